@@ -1,0 +1,126 @@
+/* caustic: public C API of libcaustic, a physically based offline renderer.
+ * Only opaque handles and plain option structs cross this boundary. Every function that
+ * can fail returns a CstStatus and fills a CstError with a human-readable message;
+ * the library never prints to stdout and never exits the process. */
+#ifndef CAUSTIC_CAUSTIC_H
+#define CAUSTIC_CAUSTIC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define CST_VERSION_MAJOR 0
+#define CST_VERSION_MINOR 1
+#define CST_VERSION_PATCH 0
+#define CST_VERSION_STRING "0.1.0"
+
+typedef enum CstStatus {
+    CST_OK = 0,
+    CST_ERR_INVALID_ARG, /* a value out of range, an unknown name */
+    CST_ERR_IO,          /* a file could not be opened, read or written */
+    CST_ERR_PARSE,       /* malformed input text; the message names file:line:column */
+    CST_ERR_UNSUPPORTED, /* a valid request this build cannot honour */
+    CST_ERR_OOM,         /* allocation failed */
+    CST_ERR_INTERNAL     /* a bug or an unexpected library failure */
+} CstStatus;
+
+typedef struct CstError {
+    CstStatus status;
+    char msg[1024];
+} CstError;
+
+/* "CST_ERR_PARSE" etc. */
+const char *cst_status_name(CstStatus status);
+
+/* ---------------------------------------------------------------- scenes */
+typedef struct CstScene CstScene;
+
+/* The built-in Cornell box (original Cornell measured data, millimetres). */
+CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err);
+/* A scene in caustic's JSON format (docs/scene-format.md). Errors name path:line:column. */
+CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err);
+/* The same from memory; `name` stands for the file name in messages. */
+CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
+                                     CstScene **out, CstError *err);
+/* Accepts NULL. */
+void cst_scene_destroy(CstScene *scene);
+/* The output path named in the scene file, or NULL. Owned by the scene. */
+const char *cst_scene_output_path(const CstScene *scene);
+
+/* ---------------------------------------------------------------- rendering */
+typedef enum CstIntegrator {
+    CST_INTEGRATOR_DEFAULT = 0, /* the scene's choice, else CST_INTEGRATOR_PATH */
+    CST_INTEGRATOR_PATH,        /* path tracing, NEE + BSDF sampling combined by MIS */
+    CST_INTEGRATOR_PATH_NEE,    /* path tracing, emitters reached only by NEE (no MIS) */
+    CST_INTEGRATOR_PATH_BSDF    /* path tracing, BSDF sampling only (no NEE) */
+} CstIntegrator;
+
+typedef enum CstFilter {
+    CST_FILTER_DEFAULT = 0, /* the scene's choice, else CST_FILTER_BOX */
+    CST_FILTER_BOX,         /* uniform sampling inside the pixel */
+    CST_FILTER_TENT         /* tent of radius 1 pixel, by filter importance sampling */
+} CstFilter;
+
+/* Parses "path", "path-nee", "path-bsdf" (aliases "mis", "nee", "bsdf").
+ * Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
+CstIntegrator cst_integrator_from_name(const char *name);
+const char *cst_integrator_name(CstIntegrator integrator);
+CstFilter cst_filter_from_name(const char *name);
+const char *cst_filter_name(CstFilter filter);
+
+typedef void (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
+
+/* Zero-initialise, then set what you want: a zero field means "the scene's value, else
+ * the default". Command-line values override scene-file values this way. */
+typedef struct CstRenderSettings {
+    int width, height;        /* default 512 x 512 */
+    int spp;                  /* samples per pixel; default 16 (or unlimited with time_limit) */
+    double time_limit;        /* seconds; 0 = none. With spp also set, stops at whichever comes first */
+    int threads;              /* 0 = all cores */
+    uint64_t seed;            /* used when seed_set != 0; default 0 */
+    int seed_set;
+    CstIntegrator integrator;
+    CstFilter filter;
+    int max_depth;            /* maximum path vertices after the camera; 0 = unbounded */
+    int rr_depth;             /* Russian roulette starts at this depth; 0 = default 3 */
+    CstProgressFn progress;   /* called from the calling thread about 10 times a second */
+    void *progress_user;
+} CstRenderSettings;
+
+typedef struct CstRenderStats {
+    double seconds;           /* wall time of the render proper (not scene loading) */
+    uint64_t samples;         /* camera samples = camera paths */
+    uint64_t rays;            /* closest-hit + shadow rays traced */
+    uint64_t nonfinite;       /* NaN/Inf samples discarded (counted, never added to the film) */
+    int spp, threads, width, height;
+    CstIntegrator integrator;
+    CstFilter filter;
+} CstRenderStats;
+
+typedef struct CstFilm CstFilm;
+
+/* Renders the scene. On success *out is a new film the caller owns (cst_film_destroy). */
+CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings,
+                     CstFilm **out, CstRenderStats *stats, CstError *err);
+
+/* ---------------------------------------------------------------- films */
+int cst_film_width(const CstFilm *film);
+int cst_film_height(const CstFilm *film);
+int cst_film_spp(const CstFilm *film);
+/* Linear RGB mean of pixel (x, y); y = 0 is the top row. */
+void cst_film_pixel(const CstFilm *film, int x, int y, double rgb[3]);
+/* Estimated variance of that mean (sample variance / spp), per channel. */
+void cst_film_pixel_variance(const CstFilm *film, int x, int y, double var[3]);
+/* Writes the film; the format follows the extension: .png (8-bit sRGB), .exr (float,
+ * linear), .pfm (float, linear). Written to a temporary file then renamed, so a failed
+ * write never leaves a partial image behind. */
+CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
+void cst_film_destroy(CstFilm *film);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages caustic builds against, only those missing.
+# Idempotent; run as root (or with sudo available). Embree is optional but installed
+# so the comparison back end and benchmarks are available.
+set -euo pipefail
+
+PKGS=(
+  build-essential cmake pkg-config
+  libjansson-dev      # JSON scenes with line/column errors
+  libpng-dev          # PNG output
+  libopenexr-dev      # OpenEXR C API (openexr.h) for EXR output
+  libstb-dev          # stb_image for texture loading
+  libassimp-dev       # mesh import (OBJ/PLY/glTF)
+  libembree-dev       # optional comparison back end
+  libcmocka-dev       # unit test framework, driven by CTest
+)
+
+missing=()
+for p in "${PKGS[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PKGS[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

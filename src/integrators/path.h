@@ -1,0 +1,23 @@
+/* Unidirectional path tracing in three flavours that estimate the same integral:
+ * BSDF sampling only, next-event estimation only, and both combined with MIS. */
+#ifndef CST_INTEGRATORS_PATH_H
+#define CST_INTEGRATORS_PATH_H
+
+#include <stdint.h>
+
+#include "core/rng.h"
+#include "scene/scene.h"
+
+typedef enum PathMode { PATH_MIS, PATH_NEE, PATH_BSDF } PathMode;
+
+typedef struct PathParams {
+    PathMode mode;
+    int max_depth; /* bounces after the camera vertex; 0 = unbounded (Russian roulette only) */
+    int rr_depth;  /* first depth at which Russian roulette may stop a path */
+} PathParams;
+
+/* Radiance arriving along `ray` (toward its origin). Adds the number of rays traced to
+ * *rays. No allocation; safe to call from many threads on one committed scene. */
+Rgb path_li(const Scene *scene, const PathParams *params, Ray ray, Pcg32 *rng, uint64_t *rays);
+
+#endif

@@ -1,0 +1,294 @@
+/* Tiled multithreaded rendering. Determinism: each pixel sample draws from its own PCG32
+ * stream seeded by (seed, pixel, sample index), and each pixel is accumulated by one
+ * thread in sample order, so images are bit-identical for any thread count. */
+#include "render/render.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "camera/camera.h"
+#include "core/error.h"
+#include "core/rng.h"
+#include "film/film.h"
+#include "integrators/path.h"
+#include "sampling/warp.h"
+#include "scene/scene.h"
+
+static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] = {
+    {"path", CST_INTEGRATOR_PATH},       {"path-nee", CST_INTEGRATOR_PATH_NEE},
+    {"path-bsdf", CST_INTEGRATOR_PATH_BSDF}, {"mis", CST_INTEGRATOR_PATH},
+    {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
+};
+
+CstIntegrator cst_integrator_from_name(const char *name)
+{
+    for (size_t i = 0; i < sizeof INTEGRATOR_NAMES / sizeof INTEGRATOR_NAMES[0]; i++)
+        if (strcmp(name, INTEGRATOR_NAMES[i].name) == 0) return INTEGRATOR_NAMES[i].id;
+    return CST_INTEGRATOR_DEFAULT;
+}
+
+const char *cst_integrator_name(CstIntegrator integrator)
+{
+    switch (integrator) {
+    case CST_INTEGRATOR_PATH: return "path";
+    case CST_INTEGRATOR_PATH_NEE: return "path-nee";
+    case CST_INTEGRATOR_PATH_BSDF: return "path-bsdf";
+    case CST_INTEGRATOR_DEFAULT: break;
+    }
+    return "default";
+}
+
+CstFilter cst_filter_from_name(const char *name)
+{
+    if (strcmp(name, "box") == 0) return CST_FILTER_BOX;
+    if (strcmp(name, "tent") == 0) return CST_FILTER_TENT;
+    return CST_FILTER_DEFAULT;
+}
+
+const char *cst_filter_name(CstFilter filter)
+{
+    switch (filter) {
+    case CST_FILTER_BOX: return "box";
+    case CST_FILTER_TENT: return "tent";
+    case CST_FILTER_DEFAULT: break;
+    }
+    return "default";
+}
+
+#define PICK(field, dflt) out->field = in->field ? in->field : (sc->field ? sc->field : (dflt))
+void render_resolve_settings(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out)
+{
+    static const CstRenderSettings zero;
+    if (!in) in = &zero;
+    const CstRenderSettings *sc = &scene->settings;
+    *out = *in;
+    PICK(width, CST_DEFAULT_WIDTH);
+    PICK(height, CST_DEFAULT_HEIGHT);
+    PICK(integrator, CST_INTEGRATOR_PATH);
+    PICK(filter, CST_FILTER_BOX);
+    PICK(max_depth, 0);
+    PICK(rr_depth, CST_DEFAULT_RR_DEPTH);
+    PICK(time_limit, 0.0);
+    /* A time limit alone means "as many samples as fit"; otherwise the default count. */
+    PICK(spp, out->time_limit > 0.0 ? 0 : CST_DEFAULT_SPP);
+    if (!in->seed_set) { out->seed = sc->seed_set ? sc->seed : 0; out->seed_set = 1; }
+    if (out->threads <= 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        out->threads = n > 0 ? (int)n : 1;
+    }
+}
+#undef PICK
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+typedef struct RenderJob {
+    const Scene *scene;
+    Film *film;
+    Camera camera;
+    PathParams params;
+    CstFilter filter;
+    uint64_t seed;
+    int tiles_x, tiles_y, num_tiles;
+    /* the pass in progress: samples [pass_first, pass_first + pass_spp) of every pixel */
+    int pass_first, pass_spp;
+    atomic_int next_tile;
+    atomic_int tiles_done;
+} RenderJob;
+
+typedef struct Worker {
+    RenderJob *job;
+    pthread_t thread;
+    uint64_t rays, nonfinite;
+} Worker;
+
+/* Film position of a sample: the box filter samples the pixel uniformly; the tent filter
+ * (radius 1 pixel) is applied by filter importance sampling (Ernst et al., "Filter
+ * Importance Sampling", 2006): offsets drawn from the tent itself, every sample weight 1,
+ * so each sample still lands in exactly one pixel's estimate. */
+static inline Vec2 film_position(CstFilter filter, int x, int y, Vec2 u)
+{
+    if (filter == CST_FILTER_TENT)
+        return v2((float)x + 0.5f + warp_tent(u.x), (float)y + 0.5f + warp_tent(u.y));
+    return v2((float)x + u.x, (float)y + u.y);
+}
+
+static void render_tile(RenderJob *job, Worker *w, int tile)
+{
+    const int W = job->film->width, H = job->film->height;
+    int x0 = (tile % job->tiles_x) * RENDER_TILE, y0 = (tile / job->tiles_x) * RENDER_TILE;
+    int x1 = x0 + RENDER_TILE < W ? x0 + RENDER_TILE : W;
+    int y1 = y0 + RENDER_TILE < H ? y0 + RENDER_TILE : H;
+    for (int y = y0; y < y1; y++) {
+        for (int x = x0; x < x1; x++) {
+            int pixel = y * W + x;
+            for (int s = job->pass_first; s < job->pass_first + job->pass_spp; s++) {
+                Pcg32 rng;
+                pcg32_seed_sample(&rng, job->seed, (uint64_t)pixel, (uint64_t)s);
+                Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
+                Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
+                Vec2 fp = film_position(job->filter, x, y, uf);
+                Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
+                Rgb L = path_li(job->scene, &job->params, ray, &rng, &w->rays);
+                if (!rgb_is_finite(L)) {
+                    /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
+                    w->nonfinite++;
+                    L = rgb_s(0.0f);
+                }
+                film_accumulate(job->film, pixel, L.r, L.g, L.b);
+            }
+        }
+    }
+}
+
+static void *worker_main(void *arg)
+{
+    Worker *w = arg;
+    RenderJob *job = w->job;
+    for (;;) {
+        int tile = atomic_fetch_add(&job->next_tile, 1);
+        if (tile >= job->num_tiles) break;
+        render_tile(job, w, tile);
+        atomic_fetch_add(&job->tiles_done, 1);
+    }
+    return NULL;
+}
+
+static void sleep_seconds(double s)
+{
+    struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+    nanosleep(&ts, NULL);
+}
+
+/* Runs one pass over all tiles with `threads` workers; the calling thread reports
+ * progress. Returns 0 on thread-creation failure. */
+static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRenderSettings *st,
+                    double t0, double done_before, double pass_fraction)
+{
+    atomic_store(&job->next_tile, 0);
+    atomic_store(&job->tiles_done, 0);
+    int started = 0;
+    for (; started < threads; started++)
+        if (pthread_create(&workers[started].thread, NULL, worker_main, &workers[started]) != 0) break;
+    if (started == 0) return 0;
+    while (atomic_load(&job->tiles_done) < job->num_tiles) {
+        sleep_seconds(0.1);
+        if (st->progress) {
+            double f = done_before + pass_fraction * atomic_load(&job->tiles_done) / job->num_tiles;
+            if (st->time_limit > 0.0) {
+                double ft = (now_seconds() - t0) / st->time_limit;
+                f = ft > f ? ft : f;
+            }
+            st->progress(st->progress_user, f > 1.0 ? 1.0 : f, now_seconds() - t0);
+        }
+    }
+    for (int i = 0; i < started; i++) pthread_join(workers[i].thread, NULL);
+    return 1;
+}
+
+CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, CstFilm **out,
+                     CstRenderStats *stats, CstError *err)
+{
+    *out = NULL;
+    CstRenderSettings st;
+    render_resolve_settings(scene, settings, &st);
+    if (st.width <= 0 || st.height <= 0 || st.width > 65536 || st.height > 65536)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "image size %dx%d: expected 1..65536 in each dimension",
+                        st.width, st.height);
+    if (st.spp < 0 || st.time_limit < 0.0)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
+    if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
+
+    Film *film = film_create(st.width, st.height);
+    Worker *workers = calloc((size_t)st.threads, sizeof *workers);
+    RenderJob *job = calloc(1, sizeof *job);
+    if (!film || !workers || !job) {
+        film_destroy(film); free(workers); free(job);
+        return cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d film", st.width, st.height);
+    }
+    job->scene = scene;
+    job->film = film;
+    camera_init(&job->camera, &scene->camera, st.width, st.height);
+    job->params.mode = st.integrator == CST_INTEGRATOR_PATH_NEE ? PATH_NEE
+                     : st.integrator == CST_INTEGRATOR_PATH_BSDF ? PATH_BSDF : PATH_MIS;
+    job->params.max_depth = st.max_depth;
+    job->params.rr_depth = st.rr_depth;
+    job->filter = st.filter;
+    job->seed = st.seed;
+    job->tiles_x = (st.width + RENDER_TILE - 1) / RENDER_TILE;
+    job->tiles_y = (st.height + RENDER_TILE - 1) / RENDER_TILE;
+    job->num_tiles = job->tiles_x * job->tiles_y;
+    for (int i = 0; i < st.threads; i++) workers[i].job = job;
+
+    CstStatus status = CST_OK;
+    double t0 = now_seconds();
+    if (st.time_limit <= 0.0) {
+        /* Fixed sample count: one pass, so accumulation order is fixed. */
+        job->pass_first = 0;
+        job->pass_spp = st.spp;
+        if (!run_pass(job, workers, st.threads, &st, t0, 0.0, 1.0)) status = CST_ERR_INTERNAL;
+        else film->spp = st.spp;
+    } else {
+        /* Time budget: passes of growing size until the next one would not fit (or the
+         * sample cap is reached). Every pixel always holds the same number of samples. */
+        int pass = 1;
+        while (status == CST_OK) {
+            if (st.spp > 0 && film->spp + pass > st.spp) pass = st.spp - film->spp;
+            if (pass <= 0) break;
+            double pass_t0 = now_seconds();
+            job->pass_first = film->spp;
+            job->pass_spp = pass;
+            double frac = st.spp > 0 ? (double)film->spp / st.spp : 0.0;
+            if (!run_pass(job, workers, st.threads, &st, t0, frac, st.spp > 0 ? (double)pass / st.spp : 0.0)) {
+                status = CST_ERR_INTERNAL;
+                break;
+            }
+            film->spp += pass;
+            double now = now_seconds(), pass_time = now - pass_t0;
+            double left = st.time_limit - (now - t0);
+            if (left <= 0.0) break;
+            /* Next pass: the largest of 2x, x, x/2, ... that is predicted to fit in the time left. */
+            double per_spp = pass_time / pass;
+            int next = pass * 2;
+            while (next > 1 && per_spp * next > left) next /= 2;
+            if (per_spp * next > left) break;
+            pass = next;
+        }
+    }
+    double seconds = now_seconds() - t0;
+    if (status != CST_OK) {
+        film_destroy(film);
+        free(workers);
+        free(job);
+        return cst_fail(err, status, "could not start render threads");
+    }
+    if (st.progress) st.progress(st.progress_user, 1.0, seconds);
+    if (stats) {
+        memset(stats, 0, sizeof *stats);
+        stats->seconds = seconds;
+        stats->spp = film->spp;
+        stats->threads = st.threads;
+        stats->width = st.width;
+        stats->height = st.height;
+        stats->integrator = st.integrator;
+        stats->filter = st.filter;
+        stats->samples = (uint64_t)film->spp * (uint64_t)st.width * (uint64_t)st.height;
+        for (int i = 0; i < st.threads; i++) {
+            stats->rays += workers[i].rays;
+            stats->nonfinite += workers[i].nonfinite;
+        }
+    }
+    free(workers);
+    free(job);
+    *out = film;
+    return CST_OK;
+}

@@ -1,0 +1,13 @@
+/* The render driver: resolves settings, schedules tiles over worker threads, reports
+ * progress, and produces the film. Implements cst_render (caustic.h). */
+#ifndef CST_RENDER_RENDER_H
+#define CST_RENDER_RENDER_H
+
+#include "caustic/caustic.h"
+
+enum { RENDER_TILE = 16 };
+
+/* Settings with every zero field filled from the scene, then from the defaults. */
+void render_resolve_settings(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out);
+
+#endif

@@ -1,0 +1,67 @@
+/* Warps from [0,1)^2 to common domains. Every warp_X has its warp_X_pdf beside it, with
+ * the measure stated; tests/unit/test_warp.c checks each pair with a chi-square test. */
+#ifndef CST_SAMPLING_WARP_H
+#define CST_SAMPLING_WARP_H
+
+#include "math/vec3.h"
+
+/* Shirley & Chiu's concentric map, unit disk; pdf w.r.t. area = 1/pi. */
+static inline Vec2 warp_concentric_disk(Vec2 u)
+{
+    float ox = 2.0f * u.x - 1.0f, oy = 2.0f * u.y - 1.0f;
+    if (ox == 0.0f && oy == 0.0f) return v2(0.0f, 0.0f);
+    float r, theta;
+    if (fabsf(ox) > fabsf(oy)) { r = ox; theta = (CST_PI / 4.0f) * (oy / ox); }
+    else { r = oy; theta = (CST_PI / 2.0f) - (CST_PI / 4.0f) * (ox / oy); }
+    return v2(r * cosf(theta), r * sinf(theta));
+}
+static inline float warp_concentric_disk_pdf(Vec2 p) { return (p.x * p.x + p.y * p.y <= 1.0f) ? CST_INV_PI : 0.0f; }
+
+/* Cosine-weighted hemisphere around +z (Malley's method); pdf w.r.t. solid angle = cos/pi. */
+static inline Vec3 warp_cosine_hemisphere(Vec2 u)
+{
+    Vec2 d = warp_concentric_disk(u);
+    float z = safe_sqrtf(1.0f - d.x * d.x - d.y * d.y);
+    return v3(d.x, d.y, z);
+}
+static inline float warp_cosine_hemisphere_pdf(Vec3 w) { return w.z > 0.0f ? w.z * CST_INV_PI : 0.0f; }
+
+/* Uniform hemisphere around +z; pdf w.r.t. solid angle = 1/(2 pi). */
+static inline Vec3 warp_uniform_hemisphere(Vec2 u)
+{
+    float z = u.x;
+    float r = safe_sqrtf(1.0f - z * z);
+    float phi = 2.0f * CST_PI * u.y;
+    return v3(r * cosf(phi), r * sinf(phi), z);
+}
+static inline float warp_uniform_hemisphere_pdf(Vec3 w) { return w.z >= 0.0f ? CST_INV_2PI : 0.0f; }
+
+/* Uniform unit sphere; pdf w.r.t. solid angle = 1/(4 pi). */
+static inline Vec3 warp_uniform_sphere(Vec2 u)
+{
+    float z = 1.0f - 2.0f * u.x;
+    float r = safe_sqrtf(1.0f - z * z);
+    float phi = 2.0f * CST_PI * u.y;
+    return v3(r * cosf(phi), r * sinf(phi), z);
+}
+static inline float warp_uniform_sphere_pdf(Vec3 w) { (void)w; return CST_INV_4PI; }
+
+/* Uniform point on a triangle as barycentrics (b1, b2) with b0 = 1 - b1 - b2
+ * (the square-root parameterisation of Osada et al., "Shape Distributions", 2002, sec. 4.2).
+ * pdf w.r.t. the barycentric domain's area = 2. */
+static inline Vec2 warp_uniform_triangle(Vec2 u)
+{
+    float su = sqrtf(u.x);
+    return v2(1.0f - su, u.y * su);
+}
+static inline float warp_uniform_triangle_pdf(Vec2 b) { return (b.x >= 0.0f && b.y >= 0.0f && b.x + b.y <= 1.0f) ? 2.0f : 0.0f; }
+
+/* Tent on [-1, 1] by inverting its CDF; pdf(x) = 1 - |x|. */
+static inline float warp_tent(float u)
+{
+    if (u < 0.5f) return sqrtf(2.0f * u) - 1.0f;
+    return 1.0f - sqrtf(2.0f - 2.0f * u);
+}
+static inline float warp_tent_pdf(float x) { return fabsf(x) <= 1.0f ? 1.0f - fabsf(x) : 0.0f; }
+
+#endif

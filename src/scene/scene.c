@@ -1,0 +1,190 @@
+/* Scene construction (growable arrays) and commit (BVH + emitter distribution). */
+#include "scene/scene.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+
+/* Grows *arr to hold `need` elements of `size` bytes, doubling. */
+static int grow(void **arr, int *cap, int need, size_t size)
+{
+    if (need <= *cap) return 1;
+    int c = *cap ? *cap : 16;
+    while (c < need) c *= 2;
+    void *p = realloc(*arr, (size_t)c * size);
+    if (!p) return 0;
+    *arr = p;
+    *cap = c;
+    return 1;
+}
+#define GROW(arr, cap, need) grow((void **)&(arr), &(cap), (need), sizeof *(arr))
+
+float triangle_area(Vec3 a, Vec3 b, Vec3 c)
+{
+    return 0.5f * v3_length(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+}
+
+Scene *scene_create(void)
+{
+    Scene *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    /* A usable default view: the scene loaders always set their own. */
+    s->camera.position = v3(0.0f, 0.0f, 5.0f);
+    s->camera.look_at = v3(0.0f, 0.0f, 0.0f);
+    s->camera.up = v3(0.0f, 1.0f, 0.0f);
+    s->camera.vfov_deg = 40.0f;
+    s->camera.focus_distance = 5.0f;
+    return s;
+}
+
+void scene_destroy(Scene *s)
+{
+    if (!s) return;
+    free(s->positions);
+    free(s->tri_indices);
+    free(s->tri_info);
+    free(s->spheres);
+    free(s->sphere_info);
+    free(s->materials);
+    free(s->emitters);
+    free(s->output_path);
+    bvh_free(&s->bvh);
+    emitter_sampler_free(&s->emitter_sampler);
+    free(s);
+}
+
+void cst_scene_destroy(CstScene *scene) { scene_destroy(scene); }
+
+const char *cst_scene_output_path(const CstScene *scene) { return scene->output_path; }
+
+CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError *err)
+{
+    if (!GROW(s->materials, s->cap_materials, s->num_materials + 1))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a material");
+    s->materials[s->num_materials] = *m;
+    *out_id = s->num_materials++;
+    return CST_OK;
+}
+
+static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float area,
+                             int32_t *out, CstError *err)
+{
+    *out = -1;
+    if (!em || rgb_is_black(em->radiance)) return CST_OK;
+    if (!GROW(s->emitters, s->cap_emitters, s->num_emitters + 1))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding an emitter");
+    Emitter *e = &s->emitters[s->num_emitters];
+    e->prim = prim;
+    e->radiance = em->radiance;
+    e->two_sided = em->two_sided;
+    e->area = area;
+    e->is_sphere = 0;
+    *out = s->num_emitters++;
+    return CST_OK;
+}
+
+CstStatus scene_add_mesh(Scene *s, const Vec3 *positions, int num_vertices, const int *indices,
+                         int num_triangles, int material, const Emission *emission, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (material < 0 || material >= s->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    for (int i = 0; i < 3 * num_triangles; i++)
+        if (indices[i] < 0 || indices[i] >= num_vertices)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d: vertex index %d out of range [0, %d)",
+                            i / 3, indices[i], num_vertices);
+    for (int i = 0; i < num_vertices; i++)
+        if (!v3_is_finite(positions[i]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "vertex %d is not finite", i);
+    int base = s->num_positions;
+    if (!GROW(s->positions, s->cap_positions, base + num_vertices) ||
+        !GROW(s->tri_indices, s->cap_triangles, 3 * (s->num_triangles + num_triangles)))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding %d triangles", num_triangles);
+    /* tri_info shares the triangle capacity logic but has one entry per triangle. */
+    PrimInfo *info = realloc(s->tri_info, (size_t)(s->num_triangles + num_triangles) * sizeof *info);
+    if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding %d triangles", num_triangles);
+    s->tri_info = info;
+    memcpy(s->positions + base, positions, (size_t)num_vertices * sizeof *positions);
+    s->num_positions += num_vertices;
+    int first = s->num_triangles;
+    for (int t = 0; t < num_triangles; t++) {
+        int id = first + t;
+        Vec3 a = positions[indices[3 * t]], b = positions[indices[3 * t + 1]], c = positions[indices[3 * t + 2]];
+        float area = triangle_area(a, b, c);
+        if (!(area > 0.0f))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d is degenerate (zero area)", t);
+        for (int k = 0; k < 3; k++) s->tri_indices[3 * id + k] = base + indices[3 * t + k];
+        s->tri_info[id].material = material;
+        CstStatus st = add_emitter(s, (uint32_t)id, emission, area, &s->tri_info[id].emitter, err);
+        if (st != CST_OK) return st;
+        s->num_triangles = id + 1; /* keep counts consistent if a later triangle fails */
+    }
+    return CST_OK;
+}
+
+CstStatus scene_add_quad(Scene *s, const Vec3 v[4], int material, const Emission *emission, CstError *err)
+{
+    static const int idx[6] = {0, 1, 2, 0, 2, 3};
+    return scene_add_mesh(s, v, 4, idx, 2, material, emission, err);
+}
+
+CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,
+                           const Emission *emission, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (!(radius > 0.0f) || !isfinite(radius) || !v3_is_finite(center))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "sphere radius must be a positive finite number");
+    if (material < 0 || material >= s->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    if (!GROW(s->spheres, s->cap_spheres, s->num_spheres + 1))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a sphere");
+    PrimInfo *info = realloc(s->sphere_info, (size_t)(s->num_spheres + 1) * sizeof *info);
+    if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding a sphere");
+    s->sphere_info = info;
+    int i = s->num_spheres;
+    s->spheres[i].center = center;
+    s->spheres[i].radius = radius;
+    s->sphere_info[i].material = material;
+    s->num_spheres = i + 1;
+    /* Sphere prim ids follow all triangles, so they are only known at commit: until
+     * then the emitter holds the sphere index, flagged by is_sphere. */
+    CstStatus st = add_emitter(s, (uint32_t)i, emission, 4.0f * CST_PI * radius * radius,
+                               &s->sphere_info[i].emitter, err);
+    if (st == CST_OK && s->sphere_info[i].emitter >= 0) s->emitters[s->sphere_info[i].emitter].is_sphere = 1;
+    return st;
+}
+
+void scene_set_camera(Scene *s, const CameraDesc *camera)
+{
+    s->camera = *camera;
+    s->camera_set = 1;
+}
+
+CstStatus scene_set_output_path(Scene *s, const char *path, CstError *err)
+{
+    char *p = strdup(path);
+    if (!p) return cst_fail(err, CST_ERR_OOM, "out of memory");
+    free(s->output_path);
+    s->output_path = p;
+    return CST_OK;
+}
+
+CstStatus scene_commit(Scene *s, CstError *err)
+{
+    if (s->committed) return CST_OK;
+    for (int i = 0; i < s->num_emitters; i++)
+        if (s->emitters[i].is_sphere) {
+            s->emitters[i].prim += (uint32_t)s->num_triangles;
+            s->emitters[i].is_sphere = 0;
+        }
+    CstStatus st = bvh_build(&s->bvh, s->positions, s->tri_indices, s->num_triangles,
+                             s->spheres, s->num_spheres, err);
+    if (st != CST_OK) return st;
+    st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, err);
+    if (st != CST_OK) return st;
+    BBox b = s->bvh.bounds;
+    s->scene_scale = s->bvh.num_nodes ? maxf(v3_max_abs(b.min), v3_max_abs(b.max)) : 1.0f;
+    s->committed = 1;
+    return CST_OK;
+}
