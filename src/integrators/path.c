@@ -31,11 +31,8 @@ static Rgb sample_direct(const Scene *s, const PathParams *pp, const Bsdf *bsdf,
     Rgb f = bsdf_eval(bsdf, wo, wi);
     if (rgb_is_black(f)) return rgb_s(0.0f);
     float pdf_w = s->emitter_sampler.pdf_a * dist2 / fabsf(cos_l);
-    Vec3 o = scene_offset(s, sh->p, sh->ng, wi);
-    float eps = scene_ray_epsilon(s);
-    Ray shadow = ray_make(o, wi, 0.0f, dist - 2.0f * eps);
     ++*rays;
-    if (bvh_occluded(&s->bvh, &shadow)) return rgb_s(0.0f);
+    if (!scene_visible(s, sh->p, sh->ng, es.p, es.n)) return rgb_s(0.0f);
     float w = pp->mode == PATH_MIS ? power_heuristic(pdf_w, bsdf_pdf(bsdf, wo, wi)) : 1.0f;
     return rgb_scale(rgb_mul(f, le), w / pdf_w);
 }
@@ -89,7 +86,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
             if (!(pcg32_float(rng) < q)) break;
             beta = rgb_scale(beta, 1.0f / q);
         }
-        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
     return L;
 }

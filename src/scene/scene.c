@@ -183,8 +183,6 @@ CstStatus scene_commit(Scene *s, CstError *err)
     if (st != CST_OK) return st;
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, err);
     if (st != CST_OK) return st;
-    BBox b = s->bvh.bounds;
-    s->scene_scale = s->bvh.num_nodes ? maxf(v3_max_abs(b.min), v3_max_abs(b.max)) : 1.0f;
     s->committed = 1;
     return CST_OK;
 }

@@ -42,7 +42,6 @@ struct CstScene {
     /* after commit */
     Bvh bvh;
     EmitterSampler emitter_sampler;
-    float scene_scale; /* max |coordinate| of the scene bounds: sets ray offsets */
     int committed;
     /* view and settings */
     CameraDesc camera;
@@ -91,13 +90,18 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     if (!bvh_intersect(&s->bvh, ray, &h)) return false;
     sh->t = h.t;
     sh->prim = h.prim;
-    sh->p = ray_at(ray, h.t);
     if ((int)h.prim < s->num_triangles) {
         const int32_t *t = &s->tri_indices[3 * h.prim];
-        Vec3 a = s->positions[t[0]];
-        sh->ng = v3_normalize(v3_cross(v3_sub(s->positions[t[1]], a), v3_sub(s->positions[t[2]], a)));
+        Vec3 a = s->positions[t[0]], b = s->positions[t[1]], c = s->positions[t[2]];
+        Vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
+        sh->ng = v3_normalize(v3_cross(e1, e2));
+        /* From barycentrics, not o + t d: accurate to a few ulps of the vertices,
+         * which ray_offset_origin relies on (the ray form errs by ulps of |o| + t). */
+        sh->p = v3_add(v3_add(v3_scale(a, 1.0f - h.u - h.v), v3_scale(b, h.u)), v3_scale(c, h.v));
     } else {
-        sh->ng = v3_normalize(v3_sub(sh->p, s->spheres[(int)h.prim - s->num_triangles].center));
+        const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];
+        sh->ng = v3_normalize(v3_sub(ray_at(ray, h.t), sp->center));
+        sh->p = v3_madd(sp->center, sh->ng, sp->radius); /* reprojected onto the surface */
     }
     const PrimInfo *pi = scene_prim_info(s, h.prim);
     sh->material = pi->material;
@@ -105,16 +109,27 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     return true;
 }
 
-/* Ray origins are pushed off surfaces by this distance along the geometric normal, so
- * new rays cannot re-hit the surface they leave. It scales with the scene's extent
- * because float rounding of hit positions does (about 1e-7 relative). */
-static inline float scene_ray_epsilon(const Scene *s) { return 5e-5f * (1.0f + s->scene_scale); }
-
 /* p moved off the surface with normal ng toward the side direction d points to. */
-static inline Vec3 scene_offset(const Scene *s, Vec3 p, Vec3 ng, Vec3 d)
+static inline Vec3 scene_offset(Vec3 p, Vec3 ng, Vec3 d)
 {
-    float eps = scene_ray_epsilon(s);
-    return v3_madd(p, ng, v3_dot(ng, d) >= 0.0f ? eps : -eps);
+    return ray_offset_origin(p, v3_dot(ng, d) >= 0.0f ? ng : v3_neg(ng));
+}
+
+/* Whether the segment between surface points p (normal n_p) and q (normal n_q) is
+ * unoccluded. Both ends are pushed off their surfaces toward each other and the shadow
+ * ray aims from one pushed end to the other: aiming from the pushed origin along the
+ * unpushed direction would run parallel to the true segment and clip the target's own
+ * surface at grazing angles (a measurable darkening of NEE near large emitters). */
+static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q)
+{
+    Vec3 d = v3_sub(q, p);
+    Vec3 o = scene_offset(p, n_p, d);
+    Vec3 t = scene_offset(q, n_q, v3_neg(d));
+    Vec3 od = v3_sub(t, o);
+    float len = v3_length(od);
+    if (!(len > 0.0f)) return true;
+    Ray r = ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-5f));
+    return !bvh_occluded(&s->bvh, &r);
 }
 
 /* Area of a triangle with nonzero normal; shared by loaders for validation. */
