@@ -41,7 +41,7 @@ static inline RegionStat region_stat(const CstFilm *f, int x0, int y0, int x1, i
 static inline double z_score(double a, double se_a, double b, double se_b)
 {
     double se = sqrt(se_a * se_a + se_b * se_b);
-    if (se == 0.0) return a == b ? 0.0 : INFINITY;
+    if (se == 0.0) return a == b ? 0.0 : (double)INFINITY;
     return (a - b) / se;
 }
 

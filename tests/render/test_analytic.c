@@ -55,7 +55,7 @@ static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t
     CstFilm *f = NULL;
     CstRenderStats stats;
     assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
-    double expected = rho * Le * 4.0 * corner_form_factor(a / 2, b / 2, h);
+    double expected = (double)rho * (double)Le * 4.0 * corner_form_factor(a / 2, b / 2, h);
     RegionStat r = region_stat(f, 0, 0, 1, 1);
     for (int c = 0; c < 3; c++) {
         double z = (r.mean[c] - expected) / r.se[c];

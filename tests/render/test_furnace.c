@@ -96,7 +96,8 @@ static void test_furnace_emitting_sphere(void **state)
     CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
-    const double expect[3] = {1.0 / (1.0 - rho), 0.5 / (1.0 - rho), 0.25 / (1.0 - rho)};
+    const double rd = (double)rho;
+    const double expect[3] = {1.0 / (1.0 - rd), 0.5 / (1.0 - rd), 0.25 / (1.0 - rd)};
     for (size_t i = 0; i < 3; i++) {
         CstFilm *f = render(s, VARIANTS[i], 32, 128, 100 + i);
         /* per-channel expectation: check each channel against its own value */
