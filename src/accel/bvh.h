@@ -1,7 +1,7 @@
 /* Bounding volume hierarchy over triangles and spheres: binned SAH build (Wald,
- * "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007), flattened
- * depth-first so the first child directly follows its parent, ordered traversal for
- * closest hits and early exit for occlusion. */
+ * "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007) collapsed into a
+ * 4-wide tree for SSE box tests, near-to-far ordered traversal for closest hits and early
+ * exit for occlusion. */
 #ifndef CST_ACCEL_BVH_H
 #define CST_ACCEL_BVH_H
 
@@ -14,13 +14,18 @@
 #include "geometry/sphere.h"
 #include "math/bbox.h"
 
+/* A 4-wide node: the boxes of its (up to) four children in structure-of-arrays form so
+ * one SSE slab test checks all four. Built by collapsing a binary SAH tree (each wide
+ * node absorbs the largest-area inner grandchildren). A child is an inner node
+ * (count == 0, child >= 0), a leaf (count > 0, child = first index into Bvh.prims) or
+ * empty (not in valid_mask: an inverted box is no use, since the min/max form of the slab
+ * test turns an inverted box into an infinite one). */
 typedef struct BvhNode {
-    float bmin[3];
-    int32_t offset; /* leaf: first index into Bvh.prims; inner: index of the second child */
-    float bmax[3];
-    uint16_t count; /* number of primitives in a leaf; 0 for inner nodes */
-    uint8_t axis;   /* inner: split axis, picks the near child from the ray direction sign */
-    uint8_t pad;
+    float bmin_x[4], bmax_x[4], bmin_y[4], bmax_y[4], bmin_z[4], bmax_z[4];
+    int32_t child[4];
+    uint16_t count[4];
+    uint32_t valid_mask; /* bit i set: child i exists */
+    uint32_t pad;
 } BvhNode;
 
 enum { BVH_PRIM_TRIANGLE = 0, BVH_PRIM_SPHERE = 1 };

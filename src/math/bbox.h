@@ -24,9 +24,10 @@ static inline float bbox_area(BBox b)
     return 2.0f * (d.x * d.y + d.y * d.z + d.z * d.x);
 }
 
-/* Reciprocal direction for slab tests. A zero component becomes +-1e20-ish instead of
- * inf, so (bound - origin) * inv is 0 (not NaN) for an origin on a slab plane: a ray in
- * that plane then counts as inside the slab (Embree's rcp_safe does the same). */
+/* Reciprocal direction for the BVH's SIMD slab test. A zero component becomes +-1e20
+ * instead of inf, so (bound - origin) * inv is finite or 0, never NaN (Embree's rcp_safe
+ * does the same). A ray lying exactly in a face plane would then leave the slab at
+ * t = 0; the BVH widens its boxes so that case cannot arise (see bvh.c, widen()). */
 static inline Vec3 ray_inv_dir(Vec3 d)
 {
     const float tiny = 1e-20f;
@@ -36,20 +37,29 @@ static inline Vec3 ray_inv_dir(Vec3 d)
     return v3(1.0f / s.x, 1.0f / s.y, 1.0f / s.z);
 }
 
-/* Robust slab test: t_far is scaled by 1 + 2*gamma(3) so rounding can never make a
- * box that the ray grazes look missed (Ize, "Robust BVH Ray Traversal", JCGT 2013).
- * Works for origins inside the box (t_near clamps to t_min). */
-static inline bool bbox_intersect(BBox b, Vec3 o, Vec3 inv_d, float t_min, float t_max,
-                                  float *t_enter)
+/* Slab test (Kay & Kajiya 1986) with exact handling of zero direction components: such
+ * an axis constrains nothing if the origin lies within the slab (boundary included) and
+ * rejects otherwise. t_far is scaled by 1 + 2*gamma(3) so rounding never makes a grazed
+ * box look missed (Ize, "Robust BVH Ray Traversal", JCGT 2013). Origins inside the box
+ * give t_enter = t_min. The BVH uses a branch-free SIMD form of the same test. */
+static inline bool bbox_intersect(BBox b, Vec3 o, Vec3 d, float t_min, float t_max, float *t_enter)
 {
-    float tx0 = (b.min.x - o.x) * inv_d.x, tx1 = (b.max.x - o.x) * inv_d.x;
-    float ty0 = (b.min.y - o.y) * inv_d.y, ty1 = (b.max.y - o.y) * inv_d.y;
-    float tz0 = (b.min.z - o.z) * inv_d.z, tz1 = (b.max.z - o.z) * inv_d.z;
-    float tn = maxf(maxf(minf(tx0, tx1), minf(ty0, ty1)), maxf(minf(tz0, tz1), t_min));
-    float tf = minf(minf(maxf(tx0, tx1), maxf(ty0, ty1)), minf(maxf(tz0, tz1), t_max));
-    tf *= 1.00000024f; /* 1 + 2 * gamma(3), gamma(n) = n eps / (1 - n eps), eps = 2^-24 */
+    float tn = t_min, tf = t_max;
+    for (int axis = 0; axis < 3; axis++) {
+        float oa = v3_get(o, axis), da = v3_get(d, axis);
+        float lo = v3_get(b.min, axis), hi = v3_get(b.max, axis);
+        if (da == 0.0f) {
+            if (oa < lo || oa > hi) return false;
+            continue;
+        }
+        float inv = 1.0f / da;
+        float t0 = (lo - oa) * inv, t1 = (hi - oa) * inv;
+        if (t0 > t1) { float t = t0; t0 = t1; t1 = t; }
+        tn = t0 > tn ? t0 : tn;
+        tf = t1 < tf ? t1 : tf;
+    }
     *t_enter = tn;
-    return tn <= tf;
+    return tn <= tf * 1.00000024f;
 }
 
 #endif
