@@ -1,0 +1,411 @@
+/* Command-line parsing for the caustic tool: the option table, strict number parsing
+ * (whole string consumed, range checked) and the help text, kept side by side so they
+ * cannot drift apart. */
+#include "args.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <inttypes.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef enum ArgsOpt {
+    ARGS_OPT_OUTPUT, ARGS_OPT_SPP, ARGS_OPT_TIME, ARGS_OPT_THREADS, ARGS_OPT_SEED,
+    ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
+    ARGS_OPT_QUIET, ARGS_OPT_HELP
+} ArgsOpt;
+
+typedef struct ArgsOptSpec {
+    const char *long_name; /* without the leading "--" */
+    char short_name;       /* 0 = none */
+    bool takes_value;
+    ArgsOpt id;
+} ArgsOptSpec;
+
+static const ArgsOptSpec ARGS_OPTS[] = {
+    {"output",     'o', true,  ARGS_OPT_OUTPUT},
+    {"spp",        0,   true,  ARGS_OPT_SPP},
+    {"time",       0,   true,  ARGS_OPT_TIME},
+    {"threads",    0,   true,  ARGS_OPT_THREADS},
+    {"seed",       0,   true,  ARGS_OPT_SEED},
+    {"integrator", 0,   true,  ARGS_OPT_INTEGRATOR},
+    {"filter",     0,   true,  ARGS_OPT_FILTER},
+    {"width",      0,   true,  ARGS_OPT_WIDTH},
+    {"height",     0,   true,  ARGS_OPT_HEIGHT},
+    {"quiet",      'q', false, ARGS_OPT_QUIET},
+    {"help",       'h', false, ARGS_OPT_HELP},
+};
+#define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
+
+void args_print_help(FILE *f)
+{
+    fputs(
+"caustic " CST_VERSION_STRING ": a physically based renderer\n"
+"\n"
+"Usage:\n"
+"  caustic render [SCENE] [options]\n"
+"  caustic render --help\n"
+"  caustic --help | -h\n"
+"  caustic --version\n"
+"\n"
+"Renders SCENE, a caustic JSON scene file (*.json, see docs/scene-format.md), or the\n"
+"built-in Cornell box when SCENE is omitted, and writes one image.\n"
+"\n"
+"Options (both --opt VALUE and --opt=VALUE are accepted; a later option wins):\n"
+"  -o, --output OUT     output image; the format follows the extension: .png (8-bit\n"
+"                       sRGB), .exr or .pfm (linear float). Default: the scene file's\n"
+"                       \"output\", else <scene file stem>.png in the current directory,\n"
+"                       cornell-box.png for the built-in scene. The extension and the\n"
+"                       directory are checked before rendering starts.\n"
+"      --spp N          samples per pixel, N >= 1 (default: the scene's, else 16)\n"
+"      --time SECONDS   stop after SECONDS of rendering, > 0; with --spp too, stops at\n"
+"                       whichever comes first (default: no time limit)\n"
+"      --threads N      render threads, 0..1024; 0 = one per core (the default)\n"
+"      --seed S         random seed, any unsigned 64-bit integer, decimal or 0x-hex\n"
+"                       (default: the scene's, else 0)\n"
+"      --integrator NAME  path (default: NEE and BSDF sampling combined by MIS),\n"
+"                       path-nee (emitters reached by NEE only), path-bsdf (BSDF\n"
+"                       sampling only); default: the scene's, else path\n"
+"      --filter NAME    box or tent (default: the scene's, else box)\n"
+"      --width W        image width in pixels, 1..65536 (default: the scene's, else 512)\n"
+"      --height H       image height in pixels, 1..65536 (default: the scene's, else\n"
+"                       512); --width and --height may each be given alone\n"
+"  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
+"  -h, --help           show this help and exit\n"
+"      --version        print the version and exit\n"
+"\n"
+"Progress goes to stderr: a redrawn bar when stderr is a terminal, otherwise one line\n"
+"per 10% of the render. The image is written atomically (temporary file, rename).\n"
+"\n"
+"Exit status:\n"
+"  0  success: the image was written\n"
+"  1  internal error: out of memory, a library failure, or an I/O error while writing\n"
+"     the image although its directory was checked writable before rendering\n"
+"     (disk full, file system error)\n"
+"  2  bad input or usage: unknown command or option, invalid value, unsupported scene\n"
+"     or output format, a scene file that is missing, unreadable or invalid, an output\n"
+"     directory that does not exist or is not writable (checked before rendering)\n"
+"\n"
+"Examples:\n"
+"  caustic render --spp 64 -o box.png\n"
+"  caustic render scenes/cornell-box.json --time 60 --threads 8 -o box.exr\n"
+"  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n",
+        f);
+}
+
+static void args_fail(ArgsError *err, bool hint, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void args_fail(ArgsError *err, bool hint, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+    err->hint = hint;
+}
+
+/* ------------------------------------------------------------ number parsing
+ * strtol and friends skip leading white space and accept a sign; we want neither
+ * surprise, so each parser first checks the leading character, then requires the
+ * whole string to be consumed without ERANGE. */
+
+static bool args_parse_long(const char *s, long lo, long hi, long *out)
+{
+    if (!(isdigit((unsigned char)s[0]) || s[0] == '+' || s[0] == '-'))
+        return false;
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+/* Decimal or 0x-hexadecimal; no sign (strtoull would silently wrap "-1"). */
+static bool args_parse_u64(const char *s, uint64_t *out)
+{
+    int base = 10;
+    if (s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+        base = 16;
+        s += 2;
+    }
+    if (!(base == 16 ? isxdigit((unsigned char)s[0]) : isdigit((unsigned char)s[0])))
+        return false;
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, base);
+    if (*end != '\0' || errno == ERANGE || v > UINT64_MAX)
+        return false;
+    *out = (uint64_t)v;
+    return true;
+}
+
+/* A finite number > 0; rejects "inf", "nan", signs other than '+', and overflow. */
+static bool args_parse_seconds(const char *s, double *out)
+{
+    if (!(isdigit((unsigned char)s[0]) || s[0] == '.' || s[0] == '+'))
+        return false;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v) || !(v > 0.0))
+        return false;
+    *out = v;
+    return true;
+}
+
+/* ------------------------------------------------------------ suggestions */
+
+/* Edit distance (Levenshtein) of two short strings; long ones count as far apart. */
+static size_t args_edit_distance(const char *a, size_t na, const char *b)
+{
+    size_t nb = strlen(b);
+    enum { N = 40 };
+    if (na >= N || nb >= N)
+        return SIZE_MAX;
+    size_t row[N];
+    for (size_t j = 0; j <= nb; j++)
+        row[j] = j;
+    for (size_t i = 1; i <= na; i++) {
+        size_t diag = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= nb; j++) {
+            size_t up = row[j];
+            size_t best = diag + (a[i - 1] != b[j - 1]);
+            if (up + 1 < best) best = up + 1;
+            if (row[j - 1] + 1 < best) best = row[j - 1] + 1;
+            row[j] = best;
+            diag = up;
+        }
+    }
+    return row[nb];
+}
+
+/* The long option closest to name[0..len), or NULL if none is plausibly meant. */
+static const char *args_suggest_option(const char *name, size_t len)
+{
+    const char *best = NULL;
+    size_t best_d = 3; /* suggest only within two edits */
+    for (size_t i = 0; i < ARGS_NUM_OPTS; i++) {
+        size_t d = args_edit_distance(name, len, ARGS_OPTS[i].long_name);
+        if (d < best_d && d < strlen(ARGS_OPTS[i].long_name)) {
+            best_d = d;
+            best = ARGS_OPTS[i].long_name;
+        }
+    }
+    return best;
+}
+
+static void args_fail_unknown_option(ArgsError *err, const char *arg, const char *name,
+                                     size_t len)
+{
+    const char *s = args_suggest_option(name, len);
+    if (s)
+        args_fail(err, true, "unknown option '%s' (did you mean --%s?)", arg, s);
+    else
+        args_fail(err, true, "unknown option '%s'", arg);
+}
+
+/* ------------------------------------------------------------ option values */
+
+static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
+{
+    CstRenderSettings *s = &out->settings;
+    long v;
+    switch (o->id) {
+    case ARGS_OPT_OUTPUT:
+        if (value[0] == '\0') {
+            args_fail(err, false, "--output: expected a file name, got ''");
+            return false;
+        }
+        out->output_path = value;
+        return true;
+    case ARGS_OPT_SPP:
+        if (!args_parse_long(value, 1, INT_MAX, &v)) {
+            args_fail(err, false, "--spp: expected a positive integer, got '%s'", value);
+            return false;
+        }
+        s->spp = (int)v;
+        return true;
+    case ARGS_OPT_TIME:
+        if (!args_parse_seconds(value, &s->time_limit)) {
+            args_fail(err, false, "--time: expected a positive number of seconds, got '%s'",
+                      value);
+            return false;
+        }
+        return true;
+    case ARGS_OPT_THREADS:
+        if (!args_parse_long(value, 0, ARGS_MAX_THREADS, &v)) {
+            args_fail(err, false,
+                      "--threads: expected an integer from 0 (one per core) to %d, got '%s'",
+                      ARGS_MAX_THREADS, value);
+            return false;
+        }
+        s->threads = (int)v;
+        return true;
+    case ARGS_OPT_SEED:
+        if (!args_parse_u64(value, &s->seed)) {
+            args_fail(err, false,
+                      "--seed: expected an unsigned 64-bit integer (decimal or 0x-hex), got '%s'",
+                      value);
+            return false;
+        }
+        s->seed_set = 1;
+        return true;
+    case ARGS_OPT_INTEGRATOR:
+        s->integrator = cst_integrator_from_name(value);
+        if (s->integrator == CST_INTEGRATOR_DEFAULT) {
+            args_fail(err, false, "--integrator: unknown integrator '%s' (valid: %s)", value,
+                      ARGS_INTEGRATOR_NAMES);
+            return false;
+        }
+        return true;
+    case ARGS_OPT_FILTER:
+        s->filter = cst_filter_from_name(value);
+        if (s->filter == CST_FILTER_DEFAULT) {
+            args_fail(err, false, "--filter: unknown filter '%s' (valid: %s)", value,
+                      ARGS_FILTER_NAMES);
+            return false;
+        }
+        return true;
+    case ARGS_OPT_WIDTH:
+    case ARGS_OPT_HEIGHT:
+        if (!args_parse_long(value, 1, ARGS_MAX_DIMENSION, &v)) {
+            args_fail(err, false, "--%s: expected an integer from 1 to %d, got '%s'",
+                      o->long_name, ARGS_MAX_DIMENSION, value);
+            return false;
+        }
+        *(o->id == ARGS_OPT_WIDTH ? &s->width : &s->height) = (int)v;
+        return true;
+    case ARGS_OPT_QUIET:
+        out->quiet = true;
+        return true;
+    case ARGS_OPT_HELP:
+        out->command = ARGS_CMD_RENDER_HELP;
+        return true;
+    }
+    args_fail(err, false, "internal error: unhandled option --%s", o->long_name);
+    return false;
+}
+
+/* ------------------------------------------------------------ argv */
+
+static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, ArgsError *err)
+{
+    bool only_positional = false; /* after "--" */
+    for (int i = first; i < argc; i++) {
+        const char *arg = argv[i];
+        const ArgsOptSpec *o = NULL;
+        const char *value = NULL;
+
+        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
+            if (out->scene_path) {
+                args_fail(err, true, "unexpected argument '%s' (only one SCENE may be given)",
+                          arg);
+                return false;
+            }
+            out->scene_path = arg;
+            continue;
+        }
+        if (strcmp(arg, "--") == 0) {
+            only_positional = true;
+            continue;
+        }
+        if (arg[1] == '-') { /* --name, --name=value, --name value */
+            const char *name = arg + 2;
+            const char *eq = strchr(name, '=');
+            size_t len = eq ? (size_t)(eq - name) : strlen(name);
+            for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
+                if (strlen(ARGS_OPTS[k].long_name) == len &&
+                    strncmp(ARGS_OPTS[k].long_name, name, len) == 0)
+                    o = &ARGS_OPTS[k];
+            if (!o) {
+                if (len == 7 && strncmp(name, "version", 7) == 0) {
+                    args_fail(err, true, "--version is not an option of 'render'");
+                    return false;
+                }
+                args_fail_unknown_option(err, arg, name, len);
+                return false;
+            }
+            if (eq && !o->takes_value) {
+                args_fail(err, true, "--%s does not take a value (got '%s')", o->long_name,
+                          arg);
+                return false;
+            }
+            value = eq ? eq + 1 : NULL;
+        } else { /* -o OUT, -oOUT, -q, -h */
+            for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
+                if (ARGS_OPTS[k].short_name == arg[1])
+                    o = &ARGS_OPTS[k];
+            if (!o || (!o->takes_value && arg[2] != '\0')) {
+                args_fail(err, true, "unknown option '%s'", arg);
+                return false;
+            }
+            value = arg[2] != '\0' ? arg + 2 : NULL;
+        }
+        if (o->takes_value && !value) {
+            if (i + 1 >= argc) {
+                args_fail(err, true, "--%s: missing value", o->long_name);
+                return false;
+            }
+            value = argv[++i]; /* taken even if it starts with '-': "--seed -1" fails clearly */
+        }
+        if (!args_apply(o, value, out, err))
+            return false;
+    }
+    return true;
+}
+
+bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
+{
+    memset(out, 0, sizeof *out);
+    err->msg[0] = '\0';
+    err->hint = false;
+
+    if (argc < 2) {
+        args_fail(err, true, "missing command");
+        return false;
+    }
+    const char *cmd = argv[1];
+    if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
+        out->command = ARGS_CMD_HELP;
+    } else if (strcmp(cmd, "--version") == 0) {
+        out->command = ARGS_CMD_VERSION;
+    } else if (strcmp(cmd, "render") == 0) {
+        out->command = ARGS_CMD_RENDER;
+        return args_parse_render(argc, argv, 2, out, err);
+    } else if (cmd[0] == '-') {
+        const char *name = cmd + strspn(cmd, "-");
+        for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
+            if (strcmp(ARGS_OPTS[k].long_name, name) == 0 ||
+                (ARGS_OPTS[k].short_name && name[0] == ARGS_OPTS[k].short_name && !name[1])) {
+                args_fail(err, true, "'%s' is an option of the render command: caustic render %s ...",
+                          cmd, cmd);
+                return false;
+            }
+        if (args_edit_distance(name, strlen(name), "help") <= 2)
+            args_fail(err, true, "unknown option '%s' (did you mean --help?)", cmd);
+        else if (args_edit_distance(name, strlen(name), "version") <= 2)
+            args_fail(err, true, "unknown option '%s' (did you mean --version?)", cmd);
+        else
+            args_fail(err, true, "unknown option '%s'", cmd);
+        return false;
+    } else {
+        if (args_edit_distance(cmd, strlen(cmd), "render") <= 2)
+            args_fail(err, true, "unknown command '%s' (did you mean 'render'?)", cmd);
+        else
+            args_fail(err, true, "unknown command '%s' (the only command is 'render')", cmd);
+        return false;
+    }
+    if (argc > 2) {
+        args_fail(err, true, "unexpected argument '%s' after %s", argv[2], cmd);
+        return false;
+    }
+    return true;
+}

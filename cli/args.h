@@ -1,0 +1,47 @@
+/* Command-line parsing for the caustic tool: argv -> CliArgs with strict number parsing,
+ * and the help text. Never prints diagnostics or exits: cli/main.c decides what to do. */
+#ifndef CST_CLI_ARGS_H
+#define CST_CLI_ARGS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+
+#include "caustic/caustic.h"
+
+/* Valid values, shared by the help text and the error messages. */
+#define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf"
+#define ARGS_FILTER_NAMES     "box, tent"
+#define ARGS_OUTPUT_FORMATS   ".png, .exr, .pfm"
+#define ARGS_MAX_DIMENSION    65536
+#define ARGS_MAX_THREADS      1024
+
+typedef enum ArgsCommand {
+    ARGS_CMD_RENDER,      /* caustic render ... */
+    ARGS_CMD_HELP,        /* caustic --help | -h | help */
+    ARGS_CMD_RENDER_HELP, /* caustic render --help */
+    ARGS_CMD_VERSION      /* caustic --version */
+} ArgsCommand;
+
+typedef struct CliArgs {
+    ArgsCommand command;
+    const char *scene_path;  /* NULL = the built-in Cornell box; points into argv */
+    const char *output_path; /* NULL = the scene's "output", else the default name */
+    /* Only what the command line set; zero fields defer to the scene, then the library
+     * default. progress and progress_user are left for main.c. */
+    CstRenderSettings settings;
+    bool quiet;
+} CliArgs;
+
+typedef struct ArgsError {
+    char msg[512]; /* without the "caustic: " prefix */
+    bool hint;     /* append "see caustic --help": the command line itself was malformed */
+} ArgsError;
+
+/* Parses argv. Returns false on any usage error and fills *err; *out is then undefined. */
+bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err);
+
+/* Writes the full usage text (every option, defaults, exit codes, examples). */
+void args_print_help(FILE *f);
+
+#endif

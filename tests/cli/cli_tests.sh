@@ -1,0 +1,315 @@
+#!/usr/bin/env bash
+# Tests of the caustic command-line tool: usage errors and exit codes, strict option
+# parsing, scene diagnostics (file:line:col, no image written), tiny renders to each
+# format, and progress output. Run by CTest:
+#   bash cli_tests.sh <path-to-caustic-binary> <source-dir>
+# Prints one PASS/FAIL line per check and ends with "N passed, M failed".
+set -u
+
+if [ $# -ne 2 ]; then
+    echo "usage: bash cli_tests.sh <path-to-caustic-binary> <source-dir>" >&2
+    exit 2
+fi
+BIN=$(realpath "$1")
+SRC=$(realpath "$2")
+if [ ! -x "$BIN" ]; then
+    echo "cli_tests: not an executable: $BIN" >&2
+    exit 2
+fi
+
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-cli-tests.XXXXXX")
+trap 'rm -rf "$TMP"' EXIT
+
+passed=0
+failed=0
+pass() { echo "PASS: $1"; passed=$((passed + 1)); }
+fail() {
+    echo "FAIL: $1"
+    shift
+    for line in "$@"; do echo "      $line"; done
+    if [ -s "$OUT" ]; then echo "      stdout: $(head -c 600 "$OUT")"; fi
+    if [ -s "$ERR" ]; then echo "      stderr: $(head -c 1200 "$ERR")"; fi
+    failed=$((failed + 1))
+}
+
+# run DIR ARGS...: runs caustic in DIR with stdin closed-ish; sets RC, OUT, ERR.
+# The timeout guards against an option silently accepted and a full render started.
+OUT=$TMP/.stdout
+ERR=$TMP/.stderr
+run() {
+    local dir=$1
+    shift
+    mkdir -p "$dir"
+    (cd "$dir" && timeout 300 "$BIN" "$@" >"$OUT" 2>"$ERR" </dev/null)
+    RC=$?
+}
+
+# expect NAME RC [ERE ...]: exit code RC and every ERE found in stderr.
+expect() {
+    local name=$1 want=$2
+    shift 2
+    if [ "$RC" -ne "$want" ]; then
+        fail "$name" "exit code $RC, expected $want"
+        return 1
+    fi
+    local re
+    for re in "$@"; do
+        if ! grep -Eq -- "$re" "$ERR"; then
+            fail "$name" "stderr does not match /$re/"
+            return 1
+        fi
+    done
+    pass "$name"
+}
+
+# no_images DIR: true when DIR holds no image (nor a temporary left by a writer).
+no_images() {
+    [ -z "$(find "$1" -maxdepth 2 -type f \( -name '*.png' -o -name '*.exr' -o -name '*.pfm' \
+        -o -name '*.tmp*' -o -name '*.png.*' -o -name '*.exr.*' -o -name '*.pfm.*' \) -print -quit)" ]
+}
+
+# magic FILE: the first bytes as hex.
+magic() { od -An -tx1 -N"$2" "$1" | tr -d ' \n'; }
+
+# --------------------------------------------------------------- help and version
+run "$TMP/help" --help
+expect "--help exits 0" 0
+if [ -s "$ERR" ]; then fail "--help writes nothing to stderr"; else pass "--help writes nothing to stderr"; fi
+missing=""
+for opt in render SCENE -o --output --spp --time --threads --seed --integrator --filter \
+           --width --height --quiet --help --version \
+           path path-nee path-bsdf box tent .png .exr .pfm cornell-box.png "Exit status"; do
+    grep -qF -- "$opt" "$OUT" || missing="$missing $opt"
+done
+if [ -z "$missing" ]; then pass "--help mentions every option, value and exit codes"
+else fail "--help mentions every option, value and exit codes" "missing:$missing"; fi
+for code in 0 1 2; do
+    if grep -Eq "^ +$code +[a-z]" "$OUT"; then pass "--help documents exit code $code"
+    else fail "--help documents exit code $code"; fi
+done
+
+run "$TMP/help" -h
+expect "-h exits 0" 0 && { grep -q -- "--spp" "$OUT" || fail "-h prints the usage"; }
+run "$TMP/help" render --help
+expect "render --help exits 0" 0 && { grep -q -- "--integrator" "$OUT" || fail "render --help prints the usage"; }
+
+run "$TMP/version" --version
+if [ "$RC" -eq 0 ] && [ "$(cat "$OUT")" = "caustic 0.1.0" ]; then pass "--version prints 'caustic 0.1.0'"
+else fail "--version prints 'caustic 0.1.0'" "exit $RC"; fi
+
+# --------------------------------------------------------------- usage errors
+run "$TMP/usage"
+expect "no command: exit 2 with a hint" 2 "see caustic --help"
+run "$TMP/usage" frobnicate
+expect "unknown command: exit 2 with a hint" 2 "frobnicate" "see caustic --help"
+run "$TMP/usage" --bogus
+expect "unknown top-level option: exit 2 with a hint" 2 "'--bogus'" "see caustic --help"
+run "$TMP/usage" render --bogus
+expect "unknown render option: exit 2 with a hint" 2 "unknown option '--bogus'" "see caustic --help"
+run "$TMP/usage" render --sp 4
+expect "misspelt option: suggests the right one" 2 "did you mean --spp" "see caustic --help"
+run "$TMP/usage" render -x
+expect "unknown short option: exit 2" 2 "'-x'" "see caustic --help"
+run "$TMP/usage" render --spp
+expect "option without its value: exit 2" 2 "--spp: missing value"
+run "$TMP/usage" render --quiet=yes
+expect "flag given a value: exit 2" 2 "--quiet"
+run "$TMP/usage" render a.json b.json
+expect "two scenes: exit 2" 2 "b.json"
+if no_images "$TMP/usage"; then pass "usage errors write no image"; else fail "usage errors write no image"; fi
+
+# --------------------------------------------------------------- strict numbers
+# check_value NAME ARGS... -- ERE: exit 2, message matching ERE, nothing rendered.
+check_value() {
+    local name=$1
+    shift
+    local args=()
+    while [ "$1" != "--" ]; do args+=("$1"); shift; done
+    run "$TMP/values" render "${args[@]}" -o v.png
+    expect "$name" 2 "$2"
+}
+check_value "--spp 0 rejected"        --spp 0         -- "^caustic: --spp: expected a positive integer, got '0'$"
+check_value "--spp abc rejected"      --spp abc       -- "^caustic: --spp: expected a positive integer, got 'abc'$"
+check_value "--spp=abc rejected"      --spp=abc       -- "^caustic: --spp: expected a positive integer, got 'abc'$"
+check_value "--spp 4x rejected"       --spp 4x        -- "--spp: .*got '4x'"
+check_value "--spp -3 rejected"       --spp -3        -- "--spp: .*got '-3'"
+check_value "--spp 2.5 rejected"      --spp 2.5       -- "--spp: .*got '2.5'"
+check_value "--spp '' rejected"       --spp=          -- "--spp: .*got ''"
+check_value "--spp overflow rejected" --spp 99999999999999999999 -- "--spp: .*got '99999999999999999999'"
+check_value "--threads -1 rejected"   --threads -1    -- "^caustic: --threads: expected .*got '-1'$"
+check_value "--threads 1025 rejected" --threads 1025  -- "--threads: .*got '1025'"
+check_value "--width 0 rejected"      --width 0       -- "^caustic: --width: expected an integer from 1 to 65536, got '0'$"
+check_value "--height 65537 rejected" --height 65537  -- "--height: .*got '65537'"
+check_value "--width ' 8' rejected"   --width " 8"    -- "--width: .*got ' 8'"
+check_value "--time 0 rejected"       --time 0        -- "^caustic: --time: expected .*got '0'$"
+check_value "--time -1 rejected"      --time -1       -- "--time: .*got '-1'"
+check_value "--time nan rejected"     --time nan      -- "--time: .*got 'nan'"
+check_value "--time inf rejected"     --time inf      -- "--time: .*got 'inf'"
+check_value "--time 1e999 rejected"   --time 1e999    -- "--time: .*got '1e999'"
+check_value "--time 5s rejected"      --time 5s       -- "--time: .*got '5s'"
+check_value "--seed -1 rejected"      --seed -1       -- "^caustic: --seed: expected .*got '-1'$"
+check_value "--seed 2^64 rejected"    --seed 18446744073709551616 -- "--seed: .*got '18446744073709551616'"
+check_value "--seed 0x rejected"      --seed 0x       -- "--seed: .*got '0x'"
+check_value "unknown integrator lists the valid ones" --integrator whitted -- \
+    "--integrator: .*'whitted'.*path, path-nee, path-bsdf"
+check_value "unknown filter lists the valid ones"     --filter gaussian -- \
+    "--filter: .*'gaussian'.*box, tent"
+if no_images "$TMP/values"; then pass "rejected values write no image"; else fail "rejected values write no image"; fi
+
+# --------------------------------------------------------------- output path checks
+run "$TMP/badout" render --spp 1 -o out.jpg
+expect "bad output extension: exit 2 naming the formats" 2 "out.jpg" "\.png" "\.exr" "\.pfm"
+[ -e "$TMP/badout/out.jpg" ] && fail "bad output extension: no file created" || pass "bad output extension: no file created"
+run "$TMP/badout" render --spp 1 -o out
+expect "output without extension: exit 2" 2 "'out'"
+run "$TMP/badout" render --spp 1 -o nodir/out.png
+expect "output in a missing directory: exit 2 before rendering" 2 "nodir"
+if grep -q "rendering" "$ERR"; then fail "missing output directory is caught before rendering"
+else pass "missing output directory is caught before rendering"; fi
+if no_images "$TMP/badout"; then pass "bad outputs write no image"; else fail "bad outputs write no image"; fi
+
+# --------------------------------------------------------------- scene files
+run "$TMP/scenes" render scene.obj
+expect "unsupported scene format: exit 2 naming .json" 2 "scene.obj" "\.json"
+run "$TMP/scenes" render no-such-scene.json
+expect "missing scene file: exit 2 naming the file" 2 "^caustic: error: .*no-such-scene\.json"
+mkdir -p "$TMP/scenes/dir.json"
+run "$TMP/scenes" render dir.json
+expect "directory as scene: exit 2" 2 "dir\.json"
+
+# Each bad scene is the valid one below with one defect; the loader must name
+# file:line:col, the CLI must prefix "caustic: error: ", exit 2 and write nothing.
+VALID_SCENE='{
+  "film": {"width": 16, "height": 16},
+  "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
+  "materials": {
+    "white": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+  },
+  "shapes": [
+    {"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "white"},
+    {"type": "mesh", "vertices": [[-1, 3, -1], [1, 3, -1], [0, 3, 1]], "indices": [[0, 1, 2]],
+     "material": "white", "emission": {"radiance": [10, 10, 10]}}
+  ]
+}'
+# bad_scene NAME LINE ERE TEXT: the error is located on LINE and mentions ERE (what is wrong).
+bad_scene() {
+    local name=$1 line=$2 what=$3 text=$4
+    local dir=$TMP/bad-$name
+    mkdir -p "$dir"
+    printf '%s\n' "$text" >"$dir/$name.json"
+    run "$dir" render "$name.json"
+    if expect "bad scene ($name): exit 2, file.json:LINE:COL" 2 \
+        '\.json:[0-9]+:[0-9]+:' "^caustic: error: $name\.json:$line:[0-9]+: " "$what"; then
+        if no_images "$dir"; then pass "bad scene ($name): no image written"
+        else fail "bad scene ($name): no image written" "found: $(ls "$dir")"; fi
+    fi
+}
+bad_scene syntax-error 3 "."                "${VALID_SCENE/\"fov\": 40\}/\"fov\": 40,\}}"
+bad_scene unknown-key 8 "colour"            "${VALID_SCENE/\"radius\": 1,/\"radius\": 1, \"colour\": 3,}"
+bad_scene wrong-type 8 "radius"             "${VALID_SCENE/\"radius\": 1,/\"radius\": \"one\",}"
+bad_scene degenerate-triangle 9 "degenerate" "${VALID_SCENE/\[0, 3, 1\]/[2, 3, -1]}"
+bad_scene negative-radius 8 "radius"        "${VALID_SCENE/\"radius\": 1,/\"radius\": -1,}"
+bad_scene huge-number 8 "1e999|overflow|range" "${VALID_SCENE/\"radius\": 1,/\"radius\": 1e999,}"
+
+# A syntax error is located on its line: a missing comma between two keys on line 3.
+dir=$TMP/bad-line
+mkdir -p "$dir"
+printf '{\n  "film": {"width": 16, "height": 16},\n  "materials": {} "shapes": []\n}\n' >"$dir/line.json"
+run "$dir" render line.json
+expect "syntax error names line 3" 2 "line\.json:3:[0-9]+:"
+
+# The valid scene renders; default output <stem>.png in the current directory.
+dir=$TMP/good-scene
+mkdir -p "$dir/sub"
+printf '%s\n' "$VALID_SCENE" >"$dir/sub/tiny.scene.json"
+run "$dir" render --spp 1 -- sub/tiny.scene.json
+if expect "valid scene renders: exit 0" 0 "wrote tiny\.scene\.png"; then
+    [ -s "$dir/tiny.scene.png" ] && pass "scene default output is <stem>.png in the current directory" \
+        || fail "scene default output is <stem>.png in the current directory" "found: $(ls "$dir")"
+fi
+# The scene's "output" is used when -o is absent.
+printf '%s\n' "${VALID_SCENE/\"film\": \{/\"film\": {\"output\": \"from-scene.pfm\", }" >"$dir/out.json"
+run "$dir" render out.json --spp 1
+if expect "scene output key: exit 0" 0; then
+    if [ -s "$dir/from-scene.pfm" ]; then pass "scene output key names the image"
+    else fail "scene output key names the image" "found: $(ls -R "$dir")"; fi
+fi
+printf '%s\n' "${VALID_SCENE/\"film\": \{/\"film\": {\"output\": \"from-scene.bmp\", }" >"$dir/badext.json"
+run "$dir" render badext.json --spp 1
+expect "scene output with a bad extension: exit 2 before rendering" 2 "from-scene\.bmp"
+[ -e "$dir/from-scene.bmp" ] && fail "scene output with a bad extension: no file" || pass "scene output with a bad extension: no file"
+
+# --------------------------------------------------------------- tiny renders
+dir=$TMP/render
+run "$dir" render --width 16 --height 16 --spp 2 -o out.png
+if expect "render to PNG: exit 0" 0 "^caustic: wrote out\.png: 16x16, 2 spp, "; then
+    [ "$(magic "$dir/out.png" 8)" = "89504e470d0a1a0a" ] && pass "PNG file has the PNG signature" \
+        || fail "PNG file has the PNG signature" "got $(magic "$dir/out.png" 8)"
+    [ "$(magic "$dir/out.png" 24 | cut -c33-48)" = "0000001000000010" ] && pass "PNG is 16x16" \
+        || fail "PNG is 16x16" "IHDR $(magic "$dir/out.png" 24)"
+fi
+run "$dir" render --width 16 --height 16 --spp 2 -o out.exr
+if expect "render to EXR: exit 0" 0 "wrote out\.exr"; then
+    [ "$(magic "$dir/out.exr" 4)" = "762f3101" ] && pass "EXR file has the OpenEXR magic" \
+        || fail "EXR file has the OpenEXR magic" "got $(magic "$dir/out.exr" 4)"
+fi
+run "$dir" render --width 16 --height 16 --spp 2 -o out.pfm
+if expect "render to PFM: exit 0" 0 "wrote out\.pfm"; then
+    [ "$(head -c 9 "$dir/out.pfm" | tr '\n' ' ')" = "PF 16 16 " ] && pass "PFM header is 'PF 16 16'" \
+        || fail "PFM header is 'PF 16 16'" "got $(head -c 12 "$dir/out.pfm" | od -c | head -2)"
+fi
+run "$dir" render --width=16 --height=16 --spp=2 --output=eq.png --seed=0xffffffffffffffff \
+    --threads=1 --integrator=path-nee --filter=tent
+if expect "--opt=value forms accepted" 0 "wrote eq\.png: 16x16, 2 spp, path-nee, 1 thread,"; then
+    [ -s "$dir/eq.png" ] && pass "--output=FILE writes FILE" || fail "--output=FILE writes FILE"
+fi
+run "$dir" render --width 8 --height 8 --spp 1 --integrator path-bsdf --seed 18446744073709551615 \
+    --threads 0 --filter box -o dash.png
+expect "--opt value forms accepted" 0 "wrote dash\.png: 8x8, 1 spp, path-bsdf, "
+dir=$TMP/default
+run "$dir" render --width 8 --height 8 --spp 1
+if expect "built-in scene render: exit 0" 0 "wrote cornell-box\.png"; then
+    [ -s "$dir/cornell-box.png" ] && pass "built-in scene default output is cornell-box.png" \
+        || fail "built-in scene default output is cornell-box.png" "found: $(ls "$dir")"
+fi
+
+# Job line first, summary line last, with throughput.
+dir=$TMP/lines
+run "$dir" render --width 16 --height 16 --spp 2 --threads 2 -o lines.png
+expect "job line names scene, size, spp, integrator, threads" 0 \
+    "^caustic: rendering .*Cornell box.*16x16.*2 spp.*path.*2 threads"
+if [ "$(tail -n 1 "$ERR" | grep -Ec '^caustic: wrote lines\.png: 16x16, 2 spp, path, 2 threads, [0-9.]+ s(, [0-9.]+ M samples/s, [0-9.]+ M rays/s)?$')" -eq 1 ]; then
+    pass "summary line is last and complete"
+else fail "summary line is last and complete" "last: $(tail -n 1 "$ERR")"; fi
+if [ -s "$OUT" ]; then fail "a render writes nothing to stdout"; else pass "a render writes nothing to stdout"; fi
+
+# --------------------------------------------------------------- progress
+dir=$TMP/progress
+run "$dir" render --width 32 --height 32 --time 1.5 -o p.png
+if expect "timed render: exit 0" 0; then
+    n=$(grep -Ec '^caustic: [0-9]+% \(elapsed [0-9]+\.[0-9] s\)$' "$ERR")
+    [ "$n" -ge 3 ] && pass "non-TTY progress: plain lines at 10% steps ($n lines)" \
+        || fail "non-TTY progress: plain lines at 10% steps" "$n progress lines"
+    grep -Eq '^caustic: 100% \(elapsed' "$ERR" && pass "non-TTY progress reaches 100%" \
+        || fail "non-TTY progress reaches 100%"
+    if grep -q $'\r' "$ERR" || grep -q 'ETA' "$ERR"; then fail "non-TTY progress has no bar"
+    else pass "non-TTY progress has no bar"; fi
+fi
+run "$dir" render --width 8 --height 8 --spp 1 -o q.png --quiet
+if [ "$RC" -eq 0 ] && [ ! -s "$ERR" ] && [ -s "$dir/q.png" ]; then pass "--quiet: silent on success"
+else fail "--quiet: silent on success" "exit $RC"; fi
+
+# A terminal gets the redrawn bar ('script' provides a pseudo-terminal).
+if command -v script >/dev/null 2>&1; then
+    (cd "$dir" && timeout 300 script -qec "'$BIN' render --width 32 --height 32 --time 1 -o tty.png" /dev/null \
+        >"$OUT" 2>"$ERR" </dev/null)
+    RC=$?
+    if [ "$RC" -eq 0 ] && grep -Eq $'\r\\[[#.]{30}\\] +[0-9]+%  ETA [-0-9:]+  elapsed [0-9:]+' "$OUT"; then
+        pass "TTY progress: redrawn bar with ETA and elapsed time"
+    else fail "TTY progress: redrawn bar with ETA and elapsed time" "exit $RC"; fi
+else
+    echo "SKIP: TTY progress ('script' not installed)"
+fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
