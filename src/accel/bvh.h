@@ -16,33 +16,48 @@
 
 /* A 4-wide node: the boxes of its (up to) four children in structure-of-arrays form so
  * one SSE slab test checks all four. Built by collapsing a binary SAH tree (each wide
- * node absorbs the largest-area inner grandchildren). A child is an inner node
- * (count == 0, child >= 0), a leaf (count > 0, child = first index into Bvh.prims) or
- * empty (not in valid_mask: an inverted box is no use, since the min/max form of the slab
- * test turns an inverted box into an infinite one). */
+ * node absorbs the largest-area inner grandchildren). Child i is an inner node
+ * (is_leaf[i] == 0: child[i] indexes Bvh.nodes) or a leaf (child[i] indexes Bvh.leaves);
+ * slots outside valid_mask are empty. (An inverted box cannot mark an empty slot: the
+ * min/max form of the slab test turns it into an infinite one.) */
 typedef struct BvhNode {
     float bmin_x[4], bmax_x[4], bmin_y[4], bmax_y[4], bmin_z[4], bmax_z[4];
     int32_t child[4];
-    uint16_t count[4];
+    uint16_t is_leaf[4];
     uint32_t valid_mask; /* bit i set: child i exists */
     uint32_t pad;
 } BvhNode;
 
-enum { BVH_PRIM_TRIANGLE = 0, BVH_PRIM_SPHERE = 1 };
+/* Four triangles as (v0, e1 = v1 - v0, e2 = v2 - v0) in SoA form for one SSE
+ * Moller-Trumbore test. Unused lanes have zero edges (det = 0: never hit). */
+typedef struct BvhTriBlock {
+    float v0x[4], v0y[4], v0z[4];
+    float e1x[4], e1y[4], e1z[4];
+    float e2x[4], e2y[4], e2z[4];
+    uint32_t id[4]; /* scene primitive ids */
+} BvhTriBlock;
 
-/* Leaf-ordered primitive data so a leaf reads one contiguous block: triangles as
- * (v0, e1, e2) for Moller-Trumbore; spheres as centre = v0, radius = e1.x. */
-typedef struct BvhPrim {
-    Vec3 v0, e1, e2;
-    uint32_t id;   /* scene primitive id */
-    uint32_t kind; /* BVH_PRIM_* */
-    float pad;
-} BvhPrim;
+typedef struct BvhSphere {
+    Vec3 center;
+    float radius;
+    uint32_t id;
+} BvhSphere;
+
+/* A leaf's contents: a run of triangle blocks and a run of spheres. */
+typedef struct BvhLeaf {
+    uint32_t first_block, first_sphere;
+    uint16_t num_blocks, num_spheres;
+} BvhLeaf;
 
 typedef struct Bvh {
     BvhNode *nodes;
     int num_nodes;
-    BvhPrim *prims;
+    BvhLeaf *leaves;
+    int num_leaves;
+    BvhTriBlock *blocks;
+    int num_blocks;
+    BvhSphere *spheres;
+    int num_spheres;
     int num_prims;
     BBox bounds;
 } Bvh;
