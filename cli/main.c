@@ -236,55 +236,23 @@ static void cli_format_rate(double count, double seconds, char *buf, size_t size
     snprintf(buf, size, m >= 100.0 ? "%.0f" : m >= 10.0 ? "%.1f" : "%.2f", m);
 }
 
-static int cli_online_cores(void)
+/* One line describing the job, with the settings the render will really use. */
+static void cli_print_job(const CliArgs *a, const CstScene *scene, const CstRenderSettings *settings,
+                          const char *output)
 {
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n > 0 ? (int)n : 1;
-}
-
-/* One line describing the job. The public API does not expose what a scene file asks
- * for, so a setting left to a scene file is shown as "scene's"; the built-in scene
- * carries no settings, so the library defaults apply to it. */
-static void cli_print_job(const CliArgs *a, const char *output)
-{
-    const CstRenderSettings *s = &a->settings;
-    bool builtin = a->scene_path == NULL;
-    char size[64], work[96], integ[48], threads[48];
-
-    if (s->width && s->height)
-        snprintf(size, sizeof size, "%dx%d", s->width, s->height);
-    else if (builtin)
-        snprintf(size, sizeof size, "%dx%d", s->width ? s->width : 512,
-                 s->height ? s->height : 512);
-    else if (s->width)
-        snprintf(size, sizeof size, "width %d, scene's height", s->width);
-    else if (s->height)
-        snprintf(size, sizeof size, "scene's width, height %d", s->height);
+    CstRenderSettings s;
+    cst_render_settings_resolve(scene, settings, &s);
+    char work[96];
+    if (s.spp && s.time_limit > 0.0)
+        snprintf(work, sizeof work, "%d spp or %g s, whichever comes first", s.spp, s.time_limit);
+    else if (s.time_limit > 0.0)
+        snprintf(work, sizeof work, "time limit %g s", s.time_limit);
     else
-        snprintf(size, sizeof size, "scene's size");
-
-    if (s->spp && s->time_limit > 0.0)
-        snprintf(work, sizeof work, "%d spp or %g s, whichever comes first", s->spp,
-                 s->time_limit);
-    else if (s->spp)
-        snprintf(work, sizeof work, "%d spp", s->spp);
-    else if (s->time_limit > 0.0)
-        snprintf(work, sizeof work, builtin ? "time limit %g s" : "time limit %g s or scene's spp",
-                 s->time_limit);
-    else
-        snprintf(work, sizeof work, builtin ? "16 spp" : "scene's spp");
-
-    if (s->integrator != CST_INTEGRATOR_DEFAULT)
-        snprintf(integ, sizeof integ, "%s", cst_integrator_name(s->integrator));
-    else
-        snprintf(integ, sizeof integ, builtin ? "path" : "scene's integrator");
-
-    int nt = s->threads ? s->threads : cli_online_cores();
-    snprintf(threads, sizeof threads, "%d thread%s", nt, nt == 1 ? "" : "s");
-
-    fprintf(stderr, "caustic: rendering %s (%s, %s, %s, %s) to %s\n",
-            builtin ? "the built-in Cornell box" : a->scene_path, size, work, integ, threads,
-            output);
+        snprintf(work, sizeof work, "%d spp", s.spp);
+    fprintf(stderr, "caustic: rendering %s (%dx%d, %s, %s, %s filter, %d thread%s) to %s\n",
+            a->scene_path ? a->scene_path : "the built-in Cornell box", s.width, s.height, work,
+            cst_integrator_name(s.integrator), cst_filter_name(s.filter), s.threads,
+            s.threads == 1 ? "" : "s", output);
 }
 
 static void cli_print_summary(const char *output, const CstRenderStats *st)
@@ -379,7 +347,7 @@ static int cli_render(const CliArgs *a)
     if (!a->quiet) {
         settings.progress = cli_progress_report;
         settings.progress_user = &progress;
-        cli_print_job(a, output);
+        cli_print_job(a, scene, &settings, output);
     }
 
     status = cst_render(scene, &settings, &film, &stats, &err);

@@ -90,6 +90,11 @@ typedef struct CstRenderSettings {
     void *progress_user;
 } CstRenderSettings;
 
+/* The settings a render of `scene` would use: every zero field of `in` (which may be
+ * NULL) filled from the scene file, then from the defaults (threads: the core count). */
+void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in,
+                                 CstRenderSettings *out);
+
 typedef struct CstRenderStats {
     double seconds;           /* wall time of the render proper (not scene loading) */
     uint64_t samples;         /* camera samples = camera paths */

@@ -61,7 +61,7 @@ const char *cst_filter_name(CstFilter filter)
 }
 
 #define PICK(field, dflt) out->field = in->field ? in->field : (sc->field ? sc->field : (dflt))
-void render_resolve_settings(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out)
+void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out)
 {
     static const CstRenderSettings zero;
     if (!in) in = &zero;
@@ -200,7 +200,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
 {
     *out = NULL;
     CstRenderSettings st;
-    render_resolve_settings(scene, settings, &st);
+    cst_render_settings_resolve(scene, settings, &st);
     if (st.width <= 0 || st.height <= 0 || st.width > 65536 || st.height > 65536)
         return cst_fail(err, CST_ERR_INVALID_ARG, "image size %dx%d: expected 1..65536 in each dimension",
                         st.width, st.height);

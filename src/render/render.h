@@ -7,7 +7,4 @@
 
 enum { RENDER_TILE = 16 };
 
-/* Settings with every zero field filled from the scene, then from the defaults. */
-void render_resolve_settings(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out);
-
 #endif
