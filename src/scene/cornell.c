@@ -66,8 +66,14 @@ CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err)
                       (float)39.3077, 0.0f, (float)800.0};
     scene_set_camera(s, &cam);
     if ((st = scene_set_output_path(s, "cornell-box.png", err))) goto fail;
+    /* The same settings as scenes/cornell-box.json, so the two are interchangeable. */
     s->settings.width = 512;
     s->settings.height = 512;
+    s->settings.spp = 64;
+    s->settings.seed = 0;
+    s->settings.seed_set = 1;
+    s->settings.integrator = CST_INTEGRATOR_PATH;
+    s->settings.filter = CST_FILTER_BOX;
     if ((st = scene_commit(s, err))) goto fail;
     *out = s;
     return CST_OK;

@@ -1,0 +1,1108 @@
+/* The JSON scene loader (format: docs/scene-format.md). jansson parses; this file validates
+ * every value, names its file:line:column on error (found again by json_locate, since
+ * jansson keeps no positions), and builds the scene through the scene_add_* builder only. */
+#include <errno.h>
+#include <float.h>
+#include <jansson.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "scene/json_locate.h"
+#include "scene/scene.h"
+
+/* Deepest path the format has is 4 (shapes[i].emission.radiance[k]); the rest is headroom. */
+#define LOADER_MAX_DEPTH 8
+#define LOADER_MAX_FILM_SIZE 65536
+/* A quad's fourth vertex may lie this fraction of the quad's longer diagonal off the plane
+ * of the other three. The measured Cornell box data is off by 0.41% (the left wall: the
+ * room was surveyed, not modelled), so 1% passes it while a visibly bent quad fails. */
+#define LOADER_QUAD_PLANARITY_TOL 0.01
+/* Bound on scene-space coordinates and lengths. Intersection tests work with squared
+ * distances in float; with every coordinate within 1e18 those stay finite,
+ * 3 * (2e18)^2 = 1.2e37 < FLT_MAX = 3.4e38, and so do triangle and sphere areas. */
+#define LOADER_MAX_LENGTH 1e18
+/* A sphere's area 4 pi r^2 must not underflow to 0 in float: an emitter of area 0 cannot
+ * be sampled. 1e-18 keeps r^2 a normal float. */
+#define LOADER_MIN_RADIUS 1e-18
+/* read_int's "no upper bound"; jansson integers are long long (JSON_INTEGER_IS_LONG_LONG). */
+#define LOADER_NO_MAX ((json_int_t)LLONG_MAX)
+_Static_assert(sizeof(json_int_t) == sizeof(long long), "jansson integers are long long");
+
+#define LOADER_TRY(expr)                    \
+    do {                                    \
+        CstStatus loader_st_ = (expr);      \
+        if (loader_st_ != CST_OK)           \
+            return loader_st_;              \
+    } while (0)
+
+typedef struct Loader {
+    const char *text;
+    size_t len;
+    const char *name; /* the file name in messages */
+    /* Path of the value being read. Every error returns at once, so a failing reader
+     * never needs to pop what it pushed. */
+    JsonPathStep path[LOADER_MAX_DEPTH];
+    int depth;
+    Scene *scene;
+    CstError *err; /* never NULL: the entry points substitute a local one */
+    /* Material names (keys owned by the jansson root) and their scene ids, in file order. */
+    const char **mat_names;
+    int *mat_ids;
+    int num_materials;
+} Loader;
+
+/* ------------------------------------------------------------------ paths and messages */
+
+static void path_push_key(Loader *ld, const char *key)
+{
+    if (ld->depth < LOADER_MAX_DEPTH)
+        ld->path[ld->depth] = (JsonPathStep){key, 0};
+    ld->depth++;
+}
+
+static void path_push_index(Loader *ld, size_t index)
+{
+    if (ld->depth < LOADER_MAX_DEPTH)
+        ld->path[ld->depth] = (JsonPathStep){NULL, index};
+    ld->depth++;
+}
+
+static void path_pop(Loader *ld) { ld->depth--; }
+
+/* Copies src into buf[*pos, cap) as far as it fits, always terminating. Control bytes
+ * (decoded from escapes in the file) become '?' so a message stays on one line. */
+static void buf_append(char *buf, size_t cap, size_t *pos, const char *src)
+{
+    for (; *src && *pos + 1 < cap; src++)
+        buf[(*pos)++] = ((unsigned char)*src < 0x20) ? '?' : *src;
+    buf[*pos] = '\0';
+}
+
+/* A name from the file, made safe and short enough to quote in a message. */
+static const char *clip_name(const char *s, char buf[72])
+{
+    size_t pos = 0;
+    buf[0] = '\0';
+    buf_append(buf, 64, &pos, s);
+    if (strlen(s) > pos)
+        buf_append(buf, 72, &pos, "...");
+    return buf;
+}
+
+/* "a, b, c" */
+static void join_names(const char *const *names, int n, char *buf, size_t cap)
+{
+    size_t pos = 0;
+    buf[0] = '\0';
+    for (int i = 0; i < n; i++) {
+        if (i > 0)
+            buf_append(buf, cap, &pos, ", ");
+        buf_append(buf, cap, &pos, names[i]);
+    }
+}
+
+static int is_plain_key(const char *k)
+{
+    if (!*k)
+        return 0;
+    for (; *k; k++)
+        if (!((*k >= 'a' && *k <= 'z') || (*k >= 'A' && *k <= 'Z') || (*k >= '0' && *k <= '9') ||
+              *k == '_' || *k == '-'))
+            return 0;
+    return 1;
+}
+
+/* shapes[3].vertices[2], or materials["my glass"].ior for keys that are not identifiers. */
+static void path_format(const JsonPathStep *path, int depth, char *buf, size_t cap)
+{
+    size_t pos = 0;
+    buf[0] = '\0';
+    for (int d = 0; d < depth; d++) {
+        if (path[d].key && is_plain_key(path[d].key)) {
+            if (d > 0)
+                buf_append(buf, cap, &pos, ".");
+            buf_append(buf, cap, &pos, path[d].key);
+        } else if (path[d].key) {
+            char name[72];
+            buf_append(buf, cap, &pos, "[\"");
+            buf_append(buf, cap, &pos, clip_name(path[d].key, name));
+            buf_append(buf, cap, &pos, "\"]");
+        } else {
+            char idx[32];
+            snprintf(idx, sizeof idx, "[%zu]", path[d].index);
+            buf_append(buf, cap, &pos, idx);
+        }
+    }
+}
+
+/* Fails with "<file>:<line>:<col>: <json path>: <what>". The position is that of the value
+ * at the current path or, for JSON_LOCATE_KEY, of the key ending it; the json path printed
+ * is then the object holding the key, as the message names the key itself. */
+static CstStatus fail_v(Loader *ld, CstStatus status, JsonLocateTarget target, const char *fmt,
+                        va_list ap)
+{
+    char what[640], where[256];
+    int depth = ld->depth < LOADER_MAX_DEPTH ? ld->depth : LOADER_MAX_DEPTH;
+    vsnprintf(what, sizeof what, fmt, ap);
+    path_format(ld->path, target == JSON_LOCATE_KEY ? depth - 1 : depth, where, sizeof where);
+    const char *sep = where[0] ? ": " : "";
+    JsonLocation loc;
+    if (json_locate(ld->text, ld->len, ld->path, depth, target, &loc))
+        cst_fail(ld->err, status, "%.200s:%d:%d: %s%s%s", ld->name, loc.line, loc.column, where,
+                 sep, what);
+    else /* unreachable for text jansson accepted; still say what we know */
+        cst_fail(ld->err, status, "%.200s: %s%s%s", ld->name, where, sep, what);
+    return status; /* visibly nonzero, so callers' outputs are known set on CST_OK */
+}
+
+static CstStatus fail_at(Loader *ld, CstStatus status, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static CstStatus fail_at(Loader *ld, CstStatus status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    CstStatus st = fail_v(ld, status, JSON_LOCATE_VALUE, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+/* A semantic error in the value at the current path. */
+static CstStatus fail_here(Loader *ld, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static CstStatus fail_here(Loader *ld, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    CstStatus st = fail_v(ld, CST_ERR_INVALID_ARG, JSON_LOCATE_VALUE, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+/* A semantic error in the key that ends the current path. */
+static CstStatus fail_key(Loader *ld, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static CstStatus fail_key(Loader *ld, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    CstStatus st = fail_v(ld, CST_ERR_INVALID_ARG, JSON_LOCATE_KEY, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+/* A builder call failed: keep its status and text, add where in the file it came from. */
+static CstStatus fail_builder(Loader *ld, CstStatus status)
+{
+    char msg[sizeof ld->err->msg];
+    memcpy(msg, ld->err->msg, sizeof msg);
+    msg[sizeof msg - 1] = '\0';
+    return fail_at(ld, status, "%.600s", msg);
+}
+
+/* ------------------------------------------------------------------ typed readers */
+/* Each reads the value at the current path and fails there with what it expected. */
+
+static const char *describe(const json_t *v, char buf[48])
+{
+    switch (json_typeof(v)) {
+    case JSON_OBJECT: return "an object";
+    case JSON_ARRAY:
+        snprintf(buf, 48, "an array of %zu element%s", json_array_size(v),
+                 json_array_size(v) == 1 ? "" : "s");
+        return buf;
+    case JSON_STRING: return "a string";
+    case JSON_INTEGER: return "an integer";
+    case JSON_REAL: return "a number";
+    case JSON_TRUE: return "true";
+    case JSON_FALSE: return "false";
+    case JSON_NULL: return "null";
+    }
+    return "an unknown value";
+}
+
+/* A number of magnitude at most max_abs: FLT_MAX for plain values, LOADER_MAX_LENGTH for
+ * scene-space coordinates and lengths. */
+static CstStatus read_float(Loader *ld, const json_t *v, double max_abs, float *out)
+{
+    char kind[48];
+    if (!json_is_number(v))
+        return fail_here(ld, "got %s; expected a number", describe(v, kind));
+    double d = json_number_value(v);
+    /* jansson already rejects NaN, Infinity and 1e999; this catches finite doubles that
+     * would become infinite as floats, and coordinates beyond LOADER_MAX_LENGTH. */
+    if (!(fabs(d) <= (double)FLT_MAX))
+        return fail_here(ld, "%g does not fit a 32-bit float; expected a magnitude below 3.4e38",
+                         d);
+    if (!(fabs(d) <= max_abs))
+        return fail_here(ld, "%g is too large for a scene coordinate or length; expected a "
+                             "magnitude of at most %g",
+                         d, max_abs);
+    *out = (float)d;
+    return CST_OK;
+}
+
+static CstStatus read_vec3(Loader *ld, const json_t *v, double max_abs, Vec3 *out)
+{
+    char kind[48];
+    if (!json_is_array(v) || json_array_size(v) != 3)
+        return fail_here(ld, "got %s; expected an array of 3 numbers", describe(v, kind));
+    float c[3] = {0};
+    for (size_t k = 0; k < 3; k++) {
+        path_push_index(ld, k);
+        LOADER_TRY(read_float(ld, json_array_get(v, k), max_abs, &c[k]));
+        path_pop(ld);
+    }
+    *out = v3(c[0], c[1], c[2]);
+    return CST_OK;
+}
+
+/* An RGB triple of numbers, each >= 0 and, when max_one, <= 1. */
+static CstStatus read_rgb(Loader *ld, const json_t *v, int max_one, Rgb *out)
+{
+    static const char *const channel[3] = {"red", "green", "blue"};
+    Vec3 c = {0};
+    LOADER_TRY(read_vec3(ld, v, (double)FLT_MAX, &c));
+    for (int k = 0; k < 3; k++) {
+        float x = v3_get(c, k);
+        if (x < 0.0f || (max_one && x > 1.0f)) {
+            path_push_index(ld, (size_t)k);
+            if (max_one)
+                return fail_here(ld, "%s %g is outside [0, 1] (more than 1 would create energy); "
+                                     "expected a reflectance from 0 to 1",
+                                 channel[k], (double)x);
+            return fail_here(ld, "%s %g is negative; expected a number >= 0", channel[k], (double)x);
+        }
+    }
+    *out = rgb(c.x, c.y, c.z);
+    return CST_OK;
+}
+
+static CstStatus read_int(Loader *ld, const json_t *v, json_int_t lo, json_int_t hi, json_int_t *out)
+{
+    char kind[48];
+    if (!json_is_integer(v)) {
+        if (hi == LOADER_NO_MAX)
+            return fail_here(ld, "got %s; expected an integer >= %" JSON_INTEGER_FORMAT,
+                             describe(v, kind), lo);
+        return fail_here(ld, "got %s; expected an integer from %" JSON_INTEGER_FORMAT
+                             " to %" JSON_INTEGER_FORMAT,
+                         describe(v, kind), lo, hi);
+    }
+    json_int_t i = json_integer_value(v);
+    if (i < lo || i > hi) {
+        if (hi == LOADER_NO_MAX)
+            return fail_here(ld, "%" JSON_INTEGER_FORMAT " is out of range; expected an integer >= %"
+                                 JSON_INTEGER_FORMAT, i, lo);
+        return fail_here(ld, "%" JSON_INTEGER_FORMAT " is out of range; expected an integer from %"
+                             JSON_INTEGER_FORMAT " to %" JSON_INTEGER_FORMAT, i, lo, hi);
+    }
+    *out = i;
+    return CST_OK;
+}
+
+static CstStatus read_string(Loader *ld, const json_t *v, const char **out)
+{
+    char kind[48];
+    if (!json_is_string(v))
+        return fail_here(ld, "got %s; expected a string", describe(v, kind));
+    *out = json_string_value(v);
+    return CST_OK;
+}
+
+static CstStatus read_bool(Loader *ld, const json_t *v, int *out)
+{
+    char kind[48];
+    if (!json_is_boolean(v))
+        return fail_here(ld, "got %s; expected true or false", describe(v, kind));
+    *out = json_is_true(v);
+    return CST_OK;
+}
+
+static CstStatus expect_object(Loader *ld, const json_t *v, const char *what)
+{
+    char kind[48];
+    if (!json_is_object(v))
+        return fail_here(ld, "got %s; expected %s", describe(v, kind), what);
+    return CST_OK;
+}
+
+/* Rejects keys not in allowed: a misspelt optional key must not silently mean "default". */
+static CstStatus check_keys(Loader *ld, const json_t *obj, const char *const *allowed, int n)
+{
+    const char *key;
+    json_t *val;
+    json_object_foreach((json_t *)obj, key, val) {
+        int known = 0;
+        for (int i = 0; i < n && !known; i++)
+            known = strcmp(key, allowed[i]) == 0;
+        if (!known) {
+            char list[512], name[72];
+            join_names(allowed, n, list, sizeof list);
+            path_push_key(ld, key);
+            return fail_key(ld, "unknown key \"%s\"; expected one of: %s", clip_name(key, name),
+                            list);
+        }
+    }
+    return CST_OK;
+}
+
+/* *out = obj[key], which must exist; the error points at obj. */
+static CstStatus member_required(Loader *ld, const json_t *obj, const char *key,
+                                 const char *expected, json_t **out)
+{
+    *out = json_object_get(obj, key);
+    if (!*out)
+        return fail_here(ld, "missing key \"%s\"; expected %s", key, expected);
+    return CST_OK;
+}
+
+/* obj["type"] as an index into names; a missing type gives default_index, or an error
+ * if that is -1. */
+static CstStatus read_type(Loader *ld, const json_t *obj, const char *what,
+                           const char *const *names, int n, int default_index, int *out)
+{
+    char list[256];
+    join_names(names, n, list, sizeof list);
+    json_t *v = json_object_get(obj, "type");
+    if (!v) {
+        if (default_index >= 0) {
+            *out = default_index;
+            return CST_OK;
+        }
+        return fail_here(ld, "missing key \"type\"; expected a %s: %s", what, list);
+    }
+    const char *s = NULL;
+    path_push_key(ld, "type");
+    LOADER_TRY(read_string(ld, v, &s));
+    for (int i = 0; i < n; i++)
+        if (strcmp(s, names[i]) == 0) {
+            path_pop(ld);
+            *out = i;
+            return CST_OK;
+        }
+    char name[72];
+    return fail_here(ld, "unknown %s \"%s\"; expected one of: %s", what, clip_name(s, name), list);
+}
+
+/* ------------------------------------------------------------------ sections */
+
+/* Ends in .png, .exr or .pfm, any case (as the CLI accepts), after a nonempty stem. */
+static int has_image_extension(const char *path)
+{
+    static const char *const exts[] = {".png", ".exr", ".pfm"};
+    size_t n = strlen(path);
+    if (n < 5)
+        return 0;
+    for (int e = 0; e < 3; e++) {
+        int same = 1;
+        for (int k = 0; k < 4 && same; k++) {
+            char c = path[n - 4 + (size_t)k];
+            same = (c >= 'A' && c <= 'Z' ? (char)(c - 'A' + 'a') : c) == exts[e][k];
+        }
+        if (same)
+            return 1;
+    }
+    return 0;
+}
+
+static CstStatus parse_film(Loader *ld, const json_t *film)
+{
+    static const char *const keys[] = {"width", "height", "filter", "output"};
+    CstRenderSettings *rs = &ld->scene->settings;
+    LOADER_TRY(expect_object(ld, film, "an object with width, height, filter, output"));
+    LOADER_TRY(check_keys(ld, film, keys, 4));
+    json_t *v;
+    json_int_t i = 0;
+    if ((v = json_object_get(film, "width"))) {
+        path_push_key(ld, "width");
+        LOADER_TRY(read_int(ld, v, 1, LOADER_MAX_FILM_SIZE, &i));
+        rs->width = (int)i;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(film, "height"))) {
+        path_push_key(ld, "height");
+        LOADER_TRY(read_int(ld, v, 1, LOADER_MAX_FILM_SIZE, &i));
+        rs->height = (int)i;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(film, "filter"))) {
+        const char *s = NULL;
+        path_push_key(ld, "filter");
+        LOADER_TRY(read_string(ld, v, &s));
+        CstFilter f = cst_filter_from_name(s);
+        if (f == CST_FILTER_DEFAULT) {
+            char name[72];
+            return fail_here(ld, "unknown filter \"%s\"; expected one of: box, tent",
+                             clip_name(s, name));
+        }
+        rs->filter = f;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(film, "output"))) {
+        const char *s = NULL;
+        path_push_key(ld, "output");
+        LOADER_TRY(read_string(ld, v, &s));
+        /* Checked now, not when the image is written hours later: the writer picks the
+         * format from the extension. */
+        if (!has_image_extension(s)) {
+            char name[72];
+            return fail_here(ld, "output \"%s\" has no supported extension; expected a file "
+                                 "name ending in .png, .exr or .pfm",
+                             clip_name(s, name));
+        }
+        CstStatus st = scene_set_output_path(ld->scene, s, ld->err);
+        if (st != CST_OK)
+            return fail_builder(ld, st);
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
+enum { CAMERA_PINHOLE, CAMERA_THINLENS };
+
+static CstStatus parse_camera(Loader *ld, const json_t *cam)
+{
+    static const char *const types[] = {"pinhole", "thinlens"};
+    static const char *const keys[] = {"type", "position", "look_at", "up", "fov",
+                                       "aperture_radius", "focus_distance"};
+    int type = 0;
+    json_t *v;
+    LOADER_TRY(expect_object(ld, cam, "a camera object"));
+    LOADER_TRY(read_type(ld, cam, "camera type", types, 2, CAMERA_PINHOLE, &type));
+    /* The lens keys mean nothing to a pinhole: reject rather than ignore them. */
+    LOADER_TRY(check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 7 : 5));
+
+    CameraDesc desc = {0};
+    desc.up = v3(0.0f, 1.0f, 0.0f);
+    LOADER_TRY(member_required(ld, cam, "position", "the eye point, an array of 3 numbers", &v));
+    path_push_key(ld, "position");
+    LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &desc.position));
+    path_pop(ld);
+
+    LOADER_TRY(member_required(ld, cam, "look_at", "the point looked at, an array of 3 numbers",
+                               &v));
+    path_push_key(ld, "look_at");
+    LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &desc.look_at));
+    Vec3 forward = v3_sub(desc.look_at, desc.position);
+    float dist = v3_length(forward);
+    if (!(dist > 0.0f) || !isfinite(dist))
+        return fail_here(ld, "look_at equals position, so there is no view direction; expected "
+                             "a point other than position");
+    path_pop(ld);
+
+    if ((v = json_object_get(cam, "up"))) {
+        path_push_key(ld, "up");
+        LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &desc.up));
+        path_pop(ld);
+    }
+    /* right = normalize(forward x up) must exist: up must not be zero or along forward.
+     * sin(angle) below 1e-4 (0.006 degrees) leaves the frame to rounding. */
+    float ul = v3_length(desc.up);
+    Vec3 c = v3_cross(v3_scale(forward, 1.0f / dist), desc.up);
+    if (!(ul > 0.0f) || !isfinite(ul) || !(v3_length(c) > 1e-4f * ul)) {
+        if (json_object_get(cam, "up"))
+            path_push_key(ld, "up");
+        return fail_here(ld, "up (%g, %g, %g) is zero or parallel to the view direction; "
+                             "expected a vector not parallel to look_at - position",
+                         (double)desc.up.x, (double)desc.up.y, (double)desc.up.z);
+    }
+
+    LOADER_TRY(member_required(ld, cam, "fov",
+                               "the vertical field of view in degrees, in (0, 180)", &v));
+    path_push_key(ld, "fov");
+    LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &desc.vfov_deg));
+    if (!(desc.vfov_deg > 0.0f && desc.vfov_deg < 180.0f))
+        return fail_here(ld, "fov %g is out of range; expected the vertical field of view in "
+                             "degrees, greater than 0 and less than 180",
+                         (double)desc.vfov_deg);
+    path_pop(ld);
+
+    desc.aperture_radius = 0.0f;
+    desc.focus_distance = dist;
+    if (type == CAMERA_THINLENS) {
+        LOADER_TRY(member_required(ld, cam, "aperture_radius",
+                                   "the lens radius in scene units, >= 0", &v));
+        path_push_key(ld, "aperture_radius");
+        LOADER_TRY(read_float(ld, v, LOADER_MAX_LENGTH, &desc.aperture_radius));
+        if (desc.aperture_radius < 0.0f)
+            return fail_here(ld, "aperture_radius %g is negative; expected a lens radius >= 0",
+                             (double)desc.aperture_radius);
+        path_pop(ld);
+        if ((v = json_object_get(cam, "focus_distance"))) {
+            path_push_key(ld, "focus_distance");
+            LOADER_TRY(read_float(ld, v, LOADER_MAX_LENGTH, &desc.focus_distance));
+            if (!(desc.focus_distance > 0.0f))
+                return fail_here(ld, "focus_distance %g is not positive; expected a distance > 0",
+                                 (double)desc.focus_distance);
+            path_pop(ld);
+        }
+    }
+    scene_set_camera(ld->scene, &desc);
+    return CST_OK;
+}
+
+static CstStatus parse_integrator(Loader *ld, const json_t *integ)
+{
+    static const char *const keys[] = {"type", "max_depth", "rr_depth"};
+    CstRenderSettings *rs = &ld->scene->settings;
+    json_t *v;
+    json_int_t i = 0;
+    LOADER_TRY(expect_object(ld, integ, "an object with type, max_depth, rr_depth"));
+    LOADER_TRY(check_keys(ld, integ, keys, 3));
+    if ((v = json_object_get(integ, "type"))) {
+        const char *s = NULL;
+        path_push_key(ld, "type");
+        LOADER_TRY(read_string(ld, v, &s));
+        CstIntegrator t = cst_integrator_from_name(s);
+        if (t == CST_INTEGRATOR_DEFAULT) {
+            char name[72];
+            return fail_here(ld, "unknown integrator \"%s\"; expected one of: path, path-nee, "
+                                 "path-bsdf",
+                             clip_name(s, name));
+        }
+        rs->integrator = t;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "max_depth"))) {
+        path_push_key(ld, "max_depth");
+        LOADER_TRY(read_int(ld, v, 0, INT_MAX, &i)); /* 0 = unbounded */
+        rs->max_depth = (int)i;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "rr_depth"))) {
+        /* From 1: the settings struct reads 0 as "default", which a file should not say. */
+        path_push_key(ld, "rr_depth");
+        LOADER_TRY(read_int(ld, v, 1, INT_MAX, &i));
+        rs->rr_depth = (int)i;
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
+static CstStatus parse_sampler(Loader *ld, const json_t *sampler)
+{
+    static const char *const keys[] = {"spp", "seed"};
+    CstRenderSettings *rs = &ld->scene->settings;
+    json_t *v;
+    json_int_t i = 0;
+    LOADER_TRY(expect_object(ld, sampler, "an object with spp, seed"));
+    LOADER_TRY(check_keys(ld, sampler, keys, 2));
+    if ((v = json_object_get(sampler, "spp"))) {
+        path_push_key(ld, "spp");
+        LOADER_TRY(read_int(ld, v, 1, INT_MAX, &i));
+        rs->spp = (int)i;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(sampler, "seed"))) {
+        path_push_key(ld, "seed");
+        LOADER_TRY(read_int(ld, v, 0, LOADER_NO_MAX, &i));
+        rs->seed = (uint64_t)i;
+        rs->seed_set = 1;
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
+enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS };
+
+static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
+{
+    static const char *const types[] = {"diffuse", "mirror", "glass"};
+    static const char *const keys[] = {"type", "albedo", "ior"};
+    static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS};
+    int type = 0;
+    json_t *v;
+    LOADER_TRY(expect_object(ld, obj, "a material object"));
+    LOADER_TRY(read_type(ld, obj, "material type", types, 3, -1, &type));
+    LOADER_TRY(check_keys(ld, obj, keys, type == MAT_GLASS ? 3 : 2));
+    m->type = mtype[type];
+    m->albedo = type == MAT_DIFFUSE ? rgb_s(0.5f) : rgb_s(1.0f);
+    m->ior = type == MAT_GLASS ? 1.5f : 1.0f;
+    if ((v = json_object_get(obj, "albedo"))) {
+        /* A reflectance above 1 would make any of these create energy. */
+        path_push_key(ld, "albedo");
+        LOADER_TRY(read_rgb(ld, v, 1, &m->albedo));
+        path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "ior"))) {
+        path_push_key(ld, "ior");
+        LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &m->ior));
+        if (!(m->ior > 0.0f))
+            return fail_here(ld, "ior %g is not positive; expected an index of refraction > 0 "
+                                 "(glass is about 1.5)",
+                             (double)m->ior);
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
+static CstStatus parse_materials(Loader *ld, const json_t *mats)
+{
+    LOADER_TRY(expect_object(ld, mats, "an object mapping material names to materials"));
+    size_t n = json_object_size(mats);
+    if (n > (size_t)INT_MAX)
+        return fail_here(ld, "too many materials");
+    ld->mat_names = malloc((n ? n : 1) * sizeof *ld->mat_names);
+    ld->mat_ids = malloc((n ? n : 1) * sizeof *ld->mat_ids);
+    if (!ld->mat_names || !ld->mat_ids)
+        return fail_at(ld, CST_ERR_OOM, "out of memory");
+    const char *name;
+    json_t *v;
+    json_object_foreach((json_t *)mats, name, v) {
+        Material m = {0};
+        int id = 0;
+        path_push_key(ld, name);
+        LOADER_TRY(parse_material(ld, v, &m));
+        CstStatus st = scene_add_material(ld->scene, &m, &id, ld->err);
+        if (st != CST_OK)
+            return fail_builder(ld, st);
+        path_pop(ld);
+        ld->mat_names[ld->num_materials] = name;
+        ld->mat_ids[ld->num_materials] = id;
+        ld->num_materials++;
+    }
+    return CST_OK;
+}
+
+/* shape["material"] -> scene material id. */
+static CstStatus read_material_ref(Loader *ld, const json_t *shape, int *out)
+{
+    json_t *v;
+    const char *s = NULL;
+    LOADER_TRY(member_required(ld, shape, "material", "the name of a material", &v));
+    path_push_key(ld, "material");
+    LOADER_TRY(read_string(ld, v, &s));
+    for (int i = 0; i < ld->num_materials; i++)
+        if (strcmp(ld->mat_names[i], s) == 0) {
+            *out = ld->mat_ids[i];
+            path_pop(ld);
+            return CST_OK;
+        }
+    char name[72];
+    if (ld->num_materials == 0)
+        return fail_here(ld, "material \"%s\" is not defined (no materials are); expected a name "
+                             "defined under \"materials\"",
+                         clip_name(s, name));
+    char list[512];
+    join_names(ld->mat_names, ld->num_materials, list, sizeof list);
+    return fail_here(ld, "material \"%s\" is not defined; expected one of: %s", clip_name(s, name),
+                     list);
+}
+
+static CstStatus read_emission(Loader *ld, const json_t *shape, Emission *em)
+{
+    static const char *const keys[] = {"radiance", "two_sided"};
+    json_t *obj = json_object_get(shape, "emission"), *v;
+    em->radiance = rgb_s(0.0f);
+    em->two_sided = 0;
+    if (!obj)
+        return CST_OK;
+    path_push_key(ld, "emission");
+    LOADER_TRY(expect_object(ld, obj, "an object with radiance, two_sided"));
+    LOADER_TRY(check_keys(ld, obj, keys, 2));
+    LOADER_TRY(member_required(ld, obj, "radiance", "an array of 3 numbers >= 0", &v));
+    path_push_key(ld, "radiance");
+    LOADER_TRY(read_rgb(ld, v, 0, &em->radiance));
+    path_pop(ld);
+    if ((v = json_object_get(obj, "two_sided"))) {
+        path_push_key(ld, "two_sided");
+        LOADER_TRY(read_bool(ld, v, &em->two_sided));
+        path_pop(ld);
+    }
+    path_pop(ld);
+    return CST_OK;
+}
+
+/* Triangle (a, b, c) has an area > 0, the same test the builder applies. */
+static int triangle_ok(Vec3 a, Vec3 b, Vec3 c)
+{
+    float area = triangle_area(a, b, c);
+    return area > 0.0f && isfinite(area);
+}
+
+static CstStatus parse_quad(Loader *ld, const json_t *shape, int material, const Emission *em)
+{
+    json_t *arr;
+    Vec3 v[4] = {{0}};
+    char kind[48];
+    LOADER_TRY(member_required(ld, shape, "vertices", "4 vertices, each an array of 3 numbers",
+                               &arr));
+    path_push_key(ld, "vertices");
+    if (!json_is_array(arr) || json_array_size(arr) != 4)
+        return fail_here(ld, "got %s; expected 4 vertices, each an array of 3 numbers",
+                         describe(arr, kind));
+    for (size_t k = 0; k < 4; k++) {
+        path_push_index(ld, k);
+        LOADER_TRY(read_vec3(ld, json_array_get(arr, k), LOADER_MAX_LENGTH, &v[k]));
+        path_pop(ld);
+    }
+    /* The builder splits the quad along v0-v2 into (v0, v1, v2) and (v0, v2, v3). */
+    if (!triangle_ok(v[0], v[1], v[2]))
+        return fail_here(ld, "triangle 0 of the quad (v0, v1, v2) is degenerate (zero area); "
+                             "expected 4 vertices in order around a quad of nonzero area");
+    if (!triangle_ok(v[0], v[2], v[3]))
+        return fail_here(ld, "triangle 1 of the quad (v0, v2, v3) is degenerate (zero area); "
+                             "expected 4 vertices in order around a quad of nonzero area");
+    /* Checked in double: the cancellation in these differences is what we measure. */
+    double e1[3], e2[3], e3[3], n0[3], n1[3], d13[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = (double)v3_get(v[1], k) - (double)v3_get(v[0], k);
+        e2[k] = (double)v3_get(v[2], k) - (double)v3_get(v[0], k);
+        e3[k] = (double)v3_get(v[3], k) - (double)v3_get(v[0], k);
+        d13[k] = (double)v3_get(v[3], k) - (double)v3_get(v[1], k);
+    }
+    for (int k = 0; k < 3; k++) {
+        int a = (k + 1) % 3, b = (k + 2) % 3;
+        n0[k] = e1[a] * e2[b] - e1[b] * e2[a]; /* (v1 - v0) x (v2 - v0) */
+        n1[k] = e2[a] * e3[b] - e2[b] * e3[a]; /* (v2 - v0) x (v3 - v0) */
+    }
+    double dot01 = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
+    if (!(dot01 > 0.0))
+        return fail_here(ld, "the quad's triangles (v0, v1, v2) and (v0, v2, v3) face opposite "
+                             "ways; expected vertices in order around the quad (not crossing)");
+    double n0_len = sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]);
+    double off = fabs(e3[0] * n0[0] + e3[1] * n0[1] + e3[2] * n0[2]) / n0_len;
+    double diag = fmax(sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]),
+                       sqrt(d13[0] * d13[0] + d13[1] * d13[1] + d13[2] * d13[2]));
+    double tol = LOADER_QUAD_PLANARITY_TOL * diag;
+    if (off > tol)
+        return fail_here(ld, "the quad is not planar: v3 is %g off the plane of v0, v1, v2 (more "
+                             "than %g, 1%% of its longer diagonal); expected 4 coplanar vertices",
+                         off, tol);
+    path_pop(ld);
+    CstStatus st = scene_add_quad(ld->scene, v, material, em, ld->err);
+    return st == CST_OK ? CST_OK : fail_builder(ld, st);
+}
+
+static CstStatus read_mesh_indices(Loader *ld, const json_t *arr, int num_vertices, Vec3 *pos,
+                                   int *idx)
+{
+    char kind[48];
+    size_t t;
+    json_t *tri;
+    json_array_foreach(arr, t, tri) {
+        path_push_index(ld, t);
+        if (!json_is_array(tri) || json_array_size(tri) != 3)
+            return fail_here(ld, "got %s; expected a triangle, an array of 3 vertex indices",
+                             describe(tri, kind));
+        for (size_t k = 0; k < 3; k++) {
+            json_t *iv = json_array_get(tri, k);
+            path_push_index(ld, k);
+            if (!json_is_integer(iv))
+                return fail_here(ld, "got %s; expected a vertex index, an integer from 0 to %d",
+                                 describe(iv, kind), num_vertices - 1);
+            json_int_t i = json_integer_value(iv);
+            if (i < 0 || i >= num_vertices)
+                return fail_here(ld, "vertex index %" JSON_INTEGER_FORMAT " is out of range; "
+                                     "expected 0 to %d (the mesh has %d vertices)",
+                                 i, num_vertices - 1, num_vertices);
+            idx[3 * t + k] = (int)i;
+            path_pop(ld);
+        }
+        if (!triangle_ok(pos[idx[3 * t]], pos[idx[3 * t + 1]], pos[idx[3 * t + 2]]))
+            return fail_here(ld, "triangle %zu is degenerate (zero area); expected 3 distinct, "
+                                 "non-collinear vertices",
+                             t);
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
+static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const Emission *em)
+{
+    json_t *varr, *iarr;
+    char kind[48];
+    LOADER_TRY(member_required(ld, shape, "vertices",
+                               "an array of vertices, each an array of 3 numbers", &varr));
+    LOADER_TRY(member_required(ld, shape, "indices",
+                               "an array of triangles, each an array of 3 vertex indices", &iarr));
+    path_push_key(ld, "vertices");
+    if (!json_is_array(varr) || json_array_size(varr) < 3)
+        return fail_here(ld, "got %s; expected at least 3 vertices, each an array of 3 numbers",
+                         describe(varr, kind));
+    path_pop(ld);
+    path_push_key(ld, "indices");
+    if (!json_is_array(iarr) || json_array_size(iarr) == 0)
+        return fail_here(ld, "got %s; expected at least 1 triangle, each an array of 3 vertex "
+                             "indices",
+                         describe(iarr, kind));
+    path_pop(ld);
+    size_t nv = json_array_size(varr), nt = json_array_size(iarr);
+    /* The builder counts in int, 3 indices per triangle. */
+    if (nv > (size_t)INT_MAX || nt > (size_t)(INT_MAX / 3))
+        return fail_here(ld, "the mesh is too large; expected fewer than %d triangles", INT_MAX / 3);
+
+    CstStatus st = CST_OK;
+    Vec3 *pos = malloc(nv * sizeof *pos);
+    int *idx = malloc(nt * 3 * sizeof *idx);
+    if (!pos || !idx) {
+        st = fail_at(ld, CST_ERR_OOM, "out of memory for %zu vertices and %zu triangles", nv, nt);
+        goto done;
+    }
+    path_push_key(ld, "vertices");
+    for (size_t k = 0; k < nv; k++) {
+        path_push_index(ld, k);
+        st = read_vec3(ld, json_array_get(varr, k), LOADER_MAX_LENGTH, &pos[k]);
+        if (st != CST_OK)
+            goto done;
+        path_pop(ld);
+    }
+    path_pop(ld);
+    path_push_key(ld, "indices");
+    st = read_mesh_indices(ld, iarr, (int)nv, pos, idx);
+    if (st != CST_OK)
+        goto done;
+    path_pop(ld);
+    st = scene_add_mesh(ld->scene, pos, (int)nv, idx, (int)nt, material, em, ld->err);
+    if (st != CST_OK)
+        st = fail_builder(ld, st);
+done:
+    free(pos);
+    free(idx);
+    return st;
+}
+
+static CstStatus parse_sphere(Loader *ld, const json_t *shape, int material, const Emission *em)
+{
+    json_t *v;
+    Vec3 center = {0};
+    float radius = 0.0f;
+    LOADER_TRY(member_required(ld, shape, "center", "an array of 3 numbers", &v));
+    path_push_key(ld, "center");
+    LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &center));
+    path_pop(ld);
+    LOADER_TRY(member_required(ld, shape, "radius", "a number > 0", &v));
+    path_push_key(ld, "radius");
+    LOADER_TRY(read_float(ld, v, LOADER_MAX_LENGTH, &radius));
+    if (!(radius > 0.0f))
+        return fail_here(ld, "radius %g is not positive; expected a number > 0", (double)radius);
+    if (!(radius >= (float)LOADER_MIN_RADIUS))
+        return fail_here(ld, "radius %g is too small (its area would underflow a 32-bit float); "
+                             "expected a radius of at least %g",
+                         (double)radius, LOADER_MIN_RADIUS);
+    path_pop(ld);
+    CstStatus st = scene_add_sphere(ld->scene, center, radius, material, em, ld->err);
+    return st == CST_OK ? CST_OK : fail_builder(ld, st);
+}
+
+enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE };
+
+static CstStatus parse_shape(Loader *ld, const json_t *shape)
+{
+    static const char *const types[] = {"quad", "mesh", "sphere"};
+    static const char *const quad_keys[] = {"type", "vertices", "material", "emission"};
+    static const char *const mesh_keys[] = {"type", "vertices", "indices", "material", "emission"};
+    static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission"};
+    int type = 0, material = 0;
+    Emission em = {0};
+    LOADER_TRY(expect_object(ld, shape, "a shape object"));
+    LOADER_TRY(read_type(ld, shape, "shape type", types, 3, -1, &type));
+    switch (type) {
+    case SHAPE_QUAD: LOADER_TRY(check_keys(ld, shape, quad_keys, 4)); break;
+    case SHAPE_MESH: LOADER_TRY(check_keys(ld, shape, mesh_keys, 5)); break;
+    default: LOADER_TRY(check_keys(ld, shape, sphere_keys, 5)); break;
+    }
+    LOADER_TRY(read_material_ref(ld, shape, &material));
+    LOADER_TRY(read_emission(ld, shape, &em));
+    switch (type) {
+    case SHAPE_QUAD: return parse_quad(ld, shape, material, &em);
+    case SHAPE_MESH: return parse_mesh(ld, shape, material, &em);
+    default: return parse_sphere(ld, shape, material, &em);
+    }
+}
+
+static CstStatus parse_shapes(Loader *ld, const json_t *shapes)
+{
+    char kind[48];
+    if (!json_is_array(shapes) || json_array_size(shapes) == 0)
+        return fail_here(ld, "got %s; expected an array of at least one shape",
+                         describe(shapes, kind));
+    size_t i;
+    json_t *shape;
+    json_array_foreach(shapes, i, shape) {
+        path_push_index(ld, i);
+        LOADER_TRY(parse_shape(ld, shape));
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
+/* Sections are read in dependency order (materials before the shapes naming them), not
+ * file order, so a file may list them in any order. */
+static CstStatus parse_root(Loader *ld, const json_t *root)
+{
+    static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
+                                       "shapes"};
+    json_t *v;
+    LOADER_TRY(expect_object(ld, root, "an object with the scene sections"));
+    LOADER_TRY(check_keys(ld, root, keys, 6));
+    if ((v = json_object_get(root, "film"))) {
+        path_push_key(ld, "film");
+        LOADER_TRY(parse_film(ld, v));
+        path_pop(ld);
+    }
+    LOADER_TRY(member_required(ld, root, "camera", "a camera object", &v));
+    path_push_key(ld, "camera");
+    LOADER_TRY(parse_camera(ld, v));
+    path_pop(ld);
+    if ((v = json_object_get(root, "integrator"))) {
+        path_push_key(ld, "integrator");
+        LOADER_TRY(parse_integrator(ld, v));
+        path_pop(ld);
+    }
+    if ((v = json_object_get(root, "sampler"))) {
+        path_push_key(ld, "sampler");
+        LOADER_TRY(parse_sampler(ld, v));
+        path_pop(ld);
+    }
+    if ((v = json_object_get(root, "materials"))) {
+        path_push_key(ld, "materials");
+        LOADER_TRY(parse_materials(ld, v));
+        path_pop(ld);
+    }
+    LOADER_TRY(member_required(ld, root, "shapes", "an array of at least one shape", &v));
+    path_push_key(ld, "shapes");
+    LOADER_TRY(parse_shapes(ld, v));
+    path_pop(ld);
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------------ entry points */
+
+CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
+                                     CstScene **out, CstError *err)
+{
+    CstError local;
+    if (!err)
+        err = &local;
+    cst_error_clear(err);
+    if (!name)
+        name = "<string>";
+    if (!out)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%.200s: no place for the scene (out is NULL)",
+                        name);
+    *out = NULL;
+    if (!text && len > 0)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%.200s: text is NULL", name);
+
+    /* JSON text never holds a raw NUL, but jansson drops one that directly follows a number
+     * or literal ("51\0," parses as "51,"): its one-character push-back cannot tell a NUL
+     * from an empty buffer. Reject it here so the text json_locate walks is what jansson
+     * saw. */
+    const char *nul = len ? memchr(text, '\0', len) : NULL;
+    if (nul) {
+        JsonLocation at = json_offset_location(text, len, (size_t)(nul - text));
+        return cst_fail(err, CST_ERR_PARSE,
+                        "%.200s:%d:%d: NUL byte in the text; expected JSON text, which has none",
+                        name, at.line, at.column);
+    }
+
+    json_error_t jerr;
+    json_t *root = json_loadb(text ? text : "", len, JSON_REJECT_DUPLICATES, &jerr);
+    if (!root) {
+        if (json_error_code(&jerr) == json_error_out_of_memory)
+            return cst_fail(err, CST_ERR_OOM, "%.200s: out of memory parsing JSON", name);
+        /* jansson's column is that of the token's last character; 0 means "before the first"
+         * (an empty file), shown as 1 so positions stay 1-based. */
+        int line = jerr.line > 0 ? jerr.line : 1, col = jerr.column > 0 ? jerr.column : 1;
+        char text_safe[JSON_ERROR_TEXT_LENGTH]; /* "near '<raw bytes>'" may hold a newline */
+        size_t pos = 0;
+        buf_append(text_safe, sizeof text_safe, &pos, jerr.text);
+        return cst_fail(err, CST_ERR_PARSE, "%.200s:%d:%d: %s", name, line, col, text_safe);
+    }
+
+    Loader ld = {0};
+    ld.text = text ? text : "";
+    ld.len = len;
+    ld.name = name;
+    ld.err = err;
+    ld.scene = scene_create();
+    CstStatus st;
+    if (!ld.scene) {
+        st = cst_fail(err, CST_ERR_OOM, "%.200s: out of memory creating the scene", name);
+    } else {
+        st = parse_root(&ld, root);
+        if (st == CST_OK) {
+            st = scene_commit(ld.scene, err);
+            if (st != CST_OK) {
+                char msg[sizeof err->msg];
+                memcpy(msg, err->msg, sizeof msg);
+                msg[sizeof msg - 1] = '\0';
+                cst_fail(err, st, "%.200s: %.800s", name, msg);
+            }
+        }
+    }
+    free(ld.mat_names);
+    free(ld.mat_ids);
+    json_decref(root);
+    if (st != CST_OK) {
+        scene_destroy(ld.scene);
+        return st;
+    }
+    *out = ld.scene;
+    return CST_OK;
+}
+
+/* Reads a whole file into a new buffer; the size need not be known up front (pipes). */
+static CstStatus read_file(const char *path, char **out, size_t *out_len, CstError *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return cst_fail(err, CST_ERR_IO, "%.200s: cannot open: %s", path, strerror(errno));
+    size_t cap = 1 << 16, len = 0;
+    char *buf = malloc(cap);
+    CstStatus st = CST_OK;
+    if (!buf) {
+        st = cst_fail(err, CST_ERR_OOM, "%.200s: out of memory reading the file", path);
+        goto done;
+    }
+    for (;;) {
+        if (len == cap) {
+            char *nb = cap <= SIZE_MAX / 2 ? realloc(buf, cap * 2) : NULL;
+            if (!nb) {
+                st = cst_fail(err, CST_ERR_OOM, "%.200s: out of memory reading the file", path);
+                goto done;
+            }
+            buf = nb;
+            cap *= 2;
+        }
+        size_t n = fread(buf + len, 1, cap - len, f);
+        len += n;
+        if (n == 0) {
+            if (ferror(f))
+                st = cst_fail(err, CST_ERR_IO, "%.200s: cannot read: %s", path, strerror(errno));
+            break;
+        }
+    }
+done:
+    fclose(f);
+    if (st != CST_OK) {
+        free(buf);
+        return st;
+    }
+    *out = buf;
+    *out_len = len;
+    return CST_OK;
+}
+
+CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err)
+{
+    CstError local;
+    if (!err)
+        err = &local;
+    if (!out || !path)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_load_json: path and out must not "
+                                                  "be NULL");
+    *out = NULL;
+    char *text = NULL;
+    size_t len = 0;
+    CstStatus st = read_file(path, &text, &len, err);
+    if (st != CST_OK)
+        return st;
+    st = cst_scene_load_json_string(text, len, path, out, err);
+    free(text);
+    return st;
+}
