@@ -14,9 +14,9 @@ enum {
     BVH_MAX_DEPTH = 60,    /* beyond this, split at the median: traversal stacks stay bounded */
     BVH_STACK = 384 /* tree depth <= ~91 (see BVH_MAX_DEPTH), at most 3 pending siblings each */
 };
-/* SAH costs relative to one primitive test. With four boxes tested per SSE node visit a
- * binary-tree "traversal step" is about half a triangle test: 0.5 measured 1.61 M paths/s
- * on the Cornell box against 1.50 M for 1.0 and 1.10 M for 2.0 (1 thread, bench_render). */
+/* SAH costs relative to one 4-triangle block test. One SSE node visit tests four boxes;
+ * on the Cornell box (bench_render, 1 thread, 4 alternating runs each) 0.25, 0.5 and 1.0
+ * gave 1.48, 1.53 and 1.50 M paths/s: within this machine's +-6% noise, so 0.5 it is. */
 static const float SAH_TRAVERSAL_COST = 0.5f;
 static const float SAH_ISECT_COST = 1.0f;
 
