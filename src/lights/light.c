@@ -41,7 +41,7 @@ void emitter_sample(const EmitterSampler *s, const Emitter *emitters, const Emit
         Vec2 bc = warp_uniform_triangle(u);
         Vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
         out->p = v3_add(a, v3_add(v3_scale(e1, bc.x), v3_scale(e2, bc.y)));
-        out->n = v3_normalize(v3_cross(e1, e2));
+        out->n = e->n;
     } else {
         const Sphere *sp = &g->spheres[(int)e->prim - g->num_triangles];
         Vec3 d = warp_uniform_sphere(u);

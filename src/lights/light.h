@@ -15,6 +15,7 @@ typedef struct Emitter {
     Rgb radiance;
     int two_sided;
     float area;
+    Vec3 n;        /* triangles: unit geometric normal (set by scene_commit) */
     int is_sphere; /* scene construction only: prim is still a sphere index */
 } Emitter;
 

@@ -44,6 +44,7 @@ void scene_destroy(Scene *s)
     free(s->positions);
     free(s->tri_indices);
     free(s->tri_info);
+    free(s->tri_normals);
     free(s->spheres);
     free(s->sphere_info);
     free(s->materials);
@@ -178,6 +179,15 @@ CstStatus scene_commit(Scene *s, CstError *err)
             s->emitters[i].prim += (uint32_t)s->num_triangles;
             s->emitters[i].is_sphere = 0;
         }
+    s->tri_normals = malloc((size_t)(s->num_triangles > 0 ? s->num_triangles : 1) * sizeof *s->tri_normals);
+    if (!s->tri_normals) return cst_fail(err, CST_ERR_OOM, "out of memory for %d normals", s->num_triangles);
+    for (int i = 0; i < s->num_triangles; i++) {
+        const int32_t *t = &s->tri_indices[3 * i];
+        Vec3 a = s->positions[t[0]];
+        s->tri_normals[i] = v3_normalize(v3_cross(v3_sub(s->positions[t[1]], a), v3_sub(s->positions[t[2]], a)));
+    }
+    for (int i = 0; i < s->num_emitters; i++)
+        if ((int)s->emitters[i].prim < s->num_triangles) s->emitters[i].n = s->tri_normals[s->emitters[i].prim];
     CstStatus st = bvh_build(&s->bvh, s->positions, s->tri_indices, s->num_triangles,
                              s->spheres, s->num_spheres, err);
     if (st != CST_OK) return st;

@@ -35,6 +35,7 @@ struct CstScene {
     int num_triangles, cap_triangles;
     Sphere *spheres; int num_spheres, cap_spheres;
     PrimInfo *tri_info;    /* num_triangles entries */
+    Vec3 *tri_normals;     /* unit geometric normals, (v1-v0) x (v2-v0); made by commit */
     PrimInfo *sphere_info; /* num_spheres entries */
     /* appearance */
     Material *materials; int num_materials, cap_materials;
@@ -93,8 +94,7 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     if ((int)h.prim < s->num_triangles) {
         const int32_t *t = &s->tri_indices[3 * h.prim];
         Vec3 a = s->positions[t[0]], b = s->positions[t[1]], c = s->positions[t[2]];
-        Vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
-        sh->ng = v3_normalize(v3_cross(e1, e2));
+        sh->ng = s->tri_normals[h.prim];
         /* From barycentrics, not o + t d: accurate to a few ulps of the vertices,
          * which ray_offset_origin relies on (the ray form errs by ulps of |o| + t). */
         sh->p = v3_add(v3_add(v3_scale(a, 1.0f - h.u - h.v), v3_scale(b, h.u)), v3_scale(c, h.v));
