@@ -50,6 +50,18 @@ void cst_scene_destroy(CstScene *scene);
 /* The output path named in the scene file, or NULL. Owned by the scene. */
 const char *cst_scene_output_path(const CstScene *scene);
 
+/* Rebuilds the scene's acceleration structure: "bvh" (default), "kdtree", "grid", "list"
+ * (brute force) or "embree" (only in builds with Embree). On failure the old one stays. */
+CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
+
+typedef struct CstSceneInfo {
+    int triangles, spheres, emitters, materials;
+    const char *accel;          /* name of the acceleration structure in use */
+    double accel_build_seconds; /* its last build */
+    size_t accel_bytes;         /* memory it uses (not counting the scene's own arrays) */
+} CstSceneInfo;
+void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
+
 /* ---------------------------------------------------------------- rendering */
 typedef enum CstIntegrator {
     CST_INTEGRATOR_DEFAULT = 0, /* the scene's choice, else CST_INTEGRATOR_PATH */

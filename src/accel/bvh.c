@@ -263,9 +263,12 @@ static void collapse(Emitter4 *e, int bin, int out)
     }
 }
 
-CstStatus bvh_build(Bvh *bvh, const Vec3 *positions, const int32_t *tri_indices, int num_tris,
-                    const Sphere *spheres, int num_spheres, CstError *err)
+CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
 {
+    const Vec3 *positions = geom->positions;
+    const int32_t *tri_indices = geom->tri_indices;
+    const Sphere *spheres = geom->spheres;
+    int num_tris = geom->num_tris, num_spheres = geom->num_spheres;
     memset(bvh, 0, sizeof *bvh);
     bvh->bounds = bbox_empty();
     int n = num_tris + num_spheres;

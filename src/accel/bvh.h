@@ -10,9 +10,11 @@
 #include <stdint.h>
 
 #include "caustic/caustic.h"
+#include "geometry/hit.h"
 #include "geometry/ray.h"
 #include "geometry/sphere.h"
 #include "math/bbox.h"
+#include "accel/accel_geometry.h"
 
 /* A 4-wide node: the boxes of its (up to) four children in structure-of-arrays form so
  * one SSE slab test checks all four. Built by collapsing a binary SAH tree (each wide
@@ -62,16 +64,9 @@ typedef struct Bvh {
     BBox bounds;
 } Bvh;
 
-typedef struct Hit {
-    float t;
-    float u, v;    /* triangle barycentrics of v1, v2 */
-    uint32_t prim; /* scene primitive id */
-} Hit;
 
-/* Triangles are tri_indices[3i..3i+2] into positions, ids 0..num_tris-1; spheres get ids
- * num_tris.. in order. Zero primitives is valid (every ray misses). */
-CstStatus bvh_build(Bvh *bvh, const Vec3 *positions, const int32_t *tri_indices, int num_tris,
-                    const Sphere *spheres, int num_spheres, CstError *err);
+/* Zero primitives is valid (every ray misses). */
+CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err);
 void bvh_free(Bvh *bvh);
 /* Closest hit in (ray.t_min, ray.t_max). */
 bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit);

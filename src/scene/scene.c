@@ -50,7 +50,7 @@ void scene_destroy(Scene *s)
     free(s->materials);
     free(s->emitters);
     free(s->output_path);
-    bvh_free(&s->bvh);
+    accel_free(&s->accel);
     emitter_sampler_free(&s->emitter_sampler);
     free(s);
 }
@@ -188,11 +188,50 @@ CstStatus scene_commit(Scene *s, CstError *err)
     }
     for (int i = 0; i < s->num_emitters; i++)
         if ((int)s->emitters[i].prim < s->num_triangles) s->emitters[i].n = s->tri_normals[s->emitters[i].prim];
-    CstStatus st = bvh_build(&s->bvh, s->positions, s->tri_indices, s->num_triangles,
-                             s->spheres, s->num_spheres, err);
+    AccelGeometry geom = scene_accel_geometry(s);
+    CstStatus st = accel_build(&s->accel, s->accel_type, &geom, err);
     if (st != CST_OK) return st;
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, err);
     if (st != CST_OK) return st;
     s->committed = 1;
     return CST_OK;
+}
+
+CstStatus scene_set_accel(Scene *s, AccelType type, CstError *err)
+{
+    if (!s->committed) {
+        s->accel_type = type;
+        return CST_OK;
+    }
+    Accel fresh;
+    AccelGeometry geom = scene_accel_geometry(s);
+    CstStatus st = accel_build(&fresh, type, &geom, err);
+    if (st != CST_OK) return st; /* the old structure stays usable */
+    accel_free(&s->accel);
+    s->accel = fresh;
+    s->accel_type = type;
+    return CST_OK;
+}
+
+CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err)
+{
+    AccelType type;
+    if (!accel_type_from_name(name, &type))
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "unknown acceleration structure '%s'; expected bvh, kdtree, grid, list or embree", name);
+    if (!accel_type_available(type))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "acceleration structure '%s' is not available in this build", name);
+    return scene_set_accel(scene, type, err);
+}
+
+void cst_scene_info(const CstScene *s, CstSceneInfo *info)
+{
+    memset(info, 0, sizeof *info);
+    info->triangles = s->num_triangles;
+    info->spheres = s->num_spheres;
+    info->emitters = s->num_emitters;
+    info->materials = s->num_materials;
+    info->accel = accel_type_name(s->accel.type);
+    info->accel_build_seconds = s->accel.build_seconds;
+    info->accel_bytes = accel_memory_bytes(&s->accel);
 }

@@ -8,7 +8,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "accel/bvh.h"
+#include "accel/accel.h"
 #include "camera/camera.h"
 #include "caustic/caustic.h"
 #include "lights/light.h"
@@ -41,7 +41,8 @@ struct CstScene {
     Material *materials; int num_materials, cap_materials;
     Emitter *emitters; int num_emitters, cap_emitters;
     /* after commit */
-    Bvh bvh;
+    AccelType accel_type; /* what scene_commit builds; ACCEL_BVH unless set */
+    Accel accel;
     EmitterSampler emitter_sampler;
     int committed;
     /* view and settings */
@@ -70,6 +71,13 @@ CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material
 void scene_set_camera(Scene *scene, const CameraDesc *camera);
 CstStatus scene_set_output_path(Scene *scene, const char *path, CstError *err);
 CstStatus scene_commit(Scene *scene, CstError *err);
+/* Rebuilds a committed scene's acceleration structure as `type`. */
+CstStatus scene_set_accel(Scene *scene, AccelType type, CstError *err);
+static inline AccelGeometry scene_accel_geometry(const Scene *s)
+{
+    AccelGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres, s->num_spheres};
+    return g;
+}
 
 static inline const PrimInfo *scene_prim_info(const Scene *s, uint32_t prim)
 {
@@ -88,7 +96,7 @@ typedef struct SurfaceHit {
 static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *sh)
 {
     Hit h;
-    if (!bvh_intersect(&s->bvh, ray, &h)) return false;
+    if (!accel_intersect(&s->accel, ray, &h)) return false;
     sh->t = h.t;
     sh->prim = h.prim;
     if ((int)h.prim < s->num_triangles) {
@@ -129,7 +137,7 @@ static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 
     float len = v3_length(od);
     if (!(len > 0.0f)) return true;
     Ray r = ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-5f));
-    return !bvh_occluded(&s->bvh, &r);
+    return !accel_occluded(&s->accel, &r);
 }
 
 /* Area of a triangle with nonzero normal; shared by loaders for validation. */

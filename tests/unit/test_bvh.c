@@ -108,7 +108,8 @@ static void soup_random_spheres(Soup *s, Pcg32 *rng, int n)
 static void soup_build(const Soup *s, Bvh *bvh)
 {
     CstError err = {0};
-    CstStatus st = bvh_build(bvh, s->pos, s->idx, s->num_tris, s->spheres, s->num_spheres, &err);
+    AccelGeometry g = {s->pos, s->idx, s->num_tris, s->spheres, s->num_spheres};
+    CstStatus st = bvh_build(bvh, &g, &err);
     if (st != CST_OK) fail_msg("bvh_build: %s", err.msg);
 }
 
@@ -450,7 +451,8 @@ static void test_bvh_empty(void **state)
     (void)state;
     Bvh bvh;
     CstError err = {0};
-    assert_int_equal(bvh_build(&bvh, NULL, NULL, 0, NULL, 0, &err), CST_OK);
+    AccelGeometry none = {NULL, NULL, 0, NULL, 0};
+    assert_int_equal(bvh_build(&bvh, &none, &err), CST_OK);
     Pcg32 rng;
     pcg32_seed(&rng, 1u, 1u);
     for (int i = 0; i < 1000; i++) {
