@@ -16,7 +16,7 @@
 typedef enum ArgsOpt {
     ARGS_OPT_OUTPUT, ARGS_OPT_SPP, ARGS_OPT_TIME, ARGS_OPT_THREADS, ARGS_OPT_SEED,
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
-    ARGS_OPT_QUIET, ARGS_OPT_HELP
+    ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL
 } ArgsOpt;
 
 typedef struct ArgsOptSpec {
@@ -36,6 +36,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"filter",     0,   true,  ARGS_OPT_FILTER},
     {"width",      0,   true,  ARGS_OPT_WIDTH},
     {"height",     0,   true,  ARGS_OPT_HEIGHT},
+    {"accel",      0,   true,  ARGS_OPT_ACCEL},
     {"quiet",      'q', false, ARGS_OPT_QUIET},
     {"help",       'h', false, ARGS_OPT_HELP},
 };
@@ -49,11 +50,13 @@ void args_print_help(FILE *f)
 "Usage:\n"
 "  caustic render [SCENE] [options]\n"
 "  caustic render --help\n"
+"  caustic info [SCENE] [--accel NAME]\n"
 "  caustic --help | -h\n"
 "  caustic --version\n"
 "\n"
 "Renders SCENE, a caustic JSON scene file (*.json, see docs/scene-format.md), or the\n"
-"built-in Cornell box when SCENE is omitted, and writes one image.\n"
+"built-in Cornell box when SCENE is omitted, and writes one image. 'info' loads the\n"
+"scene, builds its acceleration structure and prints its size, build time and memory.\n"
 "\n"
 "Options (both --opt VALUE and --opt=VALUE are accepted; a later option wins):\n"
 "  -o, --output OUT     output image; the format follows the extension: .png (8-bit\n"
@@ -74,6 +77,8 @@ void args_print_help(FILE *f)
 "      --width W        image width in pixels, 1..65536 (default: the scene's, else 512)\n"
 "      --height H       image height in pixels, 1..65536 (default: the scene's, else\n"
 "                       512); --width and --height may each be given alone\n"
+"      --accel NAME     acceleration structure: bvh (default), kdtree, grid, list (brute\n"
+"                       force) or embree (when built with Embree); default: the scene's\n"
 "  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
 "  -h, --help           show this help and exit\n"
 "      --version        print the version and exit\n"
@@ -283,6 +288,15 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         }
         *(o->id == ARGS_OPT_WIDTH ? &s->width : &s->height) = (int)v;
         return true;
+    case ARGS_OPT_ACCEL:
+        if (strcmp(value, "bvh") && strcmp(value, "kdtree") && strcmp(value, "grid") &&
+            strcmp(value, "list") && strcmp(value, "embree")) {
+            args_fail(err, false, "--accel: unknown acceleration structure '%s' (valid: %s)", value,
+                      ARGS_ACCEL_NAMES);
+            return false;
+        }
+        out->accel = value;
+        return true;
     case ARGS_OPT_QUIET:
         out->quiet = true;
         return true;
@@ -380,6 +394,9 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
     } else if (strcmp(cmd, "render") == 0) {
         out->command = ARGS_CMD_RENDER;
         return args_parse_render(argc, argv, 2, out, err);
+    } else if (strcmp(cmd, "info") == 0) {
+        out->command = ARGS_CMD_INFO;
+        return args_parse_render(argc, argv, 2, out, err);
     } else if (cmd[0] == '-') {
         const char *name = cmd + strspn(cmd, "-");
         for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
@@ -400,7 +417,7 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         if (args_edit_distance(cmd, strlen(cmd), "render") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'render'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (the only command is 'render')", cmd);
+            args_fail(err, true, "unknown command '%s' (commands: render, info)", cmd);
         return false;
     }
     if (argc > 2) {

@@ -12,6 +12,7 @@
 /* Valid values, shared by the help text and the error messages. */
 #define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf"
 #define ARGS_FILTER_NAMES     "box, tent"
+#define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree"
 #define ARGS_OUTPUT_FORMATS   ".png, .exr, .pfm"
 #define ARGS_MAX_DIMENSION    65536
 #define ARGS_MAX_THREADS      1024
@@ -20,6 +21,7 @@ typedef enum ArgsCommand {
     ARGS_CMD_RENDER,      /* caustic render ... */
     ARGS_CMD_HELP,        /* caustic --help | -h | help */
     ARGS_CMD_RENDER_HELP, /* caustic render --help */
+    ARGS_CMD_INFO,        /* caustic info [SCENE] [--accel NAME] */
     ARGS_CMD_VERSION      /* caustic --version */
 } ArgsCommand;
 
@@ -27,6 +29,7 @@ typedef struct CliArgs {
     ArgsCommand command;
     const char *scene_path;  /* NULL = the built-in Cornell box; points into argv */
     const char *output_path; /* NULL = the scene's "output", else the default name */
+    const char *accel;       /* NULL = the scene's choice (default bvh); points into argv */
     /* Only what the command line set; zero fields defer to the scene, then the library
      * default. progress and progress_user are left for main.c. */
     CstRenderSettings settings;

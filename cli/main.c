@@ -255,6 +255,24 @@ static void cli_print_job(const CliArgs *a, const CstScene *scene, const CstRend
             s.threads == 1 ? "" : "s", output);
 }
 
+/* `caustic info`: what the scene holds and what its acceleration structure costs. */
+static void cli_print_info(const CliArgs *a, const CstScene *scene)
+{
+    CstSceneInfo in;
+    cst_scene_info(scene, &in);
+    printf("scene:       %s\n", a->scene_path ? a->scene_path : "built-in Cornell box");
+    printf("triangles:   %d\n", in.triangles);
+    printf("spheres:     %d\n", in.spheres);
+    printf("emitters:    %d\n", in.emitters);
+    printf("materials:   %d\n", in.materials);
+    printf("accel:       %s\n", in.accel);
+    printf("build:       %.2f ms\n", in.accel_build_seconds * 1e3);
+    printf("memory:      %zu bytes", in.accel_bytes);
+    int prims = in.triangles + in.spheres;
+    if (prims > 0) printf(" (%.1f bytes per primitive)", (double)in.accel_bytes / prims);
+    printf("\n");
+}
+
 static void cli_print_summary(const char *output, const CstRenderStats *st)
 {
     char line[512];
@@ -316,6 +334,19 @@ static int cli_render(const CliArgs *a)
         cli_print_error(&err, status);
         /* Nothing the user wrote can break the built-in scene. */
         code = a->scene_path ? cli_exit_code(status, CLI_STAGE_LOAD) : CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    if (a->accel) {
+        status = cst_scene_set_accel(scene, a->accel, &err);
+        if (status != CST_OK) {
+            cli_print_error(&err, status);
+            code = cli_exit_code(status, CLI_STAGE_LOAD);
+            goto done;
+        }
+    }
+    if (a->command == ARGS_CMD_INFO) {
+        cli_print_info(a, scene);
+        code = CLI_EXIT_OK;
         goto done;
     }
 
@@ -416,6 +447,7 @@ int main(int argc, char **argv)
         code = cli_finish_stdout();
         break;
     case ARGS_CMD_RENDER:
+    case ARGS_CMD_INFO:
         code = cli_render(&args);
         break;
     }

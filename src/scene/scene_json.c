@@ -935,10 +935,24 @@ static CstStatus parse_shapes(Loader *ld, const json_t *shapes)
 static CstStatus parse_root(Loader *ld, const json_t *root)
 {
     static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
-                                       "shapes"};
+                                       "shapes", "accel"};
     json_t *v;
     LOADER_TRY(expect_object(ld, root, "an object with the scene sections"));
-    LOADER_TRY(check_keys(ld, root, keys, 6));
+    LOADER_TRY(check_keys(ld, root, keys, 7));
+    if ((v = json_object_get(root, "accel"))) {
+        path_push_key(ld, "accel");
+        const char *name = NULL;
+        AccelType type = ACCEL_BVH;
+        LOADER_TRY(read_string(ld, v, &name));
+        if (!accel_type_from_name(name, &type))
+            return fail_here(ld, "unknown acceleration structure \"%s\"; expected one of: bvh, "
+                                 "kdtree, grid, list, embree", name);
+        if (!accel_type_available(type))
+            return fail_here(ld, "acceleration structure \"%s\" is not available in this build; "
+                                 "expected one of: bvh, kdtree, grid, list", name);
+        ld->scene->accel_type = type;
+        path_pop(ld);
+    }
     if ((v = json_object_get(root, "film"))) {
         path_push_key(ld, "film");
         LOADER_TRY(parse_film(ld, v));
