@@ -51,6 +51,8 @@ void args_print_help(FILE *f)
 "  caustic render [SCENE] [options]\n"
 "  caustic render --help\n"
 "  caustic info [SCENE] [--accel NAME]\n"
+"  caustic bench rays [MESH | --cornell] [--stadium] [--accel NAME[,NAME...]]\n"
+"                     [--threads N] [--json]\n"
 "  caustic --help | -h\n"
 "  caustic --version\n"
 "\n"
@@ -86,11 +88,30 @@ void args_print_help(FILE *f)
 "Progress goes to stderr: a redrawn bar when stderr is a terminal, otherwise one line\n"
 "per 10% of the render. The image is written atomically (temporary file, rename).\n"
 "\n"
+"Benchmark: caustic bench rays\n"
+"Traces the acceleration benchmark's three ray sets (/work/shared/bench/RAYSETS.md:\n"
+"primary closest hits, secondary bounce rays generated once and shared by every back\n"
+"end, and the bounce rays as occlusion queries) through each back end with 1 thread and\n"
+"with N threads, and prints build time, bytes per triangle, M rays/s, the speed ratio to\n"
+"Embree, hits and sum of t, checked against the published checksums (or, for scenes\n"
+"without them, against the first back end).\n"
+"  MESH                 a triangle mesh file (read through the mesh importer, e.g. a\n"
+"                       PLY of /work/shared/meshes); default: the built-in Cornell box\n"
+"      --cornell        the built-in Cornell box (the default)\n"
+"      --stadium        put the scene inside a huge box of 12 triangles (teapot in a\n"
+"                       stadium); alone: a built-in 20,480-triangle bumpy ball inside it\n"
+"      --accel LIST     comma-separated back ends: " ARGS_ACCEL_NAMES "\n"
+"                       (default: all this build has; list only for scenes of at most\n"
+"                       1,000 triangles)\n"
+"      --threads N      the second thread count, 0..1024; 0 = one per core (default)\n"
+"      --json           one JSON object per line on stdout instead of the table\n"
+"\n"
 "Exit status:\n"
-"  0  success: the image was written\n"
+"  0  success: the image was written (bench rays: every check passed)\n"
 "  1  internal error: out of memory, a library failure, or an I/O error while writing\n"
 "     the image although its directory was checked writable before rendering\n"
 "     (disk full, file system error)\n"
+"     bench rays: a checksum did not match\n"
 "  2  bad input or usage: unknown command or option, invalid value, unsupported scene\n"
 "     or output format, a scene file that is missing, unreadable or invalid, an output\n"
 "     directory that does not exist or is not writable (checked before rendering)\n"
@@ -98,7 +119,8 @@ void args_print_help(FILE *f)
 "Examples:\n"
 "  caustic render --spp 64 -o box.png\n"
 "  caustic render scenes/cornell-box.json --time 60 --threads 8 -o box.exr\n"
-"  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n",
+"  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n"
+"  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n",
         f);
 }
 
@@ -376,6 +398,157 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
     return true;
 }
 
+/* ------------------------------------------------------------ caustic bench rays */
+
+typedef struct ArgsBenchOpt {
+    const char *long_name;
+    bool takes_value;
+} ArgsBenchOpt;
+
+static const ArgsBenchOpt ARGS_BENCH_OPTS[] = {
+    {"cornell", false}, {"stadium", false}, {"accel", true},
+    {"threads", true},  {"json", false},    {"help", false},
+};
+#define ARGS_NUM_BENCH_OPTS (sizeof ARGS_BENCH_OPTS / sizeof ARGS_BENCH_OPTS[0])
+
+static const char *const ARGS_BENCH_ACCELS[] = {"bvh", "kdtree", "grid", "list", "embree"};
+
+/* --accel bvh,embree: each name known, none empty, none twice. */
+static bool args_parse_bench_accels(const char *value, BenchArgs *b, ArgsError *err)
+{
+    b->num_accels = 0;
+    const char *p = value;
+    for (;;) {
+        size_t len = strcspn(p, ",");
+        if (len == 0) {
+            args_fail(err, false, "--accel: empty name in '%s' (valid: %s)", value, ARGS_ACCEL_NAMES);
+            return false;
+        }
+        const char *name = NULL;
+        for (size_t k = 0; k < sizeof ARGS_BENCH_ACCELS / sizeof ARGS_BENCH_ACCELS[0]; k++)
+            if (strlen(ARGS_BENCH_ACCELS[k]) == len && strncmp(ARGS_BENCH_ACCELS[k], p, len) == 0)
+                name = ARGS_BENCH_ACCELS[k];
+        if (!name) {
+            args_fail(err, false, "--accel: unknown acceleration structure '%.*s' (valid: %s)",
+                      (int)len, p, ARGS_ACCEL_NAMES);
+            return false;
+        }
+        for (int k = 0; k < b->num_accels; k++)
+            if (b->accels[k] == name) {
+                args_fail(err, false, "--accel: '%s' listed twice in '%s'", name, value);
+                return false;
+            }
+        b->accels[b->num_accels++] = name; /* cannot overflow: names are distinct */
+        if (p[len] == '\0') return true;
+        p += len + 1;
+    }
+}
+
+static bool args_parse_bench_rays(int argc, char **argv, int first, CliArgs *out, ArgsError *err)
+{
+    BenchArgs *b = &out->bench;
+    bool only_positional = false;
+    for (int i = first; i < argc; i++) {
+        const char *arg = argv[i];
+        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
+            if (b->mesh_path) {
+                args_fail(err, true, "unexpected argument '%s' (only one MESH may be given)", arg);
+                return false;
+            }
+            b->mesh_path = arg;
+            continue;
+        }
+        if (strcmp(arg, "--") == 0) {
+            only_positional = true;
+            continue;
+        }
+        if (strcmp(arg, "-h") == 0) {
+            out->command = ARGS_CMD_HELP;
+            continue;
+        }
+        const char *name = arg + 2, *eq = strchr(name, '=');
+        size_t len = eq ? (size_t)(eq - name) : strlen(name);
+        const ArgsBenchOpt *o = NULL;
+        if (arg[1] == '-')
+            for (size_t k = 0; k < ARGS_NUM_BENCH_OPTS; k++)
+                if (strlen(ARGS_BENCH_OPTS[k].long_name) == len &&
+                    strncmp(ARGS_BENCH_OPTS[k].long_name, name, len) == 0)
+                    o = &ARGS_BENCH_OPTS[k];
+        if (!o) {
+            const char *best = NULL;
+            size_t best_d = 3;
+            for (size_t k = 0; arg[1] == '-' && k < ARGS_NUM_BENCH_OPTS; k++) {
+                size_t d = args_edit_distance(name, len, ARGS_BENCH_OPTS[k].long_name);
+                if (d < best_d && d < strlen(ARGS_BENCH_OPTS[k].long_name)) {
+                    best_d = d;
+                    best = ARGS_BENCH_OPTS[k].long_name;
+                }
+            }
+            if (best)
+                args_fail(err, true, "unknown option '%s' for 'bench rays' (did you mean --%s?)", arg, best);
+            else
+                args_fail(err, true, "unknown option '%s' for 'bench rays'", arg);
+            return false;
+        }
+        if (eq && !o->takes_value) {
+            args_fail(err, true, "--%s does not take a value (got '%s')", o->long_name, arg);
+            return false;
+        }
+        const char *value = eq ? eq + 1 : NULL;
+        if (o->takes_value && !value) {
+            if (i + 1 >= argc) {
+                args_fail(err, true, "--%s: missing value", o->long_name);
+                return false;
+            }
+            value = argv[++i];
+        }
+        long v;
+        if (strcmp(o->long_name, "cornell") == 0) {
+            b->cornell = true;
+        } else if (strcmp(o->long_name, "stadium") == 0) {
+            b->stadium = true;
+        } else if (strcmp(o->long_name, "json") == 0) {
+            b->json = true;
+        } else if (strcmp(o->long_name, "help") == 0) {
+            out->command = ARGS_CMD_HELP;
+        } else if (strcmp(o->long_name, "threads") == 0) {
+            if (!args_parse_long(value, 0, ARGS_MAX_THREADS, &v)) {
+                args_fail(err, false,
+                          "--threads: expected an integer from 0 (one per core) to %d, got '%s'",
+                          ARGS_MAX_THREADS, value);
+                return false;
+            }
+            b->threads = (int)v;
+        } else if (!args_parse_bench_accels(value, b, err)) { /* accel */
+            return false;
+        }
+    }
+    if (b->mesh_path && b->cornell) {
+        args_fail(err, true, "MESH '%s' and --cornell exclude each other", b->mesh_path);
+        return false;
+    }
+    return true;
+}
+
+static bool args_parse_bench(int argc, char **argv, CliArgs *out, ArgsError *err)
+{
+    if (argc < 3) {
+        args_fail(err, true, "bench: missing benchmark name (benchmarks: rays)");
+        return false;
+    }
+    const char *what = argv[2];
+    if (strcmp(what, "--help") == 0 || strcmp(what, "-h") == 0) {
+        out->command = ARGS_CMD_HELP;
+        return true;
+    }
+    if (strcmp(what, "rays") != 0) {
+        args_fail(err, true, "bench: unknown benchmark '%s' (benchmarks: rays)", what);
+        return false;
+    }
+    out->command = ARGS_CMD_BENCH_RAYS;
+    return args_parse_bench_rays(argc, argv, 3, out, err);
+}
+
 bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
 {
     memset(out, 0, sizeof *out);
@@ -397,6 +570,8 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
     } else if (strcmp(cmd, "info") == 0) {
         out->command = ARGS_CMD_INFO;
         return args_parse_render(argc, argv, 2, out, err);
+    } else if (strcmp(cmd, "bench") == 0) {
+        return args_parse_bench(argc, argv, out, err);
     } else if (cmd[0] == '-') {
         const char *name = cmd + strspn(cmd, "-");
         for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
@@ -417,7 +592,7 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         if (args_edit_distance(cmd, strlen(cmd), "render") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'render'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (commands: render, info)", cmd);
+            args_fail(err, true, "unknown command '%s' (commands: render, info, bench)", cmd);
         return false;
     }
     if (argc > 2) {

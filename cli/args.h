@@ -22,8 +22,24 @@ typedef enum ArgsCommand {
     ARGS_CMD_HELP,        /* caustic --help | -h | help */
     ARGS_CMD_RENDER_HELP, /* caustic render --help */
     ARGS_CMD_INFO,        /* caustic info [SCENE] [--accel NAME] */
-    ARGS_CMD_VERSION      /* caustic --version */
+    ARGS_CMD_VERSION,     /* caustic --version */
+    ARGS_CMD_BENCH_RAYS   /* caustic bench rays [MESH | --cornell] [--stadium] [--accel LIST] ... */
 } ArgsCommand;
+
+#define ARGS_BENCH_MAX_ACCELS 5 /* each back end at most once */
+
+/* `caustic bench rays`: what to trace and with what. */
+typedef struct BenchArgs {
+    const char *mesh_path; /* NULL = the built-in Cornell box (or, with --stadium alone,
+                            * the built-in dense ball); points into argv */
+    bool cornell;          /* --cornell given */
+    bool stadium;          /* --stadium: the scene inside a huge sparse box */
+    bool json;             /* --json: one JSON object per line on stdout */
+    int threads;           /* --threads: the second thread count; 0 = one per core */
+    /* --accel: back-end names (static strings) in the order given; 0 = all available */
+    const char *accels[ARGS_BENCH_MAX_ACCELS];
+    int num_accels;
+} BenchArgs;
 
 typedef struct CliArgs {
     ArgsCommand command;
@@ -34,6 +50,7 @@ typedef struct CliArgs {
      * default. progress and progress_user are left for main.c. */
     CstRenderSettings settings;
     bool quiet;
+    BenchArgs bench; /* ARGS_CMD_BENCH_RAYS only */
 } CliArgs;
 
 typedef struct ArgsError {

@@ -1,10 +1,12 @@
 /* caustic: the command-line front end. Parses arguments (args.c), builds or loads the
- * scene, renders with progress on stderr and writes the image. The only place in the
+ * scene, renders with progress on stderr and writes the image; `bench rays` traces the
+ * acceleration benchmark's ray sets (bench/raysets.c). The only place in the
  * project that turns a CstStatus into an exit code (see docs/cli.md). */
 #define _POSIX_C_SOURCE 200809L
 
 #include <errno.h>
 #include <inttypes.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,13 +15,18 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <jansson.h>
+
+#include "accel/accel.h"
 #include "args.h"
 #include "caustic/caustic.h"
+#include "raysets.h"
 
 /* Exit codes: the contract with scripts, documented in --help and docs/cli.md. */
 #define CLI_EXIT_OK       0
 #define CLI_EXIT_INTERNAL 1 /* not the user's fault: OOM, library failure, I/O while writing */
 #define CLI_EXIT_USAGE    2 /* bad command line, bad scene file, unusable output path */
+#define CLI_EXIT_MISMATCH 1 /* bench rays: a checksum did not match */
 
 #define CLI_BUILTIN_OUTPUT "cornell-box.png"
 
@@ -414,6 +421,388 @@ done:
     return code;
 }
 
+/* ------------------------------------------------------------ caustic bench rays */
+
+/* Back ends run by default: brute force only where it finishes in seconds. */
+#define CLI_BENCH_LIST_MAX_TRIS 1000
+/* --stadium alone: a 20,480-triangle bumpy ball as the teapot. */
+#define CLI_BENCH_BALL_LEVELS 5
+
+enum { BENCH_PRIMARY, BENCH_SECONDARY, BENCH_OCCLUSION, BENCH_NUM_SETS };
+static const char *const BENCH_SET_NAMES[BENCH_NUM_SETS] = {"primary", "secondary", "occlusion"};
+
+typedef struct BenchRow {
+    AccelType accel;
+    double build_ms, bytes_per_tri;
+    int set, threads;
+    RaysetStats st;
+    bool checked, ok;   /* checked: there was something to compare with */
+    const char *against; /* "reference", the back end compared with, or "1 thread" */
+    double vs_embree;   /* M rays/s ratio to Embree's row; < 0 when there is none */
+    /* Scenes without a reference, 1-thread rows of all but the first back end: the rays
+     * whose result differs from the first back end's (rayset_compare). */
+    bool compared;
+    size_t rays_differing;
+    double dt_sum;
+} BenchRow;
+
+typedef struct BenchRays {
+    const Ray *rays[BENCH_NUM_SETS];
+    size_t count[BENCH_NUM_SETS];
+} BenchRays;
+
+static double cli_bench_mrays(const RaysetStats *st)
+{
+    return st->seconds > 0.0 ? (double)st->rays / st->seconds / 1e6 : 0.0;
+}
+
+/* The expected (hits, sum t) of a set from RAYSETS.md's reference row. */
+static void cli_bench_expected(const RaysetReference *ref, int set, size_t *hits, double *sum_t)
+{
+    *hits = set == BENCH_PRIMARY ? ref->primary_hits : ref->secondary_hits;
+    *sum_t = set == BENCH_PRIMARY ? ref->primary_sum_t : ref->secondary_sum_t;
+}
+
+/* Checks every row. With a reference row (RAYSETS.md): hits, ray counts and sum t against
+ * it. Without: each back end's 1-thread rows against the first back end's, ray by ray (at
+ * most a handful of rays may differ, and they must explain the sum-t difference). Every
+ * N-thread row must equal the same back end's 1-thread row exactly. */
+static void cli_bench_check(BenchRow *rows, int n, const RaysetReference *ref, bool published_bounces)
+{
+    for (int i = 0; i < n; i++) {
+        BenchRow *r = &rows[i];
+        bool any = r->set == BENCH_OCCLUSION;
+        r->ok = true;
+        r->checked = false;
+        if (ref) {
+            size_t hits;
+            double sum_t;
+            cli_bench_expected(ref, r->set, &hits, &sum_t);
+            /* Bounce rays made from other hits than Embree's are not exactly the published
+             * set (a few start on other surfaces): only their counts can be checked. */
+            bool counts_only = r->set != BENCH_PRIMARY && !published_bounces;
+            r->ok = rayset_hits_match(r->st.hits, hits) &&
+                    (any || counts_only ||
+                     rayset_sum_t_match(r->st.sum_t, sum_t, r->st.hits, hits, (double)r->st.max_t));
+            if (r->set != BENCH_PRIMARY) r->ok = r->ok && rayset_hits_match(r->st.rays, ref->secondary_rays);
+            r->checked = true;
+            r->against = counts_only && !any ? "reference (counts only)" : "reference";
+        } else if (r->compared) {
+            /* The first back end's 1-thread row of this set: rows[0..) are its rows. */
+            const BenchRow *b = r;
+            for (int k = 0; k < n; k++)
+                if (rows[k].accel == rows[0].accel && rows[k].set == r->set && rows[k].threads == 1) b = &rows[k];
+            r->ok = r->rays_differing <= rayset_rays_tolerance(r->st.rays) &&
+                    rayset_hits_match(r->st.hits, b->st.hits) &&
+                    (any || fabs(r->st.sum_t - b->st.sum_t) <= RAYSET_SUM_T_TOLERANCE * fabs(b->st.sum_t) + r->dt_sum);
+            r->checked = true;
+            r->against = accel_type_name(b->accel);
+        }
+        if (r->threads != 1)
+            for (int k = 0; k < i; k++) {
+                const BenchRow *o = &rows[k];
+                if (o->accel != r->accel || o->set != r->set || o->threads != 1) continue;
+                bool same = o->st.hits == r->st.hits && o->st.sum_t == r->st.sum_t &&
+                            o->st.sum_prim == r->st.sum_prim;
+                r->ok = r->ok && same && (!o->checked || o->ok);
+                if (!r->checked) {
+                    r->checked = true;
+                    r->against = o->checked ? o->against : "1 thread";
+                }
+            }
+        r->vs_embree = -1.0;
+        for (int k = 0; k < n; k++)
+            if (rows[k].accel == ACCEL_EMBREE && rows[k].set == r->set && rows[k].threads == r->threads &&
+                cli_bench_mrays(&rows[k].st) > 0.0)
+                r->vs_embree = cli_bench_mrays(&r->st) / cli_bench_mrays(&rows[k].st);
+    }
+}
+
+static void cli_bench_print_table(const BenchRow *rows, int n)
+{
+    printf("%-7s %9s %9s  %-9s %7s %9s %9s %9s %9s %16s  %s\n", "accel", "build ms", "bytes/tri",
+           "set", "threads", "rays", "Mrays/s", "vs embree", "hits", "sum_t", "check");
+    for (int i = 0; i < n; i++) {
+        const BenchRow *r = &rows[i];
+        char ratio[32], sum[32], check[48];
+        if (r->vs_embree >= 0.0) snprintf(ratio, sizeof ratio, "%.2fx", r->vs_embree);
+        else snprintf(ratio, sizeof ratio, "-");
+        if (r->set == BENCH_OCCLUSION) snprintf(sum, sizeof sum, "-");
+        else snprintf(sum, sizeof sum, "%.9e", r->st.sum_t);
+        if (!r->checked) snprintf(check, sizeof check, "(basis)");
+        else if (r->against && strcmp(r->against, "reference (counts only)") == 0)
+            snprintf(check, sizeof check, "%s (counts only)", r->ok ? "OK" : "MISMATCH");
+        else if (r->compared && r->rays_differing > 0)
+            snprintf(check, sizeof check, "%s (%zu ray%s differ%s)", r->ok ? "OK" : "MISMATCH", r->rays_differing,
+                     r->rays_differing == 1 ? "" : "s", r->rays_differing == 1 ? "s" : "");
+        else snprintf(check, sizeof check, "%s", r->ok ? "OK" : "MISMATCH");
+        printf("%-7s %9.2f %9.1f  %-9s %7d %9zu %9.2f %9s %9zu %16s  %s\n", accel_type_name(r->accel),
+               r->build_ms, r->bytes_per_tri, BENCH_SET_NAMES[r->set], r->threads, r->st.rays,
+               cli_bench_mrays(&r->st), ratio, r->st.hits, sum, check);
+    }
+}
+
+/* One compact JSON object per row; false if jansson runs out of memory. */
+static bool cli_bench_print_json(const BenchRow *rows, int n, const RaysetScene *scene)
+{
+    for (int i = 0; i < n; i++) {
+        const BenchRow *r = &rows[i];
+        bool closest = r->set != BENCH_OCCLUSION;
+        json_t *o = json_pack("{s:s, s:i, s:s, s:i, s:s, s:I, s:f, s:f, s:I, s:o, s:o, s:f, s:f, s:o, s:o, s:o, s:o}",
+            "scene", scene->name, "triangles", scene->num_tris,
+            "accel", accel_type_name(r->accel), "threads", r->threads,
+            "set", BENCH_SET_NAMES[r->set], "rays", (json_int_t)r->st.rays,
+            "seconds", r->st.seconds, "mrays_per_s", cli_bench_mrays(&r->st),
+            "hits", (json_int_t)r->st.hits,
+            "sum_t", closest ? json_real(r->st.sum_t) : json_null(),
+            "sum_prim", closest ? json_integer((json_int_t)r->st.sum_prim) : json_null(),
+            "build_ms", r->build_ms, "bytes_per_tri", r->bytes_per_tri,
+            "vs_embree", r->vs_embree >= 0.0 ? json_real(r->vs_embree) : json_null(),
+            "check", r->checked ? json_string(r->ok ? "OK" : "MISMATCH") : json_null(),
+            "checked_against", r->checked ? json_string(r->against) : json_null(),
+            "rays_differing", r->compared ? json_integer((json_int_t)r->rays_differing) : json_null());
+        char *line = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
+        json_decref(o);
+        if (!line) return false;
+        printf("%s\n", line);
+        free(line);
+    }
+    return true;
+}
+
+/* Traces the three sets with each thread count and appends the rows. When `basis` is
+ * given (scenes without a reference), the 1-thread results are kept there (is_basis: the
+ * first back end) or compared with it ray by ray (all others, through `scratch`). */
+static CstStatus cli_bench_accel(const Accel *accel, const BenchRays *rays, const int *threads,
+                                 int num_threads, double bytes_per_tri, RaysetResult *const *basis,
+                                 bool is_basis, RaysetResult *scratch, BenchRow *rows, int *n, CstError *err)
+{
+    for (int set = 0; set < BENCH_NUM_SETS; set++)
+        for (int k = 0; k < num_threads; k++) {
+            BenchRow *r = &rows[(*n)];
+            memset(r, 0, sizeof *r);
+            r->accel = accel->type;
+            r->build_ms = accel->build_seconds * 1e3;
+            r->bytes_per_tri = bytes_per_tri;
+            r->set = set;
+            r->threads = threads[k];
+            RaysetQuery q = set == BENCH_OCCLUSION ? RAYSET_ANY : RAYSET_CLOSEST;
+            RaysetResult *out = basis && threads[k] == 1 ? (is_basis ? basis[set] : scratch) : NULL;
+            CstStatus st = rayset_trace(accel, rays->rays[set], rays->count[set], q, threads[k], out, &r->st, err);
+            if (st != CST_OK) return st;
+            if (out && !is_basis) {
+                r->compared = true;
+                r->rays_differing = rayset_compare(out, basis[set], rays->count[set], q, &r->dt_sum);
+            }
+            (*n)++;
+        }
+    return CST_OK;
+}
+
+static int cli_bench_rays(const CliArgs *a)
+{
+    const BenchArgs *b = &a->bench;
+    int code = CLI_EXIT_INTERNAL;
+    CstError err = {0};
+    CstStatus st;
+    RaysetScene scene;
+    Ray *primary = NULL, *secondary = NULL, *occlusion = NULL;
+    RaysetResult *hits = NULL, *basis[BENCH_NUM_SETS] = {NULL, NULL, NULL}, *scratch = NULL;
+    BenchRow *rows = NULL;
+    Accel gen;
+    memset(&gen, 0, sizeof gen);
+    memset(&scene, 0, sizeof scene);
+
+    /* The back ends, checked before any work: as listed (one this build lacks is a usage
+     * error), else every one this build has, brute force only for tiny scenes. */
+    AccelType accels[ACCEL_TYPE_COUNT];
+    int num_accels = 0;
+    bool explicit_accels = b->num_accels > 0;
+    if (explicit_accels) {
+        for (int i = 0; i < b->num_accels; i++) {
+            AccelType t;
+            if (!accel_type_from_name(b->accels[i], &t)) {
+                fprintf(stderr, "caustic: error: unknown acceleration structure '%s'\n", b->accels[i]);
+                code = CLI_EXIT_USAGE;
+                goto done;
+            }
+            if (!accel_type_available(t)) {
+                fprintf(stderr, "caustic: error: acceleration structure '%s' is not available in this build\n",
+                        b->accels[i]);
+                code = CLI_EXIT_USAGE;
+                goto done;
+            }
+            accels[num_accels++] = t;
+        }
+    }
+
+    /* The scene. */
+    if (b->mesh_path) {
+        struct stat sb;
+        if (stat(b->mesh_path, &sb) != 0) {
+            fprintf(stderr, "caustic: error: cannot open mesh '%s': %s\n", b->mesh_path, strerror(errno));
+            return CLI_EXIT_USAGE;
+        }
+        if (S_ISDIR(sb.st_mode)) {
+            fprintf(stderr, "caustic: error: mesh '%s' is a directory\n", b->mesh_path);
+            return CLI_EXIT_USAGE;
+        }
+        st = rayset_scene_mesh(b->mesh_path, &scene, &err);
+    } else if (b->stadium && !b->cornell) {
+        st = rayset_scene_bumpy_ball(CLI_BENCH_BALL_LEVELS, &scene, &err);
+    } else {
+        st = rayset_scene_cornell(&scene, &err);
+    }
+    if (st == CST_OK && b->stadium) st = rayset_scene_add_stadium(&scene, &err);
+    if (st != CST_OK) {
+        cli_print_error(&err, st);
+        rayset_scene_free(&scene);
+        return b->mesh_path ? cli_exit_code(st, CLI_STAGE_LOAD) : CLI_EXIT_INTERNAL;
+    }
+    const RaysetReference *ref = b->stadium ? NULL : rayset_reference(&scene);
+
+    if (!explicit_accels) {
+        for (int t = 0; t < ACCEL_TYPE_COUNT; t++) {
+            if (!accel_type_available((AccelType)t)) continue;
+            if (t == ACCEL_LIST && scene.num_tris > CLI_BENCH_LIST_MAX_TRIS) {
+                fprintf(stderr, "caustic: bench rays: skipping list (brute force over %d triangles; "
+                        "name it with --accel to run it anyway)\n", scene.num_tris);
+                continue;
+            }
+            accels[num_accels++] = (AccelType)t;
+        }
+    }
+
+    int max_threads = b->threads;
+    if (max_threads == 0) {
+        long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+        max_threads = ncpu > 0 ? (int)(ncpu < ARGS_MAX_THREADS ? ncpu : ARGS_MAX_THREADS) : 1;
+    }
+    int threads[2] = {1, max_threads};
+    int num_threads = max_threads > 1 ? 2 : 1;
+
+    /* The ray sets. Bounce rays come once from one back end's primary hits and are shared
+     * by all: Embree's when this build has it (RAYSETS.md's references were made from
+     * Embree's hits, so the secondary set is then the published one bit for bit), else
+     * the BVH's. */
+    size_t num_primary, num_secondary;
+    primary = rayset_primary(&scene, &num_primary);
+    hits = primary ? malloc(num_primary * sizeof *hits) : NULL;
+    if (!primary || !hits) {
+        fprintf(stderr, "caustic: error: out of memory for %d x %d primary rays\n", scene.camera.width,
+                scene.camera.height);
+        goto done;
+    }
+    AccelType gen_type = accel_type_available(ACCEL_EMBREE) ? ACCEL_EMBREE : ACCEL_BVH;
+    AccelGeometry geom = rayset_scene_geometry(&scene);
+    RaysetStats gen_stats;
+    if ((st = accel_build(&gen, gen_type, &geom, &err)) != CST_OK ||
+        (st = rayset_trace(&gen, primary, num_primary, RAYSET_CLOSEST, max_threads, hits, &gen_stats, &err)) != CST_OK) {
+        cli_print_error(&err, st);
+        goto done;
+    }
+    accel_free(&gen);
+    secondary = rayset_secondary(&scene, primary, hits, num_primary, &num_secondary);
+    occlusion = secondary ? rayset_occlusion(secondary, num_secondary) : NULL;
+    rows = calloc((size_t)ACCEL_TYPE_COUNT * BENCH_NUM_SETS * 2, sizeof *rows);
+    if (!secondary || !occlusion || !rows) {
+        fprintf(stderr, "caustic: error: out of memory for %zu secondary rays\n", num_primary);
+        goto done;
+    }
+    BenchRays rays = {{primary, secondary, occlusion}, {num_primary, num_secondary, num_secondary}};
+    if (!ref) { /* per-ray comparison with the first back end */
+        for (int set = 0; set < BENCH_NUM_SETS; set++)
+            if (!(basis[set] = malloc((rays.count[set] ? rays.count[set] : 1) * sizeof *basis[set]))) break;
+        size_t most = num_primary > num_secondary ? num_primary : num_secondary;
+        scratch = malloc((most ? most : 1) * sizeof *scratch);
+        if (!basis[BENCH_NUM_SETS - 1] || !scratch) {
+            fprintf(stderr, "caustic: error: out of memory for the per-ray results\n");
+            goto done;
+        }
+    }
+
+    if (!b->json) {
+        printf("scene:   %s, %d triangles, bbox diagonal %.9g", scene.name, scene.num_tris, scene.diag);
+        if (b->stadium)
+            printf(" (the teapot's: camera and offsets are its own; stadium half-size %g x diagonal)",
+                   RAYSET_STADIUM_SCALE);
+        printf("\n");
+        printf("rays:    primary %zu (%dx%d), secondary %zu and occlusion %zu (bounces of %s's primary hits)\n",
+               num_primary, scene.camera.width, scene.camera.height, num_secondary, num_secondary,
+               accel_type_name(gen_type));
+        if (ref)
+            printf("checks:  against RAYSETS.md's \"%s\" row: hits within max(%d, %g x count); sum_t within %g "
+                   "relative, plus |hits difference| x largest t%s\n", ref->scene, RAYSET_HITS_TOLERANCE_ABS,
+                   RAYSET_HITS_TOLERANCE_REL, RAYSET_SUM_T_TOLERANCE,
+                   gen_type == ACCEL_EMBREE ? "" : "; secondary sum_t unchecked (bounces not made from Embree's hits)");
+        else
+            printf("checks:  no reference checksums: every back end against the first, ray by ray: at most "
+                   "max(%d, %g x count) rays may differ (hit vs miss, or t off by more than %g relative); hits "
+                   "within the same; sum_t within %g relative plus what the differing rays explain\n",
+                   RAYSET_HITS_TOLERANCE_ABS, RAYSET_HITS_TOLERANCE_REL, RAYSET_T_TOLERANCE,
+                   RAYSET_SUM_T_TOLERANCE);
+        printf("\n");
+        fflush(stdout);
+    }
+
+    int n = 0;
+    for (int i = 0; i < num_accels; i++) {
+        Accel accel;
+        st = accel_build(&accel, accels[i], &geom, &err);
+        if (st == CST_ERR_UNSUPPORTED && !explicit_accels) {
+            fprintf(stderr, "caustic: bench rays: skipping %s: %s\n", accel_type_name(accels[i]), err.msg);
+            continue;
+        }
+        if (st != CST_OK) {
+            cli_print_error(&err, st);
+            code = st == CST_ERR_UNSUPPORTED ? CLI_EXIT_USAGE : CLI_EXIT_INTERNAL;
+            goto done;
+        }
+        double bpt = scene.num_tris > 0 ? (double)accel_memory_bytes(&accel) / scene.num_tris : 0.0;
+        if (isatty(STDERR_FILENO) == 1)
+            fprintf(stderr, "caustic: bench rays: %s built in %.1f ms, tracing...\n", accel_type_name(accels[i]),
+                    accel.build_seconds * 1e3);
+        st = cli_bench_accel(&accel, &rays, threads, num_threads, bpt, ref ? NULL : basis, n == 0, scratch,
+                             rows, &n, &err);
+        accel_free(&accel);
+        if (st != CST_OK) {
+            cli_print_error(&err, st);
+            goto done;
+        }
+    }
+    if (n == 0) {
+        fprintf(stderr, "caustic: error: no acceleration structure could be built\n");
+        goto done;
+    }
+
+    cli_bench_check(rows, n, ref, gen_type == ACCEL_EMBREE);
+    if (b->json) {
+        if (!cli_bench_print_json(rows, n, &scene)) {
+            fprintf(stderr, "caustic: error: out of memory writing JSON\n");
+            goto done;
+        }
+    } else {
+        cli_bench_print_table(rows, n);
+    }
+    int mismatches = 0;
+    for (int i = 0; i < n; i++) mismatches += rows[i].checked && !rows[i].ok;
+    if (mismatches)
+        fprintf(stderr, "caustic: bench rays: %d of %d checks MISMATCH\n", mismatches, n);
+    code = mismatches ? CLI_EXIT_MISMATCH : CLI_EXIT_OK;
+
+done:
+    accel_free(&gen);
+    for (int set = 0; set < BENCH_NUM_SETS; set++) free(basis[set]);
+    free(scratch);
+    free(rows);
+    free(occlusion);
+    free(secondary);
+    free(hits);
+    free(primary);
+    rayset_scene_free(&scene);
+    return code;
+}
+
 /* Help and version go to stdout; a failed write there (a closed pipe, a full disk) is an
  * error like any other. */
 static int cli_finish_stdout(void)
@@ -449,6 +838,11 @@ int main(int argc, char **argv)
     case ARGS_CMD_RENDER:
     case ARGS_CMD_INFO:
         code = cli_render(&args);
+        break;
+    case ARGS_CMD_BENCH_RAYS:
+        code = cli_bench_rays(&args);
+        if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
+            code = CLI_EXIT_INTERNAL;
         break;
     }
     exit(code);

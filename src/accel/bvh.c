@@ -2,11 +2,13 @@
 #include "accel/bvh.h"
 
 #include <immintrin.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/error.h"
 #include "geometry/sphere.h"
+#include "geometry/triangle.h"
 
 enum {
     BVH_BINS = 32,
@@ -210,16 +212,20 @@ static int emit_leaf(Emitter4 *e, const BinNode *bn)
         }
         if (lane == 4) {
             blk = &o->blocks[o->num_blocks++];
-            memset(blk, 0, sizeof *blk);
+            /* Unused lanes hold NaN vertices: every comparison in the SIMD test then
+             * fails (det != 0 holds for NaN, but t > t_min does not), so they need no mask. */
+            for (int k = 0; k < 3; k++)
+                for (int a = 0; a < 3; a++)
+                    for (int l = 0; l < 4; l++) blk->v[k][a][l] = NAN;
+            for (int k = 0; k < 4; k++) blk->id[k] = BVH_NO_PRIM;
             leaf->num_blocks++;
             lane = 0;
         }
         const int32_t *t = &e->tri_indices[3 * id];
-        Vec3 a = e->positions[t[0]], b = e->positions[t[1]], c = e->positions[t[2]];
-        Vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
-        blk->v0x[lane] = a.x; blk->v0y[lane] = a.y; blk->v0z[lane] = a.z;
-        blk->e1x[lane] = e1.x; blk->e1y[lane] = e1.y; blk->e1z[lane] = e1.z;
-        blk->e2x[lane] = e2.x; blk->e2y[lane] = e2.y; blk->e2z[lane] = e2.z;
+        for (int k = 0; k < 3; k++) {
+            Vec3 p = e->positions[t[k]];
+            blk->v[k][0][lane] = p.x; blk->v[k][1][lane] = p.y; blk->v[k][2][lane] = p.z;
+        }
         blk->id[lane] = id;
         lane++;
     }
@@ -380,59 +386,90 @@ static inline int node_hit4(const BvhNode *n, const RaySimd *q, float t_min, flo
     return _mm_movemask_ps(_mm_cmple_ps(tn, tf)) & (int)n->valid_mask;
 }
 
-/* Moller-Trumbore on four triangles at once: the same operations in the same order as
- * triangle_intersect(), so each lane's t, u, v are bit-identical to the scalar test. Returns
- * the mask of lanes hit within (t_min, t_max). */
-static inline int block_intersect4(const BvhTriBlock *b, const Ray *r, __m128 t_min, __m128 t_max,
-                                   __m128 *t_out, __m128 *u_out, __m128 *v_out)
+/* Per-ray constants of the SIMD watertight test. */
+typedef struct RayTri4 {
+    TriangleRay tr;
+    __m128 o[3]; /* origin, per world axis */
+    __m128 sx, sy, sz;
+} RayTri4;
+
+static inline RayTri4 ray_tri4(const Ray *r)
 {
-    const __m128 dx = _mm_set1_ps(r->d.x), dy = _mm_set1_ps(r->d.y), dz = _mm_set1_ps(r->d.z);
-    const __m128 e1x = _mm_loadu_ps(b->e1x), e1y = _mm_loadu_ps(b->e1y), e1z = _mm_loadu_ps(b->e1z);
-    const __m128 e2x = _mm_loadu_ps(b->e2x), e2y = _mm_loadu_ps(b->e2y), e2z = _mm_loadu_ps(b->e2z);
-    /* p = d x e2 */
-    __m128 px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(dz, e2y));
-    __m128 py = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(dx, e2z));
-    __m128 pz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(dy, e2x));
-    __m128 det = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e1x, px), _mm_mul_ps(e1y, py)), _mm_mul_ps(e1z, pz));
+    RayTri4 q;
+    q.tr = triangle_ray_setup(r->d);
+    q.o[0] = _mm_set1_ps(r->o.x); q.o[1] = _mm_set1_ps(r->o.y); q.o[2] = _mm_set1_ps(r->o.z);
+    q.sx = _mm_set1_ps(q.tr.sx); q.sy = _mm_set1_ps(q.tr.sy); q.sz = _mm_set1_ps(q.tr.sz);
+    return q;
+}
+
+static inline Vec3 block_vertex(const BvhTriBlock *b, int k, int lane)
+{
+    return v3(b->v[k][0][lane], b->v[k][1][lane], b->v[k][2][lane]);
+}
+
+/* triangle_intersect_watertight() on four triangles at once, with the same operations in
+ * the same order, so each lane's t, u, v are bit-identical to the scalar test. Lanes whose
+ * edge functions hit zero need the scalar's double-precision recomputation: they are
+ * returned in *scalar_lanes for the caller to run through the scalar test. Returns the
+ * mask of the other lanes that hit within (t_min, t_max). */
+static inline int block_intersect4(const BvhTriBlock *b, const RayTri4 *q, __m128 t_min, __m128 t_max,
+                                   __m128 *t_out, __m128 *u_out, __m128 *v_out, int *scalar_lanes)
+{
+    const int kx = q->tr.kx, ky = q->tr.ky, kz = q->tr.kz;
+    __m128 px[3], py[3], pz[3];
+    for (int k = 0; k < 3; k++) {
+        pz[k] = _mm_sub_ps(_mm_loadu_ps(b->v[k][kz]), q->o[kz]);
+        px[k] = _mm_sub_ps(_mm_sub_ps(_mm_loadu_ps(b->v[k][kx]), q->o[kx]), _mm_mul_ps(q->sx, pz[k]));
+        py[k] = _mm_sub_ps(_mm_sub_ps(_mm_loadu_ps(b->v[k][ky]), q->o[ky]), _mm_mul_ps(q->sy, pz[k]));
+    }
+    /* U, V, W: scaled barycentrics of vertices 0, 1, 2 (edge functions, JCGT 2013 eq. 4) */
+    __m128 U = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
+    __m128 V = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
+    __m128 W = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
+    const __m128 zero = _mm_setzero_ps();
+    int zero_lanes = _mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)),
+                                               _mm_cmpeq_ps(W, zero)));
+    *scalar_lanes = zero_lanes;
+    __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
+    __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
+    __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
+    __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(q->sz, pz[0])), _mm_mul_ps(V, _mm_mul_ps(q->sz, pz[1]))),
+                          _mm_mul_ps(W, _mm_mul_ps(q->sz, pz[2])));
     __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
-    /* s = o - v0 */
-    __m128 sx = _mm_sub_ps(_mm_set1_ps(r->o.x), _mm_loadu_ps(b->v0x));
-    __m128 sy = _mm_sub_ps(_mm_set1_ps(r->o.y), _mm_loadu_ps(b->v0y));
-    __m128 sz = _mm_sub_ps(_mm_set1_ps(r->o.z), _mm_loadu_ps(b->v0z));
-    __m128 u = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(sx, px), _mm_mul_ps(sy, py)), _mm_mul_ps(sz, pz)), inv_det);
-    /* q = s x e1 */
-    __m128 qx = _mm_sub_ps(_mm_mul_ps(sy, e1z), _mm_mul_ps(sz, e1y));
-    __m128 qy = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(sx, e1z));
-    __m128 qz = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(sy, e1x));
-    __m128 v = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)), inv_det);
-    __m128 t = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)), inv_det);
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
-    __m128 ok = _mm_cmpneq_ps(det, zero);
-    ok = _mm_and_ps(ok, _mm_cmpge_ps(u, zero));
-    ok = _mm_and_ps(ok, _mm_cmple_ps(u, one));
-    ok = _mm_and_ps(ok, _mm_cmpge_ps(v, zero));
-    ok = _mm_and_ps(ok, _mm_cmple_ps(_mm_add_ps(u, v), one));
+    __m128 t = _mm_mul_ps(T, inv_det);
+    __m128 ok = _mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpneq_ps(det, zero));
     ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, t_min));
     ok = _mm_and_ps(ok, _mm_cmplt_ps(t, t_max));
-    *t_out = t; *u_out = u; *v_out = v;
-    return _mm_movemask_ps(ok);
+    *t_out = t;
+    *u_out = _mm_mul_ps(V, inv_det);
+    *v_out = _mm_mul_ps(W, inv_det);
+    return _mm_movemask_ps(ok) & ~zero_lanes;
 }
 
 /* Closest hit in a leaf; shortens r->t_max on a hit. */
-static inline bool leaf_intersect(const Bvh *bvh, const BvhLeaf *leaf, Ray *r, Hit *hit)
+static inline bool leaf_intersect(const Bvh *bvh, const BvhLeaf *leaf, const RayTri4 *q, Ray *r, Hit *hit)
 {
     bool found = false;
     const __m128 t_min = _mm_set1_ps(r->t_min);
     for (uint32_t bi = 0; bi < leaf->num_blocks; bi++) {
         const BvhTriBlock *b = &bvh->blocks[leaf->first_block + bi];
         __m128 t4, u4, v4;
-        int mask = block_intersect4(b, r, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4);
-        if (!mask) continue;
+        int scalar_lanes;
+        int mask = block_intersect4(b, q, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4, &scalar_lanes);
+        if (!(mask | scalar_lanes)) continue;
         float t[4], u[4], v[4];
         _mm_storeu_ps(t, t4); _mm_storeu_ps(u, u4); _mm_storeu_ps(v, v4);
-        /* In lane order with strict <, as the scalar loop would pick among equal t. */
+        /* In lane order with strict <, as a scalar loop would pick among equal t. */
         for (int i = 0; i < 4; i++) {
-            if ((mask & (1 << i)) && t[i] < r->t_max) {
+            if (scalar_lanes & (1 << i)) {
+                float ts, us, vs;
+                if (triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
+                                                  block_vertex(b, 2, i), &ts, &us, &vs)) {
+                    r->t_max = ts;
+                    hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
+                    found = true;
+                }
+            } else if ((mask & (1 << i)) && t[i] < r->t_max) {
                 r->t_max = t[i];
                 hit->t = t[i]; hit->u = u[i]; hit->v = v[i]; hit->prim = b->id[i];
                 found = true;
@@ -451,13 +488,21 @@ static inline bool leaf_intersect(const Bvh *bvh, const BvhLeaf *leaf, Ray *r, H
     return found;
 }
 
-static inline bool leaf_occluded(const Bvh *bvh, const BvhLeaf *leaf, const Ray *r)
+static inline bool leaf_occluded(const Bvh *bvh, const BvhLeaf *leaf, const RayTri4 *q, const Ray *r)
 {
     const __m128 t_min = _mm_set1_ps(r->t_min), t_max = _mm_set1_ps(r->t_max);
     for (uint32_t bi = 0; bi < leaf->num_blocks; bi++) {
+        const BvhTriBlock *b = &bvh->blocks[leaf->first_block + bi];
         __m128 t4, u4, v4;
-        if (block_intersect4(&bvh->blocks[leaf->first_block + bi], r, t_min, t_max, &t4, &u4, &v4))
-            return true;
+        int scalar_lanes;
+        if (block_intersect4(b, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes)) return true;
+        for (int i = 0; i < 4; i++) {
+            float ts, us, vs;
+            if ((scalar_lanes & (1 << i)) &&
+                triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
+                                              block_vertex(b, 2, i), &ts, &us, &vs))
+                return true;
+        }
     }
     for (uint32_t si = 0; si < leaf->num_spheres; si++) {
         const BvhSphere *sp = &bvh->spheres[leaf->first_sphere + si];
@@ -478,6 +523,7 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
     if (bvh->num_nodes == 0) return false;
     Ray r = *ray;
     RaySimd q = ray_simd(&r);
+    RayTri4 qt = ray_tri4(&r);
     StackEntry stack[BVH_STACK];
     int sp = 0;
     stack[sp++] = (StackEntry){0, 0, r.t_min};
@@ -486,7 +532,7 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
         StackEntry e = stack[--sp];
         if (e.t > r.t_max) continue;
         if (e.is_leaf) {
-            found |= leaf_intersect(bvh, &bvh->leaves[e.child], &r, hit);
+            found |= leaf_intersect(bvh, &bvh->leaves[e.child], &qt, &r, hit);
             continue;
         }
         const BvhNode *n = &bvh->nodes[e.child];
@@ -515,13 +561,14 @@ bool bvh_occluded(const Bvh *bvh, const Ray *ray)
 {
     if (bvh->num_nodes == 0) return false;
     RaySimd q = ray_simd(ray);
+    RayTri4 qt = ray_tri4(ray);
     StackEntry stack[BVH_STACK];
     int sp = 0;
     stack[sp++] = (StackEntry){0, 0, 0.0f};
     while (sp > 0) {
         StackEntry e = stack[--sp];
         if (e.is_leaf) {
-            if (leaf_occluded(bvh, &bvh->leaves[e.child], ray)) return true;
+            if (leaf_occluded(bvh, &bvh->leaves[e.child], &qt, ray)) return true;
             continue;
         }
         const BvhNode *n = &bvh->nodes[e.child];

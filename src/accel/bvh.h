@@ -30,14 +30,14 @@ typedef struct BvhNode {
     uint32_t pad;
 } BvhNode;
 
-/* Four triangles as (v0, e1 = v1 - v0, e2 = v2 - v0) in SoA form for one SSE
- * Moller-Trumbore test. Unused lanes have zero edges (det = 0: never hit). */
+/* Four triangles' vertices in SoA form, v[vertex][axis][lane], for one SSE watertight
+ * test; indexing by axis lets the per-ray axis permutation pick rows. Unused lanes have
+ * id BVH_NO_PRIM and NaN vertices. */
 typedef struct BvhTriBlock {
-    float v0x[4], v0y[4], v0z[4];
-    float e1x[4], e1y[4], e1z[4];
-    float e2x[4], e2y[4], e2z[4];
+    float v[3][3][4];
     uint32_t id[4]; /* scene primitive ids */
 } BvhTriBlock;
+#define BVH_NO_PRIM 0xffffffffu
 
 typedef struct BvhSphere {
     Vec3 center;

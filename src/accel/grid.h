@@ -1,23 +1,93 @@
-/* PLACEHOLDER: the grid back end is being written. */
+/* Uniform grid over triangles and spheres: about 27 cells per primitive, near-cubic cells,
+ * primitives stored per cell in compressed sparse rows, 3D-DDA traversal (Amanatides &
+ * Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing", Eurographics 1987) that jumps
+ * over empty bricks of 64 cells, and a small per-ray hashed mailbox so a primitive
+ * spanning several cells is (almost always) tested once per ray. Read-only after
+ * grid_build: any number of threads may traverse it. Hits are bit-identical to the list
+ * back end's (see grid.c for the one exception, ill-conditioned grazing hits). */
 #ifndef CST_ACCEL_GRID_H
 #define CST_ACCEL_GRID_H
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "accel/accel_geometry.h"
 #include "caustic/caustic.h"
 #include "geometry/hit.h"
 #include "geometry/ray.h"
+#include "math/bbox.h"
 
+/* A triangle's own vertices, as triangle_intersect_watertight() takes them (the same
+ * floats the list back end tests, so hits are bit-identical). */
+typedef struct GridTri {
+    Vec3 v0, v1, v2;
+    uint32_t id; /* scene primitive id */
+} GridTri;
+
+typedef struct GridSphere {
+    Vec3 center;
+    float radius;
+    uint32_t id; /* scene primitive id */
+} GridSphere;
+
+/* Cells are numbered in bricks of 64: 2^brick_shift[a] cells along axis a, the shifts
+ * summing to 6 (4 x 4 x 4 for a box, 8 x 8 x 1 for a flat one, so flat grids are not
+ * padded). With (bx, by, bz) = (x >> shift[0], y >> shift[1], z >> shift[2]) and
+ * (lx, ly, lz) the low bits, cell (x, y, z) is number 64 * brick + lx + (ly << shift[0])
+ * + (lz << (shift[0] + shift[1])), brick = bx + brick_res[0] * (by + brick_res[1] * bz).
+ * Neighbouring cells are then neighbours in memory on all three axes (a ray's cells share
+ * cache lines of offsets and slots), and a brick's 64 occupancy bits are one word: an
+ * empty brick is a zero word, skipped in one step. Cells of the last bricks past res
+ * are padding (empty, never visited).
+ *
+ * The primitives of cell c are slots[cell_start[c] .. cell_start[c + 1]) (compressed
+ * sparse rows). A slot holds a grid-local index: below num_tris it is tris[slot],
+ * otherwise spheres[slot - num_tris]. The grid keeps its own copies of the primitives,
+ * in Morton order of their box centres, so the primitives of one cell sit together in
+ * memory. The cell geometry is kept in double so the traversal's cell boundaries are
+ * exact to far below the build margin (see grid.c). */
 typedef struct Grid {
-    int unused;
+    int res[3];             /* cells per axis, each >= 1 */
+    int brick_shift[3];     /* log2 of a brick's cells per axis; they sum to 6 */
+    int brick_res[3];       /* bricks per axis: ceil(res / 2^brick_shift) */
+    int num_cells;          /* 64 per brick, padding included; 0 for an empty grid */
+    /* The cell number is separable: cell(x, y, z) = axis_cells[x] + axis_cells[res[0] + y]
+     * + axis_cells[res[0] + res[1] + z], so the traversal updates it with one load. */
+    int32_t *axis_cells;
+    double org[3];          /* minimum corner of the grid */
+    double cell_size[3];    /* per axis */
+    double inv_cell_size[3];
+    BBox bounds;            /* float copy of the grid box (primitive boxes plus the margin) */
+    float margin;           /* every primitive is in every cell it comes within `margin` of */
+    uint32_t *cell_start;   /* num_cells + 1 offsets into slots */
+    uint32_t *slots;        /* num_refs grid-local primitive indices */
+    size_t num_refs;
+    /* Occupancy, bit c % 64 of word c / 64 (one word per brick): 1 bit per cell fits in
+     * cache where cell_start does not, so an empty cell costs no memory trip. */
+    uint64_t *cell_bits;
+    /* Superbricks of 64 bricks, shaped like bricks (2^super_shift[a] bricks along axis
+     * a), numbered sx + super_res[0] * (sy + super_res[1] * sz); super_bits[s] != 0 iff
+     * superbrick s holds a primitive. A ray jumps over an empty one in one step. */
+    int super_shift[3];
+    int super_res[3];
+    uint64_t *super_bits;
+    GridTri *tris;
+    int num_tris;
+    GridSphere *spheres;
+    int num_spheres;
 } Grid;
 
+/* Zero primitives is valid (every ray misses). Copies what it needs from geom; returns
+ * CST_ERR_OOM (and leaves a freed grid) when memory runs out. */
 CstStatus grid_build(Grid *a, const AccelGeometry *geom, CstError *err);
+/* Accepts NULL and a zeroed or already freed grid. */
 void grid_free(Grid *a);
+/* Closest hit in (r.t_min, r.t_max). */
 bool grid_intersect(const Grid *a, const Ray *r, Hit *hit);
+/* Any hit in (r.t_min, r.t_max). */
 bool grid_occluded(const Grid *a, const Ray *r);
+/* Cell offsets, occupancy bits, the slot array and the grid's copies of the primitives. */
 size_t grid_memory_bytes(const Grid *a);
 
 #endif

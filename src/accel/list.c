@@ -13,12 +13,13 @@ CstStatus list_build(ListAccel *l, const AccelGeometry *geom, CstError *err)
 
 void list_free(ListAccel *l) { (void)l; }
 
-static inline bool list_prim(const AccelGeometry *g, int i, const Ray *r, float *t, float *u, float *v)
+static inline bool list_prim(const AccelGeometry *g, const TriangleRay *tr, int i, const Ray *r,
+                             float *t, float *u, float *v)
 {
     if (i < g->num_tris) {
         const int32_t *k = &g->tri_indices[3 * i];
-        Vec3 a = g->positions[k[0]];
-        return triangle_intersect(a, v3_sub(g->positions[k[1]], a), v3_sub(g->positions[k[2]], a), r, t, u, v);
+        return triangle_intersect_watertight(tr, r, g->positions[k[0]], g->positions[k[1]],
+                                             g->positions[k[2]], t, u, v);
     }
     const Sphere *s = &g->spheres[i - g->num_tris];
     *u = *v = 0.0f;
@@ -28,11 +29,12 @@ static inline bool list_prim(const AccelGeometry *g, int i, const Ray *r, float 
 bool list_intersect(const ListAccel *l, const Ray *ray, Hit *hit)
 {
     Ray r = *ray;
+    TriangleRay tr = triangle_ray_setup(r.d);
     bool found = false;
     int n = l->geom.num_tris + l->geom.num_spheres;
     for (int i = 0; i < n; i++) {
         float t, u, v;
-        if (list_prim(&l->geom, i, &r, &t, &u, &v)) {
+        if (list_prim(&l->geom, &tr, i, &r, &t, &u, &v)) {
             r.t_max = t;
             hit->t = t; hit->u = u; hit->v = v; hit->prim = (uint32_t)i;
             found = true;
@@ -43,10 +45,11 @@ bool list_intersect(const ListAccel *l, const Ray *ray, Hit *hit)
 
 bool list_occluded(const ListAccel *l, const Ray *r)
 {
+    TriangleRay tr = triangle_ray_setup(r->d);
     int n = l->geom.num_tris + l->geom.num_spheres;
     for (int i = 0; i < n; i++) {
         float t, u, v;
-        if (list_prim(&l->geom, i, r, &t, &u, &v)) return true;
+        if (list_prim(&l->geom, &tr, i, r, &t, &u, &v)) return true;
     }
     return false;
 }

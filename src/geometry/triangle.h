@@ -10,7 +10,7 @@
 /* Two-sided test. On a hit in (t_min, t_max) writes t and the barycentrics (u, v) of v1
  * and v2. A ray parallel to the plane (det == 0) never hits, including rays lying in the
  * plane: such grazing hits have no well-defined t and are left to the neighbours. */
-static inline bool triangle_intersect(Vec3 v0, Vec3 e1, Vec3 e2, const Ray *r,
+static inline bool triangle_intersect_mt(Vec3 v0, Vec3 e1, Vec3 e2, const Ray *r,
                                       float *t_out, float *u_out, float *v_out)
 {
     Vec3 p = v3_cross(r->d, e2);
@@ -26,6 +26,65 @@ static inline bool triangle_intersect(Vec3 v0, Vec3 e1, Vec3 e2, const Ray *r,
     float t = v3_dot(e2, q) * inv_det;
     if (!(t > r->t_min && t < r->t_max)) return false;
     *t_out = t; *u_out = u; *v_out = v;
+    return true;
+}
+
+/* Per-ray set-up of the watertight test: the ray's dominant axis becomes z, the other two
+ * are sheared so the ray runs along +z from the origin (Woop, Benthin & Wald, "Watertight
+ * Ray/Triangle Intersection", JCGT 2(1), 2013, sec. 3). */
+typedef struct TriangleRay {
+    int kx, ky, kz;
+    float sx, sy, sz;
+} TriangleRay;
+
+static inline TriangleRay triangle_ray_setup(Vec3 d)
+{
+    TriangleRay tr;
+    float ax = fabsf(d.x), ay = fabsf(d.y), az = fabsf(d.z);
+    tr.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    tr.kx = tr.kz == 2 ? 0 : tr.kz + 1;
+    tr.ky = tr.kx == 2 ? 0 : tr.kx + 1;
+    float dz = v3_get(d, tr.kz);
+    if (dz < 0.0f) { int t = tr.kx; tr.kx = tr.ky; tr.ky = t; } /* keep the winding */
+    tr.sx = v3_get(d, tr.kx) / dz;
+    tr.sy = v3_get(d, tr.ky) / dz;
+    tr.sz = 1.0f / dz;
+    return tr;
+}
+
+/* The watertight test on the triangle's own vertices a, b, c (not on precomputed edges:
+ * two triangles sharing an edge must see bit-identical vertices). A ray through a shared
+ * edge or vertex hits at least one of the triangles, never neither: the edge functions
+ * of a shared edge are exact negatives of each other, and when one is zero it is
+ * recomputed in double so its sign is exact (JCGT 2013, sec. 4). Two-sided. On a hit
+ * in (t_min, t_max) writes t and the barycentrics u, v of b and c. */
+static inline bool triangle_intersect_watertight(const TriangleRay *tr, const Ray *r, Vec3 a, Vec3 b,
+                                                 Vec3 c, float *t_out, float *u_out, float *v_out)
+{
+    Vec3 A = v3_sub(a, r->o), B = v3_sub(b, r->o), C = v3_sub(c, r->o);
+    float az = v3_get(A, tr->kz), bz = v3_get(B, tr->kz), cz = v3_get(C, tr->kz);
+    float Ax = v3_get(A, tr->kx) - tr->sx * az, Ay = v3_get(A, tr->ky) - tr->sy * az;
+    float Bx = v3_get(B, tr->kx) - tr->sx * bz, By = v3_get(B, tr->ky) - tr->sy * bz;
+    float Cx = v3_get(C, tr->kx) - tr->sx * cz, Cy = v3_get(C, tr->ky) - tr->sy * cz;
+    float U = Cx * By - Cy * Bx;
+    float V = Ax * Cy - Ay * Cx;
+    float W = Bx * Ay - By * Ax;
+    if (U == 0.0f || V == 0.0f || W == 0.0f) {
+        /* Products of floats are exact in double, so the sign of each difference is too. */
+        U = (float)((double)Cx * (double)By - (double)Cy * (double)Bx);
+        V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
+        W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
+    }
+    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return false;
+    float det = U + V + W;
+    if (det == 0.0f) return false;
+    float T = U * (tr->sz * az) + V * (tr->sz * bz) + W * (tr->sz * cz);
+    float inv_det = 1.0f / det;
+    float t = T * inv_det;
+    if (!(t > r->t_min && t < r->t_max)) return false;
+    *t_out = t;
+    *u_out = V * inv_det;
+    *v_out = W * inv_det;
     return true;
 }
 

@@ -42,6 +42,8 @@ void scene_destroy(Scene *s)
 {
     if (!s) return;
     free(s->positions);
+    free(s->normals);
+    free(s->uvs);
     free(s->tri_indices);
     free(s->tri_info);
     free(s->tri_normals);
@@ -85,12 +87,42 @@ static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float 
     return CST_OK;
 }
 
-CstStatus scene_add_mesh(Scene *s, const Vec3 *positions, int num_vertices, const int *indices,
-                         int num_triangles, int material, const Emission *emission, CstError *err)
+/* Makes room for an attribute array of elem bytes per position, in step with positions:
+ * created on first use with zero fills for the positions before `base` (which count as
+ * partial), then filled from src for the new vertices, or zeroed when src is NULL. */
+static int add_attribute(void **arr, int *cap, size_t elem, int base, int n, const void *src,
+                         int src_partial, int *partial)
 {
+    if (!src && !*arr) return 1;
+    int fresh = *arr == NULL;
+    if (!grow(arr, cap, base + n, elem)) return 0;
+    char *a = *arr;
+    if (fresh && base > 0) {
+        memset(a, 0, (size_t)base * elem);
+        *partial = 1;
+    }
+    if (src)
+        memcpy(a + (size_t)base * elem, src, (size_t)n * elem);
+    else
+        memset(a + (size_t)base * elem, 0, (size_t)n * elem);
+    if (!src || src_partial) *partial = 1;
+    return 1;
+}
+
+CstStatus scene_add_mesh_ex(Scene *s, const SceneMesh *m, int *num_dropped, CstError *err)
+{
+    if (num_dropped) *num_dropped = 0;
     if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
-    if (material < 0 || material >= s->num_materials)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    int num_vertices = m->num_vertices, num_triangles = m->num_triangles;
+    const int *indices = m->indices;
+    const Vec3 *positions = m->positions;
+    if (!m->tri_material && (m->material < 0 || m->material >= s->num_materials))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", m->material);
+    if (m->tri_material)
+        for (int t = 0; t < num_triangles; t++)
+            if (m->tri_material[t] < 0 || m->tri_material[t] >= s->num_materials)
+                return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d: material index %d out of range",
+                                t, m->tri_material[t]);
     for (int i = 0; i < 3 * num_triangles; i++)
         if (indices[i] < 0 || indices[i] >= num_vertices)
             return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d: vertex index %d out of range [0, %d)",
@@ -98,30 +130,58 @@ CstStatus scene_add_mesh(Scene *s, const Vec3 *positions, int num_vertices, cons
     for (int i = 0; i < num_vertices; i++)
         if (!v3_is_finite(positions[i]))
             return cst_fail(err, CST_ERR_INVALID_ARG, "vertex %d is not finite", i);
+    for (int i = 0; m->normals && i < num_vertices; i++)
+        if (!v3_is_finite(m->normals[i]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "normal of vertex %d is not finite", i);
+    for (int i = 0; m->uvs && i < num_vertices; i++)
+        if (!isfinite(m->uvs[i].x) || !isfinite(m->uvs[i].y))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "uv of vertex %d is not finite", i);
     int base = s->num_positions;
     if (!GROW(s->positions, s->cap_positions, base + num_vertices) ||
         !GROW(s->tri_indices, s->cap_triangles, 3 * (s->num_triangles + num_triangles)))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding %d triangles", num_triangles);
+    if (!add_attribute((void **)&s->normals, &s->cap_normals, sizeof *s->normals, base,
+                       num_vertices, m->normals, m->normals_partial, &s->normals_partial) ||
+        !add_attribute((void **)&s->uvs, &s->cap_uvs, sizeof *s->uvs, base, num_vertices, m->uvs,
+                       m->uvs_partial, &s->uvs_partial))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding %d vertices", num_vertices);
     /* tri_info shares the triangle capacity logic but has one entry per triangle. */
     PrimInfo *info = realloc(s->tri_info, (size_t)(s->num_triangles + num_triangles) * sizeof *info);
     if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding %d triangles", num_triangles);
     s->tri_info = info;
     memcpy(s->positions + base, positions, (size_t)num_vertices * sizeof *positions);
     s->num_positions += num_vertices;
-    int first = s->num_triangles;
     for (int t = 0; t < num_triangles; t++) {
-        int id = first + t;
+        int id = s->num_triangles;
         Vec3 a = positions[indices[3 * t]], b = positions[indices[3 * t + 1]], c = positions[indices[3 * t + 2]];
         float area = triangle_area(a, b, c);
-        if (!(area > 0.0f))
+        if (!(area > 0.0f)) {
+            if (m->skip_degenerate) {
+                if (num_dropped) (*num_dropped)++;
+                continue;
+            }
             return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d is degenerate (zero area)", t);
+        }
         for (int k = 0; k < 3; k++) s->tri_indices[3 * id + k] = base + indices[3 * t + k];
-        s->tri_info[id].material = material;
-        CstStatus st = add_emitter(s, (uint32_t)id, emission, area, &s->tri_info[id].emitter, err);
+        s->tri_info[id].material = m->tri_material ? m->tri_material[t] : m->material;
+        CstStatus st = add_emitter(s, (uint32_t)id, m->emission, area, &s->tri_info[id].emitter, err);
         if (st != CST_OK) return st;
         s->num_triangles = id + 1; /* keep counts consistent if a later triangle fails */
     }
     return CST_OK;
+}
+
+CstStatus scene_add_mesh(Scene *s, const Vec3 *positions, int num_vertices, const int *indices,
+                         int num_triangles, int material, const Emission *emission, CstError *err)
+{
+    SceneMesh m = {0};
+    m.positions = positions;
+    m.num_vertices = num_vertices;
+    m.indices = indices;
+    m.num_triangles = num_triangles;
+    m.material = material;
+    m.emission = emission;
+    return scene_add_mesh_ex(s, &m, NULL, err);
 }
 
 CstStatus scene_add_quad(Scene *s, const Vec3 v[4], int material, const Emission *emission, CstError *err)

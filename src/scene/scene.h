@@ -31,6 +31,12 @@ typedef struct CstScene Scene;
 struct CstScene {
     /* geometry */
     Vec3 *positions; int num_positions, cap_positions;
+    /* Per-position vertex attributes for shading, NULL until a mesh supplies them; then
+     * positions of meshes without them hold zero fills (a zero normal means "none") and
+     * the *_partial flag is set. */
+    Vec3 *normals; int cap_normals; /* unit shading normals */
+    Vec2 *uvs; int cap_uvs;         /* texture coordinates, channel 0 */
+    int normals_partial, uvs_partial;
     int32_t *tri_indices; /* 3 per triangle */
     int num_triangles, cap_triangles;
     Sphere *spheres; int num_spheres, cap_spheres;
@@ -63,6 +69,23 @@ CstStatus scene_add_material(Scene *scene, const Material *m, int *out_id, CstEr
 CstStatus scene_add_mesh(Scene *scene, const Vec3 *positions, int num_vertices,
                          const int *indices, int num_triangles, int material,
                          const Emission *emission, CstError *err);
+/* A triangle mesh for scene_add_mesh_ex: zero-initialise, then fill. */
+typedef struct SceneMesh {
+    const Vec3 *positions;
+    int num_vertices;
+    const Vec3 *normals; /* per vertex, unit (zero = none), or NULL */
+    const Vec2 *uvs;     /* per vertex, or NULL */
+    int normals_partial, uvs_partial; /* the arrays already hold zero fills */
+    const int *indices;  /* 3 per triangle, into positions */
+    int num_triangles;
+    int material;            /* scene material id of every triangle, */
+    const int *tri_material; /* unless this per-triangle array of ids is given */
+    const Emission *emission; /* or NULL */
+    int skip_degenerate; /* drop zero-area triangles instead of failing (mesh files) */
+} SceneMesh;
+/* scene_add_mesh with vertex attributes, per-triangle materials and optional skipping of
+ * degenerate triangles; *num_dropped (may be NULL) gets how many were skipped. */
+CstStatus scene_add_mesh_ex(Scene *scene, const SceneMesh *mesh, int *num_dropped, CstError *err);
 /* Planar quad v0..v3 as triangles (v0,v1,v2), (v0,v2,v3); normal = (v1-v0) x (v2-v0). */
 CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);

@@ -12,10 +12,13 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "math/transform.h"
 #include "scene/json_locate.h"
+#include "scene/mesh_import.h"
 #include "scene/scene.h"
 
-/* Deepest path the format has is 4 (shapes[i].emission.radiance[k]); the rest is headroom. */
+/* Deepest path the format has is 6 (shapes[i].transform.rotate[j].axis[k]); the rest is
+ * headroom. */
 #define LOADER_MAX_DEPTH 8
 #define LOADER_MAX_FILM_SIZE 65536
 /* A quad's fourth vertex may lie this fraction of the quad's longer diagonal off the plane
@@ -888,28 +891,307 @@ static CstStatus parse_sphere(Loader *ld, const json_t *shape, int material, con
     return st == CST_OK ? CST_OK : fail_builder(ld, st);
 }
 
-enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE };
+/* One rotation {"axis": [x, y, z], "angle": degrees}. */
+static CstStatus read_rotation(Loader *ld, const json_t *obj, Transform *out)
+{
+    static const char *const keys[] = {"axis", "angle"};
+    json_t *v;
+    Vec3 axis = {0};
+    float angle = 0.0f;
+    LOADER_TRY(expect_object(ld, obj, "a rotation, an object with axis and angle"));
+    LOADER_TRY(check_keys(ld, obj, keys, 2));
+    LOADER_TRY(member_required(ld, obj, "axis", "the rotation axis, an array of 3 numbers", &v));
+    path_push_key(ld, "axis");
+    LOADER_TRY(read_vec3(ld, v, (double)FLT_MAX, &axis));
+    if (!(v3_max_abs(axis) > 0.0f))
+        return fail_here(ld, "the axis is zero; expected a nonzero vector");
+    path_pop(ld);
+    LOADER_TRY(member_required(ld, obj, "angle", "the rotation angle in degrees", &v));
+    path_push_key(ld, "angle");
+    LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &angle));
+    path_pop(ld);
+    *out = transform_rotate_degrees(axis, (double)angle);
+    return CST_OK;
+}
+
+/* "transform": {"scale", "rotate", "translate"} applied in that order, or {"matrix"}. */
+static CstStatus parse_transform(Loader *ld, const json_t *obj, Transform *out)
+{
+    static const char *const keys[] = {"translate", "rotate", "scale", "matrix"};
+    char kind[48];
+    json_t *v;
+    LOADER_TRY(expect_object(ld, obj,
+                             "an object with translate, rotate and scale, or with matrix"));
+    LOADER_TRY(check_keys(ld, obj, keys, 4));
+    Transform t = transform_identity();
+    if ((v = json_object_get(obj, "matrix"))) {
+        for (int k = 0; k < 3; k++)
+            if (json_object_get(obj, keys[k])) {
+                path_push_key(ld, keys[k]);
+                return fail_key(ld, "\"%s\" cannot be combined with \"matrix\"; expected either "
+                                    "a matrix or translate, rotate and scale", keys[k]);
+            }
+        path_push_key(ld, "matrix");
+        if (!json_is_array(v) || json_array_size(v) != 16)
+            return fail_here(ld, "got %s; expected 16 numbers, a 4x4 matrix row by row",
+                             describe(v, kind));
+        float rows[16];
+        for (size_t k = 0; k < 16; k++) {
+            path_push_index(ld, k);
+            LOADER_TRY(read_float(ld, json_array_get(v, k), (double)FLT_MAX, &rows[k]));
+            path_pop(ld);
+        }
+        static const float bottom[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+        for (size_t k = 12; k < 16; k++)
+            if (rows[k] != bottom[k - 12]) {
+                path_push_index(ld, k);
+                return fail_here(ld, "element %g of the bottom row is not %g; expected an affine "
+                                     "matrix, bottom row 0, 0, 0, 1",
+                                 (double)rows[k], (double)bottom[k - 12]);
+            }
+        t = transform_from_rows(rows);
+        path_pop(ld);
+    } else {
+        if ((v = json_object_get(obj, "scale"))) {
+            Vec3 sc = {0};
+            path_push_key(ld, "scale");
+            if (json_is_number(v)) {
+                float f = 0.0f;
+                LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &f));
+                sc = v3s(f);
+            } else if (json_is_array(v)) {
+                LOADER_TRY(read_vec3(ld, v, (double)FLT_MAX, &sc));
+            } else {
+                return fail_here(ld, "got %s; expected a number or an array of 3 numbers",
+                                 describe(v, kind));
+            }
+            for (int k = 0; k < 3; k++)
+                if (v3_get(sc, k) == 0.0f) {
+                    if (json_is_array(v))
+                        path_push_index(ld, (size_t)k);
+                    return fail_here(ld, "scale 0 flattens the mesh; expected a nonzero number "
+                                         "(a negative one mirrors)");
+                }
+            t = transform_scale(sc);
+            path_pop(ld);
+        }
+        if ((v = json_object_get(obj, "rotate"))) {
+            Transform r = transform_identity();
+            path_push_key(ld, "rotate");
+            if (json_is_array(v)) {
+                if (json_array_size(v) == 0)
+                    return fail_here(ld, "got an empty array; expected a rotation or an array "
+                                         "of rotations, each an object with axis and angle");
+                size_t i;
+                json_t *rv;
+                json_array_foreach(v, i, rv) {
+                    path_push_index(ld, i);
+                    LOADER_TRY(read_rotation(ld, rv, &r));
+                    t = transform_compose(r, t); /* the list in order: first applied first */
+                    path_pop(ld);
+                }
+            } else {
+                LOADER_TRY(read_rotation(ld, v, &r));
+                t = transform_compose(r, t);
+            }
+            path_pop(ld);
+        }
+        if ((v = json_object_get(obj, "translate"))) {
+            Vec3 d = {0};
+            path_push_key(ld, "translate");
+            LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &d));
+            t = transform_compose(transform_translate(d), t);
+            path_pop(ld);
+        }
+    }
+    Transform nm;
+    if (!transform_normal_matrix(&t, &nm))
+        return fail_here(ld, "the transform is singular (determinant %g) or not invertible in "
+                             "32-bit floats, so it flattens the mesh; expected an invertible "
+                             "transform",
+                         transform_det(&t));
+    *out = t;
+    return CST_OK;
+}
+
+/* `file` resolved against the directory of the scene file `scene_name` (the current
+ * directory when the name has none, as for "<string>"); absolute paths stay. NULL on OOM. */
+static char *resolve_mesh_path(const char *scene_name, const char *file)
+{
+    const char *slash = file[0] == '/' ? NULL : strrchr(scene_name, '/');
+    size_t dir_len = slash ? (size_t)(slash - scene_name) + 1 : 0, len = strlen(file);
+    char *p = malloc(dir_len + len + 1);
+    if (!p)
+        return NULL;
+    memcpy(p, scene_name, dir_len);
+    memcpy(p + dir_len, file, len + 1);
+    return p;
+}
+
+/* Applies the shape's transform to the imported mesh in place; a mirroring transform gets
+ * the triangles' winding swapped back so that outside stays outside (the geometric normal
+ * is (b - a) x (c - a)). */
+static void transform_mesh(ImportedMesh *im, const Transform *t)
+{
+    Transform nm = transform_identity();
+    transform_normal_matrix(t, &nm); /* checked invertible by parse_transform */
+    for (int i = 0; i < im->num_vertices; i++)
+        im->positions[i] = transform_point(t, im->positions[i]);
+    for (int i = 0; im->normals && i < im->num_vertices; i++)
+        im->normals[i] = transform_normal(&nm, im->normals[i]);
+    if (transform_det(t) < 0.0)
+        for (int i = 0; i < im->num_triangles; i++) {
+            int32_t tmp = im->indices[3 * i + 1];
+            im->indices[3 * i + 1] = im->indices[3 * i + 2];
+            im->indices[3 * i + 2] = tmp;
+        }
+}
+
+/* Scene material ids for the file's materials, added to the scene on first use. Fails
+ * at the shape when a triangle has only assimp's stand-in material. */
+static CstStatus file_materials(Loader *ld, const ImportedMesh *im, int *tri_ids)
+{
+    int *ids = malloc((size_t)(im->num_materials > 0 ? im->num_materials : 1) * sizeof *ids);
+    if (!ids)
+        return fail_at(ld, CST_ERR_OOM, "out of memory");
+    for (int i = 0; i < im->num_materials; i++)
+        ids[i] = -1;
+    CstStatus st = CST_OK;
+    for (int t = 0; t < im->num_triangles && st == CST_OK; t++) {
+        const ImportedMaterial *fm = &im->materials[im->tri_material[t]];
+        int *id = &ids[im->tri_material[t]];
+        if (*id < 0 && !fm->from_file) {
+            st = fail_here(ld, "missing key \"material\": the mesh file names no material for "
+                               "its triangle %d; expected the name of a material for the whole "
+                               "mesh",
+                           t);
+        } else if (*id < 0) {
+            Material m = {0};
+            m.type = (MaterialType)fm->type;
+            m.albedo = fm->albedo;
+            m.ior = fm->ior;
+            st = scene_add_material(ld->scene, &m, id, ld->err);
+            if (st != CST_OK)
+                st = fail_builder(ld, st);
+        }
+        tri_ids[t] = *id;
+    }
+    free(ids);
+    return st;
+}
+
+static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, const Emission *em)
+{
+    json_t *fv, *v;
+    const char *file = NULL;
+    Transform xf = transform_identity();
+    LOADER_TRY(member_required(ld, shape, "file",
+                               "the path of a mesh file (OBJ, PLY, glTF, ...), relative to the "
+                               "scene file",
+                               &fv));
+    if ((v = json_object_get(shape, "transform"))) {
+        path_push_key(ld, "transform");
+        LOADER_TRY(parse_transform(ld, v, &xf));
+        path_pop(ld);
+    }
+    path_push_key(ld, "file");
+    LOADER_TRY(read_string(ld, fv, &file));
+    if (!file[0])
+        return fail_here(ld, "the file name is empty; expected the path of a mesh file");
+    char *path = resolve_mesh_path(ld->name, file);
+    if (!path)
+        return fail_at(ld, CST_ERR_OOM, "out of memory");
+    ImportedMesh im = {0};
+    int *tri_ids = NULL;
+    CstStatus st = mesh_import(path, &im, ld->err);
+    if (st != CST_OK) {
+        st = fail_builder(ld, st); /* "<json>:l:c: shapes[i].file: <resolved path>: ..." */
+        goto done;
+    }
+    if (!transform_is_identity(&xf))
+        transform_mesh(&im, &xf);
+    for (int i = 0; i < im.num_vertices; i++) {
+        Vec3 p = im.positions[i];
+        if (!v3_is_finite(p) || !((double)v3_max_abs(p) <= LOADER_MAX_LENGTH)) {
+            st = fail_here(ld, "vertex %d of the mesh is at (%g, %g, %g)%s, beyond the scene "
+                               "limit; expected coordinates of magnitude at most %g",
+                           i, (double)p.x, (double)p.y, (double)p.z,
+                           json_object_get(shape, "transform") ? " after the transform" : "",
+                           LOADER_MAX_LENGTH);
+            goto done;
+        }
+    }
+    if (material < 0) {
+        tri_ids = malloc((size_t)im.num_triangles * sizeof *tri_ids);
+        if (!tri_ids) {
+            st = fail_at(ld, CST_ERR_OOM, "out of memory");
+            goto done;
+        }
+        path_pop(ld); /* a missing material is the shape's error, not the file's */
+        st = file_materials(ld, &im, tri_ids);
+        path_push_key(ld, "file");
+        if (st != CST_OK)
+            goto done;
+    }
+    SceneMesh sm = {0};
+    sm.positions = im.positions;
+    sm.num_vertices = im.num_vertices;
+    sm.normals = im.normals;
+    sm.uvs = im.uvs;
+    sm.normals_partial = im.normals_partial;
+    sm.uvs_partial = im.uvs_partial;
+    sm.indices = im.indices;
+    sm.num_triangles = im.num_triangles;
+    sm.material = material;
+    sm.tri_material = tri_ids;
+    sm.emission = em;
+    sm.skip_degenerate = 1; /* scanned meshes have some; documented in scene-format.md */
+    int dropped = 0;
+    st = scene_add_mesh_ex(ld->scene, &sm, &dropped, ld->err);
+    if (st != CST_OK) {
+        st = fail_builder(ld, st);
+    } else if (dropped == im.num_triangles) {
+        st = fail_here(ld, "all %d triangles of the mesh are degenerate (zero area)%s; expected "
+                           "a mesh with some area",
+                       dropped, json_object_get(shape, "transform") ? " after the transform" : "");
+    } else {
+        path_pop(ld);
+    }
+done:
+    free(tri_ids);
+    mesh_import_free(&im);
+    free(path);
+    return st;
+}
+
+enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE };
 
 static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
-    static const char *const types[] = {"quad", "mesh", "sphere"};
+    static const char *const types[] = {"quad", "mesh", "sphere", "meshfile"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "material", "emission"};
     static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission"};
-    int type = 0, material = 0;
+    static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
+                                                "transform"};
+    int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(expect_object(ld, shape, "a shape object"));
-    LOADER_TRY(read_type(ld, shape, "shape type", types, 3, -1, &type));
+    LOADER_TRY(read_type(ld, shape, "shape type", types, 4, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(check_keys(ld, shape, quad_keys, 4)); break;
     case SHAPE_MESH: LOADER_TRY(check_keys(ld, shape, mesh_keys, 5)); break;
+    case SHAPE_MESHFILE: LOADER_TRY(check_keys(ld, shape, meshfile_keys, 5)); break;
     default: LOADER_TRY(check_keys(ld, shape, sphere_keys, 5)); break;
     }
-    LOADER_TRY(read_material_ref(ld, shape, &material));
+    /* A mesh file may bring its own materials: then "material" is optional (-1 = none). */
+    if (type != SHAPE_MESHFILE || json_object_get(shape, "material"))
+        LOADER_TRY(read_material_ref(ld, shape, &material));
     LOADER_TRY(read_emission(ld, shape, &em));
     switch (type) {
     case SHAPE_QUAD: return parse_quad(ld, shape, material, &em);
     case SHAPE_MESH: return parse_mesh(ld, shape, material, &em);
+    case SHAPE_MESHFILE: return parse_meshfile(ld, shape, material, &em);
     default: return parse_sphere(ld, shape, material, &em);
     }
 }

@@ -115,13 +115,14 @@ static void soup_build(const Soup *s, Bvh *bvh)
 
 /* ------------------------------------------------------------------ brute force */
 
-/* One primitive by id, exactly as the BVH stores it (e1, e2 from the same float
- * subtractions), so results compare bit for bit. */
+/* One primitive by id with the same watertight test the BVH runs, so results compare
+ * bit for bit. */
 static bool prim_hit(const Soup *s, int id, const Ray *r, float *t, float *u, float *v)
 {
     if (id < s->num_tris) {
         Vec3 a = s->pos[s->idx[3 * id]], b = s->pos[s->idx[3 * id + 1]], c = s->pos[s->idx[3 * id + 2]];
-        return triangle_intersect(a, v3_sub(b, a), v3_sub(c, a), r, t, u, v);
+        TriangleRay tr = triangle_ray_setup(r->d);
+        return triangle_intersect_watertight(&tr, r, a, b, c, t, u, v);
     }
     const Sphere *sp = &s->spheres[id - s->num_tris];
     *u = *v = 0.0f;
@@ -288,13 +289,8 @@ static BBox slot_box(const BvhNode *n, int i)
     return b;
 }
 
-/* A block lane is unused when everything in it is zero (the builder memsets blocks and
- * fills lanes from 0; the test scenes have no zero-area triangles at the origin). */
-static bool lane_used(const BvhTriBlock *b, int l)
-{
-    return b->id[l] != 0u || b->v0x[l] != 0.0f || b->v0y[l] != 0.0f || b->v0z[l] != 0.0f || b->e1x[l] != 0.0f ||
-           b->e1y[l] != 0.0f || b->e1z[l] != 0.0f || b->e2x[l] != 0.0f || b->e2y[l] != 0.0f || b->e2z[l] != 0.0f;
-}
+/* Unused block lanes carry BVH_NO_PRIM. */
+static bool lane_used(const BvhTriBlock *b, int l) { return b->id[l] != BVH_NO_PRIM; }
 
 /* Checks one leaf against its slot box: every triangle lane and sphere is a scene
  * primitive stored exactly as the scalar tests would see it, inside the box. Counts the
@@ -314,11 +310,10 @@ static void check_leaf(const Bvh *bvh, const Soup *s, int leaf_index, BBox box, 
             int id = (int)b->id[l];
             assert_true(id >= 0 && id < s->num_tris);
             seen_ids[id]++;
-            Vec3 a = s->pos[s->idx[3 * id]], p1 = s->pos[s->idx[3 * id + 1]], p2 = s->pos[s->idx[3 * id + 2]];
-            Vec3 e1 = v3_sub(p1, a), e2 = v3_sub(p2, a);
-            assert_true(b->v0x[l] == a.x && b->v0y[l] == a.y && b->v0z[l] == a.z);
-            assert_true(b->e1x[l] == e1.x && b->e1y[l] == e1.y && b->e1z[l] == e1.z);
-            assert_true(b->e2x[l] == e2.x && b->e2y[l] == e2.y && b->e2z[l] == e2.z);
+            for (int k = 0; k < 3; k++) {
+                Vec3 p = s->pos[s->idx[3 * id + k]];
+                assert_true(b->v[k][0][l] == p.x && b->v[k][1][l] == p.y && b->v[k][2][l] == p.z);
+            }
             if (!box_contains(box, prim_box(s, id))) fail_msg("leaf %d: triangle %d outside its box", leaf_index, id);
         }
     }

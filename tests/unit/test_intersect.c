@@ -228,7 +228,7 @@ static const Vec3 TV0 = {0.0f, 0.0f, 0.0f}, TV1 = {1.0f, 0.0f, 0.0f}, TV2 = {0.0
 static bool tri_hit(Vec3 o, Vec3 d, float t_min, float t_max, float *t, float *u, float *v)
 {
     Ray r = ray_make(o, d, t_min, t_max);
-    return triangle_intersect(TV0, v3_sub(TV1, TV0), v3_sub(TV2, TV0), &r, t, u, v);
+    return triangle_intersect_mt(TV0, v3_sub(TV1, TV0), v3_sub(TV2, TV0), &r, t, u, v);
 }
 
 static void test_triangle_center_hit(void **state)
@@ -260,7 +260,7 @@ static void test_triangle_center_hit(void **state)
         float t_ref = (float)rnd(&rng, 0.1, 20.0);
         Ray r = ray_make(v3_madd(p, d, -t_ref), d, 0.0f, INFINITY);
         float tr = 0.0f, ur = 0.0f, vr = 0.0f;
-        if (!triangle_intersect(a, e1, e2, &r, &tr, &ur, &vr)) fail_msg("random ray %d missed", i);
+        if (!triangle_intersect_mt(a, e1, e2, &r, &tr, &ur, &vr)) fail_msg("random ray %d missed", i);
         assert_abs(tr, t_ref, 1e-4 * (double)t_ref + 1e-4);
         assert_abs(ur, bu, 2e-4);
         assert_abs(vr, bv, 2e-4);
@@ -342,11 +342,11 @@ static void test_triangle_two_sided(void **state)
     assert_rel(v1, v2, 1e-6);
     /* The reversed winding (v0, v2, v1) is hit from both sides as well, u and v swap. */
     Ray r = ray_make(v3(0.2f, 0.3f, 2.0f), v3(0.0f, 0.0f, -1.0f), 0.0f, INFINITY);
-    assert_true(triangle_intersect(TV0, v3_sub(TV2, TV0), v3_sub(TV1, TV0), &r, &t1, &u1, &v1));
+    assert_true(triangle_intersect_mt(TV0, v3_sub(TV2, TV0), v3_sub(TV1, TV0), &r, &t1, &u1, &v1));
     assert_rel(u1, 0.3, 1e-6);
     assert_rel(v1, 0.2, 1e-6);
     r = ray_make(v3(0.2f, 0.3f, -2.0f), v3(0.0f, 0.0f, 1.0f), 0.0f, INFINITY);
-    assert_true(triangle_intersect(TV0, v3_sub(TV2, TV0), v3_sub(TV1, TV0), &r, &t1, &u1, &v1));
+    assert_true(triangle_intersect_mt(TV0, v3_sub(TV2, TV0), v3_sub(TV1, TV0), &r, &t1, &u1, &v1));
 }
 
 static void test_triangle_interval_clipping(void **state)

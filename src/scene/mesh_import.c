@@ -1,0 +1,627 @@
+/* Mesh files in through assimp's C API (the only file that includes assimp): the node
+ * hierarchy flattened into one triangle list in world space, with per-vertex normals and
+ * UVs, and the file's materials mapped onto ours. */
+#include "scene/mesh_import.h"
+
+#include <assimp/ObjMaterial.h>
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <errno.h>
+#include <limits.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "core/error.h"
+#include "materials/material.h"
+#include "math/transform.h"
+
+/* Triangulate: polygons become fans/ear-clipped triangles in place of the polygon, so face
+ * order is kept. SortByPType: points and lines go to meshes of their own, which we skip.
+ * ValidateDataStructure: out-of-range indices and the like fail the import instead of
+ * reaching us (it costs ~0.02 s on the 1.3M-triangle bumpysphere). Deliberately NOT
+ * JoinIdenticalVertices (it would re-index and drop vertices) nor anything that reorders
+ * faces (OptimizeMeshes, FindDegenerates, ImproveCacheLocality). */
+#define MESH_IMPORT_FLAGS \
+    (aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure)
+
+/* assimp keeps its last error in one global string (aiGetErrorString), so an import and the
+ * read of its error must not interleave with another thread's import. */
+static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* ------------------------------------------------------------------ materials */
+
+static float clamp01(float v) { return isfinite(v) ? clampf(v, 0.0f, 1.0f) : 0.0f; }
+
+static int get_color(const struct aiMaterial *mat, const char *key, unsigned type,
+                     unsigned index, Rgb *out)
+{
+    struct aiColor4D c;
+    if (aiGetMaterialColor(mat, key, type, index, &c) != AI_SUCCESS) return 0;
+    *out = rgb(clamp01(c.r), clamp01(c.g), clamp01(c.b));
+    return 1;
+}
+
+static int get_float(const struct aiMaterial *mat, const char *key, unsigned type,
+                     unsigned index, float *out)
+{
+    ai_real v = 0;
+    unsigned n = 1;
+    if (aiGetMaterialFloatArray(mat, key, type, index, &v, &n) != AI_SUCCESS || n < 1 ||
+        !isfinite(v))
+        return 0;
+    *out = (float)v;
+    return 1;
+}
+
+/* The mapping onto our three materials (also in docs/scene-format.md). assimp presents
+ * OBJ/MTL and glTF 2.0 materials through the same keys:
+ *
+ *   glass   if MTL illum is 4, 6, 7 or 9 (the "transparency/refraction" models), or an MTL
+ *           material has dissolve d < 1, or glTF KHR_materials_transmission factor >= 0.5.
+ *           albedo = MTL Tf (transmission filter) when present and not black, else Kd /
+ *           base colour; ior = Ni when present and not 1 (MTL writers put Ni 1 for
+ *           "unset"), else 1.5.
+ *   mirror  if MTL illum is 3, 5 or 8 (the "reflection" models), or a glTF material has
+ *           metallicFactor >= 0.99 and roughnessFactor <= 0.01. albedo = MTL Ks when
+ *           present and not black, else white; glTF: the base colour.
+ *   diffuse otherwise, albedo = Kd / base colour (assimp fills in 0.6 grey for an MTL
+ *           material without Kd), 0.5 grey if none.
+ * Every albedo channel is clamped to [0, 1]. glTF's dissolve (base colour alpha) is an
+ * alpha cutout, not transparency, so the d < 1 rule applies to MTL only; MTL is told apart
+ * by assimp's "$mat.illum" key, which only the OBJ importer sets. */
+static void map_material(const struct aiMaterial *mat, ImportedMaterial *out)
+{
+    memset(out, 0, sizeof *out);
+    struct aiString name;
+    if (aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == AI_SUCCESS && name.length > 0) {
+        size_t len = strnlen(name.data, sizeof out->name - 1); /* truncated to fit */
+        memcpy(out->name, name.data, len);
+        out->name[len] = '\0';
+        /* assimp's stand-in for files (or faces) that name no material. PLY and unnamed
+         * glTF materials have no name at all and count as not from the file too. */
+        out->from_file = strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) != 0;
+    }
+    Rgb kd = rgb_s(0.5f), ks = rgb_s(0.0f), tf = rgb_s(0.0f);
+    int has_kd = get_color(mat, AI_MATKEY_COLOR_DIFFUSE, &kd);
+    if (!has_kd) has_kd = get_color(mat, AI_MATKEY_BASE_COLOR, &kd);
+    int has_ks = get_color(mat, AI_MATKEY_COLOR_SPECULAR, &ks);
+    int has_tf = get_color(mat, AI_MATKEY_COLOR_TRANSPARENT, &tf);
+    int illum = -1;
+    unsigned n = 1;
+    int is_mtl = aiGetMaterialIntegerArray(mat, AI_MATKEY_OBJ_ILLUM, &illum, &n) == AI_SUCCESS;
+    float opacity = 1.0f, ni = 1.0f, transmission = 0.0f, metallic = 0.0f, roughness = 1.0f;
+    get_float(mat, AI_MATKEY_OPACITY, &opacity);
+    get_float(mat, AI_MATKEY_REFRACTI, &ni);
+    get_float(mat, AI_MATKEY_TRANSMISSION_FACTOR, &transmission);
+    int has_metallic = get_float(mat, AI_MATKEY_METALLIC_FACTOR, &metallic);
+    get_float(mat, AI_MATKEY_ROUGHNESS_FACTOR, &roughness);
+
+    int glass = (is_mtl && (illum == 4 || illum == 6 || illum == 7 || illum == 9 || opacity < 1.0f)) ||
+                transmission >= 0.5f;
+    int mirror = (is_mtl && (illum == 3 || illum == 5 || illum == 8)) ||
+                 (has_metallic && metallic >= 0.99f && roughness <= 0.01f);
+    out->ior = 1.0f;
+    if (glass) {
+        out->type = MATERIAL_GLASS;
+        out->albedo = has_tf && !rgb_is_black(tf) ? tf : (is_mtl ? rgb_s(1.0f) : kd);
+        out->ior = ni > 0.0f && ni != 1.0f ? ni : 1.5f;
+    } else if (mirror) {
+        out->type = MATERIAL_MIRROR;
+        out->albedo = is_mtl ? (has_ks && !rgb_is_black(ks) ? ks : rgb_s(1.0f)) : kd;
+    } else {
+        out->type = MATERIAL_DIFFUSE;
+        out->albedo = kd;
+    }
+}
+
+/* ------------------------------------------------------------------ geometry */
+
+typedef struct Flatten {
+    const struct aiScene *scene;
+    ImportedMesh *out;
+    /* pass 1 counts, pass 2 fills */
+    int fill;
+    long long vertices, triangles, skipped;
+    int any_normals, any_uvs, partial_normals, partial_uvs;
+    int bad_index;
+} Flatten;
+
+static Transform from_ai(const struct aiMatrix4x4 *a)
+{
+    const float rows[16] = {a->a1, a->a2, a->a3, a->a4, a->b1, a->b2, a->b3, a->b4,
+                            a->c1, a->c2, a->c3, a->c4, a->d1, a->d2, a->d3, a->d4};
+    return transform_from_rows(rows);
+}
+
+static long long count_triangles(const struct aiMesh *m)
+{
+    long long n = 0;
+    for (unsigned f = 0; f < m->mNumFaces; f++) n += m->mFaces[f].mNumIndices == 3;
+    return n;
+}
+
+/* One mesh instance under the accumulated transform `to_world`. */
+static void flatten_mesh(Flatten *fl, const struct aiMesh *m, const Transform *to_world)
+{
+    long long tris = count_triangles(m);
+    if (!fl->fill) {
+        fl->skipped += (long long)m->mNumFaces - tris;
+        if (tris == 0) return;
+        fl->any_normals |= m->mNormals != NULL;
+        fl->any_uvs |= m->mTextureCoords[0] != NULL;
+        fl->partial_normals |= m->mNormals == NULL;
+        fl->partial_uvs |= m->mTextureCoords[0] == NULL;
+        fl->vertices += m->mNumVertices;
+        fl->triangles += tris;
+        return;
+    }
+    if (tris == 0) return;
+    ImportedMesh *out = fl->out;
+    int base = (int)fl->vertices, nv = (int)m->mNumVertices;
+    int identity = transform_is_identity(to_world);
+    Transform nmat = transform_identity();
+    if (!transform_normal_matrix(to_world, &nmat)) nmat = transform_identity(); /* flat: any */
+    /* A mirroring transform reverses the winding, which defines our geometric normal (and
+     * so the outside of glass and the lit side of emitters): swap two corners back, as
+     * glTF prescribes for nodes with a negative determinant. */
+    int swap = transform_det(to_world) < 0.0;
+    for (int i = 0; i < nv; i++) {
+        Vec3 p = v3(m->mVertices[i].x, m->mVertices[i].y, m->mVertices[i].z);
+        out->positions[base + i] = identity ? p : transform_point(to_world, p);
+    }
+    if (out->normals)
+        for (int i = 0; i < nv; i++)
+            out->normals[base + i] = m->mNormals
+                ? transform_normal(&nmat, v3(m->mNormals[i].x, m->mNormals[i].y, m->mNormals[i].z))
+                : v3s(0.0f);
+    if (out->uvs)
+        for (int i = 0; i < nv; i++)
+            out->uvs[base + i] = m->mTextureCoords[0]
+                ? v2(m->mTextureCoords[0][i].x, m->mTextureCoords[0][i].y)
+                : v2(0.0f, 0.0f);
+    int t = (int)fl->triangles;
+    for (unsigned f = 0; f < m->mNumFaces; f++) {
+        const struct aiFace *face = &m->mFaces[f];
+        if (face->mNumIndices != 3) continue;
+        for (int k = 0; k < 3; k++) {
+            unsigned ix = face->mIndices[swap && k ? 3 - k : k];
+            if (ix >= m->mNumVertices) {
+                fl->bad_index = 1;
+                ix = 0;
+            }
+            out->indices[3 * t + k] = base + (int)ix;
+        }
+        out->tri_material[t] = (int32_t)m->mMaterialIndex;
+        t++;
+    }
+    fl->vertices += nv;
+    fl->triangles = t;
+}
+
+/* Depth-first, parent before children, a node's meshes in its order: the file's order
+ * for single-node formats (PLY) and for OBJ, whose importer starts a new mesh at each
+ * group or material change. */
+static void flatten_node(Flatten *fl, const struct aiNode *node, const Transform *parent)
+{
+    Transform to_world = transform_compose(*parent, from_ai(&node->mTransformation));
+    for (unsigned i = 0; i < node->mNumMeshes; i++)
+        if (node->mMeshes[i] < fl->scene->mNumMeshes)
+            flatten_mesh(fl, fl->scene->mMeshes[node->mMeshes[i]], &to_world);
+    for (unsigned i = 0; i < node->mNumChildren; i++) flatten_node(fl, node->mChildren[i], &to_world);
+}
+
+/* ------------------------------------------------------------------ PLY pre-check */
+/* assimp 5.2's PLY reader is not safe on malformed files: it loops forever on a header
+ * without end_header, crashes on a binary body cut short, and reads past the end of a
+ * body short by one byte (all seen with 5.2.4; 10 of 150 random mutations of a small
+ * ASCII PLY hung it). So a PLY file's header is parsed here and its body walked record
+ * by record against the header, before assimp sees the file. Lines are counted for
+ * messages. */
+
+#define PLY_MAX_ELEMENTS 32
+#define PLY_MAX_PROPS 256
+
+typedef struct PlyProp {
+    int size;       /* bytes of a scalar, or of a list's items */
+    int count_size; /* list: bytes of the count; 0 for a scalar */
+    int is_int;     /* integer type (of the scalar or the list items) */
+} PlyProp;
+
+typedef struct PlyElement {
+    char name[32];
+    long long count;
+    int first_prop, num_props;
+} PlyElement;
+
+typedef struct PlyCheck {
+    const char *path;
+    CstError *err;
+    int format; /* 0 ascii, 1 binary little-endian, 2 binary big-endian */
+    PlyElement elems[PLY_MAX_ELEMENTS];
+    PlyProp props[PLY_MAX_PROPS];
+    int num_elems, num_props;
+} PlyCheck;
+
+static CstStatus ply_fail(PlyCheck *pc, int line, const char *what, const char *detail)
+{
+    if (line > 0)
+        return cst_fail(pc->err, CST_ERR_PARSE, "%.300s:%d: malformed PLY file: %s%.100s", pc->path,
+                        line, what, detail);
+    return cst_fail(pc->err, CST_ERR_PARSE, "%.300s: malformed PLY file: %s%.100s", pc->path, what,
+                    detail);
+}
+
+/* Size in bytes of a PLY type name, 0 if unknown; *is_int tells integers from floats. */
+static int ply_type_size(const char *name, int *is_int)
+{
+    static const struct { const char *name; int size, is_int; } types[] = {
+        {"char", 1, 1},   {"uchar", 1, 1},   {"int8", 1, 1},    {"uint8", 1, 1},
+        {"short", 2, 1},  {"ushort", 2, 1},  {"int16", 2, 1},   {"uint16", 2, 1},
+        {"int", 4, 1},    {"uint", 4, 1},    {"int32", 4, 1},   {"uint32", 4, 1},
+        {"float", 4, 0},  {"float32", 4, 0}, {"double", 8, 0},  {"float64", 8, 0},
+    };
+    for (size_t i = 0; i < sizeof types / sizeof types[0]; i++)
+        if (strcmp(name, types[i].name) == 0) {
+            *is_int = types[i].is_int;
+            return types[i].size;
+        }
+    return 0;
+}
+
+/* Parses the header in buf[0, len); *body gets the offset after end_header's line. */
+static CstStatus ply_parse_header(PlyCheck *pc, const char *buf, size_t len, size_t *body)
+{
+    size_t pos = 0;
+    int line = 0, have_format = 0;
+    char text[256];
+    for (;;) {
+        line++;
+        const char *nl = memchr(buf + pos, '\n', len - pos);
+        if (!nl) return ply_fail(pc, line, "the header has no end_header line", "");
+        size_t n = (size_t)(nl - (buf + pos));
+        if (n > 0 && buf[pos + n - 1] == '\r') n--;
+        if (n >= sizeof text) return ply_fail(pc, line, "header line too long", "");
+        memcpy(text, buf + pos, n);
+        text[n] = '\0';
+        pos = (size_t)(nl - buf) + 1;
+        char w[5][64];
+        char extra[2];
+        int nw = sscanf(text, "%63s %63s %63s %63s %63s %1s", w[0], w[1], w[2], w[3], w[4], extra);
+        if (line == 1) {
+            if (nw != 1 || (strcmp(w[0], "ply") != 0 && strcmp(w[0], "PLY") != 0))
+                return ply_fail(pc, line, "expected \"ply\"", "");
+        } else if (nw <= 0) {
+            continue;
+        } else if (strcmp(w[0], "comment") == 0 || strcmp(w[0], "obj_info") == 0) {
+            continue;
+        } else if (strcmp(w[0], "format") == 0) {
+            if (nw != 3 || have_format) return ply_fail(pc, line, "bad format line: ", text);
+            if (strcmp(w[1], "ascii") == 0) pc->format = 0;
+            else if (strcmp(w[1], "binary_little_endian") == 0) pc->format = 1;
+            else if (strcmp(w[1], "binary_big_endian") == 0) pc->format = 2;
+            else return ply_fail(pc, line, "unknown format ", w[1]);
+            have_format = 1;
+        } else if (strcmp(w[0], "element") == 0) {
+            char *end;
+            errno = 0;
+            long long count = nw == 3 ? strtoll(w[2], &end, 10) : -1;
+            if (nw != 3 || errno || *end || count < 0 || count > INT_MAX)
+                return ply_fail(pc, line, "bad element line: ", text);
+            if (pc->num_elems == PLY_MAX_ELEMENTS) return ply_fail(pc, line, "too many elements", "");
+            PlyElement *e = &pc->elems[pc->num_elems++];
+            snprintf(e->name, sizeof e->name, "%.31s", w[1]);
+            e->count = count;
+            e->first_prop = pc->num_props;
+            e->num_props = 0;
+        } else if (strcmp(w[0], "property") == 0) {
+            if (pc->num_elems == 0) return ply_fail(pc, line, "property before any element", "");
+            if (pc->num_props == PLY_MAX_PROPS) return ply_fail(pc, line, "too many properties", "");
+            PlyProp *p = &pc->props[pc->num_props];
+            int count_int = 0;
+            if (strcmp(w[1], "list") == 0) {
+                if (nw != 5) return ply_fail(pc, line, "bad property line: ", text);
+                p->count_size = ply_type_size(w[2], &count_int);
+                p->size = ply_type_size(w[3], &p->is_int);
+                if (!p->count_size || !count_int || !p->size)
+                    return ply_fail(pc, line, "bad list property: ", text);
+            } else {
+                if (nw != 3) return ply_fail(pc, line, "bad property line: ", text);
+                p->count_size = 0;
+                p->size = ply_type_size(w[1], &p->is_int);
+                if (!p->size) return ply_fail(pc, line, "unknown property type ", w[1]);
+            }
+            pc->num_props++;
+            pc->elems[pc->num_elems - 1].num_props++;
+        } else if (strcmp(w[0], "end_header") == 0 && nw == 1) {
+            break;
+        } else {
+            return ply_fail(pc, line, "unknown header line: ", text);
+        }
+    }
+    if (!have_format) return ply_fail(pc, 0, "the header has no format line", "");
+    *body = pos;
+    return CST_OK;
+}
+
+static CstStatus ply_truncated(PlyCheck *pc, const PlyElement *e, long long r)
+{
+    char what[160];
+    snprintf(what, sizeof what, "the data ends inside %s %lld of %lld", e->name, r + 1, e->count);
+    return ply_fail(pc, 0, what, "");
+}
+
+static long long ply_read_count(const unsigned char *p, int size, int big_endian)
+{
+    unsigned long long v = 0;
+    for (int i = 0; i < size; i++) v |= (unsigned long long)p[big_endian ? size - 1 - i : i] << (8 * i);
+    return (long long)v; /* counts are read unsigned: a "negative" one is just huge */
+}
+
+static CstStatus ply_check_binary(PlyCheck *pc, const unsigned char *buf, size_t len, size_t pos)
+{
+    for (int ei = 0; ei < pc->num_elems; ei++) {
+        const PlyElement *e = &pc->elems[ei];
+        const PlyProp *props = &pc->props[e->first_prop];
+        size_t fixed = 0;
+        int has_list = 0;
+        for (int k = 0; k < e->num_props; k++) {
+            has_list |= props[k].count_size != 0;
+            fixed += (size_t)props[k].size;
+        }
+        if (!has_list) { /* one step: count (<= INT_MAX) times at most 256 * 8 bytes fits */
+            size_t need = (size_t)e->count * fixed;
+            if (len - pos < need) return ply_truncated(pc, e, (long long)((len - pos) / (fixed ? fixed : 1)));
+            pos += need;
+            continue;
+        }
+        for (long long r = 0; r < e->count; r++)
+            for (int k = 0; k < e->num_props; k++) {
+                const PlyProp *p = &props[k];
+                if (!p->count_size) {
+                    if (len - pos < (size_t)p->size) return ply_truncated(pc, e, r);
+                    pos += (size_t)p->size;
+                    continue;
+                }
+                if (len - pos < (size_t)p->count_size) return ply_truncated(pc, e, r);
+                long long n = ply_read_count(buf + pos, p->count_size, pc->format == 2);
+                pos += (size_t)p->count_size;
+                if ((unsigned long long)n > (len - pos) / (size_t)p->size) return ply_truncated(pc, e, r);
+                pos += (size_t)n * (size_t)p->size;
+            }
+    }
+    return CST_OK;
+}
+
+/* Next whitespace-separated token of buf (NUL-terminated); counts lines. */
+static const char *ply_token(const char **cur, int *line, size_t *tlen)
+{
+    const char *p = *cur;
+    while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
+        if (*p == '\n') (*line)++;
+        p++;
+    }
+    if (!*p) return NULL;
+    const char *t = p;
+    while (*p && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n') p++;
+    *tlen = (size_t)(p - t);
+    *cur = p;
+    return t;
+}
+
+/* The token is one number (an integer when is_int); *value gets it. */
+static int ply_number(const char *t, size_t tlen, int is_int, double *value)
+{
+    char *end;
+    errno = 0;
+    if (is_int) {
+        long long v = strtoll(t, &end, 10);
+        *value = (double)v;
+    } else {
+        *value = strtod(t, &end);
+    }
+    return end == t + tlen && errno == 0;
+}
+
+static CstStatus ply_check_ascii(PlyCheck *pc, const char *buf, size_t body, int header_lines)
+{
+    const char *cur = buf + body;
+    int line = header_lines + 1;
+    for (int ei = 0; ei < pc->num_elems; ei++) {
+        const PlyElement *e = &pc->elems[ei];
+        for (long long r = 0; r < e->count; r++)
+            for (int k = 0; k < e->num_props; k++) {
+                const PlyProp *p = &pc->props[e->first_prop + k];
+                size_t tlen = 0;
+                double v = 0.0;
+                long long n = 1;
+                if (p->count_size) {
+                    const char *t = ply_token(&cur, &line, &tlen);
+                    if (!t) return ply_truncated(pc, e, r);
+                    if (!ply_number(t, tlen, 1, &v) || v < 0.0)
+                        return ply_fail(pc, line, "expected a list length, got ", t);
+                    n = (long long)v;
+                }
+                for (long long i = 0; i < n; i++) {
+                    const char *t = ply_token(&cur, &line, &tlen);
+                    if (!t) return ply_truncated(pc, e, r);
+                    if (!ply_number(t, tlen, p->is_int, &v)) {
+                        char tok[40];
+                        snprintf(tok, sizeof tok, "%.*s", (int)(tlen < 32 ? tlen : 32), t);
+                        return ply_fail(pc, line, p->is_int ? "expected an integer, got "
+                                                             : "expected a number, got ", tok);
+                    }
+                }
+            }
+    }
+    return CST_OK;
+}
+
+/* Checks a file that starts like a PLY; other files pass untouched. */
+static CstStatus ply_precheck(const char *path, CstError *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: %s", path, strerror(errno));
+    char magic[4] = {0};
+    size_t got = fread(magic, 1, 4, f);
+    if (got < 4 || (memcmp(magic, "ply", 3) != 0 && memcmp(magic, "PLY", 3) != 0) ||
+        (magic[3] != '\n' && magic[3] != '\r')) {
+        fclose(f);
+        return CST_OK;
+    }
+    CstStatus st = CST_OK;
+    char *buf = NULL;
+    size_t len = 0;
+    long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
+        st = cst_fail(err, CST_ERR_IO, "%.300s: cannot read: %s", path, strerror(errno));
+        goto done;
+    }
+    len = (size_t)size;
+    buf = malloc(len + 1);
+    if (!buf) {
+        st = cst_fail(err, CST_ERR_OOM, "%.300s: out of memory reading the file", path);
+        goto done;
+    }
+    if (fread(buf, 1, len, f) != len) {
+        st = cst_fail(err, CST_ERR_IO, "%.300s: cannot read: %s", path, strerror(errno));
+        goto done;
+    }
+    buf[len] = '\0';
+    PlyCheck *pc = calloc(1, sizeof *pc);
+    if (!pc) {
+        st = cst_fail(err, CST_ERR_OOM, "%.300s: out of memory", path);
+        goto done;
+    }
+    pc->path = path;
+    pc->err = err;
+    size_t body = 0;
+    st = ply_parse_header(pc, buf, len, &body);
+    if (st == CST_OK && pc->format == 0) {
+        int header_lines = 0;
+        for (size_t i = 0; i < body; i++) header_lines += buf[i] == '\n';
+        if (memchr(buf + body, '\0', len - body))
+            st = ply_fail(pc, 0, "NUL byte in ASCII data", "");
+        else
+            st = ply_check_ascii(pc, buf, body, header_lines);
+    } else if (st == CST_OK) {
+        st = ply_check_binary(pc, (const unsigned char *)buf, len, body);
+    }
+    free(pc);
+done:
+    free(buf);
+    fclose(f);
+    return st;
+}
+
+/* ------------------------------------------------------------------ entry points */
+
+void mesh_import_free(ImportedMesh *mesh)
+{
+    if (!mesh) return;
+    free(mesh->positions);
+    free(mesh->indices);
+    free(mesh->normals);
+    free(mesh->uvs);
+    free(mesh->tri_material);
+    free(mesh->materials);
+    memset(mesh, 0, sizeof *mesh);
+}
+
+/* The errors assimp reports by text only: a file that vanished between our check and its
+ * open is I/O, everything else is a malformed (or unrecognised) file. */
+static CstStatus import_error_status(const char *msg)
+{
+    return strstr(msg, "Unable to open file") ? CST_ERR_IO : CST_ERR_PARSE;
+}
+
+CstStatus mesh_import(const char *path, ImportedMesh *out, CstError *err)
+{
+    memset(out, 0, sizeof *out);
+    /* assimp's own message for a missing file lacks the reason; ask the system first. */
+    struct stat sb;
+    if (stat(path, &sb) != 0)
+        return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: %s", path, strerror(errno));
+    if (S_ISDIR(sb.st_mode))
+        return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: %s", path, strerror(EISDIR));
+    /* Not a FIFO or device: assimp would block on one, or read forever. */
+    if (!S_ISREG(sb.st_mode))
+        return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: not a regular file", path);
+    CstStatus pre = ply_precheck(path, err); /* also tells an unreadable file (IO) */
+    if (pre != CST_OK) return pre;
+
+    struct aiPropertyStore *props = aiCreatePropertyStore();
+    if (!props) return cst_fail(err, CST_ERR_OOM, "%.300s: out of memory", path);
+    /* Files with bones but no meshes would otherwise get a made-up skeleton mesh. */
+    aiSetImportPropertyInteger(props, AI_CONFIG_IMPORT_NO_SKELETON_MESHES, 1);
+    pthread_mutex_lock(&import_lock);
+    const struct aiScene *scene = aiImportFileExWithProperties(path, MESH_IMPORT_FLAGS, NULL, props);
+    CstStatus st = CST_OK;
+    if (!scene) {
+        const char *msg = aiGetErrorString();
+        msg = msg && *msg ? msg : "unknown error";
+        st = cst_fail(err, import_error_status(msg), "%.300s: cannot import: %.600s", path, msg);
+    }
+    pthread_mutex_unlock(&import_lock);
+    aiReleasePropertyStore(props);
+    if (!scene) return st;
+
+    Flatten fl = {0};
+    fl.scene = scene;
+    fl.out = out;
+    Transform root = transform_identity();
+    if (scene->mRootNode) flatten_node(&fl, scene->mRootNode, &root);
+    if (fl.triangles == 0) {
+        st = cst_fail(err, CST_ERR_PARSE, "%.300s: no triangles in the file (%lld point and line "
+                      "primitives skipped)", path, fl.skipped);
+        goto done;
+    }
+    if (fl.vertices > INT_MAX || fl.triangles > INT_MAX / 3) {
+        st = cst_fail(err, CST_ERR_UNSUPPORTED, "%.300s: %lld vertices and %lld triangles are "
+                      "too many; expected fewer than %d of each", path, fl.vertices, fl.triangles,
+                      INT_MAX / 3);
+        goto done;
+    }
+    size_t nv = (size_t)fl.vertices, nt = (size_t)fl.triangles;
+    out->positions = malloc(nv * sizeof *out->positions);
+    out->indices = malloc(3 * nt * sizeof *out->indices);
+    out->tri_material = malloc(nt * sizeof *out->tri_material);
+    out->normals = fl.any_normals ? malloc(nv * sizeof *out->normals) : NULL;
+    out->uvs = fl.any_uvs ? malloc(nv * sizeof *out->uvs) : NULL;
+    unsigned nm = scene->mNumMaterials;
+    out->materials = calloc(nm ? nm : 1, sizeof *out->materials);
+    if (!out->positions || !out->indices || !out->tri_material || !out->materials ||
+        (fl.any_normals && !out->normals) || (fl.any_uvs && !out->uvs)) {
+        st = cst_fail(err, CST_ERR_OOM, "%.300s: out of memory for %lld vertices and %lld "
+                      "triangles", path, fl.vertices, fl.triangles);
+        goto done;
+    }
+    out->normals_partial = fl.any_normals && fl.partial_normals;
+    out->uvs_partial = fl.any_uvs && fl.partial_uvs;
+    out->num_skipped_primitives = fl.skipped > INT_MAX ? INT_MAX : (int)fl.skipped;
+    fl.fill = 1;
+    fl.vertices = fl.triangles = 0;
+    flatten_node(&fl, scene->mRootNode, &root);
+    out->num_vertices = (int)fl.vertices;
+    out->num_triangles = (int)fl.triangles;
+    for (unsigned i = 0; i < nm; i++) map_material(scene->mMaterials[i], &out->materials[i]);
+    out->num_materials = (int)nm;
+    if (fl.bad_index) { /* ValidateDataStructure rules this out; keep the promise anyway */
+        st = cst_fail(err, CST_ERR_PARSE, "%.300s: a face has a vertex index out of range", path);
+        goto done;
+    }
+    for (int t = 0; t < out->num_triangles; t++)
+        if (out->tri_material[t] < 0 || out->tri_material[t] >= out->num_materials) {
+            st = cst_fail(err, CST_ERR_PARSE, "%.300s: triangle %d has material index %d out of "
+                          "range", path, t, (int)out->tri_material[t]);
+            goto done;
+        }
+done:
+    aiReleaseImport(scene);
+    if (st != CST_OK) mesh_import_free(out);
+    return st;
+}
