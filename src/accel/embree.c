@@ -289,9 +289,13 @@ void embree_free(EmbreeAccel *a)
 
 /* ------------------------------------------------------------ queries */
 
-/* Interval semantics: Embree's triangle test accepts tnear < t <= tfar (closed at tfar),
- * ours accepts t_min < t < t_max. The only observable difference is a ray whose t_max
- * equals a hit distance exactly; the sphere callbacks use our open test. */
+/* Interval semantics: Embree 3.13's triangle test accepts tnear < t <= tfar, open at tnear
+ * like ours but closed at tfar (its depth test is absDen * tnear < T <= absDen * tfar;
+ * checked on an axis-aligned triangle at exactly t = 1: tnear = 1 misses in both, tfar = 1
+ * hits in Embree only). Ours is t_min < t < t_max throughout, and the sphere callbacks
+ * use our open test. The difference shows only for a t_max exactly equal to a hit
+ * distance, which neither the renderer (shadow rays stop short of their target) nor the
+ * benchmark (t_max = inf or 1e30) produces. */
 static inline void embree_ray_set(struct RTCRay *er, const Ray *r)
 {
     er->org_x = r->o.x; er->org_y = r->o.y; er->org_z = r->o.z;
