@@ -518,15 +518,27 @@ static void cli_bench_check(BenchRow *rows, int n, const RaysetReference *ref, b
     }
 }
 
+/* Three significant digits, without exponent down to 0.001 (slow back ends). */
+static void cli_bench_format3(double v, char *buf, size_t size)
+{
+    snprintf(buf, size, v >= 100.0 ? "%.0f" : v >= 10.0 ? "%.1f" : v >= 1.0 ? "%.2f" : v >= 0.001 ? "%.3f" : "%.2g",
+             v);
+}
+
 static void cli_bench_print_table(const BenchRow *rows, int n)
 {
     printf("%-7s %9s %9s  %-9s %7s %9s %9s %9s %9s %16s  %s\n", "accel", "build ms", "bytes/tri",
            "set", "threads", "rays", "Mrays/s", "vs embree", "hits", "sum_t", "check");
     for (int i = 0; i < n; i++) {
         const BenchRow *r = &rows[i];
-        char ratio[32], sum[32], check[48];
-        if (r->vs_embree >= 0.0) snprintf(ratio, sizeof ratio, "%.2fx", r->vs_embree);
-        else snprintf(ratio, sizeof ratio, "-");
+        char ratio[32], rate[32], sum[32], check[48];
+        cli_bench_format3(cli_bench_mrays(&r->st), rate, sizeof rate);
+        if (r->vs_embree >= 0.0) {
+            cli_bench_format3(r->vs_embree, ratio, sizeof ratio);
+            strcat(ratio, "x");
+        } else {
+            snprintf(ratio, sizeof ratio, "-");
+        }
         if (r->set == BENCH_OCCLUSION) snprintf(sum, sizeof sum, "-");
         else snprintf(sum, sizeof sum, "%.9e", r->st.sum_t);
         if (!r->checked) snprintf(check, sizeof check, "(basis)");
@@ -536,9 +548,9 @@ static void cli_bench_print_table(const BenchRow *rows, int n)
             snprintf(check, sizeof check, "%s (%zu ray%s differ%s)", r->ok ? "OK" : "MISMATCH", r->rays_differing,
                      r->rays_differing == 1 ? "" : "s", r->rays_differing == 1 ? "s" : "");
         else snprintf(check, sizeof check, "%s", r->ok ? "OK" : "MISMATCH");
-        printf("%-7s %9.2f %9.1f  %-9s %7d %9zu %9.2f %9s %9zu %16s  %s\n", accel_type_name(r->accel),
-               r->build_ms, r->bytes_per_tri, BENCH_SET_NAMES[r->set], r->threads, r->st.rays,
-               cli_bench_mrays(&r->st), ratio, r->st.hits, sum, check);
+        printf("%-7s %9.2f %9.1f  %-9s %7d %9zu %9s %9s %9zu %16s  %s\n", accel_type_name(r->accel),
+               r->build_ms, r->bytes_per_tri, BENCH_SET_NAMES[r->set], r->threads, r->st.rays, rate, ratio,
+               r->st.hits, sum, check);
     }
 }
 
