@@ -427,6 +427,9 @@ done:
 #define CLI_BENCH_LIST_MAX_TRIS 1000
 /* --stadium alone: a 20,480-triangle bumpy ball as the teapot. */
 #define CLI_BENCH_BALL_LEVELS 5
+/* Each figure is the best of up to this many runs, repeated while under a second in all. */
+#define CLI_BENCH_MAX_REPEATS 5
+#define CLI_BENCH_REPEAT_SECONDS 1.0
 
 enum { BENCH_PRIMARY, BENCH_SECONDARY, BENCH_OCCLUSION, BENCH_NUM_SETS };
 static const char *const BENCH_SET_NAMES[BENCH_NUM_SETS] = {"primary", "secondary", "occlusion"};
@@ -435,7 +438,8 @@ typedef struct BenchRow {
     AccelType accel;
     double build_ms, bytes_per_tri;
     int set, threads;
-    RaysetStats st;
+    RaysetStats st; /* of the fastest run */
+    int runs;
     bool checked, ok;   /* checked: there was something to compare with */
     const char *against; /* "reference", the back end compared with, or "1 thread" */
     double vs_embree;   /* M rays/s ratio to Embree's row; < 0 when there is none */
@@ -560,11 +564,11 @@ static bool cli_bench_print_json(const BenchRow *rows, int n, const RaysetScene 
     for (int i = 0; i < n; i++) {
         const BenchRow *r = &rows[i];
         bool closest = r->set != BENCH_OCCLUSION;
-        json_t *o = json_pack("{s:s, s:i, s:s, s:i, s:s, s:I, s:f, s:f, s:I, s:o, s:o, s:f, s:f, s:o, s:o, s:o, s:o}",
+        json_t *o = json_pack("{s:s, s:i, s:s, s:i, s:s, s:I, s:f, s:i, s:f, s:I, s:o, s:o, s:f, s:f, s:o, s:o, s:o, s:o}",
             "scene", scene->name, "triangles", scene->num_tris,
             "accel", accel_type_name(r->accel), "threads", r->threads,
             "set", BENCH_SET_NAMES[r->set], "rays", (json_int_t)r->st.rays,
-            "seconds", r->st.seconds, "mrays_per_s", cli_bench_mrays(&r->st),
+            "seconds", r->st.seconds, "runs", r->runs, "mrays_per_s", cli_bench_mrays(&r->st),
             "hits", (json_int_t)r->st.hits,
             "sum_t", closest ? json_real(r->st.sum_t) : json_null(),
             "sum_prim", closest ? json_integer((json_int_t)r->st.sum_prim) : json_null(),
@@ -600,8 +604,19 @@ static CstStatus cli_bench_accel(const Accel *accel, const BenchRays *rays, cons
             r->threads = threads[k];
             RaysetQuery q = set == BENCH_OCCLUSION ? RAYSET_ANY : RAYSET_CLOSEST;
             RaysetResult *out = basis && threads[k] == 1 ? (is_basis ? basis[set] : scratch) : NULL;
-            CstStatus st = rayset_trace(accel, rays->rays[set], rays->count[set], q, threads[k], out, &r->st, err);
-            if (st != CST_OK) return st;
+            /* Best of several runs: the first pays for cold caches and page faults, and this
+             * VM's second vCPU is noisy. Repeats stop after a second, so slow back ends
+             * (the grid in the stadium) run once. */
+            double spent = 0.0;
+            for (int rep = 0; rep < CLI_BENCH_MAX_REPEATS && (rep == 0 || spent < CLI_BENCH_REPEAT_SECONDS); rep++) {
+                RaysetStats run;
+                CstStatus st = rayset_trace(accel, rays->rays[set], rays->count[set], q, threads[k],
+                                            rep == 0 ? out : NULL, &run, err);
+                if (st != CST_OK) return st;
+                spent += run.seconds;
+                if (rep == 0 || run.seconds < r->st.seconds) r->st = run;
+                r->runs = rep + 1;
+            }
             if (out && !is_basis) {
                 r->compared = true;
                 r->rays_differing = rayset_compare(out, basis[set], rays->count[set], q, &r->dt_sum);
@@ -753,6 +768,8 @@ static int cli_bench_rays(const CliArgs *a)
                    "within the same; sum_t within %g relative plus what the differing rays explain\n",
                    RAYSET_HITS_TOLERANCE_ABS, RAYSET_HITS_TOLERANCE_REL, RAYSET_T_TOLERANCE,
                    RAYSET_SUM_T_TOLERANCE);
+        printf("timing:  Mrays/s of the fastest of up to %d runs (repeated while under %g s in all)\n",
+               CLI_BENCH_MAX_REPEATS, CLI_BENCH_REPEAT_SECONDS);
         printf("\n");
         fflush(stdout);
     }

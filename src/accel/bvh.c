@@ -1,10 +1,15 @@
-/* BVH build (binned SAH) and traversal (closest hit, occlusion). */
+/* BVH build (binned SAH, parallel over subtrees, collapsed to 8-wide nodes) and traversal
+ * (closest hit, occlusion). */
 #include "accel/bvh.h"
 
 #include <immintrin.h>
+#include <float.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "geometry/sphere.h"
@@ -12,143 +17,288 @@
 
 enum {
     BVH_BINS = 32,
-    BVH_MAX_LEAF = 8,      /* larger leaves are always split */
-    BVH_MAX_DEPTH = 60,    /* beyond this, split at the median: traversal stacks stay bounded */
-    BVH_STACK = 384 /* tree depth <= ~91 (see BVH_MAX_DEPTH), at most 3 pending siblings each */
+    BVH_MAX_LEAF = 8,   /* larger leaves are always split; 8 spheres or 2 blocks fit a BvhRef */
+    BVH_MAX_DEPTH = 60, /* beyond this, split at the median: traversal stacks stay bounded */
+    /* The binary tree is at most BVH_MAX_DEPTH + 32 deep (median splits halve), so is the
+     * wide one, and each wide level leaves at most 7 siblings on the stack. */
+    BVH_STACK = 7 * (BVH_MAX_DEPTH + 33) + 1,
+    /* Subtrees over fewer primitives are built by the thread that reached them: thread
+     * start-up would cost more than it saves. */
+    BVH_PARALLEL_MIN = 16384,
+    BVH_MAX_BUILD_THREADS = 16
 };
-/* SAH costs relative to one 4-triangle block test. One SSE node visit tests four boxes;
- * on the Cornell box (bench_render, 1 thread, 4 alternating runs each) 0.25, 0.5 and 1.0
- * gave 1.48, 1.53 and 1.50 M paths/s: within this machine's +-6% noise, so 0.5 it is. */
-static const float SAH_TRAVERSAL_COST = 0.5f;
+/* SAH costs relative to one 4-triangle block test. One node visit tests eight boxes with
+ * one AVX slab test. 0.5 measured best of 0.25/0.5/1.0 with 4-wide nodes on the Cornell
+ * box (bench_render); docs/benchmarks.md has the 8-wide figures. */
+#ifndef SAHT
+#define SAHT 0.5f
+#endif
+static const float SAH_TRAVERSAL_COST = SAHT;
 static const float SAH_ISECT_COST = 1.0f;
 
-/* Binary node of the intermediate SAH tree, flattened depth-first (left child follows). */
+/* ------------------------------------------------------------------ build */
+
+/* Box with SSE lanes x, y, z (lane 3 unused). */
+typedef struct Box4 {
+    __m128 lo, hi;
+} Box4;
+
+static inline Box4 box4_empty(void)
+{
+    Box4 b = {_mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY)};
+    return b;
+}
+static inline Box4 box4_union(Box4 a, Box4 b)
+{
+    Box4 r = {_mm_min_ps(a.lo, b.lo), _mm_max_ps(a.hi, b.hi)};
+    return r;
+}
+static inline Box4 box4_add(Box4 a, __m128 p)
+{
+    Box4 r = {_mm_min_ps(a.lo, p), _mm_max_ps(a.hi, p)};
+    return r;
+}
+static inline float box4_half_area(Box4 b)
+{
+    float e[4];
+    _mm_storeu_ps(e, _mm_sub_ps(b.hi, b.lo));
+    return e[0] * e[1] + e[1] * e[2] + e[2] * e[0];
+}
+static inline BBox box4_to_bbox(Box4 b)
+{
+    float lo[4], hi[4];
+    _mm_storeu_ps(lo, b.lo);
+    _mm_storeu_ps(hi, b.hi);
+    BBox r = {v3(lo[0], lo[1], lo[2]), v3(hi[0], hi[1], hi[2])};
+    return r;
+}
+
+/* A primitive's bounds; its centroid is taken doubled, lo + hi, which bins the same. */
+typedef struct BuildPrim {
+    float lo[4], hi[4];
+} BuildPrim;
+
+static inline Box4 prim_box(const BuildPrim *p)
+{
+    Box4 b = {_mm_load_ps(p->lo), _mm_load_ps(p->hi)};
+    return b;
+}
+
+/* Binary node of the intermediate SAH tree. The left child follows its parent; each
+ * subtree over m primitives owns the 2m - 1 slots from its root on, so subtrees built
+ * by different threads never share an index and the layout does not depend on timing. */
 typedef struct BinNode {
     BBox box;
-    int32_t offset; /* leaf: first primitive; inner: index of the right child */
+    int32_t offset; /* leaf: first primitive in idx; inner: index of the right child */
     int32_t count;  /* primitives in a leaf; 0 for inner nodes */
 } BinNode;
 
-/* Leaves are tested four primitives at a time, so a leaf of n costs ceil(n / 4) tests
+/* Leaves are tested four triangles at a time, so a leaf of n costs ceil(n / 4) tests
  * (the "block SAH" of wide BVHs). */
 static inline float sah_blocks(int n) { return (float)((n + 3) / 4); }
-
-typedef struct BuildPrim {
-    BBox box;
-    Vec3 centroid;
-} BuildPrim;
 
 typedef struct Builder {
     const BuildPrim *bp;
     uint32_t *idx;
     BinNode *nodes;
-    int num_nodes, cap_nodes;
+    uint32_t num_tris; /* ids below are triangles, the rest spheres */
+    atomic_int spare_threads;
 } Builder;
 
-static int builder_new_node(Builder *b)
+/* Bounds and centroid bounds of idx[begin, end): for the root and the rare splits that
+ * do not come out of binning. */
+static void range_bounds(const Builder *b, int begin, int end, Box4 *box, Box4 *cbox)
 {
-    /* A binary tree over n leaves-with-at-least-one-primitive has at most 2n - 1 nodes,
-     * and the array was sized for that up front, so this never reallocates. */
-    return b->num_nodes++;
+    Box4 bb = box4_empty(), cb = box4_empty();
+    for (int i = begin; i < end; i++) {
+        Box4 p = prim_box(&b->bp[b->idx[i]]);
+        bb = box4_union(bb, p);
+        cb = box4_add(cb, _mm_add_ps(p.lo, p.hi));
+    }
+    *box = bb;
+    *cbox = cb;
 }
 
+typedef struct Split {
+    int mid; /* partition point; -1: make a leaf */
+    Box4 lbox, lcbox, rbox, rcbox;
+} Split;
 
-/* Picks the split of idx[begin, end) with the lowest binned SAH cost over all three
- * axes. Returns the partition point, or -1 when a leaf is cheaper (or nothing splits). */
-static int find_split(Builder *b, int begin, int end, BBox box, BBox cbox, int *axis_out)
+/* Bins for a node over n primitives: as many as pay off. The SAH sweep over the bins
+ * costs as much as binning ~100 primitives, and most nodes are small (Embree sizes its
+ * bins the same way, 4 + n / 20 up to its maximum). */
+static inline int bin_count(int n) { return n / 20 + 4 < BVH_BINS ? n / 20 + 4 : BVH_BINS; }
+
+/* Per-axis bin scale: bins across the centroid extent, 0 where it is flat (everything
+ * then lands in bin 0 and the axis is skipped). */
+static inline __m128 bin_scale(Box4 cbox, int nbins)
 {
+    __m128 ext = _mm_sub_ps(cbox.hi, cbox.lo);
+    __m128 s = _mm_div_ps(_mm_set1_ps((float)nbins * 0.99999f), ext);
+    return _mm_and_ps(s, _mm_cmpgt_ps(ext, _mm_setzero_ps()));
+}
+
+static inline __m128i bin_index(__m128 c, __m128 cmin, __m128 scale, __m128 last_bin)
+{
+    __m128 k = _mm_mul_ps(_mm_sub_ps(c, cmin), scale);
+    k = _mm_min_ps(_mm_max_ps(k, _mm_setzero_ps()), last_bin);
+    return _mm_cvttps_epi32(k);
+}
+
+/* Binned SAH over all three axes in one pass (Wald 2007), on doubled centroids. Fills
+ * the split and both sides' bounds, or sets mid = -1 when a leaf is cheaper. */
+static void find_split(Builder *b, int begin, int end, Box4 box, Box4 cbox, Split *out)
+{
+    out->mid = -1;
     int n = end - begin;
+    Box4 bins[3][BVH_BINS], cbins[3][BVH_BINS];
+    int counts[3][BVH_BINS];
+    const int nbins = bin_count(n);
+    for (int a = 0; a < 3; a++)
+        for (int i = 0; i < nbins; i++) {
+            bins[a][i] = box4_empty();
+            cbins[a][i] = box4_empty();
+            counts[a][i] = 0;
+        }
+    __m128 cmin = cbox.lo, scale = bin_scale(cbox, nbins), last_bin = _mm_set1_ps((float)(nbins - 1));
+    for (int i = begin; i < end; i++) {
+        Box4 p = prim_box(&b->bp[b->idx[i]]);
+        __m128 c = _mm_add_ps(p.lo, p.hi);
+        int k[4];
+        _mm_storeu_si128((__m128i *)k, bin_index(c, cmin, scale, last_bin));
+        for (int a = 0; a < 3; a++) {
+            bins[a][k[a]] = box4_union(bins[a][k[a]], p);
+            cbins[a][k[a]] = box4_add(cbins[a][k[a]], c);
+            counts[a][k[a]]++;
+        }
+    }
+    float ext[4];
+    _mm_storeu_ps(ext, _mm_sub_ps(cbox.hi, cbox.lo));
     float best_cost = INFINITY;
     int best_axis = -1, best_bin = -1;
-    Vec3 cext = v3_sub(cbox.max, cbox.min);
-    for (int axis = 0; axis < 3; axis++) {
-        float lo = v3_get(cbox.min, axis), ext = v3_get(cext, axis);
-        if (!(ext > 0.0f)) continue;
-        float scale = (float)BVH_BINS / ext;
-        BBox bin_box[BVH_BINS];
-        int bin_count[BVH_BINS];
-        for (int i = 0; i < BVH_BINS; i++) { bin_box[i] = bbox_empty(); bin_count[i] = 0; }
-        for (int i = begin; i < end; i++) {
-            const BuildPrim *p = &b->bp[b->idx[i]];
-            int k = (int)((v3_get(p->centroid, axis) - lo) * scale);
-            k = k < 0 ? 0 : (k >= BVH_BINS ? BVH_BINS - 1 : k);
-            bin_count[k]++;
-            bin_box[k] = bbox_union(bin_box[k], p->box);
-        }
-        /* Sweep from the right to get suffix areas, then from the left to evaluate. */
+    for (int a = 0; a < 3; a++) {
+        if (!(ext[a] > 0.0f)) continue;
+        /* Sweep from the right for suffix areas, then from the left to evaluate. */
         float right_area[BVH_BINS];
         int right_count[BVH_BINS];
-        BBox acc = bbox_empty();
+        Box4 acc = box4_empty();
         int cnt = 0;
-        for (int i = BVH_BINS - 1; i > 0; i--) {
-            acc = bbox_union(acc, bin_box[i]);
-            cnt += bin_count[i];
-            right_area[i] = bbox_area(acc);
+        for (int i = nbins - 1; i > 0; i--) {
+            acc = box4_union(acc, bins[a][i]);
+            cnt += counts[a][i];
+            right_area[i] = box4_half_area(acc);
             right_count[i] = cnt;
         }
-        acc = bbox_empty();
+        acc = box4_empty();
         cnt = 0;
-        for (int i = 0; i < BVH_BINS - 1; i++) {
-            acc = bbox_union(acc, bin_box[i]);
-            cnt += bin_count[i];
+        for (int i = 0; i < nbins - 1; i++) {
+            acc = box4_union(acc, bins[a][i]);
+            cnt += counts[a][i];
             if (cnt == 0 || right_count[i + 1] == 0) continue;
-            float cost = bbox_area(acc) * sah_blocks(cnt) + right_area[i + 1] * sah_blocks(right_count[i + 1]);
-            if (cost < best_cost) { best_cost = cost; best_axis = axis; best_bin = i; }
+            float cost = box4_half_area(acc) * sah_blocks(cnt) + right_area[i + 1] * sah_blocks(right_count[i + 1]);
+            if (cost < best_cost) { best_cost = cost; best_axis = a; best_bin = i; }
         }
     }
-    float parent_area = bbox_area(box);
-    float split_cost = SAH_TRAVERSAL_COST +
-                       (parent_area > 0.0f ? SAH_ISECT_COST * best_cost / parent_area : INFINITY);
-    float leaf_cost = SAH_ISECT_COST * sah_blocks(n);
-    if (best_axis < 0 || (split_cost >= leaf_cost && n <= BVH_MAX_LEAF)) return -1;
+    if (best_axis < 0) return;
+    float parent_area = box4_half_area(box);
+    float split_cost = SAH_TRAVERSAL_COST + (parent_area > 0.0f ? SAH_ISECT_COST * best_cost / parent_area : INFINITY);
+    if (split_cost >= SAH_ISECT_COST * sah_blocks(n) && n <= BVH_MAX_LEAF) return;
 
-    float lo = v3_get(cbox.min, best_axis);
-    float scale = (float)BVH_BINS / v3_get(cext, best_axis);
+    out->lbox = out->lcbox = out->rbox = out->rcbox = box4_empty();
+    for (int i = 0; i < nbins; i++) {
+        if (i <= best_bin) {
+            out->lbox = box4_union(out->lbox, bins[best_axis][i]);
+            out->lcbox = box4_union(out->lcbox, cbins[best_axis][i]);
+        } else {
+            out->rbox = box4_union(out->rbox, bins[best_axis][i]);
+            out->rcbox = box4_union(out->rcbox, cbins[best_axis][i]);
+        }
+    }
     int i = begin, j = end - 1;
     while (i <= j) {
-        const BuildPrim *p = &b->bp[b->idx[i]];
-        int k = (int)((v3_get(p->centroid, best_axis) - lo) * scale);
-        k = k < 0 ? 0 : (k >= BVH_BINS ? BVH_BINS - 1 : k);
-        if (k <= best_bin) i++;
+        Box4 p = prim_box(&b->bp[b->idx[i]]);
+        int k[4];
+        _mm_storeu_si128((__m128i *)k, bin_index(_mm_add_ps(p.lo, p.hi), cmin, scale, last_bin));
+        if (k[best_axis] <= best_bin) i++;
         else { uint32_t t = b->idx[i]; b->idx[i] = b->idx[j]; b->idx[j] = t; j--; }
     }
-    *axis_out = best_axis;
-    return i;
+    out->mid = i;
 }
 
-static int build_recursive(Builder *b, int begin, int end, int depth)
+static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth);
+
+typedef struct BuildTask {
+    Builder *b;
+    int node, begin, end, depth;
+    Box4 box, cbox;
+} BuildTask;
+
+static void *build_task_run(void *arg)
 {
-    int node = builder_new_node(b);
-    BBox box = bbox_empty(), cbox = bbox_empty();
-    for (int i = begin; i < end; i++) {
-        const BuildPrim *p = &b->bp[b->idx[i]];
-        box = bbox_union(box, p->box);
-        cbox = bbox_add(cbox, p->centroid);
-    }
-    b->nodes[node].box = box;
+    BuildTask *t = arg;
+    build_node(t->b, t->node, t->begin, t->end, t->box, t->cbox, t->depth);
+    return NULL;
+}
+
+static bool take_thread(Builder *b)
+{
+    int spare = atomic_load(&b->spare_threads);
+    while (spare > 0)
+        if (atomic_compare_exchange_weak(&b->spare_threads, &spare, spare - 1)) return true;
+    return false;
+}
+
+static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth)
+{
+    BinNode *bn = &b->nodes[node];
+    bn->box = box4_to_bbox(box);
     int n = end - begin;
-    int axis = 0, mid = -1;
-    if (n > 1) {
-        if (depth < BVH_MAX_DEPTH) mid = find_split(b, begin, end, box, cbox, &axis);
-        if (mid < 0 && n > BVH_MAX_LEAF) {
-            /* Coincident centroids (or too deep): split the range in the middle; any
-             * partition is correct, this one only keeps leaves small. */
-            Vec3 ext = v3_sub(cbox.max, cbox.min);
-            axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
-            mid = begin + n / 2;
+    Split s;
+    s.mid = -1;
+    if (n > 1 && depth < BVH_MAX_DEPTH) find_split(b, begin, end, box, cbox, &s);
+    if (s.mid < 0 && n > 1) {
+        int split_at = -1;
+        if (n > BVH_MAX_LEAF) {
+            /* Coincident centroids (or too deep): any partition is correct, the middle
+             * keeps leaves small. */
+            split_at = begin + n / 2;
+        } else {
+            /* A leaf holds one kind of primitive: separate triangles from spheres. */
+            int i = begin, j = end - 1;
+            while (i <= j) {
+                if (b->idx[i] < b->num_tris) i++;
+                else { uint32_t t = b->idx[i]; b->idx[i] = b->idx[j]; b->idx[j] = t; j--; }
+            }
+            if (i > begin && i < end) split_at = i;
+        }
+        if (split_at >= 0) {
+            s.mid = split_at;
+            range_bounds(b, begin, split_at, &s.lbox, &s.lcbox);
+            range_bounds(b, split_at, end, &s.rbox, &s.rcbox);
         }
     }
-    if (mid < 0) {
-        b->nodes[node].offset = begin;
-        b->nodes[node].count = n;
-        return node;
+    if (s.mid < 0) {
+        bn->offset = begin;
+        bn->count = n;
+        return;
     }
-    (void)axis;
-    build_recursive(b, begin, mid, depth + 1);
-    int right = build_recursive(b, mid, end, depth + 1);
-    b->nodes[node].offset = right;
-    b->nodes[node].count = 0;
-    return node;
+    int nl = s.mid - begin;
+    int left = node + 1, right = node + 2 * nl;
+    bn->offset = right;
+    bn->count = 0;
+    if (n >= BVH_PARALLEL_MIN && take_thread(b)) {
+        BuildTask t = {b, right, s.mid, end, depth + 1, s.rbox, s.rcbox};
+        pthread_t tid;
+        if (pthread_create(&tid, NULL, build_task_run, &t) == 0) {
+            build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1);
+            pthread_join(tid, NULL);
+            atomic_fetch_add(&b->spare_threads, 1);
+            return;
+        }
+        atomic_fetch_add(&b->spare_threads, 1);
+    }
+    build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1);
+    build_node(b, right, s.mid, end, s.rbox, s.rcbox, depth + 1);
 }
 
 /* Node boxes are widened a little, outward: a ray lying exactly in a box's face plane
@@ -167,58 +317,63 @@ static BBox widen(BBox b, float abs_margin)
     return b;
 }
 
-static void wide_set_child(BvhNode *w, int slot, BBox box, int32_t child, int is_leaf)
+static void wide_set_child(BvhNode *w, int slot, BBox box, uint32_t ref)
 {
-    w->bmin_x[slot] = box.min.x; w->bmax_x[slot] = box.max.x;
-    w->bmin_y[slot] = box.min.y; w->bmax_y[slot] = box.max.y;
-    w->bmin_z[slot] = box.min.z; w->bmax_z[slot] = box.max.z;
-    w->child[slot] = child;
-    w->is_leaf[slot] = (uint16_t)is_leaf;
+    w->bounds[0][slot] = box.min.x; w->bounds[1][slot] = box.max.x;
+    w->bounds[2][slot] = box.min.y; w->bounds[3][slot] = box.max.y;
+    w->bounds[4][slot] = box.min.z; w->bounds[5][slot] = box.max.z;
+    w->child[slot] = ref;
 }
 
-/* Everything the collapse pass writes: wide nodes, leaves, triangle blocks, spheres. */
-typedef struct Emitter4 {
+static void wide_clear(BvhNode *w)
+{
+    BBox nan_box = {v3s(NAN), v3s(NAN)}; /* see node_hit8 */
+    for (int i = 0; i < BVH_WIDTH; i++) wide_set_child(w, i, nan_box, BVH_EMPTY);
+}
+
+/* Everything the collapse pass writes: wide nodes, triangle blocks, spheres. */
+typedef struct Emitter {
     const BinNode *bin;
     const uint32_t *idx;
     const Vec3 *positions;
     const int32_t *tri_indices;
-    int num_tris;
+    uint32_t num_tris;
     const Sphere *spheres;
+    float margin;
     Bvh *out;
-} Emitter4;
+} Emitter;
 
-/* Writes the leaf for binary leaf `bn` and returns its index: triangles packed four to a
- * block in the SAH's order, spheres after them. */
-static int emit_leaf(Emitter4 *e, const BinNode *bn)
+/* Writes the leaf for binary leaf `bn` and returns its reference: triangles packed four
+ * to a block in the SAH's order, or spheres. */
+static uint32_t emit_leaf(Emitter *e, const BinNode *bn)
 {
     Bvh *o = e->out;
-    BvhLeaf *leaf = &o->leaves[o->num_leaves];
-    leaf->first_block = (uint32_t)o->num_blocks;
-    leaf->first_sphere = (uint32_t)o->num_spheres;
-    leaf->num_blocks = 0;
-    leaf->num_spheres = 0;
+    o->num_leaves++;
+    uint32_t first_id = e->idx[bn->offset];
+    if (first_id >= e->num_tris) {
+        uint32_t first = (uint32_t)o->num_spheres;
+        for (int i = bn->offset; i < bn->offset + bn->count; i++) {
+            const Sphere *sp = &e->spheres[e->idx[i] - e->num_tris];
+            BvhSphere *d = &o->spheres[o->num_spheres++];
+            d->center = sp->center;
+            d->radius = sp->radius;
+            d->id = e->idx[i];
+        }
+        return BVH_LEAF | BVH_SPHERES | ((uint32_t)(bn->count - 1) << BVH_COUNT_SHIFT) | first;
+    }
+    uint32_t first = (uint32_t)o->num_blocks;
     int lane = 4;
     BvhTriBlock *blk = NULL;
     for (int i = bn->offset; i < bn->offset + bn->count; i++) {
         uint32_t id = e->idx[i];
-        if ((int)id >= e->num_tris) {
-            const Sphere *sp = &e->spheres[id - (uint32_t)e->num_tris];
-            BvhSphere *d = &o->spheres[o->num_spheres++];
-            d->center = sp->center;
-            d->radius = sp->radius;
-            d->id = id;
-            leaf->num_spheres++;
-            continue;
-        }
         if (lane == 4) {
             blk = &o->blocks[o->num_blocks++];
             /* Unused lanes hold NaN vertices: every comparison in the SIMD test then
-             * fails (det != 0 holds for NaN, but t > t_min does not), so they need no mask. */
+             * fails, so they need no mask. */
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++)
                     for (int l = 0; l < 4; l++) blk->v[k][a][l] = NAN;
             for (int k = 0; k < 4; k++) blk->id[k] = BVH_NO_PRIM;
-            leaf->num_blocks++;
             lane = 0;
         }
         const int32_t *t = &e->tri_indices[3 * id];
@@ -229,19 +384,20 @@ static int emit_leaf(Emitter4 *e, const BinNode *bn)
         blk->id[lane] = id;
         lane++;
     }
-    return o->num_leaves++;
+    uint32_t count = (uint32_t)o->num_blocks - first;
+    return BVH_LEAF | ((count - 1u) << BVH_COUNT_SHIFT) | first;
 }
 
 /* Turns binary node `bin` into wide node `out`: its children, with the largest-area inner
  * ones replaced by their own children while slots remain (fewer, fuller wide nodes cut
  * the node visits per ray). Children are laid out depth-first after their parent. */
-static void collapse(Emitter4 *e, int bin, int out)
+static void collapse(Emitter *e, int bin, int out)
 {
     const BinNode *bn = e->bin;
-    int kids[4], nk = 0;
+    int kids[BVH_WIDTH], nk = 0;
     kids[nk++] = bin + 1;
     kids[nk++] = bn[bin].offset;
-    while (nk < 4) {
+    while (nk < BVH_WIDTH) {
         int best = -1;
         float best_area = -1.0f;
         for (int i = 0; i < nk; i++) {
@@ -254,19 +410,40 @@ static void collapse(Emitter4 *e, int bin, int out)
         kids[nk++] = bn[k].offset;
     }
     BvhNode *w = &e->out->nodes[out];
-    w->valid_mask = (1u << nk) - 1u;
-    w->pad = 0;
-    for (int i = nk; i < 4; i++) wide_set_child(w, i, bbox_empty(), -1, 0);
+    wide_clear(w);
     for (int i = 0; i < nk; i++) {
         const BinNode *k = &bn[kids[i]];
+        BBox box = widen(k->box, e->margin);
         if (k->count > 0) {
-            wide_set_child(w, i, k->box, emit_leaf(e, k), 1);
+            wide_set_child(w, i, box, emit_leaf(e, k));
         } else {
             int idx = e->out->num_nodes++;
-            wide_set_child(w, i, k->box, idx, 0);
+            wide_set_child(w, i, box, (uint32_t)idx);
             collapse(e, kids[i], idx);
         }
     }
+}
+
+/* Inner nodes and triangle blocks of the binary tree below `node`. */
+static void count_binary(const BinNode *nodes, const uint32_t *idx, uint32_t num_tris, int node, size_t *inner,
+                         size_t *blocks)
+{
+    for (;;) {
+        const BinNode *bn = &nodes[node];
+        if (bn->count > 0) {
+            if (idx[bn->offset] < num_tris) *blocks += (size_t)(bn->count + 3) / 4;
+            return;
+        }
+        (*inner)++;
+        count_binary(nodes, idx, num_tris, node + 1, inner, blocks);
+        node = bn->offset;
+    }
+}
+
+static int build_threads(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : (n > BVH_MAX_BUILD_THREADS ? BVH_MAX_BUILD_THREADS : (int)n);
 }
 
 CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
@@ -279,49 +456,56 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     bvh->bounds = bbox_empty();
     int n = num_tris + num_spheres;
     if (n == 0) return CST_OK;
-    BuildPrim *bp = malloc((size_t)n * sizeof *bp);
+    if ((uint32_t)num_spheres > BVH_INDEX_MASK)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "the BVH holds at most %u spheres", BVH_INDEX_MASK);
+    BuildPrim *bp = aligned_alloc(16, (size_t)n * sizeof *bp);
     uint32_t *idx = malloc((size_t)n * sizeof *idx);
-    BinNode *nodes = malloc((size_t)(2 * n) * sizeof *nodes);
-    /* Every wide node but the root absorbs at least one binary inner node, and a binary
-     * tree over n primitives has fewer than n inner nodes and at most n leaves; each
-     * leaf needs at most one block per triangle. */
-    bvh->nodes = malloc((size_t)(n + 1) * sizeof *bvh->nodes);
-    bvh->leaves = malloc((size_t)n * sizeof *bvh->leaves);
-    bvh->blocks = malloc((size_t)(num_tris > 0 ? num_tris : 1) * sizeof *bvh->blocks);
-    bvh->spheres = malloc((size_t)(num_spheres > 0 ? num_spheres : 1) * sizeof *bvh->spheres);
-    if (!bp || !idx || !nodes || !bvh->nodes || !bvh->leaves || !bvh->blocks || !bvh->spheres) goto oom;
+    BinNode *nodes = malloc((size_t)2 * (size_t)n * sizeof *nodes);
+    if (!bp || !idx || !nodes) goto oom;
 
     for (int i = 0; i < num_tris; i++) {
         Vec3 a = positions[tri_indices[3 * i]], bb = positions[tri_indices[3 * i + 1]],
              c = positions[tri_indices[3 * i + 2]];
         BBox box = bbox_add(bbox_add(bbox_add(bbox_empty(), a), bb), c);
-        bp[i].box = box;
-        bp[i].centroid = bbox_center(box);
+        bp[i] = (BuildPrim){{box.min.x, box.min.y, box.min.z, 0.0f}, {box.max.x, box.max.y, box.max.z, 0.0f}};
     }
     for (int i = 0; i < num_spheres; i++) {
-        Vec3 r = v3s(spheres[i].radius);
-        BBox box = {v3_sub(spheres[i].center, r), v3_add(spheres[i].center, r)};
-        bp[num_tris + i].box = box;
-        bp[num_tris + i].centroid = spheres[i].center;
+        Vec3 c = spheres[i].center;
+        float r = spheres[i].radius;
+        bp[num_tris + i] = (BuildPrim){{c.x - r, c.y - r, c.z - r, 0.0f}, {c.x + r, c.y + r, c.z + r, 0.0f}};
     }
     for (int i = 0; i < n; i++) idx[i] = (uint32_t)i;
 
-    Builder b = {bp, idx, nodes, 0, 2 * n};
-    build_recursive(&b, 0, n, 0);
+    Builder b = {bp, idx, nodes, (uint32_t)num_tris, 0};
+    atomic_init(&b.spare_threads, build_threads() - 1);
+    Box4 root_box, root_cbox;
+    range_bounds(&b, 0, n, &root_box, &root_cbox);
+    build_node(&b, 0, 0, n, root_box, root_cbox, 0);
+
+    /* Every wide node but the root absorbs at least one binary inner node; blocks are
+     * counted exactly. */
+    size_t inner = 0, blocks = 0;
+    count_binary(nodes, idx, (uint32_t)num_tris, 0, &inner, &blocks);
+    if (blocks > BVH_INDEX_MASK) {
+        free(bp); free(idx); free(nodes);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "the BVH holds at most %u blocks of 4 triangles (%zu needed)",
+                        BVH_INDEX_MASK, blocks);
+    }
+    size_t node_bytes = ((inner + 1) * sizeof(BvhNode) + 63u) & ~(size_t)63u;
+    size_t block_bytes = ((blocks > 0 ? blocks : 1) * sizeof(BvhTriBlock) + 63u) & ~(size_t)63u;
+    bvh->nodes = aligned_alloc(64, node_bytes);
+    bvh->blocks = aligned_alloc(64, block_bytes);
+    bvh->spheres = malloc((size_t)(num_spheres > 0 ? num_spheres : 1) * sizeof *bvh->spheres);
+    if (!bvh->nodes || !bvh->blocks || !bvh->spheres) goto oom;
 
     BBox root = nodes[0].box;
-    float margin = 1e-7f * maxf(v3_max_abs(root.min), v3_max_abs(root.max)) + 1e-30f;
-    for (int i = 0; i < b.num_nodes; i++) nodes[i].box = widen(nodes[i].box, margin);
-
-    Emitter4 e = {nodes, idx, positions, tri_indices, num_tris, spheres, bvh};
+    Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, 0.0f, bvh};
+    e.margin = 1e-7f * maxf(v3_max_abs(root.min), v3_max_abs(root.max)) + 1e-30f;
     bvh->num_nodes = 1;
     if (nodes[0].count > 0) {
         /* A root that is a leaf (few primitives) becomes the single slot of the root. */
-        BvhNode *w = &bvh->nodes[0];
-        for (int i = 1; i < 4; i++) wide_set_child(w, i, bbox_empty(), -1, 0);
-        wide_set_child(w, 0, nodes[0].box, emit_leaf(&e, &nodes[0]), 1);
-        w->valid_mask = 1u;
-        w->pad = 0;
+        wide_clear(&bvh->nodes[0]);
+        wide_set_child(&bvh->nodes[0], 0, widen(root, e.margin), emit_leaf(&e, &nodes[0]));
     } else {
         collapse(&e, 0, 0);
     }
@@ -341,7 +525,6 @@ void bvh_free(Bvh *bvh)
 {
     if (!bvh) return;
     free(bvh->nodes);
-    free(bvh->leaves);
     free(bvh->blocks);
     free(bvh->spheres);
     memset(bvh, 0, sizeof *bvh);
@@ -349,41 +532,76 @@ void bvh_free(Bvh *bvh)
 
 size_t bvh_memory_bytes(const Bvh *bvh)
 {
-    return (size_t)bvh->num_nodes * sizeof(BvhNode) + (size_t)bvh->num_leaves * sizeof(BvhLeaf) +
-           (size_t)bvh->num_blocks * sizeof(BvhTriBlock) + (size_t)bvh->num_spheres * sizeof(BvhSphere);
+    return (size_t)bvh->num_nodes * sizeof(BvhNode) + (size_t)bvh->num_blocks * sizeof(BvhTriBlock) +
+           (size_t)bvh->num_spheres * sizeof(BvhSphere);
 }
 
-/* Per-ray data for the SSE slab test, broadcast once per ray. */
-typedef struct RaySimd {
-    __m128 ox, oy, oz, ix, iy, iz;
-} RaySimd;
+/* ------------------------------------------------------------------ traversal */
 
-static inline RaySimd ray_simd(const Ray *r)
+/* Eight floats: one AVX register, or two SSE ones where AVX is missing. */
+#if defined(__AVX__)
+typedef __m256 F8;
+static inline F8 f8_set1(float x) { return _mm256_set1_ps(x); }
+static inline F8 f8_load(const float *p) { return _mm256_load_ps(p); }
+static inline F8 f8_sub(F8 a, F8 b) { return _mm256_sub_ps(a, b); }
+static inline F8 f8_mul(F8 a, F8 b) { return _mm256_mul_ps(a, b); }
+static inline F8 f8_min(F8 a, F8 b) { return _mm256_min_ps(a, b); }
+static inline F8 f8_max(F8 a, F8 b) { return _mm256_max_ps(a, b); }
+static inline unsigned f8_le_mask(F8 a, F8 b) { return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)); }
+static inline void f8_store(float *p, F8 a) { _mm256_storeu_ps(p, a); }
+#else
+typedef struct F8 {
+    __m128 lo, hi;
+} F8;
+static inline F8 f8_set1(float x) { F8 r = {_mm_set1_ps(x), _mm_set1_ps(x)}; return r; }
+static inline F8 f8_load(const float *p) { F8 r = {_mm_load_ps(p), _mm_load_ps(p + 4)}; return r; }
+static inline F8 f8_sub(F8 a, F8 b) { F8 r = {_mm_sub_ps(a.lo, b.lo), _mm_sub_ps(a.hi, b.hi)}; return r; }
+static inline F8 f8_mul(F8 a, F8 b) { F8 r = {_mm_mul_ps(a.lo, b.lo), _mm_mul_ps(a.hi, b.hi)}; return r; }
+static inline F8 f8_min(F8 a, F8 b) { F8 r = {_mm_min_ps(a.lo, b.lo), _mm_min_ps(a.hi, b.hi)}; return r; }
+static inline F8 f8_max(F8 a, F8 b) { F8 r = {_mm_max_ps(a.lo, b.lo), _mm_max_ps(a.hi, b.hi)}; return r; }
+static inline unsigned f8_le_mask(F8 a, F8 b)
+{
+    return (unsigned)(_mm_movemask_ps(_mm_cmple_ps(a.lo, b.lo)) | (_mm_movemask_ps(_mm_cmple_ps(a.hi, b.hi)) << 4));
+}
+static inline void f8_store(float *p, F8 a) { _mm_storeu_ps(p, a.lo); _mm_storeu_ps(p + 4, a.hi); }
+#endif
+
+/* Per-ray constants of the slab test: origin and negated reciprocal direction. */
+typedef struct RayBox8 {
+    F8 o[3], ninv[3];
+} RayBox8;
+
+static inline RayBox8 ray_box8(const Ray *r)
 {
     Vec3 inv = ray_inv_dir(r->d);
-    RaySimd q = {_mm_set1_ps(r->o.x), _mm_set1_ps(r->o.y), _mm_set1_ps(r->o.z),
-                 _mm_set1_ps(inv.x), _mm_set1_ps(inv.y), _mm_set1_ps(inv.z)};
+    RayBox8 q;
+    q.o[0] = f8_set1(r->o.x); q.o[1] = f8_set1(r->o.y); q.o[2] = f8_set1(r->o.z);
+    q.ninv[0] = f8_set1(-inv.x); q.ninv[1] = f8_set1(-inv.y); q.ninv[2] = f8_set1(-inv.z);
     return q;
 }
 
-/* The four children's slab tests at once (see bbox_intersect for the robustness
- * argument: zero direction components and the 1 + 2 gamma(3) widening). Returns a bit
- * mask of the children hit and their entry distances. */
-static inline int node_hit4(const BvhNode *n, const RaySimd *q, float t_min, float t_max, __m128 *t_enter)
+/* The eight children's slab tests at once (see bbox_intersect for the robustness
+ * argument: zero direction components and the 1 + 2 gamma(3) widening of the exit
+ * distance). (origin - plane) * -(1 / d) is bit for bit (plane - origin) * (1 / d), and
+ * lets the plane be a memory operand of the subtraction. Empty slots hold NaN bounds,
+ * which every finite ray misses: no inverted or infinite box can mark them, as the min
+ * and max of its two plane distances form an interval some ray contains. Returns the
+ * mask of children hit and their entry distances. */
+static inline unsigned node_hit8(const BvhNode *n, const RayBox8 *q, F8 t_min, F8 t_max, F8 *t_enter)
 {
-    __m128 tx0 = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->bmin_x), q->ox), q->ix);
-    __m128 tx1 = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->bmax_x), q->ox), q->ix);
-    __m128 ty0 = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->bmin_y), q->oy), q->iy);
-    __m128 ty1 = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->bmax_y), q->oy), q->iy);
-    __m128 tz0 = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->bmin_z), q->oz), q->iz);
-    __m128 tz1 = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(n->bmax_z), q->oz), q->iz);
-    __m128 tn = _mm_max_ps(_mm_max_ps(_mm_min_ps(tx0, tx1), _mm_min_ps(ty0, ty1)),
-                           _mm_max_ps(_mm_min_ps(tz0, tz1), _mm_set1_ps(t_min)));
-    __m128 tf = _mm_min_ps(_mm_min_ps(_mm_max_ps(tx0, tx1), _mm_max_ps(ty0, ty1)),
-                           _mm_min_ps(_mm_max_ps(tz0, tz1), _mm_set1_ps(t_max)));
-    tf = _mm_mul_ps(tf, _mm_set1_ps(1.00000024f));
+    F8 t0x = f8_mul(f8_sub(q->o[0], f8_load(n->bounds[0])), q->ninv[0]);
+    F8 t1x = f8_mul(f8_sub(q->o[0], f8_load(n->bounds[1])), q->ninv[0]);
+    F8 t0y = f8_mul(f8_sub(q->o[1], f8_load(n->bounds[2])), q->ninv[1]);
+    F8 t1y = f8_mul(f8_sub(q->o[1], f8_load(n->bounds[3])), q->ninv[1]);
+    F8 t0z = f8_mul(f8_sub(q->o[2], f8_load(n->bounds[4])), q->ninv[2]);
+    F8 t1z = f8_mul(f8_sub(q->o[2], f8_load(n->bounds[5])), q->ninv[2]);
+    /* max/min return their second operand when either is NaN: nested this way, a NaN
+     * slab distance reaches tn, and the ordered compare then fails. */
+    F8 tn = f8_max(t_min, f8_max(f8_min(t0z, t1z), f8_max(f8_min(t0y, t1y), f8_min(t0x, t1x))));
+    F8 tf = f8_min(t_max, f8_min(f8_max(t0z, t1z), f8_min(f8_max(t0y, t1y), f8_max(t0x, t1x))));
+    tf = f8_mul(tf, f8_set1(1.00000024f));
     *t_enter = tn;
-    return _mm_movemask_ps(_mm_cmple_ps(tn, tf)) & (int)n->valid_mask;
+    return f8_le_mask(tn, tf);
 }
 
 /* Per-ray constants of the SIMD watertight test. */
@@ -418,9 +636,9 @@ static inline int block_intersect4(const BvhTriBlock *b, const RayTri4 *q, __m12
     const int kx = q->tr.kx, ky = q->tr.ky, kz = q->tr.kz;
     __m128 px[3], py[3], pz[3];
     for (int k = 0; k < 3; k++) {
-        pz[k] = _mm_sub_ps(_mm_loadu_ps(b->v[k][kz]), q->o[kz]);
-        px[k] = _mm_sub_ps(_mm_sub_ps(_mm_loadu_ps(b->v[k][kx]), q->o[kx]), _mm_mul_ps(q->sx, pz[k]));
-        py[k] = _mm_sub_ps(_mm_sub_ps(_mm_loadu_ps(b->v[k][ky]), q->o[ky]), _mm_mul_ps(q->sy, pz[k]));
+        pz[k] = _mm_sub_ps(_mm_load_ps(b->v[k][kz]), q->o[kz]);
+        px[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(b->v[k][kx]), q->o[kx]), _mm_mul_ps(q->sx, pz[k]));
+        py[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(b->v[k][ky]), q->o[ky]), _mm_mul_ps(q->sy, pz[k]));
     }
     /* U, V, W: scaled barycentrics of vertices 0, 1, 2 (edge functions, JCGT 2013 eq. 4) */
     __m128 U = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
@@ -432,27 +650,34 @@ static inline int block_intersect4(const BvhTriBlock *b, const RayTri4 *q, __m12
     *scalar_lanes = zero_lanes;
     __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
     __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
+    /* Most rays pass outside all four: stop before the division. Unused lanes are NaN,
+     * neither negative nor positive, so they are dropped explicitly. */
+    int inside = _mm_movemask_ps(_mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpord_ps(U, U))) & ~zero_lanes;
+    if (!inside) {
+        *t_out = *u_out = *v_out = zero;
+        return 0;
+    }
     __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
     __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(q->sz, pz[0])), _mm_mul_ps(V, _mm_mul_ps(q->sz, pz[1]))),
                           _mm_mul_ps(W, _mm_mul_ps(q->sz, pz[2])));
     __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
     __m128 t = _mm_mul_ps(T, inv_det);
-    __m128 ok = _mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpneq_ps(det, zero));
+    __m128 ok = _mm_cmpneq_ps(det, zero);
     ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, t_min));
     ok = _mm_and_ps(ok, _mm_cmplt_ps(t, t_max));
     *t_out = t;
     *u_out = _mm_mul_ps(V, inv_det);
     *v_out = _mm_mul_ps(W, inv_det);
-    return _mm_movemask_ps(ok) & ~zero_lanes;
+    return _mm_movemask_ps(ok) & inside;
 }
 
-/* Closest hit in a leaf; shortens r->t_max on a hit. */
-static inline bool leaf_intersect(const Bvh *bvh, const BvhLeaf *leaf, const RayTri4 *q, Ray *r, Hit *hit)
+/* Closest hit among a leaf's triangle blocks; shortens r->t_max on a hit. */
+static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const RayTri4 *q, Ray *r, Hit *hit)
 {
     bool found = false;
     const __m128 t_min = _mm_set1_ps(r->t_min);
-    for (uint32_t bi = 0; bi < leaf->num_blocks; bi++) {
-        const BvhTriBlock *b = &bvh->blocks[leaf->first_block + bi];
+    const BvhTriBlock *b = &bvh->blocks[bvh_ref_index(ref)];
+    for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
         __m128 t4, u4, v4;
         int scalar_lanes;
         int mask = block_intersect4(b, q, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4, &scalar_lanes);
@@ -476,8 +701,14 @@ static inline bool leaf_intersect(const Bvh *bvh, const BvhLeaf *leaf, const Ray
             }
         }
     }
-    for (uint32_t si = 0; si < leaf->num_spheres; si++) {
-        const BvhSphere *sp = &bvh->spheres[leaf->first_sphere + si];
+    return found;
+}
+
+static inline bool leaf_spheres(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
+{
+    bool found = false;
+    const BvhSphere *sp = &bvh->spheres[bvh_ref_index(ref)];
+    for (uint32_t si = bvh_ref_count(ref); si > 0; si--, sp++) {
         float t;
         if (sphere_intersect(sp->center, sp->radius, r, &t)) {
             r->t_max = t;
@@ -488,11 +719,19 @@ static inline bool leaf_intersect(const Bvh *bvh, const BvhLeaf *leaf, const Ray
     return found;
 }
 
-static inline bool leaf_occluded(const Bvh *bvh, const BvhLeaf *leaf, const RayTri4 *q, const Ray *r)
+static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const RayTri4 *q, const Ray *r)
 {
+    if (ref & BVH_SPHERES) {
+        const BvhSphere *sp = &bvh->spheres[bvh_ref_index(ref)];
+        for (uint32_t si = bvh_ref_count(ref); si > 0; si--, sp++) {
+            float t;
+            if (sphere_intersect(sp->center, sp->radius, r, &t)) return true;
+        }
+        return false;
+    }
     const __m128 t_min = _mm_set1_ps(r->t_min), t_max = _mm_set1_ps(r->t_max);
-    for (uint32_t bi = 0; bi < leaf->num_blocks; bi++) {
-        const BvhTriBlock *b = &bvh->blocks[leaf->first_block + bi];
+    const BvhTriBlock *b = &bvh->blocks[bvh_ref_index(ref)];
+    for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
         __m128 t4, u4, v4;
         int scalar_lanes;
         if (block_intersect4(b, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes)) return true;
@@ -504,78 +743,148 @@ static inline bool leaf_occluded(const Bvh *bvh, const BvhLeaf *leaf, const RayT
                 return true;
         }
     }
-    for (uint32_t si = 0; si < leaf->num_spheres; si++) {
-        const BvhSphere *sp = &bvh->spheres[leaf->first_sphere + si];
-        float t;
-        if (sphere_intersect(sp->center, sp->radius, r, &t)) return true;
-    }
     return false;
 }
 
-typedef struct StackEntry {
-    int32_t child;
-    int32_t is_leaf;
-    float t; /* entry distance, to skip entries beyond a closer hit */
-} StackEntry;
+static inline unsigned ctz(unsigned m) { return (unsigned)__builtin_ctz(m); }
+
+/* A NaN or infinite origin or direction would make every slab test pass, empty slots
+ * included; such a ray hits nothing. */
+static inline bool ray_is_finite(const Ray *r)
+{
+    /* Ray is {o, t_min, d, t_max}: two loads, one compare each, lanes 0-2. */
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff)), big = _mm_set1_ps(FLT_MAX);
+    __m128 o = _mm_and_ps(_mm_loadu_ps(&r->o.x), abs_mask), d = _mm_and_ps(_mm_loadu_ps(&r->d.x), abs_mask);
+    return (_mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(o, big), _mm_cmple_ps(d, big))) & 7) == 7;
+}
+
+/* Starts loading a child that will be visited later, so the visit of its nearer sibling
+ * overlaps the memory latency (Embree's traversal does the same). */
+static inline void prefetch_ref(const Bvh *bvh, uint32_t ref)
+{
+    const char *p;
+    size_t bytes;
+    if (!bvh_ref_is_leaf(ref)) {
+        p = (const char *)&bvh->nodes[ref];
+        bytes = sizeof(BvhNode);
+    } else if (ref & BVH_SPHERES) {
+        p = (const char *)&bvh->spheres[bvh_ref_index(ref)];
+        bytes = bvh_ref_count(ref) * sizeof(BvhSphere);
+    } else {
+        p = (const char *)&bvh->blocks[bvh_ref_index(ref)];
+        bytes = bvh_ref_count(ref) * sizeof(BvhTriBlock);
+    }
+#ifndef BVH_NO_PREFETCH
+    for (size_t off = 0; off < bytes; off += 64) _mm_prefetch(p + off, _MM_HINT_T0);
+#else
+    (void)p; (void)bytes;
+#endif
+}
 
 bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
 {
-    if (bvh->num_nodes == 0) return false;
+    if (bvh->num_nodes == 0 || !ray_is_finite(ray)) return false;
     Ray r = *ray;
-    RaySimd q = ray_simd(&r);
-    RayTri4 qt = ray_tri4(&r);
-    StackEntry stack[BVH_STACK];
+    RayBox8 q = ray_box8(&r);
+    RayTri4 qt; /* set up at the first leaf: many rays never reach one */
+    bool qt_ready = false;
+    const F8 t_min = f8_set1(r.t_min);
+    uint32_t stack_ref[BVH_STACK];
+    float stack_t[BVH_STACK];
     int sp = 0;
-    stack[sp++] = (StackEntry){0, 0, r.t_min};
+    uint32_t cur = 0; /* the root */
     bool found = false;
-    while (sp > 0) {
-        StackEntry e = stack[--sp];
-        if (e.t > r.t_max) continue;
-        if (e.is_leaf) {
-            found |= leaf_intersect(bvh, &bvh->leaves[e.child], &qt, &r, hit);
-            continue;
+    for (;;) {
+        if (!bvh_ref_is_leaf(cur)) {
+            const BvhNode *n = &bvh->nodes[cur];
+            F8 tn8;
+            unsigned mask = node_hit8(n, &q, t_min, f8_set1(r.t_max), &tn8);
+            if (mask) {
+                unsigned c0 = ctz(mask);
+                mask &= mask - 1u;
+                if (!mask) { cur = n->child[c0]; continue; } /* the common case: one child */
+                float tn[BVH_WIDTH];
+                f8_store(tn, tn8);
+                unsigned c1 = ctz(mask);
+                mask &= mask - 1u;
+                if (!mask) {
+                    /* Two: descend into the nearer, keep the farther with its entry
+                     * distance so a closer hit found first lets it be skipped. */
+                    if (tn[c1] < tn[c0]) { unsigned t = c0; c0 = c1; c1 = t; }
+                    prefetch_ref(bvh, n->child[c1]);
+                    stack_ref[sp] = n->child[c1];
+                    stack_t[sp++] = tn[c1];
+                    cur = n->child[c0];
+                    continue;
+                }
+                /* Three or more: push all, sorted far to near, and pop the nearest. */
+                int base = sp;
+                stack_ref[sp] = n->child[c0]; stack_t[sp++] = tn[c0];
+                mask |= 1u << c1;
+                prefetch_ref(bvh, n->child[c0]);
+                while (mask) {
+                    unsigned c = ctz(mask);
+                    mask &= mask - 1u;
+                    prefetch_ref(bvh, n->child[c]);
+                    float t = tn[c];
+                    int j = sp++;
+                    while (j > base && stack_t[j - 1] < t) {
+                        stack_ref[j] = stack_ref[j - 1];
+                        stack_t[j] = stack_t[j - 1];
+                        j--;
+                    }
+                    stack_ref[j] = n->child[c];
+                    stack_t[j] = t;
+                }
+                cur = stack_ref[--sp];
+                continue;
+            }
+        } else if (cur & BVH_SPHERES) {
+            found |= leaf_spheres(bvh, cur, &r, hit);
+        } else {
+            if (!qt_ready) { qt = ray_tri4(&r); qt_ready = true; }
+            found |= leaf_triangles(bvh, cur, &qt, &r, hit);
         }
-        const BvhNode *n = &bvh->nodes[e.child];
-        __m128 tn4;
-        int mask = node_hit4(n, &q, r.t_min, r.t_max, &tn4);
-        if (!mask) continue;
-        float tn[4];
-        _mm_storeu_ps(tn, tn4);
-        /* Push the hit children far to near so the nearest is popped first; a closer hit
-         * found there lets the farther entries be skipped by their entry distance. */
-        StackEntry kids[4];
-        int nk = 0;
-        for (int i = 0; i < 4; i++) {
-            if (!(mask & (1 << i))) continue;
-            StackEntry k = {n->child[i], n->is_leaf[i], tn[i]};
-            int j = nk++;
-            while (j > 0 && kids[j - 1].t < k.t) { kids[j] = kids[j - 1]; j--; }
-            kids[j] = k;
-        }
-        for (int i = 0; i < nk; i++) stack[sp++] = kids[i];
+        /* Next: the nearest pending entry not beyond the closest hit so far. */
+        do {
+            if (sp == 0) return found;
+            sp--;
+        } while (stack_t[sp] > r.t_max);
+        cur = stack_ref[sp];
     }
-    return found;
 }
 
 bool bvh_occluded(const Bvh *bvh, const Ray *ray)
 {
-    if (bvh->num_nodes == 0) return false;
-    RaySimd q = ray_simd(ray);
-    RayTri4 qt = ray_tri4(ray);
-    StackEntry stack[BVH_STACK];
+    if (bvh->num_nodes == 0 || !ray_is_finite(ray)) return false;
+    RayBox8 q = ray_box8(ray);
+    RayTri4 qt;
+    bool qt_ready = false;
+    const F8 t_min = f8_set1(ray->t_min), t_max = f8_set1(ray->t_max);
+    uint32_t stack[BVH_STACK];
     int sp = 0;
-    stack[sp++] = (StackEntry){0, 0, 0.0f};
-    while (sp > 0) {
-        StackEntry e = stack[--sp];
-        if (e.is_leaf) {
-            if (leaf_occluded(bvh, &bvh->leaves[e.child], &qt, ray)) return true;
-            continue;
+    uint32_t cur = 0;
+    for (;;) {
+        if (!bvh_ref_is_leaf(cur)) {
+            const BvhNode *n = &bvh->nodes[cur];
+            F8 tn8;
+            unsigned mask = node_hit8(n, &q, t_min, t_max, &tn8);
+            if (mask) {
+                /* Any order finds an occluder; descend into the first, keep the rest. */
+                cur = n->child[ctz(mask)];
+                mask &= mask - 1u;
+                while (mask) {
+                    prefetch_ref(bvh, n->child[ctz(mask)]);
+                    stack[sp++] = n->child[ctz(mask)];
+                    mask &= mask - 1u;
+                }
+                continue;
+            }
+        } else {
+            if (!qt_ready && !(cur & BVH_SPHERES)) { qt = ray_tri4(ray); qt_ready = true; }
+            if (leaf_occluded(bvh, cur, &qt, ray)) return true;
         }
-        const BvhNode *n = &bvh->nodes[e.child];
-        __m128 tn4;
-        int mask = node_hit4(n, &q, ray->t_min, ray->t_max, &tn4);
-        for (int i = 0; i < 4; i++)
-            if (mask & (1 << i)) stack[sp++] = (StackEntry){n->child[i], n->is_leaf[i], 0.0f};
+        if (sp == 0) return false;
+        cur = stack[--sp];
     }
-    return false;
 }

@@ -1,7 +1,7 @@
 /* Bounding volume hierarchy over triangles and spheres: binned SAH build (Wald,
- * "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007) collapsed into a
- * 4-wide tree for SSE box tests, near-to-far ordered traversal for closest hits and early
- * exit for occlusion. */
+ * "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007), parallel over
+ * subtrees, collapsed into an 8-wide tree for AVX box tests; near-to-far ordered
+ * traversal for closest hits and early exit for occlusion. */
 #ifndef CST_ACCEL_BVH_H
 #define CST_ACCEL_BVH_H
 
@@ -16,19 +16,28 @@
 #include "math/bbox.h"
 #include "accel/accel_geometry.h"
 
-/* A 4-wide node: the boxes of its (up to) four children in structure-of-arrays form so
- * one SSE slab test checks all four. Built by collapsing a binary SAH tree (each wide
- * node absorbs the largest-area inner grandchildren). Child i is an inner node
- * (is_leaf[i] == 0: child[i] indexes Bvh.nodes) or a leaf (child[i] indexes Bvh.leaves);
- * slots outside valid_mask are empty. (An inverted box cannot mark an empty slot: the
- * min/max form of the slab test turns it into an infinite one.) */
+#define BVH_WIDTH 8
+
+/* An 8-wide node: the boxes of its children in structure-of-arrays form so one AVX slab
+ * test checks all eight. Rows are [2 * axis + side] (side 0: min plane, 1: max plane).
+ * Empty slots hold NaN bounds, which every finite ray misses (see node_hit8 in bvh.c).
+ * 224 bytes, 32-byte aligned. */
 typedef struct BvhNode {
-    float bmin_x[4], bmax_x[4], bmin_y[4], bmax_y[4], bmin_z[4], bmax_z[4];
-    int32_t child[4];
-    uint16_t is_leaf[4];
-    uint32_t valid_mask; /* bit i set: child i exists */
-    uint32_t pad;
+    float bounds[6][BVH_WIDTH];
+    uint32_t child[BVH_WIDTH]; /* a BvhRef */
 } BvhNode;
+
+/* Child references. Inner: index of a BvhNode. Leaf (BVH_LEAF set): a run of 1 to 8
+ * triangle blocks or, with BVH_SPHERES set, of 1 to 8 spheres; leaves hold one kind only,
+ * so the reference says everything traversal needs without another memory access. */
+#define BVH_LEAF 0x80000000u
+#define BVH_SPHERES 0x40000000u
+#define BVH_COUNT_SHIFT 27 /* count - 1, three bits */
+#define BVH_INDEX_MASK 0x07ffffffu
+#define BVH_EMPTY 0xffffffffu
+static inline bool bvh_ref_is_leaf(uint32_t ref) { return (ref & BVH_LEAF) != 0u; }
+static inline uint32_t bvh_ref_index(uint32_t ref) { return ref & BVH_INDEX_MASK; }
+static inline uint32_t bvh_ref_count(uint32_t ref) { return ((ref >> BVH_COUNT_SHIFT) & 7u) + 1u; }
 
 /* Four triangles' vertices in SoA form, v[vertex][axis][lane], for one SSE watertight
  * test; indexing by axis lets the per-ray axis permutation pick rows. Unused lanes have
@@ -45,27 +54,20 @@ typedef struct BvhSphere {
     uint32_t id;
 } BvhSphere;
 
-/* A leaf's contents: a run of triangle blocks and a run of spheres. */
-typedef struct BvhLeaf {
-    uint32_t first_block, first_sphere;
-    uint16_t num_blocks, num_spheres;
-} BvhLeaf;
-
 typedef struct Bvh {
-    BvhNode *nodes;
+    BvhNode *nodes; /* nodes[0] is the root (also when the whole scene is one leaf) */
     int num_nodes;
-    BvhLeaf *leaves;
-    int num_leaves;
     BvhTriBlock *blocks;
     int num_blocks;
     BvhSphere *spheres;
     int num_spheres;
+    int num_leaves;
     int num_prims;
     BBox bounds;
 } Bvh;
 
-
-/* Zero primitives is valid (every ray misses). */
+/* Zero primitives is valid (every ray misses). The build runs on all online CPUs; the
+ * tree does not depend on how many. */
 CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err);
 void bvh_free(Bvh *bvh);
 /* Closest hit in (ray.t_min, ray.t_max). */

@@ -46,9 +46,10 @@ static inline TriangleRay triangle_ray_setup(Vec3 d)
     tr.ky = tr.kx == 2 ? 0 : tr.kx + 1;
     float dz = v3_get(d, tr.kz);
     if (dz < 0.0f) { int t = tr.kx; tr.kx = tr.ky; tr.ky = t; } /* keep the winding */
-    tr.sx = v3_get(d, tr.kx) / dz;
-    tr.sy = v3_get(d, tr.ky) / dz;
+    /* One division: the shear only has to be the same for every triangle a ray meets. */
     tr.sz = 1.0f / dz;
+    tr.sx = v3_get(d, tr.kx) * tr.sz;
+    tr.sy = v3_get(d, tr.ky) * tr.sz;
     return tr;
 }
 

@@ -285,25 +285,40 @@ static bool box_contains(BBox outer, BBox inner)
 
 static BBox slot_box(const BvhNode *n, int i)
 {
-    BBox b = {v3(n->bmin_x[i], n->bmin_y[i], n->bmin_z[i]), v3(n->bmax_x[i], n->bmax_y[i], n->bmax_z[i])};
+    BBox b = {v3(n->bounds[0][i], n->bounds[2][i], n->bounds[4][i]), v3(n->bounds[1][i], n->bounds[3][i], n->bounds[5][i])};
     return b;
 }
 
 /* Unused block lanes carry BVH_NO_PRIM. */
 static bool lane_used(const BvhTriBlock *b, int l) { return b->id[l] != BVH_NO_PRIM; }
 
-/* Checks one leaf against its slot box: every triangle lane and sphere is a scene
- * primitive stored exactly as the scalar tests would see it, inside the box. Counts the
- * ids seen. */
-static void check_leaf(const Bvh *bvh, const Soup *s, int leaf_index, BBox box, int *seen_ids)
+/* Checks one leaf reference against its slot box: every triangle lane and sphere is a
+ * scene primitive stored exactly as the scalar tests would see it, inside the box, and
+ * the leaf holds one kind only. Counts the ids seen, and the blocks / spheres used. */
+static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, int *seen_ids, int *seen_items)
 {
-    assert_true(leaf_index >= 0 && leaf_index < bvh->num_leaves);
-    const BvhLeaf *leaf = &bvh->leaves[leaf_index];
-    assert_true(leaf->num_blocks + leaf->num_spheres > 0);
-    assert_true((int)(leaf->first_block + leaf->num_blocks) <= bvh->num_blocks);
-    assert_true((int)(leaf->first_sphere + leaf->num_spheres) <= bvh->num_spheres);
-    for (uint32_t bi = leaf->first_block; bi < leaf->first_block + leaf->num_blocks; bi++) {
+    uint32_t first = bvh_ref_index(ref), count = bvh_ref_count(ref);
+    assert_true(count >= 1 && count <= 8);
+    if (ref & BVH_SPHERES) {
+        assert_true((int)(first + count) <= bvh->num_spheres);
+        for (uint32_t si = first; si < first + count; si++) {
+            const BvhSphere *sp = &bvh->spheres[si];
+            int id = (int)sp->id;
+            assert_true(id >= s->num_tris && id < s->num_tris + s->num_spheres);
+            seen_ids[id]++;
+            seen_items[bvh->num_blocks + (int)si]++;
+            const Sphere *src = &s->spheres[id - s->num_tris];
+            assert_true(sp->center.x == src->center.x && sp->center.y == src->center.y &&
+                        sp->center.z == src->center.z && sp->radius == src->radius);
+            if (!box_contains(box, prim_box(s, id))) fail_msg("leaf %#x: sphere %d outside its box", ref, id);
+        }
+        return;
+    }
+    assert_true(count <= 2); /* at most 8 triangles per leaf */
+    assert_true((int)(first + count) <= bvh->num_blocks);
+    for (uint32_t bi = first; bi < first + count; bi++) {
         const BvhTriBlock *b = &bvh->blocks[bi];
+        seen_items[bi]++;
         assert_true(lane_used(b, 0));
         for (int l = 0; l < 4; l++) {
             if (!lane_used(b, l)) continue;
@@ -314,45 +329,40 @@ static void check_leaf(const Bvh *bvh, const Soup *s, int leaf_index, BBox box, 
                 Vec3 p = s->pos[s->idx[3 * id + k]];
                 assert_true(b->v[k][0][l] == p.x && b->v[k][1][l] == p.y && b->v[k][2][l] == p.z);
             }
-            if (!box_contains(box, prim_box(s, id))) fail_msg("leaf %d: triangle %d outside its box", leaf_index, id);
+            if (!box_contains(box, prim_box(s, id))) fail_msg("leaf %#x: triangle %d outside its box", ref, id);
         }
-    }
-    for (uint32_t si = leaf->first_sphere; si < leaf->first_sphere + leaf->num_spheres; si++) {
-        const BvhSphere *sp = &bvh->spheres[si];
-        int id = (int)sp->id;
-        assert_true(id >= s->num_tris && id < s->num_tris + s->num_spheres);
-        seen_ids[id]++;
-        const Sphere *src = &s->spheres[id - s->num_tris];
-        assert_true(sp->center.x == src->center.x && sp->center.y == src->center.y &&
-                    sp->center.z == src->center.z && sp->radius == src->radius);
-        if (!box_contains(box, prim_box(s, id))) fail_msg("leaf %d: sphere %d outside its box", leaf_index, id);
     }
 }
 
-/* Checks the 4-wide tree below wide node `node`, whose own box (its slot in the parent)
- * is `box`: every valid slot is a leaf or a later wide node, and each slot's box lies in
- * its parent's and holds its primitives. Returns the depth below. This mirrors the
- * layout in bvh.h and must follow it when it changes. */
-static int check_node(const Bvh *bvh, const Soup *s, int node, BBox box, int depth, int *seen_ids, int *seen_leaves)
+/* Checks the 8-wide tree below wide node `node`, whose own box (its slot in the parent)
+ * is `box`: every slot is empty (NaN bounds), a leaf or a later wide node,
+ * and each slot's box lies in its parent's and holds its primitives. Returns the depth
+ * below. This mirrors the layout in bvh.h and must follow it when it changes. */
+static int check_node(const Bvh *bvh, const Soup *s, int node, BBox box, int depth, int *seen_ids, int *seen_items)
 {
     assert_true(node >= 0 && node < bvh->num_nodes);
     const BvhNode *n = &bvh->nodes[node];
-    assert_true(n->valid_mask != 0u && n->valid_mask <= 15u);
-    int d = depth;
-    for (int i = 0; i < 4; i++) {
-        if (!(n->valid_mask & (1u << i))) continue;
+    assert_true(((uintptr_t)n & 31u) == 0u);
+    int d = depth, used = 0;
+    for (int i = 0; i < BVH_WIDTH; i++) {
         BBox sb = slot_box(n, i);
+        if (n->child[i] == BVH_EMPTY) {
+            assert_true(isnan(sb.min.x) && isnan(sb.min.y) && isnan(sb.min.z));
+            assert_true(isnan(sb.max.x) && isnan(sb.max.y) && isnan(sb.max.z));
+            continue;
+        }
+        used++;
         if (!box_contains(box, sb)) fail_msg("node %d slot %d: box outside its parent's", node, i);
-        if (n->is_leaf[i]) {
-            check_leaf(bvh, s, n->child[i], sb, seen_ids);
-            seen_leaves[n->child[i]]++;
+        if (bvh_ref_is_leaf(n->child[i])) {
+            check_leaf(bvh, s, n->child[i], sb, seen_ids, seen_items);
             d = depth + 1 > d ? depth + 1 : d;
         } else {
-            assert_true(n->child[i] > node); /* children are laid out after their parent */
-            int dk = check_node(bvh, s, n->child[i], sb, depth + 1, seen_ids, seen_leaves);
+            assert_true((int)n->child[i] > node); /* children are laid out after their parent */
+            int dk = check_node(bvh, s, (int)n->child[i], sb, depth + 1, seen_ids, seen_items);
             d = dk > d ? dk : d;
         }
     }
+    assert_true(used >= 1);
     return d;
 }
 
@@ -363,22 +373,24 @@ static int check_structure(const Bvh *bvh, const Soup *s)
     if (n == 0) { assert_int_equal(bvh->num_nodes, 0); return 0; }
     assert_true(bvh->num_nodes >= 1 && bvh->num_nodes <= n);
     assert_true(bvh->num_leaves >= 1 && bvh->num_leaves <= n);
-    int *ids = calloc((size_t)n, sizeof *ids), *leaves = calloc((size_t)bvh->num_leaves, sizeof *leaves);
+    assert_int_equal(bvh->num_spheres, s->num_spheres);
+    int *ids = calloc((size_t)n, sizeof *ids);
+    int *items = calloc((size_t)(bvh->num_blocks + bvh->num_spheres), sizeof *items);
     assert_non_null(ids);
-    assert_non_null(leaves);
+    assert_non_null(items);
     BBox all = bbox_empty();
     for (int i = 0; i < n; i++) all = bbox_union(all, prim_box(s, i));
     assert_true(box_contains(bvh->bounds, all) && box_contains(all, bvh->bounds)); /* bounds are exact */
     BBox everything = {v3s(-INFINITY), v3s(INFINITY)};
-    int depth = check_node(bvh, s, 0, everything, 0, ids, leaves);
-    for (int i = 0; i < bvh->num_leaves; i++)
-        if (leaves[i] != 1) fail_msg("leaf %d is referenced %d times", i, leaves[i]);
+    int depth = check_node(bvh, s, 0, everything, 0, ids, items);
+    for (int i = 0; i < bvh->num_blocks + bvh->num_spheres; i++)
+        if (items[i] != 1) fail_msg("block or sphere %d is referenced %d times", i, items[i]);
     for (int i = 0; i < n; i++)
         if (ids[i] != 1) fail_msg("scene primitive %d appears %d times", i, ids[i]);
     free(ids);
-    free(leaves);
-    /* Traversal pushes at most 3 siblings per level on a 384-entry stack. */
-    assert_true(3 * depth + 1 < 384);
+    free(items);
+    /* Traversal keeps at most 7 siblings per level on its stack (bvh.c's BVH_STACK). */
+    assert_true(7 * depth + 1 < 7 * (60 + 33) + 1);
     return depth;
 }
 
@@ -483,6 +495,32 @@ static void test_bvh_random_soups(void **state)
         bvh_free(&bvh);
         soup_free(&s);
     }
+}
+
+/* Rays with a NaN or infinite component would pass every slab test, empty slots too;
+ * they must miss, not crash (the 8-wide nodes have no separate valid-slot mask). */
+static void test_bvh_nonfinite_rays(void **state)
+{
+    (void)state;
+    Soup s = {0};
+    Pcg32 rng;
+    pcg32_seed(&rng, 77u, 5u);
+    soup_random_tris(&s, &rng, 3); /* few children: most slots are empty */
+    soup_random_spheres(&s, &rng, 2);
+    Bvh bvh;
+    soup_build(&s, &bvh);
+    const float bad[] = {NAN, INFINITY, -INFINITY};
+    for (int k = 0; k < 3; k++)
+        for (int c = 0; c < 6; c++) {
+            float v[6] = {0.1f, 0.2f, 0.3f, 0.0f, 0.0f, 1.0f};
+            v[c] = bad[k];
+            Ray r = ray_make(v3(v[0], v[1], v[2]), v3(v[3], v[4], v[5]), 0.0f, INFINITY);
+            Hit h;
+            assert_false(bvh_intersect(&bvh, &r, &h));
+            assert_false(bvh_occluded(&bvh, &r));
+        }
+    bvh_free(&bvh);
+    soup_free(&s);
 }
 
 static void test_bvh_mixed_triangles_spheres(void **state)
@@ -884,6 +922,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bvh_empty),
         cmocka_unit_test(test_bvh_random_soups),
+        cmocka_unit_test(test_bvh_nonfinite_rays),
         cmocka_unit_test(test_bvh_mixed_triangles_spheres),
         cmocka_unit_test(test_bvh_coincident_centroids),
         cmocka_unit_test(test_bvh_deep_build),
