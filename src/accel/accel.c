@@ -43,7 +43,7 @@ static BBox geometry_bounds(const AccelGeometry *g)
     return b;
 }
 
-CstStatus accel_build(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err)
+static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry *geom, bool native, CstError *err)
 {
     memset(a, 0, sizeof *a);
     a->type = type;
@@ -54,7 +54,7 @@ CstStatus accel_build(Accel *a, AccelType type, const AccelGeometry *geom, CstEr
     case ACCEL_KDTREE: st = kdtree_build(&a->kdtree, geom, err); break;
     case ACCEL_GRID: st = grid_build(&a->grid, geom, err); break;
     case ACCEL_LIST: st = list_build(&a->list, geom, err); break;
-    case ACCEL_EMBREE: st = embree_build(&a->embree, geom, err); break;
+    case ACCEL_EMBREE: st = embree_build(&a->embree, geom, native, err); break;
     default: return cst_fail(err, CST_ERR_INVALID_ARG, "unknown acceleration structure %d", (int)type);
     }
     if (st != CST_OK) {
@@ -65,6 +65,16 @@ CstStatus accel_build(Accel *a, AccelType type, const AccelGeometry *geom, CstEr
     a->build_seconds = seconds_now() - t0;
     a->bounds = geometry_bounds(geom);
     return CST_OK;
+}
+
+CstStatus accel_build(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err)
+{
+    return accel_build_mode(a, type, geom, false, err);
+}
+
+CstStatus accel_build_native(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err)
+{
+    return accel_build_mode(a, type, geom, true, err);
 }
 
 void accel_free(Accel *a)

@@ -47,7 +47,13 @@ bool accel_type_from_name(const char *name, AccelType *out);
 /* Whether this build can construct the type (embree needs the library at build time). */
 bool accel_type_available(AccelType type);
 
+/* Every back end finds the same hits, bit for bit: Embree's BVH is given our triangles
+ * as user geometry whose callbacks run our watertight test. */
 CstStatus accel_build(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err);
+/* The same, except that Embree intersects triangles with its own arithmetic (its BVH8
+ * triangle kernels, its speed; t, u, v differ from ours in the last bits): the ray
+ * benchmark's speed anchor. */
+CstStatus accel_build_native(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err);
 /* Accepts a zeroed or already freed Accel. */
 void accel_free(Accel *a);
 size_t accel_memory_bytes(const Accel *a);

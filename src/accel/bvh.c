@@ -658,13 +658,38 @@ static inline int block_intersect4(const BvhTriBlock *b, const RayTri4 *q, __m12
         return 0;
     }
     __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
-    __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(q->sz, pz[0])), _mm_mul_ps(V, _mm_mul_ps(q->sz, pz[1]))),
-                          _mm_mul_ps(W, _mm_mul_ps(q->sz, pz[2])));
+    __m128 zt[3];
+    for (int k = 0; k < 3; k++) zt[k] = _mm_mul_ps(q->sz, pz[k]);
+    __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, zt[0]), _mm_mul_ps(V, zt[1])), _mm_mul_ps(W, zt[2]));
     __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
     __m128 t = _mm_mul_ps(T, inv_det);
     __m128 ok = _mm_cmpneq_ps(det, zero);
     ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, t_min));
     ok = _mm_and_ps(ok, _mm_cmplt_ps(t, t_max));
+    /* triangle_t_error(), lane by lane, same operations in the same order. */
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+#define ABS4(x) _mm_and_ps((x), abs_mask)
+#define MAX3(a, b, c) _mm_max_ps(_mm_max_ps(ABS4(a), ABS4(b)), ABS4(c))
+    __m128 max_zt = MAX3(zt[0], zt[1], zt[2]);
+    __m128 max_xt = MAX3(px[0], px[1], px[2]);
+    __m128 max_yt = MAX3(py[0], py[1], py[2]);
+    __m128 max_e = MAX3(U, V, W);
+#undef MAX3
+    const __m128 g2 = _mm_set1_ps(TRIANGLE_GAMMA(2)), g3 = _mm_set1_ps(TRIANGLE_GAMMA(3)),
+                 g5 = _mm_set1_ps(TRIANGLE_GAMMA(5));
+    __m128 delta_z = _mm_mul_ps(g3, max_zt);
+    __m128 delta_x = _mm_mul_ps(g5, _mm_add_ps(max_xt, max_zt));
+    __m128 delta_y = _mm_mul_ps(g5, _mm_add_ps(max_yt, max_zt));
+    __m128 delta_e = _mm_mul_ps(_mm_set1_ps(2.0f),
+                                _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g2, max_xt), max_yt), _mm_mul_ps(delta_y, max_xt)),
+                                           _mm_mul_ps(delta_x, max_yt)));
+    __m128 delta_t = _mm_mul_ps(
+        _mm_mul_ps(_mm_set1_ps(3.0f), _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g3, max_e), max_zt),
+                                                            _mm_mul_ps(delta_e, max_zt)),
+                                                 _mm_mul_ps(delta_z, max_e))),
+        ABS4(inv_det));
+#undef ABS4
+    ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, delta_t));
     *t_out = t;
     *u_out = _mm_mul_ps(V, inv_det);
     *v_out = _mm_mul_ps(W, inv_det);

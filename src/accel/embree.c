@@ -1,7 +1,9 @@
-/* Intel Embree 3 as a comparison back end: one device and one scene per structure, our
- * triangles as one Embree triangle geometry and our spheres as one user geometry whose
- * callbacks run our own sphere_intersect(), so sphere hits agree with the other back ends
- * bit for bit. Compiled against Embree only when CMake defines CST_HAVE_EMBREE. */
+/* Intel Embree 3 as a comparison back end: one device and one scene per structure. Our
+ * spheres are a user geometry whose callbacks run our own sphere_intersect(); our
+ * triangles are either Embree's own triangle geometry (native: Embree's speed, its
+ * arithmetic) or a user geometry running our watertight test, so that hits, and images,
+ * agree with the other back ends bit for bit. Compiled against Embree only when CMake
+ * defines CST_HAVE_EMBREE. */
 #include "accel/embree.h"
 
 #include "core/error.h"
@@ -10,9 +12,10 @@
 
 bool embree_available(void) { return false; }
 
-CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, CstError *err)
+CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, bool native_triangles, CstError *err)
 {
     (void)geom;
+    (void)native_triangles;
     *out = NULL;
     return cst_fail(err, CST_ERR_UNSUPPORTED,
                     "this build has no Embree back end (configure with -DCST_EMBREE=ON and "
@@ -34,6 +37,8 @@ size_t embree_memory_bytes(const EmbreeAccel *a) { (void)a; return 0; }
 #include <string.h>
 
 #include "geometry/sphere.h"
+#include "geometry/triangle.h"
+#include "math/bbox.h"
 
 /* Fixed geometry ids, so a hit's geomID tells which primitive range primID is in. */
 enum { EMBREE_GEOM_TRIANGLES = 0, EMBREE_GEOM_SPHERES = 1 };
@@ -42,6 +47,8 @@ struct EmbreeAccel {
     RTCDevice device;
     RTCScene scene;
     const Sphere *spheres; /* borrowed from the AccelGeometry, read by the callbacks */
+    const Vec3 *positions; /* borrowed too, for the watertight triangle callbacks */
+    const int32_t *tri_indices;
     uint32_t num_tris;     /* sphere j has scene primitive id num_tris + j */
     /* Net bytes Embree allocated on this device (allocations minus frees) since the memory
      * monitor was installed. Embree builds with TBB threads: the callback runs
@@ -186,6 +193,67 @@ static void embree_sphere_occluded(const struct RTCOccludedFunctionNArguments *a
     }
 }
 
+/* ------------------------------------------------------------ exact triangles */
+
+/* Our watertight test reports points on the triangle, inside its vertices' box up to
+ * rounding; two ulps outward cover that and the rounding of Embree's own box tests. */
+static void embree_triangle_bounds(const struct RTCBoundsFunctionArguments *args)
+{
+    const EmbreeAccel *a = args->geometryUserPtr;
+    const int32_t *t = &a->tri_indices[3 * (size_t)args->primID];
+    BBox b = bbox_add(bbox_add(bbox_add(bbox_empty(), a->positions[t[0]]), a->positions[t[1]]), a->positions[t[2]]);
+    struct RTCBounds *o = args->bounds_o;
+    o->lower_x = nextafterf(nextafterf(b.min.x, -INFINITY), -INFINITY);
+    o->lower_y = nextafterf(nextafterf(b.min.y, -INFINITY), -INFINITY);
+    o->lower_z = nextafterf(nextafterf(b.min.z, -INFINITY), -INFINITY);
+    o->upper_x = nextafterf(nextafterf(b.max.x, INFINITY), INFINITY);
+    o->upper_y = nextafterf(nextafterf(b.max.y, INFINITY), INFINITY);
+    o->upper_z = nextafterf(nextafterf(b.max.z, INFINITY), INFINITY);
+}
+
+static inline bool embree_triangle_test(const EmbreeAccel *a, unsigned prim, const Ray *r, float *t, float *u,
+                                        float *v)
+{
+    const int32_t *i = &a->tri_indices[3 * (size_t)prim];
+    TriangleRay tr = triangle_ray_setup(r->d);
+    return triangle_intersect_watertight(&tr, r, a->positions[i[0]], a->positions[i[1]], a->positions[i[2]], t, u, v);
+}
+
+static void embree_triangle_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    const EmbreeAccel *a = args->geometryUserPtr;
+    unsigned n = args->N;
+    void *rayn = args->rayhit;
+    void *hitn = (float *)args->rayhit + RAYN_FIELDS * n;
+    for (unsigned i = 0; i < n; i++) {
+        if (!args->valid[i]) continue;
+        Ray r = embree_rayn_load(rayn, n, i);
+        float t, u, v;
+        if (!embree_triangle_test(a, args->primID, &r, &t, &u, &v)) continue;
+        *embree_rayn_f(rayn, n, RAYN_TFAR, i) = t;
+        *embree_rayn_f(hitn, n, HITN_NG_X, i) = 0.0f; /* unused: the scene computes normals */
+        *embree_rayn_f(hitn, n, HITN_NG_Y, i) = 0.0f;
+        *embree_rayn_f(hitn, n, HITN_NG_Z, i) = 0.0f;
+        *embree_rayn_f(hitn, n, HITN_U, i) = u;
+        *embree_rayn_f(hitn, n, HITN_V, i) = v;
+        *embree_rayn_u(hitn, n, HITN_PRIM, i) = args->primID;
+        *embree_rayn_u(hitn, n, HITN_GEOM, i) = args->geomID;
+        *embree_rayn_u(hitn, n, HITN_INST, i) = args->context->instID[0];
+    }
+}
+
+static void embree_triangle_occluded(const struct RTCOccludedFunctionNArguments *args)
+{
+    const EmbreeAccel *a = args->geometryUserPtr;
+    unsigned n = args->N;
+    for (unsigned i = 0; i < n; i++) {
+        if (!args->valid[i]) continue;
+        Ray r = embree_rayn_load(args->ray, n, i);
+        float t, u, v;
+        if (embree_triangle_test(a, args->primID, &r, &t, &u, &v)) *embree_rayn_f(args->ray, n, RAYN_TFAR, i) = -INFINITY;
+    }
+}
+
 /* ------------------------------------------------------------ build */
 
 /* Triangles in an Embree-owned buffer: rtcSetNewGeometryBuffer pads the vertex buffer
@@ -224,6 +292,21 @@ static CstStatus embree_add_triangles(EmbreeAccel *a, const AccelGeometry *g, Cs
     return embree_check(a, "adding the triangles", err);
 }
 
+static CstStatus embree_add_exact_triangles(EmbreeAccel *a, const AccelGeometry *g, CstError *err)
+{
+    RTCGeometry geom = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
+    if (!geom) return embree_check(a, "creating the triangle geometry", err);
+    rtcSetGeometryUserPrimitiveCount(geom, (unsigned)g->num_tris);
+    rtcSetGeometryUserData(geom, a);
+    rtcSetGeometryBoundsFunction(geom, embree_triangle_bounds, NULL);
+    rtcSetGeometryIntersectFunction(geom, embree_triangle_intersect);
+    rtcSetGeometryOccludedFunction(geom, embree_triangle_occluded);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(a->scene, geom, EMBREE_GEOM_TRIANGLES);
+    rtcReleaseGeometry(geom);
+    return embree_check(a, "adding the triangles", err);
+}
+
 static CstStatus embree_add_spheres(EmbreeAccel *a, const AccelGeometry *g, CstError *err)
 {
     RTCGeometry geom = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
@@ -239,13 +322,15 @@ static CstStatus embree_add_spheres(EmbreeAccel *a, const AccelGeometry *g, CstE
     return embree_check(a, "adding the spheres", err);
 }
 
-CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, CstError *err)
+CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, bool native_triangles, CstError *err)
 {
     *out = NULL;
     EmbreeAccel *a = calloc(1, sizeof *a);
     if (!a) return cst_fail(err, CST_ERR_OOM, "out of memory creating the Embree back end");
     atomic_init(&a->live_bytes, 0);
     a->spheres = geom->spheres;
+    a->positions = geom->positions;
+    a->tri_indices = geom->tri_indices;
     a->num_tris = (uint32_t)geom->num_tris;
     CstStatus st;
 
@@ -262,10 +347,16 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, CstError *e
 
     a->scene = rtcNewScene(a->device);
     if (!a->scene) { st = embree_check(a, "creating the scene", err); goto fail; }
-    rtcSetSceneFlags(a->scene, RTC_SCENE_FLAG_NONE);
+    /* Exact mode also needs Embree's robust traversal: its default box test computes
+     * lower * rdir - org * rdir, which loses hits a few ulps of the coordinates from the
+     * origin (where two walls meet, a bounce ray can cross the other wall at t ~ 1e-5 in
+     * a box of size 500), hits our conservative BVH keeps. */
+    rtcSetSceneFlags(a->scene, native_triangles ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(a->scene, RTC_BUILD_QUALITY_MEDIUM); /* Embree's default */
 
-    if (geom->num_tris > 0 && (st = embree_add_triangles(a, geom, err)) != CST_OK) goto fail;
+    if (geom->num_tris > 0 &&
+        (st = native_triangles ? embree_add_triangles(a, geom, err) : embree_add_exact_triangles(a, geom, err)) != CST_OK)
+        goto fail;
     if (geom->num_spheres > 0 && (st = embree_add_spheres(a, geom, err)) != CST_OK) goto fail;
     rtcCommitScene(a->scene);
     if ((st = embree_check(a, "building the BVH", err)) != CST_OK) goto fail;
@@ -292,8 +383,8 @@ void embree_free(EmbreeAccel *a)
 /* Interval semantics: Embree 3.13's triangle test accepts tnear < t <= tfar, open at tnear
  * like ours but closed at tfar (its depth test is absDen * tnear < T <= absDen * tfar;
  * checked on an axis-aligned triangle at exactly t = 1: tnear = 1 misses in both, tfar = 1
- * hits in Embree only). Ours is t_min < t < t_max throughout, and the sphere callbacks
- * use our open test. The difference shows only for a t_max exactly equal to a hit
+ * hits in Embree only). Ours is t_min < t < t_max throughout, and the sphere and exact
+ * triangle callbacks use our open test. The difference shows only for a t_max exactly equal to a hit
  * distance, which neither the renderer (shadow rays stop short of their target) nor the
  * benchmark (t_max = inf or 1e30) produces. */
 static inline void embree_ray_set(struct RTCRay *er, const Ray *r)

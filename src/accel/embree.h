@@ -14,8 +14,10 @@
 typedef struct EmbreeAccel EmbreeAccel;
 
 bool embree_available(void);
-/* *out is a new handle; embree_free releases it (accepts NULL). */
-CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, CstError *err);
+/* *out is a new handle; embree_free releases it (accepts NULL). native_triangles: Embree's
+ * own triangle geometry; else a user geometry running triangle_intersect_watertight, so
+ * hits equal the other back ends' (see accel_build). */
+CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, bool native_triangles, CstError *err);
 void embree_free(EmbreeAccel *a);
 bool embree_intersect(const EmbreeAccel *a, const Ray *r, Hit *hit);
 bool embree_occluded(const EmbreeAccel *a, const Ray *r);

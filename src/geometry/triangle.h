@@ -53,12 +53,38 @@ static inline TriangleRay triangle_ray_setup(Vec3 d)
     return tr;
 }
 
+/* gamma(n) = n eps / (1 - n eps), eps = 2^-24: the relative error bound of n float
+ * operations (Higham; pbrt-v3 sec. 3.9.1). */
+#define TRIANGLE_GAMMA(n) ((float)(n) * 0x1p-24f / (1.0f - (float)(n) * 0x1p-24f))
+
+/* A conservative bound on the rounding error of the watertight test's t, from the
+ * sheared vertices (x, y and the scaled z), the edge functions and 1 / det (pbrt-v3
+ * sec. 3.9.6, "Ensuring positive t"). Rounding can make a ray that leaves a surface hit
+ * that surface, or a neighbour it cannot reach, at a tiny positive t: where the
+ * coordinates are large and the ray origin's offset is small (a wall at x = 0 in a box
+ * of size 500, offset by 2^-16), the sheared vertices err by more than the offset.
+ * A t within the bound is not provably positive and is rejected. block_intersect4 in
+ * accel/bvh.c repeats these operations in this order, lane by lane. */
+static inline float triangle_t_error(float Ax, float Ay, float Bx, float By, float Cx, float Cy, float azt,
+                                     float bzt, float czt, float U, float V, float W, float inv_det)
+{
+    float max_zt = maxf(maxf(fabsf(azt), fabsf(bzt)), fabsf(czt));
+    float max_xt = maxf(maxf(fabsf(Ax), fabsf(Bx)), fabsf(Cx));
+    float max_yt = maxf(maxf(fabsf(Ay), fabsf(By)), fabsf(Cy));
+    float delta_z = TRIANGLE_GAMMA(3) * max_zt;
+    float delta_x = TRIANGLE_GAMMA(5) * (max_xt + max_zt);
+    float delta_y = TRIANGLE_GAMMA(5) * (max_yt + max_zt);
+    float delta_e = 2.0f * (TRIANGLE_GAMMA(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    float max_e = maxf(maxf(fabsf(U), fabsf(V)), fabsf(W));
+    return 3.0f * (TRIANGLE_GAMMA(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * fabsf(inv_det);
+}
+
 /* The watertight test on the triangle's own vertices a, b, c (not on precomputed edges:
  * two triangles sharing an edge must see bit-identical vertices). A ray through a shared
  * edge or vertex hits at least one of the triangles, never neither: the edge functions
  * of a shared edge are exact negatives of each other, and when one is zero it is
  * recomputed in double so its sign is exact (JCGT 2013, sec. 4). Two-sided. On a hit
- * in (t_min, t_max) writes t and the barycentrics u, v of b and c. */
+ * in (t_min, t_max) beyond t's error bound writes t and the barycentrics u, v of b and c. */
 static inline bool triangle_intersect_watertight(const TriangleRay *tr, const Ray *r, Vec3 a, Vec3 b,
                                                  Vec3 c, float *t_out, float *u_out, float *v_out)
 {
@@ -79,10 +105,12 @@ static inline bool triangle_intersect_watertight(const TriangleRay *tr, const Ra
     if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return false;
     float det = U + V + W;
     if (det == 0.0f) return false;
-    float T = U * (tr->sz * az) + V * (tr->sz * bz) + W * (tr->sz * cz);
+    float azt = tr->sz * az, bzt = tr->sz * bz, czt = tr->sz * cz;
+    float T = U * azt + V * bzt + W * czt;
     float inv_det = 1.0f / det;
     float t = T * inv_det;
     if (!(t > r->t_min && t < r->t_max)) return false;
+    if (!(t > triangle_t_error(Ax, Ay, Bx, By, Cx, Cy, azt, bzt, czt, U, V, W, inv_det))) return false;
     *t_out = t;
     *u_out = V * inv_det;
     *v_out = W * inv_det;

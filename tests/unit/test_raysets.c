@@ -40,7 +40,7 @@ static CstStatus fixture_rays(Fixture *f)
     f->generator = embree_available() ? ACCEL_EMBREE : ACCEL_BVH;
     Accel a;
     AccelGeometry g = rayset_scene_geometry(&f->scene);
-    CstStatus st = accel_build(&a, f->generator, &g, &err);
+    CstStatus st = accel_build_native(&a, f->generator, &g, &err);
     if (st != CST_OK) return st;
     RaysetResult *res = malloc(f->num_primary * sizeof *res);
     RaysetStats rs;
@@ -92,7 +92,7 @@ static void check_fixture(const Fixture *f, AccelType type, bool exact, bool che
     }
     Accel a;
     AccelGeometry g = rayset_scene_geometry(&f->scene);
-    CstStatus st = accel_build(&a, type, &g, &err);
+    CstStatus st = accel_build_native(&a, type, &g, &err);
     if (st == CST_ERR_UNSUPPORTED) {
         print_message("%s: %s, skipped\n", accel_type_name(type), err.msg);
         skip();
@@ -152,12 +152,16 @@ static void test_cornell_scene(void **state)
     assert_int_equal(f->num_secondary, f->ref->secondary_rays);
 }
 
-/* The Cornell box has no rays near shared edges that back ends resolve differently, and
- * its bounce rays from the BVH's hits are the published ones too: everything exact. */
-static void test_cornell_bvh(void **state) { check_fixture(*state, ACCEL_BVH, true, true); }
-static void test_cornell_list(void **state) { check_fixture(*state, ACCEL_LIST, true, true); }
-static void test_cornell_kdtree(void **state) { check_fixture(*state, ACCEL_KDTREE, true, true); }
-static void test_cornell_grid(void **state) { check_fixture(*state, ACCEL_GRID, true, true); }
+/* Our back ends reject hits whose t lies within the watertight test's rounding-error
+ * bound (triangle_t_error, pbrt-v3 sec. 3.9.6), which Embree keeps: two of the Cornell
+ * box's bounce rays start 0.0034 and 0.0069 from the tall block (in a box of size 556)
+ * and hit it inside that bound. So our back ends agree with the published checksums
+ * within the benchmark's stated tolerance (1 hit fewer, sum t within one ray's t), and
+ * with each other exactly (test_determinism). */
+static void test_cornell_bvh(void **state) { check_fixture(*state, ACCEL_BVH, false, true); }
+static void test_cornell_list(void **state) { check_fixture(*state, ACCEL_LIST, false, true); }
+static void test_cornell_kdtree(void **state) { check_fixture(*state, ACCEL_KDTREE, false, true); }
+static void test_cornell_grid(void **state) { check_fixture(*state, ACCEL_GRID, false, true); }
 static void test_cornell_embree(void **state) { check_fixture(*state, ACCEL_EMBREE, true, true); }
 
 /* 1 thread and 3 threads: identical per-ray results and checksums. */
