@@ -53,6 +53,9 @@ void args_print_help(FILE *f)
 "  caustic info [SCENE] [--accel NAME]\n"
 "  caustic bench rays [MESH | --cornell] [--stadium] [--accel NAME[,NAME...]]\n"
 "                     [--threads N] [--json]\n"
+"  caustic verify [SCENE] --integrators NAME,NAME[,...] [--spp N | --time S]\n"
+"                 [--threads N] [--seed S] [--alpha A] [--block N] [--map OUT.png]\n"
+"                 [--json] [--width W] [--height H] [--quiet]\n"
 "  caustic --help | -h\n"
 "  caustic --version\n"
 "\n"
@@ -106,12 +109,41 @@ void args_print_help(FILE *f)
 "      --threads N      the second thread count, 0..1024; 0 = one per core (default)\n"
 "      --json           one JSON object per line on stdout instead of the table\n"
 "\n"
+"Consistency check: caustic verify\n"
+"Renders SCENE (or the built-in Cornell box) once per integrator, each with its own seed,\n"
+"and tests every pair for agreement: per channel, the z-score of the difference of the\n"
+"image means and of every NxN block mean, z = (mean_a - mean_b) / sqrt(var_a + var_b),\n"
+"with variances from the per-pixel sample variances. A pair disagrees if any |z| exceeds\n"
+"the critical z of a Sidak correction over all tests of all pairs at family-wise\n"
+"significance A. Prints one row per pair (image-mean z per channel, largest |block z|,\n"
+"failing blocks) and the critical z; see docs/cli.md for the statistics.\n"
+"  SCENE                a caustic JSON scene; default: the built-in Cornell box\n"
+"      --integrators LIST  comma-separated, at least two (any name --integrator takes;\n"
+"                       a name may repeat: a same-integrator pair checks the test itself)\n"
+"      --spp N          samples per pixel of each render (default: the scene's, else 16)\n"
+"      --time SECONDS   render each integrator for SECONDS (equal time); with --spp\n"
+"                       (or a scene's spp) too, each stops at whichever comes first\n"
+"      --seed S         base seed (default: the scene's, else 0); integrator k (0-based,\n"
+"                       in list order) renders with SplitMix64's output k+1 from S, shown\n"
+"                       in the report, so 'caustic render --seed' reproduces it\n"
+"      --alpha A        family-wise significance, 0 < A < 1 (default: 0.01)\n"
+"      --block N        block side in pixels, 1..65536 (default: 16); edge blocks are\n"
+"                       partial and tested with their own pixel counts. Each block needs\n"
+"                       many samples (block^2 x spp >= 65536, else a warning) for z to be\n"
+"                       near normal with heavy-tailed estimators such as path-bsdf\n"
+"      --map OUT        false-colour map of the largest block |z| over channels and\n"
+"                       pairs, at the image's size (.png, .exr or .pfm): black to blue\n"
+"                       up to z_crit/2, blue to yellow at z_crit, red beyond\n"
+"      --json           one JSON object per pair on stdout instead of the report\n"
+"      --width W, --height H, --threads N, -q/--quiet: as for render\n"
+"\n"
 "Exit status:\n"
-"  0  success: the image was written (bench rays: every check passed)\n"
+"  0  success: the image was written (bench rays: every check passed; verify: every\n"
+"     pair of integrators agrees)\n"
 "  1  internal error: out of memory, a library failure, or an I/O error while writing\n"
 "     the image although its directory was checked writable before rendering\n"
 "     (disk full, file system error)\n"
-"     bench rays: a checksum did not match\n"
+"     bench rays: a checksum did not match; verify: a pair of integrators disagrees\n"
 "  2  bad input or usage: unknown command or option, invalid value, unsupported scene\n"
 "     or output format, a scene file that is missing, unreadable or invalid, an output\n"
 "     directory that does not exist or is not writable (checked before rendering)\n"
@@ -120,7 +152,8 @@ void args_print_help(FILE *f)
 "  caustic render --spp 64 -o box.png\n"
 "  caustic render scenes/cornell-box.json --time 60 --threads 8 -o box.exr\n"
 "  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n"
-"  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n",
+"  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n"
+"  caustic verify --integrators path,path-nee,path-bsdf --spp 64 --map z.png\n",
         f);
 }
 
@@ -549,6 +582,205 @@ static bool args_parse_bench(int argc, char **argv, CliArgs *out, ArgsError *err
     return args_parse_bench_rays(argc, argv, 3, out, err);
 }
 
+/* ------------------------------------------------------------ caustic verify */
+
+typedef struct ArgsVerifyOpt {
+    const char *long_name;
+    char short_name;
+    bool takes_value;
+} ArgsVerifyOpt;
+
+/* spp, time, threads, seed, width, height and quiet mean what they mean for render and go
+ * through args_apply, so their checks and messages are the same. */
+static const ArgsVerifyOpt ARGS_VERIFY_OPTS[] = {
+    {"integrators", 0, true}, {"spp", 0, true},     {"time", 0, true},   {"threads", 0, true},
+    {"seed", 0, true},        {"alpha", 0, true},   {"block", 0, true},  {"map", 0, true},
+    {"json", 0, false},       {"width", 0, true},   {"height", 0, true}, {"quiet", 'q', false},
+    {"help", 'h', false},
+};
+#define ARGS_NUM_VERIFY_OPTS (sizeof ARGS_VERIFY_OPTS / sizeof ARGS_VERIFY_OPTS[0])
+
+/* "path, path-nee, ...": every integrator the library names, so an integrator added to the
+ * library is listed (and accepted, through cst_integrator_from_name) without a change here.
+ * Relies on cst_integrator_name() answering "default" past the last enumerator. */
+static void args_integrator_list(char *buf, size_t size)
+{
+    size_t n = 0;
+    buf[0] = '\0';
+    for (int k = CST_INTEGRATOR_DEFAULT + 1; k < 64; k++) {
+        const char *name = cst_integrator_name((CstIntegrator)k);
+        if (strcmp(name, "default") == 0) break;
+        int w = snprintf(buf + n, size - n, "%s%s", n ? ", " : "", name);
+        if (w < 0 || (size_t)w >= size - n) break;
+        n += (size_t)w;
+    }
+}
+
+/* --integrators path,path-nee: each name known, at least two. A name may repeat: the two
+ * renders still get different seeds, and the pair tests the test's false-alarm rate. */
+static bool args_parse_verify_integrators(const char *value, VerifyArgs *v, ArgsError *err)
+{
+    char valid[256];
+    v->num_integrators = 0;
+    const char *p = value;
+    for (;;) {
+        size_t len = strcspn(p, ",");
+        char name[64];
+        CstIntegrator id = CST_INTEGRATOR_DEFAULT;
+        if (len > 0 && len < sizeof name) {
+            memcpy(name, p, len);
+            name[len] = '\0';
+            id = cst_integrator_from_name(name);
+        }
+        if (id == CST_INTEGRATOR_DEFAULT) {
+            args_integrator_list(valid, sizeof valid);
+            if (len == 0)
+                args_fail(err, false, "--integrators: empty name in '%s' (valid: %s)", value, valid);
+            else
+                args_fail(err, false, "--integrators: unknown integrator '%.*s' (valid: %s)",
+                          (int)len, p, valid);
+            return false;
+        }
+        if (v->num_integrators == ARGS_VERIFY_MAX_INTEGRATORS) {
+            args_fail(err, false, "--integrators: at most %d integrators, got more in '%s'",
+                      ARGS_VERIFY_MAX_INTEGRATORS, value);
+            return false;
+        }
+        v->integrators[v->num_integrators++] = id;
+        if (p[len] == '\0') break;
+        p += len + 1;
+    }
+    if (v->num_integrators < 2) {
+        args_fail(err, false, "--integrators: verify compares at least two integrators, got "
+                  "only '%s'", value);
+        return false;
+    }
+    return true;
+}
+
+static bool args_apply_verify(const ArgsVerifyOpt *o, const char *value, CliArgs *out,
+                              ArgsError *err)
+{
+    VerifyArgs *v = &out->verify;
+    long n;
+    if (strcmp(o->long_name, "integrators") == 0)
+        return args_parse_verify_integrators(value, v, err);
+    if (strcmp(o->long_name, "alpha") == 0) {
+        if (!args_parse_seconds(value, &v->alpha) || !(v->alpha < 1.0)) {
+            args_fail(err, false, "--alpha: expected a number between 0 and 1 (exclusive), got '%s'",
+                      value);
+            return false;
+        }
+        return true;
+    }
+    if (strcmp(o->long_name, "block") == 0) {
+        if (!args_parse_long(value, 1, ARGS_MAX_DIMENSION, &n)) {
+            args_fail(err, false, "--block: expected an integer from 1 to %d, got '%s'",
+                      ARGS_MAX_DIMENSION, value);
+            return false;
+        }
+        v->block = (int)n;
+        return true;
+    }
+    if (strcmp(o->long_name, "map") == 0) {
+        if (value[0] == '\0') {
+            args_fail(err, false, "--map: expected a file name, got ''");
+            return false;
+        }
+        v->map_path = value;
+        return true;
+    }
+    if (strcmp(o->long_name, "json") == 0) {
+        v->json = true;
+        return true;
+    }
+    if (strcmp(o->long_name, "help") == 0) {
+        out->command = ARGS_CMD_HELP;
+        return true;
+    }
+    for (size_t k = 0; k < ARGS_NUM_OPTS; k++) /* shared with render */
+        if (strcmp(ARGS_OPTS[k].long_name, o->long_name) == 0)
+            return args_apply(&ARGS_OPTS[k], value, out, err);
+    args_fail(err, false, "internal error: unhandled option --%s", o->long_name);
+    return false;
+}
+
+static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, ArgsError *err)
+{
+    VerifyArgs *v = &out->verify;
+    v->alpha = ARGS_VERIFY_DEFAULT_ALPHA;
+    v->block = ARGS_VERIFY_DEFAULT_BLOCK;
+    bool only_positional = false;
+    for (int i = first; i < argc; i++) {
+        const char *arg = argv[i];
+        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
+            if (out->scene_path) {
+                args_fail(err, true, "unexpected argument '%s' (only one SCENE may be given)", arg);
+                return false;
+            }
+            out->scene_path = arg;
+            continue;
+        }
+        if (strcmp(arg, "--") == 0) {
+            only_positional = true;
+            continue;
+        }
+        const ArgsVerifyOpt *o = NULL;
+        const char *value = NULL;
+        if (arg[1] == '-') { /* --name, --name=value, --name value */
+            const char *name = arg + 2, *eq = strchr(name, '=');
+            size_t len = eq ? (size_t)(eq - name) : strlen(name);
+            for (size_t k = 0; k < ARGS_NUM_VERIFY_OPTS; k++)
+                if (strlen(ARGS_VERIFY_OPTS[k].long_name) == len &&
+                    strncmp(ARGS_VERIFY_OPTS[k].long_name, name, len) == 0)
+                    o = &ARGS_VERIFY_OPTS[k];
+            if (!o) {
+                const char *best = NULL;
+                size_t best_d = 3;
+                for (size_t k = 0; k < ARGS_NUM_VERIFY_OPTS; k++) {
+                    size_t d = args_edit_distance(name, len, ARGS_VERIFY_OPTS[k].long_name);
+                    if (d < best_d && d < strlen(ARGS_VERIFY_OPTS[k].long_name)) {
+                        best_d = d;
+                        best = ARGS_VERIFY_OPTS[k].long_name;
+                    }
+                }
+                if (best)
+                    args_fail(err, true, "unknown option '%s' for 'verify' (did you mean --%s?)", arg, best);
+                else
+                    args_fail(err, true, "unknown option '%s' for 'verify'", arg);
+                return false;
+            }
+            if (eq && !o->takes_value) {
+                args_fail(err, true, "--%s does not take a value (got '%s')", o->long_name, arg);
+                return false;
+            }
+            value = eq ? eq + 1 : NULL;
+        } else { /* -q, -h */
+            for (size_t k = 0; k < ARGS_NUM_VERIFY_OPTS; k++)
+                if (ARGS_VERIFY_OPTS[k].short_name == arg[1] && arg[2] == '\0')
+                    o = &ARGS_VERIFY_OPTS[k];
+            if (!o) {
+                args_fail(err, true, "unknown option '%s' for 'verify'", arg);
+                return false;
+            }
+        }
+        if (o->takes_value && !value) {
+            if (i + 1 >= argc) {
+                args_fail(err, true, "--%s: missing value", o->long_name);
+                return false;
+            }
+            value = argv[++i]; /* taken even if it starts with '-', as for render */
+        }
+        if (!args_apply_verify(o, value, out, err))
+            return false;
+    }
+    if (out->command == ARGS_CMD_VERIFY && v->num_integrators == 0) {
+        args_fail(err, true, "verify: --integrators is required (e.g. --integrators path,path-nee)");
+        return false;
+    }
+    return true;
+}
+
 bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
 {
     memset(out, 0, sizeof *out);
@@ -572,6 +804,9 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         return args_parse_render(argc, argv, 2, out, err);
     } else if (strcmp(cmd, "bench") == 0) {
         return args_parse_bench(argc, argv, out, err);
+    } else if (strcmp(cmd, "verify") == 0) {
+        out->command = ARGS_CMD_VERIFY;
+        return args_parse_verify(argc, argv, 2, out, err);
     } else if (cmd[0] == '-') {
         const char *name = cmd + strspn(cmd, "-");
         for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
@@ -591,8 +826,10 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
     } else {
         if (args_edit_distance(cmd, strlen(cmd), "render") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'render'?)", cmd);
+        else if (args_edit_distance(cmd, strlen(cmd), "verify") <= 2)
+            args_fail(err, true, "unknown command '%s' (did you mean 'verify'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (commands: render, info, bench)", cmd);
+            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify)", cmd);
         return false;
     }
     if (argc > 2) {

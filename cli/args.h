@@ -23,7 +23,8 @@ typedef enum ArgsCommand {
     ARGS_CMD_RENDER_HELP, /* caustic render --help */
     ARGS_CMD_INFO,        /* caustic info [SCENE] [--accel NAME] */
     ARGS_CMD_VERSION,     /* caustic --version */
-    ARGS_CMD_BENCH_RAYS   /* caustic bench rays [MESH | --cornell] [--stadium] [--accel LIST] ... */
+    ARGS_CMD_BENCH_RAYS,  /* caustic bench rays [MESH | --cornell] [--stadium] [--accel LIST] ... */
+    ARGS_CMD_VERIFY       /* caustic verify [SCENE] --integrators NAME,NAME[,...] ... */
 } ArgsCommand;
 
 #define ARGS_BENCH_MAX_ACCELS 5 /* each back end at most once */
@@ -41,6 +42,21 @@ typedef struct BenchArgs {
     int num_accels;
 } BenchArgs;
 
+#define ARGS_VERIFY_MAX_INTEGRATORS 16
+#define ARGS_VERIFY_DEFAULT_ALPHA   0.01
+#define ARGS_VERIFY_DEFAULT_BLOCK   16
+
+/* `caustic verify`: which integrators to render and how to compare them. The scene, size,
+ * spp, time, threads and seed are CliArgs' scene_path and settings (seed: the base seed). */
+typedef struct VerifyArgs {
+    CstIntegrator integrators[ARGS_VERIFY_MAX_INTEGRATORS]; /* in the order given */
+    int num_integrators;
+    double alpha;         /* family-wise significance, in (0, 1) */
+    int block;            /* block side in pixels, >= 1 */
+    const char *map_path; /* --map: NULL = no map; points into argv */
+    bool json;            /* --json: one JSON object per pair on stdout */
+} VerifyArgs;
+
 typedef struct CliArgs {
     ArgsCommand command;
     const char *scene_path;  /* NULL = the built-in Cornell box; points into argv */
@@ -50,7 +66,8 @@ typedef struct CliArgs {
      * default. progress and progress_user are left for main.c. */
     CstRenderSettings settings;
     bool quiet;
-    BenchArgs bench; /* ARGS_CMD_BENCH_RAYS only */
+    BenchArgs bench;   /* ARGS_CMD_BENCH_RAYS only */
+    VerifyArgs verify; /* ARGS_CMD_VERIFY only */
 } CliArgs;
 
 typedef struct ArgsError {

@@ -311,5 +311,84 @@ else
     echo "SKIP: TTY progress ('script' not installed)"
 fi
 
+# --------------------------------------------------------------- verify
+# 64x64 at 64 spp in 32x32 blocks: 65536 samples per block, where the z-scores of
+# path-bsdf are close enough to normal (0 false alarms in 100 seeds, docs/cli.md); the seed
+# is fixed, so a pass stays one until the renders change.
+dir=$TMP/verify
+VERIFY=(verify --integrators path,path-nee,path-bsdf --spp 64 --width 64 --height 64 --block 32 --threads 2)
+run "$dir" "${VERIFY[@]}" --map z.png
+if expect "verify: consistent integrators agree, exit 0" 0; then
+    missing=""
+    for re in "^path vs path-nee " "^path vs path-bsdf " "^path-nee vs path-bsdf " "z_crit = [0-9]+\.[0-9]+" \
+              "m = 45 tests \(3 pairs x 3 channels x \(1 \+ 4\)\)" "^result: +all pairs agree$"; do
+        grep -Eq -- "$re" "$OUT" || missing="$missing /$re/"
+    done
+    if [ -z "$missing" ]; then pass "verify: report names every pair, m and z_crit"
+    else fail "verify: report names every pair, m and z_crit" "stdout lacks:$missing"; fi
+    [ "$(grep -Ec '^path[-a-z]* vs .* agree$' "$OUT")" -eq 3 ] && pass "verify: three rows, each 'agree'" \
+        || fail "verify: three rows, each 'agree'"
+    if [ "$(magic "$dir/z.png" 8)" = "89504e470d0a1a0a" ] && \
+       [ "$(magic "$dir/z.png" 24 | cut -c33-48)" = "0000004000000040" ]; then
+        pass "verify --map writes a 64x64 PNG"
+    else fail "verify --map writes a 64x64 PNG" "found: $(ls "$dir")"; fi
+fi
+run "$dir" "${VERIFY[@]}" --json
+if expect "verify --json: exit 0" 0; then
+    if python3 - "$OUT" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+assert len(rows) == 3, rows
+keys = {"a", "b", "spp_a", "spp_b", "z_mean", "max_abs_block_z", "blocks", "blocks_failing",
+        "z_crit", "tests", "pass"}
+for r in rows:
+    assert keys <= r.keys(), keys - r.keys()
+    assert len(r["z_mean"]) == 3 and r["pass"] is True and r["blocks"] == 4 and r["tests"] == 45
+assert [(r["a"], r["b"]) for r in rows] == [("path", "path-nee"), ("path", "path-bsdf"), ("path-nee", "path-bsdf")]
+PY
+    then pass "verify --json: one parseable object per pair with the documented keys"
+    else fail "verify --json: one parseable object per pair with the documented keys"; fi
+fi
+# alpha close to 1 makes z_crit tiny: some |z| exceeds it, and that is a disagreement.
+run "$dir" verify --integrators path,path-nee --spp 4 --width 16 --height 16 --threads 2 --alpha 0.9999 -q
+expect "verify: a disagreement exits 1" 1 "^caustic: verify: 1 of 1 pair disagree"
+grep -q "DISAGREE" "$OUT" && pass "verify: disagreement reported as DISAGREE" \
+    || fail "verify: disagreement reported as DISAGREE"
+grep -q "^caustic: warning: verify: 1024 samples per block" "$ERR" \
+    && pass "verify: warns about too few samples per block" \
+    || fail "verify: warns about too few samples per block"
+run "$dir" verify --integrators path,frobnicate --spp 2
+expect "verify: unknown integrator exits 2 listing the valid ones" 2 \
+    "--integrators: unknown integrator 'frobnicate' \(valid: path, path-nee, path-bsdf"
+run "$dir" verify --integrators path --spp 2
+expect "verify: one integrator exits 2" 2 "at least two integrators"
+run "$dir" verify --integrators path,,path-nee
+expect "verify: empty integrator name exits 2" 2 "empty name"
+run "$dir" verify --spp 2
+expect "verify: --integrators is required" 2 "--integrators is required" "see caustic --help"
+run "$dir" verify --integrators path,path-nee --alpha 1
+expect "verify: --alpha 1 rejected" 2 "^caustic: --alpha: expected a number between 0 and 1"
+run "$dir" verify --integrators path,path-nee --alpha nan
+expect "verify: --alpha nan rejected" 2 "--alpha: .*got 'nan'"
+run "$dir" verify --integrators path,path-nee --block 0
+expect "verify: --block 0 rejected" 2 "^caustic: --block: expected an integer from 1 to 65536, got '0'$"
+run "$dir" verify --integrators path,path-nee --spp 2x
+expect "verify: --spp is parsed strictly" 2 "^caustic: --spp: expected a positive integer, got '2x'$"
+run "$dir" verify --integrators path,path-nee --integrator path
+expect "verify: unknown option suggests one" 2 "did you mean --integrators"
+run "$dir" verify --integrators path,path-nee --spp 1 --width 8 --height 8
+expect "verify: 1 spp (no variance) exits 2" 2 "at least 2"
+run "$dir" verify --integrators path,path-nee --map z.jpg
+expect "verify: bad --map extension exits 2 before rendering" 2 "z\.jpg"
+grep -q "rendering" "$ERR" && fail "verify: bad --map caught before rendering" \
+    || pass "verify: bad --map caught before rendering"
+run "$dir" verify no-such.json --integrators path,path-nee
+expect "verify: missing scene exits 2" 2 "no-such\.json"
+run "$dir" verify --help
+if expect "verify --help exits 0" 0; then
+    grep -q -- "--integrators" "$OUT" && grep -q -- "--alpha" "$OUT" && grep -q -- "--map" "$OUT" \
+        && pass "verify --help prints the verify options" || fail "verify --help prints the verify options"
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -1,0 +1,231 @@
+/* Comparison of two renders: region z-scores from the films' per-pixel means and
+ * variances, the Sidak-corrected critical z (with the inverse normal CDF it needs), and
+ * the colours of the z map. Pure functions over films; the CLI renders and prints. */
+#include "film/film_compare.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "core/error.h"
+
+#define COMPARE_SQRT2    1.41421356237309504880
+#define COMPARE_SQRT2PI  2.50662827463100050242
+
+/* ------------------------------------------------------------ inverse normal CDF */
+
+/* Phi^-1(p) for p in (0, 0.5]. P. J. Acklam, "An algorithm for computing the inverse normal
+ * cumulative distribution function" (2003, https://web.archive.org/web/20151030215612/
+ * http://home.online.no/~pjacklam/notes/invnorm/): a rational approximation in the
+ * central region and one in sqrt(-2 log p) in the tail, relative error below 1.15e-9.
+ * One Halley step on Phi(x) - p = 0 (also from Acklam's note) brings it to about machine
+ * precision (measured: under 3e-16 relative against 50-digit values); Phi comes from libm's
+ * erfc, which keeps its relative accuracy deep in the lower tail, which is why only the
+ * lower half is computed here. */
+static double compare_quantile_lower(double p)
+{
+    static const double a[6] = {-3.969683028665376e+01, 2.209460984245205e+02,
+                                -2.759285104469687e+02, 1.383577518672690e+02,
+                                -3.066479806614716e+01, 2.506628277459239e+00};
+    static const double b[5] = {-5.447609879822406e+01, 1.615858368580409e+02,
+                                -1.556989798598866e+02, 6.680131188771972e+01,
+                                -1.328068155288572e+01};
+    static const double c[6] = {-7.784894002430293e-03, -3.223964580411365e-01,
+                                -2.400758277161838e+00, -2.549732539343734e+00,
+                                4.374664141464968e+00, 2.938163982698783e+00};
+    static const double d[4] = {7.784695709041462e-03, 3.224671290700398e-01,
+                                2.445134137142996e+00, 3.754408661907416e+00};
+    double x;
+    if (p < 0.02425) {
+        double q = sqrt(-2.0 * log(p));
+        x = (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
+            ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
+    } else {
+        double q = p - 0.5, r = q * q;
+        x = (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
+            (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0);
+    }
+    /* Halley: u = (Phi(x) - p) / phi(x). Near p = 1/2, x is tiny and Phi(x) - p would
+     * cancel to an absolute error of an ulp of 1/2, so the residual is taken as
+     * erf(x/sqrt 2)/2 - (p - 1/2) there (p - 1/2 is exact for p >= 1/4, Sterbenz). Below
+     * p ~ 1e-306 exp(x^2/2) overflows; the raw approximation is then kept (1e-9). */
+    double e = p < 0.02425 ? 0.5 * erfc(-x / COMPARE_SQRT2) - p
+                           : 0.5 * erf(x / COMPARE_SQRT2) - (p - 0.5);
+    double u = e * COMPARE_SQRT2PI * exp(0.5 * x * x);
+    if (isfinite(u))
+        x -= u / (1.0 + 0.5 * x * u);
+    return x;
+}
+
+double compare_normal_quantile(double p)
+{
+    if (isnan(p) || p < 0.0 || p > 1.0) return (double)NAN;
+    if (p == 0.0) return -HUGE_VAL;
+    if (p == 1.0) return HUGE_VAL;
+    /* 1 - p is exact for p in [0.5, 1] (Sterbenz), so the upper half loses nothing by
+     * symmetry beyond the rounding already in p. */
+    return p <= 0.5 ? compare_quantile_lower(p) : -compare_quantile_lower(1.0 - p);
+}
+
+/* ------------------------------------------------------------ multiple testing */
+
+/* Z. Sidak, "Rectangular confidence regions for the means of multivariate normal
+ * distributions", JASA 62 (1967) 626-633: for jointly normal statistics, whatever their
+ * correlations, P(all |Z_i| <= c_i) >= prod P(|Z_i| <= c_i). So testing each at
+ * 1 - (1 - alpha)^(1/m) holds the family-wise error at or below alpha even though the
+ * image mean, the blocks inside it, the channels and pairs sharing a render are correlated.
+ * expm1/log1p keep alpha_1 accurate when it is ~1e-9 and 1 - alpha_1 would round. */
+double compare_sidak_alpha(double alpha, double m)
+{
+    if (!(alpha > 0.0 && alpha < 1.0) || !(m >= 1.0) || isinf(m)) return (double)NAN;
+    return -expm1(log1p(-alpha) / m);
+}
+
+double compare_z_critical(double alpha, double m)
+{
+    double a1 = compare_sidak_alpha(alpha, m);
+    if (isnan(a1)) return (double)NAN;
+    /* Two-sided: alpha_1 / 2 in each tail; the lower tail quantile avoids 1 - alpha_1/2. */
+    return -compare_normal_quantile(0.5 * a1);
+}
+
+int compare_blocks_x(int width, int block)
+{
+    return width > 0 && block > 0 ? width / block + (width % block != 0) : 0;
+}
+
+int compare_blocks_y(int height, int block) { return compare_blocks_x(height, block); }
+
+int64_t compare_tests_per_pair(int width, int height, int block)
+{
+    int64_t blocks = (int64_t)compare_blocks_x(width, block) * compare_blocks_y(height, block);
+    return blocks > 0 ? 3 * (1 + blocks) : 0;
+}
+
+/* ------------------------------------------------------------ z-scores */
+
+/* z of a region from the sums over its n pixels of the pixel means (s) and of their
+ * variances (v): (s_a/n - s_b/n) / (sqrt(v_a + v_b)/n), the n cancels. Zero variance on
+ * both sides leaves nothing to divide by: equal sums agree (z = 0), different ones are an
+ * outright disagreement (z = +-inf, *outright set). */
+static double compare_z(double s_a, double v_a, double s_b, double v_b, bool *outright)
+{
+    double diff = s_a - s_b, var = v_a + v_b;
+    if (var > 0.0) return diff / sqrt(var);
+    if (fabs(diff) <= COMPARE_EQUAL_REL * fmax(fabs(s_a), fabs(s_b))) return 0.0;
+    *outright = true;
+    return diff > 0.0 ? HUGE_VAL : diff < 0.0 ? -HUGE_VAL : (double)NAN;
+}
+
+/* Adds the pixel means and variances of [x0,x1) x [y0,y1) of f to s and v. */
+static void compare_region_sums(const CstFilm *f, int x0, int y0, int x1, int y1, double s[3],
+                                double v[3])
+{
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            double m[3], var[3];
+            cst_film_pixel(f, x, y, m);
+            cst_film_pixel_variance(f, x, y, var);
+            for (int c = 0; c < 3; c++) {
+                s[c] += m[c];
+                v[c] += var[c];
+            }
+        }
+}
+
+CstStatus compare_films(const CstFilm *a, const CstFilm *b, int block, double z_crit,
+                        CompareResult *out, double *block_abs_z, CstError *err)
+{
+    int w = cst_film_width(a), h = cst_film_height(a);
+    if (w != cst_film_width(b) || h != cst_film_height(b))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "films of different sizes: %dx%d and %dx%d",
+                        w, h, cst_film_width(b), cst_film_height(b));
+    if (w < 1 || h < 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "empty film (%dx%d)", w, h);
+    /* With one sample the film reports zero variance: every difference would look like an
+     * outright disagreement. */
+    if (cst_film_spp(a) < 2 || cst_film_spp(b) < 2)
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "comparing films needs at least 2 samples per pixel in each for a "
+                        "variance estimate (got %d and %d)", cst_film_spp(a), cst_film_spp(b));
+    if (block < 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "block size must be >= 1 (got %d)", block);
+    if (!(z_crit > 0.0))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "critical z must be > 0 (got %g)", z_crit);
+
+    memset(out, 0, sizeof *out);
+    int nbx = compare_blocks_x(w, block), nby = compare_blocks_y(h, block);
+    double img_s[2][3] = {{0}}, img_v[2][3] = {{0}};
+    out->max_abs_block_z = -1.0; /* so the first block is recorded as the worst so far */
+    for (int by = 0; by < nby; by++)
+        for (int bx = 0; bx < nbx; bx++) {
+            int x0 = bx * block, y0 = by * block;
+            int x1 = x0 + block < w ? x0 + block : w, y1 = y0 + block < h ? y0 + block : h;
+            double s[2][3] = {{0}}, v[2][3] = {{0}};
+            compare_region_sums(a, x0, y0, x1, y1, s[0], v[0]);
+            compare_region_sums(b, x0, y0, x1, y1, s[1], v[1]);
+            double worst = 0.0;
+            bool fails = false;
+            for (int c = 0; c < 3; c++) {
+                bool zero_var = false;
+                double z = compare_z(s[0][c], v[0][c], s[1][c], v[1][c], &zero_var);
+                out->zero_variance_disagreements += zero_var;
+                if (!(fabs(z) <= z_crit)) fails = true;
+                double az = isnan(z) ? HUGE_VAL : fabs(z);
+                if (az > worst) worst = az;
+                if (az > out->max_abs_block_z) {
+                    out->max_abs_block_z = az;
+                    out->worst_z = z;
+                    out->worst_bx = bx;
+                    out->worst_by = by;
+                    out->worst_channel = c;
+                }
+                img_s[0][c] += s[0][c]; img_v[0][c] += v[0][c];
+                img_s[1][c] += s[1][c]; img_v[1][c] += v[1][c];
+            }
+            out->blocks_failing += fails;
+            if (block_abs_z) block_abs_z[by * nbx + bx] = worst;
+        }
+    out->blocks = nbx * nby;
+
+    out->pass = out->blocks_failing == 0;
+    for (int c = 0; c < 3; c++) {
+        bool zero_var = false;
+        out->z_mean[c] = compare_z(img_s[0][c], img_v[0][c], img_s[1][c], img_v[1][c], &zero_var);
+        out->zero_variance_disagreements += zero_var;
+        if (!(fabs(out->z_mean[c]) <= z_crit)) out->pass = false;
+    }
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------ the map */
+
+/* sRGB EOTF (IEC 61966-2-1): the map's colours are designed as display values and
+ * image_write encodes linear values, so they are decoded here first. */
+static float compare_srgb_to_linear(double s)
+{
+    return (float)(s <= 0.04045 ? s / 12.92 : pow((s + 0.055) / 1.055, 2.4));
+}
+
+void compare_map_colour(double abs_z, double z_crit, float rgb[3])
+{
+    double t = abs_z / z_crit, srgb[3];
+    if (!(t <= 1.0)) {                      /* fails (or NaN): red */
+        srgb[0] = 1.0; srgb[1] = 0.0; srgb[2] = 0.0;
+    } else if (t <= 0.5) {                  /* well inside: black to blue */
+        srgb[0] = 0.0; srgb[1] = 0.0; srgb[2] = t > 0.0 ? 2.0 * t : 0.0;
+    } else {                                /* approaching z_crit: blue to yellow */
+        double s = 2.0 * (t - 0.5);
+        srgb[0] = s; srgb[1] = s; srgb[2] = 1.0 - s;
+    }
+    for (int c = 0; c < 3; c++) rgb[c] = compare_srgb_to_linear(srgb[c]);
+}
+
+void compare_map_image(const double *block_abs_z, int width, int height, int block,
+                       double z_crit, float *rgb)
+{
+    int nbx = compare_blocks_x(width, block);
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++)
+            compare_map_colour(block_abs_z[(y / block) * nbx + x / block], z_crit,
+                               &rgb[3 * ((size_t)y * (size_t)width + (size_t)x)]);
+}

@@ -1,0 +1,73 @@
+/* Statistical comparison of two renders of one scene, for `caustic verify`: z-scores of
+ * the difference of the image means and of the block means, per channel, judged at a
+ * family-wise significance with the Sidak correction; and the false-colour map of them. */
+#ifndef CST_FILM_FILM_COMPARE_H
+#define CST_FILM_FILM_COMPARE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "caustic/caustic.h"
+
+/* Two deterministic region sums (zero variance in both films) closer than this, relative
+ * to the larger, count as equal: integrators may compute the same deterministic radiance
+ * with float operations in a different order, a few float ulps (~1e-7) apart. */
+#define COMPARE_EQUAL_REL 1e-5
+
+/* Inverse of the standard normal CDF: the x with Phi(x) = p. -INFINITY at p = 0, INFINITY
+ * at p = 1, NaN outside [0, 1]. Relative error under 3e-16 (see film_compare.c). */
+double compare_normal_quantile(double p);
+
+/* Per-test significance of m tests with family-wise significance alpha (Sidak):
+ * 1 - (1 - alpha)^(1/m). alpha in (0, 1), m >= 1; NaN otherwise. */
+double compare_sidak_alpha(double alpha, double m);
+
+/* The two-sided critical |z| of one test among m at family-wise significance alpha: the
+ * standard normal quantile at 1 - alpha_1/2, alpha_1 = compare_sidak_alpha(alpha, m).
+ * NaN for invalid arguments. */
+double compare_z_critical(double alpha, double m);
+
+/* Non-overlapping block x block cells covering a width x height image; the last column
+ * and row hold partial blocks. 0 for invalid arguments. */
+int compare_blocks_x(int width, int block);
+int compare_blocks_y(int height, int block);
+
+/* Tests one pair of films contributes: 3 channels x (the image mean + every block). */
+int64_t compare_tests_per_pair(int width, int height, int block);
+
+typedef struct CompareResult {
+    /* z = (mean_a - mean_b) / sqrt(var_a + var_b) of the image mean, per channel; +-INFINITY
+     * when both variances are zero and the means differ (an outright disagreement). */
+    double z_mean[3];
+    double max_abs_block_z;  /* largest |z| over blocks and channels (INFINITY as above) */
+    double worst_z;          /* that z with its sign: > 0 where a is brighter */
+    int worst_bx, worst_by;  /* the block where it was found (block column, row) */
+    int worst_channel;       /* 0 r, 1 g, 2 b */
+    int blocks;              /* blocks tested */
+    int blocks_failing;      /* blocks with |z| > z_crit (or NaN) in any channel */
+    int zero_variance_disagreements; /* tests (image or block, per channel) with zero variance
+                                      * in both films and different means */
+    bool pass;               /* every image-mean and block |z| <= z_crit */
+} CompareResult;
+
+/* Compares films a and b (same size, at least 2 samples per pixel each: the variance of a
+ * pixel mean is estimated from its samples) over block x block blocks, failing tests with
+ * |z| > z_crit. Pixel means are independent (each pixel has its own random streams), so the
+ * variance of a region's mean is the sum of its pixels' variances over n^2. If block_abs_z
+ * is not NULL it receives, per block (row-major, compare_blocks_x * compare_blocks_y
+ * entries), the largest |z| over the channels. Returns CST_ERR_INVALID_ARG for films of
+ * different sizes, fewer than 2 spp, block < 1 or z_crit not > 0; never allocates. */
+CstStatus compare_films(const CstFilm *a, const CstFilm *b, int block, double z_crit,
+                        CompareResult *out, double *block_abs_z, CstError *err);
+
+/* The map colour of a block's |z|, as linear RGB (for image_write, which encodes PNG as
+ * sRGB): black at 0 ramping to blue at z_crit/2, blue ramping to yellow at z_crit (both
+ * ramps linear in sRGB), red above z_crit (and for NaN). */
+void compare_map_colour(double abs_z, double z_crit, float rgb[3]);
+
+/* Fills rgb (width * height * 3 linear floats, row 0 = top) with every pixel's block colour:
+ * the map at the image's size, one flat cell per block. */
+void compare_map_image(const double *block_abs_z, int width, int height, int block,
+                       double z_crit, float *rgb);
+
+#endif
