@@ -1,6 +1,6 @@
 /* Uniform grid: resolution heuristic, exact primitive-cell overlap, compressed cell lists
- * (build) and 3D-DDA traversal with empty-brick skipping and hashed mailboxing (closest
- * hit, occlusion).
+ * (build) and 3D-DDA traversal with a brick-level DDA through empty space, hashed
+ * mailboxing and SIMD triangle tests (closest hit, occlusion).
  *
  * Exactness. Hits must be bit-identical to the list back end, so every primitive is
  * tested with the caller's own ray (triangle_intersect_watertight / sphere_intersect on the same
@@ -19,6 +19,7 @@
 #include "accel/grid.h"
 
 #include <float.h>
+#include <immintrin.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -323,6 +324,8 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
     if (n >= (size_t)INT32_MAX)
         return cst_fail(err, CST_ERR_INVALID_ARG, "grid: %zu primitives exceed the 32-bit id range", n);
     uint32_t *order = NULL;
+    uint32_t *cell_start = NULL; /* during the build: num_cells + 1 offsets into slots */
+    uint8_t *super_used = NULL;  /* during the build: by superbrick, whether it holds a primitive */
 
     BBox raw = bbox_empty();
     size_t placed = 0;
@@ -382,12 +385,12 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
         free(g->axis_cells);
         if (!(g->axis_cells = malloc((size_t)(res[0] + res[1] + res[2]) * sizeof *g->axis_cells))) goto oom;
         grid_set_cells(g, lo, size, res);
-        free(g->cell_start);
-        g->cell_start = calloc((size_t)g->num_cells + 1, sizeof *g->cell_start);
-        if (!g->cell_start) goto oom;
+        free(cell_start);
+        cell_start = calloc((size_t)g->num_cells + 1, sizeof *cell_start);
+        if (!cell_start) goto oom;
         refs = 0;
         for (size_t i = 0; i < n && refs <= budget; i++)
-            refs += grid_insert(g, &gm, (int)order[i], (uint32_t)i, g->cell_start, NULL);
+            refs += grid_insert(g, &gm, (int)order[i], (uint32_t)i, cell_start, NULL);
         if (refs <= budget || (res[0] == 1 && res[1] == 1 && res[2] == 1)) break;
         for (int a = 0; a < 3; a++) res[a] = res[a] > 1 ? res[a] / 2 : 1;
     }
@@ -396,37 +399,56 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
      * each cell's entry to its end, the next cell's start; then shift back by one. */
     uint32_t sum = 0;
     for (int c = 0; c < g->num_cells; c++) {
-        uint32_t k = g->cell_start[c];
-        g->cell_start[c] = sum;
+        uint32_t k = cell_start[c];
+        cell_start[c] = sum;
         sum += k;
     }
-    g->cell_start[g->num_cells] = sum;
+    cell_start[g->num_cells] = sum;
     g->num_refs = refs;
     if (!(g->slots = malloc((refs > 0 ? refs : 1) * sizeof *g->slots))) goto oom;
-    for (size_t i = 0; i < n; i++) grid_insert(g, &gm, (int)order[i], (uint32_t)i, g->cell_start, g->slots);
-    memmove(g->cell_start + 1, g->cell_start, (size_t)g->num_cells * sizeof *g->cell_start);
-    g->cell_start[0] = 0;
+    for (size_t i = 0; i < n; i++) grid_insert(g, &gm, (int)order[i], (uint32_t)i, cell_start, g->slots);
+    memmove(cell_start + 1, cell_start, (size_t)g->num_cells * sizeof *cell_start);
+    cell_start[0] = 0;
 
-    size_t num_super = (size_t)g->super_res[0] * (size_t)g->super_res[1] * (size_t)g->super_res[2];
+    /* The compact form: occupancy bits per brick, list offsets for occupied cells only. */
+    int occupied = 0;
+    for (int c = 0; c < g->num_cells; c++) occupied += cell_start[c + 1] > cell_start[c];
     g->cell_bits = calloc((size_t)g->num_cells / 64, sizeof *g->cell_bits);
-    g->super_bits = calloc(num_super, sizeof *g->super_bits);
-    if (!g->cell_bits || !g->super_bits) goto oom;
-    for (int c = 0; c < g->num_cells; c++)
-        if (g->cell_start[c + 1] > g->cell_start[c]) g->cell_bits[c >> 6] |= (uint64_t)1 << (c & 63);
-    for (int bz = 0, b = 0; bz < g->brick_res[2]; bz++)
-        for (int by = 0; by < g->brick_res[1]; by++)
-            for (int bx = 0; bx < g->brick_res[0]; bx++, b++) {
-                if (!g->cell_bits[b]) continue;
-                const int *ss = g->super_shift;
-                int sb = (bx >> ss[0]) + g->super_res[0] * ((by >> ss[1]) + g->super_res[1] * (bz >> ss[2]));
-                int local = (bx & ((1 << ss[0]) - 1)) | ((by & ((1 << ss[1]) - 1)) << ss[0]) |
-                            ((bz & ((1 << ss[2]) - 1)) << (ss[0] + ss[1]));
-                g->super_bits[sb] |= (uint64_t)1 << local;
-            }
+    g->brick_first = calloc((size_t)g->num_cells / 64, sizeof *g->brick_first);
+    g->list_start = malloc(((size_t)occupied + 1) * sizeof *g->list_start);
+    if (!g->cell_bits || !g->brick_first || !g->list_start) goto oom;
+    g->num_occupied = occupied;
+    for (int c = 0, k = 0; c < g->num_cells; c++) {
+        if ((c & 63) == 0) g->brick_first[c >> 6] = (uint32_t)k;
+        if (cell_start[c + 1] == cell_start[c]) continue;
+        g->cell_bits[c >> 6] |= (uint64_t)1 << (c & 63);
+        g->list_start[k++] = cell_start[c];
+    }
+    g->list_start[occupied] = cell_start[g->num_cells];
+    free(cell_start);
+    cell_start = NULL;
+
+    /* Superbrick occupancy, kept as a flag on each brick of an empty superbrick: the
+     * traversal reads it from the brick it is in, with no index arithmetic. */
+    size_t num_super = (size_t)g->super_res[0] * (size_t)g->super_res[1] * (size_t)g->super_res[2];
+    super_used = calloc(num_super, 1);
+    if (!super_used) goto oom;
+    const int *ss = g->super_shift;
+    for (int pass = 0; pass < 2; pass++)
+        for (int bz = 0, b = 0; bz < g->brick_res[2]; bz++)
+            for (int by = 0; by < g->brick_res[1]; by++)
+                for (int bx = 0; bx < g->brick_res[0]; bx++, b++) {
+                    int sb = (bx >> ss[0]) + g->super_res[0] * ((by >> ss[1]) + g->super_res[1] * (bz >> ss[2]));
+                    if (pass == 0 && g->cell_bits[b]) super_used[sb] = 1;
+                    if (pass == 1 && !super_used[sb]) g->brick_first[b] |= GRID_SUPER_EMPTY;
+                }
+    free(super_used);
     free(order);
     return CST_OK;
 oom:
     free(order);
+    free(cell_start);
+    free(super_used);
     grid_free(g);
     return cst_fail(err, CST_ERR_OOM, "out of memory building the grid over %zu primitives", n);
 }
@@ -434,10 +456,10 @@ oom:
 void grid_free(Grid *g)
 {
     if (!g) return;
-    free(g->cell_start);
-    free(g->slots);
     free(g->cell_bits);
-    free(g->super_bits);
+    free(g->brick_first);
+    free(g->list_start);
+    free(g->slots);
     free(g->axis_cells);
     free(g->tris);
     free(g->spheres);
@@ -447,9 +469,9 @@ void grid_free(Grid *g)
 size_t grid_memory_bytes(const Grid *g)
 {
     if (g->num_cells == 0) return (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres;
-    return ((size_t)g->num_cells + 1) * sizeof *g->cell_start + g->num_refs * sizeof *g->slots +
-           (size_t)g->num_cells / 64 * sizeof *g->cell_bits +
-           (size_t)g->super_res[0] * (size_t)g->super_res[1] * (size_t)g->super_res[2] * sizeof *g->super_bits +
+    return (size_t)g->num_cells / 64 * (sizeof *g->cell_bits + sizeof *g->brick_first) +
+           ((size_t)g->num_occupied + 1) * sizeof *g->list_start +
+           g->num_refs * sizeof *g->slots +
            (size_t)(g->res[0] + g->res[1] + g->res[2]) * sizeof *g->axis_cells +
            (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres;
 }
@@ -464,6 +486,7 @@ size_t grid_memory_bytes(const Grid *g)
  * farther than the current cell's exit is final: see the top of the file). */
 typedef struct GridWalk {
     double t_next[3], t_base[3], t_cell[3];
+    double t_after[3]; /* the crossing after t_next: a step needs no arithmetic before the next choice */
     double t_end;
     int idx[3];  /* cell coordinates */
     int step[3]; /* -1, 0 or +1 */
@@ -484,6 +507,7 @@ static inline void walk_set(GridWalk *w, int a, int i)
 {
     w->idx[a] = i;
     w->t_next[a] = walk_crossing(w, a, i);
+    w->t_after[a] = walk_crossing(w, a, i + w->step[a]);
     w->cell += w->axis_cells[a][i] - w->part[a];
     w->part[a] = w->axis_cells[a][i];
 }
@@ -534,84 +558,213 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
  * t_end. */
 static inline bool walk_step(const Grid *g, GridWalk *w)
 {
-    const double *t = w->t_next;
-    int a = t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
-    if (!(t[a] < w->t_end)) return false;
+    /* The axis of the nearest crossing, ties to the higher axis, without branches: its
+     * choice is a coin toss for the predictor on most rays. */
+    __m128d t0 = _mm_load_sd(&w->t_next[0]), t1 = _mm_load_sd(&w->t_next[1]), t2 = _mm_load_sd(&w->t_next[2]);
+    int lt01 = _mm_comilt_sd(t0, t1);
+    __m128d m = _mm_min_sd(t0, t1); /* t0 < t1 ? t0 : t1 */
+    int c = _mm_comilt_sd(m, t2);
+    int a = ((1 - lt01) & -c) | (2 & (c - 1));
+    if (!(w->t_next[a] < w->t_end)) return false;
     int i = w->idx[a] + w->step[a];
     if ((unsigned)i >= (unsigned)g->res[a]) return false;
-    walk_set(w, a, i);
+    /* walk_set(w, a, i), with the crossing computed one step ahead (the same value). */
+    w->idx[a] = i;
+    w->t_next[a] = w->t_after[a];
+    w->t_after[a] = walk_crossing(w, a, i + w->step[a]);
+    w->cell += w->axis_cells[a][i] - w->part[a];
+    w->part[a] = w->axis_cells[a][i];
     return true;
 }
 
-static inline bool cell_occupied(const Grid *g, int cell)
+/* The slots of an occupied cell: [*begin, *end). */
+static inline void cell_list(const Grid *g, int cell, uint32_t *begin, uint32_t *end)
 {
-    return (g->cell_bits[cell >> 6] >> (cell & 63)) & 1u;
+    uint64_t before = g->cell_bits[cell >> 6] & (((uint64_t)1 << (cell & 63)) - 1u);
+    uint32_t k = (g->brick_first[cell >> 6] & ~GRID_SUPER_EMPTY) + (uint32_t)__builtin_popcountll(before);
+    *begin = g->list_start[k];
+    *end = g->list_start[k + 1];
 }
 
-static inline bool brick_occupied(const Grid *g, int cell) { return g->cell_bits[cell >> 6] != 0u; }
+/* The last cell of brick (or superbrick, by mask) b on axis a in the ray's direction. */
+static inline int walk_block_last(const GridWalk *w, int a, int b, int shift)
+{
+    return w->step[a] > 0 ? ((b + 1) << shift) - 1 : b << shift;
+}
 
-static inline bool super_occupied(const Grid *g, const GridWalk *w)
+/* From the current cell, in an empty brick, walks brick by brick (a 3D-DDA over bricks,
+ * jumping empty superbricks in one step) to the first brick holding a primitive, and sets
+ * the walk to the cell where the ray enters it. The cells of the axes other than the last
+ * exit's are only found at the end, so an empty brick costs one crossing. The walk ends
+ * exactly where jumping one empty block at a time would leave it, moving the exit axis
+ * into the next block and every other axis past its crossings before the exit, within the
+ * block: the exits are chosen alike (ties to the lower axis), and as the crossings along
+ * an axis increase, finding the other axes' cells once at the end gives the same cells.
+ * False once the ray has left the grid or passed t_end. */
+static inline bool walk_bricks(const Grid *g, GridWalk *w)
 {
     const int *bs = g->brick_shift, *ss = g->super_shift;
-    int sb = (w->idx[0] >> (bs[0] + ss[0])) +
-             g->super_res[0] * ((w->idx[1] >> (bs[1] + ss[1])) + g->super_res[1] * (w->idx[2] >> (bs[2] + ss[2])));
-    return g->super_bits[sb] != 0u;
-}
-
-/* Jumps over the empty block (brick or superbrick: 2^shift[a] cells along axis a)
- * holding the current cell, to the cell where the ray leaves it: the exit axis moves
- * into the neighbouring block; each other axis advances, within the block, past the
- * crossings before the exit. False once the ray has left the grid or passed t_end. */
-static inline bool walk_skip(const Grid *g, GridWalk *w, int shift0, int shift1, int shift2)
-{
-    double t_exit = INFINITY;
-    int exit_axis = 0;
-    int mask[3] = {(1 << shift0) - 1, (1 << shift1) - 1, (1 << shift2) - 1}; /* block size - 1 */
+    int b[3], start[3];
+    double tb[3]; /* where the ray leaves the current brick on each axis */
     for (int a = 0; a < 3; a++) {
-        int last = w->step[a] > 0 ? w->idx[a] | mask[a] : w->idx[a] & ~mask[a];
-        double t = walk_crossing(w, a, last); /* inf on an axis without steps */
-        if (t < t_exit) { t_exit = t; exit_axis = a; }
+        b[a] = w->idx[a] >> bs[a];
+        start[a] = w->idx[a]; /* at or before the axis' cell at the end */
+        tb[a] = walk_crossing(w, a, walk_block_last(w, a, b[a], bs[a])); /* inf on an axis without steps */
     }
-    if (!(t_exit < w->t_end)) return false;
+    int brick = w->cell >> 6, e;
+    double t_exit;
+    do {
+        if (g->brick_first[brick] & GRID_SUPER_EMPTY) {
+            int slast[3];
+            t_exit = INFINITY;
+            e = 0;
+            for (int a = 0; a < 3; a++) {
+                slast[a] = walk_block_last(w, a, b[a] >> ss[a], bs[a] + ss[a]);
+                double t = walk_crossing(w, a, slast[a]);
+                if (t < t_exit) { t_exit = t; e = a; }
+            }
+            if (!(t_exit < w->t_end)) return false;
+            int i = slast[e] + w->step[e];
+            if ((unsigned)i >= (unsigned)g->res[e]) return false;
+            b[e] = i >> bs[e];
+            start[e] = i;
+            tb[e] = walk_crossing(w, e, walk_block_last(w, e, b[e], bs[e]));
+            for (int a = 0; a < 3; a++) {
+                if (a == e) continue;
+                /* Past the bricks of the superbrick that the ray leaves before t_exit. */
+                int last_b = slast[a] >> bs[a], max_b = (g->res[a] - 1) >> bs[a];
+                while (tb[a] < t_exit && b[a] != last_b && b[a] + w->step[a] <= max_b) {
+                    b[a] += w->step[a];
+                    start[a] = w->step[a] > 0 ? b[a] << bs[a] : ((b[a] + 1) << bs[a]) - 1;
+                    tb[a] = walk_crossing(w, a, walk_block_last(w, a, b[a], bs[a]));
+                }
+            }
+        } else {
+            e = tb[1] < tb[0] ? (tb[2] < tb[1] ? 2 : 1) : (tb[2] < tb[0] ? 2 : 0);
+            t_exit = tb[e];
+            if (!(t_exit < w->t_end)) return false;
+            int i = walk_block_last(w, e, b[e], bs[e]) + w->step[e];
+            if ((unsigned)i >= (unsigned)g->res[e]) return false;
+            b[e] += w->step[e];
+            start[e] = i;
+            tb[e] = walk_crossing(w, e, walk_block_last(w, e, b[e], bs[e]));
+        }
+        brick = b[0] + g->brick_res[0] * (b[1] + g->brick_res[1] * b[2]);
+    } while (!g->cell_bits[brick]);
+    /* Each other axis: from its start, past the crossings before t_exit, within the brick
+     * and the grid. */
     for (int a = 0; a < 3; a++) {
-        if (a == exit_axis) {
-            int i = w->step[a] > 0 ? (w->idx[a] | mask[a]) + 1 : (w->idx[a] & ~mask[a]) - 1;
-            if ((unsigned)i >= (unsigned)g->res[a]) return false;
-            walk_set(w, a, i);
-            continue;
+        int i = start[a];
+        if (a != e) {
+            int last = walk_block_last(w, a, b[a], bs[a]);
+            int lim = last < g->res[a] ? last : g->res[a] - 1;
+            while (i != lim && walk_crossing(w, a, i) < t_exit) i += w->step[a];
         }
-        /* Usually no step or one (at most the block's size); a crossing equal to the exit
-         * (the ray leaves through an edge) can stay for walk_step. */
-        while (w->t_next[a] < t_exit) {
-            int i = w->idx[a] + w->step[a];
-            if ((i & ~mask[a]) != (w->idx[a] & ~mask[a]) || i >= g->res[a]) break;
-            walk_set(w, a, i);
-        }
+        if (i != w->idx[a]) walk_set(w, a, i);
     }
     return true;
 }
 
-/* From an empty brick: skips its superbrick if that is empty too, else the brick. */
-static inline bool walk_skip_empty(const Grid *g, GridWalk *w)
+/* Per-ray constants of the 4-wide watertight test. */
+typedef struct GridRayTri4 {
+    TriangleRay tr;
+    __m128 o[3]; /* origin, per world axis */
+    __m128 sx, sy, sz;
+} GridRayTri4;
+
+static inline GridRayTri4 grid_ray_tri4(const Ray *r)
 {
-    const int *bs = g->brick_shift, *ss = g->super_shift;
-    if (!super_occupied(g, w)) return walk_skip(g, w, bs[0] + ss[0], bs[1] + ss[1], bs[2] + ss[2]);
-    return walk_skip(g, w, bs[0], bs[1], bs[2]);
+    GridRayTri4 q;
+    q.tr = triangle_ray_setup(r->d);
+    q.o[0] = _mm_set1_ps(r->o.x); q.o[1] = _mm_set1_ps(r->o.y); q.o[2] = _mm_set1_ps(r->o.z);
+    q.sx = _mm_set1_ps(q.tr.sx); q.sy = _mm_set1_ps(q.tr.sy); q.sz = _mm_set1_ps(q.tr.sz);
+    return q;
 }
 
-static inline bool grid_prim_hit(const Grid *g, uint32_t slot, const TriangleRay *tr, const Ray *r,
-                                 float *t, float *u, float *v, uint32_t *id)
+/* Fills the unused lanes of a batch: NaN vertices fail every comparison of the test. */
+static const GridTri GRID_NAN_TRI = {{NAN, NAN, NAN}, {NAN, NAN, NAN}, {NAN, NAN, NAN}, 0u};
+
+/* triangle_intersect_watertight() on four triangles at once, with the same operations in
+ * the same order (the build has -ffp-contract=off, so nothing is fused into FMAs), so each
+ * lane's t, u, v are bit-identical to the scalar test's, and so is its rejection of t
+ * within triangle_t_error(). The triangles are gathered from the cell's list and
+ * transposed in registers (a vertex is 12 bytes, so each load takes the three coordinates
+ * and one float of whatever follows inside the GridTri). Lanes with an edge function of
+ * exactly zero need the scalar's recomputation in double: they come back in
+ * *scalar_lanes for the caller to run through the scalar test. Returns the mask of the
+ * other lanes that hit within (t_min, t_max). */
+static inline int tri4_intersect(const GridTri *const tri[4], const GridRayTri4 *q, __m128 t_min, __m128 t_max,
+                                 __m128 *t_out, __m128 *u_out, __m128 *v_out, int *scalar_lanes)
 {
-    GRID_COUNT_PRIM_TEST(slot);
-    if (slot < (uint32_t)g->num_tris) {
-        const GridTri *tri = &g->tris[slot];
-        *id = tri->id;
-        return triangle_intersect_watertight(tr, r, tri->v0, tri->v1, tri->v2, t, u, v);
+    _Alignas(16) float vtx[3][3][4]; /* [vertex][axis][lane] */
+    for (int k = 0; k < 3; k++) {
+        __m128 r0 = _mm_loadu_ps(&tri[0]->v0.x + 3 * k), r1 = _mm_loadu_ps(&tri[1]->v0.x + 3 * k);
+        __m128 r2 = _mm_loadu_ps(&tri[2]->v0.x + 3 * k), r3 = _mm_loadu_ps(&tri[3]->v0.x + 3 * k);
+        _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+        _mm_store_ps(vtx[k][0], r0);
+        _mm_store_ps(vtx[k][1], r1);
+        _mm_store_ps(vtx[k][2], r2);
     }
-    const GridSphere *s = &g->spheres[slot - (uint32_t)g->num_tris];
-    *id = s->id;
-    *u = *v = 0.0f;
-    return sphere_intersect(s->center, s->radius, r, t);
+    const int kx = q->tr.kx, ky = q->tr.ky, kz = q->tr.kz;
+    __m128 px[3], py[3], pz[3];
+    for (int k = 0; k < 3; k++) {
+        pz[k] = _mm_sub_ps(_mm_load_ps(vtx[k][kz]), q->o[kz]);
+        px[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(vtx[k][kx]), q->o[kx]), _mm_mul_ps(q->sx, pz[k]));
+        py[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(vtx[k][ky]), q->o[ky]), _mm_mul_ps(q->sy, pz[k]));
+    }
+    /* U, V, W: the edge functions, scaled barycentrics of vertices 0, 1, 2 (JCGT 2013 eq. 4) */
+    __m128 U = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
+    __m128 V = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
+    __m128 W = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
+    const __m128 zero = _mm_setzero_ps();
+    int zero_lanes = _mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)),
+                                               _mm_cmpeq_ps(W, zero)));
+    *scalar_lanes = zero_lanes;
+    __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
+    __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
+    /* Most rays pass outside all four: stop before the division. Unused lanes are NaN,
+     * neither negative nor positive, so they are dropped explicitly. */
+    int inside = _mm_movemask_ps(_mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpord_ps(U, U))) & ~zero_lanes;
+    if (!inside) {
+        *t_out = *u_out = *v_out = zero;
+        return 0;
+    }
+    __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
+    __m128 zt[3];
+    for (int k = 0; k < 3; k++) zt[k] = _mm_mul_ps(q->sz, pz[k]);
+    __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, zt[0]), _mm_mul_ps(V, zt[1])), _mm_mul_ps(W, zt[2]));
+    __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
+    __m128 t = _mm_mul_ps(T, inv_det);
+    __m128 ok = _mm_cmpneq_ps(det, zero);
+    ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, t_min));
+    ok = _mm_and_ps(ok, _mm_cmplt_ps(t, t_max));
+    /* triangle_t_error(), lane by lane; max_ps is maxf's a > b ? a : b, the and fabsf. */
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    __m128 max_zt = _mm_max_ps(_mm_max_ps(_mm_and_ps(zt[0], abs_mask), _mm_and_ps(zt[1], abs_mask)),
+                               _mm_and_ps(zt[2], abs_mask));
+    __m128 max_xt = _mm_max_ps(_mm_max_ps(_mm_and_ps(px[0], abs_mask), _mm_and_ps(px[1], abs_mask)),
+                               _mm_and_ps(px[2], abs_mask));
+    __m128 max_yt = _mm_max_ps(_mm_max_ps(_mm_and_ps(py[0], abs_mask), _mm_and_ps(py[1], abs_mask)),
+                               _mm_and_ps(py[2], abs_mask));
+    const __m128 g2 = _mm_set1_ps(TRIANGLE_GAMMA(2)), g3 = _mm_set1_ps(TRIANGLE_GAMMA(3)),
+                 g5 = _mm_set1_ps(TRIANGLE_GAMMA(5));
+    __m128 delta_z = _mm_mul_ps(g3, max_zt);
+    __m128 delta_x = _mm_mul_ps(g5, _mm_add_ps(max_xt, max_zt));
+    __m128 delta_y = _mm_mul_ps(g5, _mm_add_ps(max_yt, max_zt));
+    __m128 delta_e = _mm_mul_ps(_mm_set1_ps(2.0f),
+                                _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g2, max_xt), max_yt), _mm_mul_ps(delta_y, max_xt)),
+                                           _mm_mul_ps(delta_x, max_yt)));
+    __m128 max_e = _mm_max_ps(_mm_max_ps(_mm_and_ps(U, abs_mask), _mm_and_ps(V, abs_mask)), _mm_and_ps(W, abs_mask));
+    __m128 delta_t = _mm_mul_ps(
+        _mm_mul_ps(_mm_set1_ps(3.0f), _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g3, max_e), max_zt),
+                                                            _mm_mul_ps(delta_e, max_zt)),
+                                                 _mm_mul_ps(delta_z, max_e))),
+        _mm_and_ps(inv_det, abs_mask));
+    ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, delta_t));
+    *t_out = t;
+    *u_out = _mm_mul_ps(V, inv_det);
+    *v_out = _mm_mul_ps(W, inv_det);
+    return _mm_movemask_ps(ok) & inside;
 }
 
 /* Hashed mailboxing (after Benthin, "Realtime Ray Tracing on Current CPU Architectures",
@@ -635,30 +788,116 @@ static inline bool mailbox_seen(Mailbox *mb, uint32_t slot)
     return false;
 }
 
+/* Collects the next (up to) four triangles of slots[*k .. end) that the ray has not
+ * tested yet, in list order; stops at the first sphere (spheres follow the triangles:
+ * their grid-local indices are larger). Returns how many. */
+static inline int cell_next_tris(const Grid *g, uint32_t *k, uint32_t end, Mailbox *mb, const GridTri *tri[4])
+{
+    int n = 0;
+    uint32_t num_tris = (uint32_t)g->num_tris;
+    for (; *k < end && n < 4; (*k)++) {
+        uint32_t slot = g->slots[*k];
+        if (slot >= num_tris) break;
+        if (mailbox_seen(mb, slot)) continue;
+        GRID_COUNT_PRIM_TEST(slot);
+        tri[n++] = &g->tris[slot];
+    }
+    for (int i = n; i < 4; i++) tri[i] = &GRID_NAN_TRI;
+    return n;
+}
+
+/* The closest hit among a cell's untested primitives, in list order with a strict <, as
+ * a scalar loop would pick among equal t; shortens r->t_max on a hit. */
+static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const GridRayTri4 *q, Ray *r,
+                                  Hit *hit)
+{
+    bool found = false;
+    const __m128 t_min = _mm_set1_ps(r->t_min);
+    const GridTri *tri[4];
+    int n;
+    while ((n = cell_next_tris(g, &k, end, mb, tri)) > 0) {
+        __m128 t4, u4, v4;
+        int scalar_lanes;
+        int mask = tri4_intersect(tri, q, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4, &scalar_lanes);
+        if (!((mask | scalar_lanes) & ((1 << n) - 1))) continue;
+        float t[4], u[4], v[4];
+        _mm_storeu_ps(t, t4); _mm_storeu_ps(u, u4); _mm_storeu_ps(v, v4);
+        for (int i = 0; i < n; i++) {
+            if (scalar_lanes & (1 << i)) {
+                float ts, us, vs;
+                if (triangle_intersect_watertight(&q->tr, r, tri[i]->v0, tri[i]->v1, tri[i]->v2, &ts, &us, &vs)) {
+                    r->t_max = ts;
+                    hit->t = ts; hit->u = us; hit->v = vs; hit->prim = tri[i]->id;
+                    found = true;
+                }
+            } else if ((mask & (1 << i)) && t[i] < r->t_max) {
+                r->t_max = t[i];
+                hit->t = t[i]; hit->u = u[i]; hit->v = v[i]; hit->prim = tri[i]->id;
+                found = true;
+            }
+        }
+    }
+    for (; k < end; k++) {
+        uint32_t slot = g->slots[k];
+        if (slot < (uint32_t)g->num_tris || mailbox_seen(mb, slot)) continue;
+        GRID_COUNT_PRIM_TEST(slot);
+        const GridSphere *sp = &g->spheres[slot - (uint32_t)g->num_tris];
+        float t;
+        if (sphere_intersect(sp->center, sp->radius, r, &t)) {
+            r->t_max = t;
+            hit->t = t; hit->u = 0.0f; hit->v = 0.0f; hit->prim = sp->id;
+            found = true;
+        }
+    }
+    return found;
+}
+
+static inline bool cell_occluded(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const GridRayTri4 *q,
+                                 const Ray *r)
+{
+    const __m128 t_min = _mm_set1_ps(r->t_min), t_max = _mm_set1_ps(r->t_max);
+    const GridTri *tri[4];
+    int n;
+    while ((n = cell_next_tris(g, &k, end, mb, tri)) > 0) {
+        __m128 t4, u4, v4;
+        int scalar_lanes;
+        if (tri4_intersect(tri, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes) & ((1 << n) - 1)) return true;
+        for (int i = 0; i < n; i++) {
+            float ts, us, vs;
+            if ((scalar_lanes & (1 << i)) &&
+                triangle_intersect_watertight(&q->tr, r, tri[i]->v0, tri[i]->v1, tri[i]->v2, &ts, &us, &vs))
+                return true;
+        }
+    }
+    for (; k < end; k++) {
+        uint32_t slot = g->slots[k];
+        if (slot < (uint32_t)g->num_tris || mailbox_seen(mb, slot)) continue;
+        GRID_COUNT_PRIM_TEST(slot);
+        const GridSphere *sp = &g->spheres[slot - (uint32_t)g->num_tris];
+        float t;
+        if (sphere_intersect(sp->center, sp->radius, r, &t)) return true;
+    }
+    return false;
+}
+
 bool grid_intersect(const Grid *g, const Ray *ray, Hit *hit)
 {
     GridWalk w;
     if (g->num_cells == 0 || !walk_begin(g, ray, &w)) return false;
     Ray r = *ray;
-    TriangleRay tr = triangle_ray_setup(r.d);
+    GridRayTri4 q = grid_ray_tri4(&r);
     Mailbox mb;
     mailbox_clear(&mb);
     bool found = false;
     for (;;) {
-        if (cell_occupied(g, w.cell)) {
-            for (uint32_t k = g->cell_start[w.cell], end = g->cell_start[w.cell + 1]; k < end; k++) {
-                uint32_t slot = g->slots[k], id;
-                if (mailbox_seen(&mb, slot)) continue;
-                float t, u, v;
-                if (grid_prim_hit(g, slot, &tr, &r, &t, &u, &v, &id)) {
-                    r.t_max = t;
-                    hit->t = t; hit->u = u; hit->v = v; hit->prim = id;
-                    found = true;
-                }
-            }
+        uint64_t bits = g->cell_bits[w.cell >> 6];
+        if ((bits >> (w.cell & 63)) & 1u) {
+            uint32_t begin, end;
+            cell_list(g, w.cell, &begin, &end);
+            found |= cell_intersect(g, begin, end, &mb, &q, &r, hit);
             if (found && (double)r.t_max < w.t_end) w.t_end = (double)r.t_max;
-        } else if (!brick_occupied(g, w.cell)) {
-            if (!walk_skip_empty(g, &w)) break;
+        } else if (!bits) {
+            if (!walk_bricks(g, &w)) break;
             continue;
         }
         if (!walk_step(g, &w)) break;
@@ -670,19 +909,17 @@ bool grid_occluded(const Grid *g, const Ray *r)
 {
     GridWalk w;
     if (g->num_cells == 0 || !walk_begin(g, r, &w)) return false;
-    TriangleRay tr = triangle_ray_setup(r->d);
+    GridRayTri4 q = grid_ray_tri4(r);
     Mailbox mb;
     mailbox_clear(&mb);
     for (;;) {
-        if (cell_occupied(g, w.cell)) {
-            for (uint32_t k = g->cell_start[w.cell], end = g->cell_start[w.cell + 1]; k < end; k++) {
-                uint32_t slot = g->slots[k], id;
-                if (mailbox_seen(&mb, slot)) continue;
-                float t, u, v;
-                if (grid_prim_hit(g, slot, &tr, r, &t, &u, &v, &id)) return true;
-            }
-        } else if (!brick_occupied(g, w.cell)) {
-            if (!walk_skip_empty(g, &w)) break;
+        uint64_t bits = g->cell_bits[w.cell >> 6];
+        if ((bits >> (w.cell & 63)) & 1u) {
+            uint32_t begin, end;
+            cell_list(g, w.cell, &begin, &end);
+            if (cell_occluded(g, begin, end, &mb, &q, r)) return true;
+        } else if (!bits) {
+            if (!walk_bricks(g, &w)) break;
             continue;
         }
         if (!walk_step(g, &w)) break;

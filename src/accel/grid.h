@@ -1,10 +1,12 @@
 /* Uniform grid over triangles and spheres: about 27 cells per primitive, near-cubic cells,
- * primitives stored per cell in compressed sparse rows, 3D-DDA traversal (Amanatides &
- * Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing", Eurographics 1987) that jumps
- * over empty bricks of 64 cells, and a small per-ray hashed mailbox so a primitive
- * spanning several cells is (almost always) tested once per ray. Read-only after
- * grid_build: any number of threads may traverse it. Hits are bit-identical to the list
- * back end's (see grid.c for the one exception, ill-conditioned grazing hits). */
+ * primitives stored per occupied cell in compressed sparse rows, 3D-DDA traversal
+ * (Amanatides & Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing", Eurographics
+ * 1987) that crosses empty space a brick of 64 cells (or a superbrick of 64 bricks) at a
+ * time, a small per-ray hashed mailbox so a primitive spanning several cells is (almost
+ * always) tested once per ray, and a cell's untested triangles tested four at a time
+ * with SSE. Read-only after grid_build: any number of threads may traverse it. Hits are
+ * bit-identical to the list back end's (see grid.c for the one exception, ill-conditioned
+ * grazing hits). */
 #ifndef CST_ACCEL_GRID_H
 #define CST_ACCEL_GRID_H
 
@@ -31,6 +33,9 @@ typedef struct GridSphere {
     uint32_t id; /* scene primitive id */
 } GridSphere;
 
+/* Grid.brick_first flag: the brick's superbrick holds no primitive. */
+#define GRID_SUPER_EMPTY 0x80000000u
+
 /* Cells are numbered in bricks of 64: 2^brick_shift[a] cells along axis a, the shifts
  * summing to 6 (4 x 4 x 4 for a box, 8 x 8 x 1 for a flat one, so flat grids are not
  * padded). With (bx, by, bz) = (x >> shift[0], y >> shift[1], z >> shift[2]) and
@@ -41,8 +46,12 @@ typedef struct GridSphere {
  * empty brick is a zero word, skipped in one step. Cells of the last bricks past res
  * are padding (empty, never visited).
  *
- * The primitives of cell c are slots[cell_start[c] .. cell_start[c + 1]) (compressed
- * sparse rows). A slot holds a grid-local index: below num_tris it is tris[slot],
+ * The occupied cells, in cell order, have their primitives in compressed sparse rows: the
+ * k-th occupied cell's are slots[list_start[k] .. list_start[k + 1]), and k is its
+ * brick's `first` plus the number of occupied cells before it in the brick (a popcount):
+ * with ~97% of cells empty on a surface mesh, offsets for occupied cells alone are a
+ * thirtieth of the size of one offset per cell, and stay in cache. A slot holds a
+ * grid-local index: below num_tris it is tris[slot],
  * otherwise spheres[slot - num_tris]. The grid keeps its own copies of the primitives,
  * in Morton order of their box centres, so the primitives of one cell sit together in
  * memory. The cell geometry is kept in double so the traversal's cell boundaries are
@@ -60,18 +69,19 @@ typedef struct Grid {
     double inv_cell_size[3];
     BBox bounds;            /* float copy of the grid box (primitive boxes plus the margin) */
     float margin;           /* every primitive is in every cell it comes within `margin` of */
-    uint32_t *cell_start;   /* num_cells + 1 offsets into slots */
+    /* Per brick: occupancy, bit c % 64 of word c / 64 (1 bit per cell, so an empty cell
+     * costs no memory trip), and the index in list_start of its first occupied cell, with
+     * GRID_SUPER_EMPTY set when its superbrick holds no primitive. */
+    uint64_t *cell_bits;
+    uint32_t *brick_first;
+    uint32_t *list_start;   /* num_occupied + 1 offsets into slots */
+    int num_occupied;
     uint32_t *slots;        /* num_refs grid-local primitive indices */
     size_t num_refs;
-    /* Occupancy, bit c % 64 of word c / 64 (one word per brick): 1 bit per cell fits in
-     * cache where cell_start does not, so an empty cell costs no memory trip. */
-    uint64_t *cell_bits;
     /* Superbricks of 64 bricks, shaped like bricks (2^super_shift[a] bricks along axis
-     * a), numbered sx + super_res[0] * (sy + super_res[1] * sz); super_bits[s] != 0 iff
-     * superbrick s holds a primitive. A ray jumps over an empty one in one step. */
+     * a): a ray jumps over an empty one in one step. */
     int super_shift[3];
     int super_res[3];
-    uint64_t *super_bits;
     GridTri *tris;
     int num_tris;
     GridSphere *spheres;
@@ -87,7 +97,7 @@ void grid_free(Grid *a);
 bool grid_intersect(const Grid *a, const Ray *r, Hit *hit);
 /* Any hit in (r.t_min, r.t_max). */
 bool grid_occluded(const Grid *a, const Ray *r);
-/* Cell offsets, occupancy bits, the slot array and the grid's copies of the primitives. */
+/* Bricks, list offsets, the slot array and the grid's copies of the primitives. */
 size_t grid_memory_bytes(const Grid *a);
 
 #endif

@@ -5,10 +5,12 @@
  * (sec. 5.3), so every node is one linear SAH sweep (sec. 4.2, Alg. 4). Straddling
  * primitives go to both children and are clipped to each child's cell ("perfect splits",
  * sec. 4.3), which gives tighter event bounds than their boxes. Traversal is the
- * front-to-back stack traversal of pbrt-v3's KdTreeAccel (Havran's TA_rec_B). */
+ * front-to-back stack traversal of pbrt-v3's KdTreeAccel (Havran's TA_rec_B); leaves are
+ * tested KD_BLOCK_WIDTH triangles at a time with the SIMD form of the watertight test. */
 #include "accel/kdtree.h"
 
 #include <float.h>
+#include <immintrin.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,15 +19,18 @@
 #include "geometry/sphere.h"
 #include "geometry/triangle.h"
 
-/* SAH constants (Wald & Havran eq. 2 and sec. 4.4): a traversal step and one primitive
- * test in the same unit; cost * (1 - KD_EMPTY_BONUS) when one side is empty, to cut off
- * empty space. A step is dearer than a test here because node fetches miss the cache: on
- * the Stanford bunny (1 thread, random rays leaving the surface), KD_COST_ISECT = 0.35,
- * 0.5 and 0.7 ran within this machine's noise of each other, 1.0 about 15% and 1.5 about
- * 30% slower (bigger trees: 7.3 and 9.3 MB against 4.8 MB at 0.5). */
+/* SAH constants (Wald & Havran eq. 2 and sec. 4.4): a traversal step and one block test
+ * (KD_BLOCK_WIDTH triangles at once, so a leaf of n triangles costs ceil(n / width) tests:
+ * the "block SAH" of wide BVHs) in the same unit; cost * (1 - KD_EMPTY_BONUS) when one side
+ * is empty, to cut off empty space. On the Stanford bunny (1 thread, bench rays), a block
+ * cost of 0.5 ran ~5% faster on random rays than 0.25 or 1.0, and ~10% faster than 2.0;
+ * per-triangle costs (the scalar tests' SAH) ran 10-20% slower on random rays; an empty
+ * bonus of 0.1 or 0.3 instead of 0.2 within noise, 0.4 ~10% slower. */
 static const float KD_COST_TRAVERSE = 1.0f;
-static const float KD_COST_ISECT = 0.5f;
+static const float KD_COST_BLOCK = 0.5f;
 static const float KD_EMPTY_BONUS = 0.2f;
+
+static inline float leaf_blocks(int n) { return (float)((n + KD_BLOCK_WIDTH - 1) / KD_BLOCK_WIDTH); }
 
 /* Traversal treats every split plane as a slab of half-width
  * w = KD_PLANE_MARGIN * (largest |coordinate| of the scene + largest |coordinate| of the
@@ -39,7 +44,8 @@ static const float KD_PLANE_MARGIN = 0x1p-20f;
 
 enum {
     KD_STACK = KD_MAX_DEPTH + 4, /* each inner node on the current path pushes at most once */
-    KD_MAX_NODES = 1 << 30       /* the child index has 30 bits */
+    KD_NONE = -1,                /* descend(): no leaf to visit (as a uint32_t) */
+    KD_MAX_NODES = 1 << 28       /* the child index has 28 bits */
 };
 
 /* ------------------------------------------------------------------ build: events */
@@ -178,6 +184,8 @@ typedef struct Builder {
     const BBox *prim_box; /* unclipped bounds by scene id */
     uint8_t *side;        /* by scene id; valid for the primitives of the node being split */
     KdTree *out;
+    uint32_t *ids;        /* leaf lists (scene ids); a leaf node's `first` indexes it until store_leaves */
+    int num_ids;
     int cap_nodes, cap_ids;
     bool oom, too_big;
 } Builder;
@@ -198,7 +206,7 @@ typedef struct KdSplit {
 /* SAH cost of a split with hit probabilities pl, pr (child area / parent area). */
 static inline float sah_cost(float pl, float pr, int nl, int nr)
 {
-    float c = KD_COST_TRAVERSE + KD_COST_ISECT * (pl * (float)nl + pr * (float)nr);
+    float c = KD_COST_TRAVERSE + KD_COST_BLOCK * (pl * leaf_blocks(nl) + pr * leaf_blocks(nr));
     return (nl == 0 || nr == 0) ? c * (1.0f - KD_EMPTY_BONUS) : c;
 }
 
@@ -262,36 +270,31 @@ static int cmp_u32(const void *a, const void *b)
 }
 
 /* A leaf over the node's primitives, listed in ascending id order so that exact ties in t
- * within a leaf resolve to the lowest id, as in the brute-force loop. */
+ * within a leaf resolve to the lowest id, as in the brute-force loop. Until store_leaves,
+ * the leaf's `first` indexes b->ids and flags >> 2 is its number of primitives. */
 static void make_leaf(Builder *b, int node, const EventLists *E, int num_prims)
 {
-    KdTree *t = b->out;
-    KdNode *nd = &t->nodes[node];
+    KdNode *nd = &b->out->nodes[node];
     nd->flags = KD_LEAF | ((uint32_t)num_prims << 2);
-    nd->first_prim = 0;
+    nd->first = (uint32_t)b->num_ids;
     if (num_prims == 0) return;
-    if (num_prims >= (1 << 30) || t->num_prim_ids > INT32_MAX - num_prims) { b->too_big = true; return; }
-    if (t->num_prim_ids + num_prims > b->cap_ids) {
-        long long want = 2LL * b->cap_ids > (long long)t->num_prim_ids + num_prims ? 2LL * b->cap_ids
-                                                                                   : (long long)t->num_prim_ids + num_prims;
+    if (num_prims >= (1 << 28) || b->num_ids > INT32_MAX - num_prims) { b->too_big = true; return; }
+    if (b->num_ids + num_prims > b->cap_ids) {
+        long long want = 2LL * b->cap_ids > (long long)b->num_ids + num_prims ? 2LL * b->cap_ids
+                                                                              : (long long)b->num_ids + num_prims;
         int cap = want > INT32_MAX ? INT32_MAX : (int)want;
-        uint32_t *ids = realloc(t->prim_ids, (size_t)cap * sizeof *ids);
+        uint32_t *ids = realloc(b->ids, (size_t)cap * sizeof *ids);
         if (!ids) { b->oom = true; return; }
-        t->prim_ids = ids;
+        b->ids = ids;
         b->cap_ids = cap;
     }
     /* Every primitive has exactly one start or planar event on axis 0. */
-    uint32_t *ids = &t->prim_ids[t->num_prim_ids];
+    uint32_t *ids = &b->ids[b->num_ids];
     int m = 0;
     for (int i = 0; i < E->n[0]; i++)
         if (E->ev[0][i].type != EV_END) ids[m++] = E->ev[0][i].prim;
     qsort(ids, (size_t)m, sizeof *ids, cmp_u32);
-    if (m == 1) {
-        nd->one_prim = ids[0];
-    } else {
-        nd->first_prim = (uint32_t)t->num_prim_ids;
-        t->num_prim_ids += m;
-    }
+    b->num_ids += m;
 }
 
 /* Bounds of primitive `id` clipped to `cell`. The caller knows the primitive overlaps the
@@ -326,7 +329,7 @@ static int build_node(Builder *b, EventLists *E, int num_prims, BBox cell, int d
     if (node < 0) { free(E->block); return -1; }
     KdSplit s = {INFINITY, 0.0f, -1, false};
     if (num_prims > 0 && depth < b->out->max_depth) s = find_split(E, num_prims, cell);
-    if (s.axis < 0 || !(s.cost < KD_COST_ISECT * (float)num_prims)) {
+    if (s.axis < 0 || !(s.cost < KD_COST_BLOCK * leaf_blocks(num_prims))) {
         make_leaf(b, node, E, num_prims);
         free(E->block);
         return (b->oom || b->too_big) ? -1 : node;
@@ -416,51 +419,113 @@ static int build_node(Builder *b, EventLists *E, int num_prims, BBox cell, int d
     if (above < 0) return -1;
     KdNode *nd = &b->out->nodes[node];
     nd->split = s.pos;
-    nd->flags = (uint32_t)k | ((uint32_t)above << 2);
+    nd->flags = (uint32_t)k | ((uint32_t)above << 4);
     return node;
 }
 
-/* Renumbers the primitives in the order the depth-first node array first references them
- * (triangles, then spheres) and stores their data in that order; the leaf lists keep their
- * ascending scene-id order. Returns false on OOM. */
-static bool store_primitives(KdTree *t, const AccelGeometry *g, int used_tris, int used_spheres)
+/* Turns the build's leaf lists into the final leaves: each leaf's triangles as
+ * consecutive blocks of KD_BLOCK_WIDTH (in the lists' ascending id order, lane by lane),
+ * its spheres after them; leaves in node order, so a subtree's leaves are close in
+ * memory. Returns false on OOM. */
+static bool store_leaves(KdTree *t, const Builder *b)
 {
-    int n = g->num_tris + g->num_spheres, used = used_tris + used_spheres;
-    uint32_t *local = malloc((size_t)n * sizeof *local);
-    t->tris = malloc((size_t)(used_tris > 0 ? used_tris : 1) * sizeof *t->tris);
-    t->spheres = malloc((size_t)(used_spheres > 0 ? used_spheres : 1) * sizeof *t->spheres);
-    t->scene_id = malloc((size_t)used * sizeof *t->scene_id);
-    if (!local || !t->tris || !t->spheres || !t->scene_id) { free(local); return false; }
-    t->num_tris = used_tris;
-    t->num_spheres = used_spheres;
-    for (int i = 0; i < n; i++) local[i] = UINT32_MAX;
-    uint32_t next_tri = 0, next_sphere = (uint32_t)used_tris;
+    const AccelGeometry *g = b->g;
+    uint32_t num_tris = (uint32_t)g->num_tris;
+    size_t blocks = 0, spheres = 0, sphere_leaves = 0;
+    for (int i = 0; i < t->num_nodes; i++) {
+        const KdNode *nd = &t->nodes[i];
+        if ((nd->flags & 3u) != KD_LEAF) continue;
+        uint32_t count = nd->flags >> 2, nt = 0;
+        const uint32_t *ids = &b->ids[nd->first];
+        while (nt < count && ids[nt] < num_tris) nt++; /* ascending: triangles first */
+        blocks += (nt + KD_BLOCK_WIDTH - 1) / KD_BLOCK_WIDTH;
+        spheres += count - nt;
+        sphere_leaves += count > nt;
+    }
+    t->blocks = malloc((blocks > 0 ? blocks : 1) * sizeof *t->blocks);
+    t->spheres = malloc((spheres > 0 ? spheres : 1) * sizeof *t->spheres);
+    t->sphere_leaves = malloc((sphere_leaves > 0 ? sphere_leaves : 1) * sizeof *t->sphere_leaves);
+    if (!t->blocks || !t->spheres || !t->sphere_leaves) return false;
     for (int i = 0; i < t->num_nodes; i++) {
         KdNode *nd = &t->nodes[i];
         if ((nd->flags & 3u) != KD_LEAF) continue;
-        uint32_t count = nd->flags >> 2;
-        uint32_t *ids = count == 1 ? &nd->one_prim : &t->prim_ids[nd->first_prim];
-        for (uint32_t k = 0; k < count; k++) {
-            uint32_t id = ids[k];
-            if (local[id] == UINT32_MAX) {
-                if ((int)id < g->num_tris) {
-                    const int32_t *v = &g->tri_indices[3 * id];
-                    Vec3 a = g->positions[v[0]];
-                    KdTri *tri = &t->tris[next_tri];
-                    tri->v0 = a; /* the vertices list.c tests: bit-identical results */
-                    tri->v1 = g->positions[v[1]];
-                    tri->v2 = g->positions[v[2]];
-                    local[id] = next_tri++;
-                } else {
-                    t->spheres[next_sphere - (uint32_t)used_tris] = g->spheres[id - (uint32_t)g->num_tris];
-                    local[id] = next_sphere++;
+        uint32_t count = nd->flags >> 2, nt = 0;
+        const uint32_t *ids = &b->ids[nd->first];
+        while (nt < count && ids[nt] < num_tris) nt++;
+        uint32_t first_block = (uint32_t)t->num_blocks, num_blocks = (nt + KD_BLOCK_WIDTH - 1) / KD_BLOCK_WIDTH;
+        for (uint32_t k = 0; k < num_blocks; k++) {
+            KdTriBlock *blk = &t->blocks[t->num_blocks++];
+            for (int lane = 0; lane < KD_BLOCK_WIDTH; lane++) {
+                uint32_t j = KD_BLOCK_WIDTH * k + (uint32_t)lane;
+                if (j >= nt) {
+                    /* NaN vertices fail every comparison of the test (t > t_min too). */
+                    for (int v = 0; v < 3; v++)
+                        for (int a = 0; a < 3; a++) blk->v[v][a][lane] = NAN;
+                    blk->id[lane] = KD_NO_PRIM;
+                    continue;
                 }
-                t->scene_id[local[id]] = id;
+                const int32_t *vi = &g->tri_indices[3 * ids[j]];
+                for (int v = 0; v < 3; v++) {
+                    Vec3 p = g->positions[vi[v]]; /* the vertices list.c tests: bit-identical results */
+                    blk->v[v][0][lane] = p.x;
+                    blk->v[v][1][lane] = p.y;
+                    blk->v[v][2][lane] = p.z;
+                }
+                blk->id[lane] = ids[j];
             }
-            ids[k] = local[id];
         }
+        if (count == nt) {
+            nd->first = first_block;
+            nd->flags = KD_LEAF | (num_blocks << 3);
+            continue;
+        }
+        KdSphereLeaf *sl = &t->sphere_leaves[t->num_sphere_leaves];
+        sl->first_block = first_block;
+        sl->num_blocks = num_blocks;
+        sl->first_sphere = (uint32_t)t->num_spheres;
+        sl->num_spheres = count - nt;
+        for (uint32_t j = nt; j < count; j++) {
+            const Sphere *sp = &g->spheres[ids[j] - num_tris];
+            t->spheres[t->num_spheres++] = (KdSphere){sp->center, sp->radius, ids[j]};
+        }
+        nd->first = (uint32_t)t->num_sphere_leaves++;
+        nd->flags = KD_LEAF | KD_LEAF_SPHERES;
     }
-    free(local);
+    return true;
+}
+
+/* Flags the children of inner nodes that are empty leaves and drops those leaves from the
+ * node array (keeping the depth-first order): the traversal never descends into a child
+ * flagged empty, so most of a tree built with the empty-space bonus (whose leaves are
+ * mostly empty) costs neither node fetches nor cache space. Returns false on OOM. */
+static bool drop_empty_leaves(KdTree *t)
+{
+    int n = t->num_nodes;
+    uint32_t *new_index = malloc((size_t)n * sizeof *new_index);
+    if (!new_index) return false;
+    uint32_t kept = 0;
+    for (int i = 0; i < n; i++) {
+        new_index[i] = kept;
+        /* The root is kept even when empty: the tree has at least one primitive. */
+        if (i == 0 || t->nodes[i].flags != KD_LEAF) kept++;
+    }
+    for (int i = 0; i < n; i++) {
+        KdNode nd = t->nodes[i];
+        if (i > 0 && nd.flags == KD_LEAF) continue;
+        if ((nd.flags & 3u) != KD_LEAF) {
+            uint32_t above = nd.flags >> 4;
+            uint32_t fl = nd.flags & 3u;
+            if (t->nodes[i + 1].flags == KD_LEAF) fl |= KD_EMPTY_BELOW; /* no blocks, no spheres */
+            if (t->nodes[above].flags == KD_LEAF) fl |= KD_EMPTY_ABOVE;
+            nd.flags = fl | (new_index[above] << 4);
+        }
+        t->nodes[new_index[i]] = nd;
+    }
+    free(new_index);
+    t->num_nodes = (int)kept;
+    /* Give back the spare capacity (a failed shrink leaves the array as it was). */
+    KdNode *nodes = realloc(t->nodes, (size_t)kept * sizeof *nodes);
+    if (nodes) t->nodes = nodes;
     return true;
 }
 
@@ -488,7 +553,7 @@ CstStatus kdtree_build(KdTree *t, const AccelGeometry *geom, CstError *err)
     uint8_t *side = malloc((size_t)n);
     EventLists E = {0};
     E.block = malloc((size_t)n * 6 * sizeof *E.block);
-    Builder b = {geom, prim_box, side, t, 0, 0, false, false};
+    Builder b = {geom, prim_box, side, t, NULL, 0, 0, 0, false, false};
     if (!prim_box || !side || !E.block) { free(E.block); goto oom; }
 
     /* The events of every primitive that is a surface: triangles of zero area (repeated
@@ -539,34 +604,30 @@ CstStatus kdtree_build(KdTree *t, const AccelGeometry *geom, CstError *err)
     b.cap_nodes = 2 * used + 16;
     b.cap_ids = 2 * used + 16;
     t->nodes = malloc((size_t)b.cap_nodes * sizeof *t->nodes);
-    t->prim_ids = malloc((size_t)b.cap_ids * sizeof *t->prim_ids);
-    if (!t->nodes || !t->prim_ids) { free(E.block); goto oom; }
+    b.ids = malloc((size_t)b.cap_ids * sizeof *b.ids);
+    if (!t->nodes || !b.ids) { free(E.block); goto oom; }
 
     build_node(&b, &E, used, t->bounds, 0); /* frees E.block */
     if (b.oom) goto oom;
     if (b.too_big) {
         free(prim_box);
         free(side);
+        free(b.ids);
         kdtree_free(t);
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "kd-tree over %d primitives exceeds 2^30 nodes or 2^31 references",
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "kd-tree over %d primitives exceeds 2^28 nodes or 2^31 references",
                         n);
     }
     free(prim_box);
     free(side);
     prim_box = NULL;
     side = NULL;
-    /* Give back the arrays' spare capacity (a failed shrink leaves them as they were). */
-    KdNode *nodes = realloc(t->nodes, (size_t)t->num_nodes * sizeof *nodes);
-    if (nodes) t->nodes = nodes;
-    if (t->num_prim_ids > 0) {
-        uint32_t *ids = realloc(t->prim_ids, (size_t)t->num_prim_ids * sizeof *ids);
-        if (ids) t->prim_ids = ids;
-    }
-    if (!store_primitives(t, geom, used_tris, used_spheres)) goto oom;
+    if (!store_leaves(t, &b) || !drop_empty_leaves(t)) goto oom;
+    free(b.ids);
     return CST_OK;
 oom:
     free(prim_box);
     free(side);
+    free(b.ids);
     kdtree_free(t);
     return cst_fail(err, CST_ERR_OOM, "out of memory building the kd-tree over %d primitives", n);
 }
@@ -575,18 +636,16 @@ void kdtree_free(KdTree *t)
 {
     if (!t) return;
     free(t->nodes);
-    free(t->prim_ids);
-    free(t->tris);
+    free(t->blocks);
     free(t->spheres);
-    free(t->scene_id);
+    free(t->sphere_leaves);
     memset(t, 0, sizeof *t);
 }
 
 size_t kdtree_memory_bytes(const KdTree *t)
 {
-    return (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_prim_ids * sizeof(uint32_t) +
-           (size_t)t->num_tris * sizeof(KdTri) + (size_t)t->num_spheres * sizeof(Sphere) +
-           (size_t)(t->num_tris + t->num_spheres) * sizeof(uint32_t);
+    return (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_blocks * sizeof(KdTriBlock) +
+           (size_t)t->num_spheres * sizeof(KdSphere) + (size_t)t->num_sphere_leaves * sizeof(KdSphereLeaf);
 }
 
 /* ------------------------------------------------------------------ traversal */
@@ -638,78 +697,270 @@ static inline bool kd_ray_setup(const KdTree *t, const Ray *r, KdRay *q, float *
     return tn <= *t1;
 }
 
-/* The closest hit in a leaf; shortens r->t_max on a hit. hit->prim is a local index. */
-static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const TriangleRay *tr, Ray *r, Hit *hit)
+/* The lanes of a block test: KD_BLOCK_WIDTH floats, AVX or SSE. Comparisons are the
+ * ordered ones of the scalar test (false on NaN), except neq, true on NaN as in C; max is
+ * maxf's a > b ? a : b and abs fabsf's sign-bit clear. */
+#ifdef __AVX__
+typedef __m256 KdLanes;
+static inline KdLanes lanes_load(const float *p) { return _mm256_loadu_ps(p); }
+static inline void lanes_store(float *p, KdLanes a) { _mm256_storeu_ps(p, a); }
+static inline KdLanes lanes_set1(float x) { return _mm256_set1_ps(x); }
+static inline KdLanes lanes_zero(void) { return _mm256_setzero_ps(); }
+static inline KdLanes lanes_add(KdLanes a, KdLanes b) { return _mm256_add_ps(a, b); }
+static inline KdLanes lanes_sub(KdLanes a, KdLanes b) { return _mm256_sub_ps(a, b); }
+static inline KdLanes lanes_mul(KdLanes a, KdLanes b) { return _mm256_mul_ps(a, b); }
+static inline KdLanes lanes_div(KdLanes a, KdLanes b) { return _mm256_div_ps(a, b); }
+static inline KdLanes lanes_and(KdLanes a, KdLanes b) { return _mm256_and_ps(a, b); }
+static inline KdLanes lanes_or(KdLanes a, KdLanes b) { return _mm256_or_ps(a, b); }
+static inline KdLanes lanes_andnot(KdLanes a, KdLanes b) { return _mm256_andnot_ps(a, b); } /* ~a & b */
+static inline KdLanes lanes_max(KdLanes a, KdLanes b) { return _mm256_max_ps(a, b); } /* a > b ? a : b */
+static inline KdLanes lanes_abs(KdLanes a) { return _mm256_and_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff))); }
+static inline KdLanes lanes_lt(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
+static inline KdLanes lanes_gt(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+static inline KdLanes lanes_eq(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_EQ_OQ); }
+static inline KdLanes lanes_neq(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_NEQ_UQ); }
+static inline KdLanes lanes_ord(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_ORD_Q); }
+static inline int lanes_mask(KdLanes a) { return _mm256_movemask_ps(a); }
+#else
+typedef __m128 KdLanes;
+static inline KdLanes lanes_load(const float *p) { return _mm_loadu_ps(p); }
+static inline void lanes_store(float *p, KdLanes a) { _mm_storeu_ps(p, a); }
+static inline KdLanes lanes_set1(float x) { return _mm_set1_ps(x); }
+static inline KdLanes lanes_zero(void) { return _mm_setzero_ps(); }
+static inline KdLanes lanes_add(KdLanes a, KdLanes b) { return _mm_add_ps(a, b); }
+static inline KdLanes lanes_sub(KdLanes a, KdLanes b) { return _mm_sub_ps(a, b); }
+static inline KdLanes lanes_mul(KdLanes a, KdLanes b) { return _mm_mul_ps(a, b); }
+static inline KdLanes lanes_div(KdLanes a, KdLanes b) { return _mm_div_ps(a, b); }
+static inline KdLanes lanes_and(KdLanes a, KdLanes b) { return _mm_and_ps(a, b); }
+static inline KdLanes lanes_or(KdLanes a, KdLanes b) { return _mm_or_ps(a, b); }
+static inline KdLanes lanes_andnot(KdLanes a, KdLanes b) { return _mm_andnot_ps(a, b); } /* ~a & b */
+static inline KdLanes lanes_max(KdLanes a, KdLanes b) { return _mm_max_ps(a, b); } /* a > b ? a : b */
+static inline KdLanes lanes_abs(KdLanes a) { return _mm_and_ps(a, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff))); }
+static inline KdLanes lanes_lt(KdLanes a, KdLanes b) { return _mm_cmplt_ps(a, b); }
+static inline KdLanes lanes_gt(KdLanes a, KdLanes b) { return _mm_cmpgt_ps(a, b); }
+static inline KdLanes lanes_eq(KdLanes a, KdLanes b) { return _mm_cmpeq_ps(a, b); }
+static inline KdLanes lanes_neq(KdLanes a, KdLanes b) { return _mm_cmpneq_ps(a, b); }
+static inline KdLanes lanes_ord(KdLanes a, KdLanes b) { return _mm_cmpord_ps(a, b); }
+static inline int lanes_mask(KdLanes a) { return _mm_movemask_ps(a); }
+#endif
+
+/* Per-ray constants of the block test. */
+typedef struct KdRayTris {
+    TriangleRay tr;
+    KdLanes o[3]; /* origin, per world axis */
+    KdLanes sx, sy, sz;
+} KdRayTris;
+
+static inline KdRayTris kd_ray_tris(const Ray *r)
 {
-    uint32_t count = n->flags >> 2;
-    const uint32_t *ids = count == 1 ? &n->one_prim : &t->prim_ids[n->first_prim];
-    uint32_t num_tris = (uint32_t)t->num_tris;
+    KdRayTris q;
+    q.tr = triangle_ray_setup(r->d);
+    q.o[0] = lanes_set1(r->o.x); q.o[1] = lanes_set1(r->o.y); q.o[2] = lanes_set1(r->o.z);
+    q.sx = lanes_set1(q.tr.sx); q.sy = lanes_set1(q.tr.sy); q.sz = lanes_set1(q.tr.sz);
+    return q;
+}
+
+static inline Vec3 block_vertex(const KdTriBlock *b, int k, int lane)
+{
+    return v3(b->v[k][0][lane], b->v[k][1][lane], b->v[k][2][lane]);
+}
+
+/* triangle_intersect_watertight() on a block's triangles at once, with the same operations
+ * in the same order (the build has -ffp-contract=off, so nothing is fused into FMAs), so
+ * each lane's t, u, v are bit-identical to the scalar test's, and so is its rejection of t
+ * within triangle_t_error(). Lanes with an edge function of exactly zero need the scalar's
+ * recomputation in double: they come back in *scalar_lanes, for the caller to run through
+ * the scalar test. Returns the mask of the other lanes that hit within (t_min, t_max). */
+static inline int block_intersect(const KdTriBlock *b, const KdRayTris *q, KdLanes t_min, KdLanes t_max,
+                                  KdLanes *t_out, KdLanes *u_out, KdLanes *v_out, int *scalar_lanes)
+{
+    const int kx = q->tr.kx, ky = q->tr.ky, kz = q->tr.kz;
+    KdLanes px[3], py[3], pz[3];
+    for (int k = 0; k < 3; k++) {
+        pz[k] = lanes_sub(lanes_load(b->v[k][kz]), q->o[kz]);
+        px[k] = lanes_sub(lanes_sub(lanes_load(b->v[k][kx]), q->o[kx]), lanes_mul(q->sx, pz[k]));
+        py[k] = lanes_sub(lanes_sub(lanes_load(b->v[k][ky]), q->o[ky]), lanes_mul(q->sy, pz[k]));
+    }
+    /* U, V, W: the edge functions, scaled barycentrics of vertices 0, 1, 2 (JCGT 2013 eq. 4) */
+    KdLanes U = lanes_sub(lanes_mul(px[2], py[1]), lanes_mul(py[2], px[1]));
+    KdLanes V = lanes_sub(lanes_mul(px[0], py[2]), lanes_mul(py[0], px[2]));
+    KdLanes W = lanes_sub(lanes_mul(px[1], py[0]), lanes_mul(py[1], px[0]));
+    const KdLanes zero = lanes_zero();
+    int zero_lanes = lanes_mask(lanes_or(lanes_or(lanes_eq(U, zero), lanes_eq(V, zero)), lanes_eq(W, zero)));
+    *scalar_lanes = zero_lanes;
+    KdLanes neg = lanes_or(lanes_or(lanes_lt(U, zero), lanes_lt(V, zero)), lanes_lt(W, zero));
+    KdLanes pos = lanes_or(lanes_or(lanes_gt(U, zero), lanes_gt(V, zero)), lanes_gt(W, zero));
+    /* Most rays pass outside every triangle of a block: stop before the division. Unused
+     * lanes are NaN, neither negative nor positive, so they are dropped explicitly. */
+    int inside = lanes_mask(lanes_andnot(lanes_and(neg, pos), lanes_ord(U, U))) & ~zero_lanes;
+    if (!inside) {
+        *t_out = *u_out = *v_out = zero;
+        return 0;
+    }
+    KdLanes det = lanes_add(lanes_add(U, V), W);
+    KdLanes zt[3];
+    for (int k = 0; k < 3; k++) zt[k] = lanes_mul(q->sz, pz[k]);
+    KdLanes T = lanes_add(lanes_add(lanes_mul(U, zt[0]), lanes_mul(V, zt[1])), lanes_mul(W, zt[2]));
+    KdLanes inv_det = lanes_div(lanes_set1(1.0f), det);
+    KdLanes t = lanes_mul(T, inv_det);
+    KdLanes ok = lanes_neq(det, zero);
+    ok = lanes_and(ok, lanes_gt(t, t_min));
+    ok = lanes_and(ok, lanes_lt(t, t_max));
+    /* triangle_t_error(), lane by lane. */
+    KdLanes max_zt = lanes_max(lanes_max(lanes_abs(zt[0]), lanes_abs(zt[1])), lanes_abs(zt[2]));
+    KdLanes max_xt = lanes_max(lanes_max(lanes_abs(px[0]), lanes_abs(px[1])), lanes_abs(px[2]));
+    KdLanes max_yt = lanes_max(lanes_max(lanes_abs(py[0]), lanes_abs(py[1])), lanes_abs(py[2]));
+    const KdLanes g2 = lanes_set1(TRIANGLE_GAMMA(2)), g3 = lanes_set1(TRIANGLE_GAMMA(3)),
+                  g5 = lanes_set1(TRIANGLE_GAMMA(5));
+    KdLanes delta_z = lanes_mul(g3, max_zt);
+    KdLanes delta_x = lanes_mul(g5, lanes_add(max_xt, max_zt));
+    KdLanes delta_y = lanes_mul(g5, lanes_add(max_yt, max_zt));
+    KdLanes delta_e = lanes_mul(lanes_set1(2.0f), lanes_add(lanes_add(lanes_mul(lanes_mul(g2, max_xt), max_yt),
+                                                                       lanes_mul(delta_y, max_xt)),
+                                                             lanes_mul(delta_x, max_yt)));
+    KdLanes max_e = lanes_max(lanes_max(lanes_abs(U), lanes_abs(V)), lanes_abs(W));
+    KdLanes delta_t = lanes_mul(lanes_mul(lanes_set1(3.0f), lanes_add(lanes_add(lanes_mul(lanes_mul(g3, max_e), max_zt),
+                                                                                lanes_mul(delta_e, max_zt)),
+                                                                      lanes_mul(delta_z, max_e))),
+                                lanes_abs(inv_det));
+    ok = lanes_and(ok, lanes_gt(t, delta_t));
+    *t_out = t;
+    *u_out = lanes_mul(V, inv_det);
+    *v_out = lanes_mul(W, inv_det);
+    return lanes_mask(ok) & inside;
+}
+
+/* The closest hit among num_blocks blocks; shortens r->t_max on a hit. Lanes are taken in
+ * order with a strict <, which picks among equal t exactly as a scalar loop over the
+ * leaf's ascending ids would. */
+static inline bool blocks_intersect(const KdTriBlock *b, uint32_t num_blocks, const KdRayTris *q, Ray *r,
+                                    Hit *hit)
+{
     bool found = false;
-    for (uint32_t i = 0; i < count; i++) {
-        uint32_t id = ids[i];
-        float tt, u, v;
-        if (id < num_tris) {
-            const KdTri *tri = &t->tris[id];
-            if (!triangle_intersect_watertight(tr, r, tri->v0, tri->v1, tri->v2, &tt, &u, &v)) continue;
-        } else {
-            const Sphere *sp = &t->spheres[id - num_tris];
-            if (!sphere_intersect(sp->center, sp->radius, r, &tt)) continue;
-            u = v = 0.0f;
+    const KdLanes t_min = lanes_set1(r->t_min);
+    for (uint32_t bi = 0; bi < num_blocks; bi++, b++) {
+        KdLanes tl, ul, vl;
+        int scalar_lanes;
+        int mask = block_intersect(b, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
+        if (!(mask | scalar_lanes)) continue;
+        float t[KD_BLOCK_WIDTH], u[KD_BLOCK_WIDTH], v[KD_BLOCK_WIDTH];
+        lanes_store(t, tl); lanes_store(u, ul); lanes_store(v, vl);
+        for (int i = 0; i < KD_BLOCK_WIDTH; i++) {
+            if (scalar_lanes & (1 << i)) {
+                float ts, us, vs;
+                if (triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
+                                                  block_vertex(b, 2, i), &ts, &us, &vs)) {
+                    r->t_max = ts;
+                    hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
+                    found = true;
+                }
+            } else if ((mask & (1 << i)) && t[i] < r->t_max) {
+                r->t_max = t[i];
+                hit->t = t[i]; hit->u = u[i]; hit->v = v[i]; hit->prim = b->id[i];
+                found = true;
+            }
         }
-        r->t_max = tt;
-        hit->t = tt; hit->u = u; hit->v = v; hit->prim = id;
-        found = true;
     }
     return found;
 }
 
-static inline bool leaf_occluded(const KdTree *t, const KdNode *n, const TriangleRay *tr, const Ray *r)
+static inline bool blocks_occluded(const KdTriBlock *b, uint32_t num_blocks, const KdRayTris *q, const Ray *r)
 {
-    uint32_t count = n->flags >> 2;
-    const uint32_t *ids = count == 1 ? &n->one_prim : &t->prim_ids[n->first_prim];
-    uint32_t num_tris = (uint32_t)t->num_tris;
-    for (uint32_t i = 0; i < count; i++) {
-        uint32_t id = ids[i];
-        float tt, u, v;
-        if (id < num_tris) {
-            const KdTri *tri = &t->tris[id];
-            if (triangle_intersect_watertight(tr, r, tri->v0, tri->v1, tri->v2, &tt, &u, &v)) return true;
-        } else {
-            const Sphere *sp = &t->spheres[id - num_tris];
-            if (sphere_intersect(sp->center, sp->radius, r, &tt)) return true;
+    const KdLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
+    for (uint32_t bi = 0; bi < num_blocks; bi++, b++) {
+        KdLanes tl, ul, vl;
+        int scalar_lanes;
+        if (block_intersect(b, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes)) return true;
+        for (int i = 0; i < KD_BLOCK_WIDTH; i++) {
+            float ts, us, vs;
+            if ((scalar_lanes & (1 << i)) &&
+                triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
+                                              block_vertex(b, 2, i), &ts, &us, &vs))
+                return true;
         }
     }
     return false;
 }
 
-/* Descends from `node` with the ray interval [*t0, *t1] to the first leaf in front-to-back
- * order, pushing the far children that the interval also reaches (pbrt-v3's
- * KdTreeAccel::Intersect). The child above the plane is prefetched: it is the next step or
- * a later pop, and rarely in its parent's cache line. NaN plane distances (0 * inf on a
- * slab's face) compare false everywhere: both children. (A branch-free variant of this
- * loop cut simulated mispredictions by half but ran primary rays ~15% slower, random rays
- * no faster, on the bunny.) */
+/* The closest hit in a leaf; shortens r->t_max on a hit. */
+static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const KdRayTris *q, Ray *r, Hit *hit)
+{
+    if (!(n->flags & KD_LEAF_SPHERES)) return blocks_intersect(&t->blocks[n->first], n->flags >> 3, q, r, hit);
+    const KdSphereLeaf *l = &t->sphere_leaves[n->first];
+    bool found = blocks_intersect(&t->blocks[l->first_block], l->num_blocks, q, r, hit);
+    for (uint32_t i = 0; i < l->num_spheres; i++) {
+        const KdSphere *sp = &t->spheres[l->first_sphere + i];
+        float tt;
+        if (!sphere_intersect(sp->center, sp->radius, r, &tt)) continue;
+        r->t_max = tt;
+        hit->t = tt; hit->u = 0.0f; hit->v = 0.0f; hit->prim = sp->id;
+        found = true;
+    }
+    return found;
+}
+
+static inline bool leaf_occluded(const KdTree *t, const KdNode *n, const KdRayTris *q, const Ray *r)
+{
+    if (!(n->flags & KD_LEAF_SPHERES)) return blocks_occluded(&t->blocks[n->first], n->flags >> 3, q, r);
+    const KdSphereLeaf *l = &t->sphere_leaves[n->first];
+    if (blocks_occluded(&t->blocks[l->first_block], l->num_blocks, q, r)) return true;
+    for (uint32_t i = 0; i < l->num_spheres; i++) {
+        const KdSphere *sp = &t->spheres[l->first_sphere + i];
+        float tt;
+        if (sphere_intersect(sp->center, sp->radius, r, &tt)) return true;
+    }
+    return false;
+}
+
+/* Descends from `node` with the ray interval [*t0, *t1] to the first non-empty leaf in
+ * front-to-back order, pushing the far children that the interval also reaches (pbrt-v3's
+ * KdTreeAccel::Intersect); returns KD_NONE when the interval meets only empty leaves below
+ * `node`. Children flagged empty are never entered: where the near one is, the far one is
+ * taken at once, unless it starts at or beyond `skip_from` (the caller's rule for popped
+ * subtrees, which it would otherwise have been). The child above the plane is prefetched:
+ * it is the next step or a later pop, and rarely in its parent's cache line. NaN plane
+ * distances (0 * inf on a slab's face) compare false everywhere: both children. (Branch-
+ * free variants of this loop ran primary rays 15-20% slower, random rays no faster, on the
+ * bunny: the predicted branches keep the node fetches off the comparisons' latency.) */
 static inline uint32_t descend(const KdTree *t, const KdRay *q, uint32_t node, float *t0, float *t1,
-                               KdStackEntry *stack, int *sp)
+                               KdStackEntry *stack, int *sp, float skip_from)
 {
     float tmin = *t0, tmax = *t1;
     for (;;) {
         const KdNode *n = &t->nodes[node];
-        uint32_t axis = n->flags & 3u;
+        uint32_t f = n->flags, axis = f & 3u;
         if (axis == KD_LEAF) break;
-        uint32_t below = node + 1, above = n->flags >> 2;
+        uint32_t below = node + 1, above = f >> 4;
         __builtin_prefetch(&t->nodes[above]);
         float s = n->split;
         float t_near_exit = (s + q->near_off[axis]) * q->inv[axis];
         float t_far_enter = (s + q->far_off[axis]) * q->inv[axis];
-        uint32_t near = below ^ ((below ^ above) & q->near_above_mask[axis]);
+        uint32_t mask = q->near_above_mask[axis];
+        uint32_t near = below ^ ((below ^ above) & mask);
         uint32_t far = near ^ below ^ above;
-        if (t_near_exit < tmin) { node = far; continue; }  /* already past the near side */
-        if (t_far_enter > tmax) { node = near; continue; } /* never reaches the far side */
-        stack[*sp].node = far;
-        stack[*sp].t0 = t_far_enter > tmin ? t_far_enter : tmin;
-        stack[*sp].t1 = tmax;
-        (*sp)++;
+        bool near_empty = f & (KD_EMPTY_BELOW << (mask & 1u)), far_empty = f & (KD_EMPTY_ABOVE >> (mask & 1u));
+        if (t_near_exit < tmin) { /* already past the near side */
+            if (far_empty) return (uint32_t)KD_NONE;
+            node = far;
+            continue;
+        }
+        if (t_far_enter > tmax) { /* never reaches the far side */
+            if (near_empty) return (uint32_t)KD_NONE;
+            node = near;
+            continue;
+        }
+        if (near_empty) {
+            tmin = t_far_enter > tmin ? t_far_enter : tmin;
+            if (tmin >= skip_from) return (uint32_t)KD_NONE;
+            node = far;
+            continue;
+        }
+        if (!far_empty) {
+            stack[*sp].node = far;
+            stack[*sp].t0 = t_far_enter > tmin ? t_far_enter : tmin;
+            stack[*sp].t1 = tmax;
+            (*sp)++;
+        }
         node = near;
         tmax = t_near_exit < tmax ? t_near_exit : tmax;
     }
@@ -728,20 +979,17 @@ bool kdtree_intersect(const KdTree *t, const Ray *ray, Hit *hit)
     KdRay q;
     float t0, t1;
     if (!kd_ray_setup(t, ray, &q, &t0, &t1)) return false;
-    TriangleRay tr = triangle_ray_setup(ray->d);
+    KdRayTris qt = kd_ray_tris(ray);
     Ray r = *ray;
     KdStackEntry stack[KD_STACK];
     int sp = 0;
     uint32_t node = 0;
     bool found = false;
     for (;;) {
-        node = descend(t, &q, node, &t0, &t1, stack, &sp);
-        found |= leaf_intersect(t, &t->nodes[node], &tr, &r, hit);
+        node = descend(t, &q, node, &t0, &t1, stack, &sp, r.t_max);
+        if (node != (uint32_t)KD_NONE) found |= leaf_intersect(t, &t->nodes[node], &qt, &r, hit);
         do {
-            if (sp == 0) {
-                if (found) hit->prim = t->scene_id[hit->prim];
-                return found;
-            }
+            if (sp == 0) return found;
             sp--;
         } while (stack[sp].t0 >= r.t_max);
         node = stack[sp].node;
@@ -756,13 +1004,13 @@ bool kdtree_occluded(const KdTree *t, const Ray *ray)
     KdRay q;
     float t0, t1;
     if (!kd_ray_setup(t, ray, &q, &t0, &t1)) return false;
-    TriangleRay tr = triangle_ray_setup(ray->d);
+    KdRayTris qt = kd_ray_tris(ray);
     KdStackEntry stack[KD_STACK];
     int sp = 0;
     uint32_t node = 0;
     for (;;) {
-        node = descend(t, &q, node, &t0, &t1, stack, &sp);
-        if (leaf_occluded(t, &t->nodes[node], &tr, ray)) return true;
+        node = descend(t, &q, node, &t0, &t1, stack, &sp, INFINITY);
+        if (node != (uint32_t)KD_NONE && leaf_occluded(t, &t->nodes[node], &qt, ray)) return true;
         if (sp == 0) return false;
         sp--;
         node = stack[sp].node;

@@ -1,7 +1,7 @@
 /* SAH kd-tree over triangles and spheres: Wald & Havran's O(N log N) event-sweep build
  * with perfect splits ("On building fast kd-Trees for Ray Tracing, and on doing that in
- * O(N log N)", IEEE RT 2006), 8-byte nodes as in pbrt, and front-to-back stack traversal
- * (Havran's TA_rec_B, as in pbrt-v3's KdTreeAccel). */
+ * O(N log N)", IEEE RT 2006), 8-byte nodes as in pbrt, front-to-back stack traversal
+ * (Havran's TA_rec_B, as in pbrt-v3's KdTreeAccel) and leaves of SIMD triangle blocks. */
 #ifndef CST_ACCEL_KDTREE_H
 #define CST_ACCEL_KDTREE_H
 
@@ -15,43 +15,71 @@
 #include "geometry/ray.h"
 #include "math/bbox.h"
 
+/* Triangles per leaf block: one AVX or SSE register of floats. */
+#ifdef __AVX__
+#define KD_BLOCK_WIDTH 8
+#else
+#define KD_BLOCK_WIDTH 4
+#endif
+
 enum {
-    KD_LEAF = 3,       /* KdNode.flags & 3: 0, 1, 2 = split axis of an inner node */
-    KD_MAX_DEPTH = 60  /* cap on the build's depth limit; the fixed traversal stack is sized by it */
+    KD_LEAF = 3,         /* KdNode.flags & 3: 0, 1, 2 = split axis of an inner node */
+    KD_EMPTY_BELOW = 4,  /* inner node flag: the child below the plane is an empty leaf */
+    KD_EMPTY_ABOVE = 8,  /* inner node flag: the child above the plane is an empty leaf */
+    KD_LEAF_SPHERES = 4, /* leaf flag: the leaf holds spheres */
+    KD_MAX_DEPTH = 60    /* cap on the build's depth limit; the fixed traversal stack is sized by it */
 };
 
-/* 8 bytes. Inner node: `split` is the plane's coordinate on axis flags & 3; the child
- * below the plane is the next node (depth-first layout), the one above is flags >> 2.
- * Leaf (flags & 3 == KD_LEAF): flags >> 2 primitives; one is stored inline in
- * `one_prim`, more are KdTree.prim_ids[first_prim ..] (local indices, see KdTree). */
+/* 8 bytes. Inner node: `split` is the plane's coordinate on axis flags & 3 and flags >> 4
+ * is the child above the plane; the child below is the next node (depth-first layout).
+ * A child that is an empty leaf is not stored: the parent's KD_EMPTY_BELOW or
+ * KD_EMPTY_ABOVE says so, and the traversal never enters it (with the empty-space bonus
+ * most leaves are empty). Leaf (flags & 3 == KD_LEAF): without KD_LEAF_SPHERES, triangles
+ * only, flags >> 3 blocks from KdTree.blocks[first]; with it, KdTree.sphere_leaves[first]
+ * says where its blocks and spheres are. */
 typedef struct KdNode {
     union {
         float split;
-        uint32_t one_prim;
-        uint32_t first_prim;
+        uint32_t first;
     };
     uint32_t flags;
 } KdNode;
 
-/* A triangle's own vertices, as triangle_intersect_watertight() takes them. */
-typedef struct KdTri {
-    Vec3 v0, v1, v2;
-} KdTri;
+/* KD_BLOCK_WIDTH triangles of one leaf, v[vertex][axis][lane], for one SIMD watertight
+ * test (the layout of the BVH's blocks; indexing by axis lets the per-ray axis permutation
+ * pick rows). A leaf's triangles are consecutive blocks, so a leaf costs one dependent
+ * memory access, not one per triangle. Unused lanes have NaN vertices and id KD_NO_PRIM. */
+typedef struct KdTriBlock {
+    float v[3][3][KD_BLOCK_WIDTH];
+    uint32_t id[KD_BLOCK_WIDTH]; /* scene primitive ids */
+} KdTriBlock;
+#define KD_NO_PRIM 0xffffffffu
 
-/* Primitives are renumbered ("local" indices) in the order the depth-first node array
- * first references them, so the data of neighbouring cells is close in memory: triangles
- * 0..num_tris-1, then spheres. Leaf lists hold local indices, in ascending order of scene
- * id. Only primitives in the tree are stored. */
+typedef struct KdSphere {
+    Vec3 center;
+    float radius;
+    uint32_t id; /* scene primitive id */
+} KdSphere;
+
+/* A leaf holding spheres: its triangle blocks, then its spheres (scene ids of spheres
+ * exceed every triangle's, so this is ascending id order). */
+typedef struct KdSphereLeaf {
+    uint32_t first_block, num_blocks;
+    uint32_t first_sphere, num_spheres;
+} KdSphereLeaf;
+
+/* Each leaf holds copies of its primitives in ascending order of scene id (the order exact
+ * ties in t resolve in): a primitive straddling several leaves is copied into each. Only
+ * primitives in the tree are stored. */
 typedef struct KdTree {
     KdNode *nodes;      /* nodes[0] is the root; NULL when no primitive can be hit */
     int num_nodes;
-    uint32_t *prim_ids; /* leaf lists of more than one primitive (local indices) */
-    int num_prim_ids;
-    KdTri *tris;        /* by local index */
-    int num_tris;
-    Sphere *spheres;    /* by local index - num_tris */
+    KdTriBlock *blocks; /* by leaf, in node order */
+    int num_blocks;
+    KdSphere *spheres;  /* by leaf, in node order */
     int num_spheres;
-    uint32_t *scene_id; /* local index -> scene primitive id */
+    KdSphereLeaf *sphere_leaves;
+    int num_sphere_leaves;
     BBox bounds;        /* of the primitives in the tree */
     float max_abs;      /* largest |coordinate| of bounds: scales the traversal's plane margin */
     int max_depth;      /* the depth limit the build used */
@@ -59,8 +87,8 @@ typedef struct KdTree {
 
 /* Zero primitives is valid (every ray misses). Triangles of zero area (repeated or
  * collinear vertices) are left out of the tree and so never hit, as are non-finite
- * triangles and spheres. On failure (CST_ERR_OOM, or CST_ERR_UNSUPPORTED past 2^30 nodes)
- * *a is zeroed. */
+ * triangles and spheres. On failure (CST_ERR_OOM, or CST_ERR_UNSUPPORTED past 2^28 nodes
+ * or 2^31 primitive references) *a is zeroed. */
 CstStatus kdtree_build(KdTree *a, const AccelGeometry *geom, CstError *err);
 /* Accepts NULL and a zeroed tree. */
 void kdtree_free(KdTree *a);
@@ -68,7 +96,7 @@ void kdtree_free(KdTree *a);
 bool kdtree_intersect(const KdTree *a, const Ray *r, Hit *hit);
 /* Any hit in (r.t_min, r.t_max). */
 bool kdtree_occluded(const KdTree *a, const Ray *r);
-/* Nodes, leaf lists, the primitive arrays and the map to scene ids. */
+/* Nodes, triangle blocks, spheres and sphere-leaf records. */
 size_t kdtree_memory_bytes(const KdTree *a);
 
 #endif

@@ -464,7 +464,10 @@ static void check_random_rays(const Pair *p, Pcg32 *rng, int count, Stats *st, c
 
 static bool cell_lists(const Grid *g, int cell, int id)
 {
-    for (uint32_t k = g->cell_start[cell]; k < g->cell_start[cell + 1]; k++) {
+    if (!((g->cell_bits[cell >> 6] >> (cell & 63)) & 1u)) return false;
+    uint32_t begin, end;
+    cell_list(g, cell, &begin, &end);
+    for (uint32_t k = begin; k < end; k++) {
         uint32_t slot = g->slots[k];
         uint32_t sid = slot < (uint32_t)g->num_tris ? g->tris[slot].id : g->spheres[slot - (uint32_t)g->num_tris].id;
         if ((int)sid == id) return true;
@@ -483,11 +486,12 @@ static int cell_of_point(const Grid *g, Vec3 p)
     return grid_cell_index(g, c[0], c[1], c[2]);
 }
 
-/* Checks the cell lists: offsets monotone and complete, slots in range and increasing
- * within a cell, the grid's primitive copies exact (the list back end's floats), every
- * placed primitive referenced, and the cell containing each of a set of points on each
- * primitive (vertices, edge midpoints, centroid, random points; sphere poles) listing
- * it. Occupancy bits match the lists. Returns the number of references. */
+/* Checks the cell lists: one non-empty list per occupancy bit, offsets increasing and
+ * complete, each brick's first list right after the previous bricks' lists, slots in
+ * range and increasing within a cell, the grid's primitive copies exact (the list back
+ * end's floats), every placed primitive referenced, and the cell containing each of a set
+ * of points on each primitive (vertices, edge midpoints, centroid, random points; sphere
+ * poles) listing it. Returns the number of references. */
 static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
 {
     int n = s->num_tris + s->num_spheres;
@@ -497,7 +501,8 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
     assert_int_equal(g->num_cells, 64 * g->brick_res[0] * g->brick_res[1] * g->brick_res[2]);
     assert_int_equal(g->brick_shift[0] + g->brick_shift[1] + g->brick_shift[2], 6);
     for (int a = 0; a < 3; a++) assert_int_equal(g->brick_res[a], ((g->res[a] - 1) >> g->brick_shift[a]) + 1);
-    assert_true(g->cell_start[0] == 0u && g->cell_start[g->num_cells] == g->num_refs);
+    assert_true(g->list_start[0] == 0u && g->list_start[g->num_occupied] == g->num_refs);
+    for (int k = 0; k < g->num_occupied; k++) assert_true(g->list_start[k] < g->list_start[k + 1]);
     int *seen = calloc((size_t)n, sizeof *seen);
     assert_non_null(seen);
     for (int i = 0; i < s->num_tris; i++) {
@@ -518,26 +523,33 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
     }
     for (int i = 0; i < n; i++) assert_int_equal(seen[i], 1); /* a permutation */
     memset(seen, 0, (size_t)n * sizeof *seen);
+    int occupied = 0;
     for (int c = 0; c < g->num_cells; c++) {
-        assert_true(g->cell_start[c] <= g->cell_start[c + 1]);
+        if ((c & 63) == 0) assert_int_equal((int)(g->brick_first[c >> 6] & ~GRID_SUPER_EMPTY), occupied);
+        bool bit = (g->cell_bits[c >> 6] >> (c & 63)) & 1u;
+        uint32_t begin = 0, end = 0;
+        if (bit) {
+            cell_list(g, c, &begin, &end);
+            assert_true(begin == g->list_start[occupied] && end == g->list_start[occupied + 1]);
+            occupied++;
+        }
         /* Decode the brick numbering of grid.h; padding cells past res stay empty. */
         const int *sh = g->brick_shift;
         int brick = c >> 6, local = c & 63;
         int x = ((brick % g->brick_res[0]) << sh[0]) + (local & ((1 << sh[0]) - 1));
         int y = ((brick / g->brick_res[0] % g->brick_res[1]) << sh[1]) + ((local >> sh[0]) & ((1 << sh[1]) - 1));
         int z = ((brick / g->brick_res[0] / g->brick_res[1]) << sh[2]) + (local >> (sh[0] + sh[1]));
-        if (x >= g->res[0] || y >= g->res[1] || z >= g->res[2]) assert_true(g->cell_start[c] == g->cell_start[c + 1]);
+        if (x >= g->res[0] || y >= g->res[1] || z >= g->res[2]) assert_false(bit);
         else assert_int_equal(grid_cell_index(g, x, y, z), c);
-        bool bit = (g->cell_bits[c >> 6] >> (c & 63)) & 1u;
-        assert_true(bit == (g->cell_start[c + 1] > g->cell_start[c]));
-        for (uint32_t k = g->cell_start[c]; k < g->cell_start[c + 1]; k++) {
+        for (uint32_t k = begin; k < end; k++) {
             assert_true(g->slots[k] < (uint32_t)n);
-            if (k > g->cell_start[c]) assert_true(g->slots[k] > g->slots[k - 1]);
+            if (k > begin) assert_true(g->slots[k] > g->slots[k - 1]);
             uint32_t slot = g->slots[k];
             seen[slot < (uint32_t)g->num_tris ? g->tris[slot].id : g->spheres[slot - (uint32_t)g->num_tris].id]++;
         }
     }
-    /* Superbrick bits: set iff a brick inside has a primitive. */
+    assert_int_equal(occupied, g->num_occupied);
+    /* Superbrick flags: on every brick of a superbrick none of whose bricks has a primitive. */
     assert_int_equal(g->super_shift[0] + g->super_shift[1] + g->super_shift[2], 6);
     int num_super = g->super_res[0] * g->super_res[1] * g->super_res[2];
     uint64_t *expect = calloc((size_t)num_super, sizeof *expect);
@@ -549,7 +561,12 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
                  g->super_res[0] * ((by >> g->super_shift[1]) + g->super_res[1] * (bz >> g->super_shift[2]));
         expect[sb] = 1;
     }
-    for (int sb = 0; sb < num_super; sb++) assert_true((g->super_bits[sb] != 0) == (expect[sb] != 0));
+    for (int b = 0; b < g->num_cells / 64; b++) {
+        int bx = b % g->brick_res[0], by = b / g->brick_res[0] % g->brick_res[1], bz = b / g->brick_res[0] / g->brick_res[1];
+        int sb = (bx >> g->super_shift[0]) +
+                 g->super_res[0] * ((by >> g->super_shift[1]) + g->super_res[1] * (bz >> g->super_shift[2]));
+        assert_true(((g->brick_first[b] & GRID_SUPER_EMPTY) != 0) == (expect[sb] == 0));
+    }
     free(expect);
     for (int id = 0; id < n; id++) {
         BBox b = prim_box(s, id);
@@ -957,9 +974,13 @@ static long refs_on_walk(const Grid *g, const Ray *ray)
     if (grid_intersect(g, ray, &h)) w.t_end = fmin(w.t_end, (double)h.t);
     long refs = 0;
     for (;;) {
-        if (cell_occupied(g, w.cell)) refs += g->cell_start[w.cell + 1] - g->cell_start[w.cell];
-        else if (!brick_occupied(g, w.cell)) {
-            if (!walk_skip_empty(g, &w)) break;
+        uint64_t bits = g->cell_bits[w.cell >> 6];
+        if ((bits >> (w.cell & 63)) & 1u) {
+            uint32_t begin, end;
+            cell_list(g, w.cell, &begin, &end);
+            refs += end - begin;
+        } else if (!bits) {
+            if (!walk_bricks(g, &w)) break;
             continue;
         }
         if (!walk_step(g, &w)) break;

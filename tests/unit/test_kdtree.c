@@ -418,14 +418,48 @@ static BBox shrink(BBox b)
 }
 
 typedef struct TreeStats {
-    int leaves, empty_leaves, max_depth, refs, list_refs;
-    int *seen; /* by scene id */
+    int leaves, empty_leaves, max_depth, refs;
+    int blocks, spheres, sphere_leaves; /* leaf storage met so far, in node order */
+    int *seen;                          /* by scene id: leaves listing the primitive */
 } TreeStats;
 
+/* Checks that every primitive meeting the inside of `cell` is among ids[0..count). */
+static void check_coverage(const Soup *s, BBox cell, const uint32_t *ids, uint32_t count, int node)
+{
+    BBox inner = shrink(cell);
+    int np = s->num_tris + s->num_spheres;
+    for (int id = 0; id < np; id++) {
+        bool meets;
+        if (id < s->num_tris) {
+            if (tri_zero_area(s, id)) continue;
+            meets = triangle_meets_box(s->pos[s->idx[3 * id]], s->pos[s->idx[3 * id + 1]], s->pos[s->idx[3 * id + 2]],
+                                       inner);
+        } else {
+            meets = sphere_meets_box(&s->spheres[id - s->num_tris], inner);
+        }
+        if (!meets) continue;
+        bool listed = false;
+        for (uint32_t i = 0; i < count && !listed; i++) listed = ids[i] == (uint32_t)id;
+        if (!listed) fail_msg("leaf under node %d: primitive %d meets the cell but is not listed", node, id);
+    }
+}
+
+/* An empty leaf: not stored, flagged in its parent `node`. */
+static void check_empty_leaf(const Soup *s, int node, BBox cell, int depth, bool full, TreeStats *ts)
+{
+    if (depth > ts->max_depth) ts->max_depth = depth;
+    ts->leaves++;
+    ts->empty_leaves++;
+    if (full) check_coverage(s, cell, NULL, 0, node);
+}
+
 /* Walks the subtree at `node` with cell `cell`: children laid out depth-first (below =
- * node + 1, above later), every split strictly inside its cell, depth within the limit,
- * leaf lists ascending and in range, and every primitive that meets the inside of a leaf's
- * cell listed in that leaf (checked when `full`). Returns the index after the subtree. */
+ * node + 1 unless flagged empty, above next after the below subtree), every split strictly
+ * inside its cell, depth within the limit; leaves non-empty (empty ones are flags of their
+ * parent), their blocks and spheres consecutive in node order, lanes filled from the
+ * first with ascending scene ids and the list's vertices bit for bit (unused lanes NaN),
+ * spheres after the triangles; and every primitive that meets the inside of a leaf's cell
+ * listed in that leaf (checked when `full`). Returns the index after the subtree. */
 static int check_node(const KdTree *t, const Soup *s, int node, BBox cell, int depth, bool full, TreeStats *ts)
 {
     assert_true(node >= 0 && node < t->num_nodes);
@@ -437,53 +471,85 @@ static int check_node(const KdTree *t, const Soup *s, int node, BBox cell, int d
         float sp = n->split;
         float lo = v3_get(cell.min, (int)axis), hi = v3_get(cell.max, (int)axis);
         if (!(sp > lo && sp < hi)) fail_msg("node %d: split %g on axis %u outside its cell (%g, %g)", node, (double)sp, axis, (double)lo, (double)hi);
-        uint32_t above = n->flags >> 2;
         BBox cl = cell, cr = cell;
         if (axis == 0) { cl.max.x = sp; cr.min.x = sp; }
         else if (axis == 1) { cl.max.y = sp; cr.min.y = sp; }
         else { cl.max.z = sp; cr.min.z = sp; }
-        int next = check_node(t, s, node + 1, cl, depth + 1, full, ts);
-        assert_int_equal((int)above, next);
-        return check_node(t, s, (int)above, cr, depth + 1, full, ts);
+        bool below_empty = n->flags & KD_EMPTY_BELOW, above_empty = n->flags & KD_EMPTY_ABOVE;
+        assert_false(below_empty && above_empty); /* every primitive goes to a side */
+        int next = node + 1;
+        if (below_empty) check_empty_leaf(s, node, cl, depth + 1, full, ts);
+        else next = check_node(t, s, node + 1, cl, depth + 1, full, ts);
+        if (above_empty) {
+            check_empty_leaf(s, node, cr, depth + 1, full, ts);
+            return next;
+        }
+        assert_int_equal((int)(n->flags >> 4), next);
+        return check_node(t, s, next, cr, depth + 1, full, ts);
     }
-    uint32_t count = n->flags >> 2;
     ts->leaves++;
-    ts->empty_leaves += count == 0;
-    ts->refs += (int)count;
-    if (count > 1) {
-        assert_int_equal((int)n->first_prim, ts->list_refs);
-        ts->list_refs += (int)count;
+    uint32_t first_block, num_blocks, first_sphere = 0, num_spheres = 0;
+    if (n->flags & KD_LEAF_SPHERES) {
+        assert_int_equal((int)n->first, ts->sphere_leaves);
+        assert_true(n->first < (uint32_t)t->num_sphere_leaves);
+        const KdSphereLeaf *l = &t->sphere_leaves[n->first];
+        ts->sphere_leaves++;
+        first_block = l->first_block;
+        num_blocks = l->num_blocks;
+        first_sphere = l->first_sphere;
+        num_spheres = l->num_spheres;
+        assert_true(num_spheres > 0);
+        assert_int_equal((int)first_sphere, ts->spheres);
+        assert_true((size_t)first_sphere + num_spheres <= (size_t)t->num_spheres);
+    } else {
+        first_block = n->first;
+        num_blocks = n->flags >> 3;
+        assert_true(num_blocks > 0);
     }
-    const uint32_t *local = count == 1 ? &n->one_prim : &t->prim_ids[n->first_prim];
-    if (count > 1) assert_true((size_t)n->first_prim + count <= (size_t)t->num_prim_ids);
-    int np = s->num_tris + s->num_spheres;
-    uint32_t ids[4096]; /* scene ids of the leaf's primitives */
-    assert_true(count <= 4096);
+    assert_int_equal((int)first_block, ts->blocks);
+    assert_true((size_t)first_block + num_blocks <= (size_t)t->num_blocks);
+    ts->blocks += (int)num_blocks;
+    ts->spheres += (int)num_spheres;
+    static uint32_t ids[8192]; /* scene ids of the leaf's primitives */
+    uint32_t count = 0;
+    for (uint32_t b = 0; b < num_blocks; b++) {
+        const KdTriBlock *blk = &t->blocks[first_block + b];
+        for (int lane = 0; lane < KD_BLOCK_WIDTH; lane++) {
+            uint32_t id = blk->id[lane];
+            if (id == KD_NO_PRIM) {
+                assert_true(b == num_blocks - 1 && lane > 0); /* padding only ends the last block */
+                for (int k = 0; k < 3; k++)
+                    for (int a = 0; a < 3; a++) assert_true(isnan(blk->v[k][a][lane]));
+                continue;
+            }
+            assert_true(b == 0 || lane == 0 || blk->id[lane - 1] != KD_NO_PRIM);
+            assert_true(id < (uint32_t)s->num_tris);
+            assert_true(count < 8192);
+            ids[count++] = id;
+            const int32_t *vi = &s->idx[3 * id];
+            for (int k = 0; k < 3; k++) {
+                Vec3 p = s->pos[vi[k]]; /* list's own vertices: bit-identical hits */
+                float got[3] = {blk->v[k][0][lane], blk->v[k][1][lane], blk->v[k][2][lane]};
+                assert_memory_equal(got, &p, sizeof got);
+            }
+        }
+    }
+    for (uint32_t i = 0; i < num_spheres; i++) {
+        const KdSphere *sp = &t->spheres[first_sphere + i];
+        assert_true(sp->id >= (uint32_t)s->num_tris && sp->id < (uint32_t)(s->num_tris + s->num_spheres));
+        const Sphere *ref = &s->spheres[sp->id - (uint32_t)s->num_tris];
+        assert_memory_equal(&sp->center, &ref->center, sizeof ref->center);
+        assert_memory_equal(&sp->radius, &ref->radius, sizeof ref->radius);
+        assert_true(count < 8192);
+        ids[count++] = sp->id;
+    }
+    assert_true(count > 0);
+    ts->refs += (int)count;
     for (uint32_t i = 0; i < count; i++) {
-        assert_true(local[i] < (uint32_t)(t->num_tris + t->num_spheres));
-        ids[i] = t->scene_id[local[i]];
-        assert_true(ids[i] < (uint32_t)np);
-        assert_true((local[i] < (uint32_t)t->num_tris) == (ids[i] < (uint32_t)s->num_tris)); /* kind kept */
         if (i > 0) assert_true(ids[i] > ids[i - 1]); /* ascending scene ids: list's tie order */
         ts->seen[ids[i]]++;
     }
-    if (full) {
-        BBox inner = shrink(cell);
-        for (int id = 0; id < np; id++) {
-            bool meets;
-            if (id < s->num_tris) {
-                if (tri_zero_area(s, id)) continue;
-                meets = triangle_meets_box(s->pos[s->idx[3 * id]], s->pos[s->idx[3 * id + 1]],
-                                           s->pos[s->idx[3 * id + 2]], inner);
-            } else {
-                meets = sphere_meets_box(&s->spheres[id - s->num_tris], inner);
-            }
-            if (!meets) continue;
-            bool listed = false;
-            for (uint32_t i = 0; i < count && !listed; i++) listed = ids[i] == (uint32_t)id;
-            if (!listed) fail_msg("leaf %d: primitive %d meets the cell but is not listed", node, id);
-        }
-    }
+    if (full) check_coverage(s, cell, ids, count, node);
     return node + 1;
 }
 
@@ -499,43 +565,23 @@ static TreeStats check_structure(const Accel *a, const Soup *s, bool full)
         assert_null(t->nodes);
     } else {
         assert_int_equal(check_node(t, s, 0, t->bounds, 0, full, &ts), t->num_nodes);
-        /* Lists of more than one primitive live in prim_ids, back to back. */
-        assert_int_equal(ts.list_refs, t->num_prim_ids);
-        for (int id = 0; id < np; id++) {
-            bool skippable = id < s->num_tris && tri_zero_area(s, id);
-            if (!skippable && ts.seen[id] == 0) fail_msg("primitive %d is in no leaf", id);
-        }
+        /* Leaf storage is exactly the leaves', back to back. */
+        assert_int_equal(ts.blocks, t->num_blocks);
+        assert_int_equal(ts.spheres, t->num_spheres);
+        assert_int_equal(ts.sphere_leaves, t->num_sphere_leaves);
+        /* A full binary tree over all leaves, of which the empty ones are not stored. */
+        assert_int_equal(t->num_nodes, 2 * ts.leaves - 1 - ts.empty_leaves);
     }
-    /* The stored primitives: exactly the non-degenerate ones, each once, bit for bit as list
-     * forms them (v0, v1 - v0, v2 - v0). */
-    int tris_in = 0;
-    for (int id = 0; id < s->num_tris; id++) tris_in += !tri_zero_area(s, id);
-    assert_int_equal(t->num_tris, tris_in);
-    assert_int_equal(t->num_spheres, s->num_spheres);
-    int *stored = calloc((size_t)(np > 0 ? np : 1), sizeof *stored);
-    assert_non_null(stored);
-    for (int l = 0; l < t->num_tris + t->num_spheres; l++) {
-        int id = (int)t->scene_id[l];
-        assert_true(id >= 0 && id < np);
-        assert_int_equal(stored[id]++, 0);
-        if (l < t->num_tris) {
-            assert_true(id < s->num_tris);
-            Vec3 v0 = s->pos[s->idx[3 * id]], v1 = s->pos[s->idx[3 * id + 1]], v2 = s->pos[s->idx[3 * id + 2]];
-            const KdTri *k = &t->tris[l];
-            assert_memory_equal(&k->v0, &v0, sizeof v0);
-            assert_memory_equal(&k->v1, &v1, sizeof v1);
-            assert_memory_equal(&k->v2, &v2, sizeof v2);
-        } else {
-            assert_true(id >= s->num_tris);
-            assert_memory_equal(&t->spheres[l - t->num_tris], &s->spheres[id - s->num_tris], sizeof(Sphere));
-        }
+    /* The stored primitives: exactly the non-degenerate ones (zero-area triangles are
+     * left out by design). */
+    for (int id = 0; id < np; id++) {
+        bool skippable = id < s->num_tris && tri_zero_area(s, id);
+        if (skippable && ts.seen[id] != 0) fail_msg("zero-area triangle %d is in a leaf", id);
+        if (!skippable && ts.seen[id] == 0) fail_msg("primitive %d is in no leaf", id);
     }
-    free(stored);
-    size_t expect = (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_prim_ids * sizeof(uint32_t) +
-                    (size_t)t->num_tris * sizeof(KdTri) + (size_t)t->num_spheres * sizeof(Sphere) +
-                    (size_t)(t->num_tris + t->num_spheres) * sizeof(uint32_t);
+    size_t expect = (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_blocks * sizeof(KdTriBlock) +
+                    (size_t)t->num_spheres * sizeof(KdSphere) + (size_t)t->num_sphere_leaves * sizeof(KdSphereLeaf);
     assert_true(accel_memory_bytes(a) == expect);
-    assert_true(t->num_nodes <= 1 || 2 * ts.leaves - 1 == t->num_nodes); /* a full binary tree */
     free(ts.seen);
     ts.seen = NULL;
     return ts;
@@ -819,13 +865,13 @@ static void test_kdtree_coincident_triangles(void **state)
 }
 
 /* Triangles at exponentially growing distances: the SAH keeps cutting off empty space and
- * one triangle at a time, so the build runs into its depth limit. */
+ * one leaf block of triangles at a time, so the build runs into its depth limit. */
 static void test_kdtree_deep_build(void **state)
 {
     (void)state;
     Soup s = {0};
-    soup_reserve(&s, 150, 450, 0);
-    for (int i = 0; i < 150; i++) {
+    soup_reserve(&s, 250, 750, 0);
+    for (int i = 0; i < 250; i++) {
         float x = powf(1.4f, (float)i);
         soup_add_tri(&s, v3(x, 0.0f, 0.0f), v3(x, 1.0f, 0.0f), v3(x, 0.0f, 1.0f));
     }
@@ -837,7 +883,7 @@ static void test_kdtree_deep_build(void **state)
     pcg32_seed(&rng, 5u, 5u);
     for (int i = 0; i < 2000; i++) {
         float y = (float)rnd(&rng, -0.2, 1.0), z = (float)rnd(&rng, -0.2, 1.0);
-        float x0 = powf(1.4f, (float)rnd(&rng, 0.0, 150.0));
+        float x0 = powf(1.4f, (float)rnd(&rng, 0.0, 250.0));
         Ray r = ray_make(v3(x0, y, z), v3((i & 1) ? 1.0f : -1.0f, 0.0f, 0.0f), 0.0f, INFINITY);
         check_ray(&kd, &list, &s, &r, &st, "deep, along x", i);
         Ray q = ray_make(rnd_v3(&rng, -3.0, 3.0), rnd_dir(&rng), 0.0f, INFINITY);
