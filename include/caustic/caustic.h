@@ -67,7 +67,10 @@ typedef enum CstIntegrator {
     CST_INTEGRATOR_DEFAULT = 0, /* the scene's choice, else CST_INTEGRATOR_PATH */
     CST_INTEGRATOR_PATH,        /* path tracing, NEE + BSDF sampling combined by MIS */
     CST_INTEGRATOR_PATH_NEE,    /* path tracing, emitters reached only by NEE (no MIS) */
-    CST_INTEGRATOR_PATH_BSDF    /* path tracing, BSDF sampling only (no NEE) */
+    CST_INTEGRATOR_PATH_BSDF,   /* path tracing, BSDF sampling only (no NEE) */
+    CST_INTEGRATOR_LIGHT        /* light tracing: paths from emitters, every vertex splatted
+                                 * to the camera; spp counts iterations of width x height
+                                 * light paths (docs/integrators.md) */
 } CstIntegrator;
 
 typedef enum CstFilter {
@@ -76,8 +79,8 @@ typedef enum CstFilter {
     CST_FILTER_TENT         /* tent of radius 1 pixel, by filter importance sampling */
 } CstFilter;
 
-/* Parses "path", "path-nee", "path-bsdf" (aliases "mis", "nee", "bsdf").
- * Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
+/* Parses "path", "path-nee", "path-bsdf", "light" (aliases "mis", "nee", "bsdf",
+ * "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CstIntegrator cst_integrator_from_name(const char *name);
 const char *cst_integrator_name(CstIntegrator integrator);
 CstFilter cst_filter_from_name(const char *name);
@@ -89,14 +92,16 @@ typedef void (*CstProgressFn)(void *user, double fraction_done, double elapsed_s
  * the default". Command-line values override scene-file values this way. */
 typedef struct CstRenderSettings {
     int width, height;        /* default 512 x 512 */
-    int spp;                  /* samples per pixel; default 16 (or unlimited with time_limit) */
+    int spp;                  /* samples per pixel (light tracing: iterations of width x height
+                               * light paths); default 16 (or unlimited with time_limit) */
     double time_limit;        /* seconds; 0 = none. With spp also set, stops at whichever comes first */
     int threads;              /* 0 = all cores */
     uint64_t seed;            /* used when seed_set != 0; default 0 */
     int seed_set;
     CstIntegrator integrator;
     CstFilter filter;
-    int max_depth;            /* maximum path vertices after the camera; 0 = unbounded */
+    int max_depth;            /* maximum bounces (scattering vertices) of a path, light paths
+                               * included; 0 = unbounded */
     int rr_depth;             /* Russian roulette starts at this depth; 0 = default 3 */
     CstProgressFn progress;   /* called from the calling thread about 10 times a second */
     void *progress_user;
@@ -109,9 +114,10 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
 
 typedef struct CstRenderStats {
     double seconds;           /* wall time of the render proper (not scene loading) */
-    uint64_t samples;         /* camera samples = camera paths */
+    uint64_t samples;         /* camera samples = camera paths (light tracing: light paths) */
     uint64_t rays;            /* closest-hit + shadow rays traced */
-    uint64_t nonfinite;       /* NaN/Inf samples discarded (counted, never added to the film) */
+    uint64_t nonfinite;       /* NaN/Inf samples (light tracing: splats) discarded (counted,
+                               * never added to the film) */
     int spp, threads, width, height;
     CstIntegrator integrator;
     CstFilter filter;

@@ -32,3 +32,68 @@ Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens
                                         v3_scale(cam->up, l.y * cam->aperture_radius)));
     return ray_make(o, v3_normalize(v3_sub(focus, o)), 0.0f, INFINITY);
 }
+
+/* Importance of a perspective camera: Veach thesis ch. 10 (light tracing as the t = 1
+ * strategies of bidirectional path tracing); pbrt-v3 sec. 16.1.1, pbrt-v4
+ * PerspectiveCamera::We and SampleWi.
+ *
+ * With the box filter a pixel is the average of radiance over its film area (raster
+ * units, area 1), and raster units map to the image plane at distance 1 with the constant
+ * Jacobian W H / A, A = (2 tan(vfov/2) aspect) (2 tan(vfov/2)) that plane's area. A patch
+ * dA of the plane seen from the lens along a ray at angle theta to the view axis subtends
+ * d omega = cos^3 theta dA (distance 1/cos theta, tilt theta); for the thin lens the same
+ * holds on the plane of focus, where every ray of a film position meets its pinhole ray.
+ * Averaging over the lens too (area A_lens), per unit film area as pbrt normalises it
+ * (the integral of W_e cos theta over lens and directions is 1):
+ *   W_e = 1 / (A A_lens cos^4 theta),
+ * one cos theta being the lens's own cosine in the geometry term. The lens point, uniform
+ * on the disk (area density 1 / A_lens), has density pdf_w = d^2 / (cos theta A_lens) per
+ * unit solid angle at a point p at distance d, so
+ *   W_e / pdf_w = 1 / (A cos^3 theta d^2):
+ * the film-plane-to-solid-angle conversion 1 / (A cos^3 theta) times 1 / d^2, as in
+ * SmallVCM's light tracer; the cosine at p comes with the BSDF. A pinhole is the limit
+ * with A_lens = 1 as a formal unit (pbrt's convention): only the ratio matters. "Per unit
+ * film" becomes "per pixel" by the factor W H, which the render driver applies as
+ * (pixel count / light paths). */
+bool camera_sample_wi(const Camera *cam, Vec3 p, Vec2 lens_u, float margin, CameraWiSample *out)
+{
+    Vec3 o = cam->origin;
+    float lens_x = 0.0f, lens_y = 0.0f, lens_area = 1.0f;
+    if (cam->aperture_radius > 0.0f) {
+        Vec2 l = warp_concentric_disk(lens_u);
+        lens_x = l.x * cam->aperture_radius;
+        lens_y = l.y * cam->aperture_radius;
+        o = v3_add(o, v3_add(v3_scale(cam->right, lens_x), v3_scale(cam->up, lens_y)));
+        lens_area = CST_PI * cam->aperture_radius * cam->aperture_radius;
+    }
+    Vec3 d = v3_sub(p, o);
+    float dz = v3_dot(d, cam->forward);
+    if (!(dz > 0.0f)) return false;
+    /* The inverse of camera_generate_ray: the film position is that of the pinhole ray
+     * through the point where o -> p crosses the plane of focus. On the image plane at
+     * distance 1 that point is (lens offset) / focus_distance + (d's slope); the pinhole
+     * has no lens offset. */
+    float sx = v3_dot(d, cam->right) / dz, sy = v3_dot(d, cam->up) / dz;
+    if (cam->aperture_radius > 0.0f) {
+        sx += lens_x / cam->focus_distance;
+        sy += lens_y / cam->focus_distance;
+    }
+    float fx = (sx / (cam->tan_half_vfov * cam->aspect) + 1.0f) * 0.5f * (float)cam->width;
+    float fy = (1.0f - sy / cam->tan_half_vfov) * 0.5f * (float)cam->height;
+    if (!(fx >= -margin && fx < (float)cam->width + margin && fy >= -margin &&
+          fy < (float)cam->height + margin))
+        return false;
+    float dist2 = v3_length2(d);
+    float dist = sqrtf(dist2);
+    if (!(dist > 0.0f)) return false;
+    float cos_theta = dz / dist;
+    float film_area = 4.0f * cam->tan_half_vfov * cam->tan_half_vfov * cam->aspect;
+    float cos2 = cos_theta * cos_theta;
+    out->raster = v2(fx, fy);
+    out->p_lens = o;
+    out->wi = v3_scale(d, -1.0f / dist);
+    out->dist = dist;
+    out->we = 1.0f / (film_area * lens_area * cos2 * cos2);
+    out->pdf_w = dist2 / (cos_theta * lens_area);
+    return true;
+}

@@ -1,7 +1,10 @@
 /* Cameras: pinhole and thin lens (the lens is a disk of aperture_radius, focused on the
- * plane at focus_distance). Generates world-space primary rays from film positions. */
+ * plane at focus_distance). Generates world-space primary rays from film positions and,
+ * for light tracing, connects scene points back to the film with their importance. */
 #ifndef CST_CAMERA_CAMERA_H
 #define CST_CAMERA_CAMERA_H
+
+#include <stdbool.h>
 
 #include "geometry/ray.h"
 #include "math/vec3.h"
@@ -23,5 +26,23 @@ typedef struct Camera {
 void camera_init(Camera *cam, const CameraDesc *desc, int width, int height);
 /* film_x in [0, width), film_y in [0, height), y = 0 the top row; lens_u in [0,1)^2. */
 Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens_u);
+
+/* A scene point connected to the camera (pbrt-v4 PerspectiveCamera::SampleWi). A light
+ * path vertex p with throughput beta adds beta * f * |cos theta_p| * we / pdf_w to the
+ * film at `raster`, where f |cos theta_p| is its BSDF (or emitted radiance) toward wi. */
+typedef struct CameraWiSample {
+    Vec2 raster;  /* film position in camera_generate_ray's convention */
+    Vec3 p_lens;  /* the point on the lens (pinhole: the origin) */
+    Vec3 wi;      /* unit, from p toward p_lens */
+    float dist;   /* |p_lens - p| */
+    float we;     /* importance W_e of the ray p_lens -> p, normalised over the whole film */
+    float pdf_w;  /* density of p_lens per unit solid angle at p */
+} CameraWiSample;
+
+/* Picks a lens point with lens_u (uniform on the disk, as camera_generate_ray does) and
+ * projects p through it. False when p is behind the lens or lands outside the film
+ * grown by `margin` pixels on every side (a filter wider than a pixel reaches past the
+ * edge). Visibility is the caller's. */
+bool camera_sample_wi(const Camera *cam, Vec3 p, Vec2 lens_u, float margin, CameraWiSample *out);
 
 #endif

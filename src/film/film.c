@@ -1,7 +1,9 @@
 /* Film storage, resolution to pixel means and variances, and output. */
 #include "film/film.h"
 
+#include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "core/error.h"
 #include "film/image_io.h"
@@ -67,4 +69,75 @@ CstStatus cst_film_write(const CstFilm *f, const char *path, CstError *err)
     CstStatus st = image_write(path, rgb, f->width, f->height, err);
     free(rgb);
     return st;
+}
+
+int splat_list_init(SplatList *l, size_t cap)
+{
+    memset(l, 0, sizeof *l);
+    l->v = malloc(cap * sizeof *l->v);
+    if (!l->v) return 0;
+    l->cap = cap;
+    return 1;
+}
+
+void splat_list_free(SplatList *l)
+{
+    free(l->v);
+    memset(l, 0, sizeof *l);
+}
+
+static void splat_push(SplatList *l, int pixel, Rgb c)
+{
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? 2 * l->cap : 1024;
+        FilmSplat *v = realloc(l->v, cap * sizeof *v);
+        if (!v) { l->oom = 1; return; }
+        l->v = v;
+        l->cap = cap;
+    }
+    FilmSplat *s = &l->v[l->n++];
+    s->pixel = pixel;
+    s->r = c.r; s->g = c.g; s->b = c.b;
+}
+
+void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, float y, Rgb c)
+{
+    if (!rgb_is_finite(c)) {
+        l->nonfinite++;
+        return;
+    }
+    if (filter != CST_FILTER_TENT) {
+        int px = (int)floorf(x), py = (int)floorf(y);
+        if (px < 0 || px >= width || py < 0 || py >= height) return;
+        splat_push(l, py * width + px, c);
+        return;
+    }
+    /* Pixel centres sit at k + 1/2; the tent 1 - |t| of the two nearest in each axis
+     * sums to 1, the partition of unity that makes filter importance sampling (each
+     * camera sample in one pixel, weight 1) and splatting estimate the same pixel. */
+    float tx = x - 0.5f, ty = y - 0.5f;
+    float fx0 = floorf(tx), fy0 = floorf(ty);
+    float ax = tx - fx0, ay = ty - fy0;
+    int x0 = (int)fx0, y0 = (int)fy0;
+    const float wx[2] = {1.0f - ax, ax}, wy[2] = {1.0f - ay, ay};
+    for (int j = 0; j < 2; j++) {
+        int py = y0 + j;
+        if (py < 0 || py >= height || wy[j] == 0.0f) continue;
+        for (int i = 0; i < 2; i++) {
+            int px = x0 + i;
+            if (px < 0 || px >= width || wx[i] == 0.0f) continue;
+            splat_push(l, py * width + px, rgb_scale(c, wx[i] * wy[j]));
+        }
+    }
+}
+
+void film_add_splats(const SplatList *l, double *rgb, double scale)
+{
+    for (size_t i = 0; i < l->n; i++) {
+        const FilmSplat *s = &l->v[i];
+        double *p = &rgb[3 * (size_t)s->pixel];
+        p[0] += scale * (double)s->r;
+        p[1] += scale * (double)s->g;
+        p[2] += scale * (double)s->b;
+    }
 }

@@ -30,4 +30,34 @@ static inline void film_accumulate(Film *f, int pixel, double r, double g, doubl
 /* Means as float RGB, row 0 = top, into a caller buffer of width*height*3. */
 void film_resolve(const Film *f, float *rgb_out);
 
+/* Light tracing's contributions ("splats") land on arbitrary pixels, so they cannot be
+ * accumulated by the thread that owns a pixel. Each work unit records its splats in its
+ * own list; the render driver adds the lists in a fixed order (render.c). */
+typedef struct FilmSplat {
+    int32_t pixel;
+    float r, g, b;
+} FilmSplat;
+
+typedef struct SplatList {
+    FilmSplat *v;
+    size_t n, cap;
+    uint64_t nonfinite; /* NaN/Inf contributions dropped (never cleared) */
+    int oom;            /* a splat was lost for lack of memory */
+} SplatList;
+
+/* Reserves room for cap splats; returns 0 on OOM. Free with splat_list_free (accepts a
+ * zeroed list). */
+int splat_list_init(SplatList *l, size_t cap);
+void splat_list_free(SplatList *l);
+/* Records contribution c at film position (x, y) (camera_generate_ray's convention) with
+ * the render's filter, so that splats estimate the same pixel values as camera samples:
+ * box: all of c to the pixel containing (x, y); tent (radius 1 pixel, normalised, as
+ * render.c samples it): c times the tent of each of the up to four pixel centres within
+ * one pixel in x and y, i.e. bilinear weights. (x, y) may lie up to half a pixel outside
+ * the film for the tent. NaN/Inf contributions are counted and dropped. Grows the list
+ * when full (amortised: lists are reused, so this stops after the first iterations). */
+void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, float y, Rgb c);
+/* Adds scale times every splat to rgb (width*height*3 doubles), in the list's order. */
+void film_add_splats(const SplatList *l, double *rgb, double scale);
+
 #endif

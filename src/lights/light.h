@@ -1,6 +1,7 @@
 /* Area emitters: any primitive with emission. NEE picks an emitter with probability
  * proportional to its area and a uniform point on it, so a point on any emitter has the
- * area density pdf_a = 1 / (total emitting area). */
+ * area density pdf_a = 1 / (total emitting area). Light tracing starts its paths the same
+ * way and adds a cosine-weighted direction on an emitting side. */
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
@@ -52,5 +53,22 @@ typedef struct EmitterSample {
  * density is s->pdf_a per unit area. */
 void emitter_sample(const EmitterSampler *s, const Emitter *emitters, const EmitterGeometry *g,
                     float u_sel, Vec2 u, EmitterSample *out);
+
+typedef struct EmissionSample {
+    Vec3 p, n;   /* point and unit geometric normal */
+    Vec3 w;      /* unit direction of emission, on an emitting side */
+    int emitter;
+    float pdf_a; /* density of p per unit area (= s->pdf_a) */
+    float pdf_w; /* density of w given p per unit solid angle; 0 = no usable sample */
+} EmissionSample;
+
+/* The start of a light path: a point as emitter_sample picks it (emitter by area, uniform
+ * on it; u_sel, u_pos) and a cosine-weighted direction around the emitting side's normal
+ * (u_dir); two-sided emitters pick either side with probability 1/2. */
+void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
+                             const EmitterGeometry *g, float u_sel, Vec2 u_pos, Vec2 u_dir,
+                             EmissionSample *out);
+/* pdf_w of emitter_sample_emission for direction w at a point with normal n. */
+float emitter_emission_pdf_w(const Emitter *e, Vec3 n, Vec3 w);
 
 #endif

@@ -44,6 +44,12 @@ float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
 
 bool bsdf_sample(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfSample *out)
 {
+    return bsdf_sample_transport(b, wo_world, uc, u, BSDF_RADIANCE, out);
+}
+
+bool bsdf_sample_transport(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfTransport mode,
+                           BsdfSample *out)
+{
     Vec3 wo = frame_to_local(&b->frame, wo_world);
     if (wo.z == 0.0f) return false;
     switch (b->type) {
@@ -84,8 +90,10 @@ bool bsdf_sample(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfSample *out
         out->wi = frame_to_world(&b->frame, v3_normalize(wt));
         out->pdf = 1.0f - f;
         /* Radiance is compressed by 1/etap^2 entering a denser medium (Veach thesis sec. 5.2, pbrt-v4 sec. 9.5.2);
-         * camera paths carry radiance, so the factor applies here. */
-        out->weight = rgb_scale(b->albedo, 1.0f / (etap * etap));
+         * camera paths carry radiance, so the factor applies to them. Light paths carry
+         * flux, which refraction does not compress: the adjoint BTDF lacks the factor
+         * (Veach thesis sec. 5.2, pbrt-v4 DielectricBxDF with TransportMode::Importance). */
+        out->weight = mode == BSDF_RADIANCE ? rgb_scale(b->albedo, 1.0f / (etap * etap)) : b->albedo;
         return true;
     }
     }

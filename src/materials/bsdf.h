@@ -19,6 +19,13 @@ typedef struct Bsdf {
     float eta;   /* glass: inside over outside IOR */
 } Bsdf;
 
+/* What a path carries, which decides the adjoint of a non-reciprocal lobe (Veach thesis
+ * ch. 5, pbrt-v4 TransportMode): camera paths carry radiance, light paths importance. */
+typedef enum BsdfTransport {
+    BSDF_RADIANCE,  /* camera paths: wo toward the camera side */
+    BSDF_IMPORTANCE /* light paths: wo toward the light side */
+} BsdfTransport;
+
 typedef struct BsdfSample {
     Vec3 wi;      /* world space */
     Rgb weight;   /* f * |cos theta_i| / pdf */
@@ -31,8 +38,13 @@ static inline bool bsdf_is_delta(const Bsdf *b) { return b->type != MATERIAL_DIF
 Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi);
 float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi);
 /* uc picks a lobe (glass: reflect vs refract), u samples a direction. Returns false for
- * no usable sample (e.g. wo exactly in the tangent plane). */
+ * no usable sample (e.g. wo exactly in the tangent plane). For camera paths. */
 bool bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out);
+/* The same for either transport: the weight is f(wo, wi) |cos theta_i| / pdf for
+ * BSDF_RADIANCE and the adjoint f*(wo, wi) |cos theta_i| / pdf = f(wi, wo) |cos theta_i| / pdf
+ * for BSDF_IMPORTANCE. They differ only in refraction, by the factor 1/eta^2. */
+bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode,
+                           BsdfSample *out);
 
 /* Unpolarised Fresnel reflectance of a smooth dielectric interface; cos_i is the cosine
  * on the incident side (sign picks the side), eta = inside over outside IOR. */

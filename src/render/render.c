@@ -1,6 +1,10 @@
 /* Tiled multithreaded rendering. Determinism: each pixel sample draws from its own PCG32
  * stream seeded by (seed, pixel, sample index), and each pixel is accumulated by one
- * thread in sample order, so images are bit-identical for any thread count. */
+ * thread in sample order, so images are bit-identical for any thread count.
+ * Light tracing splats anywhere on the film instead; it runs in iterations of
+ * width x height light paths, path i of iteration s seeded by (seed, i, s), cut into
+ * fixed chunks whose splat lists are added in chunk order once the iteration is done, so
+ * its images are bit-identical for any thread count too. */
 #include "render/render.h"
 
 #include <pthread.h>
@@ -15,6 +19,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "film/film.h"
+#include "integrators/light.h"
 #include "integrators/path.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
@@ -23,6 +28,7 @@ static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] =
     {"path", CST_INTEGRATOR_PATH},       {"path-nee", CST_INTEGRATOR_PATH_NEE},
     {"path-bsdf", CST_INTEGRATOR_PATH_BSDF}, {"mis", CST_INTEGRATOR_PATH},
     {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
+    {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
 };
 
 CstIntegrator cst_integrator_from_name(const char *name)
@@ -38,6 +44,7 @@ const char *cst_integrator_name(CstIntegrator integrator)
     case CST_INTEGRATOR_PATH: return "path";
     case CST_INTEGRATOR_PATH_NEE: return "path-nee";
     case CST_INTEGRATOR_PATH_BSDF: return "path-bsdf";
+    case CST_INTEGRATOR_LIGHT: return "light";
     case CST_INTEGRATOR_DEFAULT: break;
     }
     return "default";
@@ -91,6 +98,11 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* Light paths per work unit: small enough to balance threads on small films, large
+ * enough that a unit's splat list amortises its bookkeeping. Fixed, because chunk
+ * boundaries decide the order in which splats are added. */
+enum { LIGHT_CHUNK = 1024 };
+
 typedef struct RenderJob {
     const Scene *scene;
     Film *film;
@@ -98,7 +110,16 @@ typedef struct RenderJob {
     PathParams params;
     CstFilter filter;
     uint64_t seed;
+    /* Work units: tiles, or for light tracing chunks of LIGHT_CHUNK light paths. */
     int tiles_x, tiles_y, num_tiles;
+    /* light tracing only */
+    bool light;
+    LightParams light_params;
+    int iteration;     /* in progress */
+    int light_paths;   /* per iteration: width x height */
+    SplatList *splats; /* one per chunk, reused by every iteration */
+    double *iteration_rgb; /* the iteration's image, width x height x 3 */
+    double last_progress;  /* when progress was last reported: iterations can be short */
     /* the pass in progress: samples [pass_first, pass_first + pass_spp) of every pixel */
     int pass_first, pass_spp;
     atomic_int next_tile;
@@ -154,6 +175,36 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
     }
 }
 
+static void light_chunk(RenderJob *job, Worker *w, int chunk)
+{
+    SplatList *out = &job->splats[chunk];
+    out->n = 0;
+    int first = chunk * LIGHT_CHUNK;
+    int last = first + LIGHT_CHUNK < job->light_paths ? first + LIGHT_CHUNK : job->light_paths;
+    for (int i = first; i < last; i++) {
+        Pcg32 rng;
+        pcg32_seed_sample(&rng, job->seed, (uint64_t)i, (uint64_t)job->iteration);
+        light_trace(job->scene, &job->camera, &job->light_params, &rng, out, &w->rays);
+    }
+}
+
+/* Adds the finished iteration to the film as one sample per pixel. The light tracer's
+ * pixel estimate is (W H / paths) times the sum of its splats (splats are per unit film,
+ * camera.c), and W H / paths = 1 with one path per pixel. Adding the iteration, not the
+ * splats, as the sample keeps the film's sum of squares a per-pixel variance across
+ * iterations; splats are summed in chunk order, so the floating-point sums do not depend
+ * on which thread traced which chunk. */
+static void light_merge(RenderJob *job)
+{
+    const size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
+    const double scale = (double)pixels / (double)job->light_paths;
+    double *rgb = job->iteration_rgb;
+    memset(rgb, 0, 3 * pixels * sizeof *rgb);
+    for (int c = 0; c < job->num_tiles; c++) film_add_splats(&job->splats[c], rgb, scale);
+    for (size_t p = 0; p < pixels; p++)
+        film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
+}
+
 static void *worker_main(void *arg)
 {
     Worker *w = arg;
@@ -161,7 +212,8 @@ static void *worker_main(void *arg)
     for (;;) {
         int tile = atomic_fetch_add(&job->next_tile, 1);
         if (tile >= job->num_tiles) break;
-        render_tile(job, w, tile);
+        if (job->light) light_chunk(job, w, tile);
+        else render_tile(job, w, tile);
         if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->num_tiles) {
             pthread_mutex_lock(&job->lock);
             pthread_cond_broadcast(&job->done);
@@ -198,7 +250,11 @@ static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRende
     if (started == 0) return 0;
     while (atomic_load(&job->tiles_done) < job->num_tiles) {
         wait_for_pass(job, 0.1);
+        /* Each light-tracing iteration is a pass of its own and may take far less than
+         * 0.1 s: keep the reports about 10 a second. */
+        if (st->progress && job->light && now_seconds() - job->last_progress < 0.1) continue;
         if (st->progress) {
+            job->last_progress = now_seconds();
             double f = done_before + pass_fraction * atomic_load(&job->tiles_done) / job->num_tiles;
             if (st->time_limit > 0.0) {
                 double ft = (now_seconds() - t0) / st->time_limit;
@@ -208,6 +264,52 @@ static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRende
         }
     }
     for (int i = 0; i < started; i++) pthread_join(workers[i].thread, NULL);
+    return 1;
+}
+
+/* Samples [first, first + count) of every pixel: one pass over the tiles, or for light
+ * tracing `count` iterations, each merged into the film before the next starts (the
+ * iteration is the light tracer's pass unit for progress and time limits). */
+static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const CstRenderSettings *st,
+                             double t0, int first, int count, double done_before, double fraction)
+{
+    if (!job->light) {
+        job->pass_first = first;
+        job->pass_spp = count;
+        return run_pass(job, workers, threads, st, t0, done_before, fraction) ? CST_OK : CST_ERR_INTERNAL;
+    }
+    for (int k = 0; k < count; k++) {
+        job->iteration = first + k;
+        if (!run_pass(job, workers, threads, st, t0, done_before + fraction * k / count, fraction / count))
+            return CST_ERR_INTERNAL;
+        for (int c = 0; c < job->num_tiles; c++)
+            if (job->splats[c].oom) return CST_ERR_OOM;
+        light_merge(job);
+    }
+    return CST_OK;
+}
+
+static void light_free(RenderJob *job)
+{
+    if (job->splats)
+        for (int c = 0; c < job->num_tiles; c++) splat_list_free(&job->splats[c]);
+    free(job->splats);
+    free(job->iteration_rgb);
+    job->splats = NULL;
+    job->iteration_rgb = NULL;
+}
+
+/* Per-render buffers of the light tracer: a splat list per chunk, sized for a few
+ * connections per path (they grow if a scene needs more, then stay), and the iteration
+ * image. Returns 0 on OOM. */
+static int light_alloc(RenderJob *job)
+{
+    size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
+    job->iteration_rgb = malloc(3 * pixels * sizeof *job->iteration_rgb);
+    job->splats = calloc((size_t)job->num_tiles, sizeof *job->splats);
+    if (!job->iteration_rgb || !job->splats) return 0;
+    for (int c = 0; c < job->num_tiles; c++)
+        if (!splat_list_init(&job->splats[c], 4 * (size_t)LIGHT_CHUNK)) return 0;
     return 1;
 }
 
@@ -246,15 +348,35 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->tiles_y = (st.height + RENDER_TILE - 1) / RENDER_TILE;
     job->num_tiles = job->tiles_x * job->tiles_y;
     for (int i = 0; i < st.threads; i++) workers[i].job = job;
+    if (st.integrator == CST_INTEGRATOR_LIGHT) {
+        job->light = true;
+        job->light_params.max_depth = st.max_depth;
+        job->light_params.rr_depth = st.rr_depth;
+        job->light_params.filter = st.filter;
+        /* One light path per pixel per iteration; 65536^2 pixels would overflow int. */
+        size_t pixels = (size_t)st.width * (size_t)st.height;
+        if (pixels > (size_t)INT32_MAX - LIGHT_CHUNK) {
+            film_destroy(film); free(workers); free(job);
+            return cst_fail(err, CST_ERR_INVALID_ARG,
+                            "image size %dx%d: too many pixels for the light tracer (at most %d)",
+                            st.width, st.height, INT32_MAX - LIGHT_CHUNK);
+        }
+        job->light_paths = (int)pixels;
+        job->num_tiles = (job->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
+        if (!light_alloc(job)) {
+            light_free(job);
+            film_destroy(film); free(workers); free(job);
+            return cst_fail(err, CST_ERR_OOM, "out of memory for light-tracing buffers (%dx%d)",
+                            st.width, st.height);
+        }
+    }
 
     CstStatus status = CST_OK;
     double t0 = now_seconds();
     if (st.time_limit <= 0.0) {
         /* Fixed sample count: one pass, so accumulation order is fixed. */
-        job->pass_first = 0;
-        job->pass_spp = st.spp;
-        if (!run_pass(job, workers, st.threads, &st, t0, 0.0, 1.0)) status = CST_ERR_INTERNAL;
-        else film->spp = st.spp;
+        status = run_samples(job, workers, st.threads, &st, t0, 0, st.spp, 0.0, 1.0);
+        if (status == CST_OK) film->spp = st.spp;
     } else {
         /* Time budget: passes of growing size until the next one would not fit (or the
          * sample cap is reached). Every pixel always holds the same number of samples. */
@@ -263,13 +385,10 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             if (st.spp > 0 && film->spp + pass > st.spp) pass = st.spp - film->spp;
             if (pass <= 0) break;
             double pass_t0 = now_seconds();
-            job->pass_first = film->spp;
-            job->pass_spp = pass;
             double frac = st.spp > 0 ? (double)film->spp / st.spp : 0.0;
-            if (!run_pass(job, workers, st.threads, &st, t0, frac, st.spp > 0 ? (double)pass / st.spp : 0.0)) {
-                status = CST_ERR_INTERNAL;
-                break;
-            }
+            status = run_samples(job, workers, st.threads, &st, t0, film->spp, pass, frac,
+                                 st.spp > 0 ? (double)pass / st.spp : 0.0);
+            if (status != CST_OK) break;
             film->spp += pass;
             double now = now_seconds(), pass_time = now - pass_t0;
             double left = st.time_limit - (now - t0);
@@ -285,10 +404,16 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     double seconds = now_seconds() - t0;
     pthread_mutex_destroy(&job->lock);
     pthread_cond_destroy(&job->done);
+    uint64_t splats_nonfinite = 0;
+    if (job->light)
+        for (int c = 0; c < job->num_tiles; c++) splats_nonfinite += job->splats[c].nonfinite;
+    light_free(job);
     if (status != CST_OK) {
         film_destroy(film);
         free(workers);
         free(job);
+        if (status == CST_ERR_OOM)
+            return cst_fail(err, status, "out of memory for light-tracing splats (%dx%d)", st.width, st.height);
         return cst_fail(err, status, "could not start render threads");
     }
     if (st.progress) st.progress(st.progress_user, 1.0, seconds);
@@ -301,7 +426,9 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         stats->height = st.height;
         stats->integrator = st.integrator;
         stats->filter = st.filter;
+        /* Light tracing traces width x height light paths per iteration: the same count. */
         stats->samples = (uint64_t)film->spp * (uint64_t)st.width * (uint64_t)st.height;
+        stats->nonfinite = splats_nonfinite;
         for (int i = 0; i < st.threads; i++) {
             stats->rays += workers[i].rays;
             stats->nonfinite += workers[i].nonfinite;

@@ -1,5 +1,6 @@
 /* Analytic test: radiance reflected by a diffuse plane under a rectangular emitter,
- * against the closed-form irradiance. */
+ * against the closed-form irradiance: at one point for the path tracers, over a whole
+ * image for the light tracer. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -20,15 +21,31 @@ static double corner_form_factor(double a, double b, double h)
     return (X / sx * atan(Y / sx) + Y / sy * atan(X / sy)) / (2.0 * 3.14159265358979323846);
 }
 
-/* Radiance leaving a diffuse plane of albedo rho at the point below an a x b emitter's
- * centre: L_o = rho E / pi = rho L * 4 F(a/2, b/2, h). */
-static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t seed)
+/* Form factor from the point (x, 0, z) of the plane to the emitter [-a/2, a/2] x
+ * [-b/2, b/2] at height h, by superposition of the four rectangles that have a corner
+ * above the point; a signed extent subtracts the part beyond the emitter's edge. */
+static double signed_corner(double u, double v, double h)
+{
+    double s = (u < 0.0 ? -1.0 : 1.0) * (v < 0.0 ? -1.0 : 1.0);
+    return s * corner_form_factor(fabs(u), fabs(v), h);
+}
+
+static double point_form_factor(double a, double b, double h, double x, double z)
+{
+    return signed_corner(a / 2 - x, b / 2 - z, h) + signed_corner(a / 2 + x, b / 2 - z, h) +
+           signed_corner(a / 2 - x, b / 2 + z, h) + signed_corner(a / 2 + x, b / 2 + z, h);
+}
+
+static const float RHO = 0.8f, LE = 3.0f;
+
+/* The plane y = 0 (albedo RHO, normal +y) and an a x b emitter (LE, facing down) at
+ * height h, centred above the origin. */
+static Scene *plane_under_light(double a, double b, double h)
 {
     CstError err;
     Scene *s = scene_create();
     int plane_mat, light_mat;
-    const float rho = 0.8f, Le = 3.0f;
-    Material m = {MATERIAL_DIFFUSE, {rho, rho, rho}, 1.0f};
+    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
     m.albedo = rgb_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
@@ -37,8 +54,18 @@ static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t
     assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
     float ha = (float)(a / 2), hb = (float)(b / 2), fh = (float)h;
     Vec3 light[4] = {{-ha, fh, -hb}, {ha, fh, -hb}, {ha, fh, hb}, {-ha, fh, hb}};
-    Emission em = {{Le, Le, Le}, 0};
+    Emission em = {{LE, LE, LE}, 0};
     assert_int_equal(scene_add_quad(s, light, light_mat, &em, &err), CST_OK);
+    return s;
+}
+
+/* Radiance leaving a diffuse plane of albedo rho at the point below an a x b emitter's
+ * centre: L_o = rho E / pi = rho L * 4 F(a/2, b/2, h). */
+static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t seed)
+{
+    CstError err;
+    Scene *s = plane_under_light(a, b, h);
+    float fh = (float)h;
     /* A pinhole (which blocks nothing) between the two, looking straight down with a
      * field of view so narrow that the pixel sees a single point of the plane. */
     CameraDesc cam = {{0, fh * 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f};
@@ -55,7 +82,7 @@ static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t
     CstFilm *f = NULL;
     CstRenderStats stats;
     assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
-    double expected = (double)rho * (double)Le * 4.0 * corner_form_factor(a / 2, b / 2, h);
+    double expected = (double)RHO * (double)LE * 4.0 * corner_form_factor(a / 2, b / 2, h);
     RegionStat r = region_stat(f, 0, 0, 1, 1);
     for (int c = 0; c < 3; c++) {
         double z = (r.mean[c] - expected) / r.se[c];
@@ -65,6 +92,134 @@ static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t
     }
     cst_film_destroy(f);
     scene_destroy(s);
+}
+
+/* The light tracer cannot render the single-point view above (a vertex would have to land
+ * on that point), so it gets a 90-degree view of the plane from height h/2 and every
+ * pixel a closed form. The camera looks straight down, so film and plane are parallel and
+ * raster (x, y) maps linearly to the plane point (-(2x/W - 1) h/2, (1 - 2y/H) h/2) (right =
+ * -x, up = +z), also past the film's edge. */
+enum { LT_SIZE = 32, LT_BLOCK = 8, LT_SUB = 8, LT_REGIONS = 1 + 16 + 4 };
+
+static double radiance_at_raster(double a, double b, double h, double fx, double fy)
+{
+    const double c = h / 2, n = LT_SIZE;
+    double x = -(2.0 * fx / n - 1.0) * c, z = (1.0 - 2.0 * fy / n) * c;
+    return (double)RHO * (double)LE * point_form_factor(a, b, h, x, z);
+}
+
+/* Pixel (px, py) under the filter: box, the mean of L over the pixel; tent, L weighted by
+ * (1 - |dx|)(1 - |dy|) around the pixel centre. Midpoint rule on cells of 1/LT_SUB pixel,
+ * whose edges include the tent's kinks, so the weights are integrated exactly. */
+static double expected_pixel(double a, double b, double h, CstFilter filter, int px, int py)
+{
+    double sum = 0.0;
+    if (filter != CST_FILTER_TENT) {
+        for (int j = 0; j < LT_SUB; j++)
+            for (int i = 0; i < LT_SUB; i++)
+                sum += radiance_at_raster(a, b, h, px + (i + 0.5) / LT_SUB, py + (j + 0.5) / LT_SUB);
+        return sum / (LT_SUB * LT_SUB);
+    }
+    for (int j = 0; j < 2 * LT_SUB; j++)
+        for (int i = 0; i < 2 * LT_SUB; i++) {
+            double dx = (i + 0.5) / LT_SUB - 1.0, dy = (j + 0.5) / LT_SUB - 1.0;
+            double w = (1.0 - fabs(dx)) * (1.0 - fabs(dy));
+            sum += w * radiance_at_raster(a, b, h, px + 0.5 + dx, py + 0.5 + dy);
+        }
+    return sum / (LT_SUB * LT_SUB);
+}
+
+/* The whole image, its 4 x 4 blocks and its four one-pixel edges (top, bottom, left,
+ * right): past the edge of the film lies half a pixel of the border pixels' tents, which
+ * a light tracer that drops connections landing there would miss (1/8 of their weight). */
+static void light_regions(int rect[LT_REGIONS][4])
+{
+    const int nb = LT_SIZE / LT_BLOCK, s = LT_SIZE;
+    const int edges[4][4] = {{0, 0, s, 1}, {0, s - 1, s, s}, {0, 0, 1, s}, {s - 1, 0, s, s}};
+    rect[0][0] = 0; rect[0][1] = 0; rect[0][2] = s; rect[0][3] = s;
+    for (int k = 0; k < nb * nb; k++) {
+        rect[1 + k][0] = (k % nb) * LT_BLOCK; rect[1 + k][1] = (k / nb) * LT_BLOCK;
+        rect[1 + k][2] = rect[1 + k][0] + LT_BLOCK; rect[1 + k][3] = rect[1 + k][1] + LT_BLOCK;
+    }
+    for (int e = 0; e < 4; e++)
+        for (int i = 0; i < 4; i++) rect[1 + nb * nb + e][i] = edges[e][i];
+}
+
+/* Box filter: one render of `iterations`, standard errors from region_stat. Each light
+ * path reaches the plane at most once (the emitter is black, the plane flat), so its
+ * splats in an iteration fall into different pixels, which only makes pixel estimates
+ * negatively correlated: region_stat's standard errors are conservative, by 1 / sqrt(1 - P)
+ * for a region a path lands in with probability P (about 1.2 for the whole image, 1.01 for
+ * a block). Tent filter: a splat is shared by neighbouring pixels, so the standard errors
+ * come from independent one-iteration renders (region_stats_by_render). */
+static void run_light_case(double a, double b, double h, CstFilter filter, int iterations,
+                           uint64_t seed)
+{
+    CstError err;
+    Scene *s = plane_under_light(a, b, h);
+    CameraDesc cam = {{0, (float)(h * 0.5), 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = {0};
+    st.width = st.height = LT_SIZE;
+    st.spp = iterations;
+    st.integrator = CST_INTEGRATOR_LIGHT;
+    st.filter = filter;
+    st.seed = seed;
+    st.seed_set = 1;
+    st.threads = 2;
+
+    int rect[LT_REGIONS][4];
+    light_regions(rect);
+    const int count = filter == CST_FILTER_TENT ? LT_REGIONS : LT_REGIONS - 4;
+    RegionStat r[LT_REGIONS];
+    if (filter == CST_FILTER_TENT) {
+        if (region_stats_by_render(s, &st, iterations, seed, count, (const int (*)[4])rect, r,
+                                   NULL, &err) != CST_OK)
+            fail_msg("%s", err.msg);
+    } else {
+        CstFilm *f = NULL;
+        CstRenderStats stats;
+        assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+        assert_int_equal(stats.nonfinite, 0);
+        for (int i = 0; i < count; i++) r[i] = region_stat(f, rect[i][0], rect[i][1], rect[i][2], rect[i][3]);
+        cst_film_destroy(f);
+    }
+
+    double pixel[LT_SIZE][LT_SIZE];
+    for (int y = 0; y < LT_SIZE; y++)
+        for (int x = 0; x < LT_SIZE; x++) pixel[y][x] = expected_pixel(a, b, h, filter, x, y);
+    double worst = 0.0;
+    for (int i = 0; i < count; i++) {
+        double expected = 0.0;
+        for (int y = rect[i][1]; y < rect[i][3]; y++)
+            for (int x = rect[i][0]; x < rect[i][2]; x++) expected += pixel[y][x];
+        expected /= (double)(rect[i][2] - rect[i][0]) * (double)(rect[i][3] - rect[i][1]);
+        for (int c = 0; c < 3; c++) {
+            double z = (r[i].mean[c] - expected) / r[i].se[c];
+            if (fabs(z) > fabs(worst)) worst = z;
+            if (!(fabs(z) <= Z_LIMIT))
+                fail_msg("light (%s) a=%g b=%g h=%g region %d (0 = whole image, then blocks, "
+                         "then edges): L = %.6f, closed form %.6f (z = %.2f)", cst_filter_name(filter),
+                         a, b, h, i, r[i].mean[c], expected, z);
+        }
+        if (i == 0)
+            print_message("light (%s) a=%g b=%g h=%g: whole image %.5f, closed form %.5f, "
+                          "relative standard error %.1e\n", cst_filter_name(filter), a, b, h,
+                          r[i].mean[0], expected, r[i].se[0] / expected);
+    }
+    print_message("light (%s) a=%g b=%g h=%g: largest |z| = %.2f\n", cst_filter_name(filter), a,
+                  b, h, fabs(worst));
+    scene_destroy(s);
+}
+
+static void test_light_tracer_irradiance(void **state)
+{
+    (void)state;
+    run_light_case(1.0, 1.0, 1.0, CST_FILTER_BOX, 8192, 41);
+    run_light_case(4.0, 0.5, 0.7, CST_FILTER_BOX, 8192, 42);
+    run_light_case(0.2, 0.3, 2.0, CST_FILTER_BOX, 8192, 43);
+    run_light_case(1.0, 1.0, 1.0, CST_FILTER_TENT, 2048, 44000);
 }
 
 static void test_rectangle_irradiance(void **state)
@@ -82,6 +237,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rectangle_irradiance),
+        cmocka_unit_test(test_light_tracer_irradiance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

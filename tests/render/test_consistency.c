@@ -1,78 +1,236 @@
-/* Consistency: BSDF-only, NEE-only and MIS path tracing estimate the same integral, so
- * their Cornell box images must agree within noise, per channel, on the image mean and
- * on every 32x32 block. */
+/* Consistency: BSDF-only, NEE-only and MIS path tracing estimate the same integral, and
+ * so does light tracing wherever the camera sees no delta surface, so their images must
+ * agree within noise, per channel, on the image mean and on every block. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include <cmocka.h>
 
 #include "render/render_util.h"
+#include "scene/scene.h"
 
-enum { SIZE = 128, BLOCK = 32 };
+enum { SIZE = 128, BLOCK = 32, MAX_REGIONS = 1 + 16 };
 
-static CstFilm *render_cornell(CstIntegrator integ, int spp, uint64_t seed)
+/* The regions compared: region 0 is the whole image, then the blocks of a size x size
+ * image in row order. Messages number them from -1 = whole image. */
+typedef struct Regions {
+    int count;
+    int rect[MAX_REGIONS][4]; /* x0, y0, x1, y1 */
+    RegionStat stat[MAX_REGIONS];
+} Regions;
+
+static Regions regions(int size, int block)
 {
-    CstScene *s = NULL;
-    CstError err;
-    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
-    CstRenderSettings st = {0};
-    st.width = st.height = SIZE;
+    Regions r;
+    memset(&r, 0, sizeof r);
+    int n = size / block;
+    r.rect[r.count][0] = 0; r.rect[r.count][1] = 0;
+    r.rect[r.count][2] = size; r.rect[r.count][3] = size;
+    r.count++;
+    for (int b = 0; b < n * n; b++, r.count++) {
+        r.rect[r.count][0] = (b % n) * block; r.rect[r.count][1] = (b / n) * block;
+        r.rect[r.count][2] = r.rect[r.count][0] + block; r.rect[r.count][3] = r.rect[r.count][1] + block;
+    }
+    assert_true(r.count <= MAX_REGIONS);
+    return r;
+}
+
+/* Standard errors from the film's per-pixel variances: right for camera integrators,
+ * whose pixel estimates are independent. */
+static void film_regions(const CstFilm *f, Regions *r)
+{
+    for (int i = 0; i < r->count; i++)
+        r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
+}
+
+static CstFilm *render(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ,
+                       int spp, uint64_t seed)
+{
+    CstRenderSettings st = *base;
     st.spp = spp;
     st.integrator = integ;
     st.seed = seed;
     st.seed_set = 1;
     CstFilm *f = NULL;
     CstRenderStats stats;
-    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+    CstError err;
+    if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
     assert_int_equal(stats.nonfinite, 0);
-    cst_scene_destroy(s);
     return f;
 }
 
-static void compare(const CstFilm *a, const CstFilm *b, const char *na, const char *nb)
+/* The light tracer's pixel estimates are correlated within an iteration (a light path
+ * splats into several pixels; the path count is fixed), so its region standard errors
+ * come from independent iterations (region_stats_by_render). Prints how far region_stat's
+ * sum of per-pixel variances would have been off for the whole image. */
+static void light_regions(const CstScene *s, const CstRenderSettings *base, int iterations,
+                          uint64_t seed, const char *name, Regions *r)
 {
+    CstRenderSettings st = *base;
+    st.integrator = CST_INTEGRATOR_LIGHT;
+    double naive_se[MAX_REGIONS];
+    CstError err;
+    if (region_stats_by_render(s, &st, iterations, seed, r->count, r->rect, r->stat, naive_se,
+                               &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    print_message("%s: whole-image standard error (red) from iterations %.3g, from per-pixel "
+                  "variances %.3g (ratio %.2f)\n",
+                  name, r->stat[0].se[0], naive_se[0], r->stat[0].se[0] / naive_se[0]);
+}
+
+static void compare(const Regions *a, const Regions *b, const char *na, const char *nb)
+{
+    assert_int_equal(a->count, b->count);
     int worst_block = -2, worst_c = 0;
     double worst = 0.0;
-    for (int blk = -1; blk < (SIZE / BLOCK) * (SIZE / BLOCK); blk++) {
-        int x0 = 0, y0 = 0, x1 = SIZE, y1 = SIZE;
-        if (blk >= 0) {
-            x0 = (blk % (SIZE / BLOCK)) * BLOCK; y0 = (blk / (SIZE / BLOCK)) * BLOCK;
-            x1 = x0 + BLOCK; y1 = y0 + BLOCK;
-        }
-        RegionStat ra = region_stat(a, x0, y0, x1, y1), rb = region_stat(b, x0, y0, x1, y1);
+    for (int i = 0; i < a->count; i++) {
+        const RegionStat *ra = &a->stat[i], *rb = &b->stat[i];
         for (int c = 0; c < 3; c++) {
-            double z = z_score(ra.mean[c], ra.se[c], rb.mean[c], rb.se[c]);
-            if (fabs(z) > fabs(worst)) { worst = z; worst_block = blk; worst_c = c; }
+            double z = z_score(ra->mean[c], ra->se[c], rb->mean[c], rb->se[c]);
+            if (fabs(z) > fabs(worst)) { worst = z; worst_block = i - 1; worst_c = c; }
             if (!(fabs(z) <= Z_LIMIT))
                 fail_msg("%s vs %s: block %d (-1 = whole image) channel %d: %.6f vs %.6f, z = %.2f",
-                         na, nb, blk, c, ra.mean[c], rb.mean[c], z);
+                         na, nb, i - 1, c, ra->mean[c], rb->mean[c], z);
         }
     }
     print_message("%s vs %s: largest |z| = %.2f (block %d, channel %d)\n", na, nb, fabs(worst),
                   worst_block, worst_c);
 }
 
+static CstScene *cornell(void)
+{
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    return s;
+}
+
+static CstRenderSettings sized(int size, CstFilter filter)
+{
+    CstRenderSettings st = {0};
+    st.width = st.height = size;
+    st.filter = filter;
+    return st;
+}
+
 static void test_cornell_variants_agree(void **state)
 {
     (void)state;
+    CstScene *s = cornell();
+    CstRenderSettings st = sized(SIZE, CST_FILTER_BOX);
     /* BSDF-only sampling of a small light is the noisy one: give it more samples so the
      * test has power against biases of a fraction of a percent. */
-    CstFilm *mis = render_cornell(CST_INTEGRATOR_PATH, 256, 1);
-    CstFilm *nee = render_cornell(CST_INTEGRATOR_PATH_NEE, 256, 2);
-    CstFilm *bsdf = render_cornell(CST_INTEGRATOR_PATH_BSDF, 1024, 3);
-    compare(mis, nee, "path", "path-nee");
-    compare(mis, bsdf, "path", "path-bsdf");
-    compare(nee, bsdf, "path-nee", "path-bsdf");
+    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 1);
+    CstFilm *nee = render(s, &st, CST_INTEGRATOR_PATH_NEE, 256, 2);
+    CstFilm *bsdf = render(s, &st, CST_INTEGRATOR_PATH_BSDF, 1024, 3);
+    Regions rm = regions(SIZE, BLOCK), rn = rm, rb = rm, rl = rm;
+    film_regions(mis, &rm);
+    film_regions(nee, &rn);
+    film_regions(bsdf, &rb);
+    compare(&rm, &rn, "path", "path-nee");
+    compare(&rm, &rb, "path", "path-bsdf");
+    compare(&rn, &rb, "path-nee", "path-bsdf");
+    /* The Cornell box is all diffuse: light tracing sees every path the path tracer does. */
+    light_regions(s, &st, 256, 1000, "light", &rl);
+    compare(&rm, &rl, "path", "light");
     cst_film_destroy(mis);
     cst_film_destroy(nee);
     cst_film_destroy(bsdf);
+    cst_scene_destroy(s);
+}
+
+/* The tent filter: camera samples by filter importance sampling, splats by tent weights
+ * (bilinear). The Cornell box's border pixels are black, so the half pixel past the
+ * film's edge that border pixels see is tested in test_analytic.c instead. */
+static void test_cornell_light_tent(void **state)
+{
+    (void)state;
+    CstScene *s = cornell();
+    CstRenderSettings st = sized(SIZE, CST_FILTER_TENT);
+    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 4);
+    Regions rm = regions(SIZE, BLOCK), rl = rm;
+    film_regions(mis, &rm);
+    light_regions(s, &st, 256, 2000, "light (tent)", &rl);
+    compare(&rm, &rl, "path (tent)", "light (tent)");
+    cst_film_destroy(mis);
+    cst_scene_destroy(s);
+}
+
+/* max_depth means the same for both: paths of at most 2 bounces (an off-by-one would add
+ * or drop a whole bounce of light, tens of percent). Short paths: a small, cheap test. */
+static void test_cornell_light_max_depth(void **state)
+{
+    (void)state;
+    CstScene *s = cornell();
+    enum { DSIZE = 64, DBLOCK = 16 };
+    CstRenderSettings st = sized(DSIZE, CST_FILTER_BOX);
+    st.max_depth = 2;
+    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 6);
+    Regions rm = regions(DSIZE, DBLOCK), rl = rm;
+    film_regions(mis, &rm);
+    light_regions(s, &st, 256, 4000, "light (max_depth 2)", &rl);
+    compare(&rm, &rl, "path (max_depth 2)", "light (max_depth 2)");
+    cst_film_destroy(mis);
+    cst_scene_destroy(s);
+}
+
+/* Light entering glass: a diffuse floor under a flat glass interface (IOR 1.5, the
+ * outside above), lit from above through it, seen by a camera under the interface that
+ * looks straight down at the floor. Radiance under the interface is eta^2 times
+ * brighter; camera paths get the factor from the BTDF, light paths must not (flux is not
+ * compressed), so a light tracer with the radiance BTDF would be 1/eta^2 = 0.44 too dark.
+ * No delta surface is directly visible, so the two must agree. */
+static void test_light_through_glass(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    int floor_mat, glass_mat, light_mat;
+    Material m = {MATERIAL_DIFFUSE, {0.7f, 0.5f, 0.3f}, 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &floor_mat, &err), CST_OK);
+    m.albedo = rgb_s(0.0f);
+    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
+    Material glass = {MATERIAL_GLASS, {1.0f, 1.0f, 1.0f}, 1.5f};
+    assert_int_equal(scene_add_material(s, &glass, &glass_mat, &err), CST_OK);
+    /* Windings give the normals: floor and interface +y (the interface's outside is
+     * above), emitter -y. */
+    Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
+    Vec3 glass_q[4] = {{-3, 1, -3}, {-3, 1, 3}, {3, 1, 3}, {3, 1, -3}};
+    Vec3 light_q[4] = {{-1.5f, 2, -1.5f}, {1.5f, 2, -1.5f}, {1.5f, 2, 1.5f}, {-1.5f, 2, 1.5f}};
+    Emission em = {{4.0f, 4.0f, 4.0f}, 0};
+    assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
+    assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
+    assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
+    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+
+    enum { GSIZE = 64, GBLOCK = 16 };
+    CstRenderSettings st = sized(GSIZE, CST_FILTER_BOX);
+    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 5);
+    Regions rm = regions(GSIZE, GBLOCK), rl = rm;
+    film_regions(mis, &rm);
+    light_regions(s, &st, 256, 3000, "light (glass)", &rl);
+    compare(&rm, &rl, "path (glass)", "light (glass)");
+    /* Power: the test would see the radiance BTDF's 1/eta^2 on the light paths. */
+    double z = z_score(rm.stat[0].mean[0] / (1.5 * 1.5), rm.stat[0].se[0] / (1.5 * 1.5),
+                       rl.stat[0].mean[0], rl.stat[0].se[0]);
+    print_message("path (glass) / eta^2 vs light (glass): z = %.1f\n", z);
+    assert_true(fabs(z) > Z_LIMIT);
+    cst_film_destroy(mis);
+    scene_destroy(s);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_variants_agree),
+        cmocka_unit_test(test_cornell_light_tent),
+        cmocka_unit_test(test_cornell_light_max_depth),
+        cmocka_unit_test(test_light_through_glass),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

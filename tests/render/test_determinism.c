@@ -1,5 +1,6 @@
 /* Determinism: the same scene, seed and sample count give bit-identical images whatever
- * the thread count; the JSON Cornell box equals the built-in one bit for bit. */
+ * the thread count, for the path tracer and for the light tracer (whose splats land on
+ * any pixel); the JSON Cornell box equals the built-in one bit for bit. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -11,9 +12,11 @@
 #include "film/film.h"
 #include "scene/scene.h"
 
-static Film *render(const CstScene *s, int threads, CstFilter filter, uint64_t seed)
+static Film *render_with(const CstScene *s, CstIntegrator integ, int threads, CstFilter filter,
+                         uint64_t seed)
 {
     CstRenderSettings st = {0};
+    st.integrator = integ;
     st.width = 96;
     st.height = 80; /* not a multiple of the tile size: partial tiles too */
     st.spp = 8;
@@ -27,6 +30,11 @@ static Film *render(const CstScene *s, int threads, CstFilter filter, uint64_t s
     return f;
 }
 
+static Film *render(const CstScene *s, int threads, CstFilter filter, uint64_t seed)
+{
+    return render_with(s, CST_INTEGRATOR_PATH, threads, filter, seed);
+}
+
 static int films_identical(const Film *a, const Film *b)
 {
     size_t n = (size_t)a->width * (size_t)a->height * 3u;
@@ -35,29 +43,44 @@ static int films_identical(const Film *a, const Film *b)
            memcmp(a->sum_sq, b->sum_sq, n * sizeof *a->sum_sq) == 0;
 }
 
-static void test_thread_count_invariance(void **state)
+static void check_thread_count_invariance(CstIntegrator integ)
 {
-    (void)state;
     CstScene *s;
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     const CstFilter filters[] = {CST_FILTER_BOX, CST_FILTER_TENT};
     for (int fi = 0; fi < 2; fi++) {
-        Film *one = render(s, 1, filters[fi], 5);
+        Film *one = render_with(s, integ, 1, filters[fi], 5);
         const int counts[] = {2, 3, 7};
         for (int i = 0; i < 3; i++) {
-            Film *many = render(s, counts[i], filters[fi], 5);
+            Film *many = render_with(s, integ, counts[i], filters[fi], 5);
             if (!films_identical(one, many))
-                fail_msg("filter %s: 1 thread and %d threads differ", cst_filter_name(filters[fi]), counts[i]);
+                fail_msg("%s, filter %s: 1 thread and %d threads differ", cst_integrator_name(integ),
+                         cst_filter_name(filters[fi]), counts[i]);
             film_destroy(many);
         }
         /* ...and the seed matters (guards against a test that cannot fail). */
-        Film *other = render(s, 2, filters[fi], 6);
+        Film *other = render_with(s, integ, 2, filters[fi], 6);
         assert_false(films_identical(one, other));
         film_destroy(other);
         film_destroy(one);
     }
     cst_scene_destroy(s);
+}
+
+static void test_thread_count_invariance(void **state)
+{
+    (void)state;
+    check_thread_count_invariance(CST_INTEGRATOR_PATH);
+}
+
+/* 96 x 80 = 7680 light paths per iteration: 8 chunks, split unevenly over 2, 3 and 7
+ * threads, and 8 iterations, so both the chunk order within an iteration and the
+ * iteration order are exercised. */
+static void test_light_thread_count_invariance(void **state)
+{
+    (void)state;
+    check_thread_count_invariance(CST_INTEGRATOR_LIGHT);
 }
 
 static void test_json_cornell_equals_builtin(void **state)
@@ -107,6 +130,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_thread_count_invariance),
+        cmocka_unit_test(test_light_thread_count_invariance),
         cmocka_unit_test(test_accel_backends_identical_images),
         cmocka_unit_test(test_json_cornell_equals_builtin),
     };

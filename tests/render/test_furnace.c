@@ -1,5 +1,5 @@
 /* White-furnace tests: closed scenes whose radiance is known exactly, rendered by every
- * path-tracing variant. */
+ * path-tracing variant and by the light tracer. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -118,11 +118,58 @@ static void test_furnace_emitting_sphere(void **state)
     scene_destroy(s);
 }
 
+/* The emitting sphere for the light tracer: two-sided emission (half of the paths start
+ * outward and only show their first vertex), long paths, Russian roulette. Light paths
+ * splat into many pixels, so the standard errors come from independent one-iteration
+ * renders (region_stats_by_render). */
+static void test_light_furnace_emitting_sphere(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    int grey;
+    const float rho = 0.5f;
+    Material m = {MATERIAL_DIFFUSE, {rho, rho, rho}, 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
+    Emission em = {{1.0f, 0.5f, 0.25f}, 1};
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
+    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    const double rd = (double)rho;
+    const double expect[3] = {1.0 / (1.0 - rd), 0.5 / (1.0 - rd), 0.25 / (1.0 - rd)};
+    CstRenderSettings st = {0};
+    st.width = st.height = 32;
+    st.integrator = CST_INTEGRATOR_LIGHT;
+    int rect[17][4];
+    for (int b = -1; b < 16; b++) {
+        int *r = rect[b + 1];
+        r[0] = 0; r[1] = 0; r[2] = 32; r[3] = 32;
+        if (b >= 0) { r[0] = (b % 4) * 8; r[2] = r[0] + 8; r[1] = (b / 4) * 8; r[3] = r[1] + 8; }
+    }
+    RegionStat reg[17];
+    if (region_stats_by_render(s, &st, 2048, 300, 17, (const int (*)[4])rect, reg, NULL, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    double worst = 0.0;
+    for (int i = 0; i < 17; i++)
+        for (int c = 0; c < 3; c++) {
+            double z = (reg[i].mean[c] - expect[c]) / reg[i].se[c];
+            if (fabs(z) > fabs(worst)) worst = z;
+            if (!(fabs(z) <= Z_LIMIT))
+                fail_msg("light: block %d channel %d: mean %.6f, expected %.6f (z = %.2f)", i - 1, c,
+                         reg[i].mean[c], expect[c], z);
+        }
+    print_message("light: whole image %.5f (se %.1e), expected %.5f; largest |z| = %.2f\n",
+                  reg[0].mean[0], reg[0].se[0], expect[0], fabs(worst));
+    scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_white_furnace_albedo_one),
         cmocka_unit_test(test_furnace_emitting_sphere),
+        cmocka_unit_test(test_light_furnace_emitting_sphere),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

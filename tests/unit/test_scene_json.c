@@ -626,7 +626,7 @@ static void test_type_names(void **state)
                  CST_ERR_INVALID_ARG, "\"fisheye\"", 0,
                  "camera.type: unknown camera type \"fisheye\"; expected one of: pinhole, thinlens");
     expect_error(WITH_SECTION("\"integrator\": {\"type\": \"bdpt\"}"), CST_ERR_INVALID_ARG, "\"bdpt\"", 0,
-                 "integrator.type: unknown integrator \"bdpt\"; expected one of: path, path-nee, path-bsdf");
+                 "integrator.type: unknown integrator \"bdpt\"; expected one of: path, path-nee, path-bsdf, light");
     expect_error(WITH_SECTION("\"film\": {\"filter\": \"gauss\"}"), CST_ERR_INVALID_ARG, "\"gauss\"", 0,
                  "film.filter: unknown filter \"gauss\"; expected one of: box, tent");
 }
@@ -824,6 +824,12 @@ static void test_defaults(void **state)
     assert_int_equal(s->settings.rr_depth, 1);
     assert_int_equal(s->settings.filter, CST_FILTER_TENT);
     assert_string_equal(cst_scene_output_path(s), "out/A.EXR");
+    cst_scene_destroy(s);
+    s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"light\"}"));
+    assert_int_equal(s->settings.integrator, CST_INTEGRATOR_LIGHT);
+    cst_scene_destroy(s);
+    s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"lighttracing\"}"));
+    assert_int_equal(s->settings.integrator, CST_INTEGRATOR_LIGHT);
     cst_scene_destroy(s);
     /* two-sided emission on a sphere */
     s = expect_ok(WITH_SHAPE("{\"type\": \"sphere\", \"material\": \"white\", \"center\": [0, 0, 0], \"radius\": 2, "

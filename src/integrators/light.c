@@ -1,0 +1,110 @@
+/* Light tracer: Veach thesis ch. 10 (the t = 1 strategies of bidirectional path tracing,
+ * here without MIS); pbrt-v4 LightPathIntegrator. A light path y0 (on an emitter), y1, ...
+ * with throughput beta_j connects every non-delta vertex y_j to a point on the lens:
+ *   splat = beta_j f(y_j: w_cam <- w_prev) |cos theta_cam| W_e / pdf_w   (j >= 1)
+ *   splat = L_e(y0 -> w_cam) |cos theta_cam| W_e / (pdf_a pdf_w)           (j = 0)
+ * with V(y_j, lens) = 1; W_e / pdf_w = 1 / (A cos^3 theta d^2) (camera.c). */
+#include "integrators/light.h"
+
+#include "materials/bsdf.h"
+
+/* Whether the segment from surface point p (normal ng) to the lens point q is clear. The
+ * lens is not geometry, so only p's end is pushed off its surface, and the ray aims from
+ * the pushed point (see scene_visible for why). */
+static bool visible_to_lens(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+{
+    Vec3 o = scene_offset(p, ng, v3_sub(q, p));
+    Vec3 d = v3_sub(q, o);
+    float len = v3_length(d);
+    if (!(len > 0.0f)) return true;
+    Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
+    return !accel_occluded(&s->accel, &r);
+}
+
+/* Splats weight * W_e / pdf_w if the lens point is visible; weight already holds the
+ * throughput and the vertex's f |cos theta_cam| (or L_e |cos theta_cam|). */
+static void splat_if_visible(const Scene *s, const Camera *cam, const LightParams *lp,
+                             Vec3 p, Vec3 ng, const CameraWiSample *cs, Rgb weight,
+                             SplatList *out, uint64_t *rays)
+{
+    if (rgb_is_black(weight)) return;
+    ++*rays;
+    if (!visible_to_lens(s, p, ng, cs->p_lens)) return;
+    film_splat(out, cam->width, cam->height, lp->filter, cs->raster.x, cs->raster.y,
+               rgb_scale(weight, cs->we / cs->pdf_w));
+}
+
+void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32 *rng,
+                 SplatList *out, uint64_t *rays)
+{
+    if (s->emitter_sampler.count == 0) return;
+    /* The tent reaches half a pixel past the film's edge (film_splat). */
+    const float margin = lp->filter == CST_FILTER_TENT ? 0.5f : 0.0f;
+    float u_sel = pcg32_float(rng);
+    Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));
+    EmissionSample es;
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
+    const Emitter *e = &s->emitters[es.emitter];
+
+    /* y0 seen directly: the only way this estimator renders visible emitters. */
+    CameraWiSample cs;
+    Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+    if (camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
+        Rgb le = emitter_radiance(e, es.n, cs.wi);
+        splat_if_visible(s, cam, lp, es.p, es.n, &cs,
+                         rgb_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a), out, rays);
+    }
+    if (!(es.pdf_w > 0.0f)) return;
+
+    /* beta = L_e |cos theta_0| / (pdf_a pdf_w): the flux a path carries. Russian roulette
+     * looks at `scatter`, the product of the BSDF weights (and 1/q), which is what the
+     * path tracer's beta is: beta's flux scale would keep every path alive. */
+    Rgb beta = rgb_scale(emitter_radiance(e, es.n, es.w),
+                         fabsf(v3_dot(es.n, es.w)) / (es.pdf_a * es.pdf_w));
+    Rgb scatter = rgb_s(1.0f);
+    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    for (int depth = 1;; depth++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) break;
+        Vec3 w_prev = v3_neg(ray.d); /* toward y_{j-1}, where the light came from */
+        Bsdf bsdf;
+        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        /* Delta lobes cannot be connected: f is a Dirac in the direction to the lens. */
+        if (!bsdf_is_delta(&bsdf)) {
+            u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+            float cos_prev = fabsf(v3_dot(sh.ng, w_prev));
+            if (camera_sample_wi(cam, sh.p, u_lens, margin, &cs) && cos_prev > 0.0f) {
+                /* The camera path through this vertex evaluates f(wo = w_cam, wi = w_prev)
+                 * |cos theta_prev|; the connection wants |cos theta_cam| instead (the
+                 * geometry term toward the lens). Evaluated that way round rather than
+                 * relying on reciprocity, so a non-reciprocal lobe would stay right. */
+                Rgb f = bsdf_eval(&bsdf, cs.wi, w_prev);
+                f = rgb_scale(f, fabsf(v3_dot(sh.ng, cs.wi)) / cos_prev);
+                splat_if_visible(s, cam, lp, sh.p, sh.ng, &cs, rgb_mul(beta, f), out, rays);
+            }
+        }
+        if (lp->max_depth > 0 && depth >= lp->max_depth) break;
+
+        BsdfSample bs;
+        float uc = pcg32_float(rng);
+        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+        /* Adjoint sampling: wo is where the light came from, and refraction does not
+         * scale flux by 1/eta^2 (bsdf.c). */
+        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
+        beta = rgb_mul(beta, bs.weight);
+        scatter = rgb_mul(scatter, bs.weight);
+        if (rgb_is_black(scatter)) break;
+
+        /* Russian roulette as in path.c: from the same depth, the same survival rule. */
+        if (depth >= lp->rr_depth) {
+            float q = minf(0.95f, rgb_max(scatter));
+            if (!(pcg32_float(rng) < q)) break;
+            beta = rgb_scale(beta, 1.0f / q);
+            scatter = rgb_scale(scatter, 1.0f / q);
+        }
+        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    }
+}
