@@ -68,9 +68,11 @@ typedef enum CstIntegrator {
     CST_INTEGRATOR_PATH,        /* path tracing, NEE + BSDF sampling combined by MIS */
     CST_INTEGRATOR_PATH_NEE,    /* path tracing, emitters reached only by NEE (no MIS) */
     CST_INTEGRATOR_PATH_BSDF,   /* path tracing, BSDF sampling only (no NEE) */
-    CST_INTEGRATOR_LIGHT        /* light tracing: paths from emitters, every vertex splatted
+    CST_INTEGRATOR_LIGHT,       /* light tracing: paths from emitters, every vertex splatted
                                  * to the camera; spp counts iterations of width x height
                                  * light paths (docs/integrators.md) */
+    CST_INTEGRATOR_WHITTED      /* Whitted ray tracing: specular recursion + direct light,
+                                 * no diffuse interreflection (biased by design) */
 } CstIntegrator;
 
 typedef enum CstFilter {
@@ -79,8 +81,8 @@ typedef enum CstFilter {
     CST_FILTER_TENT         /* tent of radius 1 pixel, by filter importance sampling */
 } CstFilter;
 
-/* Parses "path", "path-nee", "path-bsdf", "light" (aliases "mis", "nee", "bsdf",
- * "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
+/* Parses "path", "path-nee", "path-bsdf", "light", "whitted" (aliases "mis", "nee",
+ * "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CstIntegrator cst_integrator_from_name(const char *name);
 const char *cst_integrator_name(CstIntegrator integrator);
 CstFilter cst_filter_from_name(const char *name);

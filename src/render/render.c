@@ -21,6 +21,7 @@
 #include "film/film.h"
 #include "integrators/light.h"
 #include "integrators/path.h"
+#include "integrators/whitted.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
 
@@ -29,6 +30,7 @@ static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] =
     {"path-bsdf", CST_INTEGRATOR_PATH_BSDF}, {"mis", CST_INTEGRATOR_PATH},
     {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
     {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
+    {"whitted", CST_INTEGRATOR_WHITTED},
 };
 
 CstIntegrator cst_integrator_from_name(const char *name)
@@ -45,6 +47,7 @@ const char *cst_integrator_name(CstIntegrator integrator)
     case CST_INTEGRATOR_PATH_NEE: return "path-nee";
     case CST_INTEGRATOR_PATH_BSDF: return "path-bsdf";
     case CST_INTEGRATOR_LIGHT: return "light";
+    case CST_INTEGRATOR_WHITTED: return "whitted";
     case CST_INTEGRATOR_DEFAULT: break;
     }
     return "default";
@@ -108,6 +111,8 @@ typedef struct RenderJob {
     Film *film;
     Camera camera;
     PathParams params;
+    bool whitted; /* camera samples through whitted_li instead of path_li */
+    WhittedParams whitted_params;
     CstFilter filter;
     uint64_t seed;
     /* Work units: tiles, or for light tracing chunks of LIGHT_CHUNK light paths. */
@@ -163,7 +168,8 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
                 Vec2 fp = film_position(job->filter, x, y, uf);
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
-                Rgb L = path_li(job->scene, &job->params, ray, &rng, &w->rays);
+                Rgb L = job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &rng, &w->rays)
+                                     : path_li(job->scene, &job->params, ray, &rng, &w->rays);
                 if (!rgb_is_finite(L)) {
                     /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
                     w->nonfinite++;
@@ -341,6 +347,9 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->params.mode = st.integrator == CST_INTEGRATOR_PATH_NEE ? PATH_NEE
                      : st.integrator == CST_INTEGRATOR_PATH_BSDF ? PATH_BSDF : PATH_MIS;
     job->params.max_depth = st.max_depth;
+    job->whitted = st.integrator == CST_INTEGRATOR_WHITTED;
+    job->whitted_params.max_depth = st.max_depth;
+    job->whitted_params.light_samples = 1;
     job->params.rr_depth = st.rr_depth;
     job->filter = st.filter;
     job->seed = st.seed;

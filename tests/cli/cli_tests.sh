@@ -150,8 +150,8 @@ check_value "--time 5s rejected"      --time 5s       -- "--time: .*got '5s'"
 check_value "--seed -1 rejected"      --seed -1       -- "^caustic: --seed: expected .*got '-1'$"
 check_value "--seed 2^64 rejected"    --seed 18446744073709551616 -- "--seed: .*got '18446744073709551616'"
 check_value "--seed 0x rejected"      --seed 0x       -- "--seed: .*got '0x'"
-check_value "unknown integrator lists the valid ones" --integrator whitted -- \
-    "--integrator: .*'whitted'.*path, path-nee, path-bsdf"
+check_value "unknown integrator lists the valid ones" --integrator metropolis -- \
+    "--integrator: .*'metropolis'.*path, path-nee, path-bsdf"
 check_value "unknown filter lists the valid ones"     --filter gaussian -- \
     "--filter: .*'gaussian'.*box, tent"
 if no_images "$TMP/values"; then pass "rejected values write no image"; else fail "rejected values write no image"; fi

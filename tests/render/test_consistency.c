@@ -176,6 +176,27 @@ static void test_cornell_light_max_depth(void **state)
     cst_scene_destroy(s);
 }
 
+/* Whitted on an all-diffuse scene is emission plus direct light at the first surface:
+ * the expectation of the path tracer cut after one bounce (max_depth 1), so the two must
+ * agree; a missing cosine, 1/pdf or emitter side in whitted_direct would not. */
+static void test_cornell_whitted_direct(void **state)
+{
+    (void)state;
+    CstScene *s = cornell();
+    enum { WSIZE = 64, WBLOCK = 16 };
+    CstRenderSettings st = sized(WSIZE, CST_FILTER_BOX);
+    st.max_depth = 1;
+    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 7);
+    CstFilm *wh = render(s, &st, CST_INTEGRATOR_WHITTED, 256, 8);
+    Regions rm = regions(WSIZE, WBLOCK), rw = rm;
+    film_regions(mis, &rm);
+    film_regions(wh, &rw);
+    compare(&rm, &rw, "path (max_depth 1)", "whitted");
+    cst_film_destroy(mis);
+    cst_film_destroy(wh);
+    cst_scene_destroy(s);
+}
+
 /* Light entering glass: a diffuse floor under a flat glass interface (IOR 1.5, the
  * outside above), lit from above through it, seen by a camera under the interface that
  * looks straight down at the floor. Radiance under the interface is eta^2 times
@@ -231,6 +252,7 @@ int main(void)
         cmocka_unit_test(test_cornell_light_tent),
         cmocka_unit_test(test_cornell_light_max_depth),
         cmocka_unit_test(test_light_through_glass),
+        cmocka_unit_test(test_cornell_whitted_direct),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,92 @@
+/* Whitted-style ray tracing (T. Whitted, "An Improved Illumination Model for Shaded
+ * Display", CACM 1980): at mirrors and glass the ray tree branches deterministically into
+ * every specular lobe, weighted by its Fresnel probability; at diffuse surfaces only the
+ * light arriving straight from emitters (shadow rays) is reflected. What it leaves out,
+ * and so where it is darker than the path tracer: diffuse interreflection and any light
+ * reaching a diffuse surface through a mirror or glass (caustics). */
+#include "integrators/whitted.h"
+
+#include "materials/bsdf.h"
+
+/* Branches whose weight falls below this stop: adaptive tree depth control (Hall &
+ * Greenberg, "A Testbed for Realistic Image Synthesis", 1983). Bounds the cost of glass,
+ * where every hit splits in two, at a bias below 1e-4 of the radiance of what is cut. */
+static const float WHITTED_MIN_WEIGHT = 1e-4f;
+
+/* Direct light at a diffuse point: the mean of n emitter samples (area measure,
+ * converted to solid angle with dist^2 / |cos theta_light|). */
+static Rgb whitted_direct(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, int n, Pcg32 *rng,
+                          uint64_t *rays)
+{
+    Rgb sum = rgb_s(0.0f);
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    for (int i = 0; i < n; i++) {
+        float u_sel = pcg32_float(rng);
+        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+        EmitterSample es;
+        emitter_sample(&s->emitter_sampler, s->emitters, &g, u_sel, u, &es);
+        Vec3 to = v3_sub(es.p, sh->p);
+        float dist2 = v3_length2(to);
+        if (!(dist2 > 0.0f)) continue;
+        Vec3 wi = v3_scale(to, 1.0f / sqrtf(dist2));
+        float cos_l = v3_dot(es.n, wi);
+        Rgb le = emitter_radiance(&s->emitters[es.emitter], es.n, v3_neg(wi));
+        if (rgb_is_black(le) || cos_l == 0.0f) continue;
+        Rgb f = bsdf_eval(bsdf, wo, wi);
+        if (rgb_is_black(f)) continue;
+        ++*rays;
+        if (!scene_visible(s, sh->p, sh->ng, es.p, es.n)) continue;
+        float pdf_w = s->emitter_sampler.pdf_a * dist2 / fabsf(cos_l);
+        sum = rgb_add(sum, rgb_scale(rgb_mul(f, le), 1.0f / pdf_w));
+    }
+    return rgb_scale(sum, 1.0f / (float)n);
+}
+
+static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int depth, float weight, Pcg32 *rng,
+                         uint64_t *rays)
+{
+    SurfaceHit sh;
+    ++*rays;
+    if (!scene_intersect(s, &ray, &sh)) return rgb_s(0.0f);
+    Vec3 wo = v3_neg(ray.d);
+    Rgb L = sh.emitter >= 0 ? emitter_radiance(&s->emitters[sh.emitter], sh.ng, wo) : rgb_s(0.0f);
+
+    Bsdf bsdf;
+    bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+    if (!bsdf_is_delta(&bsdf)) {
+        if (s->emitter_sampler.count > 0) L = rgb_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, rng, rays));
+        return L;
+    }
+    if (depth >= wp->max_depth) return L;
+
+    /* Every specular lobe once: the lobe choice of bsdf_sample (uc < F reflects) asked
+     * for at both ends of [0, 1); under total internal reflection both give the mirror
+     * direction, which is then counted once. A lobe's share of the radiance is its
+     * probability times its sample weight (f |cos| / pdf). */
+    const float ucs[2] = {0.0f, 0x1.fffffep-1f};
+    bool reflected = false, refracted = false;
+    Vec3 n = sh.ng;
+    float side_o = v3_dot(wo, n);
+    for (int k = 0; k < 2; k++) {
+        BsdfSample bs;
+        if (!bsdf_sample(&bsdf, wo, ucs[k], v2(0.5f, 0.5f), &bs)) continue;
+        bool reflect = (v3_dot(bs.wi, n) > 0.0f) == (side_o > 0.0f);
+        if (reflect ? reflected : refracted) continue;
+        if (reflect) reflected = true;
+        else refracted = true;
+        Rgb w = rgb_scale(bs.weight, bs.pdf);
+        float wmax = weight * rgb_max(w);
+        if (!(wmax >= WHITTED_MIN_WEIGHT)) continue;
+        Ray next = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        L = rgb_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, rng, rays));
+    }
+    return L;
+}
+
+Rgb whitted_li(const Scene *s, const WhittedParams *wp, Ray ray, Pcg32 *rng, uint64_t *rays)
+{
+    WhittedParams p = *wp;
+    if (p.max_depth <= 0) p.max_depth = WHITTED_DEFAULT_DEPTH;
+    if (p.light_samples <= 0) p.light_samples = 1;
+    return whitted_trace(s, &p, ray, 0, 1.0f, rng, rays);
+}

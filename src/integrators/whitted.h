@@ -1,0 +1,23 @@
+/* Whitted-style recursive ray tracing: perfect mirror reflection and dielectric
+ * reflection + refraction traced recursively, direct light by shadow rays at diffuse
+ * surfaces, no diffuse interreflection (biased by design). */
+#ifndef CST_INTEGRATORS_WHITTED_H
+#define CST_INTEGRATORS_WHITTED_H
+
+#include <stdint.h>
+
+#include "core/rng.h"
+#include "scene/scene.h"
+
+typedef struct WhittedParams {
+    int max_depth;     /* specular bounces after the camera vertex; 0 = WHITTED_DEFAULT_DEPTH */
+    int light_samples; /* shadow rays per diffuse hit; 0 = 1 */
+} WhittedParams;
+
+enum { WHITTED_DEFAULT_DEPTH = 10 };
+
+/* Radiance arriving along `ray` (toward its origin) under the Whitted model. Adds the
+ * number of rays traced to *rays. No allocation (recursion depth <= max_depth). */
+Rgb whitted_li(const Scene *scene, const WhittedParams *params, Ray ray, Pcg32 *rng, uint64_t *rays);
+
+#endif
