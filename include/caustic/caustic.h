@@ -71,8 +71,11 @@ typedef enum CstIntegrator {
     CST_INTEGRATOR_LIGHT,       /* light tracing: paths from emitters, every vertex splatted
                                  * to the camera; spp counts iterations of width x height
                                  * light paths (docs/integrators.md) */
-    CST_INTEGRATOR_WHITTED      /* Whitted ray tracing: specular recursion + direct light,
+    CST_INTEGRATOR_WHITTED,     /* Whitted ray tracing: specular recursion + direct light,
                                  * no diffuse interreflection (biased by design) */
+    CST_INTEGRATOR_PHOTON       /* photon mapping (Jensen): global + caustic maps built once
+                                 * per render, NEE and one final-gather ray per camera
+                                 * sample; consistent but biased (docs/integrators.md) */
 } CstIntegrator;
 
 typedef enum CstFilter {
@@ -81,7 +84,7 @@ typedef enum CstFilter {
     CST_FILTER_TENT         /* tent of radius 1 pixel, by filter importance sampling */
 } CstFilter;
 
-/* Parses "path", "path-nee", "path-bsdf", "light", "whitted" (aliases "mis", "nee",
+/* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon" (aliases "mis", "nee",
  * "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CstIntegrator cst_integrator_from_name(const char *name);
 const char *cst_integrator_name(CstIntegrator integrator);
@@ -105,6 +108,10 @@ typedef struct CstRenderSettings {
     int max_depth;            /* maximum bounces (scattering vertices) of a path, light paths
                                * included; 0 = unbounded */
     int rr_depth;             /* Russian roulette starts at this depth; 0 = default 3 */
+    int photons;              /* photon integrator: photon paths emitted per render;
+                               * 0 = default 200000 */
+    double photon_radius;     /* photon integrator: gather radius in scene units; 0 = automatic
+                               * (about 50 photons at a typical visible point) */
     CstProgressFn progress;   /* called from the calling thread about 10 times a second */
     void *progress_user;
 } CstRenderSettings;

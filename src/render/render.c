@@ -21,6 +21,7 @@
 #include "film/film.h"
 #include "integrators/light.h"
 #include "integrators/path.h"
+#include "integrators/photon.h"
 #include "integrators/whitted.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
@@ -30,7 +31,7 @@ static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] =
     {"path-bsdf", CST_INTEGRATOR_PATH_BSDF}, {"mis", CST_INTEGRATOR_PATH},
     {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
     {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
-    {"whitted", CST_INTEGRATOR_WHITTED},
+    {"whitted", CST_INTEGRATOR_WHITTED}, {"photon", CST_INTEGRATOR_PHOTON},
 };
 
 CstIntegrator cst_integrator_from_name(const char *name)
@@ -48,6 +49,7 @@ const char *cst_integrator_name(CstIntegrator integrator)
     case CST_INTEGRATOR_PATH_BSDF: return "path-bsdf";
     case CST_INTEGRATOR_LIGHT: return "light";
     case CST_INTEGRATOR_WHITTED: return "whitted";
+    case CST_INTEGRATOR_PHOTON: return "photon";
     case CST_INTEGRATOR_DEFAULT: break;
     }
     return "default";
@@ -84,6 +86,8 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK(max_depth, 0);
     PICK(rr_depth, CST_DEFAULT_RR_DEPTH);
     PICK(time_limit, 0.0);
+    PICK(photons, 0);          /* 0 stays: the photon integrator's default */
+    PICK(photon_radius, 0.0);  /* 0 stays: automatic */
     /* A time limit alone means "as many samples as fit"; otherwise the default count. */
     PICK(spp, out->time_limit > 0.0 ? 0 : CST_DEFAULT_SPP);
     if (!in->seed_set) { out->seed = sc->seed_set ? sc->seed : 0; out->seed_set = 1; }
@@ -112,6 +116,8 @@ typedef struct RenderJob {
     Camera camera;
     PathParams params;
     bool whitted; /* camera samples through whitted_li instead of path_li */
+    bool photon;  /* camera samples through photon_li, reading photon_maps */
+    PhotonMaps photon_maps; /* built once per render, before the first pass */
     WhittedParams whitted_params;
     CstFilter filter;
     uint64_t seed;
@@ -168,7 +174,8 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
                 Vec2 fp = film_position(job->filter, x, y, uf);
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
-                Rgb L = job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &rng, &w->rays)
+                Rgb L = job->photon ? photon_li(job->scene, &job->photon_maps, ray, &rng, &w->rays)
+                      : job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &rng, &w->rays)
                                      : path_li(job->scene, &job->params, ray, &rng, &w->rays);
                 if (!rgb_is_finite(L)) {
                     /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
@@ -382,6 +389,27 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
 
     CstStatus status = CST_OK;
     double t0 = now_seconds();
+    uint64_t photon_rays = 0;
+    if (st.integrator == CST_INTEGRATOR_PHOTON) {
+        /* The photon pass is part of the render's time (and of a time limit's budget). It
+         * runs single-threaded from the render seed, so the maps, and with them the image,
+         * do not depend on the thread count. */
+        PhotonParams pp = {st.photons, (float)st.photon_radius, st.max_depth, st.rr_depth, st.seed};
+        job->photon = true;
+        if (st.photons < 0 || !(st.photon_radius >= 0.0) || !((float)st.photon_radius < INFINITY)) {
+            status = CST_ERR_INVALID_ARG;
+            cst_fail(err, status, "photon count %d and radius %g: expected positive values (0 = default)",
+                     st.photons, st.photon_radius);
+        } else {
+            status = photon_maps_build(scene, &job->camera, &pp, &job->photon_maps, &photon_rays, err);
+        }
+        if (status != CST_OK) {
+            pthread_mutex_destroy(&job->lock);
+            pthread_cond_destroy(&job->done);
+            film_destroy(film); free(workers); free(job);
+            return status;
+        }
+    }
     if (st.time_limit <= 0.0) {
         /* Fixed sample count: one pass, so accumulation order is fixed. */
         status = run_samples(job, workers, st.threads, &st, t0, 0, st.spp, 0.0, 1.0);
@@ -417,6 +445,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     if (job->light)
         for (int c = 0; c < job->num_tiles; c++) splats_nonfinite += job->splats[c].nonfinite;
     light_free(job);
+    photon_maps_free(&job->photon_maps);
     if (status != CST_OK) {
         film_destroy(film);
         free(workers);
@@ -438,6 +467,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         /* Light tracing traces width x height light paths per iteration: the same count. */
         stats->samples = (uint64_t)film->spp * (uint64_t)st.width * (uint64_t)st.height;
         stats->nonfinite = splats_nonfinite;
+        stats->rays = photon_rays;
         for (int i = 0; i < st.threads; i++) {
             stats->rays += workers[i].rays;
             stats->nonfinite += workers[i].nonfinite;

@@ -549,12 +549,12 @@ static CstStatus parse_camera(Loader *ld, const json_t *cam)
 
 static CstStatus parse_integrator(Loader *ld, const json_t *integ)
 {
-    static const char *const keys[] = {"type", "max_depth", "rr_depth"};
+    static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius"};
     CstRenderSettings *rs = &ld->scene->settings;
     json_t *v;
     json_int_t i = 0;
-    LOADER_TRY(expect_object(ld, integ, "an object with type, max_depth, rr_depth"));
-    LOADER_TRY(check_keys(ld, integ, keys, 3));
+    LOADER_TRY(expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius"));
+    LOADER_TRY(check_keys(ld, integ, keys, 5));
     if ((v = json_object_get(integ, "type"))) {
         const char *s = NULL;
         path_push_key(ld, "type");
@@ -563,7 +563,7 @@ static CstStatus parse_integrator(Loader *ld, const json_t *integ)
         if (t == CST_INTEGRATOR_DEFAULT) {
             char name[72];
             return fail_here(ld, "unknown integrator \"%s\"; expected one of: path, path-nee, "
-                                 "path-bsdf, light, whitted",
+                                 "path-bsdf, light, whitted, photon",
                              clip_name(s, name));
         }
         rs->integrator = t;
@@ -580,6 +580,25 @@ static CstStatus parse_integrator(Loader *ld, const json_t *integ)
         path_push_key(ld, "rr_depth");
         LOADER_TRY(read_int(ld, v, 1, INT_MAX, &i));
         rs->rr_depth = (int)i;
+        path_pop(ld);
+    }
+    /* Photon mapping only (ignored by the other integrators). At most 2^28 photon paths:
+     * the stored photons (several per path) must stay within the photon map's 2^30. */
+    if ((v = json_object_get(integ, "photons"))) {
+        path_push_key(ld, "photons");
+        LOADER_TRY(read_int(ld, v, 1, (json_int_t)1 << 28, &i));
+        rs->photons = (int)i;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "radius"))) {
+        float r = 0.0f;
+        path_push_key(ld, "radius");
+        LOADER_TRY(read_float(ld, v, LOADER_MAX_LENGTH, &r));
+        if (!(r > 0.0f))
+            return fail_here(ld, "radius %g is not positive; expected a gather radius > 0 (omit it for "
+                                 "the automatic radius)",
+                             (double)r);
+        rs->photon_radius = (double)r;
         path_pop(ld);
     }
     return CST_OK;

@@ -1,6 +1,6 @@
 /* Determinism: the same scene, seed and sample count give bit-identical images whatever
- * the thread count, for the path tracer and for the light tracer (whose splats land on
- * any pixel); the JSON Cornell box equals the built-in one bit for bit. */
+ * the thread count, for the path tracer, for the light tracer (whose splats land on
+ * any pixel) and for photon mapping (whose maps are shared by all threads); the JSON Cornell box equals the built-in one bit for bit. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -83,6 +83,15 @@ static void test_light_thread_count_invariance(void **state)
     check_thread_count_invariance(CST_INTEGRATOR_LIGHT);
 }
 
+/* The photon maps are built single-threaded from the render seed (200000 photons, the
+ * default, and the automatic radius), then read by every thread: the image must still
+ * not depend on the thread count, and the seed must change the maps too. */
+static void test_photon_thread_count_invariance(void **state)
+{
+    (void)state;
+    check_thread_count_invariance(CST_INTEGRATOR_PHOTON);
+}
+
 static void test_json_cornell_equals_builtin(void **state)
 {
     (void)state;
@@ -131,6 +140,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_thread_count_invariance),
         cmocka_unit_test(test_light_thread_count_invariance),
+        cmocka_unit_test(test_photon_thread_count_invariance),
         cmocka_unit_test(test_accel_backends_identical_images),
         cmocka_unit_test(test_json_cornell_equals_builtin),
     };

@@ -528,6 +528,12 @@ static void test_ranges(void **state)
                  "integrator.max_depth: -1 is out of range");
     expect_error(WITH_SECTION("\"integrator\": {\"rr_depth\": 0}"), CST_ERR_INVALID_ARG, "0}", 0,
                  "integrator.rr_depth: 0 is out of range");
+    expect_error(WITH_SECTION("\"integrator\": {\"photons\": 0}"), CST_ERR_INVALID_ARG, "0}", 0,
+                 "integrator.photons: 0 is out of range");
+    expect_error(WITH_SECTION("\"integrator\": {\"radius\": -2}"), CST_ERR_INVALID_ARG, "-2", 0,
+                 "integrator.radius: radius -2 is not positive");
+    expect_error(WITH_SECTION("\"integrator\": {\"radius\": 0}"), CST_ERR_INVALID_ARG, "0}", 0,
+                 "integrator.radius: radius 0 is not positive");
     const char *fovs[] = {"0", "180", "-5", "200.5"};
     for (int i = 0; i < 4; i++) {
         char text[512];
@@ -830,6 +836,11 @@ static void test_defaults(void **state)
     cst_scene_destroy(s);
     s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"lighttracing\"}"));
     assert_int_equal(s->settings.integrator, CST_INTEGRATOR_LIGHT);
+    cst_scene_destroy(s);
+    s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"photon\", \"photons\": 5000, \"radius\": 12.5}"));
+    assert_int_equal(s->settings.integrator, CST_INTEGRATOR_PHOTON);
+    assert_int_equal(s->settings.photons, 5000);
+    assert_true(s->settings.photon_radius == 12.5);
     cst_scene_destroy(s);
     /* two-sided emission on a sphere */
     s = expect_ok(WITH_SHAPE("{\"type\": \"sphere\", \"material\": \"white\", \"center\": [0, 0, 0], \"radius\": 2, "

@@ -1,0 +1,311 @@
+/* Photon mapping after Jensen 2001 (ch. 5-9) with the map split of Jensen & Christensen
+ * 1998. The scheme, chosen so every light path is counted exactly once:
+ *   photon pass: photon paths start on emitters with flux
+ *     Phi = L_e |cos theta_0| / (pdf_a pdf_w) / N
+ *   (one of N samples of the emitted power, Jensen 2001 sec. 5.1: the sum's expectation
+ *   is pi L_e A for a one-sided Lambertian area emitter, 2 pi L_e A two-sided), are traced with
+ *   importance-mode BSDF sampling and Russian roulette, and leave a copy at every
+ *   non-delta hit: all of them go to the global map (paths L (S|D)* D), those whose path
+ *   so far is L S+ D also to the caustic map.
+ *   camera pass: follow delta lobes from the camera, adding emission seen through them;
+ *   at the first non-delta point x add
+ *     direct light by NEE (emitters seen straight from x: L D),
+ *     the caustic map's density estimate at x (L S+ D),
+ *     one final-gather ray: BSDF-sampled from x, through delta bounces, to the first
+ *     non-delta point y, weighted by the global map's estimate at y (... D S* x).
+ *   A gather ray that reaches an emitter adds nothing: that light is NEE's or the
+ *   caustic map's at x. */
+#include "integrators/photon.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "materials/bsdf.h"
+
+/* Stream ids: the photon pass and the radius probes draw from (seed, index, id), disjoint
+ * from the camera samples' (seed, pixel, sample) for any sample index below 2^62. */
+#define PHOTON_STREAM ((uint64_t)1 << 62)
+#define RADIUS_STREAM (((uint64_t)1 << 62) + 1u)
+
+typedef struct PhotonArray {
+    Photon *data;
+    size_t n, cap;
+} PhotonArray;
+
+static int photon_array_push(PhotonArray *a, const Photon *ph)
+{
+    if (a->n == a->cap) {
+        size_t cap = a->cap ? 2 * a->cap : 4096;
+        Photon *d = realloc(a->data, cap * sizeof *d);
+        if (!d) return 0;
+        a->data = d;
+        a->cap = cap;
+    }
+    a->data[a->n++] = *ph;
+    return 1;
+}
+
+/* Traces photon path `index`; returns 0 on OOM. */
+static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, float inv_n,
+                        PhotonArray *global, PhotonArray *caustic, uint64_t *rays)
+{
+    Pcg32 rng;
+    pcg32_seed_sample(&rng, pp->seed, index, PHOTON_STREAM);
+    float u_sel = pcg32_float(&rng);
+    Vec2 u_pos = v2(pcg32_float(&rng), pcg32_float(&rng));
+    Vec2 u_dir = v2(pcg32_float(&rng), pcg32_float(&rng));
+    EmissionSample es;
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
+    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return 1; /* still one of the N */
+    const Emitter *e = &s->emitters[es.emitter];
+    /* Cosine-weighted directions (pdf_w = |cos| / pi, or half that per side when two-sided)
+     * make every photon of a uniform emitter carry the same flux: L_e pi A / N one-sided,
+     * L_e 2 pi A / N two-sided, summing to the emitted power. */
+    Rgb power = rgb_scale(emitter_radiance(e, es.n, es.w),
+                          fabsf(v3_dot(es.n, es.w)) / (es.pdf_a * es.pdf_w) * inv_n);
+    Rgb scatter = rgb_s(1.0f); /* what Russian roulette looks at, as in light.c */
+    bool specular_only = true; /* every bounce so far was a delta lobe */
+    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    for (int depth = 1;; depth++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) break;
+        Vec3 w_prev = v3_neg(ray.d);
+        Bsdf bsdf;
+        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        if (!bsdf_is_delta(&bsdf)) {
+            Photon ph;
+            ph.pos = sh.p;
+            ph.wi = w_prev;
+            ph.power = power;
+            ph.n = v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng);
+            if (!photon_array_push(global, &ph)) return 0;
+            /* depth 1 is direct light (L D), which NEE handles at camera points. */
+            if (specular_only && depth > 1 && !photon_array_push(caustic, &ph)) return 0;
+        }
+        if (pp->max_depth > 0 && depth >= pp->max_depth) break;
+        BsdfSample bs;
+        float uc = pcg32_float(&rng);
+        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
+        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
+        if (!bs.delta) specular_only = false;
+        power = rgb_mul(power, bs.weight);
+        scatter = rgb_mul(scatter, bs.weight);
+        if (rgb_is_black(scatter)) break;
+        /* Russian roulette (Jensen 2001 sec. 5.4 uses absorption probability; this is the
+         * light tracer's rule, so both trace the same paths): unbiased, power scaled by 1/q. */
+        if (depth >= pp->rr_depth) {
+            float q = minf(0.95f, rgb_max(scatter));
+            if (!(pcg32_float(&rng) < q)) break;
+            power = rgb_scale(power, 1.0f / q);
+            scatter = rgb_scale(scatter, 1.0f / q);
+        }
+        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    }
+    return 1;
+}
+
+/* Follows delta lobes from `ray` (sampling one lobe at each; weights into *beta) to the
+ * first non-delta hit. Adds the emission it passes (and the hit's) to *le when le is not
+ * NULL. *wo_out is the direction back along the last segment. Returns false if the ray leaves the scene or the chain stops. */
+static bool trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb *le,
+                             SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays)
+{
+    for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
+        ++*rays;
+        if (!scene_intersect(s, &ray, sh)) return false;
+        Vec3 wo = v3_neg(ray.d);
+        if (le && sh->emitter >= 0)
+            *le = rgb_madd(*le, *beta, emitter_radiance(&s->emitters[sh->emitter], sh->ng, wo));
+        bsdf_init(bsdf, &s->materials[sh->material], sh->ng);
+        if (!bsdf_is_delta(bsdf)) {
+            *wo_out = wo;
+            return true;
+        }
+        BsdfSample bs;
+        float uc = pcg32_float(rng);
+        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+        if (!bsdf_sample(bsdf, wo, uc, u, &bs)) return false;
+        *beta = rgb_mul(*beta, bs.weight);
+        if (rgb_is_black(*beta)) return false;
+        ray = ray_make(scene_offset(sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    }
+    /* Cut after PHOTON_MAX_SPECULAR delta bounces: a bias of at most the throughput left,
+     * which for Fresnel-weighted glass chains is negligible. */
+    return false;
+}
+
+typedef struct DensityCtx {
+    const Bsdf *bsdf;
+    Vec3 wo, n; /* n: x's geometric normal, on wo's side */
+    Rgb sum;
+} DensityCtx;
+
+static void density_visit(void *ctx, const Photon *ph, float dist2)
+{
+    (void)dist2;
+    DensityCtx *c = ctx;
+    /* A photon on the other side of a thin wall must not light this side. */
+    if (!(v3_dot(ph->n, c->n) > 0.0f)) return;
+    float cos_i = fabsf(v3_dot(c->n, ph->wi));
+    if (!(cos_i > 0.0f)) return;
+    /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
+    Rgb f = rgb_scale(bsdf_eval(c->bsdf, c->wo, ph->wi), 1.0f / cos_i);
+    c->sum = rgb_madd(c->sum, f, ph->power);
+}
+
+/* Reflected radiance at sh toward wo: L = sum f(wo, wi_p) Phi_p / (pi r^2), the constant
+ * (box) kernel density estimate of Jensen 2001 eq. 7.6. */
+static Rgb radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo)
+{
+    if (photon_map_count(map) == 0) return rgb_s(0.0f);
+    DensityCtx c = {bsdf, wo, v3_dot(sh->ng, wo) >= 0.0f ? sh->ng : v3_neg(sh->ng), rgb_s(0.0f)};
+    photon_map_radius(map, sh->p, r, density_visit, &c);
+    return rgb_scale(c.sum, 1.0f / (CST_PI * r * r));
+}
+
+/* Direct light at a non-delta point by one emitter sample (path.c's NEE, without MIS:
+ * BSDF-sampled rays that reach emitters add nothing here). */
+static Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
+                        uint64_t *rays)
+{
+    if (s->emitter_sampler.count == 0) return rgb_s(0.0f);
+    float u_sel = pcg32_float(rng);
+    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    EmitterSample es;
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    emitter_sample(&s->emitter_sampler, s->emitters, &g, u_sel, u, &es);
+    Vec3 to = v3_sub(es.p, sh->p);
+    float dist2 = v3_length2(to);
+    if (!(dist2 > 0.0f)) return rgb_s(0.0f);
+    Vec3 wi = v3_scale(to, 1.0f / sqrtf(dist2));
+    float cos_l = v3_dot(es.n, wi);
+    Rgb le = emitter_radiance(&s->emitters[es.emitter], es.n, v3_neg(wi));
+    if (rgb_is_black(le) || cos_l == 0.0f) return rgb_s(0.0f);
+    Rgb f = bsdf_eval(bsdf, wo, wi);
+    if (rgb_is_black(f)) return rgb_s(0.0f);
+    ++*rays;
+    if (!scene_visible(s, sh->p, sh->ng, es.p, es.n)) return rgb_s(0.0f);
+    float pdf_w = s->emitter_sampler.pdf_a * dist2 / fabsf(cos_l);
+    return rgb_scale(rgb_mul(f, le), 1.0f / pdf_w);
+}
+
+Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t *rays)
+{
+    Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
+    SurfaceHit x;
+    Bsdf bsdf_x;
+    Vec3 wo;
+    if (!trace_to_diffuse(s, ray, rng, &beta, &L, &x, &bsdf_x, &wo, rays)) return L;
+
+    Rgb lx = direct_light(s, &bsdf_x, &x, wo, rng, rays);
+    lx = rgb_add(lx, radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo));
+
+    /* Final gathering (Jensen 2001 sec. 9.3.3): the global map's blur is hidden behind one
+     * more bounce; reading it at x directly would show its low-frequency noise. */
+    BsdfSample bs;
+    float uc = pcg32_float(rng);
+    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    if (bsdf_sample(&bsdf_x, wo, uc, u, &bs)) {
+        Rgb g = bs.weight;
+        SurfaceHit y;
+        Bsdf bsdf_y;
+        Vec3 wo_y;
+        Ray gr = ray_make(scene_offset(x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        /* Emission the gather ray meets is not added (le = NULL): see the header. */
+        if (trace_to_diffuse(s, gr, rng, &g, NULL, &y, &bsdf_y, &wo_y, rays))
+            lx = rgb_add(lx, rgb_mul(g, radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y)));
+    }
+    return rgb_madd(L, beta, lx);
+}
+
+void photon_maps_free(PhotonMaps *m)
+{
+    if (!m) return;
+    photon_map_free(&m->global);
+    photon_map_free(&m->caustic);
+    memset(m, 0, sizeof *m);
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* Squared distance to the k-th nearest photon of the global map around p (fewer when the
+ * map holds fewer than k). */
+static float knn_dist2(const PhotonMap *map, Vec3 p)
+{
+    const Photon *found[PHOTON_RADIUS_K];
+    float d2[PHOTON_RADIUS_K];
+    int n = photon_map_knn(map, p, PHOTON_RADIUS_K, INFINITY, found, d2);
+    return n > 0 ? d2[n - 1] : 0.0f;
+}
+
+/* The automatic radius: the median, over PHOTON_RADIUS_POINTS first non-delta hits of
+ * random camera rays, of the distance to the PHOTON_RADIUS_K-th nearest global photon,
+ * so a typical visible point gathers about PHOTON_RADIUS_K photons (Jensen 2001 sec. 7.2
+ * gathers a fixed count; a fixed radius keeps the estimate a plain box-kernel average).
+ * When no camera ray finds a surface, the photons themselves are the probe points. */
+static float auto_radius(const Scene *s, const Camera *cam, const PhotonParams *pp, const PhotonMap *g,
+                         uint64_t *rays)
+{
+    float d2[PHOTON_RADIUS_POINTS];
+    int n = 0;
+    size_t count = photon_map_count(g);
+    if (count == 0) return 1.0f; /* nothing to estimate: any radius gives zero */
+    for (int i = 0; i < PHOTON_RADIUS_POINTS; i++) {
+        Pcg32 rng;
+        pcg32_seed_sample(&rng, pp->seed, (uint64_t)i, RADIUS_STREAM);
+        float fx = pcg32_float(&rng) * (float)cam->width, fy = pcg32_float(&rng) * (float)cam->height;
+        Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Ray r = camera_generate_ray(cam, fx, fy, ul);
+        Rgb beta = rgb_s(1.0f);
+        SurfaceHit sh;
+        Bsdf b;
+        Vec3 wo;
+        if (!trace_to_diffuse(s, r, &rng, &beta, NULL, &sh, &b, &wo, rays)) continue;
+        float v = knn_dist2(g, sh.p);
+        if (v > 0.0f) d2[n++] = v;
+    }
+    if (n == 0) {
+        size_t stride = count / PHOTON_RADIUS_POINTS + 1;
+        for (size_t i = 0; i < count && n < PHOTON_RADIUS_POINTS; i += stride) {
+            float v = knn_dist2(g, g->photons[i].pos);
+            if (v > 0.0f) d2[n++] = v;
+        }
+    }
+    if (n == 0) return 1.0f; /* every photon at one point */
+    qsort(d2, (size_t)n, sizeof d2[0], cmp_float);
+    return sqrtf(d2[n / 2]);
+}
+
+CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParams *pp, PhotonMaps *out,
+                            uint64_t *rays, CstError *err)
+{
+    memset(out, 0, sizeof *out);
+    int n = pp->photons > 0 ? pp->photons : PHOTON_DEFAULT_COUNT;
+    PhotonArray global = {0}, caustic = {0};
+    CstStatus st = CST_OK;
+    if (s->emitter_sampler.count > 0) {
+        float inv_n = 1.0f / (float)n;
+        for (int i = 0; i < n; i++)
+            if (!trace_photon(s, pp, (uint64_t)i, inv_n, &global, &caustic, rays)) {
+                st = cst_fail(err, CST_ERR_OOM, "out of memory for %zu photons", global.n + caustic.n);
+                goto done;
+            }
+    }
+    if ((st = photon_map_build(&out->global, global.data, global.n, err)) != CST_OK) goto done;
+    if ((st = photon_map_build(&out->caustic, caustic.data, caustic.n, err)) != CST_OK) goto done;
+    out->emitted = n;
+    out->radius = pp->radius > 0.0f ? pp->radius : auto_radius(s, cam, pp, &out->global, rays);
+done:
+    free(global.data);
+    free(caustic.data);
+    if (st != CST_OK) photon_maps_free(out);
+    return st;
+}

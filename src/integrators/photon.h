@@ -1,0 +1,52 @@
+/* Photon mapping (Jensen, "Realistic Image Synthesis Using Photon Mapping", 2001; Jensen &
+ * Christensen, "Efficient Simulation of Light Transport in Scenes with Participating Media
+ * Using Photon Maps", 1998, for the two-map split): a photon pass builds a global and a
+ * caustic map once per render, then camera paths read them by density estimation. */
+#ifndef CST_INTEGRATORS_PHOTON_H
+#define CST_INTEGRATORS_PHOTON_H
+
+#include <stdint.h>
+
+#include "camera/camera.h"
+#include "core/rng.h"
+#include "integrators/photon_map.h"
+#include "scene/scene.h"
+
+enum {
+    PHOTON_DEFAULT_COUNT = 200000, /* photons emitted when the settings say 0 */
+    PHOTON_RADIUS_K = 50,          /* the automatic radius holds about this many photons */
+    PHOTON_RADIUS_POINTS = 256,    /* camera hit points whose k-NN distance sets the radius */
+    PHOTON_MAX_SPECULAR = 64       /* delta bounces a camera or gather ray follows at most */
+};
+
+typedef struct PhotonParams {
+    int photons;     /* emitted photon paths; 0 = PHOTON_DEFAULT_COUNT */
+    float radius;    /* gather radius (scene units); 0 = automatic (photon_maps_build) */
+    int max_depth;   /* bounces of a photon path; 0 = unbounded (Russian roulette only) */
+    int rr_depth;    /* first bounce at which Russian roulette may stop a photon path */
+    uint64_t seed;   /* the photon pass is a function of this seed only */
+} PhotonParams;
+
+/* Both maps and the radius every estimate uses. A zeroed PhotonMaps is valid and empty. */
+typedef struct PhotonMaps {
+    PhotonMap global;  /* every photon hit on a non-delta surface: paths L (S|D)* D */
+    PhotonMap caustic; /* the subset whose path is L S+ D */
+    float radius;      /* resolved: the given one, or the automatic one */
+    int emitted;       /* photon paths emitted (the power divisor) */
+} PhotonMaps;
+
+/* Emits and traces the photons single-threaded, in index order, photon i drawing from the
+ * stream (seed, i): the maps depend on the seed only, never on threads or timing. Then, if
+ * pp->radius is 0, chooses the radius from camera rays (see photon.c). Adds the rays it
+ * traces to *rays. Fails with CST_ERR_OOM (maps zeroed). Caller frees: photon_maps_free. */
+CstStatus photon_maps_build(const Scene *scene, const Camera *cam, const PhotonParams *pp,
+                            PhotonMaps *out, uint64_t *rays, CstError *err);
+/* Accepts NULL and a zeroed struct. */
+void photon_maps_free(PhotonMaps *maps);
+
+/* Radiance arriving along `ray` (toward its origin): emission seen directly or through
+ * delta bounces, NEE, the caustic map and one final-gather ray at the first non-delta hit.
+ * No allocation; safe from many threads on one committed scene and built maps. */
+Rgb photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Pcg32 *rng, uint64_t *rays);
+
+#endif
