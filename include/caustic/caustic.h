@@ -73,9 +73,12 @@ typedef enum CstIntegrator {
                                  * light paths (docs/integrators.md) */
     CST_INTEGRATOR_WHITTED,     /* Whitted ray tracing: specular recursion + direct light,
                                  * no diffuse interreflection (biased by design) */
-    CST_INTEGRATOR_PHOTON       /* photon mapping (Jensen): global + caustic maps built once
+    CST_INTEGRATOR_PHOTON,      /* photon mapping (Jensen): global + caustic maps built once
                                  * per render, NEE and one final-gather ray per camera
                                  * sample; consistent but biased (docs/integrators.md) */
+    CST_INTEGRATOR_SPPM         /* stochastic progressive photon mapping (Hachisuka & Jensen
+                                 * 2009): spp counts iterations; photons = photon paths per
+                                 * iteration; single-threaded; consistent (docs/integrators.md) */
 } CstIntegrator;
 
 typedef enum CstFilter {
@@ -84,7 +87,7 @@ typedef enum CstFilter {
     CST_FILTER_TENT         /* tent of radius 1 pixel, by filter importance sampling */
 } CstFilter;
 
-/* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon" (aliases "mis", "nee",
+/* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm" (aliases "mis", "nee",
  * "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CstIntegrator cst_integrator_from_name(const char *name);
 const char *cst_integrator_name(CstIntegrator integrator);

@@ -111,7 +111,7 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
 /* Follows delta lobes from `ray` (sampling one lobe at each; weights into *beta) to the
  * first non-delta hit. Adds the emission it passes (and the hit's) to *le when le is not
  * NULL. *wo_out is the direction back along the last segment. Returns false if the ray leaves the scene or the chain stops. */
-static bool trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb *le,
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb *le,
                              SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays)
 {
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
@@ -169,7 +169,7 @@ static Rgb radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, co
 
 /* Direct light at a non-delta point by one emitter sample (path.c's NEE, without MIS:
  * BSDF-sampled rays that reach emitters add nothing here). */
-static Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
+Rgb photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
                         uint64_t *rays)
 {
     if (s->emitter_sampler.count == 0) return rgb_s(0.0f);
@@ -199,9 +199,9 @@ Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t
     SurfaceHit x;
     Bsdf bsdf_x;
     Vec3 wo;
-    if (!trace_to_diffuse(s, ray, rng, &beta, &L, &x, &bsdf_x, &wo, rays)) return L;
+    if (!photon_trace_to_diffuse(s, ray, rng, &beta, &L, &x, &bsdf_x, &wo, rays)) return L;
 
-    Rgb lx = direct_light(s, &bsdf_x, &x, wo, rng, rays);
+    Rgb lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, rays);
     lx = rgb_add(lx, radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo));
 
     /* Final gathering (Jensen 2001 sec. 9.3.3): the global map's blur is hidden behind one
@@ -216,7 +216,7 @@ Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t
         Vec3 wo_y;
         Ray gr = ray_make(scene_offset(x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
-        if (trace_to_diffuse(s, gr, rng, &g, NULL, &y, &bsdf_y, &wo_y, rays))
+        if (photon_trace_to_diffuse(s, gr, rng, &g, NULL, &y, &bsdf_y, &wo_y, rays))
             lx = rgb_add(lx, rgb_mul(g, radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y)));
     }
     return rgb_madd(L, beta, lx);
@@ -268,7 +268,7 @@ static float auto_radius(const Scene *s, const Camera *cam, const PhotonParams *
         SurfaceHit sh;
         Bsdf b;
         Vec3 wo;
-        if (!trace_to_diffuse(s, r, &rng, &beta, NULL, &sh, &b, &wo, rays)) continue;
+        if (!photon_trace_to_diffuse(s, r, &rng, &beta, NULL, &sh, &b, &wo, rays)) continue;
         float v = knn_dist2(g, sh.p);
         if (v > 0.0f) d2[n++] = v;
     }

@@ -49,4 +49,16 @@ void photon_maps_free(PhotonMaps *maps);
  * No allocation; safe from many threads on one committed scene and built maps. */
 Rgb photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Pcg32 *rng, uint64_t *rays);
 
+/* Shared with sppm.c, which builds its visible points the same way. */
+struct Bsdf;
+/* Follows delta lobes from `ray` (one sampled lobe per bounce, weights into *beta) to the
+ * first non-delta hit *sh (its BSDF in *bsdf, the direction back in *wo_out), adding the
+ * emission it passes to *le when le is not NULL. False if the ray leaves the scene, the
+ * chain dies or exceeds PHOTON_MAX_SPECULAR bounces. */
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb *le, SurfaceHit *sh,
+                             struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays);
+/* Direct light at a non-delta point by one emitter sample, no MIS. */
+Rgb photon_direct_light(const Scene *s, const struct Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo,
+                        Pcg32 *rng, uint64_t *rays);
+
 #endif

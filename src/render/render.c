@@ -4,7 +4,8 @@
  * Light tracing splats anywhere on the film instead; it runs in iterations of
  * width x height light paths, path i of iteration s seeded by (seed, i, s), cut into
  * fixed chunks whose splat lists are added in chunk order once the iteration is done, so
- * its images are bit-identical for any thread count too. */
+ * its images are bit-identical for any thread count too. SPPM (sppm.c) runs its own
+ * iterations on the calling thread. */
 #include "render/render.h"
 
 #include <pthread.h>
@@ -22,6 +23,7 @@
 #include "integrators/light.h"
 #include "integrators/path.h"
 #include "integrators/photon.h"
+#include "integrators/sppm.h"
 #include "integrators/whitted.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
@@ -32,6 +34,7 @@ static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] =
     {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
     {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
     {"whitted", CST_INTEGRATOR_WHITTED}, {"photon", CST_INTEGRATOR_PHOTON},
+    {"sppm", CST_INTEGRATOR_SPPM},
 };
 
 CstIntegrator cst_integrator_from_name(const char *name)
@@ -50,6 +53,7 @@ const char *cst_integrator_name(CstIntegrator integrator)
     case CST_INTEGRATOR_LIGHT: return "light";
     case CST_INTEGRATOR_WHITTED: return "whitted";
     case CST_INTEGRATOR_PHOTON: return "photon";
+    case CST_INTEGRATOR_SPPM: return "sppm";
     case CST_INTEGRATOR_DEFAULT: break;
     }
     return "default";
@@ -410,7 +414,26 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             return status;
         }
     }
-    if (st.time_limit <= 0.0) {
+    SppmResult sppm_res = {0};
+    if (st.integrator == CST_INTEGRATOR_SPPM) {
+        /* SPPM runs its own iterations on this thread (sppm.c: every visible point is
+         * updated by every photon of a pass, in photon order, which is what makes the
+         * image independent of the thread count); spp is the iteration count. */
+        SppmParams sp = {st.spp, st.time_limit, st.photons, (float)st.photon_radius, st.max_depth,
+                         st.rr_depth, st.filter, st.seed, st.progress, st.progress_user};
+        if (st.photons < 0 || !(st.photon_radius >= 0.0) || !((float)st.photon_radius < INFINITY))
+            status = cst_fail(err, CST_ERR_INVALID_ARG,
+                              "photon count %d and radius %g: expected positive values (0 = default)",
+                              st.photons, st.photon_radius);
+        else
+            status = sppm_render(scene, &job->camera, &sp, film, &sppm_res, &photon_rays, err);
+        if (status != CST_OK) {
+            pthread_mutex_destroy(&job->lock);
+            pthread_cond_destroy(&job->done);
+            film_destroy(film); free(workers); free(job);
+            return status;
+        }
+    } else if (st.time_limit <= 0.0) {
         /* Fixed sample count: one pass, so accumulation order is fixed. */
         status = run_samples(job, workers, st.threads, &st, t0, 0, st.spp, 0.0, 1.0);
         if (status == CST_OK) film->spp = st.spp;
@@ -458,15 +481,16 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     if (stats) {
         memset(stats, 0, sizeof *stats);
         stats->seconds = seconds;
-        stats->spp = film->spp;
-        stats->threads = st.threads;
+        /* SPPM: the film holds one final estimate per pixel; spp reports the iterations. */
+        stats->spp = st.integrator == CST_INTEGRATOR_SPPM ? sppm_res.iterations : film->spp;
+        stats->threads = st.integrator == CST_INTEGRATOR_SPPM ? 1 : st.threads; /* SPPM: calling thread only */
         stats->width = st.width;
         stats->height = st.height;
         stats->integrator = st.integrator;
         stats->filter = st.filter;
         /* Light tracing traces width x height light paths per iteration: the same count. */
-        stats->samples = (uint64_t)film->spp * (uint64_t)st.width * (uint64_t)st.height;
-        stats->nonfinite = splats_nonfinite;
+        stats->samples = (uint64_t)stats->spp * (uint64_t)st.width * (uint64_t)st.height;
+        stats->nonfinite = splats_nonfinite + sppm_res.nonfinite;
         stats->rays = photon_rays;
         for (int i = 0; i < st.threads; i++) {
             stats->rays += workers[i].rays;

@@ -1,6 +1,8 @@
 /* Determinism: the same scene, seed and sample count give bit-identical images whatever
  * the thread count, for the path tracer, for the light tracer (whose splats land on
- * any pixel) and for photon mapping (whose maps are shared by all threads); the JSON Cornell box equals the built-in one bit for bit. */
+ * any pixel), for photon mapping (whose maps are shared by all threads) and for SPPM
+ * (whose photons update every visible point in reach); the JSON Cornell box equals the
+ * built-in one bit for bit. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -92,6 +94,15 @@ static void test_photon_thread_count_invariance(void **state)
     check_thread_count_invariance(CST_INTEGRATOR_PHOTON);
 }
 
+/* SPPM (8 iterations of 7680 photons, automatic initial radius) runs on the calling
+ * thread whatever the thread count: this guards that it stays so, or that a parallel
+ * version keeps the photon order fixed. */
+static void test_sppm_thread_count_invariance(void **state)
+{
+    (void)state;
+    check_thread_count_invariance(CST_INTEGRATOR_SPPM);
+}
+
 static void test_json_cornell_equals_builtin(void **state)
 {
     (void)state;
@@ -141,6 +152,7 @@ int main(void)
         cmocka_unit_test(test_thread_count_invariance),
         cmocka_unit_test(test_light_thread_count_invariance),
         cmocka_unit_test(test_photon_thread_count_invariance),
+        cmocka_unit_test(test_sppm_thread_count_invariance),
         cmocka_unit_test(test_accel_backends_identical_images),
         cmocka_unit_test(test_json_cornell_equals_builtin),
     };

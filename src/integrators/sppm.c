@@ -1,0 +1,363 @@
+/* Stochastic progressive photon mapping (Hachisuka & Jensen 2009; pbrt-v3 sec. 16.2).
+ * Iteration k:
+ *   camera pass: one camera sample per pixel, through delta lobes (one sampled lobe per
+ *     bounce) to its first non-delta hit, the visible point x. Emission passed on the way
+ *     and direct light at x by NEE go to the pixel's Ld (an unbiased sample of the L D and
+ *     L S* E paths).
+ *   photon pass: `photons` photon paths, traced as photon.c does. Every hit on a non-delta
+ *     surface EXCEPT THE FIRST ONE FROM THE LIGHT (depth 1 = L D, which NEE already counts
+ *     at x) adds f(wo, wi) Phi / |cos| to phi of every visible point within its radius, so
+ *     the density estimate covers L (S|D)* (S|D) D exactly once next to NEE.
+ *   update (HJ 2009 eqs. 6-7, pbrt-v3 eq. 16.10): with M photons found this iteration,
+ *     N' = N + alpha M,  r' = r sqrt(N' / (N + M)),  tau' = (tau + beta phi) r'^2 / r^2.
+ * Pixel: L = Ld_sum / k + tau / (N_emitted pi r^2), N_emitted the photon paths of all k
+ * iterations (photon powers are not divided by the per-pass count).
+ * Determinism: every random number comes from a stream of (seed, pixel or photon, iteration),
+ * and both passes run in index order on the calling thread, so the image does not depend
+ * on the thread count. Visible points are found through a uniform hash grid rebuilt each
+ * iteration (pbrt-v3's SPPMPixelListNode grid, as flat counting-sort arrays here). */
+#include "integrators/sppm.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "integrators/photon.h"
+#include "materials/bsdf.h"
+#include "sampling/warp.h"
+
+/* Photon path i of iteration k draws from (seed, i, SPPM_STREAM + k): disjoint from the
+ * camera samples' (seed, pixel, k) for k < 2^62 and from photon.c's streams (2^62, 2^62 + 1)
+ * which the automatic radius uses. */
+#define SPPM_STREAM (((uint64_t)1 << 62) + 2u)
+
+typedef struct SppmPixel {
+    /* the visible point of the current iteration */
+    Vec3 p, wo, n;   /* n: geometric normal on wo's side */
+    Bsdf bsdf;
+    Rgb beta;        /* camera throughput to p */
+    bool valid;
+    /* progressive state */
+    double ld[3];    /* sum over iterations of emission + NEE */
+    double tau[3];   /* accumulated flux (unnormalised photon powers) */
+    double phi[3];   /* this iteration's sum of f Phi / |cos| */
+    double n_photons; /* N */
+    long m;          /* M: photons found this iteration */
+    float r;
+} SppmPixel;
+
+/* Uniform grid over the visible points, hashed (Teschner et al. 2003) into `buckets`
+ * slots; cell_start/entries is a counting sort of (bucket, pixel) pairs. A visible point
+ * enters every cell its disc's bounding box overlaps (at most 8: the cell edge is twice
+ * the largest radius). */
+typedef struct SppmGrid {
+    Vec3 lo, hi;     /* the box of every disc */
+    float inv_cell;
+    int res[3];
+    uint32_t buckets;      /* power of two */
+    uint32_t *cell_start;  /* buckets + 1 */
+    uint32_t *entries;     /* 8 per pixel at most */
+} SppmGrid;
+
+static inline uint32_t sppm_grid_hash(const SppmGrid *g, int x, int y, int z)
+{
+    uint32_t h = ((uint32_t)x * 73856093u) ^ ((uint32_t)y * 19349663u) ^ ((uint32_t)z * 83492791u);
+    return h & (g->buckets - 1u);
+}
+
+static inline int clampi(int v, int lo, int hi) { return v < lo ? lo : v > hi ? hi : v; }
+
+static inline void sppm_grid_cell(const SppmGrid *g, Vec3 p, int c[3])
+{
+    float q[3] = {(p.x - g->lo.x) * g->inv_cell, (p.y - g->lo.y) * g->inv_cell, (p.z - g->lo.z) * g->inv_cell};
+    for (int a = 0; a < 3; a++) c[a] = clampi((int)floorf(q[a]), 0, g->res[a] - 1);
+}
+
+/* The distinct buckets of the cells pixel `px`'s disc overlaps; returns how many (<= 8).
+ * Distinct, so a hash collision between two of its own cells cannot count a photon twice. */
+static int pixel_buckets(const SppmGrid *g, const SppmPixel *px, uint32_t out[8])
+{
+    int a[3], b[3], n = 0;
+    Vec3 r = v3(px->r, px->r, px->r);
+    sppm_grid_cell(g, v3_sub(px->p, r), a);
+    sppm_grid_cell(g, v3_add(px->p, r), b);
+    for (int z = a[2]; z <= b[2]; z++)
+        for (int y = a[1]; y <= b[1]; y++)
+            for (int x = a[0]; x <= b[0]; x++) {
+                uint32_t h = sppm_grid_hash(g, x, y, z);
+                bool seen = false;
+                for (int i = 0; i < n; i++) seen |= out[i] == h;
+                if (!seen && n < 8) out[n++] = h;
+            }
+    return n;
+}
+
+/* Rebuilds the grid over the valid visible points; no allocation (arrays sized once). */
+static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
+{
+    Vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
+    float rmax = 0.0f;
+    for (size_t i = 0; i < count; i++) {
+        if (!px[i].valid) continue;
+        lo = v3_min(lo, px[i].p);
+        hi = v3_max(hi, px[i].p);
+        rmax = fmaxf(rmax, px[i].r);
+    }
+    memset(g->cell_start, 0, ((size_t)g->buckets + 1u) * sizeof *g->cell_start);
+    if (!(rmax > 0.0f)) { g->res[0] = 0; return; }
+    Vec3 rv = v3(rmax, rmax, rmax);
+    g->lo = v3_sub(lo, rv);
+    float cell = 2.0f * rmax;
+    g->inv_cell = 1.0f / cell;
+    g->hi = v3_add(hi, rv);
+    Vec3 ext = v3_sub(g->hi, g->lo);
+    float e[3] = {ext.x, ext.y, ext.z};
+    /* Cell counts are capped so the integer cell coordinates stay small; a capped grid is
+     * only coarser (the clamp in grid_cell keeps every point inside). */
+    for (int a = 0; a < 3; a++) g->res[a] = clampi((int)(e[a] * g->inv_cell) + 1, 1, 1 << 20);
+    uint32_t b[8];
+    for (size_t i = 0; i < count; i++) {
+        if (!px[i].valid) continue;
+        int n = pixel_buckets(g, &px[i], b);
+        for (int k = 0; k < n; k++) g->cell_start[b[k] + 1]++;
+    }
+    for (uint32_t h = 0; h < g->buckets; h++) g->cell_start[h + 1] += g->cell_start[h];
+    /* Fill in pixel order using a running cursor per bucket: cell_start[h] is advanced and
+     * then restored by the shift below, the usual in-place counting sort. */
+    for (size_t i = 0; i < count; i++) {
+        if (!px[i].valid) continue;
+        int n = pixel_buckets(g, &px[i], b);
+        for (int k = 0; k < n; k++) g->entries[g->cell_start[b[k]]++] = (uint32_t)i;
+    }
+    for (uint32_t h = g->buckets; h > 0; h--) g->cell_start[h] = g->cell_start[h - 1];
+    g->cell_start[0] = 0;
+}
+
+/* Adds a photon at `pos` arriving from wi (normal n on its side) with flux `power` to every
+ * visible point whose disc holds it (photon.c's density_visit rules). */
+static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, Vec3 pos, Vec3 wi, Vec3 n, Rgb power)
+{
+    if (g->res[0] == 0) return;
+    int c[3];
+    /* A photon outside the box of every disc is in none. */
+    if (!(pos.x >= g->lo.x && pos.y >= g->lo.y && pos.z >= g->lo.z)) return;
+    if (!(pos.x <= g->hi.x && pos.y <= g->hi.y && pos.z <= g->hi.z)) return;
+    sppm_grid_cell(g, pos, c);
+    uint32_t h = sppm_grid_hash(g, c[0], c[1], c[2]);
+    for (uint32_t k = g->cell_start[h]; k < g->cell_start[h + 1]; k++) {
+        SppmPixel *v = &px[g->entries[k]];
+        if (photon_dist2(pos, v->p) > v->r * v->r) continue;
+        /* A photon on the other side of a thin wall must not light this side. */
+        if (!(v3_dot(n, v->n) > 0.0f)) continue;
+        float cos_i = fabsf(v3_dot(v->n, wi));
+        if (!(cos_i > 0.0f)) continue;
+        /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
+        Rgb f = rgb_scale(bsdf_eval(&v->bsdf, v->wo, wi), 1.0f / cos_i);
+        Rgb d = rgb_mul(f, power);
+        v->phi[0] += (double)d.r;
+        v->phi[1] += (double)d.g;
+        v->phi[2] += (double)d.b;
+        v->m++;
+    }
+}
+
+/* Photon path `index` of iteration `iter`, photon.c's trace_photon with deposits into the
+ * grid instead of a map; power unnormalised (see the file comment). */
+static void trace_photon(const Scene *s, const SppmParams *sp, const SppmGrid *g, SppmPixel *px,
+                         uint64_t index, int iter, uint64_t *rays)
+{
+    Pcg32 rng;
+    pcg32_seed_sample(&rng, sp->seed, index, SPPM_STREAM + (uint64_t)iter);
+    float u_sel = pcg32_float(&rng);
+    Vec2 u_pos = v2(pcg32_float(&rng), pcg32_float(&rng));
+    Vec2 u_dir = v2(pcg32_float(&rng), pcg32_float(&rng));
+    EmissionSample es;
+    EmitterGeometry eg = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
+    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
+    Rgb power = rgb_scale(emitter_radiance(&s->emitters[es.emitter], es.n, es.w),
+                          fabsf(v3_dot(es.n, es.w)) / (es.pdf_a * es.pdf_w));
+    Rgb scatter = rgb_s(1.0f);
+    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    for (int depth = 1;; depth++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) break;
+        Vec3 w_prev = v3_neg(ray.d);
+        Bsdf bsdf;
+        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        /* depth 1 is direct light (L D): NEE counts it at the visible points. */
+        if (depth > 1 && !bsdf_is_delta(&bsdf))
+            sppm_grid_deposit(g, px, sh.p, w_prev, v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng), power);
+        if (sp->max_depth > 0 && depth >= sp->max_depth) break;
+        BsdfSample bs;
+        float uc = pcg32_float(&rng);
+        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
+        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
+        power = rgb_mul(power, bs.weight);
+        scatter = rgb_mul(scatter, bs.weight);
+        if (rgb_is_black(scatter)) break;
+        if (depth >= sp->rr_depth) {
+            float q = minf(0.95f, rgb_max(scatter));
+            if (!(pcg32_float(&rng) < q)) break;
+            power = rgb_scale(power, 1.0f / q);
+            scatter = rgb_scale(scatter, 1.0f / q);
+        }
+        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    }
+}
+
+/* render.c's film_position: box = uniform in the pixel, tent by filter importance sampling. */
+static Vec2 sample_position(CstFilter filter, int x, int y, Vec2 u)
+{
+    if (filter == CST_FILTER_TENT)
+        return v2((float)x + 0.5f + warp_tent(u.x), (float)y + 0.5f + warp_tent(u.y));
+    return v2((float)x + u.x, (float)y + u.y);
+}
+
+static void camera_pass(const Scene *s, const Camera *cam, const SppmParams *sp, SppmPixel *px, int iter,
+                        uint64_t *nonfinite, uint64_t *rays)
+{
+    for (int y = 0; y < cam->height; y++)
+        for (int x = 0; x < cam->width; x++) {
+            int pixel = y * cam->width + x;
+            SppmPixel *v = &px[pixel];
+            Pcg32 rng;
+            pcg32_seed_sample(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
+            Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
+            Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
+            Vec2 fp = sample_position(sp->filter, x, y, uf);
+            Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
+            Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
+            SurfaceHit sh;
+            v->valid = photon_trace_to_diffuse(s, ray, &rng, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
+            if (v->valid) {
+                L = rgb_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, rays));
+                v->p = sh.p;
+                v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
+                v->beta = beta;
+                v->valid = rgb_is_finite(beta) && !rgb_is_black(beta);
+            }
+            if (!rgb_is_finite(L)) {
+                ++*nonfinite; /* dropped as a zero sample, as render.c does */
+                L = rgb_s(0.0f);
+            }
+            v->ld[0] += (double)L.r;
+            v->ld[1] += (double)L.g;
+            v->ld[2] += (double)L.b;
+        }
+}
+
+/* HJ 2009 eqs. 6-7 (pbrt-v3 eq. 16.10): keep alpha of the new photons, shrink the disc so
+ * the density stays, and rescale the flux to the smaller disc. */
+static void progressive_update(SppmPixel *px, size_t count, uint64_t *nonfinite)
+{
+    for (size_t i = 0; i < count; i++) {
+        SppmPixel *v = &px[i];
+        if (v->valid && v->m > 0) {
+            double b[3] = {(double)v->beta.r, (double)v->beta.g, (double)v->beta.b};
+            double n_new = v->n_photons + (double)SPPM_ALPHA * (double)v->m;
+            double r_new = (double)v->r * sqrt(n_new / (v->n_photons + (double)v->m));
+            double shrink = r_new * r_new / ((double)v->r * (double)v->r);
+            bool ok = true;
+            for (int c = 0; c < 3; c++) ok &= isfinite(v->phi[c] * b[c]);
+            if (ok) {
+                for (int c = 0; c < 3; c++) v->tau[c] = (v->tau[c] + b[c] * v->phi[c]) * shrink;
+                v->n_photons = n_new;
+                v->r = (float)r_new;
+            } else {
+                ++*nonfinite;
+            }
+        }
+        v->m = 0;
+        v->phi[0] = v->phi[1] = v->phi[2] = 0.0;
+    }
+}
+
+static double seconds_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The automatic initial radius: photon.c's rule (the median distance to the 50th nearest
+ * photon over 256 camera hit points) applied to one iteration's worth of photons, so the
+ * first iteration's discs hold about 50 photons each. */
+static CstStatus initial_radius(const Scene *s, const Camera *cam, const SppmParams *sp, int photons,
+                                float *r, uint64_t *rays, CstError *err)
+{
+    if (sp->radius > 0.0f) { *r = sp->radius; return CST_OK; }
+    PhotonParams pp = {photons, 0.0f, sp->max_depth, sp->rr_depth, sp->seed};
+    PhotonMaps maps;
+    CstStatus st = photon_maps_build(s, cam, &pp, &maps, rays, err);
+    if (st != CST_OK) return st;
+    *r = maps.radius;
+    photon_maps_free(&maps);
+    return CST_OK;
+}
+
+CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, Film *film, SppmResult *res,
+                      uint64_t *rays, CstError *err)
+{
+    memset(res, 0, sizeof *res);
+    const size_t count = (size_t)cam->width * (size_t)cam->height;
+    /* The grid stores pixel indices and entry offsets (8 per pixel) as 32-bit integers. */
+    if (count > (size_t)UINT32_MAX / 8u)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "image of %zu pixels: too many for SPPM (at most %u)", count,
+                        UINT32_MAX / 8u);
+    const int photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
+    float r0;
+    CstStatus st = initial_radius(s, cam, sp, photons, &r0, rays, err);
+    if (st != CST_OK) return st;
+    SppmGrid g = {0};
+    g.buckets = 1;
+    while (g.buckets < count && g.buckets < (1u << 30)) g.buckets <<= 1;
+    SppmPixel *px = calloc(count, sizeof *px);
+    g.cell_start = malloc(((size_t)g.buckets + 1u) * sizeof *g.cell_start);
+    g.entries = malloc(8u * count * sizeof *g.entries);
+    if (!px || !g.cell_start || !g.entries) {
+        st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
+        goto done;
+    }
+    for (size_t i = 0; i < count; i++) px[i].r = r0;
+    double t0 = seconds_now();
+    int iter = 0;
+    while (sp->iterations <= 0 || iter < sp->iterations) {
+        camera_pass(s, cam, sp, px, iter, &res->nonfinite, rays);
+        sppm_grid_build(&g, px, count);
+        if (s->emitter_sampler.count > 0)
+            for (int i = 0; i < photons; i++) trace_photon(s, sp, &g, px, (uint64_t)i, iter, rays);
+        progressive_update(px, count, &res->nonfinite);
+        iter++;
+        double elapsed = seconds_now() - t0;
+        if (sp->progress) {
+            double f = sp->iterations > 0 ? (double)iter / sp->iterations : 0.0;
+            if (sp->time_limit > 0.0 && elapsed / sp->time_limit > f) f = elapsed / sp->time_limit;
+            sp->progress(sp->progress_user, f > 1.0 ? 1.0 : f, elapsed);
+        }
+        if (sp->time_limit > 0.0 && elapsed >= sp->time_limit) break;
+    }
+    /* The final estimate as the film's single sample (see sppm.h). */
+    const double n_emitted = (double)photons * (double)iter;
+    for (size_t i = 0; i < count; i++) {
+        const SppmPixel *v = &px[i];
+        double area = (double)CST_PI * (double)v->r * (double)v->r;
+        double L[3];
+        for (int c = 0; c < 3; c++) L[c] = v->ld[c] / iter + (n_emitted > 0.0 ? v->tau[c] / (n_emitted * area) : 0.0);
+        film_accumulate(film, (int)i, L[0], L[1], L[2]);
+    }
+    film->spp = 1;
+    res->iterations = iter;
+    res->photons = (uint64_t)photons * (uint64_t)iter;
+    res->radius0 = r0;
+done:
+    free(px);
+    free(g.cell_start);
+    free(g.entries);
+    return st;
+}
