@@ -13,7 +13,7 @@
 
 #include "core/error.h"
 #include "geometry/sphere.h"
-#include "geometry/triangle.h"
+#include "geometry/triangle4.h"
 
 enum {
     BVH_BINS = 32,
@@ -604,100 +604,8 @@ static inline unsigned node_hit8(const BvhNode *n, const RayBox8 *q, F8 t_min, F
     return f8_le_mask(tn, tf);
 }
 
-/* Per-ray constants of the SIMD watertight test. */
-typedef struct RayTri4 {
-    TriangleRay tr;
-    __m128 o[3]; /* origin, per world axis */
-    __m128 sx, sy, sz;
-} RayTri4;
-
-static inline RayTri4 ray_tri4(const Ray *r)
-{
-    RayTri4 q;
-    q.tr = triangle_ray_setup(r->d);
-    q.o[0] = _mm_set1_ps(r->o.x); q.o[1] = _mm_set1_ps(r->o.y); q.o[2] = _mm_set1_ps(r->o.z);
-    q.sx = _mm_set1_ps(q.tr.sx); q.sy = _mm_set1_ps(q.tr.sy); q.sz = _mm_set1_ps(q.tr.sz);
-    return q;
-}
-
-static inline Vec3 block_vertex(const BvhTriBlock *b, int k, int lane)
-{
-    return v3(b->v[k][0][lane], b->v[k][1][lane], b->v[k][2][lane]);
-}
-
-/* triangle_intersect_watertight() on four triangles at once, with the same operations in
- * the same order, so each lane's t, u, v are bit-identical to the scalar test. Lanes whose
- * edge functions hit zero need the scalar's double-precision recomputation: they are
- * returned in *scalar_lanes for the caller to run through the scalar test. Returns the
- * mask of the other lanes that hit within (t_min, t_max). */
-static inline int block_intersect4(const BvhTriBlock *b, const RayTri4 *q, __m128 t_min, __m128 t_max,
-                                   __m128 *t_out, __m128 *u_out, __m128 *v_out, int *scalar_lanes)
-{
-    const int kx = q->tr.kx, ky = q->tr.ky, kz = q->tr.kz;
-    __m128 px[3], py[3], pz[3];
-    for (int k = 0; k < 3; k++) {
-        pz[k] = _mm_sub_ps(_mm_load_ps(b->v[k][kz]), q->o[kz]);
-        px[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(b->v[k][kx]), q->o[kx]), _mm_mul_ps(q->sx, pz[k]));
-        py[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(b->v[k][ky]), q->o[ky]), _mm_mul_ps(q->sy, pz[k]));
-    }
-    /* U, V, W: scaled barycentrics of vertices 0, 1, 2 (edge functions, JCGT 2013 eq. 4) */
-    __m128 U = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
-    __m128 V = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
-    __m128 W = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
-    const __m128 zero = _mm_setzero_ps();
-    int zero_lanes = _mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)),
-                                               _mm_cmpeq_ps(W, zero)));
-    *scalar_lanes = zero_lanes;
-    __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
-    __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
-    /* Most rays pass outside all four: stop before the division. Unused lanes are NaN,
-     * neither negative nor positive, so they are dropped explicitly. */
-    int inside = _mm_movemask_ps(_mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpord_ps(U, U))) & ~zero_lanes;
-    if (!inside) {
-        *t_out = *u_out = *v_out = zero;
-        return 0;
-    }
-    __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
-    __m128 zt[3];
-    for (int k = 0; k < 3; k++) zt[k] = _mm_mul_ps(q->sz, pz[k]);
-    __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, zt[0]), _mm_mul_ps(V, zt[1])), _mm_mul_ps(W, zt[2]));
-    __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
-    __m128 t = _mm_mul_ps(T, inv_det);
-    __m128 ok = _mm_cmpneq_ps(det, zero);
-    ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, t_min));
-    ok = _mm_and_ps(ok, _mm_cmplt_ps(t, t_max));
-    /* triangle_t_error(), lane by lane, same operations in the same order. */
-    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-#define ABS4(x) _mm_and_ps((x), abs_mask)
-#define MAX3(a, b, c) _mm_max_ps(_mm_max_ps(ABS4(a), ABS4(b)), ABS4(c))
-    __m128 max_zt = MAX3(zt[0], zt[1], zt[2]);
-    __m128 max_xt = MAX3(px[0], px[1], px[2]);
-    __m128 max_yt = MAX3(py[0], py[1], py[2]);
-    __m128 max_e = MAX3(U, V, W);
-#undef MAX3
-    const __m128 g2 = _mm_set1_ps(TRIANGLE_GAMMA(2)), g3 = _mm_set1_ps(TRIANGLE_GAMMA(3)),
-                 g5 = _mm_set1_ps(TRIANGLE_GAMMA(5));
-    __m128 delta_z = _mm_mul_ps(g3, max_zt);
-    __m128 delta_x = _mm_mul_ps(g5, _mm_add_ps(max_xt, max_zt));
-    __m128 delta_y = _mm_mul_ps(g5, _mm_add_ps(max_yt, max_zt));
-    __m128 delta_e = _mm_mul_ps(_mm_set1_ps(2.0f),
-                                _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g2, max_xt), max_yt), _mm_mul_ps(delta_y, max_xt)),
-                                           _mm_mul_ps(delta_x, max_yt)));
-    __m128 delta_t = _mm_mul_ps(
-        _mm_mul_ps(_mm_set1_ps(3.0f), _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g3, max_e), max_zt),
-                                                            _mm_mul_ps(delta_e, max_zt)),
-                                                 _mm_mul_ps(delta_z, max_e))),
-        ABS4(inv_det));
-#undef ABS4
-    ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, delta_t));
-    *t_out = t;
-    *u_out = _mm_mul_ps(V, inv_det);
-    *v_out = _mm_mul_ps(W, inv_det);
-    return _mm_movemask_ps(ok) & inside;
-}
-
 /* Closest hit among a leaf's triangle blocks; shortens r->t_max on a hit. */
-static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const RayTri4 *q, Ray *r, Hit *hit)
+static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const TriangleRay4 *q, Ray *r, Hit *hit)
 {
     bool found = false;
     const __m128 t_min = _mm_set1_ps(r->t_min);
@@ -705,7 +613,7 @@ static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const RayTri4 *q
     for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
         __m128 t4, u4, v4;
         int scalar_lanes;
-        int mask = block_intersect4(b, q, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4, &scalar_lanes);
+        int mask = triangle4_intersect(b->v, q, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4, &scalar_lanes);
         if (!(mask | scalar_lanes)) continue;
         float t[4], u[4], v[4];
         _mm_storeu_ps(t, t4); _mm_storeu_ps(u, u4); _mm_storeu_ps(v, v4);
@@ -713,8 +621,8 @@ static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const RayTri4 *q
         for (int i = 0; i < 4; i++) {
             if (scalar_lanes & (1 << i)) {
                 float ts, us, vs;
-                if (triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
-                                                  block_vertex(b, 2, i), &ts, &us, &vs)) {
+                if (triangle_intersect_watertight(&q->tr, r, triangle4_vertex(b->v, 0, i), triangle4_vertex(b->v, 1, i),
+                                                  triangle4_vertex(b->v, 2, i), &ts, &us, &vs)) {
                     r->t_max = ts;
                     hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
                     found = true;
@@ -744,7 +652,7 @@ static inline bool leaf_spheres(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
     return found;
 }
 
-static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const RayTri4 *q, const Ray *r)
+static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRay4 *q, const Ray *r)
 {
     if (ref & BVH_SPHERES) {
         const BvhSphere *sp = &bvh->spheres[bvh_ref_index(ref)];
@@ -759,12 +667,12 @@ static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const RayTri4 *q,
     for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
         __m128 t4, u4, v4;
         int scalar_lanes;
-        if (block_intersect4(b, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes)) return true;
+        if (triangle4_intersect(b->v, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes)) return true;
         for (int i = 0; i < 4; i++) {
             float ts, us, vs;
             if ((scalar_lanes & (1 << i)) &&
-                triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
-                                              block_vertex(b, 2, i), &ts, &us, &vs))
+                triangle_intersect_watertight(&q->tr, r, triangle4_vertex(b->v, 0, i), triangle4_vertex(b->v, 1, i),
+                                              triangle4_vertex(b->v, 2, i), &ts, &us, &vs))
                 return true;
         }
     }
@@ -811,7 +719,7 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
     if (bvh->num_nodes == 0 || !ray_is_finite(ray)) return false;
     Ray r = *ray;
     RayBox8 q = ray_box8(&r);
-    RayTri4 qt; /* set up at the first leaf: many rays never reach one */
+    TriangleRay4 qt; /* set up at the first leaf: many rays never reach one */
     bool qt_ready = false;
     const F8 t_min = f8_set1(r.t_min);
     uint32_t stack_ref[BVH_STACK];
@@ -867,7 +775,7 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
         } else if (cur & BVH_SPHERES) {
             found |= leaf_spheres(bvh, cur, &r, hit);
         } else {
-            if (!qt_ready) { qt = ray_tri4(&r); qt_ready = true; }
+            if (!qt_ready) { qt = triangle_ray4_setup(&r); qt_ready = true; }
             found |= leaf_triangles(bvh, cur, &qt, &r, hit);
         }
         /* Next: the nearest pending entry not beyond the closest hit so far. */
@@ -883,7 +791,7 @@ bool bvh_occluded(const Bvh *bvh, const Ray *ray)
 {
     if (bvh->num_nodes == 0 || !ray_is_finite(ray)) return false;
     RayBox8 q = ray_box8(ray);
-    RayTri4 qt;
+    TriangleRay4 qt;
     bool qt_ready = false;
     const F8 t_min = f8_set1(ray->t_min), t_max = f8_set1(ray->t_max);
     uint32_t stack[BVH_STACK];
@@ -906,7 +814,7 @@ bool bvh_occluded(const Bvh *bvh, const Ray *ray)
                 continue;
             }
         } else {
-            if (!qt_ready && !(cur & BVH_SPHERES)) { qt = ray_tri4(ray); qt_ready = true; }
+            if (!qt_ready && !(cur & BVH_SPHERES)) { qt = triangle_ray4_setup(ray); qt_ready = true; }
             if (leaf_occluded(bvh, cur, &qt, ray)) return true;
         }
         if (sp == 0) return false;

@@ -26,7 +26,7 @@
 
 #include "core/error.h"
 #include "geometry/sphere.h"
-#include "geometry/triangle.h"
+#include "geometry/triangle4.h"
 
 enum {
     GRID_CELLS_PER_PRIM = 27,  /* #cells ~ 27 N: 3 cells per primitive along each axis */
@@ -665,35 +665,16 @@ static inline bool walk_bricks(const Grid *g, GridWalk *w)
     return true;
 }
 
-/* Per-ray constants of the 4-wide watertight test. */
-typedef struct GridRayTri4 {
-    TriangleRay tr;
-    __m128 o[3]; /* origin, per world axis */
-    __m128 sx, sy, sz;
-} GridRayTri4;
-
-static inline GridRayTri4 grid_ray_tri4(const Ray *r)
-{
-    GridRayTri4 q;
-    q.tr = triangle_ray_setup(r->d);
-    q.o[0] = _mm_set1_ps(r->o.x); q.o[1] = _mm_set1_ps(r->o.y); q.o[2] = _mm_set1_ps(r->o.z);
-    q.sx = _mm_set1_ps(q.tr.sx); q.sy = _mm_set1_ps(q.tr.sy); q.sz = _mm_set1_ps(q.tr.sz);
-    return q;
-}
-
 /* Fills the unused lanes of a batch: NaN vertices fail every comparison of the test. */
 static const GridTri GRID_NAN_TRI = {{NAN, NAN, NAN}, {NAN, NAN, NAN}, {NAN, NAN, NAN}, 0u};
 
-/* triangle_intersect_watertight() on four triangles at once, with the same operations in
- * the same order (the build has -ffp-contract=off, so nothing is fused into FMAs), so each
- * lane's t, u, v are bit-identical to the scalar test's, and so is its rejection of t
- * within triangle_t_error(). The triangles are gathered from the cell's list and
+/* triangle4_intersect() on four triangles of a cell's list: they are gathered and
  * transposed in registers (a vertex is 12 bytes, so each load takes the three coordinates
  * and one float of whatever follows inside the GridTri). Lanes with an edge function of
  * exactly zero need the scalar's recomputation in double: they come back in
  * *scalar_lanes for the caller to run through the scalar test. Returns the mask of the
  * other lanes that hit within (t_min, t_max). */
-static inline int tri4_intersect(const GridTri *const tri[4], const GridRayTri4 *q, __m128 t_min, __m128 t_max,
+static inline int tri4_intersect(const GridTri *const tri[4], const TriangleRay4 *q, __m128 t_min, __m128 t_max,
                                  __m128 *t_out, __m128 *u_out, __m128 *v_out, int *scalar_lanes)
 {
     _Alignas(16) float vtx[3][3][4]; /* [vertex][axis][lane] */
@@ -705,66 +686,7 @@ static inline int tri4_intersect(const GridTri *const tri[4], const GridRayTri4 
         _mm_store_ps(vtx[k][1], r1);
         _mm_store_ps(vtx[k][2], r2);
     }
-    const int kx = q->tr.kx, ky = q->tr.ky, kz = q->tr.kz;
-    __m128 px[3], py[3], pz[3];
-    for (int k = 0; k < 3; k++) {
-        pz[k] = _mm_sub_ps(_mm_load_ps(vtx[k][kz]), q->o[kz]);
-        px[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(vtx[k][kx]), q->o[kx]), _mm_mul_ps(q->sx, pz[k]));
-        py[k] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(vtx[k][ky]), q->o[ky]), _mm_mul_ps(q->sy, pz[k]));
-    }
-    /* U, V, W: the edge functions, scaled barycentrics of vertices 0, 1, 2 (JCGT 2013 eq. 4) */
-    __m128 U = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
-    __m128 V = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
-    __m128 W = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
-    const __m128 zero = _mm_setzero_ps();
-    int zero_lanes = _mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)),
-                                               _mm_cmpeq_ps(W, zero)));
-    *scalar_lanes = zero_lanes;
-    __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
-    __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
-    /* Most rays pass outside all four: stop before the division. Unused lanes are NaN,
-     * neither negative nor positive, so they are dropped explicitly. */
-    int inside = _mm_movemask_ps(_mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpord_ps(U, U))) & ~zero_lanes;
-    if (!inside) {
-        *t_out = *u_out = *v_out = zero;
-        return 0;
-    }
-    __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
-    __m128 zt[3];
-    for (int k = 0; k < 3; k++) zt[k] = _mm_mul_ps(q->sz, pz[k]);
-    __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, zt[0]), _mm_mul_ps(V, zt[1])), _mm_mul_ps(W, zt[2]));
-    __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
-    __m128 t = _mm_mul_ps(T, inv_det);
-    __m128 ok = _mm_cmpneq_ps(det, zero);
-    ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, t_min));
-    ok = _mm_and_ps(ok, _mm_cmplt_ps(t, t_max));
-    /* triangle_t_error(), lane by lane; max_ps is maxf's a > b ? a : b, the and fabsf. */
-    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    __m128 max_zt = _mm_max_ps(_mm_max_ps(_mm_and_ps(zt[0], abs_mask), _mm_and_ps(zt[1], abs_mask)),
-                               _mm_and_ps(zt[2], abs_mask));
-    __m128 max_xt = _mm_max_ps(_mm_max_ps(_mm_and_ps(px[0], abs_mask), _mm_and_ps(px[1], abs_mask)),
-                               _mm_and_ps(px[2], abs_mask));
-    __m128 max_yt = _mm_max_ps(_mm_max_ps(_mm_and_ps(py[0], abs_mask), _mm_and_ps(py[1], abs_mask)),
-                               _mm_and_ps(py[2], abs_mask));
-    const __m128 g2 = _mm_set1_ps(TRIANGLE_GAMMA(2)), g3 = _mm_set1_ps(TRIANGLE_GAMMA(3)),
-                 g5 = _mm_set1_ps(TRIANGLE_GAMMA(5));
-    __m128 delta_z = _mm_mul_ps(g3, max_zt);
-    __m128 delta_x = _mm_mul_ps(g5, _mm_add_ps(max_xt, max_zt));
-    __m128 delta_y = _mm_mul_ps(g5, _mm_add_ps(max_yt, max_zt));
-    __m128 delta_e = _mm_mul_ps(_mm_set1_ps(2.0f),
-                                _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g2, max_xt), max_yt), _mm_mul_ps(delta_y, max_xt)),
-                                           _mm_mul_ps(delta_x, max_yt)));
-    __m128 max_e = _mm_max_ps(_mm_max_ps(_mm_and_ps(U, abs_mask), _mm_and_ps(V, abs_mask)), _mm_and_ps(W, abs_mask));
-    __m128 delta_t = _mm_mul_ps(
-        _mm_mul_ps(_mm_set1_ps(3.0f), _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_mul_ps(g3, max_e), max_zt),
-                                                            _mm_mul_ps(delta_e, max_zt)),
-                                                 _mm_mul_ps(delta_z, max_e))),
-        _mm_and_ps(inv_det, abs_mask));
-    ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, delta_t));
-    *t_out = t;
-    *u_out = _mm_mul_ps(V, inv_det);
-    *v_out = _mm_mul_ps(W, inv_det);
-    return _mm_movemask_ps(ok) & inside;
+    return triangle4_intersect((const float(*)[3][4])vtx, q, t_min, t_max, t_out, u_out, v_out, scalar_lanes);
 }
 
 /* Hashed mailboxing (after Benthin, "Realtime Ray Tracing on Current CPU Architectures",
@@ -808,7 +730,7 @@ static inline int cell_next_tris(const Grid *g, uint32_t *k, uint32_t end, Mailb
 
 /* The closest hit among a cell's untested primitives, in list order with a strict <, as
  * a scalar loop would pick among equal t; shortens r->t_max on a hit. */
-static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const GridRayTri4 *q, Ray *r,
+static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const TriangleRay4 *q, Ray *r,
                                   Hit *hit)
 {
     bool found = false;
@@ -852,7 +774,7 @@ static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailb
     return found;
 }
 
-static inline bool cell_occluded(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const GridRayTri4 *q,
+static inline bool cell_occluded(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const TriangleRay4 *q,
                                  const Ray *r)
 {
     const __m128 t_min = _mm_set1_ps(r->t_min), t_max = _mm_set1_ps(r->t_max);
@@ -885,7 +807,7 @@ bool grid_intersect(const Grid *g, const Ray *ray, Hit *hit)
     GridWalk w;
     if (g->num_cells == 0 || !walk_begin(g, ray, &w)) return false;
     Ray r = *ray;
-    GridRayTri4 q = grid_ray_tri4(&r);
+    TriangleRay4 q = triangle_ray4_setup(&r);
     Mailbox mb;
     mailbox_clear(&mb);
     bool found = false;
@@ -909,7 +831,7 @@ bool grid_occluded(const Grid *g, const Ray *r)
 {
     GridWalk w;
     if (g->num_cells == 0 || !walk_begin(g, r, &w)) return false;
-    GridRayTri4 q = grid_ray_tri4(r);
+    TriangleRay4 q = triangle_ray4_setup(r);
     Mailbox mb;
     mailbox_clear(&mb);
     for (;;) {
