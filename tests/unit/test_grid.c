@@ -47,76 +47,12 @@ size_t grid_memory_bytes(const Grid *a);
 
 /* ------------------------------------------------------------------ scenes */
 
-typedef struct Soup {
-    Vec3 *pos;
-    int32_t *idx;
-    int num_tris, num_verts;
-    Sphere *spheres;
-    int num_spheres;
-} Soup;
-
-static void soup_free(Soup *s)
-{
-    free(s->pos);
-    free(s->idx);
-    free(s->spheres);
-    memset(s, 0, sizeof *s);
-}
-
-static void soup_reserve(Soup *s, int tris, int verts, int spheres)
-{
-    s->pos = realloc(s->pos, (size_t)(verts > 0 ? verts : 1) * sizeof *s->pos);
-    s->idx = realloc(s->idx, (size_t)(tris > 0 ? 3 * tris : 1) * sizeof *s->idx);
-    s->spheres = realloc(s->spheres, (size_t)(spheres > 0 ? spheres : 1) * sizeof *s->spheres);
-    assert_non_null(s->pos);
-    assert_non_null(s->idx);
-    assert_non_null(s->spheres);
-}
-
-/* Appends an unshared triangle; the caller has reserved room. */
-static void soup_add_tri(Soup *s, Vec3 a, Vec3 b, Vec3 c)
-{
-    int v = s->num_verts;
-    s->pos[v] = a; s->pos[v + 1] = b; s->pos[v + 2] = c;
-    s->idx[3 * s->num_tris] = v; s->idx[3 * s->num_tris + 1] = v + 1; s->idx[3 * s->num_tris + 2] = v + 2;
-    s->num_verts += 3;
-    s->num_tris++;
-}
-
-static void soup_add_sphere(Soup *s, Vec3 c, float r)
-{
-    s->spheres[s->num_spheres].center = c;
-    s->spheres[s->num_spheres].radius = r;
-    s->num_spheres++;
-}
-
-static AccelGeometry soup_geometry(const Soup *s)
-{
-    AccelGeometry g = {s->pos, s->idx, s->num_tris, s->spheres, s->num_spheres};
-    return g;
-}
-
-static double rnd(Pcg32 *rng, double lo, double hi) { return lo + (hi - lo) * (double)pcg32_float(rng); }
-static Vec3 rnd_v3(Pcg32 *rng, double lo, double hi)
-{
-    float x = (float)rnd(rng, lo, hi);
-    float y = (float)rnd(rng, lo, hi);
-    float z = (float)rnd(rng, lo, hi);
-    return v3(x, y, z);
-}
-static Vec3 rnd_dir(Pcg32 *rng)
-{
-    for (;;) {
-        Vec3 d = rnd_v3(rng, -1.0, 1.0);
-        float l = v3_length(d);
-        if (l > 0.05f && l <= 1.0f) return v3_scale(d, 1.0f / l);
-    }
-}
+#include "unit/soup.h"
 
 /* Random triangles of log-uniform size in [0.01, 5] around centres in [-10, 10]^3: a
  * third are slivers (the third vertex within 1e-4 of the size off the first edge), and
  * one in ten is a needle 5 to 25 long and 0.001 to 0.1 wide, which spans many cells. */
-static void soup_random_tris(Soup *s, Pcg32 *rng, int n)
+static void soup_random_tris_needles(Soup *s, Pcg32 *rng, int n)
 {
     soup_reserve(s, s->num_tris + n, s->num_verts + 3 * n, s->num_spheres);
     for (int i = 0; i < n; i++) {
@@ -140,13 +76,6 @@ static void soup_random_tris(Soup *s, Pcg32 *rng, int n)
         }
         soup_add_tri(s, a, b, d);
     }
-}
-
-static void soup_random_spheres(Soup *s, Pcg32 *rng, int n)
-{
-    soup_reserve(s, s->num_tris, s->num_verts, s->num_spheres + n);
-    for (int i = 0; i < n; i++)
-        soup_add_sphere(s, rnd_v3(rng, -10.0, 10.0), (float)exp(rnd(rng, log(0.01), log(3.0))));
 }
 
 /* Indexed mesh of the cube [-1, 1]^3, each face an n x n grid of quads (two triangles),
@@ -663,7 +592,7 @@ static void test_grid_random_soups(void **state)
         Soup s = {0};
         Pcg32 rng;
         pcg32_seed(&rng, 1000u + (uint64_t)k, 3u);
-        soup_random_tris(&s, &rng, sizes[k]);
+        soup_random_tris_needles(&s, &rng, sizes[k]);
         Pair p;
         pair_build(&p, &s);
         const Grid *g = &p.grid.grid;
@@ -694,7 +623,7 @@ static void test_grid_mixed_triangles_spheres(void **state)
         Soup s = {0};
         Pcg32 rng;
         pcg32_seed(&rng, 2000u + (uint64_t)k, 5u);
-        soup_random_tris(&s, &rng, tris[k]);
+        soup_random_tris_needles(&s, &rng, tris[k]);
         soup_random_spheres(&s, &rng, spheres[k]);
         if (k == 3) { /* a sphere with a negative radius: sphere_intersect squares it */
             s.spheres[0].radius = -s.spheres[0].radius;
@@ -730,7 +659,7 @@ static void test_grid_rays_in_cell_planes(void **state)
     Soup s = {0};
     Pcg32 rng;
     pcg32_seed(&rng, 3000u, 7u);
-    soup_random_tris(&s, &rng, 400);
+    soup_random_tris_needles(&s, &rng, 400);
     soup_random_spheres(&s, &rng, 20);
     Pair p;
     pair_build(&p, &s);
@@ -817,7 +746,7 @@ static void test_grid_degenerate_and_flat(void **state)
     Pcg32 rng;
     pcg32_seed(&rng, 4000u, 9u);
     Soup s = {0};
-    soup_random_tris(&s, &rng, 200);
+    soup_random_tris_needles(&s, &rng, 200);
     soup_reserve(&s, s.num_tris + 60, s.num_verts + 180, 0);
     for (int i = 0; i < 20; i++) {
         Vec3 a = rnd_v3(&rng, -10.0, 10.0), b = rnd_v3(&rng, -10.0, 10.0);
@@ -1009,7 +938,7 @@ static void test_grid_mailbox(void **state)
     for (int scene = 0; scene < 2; scene++) {
         if (scene == 1) {
             soup_free(&s);
-            soup_random_tris(&s, &rng, 3000);
+            soup_random_tris_needles(&s, &rng, 3000);
         }
         int n = s.num_tris;
         AccelGeometry geom = soup_geometry(&s);
