@@ -5,6 +5,7 @@
 #define CST_TESTS_RENDER_UTIL_H
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -51,12 +52,13 @@ static inline double z_score(double a, double se_a, double b, double se_b)
 /* Region statistics of an estimator whose pixel estimates are correlated within a sample,
  * as the light tracer's are (a light path splats into several pixels, and the number of
  * paths is fixed): region_stat would sum per-pixel variances and miss the covariances.
- * Instead: `renders` independent renders of one sample per pixel (seeds seed, seed + 1,
- * ...), and for each of the `count` regions rect[i] = {x0, y0, x1, y1} the mean of its
+ * Instead: `renders` independent renders of base->spp samples per pixel (1 if unset;
+ * seeds seed, seed + 1, ...), and for each of the `count` regions rect[i] = {x0, y0, x1, y1} the mean of its
  * per-render means, with the standard error from their sample variance (normal to the
  * precision Z_LIMIT needs when renders is in the hundreds). If naive_se is not NULL it
  * receives, per region, what region_stat would have given for channel 0, for
- * comparison. Returns cst_render's status on failure. */
+ * comparison. Also right for estimators whose maps are shared by all pixels (photon
+ * mapping). Returns cst_render's status on failure, and fails on NaN/Inf samples. */
 static inline CstStatus region_stats_by_render(const CstScene *scene, const CstRenderSettings *base,
                                                int renders, uint64_t seed, int count,
                                                const int (*rect)[4], RegionStat *out,
@@ -72,11 +74,18 @@ static inline CstStatus region_stats_by_render(const CstScene *scene, const CstR
     }
     for (int k = 0; k < renders && st == CST_OK; k++) {
         CstRenderSettings rs = *base;
-        rs.spp = 1;
+        rs.spp = base->spp > 0 ? base->spp : 1;
         rs.seed = seed + (uint64_t)k;
         rs.seed_set = 1;
         CstFilm *f = NULL;
-        if ((st = cst_render(scene, &rs, &f, NULL, err)) != CST_OK) break;
+        CstRenderStats stats;
+        if ((st = cst_render(scene, &rs, &f, &stats, err)) != CST_OK) break;
+        if (stats.nonfinite > 0) {
+            cst_film_destroy(f);
+            st = err->status = CST_ERR_INTERNAL;
+            snprintf(err->msg, sizeof err->msg, "%llu NaN/Inf samples", (unsigned long long)stats.nonfinite);
+            break;
+        }
         for (int i = 0; i < count; i++) {
             RegionStat one = region_stat(f, rect[i][0], rect[i][1], rect[i][2], rect[i][3]);
             for (int c = 0; c < 3; c++) {

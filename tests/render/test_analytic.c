@@ -174,7 +174,9 @@ static void run_light_case(double a, double b, double h, CstFilter filter, int i
     const int count = filter == CST_FILTER_TENT ? LT_REGIONS : LT_REGIONS - 4;
     RegionStat r[LT_REGIONS];
     if (filter == CST_FILTER_TENT) {
-        if (region_stats_by_render(s, &st, iterations, seed, count, (const int (*)[4])rect, r,
+        CstRenderSettings one = st; /* `iterations` renders of one iteration each */
+        one.spp = 1;
+        if (region_stats_by_render(s, &one, iterations, seed, count, (const int (*)[4])rect, r,
                                    NULL, &err) != CST_OK)
             fail_msg("%s", err.msg);
     } else {

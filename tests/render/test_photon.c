@@ -33,35 +33,16 @@ static CstScene *cornell(void)
  * serves every pixel). */
 static RegionStat photon_mean(const CstScene *s, int photons, double radius, uint64_t seed)
 {
-    double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
-    for (int k = 0; k < RENDERS; k++) {
-        CstRenderSettings st = {0};
-        st.width = st.height = SIZE;
-        st.spp = PHOTON_SPP;
-        st.integrator = CST_INTEGRATOR_PHOTON;
-        st.photons = photons;
-        st.photon_radius = radius;
-        st.seed = seed + (uint64_t)k;
-        st.seed_set = 1;
-        CstFilm *f = NULL;
-        CstRenderStats stats;
-        CstError err;
-        if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
-        assert_int_equal(stats.nonfinite, 0);
-        RegionStat one = region_stat(f, 0, 0, SIZE, SIZE);
-        for (int c = 0; c < 3; c++) {
-            sum[c] += one.mean[c];
-            sum2[c] += one.mean[c] * one.mean[c];
-        }
-        cst_film_destroy(f);
-    }
+    CstRenderSettings st = {0};
+    st.width = st.height = SIZE;
+    st.spp = PHOTON_SPP;
+    st.integrator = CST_INTEGRATOR_PHOTON;
+    st.photons = photons;
+    st.photon_radius = radius;
+    const int whole[1][4] = {{0, 0, SIZE, SIZE}};
     RegionStat r;
-    for (int c = 0; c < 3; c++) {
-        double m = sum[c] / RENDERS;
-        double var = (sum2[c] / RENDERS - m * m) * RENDERS / (RENDERS - 1);
-        r.mean[c] = m;
-        r.se[c] = sqrt(var > 0.0 ? var / RENDERS : 0.0);
-    }
+    CstError err;
+    if (region_stats_by_render(s, &st, RENDERS, seed, 1, whole, &r, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
     return r;
 }
 
