@@ -12,13 +12,21 @@
  *     N' = N + alpha M,  r' = r sqrt(N' / (N + M)),  tau' = (tau + beta phi) r'^2 / r^2.
  * Pixel: L = Ld_sum / k + tau / (N_emitted pi r^2), N_emitted the photon paths of all k
  * iterations (photon powers are not divided by the per-pass count).
- * Determinism: every random number comes from a stream of (seed, pixel or photon, iteration),
- * and both passes run in index order on the calling thread, so the image does not depend
- * on the thread count. Visible points are found through a uniform hash grid rebuilt each
- * iteration (pbrt-v3's SPPMPixelListNode grid, as flat counting-sort arrays here). */
+ * Threads and determinism: every random number comes from a stream of (seed, pixel or
+ * photon, iteration), so what a thread computes does not depend on which thread it is. The
+ * camera pass runs over rows in parallel (a pixel's visible point is its own). Photons are
+ * traced in parallel in fixed chunks, each recording its non-delta hits in its own list;
+ * then the pixels are split into ranges among the threads, and each thread reads every
+ * chunk's list in chunk order, hit order, adding the photons that fall in its own pixels'
+ * discs. So each pixel's phi receives its photons in photon order, exactly the sums of a
+ * single-threaded loop over photons, and the image does not depend on the thread count.
+ * Visible points are found through a uniform hash grid rebuilt each iteration (pbrt-v3's
+ * SPPMPixelListNode grid, as flat counting-sort arrays here). */
 #include "integrators/sppm.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -136,27 +144,61 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
     g->cell_start[0] = 0;
 }
 
-/* Adds a photon at `pos` arriving from wi (normal n on its side) with flux `power` to every
- * visible point whose disc holds it (photon.c's density_visit rules). */
-static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, Vec3 pos, Vec3 wi, Vec3 n, Rgb power)
+/* A photon's arrival at a non-delta surface, kept until the deposit phase. */
+typedef struct SppmHit {
+    Vec3 p, wi, n;   /* n: geometric normal on wi's side */
+    Rgb power;       /* unnormalised flux (see the file comment) */
+} SppmHit;
+
+/* The hits of one chunk of photon paths, in photon order then path order. Reused by every
+ * iteration, so it stops growing after the first ones. */
+typedef struct SppmHitList {
+    SppmHit *v;
+    size_t n, cap;
+    bool oom;        /* a hit was lost for lack of memory: the render fails */
+} SppmHitList;
+
+static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Rgb power)
+{
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? 2 * l->cap : 1024;
+        SppmHit *v = realloc(l->v, cap * sizeof *v);
+        if (!v) { l->oom = true; return; }
+        l->v = v;
+        l->cap = cap;
+    }
+    l->v[l->n++] = (SppmHit){p, wi, n, power};
+}
+
+/* Adds a photon hit to every visible point with index in [lo, hi) whose disc holds it
+ * (photon.c's density_visit rules). A bucket's entries are in ascending pixel order
+ * (sppm_grid_build fills them so), so the range is a binary search and a prefix. */
+static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *hit, uint32_t lo, uint32_t hi)
 {
     if (g->res[0] == 0) return;
+    Vec3 pos = hit->p;
     int c[3];
     /* A photon outside the box of every disc is in none. */
     if (!(pos.x >= g->lo.x && pos.y >= g->lo.y && pos.z >= g->lo.z)) return;
     if (!(pos.x <= g->hi.x && pos.y <= g->hi.y && pos.z <= g->hi.z)) return;
     sppm_grid_cell(g, pos, c);
     uint32_t h = sppm_grid_hash(g, c[0], c[1], c[2]);
-    for (uint32_t k = g->cell_start[h]; k < g->cell_start[h + 1]; k++) {
+    uint32_t a = g->cell_start[h], b = g->cell_start[h + 1];
+    while (a < b) { /* first entry >= lo */
+        uint32_t mid = a + (b - a) / 2u;
+        if (g->entries[mid] < lo) a = mid + 1u;
+        else b = mid;
+    }
+    for (uint32_t k = a; k < g->cell_start[h + 1] && g->entries[k] < hi; k++) {
         SppmPixel *v = &px[g->entries[k]];
         if (photon_dist2(pos, v->p) > v->r * v->r) continue;
         /* A photon on the other side of a thin wall must not light this side. */
-        if (!(v3_dot(n, v->n) > 0.0f)) continue;
-        float cos_i = fabsf(v3_dot(v->n, wi));
+        if (!(v3_dot(hit->n, v->n) > 0.0f)) continue;
+        float cos_i = fabsf(v3_dot(v->n, hit->wi));
         if (!(cos_i > 0.0f)) continue;
         /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
-        Rgb f = rgb_scale(bsdf_eval(&v->bsdf, v->wo, wi), 1.0f / cos_i);
-        Rgb d = rgb_mul(f, power);
+        Rgb f = rgb_scale(bsdf_eval(&v->bsdf, v->wo, hit->wi), 1.0f / cos_i);
+        Rgb d = rgb_mul(f, hit->power);
         v->phi[0] += (double)d.r;
         v->phi[1] += (double)d.g;
         v->phi[2] += (double)d.b;
@@ -164,10 +206,10 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, Vec3 pos, Vec3 w
     }
 }
 
-/* Photon path `index` of iteration `iter`, photon.c's trace_photon with deposits into the
- * grid instead of a map; power unnormalised (see the file comment). */
-static void trace_photon(const Scene *s, const SppmParams *sp, const SppmGrid *g, SppmPixel *px,
-                         uint64_t index, int iter, uint64_t *rays)
+/* Photon path `index` of iteration `iter`, photon.c's trace_photon, recording its hits
+ * in `out` instead of a map; power unnormalised (see the file comment). */
+static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out, uint64_t index, int iter,
+                         uint64_t *rays)
 {
     Pcg32 rng;
     pcg32_seed_sample(&rng, sp->seed, index, SPPM_STREAM + (uint64_t)iter);
@@ -191,7 +233,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, const SppmGrid *g
         bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
         /* depth 1 is direct light (L D): NEE counts it at the visible points. */
         if (depth > 1 && !bsdf_is_delta(&bsdf))
-            sppm_grid_deposit(g, px, sh.p, w_prev, v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng), power);
+            hit_list_push(out, sh.p, w_prev, v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng), power);
         if (sp->max_depth > 0 && depth >= sp->max_depth) break;
         BsdfSample bs;
         float uc = pcg32_float(&rng);
@@ -219,63 +261,140 @@ static Vec2 sample_position(CstFilter filter, int x, int y, Vec2 u)
     return v2((float)x + u.x, (float)y + u.y);
 }
 
-static void camera_pass(const Scene *s, const Camera *cam, const SppmParams *sp, SppmPixel *px, int iter,
-                        uint64_t *nonfinite, uint64_t *rays)
+/* The visible points of row y for iteration `iter`. */
+static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, SppmPixel *px, int y, int iter,
+                       uint64_t *nonfinite, uint64_t *rays)
 {
-    for (int y = 0; y < cam->height; y++)
-        for (int x = 0; x < cam->width; x++) {
-            int pixel = y * cam->width + x;
-            SppmPixel *v = &px[pixel];
-            Pcg32 rng;
-            pcg32_seed_sample(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
-            Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
-            Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
-            Vec2 fp = sample_position(sp->filter, x, y, uf);
-            Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
-            Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
-            SurfaceHit sh;
-            v->valid = photon_trace_to_diffuse(s, ray, &rng, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
-            if (v->valid) {
-                L = rgb_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, rays));
-                v->p = sh.p;
-                v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
-                v->beta = beta;
-                v->valid = rgb_is_finite(beta) && !rgb_is_black(beta);
-            }
-            if (!rgb_is_finite(L)) {
-                ++*nonfinite; /* dropped as a zero sample, as render.c does */
-                L = rgb_s(0.0f);
-            }
-            v->ld[0] += (double)L.r;
-            v->ld[1] += (double)L.g;
-            v->ld[2] += (double)L.b;
+    for (int x = 0; x < cam->width; x++) {
+        int pixel = y * cam->width + x;
+        SppmPixel *v = &px[pixel];
+        Pcg32 rng;
+        pcg32_seed_sample(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
+        Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 fp = sample_position(sp->filter, x, y, uf);
+        Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
+        Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
+        SurfaceHit sh;
+        v->valid = photon_trace_to_diffuse(s, ray, &rng, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
+        if (v->valid) {
+            L = rgb_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, rays));
+            v->p = sh.p;
+            v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
+            v->beta = beta;
+            v->valid = rgb_is_finite(beta) && !rgb_is_black(beta);
         }
+        if (!rgb_is_finite(L)) {
+            ++*nonfinite; /* dropped as a zero sample, as render.c does */
+            L = rgb_s(0.0f);
+        }
+        v->ld[0] += (double)L.r;
+        v->ld[1] += (double)L.g;
+        v->ld[2] += (double)L.b;
+    }
 }
 
 /* HJ 2009 eqs. 6-7 (pbrt-v3 eq. 16.10): keep alpha of the new photons, shrink the disc so
  * the density stays, and rescale the flux to the smaller disc. */
-static void progressive_update(SppmPixel *px, size_t count, uint64_t *nonfinite)
+static void progressive_update(SppmPixel *v, uint64_t *nonfinite)
 {
-    for (size_t i = 0; i < count; i++) {
-        SppmPixel *v = &px[i];
-        if (v->valid && v->m > 0) {
-            double b[3] = {(double)v->beta.r, (double)v->beta.g, (double)v->beta.b};
-            double n_new = v->n_photons + (double)SPPM_ALPHA * (double)v->m;
-            double r_new = (double)v->r * sqrt(n_new / (v->n_photons + (double)v->m));
-            double shrink = r_new * r_new / ((double)v->r * (double)v->r);
-            bool ok = true;
-            for (int c = 0; c < 3; c++) ok &= isfinite(v->phi[c] * b[c]);
-            if (ok) {
-                for (int c = 0; c < 3; c++) v->tau[c] = (v->tau[c] + b[c] * v->phi[c]) * shrink;
-                v->n_photons = n_new;
-                v->r = (float)r_new;
-            } else {
-                ++*nonfinite;
-            }
+    if (v->valid && v->m > 0) {
+        double b[3] = {(double)v->beta.r, (double)v->beta.g, (double)v->beta.b};
+        double n_new = v->n_photons + (double)SPPM_ALPHA * (double)v->m;
+        double r_new = (double)v->r * sqrt(n_new / (v->n_photons + (double)v->m));
+        double shrink = r_new * r_new / ((double)v->r * (double)v->r);
+        bool ok = true;
+        for (int c = 0; c < 3; c++) ok &= isfinite(v->phi[c] * b[c]);
+        if (ok) {
+            for (int c = 0; c < 3; c++) v->tau[c] = (v->tau[c] + b[c] * v->phi[c]) * shrink;
+            v->n_photons = n_new;
+            v->r = (float)r_new;
+        } else {
+            ++*nonfinite;
         }
-        v->m = 0;
-        v->phi[0] = v->phi[1] = v->phi[2] = 0.0;
     }
+    v->m = 0;
+    v->phi[0] = v->phi[1] = v->phi[2] = 0.0;
+}
+
+/* Photon paths per chunk: a chunk is the unit of work of the photon phase. Any size gives
+ * the same image (the deposit phase reads the chunks in order, so photon order is kept);
+ * this one balances threads on small images and amortises the bookkeeping. */
+enum { SPPM_PHOTON_CHUNK = 1024 };
+
+/* The three parallel phases of an iteration. */
+typedef enum SppmPhase { SPPM_PHASE_CAMERA, SPPM_PHASE_PHOTONS, SPPM_PHASE_DEPOSIT } SppmPhase;
+
+/* What every worker of a phase reads; `next` hands out its units of work. */
+typedef struct SppmJob {
+    const Scene *s;
+    const Camera *cam;
+    const SppmParams *sp;
+    SppmPixel *px;
+    size_t count;         /* pixels */
+    const SppmGrid *g;
+    SppmHitList *hits;    /* one per chunk */
+    int chunks, photons;
+    int ranges;           /* pixel ranges of the deposit phase */
+    int iter;
+    SppmPhase phase;
+    atomic_int next;
+} SppmJob;
+
+typedef struct SppmWorker {
+    SppmJob *job;
+    pthread_t thread;
+    uint64_t rays, nonfinite; /* integer totals: summed in any order */
+} SppmWorker;
+
+/* Deposit unit `r`: every hit of every chunk, in order, into the pixels of range r, then
+ * the progressive update of those pixels. */
+static void deposit_range(SppmJob *job, SppmWorker *w, int r)
+{
+    uint32_t lo = (uint32_t)(job->count * (size_t)r / (size_t)job->ranges);
+    uint32_t hi = (uint32_t)(job->count * (size_t)(r + 1) / (size_t)job->ranges);
+    for (int c = 0; c < job->chunks; c++) {
+        const SppmHitList *l = &job->hits[c];
+        for (size_t i = 0; i < l->n; i++) sppm_grid_deposit(job->g, job->px, &l->v[i], lo, hi);
+    }
+    for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], &w->nonfinite);
+}
+
+static void *sppm_worker_main(void *arg)
+{
+    SppmWorker *w = arg;
+    SppmJob *job = w->job;
+    const int units = job->phase == SPPM_PHASE_CAMERA ? job->cam->height
+                    : job->phase == SPPM_PHASE_PHOTONS ? job->chunks : job->ranges;
+    for (;;) {
+        int u = atomic_fetch_add(&job->next, 1);
+        if (u >= units) break;
+        if (job->phase == SPPM_PHASE_CAMERA) {
+            camera_row(job->s, job->cam, job->sp, job->px, u, job->iter, &w->nonfinite, &w->rays);
+        } else if (job->phase == SPPM_PHASE_PHOTONS) {
+            SppmHitList *l = &job->hits[u];
+            l->n = 0;
+            int first = u * SPPM_PHOTON_CHUNK;
+            int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
+            for (int i = first; i < last; i++) trace_photon(job->s, job->sp, l, (uint64_t)i, job->iter, &w->rays);
+        } else {
+            deposit_range(job, w, u);
+        }
+    }
+    return NULL;
+}
+
+/* Runs one phase on workers[0] (the calling thread) and threads - 1 helpers. A helper that
+ * cannot be started leaves its share to the others: the result is the same. */
+static void run_phase(SppmJob *job, SppmWorker *workers, int threads, SppmPhase phase)
+{
+    job->phase = phase;
+    atomic_store(&job->next, 0);
+    int started = 1;
+    for (; started < threads; started++)
+        if (pthread_create(&workers[started].thread, NULL, sppm_worker_main, &workers[started]) != 0) break;
+    sppm_worker_main(&workers[0]);
+    for (int i = 1; i < started; i++) pthread_join(workers[i].thread, NULL);
 }
 
 static double seconds_now(void)
@@ -311,28 +430,48 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
         return cst_fail(err, CST_ERR_INVALID_ARG, "image of %zu pixels: too many for SPPM (at most %u)", count,
                         UINT32_MAX / 8u);
     const int photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
+    const int threads = sp->threads > 0 ? sp->threads : 1;
     float r0;
     CstStatus st = initial_radius(s, cam, sp, photons, &r0, rays, err);
     if (st != CST_OK) return st;
     SppmGrid g = {0};
     g.buckets = 1;
     while (g.buckets < count && g.buckets < (1u << 30)) g.buckets <<= 1;
+    SppmJob job = {s, cam, sp, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, 0};
+    job.chunks = (int)(((int64_t)photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
+    /* A few pixel ranges per thread, so a range crowded with photons does not hold the
+     * others up; each range reads every hit, so not many more. */
+    job.ranges = count < (size_t)(4 * threads) ? (int)count : 4 * threads;
+    SppmWorker *workers = calloc((size_t)threads, sizeof *workers);
     SppmPixel *px = calloc(count, sizeof *px);
+    job.hits = calloc((size_t)job.chunks, sizeof *job.hits);
     g.cell_start = malloc(((size_t)g.buckets + 1u) * sizeof *g.cell_start);
     g.entries = malloc(8u * count * sizeof *g.entries);
-    if (!px || !g.cell_start || !g.entries) {
+    if (!workers || !px || !job.hits || !g.cell_start || !g.entries) {
         st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
         goto done;
     }
+    job.px = px;
+    for (int i = 0; i < threads; i++) workers[i].job = &job;
     for (size_t i = 0; i < count; i++) px[i].r = r0;
     double t0 = seconds_now();
     int iter = 0;
     while (sp->iterations <= 0 || iter < sp->iterations) {
-        camera_pass(s, cam, sp, px, iter, &res->nonfinite, rays);
+        job.iter = iter;
+        run_phase(&job, workers, threads, SPPM_PHASE_CAMERA);
+        /* Serial, and cheap next to the passes: a counting sort over the pixels. */
         sppm_grid_build(&g, px, count);
-        if (s->emitter_sampler.count > 0)
-            for (int i = 0; i < photons; i++) trace_photon(s, sp, &g, px, (uint64_t)i, iter, rays);
-        progressive_update(px, count, &res->nonfinite);
+        if (s->emitter_sampler.count > 0) {
+            run_phase(&job, workers, threads, SPPM_PHASE_PHOTONS);
+            for (int c = 0; c < job.chunks; c++)
+                if (job.hits[c].oom) {
+                    st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon hits");
+                    goto done;
+                }
+        } else {
+            for (int c = 0; c < job.chunks; c++) job.hits[c].n = 0;
+        }
+        run_phase(&job, workers, threads, SPPM_PHASE_DEPOSIT);
         iter++;
         double elapsed = seconds_now() - t0;
         if (sp->progress) {
@@ -356,6 +495,15 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
     res->photons = (uint64_t)photons * (uint64_t)iter;
     res->radius0 = r0;
 done:
+    if (workers)
+        for (int i = 0; i < threads; i++) {
+            *rays += workers[i].rays;
+            res->nonfinite += workers[i].nonfinite;
+        }
+    if (job.hits)
+        for (int c = 0; c < job.chunks; c++) free(job.hits[c].v);
+    free(job.hits);
+    free(workers);
     free(px);
     free(g.cell_start);
     free(g.entries);

@@ -23,6 +23,7 @@ typedef struct SppmParams {
     uint64_t seed;
     CstProgressFn progress; /* may be NULL; called after every iteration */
     void *progress_user;
+    int threads;         /* workers, the calling thread included; <= 0 = 1 */
 } SppmParams;
 
 typedef struct SppmResult {
@@ -32,8 +33,8 @@ typedef struct SppmResult {
     uint64_t nonfinite;  /* NaN/Inf contributions dropped */
 } SppmResult;
 
-/* Renders into `film` (empty, width x height of cam) single-threaded: the image is a
- * function of the params and the scene only. The film receives the final estimate of every
+/* Renders into `film` (empty, width x height of cam) with sp->threads threads; the image is
+ * a function of the params (but the thread count) and the scene only, bit for bit. The film receives the final estimate of every
  * pixel as one sample (film->spp = 1, so its per-pixel variance is unavailable, reported
  * as 0): SPPM's iterations are not independent samples of the pixel (each one's radius
  * depends on all before it). Fails with CST_ERR_OOM, or CST_ERR_INVALID_ARG for more than 2^29 pixels. */

@@ -5,7 +5,7 @@
  * width x height light paths, path i of iteration s seeded by (seed, i, s), cut into
  * fixed chunks whose splat lists are added in chunk order once the iteration is done, so
  * its images are bit-identical for any thread count too. SPPM (sppm.c) runs its own
- * iterations on the calling thread. */
+ * iterations and threads. */
 #include "render/render.h"
 
 #include <pthread.h>
@@ -416,11 +416,10 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     }
     SppmResult sppm_res = {0};
     if (st.integrator == CST_INTEGRATOR_SPPM) {
-        /* SPPM runs its own iterations on this thread (sppm.c: every visible point is
-         * updated by every photon of a pass, in photon order, which is what makes the
-         * image independent of the thread count); spp is the iteration count. */
+        /* SPPM runs its own iterations and threads (sppm.c: photons reach each visible
+         * point in photon order whatever the thread count); spp is the iteration count. */
         SppmParams sp = {st.spp, st.time_limit, st.photons, (float)st.photon_radius, st.max_depth,
-                         st.rr_depth, st.filter, st.seed, st.progress, st.progress_user};
+                         st.rr_depth, st.filter, st.seed, st.progress, st.progress_user, st.threads};
         if (st.photons < 0 || !(st.photon_radius >= 0.0) || !((float)st.photon_radius < INFINITY))
             status = cst_fail(err, CST_ERR_INVALID_ARG,
                               "photon count %d and radius %g: expected positive values (0 = default)",
@@ -483,7 +482,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         stats->seconds = seconds;
         /* SPPM: the film holds one final estimate per pixel; spp reports the iterations. */
         stats->spp = st.integrator == CST_INTEGRATOR_SPPM ? sppm_res.iterations : film->spp;
-        stats->threads = st.integrator == CST_INTEGRATOR_SPPM ? 1 : st.threads; /* SPPM: calling thread only */
+        stats->threads = st.threads;
         stats->width = st.width;
         stats->height = st.height;
         stats->integrator = st.integrator;
