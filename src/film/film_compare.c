@@ -197,6 +197,83 @@ CstStatus compare_films(const CstFilm *a, const CstFilm *b, int block, double z_
     return CST_OK;
 }
 
+/* ------------------------------------------------------------ convergence */
+
+CstStatus compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2, int block,
+                                    double *terms, ConvergenceLevel *out, CstError *err)
+{
+    int w = cst_film_width(ref), h = cst_film_height(ref);
+    if (w != cst_film_width(x1) || h != cst_film_height(x1) || w != cst_film_width(x2) ||
+        h != cst_film_height(x2))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "films of different sizes: %dx%d, %dx%d and %dx%d", w, h,
+                        cst_film_width(x1), cst_film_height(x1), cst_film_width(x2), cst_film_height(x2));
+    if (cst_film_spp(ref) < 2)
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "the reference needs at least 2 samples per pixel for a variance estimate (got %d)",
+                        cst_film_spp(ref));
+    if (block < 1) return cst_fail(err, CST_ERR_INVALID_ARG, "block size must be >= 1 (got %d)", block);
+    int nbx = compare_blocks_x(w, block), nby = compare_blocks_y(h, block);
+    if (nbx * nby < 2)
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "a convergence check needs at least 2 blocks for a standard error (%dx%d "
+                        "image, block %d)", w, h, block);
+    memset(out, 0, sizeof *out);
+    out->blocks = nbx * nby;
+    double sum = 0.0, img[3][2] = {{0}}; /* image sums of (x1 + x2)/2 and of r */
+    for (int by = 0; by < nby; by++)
+        for (int bx = 0; bx < nbx; bx++) {
+            int x0 = bx * block, y0 = by * block;
+            int xe = x0 + block < w ? x0 + block : w, ye = y0 + block < h ? y0 + block : h;
+            double n = (double)(xe - x0) * (double)(ye - y0);
+            double s1[3] = {0}, s2[3] = {0}, v1[3] = {0}, sr[3] = {0}, vr[3] = {0};
+            /* The films' per-pixel variances of X are not used (see the header). */
+            compare_region_sums(x1, x0, y0, xe, ye, s1, v1);
+            compare_region_sums(x2, x0, y0, xe, ye, s2, v1);
+            compare_region_sums(ref, x0, y0, xe, ye, sr, vr);
+            double t = 0.0;
+            for (int c = 0; c < 3; c++) {
+                double m1 = s1[c] / n, m2 = s2[c] / n, mr = sr[c] / n;
+                double d = 0.5 * (m1 + m2) - mr, half = 0.5 * (m1 - m2);
+                t += d * d - half * half - vr[c] / (n * n);
+                img[c][0] += 0.5 * (s1[c] + s2[c]);
+                img[c][1] += sr[c];
+            }
+            terms[by * nbx + bx] = t;
+            sum += t;
+        }
+    out->d2 = sum / out->blocks;
+    double ss = 0.0;
+    for (int b = 0; b < out->blocks; b++) ss += (terms[b] - out->d2) * (terms[b] - out->d2);
+    out->d2_se = sqrt(ss / (out->blocks - 1) / out->blocks);
+    for (int c = 0; c < 3; c++) out->mean_diff[c] = (img[c][0] - img[c][1]) / ((double)w * (double)h);
+    return CST_OK;
+}
+
+void compare_convergence_step(const double *terms_a, const double *terms_b, int blocks, double *diff,
+                              double *se)
+{
+    double sum = 0.0, ss = 0.0;
+    for (int b = 0; b < blocks; b++) sum += terms_a[b] - terms_b[b];
+    double mean = blocks > 0 ? sum / blocks : (double)NAN;
+    for (int b = 0; b < blocks; b++) {
+        double e = terms_a[b] - terms_b[b] - mean;
+        ss += e * e;
+    }
+    *diff = mean;
+    *se = blocks >= 2 ? sqrt(ss / (blocks - 1) / blocks) : (double)NAN;
+}
+
+ConvergenceVerdict compare_convergence_judge(const ConvergenceLevel *lv, const double *step_diff,
+                                             const double *step_se, int levels, double z)
+{
+    if (levels < 2 || !(z > 0.0)) return CONVERGENCE_FAILS;
+    const ConvergenceLevel *last = &lv[levels - 1];
+    if (last->d2 <= z * last->d2_se) return CONVERGENCE_WITHIN_NOISE;
+    for (int k = 0; k + 1 < levels; k++)
+        if (!(step_diff[k] > z * step_se[k])) return CONVERGENCE_FAILS;
+    return CONVERGENCE_SHRINKS;
+}
+
 /* ------------------------------------------------------------ the map */
 
 /* sRGB EOTF (IEC 61966-2-1): the map's colours are designed as display values and

@@ -1,6 +1,7 @@
-/* Statistical comparison of two renders of one scene, for `caustic verify`: z-scores of
- * the difference of the image means and of the block means, per channel, judged at a
- * family-wise significance with the Sidak correction; and the false-colour map of them. */
+/* Statistical comparison of renders of one scene, for `caustic verify`: z-scores of the
+ * difference of the image means and of the block means, per channel, judged at a
+ * family-wise significance with the Sidak correction; the false-colour map of them; and the
+ * convergence check of consistent but biased integrators against an unbiased reference. */
 #ifndef CST_FILM_FILM_COMPARE_H
 #define CST_FILM_FILM_COMPARE_H
 
@@ -59,6 +60,51 @@ typedef struct CompareResult {
  * different sizes, fewer than 2 spp, block < 1 or z_crit not > 0; never allocates. */
 CstStatus compare_films(const CstFilm *a, const CstFilm *b, int block, double z_crit,
                         CompareResult *out, double *block_abs_z, CstError *err);
+
+/* ------------------------------------------------------------ convergence */
+
+/* One level of the convergence check of a consistent but biased integrator X (photon
+ * mapping, SPPM): two independent renders x1, x2 of X at the same work, against a render r
+ * of an unbiased reference with per-pixel variances. Per block b and channel c, with block
+ * means,
+ *   d = (x1 + x2) / 2 - r,   s2 = (x1 - x2)^2 / 4 + var(r),
+ *   t_b = sum_c (d^2 - s2).
+ * (x1 - x2)^2 / 4 estimates the variance of (x1 + x2) / 2 without bias whatever X's
+ * correlations between pixels (the photons are shared by the whole image, so X's per-pixel
+ * variances, when it has any, understate it; the two renders are independent), so t_b
+ * estimates the block's squared bias, summed over channels, without bias. */
+typedef struct ConvergenceLevel {
+    double d2;           /* D = mean of t_b over blocks: the mean squared block bias (radiance^2) */
+    double d2_se;        /* its standard error: sd of t_b over blocks / sqrt(blocks) */
+    double mean_diff[3]; /* image mean of (x1 + x2) / 2 minus the reference's */
+    int blocks;
+} ConvergenceLevel;
+
+/* Fills *out and terms[b] = t_b (compare_blocks_x * compare_blocks_y entries, row-major).
+ * CST_ERR_INVALID_ARG for films of different sizes, a reference with fewer than 2 spp,
+ * block < 1 or fewer than 2 blocks (no spread to estimate the standard error from). */
+CstStatus compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2, int block,
+                                    double *terms, ConvergenceLevel *out, CstError *err);
+
+/* The paired difference D_a - D_b of two levels over the same blocks (terms from
+ * compare_convergence_level) and its standard error, from the spread of the per-block
+ * differences: the reference render is shared by the levels, so D_a and D_b are correlated
+ * and their own standard errors cannot be combined in quadrature. se is NaN for blocks < 2. */
+void compare_convergence_step(const double *terms_a, const double *terms_b, int blocks, double *diff,
+                              double *se);
+
+typedef enum ConvergenceVerdict {
+    CONVERGENCE_WITHIN_NOISE, /* D at the last level is not significantly above 0 */
+    CONVERGENCE_SHRINKS,      /* D falls significantly at every step */
+    CONVERGENCE_FAILS         /* neither: a bias remains and it is not shown to shrink */
+} ConvergenceVerdict;
+
+/* The rule of `caustic verify` for `levels` >= 2 levels of growing work (step k compares
+ * level k with k + 1, step_diff[k] = D_k - D_k+1): within noise if D_last <= z * se_last;
+ * else shrinks if step_diff[k] > z * step_se[k] for every step; else fails. z is a one-sided
+ * critical value; NaN anywhere counts against the integrator. */
+ConvergenceVerdict compare_convergence_judge(const ConvergenceLevel *lv, const double *step_diff,
+                                             const double *step_se, int levels, double z);
 
 /* The map colour of a block's |z|, as linear RGB (for image_write, which encodes PNG as
  * sRGB): black at 0 ramping to blue at z_crit/2, blue ramping to yellow at z_crit (both

@@ -1,7 +1,8 @@
 /* The comparison statistics of `caustic verify` (film/film_compare.c): the inverse normal
  * CDF against high-precision quantiles, the Sidak arithmetic, and z-scores of synthetic
  * films with known pixel means and variances: agreement, offsets of a known z in one
- * block (partial blocks included), zero-variance pixels, the false-alarm rate, map colours. */
+ * block (partial blocks included), zero-variance pixels, the false-alarm rate, map colours;
+ * the convergence check's level statistics, step test and rule, and their error rates. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -333,6 +334,155 @@ static void test_false_alarm_rate(void **state)
     film_destroy(f[1]);
 }
 
+/* ------------------------------------------------------------------ convergence */
+
+/* Fills f (2 spp) with the per-channel means base[c] + off[c] in every pixel, and a pixel
+ * mean standard error s. */
+static void fill_const(Film *f, const double base[3], const double off[3], double s)
+{
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++) {
+            double m[3] = {base[0] + off[0], base[1] + off[1], base[2] + off[2]}, se[3] = {s, s, s};
+            put(f, x, y, m, se);
+        }
+}
+
+/* Known answer: X's two renders are truth + bias +- e in every pixel (so their half
+ * difference is e), the reference is the truth with pixel standard error s; on 8x8 blocks
+ * t_b = 3 (bias^2 - e^2 - s^2 / 64) exactly, in every block. X's own film variances (here
+ * 0.3) must not enter. */
+static void test_convergence_level_known(void **state)
+{
+    (void)state;
+    static const double truth[3] = {0.5, 0.25, 0.125}, zero[3] = {0, 0, 0};
+    const double bias = 0.02, e = 0.005, s = 0.04;
+    Film *r = make_film(24, 16), *x1 = make_film(24, 16), *x2 = make_film(24, 16);
+    fill_const(r, truth, zero, s);
+    double up[3] = {bias + e, bias + e, bias + e}, down[3] = {bias - e, bias - e, bias - e};
+    fill_const(x1, truth, up, 0.3);
+    fill_const(x2, truth, down, 0.3);
+    double terms[6];
+    ConvergenceLevel lv;
+    CstError err = {0};
+    assert_int_equal(compare_convergence_level(r, x1, x2, 8, terms, &lv, &err), CST_OK);
+    assert_int_equal(lv.blocks, 6);
+    double want = 3.0 * (bias * bias - e * e - s * s / 64.0);
+    for (int b = 0; b < 6; b++) assert_rel(terms[b], want, 1e-9);
+    assert_rel(lv.d2, want, 1e-9);
+    assert_true(lv.d2_se < 1e-12); /* every block the same */
+    for (int c = 0; c < 3; c++) assert_rel(lv.mean_diff[c], bias, 1e-9);
+    /* The arguments it refuses. */
+    Film *small = make_film(8, 8), *one = make_film(24, 16);
+    one->spp = 1;
+    assert_int_equal(compare_convergence_level(r, x1, small, 8, terms, &lv, &err), CST_ERR_INVALID_ARG);
+    assert_int_equal(compare_convergence_level(one, x1, x2, 8, terms, &lv, &err), CST_ERR_INVALID_ARG);
+    assert_int_equal(compare_convergence_level(r, x1, x2, 0, terms, &lv, &err), CST_ERR_INVALID_ARG);
+    assert_int_equal(compare_convergence_level(r, x1, x2, 24, terms, &lv, &err), CST_ERR_INVALID_ARG);
+    film_destroy(small);
+    film_destroy(one);
+    film_destroy(r);
+    film_destroy(x1);
+    film_destroy(x2);
+}
+
+static void test_convergence_step_and_judge(void **state)
+{
+    (void)state;
+    const double a[4] = {4, 5, 6, 5}, b[4] = {1, 3, 2, 2};
+    double diff, se;
+    compare_convergence_step(a, b, 4, &diff, &se);
+    assert_rel(diff, 3.0, 1e-12);                        /* differences 3, 2, 4, 3 */
+    assert_rel(se, sqrt(2.0 / 3.0 / 4.0), 1e-12);        /* their sample variance 2/3, over 4 */
+    compare_convergence_step(a, b, 1, &diff, &se);
+    assert_true(isnan(se));
+
+    ConvergenceLevel lv[3] = {{.d2 = 9.0, .d2_se = 1.0}, {.d2 = 5.0, .d2_se = 1.0}, {.d2 = 1.5, .d2_se = 1.0}};
+    double sd[2] = {4.0, 3.5}, sse[2] = {1.0, 1.0};
+    /* D_last = 1.5 <= 2 se: within noise, whatever the steps. */
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0), CONVERGENCE_WITHIN_NOISE);
+    /* z = 1: D_last is significant, every step falls by more than 1 se. */
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0), CONVERGENCE_SHRINKS);
+    /* A step that does not fall significantly (a bias floor). */
+    sd[1] = 0.5;
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0), CONVERGENCE_FAILS);
+    sd[1] = (double)NAN;
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0), CONVERGENCE_FAILS);
+    lv[2].d2 = (double)NAN;
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0), CONVERGENCE_FAILS);
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 1, 2.0), CONVERGENCE_FAILS);
+}
+
+/* One Gaussian draw (Box-Muller; u1 in (0, 1]). */
+static double gauss(Pcg32 *rng)
+{
+    double u1 = 1.0 - (double)pcg32_float(rng), u2 = (double)pcg32_float(rng);
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+/* Pixel means truth + bias(x, y) + noise of standard deviation s; the film claims
+ * variance vs^2 (X's claim is not used; the reference's is). */
+static void fill_noisy(Film *f, Pcg32 *rng, double s, double vs, double bias, bool bias_in_blocks)
+{
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++) {
+            /* A block-level bias pattern of zero image mean: +bias and -bias in a
+             * checkerboard of 8x8 blocks (as edges darken and caustics brighten). */
+            double b = bias_in_blocks ? ((x / 8 + y / 8) % 2 ? bias : -bias) : bias;
+            double m[3], se[3] = {vs, vs, vs};
+            for (int c = 0; c < 3; c++) m[c] = 0.3 * (c + 1) + b + s * gauss(rng);
+            put(f, x, y, m, se);
+        }
+}
+
+/* The statistics of the rule on synthetic renders (64 blocks of 8x8 pixels): an unbiased
+ * X is called "within noise" about 1 - alpha of the time; a biased one whose bias halves
+ * per level passes by shrinking; one whose bias stays (a bug) fails. */
+static void test_convergence_rates(void **state)
+{
+    (void)state;
+    enum { W = 64, H = 64, B = 8, K = 3, TRIALS = 200 };
+    const double alpha = 0.05, s = 0.1;
+    const double z = -compare_normal_quantile(alpha); /* one-sided, one test */
+    Film *r = make_film(W, H), *x[2] = {make_film(W, H), make_film(W, H)};
+    Pcg32 rng;
+    pcg32_seed(&rng, 20261122u, 3u);
+    double terms[K][64];
+    int outcomes[3][3] = {{0}}; /* [case][verdict] */
+    for (int t = 0; t < TRIALS; t++)
+        for (int kase = 0; kase < 3; kase++) {
+            ConvergenceLevel lv[K];
+            double sd[K - 1], sse[K - 1];
+            for (int l = 0; l < K; l++) {
+                fill_noisy(r, &rng, s, s, 0.0, false);
+                /* case 0 unbiased; 1 block bias 0.08, 0.04, 0.02 (its noise: 0.1/8 per
+                 * block mean, 0.0125); 2 a bias that stays at 0.04. */
+                double bias = kase == 0 ? 0.0 : kase == 1 ? 0.08 / (1 << l) : 0.04;
+                for (int k = 0; k < 2; k++) fill_noisy(x[k], &rng, s, 0.0, bias, true);
+                CstError err = {0};
+                assert_int_equal(compare_convergence_level(r, x[0], x[1], B, terms[l], &lv[l], &err), CST_OK);
+            }
+            for (int l = 0; l + 1 < K; l++) compare_convergence_step(terms[l], terms[l + 1], 64, &sd[l], &sse[l]);
+            outcomes[kase][compare_convergence_judge(lv, sd, sse, K, z)]++;
+        }
+    print_message("unbiased: %d within noise, %d shrinks, %d fails; halving bias: %d %d %d; "
+                  "constant bias: %d %d %d (of %d)\n", outcomes[0][0], outcomes[0][1], outcomes[0][2],
+                  outcomes[1][0], outcomes[1][1], outcomes[1][2], outcomes[2][0], outcomes[2][1],
+                  outcomes[2][2], TRIALS);
+    /* Unbiased: D_last > z se about alpha of the time (Binomial(200, 0.05): mean 10, sd 3.1),
+     * and then it fails unless both steps happen to fall significantly. */
+    assert_true(outcomes[0][2] <= 22);
+    assert_true(outcomes[0][0] >= 170);
+    /* Halving: bias 0.02 at the last level is 1.6 block standard errors, so D_last is
+     * often significant; then both steps must be: 0.0064 - 0.0016 and 0.0016 - 0.0004
+     * per channel, many standard errors each. */
+    assert_int_equal(outcomes[1][2], 0);
+    /* Constant: D_last ~ 3 x 0.0016 with se ~ 3e-4: always significant, never shrinking. */
+    assert_int_equal(outcomes[2][2], TRIALS);
+    film_destroy(r);
+    film_destroy(x[0]);
+    film_destroy(x[1]);
+}
+
 static void test_errors(void **state)
 {
     (void)state;
@@ -411,6 +561,9 @@ int main(void)
         cmocka_unit_test(test_partial_block_uses_its_pixel_count),
         cmocka_unit_test(test_zero_variance),
         cmocka_unit_test(test_false_alarm_rate),
+        cmocka_unit_test(test_convergence_level_known),
+        cmocka_unit_test(test_convergence_step_and_judge),
+        cmocka_unit_test(test_convergence_rates),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_map_colours),
     };
