@@ -55,7 +55,7 @@ void args_print_help(FILE *f)
 "                     [--threads N] [--json]\n"
 "  caustic verify [SCENE] --integrators NAME,NAME[,...] [--spp N | --time S]\n"
 "                 [--threads N] [--seed S] [--alpha A] [--block N] [--map OUT.png]\n"
-"                 [--json] [--width W] [--height H] [--quiet]\n"
+"                 [--convergence K] [--json] [--width W] [--height H] [--quiet]\n"
 "  caustic --help | -h\n"
 "  caustic --version\n"
 "\n"
@@ -84,8 +84,8 @@ void args_print_help(FILE *f)
 "                       mapping with final gathering; consistent but biased, photon\n"
 "                       count and radius from the scene file), sppm (stochastic\n"
 "                       progressive photon mapping; --spp counts iterations, each one\n"
-"                       camera sample per pixel and one photon pass; single-threaded;\n"
-"                       consistent but biased); default: the scene's, else path\n"
+"                       camera sample per pixel and one photon pass; consistent but\n"
+"                       biased); default: the scene's, else path\n"
 "      --filter NAME    box or tent (default: the scene's, else box)\n"
 "      --width W        image width in pixels, 1..65536 (default: the scene's, else 512)\n"
 "      --height H       image height in pixels, 1..65536 (default: the scene's, else\n"
@@ -125,6 +125,13 @@ void args_print_help(FILE *f)
 "the critical z of a Sidak correction over all tests of all pairs at family-wise\n"
 "significance A. Prints one row per pair (image-mean z per channel, largest |block z|,\n"
 "failing blocks) and the critical z; see docs/cli.md for the statistics.\n"
+"Consistent but biased integrators (photon, sppm) are judged by convergence instead,\n"
+"against the first other integrator in the list (the reference, e.g. path): rendered\n"
+"twice (independent seeds) at K levels of work, 1, 4, 16, ... times the base (sppm:\n"
+"--spp iterations; photon: the scene's photon count, and its radius halved per level\n"
+"if the scene fixes one), each level's disagreement D (the mean squared block bias,\n"
+"estimated net of noise) must be within noise at the last level or fall significantly\n"
+"at every step.\n"
 "  SCENE                a caustic JSON scene; default: the built-in Cornell box\n"
 "      --integrators LIST  comma-separated, at least two (any name --integrator takes;\n"
 "                       a name may repeat: a same-integrator pair checks the test itself)\n"
@@ -142,16 +149,18 @@ void args_print_help(FILE *f)
 "      --map OUT        false-colour map of the largest block |z| over channels and\n"
 "                       pairs, at the image's size (.png, .exr or .pfm): black to blue\n"
 "                       up to z_crit/2, blue to yellow at z_crit, red beyond\n"
+"      --convergence K  levels of the convergence check, 2..6 (default: 3)\n"
 "      --json           one JSON object per pair on stdout instead of the report\n"
 "      --width W, --height H, --threads N, -q/--quiet: as for render\n"
 "\n"
 "Exit status:\n"
 "  0  success: the image was written (bench rays: every check passed; verify: every\n"
-"     pair of integrators agrees)\n"
+"     pair of integrators agrees and every consistent one converges)\n"
 "  1  internal error: out of memory, a library failure, or an I/O error while writing\n"
 "     the image although its directory was checked writable before rendering\n"
 "     (disk full, file system error)\n"
 "     bench rays: a checksum did not match; verify: a pair of integrators disagrees\n"
+"     or a consistent integrator is not shown to converge\n"
 "  2  bad input or usage: unknown command or option, invalid value, unsupported scene\n"
 "     or output format, a scene file that is missing, unreadable or invalid, an output\n"
 "     directory that does not exist or is not writable (checked before rendering)\n"
@@ -604,7 +613,7 @@ static const ArgsVerifyOpt ARGS_VERIFY_OPTS[] = {
     {"integrators", 0, true}, {"spp", 0, true},     {"time", 0, true},   {"threads", 0, true},
     {"seed", 0, true},        {"alpha", 0, true},   {"block", 0, true},  {"map", 0, true},
     {"json", 0, false},       {"width", 0, true},   {"height", 0, true}, {"quiet", 'q', false},
-    {"help", 'h', false},
+    {"help", 'h', false},     {"convergence", 0, true},
 };
 #define ARGS_NUM_VERIFY_OPTS (sizeof ARGS_VERIFY_OPTS / sizeof ARGS_VERIFY_OPTS[0])
 
@@ -690,6 +699,15 @@ static bool args_apply_verify(const ArgsVerifyOpt *o, const char *value, CliArgs
         v->block = (int)n;
         return true;
     }
+    if (strcmp(o->long_name, "convergence") == 0) {
+        if (!args_parse_long(value, 2, ARGS_VERIFY_MAX_LEVELS, &n)) {
+            args_fail(err, false, "--convergence: expected a number of levels from 2 to %d, got '%s'",
+                      ARGS_VERIFY_MAX_LEVELS, value);
+            return false;
+        }
+        v->levels = (int)n;
+        return true;
+    }
     if (strcmp(o->long_name, "map") == 0) {
         if (value[0] == '\0') {
             args_fail(err, false, "--map: expected a file name, got ''");
@@ -718,6 +736,7 @@ static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, Ar
     VerifyArgs *v = &out->verify;
     v->alpha = ARGS_VERIFY_DEFAULT_ALPHA;
     v->block = ARGS_VERIFY_DEFAULT_BLOCK;
+    v->levels = ARGS_VERIFY_DEFAULT_LEVELS;
     bool only_positional = false;
     for (int i = first; i < argc; i++) {
         const char *arg = argv[i];

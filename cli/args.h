@@ -45,6 +45,8 @@ typedef struct BenchArgs {
 #define ARGS_VERIFY_MAX_INTEGRATORS 16
 #define ARGS_VERIFY_DEFAULT_ALPHA   0.01
 #define ARGS_VERIFY_DEFAULT_BLOCK   16
+#define ARGS_VERIFY_DEFAULT_LEVELS  3  /* --convergence: work 1, 4, 16 times the base */
+#define ARGS_VERIFY_MAX_LEVELS      6  /* 4^5 = 1024 times the base work at most */
 
 /* `caustic verify`: which integrators to render and how to compare them. The scene, size,
  * spp, time, threads and seed are CliArgs' scene_path and settings (seed: the base seed). */
@@ -55,6 +57,7 @@ typedef struct VerifyArgs {
     int block;            /* block side in pixels, >= 1 */
     const char *map_path; /* --map: NULL = no map; points into argv */
     bool json;            /* --json: one JSON object per pair on stdout */
+    int levels;           /* --convergence: work levels of consistent integrators, 2..MAX */
 } VerifyArgs;
 
 typedef struct CliArgs {

@@ -23,6 +23,7 @@
 #include "core/rng.h"
 #include "film/film_compare.h"
 #include "film/image_io.h"
+#include "integrators/photon.h"
 #include "raysets.h"
 
 /* Exit codes: the contract with scripts, documented in --help and docs/cli.md. */
@@ -865,30 +866,46 @@ done:
 
 /* ------------------------------------------------------------ caustic verify */
 
-/* Integrators that converge to the right image but are biased at every finite sample count
- * (photon mapping's density estimation, SPPM, VCM's merging): a finite-sample z-test would
- * flag their bias, correctly and uselessly. A pair with one of them is rendered and
- * reported, but not judged, not counted in the Sidak family and not drawn in the map. The
- * rule for judging them, not yet implemented: a --convergence mode rendering at N and 4N
- * samples and requiring the disagreement to shrink (for a bias falling like the kernel
- * radius, by the factor that radius schedule predicts). Matched by cst_integrator_name();
- * these are the names the integrators are planned under; add any other such integrator. */
-static const char *const CLI_VERIFY_BIASED[] = {"photon", "sppm", "vcm"};
+/* How verify judges each integrator, by cst_integrator_name(); one line per integrator.
+ * EXACT: unbiased, so any two must agree at any sample count (whitted too: it is biased by
+ * design, and verify reports that it disagrees). CONVERGE_*: consistent but biased at every
+ * finite sample count (density estimation), where a z-test would flag the bias, correctly
+ * and uselessly; judged instead by the convergence check against the reference (the first
+ * EXACT integrator listed), with the work that shrinks the bias growing by 4 per level:
+ * iterations (--spp) or the photon count. A name not listed is judged EXACT. */
+typedef enum VerifyJudge { VERIFY_EXACT, VERIFY_CONVERGE_SPP, VERIFY_CONVERGE_PHOTONS } VerifyJudge;
 
-static bool cli_verify_unbiased(CstIntegrator id)
+static const struct { const char *name; VerifyJudge judge; } CLI_VERIFY_JUDGES[] = {
+    {"path", VERIFY_EXACT},
+    {"path-nee", VERIFY_EXACT},
+    {"path-bsdf", VERIFY_EXACT},
+    {"light", VERIFY_EXACT},
+    {"whitted", VERIFY_EXACT},
+    {"photon", VERIFY_CONVERGE_PHOTONS},
+    {"sppm", VERIFY_CONVERGE_SPP},
+};
+
+static VerifyJudge cli_verify_judge(CstIntegrator id)
 {
     const char *name = cst_integrator_name(id);
-    for (size_t i = 0; i < sizeof CLI_VERIFY_BIASED / sizeof CLI_VERIFY_BIASED[0]; i++)
-        if (strcmp(name, CLI_VERIFY_BIASED[i]) == 0) return false;
-    return true;
+    for (size_t i = 0; i < sizeof CLI_VERIFY_JUDGES / sizeof CLI_VERIFY_JUDGES[0]; i++)
+        if (strcmp(name, CLI_VERIFY_JUDGES[i].name) == 0) return CLI_VERIFY_JUDGES[i].judge;
+    return VERIFY_EXACT;
 }
 
-/* Integrator k (0-based, in --integrators order) renders with output k+1 of SplitMix64
- * (Steele et al. 2014) started at the base seed: independent streams for every render, so
- * the two images of a pair are independent estimates, even of the same integrator. */
+/* Render k (0-based) of a verify run renders with output k+1 of SplitMix64 (Steele et al.
+ * 2014) started at the base seed: independent streams for every render, so the images
+ * compared are independent estimates, even of the same integrator. Integrator k of the
+ * list is render k; render i of level l of the convergence check of integrator k is
+ * render MAX_INTEGRATORS + 2 (k MAX_LEVELS + l) + i. */
 static uint64_t cli_verify_seed(uint64_t base, int k)
 {
     return mix64(base + (uint64_t)(k + 1) * 0x9e3779b97f4a7c15ULL);
+}
+
+static uint64_t cli_verify_level_seed(uint64_t base, int k, int level, int i)
+{
+    return cli_verify_seed(base, ARGS_VERIFY_MAX_INTEGRATORS + 2 * (k * ARGS_VERIFY_MAX_LEVELS + level) + i);
 }
 
 static const char CLI_CHANNELS[3] = {'r', 'g', 'b'};
@@ -915,12 +932,31 @@ typedef struct VerifyRender {
     CstRenderStats stats;
 } VerifyRender;
 
+/* The convergence check of one consistent integrator (index k of --integrators). */
+typedef struct VerifyConvergence {
+    int k;
+    VerifyJudge judge;
+    char label[40];
+    int work[ARGS_VERIFY_MAX_LEVELS];      /* iterations or photons */
+    double radius[ARGS_VERIFY_MAX_LEVELS]; /* photon: the fixed radius, 0 = automatic */
+    uint64_t seed[ARGS_VERIFY_MAX_LEVELS][2];
+    double seconds[ARGS_VERIFY_MAX_LEVELS];  /* both renders */
+    ConvergenceLevel lv[ARGS_VERIFY_MAX_LEVELS];
+    double step_diff[ARGS_VERIFY_MAX_LEVELS - 1], step_se[ARGS_VERIFY_MAX_LEVELS - 1];
+    ConvergenceVerdict verdict;
+} VerifyConvergence;
+
 typedef struct VerifyPlan {
     int width, height, block, nbx, nby, blocks;
-    int pairs, judged_pairs;
-    int64_t tests; /* m: judged pairs x 3 channels x (1 + blocks) */
-    double alpha, alpha_1, z_crit;
+    int pairs, checks, levels, reference; /* reference: index of the first EXACT integrator */
+    int64_t tests; /* m: pairs x 3 channels x (1 + blocks) + checks x levels */
+    double alpha, alpha_1, z_crit, z_conv; /* z_conv: one-sided, for the convergence tests */
 } VerifyPlan;
+
+static const char *cli_verify_verdict(ConvergenceVerdict v)
+{
+    return v == CONVERGENCE_WITHIN_NOISE ? "within-noise" : v == CONVERGENCE_SHRINKS ? "shrinks" : "fails";
+}
 
 static void cli_verify_print_header(const CliArgs *a, const CstRenderSettings *rs,
                                     const VerifyPlan *p, const VerifyRender *r, int n)
@@ -937,23 +973,39 @@ static void cli_verify_print_header(const CliArgs *a, const CstRenderSettings *r
            cst_filter_name(rs->filter), work);
     printf("renders:   %-12s %-18s %6s %9s\n", "integrator", "seed", "spp", "seconds");
     for (int k = 0; k < n; k++)
-        printf("           %-12s 0x%016" PRIx64 " %6d %9.2f%s\n", r[k].label, r[k].seed,
-               r[k].stats.spp, r[k].stats.seconds,
-               cli_verify_unbiased(r[k].id) ? "" : "  (consistent, not unbiased)");
+        if (r[k].film)
+            printf("           %-12s 0x%016" PRIx64 " %6d %9.2f\n", r[k].label, r[k].seed, r[k].stats.spp,
+                   r[k].stats.seconds);
     bool partial = p->width % p->block || p->height % p->block;
-    printf("tests:     per pair and channel, z = (mean_a - mean_b) / sqrt(var_a + var_b) of the\n"
-           "           image mean and of each of the %d blocks of %dx%d pixels (a %dx%d grid%s);\n"
-           "           var of a mean = sum of its pixel-mean variances / n^2\n",
-           p->blocks, p->block, p->block, p->nbx, p->nby, partial ? ", edge blocks partial" : "");
-    printf("threshold: m = %" PRId64 " tests (%d pair%s x 3 channels x (1 + %d)), family-wise alpha %g,\n"
+    if (p->pairs > 0)
+        printf("tests:     per pair and channel, z = (mean_a - mean_b) / sqrt(var_a + var_b) of the\n"
+               "           image mean and of each of the %d blocks of %dx%d pixels (a %dx%d grid%s);\n"
+               "           var of a mean = sum of its pixel-mean variances / n^2\n",
+               p->blocks, p->block, p->block, p->nbx, p->nby, partial ? ", edge blocks partial" : "");
+    if (p->checks > 0)
+        printf("%s per consistent integrator X, %d levels of work (x1, x4, x16, ...), two renders\n"
+               "           x1, x2 each, against the reference %s r: per block b, with block means,\n"
+               "           t_b = sum over channels of ((x1+x2)/2 - r)^2 - (x1-x2)^2/4 - var(r);\n"
+               "           D = mean of t_b over the %d blocks (the squared bias net of noise), se from\n"
+               "           their spread; X converges if at the last level D <= z se and the image\n"
+               "           mean's |z| <= z_crit per channel (within noise), or if D falls\n"
+               "           significantly at every step (paired over blocks: dD > z se)\n",
+               p->pairs > 0 ? "           and" : "tests:    ", p->levels, r[p->reference].label, p->blocks);
+    char checks[64] = "";
+    if (p->checks > 0)
+        snprintf(checks, sizeof checks, " + %d check%s x (%d + 3)", p->checks, p->checks == 1 ? "" : "s",
+                 p->levels);
+    printf("threshold: m = %" PRId64 " tests (%d pair%s x 3 channels x (1 + %d)%s), family-wise alpha %g,\n"
            "           Sidak per-test alpha %.4g: a pair disagrees where |z| > z_crit = %.3f\n",
-           p->tests, p->judged_pairs, p->judged_pairs == 1 ? "" : "s", p->blocks, p->alpha,
-           p->alpha_1, p->z_crit);
+           p->tests, p->pairs, p->pairs == 1 ? "" : "s", p->blocks, checks, p->alpha, p->alpha_1, p->z_crit);
+    if (p->checks > 0)
+        printf("           (the image means of a convergence check too); D and its steps are\n"
+               "           significant where z > %.3f (one-sided)\n", p->z_conv);
     printf("\n");
 }
 
 static void cli_verify_print_row(const VerifyRender *ra, const VerifyRender *rb, int width,
-                                 const CompareResult *c, const VerifyPlan *p, bool judged)
+                                 const CompareResult *c, const VerifyPlan *p)
 {
     char pair[96], where[48], failing[48];
     snprintf(pair, sizeof pair, "%s vs %s", ra->label, rb->label);
@@ -961,22 +1013,61 @@ static void cli_verify_print_row(const VerifyRender *ra, const VerifyRender *rb,
              CLI_CHANNELS[c->worst_channel]);
     snprintf(failing, sizeof failing, "%d of %d", c->blocks_failing, c->blocks);
     printf("%-*s  %+7.2f %+7.2f %+7.2f  %+13.2f  %-16s  %-14s  %s\n", width, pair, c->z_mean[0],
-           c->z_mean[1], c->z_mean[2], c->worst_z, where, failing,
-           !judged ? "not judged*" : c->pass ? "agree" : "DISAGREE");
+           c->z_mean[1], c->z_mean[2], c->worst_z, where, failing, c->pass ? "agree" : "DISAGREE");
     if (c->zero_variance_disagreements > 0)
         printf("%-*s  (%d test%s with zero variance in both images and different means)\n", width,
                "", c->zero_variance_disagreements, c->zero_variance_disagreements == 1 ? "" : "s");
 }
 
-/* One compact JSON object; false if jansson runs out of memory. */
+static void cli_verify_print_convergence(const VerifyConvergence *cv, const VerifyRender *ref,
+                                         const VerifyPlan *p)
+{
+    const bool photons = cv->judge == VERIFY_CONVERGE_PHOTONS;
+    printf("convergence: %s against %s\n", cv->label, ref->label);
+    printf("  %-5s %10s  %-37s %10s %9s %6s %8s  %s\n", "level", photons ? "photons" : "iterations",
+           "seeds", "D", "se", "z(D)", "rms bias", "image-mean diff (z) r, g, b");
+    for (int l = 0; l < p->levels; l++) {
+        const ConvergenceLevel *lv = &cv->lv[l];
+        /* rms bias per channel of a block mean: sqrt(D / 3), 0 when noise exceeds it */
+        printf("  %-5d %10d  0x%016" PRIx64 " 0x%016" PRIx64 " %+10.3e %9.2e %+6.2f %8.5f ", l, cv->work[l],
+               cv->seed[l][0], cv->seed[l][1], lv->d2, lv->d2_se, lv->d2 / lv->d2_se,
+               lv->d2 > 0.0 ? sqrt(lv->d2 / 3.0) : 0.0);
+        for (int c = 0; c < 3; c++) printf(" %+.5f (%+.1f)", lv->mean_diff[c], lv->mean_z[c]);
+        if (photons && cv->radius[l] > 0.0) printf("  (radius %g)", cv->radius[l]);
+        printf("\n");
+    }
+    for (int l = 0; l + 1 < p->levels; l++)
+        printf("  step %d->%d: D falls by %+.3e (se %.2e, z = %+.2f)\n", l, l + 1, cv->step_diff[l],
+               cv->step_se[l], cv->step_diff[l] / cv->step_se[l]);
+    if (cv->verdict == CONVERGENCE_WITHIN_NOISE)
+        printf("  result: converges (within noise at level %d: z(D) <= %.3f, |image-mean z| <= %.3f)\n",
+               p->levels - 1, p->z_conv, p->z_crit);
+    else if (cv->verdict == CONVERGENCE_SHRINKS)
+        printf("  result: converges (D falls significantly at every step: z > %.3f)\n", p->z_conv);
+    else
+        printf("  result: DISAGREE (a bias remains at level %d and D is not shown to fall at every step)\n",
+               p->levels - 1);
+}
+
+/* One compact JSON line; false if jansson runs out of memory. */
+static bool cli_print_json_line(json_t *o)
+{
+    char *line = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
+    json_decref(o);
+    if (!line) return false;
+    printf("%s\n", line);
+    free(line);
+    return true;
+}
+
 static bool cli_verify_print_json(const VerifyRender *ra, const VerifyRender *rb,
-                                  const CompareResult *c, const VerifyPlan *p, bool judged)
+                                  const CompareResult *c, const VerifyPlan *p)
 {
     char seed_a[24], seed_b[24], ch[2] = {CLI_CHANNELS[c->worst_channel], '\0'};
     snprintf(seed_a, sizeof seed_a, "0x%016" PRIx64, ra->seed);
     snprintf(seed_b, sizeof seed_b, "0x%016" PRIx64, rb->seed);
     json_t *o = json_pack("{s:s, s:s, s:s, s:s, s:i, s:i, s:[o,o,o], s:o, s:o, s:[i,i], s:s, s:i, s:i, "
-                          "s:i, s:i, s:f, s:f, s:I, s:b, s:o}",
+                          "s:i, s:i, s:f, s:f, s:I, s:b, s:b}",
         "a", ra->label, "b", rb->label, "seed_a", seed_a, "seed_b", seed_b,
         "spp_a", ra->stats.spp, "spp_b", rb->stats.spp,
         "z_mean", cli_json_real(c->z_mean[0]), cli_json_real(c->z_mean[1]), cli_json_real(c->z_mean[2]),
@@ -985,13 +1076,119 @@ static bool cli_verify_print_json(const VerifyRender *ra, const VerifyRender *rb
         "block", p->block, "blocks", c->blocks, "blocks_failing", c->blocks_failing,
         "zero_variance_disagreements", c->zero_variance_disagreements,
         "alpha", p->alpha, "z_crit", p->z_crit, "tests", (json_int_t)p->tests,
-        "judged", judged, "pass", judged ? json_boolean(c->pass) : json_null());
-    char *line = o ? json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
-    json_decref(o);
-    if (!line) return false;
-    printf("%s\n", line);
-    free(line);
-    return true;
+        "judged", 1, "pass", c->pass);
+    return cli_print_json_line(o);
+}
+
+static bool cli_verify_print_json_convergence(const VerifyConvergence *cv, const VerifyRender *ref,
+                                              const VerifyPlan *p)
+{
+    json_t *levels = json_array(), *steps = json_array();
+    for (int l = 0; levels && l < p->levels; l++) {
+        char s0[24], s1[24];
+        snprintf(s0, sizeof s0, "0x%016" PRIx64, cv->seed[l][0]);
+        snprintf(s1, sizeof s1, "0x%016" PRIx64, cv->seed[l][1]);
+        const ConvergenceLevel *lv = &cv->lv[l];
+        json_array_append_new(levels, json_pack("{s:i, s:f, s:[s,s], s:o, s:o, s:[o,o,o], s:[o,o,o]}",
+            "work", cv->work[l], "radius", cv->radius[l], "seeds", s0, s1,
+            "d2", cli_json_real(lv->d2), "d2_se", cli_json_real(lv->d2_se),
+            "mean_diff", cli_json_real(lv->mean_diff[0]), cli_json_real(lv->mean_diff[1]),
+            cli_json_real(lv->mean_diff[2]),
+            "mean_z", cli_json_real(lv->mean_z[0]), cli_json_real(lv->mean_z[1]), cli_json_real(lv->mean_z[2])));
+    }
+    for (int l = 0; steps && l + 1 < p->levels; l++)
+        json_array_append_new(steps, json_pack("{s:o, s:o}", "diff", cli_json_real(cv->step_diff[l]),
+                                               "se", cli_json_real(cv->step_se[l])));
+    char seed_r[24];
+    snprintf(seed_r, sizeof seed_r, "0x%016" PRIx64, ref->seed);
+    /* "o" steals levels and steps, also when json_pack fails. */
+    json_t *o = levels && steps
+        ? json_pack("{s:s, s:s, s:s, s:s, s:i, s:i, s:o, s:o, s:f, s:f, s:f, s:I, s:s, s:b}",
+            "convergence", cv->label, "reference", ref->label,
+            "work", cv->judge == VERIFY_CONVERGE_PHOTONS ? "photons" : "iterations", "seed_reference", seed_r,
+            "block", p->block, "blocks", p->blocks, "levels", levels, "steps", steps,
+            "alpha", p->alpha, "z_conv", p->z_conv, "z_crit", p->z_crit, "tests", (json_int_t)p->tests,
+            "verdict", cli_verify_verdict(cv->verdict), "pass", cv->verdict != CONVERGENCE_FAILS)
+        : NULL;
+    if (!o && !(levels && steps)) {
+        json_decref(levels);
+        json_decref(steps);
+    }
+    return cli_print_json_line(o);
+}
+
+/* One render of verify, with a bar on a terminal (otherwise one line per render, not ten).
+ * Returns an exit code; on success *film is the caller's. */
+static int cli_verify_render(const CliArgs *a, CstScene *scene, CstRenderSettings settings, const char *what,
+                             CstFilm **film, CstRenderStats *stats)
+{
+    CliProgress progress = {.tty = isatty(STDERR_FILENO) == 1};
+    CstError err = {0};
+    if (!a->quiet && progress.tty) {
+        settings.progress = cli_progress_report;
+        settings.progress_user = &progress;
+    }
+    CstStatus status = cst_render(scene, &settings, film, stats, &err);
+    if (status != CST_OK) {
+        if (settings.progress) cli_progress_abort(&progress);
+        cli_print_error(&err, status);
+        return cli_exit_code(status, CLI_STAGE_RENDER);
+    }
+    if (settings.progress) cli_progress_finish(&progress, stats->seconds);
+    if (!a->quiet)
+        fprintf(stderr, "caustic: verify: %s: %d spp in %.2f s\n", what, stats->spp, stats->seconds);
+    if (stats->nonfinite > 0)
+        fprintf(stderr, "caustic: warning: %s: %" PRIu64 " NaN/Inf samples discarded "
+                "(counted as zero: the image is biased low there)\n", what, stats->nonfinite);
+    return CLI_EXIT_OK;
+}
+
+/* The levels of one convergence check: render, compare with the reference, judge. terms
+ * holds levels x blocks doubles. */
+static int cli_verify_converge(const CliArgs *a, CstScene *scene, const CstRenderSettings *rs,
+                               const VerifyPlan *p, const VerifyRender *ref, VerifyConvergence *cv,
+                               double *terms)
+{
+    for (int l = 0; l < p->levels; l++) {
+        CstFilm *x[2] = {NULL, NULL};
+        for (int i = 0; i < 2; i++) {
+            CstRenderSettings settings = a->settings;
+            CstRenderStats stats;
+            char what[96];
+            settings.integrator = a->verify.integrators[cv->k];
+            settings.seed = cv->seed[l][i];
+            settings.seed_set = 1;
+            if (cv->judge == VERIFY_CONVERGE_PHOTONS) {
+                settings.photons = cv->work[l];
+                settings.photon_radius = cv->radius[l];
+                settings.spp = rs->spp;
+            } else {
+                settings.spp = cv->work[l];
+            }
+            snprintf(what, sizeof what, "%s level %d (%d %s) render %d", cv->label, l, cv->work[l],
+                     cv->judge == VERIFY_CONVERGE_PHOTONS ? "photons" : "iterations", i + 1);
+            int code = cli_verify_render(a, scene, settings, what, &x[i], &stats);
+            if (code != CLI_EXIT_OK) {
+                cst_film_destroy(x[0]);
+                return code;
+            }
+            cv->seconds[l] += stats.seconds;
+        }
+        CstError err = {0};
+        CstStatus status = compare_convergence_level(ref->film, x[0], x[1], p->block,
+                                                     &terms[(size_t)l * (size_t)p->blocks], &cv->lv[l], &err);
+        cst_film_destroy(x[0]);
+        cst_film_destroy(x[1]);
+        if (status != CST_OK) {
+            cli_print_error(&err, status);
+            return CLI_EXIT_USAGE; /* the only failures are the arguments' (block count) */
+        }
+    }
+    for (int l = 0; l + 1 < p->levels; l++)
+        compare_convergence_step(&terms[(size_t)l * (size_t)p->blocks], &terms[(size_t)(l + 1) * (size_t)p->blocks],
+                                 p->blocks, &cv->step_diff[l], &cv->step_se[l]);
+    cv->verdict = compare_convergence_judge(cv->lv, cv->step_diff, cv->step_se, p->levels, p->z_conv, p->z_crit);
+    return CLI_EXIT_OK;
 }
 
 static int cli_verify(const CliArgs *a)
@@ -1003,26 +1200,36 @@ static int cli_verify(const CliArgs *a)
     CstError err = {0};
     CstStatus status;
     VerifyRender r[ARGS_VERIFY_MAX_INTEGRATORS];
-    double *block_z = NULL, *worst_z = NULL;
+    VerifyConvergence cv[ARGS_VERIFY_MAX_INTEGRATORS];
+    double *block_z = NULL, *worst_z = NULL, *terms = NULL;
     float *map = NULL;
     memset(r, 0, sizeof r);
+    memset(cv, 0, sizeof cv);
 
     if (!cli_check_scene_path(a))
         return CLI_EXIT_USAGE;
     if (v->map_path && !cli_check_output(v->map_path, "--map"))
         return CLI_EXIT_USAGE;
 
-    /* The plan, before rendering: which pairs are judged, how many tests, z_crit. */
-    VerifyPlan p = {.block = v->block, .alpha = v->alpha};
-    for (int i = 0; i < n; i++)
-        for (int j = i + 1; j < n; j++) {
-            p.pairs++;
-            p.judged_pairs += cli_verify_unbiased(v->integrators[i]) &&
-                              cli_verify_unbiased(v->integrators[j]);
+    /* The plan, before rendering: pairs of EXACT integrators, convergence checks of the
+     * others against the first EXACT one, how many tests, the critical values. */
+    VerifyPlan p = {.block = v->block, .alpha = v->alpha, .levels = v->levels, .reference = -1};
+    int exact = 0;
+    for (int i = 0; i < n; i++) {
+        if (cli_verify_judge(v->integrators[i]) == VERIFY_EXACT) {
+            if (p.reference < 0) p.reference = i;
+            exact++;
+        } else {
+            cv[p.checks].k = i;
+            cv[p.checks].judge = cli_verify_judge(v->integrators[i]);
+            p.checks++;
         }
-    if (p.judged_pairs == 0) {
-        fprintf(stderr, "caustic: error: verify: every pair includes a consistent but biased "
-                "integrator; judging those by convergence (--convergence) is not implemented yet\n");
+    }
+    p.pairs = exact * (exact - 1) / 2;
+    if (p.checks > 0 && p.reference < 0) {
+        fprintf(stderr, "caustic: error: verify: %s is judged by convergence against an unbiased "
+                "reference; add one to --integrators (e.g. path,%s)\n",
+                cst_integrator_name(v->integrators[cv[0].k]), cst_integrator_name(v->integrators[cv[0].k]));
         return CLI_EXIT_USAGE;
     }
 
@@ -1038,9 +1245,49 @@ static int cli_verify(const CliArgs *a)
     p.nbx = compare_blocks_x(p.width, p.block);
     p.nby = compare_blocks_y(p.height, p.block);
     p.blocks = p.nbx * p.nby;
-    p.tests = p.judged_pairs * compare_tests_per_pair(p.width, p.height, p.block);
+    /* A check: D and the image mean per channel at the last level, and every step. */
+    p.tests = p.pairs * compare_tests_per_pair(p.width, p.height, p.block) + (int64_t)p.checks * (p.levels + 3);
     p.alpha_1 = compare_sidak_alpha(p.alpha, (double)p.tests);
     p.z_crit = compare_z_critical(p.alpha, (double)p.tests);
+    p.z_conv = -compare_normal_quantile(p.alpha_1);
+    if (p.checks > 0) {
+        /* Levels are multiples of work; a time limit would make them depend on the machine. */
+        if (rs.time_limit > 0.0) {
+            fprintf(stderr, "caustic: error: verify: the convergence check of %s needs a sample count "
+                    "(--spp), not a time limit: its levels are 1, 4, 16, ... times that work\n",
+                    cst_integrator_name(v->integrators[cv[0].k]));
+            code = CLI_EXIT_USAGE;
+            goto done;
+        }
+        if (p.blocks < 2) {
+            fprintf(stderr, "caustic: error: verify: the convergence check needs at least 2 blocks "
+                    "(%dx%d image, --block %d); its standard error comes from their spread\n",
+                    p.width, p.height, p.block);
+            code = CLI_EXIT_USAGE;
+            goto done;
+        }
+        const int64_t grow = (int64_t)1 << (2 * (p.levels - 1));
+        for (int c = 0; c < p.checks; c++) {
+            VerifyConvergence *x = &cv[c];
+            int64_t base = x->judge == VERIFY_CONVERGE_PHOTONS
+                               ? (rs.photons > 0 ? rs.photons : PHOTON_DEFAULT_COUNT) : rs.spp;
+            if (base * grow > INT32_MAX) {
+                fprintf(stderr, "caustic: error: verify: %s: %" PRId64 " %s times 4^%d is too many "
+                        "(at most %d); lower --spp or --convergence\n",
+                        cst_integrator_name(v->integrators[x->k]), base,
+                        x->judge == VERIFY_CONVERGE_PHOTONS ? "photons" : "iterations", p.levels - 1, INT32_MAX);
+                code = CLI_EXIT_USAGE;
+                goto done;
+            }
+            for (int l = 0; l < p.levels; l++) {
+                x->work[l] = (int)(base << (2 * l));
+                /* A fixed radius would keep a fixed bias; halving it with 4x the photons
+                 * keeps the photons per disc and halves the first-order bias. */
+                x->radius[l] = x->judge == VERIFY_CONVERGE_PHOTONS ? rs.photon_radius / (double)(1 << l) : 0.0;
+                for (int i = 0; i < 2; i++) x->seed[l][i] = cli_verify_level_seed(rs.seed, x->k, l, i);
+            }
+        }
+    }
 
     for (int k = 0; k < n; k++) {
         r[k].id = v->integrators[k];
@@ -1052,6 +1299,7 @@ static int cli_verify(const CliArgs *a)
         else
             snprintf(r[k].label, sizeof r[k].label, "%s", cst_integrator_name(r[k].id));
     }
+    for (int c = 0; c < p.checks; c++) memcpy(cv[c].label, r[cv[c].k].label, sizeof cv[c].label);
 
     if (!a->quiet) {
         char work[96];
@@ -1065,34 +1313,20 @@ static int cli_verify(const CliArgs *a)
                 a->scene_path ? a->scene_path : "the built-in Cornell box", rs.width, rs.height,
                 work, rs.threads, rs.threads == 1 ? "" : "s");
         for (int k = 0; k < n; k++) fprintf(stderr, "%s %s", k ? "," : "", r[k].label);
+        if (p.checks > 0)
+            fprintf(stderr, " (consistent ones: %d levels x 2 renders)", p.levels);
         fprintf(stderr, "\n");
     }
+    int min_spp = INT32_MAX;
     for (int k = 0; k < n; k++) {
-        CliProgress progress = {.tty = isatty(STDERR_FILENO) == 1};
+        if (cli_verify_judge(r[k].id) != VERIFY_EXACT) continue;
         CstRenderSettings settings = a->settings;
         settings.integrator = r[k].id;
         settings.seed = r[k].seed;
         settings.seed_set = 1;
-        /* A bar on a terminal; otherwise one line per render, not ten. */
-        if (!a->quiet && progress.tty) {
-            settings.progress = cli_progress_report;
-            settings.progress_user = &progress;
-        }
-        status = cst_render(scene, &settings, &r[k].film, &r[k].stats, &err);
-        if (status != CST_OK) {
-            if (settings.progress) cli_progress_abort(&progress);
-            cli_print_error(&err, status);
-            code = cli_exit_code(status, CLI_STAGE_RENDER);
-            goto done;
-        }
-        if (settings.progress) cli_progress_finish(&progress, r[k].stats.seconds);
-        if (!a->quiet)
-            fprintf(stderr, "caustic: verify: %s: %d spp in %.2f s\n", r[k].label,
-                    r[k].stats.spp, r[k].stats.seconds);
-        if (r[k].stats.nonfinite > 0)
-            fprintf(stderr, "caustic: warning: %s: %" PRIu64 " NaN/Inf samples discarded "
-                    "(counted as zero: the image is biased low there)\n", r[k].label,
-                    r[k].stats.nonfinite);
+        code = cli_verify_render(a, scene, settings, r[k].label, &r[k].film, &r[k].stats);
+        if (code != CLI_EXIT_OK) goto done;
+        code = CLI_EXIT_INTERNAL;
         if (r[k].stats.spp < 2) {
             fprintf(stderr, "caustic: error: verify: %s rendered %d sample per pixel; the "
                     "variance estimate needs at least 2 (use --spp 2 or more, or a longer --time)\n",
@@ -1100,14 +1334,11 @@ static int cli_verify(const CliArgs *a)
             code = CLI_EXIT_USAGE;
             goto done;
         }
-    }
-
-    int min_spp = r[0].stats.spp;
-    for (int k = 1; k < n; k++)
         if (r[k].stats.spp < min_spp) min_spp = r[k].stats.spp;
+    }
     double block_samples = (double)(p.block < p.width ? p.block : p.width) *
                            (double)(p.block < p.height ? p.block : p.height) * min_spp;
-    if (block_samples < CLI_VERIFY_MIN_BLOCK_SAMPLES)
+    if (p.pairs > 0 && block_samples < CLI_VERIFY_MIN_BLOCK_SAMPLES)
         fprintf(stderr, "caustic: warning: verify: %.0f samples per block (%dx%d pixels x %d spp); "
                 "with fewer than %d, heavy-tailed estimators (e.g. path-bsdf) give false alarms "
                 "far above alpha: raise --spp or --block (see docs/cli.md)\n", block_samples,
@@ -1115,10 +1346,17 @@ static int cli_verify(const CliArgs *a)
 
     block_z = malloc((size_t)p.blocks * sizeof *block_z);
     worst_z = calloc((size_t)p.blocks, sizeof *worst_z);
-    if (!block_z || !worst_z) {
+    terms = malloc((size_t)p.levels * (size_t)p.blocks * sizeof *terms);
+    if (!block_z || !worst_z || !terms) {
         fprintf(stderr, "caustic: error: out of memory for %d blocks\n", p.blocks);
         goto done;
     }
+    for (int c = 0; c < p.checks; c++) {
+        code = cli_verify_converge(a, scene, &rs, &p, &r[p.reference], &cv[c], terms);
+        if (code != CLI_EXIT_OK) goto done;
+        code = CLI_EXIT_INTERNAL;
+    }
+
     int width = 0;
     for (int k = 0; k < n; k++) {
         int len = (int)strlen(r[k].label);
@@ -1127,45 +1365,60 @@ static int cli_verify(const CliArgs *a)
     width = 2 * width + 4;
     if (!v->json) {
         cli_verify_print_header(a, &rs, &p, r, n);
-        printf("%-*s  %-23s  %13s  %-16s  %-14s  %s\n", width, "pair", "image-mean z (r, g, b)",
-               "worst block z", "at (x, y) ch", "failing blocks", "result");
+        if (p.pairs > 0)
+            printf("%-*s  %-23s  %13s  %-16s  %-14s  %s\n", width, "pair", "image-mean z (r, g, b)",
+                   "worst block z", "at (x, y) ch", "failing blocks", "result");
     }
-    int disagree = 0;
-    bool unjudged = false;
+    int disagree = 0, diverge = 0;
     for (int i = 0; i < n; i++)
         for (int j = i + 1; j < n; j++) {
+            if (!r[i].film || !r[j].film) continue; /* a consistent integrator: its own check */
             CompareResult c;
             status = compare_films(r[i].film, r[j].film, p.block, p.z_crit, &c, block_z, &err);
             if (status != CST_OK) {
                 cli_print_error(&err, status);
                 goto done;
             }
-            bool judged = cli_verify_unbiased(r[i].id) && cli_verify_unbiased(r[j].id);
-            if (judged) {
-                disagree += !c.pass;
-                for (int b = 0; b < p.blocks; b++)
-                    if (block_z[b] > worst_z[b]) worst_z[b] = block_z[b];
-            }
-            unjudged |= !judged;
+            disagree += !c.pass;
+            for (int b = 0; b < p.blocks; b++)
+                if (block_z[b] > worst_z[b]) worst_z[b] = block_z[b];
             if (v->json) {
-                if (!cli_verify_print_json(&r[i], &r[j], &c, &p, judged)) {
+                if (!cli_verify_print_json(&r[i], &r[j], &c, &p)) {
                     fprintf(stderr, "caustic: error: out of memory writing JSON\n");
                     goto done;
                 }
             } else {
-                cli_verify_print_row(&r[i], &r[j], width, &c, &p, judged);
+                cli_verify_print_row(&r[i], &r[j], width, &c, &p);
             }
         }
+    for (int c = 0; c < p.checks; c++) {
+        diverge += cv[c].verdict == CONVERGENCE_FAILS;
+        if (v->json) {
+            if (!cli_verify_print_json_convergence(&cv[c], &r[p.reference], &p)) {
+                fprintf(stderr, "caustic: error: out of memory writing JSON\n");
+                goto done;
+            }
+        } else {
+            if (c > 0 || p.pairs > 0) printf("\n");
+            cli_verify_print_convergence(&cv[c], &r[p.reference], &p);
+        }
+    }
     if (!v->json) {
-        if (unjudged)
-            printf("* consistent but biased integrator: its finite-sample bias is expected; judging "
-                   "it needs a --convergence mode (N vs 4N samples), not implemented yet\n");
         printf("\n");
-        if (disagree)
-            printf("result:    %d of %d pair%s DISAGREE\n", disagree, p.judged_pairs,
-                   p.judged_pairs == 1 ? "" : "s");
-        else
-            printf("result:    %s\n", p.judged_pairs == 1 ? "the pair agrees" : "all pairs agree");
+        if (p.pairs > 0) {
+            if (disagree)
+                printf("result:    %d of %d pair%s DISAGREE\n", disagree, p.pairs, p.pairs == 1 ? "" : "s");
+            else
+                printf("result:    %s\n", p.pairs == 1 ? "the pair agrees" : "all pairs agree");
+        }
+        if (p.checks > 0) {
+            if (diverge)
+                printf("%s %d of %d consistent integrator%s not shown to converge (DISAGREE)\n",
+                       p.pairs > 0 ? "          " : "result:   ", diverge, p.checks, p.checks == 1 ? "" : "s");
+            else
+                printf("%s %s\n", p.pairs > 0 ? "          " : "result:   ",
+                       p.checks == 1 ? "the consistent integrator converges" : "every consistent integrator converges");
+        }
     }
 
     if (v->map_path) {
@@ -1186,11 +1439,15 @@ static int cli_verify(const CliArgs *a)
     }
     if (disagree)
         fprintf(stderr, "caustic: verify: %d of %d pair%s disagree (|z| > %.3f)\n", disagree,
-                p.judged_pairs, p.judged_pairs == 1 ? "" : "s", p.z_crit);
-    code = disagree ? CLI_EXIT_DISAGREE : CLI_EXIT_OK;
+                p.pairs, p.pairs == 1 ? "" : "s", p.z_crit);
+    if (diverge)
+        fprintf(stderr, "caustic: verify: %d of %d consistent integrator%s not shown to converge\n", diverge,
+                p.checks, p.checks == 1 ? "" : "s");
+    code = disagree || diverge ? CLI_EXIT_DISAGREE : CLI_EXIT_OK;
 
 done:
     free(map);
+    free(terms);
     free(worst_z);
     free(block_z);
     for (int k = 0; k < n; k++) cst_film_destroy(r[k].film);

@@ -219,7 +219,8 @@ CstStatus compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const
                         "image, block %d)", w, h, block);
     memset(out, 0, sizeof *out);
     out->blocks = nbx * nby;
-    double sum = 0.0, img[3][2] = {{0}}; /* image sums of (x1 + x2)/2 and of r */
+    /* image sums of (x1 + x2)/2 and of r, and the variances of those sums */
+    double sum = 0.0, img[3][2] = {{0}}, img_var[3][2] = {{0}};
     for (int by = 0; by < nby; by++)
         for (int bx = 0; bx < nbx; bx++) {
             int x0 = bx * block, y0 = by * block;
@@ -237,6 +238,8 @@ CstStatus compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const
                 t += d * d - half * half - vr[c] / (n * n);
                 img[c][0] += 0.5 * (s1[c] + s2[c]);
                 img[c][1] += sr[c];
+                img_var[c][0] += n * n * half * half; /* the block sum's variance */
+                img_var[c][1] += vr[c];
             }
             terms[by * nbx + bx] = t;
             sum += t;
@@ -245,7 +248,11 @@ CstStatus compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const
     double ss = 0.0;
     for (int b = 0; b < out->blocks; b++) ss += (terms[b] - out->d2) * (terms[b] - out->d2);
     out->d2_se = sqrt(ss / (out->blocks - 1) / out->blocks);
-    for (int c = 0; c < 3; c++) out->mean_diff[c] = (img[c][0] - img[c][1]) / ((double)w * (double)h);
+    for (int c = 0; c < 3; c++) {
+        out->mean_diff[c] = (img[c][0] - img[c][1]) / ((double)w * (double)h);
+        bool outright = false;
+        out->mean_z[c] = compare_z(img[c][0], img_var[c][0], img[c][1], img_var[c][1], &outright);
+    }
     return CST_OK;
 }
 
@@ -264,11 +271,15 @@ void compare_convergence_step(const double *terms_a, const double *terms_b, int 
 }
 
 ConvergenceVerdict compare_convergence_judge(const ConvergenceLevel *lv, const double *step_diff,
-                                             const double *step_se, int levels, double z)
+                                             const double *step_se, int levels, double z, double z_mean)
 {
-    if (levels < 2 || !(z > 0.0)) return CONVERGENCE_FAILS;
+    if (levels < 2 || !(z > 0.0) || !(z_mean > 0.0)) return CONVERGENCE_FAILS;
     const ConvergenceLevel *last = &lv[levels - 1];
-    if (last->d2 <= z * last->d2_se) return CONVERGENCE_WITHIN_NOISE;
+    /* D alone misses a bias spread evenly over many blocks when the blocks differ much
+     * (se comes from their spread); the image mean sees it at once. */
+    bool within = last->d2 <= z * last->d2_se;
+    for (int c = 0; c < 3; c++) within &= fabs(last->mean_z[c]) <= z_mean;
+    if (within) return CONVERGENCE_WITHIN_NOISE;
     for (int k = 0; k + 1 < levels; k++)
         if (!(step_diff[k] > z * step_se[k])) return CONVERGENCE_FAILS;
     return CONVERGENCE_SHRINKS;

@@ -77,6 +77,9 @@ typedef struct ConvergenceLevel {
     double d2;           /* D = mean of t_b over blocks: the mean squared block bias (radiance^2) */
     double d2_se;        /* its standard error: sd of t_b over blocks / sqrt(blocks) */
     double mean_diff[3]; /* image mean of (x1 + x2) / 2 minus the reference's */
+    double mean_z[3];    /* mean_diff over its standard error: X's variance pooled over the
+                          * blocks' (x1 - x2)^2 / 4 (so blocks are taken as independent), r's
+                          * from its pixels */
     int blocks;
 } ConvergenceLevel;
 
@@ -100,11 +103,12 @@ typedef enum ConvergenceVerdict {
 } ConvergenceVerdict;
 
 /* The rule of `caustic verify` for `levels` >= 2 levels of growing work (step k compares
- * level k with k + 1, step_diff[k] = D_k - D_k+1): within noise if D_last <= z * se_last;
- * else shrinks if step_diff[k] > z * step_se[k] for every step; else fails. z is a one-sided
- * critical value; NaN anywhere counts against the integrator. */
+ * level k with k + 1, step_diff[k] = D_k - D_k+1): within noise if at the last level
+ * D <= z * se and every |mean_z| <= z_mean; else shrinks if step_diff[k] > z * step_se[k]
+ * for every step; else fails. z is a one-sided critical value, z_mean a two-sided one; NaN
+ * anywhere counts against the integrator. */
 ConvergenceVerdict compare_convergence_judge(const ConvergenceLevel *lv, const double *step_diff,
-                                             const double *step_se, int levels, double z);
+                                             const double *step_se, int levels, double z, double z_mean);
 
 /* The map colour of a block's |z|, as linear RGB (for image_write, which encodes PNG as
  * sRGB): black at 0 ramping to blue at z_crit/2, blue ramping to yellow at z_crit (both

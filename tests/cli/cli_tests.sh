@@ -384,6 +384,51 @@ grep -q "rendering" "$ERR" && fail "verify: bad --map caught before rendering" \
     || pass "verify: bad --map caught before rendering"
 run "$dir" verify no-such.json --integrators path,path-nee
 expect "verify: missing scene exits 2" 2 "no-such\.json"
+# Consistent integrators: judged by convergence against the first unbiased one (docs/cli.md).
+CONV=(--spp 8 --width 32 --height 32 --block 8 --threads 2)
+run "$dir" verify --integrators path,sppm "${CONV[@]}"
+if expect "verify: sppm converges to path, exit 0" 0; then
+    grep -q "^convergence: sppm against path$" "$OUT" && grep -Eq "^  result: converges" "$OUT" \
+        && [ "$(grep -Ec '^  [0-2] +(8|32|128) +0x' "$OUT")" -eq 3 ] \
+        && pass "verify: sppm convergence report, levels of 8, 32 and 128 iterations" \
+        || fail "verify: sppm convergence report, levels of 8, 32 and 128 iterations"
+fi
+# whitted leaves out indirect light: against it as the reference, sppm's bias stays.
+run "$dir" verify --integrators whitted,sppm "${CONV[@]}"
+if expect "verify: sppm against a biased reference exits 1" 1 "1 of 1 consistent integrator not shown to converge"; then
+    grep -q "^  result: DISAGREE" "$OUT" && pass "verify: non-convergence reported as DISAGREE" \
+        || fail "verify: non-convergence reported as DISAGREE"
+fi
+sed 's/"integrator": {"type": "path"}/"integrator": {"type": "path", "photons": 4000}/' \
+    "$SRC/scenes/cornell-box.json" >"$dir/box-photons.json"
+run "$dir" verify box-photons.json --integrators path,photon "${CONV[@]}" --json
+if expect "verify --json: photon converges, exit 0" 0; then
+    if python3 - "$OUT" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+assert len(rows) == 1, rows
+r = rows[0]
+assert r["convergence"] == "photon" and r["reference"] == "path" and r["work"] == "photons", r
+assert [l["work"] for l in r["levels"]] == [4000, 16000, 64000], r["levels"]
+assert len(r["steps"]) == 2 and r["pass"] is True and r["verdict"] in ("within-noise", "shrinks")
+assert r["tests"] == 6 and r["blocks"] == 16
+for l in r["levels"]:
+    assert {"d2", "d2_se", "mean_diff", "mean_z", "seeds"} <= l.keys()
+PY
+    then pass "verify --json: one convergence object with levels, steps and verdict"
+    else fail "verify --json: one convergence object with levels, steps and verdict"; fi
+fi
+run "$dir" verify --integrators sppm,photon --spp 2
+expect "verify: convergence without an unbiased reference exits 2" 2 "unbiased reference"
+run "$dir" verify --integrators path,sppm --time 1
+expect "verify: convergence with --time exits 2" 2 "needs a sample count"
+run "$dir" verify --integrators path,sppm --spp 2 --width 8 --height 8 --block 8
+expect "verify: convergence over one block exits 2" 2 "at least 2 blocks"
+run "$dir" verify --integrators path,sppm --convergence 1
+expect "verify: --convergence 1 rejected" 2 "^caustic: --convergence: expected a number of levels from 2 to 6, got '1'$"
+run "$dir" verify --integrators path,sppm --spp 1000000000 --convergence 6
+expect "verify: too many iterations exits 2" 2 "too many"
+
 run "$dir" verify --help
 if expect "verify --help exits 0" 0; then
     grep -q -- "--integrators" "$OUT" && grep -q -- "--alpha" "$OUT" && grep -q -- "--map" "$OUT" \

@@ -371,6 +371,9 @@ static void test_convergence_level_known(void **state)
     assert_rel(lv.d2, want, 1e-9);
     assert_true(lv.d2_se < 1e-12); /* every block the same */
     for (int c = 0; c < 3; c++) assert_rel(lv.mean_diff[c], bias, 1e-9);
+    /* Image-mean z: the sum's variance is 6 blocks x (64 e)^2 from X plus 384 s^2 from r. */
+    for (int c = 0; c < 3; c++)
+        assert_rel(lv.mean_z[c], 384.0 * bias / sqrt(6.0 * 64.0 * 64.0 * e * e + 384.0 * s * s), 1e-9);
     /* The arguments it refuses. */
     Film *small = make_film(8, 8), *one = make_film(24, 16);
     one->spp = 1;
@@ -398,18 +401,25 @@ static void test_convergence_step_and_judge(void **state)
 
     ConvergenceLevel lv[3] = {{.d2 = 9.0, .d2_se = 1.0}, {.d2 = 5.0, .d2_se = 1.0}, {.d2 = 1.5, .d2_se = 1.0}};
     double sd[2] = {4.0, 3.5}, sse[2] = {1.0, 1.0};
-    /* D_last = 1.5 <= 2 se: within noise, whatever the steps. */
-    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0), CONVERGENCE_WITHIN_NOISE);
+    /* D_last = 1.5 <= 2 se: within noise, whatever the steps... */
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0, 3.0), CONVERGENCE_WITHIN_NOISE);
+    /* ...unless the image mean is off (here the steps then decide: they fall). */
+    lv[2].mean_z[1] = -3.5;
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0, 3.0), CONVERGENCE_SHRINKS);
+    sd[0] = 1.0;
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0, 3.0), CONVERGENCE_FAILS);
+    sd[0] = 4.0;
+    lv[2].mean_z[1] = 0.0;
     /* z = 1: D_last is significant, every step falls by more than 1 se. */
-    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0), CONVERGENCE_SHRINKS);
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0, 3.0), CONVERGENCE_SHRINKS);
     /* A step that does not fall significantly (a bias floor). */
     sd[1] = 0.5;
-    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0), CONVERGENCE_FAILS);
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0, 3.0), CONVERGENCE_FAILS);
     sd[1] = (double)NAN;
-    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0), CONVERGENCE_FAILS);
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 1.0, 3.0), CONVERGENCE_FAILS);
     lv[2].d2 = (double)NAN;
-    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0), CONVERGENCE_FAILS);
-    assert_int_equal(compare_convergence_judge(lv, sd, sse, 1, 2.0), CONVERGENCE_FAILS);
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 3, 2.0, 3.0), CONVERGENCE_FAILS);
+    assert_int_equal(compare_convergence_judge(lv, sd, sse, 1, 2.0, 3.0), CONVERGENCE_FAILS);
 }
 
 /* One Gaussian draw (Box-Muller; u1 in (0, 1]). */
@@ -442,7 +452,9 @@ static void test_convergence_rates(void **state)
     (void)state;
     enum { W = 64, H = 64, B = 8, K = 3, TRIALS = 200 };
     const double alpha = 0.05, s = 0.1;
-    const double z = -compare_normal_quantile(alpha); /* one-sided, one test */
+    /* Sidak over the 4 tests of "within noise": D one-sided, the image mean two-sided. */
+    const double a1 = compare_sidak_alpha(alpha, 4.0);
+    const double z = -compare_normal_quantile(a1), z_mean = -compare_normal_quantile(0.5 * a1);
     Film *r = make_film(W, H), *x[2] = {make_film(W, H), make_film(W, H)};
     Pcg32 rng;
     pcg32_seed(&rng, 20261122u, 3u);
@@ -462,7 +474,7 @@ static void test_convergence_rates(void **state)
                 assert_int_equal(compare_convergence_level(r, x[0], x[1], B, terms[l], &lv[l], &err), CST_OK);
             }
             for (int l = 0; l + 1 < K; l++) compare_convergence_step(terms[l], terms[l + 1], 64, &sd[l], &sse[l]);
-            outcomes[kase][compare_convergence_judge(lv, sd, sse, K, z)]++;
+            outcomes[kase][compare_convergence_judge(lv, sd, sse, K, z, z_mean)]++;
         }
     print_message("unbiased: %d within noise, %d shrinks, %d fails; halving bias: %d %d %d; "
                   "constant bias: %d %d %d (of %d)\n", outcomes[0][0], outcomes[0][1], outcomes[0][2],
