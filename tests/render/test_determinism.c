@@ -94,13 +94,31 @@ static void test_photon_thread_count_invariance(void **state)
     check_thread_count_invariance(CST_INTEGRATOR_PHOTON);
 }
 
-/* SPPM (8 iterations of 7680 photons, automatic initial radius) runs on the calling
- * thread whatever the thread count: this guards that it stays so, or that a parallel
- * version keeps the photon order fixed. */
+/* SPPM (8 iterations of 7680 photons, automatic initial radius) traces its photons in
+ * parallel chunks of 1024 (7.5 chunks: the last one partial) and deposits them over 4 x
+ * threads pixel ranges (8, 12 and 28 here), each reading the chunks in order: every pixel
+ * must still receive its photons in photon order, so the images must be identical. */
 static void test_sppm_thread_count_invariance(void **state)
 {
     (void)state;
     check_thread_count_invariance(CST_INTEGRATOR_SPPM);
+    /* ...and the threads are used, and reported. */
+    CstScene *s;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    CstRenderSettings st = {0};
+    st.integrator = CST_INTEGRATOR_SPPM;
+    st.width = 16;
+    st.height = 16;
+    st.spp = 2;
+    st.threads = 3;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+    assert_int_equal(stats.threads, 3);
+    assert_int_equal(stats.spp, 2);
+    cst_film_destroy(f);
+    cst_scene_destroy(s);
 }
 
 static void test_json_cornell_equals_builtin(void **state)
