@@ -17,9 +17,10 @@
  * camera pass runs over rows in parallel (a pixel's visible point is its own). Photons are
  * traced in parallel in fixed chunks, each recording its non-delta hits in its own list;
  * then the pixels are split into ranges among the threads, and each thread reads every
- * chunk's list in chunk order, hit order, adding the photons that fall in its own pixels'
- * discs. So each pixel's phi receives its photons in photon order, exactly the sums of a
- * single-threaded loop over photons, and the image does not depend on the thread count.
+ * chunk's hits that can reach its range (grouped by range after tracing) in chunk order,
+ * hit order, adding the photons that fall in its own pixels' discs. So each pixel's phi
+ * receives its photons in photon order, exactly the sums of a single-threaded loop over
+ * photons, and the image does not depend on the thread count.
  * Visible points are found through a uniform hash grid rebuilt each iteration (pbrt-v3's
  * SPPMPixelListNode grid, as flat counting-sort arrays here). */
 #include "integrators/sppm.h"
@@ -158,14 +159,20 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
 typedef struct SppmHit {
     Vec3 p, wi, n;   /* n: geometric normal on wi's side */
     Rgb power;       /* unnormalised flux (see the file comment) */
+    uint32_t first, last; /* its grid bucket's entries [first, last): the candidates */
 } SppmHit;
 
-/* The hits of one chunk of photon paths, in photon order then path order. Reused by every
- * iteration, so it stops growing after the first ones. */
+/* The hits of one chunk of photon paths, in photon order then path order, and their
+ * indices grouped by the pixel ranges their candidates fall in (hit order kept within a
+ * group; a hit whose candidates span several ranges is in each). Reused by every
+ * iteration, so the arrays stop growing after the first ones. */
 typedef struct SppmHitList {
     SppmHit *v;
     size_t n, cap;
-    bool oom;        /* a hit was lost for lack of memory: the render fails */
+    uint32_t *order;       /* hit indices, range by range */
+    size_t order_cap;
+    uint32_t *range_start; /* ranges + 1: range r's indices are order[range_start[r] ..] */
+    bool oom;              /* a hit was lost for lack of memory: the render fails */
 } SppmHitList;
 
 static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Rgb power)
@@ -177,7 +184,22 @@ static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Rgb power)
         l->v = v;
         l->cap = cap;
     }
-    l->v[l->n++] = (SppmHit){p, wi, n, power};
+    l->v[l->n++] = (SppmHit){p, wi, n, power, 0, 0};
+}
+
+/* The candidates of a photon at pos: the entries of its cell's bucket, or none outside
+ * the box of every disc. */
+static void sppm_grid_candidates(const SppmGrid *g, Vec3 pos, uint32_t *first, uint32_t *last)
+{
+    *first = *last = 0;
+    if (g->res[0] == 0) return;
+    if (!(pos.x >= g->lo.x && pos.y >= g->lo.y && pos.z >= g->lo.z)) return;
+    if (!(pos.x <= g->hi.x && pos.y <= g->hi.y && pos.z <= g->hi.z)) return;
+    int c[3];
+    sppm_grid_cell(g, pos, c);
+    uint32_t h = sppm_grid_hash(g, c[0], c[1], c[2]);
+    *first = g->cell_start[h];
+    *last = g->cell_start[h + 1];
 }
 
 /* Adds a photon hit to every visible point with index in [lo, hi) whose disc holds it
@@ -185,21 +207,14 @@ static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Rgb power)
  * (sppm_grid_build fills them so), so the range is a binary search and a prefix. */
 static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *hit, uint32_t lo, uint32_t hi)
 {
-    if (g->res[0] == 0) return;
     Vec3 pos = hit->p;
-    int c[3];
-    /* A photon outside the box of every disc is in none. */
-    if (!(pos.x >= g->lo.x && pos.y >= g->lo.y && pos.z >= g->lo.z)) return;
-    if (!(pos.x <= g->hi.x && pos.y <= g->hi.y && pos.z <= g->hi.z)) return;
-    sppm_grid_cell(g, pos, c);
-    uint32_t h = sppm_grid_hash(g, c[0], c[1], c[2]);
-    uint32_t a = g->cell_start[h], b = g->cell_start[h + 1];
+    uint32_t a = hit->first, b = hit->last;
     while (a < b) { /* first entry >= lo */
         uint32_t mid = a + (b - a) / 2u;
         if (g->entries[mid] < lo) a = mid + 1u;
         else b = mid;
     }
-    for (uint32_t k = a; k < g->cell_start[h + 1] && g->entries[k] < hi; k++) {
+    for (uint32_t k = a; k < hit->last && g->entries[k] < hi; k++) {
         const SppmDisc *disc = &g->discs[g->entries[k]];
         if (photon_dist2(pos, disc->p) > disc->r2) continue;
         SppmPixel *v = &px[g->entries[k]];
@@ -358,15 +373,64 @@ typedef struct SppmWorker {
     uint64_t rays, nonfinite; /* integer totals: summed in any order */
 } SppmWorker;
 
-/* Deposit unit `r`: every hit of every chunk, in order, into the pixels of range r, then
- * the progressive update of those pixels. */
+/* Pixel range r of the deposit phase is [range_lo(r), range_lo(r + 1)). */
+static inline uint32_t range_lo(const SppmJob *job, int r)
+{
+    return (uint32_t)(job->count * (size_t)r / (size_t)job->ranges);
+}
+
+static int range_of(const SppmJob *job, uint32_t pixel)
+{
+    int r = (int)((size_t)pixel * (size_t)job->ranges / job->count);
+    while (r + 1 < job->ranges && pixel >= range_lo(job, r + 1)) r++;
+    while (r > 0 && pixel < range_lo(job, r)) r--;
+    return r;
+}
+
+/* After tracing chunk l: every hit's candidates, then the hits grouped by range (a
+ * counting sort in hit order), so that a range reads only the hits that can reach it. */
+static void chunk_group_by_range(const SppmJob *job, SppmHitList *l)
+{
+    const uint32_t *entries = job->g->entries;
+    const int R = job->ranges;
+    uint32_t *rs = l->range_start;
+    memset(rs, 0, ((size_t)R + 1u) * sizeof *rs);
+    for (size_t i = 0; i < l->n; i++) {
+        SppmHit *h = &l->v[i];
+        sppm_grid_candidates(job->g, h->p, &h->first, &h->last);
+        if (h->first == h->last) continue;
+        /* Entries ascend, so the candidates' ranges are r0..r1. */
+        for (int r = range_of(job, entries[h->first]), r1 = range_of(job, entries[h->last - 1]); r <= r1; r++)
+            rs[r + 1]++;
+    }
+    for (int r = 0; r < R; r++) rs[r + 1] += rs[r];
+    if (rs[R] > l->order_cap) {
+        size_t cap = 2u * (size_t)rs[R];
+        uint32_t *o = realloc(l->order, cap * sizeof *o);
+        if (!o) { l->oom = true; l->n = 0; return; }
+        l->order = o;
+        l->order_cap = cap;
+    }
+    /* Fill with rs[r] as range r's cursor, then shift the starts back (as in the grid). */
+    for (size_t i = 0; i < l->n; i++) {
+        const SppmHit *h = &l->v[i];
+        if (h->first == h->last) continue;
+        for (int r = range_of(job, entries[h->first]), r1 = range_of(job, entries[h->last - 1]); r <= r1; r++)
+            l->order[rs[r]++] = (uint32_t)i;
+    }
+    for (int r = R; r > 0; r--) rs[r] = rs[r - 1];
+    rs[0] = 0;
+}
+
+/* Deposit unit `r`: the hits of every chunk that reach range r, in chunk order and hit
+ * order, into the pixels of range r; then the progressive update of those pixels. */
 static void deposit_range(SppmJob *job, SppmWorker *w, int r)
 {
-    uint32_t lo = (uint32_t)(job->count * (size_t)r / (size_t)job->ranges);
-    uint32_t hi = (uint32_t)(job->count * (size_t)(r + 1) / (size_t)job->ranges);
+    uint32_t lo = range_lo(job, r), hi = range_lo(job, r + 1);
     for (int c = 0; c < job->chunks; c++) {
         const SppmHitList *l = &job->hits[c];
-        for (size_t i = 0; i < l->n; i++) sppm_grid_deposit(job->g, job->px, &l->v[i], lo, hi);
+        for (uint32_t k = l->range_start[r]; k < l->range_start[r + 1]; k++)
+            sppm_grid_deposit(job->g, job->px, &l->v[l->order[k]], lo, hi);
     }
     for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], &w->nonfinite);
 }
@@ -388,6 +452,7 @@ static void *sppm_worker_main(void *arg)
             int first = u * SPPM_PHOTON_CHUNK;
             int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
             for (int i = first; i < last; i++) trace_photon(job->s, job->sp, l, (uint64_t)i, job->iter, &w->rays);
+            chunk_group_by_range(job, l);
         } else {
             deposit_range(job, w, u);
         }
@@ -450,9 +515,10 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
     while (g.buckets < count && g.buckets < (1u << 30)) g.buckets <<= 1;
     SppmJob job = {s, cam, sp, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, 0};
     job.chunks = (int)(((int64_t)photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
-    /* A few pixel ranges per thread, so a range crowded with photons does not hold the
-     * others up; each range reads every hit, so not many more, and one thread needs one. */
-    const int ranges = threads == 1 ? 1 : 4 * threads;
+    /* Several pixel ranges per thread, so a range crowded with photons does not hold the
+     * others up; a hit is read once per range its candidates reach (mostly one or two),
+     * and one thread needs one range. */
+    const int ranges = threads == 1 ? 1 : 8 * threads;
     job.ranges = count < (size_t)ranges ? (int)count : ranges;
     SppmWorker *workers = calloc((size_t)threads, sizeof *workers);
     SppmPixel *px = calloc(count, sizeof *px);
@@ -463,6 +529,13 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
     if (!workers || !px || !job.hits || !g.cell_start || !g.entries || !g.discs) {
         st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
         goto done;
+    }
+    for (int c = 0; c < job.chunks; c++) {
+        job.hits[c].range_start = calloc((size_t)job.ranges + 1u, sizeof *job.hits[c].range_start);
+        if (!job.hits[c].range_start) {
+            st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon chunks (%d)", job.chunks);
+            goto done;
+        }
     }
     job.px = px;
     for (int i = 0; i < threads; i++) workers[i].job = &job;
@@ -482,7 +555,10 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
                     goto done;
                 }
         } else {
-            for (int c = 0; c < job.chunks; c++) job.hits[c].n = 0;
+            for (int c = 0; c < job.chunks; c++) {
+                job.hits[c].n = 0;
+                memset(job.hits[c].range_start, 0, ((size_t)job.ranges + 1u) * sizeof *job.hits[c].range_start);
+            }
         }
         run_phase(&job, workers, threads, SPPM_PHASE_DEPOSIT);
         iter++;
@@ -514,7 +590,11 @@ done:
             res->nonfinite += workers[i].nonfinite;
         }
     if (job.hits)
-        for (int c = 0; c < job.chunks; c++) free(job.hits[c].v);
+        for (int c = 0; c < job.chunks; c++) {
+            free(job.hits[c].v);
+            free(job.hits[c].order);
+            free(job.hits[c].range_start);
+        }
     free(job.hits);
     free(workers);
     free(px);
