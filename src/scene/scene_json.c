@@ -563,7 +563,7 @@ static CstStatus parse_integrator(Loader *ld, const json_t *integ)
         if (t == CST_INTEGRATOR_DEFAULT) {
             char name[72];
             return fail_here(ld, "unknown integrator \"%s\"; expected one of: path, path-nee, "
-                                 "path-bsdf, light, whitted, photon, sppm",
+                                 "path-bsdf, light, whitted, photon, sppm, bdpt, vcm",
                              clip_name(s, name));
         }
         rs->integrator = t;
