@@ -163,27 +163,24 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
 void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
                      Pcg32 *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
 {
-    if (s->emitter_sampler.count == 0) return;
+    if (s->emitter_sampler.lights == 0) return;
     float u_sel = pcg32_float(rng);
     Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
     Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));
     EmissionSample es;
     EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
-    if (!(es.pdf_w > 0.0f)) return;
-    const Emitter *e = &s->emitters[es.emitter];
-    float cos_l = fabsf(v3_dot(es.n, es.w));
+    if (!(es.pdf_w > 0.0f) || rgb_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
 
-    /* tech. rep. eqs. 31-33: the light vertex's NEE density (es.pdf_a: the same
-     * distribution) against its emission density. */
+    /* tech. rep. eqs. 31-33: the light vertex's NEE density against its emission density;
+     * a delta light cannot be hit, so no strategy reaches it by a connection (d_vc = 0). */
     SubPath sp;
-    sp.beta = rgb_scale(emitter_radiance(e, es.n, es.w), cos_l / emission_pdf);
+    sp.beta = es.beta;
     sp.scatter = rgb_s(1.0f);
-    sp.d_vcm = mis(es.pdf_a / emission_pdf);
-    sp.d_vc = mis(cos_l / emission_pdf);
+    sp.d_vcm = mis(es.nee_pdf / emission_pdf);
+    sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
-    if (rgb_is_black(sp.beta)) return;
 
     Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int bounces = 1;; bounces++) {
@@ -193,7 +190,9 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
         Vec3 w_prev = v3_neg(ray.d);
         float cos_in = fabsf(v3_dot(sh.ng, w_prev));
         if (!(cos_in > 0.0f)) break;
-        mis_arrive(&sp, sh.t, cos_in);
+        /* From a directional light the first segment has no distance: its density is
+         * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
+        mis_arrive(&sp, bounces > 1 || es.finite ? sh.t : 1.0f, cos_in);
 
         Bsdf bsdf;
         bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
@@ -263,37 +262,28 @@ void vcm_grid_build(VcmIteration *it, size_t n, uint32_t cells, uint32_t *cell_s
     cell_start[0] = 0;
 }
 
-/* NEE, the s = 1 strategy (tech. rep. eqs. 44-45 with an area emitter). */
+/* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF
+ * sampling cannot hit it). */
 static Rgb connect_to_light(const Scene *s, const VcmIteration *it, const SubPath *sp,
                             const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
 {
     float u_sel = pcg32_float(rng);
     Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-    EmitterSample es;
+    LightLi ls;
     EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
-    emitter_sample(&s->emitter_sampler, s->emitters, &g, u_sel, u, &es);
-    Vec3 to = v3_sub(es.p, sh->p);
-    float dist2 = v3_length2(to);
-    if (!(dist2 > 0.0f)) return rgb_s(0.0f);
-    float dist = sqrtf(dist2);
-    Vec3 wi = v3_scale(to, 1.0f / dist);
-    float cos_l = fabsf(v3_dot(es.n, wi));
-    float cos_x = fabsf(v3_dot(sh->ng, wi));
-    const Emitter *e = &s->emitters[es.emitter];
-    Rgb le = emitter_radiance(e, es.n, v3_neg(wi));
-    if (rgb_is_black(le) || !(cos_l > 0.0f) || !(cos_x > 0.0f)) return rgb_s(0.0f);
-    Rgb f = bsdf_eval(b, wo, wi);
+    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
+    float cos_x = fabsf(v3_dot(sh->ng, ls.wi));
+    if (!(cos_x > 0.0f)) return rgb_s(0.0f);
+    Rgb f = bsdf_eval(b, wo, ls.wi);
     if (rgb_is_black(f)) return rgb_s(0.0f);
-    float direct_pdf_w = s->emitter_sampler.pdf_a * dist2 / cos_l;
-    float emission_pdf_w = s->emitter_sampler.pdf_a * emitter_emission_pdf_w(e, es.n, v3_neg(wi));
-    float bsdf_pdf_fwd = bsdf_pdf(b, wo, wi), bsdf_pdf_rev = bsdf_pdf(b, wi, wo);
-    float w_light = mis(bsdf_pdf_fwd / direct_pdf_w);
-    float w_camera = mis(emission_pdf_w * cos_x / (direct_pdf_w * cos_l)) *
+    float bsdf_pdf_fwd = bsdf_pdf(b, wo, ls.wi), bsdf_pdf_rev = bsdf_pdf(b, ls.wi, wo);
+    float w_light = ls.delta ? 0.0f : mis(bsdf_pdf_fwd / ls.direct_pdf);
+    float w_camera = mis(ls.emit_pdf * cos_x / (ls.direct_pdf * ls.cos_light)) *
                      (it->mis_vm + sp->d_vcm + sp->d_vc * mis(bsdf_pdf_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
-    if (!scene_visible(s, sh->p, sh->ng, es.p, es.n)) return rgb_s(0.0f);
-    return rgb_scale(rgb_mul(f, le), weight / direct_pdf_w);
+    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
+    return rgb_scale(rgb_mul(f, ls.li), weight / ls.pdf);
 }
 
 /* A connection between camera vertex x and light vertex y (tech. rep. eqs. 40-41). */
@@ -398,7 +388,7 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
                   mis((float)it->light_paths / camera_pdf_w(it, cos_theta)), 0.0f, 0.0f};
     const VcmVertex *lv = it->vertices + it->path_start[path];
     const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
-    const bool has_lights = s->emitter_sampler.count > 0;
+    const bool has_lights = s->emitter_sampler.lights > 0;
     for (int t = 1;; t++) {
         SurfaceHit sh;
         ++*rays;
@@ -416,7 +406,7 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
             if (!rgb_is_black(le)) {
                 float w = 1.0f;
                 if (t > 1) {
-                    float pdf_a = s->emitter_sampler.pdf_a;
+                    float pdf_a = emitter_pdf_a(&s->emitter_sampler, sh.emitter);
                     float emission_pdf = pdf_a * emitter_emission_pdf_w(e, sh.ng, wo);
                     w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
                 }

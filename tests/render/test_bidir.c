@@ -224,6 +224,38 @@ static void test_emitting_furnace(void **state)
     scene_destroy(s);
 }
 
+/* The Cornell box with a point light and a spot added to its area light: delta lights in
+ * every strategy (never hit, never connected to as a surface, NEE and light paths only),
+ * light selection by power over three kinds of light. The light tracer joins: the box is
+ * all diffuse. */
+static void test_delta_lights_cornell(void **state)
+{
+    (void)state;
+    FILE *fp = fopen(CST_SOURCE_DIR "/scenes/cornell-box.json", "rb");
+    assert_non_null(fp);
+    static char text[1 << 16];
+    size_t n = fread(text, 1, sizeof text - 512, fp);
+    fclose(fp);
+    while (n > 0 && text[n - 1] != '}') n--;
+    assert_true(n > 0);
+    const char *lights = ",\n\"lights\": [{\"type\": \"point\", \"position\": [150, 400, 200], "
+                         "\"intensity\": [30000, 30000, 20000]}, {\"type\": \"spot\", \"position\": [450, 500, 100], "
+                         "\"look_at\": [350, 0, 400], \"intensity\": [60000, 40000, 40000], \"cone_angle\": 25, "
+                         "\"cone_delta\": 10}]}";
+    memcpy(text + n - 1, lights, strlen(lights) + 1);
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_json_string(text, strlen(text), "cornell+delta", &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    CstRenderSettings st = sized(48, CST_FILTER_BOX);
+    three_way(s, &st, 48, 12, 1024, 256, 51, "delta lights");
+    Regions rp = regions(48, 12), rl = rp;
+    path_regions(s, &st, 1024, 61, &rp);
+    bidir_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 7000, &rl);
+    compare(&rp, &rl, "path (delta lights)", "light (delta lights)");
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -232,6 +264,7 @@ int main(void)
         cmocka_unit_test(test_max_depth_and_tent),
         cmocka_unit_test(test_through_glass),
         cmocka_unit_test(test_emitting_furnace),
+        cmocka_unit_test(test_delta_lights_cornell),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
