@@ -131,6 +131,18 @@ void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, 
     }
 }
 
+void film_add_splats_range(const SplatList *l, double *rgb, double scale, int32_t lo, int32_t hi)
+{
+    for (size_t i = 0; i < l->n; i++) {
+        const FilmSplat *s = &l->v[i];
+        if (s->pixel < lo || s->pixel >= hi) continue;
+        double *p = &rgb[3 * (size_t)s->pixel];
+        p[0] += scale * (double)s->r;
+        p[1] += scale * (double)s->g;
+        p[2] += scale * (double)s->b;
+    }
+}
+
 void film_add_splats(const SplatList *l, double *rgb, double scale)
 {
     for (size_t i = 0; i < l->n; i++) {

@@ -135,7 +135,8 @@ typedef struct RenderJob {
     /* Work units: tiles, or chunks of LIGHT_CHUNK light paths. units is the pass's
      * count: num_tiles or num_chunks. */
     int tiles_x, tiles_y, num_tiles, num_chunks, units;
-    bool chunk_pass; /* the pass in progress runs light_chunk, not render_tile */
+    enum { PASS_TILES, PASS_CHUNKS, PASS_MERGE } pass_kind; /* what the pass's units are */
+    int merge_units;  /* pixel ranges of a merge pass: one per thread */
     /* light tracing, BDPT and VCM: iterations of width x height light paths */
     bool light;
     LightParams light_params;
@@ -288,21 +289,26 @@ static int vcm_gather(RenderJob *job)
     return 1;
 }
 
-/* Adds the finished iteration to the film as one sample per pixel. The light tracer's
- * pixel estimate is (W H / paths) times the sum of its splats (splats are per unit film,
- * camera.c), and W H / paths = 1 with one path per pixel. Adding the iteration, not the
- * splats, as the sample keeps the film's sum of squares a per-pixel variance across
- * iterations; splats are summed in chunk order, so the floating-point sums do not depend
- * on which thread traced which chunk. */
-static void light_merge(RenderJob *job)
+/* Adds the finished iteration to the film as one sample per pixel, for the pixels
+ * [unit * P / units, (unit + 1) * P / units) of one unit of a merge pass. The light
+ * tracer's pixel estimate is (W H / paths) times the sum of its splats (splats are per
+ * unit film, camera.c), and W H / paths = 1 with one path per pixel. Adding the
+ * iteration, not the splats, as the sample keeps the film's sum of squares a per-pixel
+ * variance across iterations; splats are summed in chunk order, so the floating-point
+ * sums depend neither on which thread traced which chunk nor on how the pixels are split
+ * among the merging threads (one range per thread, run at once). */
+static void light_merge_range(RenderJob *job, int unit)
 {
     const size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
     const double scale = (double)pixels / (double)job->light_paths;
+    size_t lo = pixels * (size_t)unit / (size_t)job->merge_units;
+    size_t hi = pixels * (size_t)(unit + 1) / (size_t)job->merge_units;
     double *rgb = job->iteration_rgb;
     /* BDPT/VCM: the camera pass already wrote its pixel samples there. */
-    if (!job->vcm) memset(rgb, 0, 3 * pixels * sizeof *rgb);
-    for (int c = 0; c < job->num_chunks; c++) film_add_splats(&job->splats[c], rgb, scale);
-    for (size_t p = 0; p < pixels; p++)
+    if (!job->vcm) memset(rgb + 3 * lo, 0, 3 * (hi - lo) * sizeof *rgb);
+    for (int c = 0; c < job->num_chunks; c++)
+        film_add_splats_range(&job->splats[c], rgb, scale, (int32_t)lo, (int32_t)hi);
+    for (size_t p = lo; p < hi; p++)
         film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
 }
 
@@ -313,7 +319,8 @@ static void *worker_main(void *arg)
     for (;;) {
         int tile = atomic_fetch_add(&job->next_tile, 1);
         if (tile >= job->units) break;
-        if (job->chunk_pass) light_chunk(job, w, tile);
+        if (job->pass_kind == PASS_CHUNKS) light_chunk(job, w, tile);
+        else if (job->pass_kind == PASS_MERGE) light_merge_range(job, tile);
         else render_tile(job, w, tile);
         if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->units) {
             pthread_mutex_lock(&job->lock);
@@ -378,7 +385,7 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
         job->pass_first = first;
         job->pass_spp = count;
         job->units = job->num_tiles;
-        job->chunk_pass = false;
+        job->pass_kind = PASS_TILES;
         return run_pass(job, workers, threads, st, t0, done_before, fraction) ? CST_OK : CST_ERR_INTERNAL;
     }
     for (int k = 0; k < count; k++) {
@@ -388,7 +395,7 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
             vcm_iteration_init(&job->vcm_it, &job->vcm_params, &job->camera, job->light_paths,
                                job->vcm_radius, job->iteration);
         job->units = job->num_chunks;
-        job->chunk_pass = true;
+        job->pass_kind = PASS_CHUNKS;
         if (!run_pass(job, workers, threads, st, t0, f0, job->vcm ? 0.5 * f1 : f1))
             return CST_ERR_INTERNAL;
         for (int c = 0; c < job->num_chunks; c++)
@@ -399,11 +406,13 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
             job->pass_first = job->iteration;
             job->pass_spp = 1;
             job->units = job->num_tiles;
-            job->chunk_pass = false;
+            job->pass_kind = PASS_TILES;
             if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.5 * f1))
                 return CST_ERR_INTERNAL;
         }
-        light_merge(job);
+        job->units = job->merge_units = threads;
+        job->pass_kind = PASS_MERGE;
+        if (!run_pass(job, workers, threads, st, t0, f0 + f1, 0.0)) return CST_ERR_INTERNAL;
     }
     return CST_OK;
 }
