@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "film/filter.h"
 #include "film/image_io.h"
 
 Film *film_create(int width, int height)
@@ -110,6 +111,26 @@ void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, 
         int px = (int)floorf(x), py = (int)floorf(y);
         if (px < 0 || px >= width || py < 0 || py >= height) return;
         splat_push(l, py * width + px, c);
+        return;
+    }
+    if (filter == CST_FILTER_GAUSSIAN || filter == CST_FILTER_MITCHELL) {
+        /* Every pixel whose centre lies within the radius gets h(centre - (x, y)) c: the
+         * same normalised h the camera samples are weighted with (filter.c). */
+        const float r = filter_radius(filter);
+        int x0 = (int)ceilf(x - 0.5f - r), x1 = (int)floorf(x - 0.5f + r);
+        int y0 = (int)ceilf(y - 0.5f - r), y1 = (int)floorf(y - 0.5f + r);
+        if (x0 < 0) x0 = 0;
+        if (y0 < 0) y0 = 0;
+        if (x1 > width - 1) x1 = width - 1;
+        if (y1 > height - 1) y1 = height - 1;
+        for (int py = y0; py <= y1; py++) {
+            float wy = filter_weight1(filter, (float)py + 0.5f - y);
+            if (wy == 0.0f) continue;
+            for (int px = x0; px <= x1; px++) {
+                float wx = filter_weight1(filter, (float)px + 0.5f - x);
+                if (wx != 0.0f) splat_push(l, py * width + px, rgb_scale(c, wx * wy));
+            }
+        }
         return;
     }
     /* Pixel centres sit at k + 1/2; the tent 1 - |t| of the two nearest in each axis

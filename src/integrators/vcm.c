@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "film/filter.h"
 #include "materials/bsdf.h"
 
 /* The MIS exponent: the power heuristic. Applied to every factor of a ratio, which is
@@ -136,7 +137,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
                               const VcmIteration *it, const VcmVertex *v, const Bsdf *b,
                               Pcg32 *rng, SplatList *splats, uint64_t *rays)
 {
-    const float margin = vp->filter == CST_FILTER_TENT ? 0.5f : 0.0f;
+    const float margin = filter_radius(vp->filter) - 0.5f;
     Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
     CameraWiSample cs;
     if (!camera_sample_wi(cam, v->p, u_lens, margin, &cs)) return;

@@ -23,6 +23,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "film/film.h"
+#include "film/filter.h"
 #include "integrators/light.h"
 #include "integrators/path.h"
 #include "integrators/photon.h"
@@ -70,6 +71,8 @@ CstFilter cst_filter_from_name(const char *name)
 {
     if (strcmp(name, "box") == 0) return CST_FILTER_BOX;
     if (strcmp(name, "tent") == 0) return CST_FILTER_TENT;
+    if (strcmp(name, "gaussian") == 0) return CST_FILTER_GAUSSIAN;
+    if (strcmp(name, "mitchell") == 0) return CST_FILTER_MITCHELL;
     return CST_FILTER_DEFAULT;
 }
 
@@ -78,6 +81,8 @@ const char *cst_filter_name(CstFilter filter)
     switch (filter) {
     case CST_FILTER_BOX: return "box";
     case CST_FILTER_TENT: return "tent";
+    case CST_FILTER_GAUSSIAN: return "gaussian";
+    case CST_FILTER_MITCHELL: return "mitchell";
     case CST_FILTER_DEFAULT: break;
     }
     return "default";
@@ -131,6 +136,7 @@ typedef struct RenderJob {
     PhotonMaps photon_maps; /* built once per render, before the first pass */
     WhittedParams whitted_params;
     CstFilter filter;
+    Filter pixel_filter; /* its shape and sampling tables */
     uint64_t seed;
     /* Work units: tiles, or chunks of LIGHT_CHUNK light paths. units is the pass's
      * count: num_tiles or num_chunks. */
@@ -177,10 +183,15 @@ typedef struct Worker {
  * (radius 1 pixel) is applied by filter importance sampling (Ernst et al., "Filter
  * Importance Sampling", 2006): offsets drawn from the tent itself, every sample weight 1,
  * so each sample still lands in exactly one pixel's estimate. */
-static inline Vec2 film_position(CstFilter filter, int x, int y, Vec2 u)
+static inline Vec2 film_position(const Filter *filter, int x, int y, Vec2 u, float *weight)
 {
-    if (filter == CST_FILTER_TENT)
+    *weight = 1.0f;
+    if (filter->type == CST_FILTER_TENT)
         return v2((float)x + 0.5f + warp_tent(u.x), (float)y + 0.5f + warp_tent(u.y));
+    if (filter->type == CST_FILTER_GAUSSIAN || filter->type == CST_FILTER_MITCHELL) {
+        Vec2 d = filter_sample(filter, u, weight);
+        return v2((float)x + 0.5f + d.x, (float)y + 0.5f + d.y);
+    }
     return v2((float)x + u.x, (float)y + u.y);
 }
 
@@ -198,7 +209,8 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 pcg32_seed_sample(&rng, job->seed, (uint64_t)pixel, (uint64_t)s);
                 Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
                 Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
-                Vec2 fp = film_position(job->filter, x, y, uf);
+                float fw;
+                Vec2 fp = film_position(&job->pixel_filter, x, y, uf, &fw);
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
                 Rgb L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
                                                     &job->vcm_it, pixel, ray, &rng, &w->rays)
@@ -210,6 +222,7 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                     w->nonfinite++;
                     L = rgb_s(0.0f);
                 }
+                if (fw != 1.0f) L = rgb_scale(L, fw);
                 if (job->vcm) {
                     /* The iteration's image; light_merge adds the splats and files it. */
                     double *o = &job->iteration_rgb[3 * (size_t)pixel];
@@ -493,6 +506,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->whitted_params.light_samples = 1;
     job->params.rr_depth = st.rr_depth;
     job->filter = st.filter;
+    filter_init(&job->pixel_filter, st.filter);
     job->seed = st.seed;
     job->tiles_x = (st.width + RENDER_TILE - 1) / RENDER_TILE;
     job->tiles_y = (st.height + RENDER_TILE - 1) / RENDER_TILE;

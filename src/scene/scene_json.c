@@ -438,7 +438,7 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
         CstFilter f = cst_filter_from_name(s);
         if (f == CST_FILTER_DEFAULT) {
             char name[72];
-            return fail_here(ld, "unknown filter \"%s\"; expected one of: box, tent",
+            return fail_here(ld, "unknown filter \"%s\"; expected one of: box, tent, gaussian, mitchell",
                              clip_name(s, name));
         }
         rs->filter = f;
