@@ -384,9 +384,12 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
     Rgb L = rgb_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
-    /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. */
+    /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic
+     * camera cannot be connected to (camera.h): like a delta vertex, 0 drops the t = 1
+     * strategy from every weight. */
     SubPath sp = {rgb_s(1.0f), rgb_s(1.0f),
-                  mis((float)it->light_paths / camera_pdf_w(it, cos_theta)), 0.0f, 0.0f};
+                  camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
+                  0.0f, 0.0f};
     const VcmVertex *lv = it->vertices + it->path_start[path];
     const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
     const bool has_lights = s->emitter_sampler.lights > 0;

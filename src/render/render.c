@@ -366,6 +366,7 @@ static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRende
     atomic_store(&job->next_tile, 0);
     atomic_store(&job->tiles_done, 0);
     int started = 0;
+    if (threads > job->units) threads = job->units; /* idle workers would only cost their creation */
     for (; started < threads; started++)
         if (pthread_create(&workers[started].thread, NULL, worker_main, &workers[started]) != 0) break;
     if (started == 0) return 0;
@@ -486,6 +487,11 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
 
+    if (st.integrator == CST_INTEGRATOR_LIGHT && scene->camera.ortho_height > 0.0f)
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "the light tracer cannot render through an orthographic camera (its rays are "
+                        "parallel, so no light path can connect to it); expected a pinhole or thin-lens "
+                        "camera, or another integrator");
     Film *film = film_create(st.width, st.height);
     Worker *workers = calloc((size_t)st.threads, sizeof *workers);
     RenderJob *job = calloc(1, sizeof *job);
