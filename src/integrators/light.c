@@ -49,10 +49,11 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
 
     /* y0 seen directly: the only way this estimator renders visible emitters (delta
-     * lights are never seen). */
+     * lights are never seen, nor is the environment: it is no surface a connection could
+     * reach). */
     CameraWiSample cs;
     Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
-    if (!es.delta && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
+    if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
         const Emitter *e = &s->emitters[es.emitter];
         Rgb le = emitter_radiance(e, es.n, cs.wi);
         splat_if_visible(s, cam, lp, es.p, es.n, &cs,

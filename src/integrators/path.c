@@ -38,7 +38,17 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
     for (int depth = 0;; depth++) {
         SurfaceHit sh;
         ++*rays;
-        if (!scene_intersect(s, &ray, &sh)) break;
+        if (!scene_intersect(s, &ray, &sh)) {
+            /* The environment: counted like an emitter hit, with the same MIS against
+             * NEE's density of sampling this direction. */
+            Rgb le = light_env_radiance(&s->emitter_sampler, ray.d);
+            if (!rgb_is_black(le)) {
+                if (specular || pp->mode == PATH_BSDF) L = rgb_madd(L, beta, le);
+                else if (pp->mode == PATH_MIS)
+                    L = rgb_madd(L, beta, rgb_scale(le, power_heuristic(prev_pdf, light_env_pdf(&s->emitter_sampler, ray.d))));
+            }
+            break;
+        }
         Vec3 wo = v3_neg(ray.d);
 
         if (sh.emitter >= 0) {

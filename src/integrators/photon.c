@@ -116,7 +116,11 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
 {
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
         ++*rays;
-        if (!scene_intersect(s, &ray, sh)) return false;
+        if (!scene_intersect(s, &ray, sh)) {
+            /* The environment seen from the camera, directly or through the chain. */
+            if (le) *le = rgb_madd(*le, *beta, light_env_radiance(&s->emitter_sampler, ray.d));
+            return false;
+        }
         Vec3 wo = v3_neg(ray.d);
         if (le && sh->emitter >= 0)
             *le = rgb_madd(*le, *beta, emitter_radiance(&s->emitters[sh->emitter], sh->ng, wo));

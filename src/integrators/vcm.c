@@ -396,7 +396,22 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
     for (int t = 1;; t++) {
         SurfaceHit sh;
         ++*rays;
-        if (!scene_intersect(s, &ray, &sh)) break;
+        if (!scene_intersect(s, &ray, &sh)) {
+            /* s = 0 with the environment: an infinitely distant light, so its densities
+             * have no distance factor and the last segment's is not converted (tech.
+             * rep. sec. 5.1, SmallVCM's background). */
+            Rgb le = light_env_radiance(&s->emitter_sampler, ray.d);
+            if (!rgb_is_black(le)) {
+                float w = 1.0f;
+                if (t > 1) {
+                    float direct = light_env_pdf(&s->emitter_sampler, ray.d);
+                    float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
+                    w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
+                }
+                L = rgb_madd(L, sp.beta, rgb_scale(le, w));
+            }
+            break;
+        }
         Vec3 wo = v3_neg(ray.d);
         float cos_in = fabsf(v3_dot(sh.ng, wo));
         if (!(cos_in > 0.0f)) break;

@@ -30,7 +30,7 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
 {
     SurfaceHit sh;
     ++*rays;
-    if (!scene_intersect(s, &ray, &sh)) return rgb_s(0.0f);
+    if (!scene_intersect(s, &ray, &sh)) return light_env_radiance(&s->emitter_sampler, ray.d);
     Vec3 wo = v3_neg(ray.d);
     Rgb L = sh.emitter >= 0 ? emitter_radiance(&s->emitters[sh.emitter], sh.ng, wo) : rgb_s(0.0f);
 

@@ -33,7 +33,7 @@ float delta_light_power(const DeltaLight *l, float scene_radius)
 }
 
 CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, const DeltaLight *delta,
-                               int num_delta, Vec3 lo, Vec3 hi, CstError *err)
+                               int num_delta, const EnvMap *env, Vec3 lo, Vec3 hi, CstError *err)
 {
     memset(s, 0, sizeof *s);
     s->center = v3_scale(v3_add(lo, hi), 0.5f);
@@ -42,7 +42,8 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
     s->delta = delta;
     s->count = n;
     s->num_delta = num_delta;
-    s->lights = n + num_delta;
+    s->env = env;
+    s->lights = n + num_delta + (env ? 1 : 0);
     if (s->lights == 0) return CST_OK;
     float *w = malloc((size_t)s->lights * sizeof *w);
     s->pdf_a = malloc((size_t)(n > 0 ? n : 1) * sizeof *s->pdf_a);
@@ -56,6 +57,9 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
     for (int i = 0; i < n; i++)
         w[i] = CST_PI * emitters[i].area * rgb_luminance(emitters[i].radiance) * (emitters[i].two_sided ? 2.0f : 1.0f);
     for (int i = 0; i < num_delta; i++) w[n + i] = delta_light_power(&delta[i], s->radius);
+    /* The environment's flux through the scene's disk: pi R^2 times the integral of its
+     * luminance over the sphere (pbrt-v4's UniformInfiniteLight::Phi for a constant one). */
+    if (env) w[n + num_delta] = CST_PI * s->radius * s->radius * env->power;
     /* Lights of zero luminance (pure blue has 0.07, but a hand-written [0, 0, 1e-30]
      * might round to 0) still emit: give every light a floor so none is never picked. */
     double total = 0.0;
@@ -134,6 +138,23 @@ bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const Emi
         out->direct_pdf = out->pdf;
         return true;
     }
+    if (i == light_env_index(s)) {
+        /* From beyond the bounding sphere like a directional light, but a direction from
+         * the environment's distribution: not a delta, so MIS applies. */
+        float pdf_w;
+        out->wi = envmap_sample(s->env, u, &pdf_w);
+        if (!(pdf_w > 0.0f)) return false;
+        out->pdf = pmf * pdf_w;
+        out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
+        out->p = v3_madd(x, out->wi, out->dist);
+        out->n = v3_neg(out->wi);
+        out->li = envmap_eval(s->env, out->wi);
+        out->finite = false;
+        out->cos_light = 1.0f;
+        out->emit_pdf = out->pdf / (CST_PI * s->radius * s->radius);
+        out->direct_pdf = out->pdf;
+        return !rgb_is_black(out->li);
+    }
     const DeltaLight *l = &s->delta[i - s->count];
     out->delta = true;
     out->pdf = pmf;
@@ -198,6 +219,27 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
         out->finite = true;
         if (out->pdf_w > 0.0f)
             out->beta = rgb_scale(emitter_radiance(e, n, out->w), out->cos_l / (out->pdf_a * out->pdf_w));
+        return;
+    }
+    if (i == light_env_index(s)) {
+        /* A direction w_in toward the environment from its distribution (u_dir), the light
+         * travelling -w_in from a uniform point on the disk of the bounding sphere facing
+         * it, one radius upstream (u_pos): pbrt-v4 ImageInfiniteLight::SampleLe. */
+        float pdf_dir;
+        Vec3 w_in = envmap_sample(s->env, u_dir, &pdf_dir);
+        Frame f = frame_from_normal(w_in);
+        Vec2 d = warp_concentric_disk(u_pos);
+        Vec3 off = frame_to_world(&f, v3(d.x * s->radius, d.y * s->radius, 0.0f));
+        out->p = v3_add(v3_madd(s->center, w_in, s->radius), off);
+        out->w = v3_neg(w_in);
+        out->n = out->w;
+        float area = CST_PI * s->radius * s->radius;
+        out->pdf_a = pmf / area;
+        out->pdf_w = pdf_dir;
+        out->cos_l = 1.0f;
+        out->nee_pdf = pmf * pdf_dir;
+        out->finite = false;
+        if (pdf_dir > 0.0f) out->beta = rgb_scale(envmap_eval(s->env, w_in), area / (pmf * pdf_dir));
         return;
     }
     const DeltaLight *l = &s->delta[i - s->count];

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "geometry/sphere.h"
+#include "lights/envmap.h"
 #include "math/rgb.h"
 #include "sampling/distrib1d.h"
 
@@ -44,8 +45,9 @@ typedef struct EmitterSampler {
     float *pdf_a;    /* per area emitter */
     int count;       /* area emitters */
     int num_delta;   /* delta lights */
-    int lights;      /* count + num_delta: 0 = nothing to sample */
+    int lights;      /* count + num_delta (+ 1 with an environment): 0 = nothing to sample */
     const DeltaLight *delta; /* borrowed from the scene */
+    const EnvMap *env;       /* borrowed from the scene, or NULL; light index count + num_delta */
     Vec3 center;     /* the scene's bounding sphere: directional lights cover its disk */
     float radius;
 } EmitterSampler;
@@ -60,7 +62,7 @@ typedef struct EmitterGeometry {
 
 /* bounds_lo/hi: the scene's geometry bounds (directional lights' power and emission disk). */
 CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, const DeltaLight *delta,
-                               int num_delta, Vec3 bounds_lo, Vec3 bounds_hi, CstError *err);
+                               int num_delta, const EnvMap *env, Vec3 bounds_lo, Vec3 bounds_hi, CstError *err);
 void emitter_sampler_free(EmitterSampler *s);
 
 /* Radiance leaving the emitter at a point with geometric normal ng toward direction w
@@ -72,6 +74,18 @@ static inline Rgb emitter_radiance(const Emitter *e, Vec3 ng, Vec3 w)
 
 /* The area density of a point on area emitter e, selection included. */
 static inline float emitter_pdf_a(const EmitterSampler *s, int e) { return s->pdf_a[e]; }
+
+/* The environment: its radiance arriving from direction w (toward it; black without one),
+ * and NEE's density of sampling w per unit solid angle, selection included. */
+static inline Rgb light_env_radiance(const EmitterSampler *s, Vec3 w)
+{
+    return s->env ? envmap_eval(s->env, w) : rgb_s(0.0f);
+}
+static inline float light_env_pdf(const EmitterSampler *s, Vec3 w)
+{
+    return s->env ? s->by_power.pmf[s->count + s->num_delta] * envmap_pdf(s->env, w) : 0.0f;
+}
+static inline int light_env_index(const EmitterSampler *s) { return s->count + s->num_delta; }
 
 /* Next-event estimation at x: a light picked by power (u_sel) and, for an area emitter, a
  * uniform point on it (u). The estimate of direct light is f(wo, wi) li / pdf with the
@@ -125,7 +139,7 @@ typedef struct EmissionSample {
     float cos_l; /* |cos| between w and n: 1 for delta lights */
     float nee_pdf; /* the density with which NEE picks p: area: pdf_a; delta: the selection probability */
     bool delta;  /* a delta light: never hit, never connected to as a surface */
-    bool finite; /* false for directional lights */
+    bool finite; /* false for directional lights and the environment */
 } EmissionSample;
 
 void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,

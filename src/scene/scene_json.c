@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "film/image_io.h"
 #include "math/transform.h"
 #include "scene/json_locate.h"
 #include "scene/mesh_import.h"
@@ -1348,15 +1349,70 @@ static CstStatus parse_lights(Loader *ld, const json_t *lights)
     return CST_OK;
 }
 
+/* "environment": a constant radiance, or an equirectangular image (EXR, PFM or PNG,
+ * relative to the scene file) times a scale. */
+static CstStatus parse_environment(Loader *ld, const json_t *obj)
+{
+    static const char *const keys[] = {"radiance", "file", "scale"};
+    json_t *v;
+    LOADER_TRY(expect_object(ld, obj, "an object with radiance, or file and scale"));
+    LOADER_TRY(check_keys(ld, obj, keys, 3));
+    json_t *rad = json_object_get(obj, "radiance"), *file = json_object_get(obj, "file");
+    if (!rad == !file)
+        return fail_here(ld, "expected exactly one of radiance (a constant environment) and file "
+                             "(an equirectangular image)");
+    EnvMap env;
+    if (rad) {
+        if (json_object_get(obj, "scale")) {
+            path_push_key(ld, "scale");
+            return fail_here(ld, "scale goes with file; a constant environment is just its radiance");
+        }
+        Rgb L;
+        path_push_key(ld, "radiance");
+        LOADER_TRY(read_rgb(ld, rad, 0, &L));
+        path_pop(ld);
+        LOADER_TRY(envmap_init_constant(&env, L, ld->err));
+        return scene_set_environment(ld->scene, &env, ld->err);
+    }
+    Rgb scale = rgb_s(1.0f);
+    if ((v = json_object_get(obj, "scale"))) {
+        path_push_key(ld, "scale");
+        if (json_is_number(v)) {
+            float k;
+            LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &k));
+            if (!(k >= 0.0f)) return fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
+            scale = rgb_s(k);
+        } else {
+            LOADER_TRY(read_rgb(ld, v, 0, &scale));
+        }
+        path_pop(ld);
+    }
+    const char *name = NULL;
+    path_push_key(ld, "file");
+    LOADER_TRY(read_string(ld, file, &name));
+    if (!name[0]) return fail_here(ld, "the file name is empty; expected the path of an image");
+    char *path = resolve_mesh_path(ld->name, name);
+    if (!path) return fail_at(ld, CST_ERR_OOM, "out of memory");
+    float *rgb = NULL;
+    int w = 0, h = 0;
+    CstStatus st = image_read(path, &rgb, &w, &h, ld->err);
+    free(path);
+    if (st != CST_OK) return fail_builder(ld, st);
+    st = envmap_init_image(&env, rgb, w, h, scale, ld->err);
+    if (st != CST_OK) return fail_builder(ld, st);
+    path_pop(ld);
+    return scene_set_environment(ld->scene, &env, ld->err);
+}
+
 /* Sections are read in dependency order (materials before the shapes naming them), not
  * file order, so a file may list them in any order. */
 static CstStatus parse_root(Loader *ld, const json_t *root)
 {
     static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
-                                       "shapes", "lights", "accel"};
+                                       "shapes", "lights", "environment", "accel"};
     json_t *v;
     LOADER_TRY(expect_object(ld, root, "an object with the scene sections"));
-    LOADER_TRY(check_keys(ld, root, keys, 8));
+    LOADER_TRY(check_keys(ld, root, keys, 9));
     if ((v = json_object_get(root, "accel"))) {
         path_push_key(ld, "accel");
         const char *name = NULL;
@@ -1402,6 +1458,11 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
     if ((v = json_object_get(root, "lights"))) {
         path_push_key(ld, "lights");
         LOADER_TRY(parse_lights(ld, v));
+        path_pop(ld);
+    }
+    if ((v = json_object_get(root, "environment"))) {
+        path_push_key(ld, "environment");
+        LOADER_TRY(parse_environment(ld, v));
         path_pop(ld);
     }
     return CST_OK;

@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -393,6 +394,81 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
     scene_destroy(s);
 }
 
+/* A diffuse plane (albedo RHO, normal +y) under an equirectangular environment, seen at
+ * its origin by the 1-pixel camera: L = RHO/pi times the cosine-weighted integral of the
+ * map over the upper hemisphere, by exact quadrature per pixel (the map is piecewise
+ * constant; a pixel row from theta0 to theta1 contributes (2 pi / W) (sin^2 theta1 -
+ * sin^2 theta0) / 2 per unit radiance; the horizon is a row edge). The map has a small
+ * bright sun, so NEE, BSDF sampling and their MIS all matter. */
+static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
+{
+    enum { W = 64, H = 32 };
+    CstError err;
+    Scene *s = scene_create();
+    int plane_mat;
+    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
+    Vec3 plane[4] = {{-500, 0, -500}, {-500, 0, 500}, {500, 0, 500}, {500, 0, -500}};
+    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    float *rgb = malloc(W * H * 3 * sizeof *rgb);
+    assert_non_null(rgb);
+    double expected[3] = {0, 0, 0};
+    const double pi = 3.14159265358979323846;
+    for (int r = 0; r < H; r++)
+        for (int c = 0; c < W; c++) {
+            float *p = &rgb[3 * (r * W + c)];
+            float sky = 0.3f + 0.7f * (float)(H - r) / H;
+            p[0] = 0.4f * sky; p[1] = 0.6f * sky; p[2] = sky;
+            if (r == 5 && (c == 12 || c == 13)) { p[0] = 300.0f; p[1] = 250.0f; p[2] = 200.0f; }
+            if (r < H / 2) {
+                double t0 = pi * r / H, t1 = pi * (r + 1) / H;
+                double w = (2.0 * pi / W) * 0.5 * (sin(t1) * sin(t1) - sin(t0) * sin(t0));
+                for (int k = 0; k < 3; k++) expected[k] += (double)p[k] * w;
+            }
+        }
+    for (int k = 0; k < 3; k++) expected[k] *= (double)RHO / pi;
+    EnvMap env;
+    assert_int_equal(envmap_init_image(&env, rgb, W, H, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(scene_set_environment(s, &env, &err), CST_OK);
+    CameraDesc cam = {{0, 1.0f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = {0};
+    st.width = st.height = 1;
+    st.spp = spp;
+    st.integrator = integ;
+    st.seed = seed;
+    st.seed_set = 1;
+    st.threads = 2;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+    assert_int_equal(stats.nonfinite, 0);
+    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    for (int c = 0; c < 3; c++) {
+        double z = (r.mean[c] - expected[c]) / r.se[c];
+        if (!(fabs(z) <= Z_LIMIT))
+            fail_msg("%s under the environment: L = %.6f, quadrature %.6f (z = %.2f)", cst_integrator_name(integ),
+                     r.mean[c], expected[c], z);
+    }
+    print_message("%s under the environment: L = %.5f (se %.1e), quadrature %.5f\n", cst_integrator_name(integ),
+                  r.mean[0], r.se[0], expected[0]);
+    cst_film_destroy(f);
+    scene_destroy(s);
+}
+
+static void test_environment_irradiance(void **state)
+{
+    (void)state;
+    run_env_case(CST_INTEGRATOR_PATH, 1 << 18, 201);
+    run_env_case(CST_INTEGRATOR_PATH_NEE, 1 << 18, 202);
+    run_env_case(CST_INTEGRATOR_PATH_BSDF, 1 << 20, 203);
+    run_env_case(CST_INTEGRATOR_WHITTED, 1 << 18, 204);
+    run_env_case(CST_INTEGRATOR_PHOTON, 1 << 16, 205);
+    run_env_case(CST_INTEGRATOR_BDPT, 4096, 206);
+    run_env_case(CST_INTEGRATOR_VCM, 4096, 207);
+}
+
 static void test_delta_lights(void **state)
 {
     (void)state;
@@ -410,6 +486,7 @@ int main(void)
         cmocka_unit_test(test_rectangle_irradiance),
         cmocka_unit_test(test_rectangle_irradiance_bidir),
         cmocka_unit_test(test_delta_lights),
+        cmocka_unit_test(test_environment_irradiance),
         cmocka_unit_test(test_orthographic),
         cmocka_unit_test(test_light_tracer_irradiance),
     };

@@ -9,6 +9,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -256,6 +257,60 @@ static void test_delta_lights_cornell(void **state)
     cst_scene_destroy(s);
 }
 
+/* An environment map lighting a plane and a box, seen from above (the camera sees no sky,
+ * which light paths could not render): light paths start on the disk of the bounding
+ * sphere with directions from the map's distribution; camera paths escape into it; NEE
+ * samples it. The light tracer must agree too. */
+static void test_environment_scene(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    int white, red;
+    Material m = {MATERIAL_DIFFUSE, {0.7f, 0.7f, 0.7f}, 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &white, &err), CST_OK);
+    m.albedo = rgb(0.7f, 0.2f, 0.1f);
+    assert_int_equal(scene_add_material(s, &m, &red, &err), CST_OK);
+    /* Small, so that the light paths' disk (the bounding sphere's) is not much wider
+     * than what the camera sees, or the light tracer would have no power here. */
+    Vec3 plane[4] = {{-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}};
+    assert_int_equal(scene_add_quad(s, plane, white, NULL, &err), CST_OK);
+    /* A unit box on the plane, faces outward. */
+    const Vec3 b0 = {-0.5f, 0.0f, -0.5f}, b1 = {0.5f, 1.0f, 0.5f};
+    Vec3 faces[5][4] = {
+        {{b0.x, b1.y, b0.z}, {b0.x, b1.y, b1.z}, {b1.x, b1.y, b1.z}, {b1.x, b1.y, b0.z}}, /* top, +y */
+        {{b0.x, b0.y, b0.z}, {b0.x, b1.y, b0.z}, {b1.x, b1.y, b0.z}, {b1.x, b0.y, b0.z}}, /* -z */
+        {{b0.x, b0.y, b1.z}, {b1.x, b0.y, b1.z}, {b1.x, b1.y, b1.z}, {b0.x, b1.y, b1.z}}, /* +z */
+        {{b0.x, b0.y, b0.z}, {b0.x, b0.y, b1.z}, {b0.x, b1.y, b1.z}, {b0.x, b1.y, b0.z}}, /* -x */
+        {{b1.x, b0.y, b0.z}, {b1.x, b1.y, b0.z}, {b1.x, b1.y, b1.z}, {b1.x, b0.y, b1.z}}, /* +x */
+    };
+    for (int k = 0; k < 5; k++) assert_int_equal(scene_add_quad(s, faces[k], red, NULL, &err), CST_OK);
+    enum { W = 32, H = 16 };
+    float *rgb = malloc(W * H * 3 * sizeof *rgb);
+    assert_non_null(rgb);
+    for (int r = 0; r < H; r++)
+        for (int c = 0; c < W; c++) {
+            float *p = &rgb[3 * (r * W + c)];
+            float sky = 0.3f + 0.7f * (float)(H - r) / H;
+            p[0] = 0.5f * sky; p[1] = 0.6f * sky; p[2] = sky;
+            if (r == 3 && c == 5) { p[0] = 80.0f; p[1] = 70.0f; p[2] = 50.0f; }
+        }
+    EnvMap env;
+    assert_int_equal(envmap_init_image(&env, rgb, W, H, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(scene_set_environment(s, &env, &err), CST_OK);
+    CameraDesc cam = {{0.3f, 4.0f, -0.2f}, {0, 0, 0}, {0, 0, 1}, 50.0f, 0.0f, 1.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = sized(32, CST_FILTER_BOX);
+    three_way(s, &st, 32, 8, 1024, 256, 71, "environment");
+    Regions rp = regions(32, 8), rl = rp;
+    path_regions(s, &st, 1024, 81, &rp);
+    bidir_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 9000, &rl);
+    compare(&rp, &rl, "path (environment)", "light (environment)");
+    scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -265,6 +320,7 @@ int main(void)
         cmocka_unit_test(test_through_glass),
         cmocka_unit_test(test_emitting_furnace),
         cmocka_unit_test(test_delta_lights_cornell),
+        cmocka_unit_test(test_environment_scene),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

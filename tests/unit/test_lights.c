@@ -6,6 +6,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -160,11 +161,87 @@ static void test_nee_densities(void **state)
     scene_destroy(s);
 }
 
+/* A synthetic 64 x 32 environment: a sky gradient, a bright sun of a few pixels and a dark
+ * band, so the distribution has structure at every scale. Returns a malloc'd buffer. */
+static float *synthetic_env(int w, int h)
+{
+    float *rgb = malloc((size_t)w * (size_t)h * 3 * sizeof *rgb);
+    assert_non_null(rgb);
+    for (int r = 0; r < h; r++)
+        for (int c = 0; c < w; c++) {
+            float *p = &rgb[3 * ((size_t)r * (size_t)w + (size_t)c)];
+            float sky = 0.2f + 0.8f * (float)(h - r) / (float)h;
+            p[0] = 0.5f * sky; p[1] = 0.7f * sky; p[2] = sky;
+            if (r >= 6 && r < 8 && c >= 40 && c < 43) { p[0] = 200.0f; p[1] = 180.0f; p[2] = 150.0f; }
+            if (r >= 20 && r < 24) { p[0] = p[1] = p[2] = 0.0f; }
+        }
+    return rgb;
+}
+
+/* Environment sampling against its pdf: 10^6 directions into a (theta, phi) histogram
+ * twice as fine as the image in each direction (so cell edges fall on pixel edges and
+ * the density is smooth inside each cell), expected counts from envmap_pdf integrated
+ * with d omega = sin theta dtheta dphi on 4 x 4 midpoints per cell; cells expecting fewer
+ * than 5 pooled. Also every sample's reported pdf equals envmap_pdf of its direction. */
+static void test_envmap_chi2(void **state)
+{
+    (void)state;
+    EnvMap m;
+    CstError err;
+    assert_int_equal(envmap_init_image(&m, synthetic_env(64, 32), 64, 32, rgb_s(1.0f), &err), CST_OK);
+    enum { NT = 64, NP = 128, N = 1000000, SUB = 4 };
+    static double obs[NT * NP], expd[NT * NP];
+    memset(obs, 0, sizeof obs);
+    Pcg32 rng;
+    pcg32_seed(&rng, 21u, 4u);
+    for (int n = 0; n < N; n++) {
+        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        float pdf;
+        Vec3 w = envmap_sample(&m, u, &pdf);
+        if (!(pdf == envmap_pdf(&m, w))) fail_msg("sample %d: pdf %g, envmap_pdf %g", n, (double)pdf, (double)envmap_pdf(&m, w));
+        double theta = acos(fmax(-1.0, fmin(1.0, (double)w.y))), phi = atan2((double)w.z, (double)w.x);
+        if (phi < 0.0) phi += 2.0 * PI_D;
+        int i = (int)(theta / PI_D * NT), j = (int)(phi / (2.0 * PI_D) * NP);
+        i = i < 0 ? 0 : i >= NT ? NT - 1 : i;
+        j = j < 0 ? 0 : j >= NP ? NP - 1 : j;
+        obs[i * NP + j] += 1.0;
+    }
+    double total = 0.0;
+    for (int i = 0; i < NT; i++)
+        for (int j = 0; j < NP; j++) {
+            double sum = 0.0;
+            for (int a = 0; a < SUB; a++)
+                for (int b = 0; b < SUB; b++) {
+                    double th = PI_D * (i + (a + 0.5) / SUB) / NT, phi = 2.0 * PI_D * (j + (b + 0.5) / SUB) / NP;
+                    Vec3 w = v3((float)(sin(th) * cos(phi)), (float)cos(th), (float)(sin(th) * sin(phi)));
+                    sum += (double)envmap_pdf(&m, w) * sin(th);
+                }
+            expd[i * NP + j] = sum / (SUB * SUB) * (PI_D / NT) * (2.0 * PI_D / NP) * N;
+            total += expd[i * NP + j];
+        }
+    print_message("  environment map: pdf integrates to %.5f\n", total / N);
+    assert_true(fabs(total / N - 1.0) < 2e-3);
+    double chi2 = 0.0, pool_o = 0.0, pool_e = 0.0;
+    int dof = -1;
+    for (int k = 0; k < NT * NP; k++) {
+        if (expd[k] < 5.0) { pool_o += obs[k]; pool_e += expd[k]; continue; }
+        chi2 += (obs[k] - expd[k]) * (obs[k] - expd[k]) / expd[k];
+        dof++;
+    }
+    if (pool_e > 0.0) { chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e; dof++; }
+    else assert_true(pool_o == 0.0);
+    double p = gamma_q(0.5 * dof, 0.5 * chi2);
+    print_message("  environment map: chi2 = %.1f, dof %d, p = %.4f\n", chi2, dof, p);
+    assert_true(p > 0.01);
+    envmap_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_selection_by_power),
         cmocka_unit_test(test_nee_densities),
+        cmocka_unit_test(test_envmap_chi2),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
