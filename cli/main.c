@@ -883,8 +883,8 @@ static const struct { const char *name; VerifyJudge judge; } CLI_VERIFY_JUDGES[]
     {"whitted", VERIFY_EXACT},
     {"photon", VERIFY_CONVERGE_PHOTONS},
     {"sppm", VERIFY_CONVERGE_SPP},
-    /* to come: {"bdpt", VERIFY_EXACT}, {"vcm", VERIFY_CONVERGE_SPP} (if --spp counts its
-     * iterations, whose merging radius shrinks) */
+    {"bdpt", VERIFY_EXACT},
+    {"vcm", VERIFY_CONVERGE_SPP}, /* --spp counts iterations; the merging radius shrinks over them */
 };
 
 static VerifyJudge cli_verify_judge(CstIntegrator id)

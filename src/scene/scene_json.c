@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "film/image_io.h"
 #include "math/transform.h"
 #include "scene/json_locate.h"
 #include "scene/mesh_import.h"
@@ -438,7 +439,7 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
         CstFilter f = cst_filter_from_name(s);
         if (f == CST_FILTER_DEFAULT) {
             char name[72];
-            return fail_here(ld, "unknown filter \"%s\"; expected one of: box, tent",
+            return fail_here(ld, "unknown filter \"%s\"; expected one of: box, tent, gaussian, mitchell",
                              clip_name(s, name));
         }
         rs->filter = f;
@@ -464,19 +465,21 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
     return CST_OK;
 }
 
-enum { CAMERA_PINHOLE, CAMERA_THINLENS };
+enum { CAMERA_PINHOLE, CAMERA_THINLENS, CAMERA_ORTHOGRAPHIC };
 
 static CstStatus parse_camera(Loader *ld, const json_t *cam)
 {
-    static const char *const types[] = {"pinhole", "thinlens"};
+    static const char *const types[] = {"pinhole", "thinlens", "orthographic"};
     static const char *const keys[] = {"type", "position", "look_at", "up", "fov",
                                        "aperture_radius", "focus_distance"};
+    static const char *const ortho_keys[] = {"type", "position", "look_at", "up", "height"};
     int type = 0;
     json_t *v;
     LOADER_TRY(expect_object(ld, cam, "a camera object"));
-    LOADER_TRY(read_type(ld, cam, "camera type", types, 2, CAMERA_PINHOLE, &type));
+    LOADER_TRY(read_type(ld, cam, "camera type", types, 3, CAMERA_PINHOLE, &type));
     /* The lens keys mean nothing to a pinhole: reject rather than ignore them. */
-    LOADER_TRY(check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 7 : 5));
+    if (type == CAMERA_ORTHOGRAPHIC) LOADER_TRY(check_keys(ld, cam, ortho_keys, 5));
+    else LOADER_TRY(check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 7 : 5));
 
     CameraDesc desc = {0};
     desc.up = v3(0.0f, 1.0f, 0.0f);
@@ -513,6 +516,19 @@ static CstStatus parse_camera(Loader *ld, const json_t *cam)
                          (double)desc.up.x, (double)desc.up.y, (double)desc.up.z);
     }
 
+    if (type == CAMERA_ORTHOGRAPHIC) {
+        LOADER_TRY(member_required(ld, cam, "height", "the view's height in scene units, > 0", &v));
+        path_push_key(ld, "height");
+        LOADER_TRY(read_float(ld, v, LOADER_MAX_LENGTH, &desc.ortho_height));
+        if (!(desc.ortho_height > 0.0f))
+            return fail_here(ld, "height %g is not positive; expected the view's height in scene units, > 0",
+                             (double)desc.ortho_height);
+        path_pop(ld);
+        desc.vfov_deg = 0.0f;
+        desc.focus_distance = dist;
+        scene_set_camera(ld->scene, &desc);
+        return CST_OK;
+    }
     LOADER_TRY(member_required(ld, cam, "fov",
                                "the vertical field of view in degrees, in (0, 180)", &v));
     path_push_key(ld, "fov");
@@ -563,7 +579,7 @@ static CstStatus parse_integrator(Loader *ld, const json_t *integ)
         if (t == CST_INTEGRATOR_DEFAULT) {
             char name[72];
             return fail_here(ld, "unknown integrator \"%s\"; expected one of: path, path-nee, "
-                                 "path-bsdf, light, whitted, photon, sppm",
+                                 "path-bsdf, light, whitted, photon, sppm, bdpt, vcm",
                              clip_name(s, name));
         }
         rs->integrator = t;
@@ -1231,15 +1247,172 @@ static CstStatus parse_shapes(Loader *ld, const json_t *shapes)
     return CST_OK;
 }
 
+/* A unit direction from a vector that must not be zero. */
+static CstStatus read_direction(Loader *ld, const json_t *v, Vec3 *out)
+{
+    Vec3 d;
+    LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &d));
+    float len = v3_length(d);
+    if (!(len > 0.0f) || !isfinite(len))
+        return fail_here(ld, "direction [%g, %g, %g] has no length; expected a nonzero vector",
+                         (double)d.x, (double)d.y, (double)d.z);
+    *out = v3_scale(d, 1.0f / len);
+    return CST_OK;
+}
+
+static CstStatus read_angle(Loader *ld, const json_t *obj, const char *key, float dflt, float lo,
+                            float hi, float *out)
+{
+    json_t *v = json_object_get(obj, key);
+    *out = dflt;
+    if (!v) return CST_OK;
+    path_push_key(ld, key);
+    LOADER_TRY(read_float(ld, v, (double)FLT_MAX, out));
+    if (!(*out >= lo && *out <= hi))
+        return fail_here(ld, "%s %g is out of range; expected degrees from %g to %g", key, (double)*out,
+                         (double)lo, (double)hi);
+    path_pop(ld);
+    return CST_OK;
+}
+
+/* "lights": point, spot and directional lights (area lights are shapes with "emission"). */
+static CstStatus parse_light(Loader *ld, const json_t *obj)
+{
+    static const char *const types[] = {"point", "spot", "directional"};
+    static const char *const point_keys[] = {"type", "position", "intensity"};
+    static const char *const spot_keys[] = {"type", "position", "look_at", "intensity", "cone_angle",
+                                            "cone_delta"};
+    static const char *const dir_keys[] = {"type", "direction", "irradiance"};
+    int type = 0;
+    json_t *v;
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    LOADER_TRY(expect_object(ld, obj, "a light object"));
+    LOADER_TRY(read_type(ld, obj, "light type", types, 3, -1, &type));
+    if (type == 2) {
+        LOADER_TRY(check_keys(ld, obj, dir_keys, 3));
+        l.type = DELTA_DIRECTIONAL;
+        LOADER_TRY(member_required(ld, obj, "direction", "the direction the light travels, 3 numbers", &v));
+        path_push_key(ld, "direction");
+        LOADER_TRY(read_direction(ld, v, &l.dir));
+        path_pop(ld);
+        LOADER_TRY(member_required(ld, obj, "irradiance", "an array of 3 numbers >= 0", &v));
+        path_push_key(ld, "irradiance");
+        LOADER_TRY(read_rgb(ld, v, 0, &l.intensity));
+        path_pop(ld);
+    } else {
+        LOADER_TRY(check_keys(ld, obj, type == 0 ? point_keys : spot_keys, type == 0 ? 3 : 6));
+        l.type = type == 0 ? DELTA_POINT : DELTA_SPOT;
+        LOADER_TRY(member_required(ld, obj, "position", "the light's position, 3 numbers", &v));
+        path_push_key(ld, "position");
+        LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &l.p));
+        path_pop(ld);
+        LOADER_TRY(member_required(ld, obj, "intensity", "an array of 3 numbers >= 0 (W/sr)", &v));
+        path_push_key(ld, "intensity");
+        LOADER_TRY(read_rgb(ld, v, 0, &l.intensity));
+        path_pop(ld);
+        if (type == 1) {
+            Vec3 at;
+            LOADER_TRY(member_required(ld, obj, "look_at", "the point the spot's axis goes through", &v));
+            path_push_key(ld, "look_at");
+            LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &at));
+            Vec3 d = v3_sub(at, l.p);
+            float len = v3_length(d);
+            if (!(len > 0.0f) || !isfinite(len))
+                return fail_here(ld, "look_at equals position; expected a point away from the light");
+            l.dir = v3_scale(d, 1.0f / len);
+            path_pop(ld);
+            /* pbrt-v4's parameters: the cone's half-angle, and how much of it the falloff
+             * takes at its edge. */
+            float cone, delta;
+            LOADER_TRY(read_angle(ld, obj, "cone_angle", 30.0f, 0.001f, 90.0f, &cone));
+            LOADER_TRY(read_angle(ld, obj, "cone_delta", 5.0f, 0.0f, cone, &delta));
+            l.cos_outer = cosf(cone * (CST_PI / 180.0f));
+            l.cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
+        }
+    }
+    return scene_add_delta_light(ld->scene, &l, ld->err);
+}
+
+static CstStatus parse_lights(Loader *ld, const json_t *lights)
+{
+    char kind[48];
+    if (!json_is_array(lights))
+        return fail_here(ld, "got %s; expected an array of lights", describe(lights, kind));
+    size_t i;
+    json_t *light;
+    json_array_foreach(lights, i, light) {
+        path_push_index(ld, i);
+        LOADER_TRY(parse_light(ld, light));
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
+/* "environment": a constant radiance, or an equirectangular image (EXR, PFM or PNG,
+ * relative to the scene file) times a scale. */
+static CstStatus parse_environment(Loader *ld, const json_t *obj)
+{
+    static const char *const keys[] = {"radiance", "file", "scale"};
+    json_t *v;
+    LOADER_TRY(expect_object(ld, obj, "an object with radiance, or file and scale"));
+    LOADER_TRY(check_keys(ld, obj, keys, 3));
+    json_t *rad = json_object_get(obj, "radiance"), *file = json_object_get(obj, "file");
+    if (!rad == !file)
+        return fail_here(ld, "expected exactly one of radiance (a constant environment) and file "
+                             "(an equirectangular image)");
+    EnvMap env;
+    if (rad) {
+        if (json_object_get(obj, "scale")) {
+            path_push_key(ld, "scale");
+            return fail_here(ld, "scale goes with file; a constant environment is just its radiance");
+        }
+        Rgb L;
+        path_push_key(ld, "radiance");
+        LOADER_TRY(read_rgb(ld, rad, 0, &L));
+        path_pop(ld);
+        LOADER_TRY(envmap_init_constant(&env, L, ld->err));
+        return scene_set_environment(ld->scene, &env, ld->err);
+    }
+    Rgb scale = rgb_s(1.0f);
+    if ((v = json_object_get(obj, "scale"))) {
+        path_push_key(ld, "scale");
+        if (json_is_number(v)) {
+            float k;
+            LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &k));
+            if (!(k >= 0.0f)) return fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
+            scale = rgb_s(k);
+        } else {
+            LOADER_TRY(read_rgb(ld, v, 0, &scale));
+        }
+        path_pop(ld);
+    }
+    const char *name = NULL;
+    path_push_key(ld, "file");
+    LOADER_TRY(read_string(ld, file, &name));
+    if (!name[0]) return fail_here(ld, "the file name is empty; expected the path of an image");
+    char *path = resolve_mesh_path(ld->name, name);
+    if (!path) return fail_at(ld, CST_ERR_OOM, "out of memory");
+    float *rgb = NULL;
+    int w = 0, h = 0;
+    CstStatus st = image_read(path, &rgb, &w, &h, ld->err);
+    free(path);
+    if (st != CST_OK) return fail_builder(ld, st);
+    st = envmap_init_image(&env, rgb, w, h, scale, ld->err);
+    if (st != CST_OK) return fail_builder(ld, st);
+    path_pop(ld);
+    return scene_set_environment(ld->scene, &env, ld->err);
+}
+
 /* Sections are read in dependency order (materials before the shapes naming them), not
  * file order, so a file may list them in any order. */
 static CstStatus parse_root(Loader *ld, const json_t *root)
 {
     static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
-                                       "shapes", "accel"};
+                                       "shapes", "lights", "environment", "accel"};
     json_t *v;
     LOADER_TRY(expect_object(ld, root, "an object with the scene sections"));
-    LOADER_TRY(check_keys(ld, root, keys, 7));
+    LOADER_TRY(check_keys(ld, root, keys, 9));
     if ((v = json_object_get(root, "accel"))) {
         path_push_key(ld, "accel");
         const char *name = NULL;
@@ -1282,6 +1455,16 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
     path_push_key(ld, "shapes");
     LOADER_TRY(parse_shapes(ld, v));
     path_pop(ld);
+    if ((v = json_object_get(root, "lights"))) {
+        path_push_key(ld, "lights");
+        LOADER_TRY(parse_lights(ld, v));
+        path_pop(ld);
+    }
+    if ((v = json_object_get(root, "environment"))) {
+        path_push_key(ld, "environment");
+        LOADER_TRY(parse_environment(ld, v));
+        path_pop(ld);
+    }
     return CST_OK;
 }
 

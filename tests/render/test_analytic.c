@@ -5,6 +5,8 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
 #include <cmocka.h>
 
 #include "render/render_util.h"
@@ -61,20 +63,20 @@ static Scene *plane_under_light(double a, double b, double h)
 
 /* Radiance leaving a diffuse plane of albedo rho at the point below an a x b emitter's
  * centre: L_o = rho E / pi = rho L * 4 F(a/2, b/2, h). */
-static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t seed)
+static void run_case_spp(CstIntegrator integ, double a, double b, double h, uint64_t seed, int spp)
 {
     CstError err;
     Scene *s = plane_under_light(a, b, h);
     float fh = (float)h;
     /* A pinhole (which blocks nothing) between the two, looking straight down with a
      * field of view so narrow that the pixel sees a single point of the plane. */
-    CameraDesc cam = {{0, fh * 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f};
+    CameraDesc cam = {{0, fh * 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
 
     CstRenderSettings st = {0};
     st.width = st.height = 1;
-    st.spp = 1 << 20;
+    st.spp = spp;
     st.integrator = integ;
     st.seed = seed;
     st.seed_set = 1;
@@ -92,6 +94,11 @@ static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t
     }
     cst_film_destroy(f);
     scene_destroy(s);
+}
+
+static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t seed)
+{
+    run_case_spp(integ, a, b, h, seed, 1 << 20);
 }
 
 /* The light tracer cannot render the single-point view above (a vertex would have to land
@@ -157,7 +164,7 @@ static void run_light_case(double a, double b, double h, CstFilter filter, int i
 {
     CstError err;
     Scene *s = plane_under_light(a, b, h);
-    CameraDesc cam = {{0, (float)(h * 0.5), 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
+    CameraDesc cam = {{0, (float)(h * 0.5), 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     CstRenderSettings st = {0};
@@ -235,10 +242,252 @@ static void test_rectangle_irradiance(void **state)
     }
 }
 
+/* An orthographic camera of view height h at height h/2 looking straight down sees the
+ * plane point (-(2x/W - 1) h/2, (1 - 2y/H) h/2) at raster (x, y): the mapping of
+ * run_light_case's 90-degree perspective view, so the same closed form holds per pixel.
+ * Its rays are parallel, so no light path can connect to it; BDPT and VCM must drop that
+ * strategy from their weights and still converge. */
+static void run_ortho_case(CstIntegrator integ, double a, double b, double h, int spp, uint64_t seed)
+{
+    CstError err;
+    Scene *s = plane_under_light(a, b, h);
+    CameraDesc cam = {{0, (float)(h * 0.5), 0}, {0, 0, 0}, {0, 0, 1}, 0.0f, 0.0f, 1.0f, (float)h};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = {0};
+    st.width = st.height = LT_SIZE;
+    st.spp = spp;
+    st.integrator = integ;
+    st.seed = seed;
+    st.seed_set = 1;
+    st.threads = 2;
+    /* VCM's default radius is 0.003 of the scene's bounding sphere, here the 100 x 100
+     * plane's: 0.21, a fifth of the view, whose blur of the falloff under the light would
+     * be a bias of 2% (measured) where merging takes the weight that light tracing has
+     * with a perspective camera. A radius at the scale of the view keeps it negligible. */
+    st.photon_radius = 0.005;
+    int rect[LT_REGIONS][4];
+    light_regions(rect);
+    const int count = LT_REGIONS - 4;
+    RegionStat r[LT_REGIONS];
+    if (integ == CST_INTEGRATOR_PATH) {
+        CstFilm *f = NULL;
+        CstRenderStats stats;
+        assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+        for (int i = 0; i < count; i++) r[i] = region_stat(f, rect[i][0], rect[i][1], rect[i][2], rect[i][3]);
+        cst_film_destroy(f);
+    } else {
+        CstRenderSettings one = st;
+        one.spp = 1;
+        if (region_stats_by_render(s, &one, spp, seed, count, (const int (*)[4])rect, r, NULL, &err) != CST_OK)
+            fail_msg("%s", err.msg);
+    }
+    double worst = 0.0;
+    for (int i = 0; i < count; i++) {
+        double expected = 0.0;
+        for (int y = rect[i][1]; y < rect[i][3]; y++)
+            for (int x = rect[i][0]; x < rect[i][2]; x++) expected += expected_pixel(a, b, h, CST_FILTER_BOX, x, y);
+        expected /= (double)(rect[i][2] - rect[i][0]) * (double)(rect[i][3] - rect[i][1]);
+        for (int c = 0; c < 3; c++) {
+            double z = (r[i].mean[c] - expected) / r[i].se[c];
+            if (fabs(z) > fabs(worst)) worst = z;
+            if (!(fabs(z) <= Z_LIMIT))
+                fail_msg("%s (orthographic) region %d: L = %.6f, closed form %.6f (z = %.2f)",
+                         cst_integrator_name(integ), i, r[i].mean[c], expected, z);
+        }
+    }
+    print_message("%s (orthographic): whole image %.5f, largest |z| = %.2f\n", cst_integrator_name(integ),
+                  r[0].mean[0], fabs(worst));
+    /* The light tracer has no way to the camera: a clear error, not a black image. */
+    st.integrator = CST_INTEGRATOR_LIGHT;
+    CstFilm *f = NULL;
+    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_INVALID_ARG);
+    scene_destroy(s);
+}
+
+static void test_orthographic(void **state)
+{
+    (void)state;
+    run_ortho_case(CST_INTEGRATOR_PATH, 1.0, 1.0, 1.0, 1024, 81);
+    run_ortho_case(CST_INTEGRATOR_BDPT, 1.0, 1.0, 1.0, 256, 82000);
+    run_ortho_case(CST_INTEGRATOR_VCM, 1.0, 1.0, 1.0, 256, 83000);
+}
+
+/* BDPT and VCM run one light and one camera path per iteration on this 1-pixel film, and
+ * an iteration has a fixed cost, so they get fewer samples (their error bars say so). */
+static void test_rectangle_irradiance_bidir(void **state)
+{
+    (void)state;
+    const CstIntegrator v[] = {CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
+    for (int i = 0; i < 2; i++) {
+        run_case_spp(v[i], 1.0, 1.0, 1.0, 51 + i, 4096);
+        run_case_spp(v[i], 4.0, 0.5, 0.7, 61 + i, 4096);
+        run_case_spp(v[i], 0.2, 0.3, 2.0, 71 + i, 4096);
+    }
+}
+
+/* Delta lights over the plane y = 0 (albedo RHO) seen at its origin by the 1-pixel camera:
+ * a point light of intensity I at height h gives L = RHO/pi I / h^2; a spot there whose
+ * axis is tilted by 25 degrees, with a 30-degree cone and a 10-degree falloff, gives that
+ * times pbrt-v4's smoothstep falloff at 25 degrees; a directional light of irradiance E
+ * at 30 degrees from the normal gives RHO/pi E cos 30. No other geometry: direct light is
+ * all there is. NEE of a delta light has no variance, so the check allows float rounding
+ * (1e-5 relative) besides 4 standard errors. */
+static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed)
+{
+    CstError err;
+    Scene *s = scene_create();
+    int plane_mat;
+    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
+    Vec3 plane[4] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
+    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    const double h = 2.0, I = 5.0, E = 1.5, pi = 3.14159265358979323846;
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    double expected = 0.0;
+    if (kind == 0) {
+        l.type = DELTA_POINT;
+        l.p = v3(0, (float)h, 0);
+        l.intensity = rgb_s((float)I);
+        expected = (double)RHO / pi * I / (h * h);
+    } else if (kind == 1) {
+        const double tilt = 25.0 * pi / 180.0, cone = 30.0 * pi / 180.0, inner = 20.0 * pi / 180.0;
+        l.type = DELTA_SPOT;
+        l.p = v3(0, (float)h, 0);
+        l.dir = v3((float)sin(tilt), (float)-cos(tilt), 0);
+        l.intensity = rgb_s((float)I);
+        l.cos_outer = (float)cos(cone);
+        l.cos_inner = (float)cos(inner);
+        double t = (cos(tilt) - cos(cone)) / (cos(inner) - cos(cone));
+        expected = (double)RHO / pi * I * t * t * (3.0 - 2.0 * t) / (h * h);
+    } else {
+        const double beta = 30.0 * pi / 180.0;
+        l.type = DELTA_DIRECTIONAL;
+        l.dir = v3((float)sin(beta), (float)-cos(beta), 0);
+        l.intensity = rgb_s((float)E);
+        expected = (double)RHO / pi * E * cos(beta);
+    }
+    assert_int_equal(scene_add_delta_light(s, &l, &err), CST_OK);
+    CameraDesc cam = {{0, 1.0f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = {0};
+    st.width = st.height = 1;
+    st.spp = spp;
+    st.integrator = integ;
+    st.seed = seed;
+    st.seed_set = 1;
+    st.threads = 2;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+    assert_int_equal(stats.nonfinite, 0);
+    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    for (int c = 0; c < 3; c++)
+        if (!(fabs(r.mean[c] - expected) <= Z_LIMIT * r.se[c] + 1e-5 * expected))
+            fail_msg("%s, light kind %d: L = %.7f, closed form %.7f (se %.2g)", cst_integrator_name(integ), kind,
+                     r.mean[c], expected, r.se[c]);
+    print_message("%s, light kind %d: L = %.6f (se %.1e), closed form %.6f\n", cst_integrator_name(integ), kind,
+                  r.mean[0], r.se[0], expected);
+    cst_film_destroy(f);
+    scene_destroy(s);
+}
+
+/* A diffuse plane (albedo RHO, normal +y) under an equirectangular environment, seen at
+ * its origin by the 1-pixel camera: L = RHO/pi times the cosine-weighted integral of the
+ * map over the upper hemisphere, by exact quadrature per pixel (the map is piecewise
+ * constant; a pixel row from theta0 to theta1 contributes (2 pi / W) (sin^2 theta1 -
+ * sin^2 theta0) / 2 per unit radiance; the horizon is a row edge). The map has a small
+ * bright sun, so NEE, BSDF sampling and their MIS all matter. */
+static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
+{
+    enum { W = 64, H = 32 };
+    CstError err;
+    Scene *s = scene_create();
+    int plane_mat;
+    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
+    Vec3 plane[4] = {{-500, 0, -500}, {-500, 0, 500}, {500, 0, 500}, {500, 0, -500}};
+    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    float *rgb = malloc(W * H * 3 * sizeof *rgb);
+    assert_non_null(rgb);
+    double expected[3] = {0, 0, 0};
+    const double pi = 3.14159265358979323846;
+    for (int r = 0; r < H; r++)
+        for (int c = 0; c < W; c++) {
+            float *p = &rgb[3 * (r * W + c)];
+            float sky = 0.3f + 0.7f * (float)(H - r) / H;
+            p[0] = 0.4f * sky; p[1] = 0.6f * sky; p[2] = sky;
+            if (r == 5 && (c == 12 || c == 13)) { p[0] = 300.0f; p[1] = 250.0f; p[2] = 200.0f; }
+            if (r < H / 2) {
+                double t0 = pi * r / H, t1 = pi * (r + 1) / H;
+                double w = (2.0 * pi / W) * 0.5 * (sin(t1) * sin(t1) - sin(t0) * sin(t0));
+                for (int k = 0; k < 3; k++) expected[k] += (double)p[k] * w;
+            }
+        }
+    for (int k = 0; k < 3; k++) expected[k] *= (double)RHO / pi;
+    EnvMap env;
+    assert_int_equal(envmap_init_image(&env, rgb, W, H, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(scene_set_environment(s, &env, &err), CST_OK);
+    CameraDesc cam = {{0, 1.0f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = {0};
+    st.width = st.height = 1;
+    st.spp = spp;
+    st.integrator = integ;
+    st.seed = seed;
+    st.seed_set = 1;
+    st.threads = 2;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+    assert_int_equal(stats.nonfinite, 0);
+    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    for (int c = 0; c < 3; c++) {
+        double z = (r.mean[c] - expected[c]) / r.se[c];
+        if (!(fabs(z) <= Z_LIMIT))
+            fail_msg("%s under the environment: L = %.6f, quadrature %.6f (z = %.2f)", cst_integrator_name(integ),
+                     r.mean[c], expected[c], z);
+    }
+    print_message("%s under the environment: L = %.5f (se %.1e), quadrature %.5f\n", cst_integrator_name(integ),
+                  r.mean[0], r.se[0], expected[0]);
+    cst_film_destroy(f);
+    scene_destroy(s);
+}
+
+static void test_environment_irradiance(void **state)
+{
+    (void)state;
+    run_env_case(CST_INTEGRATOR_PATH, 1 << 18, 201);
+    run_env_case(CST_INTEGRATOR_PATH_NEE, 1 << 18, 202);
+    run_env_case(CST_INTEGRATOR_PATH_BSDF, 1 << 20, 203);
+    run_env_case(CST_INTEGRATOR_WHITTED, 1 << 18, 204);
+    run_env_case(CST_INTEGRATOR_PHOTON, 1 << 16, 205);
+    run_env_case(CST_INTEGRATOR_BDPT, 4096, 206);
+    run_env_case(CST_INTEGRATOR_VCM, 4096, 207);
+}
+
+static void test_delta_lights(void **state)
+{
+    (void)state;
+    const CstIntegrator v[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_NEE, CST_INTEGRATOR_WHITTED,
+                               CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_BDPT,
+                               CST_INTEGRATOR_VCM};
+    for (int i = 0; i < 7; i++)
+        for (int kind = 0; kind < 3; kind++)
+            run_delta_case(v[i], kind, v[i] >= CST_INTEGRATOR_SPPM ? 1024 : 65536, 100 + 10 * (uint64_t)i + (uint64_t)kind);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rectangle_irradiance),
+        cmocka_unit_test(test_rectangle_irradiance_bidir),
+        cmocka_unit_test(test_delta_lights),
+        cmocka_unit_test(test_environment_irradiance),
+        cmocka_unit_test(test_orthographic),
         cmocka_unit_test(test_light_tracer_irradiance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,0 +1,247 @@
+/* Light selection: every light (area emitters, point, spot, directional) is picked with
+ * probability proportional to its power, checked by a chi-square test of 10^6 picks against
+ * powers computed here from their closed forms; and the densities NEE reports agree with
+ * those probabilities. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "core/rng.h"
+#include "render/render_util.h"
+#include "scene/scene.h"
+
+#define PI_D 3.14159265358979323846
+
+/* Regularised upper incomplete gamma Q(a, x) for the chi-square survival function, by the
+ * series of P for x < a + 1, else the continued fraction (Numerical Recipes sec. 6.2). */
+static double gamma_q(double a, double x)
+{
+    if (x <= 0.0) return 1.0;
+    if (x < a + 1.0) {
+        double sum = 1.0 / a, term = sum;
+        for (int n = 1; n < 1000; n++) {
+            term *= x / (a + n);
+            sum += term;
+            if (fabs(term) < fabs(sum) * 1e-15) break;
+        }
+        return 1.0 - sum * exp(-x + a * log(x) - lgamma(a));
+    }
+    double b = x + 1.0 - a, c = 1e300, d = 1.0 / b, h = d;
+    for (int i = 1; i < 1000; i++) {
+        double an = -i * (i - a);
+        b += 2.0;
+        d = an * d + b;
+        if (fabs(d) < 1e-300) d = 1e-300;
+        c = b + an / c;
+        if (fabs(c) < 1e-300) c = 1e-300;
+        d = 1.0 / d;
+        double del = d * c;
+        h *= del;
+        if (fabs(del - 1.0) < 1e-15) break;
+    }
+    return exp(-x + a * log(x) - lgamma(a)) * h;
+}
+
+static Scene *scene_with_lights(double power[6])
+{
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    int mat;
+    Material m = {MATERIAL_DIFFUSE, {0.5f, 0.5f, 0.5f}, 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
+    /* Two quads (2 triangles each) and a sphere: power pi A L (x2 two-sided). */
+    Vec3 q1[4] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
+    Vec3 q2[4] = {{0, 2, 0}, {0, 2, 2}, {3, 2, 2}, {3, 2, 0}};
+    Emission e1 = {{1.0f, 1.0f, 1.0f}, 0}, e2 = {{0.5f, 0.2f, 0.1f}, 1}, e3 = {{4.0f, 4.0f, 4.0f}, 0};
+    assert_int_equal(scene_add_quad(s, q1, mat, &e1, &err), CST_OK);
+    assert_int_equal(scene_add_quad(s, q2, mat, &e2, &err), CST_OK);
+    assert_int_equal(scene_add_sphere(s, v3(5, 5, 5), 0.25f, mat, &e3, &err), CST_OK);
+    DeltaLight pt = {DELTA_POINT, {1, 1, 1}, {0, 0, 0}, {2, 2, 2}, 0, 0};
+    DeltaLight sp = {DELTA_SPOT, {2, 1, 1}, {0, -1, 0}, {8, 4, 2}, 0.9f, 0.8f};
+    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {0.01f, 0.01f, 0.01f}, 0, 0};
+    assert_int_equal(scene_add_delta_light(s, &pt, &err), CST_OK);
+    assert_int_equal(scene_add_delta_light(s, &sp, &err), CST_OK);
+    assert_int_equal(scene_add_delta_light(s, &dl, &err), CST_OK);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    /* Per light of the combined list: quad 1 (2 triangles), quad 2 (2), the sphere, then
+     * the delta lights. Folded per source below. */
+    const double y2 = 0.2126 * 0.5 + 0.7152 * 0.2 + 0.0722 * 0.1;
+    power[0] = PI_D * 1.0 * 1.0;                 /* quad 1, area 1, one-sided, L = 1 */
+    power[1] = PI_D * 6.0 * y2 * 2.0;            /* quad 2, area 6, two-sided */
+    power[2] = PI_D * 4.0 * PI_D * 0.0625 * 4.0; /* sphere, area 4 pi r^2 */
+    power[3] = 4.0 * PI_D * 2.0;
+    double ysp = 0.2126 * 8 + 0.7152 * 4 + 0.0722 * 2;
+    power[4] = 2.0 * PI_D * ysp * (1.0 - 0.5 * (0.9 + 0.8));
+    double r = (double)s->emitter_sampler.radius;
+    power[5] = PI_D * r * r * 0.01;
+    return s;
+}
+
+/* The source (0..5) of combined-list light i. */
+static int source_of(const Scene *s, int i)
+{
+    if (i >= s->emitter_sampler.count) return 3 + (i - s->emitter_sampler.count);
+    uint32_t prim = s->emitters[i].prim;
+    if ((int)prim >= s->num_triangles) return 2;
+    return prim < 2 ? 0 : 1;
+}
+
+static void test_selection_by_power(void **state)
+{
+    (void)state;
+    double power[6];
+    Scene *s = scene_with_lights(power);
+    assert_int_equal(s->emitter_sampler.lights, 5 + 3);
+    double total = 0.0;
+    for (int k = 0; k < 6; k++) total += power[k];
+    enum { N = 1000000 };
+    double obs[6] = {0};
+    Pcg32 rng;
+    pcg32_seed(&rng, 17u, 3u);
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    for (int n = 0; n < N; n++) {
+        EmissionSample es;
+        float u_sel = pcg32_float(&rng);
+        Vec2 a = v2(pcg32_float(&rng), pcg32_float(&rng)), b = v2(pcg32_float(&rng), pcg32_float(&rng));
+        emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, a, b, &es);
+        obs[source_of(s, es.emitter)] += 1.0;
+    }
+    double chi2 = 0.0;
+    for (int k = 0; k < 6; k++) {
+        double e = N * power[k] / total;
+        chi2 += (obs[k] - e) * (obs[k] - e) / e;
+        print_message("  source %d: %8.0f picks, expected %10.1f\n", k, obs[k], e);
+    }
+    double p = gamma_q(2.5, 0.5 * chi2); /* 5 degrees of freedom */
+    print_message("  light selection: chi2 = %.2f, dof 5, p = %.4f\n", chi2, p);
+    assert_true(p > 0.01);
+    scene_destroy(s);
+}
+
+/* NEE's densities: an area point has pdf_a = pmf / area (converted to solid angle), a delta
+ * light reports its pick probability, and each pmf is the light's share of the power. */
+static void test_nee_densities(void **state)
+{
+    (void)state;
+    double power[6];
+    Scene *s = scene_with_lights(power);
+    double total = 0.0;
+    for (int k = 0; k < 6; k++) total += power[k];
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    Pcg32 rng;
+    pcg32_seed(&rng, 5u, 9u);
+    Vec3 x = v3(1.5f, -1.0f, 1.0f); /* below quad 1 (which faces down), inside the spot's cone */
+    int seen[8] = {0};
+    for (int n = 0; n < 20000; n++) {
+        LightLi ls;
+        float u_sel = pcg32_float(&rng);
+        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, x, u_sel, u, &ls)) continue;
+        seen[ls.light] = 1;
+        int src = source_of(s, ls.light);
+        if (ls.delta) {
+            double expect = power[src] / total;
+            assert_true(fabs((double)ls.pdf - expect) <= 1e-5 * expect);
+            continue;
+        }
+        const Emitter *e = &s->emitters[ls.light];
+        /* Triangles of one quad split its power by area: pmf = power * (A_tri / A_quad). */
+        double area_src = src == 0 ? 1.0 : src == 1 ? 6.0 : 4.0 * PI_D * 0.0625;
+        double pmf = power[src] / total * (double)e->area / area_src;
+        double d2 = (double)ls.dist * (double)ls.dist;
+        double expect = pmf / (double)e->area * d2 / (double)ls.cos_light;
+        assert_true(fabs((double)ls.pdf - expect) <= 1e-4 * expect);
+    }
+    for (int i = 0; i < 8; i++) assert_true(seen[i]);
+    scene_destroy(s);
+}
+
+/* A synthetic 64 x 32 environment: a sky gradient, a bright sun of a few pixels and a dark
+ * band, so the distribution has structure at every scale. Returns a malloc'd buffer. */
+static float *synthetic_env(int w, int h)
+{
+    float *rgb = malloc((size_t)w * (size_t)h * 3 * sizeof *rgb);
+    assert_non_null(rgb);
+    for (int r = 0; r < h; r++)
+        for (int c = 0; c < w; c++) {
+            float *p = &rgb[3 * ((size_t)r * (size_t)w + (size_t)c)];
+            float sky = 0.2f + 0.8f * (float)(h - r) / (float)h;
+            p[0] = 0.5f * sky; p[1] = 0.7f * sky; p[2] = sky;
+            if (r >= 6 && r < 8 && c >= 40 && c < 43) { p[0] = 200.0f; p[1] = 180.0f; p[2] = 150.0f; }
+            if (r >= 20 && r < 24) { p[0] = p[1] = p[2] = 0.0f; }
+        }
+    return rgb;
+}
+
+/* Environment sampling against its pdf: 10^6 directions into a (theta, phi) histogram
+ * twice as fine as the image in each direction (so cell edges fall on pixel edges and
+ * the density is smooth inside each cell), expected counts from envmap_pdf integrated
+ * with d omega = sin theta dtheta dphi on 4 x 4 midpoints per cell; cells expecting fewer
+ * than 5 pooled. Also every sample's reported pdf equals envmap_pdf of its direction. */
+static void test_envmap_chi2(void **state)
+{
+    (void)state;
+    EnvMap m;
+    CstError err;
+    assert_int_equal(envmap_init_image(&m, synthetic_env(64, 32), 64, 32, rgb_s(1.0f), &err), CST_OK);
+    enum { NT = 64, NP = 128, N = 1000000, SUB = 4 };
+    static double obs[NT * NP], expd[NT * NP];
+    memset(obs, 0, sizeof obs);
+    Pcg32 rng;
+    pcg32_seed(&rng, 21u, 4u);
+    for (int n = 0; n < N; n++) {
+        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        float pdf;
+        Vec3 w = envmap_sample(&m, u, &pdf);
+        if (!(pdf == envmap_pdf(&m, w))) fail_msg("sample %d: pdf %g, envmap_pdf %g", n, (double)pdf, (double)envmap_pdf(&m, w));
+        double theta = acos(fmax(-1.0, fmin(1.0, (double)w.y))), phi = atan2((double)w.z, (double)w.x);
+        if (phi < 0.0) phi += 2.0 * PI_D;
+        int i = (int)(theta / PI_D * NT), j = (int)(phi / (2.0 * PI_D) * NP);
+        i = i < 0 ? 0 : i >= NT ? NT - 1 : i;
+        j = j < 0 ? 0 : j >= NP ? NP - 1 : j;
+        obs[i * NP + j] += 1.0;
+    }
+    double total = 0.0;
+    for (int i = 0; i < NT; i++)
+        for (int j = 0; j < NP; j++) {
+            double sum = 0.0;
+            for (int a = 0; a < SUB; a++)
+                for (int b = 0; b < SUB; b++) {
+                    double th = PI_D * (i + (a + 0.5) / SUB) / NT, phi = 2.0 * PI_D * (j + (b + 0.5) / SUB) / NP;
+                    Vec3 w = v3((float)(sin(th) * cos(phi)), (float)cos(th), (float)(sin(th) * sin(phi)));
+                    sum += (double)envmap_pdf(&m, w) * sin(th);
+                }
+            expd[i * NP + j] = sum / (SUB * SUB) * (PI_D / NT) * (2.0 * PI_D / NP) * N;
+            total += expd[i * NP + j];
+        }
+    print_message("  environment map: pdf integrates to %.5f\n", total / N);
+    assert_true(fabs(total / N - 1.0) < 2e-3);
+    double chi2 = 0.0, pool_o = 0.0, pool_e = 0.0;
+    int dof = -1;
+    for (int k = 0; k < NT * NP; k++) {
+        if (expd[k] < 5.0) { pool_o += obs[k]; pool_e += expd[k]; continue; }
+        chi2 += (obs[k] - expd[k]) * (obs[k] - expd[k]) / expd[k];
+        dof++;
+    }
+    if (pool_e > 0.0) { chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e; dof++; }
+    else assert_true(pool_o == 0.0);
+    double p = gamma_q(0.5 * dof, 0.5 * chi2);
+    print_message("  environment map: chi2 = %.1f, dof %d, p = %.4f\n", chi2, dof, p);
+    assert_true(p > 0.01);
+    envmap_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_selection_by_power),
+        cmocka_unit_test(test_nee_densities),
+        cmocka_unit_test(test_envmap_chi2),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
