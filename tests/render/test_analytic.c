@@ -45,7 +45,7 @@ static Scene *plane_under_light(double a, double b, double h)
     CstError err;
     Scene *s = scene_create();
     int plane_mat, light_mat;
-    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
     m.albedo = rgb_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
