@@ -121,6 +121,16 @@ static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *m, float *etap, b
     return true;
 }
 
+/* F at the microfacet. For refraction, from the outside direction's cosine: F(cos_o, eta)
+ * and F(cos_t, 1/eta) are equal in exact arithmetic, but the inside cosine is near the
+ * critical angle where 1 - F is ill-conditioned, and one formula for both orders keeps
+ * f(wo, wi) and f(wi, wo) (the adjoint) consistent to rounding. */
+static float dielectric_fresnel(const Bsdf *b, Vec3 wo, Vec3 wi, Vec3 m, bool reflect)
+{
+    Vec3 w = reflect || wo.z > 0.0f ? wo : wi;
+    return fresnel_dielectric(v3_dot(w, m), b->eta);
+}
+
 /* Walter et al. 2007 eq. 20 (reflection) and eq. 21 (transmission), with eta_o and eta_i
  * divided out: f_t = |wi.m| |wo.m| (1 - F) D G2 / (|cos_i| |cos_o| (wi.m + wo.m / etap)^2)
  * / etap^2. The 1 / etap^2 is radiance compression: it belongs to the radiance BSDF;
@@ -133,7 +143,7 @@ static float dielectric_eval(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode
     bool reflect;
     if (!dielectric_half(wo, wi, b->eta, &m, &etap, &reflect)) return 0.0f;
     float dm = ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha);
-    float F = fresnel_dielectric(v3_dot(wo, m), b->eta);
+    float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * dm / (4.0f * fabsf(wo.z));
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
     float f = (1.0f - F) * dm * fabsf(v3_dot(wi, m) * v3_dot(wo, m) / (wo.z * denom));
@@ -150,7 +160,7 @@ static float dielectric_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
     bool reflect;
     if (!dielectric_half(wo, wi, b->eta, &m, &etap, &reflect)) return 0.0f;
     float pm = ggx_visible_pdf(wo, m, b->alpha);
-    float F = fresnel_dielectric(v3_dot(wo, m), b->eta);
+    float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * pm / (4.0f * fabsf(v3_dot(wo, m)));
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
     return (1.0f - F) * pm * fabsf(v3_dot(wi, m)) / denom;
@@ -226,7 +236,8 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
 static float coat_albedo(const Bsdf *b, float mu)
 {
     if (!b->coat_e) return fresnel_dielectric(mu, b->eta);
-    float x = clampf(mu, 0.0f, 1.0f) * (float)(MATERIAL_COAT_TABLE - 1);
+    /* linear in x = sqrt(mu), the table's abscissa (material_prepare) */
+    float x = sqrtf(clampf(mu, 0.0f, 1.0f)) * (float)(MATERIAL_COAT_TABLE - 1);
     int i = (int)x;
     if (i > MATERIAL_COAT_TABLE - 2) i = MATERIAL_COAT_TABLE - 2;
     float t = x - (float)i;

@@ -67,18 +67,24 @@ void material_prepare(Material *m)
     if (m->type != MATERIAL_PLASTIC || alpha < MATERIAL_SMOOTH_ALPHA) return;
     const int N = MATERIAL_COAT_TABLE;
     for (int j = 0; j < N; j++) {
-        /* mu = 0 is the limit; sample just above it. */
-        float mu = maxf((float)j / (float)(N - 1), 1e-3f);
-        m->coat_e[j] = coat_albedo_quadrature(mu, alpha, m->ior, 64);
+        /* Nodes at mu = x^2, x uniform: E changes fastest at grazing. mu = 0 is a limit
+         * (G1 = 0); sample just above it. */
+        float x = (float)j / (float)(N - 1);
+        m->coat_e[j] = coat_albedo_quadrature(maxf(x * x, 1e-4f), alpha, m->ior, 64);
     }
-    /* E_avg = 2 int_0^1 E(mu) mu dmu of the piecewise-linear E that bsdf.c evaluates,
-     * exactly (Simpson is exact on each quadratic piece E(mu) mu), so that the diffuse
-     * normalisation matches the table and the albedo identity E + rho (1 - E) holds. */
+    /* E_avg = 2 int_0^1 E(mu) mu dmu = 4 int_0^1 E(x) x^3 dx of the piecewise-linear E(x)
+     * that bsdf.c evaluates, exactly (3-point Gauss-Legendre is exact for the degree-4
+     * integrand on each piece), so the diffuse normalisation matches the table and the
+     * albedo identity E + rho (1 - E) holds. */
+    static const double GX[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
+    static const double GW[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
     double avg = 0.0, h = 1.0 / (double)(N - 1);
     for (int j = 0; j + 1 < N; j++) {
-        double a = (double)j * h, b = a + h, c = 0.5 * (a + b);
-        double ea = (double)m->coat_e[j], eb = (double)m->coat_e[j + 1], ec = 0.5 * (ea + eb);
-        avg += (h / 6.0) * (ea * a + 4.0 * ec * c + eb * b);
+        double e0 = (double)m->coat_e[j], e1 = (double)m->coat_e[j + 1];
+        for (int q = 0; q < 3; q++) {
+            double t = 0.5 * (1.0 + GX[q]), x = ((double)j + t) * h;
+            avg += 0.5 * h * GW[q] * 4.0 * (e0 + t * (e1 - e0)) * x * x * x;
+        }
     }
-    m->coat_e_avg = (float)(2.0 * avg);
+    m->coat_e_avg = (float)avg;
 }

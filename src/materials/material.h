@@ -23,7 +23,7 @@ typedef enum MaterialType {
 /* GGX alpha below this is treated as perfectly smooth (pbrt-v4 uses the same cut). */
 #define MATERIAL_SMOOTH_ALPHA 1e-3f
 
-/* The rough plastic's coat albedo E(mu), tabulated at mu_j = j / (N - 1) (bsdf.c). */
+/* The rough plastic's coat albedo E(mu), tabulated at mu_j = (j / (N - 1))^2 (bsdf.c). */
 #define MATERIAL_COAT_TABLE 32
 
 typedef struct Material {
