@@ -150,8 +150,9 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, Vec3 pos, Vec3 w
     for (uint32_t k = g->cell_start[h]; k < g->cell_start[h + 1]; k++) {
         SppmPixel *v = &px[g->entries[k]];
         if (photon_dist2(pos, v->p) > v->r * v->r) continue;
-        /* A photon on the other side of a thin wall must not light this side. */
-        if (!(v3_dot(n, v->n) > 0.0f)) continue;
+        /* A photon on the other side of a thin wall must not light this side, unless the
+         * visible point's surface transmits (rough glass). */
+        if (!(v3_dot(n, v->n) > 0.0f) && !bsdf_has_transmission(&v->bsdf)) continue;
         float cos_i = fabsf(v3_dot(v->n, wi));
         if (!(cos_i > 0.0f)) continue;
         /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */

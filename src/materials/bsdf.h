@@ -65,6 +65,11 @@ static inline bool bsdf_has_delta(const Bsdf *b)
 {
     return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->alpha == 0.0f);
 }
+/* True when some lobe transmits (light crosses to the other side of the surface). */
+static inline bool bsdf_has_transmission(const Bsdf *b)
+{
+    return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC;
+}
 /* The probability that bsdf_sample takes a delta lobe from wo (0 or 1 except for mixed
  * BSDFs); lets a caller that splits the two parts weight each by its share. */
 float bsdf_delta_probability(const Bsdf *b, Vec3 wo);
