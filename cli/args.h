@@ -10,7 +10,7 @@
 #include "caustic/caustic.h"
 
 /* Valid values, shared by the help text and the error messages. */
-#define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm"
+#define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm, bdpt, vcm"
 #define ARGS_FILTER_NAMES     "box, tent"
 #define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree"
 #define ARGS_OUTPUT_FORMATS   ".png, .exr, .pfm"

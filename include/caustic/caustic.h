@@ -76,9 +76,15 @@ typedef enum CstIntegrator {
     CST_INTEGRATOR_PHOTON,      /* photon mapping (Jensen): global + caustic maps built once
                                  * per render, NEE and one final-gather ray per camera
                                  * sample; consistent but biased (docs/integrators.md) */
-    CST_INTEGRATOR_SPPM         /* stochastic progressive photon mapping (Hachisuka & Jensen
+    CST_INTEGRATOR_SPPM,        /* stochastic progressive photon mapping (Hachisuka & Jensen
                                  * 2009): spp counts iterations; photons = photon paths per
                                  * iteration; single-threaded; consistent (docs/integrators.md) */
+    CST_INTEGRATOR_BDPT,        /* bidirectional path tracing, every connection strategy
+                                 * combined by MIS; spp counts iterations of one light and
+                                 * one camera path per pixel (docs/integrators.md) */
+    CST_INTEGRATOR_VCM          /* vertex connection and merging (Georgiev et al. 2012):
+                                 * BDPT plus photon merging with a shrinking radius
+                                 * (photon_radius = the first iteration's); consistent */
 } CstIntegrator;
 
 typedef enum CstFilter {
@@ -87,8 +93,8 @@ typedef enum CstFilter {
     CST_FILTER_TENT         /* tent of radius 1 pixel, by filter importance sampling */
 } CstFilter;
 
-/* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm" (aliases "mis", "nee",
- * "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
+/* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",
+ * "vcm" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CstIntegrator cst_integrator_from_name(const char *name);
 const char *cst_integrator_name(CstIntegrator integrator);
 CstFilter cst_filter_from_name(const char *name);

@@ -37,7 +37,7 @@ static void splat_if_visible(const Scene *s, const Camera *cam, const LightParam
 void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32 *rng,
                  SplatList *out, uint64_t *rays)
 {
-    if (s->emitter_sampler.count == 0) return;
+    if (s->emitter_sampler.lights == 0) return;
     /* The tent reaches half a pixel past the film's edge (film_splat). */
     const float margin = lp->filter == CST_FILTER_TENT ? 0.5f : 0.0f;
     float u_sel = pcg32_float(rng);
@@ -46,23 +46,24 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     EmissionSample es;
     EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
-    const Emitter *e = &s->emitters[es.emitter];
 
-    /* y0 seen directly: the only way this estimator renders visible emitters. */
+    /* y0 seen directly: the only way this estimator renders visible emitters (delta
+     * lights are never seen). */
     CameraWiSample cs;
     Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
-    if (camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
+    if (!es.delta && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
+        const Emitter *e = &s->emitters[es.emitter];
         Rgb le = emitter_radiance(e, es.n, cs.wi);
         splat_if_visible(s, cam, lp, es.p, es.n, &cs,
                          rgb_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a), out, rays);
     }
     if (!(es.pdf_w > 0.0f)) return;
 
-    /* beta = L_e |cos theta_0| / (pdf_a pdf_w): the flux a path carries. Russian roulette
-     * looks at `scatter`, the product of the BSDF weights (and 1/q), which is what the
-     * path tracer's beta is: beta's flux scale would keep every path alive. */
-    Rgb beta = rgb_scale(emitter_radiance(e, es.n, es.w),
-                         fabsf(v3_dot(es.n, es.w)) / (es.pdf_a * es.pdf_w));
+    /* beta = L_e |cos theta_0| / (pdf_a pdf_w) (or a delta light's, light.c): the flux a
+     * path carries. Russian roulette looks at `scatter`, the product of the BSDF weights
+     * (and 1/q), which is what the path tracer's beta is: beta's flux scale would keep
+     * every path alive. */
+    Rgb beta = es.beta;
     Rgb scatter = rgb_s(1.0f);
     Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {

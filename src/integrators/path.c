@@ -10,31 +10,23 @@ static inline float power_heuristic(float pdf_a, float pdf_b)
     return a / (a + b);
 }
 
-/* Direct light at a non-delta vertex by sampling a point on an emitter (area measure)
- * and converting to solid angle: pdf_w = pdf_a * dist^2 / |cos theta_light|. */
+/* Direct light at a non-delta vertex by sampling a light (light_sample_li: an area point
+ * converted to solid angle, pdf_w = pdf_a dist^2 / |cos theta_light|, or a delta light). */
 static Rgb sample_direct(const Scene *s, const PathParams *pp, const Bsdf *bsdf,
                          const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
 {
     float u_sel = pcg32_float(rng);
     Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-    EmitterSample es;
+    LightLi ls;
     EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
-    emitter_sample(&s->emitter_sampler, s->emitters, &g, u_sel, u, &es);
-    Vec3 to = v3_sub(es.p, sh->p);
-    float dist2 = v3_length2(to);
-    if (!(dist2 > 0.0f)) return rgb_s(0.0f);
-    float dist = sqrtf(dist2);
-    Vec3 wi = v3_scale(to, 1.0f / dist);
-    float cos_l = v3_dot(es.n, wi); /* negative when the emitter faces us */
-    Rgb le = emitter_radiance(&s->emitters[es.emitter], es.n, v3_neg(wi));
-    if (rgb_is_black(le) || cos_l == 0.0f) return rgb_s(0.0f);
-    Rgb f = bsdf_eval(bsdf, wo, wi);
+    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
+    Rgb f = bsdf_eval(bsdf, wo, ls.wi);
     if (rgb_is_black(f)) return rgb_s(0.0f);
-    float pdf_w = s->emitter_sampler.pdf_a * dist2 / fabsf(cos_l);
     ++*rays;
-    if (!scene_visible(s, sh->p, sh->ng, es.p, es.n)) return rgb_s(0.0f);
-    float w = pp->mode == PATH_MIS ? power_heuristic(pdf_w, bsdf_pdf(bsdf, wo, wi)) : 1.0f;
-    return rgb_scale(rgb_mul(f, le), w / pdf_w);
+    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
+    /* A delta light cannot be hit by BSDF sampling: NEE is its only strategy. */
+    float w = pp->mode == PATH_MIS && !ls.delta ? power_heuristic(ls.pdf, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
+    return rgb_scale(rgb_mul(f, ls.li), w / ls.pdf);
 }
 
 Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t *rays)
@@ -42,7 +34,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
     Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
     bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
     float prev_pdf = 0.0f;
-    bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.count > 0;
+    bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
     for (int depth = 0;; depth++) {
         SurfaceHit sh;
         ++*rays;
@@ -56,7 +48,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
                     L = rgb_madd(L, beta, le);
                 } else if (pp->mode == PATH_MIS) {
                     float cos_l = fabsf(v3_dot(sh.ng, wo));
-                    float pdf_light = cos_l > 0.0f ? s->emitter_sampler.pdf_a * sh.t * sh.t / cos_l : 0.0f;
+                    float pdf_light = cos_l > 0.0f ? emitter_pdf_a(&s->emitter_sampler, sh.emitter) * sh.t * sh.t / cos_l : 0.0f;
                     L = rgb_madd(L, beta, rgb_scale(le, power_heuristic(prev_pdf, pdf_light)));
                 }
                 /* PATH_NEE: this emitter was already counted by the previous vertex's NEE. */

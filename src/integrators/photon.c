@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "integrators/direct.h"
 #include "materials/bsdf.h"
 
 /* Stream ids: the photon pass and the radius probes draw from (seed, index, id), disjoint
@@ -59,12 +60,11 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
     EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return 1; /* still one of the N */
-    const Emitter *e = &s->emitters[es.emitter];
-    /* Cosine-weighted directions (pdf_w = |cos| / pi, or half that per side when two-sided)
-     * make every photon of a uniform emitter carry the same flux: L_e pi A / N one-sided,
-     * L_e 2 pi A / N two-sided, summing to the emitted power. */
-    Rgb power = rgb_scale(emitter_radiance(e, es.n, es.w),
-                          fabsf(v3_dot(es.n, es.w)) / (es.pdf_a * es.pdf_w) * inv_n);
+    /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
+     * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
+     * uniform emitter carry the same flux, L_e pi A / N one-sided, L_e 2 pi A / N
+     * two-sided, summing to the emitted power; delta lights likewise (light.c). */
+    Rgb power = rgb_scale(es.beta, inv_n);
     Rgb scatter = rgb_s(1.0f); /* what Russian roulette looks at, as in light.c */
     bool specular_only = true; /* every bounce so far was a delta lobe */
     Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
@@ -185,25 +185,7 @@ static Rgb radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, co
 Rgb photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
                         uint64_t *rays)
 {
-    if (s->emitter_sampler.count == 0) return rgb_s(0.0f);
-    float u_sel = pcg32_float(rng);
-    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-    EmitterSample es;
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
-    emitter_sample(&s->emitter_sampler, s->emitters, &g, u_sel, u, &es);
-    Vec3 to = v3_sub(es.p, sh->p);
-    float dist2 = v3_length2(to);
-    if (!(dist2 > 0.0f)) return rgb_s(0.0f);
-    Vec3 wi = v3_scale(to, 1.0f / sqrtf(dist2));
-    float cos_l = v3_dot(es.n, wi);
-    Rgb le = emitter_radiance(&s->emitters[es.emitter], es.n, v3_neg(wi));
-    if (rgb_is_black(le) || cos_l == 0.0f) return rgb_s(0.0f);
-    Rgb f = bsdf_eval(bsdf, wo, wi);
-    if (rgb_is_black(f)) return rgb_s(0.0f);
-    ++*rays;
-    if (!scene_visible(s, sh->p, sh->ng, es.p, es.n)) return rgb_s(0.0f);
-    float pdf_w = s->emitter_sampler.pdf_a * dist2 / fabsf(cos_l);
-    return rgb_scale(rgb_mul(f, le), 1.0f / pdf_w);
+    return direct_light(s, bsdf, sh, wo, rng, rays);
 }
 
 Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t *rays)
@@ -308,7 +290,7 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
     int n = pp->photons > 0 ? pp->photons : PHOTON_DEFAULT_COUNT;
     PhotonArray global = {0}, caustic = {0};
     CstStatus st = CST_OK;
-    if (s->emitter_sampler.count > 0) {
+    if (s->emitter_sampler.lights > 0) {
         float inv_n = 1.0f / (float)n;
         for (int i = 0; i < n; i++)
             if (!trace_photon(s, pp, (uint64_t)i, inv_n, &global, &caustic, rays)) {

@@ -179,8 +179,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, const SppmGrid *g
     EmitterGeometry eg = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
-    Rgb power = rgb_scale(emitter_radiance(&s->emitters[es.emitter], es.n, es.w),
-                          fabsf(v3_dot(es.n, es.w)) / (es.pdf_a * es.pdf_w));
+    Rgb power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */
     Rgb scatter = rgb_s(1.0f);
     Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {
@@ -331,7 +330,7 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
     while (sp->iterations <= 0 || iter < sp->iterations) {
         camera_pass(s, cam, sp, px, iter, &res->nonfinite, rays);
         sppm_grid_build(&g, px, count);
-        if (s->emitter_sampler.count > 0)
+        if (s->emitter_sampler.lights > 0)
             for (int i = 0; i < photons; i++) trace_photon(s, sp, &g, px, (uint64_t)i, iter, rays);
         progressive_update(px, count, &res->nonfinite);
         iter++;

@@ -6,6 +6,7 @@
  * reaching a diffuse surface through a mirror or glass (caustics). */
 #include "integrators/whitted.h"
 
+#include "integrators/direct.h"
 #include "materials/bsdf.h"
 
 /* Branches whose weight falls below this stop: adaptive tree depth control (Hall &
@@ -13,32 +14,14 @@
  * where every hit splits in two, at a bias below 1e-4 of the radiance of what is cut. */
 static const float WHITTED_MIN_WEIGHT = 1e-4f;
 
-/* Direct light at a diffuse point: the mean of n emitter samples (area measure,
- * converted to solid angle with dist^2 / |cos theta_light|). */
+/* Direct light at a diffuse point: the mean of n light samples (direct.c: area points
+ * converted to solid angle with dist^2 / |cos theta_light|, or point, spot and
+ * directional lights, whose shadow rays are Whitted's own). */
 static Rgb whitted_direct(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, int n, Pcg32 *rng,
                           uint64_t *rays)
 {
     Rgb sum = rgb_s(0.0f);
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
-    for (int i = 0; i < n; i++) {
-        float u_sel = pcg32_float(rng);
-        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-        EmitterSample es;
-        emitter_sample(&s->emitter_sampler, s->emitters, &g, u_sel, u, &es);
-        Vec3 to = v3_sub(es.p, sh->p);
-        float dist2 = v3_length2(to);
-        if (!(dist2 > 0.0f)) continue;
-        Vec3 wi = v3_scale(to, 1.0f / sqrtf(dist2));
-        float cos_l = v3_dot(es.n, wi);
-        Rgb le = emitter_radiance(&s->emitters[es.emitter], es.n, v3_neg(wi));
-        if (rgb_is_black(le) || cos_l == 0.0f) continue;
-        Rgb f = bsdf_eval(bsdf, wo, wi);
-        if (rgb_is_black(f)) continue;
-        ++*rays;
-        if (!scene_visible(s, sh->p, sh->ng, es.p, es.n)) continue;
-        float pdf_w = s->emitter_sampler.pdf_a * dist2 / fabsf(cos_l);
-        sum = rgb_add(sum, rgb_scale(rgb_mul(f, le), 1.0f / pdf_w));
-    }
+    for (int i = 0; i < n; i++) sum = rgb_add(sum, direct_light(s, bsdf, sh, wo, rng, rays));
     return rgb_scale(sum, 1.0f / (float)n);
 }
 
@@ -57,7 +40,7 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
      * plastic) get direct light only, Whitted's diffuse rule; a BSDF that also has delta
      * lobes (smooth-coat plastic) then branches into those below as well. */
     if (!bsdf_is_delta(&bsdf)) {
-        if (s->emitter_sampler.count > 0) L = rgb_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, rng, rays));
+        if (s->emitter_sampler.lights > 0) L = rgb_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, rng, rays));
         if (!bsdf_has_delta(&bsdf)) return L;
     }
     if (depth >= wp->max_depth) return L;

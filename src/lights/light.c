@@ -1,5 +1,5 @@
-/* Area-emitter sampling: points for next-event estimation, points and directions for
- * light paths. */
+/* Light sampling: selection by power, points and directions for next-event estimation and
+ * for the starts of light paths, for area emitters and delta lights alike. */
 #include "lights/light.h"
 
 #include <stdlib.h>
@@ -9,75 +9,238 @@
 #include "math/frame.h"
 #include "sampling/warp.h"
 
-CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, CstError *err)
+/* pbrt-v4's spotlight falloff (SpotLight::I): smoothstep between the cone's cosines. */
+static float spot_falloff(const DeltaLight *l, float cos_theta)
+{
+    if (cos_theta >= l->cos_inner) return 1.0f;
+    if (cos_theta <= l->cos_outer) return 0.0f;
+    float t = (cos_theta - l->cos_outer) / (l->cos_inner - l->cos_outer);
+    return t * t * (3.0f - 2.0f * t);
+}
+
+/* Luminance of the emitted flux: 4 pi I for a point; for a spot 2 pi I times the cone's
+ * solid-angle fraction with the falloff's mean taken as half way (pbrt-v4
+ * SpotLight::Phi); E pi R^2 for a directional light over the scene's disk. */
+float delta_light_power(const DeltaLight *l, float scene_radius)
+{
+    float y = rgb_luminance(l->intensity);
+    switch (l->type) {
+    case DELTA_POINT: return 4.0f * CST_PI * y;
+    case DELTA_SPOT: return 2.0f * CST_PI * y * (1.0f - 0.5f * (l->cos_inner + l->cos_outer));
+    case DELTA_DIRECTIONAL: return CST_PI * scene_radius * scene_radius * y;
+    }
+    return 0.0f;
+}
+
+CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, const DeltaLight *delta,
+                               int num_delta, Vec3 lo, Vec3 hi, CstError *err)
 {
     memset(s, 0, sizeof *s);
-    if (n == 0) return CST_OK;
-    float stack_w[64] = {0};
-    float *w = n <= 64 ? stack_w : malloc((size_t)n * sizeof *w);
-    if (!w) return cst_fail(err, CST_ERR_OOM, "out of memory for %d emitters", n);
-    for (int i = 0; i < n; i++) w[i] = emitters[i].area;
-    CstStatus st = distrib1d_init(&s->by_area, w, n, err);
-    if (w != stack_w) free(w);
-    if (st != CST_OK) return st;
-    s->pdf_a = (float)(1.0 / s->by_area.total);
+    s->center = v3_scale(v3_add(lo, hi), 0.5f);
+    s->radius = 0.5f * v3_length(v3_sub(hi, lo));
+    if (!(s->radius > 0.0f) || !isfinite(s->radius)) s->radius = 1.0f;
+    s->delta = delta;
     s->count = n;
+    s->num_delta = num_delta;
+    s->lights = n + num_delta;
+    if (s->lights == 0) return CST_OK;
+    float *w = malloc((size_t)s->lights * sizeof *w);
+    s->pdf_a = malloc((size_t)(n > 0 ? n : 1) * sizeof *s->pdf_a);
+    if (!w || !s->pdf_a) {
+        free(w);
+        free(s->pdf_a);
+        s->pdf_a = NULL;
+        return cst_fail(err, CST_ERR_OOM, "out of memory for %d lights", s->lights);
+    }
+    /* A Lambertian emitter of radiance L and area A emits pi A L per side. */
+    for (int i = 0; i < n; i++)
+        w[i] = CST_PI * emitters[i].area * rgb_luminance(emitters[i].radiance) * (emitters[i].two_sided ? 2.0f : 1.0f);
+    for (int i = 0; i < num_delta; i++) w[n + i] = delta_light_power(&delta[i], s->radius);
+    /* Lights of zero luminance (pure blue has 0.07, but a hand-written [0, 0, 1e-30]
+     * might round to 0) still emit: give every light a floor so none is never picked. */
+    double total = 0.0;
+    for (int i = 0; i < s->lights; i++) total += (double)w[i];
+    for (int i = 0; i < s->lights; i++)
+        if (!(w[i] > 1e-6f * (float)total) || !isfinite(w[i])) w[i] = total > 0.0 && isfinite(total) ? 1e-6f * (float)total : 1.0f;
+    CstStatus st = distrib1d_init(&s->by_power, w, s->lights, err);
+    free(w);
+    if (st != CST_OK) {
+        free(s->pdf_a);
+        s->pdf_a = NULL;
+        return st;
+    }
+    for (int i = 0; i < n; i++) s->pdf_a[i] = s->by_power.pmf[i] / emitters[i].area;
     return CST_OK;
 }
 
 void emitter_sampler_free(EmitterSampler *s)
 {
-    distrib1d_free(&s->by_area);
+    distrib1d_free(&s->by_power);
+    free(s->pdf_a);
     memset(s, 0, sizeof *s);
 }
 
-void emitter_sample(const EmitterSampler *s, const Emitter *emitters, const EmitterGeometry *g,
-                    float u_sel, Vec2 u, EmitterSample *out)
+void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Vec3 *p, Vec3 *n)
 {
-    int i = distrib1d_sample(&s->by_area, u_sel);
-    const Emitter *e = &emitters[i];
-    out->emitter = i;
     if ((int)e->prim < g->num_triangles) {
         const int32_t *t = &g->tri_indices[3 * e->prim];
         Vec3 a = g->positions[t[0]], b = g->positions[t[1]], c = g->positions[t[2]];
         Vec2 bc = warp_uniform_triangle(u);
         Vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
-        out->p = v3_add(a, v3_add(v3_scale(e1, bc.x), v3_scale(e2, bc.y)));
-        out->n = e->n;
+        *p = v3_add(a, v3_add(v3_scale(e1, bc.x), v3_scale(e2, bc.y)));
+        *n = e->n;
     } else {
         const Sphere *sp = &g->spheres[(int)e->prim - g->num_triangles];
         Vec3 d = warp_uniform_sphere(u);
-        out->p = v3_madd(sp->center, d, sp->radius);
-        out->n = d;
+        *p = v3_madd(sp->center, d, sp->radius);
+        *n = d;
     }
 }
 
-/* Emitters are chosen by area, not by power: the NEE distribution already exists and
- * both are unbiased; by power would spend fewer paths on dim emitters when radiances
- * differ. The cosine-weighted direction is proportional to the emitted flux
- * L_e |cos theta| of a Lambertian emitter, so the first throughput
- * L_e |cos theta| / (pdf_a pdf_w) is the same for every path of an emitter. */
+/* The emission direction density at a delta light (per unit solid angle). */
+static float delta_emit_pdf_w(const DeltaLight *l)
+{
+    switch (l->type) {
+    case DELTA_POINT: return CST_INV_4PI;
+    case DELTA_SPOT: return warp_uniform_cone_pdf(l->cos_outer);
+    case DELTA_DIRECTIONAL: return 1.0f;
+    }
+    return 0.0f;
+}
+
+bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const EmitterGeometry *g, Vec3 x,
+                     float u_sel, Vec2 u, LightLi *out)
+{
+    memset(out, 0, sizeof *out);
+    if (s->lights == 0) return false;
+    int i = distrib1d_sample(&s->by_power, u_sel);
+    float pmf = s->by_power.pmf[i];
+    out->light = i;
+    if (i < s->count) {
+        const Emitter *e = &emitters[i];
+        emitter_sample_point(e, g, u, &out->p, &out->n);
+        Vec3 to = v3_sub(out->p, x);
+        float dist2 = v3_length2(to);
+        if (!(dist2 > 0.0f)) return false;
+        out->dist = sqrtf(dist2);
+        out->wi = v3_scale(to, 1.0f / out->dist);
+        out->cos_light = fabsf(v3_dot(out->n, out->wi));
+        out->li = emitter_radiance(e, out->n, v3_neg(out->wi));
+        if (rgb_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
+        /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
+        out->pdf = s->pdf_a[i] * dist2 / out->cos_light;
+        out->finite = true;
+        out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
+        out->direct_pdf = out->pdf;
+        return true;
+    }
+    const DeltaLight *l = &s->delta[i - s->count];
+    out->delta = true;
+    out->pdf = pmf;
+    out->cos_light = 1.0f;
+    out->emit_pdf = pmf * delta_emit_pdf_w(l);
+    if (l->type == DELTA_DIRECTIONAL) {
+        /* From outside the scene's bounding sphere, so every occluder is on the segment;
+         * the direct_pdf of an infinitely distant light has no distance factor, and a
+         * light path starts from the disk of the bounding sphere (density 1 / (pi R^2)). */
+        out->wi = v3_neg(l->dir);
+        out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
+        out->p = v3_madd(x, out->wi, out->dist);
+        out->n = l->dir;
+        out->li = l->intensity;
+        out->finite = false;
+        out->emit_pdf = pmf / (CST_PI * s->radius * s->radius);
+        out->direct_pdf = pmf;
+        return true;
+    }
+    Vec3 to = v3_sub(l->p, x);
+    float dist2 = v3_length2(to);
+    if (!(dist2 > 0.0f)) return false;
+    out->p = l->p;
+    out->dist = sqrtf(dist2);
+    out->wi = v3_scale(to, 1.0f / out->dist);
+    out->n = v3_neg(out->wi);
+    out->finite = true;
+    float falloff = l->type == DELTA_SPOT ? spot_falloff(l, v3_dot(l->dir, v3_neg(out->wi))) : 1.0f;
+    out->li = rgb_scale(l->intensity, falloff / dist2);
+    out->direct_pdf = pmf * dist2;
+    return falloff > 0.0f;
+}
+
 void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
                              const EmitterGeometry *g, float u_sel, Vec2 u_pos, Vec2 u_dir,
                              EmissionSample *out)
 {
-    EmitterSample es;
-    emitter_sample(s, emitters, g, u_sel, u_pos, &es);
-    const Emitter *e = &emitters[es.emitter];
-    float side = 1.0f;
-    if (e->two_sided) {
-        /* Reuse u_dir.x for the side: [0, 1/2) front, [1/2, 1) back, stretched back to [0, 1). */
-        if (u_dir.x < 0.5f) u_dir.x *= 2.0f;
-        else { u_dir.x = 2.0f * u_dir.x - 1.0f; side = -1.0f; }
+    memset(out, 0, sizeof *out);
+    if (s->lights == 0) return;
+    int i = distrib1d_sample(&s->by_power, u_sel);
+    float pmf = s->by_power.pmf[i];
+    out->emitter = i;
+    if (i < s->count) {
+        const Emitter *e = &emitters[i];
+        Vec3 p, n;
+        emitter_sample_point(e, g, u_pos, &p, &n);
+        float side = 1.0f;
+        if (e->two_sided) {
+            /* Reuse u_dir.x for the side: [0, 1/2) front, [1/2, 1) back, stretched back to [0, 1). */
+            if (u_dir.x < 0.5f) u_dir.x *= 2.0f;
+            else { u_dir.x = 2.0f * u_dir.x - 1.0f; side = -1.0f; }
+        }
+        Vec3 local = warp_cosine_hemisphere(u_dir);
+        Frame f = frame_from_normal(v3_scale(n, side));
+        out->p = p;
+        out->n = n;
+        out->w = frame_to_world(&f, local);
+        out->pdf_a = s->pdf_a[i];
+        out->nee_pdf = out->pdf_a;
+        out->pdf_w = local.z > 0.0f ? emitter_emission_pdf_w(e, n, out->w) : 0.0f;
+        out->cos_l = fabsf(v3_dot(n, out->w));
+        out->finite = true;
+        if (out->pdf_w > 0.0f)
+            out->beta = rgb_scale(emitter_radiance(e, n, out->w), out->cos_l / (out->pdf_a * out->pdf_w));
+        return;
     }
-    Vec3 local = warp_cosine_hemisphere(u_dir);
-    Frame f = frame_from_normal(v3_scale(es.n, side));
-    out->p = es.p;
-    out->n = es.n;
-    out->w = frame_to_world(&f, local);
-    out->emitter = es.emitter;
-    out->pdf_a = s->pdf_a;
-    out->pdf_w = local.z > 0.0f ? emitter_emission_pdf_w(e, es.n, out->w) : 0.0f;
+    const DeltaLight *l = &s->delta[i - s->count];
+    out->delta = true;
+    out->cos_l = 1.0f;
+    out->nee_pdf = pmf;
+    switch (l->type) {
+    case DELTA_POINT:
+        out->p = l->p;
+        out->w = warp_uniform_sphere(u_dir);
+        out->pdf_a = pmf;
+        out->pdf_w = CST_INV_4PI;
+        out->beta = rgb_scale(l->intensity, 1.0f / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
+    case DELTA_SPOT: {
+        Frame f = frame_from_normal(l->dir);
+        out->p = l->p;
+        out->w = frame_to_world(&f, warp_uniform_cone(u_dir, l->cos_outer));
+        out->pdf_a = pmf;
+        out->pdf_w = warp_uniform_cone_pdf(l->cos_outer);
+        float falloff = spot_falloff(l, v3_dot(l->dir, out->w));
+        out->beta = rgb_scale(l->intensity, falloff / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
+    }
+    case DELTA_DIRECTIONAL: {
+        /* A uniform point on the disk of the bounding sphere facing the light, one radius
+         * upstream of the centre: every ray through the scene is covered. */
+        Frame f = frame_from_normal(l->dir);
+        Vec2 d = warp_concentric_disk(u_pos);
+        Vec3 off = frame_to_world(&f, v3(d.x * s->radius, d.y * s->radius, 0.0f));
+        out->p = v3_add(v3_madd(s->center, l->dir, -s->radius), off);
+        out->w = l->dir;
+        float area = CST_PI * s->radius * s->radius;
+        out->pdf_a = pmf / area;
+        out->pdf_w = 1.0f;
+        out->beta = rgb_scale(l->intensity, area / pmf);
+        out->finite = false;
+        break;
+    }
+    }
+    out->n = out->w;
 }
 
 float emitter_emission_pdf_w(const Emitter *e, Vec3 n, Vec3 w)

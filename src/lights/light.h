@@ -1,7 +1,6 @@
-/* Area emitters: any primitive with emission. NEE picks an emitter with probability
- * proportional to its area and a uniform point on it, so a point on any emitter has the
- * area density pdf_a = 1 / (total emitting area). Light tracing starts its paths the same
- * way and adds a cosine-weighted direction on an emitting side. */
+/* Lights: area emitters (any primitive with emission) and delta lights (point, spot,
+ * directional). NEE picks a light with probability proportional to its power and, on an
+ * area emitter, a uniform point; light paths start the same way and add a direction. */
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
@@ -20,10 +19,35 @@ typedef struct Emitter {
     int is_sphere; /* scene construction only: prim is still a sphere index */
 } Emitter;
 
+/* Lights whose position or direction is a Dirac delta: no surface, never hit by a ray,
+ * reached only by sampling them (pbrt-v4 sec. 12.1-12.4). */
+typedef enum DeltaLightType {
+    DELTA_POINT,       /* isotropic point: intensity I in every direction */
+    DELTA_SPOT,        /* point with a cone: I on the axis, smoothstep falloff to 0 at cos_outer */
+    DELTA_DIRECTIONAL  /* parallel light from infinitely far: irradiance E on a surface facing it */
+} DeltaLightType;
+
+typedef struct DeltaLight {
+    DeltaLightType type;
+    Vec3 p;        /* point, spot: position */
+    Vec3 dir;      /* spot: unit axis; directional: unit direction the light travels */
+    Rgb intensity; /* point, spot: radiant intensity (W/sr) on the axis; directional: irradiance */
+    float cos_inner, cos_outer; /* spot: full intensity within cos_inner, none beyond cos_outer */
+} DeltaLight;
+
+/* Light selection: one distribution over the area emitters [0, count) and the delta lights
+ * [count, count + num_delta), proportional to each light's power (luminance of its flux),
+ * so bright lights get the samples; a point on emitter e then has the area density
+ * pdf_a[e] = pmf(e) / area(e). */
 typedef struct EmitterSampler {
-    Distrib1D by_area;
-    float pdf_a; /* 1 / total area */
-    int count;
+    Distrib1D by_power;
+    float *pdf_a;    /* per area emitter */
+    int count;       /* area emitters */
+    int num_delta;   /* delta lights */
+    int lights;      /* count + num_delta: 0 = nothing to sample */
+    const DeltaLight *delta; /* borrowed from the scene */
+    Vec3 center;     /* the scene's bounding sphere: directional lights cover its disk */
+    float radius;
 } EmitterSampler;
 
 /* The geometry NEE needs, borrowed from the scene. */
@@ -34,7 +58,9 @@ typedef struct EmitterGeometry {
     const Sphere *spheres;
 } EmitterGeometry;
 
-CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, CstError *err);
+/* bounds_lo/hi: the scene's geometry bounds (directional lights' power and emission disk). */
+CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, const DeltaLight *delta,
+                               int num_delta, Vec3 bounds_lo, Vec3 bounds_hi, CstError *err);
 void emitter_sampler_free(EmitterSampler *s);
 
 /* Radiance leaving the emitter at a point with geometric normal ng toward direction w
@@ -44,31 +70,71 @@ static inline Rgb emitter_radiance(const Emitter *e, Vec3 ng, Vec3 w)
     return (e->two_sided || v3_dot(ng, w) > 0.0f) ? e->radiance : rgb_s(0.0f);
 }
 
+/* The area density of a point on area emitter e, selection included. */
+static inline float emitter_pdf_a(const EmitterSampler *s, int e) { return s->pdf_a[e]; }
+
+/* Next-event estimation at x: a light picked by power (u_sel) and, for an area emitter, a
+ * uniform point on it (u). The estimate of direct light is f(wo, wi) li / pdf with the
+ * shadow ray from x toward p (an area point or a delta light's position; for a
+ * directional light a point beyond the scene). */
+typedef struct LightLi {
+    Vec3 p, n;   /* the light point and its unit normal (delta lights: n = -wi) */
+    Vec3 wi;     /* unit, from x toward the light */
+    float dist;  /* |p - x| */
+    Rgb li;      /* area: L_e toward x; point/spot: I(-wi) / dist^2; directional: E */
+    float pdf;   /* area: density of wi per unit solid angle; delta: the selection
+                  * probability (a discrete one: the estimate has no MIS partner) */
+    bool delta;
+    bool finite; /* false for directional lights (no distance falloff) */
+    int light;   /* area: emitter index; delta: count + delta light index */
+    /* For bidirectional MIS (vcm.c; Georgiev's tech. rep. eqs. 44-45): a light path's
+     * density of leaving the light toward x (position density per area, or selection
+     * for delta positions, times the direction's per solid angle), the density NEE picks
+     * the light point with expressed as SmallVCM's "directPdfW", and |cos| at the light. */
+    float emit_pdf;
+    float direct_pdf;
+    float cos_light;
+} LightLi;
+
+/* False when no light can contribute (no lights, x on the light, or outside a spot's
+ * cone); li is then black. */
+bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const EmitterGeometry *g, Vec3 x,
+                     float u_sel, Vec2 u, LightLi *out);
+
 typedef struct EmitterSample {
     Vec3 p, n; /* point and unit geometric normal */
     int emitter;
 } EmitterSample;
 
-/* Picks an emitter by area with u_sel and a uniform point on it with u. The point's
- * density is s->pdf_a per unit area. */
-void emitter_sample(const EmitterSampler *s, const Emitter *emitters, const EmitterGeometry *g,
-                    float u_sel, Vec2 u, EmitterSample *out);
+/* A uniform point on area emitter i (u). */
+void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Vec3 *p, Vec3 *n);
 
+/* The start of a light path. Area emitters: a uniform point and a cosine-weighted
+ * direction around the emitting side's normal (two-sided ones pick either side with
+ * probability 1/2). Point lights: a uniform direction; spots: uniform in the cone;
+ * directional: a uniform point on the disk of the scene's bounding sphere, upstream. */
 typedef struct EmissionSample {
-    Vec3 p, n;   /* point and unit geometric normal */
-    Vec3 w;      /* unit direction of emission, on an emitting side */
-    int emitter;
-    float pdf_a; /* density of p per unit area (= s->pdf_a) */
-    float pdf_w; /* density of w given p per unit solid angle; 0 = no usable sample */
+    Vec3 p, n;   /* point and unit normal (delta lights: n = w) */
+    Vec3 w;      /* unit direction of emission */
+    int emitter; /* area: emitter index; delta: count + delta light index */
+    Rgb beta;    /* the path's first throughput, the flux it carries:
+                  * L_e |cos| / (pdf_a pdf_w), I(w) / (pmf pdf_w), or E pi R^2 / pmf */
+    float pdf_a; /* area: density of p per unit area; point/spot: the selection
+                  * probability; directional: pmf / (pi R^2) */
+    float pdf_w; /* density of w per unit solid angle (directional: 1, a delta); 0 = no usable sample */
+    float cos_l; /* |cos| between w and n: 1 for delta lights */
+    float nee_pdf; /* the density with which NEE picks p: area: pdf_a; delta: the selection probability */
+    bool delta;  /* a delta light: never hit, never connected to as a surface */
+    bool finite; /* false for directional lights */
 } EmissionSample;
 
-/* The start of a light path: a point as emitter_sample picks it (emitter by area, uniform
- * on it; u_sel, u_pos) and a cosine-weighted direction around the emitting side's normal
- * (u_dir); two-sided emitters pick either side with probability 1/2. */
 void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
                              const EmitterGeometry *g, float u_sel, Vec2 u_pos, Vec2 u_dir,
                              EmissionSample *out);
 /* pdf_w of emitter_sample_emission for direction w at a point with normal n. */
 float emitter_emission_pdf_w(const Emitter *e, Vec3 n, Vec3 w);
+
+/* Emitted power (luminance of the flux) of each kind of light: the selection weights. */
+float delta_light_power(const DeltaLight *l, float scene_radius);
 
 #endif

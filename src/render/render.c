@@ -4,8 +4,11 @@
  * Light tracing splats anywhere on the film instead; it runs in iterations of
  * width x height light paths, path i of iteration s seeded by (seed, i, s), cut into
  * fixed chunks whose splat lists are added in chunk order once the iteration is done, so
- * its images are bit-identical for any thread count too. SPPM (sppm.c) runs its own
- * iterations on the calling thread. */
+ * its images are bit-identical for any thread count too. BDPT and VCM run the same
+ * iterations: a pass of light-path chunks (vertex lists and camera splats per chunk,
+ * concatenated in chunk order), then a pass of tiles, one camera path per pixel, each
+ * pixel written by one thread. SPPM (sppm.c) runs its own iterations on the calling
+ * thread. */
 #include "render/render.h"
 
 #include <pthread.h>
@@ -24,6 +27,7 @@
 #include "integrators/path.h"
 #include "integrators/photon.h"
 #include "integrators/sppm.h"
+#include "integrators/vcm.h"
 #include "integrators/whitted.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
@@ -34,7 +38,8 @@ static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] =
     {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
     {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
     {"whitted", CST_INTEGRATOR_WHITTED}, {"photon", CST_INTEGRATOR_PHOTON},
-    {"sppm", CST_INTEGRATOR_SPPM},
+    {"sppm", CST_INTEGRATOR_SPPM},       {"bdpt", CST_INTEGRATOR_BDPT},
+    {"vcm", CST_INTEGRATOR_VCM},
 };
 
 CstIntegrator cst_integrator_from_name(const char *name)
@@ -54,6 +59,8 @@ const char *cst_integrator_name(CstIntegrator integrator)
     case CST_INTEGRATOR_WHITTED: return "whitted";
     case CST_INTEGRATOR_PHOTON: return "photon";
     case CST_INTEGRATOR_SPPM: return "sppm";
+    case CST_INTEGRATOR_BDPT: return "bdpt";
+    case CST_INTEGRATOR_VCM: return "vcm";
     case CST_INTEGRATOR_DEFAULT: break;
     }
     return "default";
@@ -125,9 +132,11 @@ typedef struct RenderJob {
     WhittedParams whitted_params;
     CstFilter filter;
     uint64_t seed;
-    /* Work units: tiles, or for light tracing chunks of LIGHT_CHUNK light paths. */
-    int tiles_x, tiles_y, num_tiles;
-    /* light tracing only */
+    /* Work units: tiles, or chunks of LIGHT_CHUNK light paths. units is the pass's
+     * count: num_tiles or num_chunks. */
+    int tiles_x, tiles_y, num_tiles, num_chunks, units;
+    bool chunk_pass; /* the pass in progress runs light_chunk, not render_tile */
+    /* light tracing, BDPT and VCM: iterations of width x height light paths */
     bool light;
     LightParams light_params;
     int iteration;     /* in progress */
@@ -135,6 +144,18 @@ typedef struct RenderJob {
     SplatList *splats; /* one per chunk, reused by every iteration */
     double *iteration_rgb; /* the iteration's image, width x height x 3 */
     double last_progress;  /* when progress was last reported: iterations can be short */
+    /* BDPT / VCM only (with light = true) */
+    bool vcm;
+    VcmParams vcm_params;
+    float vcm_radius;          /* the first iteration's merging radius */
+    VcmIteration vcm_it;       /* the iteration in progress */
+    VcmVertexList *vcm_lists;  /* one per chunk */
+    uint32_t *vcm_path_count;  /* light_paths: vertices each path stored */
+    uint32_t *vcm_path_start;  /* light_paths + 1 */
+    VcmVertex *vcm_vertices;   /* the iteration's, concatenated */
+    uint32_t *vcm_cell_start;
+    VcmVertex *vcm_cell_items;
+    size_t vcm_cap;            /* capacity of vcm_vertices and vcm_cell_items */
     /* the pass in progress: samples [pass_first, pass_first + pass_spp) of every pixel */
     int pass_first, pass_spp;
     atomic_int next_tile;
@@ -178,7 +199,9 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
                 Vec2 fp = film_position(job->filter, x, y, uf);
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
-                Rgb L = job->photon ? photon_li(job->scene, &job->photon_maps, ray, &rng, &w->rays)
+                Rgb L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
+                                                    &job->vcm_it, pixel, ray, &rng, &w->rays)
+                      : job->photon ? photon_li(job->scene, &job->photon_maps, ray, &rng, &w->rays)
                       : job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &rng, &w->rays)
                                      : path_li(job->scene, &job->params, ray, &rng, &w->rays);
                 if (!rgb_is_finite(L)) {
@@ -186,7 +209,13 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                     w->nonfinite++;
                     L = rgb_s(0.0f);
                 }
-                film_accumulate(job->film, pixel, L.r, L.g, L.b);
+                if (job->vcm) {
+                    /* The iteration's image; light_merge adds the splats and files it. */
+                    double *o = &job->iteration_rgb[3 * (size_t)pixel];
+                    o[0] = L.r; o[1] = L.g; o[2] = L.b;
+                } else {
+                    film_accumulate(job->film, pixel, L.r, L.g, L.b);
+                }
             }
         }
     }
@@ -198,11 +227,65 @@ static void light_chunk(RenderJob *job, Worker *w, int chunk)
     out->n = 0;
     int first = chunk * LIGHT_CHUNK;
     int last = first + LIGHT_CHUNK < job->light_paths ? first + LIGHT_CHUNK : job->light_paths;
+    if (job->vcm) {
+        VcmVertexList *verts = &job->vcm_lists[chunk];
+        verts->n = 0;
+        for (int i = first; i < last; i++) {
+            Pcg32 rng;
+            /* A stream apart from the camera path of pixel i, which uses (seed, i, iteration). */
+            pcg32_seed_sample(&rng, job->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)job->iteration);
+            size_t before = verts->n;
+            vcm_trace_light(job->scene, &job->camera, &job->vcm_params, &job->vcm_it, &rng, verts, out,
+                            &w->rays);
+            job->vcm_path_count[i] = (uint32_t)(verts->n - before);
+        }
+        return;
+    }
     for (int i = first; i < last; i++) {
         Pcg32 rng;
         pcg32_seed_sample(&rng, job->seed, (uint64_t)i, (uint64_t)job->iteration);
         light_trace(job->scene, &job->camera, &job->light_params, &rng, out, &w->rays);
     }
+}
+
+/* Between the light and the camera pass of a BDPT/VCM iteration: the chunks' vertex
+ * lists concatenated in chunk order (so path i's vertices are a run starting at
+ * path_start[i]), and for VCM the merging grid over them. Returns 0 on OOM. */
+static int vcm_gather(RenderJob *job)
+{
+    size_t total = 0;
+    for (int c = 0; c < job->num_chunks; c++) {
+        if (job->vcm_lists[c].oom) return 0;
+        total += job->vcm_lists[c].n;
+    }
+    if (total > UINT32_MAX - 1) return 0;
+    if (total > job->vcm_cap) {
+        size_t cap = total + total / 4;
+        VcmVertex *v = realloc(job->vcm_vertices, cap * sizeof *v);
+        if (!v) return 0;
+        job->vcm_vertices = v;
+        VcmVertex *items = realloc(job->vcm_cell_items, cap * sizeof *items);
+        if (!items) return 0;
+        job->vcm_cell_items = items;
+        uint32_t *starts = realloc(job->vcm_cell_start, (cap + 1) * sizeof *starts);
+        if (!starts) return 0;
+        job->vcm_cell_start = starts;
+        job->vcm_cap = cap;
+    }
+    size_t at = 0;
+    for (int c = 0; c < job->num_chunks; c++) {
+        if (job->vcm_lists[c].n)
+            memcpy(job->vcm_vertices + at, job->vcm_lists[c].v, job->vcm_lists[c].n * sizeof *job->vcm_vertices);
+        at += job->vcm_lists[c].n;
+    }
+    uint32_t *ps = job->vcm_path_start;
+    ps[0] = 0;
+    for (int i = 0; i < job->light_paths; i++) ps[i + 1] = ps[i] + job->vcm_path_count[i];
+    job->vcm_it.vertices = job->vcm_vertices;
+    job->vcm_it.path_start = ps;
+    if (job->vcm_params.merge && total > 0)
+        vcm_grid_build(&job->vcm_it, total, (uint32_t)total, job->vcm_cell_start, job->vcm_cell_items);
+    return 1;
 }
 
 /* Adds the finished iteration to the film as one sample per pixel. The light tracer's
@@ -216,8 +299,9 @@ static void light_merge(RenderJob *job)
     const size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
     const double scale = (double)pixels / (double)job->light_paths;
     double *rgb = job->iteration_rgb;
-    memset(rgb, 0, 3 * pixels * sizeof *rgb);
-    for (int c = 0; c < job->num_tiles; c++) film_add_splats(&job->splats[c], rgb, scale);
+    /* BDPT/VCM: the camera pass already wrote its pixel samples there. */
+    if (!job->vcm) memset(rgb, 0, 3 * pixels * sizeof *rgb);
+    for (int c = 0; c < job->num_chunks; c++) film_add_splats(&job->splats[c], rgb, scale);
     for (size_t p = 0; p < pixels; p++)
         film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
 }
@@ -228,10 +312,10 @@ static void *worker_main(void *arg)
     RenderJob *job = w->job;
     for (;;) {
         int tile = atomic_fetch_add(&job->next_tile, 1);
-        if (tile >= job->num_tiles) break;
-        if (job->light) light_chunk(job, w, tile);
+        if (tile >= job->units) break;
+        if (job->chunk_pass) light_chunk(job, w, tile);
         else render_tile(job, w, tile);
-        if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->num_tiles) {
+        if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->units) {
             pthread_mutex_lock(&job->lock);
             pthread_cond_broadcast(&job->done);
             pthread_mutex_unlock(&job->lock);
@@ -249,7 +333,7 @@ static void wait_for_pass(RenderJob *job, double seconds)
     ts.tv_sec += ns / 1000000000L;
     ts.tv_nsec = ns % 1000000000L;
     pthread_mutex_lock(&job->lock);
-    while (atomic_load(&job->tiles_done) < job->num_tiles)
+    while (atomic_load(&job->tiles_done) < job->units)
         if (pthread_cond_timedwait(&job->done, &job->lock, &ts) != 0) break;
     pthread_mutex_unlock(&job->lock);
 }
@@ -265,14 +349,14 @@ static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRende
     for (; started < threads; started++)
         if (pthread_create(&workers[started].thread, NULL, worker_main, &workers[started]) != 0) break;
     if (started == 0) return 0;
-    while (atomic_load(&job->tiles_done) < job->num_tiles) {
+    while (atomic_load(&job->tiles_done) < job->units) {
         wait_for_pass(job, 0.1);
         /* Each light-tracing iteration is a pass of its own and may take far less than
          * 0.1 s: keep the reports about 10 a second. */
         if (st->progress && job->light && now_seconds() - job->last_progress < 0.1) continue;
         if (st->progress) {
             job->last_progress = now_seconds();
-            double f = done_before + pass_fraction * atomic_load(&job->tiles_done) / job->num_tiles;
+            double f = done_before + pass_fraction * atomic_load(&job->tiles_done) / job->units;
             if (st->time_limit > 0.0) {
                 double ft = (now_seconds() - t0) / st->time_limit;
                 f = ft > f ? ft : f;
@@ -293,14 +377,32 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
     if (!job->light) {
         job->pass_first = first;
         job->pass_spp = count;
+        job->units = job->num_tiles;
+        job->chunk_pass = false;
         return run_pass(job, workers, threads, st, t0, done_before, fraction) ? CST_OK : CST_ERR_INTERNAL;
     }
     for (int k = 0; k < count; k++) {
         job->iteration = first + k;
-        if (!run_pass(job, workers, threads, st, t0, done_before + fraction * k / count, fraction / count))
+        double f0 = done_before + fraction * k / count, f1 = fraction / count;
+        if (job->vcm)
+            vcm_iteration_init(&job->vcm_it, &job->vcm_params, &job->camera, job->light_paths,
+                               job->vcm_radius, job->iteration);
+        job->units = job->num_chunks;
+        job->chunk_pass = true;
+        if (!run_pass(job, workers, threads, st, t0, f0, job->vcm ? 0.5 * f1 : f1))
             return CST_ERR_INTERNAL;
-        for (int c = 0; c < job->num_tiles; c++)
+        for (int c = 0; c < job->num_chunks; c++)
             if (job->splats[c].oom) return CST_ERR_OOM;
+        if (job->vcm) {
+            if (!vcm_gather(job)) return CST_ERR_OOM;
+            /* One camera path per pixel: sample `iteration` of every pixel. */
+            job->pass_first = job->iteration;
+            job->pass_spp = 1;
+            job->units = job->num_tiles;
+            job->chunk_pass = false;
+            if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.5 * f1))
+                return CST_ERR_INTERNAL;
+        }
         light_merge(job);
     }
     return CST_OK;
@@ -309,11 +411,24 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
 static void light_free(RenderJob *job)
 {
     if (job->splats)
-        for (int c = 0; c < job->num_tiles; c++) splat_list_free(&job->splats[c]);
+        for (int c = 0; c < job->num_chunks; c++) splat_list_free(&job->splats[c]);
+    if (job->vcm_lists)
+        for (int c = 0; c < job->num_chunks; c++) vcm_vertex_list_free(&job->vcm_lists[c]);
     free(job->splats);
     free(job->iteration_rgb);
+    free(job->vcm_lists);
+    free(job->vcm_path_count);
+    free(job->vcm_path_start);
+    free(job->vcm_vertices);
+    free(job->vcm_cell_start);
+    free(job->vcm_cell_items);
     job->splats = NULL;
     job->iteration_rgb = NULL;
+    job->vcm_lists = NULL;
+    job->vcm_path_count = job->vcm_path_start = NULL;
+    job->vcm_vertices = NULL;
+    job->vcm_cell_start = NULL;
+    job->vcm_cell_items = NULL;
 }
 
 /* Per-render buffers of the light tracer: a splat list per chunk, sized for a few
@@ -323,10 +438,16 @@ static int light_alloc(RenderJob *job)
 {
     size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
     job->iteration_rgb = malloc(3 * pixels * sizeof *job->iteration_rgb);
-    job->splats = calloc((size_t)job->num_tiles, sizeof *job->splats);
+    job->splats = calloc((size_t)job->num_chunks, sizeof *job->splats);
     if (!job->iteration_rgb || !job->splats) return 0;
-    for (int c = 0; c < job->num_tiles; c++)
+    for (int c = 0; c < job->num_chunks; c++)
         if (!splat_list_init(&job->splats[c], 4 * (size_t)LIGHT_CHUNK)) return 0;
+    if (job->vcm) {
+        job->vcm_lists = calloc((size_t)job->num_chunks, sizeof *job->vcm_lists);
+        job->vcm_path_count = calloc(pixels, sizeof *job->vcm_path_count);
+        job->vcm_path_start = calloc(pixels + 1, sizeof *job->vcm_path_start);
+        if (!job->vcm_lists || !job->vcm_path_count || !job->vcm_path_start) return 0;
+    }
     return 1;
 }
 
@@ -368,8 +489,22 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->tiles_y = (st.height + RENDER_TILE - 1) / RENDER_TILE;
     job->num_tiles = job->tiles_x * job->tiles_y;
     for (int i = 0; i < st.threads; i++) workers[i].job = job;
-    if (st.integrator == CST_INTEGRATOR_LIGHT) {
+    if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
+        st.integrator == CST_INTEGRATOR_VCM) {
         job->light = true;
+        if (st.integrator != CST_INTEGRATOR_LIGHT) {
+            job->vcm = true;
+            job->vcm_params.merge = st.integrator == CST_INTEGRATOR_VCM;
+            job->vcm_params.max_depth = st.max_depth;
+            job->vcm_params.rr_depth = st.rr_depth;
+            job->vcm_params.filter = st.filter;
+            job->vcm_radius = st.photon_radius > 0.0 ? (float)st.photon_radius : vcm_default_radius(scene);
+            if (!(st.photon_radius >= 0.0) || !(job->vcm_radius > 0.0f) || !(job->vcm_radius < INFINITY)) {
+                film_destroy(film); free(workers); free(job);
+                return cst_fail(err, CST_ERR_INVALID_ARG, "merging radius %g: expected a positive value (0 = automatic)",
+                                st.photon_radius);
+            }
+        }
         job->light_params.max_depth = st.max_depth;
         job->light_params.rr_depth = st.rr_depth;
         job->light_params.filter = st.filter;
@@ -382,7 +517,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                             st.width, st.height, INT32_MAX - LIGHT_CHUNK);
         }
         job->light_paths = (int)pixels;
-        job->num_tiles = (job->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
+        job->num_chunks = (job->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
         if (!light_alloc(job)) {
             light_free(job);
             film_destroy(film); free(workers); free(job);
@@ -466,7 +601,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     pthread_cond_destroy(&job->done);
     uint64_t splats_nonfinite = 0;
     if (job->light)
-        for (int c = 0; c < job->num_tiles; c++) splats_nonfinite += job->splats[c].nonfinite;
+        for (int c = 0; c < job->num_chunks; c++) splats_nonfinite += job->splats[c].nonfinite;
     light_free(job);
     photon_maps_free(&job->photon_maps);
     if (status != CST_OK) {

@@ -46,6 +46,17 @@ static inline Vec3 warp_uniform_sphere(Vec2 u)
 }
 static inline float warp_uniform_sphere_pdf(Vec3 w) { (void)w; return CST_INV_4PI; }
 
+/* Uniform direction in the cone of directions within angle acos(cos_max) of +z (pbrt-v4
+ * SampleUniformCone): cos theta uniform in [cos_max, 1]. */
+static inline Vec3 warp_uniform_cone(Vec2 u, float cos_max)
+{
+    float c = (1.0f - u.x) + u.x * cos_max;
+    float s = sqrtf(fmaxf(0.0f, 1.0f - c * c));
+    float phi = 2.0f * CST_PI * u.y;
+    return v3(cosf(phi) * s, sinf(phi) * s, c);
+}
+static inline float warp_uniform_cone_pdf(float cos_max) { return 1.0f / (2.0f * CST_PI * (1.0f - cos_max)); }
+
 /* Uniform point on a triangle as barycentrics (b1, b2) with b0 = 1 - b1 - b2
  * (the square-root parameterisation of Osada et al., "Shape Distributions", 2002, sec. 4.2).
  * pdf w.r.t. the barycentric domain's area = 2. */

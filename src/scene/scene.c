@@ -51,6 +51,7 @@ void scene_destroy(Scene *s)
     free(s->sphere_info);
     free(s->materials);
     free(s->emitters);
+    free(s->delta_lights);
     free(s->output_path);
     accel_free(&s->accel);
     emitter_sampler_free(&s->emitter_sampler);
@@ -69,6 +70,14 @@ CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError 
     /* Derived data (the rough plastic's coat table) is computed once here, not per hit. */
     material_prepare(&s->materials[s->num_materials]);
     *out_id = s->num_materials++;
+    return CST_OK;
+}
+
+CstStatus scene_add_delta_light(Scene *s, const DeltaLight *l, CstError *err)
+{
+    if (!GROW(s->delta_lights, s->cap_delta_lights, s->num_delta_lights + 1))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a light");
+    s->delta_lights[s->num_delta_lights++] = *l;
     return CST_OK;
 }
 
@@ -253,7 +262,8 @@ CstStatus scene_commit(Scene *s, CstError *err)
     AccelGeometry geom = scene_accel_geometry(s);
     CstStatus st = accel_build(&s->accel, s->accel_type, &geom, err);
     if (st != CST_OK) return st;
-    st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, err);
+    st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, s->delta_lights,
+                              s->num_delta_lights, s->accel.bounds.min, s->accel.bounds.max, err);
     if (st != CST_OK) return st;
     s->committed = 1;
     return CST_OK;

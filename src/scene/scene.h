@@ -46,6 +46,7 @@ struct CstScene {
     /* appearance */
     Material *materials; int num_materials, cap_materials;
     Emitter *emitters; int num_emitters, cap_emitters;
+    DeltaLight *delta_lights; int num_delta_lights, cap_delta_lights; /* point, spot, directional */
     /* after commit */
     AccelType accel_type; /* what scene_commit builds; ACCEL_BVH unless set */
     Accel accel;
@@ -91,6 +92,8 @@ CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err);
+/* A point, spot or directional light (unit dir; spot cosines with cos_outer < cos_inner). */
+CstStatus scene_add_delta_light(Scene *scene, const DeltaLight *light, CstError *err);
 void scene_set_camera(Scene *scene, const CameraDesc *camera);
 CstStatus scene_set_output_path(Scene *scene, const char *path, CstError *err);
 CstStatus scene_commit(Scene *scene, CstError *err);

@@ -563,7 +563,7 @@ static CstStatus parse_integrator(Loader *ld, const json_t *integ)
         if (t == CST_INTEGRATOR_DEFAULT) {
             char name[72];
             return fail_here(ld, "unknown integrator \"%s\"; expected one of: path, path-nee, "
-                                 "path-bsdf, light, whitted, photon, sppm",
+                                 "path-bsdf, light, whitted, photon, sppm, bdpt, vcm",
                              clip_name(s, name));
         }
         rs->integrator = t;
@@ -1298,15 +1298,117 @@ static CstStatus parse_shapes(Loader *ld, const json_t *shapes)
     return CST_OK;
 }
 
+/* A unit direction from a vector that must not be zero. */
+static CstStatus read_direction(Loader *ld, const json_t *v, Vec3 *out)
+{
+    Vec3 d;
+    LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &d));
+    float len = v3_length(d);
+    if (!(len > 0.0f) || !isfinite(len))
+        return fail_here(ld, "direction [%g, %g, %g] has no length; expected a nonzero vector",
+                         (double)d.x, (double)d.y, (double)d.z);
+    *out = v3_scale(d, 1.0f / len);
+    return CST_OK;
+}
+
+static CstStatus read_angle(Loader *ld, const json_t *obj, const char *key, float dflt, float lo,
+                            float hi, float *out)
+{
+    json_t *v = json_object_get(obj, key);
+    *out = dflt;
+    if (!v) return CST_OK;
+    path_push_key(ld, key);
+    LOADER_TRY(read_float(ld, v, (double)FLT_MAX, out));
+    if (!(*out >= lo && *out <= hi))
+        return fail_here(ld, "%s %g is out of range; expected degrees from %g to %g", key, (double)*out,
+                         (double)lo, (double)hi);
+    path_pop(ld);
+    return CST_OK;
+}
+
+/* "lights": point, spot and directional lights (area lights are shapes with "emission"). */
+static CstStatus parse_light(Loader *ld, const json_t *obj)
+{
+    static const char *const types[] = {"point", "spot", "directional"};
+    static const char *const point_keys[] = {"type", "position", "intensity"};
+    static const char *const spot_keys[] = {"type", "position", "look_at", "intensity", "cone_angle",
+                                            "cone_delta"};
+    static const char *const dir_keys[] = {"type", "direction", "irradiance"};
+    int type = 0;
+    json_t *v;
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    LOADER_TRY(expect_object(ld, obj, "a light object"));
+    LOADER_TRY(read_type(ld, obj, "light type", types, 3, -1, &type));
+    if (type == 2) {
+        LOADER_TRY(check_keys(ld, obj, dir_keys, 3));
+        l.type = DELTA_DIRECTIONAL;
+        LOADER_TRY(member_required(ld, obj, "direction", "the direction the light travels, 3 numbers", &v));
+        path_push_key(ld, "direction");
+        LOADER_TRY(read_direction(ld, v, &l.dir));
+        path_pop(ld);
+        LOADER_TRY(member_required(ld, obj, "irradiance", "an array of 3 numbers >= 0", &v));
+        path_push_key(ld, "irradiance");
+        LOADER_TRY(read_rgb(ld, v, 0, &l.intensity));
+        path_pop(ld);
+    } else {
+        LOADER_TRY(check_keys(ld, obj, type == 0 ? point_keys : spot_keys, type == 0 ? 3 : 6));
+        l.type = type == 0 ? DELTA_POINT : DELTA_SPOT;
+        LOADER_TRY(member_required(ld, obj, "position", "the light's position, 3 numbers", &v));
+        path_push_key(ld, "position");
+        LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &l.p));
+        path_pop(ld);
+        LOADER_TRY(member_required(ld, obj, "intensity", "an array of 3 numbers >= 0 (W/sr)", &v));
+        path_push_key(ld, "intensity");
+        LOADER_TRY(read_rgb(ld, v, 0, &l.intensity));
+        path_pop(ld);
+        if (type == 1) {
+            Vec3 at;
+            LOADER_TRY(member_required(ld, obj, "look_at", "the point the spot's axis goes through", &v));
+            path_push_key(ld, "look_at");
+            LOADER_TRY(read_vec3(ld, v, LOADER_MAX_LENGTH, &at));
+            Vec3 d = v3_sub(at, l.p);
+            float len = v3_length(d);
+            if (!(len > 0.0f) || !isfinite(len))
+                return fail_here(ld, "look_at equals position; expected a point away from the light");
+            l.dir = v3_scale(d, 1.0f / len);
+            path_pop(ld);
+            /* pbrt-v4's parameters: the cone's half-angle, and how much of it the falloff
+             * takes at its edge. */
+            float cone, delta;
+            LOADER_TRY(read_angle(ld, obj, "cone_angle", 30.0f, 0.001f, 90.0f, &cone));
+            LOADER_TRY(read_angle(ld, obj, "cone_delta", 5.0f, 0.0f, cone, &delta));
+            l.cos_outer = cosf(cone * (CST_PI / 180.0f));
+            l.cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
+        }
+    }
+    return scene_add_delta_light(ld->scene, &l, ld->err);
+}
+
+static CstStatus parse_lights(Loader *ld, const json_t *lights)
+{
+    char kind[48];
+    if (!json_is_array(lights))
+        return fail_here(ld, "got %s; expected an array of lights", describe(lights, kind));
+    size_t i;
+    json_t *light;
+    json_array_foreach(lights, i, light) {
+        path_push_index(ld, i);
+        LOADER_TRY(parse_light(ld, light));
+        path_pop(ld);
+    }
+    return CST_OK;
+}
+
 /* Sections are read in dependency order (materials before the shapes naming them), not
  * file order, so a file may list them in any order. */
 static CstStatus parse_root(Loader *ld, const json_t *root)
 {
     static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
-                                       "shapes", "accel"};
+                                       "shapes", "lights", "accel"};
     json_t *v;
     LOADER_TRY(expect_object(ld, root, "an object with the scene sections"));
-    LOADER_TRY(check_keys(ld, root, keys, 7));
+    LOADER_TRY(check_keys(ld, root, keys, 8));
     if ((v = json_object_get(root, "accel"))) {
         path_push_key(ld, "accel");
         const char *name = NULL;
@@ -1349,6 +1451,11 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
     path_push_key(ld, "shapes");
     LOADER_TRY(parse_shapes(ld, v));
     path_pop(ld);
+    if ((v = json_object_get(root, "lights"))) {
+        path_push_key(ld, "lights");
+        LOADER_TRY(parse_lights(ld, v));
+        path_pop(ld);
+    }
     return CST_OK;
 }
 

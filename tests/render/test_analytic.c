@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include <cmocka.h>
 
 #include "render/render_util.h"
@@ -61,7 +62,7 @@ static Scene *plane_under_light(double a, double b, double h)
 
 /* Radiance leaving a diffuse plane of albedo rho at the point below an a x b emitter's
  * centre: L_o = rho E / pi = rho L * 4 F(a/2, b/2, h). */
-static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t seed)
+static void run_case_spp(CstIntegrator integ, double a, double b, double h, uint64_t seed, int spp)
 {
     CstError err;
     Scene *s = plane_under_light(a, b, h);
@@ -74,7 +75,7 @@ static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t
 
     CstRenderSettings st = {0};
     st.width = st.height = 1;
-    st.spp = 1 << 20;
+    st.spp = spp;
     st.integrator = integ;
     st.seed = seed;
     st.seed_set = 1;
@@ -92,6 +93,11 @@ static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t
     }
     cst_film_destroy(f);
     scene_destroy(s);
+}
+
+static void run_case(CstIntegrator integ, double a, double b, double h, uint64_t seed)
+{
+    run_case_spp(integ, a, b, h, seed, 1 << 20);
 }
 
 /* The light tracer cannot render the single-point view above (a vertex would have to land
@@ -235,10 +241,104 @@ static void test_rectangle_irradiance(void **state)
     }
 }
 
+/* BDPT and VCM run one light and one camera path per iteration on this 1-pixel film, and
+ * an iteration has a fixed cost, so they get fewer samples (their error bars say so). */
+static void test_rectangle_irradiance_bidir(void **state)
+{
+    (void)state;
+    const CstIntegrator v[] = {CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
+    for (int i = 0; i < 2; i++) {
+        run_case_spp(v[i], 1.0, 1.0, 1.0, 51 + i, 4096);
+        run_case_spp(v[i], 4.0, 0.5, 0.7, 61 + i, 4096);
+        run_case_spp(v[i], 0.2, 0.3, 2.0, 71 + i, 4096);
+    }
+}
+
+/* Delta lights over the plane y = 0 (albedo RHO) seen at its origin by the 1-pixel camera:
+ * a point light of intensity I at height h gives L = RHO/pi I / h^2; a spot there whose
+ * axis is tilted by 25 degrees, with a 30-degree cone and a 10-degree falloff, gives that
+ * times pbrt-v4's smoothstep falloff at 25 degrees; a directional light of irradiance E
+ * at 30 degrees from the normal gives RHO/pi E cos 30. No other geometry: direct light is
+ * all there is. NEE of a delta light has no variance, so the check allows float rounding
+ * (1e-5 relative) besides 4 standard errors. */
+static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed)
+{
+    CstError err;
+    Scene *s = scene_create();
+    int plane_mat;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
+    Vec3 plane[4] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
+    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    const double h = 2.0, I = 5.0, E = 1.5, pi = 3.14159265358979323846;
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    double expected = 0.0;
+    if (kind == 0) {
+        l.type = DELTA_POINT;
+        l.p = v3(0, (float)h, 0);
+        l.intensity = rgb_s((float)I);
+        expected = (double)RHO / pi * I / (h * h);
+    } else if (kind == 1) {
+        const double tilt = 25.0 * pi / 180.0, cone = 30.0 * pi / 180.0, inner = 20.0 * pi / 180.0;
+        l.type = DELTA_SPOT;
+        l.p = v3(0, (float)h, 0);
+        l.dir = v3((float)sin(tilt), (float)-cos(tilt), 0);
+        l.intensity = rgb_s((float)I);
+        l.cos_outer = (float)cos(cone);
+        l.cos_inner = (float)cos(inner);
+        double t = (cos(tilt) - cos(cone)) / (cos(inner) - cos(cone));
+        expected = (double)RHO / pi * I * t * t * (3.0 - 2.0 * t) / (h * h);
+    } else {
+        const double beta = 30.0 * pi / 180.0;
+        l.type = DELTA_DIRECTIONAL;
+        l.dir = v3((float)sin(beta), (float)-cos(beta), 0);
+        l.intensity = rgb_s((float)E);
+        expected = (double)RHO / pi * E * cos(beta);
+    }
+    assert_int_equal(scene_add_delta_light(s, &l, &err), CST_OK);
+    CameraDesc cam = {{0, 1.0f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = {0};
+    st.width = st.height = 1;
+    st.spp = spp;
+    st.integrator = integ;
+    st.seed = seed;
+    st.seed_set = 1;
+    st.threads = 2;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+    assert_int_equal(stats.nonfinite, 0);
+    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    for (int c = 0; c < 3; c++)
+        if (!(fabs(r.mean[c] - expected) <= Z_LIMIT * r.se[c] + 1e-5 * expected))
+            fail_msg("%s, light kind %d: L = %.7f, closed form %.7f (se %.2g)", cst_integrator_name(integ), kind,
+                     r.mean[c], expected, r.se[c]);
+    print_message("%s, light kind %d: L = %.6f (se %.1e), closed form %.6f\n", cst_integrator_name(integ), kind,
+                  r.mean[0], r.se[0], expected);
+    cst_film_destroy(f);
+    scene_destroy(s);
+}
+
+static void test_delta_lights(void **state)
+{
+    (void)state;
+    const CstIntegrator v[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_NEE, CST_INTEGRATOR_WHITTED,
+                               CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_BDPT,
+                               CST_INTEGRATOR_VCM};
+    for (int i = 0; i < 7; i++)
+        for (int kind = 0; kind < 3; kind++)
+            run_delta_case(v[i], kind, v[i] >= CST_INTEGRATOR_SPPM ? 1024 : 65536, 100 + 10 * (uint64_t)i + (uint64_t)kind);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rectangle_irradiance),
+        cmocka_unit_test(test_rectangle_irradiance_bidir),
+        cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_light_tracer_irradiance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -85,6 +85,15 @@ static void test_light_thread_count_invariance(void **state)
     check_thread_count_invariance(CST_INTEGRATOR_LIGHT);
 }
 
+/* BDPT and VCM: light vertex lists and camera splats per chunk, concatenated in chunk
+ * order, the merging grid built from them in vertex order, camera paths per pixel. */
+static void test_bidir_thread_count_invariance(void **state)
+{
+    (void)state;
+    check_thread_count_invariance(CST_INTEGRATOR_BDPT);
+    check_thread_count_invariance(CST_INTEGRATOR_VCM);
+}
+
 /* The photon maps are built single-threaded from the render seed (200000 photons, the
  * default, and the automatic radius), then read by every thread: the image must still
  * not depend on the thread count, and the seed must change the maps too. */
@@ -151,6 +160,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_thread_count_invariance),
         cmocka_unit_test(test_light_thread_count_invariance),
+        cmocka_unit_test(test_bidir_thread_count_invariance),
         cmocka_unit_test(test_photon_thread_count_invariance),
         cmocka_unit_test(test_sppm_thread_count_invariance),
         cmocka_unit_test(test_accel_backends_identical_images),

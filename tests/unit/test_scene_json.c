@@ -631,8 +631,8 @@ static void test_type_names(void **state)
     expect_error(WITH_CAM("{\"type\": \"fisheye\", \"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40}"),
                  CST_ERR_INVALID_ARG, "\"fisheye\"", 0,
                  "camera.type: unknown camera type \"fisheye\"; expected one of: pinhole, thinlens");
-    expect_error(WITH_SECTION("\"integrator\": {\"type\": \"bdpt\"}"), CST_ERR_INVALID_ARG, "\"bdpt\"", 0,
-                 "integrator.type: unknown integrator \"bdpt\"; expected one of: path, path-nee, path-bsdf, light");
+    expect_error(WITH_SECTION("\"integrator\": {\"type\": \"bpt\"}"), CST_ERR_INVALID_ARG, "\"bpt\"", 0,
+                 "integrator.type: unknown integrator \"bpt\"; expected one of: path, path-nee, path-bsdf, light");
     expect_error(WITH_SECTION("\"film\": {\"filter\": \"gauss\"}"), CST_ERR_INVALID_ARG, "\"gauss\"", 0,
                  "film.filter: unknown filter \"gauss\"; expected one of: box, tent");
 }

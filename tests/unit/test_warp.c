@@ -22,7 +22,7 @@
 enum {
     SAMPLE_COUNT = 1000000, /* per chi-square test */
     SUBCELLS = 8,           /* midpoint sub-samples per cell side for the expected counts */
-    CHI2_TESTS = 7          /* 6 warps + distrib1d: the number of p-values corrected for */
+    CHI2_TESTS = 8          /* 7 warps + distrib1d: the number of p-values corrected for */
 };
 /* Significance level of the whole file. Each test compares its p-value against the Sidak
  * threshold 1 - (1 - ALPHA)^(1 / CHI2_TESTS) ~ 0.00144, so that with correct samplers
@@ -199,6 +199,16 @@ static double sphere_density(double gx, double gy)
     return 4.0 * PI_D * (double)warp_uniform_sphere_pdf(dir_of_grid(gx, gy));
 }
 
+/* The cone of spot lights, cos_max = 0.85: its edge z = 0.85 is the grid line gx = 37/40,
+ * so no cell straddles it. */
+static const float CONE_COS = 0.85f;
+static bool cone_to_grid(Vec2 u, double *gx, double *gy) { return dir_to_grid(warp_uniform_cone(u, CONE_COS), gx, gy); }
+static double cone_density(double gx, double gy)
+{
+    Vec3 w = dir_of_grid(gx, gy);
+    return w.z >= CONE_COS ? 4.0 * PI_D * (double)warp_uniform_cone_pdf(CONE_COS) : 0.0;
+}
+
 /* Barycentrics on the Duffy square: b1 = gx, b2 = gy (1 - gx), Jacobian 1 - gx. The
  * triangle's hypotenuse is the edge gy = 1, so no cell straddles it (and the grid is not
  * the sampler's own parameterisation, which is b1 + b2 = sqrt(u.x)). */
@@ -237,6 +247,7 @@ static const WarpCase WARPS[] = {
     {"uniform sphere", 40, 40, sphere_to_grid, sphere_density},
     {"uniform triangle", 30, 30, triangle_to_grid, triangle_density},
     {"tent", 100, 1, tent_to_grid, tent_density},
+    {"uniform cone", 40, 40, cone_to_grid, cone_density},
 };
 
 static Vec2 next_u(Pcg32 *rng)
@@ -313,6 +324,7 @@ static void test_chi2_uniform_hemisphere(void **state) { (void)state; run_warp_c
 static void test_chi2_uniform_sphere(void **state) { (void)state; run_warp_chi2(&WARPS[3], 4u); }
 static void test_chi2_uniform_triangle(void **state) { (void)state; run_warp_chi2(&WARPS[4], 5u); }
 static void test_chi2_tent(void **state) { (void)state; run_warp_chi2(&WARPS[5], 6u); }
+static void test_chi2_uniform_cone(void **state) { (void)state; run_warp_chi2(&WARPS[6], 8u); }
 
 /* Negative controls, not counted in CHI2_TESTS: the machinery must reject a sampler
  * that does not match the pdf it is tested against, including a subtle mismatch. */
@@ -591,6 +603,7 @@ int main(void)
         cmocka_unit_test(test_chi2_uniform_sphere),
         cmocka_unit_test(test_chi2_uniform_triangle),
         cmocka_unit_test(test_chi2_tent),
+        cmocka_unit_test(test_chi2_uniform_cone),
         cmocka_unit_test(test_chi2_rejects_wrong_pdfs),
         cmocka_unit_test(test_pdfs_integrate_to_one),
         cmocka_unit_test(test_samples_in_domain),

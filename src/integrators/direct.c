@@ -1,0 +1,17 @@
+/* One-sample direct lighting shared by the integrators that do not MIS it. */
+#include "integrators/direct.h"
+
+Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return rgb_s(0.0f);
+    float u_sel = pcg32_float(rng);
+    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    LightLi ls;
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
+    Rgb f = bsdf_eval(bsdf, wo, ls.wi);
+    if (rgb_is_black(f)) return rgb_s(0.0f);
+    ++*rays;
+    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
+    return rgb_scale(rgb_mul(f, ls.li), 1.0f / ls.pdf);
+}

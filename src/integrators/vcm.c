@@ -1,0 +1,448 @@
+/* BDPT and VCM as one estimator, after Georgiev et al. 2012 and the recursive MIS of
+ * Georgiev's technical report "Implementing Vertex Connection and Merging" (2012; the
+ * "tech. rep." equations below), with the power heuristic (beta = 2, Veach eq. 9.13).
+ *
+ * Every strategy's MIS weight is 1 / (sum over strategies of (p_k / p_s)^2); the ratios
+ * are carried along each subpath in three numbers (d_vcm, d_vc, d_vm) so that a weight
+ * costs O(1) instead of a walk over the path. The pdfs in the weights leave out Russian
+ * roulette (our roulette follows the throughput, which the reverse direction cannot know):
+ * weights that sum to one over the strategies of a path keep the estimator unbiased
+ * whatever pdfs they are computed from, so this only makes them slightly less optimal. */
+#include "integrators/vcm.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "materials/bsdf.h"
+
+/* The MIS exponent: the power heuristic. Applied to every factor of a ratio, which is
+ * the same as to the ratio: (ab)^2 = a^2 b^2. */
+static inline float mis(float x) { return x * x; }
+
+void vcm_vertex_list_free(VcmVertexList *l)
+{
+    free(l->v);
+    memset(l, 0, sizeof *l);
+}
+
+static void push_vertex(VcmVertexList *l, const VcmVertex *v)
+{
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? 2 * l->cap : 1024;
+        VcmVertex *nv = realloc(l->v, cap * sizeof *nv);
+        if (!nv) { l->oom = 1; return; }
+        l->v = nv;
+        l->cap = cap;
+    }
+    l->v[l->n++] = *v;
+}
+
+float vcm_default_radius(const Scene *s)
+{
+    /* SmallVCM's default: 0.003 times the radius of the scene's bounding sphere. */
+    BBox b = s->accel.bounds;
+    Vec3 ext = v3_sub(b.max, b.min);
+    float r = 0.5f * v3_length(ext);
+    return isfinite(r) && r > 0.0f ? 0.003f * r : 1e-3f;
+}
+
+void vcm_iteration_init(VcmIteration *it, const VcmParams *vp, const Camera *cam, int light_paths,
+                        float base_radius, int index)
+{
+    memset(it, 0, sizeof *it);
+    it->light_paths = light_paths;
+    const float alpha = 0.75f;
+    it->radius = base_radius * powf((float)index + 1.0f, 0.5f * (alpha - 1.0f));
+    float eta = CST_PI * it->radius * it->radius * (float)light_paths; /* tech. rep. eq. 12 */
+    it->mis_vm = vp->merge ? mis(eta) : 0.0f;
+    it->mis_vc = vp->merge ? mis(1.0f / eta) : 0.0f;
+    it->vm_norm = 1.0f / eta;
+    float film_area = 4.0f * cam->tan_half_vfov * cam->tan_half_vfov * cam->aspect;
+    it->pixel_area = film_area / ((float)cam->width * (float)cam->height);
+}
+
+/* The density, per unit solid angle, with which a camera sample of one pixel picks the
+ * direction at angle theta to the view axis: 1 / (pixel area cos^3 theta) on the image
+ * plane at distance 1 (camera.c). Exact for the box filter; for the tent and the thin
+ * lens it is the same function used consistently by every strategy, which is all the
+ * weights need. */
+static inline float camera_pdf_w(const VcmIteration *it, float cos_theta)
+{
+    return 1.0f / (it->pixel_area * cos_theta * cos_theta * cos_theta);
+}
+
+/* The subpath state between vertices. */
+typedef struct SubPath {
+    Rgb beta, scatter; /* throughput; scatter = product of BSDF weights (roulette's input) */
+    float d_vcm, d_vc, d_vm;
+} SubPath;
+
+/* After scattering at a vertex into a direction with |cos| cos_out, forward pdf pdf_fwd
+ * and reverse pdf pdf_rev (tech. rep. eqs. 34-36; for delta lobes eqs. 53-55, where the
+ * forward and reverse discrete probabilities are the same and cancel). The division by
+ * the next vertex's distance and cosine happens at the next hit. */
+static inline void mis_scatter(SubPath *sp, const VcmIteration *it, const BsdfSample *bs,
+                               float cos_out, float pdf_rev)
+{
+    if (bs->delta) {
+        sp->d_vcm = 0.0f;
+        sp->d_vc *= mis(cos_out);
+        sp->d_vm *= mis(cos_out);
+        return;
+    }
+    float g = mis(cos_out / bs->pdf);
+    sp->d_vc = g * (sp->d_vc * mis(pdf_rev) + sp->d_vcm + it->mis_vm);
+    sp->d_vm = g * (sp->d_vm * mis(pdf_rev) + sp->d_vcm * it->mis_vc + 1.0f);
+    sp->d_vcm = mis(1.0f / bs->pdf);
+}
+
+/* At a hit at distance dist with |cos| cos_in to the incoming direction: completes the
+ * area conversion of the previous scattering (tech. rep. eqs. 31-33, 37-38). */
+static inline void mis_arrive(SubPath *sp, float dist, float cos_in)
+{
+    sp->d_vcm *= mis(dist * dist);
+    float inv = 1.0f / mis(cos_in);
+    sp->d_vcm *= inv;
+    sp->d_vc *= inv;
+    sp->d_vm *= inv;
+}
+
+/* Throughput-following Russian roulette, as path.c and light.c do it. Returns false when
+ * the path stops. */
+static inline bool roulette(SubPath *sp, int depth, int rr_depth, Pcg32 *rng)
+{
+    if (depth < rr_depth) return true;
+    float q = minf(0.95f, rgb_max(sp->scatter));
+    if (!(pcg32_float(rng) < q)) return false;
+    sp->beta = rgb_scale(sp->beta, 1.0f / q);
+    sp->scatter = rgb_scale(sp->scatter, 1.0f / q);
+    return true;
+}
+
+/* Whether a surface point sees a lens point (light.c's visible_to_lens: the lens is not
+ * geometry, so only the surface end is pushed off). */
+static bool visible_to_lens(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+{
+    Vec3 o = scene_offset(p, ng, v3_sub(q, p));
+    Vec3 d = v3_sub(q, o);
+    float len = v3_length(d);
+    if (!(len > 0.0f)) return true;
+    Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
+    return !accel_occluded(&s->accel, &r);
+}
+
+/* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
+static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams *vp,
+                              const VcmIteration *it, const VcmVertex *v, const Bsdf *b,
+                              Pcg32 *rng, SplatList *splats, uint64_t *rays)
+{
+    const float margin = vp->filter == CST_FILTER_TENT ? 0.5f : 0.0f;
+    Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+    CameraWiSample cs;
+    if (!camera_sample_wi(cam, v->p, u_lens, margin, &cs)) return;
+    float cos_prev = fabsf(v3_dot(v->ng, v->w_prev));
+    float cos_cam = fabsf(v3_dot(v->ng, cs.wi));
+    if (!(cos_prev > 0.0f) || !(cos_cam > 0.0f)) return;
+    /* f(wo = toward the camera, wi = toward the light) |cos theta_cam|, evaluated the way
+     * the camera path sees this vertex (light.c explains the cosine swap). */
+    Rgb f = rgb_scale(bsdf_eval(b, cs.wi, v->w_prev), cos_cam / cos_prev);
+    if (rgb_is_black(f)) return;
+    float pdf_rev = bsdf_pdf(b, cs.wi, v->w_prev);
+    float cos_theta = v3_dot(v3_neg(cs.wi), cam->forward);
+    /* The camera's density of this vertex per unit area, per pixel (tech. rep. eq. 46). */
+    float cam_pdf_a = camera_pdf_w(it, cos_theta) * cos_cam / (cs.dist * cs.dist);
+    float w_light = mis(cam_pdf_a / (float)it->light_paths) *
+                    (it->mis_vm + v->d_vcm + v->d_vc * mis(pdf_rev));
+    float weight = 1.0f / (1.0f + w_light);
+    ++*rays;
+    if (!visible_to_lens(s, v->p, v->ng, cs.p_lens)) return;
+    film_splat(splats, cam->width, cam->height, vp->filter, cs.raster.x, cs.raster.y,
+               rgb_scale(rgb_mul(v->beta, f), weight * cs.we / cs.pdf_w));
+}
+
+void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
+                     Pcg32 *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return;
+    float u_sel = pcg32_float(rng);
+    Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));
+    EmissionSample es;
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
+    if (!(es.pdf_w > 0.0f) || rgb_is_black(es.beta)) return;
+    float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
+
+    /* tech. rep. eqs. 31-33: the light vertex's NEE density against its emission density;
+     * a delta light cannot be hit, so no strategy reaches it by a connection (d_vc = 0). */
+    SubPath sp;
+    sp.beta = es.beta;
+    sp.scatter = rgb_s(1.0f);
+    sp.d_vcm = mis(es.nee_pdf / emission_pdf);
+    sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
+    sp.d_vm = sp.d_vc * it->mis_vc;
+
+    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    for (int bounces = 1;; bounces++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) break;
+        Vec3 w_prev = v3_neg(ray.d);
+        float cos_in = fabsf(v3_dot(sh.ng, w_prev));
+        if (!(cos_in > 0.0f)) break;
+        /* From a directional light the first segment has no distance: its density is
+         * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
+        mis_arrive(&sp, bounces > 1 || es.finite ? sh.t : 1.0f, cos_in);
+
+        Bsdf bsdf;
+        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        if (!bsdf_is_delta(&bsdf)) {
+            VcmVertex v = {sh.p, sh.ng, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
+                           sh.material, bounces};
+            push_vertex(verts, &v);
+            connect_to_camera(s, cam, vp, it, &v, &bsdf, rng, splats, rays);
+        }
+        if (vp->max_depth > 0 && bounces >= vp->max_depth) break;
+
+        BsdfSample bs;
+        float uc = pcg32_float(rng);
+        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
+        if (!(bs.pdf > 0.0f)) break;
+        float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(&bsdf, bs.wi, w_prev);
+        sp.beta = rgb_mul(sp.beta, bs.weight);
+        sp.scatter = rgb_mul(sp.scatter, bs.weight);
+        if (rgb_is_black(sp.scatter)) break;
+        if (!roulette(&sp, bounces, vp->rr_depth, rng)) break;
+        mis_scatter(&sp, it, &bs, fabsf(v3_dot(sh.ng, bs.wi)), pdf_rev);
+        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    }
+}
+
+/* A hashed grid cell index of integer cell coordinates (Teschner et al. 2003 primes). */
+static inline uint32_t cell_hash(const VcmIteration *it, int x, int y, int z)
+{
+    uint32_t h = ((uint32_t)x * 73856093u) ^ ((uint32_t)y * 19349663u) ^ ((uint32_t)z * 83492791u);
+    return h % it->cells;
+}
+
+static inline int cell_coord(float p, float lo, float inv_cell)
+{
+    return (int)floorf((p - lo) * inv_cell);
+}
+
+void vcm_grid_build(VcmIteration *it, size_t n, uint32_t cells, uint32_t *cell_start,
+                    VcmVertex *cell_vertices)
+{
+    it->cells = cells;
+    it->cell_start = cell_start;
+    it->cell_vertices = cell_vertices;
+    Vec3 lo = v3(INFINITY, INFINITY, INFINITY);
+    for (size_t i = 0; i < n; i++) lo = v3_min(lo, it->vertices[i].p);
+    it->grid_lo = n ? lo : v3(0.0f, 0.0f, 0.0f);
+    it->inv_cell = 1.0f / (2.0f * it->radius);
+    /* A counting sort by cell, stable in vertex order: the order in which merges are
+     * summed is then a function of the iteration alone. */
+    memset(cell_start, 0, ((size_t)cells + 1) * sizeof *cell_start);
+    for (size_t i = 0; i < n; i++) {
+        Vec3 p = it->vertices[i].p;
+        uint32_t c = cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
+                               cell_coord(p.z, lo.z, it->inv_cell));
+        cell_start[c + 1]++;
+    }
+    for (uint32_t c = 0; c < cells; c++) cell_start[c + 1] += cell_start[c];
+    /* cell_start[c] doubles as the fill cursor, then is restored by one shift. */
+    for (size_t i = 0; i < n; i++) {
+        Vec3 p = it->vertices[i].p;
+        uint32_t c = cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
+                               cell_coord(p.z, lo.z, it->inv_cell));
+        cell_vertices[cell_start[c]++] = it->vertices[i];
+    }
+    for (uint32_t c = cells; c > 0; c--) cell_start[c] = cell_start[c - 1];
+    cell_start[0] = 0;
+}
+
+/* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF
+ * sampling cannot hit it). */
+static Rgb connect_to_light(const Scene *s, const VcmIteration *it, const SubPath *sp,
+                            const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
+{
+    float u_sel = pcg32_float(rng);
+    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    LightLi ls;
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
+    float cos_x = fabsf(v3_dot(sh->ng, ls.wi));
+    if (!(cos_x > 0.0f)) return rgb_s(0.0f);
+    Rgb f = bsdf_eval(b, wo, ls.wi);
+    if (rgb_is_black(f)) return rgb_s(0.0f);
+    float bsdf_pdf_fwd = bsdf_pdf(b, wo, ls.wi), bsdf_pdf_rev = bsdf_pdf(b, ls.wi, wo);
+    float w_light = ls.delta ? 0.0f : mis(bsdf_pdf_fwd / ls.direct_pdf);
+    float w_camera = mis(ls.emit_pdf * cos_x / (ls.direct_pdf * ls.cos_light)) *
+                     (it->mis_vm + sp->d_vcm + sp->d_vc * mis(bsdf_pdf_rev));
+    float weight = 1.0f / (w_light + 1.0f + w_camera);
+    ++*rays;
+    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
+    return rgb_scale(rgb_mul(f, ls.li), weight / ls.pdf);
+}
+
+/* A connection between camera vertex x and light vertex y (tech. rep. eqs. 40-41). */
+static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPath *sp,
+                            const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const VcmVertex *y,
+                            uint64_t *rays)
+{
+    Vec3 to = v3_sub(y->p, x->p);
+    float dist2 = v3_length2(to);
+    if (!(dist2 > 0.0f)) return rgb_s(0.0f);
+    float dist = sqrtf(dist2);
+    Vec3 d = v3_scale(to, 1.0f / dist); /* x -> y */
+    Vec3 nd = v3_neg(d);
+    float cos_x = fabsf(v3_dot(x->ng, d)), cos_y = fabsf(v3_dot(y->ng, d));
+    float cos_y_prev = fabsf(v3_dot(y->ng, y->w_prev));
+    if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return rgb_s(0.0f);
+    Rgb fx = bsdf_eval(bx, wo, d);
+    if (rgb_is_black(fx)) return rgb_s(0.0f);
+    Bsdf by;
+    bsdf_init(&by, &s->materials[y->material], y->ng);
+    /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
+     * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */
+    Rgb fy = rgb_scale(bsdf_eval(&by, nd, y->w_prev), cos_y / cos_y_prev);
+    if (rgb_is_black(fy)) return rgb_s(0.0f);
+    float x_fwd = bsdf_pdf(bx, wo, d), x_rev = bsdf_pdf(bx, d, wo);
+    float y_fwd = bsdf_pdf(&by, y->w_prev, nd), y_rev = bsdf_pdf(&by, nd, y->w_prev);
+    float x_fwd_a = x_fwd * cos_y / dist2; /* the camera subpath reaching y */
+    float y_fwd_a = y_fwd * cos_x / dist2; /* the light subpath reaching x */
+    float w_light = mis(x_fwd_a) * (it->mis_vm + y->d_vcm + y->d_vc * mis(y_rev));
+    float w_camera = mis(y_fwd_a) * (it->mis_vm + sp->d_vcm + sp->d_vc * mis(x_rev));
+    float weight = 1.0f / (w_light + 1.0f + w_camera);
+    ++*rays;
+    if (!scene_visible(s, x->p, x->ng, y->p, y->ng)) return rgb_s(0.0f);
+    return rgb_scale(rgb_mul(rgb_mul(fx, fy), y->beta), weight / dist2);
+}
+
+/* Merging at camera vertex x: the density estimate over every light vertex within the
+ * radius, each MIS-weighted (tech. rep. eqs. 42-43), scaled by 1 / (pi r^2 N). */
+static Rgb merge(const VcmParams *vp, const VcmIteration *it, const SubPath *sp, const Bsdf *bx,
+                 const SurfaceHit *x, Vec3 wo, int bounces)
+{
+    const float r = it->radius, r2 = r * r;
+    int lo[3], hi[3];
+    const float pc[3] = {x->p.x, x->p.y, x->p.z}, gl[3] = {it->grid_lo.x, it->grid_lo.y, it->grid_lo.z};
+    for (int a = 0; a < 3; a++) {
+        lo[a] = cell_coord(pc[a] - r, gl[a], it->inv_cell);
+        hi[a] = cell_coord(pc[a] + r, gl[a], it->inv_cell);
+    }
+    /* At most 2 x 2 x 2 cells (cells are 2r wide); distinct cells can hash to the same
+     * bucket, which must be visited once. The buckets' bounds and first vertices are
+     * prefetched together before any is read: the lookups are independent cache misses,
+     * and issuing them at once overlaps their latency (measured: docs/benchmarks.md). */
+    uint32_t bucket[8];
+    int nb = 0;
+    for (int cz = lo[2]; cz <= hi[2]; cz++)
+        for (int cy = lo[1]; cy <= hi[1]; cy++)
+            for (int cx = lo[0]; cx <= hi[0]; cx++) {
+                uint32_t c = cell_hash(it, cx, cy, cz);
+                bool dup = false;
+                for (int k = 0; k < nb; k++) dup |= bucket[k] == c;
+                if (dup || nb == 8) continue;
+                bucket[nb++] = c;
+                __builtin_prefetch(&it->cell_start[c]);
+            }
+    uint32_t first[8], last[8];
+    for (int b = 0; b < nb; b++) {
+        first[b] = it->cell_start[bucket[b]];
+        last[b] = it->cell_start[bucket[b] + 1];
+        __builtin_prefetch(&it->cell_vertices[first[b]]);
+    }
+    Rgb acc = rgb_s(0.0f);
+    for (int b = 0; b < nb; b++)
+        for (uint32_t k = first[b]; k < last[b]; k++) {
+            const VcmVertex *y = &it->cell_vertices[k];
+            Vec3 dv = v3_sub(y->p, x->p);
+            if (v3_dot(dv, dv) > r2) continue;
+            /* The merged path has the camera vertices and y's, sharing one. */
+            if (vp->max_depth > 0 && bounces + y->bounces - 1 > vp->max_depth) continue;
+            float cos_w = fabsf(v3_dot(x->ng, y->w_prev));
+            if (!(cos_w > 0.0f)) continue;
+            /* A photon from the far side of a thin wall gets f = 0 here. */
+            Rgb f = bsdf_eval(bx, wo, y->w_prev);
+            if (rgb_is_black(f)) continue;
+            f = rgb_scale(f, 1.0f / cos_w); /* merging wants f without the cosine */
+            float x_fwd = bsdf_pdf(bx, wo, y->w_prev), x_rev = bsdf_pdf(bx, y->w_prev, wo);
+            float w_light = y->d_vcm * it->mis_vc + y->d_vm * mis(x_fwd);
+            float w_camera = sp->d_vcm * it->mis_vc + sp->d_vm * mis(x_rev);
+            float weight = 1.0f / (w_light + 1.0f + w_camera);
+            acc = rgb_add(acc, rgb_scale(rgb_mul(f, y->beta), weight));
+        }
+    return rgb_scale(acc, it->vm_norm);
+}
+
+Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
+                     int path, Ray ray, Pcg32 *rng, uint64_t *rays)
+{
+    Rgb L = rgb_s(0.0f);
+    float cos_theta = v3_dot(ray.d, cam->forward);
+    if (!(cos_theta > 0.0f)) return L;
+    /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. */
+    SubPath sp = {rgb_s(1.0f), rgb_s(1.0f),
+                  mis((float)it->light_paths / camera_pdf_w(it, cos_theta)), 0.0f, 0.0f};
+    const VcmVertex *lv = it->vertices + it->path_start[path];
+    const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
+    const bool has_lights = s->emitter_sampler.lights > 0;
+    for (int t = 1;; t++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) break;
+        Vec3 wo = v3_neg(ray.d);
+        float cos_in = fabsf(v3_dot(sh.ng, wo));
+        if (!(cos_in > 0.0f)) break;
+        mis_arrive(&sp, sh.t, cos_in);
+
+        /* s = 0: the camera subpath hits an emitter (tech. rep. eq. 39). Seen directly
+         * there is no other strategy (light vertices on emitters are not splatted). */
+        if (sh.emitter >= 0) {
+            const Emitter *e = &s->emitters[sh.emitter];
+            Rgb le = emitter_radiance(e, sh.ng, wo);
+            if (!rgb_is_black(le)) {
+                float w = 1.0f;
+                if (t > 1) {
+                    float pdf_a = emitter_pdf_a(&s->emitter_sampler, sh.emitter);
+                    float emission_pdf = pdf_a * emitter_emission_pdf_w(e, sh.ng, wo);
+                    w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
+                }
+                L = rgb_madd(L, sp.beta, rgb_scale(le, w));
+            }
+        }
+        /* The camera path's vertices so far are t bounces once this one scatters. */
+        if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
+
+        Bsdf bsdf;
+        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        if (!bsdf_is_delta(&bsdf)) {
+            if (has_lights)
+                L = rgb_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, rays));
+            Rgb c = rgb_s(0.0f);
+            for (int j = 0; j < nlv; j++) {
+                if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
+                c = rgb_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], rays));
+            }
+            L = rgb_madd(L, sp.beta, c);
+            if (vp->merge && it->cells > 0)
+                L = rgb_madd(L, sp.beta, merge(vp, it, &sp, &bsdf, &sh, wo, t));
+        }
+
+        BsdfSample bs;
+        float uc = pcg32_float(rng);
+        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+        if (!bsdf_sample(&bsdf, wo, uc, u, &bs)) break;
+        if (!(bs.pdf > 0.0f)) break;
+        float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(&bsdf, bs.wi, wo);
+        sp.beta = rgb_mul(sp.beta, bs.weight);
+        sp.scatter = rgb_mul(sp.scatter, bs.weight);
+        if (rgb_is_black(sp.scatter)) break;
+        if (!roulette(&sp, t, vp->rr_depth, rng)) break;
+        mis_scatter(&sp, it, &bs, fabsf(v3_dot(sh.ng, bs.wi)), pdf_rev);
+        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    }
+    return L;
+}

@@ -1,0 +1,270 @@
+/* Bidirectional estimators: BDPT is unbiased and VCM consistent, so both must agree with
+ * the MIS path tracer within noise per channel on the image mean and every block: on
+ * the Cornell box, on the Cornell box with a mirror and a glass sphere (caustics, paths
+ * through delta vertices), with a bounce limit and the tent filter, through a glass
+ * interface (the eta^2 of radiance vs importance), and in an emitting furnace with a
+ * closed form. Their pixel estimates are correlated within an iteration (splats, shared
+ * light vertices), so their standard errors come from independent renders. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "render/render_util.h"
+#include "scene/scene.h"
+
+enum { MAX_REGIONS = 1 + 16 };
+
+typedef struct Regions {
+    int count;
+    int rect[MAX_REGIONS][4]; /* x0, y0, x1, y1 */
+    RegionStat stat[MAX_REGIONS];
+} Regions;
+
+/* Region 0 is the whole image, then size/block squared blocks in row order. */
+static Regions regions(int size, int block)
+{
+    Regions r;
+    memset(&r, 0, sizeof r);
+    int n = size / block;
+    r.rect[0][2] = size;
+    r.rect[0][3] = size;
+    r.count = 1;
+    for (int b = 0; b < n * n; b++, r.count++) {
+        r.rect[r.count][0] = (b % n) * block;
+        r.rect[r.count][1] = (b / n) * block;
+        r.rect[r.count][2] = r.rect[r.count][0] + block;
+        r.rect[r.count][3] = r.rect[r.count][1] + block;
+    }
+    assert_true(r.count <= MAX_REGIONS);
+    return r;
+}
+
+/* The path tracer's pixels are independent: the film's variances give the errors. */
+static void path_regions(const CstScene *s, const CstRenderSettings *base, int spp, uint64_t seed,
+                         Regions *r)
+{
+    CstRenderSettings st = *base;
+    st.integrator = CST_INTEGRATOR_PATH;
+    st.spp = spp;
+    st.seed = seed;
+    st.seed_set = 1;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    CstError err;
+    if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(stats.nonfinite, 0);
+    for (int i = 0; i < r->count; i++)
+        r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
+    cst_film_destroy(f);
+}
+
+static void bidir_regions(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ,
+                          int renders, uint64_t seed, Regions *r)
+{
+    CstRenderSettings st = *base;
+    st.integrator = integ;
+    CstError err;
+    if (region_stats_by_render(s, &st, renders, seed, r->count, (const int (*)[4])r->rect, r->stat,
+                               NULL, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+}
+
+static void compare(const Regions *a, const Regions *b, const char *na, const char *nb)
+{
+    double worst = 0.0;
+    int worst_block = -2, worst_c = 0;
+    for (int i = 0; i < a->count; i++)
+        for (int c = 0; c < 3; c++) {
+            double z = z_score(a->stat[i].mean[c], a->stat[i].se[c], b->stat[i].mean[c], b->stat[i].se[c]);
+            if (fabs(z) > fabs(worst)) { worst = z; worst_block = i - 1; worst_c = c; }
+            if (!(fabs(z) <= Z_LIMIT))
+                fail_msg("%s vs %s: block %d (-1 = whole image) channel %d: %.6f vs %.6f, z = %.2f",
+                         na, nb, i - 1, c, a->stat[i].mean[c], b->stat[i].mean[c], z);
+        }
+    print_message("%s vs %s: whole image (r) %.5f vs %.5f, largest |z| = %.2f (block %d, channel %d)\n",
+                  na, nb, a->stat[0].mean[0], b->stat[0].mean[0], fabs(worst), worst_block, worst_c);
+}
+
+static CstRenderSettings sized(int size, CstFilter filter)
+{
+    CstRenderSettings st = {0};
+    st.width = st.height = size;
+    st.filter = filter;
+    return st;
+}
+
+/* path vs bdpt vs vcm on one scene and settings. */
+static void three_way(const CstScene *s, const CstRenderSettings *st, int size, int block, int path_spp,
+                      int renders, uint64_t seed, const char *label)
+{
+    Regions rp = regions(size, block), rb = rp, rv = rp;
+    path_regions(s, st, path_spp, seed, &rp);
+    bidir_regions(s, st, CST_INTEGRATOR_BDPT, renders, seed + 1000, &rb);
+    bidir_regions(s, st, CST_INTEGRATOR_VCM, renders, seed + 5000, &rv);
+    char a[96], b[96], c[96];
+    snprintf(a, sizeof a, "path (%s)", label);
+    snprintf(b, sizeof b, "bdpt (%s)", label);
+    snprintf(c, sizeof c, "vcm (%s)", label);
+    compare(&rp, &rb, a, b);
+    compare(&rp, &rv, a, c);
+    compare(&rb, &rv, b, c);
+}
+
+static void test_cornell_box(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    CstRenderSettings st = sized(64, CST_FILTER_BOX);
+    three_way(s, &st, 64, 16, 1024, 256, 11, "cornell");
+    cst_scene_destroy(s);
+}
+
+/* Mirror and glass spheres: caustics on the floor (light -> glass -> floor -> camera,
+ * where connections through the delta vertices are impossible and the weights must fall
+ * to the strategies that can), the mirror's reflections seen by the camera. */
+static void test_cornell_spheres(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_json(CST_SOURCE_DIR "/scenes/cornell-spheres.json", &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    CstRenderSettings st = sized(48, CST_FILTER_BOX);
+    three_way(s, &st, 48, 12, 2048, 512, 21, "spheres");
+    cst_scene_destroy(s);
+}
+
+/* A bounce limit means the same for all three (an off-by-one drops or adds a bounce of
+ * light, tens of percent), and the tent filter splats as camera samples are filtered. */
+static void test_max_depth_and_tent(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    CstRenderSettings st = sized(48, CST_FILTER_TENT);
+    st.max_depth = 2;
+    three_way(s, &st, 48, 12, 1024, 256, 31, "max_depth 2, tent");
+    cst_scene_destroy(s);
+}
+
+/* test_consistency.c's glass interface: a floor lit through a flat glass interface, seen
+ * from under it. A light subpath that used the radiance BTDF would be 1/eta^2 too dark in
+ * every strategy that crosses the interface on the light side. */
+static void test_through_glass(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    int floor_mat, glass_mat, light_mat;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.5f, 0.3f}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &floor_mat, &err), CST_OK);
+    m.albedo = rgb_s(0.0f);
+    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
+    Material glass = {.type = MATERIAL_GLASS, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.5f};
+    assert_int_equal(scene_add_material(s, &glass, &glass_mat, &err), CST_OK);
+    Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
+    Vec3 glass_q[4] = {{-3, 1, -3}, {-3, 1, 3}, {3, 1, 3}, {3, 1, -3}};
+    Vec3 light_q[4] = {{-1.5f, 2, -1.5f}, {1.5f, 2, -1.5f}, {1.5f, 2, 1.5f}, {-1.5f, 2, 1.5f}};
+    Emission em = {{4.0f, 4.0f, 4.0f}, 0};
+    assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
+    assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
+    assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
+    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st = sized(32, CST_FILTER_BOX);
+    three_way(s, &st, 32, 8, 512, 256, 41, "glass");
+    scene_destroy(s);
+}
+
+/* A diffuse sphere of albedo rho emitting L_e on both sides, seen from inside: every
+ * pixel sees L_e / (1 - rho) (the emitting furnace of test_furnace.c). Long paths,
+ * Russian roulette on both subpaths, two-sided emission. */
+static void test_emitting_furnace(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    int grey;
+    const float rho = 0.5f;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
+    Emission em = {{1.0f, 0.5f, 0.25f}, 1};
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
+    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    const double rd = (double)rho;
+    const double expect[3] = {1.0 / (1.0 - rd), 0.5 / (1.0 - rd), 0.25 / (1.0 - rd)};
+    const CstIntegrator integ[2] = {CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
+    for (int k = 0; k < 2; k++) {
+        CstRenderSettings st = sized(32, CST_FILTER_BOX);
+        Regions r = regions(32, 8);
+        bidir_regions(s, &st, integ[k], 256, 300 + 1000 * (uint64_t)k, &r);
+        double worst = 0.0;
+        for (int i = 0; i < r.count; i++)
+            for (int c = 0; c < 3; c++) {
+                double z = (r.stat[i].mean[c] - expect[c]) / r.stat[i].se[c];
+                if (fabs(z) > fabs(worst)) worst = z;
+                if (!(fabs(z) <= Z_LIMIT))
+                    fail_msg("%s: block %d channel %d: mean %.6f, expected %.6f (z = %.2f)",
+                             cst_integrator_name(integ[k]), i - 1, c, r.stat[i].mean[c], expect[c], z);
+            }
+        print_message("%s furnace: whole image %.5f (se %.1e), expected %.5f; largest |z| = %.2f\n",
+                      cst_integrator_name(integ[k]), r.stat[0].mean[0], r.stat[0].se[0], expect[0],
+                      fabs(worst));
+    }
+    scene_destroy(s);
+}
+
+/* The Cornell box with a point light and a spot added to its area light: delta lights in
+ * every strategy (never hit, never connected to as a surface, NEE and light paths only),
+ * light selection by power over three kinds of light. The light tracer joins: the box is
+ * all diffuse. */
+static void test_delta_lights_cornell(void **state)
+{
+    (void)state;
+    FILE *fp = fopen(CST_SOURCE_DIR "/scenes/cornell-box.json", "rb");
+    assert_non_null(fp);
+    static char text[1 << 16];
+    size_t n = fread(text, 1, sizeof text - 512, fp);
+    fclose(fp);
+    while (n > 0 && text[n - 1] != '}') n--;
+    assert_true(n > 0);
+    const char *lights = ",\n\"lights\": [{\"type\": \"point\", \"position\": [150, 400, 200], "
+                         "\"intensity\": [30000, 30000, 20000]}, {\"type\": \"spot\", \"position\": [450, 500, 100], "
+                         "\"look_at\": [350, 0, 400], \"intensity\": [60000, 40000, 40000], \"cone_angle\": 25, "
+                         "\"cone_delta\": 10}]}";
+    memcpy(text + n - 1, lights, strlen(lights) + 1);
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_json_string(text, strlen(text), "cornell+delta", &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    CstRenderSettings st = sized(48, CST_FILTER_BOX);
+    three_way(s, &st, 48, 12, 1024, 256, 51, "delta lights");
+    Regions rp = regions(48, 12), rl = rp;
+    path_regions(s, &st, 1024, 61, &rp);
+    bidir_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 7000, &rl);
+    compare(&rp, &rl, "path (delta lights)", "light (delta lights)");
+    cst_scene_destroy(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cornell_box),
+        cmocka_unit_test(test_cornell_spheres),
+        cmocka_unit_test(test_max_depth_and_tent),
+        cmocka_unit_test(test_through_glass),
+        cmocka_unit_test(test_emitting_furnace),
+        cmocka_unit_test(test_delta_lights_cornell),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
