@@ -182,6 +182,35 @@ static void test_bidirectional_materials(void **state)
     }
 }
 
+/* Photon mapping and SPPM stop their camera chains at a mixed BSDF with the probability of
+ * its non-delta part and follow the delta lobe otherwise (photon.c). In this furnace the
+ * sphere is convex, so every bit of light at it is direct (NEE) or seen through the coat's
+ * delta reflection: the image mean must be 1 without any density-estimation bias. */
+static void test_photon_mixed_bsdf(void **state)
+{
+    (void)state;
+    Material m = {.type = MATERIAL_PLASTIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.0f};
+    Scene *s = furnace_scene(&m);
+    const CstIntegrator integ[2] = {CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM};
+    const int rect[1][4] = {{0, 0, 24, 24}};
+    for (int k = 0; k < 2; k++) {
+        CstRenderSettings st = {0};
+        st.width = st.height = 24;
+        st.integrator = integ[k];
+        st.spp = 16;
+        st.photons = 2000;
+        RegionStat r;
+        CstError err;
+        if (region_stats_by_render(s, &st, 16, 700u + (uint64_t)k, 1, rect, &r, NULL, &err) != CST_OK)
+            fail_msg("%s", err.msg);
+        double z = (r.mean[0] - 1.0) / r.se[0];
+        print_message("smooth plastic %-6s mean %.5f (se %.1e): z = %.2f\n", cst_integrator_name(integ[k]), r.mean[0],
+                      r.se[0], z);
+        if (!(fabs(z) <= Z_LIMIT)) fail_msg("%s: mean %.5f, expected 1 (z = %.2f)", cst_integrator_name(integ[k]), r.mean[0], z);
+    }
+    scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -189,6 +218,7 @@ int main(void)
         cmocka_unit_test(test_rough_dielectric_sphere),
         cmocka_unit_test(test_rough_dielectric_light_vs_path),
         cmocka_unit_test(test_bidirectional_materials),
+        cmocka_unit_test(test_photon_mixed_bsdf),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
