@@ -91,7 +91,7 @@ void args_print_help(FILE *f)
 "                       and merging: bdpt plus photon merging with a shrinking radius,\n"
 "                       the first from the scene's \"radius\", else automatic;\n"
 "                       consistent); default: the scene's, else path\n"
-"      --filter NAME    box or tent (default: the scene's, else box)\n"
+"      --filter NAME    box, tent, gaussian or mitchell (default: the scene's, else box)\n"
 "      --width W        image width in pixels, 1..65536 (default: the scene's, else 512)\n"
 "      --height H       image height in pixels, 1..65536 (default: the scene's, else\n"
 "                       512); --width and --height may each be given alone\n"

@@ -11,7 +11,7 @@
 
 /* Valid values, shared by the help text and the error messages. */
 #define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm, bdpt, vcm"
-#define ARGS_FILTER_NAMES     "box, tent"
+#define ARGS_FILTER_NAMES     "box, tent, gaussian, mitchell"
 #define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree"
 #define ARGS_OUTPUT_FORMATS   ".png, .exr, .pfm"
 #define ARGS_MAX_DIMENSION    65536

@@ -90,7 +90,9 @@ typedef enum CstIntegrator {
 typedef enum CstFilter {
     CST_FILTER_DEFAULT = 0, /* the scene's choice, else CST_FILTER_BOX */
     CST_FILTER_BOX,         /* uniform sampling inside the pixel */
-    CST_FILTER_TENT         /* tent of radius 1 pixel, by filter importance sampling */
+    CST_FILTER_TENT,        /* tent of radius 1 pixel, by filter importance sampling */
+    CST_FILTER_GAUSSIAN,    /* Gaussian, sigma 0.5 pixel, radius 1.5 (pbrt-v4's default) */
+    CST_FILTER_MITCHELL     /* Mitchell-Netravali, B = C = 1/3, radius 2 (negative lobes) */
 } CstFilter;
 
 /* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",

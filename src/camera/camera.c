@@ -14,12 +14,22 @@ void camera_init(Camera *cam, const CameraDesc *d, int width, int height)
     cam->aspect = (float)width / (float)height;
     cam->aperture_radius = d->aperture_radius;
     cam->focus_distance = d->focus_distance;
+    cam->ortho_half_height = d->ortho_height > 0.0f ? 0.5f * d->ortho_height : 0.0f;
     cam->width = width;
     cam->height = height;
 }
 
 Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens_u)
 {
+    if (camera_is_orthographic(cam)) {
+        /* The film is a rectangle through the camera position, perpendicular to the view
+         * axis, 2 h aspect wide and 2 h high; every ray leaves it along the axis. */
+        float h = cam->ortho_half_height;
+        float sx = (2.0f * film_x / (float)cam->width - 1.0f) * h * cam->aspect;
+        float sy = (1.0f - 2.0f * film_y / (float)cam->height) * h;
+        Vec3 o = v3_add(cam->origin, v3_add(v3_scale(cam->right, sx), v3_scale(cam->up, sy)));
+        return ray_make(o, cam->forward, 0.0f, INFINITY);
+    }
     float sx = (2.0f * film_x / (float)cam->width - 1.0f) * cam->tan_half_vfov * cam->aspect;
     float sy = (1.0f - 2.0f * film_y / (float)cam->height) * cam->tan_half_vfov;
     Vec3 d = v3_normalize(v3_add(cam->forward, v3_add(v3_scale(cam->right, sx), v3_scale(cam->up, sy))));
@@ -57,6 +67,7 @@ Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens
  * (pixel count / light paths). */
 bool camera_sample_wi(const Camera *cam, Vec3 p, Vec2 lens_u, float margin, CameraWiSample *out)
 {
+    if (camera_is_orthographic(cam)) return false;
     Vec3 o = cam->origin;
     float lens_x = 0.0f, lens_y = 0.0f, lens_area = 1.0f;
     if (cam->aperture_radius > 0.0f) {

@@ -14,12 +14,15 @@ typedef struct CameraDesc {
     float vfov_deg;        /* full vertical field of view in degrees, (0, 180) */
     float aperture_radius; /* 0 = pinhole */
     float focus_distance;  /* > 0; distance along the view axis to the plane in focus */
+    float ortho_height;    /* > 0: an orthographic camera, the view's height in scene units
+                            * (vfov and the lens are then unused); 0: perspective */
 } CameraDesc;
 
 typedef struct Camera {
     Vec3 origin, forward, right, up; /* right = normalize(forward x up_hint), up = right x forward */
     float tan_half_vfov, aspect;
     float aperture_radius, focus_distance;
+    float ortho_half_height; /* > 0: orthographic */
     int width, height;
 } Camera;
 
@@ -38,6 +41,11 @@ typedef struct CameraWiSample {
     float we;     /* importance W_e of the ray p_lens -> p, normalised over the whole film */
     float pdf_w;  /* density of p_lens per unit solid angle at p */
 } CameraWiSample;
+
+/* An orthographic camera's rays are parallel: its direction is a Dirac delta, so no
+ * connection from a scene point can reach it (pbrt-v4 leaves OrthographicCamera::SampleWi
+ * unimplemented for the same reason) and camera_sample_wi returns false for it. */
+static inline bool camera_is_orthographic(const Camera *cam) { return cam->ortho_half_height > 0.0f; }
 
 /* Picks a lens point with lens_u (uniform on the disk, as camera_generate_ray does) and
  * projects p through it. False when p is behind the lens or lands outside the film

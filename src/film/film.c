@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "film/filter.h"
 #include "film/image_io.h"
 
 Film *film_create(int width, int height)
@@ -112,6 +113,26 @@ void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, 
         splat_push(l, py * width + px, c);
         return;
     }
+    if (filter == CST_FILTER_GAUSSIAN || filter == CST_FILTER_MITCHELL) {
+        /* Every pixel whose centre lies within the radius gets h(centre - (x, y)) c: the
+         * same normalised h the camera samples are weighted with (filter.c). */
+        const float r = filter_radius(filter);
+        int x0 = (int)ceilf(x - 0.5f - r), x1 = (int)floorf(x - 0.5f + r);
+        int y0 = (int)ceilf(y - 0.5f - r), y1 = (int)floorf(y - 0.5f + r);
+        if (x0 < 0) x0 = 0;
+        if (y0 < 0) y0 = 0;
+        if (x1 > width - 1) x1 = width - 1;
+        if (y1 > height - 1) y1 = height - 1;
+        for (int py = y0; py <= y1; py++) {
+            float wy = filter_weight1(filter, (float)py + 0.5f - y);
+            if (wy == 0.0f) continue;
+            for (int px = x0; px <= x1; px++) {
+                float wx = filter_weight1(filter, (float)px + 0.5f - x);
+                if (wx != 0.0f) splat_push(l, py * width + px, rgb_scale(c, wx * wy));
+            }
+        }
+        return;
+    }
     /* Pixel centres sit at k + 1/2; the tent 1 - |t| of the two nearest in each axis
      * sums to 1, the partition of unity that makes filter importance sampling (each
      * camera sample in one pixel, weight 1) and splatting estimate the same pixel. */
@@ -128,6 +149,18 @@ void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, 
             if (px < 0 || px >= width || wx[i] == 0.0f) continue;
             splat_push(l, py * width + px, rgb_scale(c, wx[i] * wy[j]));
         }
+    }
+}
+
+void film_add_splats_range(const SplatList *l, double *rgb, double scale, int32_t lo, int32_t hi)
+{
+    for (size_t i = 0; i < l->n; i++) {
+        const FilmSplat *s = &l->v[i];
+        if (s->pixel < lo || s->pixel >= hi) continue;
+        double *p = &rgb[3 * (size_t)s->pixel];
+        p[0] += scale * (double)s->r;
+        p[1] += scale * (double)s->g;
+        p[2] += scale * (double)s->b;
     }
 }
 

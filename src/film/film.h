@@ -59,5 +59,8 @@ void splat_list_free(SplatList *l);
 void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, float y, Rgb c);
 /* Adds scale times every splat to rgb (width*height*3 doubles), in the list's order. */
 void film_add_splats(const SplatList *l, double *rgb, double scale);
+/* The same for the splats on pixels [lo, hi) only: threads that own disjoint pixel ranges
+ * can merge the same lists at once, each pixel's sum still in list order. */
+void film_add_splats_range(const SplatList *l, double *rgb, double scale, int32_t lo, int32_t hi);
 
 #endif

@@ -6,6 +6,7 @@
  * with V(y_j, lens) = 1; W_e / pdf_w = 1 / (A cos^3 theta d^2) (camera.c). */
 #include "integrators/light.h"
 
+#include "film/filter.h"
 #include "materials/bsdf.h"
 
 /* Whether the segment from surface point p (normal ng) to the lens point q is clear. The
@@ -39,7 +40,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
 {
     if (s->emitter_sampler.lights == 0) return;
     /* The tent reaches half a pixel past the film's edge (film_splat). */
-    const float margin = lp->filter == CST_FILTER_TENT ? 0.5f : 0.0f;
+    const float margin = filter_radius(lp->filter) - 0.5f;
     float u_sel = pcg32_float(rng);
     Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
     Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));

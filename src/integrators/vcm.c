@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "film/filter.h"
 #include "materials/bsdf.h"
 
 /* The MIS exponent: the power heuristic. Applied to every factor of a ratio, which is
@@ -136,7 +137,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
                               const VcmIteration *it, const VcmVertex *v, const Bsdf *b,
                               Pcg32 *rng, SplatList *splats, uint64_t *rays)
 {
-    const float margin = vp->filter == CST_FILTER_TENT ? 0.5f : 0.0f;
+    const float margin = filter_radius(vp->filter) - 0.5f;
     Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
     CameraWiSample cs;
     if (!camera_sample_wi(cam, v->p, u_lens, margin, &cs)) return;
@@ -383,9 +384,12 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
     Rgb L = rgb_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
-    /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. */
+    /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic
+     * camera cannot be connected to (camera.h): like a delta vertex, 0 drops the t = 1
+     * strategy from every weight. */
     SubPath sp = {rgb_s(1.0f), rgb_s(1.0f),
-                  mis((float)it->light_paths / camera_pdf_w(it, cos_theta)), 0.0f, 0.0f};
+                  camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
+                  0.0f, 0.0f};
     const VcmVertex *lv = it->vertices + it->path_start[path];
     const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
     const bool has_lights = s->emitter_sampler.lights > 0;

@@ -23,6 +23,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "film/film.h"
+#include "film/filter.h"
 #include "integrators/light.h"
 #include "integrators/path.h"
 #include "integrators/photon.h"
@@ -70,6 +71,8 @@ CstFilter cst_filter_from_name(const char *name)
 {
     if (strcmp(name, "box") == 0) return CST_FILTER_BOX;
     if (strcmp(name, "tent") == 0) return CST_FILTER_TENT;
+    if (strcmp(name, "gaussian") == 0) return CST_FILTER_GAUSSIAN;
+    if (strcmp(name, "mitchell") == 0) return CST_FILTER_MITCHELL;
     return CST_FILTER_DEFAULT;
 }
 
@@ -78,6 +81,8 @@ const char *cst_filter_name(CstFilter filter)
     switch (filter) {
     case CST_FILTER_BOX: return "box";
     case CST_FILTER_TENT: return "tent";
+    case CST_FILTER_GAUSSIAN: return "gaussian";
+    case CST_FILTER_MITCHELL: return "mitchell";
     case CST_FILTER_DEFAULT: break;
     }
     return "default";
@@ -131,11 +136,13 @@ typedef struct RenderJob {
     PhotonMaps photon_maps; /* built once per render, before the first pass */
     WhittedParams whitted_params;
     CstFilter filter;
+    Filter pixel_filter; /* its shape and sampling tables */
     uint64_t seed;
     /* Work units: tiles, or chunks of LIGHT_CHUNK light paths. units is the pass's
      * count: num_tiles or num_chunks. */
     int tiles_x, tiles_y, num_tiles, num_chunks, units;
-    bool chunk_pass; /* the pass in progress runs light_chunk, not render_tile */
+    enum { PASS_TILES, PASS_CHUNKS, PASS_MERGE } pass_kind; /* what the pass's units are */
+    int merge_units;  /* pixel ranges of a merge pass: one per thread */
     /* light tracing, BDPT and VCM: iterations of width x height light paths */
     bool light;
     LightParams light_params;
@@ -176,10 +183,15 @@ typedef struct Worker {
  * (radius 1 pixel) is applied by filter importance sampling (Ernst et al., "Filter
  * Importance Sampling", 2006): offsets drawn from the tent itself, every sample weight 1,
  * so each sample still lands in exactly one pixel's estimate. */
-static inline Vec2 film_position(CstFilter filter, int x, int y, Vec2 u)
+static inline Vec2 film_position(const Filter *filter, int x, int y, Vec2 u, float *weight)
 {
-    if (filter == CST_FILTER_TENT)
+    *weight = 1.0f;
+    if (filter->type == CST_FILTER_TENT)
         return v2((float)x + 0.5f + warp_tent(u.x), (float)y + 0.5f + warp_tent(u.y));
+    if (filter->type == CST_FILTER_GAUSSIAN || filter->type == CST_FILTER_MITCHELL) {
+        Vec2 d = filter_sample(filter, u, weight);
+        return v2((float)x + 0.5f + d.x, (float)y + 0.5f + d.y);
+    }
     return v2((float)x + u.x, (float)y + u.y);
 }
 
@@ -197,7 +209,8 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 pcg32_seed_sample(&rng, job->seed, (uint64_t)pixel, (uint64_t)s);
                 Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
                 Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
-                Vec2 fp = film_position(job->filter, x, y, uf);
+                float fw;
+                Vec2 fp = film_position(&job->pixel_filter, x, y, uf, &fw);
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
                 Rgb L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
                                                     &job->vcm_it, pixel, ray, &rng, &w->rays)
@@ -209,6 +222,7 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                     w->nonfinite++;
                     L = rgb_s(0.0f);
                 }
+                if (fw != 1.0f) L = rgb_scale(L, fw);
                 if (job->vcm) {
                     /* The iteration's image; light_merge adds the splats and files it. */
                     double *o = &job->iteration_rgb[3 * (size_t)pixel];
@@ -288,21 +302,26 @@ static int vcm_gather(RenderJob *job)
     return 1;
 }
 
-/* Adds the finished iteration to the film as one sample per pixel. The light tracer's
- * pixel estimate is (W H / paths) times the sum of its splats (splats are per unit film,
- * camera.c), and W H / paths = 1 with one path per pixel. Adding the iteration, not the
- * splats, as the sample keeps the film's sum of squares a per-pixel variance across
- * iterations; splats are summed in chunk order, so the floating-point sums do not depend
- * on which thread traced which chunk. */
-static void light_merge(RenderJob *job)
+/* Adds the finished iteration to the film as one sample per pixel, for the pixels
+ * [unit * P / units, (unit + 1) * P / units) of one unit of a merge pass. The light
+ * tracer's pixel estimate is (W H / paths) times the sum of its splats (splats are per
+ * unit film, camera.c), and W H / paths = 1 with one path per pixel. Adding the
+ * iteration, not the splats, as the sample keeps the film's sum of squares a per-pixel
+ * variance across iterations; splats are summed in chunk order, so the floating-point
+ * sums depend neither on which thread traced which chunk nor on how the pixels are split
+ * among the merging threads (one range per thread, run at once). */
+static void light_merge_range(RenderJob *job, int unit)
 {
     const size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
     const double scale = (double)pixels / (double)job->light_paths;
+    size_t lo = pixels * (size_t)unit / (size_t)job->merge_units;
+    size_t hi = pixels * (size_t)(unit + 1) / (size_t)job->merge_units;
     double *rgb = job->iteration_rgb;
     /* BDPT/VCM: the camera pass already wrote its pixel samples there. */
-    if (!job->vcm) memset(rgb, 0, 3 * pixels * sizeof *rgb);
-    for (int c = 0; c < job->num_chunks; c++) film_add_splats(&job->splats[c], rgb, scale);
-    for (size_t p = 0; p < pixels; p++)
+    if (!job->vcm) memset(rgb + 3 * lo, 0, 3 * (hi - lo) * sizeof *rgb);
+    for (int c = 0; c < job->num_chunks; c++)
+        film_add_splats_range(&job->splats[c], rgb, scale, (int32_t)lo, (int32_t)hi);
+    for (size_t p = lo; p < hi; p++)
         film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
 }
 
@@ -313,7 +332,8 @@ static void *worker_main(void *arg)
     for (;;) {
         int tile = atomic_fetch_add(&job->next_tile, 1);
         if (tile >= job->units) break;
-        if (job->chunk_pass) light_chunk(job, w, tile);
+        if (job->pass_kind == PASS_CHUNKS) light_chunk(job, w, tile);
+        else if (job->pass_kind == PASS_MERGE) light_merge_range(job, tile);
         else render_tile(job, w, tile);
         if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->units) {
             pthread_mutex_lock(&job->lock);
@@ -346,6 +366,7 @@ static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRende
     atomic_store(&job->next_tile, 0);
     atomic_store(&job->tiles_done, 0);
     int started = 0;
+    if (threads > job->units) threads = job->units; /* idle workers would only cost their creation */
     for (; started < threads; started++)
         if (pthread_create(&workers[started].thread, NULL, worker_main, &workers[started]) != 0) break;
     if (started == 0) return 0;
@@ -378,7 +399,7 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
         job->pass_first = first;
         job->pass_spp = count;
         job->units = job->num_tiles;
-        job->chunk_pass = false;
+        job->pass_kind = PASS_TILES;
         return run_pass(job, workers, threads, st, t0, done_before, fraction) ? CST_OK : CST_ERR_INTERNAL;
     }
     for (int k = 0; k < count; k++) {
@@ -388,7 +409,7 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
             vcm_iteration_init(&job->vcm_it, &job->vcm_params, &job->camera, job->light_paths,
                                job->vcm_radius, job->iteration);
         job->units = job->num_chunks;
-        job->chunk_pass = true;
+        job->pass_kind = PASS_CHUNKS;
         if (!run_pass(job, workers, threads, st, t0, f0, job->vcm ? 0.5 * f1 : f1))
             return CST_ERR_INTERNAL;
         for (int c = 0; c < job->num_chunks; c++)
@@ -399,11 +420,13 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
             job->pass_first = job->iteration;
             job->pass_spp = 1;
             job->units = job->num_tiles;
-            job->chunk_pass = false;
+            job->pass_kind = PASS_TILES;
             if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.5 * f1))
                 return CST_ERR_INTERNAL;
         }
-        light_merge(job);
+        job->units = job->merge_units = threads;
+        job->pass_kind = PASS_MERGE;
+        if (!run_pass(job, workers, threads, st, t0, f0 + f1, 0.0)) return CST_ERR_INTERNAL;
     }
     return CST_OK;
 }
@@ -464,6 +487,11 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
 
+    if (st.integrator == CST_INTEGRATOR_LIGHT && scene->camera.ortho_height > 0.0f)
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "the light tracer cannot render through an orthographic camera (its rays are "
+                        "parallel, so no light path can connect to it); expected a pinhole or thin-lens "
+                        "camera, or another integrator");
     Film *film = film_create(st.width, st.height);
     Worker *workers = calloc((size_t)st.threads, sizeof *workers);
     RenderJob *job = calloc(1, sizeof *job);
@@ -484,6 +512,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->whitted_params.light_samples = 1;
     job->params.rr_depth = st.rr_depth;
     job->filter = st.filter;
+    filter_init(&job->pixel_filter, st.filter);
     job->seed = st.seed;
     job->tiles_x = (st.width + RENDER_TILE - 1) / RENDER_TILE;
     job->tiles_y = (st.height + RENDER_TILE - 1) / RENDER_TILE;

@@ -438,7 +438,7 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
         CstFilter f = cst_filter_from_name(s);
         if (f == CST_FILTER_DEFAULT) {
             char name[72];
-            return fail_here(ld, "unknown filter \"%s\"; expected one of: box, tent",
+            return fail_here(ld, "unknown filter \"%s\"; expected one of: box, tent, gaussian, mitchell",
                              clip_name(s, name));
         }
         rs->filter = f;
@@ -464,19 +464,21 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
     return CST_OK;
 }
 
-enum { CAMERA_PINHOLE, CAMERA_THINLENS };
+enum { CAMERA_PINHOLE, CAMERA_THINLENS, CAMERA_ORTHOGRAPHIC };
 
 static CstStatus parse_camera(Loader *ld, const json_t *cam)
 {
-    static const char *const types[] = {"pinhole", "thinlens"};
+    static const char *const types[] = {"pinhole", "thinlens", "orthographic"};
     static const char *const keys[] = {"type", "position", "look_at", "up", "fov",
                                        "aperture_radius", "focus_distance"};
+    static const char *const ortho_keys[] = {"type", "position", "look_at", "up", "height"};
     int type = 0;
     json_t *v;
     LOADER_TRY(expect_object(ld, cam, "a camera object"));
-    LOADER_TRY(read_type(ld, cam, "camera type", types, 2, CAMERA_PINHOLE, &type));
+    LOADER_TRY(read_type(ld, cam, "camera type", types, 3, CAMERA_PINHOLE, &type));
     /* The lens keys mean nothing to a pinhole: reject rather than ignore them. */
-    LOADER_TRY(check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 7 : 5));
+    if (type == CAMERA_ORTHOGRAPHIC) LOADER_TRY(check_keys(ld, cam, ortho_keys, 5));
+    else LOADER_TRY(check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 7 : 5));
 
     CameraDesc desc = {0};
     desc.up = v3(0.0f, 1.0f, 0.0f);
@@ -513,6 +515,19 @@ static CstStatus parse_camera(Loader *ld, const json_t *cam)
                          (double)desc.up.x, (double)desc.up.y, (double)desc.up.z);
     }
 
+    if (type == CAMERA_ORTHOGRAPHIC) {
+        LOADER_TRY(member_required(ld, cam, "height", "the view's height in scene units, > 0", &v));
+        path_push_key(ld, "height");
+        LOADER_TRY(read_float(ld, v, LOADER_MAX_LENGTH, &desc.ortho_height));
+        if (!(desc.ortho_height > 0.0f))
+            return fail_here(ld, "height %g is not positive; expected the view's height in scene units, > 0",
+                             (double)desc.ortho_height);
+        path_pop(ld);
+        desc.vfov_deg = 0.0f;
+        desc.focus_distance = dist;
+        scene_set_camera(ld->scene, &desc);
+        return CST_OK;
+    }
     LOADER_TRY(member_required(ld, cam, "fov",
                                "the vertical field of view in degrees, in (0, 180)", &v));
     path_push_key(ld, "fov");

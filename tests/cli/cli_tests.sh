@@ -152,8 +152,8 @@ check_value "--seed 2^64 rejected"    --seed 18446744073709551616 -- "--seed: .*
 check_value "--seed 0x rejected"      --seed 0x       -- "--seed: .*got '0x'"
 check_value "unknown integrator lists the valid ones" --integrator metropolis -- \
     "--integrator: .*'metropolis'.*path, path-nee, path-bsdf"
-check_value "unknown filter lists the valid ones"     --filter gaussian -- \
-    "--filter: .*'gaussian'.*box, tent"
+check_value "unknown filter lists the valid ones"     --filter lanczos -- \
+    "--filter: .*'lanczos'.*box, tent, gaussian, mitchell"
 if no_images "$TMP/values"; then pass "rejected values write no image"; else fail "rejected values write no image"; fi
 
 # --------------------------------------------------------------- output path checks

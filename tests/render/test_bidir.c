@@ -176,7 +176,7 @@ static void test_through_glass(void **state)
     assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
+    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     CstRenderSettings st = sized(32, CST_FILTER_BOX);
@@ -198,7 +198,7 @@ static void test_emitting_furnace(void **state)
     assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
     Emission em = {{1.0f, 0.5f, 0.25f}, 1};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
-    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f};
+    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     const double rd = (double)rho;

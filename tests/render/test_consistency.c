@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -158,6 +159,31 @@ static void test_cornell_light_tent(void **state)
     cst_scene_destroy(s);
 }
 
+/* The Gaussian and the Mitchell filter: camera samples placed by filter importance
+ * sampling and weighted by h / pdf (Mitchell's negative lobes give negative weights),
+ * splats spread with weights h over every pixel within the radius. Both must estimate the
+ * same filtered pixel. */
+static void test_cornell_light_wide_filters(void **state)
+{
+    (void)state;
+    CstScene *s = cornell();
+    enum { FSIZE = 64, FBLOCK = 16 };
+    const CstFilter filters[2] = {CST_FILTER_GAUSSIAN, CST_FILTER_MITCHELL};
+    for (int k = 0; k < 2; k++) {
+        CstRenderSettings st = sized(FSIZE, filters[k]);
+        CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 512, 8 + (uint64_t)k);
+        Regions rm = regions(FSIZE, FBLOCK), rl = rm;
+        film_regions(mis, &rm);
+        char a[64], b[64];
+        snprintf(a, sizeof a, "path (%s)", cst_filter_name(filters[k]));
+        snprintf(b, sizeof b, "light (%s)", cst_filter_name(filters[k]));
+        light_regions(s, &st, 256, 5000 + 1000 * (uint64_t)k, b, &rl);
+        compare(&rm, &rl, a, b);
+        cst_film_destroy(mis);
+    }
+    cst_scene_destroy(s);
+}
+
 /* max_depth means the same for both: paths of at most 2 bounces (an off-by-one would add
  * or drop a whole bounce of light, tens of percent). Short paths: a small, cheap test. */
 static void test_cornell_light_max_depth(void **state)
@@ -225,7 +251,7 @@ static void test_light_through_glass(void **state)
     assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
+    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
 
@@ -250,6 +276,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_variants_agree),
         cmocka_unit_test(test_cornell_light_tent),
+        cmocka_unit_test(test_cornell_light_wide_filters),
         cmocka_unit_test(test_cornell_light_max_depth),
         cmocka_unit_test(test_light_through_glass),
         cmocka_unit_test(test_cornell_whitted_direct),
