@@ -26,7 +26,7 @@ static Scene *furnace_scene(const Material *m)
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 10.0f, black, &em, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, obj, NULL, &err), CST_OK);
     /* fov 30 at distance 4: the sphere fills most of the frame */
-    CameraDesc cam = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 30.0f, 0.0f, 4.0f};
+    CameraDesc cam = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 30.0f, 0.0f, 4.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     return s;
