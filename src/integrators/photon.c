@@ -109,8 +109,9 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
 }
 
 /* Follows delta lobes from `ray` (sampling one lobe at each; weights into *beta) to the
- * first non-delta hit. Adds the emission it passes (and the hit's) to *le when le is not
- * NULL. *wo_out is the direction back along the last segment. Returns false if the ray leaves the scene or the chain stops. */
+ * first non-delta hit; mixed BSDFs as photon.h says. Adds the emission it passes (and the
+ * hit's) to *le when le is not NULL. *wo_out is the direction back along the last segment.
+ * Returns false if the ray leaves the scene or the chain stops. */
 bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb *le,
                              SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays)
 {
@@ -125,14 +126,25 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
         if (le && sh->emitter >= 0)
             *le = rgb_madd(*le, *beta, emitter_radiance(&s->emitters[sh->emitter], sh->ng, wo));
         bsdf_init(bsdf, &s->materials[sh->material], sh->ng);
-        if (!bsdf_is_delta(bsdf)) {
+        float p_delta = bsdf_delta_probability(bsdf, wo);
+        if (!(p_delta > 0.0f)) {
             *wo_out = wo;
             return true;
         }
         BsdfSample bs;
         float uc = pcg32_float(rng);
         Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-        if (!bsdf_sample(bsdf, wo, uc, u, &bs)) return false;
+        bool sampled = bsdf_sample(bsdf, wo, uc, u, &bs);
+        if (!bsdf_is_delta(bsdf) && !(sampled && bs.delta)) {
+            /* A BSDF with delta and non-delta lobes (smooth-coat plastic): bsdf_sample
+             * took the non-delta part with probability 1 - p_delta, so this is the point
+             * whose non-delta part the caller estimates, weighted by 1 / (1 - p_delta); the
+             * other branch follows the delta lobe below (its weight holds 1 / p_delta). */
+            *beta = rgb_scale(*beta, 1.0f / (1.0f - p_delta));
+            *wo_out = wo;
+            return rgb_is_finite(*beta);
+        }
+        if (!sampled) return false;
         *beta = rgb_mul(*beta, bs.weight);
         if (rgb_is_black(*beta)) return false;
         ray = ray_make(scene_offset(sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
@@ -152,8 +164,9 @@ static void density_visit(void *ctx, const Photon *ph, float dist2)
 {
     (void)dist2;
     DensityCtx *c = ctx;
-    /* A photon on the other side of a thin wall must not light this side. */
-    if (!(v3_dot(ph->n, c->n) > 0.0f)) return;
+    /* A photon on the other side of a thin wall must not light this side, unless this
+     * surface transmits (rough glass is lit through itself). */
+    if (!(v3_dot(ph->n, c->n) > 0.0f) && !bsdf_has_transmission(c->bsdf)) return;
     float cos_i = fabsf(v3_dot(c->n, ph->wi));
     if (!(cos_i > 0.0f)) return;
     /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
@@ -195,7 +208,11 @@ Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t
     BsdfSample bs;
     float uc = pcg32_float(rng);
     Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-    if (bsdf_sample(&bsdf_x, wo, uc, u, &bs)) {
+    /* Only the non-delta part of x is estimated here (photon_trace_to_diffuse follows a
+     * mixed BSDF's delta lobes itself): a delta gather sample adds nothing. Its weight
+     * f / pdf has the probability of the non-delta lobes in pdf, so the estimate stays
+     * that of the non-delta part alone. */
+    if (bsdf_sample(&bsdf_x, wo, uc, u, &bs) && !bs.delta) {
         Rgb g = bs.weight;
         SurfaceHit y;
         Bsdf bsdf_y;

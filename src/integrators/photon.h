@@ -53,8 +53,10 @@ Rgb photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Pcg32 *rng, u
 struct Bsdf;
 /* Follows delta lobes from `ray` (one sampled lobe per bounce, weights into *beta) to the
  * first non-delta hit *sh (its BSDF in *bsdf, the direction back in *wo_out), adding the
- * emission it passes to *le when le is not NULL. False if the ray leaves the scene, the
- * chain dies or exceeds PHOTON_MAX_SPECULAR bounces. */
+ * emission it passes to *le when le is not NULL. At a BSDF with both kinds of lobes it
+ * stops with the probability of the non-delta ones (and *beta divided by it), and follows
+ * a delta lobe otherwise: the caller then estimates only the non-delta part at *sh. False
+ * if the ray leaves the scene, the chain dies or exceeds PHOTON_MAX_SPECULAR bounces. */
 bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb *le, SurfaceHit *sh,
                              struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays);
 /* Direct light at a non-delta point by one emitter sample, no MIS. */

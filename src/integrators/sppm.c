@@ -218,8 +218,9 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *h
         const SppmDisc *disc = &g->discs[g->entries[k]];
         if (photon_dist2(pos, disc->p) > disc->r2) continue;
         SppmPixel *v = &px[g->entries[k]];
-        /* A photon on the other side of a thin wall must not light this side. */
-        if (!(v3_dot(hit->n, v->n) > 0.0f)) continue;
+        /* A photon on the other side of a thin wall must not light this side, unless the
+         * visible point's surface transmits (rough glass). */
+        if (!(v3_dot(hit->n, v->n) > 0.0f) && !bsdf_has_transmission(&v->bsdf)) continue;
         float cos_i = fabsf(v3_dot(v->n, hit->wi));
         if (!(cos_i > 0.0f)) continue;
         /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */

@@ -36,9 +36,12 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
 
     Bsdf bsdf;
     bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+    /* Non-delta lobes (diffuse, and glossy ones: rough metal, rough glass, the base of
+     * plastic) get direct light only, Whitted's diffuse rule; a BSDF that also has delta
+     * lobes (smooth-coat plastic) then branches into those below as well. */
     if (!bsdf_is_delta(&bsdf)) {
         if (s->emitter_sampler.lights > 0) L = rgb_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, rng, rays));
-        return L;
+        if (!bsdf_has_delta(&bsdf)) return L;
     }
     if (depth >= wp->max_depth) return L;
 
@@ -52,7 +55,7 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
     float side_o = v3_dot(wo, n);
     for (int k = 0; k < 2; k++) {
         BsdfSample bs;
-        if (!bsdf_sample(&bsdf, wo, ucs[k], v2(0.5f, 0.5f), &bs)) continue;
+        if (!bsdf_sample(&bsdf, wo, ucs[k], v2(0.5f, 0.5f), &bs) || !bs.delta) continue;
         bool reflect = (v3_dot(bs.wi, n) > 0.0f) == (side_o > 0.0f);
         if (reflect ? reflected : refracted) continue;
         if (reflect) reflected = true;

@@ -1,6 +1,13 @@
-/* BSDF lobes: Lambert, perfect mirror, smooth dielectric. */
+/* BSDF lobes: Lambert, perfect mirror, smooth and rough conductor, smooth and rough
+ * dielectric, plastic (a dielectric coat over Lambert). Everything below works in the local
+ * shading frame (normal +z); the public wrappers at the end convert and reject degenerate
+ * samples in one place. Microfacet lobes use GGX with height-correlated Smith G2 and
+ * visible-normal sampling (microfacet.h). */
 #include "materials/bsdf.h"
 
+#include <stddef.h>
+
+#include "materials/microfacet.h"
 #include "sampling/warp.h"
 
 void bsdf_init(Bsdf *b, const Material *m, Vec3 n)
@@ -9,37 +16,360 @@ void bsdf_init(Bsdf *b, const Material *m, Vec3 n)
     b->frame = frame_from_normal(n);
     b->albedo = m->albedo;
     b->eta = m->ior;
+    b->alpha = 0.0f;
+    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC) {
+        float a = material_alpha(m->roughness);
+        b->alpha = a < MATERIAL_SMOOTH_ALPHA ? 0.0f : a;
+    }
+    b->cond_eta = m->eta;
+    b->cond_k = m->k;
+    b->one_sided = m->one_sided;
+    b->coat_e = NULL;
+    b->coat_e_avg = 0.0f;
+    if (m->type == MATERIAL_PLASTIC) {
+        if (b->alpha > 0.0f && m->prepared) {
+            b->coat_e = m->coat_e;
+            b->coat_e_avg = m->coat_e_avg;
+        } else {
+            /* Smooth coat (or an unprepared rough one, approximated by it): E = F. */
+            b->coat_e_avg = fresnel_diffuse_reflectance(m->ior);
+        }
+    }
 }
 
-/* Exact Fresnel equations for unpolarised light (pbrt-v4 eq. 9.4-9.5, averaged). */
-float fresnel_dielectric(float cos_i, float eta)
+/* ------------------------------------------------------------------ shared helpers */
+
+/* Reflective BSDFs see the world from +z: a two-sided one mirrors a back-side query to the
+ * front (both directions flip, which keeps reciprocity), a one-sided one is black behind.
+ * Returns false when the query has no value. wi may be NULL (sampling). */
+static bool reflect_side(const Bsdf *b, Vec3 *wo, Vec3 *wi)
 {
-    cos_i = clampf(cos_i, -1.0f, 1.0f);
-    if (cos_i < 0.0f) { eta = 1.0f / eta; cos_i = -cos_i; }
-    float sin2_i = 1.0f - cos_i * cos_i;
-    float sin2_t = sin2_i / (eta * eta);
-    if (sin2_t >= 1.0f) return 1.0f; /* total internal reflection */
-    float cos_t = safe_sqrtf(1.0f - sin2_t);
-    float r_par = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    float r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5f * (r_par * r_par + r_perp * r_perp);
+    if (wo->z >= 0.0f) return true;
+    if (b->one_sided) return false;
+    wo->z = -wo->z;
+    if (wi) wi->z = -wi->z;
+    return true;
 }
 
-Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+static inline Vec3 mirror_z(Vec3 w) { return v3(-w.x, -w.y, w.z); }
+
+/* ------------------------------------------------------------------ rough conductor */
+
+/* Torrance-Sparrow / Cook-Torrance reflection with GGX (Walter et al. 2007 eq. 20):
+ *   f(wo, wi) = F(wo.m) D(m) G2(wo, wi) / (4 cos_o cos_i),  m = normalize(wo + wi). */
+static Rgb conductor_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
-    if (b->type != MATERIAL_DIFFUSE) return rgb_s(0.0f);
-    float co = v3_dot(wo, b->frame.n), ci = v3_dot(wi, b->frame.n);
-    /* Two-sided Lambert: reflection only, on whichever side wo is. */
-    if (co * ci <= 0.0f) return rgb_s(0.0f);
-    return rgb_scale(b->albedo, CST_INV_PI * fabsf(ci));
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return rgb_s(0.0f);
+    Vec3 h = v3_add(wo, wi);
+    if (v3_length2(h) == 0.0f) return rgb_s(0.0f);
+    Vec3 m = v3_normalize(h);
+    float s = ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha) / (4.0f * wo.z);
+    return rgb_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), s);
 }
 
-float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
+/* Visible-normal sampling then reflection: pdf = D_wo(m) / (4 wo.m) (the reflection
+ * Jacobian, Walter 2007 eq. 14) = G1(wo) D(m) / (4 cos_o). */
+static float microfacet_reflect_pdf(Vec3 wo, Vec3 wi, float alpha)
 {
-    if (b->type != MATERIAL_DIFFUSE) return 0.0f;
-    float co = v3_dot(wo, b->frame.n), ci = v3_dot(wi, b->frame.n);
-    if (co * ci <= 0.0f) return 0.0f;
-    return fabsf(ci) * CST_INV_PI;
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
+    Vec3 h = v3_add(wo, wi);
+    if (v3_length2(h) == 0.0f) return 0.0f;
+    Vec3 m = v3_normalize(h);
+    return ggx_g1(wo, alpha) * ggx_d(m, alpha) / (4.0f * wo.z);
+}
+
+static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
+{
+    if (b->alpha == 0.0f) {
+        out->wi = mirror_z(wo);
+        out->pdf = 1.0f;
+        out->weight = fresnel_conductor_rgb(wo.z, b->cond_eta, b->cond_k);
+        out->delta = true;
+        return true;
+    }
+    Vec3 m = ggx_sample_visible(wo, b->alpha, u);
+    Vec3 wi = reflect_about(wo, m);
+    if (wi.z <= 0.0f) return false; /* reflected into the surface: lost (single scattering) */
+    out->wi = wi;
+    out->pdf = microfacet_reflect_pdf(wo, wi, b->alpha);
+    /* f cos_i / pdf = F G2 / G1(wo): D and the Jacobian cancel. */
+    float g = ggx_g2(wo, wi, b->alpha) / ggx_g1(wo, b->alpha);
+    out->weight = rgb_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), g);
+    out->delta = false;
+    return true;
+}
+
+/* ------------------------------------------------------------------ rough dielectric */
+
+/* The generalised half vector of Walter et al. 2007 (eq. 16): for reflection
+ * m ~ wo + wi, for transmission m ~ -(eta_o wo + eta_i wi), i.e. wo + etap wi with
+ * etap = eta_i / eta_o the IOR of wi's side over wo's; oriented to +z. Returns false
+ * for configurations no microfacet produces (either direction on the back of m).
+ * eta here is the inside (-z) over the outside (+z). */
+static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *m, float *etap, bool *reflect)
+{
+    float co = wo.z, ci = wi.z;
+    if (co == 0.0f || ci == 0.0f) return false;
+    *reflect = co * ci > 0.0f;
+    *etap = *reflect ? 1.0f : (co > 0.0f ? eta : 1.0f / eta);
+    Vec3 h = v3_add(wo, v3_scale(wi, *etap));
+    if (v3_length2(h) == 0.0f) return false;
+    h = v3_normalize(h);
+    if (h.z < 0.0f) h = v3_neg(h);
+    if (v3_dot(h, wo) * co <= 0.0f || v3_dot(h, wi) * ci <= 0.0f) return false;
+    *m = h;
+    return true;
+}
+
+/* F at the microfacet. For refraction, from the outside direction's cosine: F(cos_o, eta)
+ * and F(cos_t, 1/eta) are equal in exact arithmetic, but the inside cosine is near the
+ * critical angle where 1 - F is ill-conditioned, and one formula for both orders keeps
+ * f(wo, wi) and f(wi, wo) (the adjoint) consistent to rounding. */
+static float dielectric_fresnel(const Bsdf *b, Vec3 wo, Vec3 wi, Vec3 m, bool reflect)
+{
+    Vec3 w = reflect || wo.z > 0.0f ? wo : wi;
+    return fresnel_dielectric(v3_dot(w, m), b->eta);
+}
+
+/* Walter et al. 2007 eq. 20 (reflection) and eq. 21 (transmission), with eta_o and eta_i
+ * divided out: f_t = |wi.m| |wo.m| (1 - F) D G2 / (|cos_i| |cos_o| (wi.m + wo.m / etap)^2)
+ * / etap^2. The 1 / etap^2 is radiance compression: it belongs to the radiance BSDF;
+ * the adjoint f*(wo, wi) = f(wi, wo) lacks it (Veach thesis sec. 5.2; swapping wo and wi
+ * in the formula above shows it). Returns f |cos_i|. */
+static float dielectric_eval(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
+{
+    Vec3 m;
+    float etap;
+    bool reflect;
+    if (!dielectric_half(wo, wi, b->eta, &m, &etap, &reflect)) return 0.0f;
+    float dm = ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha);
+    float F = dielectric_fresnel(b, wo, wi, m, reflect);
+    if (reflect) return F * dm / (4.0f * fabsf(wo.z));
+    float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
+    float f = (1.0f - F) * dm * fabsf(v3_dot(wi, m) * v3_dot(wo, m) / (wo.z * denom));
+    return mode == BSDF_RADIANCE ? f / (etap * etap) : f;
+}
+
+/* Lobe chosen with probability F(wo.m) / (1 - F(wo.m)) after sampling m from the visible
+ * normals of |wo|; pdf = D_wo(m) * (F / (4 |wo.m|) or (1 - F) |wi.m| / (wi.m + wo.m/etap)^2)
+ * (the refraction Jacobian, Walter 2007 eq. 17). */
+static float dielectric_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    Vec3 m;
+    float etap;
+    bool reflect;
+    if (!dielectric_half(wo, wi, b->eta, &m, &etap, &reflect)) return 0.0f;
+    float pm = ggx_visible_pdf(wo, m, b->alpha);
+    float F = dielectric_fresnel(b, wo, wi, m, reflect);
+    if (reflect) return F * pm / (4.0f * fabsf(v3_dot(wo, m)));
+    float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
+    return (1.0f - F) * pm * fabsf(v3_dot(wi, m)) / denom;
+}
+
+static bool dielectric_smooth_sample(const Bsdf *b, Vec3 wo, float uc, BsdfTransport mode, BsdfSample *out)
+{
+    float f = fresnel_dielectric(wo.z, b->eta);
+    out->delta = true;
+    if (uc < f) {
+        out->wi = mirror_z(wo);
+        out->pdf = f;
+        out->weight = b->albedo; /* (F / |cos|) |cos| / F */
+        return true;
+    }
+    /* Refraction by Snell's law about the macro normal. */
+    Vec3 wt;
+    float etap;
+    if (!refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->eta, &wt, &etap)) return false; /* f == 1 under TIR */
+    out->wi = v3_normalize(wt);
+    out->pdf = 1.0f - f;
+    /* Radiance is compressed by 1/etap^2 entering a denser medium (Veach thesis sec. 5.2,
+     * pbrt-v4 sec. 9.5.2); camera paths carry radiance, so the factor applies to them.
+     * Light paths carry flux, which refraction does not compress: the adjoint BTDF lacks
+     * the factor (pbrt-v4 DielectricBxDF with TransportMode::Importance). */
+    out->weight = mode == BSDF_RADIANCE ? rgb_scale(b->albedo, 1.0f / (etap * etap)) : b->albedo;
+    return true;
+}
+
+static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode, BsdfSample *out)
+{
+    if (b->alpha == 0.0f) return dielectric_smooth_sample(b, wo, uc, mode, out);
+    /* Visible normals of the side wo is on (the distribution is symmetric under z -> -z). */
+    Vec3 m = ggx_sample_visible(wo.z > 0.0f ? wo : v3_neg(wo), b->alpha, u);
+    float F = fresnel_dielectric(v3_dot(wo, m), b->eta);
+    Vec3 wi;
+    float extra = 1.0f;
+    if (uc < F) {
+        wi = reflect_about(wo, m);
+        if (wi.z * wo.z <= 0.0f) return false; /* lost: single scattering */
+    } else {
+        float etap;
+        if (!refract_about(wo, m, b->eta, &wi, &etap)) return false; /* F == 1 there: unreachable */
+        wi = v3_normalize(wi);
+        if (wi.z * wo.z >= 0.0f) return false; /* stays on wo's side: lost */
+        if (mode == BSDF_RADIANCE) extra = 1.0f / (etap * etap);
+    }
+    out->wi = wi;
+    out->pdf = dielectric_pdf(b, wo, wi);
+    out->delta = false;
+    /* f |cos_i| / pdf = G2 / G1(wo) for both lobes (D, F and the Jacobians cancel), times
+     * 1 / etap^2 for radiance through refraction. */
+    float g = ggx_g2(wo, wi, b->alpha) / ggx_g1(wo, b->alpha);
+    out->weight = rgb_scale(b->albedo, g * extra);
+    return true;
+}
+
+/* ------------------------------------------------------------------ plastic
+ * A dielectric coat (IOR eta, smooth or GGX-rough) over a Lambertian base of albedo rho,
+ * after Kelemen & Szirmay-Kalos 2001 ("A Microfacet Based Coupled Specular-Matte BRDF
+ * Model with Importance Sampling"):
+ *   f = f_coat(wo, wi) + rho (1 - E(cos_o)) (1 - E(cos_i)) / (pi (1 - E_avg)),
+ * f_coat the coat's reflection (a delta mirror lobe weighted by F when smooth, the rough
+ * dielectric's reflection lobe when rough), E(mu) its directional albedo (F(mu) when
+ * smooth; tabulated by material_prepare when rough) and E_avg = 2 int E(mu) mu dmu.
+ * Energy: the directional albedo is E(cos_o) + rho (1 - E(cos_o)) <= 1 by construction,
+ * exactly 1 for rho = 1 (up to the table's interpolation error when rough). Reciprocal.
+ * The approximation: light refracted through the coat is treated as one diffuse bounce
+ * whose angular shape is (1 - E) on both sides; the internal reflections between coat
+ * and base that would saturate colours (rho^2, rho^3 ... terms) are folded into the
+ * normalisation instead of modelled, and the layer does not absorb. */
+
+static float coat_albedo(const Bsdf *b, float mu)
+{
+    if (!b->coat_e) return fresnel_dielectric(mu, b->eta);
+    /* linear in x = sqrt(mu), the table's abscissa (material_prepare) */
+    float x = sqrtf(clampf(mu, 0.0f, 1.0f)) * (float)(MATERIAL_COAT_TABLE - 1);
+    int i = (int)x;
+    if (i > MATERIAL_COAT_TABLE - 2) i = MATERIAL_COAT_TABLE - 2;
+    float t = x - (float)i;
+    return b->coat_e[i] + t * (b->coat_e[i + 1] - b->coat_e[i]);
+}
+
+/* Probability of sampling the coat: its share of the expected reflected energy. */
+static float plastic_coat_prob(const Bsdf *b, float cos_o)
+{
+    float e = coat_albedo(b, cos_o);
+    float d = e + rgb_max(b->albedo) * (1.0f - e);
+    return d > 0.0f ? e / d : 1.0f;
+}
+
+static Rgb plastic_diffuse_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    float s = (1.0f - coat_albedo(b, wo.z)) * (1.0f - coat_albedo(b, wi.z)) /
+              (CST_PI * (1.0f - b->coat_e_avg));
+    return rgb_scale(b->albedo, s * wi.z);
+}
+
+/* The coat's rough reflection (f |cos_i|), the rough dielectric's reflection lobe. */
+static float plastic_coat_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    Vec3 h = v3_add(wo, wi);
+    if (v3_length2(h) == 0.0f) return 0.0f;
+    Vec3 m = v3_normalize(h);
+    return fresnel_dielectric(v3_dot(wo, m), b->eta) * ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha) /
+           (4.0f * wo.z);
+}
+
+/* Non-delta part only: the diffuse base, and the coat when rough. */
+static Rgb plastic_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return rgb_s(0.0f);
+    Rgb f = plastic_diffuse_eval(b, wo, wi);
+    if (b->alpha > 0.0f) f = rgb_add(f, rgb_s(plastic_coat_eval(b, wo, wi)));
+    return f;
+}
+
+static float plastic_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
+    float pc = plastic_coat_prob(b, wo.z);
+    float p = (1.0f - pc) * wi.z * CST_INV_PI;
+    if (b->alpha > 0.0f) p += pc * microfacet_reflect_pdf(wo, wi, b->alpha);
+    return p;
+}
+
+static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out)
+{
+    float pc = plastic_coat_prob(b, wo.z);
+    Vec3 wi;
+    if (uc < pc) {
+        if (b->alpha == 0.0f) {
+            out->wi = mirror_z(wo);
+            out->pdf = pc;
+            out->weight = rgb_s(fresnel_dielectric(wo.z, b->eta) / pc);
+            out->delta = true;
+            return true;
+        }
+        wi = reflect_about(wo, ggx_sample_visible(wo, b->alpha, u));
+        if (wi.z <= 0.0f) return false;
+    } else {
+        wi = warp_cosine_hemisphere(u);
+        if (wi.z <= 0.0f) return false;
+    }
+    /* One-sample MIS over the lobes (the mixture pdf), so the weight is f / pdf of the
+     * whole non-delta part whichever lobe drew wi. */
+    out->wi = wi;
+    out->pdf = plastic_pdf(b, wo, wi);
+    out->weight = rgb_scale(plastic_eval(b, wo, wi), 1.0f / out->pdf);
+    out->delta = false;
+    return true;
+}
+
+float bsdf_delta_probability(const Bsdf *b, Vec3 wo_world)
+{
+    if (bsdf_is_delta(b)) return 1.0f;
+    if (!bsdf_has_delta(b)) return 0.0f;
+    Vec3 wo = frame_to_local(&b->frame, wo_world);
+    if (!reflect_side(b, &wo, NULL)) return 0.0f;
+    return plastic_coat_prob(b, wo.z);
+}
+
+/* ------------------------------------------------------------------ public wrappers */
+
+Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTransport mode)
+{
+    Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
+    switch (b->type) {
+    case MATERIAL_DIFFUSE:
+        /* Lambert reflects on whichever side wo is (unless one-sided). */
+        if (!reflect_side(b, &wo, &wi) || wo.z == 0.0f || wi.z <= 0.0f) return rgb_s(0.0f);
+        return rgb_scale(b->albedo, CST_INV_PI * wi.z);
+    case MATERIAL_CONDUCTOR:
+        if (b->alpha == 0.0f || !reflect_side(b, &wo, &wi)) return rgb_s(0.0f);
+        return conductor_eval(b, wo, wi);
+    case MATERIAL_DIELECTRIC:
+        if (b->alpha == 0.0f) return rgb_s(0.0f);
+        return rgb_scale(b->albedo, dielectric_eval(b, wo, wi, mode));
+    case MATERIAL_PLASTIC:
+        if (!reflect_side(b, &wo, &wi)) return rgb_s(0.0f);
+        return plastic_eval(b, wo, wi);
+    case MATERIAL_MIRROR:
+    case MATERIAL_GLASS: break;
+    }
+    return rgb_s(0.0f);
+}
+
+Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi) { return bsdf_eval_transport(b, wo, wi, BSDF_RADIANCE); }
+
+float bsdf_pdf(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
+{
+    Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
+    switch (b->type) {
+    case MATERIAL_DIFFUSE:
+        if (!reflect_side(b, &wo, &wi) || wo.z == 0.0f || wi.z <= 0.0f) return 0.0f;
+        return wi.z * CST_INV_PI;
+    case MATERIAL_CONDUCTOR:
+        if (b->alpha == 0.0f || !reflect_side(b, &wo, &wi)) return 0.0f;
+        return microfacet_reflect_pdf(wo, wi, b->alpha);
+    case MATERIAL_DIELECTRIC:
+        if (b->alpha == 0.0f) return 0.0f;
+        return dielectric_pdf(b, wo, wi);
+    case MATERIAL_PLASTIC:
+        if (!reflect_side(b, &wo, &wi)) return 0.0f;
+        return plastic_pdf(b, wo, wi);
+    case MATERIAL_MIRROR:
+    case MATERIAL_GLASS: break;
+    }
+    return 0.0f;
 }
 
 bool bsdf_sample(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfSample *out)
@@ -52,50 +382,47 @@ bool bsdf_sample_transport(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfT
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world);
     if (wo.z == 0.0f) return false;
+    bool flipped = false; /* reflective types sample from +z and flip back */
+    bool ok = false;
     switch (b->type) {
-    case MATERIAL_DIFFUSE: {
-        Vec3 wi = warp_cosine_hemisphere(u);
-        if (wo.z < 0.0f) wi.z = -wi.z;
-        if (wi.z == 0.0f) return false;
-        out->wi = frame_to_world(&b->frame, wi);
-        out->pdf = fabsf(wi.z) * CST_INV_PI;
+    case MATERIAL_DIFFUSE:
+        if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
+        out->wi = warp_cosine_hemisphere(u);
+        out->pdf = out->wi.z * CST_INV_PI;
         out->weight = b->albedo; /* (albedo/pi) |cos| / (|cos|/pi) */
         out->delta = false;
-        return true;
-    }
+        ok = out->wi.z > 0.0f;
+        break;
     case MATERIAL_MIRROR:
-        out->wi = frame_to_world(&b->frame, v3(-wo.x, -wo.y, wo.z));
+        /* Mirrors reflect on both sides unless one-sided. */
+        if (wo.z < 0.0f && b->one_sided) return false;
+        out->wi = mirror_z(wo);
         out->pdf = 1.0f;
         out->weight = b->albedo;
         out->delta = true;
-        return true;
-    case MATERIAL_GLASS: {
-        float f = fresnel_dielectric(wo.z, b->eta);
-        out->delta = true;
-        if (uc < f) {
-            out->wi = frame_to_world(&b->frame, v3(-wo.x, -wo.y, wo.z));
-            out->pdf = f;
-            out->weight = b->albedo; /* (F / |cos|) |cos| / F */
-            return true;
-        }
-        /* Refraction by Snell's law; etap is the relative IOR across the interface as
-         * seen from wo's side (pbrt-v4 sec. 9.3.2). */
-        float etap = wo.z > 0.0f ? b->eta : 1.0f / b->eta;
-        float cos_i = fabsf(wo.z);
-        float sin2_t = (1.0f - cos_i * cos_i) / (etap * etap);
-        if (sin2_t >= 1.0f) return false; /* unreachable: f == 1 under TIR */
-        float cos_t = safe_sqrtf(1.0f - sin2_t);
-        Vec3 wt = v3_add(v3_scale(v3_neg(wo), 1.0f / etap),
-                         v3(0.0f, 0.0f, (cos_i / etap - cos_t) * (wo.z > 0.0f ? 1.0f : -1.0f)));
-        out->wi = frame_to_world(&b->frame, v3_normalize(wt));
-        out->pdf = 1.0f - f;
-        /* Radiance is compressed by 1/etap^2 entering a denser medium (Veach thesis sec. 5.2, pbrt-v4 sec. 9.5.2);
-         * camera paths carry radiance, so the factor applies to them. Light paths carry
-         * flux, which refraction does not compress: the adjoint BTDF lacks the factor
-         * (Veach thesis sec. 5.2, pbrt-v4 DielectricBxDF with TransportMode::Importance). */
-        out->weight = mode == BSDF_RADIANCE ? rgb_scale(b->albedo, 1.0f / (etap * etap)) : b->albedo;
-        return true;
+        ok = true;
+        break;
+    case MATERIAL_CONDUCTOR:
+        if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
+        if (flipped) wo.z = -wo.z;
+        ok = conductor_sample(b, wo, u, out);
+        break;
+    case MATERIAL_GLASS:
+        ok = dielectric_smooth_sample(b, wo, uc, mode, out);
+        break;
+    case MATERIAL_DIELECTRIC:
+        ok = dielectric_sample(b, wo, uc, u, mode, out);
+        break;
+    case MATERIAL_PLASTIC:
+        if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
+        if (flipped) wo.z = -wo.z;
+        ok = plastic_sample(b, wo, uc, u, out);
+        break;
     }
-    }
-    return false;
+    /* The one place degenerate samples are rejected: no pdf, or a weight that is not a
+     * number (e.g. a direction exactly in the tangent plane). */
+    if (!ok || !(out->pdf > 0.0f) || !rgb_is_finite(out->weight)) return false;
+    if (flipped) out->wi.z = -out->wi.z;
+    out->wi = frame_to_world(&b->frame, out->wi);
+    return true;
 }

@@ -2,12 +2,15 @@
  * Conventions (pbrt-v4's): wo points away from the surface toward the previous vertex,
  * wi toward the next; both world-space unit vectors at the API. bsdf_eval returns
  * f(wo, wi) * |cos theta_i|; pdfs are per unit solid angle. Delta lobes (mirror, smooth
- * glass) have eval = pdf = 0 and are reached only through bsdf_sample. */
+ * glass, a smooth conductor, the smooth coat of plastic) are reached only through
+ * bsdf_sample: bsdf_eval and bsdf_pdf return the non-delta part of a BSDF only (zero for
+ * an all-delta one), and bsdf_sample says per sample whether it took a delta lobe. */
 #ifndef CST_MATERIALS_BSDF_H
 #define CST_MATERIALS_BSDF_H
 
 #include <stdbool.h>
 
+#include "materials/fresnel.h"
 #include "materials/material.h"
 #include "math/frame.h"
 #include "math/rgb.h"
@@ -16,7 +19,14 @@ typedef struct Bsdf {
     MaterialType type;
     Frame frame; /* n = the outward geometric/shading normal (glass: the outside) */
     Rgb albedo;
-    float eta;   /* glass: inside over outside IOR */
+    float eta;   /* glass, dielectric, plastic coat: inside over outside IOR */
+    float alpha; /* GGX width; 0 = smooth (delta lobes) */
+    Rgb cond_eta, cond_k; /* conductor: complex IOR */
+    bool one_sided;       /* reflective types: black seen from the back */
+    /* plastic: the coat's directional albedo E(mu) (NULL: the smooth coat's Fresnel F(mu))
+     * and its cosine-weighted hemispherical average */
+    const float *coat_e;
+    float coat_e_avg;
 } Bsdf;
 
 /* What a path carries, which decides the adjoint of a non-reciprocal lobe (Veach thesis
@@ -29,25 +39,56 @@ typedef enum BsdfTransport {
 typedef struct BsdfSample {
     Vec3 wi;      /* world space */
     Rgb weight;   /* f * |cos theta_i| / pdf */
-    float pdf;    /* solid angle; for delta lobes, the discrete probability of the lobe */
+    /* solid angle; for delta lobes, the discrete probability of the lobe. For a non-delta
+     * sample of a BSDF with delta lobes too, it includes the probability of not taking
+     * them, and equals bsdf_pdf(wo, wi). */
+    float pdf;
     bool delta;
 } BsdfSample;
 
+/* m must outlive b when m is a rough plastic (b points at its coat table). */
 void bsdf_init(Bsdf *b, const Material *m, Vec3 n);
-static inline bool bsdf_is_delta(const Bsdf *b) { return b->type != MATERIAL_DIFFUSE; }
+/* True when every lobe is a delta lobe: eval and pdf are zero everywhere, NEE is useless. */
+static inline bool bsdf_is_delta(const Bsdf *b)
+{
+    switch (b->type) {
+    case MATERIAL_MIRROR:
+    case MATERIAL_GLASS: return true;
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_DIELECTRIC: return b->alpha == 0.0f;
+    default: return false;
+    }
+}
+/* True when some lobe is a delta lobe (all-delta BSDFs, and the smooth-coat plastic, which
+ * mixes a delta coat reflection with a diffuse base). */
+static inline bool bsdf_has_delta(const Bsdf *b)
+{
+    return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->alpha == 0.0f);
+}
+/* True when some lobe transmits (light crosses to the other side of the surface). */
+static inline bool bsdf_has_transmission(const Bsdf *b)
+{
+    return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC;
+}
+/* The probability that bsdf_sample takes a delta lobe from wo (0 or 1 except for mixed
+ * BSDFs); lets a caller that splits the two parts weight each by its share. */
+float bsdf_delta_probability(const Bsdf *b, Vec3 wo);
+
 Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi);
+/* bsdf_eval for either transport: BSDF_IMPORTANCE gives the adjoint f*(wo, wi) |cos theta_i|
+ * = f(wi, wo) |cos theta_i|, which differs from the radiance BSDF only in refraction
+ * (by eta^2). bsdf_eval is the BSDF_RADIANCE case. */
+Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode);
 float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi);
 /* uc picks a lobe (glass: reflect vs refract), u samples a direction. Returns false for
- * no usable sample (e.g. wo exactly in the tangent plane). For camera paths. */
+ * no usable sample (e.g. wo exactly in the tangent plane, a microfacet reflection below
+ * the surface: that energy is lost, the single-scattering loss of microfacet models).
+ * For camera paths. */
 bool bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out);
 /* The same for either transport: the weight is f(wo, wi) |cos theta_i| / pdf for
  * BSDF_RADIANCE and the adjoint f*(wo, wi) |cos theta_i| / pdf = f(wi, wo) |cos theta_i| / pdf
  * for BSDF_IMPORTANCE. They differ only in refraction, by the factor 1/eta^2. */
 bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode,
                            BsdfSample *out);
-
-/* Unpolarised Fresnel reflectance of a smooth dielectric interface; cos_i is the cosine
- * on the incident side (sign picks the side), eta = inside over outside IOR. */
-float fresnel_dielectric(float cos_i, float eta);
 
 #endif

@@ -1,20 +1,59 @@
 /* Material descriptions as stored in the scene. A Material is turned into a Bsdf at each
- * hit (materials/bsdf.h); keeping the two apart lets textures plug in later. */
+ * hit (materials/bsdf.h); keeping the two apart lets textures plug in later.
+ * Roughness: scenes give a perceptual roughness r in [0, 1] and the GGX width is
+ * alpha = r^2 (Burley 2012, "Physically-Based Shading at Disney", sec. 5.4), so equal
+ * steps of r look like equal steps of blur. Below MATERIAL_SMOOTH_ALPHA the lobes become
+ * the exact delta lobes of a smooth surface. */
 #ifndef CST_MATERIALS_MATERIAL_H
 #define CST_MATERIALS_MATERIAL_H
+
+#include <stdbool.h>
 
 #include "math/rgb.h"
 
 typedef enum MaterialType {
-    MATERIAL_DIFFUSE, /* Lambertian: albedo = hemispherical reflectance */
-    MATERIAL_MIRROR,  /* perfect specular reflection scaled by albedo */
-    MATERIAL_GLASS    /* smooth dielectric: exact Fresnel, reflect or refract; albedo tints both */
+    MATERIAL_DIFFUSE,    /* Lambertian: albedo = hemispherical reflectance */
+    MATERIAL_MIRROR,     /* perfect specular reflection scaled by albedo */
+    MATERIAL_GLASS,      /* smooth dielectric: exact Fresnel, reflect or refract; albedo tints both */
+    MATERIAL_CONDUCTOR,  /* metal: complex-IOR Fresnel, GGX when rough, mirror when smooth */
+    MATERIAL_DIELECTRIC, /* glass that may be rough: GGX reflection + transmission (Walter 2007) */
+    MATERIAL_PLASTIC     /* dielectric coat (smooth or GGX) over Lambert; see bsdf.c */
 } MaterialType;
+
+/* GGX alpha below this is treated as perfectly smooth (pbrt-v4 uses the same cut). */
+#define MATERIAL_SMOOTH_ALPHA 1e-3f
+
+/* The rough plastic's coat albedo E(mu), tabulated at mu_j = (j / (N - 1))^2 (bsdf.c). */
+#define MATERIAL_COAT_TABLE 32
 
 typedef struct Material {
     MaterialType type;
-    Rgb albedo;
-    float ior; /* glass only: interior over exterior index of refraction, > 0 */
+    Rgb albedo;      /* diffuse, mirror, plastic base; dielectric tint */
+    float ior;       /* glass, dielectric, plastic coat: interior over exterior IOR, > 0 */
+    float roughness; /* conductor, dielectric, plastic: perceptual roughness in [0, 1] */
+    Rgb eta, k;      /* conductor: complex IOR eta + i k per RGB channel (material_metal) */
+    /* Reflective materials (diffuse, mirror, conductor, plastic) reflect on both sides
+     * unless one_sided is set, when the back (against the normal) is black. Stored
+     * inverted so that a zero-initialised Material keeps the historical two-sided
+     * behaviour; the scene file's key is "two_sided". Dielectrics have an inside and
+     * ignore it. */
+    bool one_sided;
+    /* Derived by material_prepare() (scene_add_material calls it): the rough plastic's
+     * coat albedo table and its cosine-weighted average. */
+    bool prepared;
+    float coat_e[MATERIAL_COAT_TABLE];
+    float coat_e_avg;
 } Material;
+
+/* GGX alpha of a perceptual roughness (alpha = r^2). */
+static inline float material_alpha(float roughness) { return roughness * roughness; }
+
+/* Fills the derived fields (a few ms for a rough plastic, nothing otherwise). */
+void material_prepare(Material *m);
+
+/* Named conductors: "gold", "silver", "copper", "aluminium". Sets eta and k; returns
+ * false for an unknown name. material_metal_names lists them, NULL-terminated. */
+bool material_metal(const char *name, Rgb *eta, Rgb *k);
+extern const char *const material_metal_names[];
 
 #endif

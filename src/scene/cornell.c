@@ -45,7 +45,7 @@ CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err)
     if (!s) return cst_fail(err, CST_ERR_OOM, "out of memory creating the Cornell box");
     CstStatus st;
     int light, white, red, green;
-    Material m = {MATERIAL_DIFFUSE, rgbd(0.0, 0.0, 0.0), 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = rgbd(0.0, 0.0, 0.0), .ior = 1.0f};
     if ((st = scene_add_material(s, &m, &light, err))) goto fail;
     m.albedo = rgbd(0.725, 0.71, 0.68);
     if ((st = scene_add_material(s, &m, &white, err))) goto fail;

@@ -69,6 +69,8 @@ CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError 
     if (!GROW(s->materials, s->cap_materials, s->num_materials + 1))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a material");
     s->materials[s->num_materials] = *m;
+    /* Derived data (the rough plastic's coat table) is computed once here, not per hit. */
+    material_prepare(&s->materials[s->num_materials]);
     *out_id = s->num_materials++;
     return CST_OK;
 }

@@ -644,21 +644,43 @@ static CstStatus parse_sampler(Loader *ld, const json_t *sampler)
     return CST_OK;
 }
 
-enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS };
+enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COUNT };
+
+/* "roughness": perceptual, in [0, 1] (material.h: alpha = roughness^2). */
+static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
+{
+    path_push_key(ld, "roughness");
+    LOADER_TRY(read_float(ld, v, (double)FLT_MAX, out));
+    if (!(*out >= 0.0f && *out <= 1.0f))
+        return fail_here(ld, "roughness %g is outside [0, 1]; expected 0 (smooth) to 1 (roughest)",
+                         (double)*out);
+    path_pop(ld);
+    return CST_OK;
+}
 
 static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
 {
-    static const char *const types[] = {"diffuse", "mirror", "glass"};
-    static const char *const keys[] = {"type", "albedo", "ior"};
-    static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS};
+    static const char *const types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric", "plastic"};
+    static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
+                                         MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC};
+    /* The keys each type accepts, "type" first. */
+    static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
+    static const char *const keys_glass[] = {"type", "albedo", "ior"};
+    static const char *const keys_conductor[] = {"type", "metal", "eta", "k", "roughness", "two_sided"};
+    static const char *const keys_dielectric[] = {"type", "albedo", "ior", "roughness"};
+    static const char *const keys_plastic[] = {"type", "albedo", "ior", "roughness", "two_sided"};
+    static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass,
+                                              keys_conductor, keys_dielectric, keys_plastic};
+    static const int nkeys[] = {3, 3, 3, 6, 4, 5};
     int type = 0;
     json_t *v;
     LOADER_TRY(expect_object(ld, obj, "a material object"));
-    LOADER_TRY(read_type(ld, obj, "material type", types, 3, -1, &type));
-    LOADER_TRY(check_keys(ld, obj, keys, type == MAT_GLASS ? 3 : 2));
+    LOADER_TRY(read_type(ld, obj, "material type", types, MAT_COUNT, -1, &type));
+    LOADER_TRY(check_keys(ld, obj, keys[type], nkeys[type]));
     m->type = mtype[type];
-    m->albedo = type == MAT_DIFFUSE ? rgb_s(0.5f) : rgb_s(1.0f);
-    m->ior = type == MAT_GLASS ? 1.5f : 1.0f;
+    m->albedo = type == MAT_DIFFUSE ? rgb_s(0.5f) : type == MAT_PLASTIC ? rgb_s(0.5f) : rgb_s(1.0f);
+    m->ior = type == MAT_GLASS || type == MAT_DIELECTRIC || type == MAT_PLASTIC ? 1.5f : 1.0f;
+    m->roughness = 0.0f;
     if ((v = json_object_get(obj, "albedo"))) {
         /* A reflectance above 1 would make any of these create energy. */
         path_push_key(ld, "albedo");
@@ -672,7 +694,52 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
             return fail_here(ld, "ior %g is not positive; expected an index of refraction > 0 "
                                  "(glass is about 1.5)",
                              (double)m->ior);
+        /* The coat model (bsdf.c) needs light to enter a denser layer. */
+        if (type == MAT_PLASTIC && !(m->ior >= 1.0f))
+            return fail_here(ld, "ior %g is below 1; expected the coat's index of refraction >= 1 "
+                                 "(plastics are about 1.5)",
+                             (double)m->ior);
         path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "roughness"))) LOADER_TRY(read_roughness(ld, v, &m->roughness));
+    if ((v = json_object_get(obj, "two_sided"))) {
+        int two = 1;
+        path_push_key(ld, "two_sided");
+        LOADER_TRY(read_bool(ld, v, &two));
+        m->one_sided = !two;
+        path_pop(ld);
+    }
+    if (type == MAT_CONDUCTOR) {
+        json_t *metal = json_object_get(obj, "metal"), *eta = json_object_get(obj, "eta"),
+               *k = json_object_get(obj, "k");
+        char list[128];
+        join_names(material_metal_names, 4, list, sizeof list);
+        if (metal && (eta || k))
+            return fail_here(ld, "both \"metal\" and \"eta\"/\"k\"; expected either a named metal "
+                                 "(%s) or \"eta\" and \"k\"",
+                             list);
+        if (metal) {
+            const char *name = NULL;
+            path_push_key(ld, "metal");
+            LOADER_TRY(read_string(ld, metal, &name));
+            if (!material_metal(name, &m->eta, &m->k)) {
+                char clipped[72];
+                return fail_here(ld, "unknown metal \"%s\"; expected one of: %s", clip_name(name, clipped), list);
+            }
+            path_pop(ld);
+        } else if (eta && k) {
+            /* A complex IOR: eta >= 0 and k >= 0 per channel. */
+            path_push_key(ld, "eta");
+            LOADER_TRY(read_rgb(ld, eta, 0, &m->eta));
+            path_pop(ld);
+            path_push_key(ld, "k");
+            LOADER_TRY(read_rgb(ld, k, 0, &m->k));
+            path_pop(ld);
+        } else {
+            return fail_here(ld, "missing key \"%s\"; expected a named metal (\"metal\": one of %s) or "
+                                 "a complex IOR (\"eta\" and \"k\", RGB triples)",
+                             eta ? "k" : k ? "eta" : "metal", list);
+        }
     }
     return CST_OK;
 }

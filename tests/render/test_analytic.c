@@ -47,7 +47,7 @@ static Scene *plane_under_light(double a, double b, double h)
     CstError err;
     Scene *s = scene_create();
     int plane_mat, light_mat;
-    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
     m.albedo = rgb_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
@@ -338,7 +338,7 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
     CstError err;
     Scene *s = scene_create();
     int plane_mat;
-    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
     Vec3 plane[4] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
     assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
@@ -406,7 +406,7 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
     CstError err;
     Scene *s = scene_create();
     int plane_mat;
-    Material m = {MATERIAL_DIFFUSE, {RHO, RHO, RHO}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
     Vec3 plane[4] = {{-500, 0, -500}, {-500, 0, 500}, {500, 0, 500}, {500, 0, -500}};
     assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);

@@ -164,11 +164,11 @@ static void test_through_glass(void **state)
     Scene *s = scene_create();
     assert_non_null(s);
     int floor_mat, glass_mat, light_mat;
-    Material m = {MATERIAL_DIFFUSE, {0.7f, 0.5f, 0.3f}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.5f, 0.3f}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &floor_mat, &err), CST_OK);
     m.albedo = rgb_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
-    Material glass = {MATERIAL_GLASS, {1.0f, 1.0f, 1.0f}, 1.5f};
+    Material glass = {.type = MATERIAL_GLASS, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.5f};
     assert_int_equal(scene_add_material(s, &glass, &glass_mat, &err), CST_OK);
     Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
     Vec3 glass_q[4] = {{-3, 1, -3}, {-3, 1, 3}, {3, 1, 3}, {3, 1, -3}};
@@ -195,7 +195,7 @@ static void test_emitting_furnace(void **state)
     Scene *s = scene_create();
     int grey;
     const float rho = 0.5f;
-    Material m = {MATERIAL_DIFFUSE, {rho, rho, rho}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
     Emission em = {{1.0f, 0.5f, 0.25f}, 1};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
@@ -268,7 +268,7 @@ static void test_environment_scene(void **state)
     Scene *s = scene_create();
     assert_non_null(s);
     int white, red;
-    Material m = {MATERIAL_DIFFUSE, {0.7f, 0.7f, 0.7f}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.7f, 0.7f}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &white, &err), CST_OK);
     m.albedo = rgb(0.7f, 0.2f, 0.1f);
     assert_int_equal(scene_add_material(s, &m, &red, &err), CST_OK);

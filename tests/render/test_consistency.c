@@ -236,11 +236,11 @@ static void test_light_through_glass(void **state)
     Scene *s = scene_create();
     assert_non_null(s);
     int floor_mat, glass_mat, light_mat;
-    Material m = {MATERIAL_DIFFUSE, {0.7f, 0.5f, 0.3f}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.5f, 0.3f}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &floor_mat, &err), CST_OK);
     m.albedo = rgb_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
-    Material glass = {MATERIAL_GLASS, {1.0f, 1.0f, 1.0f}, 1.5f};
+    Material glass = {.type = MATERIAL_GLASS, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.5f};
     assert_int_equal(scene_add_material(s, &glass, &glass_mat, &err), CST_OK);
     /* Windings give the normals: floor and interface +y (the interface's outside is
      * above), emitter -y. */

@@ -60,7 +60,7 @@ static void test_white_furnace_albedo_one(void **state)
     CstError err;
     Scene *s = scene_create();
     int white, black;
-    Material m = {MATERIAL_DIFFUSE, {1.0f, 1.0f, 1.0f}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &white, &err), CST_OK);
     m.albedo = rgb_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
@@ -89,7 +89,7 @@ static void test_furnace_emitting_sphere(void **state)
     Scene *s = scene_create();
     int grey;
     const float rho = 0.5f;
-    Material m = {MATERIAL_DIFFUSE, {rho, rho, rho}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
     Emission em = {{1.0f, 0.5f, 0.25f}, 1};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
@@ -129,7 +129,7 @@ static void test_light_furnace_emitting_sphere(void **state)
     Scene *s = scene_create();
     int grey;
     const float rho = 0.5f;
-    Material m = {MATERIAL_DIFFUSE, {rho, rho, rho}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
     Emission em = {{1.0f, 0.5f, 0.25f}, 1};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);

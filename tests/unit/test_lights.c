@@ -52,7 +52,7 @@ static Scene *scene_with_lights(double power[6])
     Scene *s = scene_create();
     assert_non_null(s);
     int mat;
-    Material m = {MATERIAL_DIFFUSE, {0.5f, 0.5f, 0.5f}, 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
     /* Two quads (2 triangles each) and a sphere: power pi A L (x2 two-sided). */
     Vec3 q1[4] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};

@@ -987,6 +987,48 @@ static void test_mutations(void **state)
     free(text);
 }
 
+/* The materials of issue #5: conductor (named or complex IOR), rough dielectric, plastic,
+ * roughness and two_sided, with their errors. */
+static void test_new_materials(void **state)
+{
+    (void)state;
+    CstScene *s = expect_ok(SCENE3(CAM,
+        "\"materials\": {\"white\": {\"type\": \"conductor\", \"metal\": \"gold\", \"roughness\": 0.2}, "
+        "\"c\": {\"type\": \"conductor\", \"eta\": [0.2, 0.9, 1.1], \"k\": [3.9, 2.4, 2.1], \"two_sided\": false}, "
+        "\"d\": {\"type\": \"dielectric\", \"ior\": 1.33, \"roughness\": 0.1}, "
+        "\"p\": {\"type\": \"plastic\", \"albedo\": [0.8, 0.1, 0.1], \"roughness\": 0.3}}",
+        SHAPES));
+    assert_int_equal(s->num_materials, 4);
+    assert_int_equal(s->materials[0].type, MATERIAL_CONDUCTOR);
+    assert_true(s->materials[0].roughness == 0.2f && s->materials[0].k.r > 3.0f && !s->materials[0].one_sided);
+    assert_int_equal(s->materials[1].type, MATERIAL_CONDUCTOR);
+    assert_true(s->materials[1].eta.g == 0.9f && s->materials[1].k.b == 2.1f && s->materials[1].one_sided);
+    assert_int_equal(s->materials[2].type, MATERIAL_DIELECTRIC);
+    assert_true(s->materials[2].ior == 1.33f && s->materials[2].roughness == 0.1f);
+    assert_int_equal(s->materials[3].type, MATERIAL_PLASTIC);
+    assert_true(s->materials[3].ior == 1.5f && s->materials[3].prepared && s->materials[3].coat_e_avg > 0.0f);
+    cst_scene_destroy(s);
+
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"conductor\", \"metal\": \"brass\"}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "\"brass\"", 0,
+                 "materials.white.metal: unknown metal \"brass\"; expected one of: gold, silver, copper, aluminium");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"conductor\"}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "{\"type\": \"conductor\"", 0,
+                 "materials.white: missing key \"metal\"; expected a named metal");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"conductor\", \"eta\": [1, 1, 1]}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "{\"type\": \"conductor\"", 0, "missing key \"k\"");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"dielectric\", \"roughness\": 1.5}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "1.5", 0,
+                 "materials.white.roughness: roughness 1.5 is outside [0, 1]; expected 0 (smooth) to 1 (roughest)");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"plastic\", \"ior\": 0.8}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "0.8", 0, "ior 0.8 is below 1");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"diffuse\", \"two_sided\": 1}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "1}", 0, "materials.white.two_sided: got");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"glass\", \"roughness\": 0.1}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "\"roughness\"", 0,
+                 "unknown key \"roughness\"; expected one of: type, albedo, ior");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1015,6 +1057,7 @@ int main(void)
         cmocka_unit_test(test_cornell_box_matches_builtin),
         cmocka_unit_test(test_cornell_spheres_file),
         cmocka_unit_test(test_mutations),
+        cmocka_unit_test(test_new_materials),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
