@@ -9,6 +9,7 @@
 
 #include "caustic/caustic.h"
 #include "math/vec3.h"
+#include "sampling/warp.h"
 
 enum { FILTER_TABLE = 64 }; /* bins per half-axis of the tabulated filters */
 
@@ -38,5 +39,20 @@ static inline float filter_radius(CstFilter type)
 }
 /* An offset from the pixel centre, in pixels, with u in [0, 1)^2; *weight = h / pdf. */
 Vec2 filter_sample(const Filter *f, Vec2 u, float *weight);
+
+/* The film position of a camera sample of pixel (x, y) (camera_generate_ray's
+ * convention) and its weight h / pdf: the box filter samples the pixel uniformly and the
+ * tent by inverting its CDF (weight 1); the others by filter_sample. */
+static inline Vec2 filter_film_position(const Filter *f, int x, int y, Vec2 u, float *weight)
+{
+    *weight = 1.0f;
+    if (f->type == CST_FILTER_TENT)
+        return v2((float)x + 0.5f + warp_tent(u.x), (float)y + 0.5f + warp_tent(u.y));
+    if (f->type == CST_FILTER_GAUSSIAN || f->type == CST_FILTER_MITCHELL) {
+        Vec2 d = filter_sample(f, u, weight);
+        return v2((float)x + 0.5f + d.x, (float)y + 0.5f + d.y);
+    }
+    return v2((float)x + u.x, (float)y + u.y);
+}
 
 #endif

@@ -34,6 +34,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "film/filter.h"
 #include "integrators/photon.h"
 #include "materials/bsdf.h"
 #include "sampling/warp.h"
@@ -279,17 +280,9 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     }
 }
 
-/* render.c's film_position: box = uniform in the pixel, tent by filter importance sampling. */
-static Vec2 sample_position(CstFilter filter, int x, int y, Vec2 u)
-{
-    if (filter == CST_FILTER_TENT)
-        return v2((float)x + 0.5f + warp_tent(u.x), (float)y + 0.5f + warp_tent(u.y));
-    return v2((float)x + u.x, (float)y + u.y);
-}
-
 /* The visible points of row y for iteration `iter`. */
-static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, SppmPixel *px, int y, int iter,
-                       uint64_t *nonfinite, uint64_t *rays)
+static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, const Filter *filter, SppmPixel *px,
+                       int y, int iter, uint64_t *nonfinite, uint64_t *rays)
 {
     for (int x = 0; x < cam->width; x++) {
         int pixel = y * cam->width + x;
@@ -298,9 +291,12 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         pcg32_seed_sample(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
         Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
         Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
-        Vec2 fp = sample_position(sp->filter, x, y, uf);
+        /* render.c's rule: the filter's weight h / pdf scales the sample, so both the
+         * direct part and the visible point's throughput. */
+        float fw;
+        Vec2 fp = filter_film_position(filter, x, y, uf, &fw);
         Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
-        Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
+        Rgb L = rgb_s(0.0f), beta = rgb_s(fw);
         SurfaceHit sh;
         v->valid = photon_trace_to_diffuse(s, ray, &rng, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
         if (v->valid) {
@@ -356,6 +352,7 @@ typedef struct SppmJob {
     const Scene *s;
     const Camera *cam;
     const SppmParams *sp;
+    Filter filter;        /* sp->filter's shape and tables */
     SppmPixel *px;
     size_t count;         /* pixels */
     const SppmGrid *g;
@@ -445,7 +442,7 @@ static void *sppm_worker_main(void *arg)
         int u = atomic_fetch_add(&job->next, 1);
         if (u >= units) break;
         if (job->phase == SPPM_PHASE_CAMERA) {
-            camera_row(job->s, job->cam, job->sp, job->px, u, job->iter, &w->nonfinite, &w->rays);
+            camera_row(job->s, job->cam, job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
         } else if (job->phase == SPPM_PHASE_PHOTONS) {
             SppmHitList *l = &job->hits[u];
             l->n = 0;
@@ -513,7 +510,8 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
     SppmGrid g = {0};
     g.buckets = 1;
     while (g.buckets < count && g.buckets < (1u << 30)) g.buckets <<= 1;
-    SppmJob job = {s, cam, sp, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, 0};
+    SppmJob job = {s, cam, sp, {0}, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, 0};
+    filter_init(&job.filter, sp->filter);
     job.chunks = (int)(((int64_t)photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
     /* Several pixel ranges per thread, so a range crowded with photons does not hold the
      * others up; a hit is read once per range its candidates reach (mostly one or two),

@@ -179,22 +179,6 @@ typedef struct Worker {
     uint64_t rays, nonfinite;
 } Worker;
 
-/* Film position of a sample: the box filter samples the pixel uniformly; the tent filter
- * (radius 1 pixel) is applied by filter importance sampling (Ernst et al., "Filter
- * Importance Sampling", 2006): offsets drawn from the tent itself, every sample weight 1,
- * so each sample still lands in exactly one pixel's estimate. */
-static inline Vec2 film_position(const Filter *filter, int x, int y, Vec2 u, float *weight)
-{
-    *weight = 1.0f;
-    if (filter->type == CST_FILTER_TENT)
-        return v2((float)x + 0.5f + warp_tent(u.x), (float)y + 0.5f + warp_tent(u.y));
-    if (filter->type == CST_FILTER_GAUSSIAN || filter->type == CST_FILTER_MITCHELL) {
-        Vec2 d = filter_sample(filter, u, weight);
-        return v2((float)x + 0.5f + d.x, (float)y + 0.5f + d.y);
-    }
-    return v2((float)x + u.x, (float)y + u.y);
-}
-
 static void render_tile(RenderJob *job, Worker *w, int tile)
 {
     const int W = job->film->width, H = job->film->height;
@@ -210,7 +194,7 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
                 Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
                 float fw;
-                Vec2 fp = film_position(&job->pixel_filter, x, y, uf, &fw);
+                Vec2 fp = filter_film_position(&job->pixel_filter, x, y, uf, &fw);
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
                 Rgb L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
                                                     &job->vcm_it, pixel, ray, &rng, &w->rays)
