@@ -14,10 +14,13 @@ typedef struct CameraDesc {
     float vfov_deg;        /* full vertical field of view in degrees, (0, 180) */
     float aperture_radius; /* 0 = pinhole */
     float focus_distance;  /* > 0; distance along the view axis to the plane in focus */
+    int mirror;            /* 1: image right is up x forward instead of forward x up, the
+                            * left-handed frame of a pbrt LookAt (scene/scene_pbrt.c) */
 } CameraDesc;
 
 typedef struct Camera {
-    Vec3 origin, forward, right, up; /* right = normalize(forward x up_hint), up = right x forward */
+    Vec3 origin, forward, right, up; /* right = normalize(forward x up_hint), up = right x forward;
+                                      * right negated after that for a mirrored desc */
     float tan_half_vfov, aspect;
     float aperture_radius, focus_distance;
     int width, height;
