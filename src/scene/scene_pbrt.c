@@ -753,7 +753,8 @@ Rgb pbrt_blackbody_rgb(double kelvin)
     }
     if (!(xyz[1] > 0.0))
         return rgb_s(0.0f);
-    for (int k = 0; k < 3; k++) xyz[k] /= xyz[1];
+    double y = xyz[1];
+    for (int k = 0; k < 3; k++) xyz[k] /= y;
     double c[3];
     xyz_to_rgb(xyz, c);
     for (int k = 0; k < 3; k++) c[k] = c[k] > 0.0 ? c[k] : 0.0; /* outside the gamut: clip */
@@ -787,8 +788,9 @@ Rgb pbrt_spectrum_rgb(const double *pairs, int num_pairs, bool illuminant)
     }
     double c[3], cw[3];
     if (illuminant) {
-        if (!(xyz[1] > 0.0)) return rgb_s(0.0f);
-        for (int k = 0; k < 3; k++) xyz[k] /= xyz[1];
+        double y = xyz[1];
+        if (!(y > 0.0)) return rgb_s(0.0f);
+        for (int k = 0; k < 3; k++) xyz[k] /= y;
         xyz_to_rgb(xyz, c);
     } else {
         /* Per-channel normalisation by the flat spectrum: a constant reflectance c maps to
@@ -1434,10 +1436,12 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
     if (strcmp(cls, "constant") == 0) {
         TEXPARAM("value", 1.0f, v);
     } else if (strcmp(cls, "scale") == 0) {
-        Rgb a, b;
+        Rgb a;
+        float sc = 1.0f;
         TEXPARAM("tex", 1.0f, a);
-        TEXPARAM("scale", 1.0f, b);
-        v = rgb_mul(a, b);
+        st = get_float_tex(ld, &ps, d, "scale", 1.0f, &sc, NULL); /* a float texture in pbrt-v4 */
+        if (st) goto done;
+        v = rgb_scale(a, sc);
     } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
         Rgb a, b;
         float amount = 0.5f;
