@@ -2182,7 +2182,8 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
     CstStatus st = expect_string(ld, lx, dname, "a type name in quotes", &type, &tl);
     if (!st && strcmp(dname, "ColorSpace") != 0) st = parse_params(ld, lx, &ps);
     if (st) goto done;
-    snprintf(d, sizeof d, "%s \"%s\"", dname, clip(type, nm));
+    /* (the guard only quiets GCC's format-truncation analysis, which loses track of dname) */
+    snprintf(d, sizeof d, "%s \"%s\"", dname ? dname : "?", clip(type, nm));
     CstRenderSettings *rs = &ld->scene->settings;
     int options_block = strcmp(dname, "Film") == 0 || strcmp(dname, "Sampler") == 0 ||
                         strcmp(dname, "Integrator") == 0 || strcmp(dname, "PixelFilter") == 0 ||
