@@ -282,6 +282,10 @@ static void cli_print_info(const CliArgs *a, const CstScene *scene)
     int prims = in.triangles + in.spheres;
     if (prims > 0) printf(" (%.1f bytes per primitive)", (double)in.accel_bytes / prims);
     printf("\n");
+    if (in.instances > 0)
+        printf("instances:   %d of %d object%s (%zu triangles), %zu bytes\n", in.instances,
+               in.instanced_objects, in.instanced_objects == 1 ? "" : "s", in.instanced_triangles,
+               in.instance_bytes);
 }
 
 static void cli_print_summary(const char *output, const CstRenderStats *st)

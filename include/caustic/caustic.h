@@ -90,6 +90,11 @@ typedef struct CstSceneInfo {
     const char *accel;          /* name of the acceleration structure in use */
     double accel_build_seconds; /* its last build */
     size_t accel_bytes;         /* memory it uses (not counting the scene's own arrays) */
+    int instances;              /* object instances (pbrt ObjectInstance), not in `triangles` */
+    int instanced_objects;      /* distinct objects they place */
+    size_t instanced_triangles; /* triangles of those objects, each counted once */
+    size_t instance_bytes;      /* the objects' geometry and BVHs, the instance records and
+                                 * the top-level tree */
 } CstSceneInfo;
 void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
 

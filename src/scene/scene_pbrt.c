@@ -145,6 +145,7 @@ typedef struct Object {
     ObjShape *shapes;
     int n, cap;
     Loc loc;
+    int proto; /* the scene's instanced object, made at the first ObjectInstance; -1 before */
 } Object;
 
 typedef struct CamRec {
@@ -188,9 +189,8 @@ typedef struct Loader {
     int in_world;
     int active_start, active_end;
     CamRec cam;
-    int num_instances_expanded;
+    int num_instances_expanded; /* instances whose spheres were copied */
     int num_shapes;
-    Loc first_instance_loc;
     Loc end; /* end of the main file, for errors about the whole scene */
 } Loader;
 
@@ -385,19 +385,19 @@ static int ptype_from_name(const char *s, PType *out)
 }
 
 /* Splits "type name" (any whitespace around and between) into its two words. */
-static int split_decl(const char *d, char *type, char *name, size_t cap)
+static int split_decl(const char *d, char *type, size_t type_cap, char *name, size_t name_cap)
 {
     const char *p = d;
     size_t n;
     while (*p == ' ' || *p == '\t') p++;
     for (n = 0; p[n] && p[n] != ' ' && p[n] != '\t'; n++) {}
-    if (n == 0 || n >= cap) return 0;
+    if (n == 0 || n >= type_cap) return 0;
     memcpy(type, p, n);
     type[n] = '\0';
     p += n;
     while (*p == ' ' || *p == '\t') p++;
     for (n = 0; p[n] && p[n] != ' ' && p[n] != '\t'; n++) {}
-    if (n == 0 || n >= cap) return 0;
+    if (n == 0 || n >= name_cap) return 0;
     memcpy(name, p, n);
     name[n] = '\0';
     p += n;
@@ -524,7 +524,7 @@ static CstStatus parse_params(Loader *ld, Lexer *lx, Params *ps)
             return oom(ld);
         char tname[64], pname[256], nm[72];
         PType type;
-        if (!split_decl(decl, tname, pname, sizeof pname)) {
+        if (!split_decl(decl, tname, sizeof tname, pname, sizeof pname)) {
             CstStatus st = fail_at(ld, CST_ERR_PARSE, loc,
                                    "\"%s\" is not a parameter declaration; expected \"type name\", "
                                    "as in \"float fov\"", clip(decl, nm));
@@ -1711,9 +1711,8 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     Emission *ems = NULL;
     if (!p || !idx || (g->n && !n)) { st = oom(ld); goto done; }
     if (g->nt > PBRT_MAX_TRIANGLES - ld->scene->num_triangles) {
-        st = fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: the scene would exceed %d triangles%s", d,
-                     PBRT_MAX_TRIANGLES, ld->num_instances_expanded ? " (object instances are "
-                     "expanded into copies, see docs/pbrt-compat.md)" : "");
+        st = fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: the scene would exceed %d triangles", d,
+                     PBRT_MAX_TRIANGLES);
         goto done;
     }
     int swap = (transform_det(&xf->m) < 0.0) != (reverse != 0);
@@ -1989,6 +1988,81 @@ done:
     return st;
 }
 
+/* The object's triangles, placed by their definition transforms with pbrt's orientation
+ * rule (as emit_shape does), as one instanced object of the scene. Degenerate triangles
+ * are dropped; an object without triangles gets no prototype. */
+static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
+{
+    int nv = 0, nt = 0;
+    for (int i = 0; i < obj->n; i++)
+        if (!obj->shapes[i].g.is_sphere) {
+            if (obj->shapes[i].g.nv > INT_MAX - nv || obj->shapes[i].g.nt > PBRT_MAX_TRIANGLES - nt)
+                return fail_at(ld, CST_ERR_UNSUPPORTED, obj->loc, "%s: the object has too many triangles", d);
+            nv += obj->shapes[i].g.nv;
+            nt += obj->shapes[i].g.nt;
+        }
+    if (nt == 0) return CST_OK;
+    CstStatus st = CST_OK;
+    Vec3 *p = malloc((size_t)nv * sizeof *p);
+    int *idx = malloc((size_t)nt * 3 * sizeof *idx), *mat = malloc((size_t)nt * sizeof *mat);
+    int vbase = 0, t_out = 0, dropped = 0;
+    if (!p || !idx || !mat) {
+        st = oom(ld);
+        goto done;
+    }
+    for (int i = 0; i < obj->n && !st; i++) {
+        const ObjShape *os = &obj->shapes[i];
+        const ShapeGeom *g = &os->g;
+        if (g->is_sphere) continue;
+        int m = 0;
+        if ((st = material_scene_id(ld, os->material, &m))) goto done;
+        int swap = (transform_det(&os->xf.m) < 0.0) != (os->reverse != 0);
+        Transform nm = transform_identity();
+        transform_normal_matrix(&os->xf.m, &nm);
+        for (int v = 0; v < g->nv; v++) {
+            p[vbase + v] = transform_point(&os->xf.m, g->p[v]);
+            if (!coords_ok(p[vbase + v])) {
+                st = fail_at(ld, CST_ERR_INVALID_ARG, os->loc, "%s: vertex %d of the object is beyond "
+                             "the scene limit", d, v);
+                goto done;
+            }
+        }
+        for (int t = 0; t < g->nt; t++) {
+            int a = g->idx[3 * t], b = g->idx[3 * t + 1], c = g->idx[3 * t + 2];
+            int sw = swap;
+            if (g->n) {
+                Vec3 na = transform_normal(&nm, g->n[a]), nb = transform_normal(&nm, g->n[b]),
+                     nc = transform_normal(&nm, g->n[c]);
+                Vec3 ns = v3_add(v3_add(na, nb), nc);
+                if (os->reverse) ns = v3_neg(ns);
+                Vec3 ng = v3_cross(v3_sub(p[vbase + b], p[vbase + a]), v3_sub(p[vbase + c], p[vbase + a]));
+                sw = v3_dot(ng, ns) < 0.0f;
+            }
+            if (!(triangle_area(p[vbase + a], p[vbase + b], p[vbase + c]) > 0.0f)) {
+                dropped++;
+                continue;
+            }
+            idx[3 * t_out] = vbase + a;
+            idx[3 * t_out + 1] = vbase + (sw ? c : b);
+            idx[3 * t_out + 2] = vbase + (sw ? b : c);
+            mat[t_out++] = m;
+        }
+        vbase += g->nv;
+    }
+    if (dropped)
+        warn_at(ld, CST_WARN_GEOMETRY, obj->loc, "ObjectBegin \"%s\": %d degenerate triangles dropped",
+                obj->name, dropped);
+    if (t_out > 0) {
+        st = scene_add_instance_proto(ld->scene, p, nv, idx, mat, t_out, &obj->proto, ld->err);
+        if (st) st = fail_wrap(ld, st, obj->loc, d);
+    }
+done:
+    free(p);
+    free(idx);
+    free(mat);
+    return st;
+}
+
 static CstStatus object_instance(Loader *ld, Lexer *lx, Loc loc)
 {
     char *name = NULL, nm[72];
@@ -2010,18 +2084,29 @@ static CstStatus object_instance(Loader *ld, Lexer *lx, Loc loc)
         free(name);
         return st;
     }
-    if (ld->num_instances_expanded++ == 0) {
-        ld->first_instance_loc = loc;
-        warn_at(ld, CST_WARN_APPROXIMATED, loc, "ObjectInstance \"%s\": instances are expanded "
-                "into copies of the object's triangles (no two-level acceleration structure yet); "
-                "memory grows with the number of instances", clip(name, nm));
-    }
     char d[96];
     snprintf(d, sizeof d, "ObjectInstance \"%s\"", clip(name, nm));
     free(name);
-    const Object *obj = &ld->objs[o];
+    Object *obj = &ld->objs[o];
+    if (obj->proto < 0) {
+        st = make_proto(ld, obj, d);
+        if (st) return st;
+    }
+    if (obj->proto >= 0) {
+        Xf xf = ld->gs.ctm;
+        if (!xf.inv_ok || !transform_is_affine(&xf.m))
+            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the instance transform is singular; "
+                           "expected an invertible transform", d);
+        st = scene_add_instance(ld->scene, obj->proto, &xf.m, ld->err);
+        if (st) return fail_wrap(ld, st, loc, d);
+    }
+    /* Spheres are not instanced (the prototypes hold triangles): they are placed as copies. */
     for (int i = 0; i < obj->n && !st; i++) {
         const ObjShape *os = &obj->shapes[i];
+        if (!os->g.is_sphere) continue;
+        if (ld->num_instances_expanded++ == 0)
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: spheres in instanced objects are placed "
+                    "as copies (only triangles are instanced)", d);
         Xf xf = xf_compose(&ld->gs.ctm, &os->xf);
         st = emit_shape(ld, &os->g, &xf, os->reverse, os->material, NULL, loc, d);
     }
@@ -2583,6 +2668,7 @@ static CstStatus directive(Loader *ld, Lexer *lx, const PbrtToken *t)
         memset(o, 0, sizeof *o);
         o->name = s;
         o->loc = loc;
+        o->proto = -1;
         ld->cur_obj = ld->num_objs++;
         return CST_OK;
     }
@@ -2733,7 +2819,8 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     }
     if (!ld.in_world)
         warn_at(&ld, CST_WARN_GEOMETRY, ld.end, "the file has no WorldBegin");
-    if (ld.scene->num_triangles == 0 && ld.scene->num_spheres == 0) {
+    if (ld.scene->num_triangles == 0 && ld.scene->num_spheres == 0 &&
+        !(ld.scene->instances && ld.scene->instances->num_insts > 0)) {
         st = fail_at(&ld, CST_ERR_INVALID_ARG, ld.end, "the scene has no shapes caustic can render; "
                      "expected at least one supported Shape in the world block");
         goto done;

@@ -628,13 +628,146 @@ static void test_instances(void **state)
                                "AttributeBegin\n Translate 10 0 0\n ObjectInstance \"pair\"\nAttributeEnd\n"
                                "AttributeBegin\n Translate 20 0 0\n ObjectInstance \"pair\"\nAttributeEnd\n"),
                          &w);
-    assert_int_equal(s->num_triangles, 2);
-    assert_int_equal(s->num_spheres, 2);
-    assert_vec(tri_vertex(s, 1, 1), 21, 0, 1, 0);
+    assert_int_equal(s->num_triangles, 0); /* the triangle is instanced, not copied */
+    assert_non_null(s->instances);
+    assert_int_equal(s->instances->num_protos, 1);
+    assert_int_equal(s->instances->num_insts, 2);
+    assert_int_equal(s->instances->protos[0].num_triangles, 1);
+    assert_vec(s->instances->protos[0].positions[1], 1, 0, 1, 0); /* the definition's CTM */
+    assert_vec(transform_point(&s->instances->insts[1].world_from_obj, v3(1, 0, 1)), 21, 0, 1, 0);
+    assert_int_equal(s->num_spheres, 2); /* spheres are copied */
     assert_vec(s->spheres[0].center, 10, 0, 1, 0);
     assert_int_equal(s->num_emitters, 0);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "expanded into copies") >= 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "spheres in instanced objects") >= 0);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "area lights inside ObjectBegin") >= 0);
+    /* a ray down onto the second instance's triangle */
+    SurfaceHit sh;
+    Ray r = ray_make(v3(20.25f, 0.25f, 5.0f), v3(0.0f, 0.0f, -1.0f), 0.0f, INFINITY);
+    assert_true(scene_intersect(s, &r, &sh));
+    assert_true(fabsf(sh.t - 4.0f) < 1e-5f);
+    assert_vec(sh.p, 20.25f, 0.25f, 1.0f, 1e-5f);
+    assert_vec(sh.ng, 0, 0, 1, 1e-6f);
+    assert_true(scene_occluded(s, &r));
+    r.d = v3(0.0f, 0.0f, 1.0f);
+    assert_false(scene_intersect(s, &r, &sh));
+    CstSceneInfo info;
+    cst_scene_info(s, &info);
+    assert_int_equal(info.instances, 2);
+    assert_int_equal(info.instanced_objects, 1);
+    assert_true(info.instanced_triangles == 1);
+    cst_scene_destroy(s);
+}
+
+/* The same objects instanced and written out as copies: every camera ray finds the same
+ * surface (t to 1e-4 relative, same material, same normal), with rotations, non-uniform
+ * scales and a mirror among the instance transforms. */
+static void test_instances_match_copies(void **state)
+{
+    (void)state;
+#define OBJ_SHAPES "Shape \"trianglemesh\" \"point3 P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] \"integer indices\" [0 1 2 0 2 3]\n" \
+                   "Material \"diffuse\" \"rgb reflectance\" [.1 .2 .3]\n" \
+                   "Shape \"trianglemesh\" \"point3 P\" [0 0 0  0 1 1  1 0 1] \"integer indices\" [0 1 2]\n"
+    static const char *const xfs[] = {"Translate -2 0 0", "Translate 2 0 1\nRotate 30 0 1 0",
+                                      "Translate 0 2 0\nScale 0.5 1 2", "Translate 0 -2 0\nScale -1 1 1",
+                                      "Translate 0 0 3\nRotate 200 1 1 0"};
+    char inst[4096], copy[4096];
+    int ni = snprintf(inst, sizeof inst, "LookAt 0 0 -8  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 60\n"
+                      "WorldBegin\nObjectBegin \"o\"\n" OBJ_SHAPES "ObjectEnd\n");
+    int nc = snprintf(copy, sizeof copy, "LookAt 0 0 -8  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 60\nWorldBegin\n");
+    for (int i = 0; i < 5; i++) {
+        ni += snprintf(inst + ni, sizeof inst - (size_t)ni, "AttributeBegin\n%s\nObjectInstance \"o\"\nAttributeEnd\n", xfs[i]);
+        nc += snprintf(copy + nc, sizeof copy - (size_t)nc, "AttributeBegin\n%s\n" OBJ_SHAPES "AttributeEnd\n", xfs[i]);
+    }
+#undef OBJ_SHAPES
+    Scene *a = expect_ok(inst, NULL), *b = expect_ok(copy, NULL);
+    assert_int_equal(a->num_triangles, 0);
+    assert_int_equal(b->num_triangles, 15);
+    int hits = 0;
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 64; x++) {
+            Vec3 d = v3_normalize(v3(((float)x + 0.5f) / 32.0f - 1.0f, ((float)y + 0.5f) / 32.0f - 1.0f, 1.6f));
+            Ray r = ray_make(v3(0.0f, 0.0f, -8.0f), d, 0.0f, INFINITY);
+            SurfaceHit ha, hb;
+            bool ia = scene_intersect(a, &r, &ha), ib = scene_intersect(b, &r, &hb);
+            if (ia != ib) fail_msg("ray %d,%d: instanced %d, copies %d", x, y, ia, ib);
+            if (!ia) continue;
+            hits++;
+            if (fabsf(ha.t - hb.t) > 1e-4f * hb.t) fail_msg("ray %d,%d: t %g vs %g", x, y, (double)ha.t, (double)hb.t);
+            assert_true(a->materials[ha.material].albedo.r == b->materials[hb.material].albedo.r);
+            if (v3_dot(ha.ng, hb.ng) < 0.9999f)
+                fail_msg("ray %d,%d: normal (%g %g %g) vs (%g %g %g)", x, y, (double)ha.ng.x, (double)ha.ng.y,
+                         (double)ha.ng.z, (double)hb.ng.x, (double)hb.ng.y, (double)hb.ng.z);
+            assert_true(scene_occluded(a, &r) && scene_occluded(b, &r));
+        }
+    assert_true(hits > 300);
+    cst_scene_destroy(a);
+    cst_scene_destroy(b);
+}
+
+/* Issue #6: 10^4 instances of a 70k-triangle mesh cost about one copy of the mesh plus the
+ * instance table, not 10^4 copies (7 * 10^8 triangles, tens of GB). */
+static void test_instances_memory(void **state)
+{
+    (void)state;
+    enum { N = 188, INSTANCES = 10000 }; /* (N-1)^2 * 2 = 69938 triangles */
+    size_t cap = 8u << 20, n = 0;
+    char *t = malloc(cap);
+    assert_non_null(t);
+    n += (size_t)snprintf(t + n, cap - n, "LookAt 50 50 -150  50 50 0  0 1 0\nCamera \"perspective\" \"float fov\" 50\n"
+                          "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\n"
+                          "Translate 50 50 -60 Shape \"sphere\" \"float radius\" 20\nAttributeEnd\n"
+                          "ObjectBegin \"bumps\"\nShape \"trianglemesh\" \"point3 P\" [");
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++)
+            n += (size_t)snprintf(t + n, cap - n, "%.4f %.4f %.4f ", i / (double)(N - 1), j / (double)(N - 1),
+                                  0.05 * sin(i * 0.3) * cos(j * 0.2));
+    n += (size_t)snprintf(t + n, cap - n, "] \"integer indices\" [");
+    for (int j = 0; j + 1 < N; j++)
+        for (int i = 0; i + 1 < N; i++) {
+            int v = j * N + i;
+            n += (size_t)snprintf(t + n, cap - n, "%d %d %d %d %d %d ", v, v + 1, v + N + 1, v, v + N + 1, v + N);
+        }
+    n += (size_t)snprintf(t + n, cap - n, "]\nObjectEnd\n");
+    for (int k = 0; k < INSTANCES; k++)
+        n += (size_t)snprintf(t + n, cap - n, "AttributeBegin Translate %d %d 0 Rotate %d 0 0 1 ObjectInstance \"bumps\" AttributeEnd\n",
+                              (k % 100) * 1, (k / 100) * 1, (k * 37) % 360);
+    assert_true(n < cap - 1);
+    Scene *s = expect_ok(t, NULL);
+    free(t);
+    CstSceneInfo info;
+    cst_scene_info(s, &info);
+    assert_int_equal(info.instances, INSTANCES);
+    assert_true(info.instanced_triangles == (size_t)2 * (N - 1) * (N - 1));
+    const InstProto *p = &s->instances->protos[0];
+    size_t one_copy = (size_t)p->num_positions * sizeof(Vec3) +
+                      (size_t)p->num_triangles * (3 * sizeof(int32_t) + sizeof(int32_t) + sizeof(Vec3)) +
+                      accel_memory_bytes(&p->accel);
+    size_t table = info.instance_bytes - one_copy;
+    print_message("10^4 instances of a %zu-triangle mesh: %zu bytes in all = one copy %zu "
+                  "(geometry + BVH) + instance table and top-level tree %zu (%.0f bytes per "
+                  "instance); as copies: about %.1f GB\n",
+                  info.instanced_triangles, info.instance_bytes, one_copy, table,
+                  (double)table / INSTANCES, (double)one_copy * INSTANCES / 1e9);
+    assert_true(table < (size_t)INSTANCES * 400);
+    assert_true(info.instance_bytes < one_copy + (size_t)INSTANCES * 400);
+    /* and it renders: the mesh field is lit, not black */
+    CstRenderSettings st = {0};
+    st.width = st.height = 24;
+    st.spp = 4;
+    st.threads = 2;
+    CstFilm *f = NULL;
+    CstError err;
+    if (cst_render(s, &st, &f, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
+    int lit = 0;
+    for (int y = 0; y < 24; y++)
+        for (int x = 0; x < 24; x++) {
+            double c[3];
+            cst_film_pixel(f, x, y, c);
+            lit += c[0] + c[1] + c[2] > 0.0;
+        }
+    /* the field covers about half the image at this distance */
+    if (!(lit > 24 * 24 / 4)) fail_msg("%d of %d pixels lit", lit, 24 * 24);
+    cst_film_destroy(f);
     cst_scene_destroy(s);
 }
 
@@ -823,6 +956,8 @@ int main(void)
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_plymesh),
         cmocka_unit_test(test_instances),
+        cmocka_unit_test(test_instances_match_copies),
+        cmocka_unit_test(test_instances_memory),
         cmocka_unit_test(test_camera_and_options),
         cmocka_unit_test(test_cornell_pbrt_equals_json),
         cmocka_unit_test(test_cornell_handedness),
