@@ -216,6 +216,9 @@ static void test_parse_errors_located(void **state)
                  "unknown parameter type \"real\"");
     expect_error(WORLD("Shape \"sphere\" \"radius\" 2\n"), CST_ERR_PARSE, "\"radius\"", 0,
                  "expected \"type name\"");
+    /* found by fuzz_pbrt: a type name longer than its buffer overran the stack */
+    expect_error(WORLD("Shape \"sphere\" \"floatfloatfloatfloatfloatfloatfloatfloatfloatfloatfloatfloatfloatfloat r\" 2\n"),
+                 CST_ERR_PARSE, "\"floatfloat", 0, "expected \"type name\"");
     expect_error(WORLD("Shape \"sphere\" \"float radius\" [1 \"a\"]\n"), CST_ERR_PARSE,
                  "\"float radius\"", 0, "mixes numbers and strings");
     expect_error(WORLD("Shape \"sphere\" \"float radius\" \"big\"\n"), CST_ERR_INVALID_ARG,
