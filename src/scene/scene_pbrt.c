@@ -187,10 +187,9 @@ typedef struct Loader {
     int num_objs, cap_objs;
     int cur_obj; /* -1 outside ObjectBegin/End */
     int in_world;
-    int active_start, active_end;
+    int active_start; /* ActiveTransform includes StartTime: transforms apply */
     CamRec cam;
     int num_instances_expanded; /* instances whose spheres were copied */
-    int num_shapes;
     Loc end; /* end of the main file, for errors about the whole scene */
 } Loader;
 
@@ -425,8 +424,8 @@ static CstStatus param_add_str(Loader *ld, Param *p, int *cap, const PbrtToken *
 }
 
 /* One value token into p: numbers, strings, and the bare words true/false for bools. */
-static CstStatus param_value(Loader *ld, Lexer *lx, Param *p, int *cap_n, int *cap_s,
-                             const PbrtToken *t, int *ok)
+static CstStatus param_value(Loader *ld, Param *p, int *cap_n, int *cap_s, const PbrtToken *t,
+                             int *ok)
 {
     *ok = 1;
     if (t->kind == PBRT_TOK_NUMBER)
@@ -435,7 +434,6 @@ static CstStatus param_value(Loader *ld, Lexer *lx, Param *p, int *cap_n, int *c
         return param_add_str(ld, p, cap_s, t);
     if (t->kind == PBRT_TOK_WORD && (tok_is(t, "true") || tok_is(t, "false")) && p->type == PT_BOOL)
         return param_add_str(ld, p, cap_s, t);
-    (void)lx;
     *ok = 0;
     return CST_OK;
 }
@@ -567,7 +565,7 @@ static CstStatus parse_params(Loader *ld, Lexer *lx, Params *ps)
                 TRY(lex_next(ld, lx, &t));
                 if (t.kind == PBRT_TOK_RBRACKET)
                     break;
-                TRY(param_value(ld, lx, p, &cap_n, &cap_s, &t, &ok));
+                TRY(param_value(ld, p, &cap_n, &cap_s, &t, &ok));
                 if (!ok) {
                     char got[96];
                     pbrt_token_describe(&t, got, sizeof got);
@@ -582,7 +580,7 @@ static CstStatus parse_params(Loader *ld, Lexer *lx, Params *ps)
                 }
             }
         } else {
-            TRY(param_value(ld, lx, p, &cap_n, &cap_s, &t, &ok));
+            TRY(param_value(ld, p, &cap_n, &cap_s, &t, &ok));
             if (!ok) {
                 char got[96];
                 pbrt_token_describe(&t, got, sizeof got);
@@ -1162,22 +1160,22 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
     Rgb eta, k, refl = rgb_s(0.0f);
     pbrt_named_metal("metal-Cu-eta", &eta); /* pbrt's default conductor is copper */
     pbrt_named_metal("metal-Cu-k", &k);
-    int has_refl = 0, has_eta = 0, has_k = 0;
+    int has_refl = 0;
     float eta_f = 0.0f;
     Param *pe = find_param(ps, n_eta);
     if (pe && pe->type == PT_FLOAT) { /* pbrt-v4 also takes a plain float eta */
-        TRY(get_float(ld, ps, d, n_eta, 1.0f, &eta_f, &has_eta));
+        TRY(get_float(ld, ps, d, n_eta, 1.0f, &eta_f, NULL));
         eta = rgb_s(eta_f);
     } else {
-        TRY(get_spectrum(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, &has_eta));
+        TRY(get_spectrum(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, NULL));
     }
-    TRY(get_spectrum(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, &has_k));
+    TRY(get_spectrum(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL));
     TRY(get_spectrum(ld, ps, d, n_refl, SPEC_REFLECTANCE, 1, &refl, &has_refl));
     float r = 0.0f, ur = 0.0f, vr = 0.0f;
-    int has_r = 0, has_u = 0, has_v = 0, remap = 1;
-    TRY(get_float_tex(ld, ps, d, "roughness", 0.0f, &r, &has_r));
-    TRY(get_float_tex(ld, ps, d, "uroughness", r, &ur, &has_u));
-    TRY(get_float_tex(ld, ps, d, "vroughness", r, &vr, &has_v));
+    int remap = 1;
+    TRY(get_float_tex(ld, ps, d, "roughness", 0.0f, &r, NULL));
+    TRY(get_float_tex(ld, ps, d, "uroughness", r, &ur, NULL));
+    TRY(get_float_tex(ld, ps, d, "vroughness", r, &vr, NULL));
     TRY(get_bool(ld, ps, d, "remaproughness", 1, &remap));
     float rough = maxf(maxf(ur, vr), 0.0f);
     float alpha = remap ? sqrtf(rough) : rough; /* pbrt-v4 RoughnessToAlpha */
@@ -1199,7 +1197,6 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
                 (double)PBRT_ROUGH_AS_DIFFUSE_ALPHA, (double)m->albedo.r, (double)m->albedo.g,
                 (double)m->albedo.b);
     }
-    (void)has_eta; (void)has_k; (void)has_u; (void)has_v;
     return CST_OK;
 }
 
@@ -1233,7 +1230,6 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
     m->albedo = rgb_s(0.5f);
     m->ior = 1.0f;
     float rough = 0.0f;
-    int has_rough = 0;
     if (strcmp(type, "diffuse") == 0) {
         TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
     } else if (strcmp(type, "matte") == 0) { /* pbrt-v3 */
@@ -1271,7 +1267,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as a solid dielectric (glass) "
                     "of the same eta: rays refract at its surface instead of passing straight through", d);
         float ur = 0.0f, vr = 0.0f;
-        TRY(get_float_tex(ld, ps, d, "roughness", 0.0f, &rough, &has_rough));
+        TRY(get_float_tex(ld, ps, d, "roughness", 0.0f, &rough, NULL));
         TRY(get_float_tex(ld, ps, d, "uroughness", rough, &ur, NULL));
         TRY(get_float_tex(ld, ps, d, "vroughness", rough, &vr, NULL));
         int remap = 1;
@@ -1321,7 +1317,6 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
                        "conductor, coatedconductor, dielectric, thindielectric, diffusetransmission, "
                        "interface, mix, measured, hair, subsurface", clip(type, nm));
     }
-    (void)has_rough;
     return CST_OK;
 }
 
@@ -1708,7 +1703,6 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     Vec3 *p = malloc((size_t)(g->nv ? g->nv : 1) * sizeof *p);
     Vec3 *n = g->n ? malloc((size_t)g->nv * sizeof *n) : NULL;
     int *idx = malloc((size_t)(g->nt ? g->nt : 1) * 3 * sizeof *idx);
-    Emission *ems = NULL;
     if (!p || !idx || (g->n && !n)) { st = oom(ld); goto done; }
     if (g->nt > PBRT_MAX_TRIANGLES - ld->scene->num_triangles) {
         st = fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: the scene would exceed %d triangles", d,
@@ -1790,7 +1784,6 @@ done:
     free(p);
     free(n);
     free(idx);
-    free(ems);
     geom_free(&tess);
     return st;
 }
@@ -1964,7 +1957,6 @@ static CstStatus shape_directive(Loader *ld, Lexer *lx, Loc loc)
     }
     if (st || skip) goto done;
     params_warn_unused(ld, &ps, d);
-    ld->num_shapes++;
     if (ld->cur_obj >= 0) {
         Object *o = &ld->objs[ld->cur_obj];
         if (ld->gs.area.active)
@@ -2094,11 +2086,14 @@ static CstStatus object_instance(Loader *ld, Lexer *lx, Loc loc)
     }
     if (obj->proto >= 0) {
         Xf xf = ld->gs.ctm;
-        if (!xf.inv_ok || !transform_is_affine(&xf.m))
-            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the instance transform is singular; "
-                           "expected an invertible transform", d);
-        st = scene_add_instance(ld->scene, obj->proto, &xf.m, ld->err);
-        if (st) return fail_wrap(ld, st, loc, d);
+        Transform inv;
+        if (!transform_invert(&xf.m, &inv)) {
+            /* flat (Scale 0) or not finite when inverted: nothing a ray could hit */
+            warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: the instance transform is singular; skipped", d);
+        } else {
+            st = scene_add_instance(ld->scene, obj->proto, &xf.m, ld->err);
+            if (st) return fail_wrap(ld, st, loc, d);
+        }
     }
     /* Spheres are not instanced (the prototypes hold triangles): they are placed as copies. */
     for (int i = 0; i < obj->n && !st; i++) {
@@ -2417,9 +2412,6 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
     } else if (strcmp(dname, "ColorSpace") == 0) {
         if (strcmp(type, "srgb") != 0)
             warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: RGB values are taken as linear sRGB", d);
-    } else if (strcmp(dname, "Option") == 0) {
-        params_mark_all_used(&ps);
-        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "Option is not supported; ignored");
     } else if (strcmp(dname, "MakeNamedMedium") == 0) {
         params_mark_all_used(&ps);
         warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: participating media are not supported; ignored", d);
@@ -2606,13 +2598,12 @@ static CstStatus directive(Loader *ld, Lexer *lx, const PbrtToken *t)
     if (tok_is(t, "ActiveTransform")) {
         PbrtToken w;
         TRY(lex_next(ld, lx, &w));
-        if (w.kind == PBRT_TOK_WORD && tok_is(&w, "StartTime")) { ld->active_start = 1; ld->active_end = 0; }
+        if (w.kind == PBRT_TOK_WORD && tok_is(&w, "StartTime")) { ld->active_start = 1; }
         else if (w.kind == PBRT_TOK_WORD && tok_is(&w, "EndTime")) {
             ld->active_start = 0;
-            ld->active_end = 1;
             warn_at(ld, CST_WARN_UNSUPPORTED, loc, "ActiveTransform EndTime: motion blur is not "
                     "supported; end-time transforms are ignored");
-        } else if (w.kind == PBRT_TOK_WORD && tok_is(&w, "All")) { ld->active_start = ld->active_end = 1; }
+        } else if (w.kind == PBRT_TOK_WORD && tok_is(&w, "All")) { ld->active_start = 1; }
         else {
             char got[96];
             pbrt_token_describe(&w, got, sizeof got);
