@@ -17,6 +17,7 @@
 
 #include "caustic/caustic.h"
 #include "film/film.h"
+#include "film/image_io.h"
 #include "scene/pbrt_tokenizer.h"
 #include "scene/scene.h"
 #include "scene/scene_pbrt.h"
@@ -622,6 +623,69 @@ static void test_plymesh(void **state)
     cst_scene_destroy(s);
 }
 
+/* Directives that only warn, and the v3 leftovers that are accepted silently. */
+static void test_other_directives(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok("Option \"bool disablepixeljitter\" true\n"
+                         "ColorSpace \"aces2065-1\"\n"
+                         "TransformTimes 0 1\n"
+                         "WorldBegin\n"
+                         "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+                         "MediumInterface \"fog\" \"\"\n"
+                         "MediumInterface \"fog\"\n"
+                         "Attribute \"shape\" \"float radius\" 2\n"
+                         "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"vector3 S\" [1 0 0 1 0 0 1 0 0] "
+                         "\"vector2 dpdu\" [1 0]\n"
+                         "WorldEnd\n", &w);
+    assert_int_equal(s->num_triangles, 1);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:1:1: Option is not supported") >= 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "t.pbrt:2:12: ColorSpace \"aces2065-1\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:3:1: TransformTimes") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: MakeNamedMedium \"fog\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:6:1: MediumInterface") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:7:1: MediumInterface") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:8:1: Attribute \"shape\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"vector3 S\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"vector2 dpdu\"") >= 0);
+    cst_scene_destroy(s);
+}
+
+/* imagemap stands in as the image's average; binary PLY through assimp. */
+static void test_imagemap_and_binary_ply(void **state)
+{
+    (void)state;
+    const float px[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    CstError err;
+    assert_int_equal(image_write(CST_BINARY_DIR "/pbrt_tex.pfm", px, 2, 2, &err), CST_OK);
+    FILE *f = fopen(CST_BINARY_DIR "/pbrt_bin.ply", "wb");
+    assert_non_null(f);
+    fputs("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+          "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n", f);
+    const float v[9] = {0, 0, 0, 2, 0, 0, 0, 3, 0};
+    fwrite(v, sizeof v, 1, f);
+    const unsigned char n3 = 3;
+    const int32_t idx[3] = {0, 1, 2};
+    fwrite(&n3, 1, 1, f);
+    fwrite(idx, sizeof idx, 1, f);
+    fclose(f);
+    const char *text = WORLD("Texture \"img\" \"spectrum\" \"imagemap\" \"string filename\" \"pbrt_tex.pfm\"\n"
+                             "Material \"diffuse\" \"texture reflectance\" \"img\"\n"
+                             "Shape \"plymesh\" \"string filename\" \"pbrt_bin.ply\"\n");
+    CstScene *s = NULL;
+    Warnings w = {0};
+    CstLoadOptions opt = {collect, &w, 0};
+    if (cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    Rgb a = s->materials[s->tri_info[0].material].albedo;
+    assert_true(fabsf(a.r - 0.5f) < 1e-6f && fabsf(a.g - 0.5f) < 1e-6f && fabsf(a.b - 0.5f) < 1e-6f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "image's average") >= 0);
+    assert_int_equal(s->num_triangles, 1);
+    assert_vec(tri_vertex(s, 0, 2), 0, 3, 0, 0);
+    cst_scene_destroy(s);
+}
+
 static void test_instances(void **state)
 {
     (void)state;
@@ -958,6 +1022,8 @@ int main(void)
         cmocka_unit_test(test_lights),
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_plymesh),
+        cmocka_unit_test(test_other_directives),
+        cmocka_unit_test(test_imagemap_and_binary_ply),
         cmocka_unit_test(test_instances),
         cmocka_unit_test(test_instances_match_copies),
         cmocka_unit_test(test_instances_memory),
