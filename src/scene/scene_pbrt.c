@@ -1392,7 +1392,7 @@ static CstStatus fail_wrap(Loader *ld, CstStatus st, Loc loc, const char *d)
 
 static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
 {
-    char *name = NULL, *ttype = NULL, *cls = NULL, nm[72];
+    char *name = NULL, *ttype = NULL, *cls = NULL, nm[72], nm2[72];
     Params ps = {0};
     Loc tl;
     CstStatus st = expect_string(ld, lx, "Texture", "the texture's name", &name, NULL);
@@ -1408,11 +1408,11 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
     int is_float = strcmp(ttype, "float") == 0;
     if (!is_float && strcmp(ttype, "spectrum") != 0 && strcmp(ttype, "color") != 0) {
         st = fail_at(ld, CST_ERR_INVALID_ARG, tl, "Texture \"%s\": type \"%s\"; expected \"spectrum\" "
-                     "or \"float\"", clip(name, nm), ttype);
+                     "or \"float\"", clip(name, nm), clip(ttype, nm2));
         goto done;
     }
     char d[160];
-    snprintf(d, sizeof d, "Texture \"%s\" \"%s\"", clip(name, nm), cls);
+    snprintf(d, sizeof d, "Texture \"%s\" \"%s\"", clip(name, nm), clip(cls, nm2));
     Rgb v = rgb_s(is_float ? 1.0f : 1.0f);
     SpecKind sk = SPEC_UNBOUNDED;
 /* A texture-valued parameter of this texture: constant, or another texture's value. */
