@@ -10,10 +10,6 @@ void camera_init(Camera *cam, const CameraDesc *d, int width, int height)
     cam->forward = v3_normalize(v3_sub(d->look_at, d->position));
     cam->right = v3_normalize(v3_cross(cam->forward, d->up));
     cam->up = v3_cross(cam->right, cam->forward);
-    /* After up: mirroring flips the image horizontally, not the vertical axis. Every use
-     * of right (rays, lens offsets, camera_sample_wi) then flips together. */
-    if (d->mirror)
-        cam->right = v3_neg(cam->right);
     cam->tan_half_vfov = tanf(d->vfov_deg * (CST_PI / 360.0f));
     cam->aspect = (float)width / (float)height;
     cam->aperture_radius = d->aperture_radius;
@@ -21,6 +17,8 @@ void camera_init(Camera *cam, const CameraDesc *d, int width, int height)
     cam->width = width;
     cam->height = height;
 }
+
+void camera_mirror_x(Camera *cam) { cam->right = v3_neg(cam->right); }
 
 Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens_u)
 {

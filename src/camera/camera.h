@@ -14,19 +14,20 @@ typedef struct CameraDesc {
     float vfov_deg;        /* full vertical field of view in degrees, (0, 180) */
     float aperture_radius; /* 0 = pinhole */
     float focus_distance;  /* > 0; distance along the view axis to the plane in focus */
-    int mirror;            /* 1: image right is up x forward instead of forward x up, the
-                            * left-handed frame of a pbrt LookAt (scene/scene_pbrt.c) */
 } CameraDesc;
 
 typedef struct Camera {
-    Vec3 origin, forward, right, up; /* right = normalize(forward x up_hint), up = right x forward;
-                                      * right negated after that for a mirrored desc */
+    Vec3 origin, forward, right, up; /* right = normalize(forward x up_hint), up = right x forward */
     float tan_half_vfov, aspect;
     float aperture_radius, focus_distance;
     int width, height;
 } Camera;
 
 void camera_init(Camera *cam, const CameraDesc *desc, int width, int height);
+/* Flips the image horizontally: image right becomes up x forward, the left-handed frame
+ * of a pbrt LookAt (scene/scene_pbrt.c). Call after camera_init; every use of right
+ * (rays, lens offsets, camera_sample_wi) flips together. */
+void camera_mirror_x(Camera *cam);
 /* film_x in [0, width), film_y in [0, height), y = 0 the top row; lens_u in [0,1)^2. */
 Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens_u);
 

@@ -63,7 +63,7 @@ CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err)
         if ((st = scene_add_quad(s, v, mat, q == 0 ? &em : NULL, err))) goto fail;
     }
     CameraDesc cam = {v3d(278.0, 273.0, -800.0), v3d(278.0, 273.0, 0.0), v3d(0.0, 1.0, 0.0),
-                      (float)39.3077, 0.0f, (float)800.0, 0};
+                      (float)39.3077, 0.0f, (float)800.0};
     scene_set_camera(s, &cam);
     if ((st = scene_set_output_path(s, "cornell-box.png", err))) goto fail;
     /* The same settings as scenes/cornell-box.json, so the two are interchangeable. */

@@ -59,6 +59,7 @@ struct CstScene {
     /* view and settings */
     CameraDesc camera;
     int camera_set;
+    int camera_mirror; /* render with camera_mirror_x (pbrt's left-handed LookAt) */
     CstRenderSettings settings; /* what the scene file asked for; zero = default */
     char *output_path;
 };

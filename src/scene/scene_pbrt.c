@@ -2180,7 +2180,7 @@ done:
 
 /* The CameraDesc equal to pbrt's view: position and axes from world-from-camera; pbrt's
  * image right is the camera's +x, ours forward x up, so a frame where those disagree
- * (every plain LookAt: x = up x dir) is rendered mirrored. fov spans the shorter image
+ * (every plain LookAt: x = up x dir) is rendered mirrored (Scene.camera_mirror). fov spans the shorter image
  * axis in pbrt and the vertical one in caustic. */
 static CstStatus camera_finish(Loader *ld)
 {
@@ -2210,7 +2210,7 @@ static CstStatus camera_finish(Loader *ld)
     while (s < v3_max_abs(desc.position) && s < 1e30f) s *= 2.0f;
     desc.look_at = v3_add(desc.position, v3_scale(f, s));
     desc.up = u;
-    desc.mirror = v3_dot(x, v3_cross(f, u)) < 0.0f;
+    int mirror = v3_dot(x, v3_cross(f, u)) < 0.0f;
     int w_px = ld->scene->settings.width, h_px = ld->scene->settings.height;
     double aspect = (double)w_px / (double)h_px;
     double frame = c.has_frame ? (double)c.frame : aspect;
@@ -2240,6 +2240,7 @@ static CstStatus camera_finish(Loader *ld)
     desc.aperture_radius = c.lens_radius;
     desc.focus_distance = c.focal_distance;
     scene_set_camera(ld->scene, &desc);
+    ld->scene->camera_mirror = mirror;
     return CST_OK;
 }
 

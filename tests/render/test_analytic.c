@@ -69,7 +69,7 @@ static void run_case_spp(CstIntegrator integ, double a, double b, double h, uint
     float fh = (float)h;
     /* A pinhole (which blocks nothing) between the two, looking straight down with a
      * field of view so narrow that the pixel sees a single point of the plane. */
-    CameraDesc cam = {{0, fh * 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0};
+    CameraDesc cam = {{0, fh * 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
 
@@ -163,7 +163,7 @@ static void run_light_case(double a, double b, double h, CstFilter filter, int i
 {
     CstError err;
     Scene *s = plane_under_light(a, b, h);
-    CameraDesc cam = {{0, (float)(h * 0.5), 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0};
+    CameraDesc cam = {{0, (float)(h * 0.5), 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     CstRenderSettings st = {0};

@@ -225,7 +225,7 @@ static void test_light_through_glass(void **state)
     assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0};
+    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
 

@@ -67,7 +67,7 @@ static void test_white_furnace_albedo_one(void **state)
     Emission em = {{1.0f, 1.0f, 1.0f}, 1};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 10.0f, black, &em, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, white, NULL, &err), CST_OK);
-    CameraDesc cam = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 4.0f, 0};
+    CameraDesc cam = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 4.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     for (size_t i = 0; i < 3; i++) {
@@ -93,7 +93,7 @@ static void test_furnace_emitting_sphere(void **state)
     assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
     Emission em = {{1.0f, 0.5f, 0.25f}, 1};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
-    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0};
+    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     const double rd = (double)rho;
@@ -133,7 +133,7 @@ static void test_light_furnace_emitting_sphere(void **state)
     assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
     Emission em = {{1.0f, 0.5f, 0.25f}, 1};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
-    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0};
+    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     const double rd = (double)rho;

@@ -14,7 +14,7 @@
 /* A non-square film so that the aspect ratio is exercised. */
 static Camera make_camera(float aperture)
 {
-    CameraDesc d = {{1.0f, 2.0f, -3.0f}, {0.5f, 1.5f, 4.0f}, {0.0f, 1.0f, 0.0f}, 40.0f, aperture, 5.0f, 0};
+    CameraDesc d = {{1.0f, 2.0f, -3.0f}, {0.5f, 1.5f, 4.0f}, {0.0f, 1.0f, 0.0f}, 40.0f, aperture, 5.0f};
     Camera cam;
     camera_init(&cam, &d, 64, 48);
     return cam;

@@ -863,7 +863,7 @@ static void test_camera_and_options(void **state)
     double vfov = 2.0 * atan(tan(30.0 * 3.14159265358979 / 180.0) * 2.0) * 180.0 / 3.14159265358979;
     assert_true(fabs((double)s->camera.vfov_deg - vfov) < 1e-4);
     assert_vec(s->camera.position, 1, 2, 3, 0);
-    assert_true(s->camera.mirror); /* a plain LookAt is left-handed */
+    assert_true(s->camera_mirror); /* a plain LookAt is left-handed */
     assert_true(s->camera.aperture_radius == 0.1f && s->camera.focus_distance == 7.0f);
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"float iso\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Sampler \"halton\"") >= 0);
@@ -876,7 +876,7 @@ static void test_camera_and_options(void **state)
     assert_int_equal(s->settings.height, 720);
     assert_int_equal(s->settings.max_depth, 5);
     assert_true(s->camera.vfov_deg == 90.0f);
-    assert_false(s->camera.mirror);
+    assert_false(s->camera_mirror);
     cst_scene_destroy(s);
     s = expect_ok("Integrator \"path\" \"integer maxdepth\" -1\nWorldBegin\n" TRI, NULL);
     assert_int_equal(s->settings.max_depth, 0); /* unbounded */
@@ -937,7 +937,7 @@ static void test_cornell_pbrt_equals_json(void **state)
         }
     assert_memory_equal(&pbrt->camera.position, &json->camera.position, sizeof(Vec3));
     assert_true(pbrt->camera.vfov_deg == json->camera.vfov_deg);
-    assert_false(pbrt->camera.mirror);
+    assert_false(pbrt->camera_mirror);
     CstRenderSettings a = {0}, b = {0};
     cst_render_settings_resolve(json, NULL, &a);
     cst_render_settings_resolve(pbrt, NULL, &b);
@@ -990,7 +990,7 @@ static void test_cornell_handedness(void **state)
     assert_non_null(sc);
     memcpy(sc, "#cale", 5);
     if (cst_scene_load_pbrt_string(text, n, "cornell.pbrt", NULL, &b, &err) != CST_OK) fail_msg("%s", err.msg);
-    assert_true(b->camera.mirror);
+    assert_true(b->camera_mirror);
     Film *fa = render_small(a, 48, 48, 4), *fb = render_small(b, 48, 48, 4);
     double al, ar, bl, br;
     red_sides(fa, &al, &ar);
