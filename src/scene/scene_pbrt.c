@@ -2253,6 +2253,99 @@ static int has_image_ext(const char *s)
            strcmp(e, ".PNG") == 0 || strcmp(e, ".EXR") == 0 || strcmp(e, ".PFM") == 0;
 }
 
+static CstStatus get_point3(Loader *ld, Params *ps, const char *d, const char *name, Vec3 def, Vec3 *out)
+{
+    Param *p;
+    *out = def;
+    TRY(lookup(ld, ps, d, name, M(PT_POINT3), "point3", &p));
+    if (!p) return CST_OK;
+    char nm[72];
+    if (p->num_nums != 3)
+        return fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" has %d values; expected 3", d,
+                       clip(p->decl, nm), p->num_nums);
+    *out = v3((float)p->nums[0], (float)p->nums[1], (float)p->nums[2]);
+    if (!coords_ok(*out))
+        return fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" is beyond the scene limit", d,
+                       clip(p->decl, nm));
+    return CST_OK;
+}
+
+/* LightSource: point, spot and distant as caustic's delta lights, placed by the CTM, with
+ * pbrt-v4's scale and power (phi / 4 pi for a point; phi / (2 pi (1 - (cos_start +
+ * cos_end) / 2)) for a spot) and illuminance for a distant light; as for area lights an
+ * "rgb" spectrum is used as given and blackbody and sampled spectra are normalised to
+ * luminance 1 first. Others are skipped with a warning. */
+static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc, const char *d)
+{
+    int point = strcmp(type, "point") == 0, spot = strcmp(type, "spot") == 0,
+        distant = strcmp(type, "distant") == 0;
+    if (!point && !spot && !distant) {
+        params_mark_all_used(ps);
+        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported (caustic has area, point, "
+                "spot and distant lights); skipped", d);
+        return CST_OK;
+    }
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    Rgb c = rgb_s(1.0f);
+    float scale = 1.0f, power = 0.0f, illum = 0.0f;
+    TRY(get_spectrum(ld, ps, d, distant ? "L" : "I", SPEC_ILLUMINANT, 0, &c, NULL));
+    TRY(get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    if (distant) TRY(get_float(ld, ps, d, "illuminance", 0.0f, &illum, NULL));
+    else TRY(get_float(ld, ps, d, "power", 0.0f, &power, NULL));
+    Vec3 from, to;
+    TRY(get_point3(ld, ps, d, "from", v3s(0.0f), &from));
+    TRY(get_point3(ld, ps, d, "to", v3(0.0f, 0.0f, 1.0f), &to));
+    if (point) { /* pbrt-v4 reads no "to" for a point light */
+        Param *pt = find_param(ps, "to");
+        if (pt) pt->used = 0;
+    }
+    const Transform *m = &ld->gs.ctm.m;
+    double k = (double)scale;
+    if (point || spot) {
+        l.type = point ? DELTA_POINT : DELTA_SPOT;
+        l.p = transform_point(m, from);
+        if (spot) {
+            float cone = 30.0f, delta = 5.0f;
+            TRY(get_float(ld, ps, d, "coneangle", 30.0f, &cone, NULL));
+            TRY(get_float(ld, ps, d, "conedelta", 5.0f, &delta, NULL));
+            if (!(cone > 0.0f && cone <= 90.0f) || !(delta >= 0.0f && delta <= cone))
+                return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: coneangle %g, conedelta %g; expected "
+                               "0 < coneangle <= 90 and 0 <= conedelta <= coneangle", d,
+                               (double)cone, (double)delta);
+            l.cos_outer = cosf(cone * (CST_PI / 180.0f));
+            l.cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
+            Vec3 axis = transform_vector(m, v3_sub(to, from));
+            float len = v3_length(axis);
+            if (!(len > 0.0f) || !isfinite(len))
+                return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: \"from\" equals \"to\"; expected the "
+                               "spot's axis", d);
+            l.dir = v3_scale(axis, 1.0f / len);
+            if (power > 0.0f)
+                k *= (double)power / (2.0 * PBRT_PI * (1.0 - 0.5 * ((double)l.cos_inner + (double)l.cos_outer)));
+        } else if (power > 0.0f) {
+            k *= (double)power / (4.0 * PBRT_PI);
+        }
+        if (!coords_ok(l.p))
+            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's position is beyond the scene limit", d);
+    } else {
+        l.type = DELTA_DIRECTIONAL;
+        Vec3 dir = transform_vector(m, v3_sub(to, from)); /* the way the light travels */
+        float len = v3_length(dir);
+        if (!(len > 0.0f) || !isfinite(len))
+            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: \"from\" equals \"to\"; expected the "
+                           "light's direction", d);
+        l.dir = v3_scale(dir, 1.0f / len);
+        if (illum > 0.0f) k *= (double)illum;
+    }
+    l.intensity = rgb_scale(c, (float)k);
+    if (!rgb_is_finite(l.intensity) || !(k >= 0.0))
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative "
+                       "or not finite", d, (double)scale);
+    CstStatus st = scene_add_delta_light(ld->scene, &l, ld->err);
+    return st ? fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
 /* Film, Sampler, Integrator, PixelFilter, Accelerator, ColorSpace, Option, MakeNamedMedium,
  * LightSource, Attribute: a name and parameters, mapped to settings or reported. */
 static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
@@ -2338,7 +2431,7 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             {"path", CST_INTEGRATOR_PATH, 1}, {"volpath", CST_INTEGRATOR_PATH, 0},
             {"simplepath", CST_INTEGRATOR_PATH_NEE, 0}, {"randomwalk", CST_INTEGRATOR_PATH_BSDF, 0},
             {"lightpath", CST_INTEGRATOR_LIGHT, 1}, {"sppm", CST_INTEGRATOR_SPPM, 1},
-            {"whitted", CST_INTEGRATOR_WHITTED, 1}, {"bdpt", CST_INTEGRATOR_PATH, 0},
+            {"whitted", CST_INTEGRATOR_WHITTED, 1}, {"bdpt", CST_INTEGRATOR_BDPT, 1},
             {"mlt", CST_INTEGRATOR_PATH, 0}, {"simplevolpath", CST_INTEGRATOR_PATH, 0},
             {"directlighting", CST_INTEGRATOR_PATH, 0}, {"ambientocclusion", CST_INTEGRATOR_PATH, 0},
             {"aov", CST_INTEGRATOR_PATH, 0}};
@@ -2377,8 +2470,9 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the path tracer renders "
                     "the image instead", d);
         } else if (!map[k].exact) {
-            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered with caustic's \"%s\" (same "
-                    "expected image without participating media)", d, cst_integrator_name(map[k].ours));
+            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered with caustic's \"%s\" (the same "
+                    "expected image in scenes without participating media)", d,
+                    cst_integrator_name(map[k].ours));
         }
     } else if (strcmp(dname, "PixelFilter") == 0) {
         float rx = 0.0f, ry = 0.0f;
@@ -2420,9 +2514,7 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
         params_mark_all_used(&ps);
         warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: default parameters by Attribute are not supported; ignored", d);
     } else if (strcmp(dname, "LightSource") == 0) {
-        params_mark_all_used(&ps);
-        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported (caustic has area lights "
-                "only); skipped", d);
+        if ((st = light_source(ld, type, &ps, loc, d))) goto done;
     } else if (strcmp(dname, "Material") == 0 || strcmp(dname, "MakeNamedMaterial") == 0) {
         if (!ld->in_world) {
             st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s before WorldBegin; expected materials in the world block", dname);

@@ -550,8 +550,8 @@ static void test_lights(void **state)
         "Shape \"sphere\" \"float radius\" 2\nAttributeEnd\n"
         "AttributeBegin\nAreaLightSource \"goniometric\"\n" TRI "AttributeEnd\n"),
         &w);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:4:1: LightSource \"point\" is not supported") >= 0);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\" is not supported") >= 0);
+    assert_int_equal(s->num_delta_lights, 1);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "AreaLightSource \"goniometric\"") >= 0);
     assert_int_equal(s->num_emitters, 3);
     Rgb l0 = s->emitters[s->tri_info[0].emitter].radiance;
@@ -566,6 +566,42 @@ static void test_lights(void **state)
 }
 
 /* ------------------------------------------------------------------ shapes */
+
+/* point, spot and distant lights as delta lights, placed by the CTM, with pbrt's power and
+ * illuminance normalisation. */
+static void test_delta_lights(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD(
+        "AttributeBegin\nTranslate 1 2 3\nLightSource \"point\" \"rgb I\" [1 2 3] \"float scale\" 2 "
+        "\"point3 from\" [0 0 1]\nAttributeEnd\n"
+        "LightSource \"point\" \"float power\" 100\n"
+        "LightSource \"spot\" \"point3 from\" [0 5 0] \"point3 to\" [0 0 0] \"float coneangle\" 20 "
+        "\"float conedelta\" 10 \"float power\" 50\n"
+        "AttributeBegin\nRotate 90 0 0 1\nLightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [1 0 0] "
+        "\"blackbody L\" 5500 \"float illuminance\" 3\nAttributeEnd\n"
+        "LightSource \"goniometric\"\n" TRI), &w);
+    assert_int_equal(s->num_delta_lights, 4);
+    const DeltaLight *l = s->delta_lights;
+    assert_int_equal(l[0].type, DELTA_POINT);
+    assert_vec(l[0].p, 1, 2, 4, 0);
+    assert_true(l[0].intensity.r == 2.0f && l[0].intensity.b == 6.0f);
+    assert_true(fabsf(l[1].intensity.g - 100.0f / (4.0f * 3.14159265f)) < 1e-4f);
+    assert_int_equal(l[2].type, DELTA_SPOT);
+    assert_vec(l[2].dir, 0, -1, 0, 1e-6f);
+    assert_true(fabsf(l[2].cos_outer - cosf(20.0f * 3.14159265f / 180.0f)) < 1e-6f);
+    assert_true(fabsf(l[2].cos_inner - cosf(10.0f * 3.14159265f / 180.0f)) < 1e-6f);
+    float k_e = 2.0f * 3.14159265f * (1.0f - 0.5f * (l[2].cos_inner + l[2].cos_outer));
+    assert_true(fabsf(l[2].intensity.r - 50.0f / k_e) < 1e-3f * (50.0f / k_e));
+    assert_int_equal(l[3].type, DELTA_DIRECTIONAL);
+    assert_vec(l[3].dir, 0, 1, 0, 1e-6f); /* (1, 0, 0) turned 90 degrees about z */
+    assert_true(fabsf(rgb_luminance(l[3].intensity) - 3.0f) < 0.01f);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "LightSource \"goniometric\" is not supported") >= 0);
+    cst_scene_destroy(s);
+    expect_error(WORLD("LightSource \"spot\" \"float coneangle\" 120\n" TRI), CST_ERR_INVALID_ARG,
+                 "LightSource", 0, "coneangle 120");
+}
 
 static void test_shapes(void **state)
 {
@@ -850,7 +886,7 @@ static void test_camera_and_options(void **state)
                          "LookAt 1 2 3  1 2 4  0 1 0\n"
                          "Camera \"perspective\" \"float fov\" 60 \"float lensradius\" 0.1 \"float focaldistance\" 7\n"
                          "Sampler \"halton\" \"integer pixelsamples\" 32\n"
-                         "Integrator \"bdpt\" \"integer maxdepth\" 7\n"
+                         "Integrator \"mlt\" \"integer maxdepth\" 7\n"
                          "PixelFilter \"gaussian\"\n"
                          "WorldBegin\n" TRI, &w);
     assert_int_equal(s->settings.width, 100);
@@ -867,7 +903,7 @@ static void test_camera_and_options(void **state)
     assert_true(s->camera.aperture_radius == 0.1f && s->camera.focus_distance == 7.0f);
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"float iso\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Sampler \"halton\"") >= 0);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Integrator \"bdpt\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Integrator \"mlt\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "PixelFilter \"gaussian\"") >= 0);
     cst_scene_destroy(s);
     /* pbrt defaults; Scale -1 1 1 before LookAt makes the frame right-handed */
@@ -877,6 +913,9 @@ static void test_camera_and_options(void **state)
     assert_int_equal(s->settings.max_depth, 5);
     assert_true(s->camera.vfov_deg == 90.0f);
     assert_false(s->camera_mirror);
+    cst_scene_destroy(s);
+    s = expect_ok("Integrator \"bdpt\"\nWorldBegin\n" TRI, NULL);
+    assert_int_equal(s->settings.integrator, CST_INTEGRATOR_BDPT);
     cst_scene_destroy(s);
     s = expect_ok("Integrator \"path\" \"integer maxdepth\" -1\nWorldBegin\n" TRI, NULL);
     assert_int_equal(s->settings.max_depth, 0); /* unbounded */
@@ -1020,6 +1059,7 @@ int main(void)
         cmocka_unit_test(test_colour_conversions),
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_lights),
+        cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_plymesh),
         cmocka_unit_test(test_other_directives),
