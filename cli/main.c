@@ -283,6 +283,10 @@ static void cli_print_info(const CliArgs *a, const CstScene *scene)
     int prims = in.triangles + in.spheres;
     if (prims > 0) printf(" (%.1f bytes per primitive)", (double)in.accel_bytes / prims);
     printf("\n");
+    if (in.instances > 0)
+        printf("instances:   %d of %d object%s (%zu triangles), %zu bytes\n", in.instances,
+               in.instanced_objects, in.instanced_objects == 1 ? "" : "s", in.instanced_triangles,
+               in.instance_bytes);
 }
 
 static void cli_print_summary(const char *output, const CstRenderStats *st)
@@ -307,13 +311,26 @@ static void cli_print_summary(const char *output, const CstRenderStats *st)
 /* The scene argument's format, checkable before anything is loaded. */
 static bool cli_check_scene_path(const CliArgs *a)
 {
-    if (a->scene_path && !cli_has_suffix(a->scene_path, ".json")) {
+    if (a->scene_path && !cli_has_suffix(a->scene_path, ".json") &&
+        !cli_has_suffix(a->scene_path, ".pbrt")) {
         fprintf(stderr, "caustic: error: '%s': unsupported scene format (supported: .json, "
-                "a caustic JSON scene; omit SCENE for the built-in Cornell box)\n",
+                "a caustic JSON scene; .pbrt, a pbrt-v4 scene; omit SCENE for the built-in "
+                "Cornell box)\n",
                 a->scene_path);
         return false;
     }
     return true;
+}
+
+/* Loader warnings (pbrt scenes): printed as they come; a long list is cut after the
+ * first CLI_MAX_WARNINGS with a count of the rest, printed by cli_load_scene. */
+#define CLI_MAX_WARNINGS 50
+static void cli_print_warning(void *user, CstWarningCode code, const char *message)
+{
+    (void)code;
+    int *count = user;
+    if (++*count <= CLI_MAX_WARNINGS)
+        fprintf(stderr, "caustic: warning: %s\n", message);
 }
 
 /* Loads SCENE, or builds the built-in Cornell box, and applies --accel. Returns an exit
@@ -335,7 +352,18 @@ static int cli_load_scene(const CliArgs *a, CstScene **out)
             fprintf(stderr, "caustic: error: scene '%s' is a directory\n", a->scene_path);
             return CLI_EXIT_USAGE;
         }
-        status = cst_scene_load_json(a->scene_path, &scene, &err);
+        if (cli_has_suffix(a->scene_path, ".pbrt")) {
+            int warnings = 0;
+            CstLoadOptions opt = {0};
+            opt.warning = cli_print_warning;
+            opt.warning_user = &warnings;
+            status = cst_scene_load_pbrt(a->scene_path, &opt, &scene, &err);
+            if (warnings > CLI_MAX_WARNINGS)
+                fprintf(stderr, "caustic: warning: %d more warnings not shown\n",
+                        warnings - CLI_MAX_WARNINGS);
+        } else {
+            status = cst_scene_load_json(a->scene_path, &scene, &err);
+        }
     } else {
         status = cst_scene_create_cornell_box(&scene, &err);
     }

@@ -45,6 +45,37 @@ CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err);
 /* The same from memory; `name` stands for the file name in messages. */
 CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
                                      CstScene **out, CstError *err);
+
+/* Diagnostics a loader reports without failing: something in the file that the render
+ * ignores or approximates. Tests assert on the code; the message says
+ * "file:line:column: directive: what was done". */
+typedef enum CstWarningCode {
+    CST_WARN_UNSUPPORTED = 1, /* a directive, type or feature skipped entirely */
+    CST_WARN_APPROXIMATED,    /* mapped to the nearest thing caustic has (docs/pbrt-compat.md) */
+    CST_WARN_PARAMETER_IGNORED, /* a parameter the mapping does not use */
+    CST_WARN_GEOMETRY         /* degenerate triangles dropped, unclosed blocks and the like */
+} CstWarningCode;
+typedef void (*CstWarningFn)(void *user, CstWarningCode code, const char *message);
+
+/* Zero-initialise, then set what you want. */
+typedef struct CstLoadOptions {
+    CstWarningFn warning;   /* called once per warning, in file order; NULL drops them */
+    void *warning_user;
+    int no_file_access;     /* 1: Include, Import, plymesh and image textures fail instead
+                             * of opening files (untrusted text, fuzzing) */
+} CstLoadOptions;
+
+/* A scene in pbrt-v4 format (pbrt-v3 syntax where it is the same); what is supported,
+ * approximated or not is in docs/pbrt-compat.md. Relative file names (Include, plymesh,
+ * imagemap) are resolved against the directory of `path`, as pbrt does. Errors name
+ * file:line:column. options may be NULL. */
+CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *options, CstScene **out,
+                              CstError *err);
+/* The same from memory; `name` stands for the file name in messages and its directory
+ * for relative file names. */
+CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *name,
+                                     const CstLoadOptions *options, CstScene **out,
+                                     CstError *err);
 /* Accepts NULL. */
 void cst_scene_destroy(CstScene *scene);
 /* The output path named in the scene file, or NULL. Owned by the scene. */
@@ -59,6 +90,11 @@ typedef struct CstSceneInfo {
     const char *accel;          /* name of the acceleration structure in use */
     double accel_build_seconds; /* its last build */
     size_t accel_bytes;         /* memory it uses (not counting the scene's own arrays) */
+    int instances;              /* object instances (pbrt ObjectInstance), not in `triangles` */
+    int instanced_objects;      /* distinct objects they place */
+    size_t instanced_triangles; /* triangles of those objects, each counted once */
+    size_t instance_bytes;      /* the objects' geometry and BVHs, the instance records and
+                                 * the top-level tree */
 } CstSceneInfo;
 void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
 

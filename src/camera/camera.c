@@ -19,6 +19,8 @@ void camera_init(Camera *cam, const CameraDesc *d, int width, int height)
     cam->height = height;
 }
 
+void camera_mirror_x(Camera *cam) { cam->right = v3_neg(cam->right); }
+
 Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens_u)
 {
     if (camera_is_orthographic(cam)) {

@@ -19,7 +19,7 @@ static bool visible_to_lens(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
     float len = v3_length(d);
     if (!(len > 0.0f)) return true;
     Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
-    return !accel_occluded(&s->accel, &r);
+    return !scene_occluded(s, &r);
 }
 
 /* Splats weight * W_e / pdf_w if the lens point is visible; weight already holds the

@@ -488,6 +488,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->scene = scene;
     job->film = film;
     camera_init(&job->camera, &scene->camera, st.width, st.height);
+    if (scene->camera_mirror) camera_mirror_x(&job->camera);
     job->params.mode = st.integrator == CST_INTEGRATOR_PATH_NEE ? PATH_NEE
                      : st.integrator == CST_INTEGRATOR_PATH_BSDF ? PATH_BSDF : PATH_MIS;
     job->params.max_depth = st.max_depth;

@@ -56,6 +56,8 @@ void scene_destroy(Scene *s)
     free(s->env);
     free(s->output_path);
     accel_free(&s->accel);
+    instances_free(s->instances);
+    free(s->instances);
     emitter_sampler_free(&s->emitter_sampler);
     free(s);
 }
@@ -257,6 +259,43 @@ CstStatus scene_set_output_path(Scene *s, const char *path, CstError *err)
     return CST_OK;
 }
 
+static CstStatus ensure_instances(Scene *s, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (!s->instances && !(s->instances = calloc(1, sizeof *s->instances)))
+        return cst_fail(err, CST_ERR_OOM, "out of memory for instances");
+    return CST_OK;
+}
+
+CstStatus scene_add_instance_proto(Scene *s, const Vec3 *positions, int num_vertices,
+                                   const int *indices, const int *tri_material,
+                                   int num_triangles, int *out_id, CstError *err)
+{
+    CstStatus st = ensure_instances(s, err);
+    if (st != CST_OK) return st;
+    for (int t = 0; t < num_triangles; t++) {
+        if (tri_material[t] < 0 || tri_material[t] >= s->num_materials)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d: material index %d out of range", t, tri_material[t]);
+        for (int k = 0; k < 3; k++)
+            if (indices[3 * t + k] < 0 || indices[3 * t + k] >= num_vertices)
+                return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d: vertex index out of range", t);
+        Vec3 a = positions[indices[3 * t]], b = positions[indices[3 * t + 1]], c = positions[indices[3 * t + 2]];
+        if (!(triangle_area(a, b, c) > 0.0f))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d is degenerate (zero area)", t);
+    }
+    for (int i = 0; i < num_vertices; i++)
+        if (!v3_is_finite(positions[i])) return cst_fail(err, CST_ERR_INVALID_ARG, "vertex %d is not finite", i);
+    return instances_add_proto(s->instances, positions, num_vertices, indices, tri_material, num_triangles,
+                               out_id, err);
+}
+
+CstStatus scene_add_instance(Scene *s, int proto, const Transform *world_from_obj, CstError *err)
+{
+    CstStatus st = ensure_instances(s, err);
+    if (st != CST_OK) return st;
+    return instances_add(s->instances, proto, world_from_obj, err);
+}
+
 CstStatus scene_commit(Scene *s, CstError *err)
 {
     if (s->committed) return CST_OK;
@@ -277,8 +316,14 @@ CstStatus scene_commit(Scene *s, CstError *err)
     AccelGeometry geom = scene_accel_geometry(s);
     CstStatus st = accel_build(&s->accel, s->accel_type, &geom, err);
     if (st != CST_OK) return st;
+    BBox bounds = s->accel.bounds;
+    if (s->instances) {
+        if ((st = instances_build(s->instances, err)) != CST_OK) return st;
+        /* directional lights are sampled over the bounds of everything they can light */
+        if (s->instances->num_nodes > 0) bounds = bbox_union(bounds, s->instances->nodes[0].box);
+    }
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, s->delta_lights,
-                              s->num_delta_lights, s->env, s->accel.bounds.min, s->accel.bounds.max, err);
+                              s->num_delta_lights, s->env, bounds.min, bounds.max, err);
     if (st != CST_OK) return st;
     s->committed = 1;
     return CST_OK;
@@ -321,4 +366,11 @@ void cst_scene_info(const CstScene *s, CstSceneInfo *info)
     info->accel = accel_type_name(s->accel.type);
     info->accel_build_seconds = s->accel.build_seconds;
     info->accel_bytes = accel_memory_bytes(&s->accel);
+    if (s->instances) {
+        info->instances = s->instances->num_insts;
+        info->instanced_objects = s->instances->num_protos;
+        info->instance_bytes = instances_memory_bytes(s->instances);
+        for (int i = 0; i < s->instances->num_protos; i++)
+            info->instanced_triangles += (size_t)s->instances->protos[i].num_triangles;
+    }
 }

@@ -9,6 +9,7 @@
 #include <stdint.h>
 
 #include "accel/accel.h"
+#include "accel/instances.h"
 #include "camera/camera.h"
 #include "caustic/caustic.h"
 #include "lights/light.h"
@@ -51,11 +52,15 @@ struct CstScene {
     /* after commit */
     AccelType accel_type; /* what scene_commit builds; ACCEL_BVH unless set */
     Accel accel;
+    /* Instanced objects (pbrt ObjectInstance), NULL when there are none: a second,
+     * two-level structure queried after `accel`. Instances do not emit. */
+    InstanceSet *instances;
     EmitterSampler emitter_sampler;
     int committed;
     /* view and settings */
     CameraDesc camera;
     int camera_set;
+    int camera_mirror; /* render with camera_mirror_x (pbrt's left-handed LookAt) */
     CstRenderSettings settings; /* what the scene file asked for; zero = default */
     char *output_path;
 };
@@ -100,6 +105,12 @@ CstStatus scene_set_environment(Scene *scene, const EnvMap *env, CstError *err);
 CstStatus scene_add_delta_light(Scene *scene, const DeltaLight *light, CstError *err);
 void scene_set_camera(Scene *scene, const CameraDesc *camera);
 CstStatus scene_set_output_path(Scene *scene, const char *path, CstError *err);
+/* An object to instance: triangles in object space with a scene material id each. */
+CstStatus scene_add_instance_proto(Scene *scene, const Vec3 *positions, int num_vertices,
+                                   const int *indices, const int *tri_material,
+                                   int num_triangles, int *out_id, CstError *err);
+CstStatus scene_add_instance(Scene *scene, int proto, const Transform *world_from_obj,
+                             CstError *err);
 CstStatus scene_commit(Scene *scene, CstError *err);
 /* Rebuilds a committed scene's acceleration structure as `type`. */
 CstStatus scene_set_accel(Scene *scene, AccelType type, CstError *err);
@@ -123,10 +134,38 @@ typedef struct SurfaceHit {
     int32_t material, emitter;
 } SurfaceHit;
 
+/* A hit in an instance, closer than any in `accel`: filled in world space. */
+static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, SurfaceHit *sh)
+{
+    InstHit ih;
+    if (!instances_intersect(s->instances, ray, &ih)) return false;
+    const Instance *in = &s->instances->insts[ih.inst];
+    const InstProto *pr = &s->instances->protos[in->proto];
+    const int32_t *t = &pr->tri_indices[3 * ih.prim];
+    Vec3 a = pr->positions[t[0]], b = pr->positions[t[1]], c = pr->positions[t[2]];
+    Vec3 p_obj = v3_add(v3_add(v3_scale(a, 1.0f - ih.u - ih.v), v3_scale(b, ih.u)), v3_scale(c, ih.v));
+    sh->t = ih.t;
+    sh->prim = UINT32_MAX; /* not a scene primitive */
+    sh->p = transform_point(&in->world_from_obj, p_obj);
+    /* The normal matrix keeps the object's outside, also under mirroring transforms. */
+    sh->ng = transform_normal(&in->normal_matrix, pr->tri_normals[ih.prim]);
+    sh->material = pr->tri_material[ih.prim];
+    sh->emitter = -1;
+    return true;
+}
+
 static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *sh)
 {
     Hit h;
-    if (!accel_intersect(&s->accel, ray, &h)) return false;
+    if (s->instances) {
+        bool base = accel_intersect(&s->accel, ray, &h);
+        Ray r = *ray;
+        if (base) r.t_max = h.t;
+        if (scene_intersect_instances(s, &r, sh)) return true;
+        if (!base) return false;
+    } else if (!accel_intersect(&s->accel, ray, &h)) {
+        return false;
+    }
     sh->t = h.t;
     sh->prim = h.prim;
     if ((int)h.prim < s->num_triangles) {
@@ -145,6 +184,12 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     sh->material = pi->material;
     sh->emitter = pi->emitter;
     return true;
+}
+
+/* Any hit in (r->t_min, r->t_max), instances included. */
+static inline bool scene_occluded(const Scene *s, const Ray *r)
+{
+    return accel_occluded(&s->accel, r) || (s->instances && instances_occluded(s->instances, r));
 }
 
 /* p moved off the surface with normal ng toward the side direction d points to. */
@@ -167,7 +212,7 @@ static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 
     float len = v3_length(od);
     if (!(len > 0.0f)) return true;
     Ray r = ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-5f));
-    return !accel_occluded(&s->accel, &r);
+    return !scene_occluded(s, &r);
 }
 
 /* Area of a triangle with nonzero normal; shared by loaders for validation. */

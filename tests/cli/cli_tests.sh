@@ -239,6 +239,45 @@ run "$dir" render badext.json --spp 1
 expect "scene output with a bad extension: exit 2 before rendering" 2 "from-scene\.bmp"
 [ -e "$dir/from-scene.bmp" ] && fail "scene output with a bad extension: no file" || pass "scene output with a bad extension: no file"
 
+# --------------------------------------------------------------- pbrt scenes
+# A pbrt scene renders by extension; what is skipped is a located warning, not an error.
+dir=$TMP/pbrt
+mkdir -p "$dir"
+cat >"$dir/tiny.pbrt" <<'PBRT'
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+LookAt 0 0 -5  0 0 0  0 1 0
+Camera "perspective" "float fov" 40
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [10 10 10]
+  Shape "trianglemesh" "point3 P" [-1 3 -1  1 3 -1  0 3 1] "integer indices" [0 2 1]
+AttributeEnd
+Shape "sphere" "float radius" 1
+PBRT
+run "$dir" render --spp 1 tiny.pbrt
+if expect "pbrt scene renders: exit 0, located warning" 0 \
+    '^caustic: warning: tiny\.pbrt:5:1: LightSource "infinite" is not supported'; then
+    [ -s "$dir/tiny.png" ] && pass "pbrt scene default output <stem>.png" \
+        || fail "pbrt scene default output <stem>.png" "found: $(ls "$dir")"
+fi
+run "$dir" render --spp 1 -q -o cb.png "$SRC/scenes/cornell-box.pbrt"
+expect "scenes/cornell-box.pbrt renders without warnings" 0
+if [ -s "$ERR" ]; then fail "scenes/cornell-box.pbrt: no warnings" "stderr: $(cat "$ERR")"
+else pass "scenes/cornell-box.pbrt: no warnings"; fi
+sed 's/"float fov" 40/"integer fov" 40/' "$dir/tiny.pbrt" >"$dir/badtype.pbrt"
+run "$dir" render --spp 1 badtype.pbrt
+expect "pbrt wrong parameter type: exit 2, file:line:col" 2 \
+    '^caustic: error: badtype\.pbrt:3:22: Camera "perspective": parameter "integer fov" has type integer; expected float'
+printf 'WorldBegin\nShape "plymesh" "string filename" "missing.ply"\n' >"$dir/noply.pbrt"
+run "$dir" render --spp 1 noply.pbrt
+expect "pbrt missing PLY: exit 2, located" 2 '^caustic: error: noply\.pbrt:2:17: Shape "plymesh": .*missing\.ply'
+printf 'WorldBegin\nShape "sphere" "float radius" [1\n' >"$dir/open.pbrt"
+run "$dir" render --spp 1 open.pbrt
+expect "pbrt unbalanced bracket: exit 2, located" 2 '^caustic: error: open\.pbrt:3:1: .*expected .\]. to close'
+[ -e "$dir/badtype.png" ] || [ -e "$dir/noply.png" ] || [ -e "$dir/open.png" ] \
+    && fail "bad pbrt scenes write no image" || pass "bad pbrt scenes write no image"
+
 # --------------------------------------------------------------- tiny renders
 dir=$TMP/render
 run "$dir" render --width 16 --height 16 --spp 2 -o out.png

@@ -1,0 +1,75 @@
+/* Object instancing as a two-level acceleration structure: prototypes (triangle meshes,
+ * each with its own BVH built once, in object space) placed by instances (an affine
+ * transform and a prototype id) under a top-level BVH over the instances' world bounds.
+ * Memory is one copy of each prototype plus a fixed record per instance. */
+#ifndef CST_ACCEL_INSTANCES_H
+#define CST_ACCEL_INSTANCES_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "accel/accel.h"
+#include "caustic/caustic.h"
+#include "math/transform.h"
+
+typedef struct InstProto {
+    Vec3 *positions;
+    int num_positions;
+    int32_t *tri_indices; /* 3 per triangle */
+    int32_t *tri_material; /* scene material id per triangle */
+    Vec3 *tri_normals;     /* unit, object space, (v1-v0) x (v2-v0); made by instances_build */
+    int num_triangles;
+    Accel accel;           /* BVH over the prototype's triangles, object space */
+} InstProto;
+
+typedef struct Instance {
+    Transform world_from_obj, obj_from_world;
+    Transform normal_matrix; /* of world_from_obj: normals keep the object's outside */
+    BBox bounds;             /* world space */
+    int32_t proto;
+} Instance;
+
+/* Top-level node: an inner node's children are nodes[first] and nodes[first + 1]; a leaf
+ * (count > 0) holds order[first .. first + count). */
+typedef struct InstNode {
+    BBox box;
+    int32_t first, count;
+} InstNode;
+
+typedef struct InstanceSet {
+    InstProto *protos;
+    int num_protos, cap_protos;
+    Instance *insts;
+    int num_insts, cap_insts;
+    InstNode *nodes;
+    int num_nodes;
+    int32_t *order;
+    int built;
+} InstanceSet;
+
+/* A hit inside an instance: t along the world ray, barycentrics and triangle of the
+ * prototype. */
+typedef struct InstHit {
+    float t, u, v;
+    uint32_t prim; /* triangle of the prototype */
+    int32_t inst;
+} InstHit;
+
+/* Copies the mesh (triangles must be non-degenerate; material ids are the scene's). */
+CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, int num_positions,
+                              const int *indices, const int *tri_material, int num_triangles,
+                              int *out_id, CstError *err);
+/* world_from_obj must be affine and invertible. */
+CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from_obj, CstError *err);
+/* Builds every prototype's BVH and the top-level tree; call once, after the last add. */
+CstStatus instances_build(InstanceSet *set, CstError *err);
+/* Accepts a zeroed set; frees what the set owns, not the set itself. */
+void instances_free(InstanceSet *set);
+/* Prototype geometry and BVHs, the instance records and the top-level tree. */
+size_t instances_memory_bytes(const InstanceSet *set);
+/* Closest hit in (ray->t_min, ray->t_max); ray->d unit length. */
+bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit);
+bool instances_occluded(const InstanceSet *set, const Ray *ray);
+
+#endif

@@ -1,0 +1,96 @@
+/* libFuzzer target for the pbrt tokenizer and loader: any bytes must give CST_OK or a
+ * located error, never a crash, an out-of-bounds read or a leak; every warning must be
+ * located too. File access is disabled (Include, plymesh and imagemap fail cleanly), so
+ * the fuzzer cannot wander the file system. Not part of the default build.
+ *
+ * Build and run (clang with libFuzzer; the library itself instrumented for coverage):
+ *   cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=Debug \
+ *         -DCST_SANITIZE=ON -DCST_BUILD_TESTS=OFF -DCST_EMBREE=OFF \
+ *         -DCMAKE_C_FLAGS=-fsanitize=fuzzer-no-link
+ *   cmake --build build-fuzz --target caustic
+ *   clang -g -O1 -fsanitize=fuzzer,address,undefined -Iinclude -Isrc tests/fuzz/fuzz_pbrt.c \
+ *         build-fuzz/libcaustic.a $(pkg-config --libs jansson libpng assimp) -lOpenEXRCore \
+ *         -lm -lpthread -o build-fuzz/fuzz_pbrt
+ *   mkdir -p build-fuzz/corpus-pbrt && cp scenes/cornell-box.pbrt build-fuzz/corpus-pbrt/
+ *   ./build-fuzz/fuzz_pbrt -dict=tests/fuzz/pbrt.dict -max_len=4096 -runs=1000000 build-fuzz/corpus-pbrt
+ *
+ * Without clang, -DFUZZ_STANDALONE adds a main() that replays the files named on the
+ * command line through the same entry point. */
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "caustic/caustic.h"
+#include "scene/pbrt_tokenizer.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static int located(const char *msg)
+{
+    int line = 0, col = 0;
+    return sscanf(msg, "fuzz.pbrt:%d:%d: ", &line, &col) == 2 && line >= 1 && col >= 1;
+}
+
+static void on_warning(void *user, CstWarningCode code, const char *message)
+{
+    (void)user;
+    if (code < CST_WARN_UNSUPPORTED || code > CST_WARN_GEOMETRY || !located(message))
+        abort();
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    /* The tokenizer alone: it must end, at EOF or at a located error. */
+    PbrtTokenizer tz;
+    PbrtToken tok;
+    CstError err;
+    pbrt_tokenizer_init(&tz, (const char *)data, size, "fuzz.pbrt");
+    for (size_t n = 0;; n++) {
+        CstStatus st = pbrt_next_token(&tz, &tok, &err);
+        if (st != CST_OK) {
+            if (st != CST_ERR_PARSE || !located(err.msg)) abort();
+            break;
+        }
+        if (tok.kind == PBRT_TOK_EOF) break;
+        if (n > size) abort(); /* no progress */
+    }
+
+    CstScene *scene = NULL;
+    CstLoadOptions opt = {0};
+    opt.warning = on_warning;
+    opt.no_file_access = 1;
+    CstStatus st = cst_scene_load_pbrt_string((const char *)data, size, "fuzz.pbrt", &opt, &scene, &err);
+    if ((st == CST_OK) != (scene != NULL) || (st != CST_OK && err.msg[0] == '\0'))
+        abort();
+    if ((st == CST_ERR_PARSE || st == CST_ERR_INVALID_ARG || st == CST_ERR_UNSUPPORTED) &&
+        !located(err.msg))
+        abort();
+    cst_scene_destroy(scene);
+    return 0;
+}
+
+#ifdef FUZZ_STANDALONE
+int main(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        FILE *f = fopen(argv[i], "rb");
+        if (!f) {
+            perror(argv[i]);
+            return 1;
+        }
+        size_t cap = (size_t)1 << 20;
+        uint8_t *buf = malloc(cap);
+        if (!buf) {
+            fclose(f);
+            return 1;
+        }
+        size_t len = fread(buf, 1, cap, f);
+        fclose(f);
+        LLVMFuzzerTestOneInput(buf, len);
+        free(buf);
+    }
+    return 0;
+}
+#endif
