@@ -1,7 +1,6 @@
-/* Chi-square goodness-of-fit helpers shared by the sampling tests: the chi-square survival
- * function and Pearson's statistic with pooling of low-expectation cells (the routines of
- * test_warp.c, copied
- * here for test_bsdf.c; test_warp.c still has its own). */
+/* Chi-square goodness-of-fit helpers shared by the sampling tests (warps, BSDFs, lights):
+ * the chi-square survival function and Pearson's statistic with pooling of
+ * low-expectation cells. */
 #ifndef CST_TESTS_UNIT_CHI2_H
 #define CST_TESTS_UNIT_CHI2_H
 
