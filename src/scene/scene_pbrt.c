@@ -1226,6 +1226,9 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
 {
     char d[96], nm[72];
     snprintf(d, sizeof d, "material \"%s\"", clip(type, nm));
+    /* Every field caustic's Material has beyond the three set here (roughness, one_sided,
+     * the derived plastic tables) keeps its zero default. */
+    memset(m, 0, sizeof *m);
     m->type = MATERIAL_DIFFUSE;
     m->albedo = rgb_s(0.5f);
     m->ior = 1.0f;
@@ -2520,7 +2523,7 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s before WorldBegin; expected materials in the world block", dname);
             goto done;
         }
-        Material m;
+        Material m = {0};
         const char *mt = type;
         if (dname[0] == 'M' && dname[1] == 'a' && dname[2] == 'k') {
             /* MakeNamedMaterial "name" "string type" "diffuse" ... */

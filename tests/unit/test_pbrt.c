@@ -531,6 +531,8 @@ static void test_materials(void **state)
     assert_true(m[11]->albedo.r == 1.0f && m[11]->albedo.b == 0.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "clamped") >= 0);
     assert_true(m[12]->albedo.g == 0.1f);
+    /* fields the mapping does not set keep their zero defaults (two-sided, smooth) */
+    for (int i = 0; i < 13; i++) assert_true(!m[i]->one_sided && m[i]->roughness == 0.0f);
     cst_scene_destroy(s);
 }
 
