@@ -368,6 +368,7 @@ typedef struct SppmWorker {
     SppmJob *job;
     pthread_t thread;
     uint64_t rays, nonfinite; /* integer totals: summed in any order */
+    char pad[64];             /* bumped per ray: no cache line shared with the next worker's */
 } SppmWorker;
 
 /* Pixel range r of the deposit phase is [range_lo(r), range_lo(r + 1)). */

@@ -173,10 +173,15 @@ typedef struct RenderJob {
     pthread_cond_t done;
 } RenderJob;
 
+/* Every ray bumps `rays`: the padding keeps the counters of neighbouring workers in the
+ * array on different cache lines. Without it the two threads' increments bounced one line
+ * between cores (false sharing), which cost the light tracer a third of its time
+ * (docs/benchmarks.md). */
 typedef struct Worker {
     RenderJob *job;
     pthread_t thread;
     uint64_t rays, nonfinite;
+    char pad[64];
 } Worker;
 
 static void render_tile(RenderJob *job, Worker *w, int tile)
