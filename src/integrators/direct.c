@@ -1,7 +1,8 @@
 /* One-sample direct lighting shared by the integrators that do not MIS it. */
 #include "integrators/direct.h"
 
-Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
+static Rgb sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, bool mis, Pcg32 *rng,
+                  uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return rgb_s(0.0f);
     float u_sel = pcg32_float(rng);
@@ -13,5 +14,17 @@ Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo
     if (rgb_is_black(f)) return rgb_s(0.0f);
     ++*rays;
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
-    return rgb_scale(rgb_mul(f, ls.li), 1.0f / ls.pdf);
+    float w = mis && !ls.delta ? power_heuristic(ls.pdf, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
+    return rgb_scale(rgb_mul(f, ls.li), w / ls.pdf);
+}
+
+Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
+{
+    return sample(s, bsdf, sh, wo, false, rng, rays);
+}
+
+Rgb direct_light_mis(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
+                     uint64_t *rays)
+{
+    return sample(s, bsdf, sh, wo, true, rng, rays);
 }

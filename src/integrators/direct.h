@@ -1,5 +1,5 @@
-/* Direct light by one light sample without MIS: the next-event estimate the Whitted,
- * photon-mapping and SPPM integrators share (path.c's adds MIS with BSDF sampling). */
+/* Direct light by one light sample: the next-event estimate of the path tracer (with MIS)
+ * and of the Whitted, photon-mapping and SPPM integrators (without). */
 #ifndef CST_INTEGRATORS_DIRECT_H
 #define CST_INTEGRATORS_DIRECT_H
 
@@ -9,8 +9,19 @@
 #include "materials/bsdf.h"
 #include "scene/scene.h"
 
+/* Veach's power heuristic, beta = 2 (thesis eq. 9.13). */
+static inline float power_heuristic(float pdf_a, float pdf_b)
+{
+    float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
+    return a / (a + b);
+}
+
 /* f(wo, wi) L_i / pdf for one light picked by power (area point or delta light), with a
  * shadow ray; black when the scene has no lights. Draws three numbers from rng. */
 Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays);
+/* The same weighted by the power heuristic against BSDF sampling of the same direction
+ * (path.c's MIS; a delta light keeps weight 1: BSDF sampling cannot reach it). */
+Rgb direct_light_mis(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
+                     uint64_t *rays);
 
 #endif

@@ -9,19 +9,6 @@
 #include "film/filter.h"
 #include "materials/bsdf.h"
 
-/* Whether the segment from surface point p (normal ng) to the lens point q is clear. The
- * lens is not geometry, so only p's end is pushed off its surface, and the ray aims from
- * the pushed point (see scene_visible for why). */
-static bool visible_to_lens(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
-{
-    Vec3 o = scene_offset(p, ng, v3_sub(q, p));
-    Vec3 d = v3_sub(q, o);
-    float len = v3_length(d);
-    if (!(len > 0.0f)) return true;
-    Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
-    return !scene_occluded(s, &r);
-}
-
 /* Splats weight * W_e / pdf_w if the lens point is visible; weight already holds the
  * throughput and the vertex's f |cos theta_cam| (or L_e |cos theta_cam|). */
 static void splat_if_visible(const Scene *s, const Camera *cam, const LightParams *lp,
@@ -30,7 +17,7 @@ static void splat_if_visible(const Scene *s, const Camera *cam, const LightParam
 {
     if (rgb_is_black(weight)) return;
     ++*rays;
-    if (!visible_to_lens(s, p, ng, cs->p_lens)) return;
+    if (!scene_visible_point(s, p, ng, cs->p_lens)) return;
     film_splat(out, cam->width, cam->height, lp->filter, cs->raster.x, cs->raster.y,
                rgb_scale(weight, cs->we / cs->pdf_w));
 }

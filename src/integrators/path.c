@@ -2,32 +2,8 @@
  * Estimator: Veach's thesis ch. 9; power heuristic with beta = 2 (eq. 9.13). */
 #include "integrators/path.h"
 
+#include "integrators/direct.h"
 #include "materials/bsdf.h"
-
-static inline float power_heuristic(float pdf_a, float pdf_b)
-{
-    float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
-    return a / (a + b);
-}
-
-/* Direct light at a non-delta vertex by sampling a light (light_sample_li: an area point
- * converted to solid angle, pdf_w = pdf_a dist^2 / |cos theta_light|, or a delta light). */
-static Rgb sample_direct(const Scene *s, const PathParams *pp, const Bsdf *bsdf,
-                         const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
-{
-    float u_sel = pcg32_float(rng);
-    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-    LightLi ls;
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
-    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
-    Rgb f = bsdf_eval(bsdf, wo, ls.wi);
-    if (rgb_is_black(f)) return rgb_s(0.0f);
-    ++*rays;
-    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
-    /* A delta light cannot be hit by BSDF sampling: NEE is its only strategy. */
-    float w = pp->mode == PATH_MIS && !ls.delta ? power_heuristic(ls.pdf, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
-    return rgb_scale(rgb_mul(f, ls.li), w / ls.pdf);
-}
 
 Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t *rays)
 {
@@ -69,7 +45,8 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
         Bsdf bsdf;
         bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
         if (use_nee && !bsdf_is_delta(&bsdf))
-            L = rgb_madd(L, beta, sample_direct(s, pp, &bsdf, &sh, wo, rng, rays));
+            L = rgb_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, rng, rays)
+                                                               : direct_light(s, &bsdf, &sh, wo, rng, rays));
 
         BsdfSample bs;
         float uc = pcg32_float(rng);

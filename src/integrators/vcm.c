@@ -120,16 +120,25 @@ static inline bool roulette(SubPath *sp, int depth, int rr_depth, Pcg32 *rng)
     return true;
 }
 
-/* Whether a surface point sees a lens point (light.c's visible_to_lens: the lens is not
- * geometry, so only the surface end is pushed off). */
-static bool visible_to_lens(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+/* The continuation of a subpath at a vertex (wo: back along the subpath; mode: what it
+ * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
+ * quantities and the next ray. False when the subpath ends here. */
+static bool scatter(SubPath *sp, const VcmIteration *it, const Bsdf *b, const SurfaceHit *sh, Vec3 wo,
+                    BsdfTransport mode, int depth, int rr_depth, Pcg32 *rng, Ray *ray)
 {
-    Vec3 o = scene_offset(p, ng, v3_sub(q, p));
-    Vec3 d = v3_sub(q, o);
-    float len = v3_length(d);
-    if (!(len > 0.0f)) return true;
-    Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
-    return !accel_occluded(&s->accel, &r);
+    BsdfSample bs;
+    float uc = pcg32_float(rng);
+    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
+    if (!(bs.pdf > 0.0f)) return false;
+    float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(b, bs.wi, wo);
+    sp->beta = rgb_mul(sp->beta, bs.weight);
+    sp->scatter = rgb_mul(sp->scatter, bs.weight);
+    if (rgb_is_black(sp->scatter)) return false;
+    if (!roulette(sp, depth, rr_depth, rng)) return false;
+    mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), pdf_rev);
+    *ray = ray_make(scene_offset(sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    return true;
 }
 
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
@@ -156,7 +165,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
                     (it->mis_vm + v->d_vcm + v->d_vc * mis(pdf_rev));
     float weight = 1.0f / (1.0f + w_light);
     ++*rays;
-    if (!visible_to_lens(s, v->p, v->ng, cs.p_lens)) return;
+    if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
     film_splat(splats, cam->width, cam->height, vp->filter, cs.raster.x, cs.raster.y,
                rgb_scale(rgb_mul(v->beta, f), weight * cs.we / cs.pdf_w));
 }
@@ -205,18 +214,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
         }
         if (vp->max_depth > 0 && bounces >= vp->max_depth) break;
 
-        BsdfSample bs;
-        float uc = pcg32_float(rng);
-        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
-        if (!(bs.pdf > 0.0f)) break;
-        float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(&bsdf, bs.wi, w_prev);
-        sp.beta = rgb_mul(sp.beta, bs.weight);
-        sp.scatter = rgb_mul(sp.scatter, bs.weight);
-        if (rgb_is_black(sp.scatter)) break;
-        if (!roulette(&sp, bounces, vp->rr_depth, rng)) break;
-        mis_scatter(&sp, it, &bs, fabsf(v3_dot(sh.ng, bs.wi)), pdf_rev);
-        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        if (!scatter(&sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray)) break;
     }
 }
 
@@ -450,18 +448,7 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
                 L = rgb_madd(L, sp.beta, merge(vp, it, &sp, &bsdf, &sh, wo, t));
         }
 
-        BsdfSample bs;
-        float uc = pcg32_float(rng);
-        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-        if (!bsdf_sample(&bsdf, wo, uc, u, &bs)) break;
-        if (!(bs.pdf > 0.0f)) break;
-        float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(&bsdf, bs.wi, wo);
-        sp.beta = rgb_mul(sp.beta, bs.weight);
-        sp.scatter = rgb_mul(sp.scatter, bs.weight);
-        if (rgb_is_black(sp.scatter)) break;
-        if (!roulette(&sp, t, vp->rr_depth, rng)) break;
-        mis_scatter(&sp, it, &bs, fabsf(v3_dot(sh.ng, bs.wi)), pdf_rev);
-        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        if (!scatter(&sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
     }
     return L;
 }

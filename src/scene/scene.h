@@ -215,6 +215,19 @@ static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 
     return !scene_occluded(s, &r);
 }
 
+/* Whether surface point p (normal ng) sees the point q in free space (a lens point: the
+ * lens is not geometry, so only p's end is pushed off its surface, and the ray aims from
+ * the pushed point). */
+static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+{
+    Vec3 o = scene_offset(p, ng, v3_sub(q, p));
+    Vec3 d = v3_sub(q, o);
+    float len = v3_length(d);
+    if (!(len > 0.0f)) return true;
+    Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
+    return !scene_occluded(s, &r);
+}
+
 /* Area of a triangle with nonzero normal; shared by loaders for validation. */
 float triangle_area(Vec3 a, Vec3 b, Vec3 c);
 

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "core/file.h"
 #include "film/image_io.h"
 #include "math/transform.h"
 #include "scene/json_locate.h"
@@ -1611,48 +1612,6 @@ CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *n
     return CST_OK;
 }
 
-/* Reads a whole file into a new buffer; the size need not be known up front (pipes). */
-static CstStatus read_file(const char *path, char **out, size_t *out_len, CstError *err)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return cst_fail(err, CST_ERR_IO, "%.200s: cannot open: %s", path, strerror(errno));
-    size_t cap = 1 << 16, len = 0;
-    char *buf = malloc(cap);
-    CstStatus st = CST_OK;
-    if (!buf) {
-        st = cst_fail(err, CST_ERR_OOM, "%.200s: out of memory reading the file", path);
-        goto done;
-    }
-    for (;;) {
-        if (len == cap) {
-            char *nb = cap <= SIZE_MAX / 2 ? realloc(buf, cap * 2) : NULL;
-            if (!nb) {
-                st = cst_fail(err, CST_ERR_OOM, "%.200s: out of memory reading the file", path);
-                goto done;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-        size_t n = fread(buf + len, 1, cap - len, f);
-        len += n;
-        if (n == 0) {
-            if (ferror(f))
-                st = cst_fail(err, CST_ERR_IO, "%.200s: cannot read: %s", path, strerror(errno));
-            break;
-        }
-    }
-done:
-    fclose(f);
-    if (st != CST_OK) {
-        free(buf);
-        return st;
-    }
-    *out = buf;
-    *out_len = len;
-    return CST_OK;
-}
-
 CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err)
 {
     CstError local;
@@ -1664,7 +1623,7 @@ CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err)
     *out = NULL;
     char *text = NULL;
     size_t len = 0;
-    CstStatus st = read_file(path, &text, &len, err);
+    CstStatus st = file_read_all(path, &text, &len, err);
     if (st != CST_OK)
         return st;
     st = cst_scene_load_json_string(text, len, path, out, err);

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "core/file.h"
 #include "film/image_io.h"
 #include "math/transform.h"
 #include "scene/mesh_import.h"
@@ -1344,46 +1345,6 @@ static CstStatus check_file_access(Loader *ld, Loc loc, const char *d)
     return CST_OK;
 }
 
-/* Reads a whole file into a new buffer; pipes too. */
-static CstStatus read_whole_file(const char *path, char **out, size_t *out_len, CstError *err)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: %s", path, strerror(errno));
-    size_t cap = 1 << 16, len = 0;
-    char *buf = malloc(cap);
-    CstStatus st = CST_OK;
-    if (!buf) {
-        st = cst_fail(err, CST_ERR_OOM, "%.300s: out of memory reading the file", path);
-        goto done;
-    }
-    for (;;) {
-        if (len == cap) {
-            char *nb = cap <= SIZE_MAX / 2 ? realloc(buf, cap * 2) : NULL;
-            if (!nb) {
-                st = cst_fail(err, CST_ERR_OOM, "%.300s: out of memory reading the file", path);
-                goto done;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-        size_t n = fread(buf + len, 1, cap - len, f);
-        len += n;
-        if (n == 0) {
-            if (ferror(f)) st = cst_fail(err, CST_ERR_IO, "%.300s: cannot read: %s", path, strerror(errno));
-            break;
-        }
-    }
-done:
-    fclose(f);
-    if (st != CST_OK) {
-        free(buf);
-        return st;
-    }
-    *out = buf;
-    *out_len = len;
-    return CST_OK;
-}
-
 /* A failure of a library call (mesh import, image read): keep its text, add the location. */
 static CstStatus fail_wrap(Loader *ld, CstStatus st, Loc loc, const char *d)
 {
@@ -2601,7 +2562,7 @@ static CstStatus include_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
     ld->files[ld->num_files++] = path; /* owned by the loader; Locs point into it */
     char *text = NULL;
     size_t len = 0;
-    st = read_whole_file(path, &text, &len, ld->err);
+    st = file_read_all(path, &text, &len, ld->err);
     if (st) return fail_wrap(ld, st, fl, d);
     ld->depth++;
     st = parse_text(ld, text, len, path);
@@ -2940,7 +2901,7 @@ CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *options, C
     *out = NULL;
     char *text = NULL;
     size_t len = 0;
-    CstStatus st = read_whole_file(path, &text, &len, err);
+    CstStatus st = file_read_all(path, &text, &len, err);
     if (st) return st;
     st = cst_scene_load_pbrt_string(text, len, path, options, out, err);
     free(text);
