@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "render/render_util.h"
+#include "render/test_scenes.h"
 #include "scene/scene.h"
 
 enum { MAX_REGIONS = 1 + 16 };
@@ -160,26 +161,7 @@ static void test_max_depth_and_tent(void **state)
 static void test_through_glass(void **state)
 {
     (void)state;
-    CstError err;
-    Scene *s = scene_create();
-    assert_non_null(s);
-    int floor_mat, glass_mat, light_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.5f, 0.3f}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &floor_mat, &err), CST_OK);
-    m.albedo = rgb_s(0.0f);
-    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
-    Material glass = {.type = MATERIAL_GLASS, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.5f};
-    assert_int_equal(scene_add_material(s, &glass, &glass_mat, &err), CST_OK);
-    Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
-    Vec3 glass_q[4] = {{-3, 1, -3}, {-3, 1, 3}, {3, 1, 3}, {3, 1, -3}};
-    Vec3 light_q[4] = {{-1.5f, 2, -1.5f}, {1.5f, 2, -1.5f}, {1.5f, 2, 1.5f}, {-1.5f, 2, 1.5f}};
-    Emission em = {{4.0f, 4.0f, 4.0f}, 0};
-    assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
-    assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
-    assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
+    Scene *s = test_scene_glass_interface();
     CstRenderSettings st = sized(32, CST_FILTER_BOX);
     three_way(s, &st, 32, 8, 512, 256, 41, "glass");
     scene_destroy(s);
@@ -191,19 +173,9 @@ static void test_through_glass(void **state)
 static void test_emitting_furnace(void **state)
 {
     (void)state;
-    CstError err;
-    Scene *s = scene_create();
-    int grey;
     const float rho = 0.5f;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
-    Emission em = {{1.0f, 0.5f, 0.25f}, 1};
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
-    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    const double rd = (double)rho;
-    const double expect[3] = {1.0 / (1.0 - rd), 0.5 / (1.0 - rd), 0.25 / (1.0 - rd)};
+    double expect[3];
+    Scene *s = test_scene_emitting_sphere(rho, expect);
     const CstIntegrator integ[2] = {CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
     for (int k = 0; k < 2; k++) {
         CstRenderSettings st = sized(32, CST_FILTER_BOX);

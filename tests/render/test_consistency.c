@@ -10,6 +10,7 @@
 #include <cmocka.h>
 
 #include "render/render_util.h"
+#include "render/test_scenes.h"
 #include "scene/scene.h"
 
 enum { SIZE = 128, BLOCK = 32, MAX_REGIONS = 1 + 16 };
@@ -232,28 +233,7 @@ static void test_cornell_whitted_direct(void **state)
 static void test_light_through_glass(void **state)
 {
     (void)state;
-    CstError err;
-    Scene *s = scene_create();
-    assert_non_null(s);
-    int floor_mat, glass_mat, light_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.5f, 0.3f}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &floor_mat, &err), CST_OK);
-    m.albedo = rgb_s(0.0f);
-    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
-    Material glass = {.type = MATERIAL_GLASS, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.5f};
-    assert_int_equal(scene_add_material(s, &glass, &glass_mat, &err), CST_OK);
-    /* Windings give the normals: floor and interface +y (the interface's outside is
-     * above), emitter -y. */
-    Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
-    Vec3 glass_q[4] = {{-3, 1, -3}, {-3, 1, 3}, {3, 1, 3}, {3, 1, -3}};
-    Vec3 light_q[4] = {{-1.5f, 2, -1.5f}, {1.5f, 2, -1.5f}, {1.5f, 2, 1.5f}, {-1.5f, 2, 1.5f}};
-    Emission em = {{4.0f, 4.0f, 4.0f}, 0};
-    assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
-    assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
-    assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
+    Scene *s = test_scene_glass_interface();
 
     enum { GSIZE = 64, GBLOCK = 16 };
     CstRenderSettings st = sized(GSIZE, CST_FILTER_BOX);

@@ -8,6 +8,7 @@
 #include <cmocka.h>
 
 #include "render/render_util.h"
+#include "render/test_scenes.h"
 #include "scene/scene.h"
 
 static const CstIntegrator VARIANTS[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_NEE,
@@ -85,19 +86,9 @@ static void test_white_furnace_albedo_one(void **state)
 static void test_furnace_emitting_sphere(void **state)
 {
     (void)state;
-    CstError err;
-    Scene *s = scene_create();
-    int grey;
     const float rho = 0.5f;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
-    Emission em = {{1.0f, 0.5f, 0.25f}, 1};
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
-    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    const double rd = (double)rho;
-    const double expect[3] = {1.0 / (1.0 - rd), 0.5 / (1.0 - rd), 0.25 / (1.0 - rd)};
+    double expect[3];
+    Scene *s = test_scene_emitting_sphere(rho, expect);
     for (size_t i = 0; i < 3; i++) {
         CstFilm *f = render(s, VARIANTS[i], 32, 128, 100 + i);
         /* per-channel expectation: check each channel against its own value */
@@ -126,18 +117,9 @@ static void test_light_furnace_emitting_sphere(void **state)
 {
     (void)state;
     CstError err;
-    Scene *s = scene_create();
-    int grey;
     const float rho = 0.5f;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
-    Emission em = {{1.0f, 0.5f, 0.25f}, 1};
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
-    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    const double rd = (double)rho;
-    const double expect[3] = {1.0 / (1.0 - rd), 0.5 / (1.0 - rd), 0.25 / (1.0 - rd)};
+    double expect[3];
+    Scene *s = test_scene_emitting_sphere(rho, expect);
     CstRenderSettings st = {0};
     st.width = st.height = 32;
     st.integrator = CST_INTEGRATOR_LIGHT;

@@ -1,0 +1,60 @@
+/* Scenes several statistical render tests share, built and committed through the scene
+ * API: the emitting furnace sphere and the floor under a glass interface. */
+#ifndef CST_TESTS_RENDER_TEST_SCENES_H
+#define CST_TESTS_RENDER_TEST_SCENES_H
+
+#include "scene/scene.h"
+
+/* Inside a closed sphere of albedo rho whose surface also emits L_e = (1, 0.5, 0.25) on
+ * both sides, the radiance is L_e / (1 - rho) in every direction (written to expect):
+ * long paths, Russian roulette, channels kept apart. The camera looks from inside. */
+static inline Scene *test_scene_emitting_sphere(float rho, double expect[3])
+{
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    int grey;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
+    Emission em = {{1.0f, 0.5f, 0.25f}, 1};
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
+    CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    const double rd = (double)rho;
+    expect[0] = 1.0 / (1.0 - rd);
+    expect[1] = 0.5 / (1.0 - rd);
+    expect[2] = 0.25 / (1.0 - rd);
+    return s;
+}
+
+/* A diffuse floor under a flat glass interface (IOR 1.5, the outside above), lit from
+ * above through it by a quad emitter, seen by a camera under the interface looking
+ * straight down at the floor. Windings give the normals: floor and interface +y, emitter
+ * -y. No delta surface is directly visible. */
+static inline Scene *test_scene_glass_interface(void)
+{
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    int floor_mat, glass_mat, light_mat;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.5f, 0.3f}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &floor_mat, &err), CST_OK);
+    m.albedo = rgb_s(0.0f);
+    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
+    Material glass = {.type = MATERIAL_GLASS, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.5f};
+    assert_int_equal(scene_add_material(s, &glass, &glass_mat, &err), CST_OK);
+    Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
+    Vec3 glass_q[4] = {{-3, 1, -3}, {-3, 1, 3}, {3, 1, 3}, {3, 1, -3}};
+    Vec3 light_q[4] = {{-1.5f, 2, -1.5f}, {1.5f, 2, -1.5f}, {1.5f, 2, 1.5f}, {-1.5f, 2, 1.5f}};
+    Emission em = {{4.0f, 4.0f, 4.0f}, 0};
+    assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
+    assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
+    assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);
+    CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 90.0f, 0.0f, 1.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    return s;
+}
+
+#endif
