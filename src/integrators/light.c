@@ -61,7 +61,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
         if (!scene_intersect(s, &ray, &sh)) break;
         Vec3 w_prev = v3_neg(ray.d); /* toward y_{j-1}, where the light came from */
         Bsdf bsdf;
-        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        scene_bsdf(s, &sh, &bsdf);
         /* Delta lobes cannot be connected: f is a Dirac in the direction to the lens. */
         if (!bsdf_is_delta(&bsdf)) {
             u_lens = v2(pcg32_float(rng), pcg32_float(rng));

@@ -43,7 +43,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
 
         Bsdf bsdf;
-        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        scene_bsdf(s, &sh, &bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf))
             L = rgb_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, rng, rays)
                                                                : direct_light(s, &bsdf, &sh, wo, rng, rays));

@@ -74,7 +74,7 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
         if (!scene_intersect(s, &ray, &sh)) break;
         Vec3 w_prev = v3_neg(ray.d);
         Bsdf bsdf;
-        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        scene_bsdf(s, &sh, &bsdf);
         if (!bsdf_is_delta(&bsdf)) {
             Photon ph;
             ph.pos = sh.p;
@@ -125,7 +125,7 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
         Vec3 wo = v3_neg(ray.d);
         if (le && sh->emitter >= 0)
             *le = rgb_madd(*le, *beta, emitter_radiance(&s->emitters[sh->emitter], sh->ng, wo));
-        bsdf_init(bsdf, &s->materials[sh->material], sh->ng);
+        scene_bsdf(s, sh, bsdf);
         float p_delta = bsdf_delta_probability(bsdf, wo);
         if (!(p_delta > 0.0f)) {
             *wo_out = wo;

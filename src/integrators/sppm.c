@@ -257,7 +257,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
         if (!scene_intersect(s, &ray, &sh)) break;
         Vec3 w_prev = v3_neg(ray.d);
         Bsdf bsdf;
-        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        scene_bsdf(s, &sh, &bsdf);
         /* depth 1 is direct light (L D): NEE counts it at the visible points. */
         if (depth > 1 && !bsdf_is_delta(&bsdf))
             hit_list_push(out, sh.p, w_prev, v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng), power);

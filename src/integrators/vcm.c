@@ -205,7 +205,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
         mis_arrive(&sp, bounces > 1 || es.finite ? sh.t : 1.0f, cos_in);
 
         Bsdf bsdf;
-        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        scene_bsdf(s, &sh, &bsdf);
         if (!bsdf_is_delta(&bsdf)) {
             VcmVertex v = {sh.p, sh.ng, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
                            sh.material, bounces};
@@ -434,7 +434,7 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
 
         Bsdf bsdf;
-        bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+        scene_bsdf(s, &sh, &bsdf);
         if (!bsdf_is_delta(&bsdf)) {
             if (has_lights)
                 L = rgb_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, rays));

@@ -35,7 +35,7 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
     Rgb L = sh.emitter >= 0 ? emitter_radiance(&s->emitters[sh.emitter], sh.ng, wo) : rgb_s(0.0f);
 
     Bsdf bsdf;
-    bsdf_init(&bsdf, &s->materials[sh.material], sh.ng);
+    scene_bsdf(s, &sh, &bsdf);
     /* Non-delta lobes (diffuse, and glossy ones: rough metal, rough glass, the base of
      * plastic) get direct light only, Whitted's diffuse rule; a BSDF that also has delta
      * lobes (smooth-coat plastic) then branches into those below as well. */

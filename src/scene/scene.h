@@ -13,6 +13,7 @@
 #include "camera/camera.h"
 #include "caustic/caustic.h"
 #include "lights/light.h"
+#include "materials/bsdf.h"
 #include "materials/material.h"
 #include "math/rgb.h"
 #include "math/vec3.h"
@@ -184,6 +185,13 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     sh->material = pi->material;
     sh->emitter = pi->emitter;
     return true;
+}
+
+/* The BSDF at a hit: the one place where a hit's material, normal (and later its texture
+ * coordinates and shading normal) become a Bsdf, so every integrator sees the same surface. */
+static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
+{
+    bsdf_init(b, &s->materials[sh->material], sh->ng);
 }
 
 /* Any hit in (r->t_min, r->t_max), instances included. */
