@@ -84,6 +84,8 @@ int splat_list_init(SplatList *l, size_t cap)
 void splat_list_free(SplatList *l)
 {
     free(l->v);
+    free(l->binned);
+    free(l->band_start);
     memset(l, 0, sizeof *l);
 }
 
@@ -107,7 +109,7 @@ void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, 
         l->nonfinite++;
         return;
     }
-    if (filter != CST_FILTER_TENT) {
+    if (filter == CST_FILTER_BOX || filter == CST_FILTER_DEFAULT) {
         int px = (int)floorf(x), py = (int)floorf(y);
         if (px < 0 || px >= width || py < 0 || py >= height) return;
         splat_push(l, py * width + px, c);
@@ -152,11 +154,36 @@ void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, 
     }
 }
 
-void film_add_splats_range(const SplatList *l, double *rgb, double scale, int32_t lo, int32_t hi)
+int splat_list_bin(SplatList *l, int bands)
 {
-    for (size_t i = 0; i < l->n; i++) {
-        const FilmSplat *s = &l->v[i];
-        if (s->pixel < lo || s->pixel >= hi) continue;
+    if (l->bands != bands) {
+        uint32_t *bs = realloc(l->band_start, ((size_t)bands + 1) * sizeof *bs);
+        if (!bs) { l->oom = 1; return 0; }
+        l->band_start = bs;
+        l->bands = bands;
+    }
+    if (l->binned_cap < l->n) {
+        FilmSplat *b = realloc(l->binned, l->cap * sizeof *b);
+        if (!b) { l->oom = 1; return 0; }
+        l->binned = b;
+        l->binned_cap = l->cap;
+    }
+    uint32_t *start = l->band_start;
+    memset(start, 0, ((size_t)bands + 1) * sizeof *start);
+    for (size_t i = 0; i < l->n; i++) start[l->v[i].pixel / FILM_SPLAT_BAND + 1]++;
+    for (int b = 0; b < bands; b++) start[b + 1] += start[b];
+    /* Placing through a running cursor per band keeps list order inside each band; the
+     * cursors end where the next band starts, so one pass rebuilds band_start after. */
+    for (size_t i = 0; i < l->n; i++) l->binned[start[l->v[i].pixel / FILM_SPLAT_BAND]++] = l->v[i];
+    for (int b = bands; b > 0; b--) start[b] = start[b - 1];
+    start[0] = 0;
+    return 1;
+}
+
+void film_add_splats_band(const SplatList *l, double *rgb, double scale, int band)
+{
+    for (uint32_t i = l->band_start[band]; i < l->band_start[band + 1]; i++) {
+        const FilmSplat *s = &l->binned[i];
         double *p = &rgb[3 * (size_t)s->pixel];
         p[0] += scale * (double)s->r;
         p[1] += scale * (double)s->g;

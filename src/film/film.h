@@ -43,7 +43,17 @@ typedef struct SplatList {
     size_t n, cap;
     uint64_t nonfinite; /* NaN/Inf contributions dropped (never cleared) */
     int oom;            /* a splat was lost for lack of memory */
+    /* splat_list_bin's output: v stably sorted by pixel band into `binned`, band b at
+     * [band_start[b], band_start[b + 1]). */
+    FilmSplat *binned;
+    size_t binned_cap;
+    uint32_t *band_start;
+    int bands;
 } SplatList;
+
+/* Pixels per band of splat_list_bin: 2048 pixels of a double RGB image are 48 KiB, so a
+ * band being merged stays in the L2 cache. */
+enum { FILM_SPLAT_BAND = 2048 };
 
 /* Reserves room for cap splats; returns 0 on OOM. Free with splat_list_free (accepts a
  * zeroed list). */
@@ -53,14 +63,19 @@ void splat_list_free(SplatList *l);
  * the render's filter, so that splats estimate the same pixel values as camera samples:
  * box: all of c to the pixel containing (x, y); tent (radius 1 pixel, normalised, as
  * render.c samples it): c times the tent of each of the up to four pixel centres within
- * one pixel in x and y, i.e. bilinear weights. (x, y) may lie up to half a pixel outside
- * the film for the tent. NaN/Inf contributions are counted and dropped. Grows the list
- * when full (amortised: lists are reused, so this stops after the first iterations). */
+ * one pixel in x and y, i.e. bilinear weights; Gaussian and Mitchell: c times h of every
+ * pixel centre within the radius. (x, y) may lie up to the filter's radius minus half a
+ * pixel outside the film. NaN/Inf contributions are counted and dropped. Grows the list
+ * (sets l->oom if it cannot). */
 void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, float y, Rgb c);
 /* Adds scale times every splat to rgb (width*height*3 doubles), in the list's order. */
 void film_add_splats(const SplatList *l, double *rgb, double scale);
-/* The same for the splats on pixels [lo, hi) only: threads that own disjoint pixel ranges
- * can merge the same lists at once, each pixel's sum still in list order. */
-void film_add_splats_range(const SplatList *l, double *rgb, double scale, int32_t lo, int32_t hi);
+/* Counting sort of the list by band (pixel / FILM_SPLAT_BAND) into l->binned, stable, so
+ * each pixel's splats keep their order. bands = ceil(pixels / FILM_SPLAT_BAND). Done by
+ * the thread that filled the list, while it is in cache. Returns 0 on OOM (sets l->oom). */
+int splat_list_bin(SplatList *l, int bands);
+/* Adds scale times the binned splats of one band to rgb, in list order: threads that own
+ * different bands can merge the same lists at once, each pixel's sum in list order. */
+void film_add_splats_band(const SplatList *l, double *rgb, double scale, int band);
 
 #endif

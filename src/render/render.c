@@ -142,7 +142,7 @@ typedef struct RenderJob {
      * count: num_tiles or num_chunks. */
     int tiles_x, tiles_y, num_tiles, num_chunks, units;
     enum { PASS_TILES, PASS_CHUNKS, PASS_MERGE } pass_kind; /* what the pass's units are */
-    int merge_units;  /* pixel ranges of a merge pass: one per thread */
+    int merge_units;  /* pixel bands of a merge pass (FILM_SPLAT_BAND pixels each) */
     /* light tracing, BDPT and VCM: iterations of width x height light paths */
     bool light;
     LightParams light_params;
@@ -242,13 +242,14 @@ static void light_chunk(RenderJob *job, Worker *w, int chunk)
                             &w->rays);
             job->vcm_path_count[i] = (uint32_t)(verts->n - before);
         }
-        return;
+    } else {
+        for (int i = first; i < last; i++) {
+            Pcg32 rng;
+            pcg32_seed_sample(&rng, job->seed, (uint64_t)i, (uint64_t)job->iteration);
+            light_trace(job->scene, &job->camera, &job->light_params, &rng, out, &w->rays);
+        }
     }
-    for (int i = first; i < last; i++) {
-        Pcg32 rng;
-        pcg32_seed_sample(&rng, job->seed, (uint64_t)i, (uint64_t)job->iteration);
-        light_trace(job->scene, &job->camera, &job->light_params, &rng, out, &w->rays);
-    }
+    splat_list_bin(out, job->merge_units); /* sets out->oom on failure, checked after the pass */
 }
 
 /* Between the light and the camera pass of a BDPT/VCM iteration: the chunks' vertex
@@ -291,25 +292,24 @@ static int vcm_gather(RenderJob *job)
     return 1;
 }
 
-/* Adds the finished iteration to the film as one sample per pixel, for the pixels
- * [unit * P / units, (unit + 1) * P / units) of one unit of a merge pass. The light
- * tracer's pixel estimate is (W H / paths) times the sum of its splats (splats are per
- * unit film, camera.c), and W H / paths = 1 with one path per pixel. Adding the
- * iteration, not the splats, as the sample keeps the film's sum of squares a per-pixel
- * variance across iterations; splats are summed in chunk order, so the floating-point
- * sums depend neither on which thread traced which chunk nor on how the pixels are split
- * among the merging threads (one range per thread, run at once). */
-static void light_merge_range(RenderJob *job, int unit)
+/* Adds the finished iteration to the film as one sample per pixel, for the pixels of one
+ * band [unit * FILM_SPLAT_BAND, (unit + 1) * FILM_SPLAT_BAND). The light tracer's pixel
+ * estimate is (W H / paths) times the sum of its splats (splats are per unit film,
+ * camera.c), and W H / paths = 1 with one path per pixel. Adding the iteration, not the
+ * splats, as the sample keeps the film's sum of squares a per-pixel variance across
+ * iterations; splats are summed in chunk order and, within a chunk, in the order they were
+ * made (splat_list_bin is stable), so the floating-point sums depend neither on which
+ * thread traced which chunk nor on which thread merged which band. */
+static void light_merge_band(RenderJob *job, int unit)
 {
     const size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
     const double scale = (double)pixels / (double)job->light_paths;
-    size_t lo = pixels * (size_t)unit / (size_t)job->merge_units;
-    size_t hi = pixels * (size_t)(unit + 1) / (size_t)job->merge_units;
+    size_t lo = (size_t)unit * FILM_SPLAT_BAND;
+    size_t hi = lo + FILM_SPLAT_BAND < pixels ? lo + FILM_SPLAT_BAND : pixels;
     double *rgb = job->iteration_rgb;
     /* BDPT/VCM: the camera pass already wrote its pixel samples there. */
     if (!job->vcm) memset(rgb + 3 * lo, 0, 3 * (hi - lo) * sizeof *rgb);
-    for (int c = 0; c < job->num_chunks; c++)
-        film_add_splats_range(&job->splats[c], rgb, scale, (int32_t)lo, (int32_t)hi);
+    for (int c = 0; c < job->num_chunks; c++) film_add_splats_band(&job->splats[c], rgb, scale, unit);
     for (size_t p = lo; p < hi; p++)
         film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
 }
@@ -322,7 +322,7 @@ static void *worker_main(void *arg)
         int tile = atomic_fetch_add(&job->next_tile, 1);
         if (tile >= job->units) break;
         if (job->pass_kind == PASS_CHUNKS) light_chunk(job, w, tile);
-        else if (job->pass_kind == PASS_MERGE) light_merge_range(job, tile);
+        else if (job->pass_kind == PASS_MERGE) light_merge_band(job, tile);
         else render_tile(job, w, tile);
         if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->units) {
             pthread_mutex_lock(&job->lock);
@@ -413,7 +413,7 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
             if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.5 * f1))
                 return CST_ERR_INTERNAL;
         }
-        job->units = job->merge_units = threads;
+        job->units = job->merge_units;
         job->pass_kind = PASS_MERGE;
         if (!run_pass(job, workers, threads, st, t0, f0 + f1, 0.0)) return CST_ERR_INTERNAL;
     }
@@ -537,6 +537,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         }
         job->light_paths = (int)pixels;
         job->num_chunks = (job->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
+        job->merge_units = (int)((pixels + FILM_SPLAT_BAND - 1) / FILM_SPLAT_BAND);
         if (!light_alloc(job)) {
             light_free(job);
             film_destroy(film); free(workers); free(job);

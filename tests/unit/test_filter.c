@@ -8,6 +8,7 @@
 #include <cmocka.h>
 
 #include "core/rng.h"
+#include "film/film.h"
 #include "film/filter.h"
 #include "render/render_util.h"
 
@@ -80,11 +81,55 @@ static void test_importance_sampling_unbiased(void **state)
     }
 }
 
+/* A splat reaches every pixel whose centre lies within the filter's radius, each with the
+ * weight h(centre - position) the camera samples are weighted with, and no other pixel.
+ * (A wide filter that splatted like the box would still agree with path tracing on the
+ * smooth block means of the render tests; this sees it directly.) */
+static void test_splat_weights(void **state)
+{
+    (void)state;
+    enum { W = 16, H = 12 };
+    Pcg32 rng;
+    pcg32_seed(&rng, 4242u, 1u);
+    for (int k = 0; k < 4; k++) {
+        float r = filter_radius(TYPES[k]);
+        for (int trial = 0; trial < 200; trial++) {
+            /* anywhere, including the margin outside the film and the borders */
+            float x = -1.0f + (W + 2.0f) * pcg32_float(&rng), y = -1.0f + (H + 2.0f) * pcg32_float(&rng);
+            SplatList l;
+            assert_true(splat_list_init(&l, 16));
+            film_splat(&l, W, H, TYPES[k], x, y, rgb_s(1.0f));
+            double expect[W * H] = {0}, got[W * H] = {0};
+            for (int py = 0; py < H; py++)
+                for (int px = 0; px < W; px++) {
+                    float dx = (float)px + 0.5f - x, dy = (float)py + 0.5f - y;
+                    if (TYPES[k] == CST_FILTER_BOX)
+                        expect[py * W + px] = (px == (int)floorf(x) && py == (int)floorf(y)) ? 1.0 : 0.0;
+                    else if (fabsf(dx) <= r && fabsf(dy) <= r)
+                        expect[py * W + px] = (double)filter_weight1(TYPES[k], dx) * (double)filter_weight1(TYPES[k], dy);
+                }
+            for (size_t i = 0; i < l.n; i++) {
+                assert_true(l.v[i].pixel >= 0 && l.v[i].pixel < W * H);
+                got[l.v[i].pixel] += (double)l.v[i].r;
+            }
+            for (int i = 0; i < W * H; i++) {
+                if (fabs(got[i] - expect[i]) > 1e-6) {
+                    print_message("%s splat at (%.3f, %.3f): pixel %d got %.6f, expected %.6f\n",
+                                  cst_filter_name(TYPES[k]), (double)x, (double)y, i, got[i], expect[i]);
+                    fail();
+                }
+            }
+            splat_list_free(&l);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_normalised),
         cmocka_unit_test(test_importance_sampling_unbiased),
+        cmocka_unit_test(test_splat_weights),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
