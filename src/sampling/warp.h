@@ -5,15 +5,30 @@
 
 #include "math/vec3.h"
 
-/* Shirley & Chiu's concentric map, unit disk; pdf w.r.t. area = 1/pi. */
+/* cos and sin of |x| <= pi/4 by their Taylor polynomials to x^8 and x^9: the first terms
+ * left out are below 3e-8 there, under float's half-ulp of 1, and the polynomials cost a
+ * fraction of libm's sincosf with its range reduction (perf: 5% of the light tracer). */
+static inline void warp_sincos_quarter(float x, float *s, float *c)
+{
+    float x2 = x * x;
+    *s = x * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f + x2 * (1.0f / 362880.0f)))));
+    *c = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f))));
+}
+
+/* Shirley & Chiu's concentric map, unit disk; pdf w.r.t. area = 1/pi. The angle of each
+ * wedge is pi/4 times a ratio in [-1, 1]; the second pair of wedges, at pi/2 - phi, swaps
+ * sine and cosine, so only angles within pi/4 of zero are ever evaluated. */
 static inline Vec2 warp_concentric_disk(Vec2 u)
 {
     float ox = 2.0f * u.x - 1.0f, oy = 2.0f * u.y - 1.0f;
     if (ox == 0.0f && oy == 0.0f) return v2(0.0f, 0.0f);
-    float r, theta;
-    if (fabsf(ox) > fabsf(oy)) { r = ox; theta = (CST_PI / 4.0f) * (oy / ox); }
-    else { r = oy; theta = (CST_PI / 2.0f) - (CST_PI / 4.0f) * (ox / oy); }
-    return v2(r * cosf(theta), r * sinf(theta));
+    float s, c;
+    if (fabsf(ox) > fabsf(oy)) {
+        warp_sincos_quarter((CST_PI / 4.0f) * (oy / ox), &s, &c);
+        return v2(ox * c, ox * s);
+    }
+    warp_sincos_quarter((CST_PI / 4.0f) * (ox / oy), &s, &c);
+    return v2(oy * s, oy * c);
 }
 static inline float warp_concentric_disk_pdf(Vec2 p) { return (p.x * p.x + p.y * p.y <= 1.0f) ? CST_INV_PI : 0.0f; }
 
