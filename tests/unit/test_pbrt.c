@@ -645,6 +645,150 @@ static void test_lights(void **state)
     cst_scene_destroy(s);
 }
 
+/* The equal-area octahedral map of pbrt-v4's environment images: its landmarks, and
+ * square -> sphere -> square is the identity. */
+static void test_equal_area_map(void **state)
+{
+    (void)state;
+    double uv[2], d[3];
+    const double axes[4][3] = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}};
+    const double want[4][2] = {{0.5, 0.5}, {1.0, 0.5}, {0.5, 1.0}, {0.0, 0.5}};
+    for (int i = 0; i < 4; i++) {
+        pbrt_equal_area_sphere_to_square(axes[i], uv);
+        assert_true(fabs(uv[0] - want[i][0]) < 1e-12 && fabs(uv[1] - want[i][1]) < 1e-12);
+    }
+    const double down[3] = {0, 0, -1};
+    pbrt_equal_area_sphere_to_square(down, uv); /* -z: a corner */
+    assert_true((uv[0] == 0.0 || uv[0] == 1.0) && (uv[1] == 0.0 || uv[1] == 1.0));
+    for (int i = 0; i < 17; i++)
+        for (int j = 0; j < 17; j++) {
+            double p[2] = {(i + 0.37) / 17.0, (j + 0.61) / 17.0}, q[2];
+            pbrt_equal_area_square_to_sphere(p, d);
+            assert_true(fabs(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - 1.0) < 1e-12);
+            pbrt_equal_area_sphere_to_square(d, q);
+            if (!(fabs(q[0] - p[0]) < 1e-9 && fabs(q[1] - p[1]) < 1e-9))
+                fail_msg("(%g, %g) -> (%g, %g, %g) -> (%g, %g)", p[0], p[1], d[0], d[1], d[2], q[0], q[1]);
+        }
+}
+
+/* An image whose pixels say on which side of the light-space axes their centre direction
+ * lies: red x > 0, green y > 0, blue z > 0. Square: pbrt-v4's equal-area layout; else
+ * pbrt-v3's equirectangular one (+z up, phi = atan2(y, x) from the left column). */
+static void write_sides_image(const char *path, int w, int h)
+{
+    float *px = malloc(3u * (size_t)w * (size_t)h * sizeof *px);
+    assert_non_null(px);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double d[3], uv[2] = {(x + 0.5) / w, (y + 0.5) / h};
+            if (w == h) {
+                pbrt_equal_area_square_to_sphere(uv, d);
+            } else {
+                double th = 3.14159265358979 * uv[1], ph = 2.0 * 3.14159265358979 * uv[0];
+                d[0] = sin(th) * cos(ph);
+                d[1] = sin(th) * sin(ph);
+                d[2] = cos(th);
+            }
+            float *p = &px[3 * ((size_t)y * (size_t)w + (size_t)x)];
+            p[0] = d[0] > 0.0 ? 1.0f : 0.0f;
+            p[1] = d[1] > 0.0 ? 1.0f : 0.0f;
+            p[2] = d[2] > 0.0 ? 1.0f : 0.0f;
+        }
+    CstError err;
+    if (image_write(path, px, w, h, &err) != CST_OK) fail_msg("%s", err.msg);
+    free(px);
+}
+
+static Scene *load_file_scene(const char *text, Warnings *w)
+{
+    CstScene *s = NULL;
+    CstError err;
+    CstLoadOptions opt = {collect, w, 0};
+    if (cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    return s;
+}
+
+/* Checks the environment at the 8 directions (+-0.6, +-0.6, +-0.53): away from every axis
+ * plane by at least 30 degrees, far more than a pixel. `map` gives, per light axis, the
+ * world component (0 x, 1 y, 2 z) and its sign. */
+static void check_sides(const EnvMap *env, const int map[3][2], float k)
+{
+    for (int i = 0; i < 8; i++) {
+        Vec3 wv = v3_normalize(v3(i & 1 ? 0.6f : -0.6f, i & 2 ? 0.6f : -0.6f, i & 4 ? 0.53f : -0.53f));
+        float c[3] = {wv.x, wv.y, wv.z};
+        Rgb got = envmap_eval(env, wv);
+        float want[3];
+        for (int a = 0; a < 3; a++) want[a] = (float)map[a][1] * c[map[a][0]] > 0.0f ? k : 0.0f;
+        if (got.r != want[0] || got.g != want[1] || got.b != want[2])
+            fail_msg("direction (%g, %g, %g): (%g, %g, %g), expected (%g, %g, %g)", (double)wv.x,
+                     (double)wv.y, (double)wv.z, (double)got.r, (double)got.g, (double)got.b,
+                     (double)want[0], (double)want[1], (double)want[2]);
+    }
+}
+
+/* LightSource "infinite": constant (L, scale, illuminance), images through the light's
+ * transform, one environment only, malformed variants. */
+static void test_infinite_lights(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD("LightSource \"infinite\" \"rgb L\" [1 2 3] \"float scale\" 2\n"
+                               "LightSource \"infinite\" \"rgb L\" [5 5 5]\n" TRI), &w);
+    assert_non_null(s->env);
+    assert_null(s->env->rgb);
+    assert_true(s->env->scale.r == 2.0f && s->env->scale.g == 4.0f && s->env->scale.b == 6.0f);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\": caustic has one environment") >= 0);
+    cst_scene_destroy(s);
+    /* illuminance E: a uniform sky of radiance L gives pi L on an upward patch, so L E / pi */
+    s = expect_ok(WORLD("LightSource \"infinite\" \"float illuminance\" 10\n" TRI), NULL);
+    assert_true(s->env->scale.g == (float)(10.0 / 3.14159265358979323846));
+    cst_scene_destroy(s);
+
+    /* a square (equal-area) image under pbrt's usual "Rotate -90 1 0 0": light +z is world
+     * +y, light +y is world -z */
+    write_sides_image(CST_BINARY_DIR "/pbrt_env_sq.pfm", 64, 64);
+    memset(&w, 0, sizeof w);
+    s = load_file_scene(WORLD("AttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" "
+                              "\"string filename\" \"pbrt_env_sq.pfm\" \"float scale\" 2\nAttributeEnd\n" TRI), &w);
+    assert_non_null(s->env->rgb);
+    assert_int_equal(s->env->width, 128);
+    assert_int_equal(s->env->height, 64);
+    assert_int_equal(w.n, 0);
+    static const int rot[3][2] = {{0, 1}, {2, -1}, {1, 1}};
+    check_sides(s->env, rot, 2.0f);
+    cst_scene_destroy(s);
+    /* untransformed; "illuminance" 1 divides by pbrt-v4's measure of the map, sum of
+     * L cos theta times 2 pi / N^2 over the upper pixels: half the illuminance, here
+     * 0.5 pi (0.5 (0.2126 + 0.7152) + 0.0722) up to the pixels' discretisation */
+    s = load_file_scene(WORLD("LightSource \"infinite\" \"string filename\" \"pbrt_env_sq.pfm\" "
+                              "\"float illuminance\" 1\n" TRI), &w);
+    const double half_e = 0.5 * 3.14159265358979 * (0.5 * (0.2126 + 0.7152) + 0.0722);
+    float k = s->env->scale.r;
+    if (!(fabs((double)k * half_e - 1.0) < 0.02)) fail_msg("illuminance scale %g, expected about %g", (double)k, 1.0 / half_e);
+    static const int ident[3][2] = {{0, 1}, {1, 1}, {2, 1}};
+    check_sides(s->env, ident, k);
+    cst_scene_destroy(s);
+    /* a non-square image: pbrt-v3's equirectangular layout, with a warning */
+    write_sides_image(CST_BINARY_DIR "/pbrt_env_ll.pfm", 32, 16);
+    memset(&w, 0, sizeof w);
+    s = load_file_scene(WORLD("LightSource \"infinite\" \"string filename\" \"pbrt_env_ll.pfm\"\n" TRI), &w);
+    assert_int_equal(s->env->width, 32);
+    assert_int_equal(s->env->height, 16);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "is 32 x 16, not square") >= 0);
+    check_sides(s->env, ident, 1.0f);
+    cst_scene_destroy(s);
+
+    expect_error(WORLD("LightSource \"infinite\" \"rgb L\" [1 1 1] \"string filename\" \"sky.exr\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"string filename\"", 0, "both \"L\" and \"filename\"");
+    expect_error(WORLD("LightSource \"infinite\" \"string filename\" \"sky.exr\"\n" TRI),
+                 CST_ERR_UNSUPPORTED, "\"string filename\"", 0, "file access is disabled");
+    expect_error(WORLD("LightSource \"infinite\" \"float scale\" -1\n" TRI), CST_ERR_INVALID_ARG,
+                 "LightSource", 0, "scale -1");
+    expect_error(WORLD("LightSource \"infinite\" \"rgb L\" [1 1]\n" TRI), CST_ERR_INVALID_ARG,
+                 "\"rgb L\"", 0, NULL);
+}
+
 /* ------------------------------------------------------------------ shapes */
 
 /* point, spot and distant lights as delta lights, placed by the CTM, with pbrt's power and
@@ -1137,6 +1281,55 @@ static void test_cornell_pbrt_equals_json(void **state)
     cst_scene_destroy(pbrt);
 }
 
+/* A diffuse sphere under a constant sky: the pbrt file (LightSource "infinite") and the
+ * JSON scene ("environment") render the same film bit for bit. */
+static void test_env_sphere_pbrt_equals_json(void **state)
+{
+    (void)state;
+    const char *json_text =
+        "{\"film\": {\"width\": 32, \"height\": 24, \"filter\": \"box\"},\n"
+        " \"camera\": {\"type\": \"pinhole\", \"position\": [0, 0, -4], \"look_at\": [0, 0, 0],\n"
+        "            \"up\": [0, 1, 0], \"fov\": 40},\n"
+        " \"integrator\": {\"type\": \"path\", \"max_depth\": 5},\n"
+        " \"materials\": {\"m\": {\"type\": \"diffuse\", \"albedo\": [0.5, 0.6, 0.7]}},\n"
+        " \"shapes\": [{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1, \"material\": \"m\"}],\n"
+        " \"environment\": {\"radiance\": [0.8, 0.9, 1.0]}}\n";
+    const char *pbrt_text =
+        "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 24\n"
+        "PixelFilter \"box\"\nIntegrator \"path\" \"integer maxdepth\" 5\n"
+        "Scale -1 1 1\nLookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n"
+        "WorldBegin\nLightSource \"infinite\" \"rgb L\" [0.8 0.9 1.0]\n"
+        "Material \"diffuse\" \"rgb reflectance\" [0.5 0.6 0.7]\nShape \"sphere\" \"float radius\" 1\n";
+    FILE *f = fopen(CST_BINARY_DIR "/pbrt_env_sphere.json", "w");
+    assert_non_null(f);
+    fputs(json_text, f);
+    fclose(f);
+    CstScene *json = NULL, *pbrt = NULL;
+    CstError err;
+    Warnings w = {0};
+    if (cst_scene_load_json(CST_BINARY_DIR "/pbrt_env_sphere.json", &json, &err) != CST_OK) fail_msg("%s", err.msg);
+    if (load_w(pbrt_text, &pbrt, &err, &w) != CST_OK) fail_msg("%s", err.msg);
+    if (w.n) fail_msg("unexpected warning: %s", w.msg[0]);
+    /* the same pinhole (the focus distance, unused without a lens, differs) */
+    assert_memory_equal(&pbrt->camera, &json->camera, offsetof(CameraDesc, focus_distance));
+    assert_true(pbrt->camera.aperture_radius == 0.0f && pbrt->camera.ortho_height == json->camera.ortho_height);
+    assert_false(pbrt->camera_mirror);
+    assert_memory_equal(&pbrt->env->scale, &json->env->scale, sizeof(Rgb));
+    CstRenderSettings a = {0}, b = {0};
+    cst_render_settings_resolve(json, NULL, &a);
+    cst_render_settings_resolve(pbrt, NULL, &b);
+    assert_true(a.max_depth == b.max_depth && a.rr_depth == b.rr_depth && a.filter == b.filter);
+    Film *fa = render_small(json, 32, 24, 16), *fb = render_small(pbrt, 32, 24, 16);
+    assert_true(films_identical(fa, fb));
+    double c[3]; /* the sky is seen around the sphere */
+    cst_film_pixel(fb, 0, 0, c);
+    assert_true(c[2] > 0.9 && c[2] < 1.1);
+    film_destroy(fa);
+    film_destroy(fb);
+    cst_scene_destroy(json);
+    cst_scene_destroy(pbrt);
+}
+
 /* Red minus green in the left and right thirds of the image. */
 static void red_sides(const Film *f, double *left, double *right)
 {
@@ -1200,6 +1393,8 @@ int main(void)
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_lights),
         cmocka_unit_test(test_delta_lights),
+        cmocka_unit_test(test_equal_area_map),
+        cmocka_unit_test(test_infinite_lights),
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_plymesh),
         cmocka_unit_test(test_other_directives),
@@ -1210,6 +1405,7 @@ int main(void)
         cmocka_unit_test(test_camera_and_options),
         cmocka_unit_test(test_orthographic_camera),
         cmocka_unit_test(test_cornell_pbrt_equals_json),
+        cmocka_unit_test(test_env_sphere_pbrt_equals_json),
         cmocka_unit_test(test_cornell_handedness),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
