@@ -2474,6 +2474,7 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
     TRY(get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
     TRY(get_float(ld, ps, d, "illuminance", 0.0f, &illum, NULL));
     TRY(get_string(ld, ps, d, "filename", &file, &fl));
+    if (file && !file[0]) file = NULL; /* pbrt: an empty name is no image */
     TRY(lookup(ld, ps, d, "portal", M(PT_POINT3), "point3", &pp));
     if (pp)
         warn_at(ld, CST_WARN_PARAMETER_IGNORED, pp->loc, "%s: \"portal\" is not supported; the "
