@@ -1421,8 +1421,9 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             m->albedo = rgb_add(rgb_scale(ma.albedo, 1.0f - amount), rgb_scale(mb.albedo, amount));
         } else {
             *m = amount < 0.5f ? ma : mb;
-            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of different kinds approximated by the "
-                    "one with the larger weight, \"%s\"", d, clip(p->strs[amount < 0.5f ? 0 : 1], nm));
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of materials that do not blend into one "
+                    "(two diffuse or two mirrors would) approximated by the one with the larger "
+                    "weight, \"%s\"", d, clip(p->strs[amount < 0.5f ? 0 : 1], nm));
         }
     } else if (strcmp(type, "measured") == 0 || strcmp(type, "hair") == 0 ||
                strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
