@@ -34,9 +34,6 @@
 #define PBRT_DISK_SEGMENTS 128
 #define PBRT_SPHERE_SEGMENTS 64
 #define PBRT_SPHERE_RINGS 32
-/* Above this microfacet alpha a rough conductor looks more like a diffuse surface of the
- * same colour than like a mirror (pbrt-v4's alpha = sqrt(roughness) when remapped). */
-#define PBRT_ROUGH_AS_DIFFUSE_ALPHA 0.3f
 #define PBRT_PI 3.14159265358979323846 /* double; PBRT_PI is a float */
 
 #define TRY(expr)                         \
@@ -158,6 +155,7 @@ typedef struct CamRec {
     float frame;
     int has_frame;
     float lens_radius, focal_distance;
+    int ortho; /* Camera "orthographic" */
     Loc loc;
 } CamRec;
 
@@ -190,6 +188,7 @@ typedef struct Loader {
     int in_world;
     int active_start; /* ActiveTransform includes StartTime: transforms apply */
     CamRec cam;
+    int env_set; /* an infinite light has made the scene's environment */
     int num_instances_expanded; /* instances whose spheres were copied */
     Loc end; /* end of the main file, for errors about the whole scene */
 } Loader;
@@ -802,34 +801,51 @@ Rgb pbrt_spectrum_rgb(const double *pairs, int num_pairs, bool illuminant)
     return rgb_from_d(c);
 }
 
-/* Indices of refraction (eta) and extinction (k) of pbrt-v4's named metals, at about 650,
- * 550 and 450 nm, from the measured data pbrt ships (Palik; for MgO and TiO2, dielectrics,
- * k = 0 and a typical visible eta). */
-static const struct { const char *name; float eta[3], k[3]; } PBRT_METALS[] = {
-    {"Ag", {0.155f, 0.117f, 0.138f}, {4.828f, 3.122f, 2.147f}},
-    {"Al", {1.657f, 0.880f, 0.521f}, {9.224f, 6.270f, 4.837f}},
-    {"Au", {0.143f, 0.375f, 1.442f}, {3.983f, 2.386f, 1.603f}},
-    {"Cu", {0.200f, 0.924f, 1.102f}, {3.913f, 2.453f, 2.142f}},
-    {"CuZn", {0.444f, 0.527f, 1.094f}, {3.695f, 2.765f, 1.829f}},
-    {"MgO", {1.732f, 1.738f, 1.750f}, {0.0f, 0.0f, 0.0f}},
-    {"TiO2", {2.58f, 2.66f, 2.87f}, {0.0f, 0.0f, 0.0f}},
+/* pbrt-v4's named metals "metal-<X>-eta" / "-k". Gold, silver, copper and aluminium are
+ * caustic's cited presets (material_metal, materials/material.c). The other three are RGB
+ * readings at about 650, 550 and 450 nm of the sampled data pbrt ships (CuZn: brass; MgO
+ * and TiO2 are dielectrics, k = 0; MgO's n agrees with Stephens & Malitson, J. Res. NBS
+ * 49, 249 (1952), n = 1.7355 at 589 nm); get_spectrum reports them as approximated. */
+static const struct { const char *name, *preset; float eta[3], k[3]; } PBRT_METALS[] = {
+    {"Ag", "silver", {0}, {0}},
+    {"Al", "aluminium", {0}, {0}},
+    {"Au", "gold", {0}, {0}},
+    {"Cu", "copper", {0}, {0}},
+    {"CuZn", NULL, {0.444f, 0.527f, 1.094f}, {3.695f, 2.765f, 1.829f}},
+    {"MgO", NULL, {1.732f, 1.738f, 1.750f}, {0.0f, 0.0f, 0.0f}},
+    {"TiO2", NULL, {2.58f, 2.66f, 2.87f}, {0.0f, 0.0f, 0.0f}},
 };
+
+/* The table entry of a named metal spectrum, with is_k set for "-k"; -1 if unknown. */
+static int named_metal_index(const char *name, int *is_k)
+{
+    if (strncmp(name, "metal-", 6) != 0) return -1;
+    const char *m = name + 6;
+    for (int i = 0; i < (int)(sizeof PBRT_METALS / sizeof PBRT_METALS[0]); i++) {
+        size_t n = strlen(PBRT_METALS[i].name);
+        if (strncmp(m, PBRT_METALS[i].name, n) == 0 && m[n] == '-') {
+            if (strcmp(m + n, "-eta") == 0) *is_k = 0;
+            else if (strcmp(m + n, "-k") == 0) *is_k = 1;
+            else return -1;
+            return i;
+        }
+    }
+    return -1;
+}
 
 bool pbrt_named_metal(const char *name, Rgb *out)
 {
-    if (strncmp(name, "metal-", 6) != 0) return false;
-    const char *m = name + 6;
-    for (size_t i = 0; i < sizeof PBRT_METALS / sizeof PBRT_METALS[0]; i++) {
-        size_t n = strlen(PBRT_METALS[i].name);
-        if (strncmp(m, PBRT_METALS[i].name, n) == 0 && m[n] == '-') {
-            const float *v = strcmp(m + n, "-eta") == 0 ? PBRT_METALS[i].eta
-                             : strcmp(m + n, "-k") == 0 ? PBRT_METALS[i].k : NULL;
-            if (!v) return false;
-            *out = rgb(v[0], v[1], v[2]);
-            return true;
-        }
+    int is_k = 0, i = named_metal_index(name, &is_k);
+    if (i < 0) return false;
+    if (PBRT_METALS[i].preset) {
+        Rgb eta, k;
+        material_metal(PBRT_METALS[i].preset, &eta, &k);
+        *out = is_k ? k : eta;
+        return true;
     }
-    return false;
+    const float *v = is_k ? PBRT_METALS[i].k : PBRT_METALS[i].eta;
+    *out = rgb(v[0], v[1], v[2]);
+    return true;
 }
 
 static float r0_channel(float n, float k)
@@ -914,8 +930,13 @@ static CstStatus get_spectrum(Loader *ld, Params *ps, const char *d, const char 
         if (p->num_strs) {
             const char *s = p->strs[0];
             float eta = 0.0f;
-            if (pbrt_named_metal(s, &c)) {
-                /* eta/k as RGB: exact enough for a normal-incidence reflectance */
+            int is_k = 0, mi = named_metal_index(s, &is_k);
+            if (mi >= 0) {
+                pbrt_named_metal(s, &c);
+                if (!PBRT_METALS[mi].preset)
+                    warn_at(ld, CST_WARN_APPROXIMATED, p->loc,
+                            "%s: \"%s\" taken as the RGB (%g, %g, %g) of its spectrum at about "
+                            "650, 550 and 450 nm", d, clip(s, nm), (double)c.r, (double)c.g, (double)c.b);
             } else if (named_glass(s, &eta)) {
                 c = rgb_s(eta);
                 warn_at(ld, CST_WARN_APPROXIMATED, p->loc,
@@ -1151,53 +1172,122 @@ static int find_named_material(Loader *ld, const char *name)
     return -1;
 }
 
+/* pbrt's roughness parameters (names after `prefix`: "", "conductor." or "interface.") as
+ * caustic's perceptual roughness. pbrt-v4's GGX width is alpha = sqrt(roughness) when
+ * remaproughness is true, its default (TrowbridgeReitzDistribution::RoughnessToAlpha),
+ * else alpha = roughness; caustic's is alpha = r^2 (material.h), so r = sqrt(alpha), and
+ * below alpha 1e-3 both render the smooth delta lobes. Anisotropic widths become their
+ * geometric mean sqrt(alpha_u alpha_v): GGX's density of normals along the macro normal is
+ * 1 / (pi alpha_u alpha_v), so the isotropic lobe keeps that peak and the lobe's solid angle. */
+static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc,
+                                float *out)
+{
+    char n_r[64], n_u[64], n_v[64];
+    snprintf(n_r, sizeof n_r, "%sroughness", prefix);
+    snprintf(n_u, sizeof n_u, "%suroughness", prefix);
+    snprintf(n_v, sizeof n_v, "%svroughness", prefix);
+    float r = 0.0f, ur = 0.0f, vr = 0.0f;
+    int remap = 1;
+    TRY(get_float_tex(ld, ps, d, n_r, 0.0f, &r, NULL));
+    TRY(get_float_tex(ld, ps, d, n_u, r, &ur, NULL));
+    TRY(get_float_tex(ld, ps, d, n_v, r, &vr, NULL));
+    TRY(get_bool(ld, ps, d, "remaproughness", 1, &remap));
+    if (!(ur >= 0.0f) || !(vr >= 0.0f)) {
+        Param *p = find_param(ps, !(ur >= 0.0f) ? n_u : n_v);
+        if (!p) p = find_param(ps, n_r);
+        return fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc, "%s: roughness %g is negative; "
+                       "expected a roughness >= 0", d, (double)(!(ur >= 0.0f) ? ur : vr));
+    }
+    float au = remap ? sqrtf(ur) : ur, av = remap ? sqrtf(vr) : vr;
+    float alpha = au;
+    if (au != av) {
+        alpha = sqrtf(au * av);
+        warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: anisotropic roughness (alpha %g along u, %g "
+                "along v) approximated as isotropic with their geometric mean, alpha %g", d,
+                (double)au, (double)av, (double)alpha);
+    }
+    *out = sqrtf(alpha);
+    if (*out > 1.0f) {
+        warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: GGX alpha %g is beyond caustic's roughest "
+                "(alpha 1); rendered with alpha 1", d, (double)alpha);
+        *out = 1.0f;
+    }
+    return CST_OK;
+}
+
+/* A conductor (pbrt-v4 ConductorMaterial): complex IOR from eta and k (default copper), or
+ * from "reflectance" as pbrt-v4 converts it: eta = 1, k = 2 sqrt(R) / sqrt(1 - R) with R
+ * clamped to [0, 0.9999], whose normal-incidence Fresnel reflectance ((n-1)^2 + k^2) /
+ * ((n+1)^2 + k^2) = k^2 / (4 + k^2) is exactly R. coatedconductor reads the same with
+ * prefix "conductor." (its reflectance keeps the plain name). */
 static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc,
                            Material *m)
 {
-    char n_eta[64], n_k[64], n_refl[64];
+    char n_eta[64], n_k[64], nm[72];
     snprintf(n_eta, sizeof n_eta, "%seta", prefix);
     snprintf(n_k, sizeof n_k, "%sk", prefix);
-    snprintf(n_refl, sizeof n_refl, "%sreflectance", prefix);
     Rgb eta, k, refl = rgb_s(0.0f);
-    pbrt_named_metal("metal-Cu-eta", &eta); /* pbrt's default conductor is copper */
-    pbrt_named_metal("metal-Cu-k", &k);
+    material_metal("copper", &eta, &k); /* pbrt's default conductor is copper */
+    Param *pe = find_param(ps, n_eta), *pk = find_param(ps, n_k), *pr = find_param(ps, "reflectance");
+    if (pr && (pe || pk))
+        return fail_at(ld, CST_ERR_INVALID_ARG, pr->loc, "%s: \"reflectance\" given with \"%s\"; "
+                       "expected either reflectance or eta and k (as pbrt-v4)", d,
+                       clip(pe ? pe->decl : pk->decl, nm));
     int has_refl = 0;
-    float eta_f = 0.0f;
-    Param *pe = find_param(ps, n_eta);
     if (pe && pe->type == PT_FLOAT) { /* pbrt-v4 also takes a plain float eta */
+        float eta_f = 1.0f;
         TRY(get_float(ld, ps, d, n_eta, 1.0f, &eta_f, NULL));
+        if (!(eta_f >= 0.0f))
+            return fail_at(ld, CST_ERR_INVALID_ARG, pe->loc, "%s: eta %g is negative; expected "
+                           "the real part of a conductor's index of refraction, >= 0", d, (double)eta_f);
         eta = rgb_s(eta_f);
     } else {
         TRY(get_spectrum(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, NULL));
     }
     TRY(get_spectrum(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL));
-    TRY(get_spectrum(ld, ps, d, n_refl, SPEC_REFLECTANCE, 1, &refl, &has_refl));
-    float r = 0.0f, ur = 0.0f, vr = 0.0f;
-    int remap = 1;
-    TRY(get_float_tex(ld, ps, d, "roughness", 0.0f, &r, NULL));
-    TRY(get_float_tex(ld, ps, d, "uroughness", r, &ur, NULL));
-    TRY(get_float_tex(ld, ps, d, "vroughness", r, &vr, NULL));
-    TRY(get_bool(ld, ps, d, "remaproughness", 1, &remap));
-    float rough = maxf(maxf(ur, vr), 0.0f);
-    float alpha = remap ? sqrtf(rough) : rough; /* pbrt-v4 RoughnessToAlpha */
-    m->albedo = has_refl ? refl : pbrt_conductor_r0(eta, k);
-    m->ior = 1.0f;
-    if (!(alpha > 0.0f)) {
-        m->type = MATERIAL_MIRROR;
-    } else if (alpha <= PBRT_ROUGH_AS_DIFFUSE_ALPHA) {
-        m->type = MATERIAL_MIRROR;
-        warn_at(ld, CST_WARN_APPROXIMATED, loc,
-                "%s: rough conductor (alpha %g) approximated as a perfect mirror with its "
-                "normal-incidence reflectance (%.3g, %.3g, %.3g)", d, (double)alpha,
-                (double)m->albedo.r, (double)m->albedo.g, (double)m->albedo.b);
-    } else {
-        m->type = MATERIAL_DIFFUSE;
-        warn_at(ld, CST_WARN_APPROXIMATED, loc,
-                "%s: very rough conductor (alpha %g > %g) approximated as diffuse with its "
-                "normal-incidence reflectance (%.3g, %.3g, %.3g)", d, (double)alpha,
-                (double)PBRT_ROUGH_AS_DIFFUSE_ALPHA, (double)m->albedo.r, (double)m->albedo.g,
-                (double)m->albedo.b);
+    TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &refl, &has_refl));
+    if (has_refl) {
+        float r[3] = {refl.r, refl.g, refl.b}, kk[3];
+        for (int i = 0; i < 3; i++) {
+            float c = clampf(r[i], 0.0f, 0.9999f);
+            kk[i] = 2.0f * sqrtf(c) / sqrtf(1.0f - c);
+        }
+        eta = rgb_s(1.0f);
+        k = rgb(kk[0], kk[1], kk[2]);
     }
+    m->type = MATERIAL_CONDUCTOR;
+    m->albedo = rgb_s(1.0f);
+    m->ior = 1.0f;
+    m->eta = eta;
+    m->k = k;
+    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness);
+}
+
+/* Layer parameters of pbrt-v4's coated materials that caustic's closed-form coat does not
+ * have: a warning for each given with other than pbrt's default (a non-absorbing layer of
+ * any thickness, isotropic phase); the random walk's maxdepth and nsamples are read
+ * silently. */
+static CstStatus coat_layer_params(Loader *ld, Params *ps, const char *d)
+{
+    static const struct { const char *name; float def; } skip[] = {{"thickness", 0.01f}, {"g", 0.0f}};
+    for (size_t i = 0; i < sizeof skip / sizeof skip[0]; i++) {
+        float v = skip[i].def;
+        int found = 0;
+        TRY(get_float_tex(ld, ps, d, skip[i].name, skip[i].def, &v, &found));
+        if (found && v != skip[i].def)
+            warn_at(ld, CST_WARN_PARAMETER_IGNORED, find_param(ps, skip[i].name)->loc,
+                    "%s: \"%s\" %g is not supported (caustic's coat is an interface without a "
+                    "scattering layer); ignored", d, skip[i].name, (double)v);
+    }
+    Rgb albedo = rgb_s(0.0f);
+    int found = 0;
+    TRY(get_spectrum(ld, ps, d, "albedo", SPEC_REFLECTANCE, 1, &albedo, &found));
+    if (found && rgb_max(albedo) > 0.0f)
+        warn_at(ld, CST_WARN_PARAMETER_IGNORED, find_param(ps, "albedo")->loc,
+                "%s: a scattering layer (\"albedo\" > 0) is not supported; ignored", d);
+    int n = 0;
+    TRY(get_int(ld, ps, d, "maxdepth", 10, &n));
+    TRY(get_int(ld, ps, d, "nsamples", 1, &n));
     return CST_OK;
 }
 
@@ -1227,21 +1317,40 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
 {
     char d[96], nm[72];
     snprintf(d, sizeof d, "material \"%s\"", clip(type, nm));
-    /* Every field caustic's Material has beyond the three set here (roughness, one_sided,
-     * the derived plastic tables) keeps its zero default. */
+    /* Fields a mapping does not set keep their zero defaults. one_sided stays false: pbrt-v4's
+     * reflective BxDFs (diffuse, conductor, coated) reflect on both sides of a surface, as
+     * caustic's two-sided default does. */
     memset(m, 0, sizeof *m);
     m->type = MATERIAL_DIFFUSE;
     m->albedo = rgb_s(0.5f);
     m->ior = 1.0f;
-    float rough = 0.0f;
     if (strcmp(type, "diffuse") == 0) {
         TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
     } else if (strcmp(type, "matte") == 0) { /* pbrt-v3 */
         TRY(get_spectrum(ld, ps, d, "Kd", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
-    } else if (strcmp(type, "coateddiffuse") == 0 || strcmp(type, "diffusetransmission") == 0) {
+    } else if (strcmp(type, "coateddiffuse") == 0) {
+        /* caustic's plastic: the same interface over a Lambertian base, with the light
+         * between them in closed form (bsdf.c) instead of pbrt's random walk. */
+        m->type = MATERIAL_PLASTIC;
+        m->ior = 1.5f;
+        TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
+        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness));
+        TRY(coat_layer_params(ld, ps, d));
+        if (m->ior < 1.0f) {
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: coat eta %g below 1 rendered as 1 (no coat)",
+                    d, (double)m->ior);
+            m->ior = 1.0f;
+        }
+        warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by caustic's plastic (reflectance "
+                "%g %g %g, eta %g, roughness %g): the light between coat and base is modelled in "
+                "closed form (Kelemen & Szirmay-Kalos 2001), not by pbrt's random walk", d,
+                (double)m->albedo.r, (double)m->albedo.g, (double)m->albedo.b, (double)m->ior,
+                (double)m->roughness);
+    } else if (strcmp(type, "diffusetransmission") == 0) {
         TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its reflectance "
-                "(%s dropped)", d, type[0] == 'c' ? "the specular coating is" : "transmission is");
+                "(transmission is dropped)", d);
     } else if (strcmp(type, "plastic") == 0 || strcmp(type, "substrate") == 0 ||
                strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 ||
                strcmp(type, "disney") == 0) { /* pbrt-v3 */
@@ -1254,8 +1363,13 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         TRY(conductor(ld, ps, d, "", loc, m));
     } else if (strcmp(type, "coatedconductor") == 0) {
         TRY(conductor(ld, ps, d, "conductor.", loc, m));
+        /* The coat's parameters are read so that only the layer's unsupported ones warn. */
+        float coat_rough = 0.0f, coat_eta = 1.5f;
+        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &coat_rough));
+        TRY(dielectric_eta(ld, ps, d, "interface.eta", &coat_eta));
+        TRY(coat_layer_params(ld, ps, d));
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as its conductor (the "
-                "dielectric coating is dropped)", d);
+                "dielectric coating, eta %g, is dropped)", d, (double)coat_eta);
     } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
         m->type = MATERIAL_MIRROR;
         m->albedo = rgb_s(0.9f);
@@ -1267,18 +1381,16 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->ior = 1.5f;
         TRY(dielectric_eta(ld, ps, d, strcmp(type, "glass") == 0 && find_param(ps, "index") ? "index" : "eta",
                            &m->ior));
-        if (strcmp(type, "thindielectric") == 0)
+        if (strcmp(type, "thindielectric") == 0) {
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as a solid dielectric (glass) "
                     "of the same eta: rays refract at its surface instead of passing straight through", d);
-        float ur = 0.0f, vr = 0.0f;
-        TRY(get_float_tex(ld, ps, d, "roughness", 0.0f, &rough, NULL));
-        TRY(get_float_tex(ld, ps, d, "uroughness", rough, &ur, NULL));
-        TRY(get_float_tex(ld, ps, d, "vroughness", rough, &vr, NULL));
-        int remap = 1;
-        TRY(get_bool(ld, ps, d, "remaproughness", 1, &remap));
-        if (maxf(ur, vr) > 0.0f)
-            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: roughness %g approximated as smooth glass",
-                    d, (double)maxf(ur, vr));
+        } else {
+            /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
+             * DielectricBxDF; below alpha 1e-3 both are smooth. */
+            TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness));
+            if (material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA) m->type = MATERIAL_DIELECTRIC;
+            else m->roughness = 0.0f;
+        }
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 || strcmp(type, "none") == 0) {
         m->type = MATERIAL_GLASS;
         m->albedo = rgb_s(1.0f);
@@ -1300,15 +1412,18 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         TRY(get_float_tex(ld, ps, d, "amount", 0.5f, &amount, NULL));
         amount = clampf(amount, 0.0f, 1.0f);
         Material ma = ld->mats[a].m, mb = ld->mats[b].m;
-        if (ma.type == mb.type && ma.type != MATERIAL_GLASS) {
+        if (ma.type == mb.type && (ma.type == MATERIAL_DIFFUSE || ma.type == MATERIAL_MIRROR) &&
+            ma.one_sided == mb.one_sided) {
             /* Choosing one of two Lambertian (or two mirror) lobes with probability amount
-             * is the same lobe with the blended albedo: exact. */
+             * is the same lobe with the blended albedo: exact. (Conductors, plastics and
+             * dielectrics are not linear in a single albedo.) */
             *m = ma;
             m->albedo = rgb_add(rgb_scale(ma.albedo, 1.0f - amount), rgb_scale(mb.albedo, amount));
         } else {
             *m = amount < 0.5f ? ma : mb;
-            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of different kinds approximated by the "
-                    "one with the larger weight, \"%s\"", d, clip(p->strs[amount < 0.5f ? 0 : 1], nm));
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of materials that do not blend into one "
+                    "(two diffuse or two mirrors would) approximated by the one with the larger "
+                    "weight, \"%s\"", d, clip(p->strs[amount < 0.5f ? 0 : 1], nm));
         }
     } else if (strcmp(type, "measured") == 0 || strcmp(type, "hair") == 0 ||
                strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
@@ -2087,9 +2202,10 @@ static CstStatus camera_directive(Loader *ld, Lexer *lx, Loc loc)
         st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "Camera after WorldBegin; expected the camera before WorldBegin");
         goto done;
     }
-    if (strcmp(type, "perspective") != 0) {
-        st = fail_at(ld, CST_ERR_UNSUPPORTED, tl, "%s is not supported; expected \"perspective\" "
-                     "(caustic has pinhole and thin-lens cameras only)", d);
+    int ortho = strcmp(type, "orthographic") == 0;
+    if (strcmp(type, "perspective") != 0 && !ortho) {
+        st = fail_at(ld, CST_ERR_UNSUPPORTED, tl, "%s is not supported; expected \"perspective\" or "
+                     "\"orthographic\" (caustic has pinhole, thin-lens and orthographic cameras)", d);
         goto done;
     }
     if (!ld->gs.ctm.inv_ok) {
@@ -2102,8 +2218,10 @@ static CstStatus camera_directive(Loader *ld, Lexer *lx, Loc loc)
     c->set = 1;
     c->ctm = ld->gs.ctm;
     c->loc = loc;
+    c->ortho = ortho;
+    c->fov = 90.0f;
     Param *p;
-    if ((st = get_float(ld, &ps, d, "fov", 90.0f, &c->fov, NULL))) goto done;
+    if (!ortho && (st = get_float(ld, &ps, d, "fov", 90.0f, &c->fov, NULL))) goto done;
     if ((st = get_float(ld, &ps, d, "lensradius", 0.0f, &c->lens_radius, NULL))) goto done;
     if ((st = get_float(ld, &ps, d, "focaldistance", 1e6f, &c->focal_distance, NULL))) goto done;
     if ((st = get_float(ld, &ps, d, "frameaspectratio", 0.0f, &c->frame, &c->has_frame))) goto done;
@@ -2132,6 +2250,13 @@ static CstStatus camera_directive(Loader *ld, Lexer *lx, Loc loc)
                      "frameaspectratio %g; expected lensradius >= 0 and the others > 0", d,
                      (double)c->lens_radius, (double)c->focal_distance, (double)c->frame);
         goto done;
+    }
+    if (ortho && c->lens_radius > 0.0f) {
+        /* pbrt-v4's orthographic camera can have a thin lens; caustic's cannot. */
+        warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: lensradius %g and focaldistance %g ignored: "
+                "caustic's orthographic camera is always in focus", d, (double)c->lens_radius,
+                (double)c->focal_distance);
+        c->lens_radius = 0.0f;
     }
     params_warn_unused(ld, &ps, d);
     /* pbrt names the camera's space "camera": world-from-camera for CoordSysTransform. */
@@ -2191,7 +2316,16 @@ static CstStatus camera_finish(Loader *ld)
         warn_at(ld, CST_WARN_APPROXIMATED, c.loc, "Camera: screen window aspect %g differs from "
                 "the film's %g; the vertical extent is kept and the image is not stretched",
                 half_w / half_h, aspect);
-    if (half_h == 1.0) {
+    if (c.ortho) {
+        /* pbrt's orthographic rays leave the screen window at z = 0 in camera space, so the
+         * view's height is the window's, in camera units scaled into the world. */
+        desc.vfov_deg = 90.0f; /* unused */
+        desc.ortho_height = (float)(2.0 * half_h * (double)v3_length(u));
+        if (!(desc.ortho_height > 0.0f) || !isfinite(desc.ortho_height))
+            return fail_at(ld, CST_ERR_INVALID_ARG, c.loc, "Camera: the orthographic view is %g high; "
+                           "expected a finite height > 0 (from screenwindow and the transform)",
+                           (double)desc.ortho_height);
+    } else if (half_h == 1.0) {
         desc.vfov_deg = c.fov; /* the common case, bit for bit */
     } else {
         double t = tan((double)c.fov * PBRT_PI / 360.0) * half_h;
@@ -2234,19 +2368,214 @@ static CstStatus get_point3(Loader *ld, Params *ps, const char *d, const char *n
     return CST_OK;
 }
 
+/* Clarberg's equal-area octahedral map ("Fast Equal-Area Mapping of the (Hemi)Sphere using
+ * SIMD", JGT 2008), which pbrt-v4 uses for the images of infinite lights
+ * (EqualAreaSphereToSquare / EqualAreaSquareToSphere): the square's centre is +z, its
+ * corners -z, u = 1 is +x and v = 1 is +y; equal areas of the square cover equal solid
+ * angles. Here with the exact arctangent where pbrt uses a polynomial fit of it. */
+void pbrt_equal_area_sphere_to_square(const double d[3], double uv[2])
+{
+    double x = fabs(d[0]), y = fabs(d[1]), z = fabs(d[2]);
+    double r = sqrt(fmax(0.0, 1.0 - z));
+    double a = fmax(x, y), b = fmin(x, y);
+    double phi = atan(a == 0.0 ? 0.0 : b / a) * (2.0 / PBRT_PI);
+    if (x < y) phi = 1.0 - phi;
+    double v = phi * r, u = r - v;
+    if (d[2] < 0.0) {
+        double t = u;
+        u = 1.0 - v;
+        v = 1.0 - t;
+    }
+    uv[0] = 0.5 * (copysign(u, d[0]) + 1.0);
+    uv[1] = 0.5 * (copysign(v, d[1]) + 1.0);
+}
+
+void pbrt_equal_area_square_to_sphere(const double uv[2], double d[3])
+{
+    double u = 2.0 * uv[0] - 1.0, v = 2.0 * uv[1] - 1.0, up = fabs(u), vp = fabs(v);
+    double sd = 1.0 - (up + vp), r = 1.0 - fabs(sd);
+    double phi = (r == 0.0 ? 1.0 : (vp - up) / r + 1.0) * (PBRT_PI / 4.0);
+    double s = r * sqrt(fmax(0.0, 2.0 - r * r));
+    d[0] = copysign(cos(phi), u) * s;
+    d[1] = copysign(sin(phi), v) * s;
+    d[2] = copysign(1.0 - r * r, sd);
+}
+
+/* The pixel of a w x h image (row 0 at the top, as pbrt and image_read store it) that an
+ * infinite light shows in light-space direction d: nearest lookup as pbrt-v4's
+ * ImageInfiniteLight does. Square images use the equal-area map; others pbrt-v3's
+ * equirectangular one (+z up: u = phi / 2 pi, phi = atan2(y, x), v = theta / pi). */
+static size_t env_source_pixel(const double d[3], int w, int h)
+{
+    double uv[2];
+    if (w == h) {
+        pbrt_equal_area_sphere_to_square(d, uv);
+    } else {
+        double phi = atan2(d[1], d[0]);
+        if (phi < 0.0) phi += 2.0 * PBRT_PI;
+        uv[0] = phi / (2.0 * PBRT_PI);
+        uv[1] = acos(fmax(-1.0, fmin(1.0, d[2]))) / PBRT_PI;
+    }
+    int x = (int)(uv[0] * w), y = (int)(uv[1] * h);
+    x = x < 0 ? 0 : x >= w ? w - 1 : x;
+    y = y < 0 ? 0 : y >= h ? h - 1 : y;
+    return (size_t)y * (size_t)w + (size_t)x;
+}
+
+/* pbrt-v4's "illuminance" normaliser of an image light: over the pixels whose direction has
+ * light-space z > 0, the sum of luminance times cos theta, times 2 pi / (number of pixels)
+ * (lights.cpp, Light::Create). A pixel covers 4 pi / (number of pixels) sr, so this is half
+ * the patch's illuminance; kept, so that the image renders as bright as in pbrt. Non-square
+ * (equirectangular) images get the same half from their pixels' solid angles. */
+static double env_illuminance(const float *px, int w, int h)
+{
+    double sum = 0.0;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double d[3], uv[2] = {(x + 0.5) / w, (y + 0.5) / h}, dw;
+            if (w == h) {
+                pbrt_equal_area_square_to_sphere(uv, d);
+                dw = 2.0 * PBRT_PI / ((double)w * h);
+            } else {
+                double th = PBRT_PI * uv[1];
+                d[2] = cos(th);
+                dw = 0.5 * (2.0 * PBRT_PI / w) * (PBRT_PI / h) * sin(th); /* half of the pixel's sr, as above */
+            }
+            if (d[2] <= 0.0) continue;
+            const float *p = &px[3 * ((size_t)y * (size_t)w + (size_t)x)];
+            sum += (0.2126 * (double)p[0] + 0.7152 * (double)p[1] + 0.0722 * (double)p[2]) * d[2] * dw;
+        }
+    return sum;
+}
+
+/* LightSource "infinite": the scene's environment (lights/envmap.h). A constant one is
+ * L x scale, with pbrt-v4's "illuminance" E making it L x scale x E / pi (the illuminance of a
+ * uniform unit sky on an upward patch is pi). An image is resampled once, at load, into
+ * caustic's equirectangular map (+y up, theta = acos(w.y), phi = atan2(w.z, w.x)): each
+ * pixel takes, by nearest lookup, the source pixel its centre direction sees through the
+ * light's transform (light-from-world, so any rotation is exact up to the resampling). A
+ * square source of N x N becomes 2N x N (each new pixel covers at most the solid angle of
+ * a source pixel, pi^2/N^2 against 4 pi/N^2 sr); others keep their size. */
+static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
+{
+    char nm[72];
+    if (ld->env_set) {
+        params_mark_all_used(ps);
+        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: caustic has one environment and an infinite "
+                "light was given before; skipped", d);
+        return CST_OK;
+    }
+    Rgb c = rgb_s(1.0f);
+    float scale = 1.0f, illum = 0.0f;
+    int has_l = 0;
+    const char *file = NULL;
+    Loc fl = loc;
+    Param *pp;
+    TRY(get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &c, &has_l));
+    TRY(get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    TRY(get_float(ld, ps, d, "illuminance", 0.0f, &illum, NULL));
+    TRY(get_string(ld, ps, d, "filename", &file, &fl));
+    if (file && !file[0]) file = NULL; /* pbrt: an empty name is no image */
+    TRY(lookup(ld, ps, d, "portal", M(PT_POINT3), "point3", &pp));
+    if (pp)
+        warn_at(ld, CST_WARN_PARAMETER_IGNORED, pp->loc, "%s: \"portal\" is not supported; the "
+                "environment lights the scene from every direction", d);
+    if (file && has_l)
+        return fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: both \"L\" and \"filename\"; expected one "
+                       "of them (as pbrt-v4)", d);
+    if (!(scale >= 0.0f))
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g; expected a finite scale >= 0", d,
+                       (double)scale);
+    EnvMap env;
+    CstStatus st;
+    if (!file) {
+        double k = (double)scale * (illum > 0.0f ? (double)illum / PBRT_PI : 1.0);
+        Rgb L = rgb_scale(c, (float)k);
+        if (!rgb_is_finite(L))
+            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the radiance is not finite", d);
+        TRY(envmap_init_constant(&env, L, ld->err));
+    } else {
+        if (!ld->gs.ctm.inv_ok)
+            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; "
+                           "expected an invertible transform", d);
+        TRY(check_file_access(ld, fl, d));
+        char *path = resolve_path(ld, file);
+        if (!path) return oom(ld);
+        float *src = NULL;
+        int w = 0, h = 0;
+        st = image_read(path, &src, &w, &h, ld->err);
+        free(path);
+        if (st) return fail_wrap(ld, st, fl, d);
+        size_t n = 3u * (size_t)w * (size_t)h;
+        for (size_t i = 0; i < n; i++)
+            if (!isfinite(src[i])) {
+                free(src);
+                return fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: \"%s\" has infinite or NaN pixels; "
+                               "expected finite radiance (as pbrt-v4)", d, clip(file, nm));
+            }
+        if (w != h)
+            warn_at(ld, CST_WARN_APPROXIMATED, fl, "%s: \"%s\" is %d x %d, not square: pbrt-v4 "
+                    "expects an equal-area (square) image; read as an equirectangular map in "
+                    "pbrt-v3's convention (+z up in light space)", d, clip(file, nm), w, h);
+        double k = (double)scale;
+        if (illum > 0.0f) {
+            double e = env_illuminance(src, w, h);
+            k = e > 0.0 ? k * (double)illum / e : k;
+        }
+        int ow = w == h ? 2 * w : w, oh = h;
+        if (oh > 4096) { /* cap the copy at 8192 x 4096 (400 MB of floats) */
+            ow = (int)((long long)ow * 4096 / oh);
+            oh = 4096;
+        }
+        float *out = malloc(3u * (size_t)ow * (size_t)oh * sizeof *out);
+        if (!out) {
+            free(src);
+            return oom(ld);
+        }
+        const Transform *li = &ld->gs.ctm.inv; /* light-from-world */
+        for (int y = 0; y < oh; y++) {
+            double th = PBRT_PI * (y + 0.5) / oh;
+            for (int x = 0; x < ow; x++) {
+                double ph = 2.0 * PBRT_PI * (x + 0.5) / ow;
+                double wv[3] = {sin(th) * cos(ph), cos(th), sin(th) * sin(ph)}, dl[3], len = 0.0;
+                for (int r = 0; r < 3; r++) {
+                    dl[r] = (double)li->m[r][0] * wv[0] + (double)li->m[r][1] * wv[1] + (double)li->m[r][2] * wv[2];
+                    len += dl[r] * dl[r];
+                }
+                len = sqrt(len);
+                for (int r = 0; r < 3; r++) dl[r] /= len;
+                const float *p = &src[3 * env_source_pixel(dl, w, h)];
+                float *o = &out[3 * ((size_t)y * (size_t)ow + (size_t)x)];
+                for (int ch = 0; ch < 3; ch++) o[ch] = p[ch] > 0.0f ? p[ch] : 0.0f; /* pbrt: ClampZero */
+            }
+        }
+        free(src);
+        if (!isfinite(k))
+            k = 0.0;
+        st = envmap_init_image(&env, out, ow, oh, rgb_s((float)k), ld->err);
+        if (st) return fail_wrap(ld, st, fl, d);
+    }
+    st = scene_set_environment(ld->scene, &env, ld->err);
+    if (st) return fail_wrap(ld, st, loc, d);
+    ld->env_set = 1;
+    return CST_OK;
+}
+
 /* LightSource: point, spot and distant as caustic's delta lights, placed by the CTM, with
  * pbrt-v4's scale and power (phi / 4 pi for a point; phi / (2 pi (1 - (cos_start +
  * cos_end) / 2)) for a spot) and illuminance for a distant light; as for area lights an
  * "rgb" spectrum is used as given and blackbody and sampled spectra are normalised to
- * luminance 1 first. Others are skipped with a warning. */
+ * luminance 1 first. "infinite" becomes the environment (infinite_light); others are
+ * skipped with a warning. */
 static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc, const char *d)
 {
     int point = strcmp(type, "point") == 0, spot = strcmp(type, "spot") == 0,
         distant = strcmp(type, "distant") == 0;
+    if (strcmp(type, "infinite") == 0) return infinite_light(ld, ps, loc, d);
     if (!point && !spot && !distant) {
         params_mark_all_used(ps);
         warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported (caustic has area, point, "
-                "spot and distant lights); skipped", d);
+                "spot, distant and infinite lights); skipped", d);
         return CST_OK;
     }
     DeltaLight l;
@@ -2453,11 +2782,28 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             if (!hx || !hy || rx != 1.0f || ry != 1.0f)
                 warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: rendered as caustic's tent of "
                         "radius 1 pixel (pbrt's default radius is 2)", d);
-        } else if (strcmp(type, "gaussian") == 0 || strcmp(type, "mitchell") == 0 ||
-                   strcmp(type, "sinc") == 0 || strcmp(type, "lanczos") == 0) {
-            rs->filter = CST_FILTER_TENT;
+        } else if (strcmp(type, "gaussian") == 0 || strcmp(type, "mitchell") == 0) {
+            /* caustic's are pbrt-v4's defaults (film/filter.c): Gaussian sigma 0.5 pixel,
+             * radius 1.5, minus its value at the radius; Mitchell radius 2, B = C = 1/3. */
+            int gauss = type[0] == 'g', hs = 0, hb = 0, hc = 0;
+            float def_r = gauss ? 1.5f : 2.0f, sigma = 0.5f, b = 1.0f / 3.0f, c = 1.0f / 3.0f;
+            rs->filter = gauss ? CST_FILTER_GAUSSIAN : CST_FILTER_MITCHELL;
+            if (gauss) {
+                if ((st = get_float(ld, &ps, d, "sigma", 0.5f, &sigma, &hs))) goto done;
+            } else {
+                if ((st = get_float(ld, &ps, d, "B", b, &b, &hb))) goto done;
+                if ((st = get_float(ld, &ps, d, "C", c, &c, &hc))) goto done;
+            }
+            if ((hx && rx != def_r) || (hy && ry != def_r) || (hs && sigma != 0.5f) ||
+                (hb && fabsf(b - 1.0f / 3.0f) > 1e-6f) || (hc && fabsf(c - 1.0f / 3.0f) > 1e-6f))
+                warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: rendered with caustic's %s filter, %s", d,
+                        gauss ? "Gaussian" : "Mitchell", gauss ? "sigma 0.5 and radius 1.5 pixels"
+                        : "B = C = 1/3 and radius 2 pixels");
+        } else if (strcmp(type, "sinc") == 0 || strcmp(type, "lanczos") == 0) {
+            rs->filter = CST_FILTER_MITCHELL;
             params_mark_all_used(&ps);
-            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the tent filter of radius 1 pixel", d);
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the Mitchell filter (B = C = "
+                    "1/3, radius 2 pixels), the nearest caustic has to a windowed sinc", d);
         } else {
             st = fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown pixel filter \"%s\"; expected one of: "
                          "box, triangle, gaussian, mitchell, sinc", clip(type, nm));
@@ -2848,12 +3194,13 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     memcpy(ld.base_dir, name, dl);
     ld.base_dir[dl] = '\0';
     /* pbrt's defaults where they differ from caustic's: a 1280 x 720 film, the volumetric
-     * path tracer with at most 5 bounces (as "path"), a Gaussian filter (as "tent"). */
+     * path tracer with at most 5 bounces (as "path"), the Gaussian filter (sigma 0.5, radius
+     * 1.5: caustic's). */
     ld.scene->settings.width = 1280;
     ld.scene->settings.height = 720;
     ld.scene->settings.integrator = CST_INTEGRATOR_PATH;
     ld.scene->settings.max_depth = 5;
-    ld.scene->settings.filter = CST_FILTER_TENT;
+    ld.scene->settings.filter = CST_FILTER_GAUSSIAN;
     Material def = {.type = MATERIAL_DIFFUSE, .albedo = rgb_s(0.5f), .ior = 1.0f};
     if ((st = add_mat_entry(&ld, NULL, &def, &ld.gs.material))) goto done;
 

@@ -19,5 +19,9 @@ bool pbrt_named_metal(const char *name, Rgb *out);
 /* Normal-incidence Fresnel reflectance of a conductor, ((n-1)^2 + k^2) / ((n+1)^2 + k^2)
  * per channel. */
 Rgb pbrt_conductor_r0(Rgb eta, Rgb k);
+/* pbrt-v4's equal-area octahedral map between unit directions and [0, 1]^2 (Clarberg 2008),
+ * the layout of infinite lights' images. */
+void pbrt_equal_area_sphere_to_square(const double d[3], double uv[2]);
+void pbrt_equal_area_square_to_sphere(const double uv[2], double d[3]);
 
 #endif

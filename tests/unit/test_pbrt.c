@@ -268,7 +268,7 @@ static void test_semantic_errors(void **state)
                  "after WorldBegin");
     expect_error(TRI, CST_ERR_INVALID_ARG, "Shape", 0, "before WorldBegin");
     expect_error(WORLD("WorldBegin\n"), CST_ERR_INVALID_ARG, "WorldBegin", 1, "second time");
-    expect_error("Camera \"orthographic\"\nWorldBegin\n" TRI, CST_ERR_UNSUPPORTED, "\"orthographic\"",
+    expect_error("Camera \"realistic\"\nWorldBegin\n" TRI, CST_ERR_UNSUPPORTED, "\"realistic\"",
                  0, "not supported");
     expect_error(WORLD("ObjectInstance \"tree\"\n"), CST_ERR_INVALID_ARG, "\"tree\"", 0, "not defined");
     expect_error(WORLD("ObjectEnd\n"), CST_ERR_INVALID_ARG, "ObjectEnd", 0, "without ObjectBegin");
@@ -478,7 +478,11 @@ static void test_colour_conversions(void **state)
     assert_false(pbrt_named_metal("metal-Xx-k", &k));
     assert_false(pbrt_named_metal("metal-Au-kk", &k));
     Rgb r0 = pbrt_conductor_r0(eta, k);
-    assert_true(r0.r > 0.9f && r0.g > 0.7f && r0.g < 0.85f && r0.b < 0.4f); /* gold */
+    assert_true(r0.r > 0.9f && r0.g > 0.7f && r0.g < 0.85f && r0.b < 0.45f); /* gold */
+    Rgb peta, pk;
+    assert_true(material_metal("gold", &peta, &pk)); /* the named spectrum is caustic's preset */
+    assert_memory_equal(&eta, &peta, sizeof eta);
+    assert_memory_equal(&k, &pk, sizeof k);
 }
 
 /* ------------------------------------------------------------------ materials */
@@ -489,11 +493,13 @@ static void test_materials(void **state)
     Warnings w = {0};
     Scene *s = expect_ok(WORLD(
         "Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"\n" TRI /* 0 */
-        "Material \"conductor\" \"float roughness\" 0.01\n" TRI                               /* 1 */
-        "Material \"conductor\" \"float roughness\" 0.5 \"rgb reflectance\" [.9 .6 .3]\n" TRI  /* 2 */
+        "Material \"conductor\" \"float roughness\" 0.0625\n" TRI                             /* 1 */
+        "Material \"conductor\" \"float roughness\" 0.25 \"bool remaproughness\" false "
+        "\"rgb reflectance\" [.9 .6 .3]\n" TRI                                                 /* 2 */
         "Material \"dielectric\" \"float eta\" 1.33\n" TRI                                     /* 3 */
         "Material \"dielectric\" \"spectrum eta\" \"glass-BK7\"\n" TRI                          /* 4 */
-        "Material \"coateddiffuse\" \"rgb reflectance\" [.3 .4 .5]\n" TRI                      /* 5 */
+        "Material \"coateddiffuse\" \"rgb reflectance\" [.3 .4 .5] \"float roughness\" 0.0625 "
+        "\"float eta\" 1.4\n" TRI                                                              /* 5 */
         "MakeNamedMaterial \"a\" \"string type\" \"diffuse\" \"rgb reflectance\" [.2 .2 .2]\n"
         "MakeNamedMaterial \"b\" \"string type\" \"diffuse\" \"rgb reflectance\" [.6 .6 .6]\n"
         "MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string materials\" [\"a\" \"b\"] \"float amount\" 0.25\n"
@@ -505,23 +511,53 @@ static void test_materials(void **state)
         "Material \"thindielectric\"\n" TRI                                                    /* 9 */
         "Material \"hair\"\n" TRI                                                              /* 10 */
         "Material \"diffuse\" \"rgb reflectance\" [2 0.5 -1]\n" TRI                            /* 11 */
-        "Material \"matte\" \"rgb Kd\" [.1 .1 .1]\n" TRI),                                     /* 12: v3 */
+        "Material \"matte\" \"rgb Kd\" [.1 .1 .1]\n" TRI                                       /* 12: v3 */
+        "Material \"dielectric\" \"float roughness\" 0.01\n" TRI                               /* 13 */
+        "Material \"conductor\" \"float uroughness\" 0.25 \"float vroughness\" 0.0625 "
+        "\"bool remaproughness\" false\n" TRI                                                  /* 14 */
+        "Material \"coatedconductor\" \"spectrum conductor.eta\" \"metal-Ag-eta\" \"spectrum conductor.k\" "
+        "\"metal-Ag-k\" \"float conductor.roughness\" 0.0625 \"float interface.roughness\" 0.2 "
+        "\"float thickness\" 0.1\n" TRI                                                        /* 15 */
+        "Material \"conductor\" \"spectrum eta\" \"metal-CuZn-eta\" \"spectrum k\" \"metal-CuZn-k\"\n" TRI /* 16 */
+        "Material \"coateddiffuse\"\n" TRI                                                     /* 17 */
+        "Material \"conductor\" \"float roughness\" 4 \"bool remaproughness\" false\n" TRI     /* 18 */
+        "MakeNamedMaterial \"c1\" \"string type\" \"conductor\"\n"
+        "MakeNamedMaterial \"c2\" \"string type\" \"conductor\" \"rgb reflectance\" [.5 .5 .5]\n"
+        "MakeNamedMaterial \"m3\" \"string type\" \"mix\" \"string materials\" [\"c1\" \"c2\"] \"float amount\" 0.3\n"
+        "NamedMaterial \"m3\"\n" TRI),                                                         /* 19 */
         &w);
-    const Material *m[13];
-    for (int i = 0; i < 13; i++) m[i] = &s->materials[s->tri_info[i].material];
-    assert_int_equal(m[0]->type, MATERIAL_MIRROR);
-    assert_true(m[0]->albedo.r > 0.9f && m[0]->albedo.b < 0.4f);
-    assert_int_equal(m[1]->type, MATERIAL_MIRROR); /* alpha 0.1: near-mirror */
-    assert_true(m[1]->albedo.r > 0.9f && m[1]->albedo.g < 0.7f); /* copper, pbrt's default */
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "rough conductor (alpha 0.1)") >= 0);
-    assert_int_equal(m[2]->type, MATERIAL_DIFFUSE); /* alpha 0.71 */
-    assert_true(m[2]->albedo.r == 0.9f);
+    enum { N = 20 };
+    const Material *m[N];
+    for (int i = 0; i < N; i++) m[i] = &s->materials[s->tri_info[i].material];
+    Rgb eta, k;
+    /* named spectra of the four preset metals are caustic's presets, exactly */
+    assert_int_equal(m[0]->type, MATERIAL_CONDUCTOR);
+    assert_true(material_metal("gold", &eta, &k));
+    assert_memory_equal(&m[0]->eta, &eta, sizeof eta);
+    assert_memory_equal(&m[0]->k, &k, sizeof k);
+    assert_true(m[0]->roughness == 0.0f);
+    /* remapped roughness 0.0625: pbrt alpha = sqrt(0.0625) = 0.25, ours r = sqrt(alpha) = 0.5 */
+    assert_int_equal(m[1]->type, MATERIAL_CONDUCTOR);
+    assert_true(m[1]->roughness == 0.5f);
+    assert_true(material_metal("copper", &eta, &k)); /* pbrt's default conductor */
+    assert_memory_equal(&m[1]->eta, &eta, sizeof eta);
+    assert_memory_equal(&m[1]->k, &k, sizeof k);
+    /* reflectance: eta 1, k = 2 sqrt(R) / sqrt(1 - R), whose R0 is R; alpha = 0.25 unremapped */
+    assert_int_equal(m[2]->type, MATERIAL_CONDUCTOR);
+    assert_true(m[2]->roughness == 0.5f);
+    assert_true(m[2]->eta.r == 1.0f && m[2]->eta.g == 1.0f && m[2]->eta.b == 1.0f);
+    assert_true(m[2]->k.r == 2.0f * sqrtf(0.9f) / sqrtf(1.0f - 0.9f));
+    Rgb r0 = pbrt_conductor_r0(m[2]->eta, m[2]->k);
+    assert_true(fabsf(r0.r - 0.9f) < 1e-6f && fabsf(r0.g - 0.6f) < 1e-6f && fabsf(r0.b - 0.3f) < 1e-6f);
     assert_int_equal(m[3]->type, MATERIAL_GLASS);
     assert_true(m[3]->ior == 1.33f);
     assert_true(m[4]->ior == 1.5168f);
-    assert_int_equal(m[5]->type, MATERIAL_DIFFUSE);
-    assert_true(m[5]->albedo.b == 0.5f);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "coateddiffuse") >= 0);
+    /* coateddiffuse -> plastic: reflectance, eta, roughness (remapped as above) */
+    assert_int_equal(m[5]->type, MATERIAL_PLASTIC);
+    assert_true(m[5]->albedo.r == 0.3f && m[5]->albedo.g == 0.4f && m[5]->albedo.b == 0.5f);
+    assert_true(m[5]->ior == 1.4f && m[5]->roughness == 0.5f);
+    assert_true(m[5]->prepared); /* scene_add_material prepared the rough coat's table */
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coateddiffuse\" approximated by caustic's plastic") >= 0);
     assert_true(fabsf(m[6]->albedo.r - 0.3f) < 1e-6f); /* exact blend of two diffuse */
     assert_int_equal(m[7]->type, MATERIAL_GLASS);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight, \"g\"") >= 0);
@@ -531,9 +567,49 @@ static void test_materials(void **state)
     assert_true(m[11]->albedo.r == 1.0f && m[11]->albedo.b == 0.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "clamped") >= 0);
     assert_true(m[12]->albedo.g == 0.1f);
-    /* fields the mapping does not set keep their zero defaults (two-sided, smooth) */
-    for (int i = 0; i < 13; i++) assert_true(!m[i]->one_sided && m[i]->roughness == 0.0f);
+    /* rough dielectric: alpha = sqrt(0.01) = 0.1, r = sqrt(0.1) */
+    assert_int_equal(m[13]->type, MATERIAL_DIELECTRIC);
+    assert_true(m[13]->roughness == sqrtf(sqrtf(0.01f)) && m[13]->ior == 1.5f);
+    assert_true(m[13]->albedo.r == 1.0f && m[13]->albedo.b == 1.0f);
+    /* anisotropic alphas 0.25 and 0.0625: geometric mean 0.125 */
+    assert_true(m[14]->roughness == sqrtf(0.125f));
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "geometric mean, alpha 0.125") >= 0);
+    /* coatedconductor: its conductor, the coat dropped; a non-default thickness reported */
+    assert_int_equal(m[15]->type, MATERIAL_CONDUCTOR);
+    assert_true(material_metal("silver", &eta, &k));
+    assert_memory_equal(&m[15]->eta, &eta, sizeof eta);
+    assert_true(m[15]->roughness == 0.5f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coatedconductor\" approximated as its conductor") >= 0);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"thickness\" 0.1") >= 0);
+    assert_int_equal(m[16]->type, MATERIAL_CONDUCTOR);
+    assert_true(m[16]->eta.r == 0.444f && m[16]->k.b == 1.829f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-CuZn-eta\" taken as the RGB") >= 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-Au-eta\"") < 0); /* a preset */
+    assert_true(m[17]->type == MATERIAL_PLASTIC && m[17]->albedo.g == 0.5f && m[17]->ior == 1.5f &&
+                m[17]->roughness == 0.0f);
+    assert_true(m[18]->roughness == 1.0f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "GGX alpha 4 is beyond") >= 0);
+    /* two conductors are not blended: the larger weight, c1 */
+    assert_true(m[19]->type == MATERIAL_CONDUCTOR && m[19]->eta.g == m[1]->eta.g);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight, \"c1\"") >= 0);
+    /* pbrt's reflective materials reflect on both sides: caustic's two-sided default */
+    for (int i = 0; i < N; i++) assert_false(m[i]->one_sided);
+    for (int i = 0; i < 13; i++)
+        if (i != 1 && i != 2 && i != 5) assert_true(m[i]->roughness == 0.0f);
     cst_scene_destroy(s);
+    /* malformed variants, located */
+    expect_error(WORLD("Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"rgb reflectance\" [.5 .5 .5]\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"rgb reflectance\"", 0, "either reflectance or eta and k");
+    expect_error(WORLD("Material \"coateddiffuse\" \"float roughness\" -0.5\n" TRI), CST_ERR_INVALID_ARG,
+                 "\"float roughness\"", 0, "roughness -0.5 is negative");
+    expect_error(WORLD("Material \"conductor\" \"float vroughness\" -1\n" TRI), CST_ERR_INVALID_ARG,
+                 "\"float vroughness\"", 0, "is negative");
+    expect_error(WORLD("Material \"conductor\" \"float eta\" -2\n" TRI), CST_ERR_INVALID_ARG,
+                 "\"float eta\"", 0, "eta -2 is negative");
+    expect_error(WORLD("Material \"coateddiffuse\" \"float eta\" 0\n" TRI), CST_ERR_INVALID_ARG,
+                 "\"float eta\"", 0, "not positive");
+    expect_error(WORLD("Material \"conductor\" \"float roughness\" [0.1 0.2]\n" TRI), CST_ERR_INVALID_ARG,
+                 "\"float roughness\"", 0, NULL);
 }
 
 /* ------------------------------------------------------------------ lights */
@@ -552,7 +628,9 @@ static void test_lights(void **state)
         "Shape \"sphere\" \"float radius\" 2\nAttributeEnd\n"
         "AttributeBegin\nAreaLightSource \"goniometric\"\n" TRI "AttributeEnd\n"),
         &w);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\" is not supported") >= 0);
+    assert_non_null(s->env); /* the infinite light: a constant environment */
+    assert_null(s->env->rgb);
+    assert_true(s->env->scale.r == 1.0f && s->env->scale.g == 1.0f && s->env->scale.b == 1.0f);
     assert_int_equal(s->num_delta_lights, 1);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "AreaLightSource \"goniometric\"") >= 0);
     assert_int_equal(s->num_emitters, 3);
@@ -565,6 +643,150 @@ static void test_lights(void **state)
     assert_true(fabsf(l2.g - 10.0f / (2.0f * 3.14159265f * 4.0f * 3.14159265f * 4.0f)) < 1e-5f);
     assert_int_equal(s->tri_info[2].emitter, -1);
     cst_scene_destroy(s);
+}
+
+/* The equal-area octahedral map of pbrt-v4's environment images: its landmarks, and
+ * square -> sphere -> square is the identity. */
+static void test_equal_area_map(void **state)
+{
+    (void)state;
+    double uv[2], d[3];
+    const double axes[4][3] = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}};
+    const double want[4][2] = {{0.5, 0.5}, {1.0, 0.5}, {0.5, 1.0}, {0.0, 0.5}};
+    for (int i = 0; i < 4; i++) {
+        pbrt_equal_area_sphere_to_square(axes[i], uv);
+        assert_true(fabs(uv[0] - want[i][0]) < 1e-12 && fabs(uv[1] - want[i][1]) < 1e-12);
+    }
+    const double down[3] = {0, 0, -1};
+    pbrt_equal_area_sphere_to_square(down, uv); /* -z: a corner */
+    assert_true((uv[0] == 0.0 || uv[0] == 1.0) && (uv[1] == 0.0 || uv[1] == 1.0));
+    for (int i = 0; i < 17; i++)
+        for (int j = 0; j < 17; j++) {
+            double p[2] = {(i + 0.37) / 17.0, (j + 0.61) / 17.0}, q[2];
+            pbrt_equal_area_square_to_sphere(p, d);
+            assert_true(fabs(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - 1.0) < 1e-12);
+            pbrt_equal_area_sphere_to_square(d, q);
+            if (!(fabs(q[0] - p[0]) < 1e-9 && fabs(q[1] - p[1]) < 1e-9))
+                fail_msg("(%g, %g) -> (%g, %g, %g) -> (%g, %g)", p[0], p[1], d[0], d[1], d[2], q[0], q[1]);
+        }
+}
+
+/* An image whose pixels say on which side of the light-space axes their centre direction
+ * lies: red x > 0, green y > 0, blue z > 0. Square: pbrt-v4's equal-area layout; else
+ * pbrt-v3's equirectangular one (+z up, phi = atan2(y, x) from the left column). */
+static void write_sides_image(const char *path, int w, int h)
+{
+    float *px = malloc(3u * (size_t)w * (size_t)h * sizeof *px);
+    assert_non_null(px);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double d[3], uv[2] = {(x + 0.5) / w, (y + 0.5) / h};
+            if (w == h) {
+                pbrt_equal_area_square_to_sphere(uv, d);
+            } else {
+                double th = 3.14159265358979 * uv[1], ph = 2.0 * 3.14159265358979 * uv[0];
+                d[0] = sin(th) * cos(ph);
+                d[1] = sin(th) * sin(ph);
+                d[2] = cos(th);
+            }
+            float *p = &px[3 * ((size_t)y * (size_t)w + (size_t)x)];
+            p[0] = d[0] > 0.0 ? 1.0f : 0.0f;
+            p[1] = d[1] > 0.0 ? 1.0f : 0.0f;
+            p[2] = d[2] > 0.0 ? 1.0f : 0.0f;
+        }
+    CstError err;
+    if (image_write(path, px, w, h, &err) != CST_OK) fail_msg("%s", err.msg);
+    free(px);
+}
+
+static Scene *load_file_scene(const char *text, Warnings *w)
+{
+    CstScene *s = NULL;
+    CstError err;
+    CstLoadOptions opt = {collect, w, 0};
+    if (cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    return s;
+}
+
+/* Checks the environment at the 8 directions (+-0.6, +-0.6, +-0.53): away from every axis
+ * plane by at least 30 degrees, far more than a pixel. `map` gives, per light axis, the
+ * world component (0 x, 1 y, 2 z) and its sign. */
+static void check_sides(const EnvMap *env, const int map[3][2], float k)
+{
+    for (int i = 0; i < 8; i++) {
+        Vec3 wv = v3_normalize(v3(i & 1 ? 0.6f : -0.6f, i & 2 ? 0.6f : -0.6f, i & 4 ? 0.53f : -0.53f));
+        float c[3] = {wv.x, wv.y, wv.z};
+        Rgb got = envmap_eval(env, wv);
+        float want[3];
+        for (int a = 0; a < 3; a++) want[a] = (float)map[a][1] * c[map[a][0]] > 0.0f ? k : 0.0f;
+        if (got.r != want[0] || got.g != want[1] || got.b != want[2])
+            fail_msg("direction (%g, %g, %g): (%g, %g, %g), expected (%g, %g, %g)", (double)wv.x,
+                     (double)wv.y, (double)wv.z, (double)got.r, (double)got.g, (double)got.b,
+                     (double)want[0], (double)want[1], (double)want[2]);
+    }
+}
+
+/* LightSource "infinite": constant (L, scale, illuminance), images through the light's
+ * transform, one environment only, malformed variants. */
+static void test_infinite_lights(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD("LightSource \"infinite\" \"rgb L\" [1 2 3] \"float scale\" 2\n"
+                               "LightSource \"infinite\" \"rgb L\" [5 5 5]\n" TRI), &w);
+    assert_non_null(s->env);
+    assert_null(s->env->rgb);
+    assert_true(s->env->scale.r == 2.0f && s->env->scale.g == 4.0f && s->env->scale.b == 6.0f);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\": caustic has one environment") >= 0);
+    cst_scene_destroy(s);
+    /* illuminance E: a uniform sky of radiance L gives pi L on an upward patch, so L E / pi */
+    s = expect_ok(WORLD("LightSource \"infinite\" \"float illuminance\" 10\n" TRI), NULL);
+    assert_true(s->env->scale.g == (float)(10.0 / 3.14159265358979323846));
+    cst_scene_destroy(s);
+
+    /* a square (equal-area) image under pbrt's usual "Rotate -90 1 0 0": light +z is world
+     * +y, light +y is world -z */
+    write_sides_image(CST_BINARY_DIR "/pbrt_env_sq.pfm", 64, 64);
+    memset(&w, 0, sizeof w);
+    s = load_file_scene(WORLD("AttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" "
+                              "\"string filename\" \"pbrt_env_sq.pfm\" \"float scale\" 2\nAttributeEnd\n" TRI), &w);
+    assert_non_null(s->env->rgb);
+    assert_int_equal(s->env->width, 128);
+    assert_int_equal(s->env->height, 64);
+    assert_int_equal(w.n, 0);
+    static const int rot[3][2] = {{0, 1}, {2, -1}, {1, 1}};
+    check_sides(s->env, rot, 2.0f);
+    cst_scene_destroy(s);
+    /* untransformed; "illuminance" 1 divides by pbrt-v4's measure of the map, sum of
+     * L cos theta times 2 pi / N^2 over the upper pixels: half the illuminance, here
+     * 0.5 pi (0.5 (0.2126 + 0.7152) + 0.0722) up to the pixels' discretisation */
+    s = load_file_scene(WORLD("LightSource \"infinite\" \"string filename\" \"pbrt_env_sq.pfm\" "
+                              "\"float illuminance\" 1\n" TRI), &w);
+    const double half_e = 0.5 * 3.14159265358979 * (0.5 * (0.2126 + 0.7152) + 0.0722);
+    float k = s->env->scale.r;
+    if (!(fabs((double)k * half_e - 1.0) < 0.02)) fail_msg("illuminance scale %g, expected about %g", (double)k, 1.0 / half_e);
+    static const int ident[3][2] = {{0, 1}, {1, 1}, {2, 1}};
+    check_sides(s->env, ident, k);
+    cst_scene_destroy(s);
+    /* a non-square image: pbrt-v3's equirectangular layout, with a warning */
+    write_sides_image(CST_BINARY_DIR "/pbrt_env_ll.pfm", 32, 16);
+    memset(&w, 0, sizeof w);
+    s = load_file_scene(WORLD("LightSource \"infinite\" \"string filename\" \"pbrt_env_ll.pfm\"\n" TRI), &w);
+    assert_int_equal(s->env->width, 32);
+    assert_int_equal(s->env->height, 16);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "is 32 x 16, not square") >= 0);
+    check_sides(s->env, ident, 1.0f);
+    cst_scene_destroy(s);
+
+    expect_error(WORLD("LightSource \"infinite\" \"rgb L\" [1 1 1] \"string filename\" \"sky.exr\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"string filename\"", 0, "both \"L\" and \"filename\"");
+    expect_error(WORLD("LightSource \"infinite\" \"string filename\" \"sky.exr\"\n" TRI),
+                 CST_ERR_UNSUPPORTED, "\"string filename\"", 0, "file access is disabled");
+    expect_error(WORLD("LightSource \"infinite\" \"float scale\" -1\n" TRI), CST_ERR_INVALID_ARG,
+                 "LightSource", 0, "scale -1");
+    expect_error(WORLD("LightSource \"infinite\" \"rgb L\" [1 1]\n" TRI), CST_ERR_INVALID_ARG,
+                 "\"rgb L\"", 0, NULL);
 }
 
 /* ------------------------------------------------------------------ shapes */
@@ -596,6 +818,11 @@ static void test_delta_lights(void **state)
     assert_true(fabsf(l[2].cos_inner - cosf(10.0f * 3.14159265f / 180.0f)) < 1e-6f);
     float k_e = 2.0f * 3.14159265f * (1.0f - 0.5f * (l[2].cos_inner + l[2].cos_outer));
     assert_true(fabsf(l[2].intensity.r - 50.0f / k_e) < 1e-3f * (50.0f / k_e));
+    /* exactly pbrt-v4's k_e = 2 pi ((1 - cos_start) + (cos_start - cos_end) / 2), in double */
+    const double pi = 3.14159265358979323846;
+    double ci = (double)l[2].cos_inner, co = (double)l[2].cos_outer;
+    assert_true(l[2].intensity.g == (float)(50.0 / (2.0 * pi * ((1.0 - ci) + (ci - co) / 2.0))));
+    assert_true(l[1].intensity.b == (float)(100.0 / (4.0 * pi)));
     assert_int_equal(l[3].type, DELTA_DIRECTIONAL);
     assert_vec(l[3].dir, 0, 1, 0, 1e-6f); /* (1, 0, 0) turned 90 degrees about z */
     assert_true(fabsf(rgb_luminance(l[3].intensity) - 3.0f) < 0.01f);
@@ -896,7 +1123,7 @@ static void test_camera_and_options(void **state)
     assert_int_equal(s->settings.spp, 32);
     assert_int_equal(s->settings.max_depth, 7);
     assert_int_equal(s->settings.integrator, CST_INTEGRATOR_PATH);
-    assert_int_equal(s->settings.filter, CST_FILTER_TENT);
+    assert_int_equal(s->settings.filter, CST_FILTER_GAUSSIAN); /* pbrt's default parameters: exact */
     assert_string_equal(s->output_path, "out.exr");
     double vfov = 2.0 * atan(tan(30.0 * 3.14159265358979 / 180.0) * 2.0) * 180.0 / 3.14159265358979;
     assert_true(fabs((double)s->camera.vfov_deg - vfov) < 1e-4);
@@ -906,7 +1133,7 @@ static void test_camera_and_options(void **state)
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"float iso\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Sampler \"halton\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Integrator \"mlt\"") >= 0);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "PixelFilter \"gaussian\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "PixelFilter \"gaussian\"") < 0);
     cst_scene_destroy(s);
     /* pbrt defaults; Scale -1 1 1 before LookAt makes the frame right-handed */
     s = expect_ok("Scale -1 1 1\nLookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n" TRI, NULL);
@@ -915,6 +1142,21 @@ static void test_camera_and_options(void **state)
     assert_int_equal(s->settings.max_depth, 5);
     assert_true(s->camera.vfov_deg == 90.0f);
     assert_false(s->camera_mirror);
+    assert_int_equal(s->settings.filter, CST_FILTER_GAUSSIAN); /* pbrt's default filter */
+    cst_scene_destroy(s);
+    /* filters: Mitchell with pbrt's defaults is exact; other parameters, sinc: approximated */
+    memset(&w, 0, sizeof w);
+    s = expect_ok("PixelFilter \"mitchell\" \"float B\" 0.33333333 \"float xradius\" 2\nWorldBegin\n" TRI, &w);
+    assert_int_equal(s->settings.filter, CST_FILTER_MITCHELL);
+    assert_int_equal(w.n, 0);
+    cst_scene_destroy(s);
+    s = expect_ok("PixelFilter \"gaussian\" \"float sigma\" 1\nWorldBegin\n" TRI, &w);
+    assert_int_equal(s->settings.filter, CST_FILTER_GAUSSIAN);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "sigma 0.5 and radius 1.5") >= 0);
+    cst_scene_destroy(s);
+    s = expect_ok("PixelFilter \"sinc\"\nWorldBegin\n" TRI, &w);
+    assert_int_equal(s->settings.filter, CST_FILTER_MITCHELL);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "PixelFilter \"sinc\" approximated by the Mitchell") >= 0);
     cst_scene_destroy(s);
     s = expect_ok("Integrator \"bdpt\"\nWorldBegin\n" TRI, NULL);
     assert_int_equal(s->settings.integrator, CST_INTEGRATOR_BDPT);
@@ -929,6 +1171,46 @@ static void test_camera_and_options(void **state)
     assert_int_equal(s->settings.photons, 5000);
     assert_int_equal(s->accel_type, ACCEL_KDTREE);
     cst_scene_destroy(s);
+}
+
+/* Camera "orthographic": the view's height is the screen window's (default [-1, 1] on the
+ * shorter axis), in camera units scaled into the world; a lens is ignored with a warning. */
+static void test_orthographic_camera(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok("Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\n"
+                         "LookAt 0 0 -5  0 0 0  0 1 0\n"
+                         "Camera \"orthographic\" \"float lensradius\" 0.5 \"float fov\" 30\n"
+                         "WorldBegin\n" TRI, &w);
+    assert_true(s->camera.ortho_height == 2.0f); /* landscape: y spans [-1, 1] */
+    assert_true(s->camera.aperture_radius == 0.0f);
+    assert_vec(s->camera.position, 0, 0, -5, 0);
+    assert_vec(s->camera.up, 0, 1, 0, 0);
+    assert_true(s->camera_mirror);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "lensradius 0.5 and focaldistance 1e+06 ignored") >= 0);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"float fov\"") >= 0);
+    cst_scene_destroy(s);
+    /* portrait: x spans [-1, 1], y [-2, 2] */
+    s = expect_ok("Film \"rgb\" \"integer xresolution\" 100 \"integer yresolution\" 200\n"
+                  "Camera \"orthographic\"\nWorldBegin\n" TRI, NULL);
+    assert_true(s->camera.ortho_height == 4.0f);
+    cst_scene_destroy(s);
+    memset(&w, 0, sizeof w);
+    s = expect_ok("Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\n"
+                  "Camera \"orthographic\" \"float screenwindow\" [-3 3 -1.5 1.5]\nWorldBegin\n" TRI, &w);
+    assert_true(s->camera.ortho_height == 3.0f);
+    assert_int_equal(w.n, 0);
+    cst_scene_destroy(s);
+    /* a scaled camera transform: world-from-camera halves camera units */
+    s = expect_ok("Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\n"
+                  "Scale 2 2 2\nLookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\"\nWorldBegin\n" TRI, NULL);
+    assert_true(fabsf(s->camera.ortho_height - 1.0f) < 1e-6f);
+    cst_scene_destroy(s);
+    expect_error("Camera \"orthographic\" \"float screenwindow\" [-1 1 -1]\nWorldBegin\n" TRI,
+                 CST_ERR_INVALID_ARG, "\"float screenwindow\"", 0, "expected 4");
+    expect_error("Camera \"orthographic\" \"float screenwindow\" [1 -1 -1 1]\nWorldBegin\n" TRI,
+                 CST_ERR_INVALID_ARG, "\"float screenwindow\"", 0, "is empty");
 }
 
 /* ------------------------------------------------------------------ rendering */
@@ -999,6 +1281,55 @@ static void test_cornell_pbrt_equals_json(void **state)
     cst_scene_destroy(pbrt);
 }
 
+/* A diffuse sphere under a constant sky: the pbrt file (LightSource "infinite") and the
+ * JSON scene ("environment") render the same film bit for bit. */
+static void test_env_sphere_pbrt_equals_json(void **state)
+{
+    (void)state;
+    const char *json_text =
+        "{\"film\": {\"width\": 32, \"height\": 24, \"filter\": \"box\"},\n"
+        " \"camera\": {\"type\": \"pinhole\", \"position\": [0, 0, -4], \"look_at\": [0, 0, 0],\n"
+        "            \"up\": [0, 1, 0], \"fov\": 40},\n"
+        " \"integrator\": {\"type\": \"path\", \"max_depth\": 5},\n"
+        " \"materials\": {\"m\": {\"type\": \"diffuse\", \"albedo\": [0.5, 0.6, 0.7]}},\n"
+        " \"shapes\": [{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1, \"material\": \"m\"}],\n"
+        " \"environment\": {\"radiance\": [0.8, 0.9, 1.0]}}\n";
+    const char *pbrt_text =
+        "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 24\n"
+        "PixelFilter \"box\"\nIntegrator \"path\" \"integer maxdepth\" 5\n"
+        "Scale -1 1 1\nLookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n"
+        "WorldBegin\nLightSource \"infinite\" \"rgb L\" [0.8 0.9 1.0]\n"
+        "Material \"diffuse\" \"rgb reflectance\" [0.5 0.6 0.7]\nShape \"sphere\" \"float radius\" 1\n";
+    FILE *f = fopen(CST_BINARY_DIR "/pbrt_env_sphere.json", "w");
+    assert_non_null(f);
+    fputs(json_text, f);
+    fclose(f);
+    CstScene *json = NULL, *pbrt = NULL;
+    CstError err;
+    Warnings w = {0};
+    if (cst_scene_load_json(CST_BINARY_DIR "/pbrt_env_sphere.json", &json, &err) != CST_OK) fail_msg("%s", err.msg);
+    if (load_w(pbrt_text, &pbrt, &err, &w) != CST_OK) fail_msg("%s", err.msg);
+    if (w.n) fail_msg("unexpected warning: %s", w.msg[0]);
+    /* the same pinhole (the focus distance, unused without a lens, differs) */
+    assert_memory_equal(&pbrt->camera, &json->camera, offsetof(CameraDesc, focus_distance));
+    assert_true(pbrt->camera.aperture_radius == 0.0f && pbrt->camera.ortho_height == json->camera.ortho_height);
+    assert_false(pbrt->camera_mirror);
+    assert_memory_equal(&pbrt->env->scale, &json->env->scale, sizeof(Rgb));
+    CstRenderSettings a = {0}, b = {0};
+    cst_render_settings_resolve(json, NULL, &a);
+    cst_render_settings_resolve(pbrt, NULL, &b);
+    assert_true(a.max_depth == b.max_depth && a.rr_depth == b.rr_depth && a.filter == b.filter);
+    Film *fa = render_small(json, 32, 24, 16), *fb = render_small(pbrt, 32, 24, 16);
+    assert_true(films_identical(fa, fb));
+    double c[3]; /* the sky is seen around the sphere */
+    cst_film_pixel(fb, 0, 0, c);
+    assert_true(c[2] > 0.9 && c[2] < 1.1);
+    film_destroy(fa);
+    film_destroy(fb);
+    cst_scene_destroy(json);
+    cst_scene_destroy(pbrt);
+}
+
 /* Red minus green in the left and right thirds of the image. */
 static void red_sides(const Film *f, double *left, double *right)
 {
@@ -1062,6 +1393,8 @@ int main(void)
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_lights),
         cmocka_unit_test(test_delta_lights),
+        cmocka_unit_test(test_equal_area_map),
+        cmocka_unit_test(test_infinite_lights),
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_plymesh),
         cmocka_unit_test(test_other_directives),
@@ -1070,7 +1403,9 @@ int main(void)
         cmocka_unit_test(test_instances_match_copies),
         cmocka_unit_test(test_instances_memory),
         cmocka_unit_test(test_camera_and_options),
+        cmocka_unit_test(test_orthographic_camera),
         cmocka_unit_test(test_cornell_pbrt_equals_json),
+        cmocka_unit_test(test_env_sphere_pbrt_equals_json),
         cmocka_unit_test(test_cornell_handedness),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
