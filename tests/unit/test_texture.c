@@ -496,6 +496,30 @@ static void test_json_textures(void **state)
               CST_ERR_INVALID_ARG, "[[0,0],[1,0]]", 0, "one [u, v] per vertex");
 }
 
+/* The example scene loads (its image texture found next to it) with its textures in use. */
+static void test_example_scene(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_json(CST_SOURCE_DIR "/scenes/textured.json", &s, &err) != CST_OK) fail_msg("%s", err.msg);
+    int images = 0, textured = 0;
+    for (int i = 0; i < s->num_textures; i++)
+        if (s->textures[i].type == TEXTURE_IMAGE) {
+            images++;
+            assert_int_equal(s->textures[i].image.width, 256);
+            assert_int_equal(s->textures[i].image.height, 256);
+        }
+    for (int i = 0; i < s->num_materials; i++)
+        textured += s->materials[i].albedo_texture > 0 || s->materials[i].roughness_texture > 0;
+    assert_int_equal(images, 1);
+    assert_true(textured >= 3);
+    int lit = 0;
+    for (int i = 0; i < s->num_emitters; i++) lit += s->emitters[i].texture > 0;
+    assert_true(lit > 0);
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -506,6 +530,7 @@ int main(void)
         cmocka_unit_test(test_uv_at_hits),
         cmocka_unit_test(test_emitter_sample_uv),
         cmocka_unit_test(test_json_textures),
+        cmocka_unit_test(test_example_scene),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
