@@ -86,8 +86,7 @@ float image_linear_to_srgb(float v)
     return (float)s;
 }
 
-/* Inverse of the above (the sRGB EOTF); s in [0, 1]. */
-static float image_srgb_to_linear(double s)
+float image_srgb_to_linear(double s)
 {
     double c = s <= 0.04045 ? s / 12.92 : pow((s + 0.055) / 1.055, 2.4);
     return (float)c;

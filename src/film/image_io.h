@@ -13,5 +13,7 @@ CstStatus image_write(const char *path, const float *rgb, int width, int height,
 CstStatus image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
 /* sRGB OETF (IEC 61966-2-1) of a linear value, clamped to [0, 1]. */
 float image_linear_to_srgb(float v);
+/* Its inverse, the sRGB EOTF, of an encoded value s in [0, 1]. */
+float image_srgb_to_linear(double s);
 
 #endif

@@ -35,4 +35,16 @@ static inline bool sphere_intersect(Vec3 center, float radius, const Ray *r, flo
     return false;
 }
 
+/* Texture coordinates of the point in unit direction d from a sphere's centre: u = phi / 2pi
+ * with phi the angle about +y from +z toward +x, v = theta / pi with theta the angle from
+ * -y, so v runs from 0 at the bottom pole to 1 at the top (an equirectangular image with
+ * its top row at +y, as image textures put v = 1 at the top row). */
+static inline Vec2 sphere_uv(Vec3 d)
+{
+    float phi = atan2f(d.x, d.z);
+    if (phi < 0.0f) phi += 2.0f * CST_PI;
+    float theta = acosf(clampf(-d.y, -1.0f, 1.0f));
+    return v2(phi * (0.5f * CST_INV_PI), theta * CST_INV_PI);
+}
+
 #endif

@@ -4,6 +4,7 @@
 #define CST_GEOMETRY_TRIANGLE_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "geometry/ray.h"
 
@@ -115,6 +116,20 @@ static inline bool triangle_intersect_watertight(const TriangleRay *tr, const Ra
     *u_out = V * inv_det;
     *v_out = W * inv_det;
     return true;
+}
+
+/* Texture coordinates at barycentrics (b1, b2) (the weights of v1 and v2) of triangle t,
+ * whose vertex indices are tri_indices[3t..3t+2]: interpolated from the per-vertex uvs when
+ * the triangle has them (has_uv[t]; has_uv NULL: none has), else the default
+ * (0,0), (1,0), (0,1) at v0, v1, v2, which is (b1, b2) itself. */
+static inline Vec2 triangle_uv(const Vec2 *uvs, const unsigned char *has_uv, const int32_t *tri_indices,
+                               uint32_t t, float b1, float b2)
+{
+    if (!has_uv || !has_uv[t]) return v2(b1, b2);
+    const int32_t *i = &tri_indices[3 * t];
+    Vec2 a = uvs[i[0]], b = uvs[i[1]], c = uvs[i[2]];
+    float b0 = 1.0f - b1 - b2;
+    return v2(b0 * a.x + b1 * b.x + b2 * c.x, b0 * a.y + b1 * b.y + b2 * c.y);
 }
 
 #endif

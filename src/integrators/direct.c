@@ -8,7 +8,7 @@ static Rgb sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 w
     float u_sel = pcg32_float(rng);
     Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
     LightLi ls;
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
     Rgb f = bsdf_eval(bsdf, wo, ls.wi);
     if (rgb_is_black(f)) return rgb_s(0.0f);

@@ -32,7 +32,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
     Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));
     EmissionSample es;
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
 
     /* y0 seen directly: the only way this estimator renders visible emitters (delta
@@ -42,7 +42,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
         const Emitter *e = &s->emitters[es.emitter];
-        Rgb le = emitter_radiance(e, es.n, cs.wi);
+        Rgb le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
         splat_if_visible(s, cam, lp, es.p, es.n, &cs,
                          rgb_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a), out, rays);
     }

@@ -28,7 +28,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
         Vec3 wo = v3_neg(ray.d);
 
         if (sh.emitter >= 0) {
-            Rgb le = emitter_radiance(&s->emitters[sh.emitter], sh.ng, wo);
+            Rgb le = scene_emission(s, &sh, wo);
             if (!rgb_is_black(le)) {
                 if (specular || pp->mode == PATH_BSDF) {
                     L = rgb_madd(L, beta, le);

@@ -57,7 +57,7 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
     Vec2 u_pos = v2(pcg32_float(&rng), pcg32_float(&rng));
     Vec2 u_dir = v2(pcg32_float(&rng), pcg32_float(&rng));
     EmissionSample es;
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return 1; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
@@ -124,7 +124,7 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
         }
         Vec3 wo = v3_neg(ray.d);
         if (le && sh->emitter >= 0)
-            *le = rgb_madd(*le, *beta, emitter_radiance(&s->emitters[sh->emitter], sh->ng, wo));
+            *le = rgb_madd(*le, *beta, scene_emission(s, sh, wo));
         scene_bsdf(s, sh, bsdf);
         float p_delta = bsdf_delta_probability(bsdf, wo);
         if (!(p_delta > 0.0f)) {

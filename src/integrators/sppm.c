@@ -245,7 +245,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     Vec2 u_pos = v2(pcg32_float(&rng), pcg32_float(&rng));
     Vec2 u_dir = v2(pcg32_float(&rng), pcg32_float(&rng));
     EmissionSample es;
-    EmitterGeometry eg = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry eg = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
     Rgb power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */

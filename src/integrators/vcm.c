@@ -178,7 +178,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
     Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
     Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));
     EmissionSample es;
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || rgb_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
@@ -208,7 +208,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
         scene_bsdf(s, &sh, &bsdf);
         if (!bsdf_is_delta(&bsdf)) {
             VcmVertex v = {sh.p, sh.ng, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
-                           sh.material, bounces};
+                           sh.material, bounces, sh.uv};
             push_vertex(verts, &v);
             connect_to_camera(s, cam, vp, it, &v, &bsdf, rng, splats, rays);
         }
@@ -269,7 +269,7 @@ static Rgb connect_to_light(const Scene *s, const VcmIteration *it, const SubPat
     float u_sel = pcg32_float(rng);
     Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
     LightLi ls;
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
     float cos_x = fabsf(v3_dot(sh->ng, ls.wi));
     if (!(cos_x > 0.0f)) return rgb_s(0.0f);
@@ -301,8 +301,15 @@ static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPat
     if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return rgb_s(0.0f);
     Rgb fx = bsdf_eval(bx, wo, d);
     if (rgb_is_black(fx)) return rgb_s(0.0f);
+    /* y's BSDF again, from what the vertex kept of its hit */
+    SurfaceHit yh = {0};
+    yh.p = y->p;
+    yh.ng = y->ng;
+    yh.material = y->material;
+    yh.emitter = -1;
+    yh.uv = y->uv;
     Bsdf by;
-    bsdf_init(&by, &s->materials[y->material], y->ng);
+    scene_bsdf(s, &yh, &by);
     /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
      * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */
     Rgb fy = rgb_scale(bsdf_eval(&by, nd, y->w_prev), cos_y / cos_y_prev);
@@ -419,7 +426,7 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
          * there is no other strategy (light vertices on emitters are not splatted). */
         if (sh.emitter >= 0) {
             const Emitter *e = &s->emitters[sh.emitter];
-            Rgb le = emitter_radiance(e, sh.ng, wo);
+            Rgb le = scene_emission(s, &sh, wo);
             if (!rgb_is_black(le)) {
                 float w = 1.0f;
                 if (t > 1) {

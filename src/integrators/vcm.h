@@ -31,6 +31,7 @@ typedef struct VcmVertex {
     float d_vcm, d_vc, d_vm;
     int32_t material;
     int32_t bounces; /* 1 for the first hit after the emitter */
+    Vec2 uv;         /* texture coordinates (the BSDF is rebuilt from material, ng, uv) */
 } VcmVertex;
 
 /* A growable list of light vertices; one per work unit, reused by every iteration. */

@@ -32,7 +32,7 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
     ++*rays;
     if (!scene_intersect(s, &ray, &sh)) return light_env_radiance(&s->emitter_sampler, ray.d);
     Vec3 wo = v3_neg(ray.d);
-    Rgb L = sh.emitter >= 0 ? emitter_radiance(&s->emitters[sh.emitter], sh.ng, wo) : rgb_s(0.0f);
+    Rgb L = sh.emitter >= 0 ? scene_emission(s, &sh, wo) : rgb_s(0.0f);
 
     Bsdf bsdf;
     scene_bsdf(s, &sh, &bsdf);

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "geometry/triangle.h"
 #include "math/frame.h"
 #include "sampling/warp.h"
 
@@ -53,9 +54,11 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
         s->pdf_a = NULL;
         return cst_fail(err, CST_ERR_OOM, "out of memory for %d lights", s->lights);
     }
-    /* A Lambertian emitter of radiance L and area A emits pi A L per side. */
+    /* A Lambertian emitter of radiance L and area A emits pi A L per side; a textured one
+     * is weighted by its texture's average, which only shifts samples between lights (the
+     * point density on an emitter stays uniform by area, so NEE's pdf is unchanged). */
     for (int i = 0; i < n; i++)
-        w[i] = CST_PI * emitters[i].area * rgb_luminance(emitters[i].radiance) * (emitters[i].two_sided ? 2.0f : 1.0f);
+        w[i] = CST_PI * emitters[i].area * rgb_luminance(emitters[i].average) * (emitters[i].two_sided ? 2.0f : 1.0f);
     for (int i = 0; i < num_delta; i++) w[n + i] = delta_light_power(&delta[i], s->radius);
     /* The environment's flux through the scene's disk: pi R^2 times the integral of its
      * luminance over the sphere (pbrt-v4's UniformInfiniteLight::Phi for a constant one). */
@@ -84,7 +87,7 @@ void emitter_sampler_free(EmitterSampler *s)
     memset(s, 0, sizeof *s);
 }
 
-void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Vec3 *p, Vec3 *n)
+void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Vec3 *p, Vec3 *n, Vec2 *uv)
 {
     if ((int)e->prim < g->num_triangles) {
         const int32_t *t = &g->tri_indices[3 * e->prim];
@@ -93,11 +96,13 @@ void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Ve
         Vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
         *p = v3_add(a, v3_add(v3_scale(e1, bc.x), v3_scale(e2, bc.y)));
         *n = e->n;
+        *uv = e->texture ? triangle_uv(g->uvs, g->tri_has_uv, g->tri_indices, e->prim, bc.x, bc.y) : v2(0.0f, 0.0f);
     } else {
         const Sphere *sp = &g->spheres[(int)e->prim - g->num_triangles];
         Vec3 d = warp_uniform_sphere(u);
         *p = v3_madd(sp->center, d, sp->radius);
         *n = d;
+        *uv = e->texture ? sphere_uv(d) : v2(0.0f, 0.0f);
     }
 }
 
@@ -122,14 +127,15 @@ bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const Emi
     out->light = i;
     if (i < s->count) {
         const Emitter *e = &emitters[i];
-        emitter_sample_point(e, g, u, &out->p, &out->n);
+        Vec2 uv;
+        emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
         Vec3 to = v3_sub(out->p, x);
         float dist2 = v3_length2(to);
         if (!(dist2 > 0.0f)) return false;
         out->dist = sqrtf(dist2);
         out->wi = v3_scale(to, 1.0f / out->dist);
         out->cos_light = fabsf(v3_dot(out->n, out->wi));
-        out->li = emitter_radiance(e, out->n, v3_neg(out->wi));
+        out->li = emitter_radiance(e, g->textures, out->n, uv, v3_neg(out->wi));
         if (rgb_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
         /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
         out->pdf = s->pdf_a[i] * dist2 / out->cos_light;
@@ -200,7 +206,7 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
     if (i < s->count) {
         const Emitter *e = &emitters[i];
         Vec3 p, n;
-        emitter_sample_point(e, g, u_pos, &p, &n);
+        emitter_sample_point(e, g, u_pos, &p, &n, &out->uv);
         float side = 1.0f;
         if (e->two_sided) {
             /* Reuse u_dir.x for the side: [0, 1/2) front, [1/2, 1) back, stretched back to [0, 1). */
@@ -218,7 +224,8 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
         out->cos_l = fabsf(v3_dot(n, out->w));
         out->finite = true;
         if (out->pdf_w > 0.0f)
-            out->beta = rgb_scale(emitter_radiance(e, n, out->w), out->cos_l / (out->pdf_a * out->pdf_w));
+            out->beta = rgb_scale(emitter_radiance(e, g->textures, n, out->uv, out->w),
+                                  out->cos_l / (out->pdf_a * out->pdf_w));
         return;
     }
     if (i == light_env_index(s)) {

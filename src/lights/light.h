@@ -10,10 +10,13 @@
 #include "lights/envmap.h"
 #include "math/rgb.h"
 #include "sampling/distrib1d.h"
+#include "textures/texture.h"
 
 typedef struct Emitter {
     uint32_t prim;  /* scene primitive id */
-    Rgb radiance;
+    Rgb radiance;   /* times the texture's value at the point, when textured */
+    int texture;    /* 1 + index into the scene's textures; 0: constant radiance */
+    Rgb average;    /* radiance averaged over the texture: the selection weight */
     int two_sided;
     float area;
     Vec3 n;        /* triangles: unit geometric normal (set by scene_commit) */
@@ -52,12 +55,16 @@ typedef struct EmitterSampler {
     float radius;
 } EmitterSampler;
 
-/* The geometry NEE needs, borrowed from the scene. */
+/* The geometry NEE needs, borrowed from the scene (scene_emitter_geometry() fills it). */
 typedef struct EmitterGeometry {
     const Vec3 *positions;
     const int32_t *tri_indices;
     int num_triangles;
     const Sphere *spheres;
+    /* texture coordinates (triangle_uv()) and textures, for textured emission */
+    const Vec2 *uvs;
+    const unsigned char *tri_has_uv;
+    const Texture *textures;
 } EmitterGeometry;
 
 /* bounds_lo/hi: the scene's geometry bounds (directional lights' power and emission disk). */
@@ -65,11 +72,13 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
                                int num_delta, const EnvMap *env, Vec3 bounds_lo, Vec3 bounds_hi, CstError *err);
 void emitter_sampler_free(EmitterSampler *s);
 
-/* Radiance leaving the emitter at a point with geometric normal ng toward direction w
- * (unit, pointing away from the surface). One-sided emitters are dark behind. */
-static inline Rgb emitter_radiance(const Emitter *e, Vec3 ng, Vec3 w)
+/* Radiance leaving the emitter at a point with geometric normal ng and texture
+ * coordinates uv toward direction w (unit, pointing away from the surface). One-sided
+ * emitters are dark behind. textures: the scene's (read only when e is textured). */
+static inline Rgb emitter_radiance(const Emitter *e, const Texture *textures, Vec3 ng, Vec2 uv, Vec3 w)
 {
-    return (e->two_sided || v3_dot(ng, w) > 0.0f) ? e->radiance : rgb_s(0.0f);
+    if (!(e->two_sided || v3_dot(ng, w) > 0.0f)) return rgb_s(0.0f);
+    return e->texture ? rgb_mul(e->radiance, texture_eval(textures, e->texture - 1, uv)) : e->radiance;
 }
 
 /* The area density of a point on area emitter e, selection included. */
@@ -120,8 +129,8 @@ typedef struct EmitterSample {
     int emitter;
 } EmitterSample;
 
-/* A uniform point on area emitter i (u). */
-void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Vec3 *p, Vec3 *n);
+/* A uniform point on area emitter i (u), its normal and texture coordinates. */
+void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Vec3 *p, Vec3 *n, Vec2 *uv);
 
 /* The start of a light path. Area emitters: a uniform point and a cosine-weighted
  * direction around the emitting side's normal (two-sided ones pick either side with
@@ -129,6 +138,7 @@ void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Ve
  * directional: a uniform point on the disk of the scene's bounding sphere, upstream. */
 typedef struct EmissionSample {
     Vec3 p, n;   /* point and unit normal (delta lights: n = w) */
+    Vec2 uv;     /* area emitters: texture coordinates at p */
     Vec3 w;      /* unit direction of emission */
     int emitter; /* area: emitter index; delta: count + delta light index */
     Rgb beta;    /* the path's first throughput, the flux it carries:

@@ -17,10 +17,8 @@ void bsdf_init(Bsdf *b, const Material *m, Vec3 n)
     b->albedo = m->albedo;
     b->eta = m->ior;
     b->alpha = 0.0f;
-    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC) {
-        float a = material_alpha(m->roughness);
-        b->alpha = a < MATERIAL_SMOOTH_ALPHA ? 0.0f : a;
-    }
+    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC)
+        b->alpha = material_bsdf_alpha(m->roughness);
     b->cond_eta = m->eta;
     b->cond_k = m->k;
     b->one_sided = m->one_sided;

@@ -32,6 +32,10 @@ typedef struct Material {
     float ior;       /* glass, dielectric, plastic coat: interior over exterior IOR, > 0 */
     float roughness; /* conductor, dielectric, plastic: perceptual roughness in [0, 1] */
     Rgb eta, k;      /* conductor: complex IOR eta + i k per RGB channel (material_metal) */
+    /* Textures replacing albedo and roughness: 1 + an index into the scene's textures, 0 for
+     * none (so a zero-initialised Material has none). A roughness texture gives the mean of
+     * its channels; a rough plastic cannot take one (its coat table depends on roughness). */
+    int albedo_texture, roughness_texture;
     /* Reflective materials (diffuse, mirror, conductor, plastic) reflect on both sides
      * unless one_sided is set, when the back (against the normal) is black. Stored
      * inverted so that a zero-initialised Material keeps the historical two-sided
@@ -47,6 +51,12 @@ typedef struct Material {
 
 /* GGX alpha of a perceptual roughness (alpha = r^2). */
 static inline float material_alpha(float roughness) { return roughness * roughness; }
+/* The alpha a BSDF uses: 0 (the smooth, delta lobes) below MATERIAL_SMOOTH_ALPHA. */
+static inline float material_bsdf_alpha(float roughness)
+{
+    float a = material_alpha(roughness);
+    return a < MATERIAL_SMOOTH_ALPHA ? 0.0f : a;
+}
 
 /* Fills the derived fields (a few ms for a rough plastic, nothing otherwise). */
 void material_prepare(Material *m);

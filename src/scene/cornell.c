@@ -59,7 +59,7 @@ CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err)
         for (int k = 0; k < 4; k++)
             v[k] = v3d(CORNELL_QUADS[q][k][0], CORNELL_QUADS[q][k][1], CORNELL_QUADS[q][k][2]);
         int mat = q == 0 ? light : (q == 4 ? green : (q == 5 ? red : white));
-        Emission em = {rgbd(17.0, 12.0, 4.0), 0};
+        Emission em = {rgbd(17.0, 12.0, 4.0), 0, 0};
         if ((st = scene_add_quad(s, v, mat, q == 0 ? &em : NULL, err))) goto fail;
     }
     CameraDesc cam = {v3d(278.0, 273.0, -800.0), v3d(278.0, 273.0, 0.0), v3d(0.0, 1.0, 0.0),

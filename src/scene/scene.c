@@ -44,12 +44,15 @@ void scene_destroy(Scene *s)
     free(s->positions);
     free(s->normals);
     free(s->uvs);
+    free(s->tri_has_uv);
     free(s->tri_indices);
     free(s->tri_info);
     free(s->tri_normals);
     free(s->spheres);
     free(s->sphere_info);
     free(s->materials);
+    for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
+    free(s->textures);
     free(s->emitters);
     free(s->delta_lights);
     if (s->env) envmap_free(s->env);
@@ -66,8 +69,35 @@ void cst_scene_destroy(CstScene *scene) { scene_destroy(scene); }
 
 const char *cst_scene_output_path(const CstScene *scene) { return scene->output_path; }
 
+CstStatus scene_add_texture(Scene *s, const Texture *t, int *out_id, CstError *err)
+{
+    Texture copy = *t;
+    if (t->type == TEXTURE_CHECKERBOARD &&
+        (t->checker.even < 0 || t->checker.even >= s->num_textures || t->checker.odd < 0 ||
+         t->checker.odd >= s->num_textures)) {
+        texture_free(&copy);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "checkerboard texture refers to textures %d and %d; "
+                        "expected indices of textures already added (0 to %d)",
+                        t->checker.even, t->checker.odd, s->num_textures - 1);
+    }
+    if (!GROW(s->textures, s->cap_textures, s->num_textures + 1)) {
+        texture_free(&copy);
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a texture");
+    }
+    s->textures[s->num_textures] = copy;
+    *out_id = s->num_textures++;
+    return CST_OK;
+}
+
 CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError *err)
 {
+    if (m->albedo_texture < 0 || m->albedo_texture > s->num_textures || m->roughness_texture < 0 ||
+        m->roughness_texture > s->num_textures)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material texture index out of range");
+    /* The rough plastic's coat albedo table (material_prepare) is made for one roughness. */
+    if (m->type == MATERIAL_PLASTIC && m->roughness_texture)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "a plastic's roughness cannot be a texture "
+                        "(its coat albedo table is computed for one roughness); expected a number");
     if (!GROW(s->materials, s->cap_materials, s->num_materials + 1))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a material");
     s->materials[s->num_materials] = *m;
@@ -106,8 +136,12 @@ static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float 
     if (!GROW(s->emitters, s->cap_emitters, s->num_emitters + 1))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding an emitter");
     Emitter *e = &s->emitters[s->num_emitters];
+    if (em->texture < 0 || em->texture > s->num_textures)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "emission texture index out of range");
     e->prim = prim;
     e->radiance = em->radiance;
+    e->texture = em->texture;
+    e->average = em->texture ? rgb_mul(em->radiance, s->textures[em->texture - 1].average) : em->radiance;
     e->two_sided = em->two_sided;
     e->area = area;
     e->is_sphere = 0;
@@ -177,6 +211,14 @@ CstStatus scene_add_mesh_ex(Scene *s, const SceneMesh *m, int *num_dropped, CstE
     PrimInfo *info = realloc(s->tri_info, (size_t)(s->num_triangles + num_triangles) * sizeof *info);
     if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding %d triangles", num_triangles);
     s->tri_info = info;
+    /* Which triangles take their uvs from the array: made on the first mesh with uvs,
+     * zero (the default mapping) for the triangles before it. */
+    if (m->uvs || s->tri_has_uv) {
+        unsigned char *hu = realloc(s->tri_has_uv, (size_t)(s->num_triangles + num_triangles));
+        if (!hu) return cst_fail(err, CST_ERR_OOM, "out of memory adding %d triangles", num_triangles);
+        if (!s->tri_has_uv) memset(hu, 0, (size_t)s->num_triangles);
+        s->tri_has_uv = hu;
+    }
     memcpy(s->positions + base, positions, (size_t)num_vertices * sizeof *positions);
     s->num_positions += num_vertices;
     for (int t = 0; t < num_triangles; t++) {
@@ -192,6 +234,7 @@ CstStatus scene_add_mesh_ex(Scene *s, const SceneMesh *m, int *num_dropped, CstE
         }
         for (int k = 0; k < 3; k++) s->tri_indices[3 * id + k] = base + indices[3 * t + k];
         s->tri_info[id].material = m->tri_material ? m->tri_material[t] : m->material;
+        if (s->tri_has_uv) s->tri_has_uv[id] = m->uvs != NULL;
         CstStatus st = add_emitter(s, (uint32_t)id, m->emission, area, &s->tri_info[id].emitter, err);
         if (st != CST_OK) return st;
         s->num_triangles = id + 1; /* keep counts consistent if a later triangle fails */
@@ -215,7 +258,16 @@ CstStatus scene_add_mesh(Scene *s, const Vec3 *positions, int num_vertices, cons
 CstStatus scene_add_quad(Scene *s, const Vec3 v[4], int material, const Emission *emission, CstError *err)
 {
     static const int idx[6] = {0, 1, 2, 0, 2, 3};
-    return scene_add_mesh(s, v, 4, idx, 2, material, emission, err);
+    static const Vec2 uv[4] = {{0.0f, 0.0f}, {1.0f, 0.0f}, {1.0f, 1.0f}, {0.0f, 1.0f}};
+    SceneMesh m = {0};
+    m.positions = v;
+    m.num_vertices = 4;
+    m.uvs = uv;
+    m.indices = idx;
+    m.num_triangles = 2;
+    m.material = material;
+    m.emission = emission;
+    return scene_add_mesh_ex(s, &m, NULL, err);
 }
 
 CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,

@@ -12,15 +12,19 @@
 #include "accel/instances.h"
 #include "camera/camera.h"
 #include "caustic/caustic.h"
+#include "geometry/sphere.h"
+#include "geometry/triangle.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
 #include "materials/material.h"
 #include "math/rgb.h"
 #include "math/vec3.h"
+#include "textures/texture.h"
 
 typedef struct Emission {
     Rgb radiance;  /* black = not an emitter */
     int two_sided; /* 0: emits only on the side its geometric normal points to */
+    int texture;   /* 1 + texture index: radiance times the texture; 0 = none */
 } Emission;
 
 /* Primitive ids: triangles are [0, num_triangles), spheres follow. */
@@ -39,6 +43,9 @@ struct CstScene {
     Vec3 *normals; int cap_normals; /* unit shading normals */
     Vec2 *uvs; int cap_uvs;         /* texture coordinates, channel 0 */
     int normals_partial, uvs_partial;
+    /* Per triangle, whether it takes its uvs from `uvs` (else the default (0,0), (1,0),
+     * (0,1) at its vertices): NULL until a mesh with uvs arrives. */
+    unsigned char *tri_has_uv;
     int32_t *tri_indices; /* 3 per triangle */
     int num_triangles, cap_triangles;
     Sphere *spheres; int num_spheres, cap_spheres;
@@ -46,6 +53,7 @@ struct CstScene {
     Vec3 *tri_normals;     /* unit geometric normals, (v1-v0) x (v2-v0); made by commit */
     PrimInfo *sphere_info; /* num_spheres entries */
     /* appearance */
+    Texture *textures; int num_textures, cap_textures; /* referenced by index */
     Material *materials; int num_materials, cap_materials;
     Emitter *emitters; int num_emitters, cap_emitters;
     DeltaLight *delta_lights; int num_delta_lights, cap_delta_lights; /* point, spot, directional */
@@ -70,6 +78,10 @@ struct CstScene {
 Scene *scene_create(void);
 void scene_destroy(Scene *scene);
 
+/* Takes ownership of t's image buffer, also on failure. A checkerboard's two textures
+ * must already be in the scene. */
+CstStatus scene_add_texture(Scene *scene, const Texture *t, int *out_id, CstError *err);
+/* The material's textures must already be in the scene. */
 CstStatus scene_add_material(Scene *scene, const Material *m, int *out_id, CstError *err);
 /* Indices are 3 per triangle into positions; all must be in range and the triangles
  * non-degenerate (callers that know file locations check first for better messages).
@@ -94,7 +106,8 @@ typedef struct SceneMesh {
 /* scene_add_mesh with vertex attributes, per-triangle materials and optional skipping of
  * degenerate triangles; *num_dropped (may be NULL) gets how many were skipped. */
 CstStatus scene_add_mesh_ex(Scene *scene, const SceneMesh *mesh, int *num_dropped, CstError *err);
-/* Planar quad v0..v3 as triangles (v0,v1,v2), (v0,v2,v3); normal = (v1-v0) x (v2-v0). */
+/* Planar quad v0..v3 as triangles (v0,v1,v2), (v0,v2,v3); normal = (v1-v0) x (v2-v0);
+ * texture coordinates (0,0), (1,0), (1,1), (0,1) at v0..v3. */
 CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
@@ -133,6 +146,9 @@ typedef struct SurfaceHit {
     float t;
     uint32_t prim;
     int32_t material, emitter;
+    /* Texture coordinates at p (triangle_uv(), sphere_uv()); computed only in scenes with
+     * textures, the only readers, and (0, 0) elsewhere. */
+    Vec2 uv;
 } SurfaceHit;
 
 /* A hit in an instance, closer than any in `accel`: filled in world space. */
@@ -152,6 +168,7 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     sh->ng = transform_normal(&in->normal_matrix, pr->tri_normals[ih.prim]);
     sh->material = pr->tri_material[ih.prim];
     sh->emitter = -1;
+    sh->uv = v2(ih.u, ih.v); /* instanced objects carry no uvs: the triangle default */
     return true;
 }
 
@@ -176,10 +193,13 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
         /* From barycentrics, not o + t d: accurate to a few ulps of the vertices,
          * which ray_offset_origin relies on (the ray form errs by ulps of |o| + t). */
         sh->p = v3_add(v3_add(v3_scale(a, 1.0f - h.u - h.v), v3_scale(b, h.u)), v3_scale(c, h.v));
+        sh->uv = s->num_textures ? triangle_uv(s->uvs, s->tri_has_uv, s->tri_indices, h.prim, h.u, h.v)
+                                 : v2(0.0f, 0.0f);
     } else {
         const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];
         sh->ng = v3_normalize(v3_sub(ray_at(ray, h.t), sp->center));
         sh->p = v3_madd(sp->center, sh->ng, sp->radius); /* reprojected onto the surface */
+        sh->uv = s->num_textures ? sphere_uv(sh->ng) : v2(0.0f, 0.0f);
     }
     const PrimInfo *pi = scene_prim_info(s, h.prim);
     sh->material = pi->material;
@@ -187,11 +207,37 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     return true;
 }
 
-/* The BSDF at a hit: the one place where a hit's material, normal (and later its texture
- * coordinates and shading normal) become a Bsdf, so every integrator sees the same surface. */
+/* A material's textures evaluated at texture coordinates uv, over what bsdf_init took
+ * from the material's constants. */
+static inline void scene_bsdf_textures(const Scene *s, const Material *m, Vec2 uv, Bsdf *b)
+{
+    if (m->albedo_texture) b->albedo = texture_eval(s->textures, m->albedo_texture - 1, uv);
+    if (m->roughness_texture)
+        b->alpha = material_bsdf_alpha(clampf(texture_eval_scalar(s->textures, m->roughness_texture - 1, uv), 0.0f, 1.0f));
+}
+
+/* The BSDF at a hit: the one place where a hit's material, normal, texture coordinates
+ * (and later its shading normal) become a Bsdf, so every integrator sees the same surface. */
 static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
 {
-    bsdf_init(b, &s->materials[sh->material], sh->ng);
+    const Material *m = &s->materials[sh->material];
+    bsdf_init(b, m, sh->ng);
+    if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh->uv, b);
+}
+
+/* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be
+ * on an emitter (sh->emitter >= 0). */
+static inline Rgb scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w)
+{
+    return emitter_radiance(&s->emitters[sh->emitter], s->textures, sh->ng, sh->uv, w);
+}
+
+/* What NEE and light-path starts need of the scene's geometry and textures. */
+static inline EmitterGeometry scene_emitter_geometry(const Scene *s)
+{
+    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres,
+                         s->uvs, s->tri_has_uv, s->textures};
+    return g;
 }
 
 /* Any hit in (r->t_min, r->t_max), instances included. */

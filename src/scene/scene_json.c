@@ -59,6 +59,13 @@ typedef struct Loader {
     const char **mat_names;
     int *mat_ids;
     int num_materials;
+    /* The "textures" object and, per member in iteration order, its name, state (0 not
+     * read, 1 being read: a checkerboard cycle, 2 read) and scene id. Read on first use,
+     * so checkerboards may name textures listed after them. */
+    const json_t *tex_obj;
+    const char **tex_names;
+    int *tex_state, *tex_ids;
+    int num_textures;
 } Loader;
 
 /* ------------------------------------------------------------------ paths and messages */
@@ -645,6 +652,184 @@ static CstStatus parse_sampler(Loader *ld, const json_t *sampler)
     return CST_OK;
 }
 
+/* ------------------------------------------------------------------ textures */
+
+static char *resolve_mesh_path(const char *scene_name, const char *file);
+static CstStatus read_texture_name(Loader *ld, const char *name, int *out);
+
+/* A checkerboard's "even" or "odd": a colour (a new constant texture) or a texture name. */
+static CstStatus read_texture_operand(Loader *ld, const json_t *obj, const char *key, int *out)
+{
+    json_t *v;
+    LOADER_TRY(member_required(ld, obj, key, "an RGB triple or a texture name", &v));
+    path_push_key(ld, key);
+    if (json_is_string(v)) {
+        LOADER_TRY(read_texture_name(ld, json_string_value(v), out));
+    } else {
+        Rgb c;
+        Texture t;
+        LOADER_TRY(read_rgb(ld, v, 0, &c));
+        texture_constant(&t, c);
+        CstStatus st = scene_add_texture(ld->scene, &t, out, ld->err);
+        if (st != CST_OK) return fail_builder(ld, st);
+    }
+    path_pop(ld);
+    return CST_OK;
+}
+
+/* The texture object at the current path (textures.<name>). */
+static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
+{
+    static const char *const types[] = {"constant", "checkerboard", "image"};
+    static const char *const keys_constant[] = {"type", "value"};
+    static const char *const keys_checker[] = {"type", "even", "odd", "scale"};
+    static const char *const keys_image[] = {"type", "file", "linear", "wrap"};
+    int type = 0;
+    json_t *v;
+    Texture t;
+    CstStatus st;
+    LOADER_TRY(expect_object(ld, obj, "a texture object"));
+    LOADER_TRY(read_type(ld, obj, "texture type", types, 3, -1, &type));
+    if (type == TEXTURE_CONSTANT) {
+        Rgb c;
+        LOADER_TRY(check_keys(ld, obj, keys_constant, 2));
+        LOADER_TRY(member_required(ld, obj, "value", "an array of 3 numbers >= 0", &v));
+        path_push_key(ld, "value");
+        LOADER_TRY(read_rgb(ld, v, 0, &c));
+        path_pop(ld);
+        texture_constant(&t, c);
+    } else if (type == TEXTURE_CHECKERBOARD) {
+        int even = 0, odd = 0;
+        float scale = 1.0f;
+        LOADER_TRY(check_keys(ld, obj, keys_checker, 4));
+        if ((v = json_object_get(obj, "scale"))) {
+            path_push_key(ld, "scale");
+            LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &scale));
+            if (!(scale > 0.0f))
+                return fail_here(ld, "scale %g is not positive; expected the number of squares per "
+                                     "unit of u and v, > 0", (double)scale);
+            path_pop(ld);
+        }
+        LOADER_TRY(read_texture_operand(ld, obj, "even", &even));
+        LOADER_TRY(read_texture_operand(ld, obj, "odd", &odd));
+        texture_checkerboard(&t, ld->scene->textures, even, odd, scale);
+    } else {
+        static const char *const wraps[] = {"repeat", "clamp"};
+        const char *file = NULL;
+        int linear = 0;
+        TextureWrap wrap = TEXTURE_WRAP_REPEAT;
+        LOADER_TRY(check_keys(ld, obj, keys_image, 4));
+        if ((v = json_object_get(obj, "linear"))) {
+            path_push_key(ld, "linear");
+            LOADER_TRY(read_bool(ld, v, &linear));
+            path_pop(ld);
+        }
+        if ((v = json_object_get(obj, "wrap"))) {
+            const char *w = NULL;
+            path_push_key(ld, "wrap");
+            LOADER_TRY(read_string(ld, v, &w));
+            if (strcmp(w, wraps[0]) == 0) wrap = TEXTURE_WRAP_REPEAT;
+            else if (strcmp(w, wraps[1]) == 0) wrap = TEXTURE_WRAP_CLAMP;
+            else {
+                char name[72];
+                return fail_here(ld, "unknown wrap mode \"%s\"; expected one of: repeat, clamp",
+                                 clip_name(w, name));
+            }
+            path_pop(ld);
+        }
+        LOADER_TRY(member_required(ld, obj, "file", "the path of an image file", &v));
+        path_push_key(ld, "file");
+        LOADER_TRY(read_string(ld, v, &file));
+        if (!file[0]) return fail_here(ld, "the file name is empty; expected the path of an image");
+        char *path = resolve_mesh_path(ld->name, file);
+        if (!path) return fail_at(ld, CST_ERR_OOM, "out of memory");
+        st = texture_image_load(&t, path, linear, wrap, ld->err);
+        free(path);
+        if (st != CST_OK) return fail_builder(ld, st);
+        path_pop(ld);
+    }
+    st = scene_add_texture(ld->scene, &t, out, ld->err);
+    if (st != CST_OK) return fail_builder(ld, st);
+    return CST_OK;
+}
+
+/* Scene id of the texture called `name`, read now if it has not been. The error points at
+ * the current path (the value naming it). */
+static CstStatus read_texture_name(Loader *ld, const char *name, int *out)
+{
+    char clipped[72];
+    for (int i = 0; i < ld->num_textures; i++) {
+        if (strcmp(ld->tex_names[i], name) != 0) continue;
+        if (ld->tex_state[i] == 2) {
+            *out = ld->tex_ids[i];
+            return CST_OK;
+        }
+        if (ld->tex_state[i] == 1)
+            return fail_here(ld, "texture \"%s\" contains itself through checkerboards; expected "
+                                 "no cycles", clip_name(name, clipped));
+        /* Read it at its own path, then come back. */
+        JsonPathStep saved[LOADER_MAX_DEPTH];
+        int saved_depth = ld->depth;
+        memcpy(saved, ld->path, sizeof saved);
+        ld->depth = 0;
+        path_push_key(ld, "textures");
+        path_push_key(ld, ld->tex_names[i]);
+        ld->tex_state[i] = 1;
+        LOADER_TRY(parse_texture(ld, json_object_get(ld->tex_obj, ld->tex_names[i]), &ld->tex_ids[i]));
+        ld->tex_state[i] = 2;
+        memcpy(ld->path, saved, sizeof saved);
+        ld->depth = saved_depth;
+        *out = ld->tex_ids[i];
+        return CST_OK;
+    }
+    if (ld->num_textures == 0)
+        return fail_here(ld, "texture \"%s\" is not defined (no textures are); expected a name "
+                             "defined under \"textures\"", clip_name(name, clipped));
+    char list[512];
+    join_names(ld->tex_names, ld->num_textures, list, sizeof list);
+    return fail_here(ld, "texture \"%s\" is not defined; expected one of: %s", clip_name(name, clipped), list);
+}
+
+static CstStatus parse_textures(Loader *ld, const json_t *texs)
+{
+    LOADER_TRY(expect_object(ld, texs, "an object mapping texture names to textures"));
+    size_t n = json_object_size(texs);
+    if (n > (size_t)INT_MAX / 2)
+        return fail_here(ld, "too many textures");
+    ld->tex_obj = texs;
+    ld->tex_names = malloc((n ? n : 1) * sizeof *ld->tex_names);
+    ld->tex_state = calloc(n ? n : 1, sizeof *ld->tex_state);
+    ld->tex_ids = calloc(n ? n : 1, sizeof *ld->tex_ids);
+    if (!ld->tex_names || !ld->tex_state || !ld->tex_ids)
+        return fail_at(ld, CST_ERR_OOM, "out of memory");
+    const char *name;
+    json_t *v;
+    json_object_foreach((json_t *)texs, name, v) ld->tex_names[ld->num_textures++] = name;
+    /* Every texture is read (and so checked) even when nothing uses it. */
+    for (int i = 0; i < ld->num_textures; i++) {
+        int id;
+        LOADER_TRY(read_texture_name(ld, ld->tex_names[i], &id));
+    }
+    return CST_OK;
+}
+
+/* A material parameter given as a texture name: its id + 1 (Material's convention), after
+ * checking the texture's values fit the parameter (at most 1 for reflectances and
+ * roughness). The current path is the parameter's value. */
+static CstStatus read_param_texture(Loader *ld, const json_t *v, const char *what, int *out)
+{
+    int id = 0;
+    LOADER_TRY(read_texture_name(ld, json_string_value(v), &id));
+    Rgb mx = ld->scene->textures[id].max;
+    if (rgb_max(mx) > 1.0f) {
+        char clipped[72];
+        return fail_here(ld, "texture \"%s\" has values up to %g; expected %s, at most 1",
+                         clip_name(json_string_value(v), clipped), (double)rgb_max(mx), what);
+    }
+    *out = id + 1;
+    return CST_OK;
+}
+
 enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COUNT };
 
 /* "roughness": perceptual, in [0, 1] (material.h: alpha = roughness^2). */
@@ -685,7 +870,10 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     if ((v = json_object_get(obj, "albedo"))) {
         /* A reflectance above 1 would make any of these create energy. */
         path_push_key(ld, "albedo");
-        LOADER_TRY(read_rgb(ld, v, 1, &m->albedo));
+        if (json_is_string(v))
+            LOADER_TRY(read_param_texture(ld, v, "a reflectance", &m->albedo_texture));
+        else
+            LOADER_TRY(read_rgb(ld, v, 1, &m->albedo));
         path_pop(ld);
     }
     if ((v = json_object_get(obj, "ior"))) {
@@ -702,7 +890,18 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
                              (double)m->ior);
         path_pop(ld);
     }
-    if ((v = json_object_get(obj, "roughness"))) LOADER_TRY(read_roughness(ld, v, &m->roughness));
+    if ((v = json_object_get(obj, "roughness"))) {
+        if (json_is_string(v)) {
+            path_push_key(ld, "roughness");
+            if (type == MAT_PLASTIC)
+                return fail_here(ld, "a plastic's roughness cannot be a texture (its coat albedo "
+                                     "table is made for one roughness); expected a number from 0 to 1");
+            LOADER_TRY(read_param_texture(ld, v, "a roughness", &m->roughness_texture));
+            path_pop(ld);
+        } else {
+            LOADER_TRY(read_roughness(ld, v, &m->roughness));
+        }
+    }
     if ((v = json_object_get(obj, "two_sided"))) {
         int two = 1;
         path_push_key(ld, "two_sided");
@@ -800,19 +999,35 @@ static CstStatus read_material_ref(Loader *ld, const json_t *shape, int *out)
 
 static CstStatus read_emission(Loader *ld, const json_t *shape, Emission *em)
 {
-    static const char *const keys[] = {"radiance", "two_sided"};
+    static const char *const keys[] = {"radiance", "two_sided", "scale"};
     json_t *obj = json_object_get(shape, "emission"), *v;
     em->radiance = rgb_s(0.0f);
     em->two_sided = 0;
+    em->texture = 0;
     if (!obj)
         return CST_OK;
     path_push_key(ld, "emission");
-    LOADER_TRY(expect_object(ld, obj, "an object with radiance, two_sided"));
-    LOADER_TRY(check_keys(ld, obj, keys, 2));
-    LOADER_TRY(member_required(ld, obj, "radiance", "an array of 3 numbers >= 0", &v));
+    LOADER_TRY(expect_object(ld, obj, "an object with radiance, two_sided, scale"));
+    LOADER_TRY(check_keys(ld, obj, keys, 3));
+    LOADER_TRY(member_required(ld, obj, "radiance", "an array of 3 numbers >= 0 or a texture name", &v));
     path_push_key(ld, "radiance");
-    LOADER_TRY(read_rgb(ld, v, 0, &em->radiance));
+    if (json_is_string(v)) {
+        int id = 0;
+        LOADER_TRY(read_texture_name(ld, json_string_value(v), &id));
+        em->texture = id + 1;
+        em->radiance = rgb_s(1.0f);
+    } else {
+        LOADER_TRY(read_rgb(ld, v, 0, &em->radiance));
+    }
     path_pop(ld);
+    if ((v = json_object_get(obj, "scale"))) {
+        float k = 1.0f;
+        path_push_key(ld, "scale");
+        LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &k));
+        if (!(k >= 0.0f)) return fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
+        em->radiance = rgb_scale(em->radiance, k);
+        path_pop(ld);
+    }
     if ((v = json_object_get(obj, "two_sided"))) {
         path_push_key(ld, "two_sided");
         LOADER_TRY(read_bool(ld, v, &em->two_sided));
@@ -942,9 +1157,11 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
         return fail_here(ld, "the mesh is too large; expected fewer than %d triangles", INT_MAX / 3);
 
     CstStatus st = CST_OK;
+    json_t *uarr = json_object_get(shape, "uvs");
     Vec3 *pos = malloc(nv * sizeof *pos);
     int *idx = malloc(nt * 3 * sizeof *idx);
-    if (!pos || !idx) {
+    Vec2 *uvs = uarr ? malloc(nv * sizeof *uvs) : NULL;
+    if (!pos || !idx || (uarr && !uvs)) {
         st = fail_at(ld, CST_ERR_OOM, "out of memory for %zu vertices and %zu triangles", nv, nt);
         goto done;
     }
@@ -962,12 +1179,48 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
     if (st != CST_OK)
         goto done;
     path_pop(ld);
-    st = scene_add_mesh(ld->scene, pos, (int)nv, idx, (int)nt, material, em, ld->err);
+    if (uarr) {
+        /* Texture coordinates, one [u, v] per vertex. */
+        path_push_key(ld, "uvs");
+        if (!json_is_array(uarr) || json_array_size(uarr) != nv) {
+            st = fail_here(ld, "got %s; expected one [u, v] per vertex (%zu)", describe(uarr, kind), nv);
+            goto done;
+        }
+        for (size_t k = 0; k < nv; k++) {
+            json_t *e = json_array_get(uarr, k);
+            float c[2] = {0.0f, 0.0f};
+            path_push_index(ld, k);
+            if (!json_is_array(e) || json_array_size(e) != 2) {
+                st = fail_here(ld, "got %s; expected an array of 2 numbers", describe(e, kind));
+                goto done;
+            }
+            for (size_t j = 0; j < 2; j++) {
+                path_push_index(ld, j);
+                st = read_float(ld, json_array_get(e, j), (double)FLT_MAX, &c[j]);
+                if (st != CST_OK)
+                    goto done;
+                path_pop(ld);
+            }
+            uvs[k] = v2(c[0], c[1]);
+            path_pop(ld);
+        }
+        path_pop(ld);
+    }
+    SceneMesh sm = {0};
+    sm.positions = pos;
+    sm.num_vertices = (int)nv;
+    sm.uvs = uvs;
+    sm.indices = idx;
+    sm.num_triangles = (int)nt;
+    sm.material = material;
+    sm.emission = em;
+    st = scene_add_mesh_ex(ld->scene, &sm, NULL, ld->err);
     if (st != CST_OK)
         st = fail_builder(ld, st);
 done:
     free(pos);
     free(idx);
+    free(uvs);
     return st;
 }
 
@@ -1273,7 +1526,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
     static const char *const types[] = {"quad", "mesh", "sphere", "meshfile"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission"};
-    static const char *const mesh_keys[] = {"type", "vertices", "indices", "material", "emission"};
+    static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission"};
     static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission"};
     static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
                                                 "transform"};
@@ -1283,7 +1536,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     LOADER_TRY(read_type(ld, shape, "shape type", types, 4, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(check_keys(ld, shape, quad_keys, 4)); break;
-    case SHAPE_MESH: LOADER_TRY(check_keys(ld, shape, mesh_keys, 5)); break;
+    case SHAPE_MESH: LOADER_TRY(check_keys(ld, shape, mesh_keys, 6)); break;
     case SHAPE_MESHFILE: LOADER_TRY(check_keys(ld, shape, meshfile_keys, 5)); break;
     default: LOADER_TRY(check_keys(ld, shape, sphere_keys, 5)); break;
     }
@@ -1477,10 +1730,10 @@ static CstStatus parse_environment(Loader *ld, const json_t *obj)
 static CstStatus parse_root(Loader *ld, const json_t *root)
 {
     static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
-                                       "shapes", "lights", "environment", "accel"};
+                                       "shapes", "lights", "environment", "accel", "textures"};
     json_t *v;
     LOADER_TRY(expect_object(ld, root, "an object with the scene sections"));
-    LOADER_TRY(check_keys(ld, root, keys, 9));
+    LOADER_TRY(check_keys(ld, root, keys, 10));
     if ((v = json_object_get(root, "accel"))) {
         path_push_key(ld, "accel");
         const char *name = NULL;
@@ -1512,6 +1765,11 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
     if ((v = json_object_get(root, "sampler"))) {
         path_push_key(ld, "sampler");
         LOADER_TRY(parse_sampler(ld, v));
+        path_pop(ld);
+    }
+    if ((v = json_object_get(root, "textures"))) {
+        path_push_key(ld, "textures");
+        LOADER_TRY(parse_textures(ld, v));
         path_pop(ld);
     }
     if ((v = json_object_get(root, "materials"))) {
@@ -1603,6 +1861,9 @@ CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *n
     }
     free(ld.mat_names);
     free(ld.mat_ids);
+    free(ld.tex_names);
+    free(ld.tex_state);
+    free(ld.tex_ids);
     json_decref(root);
     if (st != CST_OK) {
         scene_destroy(ld.scene);

@@ -1754,7 +1754,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: sphere at (%g, %g, %g) radius %g is "
                            "beyond the scene limits (coordinates within 1e18, radius above 1e-18)",
                            d, (double)c.x, (double)c.y, (double)c.z, (double)r);
-        Emission em = {rgb_s(0.0f), 0};
+        Emission em = {rgb_s(0.0f), 0, 0};
         if (al && al->active) {
             em.radiance = rgb_scale(al->L, al->scale);
             em.two_sided = al->two_sided;
@@ -1825,7 +1825,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     sm.num_triangles = g->nt;
     sm.material = mat;
     sm.skip_degenerate = 1;
-    Emission em = {rgb_s(0.0f), 0};
+    Emission em = {rgb_s(0.0f), 0, 0};
     if (al && al->active) {
         em.radiance = rgb_scale(al->L, al->scale);
         em.two_sided = al->two_sided;

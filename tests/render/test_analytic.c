@@ -56,7 +56,7 @@ static Scene *plane_under_light(double a, double b, double h)
     assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
     float ha = (float)(a / 2), hb = (float)(b / 2), fh = (float)h;
     Vec3 light[4] = {{-ha, fh, -hb}, {ha, fh, -hb}, {ha, fh, hb}, {-ha, fh, hb}};
-    Emission em = {{LE, LE, LE}, 0};
+    Emission em = {{LE, LE, LE}, 0, 0};
     assert_int_equal(scene_add_quad(s, light, light_mat, &em, &err), CST_OK);
     return s;
 }

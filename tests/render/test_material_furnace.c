@@ -22,7 +22,7 @@ static Scene *furnace_scene(const Material *m)
     assert_int_equal(scene_add_material(s, m, &obj, &err), CST_OK);
     Material k = {.type = MATERIAL_DIFFUSE, .albedo = {0.0f, 0.0f, 0.0f}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &k, &black, &err), CST_OK);
-    Emission em = {{1.0f, 1.0f, 1.0f}, 1};
+    Emission em = {{1.0f, 1.0f, 1.0f}, 1, 0};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 10.0f, black, &em, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, obj, NULL, &err), CST_OK);
     /* fov 30 at distance 4: the sphere fills most of the frame */

@@ -16,7 +16,7 @@ static inline Scene *test_scene_emitting_sphere(float rho, double expect[3])
     int grey;
     Material m = {.type = MATERIAL_DIFFUSE, .albedo = {rho, rho, rho}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &grey, &err), CST_OK);
-    Emission em = {{1.0f, 0.5f, 0.25f}, 1};
+    Emission em = {{1.0f, 0.5f, 0.25f}, 1, 0};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, grey, &em, &err), CST_OK);
     CameraDesc cam = {{0.1f, 0.2f, 0.3f}, {0, 0, -1}, {0, 1, 0}, 90.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
@@ -47,7 +47,7 @@ static inline Scene *test_scene_glass_interface(void)
     Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
     Vec3 glass_q[4] = {{-3, 1, -3}, {-3, 1, 3}, {3, 1, 3}, {3, 1, -3}};
     Vec3 light_q[4] = {{-1.5f, 2, -1.5f}, {1.5f, 2, -1.5f}, {1.5f, 2, 1.5f}, {-1.5f, 2, 1.5f}};
-    Emission em = {{4.0f, 4.0f, 4.0f}, 0};
+    Emission em = {{4.0f, 4.0f, 4.0f}, 0, 0};
     assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, glass_q, glass_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, light_q, light_mat, &em, &err), CST_OK);

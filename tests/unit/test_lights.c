@@ -28,7 +28,7 @@ static Scene *scene_with_lights(double power[6])
     /* Two quads (2 triangles each) and a sphere: power pi A L (x2 two-sided). */
     Vec3 q1[4] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
     Vec3 q2[4] = {{0, 2, 0}, {0, 2, 2}, {3, 2, 2}, {3, 2, 0}};
-    Emission e1 = {{1.0f, 1.0f, 1.0f}, 0}, e2 = {{0.5f, 0.2f, 0.1f}, 1}, e3 = {{4.0f, 4.0f, 4.0f}, 0};
+    Emission e1 = {{1.0f, 1.0f, 1.0f}, 0, 0}, e2 = {{0.5f, 0.2f, 0.1f}, 1, 0}, e3 = {{4.0f, 4.0f, 4.0f}, 0, 0};
     assert_int_equal(scene_add_quad(s, q1, mat, &e1, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, q2, mat, &e2, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(5, 5, 5), 0.25f, mat, &e3, &err), CST_OK);
@@ -74,7 +74,7 @@ static void test_selection_by_power(void **state)
     double obs[6] = {0};
     Pcg32 rng;
     pcg32_seed(&rng, 17u, 3u);
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry g = scene_emitter_geometry(s);
     for (int n = 0; n < N; n++) {
         EmissionSample es;
         float u_sel = pcg32_float(&rng);
@@ -103,7 +103,7 @@ static void test_nee_densities(void **state)
     Scene *s = scene_with_lights(power);
     double total = 0.0;
     for (int k = 0; k < 6; k++) total += power[k];
-    EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres};
+    EmitterGeometry g = scene_emitter_geometry(s);
     Pcg32 rng;
     pcg32_seed(&rng, 5u, 9u);
     Vec3 x = v3(1.5f, -1.0f, 1.0f); /* below quad 1 (which faces down), inside the spot's cone */

@@ -1,0 +1,217 @@
+/* Texture construction (constants, checkerboards, images from memory or files) and
+ * evaluation: bilinear filtering with repeat or clamp wrapping. */
+#include "textures/texture.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <stb_image.h>
+
+#include "core/error.h"
+#include "film/image_io.h"
+
+static Rgb rgb_max3(Rgb a, Rgb b) { return rgb(maxf(a.r, b.r), maxf(a.g, b.g), maxf(a.b, b.b)); }
+
+void texture_constant(Texture *t, Rgb value)
+{
+    memset(t, 0, sizeof *t);
+    t->type = TEXTURE_CONSTANT;
+    t->value = value;
+    t->average = t->max = value;
+}
+
+void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd, float scale)
+{
+    memset(t, 0, sizeof *t);
+    t->type = TEXTURE_CHECKERBOARD;
+    t->checker.even = even;
+    t->checker.odd = odd;
+    t->checker.scale = scale;
+    /* The two kinds of square cover equal areas of the uv plane. */
+    t->average = rgb_scale(rgb_add(textures[even].average, textures[odd].average), 0.5f);
+    t->max = rgb_max3(textures[even].max, textures[odd].max);
+}
+
+CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, TextureWrap wrap, CstError *err)
+{
+    memset(t, 0, sizeof *t);
+    if (!rgb_data || width <= 0 || height <= 0) {
+        free(rgb_data);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "texture image of %d x %d pixels%s", width, height,
+                        rgb_data ? "" : " without pixels");
+    }
+    size_t n = (size_t)width * (size_t)height;
+    double sum[3] = {0.0, 0.0, 0.0};
+    Rgb mx = rgb_s(0.0f);
+    for (size_t i = 0; i < n; i++) {
+        const float *p = &rgb_data[3 * i];
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]) || p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f) {
+            free(rgb_data);
+            return cst_fail(err, CST_ERR_INVALID_ARG,
+                            "texture image pixel (%zu, %zu) is (%g, %g, %g); expected finite values >= 0",
+                            i % (size_t)width, i / (size_t)width, (double)p[0], (double)p[1], (double)p[2]);
+        }
+        for (int c = 0; c < 3; c++) sum[c] += (double)p[c];
+        mx = rgb_max3(mx, rgb(p[0], p[1], p[2]));
+    }
+    t->type = TEXTURE_IMAGE;
+    t->image.rgb = rgb_data;
+    t->image.width = width;
+    t->image.height = height;
+    t->image.wrap = wrap;
+    t->average = rgb((float)(sum[0] / (double)n), (float)(sum[1] / (double)n), (float)(sum[2] / (double)n));
+    t->max = mx;
+    return CST_OK;
+}
+
+/* An sRGB-encoded (or linear) integer image of 3 channels, maxval 255 or 65535, as floats. */
+static float *texture_decode_ints(const void *px, bool sixteen, size_t n, bool linear)
+{
+    float *out = malloc(n * 3 * sizeof *out);
+    if (!out) return NULL;
+    if (!sixteen) {
+        float lut[256];
+        for (int i = 0; i < 256; i++) lut[i] = linear ? (float)i / 255.0f : image_srgb_to_linear(i / 255.0);
+        const unsigned char *b = px;
+        for (size_t i = 0; i < 3 * n; i++) out[i] = lut[b[i]];
+    } else {
+        const uint16_t *w = px;
+        for (size_t i = 0; i < 3 * n; i++)
+            out[i] = linear ? (float)w[i] / 65535.0f : image_srgb_to_linear(w[i] / 65535.0);
+    }
+    return out;
+}
+
+CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureWrap wrap, CstError *err)
+{
+    memset(t, 0, sizeof *t);
+    FILE *fp = fopen(path, "rb");
+    if (!fp) return cst_fail(err, CST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    unsigned char magic[4] = {0};
+    size_t got = fread(magic, 1, sizeof magic, fp);
+    bool exr = got == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
+    bool pfm = got >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f');
+    if (exr || pfm) {
+        /* Float formats through the film's readers (OpenEXR's C API, our PFM parser). */
+        fclose(fp);
+        float *px = NULL;
+        int w = 0, h = 0;
+        CstStatus st = image_read(path, &px, &w, &h, err);
+        if (st != CST_OK) return st;
+        return texture_image(t, px, w, h, wrap, err);
+    }
+    if (fseek(fp, 0, SEEK_SET) != 0) {
+        fclose(fp);
+        return cst_fail(err, CST_ERR_IO, "%s: cannot seek: %s", path, strerror(errno));
+    }
+    int w = 0, h = 0, comp = 0;
+    float *px = NULL;
+    bool oom = false;
+    if (stbi_is_hdr_from_file(fp)) {
+        /* Radiance HDR: linear floats, taken as they are (stbi_loadf would gamma-decode
+         * an 8-bit image with its own 2.2 curve, so it is used for HDR files only). */
+        float *f = stbi_loadf_from_file(fp, &w, &h, &comp, 3);
+        if (f) {
+            size_t n = (size_t)w * (size_t)h * 3;
+            px = malloc(n * sizeof *px);
+            if (px) memcpy(px, f, n * sizeof *px);
+            else oom = true;
+            stbi_image_free(f);
+        }
+    } else if (stbi_is_16_bit_from_file(fp)) {
+        stbi_us *s = stbi_load_from_file_16(fp, &w, &h, &comp, 3);
+        if (s) {
+            if (!(px = texture_decode_ints(s, true, (size_t)w * (size_t)h, linear))) oom = true;
+            stbi_image_free(s);
+        }
+    } else {
+        stbi_uc *b = stbi_load_from_file(fp, &w, &h, &comp, 3);
+        if (b) {
+            if (!(px = texture_decode_ints(b, false, (size_t)w * (size_t)h, linear))) oom = true;
+            stbi_image_free(b);
+        }
+    }
+    fclose(fp);
+    if (oom) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d texture", path, w, h);
+    if (!px) {
+        const char *why = stbi_failure_reason();
+        return cst_fail(err, CST_ERR_PARSE,
+                        "%s: cannot decode the image (%s); expected a PNG, JPEG, BMP, TGA, HDR, EXR or PFM file",
+                        path, why ? why : "unknown reason");
+    }
+    CstStatus st = texture_image(t, px, w, h, wrap, err);
+    if (st != CST_OK) {
+        char msg[sizeof err->msg];
+        memcpy(msg, err->msg, sizeof msg);
+        msg[sizeof msg - 1] = '\0';
+        return cst_fail(err, st, "%s: %s", path, msg);
+    }
+    return CST_OK;
+}
+
+void texture_free(Texture *t)
+{
+    if (t && t->type == TEXTURE_IMAGE) free(t->image.rgb);
+}
+
+/* A texel index along an axis of n texels. */
+static inline int texture_wrap(int i, int n, TextureWrap wrap)
+{
+    if (wrap == TEXTURE_WRAP_CLAMP) return i < 0 ? 0 : i >= n ? n - 1 : i;
+    return i < 0 ? i + n : i >= n ? i - n : i; /* i is within one period (see below) */
+}
+
+/* Bilinear interpolation between the four texel centres around uv. */
+static Rgb texture_image_eval(const TextureImage *im, Vec2 uv)
+{
+    float u = uv.x, v = uv.y;
+    if (!isfinite(u)) u = 0.0f;
+    if (!isfinite(v)) v = 0.0f;
+    /* Reduce to one period first (repeat) or to the unit square (clamp), so the texel
+     * coordinates below are small and their conversion to int cannot overflow. */
+    if (im->wrap == TEXTURE_WRAP_REPEAT) {
+        u -= floorf(u);
+        v -= floorf(v);
+    } else {
+        u = clampf(u, 0.0f, 1.0f);
+        v = clampf(v, 0.0f, 1.0f);
+    }
+    float x = u * (float)im->width - 0.5f, y = (1.0f - v) * (float)im->height - 0.5f;
+    float fx0 = floorf(x), fy0 = floorf(y);
+    float dx = x - fx0, dy = y - fy0;
+    int x0 = (int)fx0, y0 = (int)fy0;
+    int xa = texture_wrap(x0, im->width, im->wrap), xb = texture_wrap(x0 + 1, im->width, im->wrap);
+    int ya = texture_wrap(y0, im->height, im->wrap), yb = texture_wrap(y0 + 1, im->height, im->wrap);
+    const float *p00 = &im->rgb[3 * ((size_t)ya * (size_t)im->width + (size_t)xa)];
+    const float *p10 = &im->rgb[3 * ((size_t)ya * (size_t)im->width + (size_t)xb)];
+    const float *p01 = &im->rgb[3 * ((size_t)yb * (size_t)im->width + (size_t)xa)];
+    const float *p11 = &im->rgb[3 * ((size_t)yb * (size_t)im->width + (size_t)xb)];
+    float w00 = (1.0f - dx) * (1.0f - dy), w10 = dx * (1.0f - dy), w01 = (1.0f - dx) * dy, w11 = dx * dy;
+    return rgb(w00 * p00[0] + w10 * p10[0] + w01 * p01[0] + w11 * p11[0],
+               w00 * p00[1] + w10 * p10[1] + w01 * p01[1] + w11 * p11[1],
+               w00 * p00[2] + w10 * p10[2] + w01 * p01[2] + w11 * p11[2]);
+}
+
+Rgb texture_eval(const Texture *textures, int id, Vec2 uv)
+{
+    /* Checkerboards only select another texture, so nesting is a loop; children have
+     * lower indices, so it ends. */
+    for (;;) {
+        const Texture *t = &textures[id];
+        switch (t->type) {
+        case TEXTURE_CONSTANT: return t->value;
+        case TEXTURE_IMAGE: return texture_image_eval(&t->image, uv);
+        case TEXTURE_CHECKERBOARD: {
+            float su = floorf(uv.x * t->checker.scale), sv = floorf(uv.y * t->checker.scale);
+            /* fmodf is exact; beyond 2^24 every float is even, and NaN counts as even. */
+            float parity = fmodf(su + sv, 2.0f);
+            id = parity == 1.0f || parity == -1.0f ? t->checker.odd : t->checker.even;
+            break;
+        }
+        }
+    }
+}
