@@ -29,6 +29,7 @@ def main():
     png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", W, H, 8, 2, 0, 0, 0))
            + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
     out = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "textures", "bands.png")
+    os.makedirs(os.path.dirname(out), exist_ok=True)
     with open(out, "wb") as f:
         f.write(png)
 
