@@ -93,12 +93,15 @@ uint32_t permute_index(uint32_t i, uint32_t n, uint32_t p)
 /* 32-bit fraction to a float in [0, 1): 24 bits, so 1.0f is never returned. */
 static inline float u32_to_float(uint32_t x) { return (float)(x >> 8) * 0x1p-24f; }
 
-/* (stratum + jitter) / n in [0, 1), jitter a 32-bit fraction: in double, then rounded
- * down into [0, 1) (a float near 1 could round up to 1.0f). */
+/* (stratum + jitter) / n, jitter a 32-bit fraction, as a float inside the stratum
+ * [stratum / n, (stratum + 1) / n): rounding to float may cross either end (and reach
+ * 1.0f), so it is stepped back in. */
 static inline float stratum_float(uint32_t stratum, uint32_t jitter, uint32_t n)
 {
     float v = (float)(((double)stratum + (double)jitter * 0x1p-32) / (double)n);
-    return v < 1.0f ? v : 0x1.fffffep-1f;
+    while ((double)v * n >= (double)stratum + 1.0) v = nextafterf(v, 0.0f);
+    while ((double)v * n < (double)stratum) v = nextafterf(v, 1.0f);
+    return v;
 }
 
 /* Every scramble and permutation of one request derives from this. */
