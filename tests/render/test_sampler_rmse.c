@@ -10,8 +10,9 @@
  * standard error by the jackknife over the renders). The ratio sigma^2 / (M MSE(M)) is
  * how many more samples independent sampling needs for the same RMSE.
  *
- * Measured here (seeds as below): sobol at 32 spp: 6.6x (it reaches independent's
- * 64-spp RMSE at about 16.5 spp: 3.9x); stratified at 48 spp: 2.9x. z = 14.6 and 9.2.
+ * Measured here (seeds as below): sobol at 32 spp: 6.7x, z = 14.1; stratified at 48 spp:
+ * 3.0x, z = 9.7. Independent's RMSE at 64 spp is reached by sobol at about 18 spp (ratio
+ * 3.6) and by stratified at about 27 (2.4): docs/benchmarks.md.
  * Most of the gain is at the light's edges, where the film position decides the sample
  * (antialiasing converges faster than 1/N with stratified positions). */
 #include <math.h>
