@@ -16,7 +16,8 @@
 typedef enum ArgsOpt {
     ARGS_OPT_OUTPUT, ARGS_OPT_SPP, ARGS_OPT_TIME, ARGS_OPT_THREADS, ARGS_OPT_SEED,
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
-    ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL
+    ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
+    ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV
 } ArgsOpt;
 
 typedef struct ArgsOptSpec {
@@ -37,6 +38,10 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"width",      0,   true,  ARGS_OPT_WIDTH},
     {"height",     0,   true,  ARGS_OPT_HEIGHT},
     {"accel",      0,   true,  ARGS_OPT_ACCEL},
+    {"sampler",    0,   true,  ARGS_OPT_SAMPLER},
+    {"exposure",   0,   true,  ARGS_OPT_EXPOSURE},
+    {"png-linear", 0,   false, ARGS_OPT_PNG_LINEAR},
+    {"aov",        0,   true,  ARGS_OPT_AOV},
     {"quiet",      'q', false, ARGS_OPT_QUIET},
     {"help",       'h', false, ARGS_OPT_HELP},
 };
@@ -98,6 +103,17 @@ void args_print_help(FILE *f)
 "                       512); --width and --height may each be given alone\n"
 "      --accel NAME     acceleration structure: bvh (default), kdtree, grid, list (brute\n"
 "                       force) or embree (when built with Embree); default: the scene's\n"
+"      --sampler NAME   random numbers of camera paths: independent (PCG32, the\n"
+"                       default), stratified (jittered; 2D strata nx x ny = spp, so\n"
+"                       choose square or power-of-two spp) or sobol (Owen-scrambled\n"
+"                       Sobol'; fewer samples for the same noise, see docs/benchmarks.md).\n"
+"                       Light paths (light, photon, sppm, bdpt, vcm) stay independent\n"
+"      --exposure EV    scale the written image by 2^EV, -64..64 (default: the scene's,\n"
+"                       else 0); the film's stored means are not changed\n"
+"      --png-linear     write PNG values linearly (no sRGB curve; tagged gAMA 1.0)\n"
+"      --aov LIST       extra EXR channels, comma-separated: albedo (albedo.R/G/B),\n"
+"                       normal (N.X/Y/Z), depth (Z), variance (variance.R/G/B); needs an\n"
+"                       .exr output (docs/cli.md)\n"
 "  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
 "  -h, --help           show this help and exit\n"
 "      --version        print the version and exit\n"
@@ -244,6 +260,41 @@ static bool args_parse_seconds(const char *s, double *out)
     return true;
 }
 
+/* A finite number of stops in [-ARGS_MAX_EXPOSURE, ARGS_MAX_EXPOSURE]. */
+static bool args_parse_exposure(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0' || errno == ERANGE || !(v >= -ARGS_MAX_EXPOSURE && v <= ARGS_MAX_EXPOSURE))
+        return false;
+    *out = v;
+    return true;
+}
+
+/* "albedo,normal,..." to CST_AOV_* bits; false (and the bad name in *bad) on an unknown one. */
+static bool args_parse_aovs(const char *s, int *out, char *bad, size_t bad_len)
+{
+    int bits = 0;
+    while (*s) {
+        const char *comma = strchr(s, ',');
+        size_t n = comma ? (size_t)(comma - s) : strlen(s);
+        char name[32];
+        snprintf(bad, bad_len, "%.*s", (int)n, s);
+        if (n == 0 || n >= sizeof name) return false;
+        memcpy(name, s, n);
+        name[n] = '\0';
+        int bit = cst_aov_from_name(name);
+        if (!bit) return false;
+        bits |= bit;
+        s += n + (comma ? 1 : 0);
+        if (comma && !*s) { bad[0] = '\0'; return false; }
+    }
+    if (!bits) { bad[0] = '\0'; return false; }
+    *out = bits;
+    return true;
+}
+
 /* ------------------------------------------------------------ suggestions */
 
 /* Edit distance (Levenshtein) of two short strings; long ones count as far apart. */
@@ -376,6 +427,33 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         }
         out->accel = value;
         return true;
+    case ARGS_OPT_SAMPLER:
+        s->sampler = cst_sampler_from_name(value);
+        if (s->sampler == CST_SAMPLER_DEFAULT) {
+            args_fail(err, false, "--sampler: unknown sampler '%s' (valid: %s)", value, ARGS_SAMPLER_NAMES);
+            return false;
+        }
+        return true;
+    case ARGS_OPT_EXPOSURE:
+        if (!args_parse_exposure(value, &s->exposure)) {
+            args_fail(err, false, "--exposure: expected a number of stops from -%d to %d, got '%s'",
+                      ARGS_MAX_EXPOSURE, ARGS_MAX_EXPOSURE, value);
+            return false;
+        }
+        s->exposure_set = 1;
+        return true;
+    case ARGS_OPT_PNG_LINEAR:
+        s->png_linear = 1;
+        return true;
+    case ARGS_OPT_AOV: {
+        char bad[64];
+        if (!args_parse_aovs(value, &s->aovs, bad, sizeof bad)) {
+            args_fail(err, false, "--aov: unknown AOV '%s' in '%s' (valid: a comma-separated list of %s)",
+                      bad, value, ARGS_AOV_NAMES);
+            return false;
+        }
+        return true;
+    }
     case ARGS_OPT_QUIET:
         out->quiet = true;
         return true;

@@ -13,6 +13,9 @@
 #define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm, bdpt, vcm"
 #define ARGS_FILTER_NAMES     "box, tent, gaussian, mitchell"
 #define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree"
+#define ARGS_SAMPLER_NAMES    "independent, stratified, sobol"
+#define ARGS_AOV_NAMES        "albedo, normal, depth, variance"
+#define ARGS_MAX_EXPOSURE     64
 #define ARGS_OUTPUT_FORMATS   ".png, .exr, .pfm"
 #define ARGS_MAX_DIMENSION    65536
 #define ARGS_MAX_THREADS      1024

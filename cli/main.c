@@ -441,6 +441,17 @@ static int cli_render(const CliArgs *a)
         }
     }
 
+    {
+        /* AOVs are EXR channels: refused before rendering, not after. */
+        CstRenderSettings rs;
+        cst_render_settings_resolve(scene, &settings, &rs);
+        if (rs.aovs && !cli_has_suffix(output, ".exr")) {
+            fprintf(stderr, "caustic: error: output '%s': AOVs (--aov or the scene's \"aovs\") are "
+                            "written as extra EXR channels; expected an output ending in .exr\n", output);
+            code = CLI_EXIT_USAGE;
+            goto done;
+        }
+    }
     if (!a->quiet) {
         settings.progress = cli_progress_report;
         settings.progress_user = &progress;

@@ -131,12 +131,34 @@ typedef enum CstFilter {
     CST_FILTER_MITCHELL     /* Mitchell-Netravali, B = C = 1/3, radius 2 (negative lobes) */
 } CstFilter;
 
+/* Where camera paths get their random numbers (docs/integrators.md, "Samplers"). Light
+ * paths (light, photon, sppm, bdpt, vcm) always draw from independent PCG32 streams. */
+typedef enum CstSampler {
+    CST_SAMPLER_DEFAULT = 0,   /* the scene's choice, else CST_SAMPLER_INDEPENDENT */
+    CST_SAMPLER_INDEPENDENT,   /* one PCG32 stream per pixel sample */
+    CST_SAMPLER_STRATIFIED,    /* jittered strata of spp (1D) and nx x ny = spp (2D) cells */
+    CST_SAMPLER_SOBOL          /* Sobol' with hash-based Owen scrambling (Burley 2020) */
+} CstSampler;
+
+/* Extra EXR channels (bit mask); see cst_film_write. */
+enum {
+    CST_AOV_ALBEDO = 1,   /* albedo.R/G/B: reflectance of the first surface hit */
+    CST_AOV_NORMAL = 2,   /* N.X/Y/Z: its geometric normal, world space, facing the camera */
+    CST_AOV_DEPTH = 4,    /* Z: its distance along the camera's view axis */
+    CST_AOV_VARIANCE = 8  /* variance.R/G/B: the variance of each pixel mean */
+};
+
 /* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",
  * "vcm" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CstIntegrator cst_integrator_from_name(const char *name);
 const char *cst_integrator_name(CstIntegrator integrator);
 CstFilter cst_filter_from_name(const char *name);
 const char *cst_filter_name(CstFilter filter);
+/* "independent", "stratified", "sobol"; CST_SAMPLER_DEFAULT for an unknown name. */
+CstSampler cst_sampler_from_name(const char *name);
+const char *cst_sampler_name(CstSampler sampler);
+/* "albedo", "normal", "depth", "variance" (one name) to its CST_AOV_ bit; 0 if unknown. */
+int cst_aov_from_name(const char *name);
 
 typedef void (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
 
@@ -159,6 +181,13 @@ typedef struct CstRenderSettings {
                                * 0 = default 200000 */
     double photon_radius;     /* photon integrator: gather radius in scene units; 0 = automatic
                                * (about 50 photons at a typical visible point) */
+    CstSampler sampler;       /* camera-path sampler; default independent */
+    /* Output, applied when the film is written (cst_film_write), never to the stored means */
+    double exposure;          /* used when exposure_set != 0: pixels times 2^exposure; default 0 */
+    int exposure_set;
+    int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0 = the scene's,
+                               * else sRGB. EXR and PFM are always linear. */
+    int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = the scene's, else none */
     CstProgressFn progress;   /* called from the calling thread about 10 times a second */
     void *progress_user;
 } CstRenderSettings;
@@ -193,9 +222,11 @@ int cst_film_spp(const CstFilm *film);
 void cst_film_pixel(const CstFilm *film, int x, int y, double rgb[3]);
 /* Estimated variance of that mean (sample variance / spp), per channel. */
 void cst_film_pixel_variance(const CstFilm *film, int x, int y, double var[3]);
-/* Writes the film; the format follows the extension: .png (8-bit sRGB), .exr (float,
- * linear), .pfm (float, linear). Written to a temporary file then renamed, so a failed
- * write never leaves a partial image behind. */
+/* Writes the film; the format follows the extension: .png (8-bit sRGB, or linear when
+ * the render's png_linear was set), .exr (float, linear), .pfm (float, linear), scaled
+ * by the render's 2^exposure. A film rendered with AOVs writes them as extra EXR channels
+ * and cannot be written to another format (CST_ERR_INVALID_ARG). Written to a temporary
+ * file then renamed, so a failed write never leaves a partial image behind. */
 CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
 void cst_film_destroy(CstFilm *film);
 

@@ -19,7 +19,20 @@ Film *film_create(int width, int height)
     if (!f->sum || !f->sum_sq) { film_destroy(f); return NULL; }
     f->width = width;
     f->height = height;
+    f->exposure_scale = 1.0;
     return f;
+}
+
+int film_set_output(Film *f, int aovs, double exposure, int png_linear)
+{
+    f->aovs = aovs;
+    f->exposure_scale = exp2(exposure);
+    f->png_linear = png_linear;
+    if ((aovs & FILM_AOV_FIRST_HIT) && !f->aov) {
+        f->aov = calloc((size_t)f->width * (size_t)f->height * FILM_AOV_STRIDE, sizeof *f->aov);
+        if (!f->aov) return 0;
+    }
+    return 1;
 }
 
 void film_destroy(Film *f)
@@ -27,6 +40,7 @@ void film_destroy(Film *f)
     if (!f) return;
     free(f->sum);
     free(f->sum_sq);
+    free(f->aov);
     free(f);
 }
 
@@ -62,13 +76,70 @@ void film_resolve(const Film *f, float *rgb_out)
     for (size_t i = 0; i < n; i++) rgb_out[i] = (float)(f->sum[i] * inv);
 }
 
+/* The extra channels of the AOVs in f->aovs, interleaved per pixel in this order (the
+ * EXR writer keys channels by name, so the order is ours). */
+static int film_aov_channels(int aovs, const char **names)
+{
+    static const struct { int bit; const char *names[3]; int n; } AOVS[] = {
+        {CST_AOV_ALBEDO, {"albedo.R", "albedo.G", "albedo.B"}, 3},
+        {CST_AOV_NORMAL, {"N.X", "N.Y", "N.Z"}, 3},
+        {CST_AOV_DEPTH, {"Z", NULL, NULL}, 1},
+        {CST_AOV_VARIANCE, {"variance.R", "variance.G", "variance.B"}, 3},
+    };
+    int n = 0;
+    for (size_t a = 0; a < sizeof AOVS / sizeof AOVS[0]; a++)
+        if (aovs & AOVS[a].bit)
+            for (int c = 0; c < AOVS[a].n; c++) names[n++] = AOVS[a].names[c];
+    return n;
+}
+
+/* Pixel i's extra channels, as film_aov_channels lists them. Variance is that of the
+ * written (exposed) mean, so it scales with the square of the exposure. */
+static void film_aov_pixel(const Film *f, size_t i, float *out)
+{
+    int n = 0;
+    const double *a = f->aov ? &f->aov[FILM_AOV_STRIDE * i] : NULL;
+    double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
+    if (f->aovs & CST_AOV_ALBEDO)
+        for (int c = 0; c < 3; c++) out[n++] = (float)(a[c] * inv);
+    if (f->aovs & CST_AOV_NORMAL) {
+        /* The mean of unit normals, renormalised: a pixel across an edge gets the average
+         * direction, one on a flat surface the surface's normal. */
+        double len = sqrt(a[3] * a[3] + a[4] * a[4] + a[5] * a[5]);
+        for (int c = 0; c < 3; c++) out[n++] = len > 0.0 ? (float)(a[3 + c] / len) : 0.0f;
+    }
+    if (f->aovs & CST_AOV_DEPTH) out[n++] = a[7] > 0.0 ? (float)(a[6] / a[7]) : INFINITY;
+    if (f->aovs & CST_AOV_VARIANCE) {
+        double var[3];
+        cst_film_pixel_variance(f, (int)(i % (size_t)f->width), (int)(i / (size_t)f->width), var);
+        for (int c = 0; c < 3; c++) out[n++] = (float)(var[c] * f->exposure_scale * f->exposure_scale);
+    }
+}
+
 CstStatus cst_film_write(const CstFilm *f, const char *path, CstError *err)
 {
-    float *rgb = malloc((size_t)f->width * (size_t)f->height * 3u * sizeof *rgb);
-    if (!rgb) return cst_fail(err, CST_ERR_OOM, "out of memory resolving the film");
+    size_t pixels = (size_t)f->width * (size_t)f->height;
+    const char *names[IMAGE_MAX_EXTRA];
+    int extra = film_aov_channels(f->aovs, names);
+    if (extra > 0 && !image_path_is_exr(path))
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "%s: AOVs are written as extra EXR channels; expected an output ending in .exr",
+                        path);
+    float *rgb = malloc(pixels * 3u * sizeof *rgb);
+    float *aux = extra > 0 ? malloc(pixels * (size_t)extra * sizeof *aux) : NULL;
+    if (!rgb || (extra > 0 && !aux)) {
+        free(rgb);
+        free(aux);
+        return cst_fail(err, CST_ERR_OOM, "out of memory resolving the film");
+    }
     film_resolve(f, rgb);
-    CstStatus st = image_write(path, rgb, f->width, f->height, err);
+    if (f->exposure_scale != 1.0)
+        for (size_t i = 0; i < 3 * pixels; i++) rgb[i] = (float)((double)rgb[i] * f->exposure_scale);
+    for (size_t i = 0; extra > 0 && i < pixels; i++) film_aov_pixel(f, i, aux + i * (size_t)extra);
+    ImageWriteOptions opt = {f->png_linear != 0, extra, names, aux};
+    CstStatus st = image_write_opt(path, rgb, f->width, f->height, &opt, err);
     free(rgb);
+    free(aux);
     return st;
 }
 

@@ -8,16 +8,30 @@
 #include "caustic/caustic.h"
 #include "math/rgb.h"
 
+/* The AOVs traced from each camera sample's first hit (render.c), and the per-pixel sums
+ * they keep: albedo r, g, b, normal x, y, z, depth, and the number of samples that hit
+ * something. Albedo and normal are means over all the pixel's samples (a miss adds 0);
+ * depth is the mean over the samples that hit (+inf when none did). */
+enum { FILM_AOV_FIRST_HIT = CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH, FILM_AOV_STRIDE = 8 };
+
 struct CstFilm {
     int width, height;
     int spp;        /* samples accumulated in every pixel */
     double *sum;    /* 3 per pixel */
     double *sum_sq; /* 3 per pixel */
+    /* Output settings, applied by cst_film_write only */
+    int aovs;               /* CST_AOV_* bits */
+    double *aov;            /* FILM_AOV_STRIDE per pixel when aovs & FILM_AOV_FIRST_HIT, else NULL */
+    double exposure_scale;  /* 2^exposure */
+    int png_linear;
 };
 typedef struct CstFilm Film;
 
 /* Returns NULL on OOM. */
 Film *film_create(int width, int height);
+/* Sets the output settings (caustic.h) and allocates the AOV sums if needed. Returns 0 on
+ * OOM. */
+int film_set_output(Film *film, int aovs, double exposure, int png_linear);
 void film_destroy(Film *film);
 
 static inline void film_accumulate(Film *f, int pixel, double r, double g, double b)

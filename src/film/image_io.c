@@ -92,6 +92,12 @@ float image_srgb_to_linear(double s)
     return (float)c;
 }
 
+static uint8_t image_linear_byte(float v)
+{
+    float c = v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f; /* NaN -> 0 */
+    return (uint8_t)(c * 255.0f + 0.5f);
+}
+
 static uint8_t image_srgb_byte(float v)
 {
     return (uint8_t)(image_linear_to_srgb(v) * 255.0f + 0.5f);
@@ -102,8 +108,9 @@ static uint8_t image_srgb_byte(float v)
 /* Portable Float Map: "PF" (RGB) or "Pf" (grey), width, height, then a scale whose sign
  * gives the byte order (negative = little endian); rows are stored bottom to top. */
 static CstStatus image_write_pfm(FILE *fp, const char *path, const float *rgb, int w, int h,
-                                 CstError *err)
+                                 const ImageWriteOptions *opt, CstError *err)
 {
+    (void)opt;
     size_t row_floats = (size_t)w * 3;
     uint8_t *row = malloc(row_floats * 4);
     if (!row) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d-pixel row", path, w);
@@ -284,6 +291,7 @@ typedef struct PngWriteJob {
     const float *rgb;
     int w, h;
     uint8_t *row;
+    bool linear; /* bytes are linear values, tagged gAMA 1.0, instead of sRGB */
 } PngWriteJob;
 
 /* setjmp lives in its own function: nothing the caller owns is modified after it, so
@@ -296,12 +304,14 @@ static bool image_png_write_body(png_structp png, png_infop info, const PngWrite
                  PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     /* The sRGB chunk tells viewers how the bytes were encoded; the gAMA and cHRM values
      * that go with it help decoders that predate sRGB (PNG spec 11.3.3.5). */
-    png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    if (job->linear) png_set_gAMA(png, info, 1.0);
+    else png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
     png_write_info(png, info);
     size_t row_floats = (size_t)job->w * 3;
     for (int y = 0; y < job->h; ++y) {
         const float *src = job->rgb + (size_t)y * row_floats;
-        for (size_t i = 0; i < row_floats; ++i) job->row[i] = image_srgb_byte(src[i]);
+        for (size_t i = 0; i < row_floats; ++i)
+            job->row[i] = job->linear ? image_linear_byte(src[i]) : image_srgb_byte(src[i]);
         png_write_row(png, job->row);
     }
     png_write_end(png, NULL);
@@ -309,14 +319,14 @@ static bool image_png_write_body(png_structp png, png_infop info, const PngWrite
 }
 
 static CstStatus image_write_png(FILE *fp, const char *path, const float *rgb, int w, int h,
-                                 CstError *err)
+                                 const ImageWriteOptions *opt, CstError *err)
 {
     /* libpng's default limit; checked here so it reads as a limit, not an internal error */
     if (w > PNG_USER_WIDTH_MAX || h > PNG_USER_HEIGHT_MAX)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: %d x %d exceeds the PNG writer's limit of %d per side",
                         path, w, h, (int)PNG_USER_WIDTH_MAX);
     PngIo io = {{0}, 0};
-    PngWriteJob job = {fp, rgb, w, h, malloc((size_t)w * 3)};
+    PngWriteJob job = {fp, rgb, w, h, malloc((size_t)w * 3), opt->png_linear};
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &io, image_png_on_error,
                                               image_png_on_warning);
     png_infop info = png ? png_create_info_struct(png) : NULL;
@@ -550,8 +560,18 @@ static CstStatus image_exr_status(CstError *err, const char *path, const ExrIo *
                     io->msg[0] ? io->msg : exr_get_default_error_message(rv));
 }
 
-static exr_result_t image_exr_encode(exr_context_t ctx, int part, const float *rgb, int w, int h)
+/* The extra channel called `name`, or -1. */
+static int image_exr_extra(const ImageWriteOptions *opt, const char *name)
 {
+    for (int i = 0; name && i < opt->extra_channels; ++i)
+        if (strcmp(opt->extra_names[i], name) == 0) return i;
+    return -1;
+}
+
+static exr_result_t image_exr_encode(exr_context_t ctx, int part, const float *rgb, int w, int h,
+                                     const ImageWriteOptions *opt)
+{
+    const int ne = opt->extra_channels;
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     bool live = false;
     int32_t lines = 0;
@@ -568,11 +588,17 @@ static exr_result_t image_exr_encode(exr_context_t ctx, int part, const float *r
         const float *first = rgb + (size_t)(ci.start_y) * (size_t)w * 3;
         for (int c = 0; c < enc.channel_count; ++c) {
             exr_coding_channel_info_t *ch = &enc.channels[c];
-            int slot = image_exr_slot(ch->channel_name, false);
-            if (slot < 0) return EXR_ERR_UNKNOWN; /* we declared only R, G, B */
-            ch->encode_from_ptr = (const uint8_t *)(first + slot);
-            ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
-            ch->user_line_stride = w * 3 * (int32_t)sizeof(float);
+            int slot = image_exr_slot(ch->channel_name, false), stride = 3;
+            const float *at = first + slot;
+            if (slot < 0) {
+                slot = image_exr_extra(opt, ch->channel_name);
+                if (slot < 0) return EXR_ERR_UNKNOWN; /* we declared only these */
+                stride = ne;
+                at = opt->extra + (size_t)(ci.start_y) * (size_t)w * (size_t)ne + slot;
+            }
+            ch->encode_from_ptr = (const uint8_t *)at;
+            ch->user_pixel_stride = stride * (int32_t)sizeof(float);
+            ch->user_line_stride = w * stride * (int32_t)sizeof(float);
             ch->user_bytes_per_element = (int16_t)sizeof(float);
             ch->user_data_type = EXR_PIXEL_FLOAT;
         }
@@ -584,9 +610,9 @@ static exr_result_t image_exr_encode(exr_context_t ctx, int part, const float *r
 }
 
 static CstStatus image_write_exr(FILE *fp, const char *path, const float *rgb, int w, int h,
-                                 CstError *err)
+                                 const ImageWriteOptions *opt, CstError *err)
 {
-    if (w > IMAGE_MAX_WIDTH)
+    if (w > IMAGE_MAX_WIDTH / (opt->extra_channels > 3 ? opt->extra_channels : 3) * 3)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: %d pixels is too wide for the EXR writer", path, w);
     ExrIo io = {fileno(fp), 0, {0}};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
@@ -605,8 +631,10 @@ static CstStatus image_write_exr(FILE *fp, const char *path, const float *rgb, i
     if (rv == EXR_ERR_SUCCESS) rv = exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_ZIP);
     for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; ++c)
         rv = exr_add_channel(ctx, part, names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    for (int c = 0; c < opt->extra_channels && rv == EXR_ERR_SUCCESS; ++c)
+        rv = exr_add_channel(ctx, part, opt->extra_names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
     if (rv == EXR_ERR_SUCCESS) rv = exr_write_header(ctx);
-    if (rv == EXR_ERR_SUCCESS) rv = image_exr_encode(ctx, part, rgb, w, h);
+    if (rv == EXR_ERR_SUCCESS) rv = image_exr_encode(ctx, part, rgb, w, h, opt);
     if (ctx) {
         /* exr_finish also writes the chunk offset table, so its failure is a failed write. */
         exr_result_t rf = exr_finish(&ctx);
@@ -773,7 +801,7 @@ done:
 /* ---------------------------------------------------------------- dispatch */
 
 typedef CstStatus (*ImageWriteFn)(FILE *fp, const char *path, const float *rgb, int w, int h,
-                                  CstError *err);
+                                  const ImageWriteOptions *opt, CstError *err);
 
 typedef struct ImageFormat {
     const char *ext; /* lower case, without the dot */
@@ -804,6 +832,12 @@ static const char *image_path_ext(const char *path)
     base = base ? base + 1 : path;
     const char *dot = strrchr(base, '.');
     return dot && dot[1] ? dot + 1 : NULL;
+}
+
+bool image_path_is_exr(const char *path)
+{
+    const char *ext = image_path_ext(path);
+    return ext && image_ext_equal(ext, "exr");
 }
 
 static atomic_uint image_tmp_serial;
@@ -845,6 +879,13 @@ static CstStatus image_open_temp(const char *path, char **tmp_out, int *fd_out, 
 
 CstStatus image_write(const char *path, const float *rgb, int width, int height, CstError *err)
 {
+    static const ImageWriteOptions plain;
+    return image_write_opt(path, rgb, width, height, &plain, err);
+}
+
+CstStatus image_write_opt(const char *path, const float *rgb, int width, int height,
+                          const ImageWriteOptions *opt, CstError *err)
+{
     if (!path || !path[0]) return cst_fail(err, CST_ERR_INVALID_ARG, "image_write: empty path");
     if (!rgb || width <= 0 || height <= 0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: invalid image (%d x %d%s)", path, width,
@@ -853,6 +894,11 @@ CstStatus image_write(const char *path, const float *rgb, int width, int height,
     const ImageFormat *fmt = NULL;
     for (size_t i = 0; ext && i < sizeof image_formats / sizeof image_formats[0]; ++i)
         if (image_ext_equal(ext, image_formats[i].ext)) fmt = &image_formats[i];
+    if (fmt && opt->extra_channels > 0 && fmt->write != image_write_exr)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: extra channels need an .exr output", path);
+    if (opt->extra_channels < 0 || opt->extra_channels > IMAGE_MAX_EXTRA)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d extra channels (at most %d)", path,
+                        opt->extra_channels, IMAGE_MAX_EXTRA);
     if (!fmt) {
         if (!ext)
             return cst_fail(err, CST_ERR_INVALID_ARG,
@@ -870,7 +916,7 @@ CstStatus image_write(const char *path, const float *rgb, int width, int height,
         st = image_fail_errno(err, errno, path, "cannot open temporary file");
         close(fd);
     } else {
-        st = fmt->write(fp, path, rgb, width, height, err);
+        st = fmt->write(fp, path, rgb, width, height, opt, err);
         if (st == CST_OK && fflush(fp) != 0) st = image_fail_errno(err, errno, path, "write failed");
         /* Data on disk before the rename: otherwise a crash right after it can leave an
          * empty file under the final name on some filesystems. */

@@ -1,12 +1,10 @@
 /* One-sample direct lighting shared by the integrators that do not MIS it. */
 #include "integrators/direct.h"
 
-static Rgb sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, bool mis, Pcg32 *rng,
-                  uint64_t *rays)
+static Rgb sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, bool mis, float u_sel,
+                  Vec2 u, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return rgb_s(0.0f);
-    float u_sel = pcg32_float(rng);
-    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
@@ -18,13 +16,14 @@ static Rgb sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 w
     return rgb_scale(rgb_mul(f, ls.li), w / ls.pdf);
 }
 
-Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
+Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,
+                 uint64_t *rays)
 {
-    return sample(s, bsdf, sh, wo, false, rng, rays);
+    return sample(s, bsdf, sh, wo, false, u_sel, u, rays);
 }
 
-Rgb direct_light_mis(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
-                     uint64_t *rays)
+Rgb direct_light_mis(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
+                     Vec2 u, uint64_t *rays)
 {
-    return sample(s, bsdf, sh, wo, true, rng, rays);
+    return sample(s, bsdf, sh, wo, true, u_sel, u, rays);
 }

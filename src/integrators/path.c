@@ -5,7 +5,7 @@
 #include "integrators/direct.h"
 #include "materials/bsdf.h"
 
-Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t *rays)
+Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_t *rays)
 {
     Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
     bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
@@ -44,13 +44,16 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
 
         Bsdf bsdf;
         scene_bsdf(s, &sh, &bsdf);
-        if (use_nee && !bsdf_is_delta(&bsdf))
-            L = rgb_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, rng, rays)
-                                                               : direct_light(s, &bsdf, &sh, wo, rng, rays));
+        if (use_nee && !bsdf_is_delta(&bsdf)) {
+            float u_sel = sampler_1d(smp);
+            Vec2 u_light = sampler_2d(smp);
+            L = rgb_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, u_sel, u_light, rays)
+                                                       : direct_light(s, &bsdf, &sh, wo, u_sel, u_light, rays));
+        }
 
         BsdfSample bs;
-        float uc = pcg32_float(rng);
-        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+        float uc = sampler_1d(smp);
+        Vec2 u = sampler_2d(smp);
         if (!bsdf_sample(&bsdf, wo, uc, u, &bs)) break;
         beta = rgb_mul(beta, bs.weight);
         if (rgb_is_black(beta)) break;
@@ -62,7 +65,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Pcg32 *rng, uint64_t 
          * albedo-1 furnace terminates. */
         if (depth + 1 >= pp->rr_depth) {
             float q = minf(0.95f, rgb_max(beta));
-            if (!(pcg32_float(rng) < q)) break;
+            if (!(sampler_1d(smp) < q)) break;
             beta = rgb_scale(beta, 1.0f / q);
         }
         ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);

@@ -5,7 +5,7 @@
 
 #include <stdint.h>
 
-#include "core/rng.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 typedef enum PathMode { PATH_MIS, PATH_NEE, PATH_BSDF } PathMode;
@@ -18,6 +18,6 @@ typedef struct PathParams {
 
 /* Radiance arriving along `ray` (toward its origin). Adds the number of rays traced to
  * *rays. No allocation; safe to call from many threads on one committed scene. */
-Rgb path_li(const Scene *scene, const PathParams *params, Ray ray, Pcg32 *rng, uint64_t *rays);
+Rgb path_li(const Scene *scene, const PathParams *params, Ray ray, Sampler *smp, uint64_t *rays);
 
 #endif

@@ -189,7 +189,9 @@ static Rgb radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, co
 Rgb photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
                         uint64_t *rays)
 {
-    return direct_light(s, bsdf, sh, wo, rng, rays);
+    float u_sel = pcg32_float(rng);
+    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    return direct_light(s, bsdf, sh, wo, u_sel, u, rays);
 }
 
 Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t *rays)

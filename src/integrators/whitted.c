@@ -17,15 +17,19 @@ static const float WHITTED_MIN_WEIGHT = 1e-4f;
 /* Direct light at a diffuse point: the mean of n light samples (direct.c: area points
  * converted to solid angle with dist^2 / |cos theta_light|, or point, spot and
  * directional lights, whose shadow rays are Whitted's own). */
-static Rgb whitted_direct(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, int n, Pcg32 *rng,
+static Rgb whitted_direct(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, int n, Sampler *smp,
                           uint64_t *rays)
 {
     Rgb sum = rgb_s(0.0f);
-    for (int i = 0; i < n; i++) sum = rgb_add(sum, direct_light(s, bsdf, sh, wo, rng, rays));
+    for (int i = 0; i < n; i++) {
+        float u_sel = sampler_1d(smp);
+        Vec2 u = sampler_2d(smp);
+        sum = rgb_add(sum, direct_light(s, bsdf, sh, wo, u_sel, u, rays));
+    }
     return rgb_scale(sum, 1.0f / (float)n);
 }
 
-static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int depth, float weight, Pcg32 *rng,
+static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int depth, float weight, Sampler *smp,
                          uint64_t *rays)
 {
     SurfaceHit sh;
@@ -40,7 +44,7 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
      * plastic) get direct light only, Whitted's diffuse rule; a BSDF that also has delta
      * lobes (smooth-coat plastic) then branches into those below as well. */
     if (!bsdf_is_delta(&bsdf)) {
-        if (s->emitter_sampler.lights > 0) L = rgb_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, rng, rays));
+        if (s->emitter_sampler.lights > 0) L = rgb_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, smp, rays));
         if (!bsdf_has_delta(&bsdf)) return L;
     }
     if (depth >= wp->max_depth) return L;
@@ -64,15 +68,15 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
         float wmax = weight * rgb_max(w);
         if (!(wmax >= WHITTED_MIN_WEIGHT)) continue;
         Ray next = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
-        L = rgb_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, rng, rays));
+        L = rgb_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, smp, rays));
     }
     return L;
 }
 
-Rgb whitted_li(const Scene *s, const WhittedParams *wp, Ray ray, Pcg32 *rng, uint64_t *rays)
+Rgb whitted_li(const Scene *s, const WhittedParams *wp, Ray ray, Sampler *smp, uint64_t *rays)
 {
     WhittedParams p = *wp;
     if (p.max_depth <= 0) p.max_depth = WHITTED_DEFAULT_DEPTH;
     if (p.light_samples <= 0) p.light_samples = 1;
-    return whitted_trace(s, &p, ray, 0, 1.0f, rng, rays);
+    return whitted_trace(s, &p, ray, 0, 1.0f, smp, rays);
 }

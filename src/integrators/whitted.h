@@ -6,7 +6,7 @@
 
 #include <stdint.h>
 
-#include "core/rng.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 typedef struct WhittedParams {
@@ -18,6 +18,6 @@ enum { WHITTED_DEFAULT_DEPTH = 10 };
 
 /* Radiance arriving along `ray` (toward its origin) under the Whitted model. Adds the
  * number of rays traced to *rays. No allocation (recursion depth <= max_depth). */
-Rgb whitted_li(const Scene *scene, const WhittedParams *params, Ray ray, Pcg32 *rng, uint64_t *rays);
+Rgb whitted_li(const Scene *scene, const WhittedParams *params, Ray ray, Sampler *smp, uint64_t *rays);
 
 #endif

@@ -1,6 +1,6 @@
-/* Tiled multithreaded rendering. Determinism: each pixel sample draws from its own PCG32
- * stream seeded by (seed, pixel, sample index), and each pixel is accumulated by one
- * thread in sample order, so images are bit-identical for any thread count.
+/* Tiled multithreaded rendering. Determinism: each pixel sample draws from its own Sampler
+ * (sampling/sampler.h) started from (seed, pixel, sample index), and each pixel is
+ * accumulated by one thread in sample order, so images are bit-identical for any thread count.
  * Light tracing splats anywhere on the film instead; it runs in iterations of
  * width x height light paths, path i of iteration s seeded by (seed, i, s), cut into
  * fixed chunks whose splat lists are added in chunk order once the iteration is done, so
@@ -30,6 +30,7 @@
 #include "integrators/sppm.h"
 #include "integrators/vcm.h"
 #include "integrators/whitted.h"
+#include "sampling/sampler.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
 
@@ -88,6 +89,34 @@ const char *cst_filter_name(CstFilter filter)
     return "default";
 }
 
+CstSampler cst_sampler_from_name(const char *name)
+{
+    if (strcmp(name, "independent") == 0) return CST_SAMPLER_INDEPENDENT;
+    if (strcmp(name, "stratified") == 0) return CST_SAMPLER_STRATIFIED;
+    if (strcmp(name, "sobol") == 0) return CST_SAMPLER_SOBOL;
+    return CST_SAMPLER_DEFAULT;
+}
+
+const char *cst_sampler_name(CstSampler sampler)
+{
+    switch (sampler) {
+    case CST_SAMPLER_INDEPENDENT: return "independent";
+    case CST_SAMPLER_STRATIFIED: return "stratified";
+    case CST_SAMPLER_SOBOL: return "sobol";
+    case CST_SAMPLER_DEFAULT: break;
+    }
+    return "default";
+}
+
+int cst_aov_from_name(const char *name)
+{
+    if (strcmp(name, "albedo") == 0) return CST_AOV_ALBEDO;
+    if (strcmp(name, "normal") == 0) return CST_AOV_NORMAL;
+    if (strcmp(name, "depth") == 0) return CST_AOV_DEPTH;
+    if (strcmp(name, "variance") == 0) return CST_AOV_VARIANCE;
+    return 0;
+}
+
 #define PICK(field, dflt) out->field = in->field ? in->field : (sc->field ? sc->field : (dflt))
 void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out)
 {
@@ -104,9 +133,13 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK(time_limit, 0.0);
     PICK(photons, 0);          /* 0 stays: the photon integrator's default */
     PICK(photon_radius, 0.0);  /* 0 stays: automatic */
+    PICK(sampler, CST_SAMPLER_INDEPENDENT);
+    PICK(png_linear, 0);
+    PICK(aovs, 0);
     /* A time limit alone means "as many samples as fit"; otherwise the default count. */
     PICK(spp, out->time_limit > 0.0 ? 0 : CST_DEFAULT_SPP);
     if (!in->seed_set) { out->seed = sc->seed_set ? sc->seed : 0; out->seed_set = 1; }
+    if (!in->exposure_set) { out->exposure = sc->exposure_set ? sc->exposure : 0.0; out->exposure_set = 1; }
     if (out->threads <= 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
         out->threads = n > 0 ? (int)n : 1;
@@ -138,6 +171,9 @@ typedef struct RenderJob {
     CstFilter filter;
     Filter pixel_filter; /* its shape and sampling tables */
     uint64_t seed;
+    CstSampler sampler;  /* camera paths' */
+    uint32_t sampler_spp; /* the sample count strata divide; 0 = not known (time limit) */
+    bool aov_hit;        /* albedo, normal or depth AOVs: trace the first hit for them */
     /* Work units: tiles, or chunks of LIGHT_CHUNK light paths. units is the pass's
      * count: num_tiles or num_chunks. */
     int tiles_x, tiles_y, num_tiles, num_chunks, units;
@@ -184,6 +220,24 @@ typedef struct Worker {
     char pad[64];
 } Worker;
 
+/* The AOVs of one camera sample (film.h): its first hit, traced again here so that no
+ * integrator has to report it. */
+static void render_aov(RenderJob *job, Worker *w, int pixel, Ray ray)
+{
+    SurfaceHit sh;
+    ++w->rays;
+    if (!scene_intersect(job->scene, &ray, &sh)) return;
+    Bsdf bsdf;
+    scene_bsdf(job->scene, &sh, &bsdf);
+    Vec3 n = v3_dot(sh.ng, ray.d) > 0.0f ? v3_neg(sh.ng) : sh.ng;
+    float z = v3_dot(v3_sub(sh.p, job->camera.origin), job->camera.forward);
+    double *a = &job->film->aov[FILM_AOV_STRIDE * (size_t)pixel];
+    a[0] += (double)bsdf.albedo.r; a[1] += (double)bsdf.albedo.g; a[2] += (double)bsdf.albedo.b;
+    a[3] += (double)n.x; a[4] += (double)n.y; a[5] += (double)n.z;
+    a[6] += (double)z;
+    a[7] += 1.0;
+}
+
 static void render_tile(RenderJob *job, Worker *w, int tile)
 {
     const int W = job->film->width, H = job->film->height;
@@ -194,18 +248,20 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
         for (int x = x0; x < x1; x++) {
             int pixel = y * W + x;
             for (int s = job->pass_first; s < job->pass_first + job->pass_spp; s++) {
-                Pcg32 rng;
-                pcg32_seed_sample(&rng, job->seed, (uint64_t)pixel, (uint64_t)s);
-                Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
-                Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
+                Sampler smp;
+                sampler_start(&smp, job->sampler, job->seed, (uint64_t)pixel, (uint32_t)s, job->sampler_spp);
+                Vec2 uf = sampler_2d(&smp);
+                Vec2 ul = sampler_2d(&smp);
                 float fw;
                 Vec2 fp = filter_film_position(&job->pixel_filter, x, y, uf, &fw);
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
+                if (job->aov_hit) render_aov(job, w, pixel, ray);
+                /* Photon mapping and BDPT/VCM continue from the sample's PCG32 stream. */
                 Rgb L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
-                                                    &job->vcm_it, pixel, ray, &rng, &w->rays)
-                      : job->photon ? photon_li(job->scene, &job->photon_maps, ray, &rng, &w->rays)
-                      : job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &rng, &w->rays)
-                                     : path_li(job->scene, &job->params, ray, &rng, &w->rays);
+                                                    &job->vcm_it, pixel, ray, &smp.rng, &w->rays)
+                      : job->photon ? photon_li(job->scene, &job->photon_maps, ray, &smp.rng, &w->rays)
+                      : job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &smp, &w->rays)
+                                     : path_li(job->scene, &job->params, ray, &smp, &w->rays);
                 if (!rgb_is_finite(L)) {
                     /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
                     w->nonfinite++;
@@ -481,7 +537,18 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "the light tracer cannot render through an orthographic camera (its rays are "
                         "parallel, so no light path can connect to it); expected a pinhole or thin-lens "
                         "camera, or another integrator");
+    if ((st.aovs & FILM_AOV_FIRST_HIT) &&
+        (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_SPPM))
+        return cst_fail(err, CST_ERR_UNSUPPORTED,
+                        "the albedo, normal and depth AOVs come from camera rays, which the %s integrator "
+                        "does not trace; expected path, path-nee, path-bsdf, whitted, photon, bdpt or vcm "
+                        "(the variance AOV works with every integrator)",
+                        cst_integrator_name(st.integrator));
     Film *film = film_create(st.width, st.height);
+    if (film && !film_set_output(film, st.aovs, st.exposure, st.png_linear)) {
+        film_destroy(film);
+        film = NULL;
+    }
     Worker *workers = calloc((size_t)st.threads, sizeof *workers);
     RenderJob *job = calloc(1, sizeof *job);
     if (!film || !workers || !job) {
@@ -504,6 +571,10 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->filter = st.filter;
     filter_init(&job->pixel_filter, st.filter);
     job->seed = st.seed;
+    job->sampler = st.sampler;
+    /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
+    job->sampler_spp = (uint32_t)st.spp;
+    job->aov_hit = (st.aovs & FILM_AOV_FIRST_HIT) != 0;
     job->tiles_x = (st.width + RENDER_TILE - 1) / RENDER_TILE;
     job->tiles_y = (st.height + RENDER_TILE - 1) / RENDER_TILE;
     job->num_tiles = job->tiles_x * job->tiles_y;

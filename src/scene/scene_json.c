@@ -422,10 +422,11 @@ static int has_image_extension(const char *path)
 
 static CstStatus parse_film(Loader *ld, const json_t *film)
 {
-    static const char *const keys[] = {"width", "height", "filter", "output"};
+    static const char *const keys[] = {"width", "height", "filter", "output", "exposure", "png_encoding",
+                                       "aovs"};
     CstRenderSettings *rs = &ld->scene->settings;
-    LOADER_TRY(expect_object(ld, film, "an object with width, height, filter, output"));
-    LOADER_TRY(check_keys(ld, film, keys, 4));
+    LOADER_TRY(expect_object(ld, film, "an object with width, height, filter, output, exposure, png_encoding, aovs"));
+    LOADER_TRY(check_keys(ld, film, keys, 7));
     json_t *v;
     json_int_t i = 0;
     if ((v = json_object_get(film, "width"))) {
@@ -468,6 +469,44 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
         CstStatus st = scene_set_output_path(ld->scene, s, ld->err);
         if (st != CST_OK)
             return fail_builder(ld, st);
+        path_pop(ld);
+    }
+    if ((v = json_object_get(film, "exposure"))) {
+        float ev = 0.0f;
+        path_push_key(ld, "exposure");
+        LOADER_TRY(read_float(ld, v, 64.0, &ev));
+        rs->exposure = (double)ev;
+        rs->exposure_set = 1;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(film, "png_encoding"))) {
+        const char *s = NULL;
+        path_push_key(ld, "png_encoding");
+        LOADER_TRY(read_string(ld, v, &s));
+        if (strcmp(s, "srgb") != 0 && strcmp(s, "linear") != 0) {
+            char name[72];
+            return fail_here(ld, "unknown PNG encoding \"%s\"; expected \"srgb\" or \"linear\"", clip_name(s, name));
+        }
+        rs->png_linear = strcmp(s, "linear") == 0;
+        path_pop(ld);
+    }
+    if ((v = json_object_get(film, "aovs"))) {
+        path_push_key(ld, "aovs");
+        if (!json_is_array(v))
+            return fail_here(ld, "expected an array of AOV names (albedo, normal, depth, variance)");
+        for (size_t k = 0; k < json_array_size(v); k++) {
+            const char *s = NULL;
+            path_push_index(ld, k);
+            LOADER_TRY(read_string(ld, json_array_get(v, k), &s));
+            int bit = cst_aov_from_name(s);
+            if (!bit) {
+                char name[72];
+                return fail_here(ld, "unknown AOV \"%s\"; expected one of: albedo, normal, depth, variance",
+                                 clip_name(s, name));
+            }
+            rs->aovs |= bit;
+            path_pop(ld);
+        }
         path_pop(ld);
     }
     return CST_OK;
@@ -630,12 +669,24 @@ static CstStatus parse_integrator(Loader *ld, const json_t *integ)
 
 static CstStatus parse_sampler(Loader *ld, const json_t *sampler)
 {
-    static const char *const keys[] = {"spp", "seed"};
+    static const char *const keys[] = {"spp", "seed", "type"};
     CstRenderSettings *rs = &ld->scene->settings;
     json_t *v;
     json_int_t i = 0;
-    LOADER_TRY(expect_object(ld, sampler, "an object with spp, seed"));
-    LOADER_TRY(check_keys(ld, sampler, keys, 2));
+    LOADER_TRY(expect_object(ld, sampler, "an object with spp, seed, type"));
+    LOADER_TRY(check_keys(ld, sampler, keys, 3));
+    if ((v = json_object_get(sampler, "type"))) {
+        const char *s = NULL;
+        path_push_key(ld, "type");
+        LOADER_TRY(read_string(ld, v, &s));
+        rs->sampler = cst_sampler_from_name(s);
+        if (rs->sampler == CST_SAMPLER_DEFAULT) {
+            char name[72];
+            return fail_here(ld, "unknown sampler \"%s\"; expected one of: independent, stratified, sobol",
+                             clip_name(s, name));
+        }
+        path_pop(ld);
+    }
     if ((v = json_object_get(sampler, "spp"))) {
         path_push_key(ld, "spp");
         LOADER_TRY(read_int(ld, v, 1, INT_MAX, &i));

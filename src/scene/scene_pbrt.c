@@ -2716,9 +2716,20 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             rs->seed = (uint64_t)seed;
             rs->seed_set = 1;
         }
-        if (strcmp(type, "independent") != 0 && strcmp(type, "random") != 0)
-            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: samples are independent uniform random "
-                    "numbers (caustic's only sampler); same expectation, different noise", d);
+        /* The nearest of caustic's samplers (sampling/sampler.c): same expectation; only
+         * independent is the same kind of noise as pbrt's. */
+        if (strcmp(type, "independent") == 0 || strcmp(type, "random") == 0) {
+            rs->sampler = CST_SAMPLER_INDEPENDENT;
+        } else if (strcmp(type, "stratified") == 0) {
+            rs->sampler = CST_SAMPLER_STRATIFIED;
+            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's stratified sampler (jittered, 2D strata "
+                    "nx x ny = %d with nx the largest divisor up to its square root); same expectation, "
+                    "different noise", d, spp);
+        } else {
+            rs->sampler = CST_SAMPLER_SOBOL;
+            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's Owen-scrambled Sobol' sampler; same "
+                    "expectation, different noise", d);
+        }
     } else if (strcmp(dname, "Integrator") == 0) {
         static const struct { const char *pbrt; CstIntegrator ours; int exact; } map[] = {
             {"path", CST_INTEGRATOR_PATH, 1}, {"volpath", CST_INTEGRATOR_PATH, 0},

@@ -77,7 +77,7 @@ expect "--help exits 0" 0
 if [ -s "$ERR" ]; then fail "--help writes nothing to stderr"; else pass "--help writes nothing to stderr"; fi
 missing=""
 for opt in render SCENE -o --output --spp --time --threads --seed --integrator --filter \
-           --width --height --quiet --help --version \
+           --sampler --exposure --png-linear --aov --width --height --quiet --help --version \
            path path-nee path-bsdf box tent .png .exr .pfm cornell-box.png "Exit status"; do
     grep -qF -- "$opt" "$OUT" || missing="$missing $opt"
 done
@@ -154,6 +154,14 @@ check_value "unknown integrator lists the valid ones" --integrator metropolis --
     "--integrator: .*'metropolis'.*path, path-nee, path-bsdf"
 check_value "unknown filter lists the valid ones"     --filter lanczos -- \
     "--filter: .*'lanczos'.*box, tent, gaussian, mitchell"
+check_value "unknown sampler lists the valid ones"    --sampler halton -- \
+    "--sampler: .*'halton'.*independent, stratified, sobol"
+check_value "--exposure abc rejected" --exposure abc  -- "^caustic: --exposure: expected .*got 'abc'$"
+check_value "--exposure 100 rejected" --exposure 100  -- "--exposure: .*got '100'"
+check_value "unknown AOV lists the valid ones"        --aov albedo,uv -- \
+    "--aov: unknown AOV 'uv'.*albedo, normal, depth, variance"
+check_value "--aov with a PNG output rejected"        --aov depth -- \
+    "output 'v\.png': AOVs .*expected an output ending in \.exr"
 if no_images "$TMP/values"; then pass "rejected values write no image"; else fail "rejected values write no image"; fi
 
 # --------------------------------------------------------------- output path checks
@@ -292,6 +300,9 @@ if expect "render to EXR: exit 0" 0 "wrote out\.exr"; then
     [ "$(magic "$dir/out.exr" 4)" = "762f3101" ] && pass "EXR file has the OpenEXR magic" \
         || fail "EXR file has the OpenEXR magic" "got $(magic "$dir/out.exr" 4)"
 fi
+run "$dir" render --width 16 --height 16 --spp 4 --sampler sobol --exposure -1.5 --png-linear \
+    --aov albedo,normal,depth,variance -o aov.exr
+expect "sobol render with exposure and AOVs to EXR: exit 0" 0 "wrote aov\.exr"
 run "$dir" render --width 16 --height 16 --spp 2 -o out.pfm
 if expect "render to PFM: exit 0" 0 "wrote out\.pfm"; then
     [ "$(head -c 9 "$dir/out.pfm" | tr '\n' ' ')" = "PF 16 16 " ] && pass "PFM header is 'PF 16 16'" \

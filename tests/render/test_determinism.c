@@ -76,6 +76,37 @@ static void test_thread_count_invariance(void **state)
     check_thread_count_invariance(CST_INTEGRATOR_PATH);
 }
 
+/* The stratified and Sobol' samplers: every draw is a function of (seed, pixel, sample
+ * index, dimension), so their images do not depend on the thread count either. */
+static void test_sampler_thread_count_invariance(void **state)
+{
+    (void)state;
+    CstScene *s;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    const CstSampler samplers[] = {CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL};
+    for (int k = 0; k < 2; k++) {
+        Film *f[3];
+        const int threads[3] = {1, 3, 3};
+        for (int i = 0; i < 3; i++) {
+            CstRenderSettings st = {0};
+            st.width = 96;
+            st.height = 80;
+            st.spp = 8;
+            st.threads = threads[i];
+            st.seed = i < 2 ? 5 : 6;
+            st.seed_set = 1;
+            st.sampler = samplers[k];
+            assert_int_equal(cst_render(s, &st, &f[i], NULL, &err), CST_OK);
+        }
+        if (!films_identical(f[0], f[1]))
+            fail_msg("%s sampler: 1 thread and 3 threads differ", cst_sampler_name(samplers[k]));
+        assert_false(films_identical(f[0], f[2])); /* the seed matters */
+        for (int i = 0; i < 3; i++) film_destroy(f[i]);
+    }
+    cst_scene_destroy(s);
+}
+
 /* 96 x 80 = 7680 light paths per iteration: 8 chunks, split unevenly over 2, 3 and 7
  * threads, and 8 iterations, so both the chunk order within an iteration and the
  * iteration order are exercised. */
@@ -177,6 +208,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_thread_count_invariance),
+        cmocka_unit_test(test_sampler_thread_count_invariance),
         cmocka_unit_test(test_light_thread_count_invariance),
         cmocka_unit_test(test_bidir_thread_count_invariance),
         cmocka_unit_test(test_photon_thread_count_invariance),

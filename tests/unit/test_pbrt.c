@@ -1121,6 +1121,7 @@ static void test_camera_and_options(void **state)
     assert_int_equal(s->settings.width, 100);
     assert_int_equal(s->settings.height, 200);
     assert_int_equal(s->settings.spp, 32);
+    assert_int_equal(s->settings.sampler, CST_SAMPLER_SOBOL); /* halton: the nearest we have */
     assert_int_equal(s->settings.max_depth, 7);
     assert_int_equal(s->settings.integrator, CST_INTEGRATOR_PATH);
     assert_int_equal(s->settings.filter, CST_FILTER_GAUSSIAN); /* pbrt's default parameters: exact */

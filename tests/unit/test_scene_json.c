@@ -637,6 +637,29 @@ static void test_type_names(void **state)
                  "film.filter: unknown filter \"gauss\"; expected one of: box, tent");
 }
 
+/* sampler.type and the film's output keys (exposure, png_encoding, aovs). */
+static void test_sampler_and_output_keys(void **state)
+{
+    (void)state;
+    CstScene *s = expect_ok(WITH_SECTION("\"sampler\": {\"type\": \"sobol\", \"spp\": 4}, "
+                                         "\"film\": {\"exposure\": -1.5, \"png_encoding\": \"linear\", "
+                                         "\"aovs\": [\"depth\", \"normal\"], \"output\": \"a.exr\"}"));
+    assert_int_equal(s->settings.sampler, CST_SAMPLER_SOBOL);
+    assert_true(s->settings.exposure == -1.5 && s->settings.exposure_set);
+    assert_int_equal(s->settings.png_linear, 1);
+    assert_int_equal(s->settings.aovs, CST_AOV_DEPTH | CST_AOV_NORMAL);
+    cst_scene_destroy(s);
+    expect_error(WITH_SECTION("\"sampler\": {\"type\": \"halton\"}"), CST_ERR_INVALID_ARG, "\"halton\"", 0,
+                 "sampler.type: unknown sampler \"halton\"; expected one of: independent, stratified, sobol");
+    expect_error(WITH_SECTION("\"film\": {\"aovs\": [\"depth\", \"uv\"]}"), CST_ERR_INVALID_ARG, "\"uv\"", 0,
+                 "unknown AOV \"uv\"; expected one of: albedo, normal, depth, variance");
+    expect_error(WITH_SECTION("\"film\": {\"aovs\": \"depth\"}"), CST_ERR_INVALID_ARG, "\"depth\"", 0,
+                 "expected an array of AOV names");
+    expect_error(WITH_SECTION("\"film\": {\"png_encoding\": \"gamma\"}"), CST_ERR_INVALID_ARG, "\"gamma\"", 0,
+                 "unknown PNG encoding \"gamma\"");
+    expect_error(WITH_SECTION("\"film\": {\"exposure\": 65}"), CST_ERR_INVALID_ARG, "65", 0, "exposure");
+}
+
 static void test_shapes(void **state)
 {
     (void)state;
@@ -734,7 +757,8 @@ static void test_exact_positions(void **state)
                    "  \"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40}\n"
                    "}",
                    CST_ERR_INVALID_ARG,
-                   NAME ":2:25: film: unknown key \"hieght\"; expected one of: width, height, filter, output");
+                   NAME ":2:25: film: unknown key \"hieght\"; expected one of: width, height, filter, output, exposure, "
+                   "png_encoding, aovs");
     /* columns count code points: é (2 bytes), € (3), 😀 (4) are one column each */
     expect_message("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
                    "\t\"materials\": {\"\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\": {\"type\": \"diffuse\", "
@@ -1048,6 +1072,7 @@ int main(void)
         cmocka_unit_test(test_ranges),
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_type_names),
+        cmocka_unit_test(test_sampler_and_output_keys),
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_meshes),
         cmocka_unit_test(test_exact_positions),

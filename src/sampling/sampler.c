@@ -1,0 +1,180 @@
+/* The three samplers behind sampler.h. Stratified and Sobol' are "padded" (Kollig & Keller
+ * 2002; Burley 2020 §4; pbrt-v4's PaddedSobolSampler): each 1D or 2D request is a
+ * low-dimensional point set of its own, decorrelated from the other requests by a
+ * permutation of the sample index seeded by (seed, pixel, dimension). So any number of
+ * dimensions is supported with no direction-number table beyond Sobol's first two
+ * dimensions, and a path that skips a request (NEE at a mirror) only loses
+ * stratification, never uniformity. */
+#include "sampling/sampler.h"
+
+#include <math.h>
+
+/* Sobol' generator matrices, as columns for index bits 0..31. Dimension 0 is the van der
+ * Corput sequence (bit reversal); dimension 1 comes from the first primitive polynomial,
+ * x + 1 (Joe & Kuo, new-joe-kuo-6.21201, d = 2: s = 1, a = 0, m_1 = 1), whose recurrence
+ * v_k = v_{k-1} ^ (v_{k-1} >> 1) gives Pascal's matrix mod 2. Together they form a
+ * (0, 2)-sequence in base 2: every aligned run of 2^m points has one point in each
+ * elementary interval of area 2^-m (Niederreiter 1992, ch. 4). */
+static const uint32_t SOBOL_DIM1[32] = {
+    0x80000000u, 0xc0000000u, 0xa0000000u, 0xf0000000u, 0x88000000u, 0xcc000000u,
+    0xaa000000u, 0xff000000u, 0x80800000u, 0xc0c00000u, 0xa0a00000u, 0xf0f00000u,
+    0x88880000u, 0xcccc0000u, 0xaaaa0000u, 0xffff0000u, 0x80008000u, 0xc000c000u,
+    0xa000a000u, 0xf000f000u, 0x88008800u, 0xcc00cc00u, 0xaa00aa00u, 0xff00ff00u,
+    0x80808080u, 0xc0c0c0c0u, 0xa0a0a0a0u, 0xf0f0f0f0u, 0x88888888u, 0xccccccccu,
+    0xaaaaaaaau, 0xffffffffu,
+};
+
+static inline uint32_t reverse_bits(uint32_t x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+uint32_t sobol_sample(uint32_t index, int dim)
+{
+    if (dim == 0) return reverse_bits(index);
+    uint32_t x = 0;
+    for (int b = 0; index; b++, index >>= 1)
+        if (index & 1u) x ^= SOBOL_DIM1[b];
+    return x;
+}
+
+/* Burley, "Practical Hash-based Owen Scrambling", JCGT 9(4) 2020: in bit-reversed order,
+ * a hash in which each bit depends only on the bits below it is a nested uniform scramble
+ * (Owen 1995). The hash is Laine and Karras's (2011) as improved by Vegdahl (2021), the one
+ * pbrt-v4's FastOwenScrambler uses. */
+uint32_t owen_scramble(uint32_t x, uint32_t seed)
+{
+    x = reverse_bits(x);
+    x ^= x * 0x3d20adeau;
+    x += seed;
+    x *= (seed >> 16) | 1u;
+    x ^= x * 0x05526c56u;
+    x ^= x * 0x53a22864u;
+    return reverse_bits(x);
+}
+
+/* Kensler, "Correlated Multi-Jittered Sampling", Pixar TM 13-01 (2013), listing 3: a hash
+ * that is a bijection on the next power of two, cycle-walked down to [0, n). */
+uint32_t permute_index(uint32_t i, uint32_t n, uint32_t p)
+{
+    uint32_t w = n - 1u;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    do {
+        i ^= p;
+        i *= 0xe170893du;
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i *= 0x0929eb3fu;
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i *= 1u | p >> 27;
+        i *= 0x6935fa69u;
+        i ^= (i & w) >> 11;
+        i *= 0x74dcb303u;
+        i ^= (i & w) >> 2;
+        i *= 0x9e501cc3u;
+        i ^= (i & w) >> 2;
+        i *= 0xc860a3dfu;
+        i &= w;
+        i ^= i >> 5;
+    } while (i >= n);
+    return (i + p) % n;
+}
+
+/* 32-bit fraction to a float in [0, 1): 24 bits, so 1.0f is never returned. */
+static inline float u32_to_float(uint32_t x) { return (float)(x >> 8) * 0x1p-24f; }
+
+/* (stratum + jitter) / n, jitter a 32-bit fraction, as a float inside the stratum
+ * [stratum / n, (stratum + 1) / n): rounding to float may cross either end (and reach
+ * 1.0f), so it is stepped back in. */
+static inline float stratum_float(uint32_t stratum, uint32_t jitter, uint32_t n)
+{
+    float v = (float)(((double)stratum + (double)jitter * 0x1p-32) / (double)n);
+    while ((double)v * n >= (double)stratum + 1.0) v = nextafterf(v, 0.0f);
+    while ((double)v * n < (double)stratum) v = nextafterf(v, 1.0f);
+    return v;
+}
+
+/* Every scramble and permutation of one request derives from this. */
+static inline uint64_t dim_key(const Sampler *s)
+{
+    return mix64(s->key ^ ((uint64_t)s->dim + 1u) * 0x9e3779b97f4a7c15ULL);
+}
+
+void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index, uint32_t spp)
+{
+    pcg32_seed_sample(&s->rng, seed, pixel, index);
+    s->type = type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_INDEPENDENT : type;
+    s->dim = 0;
+    s->index = index;
+    s->spp = spp;
+    s->key = mix64(mix64(seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
+    /* 2D strata: nx x (spp / nx) with nx the largest divisor of spp not above its square
+     * root, so every sample index owns exactly one cell: 16 -> 4 x 4, 32 -> 4 x 8, a prime
+     * p -> 1 x p (plain 1D stratification in y: choose square or power-of-two counts). */
+    s->nx = 1;
+    if (s->type == CST_SAMPLER_STRATIFIED)
+        for (uint32_t d = 1; d <= spp / d; d++)
+            if (spp % d == 0) s->nx = d;
+}
+
+float sampler_1d(Sampler *s)
+{
+    switch (s->type) {
+    case CST_SAMPLER_STRATIFIED: {
+        uint64_t h = dim_key(s);
+        s->dim++;
+        uint32_t jitter = (uint32_t)(mix64(h + s->index) >> 32);
+        if (s->index >= s->spp) return u32_to_float(jitter); /* beyond the known count: no strata */
+        return stratum_float(permute_index(s->index, s->spp, (uint32_t)h), jitter, s->spp);
+    }
+    case CST_SAMPLER_SOBOL: {
+        uint64_t h = dim_key(s);
+        s->dim++;
+        /* Shuffling the index by an Owen scramble maps every aligned block of 2^m indices
+         * onto another such block (Burley 2020 §4), so prefixes stay stratified. */
+        uint32_t i = owen_scramble(s->index, (uint32_t)h);
+        return u32_to_float(owen_scramble(sobol_sample(i, 0), (uint32_t)(h >> 32)));
+    }
+    default:
+        return pcg32_float(&s->rng);
+    }
+}
+
+Vec2 sampler_2d(Sampler *s)
+{
+    switch (s->type) {
+    case CST_SAMPLER_STRATIFIED: {
+        uint64_t h = dim_key(s);
+        s->dim += 2;
+        uint64_t j = mix64(h + s->index);
+        uint32_t jx = (uint32_t)j, jy = (uint32_t)(j >> 32);
+        if (s->index >= s->spp) return v2(u32_to_float(jx), u32_to_float(jy));
+        uint32_t cell = permute_index(s->index, s->spp, (uint32_t)h), ny = s->spp / s->nx;
+        return v2(stratum_float(cell % s->nx, jx, s->nx), stratum_float(cell / s->nx, jy, ny));
+    }
+    case CST_SAMPLER_SOBOL: {
+        uint64_t h = dim_key(s), h2 = mix64(h);
+        s->dim += 2;
+        uint32_t i = owen_scramble(s->index, (uint32_t)h);
+        return v2(u32_to_float(owen_scramble(sobol_sample(i, 0), (uint32_t)(h >> 32))),
+                  u32_to_float(owen_scramble(sobol_sample(i, 1), (uint32_t)h2)));
+    }
+    default: {
+        /* y first: the order GCC gave the v2(pcg32_float(), pcg32_float()) this replaced
+         * (arguments evaluated right to left), so independent images stay bit-identical. */
+        float y = pcg32_float(&s->rng);
+        float x = pcg32_float(&s->rng);
+        return v2(x, y);
+    }
+    }
+}

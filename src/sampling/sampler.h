@@ -1,0 +1,44 @@
+/* Per-pixel-sample random numbers for camera paths: independent (PCG32), stratified
+ * (jittered) and Owen-scrambled Sobol'. A Sampler is a value started once per (pixel,
+ * sample index) and read dimension by dimension, so every draw is a function of
+ * (seed, pixel, sample index, dimension) alone, whatever thread renders the pixel. */
+#ifndef CST_SAMPLING_SAMPLER_H
+#define CST_SAMPLING_SAMPLER_H
+
+#include <stdint.h>
+
+#include "caustic/caustic.h"
+#include "core/rng.h"
+#include "math/vec3.h"
+
+typedef struct Sampler {
+    /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index) for every type.
+     * The independent sampler draws from it; the others leave it for code that still takes
+     * a Pcg32 (the photon and BDPT/VCM camera paths continue from it after the film and
+     * lens dimensions). */
+    Pcg32 rng;
+    CstSampler type;   /* never CST_SAMPLER_DEFAULT */
+    uint32_t dim;      /* the next dimension (stratified, sobol) */
+    uint32_t index;    /* the sample index within the pixel */
+    uint32_t spp;      /* stratified: the sample count the strata divide; 0 = unknown */
+    uint32_t nx;       /* stratified: 2D strata are nx x (spp / nx) */
+    uint64_t key;      /* hash of (seed, pixel): seeds every per-dimension scramble */
+} Sampler;
+
+/* Starts sample `index` of `pixel` (of `spp` per pixel: the stratified sampler divides
+ * [0,1) into that many strata; 0 = not known in advance, e.g. a render with only a time
+ * limit, and then it jitters without strata). type CST_SAMPLER_DEFAULT means independent. */
+void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index, uint32_t spp);
+/* The next dimension, uniform in [0, 1). */
+float sampler_1d(Sampler *s);
+/* The next two dimensions, uniform in [0, 1)^2 and stratified jointly. */
+Vec2 sampler_2d(Sampler *s);
+
+/* Sobol' point `index` in dimension 0 or 1, as a 32-bit fraction (unscrambled). */
+uint32_t sobol_sample(uint32_t index, int dim);
+/* Nested uniform (Owen) scramble of a 32-bit fraction in base 2, seeded (Burley 2020). */
+uint32_t owen_scramble(uint32_t x, uint32_t seed);
+/* A pseudo-random permutation of [0, n) (Kensler 2013): the image of i for key p. */
+uint32_t permute_index(uint32_t i, uint32_t n, uint32_t p);
+
+#endif

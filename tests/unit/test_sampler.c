@@ -1,0 +1,210 @@
+/* Samplers (sampling/sampler.c): the independent one is exactly the old PCG32 stream;
+ * stratified and Sobol' put exactly one of N samples in each of N strata (1D) and cells
+ * (2D); every sampler's 1D and 2D marginals, and pairs of different requests, are uniform
+ * across pixels (chi-square at 0.01, Sidak-corrected). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "sampling/sampler.h"
+#include "unit/chi2.h"
+
+static const CstSampler TYPES[] = {CST_SAMPLER_INDEPENDENT, CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL};
+
+static void test_independent_is_pcg32(void **state)
+{
+    (void)state;
+    for (uint64_t pixel = 0; pixel < 50; pixel++) {
+        for (uint32_t i = 0; i < 4; i++) {
+            Sampler s;
+            Pcg32 r;
+            sampler_start(&s, CST_SAMPLER_INDEPENDENT, 42, pixel, i, 4);
+            pcg32_seed_sample(&r, 42, pixel, i);
+            for (int k = 0; k < 10; k++) {
+                /* The order the renderer drew in before the Sampler existed (sampler.c). */
+                float y = pcg32_float(&r), x = pcg32_float(&r), u = pcg32_float(&r);
+                Vec2 v = sampler_2d(&s);
+                assert_true(v.x == x && v.y == y);
+                assert_true(sampler_1d(&s) == u);
+            }
+        }
+    }
+}
+
+static void test_deterministic(void **state)
+{
+    (void)state;
+    for (size_t t = 0; t < 3; t++) {
+        Sampler a, b;
+        sampler_start(&a, TYPES[t], 7, 1234, 5, 16);
+        sampler_start(&b, TYPES[t], 7, 1234, 5, 16);
+        for (int k = 0; k < 20; k++) {
+            assert_true(sampler_1d(&a) == sampler_1d(&b));
+            Vec2 u = sampler_2d(&a), v = sampler_2d(&b);
+            assert_true(u.x == v.x && u.y == v.y);
+        }
+    }
+}
+
+static void test_permutation(void **state)
+{
+    (void)state;
+    const uint32_t ns[] = {1, 2, 3, 7, 16, 17, 100, 1000};
+    for (size_t k = 0; k < sizeof ns / sizeof ns[0]; k++) {
+        uint32_t n = ns[k];
+        unsigned char seen[1000] = {0};
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t j = permute_index(i, n, 0x9e3779b9u * (k + 1));
+            assert_true(j < n);
+            assert_false(seen[j]);
+            seen[j] = 1;
+        }
+    }
+}
+
+/* Sobol' dimension 1 from its recurrence (Joe & Kuo d = 2: s = 1, a = 0, m_1 = 1). */
+static void test_sobol_directions(void **state)
+{
+    (void)state;
+    uint32_t v = 0x80000000u;
+    for (int b = 0; b < 32; b++) {
+        assert_int_equal(sobol_sample(1u << b, 1), v);
+        assert_int_equal(sobol_sample(1u << b, 0), 0x80000000u >> b);
+        v ^= v >> 1;
+    }
+}
+
+/* Each of n strata (1D) and each cell of the sampler's 2D grid gets exactly one of the
+ * pixel's n samples, in every request. Sobol': n = 2^m and every elementary interval
+ * 2^-a x 2^-(m-a) (a (0, m, 2)-net), also for the second block of n indices. */
+static void check_strata(CstSampler type, uint32_t n, uint32_t first)
+{
+    enum { REQUESTS = 6 };
+    uint32_t nx = 1;
+    for (uint32_t d = 1; d <= n / d; d++)
+        if (n % d == 0) nx = d;
+    for (uint64_t pixel = 0; pixel < 40; pixel++) {
+        float u1[REQUESTS][1024];
+        Vec2 u2[REQUESTS][1024];
+        for (uint32_t i = 0; i < n; i++) {
+            Sampler s;
+            sampler_start(&s, type, 3, pixel, first + i, type == CST_SAMPLER_STRATIFIED ? n : 0);
+            for (int r = 0; r < REQUESTS; r++) {
+                if (r % 2) u2[r][i] = sampler_2d(&s);
+                else u1[r][i] = sampler_1d(&s);
+            }
+        }
+        for (int r = 0; r < REQUESTS; r++) {
+            unsigned char hit[1024] = {0};
+            if (r % 2 == 0) {
+                for (uint32_t i = 0; i < n; i++) {
+                    uint32_t c = (uint32_t)((double)u1[r][i] * n);
+                    assert_true(c < n);
+                    assert_false(hit[c]);
+                    hit[c] = 1;
+                }
+                continue;
+            }
+            if (type == CST_SAMPLER_STRATIFIED) {
+                uint32_t ny = n / nx;
+                for (uint32_t i = 0; i < n; i++) {
+                    uint32_t cx = (uint32_t)((double)u2[r][i].x * nx), cy = (uint32_t)((double)u2[r][i].y * ny);
+                    assert_true(cx < nx && cy < ny);
+                    assert_false(hit[cy * nx + cx]);
+                    hit[cy * nx + cx] = 1;
+                }
+                continue;
+            }
+            int m = 0;
+            while ((1u << m) < n) m++;
+            for (int a = 0; a <= m; a++) {
+                memset(hit, 0, sizeof hit);
+                uint32_t bx = 1u << a, by = 1u << (m - a);
+                for (uint32_t i = 0; i < n; i++) {
+                    uint32_t cx = (uint32_t)(u2[r][i].x * (float)bx), cy = (uint32_t)(u2[r][i].y * (float)by);
+                    assert_false(hit[cy * bx + cx]);
+                    hit[cy * bx + cx] = 1;
+                }
+            }
+        }
+    }
+}
+
+static void test_stratified_strata(void **state)
+{
+    (void)state;
+    check_strata(CST_SAMPLER_STRATIFIED, 16, 0);  /* 4 x 4 */
+    check_strata(CST_SAMPLER_STRATIFIED, 12, 0);  /* 3 x 4 */
+    check_strata(CST_SAMPLER_STRATIFIED, 7, 0);   /* 1 x 7 */
+    check_strata(CST_SAMPLER_STRATIFIED, 256, 0); /* 16 x 16 */
+}
+
+static void test_sobol_strata(void **state)
+{
+    (void)state;
+    check_strata(CST_SAMPLER_SOBOL, 16, 0);
+    check_strata(CST_SAMPLER_SOBOL, 16, 16);
+    check_strata(CST_SAMPLER_SOBOL, 256, 0);
+    check_strata(CST_SAMPLER_SOBOL, 1024, 1024);
+}
+
+/* Chi-square of one histogram against the uniform expectation; returns the p-value. */
+static double uniform_p(const double *obs, int cells, double total)
+{
+    double expd[256];
+    for (int c = 0; c < cells; c++) expd[c] = total / cells;
+    int dof;
+    double stat, outside;
+    return chi2_pvalue(obs, expd, cells, &dof, &stat, &outside);
+}
+
+/* Across 16384 pixels, for each sample index of a 16-spp pixel and each request: the
+ * first request's 1D values (64 bins), the second's 2D values (16 x 16 bins), and the
+ * pair (first request, third request) (16 x 16 bins; independence of requests). */
+static void test_uniform_across_pixels(void **state)
+{
+    (void)state;
+    enum { PIXELS = 16384, SPP = 16, TESTS = 3 * 3 * 4 };
+    const uint32_t indices[4] = {0, 1, 7, 15};
+    const double alpha = 1.0 - pow(1.0 - 0.01, 1.0 / TESTS); /* Sidak */
+    for (size_t t = 0; t < 3; t++) {
+        for (int k = 0; k < 4; k++) {
+            static double h1[64], h2[256], hp[256];
+            memset(h1, 0, sizeof h1);
+            memset(h2, 0, sizeof h2);
+            memset(hp, 0, sizeof hp);
+            for (uint64_t p = 0; p < PIXELS; p++) {
+                Sampler s;
+                sampler_start(&s, TYPES[t], 11, p, indices[k], SPP);
+                float a = sampler_1d(&s);
+                Vec2 b = sampler_2d(&s);
+                float c = sampler_1d(&s);
+                h1[(int)(a * 64.0f)] += 1.0;
+                h2[(int)(b.y * 16.0f) * 16 + (int)(b.x * 16.0f)] += 1.0;
+                hp[(int)(c * 16.0f) * 16 + (int)(a * 16.0f)] += 1.0;
+            }
+            double p1 = uniform_p(h1, 64, PIXELS), p2 = uniform_p(h2, 256, PIXELS), pp = uniform_p(hp, 256, PIXELS);
+            if (p1 < alpha || p2 < alpha || pp < alpha)
+                fail_msg("%s, sample %u: p-values 1D %.3g, 2D %.3g, pair %.3g (alpha %.3g)",
+                         cst_sampler_name(TYPES[t]), indices[k], p1, p2, pp, alpha);
+        }
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_independent_is_pcg32),
+        cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_permutation),
+        cmocka_unit_test(test_sobol_directions),
+        cmocka_unit_test(test_stratified_strata),
+        cmocka_unit_test(test_sobol_strata),
+        cmocka_unit_test(test_uniform_across_pixels),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
