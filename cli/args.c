@@ -17,7 +17,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_OUTPUT, ARGS_OPT_SPP, ARGS_OPT_TIME, ARGS_OPT_THREADS, ARGS_OPT_SEED,
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
-    ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV
+    ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP
 } ArgsOpt;
 
 typedef struct ArgsOptSpec {
@@ -42,6 +42,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"exposure",   0,   true,  ARGS_OPT_EXPOSURE},
     {"png-linear", 0,   false, ARGS_OPT_PNG_LINEAR},
     {"aov",        0,   true,  ARGS_OPT_AOV},
+    {"crop",       0,   true,  ARGS_OPT_CROP},
     {"quiet",      'q', false, ARGS_OPT_QUIET},
     {"help",       'h', false, ARGS_OPT_HELP},
 };
@@ -114,6 +115,9 @@ void args_print_help(FILE *f)
 "      --aov LIST       extra EXR channels, comma-separated: albedo (albedo.R/G/B),\n"
 "                       normal (N.X/Y/Z), depth (Z), variance (variance.R/G/B); needs an\n"
 "                       .exr output (docs/cli.md)\n"
+"      --crop X0,X1,Y0,Y1  render and write only the pixels X0 <= x < X1, Y0 <= y < Y1\n"
+"                       (y = 0 the top row) of the image; each holds the value it has in\n"
+"                       the whole image (default: the scene's crop, else none)\n"
 "  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
 "  -h, --help           show this help and exit\n"
 "      --version        print the version and exit\n"
@@ -450,6 +454,29 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         if (!args_parse_aovs(value, &s->aovs, bad, sizeof bad)) {
             args_fail(err, false, "--aov: unknown AOV '%s' in '%s' (valid: a comma-separated list of %s)",
                       bad, value, ARGS_AOV_NAMES);
+            return false;
+        }
+        return true;
+    }
+    case ARGS_OPT_CROP: {
+        /* Four integers; their bounds against the image are checked by cst_render, which
+         * knows the final width and height. */
+        const char *p = value;
+        for (int k = 0; k < 4; k++) {
+            char *end;
+            errno = 0;
+            long c = strtol(p, &end, 10);
+            bool sep_ok = k < 3 ? *end == ',' : *end == '\0';
+            if (end == p || errno || !sep_ok || c < 0 || c > ARGS_MAX_DIMENSION) {
+                args_fail(err, false, "--crop: expected X0,X1,Y0,Y1: four integers from 0 to %d, got '%s'",
+                          ARGS_MAX_DIMENSION, value);
+                return false;
+            }
+            s->crop[k] = (int)c;
+            p = end + 1;
+        }
+        if (!(s->crop[0] < s->crop[1] && s->crop[2] < s->crop[3])) {
+            args_fail(err, false, "--crop: expected X0 < X1 and Y0 < Y1, got '%s'", value);
             return false;
         }
         return true;

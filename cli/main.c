@@ -261,8 +261,11 @@ static void cli_print_job(const CliArgs *a, const CstScene *scene, const CstRend
         snprintf(work, sizeof work, "time limit %g s", s.time_limit);
     else
         snprintf(work, sizeof work, "%d spp", s.spp);
-    fprintf(stderr, "caustic: rendering %s (%dx%d, %s, %s, %s filter, %d thread%s) to %s\n",
-            a->scene_path ? a->scene_path : "the built-in Cornell box", s.width, s.height, work,
+    char crop[96] = "";
+    if (s.crop[0] != 0 || s.crop[1] != s.width || s.crop[2] != 0 || s.crop[3] != s.height)
+        snprintf(crop, sizeof crop, " cropped to [%d, %d) x [%d, %d)", s.crop[0], s.crop[1], s.crop[2], s.crop[3]);
+    fprintf(stderr, "caustic: rendering %s (%dx%d%s, %s, %s, %s filter, %d thread%s) to %s\n",
+            a->scene_path ? a->scene_path : "the built-in Cornell box", s.width, s.height, crop, work,
             cst_integrator_name(s.integrator), cst_filter_name(s.filter), s.threads,
             s.threads == 1 ? "" : "s", output);
 }

@@ -188,6 +188,11 @@ typedef struct CstRenderSettings {
     int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0 = the scene's,
                                * else sRGB. EXR and PFM are always linear. */
     int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = the scene's, else none */
+    /* Crop: only the pixels [crop[0], crop[1]) x [crop[2], crop[3]) of the width x height
+     * image (x0, x1, y0, y1; y = 0 the top row) are rendered, and the film holds just them.
+     * Each holds exactly the value it has in a whole render with the same seed. All zero =
+     * the scene's crop, else the whole image. */
+    int crop[4];
     CstProgressFn progress;   /* called from the calling thread about 10 times a second */
     void *progress_user;
 } CstRenderSettings;

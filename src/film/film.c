@@ -35,6 +35,29 @@ int film_set_output(Film *f, int aovs, double exposure, int png_linear)
     return 1;
 }
 
+Film *film_crop(const Film *f, int x0, int y0, int w, int h)
+{
+    Film *c = film_create(w, h);
+    if (!c) return NULL;
+    c->spp = f->spp;
+    c->aovs = f->aovs;
+    c->exposure_scale = f->exposure_scale;
+    c->png_linear = f->png_linear;
+    if (f->aov) {
+        c->aov = malloc((size_t)w * (size_t)h * FILM_AOV_STRIDE * sizeof *c->aov);
+        if (!c->aov) { film_destroy(c); return NULL; }
+    }
+    for (int y = 0; y < h; y++) {
+        size_t from = (size_t)(y0 + y) * (size_t)f->width + (size_t)x0, to = (size_t)y * (size_t)w;
+        memcpy(&c->sum[3 * to], &f->sum[3 * from], 3 * (size_t)w * sizeof *c->sum);
+        memcpy(&c->sum_sq[3 * to], &f->sum_sq[3 * from], 3 * (size_t)w * sizeof *c->sum_sq);
+        if (f->aov)
+            memcpy(&c->aov[FILM_AOV_STRIDE * to], &f->aov[FILM_AOV_STRIDE * from],
+                   FILM_AOV_STRIDE * (size_t)w * sizeof *c->aov);
+    }
+    return c;
+}
+
 void film_destroy(Film *f)
 {
     if (!f) return;

@@ -33,6 +33,9 @@ Film *film_create(int width, int height);
  * OOM. */
 int film_set_output(Film *film, int aovs, double exposure, int png_linear);
 void film_destroy(Film *film);
+/* A new film holding the w x h pixels of f from (x0, y0) (sums, AOV sums, spp and output
+ * settings); NULL on OOM. */
+Film *film_crop(const Film *f, int x0, int y0, int w, int h);
 
 static inline void film_accumulate(Film *f, int pixel, double r, double g, double b)
 {

@@ -138,6 +138,11 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK(aovs, 0);
     /* A time limit alone means "as many samples as fit"; otherwise the default count. */
     PICK(spp, out->time_limit > 0.0 ? 0 : CST_DEFAULT_SPP);
+    if (!(in->crop[0] | in->crop[1] | in->crop[2] | in->crop[3])) memcpy(out->crop, sc->crop, sizeof out->crop);
+    if (!(out->crop[0] | out->crop[1] | out->crop[2] | out->crop[3])) {
+        out->crop[0] = 0; out->crop[1] = out->width;
+        out->crop[2] = 0; out->crop[3] = out->height;
+    }
     if (!in->seed_set) { out->seed = sc->seed_set ? sc->seed : 0; out->seed_set = 1; }
     if (!in->exposure_set) { out->exposure = sc->exposure_set ? sc->exposure : 0.0; out->exposure_set = 1; }
     if (out->threads <= 0) {
@@ -177,6 +182,7 @@ typedef struct RenderJob {
     /* Work units: tiles, or chunks of LIGHT_CHUNK light paths. units is the pass's
      * count: num_tiles or num_chunks. */
     int tiles_x, tiles_y, num_tiles, num_chunks, units;
+    int crop_x0, crop_x1, crop_y0, crop_y1; /* the pixels camera passes cover (settings crop) */
     enum { PASS_TILES, PASS_CHUNKS, PASS_MERGE } pass_kind; /* what the pass's units are */
     int merge_units;  /* pixel bands of a merge pass (FILM_SPLAT_BAND pixels each) */
     /* light tracing, BDPT and VCM: iterations of width x height light paths */
@@ -240,10 +246,12 @@ static void render_aov(RenderJob *job, Worker *w, int pixel, Ray ray)
 
 static void render_tile(RenderJob *job, Worker *w, int tile)
 {
-    const int W = job->film->width, H = job->film->height;
-    int x0 = (tile % job->tiles_x) * RENDER_TILE, y0 = (tile / job->tiles_x) * RENDER_TILE;
-    int x1 = x0 + RENDER_TILE < W ? x0 + RENDER_TILE : W;
-    int y1 = y0 + RENDER_TILE < H ? y0 + RENDER_TILE : H;
+    /* Tiles cover the crop; pixels keep their whole-image index (seeds, film). */
+    const int W = job->film->width;
+    int x0 = job->crop_x0 + (tile % job->tiles_x) * RENDER_TILE;
+    int y0 = job->crop_y0 + (tile / job->tiles_x) * RENDER_TILE;
+    int x1 = x0 + RENDER_TILE < job->crop_x1 ? x0 + RENDER_TILE : job->crop_x1;
+    int y1 = y0 + RENDER_TILE < job->crop_y1 ? y0 + RENDER_TILE : job->crop_y1;
     for (int y = y0; y < y1; y++) {
         for (int x = x0; x < x1; x++) {
             int pixel = y * W + x;
@@ -505,7 +513,8 @@ static void light_free(RenderJob *job)
 static int light_alloc(RenderJob *job)
 {
     size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
-    job->iteration_rgb = malloc(3 * pixels * sizeof *job->iteration_rgb);
+    /* Zeroed: BDPT/VCM camera passes over a crop never write the pixels outside it. */
+    job->iteration_rgb = calloc(3 * pixels, sizeof *job->iteration_rgb);
     job->splats = calloc((size_t)job->num_chunks, sizeof *job->splats);
     if (!job->iteration_rgb || !job->splats) return 0;
     for (int c = 0; c < job->num_chunks; c++)
@@ -531,6 +540,12 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     if (st.spp < 0 || st.time_limit < 0.0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
+    if (!(0 <= st.crop[0] && st.crop[0] < st.crop[1] && st.crop[1] <= st.width && 0 <= st.crop[2] &&
+          st.crop[2] < st.crop[3] && st.crop[3] <= st.height))
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "crop [%d, %d) x [%d, %d): expected 0 <= x0 < x1 <= %d and 0 <= y0 < y1 <= %d (the "
+                        "image's width and height)",
+                        st.crop[0], st.crop[1], st.crop[2], st.crop[3], st.width, st.height);
 
     if (st.integrator == CST_INTEGRATOR_LIGHT && scene->camera.ortho_height > 0.0f)
         return cst_fail(err, CST_ERR_INVALID_ARG,
@@ -575,8 +590,10 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
     job->sampler_spp = (uint32_t)st.spp;
     job->aov_hit = (st.aovs & FILM_AOV_FIRST_HIT) != 0;
-    job->tiles_x = (st.width + RENDER_TILE - 1) / RENDER_TILE;
-    job->tiles_y = (st.height + RENDER_TILE - 1) / RENDER_TILE;
+    job->crop_x0 = st.crop[0]; job->crop_x1 = st.crop[1];
+    job->crop_y0 = st.crop[2]; job->crop_y1 = st.crop[3];
+    job->tiles_x = (st.crop[1] - st.crop[0] + RENDER_TILE - 1) / RENDER_TILE;
+    job->tiles_y = (st.crop[3] - st.crop[2] + RENDER_TILE - 1) / RENDER_TILE;
     job->num_tiles = job->tiles_x * job->tiles_y;
     for (int i = 0; i < st.threads; i++) workers[i].job = job;
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
@@ -702,6 +719,19 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             return cst_fail(err, status, "out of memory for light-tracing splats (%dx%d)", st.width, st.height);
         return cst_fail(err, status, "could not start render threads");
     }
+    const int cw = st.crop[1] - st.crop[0], ch = st.crop[3] - st.crop[2];
+    if (cw != st.width || ch != st.height) {
+        /* Light paths were traced for the whole image (their splats land anywhere), camera
+         * passes for the crop only: keep the crop. */
+        Film *cropped = film_crop(film, st.crop[0], st.crop[2], cw, ch);
+        film_destroy(film);
+        film = cropped;
+        if (!film) {
+            free(workers);
+            free(job);
+            return cst_fail(err, CST_ERR_OOM, "out of memory for the %dx%d crop", cw, ch);
+        }
+    }
     if (st.progress) st.progress(st.progress_user, 1.0, seconds);
     if (stats) {
         memset(stats, 0, sizeof *stats);
@@ -709,12 +739,15 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         /* SPPM: the film holds one final estimate per pixel; spp reports the iterations. */
         stats->spp = st.integrator == CST_INTEGRATOR_SPPM ? sppm_res.iterations : film->spp;
         stats->threads = st.threads;
-        stats->width = st.width;
-        stats->height = st.height;
+        stats->width = cw;
+        stats->height = ch;
         stats->integrator = st.integrator;
         stats->filter = st.filter;
-        /* Light tracing traces width x height light paths per iteration: the same count. */
-        stats->samples = (uint64_t)stats->spp * (uint64_t)st.width * (uint64_t)st.height;
+        /* Light tracing traces width x height light paths per iteration, whatever the crop
+         * (and BDPT/VCM as many light paths as there are pixels); camera passes cover the crop. */
+        uint64_t per_spp = job->light || st.integrator == CST_INTEGRATOR_SPPM
+                               ? (uint64_t)st.width * (uint64_t)st.height : (uint64_t)cw * (uint64_t)ch;
+        stats->samples = (uint64_t)stats->spp * per_spp;
         stats->nonfinite = splats_nonfinite + sppm_res.nonfinite;
         stats->rays = photon_rays;
         for (int i = 0; i < st.threads; i++) {

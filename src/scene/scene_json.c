@@ -423,10 +423,11 @@ static int has_image_extension(const char *path)
 static CstStatus parse_film(Loader *ld, const json_t *film)
 {
     static const char *const keys[] = {"width", "height", "filter", "output", "exposure", "png_encoding",
-                                       "aovs"};
+                                       "aovs", "crop"};
     CstRenderSettings *rs = &ld->scene->settings;
-    LOADER_TRY(expect_object(ld, film, "an object with width, height, filter, output, exposure, png_encoding, aovs"));
-    LOADER_TRY(check_keys(ld, film, keys, 7));
+    LOADER_TRY(expect_object(ld, film,
+                             "an object with width, height, filter, output, exposure, png_encoding, aovs, crop"));
+    LOADER_TRY(check_keys(ld, film, keys, 8));
     json_t *v;
     json_int_t i = 0;
     if ((v = json_object_get(film, "width"))) {
@@ -507,6 +508,26 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
             rs->aovs |= bit;
             path_pop(ld);
         }
+        path_pop(ld);
+    }
+    if ((v = json_object_get(film, "crop"))) {
+        /* Checked against the image size here only when the file gives both; cst_render
+         * checks the final size (the command line may change it). */
+        path_push_key(ld, "crop");
+        if (!json_is_array(v) || json_array_size(v) != 4)
+            return fail_here(ld, "expected [x0, x1, y0, y1]: the pixel bounds x0 <= x < x1, y0 <= y < y1 to render");
+        for (size_t k = 0; k < 4; k++) {
+            path_push_index(ld, k);
+            LOADER_TRY(read_int(ld, json_array_get(v, k), 0, LOADER_MAX_FILM_SIZE, &i));
+            rs->crop[k] = (int)i;
+            path_pop(ld);
+        }
+        if (!(rs->crop[0] < rs->crop[1] && rs->crop[2] < rs->crop[3]))
+            return fail_here(ld, "crop [%d, %d, %d, %d]: expected x0 < x1 and y0 < y1", rs->crop[0], rs->crop[1],
+                             rs->crop[2], rs->crop[3]);
+        if ((rs->width && rs->crop[1] > rs->width) || (rs->height && rs->crop[3] > rs->height))
+            return fail_here(ld, "crop [%d, %d, %d, %d]: expected x1 <= width (%d) and y1 <= height (%d)", rs->crop[0],
+                             rs->crop[1], rs->crop[2], rs->crop[3], rs->width, rs->height);
         path_pop(ld);
     }
     return CST_OK;

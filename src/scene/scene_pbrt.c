@@ -2683,11 +2683,42 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: output \"%s\" is not .png, .exr or .pfm; "
                     "ignored (the default output name is used)", d, clip(file, nm));
         }
-        Param *p;
-        if ((st = lookup(ld, &ps, d, "cropwindow", M(PT_FLOAT), "float", &p))) goto done;
-        if (p) warn_at(ld, CST_WARN_UNSUPPORTED, p->loc, "%s: cropwindow is not supported; the whole image is rendered", d);
-        if ((st = lookup(ld, &ps, d, "pixelbounds", M(PT_INTEGER), "integer", &p))) goto done;
-        if (p) warn_at(ld, CST_WARN_UNSUPPORTED, p->loc, "%s: pixelbounds is not supported; the whole image is rendered", d);
+        /* pbrt-v4 (film.cpp): cropwindow [x0 x1 y0 y1] in [0, 1], y down, to the pixel bounds
+         * ceil(res * c); pixelbounds given directly, and preferred when both are. */
+        Param *pc, *pb;
+        if ((st = lookup(ld, &ps, d, "cropwindow", M(PT_FLOAT), "float", &pc))) goto done;
+        if ((st = lookup(ld, &ps, d, "pixelbounds", M(PT_INTEGER), "integer", &pb))) goto done;
+        if (pc && pb) {
+            warn_at(ld, CST_WARN_APPROXIMATED, pc->loc, "%s: both cropwindow and pixelbounds given; "
+                    "pixelbounds is used", d);
+            pc = NULL;
+        }
+        if (pc) {
+            const double *c = pc->nums;
+            if (pc->num_nums != 4 || !(0.0 <= c[0] && c[0] < c[1] && c[1] <= 1.0 && 0.0 <= c[2] && c[2] < c[3] &&
+                                       c[3] <= 1.0)) {
+                st = fail_at(ld, CST_ERR_INVALID_ARG, pc->loc, "%s: cropwindow; expected 4 values x0 x1 y0 y1 with "
+                             "0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1", d);
+                goto done;
+            }
+            rs->crop[0] = (int)ceil(w * c[0]); rs->crop[1] = (int)ceil(w * c[1]);
+            rs->crop[2] = (int)ceil(h * c[2]); rs->crop[3] = (int)ceil(h * c[3]);
+            if (rs->crop[0] == rs->crop[1] || rs->crop[2] == rs->crop[3]) {
+                st = fail_at(ld, CST_ERR_INVALID_ARG, pc->loc, "%s: cropwindow holds no pixel of the %d x %d "
+                             "image; expected a wider window", d, w, h);
+                goto done;
+            }
+        }
+        if (pb) {
+            const double *b = pb->nums;
+            if (pb->num_nums != 4 || !(0.0 <= b[0] && b[0] < b[1] && b[1] <= w && 0.0 <= b[2] && b[2] < b[3] &&
+                                       b[3] <= h)) {
+                st = fail_at(ld, CST_ERR_INVALID_ARG, pb->loc, "%s: pixelbounds; expected 4 integers x0 x1 y0 y1 "
+                             "with 0 <= x0 < x1 <= %d and 0 <= y0 < y1 <= %d", d, w, h);
+                goto done;
+            }
+            for (int k = 0; k < 4; k++) rs->crop[k] = (int)b[k];
+        }
         if (strcmp(type, "rgb") != 0 && strcmp(type, "image") != 0)
             warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered as an RGB film", d);
     } else if (strcmp(dname, "Sampler") == 0) {

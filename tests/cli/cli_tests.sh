@@ -77,7 +77,7 @@ expect "--help exits 0" 0
 if [ -s "$ERR" ]; then fail "--help writes nothing to stderr"; else pass "--help writes nothing to stderr"; fi
 missing=""
 for opt in render SCENE -o --output --spp --time --threads --seed --integrator --filter \
-           --sampler --exposure --png-linear --aov --width --height --quiet --help --version \
+           --sampler --exposure --png-linear --aov --crop --width --height --quiet --help --version \
            path path-nee path-bsdf box tent .png .exr .pfm cornell-box.png "Exit status"; do
     grep -qF -- "$opt" "$OUT" || missing="$missing $opt"
 done
@@ -160,6 +160,10 @@ check_value "--exposure abc rejected" --exposure abc  -- "^caustic: --exposure: 
 check_value "--exposure 100 rejected" --exposure 100  -- "--exposure: .*got '100'"
 check_value "unknown AOV lists the valid ones"        --aov albedo,uv -- \
     "--aov: unknown AOV 'uv'.*albedo, normal, depth, variance"
+check_value "--crop with three numbers rejected"      --crop 1,2,3 -- \
+    "^caustic: --crop: expected X0,X1,Y0,Y1: four integers .*got '1,2,3'$"
+check_value "--crop empty rejected"                   --crop 4,4,0,8 -- "--crop: expected X0 < X1 and Y0 < Y1"
+check_value "--crop outside the image rejected"       --crop 0,8,0,900 -- "error: crop .0, 8. x .0, 900.: expected 0 <= x0"
 check_value "--aov with a PNG output rejected"        --aov depth -- \
     "output 'v\.png': AOVs .*expected an output ending in \.exr"
 if no_images "$TMP/values"; then pass "rejected values write no image"; else fail "rejected values write no image"; fi
@@ -303,6 +307,11 @@ fi
 run "$dir" render --width 16 --height 16 --spp 4 --sampler sobol --exposure -1.5 --png-linear \
     --aov albedo,normal,depth,variance -o aov.exr
 expect "sobol render with exposure and AOVs to EXR: exit 0" 0 "wrote aov\.exr"
+run "$dir" render --width 16 --height 16 --spp 2 --crop 2,12,5,9 -o crop.pfm
+if expect "cropped render: exit 0" 0 "wrote crop\.pfm: 10x4"; then
+    [ "$(head -c 8 "$dir/crop.pfm" | tr '\n' ' ')" = "PF 10 4 " ] && pass "cropped PFM is 10x4" \
+        || fail "cropped PFM is 10x4" "got $(head -c 12 "$dir/crop.pfm" | od -c | head -2)"
+fi
 run "$dir" render --width 16 --height 16 --spp 2 -o out.pfm
 if expect "render to PFM: exit 0" 0 "wrote out\.pfm"; then
     [ "$(head -c 9 "$dir/out.pfm" | tr '\n' ' ')" = "PF 16 16 " ] && pass "PFM header is 'PF 16 16'" \

@@ -204,6 +204,64 @@ static void test_accel_backends_identical_images(void **state)
     cst_scene_destroy(s);
 }
 
+/* A crop holds exactly the pixels of the whole image, for every integrator: camera passes
+ * seed each pixel by its whole-image index, light paths are traced for the whole image.
+ * (Also with AOVs, which are cropped with the film.) */
+static void test_crop_equals_whole_image(void **state)
+{
+    (void)state;
+    CstScene *s;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    const CstIntegrator integs[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_WHITTED, CST_INTEGRATOR_LIGHT,
+                                    CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_BDPT,
+                                    CST_INTEGRATOR_VCM};
+    const int crop[4] = {17, 61, 30, 79}; /* partial tiles, touching the bottom edge */
+    for (size_t k = 0; k < sizeof integs / sizeof integs[0]; k++) {
+        CstRenderSettings st = {0};
+        st.integrator = integs[k];
+        st.width = 96;
+        st.height = 80;
+        st.spp = 2;
+        st.threads = 2;
+        st.filter = CST_FILTER_TENT;
+        st.seed = 9;
+        st.seed_set = 1;
+        st.photons = 20000;
+        if (integs[k] == CST_INTEGRATOR_PATH) st.aovs = CST_AOV_ALBEDO | CST_AOV_DEPTH;
+        CstFilm *whole = NULL, *part = NULL;
+        CstRenderStats stats;
+        assert_int_equal(cst_render(s, &st, &whole, NULL, &err), CST_OK);
+        memcpy(st.crop, crop, sizeof st.crop);
+        assert_int_equal(cst_render(s, &st, &part, &stats, &err), CST_OK);
+        assert_int_equal(part->width, crop[1] - crop[0]);
+        assert_int_equal(part->height, crop[3] - crop[2]);
+        assert_int_equal(stats.width, part->width);
+        assert_int_equal(part->spp, whole->spp);
+        for (int y = 0; y < part->height; y++) {
+            size_t a = (size_t)(crop[2] + y) * 96u + (size_t)crop[0], b = (size_t)y * (size_t)part->width;
+            size_t n = 3u * (size_t)part->width;
+            if (memcmp(&whole->sum[3 * a], &part->sum[3 * b], n * sizeof *part->sum) ||
+                memcmp(&whole->sum_sq[3 * a], &part->sum_sq[3 * b], n * sizeof *part->sum_sq) ||
+                (whole->aov && memcmp(&whole->aov[FILM_AOV_STRIDE * a], &part->aov[FILM_AOV_STRIDE * b],
+                                      FILM_AOV_STRIDE * (size_t)part->width * sizeof *part->aov)))
+                fail_msg("%s: row %d of the crop differs from the whole image", cst_integrator_name(integs[k]), y);
+        }
+        cst_film_destroy(whole);
+        cst_film_destroy(part);
+    }
+    /* Bounds outside the image are refused. */
+    CstRenderSettings bad = {0};
+    bad.width = 64;
+    bad.height = 64;
+    bad.spp = 1;
+    bad.crop[0] = 0; bad.crop[1] = 65; bad.crop[2] = 0; bad.crop[3] = 10;
+    CstFilm *f = NULL;
+    assert_int_equal(cst_render(s, &bad, &f, NULL, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "crop"));
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -215,6 +273,7 @@ int main(void)
         cmocka_unit_test(test_sppm_thread_count_invariance),
         cmocka_unit_test(test_accel_backends_identical_images),
         cmocka_unit_test(test_json_cornell_equals_builtin),
+        cmocka_unit_test(test_crop_equals_whole_image),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

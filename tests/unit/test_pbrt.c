@@ -1376,9 +1376,41 @@ static void test_cornell_handedness(void **state)
     cst_scene_destroy(b);
 }
 
+/* Film cropwindow (fractions, pbrt-v4's ceil(res * c)) and pixelbounds onto the crop. */
+static void test_film_crop(void **state)
+{
+    (void)state;
+    Scene *s = expect_ok("Film \"rgb\" \"integer xresolution\" 100 \"integer yresolution\" 50 "
+                         "\"float cropwindow\" [0.105 0.5 0.2 1]\nWorldBegin\n" TRI, NULL);
+    assert_int_equal(s->settings.crop[0], 11);
+    assert_int_equal(s->settings.crop[1], 50);
+    assert_int_equal(s->settings.crop[2], 10);
+    assert_int_equal(s->settings.crop[3], 50);
+    cst_scene_destroy(s);
+    Warnings w = {0};
+    s = expect_ok("Film \"rgb\" \"integer xresolution\" 100 \"integer yresolution\" 50 "
+                  "\"float cropwindow\" [0 0.5 0 1] \"integer pixelbounds\" [3 7 4 9]\nWorldBegin\n" TRI, &w);
+    assert_int_equal(s->settings.crop[0], 3);
+    assert_int_equal(s->settings.crop[1], 7);
+    assert_int_equal(s->settings.crop[2], 4);
+    assert_int_equal(s->settings.crop[3], 9);
+    cst_scene_destroy(s);
+    expect_error("Film \"rgb\" \"integer xresolution\" 100 \"float cropwindow\" [0.5 0.2 0 1]\nWorldBegin\n" TRI,
+                 CST_ERR_INVALID_ARG, "\"float cropwindow\"", 0, "cropwindow; expected 4 values");
+    expect_error("Film \"rgb\" \"integer xresolution\" 100 \"float cropwindow\" [0 0.5 0]\nWorldBegin\n" TRI,
+                 CST_ERR_INVALID_ARG, "\"float cropwindow\"", 0, "cropwindow");
+    expect_error("Film \"rgb\" \"integer xresolution\" 100 \"integer yresolution\" 50 "
+                 "\"integer pixelbounds\" [0 101 0 5]\nWorldBegin\n" TRI,
+                 CST_ERR_INVALID_ARG, "\"integer pixelbounds\"", 0, "0 <= x0 < x1 <= 100");
+    expect_error("Film \"rgb\" \"integer xresolution\" 100 \"integer yresolution\" 50 "
+                 "\"float cropwindow\" [0.001 0.002 0 1]\nWorldBegin\n" TRI,
+                 CST_ERR_INVALID_ARG, "\"float cropwindow\"", 0, "holds no pixel");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_film_crop),
         cmocka_unit_test(test_tokens),
         cmocka_unit_test(test_token_errors),
         cmocka_unit_test(test_parse_errors),

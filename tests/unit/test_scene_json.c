@@ -658,6 +658,20 @@ static void test_sampler_and_output_keys(void **state)
     expect_error(WITH_SECTION("\"film\": {\"png_encoding\": \"gamma\"}"), CST_ERR_INVALID_ARG, "\"gamma\"", 0,
                  "unknown PNG encoding \"gamma\"");
     expect_error(WITH_SECTION("\"film\": {\"exposure\": 65}"), CST_ERR_INVALID_ARG, "65", 0, "exposure");
+    /* crop: pixel bounds x0, x1, y0, y1 */
+    s = expect_ok(WITH_SECTION("\"film\": {\"width\": 64, \"height\": 48, \"crop\": [8, 40, 0, 48]}"));
+    assert_int_equal(s->settings.crop[0], 8);
+    assert_int_equal(s->settings.crop[1], 40);
+    assert_int_equal(s->settings.crop[2], 0);
+    assert_int_equal(s->settings.crop[3], 48);
+    cst_scene_destroy(s);
+    expect_error(WITH_SECTION("\"film\": {\"crop\": [8, 40, 0]}"), CST_ERR_INVALID_ARG, "[8", 0,
+                 "film.crop: expected [x0, x1, y0, y1]");
+    expect_error(WITH_SECTION("\"film\": {\"crop\": [40, 8, 0, 10]}"), CST_ERR_INVALID_ARG, "[40", 0,
+                 "expected x0 < x1 and y0 < y1");
+    expect_error(WITH_SECTION("\"film\": {\"width\": 32, \"crop\": [0, 40, 0, 10]}"), CST_ERR_INVALID_ARG, "[0, 40", 0,
+                 "expected x1 <= width (32)");
+    expect_error(WITH_SECTION("\"film\": {\"crop\": [0, 4, -1, 10]}"), CST_ERR_INVALID_ARG, "-1", 0, "film.crop[2]");
 }
 
 static void test_shapes(void **state)
@@ -758,7 +772,7 @@ static void test_exact_positions(void **state)
                    "}",
                    CST_ERR_INVALID_ARG,
                    NAME ":2:25: film: unknown key \"hieght\"; expected one of: width, height, filter, output, exposure, "
-                   "png_encoding, aovs");
+                   "png_encoding, aovs, crop");
     /* columns count code points: é (2 bytes), € (3), 😀 (4) are one column each */
     expect_message("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
                    "\t\"materials\": {\"\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\": {\"type\": \"diffuse\", "
