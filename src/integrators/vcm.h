@@ -26,6 +26,7 @@ typedef struct VcmParams {
  * Connection and Merging", 2012, eqs. 31-38) at this vertex, already powered (mis()). */
 typedef struct VcmVertex {
     Vec3 p, ng;
+    Vec3 ns;       /* shading normal (SurfaceHit.ns): y's BSDF is rebuilt from it */
     Vec3 w_prev;   /* unit, toward the previous vertex (where the light came from) */
     Rgb beta;      /* flux-type throughput: L_e cos / (pdf_a pdf_w) times the BSDF weights */
     float d_vcm, d_vc, d_vm;

@@ -130,10 +130,29 @@ static inline const PrimInfo *scene_prim_info(const Scene *s, uint32_t prim)
 typedef struct SurfaceHit {
     Vec3 p;        /* position */
     Vec3 ng;       /* unit geometric normal: (v1-v0) x (v2-v0) for triangles, outward for spheres */
+    /* Unit shading normal on ng's side (ns.ng >= 0): the vertex normals interpolated when
+     * the triangle's three vertices have them, else ng (spheres, instances, flat meshes). */
+    Vec3 ns;
     float t;
     uint32_t prim;
     int32_t material, emitter;
 } SurfaceHit;
+
+/* The shading normal at barycentrics (u, v) of triangle t (3 indices into normals):
+ * Phong's interpolation of the vertex normals (Phong 1975), renormalised and turned to
+ * ng's side. ng is kept as it is, unlike pbrt-v4, which turns ng toward the shading
+ * normal: here ng alone says what is inside a dielectric and which way an emitter faces.
+ * ng when a vertex has no normal (zero) or the interpolation vanishes. */
+static inline Vec3 scene_shading_normal(const Vec3 *normals, const int32_t *t, float u, float v, Vec3 ng)
+{
+    Vec3 n0 = normals[t[0]], n1 = normals[t[1]], n2 = normals[t[2]];
+    if (v3_length2(n0) == 0.0f || v3_length2(n1) == 0.0f || v3_length2(n2) == 0.0f) return ng;
+    Vec3 n = v3_add(v3_add(v3_scale(n0, 1.0f - u - v), v3_scale(n1, u)), v3_scale(n2, v));
+    float l2 = v3_length2(n);
+    if (!(l2 > 0.0f) || !isfinite(l2)) return ng;
+    n = v3_scale(n, 1.0f / sqrtf(l2));
+    return v3_dot(n, ng) < 0.0f ? v3_neg(n) : n;
+}
 
 /* A hit in an instance, closer than any in `accel`: filled in world space. */
 static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, SurfaceHit *sh)
@@ -150,6 +169,7 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     sh->p = transform_point(&in->world_from_obj, p_obj);
     /* The normal matrix keeps the object's outside, also under mirroring transforms. */
     sh->ng = transform_normal(&in->normal_matrix, pr->tri_normals[ih.prim]);
+    sh->ns = sh->ng; /* prototypes carry no vertex normals */
     sh->material = pr->tri_material[ih.prim];
     sh->emitter = -1;
     return true;
@@ -176,10 +196,13 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
         /* From barycentrics, not o + t d: accurate to a few ulps of the vertices,
          * which ray_offset_origin relies on (the ray form errs by ulps of |o| + t). */
         sh->p = v3_add(v3_add(v3_scale(a, 1.0f - h.u - h.v), v3_scale(b, h.u)), v3_scale(c, h.v));
+        /* Only scenes with vertex normals pay for the interpolation. */
+        sh->ns = s->normals ? scene_shading_normal(s->normals, t, h.u, h.v, sh->ng) : sh->ng;
     } else {
         const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];
         sh->ng = v3_normalize(v3_sub(ray_at(ray, h.t), sp->center));
         sh->p = v3_madd(sp->center, sh->ng, sp->radius); /* reprojected onto the surface */
+        sh->ns = sh->ng;
     }
     const PrimInfo *pi = scene_prim_info(s, h.prim);
     sh->material = pi->material;
@@ -187,11 +210,11 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     return true;
 }
 
-/* The BSDF at a hit: the one place where a hit's material, normal (and later its texture
- * coordinates and shading normal) become a Bsdf, so every integrator sees the same surface. */
+/* The BSDF at a hit: the one place where a hit's material, normals (and later its texture
+ * coordinates) become a Bsdf, so every integrator sees the same surface. */
 static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
 {
-    bsdf_init(b, &s->materials[sh->material], sh->ng);
+    bsdf_init_shading(b, &s->materials[sh->material], sh->ns, sh->ng);
 }
 
 /* Any hit in (r->t_min, r->t_max), instances included. */
