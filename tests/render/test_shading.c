@@ -208,7 +208,7 @@ static Scene *sphere_box_scene(int nphi, int ntheta)
     return s;
 }
 
-/* path (MIS) vs light vs bdpt on the smooth-shaded sphere in the box. The light paths'
+/* path (MIS) vs light vs bdpt (and vcm) on the smooth-shaded sphere in the box. The light paths'
  * bounces off the sphere carry the adjoint correction; without it the walls lit by the
  * sphere come out too bright in the light tracer and BDPT (see the commit for the z-scores
  * of that mutation). */
@@ -218,13 +218,16 @@ static void test_smooth_sphere_consistency(void **state)
     Scene *s = sphere_box_scene(16, 10); /* 288 triangles */
     enum { SIZE = 32, BLOCK = 8 };
     CstRenderSettings st = sized(SIZE);
-    Regions rp = regions(SIZE, BLOCK), rl = rp, rb = rp;
+    Regions rp = regions(SIZE, BLOCK), rl = rp, rb = rp, rv = rp;
     path_regions(s, &st, 1024, 101, &rp);
     split_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 2000, &rl);
     split_regions(s, &st, CST_INTEGRATOR_BDPT, 128, 4000, &rb);
+    split_regions(s, &st, CST_INTEGRATOR_VCM, 128, 6000, &rv);
     compare(&rp, &rl, "path (smooth sphere)", "light (smooth sphere)");
     compare(&rp, &rb, "path (smooth sphere)", "bdpt (smooth sphere)");
     compare(&rl, &rb, "light (smooth sphere)", "bdpt (smooth sphere)");
+    /* VCM's merges divide f |cos| by the geometric cosine, as photon density estimates do */
+    compare(&rp, &rv, "path (smooth sphere)", "vcm (smooth sphere)");
     scene_destroy(s);
 }
 
