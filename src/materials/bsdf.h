@@ -101,6 +101,10 @@ float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi);
 /* uc picks a lobe (glass: reflect vs refract), u samples a direction. Returns false for
  * no usable sample (e.g. wo exactly in the tangent plane, a microfacet reflection below
  * the surface: that energy is lost, the single-scattering loss of microfacet models).
+ * On false, out->delta is true when the failed sample came from a delta lobe (e.g. a
+ * mirror direction about a shading normal that points under the surface, refused), and
+ * otherwise false or untouched: a caller splitting a mixed BSDF by lobe sets it to false
+ * first and so learns which lobe failed.
  * For camera paths. */
 bool bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out);
 /* The same for either transport: the weight is f(wo, wi) |cos theta_i| / pdf for
