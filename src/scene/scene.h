@@ -106,9 +106,10 @@ CstStatus scene_set_environment(Scene *scene, const EnvMap *env, CstError *err);
 CstStatus scene_add_delta_light(Scene *scene, const DeltaLight *light, CstError *err);
 void scene_set_camera(Scene *scene, const CameraDesc *camera);
 CstStatus scene_set_output_path(Scene *scene, const char *path, CstError *err);
-/* An object to instance: triangles in object space with a scene material id each. */
-CstStatus scene_add_instance_proto(Scene *scene, const Vec3 *positions, int num_vertices,
-                                   const int *indices, const int *tri_material,
+/* An object to instance: triangles in object space with a scene material id each, and
+ * optional unit vertex normals for smooth shading (NULL, or zero for a vertex without). */
+CstStatus scene_add_instance_proto(Scene *scene, const Vec3 *positions, const Vec3 *normals,
+                                   int num_vertices, const int *indices, const int *tri_material,
                                    int num_triangles, int *out_id, CstError *err);
 CstStatus scene_add_instance(Scene *scene, int proto, const Transform *world_from_obj,
                              CstError *err);
@@ -169,7 +170,12 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     sh->p = transform_point(&in->world_from_obj, p_obj);
     /* The normal matrix keeps the object's outside, also under mirroring transforms. */
     sh->ng = transform_normal(&in->normal_matrix, pr->tri_normals[ih.prim]);
-    sh->ns = sh->ng; /* prototypes carry no vertex normals */
+    sh->ns = sh->ng;
+    if (pr->normals) { /* interpolated in object space, then carried like ng */
+        Vec3 ns = scene_shading_normal(pr->normals, t, ih.u, ih.v, pr->tri_normals[ih.prim]);
+        ns = transform_normal(&in->normal_matrix, ns);
+        if (v3_length2(ns) > 0.0f) sh->ns = v3_dot(ns, sh->ng) < 0.0f ? v3_neg(ns) : ns;
+    }
     sh->material = pr->tri_material[ih.prim];
     sh->emitter = -1;
     return true;

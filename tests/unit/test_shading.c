@@ -118,6 +118,42 @@ static void test_flat(void **state)
     scene_destroy(s);
 }
 
+/* An instanced triangle with vertex normals under a non-uniform scale: ns is the
+ * object-space interpolation carried by the normal matrix (the inverse transpose), not by
+ * the transform itself; without normals ns = ng. */
+static void test_instance(void **state)
+{
+    (void)state;
+    for (int with = 0; with < 2; with++) {
+        CstError err;
+        Scene *s = scene_create();
+        assert_non_null(s);
+        int mat, proto;
+        Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
+        assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
+        Vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+        Vec3 n[3] = {v3(0, 0, 1), v3_normalize(v3(1, 0, 1)), v3_normalize(v3(0, 1, 2))};
+        int idx[3] = {0, 1, 2}, tm[1] = {mat};
+        assert_int_equal(scene_add_instance_proto(s, pos, with ? n : NULL, 3, idx, tm, 1, &proto, &err), CST_OK);
+        Transform xf = transform_compose(transform_translate(v3(0, 0, -2)), transform_scale(v3(3, 1, 1)));
+        assert_int_equal(scene_add_instance(s, proto, &xf, &err), CST_OK);
+        assert_int_equal(scene_commit(s, &err), CST_OK);
+        /* object point (0.2, 0.3, 0) is world (0.6, 0.3, -2) */
+        SurfaceHit sh;
+        Ray r = ray_make(v3(0.6f, 0.3f, 1.0f), v3(0, 0, -1), 0.0f, INFINITY);
+        assert_true(scene_intersect(s, &r, &sh));
+        assert_vec_near(sh.p, v3(0.6f, 0.3f, -2.0f), 1e-5f);
+        if (!with) {
+            assert_true(vec_equal(sh.ns, sh.ng));
+        } else {
+            Vec3 o = v3_add(v3_add(v3_scale(n[0], 0.5f), v3_scale(n[1], 0.2f)), v3_scale(n[2], 0.3f));
+            Vec3 expect = v3_normalize(v3(o.x / 3.0f, o.y, o.z)); /* inverse transpose of diag(3, 1, 1) */
+            assert_vec_near(sh.ns, expect, 1e-5f);
+        }
+        scene_destroy(s);
+    }
+}
+
 static const char *mesh_json(const char *extra, char *buf, size_t size)
 {
     snprintf(buf, size,
@@ -314,6 +350,7 @@ int main(void)
         cmocka_unit_test(test_interpolation),
         cmocka_unit_test(test_orientation),
         cmocka_unit_test(test_flat),
+        cmocka_unit_test(test_instance),
         cmocka_unit_test(test_json_smooth_and_flat),
         cmocka_unit_test(test_json_errors),
         cmocka_unit_test(test_adjoint_is_one_without_shading),
