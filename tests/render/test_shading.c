@@ -209,9 +209,10 @@ static Scene *sphere_box_scene(int nphi, int ntheta)
 }
 
 /* path (MIS) vs light vs bdpt (and vcm) on the smooth-shaded sphere in the box. The light paths'
- * bounces off the sphere carry the adjoint correction; without it the walls lit by the
- * sphere come out too bright in the light tracer and BDPT (see the commit for the z-scores
- * of that mutation). */
+ * bounces off the sphere and the floor carry the adjoint correction. With the factor set to
+ * 1 (a mutation check), the green wall's block lit by the floor differs from path by
+ * z = 17.6 (light), 17.2 (bdpt), 16.7 (vcm); the sphere alone gave at most 3.2, its
+ * normals leaning to all sides. */
 static void test_smooth_sphere_consistency(void **state)
 {
     (void)state;
