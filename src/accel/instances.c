@@ -28,9 +28,9 @@ static int grow(void **arr, int *cap, int need, size_t size)
     return 1;
 }
 
-CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, int num_positions,
-                              const int *indices, const int *tri_material, int num_triangles,
-                              int *out_id, CstError *err)
+CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec3 *normals,
+                              int num_positions, const int *indices, const int *tri_material,
+                              int num_triangles, int *out_id, CstError *err)
 {
     if (set->built) return cst_fail(err, CST_ERR_INVALID_ARG, "instances already built");
     if (!grow((void **)&set->protos, &set->cap_protos, set->num_protos + 1, sizeof *set->protos))
@@ -41,13 +41,16 @@ CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, int num_p
     p->positions = malloc(nv * sizeof *p->positions);
     p->tri_indices = malloc(3 * nt * sizeof *p->tri_indices);
     p->tri_material = malloc(nt * sizeof *p->tri_material);
-    if (!p->positions || !p->tri_indices || !p->tri_material) {
+    if (normals) p->normals = malloc(nv * sizeof *p->normals);
+    if (!p->positions || !p->tri_indices || !p->tri_material || (normals && !p->normals)) {
         free(p->positions);
+        free(p->normals);
         free(p->tri_indices);
         free(p->tri_material);
         return cst_fail(err, CST_ERR_OOM, "out of memory for an instanced object of %d triangles", num_triangles);
     }
     memcpy(p->positions, positions, (size_t)num_positions * sizeof *positions);
+    if (normals) memcpy(p->normals, normals, (size_t)num_positions * sizeof *normals);
     for (int i = 0; i < 3 * num_triangles; i++) p->tri_indices[i] = indices[i];
     for (int i = 0; i < num_triangles; i++) p->tri_material[i] = tri_material[i];
     p->num_positions = num_positions;
@@ -182,6 +185,7 @@ void instances_free(InstanceSet *set)
     for (int i = 0; i < set->num_protos; i++) {
         InstProto *p = &set->protos[i];
         free(p->positions);
+        free(p->normals);
         free(p->tri_indices);
         free(p->tri_material);
         free(p->tri_normals);
@@ -200,7 +204,7 @@ size_t instances_memory_bytes(const InstanceSet *set)
                (size_t)set->num_insts * sizeof *set->order;
     for (int i = 0; i < set->num_protos; i++) {
         const InstProto *p = &set->protos[i];
-        b += (size_t)p->num_positions * sizeof *p->positions +
+        b += (size_t)p->num_positions * (sizeof *p->positions + (p->normals ? sizeof *p->normals : 0)) +
              (size_t)p->num_triangles * (3 * sizeof *p->tri_indices + sizeof *p->tri_material + sizeof *p->tri_normals) +
              accel_memory_bytes(&p->accel);
     }

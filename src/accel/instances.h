@@ -16,6 +16,7 @@
 typedef struct InstProto {
     Vec3 *positions;
     int num_positions;
+    Vec3 *normals;        /* unit vertex normals, object space (zero = none), or NULL */
     int32_t *tri_indices; /* 3 per triangle */
     int32_t *tri_material; /* scene material id per triangle */
     Vec3 *tri_normals;     /* unit, object space, (v1-v0) x (v2-v0); made by instances_build */
@@ -56,10 +57,11 @@ typedef struct InstHit {
     int32_t inst;
 } InstHit;
 
-/* Copies the mesh (triangles must be non-degenerate; material ids are the scene's). */
-CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, int num_positions,
-                              const int *indices, const int *tri_material, int num_triangles,
-                              int *out_id, CstError *err);
+/* Copies the mesh (triangles must be non-degenerate; material ids are the scene's);
+ * normals (per position, unit or zero) may be NULL. */
+CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec3 *normals,
+                              int num_positions, const int *indices, const int *tri_material,
+                              int num_triangles, int *out_id, CstError *err);
 /* world_from_obj must be affine and invertible. */
 CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from_obj, CstError *err);
 /* Builds every prototype's BVH and the top-level tree; call once, after the last add. */

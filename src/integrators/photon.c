@@ -132,10 +132,11 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
             return true;
         }
         BsdfSample bs;
+        bs.delta = false; /* a delta lobe that was taken but rejected sets it (bsdf.h) */
         float uc = pcg32_float(rng);
         Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
         bool sampled = bsdf_sample(bsdf, wo, uc, u, &bs);
-        if (!bsdf_is_delta(bsdf) && !(sampled && bs.delta)) {
+        if (!bsdf_is_delta(bsdf) && !bs.delta) {
             /* A BSDF with delta and non-delta lobes (smooth-coat plastic): bsdf_sample
              * took the non-delta part with probability 1 - p_delta, so this is the point
              * whose non-delta part the caller estimates, weighted by 1 / (1 - p_delta); the

@@ -207,7 +207,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
         Bsdf bsdf;
         scene_bsdf(s, &sh, &bsdf);
         if (!bsdf_is_delta(&bsdf)) {
-            VcmVertex v = {sh.p, sh.ng, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
+            VcmVertex v = {sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
                            sh.material, bounces, sh.uv};
             push_vertex(verts, &v);
             connect_to_camera(s, cam, vp, it, &v, &bsdf, rng, splats, rays);
@@ -301,14 +301,9 @@ static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPat
     if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return rgb_s(0.0f);
     Rgb fx = bsdf_eval(bx, wo, d);
     if (rgb_is_black(fx)) return rgb_s(0.0f);
-    /* y's BSDF again, from what the vertex kept of its hit */
-    SurfaceHit yh = {0};
-    yh.p = y->p;
-    yh.ng = y->ng;
-    yh.material = y->material;
-    yh.emitter = -1;
-    yh.uv = y->uv;
+    /* y's BSDF as the light subpath saw it, through the scene's one hit-to-BSDF routine. */
     Bsdf by;
+    SurfaceHit yh = {.p = y->p, .ng = y->ng, .ns = y->ns, .material = y->material, .emitter = -1, .uv = y->uv};
     scene_bsdf(s, &yh, &by);
     /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
      * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */

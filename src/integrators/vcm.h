@@ -26,12 +26,13 @@ typedef struct VcmParams {
  * Connection and Merging", 2012, eqs. 31-38) at this vertex, already powered (mis()). */
 typedef struct VcmVertex {
     Vec3 p, ng;
+    Vec3 ns;       /* shading normal (SurfaceHit.ns): y's BSDF is rebuilt from it */
     Vec3 w_prev;   /* unit, toward the previous vertex (where the light came from) */
     Rgb beta;      /* flux-type throughput: L_e cos / (pdf_a pdf_w) times the BSDF weights */
     float d_vcm, d_vc, d_vm;
     int32_t material;
     int32_t bounces; /* 1 for the first hit after the emitter */
-    Vec2 uv;         /* texture coordinates (the BSDF is rebuilt from material, ng, uv) */
+    Vec2 uv;         /* texture coordinates (the BSDF is rebuilt from material, ns, ng, uv) */
 } VcmVertex;
 
 /* A growable list of light vertices; one per work unit, reused by every iteration. */

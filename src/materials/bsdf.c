@@ -10,10 +10,14 @@
 #include "materials/microfacet.h"
 #include "sampling/warp.h"
 
-void bsdf_init(Bsdf *b, const Material *m, Vec3 n)
+void bsdf_init(Bsdf *b, const Material *m, Vec3 n) { bsdf_init_shading(b, m, n, n); }
+
+void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
     b->type = m->type;
-    b->frame = frame_from_normal(n);
+    b->frame = frame_from_normal(ns);
+    b->ng = ng;
+    b->shading = ns.x != ng.x || ns.y != ng.y || ns.z != ng.z;
     b->albedo = m->albedo;
     b->eta = m->ior;
     b->alpha = 0.0f;
@@ -321,11 +325,35 @@ float bsdf_delta_probability(const Bsdf *b, Vec3 wo_world)
     return plastic_coat_prob(b, wo.z);
 }
 
+/* ------------------------------------------------------------------ shading normals
+ * (Veach thesis sec. 5.3; the convention is bsdf_init_shading's.) */
+
+/* Whether the geometric normal allows the pair the shading frame sees: both tests must say
+ * reflection (same side), or both transmission. ng_o, ng_i: wo.ng, wi.ng; z_o, z_i: the
+ * local (shading) cosines. A one-sided reflector is black from ng's back. */
+static inline bool shading_allows(const Bsdf *b, float ng_o, float ng_i, float z_o, float z_i)
+{
+    if (ng_o == 0.0f || ng_i == 0.0f) return false;
+    if (b->one_sided && ng_o < 0.0f && !bsdf_has_transmission(b)) return false;
+    return (ng_o * ng_i > 0.0f) == (z_o * z_i > 0.0f);
+}
+
+/* Veach eq. 5.19 from the cosines: |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|). */
+static inline float shading_adjoint(float ng_o, float ng_i, float z_o, float z_i)
+{
+    float den = fabsf(ng_o * z_i);
+    return den > 0.0f ? fabsf(z_o * ng_i) / den : 0.0f;
+}
+
+float bsdf_shading_adjoint(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    return shading_adjoint(v3_dot(wo, b->ng), v3_dot(wi, b->ng), v3_dot(wo, b->frame.n), v3_dot(wi, b->frame.n));
+}
+
 /* ------------------------------------------------------------------ public wrappers */
 
-Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTransport mode)
+static Rgb eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
 {
-    Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
     switch (b->type) {
     case MATERIAL_DIFFUSE:
         /* Lambert reflects on whichever side wo is (unless one-sided). */
@@ -346,11 +374,20 @@ Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTranspo
     return rgb_s(0.0f);
 }
 
-Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi) { return bsdf_eval_transport(b, wo, wi, BSDF_RADIANCE); }
-
-float bsdf_pdf(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
+Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTransport mode)
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
+    if (!b->shading) return eval_local(b, wo, wi, mode);
+    float ng_o = v3_dot(wo_world, b->ng), ng_i = v3_dot(wi_world, b->ng);
+    if (!shading_allows(b, ng_o, ng_i, wo.z, wi.z)) return rgb_s(0.0f);
+    Rgb f = eval_local(b, wo, wi, mode);
+    return mode == BSDF_RADIANCE ? f : rgb_scale(f, shading_adjoint(ng_o, ng_i, wo.z, wi.z));
+}
+
+Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi) { return bsdf_eval_transport(b, wo, wi, BSDF_RADIANCE); }
+
+static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
     switch (b->type) {
     case MATERIAL_DIFFUSE:
         if (!reflect_side(b, &wo, &wi) || wo.z == 0.0f || wi.z <= 0.0f) return 0.0f;
@@ -370,6 +407,16 @@ float bsdf_pdf(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
     return 0.0f;
 }
 
+/* The density of the directions bsdf_sample returns: with a shading normal it rejects
+ * the pairs shading_allows refuses, so they have density zero. */
+float bsdf_pdf(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
+{
+    Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
+    if (b->shading && !shading_allows(b, v3_dot(wo_world, b->ng), v3_dot(wi_world, b->ng), wo.z, wi.z))
+        return 0.0f;
+    return pdf_local(b, wo, wi);
+}
+
 bool bsdf_sample(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfSample *out)
 {
     return bsdf_sample_transport(b, wo_world, uc, u, BSDF_RADIANCE, out);
@@ -380,6 +427,7 @@ bool bsdf_sample_transport(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfT
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world);
     if (wo.z == 0.0f) return false;
+    const float z_o = wo.z; /* before the reflective types flip it */
     bool flipped = false; /* reflective types sample from +z and flip back */
     bool ok = false;
     switch (b->type) {
@@ -421,6 +469,16 @@ bool bsdf_sample_transport(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfT
      * number (e.g. a direction exactly in the tangent plane). */
     if (!ok || !(out->pdf > 0.0f) || !rgb_is_finite(out->weight)) return false;
     if (flipped) out->wi.z = -out->wi.z;
+    const float z_i = out->wi.z;
     out->wi = frame_to_world(&b->frame, out->wi);
+    if (b->shading) {
+        /* Delta lobes included: a mirror about ns can send light under the surface. */
+        float ng_o = v3_dot(wo_world, b->ng), ng_i = v3_dot(out->wi, b->ng);
+        if (!shading_allows(b, ng_o, ng_i, z_o, z_i)) return false;
+        if (mode == BSDF_IMPORTANCE) {
+            out->weight = rgb_scale(out->weight, shading_adjoint(ng_o, ng_i, z_o, z_i));
+            if (!rgb_is_finite(out->weight)) return false;
+        }
+    }
     return true;
 }

@@ -17,7 +17,13 @@
 
 typedef struct Bsdf {
     MaterialType type;
-    Frame frame; /* n = the outward geometric/shading normal (glass: the outside) */
+    Frame frame; /* n = the shading normal ns (the geometric one without shading normals) */
+    /* The geometric normal (glass: its side is the outside). It decides on which side of
+     * the surface a direction is: a pair (wo, wi) scatters only when ng and the shading
+     * frame agree on reflection vs transmission (pbrt-v3's convention), so interpolated
+     * normals never let light through an opaque surface; see bsdf_init_shading. */
+    Vec3 ng;
+    bool shading; /* ns != ng: the side checks and the adjoint correction apply */
     Rgb albedo;
     float eta;   /* glass, dielectric, plastic coat: inside over outside IOR */
     float alpha; /* GGX width; 0 = smooth (delta lobes) */
@@ -46,8 +52,19 @@ typedef struct BsdfSample {
     bool delta;
 } BsdfSample;
 
-/* m must outlive b when m is a rough plastic (b points at its coat table). */
+/* m must outlive b when m is a rough plastic (b points at its coat table). The shading
+ * and geometric normals are both n. */
 void bsdf_init(Bsdf *b, const Material *m, Vec3 n);
+/* A BSDF with shading normal ns (unit, on ng's side) and geometric normal ng (unit), after
+ * Veach's thesis sec. 5.3. The lobes work in the frame of ns; a pair (wo, wi) has a value
+ * only when the lobe's own test (both in ns's hemisphere for reflection, opposite ones
+ * for transmission) and the geometric one (the same with ng) agree, otherwise zero:
+ * no light leaks through the surface, at the price of some energy at grazing angles
+ * where the two normals disagree. Camera paths (BSDF_RADIANCE) see f_s(wo, wi) |wi.ns|,
+ * light paths (BSDF_IMPORTANCE) its adjoint times |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)
+ * (Veach eq. 5.19, pbrt-v3 CorrectShadingNormal), so both transports estimate the same
+ * integral with the geometric normals of the measurement (area <-> solid angle). */
+void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng);
 /* True when every lobe is a delta lobe: eval and pdf are zero everywhere, NEE is useless. */
 static inline bool bsdf_is_delta(const Bsdf *b)
 {
@@ -77,18 +94,28 @@ float bsdf_delta_probability(const Bsdf *b, Vec3 wo);
 Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi);
 /* bsdf_eval for either transport: BSDF_IMPORTANCE gives the adjoint f*(wo, wi) |cos theta_i|
  * = f(wi, wo) |cos theta_i|, which differs from the radiance BSDF only in refraction
- * (by eta^2). bsdf_eval is the BSDF_RADIANCE case. */
+ * (by eta^2) and, with a shading normal, by the factor of bsdf_init_shading. bsdf_eval is
+ * the BSDF_RADIANCE case. */
 Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode);
 float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi);
 /* uc picks a lobe (glass: reflect vs refract), u samples a direction. Returns false for
  * no usable sample (e.g. wo exactly in the tangent plane, a microfacet reflection below
  * the surface: that energy is lost, the single-scattering loss of microfacet models).
+ * On false, out->delta is true when the failed sample came from a delta lobe (e.g. a
+ * mirror direction about a shading normal that points under the surface, refused), and
+ * otherwise false or untouched: a caller splitting a mixed BSDF by lobe sets it to false
+ * first and so learns which lobe failed.
  * For camera paths. */
 bool bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out);
 /* The same for either transport: the weight is f(wo, wi) |cos theta_i| / pdf for
  * BSDF_RADIANCE and the adjoint f*(wo, wi) |cos theta_i| / pdf = f(wi, wo) |cos theta_i| / pdf
- * for BSDF_IMPORTANCE. They differ only in refraction, by the factor 1/eta^2. */
+ * for BSDF_IMPORTANCE. They differ only in refraction, by the factor 1/eta^2, and with a
+ * shading normal by the adjoint correction (bsdf_init_shading). */
 bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode,
                            BsdfSample *out);
+/* The factor by which importance transport differs from radiance transport with a shading
+ * normal, |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|) (Veach thesis eq. 5.19); 1 when ns = ng, 0
+ * when wo or wi lies in a tangent plane. */
+float bsdf_shading_adjoint(const Bsdf *b, Vec3 wo, Vec3 wi);
 
 #endif

@@ -319,8 +319,8 @@ static CstStatus ensure_instances(Scene *s, CstError *err)
     return CST_OK;
 }
 
-CstStatus scene_add_instance_proto(Scene *s, const Vec3 *positions, int num_vertices,
-                                   const int *indices, const int *tri_material,
+CstStatus scene_add_instance_proto(Scene *s, const Vec3 *positions, const Vec3 *normals,
+                                   int num_vertices, const int *indices, const int *tri_material,
                                    int num_triangles, int *out_id, CstError *err)
 {
     CstStatus st = ensure_instances(s, err);
@@ -336,9 +336,10 @@ CstStatus scene_add_instance_proto(Scene *s, const Vec3 *positions, int num_vert
             return cst_fail(err, CST_ERR_INVALID_ARG, "triangle %d is degenerate (zero area)", t);
     }
     for (int i = 0; i < num_vertices; i++)
-        if (!v3_is_finite(positions[i])) return cst_fail(err, CST_ERR_INVALID_ARG, "vertex %d is not finite", i);
-    return instances_add_proto(s->instances, positions, num_vertices, indices, tri_material, num_triangles,
-                               out_id, err);
+        if (!v3_is_finite(positions[i]) || (normals && !v3_is_finite(normals[i])))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "vertex %d is not finite", i);
+    return instances_add_proto(s->instances, positions, normals, num_vertices, indices, tri_material,
+                               num_triangles, out_id, err);
 }
 
 CstStatus scene_add_instance(Scene *s, int proto, const Transform *world_from_obj, CstError *err)

@@ -119,9 +119,10 @@ CstStatus scene_set_environment(Scene *scene, const EnvMap *env, CstError *err);
 CstStatus scene_add_delta_light(Scene *scene, const DeltaLight *light, CstError *err);
 void scene_set_camera(Scene *scene, const CameraDesc *camera);
 CstStatus scene_set_output_path(Scene *scene, const char *path, CstError *err);
-/* An object to instance: triangles in object space with a scene material id each. */
-CstStatus scene_add_instance_proto(Scene *scene, const Vec3 *positions, int num_vertices,
-                                   const int *indices, const int *tri_material,
+/* An object to instance: triangles in object space with a scene material id each, and
+ * optional unit vertex normals for smooth shading (NULL, or zero for a vertex without). */
+CstStatus scene_add_instance_proto(Scene *scene, const Vec3 *positions, const Vec3 *normals,
+                                   int num_vertices, const int *indices, const int *tri_material,
                                    int num_triangles, int *out_id, CstError *err);
 CstStatus scene_add_instance(Scene *scene, int proto, const Transform *world_from_obj,
                              CstError *err);
@@ -143,6 +144,9 @@ static inline const PrimInfo *scene_prim_info(const Scene *s, uint32_t prim)
 typedef struct SurfaceHit {
     Vec3 p;        /* position */
     Vec3 ng;       /* unit geometric normal: (v1-v0) x (v2-v0) for triangles, outward for spheres */
+    /* Unit shading normal on ng's side (ns.ng >= 0): the vertex normals interpolated when
+     * the triangle's three vertices have them, else ng (spheres, instances, flat meshes). */
+    Vec3 ns;
     float t;
     uint32_t prim;
     int32_t material, emitter;
@@ -150,6 +154,22 @@ typedef struct SurfaceHit {
      * textures, the only readers, and (0, 0) elsewhere. */
     Vec2 uv;
 } SurfaceHit;
+
+/* The shading normal at barycentrics (u, v) of triangle t (3 indices into normals):
+ * Phong's interpolation of the vertex normals (Phong 1975), renormalised and turned to
+ * ng's side. ng is kept as it is, unlike pbrt-v4, which turns ng toward the shading
+ * normal: here ng alone says what is inside a dielectric and which way an emitter faces.
+ * ng when a vertex has no normal (zero) or the interpolation vanishes. */
+static inline Vec3 scene_shading_normal(const Vec3 *normals, const int32_t *t, float u, float v, Vec3 ng)
+{
+    Vec3 n0 = normals[t[0]], n1 = normals[t[1]], n2 = normals[t[2]];
+    if (v3_length2(n0) == 0.0f || v3_length2(n1) == 0.0f || v3_length2(n2) == 0.0f) return ng;
+    Vec3 n = v3_add(v3_add(v3_scale(n0, 1.0f - u - v), v3_scale(n1, u)), v3_scale(n2, v));
+    float l2 = v3_length2(n);
+    if (!(l2 > 0.0f) || !isfinite(l2)) return ng;
+    n = v3_scale(n, 1.0f / sqrtf(l2));
+    return v3_dot(n, ng) < 0.0f ? v3_neg(n) : n;
+}
 
 /* A hit in an instance, closer than any in `accel`: filled in world space. */
 static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, SurfaceHit *sh)
@@ -166,6 +186,12 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     sh->p = transform_point(&in->world_from_obj, p_obj);
     /* The normal matrix keeps the object's outside, also under mirroring transforms. */
     sh->ng = transform_normal(&in->normal_matrix, pr->tri_normals[ih.prim]);
+    sh->ns = sh->ng;
+    if (pr->normals) { /* interpolated in object space, then carried like ng */
+        Vec3 ns = scene_shading_normal(pr->normals, t, ih.u, ih.v, pr->tri_normals[ih.prim]);
+        ns = transform_normal(&in->normal_matrix, ns);
+        if (v3_length2(ns) > 0.0f) sh->ns = v3_dot(ns, sh->ng) < 0.0f ? v3_neg(ns) : ns;
+    }
     sh->material = pr->tri_material[ih.prim];
     sh->emitter = -1;
     sh->uv = v2(ih.u, ih.v); /* instanced objects carry no uvs: the triangle default */
@@ -195,11 +221,14 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
         sh->p = v3_add(v3_add(v3_scale(a, 1.0f - h.u - h.v), v3_scale(b, h.u)), v3_scale(c, h.v));
         sh->uv = s->num_textures ? triangle_uv(s->uvs, s->tri_has_uv, s->tri_indices, h.prim, h.u, h.v)
                                  : v2(0.0f, 0.0f);
+        /* Only scenes with vertex normals pay for the interpolation. */
+        sh->ns = s->normals ? scene_shading_normal(s->normals, t, h.u, h.v, sh->ng) : sh->ng;
     } else {
         const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];
         sh->ng = v3_normalize(v3_sub(ray_at(ray, h.t), sp->center));
         sh->p = v3_madd(sp->center, sh->ng, sp->radius); /* reprojected onto the surface */
         sh->uv = s->num_textures ? sphere_uv(sh->ng) : v2(0.0f, 0.0f);
+        sh->ns = sh->ng;
     }
     const PrimInfo *pi = scene_prim_info(s, h.prim);
     sh->material = pi->material;
@@ -216,12 +245,12 @@ static inline void scene_bsdf_textures(const Scene *s, const Material *m, Vec2 u
         b->alpha = material_bsdf_alpha(clampf(texture_eval_scalar(s->textures, m->roughness_texture - 1, uv), 0.0f, 1.0f));
 }
 
-/* The BSDF at a hit: the one place where a hit's material, normal, texture coordinates
- * (and later its shading normal) become a Bsdf, so every integrator sees the same surface. */
+/* The BSDF at a hit: the one place where a hit's material, normals and texture
+ * coordinates become a Bsdf, so every integrator sees the same surface. */
 static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
 {
     const Material *m = &s->materials[sh->material];
-    bsdf_init(b, m, sh->ng);
+    bsdf_init_shading(b, m, sh->ns, sh->ng);
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh->uv, b);
 }
 

@@ -1204,6 +1204,55 @@ static CstStatus read_mesh_indices(Loader *ld, const json_t *arr, int num_vertic
     return CST_OK;
 }
 
+/* An inline mesh's "normals": one nonzero vector per vertex, stored normalised. */
+static CstStatus read_mesh_normals(Loader *ld, const json_t *narr, size_t nv, Vec3 **out)
+{
+    char kind[48];
+    path_push_key(ld, "normals");
+    if (!json_is_array(narr) || json_array_size(narr) != nv)
+        return fail_here(ld, "got %s; expected an array of %zu normals (one per vertex), each an "
+                             "array of 3 numbers",
+                         describe(narr, kind), nv);
+    Vec3 *n = malloc(nv * sizeof *n);
+    if (!n) return fail_at(ld, CST_ERR_OOM, "out of memory for %zu normals", nv);
+    for (size_t k = 0; k < nv; k++) {
+        path_push_index(ld, k);
+        CstStatus st = read_vec3(ld, json_array_get(narr, k), LOADER_MAX_LENGTH, &n[k]);
+        if (st == CST_OK && !(v3_max_abs(n[k]) > 0.0f))
+            st = fail_here(ld, "the normal is zero; expected a nonzero vector");
+        if (st != CST_OK) {
+            free(n);
+            return st;
+        }
+        /* Scaled first, so tiny or huge normals normalise without under- or overflow. */
+        n[k] = v3_normalize(v3_scale(n[k], 1.0f / v3_max_abs(n[k])));
+        path_pop(ld);
+    }
+    path_pop(ld);
+    *out = n;
+    return CST_OK;
+}
+
+/* A mesh's "shading": "smooth" (default) makes its vertex normals shading normals; "flat"
+ * drops them, so the mesh shades with its geometric normals. */
+static CstStatus read_shading(Loader *ld, const json_t *shape, bool *flat)
+{
+    json_t *v = json_object_get(shape, "shading");
+    *flat = false;
+    if (!v) return CST_OK;
+    const char *sv = NULL;
+    path_push_key(ld, "shading");
+    LOADER_TRY(read_string(ld, v, &sv));
+    if (strcmp(sv, "flat") == 0) {
+        *flat = true;
+    } else if (strcmp(sv, "smooth") != 0) {
+        char name[72];
+        return fail_here(ld, "unknown shading \"%s\"; expected one of: smooth, flat", clip_name(sv, name));
+    }
+    path_pop(ld);
+    return CST_OK;
+}
+
 static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const Emission *em)
 {
     json_t *varr, *iarr;
@@ -1230,7 +1279,7 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
 
     CstStatus st = CST_OK;
     json_t *uarr = json_object_get(shape, "uvs");
-    Vec3 *pos = malloc(nv * sizeof *pos);
+    Vec3 *pos = malloc(nv * sizeof *pos), *nrm = NULL;
     int *idx = malloc(nt * 3 * sizeof *idx);
     Vec2 *uvs = uarr ? malloc(nv * sizeof *uvs) : NULL;
     if (!pos || !idx || (uarr && !uvs)) {
@@ -1278,10 +1327,17 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
         }
         path_pop(ld);
     }
+    bool flat = false;
+    if ((st = read_shading(ld, shape, &flat)) != CST_OK)
+        goto done;
+    json_t *narr = json_object_get(shape, "normals");
+    if (narr && (st = read_mesh_normals(ld, narr, nv, &nrm)) != CST_OK)
+        goto done;
     SceneMesh sm = {0};
     sm.positions = pos;
     sm.num_vertices = (int)nv;
     sm.uvs = uvs;
+    sm.normals = flat ? NULL : nrm;
     sm.indices = idx;
     sm.num_triangles = (int)nt;
     sm.material = material;
@@ -1293,6 +1349,7 @@ done:
     free(pos);
     free(idx);
     free(uvs);
+    free(nrm);
     return st;
 }
 
@@ -1522,6 +1579,8 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
         LOADER_TRY(parse_transform(ld, v, &xf));
         path_pop(ld);
     }
+    bool flat = false;
+    LOADER_TRY(read_shading(ld, shape, &flat));
     path_push_key(ld, "file");
     LOADER_TRY(read_string(ld, fv, &file));
     if (!file[0])
@@ -1564,9 +1623,9 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
     SceneMesh sm = {0};
     sm.positions = im.positions;
     sm.num_vertices = im.num_vertices;
-    sm.normals = im.normals;
+    sm.normals = flat ? NULL : im.normals;
     sm.uvs = im.uvs;
-    sm.normals_partial = im.normals_partial;
+    sm.normals_partial = !flat && im.normals_partial;
     sm.uvs_partial = im.uvs_partial;
     sm.indices = im.indices;
     sm.num_triangles = im.num_triangles;
@@ -1598,18 +1657,19 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
     static const char *const types[] = {"quad", "mesh", "sphere", "meshfile"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission"};
-    static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission"};
+    static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
+                                            "normals", "shading"};
     static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission"};
     static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
-                                                "transform"};
+                                                "transform", "shading"};
     int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(expect_object(ld, shape, "a shape object"));
     LOADER_TRY(read_type(ld, shape, "shape type", types, 4, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(check_keys(ld, shape, quad_keys, 4)); break;
-    case SHAPE_MESH: LOADER_TRY(check_keys(ld, shape, mesh_keys, 6)); break;
-    case SHAPE_MESHFILE: LOADER_TRY(check_keys(ld, shape, meshfile_keys, 5)); break;
+    case SHAPE_MESH: LOADER_TRY(check_keys(ld, shape, mesh_keys, 8)); break;
+    case SHAPE_MESHFILE: LOADER_TRY(check_keys(ld, shape, meshfile_keys, 6)); break;
     default: LOADER_TRY(check_keys(ld, shape, sphere_keys, 5)); break;
     }
     /* A mesh file may bring its own materials: then "material" is optional (-1 = none). */

@@ -2074,10 +2074,12 @@ static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
         }
     if (nt == 0) return CST_OK;
     CstStatus st = CST_OK;
-    Vec3 *p = malloc((size_t)nv * sizeof *p);
+    int any_n = 0; /* vertex normals (N) on some shape: shading normals, zero where none */
+    for (int i = 0; i < obj->n; i++) any_n |= !obj->shapes[i].g.is_sphere && obj->shapes[i].g.n != NULL;
+    Vec3 *p = malloc((size_t)nv * sizeof *p), *n = any_n ? calloc((size_t)nv, sizeof *n) : NULL;
     int *idx = malloc((size_t)nt * 3 * sizeof *idx), *mat = malloc((size_t)nt * sizeof *mat);
     int vbase = 0, t_out = 0, dropped = 0;
-    if (!p || !idx || !mat) {
+    if (!p || !idx || !mat || (any_n && !n)) {
         st = oom(ld);
         goto done;
     }
@@ -2092,6 +2094,7 @@ static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
         transform_normal_matrix(&os->xf.m, &nm);
         for (int v = 0; v < g->nv; v++) {
             p[vbase + v] = transform_point(&os->xf.m, g->p[v]);
+            if (g->n) n[vbase + v] = transform_normal(&nm, g->n[v]);
             if (!coords_ok(p[vbase + v])) {
                 st = fail_at(ld, CST_ERR_INVALID_ARG, os->loc, "%s: vertex %d of the object is beyond "
                              "the scene limit", d, v);
@@ -2124,11 +2127,12 @@ static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
         warn_at(ld, CST_WARN_GEOMETRY, obj->loc, "ObjectBegin \"%s\": %d degenerate triangles dropped",
                 obj->name, dropped);
     if (t_out > 0) {
-        st = scene_add_instance_proto(ld->scene, p, nv, idx, mat, t_out, &obj->proto, ld->err);
+        st = scene_add_instance_proto(ld->scene, p, n, nv, idx, mat, t_out, &obj->proto, ld->err);
         if (st) st = fail_wrap(ld, st, obj->loc, d);
     }
 done:
     free(p);
+    free(n);
     free(idx);
     free(mat);
     return st;

@@ -997,6 +997,7 @@ static void test_instances_match_copies(void **state)
 {
     (void)state;
 #define OBJ_SHAPES "Shape \"trianglemesh\" \"point3 P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] \"integer indices\" [0 1 2 0 2 3]\n" \
+                   "  \"normal N\" [0.3 0 1  0 0.4 1  -0.2 0.1 1  0 0 1]\n" \
                    "Material \"diffuse\" \"rgb reflectance\" [.1 .2 .3]\n" \
                    "Shape \"trianglemesh\" \"point3 P\" [0 0 0  0 1 1  1 0 1] \"integer indices\" [0 1 2]\n"
     static const char *const xfs[] = {"Translate -2 0 0", "Translate 2 0 1\nRotate 30 0 1 0",
@@ -1014,7 +1015,7 @@ static void test_instances_match_copies(void **state)
     Scene *a = expect_ok(inst, NULL), *b = expect_ok(copy, NULL);
     assert_int_equal(a->num_triangles, 0);
     assert_int_equal(b->num_triangles, 15);
-    int hits = 0;
+    int hits = 0, smooth_hits = 0;
     for (int y = 0; y < 64; y++)
         for (int x = 0; x < 64; x++) {
             Vec3 d = v3_normalize(v3(((float)x + 0.5f) / 32.0f - 1.0f, ((float)y + 0.5f) / 32.0f - 1.0f, 1.6f));
@@ -1029,9 +1030,17 @@ static void test_instances_match_copies(void **state)
             if (v3_dot(ha.ng, hb.ng) < 0.9999f)
                 fail_msg("ray %d,%d: normal (%g %g %g) vs (%g %g %g)", x, y, (double)ha.ng.x, (double)ha.ng.y,
                          (double)ha.ng.z, (double)hb.ng.x, (double)hb.ng.y, (double)hb.ng.z);
+            /* Shading normals (the square's N) carried the same way, except under the
+             * non-uniform scale (copy 2, triangles 6..8 of b): copies renormalise each
+             * transformed vertex normal before interpolating, instances interpolate in
+             * object space and then transform (as pbrt-v4 does both), which differ there. */
+            if (hb.prim / 3 != 2 && v3_dot(ha.ns, hb.ns) < 0.9999f)
+                fail_msg("ray %d,%d: shading normal (%g %g %g) vs (%g %g %g)", x, y, (double)ha.ns.x, (double)ha.ns.y,
+                         (double)ha.ns.z, (double)hb.ns.x, (double)hb.ns.y, (double)hb.ns.z);
+            if (a->materials[ha.material].albedo.r != 0.1f) smooth_hits += v3_dot(ha.ns, ha.ng) < 0.999f;
             assert_true(scene_occluded(a, &r) && scene_occluded(b, &r));
         }
-    assert_true(hits > 300);
+    assert_true(hits > 300 && smooth_hits > 100);
     cst_scene_destroy(a);
     cst_scene_destroy(b);
 }

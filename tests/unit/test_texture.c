@@ -303,7 +303,7 @@ static void test_uv_at_hits(void **state)
     assert_int_equal(scene_add_sphere(s, v3(10, 0, 0), 1.0f, mat, NULL, &err), CST_OK);
     /* an instanced triangle at z = 5 (object space z = 0, translated) */
     int proto, pmat[1] = {mat};
-    assert_int_equal(scene_add_instance_proto(s, t0, 3, tri, pmat, 1, &proto, &err), CST_OK);
+    assert_int_equal(scene_add_instance_proto(s, t0, NULL, 3, tri, pmat, 1, &proto, &err), CST_OK);
     Transform tr = transform_translate(v3(20, 0, 5));
     assert_int_equal(scene_add_instance(s, proto, &tr, &err), CST_OK);
     assert_int_equal(scene_commit(s, &err), CST_OK);
