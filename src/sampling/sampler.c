@@ -127,7 +127,7 @@ void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, u
             if (spp % d == 0) s->nx = d;
 }
 
-float sampler_1d(Sampler *s)
+float sampler_1d_ld(Sampler *s)
 {
     switch (s->type) {
     case CST_SAMPLER_STRATIFIED: {
@@ -150,7 +150,7 @@ float sampler_1d(Sampler *s)
     }
 }
 
-Vec2 sampler_2d(Sampler *s)
+Vec2 sampler_2d_ld(Sampler *s)
 {
     switch (s->type) {
     case CST_SAMPLER_STRATIFIED: {

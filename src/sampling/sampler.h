@@ -29,10 +29,30 @@ typedef struct Sampler {
  * [0,1) into that many strata; 0 = not known in advance, e.g. a render with only a time
  * limit, and then it jitters without strata). type CST_SAMPLER_DEFAULT means independent. */
 void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index, uint32_t spp);
-/* The next dimension, uniform in [0, 1). */
-float sampler_1d(Sampler *s);
+/* The stratified and Sobol' draws (sampler.c); sampler_1d/2d call them. */
+float sampler_1d_ld(Sampler *s);
+Vec2 sampler_2d_ld(Sampler *s);
+
+/* The next dimension, uniform in [0, 1). Inline for the default independent sampler, the
+ * path tracer's inner loop draws several per bounce. */
+static inline float sampler_1d(Sampler *s)
+{
+    if (s->type == CST_SAMPLER_INDEPENDENT || s->type == CST_SAMPLER_DEFAULT) return pcg32_float(&s->rng);
+    return sampler_1d_ld(s);
+}
+
 /* The next two dimensions, uniform in [0, 1)^2 and stratified jointly. */
-Vec2 sampler_2d(Sampler *s);
+static inline Vec2 sampler_2d(Sampler *s)
+{
+    if (s->type == CST_SAMPLER_INDEPENDENT || s->type == CST_SAMPLER_DEFAULT) {
+        /* y first: the order GCC gave the v2(pcg32_float(), pcg32_float()) this replaced
+         * (arguments evaluated right to left), so independent images stay bit-identical. */
+        float y = pcg32_float(&s->rng);
+        float x = pcg32_float(&s->rng);
+        return v2(x, y);
+    }
+    return sampler_2d_ld(s);
+}
 
 /* Sobol' point `index` in dimension 0 or 1, as a 32-bit fraction (unscrambled). */
 uint32_t sobol_sample(uint32_t index, int dim);
