@@ -111,6 +111,10 @@ typedef struct TexEntry {
     int is_float; /* pbrt keeps float and spectrum textures in two name spaces */
     int id;       /* the scene's texture; float textures hold the value in all three channels */
     Rgb value;    /* its average, for parameters caustic cannot texture */
+    /* Derived scene textures made on first use and shared by every material that uses
+     * them (an image is copied once): clamped to 1 as a reflectance; as caustic's
+     * roughness without and with pbrt's remapping. -1 until made. */
+    int clamped, rough[2];
 } TexEntry;
 
 typedef struct NamedXf {
@@ -1286,7 +1290,7 @@ static CstStatus tex_map(Loader *ld, int id, TexOp op, Rgb a, Rgb b, Loc loc, co
  * 0 when the file gives a value or names a constant texture (*val then holds it), else
  * 1 + the scene texture's index, as Material stores it. */
 static CstStatus tex_param(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
-                           int *tex, Rgb *val)
+                           int *tex, Rgb *val, int *entry)
 {
     Param *p = find_param(ps, name);
     *tex = 0;
@@ -1295,6 +1299,7 @@ static CstStatus tex_param(Loader *ld, Params *ps, const char *d, const char *na
     p->used = 1;
     TRY(texture_find_ref(ld, p, d, is_float, &i));
     *val = ld->texs[i].value;
+    if (entry) *entry = i;
     if (!texture_is_constant(ld, i)) *tex = 1 + ld->texs[i].id;
     return CST_OK;
 }
@@ -1304,17 +1309,20 @@ static CstStatus tex_param(Loader *ld, Params *ps, const char *d, const char *na
  * is clamped per texel. */
 static CstStatus get_albedo(Loader *ld, Params *ps, const char *d, const char *name, Material *m)
 {
-    int tex = 0;
+    int tex = 0, e = 0;
     Rgb avg = m->albedo;
-    TRY(tex_param(ld, ps, d, name, 0, &tex, &avg));
+    TRY(tex_param(ld, ps, d, name, 0, &tex, &avg, &e));
     if (!tex) return get_spectrum(ld, ps, d, name, SPEC_REFLECTANCE, 1, &m->albedo, NULL);
     Param *p = find_param(ps, name);
     float mx = rgb_max(ld->scene->textures[tex - 1].max);
     if (mx > 1.0f) {
         char nm[72];
-        int id = 0;
-        TRY(tex_map(ld, tex - 1, TEXOP_MIN1, rgb_s(0.0f), rgb_s(0.0f), p->loc, d, &id));
-        tex = id + 1;
+        if (ld->texs[e].clamped < 0) {
+            int id = 0;
+            TRY(tex_map(ld, tex - 1, TEXOP_MIN1, rgb_s(0.0f), rgb_s(0.0f), p->loc, d, &id));
+            ld->texs[e].clamped = id;
+        }
+        tex = ld->texs[e].clamped + 1;
         warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: texture \"%s\" has values up to %g; "
                 "clamped to 1 texel by texel (pbrt-v4 clamps the filtered reflectance)", d,
                 clip(p->strs[0], nm), (double)mx);
@@ -1371,15 +1379,20 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
         *tex_out = 0;
         if (eu && ev && eu->type == PT_TEXTURE && ev->type == PT_TEXTURE && eu->num_strs == 1 &&
             ev->num_strs == 1 && strcmp(eu->strs[0], ev->strs[0]) == 0) {
-            int tex = 0, id = 0;
+            int tex = 0, e = 0;
             Rgb avg = rgb_s(0.0f);
-            TRY(tex_param(ld, ps, d, eu->name, 1, &tex, &avg));
-            if (ev != eu) TRY(tex_param(ld, ps, d, ev->name, 1, &tex, &avg));
+            TRY(tex_param(ld, ps, d, eu->name, 1, &tex, &avg, &e));
+            if (ev != eu) TRY(tex_param(ld, ps, d, ev->name, 1, &tex, &avg, &e));
             if (tex) {
                 if (pr) pr->used = 1; /* shadowed by uroughness and vroughness */
-                TRY(tex_map(ld, tex - 1, TEXOP_POW, rgb_s(remap ? 0.25f : 0.5f), rgb_s(0.0f), eu->loc, d, &id));
-                const Texture *t = &ld->scene->textures[id];
-                *tex_out = id + 1;
+                int *id = &ld->texs[e].rough[remap != 0];
+                if (*id < 0) {
+                    int made = 0;
+                    TRY(tex_map(ld, tex - 1, TEXOP_POW, rgb_s(remap ? 0.25f : 0.5f), rgb_s(0.0f), eu->loc, d, &made));
+                    *id = made;
+                }
+                const Texture *t = &ld->scene->textures[*id];
+                *tex_out = *id + 1;
                 *out = minf(t->average.r, 1.0f);
                 if (t->max.r > 1.0f)
                     warn_at(ld, CST_WARN_APPROXIMATED, eu->loc, "%s: roughness texture values up to "
@@ -1708,7 +1721,7 @@ static CstStatus tex_operand(Loader *ld, Params *ps, const char *d, const char *
     int tex = 0;
     *id = -1;
     *val = rgb_s(def);
-    TRY(tex_param(ld, ps, d, name, is_float, &tex, val));
+    TRY(tex_param(ld, ps, d, name, is_float, &tex, val, NULL));
     if (tex) {
         *id = tex - 1;
         return CST_OK;
@@ -1944,6 +1957,7 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
     ld->texs[ld->num_texs].is_float = is_float;
     ld->texs[ld->num_texs].id = id;
     ld->texs[ld->num_texs].value = ld->scene->textures[id].average;
+    ld->texs[ld->num_texs].clamped = ld->texs[ld->num_texs].rough[0] = ld->texs[ld->num_texs].rough[1] = -1;
     ld->num_texs++;
     name = NULL;
 done:

@@ -1082,7 +1082,8 @@ static void test_texture_materials(void **state)
         "Material \"diffuse\" \"texture reflectance\" \"hot\"\n" TRI                          /* 4 */
         "Material \"conductor\" \"texture uroughness\" \"r\" \"float vroughness\" 0.0625\n" TRI /* 5 */
         "Material \"diffusetransmission\" \"texture reflectance\" \"k\"\n" TRI                /* 6 */
-        "Material \"coatedconductor\" \"texture conductor.roughness\" \"r\"\n" TRI);          /* 7 */
+        "Material \"coatedconductor\" \"texture conductor.roughness\" \"r\"\n" TRI            /* 7 */
+        "Material \"diffuse\" \"texture reflectance\" \"hot\"\n" TRI);                         /* 8 */
     Scene *s = expect_ok(text, &w);
     const Material *m = tri_material(s, 0);
     assert_int_equal(m->type, MATERIAL_CONDUCTOR);
@@ -1114,6 +1115,9 @@ static void test_texture_materials(void **state)
     assert_int_equal(albedo_tex(s, 6)->type, TEXTURE_CHECKERBOARD);
     /* coatedconductor's conductor roughness */
     assert_int_not_equal(tri_material(s, 7)->roughness_texture, 0);
+    /* derived textures are made once per texture and shared */
+    assert_int_equal(tri_material(s, 7)->roughness_texture, tri_material(s, 0)->roughness_texture);
+    assert_int_equal(tri_material(s, 8)->albedo_texture, tri_material(s, 4)->albedo_texture);
     cst_scene_destroy(s);
     /* pbrt-v4 looks float and spectrum textures up apart and stops at a missing one */
     expect_error(WORLD("Texture \"r\" \"float\" \"constant\" \"float value\" 0.5\n"
