@@ -1239,8 +1239,8 @@ static Rgb texop_apply(TexOp op, Rgb a, Rgb b, Rgb v)
 static CstStatus tex_map(Loader *ld, int id, TexOp op, Rgb a, Rgb b, Loc loc, const char *d, int *out)
 {
     *out = id;
-    /* Texture values are >= 0 already (texture_image, get_spectrum), so the identity's
-     * max(0, v) changes nothing. */
+    /* Spectrum and image values are >= 0 already (get_spectrum, texture_image), so the
+     * identity's max(0, v) could only change a negative float constant: left as it is. */
     if (op == TEXOP_AFFINE && a.r == 1.0f && a.g == 1.0f && a.b == 1.0f && rgb_is_black(b)) return CST_OK;
     int n = id + 1, *memo = malloc((size_t)n * sizeof *memo);
     if (!memo) return oom(ld);
