@@ -108,8 +108,13 @@ typedef struct MatEntry {
 
 typedef struct TexEntry {
     char *name;
-    int is_float;
-    Rgb value; /* constant, or the average standing in for the texture */
+    int is_float; /* pbrt keeps float and spectrum textures in two name spaces */
+    int id;       /* the scene's texture; float textures hold the value in all three channels */
+    Rgb value;    /* its average, for parameters caustic cannot texture */
+    /* Derived scene textures made on first use and shared by every material that uses
+     * them (an image is copied once): clamped to 1 as a reflectance; as caustic's
+     * roughness without and with pbrt's remapping. -1 until made. */
+    int clamped, rough[2];
 } TexEntry;
 
 typedef struct NamedXf {
@@ -884,17 +889,44 @@ static int find_texture(Loader *ld, const char *name, int is_float)
     return -1;
 }
 
-static CstStatus texture_ref(Loader *ld, const Param *p, const char *d, int is_float, Rgb *out)
+/* The texture a "texture" parameter names, as an index into ld->texs; a located error if
+ * there is none of that type (pbrt-v4 looks float and spectrum textures up apart, and
+ * stops at a missing one). */
+static CstStatus texture_find_ref(Loader *ld, const Param *p, const char *d, int is_float, int *out)
 {
     char nm[72];
     TRY(one_value(ld, p, d));
     int i = find_texture(ld, p->strs[0], is_float);
-    if (i < 0)
+    if (i >= 0) {
+        *out = i;
+        return CST_OK;
+    }
+    if (find_texture(ld, p->strs[0], !is_float) >= 0)
         return fail_at(ld, CST_ERR_INVALID_ARG, p->loc,
-                       "%s: %s texture \"%s\" is not defined; expected the name of a Texture "
-                       "declared earlier as \"%s\"", d, is_float ? "float" : "spectrum",
-                       clip(p->strs[0], nm), is_float ? "float" : "spectrum");
+                       "%s: texture \"%s\" is a %s texture; expected a %s texture here", d,
+                       clip(p->strs[0], nm), is_float ? "spectrum" : "float", is_float ? "float" : "spectrum");
+    return fail_at(ld, CST_ERR_INVALID_ARG, p->loc,
+                   "%s: %s texture \"%s\" is not defined; expected the name of a Texture "
+                   "declared earlier as \"%s\"", d, is_float ? "float" : "spectrum",
+                   clip(p->strs[0], nm), is_float ? "float" : "spectrum");
+}
+
+static int texture_is_constant(const Loader *ld, int entry)
+{
+    return ld->scene->textures[ld->texs[entry].id].type == TEXTURE_CONSTANT;
+}
+
+/* A texture where caustic takes one value: its average, with a warning unless it is constant. */
+static CstStatus texture_ref(Loader *ld, const Param *p, const char *d, int is_float, Rgb *out)
+{
+    int i = 0;
+    char nm[72], nm2[72];
+    TRY(texture_find_ref(ld, p, d, is_float, &i));
     *out = ld->texs[i].value;
+    if (!texture_is_constant(ld, i))
+        warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: \"%s\" cannot be textured in caustic; "
+                "texture \"%s\" is taken as its average (%g, %g, %g)", d, clip(p->decl, nm),
+                clip(p->strs[0], nm2), (double)out->r, (double)out->g, (double)out->b);
     return CST_OK;
 }
 
@@ -1151,6 +1183,155 @@ static CstStatus pop_state(Loader *ld, Loc loc, int transform_only, const char *
     return CST_OK;
 }
 
+/* A failure of a library call (mesh import, image read): keep its text, add the location. */
+static CstStatus fail_wrap(Loader *ld, CstStatus st, Loc loc, const char *d)
+{
+    char msg[sizeof ld->err->msg];
+    memcpy(msg, ld->err->msg, sizeof msg);
+    msg[sizeof msg - 1] = '\0';
+    return fail_at(ld, st, loc, "%s: %.700s", d, msg);
+}
+
+/* ------------------------------------------------------------------ scene textures */
+
+/* Adds t to the scene (which takes its image), failures located at loc. */
+static CstStatus tex_add(Loader *ld, Texture *t, Loc loc, const char *d, int *id)
+{
+    CstStatus st = scene_add_texture(ld->scene, t, id, ld->err);
+    return st ? fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
+static CstStatus tex_const(Loader *ld, Rgb c, Loc loc, const char *d, int *id)
+{
+    Texture t;
+    texture_constant(&t, c);
+    return tex_add(ld, &t, loc, d, id);
+}
+
+/* Per-value maps that pbrt applies after its lookups, applied here to every value a
+ * texture holds (constants, texels, a checkerboard's two textures). Bilinear filtering
+ * commutes with the affine maps; for the others (clamps, powers) mapping texels before
+ * filtering differs from pbrt only between texels across a kink. */
+typedef enum TexOp {
+    TEXOP_AFFINE, /* max(0, a v + b): pbrt's scale, invert and ScaleTexture */
+    TEXOP_MIN1,   /* min(v, 1): the reflectance clamp of pbrt's materials */
+    TEXOP_POW,    /* max(v, 0)^a.r: gamma decoding, roughness to caustic's roughness */
+    TEXOP_RED     /* the first channel in all three: pbrt's float image textures */
+} TexOp;
+
+static Rgb texop_apply(TexOp op, Rgb a, Rgb b, Rgb v)
+{
+    switch (op) {
+    case TEXOP_AFFINE:
+        return rgb(maxf(0.0f, a.r * v.r + b.r), maxf(0.0f, a.g * v.g + b.g), maxf(0.0f, a.b * v.b + b.b));
+    case TEXOP_MIN1: return rgb(minf(v.r, 1.0f), minf(v.g, 1.0f), minf(v.b, 1.0f));
+    case TEXOP_POW:
+        return rgb(powf(maxf(v.r, 0.0f), a.r), powf(maxf(v.g, 0.0f), a.r), powf(maxf(v.b, 0.0f), a.r));
+    case TEXOP_RED: return rgb_s(v.r);
+    }
+    return v;
+}
+
+/* A new scene texture: texture `id` with op applied to its values, or id itself when op
+ * changes nothing. A checkerboard's textures are mapped too, each once however often it
+ * is shared (nested checkerboards may share children), without recursion: children have
+ * lower indices, so one downward pass marks what is reachable and one upward pass copies. */
+static CstStatus tex_map(Loader *ld, int id, TexOp op, Rgb a, Rgb b, Loc loc, const char *d, int *out)
+{
+    *out = id;
+    /* Spectrum and image values are >= 0 already (get_spectrum, texture_image), so the
+     * identity's max(0, v) could only change a negative float constant: left as it is. */
+    if (op == TEXOP_AFFINE && a.r == 1.0f && a.g == 1.0f && a.b == 1.0f && rgb_is_black(b)) return CST_OK;
+    int n = id + 1, *memo = malloc((size_t)n * sizeof *memo);
+    if (!memo) return oom(ld);
+    for (int i = 0; i < n; i++) memo[i] = -1;
+    memo[id] = 0; /* reachable */
+    for (int i = id; i >= 0; i--) {
+        const Texture *t = &ld->scene->textures[i];
+        if (memo[i] == 0 && t->type == TEXTURE_CHECKERBOARD) memo[t->checker.even] = memo[t->checker.odd] = 0;
+    }
+    CstStatus st = CST_OK;
+    for (int i = 0; i < n && !st; i++) {
+        if (memo[i] < 0) continue;
+        Texture src = ld->scene->textures[i], t; /* a copy: adding may move the array */
+        if (src.type == TEXTURE_CONSTANT) {
+            texture_constant(&t, texop_apply(op, a, b, src.value));
+        } else if (src.type == TEXTURE_CHECKERBOARD) {
+            texture_checkerboard(&t, ld->scene->textures, memo[src.checker.even], memo[src.checker.odd],
+                                 src.checker.scale);
+        } else {
+            size_t np = (size_t)src.image.width * (size_t)src.image.height;
+            float *px = malloc(np * 3 * sizeof *px);
+            if (!px) {
+                st = oom(ld);
+                break;
+            }
+            for (size_t k = 0; k < np; k++) {
+                const float *q = &src.image.rgb[3 * k];
+                Rgb v = texop_apply(op, a, b, rgb(q[0], q[1], q[2]));
+                px[3 * k] = v.r;
+                px[3 * k + 1] = v.g;
+                px[3 * k + 2] = v.b;
+            }
+            if ((st = texture_image(&t, px, src.image.width, src.image.height, src.image.wrap, ld->err))) {
+                st = fail_wrap(ld, st, loc, d);
+                break;
+            }
+        }
+        texture_set_uv_transform(&t, src.uv_scale, src.uv_offset);
+        st = tex_add(ld, &t, loc, d, &memo[i]);
+    }
+    if (!st) *out = memo[id];
+    free(memo);
+    return st;
+}
+
+/* The scene texture for a "texture" parameter of a material (its albedo or roughness):
+ * 0 when the file gives a value or names a constant texture (*val then holds it), else
+ * 1 + the scene texture's index, as Material stores it. */
+static CstStatus tex_param(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
+                           int *tex, Rgb *val, int *entry)
+{
+    Param *p = find_param(ps, name);
+    *tex = 0;
+    if (!p || p->type != PT_TEXTURE) return CST_OK;
+    int i = 0;
+    p->used = 1;
+    TRY(texture_find_ref(ld, p, d, is_float, &i));
+    *val = ld->texs[i].value;
+    if (entry) *entry = i;
+    if (!texture_is_constant(ld, i)) *tex = 1 + ld->texs[i].id;
+    return CST_OK;
+}
+
+/* A reflectance parameter (diffuse "reflectance", pbrt-v3 "Kd", ...) as albedo or albedo
+ * texture. pbrt-v4's materials clamp reflectances to [0, 1]; a texture with larger values
+ * is clamped per texel. */
+static CstStatus get_albedo(Loader *ld, Params *ps, const char *d, const char *name, Material *m)
+{
+    int tex = 0, e = 0;
+    Rgb avg = m->albedo;
+    TRY(tex_param(ld, ps, d, name, 0, &tex, &avg, &e));
+    if (!tex) return get_spectrum(ld, ps, d, name, SPEC_REFLECTANCE, 1, &m->albedo, NULL);
+    Param *p = find_param(ps, name);
+    float mx = rgb_max(ld->scene->textures[tex - 1].max);
+    if (mx > 1.0f) {
+        char nm[72];
+        if (ld->texs[e].clamped < 0) {
+            int id = 0;
+            TRY(tex_map(ld, tex - 1, TEXOP_MIN1, rgb_s(0.0f), rgb_s(0.0f), p->loc, d, &id));
+            ld->texs[e].clamped = id;
+        }
+        tex = ld->texs[e].clamped + 1;
+        warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: texture \"%s\" has values up to %g; "
+                "clamped to 1 texel by texel (pbrt-v4 clamps the filtered reflectance)", d,
+                clip(p->strs[0], nm), (double)mx);
+    }
+    m->albedo_texture = tex;
+    m->albedo = ld->scene->textures[tex - 1].average;
+    return CST_OK;
+}
+
 /* ------------------------------------------------------------------ materials and textures */
 
 static CstStatus add_mat_entry(Loader *ld, const char *name, const Material *m, int *out)
@@ -1180,7 +1361,7 @@ static int find_named_material(Loader *ld, const char *name)
  * geometric mean sqrt(alpha_u alpha_v): GGX's density of normals along the macro normal is
  * 1 / (pi alpha_u alpha_v), so the isotropic lobe keeps that peak and the lobe's solid angle. */
 static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc,
-                                float *out)
+                                float *out, int *tex_out)
 {
     char n_r[64], n_u[64], n_v[64];
     snprintf(n_r, sizeof n_r, "%sroughness", prefix);
@@ -1188,10 +1369,42 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
     snprintf(n_v, sizeof n_v, "%svroughness", prefix);
     float r = 0.0f, ur = 0.0f, vr = 0.0f;
     int remap = 1;
+    TRY(get_bool(ld, ps, d, "remaproughness", 1, &remap));
+    if (tex_out) {
+        /* An isotropic roughness texture (u and v from the same one) becomes a roughness
+         * texture of caustic's perceptual roughness, r^(1/4) (remapped) or r^(1/2) texel by
+         * texel, as the constant below; anisotropic or mixed ones take their averages. */
+        Param *pr = find_param(ps, n_r), *pu = find_param(ps, n_u), *pv = find_param(ps, n_v);
+        Param *eu = pu ? pu : pr, *ev = pv ? pv : pr;
+        *tex_out = 0;
+        if (eu && ev && eu->type == PT_TEXTURE && ev->type == PT_TEXTURE && eu->num_strs == 1 &&
+            ev->num_strs == 1 && strcmp(eu->strs[0], ev->strs[0]) == 0) {
+            int tex = 0, e = 0;
+            Rgb avg = rgb_s(0.0f);
+            TRY(tex_param(ld, ps, d, eu->name, 1, &tex, &avg, &e));
+            if (ev != eu) TRY(tex_param(ld, ps, d, ev->name, 1, &tex, &avg, &e));
+            if (tex) {
+                if (pr) pr->used = 1; /* shadowed by uroughness and vroughness */
+                int *id = &ld->texs[e].rough[remap != 0];
+                if (*id < 0) {
+                    int made = 0;
+                    TRY(tex_map(ld, tex - 1, TEXOP_POW, rgb_s(remap ? 0.25f : 0.5f), rgb_s(0.0f), eu->loc, d, &made));
+                    *id = made;
+                }
+                const Texture *t = &ld->scene->textures[*id];
+                *tex_out = *id + 1;
+                *out = minf(t->average.r, 1.0f);
+                if (t->max.r > 1.0f)
+                    warn_at(ld, CST_WARN_APPROXIMATED, eu->loc, "%s: roughness texture values up to "
+                            "GGX alpha %g are beyond caustic's roughest (alpha 1); rendered with alpha 1",
+                            d, (double)(t->max.r * t->max.r));
+                return CST_OK;
+            }
+        }
+    }
     TRY(get_float_tex(ld, ps, d, n_r, 0.0f, &r, NULL));
     TRY(get_float_tex(ld, ps, d, n_u, r, &ur, NULL));
     TRY(get_float_tex(ld, ps, d, n_v, r, &vr, NULL));
-    TRY(get_bool(ld, ps, d, "remaproughness", 1, &remap));
     if (!(ur >= 0.0f) || !(vr >= 0.0f)) {
         Param *p = find_param(ps, !(ur >= 0.0f) ? n_u : n_v);
         if (!p) p = find_param(ps, n_r);
@@ -1260,7 +1473,7 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
     m->ior = 1.0f;
     m->eta = eta;
     m->k = k;
-    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness);
+    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_texture);
 }
 
 /* Layer parameters of pbrt-v4's coated materials that caustic's closed-form coat does not
@@ -1325,17 +1538,17 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
     m->albedo = rgb_s(0.5f);
     m->ior = 1.0f;
     if (strcmp(type, "diffuse") == 0) {
-        TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
+        TRY(get_albedo(ld, ps, d, "reflectance", m));
     } else if (strcmp(type, "matte") == 0) { /* pbrt-v3 */
-        TRY(get_spectrum(ld, ps, d, "Kd", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
+        TRY(get_albedo(ld, ps, d, "Kd", m));
     } else if (strcmp(type, "coateddiffuse") == 0) {
         /* caustic's plastic: the same interface over a Lambertian base, with the light
          * between them in closed form (bsdf.c) instead of pbrt's random walk. */
         m->type = MATERIAL_PLASTIC;
         m->ior = 1.5f;
-        TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
+        TRY(get_albedo(ld, ps, d, "reflectance", m));
         TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
-        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness));
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, NULL)); /* no plastic roughness textures */
         TRY(coat_layer_params(ld, ps, d));
         if (m->ior < 1.0f) {
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: coat eta %g below 1 rendered as 1 (no coat)",
@@ -1348,15 +1561,14 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
                 (double)m->albedo.r, (double)m->albedo.g, (double)m->albedo.b, (double)m->ior,
                 (double)m->roughness);
     } else if (strcmp(type, "diffusetransmission") == 0) {
-        TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
+        TRY(get_albedo(ld, ps, d, "reflectance", m));
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its reflectance "
                 "(transmission is dropped)", d);
     } else if (strcmp(type, "plastic") == 0 || strcmp(type, "substrate") == 0 ||
                strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 ||
                strcmp(type, "disney") == 0) { /* pbrt-v3 */
         m->albedo = rgb_s(strcmp(type, "plastic") == 0 ? 0.25f : 0.5f);
-        TRY(get_spectrum(ld, ps, d, strcmp(type, "disney") == 0 ? "color" : "Kd",
-                         SPEC_REFLECTANCE, 1, &m->albedo, NULL));
+        TRY(get_albedo(ld, ps, d, strcmp(type, "disney") == 0 ? "color" : "Kd", m));
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its diffuse "
                 "reflectance (specular lobes dropped)", d);
     } else if (strcmp(type, "conductor") == 0 || strcmp(type, "metal") == 0) {
@@ -1365,7 +1577,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         TRY(conductor(ld, ps, d, "conductor.", loc, m));
         /* The coat's parameters are read so that only the layer's unsupported ones warn. */
         float coat_rough = 0.0f, coat_eta = 1.5f;
-        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &coat_rough));
+        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &coat_rough, NULL));
         TRY(dielectric_eta(ld, ps, d, "interface.eta", &coat_eta));
         TRY(coat_layer_params(ld, ps, d));
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as its conductor (the "
@@ -1373,7 +1585,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
     } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
         m->type = MATERIAL_MIRROR;
         m->albedo = rgb_s(0.9f);
-        TRY(get_spectrum(ld, ps, d, "Kr", SPEC_REFLECTANCE, 1, &m->albedo, NULL));
+        TRY(get_albedo(ld, ps, d, "Kr", m));
     } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0 ||
                strcmp(type, "thindielectric") == 0) {
         m->type = MATERIAL_GLASS;
@@ -1387,8 +1599,9 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         } else {
             /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
              * DielectricBxDF; below alpha 1e-3 both are smooth. */
-            TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness));
-            if (material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA) m->type = MATERIAL_DIELECTRIC;
+            TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
+            if (m->roughness_texture || material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA)
+                m->type = MATERIAL_DIELECTRIC;
             else m->roughness = 0.0f;
         }
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 || strcmp(type, "none") == 0) {
@@ -1413,7 +1626,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         amount = clampf(amount, 0.0f, 1.0f);
         Material ma = ld->mats[a].m, mb = ld->mats[b].m;
         if (ma.type == mb.type && (ma.type == MATERIAL_DIFFUSE || ma.type == MATERIAL_MIRROR) &&
-            ma.one_sided == mb.one_sided) {
+            ma.one_sided == mb.one_sided && !ma.albedo_texture && !mb.albedo_texture) {
             /* Choosing one of two Lambertian (or two mirror) lobes with probability amount
              * is the same lobe with the blended albedo: exact. (Conductors, plastics and
              * dielectrics are not linear in a single albedo.) */
@@ -1422,7 +1635,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         } else {
             *m = amount < 0.5f ? ma : mb;
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of materials that do not blend into one "
-                    "(two diffuse or two mirrors would) approximated by the one with the larger "
+                    "(two untextured diffuse or two mirrors would) approximated by the one with the larger "
                     "weight, \"%s\"", d, clip(p->strs[amount < 0.5f ? 0 : 1], nm));
         }
     } else if (strcmp(type, "measured") == 0 || strcmp(type, "hair") == 0 ||
@@ -1460,13 +1673,176 @@ static CstStatus check_file_access(Loader *ld, Loc loc, const char *d)
     return CST_OK;
 }
 
-/* A failure of a library call (mesh import, image read): keep its text, add the location. */
-static CstStatus fail_wrap(Loader *ld, CstStatus st, Loc loc, const char *d)
+/* op applied in place to image texture t's texels (its average and maximum recomputed),
+ * keeping its uv transform. */
+static CstStatus image_apply(Loader *ld, Texture *t, TexOp op, Rgb a, Rgb b, Loc loc, const char *d)
 {
-    char msg[sizeof ld->err->msg];
-    memcpy(msg, ld->err->msg, sizeof msg);
-    msg[sizeof msg - 1] = '\0';
-    return fail_at(ld, st, loc, "%s: %.700s", d, msg);
+    Vec2 sc = t->uv_scale, off = t->uv_offset;
+    float *px = t->image.rgb;
+    int w = t->image.width, h = t->image.height;
+    size_t np = (size_t)w * (size_t)h;
+    for (size_t k = 0; k < np; k++) {
+        Rgb v = texop_apply(op, a, b, rgb(px[3 * k], px[3 * k + 1], px[3 * k + 2]));
+        px[3 * k] = v.r;
+        px[3 * k + 1] = v.g;
+        px[3 * k + 2] = v.b;
+    }
+    CstStatus st = texture_image(t, px, w, h, t->image.wrap, ld->err); /* takes px */
+    if (st) return fail_wrap(ld, st, loc, d);
+    texture_set_uv_transform(t, sc, off);
+    return CST_OK;
+}
+
+/* pbrt's UVMapping ("uscale", "vscale", "udelta", "vdelta"): (s, t) = (su u + du, sv v + dv). */
+static CstStatus tex_uv_mapping(Loader *ld, Params *ps, const char *d, Vec2 *scale, Vec2 *offset)
+{
+    const char *mapping = NULL;
+    Loc ml;
+    char nm[72];
+    float su = 1.0f, sv = 1.0f, du = 0.0f, dv = 0.0f;
+    TRY(get_string(ld, ps, d, "mapping", &mapping, &ml));
+    if (mapping && strcmp(mapping, "uv") != 0)
+        warn_at(ld, CST_WARN_UNSUPPORTED, ml, "%s: mapping \"%s\" is not supported; the surface's "
+                "(u, v) are used (\"uv\")", d, clip(mapping, nm));
+    TRY(get_float(ld, ps, d, "uscale", 1.0f, &su, NULL));
+    TRY(get_float(ld, ps, d, "vscale", 1.0f, &sv, NULL));
+    TRY(get_float(ld, ps, d, "udelta", 0.0f, &du, NULL));
+    TRY(get_float(ld, ps, d, "vdelta", 0.0f, &dv, NULL));
+    *scale = v2(su, sv);
+    *offset = v2(du, dv);
+    return CST_OK;
+}
+
+/* A texture-valued parameter of a Texture: another non-constant texture (*id >= 0), or a
+ * value (*id = -1, *val: given, a constant texture's, or def). */
+static CstStatus tex_operand(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
+                             float def, int *id, Rgb *val)
+{
+    int tex = 0;
+    *id = -1;
+    *val = rgb_s(def);
+    TRY(tex_param(ld, ps, d, name, is_float, &tex, val, NULL));
+    if (tex) {
+        *id = tex - 1;
+        return CST_OK;
+    }
+    Param *p = find_param(ps, name);
+    if (p && p->type == PT_TEXTURE) return CST_OK;
+    if (is_float) {
+        float f = def;
+        TRY(get_float_tex(ld, ps, d, name, def, &f, NULL));
+        *val = rgb_s(f);
+        return CST_OK;
+    }
+    return get_spectrum(ld, ps, d, name, SPEC_UNBOUNDED, 1, val, NULL);
+}
+
+/* pbrt-v4's "imagemap" as an image texture (docs/pbrt-compat.md): the image file, its
+ * decoding, pbrt's per-value scale and invert, and the uv mapping. *id < 0 (and *v set)
+ * when the file's format cannot be read. */
+static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc, int is_float, int *id, Rgb *v)
+{
+    const char *file = NULL, *filter = NULL, *wrap = NULL, *enc = NULL;
+    Loc fl = loc, wl = loc, el = loc, il = loc;
+    float scale = 1.0f, aniso = 8.0f, gamma = 0.0f;
+    int invert = 0;
+    char nm[72];
+    Vec2 uvs, uvo;
+    TRY(get_string(ld, ps, d, "filename", &file, &fl));
+    TRY(get_string(ld, ps, d, "filter", &filter, &il));
+    TRY(get_string(ld, ps, d, "wrap", &wrap, &wl));
+    TRY(get_string(ld, ps, d, "encoding", &enc, &el));
+    TRY(get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    TRY(get_float(ld, ps, d, "maxanisotropy", 8.0f, &aniso, NULL)); /* for EWA only */
+    TRY(get_bool(ld, ps, d, "invert", 0, &invert));
+    TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+    *id = -1;
+    if (!file)
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the image file", d);
+    TextureWrap tw = TEXTURE_WRAP_REPEAT;
+    if (wrap && strcmp(wrap, "clamp") == 0) {
+        tw = TEXTURE_WRAP_CLAMP;
+    } else if (wrap && (strcmp(wrap, "black") == 0 || strcmp(wrap, "octahedralsphere") == 0)) {
+        tw = TEXTURE_WRAP_CLAMP;
+        warn_at(ld, CST_WARN_APPROXIMATED, wl, "%s: wrap \"%s\" approximated by \"clamp\"", d, wrap);
+    } else if (wrap && strcmp(wrap, "repeat") != 0) {
+        return fail_at(ld, CST_ERR_INVALID_ARG, wl, "%s: wrap \"%s\" is not known; expected \"repeat\", "
+                       "\"clamp\", \"black\" or \"octahedralsphere\"", d, clip(wrap, nm));
+    }
+    if (filter && strcmp(filter, "bilinear") != 0)
+        warn_at(ld, CST_WARN_APPROXIMATED, il, "%s: filter \"%s\" approximated by \"bilinear\" (caustic "
+                "has no MIP maps)", d, clip(filter, nm));
+    int linear = 0; /* pbrt-v4's default is sRGB for PNG; caustic takes 8- and 16-bit files as sRGB */
+    if (enc) {
+        if (strcmp(enc, "linear") == 0) {
+            linear = 1;
+        } else if (strncmp(enc, "gamma ", 6) == 0) {
+            char *e = NULL;
+            gamma = strtof(enc + 6, &e);
+            if (!(gamma > 0.0f) || !isfinite(gamma) || *e)
+                return fail_at(ld, CST_ERR_INVALID_ARG, el, "%s: encoding \"%s\"; expected \"gamma\" and "
+                               "a number > 0, as in \"gamma 2.2\"", d, clip(enc, nm));
+            linear = 1;
+        } else if (strcmp(enc, "sRGB") != 0) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, el, "%s: encoding \"%s\" is not known; expected "
+                           "\"sRGB\", \"linear\" or \"gamma\" and a number", d, clip(enc, nm));
+        }
+    }
+    const char *dot = strrchr(file, '.');
+    char ext[8] = "";
+    for (size_t i = 0; dot && i + 1 < sizeof ext && dot[i]; i++)
+        ext[i] = (char)((dot[i] >= 'A' && dot[i] <= 'Z') ? dot[i] - 'A' + 'a' : dot[i]);
+    static const char *const exts[] = {".png", ".jpg", ".jpeg", ".bmp", ".tga", ".hdr", ".exr", ".pfm"};
+    int readable = 0, is_float_file = 0;
+    for (size_t i = 0; dot && strlen(dot) < sizeof ext && i < sizeof exts / sizeof exts[0]; i++)
+        if (strcmp(ext, exts[i]) == 0) {
+            readable = 1;
+            is_float_file = i >= 5;
+        }
+    if (!readable) {
+        *v = rgb_s(0.5f);
+        warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR or "
+                "PFM; the constant 0.5 is used instead", d, clip(file, nm));
+        Rgb a = rgb_s(invert ? -scale : scale), b = rgb_s(invert ? 1.0f : 0.0f);
+        *v = texop_apply(TEXOP_AFFINE, a, b, *v);
+        return CST_OK;
+    }
+    TRY(check_file_access(ld, fl, d));
+    char *path = resolve_path(ld, file);
+    if (!path) return oom(ld);
+    Texture t;
+    CstStatus st = texture_image_load(&t, path, linear, tw, ld->err);
+    free(path);
+    if (st) return fail_wrap(ld, st, fl, d);
+    texture_set_uv_transform(&t, uvs, uvo);
+    /* pbrt's order: decode, take the first channel for a float texture, scale, invert. */
+    if (gamma > 0.0f && !is_float_file) st = image_apply(ld, &t, TEXOP_POW, rgb_s(gamma), rgb_s(0.0f), el, d);
+    if (!st && is_float) st = image_apply(ld, &t, TEXOP_RED, rgb_s(0.0f), rgb_s(0.0f), loc, d);
+    if (!st && (scale != 1.0f || invert))
+        st = image_apply(ld, &t, TEXOP_AFFINE, rgb_s(invert ? -scale : scale), rgb_s(invert ? 1.0f : 0.0f), loc, d);
+    if (st) {
+        texture_free(&t);
+        return st;
+    }
+    return tex_add(ld, &t, loc, d, id);
+}
+
+/* pbrt-v4's "checkerboard": a 2D checkerboard of tex1 (where floor(s) + floor(t) is even)
+ * and tex2, on the uv mapping. */
+static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc, int is_float, int *id)
+{
+    int a = -1, b = -1;
+    Rgb va, vb;
+    Vec2 uvs, uvo;
+    TRY(tex_operand(ld, ps, d, "tex1", is_float, 1.0f, &a, &va));
+    TRY(tex_operand(ld, ps, d, "tex2", is_float, 0.0f, &b, &vb));
+    TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+    if (a < 0) TRY(tex_const(ld, va, loc, d, &a));
+    if (b < 0) TRY(tex_const(ld, vb, loc, d, &b));
+    Texture t;
+    texture_checkerboard(&t, ld->scene->textures, a, b, 1.0f);
+    texture_set_uv_transform(&t, uvs, uvo);
+    return tex_add(ld, &t, loc, d, id);
 }
 
 static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
@@ -1492,9 +1868,10 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
     }
     char d[160];
     snprintf(d, sizeof d, "Texture \"%s\" \"%s\"", clip(name, nm), clip(cls, nm2));
-    Rgb v = rgb_s(is_float ? 1.0f : 1.0f);
+    Rgb v = rgb_s(1.0f); /* the value of a constant (id < 0) */
+    int id = -1;         /* the scene texture, when not a constant */
     SpecKind sk = SPEC_UNBOUNDED;
-/* A texture-valued parameter of this texture: constant, or another texture's value. */
+/* A texture-valued parameter of this texture taken as one value (its average). */
 #define TEXPARAM(pname, def, outv)                                                        \
     do {                                                                                  \
         (outv) = rgb_s(def);                                                              \
@@ -1510,12 +1887,23 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
     if (strcmp(cls, "constant") == 0) {
         TEXPARAM("value", 1.0f, v);
     } else if (strcmp(cls, "scale") == 0) {
-        Rgb a;
-        float sc = 1.0f;
-        TEXPARAM("tex", 1.0f, a);
-        st = get_float_tex(ld, &ps, d, "scale", 1.0f, &sc, NULL); /* a float texture in pbrt-v4 */
+        /* tex times scale (a float texture): a constant, or a textured operand with the
+         * other folded into its values. */
+        int ta = -1, tb = -1;
+        Rgb a, b;
+        if ((st = tex_operand(ld, &ps, d, "tex", is_float, 1.0f, &ta, &a))) goto done;
+        if ((st = tex_operand(ld, &ps, d, "scale", 1, 1.0f, &tb, &b))) goto done;
+        if (ta < 0 && tb < 0) {
+            v = rgb_mul(a, b);
+        } else if (ta >= 0 && tb >= 0) {
+            b = ld->scene->textures[tb].average;
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the product of two textures is approximated "
+                    "by \"tex\" times the average of \"scale\", %g", d, (double)b.r);
+            st = tex_map(ld, ta, TEXOP_AFFINE, b, rgb_s(0.0f), loc, d, &id);
+        } else {
+            st = tex_map(ld, ta >= 0 ? ta : tb, TEXOP_AFFINE, ta >= 0 ? b : a, rgb_s(0.0f), loc, d, &id);
+        }
         if (st) goto done;
-        v = rgb_scale(a, sc);
     } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
         Rgb a, b;
         float amount = 0.5f;
@@ -1529,12 +1917,23 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
         if (cls[0] == 'd')
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the average of its two textures", d);
     } else if (strcmp(cls, "checkerboard") == 0) {
-        Rgb a, b;
-        TEXPARAM("tex1", 1.0f, a);
-        TEXPARAM("tex2", 0.0f, b);
-        v = rgb_scale(rgb_add(a, b), 0.5f);
-        warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by its average (%g, %g, %g)", d,
-                (double)v.r, (double)v.g, (double)v.b);
+        int dim = 2;
+        if ((st = get_int(ld, &ps, d, "dimension", 2, &dim))) goto done;
+        if (dim == 3) {
+            Rgb a, b;
+            TEXPARAM("tex1", 1.0f, a);
+            TEXPARAM("tex2", 0.0f, b);
+            v = rgb_scale(rgb_add(a, b), 0.5f);
+            params_mark_all_used(&ps); /* the 3D mapping's parameters */
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: a 3D (solid) checkerboard approximated by its "
+                    "average (%g, %g, %g)", d, (double)v.r, (double)v.g, (double)v.b);
+        } else if (dim == 2) {
+            if ((st = texture_checker(ld, &ps, d, loc, is_float, &id))) goto done;
+        } else {
+            st = fail_at(ld, CST_ERR_INVALID_ARG, find_param(&ps, "dimension")->loc, "%s: dimension %d; "
+                         "expected 2 or 3", d, dim);
+            goto done;
+        }
     } else if (strcmp(cls, "bilerp") == 0) {
         Rgb c[4];
         static const char *const names[4] = {"v00", "v01", "v10", "v11"};
@@ -1543,50 +1942,7 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
         v = rgb_scale(rgb_add(rgb_add(c[0], c[1]), rgb_add(c[2], c[3])), 0.25f);
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by its average", d);
     } else if (strcmp(cls, "imagemap") == 0) {
-        const char *file = NULL;
-        Loc fl = loc;
-        float scale = 1.0f;
-        int invert = 0;
-        st = get_string(ld, &ps, d, "filename", &file, &fl);
-        if (!st) st = get_float(ld, &ps, d, "scale", 1.0f, &scale, NULL);
-        if (!st) st = get_bool(ld, &ps, d, "invert", 0, &invert);
-        if (st) goto done;
-        if (!file) {
-            st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the image file", d);
-            goto done;
-        }
-        size_t fn = strlen(file);
-        int readable = fn > 4 && (strcmp(file + fn - 4, ".png") == 0 || strcmp(file + fn - 4, ".exr") == 0 ||
-                                  strcmp(file + fn - 4, ".pfm") == 0);
-        if (!readable) {
-            v = rgb_s(0.5f);
-            warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, EXR or PFM; 0.5 is "
-                    "used instead", d, clip(file, nm));
-        } else {
-            if ((st = check_file_access(ld, fl, d))) goto done;
-            char *path = resolve_path(ld, file);
-            if (!path) { st = oom(ld); goto done; }
-            float *px = NULL;
-            int w = 0, h = 0;
-            st = image_read(path, &px, &w, &h, ld->err);
-            free(path);
-            if (st) {
-                st = fail_wrap(ld, st, fl, d);
-                goto done;
-            }
-            double sum[3] = {0, 0, 0};
-            size_t np = (size_t)w * (size_t)h;
-            for (size_t i = 0; i < np; i++)
-                for (int k = 0; k < 3; k++) sum[k] += (double)px[3 * i + (size_t)k];
-            free(px);
-            double inv = np ? 1.0 / (double)np : 0.0;
-            v = rgb((float)(sum[0] * inv), (float)(sum[1] * inv), (float)(sum[2] * inv));
-            if (is_float) v = rgb_s((v.r + v.g + v.b) / 3.0f);
-            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the image's average (%g, %g, %g)",
-                    d, (double)v.r, (double)v.g, (double)v.b);
-        }
-        v = rgb_scale(v, scale);
-        if (invert) v = rgb(1.0f - v.r, 1.0f - v.g, 1.0f - v.b);
+        if ((st = texture_imagemap(ld, &ps, d, loc, is_float, &id, &v))) goto done;
     } else {
         v = rgb_s(0.5f);
         params_mark_all_used(&ps);
@@ -1595,10 +1951,13 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
     }
 #undef TEXPARAM
     params_warn_unused(ld, &ps, d);
+    if (id < 0 && (st = tex_const(ld, v, loc, d, &id))) goto done;
     if (!GROW(ld->texs, ld->cap_texs, ld->num_texs + 1)) { st = oom(ld); goto done; }
     ld->texs[ld->num_texs].name = name;
     ld->texs[ld->num_texs].is_float = is_float;
-    ld->texs[ld->num_texs].value = v;
+    ld->texs[ld->num_texs].id = id;
+    ld->texs[ld->num_texs].value = ld->scene->textures[id].average;
+    ld->texs[ld->num_texs].clamped = ld->texs[ld->num_texs].rough[0] = ld->texs[ld->num_texs].rough[1] = -1;
     ld->num_texs++;
     name = NULL;
 done:

@@ -20,6 +20,7 @@ void texture_constant(Texture *t, Rgb value)
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_CONSTANT;
+    t->uv_scale = v2(1.0f, 1.0f);
     t->value = value;
     t->average = t->max = value;
 }
@@ -28,6 +29,7 @@ void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_CHECKERBOARD;
+    t->uv_scale = v2(1.0f, 1.0f);
     t->checker.even = even;
     t->checker.odd = odd;
     t->checker.scale = scale;
@@ -59,6 +61,7 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
         mx = rgb_max3(mx, rgb(p[0], p[1], p[2]));
     }
     t->type = TEXTURE_IMAGE;
+    t->uv_scale = v2(1.0f, 1.0f);
     t->image.rgb = rgb_data;
     t->image.width = width;
     t->image.height = height;
@@ -158,6 +161,12 @@ void texture_free(Texture *t)
     if (t && t->type == TEXTURE_IMAGE) free(t->image.rgb);
 }
 
+void texture_set_uv_transform(Texture *t, Vec2 scale, Vec2 offset)
+{
+    t->uv_scale = scale;
+    t->uv_offset = offset;
+}
+
 /* A texel index along an axis of n texels. */
 static inline int texture_wrap(int i, int n, TextureWrap wrap)
 {
@@ -202,11 +211,13 @@ Rgb texture_eval(const Texture *textures, int id, Vec2 uv)
      * lower indices, so it ends. */
     for (;;) {
         const Texture *t = &textures[id];
+        /* Exact for the identity (x * 1 + 0 == x), so untransformed textures are unchanged. */
+        Vec2 st = v2(uv.x * t->uv_scale.x + t->uv_offset.x, uv.y * t->uv_scale.y + t->uv_offset.y);
         switch (t->type) {
         case TEXTURE_CONSTANT: return t->value;
-        case TEXTURE_IMAGE: return texture_image_eval(&t->image, uv);
+        case TEXTURE_IMAGE: return texture_image_eval(&t->image, st);
         case TEXTURE_CHECKERBOARD: {
-            float su = floorf(uv.x * t->checker.scale), sv = floorf(uv.y * t->checker.scale);
+            float su = floorf(st.x * t->checker.scale), sv = floorf(st.y * t->checker.scale);
             /* fmodf is exact; beyond 2^24 every float is even, and NaN counts as even. */
             float parity = fmodf(su + sv, 2.0f);
             id = parity == 1.0f || parity == -1.0f ? t->checker.odd : t->checker.even;

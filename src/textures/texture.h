@@ -3,7 +3,9 @@
  * checkerboards (of two other textures) and images (bilinear, repeat or clamp). Textures
  * live in the scene's array and refer to each other by index; evaluation allocates nothing.
  * Images: v = 0 is the bottom row (the OpenGL / OBJ convention assimp passes through), u = 0
- * the left column; texel centres sit at half-integer positions. */
+ * the left column; texel centres sit at half-integer positions. Each texture may map the
+ * coordinates it is given by (u, v) -> (su u + du, sv v + dv) first, as pbrt's UVMapping
+ * does; a checkerboard passes the coordinates it was given, unmapped, to its two textures. */
 #ifndef CST_TEXTURES_TEXTURE_H
 #define CST_TEXTURES_TEXTURE_H
 
@@ -39,6 +41,7 @@ typedef struct Texture {
     TextureType type;
     Rgb average; /* mean over the uv plane (images: over their texels): light selection */
     Rgb max;     /* largest value of each channel: validation (an albedo must stay <= 1) */
+    Vec2 uv_scale, uv_offset; /* (1, 1) and (0, 0) unless texture_set_uv_transform */
     union {
         Rgb value; /* constant */
         TextureChecker checker;
@@ -57,6 +60,8 @@ CstStatus texture_image(Texture *t, float *rgb, int width, int height, TextureWr
  * PFM) are linear already and taken as they are. */
 CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureWrap wrap, CstError *err);
 void texture_free(Texture *t);
+/* After construction: evaluate t at (scale.x u + offset.x, scale.y v + offset.y). */
+void texture_set_uv_transform(Texture *t, Vec2 scale, Vec2 offset);
 
 /* The value at uv of texture id in textures. */
 Rgb texture_eval(const Texture *textures, int id, Vec2 uv);

@@ -16,6 +16,7 @@
 #include <sys/stat.h>
 
 #include "caustic/caustic.h"
+#include "camera/camera.h"
 #include "film/film.h"
 #include "film/image_io.h"
 #include "scene/pbrt_tokenizer.h"
@@ -444,7 +445,8 @@ static void test_parameter_types(void **state)
         &w);
     Rgb a = s->materials[s->tri_info[0].material].albedo;
     assert_true(fabsf(a.r - 0.25f) < 1e-6f && a.g == 0.0f && fabsf(a.b - 0.25f) < 1e-6f);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "checkerboard") >= 0);
+    assert_int_equal(s->textures[s->materials[s->tri_info[0].material].albedo_texture - 1].type,
+                     TEXTURE_CHECKERBOARD);
     Rgb b = s->materials[s->tri_info[1].material].albedo;
     assert_true(fabsf(b.r - 0.25f) < 1e-5f && fabsf(b.g - 0.25f) < 1e-5f && fabsf(b.b - 0.25f) < 1e-5f);
     Rgb c = s->materials[s->tri_info[2].material].albedo;
@@ -917,7 +919,7 @@ static void test_other_directives(void **state)
     cst_scene_destroy(s);
 }
 
-/* imagemap stands in as the image's average; binary PLY through assimp. */
+/* imagemap as an image texture; binary PLY through assimp. */
 static void test_imagemap_and_binary_ply(void **state)
 {
     (void)state;
@@ -945,9 +947,292 @@ static void test_imagemap_and_binary_ply(void **state)
         fail_msg("%s", err.msg);
     Rgb a = s->materials[s->tri_info[0].material].albedo;
     assert_true(fabsf(a.r - 0.5f) < 1e-6f && fabsf(a.g - 0.5f) < 1e-6f && fabsf(a.b - 0.5f) < 1e-6f);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "image's average") >= 0);
+    assert_int_equal(s->textures[s->materials[s->tri_info[0].material].albedo_texture - 1].type, TEXTURE_IMAGE);
+    assert_int_equal(w.n, 0);
     assert_int_equal(s->num_triangles, 1);
     assert_vec(tri_vertex(s, 0, 2), 0, 3, 0, 0);
+    cst_scene_destroy(s);
+}
+
+/* ------------------------------------------------------------------ textures */
+
+static const Material *tri_material(const Scene *s, int t) { return &s->materials[s->tri_info[t].material]; }
+
+static const Texture *albedo_tex(const Scene *s, int t)
+{
+    int id = tri_material(s, t)->albedo_texture;
+    if (!id) fail_msg("triangle %d's material has no albedo texture", t);
+    return &s->textures[id - 1];
+}
+
+static void assert_rgb(Rgb c, float r, float g, float b, float tol)
+{
+    if (!(fabsf(c.r - r) <= tol && fabsf(c.g - g) <= tol && fabsf(c.b - b) <= tol))
+        fail_msg("(%g, %g, %g), expected (%g, %g, %g)", (double)c.r, (double)c.g, (double)c.b,
+                 (double)r, (double)g, (double)b);
+}
+
+/* The warning with `code` containing `what` must exist and name file:line of `needle`. */
+static void assert_warning_at(const Warnings *w, CstWarningCode code, const char *what, const char *text,
+                              const char *needle, int nth)
+{
+    int i = find_warning(w, code, what);
+    if (i < 0) fail_msg("no warning with \"%s\"", what);
+    int line, col;
+    pos_of(text, needle, nth, &line, &col);
+    char prefix[64];
+    snprintf(prefix, sizeof prefix, NAME ":%d:", line);
+    const char *at = strstr(w->msg[i], prefix); /* after the directory, for files on disk */
+    if (!at || (at != w->msg[i] && at[-1] != '/') || strchr(w->msg[i], ' ') < at)
+        fail_msg("\"%s\" does not start with \"%s\"", w->msg[i], prefix);
+}
+
+/* checkerboard, scale and constant textures as caustic textures; the classes caustic has
+ * no counterpart for as their averages, with located warnings. */
+static void test_texture_classes(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    const char *text = WORLD(
+        "Texture \"c\" \"spectrum\" \"constant\" \"rgb value\" [.1 .2 .3]\n"
+        "Texture \"k\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [1 0 0] \"texture tex2\" \"c\" "
+        "\"float uscale\" 2 \"float vscale\" 3 \"float udelta\" 0.5 \"float vdelta\" -1\n"
+        "Texture \"kk\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"k\" \"rgb tex2\" [0 1 0]\n"
+        "Texture \"half\" \"float\" \"constant\" \"float value\" 0.5\n"
+        "Texture \"s1\" \"spectrum\" \"scale\" \"rgb tex\" [.4 .6 .8] \"texture scale\" \"half\"\n"
+        "Texture \"s2\" \"spectrum\" \"scale\" \"texture tex\" \"k\" \"float scale\" 0.5\n"
+        "Texture \"fk\" \"float\" \"checkerboard\" \"float tex1\" 0.25 \"float tex2\" 1\n"
+        "Texture \"s3\" \"spectrum\" \"scale\" \"rgb tex\" [1 .5 0] \"texture scale\" \"fk\"\n"
+        "Texture \"k3\" \"spectrum\" \"checkerboard\" \"integer dimension\" 3 \"rgb tex1\" [1 1 1] \"rgb tex2\" [0 0 0]\n"
+        "Texture \"m\" \"spectrum\" \"mix\" \"texture tex1\" \"k\" \"rgb tex2\" [1 1 1]\n"
+        "Texture \"f\" \"spectrum\" \"fbm\"\n"
+        "Material \"diffuse\" \"texture reflectance\" \"c\"\n" TRI   /* 0 */
+        "Material \"diffuse\" \"texture reflectance\" \"k\"\n" TRI   /* 1 */
+        "Material \"diffuse\" \"texture reflectance\" \"kk\"\n" TRI  /* 2 */
+        "Material \"diffuse\" \"texture reflectance\" \"s1\"\n" TRI  /* 3 */
+        "Material \"diffuse\" \"texture reflectance\" \"s2\"\n" TRI  /* 4 */
+        "Material \"diffuse\" \"texture reflectance\" \"s3\"\n" TRI  /* 5 */
+        "Material \"diffuse\" \"texture reflectance\" \"k3\"\n" TRI  /* 6 */
+        "Material \"diffuse\" \"texture reflectance\" \"m\"\n" TRI   /* 7 */
+        "Material \"diffuse\" \"texture reflectance\" \"f\"\n" TRI); /* 8 */
+    Scene *s = expect_ok(text, &w);
+    /* a constant texture is a constant albedo */
+    assert_int_equal(tri_material(s, 0)->albedo_texture, 0);
+    assert_rgb(tri_material(s, 0)->albedo, 0.1f, 0.2f, 0.3f, 0.0f);
+    /* checkerboard: tex1 on even squares of the mapped (s, t) = (2u + 0.5, 3v - 1) */
+    const Texture *k = albedo_tex(s, 1);
+    assert_int_equal(k->type, TEXTURE_CHECKERBOARD);
+    assert_true(k->checker.scale == 1.0f);
+    assert_true(k->uv_scale.x == 2.0f && k->uv_scale.y == 3.0f && k->uv_offset.x == 0.5f && k->uv_offset.y == -1.0f);
+    assert_rgb(s->textures[k->checker.even].value, 1, 0, 0, 0);
+    assert_rgb(s->textures[k->checker.odd].value, 0.1f, 0.2f, 0.3f, 0);
+    int kid = tri_material(s, 1)->albedo_texture - 1;
+    assert_rgb(texture_eval(s->textures, kid, v2(0.1f, 0.4f)), 1, 0, 0, 0);          /* (0.7, 0.2) */
+    assert_rgb(texture_eval(s->textures, kid, v2(0.3f, 0.4f)), 0.1f, 0.2f, 0.3f, 0); /* (1.1, 0.2) */
+    assert_rgb(texture_eval(s->textures, kid, v2(0.1f, 0.1f)), 0.1f, 0.2f, 0.3f, 0); /* (0.7, -0.7) */
+    /* a checkerboard of a checkerboard: the inner one keeps its own mapping */
+    const Texture *kk = albedo_tex(s, 2);
+    assert_int_equal(kk->checker.even, kid);
+    assert_true(kk->uv_scale.x == 1.0f && kk->uv_offset.x == 0.0f);
+    int kkid = tri_material(s, 2)->albedo_texture - 1;
+    assert_rgb(texture_eval(s->textures, kkid, v2(0.3f, 0.4f)), 0.1f, 0.2f, 0.3f, 0);
+    assert_rgb(texture_eval(s->textures, kkid, v2(1.3f, 0.4f)), 0, 1, 0, 0);
+    /* scale: two constants multiply; a constant factor is folded into a texture's values */
+    assert_int_equal(tri_material(s, 3)->albedo_texture, 0);
+    assert_rgb(tri_material(s, 3)->albedo, 0.2f, 0.3f, 0.4f, 1e-6f);
+    const Texture *s2 = albedo_tex(s, 4);
+    assert_int_equal(s2->type, TEXTURE_CHECKERBOARD);
+    assert_true(s2->uv_scale.x == 2.0f && s2->uv_offset.y == -1.0f);
+    assert_rgb(s->textures[s2->checker.even].value, 0.5f, 0, 0, 0);
+    assert_rgb(s->textures[s2->checker.odd].value, 0.05f, 0.1f, 0.15f, 1e-7f);
+    const Texture *s3 = albedo_tex(s, 5);
+    assert_int_equal(s3->type, TEXTURE_CHECKERBOARD);
+    assert_rgb(s->textures[s3->checker.even].value, 0.25f, 0.125f, 0, 0);
+    assert_rgb(s->textures[s3->checker.odd].value, 1, 0.5f, 0, 0);
+    /* 3D checkerboards, mix and fbm: their averages, with warnings at their lines */
+    assert_int_equal(tri_material(s, 6)->albedo_texture, 0);
+    assert_rgb(tri_material(s, 6)->albedo, 0.5f, 0.5f, 0.5f, 0);
+    assert_warning_at(&w, CST_WARN_APPROXIMATED, "3D (solid) checkerboard", text, "Texture \"k3\"", 0);
+    assert_int_equal(tri_material(s, 7)->albedo_texture, 0);
+    assert_rgb(tri_material(s, 7)->albedo, 0.775f, 0.55f, 0.575f, 1e-6f);
+    assert_warning_at(&w, CST_WARN_APPROXIMATED, "texture \"k\" is taken as its average", text, "\"texture tex1\" \"k\"", 1);
+    assert_warning_at(&w, CST_WARN_UNSUPPORTED, "texture class not supported", text, "Texture \"f\"", 0);
+    assert_int_equal(tri_material(s, 8)->albedo_texture, 0);
+    cst_scene_destroy(s);
+    expect_error(WORLD("Texture \"k\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"nope\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"texture tex1\"", 0, "spectrum texture \"nope\" is not defined");
+    expect_error(WORLD("Texture \"k\" \"spectrum\" \"checkerboard\" \"integer dimension\" 4\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"integer dimension\"", 0, "expected 2 or 3");
+}
+
+/* Textures in material parameters: reflectances, roughness (caustic's perceptual
+ * roughness texel by texel), what caustic cannot texture, and float / spectrum mix-ups. */
+static void test_texture_materials(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    const char *text = WORLD(
+        "Texture \"k\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n"
+        "Texture \"hot\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [2 0.5 0] \"rgb tex2\" [0 0 1]\n"
+        "Texture \"r\" \"float\" \"checkerboard\" \"float tex1\" 0.0625 \"float tex2\" 0.25\n"
+        "Material \"conductor\" \"texture roughness\" \"r\"\n" TRI                            /* 0 */
+        "Material \"conductor\" \"texture roughness\" \"r\" \"bool remaproughness\" false\n" TRI /* 1 */
+        "Material \"dielectric\" \"texture roughness\" \"r\"\n" TRI                           /* 2 */
+        "Material \"coateddiffuse\" \"texture reflectance\" \"k\" \"texture roughness\" \"r\"\n" TRI /* 3 */
+        "Material \"diffuse\" \"texture reflectance\" \"hot\"\n" TRI                          /* 4 */
+        "Material \"conductor\" \"texture uroughness\" \"r\" \"float vroughness\" 0.0625\n" TRI /* 5 */
+        "Material \"diffusetransmission\" \"texture reflectance\" \"k\"\n" TRI                /* 6 */
+        "Material \"coatedconductor\" \"texture conductor.roughness\" \"r\"\n" TRI            /* 7 */
+        "Material \"diffuse\" \"texture reflectance\" \"hot\"\n" TRI);                         /* 8 */
+    Scene *s = expect_ok(text, &w);
+    const Material *m = tri_material(s, 0);
+    assert_int_equal(m->type, MATERIAL_CONDUCTOR);
+    assert_int_not_equal(m->roughness_texture, 0);
+    const Texture *t = &s->textures[m->roughness_texture - 1];
+    assert_int_equal(t->type, TEXTURE_CHECKERBOARD);
+    /* remapped: alpha = sqrt(r), caustic's roughness sqrt(alpha) = r^(1/4) */
+    assert_rgb(s->textures[t->checker.even].value, 0.5f, 0.5f, 0.5f, 1e-6f);
+    assert_rgb(s->textures[t->checker.odd].value, 0.70710678f, 0.70710678f, 0.70710678f, 1e-6f);
+    t = &s->textures[tri_material(s, 1)->roughness_texture - 1];
+    assert_rgb(s->textures[t->checker.even].value, 0.25f, 0.25f, 0.25f, 1e-6f);
+    m = tri_material(s, 2);
+    assert_int_equal(m->type, MATERIAL_DIELECTRIC);
+    assert_int_not_equal(m->roughness_texture, 0);
+    m = tri_material(s, 3);
+    assert_int_equal(m->type, MATERIAL_PLASTIC);
+    assert_int_equal(m->roughness_texture, 0);
+    assert_true(fabsf(m->roughness - powf(0.15625f, 0.25f)) < 1e-6f); /* the average's */
+    assert_int_equal(albedo_tex(s, 3)->type, TEXTURE_CHECKERBOARD);
+    assert_warning_at(&w, CST_WARN_APPROXIMATED, "\"texture roughness\" cannot be textured", text,
+                      "Material \"coateddiffuse\"", 0);
+    /* pbrt clamps reflectances to 1 */
+    const Texture *hot = albedo_tex(s, 4);
+    assert_rgb(s->textures[hot->checker.even].value, 1, 0.5f, 0, 0);
+    assert_rgb(hot->max, 1, 0.5f, 1, 0);
+    assert_warning_at(&w, CST_WARN_APPROXIMATED, "values up to 2", text, "\"texture reflectance\" \"hot\"", 0);
+    /* anisotropic: averages */
+    assert_int_equal(tri_material(s, 5)->roughness_texture, 0);
+    assert_int_equal(albedo_tex(s, 6)->type, TEXTURE_CHECKERBOARD);
+    /* coatedconductor's conductor roughness */
+    assert_int_not_equal(tri_material(s, 7)->roughness_texture, 0);
+    /* derived textures are made once per texture and shared */
+    assert_int_equal(tri_material(s, 7)->roughness_texture, tri_material(s, 0)->roughness_texture);
+    assert_int_equal(tri_material(s, 8)->albedo_texture, tri_material(s, 4)->albedo_texture);
+    cst_scene_destroy(s);
+    /* pbrt-v4 looks float and spectrum textures up apart and stops at a missing one */
+    expect_error(WORLD("Texture \"r\" \"float\" \"constant\" \"float value\" 0.5\n"
+                       "Material \"diffuse\" \"texture reflectance\" \"r\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"texture reflectance\"", 0, "texture \"r\" is a float texture; expected a spectrum");
+    expect_error(WORLD("Texture \"k\" \"spectrum\" \"constant\" \"rgb value\" [.5 .5 .5]\n"
+                       "Material \"conductor\" \"texture roughness\" \"k\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"texture roughness\"", 0, "texture \"k\" is a spectrum texture; expected a float");
+    expect_error(WORLD("Material \"conductor\" \"texture roughness\" \"none\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"texture roughness\"", 0, "float texture \"none\" is not defined");
+    expect_error(WORLD("Texture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\"\n" TRI),
+                 CST_ERR_UNSUPPORTED, "\"string filename\"", 0, "file access is disabled");
+    expect_error(WORLD("Texture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\" \"string wrap\" \"mirror\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"string wrap\"", 0, "wrap \"mirror\" is not known");
+    expect_error(WORLD("Texture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\" \"string encoding\" \"gamma x\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"string encoding\"", 0, "expected \"gamma\" and a number > 0");
+    expect_error(WORLD("Texture \"i\" \"spectrum\" \"imagemap\" \"string encoding\" \"linear\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "Texture", 0, "missing \"string filename\"");
+}
+
+/* imagemap: the file (missing: an I/O error at its name), scale, invert, float textures
+ * (the first channel), wrap, filter, encodings and the uv mapping. */
+static void test_imagemap_params(void **state)
+{
+    (void)state;
+    /* row 0 is the top: red, green / blue, white */
+    const float px[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    CstError err;
+    assert_int_equal(image_write(CST_BINARY_DIR "/pbrt_tex4.pfm", px, 2, 2, &err), CST_OK);
+    const float grey[12] = {0.2f, 0.2f, 0.2f, 0.4f, 0.4f, 0.4f, 0.6f, 0.6f, 0.6f, 0.8f, 0.8f, 0.8f};
+    assert_int_equal(image_write(CST_BINARY_DIR "/pbrt_tex4.png", grey, 2, 2, &err), CST_OK);
+    Warnings w = {0};
+    const char *text = WORLD(
+        "Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" \"pbrt_tex4.pfm\" \"float scale\" 0.5 "
+        "\"bool invert\" true \"string wrap\" \"black\" \"string filter\" \"ewa\"\n"
+        "Texture \"f\" \"float\" \"imagemap\" \"string filename\" \"pbrt_tex4.pfm\" \"string wrap\" \"clamp\" "
+        "\"float uscale\" 2 \"float vscale\" 0.5 \"float udelta\" 0.25 \"float vdelta\" 0.125\n"
+        "Texture \"lin\" \"spectrum\" \"imagemap\" \"string filename\" \"pbrt_tex4.png\" \"string encoding\" \"linear\"\n"
+        "Texture \"gam\" \"spectrum\" \"imagemap\" \"string filename\" \"pbrt_tex4.png\" \"string encoding\" \"gamma 2.2\"\n"
+        "Texture \"srgb\" \"spectrum\" \"imagemap\" \"string filename\" \"pbrt_tex4.png\"\n"
+        "Material \"diffuse\" \"texture reflectance\" \"a\"\n" TRI       /* 0 */
+        "Material \"conductor\" \"texture roughness\" \"f\" \"bool remaproughness\" false\n" TRI /* 1 */
+        "Material \"diffuse\" \"texture reflectance\" \"lin\"\n" TRI     /* 2 */
+        "Material \"diffuse\" \"texture reflectance\" \"gam\"\n" TRI     /* 3 */
+        "Material \"diffuse\" \"texture reflectance\" \"srgb\"\n" TRI);  /* 4 */
+    Scene *s = load_file_scene(text, &w);
+    const Texture *a = albedo_tex(s, 0);
+    assert_int_equal(a->type, TEXTURE_IMAGE);
+    assert_int_equal(a->image.wrap, TEXTURE_WRAP_CLAMP);
+    const float *p = a->image.rgb; /* max(0, 1 - 0.5 v) */
+    assert_rgb(rgb(p[0], p[1], p[2]), 0.5f, 1, 1, 0);
+    assert_rgb(rgb(p[9], p[10], p[11]), 0.5f, 0.5f, 0.5f, 0);
+    assert_warning_at(&w, CST_WARN_APPROXIMATED, "wrap \"black\" approximated by \"clamp\"", text, "\"string wrap\"", 0);
+    assert_warning_at(&w, CST_WARN_APPROXIMATED, "filter \"ewa\" approximated", text, "\"string filter\"", 0);
+    /* the float texture: red channel, then caustic's roughness sqrt(v) */
+    const Material *m = tri_material(s, 1);
+    const Texture *f = &s->textures[m->roughness_texture - 1];
+    assert_int_equal(f->image.wrap, TEXTURE_WRAP_CLAMP);
+    assert_true(f->uv_scale.x == 2.0f && f->uv_scale.y == 0.5f && f->uv_offset.x == 0.25f && f->uv_offset.y == 0.125f);
+    const float expect_red[4] = {1, 0, 0, 1};
+    for (int i = 0; i < 4; i++)
+        assert_rgb(rgb(f->image.rgb[3 * i], f->image.rgb[3 * i + 1], f->image.rgb[3 * i + 2]), expect_red[i],
+                   expect_red[i], expect_red[i], 0);
+    /* encodings of one 8-bit PNG: gamma 2.2 of the linear codes; sRGB decodes to the floats written */
+    const Texture *lin = albedo_tex(s, 2), *gam = albedo_tex(s, 3), *srgb = albedo_tex(s, 4);
+    for (int i = 0; i < 12; i++) {
+        float l = lin->image.rgb[i];
+        assert_true(fabsf(gam->image.rgb[i] - powf(l, 2.2f)) < 1e-6f);
+        assert_true(fabsf(srgb->image.rgb[i] - grey[i]) < 0.004f);
+        assert_true(fabsf(l - grey[i]) > 0.05f); /* linear really is the raw codes */
+    }
+    cst_scene_destroy(s);
+    /* a missing image: an I/O error at its file name */
+    text = WORLD("Texture \"i\" \"spectrum\" \"imagemap\"\n  \"string filename\" \"no-such-image.png\"\n" TRI);
+    CstScene *cs = NULL;
+    CstStatus st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", NULL, &cs, &err);
+    assert_int_equal(st, CST_ERR_IO);
+    assert_null(cs);
+    if (!strstr(err.msg, "/t.pbrt:5:3: Texture \"i\" \"imagemap\": ") || !strstr(err.msg, "no-such-image.png"))
+        fail_msg("%s", err.msg);
+}
+
+/* A quad with uvs (0,0) at the bottom left to (1,1) at the top right and a 2x2 image,
+ * seen through a 2x2 orthographic camera from -z: pbrt-v4 looks images up at (u, 1 - v)
+ * with row 0 at the top, and its LookAt images are mirrored (left-handed), so each pixel
+ * shows the texel at the same place in the image file. Checked at the pixel centres'
+ * hits, where bilinear filtering returns the texel exactly. */
+static void test_texture_orientation(void **state)
+{
+    (void)state;
+    const float px[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    CstError err;
+    assert_int_equal(image_write(CST_BINARY_DIR "/pbrt_tex_orient.pfm", px, 2, 2, &err), CST_OK);
+    Warnings w = {0};
+    Scene *s = load_file_scene(
+        "Film \"rgb\" \"integer xresolution\" 2 \"integer yresolution\" 2\n"
+        "LookAt 0.5 0.5 -1  0.5 0.5 0  0 1 0\n"
+        "Camera \"orthographic\" \"float screenwindow\" [-0.5 0.5 -0.5 0.5]\nWorldBegin\n"
+        "Texture \"img\" \"spectrum\" \"imagemap\" \"string filename\" \"pbrt_tex_orient.pfm\"\n"
+        "Material \"diffuse\" \"texture reflectance\" \"img\"\n"
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  1 1 0  0 1 0] \"point2 uv\" [0 0  1 0  1 1  0 1] "
+        "\"integer indices\" [0 1 2  0 2 3]\n", &w);
+    Camera cam;
+    camera_init(&cam, &s->camera, 2, 2);
+    if (s->camera_mirror) camera_mirror_x(&cam);
+    for (int y = 0; y < 2; y++)
+        for (int x = 0; x < 2; x++) {
+            Ray r = camera_generate_ray(&cam, (float)x + 0.5f, (float)y + 0.5f, v2(0.5f, 0.5f));
+            SurfaceHit sh;
+            assert_true(scene_intersect(s, &r, &sh));
+            Bsdf b;
+            scene_bsdf(s, &sh, &b);
+            const float *t = &px[3 * (2 * y + x)];
+            assert_rgb(b.albedo, t[0], t[1], t[2], 1e-4f);
+        }
     cst_scene_destroy(s);
 }
 
@@ -1441,6 +1726,10 @@ int main(void)
         cmocka_unit_test(test_plymesh),
         cmocka_unit_test(test_other_directives),
         cmocka_unit_test(test_imagemap_and_binary_ply),
+        cmocka_unit_test(test_texture_classes),
+        cmocka_unit_test(test_texture_materials),
+        cmocka_unit_test(test_imagemap_params),
+        cmocka_unit_test(test_texture_orientation),
         cmocka_unit_test(test_instances),
         cmocka_unit_test(test_instances_match_copies),
         cmocka_unit_test(test_instances_memory),

@@ -244,6 +244,30 @@ static void test_checkerboard(void **state)
     assert_rgb_near(tex[3].average, 0.7, 0.65, 0.6, 1e-6);
 }
 
+/* texture_set_uv_transform: an image looked up at (su u + du, sv v + dv); a checkerboard's
+ * squares on its mapped coordinates while its textures see the coordinates unmapped. */
+static void test_uv_transform(void **state)
+{
+    (void)state;
+    Texture tex[4];
+    tex[0] = tiny_image(TEXTURE_WRAP_REPEAT);
+    float c[3];
+    /* (0.5 u + 0.25, 2 v - 0.5): texel (1, 0)'s centre from the uv below */
+    texture_set_uv_transform(&tex[0], v2(0.5f, 2.0f), v2(0.25f, -0.5f));
+    Vec2 at = centre(1, 0);
+    texel(1, 0, c);
+    assert_rgb_near(texture_eval(tex, 0, v2((at.x - 0.25f) / 0.5f, (at.y + 0.5f) / 2.0f)), c[0], c[1], c[2], 1e-6);
+    texture_constant(&tex[1], rgb(0.1f, 0.2f, 0.3f));
+    texture_constant(&tex[2], rgb(0.9f, 0.8f, 0.7f));
+    texture_checkerboard(&tex[3], tex, 0, 1, 1.0f);
+    texture_set_uv_transform(&tex[3], v2(2.0f, 1.0f), v2(-0.5f, 0.0f));
+    /* uv = (0.5, 0.625) -> (s, t) = (0.5, 0.625), even: the image, at the unmapped uv */
+    Vec2 uv = v2((at.x - 0.25f) / 0.5f, (at.y + 0.5f) / 2.0f);
+    assert_rgb_near(texture_eval(tex, 3, uv), c[0], c[1], c[2], 1e-6);
+    assert_rgb_near(texture_eval(tex, 3, v2(0.8f, 0.5f)), 0.1, 0.2, 0.3, 1e-7); /* s = 1.1: odd */
+    texture_free(&tex[0]);
+}
+
 /* ------------------------------------------------------------------ uvs at hits */
 
 /* The closest hit of a ray from o toward target. */
@@ -527,6 +551,7 @@ int main(void)
         cmocka_unit_test(test_srgb_decode),
         cmocka_unit_test(test_float_and_jpeg),
         cmocka_unit_test(test_checkerboard),
+        cmocka_unit_test(test_uv_transform),
         cmocka_unit_test(test_uv_at_hits),
         cmocka_unit_test(test_emitter_sample_uv),
         cmocka_unit_test(test_json_textures),
