@@ -17,6 +17,11 @@ void camera_init(Camera *cam, const CameraDesc *d, int width, int height)
     cam->ortho_half_height = d->ortho_height > 0.0f ? 0.5f * d->ortho_height : 0.0f;
     cam->width = width;
     cam->height = height;
+    cam->inv_tan_x = 1.0f / (cam->tan_half_vfov * cam->aspect);
+    cam->inv_tan_y = 1.0f / cam->tan_half_vfov;
+    cam->inv_focus = cam->focus_distance > 0.0f ? 1.0f / cam->focus_distance : 0.0f;
+    cam->lens_area = cam->aperture_radius > 0.0f ? CST_PI * cam->aperture_radius * cam->aperture_radius : 1.0f;
+    cam->film_area = 4.0f * cam->tan_half_vfov * cam->tan_half_vfov * cam->aspect;
 }
 
 void camera_mirror_x(Camera *cam) { cam->right = v3_neg(cam->right); }
@@ -71,13 +76,12 @@ bool camera_sample_wi(const Camera *cam, Vec3 p, Vec2 lens_u, float margin, Came
 {
     if (camera_is_orthographic(cam)) return false;
     Vec3 o = cam->origin;
-    float lens_x = 0.0f, lens_y = 0.0f, lens_area = 1.0f;
+    float lens_x = 0.0f, lens_y = 0.0f;
     if (cam->aperture_radius > 0.0f) {
         Vec2 l = warp_concentric_disk(lens_u);
         lens_x = l.x * cam->aperture_radius;
         lens_y = l.y * cam->aperture_radius;
         o = v3_add(o, v3_add(v3_scale(cam->right, lens_x), v3_scale(cam->up, lens_y)));
-        lens_area = CST_PI * cam->aperture_radius * cam->aperture_radius;
     }
     Vec3 d = v3_sub(p, o);
     float dz = v3_dot(d, cam->forward);
@@ -85,28 +89,27 @@ bool camera_sample_wi(const Camera *cam, Vec3 p, Vec2 lens_u, float margin, Came
     /* The inverse of camera_generate_ray: the film position is that of the pinhole ray
      * through the point where o -> p crosses the plane of focus. On the image plane at
      * distance 1 that point is (lens offset) / focus_distance + (d's slope); the pinhole
-     * has no lens offset. */
-    float sx = v3_dot(d, cam->right) / dz, sy = v3_dot(d, cam->up) / dz;
-    if (cam->aperture_radius > 0.0f) {
-        sx += lens_x / cam->focus_distance;
-        sy += lens_y / cam->focus_distance;
-    }
-    float fx = (sx / (cam->tan_half_vfov * cam->aspect) + 1.0f) * 0.5f * (float)cam->width;
-    float fy = (1.0f - sy / cam->tan_half_vfov) * 0.5f * (float)cam->height;
+     * has no lens offset (lens_x = lens_y = 0). Reciprocals precomputed by camera_init:
+     * this runs at every vertex of every light path. */
+    float inv_dz = 1.0f / dz;
+    float sx = v3_dot(d, cam->right) * inv_dz + lens_x * cam->inv_focus;
+    float sy = v3_dot(d, cam->up) * inv_dz + lens_y * cam->inv_focus;
+    float fx = (sx * cam->inv_tan_x + 1.0f) * 0.5f * (float)cam->width;
+    float fy = (1.0f - sy * cam->inv_tan_y) * 0.5f * (float)cam->height;
     if (!(fx >= -margin && fx < (float)cam->width + margin && fy >= -margin &&
           fy < (float)cam->height + margin))
         return false;
     float dist2 = v3_length2(d);
     float dist = sqrtf(dist2);
     if (!(dist > 0.0f)) return false;
-    float cos_theta = dz / dist;
-    float film_area = 4.0f * cam->tan_half_vfov * cam->tan_half_vfov * cam->aspect;
+    float inv_dist = 1.0f / dist;
+    float cos_theta = dz * inv_dist;
     float cos2 = cos_theta * cos_theta;
     out->raster = v2(fx, fy);
     out->p_lens = o;
-    out->wi = v3_scale(d, -1.0f / dist);
+    out->wi = v3_scale(d, -inv_dist);
     out->dist = dist;
-    out->we = 1.0f / (film_area * lens_area * cos2 * cos2);
-    out->pdf_w = dist2 / (cos_theta * lens_area);
+    out->we = 1.0f / (cam->film_area * cam->lens_area * cos2 * cos2);
+    out->pdf_w = dist2 / (cos_theta * cam->lens_area);
     return true;
 }

@@ -24,6 +24,10 @@ typedef struct Camera {
     float aperture_radius, focus_distance;
     float ortho_half_height; /* > 0: orthographic */
     int width, height;
+    /* Derived by camera_init for camera_sample_wi, which runs at every light-path vertex:
+     * 1 / (tan_half_vfov aspect), 1 / tan_half_vfov, 1 / focus_distance, the lens area
+     * (1 for a pinhole) and the film area at distance 1. */
+    float inv_tan_x, inv_tan_y, inv_focus, lens_area, film_area;
 } Camera;
 
 void camera_init(Camera *cam, const CameraDesc *desc, int width, int height);

@@ -183,8 +183,55 @@ void splat_list_free(SplatList *l)
     memset(l, 0, sizeof *l);
 }
 
-static void splat_push(SplatList *l, int pixel, Rgb c)
+SplatFrame splat_frame(int width, int height, CstFilter filter)
 {
+    SplatFrame fr = {width, height, filter, 0, 1, height};
+    /* A power of two of rows, so binning shifts instead of dividing. */
+    while ((2 << fr.band_shift) * width <= FILM_SPLAT_BAND) fr.band_shift++;
+    fr.band_rows = 1 << fr.band_shift;
+    fr.bands = (height + fr.band_rows - 1) / fr.band_rows;
+    return fr;
+}
+
+/* The pixels an entry at (x, y) reaches: columns [*x0, *x1] and rows [*y0, *y1], clipped
+ * to the film; false when none. Pixel centres sit at k + 1/2. */
+static inline bool splat_footprint(const SplatFrame *fr, float x, float y, int *x0, int *x1, int *y0, int *y1)
+{
+    switch (fr->filter) {
+    case CST_FILTER_TENT: {
+        /* The tent 1 - |t| of the two nearest centres in each axis. */
+        *x0 = (int)floorf(x - 0.5f); *x1 = *x0 + 1;
+        *y0 = (int)floorf(y - 0.5f); *y1 = *y0 + 1;
+        break;
+    }
+    case CST_FILTER_GAUSSIAN:
+    case CST_FILTER_MITCHELL: {
+        const float r = filter_radius(fr->filter);
+        *x0 = (int)ceilf(x - 0.5f - r); *x1 = (int)floorf(x - 0.5f + r);
+        *y0 = (int)ceilf(y - 0.5f - r); *y1 = (int)floorf(y - 0.5f + r);
+        break;
+    }
+    default:
+        *x0 = *x1 = (int)floorf(x);
+        *y0 = *y1 = (int)floorf(y);
+        break;
+    }
+    if (*x0 < 0) *x0 = 0;
+    if (*y0 < 0) *y0 = 0;
+    if (*x1 > fr->width - 1) *x1 = fr->width - 1;
+    if (*y1 > fr->height - 1) *y1 = fr->height - 1;
+    return *x0 <= *x1 && *y0 <= *y1;
+}
+
+void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Rgb c)
+{
+    if (!rgb_is_finite(c)) {
+        l->nonfinite++;
+        return;
+    }
+    int x0, x1, y0, y1;
+    /* (also drops positions so far off that the integer conversion would overflow) */
+    if (!(fabsf(x) < 1e9f && fabsf(y) < 1e9f) || !splat_footprint(fr, x, y, &x0, &x1, &y0, &y1)) return;
     if (l->n == l->cap) {
         size_t cap = l->cap ? 2 * l->cap : 1024;
         FilmSplat *v = realloc(l->v, cap * sizeof *v);
@@ -192,106 +239,107 @@ static void splat_push(SplatList *l, int pixel, Rgb c)
         l->v = v;
         l->cap = cap;
     }
-    FilmSplat *s = &l->v[l->n++];
-    s->pixel = pixel;
-    s->r = c.r; s->g = c.g; s->b = c.b;
+    l->v[l->n++] = (FilmSplat){x, y, c.r, c.g, c.b, (uint16_t)y0, (uint16_t)y1};
 }
 
-void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, float y, Rgb c)
+/* Adds scale times entry s, spread by the filter, to the pixels of its footprint in rows
+ * [row_lo, row_hi). The weights: the tent's bilinear (1 - a, a) pairs, the wide filters'
+ * h(centre - position) from filter_weight1, the same h camera samples are weighted with. */
+static void splat_spread(const FilmSplat *s, const SplatFrame *fr, double *rgb, double scale, int row_lo, int row_hi)
 {
-    if (!rgb_is_finite(c)) {
-        l->nonfinite++;
-        return;
+    /* Rows from the entry (film_splat's footprint), columns as film_splat found them. */
+    int y0 = s->row0 > row_lo ? s->row0 : row_lo, y1 = s->row1 < row_hi - 1 ? s->row1 : row_hi - 1;
+    int x0, x1;
+    switch (fr->filter) {
+    case CST_FILTER_TENT: x0 = (int)floorf(s->x - 0.5f); x1 = x0 + 1; break;
+    case CST_FILTER_GAUSSIAN:
+    case CST_FILTER_MITCHELL: {
+        const float rad = filter_radius(fr->filter);
+        x0 = (int)ceilf(s->x - 0.5f - rad);
+        x1 = (int)floorf(s->x - 0.5f + rad);
+        break;
     }
-    if (filter == CST_FILTER_BOX || filter == CST_FILTER_DEFAULT) {
-        int px = (int)floorf(x), py = (int)floorf(y);
-        if (px < 0 || px >= width || py < 0 || py >= height) return;
-        splat_push(l, py * width + px, c);
-        return;
+    default: x0 = x1 = (int)floorf(s->x); break;
     }
-    if (filter == CST_FILTER_GAUSSIAN || filter == CST_FILTER_MITCHELL) {
-        /* Every pixel whose centre lies within the radius gets h(centre - (x, y)) c: the
-         * same normalised h the camera samples are weighted with (filter.c). */
-        const float r = filter_radius(filter);
-        int x0 = (int)ceilf(x - 0.5f - r), x1 = (int)floorf(x - 0.5f + r);
-        int y0 = (int)ceilf(y - 0.5f - r), y1 = (int)floorf(y - 0.5f + r);
-        if (x0 < 0) x0 = 0;
-        if (y0 < 0) y0 = 0;
-        if (x1 > width - 1) x1 = width - 1;
-        if (y1 > height - 1) y1 = height - 1;
+    if (x0 < 0) x0 = 0;
+    if (x1 > fr->width - 1) x1 = fr->width - 1;
+    const double r = scale * (double)s->r, g = scale * (double)s->g, b = scale * (double)s->b;
+    if (fr->filter == CST_FILTER_TENT) {
+        float tx = s->x - 0.5f, ty = s->y - 0.5f;
+        float fx0 = floorf(tx), fy0 = floorf(ty);
+        float ax = tx - fx0, ay = ty - fy0;
+        const int cx = (int)fx0, cy = (int)fy0;
         for (int py = y0; py <= y1; py++) {
-            float wy = filter_weight1(filter, (float)py + 0.5f - y);
+            float wy = py == cy ? 1.0f - ay : ay;
             if (wy == 0.0f) continue;
             for (int px = x0; px <= x1; px++) {
-                float wx = filter_weight1(filter, (float)px + 0.5f - x);
-                if (wx != 0.0f) splat_push(l, py * width + px, rgb_scale(c, wx * wy));
+                float wx = px == cx ? 1.0f - ax : ax;
+                if (wx == 0.0f) continue;
+                double w = (double)(wx * wy);
+                double *p = &rgb[3 * ((size_t)py * (size_t)fr->width + (size_t)px)];
+                p[0] += r * w; p[1] += g * w; p[2] += b * w;
             }
         }
-        return;
-    }
-    /* Pixel centres sit at k + 1/2; the tent 1 - |t| of the two nearest in each axis
-     * sums to 1, the partition of unity that makes filter importance sampling (each
-     * camera sample in one pixel, weight 1) and splatting estimate the same pixel. */
-    float tx = x - 0.5f, ty = y - 0.5f;
-    float fx0 = floorf(tx), fy0 = floorf(ty);
-    float ax = tx - fx0, ay = ty - fy0;
-    int x0 = (int)fx0, y0 = (int)fy0;
-    const float wx[2] = {1.0f - ax, ax}, wy[2] = {1.0f - ay, ay};
-    for (int j = 0; j < 2; j++) {
-        int py = y0 + j;
-        if (py < 0 || py >= height || wy[j] == 0.0f) continue;
-        for (int i = 0; i < 2; i++) {
-            int px = x0 + i;
-            if (px < 0 || px >= width || wx[i] == 0.0f) continue;
-            splat_push(l, py * width + px, rgb_scale(c, wx[i] * wy[j]));
+    } else if (fr->filter == CST_FILTER_GAUSSIAN || fr->filter == CST_FILTER_MITCHELL) {
+        for (int py = y0; py <= y1; py++) {
+            float wy = filter_weight1(fr->filter, (float)py + 0.5f - s->y);
+            if (wy == 0.0f) continue;
+            for (int px = x0; px <= x1; px++) {
+                float wx = filter_weight1(fr->filter, (float)px + 0.5f - s->x);
+                if (wx == 0.0f) continue;
+                double w = (double)(wx * wy);
+                double *p = &rgb[3 * ((size_t)py * (size_t)fr->width + (size_t)px)];
+                p[0] += r * w; p[1] += g * w; p[2] += b * w;
+            }
         }
+    } else if (y0 <= y1) {
+        double *p = &rgb[3 * ((size_t)y0 * (size_t)fr->width + (size_t)x0)];
+        p[0] += r; p[1] += g; p[2] += b;
     }
 }
 
-int splat_list_bin(SplatList *l, int bands)
+int splat_list_bin(SplatList *l, const SplatFrame *fr)
 {
+    const int bands = fr->bands;
     if (l->bands != bands) {
         uint32_t *bs = realloc(l->band_start, ((size_t)bands + 1) * sizeof *bs);
         if (!bs) { l->oom = 1; return 0; }
         l->band_start = bs;
         l->bands = bands;
     }
-    if (l->binned_cap < l->n) {
-        FilmSplat *b = realloc(l->binned, l->cap * sizeof *b);
-        if (!b) { l->oom = 1; return 0; }
-        l->binned = b;
-        l->binned_cap = l->cap;
-    }
     uint32_t *start = l->band_start;
     memset(start, 0, ((size_t)bands + 1) * sizeof *start);
-    for (size_t i = 0; i < l->n; i++) start[l->v[i].pixel / FILM_SPLAT_BAND + 1]++;
+    /* Each entry goes to the bands of its first and last footprint rows (a footprint is
+     * at most 4 rows, a band at least 1: wider spans are counted band by band). */
+    size_t total = 0;
+    for (size_t i = 0; i < l->n; i++)
+        for (int b = l->v[i].row0 >> fr->band_shift; b <= l->v[i].row1 >> fr->band_shift; b++) { start[b + 1]++; total++; }
+    if (l->binned_cap < total) {
+        size_t cap = total + total / 4;
+        FilmSplat *nb = realloc(l->binned, cap * sizeof *nb);
+        if (!nb) { l->oom = 1; return 0; }
+        l->binned = nb;
+        l->binned_cap = cap;
+    }
     for (int b = 0; b < bands; b++) start[b + 1] += start[b];
     /* Placing through a running cursor per band keeps list order inside each band; the
      * cursors end where the next band starts, so one pass rebuilds band_start after. */
-    for (size_t i = 0; i < l->n; i++) l->binned[start[l->v[i].pixel / FILM_SPLAT_BAND]++] = l->v[i];
+    for (size_t i = 0; i < l->n; i++)
+        for (int b = l->v[i].row0 >> fr->band_shift; b <= l->v[i].row1 >> fr->band_shift; b++) l->binned[start[b]++] = l->v[i];
     for (int b = bands; b > 0; b--) start[b] = start[b - 1];
     start[0] = 0;
     return 1;
 }
 
-void film_add_splats_band(const SplatList *l, double *rgb, double scale, int band)
+void film_add_splats_band(const SplatList *l, const SplatFrame *fr, double *rgb, double scale, int band)
 {
-    for (uint32_t i = l->band_start[band]; i < l->band_start[band + 1]; i++) {
-        const FilmSplat *s = &l->binned[i];
-        double *p = &rgb[3 * (size_t)s->pixel];
-        p[0] += scale * (double)s->r;
-        p[1] += scale * (double)s->g;
-        p[2] += scale * (double)s->b;
-    }
+    const int row_lo = band * fr->band_rows;
+    const int row_hi = row_lo + fr->band_rows < fr->height ? row_lo + fr->band_rows : fr->height;
+    for (uint32_t i = l->band_start[band]; i < l->band_start[band + 1]; i++)
+        splat_spread(&l->binned[i], fr, rgb, scale, row_lo, row_hi);
 }
 
-void film_add_splats(const SplatList *l, double *rgb, double scale)
+void film_add_splats(const SplatList *l, const SplatFrame *fr, double *rgb, double scale)
 {
-    for (size_t i = 0; i < l->n; i++) {
-        const FilmSplat *s = &l->v[i];
-        double *p = &rgb[3 * (size_t)s->pixel];
-        p[0] += scale * (double)s->r;
-        p[1] += scale * (double)s->g;
-        p[2] += scale * (double)s->b;
-    }
+    for (size_t i = 0; i < l->n; i++) splat_spread(&l->v[i], fr, rgb, scale, 0, fr->height);
 }

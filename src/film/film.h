@@ -49,50 +49,66 @@ void film_resolve(const Film *f, float *rgb_out);
 
 /* Light tracing's contributions ("splats") land on arbitrary pixels, so they cannot be
  * accumulated by the thread that owns a pixel. Each work unit records its splats in its
- * own list; the render driver adds the lists in a fixed order (render.c). */
+ * own list, one entry per contribution (its film position and colour: the filter spreads
+ * it over pixels only when the lists are merged); the render driver adds the lists in a
+ * fixed order (render.c). */
 typedef struct FilmSplat {
-    int32_t pixel;
+    float x, y;         /* film position, camera_generate_ray's convention */
     float r, g, b;
+    uint16_t row0, row1; /* the first and last film rows the filter reaches (clipped) */
 } FilmSplat;
+
+/* The film geometry splats are made for: the filter and the size, and the rows of the
+ * merge bands. */
+typedef struct SplatFrame {
+    int width, height;
+    CstFilter filter;
+    int band_shift; /* rows per band of splat_list_bin: 1 << band_shift */
+    int band_rows;
+    int bands;      /* ceil(height / band_rows) */
+} SplatFrame;
+
+/* Bands of about 2048 pixels: the part of a double RGB image a band's merge writes stays
+ * in the L2 cache (48 KiB), whatever the image width. */
+enum { FILM_SPLAT_BAND = 2048 };
+SplatFrame splat_frame(int width, int height, CstFilter filter);
 
 typedef struct SplatList {
     FilmSplat *v;
     size_t n, cap;
     uint64_t nonfinite; /* NaN/Inf contributions dropped (never cleared) */
     int oom;            /* a splat was lost for lack of memory */
-    /* splat_list_bin's output: v stably sorted by pixel band into `binned`, band b at
-     * [band_start[b], band_start[b + 1]). */
+    /* splat_list_bin's output: the entries stably sorted by band into `binned`, band b at
+     * [band_start[b], band_start[b + 1]); an entry whose filter footprint spans two bands
+     * is in both. */
     FilmSplat *binned;
     size_t binned_cap;
     uint32_t *band_start;
     int bands;
 } SplatList;
 
-/* Pixels per band of splat_list_bin: 2048 pixels of a double RGB image are 48 KiB, so a
- * band being merged stays in the L2 cache. */
-enum { FILM_SPLAT_BAND = 2048 };
-
 /* Reserves room for cap splats; returns 0 on OOM. Free with splat_list_free (accepts a
  * zeroed list). */
 int splat_list_init(SplatList *l, size_t cap);
 void splat_list_free(SplatList *l);
-/* Records contribution c at film position (x, y) (camera_generate_ray's convention) with
- * the render's filter, so that splats estimate the same pixel values as camera samples:
- * box: all of c to the pixel containing (x, y); tent (radius 1 pixel, normalised, as
- * render.c samples it): c times the tent of each of the up to four pixel centres within
- * one pixel in x and y, i.e. bilinear weights; Gaussian and Mitchell: c times h of every
- * pixel centre within the radius. (x, y) may lie up to the filter's radius minus half a
- * pixel outside the film. NaN/Inf contributions are counted and dropped. Grows the list
- * (sets l->oom if it cannot). */
-void film_splat(SplatList *l, int width, int height, CstFilter filter, float x, float y, Rgb c);
-/* Adds scale times every splat to rgb (width*height*3 doubles), in the list's order. */
-void film_add_splats(const SplatList *l, double *rgb, double scale);
-/* Counting sort of the list by band (pixel / FILM_SPLAT_BAND) into l->binned, stable, so
- * each pixel's splats keep their order. bands = ceil(pixels / FILM_SPLAT_BAND). Done by
- * the thread that filled the list, while it is in cache. Returns 0 on OOM (sets l->oom). */
-int splat_list_bin(SplatList *l, int bands);
-/* Adds scale times the binned splats of one band to rgb, in list order: threads that own
- * different bands can merge the same lists at once, each pixel's sum in list order. */
-void film_add_splats_band(const SplatList *l, double *rgb, double scale, int band);
+/* Records contribution c at film position (x, y), to be spread with the frame's filter so
+ * that splats estimate the same pixel values as camera samples: box: all of c to the pixel
+ * containing (x, y); tent (radius 1 pixel, normalised, as render.c samples it): c times
+ * the tent of each of the up to four pixel centres within one pixel in x and y, i.e.
+ * bilinear weights; Gaussian and Mitchell: c times h of every pixel centre within the
+ * radius. Entries that reach no pixel are dropped; NaN/Inf contributions are counted and
+ * dropped. Grows the list (sets l->oom if it cannot). */
+void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Rgb c);
+/* Adds scale times every splat, spread by the filter, to rgb (width*height*3 doubles), in
+ * the list's order (tests and single-threaded callers). */
+void film_add_splats(const SplatList *l, const SplatFrame *fr, double *rgb, double scale);
+/* Counting sort of the list by band into l->binned, stable, so each pixel's splats keep
+ * their order. Done by the thread that filled the list, while it is in cache. Returns 0
+ * on OOM (sets l->oom). */
+int splat_list_bin(SplatList *l, const SplatFrame *fr);
+/* Adds scale times the binned splats of one band, spread by the filter, to the band's
+ * rows of rgb, in list order: threads that own different bands can merge the same lists
+ * at once, each pixel's sum in list order. */
+void film_add_splats_band(const SplatList *l, const SplatFrame *fr, double *rgb, double scale, int band);
 
 #endif

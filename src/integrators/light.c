@@ -11,14 +11,14 @@
 
 /* Splats weight * W_e / pdf_w if the lens point is visible; weight already holds the
  * throughput and the vertex's f |cos theta_cam| (or L_e |cos theta_cam|). */
-static void splat_if_visible(const Scene *s, const Camera *cam, const LightParams *lp,
+static void splat_if_visible(const Scene *s, const LightParams *lp,
                              Vec3 p, Vec3 ng, const CameraWiSample *cs, Rgb weight,
                              SplatList *out, uint64_t *rays)
 {
     if (rgb_is_black(weight)) return;
     ++*rays;
     if (!scene_visible_point(s, p, ng, cs->p_lens)) return;
-    film_splat(out, cam->width, cam->height, lp->filter, cs->raster.x, cs->raster.y,
+    film_splat(out, &lp->frame, cs->raster.x, cs->raster.y,
                rgb_scale(weight, cs->we / cs->pdf_w));
 }
 
@@ -43,7 +43,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
         const Emitter *e = &s->emitters[es.emitter];
         Rgb le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
-        splat_if_visible(s, cam, lp, es.p, es.n, &cs,
+        splat_if_visible(s, lp, es.p, es.n, &cs,
                          rgb_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a), out, rays);
     }
     if (!(es.pdf_w > 0.0f)) return;
@@ -73,7 +73,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
                  * relying on reciprocity, so a non-reciprocal lobe would stay right. */
                 Rgb f = bsdf_eval(&bsdf, cs.wi, w_prev);
                 f = rgb_scale(f, fabsf(v3_dot(sh.ng, cs.wi)) / cos_prev);
-                splat_if_visible(s, cam, lp, sh.p, sh.ng, &cs, rgb_mul(beta, f), out, rays);
+                splat_if_visible(s, lp, sh.p, sh.ng, &cs, rgb_mul(beta, f), out, rays);
             }
         }
         if (lp->max_depth > 0 && depth >= lp->max_depth) break;

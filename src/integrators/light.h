@@ -16,6 +16,7 @@ typedef struct LightParams {
                       * makes a camera path of b bounces; 0 = unbounded */
     int rr_depth;    /* first bounce at which Russian roulette may stop a path */
     CstFilter filter;
+    SplatFrame frame; /* the film the splats are for (splat_frame of its size and filter) */
 } LightParams;
 
 /* Traces one light path and splats each camera connection into *out, per unit film

@@ -166,7 +166,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
     float weight = 1.0f / (1.0f + w_light);
     ++*rays;
     if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
-    film_splat(splats, cam->width, cam->height, vp->filter, cs.raster.x, cs.raster.y,
+    film_splat(splats, &vp->frame, cs.raster.x, cs.raster.y,
                rgb_scale(rgb_mul(v->beta, f), weight * cs.we / cs.pdf_w));
 }
 

@@ -184,7 +184,7 @@ typedef struct RenderJob {
     int tiles_x, tiles_y, num_tiles, num_chunks, units;
     int crop_x0, crop_x1, crop_y0, crop_y1; /* the pixels camera passes cover (settings crop) */
     enum { PASS_TILES, PASS_CHUNKS, PASS_MERGE } pass_kind; /* what the pass's units are */
-    int merge_units;  /* pixel bands of a merge pass (FILM_SPLAT_BAND pixels each) */
+    int merge_units;  /* row bands of a merge pass (SplatFrame) */
     /* light tracing, BDPT and VCM: iterations of width x height light paths */
     bool light;
     LightParams light_params;
@@ -313,7 +313,7 @@ static void light_chunk(RenderJob *job, Worker *w, int chunk)
             light_trace(job->scene, &job->camera, &job->light_params, &rng, out, &w->rays);
         }
     }
-    splat_list_bin(out, job->merge_units); /* sets out->oom on failure, checked after the pass */
+    splat_list_bin(out, &job->light_params.frame); /* sets out->oom on failure, checked after the pass */
 }
 
 /* Between the light and the camera pass of a BDPT/VCM iteration: the chunks' vertex
@@ -356,24 +356,26 @@ static int vcm_gather(RenderJob *job)
     return 1;
 }
 
-/* Adds the finished iteration to the film as one sample per pixel, for the pixels of one
- * band [unit * FILM_SPLAT_BAND, (unit + 1) * FILM_SPLAT_BAND). The light tracer's pixel
- * estimate is (W H / paths) times the sum of its splats (splats are per unit film,
- * camera.c), and W H / paths = 1 with one path per pixel. Adding the iteration, not the
- * splats, as the sample keeps the film's sum of squares a per-pixel variance across
- * iterations; splats are summed in chunk order and, within a chunk, in the order they were
- * made (splat_list_bin is stable), so the floating-point sums depend neither on which
- * thread traced which chunk nor on which thread merged which band. */
+/* Adds the finished iteration to the film as one sample per pixel, for the rows of one
+ * band (SplatFrame). The light tracer's pixel estimate is (W H / paths) times the sum of
+ * its splats (splats are per unit film, camera.c), and W H / paths = 1 with one path per
+ * pixel. Adding the iteration, not the splats, as the sample keeps the film's sum of
+ * squares a per-pixel variance across iterations; splats are summed in chunk order and,
+ * within a chunk, in the order they were made (splat_list_bin is stable), so the
+ * floating-point sums depend neither on which thread traced which chunk nor on which
+ * thread merged which band. */
 static void light_merge_band(RenderJob *job, int unit)
 {
-    const size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
+    const SplatFrame *fr = &job->light_params.frame;
+    const size_t pixels = (size_t)fr->width * (size_t)fr->height;
     const double scale = (double)pixels / (double)job->light_paths;
-    size_t lo = (size_t)unit * FILM_SPLAT_BAND;
-    size_t hi = lo + FILM_SPLAT_BAND < pixels ? lo + FILM_SPLAT_BAND : pixels;
+    size_t lo = (size_t)unit * (size_t)fr->band_rows * (size_t)fr->width;
+    size_t hi = lo + (size_t)fr->band_rows * (size_t)fr->width;
+    if (hi > pixels) hi = pixels;
     double *rgb = job->iteration_rgb;
     /* BDPT/VCM: the camera pass already wrote its pixel samples there. */
     if (!job->vcm) memset(rgb + 3 * lo, 0, 3 * (hi - lo) * sizeof *rgb);
-    for (int c = 0; c < job->num_chunks; c++) film_add_splats_band(&job->splats[c], rgb, scale, unit);
+    for (int c = 0; c < job->num_chunks; c++) film_add_splats_band(&job->splats[c], fr, rgb, scale, unit);
     for (size_t p = lo; p < hi; p++)
         film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
 }
@@ -625,7 +627,8 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         }
         job->light_paths = (int)pixels;
         job->num_chunks = (job->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
-        job->merge_units = (int)((pixels + FILM_SPLAT_BAND - 1) / FILM_SPLAT_BAND);
+        job->light_params.frame = job->vcm_params.frame = splat_frame(st.width, st.height, st.filter);
+        job->merge_units = job->light_params.frame.bands;
         if (!light_alloc(job)) {
             light_free(job);
             film_destroy(film); free(workers); free(job);

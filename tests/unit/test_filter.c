@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include <cmocka.h>
 
 #include "core/rng.h"
@@ -93,13 +94,14 @@ static void test_splat_weights(void **state)
     pcg32_seed(&rng, 4242u, 1u);
     for (int k = 0; k < 4; k++) {
         float r = filter_radius(TYPES[k]);
+        SplatFrame fr = splat_frame(W, H, TYPES[k]);
         for (int trial = 0; trial < 200; trial++) {
             /* anywhere, including the margin outside the film and the borders */
             float x = -1.0f + (W + 2.0f) * pcg32_float(&rng), y = -1.0f + (H + 2.0f) * pcg32_float(&rng);
             SplatList l;
             assert_true(splat_list_init(&l, 16));
-            film_splat(&l, W, H, TYPES[k], x, y, rgb_s(1.0f));
-            double expect[W * H] = {0}, got[W * H] = {0};
+            film_splat(&l, &fr, x, y, rgb_s(1.0f));
+            double expect[W * H] = {0}, got[3 * W * H] = {0};
             for (int py = 0; py < H; py++)
                 for (int px = 0; px < W; px++) {
                     float dx = (float)px + 0.5f - x, dy = (float)py + 0.5f - y;
@@ -108,19 +110,50 @@ static void test_splat_weights(void **state)
                     else if (fabsf(dx) <= r && fabsf(dy) <= r)
                         expect[py * W + px] = (double)filter_weight1(TYPES[k], dx) * (double)filter_weight1(TYPES[k], dy);
                 }
-            for (size_t i = 0; i < l.n; i++) {
-                assert_true(l.v[i].pixel >= 0 && l.v[i].pixel < W * H);
-                got[l.v[i].pixel] += (double)l.v[i].r;
-            }
+            film_add_splats(&l, &fr, got, 1.0);
             for (int i = 0; i < W * H; i++) {
-                if (fabs(got[i] - expect[i]) > 1e-6) {
+                if (fabs(got[3 * i] - expect[i]) > 1e-6) {
                     print_message("%s splat at (%.3f, %.3f): pixel %d got %.6f, expected %.6f\n",
-                                  cst_filter_name(TYPES[k]), (double)x, (double)y, i, got[i], expect[i]);
+                                  cst_filter_name(TYPES[k]), (double)x, (double)y, i, got[3 * i], expect[i]);
                     fail();
                 }
             }
             splat_list_free(&l);
         }
+    }
+}
+
+/* Merging band by band (rows of 1 and 2, so footprints straddle bands) gives every pixel
+ * exactly the sum of adding the whole list in order: same additions, same order. */
+static void test_splat_bands(void **state)
+{
+    (void)state;
+    enum { W = 13, H = 11, N = 3000 };
+    Pcg32 rng;
+    pcg32_seed(&rng, 77u, 3u);
+    for (int k = 0; k < 4; k++) {
+        SplatFrame fr = splat_frame(W, H, TYPES[k]);
+        SplatList l;
+        assert_true(splat_list_init(&l, 16));
+        for (int i = 0; i < N; i++) {
+            float x = -2.0f + (W + 4.0f) * pcg32_float(&rng), y = -2.0f + (H + 4.0f) * pcg32_float(&rng);
+            film_splat(&l, &fr, x, y, rgb(pcg32_float(&rng), pcg32_float(&rng), 1.0f + pcg32_float(&rng)));
+        }
+        static double whole[3 * W * H], banded[3 * W * H];
+        memset(whole, 0, sizeof whole);
+        film_add_splats(&l, &fr, whole, 0.37);
+        for (int rows = 1; rows <= 2; rows++) {
+            SplatFrame fb = fr;
+            fb.band_shift = rows - 1;
+            fb.band_rows = 1 << fb.band_shift;
+            fb.bands = (H + fb.band_rows - 1) / fb.band_rows;
+            assert_true(splat_list_bin(&l, &fb));
+            memset(banded, 0, sizeof banded);
+            for (int b = fb.bands - 1; b >= 0; b--) film_add_splats_band(&l, &fb, banded, 0.37, b);
+            assert_memory_equal(whole, banded, sizeof whole);
+        }
+        assert_int_equal(l.oom, 0);
+        splat_list_free(&l);
     }
 }
 
@@ -130,6 +163,7 @@ int main(void)
         cmocka_unit_test(test_normalised),
         cmocka_unit_test(test_importance_sampling_unbiased),
         cmocka_unit_test(test_splat_weights),
+        cmocka_unit_test(test_splat_bands),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
