@@ -13,82 +13,10 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "render/regions.h"
 #include "render/render_util.h"
 #include "render/test_scenes.h"
 #include "scene/scene.h"
-
-enum { MAX_REGIONS = 1 + 16 };
-
-typedef struct Regions {
-    int count;
-    int rect[MAX_REGIONS][4]; /* x0, y0, x1, y1 */
-    RegionStat stat[MAX_REGIONS];
-} Regions;
-
-/* Region 0 is the whole image, then size/block squared blocks in row order. */
-static Regions regions(int size, int block)
-{
-    Regions r;
-    memset(&r, 0, sizeof r);
-    int n = size / block;
-    r.rect[0][2] = size;
-    r.rect[0][3] = size;
-    r.count = 1;
-    for (int b = 0; b < n * n; b++, r.count++) {
-        r.rect[r.count][0] = (b % n) * block;
-        r.rect[r.count][1] = (b / n) * block;
-        r.rect[r.count][2] = r.rect[r.count][0] + block;
-        r.rect[r.count][3] = r.rect[r.count][1] + block;
-    }
-    assert_true(r.count <= MAX_REGIONS);
-    return r;
-}
-
-/* The path tracer's pixels are independent: the film's variances give the errors. */
-static void path_regions(const CstScene *s, const CstRenderSettings *base, int spp, uint64_t seed,
-                         Regions *r)
-{
-    CstRenderSettings st = *base;
-    st.integrator = CST_INTEGRATOR_PATH;
-    st.spp = spp;
-    st.seed = seed;
-    st.seed_set = 1;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    CstError err;
-    if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
-    assert_int_equal(stats.nonfinite, 0);
-    for (int i = 0; i < r->count; i++)
-        r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
-    cst_film_destroy(f);
-}
-
-static void bidir_regions(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ,
-                          int renders, uint64_t seed, Regions *r)
-{
-    CstRenderSettings st = *base;
-    st.integrator = integ;
-    CstError err;
-    if (region_stats_by_render(s, &st, renders, seed, r->count, (const int (*)[4])r->rect, r->stat,
-                               NULL, &err) != CST_OK)
-        fail_msg("%s", err.msg);
-}
-
-static void compare(const Regions *a, const Regions *b, const char *na, const char *nb)
-{
-    double worst = 0.0;
-    int worst_block = -2, worst_c = 0;
-    for (int i = 0; i < a->count; i++)
-        for (int c = 0; c < 3; c++) {
-            double z = z_score(a->stat[i].mean[c], a->stat[i].se[c], b->stat[i].mean[c], b->stat[i].se[c]);
-            if (fabs(z) > fabs(worst)) { worst = z; worst_block = i - 1; worst_c = c; }
-            if (!(fabs(z) <= Z_LIMIT))
-                fail_msg("%s vs %s: block %d (-1 = whole image) channel %d: %.6f vs %.6f, z = %.2f",
-                         na, nb, i - 1, c, a->stat[i].mean[c], b->stat[i].mean[c], z);
-        }
-    print_message("%s vs %s: whole image (r) %.5f vs %.5f, largest |z| = %.2f (block %d, channel %d)\n",
-                  na, nb, a->stat[0].mean[0], b->stat[0].mean[0], fabs(worst), worst_block, worst_c);
-}
 
 static CstRenderSettings sized(int size, CstFilter filter)
 {
@@ -103,9 +31,9 @@ static void three_way(const CstScene *s, const CstRenderSettings *st, int size, 
                       int renders, uint64_t seed, const char *label)
 {
     Regions rp = regions(size, block), rb = rp, rv = rp;
-    path_regions(s, st, path_spp, seed, &rp);
-    bidir_regions(s, st, CST_INTEGRATOR_BDPT, renders, seed + 1000, &rb);
-    bidir_regions(s, st, CST_INTEGRATOR_VCM, renders, seed + 5000, &rv);
+    camera_regions(s, st, CST_INTEGRATOR_PATH, path_spp, seed, &rp);
+    split_regions(s, st, CST_INTEGRATOR_BDPT, renders, seed + 1000, &rb);
+    split_regions(s, st, CST_INTEGRATOR_VCM, renders, seed + 5000, &rv);
     char a[96], b[96], c[96];
     snprintf(a, sizeof a, "path (%s)", label);
     snprintf(b, sizeof b, "bdpt (%s)", label);
@@ -180,7 +108,7 @@ static void test_emitting_furnace(void **state)
     for (int k = 0; k < 2; k++) {
         CstRenderSettings st = sized(32, CST_FILTER_BOX);
         Regions r = regions(32, 8);
-        bidir_regions(s, &st, integ[k], 256, 300 + 1000 * (uint64_t)k, &r);
+        split_regions(s, &st, integ[k], 256, 300 + 1000 * (uint64_t)k, &r);
         double worst = 0.0;
         for (int i = 0; i < r.count; i++)
             for (int c = 0; c < 3; c++) {
@@ -223,8 +151,8 @@ static void test_delta_lights_cornell(void **state)
     CstRenderSettings st = sized(48, CST_FILTER_BOX);
     three_way(s, &st, 48, 12, 1024, 256, 51, "delta lights");
     Regions rp = regions(48, 12), rl = rp;
-    path_regions(s, &st, 1024, 61, &rp);
-    bidir_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 7000, &rl);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 61, &rp);
+    split_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 7000, &rl);
     compare(&rp, &rl, "path (delta lights)", "light (delta lights)");
     cst_scene_destroy(s);
 }
@@ -277,8 +205,8 @@ static void test_environment_scene(void **state)
     CstRenderSettings st = sized(32, CST_FILTER_BOX);
     three_way(s, &st, 32, 8, 1024, 256, 71, "environment");
     Regions rp = regions(32, 8), rl = rp;
-    path_regions(s, &st, 1024, 81, &rp);
-    bidir_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 9000, &rl);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 81, &rp);
+    split_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 9000, &rl);
     compare(&rp, &rl, "path (environment)", "light (environment)");
     scene_destroy(s);
 }

@@ -9,43 +9,12 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "render/regions.h"
 #include "render/render_util.h"
 #include "render/test_scenes.h"
 #include "scene/scene.h"
 
-enum { SIZE = 128, BLOCK = 32, MAX_REGIONS = 1 + 16 };
-
-/* The regions compared: region 0 is the whole image, then the blocks of a size x size
- * image in row order. Messages number them from -1 = whole image. */
-typedef struct Regions {
-    int count;
-    int rect[MAX_REGIONS][4]; /* x0, y0, x1, y1 */
-    RegionStat stat[MAX_REGIONS];
-} Regions;
-
-static Regions regions(int size, int block)
-{
-    Regions r;
-    memset(&r, 0, sizeof r);
-    int n = size / block;
-    r.rect[r.count][0] = 0; r.rect[r.count][1] = 0;
-    r.rect[r.count][2] = size; r.rect[r.count][3] = size;
-    r.count++;
-    for (int b = 0; b < n * n; b++, r.count++) {
-        r.rect[r.count][0] = (b % n) * block; r.rect[r.count][1] = (b / n) * block;
-        r.rect[r.count][2] = r.rect[r.count][0] + block; r.rect[r.count][3] = r.rect[r.count][1] + block;
-    }
-    assert_true(r.count <= MAX_REGIONS);
-    return r;
-}
-
-/* Standard errors from the film's per-pixel variances: right for camera integrators,
- * whose pixel estimates are independent. */
-static void film_regions(const CstFilm *f, Regions *r)
-{
-    for (int i = 0; i < r->count; i++)
-        r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
-}
+enum { SIZE = 128, BLOCK = 32 };
 
 static CstFilm *render(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ,
                        int spp, uint64_t seed)
@@ -72,7 +41,7 @@ static void light_regions(const CstScene *s, const CstRenderSettings *base, int 
 {
     CstRenderSettings st = *base;
     st.integrator = CST_INTEGRATOR_LIGHT;
-    double naive_se[MAX_REGIONS];
+    double naive_se[REGIONS_MAX];
     CstError err;
     if (region_stats_by_render(s, &st, iterations, seed, r->count, r->rect, r->stat, naive_se,
                                &err) != CST_OK)
@@ -80,25 +49,6 @@ static void light_regions(const CstScene *s, const CstRenderSettings *base, int 
     print_message("%s: whole-image standard error (red) from iterations %.3g, from per-pixel "
                   "variances %.3g (ratio %.2f)\n",
                   name, r->stat[0].se[0], naive_se[0], r->stat[0].se[0] / naive_se[0]);
-}
-
-static void compare(const Regions *a, const Regions *b, const char *na, const char *nb)
-{
-    assert_int_equal(a->count, b->count);
-    int worst_block = -2, worst_c = 0;
-    double worst = 0.0;
-    for (int i = 0; i < a->count; i++) {
-        const RegionStat *ra = &a->stat[i], *rb = &b->stat[i];
-        for (int c = 0; c < 3; c++) {
-            double z = z_score(ra->mean[c], ra->se[c], rb->mean[c], rb->se[c]);
-            if (fabs(z) > fabs(worst)) { worst = z; worst_block = i - 1; worst_c = c; }
-            if (!(fabs(z) <= Z_LIMIT))
-                fail_msg("%s vs %s: block %d (-1 = whole image) channel %d: %.6f vs %.6f, z = %.2f",
-                         na, nb, i - 1, c, ra->mean[c], rb->mean[c], z);
-        }
-    }
-    print_message("%s vs %s: largest |z| = %.2f (block %d, channel %d)\n", na, nb, fabs(worst),
-                  worst_block, worst_c);
 }
 
 static CstScene *cornell(void)

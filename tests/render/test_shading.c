@@ -10,35 +10,9 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
-
-enum { MAX_REGIONS = 1 + 16 };
-
-typedef struct Regions {
-    int count;
-    int rect[MAX_REGIONS][4]; /* x0, y0, x1, y1 */
-    RegionStat stat[MAX_REGIONS];
-} Regions;
-
-/* Region 0 is the whole image, then size/block squared blocks in row order. */
-static Regions regions(int size, int block)
-{
-    Regions r;
-    memset(&r, 0, sizeof r);
-    int n = size / block;
-    r.rect[0][2] = size;
-    r.rect[0][3] = size;
-    r.count = 1;
-    for (int b = 0; b < n * n; b++, r.count++) {
-        r.rect[r.count][0] = (b % n) * block;
-        r.rect[r.count][1] = (b / n) * block;
-        r.rect[r.count][2] = r.rect[r.count][0] + block;
-        r.rect[r.count][3] = r.rect[r.count][1] + block;
-    }
-    assert_true(r.count <= MAX_REGIONS);
-    return r;
-}
 
 static CstRenderSettings sized(int size)
 {
@@ -46,55 +20,6 @@ static CstRenderSettings sized(int size)
     st.width = st.height = size;
     st.filter = CST_FILTER_BOX;
     return st;
-}
-
-/* The path tracer's pixels are independent: the film's variances give the errors. */
-static void path_regions(const CstScene *s, const CstRenderSettings *base, int spp, uint64_t seed, Regions *r)
-{
-    CstRenderSettings st = *base;
-    st.integrator = CST_INTEGRATOR_PATH;
-    st.spp = spp;
-    st.seed = seed;
-    st.seed_set = 1;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    CstError err;
-    if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
-    assert_int_equal(stats.nonfinite, 0);
-    for (int i = 0; i < r->count; i++)
-        r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
-    cst_film_destroy(f);
-}
-
-/* Splatting integrators: correlated pixels, errors from independent renders. */
-static void split_regions(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ, int renders,
-                          uint64_t seed, Regions *r)
-{
-    CstRenderSettings st = *base;
-    st.integrator = integ;
-    CstError err;
-    if (region_stats_by_render(s, &st, renders, seed, r->count, (const int (*)[4])r->rect, r->stat, NULL,
-                               &err) != CST_OK)
-        fail_msg("%s", err.msg);
-}
-
-/* Fails at |z| > Z_LIMIT on any region and channel; prints the largest |z| and the
- * whole-image z of channel 0. */
-static void compare(const Regions *a, const Regions *b, const char *na, const char *nb)
-{
-    double worst = 0.0;
-    int worst_block = -2, worst_c = 0;
-    for (int i = 0; i < a->count; i++)
-        for (int c = 0; c < 3; c++) {
-            double z = z_score(a->stat[i].mean[c], a->stat[i].se[c], b->stat[i].mean[c], b->stat[i].se[c]);
-            if (fabs(z) > fabs(worst)) { worst = z; worst_block = i - 1; worst_c = c; }
-            if (!(fabs(z) <= Z_LIMIT))
-                fail_msg("%s vs %s: block %d (-1 = whole image) channel %d: %.6f vs %.6f, z = %.2f", na, nb, i - 1,
-                         c, a->stat[i].mean[c], b->stat[i].mean[c], z);
-        }
-    double z0 = z_score(a->stat[0].mean[0], a->stat[0].se[0], b->stat[0].mean[0], b->stat[0].se[0]);
-    print_message("%s vs %s: whole image (r) %.5f vs %.5f (z = %.2f), largest |z| = %.2f (block %d, channel %d)\n",
-                  na, nb, a->stat[0].mean[0], b->stat[0].mean[0], z0, fabs(worst), worst_block, worst_c);
 }
 
 /* Quad c, c + e1, c + e1 + e2, c + e2: normal e1 x e2. */
@@ -220,7 +145,7 @@ static void test_smooth_sphere_consistency(void **state)
     enum { SIZE = 32, BLOCK = 8 };
     CstRenderSettings st = sized(SIZE);
     Regions rp = regions(SIZE, BLOCK), rl = rp, rb = rp, rv = rp;
-    path_regions(s, &st, 1024, 101, &rp);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 101, &rp);
     split_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 2000, &rl);
     split_regions(s, &st, CST_INTEGRATOR_BDPT, 128, 4000, &rb);
     split_regions(s, &st, CST_INTEGRATOR_VCM, 128, 6000, &rv);
@@ -289,7 +214,7 @@ static void test_tilted_plane_furnace(void **state)
     enum { SIZE = 32, BLOCK = 8 };
     CstRenderSettings st = sized(SIZE);
     Regions rp = regions(SIZE, BLOCK), rl = rp;
-    path_regions(s, &st, 256, 500, &rp);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 256, 500, &rp);
     check_constant(&rp, expect, "path (tilted plane)");
     split_regions(s, &st, CST_INTEGRATOR_LIGHT, 256, 600, &rl);
     check_constant(&rl, expect, "light (tilted plane)");

@@ -11,34 +11,9 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
-
-enum { MAX_REGIONS = 1 + 16 };
-
-typedef struct Regions {
-    int count;
-    int rect[MAX_REGIONS][4]; /* x0, y0, x1, y1 */
-    RegionStat stat[MAX_REGIONS];
-} Regions;
-
-/* Region 0 the whole image, then the blocks of a size x size image in row order. */
-static Regions regions(int size, int block)
-{
-    Regions r;
-    memset(&r, 0, sizeof r);
-    int n = size / block;
-    r.rect[0][2] = r.rect[0][3] = size;
-    r.count = 1;
-    for (int b = 0; b < n * n; b++, r.count++) {
-        r.rect[r.count][0] = (b % n) * block;
-        r.rect[r.count][1] = (b / n) * block;
-        r.rect[r.count][2] = r.rect[r.count][0] + block;
-        r.rect[r.count][3] = r.rect[r.count][1] + block;
-    }
-    assert_true(r.count <= MAX_REGIONS);
-    return r;
-}
 
 static int add_texture(Scene *s, const Texture *t)
 {
@@ -199,19 +174,8 @@ static void path_regions(const Scene *s, CstIntegrator integ, int spp, uint64_t 
 {
     CstRenderSettings st = {0};
     st.width = st.height = CSIZE;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
     st.filter = CST_FILTER_BOX;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    CstError err;
-    if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
-    assert_int_equal(stats.nonfinite, 0);
-    for (int i = 0; i < r->count; i++)
-        r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
-    cst_film_destroy(f);
+    camera_regions(s, &st, integ, spp, seed, r);
 }
 
 /* Splatting and bidirectional estimators: standard errors from independent renders. */
@@ -219,28 +183,8 @@ static void render_regions(const Scene *s, CstIntegrator integ, int renders, uin
 {
     CstRenderSettings st = {0};
     st.width = st.height = CSIZE;
-    st.integrator = integ;
     st.filter = CST_FILTER_BOX;
-    CstError err;
-    if (region_stats_by_render(s, &st, renders, seed, r->count, (const int (*)[4])r->rect, r->stat, NULL,
-                               &err) != CST_OK)
-        fail_msg("%s", err.msg);
-}
-
-static void compare(const Regions *a, const Regions *b, const char *na, const char *nb)
-{
-    double worst = 0.0;
-    int worst_block = -2, worst_c = 0;
-    for (int i = 0; i < a->count; i++)
-        for (int c = 0; c < 3; c++) {
-            double z = z_score(a->stat[i].mean[c], a->stat[i].se[c], b->stat[i].mean[c], b->stat[i].se[c]);
-            if (fabs(z) > fabs(worst)) { worst = z; worst_block = i - 1; worst_c = c; }
-            if (!(fabs(z) <= Z_LIMIT))
-                fail_msg("%s vs %s: block %d (-1 = whole image) channel %d: %.6f vs %.6f, z = %.2f", na, nb,
-                         i - 1, c, a->stat[i].mean[c], b->stat[i].mean[c], z);
-        }
-    print_message("%s vs %s: whole image (r) %.5f vs %.5f, largest |z| = %.2f (block %d, channel %d)\n", na,
-                  nb, a->stat[0].mean[0], b->stat[0].mean[0], fabs(worst), worst_block, worst_c);
+    split_regions(s, &st, integ, renders, seed, r);
 }
 
 static void test_textured_estimators_agree(void **state)

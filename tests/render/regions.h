@@ -1,0 +1,98 @@
+/* The image regions the render tests compare between estimators (the whole image, then
+ * square blocks), their statistics from a film or from independent renders, and the
+ * comparison at Z_LIMIT standard errors. Include after cmocka.h. */
+#ifndef CST_TESTS_REGIONS_H
+#define CST_TESTS_REGIONS_H
+
+#include <math.h>
+#include <string.h>
+
+#include "render/render_util.h"
+
+enum { REGIONS_MAX = 1 + 16 };
+
+typedef struct Regions {
+    int count;
+    int rect[REGIONS_MAX][4]; /* x0, y0, x1, y1 */
+    RegionStat stat[REGIONS_MAX];
+} Regions;
+
+/* Region 0 is the whole size x size image, then its (size / block)^2 blocks in row order;
+ * messages number them from -1 = whole image. */
+static inline Regions regions(int size, int block)
+{
+    Regions r;
+    memset(&r, 0, sizeof r);
+    int n = size / block;
+    r.rect[0][2] = r.rect[0][3] = size;
+    r.count = 1;
+    for (int b = 0; b < n * n; b++, r.count++) {
+        r.rect[r.count][0] = (b % n) * block;
+        r.rect[r.count][1] = (b / n) * block;
+        r.rect[r.count][2] = r.rect[r.count][0] + block;
+        r.rect[r.count][3] = r.rect[r.count][1] + block;
+    }
+    assert_true(r.count <= REGIONS_MAX);
+    return r;
+}
+
+/* Standard errors from the film's per-pixel variances: right for camera integrators,
+ * whose pixel estimates are independent. */
+static inline void film_regions(const CstFilm *f, Regions *r)
+{
+    for (int i = 0; i < r->count; i++)
+        r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
+}
+
+/* Renders with a camera integrator and takes the film's statistics (no NaN/Inf allowed). */
+static inline void camera_regions(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ, int spp,
+                                  uint64_t seed, Regions *r)
+{
+    CstRenderSettings st = *base;
+    st.integrator = integ;
+    st.spp = spp;
+    st.seed = seed;
+    st.seed_set = 1;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    CstError err;
+    if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(stats.nonfinite, 0);
+    film_regions(f, r);
+    cst_film_destroy(f);
+}
+
+/* Splatting integrators: their pixels are correlated within an iteration, so the errors
+ * come from `renders` independent renders (region_stats_by_render). */
+static inline void split_regions(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ,
+                                 int renders, uint64_t seed, Regions *r)
+{
+    CstRenderSettings st = *base;
+    st.integrator = integ;
+    CstError err;
+    if (region_stats_by_render(s, &st, renders, seed, r->count, (const int (*)[4])r->rect, r->stat, NULL,
+                               &err) != CST_OK)
+        fail_msg("%s", err.msg);
+}
+
+/* Fails at |z| > Z_LIMIT on any region and channel; prints the whole image's red means
+ * and z, and the largest |z|. */
+static inline void compare(const Regions *a, const Regions *b, const char *na, const char *nb)
+{
+    assert_int_equal(a->count, b->count);
+    double worst = 0.0;
+    int worst_block = -2, worst_c = 0;
+    for (int i = 0; i < a->count; i++)
+        for (int c = 0; c < 3; c++) {
+            double z = z_score(a->stat[i].mean[c], a->stat[i].se[c], b->stat[i].mean[c], b->stat[i].se[c]);
+            if (fabs(z) > fabs(worst)) { worst = z; worst_block = i - 1; worst_c = c; }
+            if (!(fabs(z) <= Z_LIMIT))
+                fail_msg("%s vs %s: block %d (-1 = whole image) channel %d: %.6f vs %.6f, z = %.2f", na, nb, i - 1,
+                         c, a->stat[i].mean[c], b->stat[i].mean[c], z);
+        }
+    double z0 = z_score(a->stat[0].mean[0], a->stat[0].se[0], b->stat[0].mean[0], b->stat[0].se[0]);
+    print_message("%s vs %s: whole image (r) %.5f vs %.5f (z = %.2f), largest |z| = %.2f (block %d, channel %d)\n",
+                  na, nb, a->stat[0].mean[0], b->stat[0].mean[0], z0, fabs(worst), worst_block, worst_c);
+}
+
+#endif
