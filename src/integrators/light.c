@@ -27,7 +27,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
 {
     if (s->emitter_sampler.lights == 0) return;
     /* The tent reaches half a pixel past the film's edge (film_splat). */
-    const float margin = filter_radius(lp->filter) - 0.5f;
+    const float margin = filter_radius(lp->frame.filter) - 0.5f;
     float u_sel = pcg32_float(rng);
     Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
     Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));

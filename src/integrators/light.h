@@ -15,8 +15,7 @@ typedef struct LightParams {
     int max_depth;   /* bounces, as PathParams: a vertex after b bounces of the light path
                       * makes a camera path of b bounces; 0 = unbounded */
     int rr_depth;    /* first bounce at which Russian roulette may stop a path */
-    CstFilter filter;
-    SplatFrame frame; /* the film the splats are for (splat_frame of its size and filter) */
+    SplatFrame frame; /* the film the splats are for: its size and pixel filter */
 } LightParams;
 
 /* Traces one light path and splats each camera connection into *out, per unit film

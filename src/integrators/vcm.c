@@ -146,7 +146,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
                               const VcmIteration *it, const VcmVertex *v, const Bsdf *b,
                               Pcg32 *rng, SplatList *splats, uint64_t *rays)
 {
-    const float margin = filter_radius(vp->filter) - 0.5f;
+    const float margin = filter_radius(vp->frame.filter) - 0.5f;
     Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
     CameraWiSample cs;
     if (!camera_sample_wi(cam, v->p, u_lens, margin, &cs)) return;

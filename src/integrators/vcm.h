@@ -18,8 +18,7 @@ typedef struct VcmParams {
     bool merge;      /* false: BDPT (connections only); true: VCM */
     int max_depth;   /* bounces of a full path, as PathParams; 0 = unbounded */
     int rr_depth;    /* first bounce at which Russian roulette may stop a subpath */
-    CstFilter filter;
-    SplatFrame frame; /* the film the t = 1 splats are for */
+    SplatFrame frame; /* the film the t = 1 splats are for: its size and pixel filter */
 } VcmParams;
 
 /* A stored light vertex (a non-delta surface hit of a light subpath). The d_* are the

@@ -606,7 +606,6 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             job->vcm_params.merge = st.integrator == CST_INTEGRATOR_VCM;
             job->vcm_params.max_depth = st.max_depth;
             job->vcm_params.rr_depth = st.rr_depth;
-            job->vcm_params.filter = st.filter;
             job->vcm_radius = st.photon_radius > 0.0 ? (float)st.photon_radius : vcm_default_radius(scene);
             if (!(st.photon_radius >= 0.0) || !(job->vcm_radius > 0.0f) || !(job->vcm_radius < INFINITY)) {
                 film_destroy(film); free(workers); free(job);
@@ -616,7 +615,6 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         }
         job->light_params.max_depth = st.max_depth;
         job->light_params.rr_depth = st.rr_depth;
-        job->light_params.filter = st.filter;
         /* One light path per pixel per iteration; 65536^2 pixels would overflow int. */
         size_t pixels = (size_t)st.width * (size_t)st.height;
         if (pixels > (size_t)INT32_MAX - LIGHT_CHUNK) {

@@ -127,54 +127,35 @@ void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, u
             if (spp % d == 0) s->nx = d;
 }
 
+/* Stratified or Sobol' only: sampler_1d/2d (sampler.h) draw the independent ones inline. */
 float sampler_1d_ld(Sampler *s)
 {
-    switch (s->type) {
-    case CST_SAMPLER_STRATIFIED: {
-        uint64_t h = dim_key(s);
-        s->dim++;
+    uint64_t h = dim_key(s);
+    s->dim++;
+    if (s->type == CST_SAMPLER_STRATIFIED) {
         uint32_t jitter = (uint32_t)(mix64(h + s->index) >> 32);
         if (s->index >= s->spp) return u32_to_float(jitter); /* beyond the known count: no strata */
         return stratum_float(permute_index(s->index, s->spp, (uint32_t)h), jitter, s->spp);
     }
-    case CST_SAMPLER_SOBOL: {
-        uint64_t h = dim_key(s);
-        s->dim++;
-        /* Shuffling the index by an Owen scramble maps every aligned block of 2^m indices
-         * onto another such block (Burley 2020 §4), so prefixes stay stratified. */
-        uint32_t i = owen_scramble(s->index, (uint32_t)h);
-        return u32_to_float(owen_scramble(sobol_sample(i, 0), (uint32_t)(h >> 32)));
-    }
-    default:
-        return pcg32_float(&s->rng);
-    }
+    /* Shuffling the index by an Owen scramble maps every aligned block of 2^m indices onto
+     * another such block (Burley 2020 §4), so prefixes stay stratified. */
+    uint32_t i = owen_scramble(s->index, (uint32_t)h);
+    return u32_to_float(owen_scramble(sobol_sample(i, 0), (uint32_t)(h >> 32)));
 }
 
 Vec2 sampler_2d_ld(Sampler *s)
 {
-    switch (s->type) {
-    case CST_SAMPLER_STRATIFIED: {
-        uint64_t h = dim_key(s);
-        s->dim += 2;
+    uint64_t h = dim_key(s);
+    s->dim += 2;
+    if (s->type == CST_SAMPLER_STRATIFIED) {
         uint64_t j = mix64(h + s->index);
         uint32_t jx = (uint32_t)j, jy = (uint32_t)(j >> 32);
         if (s->index >= s->spp) return v2(u32_to_float(jx), u32_to_float(jy));
         uint32_t cell = permute_index(s->index, s->spp, (uint32_t)h), ny = s->spp / s->nx;
         return v2(stratum_float(cell % s->nx, jx, s->nx), stratum_float(cell / s->nx, jy, ny));
     }
-    case CST_SAMPLER_SOBOL: {
-        uint64_t h = dim_key(s), h2 = mix64(h);
-        s->dim += 2;
-        uint32_t i = owen_scramble(s->index, (uint32_t)h);
-        return v2(u32_to_float(owen_scramble(sobol_sample(i, 0), (uint32_t)(h >> 32))),
-                  u32_to_float(owen_scramble(sobol_sample(i, 1), (uint32_t)h2)));
-    }
-    default: {
-        /* y first: the order GCC gave the v2(pcg32_float(), pcg32_float()) this replaced
-         * (arguments evaluated right to left), so independent images stay bit-identical. */
-        float y = pcg32_float(&s->rng);
-        float x = pcg32_float(&s->rng);
-        return v2(x, y);
-    }
-    }
+    uint64_t h2 = mix64(h);
+    uint32_t i = owen_scramble(s->index, (uint32_t)h);
+    return v2(u32_to_float(owen_scramble(sobol_sample(i, 0), (uint32_t)(h >> 32))),
+              u32_to_float(owen_scramble(sobol_sample(i, 1), (uint32_t)h2)));
 }

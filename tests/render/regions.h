@@ -44,9 +44,9 @@ static inline void film_regions(const CstFilm *f, Regions *r)
         r->stat[i] = region_stat(f, r->rect[i][0], r->rect[i][1], r->rect[i][2], r->rect[i][3]);
 }
 
-/* Renders with a camera integrator and takes the film's statistics (no NaN/Inf allowed). */
-static inline void camera_regions(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ, int spp,
-                                  uint64_t seed, Regions *r)
+/* Renders `base` with `integ`, spp samples and seed; fails on an error or on NaN/Inf. */
+static inline CstFilm *render_film(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ, int spp,
+                                   uint64_t seed)
 {
     CstRenderSettings st = *base;
     st.integrator = integ;
@@ -58,6 +58,14 @@ static inline void camera_regions(const CstScene *s, const CstRenderSettings *ba
     CstError err;
     if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
     assert_int_equal(stats.nonfinite, 0);
+    return f;
+}
+
+/* Renders with a camera integrator and takes the film's statistics. */
+static inline void camera_regions(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ, int spp,
+                                  uint64_t seed, Regions *r)
+{
+    CstFilm *f = render_film(s, base, integ, spp, seed);
     film_regions(f, r);
     cst_film_destroy(f);
 }

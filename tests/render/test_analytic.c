@@ -61,6 +61,27 @@ static Scene *plane_under_light(double a, double b, double h)
     return s;
 }
 
+/* The one-pixel render every closed form here is checked against: spp samples of the
+ * pixel with `integ`, 2 threads, no NaN/Inf; the pixel's mean and standard error. */
+static RegionStat render_pixel(const Scene *s, CstIntegrator integ, int spp, uint64_t seed)
+{
+    CstRenderSettings st = {0};
+    st.width = st.height = 1;
+    st.spp = spp;
+    st.integrator = integ;
+    st.seed = seed;
+    st.seed_set = 1;
+    st.threads = 2;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    CstError err;
+    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
+    assert_int_equal(stats.nonfinite, 0);
+    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    cst_film_destroy(f);
+    return r;
+}
+
 /* Radiance leaving a diffuse plane of albedo rho at the point below an a x b emitter's
  * centre: L_o = rho E / pi = rho L * 4 F(a/2, b/2, h). */
 static void run_case_spp(CstIntegrator integ, double a, double b, double h, uint64_t seed, int spp)
@@ -74,25 +95,14 @@ static void run_case_spp(CstIntegrator integ, double a, double b, double h, uint
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
 
-    CstRenderSettings st = {0};
-    st.width = st.height = 1;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
-    st.threads = 2;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
     double expected = (double)RHO * (double)LE * 4.0 * corner_form_factor(a / 2, b / 2, h);
-    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    RegionStat r = render_pixel(s, integ, spp, seed);
     for (int c = 0; c < 3; c++) {
         double z = (r.mean[c] - expected) / r.se[c];
         if (!(fabs(z) <= Z_LIMIT))
             fail_msg("%s a=%g b=%g h=%g: L = %.6f, closed form %.6f (z = %.2f)",
                      cst_integrator_name(integ), a, b, h, r.mean[c], expected, z);
     }
-    cst_film_destroy(f);
     scene_destroy(s);
 }
 
@@ -372,25 +382,13 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
     CameraDesc cam = {{0, 1.0f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
-    CstRenderSettings st = {0};
-    st.width = st.height = 1;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
-    st.threads = 2;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
-    assert_int_equal(stats.nonfinite, 0);
-    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    RegionStat r = render_pixel(s, integ, spp, seed);
     for (int c = 0; c < 3; c++)
         if (!(fabs(r.mean[c] - expected) <= Z_LIMIT * r.se[c] + 1e-5 * expected))
             fail_msg("%s, light kind %d: L = %.7f, closed form %.7f (se %.2g)", cst_integrator_name(integ), kind,
                      r.mean[c], expected, r.se[c]);
     print_message("%s, light kind %d: L = %.6f (se %.1e), closed form %.6f\n", cst_integrator_name(integ), kind,
                   r.mean[0], r.se[0], expected);
-    cst_film_destroy(f);
     scene_destroy(s);
 }
 
@@ -433,18 +431,7 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
     CameraDesc cam = {{0, 1.0f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
-    CstRenderSettings st = {0};
-    st.width = st.height = 1;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
-    st.threads = 2;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
-    assert_int_equal(stats.nonfinite, 0);
-    RegionStat r = region_stat(f, 0, 0, 1, 1);
+    RegionStat r = render_pixel(s, integ, spp, seed);
     for (int c = 0; c < 3; c++) {
         double z = (r.mean[c] - expected[c]) / r.se[c];
         if (!(fabs(z) <= Z_LIMIT))
@@ -453,7 +440,6 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
     }
     print_message("%s under the environment: L = %.5f (se %.1e), quadrature %.5f\n", cst_integrator_name(integ),
                   r.mean[0], r.se[0], expected[0]);
-    cst_film_destroy(f);
     scene_destroy(s);
 }
 

@@ -16,22 +16,6 @@
 
 enum { SIZE = 128, BLOCK = 32 };
 
-static CstFilm *render(const CstScene *s, const CstRenderSettings *base, CstIntegrator integ,
-                       int spp, uint64_t seed)
-{
-    CstRenderSettings st = *base;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    CstError err;
-    if (cst_render(s, &st, &f, &stats, &err) != CST_OK) fail_msg("%s", err.msg);
-    assert_int_equal(stats.nonfinite, 0);
-    return f;
-}
-
 /* The light tracer's pixel estimates are correlated within an iteration (a light path
  * splats into several pixels; the path count is fixed), so its region standard errors
  * come from independent iterations (region_stats_by_render). Prints how far region_stat's
@@ -74,9 +58,9 @@ static void test_cornell_variants_agree(void **state)
     CstRenderSettings st = sized(SIZE, CST_FILTER_BOX);
     /* BSDF-only sampling of a small light is the noisy one: give it more samples so the
      * test has power against biases of a fraction of a percent. */
-    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 1);
-    CstFilm *nee = render(s, &st, CST_INTEGRATOR_PATH_NEE, 256, 2);
-    CstFilm *bsdf = render(s, &st, CST_INTEGRATOR_PATH_BSDF, 1024, 3);
+    CstFilm *mis = render_film(s, &st, CST_INTEGRATOR_PATH, 256, 1);
+    CstFilm *nee = render_film(s, &st, CST_INTEGRATOR_PATH_NEE, 256, 2);
+    CstFilm *bsdf = render_film(s, &st, CST_INTEGRATOR_PATH_BSDF, 1024, 3);
     Regions rm = regions(SIZE, BLOCK), rn = rm, rb = rm, rl = rm;
     film_regions(mis, &rm);
     film_regions(nee, &rn);
@@ -101,7 +85,7 @@ static void test_cornell_light_tent(void **state)
     (void)state;
     CstScene *s = cornell();
     CstRenderSettings st = sized(SIZE, CST_FILTER_TENT);
-    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 4);
+    CstFilm *mis = render_film(s, &st, CST_INTEGRATOR_PATH, 256, 4);
     Regions rm = regions(SIZE, BLOCK), rl = rm;
     film_regions(mis, &rm);
     light_regions(s, &st, 256, 2000, "light (tent)", &rl);
@@ -122,7 +106,7 @@ static void test_cornell_light_wide_filters(void **state)
     const CstFilter filters[2] = {CST_FILTER_GAUSSIAN, CST_FILTER_MITCHELL};
     for (int k = 0; k < 2; k++) {
         CstRenderSettings st = sized(FSIZE, filters[k]);
-        CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 512, 8 + (uint64_t)k);
+        CstFilm *mis = render_film(s, &st, CST_INTEGRATOR_PATH, 512, 8 + (uint64_t)k);
         Regions rm = regions(FSIZE, FBLOCK), rl = rm;
         film_regions(mis, &rm);
         char a[64], b[64];
@@ -144,7 +128,7 @@ static void test_cornell_light_max_depth(void **state)
     enum { DSIZE = 64, DBLOCK = 16 };
     CstRenderSettings st = sized(DSIZE, CST_FILTER_BOX);
     st.max_depth = 2;
-    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 6);
+    CstFilm *mis = render_film(s, &st, CST_INTEGRATOR_PATH, 256, 6);
     Regions rm = regions(DSIZE, DBLOCK), rl = rm;
     film_regions(mis, &rm);
     light_regions(s, &st, 256, 4000, "light (max_depth 2)", &rl);
@@ -163,8 +147,8 @@ static void test_cornell_whitted_direct(void **state)
     enum { WSIZE = 64, WBLOCK = 16 };
     CstRenderSettings st = sized(WSIZE, CST_FILTER_BOX);
     st.max_depth = 1;
-    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 7);
-    CstFilm *wh = render(s, &st, CST_INTEGRATOR_WHITTED, 256, 8);
+    CstFilm *mis = render_film(s, &st, CST_INTEGRATOR_PATH, 256, 7);
+    CstFilm *wh = render_film(s, &st, CST_INTEGRATOR_WHITTED, 256, 8);
     Regions rm = regions(WSIZE, WBLOCK), rw = rm;
     film_regions(mis, &rm);
     film_regions(wh, &rw);
@@ -187,7 +171,7 @@ static void test_light_through_glass(void **state)
 
     enum { GSIZE = 64, GBLOCK = 16 };
     CstRenderSettings st = sized(GSIZE, CST_FILTER_BOX);
-    CstFilm *mis = render(s, &st, CST_INTEGRATOR_PATH, 256, 5);
+    CstFilm *mis = render_film(s, &st, CST_INTEGRATOR_PATH, 256, 5);
     Regions rm = regions(GSIZE, GBLOCK), rl = rm;
     film_regions(mis, &rm);
     light_regions(s, &st, 256, 3000, "light (glass)", &rl);

@@ -8,6 +8,8 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include "unit/scratch_dir.h"
+
 #include <dirent.h>
 #include <math.h>
 #include <signal.h>
@@ -23,36 +25,16 @@
 
 #include "film/image_io.h"
 
-static char g_dir[256]; /* per-run scratch directory, made by the group setup */
-
-static void tpath(char *out, size_t n, const char *name)
-{
-    snprintf(out, n, "%s/%s", g_dir, name);
-}
-
 static int group_setup(void **state)
 {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/cst_image_io.XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
+    return scratch_dir_make("/tmp/cst_image_io.XXXXXX");
 }
 
-/* Removes the scratch directory; it holds files and at most empty subdirectories. */
 static int group_teardown(void **state)
 {
     (void)state;
-    DIR *d = opendir(g_dir);
-    if (!d) return 0;
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-        char p[512];
-        tpath(p, sizeof p, e->d_name);
-        if (unlink(p) != 0) rmdir(p);
-    }
-    closedir(d);
-    rmdir(g_dir);
-    return 0;
+    return scratch_dir_remove();
 }
 
 static int count_temp_files(void)

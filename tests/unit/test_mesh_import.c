@@ -8,6 +8,8 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include "unit/scratch_dir.h"
+
 #include <dirent.h>
 #include <math.h>
 #include <stdio.h>
@@ -24,31 +26,16 @@
 
 /* ------------------------------------------------------------------ helpers */
 
-static char g_dir[64]; /* the temporary directory, made by the group setup */
-
 static int group_setup(void **state)
 {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/cst_mesh_XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
+    return scratch_dir_make("/tmp/cst_mesh_XXXXXX");
 }
 
 static int group_teardown(void **state)
 {
     (void)state;
-    DIR *d = opendir(g_dir);
-    if (!d)
-        return -1;
-    struct dirent *e;
-    char path[512];
-    while ((e = readdir(d))) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        snprintf(path, sizeof path, "%s/%s", g_dir, e->d_name);
-        unlink(path);
-    }
-    closedir(d);
-    return rmdir(g_dir);
+    return scratch_dir_remove();
 }
 
 static const char *path_of(const char *name)

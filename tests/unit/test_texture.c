@@ -10,6 +10,8 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "unit/scratch_dir.h"
+
 #include <dirent.h>
 #include <math.h>
 #include <stdio.h>
@@ -23,33 +25,17 @@
 #include "scene/scene.h"
 #include "textures/texture.h"
 
-static char g_dir[256];
-
 static int group_setup(void **state)
 {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/cst_texture.XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
+    return scratch_dir_make("/tmp/cst_texture.XXXXXX");
 }
 
 static int group_teardown(void **state)
 {
     (void)state;
-    DIR *d = opendir(g_dir);
-    if (!d) return 0;
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-        char p[512];
-        snprintf(p, sizeof p, "%s/%s", g_dir, e->d_name);
-        unlink(p);
-    }
-    closedir(d);
-    rmdir(g_dir);
-    return 0;
+    return scratch_dir_remove();
 }
-
-static void tpath(char *out, size_t n, const char *name) { snprintf(out, n, "%s/%s", g_dir, name); }
 
 static void assert_rgb_near(Rgb got, double r, double g, double b, double tol)
 {
