@@ -9,6 +9,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
 
@@ -65,18 +66,8 @@ static Scene *plane_under_light(double a, double b, double h)
  * pixel with `integ`, 2 threads, no NaN/Inf; the pixel's mean and standard error. */
 static RegionStat render_pixel(const Scene *s, CstIntegrator integ, int spp, uint64_t seed)
 {
-    CstRenderSettings st = {0};
-    st.width = st.height = 1;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
-    st.threads = 2;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    CstError err;
-    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
-    assert_int_equal(stats.nonfinite, 0);
+    CstRenderSettings st = {.width = 1, .height = 1, .threads = 2};
+    CstFilm *f = render_film(s, &st, integ, spp, seed);
     RegionStat r = region_stat(f, 0, 0, 1, 1);
     cst_film_destroy(f);
     return r;

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <cmocka.h>
 
+#include "render/regions.h"
 #include "render/render_util.h"
 #include "render/test_scenes.h"
 #include "scene/scene.h"
@@ -38,18 +39,8 @@ static void check_uniform(const CstFilm *film, double expected, const char *what
 
 static CstFilm *render(const Scene *s, CstIntegrator integ, int size, int spp, uint64_t seed)
 {
-    CstRenderSettings st = {0};
-    st.width = st.height = size;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
-    CstFilm *film = NULL;
-    CstRenderStats stats;
-    CstError err;
-    assert_int_equal(cst_render(s, &st, &film, &stats, &err), CST_OK);
-    assert_int_equal(stats.nonfinite, 0);
-    return film;
+    CstRenderSettings st = {.width = size, .height = size};
+    return render_film(s, &st, integ, spp, seed);
 }
 
 /* An albedo-1 diffuse sphere inside a black enclosure that emits radiance 1 (two-sided):

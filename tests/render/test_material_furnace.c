@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <cmocka.h>
 
+#include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
 
@@ -34,17 +35,8 @@ static Scene *furnace_scene(const Material *m)
 
 static RegionStat render_mean(const Scene *s, CstIntegrator integ, int spp, uint64_t seed)
 {
-    CstRenderSettings st = {0};
-    st.width = st.height = 24;
-    st.spp = spp;
-    st.integrator = integ;
-    st.seed = seed;
-    st.seed_set = 1;
-    CstFilm *film = NULL;
-    CstRenderStats stats;
-    CstError err;
-    assert_int_equal(cst_render(s, &st, &film, &stats, &err), CST_OK);
-    assert_int_equal(stats.nonfinite, 0);
+    CstRenderSettings st = {.width = 24, .height = 24};
+    CstFilm *film = render_film(s, &st, integ, spp, seed);
     RegionStat r = region_stat(film, 0, 0, 24, 24);
     cst_film_destroy(film);
     return r;
