@@ -566,9 +566,12 @@ static inline unsigned f8_le_mask(F8 a, F8 b)
 static inline void f8_store(float *p, F8 a) { _mm_storeu_ps(p, a.lo); _mm_storeu_ps(p + 4, a.hi); }
 #endif
 
-/* Per-ray constants of the slab test: origin and negated reciprocal direction. */
+/* Per-ray constants of the slab test: origin, negated reciprocal direction, and which
+ * plane of each axis the ray meets first (the min plane where the direction is
+ * non-negative), as byte offsets of that row within a node. */
 typedef struct RayBox8 {
     F8 o[3], ninv[3];
+    size_t near[3], far[3];
 } RayBox8;
 
 static inline RayBox8 ray_box8(const Ray *r)
@@ -577,28 +580,42 @@ static inline RayBox8 ray_box8(const Ray *r)
     RayBox8 q;
     q.o[0] = f8_set1(r->o.x); q.o[1] = f8_set1(r->o.y); q.o[2] = f8_set1(r->o.z);
     q.ninv[0] = f8_set1(-inv.x); q.ninv[1] = f8_set1(-inv.y); q.ninv[2] = f8_set1(-inv.z);
+    /* By the reciprocal's sign: ray_inv_dir keeps a zero component's sign, so a -0
+     * direction enters through the max plane like any other negative one. */
+    const float sx[3] = {inv.x, inv.y, inv.z};
+    for (int a = 0; a < 3; a++) {
+        size_t neg = signbit(sx[a]) ? 1u : 0u;
+        q.near[a] = (2u * (size_t)a + neg) * sizeof(float[BVH_WIDTH]);
+        q.far[a] = (2u * (size_t)a + 1u - neg) * sizeof(float[BVH_WIDTH]);
+    }
     return q;
+}
+
+static inline const float *node_row(const BvhNode *n, size_t offset)
+{
+    return (const float *)((const char *)n->bounds + offset);
 }
 
 /* The eight children's slab tests at once (see bbox_intersect for the robustness
  * argument: zero direction components and the 1 + 2 gamma(3) widening of the exit
  * distance). (origin - plane) * -(1 / d) is bit for bit (plane - origin) * (1 / d), and
- * lets the plane be a memory operand of the subtraction. Empty slots hold NaN bounds,
- * which every finite ray misses: no inverted or infinite box can mark them, as the min
- * and max of its two plane distances form an interval some ray contains. Returns the
- * mask of children hit and their entry distances. */
+ * lets the plane be a memory operand of the subtraction. Picking each axis's entry and
+ * exit plane by the direction's sign (Williams et al. 2005) gives the same distances as
+ * the min and max of both planes' without computing them, for boxes with lo <= hi: the
+ * products are monotonic in the plane. Empty slots hold NaN bounds, which every finite ray
+ * misses. Returns the mask of children hit and their entry distances. */
 static inline unsigned node_hit8(const BvhNode *n, const RayBox8 *q, F8 t_min, F8 t_max, F8 *t_enter)
 {
-    F8 t0x = f8_mul(f8_sub(q->o[0], f8_load(n->bounds[0])), q->ninv[0]);
-    F8 t1x = f8_mul(f8_sub(q->o[0], f8_load(n->bounds[1])), q->ninv[0]);
-    F8 t0y = f8_mul(f8_sub(q->o[1], f8_load(n->bounds[2])), q->ninv[1]);
-    F8 t1y = f8_mul(f8_sub(q->o[1], f8_load(n->bounds[3])), q->ninv[1]);
-    F8 t0z = f8_mul(f8_sub(q->o[2], f8_load(n->bounds[4])), q->ninv[2]);
-    F8 t1z = f8_mul(f8_sub(q->o[2], f8_load(n->bounds[5])), q->ninv[2]);
-    /* max/min return their second operand when either is NaN: nested this way, a NaN
-     * slab distance reaches tn, and the ordered compare then fails. */
-    F8 tn = f8_max(t_min, f8_max(f8_min(t0z, t1z), f8_max(f8_min(t0y, t1y), f8_min(t0x, t1x))));
-    F8 tf = f8_min(t_max, f8_min(f8_max(t0z, t1z), f8_min(f8_max(t0y, t1y), f8_max(t0x, t1x))));
+    F8 t0x = f8_mul(f8_sub(q->o[0], f8_load(node_row(n, q->near[0]))), q->ninv[0]);
+    F8 t1x = f8_mul(f8_sub(q->o[0], f8_load(node_row(n, q->far[0]))), q->ninv[0]);
+    F8 t0y = f8_mul(f8_sub(q->o[1], f8_load(node_row(n, q->near[1]))), q->ninv[1]);
+    F8 t1y = f8_mul(f8_sub(q->o[1], f8_load(node_row(n, q->far[1]))), q->ninv[1]);
+    F8 t0z = f8_mul(f8_sub(q->o[2], f8_load(node_row(n, q->near[2]))), q->ninv[2]);
+    F8 t1z = f8_mul(f8_sub(q->o[2], f8_load(node_row(n, q->far[2]))), q->ninv[2]);
+    /* max/min return their second operand when either is NaN: nested this way, an empty
+     * slot's NaN slab distance reaches tn and tf, and the ordered compare then fails. */
+    F8 tn = f8_max(t_min, f8_max(t0z, f8_max(t0y, t0x)));
+    F8 tf = f8_min(t_max, f8_min(t1z, f8_min(t1y, t1x)));
     tf = f8_mul(tf, f8_set1(1.00000024f));
     *t_enter = tn;
     return f8_le_mask(tn, tf);
