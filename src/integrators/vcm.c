@@ -285,10 +285,33 @@ static Rgb connect_to_light(const Scene *s, const VcmIteration *it, const SubPat
     return rgb_scale(rgb_mul(f, ls.li), weight / ls.pdf);
 }
 
-/* A connection between camera vertex x and light vertex y (tech. rep. eqs. 40-41). */
+/* The BSDFs of one light path's first vertices, built when a connection first needs
+ * them: every vertex of the camera path connects to the same light vertices, and
+ * rebuilding y's BSDF for each (a frame, the material's constants, textures) was a
+ * visible part of BDPT's time (docs/benchmarks.md). */
+enum { LIGHT_BSDF_CACHE = 16 };
+typedef struct LightBsdfs {
+    Bsdf b[LIGHT_BSDF_CACHE];
+    uint32_t built; /* bit j: b[j] holds vertex j's BSDF */
+} LightBsdfs;
+
+/* y's BSDF as the light subpath saw it, through the scene's one hit-to-BSDF routine;
+ * vertex j of its path, cached in c when j is small enough (else built into *tmp). */
+static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const VcmVertex *y, Bsdf *tmp)
+{
+    Bsdf *b = j < LIGHT_BSDF_CACHE ? &c->b[j] : tmp;
+    if (j < LIGHT_BSDF_CACHE && (c->built >> j & 1u)) return b;
+    SurfaceHit yh = {.p = y->p, .ng = y->ng, .ns = y->ns, .material = y->material, .emitter = -1, .uv = y->uv};
+    scene_bsdf(s, &yh, b);
+    if (j < LIGHT_BSDF_CACHE) c->built |= 1u << j;
+    return b;
+}
+
+/* A connection between camera vertex x and light vertex y, vertex j of its light path
+ * (tech. rep. eqs. 40-41). */
 static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPath *sp,
-                            const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const VcmVertex *y,
-                            uint64_t *rays)
+                            const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const VcmVertex *y, int j,
+                            LightBsdfs *cache, uint64_t *rays)
 {
     Vec3 to = v3_sub(y->p, x->p);
     float dist2 = v3_length2(to);
@@ -301,16 +324,14 @@ static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPat
     if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return rgb_s(0.0f);
     Rgb fx = bsdf_eval(bx, wo, d);
     if (rgb_is_black(fx)) return rgb_s(0.0f);
-    /* y's BSDF as the light subpath saw it, through the scene's one hit-to-BSDF routine. */
-    Bsdf by;
-    SurfaceHit yh = {.p = y->p, .ng = y->ng, .ns = y->ns, .material = y->material, .emitter = -1, .uv = y->uv};
-    scene_bsdf(s, &yh, &by);
+    Bsdf tmp;
+    const Bsdf *by = light_bsdf(s, cache, j, y, &tmp);
     /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
      * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */
-    Rgb fy = rgb_scale(bsdf_eval(&by, nd, y->w_prev), cos_y / cos_y_prev);
+    Rgb fy = rgb_scale(bsdf_eval(by, nd, y->w_prev), cos_y / cos_y_prev);
     if (rgb_is_black(fy)) return rgb_s(0.0f);
     float x_fwd = bsdf_pdf(bx, wo, d), x_rev = bsdf_pdf(bx, d, wo);
-    float y_fwd = bsdf_pdf(&by, y->w_prev, nd), y_rev = bsdf_pdf(&by, nd, y->w_prev);
+    float y_fwd = bsdf_pdf(by, y->w_prev, nd), y_rev = bsdf_pdf(by, nd, y->w_prev);
     float x_fwd_a = x_fwd * cos_y / dist2; /* the camera subpath reaching y */
     float y_fwd_a = y_fwd * cos_x / dist2; /* the light subpath reaching x */
     float w_light = mis(x_fwd_a) * (it->mis_vm + y->d_vcm + y->d_vc * mis(y_rev));
@@ -393,6 +414,8 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
     const VcmVertex *lv = it->vertices + it->path_start[path];
     const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
     const bool has_lights = s->emitter_sampler.lights > 0;
+    LightBsdfs light_bsdfs;
+    light_bsdfs.built = 0;
     for (int t = 1;; t++) {
         SurfaceHit sh;
         ++*rays;
@@ -443,7 +466,7 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
             Rgb c = rgb_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
-                c = rgb_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], rays));
+                c = rgb_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, rays));
             }
             L = rgb_madd(L, sp.beta, c);
             if (vp->merge && it->cells > 0)
