@@ -231,7 +231,7 @@ static inline int cell_coord(float p, float lo, float inv_cell)
 }
 
 void vcm_grid_build(VcmIteration *it, size_t n, uint32_t cells, uint32_t *cell_start,
-                    VcmVertex *cell_vertices)
+                    VcmMergeVertex *cell_vertices)
 {
     it->cells = cells;
     it->cell_start = cell_start;
@@ -255,7 +255,8 @@ void vcm_grid_build(VcmIteration *it, size_t n, uint32_t cells, uint32_t *cell_s
         Vec3 p = it->vertices[i].p;
         uint32_t c = cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
                                cell_coord(p.z, lo.z, it->inv_cell));
-        cell_vertices[cell_start[c]++] = it->vertices[i];
+        const VcmVertex *v = &it->vertices[i];
+        cell_vertices[cell_start[c]++] = (VcmMergeVertex){v->p, v->w_prev, v->beta, v->d_vcm, v->d_vm, v->bounces};
     }
     for (uint32_t c = cells; c > 0; c--) cell_start[c] = cell_start[c - 1];
     cell_start[0] = 0;
@@ -379,7 +380,7 @@ static Rgb merge(const VcmParams *vp, const VcmIteration *it, const SubPath *sp,
     Rgb acc = rgb_s(0.0f);
     for (int b = 0; b < nb; b++)
         for (uint32_t k = first[b]; k < last[b]; k++) {
-            const VcmVertex *y = &it->cell_vertices[k];
+            const VcmMergeVertex *y = &it->cell_vertices[k];
             Vec3 dv = v3_sub(y->p, x->p);
             if (v3_dot(dv, dv) > r2) continue;
             /* The merged path has the camera vertices and y's, sharing one. */

@@ -35,6 +35,17 @@ typedef struct VcmVertex {
     Vec2 uv;         /* texture coordinates (the BSDF is rebuilt from material, ns, ng, uv) */
 } VcmVertex;
 
+/* The part of a VcmVertex that merging reads (48 bytes of its 88): about nine in ten
+ * candidates of a query fail the distance test, so the bytes streamed per candidate are
+ * most of a merge's cost. */
+typedef struct VcmMergeVertex {
+    Vec3 p;
+    Vec3 w_prev;
+    Rgb beta;
+    float d_vcm, d_vm;
+    int32_t bounces;
+} VcmMergeVertex;
+
 /* A growable list of light vertices; one per work unit, reused by every iteration. */
 typedef struct VcmVertexList {
     VcmVertex *v;
@@ -56,9 +67,10 @@ typedef struct VcmIteration {
     const uint32_t *path_start; /* light_paths + 1 entries */
     /* Merging: a hashed grid of cell size 2r over `vertices` (empty without merging). */
     const uint32_t *cell_start;     /* cells + 1 entries */
-    const VcmVertex *cell_vertices; /* copies of the vertices, cell by cell, in vertex order:
-                                     * a query streams through a cell's run instead of
-                                     * missing the cache on every candidate */
+    const VcmMergeVertex *cell_vertices; /* what merging reads of the vertices, cell by
+                                          * cell, in vertex order: a query streams through
+                                          * a cell's run instead of missing the cache on
+                                          * every candidate */
     uint32_t cells;
     Vec3 grid_lo;
     float inv_cell;
@@ -79,7 +91,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
 /* Builds the hashed grid over it->vertices (count n) into caller-owned arrays: cell_start
  * (cells + 1) and cell_vertices (n); cells is chosen by the caller (e.g. n). */
 void vcm_grid_build(VcmIteration *it, size_t n, uint32_t cells, uint32_t *cell_start,
-                    VcmVertex *cell_vertices);
+                    VcmMergeVertex *cell_vertices);
 
 /* One camera path for the pixel whose light path is `path`: emission hits (s = 0), NEE
  * (s = 1), connections to the light path's vertices, and with merging, merges with every

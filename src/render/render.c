@@ -203,7 +203,7 @@ typedef struct RenderJob {
     uint32_t *vcm_path_start;  /* light_paths + 1 */
     VcmVertex *vcm_vertices;   /* the iteration's, concatenated */
     uint32_t *vcm_cell_start;
-    VcmVertex *vcm_cell_items;
+    VcmMergeVertex *vcm_cell_items;
     size_t vcm_cap;            /* capacity of vcm_vertices and vcm_cell_items */
     /* the pass in progress: samples [pass_first, pass_first + pass_spp) of every pixel */
     int pass_first, pass_spp;
@@ -332,7 +332,7 @@ static int vcm_gather(RenderJob *job)
         VcmVertex *v = realloc(job->vcm_vertices, cap * sizeof *v);
         if (!v) return 0;
         job->vcm_vertices = v;
-        VcmVertex *items = realloc(job->vcm_cell_items, cap * sizeof *items);
+        VcmMergeVertex *items = realloc(job->vcm_cell_items, cap * sizeof *items);
         if (!items) return 0;
         job->vcm_cell_items = items;
         uint32_t *starts = realloc(job->vcm_cell_start, (cap + 1) * sizeof *starts);
