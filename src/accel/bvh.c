@@ -341,7 +341,14 @@ typedef struct Emitter {
     const Sphere *spheres;
     float margin;
     Bvh *out;
+    size_t cursor; /* units written */
 } Emitter;
+
+_Static_assert(sizeof(BvhNode) == 7 * BVH_UNIT, "a node is 7 units");
+_Static_assert(sizeof(BvhTriBlock) == 5 * BVH_UNIT, "a triangle block is 5 units");
+enum { NODE_UNITS = 7, BLOCK_UNITS = 5 };
+
+static inline void *unit_at(Emitter *e, size_t u) { return e->out->units + u * BVH_UNIT; }
 
 /* Writes the leaf for binary leaf `bn` and returns its reference: triangles packed four
  * to a block in the SAH's order, or spheres. */
@@ -361,13 +368,17 @@ static uint32_t emit_leaf(Emitter *e, const BinNode *bn)
         }
         return BVH_LEAF | BVH_SPHERES | ((uint32_t)(bn->count - 1) << BVH_COUNT_SHIFT) | first;
     }
-    uint32_t first = (uint32_t)o->num_blocks;
+    uint32_t first = (uint32_t)e->cursor;
+    uint32_t count = 0;
     int lane = 4;
     BvhTriBlock *blk = NULL;
     for (int i = bn->offset; i < bn->offset + bn->count; i++) {
         uint32_t id = e->idx[i];
         if (lane == 4) {
-            blk = &o->blocks[o->num_blocks++];
+            blk = unit_at(e, e->cursor);
+            e->cursor += BLOCK_UNITS;
+            o->num_blocks++;
+            count++;
             /* Unused lanes hold NaN vertices: every comparison in the SIMD test then
              * fails, so they need no mask. */
             for (int k = 0; k < 3; k++)
@@ -384,14 +395,14 @@ static uint32_t emit_leaf(Emitter *e, const BinNode *bn)
         blk->id[lane] = id;
         lane++;
     }
-    uint32_t count = (uint32_t)o->num_blocks - first;
     return BVH_LEAF | ((count - 1u) << BVH_COUNT_SHIFT) | first;
 }
 
-/* Turns binary node `bin` into wide node `out`: its children, with the largest-area inner
- * ones replaced by their own children while slots remain (fewer, fuller wide nodes cut
- * the node visits per ray). Children are laid out depth-first after their parent. */
-static void collapse(Emitter *e, int bin, int out)
+/* Turns binary node `bin` into the wide node at unit `out`: its children, with the
+ * largest-area inner ones replaced by their own children while slots remain (fewer,
+ * fuller wide nodes cut the node visits per ray). After the node come its leaves' blocks,
+ * then its inner children depth first (bvh.h). */
+static void collapse(Emitter *e, int bin, size_t out)
 {
     const BinNode *bn = e->bin;
     int kids[BVH_WIDTH], nk = 0;
@@ -409,18 +420,20 @@ static void collapse(Emitter *e, int bin, int out)
         kids[best] = k + 1;
         kids[nk++] = bn[k].offset;
     }
-    BvhNode *w = &e->out->nodes[out];
+    BvhNode *w = unit_at(e, out);
     wide_clear(w);
     for (int i = 0; i < nk; i++) {
         const BinNode *k = &bn[kids[i]];
-        BBox box = widen(k->box, e->margin);
-        if (k->count > 0) {
-            wide_set_child(w, i, box, emit_leaf(e, k));
-        } else {
-            int idx = e->out->num_nodes++;
-            wide_set_child(w, i, box, (uint32_t)idx);
-            collapse(e, kids[i], idx);
-        }
+        if (k->count > 0) wide_set_child(w, i, widen(k->box, e->margin), emit_leaf(e, k));
+    }
+    for (int i = 0; i < nk; i++) {
+        const BinNode *k = &bn[kids[i]];
+        if (k->count > 0) continue;
+        size_t at = e->cursor;
+        e->cursor += NODE_UNITS;
+        e->out->num_nodes++;
+        wide_set_child(w, i, widen(k->box, e->margin), (uint32_t)at);
+        collapse(e, kids[i], at);
     }
 }
 
@@ -486,29 +499,31 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
      * counted exactly. */
     size_t inner = 0, blocks = 0;
     count_binary(nodes, idx, (uint32_t)num_tris, 0, &inner, &blocks);
-    if (blocks > BVH_INDEX_MASK) {
+    /* Leaf references carry a unit index in 27 bits (4 GiB of nodes and blocks). */
+    if ((inner + 1) * NODE_UNITS + blocks * BLOCK_UNITS > BVH_INDEX_MASK) {
         free(bp); free(idx); free(nodes);
-        return cst_fail(err, CST_ERR_INVALID_ARG, "the BVH holds at most %u blocks of 4 triangles (%zu needed)",
-                        BVH_INDEX_MASK, blocks);
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "the BVH holds at most %u units of 32 bytes (%zu nodes and %zu triangle blocks need more)",
+                        BVH_INDEX_MASK, inner + 1, blocks);
     }
-    size_t node_bytes = ((inner + 1) * sizeof(BvhNode) + 63u) & ~(size_t)63u;
-    size_t block_bytes = ((blocks > 0 ? blocks : 1) * sizeof(BvhTriBlock) + 63u) & ~(size_t)63u;
-    bvh->nodes = aligned_alloc(64, node_bytes);
-    bvh->blocks = aligned_alloc(64, block_bytes);
+    size_t units = (inner + 1) * NODE_UNITS + blocks * BLOCK_UNITS;
+    bvh->units = aligned_alloc(64, (units * BVH_UNIT + 63u) & ~(size_t)63u);
     bvh->spheres = malloc((size_t)(num_spheres > 0 ? num_spheres : 1) * sizeof *bvh->spheres);
-    if (!bvh->nodes || !bvh->blocks || !bvh->spheres) goto oom;
+    if (!bvh->units || !bvh->spheres) goto oom;
 
     BBox root = nodes[0].box;
-    Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, 0.0f, bvh};
+    Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, 0.0f, bvh, NODE_UNITS};
     e.margin = 1e-7f * maxf(v3_max_abs(root.min), v3_max_abs(root.max)) + 1e-30f;
     bvh->num_nodes = 1;
     if (nodes[0].count > 0) {
         /* A root that is a leaf (few primitives) becomes the single slot of the root. */
-        wide_clear(&bvh->nodes[0]);
-        wide_set_child(&bvh->nodes[0], 0, widen(root, e.margin), emit_leaf(&e, &nodes[0]));
+        BvhNode *w = unit_at(&e, 0);
+        wide_clear(w);
+        wide_set_child(w, 0, widen(root, e.margin), emit_leaf(&e, &nodes[0]));
     } else {
         collapse(&e, 0, 0);
     }
+    bvh->num_units = e.cursor;
     bvh->num_prims = n;
     bvh->bounds = root;
     free(bp);
@@ -524,16 +539,14 @@ oom:
 void bvh_free(Bvh *bvh)
 {
     if (!bvh) return;
-    free(bvh->nodes);
-    free(bvh->blocks);
+    free(bvh->units);
     free(bvh->spheres);
     memset(bvh, 0, sizeof *bvh);
 }
 
 size_t bvh_memory_bytes(const Bvh *bvh)
 {
-    return (size_t)bvh->num_nodes * sizeof(BvhNode) + (size_t)bvh->num_blocks * sizeof(BvhTriBlock) +
-           (size_t)bvh->num_spheres * sizeof(BvhSphere);
+    return bvh->num_units * BVH_UNIT + (size_t)bvh->num_spheres * sizeof(BvhSphere);
 }
 
 /* ------------------------------------------------------------------ traversal */
@@ -626,7 +639,7 @@ static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const TriangleRa
 {
     bool found = false;
     const __m128 t_min = _mm_set1_ps(r->t_min);
-    const BvhTriBlock *b = &bvh->blocks[bvh_ref_index(ref)];
+    const BvhTriBlock *b = bvh_blocks(bvh, bvh_ref_index(ref));
     for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
         __m128 t4, u4, v4;
         int scalar_lanes;
@@ -680,7 +693,7 @@ static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRay
         return false;
     }
     const __m128 t_min = _mm_set1_ps(r->t_min), t_max = _mm_set1_ps(r->t_max);
-    const BvhTriBlock *b = &bvh->blocks[bvh_ref_index(ref)];
+    const BvhTriBlock *b = bvh_blocks(bvh, bvh_ref_index(ref));
     for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
         __m128 t4, u4, v4;
         int scalar_lanes;
@@ -715,13 +728,13 @@ static inline void prefetch_ref(const Bvh *bvh, uint32_t ref)
     const char *p;
     size_t bytes;
     if (!bvh_ref_is_leaf(ref)) {
-        p = (const char *)&bvh->nodes[ref];
+        p = (const char *)bvh_node(bvh, ref);
         bytes = sizeof(BvhNode);
     } else if (ref & BVH_SPHERES) {
         p = (const char *)&bvh->spheres[bvh_ref_index(ref)];
         bytes = bvh_ref_count(ref) * sizeof(BvhSphere);
     } else {
-        p = (const char *)&bvh->blocks[bvh_ref_index(ref)];
+        p = (const char *)bvh_blocks(bvh, bvh_ref_index(ref));
         bytes = bvh_ref_count(ref) * sizeof(BvhTriBlock);
     }
 #ifndef BVH_NO_PREFETCH
@@ -746,7 +759,7 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
     bool found = false;
     for (;;) {
         if (!bvh_ref_is_leaf(cur)) {
-            const BvhNode *n = &bvh->nodes[cur];
+            const BvhNode *n = bvh_node(bvh, cur);
             F8 tn8;
             unsigned mask = node_hit8(n, &q, t_min, f8_set1(r.t_max), &tn8);
             if (mask) {
@@ -816,7 +829,7 @@ bool bvh_occluded(const Bvh *bvh, const Ray *ray)
     uint32_t cur = 0;
     for (;;) {
         if (!bvh_ref_is_leaf(cur)) {
-            const BvhNode *n = &bvh->nodes[cur];
+            const BvhNode *n = bvh_node(bvh, cur);
             F8 tn8;
             unsigned mask = node_hit8(n, &q, t_min, t_max, &tn8);
             if (mask) {

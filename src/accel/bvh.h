@@ -21,15 +21,16 @@
 /* An 8-wide node: the boxes of its children in structure-of-arrays form so one AVX slab
  * test checks all eight. Rows are [2 * axis + side] (side 0: min plane, 1: max plane).
  * Empty slots hold NaN bounds, which every finite ray misses (see node_hit8 in bvh.c).
- * 224 bytes, 32-byte aligned. */
+ * 224 bytes (7 units of BVH_UNIT bytes), 32-byte aligned. */
 typedef struct BvhNode {
     float bounds[6][BVH_WIDTH];
     uint32_t child[BVH_WIDTH]; /* a BvhRef */
 } BvhNode;
 
-/* Child references. Inner: index of a BvhNode. Leaf (BVH_LEAF set): a run of 1 to 8
- * triangle blocks or, with BVH_SPHERES set, of 1 to 8 spheres; leaves hold one kind only,
- * so the reference says everything traversal needs without another memory access. */
+/* Child references. Inner: the unit (Bvh.units) where a BvhNode starts. Leaf (BVH_LEAF
+ * set): a run of 1 to 8 triangle blocks from the unit given, or, with BVH_SPHERES set, of
+ * 1 to 8 spheres from the index given; leaves hold one kind only, so the reference says
+ * everything traversal needs without another memory access. */
 #define BVH_LEAF 0x80000000u
 #define BVH_SPHERES 0x40000000u
 #define BVH_COUNT_SHIFT 27 /* count - 1, three bits */
@@ -41,7 +42,7 @@ static inline uint32_t bvh_ref_count(uint32_t ref) { return ((ref >> BVH_COUNT_S
 
 /* Four triangles' vertices in SoA form, v[vertex][axis][lane], for one SSE watertight
  * test; indexing by axis lets the per-ray axis permutation pick rows. Unused lanes have
- * id BVH_NO_PRIM and NaN vertices. */
+ * id BVH_NO_PRIM and NaN vertices. 160 bytes (5 units). */
 typedef struct BvhTriBlock {
     float v[3][3][4];
     uint32_t id[4]; /* scene primitive ids */
@@ -54,10 +55,16 @@ typedef struct BvhSphere {
     uint32_t id;
 } BvhSphere;
 
+/* Nodes and triangle blocks share one array of 32-byte units, depth first: a node, then
+ * each child in slot order (a leaf's blocks, or an inner child's node and everything
+ * below it). A node's leaves thus sit right after it in memory, where the load that
+ * reaches them is more likely to find its DRAM page open or its lines prefetched than in
+ * an array of its own (Embree allocates nodes and leaves from one pool, in build order). */
+#define BVH_UNIT 32u
 typedef struct Bvh {
-    BvhNode *nodes; /* nodes[0] is the root (also when the whole scene is one leaf) */
+    unsigned char *units; /* the root node is at unit 0 (also when the scene is one leaf) */
+    size_t num_units;
     int num_nodes;
-    BvhTriBlock *blocks;
     int num_blocks;
     BvhSphere *spheres;
     int num_spheres;
@@ -65,6 +72,15 @@ typedef struct Bvh {
     int num_prims;
     BBox bounds;
 } Bvh;
+
+static inline const BvhNode *bvh_node(const Bvh *bvh, uint32_t ref)
+{
+    return (const BvhNode *)(const void *)(bvh->units + (size_t)ref * BVH_UNIT);
+}
+static inline const BvhTriBlock *bvh_blocks(const Bvh *bvh, uint32_t index)
+{
+    return (const BvhTriBlock *)(const void *)(bvh->units + (size_t)index * BVH_UNIT);
+}
 
 /* Zero primitives is valid (every ray misses). The build runs on all online CPUs; the
  * tree does not depend on how many. */

@@ -210,10 +210,23 @@ static BBox slot_box(const BvhNode *n, int i)
 /* Unused block lanes carry BVH_NO_PRIM. */
 static bool lane_used(const BvhTriBlock *b, int l) { return b->id[l] != BVH_NO_PRIM; }
 
+/* Marks the n units from `first` as used by one node or block: every unit of the array
+ * belongs to exactly one of them. */
+static void cover_units(const Bvh *bvh, int *cover, size_t first, size_t n)
+{
+    assert_true(first + n <= bvh->num_units);
+    for (size_t u = first; u < first + n; u++) {
+        if (cover[u] != 0) fail_msg("unit %zu is used twice", u);
+        cover[u] = 1;
+    }
+}
+
 /* Checks one leaf reference against its slot box: every triangle lane and sphere is a
  * scene primitive stored exactly as the scalar tests would see it, inside the box, and
- * the leaf holds one kind only. Counts the ids seen, and the blocks / spheres used. */
-static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, int *seen_ids, int *seen_items)
+ * the leaf holds one kind only. Counts the ids seen, the spheres used (seen_items) and
+ * the units of the blocks (cover). */
+static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, int *seen_ids, int *seen_items,
+                       int *cover)
 {
     uint32_t first = bvh_ref_index(ref), count = bvh_ref_count(ref);
     assert_true(count >= 1 && count <= 8);
@@ -224,7 +237,7 @@ static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, in
             int id = (int)sp->id;
             assert_true(id >= s->num_tris && id < s->num_tris + s->num_spheres);
             seen_ids[id]++;
-            seen_items[bvh->num_blocks + (int)si]++;
+            seen_items[si]++;
             const Sphere *src = &s->spheres[id - s->num_tris];
             assert_true(sp->center.x == src->center.x && sp->center.y == src->center.y &&
                         sp->center.z == src->center.z && sp->radius == src->radius);
@@ -233,10 +246,9 @@ static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, in
         return;
     }
     assert_true(count <= 2); /* at most 8 triangles per leaf */
-    assert_true((int)(first + count) <= bvh->num_blocks);
-    for (uint32_t bi = first; bi < first + count; bi++) {
-        const BvhTriBlock *b = &bvh->blocks[bi];
-        seen_items[bi]++;
+    cover_units(bvh, cover, first, (size_t)count * (sizeof(BvhTriBlock) / BVH_UNIT));
+    for (uint32_t bi = 0; bi < count; bi++) {
+        const BvhTriBlock *b = bvh_blocks(bvh, first) + bi;
         assert_true(lane_used(b, 0));
         for (int l = 0; l < 4; l++) {
             if (!lane_used(b, l)) continue;
@@ -252,14 +264,16 @@ static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, in
     }
 }
 
-/* Checks the 8-wide tree below wide node `node`, whose own box (its slot in the parent)
- * is `box`: every slot is empty (NaN bounds), a leaf or a later wide node,
+/* Checks the 8-wide tree below wide node `node` (a unit index), whose own box (its slot in
+ * the parent) is `box`: every slot is empty (NaN bounds), a leaf or a later wide node,
  * and each slot's box lies in its parent's and holds its primitives. Returns the depth
  * below. This mirrors the layout in bvh.h and must follow it when it changes. */
-static int check_node(const Bvh *bvh, const Soup *s, int node, BBox box, int depth, int *seen_ids, int *seen_items)
+static int check_node(const Bvh *bvh, const Soup *s, int node, BBox box, int depth, int *seen_ids, int *seen_items,
+                      int *cover)
 {
-    assert_true(node >= 0 && node < bvh->num_nodes);
-    const BvhNode *n = &bvh->nodes[node];
+    assert_true(node >= 0);
+    cover_units(bvh, cover, (size_t)node, sizeof(BvhNode) / BVH_UNIT);
+    const BvhNode *n = bvh_node(bvh, (uint32_t)node);
     assert_true(((uintptr_t)n & 31u) == 0u);
     int d = depth, used = 0;
     for (int i = 0; i < BVH_WIDTH; i++) {
@@ -272,11 +286,11 @@ static int check_node(const Bvh *bvh, const Soup *s, int node, BBox box, int dep
         used++;
         if (!box_contains(box, sb)) fail_msg("node %d slot %d: box outside its parent's", node, i);
         if (bvh_ref_is_leaf(n->child[i])) {
-            check_leaf(bvh, s, n->child[i], sb, seen_ids, seen_items);
+            check_leaf(bvh, s, n->child[i], sb, seen_ids, seen_items, cover);
             d = depth + 1 > d ? depth + 1 : d;
         } else {
             assert_true((int)n->child[i] > node); /* children are laid out after their parent */
-            int dk = check_node(bvh, s, (int)n->child[i], sb, depth + 1, seen_ids, seen_items);
+            int dk = check_node(bvh, s, (int)n->child[i], sb, depth + 1, seen_ids, seen_items, cover);
             d = dk > d ? dk : d;
         }
     }
@@ -293,20 +307,27 @@ static int check_structure(const Bvh *bvh, const Soup *s)
     assert_true(bvh->num_leaves >= 1 && bvh->num_leaves <= n);
     assert_int_equal(bvh->num_spheres, s->num_spheres);
     int *ids = calloc((size_t)n, sizeof *ids);
-    int *items = calloc((size_t)(bvh->num_blocks + bvh->num_spheres), sizeof *items);
+    int *items = calloc((size_t)bvh->num_spheres + 1u, sizeof *items);
+    int *cover = calloc(bvh->num_units, sizeof *cover);
     assert_non_null(ids);
     assert_non_null(items);
+    assert_non_null(cover);
+    assert_int_equal(bvh->num_units, (size_t)bvh->num_nodes * (sizeof(BvhNode) / BVH_UNIT) +
+                                         (size_t)bvh->num_blocks * (sizeof(BvhTriBlock) / BVH_UNIT));
     BBox all = bbox_empty();
     for (int i = 0; i < n; i++) all = bbox_union(all, prim_box(s, i));
     assert_true(box_contains(bvh->bounds, all) && box_contains(all, bvh->bounds)); /* bounds are exact */
     BBox everything = {v3s(-INFINITY), v3s(INFINITY)};
-    int depth = check_node(bvh, s, 0, everything, 0, ids, items);
-    for (int i = 0; i < bvh->num_blocks + bvh->num_spheres; i++)
-        if (items[i] != 1) fail_msg("block or sphere %d is referenced %d times", i, items[i]);
+    int depth = check_node(bvh, s, 0, everything, 0, ids, items, cover);
+    for (int i = 0; i < bvh->num_spheres; i++)
+        if (items[i] != 1) fail_msg("sphere %d is referenced %d times", i, items[i]);
+    for (size_t u = 0; u < bvh->num_units; u++)
+        if (cover[u] != 1) fail_msg("unit %zu belongs to no node or block", u);
     for (int i = 0; i < n; i++)
         if (ids[i] != 1) fail_msg("scene primitive %d appears %d times", i, ids[i]);
     free(ids);
     free(items);
+    free(cover);
     /* Traversal keeps at most 7 siblings per level on its stack (bvh.c's BVH_STACK). */
     assert_true(7 * depth + 1 < 7 * (60 + 33) + 1);
     return depth;
