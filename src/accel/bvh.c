@@ -344,9 +344,9 @@ typedef struct Emitter {
     size_t cursor; /* units written */
 } Emitter;
 
-_Static_assert(sizeof(BvhNode) == 7 * BVH_UNIT, "a node is 7 units");
-_Static_assert(sizeof(BvhTriBlock) == 5 * BVH_UNIT, "a triangle block is 5 units");
-enum { NODE_UNITS = 7, BLOCK_UNITS = 5 };
+_Static_assert(sizeof(BvhNode) % BVH_UNIT == 0 && sizeof(BvhTriBlock) % BVH_UNIT == 0,
+               "nodes and blocks are whole units");
+enum { NODE_UNITS = sizeof(BvhNode) / BVH_UNIT, BLOCK_UNITS = sizeof(BvhTriBlock) / BVH_UNIT };
 
 static inline void *unit_at(Emitter *e, size_t u) { return e->out->units + u * BVH_UNIT; }
 
@@ -523,7 +523,6 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     } else {
         collapse(&e, 0, 0);
     }
-    bvh->num_units = e.cursor;
     bvh->num_prims = n;
     bvh->bounds = root;
     free(bp);
@@ -546,7 +545,7 @@ void bvh_free(Bvh *bvh)
 
 size_t bvh_memory_bytes(const Bvh *bvh)
 {
-    return bvh->num_units * BVH_UNIT + (size_t)bvh->num_spheres * sizeof(BvhSphere);
+    return bvh_num_units(bvh) * BVH_UNIT + (size_t)bvh->num_spheres * sizeof(BvhSphere);
 }
 
 /* ------------------------------------------------------------------ traversal */

@@ -63,7 +63,6 @@ typedef struct BvhSphere {
 #define BVH_UNIT 32u
 typedef struct Bvh {
     unsigned char *units; /* the root node is at unit 0 (also when the scene is one leaf) */
-    size_t num_units;
     int num_nodes;
     int num_blocks;
     BvhSphere *spheres;
@@ -73,6 +72,12 @@ typedef struct Bvh {
     BBox bounds;
 } Bvh;
 
+/* Units in use: every node and block, nothing else. */
+static inline size_t bvh_num_units(const Bvh *bvh)
+{
+    return (size_t)bvh->num_nodes * (sizeof(BvhNode) / BVH_UNIT) +
+           (size_t)bvh->num_blocks * (sizeof(BvhTriBlock) / BVH_UNIT);
+}
 static inline const BvhNode *bvh_node(const Bvh *bvh, uint32_t ref)
 {
     return (const BvhNode *)(const void *)(bvh->units + (size_t)ref * BVH_UNIT);

@@ -256,7 +256,8 @@ void vcm_grid_build(VcmIteration *it, size_t n, uint32_t cells, uint32_t *cell_s
         uint32_t c = cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
                                cell_coord(p.z, lo.z, it->inv_cell));
         const VcmVertex *v = &it->vertices[i];
-        cell_vertices[cell_start[c]++] = (VcmMergeVertex){v->p, v->w_prev, v->beta, v->d_vcm, v->d_vm, v->bounces};
+        cell_vertices[cell_start[c]++] = (VcmMergeVertex){
+            .p = v->p, .w_prev = v->w_prev, .beta = v->beta, .d_vcm = v->d_vcm, .d_vm = v->d_vm, .bounces = v->bounces};
     }
     for (uint32_t c = cells; c > 0; c--) cell_start[c] = cell_start[c - 1];
     cell_start[0] = 0;

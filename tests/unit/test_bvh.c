@@ -214,7 +214,7 @@ static bool lane_used(const BvhTriBlock *b, int l) { return b->id[l] != BVH_NO_P
  * belongs to exactly one of them. */
 static void cover_units(const Bvh *bvh, int *cover, size_t first, size_t n)
 {
-    assert_true(first + n <= bvh->num_units);
+    assert_true(first + n <= bvh_num_units(bvh));
     for (size_t u = first; u < first + n; u++) {
         if (cover[u] != 0) fail_msg("unit %zu is used twice", u);
         cover[u] = 1;
@@ -308,12 +308,10 @@ static int check_structure(const Bvh *bvh, const Soup *s)
     assert_int_equal(bvh->num_spheres, s->num_spheres);
     int *ids = calloc((size_t)n, sizeof *ids);
     int *items = calloc((size_t)bvh->num_spheres + 1u, sizeof *items);
-    int *cover = calloc(bvh->num_units, sizeof *cover);
+    int *cover = calloc(bvh_num_units(bvh), sizeof *cover);
     assert_non_null(ids);
     assert_non_null(items);
     assert_non_null(cover);
-    assert_int_equal(bvh->num_units, (size_t)bvh->num_nodes * (sizeof(BvhNode) / BVH_UNIT) +
-                                         (size_t)bvh->num_blocks * (sizeof(BvhTriBlock) / BVH_UNIT));
     BBox all = bbox_empty();
     for (int i = 0; i < n; i++) all = bbox_union(all, prim_box(s, i));
     assert_true(box_contains(bvh->bounds, all) && box_contains(all, bvh->bounds)); /* bounds are exact */
@@ -321,7 +319,7 @@ static int check_structure(const Bvh *bvh, const Soup *s)
     int depth = check_node(bvh, s, 0, everything, 0, ids, items, cover);
     for (int i = 0; i < bvh->num_spheres; i++)
         if (items[i] != 1) fail_msg("sphere %d is referenced %d times", i, items[i]);
-    for (size_t u = 0; u < bvh->num_units; u++)
+    for (size_t u = 0; u < bvh_num_units(bvh); u++)
         if (cover[u] != 1) fail_msg("unit %zu belongs to no node or block", u);
     for (int i = 0; i < n; i++)
         if (ids[i] != 1) fail_msg("scene primitive %d appears %d times", i, ids[i]);
