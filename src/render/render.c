@@ -164,6 +164,15 @@ static double now_seconds(void)
  * boundaries decide the order in which splats are added. */
 enum { LIGHT_CHUNK = 1024 };
 
+/* What one light chunk writes: its splats and, for BDPT/VCM, its light vertices. Each on
+ * cache lines of its own: the two threads trace neighbouring chunks and bump their lists'
+ * counts on every splat and vertex, and with the lists packed in an array those counts
+ * shared a line between cores (false sharing; docs/benchmarks.md has the figures). */
+typedef struct ChunkOut {
+    _Alignas(64) SplatList splats;
+    VcmVertexList verts;
+} ChunkOut;
+
 typedef struct RenderJob {
     const Scene *scene;
     Film *film;
@@ -190,7 +199,7 @@ typedef struct RenderJob {
     LightParams light_params;
     int iteration;     /* in progress */
     int light_paths;   /* per iteration: width x height */
-    SplatList *splats; /* one per chunk, reused by every iteration */
+    ChunkOut *chunks;  /* one per chunk, reused by every iteration */
     double *iteration_rgb; /* the iteration's image, width x height x 3 */
     double last_progress;  /* when progress was last reported: iterations can be short */
     /* BDPT / VCM only (with light = true) */
@@ -198,7 +207,6 @@ typedef struct RenderJob {
     VcmParams vcm_params;
     float vcm_radius;          /* the first iteration's merging radius */
     VcmIteration vcm_it;       /* the iteration in progress */
-    VcmVertexList *vcm_lists;  /* one per chunk */
     uint32_t *vcm_path_count;  /* light_paths: vertices each path stored */
     uint32_t *vcm_path_start;  /* light_paths + 1 */
     VcmVertex *vcm_vertices;   /* the iteration's, concatenated */
@@ -290,12 +298,12 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
 
 static void light_chunk(RenderJob *job, Worker *w, int chunk)
 {
-    SplatList *out = &job->splats[chunk];
+    SplatList *out = &job->chunks[chunk].splats;
     out->n = 0;
     int first = chunk * LIGHT_CHUNK;
     int last = first + LIGHT_CHUNK < job->light_paths ? first + LIGHT_CHUNK : job->light_paths;
     if (job->vcm) {
-        VcmVertexList *verts = &job->vcm_lists[chunk];
+        VcmVertexList *verts = &job->chunks[chunk].verts;
         verts->n = 0;
         for (int i = first; i < last; i++) {
             Pcg32 rng;
@@ -323,8 +331,8 @@ static int vcm_gather(RenderJob *job)
 {
     size_t total = 0;
     for (int c = 0; c < job->num_chunks; c++) {
-        if (job->vcm_lists[c].oom) return 0;
-        total += job->vcm_lists[c].n;
+        if (job->chunks[c].verts.oom) return 0;
+        total += job->chunks[c].verts.n;
     }
     if (total > UINT32_MAX - 1) return 0;
     if (total > job->vcm_cap) {
@@ -342,9 +350,9 @@ static int vcm_gather(RenderJob *job)
     }
     size_t at = 0;
     for (int c = 0; c < job->num_chunks; c++) {
-        if (job->vcm_lists[c].n)
-            memcpy(job->vcm_vertices + at, job->vcm_lists[c].v, job->vcm_lists[c].n * sizeof *job->vcm_vertices);
-        at += job->vcm_lists[c].n;
+        if (job->chunks[c].verts.n)
+            memcpy(job->vcm_vertices + at, job->chunks[c].verts.v, job->chunks[c].verts.n * sizeof *job->vcm_vertices);
+        at += job->chunks[c].verts.n;
     }
     uint32_t *ps = job->vcm_path_start;
     ps[0] = 0;
@@ -375,7 +383,7 @@ static void light_merge_band(RenderJob *job, int unit)
     double *rgb = job->iteration_rgb;
     /* BDPT/VCM: the camera pass already wrote its pixel samples there. */
     if (!job->vcm) memset(rgb + 3 * lo, 0, 3 * (hi - lo) * sizeof *rgb);
-    for (int c = 0; c < job->num_chunks; c++) film_add_splats_band(&job->splats[c], fr, rgb, scale, unit);
+    for (int c = 0; c < job->num_chunks; c++) film_add_splats_band(&job->chunks[c].splats, fr, rgb, scale, unit);
     for (size_t p = lo; p < hi; p++)
         film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
 }
@@ -468,7 +476,7 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
         if (!run_pass(job, workers, threads, st, t0, f0, job->vcm ? 0.5 * f1 : f1))
             return CST_ERR_INTERNAL;
         for (int c = 0; c < job->num_chunks; c++)
-            if (job->splats[c].oom) return CST_ERR_OOM;
+            if (job->chunks[c].splats.oom) return CST_ERR_OOM;
         if (job->vcm) {
             if (!vcm_gather(job)) return CST_ERR_OOM;
             /* One camera path per pixel: sample `iteration` of every pixel. */
@@ -488,21 +496,20 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
 
 static void light_free(RenderJob *job)
 {
-    if (job->splats)
-        for (int c = 0; c < job->num_chunks; c++) splat_list_free(&job->splats[c]);
-    if (job->vcm_lists)
-        for (int c = 0; c < job->num_chunks; c++) vcm_vertex_list_free(&job->vcm_lists[c]);
-    free(job->splats);
+    if (job->chunks)
+        for (int c = 0; c < job->num_chunks; c++) {
+            splat_list_free(&job->chunks[c].splats);
+            vcm_vertex_list_free(&job->chunks[c].verts);
+        }
+    free(job->chunks);
     free(job->iteration_rgb);
-    free(job->vcm_lists);
     free(job->vcm_path_count);
     free(job->vcm_path_start);
     free(job->vcm_vertices);
     free(job->vcm_cell_start);
     free(job->vcm_cell_items);
-    job->splats = NULL;
+    job->chunks = NULL;
     job->iteration_rgb = NULL;
-    job->vcm_lists = NULL;
     job->vcm_path_count = job->vcm_path_start = NULL;
     job->vcm_vertices = NULL;
     job->vcm_cell_start = NULL;
@@ -517,15 +524,15 @@ static int light_alloc(RenderJob *job)
     size_t pixels = (size_t)job->film->width * (size_t)job->film->height;
     /* Zeroed: BDPT/VCM camera passes over a crop never write the pixels outside it. */
     job->iteration_rgb = calloc(3 * pixels, sizeof *job->iteration_rgb);
-    job->splats = calloc((size_t)job->num_chunks, sizeof *job->splats);
-    if (!job->iteration_rgb || !job->splats) return 0;
+    job->chunks = aligned_alloc(_Alignof(ChunkOut), (size_t)job->num_chunks * sizeof *job->chunks);
+    if (!job->iteration_rgb || !job->chunks) return 0;
+    memset(job->chunks, 0, (size_t)job->num_chunks * sizeof *job->chunks);
     for (int c = 0; c < job->num_chunks; c++)
-        if (!splat_list_init(&job->splats[c], 4 * (size_t)LIGHT_CHUNK)) return 0;
+        if (!splat_list_init(&job->chunks[c].splats, 4 * (size_t)LIGHT_CHUNK)) return 0;
     if (job->vcm) {
-        job->vcm_lists = calloc((size_t)job->num_chunks, sizeof *job->vcm_lists);
         job->vcm_path_count = calloc(pixels, sizeof *job->vcm_path_count);
         job->vcm_path_start = calloc(pixels + 1, sizeof *job->vcm_path_start);
-        if (!job->vcm_lists || !job->vcm_path_count || !job->vcm_path_start) return 0;
+        if (!job->vcm_path_count || !job->vcm_path_start) return 0;
     }
     return 1;
 }
@@ -709,7 +716,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     pthread_cond_destroy(&job->done);
     uint64_t splats_nonfinite = 0;
     if (job->light)
-        for (int c = 0; c < job->num_chunks; c++) splats_nonfinite += job->splats[c].nonfinite;
+        for (int c = 0; c < job->num_chunks; c++) splats_nonfinite += job->chunks[c].splats.nonfinite;
     light_free(job);
     photon_maps_free(&job->photon_maps);
     if (status != CST_OK) {
