@@ -230,37 +230,53 @@ static inline int cell_coord(float p, float lo, float inv_cell)
     return (int)floorf((p - lo) * inv_cell);
 }
 
-void vcm_grid_build(VcmIteration *it, size_t n, uint32_t cells, uint32_t *cell_start,
-                    VcmMergeVertex *cell_vertices)
+void vcm_grid_init(VcmIteration *it, Vec3 lo, uint32_t cells, uint32_t *cell_start, VcmMergeVertex *cell_vertices)
 {
     it->cells = cells;
     it->cell_start = cell_start;
     it->cell_vertices = cell_vertices;
-    Vec3 lo = v3(INFINITY, INFINITY, INFINITY);
-    for (size_t i = 0; i < n; i++) lo = v3_min(lo, it->vertices[i].p);
-    it->grid_lo = n ? lo : v3(0.0f, 0.0f, 0.0f);
+    it->grid_lo = lo;
     it->inv_cell = 1.0f / (2.0f * it->radius);
-    /* A counting sort by cell, stable in vertex order: the order in which merges are
-     * summed is then a function of the iteration alone. */
-    memset(cell_start, 0, ((size_t)cells + 1) * sizeof *cell_start);
+    cell_start[0] = 0;
+}
+
+uint32_t vcm_grid_cell(const VcmIteration *it, Vec3 p)
+{
+    const Vec3 lo = it->grid_lo;
+    return cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
+                     cell_coord(p.z, lo.z, it->inv_cell));
+}
+
+/* The sort is a counting sort by bucket, stable in vertex order: the order in which merges
+ * are summed is then a function of the iteration alone. A range [c0, c1) owns
+ * cell_start[c0 + 1 .. c1] (the ends of its buckets; entry 0 is vcm_grid_init's), so
+ * ranges never write each other's entries. */
+size_t vcm_grid_count(const uint32_t *cell_of, size_t n, uint32_t c0, uint32_t c1, uint32_t *cell_start)
+{
+    memset(cell_start + c0 + 1, 0, (size_t)(c1 - c0) * sizeof *cell_start);
+    const uint32_t width = c1 - c0;
+    for (size_t i = 0; i < n; i++)
+        if (cell_of[i] - c0 < width) cell_start[cell_of[i] + 1]++;
+    uint32_t sum = 0;
+    for (uint32_t c = c0 + 1; c <= c1; c++) sum = cell_start[c] += sum;
+    return sum;
+}
+
+void vcm_grid_fill(const VcmVertex *vertices, const uint32_t *cell_of, size_t n, uint32_t c0, uint32_t c1,
+                   uint32_t base, uint32_t *cell_start, VcmMergeVertex *cell_vertices)
+{
+    /* cell_start[c + 1] becomes bucket c's fill cursor (its global start), and ends as its
+     * end, the final value: no pass restores anything. */
+    for (uint32_t c = c1; c > c0 + 1; c--) cell_start[c] = base + cell_start[c - 1];
+    if (c1 > c0) cell_start[c0 + 1] = base;
+    const uint32_t width = c1 - c0;
     for (size_t i = 0; i < n; i++) {
-        Vec3 p = it->vertices[i].p;
-        uint32_t c = cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
-                               cell_coord(p.z, lo.z, it->inv_cell));
-        cell_start[c + 1]++;
-    }
-    for (uint32_t c = 0; c < cells; c++) cell_start[c + 1] += cell_start[c];
-    /* cell_start[c] doubles as the fill cursor, then is restored by one shift. */
-    for (size_t i = 0; i < n; i++) {
-        Vec3 p = it->vertices[i].p;
-        uint32_t c = cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
-                               cell_coord(p.z, lo.z, it->inv_cell));
-        const VcmVertex *v = &it->vertices[i];
-        cell_vertices[cell_start[c]++] = (VcmMergeVertex){
+        uint32_t c = cell_of[i];
+        if (c - c0 >= width) continue;
+        const VcmVertex *v = &vertices[i];
+        cell_vertices[cell_start[c + 1]++] = (VcmMergeVertex){
             .p = v->p, .w_prev = v->w_prev, .beta = v->beta, .d_vcm = v->d_vcm, .d_vm = v->d_vm, .bounces = v->bounces};
     }
-    for (uint32_t c = cells; c > 0; c--) cell_start[c] = cell_start[c - 1];
-    cell_start[0] = 0;
 }
 
 /* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF

@@ -171,7 +171,13 @@ enum { LIGHT_CHUNK = 1024 };
 typedef struct ChunkOut {
     _Alignas(64) SplatList splats;
     VcmVertexList verts;
+    Vec3 lo;      /* VCM: the lowest corner of the vertices' positions */
+    size_t first; /* BDPT/VCM: where the vertices go in the iteration's array */
 } ChunkOut;
+
+/* Bucket ranges of the merging grid's parallel sort (vcm.h): a few per thread, for
+ * balance; any number gives the same grid. */
+enum { GRID_RANGES_MAX = 64 };
 
 typedef struct RenderJob {
     const Scene *scene;
@@ -192,7 +198,10 @@ typedef struct RenderJob {
      * count: num_tiles or num_chunks. */
     int tiles_x, tiles_y, num_tiles, num_chunks, units;
     int crop_x0, crop_x1, crop_y0, crop_y1; /* the pixels camera passes cover (settings crop) */
-    enum { PASS_TILES, PASS_CHUNKS, PASS_MERGE } pass_kind; /* what the pass's units are */
+    /* What the pass's units are: camera tiles, light chunks, film bands of the splat merge,
+     * and for BDPT/VCM between the light and the camera pass, chunks whose vertices are
+     * gathered, then bucket ranges of the merging grid counted and filled. */
+    enum { PASS_TILES, PASS_CHUNKS, PASS_MERGE, PASS_GATHER, PASS_GRID_COUNT, PASS_GRID_FILL } pass_kind;
     int merge_units;  /* row bands of a merge pass (SplatFrame) */
     /* light tracing, BDPT and VCM: iterations of width x height light paths */
     bool light;
@@ -210,6 +219,10 @@ typedef struct RenderJob {
     uint32_t *vcm_path_count;  /* light_paths: vertices each path stored */
     uint32_t *vcm_path_start;  /* light_paths + 1 */
     VcmVertex *vcm_vertices;   /* the iteration's, concatenated */
+    uint32_t *vcm_cell_of;     /* VCM: each vertex's grid bucket */
+    size_t vcm_total;          /* vertices this iteration */
+    int grid_ranges;
+    uint32_t grid_base[GRID_RANGES_MAX + 1]; /* per range: its vertices, then the count below it */
     uint32_t *vcm_cell_start;
     VcmMergeVertex *vcm_cell_items;
     size_t vcm_cap;            /* capacity of vcm_vertices and vcm_cell_items */
@@ -314,6 +327,12 @@ static void light_chunk(RenderJob *job, Worker *w, int chunk)
                             &w->rays);
             job->vcm_path_count[i] = (uint32_t)(verts->n - before);
         }
+        /* The grid's corner, reduced over the chunks by vcm_prepare (min is exact in any
+         * order). */
+        Vec3 lo = v3(INFINITY, INFINITY, INFINITY);
+        if (job->vcm_params.merge)
+            for (size_t k = 0; k < verts->n; k++) lo = v3_min(lo, verts->v[k].p);
+        job->chunks[chunk].lo = lo;
     } else {
         for (int i = first; i < last; i++) {
             Pcg32 rng;
@@ -325,14 +344,19 @@ static void light_chunk(RenderJob *job, Worker *w, int chunk)
 }
 
 /* Between the light and the camera pass of a BDPT/VCM iteration: the chunks' vertex
- * lists concatenated in chunk order (so path i's vertices are a run starting at
- * path_start[i]), and for VCM the merging grid over them. Returns 0 on OOM. */
-static int vcm_gather(RenderJob *job)
+ * lists are concatenated in chunk order (so path i's vertices are a run starting at
+ * path_start[i]), and for VCM the merging grid is built over them. What is serial is
+ * here: sizes, offsets and the grid's corner; the copying and sorting are passes
+ * (vcm_gather_chunk, vcm_grid_range). Returns 0 on OOM. */
+static int vcm_prepare(RenderJob *job, int threads)
 {
     size_t total = 0;
+    Vec3 lo = v3(INFINITY, INFINITY, INFINITY);
     for (int c = 0; c < job->num_chunks; c++) {
         if (job->chunks[c].verts.oom) return 0;
+        job->chunks[c].first = total;
         total += job->chunks[c].verts.n;
+        lo = v3_min(lo, job->chunks[c].lo);
     }
     if (total > UINT32_MAX - 1) return 0;
     if (total > job->vcm_cap) {
@@ -346,22 +370,48 @@ static int vcm_gather(RenderJob *job)
         uint32_t *starts = realloc(job->vcm_cell_start, (cap + 1) * sizeof *starts);
         if (!starts) return 0;
         job->vcm_cell_start = starts;
+        uint32_t *cell_of = realloc(job->vcm_cell_of, cap * sizeof *cell_of);
+        if (!cell_of) return 0;
+        job->vcm_cell_of = cell_of;
         job->vcm_cap = cap;
     }
-    size_t at = 0;
-    for (int c = 0; c < job->num_chunks; c++) {
-        if (job->chunks[c].verts.n)
-            memcpy(job->vcm_vertices + at, job->chunks[c].verts.v, job->chunks[c].verts.n * sizeof *job->vcm_vertices);
-        at += job->chunks[c].verts.n;
-    }
+    job->vcm_total = total;
     uint32_t *ps = job->vcm_path_start;
     ps[0] = 0;
     for (int i = 0; i < job->light_paths; i++) ps[i + 1] = ps[i] + job->vcm_path_count[i];
     job->vcm_it.vertices = job->vcm_vertices;
     job->vcm_it.path_start = ps;
-    if (job->vcm_params.merge && total > 0)
-        vcm_grid_build(&job->vcm_it, total, (uint32_t)total, job->vcm_cell_start, job->vcm_cell_items);
+    job->vcm_it.cells = 0;
+    job->grid_ranges = 0;
+    if (job->vcm_params.merge && total > 0) {
+        vcm_grid_init(&job->vcm_it, lo, (uint32_t)total, job->vcm_cell_start, job->vcm_cell_items);
+        int ranges = 4 * threads;
+        job->grid_ranges = ranges < 1 ? 1 : ranges > GRID_RANGES_MAX ? GRID_RANGES_MAX : ranges;
+    }
     return 1;
+}
+
+static void vcm_gather_chunk(RenderJob *job, int chunk)
+{
+    const VcmVertexList *l = &job->chunks[chunk].verts;
+    size_t first = job->chunks[chunk].first;
+    if (l->n) memcpy(job->vcm_vertices + first, l->v, l->n * sizeof *l->v);
+    if (job->grid_ranges)
+        for (size_t k = 0; k < l->n; k++) job->vcm_cell_of[first + k] = vcm_grid_cell(&job->vcm_it, l->v[k].p);
+}
+
+/* Bucket range `range` of the merging grid: counted in a PASS_GRID_COUNT, sorted in a
+ * PASS_GRID_FILL. */
+static void vcm_grid_range(RenderJob *job, int range)
+{
+    const uint32_t cells = job->vcm_it.cells;
+    uint32_t c0 = (uint32_t)((uint64_t)cells * (uint64_t)range / (uint64_t)job->grid_ranges);
+    uint32_t c1 = (uint32_t)((uint64_t)cells * (uint64_t)(range + 1) / (uint64_t)job->grid_ranges);
+    if (job->pass_kind == PASS_GRID_COUNT)
+        job->grid_base[range] = (uint32_t)vcm_grid_count(job->vcm_cell_of, job->vcm_total, c0, c1, job->vcm_cell_start);
+    else
+        vcm_grid_fill(job->vcm_vertices, job->vcm_cell_of, job->vcm_total, c0, c1, job->grid_base[range],
+                      job->vcm_cell_start, job->vcm_cell_items);
 }
 
 /* Adds the finished iteration to the film as one sample per pixel, for the rows of one
@@ -397,6 +447,8 @@ static void *worker_main(void *arg)
         if (tile >= job->units) break;
         if (job->pass_kind == PASS_CHUNKS) light_chunk(job, w, tile);
         else if (job->pass_kind == PASS_MERGE) light_merge_band(job, tile);
+        else if (job->pass_kind == PASS_GATHER) vcm_gather_chunk(job, tile);
+        else if (job->pass_kind == PASS_GRID_COUNT || job->pass_kind == PASS_GRID_FILL) vcm_grid_range(job, tile);
         else render_tile(job, w, tile);
         if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->units) {
             pthread_mutex_lock(&job->lock);
@@ -478,7 +530,24 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
         for (int c = 0; c < job->num_chunks; c++)
             if (job->chunks[c].splats.oom) return CST_ERR_OOM;
         if (job->vcm) {
-            if (!vcm_gather(job)) return CST_ERR_OOM;
+            if (!vcm_prepare(job, threads)) return CST_ERR_OOM;
+            job->units = job->num_chunks;
+            job->pass_kind = PASS_GATHER;
+            if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
+            if (job->grid_ranges) {
+                job->units = job->grid_ranges;
+                job->pass_kind = PASS_GRID_COUNT;
+                if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
+                /* Each range's vertices into the count of all ranges below it. */
+                uint32_t below = 0;
+                for (int r = 0; r < job->grid_ranges; r++) {
+                    uint32_t n = job->grid_base[r];
+                    job->grid_base[r] = below;
+                    below += n;
+                }
+                job->pass_kind = PASS_GRID_FILL;
+                if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
+            }
             /* One camera path per pixel: sample `iteration` of every pixel. */
             job->pass_first = job->iteration;
             job->pass_spp = 1;
@@ -507,12 +576,14 @@ static void light_free(RenderJob *job)
     free(job->vcm_path_start);
     free(job->vcm_vertices);
     free(job->vcm_cell_start);
+    free(job->vcm_cell_of);
     free(job->vcm_cell_items);
     job->chunks = NULL;
     job->iteration_rgb = NULL;
     job->vcm_path_count = job->vcm_path_start = NULL;
     job->vcm_vertices = NULL;
     job->vcm_cell_start = NULL;
+    job->vcm_cell_of = NULL;
     job->vcm_cell_items = NULL;
 }
 

@@ -1,0 +1,137 @@
+/* VCM's merging grid (integrators/vcm.c): the bucket sort that render.c splits into
+ * ranges over threads, against its definition (bucket c holds exactly the vertices whose
+ * cell hashes to c, in vertex order), for partitions of 1 to 97 ranges, empty ranges
+ * included. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/rng.h"
+#include "integrators/vcm.h"
+
+typedef struct SortedGrid {
+    uint32_t *cell_start;
+    VcmMergeVertex *items;
+} SortedGrid;
+
+/* Sorts vertices[0, n) into `cells` buckets with `ranges` ranges, counted then filled, each
+ * step over the ranges in an order that is not the natural one (threads finish in any). */
+static SortedGrid sort_with_ranges(VcmIteration *it, const VcmVertex *v, const uint32_t *cell_of, size_t n,
+                             uint32_t cells, int ranges)
+{
+    SortedGrid g = {malloc((cells + 1) * sizeof *g.cell_start), malloc((n ? n : 1) * sizeof *g.items)};
+    assert_non_null(g.cell_start);
+    assert_non_null(g.items);
+    memset(g.cell_start, 0xab, (cells + 1) * sizeof *g.cell_start); /* no stale zeros to lean on */
+    vcm_grid_init(it, it->grid_lo, cells, g.cell_start, g.items);
+    uint32_t *base = calloc((size_t)ranges, sizeof *base);
+    assert_non_null(base);
+    for (int k = 0; k < ranges; k++) {
+        int r = ranges - 1 - k;
+        uint32_t c0 = (uint32_t)((uint64_t)cells * (uint64_t)r / (uint64_t)ranges);
+        uint32_t c1 = (uint32_t)((uint64_t)cells * (uint64_t)(r + 1) / (uint64_t)ranges);
+        base[r] = (uint32_t)vcm_grid_count(cell_of, n, c0, c1, g.cell_start);
+    }
+    uint32_t below = 0;
+    for (int r = 0; r < ranges; r++) {
+        uint32_t m = base[r];
+        base[r] = below;
+        below += m;
+    }
+    assert_int_equal(below, n);
+    for (int k = 0; k < ranges; k++) {
+        int r = k % 2 ? k / 2 : ranges - 1 - k / 2; /* from both ends inward */
+        uint32_t c0 = (uint32_t)((uint64_t)cells * (uint64_t)r / (uint64_t)ranges);
+        uint32_t c1 = (uint32_t)((uint64_t)cells * (uint64_t)(r + 1) / (uint64_t)ranges);
+        vcm_grid_fill(v, cell_of, n, c0, c1, base[r], g.cell_start, g.items);
+    }
+    free(base);
+    return g;
+}
+
+static void test_sort_against_definition(void **state)
+{
+    (void)state;
+    Pcg32 rng;
+    pcg32_seed(&rng, 2026, 11);
+    const size_t sizes[] = {0, 1, 5, 1000, 20000};
+    const int partitions[] = {1, 2, 3, 7, 64, 97};
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++) {
+        const size_t n = sizes[si];
+        VcmVertex *v = calloc(n ? n : 1, sizeof *v);
+        uint32_t *cell_of = calloc(n ? n : 1, sizeof *cell_of);
+        assert_non_null(v);
+        assert_non_null(cell_of);
+        /* Clustered positions, so that buckets hold from zero to many vertices. */
+        for (size_t i = 0; i < n; i++) {
+            float s = (i % 3 == 0) ? 1.0f : 20.0f;
+            v[i].p = v3(s * pcg32_float(&rng), s * pcg32_float(&rng), s * pcg32_float(&rng));
+            v[i].w_prev = v3(0.0f, 0.0f, 1.0f);
+            v[i].beta = rgb_s((float)i); /* identifies the vertex in the sorted copy */
+            v[i].d_vcm = (float)i;
+            v[i].bounces = (int32_t)(i % 5) + 1;
+        }
+        VcmIteration it;
+        memset(&it, 0, sizeof it);
+        it.radius = 0.25f;
+        it.grid_lo = v3(0.0f, 0.0f, 0.0f);
+        /* More buckets than vertices, and fewer: ranges can then be empty or crowded. */
+        const uint32_t bucket_counts[] = {(uint32_t)n + 1, (uint32_t)(n / 4) + 1};
+        for (int bc = 0; bc < 2; bc++) {
+            const uint32_t cells = bucket_counts[bc];
+            SortedGrid first = {0};
+            for (size_t pi = 0; pi < sizeof partitions / sizeof *partitions; pi++) {
+                it.cells = cells;
+                it.inv_cell = 1.0f / (2.0f * it.radius);
+                for (size_t i = 0; i < n; i++) cell_of[i] = vcm_grid_cell(&it, v[i].p);
+                SortedGrid g = sort_with_ranges(&it, v, cell_of, n, cells, partitions[pi]);
+                /* The definition: bucket c, in vertex order, and every vertex once. */
+                assert_int_equal(g.cell_start[0], 0);
+                assert_int_equal(g.cell_start[cells], n);
+                size_t k = 0;
+                for (uint32_t c = 0; c < cells; c++) {
+                    assert_true(g.cell_start[c] <= g.cell_start[c + 1]);
+                    for (size_t i = 0; i < n; i++) {
+                        if (cell_of[i] != c) continue;
+                        assert_true(k < g.cell_start[c + 1]);
+                        assert_true(k >= g.cell_start[c]);
+                        assert_true(g.items[k].d_vcm == (float)i);
+                        assert_true(g.items[k].bounces == v[i].bounces);
+                        assert_true(g.items[k].p.x == v[i].p.x && g.items[k].p.y == v[i].p.y &&
+                                    g.items[k].p.z == v[i].p.z);
+                        k++;
+                    }
+                    assert_int_equal(k, g.cell_start[c + 1]);
+                }
+                assert_int_equal(k, n);
+                /* Every partition gives the same bytes as the first. */
+                if (pi == 0) {
+                    first = g;
+                } else {
+                    assert_memory_equal(first.cell_start, g.cell_start, (cells + 1) * sizeof *g.cell_start);
+                    if (n) assert_memory_equal(first.items, g.items, n * sizeof *g.items);
+                    free(g.cell_start);
+                    free(g.items);
+                }
+            }
+            free(first.cell_start);
+            free(first.items);
+        }
+        free(v);
+        free(cell_of);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sort_against_definition),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
