@@ -155,9 +155,9 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
     if (!(cos_prev > 0.0f) || !(cos_cam > 0.0f)) return;
     /* f(wo = toward the camera, wi = toward the light) |cos theta_cam|, evaluated the way
      * the camera path sees this vertex (light.c explains the cosine swap). */
-    Rgb f = rgb_scale(bsdf_eval(b, cs.wi, v->w_prev), cos_cam / cos_prev);
+    float pdf_rev, pdf_unused;
+    Rgb f = rgb_scale(bsdf_eval_pdfs(b, cs.wi, v->w_prev, &pdf_rev, &pdf_unused), cos_cam / cos_prev);
     if (rgb_is_black(f)) return;
-    float pdf_rev = bsdf_pdf(b, cs.wi, v->w_prev);
     float cos_theta = v3_dot(v3_neg(cs.wi), cam->forward);
     /* The camera's density of this vertex per unit area, per pixel (tech. rep. eq. 46). */
     float cam_pdf_a = camera_pdf_w(it, cos_theta) * cos_cam / (cs.dist * cs.dist);
@@ -291,9 +291,9 @@ static Rgb connect_to_light(const Scene *s, const VcmIteration *it, const SubPat
     if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
     float cos_x = fabsf(v3_dot(sh->ng, ls.wi));
     if (!(cos_x > 0.0f)) return rgb_s(0.0f);
-    Rgb f = bsdf_eval(b, wo, ls.wi);
+    float bsdf_pdf_fwd, bsdf_pdf_rev;
+    Rgb f = bsdf_eval_pdfs(b, wo, ls.wi, &bsdf_pdf_fwd, &bsdf_pdf_rev);
     if (rgb_is_black(f)) return rgb_s(0.0f);
-    float bsdf_pdf_fwd = bsdf_pdf(b, wo, ls.wi), bsdf_pdf_rev = bsdf_pdf(b, ls.wi, wo);
     float w_light = ls.delta ? 0.0f : mis(bsdf_pdf_fwd / ls.direct_pdf);
     float w_camera = mis(ls.emit_pdf * cos_x / (ls.direct_pdf * ls.cos_light)) *
                      (it->mis_vm + sp->d_vcm + sp->d_vc * mis(bsdf_pdf_rev));
@@ -340,16 +340,16 @@ static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPat
     float cos_x = fabsf(v3_dot(x->ng, d)), cos_y = fabsf(v3_dot(y->ng, d));
     float cos_y_prev = fabsf(v3_dot(y->ng, y->w_prev));
     if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return rgb_s(0.0f);
-    Rgb fx = bsdf_eval(bx, wo, d);
+    float x_fwd, x_rev;
+    Rgb fx = bsdf_eval_pdfs(bx, wo, d, &x_fwd, &x_rev);
     if (rgb_is_black(fx)) return rgb_s(0.0f);
     Bsdf tmp;
     const Bsdf *by = light_bsdf(s, cache, j, y, &tmp);
     /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
      * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */
-    Rgb fy = rgb_scale(bsdf_eval(by, nd, y->w_prev), cos_y / cos_y_prev);
+    float y_fwd, y_rev; /* y's own direction is toward the light: forward is w_prev -> nd */
+    Rgb fy = rgb_scale(bsdf_eval_pdfs(by, nd, y->w_prev, &y_rev, &y_fwd), cos_y / cos_y_prev);
     if (rgb_is_black(fy)) return rgb_s(0.0f);
-    float x_fwd = bsdf_pdf(bx, wo, d), x_rev = bsdf_pdf(bx, d, wo);
-    float y_fwd = bsdf_pdf(by, y->w_prev, nd), y_rev = bsdf_pdf(by, nd, y->w_prev);
     float x_fwd_a = x_fwd * cos_y / dist2; /* the camera subpath reaching y */
     float y_fwd_a = y_fwd * cos_x / dist2; /* the light subpath reaching x */
     float w_light = mis(x_fwd_a) * (it->mis_vm + y->d_vcm + y->d_vc * mis(y_rev));
@@ -405,10 +405,10 @@ static Rgb merge(const VcmParams *vp, const VcmIteration *it, const SubPath *sp,
             float cos_w = fabsf(v3_dot(x->ng, y->w_prev));
             if (!(cos_w > 0.0f)) continue;
             /* A photon from the far side of a thin wall gets f = 0 here. */
-            Rgb f = bsdf_eval(bx, wo, y->w_prev);
+            float x_fwd, x_rev;
+            Rgb f = bsdf_eval_pdfs(bx, wo, y->w_prev, &x_fwd, &x_rev);
             if (rgb_is_black(f)) continue;
             f = rgb_scale(f, 1.0f / cos_w); /* merging wants f without the cosine */
-            float x_fwd = bsdf_pdf(bx, wo, y->w_prev), x_rev = bsdf_pdf(bx, y->w_prev, wo);
             float w_light = y->d_vcm * it->mis_vc + y->d_vm * mis(x_fwd);
             float w_camera = sp->d_vcm * it->mis_vc + sp->d_vm * mis(x_rev);
             float weight = 1.0f / (w_light + 1.0f + w_camera);

@@ -417,6 +417,21 @@ float bsdf_pdf(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
     return pdf_local(b, wo, wi);
 }
 
+Rgb bsdf_eval_pdfs(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, float *pdf_fwd, float *pdf_rev)
+{
+    Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
+    if (!b->shading) {
+        *pdf_fwd = pdf_local(b, wo, wi);
+        *pdf_rev = pdf_local(b, wi, wo);
+        return eval_local(b, wo, wi, BSDF_RADIANCE);
+    }
+    float ng_o = v3_dot(wo_world, b->ng), ng_i = v3_dot(wi_world, b->ng);
+    bool fwd = shading_allows(b, ng_o, ng_i, wo.z, wi.z);
+    *pdf_fwd = fwd ? pdf_local(b, wo, wi) : 0.0f;
+    *pdf_rev = shading_allows(b, ng_i, ng_o, wi.z, wo.z) ? pdf_local(b, wi, wo) : 0.0f;
+    return fwd ? eval_local(b, wo, wi, BSDF_RADIANCE) : rgb_s(0.0f);
+}
+
 bool bsdf_sample(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfSample *out)
 {
     return bsdf_sample_transport(b, wo_world, uc, u, BSDF_RADIANCE, out);

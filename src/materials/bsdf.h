@@ -98,6 +98,10 @@ Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi);
  * the BSDF_RADIANCE case. */
 Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode);
 float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi);
+/* bsdf_eval(b, wo, wi), with bsdf_pdf(b, wo, wi) in *pdf_fwd and bsdf_pdf(b, wi, wo) in
+ * *pdf_rev, bit for bit: what the MIS weight of a bidirectional connection needs, for one
+ * change of frame instead of three (SmallVCM's BSDF::Evaluate returns the same triple). */
+Rgb bsdf_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev);
 /* uc picks a lobe (glass: reflect vs refract), u samples a direction. Returns false for
  * no usable sample (e.g. wo exactly in the tangent plane, a microfacet reflection below
  * the surface: that energy is lost, the single-scattering loss of microfacet models).

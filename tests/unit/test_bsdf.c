@@ -570,6 +570,45 @@ static void test_reciprocity(void **state)
     print_message("reciprocity: %ld pairs, max relative difference %.2g\n", checked, worst);
 }
 
+/* bsdf_eval_pdfs is the three calls it replaces, bit for bit, for every material, with and
+ * without a shading normal (one-sided and two-sided), on directions on both sides. */
+static void test_eval_pdfs_matches_calls(void **state)
+{
+    (void)state;
+    Material mats[24];
+    int nm = 0;
+    mats[nm++] = make_material(MATERIAL_DIFFUSE, 0.0f, 1.0f);
+    for (int r = 0; r < NELEM(ROUGHNESS); r++) {
+        mats[nm++] = make_material(MATERIAL_CONDUCTOR, ROUGHNESS[r], 1.0f);
+        mats[nm++] = make_material(MATERIAL_DIELECTRIC, ROUGHNESS[r], 1.5f);
+    }
+    for (int r = 0; r < NELEM(PLASTIC_ROUGHNESS); r++) mats[nm++] = make_material(MATERIAL_PLASTIC, PLASTIC_ROUGHNESS[r], 1.5f);
+    mats[nm] = make_material(MATERIAL_DIFFUSE, 0.0f, 1.0f);
+    mats[nm++].one_sided = true;
+    Pcg32 rng;
+    pcg32_seed(&rng, 79u, 1u);
+    long nonzero = 0;
+    for (int i = 0; i < nm; i++)
+        for (int shading = 0; shading < 2; shading++) {
+            Bsdf b;
+            Vec3 ng = v3_normalize(v3(0.1f, 0.2f, 1.0f));
+            bsdf_init_shading(&b, &mats[i], shading ? v3_normalize(v3(0.3f, -0.1f, 1.0f)) : ng, ng);
+            for (int k = 0; k < 5000; k++) {
+                Vec3 wo = random_dir(&rng), wi = random_dir(&rng);
+                float fwd, rev;
+                Rgb f = bsdf_eval_pdfs(&b, wo, wi, &fwd, &rev);
+                Rgb f1 = bsdf_eval(&b, wo, wi);
+                float fwd1 = bsdf_pdf(&b, wo, wi), rev1 = bsdf_pdf(&b, wi, wo);
+                if (memcmp(&f, &f1, sizeof f) != 0 || memcmp(&fwd, &fwd1, sizeof fwd) != 0 ||
+                    memcmp(&rev, &rev1, sizeof rev) != 0)
+                    fail_msg("material %d, shading %d: (%g, %g, %g) against (%g, %g, %g)", i, shading, (double)f.r,
+                             (double)fwd, (double)rev, (double)f1.r, (double)fwd1, (double)rev1);
+                nonzero += !rgb_is_black(f) && fwd > 0.0f && rev > 0.0f;
+            }
+        }
+    assert_true(nonzero > 1000); /* the pairs were not all trivially zero */
+}
+
 /* The rough dielectric's transmission: the importance BSDF is the radiance BSDF with wo
  * and wi swapped, f*(wo, wi) = f(wi, wo), and the two differ by etap^2 (etap the IOR of
  * wi's side over wo's), Veach thesis sec. 5.2. */
@@ -646,6 +685,7 @@ int main(void)
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_rough_dielectric_energy_loss),
         cmocka_unit_test(test_reciprocity),
+        cmocka_unit_test(test_eval_pdfs_matches_calls),
         cmocka_unit_test(test_transmission_adjoint),
         cmocka_unit_test(test_plastic_coat_table),
     };
