@@ -360,43 +360,65 @@ static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPat
     return rgb_scale(rgb_mul(rgb_mul(fx, fy), y->beta), weight / dist2);
 }
 
-/* Merging at camera vertex x: the density estimate over every light vertex within the
- * radius, each MIS-weighted (tech. rep. eqs. 42-43), scaled by 1 / (pi r^2 N). */
-static Rgb merge(const VcmParams *vp, const VcmIteration *it, const SubPath *sp, const Bsdf *bx,
-                 const SurfaceHit *x, Vec3 wo, int bounces)
+/* A merging query at one camera vertex, in three steps so that its two rounds of cache
+ * misses overlap the vertex's NEE and connections instead of stalling the path: which
+ * buckets (their bounds prefetched), then where their runs start (the runs prefetched),
+ * then the sum. */
+typedef struct MergeQuery {
+    int nb;
+    uint32_t bucket[8];
+    uint32_t first[8], last[8];
+} MergeQuery;
+
+/* Step 1: the buckets of the cells the ball of radius r around p overlaps. At most 2 x 2
+ * x 2 cells (cells are 2r wide); distinct cells can hash to the same bucket, which must
+ * be visited once. Their bounds are prefetched together: the lookups are independent
+ * cache misses, and issuing them at once overlaps their latency (docs/benchmarks.md). */
+static void merge_plan(const VcmIteration *it, Vec3 p, MergeQuery *q)
 {
-    const float r = it->radius, r2 = r * r;
+    const float r = it->radius;
     int lo[3], hi[3];
-    const float pc[3] = {x->p.x, x->p.y, x->p.z}, gl[3] = {it->grid_lo.x, it->grid_lo.y, it->grid_lo.z};
+    const float pc[3] = {p.x, p.y, p.z}, gl[3] = {it->grid_lo.x, it->grid_lo.y, it->grid_lo.z};
     for (int a = 0; a < 3; a++) {
         lo[a] = cell_coord(pc[a] - r, gl[a], it->inv_cell);
         hi[a] = cell_coord(pc[a] + r, gl[a], it->inv_cell);
     }
-    /* At most 2 x 2 x 2 cells (cells are 2r wide); distinct cells can hash to the same
-     * bucket, which must be visited once. The buckets' bounds and first vertices are
-     * prefetched together before any is read: the lookups are independent cache misses,
-     * and issuing them at once overlaps their latency (measured: docs/benchmarks.md). */
-    uint32_t bucket[8];
-    int nb = 0;
+    q->nb = 0;
     for (int cz = lo[2]; cz <= hi[2]; cz++)
         for (int cy = lo[1]; cy <= hi[1]; cy++)
             for (int cx = lo[0]; cx <= hi[0]; cx++) {
                 uint32_t c = cell_hash(it, cx, cy, cz);
                 bool dup = false;
-                for (int k = 0; k < nb; k++) dup |= bucket[k] == c;
-                if (dup || nb == 8) continue;
-                bucket[nb++] = c;
+                for (int k = 0; k < q->nb; k++) dup |= q->bucket[k] == c;
+                if (dup || q->nb == 8) continue;
+                q->bucket[q->nb++] = c;
                 __builtin_prefetch(&it->cell_start[c]);
             }
-    uint32_t first[8], last[8];
-    for (int b = 0; b < nb; b++) {
-        first[b] = it->cell_start[bucket[b]];
-        last[b] = it->cell_start[bucket[b] + 1];
-        __builtin_prefetch(&it->cell_vertices[first[b]]);
+}
+
+/* Step 2: each bucket's run, prefetched whole (a run is a few vertices, a few lines). */
+static void merge_fetch(const VcmIteration *it, MergeQuery *q)
+{
+    for (int b = 0; b < q->nb; b++) {
+        q->first[b] = it->cell_start[q->bucket[b]];
+        q->last[b] = it->cell_start[q->bucket[b] + 1];
     }
+    for (int b = 0; b < q->nb; b++) {
+        const char *p = (const char *)&it->cell_vertices[q->first[b]];
+        const char *end = (const char *)&it->cell_vertices[q->last[b]];
+        for (int line = 0; line < 8 && p < end; line++, p += 64) __builtin_prefetch(p);
+    }
+}
+
+/* Step 3, merging at camera vertex x: the density estimate over every light vertex within
+ * the radius, each MIS-weighted (tech. rep. eqs. 42-43), scaled by 1 / (pi r^2 N). */
+static Rgb merge(const VcmParams *vp, const VcmIteration *it, const MergeQuery *q, const SubPath *sp,
+                 const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces)
+{
+    const float r = it->radius, r2 = r * r;
     Rgb acc = rgb_s(0.0f);
-    for (int b = 0; b < nb; b++)
-        for (uint32_t k = first[b]; k < last[b]; k++) {
+    for (int b = 0; b < q->nb; b++)
+        for (uint32_t k = q->first[b]; k < q->last[b]; k++) {
             const VcmMergeVertex *y = &it->cell_vertices[k];
             Vec3 dv = v3_sub(y->p, x->p);
             if (v3_dot(dv, dv) > r2) continue;
@@ -479,16 +501,19 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
         Bsdf bsdf;
         scene_bsdf(s, &sh, &bsdf);
         if (!bsdf_is_delta(&bsdf)) {
+            const bool merging = vp->merge && it->cells > 0;
+            MergeQuery mq;
+            if (merging) merge_plan(it, sh.p, &mq);
             if (has_lights)
                 L = rgb_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, rays));
+            if (merging) merge_fetch(it, &mq);
             Rgb c = rgb_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
                 c = rgb_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, rays));
             }
             L = rgb_madd(L, sp.beta, c);
-            if (vp->merge && it->cells > 0)
-                L = rgb_madd(L, sp.beta, merge(vp, it, &sp, &bsdf, &sh, wo, t));
+            if (merging) L = rgb_madd(L, sp.beta, merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));
         }
 
         if (!scatter(&sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
