@@ -28,10 +28,12 @@ enum {
     BVH_MAX_BUILD_THREADS = 16
 };
 /* SAH costs relative to one 4-triangle block test. One node visit tests eight boxes with
- * one AVX slab test. 0.5 measured best of 0.25/0.5/1.0 with 4-wide nodes on the Cornell
- * box (bench_render); docs/benchmarks.md has the 8-wide figures. */
+ * one AVX slab test. 0.3 since the node test picks its planes by the ray's signs: on the
+ * Cornell box's ray sets 1.4 -> 1.75x Embree on primary rays, 1.0 -> 1.2x on secondary
+ * and occlusion rays against 0.5, the light tracer 7% faster on cornell-spheres, and no
+ * change on the meshes (0.1 and 0.2: no better; docs/benchmarks.md). */
 #ifndef SAHT
-#define SAHT 0.5f
+#define SAHT 0.3f
 #endif
 static const float SAH_TRAVERSAL_COST = SAHT;
 static const float SAH_ISECT_COST = 1.0f;
