@@ -248,11 +248,20 @@ uint32_t vcm_grid_cell(const VcmIteration *it, Vec3 p)
 }
 
 /* The sort is a counting sort by bucket, stable in vertex order: the order in which merges
- * are summed is then a function of the iteration alone. A range [c0, c1) owns
- * cell_start[c0 + 1 .. c1] (the ends of its buckets; entry 0 is vcm_grid_init's), so
- * ranges never write each other's entries. */
-size_t vcm_grid_count(const uint32_t *cell_of, size_t n, uint32_t c0, uint32_t c1, uint32_t *cell_start)
+ * are summed is then a function of the iteration alone. Range r of n owns the buckets
+ * [c0, c1) below and cell_start[c0 + 1 .. c1] (the ends of its buckets; entry 0 is
+ * vcm_grid_init's), so ranges never write each other's entries. */
+static void range_buckets(const VcmIteration *it, int range, int ranges, uint32_t *c0, uint32_t *c1)
 {
+    *c0 = (uint32_t)((uint64_t)it->cells * (uint64_t)range / (uint64_t)ranges);
+    *c1 = (uint32_t)((uint64_t)it->cells * (uint64_t)(range + 1) / (uint64_t)ranges);
+}
+
+uint32_t vcm_grid_count(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges,
+                        uint32_t *cell_start)
+{
+    uint32_t c0, c1;
+    range_buckets(it, range, ranges, &c0, &c1);
     memset(cell_start + c0 + 1, 0, (size_t)(c1 - c0) * sizeof *cell_start);
     const uint32_t width = c1 - c0;
     for (size_t i = 0; i < n; i++)
@@ -262,9 +271,22 @@ size_t vcm_grid_count(const uint32_t *cell_of, size_t n, uint32_t c0, uint32_t c
     return sum;
 }
 
-void vcm_grid_fill(const VcmVertex *vertices, const uint32_t *cell_of, size_t n, uint32_t c0, uint32_t c1,
-                   uint32_t base, uint32_t *cell_start, VcmMergeVertex *cell_vertices)
+uint32_t vcm_grid_bases(uint32_t *per_range, int ranges)
 {
+    uint32_t below = 0;
+    for (int r = 0; r < ranges; r++) {
+        uint32_t n = per_range[r];
+        per_range[r] = below;
+        below += n;
+    }
+    return below;
+}
+
+void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges, uint32_t base,
+                   uint32_t *cell_start, VcmMergeVertex *cell_vertices)
+{
+    uint32_t c0, c1;
+    range_buckets(it, range, ranges, &c0, &c1);
     /* cell_start[c + 1] becomes bucket c's fill cursor (its global start), and ends as its
      * end, the final value: no pass restores anything. */
     for (uint32_t c = c1; c > c0 + 1; c--) cell_start[c] = base + cell_start[c - 1];
@@ -273,7 +295,7 @@ void vcm_grid_fill(const VcmVertex *vertices, const uint32_t *cell_of, size_t n,
     for (size_t i = 0; i < n; i++) {
         uint32_t c = cell_of[i];
         if (c - c0 >= width) continue;
-        const VcmVertex *v = &vertices[i];
+        const VcmVertex *v = &it->vertices[i];
         cell_vertices[cell_start[c + 1]++] = (VcmMergeVertex){
             .p = v->p, .w_prev = v->w_prev, .beta = v->beta, .d_vcm = v->d_vcm, .d_vm = v->d_vm, .bounces = v->bounces};
     }

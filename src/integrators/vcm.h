@@ -90,16 +90,19 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
 
 /* The merging grid over it->vertices, a hashed grid of cells 2r wide from lo (the lowest
  * corner of the vertices), sorted into `cells` buckets of caller-owned arrays: cell_start
- * (cells + 1 entries) and cell_vertices (one per vertex). Built in three steps so that
- * threads can share each: vcm_grid_cell gives every vertex's bucket (cell_of[i]); then,
- * for ranges [c0, c1) that partition the buckets, vcm_grid_count counts each range
- * (returning its vertices) and, once every range is counted, vcm_grid_fill sorts each,
- * where base is the vertices of all lower ranges. Any partition gives the same grid. */
+ * (cells + 1 entries) and cell_vertices (one per vertex). Built in steps that threads can
+ * share: vcm_grid_cell gives every vertex's bucket (cell_of[i]); the buckets are cut into
+ * `ranges` ranges, and vcm_grid_count counts range r (returning its vertices); once every
+ * range is counted, vcm_grid_bases turns the per-range counts into each range's first
+ * index (returning the total), and vcm_grid_fill sorts range r from there. Any number of
+ * ranges gives the same grid. */
 void vcm_grid_init(VcmIteration *it, Vec3 lo, uint32_t cells, uint32_t *cell_start, VcmMergeVertex *cell_vertices);
 uint32_t vcm_grid_cell(const VcmIteration *it, Vec3 p);
-size_t vcm_grid_count(const uint32_t *cell_of, size_t n, uint32_t c0, uint32_t c1, uint32_t *cell_start);
-void vcm_grid_fill(const VcmVertex *vertices, const uint32_t *cell_of, size_t n, uint32_t c0, uint32_t c1,
-                   uint32_t base, uint32_t *cell_start, VcmMergeVertex *cell_vertices);
+uint32_t vcm_grid_count(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges,
+                        uint32_t *cell_start);
+uint32_t vcm_grid_bases(uint32_t *per_range, int ranges);
+void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges, uint32_t base,
+                   uint32_t *cell_start, VcmMergeVertex *cell_vertices);
 
 /* One camera path for the pixel whose light path is `path`: emission hits (s = 0), NEE
  * (s = 1), connections to the light path's vertices, and with merging, merges with every

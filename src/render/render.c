@@ -404,14 +404,12 @@ static void vcm_gather_chunk(RenderJob *job, int chunk)
  * PASS_GRID_FILL. */
 static void vcm_grid_range(RenderJob *job, int range)
 {
-    const uint32_t cells = job->vcm_it.cells;
-    uint32_t c0 = (uint32_t)((uint64_t)cells * (uint64_t)range / (uint64_t)job->grid_ranges);
-    uint32_t c1 = (uint32_t)((uint64_t)cells * (uint64_t)(range + 1) / (uint64_t)job->grid_ranges);
     if (job->pass_kind == PASS_GRID_COUNT)
-        job->grid_base[range] = (uint32_t)vcm_grid_count(job->vcm_cell_of, job->vcm_total, c0, c1, job->vcm_cell_start);
+        job->grid_base[range] = vcm_grid_count(&job->vcm_it, job->vcm_cell_of, job->vcm_total, range,
+                                               job->grid_ranges, job->vcm_cell_start);
     else
-        vcm_grid_fill(job->vcm_vertices, job->vcm_cell_of, job->vcm_total, c0, c1, job->grid_base[range],
-                      job->vcm_cell_start, job->vcm_cell_items);
+        vcm_grid_fill(&job->vcm_it, job->vcm_cell_of, job->vcm_total, range, job->grid_ranges,
+                      job->grid_base[range], job->vcm_cell_start, job->vcm_cell_items);
 }
 
 /* Adds the finished iteration to the film as one sample per pixel, for the rows of one
@@ -538,13 +536,7 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
                 job->units = job->grid_ranges;
                 job->pass_kind = PASS_GRID_COUNT;
                 if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
-                /* Each range's vertices into the count of all ranges below it. */
-                uint32_t below = 0;
-                for (int r = 0; r < job->grid_ranges; r++) {
-                    uint32_t n = job->grid_base[r];
-                    job->grid_base[r] = below;
-                    below += n;
-                }
+                vcm_grid_bases(job->grid_base, job->grid_ranges);
                 job->pass_kind = PASS_GRID_FILL;
                 if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
             }

@@ -20,10 +20,10 @@ typedef struct SortedGrid {
     VcmMergeVertex *items;
 } SortedGrid;
 
-/* Sorts vertices[0, n) into `cells` buckets with `ranges` ranges, counted then filled, each
- * step over the ranges in an order that is not the natural one (threads finish in any). */
-static SortedGrid sort_with_ranges(VcmIteration *it, const VcmVertex *v, const uint32_t *cell_of, size_t n,
-                             uint32_t cells, int ranges)
+/* Sorts it->vertices[0, n) into `cells` buckets with `ranges` ranges, counted then
+ * filled, each step over the ranges in an order that is not the natural one (threads
+ * finish in any). */
+static SortedGrid sort_with_ranges(VcmIteration *it, const uint32_t *cell_of, size_t n, uint32_t cells, int ranges)
 {
     SortedGrid g = {malloc((cells + 1) * sizeof *g.cell_start), malloc((n ? n : 1) * sizeof *g.items)};
     assert_non_null(g.cell_start);
@@ -34,22 +34,12 @@ static SortedGrid sort_with_ranges(VcmIteration *it, const VcmVertex *v, const u
     assert_non_null(base);
     for (int k = 0; k < ranges; k++) {
         int r = ranges - 1 - k;
-        uint32_t c0 = (uint32_t)((uint64_t)cells * (uint64_t)r / (uint64_t)ranges);
-        uint32_t c1 = (uint32_t)((uint64_t)cells * (uint64_t)(r + 1) / (uint64_t)ranges);
-        base[r] = (uint32_t)vcm_grid_count(cell_of, n, c0, c1, g.cell_start);
+        base[r] = vcm_grid_count(it, cell_of, n, r, ranges, g.cell_start);
     }
-    uint32_t below = 0;
-    for (int r = 0; r < ranges; r++) {
-        uint32_t m = base[r];
-        base[r] = below;
-        below += m;
-    }
-    assert_int_equal(below, n);
+    assert_int_equal(vcm_grid_bases(base, ranges), n);
     for (int k = 0; k < ranges; k++) {
         int r = k % 2 ? k / 2 : ranges - 1 - k / 2; /* from both ends inward */
-        uint32_t c0 = (uint32_t)((uint64_t)cells * (uint64_t)r / (uint64_t)ranges);
-        uint32_t c1 = (uint32_t)((uint64_t)cells * (uint64_t)(r + 1) / (uint64_t)ranges);
-        vcm_grid_fill(v, cell_of, n, c0, c1, base[r], g.cell_start, g.items);
+        vcm_grid_fill(it, cell_of, n, r, ranges, base[r], g.cell_start, g.items);
     }
     free(base);
     return g;
@@ -81,6 +71,7 @@ static void test_sort_against_definition(void **state)
         memset(&it, 0, sizeof it);
         it.radius = 0.25f;
         it.grid_lo = v3(0.0f, 0.0f, 0.0f);
+        it.vertices = v;
         /* More buckets than vertices, and fewer: ranges can then be empty or crowded. */
         const uint32_t bucket_counts[] = {(uint32_t)n + 1, (uint32_t)(n / 4) + 1};
         for (int bc = 0; bc < 2; bc++) {
@@ -90,7 +81,7 @@ static void test_sort_against_definition(void **state)
                 uint32_t start0;
                 vcm_grid_init(&it, it.grid_lo, cells, &start0, NULL); /* the hash's parameters */
                 for (size_t i = 0; i < n; i++) cell_of[i] = vcm_grid_cell(&it, v[i].p);
-                SortedGrid g = sort_with_ranges(&it, v, cell_of, n, cells, partitions[pi]);
+                SortedGrid g = sort_with_ranges(&it, cell_of, n, cells, partitions[pi]);
                 /* The definition: bucket c, in vertex order, and every vertex once. */
                 assert_int_equal(g.cell_start[0], 0);
                 assert_int_equal(g.cell_start[cells], n);
