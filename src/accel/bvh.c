@@ -596,13 +596,14 @@ static inline RayBox8 ray_box8(const Ray *r)
     RayBox8 q;
     q.o[0] = f8_set1(r->o.x); q.o[1] = f8_set1(r->o.y); q.o[2] = f8_set1(r->o.z);
     q.ninv[0] = f8_set1(-inv.x); q.ninv[1] = f8_set1(-inv.y); q.ninv[2] = f8_set1(-inv.z);
-    /* By the reciprocal's sign: ray_inv_dir keeps a zero component's sign, so a -0
-     * direction enters through the max plane like any other negative one. */
-    const float sx[3] = {inv.x, inv.y, inv.z};
+    /* By the reciprocal's sign bit (one movemask for the three axes): ray_inv_dir keeps
+     * a zero component's sign, so a -0 direction enters through the max plane like any
+     * other negative one. An axis's two rows are neighbours, 2a and 2a + 1, so the far
+     * row's offset is the near one's with the row-size bit flipped. */
+    const unsigned neg = (unsigned)_mm_movemask_ps(_mm_set_ps(0.0f, inv.z, inv.y, inv.x));
     for (int a = 0; a < 3; a++) {
-        size_t neg = signbit(sx[a]) ? 1u : 0u;
-        q.near[a] = (2u * (size_t)a + neg) * sizeof(float[BVH_WIDTH]);
-        q.far[a] = (2u * (size_t)a + 1u - neg) * sizeof(float[BVH_WIDTH]);
+        q.near[a] = (2u * (size_t)a + ((neg >> a) & 1u)) * sizeof(float[BVH_WIDTH]);
+        q.far[a] = q.near[a] ^ sizeof(float[BVH_WIDTH]);
     }
     return q;
 }
@@ -650,8 +651,10 @@ static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const TriangleRa
         if (!(mask | scalar_lanes)) continue;
         float t[4], u[4], v[4];
         _mm_storeu_ps(t, t4); _mm_storeu_ps(u, u4); _mm_storeu_ps(v, v4);
-        /* In lane order with strict <, as a scalar loop would pick among equal t. */
-        for (int i = 0; i < 4; i++) {
+        /* In lane order with strict <, as a scalar loop would pick among equal t; only
+         * the lanes hit or left to the scalar test. */
+        for (unsigned lanes = (unsigned)(mask | scalar_lanes); lanes; lanes &= lanes - 1u) {
+            const int i = __builtin_ctz(lanes);
             if (scalar_lanes & (1 << i)) {
                 float ts, us, vs;
                 if (triangle_intersect_watertight(&q->tr, r, triangle4_vertex(b->v, 0, i), triangle4_vertex(b->v, 1, i),
@@ -660,7 +663,7 @@ static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const TriangleRa
                     hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
                     found = true;
                 }
-            } else if ((mask & (1 << i)) && t[i] < r->t_max) {
+            } else if (t[i] < r->t_max) {
                 r->t_max = t[i];
                 hit->t = t[i]; hit->u = u[i]; hit->v = v[i]; hit->prim = b->id[i];
                 found = true;
@@ -701,10 +704,10 @@ static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRay
         __m128 t4, u4, v4;
         int scalar_lanes;
         if (triangle4_intersect(b->v, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes)) return true;
-        for (int i = 0; i < 4; i++) {
+        for (unsigned lanes = (unsigned)scalar_lanes; lanes; lanes &= lanes - 1u) {
+            const int i = __builtin_ctz(lanes);
             float ts, us, vs;
-            if ((scalar_lanes & (1 << i)) &&
-                triangle_intersect_watertight(&q->tr, r, triangle4_vertex(b->v, 0, i), triangle4_vertex(b->v, 1, i),
+            if (triangle_intersect_watertight(&q->tr, r, triangle4_vertex(b->v, 0, i), triangle4_vertex(b->v, 1, i),
                                               triangle4_vertex(b->v, 2, i), &ts, &us, &vs))
                 return true;
         }

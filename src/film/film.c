@@ -331,12 +331,45 @@ int splat_list_bin(SplatList *l, const SplatFrame *fr)
     return 1;
 }
 
+/* splat_spread for the tent, the light tracers' default filter, without its general
+ * loops: the two nearest pixel centres per axis, each kept if on the film (and the
+ * rows within [row_lo, row_hi)) and of nonzero weight. The same products in the same
+ * precision as splat_spread, so the film is the same bit for bit. */
+static inline void splat_spread_tent(const FilmSplat *s, int width, double *rgb, double scale, int row_lo,
+                                     int row_hi)
+{
+    const float tx = s->x - 0.5f, ty = s->y - 0.5f;
+    const float fx0 = floorf(tx), fy0 = floorf(ty);
+    const float ax = tx - fx0, ay = ty - fy0;
+    const int cx = (int)fx0, cy = (int)fy0;
+    const float wx[2] = {1.0f - ax, ax}, wy[2] = {1.0f - ay, ay};
+    const double c[3] = {scale * (double)s->r, scale * (double)s->g, scale * (double)s->b};
+    const int lo = s->row0 > row_lo ? s->row0 : row_lo, hi = s->row1 < row_hi - 1 ? s->row1 : row_hi - 1;
+    for (int j = 0; j < 2; j++) {
+        const int py = cy + j;
+        if (py < lo || py > hi || wy[j] == 0.0f) continue;
+        double *row = &rgb[3 * (size_t)py * (size_t)width];
+        for (int i = 0; i < 2; i++) {
+            const int px = cx + i;
+            if ((unsigned)px >= (unsigned)width || wx[i] == 0.0f) continue;
+            const double w = (double)(wx[i] * wy[j]);
+            double *p = &row[3 * (size_t)px];
+            p[0] += c[0] * w; p[1] += c[1] * w; p[2] += c[2] * w;
+        }
+    }
+}
+
 void film_add_splats_band(const SplatList *l, const SplatFrame *fr, double *rgb, double scale, int band)
 {
     const int row_lo = band * fr->band_rows;
     const int row_hi = row_lo + fr->band_rows < fr->height ? row_lo + fr->band_rows : fr->height;
-    for (uint32_t i = l->band_start[band]; i < l->band_start[band + 1]; i++)
-        splat_spread(&l->binned[i], fr, rgb, scale, row_lo, row_hi);
+    const FilmSplat *v = l->binned;
+    const uint32_t end = l->band_start[band + 1];
+    if (fr->filter == CST_FILTER_TENT) {
+        for (uint32_t i = l->band_start[band]; i < end; i++) splat_spread_tent(&v[i], fr->width, rgb, scale, row_lo, row_hi);
+        return;
+    }
+    for (uint32_t i = l->band_start[band]; i < end; i++) splat_spread(&v[i], fr, rgb, scale, row_lo, row_hi);
 }
 
 void film_add_splats(const SplatList *l, const SplatFrame *fr, double *rgb, double scale)

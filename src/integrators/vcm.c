@@ -406,13 +406,21 @@ static void merge_plan(const VcmIteration *it, Vec3 p, MergeQuery *q)
         hi[a] = cell_coord(pc[a] + r, gl[a], it->inv_cell);
     }
     q->nb = 0;
+    /* One bit per bucket's low six bits: a bucket whose bit is clear is certainly new,
+     * and only the rare others are compared with the list. */
+    uint64_t seen = 0;
     for (int cz = lo[2]; cz <= hi[2]; cz++)
         for (int cy = lo[1]; cy <= hi[1]; cy++)
             for (int cx = lo[0]; cx <= hi[0]; cx++) {
                 uint32_t c = cell_hash(it, cx, cy, cz);
-                bool dup = false;
-                for (int k = 0; k < q->nb; k++) dup |= q->bucket[k] == c;
-                if (dup || q->nb == 8) continue;
+                const uint64_t bit = (uint64_t)1 << (c & 63u);
+                if (seen & bit) {
+                    bool dup = false;
+                    for (int k = 0; k < q->nb; k++) dup |= q->bucket[k] == c;
+                    if (dup) continue;
+                }
+                if (q->nb == 8) continue;
+                seen |= bit;
                 q->bucket[q->nb++] = c;
                 __builtin_prefetch(&it->cell_start[c]);
             }

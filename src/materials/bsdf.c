@@ -374,7 +374,7 @@ static Rgb eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
     return rgb_s(0.0f);
 }
 
-Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTransport mode)
+Rgb bsdf_eval_transport_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTransport mode)
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
     if (!b->shading) return eval_local(b, wo, wi, mode);
@@ -384,7 +384,6 @@ Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTranspo
     return mode == BSDF_RADIANCE ? f : rgb_scale(f, shading_adjoint(ng_o, ng_i, wo.z, wi.z));
 }
 
-Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi) { return bsdf_eval_transport(b, wo, wi, BSDF_RADIANCE); }
 
 static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
@@ -409,7 +408,7 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
 
 /* The density of the directions bsdf_sample returns: with a shading normal it rejects
  * the pairs shading_allows refuses, so they have density zero. */
-float bsdf_pdf(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
+float bsdf_pdf_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
     if (b->shading && !shading_allows(b, v3_dot(wo_world, b->ng), v3_dot(wi_world, b->ng), wo.z, wi.z))
@@ -417,7 +416,7 @@ float bsdf_pdf(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
     return pdf_local(b, wo, wi);
 }
 
-Rgb bsdf_eval_pdfs(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, float *pdf_fwd, float *pdf_rev)
+Rgb bsdf_eval_pdfs_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, float *pdf_fwd, float *pdf_rev)
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
     if (!b->shading) {

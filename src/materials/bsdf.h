@@ -91,17 +91,53 @@ static inline bool bsdf_has_transmission(const Bsdf *b)
  * BSDFs); lets a caller that splits the two parts weight each by its share. */
 float bsdf_delta_probability(const Bsdf *b, Vec3 wo);
 
-Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi);
+/* The general cases of the three functions below (every material, shading normals). */
+Rgb bsdf_eval_transport_general(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode);
+float bsdf_pdf_general(const Bsdf *b, Vec3 wo, Vec3 wi);
+Rgb bsdf_eval_pdfs_general(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev);
+
+/* Lambert without a shading normal, the common case of every connection and merge, inline
+ * in the callers: the general path's diffuse branches with the two-sided flip folded in
+ * (both directions strictly on one side; a one-sided surface only from the front), from
+ * the two cosines to the frame's normal alone, the same products bit for bit. */
+static inline bool bsdf_is_plain_diffuse(const Bsdf *b) { return !b->shading && b->type == MATERIAL_DIFFUSE; }
+static inline Rgb bsdf_diffuse_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev)
+{
+    const float z_o = v3_dot(wo, b->frame.n), z_i = v3_dot(wi, b->frame.n);
+    const bool same_side = z_o > 0.0f ? z_i > 0.0f : (z_o < 0.0f && z_i < 0.0f);
+    const bool fwd = same_side && (z_o > 0.0f || !b->one_sided);
+    const bool rev = same_side && (z_i > 0.0f || !b->one_sided);
+    *pdf_fwd = fwd ? fabsf(z_i) * CST_INV_PI : 0.0f;
+    *pdf_rev = rev ? fabsf(z_o) * CST_INV_PI : 0.0f;
+    return fwd ? rgb_scale(b->albedo, CST_INV_PI * fabsf(z_i)) : rgb_s(0.0f);
+}
+
 /* bsdf_eval for either transport: BSDF_IMPORTANCE gives the adjoint f*(wo, wi) |cos theta_i|
  * = f(wi, wo) |cos theta_i|, which differs from the radiance BSDF only in refraction
  * (by eta^2) and, with a shading normal, by the factor of bsdf_init_shading. bsdf_eval is
  * the BSDF_RADIANCE case. */
-Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode);
-float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi);
+static inline Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
+{
+    float pdf_fwd, pdf_rev;
+    if (bsdf_is_plain_diffuse(b)) return bsdf_diffuse_eval_pdfs(b, wo, wi, &pdf_fwd, &pdf_rev);
+    return bsdf_eval_transport_general(b, wo, wi, mode);
+}
+static inline Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi) { return bsdf_eval_transport(b, wo, wi, BSDF_RADIANCE); }
+static inline float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    float pdf_fwd, pdf_rev;
+    if (!bsdf_is_plain_diffuse(b)) return bsdf_pdf_general(b, wo, wi);
+    bsdf_diffuse_eval_pdfs(b, wo, wi, &pdf_fwd, &pdf_rev);
+    return pdf_fwd;
+}
 /* bsdf_eval(b, wo, wi), with bsdf_pdf(b, wo, wi) in *pdf_fwd and bsdf_pdf(b, wi, wo) in
  * *pdf_rev, bit for bit: what the MIS weight of a bidirectional connection needs, for one
  * change of frame instead of three (SmallVCM's BSDF::Evaluate returns the same triple). */
-Rgb bsdf_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev);
+static inline Rgb bsdf_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev)
+{
+    if (bsdf_is_plain_diffuse(b)) return bsdf_diffuse_eval_pdfs(b, wo, wi, pdf_fwd, pdf_rev);
+    return bsdf_eval_pdfs_general(b, wo, wi, pdf_fwd, pdf_rev);
+}
 /* uc picks a lobe (glass: reflect vs refract), u samples a direction. Returns false for
  * no usable sample (e.g. wo exactly in the tangent plane, a microfacet reflection below
  * the surface: that energy is lost, the single-scattering loss of microfacet models).

@@ -612,6 +612,44 @@ static void test_eval_pdfs_matches_calls(void **state)
     assert_true(nonzero > 1000); /* the pairs were not all trivially zero */
 }
 
+/* The inline Lambert path (bsdf_is_plain_diffuse) is the general code's diffuse branch,
+ * bit for bit: eval in both transports, both densities, one- and two-sided, directions on
+ * both sides and exactly in the tangent plane (cosines +0 and -0). */
+static void test_plain_diffuse_matches_general(void **state)
+{
+    (void)state;
+    Pcg32 rng;
+    pcg32_seed(&rng, 81u, 1u);
+    long checked = 0;
+    for (int one_sided = 0; one_sided < 2; one_sided++) {
+        Material m = make_material(MATERIAL_DIFFUSE, 0.0f, 1.0f);
+        m.one_sided = one_sided;
+        Bsdf b;
+        bsdf_init(&b, &m, v3(0.0f, 0.0f, 1.0f));
+        assert_true(bsdf_is_plain_diffuse(&b));
+        const Vec3 tangent[3] = {v3(1.0f, 0.0f, 0.0f), v3(0.0f, 1.0f, -0.0f), v3(0.6f, -0.8f, 0.0f)};
+        for (int k = 0; k < 20000; k++) {
+            Vec3 wo = random_dir(&rng), wi = random_dir(&rng);
+            if (k % 7 == 0) wo = tangent[k % 3];
+            if (k % 11 == 0) wi = tangent[(k / 11) % 3];
+            float fwd, rev, fwd1, rev1;
+            Rgb f = bsdf_eval_pdfs(&b, wo, wi, &fwd, &rev);
+            Rgb f1 = bsdf_eval_pdfs_general(&b, wo, wi, &fwd1, &rev1);
+            Rgb fi = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
+            Rgb fi1 = bsdf_eval_transport_general(&b, wo, wi, BSDF_IMPORTANCE);
+            float p = bsdf_pdf(&b, wo, wi), p1 = bsdf_pdf_general(&b, wo, wi);
+            if (memcmp(&f, &f1, sizeof f) != 0 || memcmp(&fwd, &fwd1, sizeof fwd) != 0 ||
+                memcmp(&rev, &rev1, sizeof rev) != 0 || memcmp(&fi, &fi1, sizeof fi) != 0 ||
+                memcmp(&p, &p1, sizeof p) != 0)
+                fail_msg("one_sided %d, wo.z %g, wi.z %g: (%g, %g, %g) against (%g, %g, %g)", one_sided,
+                         (double)wo.z, (double)wi.z, (double)f.r, (double)fwd, (double)rev, (double)f1.r,
+                         (double)fwd1, (double)rev1);
+            checked += fwd > 0.0f;
+        }
+        assert_true(checked > 2000);
+    }
+}
+
 /* The rough dielectric's transmission: the importance BSDF is the radiance BSDF with wo
  * and wi swapped, f*(wo, wi) = f(wi, wo), and the two differ by etap^2 (etap the IOR of
  * wi's side over wo's), Veach thesis sec. 5.2. */
@@ -689,6 +727,7 @@ int main(void)
         cmocka_unit_test(test_rough_dielectric_energy_loss),
         cmocka_unit_test(test_reciprocity),
         cmocka_unit_test(test_eval_pdfs_matches_calls),
+        cmocka_unit_test(test_plain_diffuse_matches_general),
         cmocka_unit_test(test_transmission_adjoint),
         cmocka_unit_test(test_plastic_coat_table),
     };
