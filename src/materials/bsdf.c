@@ -436,8 +436,8 @@ bool bsdf_sample(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfSample *out
     return bsdf_sample_transport(b, wo_world, uc, u, BSDF_RADIANCE, out);
 }
 
-bool bsdf_sample_transport(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfTransport mode,
-                           BsdfSample *out)
+bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfTransport mode,
+                                   BsdfSample *out)
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world);
     if (wo.z == 0.0f) return false;

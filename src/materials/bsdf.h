@@ -14,6 +14,7 @@
 #include "materials/material.h"
 #include "math/frame.h"
 #include "math/rgb.h"
+#include "sampling/warp.h"
 
 typedef struct Bsdf {
     MaterialType type;
@@ -151,8 +152,26 @@ bool bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out);
  * BSDF_RADIANCE and the adjoint f*(wo, wi) |cos theta_i| / pdf = f(wi, wo) |cos theta_i| / pdf
  * for BSDF_IMPORTANCE. They differ only in refraction, by the factor 1/eta^2, and with a
  * shading normal by the adjoint correction (bsdf_init_shading). */
-bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode,
-                           BsdfSample *out);
+bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode,
+                                   BsdfSample *out);
+static inline bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode,
+                                         BsdfSample *out)
+{
+    if (!bsdf_is_plain_diffuse(b)) return bsdf_sample_transport_general(b, wo, uc, u, mode, out);
+    /* The general path's diffuse case, inline: cosine-weighted about the side wo is on
+     * (none behind a one-sided surface), weight = albedo. */
+    const float z_o = v3_dot(wo, b->frame.n);
+    if (z_o == 0.0f || (z_o < 0.0f && b->one_sided)) return false;
+    Vec3 wi = warp_cosine_hemisphere(u);
+    out->wi = wi;
+    out->pdf = wi.z * CST_INV_PI;
+    out->weight = b->albedo;
+    out->delta = false;
+    if (!(wi.z > 0.0f) || !(out->pdf > 0.0f) || !rgb_is_finite(out->weight)) return false;
+    if (z_o < 0.0f) wi.z = -wi.z;
+    out->wi = frame_to_world(&b->frame, wi);
+    return true;
+}
 /* The factor by which importance transport differs from radiance transport with a shading
  * normal, |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|) (Veach thesis eq. 5.19); 1 when ns = ng, 0
  * when wo or wi lies in a tangent plane. */

@@ -613,8 +613,8 @@ static void test_eval_pdfs_matches_calls(void **state)
 }
 
 /* The inline Lambert path (bsdf_is_plain_diffuse) is the general code's diffuse branch,
- * bit for bit: eval in both transports, both densities, one- and two-sided, directions on
- * both sides and exactly in the tangent plane (cosines +0 and -0). */
+ * bit for bit: eval in both transports, both densities and sampling, one- and two-sided,
+ * directions on both sides and exactly in the tangent plane (cosines +0 and -0). */
 static void test_plain_diffuse_matches_general(void **state)
 {
     (void)state;
@@ -645,6 +645,18 @@ static void test_plain_diffuse_matches_general(void **state)
                          (double)wo.z, (double)wi.z, (double)f.r, (double)fwd, (double)rev, (double)f1.r,
                          (double)fwd1, (double)rev1);
             checked += fwd > 0.0f;
+            BsdfSample bs, bs1;
+            memset(&bs, 0, sizeof bs);
+            memset(&bs1, 0, sizeof bs1);
+            const float uc = pcg32_float(&rng);
+            const Vec2 u = v2(pcg32_float(&rng), k % 13 == 0 ? 0.5f : pcg32_float(&rng));
+            const BsdfTransport mode = k % 2 ? BSDF_IMPORTANCE : BSDF_RADIANCE;
+            bool ok = bsdf_sample_transport(&b, wo, uc, u, mode, &bs);
+            bool ok1 = bsdf_sample_transport_general(&b, wo, uc, u, mode, &bs1);
+            if (ok != ok1 || (ok && memcmp(&bs, &bs1, sizeof bs) != 0))
+                fail_msg("one_sided %d, wo.z %g: sample %d (%g, %g, %g) against %d (%g, %g, %g)", one_sided,
+                         (double)wo.z, ok, (double)bs.wi.x, (double)bs.wi.y, (double)bs.pdf, ok1, (double)bs1.wi.x,
+                         (double)bs1.wi.y, (double)bs1.pdf);
         }
         assert_true(checked > 2000);
     }
