@@ -332,9 +332,10 @@ int splat_list_bin(SplatList *l, const SplatFrame *fr)
 }
 
 /* splat_spread for the tent, the light tracers' default filter, without its general
- * loops: the two nearest pixel centres per axis, each kept if on the film (and the
- * rows within [row_lo, row_hi)) and of nonzero weight. The same products in the same
- * precision as splat_spread, so the film is the same bit for bit. */
+ * loops: the two nearest pixel centres per axis, each kept if on the film (and the rows
+ * within [row_lo, row_hi)). Zero weights are added rather than tested for: the sums
+ * start at +0 and every term is >= 0, so adding a zero changes no bit, and the film is
+ * the same as splat_spread's. */
 static inline void splat_spread_tent(const FilmSplat *s, int width, double *rgb, double scale, int row_lo,
                                      int row_hi)
 {
@@ -342,19 +343,23 @@ static inline void splat_spread_tent(const FilmSplat *s, int width, double *rgb,
     const float fx0 = floorf(tx), fy0 = floorf(ty);
     const float ax = tx - fx0, ay = ty - fy0;
     const int cx = (int)fx0, cy = (int)fy0;
-    const float wx[2] = {1.0f - ax, ax}, wy[2] = {1.0f - ay, ay};
-    const double c[3] = {scale * (double)s->r, scale * (double)s->g, scale * (double)s->b};
+    const float wx0 = 1.0f - ax, wy[2] = {1.0f - ay, ay};
+    const bool x0_in = (unsigned)cx < (unsigned)width, x1_in = (unsigned)(cx + 1) < (unsigned)width;
+    const double r = scale * (double)s->r, g = scale * (double)s->g, b = scale * (double)s->b;
     const int lo = s->row0 > row_lo ? s->row0 : row_lo, hi = s->row1 < row_hi - 1 ? s->row1 : row_hi - 1;
     for (int j = 0; j < 2; j++) {
         const int py = cy + j;
-        if (py < lo || py > hi || wy[j] == 0.0f) continue;
+        if (py < lo || py > hi) continue;
         double *row = &rgb[3 * (size_t)py * (size_t)width];
-        for (int i = 0; i < 2; i++) {
-            const int px = cx + i;
-            if ((unsigned)px >= (unsigned)width || wx[i] == 0.0f) continue;
-            const double w = (double)(wx[i] * wy[j]);
-            double *p = &row[3 * (size_t)px];
-            p[0] += c[0] * w; p[1] += c[1] * w; p[2] += c[2] * w;
+        if (x0_in) {
+            double *p = &row[3 * cx];
+            const double w = (double)(wx0 * wy[j]);
+            p[0] += r * w; p[1] += g * w; p[2] += b * w;
+        }
+        if (x1_in) {
+            double *p = &row[3 * (cx + 1)];
+            const double w = (double)(ax * wy[j]);
+            p[0] += r * w; p[1] += g * w; p[2] += b * w;
         }
     }
 }
