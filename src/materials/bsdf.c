@@ -12,7 +12,7 @@
 
 void bsdf_init(Bsdf *b, const Material *m, Vec3 n) { bsdf_init_shading(b, m, n, n); }
 
-void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
+void bsdf_init_shading_general(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
     b->type = m->type;
     b->frame = frame_from_normal(ns);

@@ -9,6 +9,7 @@
 #define CST_MATERIALS_BSDF_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "materials/fresnel.h"
 #include "materials/material.h"
@@ -65,7 +66,28 @@ void bsdf_init(Bsdf *b, const Material *m, Vec3 n);
  * light paths (BSDF_IMPORTANCE) its adjoint times |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)
  * (Veach eq. 5.19, pbrt-v3 CorrectShadingNormal), so both transports estimate the same
  * integral with the geometric normals of the measurement (area <-> solid angle). */
-void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng);
+void bsdf_init_shading_general(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng);
+/* Inline for the materials without a roughness or a coat (Lambert, mirror, smooth glass):
+ * every hit of every path builds one. The same fields as the general path. */
+static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
+{
+    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC) {
+        bsdf_init_shading_general(b, m, ns, ng);
+        return;
+    }
+    b->type = m->type;
+    b->frame = frame_from_normal(ns);
+    b->ng = ng;
+    b->shading = ns.x != ng.x || ns.y != ng.y || ns.z != ng.z;
+    b->albedo = m->albedo;
+    b->eta = m->ior;
+    b->alpha = 0.0f;
+    b->cond_eta = m->eta;
+    b->cond_k = m->k;
+    b->one_sided = m->one_sided;
+    b->coat_e = NULL;
+    b->coat_e_avg = 0.0f;
+}
 /* True when every lobe is a delta lobe: eval and pdf are zero everywhere, NEE is useless. */
 static inline bool bsdf_is_delta(const Bsdf *b)
 {

@@ -612,6 +612,30 @@ static void test_eval_pdfs_matches_calls(void **state)
     assert_true(nonzero > 1000); /* the pairs were not all trivially zero */
 }
 
+/* The inline bsdf_init_shading fills every field as the general one does, for every
+ * material type, with and without a shading normal. */
+static void test_init_inline_matches_general(void **state)
+{
+    (void)state;
+    Material mats[24];
+    int nm = non_delta_materials(mats);
+    mats[nm++] = make_material(MATERIAL_MIRROR, 0.0f, 1.0f);
+    mats[nm++] = make_material(MATERIAL_GLASS, 0.0f, 1.5f);
+    mats[nm] = make_material(MATERIAL_DIFFUSE, 0.0f, 1.0f);
+    mats[nm++].one_sided = true;
+    const Vec3 ng = v3_normalize(v3(0.1f, 0.2f, -1.0f));
+    for (int i = 0; i < nm; i++)
+        for (int shading = 0; shading < 2; shading++) {
+            Bsdf a, b;
+            memset(&a, 0, sizeof a);
+            memset(&b, 0, sizeof b);
+            const Vec3 ns = shading ? v3_normalize(v3(0.3f, -0.1f, -1.0f)) : ng;
+            bsdf_init_shading(&a, &mats[i], ns, ng);
+            bsdf_init_shading_general(&b, &mats[i], ns, ng);
+            if (memcmp(&a, &b, sizeof a) != 0) fail_msg("material %d (type %d), shading %d", i, (int)mats[i].type, shading);
+        }
+}
+
 /* The inline Lambert path (bsdf_is_plain_diffuse) is the general code's diffuse branch,
  * bit for bit: eval in both transports, both densities and sampling, one- and two-sided,
  * directions on both sides and exactly in the tangent plane (cosines +0 and -0). */
@@ -740,6 +764,7 @@ int main(void)
         cmocka_unit_test(test_reciprocity),
         cmocka_unit_test(test_eval_pdfs_matches_calls),
         cmocka_unit_test(test_plain_diffuse_matches_general),
+        cmocka_unit_test(test_init_inline_matches_general),
         cmocka_unit_test(test_transmission_adjoint),
         cmocka_unit_test(test_plastic_coat_table),
     };
