@@ -434,9 +434,14 @@ static void merge_fetch(const VcmIteration *it, MergeQuery *q)
         q->last[b] = it->cell_start[q->bucket[b] + 1];
     }
     for (int b = 0; b < q->nb; b++) {
+        if (q->first[b] == q->last[b]) continue;
         const char *p = (const char *)&it->cell_vertices[q->first[b]];
         const char *end = (const char *)&it->cell_vertices[q->last[b]];
-        for (int line = 0; line < 8 && p < end; line++, p += 64) __builtin_prefetch(p);
+        /* Most runs are one or two vertices: their first and last lines; longer runs
+         * also the lines between, up to eight in all. */
+        __builtin_prefetch(p);
+        __builtin_prefetch(end - 1);
+        for (int line = 2; line < 8 && end - p > 128; line++) __builtin_prefetch(p += 64);
     }
 }
 
