@@ -23,17 +23,23 @@ static inline Ray ray_make(Vec3 o, Vec3 d, float t_min, float t_max)
 
 static inline Vec3 ray_at(const Ray *r, float t) { return v3_madd(r->o, r->d, t); }
 
+/* The absolute offset near the origin of Ray Tracing Gems (below): the smallest
+ * ray_offset_origin uses. Scenes pass a larger one when their size calls for it
+ * (scene.h: Scene.offset_near). */
+#define RAY_OFFSET_NEAR_MIN (1.0f / 65536.0f)
+
 /* Moves a surface point off its surface along n (oriented to the side the new ray
  * leaves on) far enough that the new ray cannot re-hit the surface, by a fixed number of
  * ulps of each coordinate, so the offset scales with the point's own float precision
  * rather than with the scene: Waechter & Binder, "A Fast and Robust Method for Avoiding
  * Self-Intersection", Ray Tracing Gems ch. 6, 2019. Near the origin, where ulps vanish,
- * a small absolute offset takes over. Hit points must be accurate to a few ulps for this
- * to hold: they are computed from barycentrics (triangles) or reprojected (spheres). */
-static inline float ray_offset_coord(float p, float n)
+ * an absolute offset `near` takes over, below |p| < 2048 near (their 2^-16 and 1/32 for
+ * near = RAY_OFFSET_NEAR_MIN). Hit points must be accurate to a few ulps for this to hold:
+ * they are computed from barycentrics (triangles) or reprojected (spheres). */
+static inline float ray_offset_coord(float p, float n, float near)
 {
-    const float ORIGIN = 1.0f / 32.0f, FLOAT_SCALE = 1.0f / 65536.0f, INT_SCALE = 256.0f;
-    if (fabsf(p) < ORIGIN) return p + FLOAT_SCALE * n;
+    const float INT_SCALE = 256.0f;
+    if (fabsf(p) < 2048.0f * near) return p + near * n;
     union { float f; int32_t i; } u = {p};
     int32_t of = (int32_t)(INT_SCALE * n);
     u.i += (p < 0.0f) ? -of : of;
@@ -44,12 +50,12 @@ static inline float ray_offset_coord(float p, float n)
  * lane, so the same bits: every shadow ray and every bounce offsets one or two points,
  * and the scalar version's three data-dependent branches were a visible part of the
  * bidirectional integrators' instructions (docs/benchmarks.md). */
-static inline Vec3 ray_offset_origin(Vec3 p, Vec3 n)
+static inline Vec3 ray_offset_origin(Vec3 p, Vec3 n, float near)
 {
     const __m128 P = _mm_set_ps(0.0f, p.z, p.y, p.x), N = _mm_set_ps(0.0f, n.z, n.y, n.x);
     const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128 near_origin = _mm_cmplt_ps(_mm_and_ps(P, abs_mask), _mm_set1_ps(1.0f / 32.0f));
-    const __m128 by_float = _mm_add_ps(P, _mm_mul_ps(_mm_set1_ps(1.0f / 65536.0f), N));
+    const __m128 near_origin = _mm_cmplt_ps(_mm_and_ps(P, abs_mask), _mm_set1_ps(2048.0f * near));
+    const __m128 by_float = _mm_add_ps(P, _mm_mul_ps(_mm_set1_ps(near), N));
     const __m128i of = _mm_cvttps_epi32(_mm_mul_ps(_mm_set1_ps(256.0f), N));
     const __m128i neg = _mm_castps_si128(_mm_cmplt_ps(P, _mm_setzero_ps()));
     const __m128i signed_of = _mm_sub_epi32(_mm_xor_si128(of, neg), neg); /* -of where p < 0 */

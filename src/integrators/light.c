@@ -54,7 +54,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
      * every path alive. */
     Rgb beta = es.beta;
     Rgb scatter = rgb_s(1.0f);
-    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {
         SurfaceHit sh;
         ++*rays;
@@ -95,6 +95,6 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
             beta = rgb_scale(beta, 1.0f / q);
             scatter = rgb_scale(scatter, 1.0f / q);
         }
-        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
 }

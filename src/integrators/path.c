@@ -68,7 +68,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_
             if (!(sampler_1d(smp) < q)) break;
             beta = rgb_scale(beta, 1.0f / q);
         }
-        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
     return L;
 }

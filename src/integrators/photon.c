@@ -67,7 +67,7 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
     Rgb power = rgb_scale(es.beta, inv_n);
     Rgb scatter = rgb_s(1.0f); /* what Russian roulette looks at, as in light.c */
     bool specular_only = true; /* every bounce so far was a delta lobe */
-    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {
         SurfaceHit sh;
         ++*rays;
@@ -103,7 +103,7 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
             power = rgb_scale(power, 1.0f / q);
             scatter = rgb_scale(scatter, 1.0f / q);
         }
-        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
     return 1;
 }
@@ -148,7 +148,7 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
         if (!sampled) return false;
         *beta = rgb_mul(*beta, bs.weight);
         if (rgb_is_black(*beta)) return false;
-        ray = ray_make(scene_offset(sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
     /* Cut after PHOTON_MAX_SPECULAR delta bounces: a bias of at most the throughput left,
      * which for Fresnel-weighted glass chains is negligible. */
@@ -220,7 +220,7 @@ Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t
         SurfaceHit y;
         Bsdf bsdf_y;
         Vec3 wo_y;
-        Ray gr = ray_make(scene_offset(x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        Ray gr = ray_make(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
         if (photon_trace_to_diffuse(s, gr, rng, &g, NULL, &y, &bsdf_y, &wo_y, rays))
             lx = rgb_add(lx, rgb_mul(g, radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y)));

@@ -250,7 +250,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
     Rgb power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */
     Rgb scatter = rgb_s(1.0f);
-    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {
         SurfaceHit sh;
         ++*rays;
@@ -276,7 +276,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
             power = rgb_scale(power, 1.0f / q);
             scatter = rgb_scale(scatter, 1.0f / q);
         }
-        ray = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
 }
 

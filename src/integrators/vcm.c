@@ -123,7 +123,7 @@ static inline bool roulette(SubPath *sp, int depth, int rr_depth, Pcg32 *rng)
 /* The continuation of a subpath at a vertex (wo: back along the subpath; mode: what it
  * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
  * quantities and the next ray. False when the subpath ends here. */
-static bool scatter(SubPath *sp, const VcmIteration *it, const Bsdf *b, const SurfaceHit *sh, Vec3 wo,
+static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const Bsdf *b, const SurfaceHit *sh, Vec3 wo,
                     BsdfTransport mode, int depth, int rr_depth, Pcg32 *rng, Ray *ray)
 {
     BsdfSample bs;
@@ -137,7 +137,7 @@ static bool scatter(SubPath *sp, const VcmIteration *it, const Bsdf *b, const Su
     if (rgb_is_black(sp->scatter)) return false;
     if (!roulette(sp, depth, rr_depth, rng)) return false;
     mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), pdf_rev);
-    *ray = ray_make(scene_offset(sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    *ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
     return true;
 }
 
@@ -192,7 +192,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
     sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
 
-    Ray ray = ray_make(scene_offset(es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int bounces = 1;; bounces++) {
         SurfaceHit sh;
         ++*rays;
@@ -214,7 +214,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
         }
         if (vp->max_depth > 0 && bounces >= vp->max_depth) break;
 
-        if (!scatter(&sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray)) break;
+        if (!scatter(s, &sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray)) break;
     }
 }
 
@@ -551,7 +551,7 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
             if (merging) L = rgb_madd(L, sp.beta, merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));
         }
 
-        if (!scatter(&sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
+        if (!scatter(s, &sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
     }
     return L;
 }

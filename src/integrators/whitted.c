@@ -67,7 +67,7 @@ static Rgb whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int d
         Rgb w = rgb_scale(bs.weight, bs.pdf);
         float wmax = weight * rgb_max(w);
         if (!(wmax >= WHITTED_MIN_WEIGHT)) continue;
-        Ray next = ray_make(scene_offset(sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        Ray next = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         L = rgb_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, smp, rays));
     }
     return L;

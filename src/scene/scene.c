@@ -378,6 +378,15 @@ CstStatus scene_commit(Scene *s, CstError *err)
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, s->delta_lights,
                               s->num_delta_lights, s->env, bounds.min, bounds.max, err);
     if (st != CST_OK) return st;
+    /* From the geometry, not from `bounds` (the back end's): every back end must offset
+     * rays alike for their images to agree bit for bit. */
+    float extent = 0.0f;
+    for (int i = 0; i < s->num_positions; i++) extent = maxf(extent, v3_max_abs(s->positions[i]));
+    for (int i = 0; i < s->num_spheres; i++)
+        extent = maxf(extent, v3_max_abs(s->spheres[i].center) + s->spheres[i].radius);
+    if (s->instances && s->instances->num_nodes > 0)
+        extent = maxf(extent, maxf(v3_max_abs(s->instances->nodes[0].box.min), v3_max_abs(s->instances->nodes[0].box.max)));
+    s->offset_near = maxf(RAY_OFFSET_NEAR_MIN, isfinite(extent) ? 4e-7f * extent : 0.0f);
     s->committed = 1;
     return CST_OK;
 }

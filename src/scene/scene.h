@@ -65,6 +65,12 @@ struct CstScene {
      * two-level structure queried after `accel`. Instances do not emit. */
     InstanceSet *instances;
     EmitterSampler emitter_sampler;
+    /* ray_offset_origin's offset near the origin: RAY_OFFSET_NEAR_MIN, or 4e-7 of the
+     * scene's largest coordinate if that is more, so that a ray leaving a surface that
+     * lies in a coordinate plane (a floor at y = 0) starts outside that surface's own
+     * BVH box, which is widened by 1e-7 of that coordinate (bvh.c), instead of testing
+     * the surface again on every bounce and shadow ray. Set by scene_commit. */
+    float offset_near;
     int committed;
     /* view and settings */
     CameraDesc camera;
@@ -276,9 +282,9 @@ static inline bool scene_occluded(const Scene *s, const Ray *r)
 }
 
 /* p moved off the surface with normal ng toward the side direction d points to. */
-static inline Vec3 scene_offset(Vec3 p, Vec3 ng, Vec3 d)
+static inline Vec3 scene_offset(const Scene *s, Vec3 p, Vec3 ng, Vec3 d)
 {
-    return ray_offset_origin(p, v3_dot(ng, d) >= 0.0f ? ng : v3_neg(ng));
+    return ray_offset_origin(p, v3_dot(ng, d) >= 0.0f ? ng : v3_neg(ng), s->offset_near);
 }
 
 /* Whether the segment between surface points p (normal n_p) and q (normal n_q) is
@@ -289,8 +295,8 @@ static inline Vec3 scene_offset(Vec3 p, Vec3 ng, Vec3 d)
 static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q)
 {
     Vec3 d = v3_sub(q, p);
-    Vec3 o = scene_offset(p, n_p, d);
-    Vec3 t = scene_offset(q, n_q, v3_neg(d));
+    Vec3 o = scene_offset(s, p, n_p, d);
+    Vec3 t = scene_offset(s, q, n_q, v3_neg(d));
     Vec3 od = v3_sub(t, o);
     float len = v3_length(od);
     if (!(len > 0.0f)) return true;
@@ -303,7 +309,7 @@ static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 
  * the pushed point). */
 static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
 {
-    Vec3 o = scene_offset(p, ng, v3_sub(q, p));
+    Vec3 o = scene_offset(s, p, ng, v3_sub(q, p));
     Vec3 d = v3_sub(q, o);
     float len = v3_length(d);
     if (!(len > 0.0f)) return true;

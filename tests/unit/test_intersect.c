@@ -16,6 +16,7 @@
 #include "geometry/sphere.h"
 #include "geometry/triangle.h"
 #include "math/bbox.h"
+#include "scene/scene.h"
 
 /* |got - want| <= tol * max(|want|, 1e-30), with both values in the failure message. */
 #define assert_rel(got, want, tol)                                                        \
@@ -520,29 +521,75 @@ static void test_slab_grazing(void **state)
 
 /* ray_offset_origin (three lanes at once) is ray_offset_coord on each coordinate, bit for
  * bit: both regimes (ulps away from the origin, a fixed step near it), the boundary at
- * 1/32, negative coordinates, signed zeros, and normals of either sign. */
+ * 2048 near, negative coordinates, signed zeros, and normals of either sign, for the
+ * smallest near and for larger scenes' ones. */
 static void test_offset_origin_matches_scalar(void **state)
 {
     (void)state;
     Pcg32 rng;
     pcg32_seed(&rng, 83u, 1u);
-    const float special[] = {0.0f, -0.0f, 1.0f / 32.0f, -1.0f / 32.0f, 0.03125001f, 1e-30f, -5e3f, 548.8f};
-    for (int i = 0; i < 200000; i++) {
-        float pc[3], nc[3];
-        for (int a = 0; a < 3; a++) {
-            int kind = (int)(pcg32_next(&rng) % 4u);
-            pc[a] = kind == 0   ? special[pcg32_next(&rng) % 8u]
-                    : kind == 1 ? (float)rnd(&rng, -0.05, 0.05)
-                                : (float)rnd(&rng, -600.0, 600.0);
-            nc[a] = (float)rnd(&rng, -1.0, 1.0);
+    const float nears[3] = {RAY_OFFSET_NEAR_MIN, 2.2239e-4f, 1e-3f};
+    for (int ni = 0; ni < 3; ni++) {
+        const float near = nears[ni], edge = 2048.0f * near;
+        const float special[] = {0.0f, -0.0f, edge, -edge, nextafterf(edge, 0.0f), nextafterf(-edge, 0.0f), 1e-30f, 548.8f};
+        for (int i = 0; i < 100000; i++) {
+            float pc[3], nc[3];
+            for (int a = 0; a < 3; a++) {
+                int kind = (int)(pcg32_next(&rng) % 4u);
+                pc[a] = kind == 0   ? special[pcg32_next(&rng) % 8u]
+                        : kind == 1 ? (float)rnd(&rng, -2.0 * (double)edge, 2.0 * (double)edge)
+                                    : (float)rnd(&rng, -600.0, 600.0);
+                nc[a] = (float)rnd(&rng, -1.0, 1.0);
+            }
+            Vec3 p = v3(pc[0], pc[1], pc[2]), n = v3(nc[0], nc[1], nc[2]);
+            Vec3 got = ray_offset_origin(p, n, near);
+            Vec3 want = v3(ray_offset_coord(p.x, n.x, near), ray_offset_coord(p.y, n.y, near),
+                           ray_offset_coord(p.z, n.z, near));
+            if (memcmp(&got, &want, sizeof got) != 0)
+                fail_msg("near %g, p (%.9g, %.9g, %.9g), n (%g, %g, %g): (%.9g, %.9g, %.9g) against (%.9g, %.9g, %.9g)",
+                         (double)near, (double)p.x, (double)p.y, (double)p.z, (double)n.x, (double)n.y, (double)n.z,
+                         (double)got.x, (double)got.y, (double)got.z, (double)want.x, (double)want.y, (double)want.z);
         }
-        Vec3 p = v3(pc[0], pc[1], pc[2]), n = v3(nc[0], nc[1], nc[2]);
-        Vec3 got = ray_offset_origin(p, n);
-        Vec3 want = v3(ray_offset_coord(p.x, n.x), ray_offset_coord(p.y, n.y), ray_offset_coord(p.z, n.z));
-        if (memcmp(&got, &want, sizeof got) != 0)
-            fail_msg("p (%.9g, %.9g, %.9g), n (%g, %g, %g): (%.9g, %.9g, %.9g) against (%.9g, %.9g, %.9g)",
-                     (double)p.x, (double)p.y, (double)p.z, (double)n.x, (double)n.y, (double)n.z, (double)got.x,
-                     (double)got.y, (double)got.z, (double)want.x, (double)want.y, (double)want.z);
+    }
+}
+
+/* A scene's offset near the origin grows with its size: a ray leaving a 1000-unit floor
+ * at y = 0 starts above that floor's BVH box (widened by 1e-7 of the largest coordinate,
+ * bvh.c) instead of inside it, and does not hit the floor; a unit-sized scene keeps Ray
+ * Tracing Gems' 2^-16. */
+static void test_scene_offset_near_scales(void **state)
+{
+    (void)state;
+    CstError err;
+    for (int big = 0; big < 2; big++) {
+        const double h = big ? 500.0 : 0.5;
+        Scene *s = scene_create();
+        assert_non_null(s);
+        int mat;
+        Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
+        assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
+        const float hf = (float)h;
+        const Vec3 floor[4] = {{-hf, 0, -hf}, {-hf, 0, hf}, {hf, 0, hf}, {hf, 0, -hf}};
+        assert_int_equal(scene_add_quad(s, floor, mat, NULL, &err), CST_OK);
+        assert_int_equal(scene_add_sphere(s, v3(0, 0.5f * hf, 0), 0.1f * hf, mat, NULL, &err), CST_OK);
+        assert_int_equal(scene_commit(s, &err), CST_OK);
+        if (!big) {
+            assert_true(s->offset_near == RAY_OFFSET_NEAR_MIN);
+        } else {
+            assert_rel(s->offset_near, 4e-7 * 500.0, 1e-6);
+            Pcg32 rng;
+            pcg32_seed(&rng, 84u, 1u);
+            for (int i = 0; i < 1000; i++) {
+                Vec3 p = v3((float)rnd(&rng, -0.9 * h, 0.9 * h), 0.0f, (float)rnd(&rng, -0.9 * h, 0.9 * h));
+                Vec3 d = v3_normalize(v3((float)rnd(&rng, -1, 1), (float)rnd(&rng, 0.01, 1), (float)rnd(&rng, -1, 1)));
+                Vec3 o = scene_offset(s, p, v3(0, 1, 0), d);
+                if (!(o.y > 1e-7f * 500.0f)) fail_msg("offset point %g above the floor, inside its box", (double)o.y);
+                SurfaceHit sh;
+                Ray r = ray_make(o, d, 0.0f, INFINITY);
+                if (scene_intersect(s, &r, &sh) && sh.prim < 2) fail_msg("ray %d re-hit the floor at t = %g", i, (double)sh.t);
+            }
+        }
+        scene_destroy(s);
     }
 }
 
@@ -568,6 +615,7 @@ int main(void)
         cmocka_unit_test(test_slab_negative_directions_and_behind),
         cmocka_unit_test(test_slab_grazing),
         cmocka_unit_test(test_offset_origin_matches_scalar),
+        cmocka_unit_test(test_scene_offset_near_scales),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
