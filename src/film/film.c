@@ -371,7 +371,8 @@ void film_add_splats_band(const SplatList *l, const SplatFrame *fr, double *rgb,
     const FilmSplat *v = l->binned;
     const uint32_t end = l->band_start[band + 1];
     if (fr->filter == CST_FILTER_TENT) {
-        for (uint32_t i = l->band_start[band]; i < end; i++) splat_spread_tent(&v[i], fr->width, rgb, scale, row_lo, row_hi);
+        for (uint32_t i = l->band_start[band]; i < end; i++)
+            splat_spread_tent(&v[i], fr->width, rgb, scale, row_lo, row_hi);
         return;
     }
     for (uint32_t i = l->band_start[band]; i < end; i++) splat_spread(&v[i], fr, rgb, scale, row_lo, row_hi);

@@ -14,20 +14,9 @@ void bsdf_init(Bsdf *b, const Material *m, Vec3 n) { bsdf_init_shading(b, m, n, 
 
 void bsdf_init_shading_general(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
-    b->type = m->type;
-    b->frame = frame_from_normal(ns);
-    b->ng = ng;
-    b->shading = ns.x != ng.x || ns.y != ng.y || ns.z != ng.z;
-    b->albedo = m->albedo;
-    b->eta = m->ior;
-    b->alpha = 0.0f;
+    bsdf_init_smooth(b, m, ns, ng);
     if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC)
         b->alpha = material_bsdf_alpha(m->roughness);
-    b->cond_eta = m->eta;
-    b->cond_k = m->k;
-    b->one_sided = m->one_sided;
-    b->coat_e = NULL;
-    b->coat_e_avg = 0.0f;
     if (m->type == MATERIAL_PLASTIC) {
         if (b->alpha > 0.0f && m->prepared) {
             b->coat_e = m->coat_e;

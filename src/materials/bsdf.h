@@ -67,14 +67,10 @@ void bsdf_init(Bsdf *b, const Material *m, Vec3 n);
  * (Veach eq. 5.19, pbrt-v3 CorrectShadingNormal), so both transports estimate the same
  * integral with the geometric normals of the measurement (area <-> solid angle). */
 void bsdf_init_shading_general(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng);
-/* Inline for the materials without a roughness or a coat (Lambert, mirror, smooth glass):
- * every hit of every path builds one. The same fields as the general path. */
-static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
+/* Every field as for a material without a roughness or a coat (Lambert, mirror, smooth
+ * glass); bsdf_init_shading_general starts from it and adds those. */
+static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
-    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC) {
-        bsdf_init_shading_general(b, m, ns, ng);
-        return;
-    }
     b->type = m->type;
     b->frame = frame_from_normal(ns);
     b->ng = ng;
@@ -87,6 +83,14 @@ static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 n
     b->one_sided = m->one_sided;
     b->coat_e = NULL;
     b->coat_e_avg = 0.0f;
+}
+/* Inline for those materials: every hit of every path builds one. */
+static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
+{
+    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC)
+        bsdf_init_shading_general(b, m, ns, ng);
+    else
+        bsdf_init_smooth(b, m, ns, ng);
 }
 /* True when every lobe is a delta lobe: eval and pdf are zero everywhere, NEE is useless. */
 static inline bool bsdf_is_delta(const Bsdf *b)

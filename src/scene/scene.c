@@ -385,7 +385,8 @@ CstStatus scene_commit(Scene *s, CstError *err)
     for (int i = 0; i < s->num_spheres; i++)
         extent = maxf(extent, v3_max_abs(s->spheres[i].center) + s->spheres[i].radius);
     if (s->instances && s->instances->num_nodes > 0)
-        extent = maxf(extent, maxf(v3_max_abs(s->instances->nodes[0].box.min), v3_max_abs(s->instances->nodes[0].box.max)));
+        extent = maxf(extent, maxf(v3_max_abs(s->instances->nodes[0].box.min),
+                                   v3_max_abs(s->instances->nodes[0].box.max)));
     s->offset_near = maxf(RAY_OFFSET_NEAR_MIN, isfinite(extent) ? 4e-7f * extent : 0.0f);
     s->committed = 1;
     return CST_OK;

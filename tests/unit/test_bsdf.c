@@ -613,7 +613,8 @@ static void test_eval_pdfs_matches_calls(void **state)
 }
 
 /* The inline bsdf_init_shading fills every field as the general one does, for every
- * material type, with and without a shading normal. */
+ * material type, with and without a shading normal: a type with a roughness or a coat
+ * left out of the inline dispatch would lose them here. */
 static void test_init_inline_matches_general(void **state)
 {
     (void)state;
@@ -632,7 +633,8 @@ static void test_init_inline_matches_general(void **state)
             const Vec3 ns = shading ? v3_normalize(v3(0.3f, -0.1f, -1.0f)) : ng;
             bsdf_init_shading(&a, &mats[i], ns, ng);
             bsdf_init_shading_general(&b, &mats[i], ns, ng);
-            if (memcmp(&a, &b, sizeof a) != 0) fail_msg("material %d (type %d), shading %d", i, (int)mats[i].type, shading);
+            if (memcmp(&a, &b, sizeof a) != 0)
+                fail_msg("material %d (type %d), shading %d", i, (int)mats[i].type, shading);
         }
 }
 

@@ -531,7 +531,8 @@ static void test_offset_origin_matches_scalar(void **state)
     const float nears[3] = {RAY_OFFSET_NEAR_MIN, 2.2239e-4f, 1e-3f};
     for (int ni = 0; ni < 3; ni++) {
         const float near = nears[ni], edge = 2048.0f * near;
-        const float special[] = {0.0f, -0.0f, edge, -edge, nextafterf(edge, 0.0f), nextafterf(-edge, 0.0f), 1e-30f, 548.8f};
+        const float special[] = {0.0f, -0.0f, edge, -edge, nextafterf(edge, 0.0f), nextafterf(-edge, 0.0f),
+                                 1e-30f, 548.8f};
         for (int i = 0; i < 100000; i++) {
             float pc[3], nc[3];
             for (int a = 0; a < 3; a++) {
@@ -586,7 +587,8 @@ static void test_scene_offset_near_scales(void **state)
                 if (!(o.y > 1e-7f * 500.0f)) fail_msg("offset point %g above the floor, inside its box", (double)o.y);
                 SurfaceHit sh;
                 Ray r = ray_make(o, d, 0.0f, INFINITY);
-                if (scene_intersect(s, &r, &sh) && sh.prim < 2) fail_msg("ray %d re-hit the floor at t = %g", i, (double)sh.t);
+                if (scene_intersect(s, &r, &sh) && sh.prim < 2)
+                    fail_msg("ray %d re-hit the floor at t = %g", i, (double)sh.t);
             }
         }
         scene_destroy(s);
