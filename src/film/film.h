@@ -68,9 +68,13 @@ typedef struct SplatFrame {
     int bands;      /* ceil(height / band_rows) */
 } SplatFrame;
 
-/* Bands of about 2048 pixels: the part of a double RGB image a band's merge writes stays
- * in the L2 cache (48 KiB), whatever the image width. */
-enum { FILM_SPLAT_BAND = 2048 };
+/* Bands of about 16384 pixels: the part of a double RGB image a band's merge writes (384
+ * KiB) stays in the L2 cache (1 MiB per core here), whatever the image width. Taller bands
+ * mean fewer tent splats that straddle two bands, each binned and spread twice (1 in 32
+ * at 512 pixels wide, against 1 in 4 with bands of 2048 pixels: light tracing 5% faster,
+ * docs/benchmarks.md). The sums do not depend on it: every pixel gets its splats in
+ * chunk order whatever band it is in. */
+enum { FILM_SPLAT_BAND = 16384 };
 SplatFrame splat_frame(int width, int height, CstFilter filter);
 
 typedef struct SplatList {
