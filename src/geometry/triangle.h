@@ -63,7 +63,9 @@ static inline TriangleRay triangle_ray_setup(Vec3 d)
  * sec. 3.9.6, "Ensuring positive t"). Rounding can make a ray that leaves a surface hit
  * that surface, or a neighbour it cannot reach, at a tiny positive t: where the
  * coordinates are large and the ray origin's offset is small (a wall at x = 0 in a box
- * of size 500, offset by 2^-16), the sheared vertices err by more than the offset.
+ * of size 500 with Ray Tracing Gems' fixed offset of 2^-16; scenes now scale theirs,
+ * Scene.offset_near, but any caller may pass small ones), the sheared vertices err by
+ * more than the offset.
  * A t within the bound is not provably positive and is rejected. block_intersect4 in
  * accel/bvh.c repeats these operations in this order, lane by lane. */
 static inline float triangle_t_error(float Ax, float Ay, float Bx, float By, float Cx, float Cy, float azt,
