@@ -63,8 +63,22 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
         Bsdf bsdf;
         scene_bsdf(s, &sh, &bsdf);
         /* Delta lobes cannot be connected: f is a Dirac in the direction to the lens. */
-        if (!bsdf_is_delta(&bsdf)) {
-            u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+        const bool connect = !bsdf_is_delta(&bsdf);
+        if (connect) u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+        /* The next direction is sampled before this vertex's camera connection (the
+         * random numbers are drawn in the same order as ever): the connection is a chain
+         * of divisions and a shadow ray nothing else waits on, and after the sampling it
+         * overlaps the next bounce instead of holding it back. */
+        bool end = lp->max_depth > 0 && depth >= lp->max_depth;
+        BsdfSample bs;
+        if (!end) {
+            float uc = pcg32_float(rng);
+            Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+            /* Adjoint sampling: wo is where the light came from, and refraction does not
+             * scale flux by 1/eta^2 (bsdf.c). */
+            end = !bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs);
+        }
+        if (connect) {
             float cos_prev = fabsf(v3_dot(sh.ng, w_prev));
             if (camera_sample_wi(cam, sh.p, u_lens, margin, &cs) && cos_prev > 0.0f) {
                 /* The camera path through this vertex evaluates f(wo = w_cam, wi = w_prev)
@@ -76,14 +90,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
                 splat_if_visible(s, lp, sh.p, sh.ng, &cs, rgb_mul(beta, f), out, rays);
             }
         }
-        if (lp->max_depth > 0 && depth >= lp->max_depth) break;
-
-        BsdfSample bs;
-        float uc = pcg32_float(rng);
-        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
-        /* Adjoint sampling: wo is where the light came from, and refraction does not
-         * scale flux by 1/eta^2 (bsdf.c). */
-        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
+        if (end) break;
         beta = rgb_mul(beta, bs.weight);
         scatter = rgb_mul(scatter, bs.weight);
         if (rgb_is_black(scatter)) break;

@@ -144,10 +144,9 @@ static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const B
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
 static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams *vp,
                               const VcmIteration *it, const VcmVertex *v, const Bsdf *b,
-                              Pcg32 *rng, SplatList *splats, uint64_t *rays)
+                              Vec2 u_lens, SplatList *splats, uint64_t *rays)
 {
     const float margin = filter_radius(vp->frame.filter) - 0.5f;
-    Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
     CameraWiSample cs;
     if (!camera_sample_wi(cam, v->p, u_lens, margin, &cs)) return;
     float cos_prev = fabsf(v3_dot(v->ng, v->w_prev));
@@ -206,15 +205,21 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
 
         Bsdf bsdf;
         scene_bsdf(s, &sh, &bsdf);
-        if (!bsdf_is_delta(&bsdf)) {
-            VcmVertex v = {sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
-                           sh.material, bounces, sh.uv};
+        const bool connect = !bsdf_is_delta(&bsdf);
+        VcmVertex v;
+        Vec2 u_lens;
+        if (connect) {
+            v = (VcmVertex){sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
+                            sh.material, bounces, sh.uv};
             push_vertex(verts, &v);
-            connect_to_camera(s, cam, vp, it, &v, &bsdf, rng, splats, rays);
+            u_lens = v2(pcg32_float(rng), pcg32_float(rng));
         }
-        if (vp->max_depth > 0 && bounces >= vp->max_depth) break;
-
-        if (!scatter(s, &sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray)) break;
+        /* The next direction before this vertex's camera connection, with the random
+         * numbers drawn in the same order (light.c says why). */
+        const bool more = !(vp->max_depth > 0 && bounces >= vp->max_depth) &&
+                          scatter(s, &sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray);
+        if (connect) connect_to_camera(s, cam, vp, it, &v, &bsdf, u_lens, splats, rays);
+        if (!more) break;
     }
 }
 
