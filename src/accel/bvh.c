@@ -516,7 +516,9 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     BBox root = nodes[0].box;
     Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, 0.0f, bvh, NODE_UNITS};
     /* Not smaller: at 2^-30 of the extent test_bvh's unit icosphere (coordinates around 0,
-     * where the relative widening vanishes) lost closest hits to the slab test's rounding. */
+     * where the relative widening vanishes) lost closest hits to the slab test's rounding.
+     * Scene.offset_near (scene_commit) is four times this, so that rays leaving a surface
+     * in a coordinate plane start outside its box: change the two together. */
     e.margin = 1e-7f * maxf(v3_max_abs(root.min), v3_max_abs(root.max)) + 1e-30f;
     bvh->num_nodes = 1;
     if (nodes[0].count > 0) {

@@ -242,16 +242,52 @@ void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Rgb c)
     l->v[l->n++] = (FilmSplat){x, y, c.r, c.g, c.b, (uint16_t)y0, (uint16_t)y1};
 }
 
+/* splat_spread for the tent, the light tracers' default filter: the two nearest pixel
+ * centres per axis with bilinear weights (1 - a, a), each kept if on the film (and the
+ * rows within [row_lo, row_hi)). Zero weights are added rather than tested for: the sums
+ * start at +0, and adding a zero of either sign to them changes no bit. */
+static inline void splat_spread_tent(const FilmSplat *s, int width, double *rgb, double scale, int row_lo,
+                                     int row_hi)
+{
+    const float tx = s->x - 0.5f, ty = s->y - 0.5f;
+    const float fx0 = floorf(tx), fy0 = floorf(ty);
+    const float ax = tx - fx0, ay = ty - fy0;
+    const int cx = (int)fx0, cy = (int)fy0;
+    const float wx0 = 1.0f - ax, wy[2] = {1.0f - ay, ay};
+    const bool x0_in = (unsigned)cx < (unsigned)width, x1_in = (unsigned)(cx + 1) < (unsigned)width;
+    const double r = scale * (double)s->r, g = scale * (double)s->g, b = scale * (double)s->b;
+    const int lo = s->row0 > row_lo ? s->row0 : row_lo, hi = s->row1 < row_hi - 1 ? s->row1 : row_hi - 1;
+    for (int j = 0; j < 2; j++) {
+        const int py = cy + j;
+        if (py < lo || py > hi) continue;
+        double *row = &rgb[3 * (size_t)py * (size_t)width];
+        if (x0_in) {
+            double *p = &row[3 * cx];
+            const double w = (double)(wx0 * wy[j]);
+            p[0] += r * w; p[1] += g * w; p[2] += b * w;
+        }
+        if (x1_in) {
+            double *p = &row[3 * (cx + 1)];
+            const double w = (double)(ax * wy[j]);
+            p[0] += r * w; p[1] += g * w; p[2] += b * w;
+        }
+    }
+}
+
 /* Adds scale times entry s, spread by the filter, to the pixels of its footprint in rows
  * [row_lo, row_hi). The weights: the tent's bilinear (1 - a, a) pairs, the wide filters'
  * h(centre - position) from filter_weight1, the same h camera samples are weighted with. */
-static void splat_spread(const FilmSplat *s, const SplatFrame *fr, double *rgb, double scale, int row_lo, int row_hi)
+static inline void splat_spread(const FilmSplat *s, const SplatFrame *fr, double *rgb, double scale, int row_lo,
+                                int row_hi)
 {
+    if (fr->filter == CST_FILTER_TENT) {
+        splat_spread_tent(s, fr->width, rgb, scale, row_lo, row_hi);
+        return;
+    }
     /* Rows from the entry (film_splat's footprint), columns as film_splat found them. */
     int y0 = s->row0 > row_lo ? s->row0 : row_lo, y1 = s->row1 < row_hi - 1 ? s->row1 : row_hi - 1;
     int x0, x1;
     switch (fr->filter) {
-    case CST_FILTER_TENT: x0 = (int)floorf(s->x - 0.5f); x1 = x0 + 1; break;
     case CST_FILTER_GAUSSIAN:
     case CST_FILTER_MITCHELL: {
         const float rad = filter_radius(fr->filter);
@@ -264,23 +300,7 @@ static void splat_spread(const FilmSplat *s, const SplatFrame *fr, double *rgb, 
     if (x0 < 0) x0 = 0;
     if (x1 > fr->width - 1) x1 = fr->width - 1;
     const double r = scale * (double)s->r, g = scale * (double)s->g, b = scale * (double)s->b;
-    if (fr->filter == CST_FILTER_TENT) {
-        float tx = s->x - 0.5f, ty = s->y - 0.5f;
-        float fx0 = floorf(tx), fy0 = floorf(ty);
-        float ax = tx - fx0, ay = ty - fy0;
-        const int cx = (int)fx0, cy = (int)fy0;
-        for (int py = y0; py <= y1; py++) {
-            float wy = py == cy ? 1.0f - ay : ay;
-            if (wy == 0.0f) continue;
-            for (int px = x0; px <= x1; px++) {
-                float wx = px == cx ? 1.0f - ax : ax;
-                if (wx == 0.0f) continue;
-                double w = (double)(wx * wy);
-                double *p = &rgb[3 * ((size_t)py * (size_t)fr->width + (size_t)px)];
-                p[0] += r * w; p[1] += g * w; p[2] += b * w;
-            }
-        }
-    } else if (fr->filter == CST_FILTER_GAUSSIAN || fr->filter == CST_FILTER_MITCHELL) {
+    if (fr->filter == CST_FILTER_GAUSSIAN || fr->filter == CST_FILTER_MITCHELL) {
         for (int py = y0; py <= y1; py++) {
             float wy = filter_weight1(fr->filter, (float)py + 0.5f - s->y);
             if (wy == 0.0f) continue;
@@ -331,51 +351,12 @@ int splat_list_bin(SplatList *l, const SplatFrame *fr)
     return 1;
 }
 
-/* splat_spread for the tent, the light tracers' default filter, without its general
- * loops: the two nearest pixel centres per axis, each kept if on the film (and the rows
- * within [row_lo, row_hi)). Zero weights are added rather than tested for: the sums
- * start at +0 and every term is >= 0, so adding a zero changes no bit, and the film is
- * the same as splat_spread's. */
-static inline void splat_spread_tent(const FilmSplat *s, int width, double *rgb, double scale, int row_lo,
-                                     int row_hi)
-{
-    const float tx = s->x - 0.5f, ty = s->y - 0.5f;
-    const float fx0 = floorf(tx), fy0 = floorf(ty);
-    const float ax = tx - fx0, ay = ty - fy0;
-    const int cx = (int)fx0, cy = (int)fy0;
-    const float wx0 = 1.0f - ax, wy[2] = {1.0f - ay, ay};
-    const bool x0_in = (unsigned)cx < (unsigned)width, x1_in = (unsigned)(cx + 1) < (unsigned)width;
-    const double r = scale * (double)s->r, g = scale * (double)s->g, b = scale * (double)s->b;
-    const int lo = s->row0 > row_lo ? s->row0 : row_lo, hi = s->row1 < row_hi - 1 ? s->row1 : row_hi - 1;
-    for (int j = 0; j < 2; j++) {
-        const int py = cy + j;
-        if (py < lo || py > hi) continue;
-        double *row = &rgb[3 * (size_t)py * (size_t)width];
-        if (x0_in) {
-            double *p = &row[3 * cx];
-            const double w = (double)(wx0 * wy[j]);
-            p[0] += r * w; p[1] += g * w; p[2] += b * w;
-        }
-        if (x1_in) {
-            double *p = &row[3 * (cx + 1)];
-            const double w = (double)(ax * wy[j]);
-            p[0] += r * w; p[1] += g * w; p[2] += b * w;
-        }
-    }
-}
-
 void film_add_splats_band(const SplatList *l, const SplatFrame *fr, double *rgb, double scale, int band)
 {
     const int row_lo = band * fr->band_rows;
     const int row_hi = row_lo + fr->band_rows < fr->height ? row_lo + fr->band_rows : fr->height;
-    const FilmSplat *v = l->binned;
-    const uint32_t end = l->band_start[band + 1];
-    if (fr->filter == CST_FILTER_TENT) {
-        for (uint32_t i = l->band_start[band]; i < end; i++)
-            splat_spread_tent(&v[i], fr->width, rgb, scale, row_lo, row_hi);
-        return;
-    }
-    for (uint32_t i = l->band_start[band]; i < end; i++) splat_spread(&v[i], fr, rgb, scale, row_lo, row_hi);
+    for (uint32_t i = l->band_start[band]; i < l->band_start[band + 1]; i++)
+        splat_spread(&l->binned[i], fr, rgb, scale, row_lo, row_hi);
 }
 
 void film_add_splats(const SplatList *l, const SplatFrame *fr, double *rgb, double scale)

@@ -431,7 +431,8 @@ static void merge_plan(const VcmIteration *it, Vec3 p, MergeQuery *q)
             }
 }
 
-/* Step 2: each bucket's run, prefetched whole (a run is a few vertices, a few lines). */
+/* Step 2: where each bucket's run lies, and the run prefetched (up to eight lines; a run
+ * is a few vertices). */
 static void merge_fetch(const VcmIteration *it, MergeQuery *q)
 {
     for (int b = 0; b < q->nb; b++) {

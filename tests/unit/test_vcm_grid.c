@@ -120,10 +120,10 @@ static void test_sort_against_definition(void **state)
 }
 
 /* The cells of a wall (a plane of 100 x 100 cells, offset from the origin) spread over the
- * buckets as random placement would: with 16411 buckets (as many as the vertices, as
- * render.c sizes it) for 10,000 cells about 76% land in a bucket of their own
- * (1 - e^(-10000 / 16411) of the buckets in use); a hash that folded a coordinate away
- * would fall far below. */
+ * buckets as random placement would: 10,000 cells placed at random in 16411 buckets (as
+ * many as the vertices, as render.c sizes it) occupy 16411 (1 - e^(-10000 / 16411)),
+ * about 7,490 distinct buckets; a hash that folded a coordinate away would use at most a
+ * few hundred. */
 static void test_buckets_spread(void **state)
 {
     (void)state;
