@@ -20,24 +20,27 @@
 
 /* An 8-wide node: the boxes of its children in structure-of-arrays form so one AVX slab
  * test checks all eight. Rows are [2 * axis + side] (side 0: min plane, 1: max plane).
- * Empty slots hold NaN bounds, which every finite ray misses (see node_hit8 in bvh.c).
+ * Empty slots hold inverted infinite bounds (+inf min, -inf max), which every ray misses.
  * 224 bytes (7 units of BVH_UNIT bytes), 32-byte aligned. */
 typedef struct BvhNode {
     float bounds[6][BVH_WIDTH];
     uint32_t child[BVH_WIDTH]; /* a BvhRef */
 } BvhNode;
 
-/* Child references. Inner: the unit (Bvh.units) where a BvhNode starts. Leaf (BVH_LEAF
- * set): a run of 1 to 8 triangle blocks from the unit given, or, with BVH_SPHERES set, of
- * 1 to 8 spheres from the index given; leaves hold one kind only, so the reference says
- * everything traversal needs without another memory access. */
-#define BVH_LEAF 0x80000000u
-#define BVH_SPHERES 0x40000000u
-#define BVH_COUNT_SHIFT 27 /* count - 1, three bits */
-#define BVH_INDEX_MASK 0x07ffffffu
+/* Child references. Inner: the byte offset in Bvh.units where a BvhNode starts (a
+ * multiple of BVH_UNIT, so the low five bits are zero and the node's address is one add
+ * away). Leaf (BVH_LEAF set): count - 1 in three bits, and above bit 5 either the unit
+ * (Bvh.units) of a run of 1 to 8 triangle blocks or, with BVH_SPHERES set, the index of
+ * a run of 1 to 8 spheres; leaves hold one kind only, so the reference says everything
+ * traversal needs without another memory access. */
+#define BVH_LEAF 0x1u
+#define BVH_SPHERES 0x2u
+#define BVH_COUNT_SHIFT 2 /* count - 1, three bits */
+#define BVH_INDEX_SHIFT 5
+#define BVH_INDEX_MAX 0x07ffffffu /* largest index a leaf can hold */
 #define BVH_EMPTY 0xffffffffu
 static inline bool bvh_ref_is_leaf(uint32_t ref) { return (ref & BVH_LEAF) != 0u; }
-static inline uint32_t bvh_ref_index(uint32_t ref) { return ref & BVH_INDEX_MASK; }
+static inline uint32_t bvh_ref_index(uint32_t ref) { return ref >> BVH_INDEX_SHIFT; }
 static inline uint32_t bvh_ref_count(uint32_t ref) { return ((ref >> BVH_COUNT_SHIFT) & 7u) + 1u; }
 
 /* Four triangles' vertices in SoA form, v[vertex][axis][lane], for one SSE watertight
@@ -80,7 +83,7 @@ static inline size_t bvh_num_units(const Bvh *bvh)
 }
 static inline const BvhNode *bvh_node(const Bvh *bvh, uint32_t ref)
 {
-    return (const BvhNode *)(const void *)(bvh->units + (size_t)ref * BVH_UNIT);
+    return (const BvhNode *)(const void *)(bvh->units + ref);
 }
 static inline const BvhTriBlock *bvh_blocks(const Bvh *bvh, uint32_t index)
 {

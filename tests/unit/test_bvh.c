@@ -264,23 +264,24 @@ static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, in
     }
 }
 
-/* Checks the 8-wide tree below wide node `node` (a unit index), whose own box (its slot in
- * the parent) is `box`: every slot is empty (NaN bounds), a leaf or a later wide node,
+/* Checks the 8-wide tree below wide node `node` (its reference: a byte offset), whose own
+ * box (its slot in the parent) is `box`: every slot is empty (inverted infinite bounds),
+ * a leaf or a later wide node,
  * and each slot's box lies in its parent's and holds its primitives. Returns the depth
  * below. This mirrors the layout in bvh.h and must follow it when it changes. */
 static int check_node(const Bvh *bvh, const Soup *s, int node, BBox box, int depth, int *seen_ids, int *seen_items,
                       int *cover)
 {
-    assert_true(node >= 0);
-    cover_units(bvh, cover, (size_t)node, sizeof(BvhNode) / BVH_UNIT);
+    assert_true(node >= 0 && node % (int)BVH_UNIT == 0);
+    cover_units(bvh, cover, (size_t)node / BVH_UNIT, sizeof(BvhNode) / BVH_UNIT);
     const BvhNode *n = bvh_node(bvh, (uint32_t)node);
     assert_true(((uintptr_t)n & 31u) == 0u);
     int d = depth, used = 0;
     for (int i = 0; i < BVH_WIDTH; i++) {
         BBox sb = slot_box(n, i);
         if (n->child[i] == BVH_EMPTY) {
-            assert_true(isnan(sb.min.x) && isnan(sb.min.y) && isnan(sb.min.z));
-            assert_true(isnan(sb.max.x) && isnan(sb.max.y) && isnan(sb.max.z));
+            assert_true(sb.min.x == INFINITY && sb.min.y == INFINITY && sb.min.z == INFINITY);
+            assert_true(sb.max.x == -INFINITY && sb.max.y == -INFINITY && sb.max.z == -INFINITY);
             continue;
         }
         used++;
