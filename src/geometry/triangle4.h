@@ -54,11 +54,12 @@ static inline int triangle4_intersect(const float v[3][3][4], const TriangleRay4
     int zero_lanes = _mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)),
                                                _mm_cmpeq_ps(W, zero)));
     *scalar_lanes = zero_lanes;
-    __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
-    __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
-    /* Most rays pass outside all four: stop before the division. Unused lanes are NaN,
-     * neither negative nor positive, so they are dropped explicitly. */
-    int inside = _mm_movemask_ps(_mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpord_ps(U, U))) & ~zero_lanes;
+    /* With no zero among U, V, W, "some negative and some positive" is "some sign bit
+     * differs from U's": two xors and an or instead of six compares. Most rays pass outside
+     * all four: stop before the division. Unused lanes are NaN, whose sign bits mean
+     * nothing, so they are dropped explicitly. */
+    __m128 mixed = _mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, W));
+    int inside = ~_mm_movemask_ps(mixed) & _mm_movemask_ps(_mm_cmpord_ps(U, U)) & ~zero_lanes;
     if (!inside) {
         *t_out = *u_out = *v_out = zero;
         return 0;
