@@ -918,4 +918,3 @@ bool bvh_occluded(const Bvh *bvh, const Ray *ray)
         cur = stack[--sp];
     }
 }
-
