@@ -373,7 +373,6 @@ Rgb bsdf_eval_transport_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, Bsd
     return mode == BSDF_RADIANCE ? f : rgb_scale(f, shading_adjoint(ng_o, ng_i, wo.z, wi.z));
 }
 
-
 static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
     switch (b->type) {
