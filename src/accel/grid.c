@@ -36,7 +36,8 @@ enum {
     GRID_REFS_PER_PRIM = 64,   /* beyond max(4M, 64 N) references, coarsen the grid */
     /* Per-ray mailbox slots (a power of two). Direct-mapped on the low bits of the
      * grid-local index: those follow the Morton order, so neighbours rarely collide. */
-    GRID_MAILBOX = 32
+    GRID_MAILBOX = 32,
+    BRICK_SHIFT = 2 /* bricks of 4 x 4 x 4 cells (grid.h) */
 };
 #define GRID_MARGIN_REL 0x1p-16
 
@@ -256,7 +257,7 @@ static void grid_set_cells(Grid *g, const double lo[3], const double size[3], co
         g->cell_size[a] = size[a] / (double)res[a];
         g->inv_cell_size[a] = (double)res[a] / size[a];
     }
-    grid_split64(res, g->brick_shift);
+    for (int a = 0; a < 3; a++) g->brick_shift[a] = BRICK_SHIFT;
     for (int a = 0; a < 3; a++) g->brick_res[a] = ((res[a] - 1) >> g->brick_shift[a]) + 1;
     grid_split64(g->brick_res, g->super_shift);
     for (int a = 0; a < 3; a++) g->super_res[a] = ((g->brick_res[a] - 1) >> g->super_shift[a]) + 1;
@@ -478,41 +479,43 @@ size_t grid_memory_bytes(const Grid *g)
 
 /* ------------------------------------------------------------------ traversal */
 
-/* 3D-DDA state (Amanatides & Woo 1987), in double. The ray crosses boundary plane k of
- * axis a (at org + k * cell_size) at t = t_base[a] + k * t_cell[a]; t_next[a] is the
- * crossing that leaves the current cell on axis a. An axis the ray does not move along
- * has t_base = inf and t_cell = 0, so its crossings are all inf. The walk ends at t_end:
- * the ray's exit from the grid box, or its t_max, or the closest hit so far (a hit no
- * farther than the current cell's exit is final: see the top of the file). */
+/* A two-level walk: a 3D-DDA over bricks (Amanatides & Woo 1987, one brick of 4 x 4 x 4
+ * cells per step, an empty superbrick per step where there is one), and in each occupied
+ * brick the set of its cells that the ray passes through, computed at once rather than
+ * stepped cell by cell: cell (x, y, z) is crossed iff its three slabs' t-intervals
+ * overlap, and since intervals on a line that overlap pairwise have a common point
+ * (Helly's theorem in one dimension), that is three pairwise tests, each a 4 x 4 table
+ * (brick_cells). A cell-by-cell DDA spent most of its time in mispredicted branches on
+ * which axis to step (docs/benchmarks.md).
+ *
+ * In double: the ray crosses boundary plane k of axis a (at org + k * cell_size) at
+ * t = t_base[a] + k * t_cell[a]. An axis the ray does not move along has t_base = inf and
+ * t_cell = 0, so its crossings are all inf. The walk ends at t_end: the ray's exit from
+ * the grid box, or its t_max, or the closest hit so far (a hit no farther than the
+ * current brick's exit is final: see the top of the file). */
 typedef struct GridWalk {
-    double t_next[3], t_base[3], t_cell[3];
-    double t_after[3]; /* the crossing after t_next: a step needs no arithmetic before the next choice */
+    double t_base[3], t_cell[3];
+    double tb[3];  /* where the ray leaves the current brick on each axis */
+    double t_lo;   /* where the ray enters the grid, or its t_min inside it */
     double t_end;
-    int idx[3];  /* cell coordinates */
-    int step[3]; /* -1, 0 or +1 */
-    int up[3];   /* 1 if step is +1: the exit plane of cell i is i + up */
-    const int32_t *axis_cells[3]; /* the grid's per-axis cell number parts */
-    int part[3]; /* axis_cells[a][idx[a]] */
-    int cell;    /* cell number (grid.h): the sum of the parts */
+    int b[3];      /* brick coordinates */
+    int step[3];   /* -1, 0 or +1 */
+    int up[3];     /* 1 if step is +1: the exit plane of cell i is i + up */
+    int brick;     /* brick number */
+    bool moves[3];
+    /* An axis the ray does not move along: its slab in the brick spans all t, the other
+     * three no t (NaN fails every comparison). */
+    __m128 fixed_lo[3], fixed_hi[3];
 } GridWalk;
 
-/* Where the ray leaves cell i along axis a. */
-static inline double walk_crossing(const GridWalk *w, int a, int i)
+/* Where the ray leaves brick b along axis a: the exit plane of its last cell in the ray's
+ * direction, (b + up) * 4. */
+static inline double brick_exit(const GridWalk *w, int a, int b)
 {
-    return w->t_base[a] + (double)(i + w->up[a]) * w->t_cell[a];
+    return w->t_base[a] + (double)((b + w->up[a]) << BRICK_SHIFT) * w->t_cell[a];
 }
 
-/* Moves to coordinate i on axis a and updates the cell number. */
-static inline void walk_set(GridWalk *w, int a, int i)
-{
-    w->idx[a] = i;
-    w->t_next[a] = walk_crossing(w, a, i);
-    w->t_after[a] = walk_crossing(w, a, i + w->step[a]);
-    w->cell += w->axis_cells[a][i] - w->part[a];
-    w->part[a] = w->axis_cells[a][i];
-}
-
-/* Clips the ray to the grid box and finds its first cell. A zero direction component
+/* Clips the ray to the grid box and finds its first brick. A zero direction component
  * (either sign) constrains nothing when the origin lies in the slab, boundary included,
  * and never steps; an origin inside the box starts at t_min. False if the ray misses. */
 static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
@@ -535,12 +538,11 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
     if (!(t0 <= t1)) return false; /* also NaN */
     /* Finite, so an axis that never steps (t_next = inf) is never stepped. */
     w->t_end = t1 < DBL_MAX ? t1 : DBL_MAX;
-    w->axis_cells[0] = g->axis_cells;
-    w->axis_cells[1] = g->axis_cells + g->res[0];
-    w->axis_cells[2] = g->axis_cells + g->res[0] + g->res[1];
-    w->cell = 0;
+    w->t_lo = t0;
+    const __m128 nan = _mm_set1_ps(NAN), idx = _mm_setr_ps(0.0f, 1.0f, 2.0f, 3.0f);
     for (int a = 0; a < 3; a++) {
         bool moves = inv[a] != 0.0;
+        w->moves[a] = moves;
         w->step[a] = moves ? (d[a] > 0.0 ? 1 : -1) : 0;
         w->up[a] = d[a] > 0.0;
         w->t_base[a] = moves ? (g->org[a] - o[a]) * inv[a] : HUGE_VAL;
@@ -548,121 +550,155 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
         double p = moves ? o[a] + t0 * d[a] : o[a];
         double f = (p - g->org[a]) * g->inv_cell_size[a];
         int i = !(f >= 0.0) ? 0 : (f >= (double)g->res[a] ? g->res[a] - 1 : (int)f);
-        w->part[a] = 0;
-        walk_set(w, a, i);
+        w->b[a] = i >> BRICK_SHIFT;
+        w->tb[a] = brick_exit(w, a, w->b[a]); /* inf on an axis without steps */
+        __m128 here = _mm_cmpeq_ps(idx, _mm_set1_ps((float)(i & ((1 << BRICK_SHIFT) - 1))));
+        w->fixed_lo[a] = _mm_or_ps(_mm_and_ps(here, _mm_set1_ps(-INFINITY)), _mm_andnot_ps(here, nan));
+        w->fixed_hi[a] = _mm_or_ps(_mm_and_ps(here, _mm_set1_ps(INFINITY)), _mm_andnot_ps(here, nan));
     }
+    w->brick = w->b[0] + g->brick_res[0] * (w->b[1] + g->brick_res[1] * w->b[2]);
     return true;
 }
 
-/* One DDA step into the next cell; false once the ray has left the grid or passed
- * t_end. */
-static inline bool walk_step(const Grid *g, GridWalk *w)
+/* The crossings of planes k, k + 1, k + 2, k + 3 of axis a, computed as in brick_exit
+ * and rounded to float. Rounding is monotonic, so it can merge an interval's end with
+ * the next one's start but never order two crossings the other way: the overlap tests
+ * below can only gain cells from it, never lose one. */
+static inline __m128 plane_t4(const GridWalk *w, int a, int k)
 {
-    /* The axis of the nearest crossing, ties to the higher axis, without branches: its
-     * choice is a coin toss for the predictor on most rays. */
-    __m128d t0 = _mm_load_sd(&w->t_next[0]), t1 = _mm_load_sd(&w->t_next[1]), t2 = _mm_load_sd(&w->t_next[2]);
-    int lt01 = _mm_comilt_sd(t0, t1);
-    __m128d m = _mm_min_sd(t0, t1); /* t0 < t1 ? t0 : t1 */
-    int c = _mm_comilt_sd(m, t2);
-    int a = ((1 - lt01) & -c) | (2 & (c - 1));
-    if (!(w->t_next[a] < w->t_end)) return false;
-    int i = w->idx[a] + w->step[a];
-    if ((unsigned)i >= (unsigned)g->res[a]) return false;
-    /* walk_set(w, a, i), with the crossing computed one step ahead (the same value). */
-    w->idx[a] = i;
-    w->t_next[a] = w->t_after[a];
-    w->t_after[a] = walk_crossing(w, a, i + w->step[a]);
-    w->cell += w->axis_cells[a][i] - w->part[a];
-    w->part[a] = w->axis_cells[a][i];
+#if defined(__AVX__)
+    __m256d kd = _mm256_add_pd(_mm256_set1_pd((double)k), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
+    return _mm256_cvtpd_ps(_mm256_add_pd(_mm256_set1_pd(w->t_base[a]), _mm256_mul_pd(kd, _mm256_set1_pd(w->t_cell[a]))));
+#else
+    const __m128d base = _mm_set1_pd(w->t_base[a]), cell = _mm_set1_pd(w->t_cell[a]), kk = _mm_set1_pd((double)k);
+    __m128d lo = _mm_add_pd(base, _mm_mul_pd(_mm_add_pd(kk, _mm_setr_pd(0.0, 1.0)), cell));
+    __m128d hi = _mm_add_pd(base, _mm_mul_pd(_mm_add_pd(kk, _mm_setr_pd(2.0, 3.0)), cell));
+    return _mm_movelh_ps(_mm_cvtpd_ps(lo), _mm_cvtpd_ps(hi));
+#endif
+}
+
+/* The t-intervals [lo, hi] of the current brick's four slabs along axis a, in cell
+ * order, limited to [t_lo, t_end]: a slab the ray crosses outside it is NaN. */
+static inline void brick_slabs(const GridWalk *w, int a, __m128 t_lo, __m128 t_hi, __m128 *lo, __m128 *hi)
+{
+    if (!w->moves[a]) {
+        *lo = w->fixed_lo[a];
+        *hi = w->fixed_hi[a];
+        return;
+    }
+    /* Cell i of the brick is entered at plane i + 1 - up and left at plane i + up. */
+    int k = w->b[a] << BRICK_SHIFT;
+    __m128 l = plane_t4(w, a, k + 1 - w->up[a]), h = plane_t4(w, a, k + w->up[a]);
+    __m128 in = _mm_and_ps(_mm_cmpge_ps(h, t_lo), _mm_cmple_ps(l, t_hi));
+    const __m128 nan = _mm_set1_ps(NAN);
+    *lo = _mm_or_ps(_mm_and_ps(in, l), _mm_andnot_ps(in, nan));
+    *hi = _mm_or_ps(_mm_and_ps(in, h), _mm_andnot_ps(in, nan));
+}
+
+/* Bit i + 4 j: slab i of one axis and slab j of another overlap. */
+static inline unsigned slab_pairs(__m128 lo_i, __m128 hi_i, __m128 lo_j, __m128 hi_j)
+{
+#define SLAB_PAIR(j)                                                                                 \
+    ((unsigned)_mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(lo_i, _mm_shuffle_ps(hi_j, hi_j, (j) * 0x55)), \
+                                          _mm_cmple_ps(_mm_shuffle_ps(lo_j, lo_j, (j) * 0x55), hi_i))) \
+     << (4 * (j)))
+    return SLAB_PAIR(0) | SLAB_PAIR(1) | SLAB_PAIR(2) | SLAB_PAIR(3);
+#undef SLAB_PAIR
+}
+
+/* Bit k of m to bit 4 k (16 bits); and nibble k of m to bits 16 k .. 16 k + 3. */
+static inline uint64_t spread_bits16(unsigned m)
+{
+    uint64_t x = m;
+    x = (x | x << 24) & 0x000000ff000000ffu;
+    x = (x | x << 12) & 0x000f000f000f000fu;
+    x = (x | x << 6) & 0x0303030303030303u;
+    return (x | x << 3) & 0x1111111111111111u;
+}
+static inline uint64_t spread_nibbles16(unsigned m)
+{
+    uint64_t x = m;
+    x = (x | x << 24) & 0x000000ff000000ffu;
+    return (x | x << 12) & 0x000f000f000f000fu;
+}
+
+/* The cells of the current brick that the ray crosses within [t_lo, t_end], as bits of
+ * the brick's occupancy word (cell x + 4 y + 16 z). Exact up to the float rounding of
+ * plane_t4, which only adds cells: a superset of the cells a cell-by-cell DDA visits. */
+static inline uint64_t brick_cells(const GridWalk *w)
+{
+    const __m128 t_lo = _mm_set1_ps((float)w->t_lo), t_hi = _mm_set1_ps((float)w->t_end);
+    __m128 lo[3], hi[3];
+    for (int a = 0; a < 3; a++) brick_slabs(w, a, t_lo, t_hi, &lo[a], &hi[a]);
+    unsigned xy = slab_pairs(lo[0], hi[0], lo[1], hi[1]); /* bit x + 4 y */
+    unsigned xz = slab_pairs(lo[0], hi[0], lo[2], hi[2]); /* bit x + 4 z */
+    unsigned yz = slab_pairs(lo[1], hi[1], lo[2], hi[2]); /* bit y + 4 z */
+    return (xy * 0x0001000100010001u) & (spread_nibbles16(xz) * 0x1111u) & (spread_bits16(yz) * 0xfu);
+}
+
+/* The last brick of block b (2^shift bricks along axis a) in the ray's direction. */
+static inline int walk_block_last(const GridWalk *w, int a, int b, int shift)
+{
+    return ((b + w->up[a]) << shift) - w->up[a];
+}
+
+/* One step of the brick DDA, or, from a brick of an empty superbrick, the jump to where
+ * the ray leaves that superbrick: the exit axis moves into the next superbrick, every
+ * other axis past its crossings before the exit, within the superbrick, which is where
+ * brick-by-brick steps would leave it (exits chosen alike, ties to the lower axis). False
+ * once the ray has left the grid or passed t_end. */
+static inline bool walk_next_brick(const Grid *g, GridWalk *w)
+{
+    int e;
+    double t_exit;
+    if (g->brick_first[w->brick] & GRID_SUPER_EMPTY) {
+        const int *ss = g->super_shift;
+        int slast[3];
+        t_exit = INFINITY;
+        e = 0;
+        for (int a = 0; a < 3; a++) {
+            slast[a] = walk_block_last(w, a, w->b[a] >> ss[a], ss[a]);
+            double t = brick_exit(w, a, slast[a]);
+            if (t < t_exit) { t_exit = t; e = a; }
+        }
+        if (!(t_exit < w->t_end)) return false;
+        int i = slast[e] + w->step[e];
+        if ((unsigned)i >= (unsigned)g->brick_res[e]) return false;
+        w->b[e] = i;
+        w->tb[e] = brick_exit(w, e, i);
+        for (int a = 0; a < 3; a++) {
+            if (a == e) continue;
+            while (w->tb[a] < t_exit && w->b[a] != slast[a] && (unsigned)(w->b[a] + w->step[a]) < (unsigned)g->brick_res[a]) {
+                w->b[a] += w->step[a];
+                w->tb[a] = brick_exit(w, a, w->b[a]);
+            }
+        }
+    } else {
+        e = w->tb[1] < w->tb[0] ? (w->tb[2] < w->tb[1] ? 2 : 1) : (w->tb[2] < w->tb[0] ? 2 : 0);
+        t_exit = w->tb[e];
+        if (!(t_exit < w->t_end)) return false;
+        int i = w->b[e] + w->step[e];
+        if ((unsigned)i >= (unsigned)g->brick_res[e]) return false;
+        w->b[e] = i;
+        w->tb[e] = brick_exit(w, e, i);
+    }
+    w->brick = w->b[0] + g->brick_res[0] * (w->b[1] + g->brick_res[1] * w->b[2]);
     return true;
+}
+
+/* The slots of occupied cell `local` of a brick with occupancy `bits`: [*begin, *end). */
+static inline void cell_list_in(const Grid *g, int brick, uint64_t bits, int local, uint32_t *begin, uint32_t *end)
+{
+    uint64_t before = bits & (((uint64_t)1 << local) - 1u);
+    uint32_t k = (g->brick_first[brick] & ~GRID_SUPER_EMPTY) + (uint32_t)__builtin_popcountll(before);
+    *begin = g->list_start[k];
+    *end = g->list_start[k + 1];
 }
 
 /* The slots of an occupied cell: [*begin, *end). */
 static inline void cell_list(const Grid *g, int cell, uint32_t *begin, uint32_t *end)
 {
-    uint64_t before = g->cell_bits[cell >> 6] & (((uint64_t)1 << (cell & 63)) - 1u);
-    uint32_t k = (g->brick_first[cell >> 6] & ~GRID_SUPER_EMPTY) + (uint32_t)__builtin_popcountll(before);
-    *begin = g->list_start[k];
-    *end = g->list_start[k + 1];
-}
-
-/* The last cell of brick (or superbrick, by mask) b on axis a in the ray's direction. */
-static inline int walk_block_last(const GridWalk *w, int a, int b, int shift)
-{
-    return w->step[a] > 0 ? ((b + 1) << shift) - 1 : b << shift;
-}
-
-/* From the current cell, in an empty brick, walks brick by brick (a 3D-DDA over bricks,
- * jumping empty superbricks in one step) to the first brick holding a primitive, and sets
- * the walk to the cell where the ray enters it. The cells of the axes other than the last
- * exit's are only found at the end, so an empty brick costs one crossing. The walk ends
- * exactly where jumping one empty block at a time would leave it, moving the exit axis
- * into the next block and every other axis past its crossings before the exit, within the
- * block: the exits are chosen alike (ties to the lower axis), and as the crossings along
- * an axis increase, finding the other axes' cells once at the end gives the same cells.
- * False once the ray has left the grid or passed t_end. */
-static inline bool walk_bricks(const Grid *g, GridWalk *w)
-{
-    const int *bs = g->brick_shift, *ss = g->super_shift;
-    int b[3], start[3];
-    double tb[3]; /* where the ray leaves the current brick on each axis */
-    for (int a = 0; a < 3; a++) {
-        b[a] = w->idx[a] >> bs[a];
-        start[a] = w->idx[a]; /* at or before the axis' cell at the end */
-        tb[a] = walk_crossing(w, a, walk_block_last(w, a, b[a], bs[a])); /* inf on an axis without steps */
-    }
-    int brick = w->cell >> 6, e;
-    double t_exit;
-    do {
-        if (g->brick_first[brick] & GRID_SUPER_EMPTY) {
-            int slast[3];
-            t_exit = INFINITY;
-            e = 0;
-            for (int a = 0; a < 3; a++) {
-                slast[a] = walk_block_last(w, a, b[a] >> ss[a], bs[a] + ss[a]);
-                double t = walk_crossing(w, a, slast[a]);
-                if (t < t_exit) { t_exit = t; e = a; }
-            }
-            if (!(t_exit < w->t_end)) return false;
-            int i = slast[e] + w->step[e];
-            if ((unsigned)i >= (unsigned)g->res[e]) return false;
-            b[e] = i >> bs[e];
-            start[e] = i;
-            tb[e] = walk_crossing(w, e, walk_block_last(w, e, b[e], bs[e]));
-            for (int a = 0; a < 3; a++) {
-                if (a == e) continue;
-                /* Past the bricks of the superbrick that the ray leaves before t_exit. */
-                int last_b = slast[a] >> bs[a], max_b = (g->res[a] - 1) >> bs[a];
-                while (tb[a] < t_exit && b[a] != last_b && b[a] + w->step[a] <= max_b) {
-                    b[a] += w->step[a];
-                    start[a] = w->step[a] > 0 ? b[a] << bs[a] : ((b[a] + 1) << bs[a]) - 1;
-                    tb[a] = walk_crossing(w, a, walk_block_last(w, a, b[a], bs[a]));
-                }
-            }
-        } else {
-            e = tb[1] < tb[0] ? (tb[2] < tb[1] ? 2 : 1) : (tb[2] < tb[0] ? 2 : 0);
-            t_exit = tb[e];
-            if (!(t_exit < w->t_end)) return false;
-            int i = walk_block_last(w, e, b[e], bs[e]) + w->step[e];
-            if ((unsigned)i >= (unsigned)g->res[e]) return false;
-            b[e] += w->step[e];
-            start[e] = i;
-            tb[e] = walk_crossing(w, e, walk_block_last(w, e, b[e], bs[e]));
-        }
-        brick = b[0] + g->brick_res[0] * (b[1] + g->brick_res[1] * b[2]);
-    } while (!g->cell_bits[brick]);
-    /* Each other axis: from its start, past the crossings before t_exit, within the brick
-     * and the grid. */
-    for (int a = 0; a < 3; a++) {
-        int i = start[a];
-        if (a != e) {
-            int last = walk_block_last(w, a, b[a], bs[a]);
-            int lim = last < g->res[a] ? last : g->res[a] - 1;
-            while (i != lim && walk_crossing(w, a, i) < t_exit) i += w->step[a];
-        }
-        if (i != w->idx[a]) walk_set(w, a, i);
-    }
-    return true;
+    cell_list_in(g, cell >> 6, g->cell_bits[cell >> 6], cell & 63, begin, end);
 }
 
 /* Fills the unused lanes of a batch: NaN vertices fail every comparison of the test. */
@@ -811,19 +847,25 @@ bool grid_intersect(const Grid *g, const Ray *ray, Hit *hit)
     Mailbox mb;
     mailbox_clear(&mb);
     bool found = false;
-    for (;;) {
-        uint64_t bits = g->cell_bits[w.cell >> 6];
-        if ((bits >> (w.cell & 63)) & 1u) {
+    do {
+        uint64_t bits = g->cell_bits[w.brick];
+        if (!bits) continue;
+        uint64_t m = brick_cells(&w) & bits;
+        while (m) {
+            int local = __builtin_ctzll(m);
+            m &= m - 1u;
             uint32_t begin, end;
-            cell_list(g, w.cell, &begin, &end);
-            found |= cell_intersect(g, begin, end, &mb, &q, &r, hit);
-            if (found && (double)r.t_max < w.t_end) w.t_end = (double)r.t_max;
-        } else if (!bits) {
-            if (!walk_bricks(g, &w)) break;
-            continue;
+            cell_list_in(g, w.brick, bits, local, &begin, &end);
+            if (cell_intersect(g, begin, end, &mb, &q, &r, hit)) {
+                found = true;
+                /* Cells entered beyond the new hit cannot hold a closer one. */
+                if ((double)r.t_max < w.t_end) {
+                    w.t_end = (double)r.t_max;
+                    m &= brick_cells(&w);
+                }
+            }
         }
-        if (!walk_step(g, &w)) break;
-    }
+    } while (walk_next_brick(g, &w));
     return found;
 }
 
@@ -834,17 +876,14 @@ bool grid_occluded(const Grid *g, const Ray *r)
     TriangleRay4 q = triangle_ray4_setup(r);
     Mailbox mb;
     mailbox_clear(&mb);
-    for (;;) {
-        uint64_t bits = g->cell_bits[w.cell >> 6];
-        if ((bits >> (w.cell & 63)) & 1u) {
+    do {
+        uint64_t bits = g->cell_bits[w.brick];
+        if (!bits) continue;
+        for (uint64_t m = brick_cells(&w) & bits; m; m &= m - 1u) {
             uint32_t begin, end;
-            cell_list(g, w.cell, &begin, &end);
+            cell_list_in(g, w.brick, bits, __builtin_ctzll(m), &begin, &end);
             if (cell_occluded(g, begin, end, &mb, &q, r)) return true;
-        } else if (!bits) {
-            if (!walk_bricks(g, &w)) break;
-            continue;
         }
-        if (!walk_step(g, &w)) break;
-    }
+    } while (walk_next_brick(g, &w));
     return false;
 }

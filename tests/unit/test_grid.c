@@ -902,18 +902,14 @@ static long refs_on_walk(const Grid *g, const Ray *ray)
     Hit h;
     if (grid_intersect(g, ray, &h)) w.t_end = fmin(w.t_end, (double)h.t);
     long refs = 0;
-    for (;;) {
-        uint64_t bits = g->cell_bits[w.cell >> 6];
-        if ((bits >> (w.cell & 63)) & 1u) {
+    do {
+        uint64_t bits = g->cell_bits[w.brick];
+        for (uint64_t m = bits ? brick_cells(&w) & bits : 0u; m; m &= m - 1u) {
             uint32_t begin, end;
-            cell_list(g, w.cell, &begin, &end);
+            cell_list_in(g, w.brick, bits, __builtin_ctzll(m), &begin, &end);
             refs += end - begin;
-        } else if (!bits) {
-            if (!walk_bricks(g, &w)) break;
-            continue;
         }
-        if (!walk_step(g, &w)) break;
-    }
+    } while (walk_next_brick(g, &w));
     return refs;
 }
 
