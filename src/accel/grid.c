@@ -234,21 +234,8 @@ static size_t grid_insert(const Grid *g, const AccelGeometry *geom, int id, uint
     return n;
 }
 
-/* Splits 64 = 2^6 units over the axes: each bit goes to the axis with the most units
- * left, so the shape follows the proportions of n and a flat axis gets none. */
-static void grid_split64(const int n[3], int shift[3])
-{
-    shift[0] = shift[1] = shift[2] = 0;
-    for (int bit = 0; bit < 6; bit++) {
-        int best = 0;
-        for (int a = 1; a < 3; a++)
-            if ((n[a] >> shift[a]) > (n[best] >> shift[best])) best = a;
-        shift[best]++;
-    }
-}
-
 /* Sets the cell geometry for resolution res over the grid box [lo, lo + size] and the
- * brick and superbrick shapes (grid.h). */
+ * bricks (grid.h). */
 static void grid_set_cells(Grid *g, const double lo[3], const double size[3], const int res[3])
 {
     for (int a = 0; a < 3; a++) {
@@ -259,11 +246,46 @@ static void grid_set_cells(Grid *g, const double lo[3], const double size[3], co
     }
     for (int a = 0; a < 3; a++) g->brick_shift[a] = BRICK_SHIFT;
     for (int a = 0; a < 3; a++) g->brick_res[a] = ((res[a] - 1) >> g->brick_shift[a]) + 1;
-    grid_split64(g->brick_res, g->super_shift);
-    for (int a = 0; a < 3; a++) g->super_res[a] = ((g->brick_res[a] - 1) >> g->super_shift[a]) + 1;
     g->num_cells = 64 * g->brick_res[0] * g->brick_res[1] * g->brick_res[2];
     for (int a = 0, k = 0; a < 3; a++)
         for (int i = 0; i < res[a]; i++) g->axis_cells[k++] = grid_axis_cell(g, a, i);
+}
+
+/* One pass of the Chebyshev distance transform, along axis a: d[b] becomes the least
+ * max(|i - j|, d[b']) over the bricks b' of b's line along a (index j, b's is i), capped
+ * at GRID_BRICK_REACH. Passes along x, y and z in turn give, from 0 on occupied bricks and
+ * the cap elsewhere, the distance in the largest coordinate difference to the nearest
+ * occupied brick: min over b' of max(|dx|, |dy|, |dz|, ...) nests axis by axis. */
+static void brick_distance_pass(const Grid *g, int a, const uint32_t *in, uint32_t *out)
+{
+    const int *r = g->brick_res;
+    int stride = a == 0 ? 1 : (a == 1 ? r[0] : r[0] * r[1]);
+    int n = r[a], nb = r[0] * r[1] * r[2];
+    for (int b = 0; b < nb; b++) {
+        int i = b / stride % n, line = b - i * stride;
+        uint32_t best = GRID_BRICK_REACH;
+        int lo = i - (GRID_BRICK_REACH - 1) > 0 ? i - (GRID_BRICK_REACH - 1) : 0;
+        int hi = i + (GRID_BRICK_REACH - 1) < n - 1 ? i + (GRID_BRICK_REACH - 1) : n - 1;
+        for (int j = lo; j <= hi && best > 0; j++) {
+            uint32_t dist = (uint32_t)(j > i ? j - i : i - j), v = in[line + j * stride];
+            if (v < dist) v = dist;
+            if (v < best) best = v;
+        }
+        out[b] = best;
+    }
+}
+
+/* brick_info of the empty bricks (grid.h); `tmp` has two entries per brick. */
+static void grid_brick_distances(Grid *g, uint32_t *tmp)
+{
+    int nb = g->num_cells / 64;
+    uint32_t *d0 = tmp, *d1 = tmp + nb;
+    for (int b = 0; b < nb; b++) d0[b] = g->cell_bits[b] ? 0u : GRID_BRICK_REACH;
+    brick_distance_pass(g, 0, d0, d1);
+    brick_distance_pass(g, 1, d1, d0);
+    brick_distance_pass(g, 2, d0, d1);
+    for (int b = 0; b < nb; b++)
+        if (!g->cell_bits[b]) g->brick_info[b] = d1[b];
 }
 
 /* Spreads the low 10 bits of x to every third bit (Morton code helper). */
@@ -326,7 +348,7 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
         return cst_fail(err, CST_ERR_INVALID_ARG, "grid: %zu primitives exceed the 32-bit id range", n);
     uint32_t *order = NULL;
     uint32_t *cell_start = NULL; /* during the build: num_cells + 1 offsets into slots */
-    uint8_t *super_used = NULL;  /* during the build: by superbrick, whether it holds a primitive */
+    uint32_t *reach = NULL;      /* during the build: the brick distances of one pass */
 
     BBox raw = bbox_empty();
     size_t placed = 0;
@@ -415,12 +437,12 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
     int occupied = 0;
     for (int c = 0; c < g->num_cells; c++) occupied += cell_start[c + 1] > cell_start[c];
     g->cell_bits = calloc((size_t)g->num_cells / 64, sizeof *g->cell_bits);
-    g->brick_first = calloc((size_t)g->num_cells / 64, sizeof *g->brick_first);
+    g->brick_info = calloc((size_t)g->num_cells / 64, sizeof *g->brick_info);
     g->list_start = malloc(((size_t)occupied + 1) * sizeof *g->list_start);
-    if (!g->cell_bits || !g->brick_first || !g->list_start) goto oom;
+    if (!g->cell_bits || !g->brick_info || !g->list_start) goto oom;
     g->num_occupied = occupied;
     for (int c = 0, k = 0; c < g->num_cells; c++) {
-        if ((c & 63) == 0) g->brick_first[c >> 6] = (uint32_t)k;
+        if ((c & 63) == 0) g->brick_info[c >> 6] = (uint32_t)k;
         if (cell_start[c + 1] == cell_start[c]) continue;
         g->cell_bits[c >> 6] |= (uint64_t)1 << (c & 63);
         g->list_start[k++] = cell_start[c];
@@ -429,27 +451,18 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
     free(cell_start);
     cell_start = NULL;
 
-    /* Superbrick occupancy, kept as a flag on each brick of an empty superbrick: the
-     * traversal reads it from the brick it is in, with no index arithmetic. */
-    size_t num_super = (size_t)g->super_res[0] * (size_t)g->super_res[1] * (size_t)g->super_res[2];
-    super_used = calloc(num_super, 1);
-    if (!super_used) goto oom;
-    const int *ss = g->super_shift;
-    for (int pass = 0; pass < 2; pass++)
-        for (int bz = 0, b = 0; bz < g->brick_res[2]; bz++)
-            for (int by = 0; by < g->brick_res[1]; by++)
-                for (int bx = 0; bx < g->brick_res[0]; bx++, b++) {
-                    int sb = (bx >> ss[0]) + g->super_res[0] * ((by >> ss[1]) + g->super_res[1] * (bz >> ss[2]));
-                    if (pass == 0 && g->cell_bits[b]) super_used[sb] = 1;
-                    if (pass == 1 && !super_used[sb]) g->brick_first[b] |= GRID_SUPER_EMPTY;
-                }
-    free(super_used);
+    /* Each empty brick's distance to the nearest occupied one (grid.h). */
+    int nb = g->num_cells / 64;
+    if (!(reach = calloc(2 * (size_t)nb, sizeof *reach))) goto oom;
+    grid_brick_distances(g, reach);
+    free(reach);
+    reach = NULL;
     free(order);
     return CST_OK;
 oom:
     free(order);
     free(cell_start);
-    free(super_used);
+    free(reach);
     grid_free(g);
     return cst_fail(err, CST_ERR_OOM, "out of memory building the grid over %zu primitives", n);
 }
@@ -458,7 +471,7 @@ void grid_free(Grid *g)
 {
     if (!g) return;
     free(g->cell_bits);
-    free(g->brick_first);
+    free(g->brick_info);
     free(g->list_start);
     free(g->slots);
     free(g->axis_cells);
@@ -470,7 +483,7 @@ void grid_free(Grid *g)
 size_t grid_memory_bytes(const Grid *g)
 {
     if (g->num_cells == 0) return (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres;
-    return (size_t)g->num_cells / 64 * (sizeof *g->cell_bits + sizeof *g->brick_first) +
+    return (size_t)g->num_cells / 64 * (sizeof *g->cell_bits + sizeof *g->brick_info) +
            ((size_t)g->num_occupied + 1) * sizeof *g->list_start +
            g->num_refs * sizeof *g->slots +
            (size_t)(g->res[0] + g->res[1] + g->res[2]) * sizeof *g->axis_cells +
@@ -502,10 +515,10 @@ typedef struct GridWalk {
     int step[3];   /* -1, 0 or +1 */
     int up[3];     /* 1 if step is +1: the exit plane of cell i is i + up */
     int brick;     /* brick number */
+    unsigned flip; /* the bits of a cell's number to complement to count in the ray's direction */
+    double o[3], d[3];
     bool moves[3];
-    /* An axis the ray does not move along: its slab in the brick spans all t, the other
-     * three no t (NaN fails every comparison). */
-    __m128 fixed_lo[3], fixed_hi[3];
+    int fixed[3];  /* on an axis the ray does not move along: its cell's place in the brick */
 } GridWalk;
 
 /* Where the ray leaves brick b along axis a: the exit plane of its last cell in the ray's
@@ -539,7 +552,7 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
     /* Finite, so an axis that never steps (t_next = inf) is never stepped. */
     w->t_end = t1 < DBL_MAX ? t1 : DBL_MAX;
     w->t_lo = t0;
-    const __m128 nan = _mm_set1_ps(NAN), idx = _mm_setr_ps(0.0f, 1.0f, 2.0f, 3.0f);
+    for (int a = 0; a < 3; a++) { w->o[a] = o[a]; w->d[a] = d[a]; }
     for (int a = 0; a < 3; a++) {
         bool moves = inv[a] != 0.0;
         w->moves[a] = moves;
@@ -552,11 +565,10 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
         int i = !(f >= 0.0) ? 0 : (f >= (double)g->res[a] ? g->res[a] - 1 : (int)f);
         w->b[a] = i >> BRICK_SHIFT;
         w->tb[a] = brick_exit(w, a, w->b[a]); /* inf on an axis without steps */
-        __m128 here = _mm_cmpeq_ps(idx, _mm_set1_ps((float)(i & ((1 << BRICK_SHIFT) - 1))));
-        w->fixed_lo[a] = _mm_or_ps(_mm_and_ps(here, _mm_set1_ps(-INFINITY)), _mm_andnot_ps(here, nan));
-        w->fixed_hi[a] = _mm_or_ps(_mm_and_ps(here, _mm_set1_ps(INFINITY)), _mm_andnot_ps(here, nan));
+        w->fixed[a] = i & ((1 << BRICK_SHIFT) - 1);
     }
     w->brick = w->b[0] + g->brick_res[0] * (w->b[1] + g->brick_res[1] * w->b[2]);
+    w->flip = (d[0] < 0.0 ? 3u : 0u) | (d[1] < 0.0 ? 12u : 0u) | (d[2] < 0.0 ? 48u : 0u);
     return true;
 }
 
@@ -581,21 +593,39 @@ static inline __m128 plane_t4(const GridWalk *w, int a, int k)
  * order, limited to [t_lo, t_end]: a slab the ray crosses outside it is NaN. */
 static inline void brick_slabs(const GridWalk *w, int a, __m128 t_lo, __m128 t_hi, __m128 *lo, __m128 *hi)
 {
+    const __m128 nan = _mm_set1_ps(NAN);
     if (!w->moves[a]) {
-        *lo = w->fixed_lo[a];
-        *hi = w->fixed_hi[a];
+        /* Its one slab spans all t, the other three none (NaN fails every comparison). */
+        __m128 here = _mm_cmpeq_ps(_mm_setr_ps(0.0f, 1.0f, 2.0f, 3.0f), _mm_set1_ps((float)w->fixed[a]));
+        *lo = _mm_or_ps(_mm_and_ps(here, _mm_set1_ps(-INFINITY)), _mm_andnot_ps(here, nan));
+        *hi = _mm_or_ps(_mm_and_ps(here, _mm_set1_ps(INFINITY)), _mm_andnot_ps(here, nan));
         return;
     }
     /* Cell i of the brick is entered at plane i + 1 - up and left at plane i + up. */
     int k = w->b[a] << BRICK_SHIFT;
     __m128 l = plane_t4(w, a, k + 1 - w->up[a]), h = plane_t4(w, a, k + w->up[a]);
     __m128 in = _mm_and_ps(_mm_cmpge_ps(h, t_lo), _mm_cmple_ps(l, t_hi));
-    const __m128 nan = _mm_set1_ps(NAN);
     *lo = _mm_or_ps(_mm_and_ps(in, l), _mm_andnot_ps(in, nan));
     *hi = _mm_or_ps(_mm_and_ps(in, h), _mm_andnot_ps(in, nan));
 }
 
-/* Bit i + 4 j: slab i of one axis and slab j of another overlap. */
+/* Bit i + 4 j: slab i of one axis and slab j of another overlap. With AVX-512 the 16
+ * pairs are one compare each way, slab i repeated along the lanes and slab j spread. */
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+static inline __m512 slabs_i(__m128 v)
+{
+    return _mm512_permutexvar_ps(_mm512_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3), _mm512_castps128_ps512(v));
+}
+static inline __m512 slabs_j(__m128 v)
+{
+    return _mm512_permutexvar_ps(_mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3), _mm512_castps128_ps512(v));
+}
+static inline unsigned slab_pairs(__m128 lo_i, __m128 hi_i, __m128 lo_j, __m128 hi_j)
+{
+    __mmask16 m = _mm512_cmp_ps_mask(slabs_i(lo_i), slabs_j(hi_j), _CMP_LE_OQ);
+    return _mm512_mask_cmp_ps_mask(m, slabs_j(lo_j), slabs_i(hi_i), _CMP_LE_OQ);
+}
+#else
 static inline unsigned slab_pairs(__m128 lo_i, __m128 hi_i, __m128 lo_j, __m128 hi_j)
 {
 #define SLAB_PAIR(j)                                                                                 \
@@ -605,6 +635,7 @@ static inline unsigned slab_pairs(__m128 lo_i, __m128 hi_i, __m128 lo_j, __m128 
     return SLAB_PAIR(0) | SLAB_PAIR(1) | SLAB_PAIR(2) | SLAB_PAIR(3);
 #undef SLAB_PAIR
 }
+#endif
 
 /* Bit k of m to bit 4 k (16 bits); and nibble k of m to bits 16 k .. 16 k + 3. */
 static inline uint64_t spread_bits16(unsigned m)
@@ -625,60 +656,80 @@ static inline uint64_t spread_nibbles16(unsigned m)
 /* The cells of the current brick that the ray crosses within [t_lo, t_end], as bits of
  * the brick's occupancy word (cell x + 4 y + 16 z). Exact up to the float rounding of
  * plane_t4, which only adds cells: a superset of the cells a cell-by-cell DDA visits. */
-static inline uint64_t brick_cells(const GridWalk *w)
+static inline uint64_t brick_cells_exits(const GridWalk *w, float exits[3][4])
 {
     const __m128 t_lo = _mm_set1_ps((float)w->t_lo), t_hi = _mm_set1_ps((float)w->t_end);
     __m128 lo[3], hi[3];
     for (int a = 0; a < 3; a++) brick_slabs(w, a, t_lo, t_hi, &lo[a], &hi[a]);
+    if (exits)
+        for (int a = 0; a < 3; a++) _mm_storeu_ps(exits[a], hi[a]);
     unsigned xy = slab_pairs(lo[0], hi[0], lo[1], hi[1]); /* bit x + 4 y */
     unsigned xz = slab_pairs(lo[0], hi[0], lo[2], hi[2]); /* bit x + 4 z */
     unsigned yz = slab_pairs(lo[1], hi[1], lo[2], hi[2]); /* bit y + 4 z */
     return (xy * 0x0001000100010001u) & (spread_nibbles16(xz) * 0x1111u) & (spread_bits16(yz) * 0xfu);
 }
+static inline uint64_t brick_cells(const GridWalk *w) { return brick_cells_exits(w, NULL); }
 
-/* The last brick of block b (2^shift bricks along axis a) in the ray's direction. */
-static inline int walk_block_last(const GridWalk *w, int a, int b, int shift)
+/* Renumbers a brick's cell bits from c to c ^ flip (w.flip): a cell's number then grows
+ * with x, y and z in the ray's direction, and as the ray meets the z layers of the brick
+ * in order, the y rows of a layer in order and the cells of a row in order, increasing
+ * renumbered bits are the cells in the order the ray crosses them. */
+static inline uint64_t flip_cells(uint64_t m, unsigned flip)
 {
-    return ((b + w->up[a]) << shift) - w->up[a];
+    if (flip & 3u) {
+        m = ((m >> 1) & 0x5555555555555555u) | ((m & 0x5555555555555555u) << 1);
+        m = ((m >> 2) & 0x3333333333333333u) | ((m & 0x3333333333333333u) << 2);
+    }
+    if (flip & 12u) {
+        m = ((m >> 4) & 0x0f0f0f0f0f0f0f0fu) | ((m & 0x0f0f0f0f0f0f0f0fu) << 4);
+        m = ((m >> 8) & 0x00ff00ff00ff00ffu) | ((m & 0x00ff00ff00ff00ffu) << 8);
+    }
+    if (flip & 48u) {
+        m = ((m >> 16) & 0x0000ffff0000ffffu) | ((m & 0x0000ffff0000ffffu) << 16);
+        m = (m >> 32) | (m << 32);
+    }
+    return m;
 }
 
-/* One step of the brick DDA, or, from a brick of an empty superbrick, the jump to where
- * the ray leaves that superbrick: the exit axis moves into the next superbrick, every
- * other axis past its crossings before the exit, within the superbrick, which is where
- * brick-by-brick steps would leave it (exits chosen alike, ties to the lower axis). False
- * once the ray has left the grid or passed t_end. */
-static inline bool walk_next_brick(const Grid *g, GridWalk *w)
+/* The next brick along the ray: one step of the brick DDA from an occupied brick or an
+ * empty one next to one; from an empty brick at distance D > 1 from the occupied ones,
+ * the brick where the ray leaves the cube of bricks within D - 1 of it, all empty
+ * (grid.h). The exit axis moves one brick past the cube; the others go to the brick
+ * holding the ray's point there, kept within the cube: rounding can put the point in a
+ * neighbour of the right brick only when it lies within ~1e-16 of their common face,
+ * where the build margin covers the difference (the top of the file). `bits` is the
+ * current brick's occupancy. False once the ray has left the grid or passed t_end. */
+static inline bool walk_next_brick(const Grid *g, GridWalk *w, uint64_t bits)
 {
-    int e;
-    double t_exit;
-    if (g->brick_first[w->brick] & GRID_SUPER_EMPTY) {
-        const int *ss = g->super_shift;
-        int slast[3];
-        t_exit = INFINITY;
-        e = 0;
-        for (int a = 0; a < 3; a++) {
-            slast[a] = walk_block_last(w, a, w->b[a] >> ss[a], ss[a]);
-            double t = brick_exit(w, a, slast[a]);
-            if (t < t_exit) { t_exit = t; e = a; }
-        }
-        if (!(t_exit < w->t_end)) return false;
-        int i = slast[e] + w->step[e];
+    uint32_t dist = bits ? 1u : g->brick_info[w->brick];
+    if (dist <= 1u) {
+        int e = w->tb[1] < w->tb[0] ? (w->tb[2] < w->tb[1] ? 2 : 1) : (w->tb[2] < w->tb[0] ? 2 : 0);
+        if (!(w->tb[e] < w->t_end)) return false;
+        int i = w->b[e] + w->step[e];
         if ((unsigned)i >= (unsigned)g->brick_res[e]) return false;
         w->b[e] = i;
         w->tb[e] = brick_exit(w, e, i);
-        for (int a = 0; a < 3; a++) {
-            if (a == e) continue;
-            while (w->tb[a] < t_exit && w->b[a] != slast[a] && (unsigned)(w->b[a] + w->step[a]) < (unsigned)g->brick_res[a]) {
-                w->b[a] += w->step[a];
-                w->tb[a] = brick_exit(w, a, w->b[a]);
-            }
-        }
     } else {
-        e = w->tb[1] < w->tb[0] ? (w->tb[2] < w->tb[1] ? 2 : 1) : (w->tb[2] < w->tb[0] ? 2 : 0);
-        t_exit = w->tb[e];
+        const int r = (int)dist - 1;
+        int last[3], e = 0;
+        double t_exit = INFINITY;
+        for (int a = 0; a < 3; a++) {
+            last[a] = w->b[a] + w->step[a] * r;
+            double t = brick_exit(w, a, last[a]); /* inf on an axis without steps */
+            if (t < t_exit) { t_exit = t; e = a; }
+        }
         if (!(t_exit < w->t_end)) return false;
-        int i = w->b[e] + w->step[e];
+        int i = last[e] + w->step[e];
         if ((unsigned)i >= (unsigned)g->brick_res[e]) return false;
+        for (int a = 0; a < 3; a++) {
+            if (a == e || !w->step[a]) continue;
+            double f = (w->o[a] + t_exit * w->d[a] - g->org[a]) * g->inv_cell_size[a];
+            int k = f >= 0.0 ? (f < (double)g->res[a] ? (int)f : g->res[a] - 1) >> BRICK_SHIFT : 0;
+            int lo = w->step[a] > 0 ? w->b[a] : last[a], hi = w->step[a] > 0 ? last[a] : w->b[a];
+            k = k < lo ? lo : (k > hi ? hi : k);
+            w->b[a] = k;
+            w->tb[a] = brick_exit(w, a, k);
+        }
         w->b[e] = i;
         w->tb[e] = brick_exit(w, e, i);
     }
@@ -690,7 +741,7 @@ static inline bool walk_next_brick(const Grid *g, GridWalk *w)
 static inline void cell_list_in(const Grid *g, int brick, uint64_t bits, int local, uint32_t *begin, uint32_t *end)
 {
     uint64_t before = bits & (((uint64_t)1 << local) - 1u);
-    uint32_t k = (g->brick_first[brick] & ~GRID_SUPER_EMPTY) + (uint32_t)__builtin_popcountll(before);
+    uint32_t k = g->brick_info[brick] + (uint32_t)__builtin_popcountll(before);
     *begin = g->list_start[k];
     *end = g->list_start[k + 1];
 }
@@ -847,26 +898,29 @@ bool grid_intersect(const Grid *g, const Ray *ray, Hit *hit)
     Mailbox mb;
     mailbox_clear(&mb);
     bool found = false;
-    do {
+    for (;;) {
         uint64_t bits = g->cell_bits[w.brick];
-        if (!bits) continue;
-        uint64_t m = brick_cells(&w) & bits;
+        /* In the order the ray crosses them (flip_cells), so a hit no farther than the
+         * exit of the cell being tested is final, as in a cell-by-cell walk: the cells
+         * after it are entered where it is left. Exits are the slabs' float-rounded
+         * exits, which can exceed the exact ones by an ulp of t, far less than the build
+         * margin. */
+        float exits[3][4];
+        uint64_t m = bits ? flip_cells(brick_cells_exits(&w, exits) & bits, w.flip) : 0u;
         while (m) {
-            int local = __builtin_ctzll(m);
+            int local = __builtin_ctzll(m) ^ (int)w.flip;
             m &= m - 1u;
             uint32_t begin, end;
             cell_list_in(g, w.brick, bits, local, &begin, &end);
             if (cell_intersect(g, begin, end, &mb, &q, &r, hit)) {
                 found = true;
-                /* Cells entered beyond the new hit cannot hold a closer one. */
-                if ((double)r.t_max < w.t_end) {
-                    w.t_end = (double)r.t_max;
-                    m &= brick_cells(&w);
-                }
+                float exit = fminf(fminf(exits[0][local & 3], exits[1][(local >> 2) & 3]), exits[2][local >> 4]);
+                if (r.t_max <= exit) return true;
+                if ((double)r.t_max < w.t_end) w.t_end = (double)r.t_max;
             }
         }
-    } while (walk_next_brick(g, &w));
-    return found;
+        if (!walk_next_brick(g, &w, bits)) return found;
+    }
 }
 
 bool grid_occluded(const Grid *g, const Ray *r)
@@ -876,14 +930,13 @@ bool grid_occluded(const Grid *g, const Ray *r)
     TriangleRay4 q = triangle_ray4_setup(r);
     Mailbox mb;
     mailbox_clear(&mb);
-    do {
+    for (;;) {
         uint64_t bits = g->cell_bits[w.brick];
-        if (!bits) continue;
-        for (uint64_t m = brick_cells(&w) & bits; m; m &= m - 1u) {
+        for (uint64_t m = bits ? brick_cells(&w) & bits : 0u; m; m &= m - 1u) {
             uint32_t begin, end;
             cell_list_in(g, w.brick, bits, __builtin_ctzll(m), &begin, &end);
             if (cell_occluded(g, begin, end, &mb, &q, r)) return true;
         }
-    } while (walk_next_brick(g, &w));
-    return false;
+        if (!walk_next_brick(g, &w, bits)) return false;
+    }
 }

@@ -1,7 +1,7 @@
 /* Uniform grid over triangles and spheres: about 27 cells per primitive, near-cubic cells,
  * primitives stored per occupied cell in compressed sparse rows, 3D-DDA traversal
  * (Amanatides & Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing", Eurographics
- * 1987) that crosses empty space a brick of 64 cells (or a superbrick of 64 bricks) at a
+ * 1987) that crosses empty space a brick of 64 cells (or a cube of empty bricks) at a
  * time, a small per-ray hashed mailbox so a primitive spanning several cells is (almost
  * always) tested once per ray, and a cell's untested triangles tested four at a time
  * with SSE. Read-only after grid_build: any number of threads may traverse it. Hits are
@@ -33,18 +33,18 @@ typedef struct GridSphere {
     uint32_t id; /* scene primitive id */
 } GridSphere;
 
-/* Grid.brick_first flag: the brick's superbrick holds no primitive. */
-#define GRID_SUPER_EMPTY 0x80000000u
+/* An empty brick's Grid.brick_info is at most this: the bricks farther away than that
+ * are not looked at (grid_build). */
+#define GRID_BRICK_REACH 16
 
-/* Cells are numbered in bricks of 64: 2^brick_shift[a] cells along axis a, the shifts
- * summing to 6 (4 x 4 x 4 for a box, 8 x 8 x 1 for a flat one, so flat grids are not
- * padded). With (bx, by, bz) = (x >> shift[0], y >> shift[1], z >> shift[2]) and
- * (lx, ly, lz) the low bits, cell (x, y, z) is number 64 * brick + lx + (ly << shift[0])
- * + (lz << (shift[0] + shift[1])), brick = bx + brick_res[0] * (by + brick_res[1] * bz).
+/* Cells are numbered in bricks of 64, 4 x 4 x 4 (brick_shift[a] = 2): with (bx, by, bz) =
+ * (x >> 2, y >> 2, z >> 2) and (lx, ly, lz) the low bits, cell (x, y, z) is number
+ * 64 * brick + lx + 4 ly + 16 lz, brick = bx + brick_res[0] * (by + brick_res[1] * bz).
  * Neighbouring cells are then neighbours in memory on all three axes (a ray's cells share
- * cache lines of offsets and slots), and a brick's 64 occupancy bits are one word: an
- * empty brick is a zero word, skipped in one step. Cells of the last bricks past res
- * are padding (empty, never visited).
+ * cache lines of offsets and slots), a brick's 64 occupancy bits are one word (an empty
+ * brick is a zero word), and the traversal finds the cells a ray crosses in a brick from
+ * three 4 x 4 tables (grid.c). Cells of the last bricks past res are padding (empty,
+ * never visited); a flat grid pads its bricks to 4 cells deep, at one bit per cell.
  *
  * The occupied cells, in cell order, have their primitives in compressed sparse rows: the
  * k-th occupied cell's are slots[list_start[k] .. list_start[k + 1]), and k is its
@@ -58,11 +58,11 @@ typedef struct GridSphere {
  * exact to far below the build margin (see grid.c). */
 typedef struct Grid {
     int res[3];             /* cells per axis, each >= 1 */
-    int brick_shift[3];     /* log2 of a brick's cells per axis; they sum to 6 */
+    int brick_shift[3];     /* log2 of a brick's cells per axis: 2 */
     int brick_res[3];       /* bricks per axis: ceil(res / 2^brick_shift) */
     int num_cells;          /* 64 per brick, padding included; 0 for an empty grid */
     /* The cell number is separable: cell(x, y, z) = axis_cells[x] + axis_cells[res[0] + y]
-     * + axis_cells[res[0] + res[1] + z], so the traversal updates it with one load. */
+     * + axis_cells[res[0] + res[1] + z] (the build's lookup). */
     int32_t *axis_cells;
     double org[3];          /* minimum corner of the grid */
     double cell_size[3];    /* per axis */
@@ -70,18 +70,17 @@ typedef struct Grid {
     BBox bounds;            /* float copy of the grid box (primitive boxes plus the margin) */
     float margin;           /* every primitive is in every cell it comes within `margin` of */
     /* Per brick: occupancy, bit c % 64 of word c / 64 (1 bit per cell, so an empty cell
-     * costs no memory trip), and the index in list_start of its first occupied cell, with
-     * GRID_SUPER_EMPTY set when its superbrick holds no primitive. */
+     * costs no memory trip); and in brick_info, for an occupied brick the index in
+     * list_start of its first occupied cell, for an empty one its distance D to the
+     * nearest occupied brick in bricks along the farthest axis (Chebyshev), at most
+     * GRID_BRICK_REACH: every brick within D - 1 of it is empty too, and a ray crosses
+     * that cube of bricks in one step. */
     uint64_t *cell_bits;
-    uint32_t *brick_first;
+    uint32_t *brick_info;
     uint32_t *list_start;   /* num_occupied + 1 offsets into slots */
     int num_occupied;
     uint32_t *slots;        /* num_refs grid-local primitive indices */
     size_t num_refs;
-    /* Superbricks of 64 bricks, shaped like bricks (2^super_shift[a] bricks along axis
-     * a): a ray jumps over an empty one in one step. */
-    int super_shift[3];
-    int super_res[3];
     GridTri *tris;
     int num_tris;
     GridSphere *spheres;

@@ -428,7 +428,7 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
     assert_int_equal(g->num_spheres, s->num_spheres);
     if (n <= 0) { assert_int_equal(g->num_cells, 0); return 0; }
     assert_int_equal(g->num_cells, 64 * g->brick_res[0] * g->brick_res[1] * g->brick_res[2]);
-    assert_int_equal(g->brick_shift[0] + g->brick_shift[1] + g->brick_shift[2], 6);
+    for (int a = 0; a < 3; a++) assert_int_equal(g->brick_shift[a], 2);
     for (int a = 0; a < 3; a++) assert_int_equal(g->brick_res[a], ((g->res[a] - 1) >> g->brick_shift[a]) + 1);
     assert_true(g->list_start[0] == 0u && g->list_start[g->num_occupied] == g->num_refs);
     for (int k = 0; k < g->num_occupied; k++) assert_true(g->list_start[k] < g->list_start[k + 1]);
@@ -454,7 +454,7 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
     memset(seen, 0, (size_t)n * sizeof *seen);
     int occupied = 0;
     for (int c = 0; c < g->num_cells; c++) {
-        if ((c & 63) == 0) assert_int_equal((int)(g->brick_first[c >> 6] & ~GRID_SUPER_EMPTY), occupied);
+        if ((c & 63) == 0 && g->cell_bits[c >> 6]) assert_int_equal((int)g->brick_info[c >> 6], occupied);
         bool bit = (g->cell_bits[c >> 6] >> (c & 63)) & 1u;
         uint32_t begin = 0, end = 0;
         if (bit) {
@@ -478,25 +478,32 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
         }
     }
     assert_int_equal(occupied, g->num_occupied);
-    /* Superbrick flags: on every brick of a superbrick none of whose bricks has a primitive. */
-    assert_int_equal(g->super_shift[0] + g->super_shift[1] + g->super_shift[2], 6);
-    int num_super = g->super_res[0] * g->super_res[1] * g->super_res[2];
-    uint64_t *expect = calloc((size_t)num_super, sizeof *expect);
-    assert_non_null(expect);
-    for (int b = 0; b < g->num_cells / 64; b++) {
-        if (!g->cell_bits[b]) continue;
-        int bx = b % g->brick_res[0], by = b / g->brick_res[0] % g->brick_res[1], bz = b / g->brick_res[0] / g->brick_res[1];
-        int sb = (bx >> g->super_shift[0]) +
-                 g->super_res[0] * ((by >> g->super_shift[1]) + g->super_res[1] * (bz >> g->super_shift[2]));
-        expect[sb] = 1;
+    /* Empty bricks: the distance to the nearest occupied brick in the largest coordinate
+     * difference, capped (brute force on grids small enough). */
+    int nb = g->num_cells / 64;
+    if (nb <= 20000) {
+        int *occ = malloc((size_t)nb * 3 * sizeof *occ), nocc = 0;
+        assert_non_null(occ);
+        for (int b = 0; b < nb; b++)
+            if (g->cell_bits[b]) {
+                occ[3 * nocc] = b % g->brick_res[0];
+                occ[3 * nocc + 1] = b / g->brick_res[0] % g->brick_res[1];
+                occ[3 * nocc + 2] = b / g->brick_res[0] / g->brick_res[1];
+                nocc++;
+            }
+        for (int b = 0; b < nb; b++) {
+            if (g->cell_bits[b]) continue;
+            int p[3] = {b % g->brick_res[0], b / g->brick_res[0] % g->brick_res[1], b / g->brick_res[0] / g->brick_res[1]};
+            int best = GRID_BRICK_REACH;
+            for (int k = 0; k < nocc; k++) {
+                int d = 0;
+                for (int a = 0; a < 3; a++) d = abs(occ[3 * k + a] - p[a]) > d ? abs(occ[3 * k + a] - p[a]) : d;
+                best = d < best ? d : best;
+            }
+            assert_int_equal((int)g->brick_info[b], best);
+        }
+        free(occ);
     }
-    for (int b = 0; b < g->num_cells / 64; b++) {
-        int bx = b % g->brick_res[0], by = b / g->brick_res[0] % g->brick_res[1], bz = b / g->brick_res[0] / g->brick_res[1];
-        int sb = (bx >> g->super_shift[0]) +
-                 g->super_res[0] * ((by >> g->super_shift[1]) + g->super_res[1] * (bz >> g->super_shift[2]));
-        assert_true(((g->brick_first[b] & GRID_SUPER_EMPTY) != 0) == (expect[sb] == 0));
-    }
-    free(expect);
     for (int id = 0; id < n; id++) {
         BBox b = prim_box(s, id);
         bool finite = v3_is_finite(b.min) && v3_is_finite(b.max);
@@ -902,14 +909,15 @@ static long refs_on_walk(const Grid *g, const Ray *ray)
     Hit h;
     if (grid_intersect(g, ray, &h)) w.t_end = fmin(w.t_end, (double)h.t);
     long refs = 0;
-    do {
+    for (;;) {
         uint64_t bits = g->cell_bits[w.brick];
         for (uint64_t m = bits ? brick_cells(&w) & bits : 0u; m; m &= m - 1u) {
             uint32_t begin, end;
             cell_list_in(g, w.brick, bits, __builtin_ctzll(m), &begin, &end);
             refs += end - begin;
         }
-    } while (walk_next_brick(g, &w));
+        if (!walk_next_brick(g, &w, bits)) break;
+    }
     return refs;
 }
 
