@@ -1,6 +1,7 @@
 /* Uniform grid: resolution heuristic, exact primitive-cell overlap, compressed cell lists
- * (build) and 3D-DDA traversal with a brick-level DDA through empty space, hashed
- * mailboxing and SIMD triangle tests (closest hit, occlusion).
+ * (build) and traversal: a 3D-DDA over bricks with jumps through empty space, the cells
+ * crossed in each occupied brick at once, hashed mailboxing and SIMD triangle tests
+ * (closest hit, occlusion).
  *
  * Exactness. Hits must be bit-identical to the list back end, so every primitive is
  * tested with the caller's own ray (triangle_intersect_watertight / sphere_intersect on the same
@@ -12,7 +13,8 @@
  * t_exit + margin / max|d_i|. Hence once the best hit so far has t <= t_exit of the
  * current cell, no later cell can hold a closer one: stop. The DDA runs in double, so
  * its cell boundaries are off by ~1e-16 relative, and neither the stepping nor the
- * brick jumps can skip a region a primitive occupies. What the grid does not promise are
+ * brick jumps can skip a region a primitive occupies; the cells of a brick are found
+ * from the same crossings, rounded to float only in the direction that adds cells. What the grid does not promise are
  * hits that Moller-Trumbore itself puts farther than `margin` off their triangle (rays
  * grazing a sliver's plane, where t is ill-conditioned): such a hit may be skipped, as
  * the BVH may skip hits off a node box. */
