@@ -527,7 +527,7 @@ typedef struct GridWalk {
  * direction, (b + up) * 4. */
 static inline double brick_exit(const GridWalk *w, int a, int b)
 {
-    return w->t_base[a] + (double)((b + w->up[a]) << BRICK_SHIFT) * w->t_cell[a];
+    return w->t_base[a] + (double)((b + w->up[a]) * (1 << BRICK_SHIFT)) * w->t_cell[a]; /* b < 0 past the grid */
 }
 
 /* Clips the ray to the grid box and finds its first brick. A zero direction component
