@@ -14,10 +14,10 @@
  * current cell, no later cell can hold a closer one: stop. The DDA runs in double, so
  * its cell boundaries are off by ~1e-16 relative, and neither the stepping nor the
  * brick jumps can skip a region a primitive occupies; the cells of a brick are found
- * from the same crossings, rounded to float only in the direction that adds cells. What the grid does not promise are
- * hits that Moller-Trumbore itself puts farther than `margin` off their triangle (rays
- * grazing a sliver's plane, where t is ill-conditioned): such a hit may be skipped, as
- * the BVH may skip hits off a node box. */
+ * from the same crossings, rounded to float only in the direction that adds cells. What
+ * the grid does not promise are hits that Moller-Trumbore itself puts farther than
+ * `margin` off their triangle (rays grazing a sliver's plane, where t is ill-conditioned):
+ * such a hit may be skipped, as the BVH may skip hits off a node box. */
 #include "accel/grid.h"
 
 #include <float.h>
@@ -495,7 +495,7 @@ size_t grid_memory_bytes(const Grid *g)
 /* ------------------------------------------------------------------ traversal */
 
 /* A two-level walk: a 3D-DDA over bricks (Amanatides & Woo 1987, one brick of 4 x 4 x 4
- * cells per step, an empty superbrick per step where there is one), and in each occupied
+ * cells per step, or a cube of empty bricks where there is one), and in each occupied
  * brick the set of its cells that the ray passes through, computed at once rather than
  * stepped cell by cell: cell (x, y, z) is crossed iff its three slabs' t-intervals
  * overlap, and since intervals on a line that overlap pairwise have a common point
@@ -582,7 +582,8 @@ static inline __m128 plane_t4(const GridWalk *w, int a, int k)
 {
 #if defined(__AVX__)
     __m256d kd = _mm256_add_pd(_mm256_set1_pd((double)k), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
-    return _mm256_cvtpd_ps(_mm256_add_pd(_mm256_set1_pd(w->t_base[a]), _mm256_mul_pd(kd, _mm256_set1_pd(w->t_cell[a]))));
+    __m256d t = _mm256_add_pd(_mm256_set1_pd(w->t_base[a]), _mm256_mul_pd(kd, _mm256_set1_pd(w->t_cell[a])));
+    return _mm256_cvtpd_ps(t);
 #else
     const __m128d base = _mm_set1_pd(w->t_base[a]), cell = _mm_set1_pd(w->t_cell[a]), kk = _mm_set1_pd((double)k);
     __m128d lo = _mm_add_pd(base, _mm_mul_pd(_mm_add_pd(kk, _mm_setr_pd(0.0, 1.0)), cell));
@@ -616,11 +617,13 @@ static inline void brick_slabs(const GridWalk *w, int a, __m128 t_lo, __m128 t_h
 #if defined(__AVX512F__) && defined(__AVX512VL__)
 static inline __m512 slabs_i(__m128 v)
 {
-    return _mm512_permutexvar_ps(_mm512_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3), _mm512_castps128_ps512(v));
+    const __m512i i = _mm512_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3);
+    return _mm512_permutexvar_ps(i, _mm512_castps128_ps512(v));
 }
 static inline __m512 slabs_j(__m128 v)
 {
-    return _mm512_permutexvar_ps(_mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3), _mm512_castps128_ps512(v));
+    const __m512i j = _mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3);
+    return _mm512_permutexvar_ps(j, _mm512_castps128_ps512(v));
 }
 static inline unsigned slab_pairs(__m128 lo_i, __m128 hi_i, __m128 lo_j, __m128 hi_j)
 {
