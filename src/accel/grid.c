@@ -52,21 +52,12 @@ enum {
 static inline double min3d(double a, double b, double c) { return a < b ? (a < c ? a : c) : (b < c ? b : c); }
 static inline double max3d(double a, double b, double c) { return a > b ? (a > c ? a : c) : (b > c ? b : c); }
 
-/* The part of the number of cell (x, y, z) in the brick layout of grid.h contributed by
- * coordinate i on axis a; the cell number is the sum over the axes. */
-static int grid_axis_cell(const Grid *g, int a, int i)
-{
-    const int *sh = g->brick_shift;
-    int brick_stride = a == 0 ? 1 : (a == 1 ? g->brick_res[0] : g->brick_res[0] * g->brick_res[1]);
-    int local_shift = a == 0 ? 0 : (a == 1 ? sh[0] : sh[0] + sh[1]);
-    return ((i >> sh[a]) * brick_stride << 6) + ((i & ((1 << sh[a]) - 1)) << local_shift);
-}
-
-/* The number of cell (x, y, z). */
+/* The number of cell (x, y, z) in the brick layout of grid.h. */
 static inline int grid_cell_index(const Grid *g, int x, int y, int z)
 {
-    const int32_t *t = g->axis_cells;
-    return t[x] + t[g->res[0] + y] + t[g->res[0] + g->res[1] + z];
+    const int m = (1 << BRICK_SHIFT) - 1;
+    int brick = (x >> BRICK_SHIFT) + g->brick_res[0] * ((y >> BRICK_SHIFT) + g->brick_res[1] * (z >> BRICK_SHIFT));
+    return brick * 64 + (x & m) + ((y & m) << BRICK_SHIFT) + ((z & m) << (2 * BRICK_SHIFT));
 }
 
 /* ------------------------------------------------------------------ build */
@@ -246,11 +237,8 @@ static void grid_set_cells(Grid *g, const double lo[3], const double size[3], co
         g->cell_size[a] = size[a] / (double)res[a];
         g->inv_cell_size[a] = (double)res[a] / size[a];
     }
-    for (int a = 0; a < 3; a++) g->brick_shift[a] = BRICK_SHIFT;
-    for (int a = 0; a < 3; a++) g->brick_res[a] = ((res[a] - 1) >> g->brick_shift[a]) + 1;
+    for (int a = 0; a < 3; a++) g->brick_res[a] = ((res[a] - 1) >> BRICK_SHIFT) + 1;
     g->num_cells = 64 * g->brick_res[0] * g->brick_res[1] * g->brick_res[2];
-    for (int a = 0, k = 0; a < 3; a++)
-        for (int i = 0; i < res[a]; i++) g->axis_cells[k++] = grid_axis_cell(g, a, i);
 }
 
 /* One pass of the Chebyshev distance transform, along axis a: d[b] becomes the least
@@ -407,8 +395,6 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
     if (budget < (size_t)GRID_MIN_REF_BUDGET) budget = (size_t)GRID_MIN_REF_BUDGET;
     size_t refs;
     for (;;) {
-        free(g->axis_cells);
-        if (!(g->axis_cells = malloc((size_t)(res[0] + res[1] + res[2]) * sizeof *g->axis_cells))) goto oom;
         grid_set_cells(g, lo, size, res);
         free(cell_start);
         cell_start = calloc((size_t)g->num_cells + 1, sizeof *cell_start);
@@ -476,7 +462,6 @@ void grid_free(Grid *g)
     free(g->brick_info);
     free(g->list_start);
     free(g->slots);
-    free(g->axis_cells);
     free(g->tris);
     free(g->spheres);
     memset(g, 0, sizeof *g);
@@ -488,7 +473,6 @@ size_t grid_memory_bytes(const Grid *g)
     return (size_t)g->num_cells / 64 * (sizeof *g->cell_bits + sizeof *g->brick_info) +
            ((size_t)g->num_occupied + 1) * sizeof *g->list_start +
            g->num_refs * sizeof *g->slots +
-           (size_t)(g->res[0] + g->res[1] + g->res[2]) * sizeof *g->axis_cells +
            (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres;
 }
 
@@ -519,7 +503,6 @@ typedef struct GridWalk {
     int brick;     /* brick number */
     unsigned flip; /* the bits of a cell's number to complement to count in the ray's direction */
     double o[3], d[3];
-    bool moves[3];
     int fixed[3];  /* on an axis the ray does not move along: its cell's place in the brick */
 } GridWalk;
 
@@ -557,7 +540,6 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
     for (int a = 0; a < 3; a++) { w->o[a] = o[a]; w->d[a] = d[a]; }
     for (int a = 0; a < 3; a++) {
         bool moves = inv[a] != 0.0;
-        w->moves[a] = moves;
         w->step[a] = moves ? (d[a] > 0.0 ? 1 : -1) : 0;
         w->up[a] = d[a] > 0.0;
         w->t_base[a] = moves ? (g->org[a] - o[a]) * inv[a] : HUGE_VAL;
@@ -597,7 +579,7 @@ static inline __m128 plane_t4(const GridWalk *w, int a, int k)
 static inline void brick_slabs(const GridWalk *w, int a, __m128 t_lo, __m128 t_hi, __m128 *lo, __m128 *hi)
 {
     const __m128 nan = _mm_set1_ps(NAN);
-    if (!w->moves[a]) {
+    if (!w->step[a]) {
         /* Its one slab spans all t, the other three none (NaN fails every comparison). */
         __m128 here = _mm_cmpeq_ps(_mm_setr_ps(0.0f, 1.0f, 2.0f, 3.0f), _mm_set1_ps((float)w->fixed[a]));
         *lo = _mm_or_ps(_mm_and_ps(here, _mm_set1_ps(-INFINITY)), _mm_andnot_ps(here, nan));
@@ -749,12 +731,6 @@ static inline void cell_list_in(const Grid *g, int brick, uint64_t bits, int loc
     uint32_t k = g->brick_info[brick] + (uint32_t)__builtin_popcountll(before);
     *begin = g->list_start[k];
     *end = g->list_start[k + 1];
-}
-
-/* The slots of an occupied cell: [*begin, *end). */
-static inline void cell_list(const Grid *g, int cell, uint32_t *begin, uint32_t *end)
-{
-    cell_list_in(g, cell >> 6, g->cell_bits[cell >> 6], cell & 63, begin, end);
 }
 
 /* Fills the unused lanes of a batch: NaN vertices fail every comparison of the test. */

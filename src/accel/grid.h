@@ -37,7 +37,7 @@ typedef struct GridSphere {
  * are not looked at (grid_build). */
 #define GRID_BRICK_REACH 16
 
-/* Cells are numbered in bricks of 64, 4 x 4 x 4 (brick_shift[a] = 2): with (bx, by, bz) =
+/* Cells are numbered in bricks of 64, 4 x 4 x 4: with (bx, by, bz) =
  * (x >> 2, y >> 2, z >> 2) and (lx, ly, lz) the low bits, cell (x, y, z) is number
  * 64 * brick + lx + 4 ly + 16 lz, brick = bx + brick_res[0] * (by + brick_res[1] * bz).
  * Neighbouring cells are then neighbours in memory on all three axes (a ray's cells share
@@ -58,12 +58,8 @@ typedef struct GridSphere {
  * exact to far below the build margin (see grid.c). */
 typedef struct Grid {
     int res[3];             /* cells per axis, each >= 1 */
-    int brick_shift[3];     /* log2 of a brick's cells per axis: 2 */
-    int brick_res[3];       /* bricks per axis: ceil(res / 2^brick_shift) */
+    int brick_res[3];       /* bricks per axis: ceil(res / 4) */
     int num_cells;          /* 64 per brick, padding included; 0 for an empty grid */
-    /* The cell number is separable: cell(x, y, z) = axis_cells[x] + axis_cells[res[0] + y]
-     * + axis_cells[res[0] + res[1] + z] (the build's lookup). */
-    int32_t *axis_cells;
     double org[3];          /* minimum corner of the grid */
     double cell_size[3];    /* per axis */
     double inv_cell_size[3];

@@ -391,6 +391,41 @@ static void check_random_rays(const Pair *p, Pcg32 *rng, int count, Stats *st, c
 
 /* ------------------------------------------------------------------ structure */
 
+/* The slots of an occupied cell, by cell number: [*begin, *end). */
+static void cell_list(const Grid *g, int cell, uint32_t *begin, uint32_t *end)
+{
+    cell_list_in(g, cell >> 6, g->cell_bits[cell >> 6], cell & 63, begin, end);
+}
+
+/* Every empty brick's brick_info against brute force: the largest coordinate difference
+ * to the nearest occupied brick, capped at GRID_BRICK_REACH. */
+static void check_brick_distances(const Grid *g)
+{
+    const int *r = g->brick_res;
+    int nb = r[0] * r[1] * r[2], nocc = 0;
+    int *occ = malloc((size_t)nb * 3 * sizeof *occ);
+    assert_non_null(occ);
+    for (int b = 0; b < nb; b++)
+        if (g->cell_bits[b]) {
+            occ[3 * nocc] = b % r[0];
+            occ[3 * nocc + 1] = b / r[0] % r[1];
+            occ[3 * nocc + 2] = b / r[0] / r[1];
+            nocc++;
+        }
+    for (int b = 0; b < nb; b++) {
+        if (g->cell_bits[b]) continue;
+        int p[3] = {b % r[0], b / r[0] % r[1], b / r[0] / r[1]};
+        int best = GRID_BRICK_REACH;
+        for (int k = 0; k < nocc; k++) {
+            int d = 0;
+            for (int a = 0; a < 3; a++) d = abs(occ[3 * k + a] - p[a]) > d ? abs(occ[3 * k + a] - p[a]) : d;
+            best = d < best ? d : best;
+        }
+        assert_int_equal((int)g->brick_info[b], best);
+    }
+    free(occ);
+}
+
 static bool cell_lists(const Grid *g, int cell, int id)
 {
     if (!((g->cell_bits[cell >> 6] >> (cell & 63)) & 1u)) return false;
@@ -428,8 +463,7 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
     assert_int_equal(g->num_spheres, s->num_spheres);
     if (n <= 0) { assert_int_equal(g->num_cells, 0); return 0; }
     assert_int_equal(g->num_cells, 64 * g->brick_res[0] * g->brick_res[1] * g->brick_res[2]);
-    for (int a = 0; a < 3; a++) assert_int_equal(g->brick_shift[a], 2);
-    for (int a = 0; a < 3; a++) assert_int_equal(g->brick_res[a], ((g->res[a] - 1) >> g->brick_shift[a]) + 1);
+    for (int a = 0; a < 3; a++) assert_int_equal(g->brick_res[a], (g->res[a] + 3) / 4);
     assert_true(g->list_start[0] == 0u && g->list_start[g->num_occupied] == g->num_refs);
     for (int k = 0; k < g->num_occupied; k++) assert_true(g->list_start[k] < g->list_start[k + 1]);
     int *seen = calloc((size_t)n, sizeof *seen);
@@ -462,12 +496,12 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
             assert_true(begin == g->list_start[occupied] && end == g->list_start[occupied + 1]);
             occupied++;
         }
-        /* Decode the brick numbering of grid.h; padding cells past res stay empty. */
-        const int *sh = g->brick_shift;
+        /* Decode the brick numbering of grid.h (4 x 4 x 4 bricks); padding cells past res
+         * stay empty. */
         int brick = c >> 6, local = c & 63;
-        int x = ((brick % g->brick_res[0]) << sh[0]) + (local & ((1 << sh[0]) - 1));
-        int y = ((brick / g->brick_res[0] % g->brick_res[1]) << sh[1]) + ((local >> sh[0]) & ((1 << sh[1]) - 1));
-        int z = ((brick / g->brick_res[0] / g->brick_res[1]) << sh[2]) + (local >> (sh[0] + sh[1]));
+        int x = (brick % g->brick_res[0]) * 4 + (local & 3);
+        int y = (brick / g->brick_res[0] % g->brick_res[1]) * 4 + ((local >> 2) & 3);
+        int z = (brick / g->brick_res[0] / g->brick_res[1]) * 4 + (local >> 4);
         if (x >= g->res[0] || y >= g->res[1] || z >= g->res[2]) assert_false(bit);
         else assert_int_equal(grid_cell_index(g, x, y, z), c);
         for (uint32_t k = begin; k < end; k++) {
@@ -478,32 +512,9 @@ static size_t check_structure(const Grid *g, const Soup *s, Pcg32 *rng)
         }
     }
     assert_int_equal(occupied, g->num_occupied);
-    /* Empty bricks: the distance to the nearest occupied brick in the largest coordinate
-     * difference, capped (brute force on grids small enough). */
-    int nb = g->num_cells / 64;
-    if (nb <= 20000) {
-        int *occ = malloc((size_t)nb * 3 * sizeof *occ), nocc = 0;
-        assert_non_null(occ);
-        for (int b = 0; b < nb; b++)
-            if (g->cell_bits[b]) {
-                occ[3 * nocc] = b % g->brick_res[0];
-                occ[3 * nocc + 1] = b / g->brick_res[0] % g->brick_res[1];
-                occ[3 * nocc + 2] = b / g->brick_res[0] / g->brick_res[1];
-                nocc++;
-            }
-        for (int b = 0; b < nb; b++) {
-            if (g->cell_bits[b]) continue;
-            int p[3] = {b % g->brick_res[0], b / g->brick_res[0] % g->brick_res[1], b / g->brick_res[0] / g->brick_res[1]};
-            int best = GRID_BRICK_REACH;
-            for (int k = 0; k < nocc; k++) {
-                int d = 0;
-                for (int a = 0; a < 3; a++) d = abs(occ[3 * k + a] - p[a]) > d ? abs(occ[3 * k + a] - p[a]) : d;
-                best = d < best ? d : best;
-            }
-            assert_int_equal((int)g->brick_info[b], best);
-        }
-        free(occ);
-    }
+    /* Empty bricks: their distance to the nearest occupied brick (brute force on grids
+     * small enough). */
+    if (g->num_cells / 64 <= 20000) check_brick_distances(g);
     for (int id = 0; id < n; id++) {
         BBox b = prim_box(s, id);
         bool finite = v3_is_finite(b.min) && v3_is_finite(b.max);
@@ -883,6 +894,34 @@ static void test_grid_teapot_in_stadium(void **state)
     soup_free(&s);
 }
 
+/* The brick distances on a long grid of bricks with three occupied ones, where most
+ * distances reach the cap (the meshes of the other tests give grids too small for it). */
+static void test_grid_brick_distances(void **state)
+{
+    (void)state;
+    Grid g = {0};
+    g.brick_res[0] = 3 * GRID_BRICK_REACH + 5;
+    g.brick_res[1] = 3;
+    g.brick_res[2] = 2;
+    int nb = g.brick_res[0] * g.brick_res[1] * g.brick_res[2];
+    g.num_cells = 64 * nb;
+    g.cell_bits = calloc((size_t)nb, sizeof *g.cell_bits);
+    g.brick_info = calloc((size_t)nb, sizeof *g.brick_info);
+    uint32_t *tmp = calloc(2 * (size_t)nb, sizeof *tmp);
+    assert_true(g.cell_bits && g.brick_info && tmp);
+    g.cell_bits[0] = 1u;                                         /* brick (0, 0, 0) */
+    g.cell_bits[GRID_BRICK_REACH + 3 + g.brick_res[0] * 4] = 8u; /* (reach + 3, 1, 1) */
+    g.cell_bits[nb - 1] = (uint64_t)1 << 63;                     /* the last corner */
+    grid_brick_distances(&g, tmp);
+    check_brick_distances(&g);
+    int capped = 0;
+    for (int b = 0; b < nb; b++) capped += !g.cell_bits[b] && g.brick_info[b] == GRID_BRICK_REACH;
+    assert_true(capped > 0);
+    free(tmp);
+    free(g.cell_bits);
+    free(g.brick_info);
+}
+
 /* Builds the counting copy over s and runs ray r through it; returns the largest number
  * of tests of one primitive, and adds to the totals. */
 static uint32_t counted_ray(const Grid *g, int n, const Ray *r, long *tests, long *distinct)
@@ -1005,6 +1044,7 @@ int main(void)
         cmocka_unit_test(test_grid_degenerate_and_flat),
         cmocka_unit_test(test_grid_teapot_in_stadium),
         cmocka_unit_test(test_grid_mailbox),
+        cmocka_unit_test(test_grid_brick_distances),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
