@@ -129,15 +129,17 @@ void args_print_help(FILE *f)
 "Traces the acceleration benchmark's three ray sets (/work/shared/bench/RAYSETS.md:\n"
 "primary closest hits, secondary bounce rays generated once and shared by every back\n"
 "end, and the bounce rays as occlusion queries) through each back end with 1 thread and\n"
-"with N threads, and prints build time, bytes per triangle, M rays/s, the speed ratio to\n"
-"Embree, hits and sum of t, checked against the published checksums (or, for scenes\n"
-"without them, against the first back end).\n"
+"with N threads, and prints build time, bytes per triangle, M rays/s, the speed ratios to\n"
+"Embree (its default configuration) and to Embree in its robust mode (robust box test,\n"
+"edge-consistent triangle test: the guarantees of our BVH), hits and sum of t, checked\n"
+"against the published checksums (or, for scenes without them, against the first back\n"
+"end).\n"
 "  MESH                 a triangle mesh file (read through the mesh importer, e.g. a\n"
 "                       PLY of /work/shared/meshes); default: the built-in Cornell box\n"
 "      --cornell        the built-in Cornell box (the default)\n"
 "      --stadium        put the scene inside a huge box of 12 triangles (teapot in a\n"
 "                       stadium); alone: a built-in 20,480-triangle bumpy ball inside it\n"
-"      --accel LIST     comma-separated back ends: " ARGS_ACCEL_NAMES "\n"
+"      --accel LIST     comma-separated back ends: " ARGS_BENCH_ACCEL_NAMES "\n"
 "                       (default: all this build has; list only for scenes of at most\n"
 "                       1,000 triangles)\n"
 "      --threads N      the second thread count, 0..1024; 0 = one per core (default)\n"
@@ -573,7 +575,8 @@ static const ArgsBenchOpt ARGS_BENCH_OPTS[] = {
 };
 #define ARGS_NUM_BENCH_OPTS (sizeof ARGS_BENCH_OPTS / sizeof ARGS_BENCH_OPTS[0])
 
-static const char *const ARGS_BENCH_ACCELS[] = {"bvh", "kdtree", "grid", "list", "embree"};
+static const char *const ARGS_BENCH_ACCELS[] = {"bvh", "kdtree", "grid", "list", "embree", "embree-robust"};
+_Static_assert(sizeof ARGS_BENCH_ACCELS / sizeof ARGS_BENCH_ACCELS[0] == ARGS_BENCH_MAX_ACCELS, "one slot per name");
 
 /* --accel bvh,embree: each name known, none empty, none twice. */
 static bool args_parse_bench_accels(const char *value, BenchArgs *b, ArgsError *err)
@@ -583,7 +586,7 @@ static bool args_parse_bench_accels(const char *value, BenchArgs *b, ArgsError *
     for (;;) {
         size_t len = strcspn(p, ",");
         if (len == 0) {
-            args_fail(err, false, "--accel: empty name in '%s' (valid: %s)", value, ARGS_ACCEL_NAMES);
+            args_fail(err, false, "--accel: empty name in '%s' (valid: %s)", value, ARGS_BENCH_ACCEL_NAMES);
             return false;
         }
         const char *name = NULL;
@@ -592,7 +595,7 @@ static bool args_parse_bench_accels(const char *value, BenchArgs *b, ArgsError *
                 name = ARGS_BENCH_ACCELS[k];
         if (!name) {
             args_fail(err, false, "--accel: unknown acceleration structure '%.*s' (valid: %s)",
-                      (int)len, p, ARGS_ACCEL_NAMES);
+                      (int)len, p, ARGS_BENCH_ACCEL_NAMES);
             return false;
         }
         for (int k = 0; k < b->num_accels; k++)

@@ -13,6 +13,8 @@
 #define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm, bdpt, vcm"
 #define ARGS_FILTER_NAMES     "box, tent, gaussian, mitchell"
 #define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree"
+/* bench rays also takes Embree in its robust mode as a back end of its own. */
+#define ARGS_BENCH_ACCEL_NAMES ARGS_ACCEL_NAMES ", embree-robust"
 #define ARGS_SAMPLER_NAMES    "independent, stratified, sobol"
 #define ARGS_AOV_NAMES        "albedo, normal, depth, variance"
 #define ARGS_MAX_EXPOSURE     64
@@ -30,7 +32,7 @@ typedef enum ArgsCommand {
     ARGS_CMD_VERIFY       /* caustic verify [SCENE] --integrators NAME,NAME[,...] ... */
 } ArgsCommand;
 
-#define ARGS_BENCH_MAX_ACCELS 5 /* each back end at most once */
+#define ARGS_BENCH_MAX_ACCELS 6 /* each back end at most once */
 
 /* `caustic bench rays`: what to trace and with what. */
 typedef struct BenchArgs {

@@ -507,8 +507,21 @@ done:
 enum { BENCH_PRIMARY, BENCH_SECONDARY, BENCH_OCCLUSION, BENCH_NUM_SETS };
 static const char *const BENCH_SET_NAMES[BENCH_NUM_SETS] = {"primary", "secondary", "occlusion"};
 
+/* A back end of the benchmark: an acceleration structure, and for Embree which mode. */
+typedef struct BenchBackend {
+    AccelType type;
+    bool robust; /* Embree in its robust mode (EMBREE_NATIVE_ROBUST) */
+} BenchBackend;
+
+static const char *cli_bench_name(BenchBackend b)
+{
+    return b.type == ACCEL_EMBREE && b.robust ? "embree-robust" : accel_type_name(b.type);
+}
+
+static bool cli_bench_same(BenchBackend a, BenchBackend b) { return a.type == b.type && a.robust == b.robust; }
+
 typedef struct BenchRow {
-    AccelType accel;
+    BenchBackend accel;
     double build_ms, bytes_per_tri;
     int set, threads;
     RaysetStats st; /* of the fastest run */
@@ -516,6 +529,7 @@ typedef struct BenchRow {
     bool checked, ok;   /* checked: there was something to compare with */
     const char *against; /* "reference", the back end compared with, or "1 thread" */
     double vs_embree;   /* M rays/s ratio to Embree's row; < 0 when there is none */
+    double vs_robust;   /* the same against Embree's robust mode */
     /* Scenes without a reference, 1-thread rows of all but the first back end: the rays
      * whose result differs from the first back end's (rayset_compare). */
     bool compared;
@@ -568,17 +582,18 @@ static void cli_bench_check(BenchRow *rows, int n, const RaysetReference *ref, b
             /* The first back end's 1-thread row of this set: rows[0..) are its rows. */
             const BenchRow *b = r;
             for (int k = 0; k < n; k++)
-                if (rows[k].accel == rows[0].accel && rows[k].set == r->set && rows[k].threads == 1) b = &rows[k];
+                if (cli_bench_same(rows[k].accel, rows[0].accel) && rows[k].set == r->set && rows[k].threads == 1)
+                    b = &rows[k];
             r->ok = r->rays_differing <= rayset_rays_tolerance(r->st.rays) &&
                     rayset_hits_match(r->st.hits, b->st.hits) &&
                     (any || fabs(r->st.sum_t - b->st.sum_t) <= RAYSET_SUM_T_TOLERANCE * fabs(b->st.sum_t) + r->dt_sum);
             r->checked = true;
-            r->against = accel_type_name(b->accel);
+            r->against = cli_bench_name(b->accel);
         }
         if (r->threads != 1)
             for (int k = 0; k < i; k++) {
                 const BenchRow *o = &rows[k];
-                if (o->accel != r->accel || o->set != r->set || o->threads != 1) continue;
+                if (!cli_bench_same(o->accel, r->accel) || o->set != r->set || o->threads != 1) continue;
                 bool same = o->st.hits == r->st.hits && o->st.sum_t == r->st.sum_t &&
                             o->st.sum_prim == r->st.sum_prim;
                 r->ok = r->ok && same && (!o->checked || o->ok);
@@ -587,11 +602,12 @@ static void cli_bench_check(BenchRow *rows, int n, const RaysetReference *ref, b
                     r->against = o->checked ? o->against : "1 thread";
                 }
             }
-        r->vs_embree = -1.0;
+        r->vs_embree = r->vs_robust = -1.0;
         for (int k = 0; k < n; k++)
-            if (rows[k].accel == ACCEL_EMBREE && rows[k].set == r->set && rows[k].threads == r->threads &&
+            if (rows[k].accel.type == ACCEL_EMBREE && rows[k].set == r->set && rows[k].threads == r->threads &&
                 cli_bench_mrays(&rows[k].st) > 0.0)
-                r->vs_embree = cli_bench_mrays(&r->st) / cli_bench_mrays(&rows[k].st);
+                *(rows[k].accel.robust ? &r->vs_robust : &r->vs_embree) =
+                    cli_bench_mrays(&r->st) / cli_bench_mrays(&rows[k].st);
     }
 }
 
@@ -602,20 +618,27 @@ static void cli_bench_format3(double v, char *buf, size_t size)
              v);
 }
 
+/* "1.23x", or "-" for a ratio that is missing (< 0). */
+static void cli_bench_format_ratio(double v, char *buf, size_t size)
+{
+    if (v < 0.0) {
+        snprintf(buf, size, "-");
+        return;
+    }
+    cli_bench_format3(v, buf, size - 1);
+    strcat(buf, "x");
+}
+
 static void cli_bench_print_table(const BenchRow *rows, int n)
 {
-    printf("%-7s %9s %9s  %-9s %7s %9s %9s %9s %9s %16s  %s\n", "accel", "build ms", "bytes/tri",
-           "set", "threads", "rays", "Mrays/s", "vs embree", "hits", "sum_t", "check");
+    printf("%-13s %9s %9s  %-9s %7s %9s %9s %9s %9s %9s %16s  %s\n", "accel", "build ms", "bytes/tri",
+           "set", "threads", "rays", "Mrays/s", "vs embree", "vs robust", "hits", "sum_t", "check");
     for (int i = 0; i < n; i++) {
         const BenchRow *r = &rows[i];
-        char ratio[32], rate[32], sum[32], check[48];
+        char ratio[32], ratio_robust[32], rate[32], sum[32], check[48];
         cli_bench_format3(cli_bench_mrays(&r->st), rate, sizeof rate);
-        if (r->vs_embree >= 0.0) {
-            cli_bench_format3(r->vs_embree, ratio, sizeof ratio);
-            strcat(ratio, "x");
-        } else {
-            snprintf(ratio, sizeof ratio, "-");
-        }
+        cli_bench_format_ratio(r->vs_embree, ratio, sizeof ratio);
+        cli_bench_format_ratio(r->vs_robust, ratio_robust, sizeof ratio_robust);
         if (r->set == BENCH_OCCLUSION) snprintf(sum, sizeof sum, "-");
         else snprintf(sum, sizeof sum, "%.9e", r->st.sum_t);
         if (!r->checked) snprintf(check, sizeof check, "(basis)");
@@ -625,9 +648,9 @@ static void cli_bench_print_table(const BenchRow *rows, int n)
             snprintf(check, sizeof check, "%s (%zu ray%s differ%s)", r->ok ? "OK" : "MISMATCH", r->rays_differing,
                      r->rays_differing == 1 ? "" : "s", r->rays_differing == 1 ? "s" : "");
         else snprintf(check, sizeof check, "%s", r->ok ? "OK" : "MISMATCH");
-        printf("%-7s %9.2f %9.1f  %-9s %7d %9zu %9s %9s %9zu %16s  %s\n", accel_type_name(r->accel),
+        printf("%-13s %9.2f %9.1f  %-9s %7d %9zu %9s %9s %9s %9zu %16s  %s\n", cli_bench_name(r->accel),
                r->build_ms, r->bytes_per_tri, BENCH_SET_NAMES[r->set], r->threads, r->st.rays, rate, ratio,
-               r->st.hits, sum, check);
+               ratio_robust, r->st.hits, sum, check);
     }
 }
 
@@ -637,9 +660,9 @@ static bool cli_bench_print_json(const BenchRow *rows, int n, const RaysetScene 
     for (int i = 0; i < n; i++) {
         const BenchRow *r = &rows[i];
         bool closest = r->set != BENCH_OCCLUSION;
-        json_t *o = json_pack("{s:s, s:i, s:s, s:i, s:s, s:I, s:f, s:i, s:f, s:I, s:o, s:o, s:f, s:f, s:o, s:o, s:o, s:o}",
+        json_t *o = json_pack("{s:s, s:i, s:s, s:i, s:s, s:I, s:f, s:i, s:f, s:I, s:o, s:o, s:f, s:f, s:o, s:o, s:o, s:o, s:o}",
             "scene", scene->name, "triangles", scene->num_tris,
-            "accel", accel_type_name(r->accel), "threads", r->threads,
+            "accel", cli_bench_name(r->accel), "threads", r->threads,
             "set", BENCH_SET_NAMES[r->set], "rays", (json_int_t)r->st.rays,
             "seconds", r->st.seconds, "runs", r->runs, "mrays_per_s", cli_bench_mrays(&r->st),
             "hits", (json_int_t)r->st.hits,
@@ -647,6 +670,7 @@ static bool cli_bench_print_json(const BenchRow *rows, int n, const RaysetScene 
             "sum_prim", closest ? json_integer((json_int_t)r->st.sum_prim) : json_null(),
             "build_ms", r->build_ms, "bytes_per_tri", r->bytes_per_tri,
             "vs_embree", r->vs_embree >= 0.0 ? json_real(r->vs_embree) : json_null(),
+            "vs_embree_robust", r->vs_robust >= 0.0 ? json_real(r->vs_robust) : json_null(),
             "check", r->checked ? json_string(r->ok ? "OK" : "MISMATCH") : json_null(),
             "checked_against", r->checked ? json_string(r->against) : json_null(),
             "rays_differing", r->compared ? json_integer((json_int_t)r->rays_differing) : json_null());
@@ -662,7 +686,7 @@ static bool cli_bench_print_json(const BenchRow *rows, int n, const RaysetScene 
 /* Traces the three sets with each thread count and appends the rows. When `basis` is
  * given (scenes without a reference), the 1-thread results are kept there (is_basis: the
  * first back end) or compared with it ray by ray (all others, through `scratch`). */
-static CstStatus cli_bench_accel(const Accel *accel, const BenchRays *rays, const int *threads,
+static CstStatus cli_bench_accel(const Accel *accel, bool robust, const BenchRays *rays, const int *threads,
                                  int num_threads, double bytes_per_tri, RaysetResult *const *basis,
                                  bool is_basis, RaysetResult *scratch, BenchRow *rows, int *n, CstError *err)
 {
@@ -670,7 +694,7 @@ static CstStatus cli_bench_accel(const Accel *accel, const BenchRays *rays, cons
         for (int k = 0; k < num_threads; k++) {
             BenchRow *r = &rows[(*n)];
             memset(r, 0, sizeof *r);
-            r->accel = accel->type;
+            r->accel = (BenchBackend){accel->type, robust};
             r->build_ms = accel->build_seconds * 1e3;
             r->bytes_per_tri = bytes_per_tri;
             r->set = set;
@@ -715,24 +739,24 @@ static int cli_bench_rays(const CliArgs *a)
 
     /* The back ends, checked before any work: as listed (one this build lacks is a usage
      * error), else every one this build has, brute force only for tiny scenes. */
-    AccelType accels[ACCEL_TYPE_COUNT];
+    BenchBackend accels[ARGS_BENCH_MAX_ACCELS];
     int num_accels = 0;
     bool explicit_accels = b->num_accels > 0;
     if (explicit_accels) {
         for (int i = 0; i < b->num_accels; i++) {
-            AccelType t;
-            if (!accel_type_from_name(b->accels[i], &t)) {
+            BenchBackend be = {ACCEL_EMBREE, strcmp(b->accels[i], "embree-robust") == 0};
+            if (!be.robust && !accel_type_from_name(b->accels[i], &be.type)) {
                 fprintf(stderr, "caustic: error: unknown acceleration structure '%s'\n", b->accels[i]);
                 code = CLI_EXIT_USAGE;
                 goto done;
             }
-            if (!accel_type_available(t)) {
+            if (!accel_type_available(be.type)) {
                 fprintf(stderr, "caustic: error: acceleration structure '%s' is not available in this build\n",
                         b->accels[i]);
                 code = CLI_EXIT_USAGE;
                 goto done;
             }
-            accels[num_accels++] = t;
+            accels[num_accels++] = be;
         }
     }
 
@@ -769,7 +793,8 @@ static int cli_bench_rays(const CliArgs *a)
                         "name it with --accel to run it anyway)\n", scene.num_tris);
                 continue;
             }
-            accels[num_accels++] = (AccelType)t;
+            accels[num_accels++] = (BenchBackend){(AccelType)t, false};
+            if (t == ACCEL_EMBREE) accels[num_accels++] = (BenchBackend){ACCEL_EMBREE, true};
         }
     }
 
@@ -805,7 +830,7 @@ static int cli_bench_rays(const CliArgs *a)
     accel_free(&gen);
     secondary = rayset_secondary(&scene, primary, hits, num_primary, &num_secondary);
     occlusion = secondary ? rayset_occlusion(secondary, num_secondary) : NULL;
-    rows = calloc((size_t)ACCEL_TYPE_COUNT * BENCH_NUM_SETS * 2, sizeof *rows);
+    rows = calloc((size_t)ARGS_BENCH_MAX_ACCELS * BENCH_NUM_SETS * 2, sizeof *rows);
     if (!secondary || !occlusion || !rows) {
         fprintf(stderr, "caustic: error: out of memory for %zu secondary rays\n", num_primary);
         goto done;
@@ -851,9 +876,9 @@ static int cli_bench_rays(const CliArgs *a)
     int n = 0;
     for (int i = 0; i < num_accels; i++) {
         Accel accel;
-        st = accel_build_native(&accel, accels[i], &geom, &err);
+        st = (accels[i].robust ? accel_build_native_robust : accel_build_native)(&accel, accels[i].type, &geom, &err);
         if (st == CST_ERR_UNSUPPORTED && !explicit_accels) {
-            fprintf(stderr, "caustic: bench rays: skipping %s: %s\n", accel_type_name(accels[i]), err.msg);
+            fprintf(stderr, "caustic: bench rays: skipping %s: %s\n", cli_bench_name(accels[i]), err.msg);
             continue;
         }
         if (st != CST_OK) {
@@ -863,9 +888,9 @@ static int cli_bench_rays(const CliArgs *a)
         }
         double bpt = scene.num_tris > 0 ? (double)accel_memory_bytes(&accel) / scene.num_tris : 0.0;
         if (isatty(STDERR_FILENO) == 1)
-            fprintf(stderr, "caustic: bench rays: %s built in %.1f ms, tracing...\n", accel_type_name(accels[i]),
+            fprintf(stderr, "caustic: bench rays: %s built in %.1f ms, tracing...\n", cli_bench_name(accels[i]),
                     accel.build_seconds * 1e3);
-        st = cli_bench_accel(&accel, &rays, threads, num_threads, bpt, ref ? NULL : basis, n == 0, scratch,
+        st = cli_bench_accel(&accel, accels[i].robust, &rays, threads, num_threads, bpt, ref ? NULL : basis, n == 0, scratch,
                              rows, &n, &err);
         accel_free(&accel);
         if (st != CST_OK) {

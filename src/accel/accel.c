@@ -43,7 +43,7 @@ static BBox geometry_bounds(const AccelGeometry *g)
     return b;
 }
 
-static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry *geom, bool native, CstError *err)
+static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry *geom, EmbreeMode mode, CstError *err)
 {
     memset(a, 0, sizeof *a);
     a->type = type;
@@ -54,7 +54,7 @@ static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry 
     case ACCEL_KDTREE: st = kdtree_build(&a->kdtree, geom, err); break;
     case ACCEL_GRID: st = grid_build(&a->grid, geom, err); break;
     case ACCEL_LIST: st = list_build(&a->list, geom, err); break;
-    case ACCEL_EMBREE: st = embree_build(&a->embree, geom, native, err); break;
+    case ACCEL_EMBREE: st = embree_build(&a->embree, geom, mode, err); break;
     default: return cst_fail(err, CST_ERR_INVALID_ARG, "unknown acceleration structure %d", (int)type);
     }
     if (st != CST_OK) {
@@ -69,12 +69,17 @@ static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry 
 
 CstStatus accel_build(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err)
 {
-    return accel_build_mode(a, type, geom, false, err);
+    return accel_build_mode(a, type, geom, EMBREE_EXACT, err);
 }
 
 CstStatus accel_build_native(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err)
 {
-    return accel_build_mode(a, type, geom, true, err);
+    return accel_build_mode(a, type, geom, EMBREE_NATIVE, err);
+}
+
+CstStatus accel_build_native_robust(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err)
+{
+    return accel_build_mode(a, type, geom, EMBREE_NATIVE_ROBUST, err);
 }
 
 void accel_free(Accel *a)

@@ -54,6 +54,9 @@ CstStatus accel_build(Accel *a, AccelType type, const AccelGeometry *geom, CstEr
  * triangle kernels, its speed; t, u, v differ from ours in the last bits): the ray
  * benchmark's speed anchor. */
 CstStatus accel_build_native(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err);
+/* accel_build_native, with Embree in its robust mode (EMBREE_NATIVE_ROBUST): the anchor
+ * with our BVH's guarantees. The other back ends build as always. */
+CstStatus accel_build_native_robust(Accel *a, AccelType type, const AccelGeometry *geom, CstError *err);
 /* Accepts a zeroed or already freed Accel. */
 void accel_free(Accel *a);
 size_t accel_memory_bytes(const Accel *a);

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "geometry/sphere.h"
 #include "geometry/triangle4.h"
 
@@ -510,7 +511,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
                         BVH_INDEX_MAX, inner + 1, blocks);
     }
     size_t units = (inner + 1) * NODE_UNITS + blocks * BLOCK_UNITS;
-    bvh->units = aligned_alloc(64, (units * BVH_UNIT + 63u) & ~(size_t)63u);
+    bvh->units = memory_alloc_large(units * BVH_UNIT);
     bvh->spheres = malloc((size_t)(num_spheres > 0 ? num_spheres : 1) * sizeof *bvh->spheres);
     if (!bvh->units || !bvh->spheres) goto oom;
 

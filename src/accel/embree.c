@@ -12,10 +12,10 @@
 
 bool embree_available(void) { return false; }
 
-CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, bool native_triangles, CstError *err)
+CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode mode, CstError *err)
 {
     (void)geom;
-    (void)native_triangles;
+    (void)mode;
     *out = NULL;
     return cst_fail(err, CST_ERR_UNSUPPORTED,
                     "this build has no Embree back end (configure with -DCST_EMBREE=ON and "
@@ -322,8 +322,9 @@ static CstStatus embree_add_spheres(EmbreeAccel *a, const AccelGeometry *g, CstE
     return embree_check(a, "adding the spheres", err);
 }
 
-CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, bool native_triangles, CstError *err)
+CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode mode, CstError *err)
 {
+    const bool native_triangles = mode != EMBREE_EXACT;
     *out = NULL;
     EmbreeAccel *a = calloc(1, sizeof *a);
     if (!a) return cst_fail(err, CST_ERR_OOM, "out of memory creating the Embree back end");
@@ -351,7 +352,7 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, bool native
      * lower * rdir - org * rdir, which loses hits a few ulps of the coordinates from the
      * origin (where two walls meet, a bounce ray can cross the other wall at t ~ 1e-5 in
      * a box of size 500), hits our conservative BVH keeps. */
-    rtcSetSceneFlags(a->scene, native_triangles ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneFlags(a->scene, mode == EMBREE_NATIVE ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(a->scene, RTC_BUILD_QUALITY_MEDIUM); /* Embree's default */
 
     if (geom->num_tris > 0 &&
