@@ -348,10 +348,10 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode 
 
     a->scene = rtcNewScene(a->device);
     if (!a->scene) { st = embree_check(a, "creating the scene", err); goto fail; }
-    /* Exact mode also needs Embree's robust traversal: its default box test computes
-     * lower * rdir - org * rdir, which loses hits a few ulps of the coordinates from the
-     * origin (where two walls meet, a bounce ray can cross the other wall at t ~ 1e-5 in
-     * a box of size 500), hits our conservative BVH keeps. */
+    /* Robust mode is EMBREE_NATIVE_ROBUST's definition, and exact mode needs it too:
+     * Embree's default box test computes lower * rdir - org * rdir, which loses hits a few
+     * ulps of the coordinates from the origin (where two walls meet, a bounce ray can cross
+     * the other wall at t ~ 1e-5 in a box of size 500), hits our conservative BVH keeps. */
     rtcSetSceneFlags(a->scene, mode == EMBREE_NATIVE ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(a->scene, RTC_BUILD_QUALITY_MEDIUM); /* Embree's default */
 

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "accel/bvh.h"
+#include "core/memory.h"
 #include "core/rng.h"
 #include "geometry/sphere.h"
 #include "geometry/triangle.h"
@@ -390,6 +391,25 @@ static void check_random_rays(const Bvh *bvh, const Soup *s, Pcg32 *rng, int cou
 }
 
 /* ------------------------------------------------------------------ tests */
+
+/* The BVH's array comes from memory_alloc_large: aligned for its 64-byte lines, and large
+ * requests on whole 2 MiB pages (the huge-page hint covers all of them), every byte usable. */
+static void test_memory_alloc_large(void **state)
+{
+    (void)state;
+    const size_t huge = (size_t)2 << 20;
+    const size_t sizes[] = {1, 64, 1000, huge - 1, huge, 5 * huge + 3};
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+        unsigned char *p = memory_alloc_large(sizes[i]);
+        assert_non_null(p);
+        assert_int_equal((uintptr_t)p % (sizes[i] >= huge ? huge : 64), 0);
+        memset(p, 0xa5, sizes[i]);
+        assert_int_equal(p[0], 0xa5);
+        assert_int_equal(p[sizes[i] - 1], 0xa5);
+        free(p);
+    }
+    assert_null(memory_alloc_large(SIZE_MAX - 16)); /* rounding up would wrap */
+}
 
 static void test_bvh_empty(void **state)
 {
@@ -858,6 +878,7 @@ static void test_bvh_rays_in_box_planes(void **state)
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_memory_alloc_large),
         cmocka_unit_test(test_bvh_empty),
         cmocka_unit_test(test_bvh_random_soups),
         cmocka_unit_test(test_bvh_nonfinite_rays),
