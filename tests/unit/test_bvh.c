@@ -823,14 +823,13 @@ static void test_bvh_closed_meshes_match_brute_force(void **state)
     shoot_closed_meshes(false);
 }
 
-/* KNOWN FAILURE (run by `test_bvh --watertight`, CTest entry test_bvh_watertight, marked
- * WILL_FAIL): every ray from inside a closed mesh toward a vertex or an edge midpoint
- * must hit. Moller-Trumbore computes each triangle's barycentrics independently, so a
- * ray through a shared edge or vertex can round to "outside" in every triangle that
- * shares it and leak (brute force misses too: not a BVH bug). The fix is a watertight
- * ray-triangle test (Woop, Benthin & Wald, "Watertight Ray/Triangle Intersection",
- * JCGT 2013), a later issue; when it lands this test passes and CTest reports the
- * WILL_FAIL entry as failed, as a reminder to drop the mark. Kept strict: no tolerance. */
+/* Run by `test_bvh --watertight` (CTest entry test_bvh_watertight): every ray from inside
+ * a closed mesh toward a vertex or an edge midpoint must hit. Moller-Trumbore computes each
+ * triangle's barycentrics independently, so a ray through a shared edge or vertex can round
+ * to "outside" in every triangle that shares it and leak (about 6% of these rays leaked;
+ * Embree's default configuration leaks 7%, docs/benchmarks.md); the watertight test (Woop,
+ * Benthin & Wald, "Watertight Ray/Triangle Intersection", JCGT 2013) decides a shared edge
+ * the same way for both triangles. Strict: no tolerance. */
 static void test_bvh_closed_meshes_watertight(void **state)
 {
     (void)state;
