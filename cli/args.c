@@ -575,7 +575,7 @@ static const ArgsBenchOpt ARGS_BENCH_OPTS[] = {
 };
 #define ARGS_NUM_BENCH_OPTS (sizeof ARGS_BENCH_OPTS / sizeof ARGS_BENCH_OPTS[0])
 
-static const char *const ARGS_BENCH_ACCELS[] = {"bvh", "kdtree", "grid", "list", "embree", "embree-robust"};
+static const char *const ARGS_BENCH_ACCELS[] = {"bvh", "kdtree", "grid", "list", "embree", ARGS_EMBREE_ROBUST};
 _Static_assert(sizeof ARGS_BENCH_ACCELS / sizeof ARGS_BENCH_ACCELS[0] == ARGS_BENCH_MAX_ACCELS, "one slot per name");
 
 /* --accel bvh,embree: each name known, none empty, none twice. */

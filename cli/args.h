@@ -14,7 +14,8 @@
 #define ARGS_FILTER_NAMES     "box, tent, gaussian, mitchell"
 #define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree"
 /* bench rays also takes Embree in its robust mode as a back end of its own. */
-#define ARGS_BENCH_ACCEL_NAMES ARGS_ACCEL_NAMES ", embree-robust"
+#define ARGS_EMBREE_ROBUST     "embree-robust"
+#define ARGS_BENCH_ACCEL_NAMES ARGS_ACCEL_NAMES ", " ARGS_EMBREE_ROBUST
 #define ARGS_SAMPLER_NAMES    "independent, stratified, sobol"
 #define ARGS_AOV_NAMES        "albedo, normal, depth, variance"
 #define ARGS_MAX_EXPOSURE     64

@@ -515,7 +515,7 @@ typedef struct BenchBackend {
 
 static const char *cli_bench_name(BenchBackend b)
 {
-    return b.type == ACCEL_EMBREE && b.robust ? "embree-robust" : accel_type_name(b.type);
+    return b.type == ACCEL_EMBREE && b.robust ? ARGS_EMBREE_ROBUST : accel_type_name(b.type);
 }
 
 static bool cli_bench_same(BenchBackend a, BenchBackend b) { return a.type == b.type && a.robust == b.robust; }
@@ -744,7 +744,7 @@ static int cli_bench_rays(const CliArgs *a)
     bool explicit_accels = b->num_accels > 0;
     if (explicit_accels) {
         for (int i = 0; i < b->num_accels; i++) {
-            BenchBackend be = {ACCEL_EMBREE, strcmp(b->accels[i], "embree-robust") == 0};
+            BenchBackend be = {ACCEL_EMBREE, strcmp(b->accels[i], ARGS_EMBREE_ROBUST) == 0};
             if (!be.robust && !accel_type_from_name(b->accels[i], &be.type)) {
                 fprintf(stderr, "caustic: error: unknown acceleration structure '%s'\n", b->accels[i]);
                 code = CLI_EXIT_USAGE;

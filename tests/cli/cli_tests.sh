@@ -494,5 +494,50 @@ if expect "verify --help exits 0" 0; then
         && pass "verify --help prints the verify options" || fail "verify --help prints the verify options"
 fi
 
+# bench rays: back-end names, and the ratio columns (the built-in Cornell box, no ../shared).
+dir=$TMP/bench
+run "$dir" bench rays --cornell --accel bvh,octree
+expect "bench rays: unknown back end exits 2 and lists the valid ones" 2 "unknown acceleration structure 'octree'" "embree, embree-robust\)"
+run "$dir" bench rays --cornell --accel bvh,bvh
+expect "bench rays: a back end listed twice exits 2" 2 "'bvh' listed twice"
+run "$dir" bench rays --cornell --accel bvh,kdtree --threads 2 --json
+if expect "bench rays --json without Embree exits 0" 0; then
+    if python3 - "$OUT" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+assert len(rows) == 12, len(rows)  # 2 back ends x 3 sets x 2 thread counts
+assert [r["accel"] for r in rows] == ["bvh"] * 6 + ["kdtree"] * 6
+assert all(r["check"] == "OK" and r["vs_embree"] is None and r["vs_embree_robust"] is None for r in rows)
+PY
+    then pass "bench rays --json: checked rows, no Embree ratios without Embree"
+    else fail "bench rays --json: checked rows, no Embree ratios without Embree"; fi
+fi
+run "$dir" bench rays --cornell --accel embree-robust --threads 1 --json
+if [ "$RC" -eq 2 ] && grep -q "not available in this build" "$ERR"; then
+    pass "bench rays: embree-robust refused in a build without Embree"
+elif expect "bench rays: embree-robust alone exits 0" 0; then
+    run "$dir" bench rays --cornell --accel bvh,embree,embree-robust --threads 2 --json
+    if expect "bench rays with both Embree modes exits 0" 0; then
+        if python3 - "$OUT" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+assert [r["accel"] for r in rows] == ["bvh"] * 6 + ["embree"] * 6 + ["embree-robust"] * 6
+assert all(r["check"] == "OK" for r in rows)
+rate = {(r["accel"], r["set"], r["threads"]): r["mrays_per_s"] for r in rows}
+for r in rows:
+    k = (r["set"], r["threads"])
+    for field, anchor in (("vs_embree", "embree"), ("vs_embree_robust", "embree-robust")):
+        want = r["mrays_per_s"] / rate[(anchor,) + k]
+        assert abs(r[field] - want) <= 1e-9 * want, (r, field, want)
+PY
+        then pass "bench rays: every row's ratio to Embree's default and to its robust mode"
+        else fail "bench rays: every row's ratio to Embree's default and to its robust mode"; fi
+    fi
+    run "$dir" bench rays --cornell --accel bvh,embree-robust --threads 1
+    expect "bench rays table exits 0" 0 && { grep -Eq "vs embree +vs robust" "$OUT" && grep -Eq "^embree-robust " "$OUT" \
+        && pass "bench rays table: a vs robust column and embree-robust rows" \
+        || fail "bench rays table: a vs robust column and embree-robust rows"; }
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
