@@ -40,17 +40,26 @@ typedef struct TriangleRay {
 
 static inline TriangleRay triangle_ray_setup(Vec3 d)
 {
+    /* The axis choice and the winding swap by table lookups, not branches: for incoherent
+     * rays (bounces, shadow rays) the branches were mispredicted about once per ray
+     * (cachegrind, the bunny's secondary rays). Bit 0: |x| > |y|, bit 1: |x| > |z|,
+     * bit 2: |y| > |z|; the largest component becomes z, ties going to the later axis. */
+    static const unsigned char KZ[8] = {2, 2, 2, 0, 1, 2, 1, 0};
+    /* [2 kz + (d_kz < 0)]: kx and ky cyclic after kz, swapped to keep the winding. */
+    static const unsigned char KX[6] = {1, 2, 2, 0, 0, 1}, KY[6] = {2, 1, 0, 2, 1, 0};
+    const float c[3] = {d.x, d.y, d.z};
+    const float ax = fabsf(d.x), ay = fabsf(d.y), az = fabsf(d.z);
+    const unsigned key = (unsigned)(ax > ay) | (unsigned)(ax > az) << 1 | (unsigned)(ay > az) << 2;
     TriangleRay tr;
-    float ax = fabsf(d.x), ay = fabsf(d.y), az = fabsf(d.z);
-    tr.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-    tr.kx = tr.kz == 2 ? 0 : tr.kz + 1;
-    tr.ky = tr.kx == 2 ? 0 : tr.kx + 1;
-    float dz = v3_get(d, tr.kz);
-    if (dz < 0.0f) { int t = tr.kx; tr.kx = tr.ky; tr.ky = t; } /* keep the winding */
+    tr.kz = KZ[key];
+    const float dz = c[tr.kz];
+    const unsigned row = 2u * (unsigned)tr.kz + (unsigned)(dz < 0.0f);
+    tr.kx = KX[row];
+    tr.ky = KY[row];
     /* One division: the shear only has to be the same for every triangle a ray meets. */
     tr.sz = 1.0f / dz;
-    tr.sx = v3_get(d, tr.kx) * tr.sz;
-    tr.sy = v3_get(d, tr.ky) * tr.sz;
+    tr.sx = c[tr.kx] * tr.sz;
+    tr.sy = c[tr.ky] * tr.sz;
     return tr;
 }
 
