@@ -68,14 +68,13 @@ static inline int triangle4_intersect(const float v[3][3][4], const TriangleRay4
     __m128 zt[3];
     for (int k = 0; k < 3; k++) zt[k] = _mm_mul_ps(q->sz, pz[k]);
     __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, zt[0]), _mm_mul_ps(V, zt[1])), _mm_mul_ps(W, zt[2]));
-    /* t = T * (1 / det) is positive only where T is non-zero and has det's sign. A ray that
+    /* t = T * (1 / det) is positive only where T and det have the same sign. A ray that
      * leaves a surface passes "inside" the triangle it starts on (and often a neighbour),
-     * behind its origin: about three such lanes per bounce or shadow ray on the meshes. With
-     * t_min >= 0 (every caller's) such lanes cannot hit, so they skip the division and the
-     * error bound (Woop et al. 2013 test the sign before dividing too); the result is the
-     * same as the full test's. */
-    int ahead = inside & ~_mm_movemask_ps(_mm_xor_ps(T, det)) & ~_mm_movemask_ps(_mm_cmpeq_ps(T, zero));
-    if (!ahead && _mm_movemask_ps(_mm_cmpge_ps(t_min, zero)) == 0xf) {
+     * behind its origin (about three such blocks per bounce ray on the bunny). With t_min
+     * >= 0 (the renderer's rays) such lanes cannot hit, so when no lane is left they skip
+     * the division and the error bound (Woop et al. 2013 test the sign before dividing
+     * too); the result is the full test's, bit for bit. */
+    if (!(inside & ~_mm_movemask_ps(_mm_xor_ps(T, det))) && _mm_movemask_ps(_mm_cmpge_ps(t_min, zero)) == 0xf) {
         *t_out = *u_out = *v_out = zero;
         return 0;
     }
