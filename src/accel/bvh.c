@@ -38,6 +38,14 @@ enum {
 #endif
 static const float SAH_TRAVERSAL_COST = SAHT;
 static const float SAH_ISECT_COST = 1.0f;
+/* The collapse's cost of one wide-node visit, relative to one block test: what a visit
+ * costs on the large meshes, where it is a dependent load that often misses the cache.
+ * Dragon and bumpysphere, 1 thread, against Embree: 1.0 and 1.5 gave the same within
+ * the noise, 3.0 too, 0.5 slightly slower (docs/benchmarks.md). */
+#ifndef WNODE
+#define WNODE 2.0f
+#endif
+static const float WIDE_NODE_COST = WNODE;
 
 /* ------------------------------------------------------------------ build */
 
@@ -100,10 +108,31 @@ typedef struct BinNode {
  * (the "block SAH" of wide BVHs). */
 static inline float sah_blocks(int n) { return (float)((n + 3) / 4); }
 
+/* The collapse into wide nodes (Ylitie et al., "Efficient Incoherent Ray Traversal on
+ * GPUs Through Compressed Wide BVHs", HPG 2017, section 4.1): for every binary node n
+ * and i = 1..8, the least SAH cost of n's subtree when it may take up to i slots of its
+ * wide parent, as one leaf, one wide node, or split between n's children. Computed
+ * bottom-up as the binary build returns, so it runs on the build's threads. The cost of
+ * a slot's subtree counts its root's area once per block tested (a leaf) or once per
+ * visit (a wide node, WIDE_NODE_COST), as the SAH of the finished wide tree does. */
+typedef struct SubtreeCost {
+    float cost[BVH_WIDTH]; /* cost[i - 1]: in at most i slots */
+    int count;             /* primitives */
+    unsigned kinds;        /* 1: has triangles, 2: has spheres */
+} SubtreeCost;
+
+/* choice[n][0]: 0 if n becomes one leaf, else k, when n becomes a wide node: k of its
+ * eight slots go to the left child's subtree, 8 - k to the right's. choice[n][i - 1] for
+ * i > 1: 0 if n takes fewer than i slots, else k, the left child's share of the i. */
+typedef int8_t CollapseChoice[BVH_WIDTH];
+
+enum { WIDE_LEAF_MAX_TRIS = 32 /* 8 blocks, the most a BvhRef counts */, WIDE_LEAF_MAX_SPHERES = 8 };
+
 typedef struct Builder {
     const BuildPrim *bp;
     uint32_t *idx;
     BinNode *nodes;
+    CollapseChoice *choice;
     uint32_t num_tris; /* ids below are triangles, the rest spheres */
     atomic_int spare_threads;
 } Builder;
@@ -228,18 +257,19 @@ static void find_split(Builder *b, int begin, int end, Box4 box, Box4 cbox, Spli
     out->mid = i;
 }
 
-static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth);
+static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth, SubtreeCost *out);
 
 typedef struct BuildTask {
     Builder *b;
     int node, begin, end, depth;
     Box4 box, cbox;
+    SubtreeCost cost;
 } BuildTask;
 
 static void *build_task_run(void *arg)
 {
     BuildTask *t = arg;
-    build_node(t->b, t->node, t->begin, t->end, t->box, t->cbox, t->depth);
+    build_node(t->b, t->node, t->begin, t->end, t->box, t->cbox, t->depth, &t->cost);
     return NULL;
 }
 
@@ -251,7 +281,51 @@ static bool take_thread(Builder *b)
     return false;
 }
 
-static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth)
+static inline float leaf_blocks(int n) { return (float)((n + 3) / 4); }
+
+static void leaf_cost(Builder *b, int node, SubtreeCost *out)
+{
+    const BinNode *bn = &b->nodes[node];
+    bool tris = b->idx[bn->offset] < b->num_tris; /* a binary leaf holds one kind */
+    float c = bbox_area(bn->box) * (tris ? leaf_blocks(bn->count) : (float)bn->count);
+    for (int i = 0; i < BVH_WIDTH; i++) {
+        out->cost[i] = c;
+        b->choice[node][i] = 0;
+    }
+    out->count = bn->count;
+    out->kinds = tris ? 1u : 2u;
+}
+
+static void inner_cost(Builder *b, int node, const SubtreeCost *l, const SubtreeCost *r, SubtreeCost *out)
+{
+    const float area = bbox_area(b->nodes[node].box);
+    int8_t *choice = b->choice[node];
+    /* split[j]: both children's subtrees in j slots, the best division */
+    float split[BVH_WIDTH + 1];
+    int8_t left_share[BVH_WIDTH + 1];
+    for (int j = 2; j <= BVH_WIDTH; j++) {
+        split[j] = INFINITY;
+        left_share[j] = 1;
+        for (int k = 1; k < j; k++) {
+            float c = l->cost[k - 1] + r->cost[j - k - 1];
+            if (c < split[j]) { split[j] = c; left_share[j] = (int8_t)k; }
+        }
+    }
+    out->count = l->count + r->count;
+    out->kinds = l->kinds | r->kinds;
+    float as_node = area * WIDE_NODE_COST + split[BVH_WIDTH], as_leaf = INFINITY;
+    if (out->kinds == 1u && out->count <= WIDE_LEAF_MAX_TRIS) as_leaf = area * leaf_blocks(out->count);
+    if (out->kinds == 2u && out->count <= WIDE_LEAF_MAX_SPHERES) as_leaf = area * (float)out->count;
+    /* The root is a wide node whatever its size: the ray tests it in any case. */
+    if (as_leaf <= as_node && node != 0) { out->cost[0] = as_leaf; choice[0] = 0; }
+    else { out->cost[0] = as_node; choice[0] = left_share[BVH_WIDTH]; }
+    for (int i = 2; i <= BVH_WIDTH; i++) {
+        if (split[i] < out->cost[i - 2]) { out->cost[i - 1] = split[i]; choice[i - 1] = left_share[i]; }
+        else { out->cost[i - 1] = out->cost[i - 2]; choice[i - 1] = 0; }
+    }
+}
+
+static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth, SubtreeCost *out)
 {
     BinNode *bn = &b->nodes[node];
     bn->box = box4_to_bbox(box);
@@ -283,25 +357,29 @@ static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 
     if (s.mid < 0) {
         bn->offset = begin;
         bn->count = n;
+        leaf_cost(b, node, out);
         return;
     }
     int nl = s.mid - begin;
     int left = node + 1, right = node + 2 * nl;
     bn->offset = right;
     bn->count = 0;
+    SubtreeCost lc, rc;
     if (n >= BVH_PARALLEL_MIN && take_thread(b)) {
-        BuildTask t = {b, right, s.mid, end, depth + 1, s.rbox, s.rcbox};
+        BuildTask t = {b, right, s.mid, end, depth + 1, s.rbox, s.rcbox, {{0.0f}, 0, 0u}};
         pthread_t tid;
         if (pthread_create(&tid, NULL, build_task_run, &t) == 0) {
-            build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1);
+            build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1, &lc);
             pthread_join(tid, NULL);
             atomic_fetch_add(&b->spare_threads, 1);
+            inner_cost(b, node, &lc, &t.cost, out);
             return;
         }
         atomic_fetch_add(&b->spare_threads, 1);
     }
-    build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1);
-    build_node(b, right, s.mid, end, s.rbox, s.rcbox, depth + 1);
+    build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1, &lc);
+    build_node(b, right, s.mid, end, s.rbox, s.rcbox, depth + 1, &rc);
+    inner_cost(b, node, &lc, &rc, out);
 }
 
 /* Node boxes are widened a little, outward: a ray lying exactly in a box's face plane
@@ -343,6 +421,7 @@ typedef struct Emitter {
     uint32_t num_tris;
     const Sphere *spheres;
     float margin;
+    const CollapseChoice *choice;
     Bvh *out;
     size_t cursor; /* units written */
 } Emitter;
@@ -353,29 +432,34 @@ enum { NODE_UNITS = sizeof(BvhNode) / BVH_UNIT, BLOCK_UNITS = sizeof(BvhTriBlock
 
 static inline void *unit_at(Emitter *e, size_t u) { return e->out->units + u * BVH_UNIT; }
 
-/* Writes the leaf for binary leaf `bn` and returns its reference: triangles packed four
- * to a block in the SAH's order, or spheres. */
-static uint32_t emit_leaf(Emitter *e, const BinNode *bn)
+/* Writes the leaf for the primitives of binary node `node`'s subtree (contiguous in idx)
+ * and returns its reference: triangles packed four to a block in the SAH's order, or
+ * spheres. */
+static uint32_t emit_leaf(Emitter *e, int node)
 {
     Bvh *o = e->out;
     o->num_leaves++;
-    uint32_t first_id = e->idx[bn->offset];
+    int lo = node, hi = node;
+    while (e->bin[lo].count == 0) lo++;                   /* the leftmost binary leaf */
+    while (e->bin[hi].count == 0) hi = e->bin[hi].offset; /* the rightmost */
+    const int begin = e->bin[lo].offset, end = e->bin[hi].offset + e->bin[hi].count;
+    uint32_t first_id = e->idx[begin];
     if (first_id >= e->num_tris) {
         uint32_t first = (uint32_t)o->num_spheres;
-        for (int i = bn->offset; i < bn->offset + bn->count; i++) {
+        for (int i = begin; i < end; i++) {
             const Sphere *sp = &e->spheres[e->idx[i] - e->num_tris];
             BvhSphere *d = &o->spheres[o->num_spheres++];
             d->center = sp->center;
             d->radius = sp->radius;
             d->id = e->idx[i];
         }
-        return BVH_LEAF | BVH_SPHERES | ((uint32_t)(bn->count - 1) << BVH_COUNT_SHIFT) | first << BVH_INDEX_SHIFT;
+        return BVH_LEAF | BVH_SPHERES | ((uint32_t)(end - begin - 1) << BVH_COUNT_SHIFT) | first << BVH_INDEX_SHIFT;
     }
     uint32_t first = (uint32_t)e->cursor;
     uint32_t count = 0;
     int lane = 4;
     BvhTriBlock *blk = NULL;
-    for (int i = bn->offset; i < bn->offset + bn->count; i++) {
+    for (int i = begin; i < end; i++) {
         uint32_t id = e->idx[i];
         if (lane == 4) {
             blk = unit_at(e, e->cursor);
@@ -401,41 +485,39 @@ static uint32_t emit_leaf(Emitter *e, const BinNode *bn)
     return BVH_LEAF | ((count - 1u) << BVH_COUNT_SHIFT) | first << BVH_INDEX_SHIFT;
 }
 
-/* Turns binary node `bin` into the wide node at unit `out`: its children, with the
- * largest-area inner ones replaced by their own children while slots remain (fewer,
- * fuller wide nodes cut the node visits per ray). After the node come its leaves' blocks,
- * then its inner children depth first (bvh.h). */
+/* The roots of the subtrees that binary node n's subtree becomes in at most i slots, as
+ * the collapse's costs chose. */
+static void gather(const Emitter *e, int n, int i, int *kids, int *nk)
+{
+    while (i > 1 && e->choice[n][i - 1] == 0) i--;
+    if (i == 1) {
+        kids[(*nk)++] = n;
+        return;
+    }
+    const int k = e->choice[n][i - 1];
+    gather(e, n + 1, k, kids, nk);
+    gather(e, e->bin[n].offset, i - k, kids, nk);
+}
+
+/* Turns binary node `bin` into the wide node at unit `out`, its slots shared between its
+ * children's subtrees as the collapse's costs chose. After the node come its leaves'
+ * blocks, then its inner children depth first (bvh.h). */
 static void collapse(Emitter *e, int bin, size_t out)
 {
-    const BinNode *bn = e->bin;
     int kids[BVH_WIDTH], nk = 0;
-    kids[nk++] = bin + 1;
-    kids[nk++] = bn[bin].offset;
-    while (nk < BVH_WIDTH) {
-        int best = -1;
-        float best_area = -1.0f;
-        for (int i = 0; i < nk; i++) {
-            const BinNode *k = &bn[kids[i]];
-            if (k->count == 0 && bbox_area(k->box) > best_area) { best = i; best_area = bbox_area(k->box); }
-        }
-        if (best < 0) break;
-        int k = kids[best];
-        kids[best] = k + 1;
-        kids[nk++] = bn[k].offset;
-    }
+    const int left_slots = e->choice[bin][0];
+    gather(e, bin + 1, left_slots, kids, &nk);
+    gather(e, e->bin[bin].offset, BVH_WIDTH - left_slots, kids, &nk);
     BvhNode *w = unit_at(e, out);
     wide_clear(w);
+    for (int i = 0; i < nk; i++)
+        if (e->choice[kids[i]][0] == 0) wide_set_child(w, i, widen(e->bin[kids[i]].box, e->margin), emit_leaf(e, kids[i]));
     for (int i = 0; i < nk; i++) {
-        const BinNode *k = &bn[kids[i]];
-        if (k->count > 0) wide_set_child(w, i, widen(k->box, e->margin), emit_leaf(e, k));
-    }
-    for (int i = 0; i < nk; i++) {
-        const BinNode *k = &bn[kids[i]];
-        if (k->count > 0) continue;
+        if (e->choice[kids[i]][0] == 0) continue;
         size_t at = e->cursor;
         e->cursor += NODE_UNITS;
         e->out->num_nodes++;
-        wide_set_child(w, i, widen(k->box, e->margin), (uint32_t)(at * BVH_UNIT));
+        wide_set_child(w, i, widen(e->bin[kids[i]].box, e->margin), (uint32_t)(at * BVH_UNIT));
         collapse(e, kids[i], at);
     }
 }
@@ -477,7 +559,8 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     BuildPrim *bp = aligned_alloc(16, (size_t)n * sizeof *bp);
     uint32_t *idx = malloc((size_t)n * sizeof *idx);
     BinNode *nodes = malloc((size_t)2 * (size_t)n * sizeof *nodes);
-    if (!bp || !idx || !nodes) goto oom;
+    CollapseChoice *choice = malloc((size_t)2 * (size_t)n * sizeof *choice);
+    if (!bp || !idx || !nodes || !choice) goto oom;
 
     for (int i = 0; i < num_tris; i++) {
         Vec3 a = positions[tri_indices[3 * i]], bb = positions[tri_indices[3 * i + 1]],
@@ -492,20 +575,22 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     }
     for (int i = 0; i < n; i++) idx[i] = (uint32_t)i;
 
-    Builder b = {bp, idx, nodes, (uint32_t)num_tris, 0};
+    Builder b = {bp, idx, nodes, choice, (uint32_t)num_tris, 0};
     atomic_init(&b.spare_threads, build_threads() - 1);
     Box4 root_box, root_cbox;
     range_bounds(&b, 0, n, &root_box, &root_cbox);
-    build_node(&b, 0, 0, n, root_box, root_cbox, 0);
+    SubtreeCost root_cost;
+    build_node(&b, 0, 0, n, root_box, root_cbox, 0, &root_cost);
 
-    /* Every wide node but the root absorbs at least one binary inner node; blocks are
-     * counted exactly. */
+    /* Upper bounds: every wide node but the root absorbs at least one binary inner node,
+     * and a leaf the collapse merges from binary leaves packs into no more blocks than
+     * they would. */
     size_t inner = 0, blocks = 0;
     count_binary(nodes, idx, (uint32_t)num_tris, 0, &inner, &blocks);
     /* Leaf references carry a unit index in 27 bits, inner ones a byte offset in 32 (4 GiB
      * of nodes and blocks either way). */
     if ((inner + 1) * NODE_UNITS + blocks * BLOCK_UNITS > BVH_INDEX_MAX) {
-        free(bp); free(idx); free(nodes);
+        free(bp); free(idx); free(nodes); free(choice);
         return cst_fail(err, CST_ERR_INVALID_ARG,
                         "the BVH holds at most %u units of 32 bytes (%zu nodes and %zu triangle blocks need more)",
                         BVH_INDEX_MAX, inner + 1, blocks);
@@ -516,7 +601,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     if (!bvh->units || !bvh->spheres) goto oom;
 
     BBox root = nodes[0].box;
-    Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, 0.0f, bvh, NODE_UNITS};
+    Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, 0.0f, choice, bvh, NODE_UNITS};
     /* Not smaller: at 2^-30 of the extent test_bvh's unit icosphere (coordinates around 0,
      * where the relative widening vanishes) lost closest hits to the slab test's rounding.
      * Scene.offset_near (scene_commit) is four times this, so that rays leaving a surface
@@ -527,7 +612,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
         /* A root that is a leaf (few primitives) becomes the single slot of the root. */
         BvhNode *w = unit_at(&e, 0);
         wide_clear(w);
-        wide_set_child(w, 0, widen(root, e.margin), emit_leaf(&e, &nodes[0]));
+        wide_set_child(w, 0, widen(root, e.margin), emit_leaf(&e, 0));
     } else {
         collapse(&e, 0, 0);
     }
@@ -536,9 +621,10 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     free(bp);
     free(idx);
     free(nodes);
+    free(choice);
     return CST_OK;
 oom:
-    free(bp); free(idx); free(nodes);
+    free(bp); free(idx); free(nodes); free(choice);
     bvh_free(bvh);
     return cst_fail(err, CST_ERR_OOM, "out of memory building the BVH over %d primitives", n);
 }

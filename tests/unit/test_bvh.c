@@ -246,13 +246,17 @@ static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, in
         }
         return;
     }
-    assert_true(count <= 2); /* at most 8 triangles per leaf */
     cover_units(bvh, cover, first, (size_t)count * (sizeof(BvhTriBlock) / BVH_UNIT));
     for (uint32_t bi = 0; bi < count; bi++) {
         const BvhTriBlock *b = bvh_blocks(bvh, first) + bi;
         assert_true(lane_used(b, 0));
         for (int l = 0; l < 4; l++) {
-            if (!lane_used(b, l)) continue;
+            /* packed: only the leaf's last block has unused lanes, at its end */
+            if (!lane_used(b, l)) {
+                assert_true(bi == count - 1);
+                for (int m = l; m < 4; m++) assert_false(lane_used(b, m));
+                break;
+            }
             int id = (int)b->id[l];
             assert_true(id >= 0 && id < s->num_tris);
             seen_ids[id]++;
