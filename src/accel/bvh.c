@@ -705,18 +705,20 @@ typedef struct RayBox8 {
 
 static inline RayBox8 ray_box8(const Ray *r)
 {
-    Vec3 inv = ray_inv_dir(r->d);
+    const __m128 o = _mm_loadu_ps(&r->o.x), ninv = _mm_xor_ps(ray_inv_dir4(_mm_loadu_ps(&r->d.x)), _mm_set1_ps(-0.0f));
+    const __m128 ninv_far = _mm_mul_ps(ninv, _mm_set1_ps(BVH_EXIT_WIDEN));
     RayBox8 q;
-    q.o[0] = f8_set1(r->o.x); q.o[1] = f8_set1(r->o.y); q.o[2] = f8_set1(r->o.z);
-    q.ninv[0] = f8_set1(-inv.x); q.ninv[1] = f8_set1(-inv.y); q.ninv[2] = f8_set1(-inv.z);
-    q.ninv_far[0] = f8_set1(-inv.x * BVH_EXIT_WIDEN);
-    q.ninv_far[1] = f8_set1(-inv.y * BVH_EXIT_WIDEN);
-    q.ninv_far[2] = f8_set1(-inv.z * BVH_EXIT_WIDEN);
-    /* By the reciprocal's sign bit (one movemask for the three axes): ray_inv_dir keeps
+#define LANE(v, a) _mm_cvtss_f32(_mm_shuffle_ps((v), (v), _MM_SHUFFLE(a, a, a, a)))
+    q.o[0] = f8_set1(LANE(o, 0)); q.o[1] = f8_set1(LANE(o, 1)); q.o[2] = f8_set1(LANE(o, 2));
+    q.ninv[0] = f8_set1(LANE(ninv, 0)); q.ninv[1] = f8_set1(LANE(ninv, 1)); q.ninv[2] = f8_set1(LANE(ninv, 2));
+    q.ninv_far[0] = f8_set1(LANE(ninv_far, 0)); q.ninv_far[1] = f8_set1(LANE(ninv_far, 1));
+    q.ninv_far[2] = f8_set1(LANE(ninv_far, 2));
+#undef LANE
+    /* By the reciprocal's sign bit (one movemask for the three axes): ray_inv_dir4 keeps
      * a zero component's sign, so a -0 direction enters through the max plane like any
      * other negative one. An axis's two rows are neighbours, 2a and 2a + 1, so the far
      * row's offset is the near one's with the row-size bit flipped. */
-    const unsigned neg = (unsigned)_mm_movemask_ps(_mm_set_ps(0.0f, inv.z, inv.y, inv.x));
+    const unsigned neg = ~(unsigned)_mm_movemask_ps(ninv);
     for (int a = 0; a < 3; a++) {
         q.near[a] = (2u * (size_t)a + ((neg >> a) & 1u)) * sizeof(float[BVH_WIDTH]);
         q.far[a] = q.near[a] ^ sizeof(float[BVH_WIDTH]);
@@ -742,7 +744,7 @@ static inline const float *node_row(const BvhNode *n, size_t offset)
  * same bound covers it, and min(a, b) * w = min(a * w, b * w) exactly. The min and max
  * are a tree, not a chain, since no NaN has to reach the compare: empty slots hold
  * inverted infinite bounds, entry +inf and exit -inf for every direction, and
- * ray_inv_dir's finite reciprocals make no 0 * inf. Returns the mask of children hit and
+ * ray_inv_dir4's finite reciprocals make no 0 * inf. Returns the mask of children hit and
  * their entry distances. */
 static inline unsigned node_hit8(const BvhNode *n, const RayBox8 *q, F8 t_min, F8 t_max_widened, F8 *t_enter)
 {

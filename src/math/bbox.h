@@ -4,6 +4,7 @@
 
 #include <float.h>
 #include <stdbool.h>
+#include <xmmintrin.h>
 
 #include "math/vec3.h"
 
@@ -24,17 +25,19 @@ static inline float bbox_area(BBox b)
     return 2.0f * (d.x * d.y + d.y * d.z + d.z * d.x);
 }
 
-/* Reciprocal direction for the BVH's SIMD slab test. A zero component becomes +-1e20
- * instead of inf, so (bound - origin) * inv is finite or 0, never NaN (Embree's rcp_safe
- * does the same). A ray lying exactly in a face plane would then leave the slab at
- * t = 0; the BVH widens its boxes so that case cannot arise (see bvh.c, widen()). */
-static inline Vec3 ray_inv_dir(Vec3 d)
+/* Reciprocal direction for the BVH's SIMD slab test, in lanes 0-2 of an SSE vector (lane
+ * 3 is whatever 1 / d[3] is). A component smaller than 1e-20 in magnitude becomes +-1e20
+ * instead of up to inf, with the sign of the component (also of a zero), so (bound -
+ * origin) * inv is finite or 0, never NaN (Embree's rcp_safe does the same). A ray lying
+ * exactly in a face plane would then leave the slab at t = 0; the BVH widens its boxes so
+ * that case cannot arise (see bvh.c, widen()). One correctly rounded division for the
+ * three lanes and no branch: it is part of every ray's set-up. */
+static inline __m128 ray_inv_dir4(__m128 d)
 {
-    const float tiny = 1e-20f;
-    Vec3 s = v3(fabsf(d.x) < tiny ? copysignf(tiny, d.x) : d.x,
-                fabsf(d.y) < tiny ? copysignf(tiny, d.y) : d.y,
-                fabsf(d.z) < tiny ? copysignf(tiny, d.z) : d.z);
-    return v3(1.0f / s.x, 1.0f / s.y, 1.0f / s.z);
+    const __m128 sign = _mm_set1_ps(-0.0f), tiny = _mm_set1_ps(1e-20f);
+    const __m128 small = _mm_cmplt_ps(_mm_andnot_ps(sign, d), tiny);
+    const __m128 s = _mm_or_ps(_mm_and_ps(small, _mm_or_ps(_mm_and_ps(d, sign), tiny)), _mm_andnot_ps(small, d));
+    return _mm_div_ps(_mm_set1_ps(1.0f), s);
 }
 
 /* Slab test (Kay & Kajiya 1986) with exact handling of zero direction components: such

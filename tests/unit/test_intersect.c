@@ -374,19 +374,26 @@ static bool slab(Vec3 o, Vec3 d, float t_min, float t_max, float *t_enter)
     return bbox_intersect(BOX, o, d, t_min, t_max, t_enter);
 }
 
-/* ray_inv_dir (the BVH's reciprocal): exact where 1/d is finite and the zero components
- * mapped to +-1e20 with the sign of the zero, never inf or NaN. */
+/* ray_inv_dir4 (the BVH's reciprocal): exact where 1/d is finite and the components
+ * below 1e-20 (zeros too) mapped to +-1e20 with the component's sign, never inf or NaN. */
+static Vec3 inv_dir(Vec3 d)
+{
+    float r[4];
+    _mm_storeu_ps(r, ray_inv_dir4(_mm_setr_ps(d.x, d.y, d.z, 1.0f)));
+    return v3(r[0], r[1], r[2]);
+}
+
 static void test_ray_inv_dir(void **state)
 {
     (void)state;
-    Vec3 inv = ray_inv_dir(v3(2.0f, -0.5f, 3.0f));
+    Vec3 inv = inv_dir(v3(2.0f, -0.5f, 3.0f));
     assert_true(inv.x == 0.5f && inv.y == -2.0f && inv.z == 1.0f / 3.0f);
-    inv = ray_inv_dir(v3(0.0f, -0.0f, 1.0f));
-    assert_true(isfinite(inv.x) && isfinite(inv.y));
-    assert_true(inv.x >= 1e20f && inv.y <= -1e20f && inv.z == 1.0f);
-    inv = ray_inv_dir(v3(1e-30f, -1e-30f, 1e-45f)); /* tiny and denormal components too */
-    assert_true(isfinite(inv.x) && isfinite(inv.y) && isfinite(inv.z));
-    assert_true(inv.x > 0.0f && inv.y < 0.0f && inv.z > 0.0f);
+    inv = inv_dir(v3(0.0f, -0.0f, 1.0f));
+    assert_true(inv.x == 1e20f && inv.y == -1e20f && inv.z == 1.0f);
+    inv = inv_dir(v3(1e-30f, -1e-30f, 1e-45f)); /* tiny and denormal components too */
+    assert_true(inv.x == 1e20f && inv.y == -1e20f && inv.z == 1e20f);
+    inv = inv_dir(v3(1e-20f, -2e-20f, 3.0e-7f)); /* at and above the threshold: exact */
+    assert_true(inv.x == 1.0f / 1e-20f && inv.y == 1.0f / -2e-20f && inv.z == 1.0f / 3.0e-7f);
     /* (bound - o) * inv is never NaN, also for an origin on the bound. */
     float zero = 1.0f - 1.0f;
     assert_false(isnan(zero * inv.x));
