@@ -504,6 +504,7 @@ typedef struct GridWalk {
     unsigned flip; /* the bits of a cell's number to complement to count in the ray's direction */
     double o[3], d[3];
     int fixed[3];  /* on an axis the ray does not move along: its cell's place in the brick */
+    int brick_step[3]; /* the change of the brick number for one step along each axis */
 } GridWalk;
 
 /* Where the ray leaves brick b along axis a: the exit plane of its last cell in the ray's
@@ -552,6 +553,9 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
         w->fixed[a] = i & ((1 << BRICK_SHIFT) - 1);
     }
     w->brick = w->b[0] + g->brick_res[0] * (w->b[1] + g->brick_res[1] * w->b[2]);
+    w->brick_step[0] = w->step[0];
+    w->brick_step[1] = w->step[1] * g->brick_res[0];
+    w->brick_step[2] = w->step[2] * g->brick_res[0] * g->brick_res[1];
     w->flip = (d[0] < 0.0 ? 3u : 0u) | (d[1] < 0.0 ? 12u : 0u) | (d[2] < 0.0 ? 48u : 0u);
     return true;
 }
@@ -690,12 +694,20 @@ static inline bool walk_next_brick(const Grid *g, GridWalk *w, uint64_t bits)
 {
     uint32_t dist = bits ? 1u : g->brick_info[w->brick];
     if (dist <= 1u) {
-        int e = w->tb[1] < w->tb[0] ? (w->tb[2] < w->tb[1] ? 2 : 1) : (w->tb[2] < w->tb[0] ? 2 : 0);
-        if (!(w->tb[e] < w->t_end)) return false;
+        /* The axis of the nearest exit without a branch on the axes' order, which is
+         * irregular (ties go to the lower axis), and the brick number by one add: bunny,
+         * every ray set 5% faster (docs/benchmarks.md). */
+        const int e01 = w->tb[1] < w->tb[0];
+        const double m01 = e01 ? w->tb[1] : w->tb[0];
+        const int e = w->tb[2] < m01 ? 2 : e01;
+        const double te = w->tb[2] < m01 ? w->tb[2] : m01;
+        if (!(te < w->t_end)) return false;
         int i = w->b[e] + w->step[e];
         if ((unsigned)i >= (unsigned)g->brick_res[e]) return false;
         w->b[e] = i;
         w->tb[e] = brick_exit(w, e, i);
+        w->brick += w->brick_step[e];
+        return true;
     } else {
         const int r = (int)dist - 1;
         int last[3], e = 0;
