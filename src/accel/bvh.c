@@ -18,7 +18,7 @@
 
 enum {
     BVH_BINS = 32,
-    BVH_MAX_LEAF = 8,   /* larger leaves are always split; 8 spheres or 2 blocks fit a BvhRef */
+    BVH_MAX_LEAF = 8,   /* larger binary leaves are always split (a BvhRef holds up to 8 spheres) */
     BVH_MAX_DEPTH = 60, /* beyond this, split at the median: traversal stacks stay bounded */
     /* The binary tree is at most BVH_MAX_DEPTH + 32 deep (median splits halve), so is the
      * wide one, and each wide level leaves at most 7 siblings on the stack. */
