@@ -2,6 +2,7 @@
  * (closest hit, occlusion). */
 #include "accel/bvh.h"
 
+#include <assert.h>
 #include <immintrin.h>
 #include <float.h>
 #include <math.h>
@@ -42,10 +43,7 @@ static const float SAH_ISECT_COST = 1.0f;
  * costs on the large meshes, where it is a dependent load that often misses the cache.
  * Dragon and bumpysphere, 1 thread, against Embree: 1.0 and 1.5 gave the same within
  * the noise, 3.0 too, 0.5 slightly slower (docs/benchmarks.md). */
-#ifndef WNODE
-#define WNODE 2.0f
-#endif
-static const float WIDE_NODE_COST = WNODE;
+static const float WIDE_NODE_COST = 2.0f;
 
 /* ------------------------------------------------------------------ build */
 
@@ -281,13 +279,17 @@ static bool take_thread(Builder *b)
     return false;
 }
 
-static inline float leaf_blocks(int n) { return (float)((n + 3) / 4); }
+/* A leaf's SAH cost: its blocks, or its spheres, one at a time. */
+static inline float leaf_sah(float area, int count, bool tris)
+{
+    return area * (tris ? sah_blocks(count) : (float)count);
+}
 
 static void leaf_cost(Builder *b, int node, SubtreeCost *out)
 {
     const BinNode *bn = &b->nodes[node];
     bool tris = b->idx[bn->offset] < b->num_tris; /* a binary leaf holds one kind */
-    float c = bbox_area(bn->box) * (tris ? leaf_blocks(bn->count) : (float)bn->count);
+    float c = leaf_sah(bbox_area(bn->box), bn->count, tris);
     for (int i = 0; i < BVH_WIDTH; i++) {
         out->cost[i] = c;
         b->choice[node][i] = 0;
@@ -314,8 +316,9 @@ static void inner_cost(Builder *b, int node, const SubtreeCost *l, const Subtree
     out->count = l->count + r->count;
     out->kinds = l->kinds | r->kinds;
     float as_node = area * WIDE_NODE_COST + split[BVH_WIDTH], as_leaf = INFINITY;
-    if (out->kinds == 1u && out->count <= WIDE_LEAF_MAX_TRIS) as_leaf = area * leaf_blocks(out->count);
-    if (out->kinds == 2u && out->count <= WIDE_LEAF_MAX_SPHERES) as_leaf = area * (float)out->count;
+    if ((out->kinds == 1u && out->count <= WIDE_LEAF_MAX_TRIS) ||
+        (out->kinds == 2u && out->count <= WIDE_LEAF_MAX_SPHERES))
+        as_leaf = leaf_sah(area, out->count, out->kinds == 1u);
     /* The root is a wide node whatever its size: the ray tests it in any case. */
     if (as_leaf <= as_node && node != 0) { out->cost[0] = as_leaf; choice[0] = 0; }
     else { out->cost[0] = as_node; choice[0] = left_share[BVH_WIDTH]; }
@@ -432,17 +435,25 @@ enum { NODE_UNITS = sizeof(BvhNode) / BVH_UNIT, BLOCK_UNITS = sizeof(BvhTriBlock
 
 static inline void *unit_at(Emitter *e, size_t u) { return e->out->units + u * BVH_UNIT; }
 
-/* Writes the leaf for the primitives of binary node `node`'s subtree (contiguous in idx)
- * and returns its reference: triangles packed four to a block in the SAH's order, or
- * spheres. */
+/* The primitives of binary node `node`'s subtree, idx[*begin, *end): contiguous, from its
+ * leftmost binary leaf to its rightmost. */
+static void subtree_range(const BinNode *bin, int node, int *begin, int *end)
+{
+    int lo = node, hi = node;
+    while (bin[lo].count == 0) lo++;
+    while (bin[hi].count == 0) hi = bin[hi].offset;
+    *begin = bin[lo].offset;
+    *end = bin[hi].offset + bin[hi].count;
+}
+
+/* Writes the leaf for the primitives of binary node `node`'s subtree and returns its
+ * reference: triangles packed four to a block in the SAH's order, or spheres. */
 static uint32_t emit_leaf(Emitter *e, int node)
 {
     Bvh *o = e->out;
     o->num_leaves++;
-    int lo = node, hi = node;
-    while (e->bin[lo].count == 0) lo++;                   /* the leftmost binary leaf */
-    while (e->bin[hi].count == 0) hi = e->bin[hi].offset; /* the rightmost */
-    const int begin = e->bin[lo].offset, end = e->bin[hi].offset + e->bin[hi].count;
+    int begin, end;
+    subtree_range(e->bin, node, &begin, &end);
     uint32_t first_id = e->idx[begin];
     if (first_id >= e->num_tris) {
         uint32_t first = (uint32_t)o->num_spheres;
@@ -487,16 +498,25 @@ static uint32_t emit_leaf(Emitter *e, int node)
 
 /* The roots of the subtrees that binary node n's subtree becomes in at most i slots, as
  * the collapse's costs chose. */
-static void gather(const Emitter *e, int n, int i, int *kids, int *nk)
+static void gather(const BinNode *bin, const CollapseChoice *choice, int n, int i, int *kids, int *nk)
 {
-    while (i > 1 && e->choice[n][i - 1] == 0) i--;
+    while (i > 1 && choice[n][i - 1] == 0) i--;
     if (i == 1) {
         kids[(*nk)++] = n;
         return;
     }
-    const int k = e->choice[n][i - 1];
-    gather(e, n + 1, k, kids, nk);
-    gather(e, e->bin[n].offset, i - k, kids, nk);
+    const int k = choice[n][i - 1];
+    gather(bin, choice, n + 1, k, kids, nk);
+    gather(bin, choice, bin[n].offset, i - k, kids, nk);
+}
+
+/* The slots of the wide node that binary inner node `bin` becomes, in order. */
+static int wide_kids(const BinNode *bin, const CollapseChoice *choice, int node, int kids[BVH_WIDTH])
+{
+    int nk = 0;
+    gather(bin, choice, node + 1, choice[node][0], kids, &nk);
+    gather(bin, choice, bin[node].offset, BVH_WIDTH - choice[node][0], kids, &nk);
+    return nk;
 }
 
 /* Turns binary node `bin` into the wide node at unit `out`, its slots shared between its
@@ -504,10 +524,8 @@ static void gather(const Emitter *e, int n, int i, int *kids, int *nk)
  * blocks, then its inner children depth first (bvh.h). */
 static void collapse(Emitter *e, int bin, size_t out)
 {
-    int kids[BVH_WIDTH], nk = 0;
-    const int left_slots = e->choice[bin][0];
-    gather(e, bin + 1, left_slots, kids, &nk);
-    gather(e, e->bin[bin].offset, BVH_WIDTH - left_slots, kids, &nk);
+    int kids[BVH_WIDTH];
+    const int nk = wide_kids(e->bin, e->choice, bin, kids);
     BvhNode *w = unit_at(e, out);
     wide_clear(w);
     for (int i = 0; i < nk; i++)
@@ -522,20 +540,22 @@ static void collapse(Emitter *e, int bin, size_t out)
     }
 }
 
-/* Inner nodes and triangle blocks of the binary tree below `node`. */
-static void count_binary(const BinNode *nodes, const uint32_t *idx, uint32_t num_tris, int node, size_t *inner,
-                         size_t *blocks)
+/* The wide nodes and triangle blocks that collapse() writes for binary node `node`'s
+ * subtree as one slot (a leaf if the collapse chose one), so the array is allocated at
+ * its size. */
+static void count_wide(const BinNode *bin, const CollapseChoice *choice, const uint32_t *idx, uint32_t num_tris,
+                       int node, size_t *nodes, size_t *blocks)
 {
-    for (;;) {
-        const BinNode *bn = &nodes[node];
-        if (bn->count > 0) {
-            if (idx[bn->offset] < num_tris) *blocks += (size_t)(bn->count + 3) / 4;
-            return;
-        }
-        (*inner)++;
-        count_binary(nodes, idx, num_tris, node + 1, inner, blocks);
-        node = bn->offset;
+    if (choice[node][0] == 0) {
+        int begin, end;
+        subtree_range(bin, node, &begin, &end);
+        if (idx[begin] < num_tris) *blocks += (size_t)(end - begin + 3) / 4;
+        return;
     }
+    (*nodes)++;
+    int kids[BVH_WIDTH];
+    const int nk = wide_kids(bin, choice, node, kids);
+    for (int i = 0; i < nk; i++) count_wide(bin, choice, idx, num_tris, kids[i], nodes, blocks);
 }
 
 static int build_threads(void)
@@ -582,20 +602,18 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     SubtreeCost root_cost;
     build_node(&b, 0, 0, n, root_box, root_cbox, 0, &root_cost);
 
-    /* Upper bounds: every wide node but the root absorbs at least one binary inner node,
-     * and a leaf the collapse merges from binary leaves packs into no more blocks than
-     * they would. */
-    size_t inner = 0, blocks = 0;
-    count_binary(nodes, idx, (uint32_t)num_tris, 0, &inner, &blocks);
+    /* A root that is a binary leaf is the single slot of a root node (below). */
+    size_t wide = nodes[0].count > 0 ? 1 : 0, blocks = 0;
+    count_wide(nodes, choice, idx, (uint32_t)num_tris, 0, &wide, &blocks);
     /* Leaf references carry a unit index in 27 bits, inner ones a byte offset in 32 (4 GiB
      * of nodes and blocks either way). */
-    if ((inner + 1) * NODE_UNITS + blocks * BLOCK_UNITS > BVH_INDEX_MAX) {
+    if (wide * NODE_UNITS + blocks * BLOCK_UNITS > BVH_INDEX_MAX) {
         free(bp); free(idx); free(nodes); free(choice);
         return cst_fail(err, CST_ERR_INVALID_ARG,
                         "the BVH holds at most %u units of 32 bytes (%zu nodes and %zu triangle blocks need more)",
-                        BVH_INDEX_MAX, inner + 1, blocks);
+                        BVH_INDEX_MAX, wide, blocks);
     }
-    size_t units = (inner + 1) * NODE_UNITS + blocks * BLOCK_UNITS;
+    size_t units = wide * NODE_UNITS + blocks * BLOCK_UNITS;
     bvh->units = memory_alloc_large(units * BVH_UNIT);
     bvh->spheres = malloc((size_t)(num_spheres > 0 ? num_spheres : 1) * sizeof *bvh->spheres);
     if (!bvh->units || !bvh->spheres) goto oom;
@@ -616,6 +634,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     } else {
         collapse(&e, 0, 0);
     }
+    assert(e.cursor == units); /* count_wide() counted what collapse() wrote */
     bvh->num_prims = n;
     bvh->bounds = root;
     free(bp);
