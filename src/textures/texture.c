@@ -52,10 +52,12 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
     for (size_t i = 0; i < n; i++) {
         const float *p = &rgb_data[3 * i];
         if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]) || p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f) {
+            /* The message reads the pixel, so the image is freed after it is written. */
+            CstStatus st = cst_fail(err, CST_ERR_INVALID_ARG,
+                                    "texture image pixel (%zu, %zu) is (%g, %g, %g); expected finite values >= 0",
+                                    i % (size_t)width, i / (size_t)width, (double)p[0], (double)p[1], (double)p[2]);
             free(rgb_data);
-            return cst_fail(err, CST_ERR_INVALID_ARG,
-                            "texture image pixel (%zu, %zu) is (%g, %g, %g); expected finite values >= 0",
-                            i % (size_t)width, i / (size_t)width, (double)p[0], (double)p[1], (double)p[2]);
+            return st;
         }
         for (int c = 0; c < 3; c++) sum[c] += (double)p[c];
         mx = rgb_max3(mx, rgb(p[0], p[1], p[2]));

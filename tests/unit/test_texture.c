@@ -71,6 +71,21 @@ static Texture tiny_image(TextureWrap wrap)
     return t;
 }
 
+/* A negative or non-finite texel is rejected with its place and value in the message
+ * (texture_image takes the pixels and frees them on failure too; ASan checks that the
+ * message is written before). */
+static void test_image_rejects_bad_texels(void **state)
+{
+    (void)state;
+    float *px = calloc(IW * IH * 3, sizeof *px);
+    assert_non_null(px);
+    px[3 * (1 * IW + 2) + 1] = -0.5f;
+    Texture t;
+    CstError err = {0};
+    assert_int_equal(texture_image(&t, px, IW, IH, TEXTURE_WRAP_REPEAT, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "pixel (2, 1) is (0, -0.5, 0); expected finite values >= 0"));
+}
+
 /* uv of the centre of texel (x, y) (v = 0 is the bottom row). */
 static Vec2 centre(double x, double y) { return v2((float)((x + 0.5) / IW), (float)(1.0 - (y + 0.5) / IH)); }
 
@@ -534,6 +549,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bilinear_exact),
+        cmocka_unit_test(test_image_rejects_bad_texels),
         cmocka_unit_test(test_srgb_decode),
         cmocka_unit_test(test_float_and_jpeg),
         cmocka_unit_test(test_checkerboard),
