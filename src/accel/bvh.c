@@ -34,10 +34,7 @@ enum {
  * Cornell box's ray sets 1.4 -> 1.75x Embree on primary rays, 1.0 -> 1.2x on secondary
  * and occlusion rays against 0.5, the light tracer 7% faster on cornell-spheres, and no
  * change on the meshes (0.1 and 0.2: no better; docs/benchmarks.md). */
-#ifndef SAHT
-#define SAHT 0.3f
-#endif
-static const float SAH_TRAVERSAL_COST = SAHT;
+static const float SAH_TRAVERSAL_COST = 0.3f;
 static const float SAH_ISECT_COST = 1.0f;
 /* The collapse's cost of one wide-node visit, relative to one block test: what a visit
  * costs on the large meshes, where it is a dependent load that often misses the cache.
