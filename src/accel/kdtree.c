@@ -712,6 +712,8 @@ static inline KdLanes lanes_mul(KdLanes a, KdLanes b) { return _mm256_mul_ps(a, 
 static inline KdLanes lanes_div(KdLanes a, KdLanes b) { return _mm256_div_ps(a, b); }
 static inline KdLanes lanes_and(KdLanes a, KdLanes b) { return _mm256_and_ps(a, b); }
 static inline KdLanes lanes_or(KdLanes a, KdLanes b) { return _mm256_or_ps(a, b); }
+static inline KdLanes lanes_xor(KdLanes a, KdLanes b) { return _mm256_xor_ps(a, b); }
+static inline KdLanes lanes_ge(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
 static inline KdLanes lanes_andnot(KdLanes a, KdLanes b) { return _mm256_andnot_ps(a, b); } /* ~a & b */
 static inline KdLanes lanes_max(KdLanes a, KdLanes b) { return _mm256_max_ps(a, b); } /* a > b ? a : b */
 static inline KdLanes lanes_abs(KdLanes a) { return _mm256_and_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff))); }
@@ -733,6 +735,8 @@ static inline KdLanes lanes_mul(KdLanes a, KdLanes b) { return _mm_mul_ps(a, b);
 static inline KdLanes lanes_div(KdLanes a, KdLanes b) { return _mm_div_ps(a, b); }
 static inline KdLanes lanes_and(KdLanes a, KdLanes b) { return _mm_and_ps(a, b); }
 static inline KdLanes lanes_or(KdLanes a, KdLanes b) { return _mm_or_ps(a, b); }
+static inline KdLanes lanes_xor(KdLanes a, KdLanes b) { return _mm_xor_ps(a, b); }
+static inline KdLanes lanes_ge(KdLanes a, KdLanes b) { return _mm_cmpge_ps(a, b); }
 static inline KdLanes lanes_andnot(KdLanes a, KdLanes b) { return _mm_andnot_ps(a, b); } /* ~a & b */
 static inline KdLanes lanes_max(KdLanes a, KdLanes b) { return _mm_max_ps(a, b); } /* a > b ? a : b */
 static inline KdLanes lanes_abs(KdLanes a) { return _mm_and_ps(a, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff))); }
@@ -788,11 +792,12 @@ static inline int block_intersect(const KdTriBlock *b, const KdRayTris *q, KdLan
     const KdLanes zero = lanes_zero();
     int zero_lanes = lanes_mask(lanes_or(lanes_or(lanes_eq(U, zero), lanes_eq(V, zero)), lanes_eq(W, zero)));
     *scalar_lanes = zero_lanes;
-    KdLanes neg = lanes_or(lanes_or(lanes_lt(U, zero), lanes_lt(V, zero)), lanes_lt(W, zero));
-    KdLanes pos = lanes_or(lanes_or(lanes_gt(U, zero), lanes_gt(V, zero)), lanes_gt(W, zero));
-    /* Most rays pass outside every triangle of a block: stop before the division. Unused
-     * lanes are NaN, neither negative nor positive, so they are dropped explicitly. */
-    int inside = lanes_mask(lanes_andnot(lanes_and(neg, pos), lanes_ord(U, U))) & ~zero_lanes;
+    /* With no zero among U, V, W, "some negative and some positive" is "some sign bit
+     * differs from U's" (as in triangle4_intersect). Most rays pass outside every triangle
+     * of a block: stop before the division. Unused lanes are NaN, whose sign bits mean
+     * nothing, so they are dropped explicitly. */
+    KdLanes mixed = lanes_or(lanes_xor(U, V), lanes_xor(U, W));
+    int inside = ~lanes_mask(mixed) & lanes_mask(lanes_ord(U, U)) & ~zero_lanes;
     if (!inside) {
         *t_out = *u_out = *v_out = zero;
         return 0;
@@ -801,6 +806,14 @@ static inline int block_intersect(const KdTriBlock *b, const KdRayTris *q, KdLan
     KdLanes zt[3];
     for (int k = 0; k < 3; k++) zt[k] = lanes_mul(q->sz, pz[k]);
     KdLanes T = lanes_add(lanes_add(lanes_mul(U, zt[0]), lanes_mul(V, zt[1])), lanes_mul(W, zt[2]));
+    /* t = T / det is positive only where T and det have the same sign: a ray leaving a
+     * surface is "inside" the triangle it starts on, behind its origin. With t_min >= 0
+     * such lanes cannot hit, so when no other lane is left the division and the error
+     * bound are skipped (as in triangle4_intersect; the result is the full test's). */
+    if (!(inside & ~lanes_mask(lanes_xor(T, det))) && (lanes_mask(lanes_ge(t_min, zero)) & 1)) {
+        *t_out = *u_out = *v_out = zero;
+        return 0;
+    }
     KdLanes inv_det = lanes_div(lanes_set1(1.0f), det);
     KdLanes t = lanes_mul(T, inv_det);
     KdLanes ok = lanes_neq(det, zero);
