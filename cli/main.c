@@ -683,42 +683,34 @@ static bool cli_bench_print_json(const BenchRow *rows, int n, const RaysetScene 
     return true;
 }
 
-/* Traces the three sets with each thread count and appends the rows. When `basis` is
- * given (scenes without a reference), the 1-thread results are kept there (is_basis: the
- * first back end) or compared with it ray by ray (all others, through `scratch`). */
-static CstStatus cli_bench_accel(const Accel *accel, bool robust, const BenchRays *rays, const int *threads,
-                                 int num_threads, double bytes_per_tri, RaysetResult *const *basis,
-                                 bool is_basis, RaysetResult *scratch, BenchRow *rows, int *n, CstError *err)
+/* Traces one set with one thread count through every built back end, in rounds: each
+ * round runs each back end once, and each row keeps its fastest run. A back end leaves
+ * the rounds once its runs add up to CLI_BENCH_REPEAT_SECONDS (the grid in the stadium
+ * runs once). Interleaving puts the VM's slow spells, which last seconds, into every back
+ * end's runs alike instead of into one back end's whole series, so they move the ratios
+ * much less. rows[i] is back end i's row. When `basis` is given (scenes without a
+ * reference), the first run at 1 thread keeps its results there (back end 0) or compares
+ * them with it ray by ray (the others, through `scratch`). */
+static CstStatus cli_bench_set(const Accel *accels, int num_accels, const BenchRays *rays, int set, int threads,
+                               RaysetResult *const *basis, RaysetResult *scratch, BenchRow *const *rows, CstError *err)
 {
-    for (int set = 0; set < BENCH_NUM_SETS; set++)
-        for (int k = 0; k < num_threads; k++) {
-            BenchRow *r = &rows[(*n)];
-            memset(r, 0, sizeof *r);
-            r->accel = (BenchBackend){accel->type, robust};
-            r->build_ms = accel->build_seconds * 1e3;
-            r->bytes_per_tri = bytes_per_tri;
-            r->set = set;
-            r->threads = threads[k];
-            RaysetQuery q = set == BENCH_OCCLUSION ? RAYSET_ANY : RAYSET_CLOSEST;
-            RaysetResult *out = basis && threads[k] == 1 ? (is_basis ? basis[set] : scratch) : NULL;
-            /* Best of several runs: the first pays for cold caches and page faults, and this
-             * VM's second vCPU is noisy. Repeats stop after a second, so slow back ends
-             * (the grid in the stadium) run once. */
-            double spent = 0.0;
-            for (int rep = 0; rep < CLI_BENCH_MAX_REPEATS && (rep == 0 || spent < CLI_BENCH_REPEAT_SECONDS); rep++) {
-                RaysetStats run;
-                CstStatus st = rayset_trace(accel, rays->rays[set], rays->count[set], q, threads[k],
-                                            rep == 0 ? out : NULL, &run, err);
-                if (st != CST_OK) return st;
-                spent += run.seconds;
-                if (rep == 0 || run.seconds < r->st.seconds) r->st = run;
-                r->runs = rep + 1;
-            }
-            if (out && !is_basis) {
+    RaysetQuery q = set == BENCH_OCCLUSION ? RAYSET_ANY : RAYSET_CLOSEST;
+    double spent[ARGS_BENCH_MAX_ACCELS] = {0.0};
+    for (int rep = 0; rep < CLI_BENCH_MAX_REPEATS; rep++)
+        for (int i = 0; i < num_accels; i++) {
+            BenchRow *r = rows[i];
+            if (rep > 0 && spent[i] >= CLI_BENCH_REPEAT_SECONDS) continue;
+            RaysetResult *out = rep == 0 && basis && threads == 1 ? (i == 0 ? basis[set] : scratch) : NULL;
+            RaysetStats run;
+            CstStatus st = rayset_trace(&accels[i], rays->rays[set], rays->count[set], q, threads, out, &run, err);
+            if (st != CST_OK) return st;
+            spent[i] += run.seconds;
+            if (rep == 0 || run.seconds < r->st.seconds) r->st = run;
+            r->runs = rep + 1;
+            if (out && i > 0) {
                 r->compared = true;
                 r->rays_differing = rayset_compare(out, basis[set], rays->count[set], q, &r->dt_sum);
             }
-            (*n)++;
         }
     return CST_OK;
 }
@@ -735,6 +727,9 @@ static int cli_bench_rays(const CliArgs *a)
     BenchRow *rows = NULL;
     Accel gen;
     memset(&gen, 0, sizeof gen);
+    Accel built[ARGS_BENCH_MAX_ACCELS];
+    BenchBackend built_as[ARGS_BENCH_MAX_ACCELS];
+    int num_built = 0;
     memset(&scene, 0, sizeof scene);
 
     /* The back ends, checked before any work: as listed (one this build lacks is a usage
@@ -867,16 +862,18 @@ static int cli_bench_rays(const CliArgs *a)
                    "within the same; sum_t within %g relative plus what the differing rays explain\n",
                    RAYSET_HITS_TOLERANCE_ABS, RAYSET_HITS_TOLERANCE_REL, RAYSET_T_TOLERANCE,
                    RAYSET_SUM_T_TOLERANCE);
-        printf("timing:  Mrays/s of the fastest of up to %d runs (repeated while under %g s in all)\n",
-               CLI_BENCH_MAX_REPEATS, CLI_BENCH_REPEAT_SECONDS);
+        printf("timing:  Mrays/s of the fastest of up to %d runs (repeated while under %g s in all), the back "
+               "ends taking turns on each set\n", CLI_BENCH_MAX_REPEATS, CLI_BENCH_REPEAT_SECONDS);
         printf("\n");
         fflush(stdout);
     }
 
-    int n = 0;
+    /* Every back end is built before any is timed, so that the rounds can interleave
+     * them (cli_bench_set). */
+    int nb = 0;
     for (int i = 0; i < num_accels; i++) {
-        Accel accel;
-        st = (accels[i].robust ? accel_build_native_robust : accel_build_native)(&accel, accels[i].type, &geom, &err);
+        Accel *accel = &built[nb];
+        st = (accels[i].robust ? accel_build_native_robust : accel_build_native)(accel, accels[i].type, &geom, &err);
         if (st == CST_ERR_UNSUPPORTED && !explicit_accels) {
             fprintf(stderr, "caustic: bench rays: skipping %s: %s\n", cli_bench_name(accels[i]), err.msg);
             continue;
@@ -886,22 +883,42 @@ static int cli_bench_rays(const CliArgs *a)
             code = st == CST_ERR_UNSUPPORTED ? CLI_EXIT_USAGE : CLI_EXIT_INTERNAL;
             goto done;
         }
-        double bpt = scene.num_tris > 0 ? (double)accel_memory_bytes(&accel) / scene.num_tris : 0.0;
+        built_as[nb++] = accels[i];
         if (isatty(STDERR_FILENO) == 1)
-            fprintf(stderr, "caustic: bench rays: %s built in %.1f ms, tracing...\n", cli_bench_name(accels[i]),
-                    accel.build_seconds * 1e3);
-        st = cli_bench_accel(&accel, accels[i].robust, &rays, threads, num_threads, bpt, ref ? NULL : basis, n == 0, scratch,
-                             rows, &n, &err);
-        accel_free(&accel);
-        if (st != CST_OK) {
-            cli_print_error(&err, st);
-            goto done;
-        }
+            fprintf(stderr, "caustic: bench rays: %s built in %.1f ms\n", cli_bench_name(accels[i]),
+                    accel->build_seconds * 1e3);
     }
-    if (n == 0) {
+    num_built = nb;
+    if (nb == 0) {
         fprintf(stderr, "caustic: error: no acceleration structure could be built\n");
         goto done;
     }
+    if (isatty(STDERR_FILENO) == 1) fprintf(stderr, "caustic: bench rays: tracing...\n");
+
+    /* Rows grouped by back end, then set, then thread count. */
+    int n = nb * BENCH_NUM_SETS * num_threads;
+    for (int i = 0; i < nb; i++) {
+        double bpt = scene.num_tris > 0 ? (double)accel_memory_bytes(&built[i]) / scene.num_tris : 0.0;
+        for (int set = 0; set < BENCH_NUM_SETS; set++)
+            for (int k = 0; k < num_threads; k++) {
+                BenchRow *r = &rows[(i * BENCH_NUM_SETS + set) * num_threads + k];
+                r->accel = built_as[i];
+                r->build_ms = built[i].build_seconds * 1e3;
+                r->bytes_per_tri = bpt;
+                r->set = set;
+                r->threads = threads[k];
+            }
+    }
+    for (int set = 0; set < BENCH_NUM_SETS; set++)
+        for (int k = 0; k < num_threads; k++) {
+            BenchRow *set_rows[ARGS_BENCH_MAX_ACCELS];
+            for (int i = 0; i < nb; i++) set_rows[i] = &rows[(i * BENCH_NUM_SETS + set) * num_threads + k];
+            st = cli_bench_set(built, nb, &rays, set, threads[k], ref ? NULL : basis, scratch, set_rows, &err);
+            if (st != CST_OK) {
+                cli_print_error(&err, st);
+                goto done;
+            }
+        }
 
     cli_bench_check(rows, n, ref, gen_type == ACCEL_EMBREE);
     if (b->json) {
@@ -920,6 +937,7 @@ static int cli_bench_rays(const CliArgs *a)
 
 done:
     accel_free(&gen);
+    for (int i = 0; i < num_built; i++) accel_free(&built[i]);
     for (int set = 0; set < BENCH_NUM_SETS; set++) free(basis[set]);
     free(scratch);
     free(rows);
