@@ -688,7 +688,7 @@ static bool cli_bench_print_json(const BenchRow *rows, int n, const RaysetScene 
  * the rounds once its runs add up to CLI_BENCH_REPEAT_SECONDS (the grid in the stadium
  * runs once). Interleaving puts the VM's slow spells, which last seconds, into every back
  * end's runs alike instead of into one back end's whole series, so they move the ratios
- * much less. rows[i] is back end i's row. When `basis` is given (scenes without a
+ * less. rows[i] is back end i's row. When `basis` is given (scenes without a
  * reference), the first run at 1 thread keeps its results there (back end 0) or compares
  * them with it ray by ray (the others, through `scratch`). */
 static CstStatus cli_bench_set(const Accel *accels, int num_accels, const BenchRays *rays, int set, int threads,
@@ -727,7 +727,7 @@ static int cli_bench_rays(const CliArgs *a)
     BenchRow *rows = NULL;
     Accel gen;
     memset(&gen, 0, sizeof gen);
-    Accel built[ARGS_BENCH_MAX_ACCELS];
+    Accel built[ARGS_BENCH_MAX_ACCELS]; /* built[0 .. num_built) are freed at done */
     BenchBackend built_as[ARGS_BENCH_MAX_ACCELS];
     int num_built = 0;
     memset(&scene, 0, sizeof scene);
@@ -870,9 +870,8 @@ static int cli_bench_rays(const CliArgs *a)
 
     /* Every back end is built before any is timed, so that the rounds can interleave
      * them (cli_bench_set). */
-    int nb = 0;
     for (int i = 0; i < num_accels; i++) {
-        Accel *accel = &built[nb];
+        Accel *accel = &built[num_built];
         st = (accels[i].robust ? accel_build_native_robust : accel_build_native)(accel, accels[i].type, &geom, &err);
         if (st == CST_ERR_UNSUPPORTED && !explicit_accels) {
             fprintf(stderr, "caustic: bench rays: skipping %s: %s\n", cli_bench_name(accels[i]), err.msg);
@@ -883,12 +882,12 @@ static int cli_bench_rays(const CliArgs *a)
             code = st == CST_ERR_UNSUPPORTED ? CLI_EXIT_USAGE : CLI_EXIT_INTERNAL;
             goto done;
         }
-        built_as[nb++] = accels[i];
+        built_as[num_built++] = accels[i];
         if (isatty(STDERR_FILENO) == 1)
             fprintf(stderr, "caustic: bench rays: %s built in %.1f ms\n", cli_bench_name(accels[i]),
                     accel->build_seconds * 1e3);
     }
-    num_built = nb;
+    const int nb = num_built;
     if (nb == 0) {
         fprintf(stderr, "caustic: error: no acceleration structure could be built\n");
         goto done;
