@@ -512,6 +512,24 @@ PY
     then pass "bench rays --json: checked rows, no Embree ratios without Embree"
     else fail "bench rays --json: checked rows, no Embree ratios without Embree"; fi
 fi
+# Without reference checksums (a stadium around the Cornell box), the first back end is the
+# basis and every other one is compared with it ray by ray, inside the interleaved rounds.
+run "$dir" bench rays --cornell --stadium --accel bvh,kdtree --threads 1 --json
+if expect "bench rays --stadium exits 0" 0; then
+    if python3 - "$OUT" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+assert [(r["accel"], r["set"]) for r in rows] == [(a, s) for a in ("bvh", "kdtree")
+                                                  for s in ("primary", "secondary", "occlusion")], rows
+for r in rows[:3]:
+    assert r["check"] is None and r["rays_differing"] is None, r
+for r in rows[3:]:
+    assert r["check"] == "OK" and r["checked_against"] == "bvh" and isinstance(r["rays_differing"], int), r
+    assert r["rays_differing"] <= 16, r
+PY
+    then pass "bench rays --stadium: the first back end is the basis, the others compared ray by ray"
+    else fail "bench rays --stadium: the first back end is the basis, the others compared ray by ray"; fi
+fi
 run "$dir" bench rays --cornell --accel embree-robust --threads 1 --json
 if [ "$RC" -eq 2 ] && grep -q "not available in this build" "$ERR"; then
     pass "bench rays: embree-robust refused in a build without Embree"
