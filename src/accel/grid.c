@@ -52,11 +52,17 @@ enum {
 static inline double min3d(double a, double b, double c) { return a < b ? (a < c ? a : c) : (b < c ? b : c); }
 static inline double max3d(double a, double b, double c) { return a > b ? (a > c ? a : c) : (b > c ? b : c); }
 
+/* The number of brick (bx, by, bz), x fastest. */
+static inline int grid_brick_index(const Grid *g, int bx, int by, int bz)
+{
+    return bx + g->brick_res[0] * (by + g->brick_res[1] * bz);
+}
+
 /* The number of cell (x, y, z) in the brick layout of grid.h. */
 static inline int grid_cell_index(const Grid *g, int x, int y, int z)
 {
     const int m = (1 << BRICK_SHIFT) - 1;
-    int brick = (x >> BRICK_SHIFT) + g->brick_res[0] * ((y >> BRICK_SHIFT) + g->brick_res[1] * (z >> BRICK_SHIFT));
+    int brick = grid_brick_index(g, x >> BRICK_SHIFT, y >> BRICK_SHIFT, z >> BRICK_SHIFT);
     return brick * 64 + (x & m) + ((y & m) << BRICK_SHIFT) + ((z & m) << (2 * BRICK_SHIFT));
 }
 
@@ -552,7 +558,7 @@ static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
         w->tb[a] = brick_exit(w, a, w->b[a]); /* inf on an axis without steps */
         w->fixed[a] = i & ((1 << BRICK_SHIFT) - 1);
     }
-    w->brick = w->b[0] + g->brick_res[0] * (w->b[1] + g->brick_res[1] * w->b[2]);
+    w->brick = grid_brick_index(g, w->b[0], w->b[1], w->b[2]);
     w->brick_step[0] = w->step[0];
     w->brick_step[1] = w->step[1] * g->brick_res[0];
     w->brick_step[2] = w->step[2] * g->brick_res[0] * g->brick_res[1];
@@ -708,31 +714,31 @@ static inline bool walk_next_brick(const Grid *g, GridWalk *w, uint64_t bits)
         w->tb[e] = brick_exit(w, e, i);
         w->brick += w->brick_step[e];
         return true;
-    } else {
-        const int r = (int)dist - 1;
-        int last[3], e = 0;
-        double t_exit = INFINITY;
-        for (int a = 0; a < 3; a++) {
-            last[a] = w->b[a] + w->step[a] * r;
-            double t = brick_exit(w, a, last[a]); /* inf on an axis without steps */
-            if (t < t_exit) { t_exit = t; e = a; }
-        }
-        if (!(t_exit < w->t_end)) return false;
-        int i = last[e] + w->step[e];
-        if ((unsigned)i >= (unsigned)g->brick_res[e]) return false;
-        for (int a = 0; a < 3; a++) {
-            if (a == e || !w->step[a]) continue;
-            double f = (w->o[a] + t_exit * w->d[a] - g->org[a]) * g->inv_cell_size[a];
-            int k = f >= 0.0 ? (f < (double)g->res[a] ? (int)f : g->res[a] - 1) >> BRICK_SHIFT : 0;
-            int lo = w->step[a] > 0 ? w->b[a] : last[a], hi = w->step[a] > 0 ? last[a] : w->b[a];
-            k = k < lo ? lo : (k > hi ? hi : k);
-            w->b[a] = k;
-            w->tb[a] = brick_exit(w, a, k);
-        }
-        w->b[e] = i;
-        w->tb[e] = brick_exit(w, e, i);
     }
-    w->brick = w->b[0] + g->brick_res[0] * (w->b[1] + g->brick_res[1] * w->b[2]);
+    /* A jump over a cube of empty bricks: the exit of its last brick on each axis. */
+    const int r = (int)dist - 1;
+    int last[3], e = 0;
+    double t_exit = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        last[a] = w->b[a] + w->step[a] * r;
+        double t = brick_exit(w, a, last[a]); /* inf on an axis without steps */
+        if (t < t_exit) { t_exit = t; e = a; }
+    }
+    if (!(t_exit < w->t_end)) return false;
+    int i = last[e] + w->step[e];
+    if ((unsigned)i >= (unsigned)g->brick_res[e]) return false;
+    for (int a = 0; a < 3; a++) {
+        if (a == e || !w->step[a]) continue;
+        double f = (w->o[a] + t_exit * w->d[a] - g->org[a]) * g->inv_cell_size[a];
+        int k = f >= 0.0 ? (f < (double)g->res[a] ? (int)f : g->res[a] - 1) >> BRICK_SHIFT : 0;
+        int lo = w->step[a] > 0 ? w->b[a] : last[a], hi = w->step[a] > 0 ? last[a] : w->b[a];
+        k = k < lo ? lo : (k > hi ? hi : k);
+        w->b[a] = k;
+        w->tb[a] = brick_exit(w, a, k);
+    }
+    w->b[e] = i;
+    w->tb[e] = brick_exit(w, e, i);
+    w->brick = grid_brick_index(g, w->b[0], w->b[1], w->b[2]);
     return true;
 }
 
