@@ -15,7 +15,6 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "geometry/sphere.h"
-#include "geometry/triangle4.h"
 
 enum {
     BVH_BINS = 32,
@@ -99,9 +98,9 @@ typedef struct BinNode {
     int32_t count;  /* primitives in a leaf; 0 for inner nodes */
 } BinNode;
 
-/* Leaves are tested four triangles at a time, so a leaf of n costs ceil(n / 4) tests
- * (the "block SAH" of wide BVHs). */
-static inline float sah_blocks(int n) { return (float)((n + 3) / 4); }
+/* Leaves are tested TRI_BLOCK_WIDTH triangles at a time, so a leaf of n costs
+ * ceil(n / width) tests (the "block SAH" of wide BVHs). */
+static inline float sah_blocks(int n) { return (float)((n + TRI_BLOCK_WIDTH - 1) / TRI_BLOCK_WIDTH); }
 
 /* The collapse into wide nodes (Ylitie et al., "Efficient Incoherent Ray Traversal on
  * GPUs Through Compressed Wide BVHs", HPG 2017, section 4.1): for every binary node n
@@ -121,7 +120,9 @@ typedef struct SubtreeCost {
  * i > 1: 0 if n takes fewer than i slots, else k, the left child's share of the i. */
 typedef int8_t CollapseChoice[BVH_WIDTH];
 
-enum { WIDE_LEAF_MAX_TRIS = 32 /* 8 blocks, the most a BvhRef counts */, WIDE_LEAF_MAX_SPHERES = 8 };
+/* 32 triangles: 4 blocks of 8 (AVX) or 8 of 4, the most a BvhRef counts; 64 with AVX
+ * measured no faster (docs/benchmarks.md). */
+enum { WIDE_LEAF_MAX_TRIS = 32, WIDE_LEAF_MAX_SPHERES = 8 };
 
 typedef struct Builder {
     const BuildPrim *bp;
@@ -444,7 +445,7 @@ static void subtree_range(const BinNode *bin, int node, int *begin, int *end)
 }
 
 /* Writes the leaf for the primitives of binary node `node`'s subtree and returns its
- * reference: triangles packed four to a block in the SAH's order, or spheres. */
+ * reference: triangles packed TRI_BLOCK_WIDTH to a block in the SAH's order, or spheres. */
 static uint32_t emit_leaf(Emitter *e, int node)
 {
     Bvh *o = e->out;
@@ -465,11 +466,11 @@ static uint32_t emit_leaf(Emitter *e, int node)
     }
     uint32_t first = (uint32_t)e->cursor;
     uint32_t count = 0;
-    int lane = 4;
+    int lane = TRI_BLOCK_WIDTH;
     BvhTriBlock *blk = NULL;
     for (int i = begin; i < end; i++) {
         uint32_t id = e->idx[i];
-        if (lane == 4) {
+        if (lane == TRI_BLOCK_WIDTH) {
             blk = unit_at(e, e->cursor);
             e->cursor += BLOCK_UNITS;
             o->num_blocks++;
@@ -478,8 +479,8 @@ static uint32_t emit_leaf(Emitter *e, int node)
              * fails, so they need no mask. */
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++)
-                    for (int l = 0; l < 4; l++) blk->v[k][a][l] = NAN;
-            for (int k = 0; k < 4; k++) blk->id[k] = BVH_NO_PRIM;
+                    for (int l = 0; l < TRI_BLOCK_WIDTH; l++) blk->v[k][a][l] = NAN;
+            for (int l = 0; l < TRI_BLOCK_WIDTH; l++) blk->id[l] = BVH_NO_PRIM;
             lane = 0;
         }
         const int32_t *t = &e->tri_indices[3 * id];
@@ -546,7 +547,7 @@ static void count_wide(const BinNode *bin, const CollapseChoice *choice, const u
     if (choice[node][0] == 0) {
         int begin, end;
         subtree_range(bin, node, &begin, &end);
-        if (idx[begin] < num_tris) *blocks += (size_t)(end - begin + 3) / 4;
+        if (idx[begin] < num_tris) *blocks += (size_t)(end - begin + TRI_BLOCK_WIDTH - 1) / TRI_BLOCK_WIDTH;
         return;
     }
     (*nodes)++;
@@ -777,26 +778,27 @@ static inline unsigned node_hit8(const BvhNode *n, const RayBox8 *q, F8 t_min, F
 }
 
 /* Closest hit among a leaf's triangle blocks; shortens r->t_max on a hit. */
-static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const TriangleRay4 *q, Ray *r, Hit *hit)
+static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const TriangleRayBlock *q, Ray *r, Hit *hit)
 {
     bool found = false;
-    const __m128 t_min = _mm_set1_ps(r->t_min);
+    const TriLanes t_min = lanes_set1(r->t_min);
     const BvhTriBlock *b = bvh_blocks(bvh, bvh_ref_index(ref));
     for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
-        __m128 t4, u4, v4;
+        TriLanes tl, ul, vl;
         int scalar_lanes;
-        int mask = triangle4_intersect(b->v, q, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4, &scalar_lanes);
+        int mask = triangle_block_intersect(b->v, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
         if (!(mask | scalar_lanes)) continue;
-        float t[4], u[4], v[4];
-        _mm_storeu_ps(t, t4); _mm_storeu_ps(u, u4); _mm_storeu_ps(v, v4);
+        float t[TRI_BLOCK_WIDTH], u[TRI_BLOCK_WIDTH], v[TRI_BLOCK_WIDTH];
+        lanes_store(t, tl); lanes_store(u, ul); lanes_store(v, vl);
         /* In lane order with strict <, as a scalar loop would pick among equal t; only
          * the lanes hit or left to the scalar test. */
         for (unsigned lanes = (unsigned)(mask | scalar_lanes); lanes; lanes &= lanes - 1u) {
             const int i = __builtin_ctz(lanes);
             if (scalar_lanes & (1 << i)) {
                 float ts, us, vs;
-                if (triangle_intersect_watertight(&q->tr, r, triangle4_vertex(b->v, 0, i), triangle4_vertex(b->v, 1, i),
-                                                  triangle4_vertex(b->v, 2, i), &ts, &us, &vs)) {
+                if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
+                                                  triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i),
+                                                  &ts, &us, &vs)) {
                     r->t_max = ts;
                     hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
                     found = true;
@@ -826,7 +828,7 @@ static inline bool leaf_spheres(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
     return found;
 }
 
-static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRay4 *q, const Ray *r)
+static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRayBlock *q, const Ray *r)
 {
     if (ref & BVH_SPHERES) {
         const BvhSphere *sp = &bvh->spheres[bvh_ref_index(ref)];
@@ -836,17 +838,18 @@ static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRay
         }
         return false;
     }
-    const __m128 t_min = _mm_set1_ps(r->t_min), t_max = _mm_set1_ps(r->t_max);
+    const TriLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
     const BvhTriBlock *b = bvh_blocks(bvh, bvh_ref_index(ref));
     for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
-        __m128 t4, u4, v4;
+        TriLanes tl, ul, vl;
         int scalar_lanes;
-        if (triangle4_intersect(b->v, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes)) return true;
+        if (triangle_block_intersect(b->v, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes)) return true;
         for (unsigned lanes = (unsigned)scalar_lanes; lanes; lanes &= lanes - 1u) {
             const int i = __builtin_ctz(lanes);
             float ts, us, vs;
-            if (triangle_intersect_watertight(&q->tr, r, triangle4_vertex(b->v, 0, i), triangle4_vertex(b->v, 1, i),
-                                              triangle4_vertex(b->v, 2, i), &ts, &us, &vs))
+            if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
+                                              triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i), &ts,
+                                              &us, &vs))
                 return true;
         }
     }
@@ -908,7 +911,7 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
     if (bvh->num_nodes == 0 || !ray_is_finite(ray)) return false;
     Ray r = *ray;
     RayBox8 q = ray_box8(&r);
-    TriangleRay4 qt; /* set up at the first leaf: many rays never reach one */
+    TriangleRayBlock qt; /* set up at the first leaf: many rays never reach one */
     bool qt_ready = false;
     const F8 t_min = f8_set1(r.t_min);
     uint32_t stack_ref[BVH_STACK];
@@ -966,7 +969,7 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
             if (cur & BVH_SPHERES) {
                 found |= leaf_spheres(bvh, cur, &r, hit);
             } else {
-                if (!qt_ready) { qt = triangle_ray4_setup(&r); qt_ready = true; }
+                if (!qt_ready) { qt = triangle_block_ray_setup(&r); qt_ready = true; }
                 found |= leaf_triangles(bvh, cur, &qt, &r, hit);
             }
             t_max_widened = f8_set1(r.t_max * BVH_EXIT_WIDEN);
@@ -1023,7 +1026,7 @@ bool bvh_occluded(const Bvh *bvh, const Ray *ray)
 {
     if (bvh->num_nodes == 0 || !ray_is_finite(ray)) return false;
     RayBox8 q = ray_box8(ray);
-    TriangleRay4 qt;
+    TriangleRayBlock qt;
     bool qt_ready = false;
     const F8 t_min = f8_set1(ray->t_min), t_max = f8_set1(ray->t_max * BVH_EXIT_WIDEN);
     uint32_t stack[BVH_STACK + BVH_WIDTH]; /* room for a whole vector store at the top */
@@ -1065,7 +1068,7 @@ bool bvh_occluded(const Bvh *bvh, const Ray *ray)
                 continue;
             }
         } else {
-            if (!qt_ready && !(cur & BVH_SPHERES)) { qt = triangle_ray4_setup(ray); qt_ready = true; }
+            if (!qt_ready && !(cur & BVH_SPHERES)) { qt = triangle_block_ray_setup(ray); qt_ready = true; }
             if (leaf_occluded(bvh, cur, &qt, ray)) return true;
         }
         if (sp == 0) return false;

@@ -13,6 +13,7 @@
 #include "geometry/hit.h"
 #include "geometry/ray.h"
 #include "geometry/sphere.h"
+#include "geometry/triangle_block.h"
 #include "math/bbox.h"
 #include "accel/accel_geometry.h"
 
@@ -43,12 +44,13 @@ static inline bool bvh_ref_is_leaf(uint32_t ref) { return (ref & BVH_LEAF) != 0u
 static inline uint32_t bvh_ref_index(uint32_t ref) { return ref >> BVH_INDEX_SHIFT; }
 static inline uint32_t bvh_ref_count(uint32_t ref) { return ((ref >> BVH_COUNT_SHIFT) & 7u) + 1u; }
 
-/* Four triangles' vertices in SoA form, v[vertex][axis][lane], for one SSE watertight
- * test; indexing by axis lets the per-ray axis permutation pick rows. Unused lanes have
- * id BVH_NO_PRIM and NaN vertices. 160 bytes (5 units). */
+/* TRI_BLOCK_WIDTH triangles' vertices in SoA form, v[vertex][axis][lane], for one SIMD
+ * watertight test (triangle_block.h); indexing by axis lets the per-ray axis permutation
+ * pick rows. Unused lanes have id BVH_NO_PRIM and NaN vertices. 320 bytes (10 units)
+ * with AVX, 160 (5) without. */
 typedef struct BvhTriBlock {
-    float v[3][3][4];
-    uint32_t id[4]; /* scene primitive ids */
+    float v[3][3][TRI_BLOCK_WIDTH];
+    uint32_t id[TRI_BLOCK_WIDTH]; /* scene primitive ids */
 } BvhTriBlock;
 #define BVH_NO_PRIM 0xffffffffu
 

@@ -697,172 +697,27 @@ static inline bool kd_ray_setup(const KdTree *t, const Ray *r, KdRay *q, float *
     return tn <= *t1;
 }
 
-/* The lanes of a block test: KD_BLOCK_WIDTH floats, AVX or SSE. Comparisons are the
- * ordered ones of the scalar test (false on NaN), except neq, true on NaN as in C; max is
- * maxf's a > b ? a : b and abs fabsf's sign-bit clear. */
-#ifdef __AVX__
-typedef __m256 KdLanes;
-static inline KdLanes lanes_load(const float *p) { return _mm256_loadu_ps(p); }
-static inline void lanes_store(float *p, KdLanes a) { _mm256_storeu_ps(p, a); }
-static inline KdLanes lanes_set1(float x) { return _mm256_set1_ps(x); }
-static inline KdLanes lanes_zero(void) { return _mm256_setzero_ps(); }
-static inline KdLanes lanes_add(KdLanes a, KdLanes b) { return _mm256_add_ps(a, b); }
-static inline KdLanes lanes_sub(KdLanes a, KdLanes b) { return _mm256_sub_ps(a, b); }
-static inline KdLanes lanes_mul(KdLanes a, KdLanes b) { return _mm256_mul_ps(a, b); }
-static inline KdLanes lanes_div(KdLanes a, KdLanes b) { return _mm256_div_ps(a, b); }
-static inline KdLanes lanes_and(KdLanes a, KdLanes b) { return _mm256_and_ps(a, b); }
-static inline KdLanes lanes_or(KdLanes a, KdLanes b) { return _mm256_or_ps(a, b); }
-static inline KdLanes lanes_xor(KdLanes a, KdLanes b) { return _mm256_xor_ps(a, b); }
-static inline KdLanes lanes_ge(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
-static inline KdLanes lanes_andnot(KdLanes a, KdLanes b) { return _mm256_andnot_ps(a, b); } /* ~a & b */
-static inline KdLanes lanes_max(KdLanes a, KdLanes b) { return _mm256_max_ps(a, b); } /* a > b ? a : b */
-static inline KdLanes lanes_abs(KdLanes a) { return _mm256_and_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff))); }
-static inline KdLanes lanes_lt(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
-static inline KdLanes lanes_gt(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
-static inline KdLanes lanes_eq(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_EQ_OQ); }
-static inline KdLanes lanes_neq(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_NEQ_UQ); }
-static inline KdLanes lanes_ord(KdLanes a, KdLanes b) { return _mm256_cmp_ps(a, b, _CMP_ORD_Q); }
-static inline int lanes_mask(KdLanes a) { return _mm256_movemask_ps(a); }
-#else
-typedef __m128 KdLanes;
-static inline KdLanes lanes_load(const float *p) { return _mm_loadu_ps(p); }
-static inline void lanes_store(float *p, KdLanes a) { _mm_storeu_ps(p, a); }
-static inline KdLanes lanes_set1(float x) { return _mm_set1_ps(x); }
-static inline KdLanes lanes_zero(void) { return _mm_setzero_ps(); }
-static inline KdLanes lanes_add(KdLanes a, KdLanes b) { return _mm_add_ps(a, b); }
-static inline KdLanes lanes_sub(KdLanes a, KdLanes b) { return _mm_sub_ps(a, b); }
-static inline KdLanes lanes_mul(KdLanes a, KdLanes b) { return _mm_mul_ps(a, b); }
-static inline KdLanes lanes_div(KdLanes a, KdLanes b) { return _mm_div_ps(a, b); }
-static inline KdLanes lanes_and(KdLanes a, KdLanes b) { return _mm_and_ps(a, b); }
-static inline KdLanes lanes_or(KdLanes a, KdLanes b) { return _mm_or_ps(a, b); }
-static inline KdLanes lanes_xor(KdLanes a, KdLanes b) { return _mm_xor_ps(a, b); }
-static inline KdLanes lanes_ge(KdLanes a, KdLanes b) { return _mm_cmpge_ps(a, b); }
-static inline KdLanes lanes_andnot(KdLanes a, KdLanes b) { return _mm_andnot_ps(a, b); } /* ~a & b */
-static inline KdLanes lanes_max(KdLanes a, KdLanes b) { return _mm_max_ps(a, b); } /* a > b ? a : b */
-static inline KdLanes lanes_abs(KdLanes a) { return _mm_and_ps(a, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff))); }
-static inline KdLanes lanes_lt(KdLanes a, KdLanes b) { return _mm_cmplt_ps(a, b); }
-static inline KdLanes lanes_gt(KdLanes a, KdLanes b) { return _mm_cmpgt_ps(a, b); }
-static inline KdLanes lanes_eq(KdLanes a, KdLanes b) { return _mm_cmpeq_ps(a, b); }
-static inline KdLanes lanes_neq(KdLanes a, KdLanes b) { return _mm_cmpneq_ps(a, b); }
-static inline KdLanes lanes_ord(KdLanes a, KdLanes b) { return _mm_cmpord_ps(a, b); }
-static inline int lanes_mask(KdLanes a) { return _mm_movemask_ps(a); }
-#endif
-
-/* Per-ray constants of the block test. */
-typedef struct KdRayTris {
-    TriangleRay tr;
-    KdLanes o[3]; /* origin, per world axis */
-    KdLanes sx, sy, sz;
-} KdRayTris;
-
-static inline KdRayTris kd_ray_tris(const Ray *r)
-{
-    KdRayTris q;
-    q.tr = triangle_ray_setup(r->d);
-    q.o[0] = lanes_set1(r->o.x); q.o[1] = lanes_set1(r->o.y); q.o[2] = lanes_set1(r->o.z);
-    q.sx = lanes_set1(q.tr.sx); q.sy = lanes_set1(q.tr.sy); q.sz = lanes_set1(q.tr.sz);
-    return q;
-}
-
-static inline Vec3 block_vertex(const KdTriBlock *b, int k, int lane)
-{
-    return v3(b->v[k][0][lane], b->v[k][1][lane], b->v[k][2][lane]);
-}
-
-/* triangle_intersect_watertight() on a block's triangles at once, with the same operations
- * in the same order (the build has -ffp-contract=off, so nothing is fused into FMAs), so
- * each lane's t, u, v are bit-identical to the scalar test's, and so is its rejection of t
- * within triangle_t_error(). Lanes with an edge function of exactly zero need the scalar's
- * recomputation in double: they come back in *scalar_lanes, for the caller to run through
- * the scalar test. Returns the mask of the other lanes that hit within (t_min, t_max). */
-static inline int block_intersect(const KdTriBlock *b, const KdRayTris *q, KdLanes t_min, KdLanes t_max,
-                                  KdLanes *t_out, KdLanes *u_out, KdLanes *v_out, int *scalar_lanes)
-{
-    const int kx = q->tr.kx, ky = q->tr.ky, kz = q->tr.kz;
-    KdLanes px[3], py[3], pz[3];
-    for (int k = 0; k < 3; k++) {
-        pz[k] = lanes_sub(lanes_load(b->v[k][kz]), q->o[kz]);
-        px[k] = lanes_sub(lanes_sub(lanes_load(b->v[k][kx]), q->o[kx]), lanes_mul(q->sx, pz[k]));
-        py[k] = lanes_sub(lanes_sub(lanes_load(b->v[k][ky]), q->o[ky]), lanes_mul(q->sy, pz[k]));
-    }
-    /* U, V, W: the edge functions, scaled barycentrics of vertices 0, 1, 2 (JCGT 2013 eq. 4) */
-    KdLanes U = lanes_sub(lanes_mul(px[2], py[1]), lanes_mul(py[2], px[1]));
-    KdLanes V = lanes_sub(lanes_mul(px[0], py[2]), lanes_mul(py[0], px[2]));
-    KdLanes W = lanes_sub(lanes_mul(px[1], py[0]), lanes_mul(py[1], px[0]));
-    const KdLanes zero = lanes_zero();
-    int zero_lanes = lanes_mask(lanes_or(lanes_or(lanes_eq(U, zero), lanes_eq(V, zero)), lanes_eq(W, zero)));
-    *scalar_lanes = zero_lanes;
-    /* With no zero among U, V, W, "some negative and some positive" is "some sign bit
-     * differs from U's" (as in triangle4_intersect). Most rays pass outside every triangle
-     * of a block: stop before the division. Unused lanes are NaN, whose sign bits mean
-     * nothing, so they are dropped explicitly. */
-    KdLanes mixed = lanes_or(lanes_xor(U, V), lanes_xor(U, W));
-    int inside = ~lanes_mask(mixed) & lanes_mask(lanes_ord(U, U)) & ~zero_lanes;
-    if (!inside) {
-        *t_out = *u_out = *v_out = zero;
-        return 0;
-    }
-    KdLanes det = lanes_add(lanes_add(U, V), W);
-    KdLanes zt[3];
-    for (int k = 0; k < 3; k++) zt[k] = lanes_mul(q->sz, pz[k]);
-    KdLanes T = lanes_add(lanes_add(lanes_mul(U, zt[0]), lanes_mul(V, zt[1])), lanes_mul(W, zt[2]));
-    /* t = T / det is positive only where T and det have the same sign: a ray leaving a
-     * surface is "inside" the triangle it starts on, behind its origin. With t_min >= 0
-     * such lanes cannot hit, so when no other lane is left the division and the error
-     * bound are skipped (as in triangle4_intersect; the result is the full test's). */
-    if (!(inside & ~lanes_mask(lanes_xor(T, det))) && (lanes_mask(lanes_ge(t_min, zero)) & 1)) {
-        *t_out = *u_out = *v_out = zero;
-        return 0;
-    }
-    KdLanes inv_det = lanes_div(lanes_set1(1.0f), det);
-    KdLanes t = lanes_mul(T, inv_det);
-    KdLanes ok = lanes_neq(det, zero);
-    ok = lanes_and(ok, lanes_gt(t, t_min));
-    ok = lanes_and(ok, lanes_lt(t, t_max));
-    /* triangle_t_error(), lane by lane. */
-    KdLanes max_zt = lanes_max(lanes_max(lanes_abs(zt[0]), lanes_abs(zt[1])), lanes_abs(zt[2]));
-    KdLanes max_xt = lanes_max(lanes_max(lanes_abs(px[0]), lanes_abs(px[1])), lanes_abs(px[2]));
-    KdLanes max_yt = lanes_max(lanes_max(lanes_abs(py[0]), lanes_abs(py[1])), lanes_abs(py[2]));
-    const KdLanes g2 = lanes_set1(TRIANGLE_GAMMA(2)), g3 = lanes_set1(TRIANGLE_GAMMA(3)),
-                  g5 = lanes_set1(TRIANGLE_GAMMA(5));
-    KdLanes delta_z = lanes_mul(g3, max_zt);
-    KdLanes delta_x = lanes_mul(g5, lanes_add(max_xt, max_zt));
-    KdLanes delta_y = lanes_mul(g5, lanes_add(max_yt, max_zt));
-    KdLanes delta_e = lanes_mul(lanes_set1(2.0f), lanes_add(lanes_add(lanes_mul(lanes_mul(g2, max_xt), max_yt),
-                                                                       lanes_mul(delta_y, max_xt)),
-                                                             lanes_mul(delta_x, max_yt)));
-    KdLanes max_e = lanes_max(lanes_max(lanes_abs(U), lanes_abs(V)), lanes_abs(W));
-    KdLanes delta_t = lanes_mul(lanes_mul(lanes_set1(3.0f), lanes_add(lanes_add(lanes_mul(lanes_mul(g3, max_e), max_zt),
-                                                                                lanes_mul(delta_e, max_zt)),
-                                                                      lanes_mul(delta_z, max_e))),
-                                lanes_abs(inv_det));
-    ok = lanes_and(ok, lanes_gt(t, delta_t));
-    *t_out = t;
-    *u_out = lanes_mul(V, inv_det);
-    *v_out = lanes_mul(W, inv_det);
-    return lanes_mask(ok) & inside;
-}
-
 /* The closest hit among num_blocks blocks; shortens r->t_max on a hit. Lanes are taken in
  * order with a strict <, which picks among equal t exactly as a scalar loop over the
  * leaf's ascending ids would. */
-static inline bool blocks_intersect(const KdTriBlock *b, uint32_t num_blocks, const KdRayTris *q, Ray *r,
+static inline bool blocks_intersect(const KdTriBlock *b, uint32_t num_blocks, const TriangleRayBlock *q, Ray *r,
                                     Hit *hit)
 {
     bool found = false;
-    const KdLanes t_min = lanes_set1(r->t_min);
+    const TriLanes t_min = lanes_set1(r->t_min);
     for (uint32_t bi = 0; bi < num_blocks; bi++, b++) {
-        KdLanes tl, ul, vl;
+        TriLanes tl, ul, vl;
         int scalar_lanes;
-        int mask = block_intersect(b, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
+        int mask = triangle_block_intersect(b->v, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
         if (!(mask | scalar_lanes)) continue;
         float t[KD_BLOCK_WIDTH], u[KD_BLOCK_WIDTH], v[KD_BLOCK_WIDTH];
         lanes_store(t, tl); lanes_store(u, ul); lanes_store(v, vl);
         for (int i = 0; i < KD_BLOCK_WIDTH; i++) {
             if (scalar_lanes & (1 << i)) {
                 float ts, us, vs;
-                if (triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
-                                                  block_vertex(b, 2, i), &ts, &us, &vs)) {
+                if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
+                                                  triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i),
+                                                  &ts, &us, &vs)) {
                     r->t_max = ts;
                     hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
                     found = true;
@@ -877,18 +732,19 @@ static inline bool blocks_intersect(const KdTriBlock *b, uint32_t num_blocks, co
     return found;
 }
 
-static inline bool blocks_occluded(const KdTriBlock *b, uint32_t num_blocks, const KdRayTris *q, const Ray *r)
+static inline bool blocks_occluded(const KdTriBlock *b, uint32_t num_blocks, const TriangleRayBlock *q, const Ray *r)
 {
-    const KdLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
+    const TriLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
     for (uint32_t bi = 0; bi < num_blocks; bi++, b++) {
-        KdLanes tl, ul, vl;
+        TriLanes tl, ul, vl;
         int scalar_lanes;
-        if (block_intersect(b, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes)) return true;
+        if (triangle_block_intersect(b->v, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes)) return true;
         for (int i = 0; i < KD_BLOCK_WIDTH; i++) {
             float ts, us, vs;
             if ((scalar_lanes & (1 << i)) &&
-                triangle_intersect_watertight(&q->tr, r, block_vertex(b, 0, i), block_vertex(b, 1, i),
-                                              block_vertex(b, 2, i), &ts, &us, &vs))
+                triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
+                                              triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i), &ts,
+                                              &us, &vs))
                 return true;
         }
     }
@@ -896,7 +752,7 @@ static inline bool blocks_occluded(const KdTriBlock *b, uint32_t num_blocks, con
 }
 
 /* The closest hit in a leaf; shortens r->t_max on a hit. */
-static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const KdRayTris *q, Ray *r, Hit *hit)
+static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const TriangleRayBlock *q, Ray *r, Hit *hit)
 {
     if (!(n->flags & KD_LEAF_SPHERES)) return blocks_intersect(&t->blocks[n->first], n->flags >> 3, q, r, hit);
     const KdSphereLeaf *l = &t->sphere_leaves[n->first];
@@ -912,7 +768,7 @@ static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const KdRayT
     return found;
 }
 
-static inline bool leaf_occluded(const KdTree *t, const KdNode *n, const KdRayTris *q, const Ray *r)
+static inline bool leaf_occluded(const KdTree *t, const KdNode *n, const TriangleRayBlock *q, const Ray *r)
 {
     if (!(n->flags & KD_LEAF_SPHERES)) return blocks_occluded(&t->blocks[n->first], n->flags >> 3, q, r);
     const KdSphereLeaf *l = &t->sphere_leaves[n->first];
@@ -992,7 +848,7 @@ bool kdtree_intersect(const KdTree *t, const Ray *ray, Hit *hit)
     KdRay q;
     float t0, t1;
     if (!kd_ray_setup(t, ray, &q, &t0, &t1)) return false;
-    KdRayTris qt = kd_ray_tris(ray);
+    TriangleRayBlock qt = triangle_block_ray_setup(ray);
     Ray r = *ray;
     KdStackEntry stack[KD_STACK];
     int sp = 0;
@@ -1017,7 +873,7 @@ bool kdtree_occluded(const KdTree *t, const Ray *ray)
     KdRay q;
     float t0, t1;
     if (!kd_ray_setup(t, ray, &q, &t0, &t1)) return false;
-    KdRayTris qt = kd_ray_tris(ray);
+    TriangleRayBlock qt = triangle_block_ray_setup(ray);
     KdStackEntry stack[KD_STACK];
     int sp = 0;
     uint32_t node = 0;

@@ -13,14 +13,11 @@
 #include "caustic/caustic.h"
 #include "geometry/hit.h"
 #include "geometry/ray.h"
+#include "geometry/triangle_block.h"
 #include "math/bbox.h"
 
 /* Triangles per leaf block: one AVX or SSE register of floats. */
-#ifdef __AVX__
-#define KD_BLOCK_WIDTH 8
-#else
-#define KD_BLOCK_WIDTH 4
-#endif
+#define KD_BLOCK_WIDTH TRI_BLOCK_WIDTH
 
 enum {
     KD_LEAF = 3,         /* KdNode.flags & 3: 0, 1, 2 = split axis of an inner node */

@@ -1,5 +1,5 @@
-/* triangle_intersect_watertight() on four triangles at once with SSE, for the back ends
- * that test triangles in blocks of four (the BVH's leaves, the grid's cell batches). */
+/* triangle_intersect_watertight() on four triangles at once with SSE, for the grid, which
+ * gathers a cell's triangles four at a time (stored blocks use triangle_block.h). */
 #ifndef CST_GEOMETRY_TRIANGLE4_H
 #define CST_GEOMETRY_TRIANGLE4_H
 

@@ -250,11 +250,11 @@ static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, in
     for (uint32_t bi = 0; bi < count; bi++) {
         const BvhTriBlock *b = bvh_blocks(bvh, first) + bi;
         assert_true(lane_used(b, 0));
-        for (int l = 0; l < 4; l++) {
+        for (int l = 0; l < TRI_BLOCK_WIDTH; l++) {
             /* packed: only the leaf's last block has unused lanes, at its end */
             if (!lane_used(b, l)) {
                 assert_true(bi == count - 1);
-                for (int m = l; m < 4; m++) assert_false(lane_used(b, m));
+                for (int m = l; m < TRI_BLOCK_WIDTH; m++) assert_false(lane_used(b, m));
                 break;
             }
             int id = (int)b->id[l];
