@@ -28,7 +28,7 @@
 
 #include "core/error.h"
 #include "geometry/sphere.h"
-#include "geometry/triangle4.h"
+#include "geometry/triangle_block.h"
 
 enum {
     GRID_CELLS_PER_PRIM = 27,  /* #cells ~ 27 N: 3 cells per primitive along each axis */
@@ -754,25 +754,36 @@ static inline void cell_list_in(const Grid *g, int brick, uint64_t bits, int loc
 /* Fills the unused lanes of a batch: NaN vertices fail every comparison of the test. */
 static const GridTri GRID_NAN_TRI = {{NAN, NAN, NAN}, {NAN, NAN, NAN}, {NAN, NAN, NAN}, 0u};
 
-/* triangle4_intersect() on four triangles of a cell's list: they are gathered and
- * transposed in registers (a vertex is 12 bytes, so each load takes the three coordinates
- * and one float of whatever follows inside the GridTri). Lanes with an edge function of
- * exactly zero need the scalar's recomputation in double: they come back in
- * *scalar_lanes for the caller to run through the scalar test. Returns the mask of the
- * other lanes that hit within (t_min, t_max). */
-static inline int tri4_intersect(const GridTri *const tri[4], const TriangleRay4 *q, __m128 t_min, __m128 t_max,
-                                 __m128 *t_out, __m128 *u_out, __m128 *v_out, int *scalar_lanes)
+/* triangle_block_intersect() on up to TRI_BLOCK_WIDTH triangles of a cell's list: they
+ * are gathered four at a time and transposed in registers (a vertex is 12 bytes, so each
+ * load takes the three coordinates and one float of whatever follows inside the GridTri);
+ * groups of four past the n triangles collected are NaN, which fails every comparison.
+ * Lanes with an edge function of exactly zero need the scalar's recomputation in double:
+ * they come back in *scalar_lanes for the caller to run through the scalar test. Returns
+ * the mask of the other lanes that hit within (t_min, t_max). */
+static inline int tri_batch_intersect(const GridTri *const tri[TRI_BLOCK_WIDTH], int n, const TriangleRayBlock *q,
+                                      TriLanes t_min, TriLanes t_max, TriLanes *t_out, TriLanes *u_out,
+                                      TriLanes *v_out, int *scalar_lanes)
 {
-    _Alignas(16) float vtx[3][3][4]; /* [vertex][axis][lane] */
-    for (int k = 0; k < 3; k++) {
-        __m128 r0 = _mm_loadu_ps(&tri[0]->v0.x + 3 * k), r1 = _mm_loadu_ps(&tri[1]->v0.x + 3 * k);
-        __m128 r2 = _mm_loadu_ps(&tri[2]->v0.x + 3 * k), r3 = _mm_loadu_ps(&tri[3]->v0.x + 3 * k);
-        _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-        _mm_store_ps(vtx[k][0], r0);
-        _mm_store_ps(vtx[k][1], r1);
-        _mm_store_ps(vtx[k][2], r2);
+    _Alignas(32) float vtx[3][3][TRI_BLOCK_WIDTH]; /* [vertex][axis][lane] */
+    for (int g = 0; g < TRI_BLOCK_WIDTH; g += 4) {
+        if (g >= n) {
+            const __m128 nan = _mm_set1_ps(NAN);
+            for (int k = 0; k < 3; k++)
+                for (int a = 0; a < 3; a++) _mm_store_ps(&vtx[k][a][g], nan);
+            continue;
+        }
+        for (int k = 0; k < 3; k++) {
+            __m128 r0 = _mm_loadu_ps(&tri[g]->v0.x + 3 * k), r1 = _mm_loadu_ps(&tri[g + 1]->v0.x + 3 * k);
+            __m128 r2 = _mm_loadu_ps(&tri[g + 2]->v0.x + 3 * k), r3 = _mm_loadu_ps(&tri[g + 3]->v0.x + 3 * k);
+            _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+            _mm_store_ps(&vtx[k][0][g], r0);
+            _mm_store_ps(&vtx[k][1][g], r1);
+            _mm_store_ps(&vtx[k][2][g], r2);
+        }
     }
-    return triangle4_intersect((const float(*)[3][4])vtx, q, t_min, t_max, t_out, u_out, v_out, scalar_lanes);
+    return triangle_block_intersect((const float(*)[3][TRI_BLOCK_WIDTH])vtx, q, t_min, t_max, t_out, u_out, v_out,
+                                    scalar_lanes);
 }
 
 /* Hashed mailboxing (after Benthin, "Realtime Ray Tracing on Current CPU Architectures",
@@ -796,40 +807,41 @@ static inline bool mailbox_seen(Mailbox *mb, uint32_t slot)
     return false;
 }
 
-/* Collects the next (up to) four triangles of slots[*k .. end) that the ray has not
- * tested yet, in list order; stops at the first sphere (spheres follow the triangles:
- * their grid-local indices are larger). Returns how many. */
-static inline int cell_next_tris(const Grid *g, uint32_t *k, uint32_t end, Mailbox *mb, const GridTri *tri[4])
+/* Collects the next (up to) TRI_BLOCK_WIDTH triangles of slots[*k .. end) that the ray
+ * has not tested yet, in list order; stops at the first sphere (spheres follow the
+ * triangles: their grid-local indices are larger). Returns how many. */
+static inline int cell_next_tris(const Grid *g, uint32_t *k, uint32_t end, Mailbox *mb,
+                                 const GridTri *tri[TRI_BLOCK_WIDTH])
 {
     int n = 0;
     uint32_t num_tris = (uint32_t)g->num_tris;
-    for (; *k < end && n < 4; (*k)++) {
+    for (; *k < end && n < TRI_BLOCK_WIDTH; (*k)++) {
         uint32_t slot = g->slots[*k];
         if (slot >= num_tris) break;
         if (mailbox_seen(mb, slot)) continue;
         GRID_COUNT_PRIM_TEST(slot);
         tri[n++] = &g->tris[slot];
     }
-    for (int i = n; i < 4; i++) tri[i] = &GRID_NAN_TRI;
+    for (int i = n; i < TRI_BLOCK_WIDTH; i++) tri[i] = &GRID_NAN_TRI;
     return n;
 }
 
 /* The closest hit among a cell's untested primitives, in list order with a strict <, as
  * a scalar loop would pick among equal t; shortens r->t_max on a hit. */
-static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const TriangleRay4 *q, Ray *r,
-                                  Hit *hit)
+static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const TriangleRayBlock *q,
+                                  Ray *r, Hit *hit)
 {
     bool found = false;
-    const __m128 t_min = _mm_set1_ps(r->t_min);
-    const GridTri *tri[4];
+    const TriLanes t_min = lanes_set1(r->t_min);
+    const GridTri *tri[TRI_BLOCK_WIDTH];
     int n;
     while ((n = cell_next_tris(g, &k, end, mb, tri)) > 0) {
-        __m128 t4, u4, v4;
+        TriLanes tl, ul, vl;
         int scalar_lanes;
-        int mask = tri4_intersect(tri, q, t_min, _mm_set1_ps(r->t_max), &t4, &u4, &v4, &scalar_lanes);
+        int mask = tri_batch_intersect(tri, n, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
         if (!((mask | scalar_lanes) & ((1 << n) - 1))) continue;
-        float t[4], u[4], v[4];
-        _mm_storeu_ps(t, t4); _mm_storeu_ps(u, u4); _mm_storeu_ps(v, v4);
+        float t[TRI_BLOCK_WIDTH], u[TRI_BLOCK_WIDTH], v[TRI_BLOCK_WIDTH];
+        lanes_store(t, tl); lanes_store(u, ul); lanes_store(v, vl);
         for (int i = 0; i < n; i++) {
             if (scalar_lanes & (1 << i)) {
                 float ts, us, vs;
@@ -860,16 +872,16 @@ static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailb
     return found;
 }
 
-static inline bool cell_occluded(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const TriangleRay4 *q,
+static inline bool cell_occluded(const Grid *g, uint32_t k, uint32_t end, Mailbox *mb, const TriangleRayBlock *q,
                                  const Ray *r)
 {
-    const __m128 t_min = _mm_set1_ps(r->t_min), t_max = _mm_set1_ps(r->t_max);
-    const GridTri *tri[4];
+    const TriLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
+    const GridTri *tri[TRI_BLOCK_WIDTH];
     int n;
     while ((n = cell_next_tris(g, &k, end, mb, tri)) > 0) {
-        __m128 t4, u4, v4;
+        TriLanes tl, ul, vl;
         int scalar_lanes;
-        if (tri4_intersect(tri, q, t_min, t_max, &t4, &u4, &v4, &scalar_lanes) & ((1 << n) - 1)) return true;
+        if (tri_batch_intersect(tri, n, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes) & ((1 << n) - 1)) return true;
         for (int i = 0; i < n; i++) {
             float ts, us, vs;
             if ((scalar_lanes & (1 << i)) &&
@@ -893,7 +905,7 @@ bool grid_intersect(const Grid *g, const Ray *ray, Hit *hit)
     GridWalk w;
     if (g->num_cells == 0 || !walk_begin(g, ray, &w)) return false;
     Ray r = *ray;
-    TriangleRay4 q = triangle_ray4_setup(&r);
+    TriangleRayBlock q = triangle_block_ray_setup(&r);
     Mailbox mb;
     mailbox_clear(&mb);
     bool found = false;
@@ -926,7 +938,7 @@ bool grid_occluded(const Grid *g, const Ray *r)
 {
     GridWalk w;
     if (g->num_cells == 0 || !walk_begin(g, r, &w)) return false;
-    TriangleRay4 q = triangle_ray4_setup(r);
+    TriangleRayBlock q = triangle_block_ray_setup(r);
     Mailbox mb;
     mailbox_clear(&mb);
     for (;;) {

@@ -1,6 +1,7 @@
 /* triangle_intersect_watertight() on a block of TRI_BLOCK_WIDTH triangles at once (eight
  * with AVX, four with SSE): the leaves of the BVH and of the kd-tree store their triangles
- * in such blocks, v[vertex][axis][lane], unused lanes NaN. */
+ * in such blocks, v[vertex][axis][lane], unused lanes NaN, and the grid gathers its cells'
+ * triangles into one. */
 #ifndef CST_GEOMETRY_TRIANGLE_BLOCK_H
 #define CST_GEOMETRY_TRIANGLE_BLOCK_H
 
@@ -113,9 +114,9 @@ static inline int triangle_block_intersect(const float v[3][3][TRI_BLOCK_WIDTH],
     int zero_lanes = lanes_mask(lanes_or(lanes_or(lanes_eq(U, zero), lanes_eq(V, zero)), lanes_eq(W, zero)));
     *scalar_lanes = zero_lanes;
     /* With no zero among U, V, W, "some negative and some positive" is "some sign bit
-     * differs from U's" (as in triangle4_intersect). Most rays pass outside every triangle
-     * of a block: stop before the division. Unused lanes are NaN, whose sign bits mean
-     * nothing, so they are dropped explicitly. */
+     * differs from U's": two xors and an or instead of six compares. Most rays pass
+     * outside every triangle of a block: stop before the division. Unused lanes are NaN,
+     * whose sign bits mean nothing, so they are dropped explicitly. */
     TriLanes mixed = lanes_or(lanes_xor(U, V), lanes_xor(U, W));
     int inside = ~lanes_mask(mixed) & lanes_mask(lanes_ord(U, U)) & ~zero_lanes;
     if (!inside) {
@@ -127,9 +128,10 @@ static inline int triangle_block_intersect(const float v[3][3][TRI_BLOCK_WIDTH],
     for (int k = 0; k < 3; k++) zt[k] = lanes_mul(q->sz, pz[k]);
     TriLanes T = lanes_add(lanes_add(lanes_mul(U, zt[0]), lanes_mul(V, zt[1])), lanes_mul(W, zt[2]));
     /* t = T / det is positive only where T and det have the same sign: a ray leaving a
-     * surface is "inside" the triangle it starts on, behind its origin. With t_min >= 0
-     * such lanes cannot hit, so when no other lane is left the division and the error
-     * bound are skipped (as in triangle4_intersect; the result is the full test's). */
+     * surface is "inside" the triangle it starts on (and often a neighbour), behind its
+     * origin. With t_min >= 0 such lanes cannot hit, so when no other lane is left the
+     * division and the error bound are skipped (Woop et al. 2013 test the sign before
+     * dividing too); the result is the full test's, bit for bit. */
     if (!(inside & ~lanes_mask(lanes_xor(T, det))) && (lanes_mask(lanes_ge(t_min, zero)) & 1)) {
         *t_out = *u_out = *v_out = zero;
         return 0;
