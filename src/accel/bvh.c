@@ -427,9 +427,9 @@ typedef struct Emitter {
     size_t cursor; /* units written */
 } Emitter;
 
-_Static_assert(sizeof(BvhNode) % BVH_UNIT == 0 && sizeof(BvhTriBlock) % BVH_UNIT == 0,
+_Static_assert(sizeof(BvhNode) % BVH_UNIT == 0 && sizeof(TriangleBlock) % BVH_UNIT == 0,
                "nodes and blocks are whole units");
-enum { NODE_UNITS = sizeof(BvhNode) / BVH_UNIT, BLOCK_UNITS = sizeof(BvhTriBlock) / BVH_UNIT };
+enum { NODE_UNITS = sizeof(BvhNode) / BVH_UNIT, BLOCK_UNITS = sizeof(TriangleBlock) / BVH_UNIT };
 
 static inline void *unit_at(Emitter *e, size_t u) { return e->out->units + u * BVH_UNIT; }
 
@@ -467,7 +467,7 @@ static uint32_t emit_leaf(Emitter *e, int node)
     uint32_t first = (uint32_t)e->cursor;
     uint32_t count = 0;
     int lane = TRI_BLOCK_WIDTH;
-    BvhTriBlock *blk = NULL;
+    TriangleBlock *blk = NULL;
     for (int i = begin; i < end; i++) {
         uint32_t id = e->idx[i];
         if (lane == TRI_BLOCK_WIDTH) {
@@ -480,7 +480,7 @@ static uint32_t emit_leaf(Emitter *e, int node)
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++)
                     for (int l = 0; l < TRI_BLOCK_WIDTH; l++) blk->v[k][a][l] = NAN;
-            for (int l = 0; l < TRI_BLOCK_WIDTH; l++) blk->id[l] = BVH_NO_PRIM;
+            for (int l = 0; l < TRI_BLOCK_WIDTH; l++) blk->id[l] = TRI_BLOCK_NO_PRIM;
             lane = 0;
         }
         const int32_t *t = &e->tri_indices[3 * id];
@@ -777,42 +777,6 @@ static inline unsigned node_hit8(const BvhNode *n, const RayBox8 *q, F8 t_min, F
     return f8_le_mask(tn, tf);
 }
 
-/* Closest hit among a leaf's triangle blocks; shortens r->t_max on a hit. */
-static inline bool leaf_triangles(const Bvh *bvh, uint32_t ref, const TriangleRayBlock *q, Ray *r, Hit *hit)
-{
-    bool found = false;
-    const TriLanes t_min = lanes_set1(r->t_min);
-    const BvhTriBlock *b = bvh_blocks(bvh, bvh_ref_index(ref));
-    for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
-        TriLanes tl, ul, vl;
-        int scalar_lanes;
-        int mask = triangle_block_intersect(b->v, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
-        if (!(mask | scalar_lanes)) continue;
-        float t[TRI_BLOCK_WIDTH], u[TRI_BLOCK_WIDTH], v[TRI_BLOCK_WIDTH];
-        lanes_store(t, tl); lanes_store(u, ul); lanes_store(v, vl);
-        /* In lane order with strict <, as a scalar loop would pick among equal t; only
-         * the lanes hit or left to the scalar test. */
-        for (unsigned lanes = (unsigned)(mask | scalar_lanes); lanes; lanes &= lanes - 1u) {
-            const int i = __builtin_ctz(lanes);
-            if (scalar_lanes & (1 << i)) {
-                float ts, us, vs;
-                if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
-                                                  triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i),
-                                                  &ts, &us, &vs)) {
-                    r->t_max = ts;
-                    hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
-                    found = true;
-                }
-            } else if (t[i] < r->t_max) {
-                r->t_max = t[i];
-                hit->t = t[i]; hit->u = u[i]; hit->v = v[i]; hit->prim = b->id[i];
-                found = true;
-            }
-        }
-    }
-    return found;
-}
-
 static inline bool leaf_spheres(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
 {
     bool found = false;
@@ -838,22 +802,7 @@ static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRay
         }
         return false;
     }
-    const TriLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
-    const BvhTriBlock *b = bvh_blocks(bvh, bvh_ref_index(ref));
-    for (uint32_t bi = bvh_ref_count(ref); bi > 0; bi--, b++) {
-        TriLanes tl, ul, vl;
-        int scalar_lanes;
-        if (triangle_block_intersect(b->v, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes)) return true;
-        for (unsigned lanes = (unsigned)scalar_lanes; lanes; lanes &= lanes - 1u) {
-            const int i = __builtin_ctz(lanes);
-            float ts, us, vs;
-            if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
-                                              triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i), &ts,
-                                              &us, &vs))
-                return true;
-        }
-    }
-    return false;
+    return triangle_blocks_occluded(bvh_blocks(bvh, bvh_ref_index(ref)), bvh_ref_count(ref), q, r);
 }
 
 static inline unsigned ctz(unsigned m) { return (unsigned)__builtin_ctz(m); }
@@ -897,7 +846,7 @@ static inline void prefetch_ref(const Bvh *bvh, uint32_t ref)
         bytes = bvh_ref_count(ref) * sizeof(BvhSphere);
     } else {
         p = (const char *)bvh_blocks(bvh, bvh_ref_index(ref));
-        bytes = bvh_ref_count(ref) * sizeof(BvhTriBlock);
+        bytes = bvh_ref_count(ref) * sizeof(TriangleBlock);
     }
 #ifndef BVH_NO_PREFETCH
     for (size_t off = 0; off < bytes; off += 64) _mm_prefetch(p + off, _MM_HINT_T0);
@@ -970,7 +919,8 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit)
                 found |= leaf_spheres(bvh, cur, &r, hit);
             } else {
                 if (!qt_ready) { qt = triangle_block_ray_setup(&r); qt_ready = true; }
-                found |= leaf_triangles(bvh, cur, &qt, &r, hit);
+                found |= triangle_blocks_intersect(bvh_blocks(bvh, bvh_ref_index(cur)), bvh_ref_count(cur), &qt, &r,
+                                                   hit);
             }
             t_max_widened = f8_set1(r.t_max * BVH_EXIT_WIDEN);
         }

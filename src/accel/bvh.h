@@ -44,15 +44,7 @@ static inline bool bvh_ref_is_leaf(uint32_t ref) { return (ref & BVH_LEAF) != 0u
 static inline uint32_t bvh_ref_index(uint32_t ref) { return ref >> BVH_INDEX_SHIFT; }
 static inline uint32_t bvh_ref_count(uint32_t ref) { return ((ref >> BVH_COUNT_SHIFT) & 7u) + 1u; }
 
-/* TRI_BLOCK_WIDTH triangles' vertices in SoA form, v[vertex][axis][lane], for one SIMD
- * watertight test (triangle_block.h); indexing by axis lets the per-ray axis permutation
- * pick rows. Unused lanes have id BVH_NO_PRIM and NaN vertices. 320 bytes (10 units)
- * with AVX, 160 (5) without. */
-typedef struct BvhTriBlock {
-    float v[3][3][TRI_BLOCK_WIDTH];
-    uint32_t id[TRI_BLOCK_WIDTH]; /* scene primitive ids */
-} BvhTriBlock;
-#define BVH_NO_PRIM 0xffffffffu
+/* A leaf's triangles are TriangleBlocks (triangle_block.h): 10 units with AVX, 5 without. */
 
 typedef struct BvhSphere {
     Vec3 center;
@@ -81,15 +73,15 @@ typedef struct Bvh {
 static inline size_t bvh_num_units(const Bvh *bvh)
 {
     return (size_t)bvh->num_nodes * (sizeof(BvhNode) / BVH_UNIT) +
-           (size_t)bvh->num_blocks * (sizeof(BvhTriBlock) / BVH_UNIT);
+           (size_t)bvh->num_blocks * (sizeof(TriangleBlock) / BVH_UNIT);
 }
 static inline const BvhNode *bvh_node(const Bvh *bvh, uint32_t ref)
 {
     return (const BvhNode *)(const void *)(bvh->units + ref);
 }
-static inline const BvhTriBlock *bvh_blocks(const Bvh *bvh, uint32_t index)
+static inline const TriangleBlock *bvh_blocks(const Bvh *bvh, uint32_t index)
 {
-    return (const BvhTriBlock *)(const void *)(bvh->units + (size_t)index * BVH_UNIT);
+    return (const TriangleBlock *)(const void *)(bvh->units + (size_t)index * BVH_UNIT);
 }
 
 /* Zero primitives is valid (every ray misses). The build runs on all online CPUs; the

@@ -6,7 +6,7 @@
  * primitives go to both children and are clipped to each child's cell ("perfect splits",
  * sec. 4.3), which gives tighter event bounds than their boxes. Traversal is the
  * front-to-back stack traversal of pbrt-v3's KdTreeAccel (Havran's TA_rec_B); leaves are
- * tested KD_BLOCK_WIDTH triangles at a time with the SIMD form of the watertight test. */
+ * tested TRI_BLOCK_WIDTH triangles at a time with the SIMD form of the watertight test. */
 #include "accel/kdtree.h"
 
 #include <float.h>
@@ -20,7 +20,7 @@
 #include "geometry/triangle.h"
 
 /* SAH constants (Wald & Havran eq. 2 and sec. 4.4): a traversal step and one block test
- * (KD_BLOCK_WIDTH triangles at once, so a leaf of n triangles costs ceil(n / width) tests:
+ * (TRI_BLOCK_WIDTH triangles at once, so a leaf of n triangles costs ceil(n / width) tests:
  * the "block SAH" of wide BVHs) in the same unit; cost * (1 - KD_EMPTY_BONUS) when one side
  * is empty, to cut off empty space. On the Stanford bunny (1 thread, bench rays), a block
  * cost of 0.5 ran ~5% faster on random rays than 0.25 or 1.0, and ~10% faster than 2.0;
@@ -30,7 +30,7 @@ static const float KD_COST_TRAVERSE = 1.0f;
 static const float KD_COST_BLOCK = 0.5f;
 static const float KD_EMPTY_BONUS = 0.2f;
 
-static inline float leaf_blocks(int n) { return (float)((n + KD_BLOCK_WIDTH - 1) / KD_BLOCK_WIDTH); }
+static inline float leaf_blocks(int n) { return (float)((n + TRI_BLOCK_WIDTH - 1) / TRI_BLOCK_WIDTH); }
 
 /* Traversal treats every split plane as a slab of half-width
  * w = KD_PLANE_MARGIN * (largest |coordinate| of the scene + largest |coordinate| of the
@@ -424,7 +424,7 @@ static int build_node(Builder *b, EventLists *E, int num_prims, BBox cell, int d
 }
 
 /* Turns the build's leaf lists into the final leaves: each leaf's triangles as
- * consecutive blocks of KD_BLOCK_WIDTH (in the lists' ascending id order, lane by lane),
+ * consecutive blocks of TRI_BLOCK_WIDTH (in the lists' ascending id order, lane by lane),
  * its spheres after them; leaves in node order, so a subtree's leaves are close in
  * memory. Returns false on OOM. */
 static bool store_leaves(KdTree *t, const Builder *b)
@@ -438,7 +438,7 @@ static bool store_leaves(KdTree *t, const Builder *b)
         uint32_t count = nd->flags >> 2, nt = 0;
         const uint32_t *ids = &b->ids[nd->first];
         while (nt < count && ids[nt] < num_tris) nt++; /* ascending: triangles first */
-        blocks += (nt + KD_BLOCK_WIDTH - 1) / KD_BLOCK_WIDTH;
+        blocks += (nt + TRI_BLOCK_WIDTH - 1) / TRI_BLOCK_WIDTH;
         spheres += count - nt;
         sphere_leaves += count > nt;
     }
@@ -452,16 +452,16 @@ static bool store_leaves(KdTree *t, const Builder *b)
         uint32_t count = nd->flags >> 2, nt = 0;
         const uint32_t *ids = &b->ids[nd->first];
         while (nt < count && ids[nt] < num_tris) nt++;
-        uint32_t first_block = (uint32_t)t->num_blocks, num_blocks = (nt + KD_BLOCK_WIDTH - 1) / KD_BLOCK_WIDTH;
+        uint32_t first_block = (uint32_t)t->num_blocks, num_blocks = (nt + TRI_BLOCK_WIDTH - 1) / TRI_BLOCK_WIDTH;
         for (uint32_t k = 0; k < num_blocks; k++) {
-            KdTriBlock *blk = &t->blocks[t->num_blocks++];
-            for (int lane = 0; lane < KD_BLOCK_WIDTH; lane++) {
-                uint32_t j = KD_BLOCK_WIDTH * k + (uint32_t)lane;
+            TriangleBlock *blk = &t->blocks[t->num_blocks++];
+            for (int lane = 0; lane < TRI_BLOCK_WIDTH; lane++) {
+                uint32_t j = TRI_BLOCK_WIDTH * k + (uint32_t)lane;
                 if (j >= nt) {
                     /* NaN vertices fail every comparison of the test (t > t_min too). */
                     for (int v = 0; v < 3; v++)
                         for (int a = 0; a < 3; a++) blk->v[v][a][lane] = NAN;
-                    blk->id[lane] = KD_NO_PRIM;
+                    blk->id[lane] = TRI_BLOCK_NO_PRIM;
                     continue;
                 }
                 const int32_t *vi = &g->tri_indices[3 * ids[j]];
@@ -644,7 +644,7 @@ void kdtree_free(KdTree *t)
 
 size_t kdtree_memory_bytes(const KdTree *t)
 {
-    return (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_blocks * sizeof(KdTriBlock) +
+    return (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_blocks * sizeof(TriangleBlock) +
            (size_t)t->num_spheres * sizeof(KdSphere) + (size_t)t->num_sphere_leaves * sizeof(KdSphereLeaf);
 }
 
@@ -697,66 +697,12 @@ static inline bool kd_ray_setup(const KdTree *t, const Ray *r, KdRay *q, float *
     return tn <= *t1;
 }
 
-/* The closest hit among num_blocks blocks; shortens r->t_max on a hit. Lanes are taken in
- * order with a strict <, which picks among equal t exactly as a scalar loop over the
- * leaf's ascending ids would. */
-static inline bool blocks_intersect(const KdTriBlock *b, uint32_t num_blocks, const TriangleRayBlock *q, Ray *r,
-                                    Hit *hit)
-{
-    bool found = false;
-    const TriLanes t_min = lanes_set1(r->t_min);
-    for (uint32_t bi = 0; bi < num_blocks; bi++, b++) {
-        TriLanes tl, ul, vl;
-        int scalar_lanes;
-        int mask = triangle_block_intersect(b->v, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
-        if (!(mask | scalar_lanes)) continue;
-        float t[KD_BLOCK_WIDTH], u[KD_BLOCK_WIDTH], v[KD_BLOCK_WIDTH];
-        lanes_store(t, tl); lanes_store(u, ul); lanes_store(v, vl);
-        for (int i = 0; i < KD_BLOCK_WIDTH; i++) {
-            if (scalar_lanes & (1 << i)) {
-                float ts, us, vs;
-                if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
-                                                  triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i),
-                                                  &ts, &us, &vs)) {
-                    r->t_max = ts;
-                    hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
-                    found = true;
-                }
-            } else if ((mask & (1 << i)) && t[i] < r->t_max) {
-                r->t_max = t[i];
-                hit->t = t[i]; hit->u = u[i]; hit->v = v[i]; hit->prim = b->id[i];
-                found = true;
-            }
-        }
-    }
-    return found;
-}
-
-static inline bool blocks_occluded(const KdTriBlock *b, uint32_t num_blocks, const TriangleRayBlock *q, const Ray *r)
-{
-    const TriLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
-    for (uint32_t bi = 0; bi < num_blocks; bi++, b++) {
-        TriLanes tl, ul, vl;
-        int scalar_lanes;
-        if (triangle_block_intersect(b->v, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes)) return true;
-        for (int i = 0; i < KD_BLOCK_WIDTH; i++) {
-            float ts, us, vs;
-            if ((scalar_lanes & (1 << i)) &&
-                triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
-                                              triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i), &ts,
-                                              &us, &vs))
-                return true;
-        }
-    }
-    return false;
-}
-
 /* The closest hit in a leaf; shortens r->t_max on a hit. */
 static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const TriangleRayBlock *q, Ray *r, Hit *hit)
 {
-    if (!(n->flags & KD_LEAF_SPHERES)) return blocks_intersect(&t->blocks[n->first], n->flags >> 3, q, r, hit);
+    if (!(n->flags & KD_LEAF_SPHERES)) return triangle_blocks_intersect(&t->blocks[n->first], n->flags >> 3, q, r, hit);
     const KdSphereLeaf *l = &t->sphere_leaves[n->first];
-    bool found = blocks_intersect(&t->blocks[l->first_block], l->num_blocks, q, r, hit);
+    bool found = triangle_blocks_intersect(&t->blocks[l->first_block], l->num_blocks, q, r, hit);
     for (uint32_t i = 0; i < l->num_spheres; i++) {
         const KdSphere *sp = &t->spheres[l->first_sphere + i];
         float tt;
@@ -770,9 +716,9 @@ static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const Triang
 
 static inline bool leaf_occluded(const KdTree *t, const KdNode *n, const TriangleRayBlock *q, const Ray *r)
 {
-    if (!(n->flags & KD_LEAF_SPHERES)) return blocks_occluded(&t->blocks[n->first], n->flags >> 3, q, r);
+    if (!(n->flags & KD_LEAF_SPHERES)) return triangle_blocks_occluded(&t->blocks[n->first], n->flags >> 3, q, r);
     const KdSphereLeaf *l = &t->sphere_leaves[n->first];
-    if (blocks_occluded(&t->blocks[l->first_block], l->num_blocks, q, r)) return true;
+    if (triangle_blocks_occluded(&t->blocks[l->first_block], l->num_blocks, q, r)) return true;
     for (uint32_t i = 0; i < l->num_spheres; i++) {
         const KdSphere *sp = &t->spheres[l->first_sphere + i];
         float tt;

@@ -16,9 +16,6 @@
 #include "geometry/triangle_block.h"
 #include "math/bbox.h"
 
-/* Triangles per leaf block: one AVX or SSE register of floats. */
-#define KD_BLOCK_WIDTH TRI_BLOCK_WIDTH
-
 enum {
     KD_LEAF = 3,         /* KdNode.flags & 3: 0, 1, 2 = split axis of an inner node */
     KD_EMPTY_BELOW = 4,  /* inner node flag: the child below the plane is an empty leaf */
@@ -42,16 +39,6 @@ typedef struct KdNode {
     uint32_t flags;
 } KdNode;
 
-/* KD_BLOCK_WIDTH triangles of one leaf, v[vertex][axis][lane], for one SIMD watertight
- * test (the layout of the BVH's blocks; indexing by axis lets the per-ray axis permutation
- * pick rows). A leaf's triangles are consecutive blocks, so a leaf costs one dependent
- * memory access, not one per triangle. Unused lanes have NaN vertices and id KD_NO_PRIM. */
-typedef struct KdTriBlock {
-    float v[3][3][KD_BLOCK_WIDTH];
-    uint32_t id[KD_BLOCK_WIDTH]; /* scene primitive ids */
-} KdTriBlock;
-#define KD_NO_PRIM 0xffffffffu
-
 typedef struct KdSphere {
     Vec3 center;
     float radius;
@@ -71,7 +58,9 @@ typedef struct KdSphereLeaf {
 typedef struct KdTree {
     KdNode *nodes;      /* nodes[0] is the root; NULL when no primitive can be hit */
     int num_nodes;
-    KdTriBlock *blocks; /* by leaf, in node order */
+    /* By leaf, in node order: a leaf's triangles are consecutive blocks, one dependent
+     * memory access, not one per triangle. */
+    TriangleBlock *blocks;
     int num_blocks;
     KdSphere *spheres;  /* by leaf, in node order */
     int num_spheres;

@@ -7,6 +7,10 @@
 
 #include <immintrin.h>
 
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "geometry/hit.h"
 #include "geometry/ray.h"
 #include "geometry/triangle.h"
 
@@ -16,6 +20,15 @@
 #else
 #define TRI_BLOCK_WIDTH 4
 #endif
+
+/* TRI_BLOCK_WIDTH triangles in SoA form, v[vertex][axis][lane]; indexing by axis lets the
+ * per-ray axis permutation pick rows. Unused lanes have NaN vertices, which fail every
+ * comparison of the test, and id TRI_BLOCK_NO_PRIM. 320 bytes with AVX, 160 without. */
+typedef struct TriangleBlock {
+    float v[3][3][TRI_BLOCK_WIDTH];
+    uint32_t id[TRI_BLOCK_WIDTH]; /* scene primitive ids */
+} TriangleBlock;
+#define TRI_BLOCK_NO_PRIM 0xffffffffu
 
 /* The lanes of a block test: TRI_BLOCK_WIDTH floats, AVX or SSE. Comparisons are the
  * ordered ones of the scalar test (false on NaN), except neq, true on NaN as in C; max is
@@ -34,9 +47,11 @@ static inline TriLanes lanes_and(TriLanes a, TriLanes b) { return _mm256_and_ps(
 static inline TriLanes lanes_or(TriLanes a, TriLanes b) { return _mm256_or_ps(a, b); }
 static inline TriLanes lanes_xor(TriLanes a, TriLanes b) { return _mm256_xor_ps(a, b); }
 static inline TriLanes lanes_ge(TriLanes a, TriLanes b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
-static inline TriLanes lanes_andnot(TriLanes a, TriLanes b) { return _mm256_andnot_ps(a, b); } /* ~a & b */
 static inline TriLanes lanes_max(TriLanes a, TriLanes b) { return _mm256_max_ps(a, b); } /* a > b ? a : b */
-static inline TriLanes lanes_abs(TriLanes a) { return _mm256_and_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff))); }
+static inline TriLanes lanes_abs(TriLanes a)
+{
+    return _mm256_and_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)));
+}
 static inline TriLanes lanes_lt(TriLanes a, TriLanes b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
 static inline TriLanes lanes_gt(TriLanes a, TriLanes b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
 static inline TriLanes lanes_eq(TriLanes a, TriLanes b) { return _mm256_cmp_ps(a, b, _CMP_EQ_OQ); }
@@ -57,7 +72,6 @@ static inline TriLanes lanes_and(TriLanes a, TriLanes b) { return _mm_and_ps(a, 
 static inline TriLanes lanes_or(TriLanes a, TriLanes b) { return _mm_or_ps(a, b); }
 static inline TriLanes lanes_xor(TriLanes a, TriLanes b) { return _mm_xor_ps(a, b); }
 static inline TriLanes lanes_ge(TriLanes a, TriLanes b) { return _mm_cmpge_ps(a, b); }
-static inline TriLanes lanes_andnot(TriLanes a, TriLanes b) { return _mm_andnot_ps(a, b); } /* ~a & b */
 static inline TriLanes lanes_max(TriLanes a, TriLanes b) { return _mm_max_ps(a, b); } /* a > b ? a : b */
 static inline TriLanes lanes_abs(TriLanes a) { return _mm_and_ps(a, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff))); }
 static inline TriLanes lanes_lt(TriLanes a, TriLanes b) { return _mm_cmplt_ps(a, b); }
@@ -154,15 +168,70 @@ static inline int triangle_block_intersect(const float v[3][3][TRI_BLOCK_WIDTH],
                                                                        lanes_mul(delta_y, max_xt)),
                                                              lanes_mul(delta_x, max_yt)));
     TriLanes max_e = lanes_max(lanes_max(lanes_abs(U), lanes_abs(V)), lanes_abs(W));
-    TriLanes delta_t = lanes_mul(lanes_mul(lanes_set1(3.0f), lanes_add(lanes_add(lanes_mul(lanes_mul(g3, max_e), max_zt),
-                                                                                lanes_mul(delta_e, max_zt)),
-                                                                      lanes_mul(delta_z, max_e))),
-                                lanes_abs(inv_det));
+    TriLanes sum_t = lanes_add(lanes_add(lanes_mul(lanes_mul(g3, max_e), max_zt), lanes_mul(delta_e, max_zt)),
+                               lanes_mul(delta_z, max_e));
+    TriLanes delta_t = lanes_mul(lanes_mul(lanes_set1(3.0f), sum_t), lanes_abs(inv_det));
     ok = lanes_and(ok, lanes_gt(t, delta_t));
     *t_out = t;
     *u_out = lanes_mul(V, inv_det);
     *v_out = lanes_mul(W, inv_det);
     return lanes_mask(ok) & inside;
+}
+
+/* The closest hit among n consecutive blocks; shortens r->t_max on a hit. Lanes are taken
+ * in order with a strict <, as a scalar loop over the blocks' triangles would pick among
+ * equal t; only the lanes hit or left to the scalar test are visited. */
+static inline bool triangle_blocks_intersect(const TriangleBlock *b, uint32_t n, const TriangleRayBlock *q, Ray *r,
+                                             Hit *hit)
+{
+    bool found = false;
+    const TriLanes t_min = lanes_set1(r->t_min);
+    for (; n > 0; n--, b++) {
+        TriLanes tl, ul, vl;
+        int scalar_lanes;
+        int mask = triangle_block_intersect(b->v, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
+        if (!(mask | scalar_lanes)) continue;
+        float t[TRI_BLOCK_WIDTH], u[TRI_BLOCK_WIDTH], v[TRI_BLOCK_WIDTH];
+        lanes_store(t, tl); lanes_store(u, ul); lanes_store(v, vl);
+        for (unsigned lanes = (unsigned)(mask | scalar_lanes); lanes; lanes &= lanes - 1u) {
+            const int i = __builtin_ctz(lanes);
+            if (scalar_lanes & (1 << i)) {
+                float ts, us, vs;
+                if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
+                                                  triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i),
+                                                  &ts, &us, &vs)) {
+                    r->t_max = ts;
+                    hit->t = ts; hit->u = us; hit->v = vs; hit->prim = b->id[i];
+                    found = true;
+                }
+            } else if (t[i] < r->t_max) {
+                r->t_max = t[i];
+                hit->t = t[i]; hit->u = u[i]; hit->v = v[i]; hit->prim = b->id[i];
+                found = true;
+            }
+        }
+    }
+    return found;
+}
+
+/* Whether any triangle of n consecutive blocks is hit within (r->t_min, r->t_max). */
+static inline bool triangle_blocks_occluded(const TriangleBlock *b, uint32_t n, const TriangleRayBlock *q, const Ray *r)
+{
+    const TriLanes t_min = lanes_set1(r->t_min), t_max = lanes_set1(r->t_max);
+    for (; n > 0; n--, b++) {
+        TriLanes tl, ul, vl;
+        int scalar_lanes;
+        if (triangle_block_intersect(b->v, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes)) return true;
+        for (unsigned lanes = (unsigned)scalar_lanes; lanes; lanes &= lanes - 1u) {
+            const int i = __builtin_ctz(lanes);
+            float ts, us, vs;
+            if (triangle_intersect_watertight(&q->tr, r, triangle_block_vertex(b->v, 0, i),
+                                              triangle_block_vertex(b->v, 1, i), triangle_block_vertex(b->v, 2, i), &ts,
+                                              &us, &vs))
+                return true;
+        }
+    }
+    return false;
 }
 
 #endif

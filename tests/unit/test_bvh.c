@@ -208,8 +208,8 @@ static BBox slot_box(const BvhNode *n, int i)
     return b;
 }
 
-/* Unused block lanes carry BVH_NO_PRIM. */
-static bool lane_used(const BvhTriBlock *b, int l) { return b->id[l] != BVH_NO_PRIM; }
+/* Unused block lanes carry TRI_BLOCK_NO_PRIM. */
+static bool lane_used(const TriangleBlock *b, int l) { return b->id[l] != TRI_BLOCK_NO_PRIM; }
 
 /* Marks the n units from `first` as used by one node or block: every unit of the array
  * belongs to exactly one of them. */
@@ -246,9 +246,9 @@ static void check_leaf(const Bvh *bvh, const Soup *s, uint32_t ref, BBox box, in
         }
         return;
     }
-    cover_units(bvh, cover, first, (size_t)count * (sizeof(BvhTriBlock) / BVH_UNIT));
+    cover_units(bvh, cover, first, (size_t)count * (sizeof(TriangleBlock) / BVH_UNIT));
     for (uint32_t bi = 0; bi < count; bi++) {
-        const BvhTriBlock *b = bvh_blocks(bvh, first) + bi;
+        const TriangleBlock *b = bvh_blocks(bvh, first) + bi;
         assert_true(lane_used(b, 0));
         for (int l = 0; l < TRI_BLOCK_WIDTH; l++) {
             /* packed: only the leaf's last block has unused lanes, at its end */

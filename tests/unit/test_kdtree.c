@@ -431,16 +431,16 @@ static int check_node(const KdTree *t, const Soup *s, int node, BBox cell, int d
     static uint32_t ids[8192]; /* scene ids of the leaf's primitives */
     uint32_t count = 0;
     for (uint32_t b = 0; b < num_blocks; b++) {
-        const KdTriBlock *blk = &t->blocks[first_block + b];
-        for (int lane = 0; lane < KD_BLOCK_WIDTH; lane++) {
+        const TriangleBlock *blk = &t->blocks[first_block + b];
+        for (int lane = 0; lane < TRI_BLOCK_WIDTH; lane++) {
             uint32_t id = blk->id[lane];
-            if (id == KD_NO_PRIM) {
+            if (id == TRI_BLOCK_NO_PRIM) {
                 assert_true(b == num_blocks - 1 && lane > 0); /* padding only ends the last block */
                 for (int k = 0; k < 3; k++)
                     for (int a = 0; a < 3; a++) assert_true(isnan(blk->v[k][a][lane]));
                 continue;
             }
-            assert_true(b == 0 || lane == 0 || blk->id[lane - 1] != KD_NO_PRIM);
+            assert_true(b == 0 || lane == 0 || blk->id[lane - 1] != TRI_BLOCK_NO_PRIM);
             assert_true(id < (uint32_t)s->num_tris);
             assert_true(count < 8192);
             ids[count++] = id;
@@ -497,7 +497,7 @@ static TreeStats check_structure(const Accel *a, const Soup *s, bool full)
         if (skippable && ts.seen[id] != 0) fail_msg("zero-area triangle %d is in a leaf", id);
         if (!skippable && ts.seen[id] == 0) fail_msg("primitive %d is in no leaf", id);
     }
-    size_t expect = (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_blocks * sizeof(KdTriBlock) +
+    size_t expect = (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_blocks * sizeof(TriangleBlock) +
                     (size_t)t->num_spheres * sizeof(KdSphere) + (size_t)t->num_sphere_leaves * sizeof(KdSphereLeaf);
     assert_true(accel_memory_bytes(a) == expect);
     free(ts.seen);
