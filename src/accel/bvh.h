@@ -67,6 +67,9 @@ typedef struct Bvh {
     int num_leaves;
     int num_prims;
     BBox bounds;
+    /* The largest magnitude of any node box coordinate, per axis (lanes x, y, z, 0): the
+     * FMA form of the slab test bounds its rounding with it (bvh.c, ray_box8). */
+    float coord_max[4];
 } Bvh;
 
 /* Units in use: every node and block, nothing else. */
@@ -93,5 +96,10 @@ bool bvh_intersect(const Bvh *bvh, const Ray *ray, Hit *hit);
 /* Any hit in (ray.t_min, ray.t_max). */
 bool bvh_occluded(const Bvh *bvh, const Ray *ray);
 size_t bvh_memory_bytes(const Bvh *bvh);
+/* For tests: *mask = the children of node n that traversal's node test finds r meets
+ * within (r.t_min, r.t_max), in the FMA form bvh_occluded uses where that is compiled in
+ * and usable for r (fma), else in the sub-mul form. Returns false if fma was asked for
+ * and that form is not available for r. */
+bool bvh_node_test(const Bvh *bvh, const BvhNode *n, const Ray *r, bool fma, unsigned *mask);
 
 #endif

@@ -693,7 +693,7 @@ static inline bool kd_ray_setup(const KdTree *t, const Ray *r, KdRay *q, float *
         tf = tb < tf ? tb : tf;
     }
     *t0 = tn;
-    *t1 = tf + fabsf(tf) * 2.4e-7f; /* 1 + 2 gamma(3), as bbox_intersect */
+    *t1 = tf + fabsf(tf) * (BBOX_EXIT_WIDEN - 1.0f); /* as bbox_intersect */
     return tn <= *t1;
 }
 

@@ -40,11 +40,20 @@ static inline __m128 ray_inv_dir4(__m128 d)
     return _mm_div_ps(_mm_set1_ps(1.0f), s);
 }
 
+/* The factor on a slab test's exit distance that keeps rounding from making a grazed box
+ * look missed (Ize, "Robust BVH Ray Traversal", JCGT 2013; pbrt-v4 section 6.8.2), for
+ * t_min >= 0. With u = 2^-24, an entry distance (plane - o) * fl(1 / d) is computed with
+ * three roundings, so at most (1 + u)^3 times the exact one; an exit distance with the
+ * factor folded into the reciprocal, fl(fl(1 / d) * w), has four, at least (1 - u)^4 times
+ * w times the exact one, and t_max * w rounds once. Entry <= exit then needs w >= (1 + u)^3
+ * / (1 - u)^4, about 1 + 7u: 1 + 8u, the next float. (Until 2026-11 this was 1.00000024f,
+ * meant as 1 + 2 gamma(3) but 1 + 4u as a float.) */
+#define BBOX_EXIT_WIDEN 0x1.000008p0f
+
 /* Slab test (Kay & Kajiya 1986) with exact handling of zero direction components: such
  * an axis constrains nothing if the origin lies within the slab (boundary included) and
- * rejects otherwise. t_far is scaled by 1 + 2*gamma(3) so rounding never makes a grazed
- * box look missed (Ize, "Robust BVH Ray Traversal", JCGT 2013). Origins inside the box
- * give t_enter = t_min. The BVH uses a branch-free SIMD form of the same test. */
+ * rejects otherwise. t_far is scaled by BBOX_EXIT_WIDEN. Origins inside the box give
+ * t_enter = t_min. The BVH uses a branch-free SIMD form of the same test. */
 static inline bool bbox_intersect(BBox b, Vec3 o, Vec3 d, float t_min, float t_max, float *t_enter)
 {
     float tn = t_min, tf = t_max;
@@ -62,7 +71,7 @@ static inline bool bbox_intersect(BBox b, Vec3 o, Vec3 d, float t_min, float t_m
         tf = t1 < tf ? t1 : tf;
     }
     *t_enter = tn;
-    return tn <= tf * 1.00000024f;
+    return tn <= tf * BBOX_EXIT_WIDEN;
 }
 
 #endif

@@ -568,6 +568,158 @@ static void test_bvh_coincident_centroids(void **state)
 
 /* Triangles at exponentially growing distances make every binned SAH split peel off one
  * primitive, driving the build to its depth limit and the median fallback below it. */
+/* ------------------------------------------------------------------ node test */
+
+/* Whether the ray o + t d, t in [t_min, t_max], meets the closed box [lo, hi], decided
+ * exactly: every entry and exit distance is a fraction (plane - o) / d whose numerator
+ * and denominator are exact in binary128, and two are compared by cross-multiplying
+ * (products of 48 significant bits and fewer fit its 113). Direction components must be
+ * non-zero. */
+static bool exact_slab(const float o[3], const float d[3], const float lo[3], const float hi[3], float t_min, float t_max)
+{
+    __float128 nn = t_min, nd = 1, fn = t_max, fd = 1; /* entry nn / nd, exit fn / fd */
+    for (int a = 0; a < 3; a++) {
+        __float128 den = (__float128)fabsf(d[a]), sign = d[a] > 0.0f ? 1 : -1;
+        __float128 n0 = ((__float128)lo[a] - o[a]) * sign, n1 = ((__float128)hi[a] - o[a]) * sign;
+        if (n0 > n1) { __float128 t = n0; n0 = n1; n1 = t; }
+        if (n0 * nd > nn * den) { nn = n0; nd = den; }
+        if (n1 * fd < fn * den) { fn = n1; fd = den; }
+    }
+    return nn * fd <= fn * nd;
+}
+
+static void node_set(BvhNode *n, int slot, const float lo[3], const float hi[3])
+{
+    for (int a = 0; a < 3; a++) { n->bounds[2 * a][slot] = lo[a]; n->bounds[2 * a + 1][slot] = hi[a]; }
+    n->child[slot] = 0u;
+}
+
+/* The node test against an exact one, for both its forms: rays from random origins aimed
+ * exactly at corners, edges and faces of random boxes (flat ones too), where entry and
+ * exit distances meet and rounding decides. A box the exact test hits must be hit (no
+ * leaks: the exit widening, and the FMA form's outward-rounded constants, cover the
+ * rounding); a box missed with 1e-4 to spare (scene size 16) must be missed (the
+ * conservatism stays tiny); an empty slot never. */
+static void test_bvh_node_test_exact(void **state)
+{
+    (void)state;
+    Soup s = {0};
+    soup_reserve(&s, 2, 6, 0);
+    soup_add_tri(&s, v3(-8.0f, -8.0f, -8.0f), v3(8.0f, 8.0f, 8.0f), v3(8.0f, -8.0f, 8.0f));
+    soup_add_tri(&s, v3(-8.0f, 8.0f, -8.0f), v3(8.0f, 8.0f, -8.0f), v3(-8.0f, -8.0f, 8.0f));
+    Bvh bvh;
+    soup_build(&s, &bvh);
+    BvhNode *n = memory_alloc_large(sizeof *n);
+    assert_non_null(n);
+    Pcg32 rng;
+    pcg32_seed(&rng, 77u, 3u);
+    long exact_hits[2] = {0, 0}, clear_misses[2] = {0, 0};
+    bool fma_tested = false;
+    for (int i = 0; i < 200000; i++) {
+        float lo[BVH_WIDTH][3], hi[BVH_WIDTH][3];
+        const int used = 1 + (int)(pcg32_next(&rng) % BVH_WIDTH);
+        for (int k = 0; k < BVH_WIDTH; k++) {
+            for (int a = 0; a < 3; a++) {
+                float x = (float)rnd(&rng, -8, 8), y = (float)rnd(&rng, -8, 8);
+                if (pcg32_next(&rng) % 8u == 0u) y = x; /* flat, as an axis-aligned triangle's */
+                lo[k][a] = fminf(x, y);
+                hi[k][a] = fmaxf(x, y);
+            }
+            if (k < used) {
+                node_set(n, k, lo[k], hi[k]);
+            } else {
+                const float inf[3] = {INFINITY, INFINITY, INFINITY}, ninf[3] = {-INFINITY, -INFINITY, -INFINITY};
+                node_set(n, k, inf, ninf); /* empty, as the build leaves it */
+            }
+        }
+        /* Aim at a corner, a point on an edge or on a face of one used slot; a third of
+         * the targets are pushed 2e-4 outward on one axis instead. */
+        const int k = (int)(pcg32_next(&rng) % (uint32_t)used);
+        float p[3];
+        for (int a = 0; a < 3; a++) p[a] = (pcg32_next(&rng) & 1u) ? hi[k][a] : lo[k][a];
+        const int free_axes = (int)(pcg32_next(&rng) % 3u);
+        for (int f = 0; f < free_axes; f++) {
+            const int a = (int)(pcg32_next(&rng) % 3u);
+            p[a] = (float)rnd(&rng, lo[k][a], hi[k][a]);
+        }
+        if (pcg32_next(&rng) % 3u == 0u) {
+            const int a = (int)(pcg32_next(&rng) % 3u);
+            p[a] = p[a] == hi[k][a] ? p[a] + 2e-4f : p[a] - 2e-4f;
+        }
+        float o[3], d[3];
+        double dd[3], len = 0.0;
+        for (int a = 0; a < 3; a++) {
+            o[a] = (float)rnd(&rng, -30, 30);
+            dd[a] = (double)p[a] - (double)o[a];
+            len += dd[a] * dd[a];
+        }
+        len = sqrt(len);
+        bool zero = false;
+        for (int a = 0; a < 3; a++) {
+            d[a] = (float)(dd[a] / len);
+            zero |= d[a] == 0.0f;
+        }
+        if (zero) continue;
+        Ray r = ray_make(v3(o[0], o[1], o[2]), v3(d[0], d[1], d[2]), 0.0f,
+                         (pcg32_next(&rng) & 1u) ? INFINITY : (float)rnd(&rng, 1, 80));
+        for (int form = 0; form < 2; form++) {
+            unsigned mask;
+            if (!bvh_node_test(&bvh, n, &r, form == 1, &mask)) {
+                assert_int_equal(form, 1); /* the sub-mul form always answers */
+                continue;
+            }
+            fma_tested |= form == 1;
+            if (mask >> used) fail_msg("ray %d, %s form: an empty slot was hit (mask 0x%x)", i, form ? "FMA" : "sub-mul", mask);
+            for (int j = 0; j < used; j++) {
+                const bool hit = (mask >> j) & 1u;
+                if (exact_slab(o, d, lo[j], hi[j], r.t_min, r.t_max)) {
+                    exact_hits[form]++;
+                    if (!hit)
+                        fail_msg("ray %d, %s form: box %d [%.9g %.9g %.9g]-[%.9g %.9g %.9g] is met exactly but "
+                                 "was missed (o %.9g %.9g %.9g, d %.9g %.9g %.9g)",
+                                 i, form ? "FMA" : "sub-mul", j, (double)lo[j][0], (double)lo[j][1], (double)lo[j][2],
+                                 (double)hi[j][0], (double)hi[j][1], (double)hi[j][2], (double)o[0], (double)o[1],
+                                 (double)o[2], (double)d[0], (double)d[1], (double)d[2]);
+                } else {
+                    float glo[3], ghi[3];
+                    for (int a = 0; a < 3; a++) { glo[a] = lo[j][a] - 1e-4f; ghi[a] = hi[j][a] + 1e-4f; }
+                    if (!exact_slab(o, d, glo, ghi, r.t_min, r.t_max)) {
+                        clear_misses[form]++;
+                        if (hit) fail_msg("ray %d, %s form: box %d, missed by more than 1e-4, was hit", i,
+                                          form ? "FMA" : "sub-mul", j);
+                    }
+                }
+            }
+        }
+    }
+    print_message("  exact hits %ld / %ld, clear misses %ld / %ld (sub-mul / FMA)\n", exact_hits[0], exact_hits[1],
+                  clear_misses[0], clear_misses[1]);
+    assert_true(exact_hits[0] > 100000 && clear_misses[0] > 100000);
+    if (fma_tested)
+        assert_true(exact_hits[1] == exact_hits[0] && clear_misses[1] == clear_misses[0]);
+    else
+        print_message("  note: the FMA form is not compiled in (no FMA in this build); only the sub-mul form tested\n");
+
+    /* o * (1 / d) overflows only for an origin coordinate beyond about 3e18 with the
+     * direction's component (near) zero, a ray that never reaches the scene: the FMA form
+     * declines it, and the sub-mul form answers, a miss. */
+    const float blo[3] = {-1.0f, -1.0f, -1.0f}, bhi[3] = {1.0f, 1.0f, 1.0f};
+    for (int k = 0; k < BVH_WIDTH; k++) node_set(n, k, blo, bhi);
+    Ray far = ray_make(v3(-5.0f, 1e19f, 0.0f), v3(1.0f, 0.0f, 0.0f), 0.0f, INFINITY);
+    unsigned mask = 1u;
+    assert_false(bvh_node_test(&bvh, n, &far, true, &mask));
+    assert_true(bvh_node_test(&bvh, n, &far, false, &mask));
+    assert_int_equal(mask, 0u);
+    far.o.y = 0.5f; /* the same ray in the box's slab: every slot hit, in both forms */
+    for (int form = 0; form < 2; form++) {
+        mask = 0u;
+        if (bvh_node_test(&bvh, n, &far, form == 1, &mask)) assert_int_equal(mask, (1u << BVH_WIDTH) - 1u);
+    }
+    free(n);
+    bvh_free(&bvh);
+    soup_free(&s);
+}
+
 static void test_bvh_deep_build(void **state)
 {
     (void)state;
@@ -888,6 +1040,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_bvh_mixed_triangles_spheres),
         cmocka_unit_test(test_bvh_coincident_centroids),
         cmocka_unit_test(test_bvh_deep_build),
+        cmocka_unit_test(test_bvh_node_test_exact),
         cmocka_unit_test(test_bvh_rays_in_box_planes),
         cmocka_unit_test(test_bvh_closed_meshes_match_brute_force),
     };
