@@ -771,10 +771,9 @@ static inline bool ray_box8_fma(const Bvh *bvh, const Ray *r, RayBox8 *q)
     const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 o = _mm_loadu_ps(&r->o.x), inv = ray_inv_dir4(_mm_loadu_ps(&r->d.x));
     const __m128 c = _mm_mul_ps(o, inv);
-    const __m128 delta = _mm_add_ps(
-        _mm_mul_ps(_mm_mul_ps(_mm_add_ps(_mm_load_ps(bvh->coord_max), _mm_and_ps(o, abs_mask)), _mm_and_ps(inv, abs_mask)),
-                   _mm_set1_ps(0x1p-21f)),
-        _mm_set1_ps(0x1p-126f));
+    const __m128 reach = _mm_add_ps(_mm_loadu_ps(bvh->coord_max), _mm_and_ps(o, abs_mask)); /* P + |o| */
+    const __m128 delta = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(reach, _mm_and_ps(inv, abs_mask)), _mm_set1_ps(0x1p-21f)),
+                                    _mm_set1_ps(0x1p-126f));
     const __m128 c_near = _mm_add_ps(c, delta), c_far = _mm_sub_ps(c, delta);
     const __m128 big = _mm_set1_ps(FLT_MAX);
     const __m128 finite = _mm_and_ps(_mm_cmple_ps(_mm_and_ps(c_near, abs_mask), big),
@@ -837,7 +836,7 @@ static inline unsigned node_hit8(const BvhNode *n, const RayBox8 *q, F8 t_min, F
  * which puts computed entries at or before the exact ones and exits at or after them,
  * with no widening needed (a widened t_max only loosens the test). In space, delta pads
  * each box by 8u (P + |o|) per axis, about 5e-7 of the scene's size plus the origin's
- * distance from zero: no measurable extra node visits. */
+ * distance from zero: the order of the build's own widening of the boxes (widen()). */
 static inline unsigned node_hit8_fma(const BvhNode *n, const RayBox8 *q, F8 t_min, F8 t_max, F8 *t_enter)
 {
     return node_mask8(_mm256_fmsub_ps(f8_load(node_row(n, q->near[0])), q->a[0], q->b[0]),
@@ -1046,7 +1045,8 @@ static const uint32_t LEFT_PACK[256] = {
 
 /* Written once and inlined twice, for the FMA and the sub-mul forms of the node test, so
  * the choice costs one branch per ray, not one per node. */
-static inline __attribute__((always_inline)) bool occluded_ray(const Bvh *bvh, const Ray *ray, const RayBox8 *q, const bool fma)
+static inline __attribute__((always_inline)) bool occluded_ray(const Bvh *bvh, const Ray *ray, const RayBox8 *q,
+                                                               const bool fma)
 {
     TriangleRayBlock qt;
     bool qt_ready = false;

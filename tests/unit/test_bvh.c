@@ -575,7 +575,8 @@ static void test_bvh_coincident_centroids(void **state)
  * and denominator are exact in binary128, and two are compared by cross-multiplying
  * (products of 48 significant bits and fewer fit its 113). Direction components must be
  * non-zero. */
-static bool exact_slab(const float o[3], const float d[3], const float lo[3], const float hi[3], float t_min, float t_max)
+static bool exact_slab(const float o[3], const float d[3], const float lo[3], const float hi[3], float t_min,
+                       float t_max)
 {
     __float128 nn = t_min, nd = 1, fn = t_max, fd = 1; /* entry nn / nd, exit fn / fd */
     for (int a = 0; a < 3; a++) {
@@ -669,7 +670,8 @@ static void test_bvh_node_test_exact(void **state)
                 continue;
             }
             fma_tested |= form == 1;
-            if (mask >> used) fail_msg("ray %d, %s form: an empty slot was hit (mask 0x%x)", i, form ? "FMA" : "sub-mul", mask);
+            if (mask >> used)
+                fail_msg("ray %d, %s form: an empty slot was hit (mask 0x%x)", i, form ? "FMA" : "sub-mul", mask);
             for (int j = 0; j < used; j++) {
                 const bool hit = (mask >> j) & 1u;
                 if (exact_slab(o, d, lo[j], hi[j], r.t_min, r.t_max)) {
