@@ -752,9 +752,10 @@ static inline RayBox8 ray_box8(const Ray *r)
 
 /* Where FMA exists, occlusion rays test a node's planes with one fused multiply-subtract
  * each, plane * r - c with r = 1 / d and c = o * r per ray (Embree's form), instead of a
- * subtraction and a multiplication: occlusion rays 8-10% faster on the dragon and the
- * bumpysphere. Closest-hit traversal measured 2-4% slower with it on the dragon (no cause
- * found), so it keeps the sub-mul form (docs/benchmarks.md). */
+ * subtraction and a multiplication: occlusion rays 6-14% faster on the dragon, the
+ * bumpysphere, the bunny and the Cornell box. Closest-hit traversal measured 2-4% slower
+ * with it on the dragon (no cause found), so it keeps the sub-mul form
+ * (docs/benchmarks.md). */
 #if defined(__AVX__) && defined(__FMA__)
 #define BVH_SLAB_FMA 1
 

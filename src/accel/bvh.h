@@ -68,7 +68,7 @@ typedef struct Bvh {
     int num_prims;
     BBox bounds;
     /* The largest magnitude of any node box coordinate, per axis (lanes x, y, z, 0): the
-     * FMA form of the slab test bounds its rounding with it (bvh.c, ray_box8). */
+     * FMA form of the slab test bounds its rounding with it (bvh.c, ray_box8_fma). */
     float coord_max[4];
 } Bvh;
 

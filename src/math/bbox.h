@@ -46,8 +46,8 @@ static inline __m128 ray_inv_dir4(__m128 d)
  * three roundings, so at most (1 + u)^3 times the exact one; an exit distance with the
  * factor folded into the reciprocal, fl(fl(1 / d) * w), has four, at least (1 - u)^4 times
  * w times the exact one, and t_max * w rounds once. Entry <= exit then needs w >= (1 + u)^3
- * / (1 - u)^4, about 1 + 7u: 1 + 8u, the next float. (Until 2026-11 this was 1.00000024f,
- * meant as 1 + 2 gamma(3) but 1 + 4u as a float.) */
+ * / (1 - u)^4, about 1 + 7u: 1 + 8u, the next float. (pbrt's 1 + 2 gamma(3) written as
+ * the literal 1.00000024f is 1 + 4u, too little.) */
 #define BBOX_EXIT_WIDEN 0x1.000008p0f
 
 /* Slab test (Kay & Kajiya 1986) with exact handling of zero direction components: such
