@@ -9,8 +9,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/rng.h"
 #include "scene/mesh_import.h"
@@ -389,13 +389,6 @@ static void *rayset_trace_worker(void *arg)
     return NULL;
 }
 
-static double rayset_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 CstStatus rayset_trace(const Accel *a, const Ray *rays, size_t n, RaysetQuery query, int threads,
                        RaysetResult *out, RaysetStats *st, CstError *err)
 {
@@ -413,7 +406,7 @@ CstStatus rayset_trace(const Accel *a, const Ray *rays, size_t n, RaysetQuery qu
     int started = 0;
     CstStatus status = CST_OK;
 
-    double t0 = rayset_now();
+    double t0 = clock_seconds();
     for (int k = 1; k < threads; k++) {
         if (pthread_create(&tid[k], NULL, rayset_trace_worker, &sh) != 0) {
             status = cst_fail(err, CST_ERR_INTERNAL, "could not start tracing thread %d of %d", k + 1, threads);
@@ -424,7 +417,7 @@ CstStatus rayset_trace(const Accel *a, const Ray *rays, size_t n, RaysetQuery qu
     rayset_trace_worker(&sh); /* the calling thread works too (and finishes the job alone
                                * if a thread failed to start, so joins cannot hang) */
     for (int k = 1; k <= started; k++) pthread_join(tid[k], NULL);
-    st->seconds = rayset_now() - t0;
+    st->seconds = clock_seconds() - t0;
 
     if (status == CST_OK) {
         /* Reduce in ray order: the sums do not depend on which thread traced what. */

@@ -14,13 +14,13 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <time.h>
 
 #include <jansson.h>
 
 #include "accel/accel.h"
 #include "args.h"
 #include "caustic/caustic.h"
+#include "core/clock.h"
 #include "core/rng.h"
 #include "film/film_compare.h"
 #include "film/image_io.h"
@@ -338,13 +338,6 @@ static void cli_print_warning(void *user, CstWarningCode code, const char *messa
         fprintf(stderr, "caustic: warning: %s\n", message);
 }
 
-static double cli_seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Loads SCENE, or builds the built-in Cornell box, and applies --accel. Returns an exit
  * code: CLI_EXIT_OK with *out set, else the error has been printed and *out is NULL.
  * *read_seconds (may be NULL) gets the loader's time without the scene's own accel build:
@@ -355,7 +348,7 @@ static int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds
     CstError err = {0};
     CstStatus status;
     *out = NULL;
-    double t0 = cli_seconds_now();
+    double t0 = clock_seconds();
     if (a->scene_path) {
         struct stat st;
         if (stat(a->scene_path, &st) != 0) {
@@ -391,7 +384,7 @@ static int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds
     if (read_seconds) {
         CstSceneInfo in;
         cst_scene_info(scene, &in);
-        *read_seconds = cli_seconds_now() - t0 - in.accel_build_seconds;
+        *read_seconds = clock_seconds() - t0 - in.accel_build_seconds;
     }
     if (a->accel) {
         status = cst_scene_set_accel(scene, a->accel, &err);

@@ -2,8 +2,8 @@
 #include "accel/accel.h"
 
 #include <string.h>
-#include <time.h>
 
+#include "core/clock.h"
 #include "core/error.h"
 
 static const char *const ACCEL_NAMES[ACCEL_TYPE_COUNT] = {"bvh", "kdtree", "grid", "list", "embree"};
@@ -25,13 +25,6 @@ bool accel_type_available(AccelType type)
     return type == ACCEL_EMBREE ? embree_available() : (unsigned)type < ACCEL_TYPE_COUNT;
 }
 
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static BBox geometry_bounds(const AccelGeometry *g)
 {
     BBox b = bbox_empty();
@@ -47,7 +40,7 @@ static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry 
 {
     memset(a, 0, sizeof *a);
     a->type = type;
-    double t0 = seconds_now();
+    double t0 = clock_seconds();
     CstStatus st;
     switch (type) {
     case ACCEL_BVH: st = bvh_build(&a->bvh, geom, err); break;
@@ -62,7 +55,7 @@ static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry 
         memset(a, 0, sizeof *a);
         return st;
     }
-    a->build_seconds = seconds_now() - t0;
+    a->build_seconds = clock_seconds() - t0;
     a->bounds = geometry_bounds(geom);
     return CST_OK;
 }

@@ -30,8 +30,8 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/rng.h"
 #include "film/filter.h"
@@ -471,13 +471,6 @@ static void run_phase(SppmJob *job, SppmWorker *workers, int threads, SppmPhase 
     for (int i = 1; i < started; i++) pthread_join(workers[i].thread, NULL);
 }
 
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* The automatic initial radius: photon.c's rule (the median distance to the 50th nearest
  * photon over 256 camera hit points) applied to one iteration's worth of photons, so the
  * first iteration's discs hold about 50 photons each. */
@@ -539,7 +532,7 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
     job.px = px;
     for (int i = 0; i < threads; i++) workers[i].job = &job;
     for (size_t i = 0; i < count; i++) px[i].r = r0;
-    double t0 = seconds_now();
+    double t0 = clock_seconds();
     int iter = 0;
     while (sp->iterations <= 0 || iter < sp->iterations) {
         job.iter = iter;
@@ -561,7 +554,7 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
         }
         run_phase(&job, workers, threads, SPPM_PHASE_DEPOSIT);
         iter++;
-        double elapsed = seconds_now() - t0;
+        double elapsed = clock_seconds() - t0;
         if (sp->progress) {
             double f = sp->iterations > 0 ? (double)iter / sp->iterations : 0.0;
             if (sp->time_limit > 0.0 && elapsed / sp->time_limit > f) f = elapsed / sp->time_limit;

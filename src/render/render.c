@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "camera/camera.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/rng.h"
 #include "film/film.h"
@@ -151,13 +152,6 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     }
 }
 #undef PICK
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* Light paths per work unit: small enough to balance threads on small films, large
  * enough that a unit's splat list amortises its bookkeeping. Fixed, because chunk
@@ -487,15 +481,15 @@ static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRende
         wait_for_pass(job, 0.1);
         /* Each light-tracing iteration is a pass of its own and may take far less than
          * 0.1 s: keep the reports about 10 a second. */
-        if (st->progress && job->light && now_seconds() - job->last_progress < 0.1) continue;
+        if (st->progress && job->light && clock_seconds() - job->last_progress < 0.1) continue;
         if (st->progress) {
-            job->last_progress = now_seconds();
+            job->last_progress = clock_seconds();
             double f = done_before + pass_fraction * atomic_load(&job->tiles_done) / job->units;
             if (st->time_limit > 0.0) {
-                double ft = (now_seconds() - t0) / st->time_limit;
+                double ft = (clock_seconds() - t0) / st->time_limit;
                 f = ft > f ? ft : f;
             }
-            st->progress(st->progress_user, f > 1.0 ? 1.0 : f, now_seconds() - t0);
+            st->progress(st->progress_user, f > 1.0 ? 1.0 : f, clock_seconds() - t0);
         }
     }
     for (int i = 0; i < started; i++) pthread_join(workers[i].thread, NULL);
@@ -706,7 +700,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     }
 
     CstStatus status = CST_OK;
-    double t0 = now_seconds();
+    double t0 = clock_seconds();
     uint64_t photon_rays = 0;
     if (st.integrator == CST_INTEGRATOR_PHOTON) {
         /* The photon pass is part of the render's time (and of a time limit's budget). It
@@ -757,13 +751,13 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         while (status == CST_OK) {
             if (st.spp > 0 && film->spp + pass > st.spp) pass = st.spp - film->spp;
             if (pass <= 0) break;
-            double pass_t0 = now_seconds();
+            double pass_t0 = clock_seconds();
             double frac = st.spp > 0 ? (double)film->spp / st.spp : 0.0;
             status = run_samples(job, workers, st.threads, &st, t0, film->spp, pass, frac,
                                  st.spp > 0 ? (double)pass / st.spp : 0.0);
             if (status != CST_OK) break;
             film->spp += pass;
-            double now = now_seconds(), pass_time = now - pass_t0;
+            double now = clock_seconds(), pass_time = now - pass_t0;
             double left = st.time_limit - (now - t0);
             if (left <= 0.0) break;
             /* Next pass: the largest of 2x, x, x/2, ... that is predicted to fit in the time left. */
@@ -774,7 +768,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             pass = next;
         }
     }
-    double seconds = now_seconds() - t0;
+    double seconds = clock_seconds() - t0;
     pthread_mutex_destroy(&job->lock);
     pthread_cond_destroy(&job->done);
     uint64_t splats_nonfinite = 0;
