@@ -6,6 +6,8 @@
 
 #include <stdint.h>
 
+#include "math/vec3.h"
+
 typedef struct Pcg32 { uint64_t state, inc; } Pcg32;
 
 #define PCG32_MULT 6364136223846793005ULL
@@ -33,6 +35,17 @@ static inline void pcg32_seed(Pcg32 *r, uint64_t initstate, uint64_t initseq)
 static inline float pcg32_float(Pcg32 *r)
 {
     return (float)(pcg32_next(r) >> 8) * 0x1p-24f;
+}
+
+/* Two uniform floats in [0, 1)^2. C leaves the evaluation order of a call's arguments
+ * unspecified, so v2(pcg32_float(r), pcg32_float(r)) drew different samples under GCC
+ * (right to left) and Clang (left to right): every pair is drawn here, in sequence. y is
+ * drawn first, the order GCC gave the calls this replaced, so GCC images did not change. */
+static inline Vec2 pcg32_v2(Pcg32 *r)
+{
+    float y = pcg32_float(r);
+    float x = pcg32_float(r);
+    return v2(x, y);
 }
 
 /* SplitMix64 finaliser (Steele et al. 2014): a bijective avalanche mix. */

@@ -29,8 +29,8 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     /* The tent reaches half a pixel past the film's edge (film_splat). */
     const float margin = filter_radius(lp->frame.filter) - 0.5f;
     float u_sel = pcg32_float(rng);
-    Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
-    Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u_pos = pcg32_v2(rng);
+    Vec2 u_dir = pcg32_v2(rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
@@ -39,7 +39,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
      * lights are never seen, nor is the environment: it is no surface a connection could
      * reach). */
     CameraWiSample cs;
-    Vec2 u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u_lens = pcg32_v2(rng);
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
         const Emitter *e = &s->emitters[es.emitter];
         Rgb le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
@@ -64,7 +64,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
         scene_bsdf(s, &sh, &bsdf);
         /* Delta lobes cannot be connected: f is a Dirac in the direction to the lens. */
         const bool connect = !bsdf_is_delta(&bsdf);
-        if (connect) u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+        if (connect) u_lens = pcg32_v2(rng);
         /* The next direction is sampled before this vertex's camera connection (the
          * random numbers are drawn in the same order as ever): the connection is a chain
          * of divisions and a shadow ray nothing else waits on, and after the sampling it
@@ -73,7 +73,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
         BsdfSample bs;
         if (!end) {
             float uc = pcg32_float(rng);
-            Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+            Vec2 u = pcg32_v2(rng);
             /* Adjoint sampling: wo is where the light came from, and refraction does not
              * scale flux by 1/eta^2 (bsdf.c). */
             end = !bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs);

@@ -54,8 +54,8 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
     Pcg32 rng;
     pcg32_seed_sample(&rng, pp->seed, index, PHOTON_STREAM);
     float u_sel = pcg32_float(&rng);
-    Vec2 u_pos = v2(pcg32_float(&rng), pcg32_float(&rng));
-    Vec2 u_dir = v2(pcg32_float(&rng), pcg32_float(&rng));
+    Vec2 u_pos = pcg32_v2(&rng);
+    Vec2 u_dir = pcg32_v2(&rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
@@ -88,7 +88,7 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
         BsdfSample bs;
         float uc = pcg32_float(&rng);
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
         if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
         if (!bs.delta) specular_only = false;
@@ -134,7 +134,7 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
         BsdfSample bs;
         bs.delta = false; /* a delta lobe that was taken but rejected sets it (bsdf.h) */
         float uc = pcg32_float(rng);
-        Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+        Vec2 u = pcg32_v2(rng);
         bool sampled = bsdf_sample(bsdf, wo, uc, u, &bs);
         if (!bsdf_is_delta(bsdf) && !bs.delta) {
             /* A BSDF with delta and non-delta lobes (smooth-coat plastic): bsdf_sample
@@ -191,7 +191,7 @@ Rgb photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, 
                         uint64_t *rays)
 {
     float u_sel = pcg32_float(rng);
-    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u = pcg32_v2(rng);
     return direct_light(s, bsdf, sh, wo, u_sel, u, rays);
 }
 
@@ -210,7 +210,7 @@ Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t
      * more bounce; reading it at x directly would show its low-frequency noise. */
     BsdfSample bs;
     float uc = pcg32_float(rng);
-    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u = pcg32_v2(rng);
     /* Only the non-delta part of x is estimated here (photon_trace_to_diffuse follows a
      * mixed BSDF's delta lobes itself): a delta gather sample adds nothing. Its weight
      * f / pdf has the probability of the non-delta lobes in pdf, so the estimate stays
@@ -268,7 +268,7 @@ static float auto_radius(const Scene *s, const Camera *cam, const PhotonParams *
         Pcg32 rng;
         pcg32_seed_sample(&rng, pp->seed, (uint64_t)i, RADIUS_STREAM);
         float fx = pcg32_float(&rng) * (float)cam->width, fy = pcg32_float(&rng) * (float)cam->height;
-        Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 ul = pcg32_v2(&rng);
         Ray r = camera_generate_ray(cam, fx, fy, ul);
         Rgb beta = rgb_s(1.0f);
         SurfaceHit sh;

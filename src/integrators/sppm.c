@@ -242,8 +242,8 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     Pcg32 rng;
     pcg32_seed_sample(&rng, sp->seed, index, SPPM_STREAM + (uint64_t)iter);
     float u_sel = pcg32_float(&rng);
-    Vec2 u_pos = v2(pcg32_float(&rng), pcg32_float(&rng));
-    Vec2 u_dir = v2(pcg32_float(&rng), pcg32_float(&rng));
+    Vec2 u_pos = pcg32_v2(&rng);
+    Vec2 u_dir = pcg32_v2(&rng);
     EmissionSample es;
     EmitterGeometry eg = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
@@ -264,7 +264,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
         if (sp->max_depth > 0 && depth >= sp->max_depth) break;
         BsdfSample bs;
         float uc = pcg32_float(&rng);
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
         if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
         power = rgb_mul(power, bs.weight);
@@ -289,8 +289,8 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         SppmPixel *v = &px[pixel];
         Pcg32 rng;
         pcg32_seed_sample(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
-        Vec2 uf = v2(pcg32_float(&rng), pcg32_float(&rng));
-        Vec2 ul = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 uf = pcg32_v2(&rng);
+        Vec2 ul = pcg32_v2(&rng);
         /* render.c's rule: the filter's weight h / pdf scales the sample, so both the
          * direct part and the visible point's throughput. */
         float fw;

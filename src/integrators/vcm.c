@@ -128,7 +128,7 @@ static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const B
 {
     BsdfSample bs;
     float uc = pcg32_float(rng);
-    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u = pcg32_v2(rng);
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
     if (!(bs.pdf > 0.0f)) return false;
     float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(b, bs.wi, wo);
@@ -174,8 +174,8 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
 {
     if (s->emitter_sampler.lights == 0) return;
     float u_sel = pcg32_float(rng);
-    Vec2 u_pos = v2(pcg32_float(rng), pcg32_float(rng));
-    Vec2 u_dir = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u_pos = pcg32_v2(rng);
+    Vec2 u_dir = pcg32_v2(rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
@@ -212,7 +212,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
             v = (VcmVertex){sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
                             sh.material, bounces, sh.uv};
             push_vertex(verts, &v);
-            u_lens = v2(pcg32_float(rng), pcg32_float(rng));
+            u_lens = pcg32_v2(rng);
         }
         /* The next direction before this vertex's camera connection, with the random
          * numbers drawn in the same order (light.c says why). */
@@ -312,7 +312,7 @@ static Rgb connect_to_light(const Scene *s, const VcmIteration *it, const SubPat
                             const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
 {
     float u_sel = pcg32_float(rng);
-    Vec2 u = v2(pcg32_float(rng), pcg32_float(rng));
+    Vec2 u = pcg32_v2(rng);
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);

@@ -209,7 +209,7 @@ static ChiResult run_chi2(const Case *c, uint64_t seed)
     pcg32_seed(&rng, seed, 0x5eedu);
     for (int i = 0; i < SAMPLES; i++) {
         float uc = pcg32_float(&rng);
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         BsdfSample s;
         if (!bsdf_sample_transport(&b, wo, uc, u, c->mode, &s)) { obs[FAIL] += 1.0; continue; }
         if (s.delta) { obs[DELTA] += 1.0; continue; }
@@ -405,7 +405,7 @@ static Albedo directional_albedo(const Material *m, float cos_o, BsdfTransport m
     double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
     for (int i = 0; i < n; i++) {
         float uc = pcg32_float(&rng);
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         BsdfSample s;
         if (!bsdf_sample_transport(&b, wo, uc, u, mode, &s)) continue;
         double w[3] = {(double)s.weight.r, (double)s.weight.g, (double)s.weight.b};
@@ -523,7 +523,7 @@ static void test_rough_dielectric_energy_loss(void **state)
 
 /* ------------------------------------------------------------------ reciprocity, adjoint */
 
-static Vec3 random_dir(Pcg32 *rng) { return warp_uniform_sphere(v2(pcg32_float(rng), pcg32_float(rng))); }
+static Vec3 random_dir(Pcg32 *rng) { return warp_uniform_sphere(pcg32_v2(rng)); }
 
 static double rel_diff(Rgb a, Rgb b)
 {
@@ -675,7 +675,8 @@ static void test_plain_diffuse_matches_general(void **state)
             memset(&bs, 0, sizeof bs);
             memset(&bs1, 0, sizeof bs1);
             const float uc = pcg32_float(&rng);
-            const Vec2 u = v2(pcg32_float(&rng), k % 13 == 0 ? 0.5f : pcg32_float(&rng));
+            const float u_y = k % 13 == 0 ? 0.5f : pcg32_float(&rng);
+            const Vec2 u = v2(pcg32_float(&rng), u_y);
             const BsdfTransport mode = k % 2 ? BSDF_IMPORTANCE : BSDF_RADIANCE;
             bool ok = bsdf_sample_transport(&b, wo, uc, u, mode, &bs);
             bool ok1 = bsdf_sample_transport_general(&b, wo, uc, u, mode, &bs1);

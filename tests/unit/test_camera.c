@@ -27,7 +27,7 @@ static void check_round_trip(float aperture)
     pcg32_seed(&rng, 7, 1);
     for (int i = 0; i < 10000; i++) {
         float fx = 64.0f * pcg32_float(&rng), fy = 48.0f * pcg32_float(&rng);
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         Ray r = camera_generate_ray(&cam, fx, fy, u);
         float t = 1.0f + 9.0f * pcg32_float(&rng);
         Vec3 p = ray_at(&r, t);
@@ -75,7 +75,7 @@ static void check_normalisation(float aperture)
         float st = sqrtf(fmaxf(0.0f, 1.0f - ct * ct)), phi = 2.0f * CST_PI * pcg32_float(&rng);
         Vec3 w = v3_add(v3_scale(cam.forward, ct),
                         v3_add(v3_scale(cam.right, st * cosf(phi)), v3_scale(cam.up, st * sinf(phi))));
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         /* The lens point of u, from camera_generate_ray (any film position). */
         Vec3 o = camera_generate_ray(&cam, 0.0f, 0.0f, u).o;
         CameraWiSample cs;

@@ -65,7 +65,7 @@ static void test_importance_sampling_unbiased(void **state)
             double s = 0.0, s2 = 0.0;
             for (int i = 0; i < n; i++) {
                 float w;
-                Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+                Vec2 u = pcg32_v2(&rng);
                 Vec2 d = filter_sample(&f, u, &w);
                 assert_true(fabsf(d.x) <= f.radius && fabsf(d.y) <= f.radius);
                 double v = (double)w * g(which, (double)d.x, (double)d.y);
@@ -137,7 +137,8 @@ static void test_splat_bands(void **state)
         assert_true(splat_list_init(&l, 16));
         for (int i = 0; i < N; i++) {
             float x = -2.0f + (W + 4.0f) * pcg32_float(&rng), y = -2.0f + (H + 4.0f) * pcg32_float(&rng);
-            film_splat(&l, &fr, x, y, rgb(pcg32_float(&rng), pcg32_float(&rng), 1.0f + pcg32_float(&rng)));
+            float cb = 1.0f + pcg32_float(&rng), cg = pcg32_float(&rng), cr = pcg32_float(&rng);
+            film_splat(&l, &fr, x, y, rgb(cr, cg, cb));
         }
         static double whole[3 * W * H], banded[3 * W * H];
         memset(whole, 0, sizeof whole);

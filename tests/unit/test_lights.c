@@ -78,7 +78,7 @@ static void test_selection_by_power(void **state)
     for (int n = 0; n < N; n++) {
         EmissionSample es;
         float u_sel = pcg32_float(&rng);
-        Vec2 a = v2(pcg32_float(&rng), pcg32_float(&rng)), b = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 a = pcg32_v2(&rng), b = pcg32_v2(&rng);
         emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, a, b, &es);
         obs[source_of(s, es.emitter)] += 1.0;
     }
@@ -111,7 +111,7 @@ static void test_nee_densities(void **state)
     for (int n = 0; n < 20000; n++) {
         LightLi ls;
         float u_sel = pcg32_float(&rng);
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, x, u_sel, u, &ls)) continue;
         seen[ls.light] = 1;
         int src = source_of(s, ls.light);
@@ -166,7 +166,7 @@ static void test_envmap_chi2(void **state)
     Pcg32 rng;
     pcg32_seed(&rng, 21u, 4u);
     for (int n = 0; n < N; n++) {
-        Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+        Vec2 u = pcg32_v2(&rng);
         float pdf;
         Vec3 w = envmap_sample(&m, u, &pdf);
         if (!(pdf == envmap_pdf(&m, w))) fail_msg("sample %d: pdf %g, envmap_pdf %g", n, (double)pdf, (double)envmap_pdf(&m, w));

@@ -79,13 +79,15 @@ static PhotonSet make_set(SetKind kind, size_t n, uint64_t seed)
         case SET_IDENTICAL: p = v3(0.25f, -1.5f, 3.0f); break;
         case SET_PLANE: p = v3(rndf(&rng, -1.0f, 1.0f), rndf(&rng, -1.0f, 1.0f), 2.0f); break;
         default: /* integer points of [0, 4]^3: duplicates and exactly equal distances */
-            p = v3((float)(pcg32_next(&rng) % 5u), (float)(pcg32_next(&rng) % 5u), (float)(pcg32_next(&rng) % 5u));
+            uint32_t pz = pcg32_next(&rng) % 5u, py = pcg32_next(&rng) % 5u, px = pcg32_next(&rng) % 5u;
+            p = v3((float)px, (float)py, (float)pz);
             break;
         }
         Vec3 wi = rnd_dir(&rng);
         s.ph[i].pos = p;
         s.ph[i].wi = wi;
-        s.ph[i].power = rgb((float)i, pcg32_float(&rng), pcg32_float(&rng));
+        float pb = pcg32_float(&rng), pg = pcg32_float(&rng);
+        s.ph[i].power = rgb((float)i, pg, pb);
         s.ph[i].n = v3_face_forward(rnd_dir(&rng), wi);
     }
     return s;
@@ -115,8 +117,10 @@ static Vec3 query_point(const PhotonSet *s, Pcg32 *rng, int q)
     case 2: return v3_scale(rnd_dir(rng), 3.0f * s->scale + 30.0f); /* far outside */
     default:
         if (s->kind == SET_LATTICE)
-            return v3((float)(pcg32_next(rng) % 7u) - 1.0f, (float)(pcg32_next(rng) % 7u) - 1.0f,
-                      (float)(pcg32_next(rng) % 7u) - 1.0f);
+            {
+            uint32_t z = pcg32_next(rng) % 7u, y = pcg32_next(rng) % 7u, x = pcg32_next(rng) % 7u;
+            return v3((float)x - 1.0f, (float)y - 1.0f, (float)z - 1.0f);
+        }
         if (s->n > 0) /* near a photon */
             return v3_madd(s->ph[pcg32_next(rng) % (uint32_t)s->n].pos, rnd_dir(rng), 1e-3f * s->scale);
         return v3s(0.5f);

@@ -325,7 +325,7 @@ static void test_convention(void **state)
             for (int mode = 0; mode < 2; mode++) {
                 BsdfSample bs;
                 float uc = pcg32_float(&rng);
-                Vec2 u = v2(pcg32_float(&rng), pcg32_float(&rng));
+                Vec2 u = pcg32_v2(&rng);
                 if (!bsdf_sample_transport(&b, wo, uc, u, (BsdfTransport)mode, &bs)) continue;
                 samples++;
                 float gs = v3_dot(bs.wi, ng), ss = v3_dot(bs.wi, ns);

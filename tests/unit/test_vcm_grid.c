@@ -61,7 +61,8 @@ static void test_sort_against_definition(void **state)
         /* Clustered positions, so that buckets hold from zero to many vertices. */
         for (size_t i = 0; i < n; i++) {
             float s = (i % 3 == 0) ? 1.0f : 20.0f;
-            v[i].p = v3(s * pcg32_float(&rng), s * pcg32_float(&rng), s * pcg32_float(&rng));
+            float pz = pcg32_float(&rng), py = pcg32_float(&rng), px = pcg32_float(&rng);
+            v[i].p = v3(s * px, s * py, s * pz);
             v[i].w_prev = v3(0.0f, 0.0f, 1.0f);
             v[i].beta = rgb_s((float)i); /* identifies the vertex in the sorted copy */
             v[i].d_vcm = (float)i;
