@@ -223,9 +223,9 @@ static inline bool splat_footprint(const SplatFrame *fr, float x, float y, int *
     return *x0 <= *x1 && *y0 <= *y1;
 }
 
-void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Rgb c)
+void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Color c)
 {
-    if (!rgb_is_finite(c)) {
+    if (!color_is_finite(c)) {
         l->nonfinite++;
         return;
     }
@@ -239,7 +239,7 @@ void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Rgb c)
         l->v = v;
         l->cap = cap;
     }
-    l->v[l->n++] = (FilmSplat){x, y, c.r, c.g, c.b, (uint16_t)y0, (uint16_t)y1};
+    l->v[l->n++] = (FilmSplat){x, y, c.c[0], c.c[1], c.c[2], (uint16_t)y0, (uint16_t)y1};
 }
 
 /* splat_spread for the tent, the light tracers' default filter: the two nearest pixel

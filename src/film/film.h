@@ -6,7 +6,7 @@
 #define CST_FILM_FILM_H
 
 #include "caustic/caustic.h"
-#include "math/rgb.h"
+#include "math/color.h"
 
 /* The AOVs traced from each camera sample's first hit (render.c), and the per-pixel sums
  * they keep: albedo r, g, b, normal x, y, z, depth, and the number of samples that hit
@@ -102,7 +102,7 @@ void splat_list_free(SplatList *l);
  * bilinear weights; Gaussian and Mitchell: c times h of every pixel centre within the
  * radius. Entries that reach no pixel are dropped; NaN/Inf contributions are counted and
  * dropped. Grows the list (sets l->oom if it cannot). */
-void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Rgb c);
+void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Color c);
 /* Adds scale times every splat, spread by the filter, to rgb (width*height*3 doubles), in
  * the list's order (tests and single-threaded callers). */
 void film_add_splats(const SplatList *l, const SplatFrame *fr, double *rgb, double scale);

@@ -1,28 +1,28 @@
 /* One-sample direct lighting shared by the integrators that do not MIS it. */
 #include "integrators/direct.h"
 
-static Rgb sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, bool mis, float u_sel,
+static Color sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, bool mis, float u_sel,
                   Vec2 u, uint64_t *rays)
 {
-    if (s->emitter_sampler.lights == 0) return rgb_s(0.0f);
+    if (s->emitter_sampler.lights == 0) return color_s(0.0f);
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
-    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
-    Rgb f = bsdf_eval(bsdf, wo, ls.wi);
-    if (rgb_is_black(f)) return rgb_s(0.0f);
+    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return color_s(0.0f);
+    Color f = bsdf_eval(bsdf, wo, ls.wi);
+    if (color_is_black(f)) return color_s(0.0f);
     ++*rays;
-    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
+    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
     float w = mis && !ls.delta ? power_heuristic(ls.pdf, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
-    return rgb_scale(rgb_mul(f, ls.li), w / ls.pdf);
+    return color_scale(color_mul(f, ls.li), w / ls.pdf);
 }
 
-Rgb direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,
+Color direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,
                  uint64_t *rays)
 {
     return sample(s, bsdf, sh, wo, false, u_sel, u, rays);
 }
 
-Rgb direct_light_mis(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
+Color direct_light_mis(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
                      Vec2 u, uint64_t *rays)
 {
     return sample(s, bsdf, sh, wo, true, u_sel, u, rays);

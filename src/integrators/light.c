@@ -12,14 +12,14 @@
 /* Splats weight * W_e / pdf_w if the lens point is visible; weight already holds the
  * throughput and the vertex's f |cos theta_cam| (or L_e |cos theta_cam|). */
 static void splat_if_visible(const Scene *s, const LightParams *lp,
-                             Vec3 p, Vec3 ng, const CameraWiSample *cs, Rgb weight,
+                             Vec3 p, Vec3 ng, const CameraWiSample *cs, Color weight,
                              SplatList *out, uint64_t *rays)
 {
-    if (rgb_is_black(weight)) return;
+    if (color_is_black(weight)) return;
     ++*rays;
     if (!scene_visible_point(s, p, ng, cs->p_lens)) return;
     film_splat(out, &lp->frame, cs->raster.x, cs->raster.y,
-               rgb_scale(weight, cs->we / cs->pdf_w));
+               color_scale(weight, cs->we / cs->pdf_w));
 }
 
 void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32 *rng,
@@ -42,9 +42,9 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     Vec2 u_lens = pcg32_v2(rng);
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
         const Emitter *e = &s->emitters[es.emitter];
-        Rgb le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
+        Color le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
         splat_if_visible(s, lp, es.p, es.n, &cs,
-                         rgb_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a), out, rays);
+                         color_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a), out, rays);
     }
     if (!(es.pdf_w > 0.0f)) return;
 
@@ -52,8 +52,8 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
      * path carries. Russian roulette looks at `scatter`, the product of the BSDF weights
      * (and 1/q), which is what the path tracer's beta is: beta's flux scale would keep
      * every path alive. */
-    Rgb beta = es.beta;
-    Rgb scatter = rgb_s(1.0f);
+    Color beta = es.beta;
+    Color scatter = color_s(1.0f);
     Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {
         SurfaceHit sh;
@@ -85,22 +85,22 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
                  * |cos theta_prev|; the connection wants |cos theta_cam| instead (the
                  * geometry term toward the lens). Evaluated that way round rather than
                  * relying on reciprocity, so a non-reciprocal lobe would stay right. */
-                Rgb f = bsdf_eval(&bsdf, cs.wi, w_prev);
-                f = rgb_scale(f, fabsf(v3_dot(sh.ng, cs.wi)) / cos_prev);
-                splat_if_visible(s, lp, sh.p, sh.ng, &cs, rgb_mul(beta, f), out, rays);
+                Color f = bsdf_eval(&bsdf, cs.wi, w_prev);
+                f = color_scale(f, fabsf(v3_dot(sh.ng, cs.wi)) / cos_prev);
+                splat_if_visible(s, lp, sh.p, sh.ng, &cs, color_mul(beta, f), out, rays);
             }
         }
         if (end) break;
-        beta = rgb_mul(beta, bs.weight);
-        scatter = rgb_mul(scatter, bs.weight);
-        if (rgb_is_black(scatter)) break;
+        beta = color_mul(beta, bs.weight);
+        scatter = color_mul(scatter, bs.weight);
+        if (color_is_black(scatter)) break;
 
         /* Russian roulette as in path.c: from the same depth, the same survival rule. */
         if (depth >= lp->rr_depth) {
-            float q = minf(0.95f, rgb_max(scatter));
+            float q = minf(0.95f, color_max(scatter));
             if (!(pcg32_float(rng) < q)) break;
-            beta = rgb_scale(beta, 1.0f / q);
-            scatter = rgb_scale(scatter, 1.0f / q);
+            beta = color_scale(beta, 1.0f / q);
+            scatter = color_scale(scatter, 1.0f / q);
         }
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }

@@ -5,9 +5,9 @@
 #include "integrators/direct.h"
 #include "materials/bsdf.h"
 
-Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_t *rays)
+Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_t *rays)
 {
-    Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
+    Color L = color_s(0.0f), beta = color_s(1.0f);
     bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
     float prev_pdf = 0.0f;
     bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
@@ -17,25 +17,25 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_
         if (!scene_intersect(s, &ray, &sh)) {
             /* The environment: counted like an emitter hit, with the same MIS against
              * NEE's density of sampling this direction. */
-            Rgb le = light_env_radiance(&s->emitter_sampler, ray.d);
-            if (!rgb_is_black(le)) {
-                if (specular || pp->mode == PATH_BSDF) L = rgb_madd(L, beta, le);
+            Color le = light_env_radiance(&s->emitter_sampler, ray.d);
+            if (!color_is_black(le)) {
+                if (specular || pp->mode == PATH_BSDF) L = color_madd(L, beta, le);
                 else if (pp->mode == PATH_MIS)
-                    L = rgb_madd(L, beta, rgb_scale(le, power_heuristic(prev_pdf, light_env_pdf(&s->emitter_sampler, ray.d))));
+                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, light_env_pdf(&s->emitter_sampler, ray.d))));
             }
             break;
         }
         Vec3 wo = v3_neg(ray.d);
 
         if (sh.emitter >= 0) {
-            Rgb le = scene_emission(s, &sh, wo);
-            if (!rgb_is_black(le)) {
+            Color le = scene_emission(s, &sh, wo);
+            if (!color_is_black(le)) {
                 if (specular || pp->mode == PATH_BSDF) {
-                    L = rgb_madd(L, beta, le);
+                    L = color_madd(L, beta, le);
                 } else if (pp->mode == PATH_MIS) {
                     float cos_l = fabsf(v3_dot(sh.ng, wo));
                     float pdf_light = cos_l > 0.0f ? emitter_pdf_a(&s->emitter_sampler, sh.emitter) * sh.t * sh.t / cos_l : 0.0f;
-                    L = rgb_madd(L, beta, rgb_scale(le, power_heuristic(prev_pdf, pdf_light)));
+                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, pdf_light)));
                 }
                 /* PATH_NEE: this emitter was already counted by the previous vertex's NEE. */
             }
@@ -47,7 +47,7 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             float u_sel = sampler_1d(smp);
             Vec2 u_light = sampler_2d(smp);
-            L = rgb_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, u_sel, u_light, rays)
+            L = color_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, u_sel, u_light, rays)
                                                        : direct_light(s, &bsdf, &sh, wo, u_sel, u_light, rays));
         }
 
@@ -55,8 +55,8 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_
         float uc = sampler_1d(smp);
         Vec2 u = sampler_2d(smp);
         if (!bsdf_sample(&bsdf, wo, uc, u, &bs)) break;
-        beta = rgb_mul(beta, bs.weight);
-        if (rgb_is_black(beta)) break;
+        beta = color_mul(beta, bs.weight);
+        if (color_is_black(beta)) break;
         specular = bs.delta;
         prev_pdf = bs.pdf;
 
@@ -64,9 +64,9 @@ Rgb path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_
          * q follows the throughput so dim paths stop early; capped below 1 so even an
          * albedo-1 furnace terminates. */
         if (depth + 1 >= pp->rr_depth) {
-            float q = minf(0.95f, rgb_max(beta));
+            float q = minf(0.95f, color_max(beta));
             if (!(sampler_1d(smp) < q)) break;
-            beta = rgb_scale(beta, 1.0f / q);
+            beta = color_scale(beta, 1.0f / q);
         }
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }

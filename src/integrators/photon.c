@@ -64,8 +64,8 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
      * uniform emitter carry the same flux, L_e pi A / N one-sided, L_e 2 pi A / N
      * two-sided, summing to the emitted power; delta lights likewise (light.c). */
-    Rgb power = rgb_scale(es.beta, inv_n);
-    Rgb scatter = rgb_s(1.0f); /* what Russian roulette looks at, as in light.c */
+    Color power = color_scale(es.beta, inv_n);
+    Color scatter = color_s(1.0f); /* what Russian roulette looks at, as in light.c */
     bool specular_only = true; /* every bounce so far was a delta lobe */
     Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {
@@ -92,16 +92,16 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
         /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
         if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
         if (!bs.delta) specular_only = false;
-        power = rgb_mul(power, bs.weight);
-        scatter = rgb_mul(scatter, bs.weight);
-        if (rgb_is_black(scatter)) break;
+        power = color_mul(power, bs.weight);
+        scatter = color_mul(scatter, bs.weight);
+        if (color_is_black(scatter)) break;
         /* Russian roulette (Jensen 2001 sec. 5.4 uses absorption probability; this is the
          * light tracer's rule, so both trace the same paths): unbiased, power scaled by 1/q. */
         if (depth >= pp->rr_depth) {
-            float q = minf(0.95f, rgb_max(scatter));
+            float q = minf(0.95f, color_max(scatter));
             if (!(pcg32_float(&rng) < q)) break;
-            power = rgb_scale(power, 1.0f / q);
-            scatter = rgb_scale(scatter, 1.0f / q);
+            power = color_scale(power, 1.0f / q);
+            scatter = color_scale(scatter, 1.0f / q);
         }
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
@@ -112,19 +112,19 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
  * first non-delta hit; mixed BSDFs as photon.h says. Adds the emission it passes (and the
  * hit's) to *le when le is not NULL. *wo_out is the direction back along the last segment.
  * Returns false if the ray leaves the scene or the chain stops. */
-bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb *le,
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Color *beta, Color *le,
                              SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays)
 {
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
         ++*rays;
         if (!scene_intersect(s, &ray, sh)) {
             /* The environment seen from the camera, directly or through the chain. */
-            if (le) *le = rgb_madd(*le, *beta, light_env_radiance(&s->emitter_sampler, ray.d));
+            if (le) *le = color_madd(*le, *beta, light_env_radiance(&s->emitter_sampler, ray.d));
             return false;
         }
         Vec3 wo = v3_neg(ray.d);
         if (le && sh->emitter >= 0)
-            *le = rgb_madd(*le, *beta, scene_emission(s, sh, wo));
+            *le = color_madd(*le, *beta, scene_emission(s, sh, wo));
         scene_bsdf(s, sh, bsdf);
         float p_delta = bsdf_delta_probability(bsdf, wo);
         if (!(p_delta > 0.0f)) {
@@ -141,13 +141,13 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
              * took the non-delta part with probability 1 - p_delta, so this is the point
              * whose non-delta part the caller estimates, weighted by 1 / (1 - p_delta); the
              * other branch follows the delta lobe below (its weight holds 1 / p_delta). */
-            *beta = rgb_scale(*beta, 1.0f / (1.0f - p_delta));
+            *beta = color_scale(*beta, 1.0f / (1.0f - p_delta));
             *wo_out = wo;
-            return rgb_is_finite(*beta);
+            return color_is_finite(*beta);
         }
         if (!sampled) return false;
-        *beta = rgb_mul(*beta, bs.weight);
-        if (rgb_is_black(*beta)) return false;
+        *beta = color_mul(*beta, bs.weight);
+        if (color_is_black(*beta)) return false;
         ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
     /* Cut after PHOTON_MAX_SPECULAR delta bounces: a bias of at most the throughput left,
@@ -158,7 +158,7 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Rgb *beta, Rgb
 typedef struct DensityCtx {
     const Bsdf *bsdf;
     Vec3 wo, n; /* n: x's geometric normal, on wo's side */
-    Rgb sum;
+    Color sum;
 } DensityCtx;
 
 static void density_visit(void *ctx, const Photon *ph, float dist2)
@@ -171,23 +171,23 @@ static void density_visit(void *ctx, const Photon *ph, float dist2)
     float cos_i = fabsf(v3_dot(c->n, ph->wi));
     if (!(cos_i > 0.0f)) return;
     /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
-    Rgb f = rgb_scale(bsdf_eval(c->bsdf, c->wo, ph->wi), 1.0f / cos_i);
-    c->sum = rgb_madd(c->sum, f, ph->power);
+    Color f = color_scale(bsdf_eval(c->bsdf, c->wo, ph->wi), 1.0f / cos_i);
+    c->sum = color_madd(c->sum, f, ph->power);
 }
 
 /* Reflected radiance at sh toward wo: L = sum f(wo, wi_p) Phi_p / (pi r^2), the constant
  * (box) kernel density estimate of Jensen 2001 eq. 7.6. */
-static Rgb radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo)
+static Color radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo)
 {
-    if (photon_map_count(map) == 0) return rgb_s(0.0f);
-    DensityCtx c = {bsdf, wo, v3_dot(sh->ng, wo) >= 0.0f ? sh->ng : v3_neg(sh->ng), rgb_s(0.0f)};
+    if (photon_map_count(map) == 0) return color_s(0.0f);
+    DensityCtx c = {bsdf, wo, v3_dot(sh->ng, wo) >= 0.0f ? sh->ng : v3_neg(sh->ng), color_s(0.0f)};
     photon_map_radius(map, sh->p, r, density_visit, &c);
-    return rgb_scale(c.sum, 1.0f / (CST_PI * r * r));
+    return color_scale(c.sum, 1.0f / (CST_PI * r * r));
 }
 
 /* Direct light at a non-delta point by one emitter sample (path.c's NEE, without MIS:
  * BSDF-sampled rays that reach emitters add nothing here). */
-Rgb photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
+Color photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
                         uint64_t *rays)
 {
     float u_sel = pcg32_float(rng);
@@ -195,16 +195,16 @@ Rgb photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, 
     return direct_light(s, bsdf, sh, wo, u_sel, u, rays);
 }
 
-Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t *rays)
+Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t *rays)
 {
-    Rgb L = rgb_s(0.0f), beta = rgb_s(1.0f);
+    Color L = color_s(0.0f), beta = color_s(1.0f);
     SurfaceHit x;
     Bsdf bsdf_x;
     Vec3 wo;
     if (!photon_trace_to_diffuse(s, ray, rng, &beta, &L, &x, &bsdf_x, &wo, rays)) return L;
 
-    Rgb lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, rays);
-    lx = rgb_add(lx, radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo));
+    Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, rays);
+    lx = color_add(lx, radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo));
 
     /* Final gathering (Jensen 2001 sec. 9.3.3): the global map's blur is hidden behind one
      * more bounce; reading it at x directly would show its low-frequency noise. */
@@ -216,16 +216,16 @@ Rgb photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t
      * f / pdf has the probability of the non-delta lobes in pdf, so the estimate stays
      * that of the non-delta part alone. */
     if (bsdf_sample(&bsdf_x, wo, uc, u, &bs) && !bs.delta) {
-        Rgb g = bs.weight;
+        Color g = bs.weight;
         SurfaceHit y;
         Bsdf bsdf_y;
         Vec3 wo_y;
         Ray gr = ray_make(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
         if (photon_trace_to_diffuse(s, gr, rng, &g, NULL, &y, &bsdf_y, &wo_y, rays))
-            lx = rgb_add(lx, rgb_mul(g, radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y)));
+            lx = color_add(lx, color_mul(g, radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y)));
     }
-    return rgb_madd(L, beta, lx);
+    return color_madd(L, beta, lx);
 }
 
 void photon_maps_free(PhotonMaps *m)
@@ -270,7 +270,7 @@ static float auto_radius(const Scene *s, const Camera *cam, const PhotonParams *
         float fx = pcg32_float(&rng) * (float)cam->width, fy = pcg32_float(&rng) * (float)cam->height;
         Vec2 ul = pcg32_v2(&rng);
         Ray r = camera_generate_ray(cam, fx, fy, ul);
-        Rgb beta = rgb_s(1.0f);
+        Color beta = color_s(1.0f);
         SurfaceHit sh;
         Bsdf b;
         Vec3 wo;

@@ -7,10 +7,10 @@
 #include <stdint.h>
 
 #include "caustic/caustic.h"
-#include "math/rgb.h"
+#include "math/color.h"
 #include "math/vec3.h"
 
-/* 48 bytes: four float triples, no padding, 4-byte aligned. Full floats rather than
+/* 52 bytes: three float triples and one Color (four lanes), no padding, 4-byte aligned. Full floats rather than
  * Jensen's packed 20-byte record: the directions feed bsdf_eval() directly, and the tree
  * keeps its own copy of the positions (PhotonNode), so the record's size only costs
  * memory, not traversal bandwidth.
@@ -25,7 +25,7 @@
 typedef struct Photon {
     Vec3 pos;
     Vec3 wi;
-    Rgb power;
+    Color power;
     Vec3 n;
 } Photon;
 

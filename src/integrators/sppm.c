@@ -48,7 +48,7 @@ typedef struct SppmPixel {
     /* the visible point of the current iteration */
     Vec3 p, wo, n;   /* n: geometric normal on wo's side */
     Bsdf bsdf;
-    Rgb beta;        /* camera throughput to p */
+    Color beta;        /* camera throughput to p */
     bool valid;
     /* progressive state */
     double ld[3];    /* sum over iterations of emission + NEE */
@@ -159,7 +159,7 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
 /* A photon's arrival at a non-delta surface, kept until the deposit phase. */
 typedef struct SppmHit {
     Vec3 p, wi, n;   /* n: geometric normal on wi's side */
-    Rgb power;       /* unnormalised flux (see the file comment) */
+    Color power;       /* unnormalised flux (see the file comment) */
     uint32_t first, last; /* its grid bucket's entries [first, last): the candidates */
 } SppmHit;
 
@@ -176,7 +176,7 @@ typedef struct SppmHitList {
     bool oom;              /* a hit was lost for lack of memory: the render fails */
 } SppmHitList;
 
-static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Rgb power)
+static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Color power)
 {
     if (l->n == l->cap) {
         size_t cap = l->cap ? 2 * l->cap : 1024;
@@ -225,11 +225,11 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *h
         float cos_i = fabsf(v3_dot(v->n, hit->wi));
         if (!(cos_i > 0.0f)) continue;
         /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
-        Rgb f = rgb_scale(bsdf_eval(&v->bsdf, v->wo, hit->wi), 1.0f / cos_i);
-        Rgb d = rgb_mul(f, hit->power);
-        v->phi[0] += (double)d.r;
-        v->phi[1] += (double)d.g;
-        v->phi[2] += (double)d.b;
+        Color f = color_scale(bsdf_eval(&v->bsdf, v->wo, hit->wi), 1.0f / cos_i);
+        Color d = color_mul(f, hit->power);
+        v->phi[0] += (double)d.c[0];
+        v->phi[1] += (double)d.c[1];
+        v->phi[2] += (double)d.c[2];
         v->m++;
     }
 }
@@ -248,8 +248,8 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     EmitterGeometry eg = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
-    Rgb power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */
-    Rgb scatter = rgb_s(1.0f);
+    Color power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */
+    Color scatter = color_s(1.0f);
     Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
     for (int depth = 1;; depth++) {
         SurfaceHit sh;
@@ -267,14 +267,14 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
         Vec2 u = pcg32_v2(&rng);
         /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
         if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
-        power = rgb_mul(power, bs.weight);
-        scatter = rgb_mul(scatter, bs.weight);
-        if (rgb_is_black(scatter)) break;
+        power = color_mul(power, bs.weight);
+        scatter = color_mul(scatter, bs.weight);
+        if (color_is_black(scatter)) break;
         if (depth >= sp->rr_depth) {
-            float q = minf(0.95f, rgb_max(scatter));
+            float q = minf(0.95f, color_max(scatter));
             if (!(pcg32_float(&rng) < q)) break;
-            power = rgb_scale(power, 1.0f / q);
-            scatter = rgb_scale(scatter, 1.0f / q);
+            power = color_scale(power, 1.0f / q);
+            scatter = color_scale(scatter, 1.0f / q);
         }
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
@@ -296,23 +296,23 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         float fw;
         Vec2 fp = filter_film_position(filter, x, y, uf, &fw);
         Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
-        Rgb L = rgb_s(0.0f), beta = rgb_s(fw);
+        Color L = color_s(0.0f), beta = color_s(fw);
         SurfaceHit sh;
         v->valid = photon_trace_to_diffuse(s, ray, &rng, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
         if (v->valid) {
-            L = rgb_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, rays));
+            L = color_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, rays));
             v->p = sh.p;
             v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
             v->beta = beta;
-            v->valid = rgb_is_finite(beta) && !rgb_is_black(beta);
+            v->valid = color_is_finite(beta) && !color_is_black(beta);
         }
-        if (!rgb_is_finite(L)) {
+        if (!color_is_finite(L)) {
             ++*nonfinite; /* dropped as a zero sample, as render.c does */
-            L = rgb_s(0.0f);
+            L = color_s(0.0f);
         }
-        v->ld[0] += (double)L.r;
-        v->ld[1] += (double)L.g;
-        v->ld[2] += (double)L.b;
+        v->ld[0] += (double)L.c[0];
+        v->ld[1] += (double)L.c[1];
+        v->ld[2] += (double)L.c[2];
     }
 }
 
@@ -321,7 +321,7 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
 static void progressive_update(SppmPixel *v, uint64_t *nonfinite)
 {
     if (v->valid && v->m > 0) {
-        double b[3] = {(double)v->beta.r, (double)v->beta.g, (double)v->beta.b};
+        double b[3] = {(double)v->beta.c[0], (double)v->beta.c[1], (double)v->beta.c[2]};
         double n_new = v->n_photons + (double)SPPM_ALPHA * (double)v->m;
         double r_new = (double)v->r * sqrt(n_new / (v->n_photons + (double)v->m));
         double shrink = r_new * r_new / ((double)v->r * (double)v->r);

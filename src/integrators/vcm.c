@@ -74,7 +74,7 @@ static inline float camera_pdf_w(const VcmIteration *it, float cos_theta)
 
 /* The subpath state between vertices. */
 typedef struct SubPath {
-    Rgb beta, scatter; /* throughput; scatter = product of BSDF weights (roulette's input) */
+    Color beta, scatter; /* throughput; scatter = product of BSDF weights (roulette's input) */
     float d_vcm, d_vc, d_vm;
 } SubPath;
 
@@ -113,10 +113,10 @@ static inline void mis_arrive(SubPath *sp, float dist, float cos_in)
 static inline bool roulette(SubPath *sp, int depth, int rr_depth, Pcg32 *rng)
 {
     if (depth < rr_depth) return true;
-    float q = minf(0.95f, rgb_max(sp->scatter));
+    float q = minf(0.95f, color_max(sp->scatter));
     if (!(pcg32_float(rng) < q)) return false;
-    sp->beta = rgb_scale(sp->beta, 1.0f / q);
-    sp->scatter = rgb_scale(sp->scatter, 1.0f / q);
+    sp->beta = color_scale(sp->beta, 1.0f / q);
+    sp->scatter = color_scale(sp->scatter, 1.0f / q);
     return true;
 }
 
@@ -132,9 +132,9 @@ static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const B
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
     if (!(bs.pdf > 0.0f)) return false;
     float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(b, bs.wi, wo);
-    sp->beta = rgb_mul(sp->beta, bs.weight);
-    sp->scatter = rgb_mul(sp->scatter, bs.weight);
-    if (rgb_is_black(sp->scatter)) return false;
+    sp->beta = color_mul(sp->beta, bs.weight);
+    sp->scatter = color_mul(sp->scatter, bs.weight);
+    if (color_is_black(sp->scatter)) return false;
     if (!roulette(sp, depth, rr_depth, rng)) return false;
     mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), pdf_rev);
     *ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
@@ -155,8 +155,8 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
     /* f(wo = toward the camera, wi = toward the light) |cos theta_cam|, evaluated the way
      * the camera path sees this vertex (light.c explains the cosine swap). */
     float pdf_rev, pdf_unused;
-    Rgb f = rgb_scale(bsdf_eval_pdfs(b, cs.wi, v->w_prev, &pdf_rev, &pdf_unused), cos_cam / cos_prev);
-    if (rgb_is_black(f)) return;
+    Color f = color_scale(bsdf_eval_pdfs(b, cs.wi, v->w_prev, &pdf_rev, &pdf_unused), cos_cam / cos_prev);
+    if (color_is_black(f)) return;
     float cos_theta = v3_dot(v3_neg(cs.wi), cam->forward);
     /* The camera's density of this vertex per unit area, per pixel (tech. rep. eq. 46). */
     float cam_pdf_a = camera_pdf_w(it, cos_theta) * cos_cam / (cs.dist * cs.dist);
@@ -166,7 +166,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
     ++*rays;
     if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
     film_splat(splats, &vp->frame, cs.raster.x, cs.raster.y,
-               rgb_scale(rgb_mul(v->beta, f), weight * cs.we / cs.pdf_w));
+               color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w));
 }
 
 void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
@@ -179,14 +179,14 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
-    if (!(es.pdf_w > 0.0f) || rgb_is_black(es.beta)) return;
+    if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
 
     /* tech. rep. eqs. 31-33: the light vertex's NEE density against its emission density;
      * a delta light cannot be hit, so no strategy reaches it by a connection (d_vc = 0). */
     SubPath sp;
     sp.beta = es.beta;
-    sp.scatter = rgb_s(1.0f);
+    sp.scatter = color_s(1.0f);
     sp.d_vcm = mis(es.nee_pdf / emission_pdf);
     sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
@@ -308,26 +308,26 @@ void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, in
 
 /* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF
  * sampling cannot hit it). */
-static Rgb connect_to_light(const Scene *s, const VcmIteration *it, const SubPath *sp,
+static Color connect_to_light(const Scene *s, const VcmIteration *it, const SubPath *sp,
                             const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
 {
     float u_sel = pcg32_float(rng);
     Vec2 u = pcg32_v2(rng);
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
-    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return rgb_s(0.0f);
+    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return color_s(0.0f);
     float cos_x = fabsf(v3_dot(sh->ng, ls.wi));
-    if (!(cos_x > 0.0f)) return rgb_s(0.0f);
+    if (!(cos_x > 0.0f)) return color_s(0.0f);
     float bsdf_pdf_fwd, bsdf_pdf_rev;
-    Rgb f = bsdf_eval_pdfs(b, wo, ls.wi, &bsdf_pdf_fwd, &bsdf_pdf_rev);
-    if (rgb_is_black(f)) return rgb_s(0.0f);
+    Color f = bsdf_eval_pdfs(b, wo, ls.wi, &bsdf_pdf_fwd, &bsdf_pdf_rev);
+    if (color_is_black(f)) return color_s(0.0f);
     float w_light = ls.delta ? 0.0f : mis(bsdf_pdf_fwd / ls.direct_pdf);
     float w_camera = mis(ls.emit_pdf * cos_x / (ls.direct_pdf * ls.cos_light)) *
                      (it->mis_vm + sp->d_vcm + sp->d_vc * mis(bsdf_pdf_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
-    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return rgb_s(0.0f);
-    return rgb_scale(rgb_mul(f, ls.li), weight / ls.pdf);
+    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
+    return color_scale(color_mul(f, ls.li), weight / ls.pdf);
 }
 
 /* The BSDFs of one light path's first vertices, built when a connection first needs
@@ -354,37 +354,37 @@ static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const
 
 /* A connection between camera vertex x and light vertex y, vertex j of its light path
  * (tech. rep. eqs. 40-41). */
-static Rgb connect_vertices(const Scene *s, const VcmIteration *it, const SubPath *sp,
+static Color connect_vertices(const Scene *s, const VcmIteration *it, const SubPath *sp,
                             const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const VcmVertex *y, int j,
                             LightBsdfs *cache, uint64_t *rays)
 {
     Vec3 to = v3_sub(y->p, x->p);
     float dist2 = v3_length2(to);
-    if (!(dist2 > 0.0f)) return rgb_s(0.0f);
+    if (!(dist2 > 0.0f)) return color_s(0.0f);
     float dist = sqrtf(dist2);
     Vec3 d = v3_scale(to, 1.0f / dist); /* x -> y */
     Vec3 nd = v3_neg(d);
     float cos_x = fabsf(v3_dot(x->ng, d)), cos_y = fabsf(v3_dot(y->ng, d));
     float cos_y_prev = fabsf(v3_dot(y->ng, y->w_prev));
-    if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return rgb_s(0.0f);
+    if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return color_s(0.0f);
     float x_fwd, x_rev;
-    Rgb fx = bsdf_eval_pdfs(bx, wo, d, &x_fwd, &x_rev);
-    if (rgb_is_black(fx)) return rgb_s(0.0f);
+    Color fx = bsdf_eval_pdfs(bx, wo, d, &x_fwd, &x_rev);
+    if (color_is_black(fx)) return color_s(0.0f);
     Bsdf tmp;
     const Bsdf *by = light_bsdf(s, cache, j, y, &tmp);
     /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
      * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */
     float y_fwd, y_rev; /* y's own direction is toward the light: forward is w_prev -> nd */
-    Rgb fy = rgb_scale(bsdf_eval_pdfs(by, nd, y->w_prev, &y_rev, &y_fwd), cos_y / cos_y_prev);
-    if (rgb_is_black(fy)) return rgb_s(0.0f);
+    Color fy = color_scale(bsdf_eval_pdfs(by, nd, y->w_prev, &y_rev, &y_fwd), cos_y / cos_y_prev);
+    if (color_is_black(fy)) return color_s(0.0f);
     float x_fwd_a = x_fwd * cos_y / dist2; /* the camera subpath reaching y */
     float y_fwd_a = y_fwd * cos_x / dist2; /* the light subpath reaching x */
     float w_light = mis(x_fwd_a) * (it->mis_vm + y->d_vcm + y->d_vc * mis(y_rev));
     float w_camera = mis(y_fwd_a) * (it->mis_vm + sp->d_vcm + sp->d_vc * mis(x_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
-    if (!scene_visible(s, x->p, x->ng, y->p, y->ng)) return rgb_s(0.0f);
-    return rgb_scale(rgb_mul(rgb_mul(fx, fy), y->beta), weight / dist2);
+    if (!scene_visible(s, x->p, x->ng, y->p, y->ng)) return color_s(0.0f);
+    return color_scale(color_mul(color_mul(fx, fy), y->beta), weight / dist2);
 }
 
 /* A merging query at one camera vertex, in three steps so that its two rounds of cache
@@ -453,11 +453,11 @@ static void merge_fetch(const VcmIteration *it, MergeQuery *q)
 
 /* Step 3, merging at camera vertex x: the density estimate over every light vertex within
  * the radius, each MIS-weighted (tech. rep. eqs. 42-43), scaled by 1 / (pi r^2 N). */
-static Rgb merge(const VcmParams *vp, const VcmIteration *it, const MergeQuery *q, const SubPath *sp,
+static Color merge(const VcmParams *vp, const VcmIteration *it, const MergeQuery *q, const SubPath *sp,
                  const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces)
 {
     const float r = it->radius, r2 = r * r;
-    Rgb acc = rgb_s(0.0f);
+    Color acc = color_s(0.0f);
     for (int b = 0; b < q->nb; b++)
         for (uint32_t k = q->first[b]; k < q->last[b]; k++) {
             const VcmMergeVertex *y = &it->cell_vertices[k];
@@ -469,27 +469,27 @@ static Rgb merge(const VcmParams *vp, const VcmIteration *it, const MergeQuery *
             if (!(cos_w > 0.0f)) continue;
             /* A photon from the far side of a thin wall gets f = 0 here. */
             float x_fwd, x_rev;
-            Rgb f = bsdf_eval_pdfs(bx, wo, y->w_prev, &x_fwd, &x_rev);
-            if (rgb_is_black(f)) continue;
-            f = rgb_scale(f, 1.0f / cos_w); /* merging wants f without the cosine */
+            Color f = bsdf_eval_pdfs(bx, wo, y->w_prev, &x_fwd, &x_rev);
+            if (color_is_black(f)) continue;
+            f = color_scale(f, 1.0f / cos_w); /* merging wants f without the cosine */
             float w_light = y->d_vcm * it->mis_vc + y->d_vm * mis(x_fwd);
             float w_camera = sp->d_vcm * it->mis_vc + sp->d_vm * mis(x_rev);
             float weight = 1.0f / (w_light + 1.0f + w_camera);
-            acc = rgb_add(acc, rgb_scale(rgb_mul(f, y->beta), weight));
+            acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
         }
-    return rgb_scale(acc, it->vm_norm);
+    return color_scale(acc, it->vm_norm);
 }
 
-Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
+Color vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
                      int path, Ray ray, Pcg32 *rng, uint64_t *rays)
 {
-    Rgb L = rgb_s(0.0f);
+    Color L = color_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
     /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic
      * camera cannot be connected to (camera.h): like a delta vertex, 0 drops the t = 1
      * strategy from every weight. */
-    SubPath sp = {rgb_s(1.0f), rgb_s(1.0f),
+    SubPath sp = {color_s(1.0f), color_s(1.0f),
                   camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
                   0.0f, 0.0f};
     const VcmVertex *lv = it->vertices + it->path_start[path];
@@ -504,15 +504,15 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
             /* s = 0 with the environment: an infinitely distant light, so its densities
              * have no distance factor and the last segment's is not converted (tech.
              * rep. sec. 5.1, SmallVCM's background). */
-            Rgb le = light_env_radiance(&s->emitter_sampler, ray.d);
-            if (!rgb_is_black(le)) {
+            Color le = light_env_radiance(&s->emitter_sampler, ray.d);
+            if (!color_is_black(le)) {
                 float w = 1.0f;
                 if (t > 1) {
                     float direct = light_env_pdf(&s->emitter_sampler, ray.d);
                     float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
                     w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
                 }
-                L = rgb_madd(L, sp.beta, rgb_scale(le, w));
+                L = color_madd(L, sp.beta, color_scale(le, w));
             }
             break;
         }
@@ -525,15 +525,15 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
          * there is no other strategy (light vertices on emitters are not splatted). */
         if (sh.emitter >= 0) {
             const Emitter *e = &s->emitters[sh.emitter];
-            Rgb le = scene_emission(s, &sh, wo);
-            if (!rgb_is_black(le)) {
+            Color le = scene_emission(s, &sh, wo);
+            if (!color_is_black(le)) {
                 float w = 1.0f;
                 if (t > 1) {
                     float pdf_a = emitter_pdf_a(&s->emitter_sampler, sh.emitter);
                     float emission_pdf = pdf_a * emitter_emission_pdf_w(e, sh.ng, wo);
                     w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
                 }
-                L = rgb_madd(L, sp.beta, rgb_scale(le, w));
+                L = color_madd(L, sp.beta, color_scale(le, w));
             }
         }
         /* The camera path's vertices so far are t bounces once this one scatters. */
@@ -546,15 +546,15 @@ Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, con
             MergeQuery mq;
             if (merging) merge_plan(it, sh.p, &mq);
             if (has_lights)
-                L = rgb_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, rays));
+                L = color_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, rays));
             if (merging) merge_fetch(it, &mq);
-            Rgb c = rgb_s(0.0f);
+            Color c = color_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
-                c = rgb_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, rays));
+                c = color_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, rays));
             }
-            L = rgb_madd(L, sp.beta, c);
-            if (merging) L = rgb_madd(L, sp.beta, merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));
+            L = color_madd(L, sp.beta, c);
+            if (merging) L = color_madd(L, sp.beta, merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));
         }
 
         if (!scatter(s, &sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;

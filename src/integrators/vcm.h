@@ -28,7 +28,7 @@ typedef struct VcmVertex {
     Vec3 p, ng;
     Vec3 ns;       /* shading normal (SurfaceHit.ns): y's BSDF is rebuilt from it */
     Vec3 w_prev;   /* unit, toward the previous vertex (where the light came from) */
-    Rgb beta;      /* flux-type throughput: L_e cos / (pdf_a pdf_w) times the BSDF weights */
+    Color beta;      /* flux-type throughput: L_e cos / (pdf_a pdf_w) times the BSDF weights */
     float d_vcm, d_vc, d_vm;
     int32_t material;
     int32_t bounces; /* 1 for the first hit after the emitter */
@@ -41,7 +41,7 @@ typedef struct VcmVertex {
 typedef struct VcmMergeVertex {
     Vec3 p;
     Vec3 w_prev;
-    Rgb beta;
+    Color beta;
     float d_vcm, d_vm;
     int32_t bounces;
 } VcmMergeVertex;
@@ -107,7 +107,7 @@ void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, in
 /* One camera path for the pixel whose light path is `path`: emission hits (s = 0), NEE
  * (s = 1), connections to the light path's vertices, and with merging, merges with every
  * light vertex within the radius; all MIS-weighted. Returns the pixel sample. */
-Rgb vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
+Color vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
                      int path, Ray ray, Pcg32 *rng, uint64_t *rays);
 
 /* A merging radius from the scene's size: the base radius r0 when none is given. */

@@ -7,12 +7,12 @@
 #include "core/error.h"
 #include "sampling/warp.h"
 
-CstStatus envmap_init_constant(EnvMap *m, Rgb radiance, CstError *err)
+CstStatus envmap_init_constant(EnvMap *m, Color radiance, CstError *err)
 {
     (void)err;
     memset(m, 0, sizeof *m);
     m->scale = radiance;
-    m->power = 4.0f * CST_PI * rgb_luminance(radiance);
+    m->power = 4.0f * CST_PI * color_luminance(radiance);
     return CST_OK;
 }
 
@@ -35,7 +35,7 @@ static float pixel_weight(const float *p)
     return fmaxf(y, 1e-4f * mx);
 }
 
-CstStatus envmap_init_image(EnvMap *m, float *rgb, int width, int height, Rgb scale, CstError *err)
+CstStatus envmap_init_image(EnvMap *m, float *rgb, int width, int height, Color scale, CstError *err)
 {
     memset(m, 0, sizeof *m);
     m->rgb = rgb;
@@ -54,7 +54,7 @@ CstStatus envmap_init_image(EnvMap *m, float *rgb, int width, int height, Rgb sc
         return cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d environment map", width, height);
     }
     double power = 0.0;
-    const float ys = rgb_luminance(scale);
+    const float ys = color_luminance(scale);
     for (int r = 0; r < height; r++) {
         double sum = 0.0, lum = 0.0;
         for (int c = 0; c < width; c++) {
@@ -106,14 +106,14 @@ static inline int clamp_index(float x, int n)
     return i < 0 ? 0 : i >= n ? n - 1 : i;
 }
 
-Rgb envmap_eval(const EnvMap *m, Vec3 w)
+Color envmap_eval(const EnvMap *m, Vec3 w)
 {
     if (!m->rgb) return m->scale;
     float u, v;
     dir_to_uv(w, &u, &v);
     int c = clamp_index(u * (float)m->width, m->width), r = clamp_index(v * (float)m->height, m->height);
     const float *p = &m->rgb[3 * ((size_t)r * (size_t)m->width + (size_t)c)];
-    return rgb(p[0] * m->scale.r, p[1] * m->scale.g, p[2] * m->scale.b);
+    return color_rgb(p[0] * m->scale.c[0], p[1] * m->scale.c[1], p[2] * m->scale.c[2]);
 }
 
 /* The bin that distrib1d_sample picked, with u remapped to a uniform position inside it. */

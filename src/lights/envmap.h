@@ -7,12 +7,12 @@
 #define CST_LIGHTS_ENVMAP_H
 
 #include "caustic/caustic.h"
-#include "math/rgb.h"
+#include "math/color.h"
 #include "math/vec3.h"
 #include "sampling/distrib1d.h"
 
 typedef struct EnvMap {
-    Rgb scale;      /* multiplies the image; the radiance itself when there is none */
+    Color scale;      /* multiplies the image; the radiance itself when there is none */
     float *rgb;     /* width * height * 3 linear values, row 0 = theta 0 (up); NULL = constant */
     int width, height;
     Distrib1D marginal; /* rows, weighted by their luminance times sin theta */
@@ -20,13 +20,13 @@ typedef struct EnvMap {
     float power;        /* the integral of luminance over the sphere (W/m^2 per unit area of a disk...) */
 } EnvMap;
 
-CstStatus envmap_init_constant(EnvMap *m, Rgb radiance, CstError *err);
+CstStatus envmap_init_constant(EnvMap *m, Color radiance, CstError *err);
 /* Takes ownership of rgb (malloc'd) on success and on failure. */
-CstStatus envmap_init_image(EnvMap *m, float *rgb, int width, int height, Rgb scale, CstError *err);
+CstStatus envmap_init_image(EnvMap *m, float *rgb, int width, int height, Color scale, CstError *err);
 void envmap_free(EnvMap *m);
 
 /* Radiance arriving from direction w (unit, toward the environment). */
-Rgb envmap_eval(const EnvMap *m, Vec3 w);
+Color envmap_eval(const EnvMap *m, Vec3 w);
 /* A direction by u, with its density per unit solid angle (0: unusable). */
 Vec3 envmap_sample(const EnvMap *m, Vec2 u, float *pdf);
 float envmap_pdf(const EnvMap *m, Vec3 w);

@@ -24,7 +24,7 @@ static float spot_falloff(const DeltaLight *l, float cos_theta)
  * SpotLight::Phi); E pi R^2 for a directional light over the scene's disk. */
 float delta_light_power(const DeltaLight *l, float scene_radius)
 {
-    float y = rgb_luminance(l->intensity);
+    float y = color_luminance(l->intensity);
     switch (l->type) {
     case DELTA_POINT: return 4.0f * CST_PI * y;
     case DELTA_SPOT: return 2.0f * CST_PI * y * (1.0f - 0.5f * (l->cos_inner + l->cos_outer));
@@ -58,7 +58,7 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
      * is weighted by its texture's average, which only shifts samples between lights (the
      * point density on an emitter stays uniform by area, so NEE's pdf is unchanged). */
     for (int i = 0; i < n; i++)
-        w[i] = CST_PI * emitters[i].area * rgb_luminance(emitters[i].average) * (emitters[i].two_sided ? 2.0f : 1.0f);
+        w[i] = CST_PI * emitters[i].area * color_luminance(emitters[i].average) * (emitters[i].two_sided ? 2.0f : 1.0f);
     for (int i = 0; i < num_delta; i++) w[n + i] = delta_light_power(&delta[i], s->radius);
     /* The environment's flux through the scene's disk: pi R^2 times the integral of its
      * luminance over the sphere (pbrt-v4's UniformInfiniteLight::Phi for a constant one). */
@@ -136,7 +136,7 @@ bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const Emi
         out->wi = v3_scale(to, 1.0f / out->dist);
         out->cos_light = fabsf(v3_dot(out->n, out->wi));
         out->li = emitter_radiance(e, g->textures, out->n, uv, v3_neg(out->wi));
-        if (rgb_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
+        if (color_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
         /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
         out->pdf = s->pdf_a[i] * dist2 / out->cos_light;
         out->finite = true;
@@ -159,7 +159,7 @@ bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const Emi
         out->cos_light = 1.0f;
         out->emit_pdf = out->pdf / (CST_PI * s->radius * s->radius);
         out->direct_pdf = out->pdf;
-        return !rgb_is_black(out->li);
+        return !color_is_black(out->li);
     }
     const DeltaLight *l = &s->delta[i - s->count];
     out->delta = true;
@@ -189,7 +189,7 @@ bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const Emi
     out->n = v3_neg(out->wi);
     out->finite = true;
     float falloff = l->type == DELTA_SPOT ? spot_falloff(l, v3_dot(l->dir, v3_neg(out->wi))) : 1.0f;
-    out->li = rgb_scale(l->intensity, falloff / dist2);
+    out->li = color_scale(l->intensity, falloff / dist2);
     out->direct_pdf = pmf * dist2;
     return falloff > 0.0f;
 }
@@ -224,7 +224,7 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
         out->cos_l = fabsf(v3_dot(n, out->w));
         out->finite = true;
         if (out->pdf_w > 0.0f)
-            out->beta = rgb_scale(emitter_radiance(e, g->textures, n, out->uv, out->w),
+            out->beta = color_scale(emitter_radiance(e, g->textures, n, out->uv, out->w),
                                   out->cos_l / (out->pdf_a * out->pdf_w));
         return;
     }
@@ -246,7 +246,7 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
         out->cos_l = 1.0f;
         out->nee_pdf = pmf * pdf_dir;
         out->finite = false;
-        if (pdf_dir > 0.0f) out->beta = rgb_scale(envmap_eval(s->env, w_in), area / (pmf * pdf_dir));
+        if (pdf_dir > 0.0f) out->beta = color_scale(envmap_eval(s->env, w_in), area / (pmf * pdf_dir));
         return;
     }
     const DeltaLight *l = &s->delta[i - s->count];
@@ -259,7 +259,7 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
         out->w = warp_uniform_sphere(u_dir);
         out->pdf_a = pmf;
         out->pdf_w = CST_INV_4PI;
-        out->beta = rgb_scale(l->intensity, 1.0f / (pmf * out->pdf_w));
+        out->beta = color_scale(l->intensity, 1.0f / (pmf * out->pdf_w));
         out->finite = true;
         break;
     case DELTA_SPOT: {
@@ -269,7 +269,7 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
         out->pdf_a = pmf;
         out->pdf_w = warp_uniform_cone_pdf(l->cos_outer);
         float falloff = spot_falloff(l, v3_dot(l->dir, out->w));
-        out->beta = rgb_scale(l->intensity, falloff / (pmf * out->pdf_w));
+        out->beta = color_scale(l->intensity, falloff / (pmf * out->pdf_w));
         out->finite = true;
         break;
     }
@@ -284,7 +284,7 @@ void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
         float area = CST_PI * s->radius * s->radius;
         out->pdf_a = pmf / area;
         out->pdf_w = 1.0f;
-        out->beta = rgb_scale(l->intensity, area / pmf);
+        out->beta = color_scale(l->intensity, area / pmf);
         out->finite = false;
         break;
     }

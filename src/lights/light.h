@@ -8,15 +8,15 @@
 
 #include "geometry/sphere.h"
 #include "lights/envmap.h"
-#include "math/rgb.h"
+#include "math/color.h"
 #include "sampling/distrib1d.h"
 #include "textures/texture.h"
 
 typedef struct Emitter {
     uint32_t prim;  /* scene primitive id */
-    Rgb radiance;   /* times the texture's value at the point, when textured */
+    Color radiance;   /* times the texture's value at the point, when textured */
     int texture;    /* 1 + index into the scene's textures; 0: constant radiance */
-    Rgb average;    /* radiance averaged over the texture: the selection weight */
+    Color average;    /* radiance averaged over the texture: the selection weight */
     int two_sided;
     float area;
     Vec3 n;        /* triangles: unit geometric normal (set by scene_commit) */
@@ -35,7 +35,7 @@ typedef struct DeltaLight {
     DeltaLightType type;
     Vec3 p;        /* point, spot: position */
     Vec3 dir;      /* spot: unit axis; directional: unit direction the light travels */
-    Rgb intensity; /* point, spot: radiant intensity (W/sr) on the axis; directional: irradiance */
+    Color intensity; /* point, spot: radiant intensity (W/sr) on the axis; directional: irradiance */
     float cos_inner, cos_outer; /* spot: full intensity within cos_inner, none beyond cos_outer */
 } DeltaLight;
 
@@ -75,10 +75,10 @@ void emitter_sampler_free(EmitterSampler *s);
 /* Radiance leaving the emitter at a point with geometric normal ng and texture
  * coordinates uv toward direction w (unit, pointing away from the surface). One-sided
  * emitters are dark behind. textures: the scene's (read only when e is textured). */
-static inline Rgb emitter_radiance(const Emitter *e, const Texture *textures, Vec3 ng, Vec2 uv, Vec3 w)
+static inline Color emitter_radiance(const Emitter *e, const Texture *textures, Vec3 ng, Vec2 uv, Vec3 w)
 {
-    if (!(e->two_sided || v3_dot(ng, w) > 0.0f)) return rgb_s(0.0f);
-    return e->texture ? rgb_mul(e->radiance, texture_eval(textures, e->texture - 1, uv)) : e->radiance;
+    if (!(e->two_sided || v3_dot(ng, w) > 0.0f)) return color_s(0.0f);
+    return e->texture ? color_mul(e->radiance, texture_eval(textures, e->texture - 1, uv)) : e->radiance;
 }
 
 /* The area density of a point on area emitter e, selection included. */
@@ -86,9 +86,9 @@ static inline float emitter_pdf_a(const EmitterSampler *s, int e) { return s->pd
 
 /* The environment: its radiance arriving from direction w (toward it; black without one),
  * and NEE's density of sampling w per unit solid angle, selection included. */
-static inline Rgb light_env_radiance(const EmitterSampler *s, Vec3 w)
+static inline Color light_env_radiance(const EmitterSampler *s, Vec3 w)
 {
-    return s->env ? envmap_eval(s->env, w) : rgb_s(0.0f);
+    return s->env ? envmap_eval(s->env, w) : color_s(0.0f);
 }
 static inline float light_env_pdf(const EmitterSampler *s, Vec3 w)
 {
@@ -104,7 +104,7 @@ typedef struct LightLi {
     Vec3 p, n;   /* the light point and its unit normal (delta lights: n = -wi) */
     Vec3 wi;     /* unit, from x toward the light */
     float dist;  /* |p - x| */
-    Rgb li;      /* area: L_e toward x; point/spot: I(-wi) / dist^2; directional: E */
+    Color li;      /* area: L_e toward x; point/spot: I(-wi) / dist^2; directional: E */
     float pdf;   /* area: density of wi per unit solid angle; delta: the selection
                   * probability (a discrete one: the estimate has no MIS partner) */
     bool delta;
@@ -141,7 +141,7 @@ typedef struct EmissionSample {
     Vec2 uv;     /* area emitters: texture coordinates at p */
     Vec3 w;      /* unit direction of emission */
     int emitter; /* area: emitter index; delta: count + delta light index */
-    Rgb beta;    /* the path's first throughput, the flux it carries:
+    Color beta;    /* the path's first throughput, the flux it carries:
                   * L_e |cos| / (pdf_a pdf_w), I(w) / (pmf pdf_w), or E pi R^2 / pmf */
     float pdf_a; /* area: density of p per unit area; point/spot: the selection
                   * probability; directional: pmf / (pi R^2) */

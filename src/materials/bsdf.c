@@ -48,14 +48,14 @@ static inline Vec3 mirror_z(Vec3 w) { return v3(-w.x, -w.y, w.z); }
 
 /* Torrance-Sparrow / Cook-Torrance reflection with GGX (Walter et al. 2007 eq. 20):
  *   f(wo, wi) = F(wo.m) D(m) G2(wo, wi) / (4 cos_o cos_i),  m = normalize(wo + wi). */
-static Rgb conductor_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+static Color conductor_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
-    if (wo.z <= 0.0f || wi.z <= 0.0f) return rgb_s(0.0f);
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return color_s(0.0f);
     Vec3 h = v3_add(wo, wi);
-    if (v3_length2(h) == 0.0f) return rgb_s(0.0f);
+    if (v3_length2(h) == 0.0f) return color_s(0.0f);
     Vec3 m = v3_normalize(h);
     float s = ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha) / (4.0f * wo.z);
-    return rgb_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), s);
+    return color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), s);
 }
 
 /* Visible-normal sampling then reflection: pdf = D_wo(m) / (4 wo.m) (the reflection
@@ -85,7 +85,7 @@ static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
     out->pdf = microfacet_reflect_pdf(wo, wi, b->alpha);
     /* f cos_i / pdf = F G2 / G1(wo): D and the Jacobian cancel. */
     float g = ggx_g2(wo, wi, b->alpha) / ggx_g1(wo, b->alpha);
-    out->weight = rgb_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), g);
+    out->weight = color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), g);
     out->delta = false;
     return true;
 }
@@ -177,7 +177,7 @@ static bool dielectric_smooth_sample(const Bsdf *b, Vec3 wo, float uc, BsdfTrans
      * pbrt-v4 sec. 9.5.2); camera paths carry radiance, so the factor applies to them.
      * Light paths carry flux, which refraction does not compress: the adjoint BTDF lacks
      * the factor (pbrt-v4 DielectricBxDF with TransportMode::Importance). */
-    out->weight = mode == BSDF_RADIANCE ? rgb_scale(b->albedo, 1.0f / (etap * etap)) : b->albedo;
+    out->weight = mode == BSDF_RADIANCE ? color_scale(b->albedo, 1.0f / (etap * etap)) : b->albedo;
     return true;
 }
 
@@ -205,7 +205,7 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
     /* f |cos_i| / pdf = G2 / G1(wo) for both lobes (D, F and the Jacobians cancel), times
      * 1 / etap^2 for radiance through refraction. */
     float g = ggx_g2(wo, wi, b->alpha) / ggx_g1(wo, b->alpha);
-    out->weight = rgb_scale(b->albedo, g * extra);
+    out->weight = color_scale(b->albedo, g * extra);
     return true;
 }
 
@@ -239,15 +239,15 @@ static float coat_albedo(const Bsdf *b, float mu)
 static float plastic_coat_prob(const Bsdf *b, float cos_o)
 {
     float e = coat_albedo(b, cos_o);
-    float d = e + rgb_max(b->albedo) * (1.0f - e);
+    float d = e + color_max(b->albedo) * (1.0f - e);
     return d > 0.0f ? e / d : 1.0f;
 }
 
-static Rgb plastic_diffuse_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+static Color plastic_diffuse_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
     float s = (1.0f - coat_albedo(b, wo.z)) * (1.0f - coat_albedo(b, wi.z)) /
               (CST_PI * (1.0f - b->coat_e_avg));
-    return rgb_scale(b->albedo, s * wi.z);
+    return color_scale(b->albedo, s * wi.z);
 }
 
 /* The coat's rough reflection (f |cos_i|), the rough dielectric's reflection lobe. */
@@ -261,11 +261,11 @@ static float plastic_coat_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
 }
 
 /* Non-delta part only: the diffuse base, and the coat when rough. */
-static Rgb plastic_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+static Color plastic_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
-    if (wo.z <= 0.0f || wi.z <= 0.0f) return rgb_s(0.0f);
-    Rgb f = plastic_diffuse_eval(b, wo, wi);
-    if (b->alpha > 0.0f) f = rgb_add(f, rgb_s(plastic_coat_eval(b, wo, wi)));
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return color_s(0.0f);
+    Color f = plastic_diffuse_eval(b, wo, wi);
+    if (b->alpha > 0.0f) f = color_add(f, color_s(plastic_coat_eval(b, wo, wi)));
     return f;
 }
 
@@ -286,7 +286,7 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
         if (b->alpha == 0.0f) {
             out->wi = mirror_z(wo);
             out->pdf = pc;
-            out->weight = rgb_s(fresnel_dielectric(wo.z, b->eta) / pc);
+            out->weight = color_s(fresnel_dielectric(wo.z, b->eta) / pc);
             out->delta = true;
             return true;
         }
@@ -300,7 +300,7 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
      * whole non-delta part whichever lobe drew wi. */
     out->wi = wi;
     out->pdf = plastic_pdf(b, wo, wi);
-    out->weight = rgb_scale(plastic_eval(b, wo, wi), 1.0f / out->pdf);
+    out->weight = color_scale(plastic_eval(b, wo, wi), 1.0f / out->pdf);
     out->delta = false;
     return true;
 }
@@ -341,36 +341,36 @@ float bsdf_shading_adjoint(const Bsdf *b, Vec3 wo, Vec3 wi)
 
 /* ------------------------------------------------------------------ public wrappers */
 
-static Rgb eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
+static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
 {
     switch (b->type) {
     case MATERIAL_DIFFUSE:
         /* Lambert reflects on whichever side wo is (unless one-sided). */
-        if (!reflect_side(b, &wo, &wi) || wo.z == 0.0f || wi.z <= 0.0f) return rgb_s(0.0f);
-        return rgb_scale(b->albedo, CST_INV_PI * wi.z);
+        if (!reflect_side(b, &wo, &wi) || wo.z == 0.0f || wi.z <= 0.0f) return color_s(0.0f);
+        return color_scale(b->albedo, CST_INV_PI * wi.z);
     case MATERIAL_CONDUCTOR:
-        if (b->alpha == 0.0f || !reflect_side(b, &wo, &wi)) return rgb_s(0.0f);
+        if (b->alpha == 0.0f || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return conductor_eval(b, wo, wi);
     case MATERIAL_DIELECTRIC:
-        if (b->alpha == 0.0f) return rgb_s(0.0f);
-        return rgb_scale(b->albedo, dielectric_eval(b, wo, wi, mode));
+        if (b->alpha == 0.0f) return color_s(0.0f);
+        return color_scale(b->albedo, dielectric_eval(b, wo, wi, mode));
     case MATERIAL_PLASTIC:
-        if (!reflect_side(b, &wo, &wi)) return rgb_s(0.0f);
+        if (!reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return plastic_eval(b, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS: break;
     }
-    return rgb_s(0.0f);
+    return color_s(0.0f);
 }
 
-Rgb bsdf_eval_transport_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTransport mode)
+Color bsdf_eval_transport_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, BsdfTransport mode)
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
     if (!b->shading) return eval_local(b, wo, wi, mode);
     float ng_o = v3_dot(wo_world, b->ng), ng_i = v3_dot(wi_world, b->ng);
-    if (!shading_allows(b, ng_o, ng_i, wo.z, wi.z)) return rgb_s(0.0f);
-    Rgb f = eval_local(b, wo, wi, mode);
-    return mode == BSDF_RADIANCE ? f : rgb_scale(f, shading_adjoint(ng_o, ng_i, wo.z, wi.z));
+    if (!shading_allows(b, ng_o, ng_i, wo.z, wi.z)) return color_s(0.0f);
+    Color f = eval_local(b, wo, wi, mode);
+    return mode == BSDF_RADIANCE ? f : color_scale(f, shading_adjoint(ng_o, ng_i, wo.z, wi.z));
 }
 
 static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
@@ -404,7 +404,7 @@ float bsdf_pdf_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world)
     return pdf_local(b, wo, wi);
 }
 
-Rgb bsdf_eval_pdfs_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, float *pdf_fwd, float *pdf_rev)
+Color bsdf_eval_pdfs_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, float *pdf_fwd, float *pdf_rev)
 {
     Vec3 wo = frame_to_local(&b->frame, wo_world), wi = frame_to_local(&b->frame, wi_world);
     if (!b->shading) {
@@ -416,7 +416,7 @@ Rgb bsdf_eval_pdfs_general(const Bsdf *b, Vec3 wo_world, Vec3 wi_world, float *p
     bool fwd = shading_allows(b, ng_o, ng_i, wo.z, wi.z);
     *pdf_fwd = fwd ? pdf_local(b, wo, wi) : 0.0f;
     *pdf_rev = shading_allows(b, ng_i, ng_o, wi.z, wo.z) ? pdf_local(b, wi, wo) : 0.0f;
-    return fwd ? eval_local(b, wo, wi, BSDF_RADIANCE) : rgb_s(0.0f);
+    return fwd ? eval_local(b, wo, wi, BSDF_RADIANCE) : color_s(0.0f);
 }
 
 bool bsdf_sample(const Bsdf *b, Vec3 wo_world, float uc, Vec2 u, BsdfSample *out)
@@ -469,7 +469,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
     }
     /* The one place degenerate samples are rejected: no pdf, or a weight that is not a
      * number (e.g. a direction exactly in the tangent plane). */
-    if (!ok || !(out->pdf > 0.0f) || !rgb_is_finite(out->weight)) return false;
+    if (!ok || !(out->pdf > 0.0f) || !color_is_finite(out->weight)) return false;
     if (flipped) out->wi.z = -out->wi.z;
     const float z_i = out->wi.z;
     out->wi = frame_to_world(&b->frame, out->wi);
@@ -478,8 +478,8 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         float ng_o = v3_dot(wo_world, b->ng), ng_i = v3_dot(out->wi, b->ng);
         if (!shading_allows(b, ng_o, ng_i, z_o, z_i)) return false;
         if (mode == BSDF_IMPORTANCE) {
-            out->weight = rgb_scale(out->weight, shading_adjoint(ng_o, ng_i, z_o, z_i));
-            if (!rgb_is_finite(out->weight)) return false;
+            out->weight = color_scale(out->weight, shading_adjoint(ng_o, ng_i, z_o, z_i));
+            if (!color_is_finite(out->weight)) return false;
         }
     }
     return true;

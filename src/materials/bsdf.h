@@ -14,7 +14,7 @@
 #include "materials/fresnel.h"
 #include "materials/material.h"
 #include "math/frame.h"
-#include "math/rgb.h"
+#include "math/color.h"
 #include "sampling/warp.h"
 
 typedef struct Bsdf {
@@ -26,10 +26,10 @@ typedef struct Bsdf {
      * normals never let light through an opaque surface; see bsdf_init_shading. */
     Vec3 ng;
     bool shading; /* ns != ng: the side checks and the adjoint correction apply */
-    Rgb albedo;
+    Color albedo;
     float eta;   /* glass, dielectric, plastic coat: inside over outside IOR */
     float alpha; /* GGX width; 0 = smooth (delta lobes) */
-    Rgb cond_eta, cond_k; /* conductor: complex IOR */
+    Color cond_eta, cond_k; /* conductor: complex IOR */
     bool one_sided;       /* reflective types: black seen from the back */
     /* plastic: the coat's directional albedo E(mu) (NULL: the smooth coat's Fresnel F(mu))
      * and its cosine-weighted hemispherical average */
@@ -46,7 +46,7 @@ typedef enum BsdfTransport {
 
 typedef struct BsdfSample {
     Vec3 wi;      /* world space */
-    Rgb weight;   /* f * |cos theta_i| / pdf */
+    Color weight;   /* f * |cos theta_i| / pdf */
     /* solid angle; for delta lobes, the discrete probability of the lobe. For a non-delta
      * sample of a BSDF with delta lobes too, it includes the probability of not taking
      * them, and equals bsdf_pdf(wo, wi). */
@@ -119,16 +119,16 @@ static inline bool bsdf_has_transmission(const Bsdf *b)
 float bsdf_delta_probability(const Bsdf *b, Vec3 wo);
 
 /* The general cases of the three functions below (every material, shading normals). */
-Rgb bsdf_eval_transport_general(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode);
+Color bsdf_eval_transport_general(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode);
 float bsdf_pdf_general(const Bsdf *b, Vec3 wo, Vec3 wi);
-Rgb bsdf_eval_pdfs_general(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev);
+Color bsdf_eval_pdfs_general(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev);
 
 /* Lambert without a shading normal, the common case of every connection and merge, inline
  * in the callers: the general path's diffuse branches with the two-sided flip folded in
  * (both directions strictly on one side; a one-sided surface only from the front), from
  * the two cosines to the frame's normal alone, the same products bit for bit. */
 static inline bool bsdf_is_plain_diffuse(const Bsdf *b) { return !b->shading && b->type == MATERIAL_DIFFUSE; }
-static inline Rgb bsdf_diffuse_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev)
+static inline Color bsdf_diffuse_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev)
 {
     const float z_o = v3_dot(wo, b->frame.n), z_i = v3_dot(wi, b->frame.n);
     const bool same_side = z_o > 0.0f ? z_i > 0.0f : (z_o < 0.0f && z_i < 0.0f);
@@ -136,20 +136,20 @@ static inline Rgb bsdf_diffuse_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float 
     const bool rev = same_side && (z_i > 0.0f || !b->one_sided);
     *pdf_fwd = fwd ? fabsf(z_i) * CST_INV_PI : 0.0f;
     *pdf_rev = rev ? fabsf(z_o) * CST_INV_PI : 0.0f;
-    return fwd ? rgb_scale(b->albedo, CST_INV_PI * fabsf(z_i)) : rgb_s(0.0f);
+    return fwd ? color_scale(b->albedo, CST_INV_PI * fabsf(z_i)) : color_s(0.0f);
 }
 
 /* bsdf_eval for either transport: BSDF_IMPORTANCE gives the adjoint f*(wo, wi) |cos theta_i|
  * = f(wi, wo) |cos theta_i|, which differs from the radiance BSDF only in refraction
  * (by eta^2) and, with a shading normal, by the factor of bsdf_init_shading. bsdf_eval is
  * the BSDF_RADIANCE case. */
-static inline Rgb bsdf_eval_transport(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
+static inline Color bsdf_eval_transport(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
 {
     float pdf_fwd, pdf_rev;
     if (bsdf_is_plain_diffuse(b)) return bsdf_diffuse_eval_pdfs(b, wo, wi, &pdf_fwd, &pdf_rev);
     return bsdf_eval_transport_general(b, wo, wi, mode);
 }
-static inline Rgb bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi) { return bsdf_eval_transport(b, wo, wi, BSDF_RADIANCE); }
+static inline Color bsdf_eval(const Bsdf *b, Vec3 wo, Vec3 wi) { return bsdf_eval_transport(b, wo, wi, BSDF_RADIANCE); }
 static inline float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
     float pdf_fwd, pdf_rev;
@@ -160,7 +160,7 @@ static inline float bsdf_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
 /* bsdf_eval(b, wo, wi), with bsdf_pdf(b, wo, wi) in *pdf_fwd and bsdf_pdf(b, wi, wo) in
  * *pdf_rev, bit for bit: what the MIS weight of a bidirectional connection needs, for one
  * change of frame instead of three (SmallVCM's BSDF::Evaluate returns the same triple). */
-static inline Rgb bsdf_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev)
+static inline Color bsdf_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, float *pdf_fwd, float *pdf_rev)
 {
     if (bsdf_is_plain_diffuse(b)) return bsdf_diffuse_eval_pdfs(b, wo, wi, pdf_fwd, pdf_rev);
     return bsdf_eval_pdfs_general(b, wo, wi, pdf_fwd, pdf_rev);
@@ -193,7 +193,7 @@ static inline bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 
     out->pdf = wi.z * CST_INV_PI;
     out->weight = b->albedo;
     out->delta = false;
-    if (!(wi.z > 0.0f) || !(out->pdf > 0.0f) || !rgb_is_finite(out->weight)) return false;
+    if (!(wi.z > 0.0f) || !(out->pdf > 0.0f) || !color_is_finite(out->weight)) return false;
     if (z_o < 0.0f) wi.z = -wi.z;
     out->wi = frame_to_world(&b->frame, wi);
     return true;

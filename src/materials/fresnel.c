@@ -39,10 +39,10 @@ float fresnel_conductor(float cos_i, float eta, float k)
     return r == r ? r : 1.0f; /* 0/0 only at grazing incidence on k = 0, where R = 1 */
 }
 
-Rgb fresnel_conductor_rgb(float cos_i, Rgb eta, Rgb k)
+Color fresnel_conductor_rgb(float cos_i, Color eta, Color k)
 {
-    return rgb(fresnel_conductor(cos_i, eta.r, k.r), fresnel_conductor(cos_i, eta.g, k.g),
-               fresnel_conductor(cos_i, eta.b, k.b));
+    return color_rgb(fresnel_conductor(cos_i, eta.c[0], k.c[0]), fresnel_conductor(cos_i, eta.c[1], k.c[1]),
+               fresnel_conductor(cos_i, eta.c[2], k.c[2]));
 }
 
 /* 2 int_0^1 F(mu) mu dmu for unpolarised light entering a medium of relative IOR n > 1:

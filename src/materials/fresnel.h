@@ -3,7 +3,7 @@
 #ifndef CST_MATERIALS_FRESNEL_H
 #define CST_MATERIALS_FRESNEL_H
 
-#include "math/rgb.h"
+#include "math/color.h"
 
 /* Unpolarised Fresnel reflectance of a smooth dielectric interface; cos_i is the cosine
  * on the incident side (sign picks the side), eta = inside over outside IOR. */
@@ -12,7 +12,7 @@ float fresnel_dielectric(float cos_i, float eta);
 /* Unpolarised reflectance of a conductor of complex relative IOR eta + i k, seen from a
  * dielectric of IOR 1, at |cos_i| (the sign is ignored: a conductor has no inside). */
 float fresnel_conductor(float cos_i, float eta, float k);
-Rgb fresnel_conductor_rgb(float cos_i, Rgb eta, Rgb k);
+Color fresnel_conductor_rgb(float cos_i, Color eta, Color k);
 
 /* Cosine-weighted hemispherical average 2 int_0^1 F(mu) mu dmu of fresnel_dielectric seen
  * from outside, in closed form; eta >= 1. */

@@ -9,7 +9,7 @@
 
 #include <stdbool.h>
 
-#include "math/rgb.h"
+#include "math/color.h"
 
 typedef enum MaterialType {
     MATERIAL_DIFFUSE,    /* Lambertian: albedo = hemispherical reflectance */
@@ -28,10 +28,10 @@ typedef enum MaterialType {
 
 typedef struct Material {
     MaterialType type;
-    Rgb albedo;      /* diffuse, mirror, plastic base; dielectric tint */
+    Color albedo;      /* diffuse, mirror, plastic base; dielectric tint */
     float ior;       /* glass, dielectric, plastic coat: interior over exterior IOR, > 0 */
     float roughness; /* conductor, dielectric, plastic: perceptual roughness in [0, 1] */
-    Rgb eta, k;      /* conductor: complex IOR eta + i k per RGB channel (material_metal) */
+    Color eta, k;      /* conductor: complex IOR eta + i k per RGB channel (material_metal) */
     /* Textures replacing albedo and roughness: 1 + an index into the scene's textures, 0 for
      * none (so a zero-initialised Material has none). A roughness texture gives the mean of
      * its channels; a rough plastic cannot take one (its coat table depends on roughness). */
@@ -63,7 +63,7 @@ void material_prepare(Material *m);
 
 /* Named conductors: "gold", "silver", "copper", "aluminium". Sets eta and k; returns
  * false for an unknown name. material_metal_names lists them, NULL-terminated. */
-bool material_metal(const char *name, Rgb *eta, Rgb *k);
+bool material_metal(const char *name, Color *eta, Color *k);
 extern const char *const material_metal_names[];
 
 #endif

@@ -253,7 +253,7 @@ static void render_aov(RenderJob *job, Worker *w, int pixel, Ray ray)
     Vec3 n = v3_dot(sh.ng, ray.d) > 0.0f ? v3_neg(sh.ng) : sh.ng;
     float z = v3_dot(v3_sub(sh.p, job->camera.origin), job->camera.forward);
     double *a = &job->film->aov[FILM_AOV_STRIDE * (size_t)pixel];
-    a[0] += (double)bsdf.albedo.r; a[1] += (double)bsdf.albedo.g; a[2] += (double)bsdf.albedo.b;
+    a[0] += (double)bsdf.albedo.c[0]; a[1] += (double)bsdf.albedo.c[1]; a[2] += (double)bsdf.albedo.c[2];
     a[3] += (double)n.x; a[4] += (double)n.y; a[5] += (double)n.z;
     a[6] += (double)z;
     a[7] += 1.0;
@@ -280,23 +280,23 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
                 if (job->aov_hit) render_aov(job, w, pixel, ray);
                 /* Photon mapping and BDPT/VCM continue from the sample's PCG32 stream. */
-                Rgb L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
+                Color L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
                                                     &job->vcm_it, pixel, ray, &smp.rng, &w->rays)
                       : job->photon ? photon_li(job->scene, &job->photon_maps, ray, &smp.rng, &w->rays)
                       : job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &smp, &w->rays)
                                      : path_li(job->scene, &job->params, ray, &smp, &w->rays);
-                if (!rgb_is_finite(L)) {
+                if (!color_is_finite(L)) {
                     /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
                     w->nonfinite++;
-                    L = rgb_s(0.0f);
+                    L = color_s(0.0f);
                 }
-                if (fw != 1.0f) L = rgb_scale(L, fw);
+                if (fw != 1.0f) L = color_scale(L, fw);
                 if (job->vcm) {
                     /* The iteration's image; light_merge adds the splats and files it. */
                     double *o = &job->iteration_rgb[3 * (size_t)pixel];
-                    o[0] = L.r; o[1] = L.g; o[2] = L.b;
+                    o[0] = L.c[0]; o[1] = L.c[1]; o[2] = L.c[2];
                 } else {
-                    film_accumulate(job->film, pixel, L.r, L.g, L.b);
+                    film_accumulate(job->film, pixel, L.c[0], L.c[1], L.c[2]);
                 }
             }
         }

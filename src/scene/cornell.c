@@ -35,7 +35,7 @@ static const double CORNELL_QUADS[][4][3] = {
 };
 enum { CORNELL_NUM_QUADS = sizeof CORNELL_QUADS / sizeof CORNELL_QUADS[0] };
 
-static Rgb rgbd(double r, double g, double b) { return rgb((float)r, (float)g, (float)b); }
+static Color rgbd(double r, double g, double b) { return color_rgb((float)r, (float)g, (float)b); }
 static Vec3 v3d(double x, double y, double z) { return v3((float)x, (float)y, (float)z); }
 
 CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err)

@@ -38,11 +38,11 @@ static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
 static float clamp01(float v) { return isfinite(v) ? clampf(v, 0.0f, 1.0f) : 0.0f; }
 
 static int get_color(const struct aiMaterial *mat, const char *key, unsigned type,
-                     unsigned index, Rgb *out)
+                     unsigned index, Color *out)
 {
     struct aiColor4D c;
     if (aiGetMaterialColor(mat, key, type, index, &c) != AI_SUCCESS) return 0;
-    *out = rgb(clamp01(c.r), clamp01(c.g), clamp01(c.b));
+    *out = color_rgb(clamp01(c.r), clamp01(c.g), clamp01(c.b));
     return 1;
 }
 
@@ -86,7 +86,7 @@ static void map_material(const struct aiMaterial *mat, ImportedMaterial *out)
          * glTF materials have no name at all and count as not from the file too. */
         out->from_file = strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) != 0;
     }
-    Rgb kd = rgb_s(0.5f), ks = rgb_s(0.0f), tf = rgb_s(0.0f);
+    Color kd = color_s(0.5f), ks = color_s(0.0f), tf = color_s(0.0f);
     int has_kd = get_color(mat, AI_MATKEY_COLOR_DIFFUSE, &kd);
     if (!has_kd) has_kd = get_color(mat, AI_MATKEY_BASE_COLOR, &kd);
     int has_ks = get_color(mat, AI_MATKEY_COLOR_SPECULAR, &ks);
@@ -108,11 +108,11 @@ static void map_material(const struct aiMaterial *mat, ImportedMaterial *out)
     out->ior = 1.0f;
     if (glass) {
         out->type = MATERIAL_GLASS;
-        out->albedo = has_tf && !rgb_is_black(tf) ? tf : (is_mtl ? rgb_s(1.0f) : kd);
+        out->albedo = has_tf && !color_is_black(tf) ? tf : (is_mtl ? color_s(1.0f) : kd);
         out->ior = ni > 0.0f && ni != 1.0f ? ni : 1.5f;
     } else if (mirror) {
         out->type = MATERIAL_MIRROR;
-        out->albedo = is_mtl ? (has_ks && !rgb_is_black(ks) ? ks : rgb_s(1.0f)) : kd;
+        out->albedo = is_mtl ? (has_ks && !color_is_black(ks) ? ks : color_s(1.0f)) : kd;
     } else {
         out->type = MATERIAL_DIFFUSE;
         out->albedo = kd;

@@ -8,14 +8,14 @@
 #include <stdint.h>
 
 #include "caustic/caustic.h"
-#include "math/rgb.h"
+#include "math/color.h"
 #include "math/vec3.h"
 
 /* A material as the file describes it, mapped to our closest one by the importer. */
 typedef struct ImportedMaterial {
     char name[64];
     int type;    /* a MaterialType (materials/material.h) */
-    Rgb albedo;
+    Color albedo;
     float ior;
     int from_file; /* 0 for assimp's stand-ins: "DefaultMaterial" or a material without a
                       name (PLY has no materials; unnamed glTF materials look the same) */

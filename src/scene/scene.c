@@ -132,7 +132,7 @@ static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float 
                              int32_t *out, CstError *err)
 {
     *out = -1;
-    if (!em || rgb_is_black(em->radiance)) return CST_OK;
+    if (!em || color_is_black(em->radiance)) return CST_OK;
     if (!GROW(s->emitters, s->cap_emitters, s->num_emitters + 1))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding an emitter");
     Emitter *e = &s->emitters[s->num_emitters];
@@ -141,7 +141,7 @@ static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float 
     e->prim = prim;
     e->radiance = em->radiance;
     e->texture = em->texture;
-    e->average = em->texture ? rgb_mul(em->radiance, s->textures[em->texture - 1].average) : em->radiance;
+    e->average = em->texture ? color_mul(em->radiance, s->textures[em->texture - 1].average) : em->radiance;
     e->two_sided = em->two_sided;
     e->area = area;
     e->is_sphere = 0;

@@ -17,12 +17,12 @@
 #include "lights/light.h"
 #include "materials/bsdf.h"
 #include "materials/material.h"
-#include "math/rgb.h"
+#include "math/color.h"
 #include "math/vec3.h"
 #include "textures/texture.h"
 
 typedef struct Emission {
-    Rgb radiance;  /* black = not an emitter */
+    Color radiance;  /* black = not an emitter */
     int two_sided; /* 0: emits only on the side its geometric normal points to */
     int texture;   /* 1 + texture index: radiance times the texture; 0 = none */
 } Emission;
@@ -262,7 +262,7 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
 
 /* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be
  * on an emitter (sh->emitter >= 0). */
-static inline Rgb scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w)
+static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w)
 {
     return emitter_radiance(&s->emitters[sh->emitter], s->textures, sh->ng, sh->uv, w);
 }

@@ -272,7 +272,7 @@ static CstStatus read_vec3(Loader *ld, const json_t *v, double max_abs, Vec3 *ou
 }
 
 /* An RGB triple of numbers, each >= 0 and, when max_one, <= 1. */
-static CstStatus read_rgb(Loader *ld, const json_t *v, int max_one, Rgb *out)
+static CstStatus read_rgb(Loader *ld, const json_t *v, int max_one, Color *out)
 {
     static const char *const channel[3] = {"red", "green", "blue"};
     Vec3 c = {0};
@@ -288,7 +288,7 @@ static CstStatus read_rgb(Loader *ld, const json_t *v, int max_one, Rgb *out)
             return fail_here(ld, "%s %g is negative; expected a number >= 0", channel[k], (double)x);
         }
     }
-    *out = rgb(c.x, c.y, c.z);
+    *out = color_rgb(c.x, c.y, c.z);
     return CST_OK;
 }
 
@@ -738,7 +738,7 @@ static CstStatus read_texture_operand(Loader *ld, const json_t *obj, const char 
     if (json_is_string(v)) {
         LOADER_TRY(read_texture_name(ld, json_string_value(v), out));
     } else {
-        Rgb c;
+        Color c;
         Texture t;
         LOADER_TRY(read_rgb(ld, v, 0, &c));
         texture_constant(&t, c);
@@ -763,7 +763,7 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
     LOADER_TRY(expect_object(ld, obj, "a texture object"));
     LOADER_TRY(read_type(ld, obj, "texture type", types, 3, -1, &type));
     if (type == TEXTURE_CONSTANT) {
-        Rgb c;
+        Color c;
         LOADER_TRY(check_keys(ld, obj, keys_constant, 2));
         LOADER_TRY(member_required(ld, obj, "value", "an array of 3 numbers >= 0", &v));
         path_push_key(ld, "value");
@@ -892,11 +892,11 @@ static CstStatus read_param_texture(Loader *ld, const json_t *v, const char *wha
 {
     int id = 0;
     LOADER_TRY(read_texture_name(ld, json_string_value(v), &id));
-    Rgb mx = ld->scene->textures[id].max;
-    if (rgb_max(mx) > 1.0f) {
+    Color mx = ld->scene->textures[id].max;
+    if (color_max(mx) > 1.0f) {
         char clipped[72];
         return fail_here(ld, "texture \"%s\" has values up to %g; expected %s, at most 1",
-                         clip_name(json_string_value(v), clipped), (double)rgb_max(mx), what);
+                         clip_name(json_string_value(v), clipped), (double)color_max(mx), what);
     }
     *out = id + 1;
     return CST_OK;
@@ -936,7 +936,7 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     LOADER_TRY(read_type(ld, obj, "material type", types, MAT_COUNT, -1, &type));
     LOADER_TRY(check_keys(ld, obj, keys[type], nkeys[type]));
     m->type = mtype[type];
-    m->albedo = type == MAT_DIFFUSE ? rgb_s(0.5f) : type == MAT_PLASTIC ? rgb_s(0.5f) : rgb_s(1.0f);
+    m->albedo = type == MAT_DIFFUSE ? color_s(0.5f) : type == MAT_PLASTIC ? color_s(0.5f) : color_s(1.0f);
     m->ior = type == MAT_GLASS || type == MAT_DIELECTRIC || type == MAT_PLASTIC ? 1.5f : 1.0f;
     m->roughness = 0.0f;
     if ((v = json_object_get(obj, "albedo"))) {
@@ -1073,7 +1073,7 @@ static CstStatus read_emission(Loader *ld, const json_t *shape, Emission *em)
 {
     static const char *const keys[] = {"radiance", "two_sided", "scale"};
     json_t *obj = json_object_get(shape, "emission"), *v;
-    em->radiance = rgb_s(0.0f);
+    em->radiance = color_s(0.0f);
     em->two_sided = 0;
     em->texture = 0;
     if (!obj)
@@ -1087,7 +1087,7 @@ static CstStatus read_emission(Loader *ld, const json_t *shape, Emission *em)
         int id = 0;
         LOADER_TRY(read_texture_name(ld, json_string_value(v), &id));
         em->texture = id + 1;
-        em->radiance = rgb_s(1.0f);
+        em->radiance = color_s(1.0f);
     } else {
         LOADER_TRY(read_rgb(ld, v, 0, &em->radiance));
     }
@@ -1097,7 +1097,7 @@ static CstStatus read_emission(Loader *ld, const json_t *shape, Emission *em)
         path_push_key(ld, "scale");
         LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &k));
         if (!(k >= 0.0f)) return fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
-        em->radiance = rgb_scale(em->radiance, k);
+        em->radiance = color_scale(em->radiance, k);
         path_pop(ld);
     }
     if ((v = json_object_get(obj, "two_sided"))) {
@@ -1820,21 +1820,21 @@ static CstStatus parse_environment(Loader *ld, const json_t *obj)
             path_push_key(ld, "scale");
             return fail_here(ld, "scale goes with file; a constant environment is just its radiance");
         }
-        Rgb L;
+        Color L;
         path_push_key(ld, "radiance");
         LOADER_TRY(read_rgb(ld, rad, 0, &L));
         path_pop(ld);
         LOADER_TRY(envmap_init_constant(&env, L, ld->err));
         return scene_set_environment(ld->scene, &env, ld->err);
     }
-    Rgb scale = rgb_s(1.0f);
+    Color scale = color_s(1.0f);
     if ((v = json_object_get(obj, "scale"))) {
         path_push_key(ld, "scale");
         if (json_is_number(v)) {
             float k;
             LOADER_TRY(read_float(ld, v, (double)FLT_MAX, &k));
             if (!(k >= 0.0f)) return fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
-            scale = rgb_s(k);
+            scale = color_s(k);
         } else {
             LOADER_TRY(read_rgb(ld, v, 0, &scale));
         }

@@ -85,7 +85,7 @@ typedef struct Xf {
 
 typedef struct AreaLight {
     int active;
-    Rgb L;       /* linear sRGB radiance before scale */
+    Color L;       /* linear sRGB radiance before scale */
     float scale;
     float power; /* > 0: radiant power per primitive, as pbrt-v4 normalises it */
     int two_sided;
@@ -110,7 +110,7 @@ typedef struct TexEntry {
     char *name;
     int is_float; /* pbrt keeps float and spectrum textures in two name spaces */
     int id;       /* the scene's texture; float textures hold the value in all three channels */
-    Rgb value;    /* its average, for parameters caustic cannot texture */
+    Color value;    /* its average, for parameters caustic cannot texture */
     /* Derived scene textures made on first use and shared by every material that uses
      * them (an image is copied once): clamped to 1 as a reflectance; as caustic's
      * roughness without and with pbrt's remapping. -1 until made. */
@@ -739,12 +739,12 @@ static void xyz_to_rgb(const double x[3], double out[3])
     out[2] = 0.0556434 * x[0] - 0.2040259 * x[1] + 1.0572252 * x[2];
 }
 
-static Rgb rgb_from_d(const double c[3]) { return rgb((float)c[0], (float)c[1], (float)c[2]); }
+static Color rgb_from_d(const double c[3]) { return color_rgb((float)c[0], (float)c[1], (float)c[2]); }
 
-Rgb pbrt_blackbody_rgb(double kelvin)
+Color pbrt_blackbody_rgb(double kelvin)
 {
     if (!(kelvin > 0.0))
-        return rgb_s(0.0f);
+        return color_s(0.0f);
     /* Planck's law up to a constant factor, which the luminance normalisation removes. */
     const double c2 = 1.4387769e7; /* h c / k_B in nm K */
     double xyz[3] = {0, 0, 0};
@@ -755,7 +755,7 @@ Rgb pbrt_blackbody_rgb(double kelvin)
         for (int k = 0; k < 3; k++) xyz[k] += b * w[k];
     }
     if (!(xyz[1] > 0.0))
-        return rgb_s(0.0f);
+        return color_s(0.0f);
     double y = xyz[1];
     for (int k = 0; k < 3; k++) xyz[k] /= y;
     double c[3];
@@ -776,11 +776,11 @@ static double spectrum_at(const double *pairs, int n, double l)
     return pairs[2 * n - 1];
 }
 
-Rgb pbrt_spectrum_rgb(const double *pairs, int num_pairs, bool illuminant)
+Color pbrt_spectrum_rgb(const double *pairs, int num_pairs, bool illuminant)
 {
     double xyz[3] = {0, 0, 0}, white[3] = {0, 0, 0};
     if (num_pairs == 1) /* a single sample: a constant spectrum */
-        return illuminant ? rgb_s(1.0f) : rgb_s((float)pairs[1]);
+        return illuminant ? color_s(1.0f) : color_s((float)pairs[1]);
     for (double l = 360.0; l <= 830.0; l += 1.0) {
         double w[3], s = spectrum_at(pairs, num_pairs, l);
         cmf(l, w);
@@ -792,7 +792,7 @@ Rgb pbrt_spectrum_rgb(const double *pairs, int num_pairs, bool illuminant)
     double c[3], cw[3];
     if (illuminant) {
         double y = xyz[1];
-        if (!(y > 0.0)) return rgb_s(0.0f);
+        if (!(y > 0.0)) return color_s(0.0f);
         for (int k = 0; k < 3; k++) xyz[k] /= y;
         xyz_to_rgb(xyz, c);
     } else {
@@ -838,18 +838,18 @@ static int named_metal_index(const char *name, int *is_k)
     return -1;
 }
 
-bool pbrt_named_metal(const char *name, Rgb *out)
+bool pbrt_named_metal(const char *name, Color *out)
 {
     int is_k = 0, i = named_metal_index(name, &is_k);
     if (i < 0) return false;
     if (PBRT_METALS[i].preset) {
-        Rgb eta, k;
+        Color eta, k;
         material_metal(PBRT_METALS[i].preset, &eta, &k);
         *out = is_k ? k : eta;
         return true;
     }
     const float *v = is_k ? PBRT_METALS[i].k : PBRT_METALS[i].eta;
-    *out = rgb(v[0], v[1], v[2]);
+    *out = color_rgb(v[0], v[1], v[2]);
     return true;
 }
 
@@ -858,9 +858,9 @@ static float r0_channel(float n, float k)
     return ((n - 1.0f) * (n - 1.0f) + k * k) / ((n + 1.0f) * (n + 1.0f) + k * k);
 }
 
-Rgb pbrt_conductor_r0(Rgb eta, Rgb k)
+Color pbrt_conductor_r0(Color eta, Color k)
 {
-    return rgb(r0_channel(eta.r, k.r), r0_channel(eta.g, k.g), r0_channel(eta.b, k.b));
+    return color_rgb(r0_channel(eta.c[0], k.c[0]), r0_channel(eta.c[1], k.c[1]), r0_channel(eta.c[2], k.c[2]));
 }
 
 /* n_d (587.6 nm) of pbrt-v4's named glasses (Schott catalogue). */
@@ -917,7 +917,7 @@ static int texture_is_constant(const Loader *ld, int entry)
 }
 
 /* A texture where caustic takes one value: its average, with a warning unless it is constant. */
-static CstStatus texture_ref(Loader *ld, const Param *p, const char *d, int is_float, Rgb *out)
+static CstStatus texture_ref(Loader *ld, const Param *p, const char *d, int is_float, Color *out)
 {
     int i = 0;
     char nm[72], nm2[72];
@@ -926,7 +926,7 @@ static CstStatus texture_ref(Loader *ld, const Param *p, const char *d, int is_f
     if (!texture_is_constant(ld, i))
         warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: \"%s\" cannot be textured in caustic; "
                 "texture \"%s\" is taken as its average (%g, %g, %g)", d, clip(p->decl, nm),
-                clip(p->strs[0], nm2), (double)out->r, (double)out->g, (double)out->b);
+                clip(p->strs[0], nm2), (double)out->c[0], (double)out->c[1], (double)out->c[2]);
     return CST_OK;
 }
 
@@ -934,7 +934,7 @@ static CstStatus texture_ref(Loader *ld, const Param *p, const char *d, int is_f
  * spectrum), xyz (pbrt-v3), or with allow_tex a spectrum texture (its constant or average).
  * *found says whether the file gave it; out keeps its default otherwise. */
 static CstStatus get_spectrum(Loader *ld, Params *ps, const char *d, const char *name,
-                              SpecKind kind, int allow_tex, Rgb *out, int *found)
+                              SpecKind kind, int allow_tex, Color *out, int *found)
 {
     Param *p;
     char nm[72];
@@ -944,10 +944,10 @@ static CstStatus get_spectrum(Loader *ld, Params *ps, const char *d, const char 
     TRY(lookup(ld, ps, d, name, allowed,
                allow_tex ? "rgb, spectrum, blackbody or texture" : "rgb, spectrum or blackbody", &p));
     if (!p) return CST_OK;
-    Rgb c = *out;
+    Color c = *out;
     switch (p->type) {
     case PT_TEXTURE: TRY(texture_ref(ld, p, d, 0, &c)); break;
-    case PT_RGB: c = rgb((float)p->nums[0], (float)p->nums[1], (float)p->nums[2]); break;
+    case PT_RGB: c = color_rgb((float)p->nums[0], (float)p->nums[1], (float)p->nums[2]); break;
     case PT_XYZ: {
         double x[3] = {p->nums[0], p->nums[1], p->nums[2]}, r[3];
         xyz_to_rgb(x, r);
@@ -956,7 +956,7 @@ static CstStatus get_spectrum(Loader *ld, Params *ps, const char *d, const char 
     }
     case PT_BLACKBODY:
         c = pbrt_blackbody_rgb(p->nums[0]);
-        if (p->num_nums == 2) c = rgb_scale(c, (float)p->nums[1]);
+        if (p->num_nums == 2) c = color_scale(c, (float)p->nums[1]);
         break;
     case PT_SPECTRUM:
         if (p->num_strs) {
@@ -968,18 +968,18 @@ static CstStatus get_spectrum(Loader *ld, Params *ps, const char *d, const char 
                 if (!PBRT_METALS[mi].preset)
                     warn_at(ld, CST_WARN_APPROXIMATED, p->loc,
                             "%s: \"%s\" taken as the RGB (%g, %g, %g) of its spectrum at about "
-                            "650, 550 and 450 nm", d, clip(s, nm), (double)c.r, (double)c.g, (double)c.b);
+                            "650, 550 and 450 nm", d, clip(s, nm), (double)c.c[0], (double)c.c[1], (double)c.c[2]);
             } else if (named_glass(s, &eta)) {
-                c = rgb_s(eta);
+                c = color_s(eta);
                 warn_at(ld, CST_WARN_APPROXIMATED, p->loc,
                         "%s: \"%s\" \"%s\" taken as the constant %g (n_d): no dispersion", d,
                         clip(p->decl, nm), s, (double)eta);
             } else if (strcmp(s, "stdillum-D65") == 0 || strcmp(s, "illum-D65") == 0) {
-                c = rgb_s(1.0f); /* sRGB's white point */
+                c = color_s(1.0f); /* sRGB's white point */
             } else if (strcmp(s, "stdillum-A") == 0 || strcmp(s, "illum-A") == 0) {
                 c = pbrt_blackbody_rgb(2856.0);
             } else if (strncmp(s, "stdillum-", 9) == 0 || strncmp(s, "illum-", 6) == 0) {
-                c = rgb_s(1.0f);
+                c = color_s(1.0f);
                 warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: illuminant \"%s\" taken as white (D65)",
                         d, clip(s, nm));
             } else {
@@ -1000,16 +1000,16 @@ static CstStatus get_spectrum(Loader *ld, Params *ps, const char *d, const char 
         break;
     default: break;
     }
-    if (!rgb_is_finite(c))
+    if (!color_is_finite(c))
         return fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" is not finite as a 32-bit RGB",
                        d, clip(p->decl, nm));
-    if (c.r < 0.0f || c.g < 0.0f || c.b < 0.0f || (kind == SPEC_REFLECTANCE && rgb_max(c) > 1.0f)) {
-        Rgb k = rgb(clampf(c.r, 0.0f, kind == SPEC_REFLECTANCE ? 1.0f : FLT_MAX),
-                    clampf(c.g, 0.0f, kind == SPEC_REFLECTANCE ? 1.0f : FLT_MAX),
-                    clampf(c.b, 0.0f, kind == SPEC_REFLECTANCE ? 1.0f : FLT_MAX));
+    if (c.c[0] < 0.0f || c.c[1] < 0.0f || c.c[2] < 0.0f || (kind == SPEC_REFLECTANCE && color_max(c) > 1.0f)) {
+        Color k = color_rgb(clampf(c.c[0], 0.0f, kind == SPEC_REFLECTANCE ? 1.0f : FLT_MAX),
+                    clampf(c.c[1], 0.0f, kind == SPEC_REFLECTANCE ? 1.0f : FLT_MAX),
+                    clampf(c.c[2], 0.0f, kind == SPEC_REFLECTANCE ? 1.0f : FLT_MAX));
         warn_at(ld, CST_WARN_APPROXIMATED, p->loc,
                 "%s: \"%s\" (%g, %g, %g) clamped to (%g, %g, %g)%s", d, clip(p->decl, nm),
-                (double)c.r, (double)c.g, (double)c.b, (double)k.r, (double)k.g, (double)k.b,
+                (double)c.c[0], (double)c.c[1], (double)c.c[2], (double)k.c[0], (double)k.c[1], (double)k.c[2],
                 kind == SPEC_REFLECTANCE ? ": a reflectance lies in [0, 1]" : "");
         c = k;
     }
@@ -1028,9 +1028,9 @@ static CstStatus get_float_tex(Loader *ld, Params *ps, const char *d, const char
     TRY(lookup(ld, ps, d, name, M(PT_FLOAT) | M(PT_TEXTURE), "float or texture", &p));
     if (!p) return CST_OK;
     if (p->type == PT_TEXTURE) {
-        Rgb c;
+        Color c;
         TRY(texture_ref(ld, p, d, 1, &c));
-        *out = c.r;
+        *out = c.c[0];
     } else {
         TRY(one_value(ld, p, d));
         *out = (float)p->nums[0];
@@ -1201,7 +1201,7 @@ static CstStatus tex_add(Loader *ld, Texture *t, Loc loc, const char *d, int *id
     return st ? fail_wrap(ld, st, loc, d) : CST_OK;
 }
 
-static CstStatus tex_const(Loader *ld, Rgb c, Loc loc, const char *d, int *id)
+static CstStatus tex_const(Loader *ld, Color c, Loc loc, const char *d, int *id)
 {
     Texture t;
     texture_constant(&t, c);
@@ -1219,15 +1219,15 @@ typedef enum TexOp {
     TEXOP_RED     /* the first channel in all three: pbrt's float image textures */
 } TexOp;
 
-static Rgb texop_apply(TexOp op, Rgb a, Rgb b, Rgb v)
+static Color texop_apply(TexOp op, Color a, Color b, Color v)
 {
     switch (op) {
     case TEXOP_AFFINE:
-        return rgb(maxf(0.0f, a.r * v.r + b.r), maxf(0.0f, a.g * v.g + b.g), maxf(0.0f, a.b * v.b + b.b));
-    case TEXOP_MIN1: return rgb(minf(v.r, 1.0f), minf(v.g, 1.0f), minf(v.b, 1.0f));
+        return color_rgb(maxf(0.0f, a.c[0] * v.c[0] + b.c[0]), maxf(0.0f, a.c[1] * v.c[1] + b.c[1]), maxf(0.0f, a.c[2] * v.c[2] + b.c[2]));
+    case TEXOP_MIN1: return color_rgb(minf(v.c[0], 1.0f), minf(v.c[1], 1.0f), minf(v.c[2], 1.0f));
     case TEXOP_POW:
-        return rgb(powf(maxf(v.r, 0.0f), a.r), powf(maxf(v.g, 0.0f), a.r), powf(maxf(v.b, 0.0f), a.r));
-    case TEXOP_RED: return rgb_s(v.r);
+        return color_rgb(powf(maxf(v.c[0], 0.0f), a.c[0]), powf(maxf(v.c[1], 0.0f), a.c[0]), powf(maxf(v.c[2], 0.0f), a.c[0]));
+    case TEXOP_RED: return color_s(v.c[0]);
     }
     return v;
 }
@@ -1236,12 +1236,12 @@ static Rgb texop_apply(TexOp op, Rgb a, Rgb b, Rgb v)
  * changes nothing. A checkerboard's textures are mapped too, each once however often it
  * is shared (nested checkerboards may share children), without recursion: children have
  * lower indices, so one downward pass marks what is reachable and one upward pass copies. */
-static CstStatus tex_map(Loader *ld, int id, TexOp op, Rgb a, Rgb b, Loc loc, const char *d, int *out)
+static CstStatus tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, const char *d, int *out)
 {
     *out = id;
     /* Spectrum and image values are >= 0 already (get_spectrum, texture_image), so the
      * identity's max(0, v) could only change a negative float constant: left as it is. */
-    if (op == TEXOP_AFFINE && a.r == 1.0f && a.g == 1.0f && a.b == 1.0f && rgb_is_black(b)) return CST_OK;
+    if (op == TEXOP_AFFINE && a.c[0] == 1.0f && a.c[1] == 1.0f && a.c[2] == 1.0f && color_is_black(b)) return CST_OK;
     int n = id + 1, *memo = malloc((size_t)n * sizeof *memo);
     if (!memo) return oom(ld);
     for (int i = 0; i < n; i++) memo[i] = -1;
@@ -1268,10 +1268,10 @@ static CstStatus tex_map(Loader *ld, int id, TexOp op, Rgb a, Rgb b, Loc loc, co
             }
             for (size_t k = 0; k < np; k++) {
                 const float *q = &src.image.rgb[3 * k];
-                Rgb v = texop_apply(op, a, b, rgb(q[0], q[1], q[2]));
-                px[3 * k] = v.r;
-                px[3 * k + 1] = v.g;
-                px[3 * k + 2] = v.b;
+                Color v = texop_apply(op, a, b, color_rgb(q[0], q[1], q[2]));
+                px[3 * k] = v.c[0];
+                px[3 * k + 1] = v.c[1];
+                px[3 * k + 2] = v.c[2];
             }
             if ((st = texture_image(&t, px, src.image.width, src.image.height, src.image.wrap, ld->err))) {
                 st = fail_wrap(ld, st, loc, d);
@@ -1290,7 +1290,7 @@ static CstStatus tex_map(Loader *ld, int id, TexOp op, Rgb a, Rgb b, Loc loc, co
  * 0 when the file gives a value or names a constant texture (*val then holds it), else
  * 1 + the scene texture's index, as Material stores it. */
 static CstStatus tex_param(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
-                           int *tex, Rgb *val, int *entry)
+                           int *tex, Color *val, int *entry)
 {
     Param *p = find_param(ps, name);
     *tex = 0;
@@ -1310,16 +1310,16 @@ static CstStatus tex_param(Loader *ld, Params *ps, const char *d, const char *na
 static CstStatus get_albedo(Loader *ld, Params *ps, const char *d, const char *name, Material *m)
 {
     int tex = 0, e = 0;
-    Rgb avg = m->albedo;
+    Color avg = m->albedo;
     TRY(tex_param(ld, ps, d, name, 0, &tex, &avg, &e));
     if (!tex) return get_spectrum(ld, ps, d, name, SPEC_REFLECTANCE, 1, &m->albedo, NULL);
     Param *p = find_param(ps, name);
-    float mx = rgb_max(ld->scene->textures[tex - 1].max);
+    float mx = color_max(ld->scene->textures[tex - 1].max);
     if (mx > 1.0f) {
         char nm[72];
         if (ld->texs[e].clamped < 0) {
             int id = 0;
-            TRY(tex_map(ld, tex - 1, TEXOP_MIN1, rgb_s(0.0f), rgb_s(0.0f), p->loc, d, &id));
+            TRY(tex_map(ld, tex - 1, TEXOP_MIN1, color_s(0.0f), color_s(0.0f), p->loc, d, &id));
             ld->texs[e].clamped = id;
         }
         tex = ld->texs[e].clamped + 1;
@@ -1380,7 +1380,7 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
         if (eu && ev && eu->type == PT_TEXTURE && ev->type == PT_TEXTURE && eu->num_strs == 1 &&
             ev->num_strs == 1 && strcmp(eu->strs[0], ev->strs[0]) == 0) {
             int tex = 0, e = 0;
-            Rgb avg = rgb_s(0.0f);
+            Color avg = color_s(0.0f);
             TRY(tex_param(ld, ps, d, eu->name, 1, &tex, &avg, &e));
             if (ev != eu) TRY(tex_param(ld, ps, d, ev->name, 1, &tex, &avg, &e));
             if (tex) {
@@ -1388,16 +1388,16 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
                 int *id = &ld->texs[e].rough[remap != 0];
                 if (*id < 0) {
                     int made = 0;
-                    TRY(tex_map(ld, tex - 1, TEXOP_POW, rgb_s(remap ? 0.25f : 0.5f), rgb_s(0.0f), eu->loc, d, &made));
+                    TRY(tex_map(ld, tex - 1, TEXOP_POW, color_s(remap ? 0.25f : 0.5f), color_s(0.0f), eu->loc, d, &made));
                     *id = made;
                 }
                 const Texture *t = &ld->scene->textures[*id];
                 *tex_out = *id + 1;
-                *out = minf(t->average.r, 1.0f);
-                if (t->max.r > 1.0f)
+                *out = minf(t->average.c[0], 1.0f);
+                if (t->max.c[0] > 1.0f)
                     warn_at(ld, CST_WARN_APPROXIMATED, eu->loc, "%s: roughness texture values up to "
                             "GGX alpha %g are beyond caustic's roughest (alpha 1); rendered with alpha 1",
-                            d, (double)(t->max.r * t->max.r));
+                            d, (double)(t->max.c[0] * t->max.c[0]));
                 return CST_OK;
             }
         }
@@ -1439,7 +1439,7 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
     char n_eta[64], n_k[64], nm[72];
     snprintf(n_eta, sizeof n_eta, "%seta", prefix);
     snprintf(n_k, sizeof n_k, "%sk", prefix);
-    Rgb eta, k, refl = rgb_s(0.0f);
+    Color eta, k, refl = color_s(0.0f);
     material_metal("copper", &eta, &k); /* pbrt's default conductor is copper */
     Param *pe = find_param(ps, n_eta), *pk = find_param(ps, n_k), *pr = find_param(ps, "reflectance");
     if (pr && (pe || pk))
@@ -1453,23 +1453,23 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
         if (!(eta_f >= 0.0f))
             return fail_at(ld, CST_ERR_INVALID_ARG, pe->loc, "%s: eta %g is negative; expected "
                            "the real part of a conductor's index of refraction, >= 0", d, (double)eta_f);
-        eta = rgb_s(eta_f);
+        eta = color_s(eta_f);
     } else {
         TRY(get_spectrum(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, NULL));
     }
     TRY(get_spectrum(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL));
     TRY(get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &refl, &has_refl));
     if (has_refl) {
-        float r[3] = {refl.r, refl.g, refl.b}, kk[3];
+        float r[3] = {refl.c[0], refl.c[1], refl.c[2]}, kk[3];
         for (int i = 0; i < 3; i++) {
             float c = clampf(r[i], 0.0f, 0.9999f);
             kk[i] = 2.0f * sqrtf(c) / sqrtf(1.0f - c);
         }
-        eta = rgb_s(1.0f);
-        k = rgb(kk[0], kk[1], kk[2]);
+        eta = color_s(1.0f);
+        k = color_rgb(kk[0], kk[1], kk[2]);
     }
     m->type = MATERIAL_CONDUCTOR;
-    m->albedo = rgb_s(1.0f);
+    m->albedo = color_s(1.0f);
     m->ior = 1.0f;
     m->eta = eta;
     m->k = k;
@@ -1492,10 +1492,10 @@ static CstStatus coat_layer_params(Loader *ld, Params *ps, const char *d)
                     "%s: \"%s\" %g is not supported (caustic's coat is an interface without a "
                     "scattering layer); ignored", d, skip[i].name, (double)v);
     }
-    Rgb albedo = rgb_s(0.0f);
+    Color albedo = color_s(0.0f);
     int found = 0;
     TRY(get_spectrum(ld, ps, d, "albedo", SPEC_REFLECTANCE, 1, &albedo, &found));
-    if (found && rgb_max(albedo) > 0.0f)
+    if (found && color_max(albedo) > 0.0f)
         warn_at(ld, CST_WARN_PARAMETER_IGNORED, find_param(ps, "albedo")->loc,
                 "%s: a scattering layer (\"albedo\" > 0) is not supported; ignored", d);
     int n = 0;
@@ -1508,9 +1508,9 @@ static CstStatus dielectric_eta(Loader *ld, Params *ps, const char *d, const cha
 {
     Param *p = find_param(ps, name);
     if (p && p->type == PT_SPECTRUM) {
-        Rgb c = rgb_s(1.5f);
+        Color c = color_s(1.5f);
         TRY(get_spectrum(ld, ps, d, name, SPEC_UNBOUNDED, 0, &c, NULL));
-        *eta = c.g;
+        *eta = c.c[1];
         if (p->num_strs == 0)
             warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: spectral eta taken as %g (no dispersion)",
                     d, (double)*eta);
@@ -1535,7 +1535,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
      * caustic's two-sided default does. */
     memset(m, 0, sizeof *m);
     m->type = MATERIAL_DIFFUSE;
-    m->albedo = rgb_s(0.5f);
+    m->albedo = color_s(0.5f);
     m->ior = 1.0f;
     if (strcmp(type, "diffuse") == 0) {
         TRY(get_albedo(ld, ps, d, "reflectance", m));
@@ -1558,7 +1558,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by caustic's plastic (reflectance "
                 "%g %g %g, eta %g, roughness %g): the light between coat and base is modelled in "
                 "closed form (Kelemen & Szirmay-Kalos 2001), not by pbrt's random walk", d,
-                (double)m->albedo.r, (double)m->albedo.g, (double)m->albedo.b, (double)m->ior,
+                (double)m->albedo.c[0], (double)m->albedo.c[1], (double)m->albedo.c[2], (double)m->ior,
                 (double)m->roughness);
     } else if (strcmp(type, "diffusetransmission") == 0) {
         TRY(get_albedo(ld, ps, d, "reflectance", m));
@@ -1567,7 +1567,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
     } else if (strcmp(type, "plastic") == 0 || strcmp(type, "substrate") == 0 ||
                strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 ||
                strcmp(type, "disney") == 0) { /* pbrt-v3 */
-        m->albedo = rgb_s(strcmp(type, "plastic") == 0 ? 0.25f : 0.5f);
+        m->albedo = color_s(strcmp(type, "plastic") == 0 ? 0.25f : 0.5f);
         TRY(get_albedo(ld, ps, d, strcmp(type, "disney") == 0 ? "color" : "Kd", m));
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its diffuse "
                 "reflectance (specular lobes dropped)", d);
@@ -1584,12 +1584,12 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
                 "dielectric coating, eta %g, is dropped)", d, (double)coat_eta);
     } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
         m->type = MATERIAL_MIRROR;
-        m->albedo = rgb_s(0.9f);
+        m->albedo = color_s(0.9f);
         TRY(get_albedo(ld, ps, d, "Kr", m));
     } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0 ||
                strcmp(type, "thindielectric") == 0) {
         m->type = MATERIAL_GLASS;
-        m->albedo = rgb_s(1.0f);
+        m->albedo = color_s(1.0f);
         m->ior = 1.5f;
         TRY(dielectric_eta(ld, ps, d, strcmp(type, "glass") == 0 && find_param(ps, "index") ? "index" : "eta",
                            &m->ior));
@@ -1606,7 +1606,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         }
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 || strcmp(type, "none") == 0) {
         m->type = MATERIAL_GLASS;
-        m->albedo = rgb_s(1.0f);
+        m->albedo = color_s(1.0f);
         m->ior = 1.0f;
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (a medium boundary) approximated as glass of "
                 "eta 1: paths pass straight through, shadow rays are blocked", d);
@@ -1631,7 +1631,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
              * is the same lobe with the blended albedo: exact. (Conductors, plastics and
              * dielectrics are not linear in a single albedo.) */
             *m = ma;
-            m->albedo = rgb_add(rgb_scale(ma.albedo, 1.0f - amount), rgb_scale(mb.albedo, amount));
+            m->albedo = color_add(color_scale(ma.albedo, 1.0f - amount), color_scale(mb.albedo, amount));
         } else {
             *m = amount < 0.5f ? ma : mb;
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of materials that do not blend into one "
@@ -1675,17 +1675,17 @@ static CstStatus check_file_access(Loader *ld, Loc loc, const char *d)
 
 /* op applied in place to image texture t's texels (its average and maximum recomputed),
  * keeping its uv transform. */
-static CstStatus image_apply(Loader *ld, Texture *t, TexOp op, Rgb a, Rgb b, Loc loc, const char *d)
+static CstStatus image_apply(Loader *ld, Texture *t, TexOp op, Color a, Color b, Loc loc, const char *d)
 {
     Vec2 sc = t->uv_scale, off = t->uv_offset;
     float *px = t->image.rgb;
     int w = t->image.width, h = t->image.height;
     size_t np = (size_t)w * (size_t)h;
     for (size_t k = 0; k < np; k++) {
-        Rgb v = texop_apply(op, a, b, rgb(px[3 * k], px[3 * k + 1], px[3 * k + 2]));
-        px[3 * k] = v.r;
-        px[3 * k + 1] = v.g;
-        px[3 * k + 2] = v.b;
+        Color v = texop_apply(op, a, b, color_rgb(px[3 * k], px[3 * k + 1], px[3 * k + 2]));
+        px[3 * k] = v.c[0];
+        px[3 * k + 1] = v.c[1];
+        px[3 * k + 2] = v.c[2];
     }
     CstStatus st = texture_image(t, px, w, h, t->image.wrap, ld->err); /* takes px */
     if (st) return fail_wrap(ld, st, loc, d);
@@ -1716,11 +1716,11 @@ static CstStatus tex_uv_mapping(Loader *ld, Params *ps, const char *d, Vec2 *sca
 /* A texture-valued parameter of a Texture: another non-constant texture (*id >= 0), or a
  * value (*id = -1, *val: given, a constant texture's, or def). */
 static CstStatus tex_operand(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
-                             float def, int *id, Rgb *val)
+                             float def, int *id, Color *val)
 {
     int tex = 0;
     *id = -1;
-    *val = rgb_s(def);
+    *val = color_s(def);
     TRY(tex_param(ld, ps, d, name, is_float, &tex, val, NULL));
     if (tex) {
         *id = tex - 1;
@@ -1731,7 +1731,7 @@ static CstStatus tex_operand(Loader *ld, Params *ps, const char *d, const char *
     if (is_float) {
         float f = def;
         TRY(get_float_tex(ld, ps, d, name, def, &f, NULL));
-        *val = rgb_s(f);
+        *val = color_s(f);
         return CST_OK;
     }
     return get_spectrum(ld, ps, d, name, SPEC_UNBOUNDED, 1, val, NULL);
@@ -1740,7 +1740,7 @@ static CstStatus tex_operand(Loader *ld, Params *ps, const char *d, const char *
 /* pbrt-v4's "imagemap" as an image texture (docs/pbrt-compat.md): the image file, its
  * decoding, pbrt's per-value scale and invert, and the uv mapping. *id < 0 (and *v set)
  * when the file's format cannot be read. */
-static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc, int is_float, int *id, Rgb *v)
+static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc, int is_float, int *id, Color *v)
 {
     const char *file = NULL, *filter = NULL, *wrap = NULL, *enc = NULL;
     Loc fl = loc, wl = loc, el = loc, il = loc;
@@ -1800,10 +1800,10 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
             is_float_file = i >= 5;
         }
     if (!readable) {
-        *v = rgb_s(0.5f);
+        *v = color_s(0.5f);
         warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR or "
                 "PFM; the constant 0.5 is used instead", d, clip(file, nm));
-        Rgb a = rgb_s(invert ? -scale : scale), b = rgb_s(invert ? 1.0f : 0.0f);
+        Color a = color_s(invert ? -scale : scale), b = color_s(invert ? 1.0f : 0.0f);
         *v = texop_apply(TEXOP_AFFINE, a, b, *v);
         return CST_OK;
     }
@@ -1816,10 +1816,10 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     if (st) return fail_wrap(ld, st, fl, d);
     texture_set_uv_transform(&t, uvs, uvo);
     /* pbrt's order: decode, take the first channel for a float texture, scale, invert. */
-    if (gamma > 0.0f && !is_float_file) st = image_apply(ld, &t, TEXOP_POW, rgb_s(gamma), rgb_s(0.0f), el, d);
-    if (!st && is_float) st = image_apply(ld, &t, TEXOP_RED, rgb_s(0.0f), rgb_s(0.0f), loc, d);
+    if (gamma > 0.0f && !is_float_file) st = image_apply(ld, &t, TEXOP_POW, color_s(gamma), color_s(0.0f), el, d);
+    if (!st && is_float) st = image_apply(ld, &t, TEXOP_RED, color_s(0.0f), color_s(0.0f), loc, d);
     if (!st && (scale != 1.0f || invert))
-        st = image_apply(ld, &t, TEXOP_AFFINE, rgb_s(invert ? -scale : scale), rgb_s(invert ? 1.0f : 0.0f), loc, d);
+        st = image_apply(ld, &t, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f), loc, d);
     if (st) {
         texture_free(&t);
         return st;
@@ -1832,7 +1832,7 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
 static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc, int is_float, int *id)
 {
     int a = -1, b = -1;
-    Rgb va, vb;
+    Color va, vb;
     Vec2 uvs, uvo;
     TRY(tex_operand(ld, ps, d, "tex1", is_float, 1.0f, &a, &va));
     TRY(tex_operand(ld, ps, d, "tex2", is_float, 0.0f, &b, &vb));
@@ -1868,17 +1868,17 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
     }
     char d[160];
     snprintf(d, sizeof d, "Texture \"%s\" \"%s\"", clip(name, nm), clip(cls, nm2));
-    Rgb v = rgb_s(1.0f); /* the value of a constant (id < 0) */
+    Color v = color_s(1.0f); /* the value of a constant (id < 0) */
     int id = -1;         /* the scene texture, when not a constant */
     SpecKind sk = SPEC_UNBOUNDED;
 /* A texture-valued parameter of this texture taken as one value (its average). */
 #define TEXPARAM(pname, def, outv)                                                        \
     do {                                                                                  \
-        (outv) = rgb_s(def);                                                              \
+        (outv) = color_s(def);                                                              \
         if (is_float) {                                                                   \
             float f_ = (def);                                                             \
             st = get_float_tex(ld, &ps, d, (pname), (def), &f_, NULL);                    \
-            (outv) = rgb_s(f_);                                                           \
+            (outv) = color_s(f_);                                                           \
         } else {                                                                          \
             st = get_spectrum(ld, &ps, d, (pname), sk, 1, &(outv), NULL);                 \
         }                                                                                 \
@@ -1890,22 +1890,22 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
         /* tex times scale (a float texture): a constant, or a textured operand with the
          * other folded into its values. */
         int ta = -1, tb = -1;
-        Rgb a, b;
+        Color a, b;
         if ((st = tex_operand(ld, &ps, d, "tex", is_float, 1.0f, &ta, &a))) goto done;
         if ((st = tex_operand(ld, &ps, d, "scale", 1, 1.0f, &tb, &b))) goto done;
         if (ta < 0 && tb < 0) {
-            v = rgb_mul(a, b);
+            v = color_mul(a, b);
         } else if (ta >= 0 && tb >= 0) {
             b = ld->scene->textures[tb].average;
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the product of two textures is approximated "
-                    "by \"tex\" times the average of \"scale\", %g", d, (double)b.r);
-            st = tex_map(ld, ta, TEXOP_AFFINE, b, rgb_s(0.0f), loc, d, &id);
+                    "by \"tex\" times the average of \"scale\", %g", d, (double)b.c[0]);
+            st = tex_map(ld, ta, TEXOP_AFFINE, b, color_s(0.0f), loc, d, &id);
         } else {
-            st = tex_map(ld, ta >= 0 ? ta : tb, TEXOP_AFFINE, ta >= 0 ? b : a, rgb_s(0.0f), loc, d, &id);
+            st = tex_map(ld, ta >= 0 ? ta : tb, TEXOP_AFFINE, ta >= 0 ? b : a, color_s(0.0f), loc, d, &id);
         }
         if (st) goto done;
     } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
-        Rgb a, b;
+        Color a, b;
         float amount = 0.5f;
         TEXPARAM("tex1", 0.0f, a);
         TEXPARAM("tex2", 1.0f, b);
@@ -1913,20 +1913,20 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
             st = get_float_tex(ld, &ps, d, "amount", 0.5f, &amount, NULL);
             if (st) goto done;
         }
-        v = rgb_add(rgb_scale(a, 1.0f - amount), rgb_scale(b, amount));
+        v = color_add(color_scale(a, 1.0f - amount), color_scale(b, amount));
         if (cls[0] == 'd')
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the average of its two textures", d);
     } else if (strcmp(cls, "checkerboard") == 0) {
         int dim = 2;
         if ((st = get_int(ld, &ps, d, "dimension", 2, &dim))) goto done;
         if (dim == 3) {
-            Rgb a, b;
+            Color a, b;
             TEXPARAM("tex1", 1.0f, a);
             TEXPARAM("tex2", 0.0f, b);
-            v = rgb_scale(rgb_add(a, b), 0.5f);
+            v = color_scale(color_add(a, b), 0.5f);
             params_mark_all_used(&ps); /* the 3D mapping's parameters */
             warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: a 3D (solid) checkerboard approximated by its "
-                    "average (%g, %g, %g)", d, (double)v.r, (double)v.g, (double)v.b);
+                    "average (%g, %g, %g)", d, (double)v.c[0], (double)v.c[1], (double)v.c[2]);
         } else if (dim == 2) {
             if ((st = texture_checker(ld, &ps, d, loc, is_float, &id))) goto done;
         } else {
@@ -1935,16 +1935,16 @@ static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
             goto done;
         }
     } else if (strcmp(cls, "bilerp") == 0) {
-        Rgb c[4];
+        Color c[4];
         static const char *const names[4] = {"v00", "v01", "v10", "v11"};
         static const float defs[4] = {0.0f, 1.0f, 0.0f, 1.0f};
         for (int i = 0; i < 4; i++) TEXPARAM(names[i], defs[i], c[i]);
-        v = rgb_scale(rgb_add(rgb_add(c[0], c[1]), rgb_add(c[2], c[3])), 0.25f);
+        v = color_scale(color_add(color_add(c[0], c[1]), color_add(c[2], c[3])), 0.25f);
         warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by its average", d);
     } else if (strcmp(cls, "imagemap") == 0) {
         if ((st = texture_imagemap(ld, &ps, d, loc, is_float, &id, &v))) goto done;
     } else {
-        v = rgb_s(0.5f);
+        v = color_s(0.5f);
         params_mark_all_used(&ps);
         warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: texture class not supported; the constant 0.5 "
                 "is used instead", d);
@@ -2113,13 +2113,13 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: sphere at (%g, %g, %g) radius %g is "
                            "beyond the scene limits (coordinates within 1e18, radius above 1e-18)",
                            d, (double)c.x, (double)c.y, (double)c.z, (double)r);
-        Emission em = {rgb_s(0.0f), 0, 0};
+        Emission em = {color_s(0.0f), 0, 0};
         if (al && al->active) {
-            em.radiance = rgb_scale(al->L, al->scale);
+            em.radiance = color_scale(al->L, al->scale);
             em.two_sided = al->two_sided;
             if (al->power > 0.0f) {
                 double k_e = (al->two_sided ? 2.0 : 1.0) * 4.0 * PBRT_PI * (double)r * (double)r * PBRT_PI;
-                em.radiance = rgb_scale(em.radiance, (float)((double)al->power / k_e));
+                em.radiance = color_scale(em.radiance, (float)((double)al->power / k_e));
             }
             if (reverse && !al->two_sided)
                 warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: ReverseOrientation on an emitting sphere "
@@ -2184,9 +2184,9 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     sm.num_triangles = g->nt;
     sm.material = mat;
     sm.skip_degenerate = 1;
-    Emission em = {rgb_s(0.0f), 0, 0};
+    Emission em = {color_s(0.0f), 0, 0};
     if (al && al->active) {
-        em.radiance = rgb_scale(al->L, al->scale);
+        em.radiance = color_scale(al->L, al->scale);
         em.two_sided = al->two_sided;
     }
     sm.emission = &em;
@@ -2198,7 +2198,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             float area = triangle_area(p[idx[3 * t]], p[idx[3 * t + 1]], p[idx[3 * t + 2]]);
             Emission et = em;
             if (area > 0.0f)
-                et.radiance = rgb_scale(em.radiance, (float)((double)al->power /
+                et.radiance = color_scale(em.radiance, (float)((double)al->power /
                                        (PBRT_PI * (double)area * (al->two_sided ? 2.0 : 1.0))));
             SceneMesh one = sm;
             one.indices = &idx[3 * t];
@@ -2828,7 +2828,7 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
                 "light was given before; skipped", d);
         return CST_OK;
     }
-    Rgb c = rgb_s(1.0f);
+    Color c = color_s(1.0f);
     float scale = 1.0f, illum = 0.0f;
     int has_l = 0;
     const char *file = NULL;
@@ -2853,8 +2853,8 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
     CstStatus st;
     if (!file) {
         double k = (double)scale * (illum > 0.0f ? (double)illum / PBRT_PI : 1.0);
-        Rgb L = rgb_scale(c, (float)k);
-        if (!rgb_is_finite(L))
+        Color L = color_scale(c, (float)k);
+        if (!color_is_finite(L))
             return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the radiance is not finite", d);
         TRY(envmap_init_constant(&env, L, ld->err));
     } else {
@@ -2915,7 +2915,7 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         free(src);
         if (!isfinite(k))
             k = 0.0;
-        st = envmap_init_image(&env, out, ow, oh, rgb_s((float)k), ld->err);
+        st = envmap_init_image(&env, out, ow, oh, color_s((float)k), ld->err);
         if (st) return fail_wrap(ld, st, fl, d);
     }
     st = scene_set_environment(ld->scene, &env, ld->err);
@@ -2943,7 +2943,7 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
     }
     DeltaLight l;
     memset(&l, 0, sizeof l);
-    Rgb c = rgb_s(1.0f);
+    Color c = color_s(1.0f);
     float scale = 1.0f, power = 0.0f, illum = 0.0f;
     TRY(get_spectrum(ld, ps, d, distant ? "L" : "I", SPEC_ILLUMINANT, 0, &c, NULL));
     TRY(get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
@@ -2994,8 +2994,8 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
         l.dir = v3_scale(dir, 1.0f / len);
         if (illum > 0.0f) k *= (double)illum;
     }
-    l.intensity = rgb_scale(c, (float)k);
-    if (!rgb_is_finite(l.intensity) || !(k >= 0.0))
+    l.intensity = color_scale(c, (float)k);
+    if (!color_is_finite(l.intensity) || !(k >= 0.0))
         return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative "
                        "or not finite", d, (double)scale);
     CstStatus st = scene_add_delta_light(ld->scene, &l, ld->err);
@@ -3266,7 +3266,7 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
             ld->gs.area.active = 0;
         } else {
-            AreaLight al = {1, rgb_s(1.0f), 1.0f, 0.0f, 0};
+            AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0};
             Param *pl;
             if ((st = lookup(ld, &ps, d, "filename", M(PT_STRING), "string", &pl))) goto done;
             if (pl) warn_at(ld, CST_WARN_UNSUPPORTED, pl->loc, "%s: image emission is not supported; \"L\" is used", d);
@@ -3274,7 +3274,7 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
             if ((st = get_float(ld, &ps, d, "scale", 1.0f, &al.scale, NULL))) goto done;
             if ((st = get_float(ld, &ps, d, "power", 0.0f, &al.power, NULL))) goto done;
             if ((st = get_bool(ld, &ps, d, "twosided", 0, &al.two_sided))) goto done;
-            if (!(al.scale >= 0.0f) || !rgb_is_finite(rgb_scale(al.L, al.scale))) {
+            if (!(al.scale >= 0.0f) || !color_is_finite(color_scale(al.L, al.scale))) {
                 st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g; expected a finite scale >= 0",
                              d, (double)al.scale);
                 goto done;
@@ -3606,7 +3606,7 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     ld.scene->settings.integrator = CST_INTEGRATOR_PATH;
     ld.scene->settings.max_depth = 5;
     ld.scene->settings.filter = CST_FILTER_GAUSSIAN;
-    Material def = {.type = MATERIAL_DIFFUSE, .albedo = rgb_s(0.5f), .ior = 1.0f};
+    Material def = {.type = MATERIAL_DIFFUSE, .albedo = color_s(0.5f), .ior = 1.0f};
     if ((st = add_mat_entry(&ld, NULL, &def, &ld.gs.material))) goto done;
 
     st = parse_text(&ld, text ? text : "", len, name);

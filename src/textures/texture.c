@@ -14,9 +14,9 @@
 #include "core/error.h"
 #include "film/image_io.h"
 
-static Rgb rgb_max3(Rgb a, Rgb b) { return rgb(maxf(a.r, b.r), maxf(a.g, b.g), maxf(a.b, b.b)); }
+static Color rgb_max3(Color a, Color b) { return color_rgb(maxf(a.c[0], b.c[0]), maxf(a.c[1], b.c[1]), maxf(a.c[2], b.c[2])); }
 
-void texture_constant(Texture *t, Rgb value)
+void texture_constant(Texture *t, Color value)
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_CONSTANT;
@@ -34,7 +34,7 @@ void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd
     t->checker.odd = odd;
     t->checker.scale = scale;
     /* The two kinds of square cover equal areas of the uv plane. */
-    t->average = rgb_scale(rgb_add(textures[even].average, textures[odd].average), 0.5f);
+    t->average = color_scale(color_add(textures[even].average, textures[odd].average), 0.5f);
     t->max = rgb_max3(textures[even].max, textures[odd].max);
 }
 
@@ -48,7 +48,7 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
     }
     size_t n = (size_t)width * (size_t)height;
     double sum[3] = {0.0, 0.0, 0.0};
-    Rgb mx = rgb_s(0.0f);
+    Color mx = color_s(0.0f);
     for (size_t i = 0; i < n; i++) {
         const float *p = &rgb_data[3 * i];
         if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]) || p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f) {
@@ -60,7 +60,7 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
             return st;
         }
         for (int c = 0; c < 3; c++) sum[c] += (double)p[c];
-        mx = rgb_max3(mx, rgb(p[0], p[1], p[2]));
+        mx = rgb_max3(mx, color_rgb(p[0], p[1], p[2]));
     }
     t->type = TEXTURE_IMAGE;
     t->uv_scale = v2(1.0f, 1.0f);
@@ -68,7 +68,7 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
     t->image.width = width;
     t->image.height = height;
     t->image.wrap = wrap;
-    t->average = rgb((float)(sum[0] / (double)n), (float)(sum[1] / (double)n), (float)(sum[2] / (double)n));
+    t->average = color_rgb((float)(sum[0] / (double)n), (float)(sum[1] / (double)n), (float)(sum[2] / (double)n));
     t->max = mx;
     return CST_OK;
 }
@@ -177,7 +177,7 @@ static inline int texture_wrap(int i, int n, TextureWrap wrap)
 }
 
 /* Bilinear interpolation between the four texel centres around uv. */
-static Rgb texture_image_eval(const TextureImage *im, Vec2 uv)
+static Color texture_image_eval(const TextureImage *im, Vec2 uv)
 {
     float u = uv.x, v = uv.y;
     if (!isfinite(u)) u = 0.0f;
@@ -202,12 +202,12 @@ static Rgb texture_image_eval(const TextureImage *im, Vec2 uv)
     const float *p01 = &im->rgb[3 * ((size_t)yb * (size_t)im->width + (size_t)xa)];
     const float *p11 = &im->rgb[3 * ((size_t)yb * (size_t)im->width + (size_t)xb)];
     float w00 = (1.0f - dx) * (1.0f - dy), w10 = dx * (1.0f - dy), w01 = (1.0f - dx) * dy, w11 = dx * dy;
-    return rgb(w00 * p00[0] + w10 * p10[0] + w01 * p01[0] + w11 * p11[0],
+    return color_rgb(w00 * p00[0] + w10 * p10[0] + w01 * p01[0] + w11 * p11[0],
                w00 * p00[1] + w10 * p10[1] + w01 * p01[1] + w11 * p11[1],
                w00 * p00[2] + w10 * p10[2] + w01 * p01[2] + w11 * p11[2]);
 }
 
-Rgb texture_eval(const Texture *textures, int id, Vec2 uv)
+Color texture_eval(const Texture *textures, int id, Vec2 uv)
 {
     /* Checkerboards only select another texture, so nesting is a loop; children have
      * lower indices, so it ends. */

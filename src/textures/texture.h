@@ -12,7 +12,7 @@
 #include <stdbool.h>
 
 #include "caustic/caustic.h"
-#include "math/rgb.h"
+#include "math/color.h"
 #include "math/vec3.h"
 
 typedef enum TextureType {
@@ -39,17 +39,17 @@ typedef struct TextureImage {
 
 typedef struct Texture {
     TextureType type;
-    Rgb average; /* mean over the uv plane (images: over their texels): light selection */
-    Rgb max;     /* largest value of each channel: validation (an albedo must stay <= 1) */
+    Color average; /* mean over the uv plane (images: over their texels): light selection */
+    Color max;     /* largest value of each channel: validation (an albedo must stay <= 1) */
     Vec2 uv_scale, uv_offset; /* (1, 1) and (0, 0) unless texture_set_uv_transform */
     union {
-        Rgb value; /* constant */
+        Color value; /* constant */
         TextureChecker checker;
         TextureImage image;
     };
 } Texture;
 
-void texture_constant(Texture *t, Rgb value);
+void texture_constant(Texture *t, Color value);
 /* even, odd: indices into textures (the array the texture will be added to). */
 void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd, float scale);
 /* Takes ownership of rgb (width * height * 3 linear floats, row 0 = top), also on failure. */
@@ -64,12 +64,12 @@ void texture_free(Texture *t);
 void texture_set_uv_transform(Texture *t, Vec2 scale, Vec2 offset);
 
 /* The value at uv of texture id in textures. */
-Rgb texture_eval(const Texture *textures, int id, Vec2 uv);
+Color texture_eval(const Texture *textures, int id, Vec2 uv);
 /* A scalar texture (roughness): the mean of the three channels. */
 static inline float texture_eval_scalar(const Texture *textures, int id, Vec2 uv)
 {
-    Rgb c = texture_eval(textures, id, uv);
-    return (c.r + c.g + c.b) * (1.0f / 3.0f);
+    Color c = texture_eval(textures, id, uv);
+    return (c.c[0] + c.c[1] + c.c[2]) * (1.0f / 3.0f);
 }
 
 #endif

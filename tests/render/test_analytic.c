@@ -48,16 +48,16 @@ static Scene *plane_under_light(double a, double b, double h)
     CstError err;
     Scene *s = scene_create();
     int plane_mat, light_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
-    m.albedo = rgb_s(0.0f);
+    m.albedo = color_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
     /* Plane y = 0 with normal +y; emitter at y = h, normal -y (winding gives the side). */
     Vec3 plane[4] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
     assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
     float ha = (float)(a / 2), hb = (float)(b / 2), fh = (float)h;
     Vec3 light[4] = {{-ha, fh, -hb}, {ha, fh, -hb}, {ha, fh, hb}, {-ha, fh, hb}};
-    Emission em = {{LE, LE, LE}, 0, 0};
+    Emission em = {{{LE, LE, LE}}, 0, 0};
     assert_int_equal(scene_add_quad(s, light, light_mat, &em, &err), CST_OK);
     return s;
 }
@@ -339,7 +339,7 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
     CstError err;
     Scene *s = scene_create();
     int plane_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
     Vec3 plane[4] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
     assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
@@ -350,14 +350,14 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
     if (kind == 0) {
         l.type = DELTA_POINT;
         l.p = v3(0, (float)h, 0);
-        l.intensity = rgb_s((float)I);
+        l.intensity = color_s((float)I);
         expected = (double)RHO / pi * I / (h * h);
     } else if (kind == 1) {
         const double tilt = 25.0 * pi / 180.0, cone = 30.0 * pi / 180.0, inner = 20.0 * pi / 180.0;
         l.type = DELTA_SPOT;
         l.p = v3(0, (float)h, 0);
         l.dir = v3((float)sin(tilt), (float)-cos(tilt), 0);
-        l.intensity = rgb_s((float)I);
+        l.intensity = color_s((float)I);
         l.cos_outer = (float)cos(cone);
         l.cos_inner = (float)cos(inner);
         double t = (cos(tilt) - cos(cone)) / (cos(inner) - cos(cone));
@@ -366,7 +366,7 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
         const double beta = 30.0 * pi / 180.0;
         l.type = DELTA_DIRECTIONAL;
         l.dir = v3((float)sin(beta), (float)-cos(beta), 0);
-        l.intensity = rgb_s((float)E);
+        l.intensity = color_s((float)E);
         expected = (double)RHO / pi * E * cos(beta);
     }
     assert_int_equal(scene_add_delta_light(s, &l, &err), CST_OK);
@@ -395,7 +395,7 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
     CstError err;
     Scene *s = scene_create();
     int plane_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {RHO, RHO, RHO}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
     Vec3 plane[4] = {{-500, 0, -500}, {-500, 0, 500}, {500, 0, 500}, {500, 0, -500}};
     assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
@@ -417,7 +417,7 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
         }
     for (int k = 0; k < 3; k++) expected[k] *= (double)RHO / pi;
     EnvMap env;
-    assert_int_equal(envmap_init_image(&env, rgb, W, H, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(envmap_init_image(&env, rgb, W, H, color_s(1.0f), &err), CST_OK);
     assert_int_equal(scene_set_environment(s, &env, &err), CST_OK);
     CameraDesc cam = {{0, 1.0f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);

@@ -168,9 +168,9 @@ static void test_environment_scene(void **state)
     Scene *s = scene_create();
     assert_non_null(s);
     int white, red;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.7f, 0.7f, 0.7f}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.7f, 0.7f, 0.7f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &white, &err), CST_OK);
-    m.albedo = rgb(0.7f, 0.2f, 0.1f);
+    m.albedo = color_rgb(0.7f, 0.2f, 0.1f);
     assert_int_equal(scene_add_material(s, &m, &red, &err), CST_OK);
     /* Small, so that the light paths' disk (the bounding sphere's) is not much wider
      * than what the camera sees, or the light tracer would have no power here. */
@@ -197,7 +197,7 @@ static void test_environment_scene(void **state)
             if (r == 3 && c == 5) { p[0] = 80.0f; p[1] = 70.0f; p[2] = 50.0f; }
         }
     EnvMap env;
-    assert_int_equal(envmap_init_image(&env, rgb, W, H, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(envmap_init_image(&env, rgb, W, H, color_s(1.0f), &err), CST_OK);
     assert_int_equal(scene_set_environment(s, &env, &err), CST_OK);
     CameraDesc cam = {{0.3f, 4.0f, -0.2f}, {0, 0, 0}, {0, 0, 1}, 50.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);

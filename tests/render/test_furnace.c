@@ -52,11 +52,11 @@ static void test_white_furnace_albedo_one(void **state)
     CstError err;
     Scene *s = scene_create();
     int white, black;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{1.0f, 1.0f, 1.0f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &white, &err), CST_OK);
-    m.albedo = rgb_s(0.0f);
+    m.albedo = color_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
-    Emission em = {{1.0f, 1.0f, 1.0f}, 1, 0};
+    Emission em = {{{1.0f, 1.0f, 1.0f}}, 1, 0};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 10.0f, black, &em, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, white, NULL, &err), CST_OK);
     CameraDesc cam = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 4.0f, 0.0f};

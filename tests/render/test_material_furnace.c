@@ -21,9 +21,9 @@ static Scene *furnace_scene(const Material *m)
     Scene *s = scene_create();
     int obj, black;
     assert_int_equal(scene_add_material(s, m, &obj, &err), CST_OK);
-    Material k = {.type = MATERIAL_DIFFUSE, .albedo = {0.0f, 0.0f, 0.0f}, .ior = 1.0f};
+    Material k = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &k, &black, &err), CST_OK);
-    Emission em = {{1.0f, 1.0f, 1.0f}, 1, 0};
+    Emission em = {{{1.0f, 1.0f, 1.0f}}, 1, 0};
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 10.0f, black, &em, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, obj, NULL, &err), CST_OK);
     /* fov 30 at distance 4: the sphere fills most of the frame */
@@ -50,11 +50,11 @@ static void test_conserving_materials_render_one(void **state)
 {
     (void)state;
     Material mats[5] = {
-        {.type = MATERIAL_DIELECTRIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.0f},
-        {.type = MATERIAL_GLASS, .albedo = {1, 1, 1}, .ior = 2.4f},
-        {.type = MATERIAL_PLASTIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.0f},
-        {.type = MATERIAL_PLASTIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.3f},
-        {.type = MATERIAL_PLASTIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.0f, .one_sided = true},
+        {.type = MATERIAL_DIELECTRIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 0.0f},
+        {.type = MATERIAL_GLASS, .albedo = {{1, 1, 1}}, .ior = 2.4f},
+        {.type = MATERIAL_PLASTIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 0.0f},
+        {.type = MATERIAL_PLASTIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 0.3f},
+        {.type = MATERIAL_PLASTIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 0.0f, .one_sided = true},
     };
     const char *names[5] = {"smooth dielectric 1.5", "glass 2.4", "smooth plastic", "rough plastic 0.3",
                             "one-sided smooth plastic"};
@@ -89,7 +89,7 @@ static void test_rough_dielectric_sphere(void **state)
     const float rough[2] = {0.2f, 0.5f};
     const double bound[2] = {0.02, 0.175};
     for (int i = 0; i < 2; i++) {
-        Material m = {.type = MATERIAL_DIELECTRIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = rough[i]};
+        Material m = {.type = MATERIAL_DIELECTRIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = rough[i]};
         Scene *s = furnace_scene(&m);
         for (int v = 0; v < 3; v++) {
             RegionStat r = render_mean(s, VARIANTS[v], 256, 40u + (uint64_t)(i * 3 + v));
@@ -113,7 +113,7 @@ static void test_rough_dielectric_sphere(void **state)
 static void test_rough_dielectric_light_vs_path(void **state)
 {
     (void)state;
-    Material m = {.type = MATERIAL_DIELECTRIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 1.0f};
+    Material m = {.type = MATERIAL_DIELECTRIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 1.0f};
     Scene *s = furnace_scene(&m);
     const int rect[1][4] = {{6, 6, 18, 18}}; /* inside the sphere's silhouette */
     CstRenderSettings st = {0};
@@ -143,8 +143,8 @@ static void test_bidirectional_materials(void **state)
 {
     (void)state;
     Material mats[2] = {
-        {.type = MATERIAL_PLASTIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.0f},
-        {.type = MATERIAL_DIELECTRIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.5f},
+        {.type = MATERIAL_PLASTIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 0.0f},
+        {.type = MATERIAL_DIELECTRIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 0.5f},
     };
     const char *names[2] = {"smooth plastic", "rough dielectric 0.5"};
     const CstIntegrator integ[2] = {CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
@@ -181,7 +181,7 @@ static void test_bidirectional_materials(void **state)
 static void test_photon_mixed_bsdf(void **state)
 {
     (void)state;
-    Material m = {.type = MATERIAL_PLASTIC, .albedo = {1, 1, 1}, .ior = 1.5f, .roughness = 0.0f};
+    Material m = {.type = MATERIAL_PLASTIC, .albedo = {{1, 1, 1}}, .ior = 1.5f, .roughness = 0.0f};
     Scene *s = furnace_scene(&m);
     const CstIntegrator integ[2] = {CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM};
     const int rect[1][4] = {{0, 0, 24, 24}};

@@ -109,22 +109,22 @@ static Scene *sphere_box_scene(int nphi, int ntheta)
     Scene *s = scene_create();
     assert_non_null(s);
     int white, red, green, ball, black;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.75f, 0.75f, 0.75f}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.75f, 0.75f, 0.75f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &white, &err), CST_OK);
-    m.albedo = rgb(0.7f, 0.1f, 0.1f);
+    m.albedo = color_rgb(0.7f, 0.1f, 0.1f);
     assert_int_equal(scene_add_material(s, &m, &red, &err), CST_OK);
-    m.albedo = rgb(0.1f, 0.7f, 0.1f);
+    m.albedo = color_rgb(0.1f, 0.7f, 0.1f);
     assert_int_equal(scene_add_material(s, &m, &green, &err), CST_OK);
-    m.albedo = rgb(0.9f, 0.9f, 0.9f);
+    m.albedo = color_rgb(0.9f, 0.9f, 0.9f);
     assert_int_equal(scene_add_material(s, &m, &ball, &err), CST_OK);
-    m.albedo = rgb_s(0.0f);
+    m.albedo = color_s(0.0f);
     assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
     add_tilted_floor(s, 30.0f * CST_PI / 180.0f, white);
     add_quad(s, v3(-1, 1, -1), v3(2, 0, 0), v3(0, 0, 2), white, NULL);  /* ceiling, -y */
     add_quad(s, v3(-1, -1, 1), v3(0, 2, 0), v3(2, 0, 0), white, NULL);  /* back, -z */
     add_quad(s, v3(-1, -1, -1), v3(0, 2, 0), v3(0, 0, 2), red, NULL);   /* x = -1, +x */
     add_quad(s, v3(1, -1, -1), v3(0, 0, 2), v3(0, 2, 0), green, NULL);  /* x = 1, -x */
-    Emission em = {{12.0f, 12.0f, 12.0f}, 0, 0};
+    Emission em = {{{12.0f, 12.0f, 12.0f}}, 0, 0};
     add_quad(s, v3(-0.3f, 0.99f, -0.1f), v3(0.6f, 0, 0), v3(0, 0, 0.6f), black, &em); /* faces -y */
     add_tessellated_sphere(s, v3(0.1f, -0.45f, 0.15f), 0.55f, nphi, ntheta, ball, true);
     CameraDesc cam = {{0, 0, -3.4f}, {0, 0, 0}, {0, 1, 0}, 38.0f, 0.0f, 1.0f, 0.0f};
@@ -190,7 +190,7 @@ static void test_tilted_plane_furnace(void **state)
     Scene *s = scene_create();
     assert_non_null(s);
     int white;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {1.0f, 1.0f, 1.0f}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{1.0f, 1.0f, 1.0f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &white, &err), CST_OK);
     Vec3 pos[4] = {{-1, 0, -1}, {-1, 0, 1}, {1, 0, 1}, {1, 0, -1}};
     Vec3 n = v3(sinf(theta), cosf(theta), 0.0f);
@@ -205,7 +205,7 @@ static void test_tilted_plane_furnace(void **state)
     sm.material = white;
     assert_int_equal(scene_add_mesh_ex(s, &sm, NULL, &err), CST_OK);
     EnvMap env;
-    assert_int_equal(envmap_init_constant(&env, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(envmap_init_constant(&env, color_s(1.0f), &err), CST_OK);
     assert_int_equal(scene_set_environment(s, &env, &err), CST_OK);
     CameraDesc cam = {{0, 3, 0}, {0, 0, 0}, {0, 0, 1}, 30.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);

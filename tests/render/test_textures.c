@@ -24,7 +24,7 @@ static int add_texture(Scene *s, const Texture *t)
 }
 
 /* A checkerboard of two colours; returns its id. */
-static int add_checker(Scene *s, Rgb even, Rgb odd, float scale)
+static int add_checker(Scene *s, Color even, Color odd, float scale)
 {
     Texture t;
     texture_constant(&t, even);
@@ -46,7 +46,7 @@ static void test_checker_plane_closed_form(void **state)
 {
     (void)state;
     enum { SIZE = 32, SQUARE = 8 };
-    const Rgb A = {0.9f, 0.2f, 0.5f}, B = {0.1f, 0.6f, 0.5f};
+    const Color A = {{0.9f, 0.2f, 0.5f}}, B = {{0.1f, 0.6f, 0.5f}};
     CstError err;
     Scene *s = scene_create();
     int board = add_checker(s, A, B, 4.0f), mat;
@@ -55,7 +55,7 @@ static void test_checker_plane_closed_form(void **state)
     Vec3 q[4] = {{-0.5f, 0, -0.5f}, {-0.5f, 0, 0.5f}, {0.5f, 0, 0.5f}, {0.5f, 0, -0.5f}};
     assert_int_equal(scene_add_quad(s, q, mat, NULL, &err), CST_OK);
     EnvMap env;
-    assert_int_equal(envmap_init_constant(&env, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(envmap_init_constant(&env, color_s(1.0f), &err), CST_OK);
     assert_int_equal(scene_set_environment(s, &env, &err), CST_OK);
     CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 0.0f, 0.0f, 1.0f, 1.0f};
     scene_set_camera(s, &cam);
@@ -76,8 +76,8 @@ static void test_checker_plane_closed_form(void **state)
         CstRenderStats stats;
         assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
         assert_int_equal(stats.nonfinite, 0);
-        const double half[3] = {0.5 * ((double)A.r + (double)B.r), 0.5 * ((double)A.g + (double)B.g),
-                                0.5 * ((double)A.b + (double)B.b)};
+        const double half[3] = {0.5 * ((double)A.c[0] + (double)B.c[0]), 0.5 * ((double)A.c[1] + (double)B.c[1]),
+                                0.5 * ((double)A.c[2] + (double)B.c[2])};
         double worst = 0.0;
         Regions quads = regions(SIZE, SIZE / 2);
         for (int i = 0; i < quads.count; i++) {
@@ -97,8 +97,8 @@ static void test_checker_plane_closed_form(void **state)
                 int is_a = r.mean[0] > 0.5;
                 RegionStat r0 = region_stat(f, 0, 0, SQUARE, SQUARE);
                 assert_int_equal(is_a, (r0.mean[0] > 0.5) ^ ((bx + by) & 1));
-                Rgb want = is_a ? A : B;
-                const double w[3] = {want.r, want.g, want.b};
+                Color want = is_a ? A : B;
+                const double w[3] = {want.c[0], want.c[1], want.c[2]};
                 for (int c = 0; c < 3; c++) {
                     double z = (r.mean[c] - w[c]) / r.se[c];
                     if (fabs(z) > worst) worst = fabs(z);
@@ -124,10 +124,10 @@ static Scene *textured_scene(void)
 {
     CstError err;
     Scene *s = scene_create();
-    int floor_tex = add_checker(s, rgb(0.8f, 0.3f, 0.2f), rgb(0.2f, 0.5f, 0.8f), 4.0f);
-    int rough_tex = add_checker(s, rgb_s(0.3f), rgb_s(0.65f), 3.0f);
-    int quad_le = add_checker(s, rgb(6.0f, 5.0f, 4.0f), rgb(0.5f, 1.0f, 2.0f), 3.0f);
-    int ball_le = add_checker(s, rgb(8.0f, 2.0f, 1.0f), rgb(1.0f, 3.0f, 6.0f), 4.0f);
+    int floor_tex = add_checker(s, color_rgb(0.8f, 0.3f, 0.2f), color_rgb(0.2f, 0.5f, 0.8f), 4.0f);
+    int rough_tex = add_checker(s, color_s(0.3f), color_s(0.65f), 3.0f);
+    int quad_le = add_checker(s, color_rgb(6.0f, 5.0f, 4.0f), color_rgb(0.5f, 1.0f, 2.0f), 3.0f);
+    int ball_le = add_checker(s, color_rgb(8.0f, 2.0f, 1.0f), color_rgb(1.0f, 3.0f, 6.0f), 4.0f);
     /* an 8 x 4 image of smooth colours */
     float *px = malloc(8 * 4 * 3 * sizeof *px);
     assert_non_null(px);
@@ -156,9 +156,9 @@ static Scene *textured_scene(void)
     Vec3 floor_q[4] = {{-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}};
     assert_int_equal(scene_add_quad(s, floor_q, floor_mat, NULL, &err), CST_OK);
     Vec3 light_q[4] = {{-1, 2, -1}, {1, 2, -1}, {1, 2, 1}, {-1, 2, 1}}; /* normal -y */
-    Emission quad_em = {{1.0f, 1.0f, 1.0f}, 0, quad_le + 1};
+    Emission quad_em = {{{1.0f, 1.0f, 1.0f}}, 0, quad_le + 1};
     assert_int_equal(scene_add_quad(s, light_q, black, &quad_em, &err), CST_OK);
-    Emission ball_em = {{1.0f, 1.0f, 1.0f}, 1, ball_le + 1};
+    Emission ball_em = {{{1.0f, 1.0f, 1.0f}}, 1, ball_le + 1};
     assert_int_equal(scene_add_sphere(s, v3(0.9f, 0.9f, 0.6f), 0.25f, black, &ball_em, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(-0.6f, 0.5f, 0.3f), 0.5f, ball_mat, NULL, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0.5f, 0.35f, -0.4f), 0.35f, metal_mat, NULL, &err), CST_OK);

@@ -49,10 +49,10 @@ typedef struct Case {
 
 static Material make_material(MaterialType t, float roughness, float ior)
 {
-    Material m = {.type = t, .albedo = {1.0f, 1.0f, 1.0f}, .ior = ior, .roughness = roughness};
+    Material m = {.type = t, .albedo = {{1.0f, 1.0f, 1.0f}}, .ior = ior, .roughness = roughness};
     if (t == MATERIAL_CONDUCTOR) assert_true(material_metal("gold", &m.eta, &m.k));
-    if (t == MATERIAL_PLASTIC) m.albedo = rgb(0.8f, 0.5f, 0.2f);
-    if (t == MATERIAL_DIFFUSE) m.albedo = rgb(0.7f, 0.7f, 0.7f);
+    if (t == MATERIAL_PLASTIC) m.albedo = color_rgb(0.8f, 0.5f, 0.2f);
+    if (t == MATERIAL_DIFFUSE) m.albedo = color_rgb(0.7f, 0.7f, 0.7f);
     material_prepare(&m);
     return m;
 }
@@ -216,10 +216,10 @@ static ChiResult run_chi2(const Case *c, uint64_t seed)
         obs[hist_cell(&h, frame_to_local(&b.frame, s.wi))] += 1.0;
         /* The sample's own pdf and weight against eval and pdf. */
         double pdf = (double)bsdf_pdf(&b, wo, s.wi);
-        Rgb f = bsdf_eval_transport(&b, wo, s.wi, c->mode);
+        Color f = bsdf_eval_transport(&b, wo, s.wi, c->mode);
         double rp = fabs((double)s.pdf - pdf) / fmax(pdf, 1e-30);
-        double fw[3] = {(double)f.r, (double)f.g, (double)f.b}, ww[3] = {(double)s.weight.r, (double)s.weight.g,
-                                                                          (double)s.weight.b};
+        double fw[3] = {(double)f.c[0], (double)f.c[1], (double)f.c[2]}, ww[3] = {(double)s.weight.c[0], (double)s.weight.c[1],
+                                                                          (double)s.weight.c[2]};
         double rw = 0.0;
         for (int k = 0; k < 3; k++) {
             double want = fw[k] / (double)s.pdf;
@@ -408,7 +408,7 @@ static Albedo directional_albedo(const Material *m, float cos_o, BsdfTransport m
         Vec2 u = pcg32_v2(&rng);
         BsdfSample s;
         if (!bsdf_sample_transport(&b, wo, uc, u, mode, &s)) continue;
-        double w[3] = {(double)s.weight.r, (double)s.weight.g, (double)s.weight.b};
+        double w[3] = {(double)s.weight.c[0], (double)s.weight.c[1], (double)s.weight.c[2]};
         for (int k = 0; k < 3; k++) { sum[k] += w[k]; sum2[k] += w[k] * w[k]; }
     }
     Albedo a;
@@ -435,12 +435,12 @@ static void test_white_furnace(void **state)
     double worst_excess_z = -INFINITY;
     for (int a = 0; a < NELEM(FURNACE_COS); a++) {
         float c = FURNACE_COS[a];
-        Material lam = {.type = MATERIAL_DIFFUSE, .albedo = {1, 1, 1}, .ior = 1.0f};
+        Material lam = {.type = MATERIAL_DIFFUSE, .albedo = {{1, 1, 1}}, .ior = 1.0f};
         Albedo al = directional_albedo(&lam, c, BSDF_RADIANCE, n, 1u);
         assert_true(fabs(al.mean[0] - 1.0) < 1e-6);
         for (int i = 0; i < NELEM(IORS); i++)
             for (int side = 0; side < 2; side++) {
-                Material glass = {.type = MATERIAL_GLASS, .albedo = {1, 1, 1}, .ior = IORS[i]};
+                Material glass = {.type = MATERIAL_GLASS, .albedo = {{1, 1, 1}}, .ior = IORS[i]};
                 Material diel = make_material(MATERIAL_DIELECTRIC, 0.0f, IORS[i]);
                 Albedo ag = directional_albedo(&glass, side ? -c : c, BSDF_IMPORTANCE, n, 2u);
                 Albedo ad = directional_albedo(&diel, side ? -c : c, BSDF_IMPORTANCE, n, 3u);
@@ -451,7 +451,7 @@ static void test_white_furnace(void **state)
         /* plastic of base albedo 1: E + (1 - E) = 1 */
         for (int r = 0; r < NELEM(PLASTIC_ROUGHNESS); r++) {
             Material pl = make_material(MATERIAL_PLASTIC, PLASTIC_ROUGHNESS[r], 1.5f);
-            pl.albedo = rgb_s(1.0f);
+            pl.albedo = color_s(1.0f);
             Albedo ap = directional_albedo(&pl, c, BSDF_RADIANCE, n, 4u + (uint64_t)r);
             double z = (ap.mean[0] - 1.0) / ap.se[0];
             if (PLASTIC_ROUGHNESS[r] == 0.0f && !(fabs(z) <= FURNACE_Z))
@@ -525,10 +525,10 @@ static void test_rough_dielectric_energy_loss(void **state)
 
 static Vec3 random_dir(Pcg32 *rng) { return warp_uniform_sphere(pcg32_v2(rng)); }
 
-static double rel_diff(Rgb a, Rgb b)
+static double rel_diff(Color a, Color b)
 {
     double d = 0.0;
-    double x[3] = {(double)a.r, (double)a.g, (double)a.b}, y[3] = {(double)b.r, (double)b.g, (double)b.b};
+    double x[3] = {(double)a.c[0], (double)a.c[1], (double)a.c[2]}, y[3] = {(double)b.c[0], (double)b.c[1], (double)b.c[2]};
     for (int k = 0; k < 3; k++) d = fmax(d, fabs(x[k] - y[k]) / fmax(fmax(fabs(x[k]), fabs(y[k])), 1e-30));
     return d;
 }
@@ -566,14 +566,14 @@ static void test_reciprocity(void **state)
             Vec3 wo = random_dir(&rng), wi = random_dir(&rng);
             if (wo.z * wi.z <= 0.0f) wi.z = -wi.z; /* reflection pairs, either side */
             if (fabsf(wo.z) < 1e-3f || fabsf(wi.z) < 1e-3f) continue;
-            Rgb f1 = rgb_scale(bsdf_eval(&b, wo, wi), 1.0f / fabsf(wi.z));
-            Rgb f2 = rgb_scale(bsdf_eval(&b, wi, wo), 1.0f / fabsf(wo.z));
-            if (rgb_is_black(f1) && rgb_is_black(f2)) continue;
+            Color f1 = color_scale(bsdf_eval(&b, wo, wi), 1.0f / fabsf(wi.z));
+            Color f2 = color_scale(bsdf_eval(&b, wi, wo), 1.0f / fabsf(wo.z));
+            if (color_is_black(f1) && color_is_black(f2)) continue;
             double d = rel_diff(f1, f2);
             worst = fmax(worst, d);
             checked++;
             if (!(d <= 1e-4))
-                fail_msg("material %d: f(wo,wi) = %g, f(wi,wo) = %g (relative %.2g)", i, (double)f1.r, (double)f2.r, d);
+                fail_msg("material %d: f(wo,wi) = %g, f(wi,wo) = %g (relative %.2g)", i, (double)f1.c[0], (double)f2.c[0], d);
         }
     }
     print_message("reciprocity: %ld pairs, max relative difference %.2g\n", checked, worst);
@@ -599,14 +599,14 @@ static void test_eval_pdfs_matches_calls(void **state)
             for (int k = 0; k < 5000; k++) {
                 Vec3 wo = random_dir(&rng), wi = random_dir(&rng);
                 float fwd, rev;
-                Rgb f = bsdf_eval_pdfs(&b, wo, wi, &fwd, &rev);
-                Rgb f1 = bsdf_eval(&b, wo, wi);
+                Color f = bsdf_eval_pdfs(&b, wo, wi, &fwd, &rev);
+                Color f1 = bsdf_eval(&b, wo, wi);
                 float fwd1 = bsdf_pdf(&b, wo, wi), rev1 = bsdf_pdf(&b, wi, wo);
                 if (memcmp(&f, &f1, sizeof f) != 0 || memcmp(&fwd, &fwd1, sizeof fwd) != 0 ||
                     memcmp(&rev, &rev1, sizeof rev) != 0)
-                    fail_msg("material %d, shading %d: (%g, %g, %g) against (%g, %g, %g)", i, shading, (double)f.r,
-                             (double)fwd, (double)rev, (double)f1.r, (double)fwd1, (double)rev1);
-                nonzero += !rgb_is_black(f) && fwd > 0.0f && rev > 0.0f;
+                    fail_msg("material %d, shading %d: (%g, %g, %g) against (%g, %g, %g)", i, shading, (double)f.c[0],
+                             (double)fwd, (double)rev, (double)f1.c[0], (double)fwd1, (double)rev1);
+                nonzero += !color_is_black(f) && fwd > 0.0f && rev > 0.0f;
             }
         }
     assert_true(nonzero > 1000); /* the pairs were not all trivially zero */
@@ -659,16 +659,16 @@ static void test_plain_diffuse_matches_general(void **state)
             if (k % 7 == 0) wo = tangent[k % 3];
             if (k % 11 == 0) wi = tangent[(k / 11) % 3];
             float fwd, rev, fwd1, rev1;
-            Rgb f = bsdf_eval_pdfs(&b, wo, wi, &fwd, &rev);
-            Rgb f1 = bsdf_eval_pdfs_general(&b, wo, wi, &fwd1, &rev1);
-            Rgb fi = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
-            Rgb fi1 = bsdf_eval_transport_general(&b, wo, wi, BSDF_IMPORTANCE);
+            Color f = bsdf_eval_pdfs(&b, wo, wi, &fwd, &rev);
+            Color f1 = bsdf_eval_pdfs_general(&b, wo, wi, &fwd1, &rev1);
+            Color fi = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
+            Color fi1 = bsdf_eval_transport_general(&b, wo, wi, BSDF_IMPORTANCE);
             float p = bsdf_pdf(&b, wo, wi), p1 = bsdf_pdf_general(&b, wo, wi);
             if (memcmp(&f, &f1, sizeof f) != 0 || memcmp(&fwd, &fwd1, sizeof fwd) != 0 ||
                 memcmp(&rev, &rev1, sizeof rev) != 0 || memcmp(&fi, &fi1, sizeof fi) != 0 ||
                 memcmp(&p, &p1, sizeof p) != 0)
                 fail_msg("one_sided %d, wo.z %g, wi.z %g: (%g, %g, %g) against (%g, %g, %g)", one_sided,
-                         (double)wo.z, (double)wi.z, (double)f.r, (double)fwd, (double)rev, (double)f1.r,
+                         (double)wo.z, (double)wi.z, (double)f.c[0], (double)fwd, (double)rev, (double)f1.c[0],
                          (double)fwd1, (double)rev1);
             checked += fwd > 0.0f;
             BsdfSample bs, bs1;
@@ -707,22 +707,22 @@ static void test_transmission_adjoint(void **state)
                 Vec3 wo = random_dir(&rng), wi = random_dir(&rng);
                 if (wo.z * wi.z >= 0.0f) wi.z = -wi.z; /* transmission pairs */
                 if (fabsf(wo.z) < 1e-3f || fabsf(wi.z) < 1e-3f) continue;
-                Rgb rad = bsdf_eval_transport(&b, wo, wi, BSDF_RADIANCE);
-                Rgb imp = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
-                Rgb swapped = rgb_scale(bsdf_eval_transport(&b, wi, wo, BSDF_RADIANCE), fabsf(wi.z) / fabsf(wo.z));
-                if (rgb_is_black(imp) && rgb_is_black(swapped)) continue;
+                Color rad = bsdf_eval_transport(&b, wo, wi, BSDF_RADIANCE);
+                Color imp = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
+                Color swapped = color_scale(bsdf_eval_transport(&b, wi, wo, BSDF_RADIANCE), fabsf(wi.z) / fabsf(wo.z));
+                if (color_is_black(imp) && color_is_black(swapped)) continue;
                 float etap = wo.z > 0.0f ? b.eta : 1.0f / b.eta;
-                double d1 = rel_diff(imp, swapped), d2 = rel_diff(imp, rgb_scale(rad, etap * etap));
+                double d1 = rel_diff(imp, swapped), d2 = rel_diff(imp, color_scale(rad, etap * etap));
                 /* Relative 1e-4, except in the far tails of the lobes (f |cos| < 1e-3): there
                  * swapping wo and wi rounds the half vector differently (~1e-7 rad), which D
                  * amplifies by up to ~4 tan(theta_m) / alpha^2; an absolute 1e-7 of a lobe
                  * that integrates to ~1 is far below anything a render can see. */
-                double mag = fmax((double)rgb_max(imp), (double)rgb_max(swapped));
+                double mag = fmax((double)color_max(imp), (double)color_max(swapped));
                 double tol = mag >= 1e-3 ? 1e-4 : 1e-4 + 1e-7 / mag;
                 if (mag >= 1e-3) worst = fmax(worst, fmax(d1, d2));
                 if (!(d1 <= tol && d2 <= tol))
                     fail_msg("r=%.2f ior %.2f: f* %g, f(wi,wo) %g, eta^2 f %g", (double)ROUGHNESS[r], (double)IORS[i],
-                             (double)imp.r, (double)swapped.r, (double)(rad.r * etap * etap));
+                             (double)imp.c[0], (double)swapped.c[0], (double)(rad.c[0] * etap * etap));
             }
         }
     print_message("transmission adjoint: max relative difference %.2g where f |cos| >= 1e-3\n", worst);
@@ -737,7 +737,7 @@ static void test_plastic_coat_table(void **state)
     double worst = 0.0;
     for (int r = 1; r < NELEM(PLASTIC_ROUGHNESS); r++) {
         Material m = make_material(MATERIAL_PLASTIC, PLASTIC_ROUGHNESS[r], 1.5f);
-        m.albedo = rgb_s(0.0f); /* coat only */
+        m.albedo = color_s(0.0f); /* coat only */
         Bsdf b;
         bsdf_init(&b, &m, test_normal());
         for (int a = 0; a < NELEM(FURNACE_COS); a++) {

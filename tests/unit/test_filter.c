@@ -100,7 +100,7 @@ static void test_splat_weights(void **state)
             float x = -1.0f + (W + 2.0f) * pcg32_float(&rng), y = -1.0f + (H + 2.0f) * pcg32_float(&rng);
             SplatList l;
             assert_true(splat_list_init(&l, 16));
-            film_splat(&l, &fr, x, y, rgb_s(1.0f));
+            film_splat(&l, &fr, x, y, color_s(1.0f));
             double expect[W * H] = {0}, got[3 * W * H] = {0};
             for (int py = 0; py < H; py++)
                 for (int px = 0; px < W; px++) {
@@ -138,7 +138,7 @@ static void test_splat_bands(void **state)
         for (int i = 0; i < N; i++) {
             float x = -2.0f + (W + 4.0f) * pcg32_float(&rng), y = -2.0f + (H + 4.0f) * pcg32_float(&rng);
             float cb = 1.0f + pcg32_float(&rng), cg = pcg32_float(&rng), cr = pcg32_float(&rng);
-            film_splat(&l, &fr, x, y, rgb(cr, cg, cb));
+            film_splat(&l, &fr, x, y, color_rgb(cr, cg, cb));
         }
         static double whole[3 * W * H], banded[3 * W * H];
         memset(whole, 0, sizeof whole);

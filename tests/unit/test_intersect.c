@@ -575,7 +575,7 @@ static void test_scene_offset_near_scales(void **state)
         Scene *s = scene_create();
         assert_non_null(s);
         int mat;
-        Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
+        Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.5f, 0.5f, 0.5f}}, .ior = 1.0f};
         assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
         const float hf = (float)h;
         const Vec3 floor[4] = {{-hf, 0, -hf}, {-hf, 0, hf}, {hf, 0, hf}, {hf, 0, -hf}};

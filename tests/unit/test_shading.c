@@ -35,7 +35,7 @@ static Scene *one_triangle(const Vec3 *n)
     Scene *s = scene_create();
     assert_non_null(s);
     int mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.5f, 0.5f, 0.5f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
     Vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
     int idx[3] = {0, 1, 2};
@@ -129,7 +129,7 @@ static void test_instance(void **state)
         Scene *s = scene_create();
         assert_non_null(s);
         int mat, proto;
-        Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
+        Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.5f, 0.5f, 0.5f}}, .ior = 1.0f};
         assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
         Vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
         Vec3 n[3] = {v3(0, 0, 1), v3_normalize(v3(1, 0, 1)), v3_normalize(v3(0, 1, 2))};
@@ -223,7 +223,7 @@ static Vec3 random_dir(Pcg32 *rng)
 
 static Material material(MaterialType t, float roughness)
 {
-    Material m = {.type = t, .albedo = {0.8f, 0.6f, 0.4f}, .ior = 1.5f, .roughness = roughness};
+    Material m = {.type = t, .albedo = {{0.8f, 0.6f, 0.4f}}, .ior = 1.5f, .roughness = roughness};
     if (t == MATERIAL_CONDUCTOR) assert_true(material_metal("gold", &m.eta, &m.k));
     material_prepare(&m);
     return m;
@@ -238,10 +238,10 @@ static Material test_material(int i)
     return material(type[i], rough[i]);
 }
 
-static bool rgb_near(Rgb a, Rgb b, float rel)
+static bool rgb_near(Color a, Color b, float rel)
 {
-    float s = fmaxf(rgb_max(a), rgb_max(b));
-    return fabsf(a.r - b.r) <= rel * s && fabsf(a.g - b.g) <= rel * s && fabsf(a.b - b.b) <= rel * s;
+    float s = fmaxf(color_max(a), color_max(b));
+    return fabsf(a.c[0] - b.c[0]) <= rel * s && fabsf(a.c[1] - b.c[1]) <= rel * s && fabsf(a.c[2] - b.c[2]) <= rel * s;
 }
 
 /* With ns = ng the factor is 1 and bsdf_init_shading is bsdf_init, bit for bit. */
@@ -261,9 +261,9 @@ static void test_adjoint_is_one_without_shading(void **state)
             float f = bsdf_shading_adjoint(&b, wo, wi);
             if (!(fabsf(f - 1.0f) <= 1e-6f)) fail_msg("adjoint factor %.9f with ns = ng", (double)f);
             for (int mode = 0; mode < 2; mode++) {
-                Rgb fa = bsdf_eval_transport(&a, wo, wi, (BsdfTransport)mode);
-                Rgb fb = bsdf_eval_transport(&b, wo, wi, (BsdfTransport)mode);
-                assert_true(fa.r == fb.r && fa.g == fb.g && fa.b == fb.b);
+                Color fa = bsdf_eval_transport(&a, wo, wi, (BsdfTransport)mode);
+                Color fb = bsdf_eval_transport(&b, wo, wi, (BsdfTransport)mode);
+                assert_true(fa.c[0] == fb.c[0] && fa.c[1] == fb.c[1] && fa.c[2] == fb.c[2]);
             }
             assert_true(bsdf_pdf(&a, wo, wi) == bsdf_pdf(&b, wo, wi));
         }
@@ -312,16 +312,16 @@ static void test_convention(void **state)
             assert_true(b.shading);
             Vec3 wo = random_dir(&rng), wi = random_dir(&rng);
             float go = v3_dot(wo, ng), gi = v3_dot(wi, ng), so = v3_dot(wo, ns), si = v3_dot(wi, ns);
-            Rgb fr = bsdf_eval_transport(&b, wo, wi, BSDF_RADIANCE);
-            Rgb fi = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
+            Color fr = bsdf_eval_transport(&b, wo, wi, BSDF_RADIANCE);
+            Color fi = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
             if ((go * gi > 0.0f) != (so * si > 0.0f)) {
                 leaks_checked++;
-                assert_true(rgb_is_black(fr) && rgb_is_black(fi) && bsdf_pdf(&b, wo, wi) == 0.0f);
+                assert_true(color_is_black(fr) && color_is_black(fi) && bsdf_pdf(&b, wo, wi) == 0.0f);
             }
-            if (!transmits && go * gi < 0.0f) assert_true(rgb_is_black(fr) && rgb_is_black(fi));
-            Rgb swapped = rgb_scale(bsdf_eval_transport(&b, wi, wo, BSDF_RADIANCE), fabsf(gi) / fabsf(go));
+            if (!transmits && go * gi < 0.0f) assert_true(color_is_black(fr) && color_is_black(fi));
+            Color swapped = color_scale(bsdf_eval_transport(&b, wi, wo, BSDF_RADIANCE), fabsf(gi) / fabsf(go));
             if (!rgb_near(fi, swapped, 1e-4f))
-                fail_msg("material %d: importance (%g) vs swapped radiance (%g)", i, (double)fi.r, (double)swapped.r);
+                fail_msg("material %d: importance (%g) vs swapped radiance (%g)", i, (double)fi.c[0], (double)swapped.c[0]);
             for (int mode = 0; mode < 2; mode++) {
                 BsdfSample bs;
                 float uc = pcg32_float(&rng);
@@ -334,9 +334,9 @@ static void test_convention(void **state)
                 if (bs.delta) continue;
                 float pdf = bsdf_pdf(&b, wo, bs.wi);
                 if (!(fabsf(pdf - bs.pdf) <= 1e-3f * pdf)) fail_msg("material %d: pdf %g vs %g", i, (double)bs.pdf, (double)pdf);
-                Rgb f = rgb_scale(bsdf_eval_transport(&b, wo, bs.wi, (BsdfTransport)mode), 1.0f / bs.pdf);
+                Color f = color_scale(bsdf_eval_transport(&b, wo, bs.wi, (BsdfTransport)mode), 1.0f / bs.pdf);
                 if (!rgb_near(f, bs.weight, 2e-3f))
-                    fail_msg("material %d mode %d: weight %g vs eval/pdf %g", i, mode, (double)bs.weight.r, (double)f.r);
+                    fail_msg("material %d mode %d: weight %g vs eval/pdf %g", i, mode, (double)bs.weight.c[0], (double)f.c[0]);
             }
         }
     }

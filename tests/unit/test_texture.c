@@ -37,11 +37,11 @@ static int group_teardown(void **state)
     return scratch_dir_remove();
 }
 
-static void assert_rgb_near(Rgb got, double r, double g, double b, double tol)
+static void assert_rgb_near(Color got, double r, double g, double b, double tol)
 {
-    if (!(fabs((double)got.r - r) <= tol && fabs((double)got.g - g) <= tol && fabs((double)got.b - b) <= tol))
-        fail_msg("got (%.9g, %.9g, %.9g), expected (%.9g, %.9g, %.9g) within %g", (double)got.r, (double)got.g,
-                 (double)got.b, r, g, b, tol);
+    if (!(fabs((double)got.c[0] - r) <= tol && fabs((double)got.c[1] - g) <= tol && fabs((double)got.c[2] - b) <= tol))
+        fail_msg("got (%.9g, %.9g, %.9g), expected (%.9g, %.9g, %.9g) within %g", (double)got.c[0], (double)got.c[1],
+                 (double)got.c[2], r, g, b, tol);
 }
 
 /* The sRGB EOTF (IEC 61966-2-1), written out independently of image_io.c. */
@@ -140,8 +140,8 @@ static void test_bilinear_exact(void **state)
     /* clamp: far outside is the corner texel; non-finite uv counts as 0 */
     int corner[1][2] = {{2, 0}};
     expect_mix(&cl, v2(50.0f, 50.0f), corner, 1);
-    Rgb nan_uv = texture_eval(&cl, 0, v2(NAN, INFINITY));
-    assert_true(rgb_is_finite(nan_uv));
+    Color nan_uv = texture_eval(&cl, 0, v2(NAN, INFINITY));
+    assert_true(color_is_finite(nan_uv));
     texture_free(&rep);
     texture_free(&cl);
 }
@@ -165,7 +165,7 @@ static void test_srgb_decode(void **state)
         assert_int_equal(t.image.height, 1);
         for (int i = 0; i < 4; i++) {
             double s = bytes[i] / 255.0, want = linear ? s : srgb_eotf(s);
-            Rgb got = texture_eval(&t, 0, v2((float)((i + 0.5) / 4.0), 0.5f));
+            Color got = texture_eval(&t, 0, v2((float)((i + 0.5) / 4.0), 0.5f));
             assert_rgb_near(got, want, want, want, 1e-6);
         }
         texture_free(&t);
@@ -204,8 +204,8 @@ static void test_float_and_jpeg(void **state)
     assert_true(stbi_write_jpg(path, 8, 8, 3, grey, 100) != 0);
     Texture t;
     assert_int_equal(texture_image_load(&t, path, false, TEXTURE_WRAP_REPEAT, &err), CST_OK);
-    Rgb c = texture_eval(&t, 0, v2(0.5f, 0.5f));
-    assert_true(fabs((double)c.r - srgb_eotf(200 / 255.0)) < srgb_eotf(201 / 255.0) - srgb_eotf(200 / 255.0));
+    Color c = texture_eval(&t, 0, v2(0.5f, 0.5f));
+    assert_true(fabs((double)c.c[0] - srgb_eotf(200 / 255.0)) < srgb_eotf(201 / 255.0) - srgb_eotf(200 / 255.0));
     texture_free(&t);
     /* failures: a missing file (I/O), a file that is no image (parse) */
     tpath(path, sizeof path, "missing.png");
@@ -224,8 +224,8 @@ static void test_checkerboard(void **state)
 {
     (void)state;
     Texture tex[4];
-    texture_constant(&tex[0], rgb(0.1f, 0.2f, 0.3f));
-    texture_constant(&tex[1], rgb(0.9f, 0.8f, 0.7f));
+    texture_constant(&tex[0], color_rgb(0.1f, 0.2f, 0.3f));
+    texture_constant(&tex[1], color_rgb(0.9f, 0.8f, 0.7f));
     texture_checkerboard(&tex[2], tex, 0, 1, 2.0f); /* squares of 1/2 */
     /* (floor(2u) + floor(2v)) even -> texture 0 */
     assert_rgb_near(texture_eval(tex, 2, v2(0.1f, 0.1f)), 0.1, 0.2, 0.3, 1e-7);
@@ -258,8 +258,8 @@ static void test_uv_transform(void **state)
     Vec2 at = centre(1, 0);
     texel(1, 0, c);
     assert_rgb_near(texture_eval(tex, 0, v2((at.x - 0.25f) / 0.5f, (at.y + 0.5f) / 2.0f)), c[0], c[1], c[2], 1e-6);
-    texture_constant(&tex[1], rgb(0.1f, 0.2f, 0.3f));
-    texture_constant(&tex[2], rgb(0.9f, 0.8f, 0.7f));
+    texture_constant(&tex[1], color_rgb(0.1f, 0.2f, 0.3f));
+    texture_constant(&tex[2], color_rgb(0.9f, 0.8f, 0.7f));
     texture_checkerboard(&tex[3], tex, 0, 1, 1.0f);
     texture_set_uv_transform(&tex[3], v2(2.0f, 1.0f), v2(-0.5f, 0.0f));
     /* uv = (0.5, 0.625) -> (s, t) = (0.5, 0.625), even: the image, at the unmapped uv */
@@ -297,11 +297,11 @@ static void test_uv_at_hits(void **state)
     CstError err;
     Scene *s = scene_create();
     int mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {0.5f, 0.5f, 0.5f}, .ior = 1.0f};
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.5f, 0.5f, 0.5f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
     /* uvs are computed in scenes with textures only */
     Texture tc;
-    texture_constant(&tc, rgb_s(1.0f));
+    texture_constant(&tc, color_s(1.0f));
     int tid;
     assert_int_equal(scene_add_texture(s, &tc, &tid, &err), CST_OK);
     /* a triangle without uvs at z = 0 (added first: before the scene has a uv array) */
@@ -376,12 +376,12 @@ static void test_emitter_sample_uv(void **state)
     Material m = {.type = MATERIAL_DIFFUSE, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
     Texture tex[3];
-    texture_constant(&tex[0], rgb(1.0f, 0.5f, 0.25f));
-    texture_constant(&tex[1], rgb(0.0f, 2.0f, 4.0f));
+    texture_constant(&tex[0], color_rgb(1.0f, 0.5f, 0.25f));
+    texture_constant(&tex[1], color_rgb(0.0f, 2.0f, 4.0f));
     for (int i = 0; i < 2; i++) assert_int_equal(scene_add_texture(s, &tex[i], &tid, &err), CST_OK);
     texture_checkerboard(&tex[2], s->textures, 0, 1, 4.0f);
     assert_int_equal(scene_add_texture(s, &tex[2], &tid, &err), CST_OK);
-    Emission em = {{2.0f, 2.0f, 2.0f}, 1, tid + 1};
+    Emission em = {{{2.0f, 2.0f, 2.0f}}, 1, tid + 1};
     Vec3 q[4] = {{0, 0, 0}, {4, 0, 0}, {4, 0, 4}, {0, 0, 4}}; /* u along x, v along z */
     assert_int_equal(scene_add_quad(s, q, mat, &em, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0, 10, 0), 1.0f, mat, &em, &err), CST_OK);
@@ -399,9 +399,9 @@ static void test_emitter_sample_uv(void **state)
             if ((int)s->emitters[e].prim < s->num_triangles) assert_uv(uv, (double)p.x / 4.0, (double)p.z / 4.0);
             else assert_uv(uv, sphere_uv(v3_sub(p, v3(0, 10, 0))).x, sphere_uv(v3_sub(p, v3(0, 10, 0))).y);
             /* the radiance there is the texture's, scaled */
-            Rgb want = rgb_scale(texture_eval(s->textures, tid, uv), 2.0f);
-            Rgb got = emitter_radiance(&s->emitters[e], s->textures, n, uv, n);
-            assert_rgb_near(got, want.r, want.g, want.b, 0.0);
+            Color want = color_scale(texture_eval(s->textures, tid, uv), 2.0f);
+            Color got = emitter_radiance(&s->emitters[e], s->textures, n, uv, n);
+            assert_rgb_near(got, want.c[0], want.c[1], want.c[2], 0.0);
             checked++;
         }
     }
@@ -415,8 +415,8 @@ static void test_emitter_sample_uv(void **state)
             continue;
         Vec2 uv = ls.light == 0 || ls.light == 1 ? v2(ls.p.x / 4.0f, ls.p.z / 4.0f)
                                                   : sphere_uv(v3_normalize(v3_sub(ls.p, v3(0, 10, 0))));
-        Rgb want = rgb_scale(texture_eval(s->textures, tid, uv), 2.0f);
-        assert_rgb_near(ls.li, want.r, want.g, want.b, 1e-6);
+        Color want = color_scale(texture_eval(s->textures, tid, uv), 2.0f);
+        assert_rgb_near(ls.li, want.c[0], want.c[1], want.c[2], 1e-6);
     }
     scene_destroy(s);
 }
@@ -482,7 +482,7 @@ static void test_json_textures(void **state)
     assert_true(ma->albedo_texture > 0 && s->textures[ma->albedo_texture - 1].type == TEXTURE_CHECKERBOARD);
     assert_true(mb->roughness_texture > 0);
     assert_int_equal(s->num_emitters, 1);
-    Rgb le = emitter_radiance(&s->emitters[0], s->textures, v3(0, 0, 1), v2(0.3f, 0.3f), v3(0, 0, 1));
+    Color le = emitter_radiance(&s->emitters[0], s->textures, v3(0, 0, 1), v2(0.3f, 0.3f), v3(0, 0, 1));
     assert_rgb_near(le, 6.0, 4.0, 2.0, 0.0);
     assert_true(s->tri_has_uv && s->tri_has_uv[0]);
     /* a hit on the mesh: uv from its uvs, albedo from the board (odd square at uv (0.3, 0.05)) */

@@ -64,7 +64,7 @@ static void test_sort_against_definition(void **state)
             float pz = pcg32_float(&rng), py = pcg32_float(&rng), px = pcg32_float(&rng);
             v[i].p = v3(s * px, s * py, s * pz);
             v[i].w_prev = v3(0.0f, 0.0f, 1.0f);
-            v[i].beta = rgb_s((float)i); /* identifies the vertex in the sorted copy */
+            v[i].beta = color_s((float)i); /* identifies the vertex in the sorted copy */
             v[i].d_vcm = (float)i;
             v[i].bounces = (int32_t)(i % 5) + 1;
         }
