@@ -14,7 +14,8 @@ void camera_init(Camera *cam, const CameraDesc *d, int width, int height)
     cam->aspect = (float)width / (float)height;
     cam->aperture_radius = d->aperture_radius;
     cam->focus_distance = d->focus_distance;
-    cam->ortho_half_height = d->ortho_height > 0.0f ? 0.5f * d->ortho_height : 0.0f;
+    cam->projection = d->ortho_height > 0.0f ? PROJECTION_ORTHOGRAPHIC : PROJECTION_PERSPECTIVE;
+    cam->ortho_half_height = cam->projection == PROJECTION_ORTHOGRAPHIC ? 0.5f * d->ortho_height : 0.0f;
     cam->width = width;
     cam->height = height;
     cam->inv_tan_x = 1.0f / (cam->tan_half_vfov * cam->aspect);

@@ -9,6 +9,12 @@
 #include "geometry/ray.h"
 #include "math/vec3.h"
 
+/* The projection. A thin-lens camera is a perspective one with aperture_radius > 0. */
+typedef enum CameraProjection {
+    PROJECTION_PERSPECTIVE,  /* pinhole or thin lens: rays through one point (or the lens disk) */
+    PROJECTION_ORTHOGRAPHIC  /* parallel rays along the view axis from a film of ortho height */
+} CameraProjection;
+
 typedef struct CameraDesc {
     Vec3 position, look_at, up;
     float vfov_deg;        /* full vertical field of view in degrees, (0, 180) */
@@ -19,10 +25,11 @@ typedef struct CameraDesc {
 } CameraDesc;
 
 typedef struct Camera {
+    CameraProjection projection;
     Vec3 origin, forward, right, up; /* right = normalize(forward x up_hint), up = right x forward */
     float tan_half_vfov, aspect;
     float aperture_radius, focus_distance;
-    float ortho_half_height; /* > 0: orthographic */
+    float ortho_half_height; /* orthographic: half the film's height in scene units */
     int width, height;
     /* Derived by camera_init for camera_sample_wi, which runs at every light-path vertex:
      * 1 / (tan_half_vfov aspect), 1 / tan_half_vfov, 1 / focus_distance, the lens area
@@ -53,7 +60,7 @@ typedef struct CameraWiSample {
 /* An orthographic camera's rays are parallel: its direction is a Dirac delta, so no
  * connection from a scene point can reach it (pbrt-v4 leaves OrthographicCamera::SampleWi
  * unimplemented for the same reason) and camera_sample_wi returns false for it. */
-static inline bool camera_is_orthographic(const Camera *cam) { return cam->ortho_half_height > 0.0f; }
+static inline bool camera_is_orthographic(const Camera *cam) { return cam->projection == PROJECTION_ORTHOGRAPHIC; }
 
 /* Picks a lens point with lens_u (uniform on the disk, as camera_generate_ray does) and
  * projects p through it. False when p is behind the lens or lands outside the film
