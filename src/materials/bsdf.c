@@ -12,18 +12,31 @@
 
 void bsdf_init(Bsdf *b, const Material *m, Vec3 n) { bsdf_init_shading(b, m, n, n); }
 
+Color bsdf_albedo(const Bsdf *b)
+{
+    switch (b->type) {
+    case MATERIAL_DIFFUSE:
+    case MATERIAL_MIRROR: return b->lobe.diffuse.albedo;
+    case MATERIAL_GLASS:
+    case MATERIAL_DIELECTRIC: return b->lobe.dielectric.tint;
+    case MATERIAL_PLASTIC: return b->lobe.plastic.albedo;
+    case MATERIAL_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.conductor.eta, b->lobe.conductor.k);
+    }
+    return color_s(0.0f);
+}
+
 void bsdf_init_shading_general(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
     bsdf_init_smooth(b, m, ns, ng);
-    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC)
-        b->alpha = material_bsdf_alpha(m->roughness);
+    bsdf_set_alpha(b, material_bsdf_alpha(m->roughness));
     if (m->type == MATERIAL_PLASTIC) {
-        if (b->alpha > 0.0f && m->prepared) {
-            b->coat_e = m->coat_e;
-            b->coat_e_avg = m->coat_e_avg;
+        PlasticLobe *pl = &b->lobe.plastic;
+        if (pl->alpha > 0.0f && m->prepared) {
+            pl->coat_e = m->coat_e;
+            pl->coat_e_avg = m->coat_e_avg;
         } else {
             /* Smooth coat (or an unprepared rough one, approximated by it): E = F. */
-            b->coat_e_avg = fresnel_diffuse_reflectance(m->ior);
+            pl->coat_e_avg = fresnel_diffuse_reflectance(m->ior);
         }
     }
 }
@@ -54,8 +67,8 @@ static Color conductor_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
     Vec3 h = v3_add(wo, wi);
     if (v3_length2(h) == 0.0f) return color_s(0.0f);
     Vec3 m = v3_normalize(h);
-    float s = ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha) / (4.0f * wo.z);
-    return color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), s);
+    float s = ggx_d(m, b->lobe.conductor.alpha) * ggx_g2(wo, wi, b->lobe.conductor.alpha) / (4.0f * wo.z);
+    return color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->lobe.conductor.eta, b->lobe.conductor.k), s);
 }
 
 /* Visible-normal sampling then reflection: pdf = D_wo(m) / (4 wo.m) (the reflection
@@ -71,21 +84,21 @@ static float microfacet_reflect_pdf(Vec3 wo, Vec3 wi, float alpha)
 
 static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
 {
-    if (b->alpha == 0.0f) {
+    if (b->lobe.conductor.alpha == 0.0f) {
         out->wi = mirror_z(wo);
         out->pdf = 1.0f;
-        out->weight = fresnel_conductor_rgb(wo.z, b->cond_eta, b->cond_k);
+        out->weight = fresnel_conductor_rgb(wo.z, b->lobe.conductor.eta, b->lobe.conductor.k);
         out->delta = true;
         return true;
     }
-    Vec3 m = ggx_sample_visible(wo, b->alpha, u);
+    Vec3 m = ggx_sample_visible(wo, b->lobe.conductor.alpha, u);
     Vec3 wi = reflect_about(wo, m);
     if (wi.z <= 0.0f) return false; /* reflected into the surface: lost (single scattering) */
     out->wi = wi;
-    out->pdf = microfacet_reflect_pdf(wo, wi, b->alpha);
+    out->pdf = microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha);
     /* f cos_i / pdf = F G2 / G1(wo): D and the Jacobian cancel. */
-    float g = ggx_g2(wo, wi, b->alpha) / ggx_g1(wo, b->alpha);
-    out->weight = color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->cond_eta, b->cond_k), g);
+    float g = ggx_g2(wo, wi, b->lobe.conductor.alpha) / ggx_g1(wo, b->lobe.conductor.alpha);
+    out->weight = color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->lobe.conductor.eta, b->lobe.conductor.k), g);
     out->delta = false;
     return true;
 }
@@ -119,7 +132,7 @@ static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *m, float *etap, b
 static float dielectric_fresnel(const Bsdf *b, Vec3 wo, Vec3 wi, Vec3 m, bool reflect)
 {
     Vec3 w = reflect || wo.z > 0.0f ? wo : wi;
-    return fresnel_dielectric(v3_dot(w, m), b->eta);
+    return fresnel_dielectric(v3_dot(w, m), b->lobe.dielectric.eta);
 }
 
 /* Walter et al. 2007 eq. 20 (reflection) and eq. 21 (transmission), with eta_o and eta_i
@@ -132,8 +145,8 @@ static float dielectric_eval(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode
     Vec3 m;
     float etap;
     bool reflect;
-    if (!dielectric_half(wo, wi, b->eta, &m, &etap, &reflect)) return 0.0f;
-    float dm = ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha);
+    if (!dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
+    float dm = ggx_d(m, b->lobe.dielectric.alpha) * ggx_g2(wo, wi, b->lobe.dielectric.alpha);
     float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * dm / (4.0f * fabsf(wo.z));
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
@@ -149,8 +162,8 @@ static float dielectric_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
     Vec3 m;
     float etap;
     bool reflect;
-    if (!dielectric_half(wo, wi, b->eta, &m, &etap, &reflect)) return 0.0f;
-    float pm = ggx_visible_pdf(wo, m, b->alpha);
+    if (!dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
+    float pm = ggx_visible_pdf(wo, m, b->lobe.dielectric.alpha);
     float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * pm / (4.0f * fabsf(v3_dot(wo, m)));
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
@@ -159,34 +172,34 @@ static float dielectric_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
 
 static bool dielectric_smooth_sample(const Bsdf *b, Vec3 wo, float uc, BsdfTransport mode, BsdfSample *out)
 {
-    float f = fresnel_dielectric(wo.z, b->eta);
+    float f = fresnel_dielectric(wo.z, b->lobe.dielectric.eta);
     out->delta = true;
     if (uc < f) {
         out->wi = mirror_z(wo);
         out->pdf = f;
-        out->weight = b->albedo; /* (F / |cos|) |cos| / F */
+        out->weight = b->lobe.dielectric.tint; /* (F / |cos|) |cos| / F */
         return true;
     }
     /* Refraction by Snell's law about the macro normal. */
     Vec3 wt;
     float etap;
-    if (!refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->eta, &wt, &etap)) return false; /* f == 1 under TIR */
+    if (!refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->lobe.dielectric.eta, &wt, &etap)) return false; /* f == 1 under TIR */
     out->wi = v3_normalize(wt);
     out->pdf = 1.0f - f;
     /* Radiance is compressed by 1/etap^2 entering a denser medium (Veach thesis sec. 5.2,
      * pbrt-v4 sec. 9.5.2); camera paths carry radiance, so the factor applies to them.
      * Light paths carry flux, which refraction does not compress: the adjoint BTDF lacks
      * the factor (pbrt-v4 DielectricBxDF with TransportMode::Importance). */
-    out->weight = mode == BSDF_RADIANCE ? color_scale(b->albedo, 1.0f / (etap * etap)) : b->albedo;
+    out->weight = mode == BSDF_RADIANCE ? color_scale(b->lobe.dielectric.tint, 1.0f / (etap * etap)) : b->lobe.dielectric.tint;
     return true;
 }
 
 static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode, BsdfSample *out)
 {
-    if (b->alpha == 0.0f) return dielectric_smooth_sample(b, wo, uc, mode, out);
+    if (b->lobe.dielectric.alpha == 0.0f) return dielectric_smooth_sample(b, wo, uc, mode, out);
     /* Visible normals of the side wo is on (the distribution is symmetric under z -> -z). */
-    Vec3 m = ggx_sample_visible(wo.z > 0.0f ? wo : v3_neg(wo), b->alpha, u);
-    float F = fresnel_dielectric(v3_dot(wo, m), b->eta);
+    Vec3 m = ggx_sample_visible(wo.z > 0.0f ? wo : v3_neg(wo), b->lobe.dielectric.alpha, u);
+    float F = fresnel_dielectric(v3_dot(wo, m), b->lobe.dielectric.eta);
     Vec3 wi;
     float extra = 1.0f;
     if (uc < F) {
@@ -194,7 +207,7 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
         if (wi.z * wo.z <= 0.0f) return false; /* lost: single scattering */
     } else {
         float etap;
-        if (!refract_about(wo, m, b->eta, &wi, &etap)) return false; /* F == 1 there: unreachable */
+        if (!refract_about(wo, m, b->lobe.dielectric.eta, &wi, &etap)) return false; /* F == 1 there: unreachable */
         wi = v3_normalize(wi);
         if (wi.z * wo.z >= 0.0f) return false; /* stays on wo's side: lost */
         if (mode == BSDF_RADIANCE) extra = 1.0f / (etap * etap);
@@ -204,8 +217,8 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
     out->delta = false;
     /* f |cos_i| / pdf = G2 / G1(wo) for both lobes (D, F and the Jacobians cancel), times
      * 1 / etap^2 for radiance through refraction. */
-    float g = ggx_g2(wo, wi, b->alpha) / ggx_g1(wo, b->alpha);
-    out->weight = color_scale(b->albedo, g * extra);
+    float g = ggx_g2(wo, wi, b->lobe.dielectric.alpha) / ggx_g1(wo, b->lobe.dielectric.alpha);
+    out->weight = color_scale(b->lobe.dielectric.tint, g * extra);
     return true;
 }
 
@@ -226,28 +239,28 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
 
 static float coat_albedo(const Bsdf *b, float mu)
 {
-    if (!b->coat_e) return fresnel_dielectric(mu, b->eta);
+    if (!b->lobe.plastic.coat_e) return fresnel_dielectric(mu, b->lobe.plastic.eta);
     /* linear in x = sqrt(mu), the table's abscissa (material_prepare) */
     float x = sqrtf(clampf(mu, 0.0f, 1.0f)) * (float)(MATERIAL_COAT_TABLE - 1);
     int i = (int)x;
     if (i > MATERIAL_COAT_TABLE - 2) i = MATERIAL_COAT_TABLE - 2;
     float t = x - (float)i;
-    return b->coat_e[i] + t * (b->coat_e[i + 1] - b->coat_e[i]);
+    return b->lobe.plastic.coat_e[i] + t * (b->lobe.plastic.coat_e[i + 1] - b->lobe.plastic.coat_e[i]);
 }
 
 /* Probability of sampling the coat: its share of the expected reflected energy. */
 static float plastic_coat_prob(const Bsdf *b, float cos_o)
 {
     float e = coat_albedo(b, cos_o);
-    float d = e + color_max(b->albedo) * (1.0f - e);
+    float d = e + color_max(b->lobe.plastic.albedo) * (1.0f - e);
     return d > 0.0f ? e / d : 1.0f;
 }
 
 static Color plastic_diffuse_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
     float s = (1.0f - coat_albedo(b, wo.z)) * (1.0f - coat_albedo(b, wi.z)) /
-              (CST_PI * (1.0f - b->coat_e_avg));
-    return color_scale(b->albedo, s * wi.z);
+              (CST_PI * (1.0f - b->lobe.plastic.coat_e_avg));
+    return color_scale(b->lobe.plastic.albedo, s * wi.z);
 }
 
 /* The coat's rough reflection (f |cos_i|), the rough dielectric's reflection lobe. */
@@ -256,7 +269,7 @@ static float plastic_coat_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
     Vec3 h = v3_add(wo, wi);
     if (v3_length2(h) == 0.0f) return 0.0f;
     Vec3 m = v3_normalize(h);
-    return fresnel_dielectric(v3_dot(wo, m), b->eta) * ggx_d(m, b->alpha) * ggx_g2(wo, wi, b->alpha) /
+    return fresnel_dielectric(v3_dot(wo, m), b->lobe.plastic.eta) * ggx_d(m, b->lobe.plastic.alpha) * ggx_g2(wo, wi, b->lobe.plastic.alpha) /
            (4.0f * wo.z);
 }
 
@@ -265,7 +278,7 @@ static Color plastic_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f) return color_s(0.0f);
     Color f = plastic_diffuse_eval(b, wo, wi);
-    if (b->alpha > 0.0f) f = color_add(f, color_s(plastic_coat_eval(b, wo, wi)));
+    if (b->lobe.plastic.alpha > 0.0f) f = color_add(f, color_s(plastic_coat_eval(b, wo, wi)));
     return f;
 }
 
@@ -274,7 +287,7 @@ static float plastic_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
     float pc = plastic_coat_prob(b, wo.z);
     float p = (1.0f - pc) * wi.z * CST_INV_PI;
-    if (b->alpha > 0.0f) p += pc * microfacet_reflect_pdf(wo, wi, b->alpha);
+    if (b->lobe.plastic.alpha > 0.0f) p += pc * microfacet_reflect_pdf(wo, wi, b->lobe.plastic.alpha);
     return p;
 }
 
@@ -283,14 +296,14 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
     float pc = plastic_coat_prob(b, wo.z);
     Vec3 wi;
     if (uc < pc) {
-        if (b->alpha == 0.0f) {
+        if (b->lobe.plastic.alpha == 0.0f) {
             out->wi = mirror_z(wo);
             out->pdf = pc;
-            out->weight = color_s(fresnel_dielectric(wo.z, b->eta) / pc);
+            out->weight = color_s(fresnel_dielectric(wo.z, b->lobe.plastic.eta) / pc);
             out->delta = true;
             return true;
         }
-        wi = reflect_about(wo, ggx_sample_visible(wo, b->alpha, u));
+        wi = reflect_about(wo, ggx_sample_visible(wo, b->lobe.plastic.alpha, u));
         if (wi.z <= 0.0f) return false;
     } else {
         wi = warp_cosine_hemisphere(u);
@@ -347,13 +360,13 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
     case MATERIAL_DIFFUSE:
         /* Lambert reflects on whichever side wo is (unless one-sided). */
         if (!reflect_side(b, &wo, &wi) || wo.z == 0.0f || wi.z <= 0.0f) return color_s(0.0f);
-        return color_scale(b->albedo, CST_INV_PI * wi.z);
+        return color_scale(b->lobe.diffuse.albedo, CST_INV_PI * wi.z);
     case MATERIAL_CONDUCTOR:
-        if (b->alpha == 0.0f || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
+        if (b->lobe.conductor.alpha == 0.0f || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return conductor_eval(b, wo, wi);
     case MATERIAL_DIELECTRIC:
-        if (b->alpha == 0.0f) return color_s(0.0f);
-        return color_scale(b->albedo, dielectric_eval(b, wo, wi, mode));
+        if (b->lobe.dielectric.alpha == 0.0f) return color_s(0.0f);
+        return color_scale(b->lobe.dielectric.tint, dielectric_eval(b, wo, wi, mode));
     case MATERIAL_PLASTIC:
         if (!reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return plastic_eval(b, wo, wi);
@@ -380,10 +393,10 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
         if (!reflect_side(b, &wo, &wi) || wo.z == 0.0f || wi.z <= 0.0f) return 0.0f;
         return wi.z * CST_INV_PI;
     case MATERIAL_CONDUCTOR:
-        if (b->alpha == 0.0f || !reflect_side(b, &wo, &wi)) return 0.0f;
-        return microfacet_reflect_pdf(wo, wi, b->alpha);
+        if (b->lobe.conductor.alpha == 0.0f || !reflect_side(b, &wo, &wi)) return 0.0f;
+        return microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha);
     case MATERIAL_DIELECTRIC:
-        if (b->alpha == 0.0f) return 0.0f;
+        if (b->lobe.dielectric.alpha == 0.0f) return 0.0f;
         return dielectric_pdf(b, wo, wi);
     case MATERIAL_PLASTIC:
         if (!reflect_side(b, &wo, &wi)) return 0.0f;
@@ -437,7 +450,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
         out->wi = warp_cosine_hemisphere(u);
         out->pdf = out->wi.z * CST_INV_PI;
-        out->weight = b->albedo; /* (albedo/pi) |cos| / (|cos|/pi) */
+        out->weight = b->lobe.diffuse.albedo; /* (albedo/pi) |cos| / (|cos|/pi) */
         out->delta = false;
         ok = out->wi.z > 0.0f;
         break;
@@ -446,7 +459,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         if (wo.z < 0.0f && b->one_sided) return false;
         out->wi = mirror_z(wo);
         out->pdf = 1.0f;
-        out->weight = b->albedo;
+        out->weight = b->lobe.diffuse.albedo;
         out->delta = true;
         ok = true;
         break;

@@ -17,6 +17,30 @@
 #include "math/color.h"
 #include "sampling/warp.h"
 
+/* The lobes' parameters, one struct per material type; Bsdf.type says which member of
+ * Bsdf.lobe is live. Roughness is GGX's alpha, 0 for the smooth (delta) lobes. */
+typedef struct DiffuseLobe {   /* MATERIAL_DIFFUSE (Lambert) and MATERIAL_MIRROR (its tint) */
+    Color albedo;
+} DiffuseLobe;
+typedef struct ConductorLobe { /* MATERIAL_CONDUCTOR */
+    Color eta, k;              /* complex IOR, per channel */
+    float alpha;
+} ConductorLobe;
+typedef struct DielectricLobe { /* MATERIAL_GLASS (alpha 0) and MATERIAL_DIELECTRIC */
+    Color tint;                 /* scales reflection and transmission alike */
+    float eta;                  /* inside over outside IOR */
+    float alpha;
+} DielectricLobe;
+typedef struct PlasticLobe {    /* MATERIAL_PLASTIC: a dielectric coat over Lambert */
+    Color albedo;               /* the base's */
+    float eta;                  /* the coat's inside over outside IOR */
+    float alpha;                /* the coat's */
+    /* The coat's directional albedo E(mu) (NULL: the smooth coat's Fresnel F(mu)) and its
+     * cosine-weighted hemispherical average. */
+    const float *coat_e;
+    float coat_e_avg;
+} PlasticLobe;
+
 typedef struct Bsdf {
     MaterialType type;
     Frame frame; /* n = the shading normal ns (the geometric one without shading normals) */
@@ -25,16 +49,14 @@ typedef struct Bsdf {
      * frame agree on reflection vs transmission (pbrt-v3's convention), so interpolated
      * normals never let light through an opaque surface; see bsdf_init_shading. */
     Vec3 ng;
-    bool shading; /* ns != ng: the side checks and the adjoint correction apply */
-    Color albedo;
-    float eta;   /* glass, dielectric, plastic coat: inside over outside IOR */
-    float alpha; /* GGX width; 0 = smooth (delta lobes) */
-    Color cond_eta, cond_k; /* conductor: complex IOR */
-    bool one_sided;       /* reflective types: black seen from the back */
-    /* plastic: the coat's directional albedo E(mu) (NULL: the smooth coat's Fresnel F(mu))
-     * and its cosine-weighted hemispherical average */
-    const float *coat_e;
-    float coat_e_avg;
+    bool shading;   /* ns != ng: the side checks and the adjoint correction apply */
+    bool one_sided; /* reflective types: black seen from the back */
+    union {
+        DiffuseLobe diffuse; /* diffuse and mirror */
+        ConductorLobe conductor;
+        DielectricLobe dielectric; /* glass and dielectric */
+        PlasticLobe plastic;
+    } lobe;
 } Bsdf;
 
 /* What a path carries, which decides the adjoint of a non-reciprocal lobe (Veach thesis
@@ -75,14 +97,29 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
     b->frame = frame_from_normal(ns);
     b->ng = ng;
     b->shading = ns.x != ng.x || ns.y != ng.y || ns.z != ng.z;
-    b->albedo = m->albedo;
-    b->eta = m->ior;
-    b->alpha = 0.0f;
-    b->cond_eta = m->eta;
-    b->cond_k = m->k;
     b->one_sided = m->one_sided;
-    b->coat_e = NULL;
-    b->coat_e_avg = 0.0f;
+    switch (m->type) {
+    case MATERIAL_DIFFUSE:
+    case MATERIAL_MIRROR: b->lobe.diffuse.albedo = m->albedo; break;
+    case MATERIAL_GLASS:
+    case MATERIAL_DIELECTRIC:
+        b->lobe.dielectric.tint = m->albedo;
+        b->lobe.dielectric.eta = m->ior;
+        b->lobe.dielectric.alpha = 0.0f;
+        break;
+    case MATERIAL_CONDUCTOR:
+        b->lobe.conductor.eta = m->eta;
+        b->lobe.conductor.k = m->k;
+        b->lobe.conductor.alpha = 0.0f;
+        break;
+    case MATERIAL_PLASTIC:
+        b->lobe.plastic.albedo = m->albedo;
+        b->lobe.plastic.eta = m->ior;
+        b->lobe.plastic.alpha = 0.0f;
+        b->lobe.plastic.coat_e = NULL;
+        b->lobe.plastic.coat_e_avg = 0.0f;
+        break;
+    }
 }
 /* Inline for those materials: every hit of every path builds one. */
 static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
@@ -98,8 +135,8 @@ static inline bool bsdf_is_delta(const Bsdf *b)
     switch (b->type) {
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS: return true;
-    case MATERIAL_CONDUCTOR:
-    case MATERIAL_DIELECTRIC: return b->alpha == 0.0f;
+    case MATERIAL_CONDUCTOR: return b->lobe.conductor.alpha == 0.0f;
+    case MATERIAL_DIELECTRIC: return b->lobe.dielectric.alpha == 0.0f;
     default: return false;
     }
 }
@@ -107,13 +144,39 @@ static inline bool bsdf_is_delta(const Bsdf *b)
  * mixes a delta coat reflection with a diffuse base). */
 static inline bool bsdf_has_delta(const Bsdf *b)
 {
-    return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->alpha == 0.0f);
+    return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->lobe.plastic.alpha == 0.0f);
 }
 /* True when some lobe transmits (light crosses to the other side of the surface). */
 static inline bool bsdf_has_transmission(const Bsdf *b)
 {
     return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC;
 }
+/* Texture overrides (scene_bsdf): the reflectance or tint of the lobes that have one (a
+ * conductor's colour is its complex IOR: unchanged), and GGX's alpha of the rough-capable
+ * lobes (conductor, dielectric, plastic; the others are smooth by definition). */
+static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
+{
+    switch (b->type) {
+    case MATERIAL_DIFFUSE:
+    case MATERIAL_MIRROR: b->lobe.diffuse.albedo = albedo; break;
+    case MATERIAL_GLASS:
+    case MATERIAL_DIELECTRIC: b->lobe.dielectric.tint = albedo; break;
+    case MATERIAL_PLASTIC: b->lobe.plastic.albedo = albedo; break;
+    case MATERIAL_CONDUCTOR: break;
+    }
+}
+static inline void bsdf_set_alpha(Bsdf *b, float alpha)
+{
+    switch (b->type) {
+    case MATERIAL_CONDUCTOR: b->lobe.conductor.alpha = alpha; break;
+    case MATERIAL_DIELECTRIC: b->lobe.dielectric.alpha = alpha; break;
+    case MATERIAL_PLASTIC: b->lobe.plastic.alpha = alpha; break;
+    default: break;
+    }
+}
+/* The surface's colour for the albedo AOV: the reflectance or tint; for a conductor, its
+ * Fresnel reflectance at normal incidence. */
+Color bsdf_albedo(const Bsdf *b);
 /* The probability that bsdf_sample takes a delta lobe from wo (0 or 1 except for mixed
  * BSDFs); lets a caller that splits the two parts weight each by its share. */
 float bsdf_delta_probability(const Bsdf *b, Vec3 wo);
@@ -136,7 +199,7 @@ static inline Color bsdf_diffuse_eval_pdfs(const Bsdf *b, Vec3 wo, Vec3 wi, floa
     const bool rev = same_side && (z_i > 0.0f || !b->one_sided);
     *pdf_fwd = fwd ? fabsf(z_i) * CST_INV_PI : 0.0f;
     *pdf_rev = rev ? fabsf(z_o) * CST_INV_PI : 0.0f;
-    return fwd ? color_scale(b->albedo, CST_INV_PI * fabsf(z_i)) : color_s(0.0f);
+    return fwd ? color_scale(b->lobe.diffuse.albedo, CST_INV_PI * fabsf(z_i)) : color_s(0.0f);
 }
 
 /* bsdf_eval for either transport: BSDF_IMPORTANCE gives the adjoint f*(wo, wi) |cos theta_i|
@@ -191,7 +254,7 @@ static inline bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 
     Vec3 wi = warp_cosine_hemisphere(u);
     out->wi = wi;
     out->pdf = wi.z * CST_INV_PI;
-    out->weight = b->albedo;
+    out->weight = b->lobe.diffuse.albedo;
     out->delta = false;
     if (!(wi.z > 0.0f) || !(out->pdf > 0.0f) || !color_is_finite(out->weight)) return false;
     if (z_o < 0.0f) wi.z = -wi.z;

@@ -253,7 +253,10 @@ static void render_aov(RenderJob *job, Worker *w, int pixel, Ray ray)
     Vec3 n = v3_dot(sh.ng, ray.d) > 0.0f ? v3_neg(sh.ng) : sh.ng;
     float z = v3_dot(v3_sub(sh.p, job->camera.origin), job->camera.forward);
     double *a = &job->film->aov[FILM_AOV_STRIDE * (size_t)pixel];
-    a[0] += (double)bsdf.albedo.c[0]; a[1] += (double)bsdf.albedo.c[1]; a[2] += (double)bsdf.albedo.c[2];
+    const Color albedo = bsdf_albedo(&bsdf);
+    a[0] += (double)color_channel(albedo, 0);
+    a[1] += (double)color_channel(albedo, 1);
+    a[2] += (double)color_channel(albedo, 2);
     a[3] += (double)n.x; a[4] += (double)n.y; a[5] += (double)n.z;
     a[6] += (double)z;
     a[7] += 1.0;

@@ -246,9 +246,9 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
  * from the material's constants. */
 static inline void scene_bsdf_textures(const Scene *s, const Material *m, Vec2 uv, Bsdf *b)
 {
-    if (m->albedo_texture) b->albedo = texture_eval(s->textures, m->albedo_texture - 1, uv);
+    if (m->albedo_texture) bsdf_set_albedo(b, texture_eval(s->textures, m->albedo_texture - 1, uv));
     if (m->roughness_texture)
-        b->alpha = material_bsdf_alpha(clampf(texture_eval_scalar(s->textures, m->roughness_texture - 1, uv), 0.0f, 1.0f));
+        bsdf_set_alpha(b, material_bsdf_alpha(clampf(texture_eval_scalar(s->textures, m->roughness_texture - 1, uv), 0.0f, 1.0f)));
 }
 
 /* The BSDF at a hit: the one place where a hit's material, normals and texture

@@ -165,6 +165,17 @@ static int hist_cell(const Hist *h, Vec3 wi_local)
     return (side * NT + it) * NP + ip;
 }
 
+/* GGX's alpha of the lobe (0 for the lobes that are always smooth). */
+static float lobe_alpha(const Bsdf *b)
+{
+    switch (b->type) {
+    case MATERIAL_CONDUCTOR: return b->lobe.conductor.alpha;
+    case MATERIAL_DIELECTRIC: return b->lobe.dielectric.alpha;
+    case MATERIAL_PLASTIC: return b->lobe.plastic.alpha;
+    default: return 0.0f;
+    }
+}
+
 static Hist make_hist(const Bsdf *b, Vec3 wo, MaterialType type)
 {
     Hist h;
@@ -173,13 +184,13 @@ static Hist make_hist(const Bsdf *b, Vec3 wo, MaterialType type)
     Vec3 p0 = v3(-wo.x, -wo.y, wo.z), p1 = v3(0.0f, 0.0f, -sgn);
     Vec3 wt;
     float etap;
-    if (type == MATERIAL_DIELECTRIC && refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->eta, &wt, &etap))
+    if (type == MATERIAL_DIELECTRIC && refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->lobe.dielectric.eta, &wt, &etap))
         p1 = v3_normalize(wt);
     if (type == MATERIAL_DIFFUSE) p0 = v3(0.0f, 0.0f, sgn);
     h.pole[0] = frame_from_normal(p0);
     h.pole[1] = frame_from_normal(p1);
-    h.theta0 = type == MATERIAL_DIFFUSE ? 100.0f : fmaxf(0.5f * b->alpha, 1e-3f);
-    if (type == MATERIAL_PLASTIC && b->alpha == 0.0f) h.theta0 = 100.0f;
+    h.theta0 = type == MATERIAL_DIFFUSE ? 100.0f : fmaxf(0.5f * lobe_alpha(b), 1e-3f);
+    if (type == MATERIAL_PLASTIC && lobe_alpha(b) == 0.0f) h.theta0 = 100.0f;
     h.L = logf(1.0f + CST_PI / h.theta0);
     return h;
 }
@@ -711,7 +722,7 @@ static void test_transmission_adjoint(void **state)
                 Color imp = bsdf_eval_transport(&b, wo, wi, BSDF_IMPORTANCE);
                 Color swapped = color_scale(bsdf_eval_transport(&b, wi, wo, BSDF_RADIANCE), fabsf(wi.z) / fabsf(wo.z));
                 if (color_is_black(imp) && color_is_black(swapped)) continue;
-                float etap = wo.z > 0.0f ? b.eta : 1.0f / b.eta;
+                float etap = wo.z > 0.0f ? b.lobe.dielectric.eta : 1.0f / b.lobe.dielectric.eta;
                 double d1 = rel_diff(imp, swapped), d2 = rel_diff(imp, color_scale(rad, etap * etap));
                 /* Relative 1e-4, except in the far tails of the lobes (f |cos| < 1e-3): there
                  * swapping wo and wi rounds the half vector differently (~1e-7 rad), which D

@@ -1231,7 +1231,7 @@ static void test_texture_orientation(void **state)
             Bsdf b;
             scene_bsdf(s, &sh, &b);
             const float *t = &px[3 * (2 * y + x)];
-            assert_rgb(b.albedo, t[0], t[1], t[2], 1e-4f);
+            assert_rgb(bsdf_albedo(&b), t[0], t[1], t[2], 1e-4f);
         }
     cst_scene_destroy(s);
 }

@@ -490,7 +490,7 @@ static void test_json_textures(void **state)
     assert_uv(sh.uv, 0.3, 0.05);
     Bsdf b;
     scene_bsdf(s, &sh, &b);
-    assert_rgb_near(b.albedo, 0.1, 0.2, 0.3, 1e-7);
+    assert_rgb_near(bsdf_albedo(&b), 0.1, 0.2, 0.3, 1e-7);
     cst_scene_destroy(s);
 
     /* errors, each at the value that causes it */
