@@ -33,7 +33,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
     Vec2 u_dir = pcg32_v2(rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
+    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
 
     /* y0 seen directly: the only way this estimator renders visible emitters (delta
      * lights are never seen, nor is the environment: it is no surface a connection could

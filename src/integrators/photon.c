@@ -58,7 +58,7 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
     Vec2 u_dir = pcg32_v2(&rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
+    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return 1; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a

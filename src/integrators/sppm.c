@@ -246,7 +246,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     Vec2 u_dir = pcg32_v2(&rng);
     EmissionSample es;
     EmitterGeometry eg = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
+    emitter_sample_emission(&s->emitter_sampler, &eg, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
     Color power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */
     Color scatter = color_s(1.0f);

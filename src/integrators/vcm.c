@@ -178,7 +178,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
     Vec2 u_dir = pcg32_v2(rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
+    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
 
@@ -315,7 +315,7 @@ static Color connect_to_light(const Scene *s, const VcmIteration *it, const SubP
     Vec2 u = pcg32_v2(rng);
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
-    if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return color_s(0.0f);
+    if (!light_sample_li(&s->emitter_sampler, &g, sh->p, u_sel, u, &ls)) return color_s(0.0f);
     float cos_x = fabsf(v3_dot(sh->ng, ls.wi));
     if (!(cos_x > 0.0f)) return color_s(0.0f);
     float bsdf_pdf_fwd, bsdf_pdf_rev;

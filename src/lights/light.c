@@ -11,7 +11,7 @@
 #include "sampling/warp.h"
 
 /* pbrt-v4's spotlight falloff (SpotLight::I): smoothstep between the cone's cosines. */
-static float spot_falloff(const DeltaLight *l, float cos_theta)
+static float spot_falloff(const SpotLight *l, float cos_theta)
 {
     if (cos_theta >= l->cos_inner) return 1.0f;
     if (cos_theta <= l->cos_outer) return 0.0f;
@@ -19,18 +19,56 @@ static float spot_falloff(const DeltaLight *l, float cos_theta)
     return t * t * (3.0f - 2.0f * t);
 }
 
-/* Luminance of the emitted flux: 4 pi I for a point; for a spot 2 pi I times the cone's
- * solid-angle fraction with the falloff's mean taken as half way (pbrt-v4
- * SpotLight::Phi); E pi R^2 for a directional light over the scene's disk. */
-float delta_light_power(const DeltaLight *l, float scene_radius)
+/* A Lambertian emitter of radiance L and area A emits pi A L per side; a textured one is
+ * weighted by its texture's average, which only shifts samples between lights (the point
+ * density on an emitter stays uniform by area, so NEE's pdf is unchanged). 4 pi I for a
+ * point; for a spot 2 pi I times the cone's solid-angle fraction with the falloff's mean
+ * taken as half way (pbrt-v4 SpotLight::Phi); E pi R^2 for a directional light over the
+ * scene's disk; the environment's flux through that disk: pi R^2 times the integral of its
+ * luminance over the sphere (pbrt-v4's UniformInfiniteLight::Phi for a constant one). */
+float light_power(const Light *l, float scene_radius)
 {
-    float y = color_luminance(l->intensity);
     switch (l->type) {
-    case DELTA_POINT: return 4.0f * CST_PI * y;
-    case DELTA_SPOT: return 2.0f * CST_PI * y * (1.0f - 0.5f * (l->cos_inner + l->cos_outer));
-    case DELTA_DIRECTIONAL: return CST_PI * scene_radius * scene_radius * y;
+    case LIGHT_AREA: {
+        const Emitter *e = &l->u.area;
+        return CST_PI * e->area * color_luminance(e->average) * (e->two_sided ? 2.0f : 1.0f);
+    }
+    case LIGHT_POINT: return 4.0f * CST_PI * color_luminance(l->u.point.intensity);
+    case LIGHT_SPOT:
+        return 2.0f * CST_PI * color_luminance(l->u.spot.intensity) *
+               (1.0f - 0.5f * (l->u.spot.cos_inner + l->u.spot.cos_outer));
+    case LIGHT_DIRECTIONAL:
+        return CST_PI * scene_radius * scene_radius * color_luminance(l->u.directional.irradiance);
+    case LIGHT_ENVIRONMENT: return CST_PI * scene_radius * scene_radius * l->u.env->power;
     }
     return 0.0f;
+}
+
+static Light light_from_delta(const DeltaLight *d)
+{
+    Light l;
+    memset(&l, 0, sizeof l);
+    switch (d->type) {
+    case DELTA_POINT:
+        l.type = LIGHT_POINT;
+        l.u.point.p = d->p;
+        l.u.point.intensity = d->intensity;
+        break;
+    case DELTA_SPOT:
+        l.type = LIGHT_SPOT;
+        l.u.spot.p = d->p;
+        l.u.spot.dir = d->dir;
+        l.u.spot.intensity = d->intensity;
+        l.u.spot.cos_inner = d->cos_inner;
+        l.u.spot.cos_outer = d->cos_outer;
+        break;
+    case DELTA_DIRECTIONAL:
+        l.type = LIGHT_DIRECTIONAL;
+        l.u.directional.dir = d->dir;
+        l.u.directional.irradiance = d->intensity;
+        break;
+    }
+    return l;
 }
 
 CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, const DeltaLight *delta,
@@ -40,7 +78,6 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
     s->center = v3_scale(v3_add(lo, hi), 0.5f);
     s->radius = 0.5f * v3_length(v3_sub(hi, lo));
     if (!(s->radius > 0.0f) || !isfinite(s->radius)) s->radius = 1.0f;
-    s->delta = delta;
     s->count = n;
     s->num_delta = num_delta;
     s->env = env;
@@ -48,21 +85,22 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
     if (s->lights == 0) return CST_OK;
     float *w = malloc((size_t)s->lights * sizeof *w);
     s->pdf_a = malloc((size_t)(n > 0 ? n : 1) * sizeof *s->pdf_a);
-    if (!w || !s->pdf_a) {
+    s->light = malloc((size_t)s->lights * sizeof *s->light);
+    if (!w || !s->pdf_a || !s->light) {
         free(w);
-        free(s->pdf_a);
-        s->pdf_a = NULL;
-        return cst_fail(err, CST_ERR_OOM, "out of memory for %d lights", s->lights);
+        emitter_sampler_free(s);
+        return cst_fail(err, CST_ERR_OOM, "out of memory for %d lights", n + num_delta + (env ? 1 : 0));
     }
-    /* A Lambertian emitter of radiance L and area A emits pi A L per side; a textured one
-     * is weighted by its texture's average, which only shifts samples between lights (the
-     * point density on an emitter stays uniform by area, so NEE's pdf is unchanged). */
-    for (int i = 0; i < n; i++)
-        w[i] = CST_PI * emitters[i].area * color_luminance(emitters[i].average) * (emitters[i].two_sided ? 2.0f : 1.0f);
-    for (int i = 0; i < num_delta; i++) w[n + i] = delta_light_power(&delta[i], s->radius);
-    /* The environment's flux through the scene's disk: pi R^2 times the integral of its
-     * luminance over the sphere (pbrt-v4's UniformInfiniteLight::Phi for a constant one). */
-    if (env) w[n + num_delta] = CST_PI * s->radius * s->radius * env->power;
+    for (int i = 0; i < n; i++) {
+        s->light[i].type = LIGHT_AREA;
+        s->light[i].u.area = emitters[i];
+    }
+    for (int i = 0; i < num_delta; i++) s->light[n + i] = light_from_delta(&delta[i]);
+    if (env) {
+        s->light[n + num_delta].type = LIGHT_ENVIRONMENT;
+        s->light[n + num_delta].u.env = env;
+    }
+    for (int i = 0; i < s->lights; i++) w[i] = light_power(&s->light[i], s->radius);
     /* Lights of zero luminance (pure blue has 0.07, but a hand-written [0, 0, 1e-30]
      * might round to 0) still emit: give every light a floor so none is never picked. */
     double total = 0.0;
@@ -72,8 +110,7 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
     CstStatus st = distrib1d_init(&s->by_power, w, s->lights, err);
     free(w);
     if (st != CST_OK) {
-        free(s->pdf_a);
-        s->pdf_a = NULL;
+        emitter_sampler_free(s);
         return st;
     }
     for (int i = 0; i < n; i++) s->pdf_a[i] = s->by_power.pmf[i] / emitters[i].area;
@@ -84,6 +121,7 @@ void emitter_sampler_free(EmitterSampler *s)
 {
     distrib1d_free(&s->by_power);
     free(s->pdf_a);
+    free(s->light);
     memset(s, 0, sizeof *s);
 }
 
@@ -107,189 +145,226 @@ void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Ve
 }
 
 /* The emission direction density at a delta light (per unit solid angle). */
-static float delta_emit_pdf_w(const DeltaLight *l)
+static float delta_emit_pdf_w(const Light *l)
 {
     switch (l->type) {
-    case DELTA_POINT: return CST_INV_4PI;
-    case DELTA_SPOT: return warp_uniform_cone_pdf(l->cos_outer);
-    case DELTA_DIRECTIONAL: return 1.0f;
+    case LIGHT_POINT: return CST_INV_4PI;
+    case LIGHT_SPOT: return warp_uniform_cone_pdf(l->u.spot.cos_outer);
+    case LIGHT_DIRECTIONAL: return 1.0f;
+    default: return 0.0f;
     }
-    return 0.0f;
 }
 
-bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const EmitterGeometry *g, Vec3 x,
-                     float u_sel, Vec2 u, LightLi *out)
+static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec3 x, Vec2 u,
+                           LightLi *out)
+{
+    const Emitter *e = &s->light[i].u.area;
+    Vec2 uv;
+    emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
+    Vec3 to = v3_sub(out->p, x);
+    float dist2 = v3_length2(to);
+    if (!(dist2 > 0.0f)) return false;
+    out->dist = sqrtf(dist2);
+    out->wi = v3_scale(to, 1.0f / out->dist);
+    out->cos_light = fabsf(v3_dot(out->n, out->wi));
+    out->li = emitter_radiance(e, g->textures, out->n, uv, v3_neg(out->wi));
+    if (color_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
+    /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
+    out->pdf = s->pdf_a[i] * dist2 / out->cos_light;
+    out->finite = true;
+    out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
+    out->direct_pdf = out->pdf;
+    return true;
+}
+
+/* From beyond the bounding sphere like a directional light, but a direction from the
+ * environment's distribution: not a delta, so MIS applies. */
+static bool env_sample_li(const EmitterSampler *s, float pmf, Vec3 x, Vec2 u, LightLi *out)
+{
+    float pdf_w;
+    out->wi = envmap_sample(s->env, u, &pdf_w);
+    if (!(pdf_w > 0.0f)) return false;
+    out->pdf = pmf * pdf_w;
+    out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
+    out->p = v3_madd(x, out->wi, out->dist);
+    out->n = v3_neg(out->wi);
+    out->li = envmap_eval(s->env, out->wi);
+    out->finite = false;
+    out->cos_light = 1.0f;
+    out->emit_pdf = out->pdf / (CST_PI * s->radius * s->radius);
+    out->direct_pdf = out->pdf;
+    return !color_is_black(out->li);
+}
+
+static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, Vec3 x, LightLi *out)
+{
+    out->delta = true;
+    out->pdf = pmf;
+    out->cos_light = 1.0f;
+    out->emit_pdf = pmf * delta_emit_pdf_w(l);
+    if (l->type == LIGHT_DIRECTIONAL) {
+        /* From outside the scene's bounding sphere, so every occluder is on the segment;
+         * the direct_pdf of an infinitely distant light has no distance factor, and a
+         * light path starts from the disk of the bounding sphere (density 1 / (pi R^2)). */
+        out->wi = v3_neg(l->u.directional.dir);
+        out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
+        out->p = v3_madd(x, out->wi, out->dist);
+        out->n = l->u.directional.dir;
+        out->li = l->u.directional.irradiance;
+        out->finite = false;
+        out->emit_pdf = pmf / (CST_PI * s->radius * s->radius);
+        out->direct_pdf = pmf;
+        return true;
+    }
+    const Vec3 lp = l->type == LIGHT_SPOT ? l->u.spot.p : l->u.point.p;
+    Vec3 to = v3_sub(lp, x);
+    float dist2 = v3_length2(to);
+    if (!(dist2 > 0.0f)) return false;
+    out->p = lp;
+    out->dist = sqrtf(dist2);
+    out->wi = v3_scale(to, 1.0f / out->dist);
+    out->n = v3_neg(out->wi);
+    out->finite = true;
+    float falloff = l->type == LIGHT_SPOT ? spot_falloff(&l->u.spot, v3_dot(l->u.spot.dir, v3_neg(out->wi))) : 1.0f;
+    const Color intensity = l->type == LIGHT_SPOT ? l->u.spot.intensity : l->u.point.intensity;
+    out->li = color_scale(intensity, falloff / dist2);
+    out->direct_pdf = pmf * dist2;
+    return falloff > 0.0f;
+}
+
+bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
+                     LightLi *out)
 {
     memset(out, 0, sizeof *out);
     if (s->lights == 0) return false;
     int i = distrib1d_sample(&s->by_power, u_sel);
     float pmf = s->by_power.pmf[i];
     out->light = i;
-    if (i < s->count) {
-        const Emitter *e = &emitters[i];
-        Vec2 uv;
-        emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
-        Vec3 to = v3_sub(out->p, x);
-        float dist2 = v3_length2(to);
-        if (!(dist2 > 0.0f)) return false;
-        out->dist = sqrtf(dist2);
-        out->wi = v3_scale(to, 1.0f / out->dist);
-        out->cos_light = fabsf(v3_dot(out->n, out->wi));
-        out->li = emitter_radiance(e, g->textures, out->n, uv, v3_neg(out->wi));
-        if (color_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
-        /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
-        out->pdf = s->pdf_a[i] * dist2 / out->cos_light;
-        out->finite = true;
-        out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
-        out->direct_pdf = out->pdf;
-        return true;
+    const Light *l = &s->light[i];
+    switch (l->type) {
+    case LIGHT_AREA: return area_sample_li(s, i, g, x, u, out);
+    case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
+    case LIGHT_POINT:
+    case LIGHT_SPOT:
+    case LIGHT_DIRECTIONAL: return delta_sample_li(s, l, pmf, x, out);
     }
-    if (i == light_env_index(s)) {
-        /* From beyond the bounding sphere like a directional light, but a direction from
-         * the environment's distribution: not a delta, so MIS applies. */
-        float pdf_w;
-        out->wi = envmap_sample(s->env, u, &pdf_w);
-        if (!(pdf_w > 0.0f)) return false;
-        out->pdf = pmf * pdf_w;
-        out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
-        out->p = v3_madd(x, out->wi, out->dist);
-        out->n = v3_neg(out->wi);
-        out->li = envmap_eval(s->env, out->wi);
-        out->finite = false;
-        out->cos_light = 1.0f;
-        out->emit_pdf = out->pdf / (CST_PI * s->radius * s->radius);
-        out->direct_pdf = out->pdf;
-        return !color_is_black(out->li);
-    }
-    const DeltaLight *l = &s->delta[i - s->count];
-    out->delta = true;
-    out->pdf = pmf;
-    out->cos_light = 1.0f;
-    out->emit_pdf = pmf * delta_emit_pdf_w(l);
-    if (l->type == DELTA_DIRECTIONAL) {
-        /* From outside the scene's bounding sphere, so every occluder is on the segment;
-         * the direct_pdf of an infinitely distant light has no distance factor, and a
-         * light path starts from the disk of the bounding sphere (density 1 / (pi R^2)). */
-        out->wi = v3_neg(l->dir);
-        out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
-        out->p = v3_madd(x, out->wi, out->dist);
-        out->n = l->dir;
-        out->li = l->intensity;
-        out->finite = false;
-        out->emit_pdf = pmf / (CST_PI * s->radius * s->radius);
-        out->direct_pdf = pmf;
-        return true;
-    }
-    Vec3 to = v3_sub(l->p, x);
-    float dist2 = v3_length2(to);
-    if (!(dist2 > 0.0f)) return false;
-    out->p = l->p;
-    out->dist = sqrtf(dist2);
-    out->wi = v3_scale(to, 1.0f / out->dist);
-    out->n = v3_neg(out->wi);
-    out->finite = true;
-    float falloff = l->type == DELTA_SPOT ? spot_falloff(l, v3_dot(l->dir, v3_neg(out->wi))) : 1.0f;
-    out->li = color_scale(l->intensity, falloff / dist2);
-    out->direct_pdf = pmf * dist2;
-    return falloff > 0.0f;
+    return false;
 }
 
-void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
-                             const EmitterGeometry *g, float u_sel, Vec2 u_pos, Vec2 u_dir,
-                             EmissionSample *out)
+static void area_sample_emission(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec2 u_pos,
+                                 Vec2 u_dir, EmissionSample *out)
+{
+    const Emitter *e = &s->light[i].u.area;
+    Vec3 p, n;
+    emitter_sample_point(e, g, u_pos, &p, &n, &out->uv);
+    float side = 1.0f;
+    if (e->two_sided) {
+        /* Reuse u_dir.x for the side: [0, 1/2) front, [1/2, 1) back, stretched back to [0, 1). */
+        if (u_dir.x < 0.5f) u_dir.x *= 2.0f;
+        else { u_dir.x = 2.0f * u_dir.x - 1.0f; side = -1.0f; }
+    }
+    Vec3 local = warp_cosine_hemisphere(u_dir);
+    Frame f = frame_from_normal(v3_scale(n, side));
+    out->p = p;
+    out->n = n;
+    out->w = frame_to_world(&f, local);
+    out->pdf_a = s->pdf_a[i];
+    out->nee_pdf = out->pdf_a;
+    out->pdf_w = local.z > 0.0f ? emitter_emission_pdf_w(e, n, out->w) : 0.0f;
+    out->cos_l = fabsf(v3_dot(n, out->w));
+    out->finite = true;
+    if (out->pdf_w > 0.0f)
+        out->beta = color_scale(emitter_radiance(e, g->textures, n, out->uv, out->w),
+                                out->cos_l / (out->pdf_a * out->pdf_w));
+}
+
+/* A direction w_in toward the environment from its distribution (u_dir), the light
+ * travelling -w_in from a uniform point on the disk of the bounding sphere facing it, one
+ * radius upstream (u_pos): pbrt-v4 ImageInfiniteLight::SampleLe. */
+static void env_sample_emission(const EmitterSampler *s, float pmf, Vec2 u_pos, Vec2 u_dir,
+                                EmissionSample *out)
+{
+    float pdf_dir;
+    Vec3 w_in = envmap_sample(s->env, u_dir, &pdf_dir);
+    Frame f = frame_from_normal(w_in);
+    Vec2 d = warp_concentric_disk(u_pos);
+    Vec3 off = frame_to_world(&f, v3(d.x * s->radius, d.y * s->radius, 0.0f));
+    out->p = v3_add(v3_madd(s->center, w_in, s->radius), off);
+    out->w = v3_neg(w_in);
+    out->n = out->w;
+    float area = CST_PI * s->radius * s->radius;
+    out->pdf_a = pmf / area;
+    out->pdf_w = pdf_dir;
+    out->cos_l = 1.0f;
+    out->nee_pdf = pmf * pdf_dir;
+    out->finite = false;
+    if (pdf_dir > 0.0f) out->beta = color_scale(envmap_eval(s->env, w_in), area / (pmf * pdf_dir));
+}
+
+static void delta_sample_emission(const EmitterSampler *s, const Light *l, float pmf, Vec2 u_pos,
+                                  Vec2 u_dir, EmissionSample *out)
+{
+    out->delta = true;
+    out->cos_l = 1.0f;
+    out->nee_pdf = pmf;
+    switch (l->type) {
+    case LIGHT_POINT:
+        out->p = l->u.point.p;
+        out->w = warp_uniform_sphere(u_dir);
+        out->pdf_a = pmf;
+        out->pdf_w = CST_INV_4PI;
+        out->beta = color_scale(l->u.point.intensity, 1.0f / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
+    case LIGHT_SPOT: {
+        const SpotLight *sp = &l->u.spot;
+        Frame f = frame_from_normal(sp->dir);
+        out->p = sp->p;
+        out->w = frame_to_world(&f, warp_uniform_cone(u_dir, sp->cos_outer));
+        out->pdf_a = pmf;
+        out->pdf_w = warp_uniform_cone_pdf(sp->cos_outer);
+        float falloff = spot_falloff(sp, v3_dot(sp->dir, out->w));
+        out->beta = color_scale(sp->intensity, falloff / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
+    }
+    case LIGHT_DIRECTIONAL: {
+        /* A uniform point on the disk of the bounding sphere facing the light, one radius
+         * upstream of the centre: every ray through the scene is covered. */
+        const DirectionalLight *dl = &l->u.directional;
+        Frame f = frame_from_normal(dl->dir);
+        Vec2 d = warp_concentric_disk(u_pos);
+        Vec3 off = frame_to_world(&f, v3(d.x * s->radius, d.y * s->radius, 0.0f));
+        out->p = v3_add(v3_madd(s->center, dl->dir, -s->radius), off);
+        out->w = dl->dir;
+        float area = CST_PI * s->radius * s->radius;
+        out->pdf_a = pmf / area;
+        out->pdf_w = 1.0f;
+        out->beta = color_scale(dl->irradiance, area / pmf);
+        out->finite = false;
+        break;
+    }
+    default: break;
+    }
+    out->n = out->w;
+}
+
+void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, float u_sel, Vec2 u_pos,
+                             Vec2 u_dir, EmissionSample *out)
 {
     memset(out, 0, sizeof *out);
     if (s->lights == 0) return;
     int i = distrib1d_sample(&s->by_power, u_sel);
     float pmf = s->by_power.pmf[i];
     out->emitter = i;
-    if (i < s->count) {
-        const Emitter *e = &emitters[i];
-        Vec3 p, n;
-        emitter_sample_point(e, g, u_pos, &p, &n, &out->uv);
-        float side = 1.0f;
-        if (e->two_sided) {
-            /* Reuse u_dir.x for the side: [0, 1/2) front, [1/2, 1) back, stretched back to [0, 1). */
-            if (u_dir.x < 0.5f) u_dir.x *= 2.0f;
-            else { u_dir.x = 2.0f * u_dir.x - 1.0f; side = -1.0f; }
-        }
-        Vec3 local = warp_cosine_hemisphere(u_dir);
-        Frame f = frame_from_normal(v3_scale(n, side));
-        out->p = p;
-        out->n = n;
-        out->w = frame_to_world(&f, local);
-        out->pdf_a = s->pdf_a[i];
-        out->nee_pdf = out->pdf_a;
-        out->pdf_w = local.z > 0.0f ? emitter_emission_pdf_w(e, n, out->w) : 0.0f;
-        out->cos_l = fabsf(v3_dot(n, out->w));
-        out->finite = true;
-        if (out->pdf_w > 0.0f)
-            out->beta = color_scale(emitter_radiance(e, g->textures, n, out->uv, out->w),
-                                  out->cos_l / (out->pdf_a * out->pdf_w));
-        return;
-    }
-    if (i == light_env_index(s)) {
-        /* A direction w_in toward the environment from its distribution (u_dir), the light
-         * travelling -w_in from a uniform point on the disk of the bounding sphere facing
-         * it, one radius upstream (u_pos): pbrt-v4 ImageInfiniteLight::SampleLe. */
-        float pdf_dir;
-        Vec3 w_in = envmap_sample(s->env, u_dir, &pdf_dir);
-        Frame f = frame_from_normal(w_in);
-        Vec2 d = warp_concentric_disk(u_pos);
-        Vec3 off = frame_to_world(&f, v3(d.x * s->radius, d.y * s->radius, 0.0f));
-        out->p = v3_add(v3_madd(s->center, w_in, s->radius), off);
-        out->w = v3_neg(w_in);
-        out->n = out->w;
-        float area = CST_PI * s->radius * s->radius;
-        out->pdf_a = pmf / area;
-        out->pdf_w = pdf_dir;
-        out->cos_l = 1.0f;
-        out->nee_pdf = pmf * pdf_dir;
-        out->finite = false;
-        if (pdf_dir > 0.0f) out->beta = color_scale(envmap_eval(s->env, w_in), area / (pmf * pdf_dir));
-        return;
-    }
-    const DeltaLight *l = &s->delta[i - s->count];
-    out->delta = true;
-    out->cos_l = 1.0f;
-    out->nee_pdf = pmf;
+    const Light *l = &s->light[i];
     switch (l->type) {
-    case DELTA_POINT:
-        out->p = l->p;
-        out->w = warp_uniform_sphere(u_dir);
-        out->pdf_a = pmf;
-        out->pdf_w = CST_INV_4PI;
-        out->beta = color_scale(l->intensity, 1.0f / (pmf * out->pdf_w));
-        out->finite = true;
-        break;
-    case DELTA_SPOT: {
-        Frame f = frame_from_normal(l->dir);
-        out->p = l->p;
-        out->w = frame_to_world(&f, warp_uniform_cone(u_dir, l->cos_outer));
-        out->pdf_a = pmf;
-        out->pdf_w = warp_uniform_cone_pdf(l->cos_outer);
-        float falloff = spot_falloff(l, v3_dot(l->dir, out->w));
-        out->beta = color_scale(l->intensity, falloff / (pmf * out->pdf_w));
-        out->finite = true;
-        break;
+    case LIGHT_AREA: area_sample_emission(s, i, g, u_pos, u_dir, out); return;
+    case LIGHT_ENVIRONMENT: env_sample_emission(s, pmf, u_pos, u_dir, out); return;
+    case LIGHT_POINT:
+    case LIGHT_SPOT:
+    case LIGHT_DIRECTIONAL: delta_sample_emission(s, l, pmf, u_pos, u_dir, out); return;
     }
-    case DELTA_DIRECTIONAL: {
-        /* A uniform point on the disk of the bounding sphere facing the light, one radius
-         * upstream of the centre: every ray through the scene is covered. */
-        Frame f = frame_from_normal(l->dir);
-        Vec2 d = warp_concentric_disk(u_pos);
-        Vec3 off = frame_to_world(&f, v3(d.x * s->radius, d.y * s->radius, 0.0f));
-        out->p = v3_add(v3_madd(s->center, l->dir, -s->radius), off);
-        out->w = l->dir;
-        float area = CST_PI * s->radius * s->radius;
-        out->pdf_a = pmf / area;
-        out->pdf_w = 1.0f;
-        out->beta = color_scale(l->intensity, area / pmf);
-        out->finite = false;
-        break;
-    }
-    }
-    out->n = out->w;
 }
 
 float emitter_emission_pdf_w(const Emitter *e, Vec3 n, Vec3 w)

@@ -31,6 +31,8 @@ typedef enum DeltaLightType {
     DELTA_DIRECTIONAL  /* parallel light from infinitely far: irradiance E on a surface facing it */
 } DeltaLightType;
 
+/* A point, spot or directional light as a scene is built (scene_add_delta_light);
+ * emitter_sampler_init turns each into its Light. */
 typedef struct DeltaLight {
     DeltaLightType type;
     Vec3 p;        /* point, spot: position */
@@ -39,17 +41,54 @@ typedef struct DeltaLight {
     float cos_inner, cos_outer; /* spot: full intensity within cos_inner, none beyond cos_outer */
 } DeltaLight;
 
-/* Light selection: one distribution over the area emitters [0, count) and the delta lights
- * [count, count + num_delta), proportional to each light's power (luminance of its flux),
- * so bright lights get the samples; a point on emitter e then has the area density
+/* The kinds of light, one tag of the Light union. */
+typedef enum LightType {
+    LIGHT_AREA,        /* an emitting triangle or sphere (Emitter) */
+    LIGHT_POINT,       /* isotropic point */
+    LIGHT_SPOT,        /* point with a cone and smoothstep falloff */
+    LIGHT_DIRECTIONAL, /* parallel light from infinitely far */
+    LIGHT_ENVIRONMENT  /* radiance from every direction at infinity (EnvMap) */
+} LightType;
+
+typedef struct PointLight {
+    Vec3 p;
+    Color intensity; /* radiant intensity I, W/sr */
+} PointLight;
+typedef struct SpotLight {
+    Vec3 p, dir;     /* position; unit axis */
+    Color intensity; /* I on the axis, W/sr */
+    float cos_inner, cos_outer; /* full intensity within cos_inner, none beyond cos_outer */
+} SpotLight;
+typedef struct DirectionalLight {
+    Vec3 dir;         /* unit direction the light travels */
+    Color irradiance; /* E on a surface facing it, W/m^2 */
+} DirectionalLight;
+
+/* One light: a tagged union. Every sampling routine below switches on the tag. */
+typedef struct Light {
+    LightType type;
+    union {
+        Emitter area;
+        PointLight point;
+        SpotLight spot;
+        DirectionalLight directional;
+        const EnvMap *env; /* borrowed from the scene */
+    } u;
+} Light;
+
+/* The scene's lights in one array, with light selection: one distribution over
+ * light[0, lights), proportional to each light's power (luminance of its flux), so bright
+ * lights get the samples. The area emitters come first, in the scene's emitter order (so
+ * an emitter's index is its light index), then the point, spot and directional lights,
+ * then the environment; a point on area light e has the area density
  * pdf_a[e] = pmf(e) / area(e). */
 typedef struct EmitterSampler {
+    Light *light;    /* lights entries */
     Distrib1D by_power;
-    float *pdf_a;    /* per area emitter */
-    int count;       /* area emitters */
-    int num_delta;   /* delta lights */
+    float *pdf_a;    /* per area light */
+    int count;       /* area lights */
+    int num_delta;   /* point, spot and directional lights */
     int lights;      /* count + num_delta (+ 1 with an environment): 0 = nothing to sample */
-    const DeltaLight *delta; /* borrowed from the scene */
     const EnvMap *env;       /* borrowed from the scene, or NULL; light index count + num_delta */
     Vec3 center;     /* the scene's bounding sphere: directional lights cover its disk */
     float radius;
@@ -121,8 +160,8 @@ typedef struct LightLi {
 
 /* False when no light can contribute (no lights, x on the light, or outside a spot's
  * cone); li is then black. */
-bool light_sample_li(const EmitterSampler *s, const Emitter *emitters, const EmitterGeometry *g, Vec3 x,
-                     float u_sel, Vec2 u, LightLi *out);
+bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
+                     LightLi *out);
 
 typedef struct EmitterSample {
     Vec3 p, n; /* point and unit geometric normal */
@@ -152,13 +191,14 @@ typedef struct EmissionSample {
     bool finite; /* false for directional lights and the environment */
 } EmissionSample;
 
-void emitter_sample_emission(const EmitterSampler *s, const Emitter *emitters,
-                             const EmitterGeometry *g, float u_sel, Vec2 u_pos, Vec2 u_dir,
-                             EmissionSample *out);
+void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, float u_sel, Vec2 u_pos,
+                             Vec2 u_dir, EmissionSample *out);
 /* pdf_w of emitter_sample_emission for direction w at a point with normal n. */
 float emitter_emission_pdf_w(const Emitter *e, Vec3 n, Vec3 w);
 
 /* Emitted power (luminance of the flux) of each kind of light: the selection weights. */
-float delta_light_power(const DeltaLight *l, float scene_radius);
+/* The luminance of a light's flux, its selection weight; infinitely distant lights (and
+ * the environment) count the flux through the disk of the scene's bounding sphere. */
+float light_power(const Light *l, float scene_radius);
 
 #endif

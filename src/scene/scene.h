@@ -264,7 +264,7 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
  * on an emitter (sh->emitter >= 0). */
 static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w)
 {
-    return emitter_radiance(&s->emitters[sh->emitter], s->textures, sh->ng, sh->uv, w);
+    return emitter_radiance(&s->emitter_sampler.light[sh->emitter].u.area, s->textures, sh->ng, sh->uv, w);
 }
 
 /* What NEE and light-path starts need of the scene's geometry and textures. */

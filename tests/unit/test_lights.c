@@ -79,7 +79,7 @@ static void test_selection_by_power(void **state)
         EmissionSample es;
         float u_sel = pcg32_float(&rng);
         Vec2 a = pcg32_v2(&rng), b = pcg32_v2(&rng);
-        emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, a, b, &es);
+        emitter_sample_emission(&s->emitter_sampler, &g, u_sel, a, b, &es);
         obs[source_of(s, es.emitter)] += 1.0;
     }
     double chi2 = 0.0;
@@ -112,7 +112,7 @@ static void test_nee_densities(void **state)
         LightLi ls;
         float u_sel = pcg32_float(&rng);
         Vec2 u = pcg32_v2(&rng);
-        if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, x, u_sel, u, &ls)) continue;
+        if (!light_sample_li(&s->emitter_sampler, &g, x, u_sel, u, &ls)) continue;
         seen[ls.light] = 1;
         int src = source_of(s, ls.light);
         if (ls.delta) {

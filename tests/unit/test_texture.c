@@ -410,7 +410,7 @@ static void test_emitter_sample_uv(void **state)
     for (int i = 0; i < 64; i++) {
         LightLi ls;
         Vec3 x = v3(2, 3, 2);
-        if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, x, (float)i / 64.0f,
+        if (!light_sample_li(&s->emitter_sampler, &g, x, (float)i / 64.0f,
                              v2((float)((i * 29) % 64) / 64.0f + 0.01f, (float)i / 64.0f + 0.005f), &ls))
             continue;
         Vec2 uv = ls.light == 0 || ls.light == 1 ? v2(ls.p.x / 4.0f, ls.p.z / 4.0f)
