@@ -6,6 +6,7 @@ set -euo pipefail
 
 PKGS=(
   build-essential cmake pkg-config
+  clang               # the second compiler of CI's render identity check
   libjansson-dev      # JSON scenes with line/column errors
   libpng-dev          # PNG output
   libopenexr-dev      # OpenEXR C API (openexr.h) for EXR output

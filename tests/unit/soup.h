@@ -98,8 +98,10 @@ static inline void soup_add_sphere(Soup *s, Vec3 c, float r)
 static inline void soup_random_spheres(Soup *s, Pcg32 *rng, int n)
 {
     soup_reserve(s, s->num_tris, s->num_verts, s->num_spheres + n);
-    for (int i = 0; i < n; i++)
-        soup_add_sphere(s, rnd_v3(rng, -10.0, 10.0), (float)exp(rnd(rng, log(0.01), log(3.0))));
+    for (int i = 0; i < n; i++) {
+        float r = (float)exp(rnd(rng, log(0.01), log(3.0))); /* radius first: GCC's order */
+        soup_add_sphere(s, rnd_v3(rng, -10.0, 10.0), r);
+    }
 }
 
 static inline AccelGeometry soup_geometry(const Soup *s)

@@ -59,8 +59,11 @@ static void soup_random_tris_needles(Soup *s, Pcg32 *rng, int n)
         Vec3 c = rnd_v3(rng, -10.0, 10.0);
         uint32_t kind = pcg32_next(rng) % 30u;
         if (kind < 3u) {
-            Vec3 axis = v3_scale(rnd_dir(rng), (float)rnd(rng, 2.5, 12.5));
-            Vec3 side = v3_scale(rnd_dir(rng), (float)exp(rnd(rng, log(0.001), log(0.1))));
+            /* Each length before its direction: GCC's order of the arguments this replaced. */
+            float axis_len = (float)rnd(rng, 2.5, 12.5);
+            Vec3 axis = v3_scale(rnd_dir(rng), axis_len);
+            float side_len = (float)exp(rnd(rng, log(0.001), log(0.1)));
+            Vec3 side = v3_scale(rnd_dir(rng), side_len);
             soup_add_tri(s, v3_sub(c, axis), v3_add(c, axis), v3_add(c, side));
             continue;
         }
@@ -561,7 +564,8 @@ static void test_grid_empty(void **state)
     Pcg32 rng;
     pcg32_seed(&rng, 1u, 1u);
     for (int i = 0; i < 1000; i++) {
-        Ray r = ray_make(rnd_v3(&rng, -10.0, 10.0), rnd_dir(&rng), 0.0f, INFINITY);
+        Vec3 d = rnd_dir(&rng); /* the direction first: GCC's order of the arguments this replaced */
+        Ray r = ray_make(rnd_v3(&rng, -10.0, 10.0), d, 0.0f, INFINITY);
         Hit h = {0};
         assert_false(accel_intersect(&a, &r, &h));
         assert_false(accel_occluded(&a, &r));
@@ -656,7 +660,8 @@ static void test_grid_mixed_triangles_spheres(void **state)
         /* Rays from inside spheres (they hit the far side). */
         for (int i = 0; i < 2000 && s.num_spheres > 0; i++) {
             const Sphere *sp = &s.spheres[pcg32_next(&rng) % (uint32_t)s.num_spheres];
-            Ray r = ray_make(v3_madd(sp->center, rnd_dir(&rng), 0.5f * sp->radius), rnd_dir(&rng), 0.0f, INFINITY);
+            Vec3 d = rnd_dir(&rng); /* the direction first: GCC's order */
+            Ray r = ray_make(v3_madd(sp->center, rnd_dir(&rng), 0.5f * sp->radius), d, 0.0f, INFINITY);
             check_ray(&p, &r, &st, "inside a sphere", i);
         }
         print_message("  %-22s refs %6zu  rays %ld hits %ld ties %ld occluded %ld off-prim %ld\n", what, refs, st.rays,
@@ -783,7 +788,9 @@ static void test_grid_degenerate_and_flat(void **state)
     Stats st = {0};
     check_random_rays(&p, &rng, 10000, &st, "with degenerates");
     for (int i = 0; i < 1000; i++) { /* at the coincident copies */
-        Vec3 d = rnd_dir(&rng), target = v3(0.5f + (float)rnd(&rng, -1.0, 1.0), (float)rnd(&rng, -1.0, 1.0), 0.6f);
+        Vec3 d = rnd_dir(&rng);
+        float ty = (float)rnd(&rng, -1.0, 1.0), tx = 0.5f + (float)rnd(&rng, -1.0, 1.0); /* y first: GCC's order */
+        Vec3 target = v3(tx, ty, 0.6f);
         Ray r = ray_make(v3_madd(target, d, -30.0f), d, 0.0f, INFINITY);
         check_ray(&p, &r, &st, "at the copies", i);
     }
@@ -861,8 +868,10 @@ static void test_grid_teapot_in_stadium(void **state)
     soup_grid_cube(&s, 1, 1000.0f, v3(0.0f, 0.0f, 0.0f));
     soup_uv_sphere(&s, 40, 64, 0.01f, v3(3.0f, -2.0f, 1.0f));
     soup_reserve(&s, s.num_tris + 4, s.num_verts + 12, 0);
-    for (int i = 0; i < 4; i++)
-        soup_add_tri(&s, rnd_v3(&rng, -990.0, 990.0), rnd_v3(&rng, -990.0, 990.0), rnd_v3(&rng, -990.0, 990.0));
+    for (int i = 0; i < 4; i++) {
+        Vec3 c = rnd_v3(&rng, -990.0, 990.0), b = rnd_v3(&rng, -990.0, 990.0); /* last first: GCC's order */
+        soup_add_tri(&s, rnd_v3(&rng, -990.0, 990.0), b, c);
+    }
     Pair p;
     pair_build(&p, &s);
     const Grid *g = &p.grid.grid;
@@ -880,10 +889,12 @@ static void test_grid_teapot_in_stadium(void **state)
     Vec3 teapot = v3(3.0f, -2.0f, 1.0f);
     for (int i = 0; i < 3000; i++) {
         Vec3 o = rnd_v3(&rng, -900.0, 900.0);
-        Vec3 aim = v3_madd(teapot, rnd_dir(&rng), (float)rnd(&rng, 0.0, 0.012));
+        float aim_r = (float)rnd(&rng, 0.0, 0.012); /* the distance first: GCC's order */
+        Vec3 aim = v3_madd(teapot, rnd_dir(&rng), aim_r);
         Ray r = ray_make(o, v3_normalize(v3_sub(aim, o)), 0.0f, INFINITY);
         check_ray(&p, &r, &st, "at the teapot", i);
-        Vec3 near = v3_madd(teapot, rnd_dir(&rng), (float)rnd(&rng, 0.0, 0.02));
+        float near_r = (float)rnd(&rng, 0.0, 0.02); /* the distance first: GCC's order */
+        Vec3 near = v3_madd(teapot, rnd_dir(&rng), near_r);
         Ray q = ray_make(near, rnd_dir(&rng), 0.0f, (i & 1) ? INFINITY : 0.05f);
         check_ray(&p, &q, &st, "from the teapot", i);
     }

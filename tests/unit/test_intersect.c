@@ -38,6 +38,14 @@ static Ray ray_to(Vec3 o, Vec3 d, float t_min, float t_max)
 }
 
 static double rnd(Pcg32 *rng, double lo, double hi) { return lo + (hi - lo) * (double)pcg32_float(rng); }
+/* Three draws for one vector, z first: the order GCC gave the v3(rnd(), rnd(), rnd()) this
+ * replaces (C leaves the order of arguments unspecified; Clang went x first), so the tests
+ * keep the values they had. */
+static Vec3 rnd_v3_zyx(Pcg32 *rng, double lo, double hi)
+{
+    float z = (float)rnd(rng, lo, hi), y = (float)rnd(rng, lo, hi), x = (float)rnd(rng, lo, hi);
+    return v3(x, y, z);
+}
 
 /* ------------------------------------------------------------------ sphere */
 
@@ -63,13 +71,13 @@ static void test_sphere_outside_nearest_root(void **state)
     Pcg32 rng;
     pcg32_seed(&rng, 1u, 2u);
     for (int i = 0; i < 10000; i++) {
-        Vec3 cc = v3((float)rnd(&rng, -10, 10), (float)rnd(&rng, -10, 10), (float)rnd(&rng, -10, 10));
+        Vec3 cc = rnd_v3_zyx(&rng, -10, 10);
         float rad = (float)exp(rnd(&rng, log(0.01), log(5.0)));
-        Vec3 o = v3((float)rnd(&rng, -30, 30), (float)rnd(&rng, -30, 30), (float)rnd(&rng, -30, 30));
+        Vec3 o = rnd_v3_zyx(&rng, -30, 30);
         if (v3_length(v3_sub(o, cc)) < 1.5f * rad) continue;
         /* Aim at a point within 0.9 radius of the centre so the ray clearly hits. */
-        Vec3 aim = v3_add(cc, v3((float)rnd(&rng, -0.5, 0.5) * rad, (float)rnd(&rng, -0.5, 0.5) * rad,
-                                 (float)rnd(&rng, -0.5, 0.5) * rad));
+        Vec3 off = rnd_v3_zyx(&rng, -0.5, 0.5);
+        Vec3 aim = v3_add(cc, v3(off.x * rad, off.y * rad, off.z * rad));
         Ray rr = ray_to(o, v3_sub(aim, o), 0.0f, INFINITY);
         double fx = (double)o.x - (double)cc.x, fy = (double)o.y - (double)cc.y, fz = (double)o.z - (double)cc.z;
         double dx = (double)rr.d.x, dy = (double)rr.d.y, dz = (double)rr.d.z;
@@ -151,9 +159,9 @@ static void test_sphere_tangent_consistent(void **state)
     Pcg32 rng;
     pcg32_seed(&rng, 7u, 9u);
     for (int i = 0; i < 20000; i++) {
-        Vec3 d = v3_normalize(v3((float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1)));
+        Vec3 d = v3_normalize(rnd_v3_zyx(&rng, -1, 1));
         Vec3 n = v3_normalize(v3_cross(d, v3(0.3f, 0.5f, 0.7f)));
-        Vec3 cc = v3((float)rnd(&rng, -5, 5), (float)rnd(&rng, -5, 5), (float)rnd(&rng, -5, 5));
+        Vec3 cc = rnd_v3_zyx(&rng, -5, 5);
         float rad = (float)rnd(&rng, 0.1, 3.0);
         Vec3 o = v3_madd(v3_madd(cc, n, rad), d, -10.0f);
         Ray g = ray_make(o, d, 0.0f, INFINITY);
@@ -180,7 +188,7 @@ static void test_sphere_far_precision(void **state)
     Pcg32 rng;
     pcg32_seed(&rng, 3u, 4u);
     for (int i = 0; i < 2000; i++) {
-        Vec3 dir = v3_normalize(v3((float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1)));
+        Vec3 dir = v3_normalize(rnd_v3_zyx(&rng, -1, 1));
         Vec3 cc = v3_scale(dir, 1e5f);
         /* Aim at a point up to 0.9 off the centre, perpendicular to dir. */
         Vec3 side = v3_normalize(v3_cross(dir, v3(0.0f, 0.6f, 0.8f)));
@@ -251,14 +259,14 @@ static void test_triangle_center_hit(void **state)
     Pcg32 rng;
     pcg32_seed(&rng, 11u, 12u);
     for (int i = 0; i < 20000; i++) {
-        Vec3 a = v3((float)rnd(&rng, -5, 5), (float)rnd(&rng, -5, 5), (float)rnd(&rng, -5, 5));
-        Vec3 e1 = v3((float)rnd(&rng, -2, 2), (float)rnd(&rng, -2, 2), (float)rnd(&rng, -2, 2));
-        Vec3 e2 = v3((float)rnd(&rng, -2, 2), (float)rnd(&rng, -2, 2), (float)rnd(&rng, -2, 2));
+        Vec3 a = rnd_v3_zyx(&rng, -5, 5);
+        Vec3 e1 = rnd_v3_zyx(&rng, -2, 2);
+        Vec3 e2 = rnd_v3_zyx(&rng, -2, 2);
         Vec3 n = v3_cross(e1, e2);
         if (v3_length(n) < 0.1f) continue;
         double bu = rnd(&rng, 0.02, 0.96), bv = rnd(&rng, 0.02, 0.98 - bu);
         Vec3 p = v3_add(a, v3_add(v3_scale(e1, (float)bu), v3_scale(e2, (float)bv)));
-        Vec3 d = v3_normalize(v3((float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1)));
+        Vec3 d = v3_normalize(rnd_v3_zyx(&rng, -1, 1));
         if (fabsf(v3_dot(d, v3_normalize(n))) < 0.05f) continue; /* keep away from grazing */
         float t_ref = (float)rnd(&rng, 0.1, 20.0);
         Ray r = ray_make(v3_madd(p, d, -t_ref), d, 0.0f, INFINITY);
@@ -507,14 +515,16 @@ static void test_slab_grazing(void **state)
     for (int i = 0; i < 100000; i++) {
         int axis = (int)(pcg32_next(&rng) % 3u);
         float side = (pcg32_next(&rng) & 1u) ? 1.0f : -1.0f;
-        float p[3] = {(float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1)};
+        float p[3]; /* in sequence, x first (an initializer list's order is not specified either) */
+        for (int a = 0; a < 3; a++) p[a] = (float)rnd(&rng, -1, 1);
         p[axis] = side * (1.0f - 1e-4f);
-        Vec3 o = v3((float)rnd(&rng, -20, 20), (float)rnd(&rng, -20, 20), (float)rnd(&rng, -20, 20));
+        Vec3 o = rnd_v3_zyx(&rng, -20, 20);
         Vec3 d = v3_normalize(v3_sub(v3(p[0], p[1], p[2]), o));
         if (!slab(o, d, 0.0f, INFINITY, &te)) fail_msg("ray %d toward a surface point missed", i);
 
-        float oc[3] = {(float)rnd(&rng, -20, 20), (float)rnd(&rng, -20, 20), (float)rnd(&rng, -20, 20)};
-        float dc[3] = {(float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1), (float)rnd(&rng, -1, 1)};
+        float oc[3], dc[3];
+        for (int a = 0; a < 3; a++) oc[a] = (float)rnd(&rng, -20, 20);
+        for (int a = 0; a < 3; a++) dc[a] = (float)rnd(&rng, -1, 1);
         oc[axis] = side * 1.001f;
         dc[axis] = 0.0f;
         if (slab(v3(oc[0], oc[1], oc[2]), v3(dc[0], dc[1], dc[2]), 0.0f, INFINITY, &te))
@@ -589,8 +599,10 @@ static void test_scene_offset_near_scales(void **state)
             Pcg32 rng;
             pcg32_seed(&rng, 84u, 1u);
             for (int i = 0; i < 1000; i++) {
-                Vec3 p = v3((float)rnd(&rng, -0.9 * h, 0.9 * h), 0.0f, (float)rnd(&rng, -0.9 * h, 0.9 * h));
-                Vec3 d = v3_normalize(v3((float)rnd(&rng, -1, 1), (float)rnd(&rng, 0.01, 1), (float)rnd(&rng, -1, 1)));
+                float pz = (float)rnd(&rng, -0.9 * h, 0.9 * h), px = (float)rnd(&rng, -0.9 * h, 0.9 * h);
+                Vec3 p = v3(px, 0.0f, pz);
+                float dz = (float)rnd(&rng, -1, 1), dy = (float)rnd(&rng, 0.01, 1), dx = (float)rnd(&rng, -1, 1);
+                Vec3 d = v3_normalize(v3(dx, dy, dz));
                 Vec3 o = scene_offset(s, p, v3(0, 1, 0), d);
                 if (!(o.y > 1e-7f * 500.0f)) fail_msg("offset point %g above the floor, inside its box", (double)o.y);
                 SurfaceHit sh;

@@ -71,13 +71,18 @@ static PhotonSet make_set(SetKind kind, size_t n, uint64_t seed)
         case SET_CLUSTERED: {
             if (pcg32_next(&rng) % 100u == 0u) { p = rnd_v3(&rng, -10.0f, 10.0f); break; }
             int c = (int)(pcg32_next(&rng) % 8u);
-            Vec3 g = v3_sub(v3_add(rnd_v3(&rng, 0.0f, 1.0f), v3_add(rnd_v3(&rng, 0.0f, 1.0f), rnd_v3(&rng, 0.0f, 1.0f))),
-                            v3s(1.5f));
+            /* Three draws in sequence (the order GCC evaluated the nested arguments in). */
+            Vec3 g3 = rnd_v3(&rng, 0.0f, 1.0f), g2 = rnd_v3(&rng, 0.0f, 1.0f), g1 = rnd_v3(&rng, 0.0f, 1.0f);
+            Vec3 g = v3_sub(v3_add(g1, v3_add(g2, g3)), v3s(1.5f));
             p = v3_madd(centres[c], g, sigma[c]);
             break;
         }
         case SET_IDENTICAL: p = v3(0.25f, -1.5f, 3.0f); break;
-        case SET_PLANE: p = v3(rndf(&rng, -1.0f, 1.0f), rndf(&rng, -1.0f, 1.0f), 2.0f); break;
+        case SET_PLANE: {
+            float y = rndf(&rng, -1.0f, 1.0f), x = rndf(&rng, -1.0f, 1.0f); /* y first: GCC's order */
+            p = v3(x, y, 2.0f);
+            break;
+        }
         default: /* integer points of [0, 4]^3: duplicates and exactly equal distances */
             uint32_t pz = pcg32_next(&rng) % 5u, py = pcg32_next(&rng) % 5u, px = pcg32_next(&rng) % 5u;
             p = v3((float)px, (float)py, (float)pz);
@@ -121,8 +126,10 @@ static Vec3 query_point(const PhotonSet *s, Pcg32 *rng, int q)
             uint32_t z = pcg32_next(rng) % 7u, y = pcg32_next(rng) % 7u, x = pcg32_next(rng) % 7u;
             return v3((float)x - 1.0f, (float)y - 1.0f, (float)z - 1.0f);
         }
-        if (s->n > 0) /* near a photon */
-            return v3_madd(s->ph[pcg32_next(rng) % (uint32_t)s->n].pos, rnd_dir(rng), 1e-3f * s->scale);
+        if (s->n > 0) { /* near a photon: the offset drawn before the photon (GCC's order) */
+            Vec3 off = rnd_dir(rng);
+            return v3_madd(s->ph[pcg32_next(rng) % (uint32_t)s->n].pos, off, 1e-3f * s->scale);
+        }
         return v3s(0.5f);
     }
 }
