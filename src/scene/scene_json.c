@@ -13,7 +13,8 @@
 
 #include "core/error.h"
 #include "core/file.h"
-#include "film/image_io.h"
+#include "io/image_io.h"
+#include "io/path.h"
 #include "math/transform.h"
 #include "scene/json_locate.h"
 #include "scene/mesh_import.h"
@@ -401,25 +402,6 @@ static CstStatus read_type(Loader *ld, const json_t *obj, const char *what,
 
 /* ------------------------------------------------------------------ sections */
 
-/* Ends in .png, .exr or .pfm, any case (as the CLI accepts), after a nonempty stem. */
-static int has_image_extension(const char *path)
-{
-    static const char *const exts[] = {".png", ".exr", ".pfm"};
-    size_t n = strlen(path);
-    if (n < 5)
-        return 0;
-    for (int e = 0; e < 3; e++) {
-        int same = 1;
-        for (int k = 0; k < 4 && same; k++) {
-            char c = path[n - 4 + (size_t)k];
-            same = (c >= 'A' && c <= 'Z' ? (char)(c - 'A' + 'a') : c) == exts[e][k];
-        }
-        if (same)
-            return 1;
-    }
-    return 0;
-}
-
 static CstStatus parse_film(Loader *ld, const json_t *film)
 {
     static const char *const keys[] = {"width", "height", "filter", "output", "exposure", "png_encoding",
@@ -461,7 +443,7 @@ static CstStatus parse_film(Loader *ld, const json_t *film)
         LOADER_TRY(read_string(ld, v, &s));
         /* Checked now, not when the image is written hours later: the writer picks the
          * format from the extension. */
-        if (!has_image_extension(s)) {
+        if (!image_path_is_scene_output(s)) {
             char name[72];
             return fail_here(ld, "output \"%s\" has no supported extension; expected a file "
                                  "name ending in .png, .exr or .pfm",
@@ -726,7 +708,6 @@ static CstStatus parse_sampler(Loader *ld, const json_t *sampler)
 
 /* ------------------------------------------------------------------ textures */
 
-static char *resolve_mesh_path(const char *scene_name, const char *file);
 static CstStatus read_texture_name(Loader *ld, const char *name, int *out);
 
 /* A checkerboard's "even" or "odd": a colour (a new constant texture) or a texture name. */
@@ -813,7 +794,7 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
         path_push_key(ld, "file");
         LOADER_TRY(read_string(ld, v, &file));
         if (!file[0]) return fail_here(ld, "the file name is empty; expected the path of an image");
-        char *path = resolve_mesh_path(ld->name, file);
+        char *path = path_resolve(ld->name, file);
         if (!path) return fail_at(ld, CST_ERR_OOM, "out of memory");
         st = texture_image_load(&t, path, linear, wrap, ld->err);
         free(path);
@@ -1499,20 +1480,6 @@ static CstStatus parse_transform(Loader *ld, const json_t *obj, Transform *out)
     return CST_OK;
 }
 
-/* `file` resolved against the directory of the scene file `scene_name` (the current
- * directory when the name has none, as for "<string>"); absolute paths stay. NULL on OOM. */
-static char *resolve_mesh_path(const char *scene_name, const char *file)
-{
-    const char *slash = file[0] == '/' ? NULL : strrchr(scene_name, '/');
-    size_t dir_len = slash ? (size_t)(slash - scene_name) + 1 : 0, len = strlen(file);
-    char *p = malloc(dir_len + len + 1);
-    if (!p)
-        return NULL;
-    memcpy(p, scene_name, dir_len);
-    memcpy(p + dir_len, file, len + 1);
-    return p;
-}
-
 /* Applies the shape's transform to the imported mesh in place; a mirroring transform gets
  * the triangles' winding swapped back so that outside stays outside (the geometric normal
  * is (b - a) x (c - a)). */
@@ -1585,7 +1552,7 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
     LOADER_TRY(read_string(ld, fv, &file));
     if (!file[0])
         return fail_here(ld, "the file name is empty; expected the path of a mesh file");
-    char *path = resolve_mesh_path(ld->name, file);
+    char *path = path_resolve(ld->name, file);
     if (!path)
         return fail_at(ld, CST_ERR_OOM, "out of memory");
     ImportedMesh im = {0};
@@ -1844,7 +1811,7 @@ static CstStatus parse_environment(Loader *ld, const json_t *obj)
     path_push_key(ld, "file");
     LOADER_TRY(read_string(ld, file, &name));
     if (!name[0]) return fail_here(ld, "the file name is empty; expected the path of an image");
-    char *path = resolve_mesh_path(ld->name, name);
+    char *path = path_resolve(ld->name, name);
     if (!path) return fail_at(ld, CST_ERR_OOM, "out of memory");
     float *rgb = NULL;
     int w = 0, h = 0;

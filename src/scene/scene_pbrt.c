@@ -15,7 +15,8 @@
 
 #include "core/error.h"
 #include "core/file.h"
-#include "film/image_io.h"
+#include "io/image_io.h"
+#include "io/path.h"
 #include "math/transform.h"
 #include "scene/mesh_import.h"
 #include "scene/pbrt_tokenizer.h"
@@ -1657,12 +1658,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
 /* `file` relative to the main scene file's directory (pbrt's search directory). */
 static char *resolve_path(Loader *ld, const char *file)
 {
-    size_t dl = file[0] == '/' ? 0 : strlen(ld->base_dir), fl = strlen(file);
-    char *p = malloc(dl + fl + 1);
-    if (!p) return NULL;
-    memcpy(p, ld->base_dir, dl);
-    memcpy(p + dl, file, fl + 1);
-    return p;
+    return path_resolve(ld->base_dir, file);
 }
 
 static CstStatus check_file_access(Loader *ld, Loc loc, const char *d)
@@ -1788,17 +1784,8 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
                            "\"sRGB\", \"linear\" or \"gamma\" and a number", d, clip(enc, nm));
         }
     }
-    const char *dot = strrchr(file, '.');
-    char ext[8] = "";
-    for (size_t i = 0; dot && i + 1 < sizeof ext && dot[i]; i++)
-        ext[i] = (char)((dot[i] >= 'A' && dot[i] <= 'Z') ? dot[i] - 'A' + 'a' : dot[i]);
-    static const char *const exts[] = {".png", ".jpg", ".jpeg", ".bmp", ".tga", ".hdr", ".exr", ".pfm"};
-    int readable = 0, is_float_file = 0;
-    for (size_t i = 0; dot && strlen(dot) < sizeof ext && i < sizeof exts / sizeof exts[0]; i++)
-        if (strcmp(ext, exts[i]) == 0) {
-            readable = 1;
-            is_float_file = i >= 5;
-        }
+    ImageFileFormat format = image_format_from_path(file);
+    int readable = format != IMAGE_FILE_NONE, is_float_file = image_format_is_float(format);
     if (!readable) {
         *v = color_s(0.5f);
         warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR or "
@@ -2705,15 +2692,6 @@ static CstStatus camera_finish(Loader *ld)
     return CST_OK;
 }
 
-static int has_image_ext(const char *s)
-{
-    size_t n = strlen(s);
-    if (n < 5) return 0;
-    const char *e = s + n - 4;
-    return strcmp(e, ".png") == 0 || strcmp(e, ".exr") == 0 || strcmp(e, ".pfm") == 0 ||
-           strcmp(e, ".PNG") == 0 || strcmp(e, ".EXR") == 0 || strcmp(e, ".PFM") == 0;
-}
-
 static CstStatus get_point3(Loader *ld, Params *ps, const char *d, const char *name, Vec3 def, Vec3 *out)
 {
     Param *p;
@@ -3040,7 +3018,7 @@ static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
         }
         rs->width = w;
         rs->height = h;
-        if (file && has_image_ext(file)) {
+        if (file && image_path_is_scene_output(file)) {
             if ((st = scene_set_output_path(ld->scene, file, ld->err))) goto done;
         } else if (file) {
             warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: output \"%s\" is not .png, .exr or .pfm; "
@@ -3588,8 +3566,7 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     ld.gs.ctm = xf_identity();
     ld.end = (Loc){name, 1, 1};
     CstStatus st = CST_OK;
-    const char *slash = strrchr(name, '/');
-    size_t dl = slash ? (size_t)(slash - name) + 1 : 0;
+    size_t dl = path_dir_len(name);
     ld.base_dir = malloc(dl + 1);
     ld.scene = scene_create();
     if (!ld.base_dir || !ld.scene) {

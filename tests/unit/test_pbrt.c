@@ -18,7 +18,7 @@
 #include "caustic/caustic.h"
 #include "camera/camera.h"
 #include "film/film.h"
-#include "film/image_io.h"
+#include "io/image_io.h"
 #include "scene/pbrt_tokenizer.h"
 #include "scene/scene.h"
 #include "scene/scene_pbrt.h"
