@@ -171,6 +171,17 @@ typedef struct Lexer {
     int has_peek;
 } Lexer;
 
+/* A directive with a quoted type name and a parameter list (Film "rgb" ..., Material
+ * "diffuse" ...), as read before its handler runs. */
+typedef struct NamedCall {
+    const char *dname; /* the directive, "Film" */
+    const char *type;  /* its type name, "rgb" */
+    Params ps;
+    Loc loc;           /* of the directive */
+    Loc tl;            /* of the type name */
+    char d[128];       /* "Film \"rgb\"": the prefix of its messages */
+} NamedCall;
+
 typedef struct Loader {
     Scene *scene;
     CstError *err;
@@ -1832,8 +1843,9 @@ static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc,
     return tex_add(ld, &t, loc, d, id);
 }
 
-static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc)
+static CstStatus texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
+    (void)dname;
     char *name = NULL, *ttype = NULL, *cls = NULL, nm[72], nm2[72];
     Params ps = {0};
     Loc tl;
@@ -2303,8 +2315,9 @@ static CstStatus plymesh(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGe
     return st;
 }
 
-static CstStatus shape_directive(Loader *ld, Lexer *lx, Loc loc)
+static CstStatus shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
+    (void)dname;
     char *type = NULL, nm[72], d[96];
     Params ps = {0};
     ShapeGeom g = {0};
@@ -2484,8 +2497,9 @@ done:
     return st;
 }
 
-static CstStatus object_instance(Loader *ld, Lexer *lx, Loc loc)
+static CstStatus object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
+    (void)dname;
     char *name = NULL, nm[72];
     Loc nl;
     TRY(expect_string(ld, lx, "ObjectInstance", "the object's name", &name, &nl));
@@ -2539,8 +2553,9 @@ static CstStatus object_instance(Loader *ld, Lexer *lx, Loc loc)
 
 /* ------------------------------------------------------------------ camera and options */
 
-static CstStatus camera_directive(Loader *ld, Lexer *lx, Loc loc)
+static CstStatus camera_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
+    (void)dname;
     char *type = NULL, nm[72], d[96];
     Params ps = {0};
     Loc tl;
@@ -2980,294 +2995,590 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
     return st ? fail_wrap(ld, st, loc, d) : CST_OK;
 }
 
-/* Film, Sampler, Integrator, PixelFilter, Accelerator, ColorSpace, Option, MakeNamedMedium,
- * LightSource, Attribute: a name and parameters, mapped to settings or reported. */
-static CstStatus named_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+/* ------------------------------------------------------------------ directives: rendering options */
+
+/* Film, Sampler, Integrator, PixelFilter, Accelerator, ColorSpace, MakeNamedMedium, Attribute:
+ * a type name and parameters, mapped to settings or reported. */
+static CstStatus film_directive(Loader *ld, NamedCall *call)
 {
-    char *type = NULL, nm[72], d[128];
-    Params ps = {0};
-    Loc tl;
-    CstStatus st = expect_string(ld, lx, dname, "a type name in quotes", &type, &tl);
-    if (!st && strcmp(dname, "ColorSpace") != 0) st = parse_params(ld, lx, &ps);
-    if (st) goto done;
-    /* (the guard only quiets GCC's format-truncation analysis, which loses track of dname) */
-    snprintf(d, sizeof d, "%s \"%s\"", dname ? dname : "?", clip(type, nm));
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d;
+    Loc loc = call->loc, tl = call->tl;
+    char nm[72];
     CstRenderSettings *rs = &ld->scene->settings;
-    int options_block = strcmp(dname, "Film") == 0 || strcmp(dname, "Sampler") == 0 ||
-                        strcmp(dname, "Integrator") == 0 || strcmp(dname, "PixelFilter") == 0 ||
-                        strcmp(dname, "Accelerator") == 0;
-    if (options_block && ld->in_world) {
-        st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s after WorldBegin; expected it before WorldBegin", dname);
-        goto done;
+    int w = 1280, h = 720;
+    const char *file = NULL;
+    Loc fl = loc;
+    TRY(get_int(ld, ps, d, "xresolution", 1280, &w));
+    TRY(get_int(ld, ps, d, "yresolution", 720, &h));
+    TRY(get_string(ld, ps, d, "filename", &file, &fl));
+    if (w < 1 || h < 1 || w > PBRT_MAX_FILM_SIZE || h > PBRT_MAX_FILM_SIZE) {
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: resolution %d x %d; expected 1 to %d "
+                     "pixels on each side", d, w, h, PBRT_MAX_FILM_SIZE);
     }
-    if (strcmp(dname, "LightSource") == 0 && !ld->in_world) {
-        st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "LightSource before WorldBegin; expected it in the world block");
-        goto done;
+    rs->width = w;
+    rs->height = h;
+    if (file && image_path_is_scene_output(file)) {
+        TRY(scene_set_output_path(ld->scene, file, ld->err));
+    } else if (file) {
+        warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: output \"%s\" is not .png, .exr or .pfm; "
+                "ignored (the default output name is used)", d, clip(file, nm));
     }
-    if (strcmp(dname, "Film") == 0) {
-        int w = 1280, h = 720;
-        const char *file = NULL;
-        Loc fl = loc;
-        if ((st = get_int(ld, &ps, d, "xresolution", 1280, &w))) goto done;
-        if ((st = get_int(ld, &ps, d, "yresolution", 720, &h))) goto done;
-        if ((st = get_string(ld, &ps, d, "filename", &file, &fl))) goto done;
-        if (w < 1 || h < 1 || w > PBRT_MAX_FILM_SIZE || h > PBRT_MAX_FILM_SIZE) {
-            st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: resolution %d x %d; expected 1 to %d "
-                         "pixels on each side", d, w, h, PBRT_MAX_FILM_SIZE);
-            goto done;
+    /* pbrt-v4 (film.cpp): cropwindow [x0 x1 y0 y1] in [0, 1], y down, to the pixel bounds
+     * ceil(res * c); pixelbounds given directly, and preferred when both are. */
+    Param *pc, *pb;
+    TRY(lookup(ld, ps, d, "cropwindow", M(PT_FLOAT), "float", &pc));
+    TRY(lookup(ld, ps, d, "pixelbounds", M(PT_INTEGER), "integer", &pb));
+    if (pc && pb) {
+        warn_at(ld, CST_WARN_APPROXIMATED, pc->loc, "%s: both cropwindow and pixelbounds given; "
+                "pixelbounds is used", d);
+        pc = NULL;
+    }
+    if (pc) {
+        const double *c = pc->nums;
+        if (pc->num_nums != 4 || !(0.0 <= c[0] && c[0] < c[1] && c[1] <= 1.0 && 0.0 <= c[2] && c[2] < c[3] &&
+                                   c[3] <= 1.0)) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, pc->loc, "%s: cropwindow; expected 4 values x0 x1 y0 y1 with "
+                         "0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1", d);
         }
-        rs->width = w;
-        rs->height = h;
-        if (file && image_path_is_scene_output(file)) {
-            if ((st = scene_set_output_path(ld->scene, file, ld->err))) goto done;
-        } else if (file) {
-            warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: output \"%s\" is not .png, .exr or .pfm; "
-                    "ignored (the default output name is used)", d, clip(file, nm));
-        }
-        /* pbrt-v4 (film.cpp): cropwindow [x0 x1 y0 y1] in [0, 1], y down, to the pixel bounds
-         * ceil(res * c); pixelbounds given directly, and preferred when both are. */
-        Param *pc, *pb;
-        if ((st = lookup(ld, &ps, d, "cropwindow", M(PT_FLOAT), "float", &pc))) goto done;
-        if ((st = lookup(ld, &ps, d, "pixelbounds", M(PT_INTEGER), "integer", &pb))) goto done;
-        if (pc && pb) {
-            warn_at(ld, CST_WARN_APPROXIMATED, pc->loc, "%s: both cropwindow and pixelbounds given; "
-                    "pixelbounds is used", d);
-            pc = NULL;
-        }
-        if (pc) {
-            const double *c = pc->nums;
-            if (pc->num_nums != 4 || !(0.0 <= c[0] && c[0] < c[1] && c[1] <= 1.0 && 0.0 <= c[2] && c[2] < c[3] &&
-                                       c[3] <= 1.0)) {
-                st = fail_at(ld, CST_ERR_INVALID_ARG, pc->loc, "%s: cropwindow; expected 4 values x0 x1 y0 y1 with "
-                             "0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1", d);
-                goto done;
-            }
-            rs->crop[0] = (int)ceil(w * c[0]); rs->crop[1] = (int)ceil(w * c[1]);
-            rs->crop[2] = (int)ceil(h * c[2]); rs->crop[3] = (int)ceil(h * c[3]);
-            if (rs->crop[0] == rs->crop[1] || rs->crop[2] == rs->crop[3]) {
-                st = fail_at(ld, CST_ERR_INVALID_ARG, pc->loc, "%s: cropwindow holds no pixel of the %d x %d "
-                             "image; expected a wider window", d, w, h);
-                goto done;
-            }
-        }
-        if (pb) {
-            const double *b = pb->nums;
-            if (pb->num_nums != 4 || !(0.0 <= b[0] && b[0] < b[1] && b[1] <= w && 0.0 <= b[2] && b[2] < b[3] &&
-                                       b[3] <= h)) {
-                st = fail_at(ld, CST_ERR_INVALID_ARG, pb->loc, "%s: pixelbounds; expected 4 integers x0 x1 y0 y1 "
-                             "with 0 <= x0 < x1 <= %d and 0 <= y0 < y1 <= %d", d, w, h);
-                goto done;
-            }
-            for (int k = 0; k < 4; k++) rs->crop[k] = (int)b[k];
-        }
-        if (strcmp(type, "rgb") != 0 && strcmp(type, "image") != 0)
-            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered as an RGB film", d);
-    } else if (strcmp(dname, "Sampler") == 0) {
-        int spp = 16, seed = 0;
-        Param *ps_seed = find_param(&ps, "seed");
-        if (strcmp(type, "stratified") == 0) {
-            int xs = 4, ys = 4, jitter = 1;
-            if ((st = get_int(ld, &ps, d, "xsamples", 4, &xs))) goto done;
-            if ((st = get_int(ld, &ps, d, "ysamples", 4, &ys))) goto done;
-            if ((st = get_bool(ld, &ps, d, "jitter", 1, &jitter))) goto done;
-            spp = (xs > 0 && ys > 0 && xs <= INT_MAX / ys) ? xs * ys : 0;
-        } else {
-            if ((st = get_int(ld, &ps, d, "pixelsamples", 16, &spp))) goto done;
-        }
-        if (spp < 1) {
-            st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: %d samples per pixel; expected at least 1", d, spp);
-            goto done;
-        }
-        rs->spp = spp;
-        if ((st = get_int(ld, &ps, d, "seed", 0, &seed))) goto done;
-        if (ps_seed) {
-            if (seed < 0) {
-                st = fail_at(ld, CST_ERR_INVALID_ARG, ps_seed->loc, "%s: seed %d; expected >= 0", d, seed);
-                goto done;
-            }
-            rs->seed = (uint64_t)seed;
-            rs->seed_set = 1;
-        }
-        /* The nearest of caustic's samplers (sampling/sampler.c): same expectation; only
-         * independent is the same kind of noise as pbrt's. */
-        if (strcmp(type, "independent") == 0 || strcmp(type, "random") == 0) {
-            rs->sampler = CST_SAMPLER_INDEPENDENT;
-        } else if (strcmp(type, "stratified") == 0) {
-            rs->sampler = CST_SAMPLER_STRATIFIED;
-            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's stratified sampler (jittered, 2D strata "
-                    "nx x ny = %d with nx the largest divisor up to its square root); same expectation, "
-                    "different noise", d, spp);
-        } else {
-            rs->sampler = CST_SAMPLER_SOBOL;
-            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's Owen-scrambled Sobol' sampler; same "
-                    "expectation, different noise", d);
-        }
-    } else if (strcmp(dname, "Integrator") == 0) {
-        static const struct { const char *pbrt; CstIntegrator ours; int exact; } map[] = {
-            {"path", CST_INTEGRATOR_PATH, 1}, {"volpath", CST_INTEGRATOR_PATH, 0},
-            {"simplepath", CST_INTEGRATOR_PATH_NEE, 0}, {"randomwalk", CST_INTEGRATOR_PATH_BSDF, 0},
-            {"lightpath", CST_INTEGRATOR_LIGHT, 1}, {"sppm", CST_INTEGRATOR_SPPM, 1},
-            {"whitted", CST_INTEGRATOR_WHITTED, 1}, {"bdpt", CST_INTEGRATOR_BDPT, 1},
-            {"mlt", CST_INTEGRATOR_PATH, 0}, {"simplevolpath", CST_INTEGRATOR_PATH, 0},
-            {"directlighting", CST_INTEGRATOR_PATH, 0}, {"ambientocclusion", CST_INTEGRATOR_PATH, 0},
-            {"aov", CST_INTEGRATOR_PATH, 0}};
-        int k = -1;
-        for (int i = 0; i < (int)(sizeof map / sizeof map[0]); i++)
-            if (strcmp(type, map[i].pbrt) == 0) k = i;
-        if (k < 0) {
-            st = fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown integrator \"%s\"; expected one of: "
-                         "path, volpath, simplepath, randomwalk, lightpath, bdpt, mlt, sppm, "
-                         "simplevolpath, ambientocclusion, aov (pbrt-v3: whitted, directlighting)",
-                         clip(type, nm));
-            goto done;
-        }
-        rs->integrator = map[k].ours;
-        int depth = 5;
-        if ((st = get_int(ld, &ps, d, "maxdepth", 5, &depth))) goto done;
-        if (strcmp(type, "directlighting") == 0) depth = 1;
-        if (depth == 0)
-            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: maxdepth 0 (emitters seen directly only) "
-                    "is not expressible; rendered with maxdepth 1", d);
-        rs->max_depth = depth < 0 ? 0 : (depth == 0 ? 1 : depth); /* pbrt: < 0 never stops */
-        if (map[k].ours == CST_INTEGRATOR_SPPM) {
-            int photons = 0;
-            float radius = 0.0f;
-            int has_r = 0;
-            if ((st = get_int(ld, &ps, d, "photonsperiteration", -1, &photons))) goto done;
-            if ((st = get_float(ld, &ps, d, "radius", 1.0f, &radius, &has_r))) goto done;
-            if (photons > 0) rs->photons = photons < (1 << 28) ? photons : (1 << 28);
-            if (has_r && radius > 0.0f) rs->photon_radius = (double)radius;
-            int iters = 0;
-            if ((st = get_int(ld, &ps, d, "iterations", 0, &iters))) goto done;
-            if (iters > 0) rs->spp = iters;
-        }
-        if (strcmp(type, "ambientocclusion") == 0 || strcmp(type, "aov") == 0) {
-            params_mark_all_used(&ps);
-            warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the path tracer renders "
-                    "the image instead", d);
-        } else if (!map[k].exact) {
-            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered with caustic's \"%s\" (the same "
-                    "expected image in scenes without participating media)", d,
-                    cst_integrator_name(map[k].ours));
-        }
-    } else if (strcmp(dname, "PixelFilter") == 0) {
-        float rx = 0.0f, ry = 0.0f;
-        int hx = 0, hy = 0;
-        if ((st = get_float(ld, &ps, d, "xradius", 0.0f, &rx, &hx))) goto done;
-        if ((st = get_float(ld, &ps, d, "yradius", 0.0f, &ry, &hy))) goto done;
-        if (strcmp(type, "box") == 0) {
-            rs->filter = CST_FILTER_BOX;
-            if ((hx && rx != 0.5f) || (hy && ry != 0.5f))
-                warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: radius other than 0.5 rendered as "
-                        "the one-pixel box", d);
-        } else if (strcmp(type, "triangle") == 0) {
-            rs->filter = CST_FILTER_TENT;
-            if (!hx || !hy || rx != 1.0f || ry != 1.0f)
-                warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: rendered as caustic's tent of "
-                        "radius 1 pixel (pbrt's default radius is 2)", d);
-        } else if (strcmp(type, "gaussian") == 0 || strcmp(type, "mitchell") == 0) {
-            /* caustic's are pbrt-v4's defaults (film/filter.c): Gaussian sigma 0.5 pixel,
-             * radius 1.5, minus its value at the radius; Mitchell radius 2, B = C = 1/3. */
-            int gauss = type[0] == 'g', hs = 0, hb = 0, hc = 0;
-            float def_r = gauss ? 1.5f : 2.0f, sigma = 0.5f, b = 1.0f / 3.0f, c = 1.0f / 3.0f;
-            rs->filter = gauss ? CST_FILTER_GAUSSIAN : CST_FILTER_MITCHELL;
-            if (gauss) {
-                if ((st = get_float(ld, &ps, d, "sigma", 0.5f, &sigma, &hs))) goto done;
-            } else {
-                if ((st = get_float(ld, &ps, d, "B", b, &b, &hb))) goto done;
-                if ((st = get_float(ld, &ps, d, "C", c, &c, &hc))) goto done;
-            }
-            if ((hx && rx != def_r) || (hy && ry != def_r) || (hs && sigma != 0.5f) ||
-                (hb && fabsf(b - 1.0f / 3.0f) > 1e-6f) || (hc && fabsf(c - 1.0f / 3.0f) > 1e-6f))
-                warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: rendered with caustic's %s filter, %s", d,
-                        gauss ? "Gaussian" : "Mitchell", gauss ? "sigma 0.5 and radius 1.5 pixels"
-                        : "B = C = 1/3 and radius 2 pixels");
-        } else if (strcmp(type, "sinc") == 0 || strcmp(type, "lanczos") == 0) {
-            rs->filter = CST_FILTER_MITCHELL;
-            params_mark_all_used(&ps);
-            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the Mitchell filter (B = C = "
-                    "1/3, radius 2 pixels), the nearest caustic has to a windowed sinc", d);
-        } else {
-            st = fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown pixel filter \"%s\"; expected one of: "
-                         "box, triangle, gaussian, mitchell, sinc", clip(type, nm));
-            goto done;
-        }
-    } else if (strcmp(dname, "Accelerator") == 0) {
-        params_mark_all_used(&ps);
-        if (strcmp(type, "kdtree") == 0) ld->scene->accel_type = ACCEL_KDTREE;
-        else if (strcmp(type, "bvh") != 0)
-            warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not known; the BVH is used", d);
-    } else if (strcmp(dname, "ColorSpace") == 0) {
-        if (strcmp(type, "srgb") != 0)
-            warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: RGB values are taken as linear sRGB", d);
-    } else if (strcmp(dname, "MakeNamedMedium") == 0) {
-        params_mark_all_used(&ps);
-        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: participating media are not supported; ignored", d);
-    } else if (strcmp(dname, "Attribute") == 0) {
-        params_mark_all_used(&ps);
-        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: default parameters by Attribute are not supported; ignored", d);
-    } else if (strcmp(dname, "LightSource") == 0) {
-        if ((st = light_source(ld, type, &ps, loc, d))) goto done;
-    } else if (strcmp(dname, "Material") == 0 || strcmp(dname, "MakeNamedMaterial") == 0) {
-        if (!ld->in_world) {
-            st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s before WorldBegin; expected materials in the world block", dname);
-            goto done;
-        }
-        Material m = {0};
-        const char *mt = type;
-        if (dname[0] == 'M' && dname[1] == 'a' && dname[2] == 'k') {
-            /* MakeNamedMaterial "name" "string type" "diffuse" ... */
-            if (find_named_material(ld, type) >= 0) {
-                st = fail_at(ld, CST_ERR_INVALID_ARG, tl, "MakeNamedMaterial: \"%s\" is already "
-                             "defined; expected each name once", clip(type, nm));
-                goto done;
-            }
-            Loc l2 = loc;
-            if ((st = get_string(ld, &ps, d, "type", &mt, &l2))) goto done;
-            if (!mt) {
-                st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string type\"; expected the "
-                             "material type, as in \"string type\" \"diffuse\"", d);
-                goto done;
-            }
-        }
-        if ((st = make_material(ld, mt, &ps, loc, &m))) goto done;
-        int id = 0;
-        if ((st = add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id))) goto done;
-        if (dname[2] != 'k') ld->gs.material = id;
-    } else if (strcmp(dname, "AreaLightSource") == 0) {
-        if (!ld->in_world) {
-            st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "AreaLightSource before WorldBegin; expected it in the world block");
-            goto done;
-        }
-        if (strcmp(type, "diffuse") != 0 && strcmp(type, "area") != 0) {
-            params_mark_all_used(&ps);
-            warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
-            ld->gs.area.active = 0;
-        } else {
-            AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0};
-            Param *pl;
-            if ((st = lookup(ld, &ps, d, "filename", M(PT_STRING), "string", &pl))) goto done;
-            if (pl) warn_at(ld, CST_WARN_UNSUPPORTED, pl->loc, "%s: image emission is not supported; \"L\" is used", d);
-            if ((st = get_spectrum(ld, &ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, NULL))) goto done;
-            if ((st = get_float(ld, &ps, d, "scale", 1.0f, &al.scale, NULL))) goto done;
-            if ((st = get_float(ld, &ps, d, "power", 0.0f, &al.power, NULL))) goto done;
-            if ((st = get_bool(ld, &ps, d, "twosided", 0, &al.two_sided))) goto done;
-            if (!(al.scale >= 0.0f) || !color_is_finite(color_scale(al.L, al.scale))) {
-                st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g; expected a finite scale >= 0",
-                             d, (double)al.scale);
-                goto done;
-            }
-            ld->gs.area = al;
+        rs->crop[0] = (int)ceil(w * c[0]); rs->crop[1] = (int)ceil(w * c[1]);
+        rs->crop[2] = (int)ceil(h * c[2]); rs->crop[3] = (int)ceil(h * c[3]);
+        if (rs->crop[0] == rs->crop[1] || rs->crop[2] == rs->crop[3]) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, pc->loc, "%s: cropwindow holds no pixel of the %d x %d "
+                         "image; expected a wider window", d, w, h);
         }
     }
-    params_warn_unused(ld, &ps, d);
-done:
-    free(type);
-    params_free(&ps);
+    if (pb) {
+        const double *b = pb->nums;
+        if (pb->num_nums != 4 || !(0.0 <= b[0] && b[0] < b[1] && b[1] <= w && 0.0 <= b[2] && b[2] < b[3] &&
+                                   b[3] <= h)) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, pb->loc, "%s: pixelbounds; expected 4 integers x0 x1 y0 y1 "
+                         "with 0 <= x0 < x1 <= %d and 0 <= y0 < y1 <= %d", d, w, h);
+        }
+        for (int k = 0; k < 4; k++) rs->crop[k] = (int)b[k];
+    }
+    if (strcmp(type, "rgb") != 0 && strcmp(type, "image") != 0)
+        warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered as an RGB film", d);
+    return CST_OK;
+}
+
+static CstStatus sampler_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d;
+    Loc loc = call->loc, tl = call->tl;
+    CstRenderSettings *rs = &ld->scene->settings;
+    int spp = 16, seed = 0;
+    Param *ps_seed = find_param(ps, "seed");
+    if (strcmp(type, "stratified") == 0) {
+        int xs = 4, ys = 4, jitter = 1;
+        TRY(get_int(ld, ps, d, "xsamples", 4, &xs));
+        TRY(get_int(ld, ps, d, "ysamples", 4, &ys));
+        TRY(get_bool(ld, ps, d, "jitter", 1, &jitter));
+        spp = (xs > 0 && ys > 0 && xs <= INT_MAX / ys) ? xs * ys : 0;
+    } else {
+        TRY(get_int(ld, ps, d, "pixelsamples", 16, &spp));
+    }
+    if (spp < 1) {
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: %d samples per pixel; expected at least 1", d, spp);
+    }
+    rs->spp = spp;
+    TRY(get_int(ld, ps, d, "seed", 0, &seed));
+    if (ps_seed) {
+        if (seed < 0) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, ps_seed->loc, "%s: seed %d; expected >= 0", d, seed);
+        }
+        rs->seed = (uint64_t)seed;
+        rs->seed_set = 1;
+    }
+    /* The nearest of caustic's samplers (sampling/sampler.c): same expectation; only
+     * independent is the same kind of noise as pbrt's. */
+    if (strcmp(type, "independent") == 0 || strcmp(type, "random") == 0) {
+        rs->sampler = CST_SAMPLER_INDEPENDENT;
+    } else if (strcmp(type, "stratified") == 0) {
+        rs->sampler = CST_SAMPLER_STRATIFIED;
+        warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's stratified sampler (jittered, 2D strata "
+                "nx x ny = %d with nx the largest divisor up to its square root); same expectation, "
+                "different noise", d, spp);
+    } else {
+        rs->sampler = CST_SAMPLER_SOBOL;
+        warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's Owen-scrambled Sobol' sampler; same "
+                "expectation, different noise", d);
+    }
+    return CST_OK;
+}
+
+static CstStatus integrator_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d;
+    Loc loc = call->loc, tl = call->tl;
+    char nm[72];
+    CstRenderSettings *rs = &ld->scene->settings;
+    static const struct { const char *pbrt; CstIntegrator ours; int exact; } map[] = {
+        {"path", CST_INTEGRATOR_PATH, 1}, {"volpath", CST_INTEGRATOR_PATH, 0},
+        {"simplepath", CST_INTEGRATOR_PATH_NEE, 0}, {"randomwalk", CST_INTEGRATOR_PATH_BSDF, 0},
+        {"lightpath", CST_INTEGRATOR_LIGHT, 1}, {"sppm", CST_INTEGRATOR_SPPM, 1},
+        {"whitted", CST_INTEGRATOR_WHITTED, 1}, {"bdpt", CST_INTEGRATOR_BDPT, 1},
+        {"mlt", CST_INTEGRATOR_PATH, 0}, {"simplevolpath", CST_INTEGRATOR_PATH, 0},
+        {"directlighting", CST_INTEGRATOR_PATH, 0}, {"ambientocclusion", CST_INTEGRATOR_PATH, 0},
+        {"aov", CST_INTEGRATOR_PATH, 0}};
+    int k = -1;
+    for (int i = 0; i < (int)(sizeof map / sizeof map[0]); i++)
+        if (strcmp(type, map[i].pbrt) == 0) k = i;
+    if (k < 0) {
+        return fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown integrator \"%s\"; expected one of: "
+                     "path, volpath, simplepath, randomwalk, lightpath, bdpt, mlt, sppm, "
+                     "simplevolpath, ambientocclusion, aov (pbrt-v3: whitted, directlighting)",
+                     clip(type, nm));
+    }
+    rs->integrator = map[k].ours;
+    int depth = 5;
+    TRY(get_int(ld, ps, d, "maxdepth", 5, &depth));
+    if (strcmp(type, "directlighting") == 0) depth = 1;
+    if (depth == 0)
+        warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: maxdepth 0 (emitters seen directly only) "
+                "is not expressible; rendered with maxdepth 1", d);
+    rs->max_depth = depth < 0 ? 0 : (depth == 0 ? 1 : depth); /* pbrt: < 0 never stops */
+    if (map[k].ours == CST_INTEGRATOR_SPPM) {
+        int photons = 0;
+        float radius = 0.0f;
+        int has_r = 0;
+        TRY(get_int(ld, ps, d, "photonsperiteration", -1, &photons));
+        TRY(get_float(ld, ps, d, "radius", 1.0f, &radius, &has_r));
+        if (photons > 0) rs->photons = photons < (1 << 28) ? photons : (1 << 28);
+        if (has_r && radius > 0.0f) rs->photon_radius = (double)radius;
+        int iters = 0;
+        TRY(get_int(ld, ps, d, "iterations", 0, &iters));
+        if (iters > 0) rs->spp = iters;
+    }
+    if (strcmp(type, "ambientocclusion") == 0 || strcmp(type, "aov") == 0) {
+        params_mark_all_used(ps);
+        warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the path tracer renders "
+                "the image instead", d);
+    } else if (!map[k].exact) {
+        warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered with caustic's \"%s\" (the same "
+                "expected image in scenes without participating media)", d,
+                cst_integrator_name(map[k].ours));
+    }
+    return CST_OK;
+}
+
+static CstStatus pixel_filter_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d;
+    Loc loc = call->loc, tl = call->tl;
+    char nm[72];
+    CstRenderSettings *rs = &ld->scene->settings;
+    float rx = 0.0f, ry = 0.0f;
+    int hx = 0, hy = 0;
+    TRY(get_float(ld, ps, d, "xradius", 0.0f, &rx, &hx));
+    TRY(get_float(ld, ps, d, "yradius", 0.0f, &ry, &hy));
+    if (strcmp(type, "box") == 0) {
+        rs->filter = CST_FILTER_BOX;
+        if ((hx && rx != 0.5f) || (hy && ry != 0.5f))
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: radius other than 0.5 rendered as "
+                    "the one-pixel box", d);
+    } else if (strcmp(type, "triangle") == 0) {
+        rs->filter = CST_FILTER_TENT;
+        if (!hx || !hy || rx != 1.0f || ry != 1.0f)
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: rendered as caustic's tent of "
+                    "radius 1 pixel (pbrt's default radius is 2)", d);
+    } else if (strcmp(type, "gaussian") == 0 || strcmp(type, "mitchell") == 0) {
+        /* caustic's are pbrt-v4's defaults (film/filter.c): Gaussian sigma 0.5 pixel,
+         * radius 1.5, minus its value at the radius; Mitchell radius 2, B = C = 1/3. */
+        int gauss = type[0] == 'g', hs = 0, hb = 0, hc = 0;
+        float def_r = gauss ? 1.5f : 2.0f, sigma = 0.5f, b = 1.0f / 3.0f, c = 1.0f / 3.0f;
+        rs->filter = gauss ? CST_FILTER_GAUSSIAN : CST_FILTER_MITCHELL;
+        if (gauss) {
+            TRY(get_float(ld, ps, d, "sigma", 0.5f, &sigma, &hs));
+        } else {
+            TRY(get_float(ld, ps, d, "B", b, &b, &hb));
+            TRY(get_float(ld, ps, d, "C", c, &c, &hc));
+        }
+        if ((hx && rx != def_r) || (hy && ry != def_r) || (hs && sigma != 0.5f) ||
+            (hb && fabsf(b - 1.0f / 3.0f) > 1e-6f) || (hc && fabsf(c - 1.0f / 3.0f) > 1e-6f))
+            warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: rendered with caustic's %s filter, %s", d,
+                    gauss ? "Gaussian" : "Mitchell", gauss ? "sigma 0.5 and radius 1.5 pixels"
+                    : "B = C = 1/3 and radius 2 pixels");
+    } else if (strcmp(type, "sinc") == 0 || strcmp(type, "lanczos") == 0) {
+        rs->filter = CST_FILTER_MITCHELL;
+        params_mark_all_used(ps);
+        warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the Mitchell filter (B = C = "
+                "1/3, radius 2 pixels), the nearest caustic has to a windowed sinc", d);
+    } else {
+        return fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown pixel filter \"%s\"; expected one of: "
+                     "box, triangle, gaussian, mitchell, sinc", clip(type, nm));
+    }
+    return CST_OK;
+}
+
+static CstStatus accelerator_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d;
+    Loc tl = call->tl;
+    params_mark_all_used(ps);
+    if (strcmp(type, "kdtree") == 0) ld->scene->accel_type = ACCEL_KDTREE;
+    else if (strcmp(type, "bvh") != 0)
+        warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not known; the BVH is used", d);
+    return CST_OK;
+}
+
+static CstStatus color_space_directive(Loader *ld, NamedCall *call)
+{
+    const char *type = call->type, *d = call->d;
+    Loc tl = call->tl;
+    if (strcmp(type, "srgb") != 0)
+        warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: RGB values are taken as linear sRGB", d);
+    return CST_OK;
+}
+
+static CstStatus make_named_medium_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *d = call->d;
+    Loc loc = call->loc;
+    params_mark_all_used(ps);
+    warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: participating media are not supported; ignored", d);
+    return CST_OK;
+}
+
+static CstStatus attribute_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *d = call->d;
+    Loc loc = call->loc;
+    params_mark_all_used(ps);
+    warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: default parameters by Attribute are not supported; ignored", d);
+    return CST_OK;
+}
+
+/* Material and MakeNamedMaterial. */
+static CstStatus material_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d, *dname = call->dname;
+    Loc loc = call->loc, tl = call->tl;
+    char nm[72];
+    if (!ld->in_world) {
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s before WorldBegin; expected materials in the world block", dname);
+    }
+    Material m = {0};
+    const char *mt = type;
+    if (dname[0] == 'M' && dname[1] == 'a' && dname[2] == 'k') {
+        /* MakeNamedMaterial "name" "string type" "diffuse" ... */
+        if (find_named_material(ld, type) >= 0) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, tl, "MakeNamedMaterial: \"%s\" is already "
+                         "defined; expected each name once", clip(type, nm));
+        }
+        Loc l2 = loc;
+        TRY(get_string(ld, ps, d, "type", &mt, &l2));
+        if (!mt) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string type\"; expected the "
+                         "material type, as in \"string type\" \"diffuse\"", d);
+        }
+    }
+    TRY(make_material(ld, mt, ps, loc, &m));
+    int id = 0;
+    TRY(add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id));
+    if (dname[2] != 'k') ld->gs.material = id;
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------------ directives: lights */
+
+static CstStatus light_source_directive(Loader *ld, NamedCall *call)
+{
+    if (!ld->in_world)
+        return fail_at(ld, CST_ERR_INVALID_ARG, call->loc, "LightSource before WorldBegin; expected it in the world block");
+    return light_source(ld, call->type, &call->ps, call->loc, call->d);
+}
+
+static CstStatus area_light_source_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d;
+    Loc loc = call->loc, tl = call->tl;
+    if (!ld->in_world) {
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "AreaLightSource before WorldBegin; expected it in the world block");
+    }
+    if (strcmp(type, "diffuse") != 0 && strcmp(type, "area") != 0) {
+        params_mark_all_used(ps);
+        warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
+        ld->gs.area.active = 0;
+    } else {
+        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0};
+        Param *pl;
+        TRY(lookup(ld, ps, d, "filename", M(PT_STRING), "string", &pl));
+        if (pl) warn_at(ld, CST_WARN_UNSUPPORTED, pl->loc, "%s: image emission is not supported; \"L\" is used", d);
+        TRY(get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, NULL));
+        TRY(get_float(ld, ps, d, "scale", 1.0f, &al.scale, NULL));
+        TRY(get_float(ld, ps, d, "power", 0.0f, &al.power, NULL));
+        TRY(get_bool(ld, ps, d, "twosided", 0, &al.two_sided));
+        if (!(al.scale >= 0.0f) || !color_is_finite(color_scale(al.L, al.scale))) {
+            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g; expected a finite scale >= 0",
+                         d, (double)al.scale);
+        }
+        ld->gs.area = al;
+    }
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------------ directives: transforms and state */
+
+static CstStatus translate_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    double v[3];
+    TRY(expect_numbers(ld, lx, dname, 3, v));
+    Xf x = {transform_translate(v3((float)v[0], (float)v[1], (float)v[2])),
+            transform_translate(v3(-(float)v[0], -(float)v[1], -(float)v[2])), 1};
+    return apply_ctm(ld, x, loc, dname);
+}
+
+static CstStatus scale_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    double v[3];
+    TRY(expect_numbers(ld, lx, dname, 3, v));
+    Vec3 sc = v3((float)v[0], (float)v[1], (float)v[2]);
+    Xf x = {transform_scale(sc), transform_identity(), 0};
+    if (sc.x != 0.0f && sc.y != 0.0f && sc.z != 0.0f) {
+        x.inv = transform_scale(v3(1.0f / sc.x, 1.0f / sc.y, 1.0f / sc.z));
+        x.inv_ok = 1;
+    }
+    return apply_ctm(ld, x, loc, dname);
+}
+
+static CstStatus rotate_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    double v[4];
+    TRY(expect_numbers(ld, lx, dname, 4, v));
+    Vec3 axis = v3((float)v[1], (float)v[2], (float)v[3]);
+    if (!(v3_max_abs(axis) > 0.0f) || !v3_is_finite(axis))
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "Rotate: axis (%g, %g, %g); expected a "
+                       "nonzero finite axis", v[1], v[2], v[3]);
+    Xf x = {transform_rotate_degrees(axis, v[0]), transform_rotate_degrees(axis, -v[0]), 1};
+    return apply_ctm(ld, x, loc, dname);
+}
+
+static CstStatus look_at_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    double v[9];
+    TRY(expect_numbers(ld, lx, dname, 9, v));
+    Xf x;
+    if (!xf_look_at(v, v + 3, v + 6, &x))
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "LookAt: eye equals look, or up is zero or "
+                       "parallel to the view direction; expected eye != look and up not along "
+                       "look - eye");
+    return apply_ctm(ld, x, loc, dname);
+}
+
+/* Transform replaces the CTM, ConcatTransform multiplies it. */
+static CstStatus transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *d)
+{
+    double v[16];
+    TRY(expect_number_array(ld, lx, d, 16, v));
+    /* The file lists the matrix column by column (pbrt transposes it on reading). */
+    float rows[16];
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++) rows[4 * r + c] = (float)v[4 * c + r];
+    Transform m = transform_from_rows(rows);
+    if (!transform_is_affine(&m))
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: a projective or non-finite matrix; "
+                       "expected an affine one (translation in elements 13-15, then 0 0 0 1 "
+                       "in elements 4, 8, 12, 16)", d);
+    Xf x = xf_from(m);
+    if (d[0] == 'T') {
+        if (!ld->active_start) return CST_OK;
+        ld->gs.ctm = x;
+        return CST_OK;
+    }
+    return apply_ctm(ld, x, loc, d);
+}
+
+static CstStatus identity_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)lx, (void)loc, (void)dname;
+    if (ld->active_start) ld->gs.ctm = xf_identity();
+    return CST_OK;
+}
+
+/* CoordinateSystem names the CTM, CoordSysTransform makes a named one current. */
+static CstStatus coordinate_system_directive(Loader *ld, Lexer *lx, Loc loc, const char *d)
+{
+    (void)loc;
+    char *s = NULL, nm[72];
+    CstStatus st = CST_OK;
+    int set = strcmp(d, "CoordinateSystem") == 0;
+    Loc nl;
+    TRY(expect_string(ld, lx, d, "a coordinate system name", &s, &nl));
+    if (set) {
+        st = set_named_xf(ld, s, ld->gs.ctm);
+    } else {
+        int i = find_named_xf(ld, s);
+        if (i < 0) st = fail_at(ld, CST_ERR_INVALID_ARG, nl, "CoordSysTransform: \"%s\" is not defined; "
+                                "expected a name given to CoordinateSystem (or \"camera\" after Camera)",
+                                clip(s, nm));
+        else ld->gs.ctm = ld->coords[i].xf;
+    }
+    free(s);
     return st;
 }
 
-/* ------------------------------------------------------------------ the directive loop */
+static CstStatus active_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)dname;
+    PbrtToken w;
+    TRY(lex_next(ld, lx, &w));
+    if (w.kind == PBRT_TOK_WORD && tok_is(&w, "StartTime")) { ld->active_start = 1; }
+    else if (w.kind == PBRT_TOK_WORD && tok_is(&w, "EndTime")) {
+        ld->active_start = 0;
+        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "ActiveTransform EndTime: motion blur is not "
+                "supported; end-time transforms are ignored");
+    } else if (w.kind == PBRT_TOK_WORD && tok_is(&w, "All")) { ld->active_start = 1; }
+    else {
+        char got[96];
+        pbrt_token_describe(&w, got, sizeof got);
+        return fail_at(ld, CST_ERR_PARSE, tok_loc(lx, &w), "ActiveTransform: got %s; expected "
+                       "StartTime, EndTime or All", got);
+    }
+    return CST_OK;
+}
+
+static CstStatus transform_times_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    double v[2];
+    TRY(expect_numbers(ld, lx, dname, 2, v));
+    warn_at(ld, CST_WARN_UNSUPPORTED, loc, "TransformTimes: motion blur is not supported; ignored");
+    return CST_OK;
+}
+
+static CstStatus reverse_orientation_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)lx, (void)loc, (void)dname;
+    ld->gs.reverse = !ld->gs.reverse;
+    return CST_OK;
+}
+
+/* AttributeBegin/End push and pop the whole graphics state, TransformBegin/End (pbrt-v3)
+ * only the CTM. */
+static CstStatus begin_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)lx;
+    return push_state(ld, loc, dname[0] == 'T');
+}
+
+static CstStatus end_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)lx;
+    return pop_state(ld, loc, dname[0] == 'T', dname);
+}
+
+static CstStatus world_begin_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)lx, (void)dname;
+    if (ld->in_world)
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "WorldBegin a second time; expected one world block");
+    ld->in_world = 1;
+    ld->gs.ctm = xf_identity();
+    return set_named_xf(ld, "world", ld->gs.ctm);
+}
+
+/* pbrt-v3: the end of the file follows */
+static CstStatus world_end_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)ld, (void)lx, (void)loc, (void)dname;
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------------ directives: objects */
+
+static CstStatus object_begin_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    char *s = NULL, nm[72];
+    CstStatus st = CST_OK;
+    Loc nl;
+    TRY(expect_string(ld, lx, dname, "the object's name", &s, &nl));
+    if (!ld->in_world) st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectBegin before WorldBegin; expected it in the world block");
+    else if (ld->cur_obj >= 0)
+        st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectBegin inside ObjectBegin \"%s\"; "
+                     "expected ObjectEnd first", clip(ld->objs[ld->cur_obj].name, nm));
+    for (int i = 0; !st && i < ld->num_objs; i++)
+        if (strcmp(ld->objs[i].name, s) == 0)
+            st = fail_at(ld, CST_ERR_INVALID_ARG, nl, "ObjectBegin: \"%s\" is already defined "
+                         "(line %d); expected each name once", clip(s, nm), ld->objs[i].loc.line);
+    if (!st) st = push_state(ld, loc, 0);
+    if (!st && !GROW(ld->objs, ld->cap_objs, ld->num_objs + 1)) st = oom(ld);
+    if (st) {
+        free(s);
+        return st;
+    }
+    Object *o = &ld->objs[ld->num_objs];
+    memset(o, 0, sizeof *o);
+    o->name = s;
+    o->loc = loc;
+    o->proto = -1;
+    ld->cur_obj = ld->num_objs++;
+    return CST_OK;
+}
+
+static CstStatus object_end_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)lx;
+    if (ld->cur_obj < 0)
+        return fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectEnd without ObjectBegin; expected it "
+                       "only to close an object definition");
+    ld->cur_obj = -1;
+    return pop_state(ld, loc, 0, dname);
+}
+
+/* ------------------------------------------------------------------ directives: materials */
+
+static CstStatus named_material_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)loc;
+    char *s = NULL, nm[72];
+    CstStatus st = CST_OK;
+    Loc nl;
+    TRY(expect_string(ld, lx, dname, "a material name", &s, &nl));
+    int i = find_named_material(ld, s);
+    if (i < 0)
+        st = fail_at(ld, CST_ERR_INVALID_ARG, nl, "NamedMaterial: \"%s\" is not defined; expected "
+                     "a name given to MakeNamedMaterial before", clip(s, nm));
+    else
+        ld->gs.material = i;
+    free(s);
+    return st;
+}
+
+/* ------------------------------------------------------------------ directives: ignored */
+
+static CstStatus medium_interface_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    char *s = NULL;
+    TRY(expect_string(ld, lx, dname, "the inside medium's name", &s, NULL));
+    free(s);
+    PbrtToken n2;
+    TRY(lex_peek(ld, lx, &n2));
+    if (n2.kind == PBRT_TOK_STRING) {
+        TRY(expect_string(ld, lx, dname, "the outside medium's name", &s, NULL));
+        free(s);
+    }
+    warn_at(ld, CST_WARN_UNSUPPORTED, loc, "MediumInterface: participating media are not supported; ignored");
+    return CST_OK;
+}
+
+/* Option "type name" value: a single parameter, no type name before it */
+static CstStatus option_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)dname;
+    Params ps = {0};
+    CstStatus st = parse_params(ld, lx, &ps);
+    if (!st) warn_at(ld, CST_WARN_UNSUPPORTED, loc, "Option is not supported; ignored");
+    params_free(&ps);
+    return st;
+}
 
 static CstStatus parse_text(Loader *ld, const char *text, size_t len, const char *name);
 
@@ -3300,207 +3611,112 @@ static CstStatus include_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
     return st;
 }
 
+/* ------------------------------------------------------------------ the directive table */
+
+/* Reads a directive's own arguments from lx; dname is its name as in the table. */
+typedef CstStatus (*DirectiveFn)(Loader *ld, Lexer *lx, Loc loc, const char *dname);
+/* Acts on a directive whose type name and parameters named_call has read. */
+typedef CstStatus (*NamedDirectiveFn)(Loader *ld, NamedCall *call);
+
+enum {
+    DIRECTIVE_NO_PARAMS = 1,   /* a type name only (ColorSpace) */
+    DIRECTIVE_OPTIONS = 2      /* rendering options: only before WorldBegin */
+};
+
+typedef struct Directive {
+    const char *name;
+    DirectiveFn parse;       /* either this, */
+    NamedDirectiveFn named;  /* or this with the arguments read by named_call */
+    unsigned flags;
+} Directive;
+
+static const Directive DIRECTIVES[] = {
+    /* transforms and the graphics state */
+    {"Translate", translate_directive, NULL, 0},
+    {"Scale", scale_directive, NULL, 0},
+    {"Rotate", rotate_directive, NULL, 0},
+    {"LookAt", look_at_directive, NULL, 0},
+    {"Transform", transform_directive, NULL, 0},
+    {"ConcatTransform", transform_directive, NULL, 0},
+    {"Identity", identity_directive, NULL, 0},
+    {"CoordinateSystem", coordinate_system_directive, NULL, 0},
+    {"CoordSysTransform", coordinate_system_directive, NULL, 0},
+    {"ActiveTransform", active_transform_directive, NULL, 0},
+    {"TransformTimes", transform_times_directive, NULL, 0},
+    {"ReverseOrientation", reverse_orientation_directive, NULL, 0},
+    {"AttributeBegin", begin_directive, NULL, 0},
+    {"AttributeEnd", end_directive, NULL, 0},
+    {"TransformBegin", begin_directive, NULL, 0},
+    {"TransformEnd", end_directive, NULL, 0},
+    {"WorldBegin", world_begin_directive, NULL, 0},
+    {"WorldEnd", world_end_directive, NULL, 0},
+    /* files, shapes, objects, camera, textures, materials */
+    {"Include", include_directive, NULL, 0},
+    {"Import", include_directive, NULL, 0},
+    {"Shape", shape_directive, NULL, 0},
+    {"Camera", camera_directive, NULL, 0},
+    {"Texture", texture_directive, NULL, 0},
+    {"ObjectBegin", object_begin_directive, NULL, 0},
+    {"ObjectEnd", object_end_directive, NULL, 0},
+    {"ObjectInstance", object_instance_directive, NULL, 0},
+    {"NamedMaterial", named_material_directive, NULL, 0},
+    {"MediumInterface", medium_interface_directive, NULL, 0},
+    {"Option", option_directive, NULL, 0},
+    /* a type name and parameters */
+    {"Film", NULL, film_directive, DIRECTIVE_OPTIONS},
+    {"Sampler", NULL, sampler_directive, DIRECTIVE_OPTIONS},
+    {"Integrator", NULL, integrator_directive, DIRECTIVE_OPTIONS},
+    {"PixelFilter", NULL, pixel_filter_directive, DIRECTIVE_OPTIONS},
+    {"Accelerator", NULL, accelerator_directive, DIRECTIVE_OPTIONS},
+    {"ColorSpace", NULL, color_space_directive, DIRECTIVE_NO_PARAMS},
+    {"MakeNamedMedium", NULL, make_named_medium_directive, 0},
+    {"Attribute", NULL, attribute_directive, 0},
+    {"LightSource", NULL, light_source_directive, 0},
+    {"AreaLightSource", NULL, area_light_source_directive, 0},
+    {"Material", NULL, material_directive, 0},
+    {"MakeNamedMaterial", NULL, material_directive, 0},
+};
+
+/* Reads the type name and (unless DIRECTIVE_NO_PARAMS) the parameter list of `dir`, runs
+ * its handler, and reports the parameters it left unused. */
+static CstStatus named_call(Loader *ld, Lexer *lx, Loc loc, const Directive *dir)
+{
+    char *type = NULL, nm[72];
+    NamedCall call = {.dname = dir->name, .loc = loc};
+    CstStatus st = expect_string(ld, lx, dir->name, "a type name in quotes", &type, &call.tl);
+    if (!st && !(dir->flags & DIRECTIVE_NO_PARAMS)) st = parse_params(ld, lx, &call.ps);
+    if (st) goto done;
+    call.type = type;
+    /* (the guard only quiets GCC's format-truncation analysis, which loses track of the name) */
+    snprintf(call.d, sizeof call.d, "%s \"%s\"", dir->name ? dir->name : "?", clip(type, nm));
+    if ((dir->flags & DIRECTIVE_OPTIONS) && ld->in_world) {
+        st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s after WorldBegin; expected it before WorldBegin",
+                     dir->name);
+        goto done;
+    }
+    st = dir->named(ld, &call);
+    if (!st) params_warn_unused(ld, &call.ps, call.d);
+done:
+    free(type);
+    params_free(&call.ps);
+    return st;
+}
+
 static CstStatus directive(Loader *ld, Lexer *lx, const PbrtToken *t)
 {
     Loc loc = tok_loc(lx, t);
-    double v[16] = {0};
-    char *s = NULL, nm[72];
-    CstStatus st = CST_OK;
-    if (tok_is(t, "Translate")) {
-        TRY(expect_numbers(ld, lx, "Translate", 3, v));
-        Xf x = {transform_translate(v3((float)v[0], (float)v[1], (float)v[2])),
-                transform_translate(v3(-(float)v[0], -(float)v[1], -(float)v[2])), 1};
-        return apply_ctm(ld, x, loc, "Translate");
+    for (size_t i = 0; i < sizeof DIRECTIVES / sizeof DIRECTIVES[0]; i++) {
+        const Directive *dir = &DIRECTIVES[i];
+        if (tok_is(t, dir->name))
+            return dir->parse ? dir->parse(ld, lx, loc, dir->name) : named_call(ld, lx, loc, dir);
     }
-    if (tok_is(t, "Scale")) {
-        TRY(expect_numbers(ld, lx, "Scale", 3, v));
-        Vec3 sc = v3((float)v[0], (float)v[1], (float)v[2]);
-        Xf x = {transform_scale(sc), transform_identity(), 0};
-        if (sc.x != 0.0f && sc.y != 0.0f && sc.z != 0.0f) {
-            x.inv = transform_scale(v3(1.0f / sc.x, 1.0f / sc.y, 1.0f / sc.z));
-            x.inv_ok = 1;
-        }
-        return apply_ctm(ld, x, loc, "Scale");
-    }
-    if (tok_is(t, "Rotate")) {
-        TRY(expect_numbers(ld, lx, "Rotate", 4, v));
-        Vec3 axis = v3((float)v[1], (float)v[2], (float)v[3]);
-        if (!(v3_max_abs(axis) > 0.0f) || !v3_is_finite(axis))
-            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "Rotate: axis (%g, %g, %g); expected a "
-                           "nonzero finite axis", v[1], v[2], v[3]);
-        Xf x = {transform_rotate_degrees(axis, v[0]), transform_rotate_degrees(axis, -v[0]), 1};
-        return apply_ctm(ld, x, loc, "Rotate");
-    }
-    if (tok_is(t, "LookAt")) {
-        TRY(expect_numbers(ld, lx, "LookAt", 9, v));
-        Xf x;
-        if (!xf_look_at(v, v + 3, v + 6, &x))
-            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "LookAt: eye equals look, or up is zero or "
-                           "parallel to the view direction; expected eye != look and up not along "
-                           "look - eye");
-        return apply_ctm(ld, x, loc, "LookAt");
-    }
-    if (tok_is(t, "Transform") || tok_is(t, "ConcatTransform")) {
-        const char *d = tok_is(t, "Transform") ? "Transform" : "ConcatTransform";
-        TRY(expect_number_array(ld, lx, d, 16, v));
-        /* The file lists the matrix column by column (pbrt transposes it on reading). */
-        float rows[16];
-        for (int r = 0; r < 4; r++)
-            for (int c = 0; c < 4; c++) rows[4 * r + c] = (float)v[4 * c + r];
-        Transform m = transform_from_rows(rows);
-        if (!transform_is_affine(&m))
-            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: a projective or non-finite matrix; "
-                           "expected an affine one (translation in elements 13-15, then 0 0 0 1 "
-                           "in elements 4, 8, 12, 16)", d);
-        Xf x = xf_from(m);
-        if (d[0] == 'T') {
-            if (!ld->active_start) return CST_OK;
-            ld->gs.ctm = x;
-            return CST_OK;
-        }
-        return apply_ctm(ld, x, loc, d);
-    }
-    if (tok_is(t, "Identity")) {
-        if (ld->active_start) ld->gs.ctm = xf_identity();
-        return CST_OK;
-    }
-    if (tok_is(t, "CoordinateSystem") || tok_is(t, "CoordSysTransform")) {
-        int set = tok_is(t, "CoordinateSystem");
-        const char *d = set ? "CoordinateSystem" : "CoordSysTransform";
-        Loc nl;
-        TRY(expect_string(ld, lx, d, "a coordinate system name", &s, &nl));
-        if (set) {
-            st = set_named_xf(ld, s, ld->gs.ctm);
-        } else {
-            int i = find_named_xf(ld, s);
-            if (i < 0) st = fail_at(ld, CST_ERR_INVALID_ARG, nl, "CoordSysTransform: \"%s\" is not defined; "
-                                    "expected a name given to CoordinateSystem (or \"camera\" after Camera)",
-                                    clip(s, nm));
-            else ld->gs.ctm = ld->coords[i].xf;
-        }
-        free(s);
-        return st;
-    }
-    if (tok_is(t, "ActiveTransform")) {
-        PbrtToken w;
-        TRY(lex_next(ld, lx, &w));
-        if (w.kind == PBRT_TOK_WORD && tok_is(&w, "StartTime")) { ld->active_start = 1; }
-        else if (w.kind == PBRT_TOK_WORD && tok_is(&w, "EndTime")) {
-            ld->active_start = 0;
-            warn_at(ld, CST_WARN_UNSUPPORTED, loc, "ActiveTransform EndTime: motion blur is not "
-                    "supported; end-time transforms are ignored");
-        } else if (w.kind == PBRT_TOK_WORD && tok_is(&w, "All")) { ld->active_start = 1; }
-        else {
-            char got[96];
-            pbrt_token_describe(&w, got, sizeof got);
-            return fail_at(ld, CST_ERR_PARSE, tok_loc(lx, &w), "ActiveTransform: got %s; expected "
-                           "StartTime, EndTime or All", got);
-        }
-        return CST_OK;
-    }
-    if (tok_is(t, "TransformTimes")) {
-        TRY(expect_numbers(ld, lx, "TransformTimes", 2, v));
-        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "TransformTimes: motion blur is not supported; ignored");
-        return CST_OK;
-    }
-    if (tok_is(t, "ReverseOrientation")) {
-        ld->gs.reverse = !ld->gs.reverse;
-        return CST_OK;
-    }
-    if (tok_is(t, "AttributeBegin")) return push_state(ld, loc, 0);
-    if (tok_is(t, "AttributeEnd")) return pop_state(ld, loc, 0, "AttributeEnd");
-    if (tok_is(t, "TransformBegin")) return push_state(ld, loc, 1);
-    if (tok_is(t, "TransformEnd")) return pop_state(ld, loc, 1, "TransformEnd");
-    if (tok_is(t, "WorldBegin")) {
-        if (ld->in_world)
-            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "WorldBegin a second time; expected one world block");
-        ld->in_world = 1;
-        ld->gs.ctm = xf_identity();
-        return set_named_xf(ld, "world", ld->gs.ctm);
-    }
-    if (tok_is(t, "WorldEnd")) return CST_OK; /* pbrt-v3: the end of the file follows */
-    if (tok_is(t, "Include") || tok_is(t, "Import"))
-        return include_directive(ld, lx, loc, tok_is(t, "Include") ? "Include" : "Import");
-    if (tok_is(t, "Shape")) return shape_directive(ld, lx, loc);
-    if (tok_is(t, "Camera")) return camera_directive(ld, lx, loc);
-    if (tok_is(t, "Texture")) return texture_directive(ld, lx, loc);
-    if (tok_is(t, "ObjectBegin")) {
-        Loc nl;
-        TRY(expect_string(ld, lx, "ObjectBegin", "the object's name", &s, &nl));
-        if (!ld->in_world) st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectBegin before WorldBegin; expected it in the world block");
-        else if (ld->cur_obj >= 0)
-            st = fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectBegin inside ObjectBegin \"%s\"; "
-                         "expected ObjectEnd first", clip(ld->objs[ld->cur_obj].name, nm));
-        for (int i = 0; !st && i < ld->num_objs; i++)
-            if (strcmp(ld->objs[i].name, s) == 0)
-                st = fail_at(ld, CST_ERR_INVALID_ARG, nl, "ObjectBegin: \"%s\" is already defined "
-                             "(line %d); expected each name once", clip(s, nm), ld->objs[i].loc.line);
-        if (!st) st = push_state(ld, loc, 0);
-        if (!st && !GROW(ld->objs, ld->cap_objs, ld->num_objs + 1)) st = oom(ld);
-        if (st) {
-            free(s);
-            return st;
-        }
-        Object *o = &ld->objs[ld->num_objs];
-        memset(o, 0, sizeof *o);
-        o->name = s;
-        o->loc = loc;
-        o->proto = -1;
-        ld->cur_obj = ld->num_objs++;
-        return CST_OK;
-    }
-    if (tok_is(t, "ObjectEnd")) {
-        if (ld->cur_obj < 0)
-            return fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectEnd without ObjectBegin; expected it "
-                           "only to close an object definition");
-        ld->cur_obj = -1;
-        return pop_state(ld, loc, 0, "ObjectEnd");
-    }
-    if (tok_is(t, "ObjectInstance")) return object_instance(ld, lx, loc);
-    if (tok_is(t, "NamedMaterial")) {
-        Loc nl;
-        TRY(expect_string(ld, lx, "NamedMaterial", "a material name", &s, &nl));
-        int i = find_named_material(ld, s);
-        if (i < 0)
-            st = fail_at(ld, CST_ERR_INVALID_ARG, nl, "NamedMaterial: \"%s\" is not defined; expected "
-                         "a name given to MakeNamedMaterial before", clip(s, nm));
-        else
-            ld->gs.material = i;
-        free(s);
-        return st;
-    }
-    if (tok_is(t, "MediumInterface")) {
-        TRY(expect_string(ld, lx, "MediumInterface", "the inside medium's name", &s, NULL));
-        free(s);
-        PbrtToken n2;
-        TRY(lex_peek(ld, lx, &n2));
-        if (n2.kind == PBRT_TOK_STRING) {
-            TRY(expect_string(ld, lx, "MediumInterface", "the outside medium's name", &s, NULL));
-            free(s);
-        }
-        warn_at(ld, CST_WARN_UNSUPPORTED, loc, "MediumInterface: participating media are not supported; ignored");
-        return CST_OK;
-    }
-    static const char *const named[] = {"Film", "Sampler", "Integrator", "PixelFilter", "Accelerator",
-                                        "ColorSpace", "Option", "MakeNamedMedium", "Attribute",
-                                        "LightSource", "AreaLightSource", "Material", "MakeNamedMaterial"};
-    for (size_t i = 0; i < sizeof named / sizeof named[0]; i++)
-        if (tok_is(t, named[i])) {
-            if (strcmp(named[i], "Option") == 0) {
-                /* Option "type name" value: a single parameter, no type name before it */
-                Params ps = {0};
-                st = parse_params(ld, lx, &ps);
-                if (!st) warn_at(ld, CST_WARN_UNSUPPORTED, loc, "Option is not supported; ignored");
-                params_free(&ps);
-                return st;
-            }
-            return named_directive(ld, lx, loc, named[i]);
-        }
     char got[96];
     pbrt_token_describe(t, got, sizeof got);
     return fail_at(ld, CST_ERR_PARSE, loc, "unknown directive: got %s; expected a pbrt directive "
                    "such as Shape, Material, AttributeBegin, LookAt, Camera or WorldBegin", got);
 }
+
+/* ------------------------------------------------------------------ the directive loop */
 
 static CstStatus parse_text(Loader *ld, const char *text, size_t len, const char *name)
 {
