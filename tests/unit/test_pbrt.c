@@ -1,4 +1,4 @@
-/* Unit tests for the pbrt-v4 loader (scene/pbrt_tokenizer.c, scene/scene_pbrt.c): tokens
+/* Unit tests for the pbrt-v4 loader (scene/pbrt/): tokens
  * and their locations, every directive and parameter type, the mapping of materials,
  * lights, shapes and the camera, the warnings (by code) for what is approximated or
  * skipped, malformed input (status and file:line:column), and the Cornell box in pbrt
@@ -19,9 +19,10 @@
 #include "camera/camera.h"
 #include "film/film.h"
 #include "io/image_io.h"
-#include "scene/pbrt_tokenizer.h"
+#include "scene/pbrt/pbrt_tokenizer.h"
 #include "scene/scene.h"
-#include "scene/scene_pbrt.h"
+#include "scene/pbrt/pbrt_light.h"
+#include "scene/pbrt/pbrt_spectrum.h"
 
 #define NAME "t.pbrt"
 
