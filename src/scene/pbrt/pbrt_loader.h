@@ -14,7 +14,7 @@
 #include "scene/pbrt/pbrt_tokenizer.h"
 #include "scene/scene.h"
 
-/* Same bound on coordinates as the JSON loader (scene_json.c): squared distances of
+/* Same bound on coordinates as the JSON loader (LOADER_MAX_LENGTH, json/json_reader.h): squared distances of
  * coordinates within 1e18 stay finite in float. */
 #define PBRT_MAX_LENGTH 1e18
 
