@@ -5,6 +5,7 @@
 
 #include "scene/json/json_reader.h"
 
+/* The "shapes" array: every shape validated and added to the scene. */
 CstStatus json_parse_shapes(Loader *ld, const json_t *shapes);
 
 #endif

@@ -4,6 +4,7 @@
 
 #include "scene/json/json_reader.h"
 
+/* The "lights" array. */
 CstStatus json_parse_lights(Loader *ld, const json_t *lights);
 
 /* "environment": a constant radiance, or an equirectangular image (EXR, PFM or PNG,

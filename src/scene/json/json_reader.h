@@ -55,6 +55,8 @@ typedef struct Loader {
     int num_textures;
 } Loader;
 
+/* The path of the value being read (for messages): push an object member, an array element;
+ * pop. Pushes beyond LOADER_MAX_DEPTH are counted, not stored. */
 void json_path_push_key(Loader *ld, const char *key);
 
 void json_path_push_index(Loader *ld, size_t index);
@@ -71,6 +73,7 @@ const char *json_clip_name(const char *s, char buf[72]);
 /* "a, b, c" */
 void json_join_names(const char *const *names, int n, char *buf, size_t cap);
 
+/* Fails with `status` at the value of the current path: "file:line:column: path: message". */
 CstStatus json_fail_at(Loader *ld, CstStatus status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
@@ -85,23 +88,29 @@ CstStatus json_fail_builder(Loader *ld, CstStatus status);
 
 /* Each reads the value at the current path and fails there with what it expected. */
 
+/* What v is, for "got ..." in messages ("an array of 2 elements", "a string"...). */
 const char *json_describe(const json_t *v, char buf[48]);
 
 /* A number of magnitude at most max_abs: FLT_MAX for plain values, LOADER_MAX_LENGTH for
  * scene-space coordinates and lengths. */
 CstStatus json_read_float(Loader *ld, const json_t *v, double max_abs, float *out);
 
+/* An array of 3 numbers of magnitude at most max_abs. */
 CstStatus json_read_vec3(Loader *ld, const json_t *v, double max_abs, Vec3 *out);
 
 /* An RGB triple of numbers, each >= 0 and, when max_one, <= 1. */
 CstStatus json_read_rgb(Loader *ld, const json_t *v, int max_one, Color *out);
 
+/* An integer in [lo, hi]. */
 CstStatus json_read_int(Loader *ld, const json_t *v, json_int_t lo, json_int_t hi, json_int_t *out);
 
+/* A string; *out points into the jansson value. */
 CstStatus json_read_string(Loader *ld, const json_t *v, const char **out);
 
+/* true or false. */
 CstStatus json_read_bool(Loader *ld, const json_t *v, int *out);
 
+/* A located error unless v is an object; `what` describes the expected object. */
 CstStatus json_expect_object(Loader *ld, const json_t *v, const char *what);
 
 /* Rejects keys not in allowed: a misspelt optional key must not silently mean "default". */

@@ -4,6 +4,8 @@
 
 #include "scene/json/json_reader.h"
 
+/* Each reads one settings section into ld->scene->settings (or its camera); the current
+ * path is the section. */
 CstStatus json_parse_film(Loader *ld, const json_t *film);
 
 CstStatus json_parse_camera(Loader *ld, const json_t *cam);

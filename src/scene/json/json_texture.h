@@ -9,6 +9,8 @@
  * the current path (the value naming it). */
 CstStatus json_read_texture_name(Loader *ld, const char *name, int *out);
 
+/* The "textures" object: every texture read and added to the scene (checkerboards read
+ * the textures they name first, wherever those are listed). */
 CstStatus json_parse_textures(Loader *ld, const json_t *texs);
 
 /* A material parameter given as a texture name: its id + 1 (Material's convention), after

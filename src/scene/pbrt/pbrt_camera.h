@@ -5,6 +5,7 @@
 
 #include "scene/pbrt/pbrt_loader.h"
 
+/* Directive handler, called through the table in pbrt_scene.c. */
 CstStatus pbrt_camera_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
 
 /* The CameraDesc equal to pbrt's view: position and axes from world-from-camera; pbrt's

@@ -5,6 +5,7 @@
 
 #include "scene/pbrt/pbrt_loader.h"
 
+/* Directive handlers, called through the table in pbrt_scene.c. */
 CstStatus pbrt_light_source_directive(Loader *ld, NamedCall *call);
 
 CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call);

@@ -191,34 +191,47 @@ typedef struct Loader {
     Loc end; /* end of the main file, for errors about the whole scene */
 } Loader;
 
+/* Grows *arr (element size `size`) to hold `need` elements, doubling; 0 on overflow or OOM.
+ * Use through GROW(arr, cap, need). */
 int pbrt_grow(void **arr, int *cap, int need, size_t size);
 
 #define GROW(arr, cap, need) pbrt_grow((void **)&(arr), &(cap), (need), sizeof *(arr))
 
+/* A malloc'd copy of s, or NULL on OOM. */
 char *pbrt_dup_str(const char *s);
 
 /* A name from the file, printable and short enough to quote. */
 const char *pbrt_clip(const char *s, char buf[72]);
 
+/* Fails with status st and "file:line:column: message" at loc. */
 CstStatus pbrt_fail_at(Loader *ld, CstStatus st, Loc loc, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
+/* CST_ERR_OOM with the loader's message. */
 CstStatus pbrt_oom(Loader *ld);
 
+/* Reports a located warning through the CstLoadOptions callback, if any. */
 void pbrt_warn_at(Loader *ld, CstWarningCode code, Loc loc, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
+/* The file, line and column of token t. */
 Loc pbrt_tok_loc(const Lexer *lx, const PbrtToken *t);
 
+/* True when t's text is exactly `word`. */
 int pbrt_tok_is(const PbrtToken *t, const char *word);
 
+/* The next token, left for the next pbrt_lex_next. */
 CstStatus pbrt_lex_peek(Loader *ld, Lexer *lx, PbrtToken *t);
 
+/* The next token, consumed. */
 CstStatus pbrt_lex_next(Loader *ld, Lexer *lx, PbrtToken *t);
 
+/* A quoted string (decoded into a new *out, free()) or a located parse error naming
+ * `directive` and `what`; *loc, when not NULL, gets the token's location. */
 CstStatus pbrt_expect_string(Loader *ld, Lexer *lx, const char *directive, const char *what,
                              char **out, Loc *loc);
 
+/* n bare numbers into out, or a located parse error. */
 CstStatus pbrt_expect_numbers(Loader *ld, Lexer *lx, const char *directive, int n, double *out);
 
 /* n numbers in brackets; pbrt-v3 files sometimes leave the brackets out. */
@@ -230,8 +243,10 @@ CstStatus pbrt_fail_wrap(Loader *ld, CstStatus st, Loc loc, const char *d);
 /* `file` relative to the main scene file's directory (pbrt's search directory). */
 char *pbrt_resolve_path(Loader *ld, const char *file);
 
+/* CST_ERR_UNSUPPORTED at loc when CstLoadOptions.no_file_access is set. */
 CstStatus pbrt_check_file_access(Loader *ld, Loc loc, const char *d);
 
+/* Frees everything the loader owns (not the scene). */
 void pbrt_loader_free(Loader *ld);
 
 #endif

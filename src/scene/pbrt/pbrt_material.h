@@ -5,11 +5,15 @@
 
 #include "scene/pbrt/pbrt_loader.h"
 
+/* Adds a material (named, or anonymous when name is NULL) to the loader; *out is its
+ * index in ld->mats. It reaches the scene on first use (pbrt_material_scene_id). */
 CstStatus pbrt_add_mat_entry(Loader *ld, const char *name, const Material *m, int *out);
 
+/* The scene's id of material entry `entry`, adding it to the scene on first use. */
 CstStatus pbrt_material_scene_id(Loader *ld, int entry, int *out);
 
-/* Material and MakeNamedMaterial. */
+/* Directive handlers, called through the table in pbrt_scene.c; pbrt_material_directive
+ * serves Material and MakeNamedMaterial. */
 CstStatus pbrt_material_directive(Loader *ld, NamedCall *call);
 
 CstStatus pbrt_named_material_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);

@@ -6,8 +6,9 @@
 
 #include "scene/pbrt/pbrt_loader.h"
 
-/* Film, Sampler, Integrator, PixelFilter, Accelerator, ColorSpace, MakeNamedMedium, Attribute:
- * a type name and parameters, mapped to settings or reported. */
+/* Directive handlers, called through the table in pbrt_scene.c. Film ... Attribute take a
+ * type name and parameters (NamedCall), mapped to settings or reported; MediumInterface and
+ * Option read their own arguments. */
 CstStatus pbrt_film_directive(Loader *ld, NamedCall *call);
 
 CstStatus pbrt_sampler_directive(Loader *ld, NamedCall *call);

@@ -5,10 +5,13 @@
 
 #include "scene/pbrt/pbrt_loader.h"
 
+/* Frees g's arrays. */
 void pbrt_geom_free(ShapeGeom *g);
 
+/* Finite and within PBRT_MAX_LENGTH on every axis. */
 int pbrt_coords_ok(Vec3 p);
 
+/* Directive handlers, called through the table in pbrt_scene.c. */
 CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
 
 CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);

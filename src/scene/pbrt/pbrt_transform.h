@@ -5,18 +5,28 @@
 
 #include "scene/pbrt/pbrt_loader.h"
 
+/* The identity with its inverse. */
 Xf pbrt_xf_identity(void);
 
+/* a * b, inverses composed alongside. */
 Xf pbrt_xf_compose(const Xf *a, const Xf *b);
 
+/* The inverse transform: matrix and inverse exchanged. */
 Xf pbrt_xf_swap(Xf x);
 
+/* Names xf (CoordinateSystem, "camera", "world"), replacing an earlier one of that name. */
 CstStatus pbrt_set_named_xf(Loader *ld, const char *name, Xf xf);
 
+/* Pushes the graphics state (AttributeBegin, ObjectBegin) or, transform_only, just the CTM
+ * (TransformBegin). */
 CstStatus pbrt_push_state(Loader *ld, Loc loc, int transform_only);
 
+/* Pops what the matching push saved; a located error for an End without or against its
+ * Begin. */
 CstStatus pbrt_pop_state(Loader *ld, Loc loc, int transform_only, const char *d);
 
+/* Directive handlers, called through the table in pbrt_scene.c; dname is the directive's
+ * name (one handler serves Transform and ConcatTransform, AttributeBegin and TransformBegin...). */
 CstStatus pbrt_translate_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
 
 CstStatus pbrt_scale_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
