@@ -23,7 +23,7 @@
 #include "core/clock.h"
 #include "core/rng.h"
 #include "film/film_compare.h"
-#include "film/image_io.h"
+#include "io/image_io.h"
 #include "integrators/photon.h"
 #include "raysets.h"
 
@@ -76,8 +76,7 @@ static bool cli_has_suffix(const char *s, const char *suffix)
 
 static bool cli_output_format_ok(const char *path)
 {
-    return cli_has_suffix(path, ".png") || cli_has_suffix(path, ".exr") ||
-           cli_has_suffix(path, ".pfm");
+    return image_format_is_writable(image_format_from_path(path));
 }
 
 /* Checks, before any rendering, that `path` has a supported extension and names a file
@@ -459,7 +458,7 @@ static int cli_render(const CliArgs *a)
         /* AOVs are EXR channels: refused before rendering, not after. */
         CstRenderSettings rs;
         cst_render_settings_resolve(scene, &settings, &rs);
-        if (rs.aovs && !cli_has_suffix(output, ".exr")) {
+        if (rs.aovs && !image_path_is_exr(output)) {
             fprintf(stderr, "caustic: error: output '%s': AOVs (--aov or the scene's \"aovs\") are "
                             "written as extra EXR channels; expected an output ending in .exr\n", output);
             code = CLI_EXIT_USAGE;

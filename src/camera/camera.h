@@ -39,7 +39,7 @@ typedef struct Camera {
 
 void camera_init(Camera *cam, const CameraDesc *desc, int width, int height);
 /* Flips the image horizontally: image right becomes up x forward, the left-handed frame
- * of a pbrt LookAt (scene/scene_pbrt.c). Call after camera_init; every use of right
+ * of a pbrt LookAt (scene/pbrt/pbrt_transform.c). Call after camera_init; every use of right
  * (rays, lens offsets, camera_sample_wi) flips together. */
 void camera_mirror_x(Camera *cam);
 /* film_x in [0, width), film_y in [0, height), y = 0 the top row; lens_u in [0,1)^2. */

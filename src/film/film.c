@@ -7,7 +7,7 @@
 
 #include "core/error.h"
 #include "film/filter.h"
-#include "film/image_io.h"
+#include "io/image_io.h"
 
 Film *film_create(int width, int height)
 {

@@ -12,7 +12,7 @@
 #include <stb_image.h>
 
 #include "core/error.h"
-#include "film/image_io.h"
+#include "io/image_io.h"
 
 static Color rgb_max3(Color a, Color b) { return color_rgb(maxf(a.c[0], b.c[0]), maxf(a.c[1], b.c[1]), maxf(a.c[2], b.c[2])); }
 

@@ -55,7 +55,7 @@ void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd
 /* Takes ownership of rgb (width * height * 3 linear floats, row 0 = top), also on failure. */
 CstStatus texture_image(Texture *t, float *rgb, int width, int height, TextureWrap wrap, CstError *err);
 /* Loads an image file: PNG, JPEG, BMP, TGA and Radiance HDR through stb_image, OpenEXR and
- * PFM through image_read (film/image_io.c). 8- and 16-bit images are sRGB-encoded and
+ * PFM through image_read (io/image_io.c). 8- and 16-bit images are sRGB-encoded and
  * decoded to linear unless `linear` (data such as roughness maps); float images (HDR, EXR,
  * PFM) are linear already and taken as they are. */
 CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureWrap wrap, CstError *err);

@@ -23,7 +23,7 @@
 #include <string.h>
 
 #include "caustic/caustic.h"
-#include "scene/pbrt_tokenizer.h"
+#include "scene/pbrt/pbrt_tokenizer.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 

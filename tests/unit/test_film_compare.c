@@ -18,7 +18,7 @@
 #include "core/rng.h"
 #include "film/film.h"
 #include "film/film_compare.h"
-#include "film/image_io.h"
+#include "io/image_io.h"
 
 static void assert_rel(double got, double want, double rel)
 {

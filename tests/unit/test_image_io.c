@@ -1,4 +1,4 @@
-/* Unit tests for film/image_io: PFM/EXR/PNG round trips, the sRGB curve, atomic writes
+/* Unit tests for io/image_io: PFM/EXR/PNG round trips, the sRGB curve, atomic writes
  * and failure paths, and malformed or hand-built files that exercise the readers. */
 #define _POSIX_C_SOURCE 200809L
 
@@ -23,7 +23,7 @@
 
 #include <png.h>
 
-#include "film/image_io.h"
+#include "io/image_io.h"
 
 static int group_setup(void **state)
 {
@@ -738,6 +738,36 @@ static void test_unknown_extension(void **state)
     assert_int_equal(count_temp_files(), 0);
 }
 
+/* The one extension rule (image_format_from_path) that the writer, both scene loaders and
+ * the CLI share. */
+static void test_format_from_path(void **state)
+{
+    (void)state;
+    assert_int_equal(image_format_from_path("a.png"), IMAGE_FILE_PNG);
+    assert_int_equal(image_format_from_path("dir/A.PnG"), IMAGE_FILE_PNG);
+    assert_int_equal(image_format_from_path("x.jpeg"), IMAGE_FILE_JPEG);
+    assert_int_equal(image_format_from_path("x.JPG"), IMAGE_FILE_JPEG);
+    assert_int_equal(image_format_from_path("x.bmp"), IMAGE_FILE_BMP);
+    assert_int_equal(image_format_from_path("x.tga"), IMAGE_FILE_TGA);
+    assert_int_equal(image_format_from_path("x.hdr"), IMAGE_FILE_HDR);
+    assert_int_equal(image_format_from_path("x.tar.exr"), IMAGE_FILE_EXR);
+    assert_int_equal(image_format_from_path("x.pfm"), IMAGE_FILE_PFM);
+    assert_int_equal(image_format_from_path("dir.png/noext"), IMAGE_FILE_NONE);
+    assert_int_equal(image_format_from_path("png"), IMAGE_FILE_NONE);
+    assert_int_equal(image_format_from_path("x."), IMAGE_FILE_NONE);
+    assert_int_equal(image_format_from_path("x.pngx"), IMAGE_FILE_NONE);
+    assert_int_equal(image_format_from_path(""), IMAGE_FILE_NONE);
+    assert_true(image_format_is_writable(IMAGE_FILE_EXR));
+    assert_false(image_format_is_writable(IMAGE_FILE_JPEG));
+    assert_true(image_format_is_float(IMAGE_FILE_HDR));
+    assert_false(image_format_is_float(IMAGE_FILE_PNG));
+    assert_true(image_path_is_exr("a.EXR"));
+    assert_true(image_path_is_scene_output("a.png"));
+    assert_true(image_path_is_scene_output("dir/.pfm"));
+    assert_false(image_path_is_scene_output(".png"));
+    assert_false(image_path_is_scene_output("a.jpg"));
+}
+
 static void test_invalid_args(void **state)
 {
     (void)state;
@@ -862,6 +892,7 @@ int main(void)
         cmocka_unit_test(test_png_read_layouts),
         cmocka_unit_test(test_png_malformed),
         cmocka_unit_test(test_unknown_extension),
+        cmocka_unit_test(test_format_from_path),
         cmocka_unit_test(test_invalid_args),
         cmocka_unit_test(test_missing_directory),
         cmocka_unit_test(test_overwrite_and_mode),

@@ -1,5 +1,5 @@
-/* Unit tests for the JSON scene loader (scene/scene_json.c) and the JSON locator
- * (scene/json_locate.c): every validation error gives its status and file:line:column,
+/* Unit tests for the JSON scene loader (scene/json/) and the JSON locator
+ * (scene/json/json_locate.c): every validation error gives its status and file:line:column,
  * the example scenes load, and the locator stays in bounds on hostile text. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -14,7 +14,7 @@
 #include <jansson.h>
 
 #include "caustic/caustic.h"
-#include "scene/json_locate.h"
+#include "scene/json/json_locate.h"
 #include "scene/scene.h"
 
 #define NAME "t.json"

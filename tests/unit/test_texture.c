@@ -21,7 +21,7 @@
 
 #include <stb_image_write.h>
 
-#include "film/image_io.h"
+#include "io/image_io.h"
 #include "scene/scene.h"
 #include "textures/texture.h"
 

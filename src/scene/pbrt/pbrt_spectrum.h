@@ -1,11 +1,19 @@
-/* The pbrt-v4 scene loader (scene_pbrt.c): the public entry points are in caustic.h; these
- * are its colour conversions, exposed for the unit tests. */
-#ifndef CST_SCENE_SCENE_PBRT_H
-#define CST_SCENE_SCENE_PBRT_H
+/* Spectra as linear sRGB: CIE 1931 matching functions, blackbodies, sampled and named
+ * spectra (metals, glasses), and spectrum-valued parameters. */
+#ifndef CST_SCENE_PBRT_PBRT_SPECTRUM_H
+#define CST_SCENE_PBRT_PBRT_SPECTRUM_H
 
 #include <stdbool.h>
 
-#include "math/color.h"
+#include "scene/pbrt/pbrt_loader.h"
+
+typedef enum SpecKind { SPEC_REFLECTANCE, SPEC_UNBOUNDED, SPEC_ILLUMINANT } SpecKind;
+
+/* A spectrum-valued parameter as linear sRGB: rgb, blackbody, spectrum (pairs or a named
+ * spectrum), xyz (pbrt-v3), or with allow_tex a spectrum texture (its constant or average).
+ * *found says whether the file gave it; out keeps its default otherwise. */
+CstStatus pbrt_get_spectrum(Loader *ld, Params *ps, const char *d, const char *name,
+                            SpecKind kind, int allow_tex, Color *out, int *found);
 
 /* Linear sRGB of a blackbody at kelvin, scaled to luminance Y = 1 (pbrt-v4 normalises
  * blackbody emitters to 1 nit before "scale"). */
@@ -19,9 +27,5 @@ bool pbrt_named_metal(const char *name, Color *out);
 /* Normal-incidence Fresnel reflectance of a conductor, ((n-1)^2 + k^2) / ((n+1)^2 + k^2)
  * per channel. */
 Color pbrt_conductor_r0(Color eta, Color k);
-/* pbrt-v4's equal-area octahedral map between unit directions and [0, 1]^2 (Clarberg 2008),
- * the layout of infinite lights' images. */
-void pbrt_equal_area_sphere_to_square(const double d[3], double uv[2]);
-void pbrt_equal_area_square_to_sphere(const double uv[2], double d[3]);
 
 #endif

@@ -1,7 +1,7 @@
 /* Tokens of the pbrt scene format (pbrt-v3 and pbrt-v4 share the lexical syntax): words,
  * quoted strings, numbers and brackets, each with its 1-based line and column. */
-#ifndef CST_SCENE_PBRT_TOKENIZER_H
-#define CST_SCENE_PBRT_TOKENIZER_H
+#ifndef CST_SCENE_PBRT_PBRT_TOKENIZER_H
+#define CST_SCENE_PBRT_PBRT_TOKENIZER_H
 
 #include <stddef.h>
 

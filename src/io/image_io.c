@@ -2,7 +2,8 @@
  * and committed atomically (temporary file, then rename); readers that sniff the format. */
 #define _POSIX_C_SOURCE 200809L
 
-#include "film/image_io.h"
+#include "io/image_io.h"
+
 #include "core/error.h"
 
 #include <errno.h>
@@ -803,15 +804,15 @@ done:
 typedef CstStatus (*ImageWriteFn)(FILE *fp, const char *path, const float *rgb, int w, int h,
                                   const ImageWriteOptions *opt, CstError *err);
 
-typedef struct ImageFormat {
-    const char *ext; /* lower case, without the dot */
+typedef struct ImageWriter {
+    ImageFileFormat format;
     ImageWriteFn write;
-} ImageFormat;
+} ImageWriter;
 
-static const ImageFormat image_formats[] = {
-    {"png", image_write_png},
-    {"exr", image_write_exr},
-    {"pfm", image_write_pfm},
+static const ImageWriter image_writers[] = {
+    {IMAGE_FILE_PNG, image_write_png},
+    {IMAGE_FILE_EXR, image_write_exr},
+    {IMAGE_FILE_PFM, image_write_pfm},
 };
 #define IMAGE_SUPPORTED "supported: .png, .exr, .pfm"
 
@@ -834,10 +835,37 @@ static const char *image_path_ext(const char *path)
     return dot && dot[1] ? dot + 1 : NULL;
 }
 
-bool image_path_is_exr(const char *path)
+ImageFileFormat image_format_from_path(const char *path)
+{
+    static const struct { const char *ext; ImageFileFormat format; } exts[] = {
+        {"png", IMAGE_FILE_PNG}, {"jpg", IMAGE_FILE_JPEG}, {"jpeg", IMAGE_FILE_JPEG},
+        {"bmp", IMAGE_FILE_BMP}, {"tga", IMAGE_FILE_TGA},  {"hdr", IMAGE_FILE_HDR},
+        {"exr", IMAGE_FILE_EXR}, {"pfm", IMAGE_FILE_PFM}};
+    const char *ext = path ? image_path_ext(path) : NULL;
+    for (size_t i = 0; ext && i < sizeof exts / sizeof exts[0]; ++i)
+        if (image_ext_equal(ext, exts[i].ext)) return exts[i].format;
+    return IMAGE_FILE_NONE;
+}
+
+bool image_format_is_writable(ImageFileFormat f)
+{
+    return f == IMAGE_FILE_PNG || f == IMAGE_FILE_EXR || f == IMAGE_FILE_PFM;
+}
+
+bool image_path_is_scene_output(const char *path)
 {
     const char *ext = image_path_ext(path);
-    return ext && image_ext_equal(ext, "exr");
+    return image_format_is_writable(image_format_from_path(path)) && ext - 1 > path;
+}
+
+bool image_format_is_float(ImageFileFormat f)
+{
+    return f == IMAGE_FILE_HDR || f == IMAGE_FILE_EXR || f == IMAGE_FILE_PFM;
+}
+
+bool image_path_is_exr(const char *path)
+{
+    return image_format_from_path(path) == IMAGE_FILE_EXR;
 }
 
 static atomic_uint image_tmp_serial;
@@ -891,9 +919,10 @@ CstStatus image_write_opt(const char *path, const float *rgb, int width, int hei
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: invalid image (%d x %d%s)", path, width,
                         height, rgb ? "" : ", no pixels");
     const char *ext = image_path_ext(path);
-    const ImageFormat *fmt = NULL;
-    for (size_t i = 0; ext && i < sizeof image_formats / sizeof image_formats[0]; ++i)
-        if (image_ext_equal(ext, image_formats[i].ext)) fmt = &image_formats[i];
+    ImageFileFormat format = image_format_from_path(path);
+    const ImageWriter *fmt = NULL;
+    for (size_t i = 0; i < sizeof image_writers / sizeof image_writers[0]; ++i)
+        if (image_writers[i].format == format) fmt = &image_writers[i];
     if (fmt && opt->extra_channels > 0 && fmt->write != image_write_exr)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: extra channels need an .exr output", path);
     if (opt->extra_channels < 0 || opt->extra_channels > IMAGE_MAX_EXTRA)

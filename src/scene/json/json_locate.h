@@ -1,7 +1,7 @@
 /* Source positions inside JSON text. jansson does not record where values came from, so
  * loaders find them again by walking the raw text along a path of keys and indices. */
-#ifndef CST_SCENE_JSON_LOCATE_H
-#define CST_SCENE_JSON_LOCATE_H
+#ifndef CST_SCENE_JSON_JSON_LOCATE_H
+#define CST_SCENE_JSON_JSON_LOCATE_H
 
 #include <stdbool.h>
 #include <stddef.h>

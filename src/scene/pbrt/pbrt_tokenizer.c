@@ -1,7 +1,7 @@
 /* The pbrt tokenizer: splits scene text into tokens and locates each one. Comments run
  * from '#' to the end of the line; strings may not span lines (pbrt rejects that too,
  * and it catches a missing closing quote at the line where it happened). */
-#include "scene/pbrt_tokenizer.h"
+#include "scene/pbrt/pbrt_tokenizer.h"
 
 #include <math.h>
 #include <stdio.h>

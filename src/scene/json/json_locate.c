@@ -1,6 +1,6 @@
 /* Finds where a value sits in JSON text, for error messages: a bounded, non-recursive
  * scanner that skips strings, numbers, literals and containers without building anything. */
-#include "scene/json_locate.h"
+#include "scene/json/json_locate.h"
 
 #include <limits.h>
 #include <stdint.h>

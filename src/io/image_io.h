@@ -1,8 +1,8 @@
 /* Image files: writers for PNG (8-bit sRGB), OpenEXR (float, linear) and PFM (float,
  * linear), chosen by the file extension, always written atomically (temporary file in
  * the same directory, then rename). Readers for the same formats serve tests and tools. */
-#ifndef CST_FILM_IMAGE_IO_H
-#define CST_FILM_IMAGE_IO_H
+#ifndef CST_IO_IMAGE_IO_H
+#define CST_IO_IMAGE_IO_H
 
 #include "caustic/caustic.h"
 
@@ -23,6 +23,26 @@ CstStatus image_write(const char *path, const float *rgb, int width, int height,
 /* The same with options; extra channels with a non-EXR path fail with CST_ERR_INVALID_ARG. */
 CstStatus image_write_opt(const char *path, const float *rgb, int width, int height,
                           const ImageWriteOptions *opt, CstError *err);
+/* Image file formats caustic reads (textures) or writes (renders). */
+typedef enum ImageFileFormat {
+    IMAGE_FILE_NONE, /* no extension, or one that names no image format below */
+    IMAGE_FILE_PNG, IMAGE_FILE_JPEG, IMAGE_FILE_BMP, IMAGE_FILE_TGA, /* 8/16-bit, sRGB */
+    IMAGE_FILE_HDR, IMAGE_FILE_EXR, IMAGE_FILE_PFM                   /* float, linear */
+} ImageFileFormat;
+
+/* The one rule for "which image format does this file name name": the extension of the
+ * last path component (after its last '.', nonempty), compared ASCII case-insensitively
+ * (the locale must not change the answer). "a.png", "A.PNG" and "dir/.png" are PNG;
+ * "dir.png/a" and "png" are IMAGE_FILE_NONE. The scene loaders and the CLI use it to
+ * reject names that image_write would refuse before rendering. */
+ImageFileFormat image_format_from_path(const char *path);
+/* True for the formats image_write can produce: PNG, EXR and PFM. */
+bool image_format_is_writable(ImageFileFormat f);
+/* An output name a scene file may give: a writable format and something before the '.' of
+ * the extension ("a.png", "dir/.png"; not ".png"), as both scene loaders have checked it. */
+bool image_path_is_scene_output(const char *path);
+/* True for the formats holding linear floats (HDR, EXR, PFM): no sRGB decoding. */
+bool image_format_is_float(ImageFileFormat f);
 /* True when the path's extension is .exr (any case). */
 bool image_path_is_exr(const char *path);
 /* Reads a PNG (decoded to linear), EXR or PFM into a new malloc'd buffer in the same layout.

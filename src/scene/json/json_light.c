@@ -1,0 +1,169 @@
+/* The "lights" (point, spot, directional) and "environment" sections. */
+#include "scene/json/json_light.h"
+
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io/image_io.h"
+#include "io/path.h"
+
+/* A unit direction from a vector that must not be zero. */
+static CstStatus read_direction(Loader *ld, const json_t *v, Vec3 *out)
+{
+    Vec3 d;
+    LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &d));
+    float len = v3_length(d);
+    if (!(len > 0.0f) || !isfinite(len))
+        return json_fail_here(ld, "direction [%g, %g, %g] has no length; expected a nonzero vector",
+                              (double)d.x, (double)d.y, (double)d.z);
+    *out = v3_scale(d, 1.0f / len);
+    return CST_OK;
+}
+
+static CstStatus read_angle(Loader *ld, const json_t *obj, const char *key, float dflt, float lo,
+                            float hi, float *out)
+{
+    json_t *v = json_object_get(obj, key);
+    *out = dflt;
+    if (!v) return CST_OK;
+    json_path_push_key(ld, key);
+    LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, out));
+    if (!(*out >= lo && *out <= hi))
+        return json_fail_here(ld, "%s %g is out of range; expected degrees from %g to %g", key, (double)*out,
+                              (double)lo, (double)hi);
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+/* "lights": point, spot and directional lights (area lights are shapes with "emission"). */
+static CstStatus parse_light(Loader *ld, const json_t *obj)
+{
+    static const char *const types[] = {"point", "spot", "directional"};
+    static const char *const point_keys[] = {"type", "position", "intensity"};
+    static const char *const spot_keys[] = {"type", "position", "look_at", "intensity", "cone_angle",
+                                            "cone_delta"};
+    static const char *const dir_keys[] = {"type", "direction", "irradiance"};
+    int type = 0;
+    json_t *v;
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    LOADER_TRY(json_expect_object(ld, obj, "a light object"));
+    LOADER_TRY(json_read_type(ld, obj, "light type", types, 3, -1, &type));
+    if (type == 2) {
+        LOADER_TRY(json_check_keys(ld, obj, dir_keys, 3));
+        l.type = DELTA_DIRECTIONAL;
+        LOADER_TRY(json_member_required(ld, obj, "direction", "the direction the light travels, 3 numbers", &v));
+        json_path_push_key(ld, "direction");
+        LOADER_TRY(read_direction(ld, v, &l.dir));
+        json_path_pop(ld);
+        LOADER_TRY(json_member_required(ld, obj, "irradiance", "an array of 3 numbers >= 0", &v));
+        json_path_push_key(ld, "irradiance");
+        LOADER_TRY(json_read_rgb(ld, v, 0, &l.intensity));
+        json_path_pop(ld);
+    } else {
+        LOADER_TRY(json_check_keys(ld, obj, type == 0 ? point_keys : spot_keys, type == 0 ? 3 : 6));
+        l.type = type == 0 ? DELTA_POINT : DELTA_SPOT;
+        LOADER_TRY(json_member_required(ld, obj, "position", "the light's position, 3 numbers", &v));
+        json_path_push_key(ld, "position");
+        LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &l.p));
+        json_path_pop(ld);
+        LOADER_TRY(json_member_required(ld, obj, "intensity", "an array of 3 numbers >= 0 (W/sr)", &v));
+        json_path_push_key(ld, "intensity");
+        LOADER_TRY(json_read_rgb(ld, v, 0, &l.intensity));
+        json_path_pop(ld);
+        if (type == 1) {
+            Vec3 at;
+            LOADER_TRY(json_member_required(ld, obj, "look_at", "the point the spot's axis goes through", &v));
+            json_path_push_key(ld, "look_at");
+            LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &at));
+            Vec3 d = v3_sub(at, l.p);
+            float len = v3_length(d);
+            if (!(len > 0.0f) || !isfinite(len))
+                return json_fail_here(ld, "look_at equals position; expected a point away from the light");
+            l.dir = v3_scale(d, 1.0f / len);
+            json_path_pop(ld);
+            /* pbrt-v4's parameters: the cone's half-angle, and how much of it the falloff
+             * takes at its edge. */
+            float cone, delta;
+            LOADER_TRY(read_angle(ld, obj, "cone_angle", 30.0f, 0.001f, 90.0f, &cone));
+            LOADER_TRY(read_angle(ld, obj, "cone_delta", 5.0f, 0.0f, cone, &delta));
+            l.cos_outer = cosf(cone * (CST_PI / 180.0f));
+            l.cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
+        }
+    }
+    return scene_add_delta_light(ld->scene, &l, ld->err);
+}
+
+CstStatus json_parse_lights(Loader *ld, const json_t *lights)
+{
+    char kind[48];
+    if (!json_is_array(lights))
+        return json_fail_here(ld, "got %s; expected an array of lights", json_describe(lights, kind));
+    size_t i;
+    json_t *light;
+    json_array_foreach(lights, i, light) {
+        json_path_push_index(ld, i);
+        LOADER_TRY(parse_light(ld, light));
+        json_path_pop(ld);
+    }
+    return CST_OK;
+}
+
+/* "environment": a constant radiance, or an equirectangular image (EXR, PFM or PNG,
+ * relative to the scene file) times a scale. */
+CstStatus json_parse_environment(Loader *ld, const json_t *obj)
+{
+    static const char *const keys[] = {"radiance", "file", "scale"};
+    json_t *v;
+    LOADER_TRY(json_expect_object(ld, obj, "an object with radiance, or file and scale"));
+    LOADER_TRY(json_check_keys(ld, obj, keys, 3));
+    json_t *rad = json_object_get(obj, "radiance"), *file = json_object_get(obj, "file");
+    if (!rad == !file)
+        return json_fail_here(ld, "expected exactly one of radiance (a constant environment) and file "
+                                  "(an equirectangular image)");
+    EnvMap env;
+    if (rad) {
+        if (json_object_get(obj, "scale")) {
+            json_path_push_key(ld, "scale");
+            return json_fail_here(ld, "scale goes with file; a constant environment is just its radiance");
+        }
+        Color L;
+        json_path_push_key(ld, "radiance");
+        LOADER_TRY(json_read_rgb(ld, rad, 0, &L));
+        json_path_pop(ld);
+        LOADER_TRY(envmap_init_constant(&env, L, ld->err));
+        return scene_set_environment(ld->scene, &env, ld->err);
+    }
+    Color scale = color_s(1.0f);
+    if ((v = json_object_get(obj, "scale"))) {
+        json_path_push_key(ld, "scale");
+        if (json_is_number(v)) {
+            float k;
+            LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &k));
+            if (!(k >= 0.0f)) return json_fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
+            scale = color_s(k);
+        } else {
+            LOADER_TRY(json_read_rgb(ld, v, 0, &scale));
+        }
+        json_path_pop(ld);
+    }
+    const char *name = NULL;
+    json_path_push_key(ld, "file");
+    LOADER_TRY(json_read_string(ld, file, &name));
+    if (!name[0]) return json_fail_here(ld, "the file name is empty; expected the path of an image");
+    char *path = path_resolve(ld->name, name);
+    if (!path) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+    float *rgb = NULL;
+    int w = 0, h = 0;
+    CstStatus st = image_read(path, &rgb, &w, &h, ld->err);
+    free(path);
+    if (st != CST_OK) return json_fail_builder(ld, st);
+    st = envmap_init_image(&env, rgb, w, h, scale, ld->err);
+    if (st != CST_OK) return json_fail_builder(ld, st);
+    json_path_pop(ld);
+    return scene_set_environment(ld->scene, &env, ld->err);
+}

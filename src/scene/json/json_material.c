@@ -1,0 +1,219 @@
+/* The "materials" section: material types, roughness, textured parameters, and the
+ * material references and emission of shapes. */
+#include "scene/json/json_material.h"
+
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene/json/json_texture.h"
+
+enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COUNT };
+
+/* "roughness": perceptual, in [0, 1] (material.h: alpha = roughness^2). */
+static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
+{
+    json_path_push_key(ld, "roughness");
+    LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, out));
+    if (!(*out >= 0.0f && *out <= 1.0f))
+        return json_fail_here(ld, "roughness %g is outside [0, 1]; expected 0 (smooth) to 1 (roughest)",
+                              (double)*out);
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
+{
+    static const char *const types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric", "plastic"};
+    static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
+                                         MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC};
+    /* The keys each type accepts, "type" first. */
+    static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
+    static const char *const keys_glass[] = {"type", "albedo", "ior"};
+    static const char *const keys_conductor[] = {"type", "metal", "eta", "k", "roughness", "two_sided"};
+    static const char *const keys_dielectric[] = {"type", "albedo", "ior", "roughness"};
+    static const char *const keys_plastic[] = {"type", "albedo", "ior", "roughness", "two_sided"};
+    static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass,
+                                              keys_conductor, keys_dielectric, keys_plastic};
+    static const int nkeys[] = {3, 3, 3, 6, 4, 5};
+    int type = 0;
+    json_t *v;
+    LOADER_TRY(json_expect_object(ld, obj, "a material object"));
+    LOADER_TRY(json_read_type(ld, obj, "material type", types, MAT_COUNT, -1, &type));
+    LOADER_TRY(json_check_keys(ld, obj, keys[type], nkeys[type]));
+    m->type = mtype[type];
+    m->albedo = type == MAT_DIFFUSE ? color_s(0.5f) : type == MAT_PLASTIC ? color_s(0.5f) : color_s(1.0f);
+    m->ior = type == MAT_GLASS || type == MAT_DIELECTRIC || type == MAT_PLASTIC ? 1.5f : 1.0f;
+    m->roughness = 0.0f;
+    if ((v = json_object_get(obj, "albedo"))) {
+        /* A reflectance above 1 would make any of these create energy. */
+        json_path_push_key(ld, "albedo");
+        if (json_is_string(v))
+            LOADER_TRY(json_read_param_texture(ld, v, "a reflectance", &m->albedo_texture));
+        else
+            LOADER_TRY(json_read_rgb(ld, v, 1, &m->albedo));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "ior"))) {
+        json_path_push_key(ld, "ior");
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &m->ior));
+        if (!(m->ior > 0.0f))
+            return json_fail_here(ld, "ior %g is not positive; expected an index of refraction > 0 "
+                                      "(glass is about 1.5)",
+                                  (double)m->ior);
+        /* The coat model (bsdf.c) needs light to enter a denser layer. */
+        if (type == MAT_PLASTIC && !(m->ior >= 1.0f))
+            return json_fail_here(ld, "ior %g is below 1; expected the coat's index of refraction >= 1 "
+                                      "(plastics are about 1.5)",
+                                  (double)m->ior);
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "roughness"))) {
+        if (json_is_string(v)) {
+            json_path_push_key(ld, "roughness");
+            if (type == MAT_PLASTIC)
+                return json_fail_here(ld, "a plastic's roughness cannot be a texture (its coat albedo "
+                                          "table is made for one roughness); expected a number from 0 to 1");
+            LOADER_TRY(json_read_param_texture(ld, v, "a roughness", &m->roughness_texture));
+            json_path_pop(ld);
+        } else {
+            LOADER_TRY(read_roughness(ld, v, &m->roughness));
+        }
+    }
+    if ((v = json_object_get(obj, "two_sided"))) {
+        int two = 1;
+        json_path_push_key(ld, "two_sided");
+        LOADER_TRY(json_read_bool(ld, v, &two));
+        m->one_sided = !two;
+        json_path_pop(ld);
+    }
+    if (type == MAT_CONDUCTOR) {
+        json_t *metal = json_object_get(obj, "metal"), *eta = json_object_get(obj, "eta"),
+               *k = json_object_get(obj, "k");
+        char list[128];
+        json_join_names(material_metal_names, 4, list, sizeof list);
+        if (metal && (eta || k))
+            return json_fail_here(ld, "both \"metal\" and \"eta\"/\"k\"; expected either a named metal "
+                                      "(%s) or \"eta\" and \"k\"",
+                                  list);
+        if (metal) {
+            const char *name = NULL;
+            json_path_push_key(ld, "metal");
+            LOADER_TRY(json_read_string(ld, metal, &name));
+            if (!material_metal(name, &m->eta, &m->k)) {
+                char clipped[72];
+                return json_fail_here(ld, "unknown metal \"%s\"; expected one of: %s", json_clip_name(name, clipped), list);
+            }
+            json_path_pop(ld);
+        } else if (eta && k) {
+            /* A complex IOR: eta >= 0 and k >= 0 per channel. */
+            json_path_push_key(ld, "eta");
+            LOADER_TRY(json_read_rgb(ld, eta, 0, &m->eta));
+            json_path_pop(ld);
+            json_path_push_key(ld, "k");
+            LOADER_TRY(json_read_rgb(ld, k, 0, &m->k));
+            json_path_pop(ld);
+        } else {
+            return json_fail_here(ld, "missing key \"%s\"; expected a named metal (\"metal\": one of %s) or "
+                                      "a complex IOR (\"eta\" and \"k\", RGB triples)",
+                                  eta ? "k" : k ? "eta" : "metal", list);
+        }
+    }
+    return CST_OK;
+}
+
+CstStatus json_parse_materials(Loader *ld, const json_t *mats)
+{
+    LOADER_TRY(json_expect_object(ld, mats, "an object mapping material names to materials"));
+    size_t n = json_object_size(mats);
+    if (n > (size_t)INT_MAX)
+        return json_fail_here(ld, "too many materials");
+    ld->mat_names = malloc((n ? n : 1) * sizeof *ld->mat_names);
+    ld->mat_ids = malloc((n ? n : 1) * sizeof *ld->mat_ids);
+    if (!ld->mat_names || !ld->mat_ids)
+        return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+    const char *name;
+    json_t *v;
+    json_object_foreach((json_t *)mats, name, v) {
+        Material m = {0};
+        int id = 0;
+        json_path_push_key(ld, name);
+        LOADER_TRY(parse_material(ld, v, &m));
+        CstStatus st = scene_add_material(ld->scene, &m, &id, ld->err);
+        if (st != CST_OK)
+            return json_fail_builder(ld, st);
+        json_path_pop(ld);
+        ld->mat_names[ld->num_materials] = name;
+        ld->mat_ids[ld->num_materials] = id;
+        ld->num_materials++;
+    }
+    return CST_OK;
+}
+
+/* shape["material"] -> scene material id. */
+CstStatus json_read_material_ref(Loader *ld, const json_t *shape, int *out)
+{
+    json_t *v;
+    const char *s = NULL;
+    LOADER_TRY(json_member_required(ld, shape, "material", "the name of a material", &v));
+    json_path_push_key(ld, "material");
+    LOADER_TRY(json_read_string(ld, v, &s));
+    for (int i = 0; i < ld->num_materials; i++)
+        if (strcmp(ld->mat_names[i], s) == 0) {
+            *out = ld->mat_ids[i];
+            json_path_pop(ld);
+            return CST_OK;
+        }
+    char name[72];
+    if (ld->num_materials == 0)
+        return json_fail_here(ld, "material \"%s\" is not defined (no materials are); expected a name "
+                                  "defined under \"materials\"",
+                              json_clip_name(s, name));
+    char list[512];
+    json_join_names(ld->mat_names, ld->num_materials, list, sizeof list);
+    return json_fail_here(ld, "material \"%s\" is not defined; expected one of: %s", json_clip_name(s, name),
+                          list);
+}
+
+CstStatus json_read_emission(Loader *ld, const json_t *shape, Emission *em)
+{
+    static const char *const keys[] = {"radiance", "two_sided", "scale"};
+    json_t *obj = json_object_get(shape, "emission"), *v;
+    em->radiance = color_s(0.0f);
+    em->two_sided = 0;
+    em->texture = 0;
+    if (!obj)
+        return CST_OK;
+    json_path_push_key(ld, "emission");
+    LOADER_TRY(json_expect_object(ld, obj, "an object with radiance, two_sided, scale"));
+    LOADER_TRY(json_check_keys(ld, obj, keys, 3));
+    LOADER_TRY(json_member_required(ld, obj, "radiance", "an array of 3 numbers >= 0 or a texture name", &v));
+    json_path_push_key(ld, "radiance");
+    if (json_is_string(v)) {
+        int id = 0;
+        LOADER_TRY(json_read_texture_name(ld, json_string_value(v), &id));
+        em->texture = id + 1;
+        em->radiance = color_s(1.0f);
+    } else {
+        LOADER_TRY(json_read_rgb(ld, v, 0, &em->radiance));
+    }
+    json_path_pop(ld);
+    if ((v = json_object_get(obj, "scale"))) {
+        float k = 1.0f;
+        json_path_push_key(ld, "scale");
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &k));
+        if (!(k >= 0.0f)) return json_fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
+        em->radiance = color_scale(em->radiance, k);
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "two_sided"))) {
+        json_path_push_key(ld, "two_sided");
+        LOADER_TRY(json_read_bool(ld, v, &em->two_sided));
+        json_path_pop(ld);
+    }
+    json_path_pop(ld);
+    return CST_OK;
+}

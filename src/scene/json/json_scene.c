@@ -1,0 +1,183 @@
+/* The JSON scene loader (format: docs/scene-format.md): the entry points and the root
+ * object. jansson parses; the json_*.c files beside this one validate every value, name
+ * its file:line:column on error, and build the scene through the scene_add_* builder only. */
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "core/file.h"
+#include "scene/json/json_geometry.h"
+#include "scene/json/json_light.h"
+#include "scene/json/json_locate.h"
+#include "scene/json/json_material.h"
+#include "scene/json/json_reader.h"
+#include "scene/json/json_settings.h"
+#include "scene/json/json_texture.h"
+
+/* Sections are read in dependency order (materials before the shapes naming them), not
+ * file order, so a file may list them in any order. */
+static CstStatus parse_root(Loader *ld, const json_t *root)
+{
+    static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
+                                       "shapes", "lights", "environment", "accel", "textures"};
+    json_t *v;
+    LOADER_TRY(json_expect_object(ld, root, "an object with the scene sections"));
+    LOADER_TRY(json_check_keys(ld, root, keys, 10));
+    if ((v = json_object_get(root, "accel"))) {
+        json_path_push_key(ld, "accel");
+        const char *name = NULL;
+        AccelType type = ACCEL_BVH;
+        LOADER_TRY(json_read_string(ld, v, &name));
+        if (!accel_type_from_name(name, &type))
+            return json_fail_here(ld, "unknown acceleration structure \"%s\"; expected one of: bvh, "
+                                      "kdtree, grid, list, embree", name);
+        if (!accel_type_available(type))
+            return json_fail_here(ld, "acceleration structure \"%s\" is not available in this build; "
+                                      "expected one of: bvh, kdtree, grid, list", name);
+        ld->scene->accel_type = type;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(root, "film"))) {
+        json_path_push_key(ld, "film");
+        LOADER_TRY(json_parse_film(ld, v));
+        json_path_pop(ld);
+    }
+    LOADER_TRY(json_member_required(ld, root, "camera", "a camera object", &v));
+    json_path_push_key(ld, "camera");
+    LOADER_TRY(json_parse_camera(ld, v));
+    json_path_pop(ld);
+    if ((v = json_object_get(root, "integrator"))) {
+        json_path_push_key(ld, "integrator");
+        LOADER_TRY(json_parse_integrator(ld, v));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(root, "sampler"))) {
+        json_path_push_key(ld, "sampler");
+        LOADER_TRY(json_parse_sampler(ld, v));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(root, "textures"))) {
+        json_path_push_key(ld, "textures");
+        LOADER_TRY(json_parse_textures(ld, v));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(root, "materials"))) {
+        json_path_push_key(ld, "materials");
+        LOADER_TRY(json_parse_materials(ld, v));
+        json_path_pop(ld);
+    }
+    LOADER_TRY(json_member_required(ld, root, "shapes", "an array of at least one shape", &v));
+    json_path_push_key(ld, "shapes");
+    LOADER_TRY(json_parse_shapes(ld, v));
+    json_path_pop(ld);
+    if ((v = json_object_get(root, "lights"))) {
+        json_path_push_key(ld, "lights");
+        LOADER_TRY(json_parse_lights(ld, v));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(root, "environment"))) {
+        json_path_push_key(ld, "environment");
+        LOADER_TRY(json_parse_environment(ld, v));
+        json_path_pop(ld);
+    }
+    return CST_OK;
+}
+
+CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
+                                     CstScene **out, CstError *err)
+{
+    CstError local;
+    if (!err)
+        err = &local;
+    cst_error_clear(err);
+    if (!name)
+        name = "<string>";
+    if (!out)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%.200s: no place for the scene (out is NULL)",
+                        name);
+    *out = NULL;
+    if (!text && len > 0)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%.200s: text is NULL", name);
+
+    /* JSON text never holds a raw NUL, but jansson drops one that directly follows a number
+     * or literal ("51\0," parses as "51,"): its one-character push-back cannot tell a NUL
+     * from an empty buffer. Reject it here so the text json_locate walks is what jansson
+     * saw. */
+    const char *nul = len ? memchr(text, '\0', len) : NULL;
+    if (nul) {
+        JsonLocation at = json_offset_location(text, len, (size_t)(nul - text));
+        return cst_fail(err, CST_ERR_PARSE,
+                        "%.200s:%d:%d: NUL byte in the text; expected JSON text, which has none",
+                        name, at.line, at.column);
+    }
+
+    json_error_t jerr;
+    json_t *root = json_loadb(text ? text : "", len, JSON_REJECT_DUPLICATES, &jerr);
+    if (!root) {
+        if (json_error_code(&jerr) == json_error_out_of_memory)
+            return cst_fail(err, CST_ERR_OOM, "%.200s: out of memory parsing JSON", name);
+        /* jansson's column is that of the token's last character; 0 means "before the first"
+         * (an empty file), shown as 1 so positions stay 1-based. */
+        int line = jerr.line > 0 ? jerr.line : 1, col = jerr.column > 0 ? jerr.column : 1;
+        char text_safe[JSON_ERROR_TEXT_LENGTH]; /* "near '<raw bytes>'" may hold a newline */
+        size_t pos = 0;
+        json_buf_append(text_safe, sizeof text_safe, &pos, jerr.text);
+        return cst_fail(err, CST_ERR_PARSE, "%.200s:%d:%d: %s", name, line, col, text_safe);
+    }
+
+    Loader ld = {0};
+    ld.text = text ? text : "";
+    ld.len = len;
+    ld.name = name;
+    ld.err = err;
+    ld.scene = scene_create();
+    CstStatus st;
+    if (!ld.scene) {
+        st = cst_fail(err, CST_ERR_OOM, "%.200s: out of memory creating the scene", name);
+    } else {
+        st = parse_root(&ld, root);
+        if (st == CST_OK) {
+            st = scene_commit(ld.scene, err);
+            if (st != CST_OK) {
+                char msg[sizeof err->msg];
+                memcpy(msg, err->msg, sizeof msg);
+                msg[sizeof msg - 1] = '\0';
+                cst_fail(err, st, "%.200s: %.800s", name, msg);
+            }
+        }
+    }
+    free(ld.mat_names);
+    free(ld.mat_ids);
+    free(ld.tex_names);
+    free(ld.tex_state);
+    free(ld.tex_ids);
+    json_decref(root);
+    if (st != CST_OK) {
+        scene_destroy(ld.scene);
+        return st;
+    }
+    *out = ld.scene;
+    return CST_OK;
+}
+
+CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err)
+{
+    CstError local;
+    if (!err)
+        err = &local;
+    if (!out || !path)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_load_json: path and out must not "
+                                                  "be NULL");
+    *out = NULL;
+    char *text = NULL;
+    size_t len = 0;
+    CstStatus st = file_read_all(path, &text, &len, err);
+    if (st != CST_OK)
+        return st;
+    st = cst_scene_load_json_string(text, len, path, out, err);
+    free(text);
+    return st;
+}

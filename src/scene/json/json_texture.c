@@ -1,0 +1,185 @@
+/* The "textures" section: constants, checkerboards and image files, read on first use so
+ * that checkerboards may name textures listed after them. */
+#include "scene/json/json_texture.h"
+
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io/path.h"
+
+/* A checkerboard's "even" or "odd": a colour (a new constant texture) or a texture name. */
+static CstStatus read_texture_operand(Loader *ld, const json_t *obj, const char *key, int *out)
+{
+    json_t *v;
+    LOADER_TRY(json_member_required(ld, obj, key, "an RGB triple or a texture name", &v));
+    json_path_push_key(ld, key);
+    if (json_is_string(v)) {
+        LOADER_TRY(json_read_texture_name(ld, json_string_value(v), out));
+    } else {
+        Color c;
+        Texture t;
+        LOADER_TRY(json_read_rgb(ld, v, 0, &c));
+        texture_constant(&t, c);
+        CstStatus st = scene_add_texture(ld->scene, &t, out, ld->err);
+        if (st != CST_OK) return json_fail_builder(ld, st);
+    }
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+/* The texture object at the current path (textures.<name>). */
+static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
+{
+    static const char *const types[] = {"constant", "checkerboard", "image"};
+    static const char *const keys_constant[] = {"type", "value"};
+    static const char *const keys_checker[] = {"type", "even", "odd", "scale"};
+    static const char *const keys_image[] = {"type", "file", "linear", "wrap"};
+    int type = 0;
+    json_t *v;
+    Texture t;
+    CstStatus st;
+    LOADER_TRY(json_expect_object(ld, obj, "a texture object"));
+    LOADER_TRY(json_read_type(ld, obj, "texture type", types, 3, -1, &type));
+    if (type == TEXTURE_CONSTANT) {
+        Color c;
+        LOADER_TRY(json_check_keys(ld, obj, keys_constant, 2));
+        LOADER_TRY(json_member_required(ld, obj, "value", "an array of 3 numbers >= 0", &v));
+        json_path_push_key(ld, "value");
+        LOADER_TRY(json_read_rgb(ld, v, 0, &c));
+        json_path_pop(ld);
+        texture_constant(&t, c);
+    } else if (type == TEXTURE_CHECKERBOARD) {
+        int even = 0, odd = 0;
+        float scale = 1.0f;
+        LOADER_TRY(json_check_keys(ld, obj, keys_checker, 4));
+        if ((v = json_object_get(obj, "scale"))) {
+            json_path_push_key(ld, "scale");
+            LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &scale));
+            if (!(scale > 0.0f))
+                return json_fail_here(ld, "scale %g is not positive; expected the number of squares per "
+                                          "unit of u and v, > 0", (double)scale);
+            json_path_pop(ld);
+        }
+        LOADER_TRY(read_texture_operand(ld, obj, "even", &even));
+        LOADER_TRY(read_texture_operand(ld, obj, "odd", &odd));
+        texture_checkerboard(&t, ld->scene->textures, even, odd, scale);
+    } else {
+        static const char *const wraps[] = {"repeat", "clamp"};
+        const char *file = NULL;
+        int linear = 0;
+        TextureWrap wrap = TEXTURE_WRAP_REPEAT;
+        LOADER_TRY(json_check_keys(ld, obj, keys_image, 4));
+        if ((v = json_object_get(obj, "linear"))) {
+            json_path_push_key(ld, "linear");
+            LOADER_TRY(json_read_bool(ld, v, &linear));
+            json_path_pop(ld);
+        }
+        if ((v = json_object_get(obj, "wrap"))) {
+            const char *w = NULL;
+            json_path_push_key(ld, "wrap");
+            LOADER_TRY(json_read_string(ld, v, &w));
+            if (strcmp(w, wraps[0]) == 0) wrap = TEXTURE_WRAP_REPEAT;
+            else if (strcmp(w, wraps[1]) == 0) wrap = TEXTURE_WRAP_CLAMP;
+            else {
+                char name[72];
+                return json_fail_here(ld, "unknown wrap mode \"%s\"; expected one of: repeat, clamp",
+                                      json_clip_name(w, name));
+            }
+            json_path_pop(ld);
+        }
+        LOADER_TRY(json_member_required(ld, obj, "file", "the path of an image file", &v));
+        json_path_push_key(ld, "file");
+        LOADER_TRY(json_read_string(ld, v, &file));
+        if (!file[0]) return json_fail_here(ld, "the file name is empty; expected the path of an image");
+        char *path = path_resolve(ld->name, file);
+        if (!path) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+        st = texture_image_load(&t, path, linear, wrap, ld->err);
+        free(path);
+        if (st != CST_OK) return json_fail_builder(ld, st);
+        json_path_pop(ld);
+    }
+    st = scene_add_texture(ld->scene, &t, out, ld->err);
+    if (st != CST_OK) return json_fail_builder(ld, st);
+    return CST_OK;
+}
+
+/* Scene id of the texture called `name`, read now if it has not been. The error points at
+ * the current path (the value naming it). */
+CstStatus json_read_texture_name(Loader *ld, const char *name, int *out)
+{
+    char clipped[72];
+    for (int i = 0; i < ld->num_textures; i++) {
+        if (strcmp(ld->tex_names[i], name) != 0) continue;
+        if (ld->tex_state[i] == 2) {
+            *out = ld->tex_ids[i];
+            return CST_OK;
+        }
+        if (ld->tex_state[i] == 1)
+            return json_fail_here(ld, "texture \"%s\" contains itself through checkerboards; expected "
+                                      "no cycles", json_clip_name(name, clipped));
+        /* Read it at its own path, then come back. */
+        JsonPathStep saved[LOADER_MAX_DEPTH];
+        int saved_depth = ld->depth;
+        memcpy(saved, ld->path, sizeof saved);
+        ld->depth = 0;
+        json_path_push_key(ld, "textures");
+        json_path_push_key(ld, ld->tex_names[i]);
+        ld->tex_state[i] = 1;
+        LOADER_TRY(parse_texture(ld, json_object_get(ld->tex_obj, ld->tex_names[i]), &ld->tex_ids[i]));
+        ld->tex_state[i] = 2;
+        memcpy(ld->path, saved, sizeof saved);
+        ld->depth = saved_depth;
+        *out = ld->tex_ids[i];
+        return CST_OK;
+    }
+    if (ld->num_textures == 0)
+        return json_fail_here(ld, "texture \"%s\" is not defined (no textures are); expected a name "
+                                  "defined under \"textures\"", json_clip_name(name, clipped));
+    char list[512];
+    json_join_names(ld->tex_names, ld->num_textures, list, sizeof list);
+    return json_fail_here(ld, "texture \"%s\" is not defined; expected one of: %s", json_clip_name(name, clipped), list);
+}
+
+CstStatus json_parse_textures(Loader *ld, const json_t *texs)
+{
+    LOADER_TRY(json_expect_object(ld, texs, "an object mapping texture names to textures"));
+    size_t n = json_object_size(texs);
+    if (n > (size_t)INT_MAX / 2)
+        return json_fail_here(ld, "too many textures");
+    ld->tex_obj = texs;
+    ld->tex_names = malloc((n ? n : 1) * sizeof *ld->tex_names);
+    ld->tex_state = calloc(n ? n : 1, sizeof *ld->tex_state);
+    ld->tex_ids = calloc(n ? n : 1, sizeof *ld->tex_ids);
+    if (!ld->tex_names || !ld->tex_state || !ld->tex_ids)
+        return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+    const char *name;
+    json_t *v;
+    json_object_foreach((json_t *)texs, name, v) ld->tex_names[ld->num_textures++] = name;
+    /* Every texture is read (and so checked) even when nothing uses it. */
+    for (int i = 0; i < ld->num_textures; i++) {
+        int id;
+        LOADER_TRY(json_read_texture_name(ld, ld->tex_names[i], &id));
+    }
+    return CST_OK;
+}
+
+/* A material parameter given as a texture name: its id + 1 (Material's convention), after
+ * checking the texture's values fit the parameter (at most 1 for reflectances and
+ * roughness). The current path is the parameter's value. */
+CstStatus json_read_param_texture(Loader *ld, const json_t *v, const char *what, int *out)
+{
+    int id = 0;
+    LOADER_TRY(json_read_texture_name(ld, json_string_value(v), &id));
+    Color mx = ld->scene->textures[id].max;
+    if (color_max(mx) > 1.0f) {
+        char clipped[72];
+        return json_fail_here(ld, "texture \"%s\" has values up to %g; expected %s, at most 1",
+                              json_clip_name(json_string_value(v), clipped), (double)color_max(mx), what);
+    }
+    *out = id + 1;
+    return CST_OK;
+}

@@ -1,0 +1,339 @@
+/* Lights: point, spot and distant lights, area lights, and infinite lights whose
+ * equal-area octahedral images are remapped to caustic's environment map. */
+#include "scene/pbrt/pbrt_light.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io/image_io.h"
+#include "scene/pbrt/pbrt_params.h"
+#include "scene/pbrt/pbrt_shape.h"
+#include "scene/pbrt/pbrt_spectrum.h"
+
+static CstStatus get_point3(Loader *ld, Params *ps, const char *d, const char *name, Vec3 def, Vec3 *out)
+{
+    Param *p;
+    *out = def;
+    TRY(pbrt_lookup(ld, ps, d, name, PT_MASK(PT_POINT3), "point3", &p));
+    if (!p) return CST_OK;
+    char nm[72];
+    if (p->num_nums != 3)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" has %d values; expected 3", d,
+                            pbrt_clip(p->decl, nm), p->num_nums);
+    *out = v3((float)p->nums[0], (float)p->nums[1], (float)p->nums[2]);
+    if (!pbrt_coords_ok(*out))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" is beyond the scene limit", d,
+                            pbrt_clip(p->decl, nm));
+    return CST_OK;
+}
+
+/* Clarberg's equal-area octahedral map ("Fast Equal-Area Mapping of the (Hemi)Sphere using
+ * SIMD", JGT 2008), which pbrt-v4 uses for the images of infinite lights
+ * (EqualAreaSphereToSquare / EqualAreaSquareToSphere): the square's centre is +z, its
+ * corners -z, u = 1 is +x and v = 1 is +y; equal areas of the square cover equal solid
+ * angles. Here with the exact arctangent where pbrt uses a polynomial fit of it. */
+void pbrt_equal_area_sphere_to_square(const double d[3], double uv[2])
+{
+    double x = fabs(d[0]), y = fabs(d[1]), z = fabs(d[2]);
+    double r = sqrt(fmax(0.0, 1.0 - z));
+    double a = fmax(x, y), b = fmin(x, y);
+    double phi = atan(a == 0.0 ? 0.0 : b / a) * (2.0 / PBRT_PI);
+    if (x < y) phi = 1.0 - phi;
+    double v = phi * r, u = r - v;
+    if (d[2] < 0.0) {
+        double t = u;
+        u = 1.0 - v;
+        v = 1.0 - t;
+    }
+    uv[0] = 0.5 * (copysign(u, d[0]) + 1.0);
+    uv[1] = 0.5 * (copysign(v, d[1]) + 1.0);
+}
+
+void pbrt_equal_area_square_to_sphere(const double uv[2], double d[3])
+{
+    double u = 2.0 * uv[0] - 1.0, v = 2.0 * uv[1] - 1.0, up = fabs(u), vp = fabs(v);
+    double sd = 1.0 - (up + vp), r = 1.0 - fabs(sd);
+    double phi = (r == 0.0 ? 1.0 : (vp - up) / r + 1.0) * (PBRT_PI / 4.0);
+    double s = r * sqrt(fmax(0.0, 2.0 - r * r));
+    d[0] = copysign(cos(phi), u) * s;
+    d[1] = copysign(sin(phi), v) * s;
+    d[2] = copysign(1.0 - r * r, sd);
+}
+
+/* The pixel of a w x h image (row 0 at the top, as pbrt and image_read store it) that an
+ * infinite light shows in light-space direction d: nearest lookup as pbrt-v4's
+ * ImageInfiniteLight does. Square images use the equal-area map; others pbrt-v3's
+ * equirectangular one (+z up: u = phi / 2 pi, phi = atan2(y, x), v = theta / pi). */
+static size_t env_source_pixel(const double d[3], int w, int h)
+{
+    double uv[2];
+    if (w == h) {
+        pbrt_equal_area_sphere_to_square(d, uv);
+    } else {
+        double phi = atan2(d[1], d[0]);
+        if (phi < 0.0) phi += 2.0 * PBRT_PI;
+        uv[0] = phi / (2.0 * PBRT_PI);
+        uv[1] = acos(fmax(-1.0, fmin(1.0, d[2]))) / PBRT_PI;
+    }
+    int x = (int)(uv[0] * w), y = (int)(uv[1] * h);
+    x = x < 0 ? 0 : x >= w ? w - 1 : x;
+    y = y < 0 ? 0 : y >= h ? h - 1 : y;
+    return (size_t)y * (size_t)w + (size_t)x;
+}
+
+/* pbrt-v4's "illuminance" normaliser of an image light: over the pixels whose direction has
+ * light-space z > 0, the sum of luminance times cos theta, times 2 pi / (number of pixels)
+ * (lights.cpp, Light::Create). A pixel covers 4 pi / (number of pixels) sr, so this is half
+ * the patch's illuminance; kept, so that the image renders as bright as in pbrt. Non-square
+ * (equirectangular) images get the same half from their pixels' solid angles. */
+static double env_illuminance(const float *px, int w, int h)
+{
+    double sum = 0.0;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double d[3], uv[2] = {(x + 0.5) / w, (y + 0.5) / h}, dw;
+            if (w == h) {
+                pbrt_equal_area_square_to_sphere(uv, d);
+                dw = 2.0 * PBRT_PI / ((double)w * h);
+            } else {
+                double th = PBRT_PI * uv[1];
+                d[2] = cos(th);
+                dw = 0.5 * (2.0 * PBRT_PI / w) * (PBRT_PI / h) * sin(th); /* half of the pixel's sr, as above */
+            }
+            if (d[2] <= 0.0) continue;
+            const float *p = &px[3 * ((size_t)y * (size_t)w + (size_t)x)];
+            sum += (0.2126 * (double)p[0] + 0.7152 * (double)p[1] + 0.0722 * (double)p[2]) * d[2] * dw;
+        }
+    return sum;
+}
+
+/* LightSource "infinite": the scene's environment (lights/envmap.h). A constant one is
+ * L x scale, with pbrt-v4's "illuminance" E making it L x scale x E / pi (the illuminance of a
+ * uniform unit sky on an upward patch is pi). An image is resampled once, at load, into
+ * caustic's equirectangular map (+y up, theta = acos(w.y), phi = atan2(w.z, w.x)): each
+ * pixel takes, by nearest lookup, the source pixel its centre direction sees through the
+ * light's transform (light-from-world, so any rotation is exact up to the resampling). A
+ * square source of N x N becomes 2N x N (each new pixel covers at most the solid angle of
+ * a source pixel, pi^2/N^2 against 4 pi/N^2 sr); others keep their size. */
+static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
+{
+    char nm[72];
+    if (ld->env_set) {
+        pbrt_params_mark_all_used(ps);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: caustic has one environment and an infinite "
+                     "light was given before; skipped", d);
+        return CST_OK;
+    }
+    Color c = color_s(1.0f);
+    float scale = 1.0f, illum = 0.0f;
+    int has_l = 0;
+    const char *file = NULL;
+    Loc fl = loc;
+    Param *pp;
+    TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &c, &has_l));
+    TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "illuminance", 0.0f, &illum, NULL));
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    if (file && !file[0]) file = NULL; /* pbrt: an empty name is no image */
+    TRY(pbrt_lookup(ld, ps, d, "portal", PT_MASK(PT_POINT3), "point3", &pp));
+    if (pp)
+        pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pp->loc, "%s: \"portal\" is not supported; the "
+                     "environment lights the scene from every direction", d);
+    if (file && has_l)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: both \"L\" and \"filename\"; expected one "
+                            "of them (as pbrt-v4)", d);
+    if (!(scale >= 0.0f))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g; expected a finite scale >= 0", d,
+                            (double)scale);
+    EnvMap env;
+    CstStatus st;
+    if (!file) {
+        double k = (double)scale * (illum > 0.0f ? (double)illum / PBRT_PI : 1.0);
+        Color L = color_scale(c, (float)k);
+        if (!color_is_finite(L))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the radiance is not finite", d);
+        TRY(envmap_init_constant(&env, L, ld->err));
+    } else {
+        if (!ld->gs.ctm.inv_ok)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; "
+                                "expected an invertible transform", d);
+        TRY(pbrt_check_file_access(ld, fl, d));
+        char *path = pbrt_resolve_path(ld, file);
+        if (!path) return pbrt_oom(ld);
+        float *src = NULL;
+        int w = 0, h = 0;
+        st = image_read(path, &src, &w, &h, ld->err);
+        free(path);
+        if (st) return pbrt_fail_wrap(ld, st, fl, d);
+        size_t n = 3u * (size_t)w * (size_t)h;
+        for (size_t i = 0; i < n; i++)
+            if (!isfinite(src[i])) {
+                free(src);
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: \"%s\" has infinite or NaN pixels; "
+                                    "expected finite radiance (as pbrt-v4)", d, pbrt_clip(file, nm));
+            }
+        if (w != h)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, fl, "%s: \"%s\" is %d x %d, not square: pbrt-v4 "
+                    "expects an equal-area (square) image; read as an equirectangular map in "
+                         "pbrt-v3's convention (+z up in light space)", d, pbrt_clip(file, nm), w, h);
+        double k = (double)scale;
+        if (illum > 0.0f) {
+            double e = env_illuminance(src, w, h);
+            k = e > 0.0 ? k * (double)illum / e : k;
+        }
+        int ow = w == h ? 2 * w : w, oh = h;
+        if (oh > 4096) { /* cap the copy at 8192 x 4096 (400 MB of floats) */
+            ow = (int)((long long)ow * 4096 / oh);
+            oh = 4096;
+        }
+        float *out = malloc(3u * (size_t)ow * (size_t)oh * sizeof *out);
+        if (!out) {
+            free(src);
+            return pbrt_oom(ld);
+        }
+        const Transform *li = &ld->gs.ctm.inv; /* light-from-world */
+        for (int y = 0; y < oh; y++) {
+            double th = PBRT_PI * (y + 0.5) / oh;
+            for (int x = 0; x < ow; x++) {
+                double ph = 2.0 * PBRT_PI * (x + 0.5) / ow;
+                double wv[3] = {sin(th) * cos(ph), cos(th), sin(th) * sin(ph)}, dl[3], len = 0.0;
+                for (int r = 0; r < 3; r++) {
+                    dl[r] = (double)li->m[r][0] * wv[0] + (double)li->m[r][1] * wv[1] + (double)li->m[r][2] * wv[2];
+                    len += dl[r] * dl[r];
+                }
+                len = sqrt(len);
+                for (int r = 0; r < 3; r++) dl[r] /= len;
+                const float *p = &src[3 * env_source_pixel(dl, w, h)];
+                float *o = &out[3 * ((size_t)y * (size_t)ow + (size_t)x)];
+                for (int ch = 0; ch < 3; ch++) o[ch] = p[ch] > 0.0f ? p[ch] : 0.0f; /* pbrt: ClampZero */
+            }
+        }
+        free(src);
+        if (!isfinite(k))
+            k = 0.0;
+        st = envmap_init_image(&env, out, ow, oh, color_s((float)k), ld->err);
+        if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    }
+    st = scene_set_environment(ld->scene, &env, ld->err);
+    if (st) return pbrt_fail_wrap(ld, st, loc, d);
+    ld->env_set = 1;
+    return CST_OK;
+}
+
+/* LightSource: point, spot and distant as caustic's delta lights, placed by the CTM, with
+ * pbrt-v4's scale and power (phi / 4 pi for a point; phi / (2 pi (1 - (cos_start +
+ * cos_end) / 2)) for a spot) and illuminance for a distant light; as for area lights an
+ * "rgb" spectrum is used as given and blackbody and sampled spectra are normalised to
+ * luminance 1 first. "infinite" becomes the environment (infinite_light); others are
+ * skipped with a warning. */
+static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc, const char *d)
+{
+    int point = strcmp(type, "point") == 0, spot = strcmp(type, "spot") == 0,
+        distant = strcmp(type, "distant") == 0;
+    if (strcmp(type, "infinite") == 0) return infinite_light(ld, ps, loc, d);
+    if (!point && !spot && !distant) {
+        pbrt_params_mark_all_used(ps);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported (caustic has area, point, "
+                     "spot, distant and infinite lights); skipped", d);
+        return CST_OK;
+    }
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    Color c = color_s(1.0f);
+    float scale = 1.0f, power = 0.0f, illum = 0.0f;
+    TRY(pbrt_get_spectrum(ld, ps, d, distant ? "L" : "I", SPEC_ILLUMINANT, 0, &c, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    if (distant) TRY(pbrt_get_float(ld, ps, d, "illuminance", 0.0f, &illum, NULL));
+    else TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &power, NULL));
+    Vec3 from, to;
+    TRY(get_point3(ld, ps, d, "from", v3s(0.0f), &from));
+    TRY(get_point3(ld, ps, d, "to", v3(0.0f, 0.0f, 1.0f), &to));
+    if (point) { /* pbrt-v4 reads no "to" for a point light */
+        Param *pt = pbrt_find_param(ps, "to");
+        if (pt) pt->used = 0;
+    }
+    const Transform *m = &ld->gs.ctm.m;
+    double k = (double)scale;
+    if (point || spot) {
+        l.type = point ? DELTA_POINT : DELTA_SPOT;
+        l.p = transform_point(m, from);
+        if (spot) {
+            float cone = 30.0f, delta = 5.0f;
+            TRY(pbrt_get_float(ld, ps, d, "coneangle", 30.0f, &cone, NULL));
+            TRY(pbrt_get_float(ld, ps, d, "conedelta", 5.0f, &delta, NULL));
+            if (!(cone > 0.0f && cone <= 90.0f) || !(delta >= 0.0f && delta <= cone))
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: coneangle %g, conedelta %g; expected "
+                                    "0 < coneangle <= 90 and 0 <= conedelta <= coneangle", d,
+                                    (double)cone, (double)delta);
+            l.cos_outer = cosf(cone * (CST_PI / 180.0f));
+            l.cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
+            Vec3 axis = transform_vector(m, v3_sub(to, from));
+            float len = v3_length(axis);
+            if (!(len > 0.0f) || !isfinite(len))
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: \"from\" equals \"to\"; expected the "
+                                    "spot's axis", d);
+            l.dir = v3_scale(axis, 1.0f / len);
+            if (power > 0.0f)
+                k *= (double)power / (2.0 * PBRT_PI * (1.0 - 0.5 * ((double)l.cos_inner + (double)l.cos_outer)));
+        } else if (power > 0.0f) {
+            k *= (double)power / (4.0 * PBRT_PI);
+        }
+        if (!pbrt_coords_ok(l.p))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's position is beyond the scene limit", d);
+    } else {
+        l.type = DELTA_DIRECTIONAL;
+        Vec3 dir = transform_vector(m, v3_sub(to, from)); /* the way the light travels */
+        float len = v3_length(dir);
+        if (!(len > 0.0f) || !isfinite(len))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: \"from\" equals \"to\"; expected the "
+                                "light's direction", d);
+        l.dir = v3_scale(dir, 1.0f / len);
+        if (illum > 0.0f) k *= (double)illum;
+    }
+    l.intensity = color_scale(c, (float)k);
+    if (!color_is_finite(l.intensity) || !(k >= 0.0))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative "
+                            "or not finite", d, (double)scale);
+    CstStatus st = scene_add_delta_light(ld->scene, &l, ld->err);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
+CstStatus pbrt_light_source_directive(Loader *ld, NamedCall *call)
+{
+    if (!ld->in_world)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, call->loc, "LightSource before WorldBegin; expected it in the world block");
+    return light_source(ld, call->type, &call->ps, call->loc, call->d);
+}
+
+CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d;
+    Loc loc = call->loc, tl = call->tl;
+    if (!ld->in_world) {
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "AreaLightSource before WorldBegin; expected it in the world block");
+    }
+    if (strcmp(type, "diffuse") != 0 && strcmp(type, "area") != 0) {
+        pbrt_params_mark_all_used(ps);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
+        ld->gs.area.active = 0;
+    } else {
+        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0};
+        Param *pl;
+        TRY(pbrt_lookup(ld, ps, d, "filename", PT_MASK(PT_STRING), "string", &pl));
+        if (pl) pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, pl->loc, "%s: image emission is not supported; \"L\" is used", d);
+        TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, NULL));
+        TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &al.scale, NULL));
+        TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &al.power, NULL));
+        TRY(pbrt_get_bool(ld, ps, d, "twosided", 0, &al.two_sided));
+        if (!(al.scale >= 0.0f) || !color_is_finite(color_scale(al.L, al.scale))) {
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g; expected a finite scale >= 0",
+                              d, (double)al.scale);
+        }
+        ld->gs.area = al;
+    }
+    return CST_OK;
+}

@@ -1,0 +1,252 @@
+/* The pbrt loader's shared state (Loader: the graphics state and its stack, named materials,
+ * textures, coordinate systems and objects, the camera) and what every directive uses:
+ * located errors and warnings, the lexer with one token of lookahead, file names. */
+#ifndef CST_SCENE_PBRT_PBRT_LOADER_H
+#define CST_SCENE_PBRT_PBRT_LOADER_H
+
+#include <limits.h>
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "caustic/caustic.h"
+#include "math/color.h"
+#include "math/transform.h"
+#include "scene/pbrt/pbrt_tokenizer.h"
+#include "scene/scene.h"
+
+/* Same bound on coordinates as the JSON loader (LOADER_MAX_LENGTH, json/json_reader.h): squared distances of
+ * coordinates within 1e18 stay finite in float. */
+#define PBRT_MAX_LENGTH 1e18
+
+/* The scene indexes triangles with int, three indices each. */
+#define PBRT_MAX_TRIANGLES (INT_MAX / 3 - 1)
+
+#define PBRT_PI 3.14159265358979323846 /* double; PBRT_PI is a float */
+
+#define TRY(expr)                         \
+    do {                                  \
+        CstStatus try_st_ = (expr);       \
+        if (try_st_ != CST_OK)            \
+            return try_st_;               \
+    } while (0)
+
+typedef struct Loc {
+    const char *file;
+    int line, col;
+} Loc;
+
+typedef enum PType {
+    PT_INTEGER, PT_FLOAT, PT_POINT2, PT_VECTOR2, PT_POINT3, PT_VECTOR3, PT_NORMAL, PT_RGB,
+    PT_SPECTRUM, PT_BLACKBODY, PT_BOOL, PT_STRING, PT_TEXTURE, PT_XYZ
+} PType;
+
+typedef struct Param {
+    PType type;
+    char *name;
+    char *decl; /* "type name" as written, for messages */
+    double *nums;
+    int num_nums;
+    char **strs; /* string, texture, named spectrum; bools are stored as 0/1 in nums */
+    int num_strs;
+    Loc loc;
+    int used;
+} Param;
+
+typedef struct Params {
+    Param *v;
+    int n, cap;
+} Params;
+
+/* A transform with its inverse composed alongside (as pbrt keeps both): the camera needs
+ * world-from-camera, and inverting the product afresh would round what LookAt gives
+ * exactly. */
+typedef struct Xf {
+    Transform m, inv;
+    int inv_ok;
+} Xf;
+
+typedef struct AreaLight {
+    int active;
+    Color L;       /* linear sRGB radiance before scale */
+    float scale;
+    float power; /* > 0: radiant power per primitive, as pbrt-v4 normalises it */
+    int two_sided;
+} AreaLight;
+
+typedef struct GState {
+    Xf ctm;
+    int reverse;
+    int material; /* index into Loader.mats */
+    AreaLight area;
+    int transform_only; /* pushed by TransformBegin (pbrt-v3): pops only the CTM */
+    Loc loc;            /* of the Begin, for messages */
+} GState;
+
+typedef struct MatEntry {
+    char *name; /* NULL for anonymous Material directives */
+    Material m;
+    int scene_id; /* added to the scene on first use, -1 before */
+} MatEntry;
+
+typedef struct TexEntry {
+    char *name;
+    int is_float; /* pbrt keeps float and spectrum textures in two name spaces */
+    int id;       /* the scene's texture; float textures hold the value in all three channels */
+    Color value;    /* its average, for parameters caustic cannot texture */
+    /* Derived scene textures made on first use and shared by every material that uses
+     * them (an image is copied once): clamped to 1 as a reflectance; as caustic's
+     * roughness without and with pbrt's remapping. -1 until made. */
+    int clamped, rough[2];
+} TexEntry;
+
+typedef struct NamedXf {
+    char *name;
+    Xf xf;
+} NamedXf;
+
+/* Geometry in object space, with the transform that places it. Shapes inside
+ * ObjectBegin/End are kept in this form and placed again by each ObjectInstance. */
+typedef struct ShapeGeom {
+    int is_sphere;
+    float radius;  /* spheres */
+    Vec3 *p;       /* meshes: positions, optional unit normals and uvs, 3 indices a triangle */
+    Vec3 *n;
+    Vec2 *uv;
+    int nv;
+    int *idx;
+    int nt;
+} ShapeGeom;
+
+typedef struct ObjShape {
+    ShapeGeom g;
+    Xf xf;
+    int reverse;
+    int material;
+    Loc loc;
+} ObjShape;
+
+typedef struct Object {
+    char *name;
+    ObjShape *shapes;
+    int n, cap;
+    Loc loc;
+    int proto; /* the scene's instanced object, made at the first ObjectInstance; -1 before */
+} Object;
+
+typedef struct CamRec {
+    int set;
+    Xf ctm; /* camera-from-world */
+    float fov;
+    double screen[4];
+    int has_screen;
+    float frame;
+    int has_frame;
+    float lens_radius, focal_distance;
+    int ortho; /* Camera "orthographic" */
+    Loc loc;
+} CamRec;
+
+typedef struct Lexer {
+    PbrtTokenizer tz;
+    PbrtToken peek;
+    int has_peek;
+} Lexer;
+
+/* A directive with a quoted type name and a parameter list (Film "rgb" ..., Material
+ * "diffuse" ...), as read before its handler runs. */
+typedef struct NamedCall {
+    const char *dname; /* the directive, "Film" */
+    const char *type;  /* its type name, "rgb" */
+    Params ps;
+    Loc loc;           /* of the directive */
+    Loc tl;            /* of the type name */
+    char d[128];       /* "Film \"rgb\"": the prefix of its messages */
+} NamedCall;
+
+typedef struct Loader {
+    Scene *scene;
+    CstError *err;
+    CstLoadOptions opt;
+    char *base_dir; /* with trailing '/', or "" */
+    char **files;   /* every file name seen; Locs point into these */
+    int num_files, cap_files;
+    int depth;
+    GState gs;
+    GState *stack;
+    int num_stack, cap_stack;
+    MatEntry *mats;
+    int num_mats, cap_mats;
+    TexEntry *texs;
+    int num_texs, cap_texs;
+    NamedXf *coords;
+    int num_coords, cap_coords;
+    Object *objs;
+    int num_objs, cap_objs;
+    int cur_obj; /* -1 outside ObjectBegin/End */
+    int in_world;
+    int active_start; /* ActiveTransform includes StartTime: transforms apply */
+    CamRec cam;
+    int env_set; /* an infinite light has made the scene's environment */
+    int num_instances_expanded; /* instances whose spheres were copied */
+    Loc end; /* end of the main file, for errors about the whole scene */
+} Loader;
+
+/* Grows *arr (element size `size`) to hold `need` elements, doubling; 0 on overflow or OOM.
+ * Use through GROW(arr, cap, need). */
+int pbrt_grow(void **arr, int *cap, int need, size_t size);
+
+#define GROW(arr, cap, need) pbrt_grow((void **)&(arr), &(cap), (need), sizeof *(arr))
+
+/* A malloc'd copy of s, or NULL on OOM. */
+char *pbrt_dup_str(const char *s);
+
+/* A name from the file, printable and short enough to quote. */
+const char *pbrt_clip(const char *s, char buf[72]);
+
+/* Fails with status st and "file:line:column: message" at loc. */
+CstStatus pbrt_fail_at(Loader *ld, CstStatus st, Loc loc, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* CST_ERR_OOM with the loader's message. */
+CstStatus pbrt_oom(Loader *ld);
+
+/* Reports a located warning through the CstLoadOptions callback, if any. */
+void pbrt_warn_at(Loader *ld, CstWarningCode code, Loc loc, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* The file, line and column of token t. */
+Loc pbrt_tok_loc(const Lexer *lx, const PbrtToken *t);
+
+/* True when t's text is exactly `word`. */
+int pbrt_tok_is(const PbrtToken *t, const char *word);
+
+/* The next token, left for the next pbrt_lex_next. */
+CstStatus pbrt_lex_peek(Loader *ld, Lexer *lx, PbrtToken *t);
+
+/* The next token, consumed. */
+CstStatus pbrt_lex_next(Loader *ld, Lexer *lx, PbrtToken *t);
+
+/* A quoted string (decoded into a new *out, free()) or a located parse error naming
+ * `directive` and `what`; *loc, when not NULL, gets the token's location. */
+CstStatus pbrt_expect_string(Loader *ld, Lexer *lx, const char *directive, const char *what,
+                             char **out, Loc *loc);
+
+/* n bare numbers into out, or a located parse error. */
+CstStatus pbrt_expect_numbers(Loader *ld, Lexer *lx, const char *directive, int n, double *out);
+
+/* n numbers in brackets; pbrt-v3 files sometimes leave the brackets out. */
+CstStatus pbrt_expect_number_array(Loader *ld, Lexer *lx, const char *directive, int n, double *out);
+
+/* A failure of a library call (mesh import, image read): keep its text, add the location. */
+CstStatus pbrt_fail_wrap(Loader *ld, CstStatus st, Loc loc, const char *d);
+
+/* `file` relative to the main scene file's directory (pbrt's search directory). */
+char *pbrt_resolve_path(Loader *ld, const char *file);
+
+/* CST_ERR_UNSUPPORTED at loc when CstLoadOptions.no_file_access is set. */
+CstStatus pbrt_check_file_access(Loader *ld, Loc loc, const char *d);
+
+/* Frees everything the loader owns (not the scene). */
+void pbrt_loader_free(Loader *ld);
+
+#endif

@@ -1,0 +1,416 @@
+/* Materials: pbrt-v4's material types mapped onto caustic's Material (roughness remapping,
+ * conductors, coated layers), named materials, and the Material directives. */
+#include "scene/pbrt/pbrt_material.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene/pbrt/pbrt_params.h"
+#include "scene/pbrt/pbrt_spectrum.h"
+#include "scene/pbrt/pbrt_texture.h"
+
+/* A reflectance parameter (diffuse "reflectance", pbrt-v3 "Kd", ...) as albedo or albedo
+ * texture. pbrt-v4's materials clamp reflectances to [0, 1]; a texture with larger values
+ * is clamped per texel. */
+static CstStatus get_albedo(Loader *ld, Params *ps, const char *d, const char *name, Material *m)
+{
+    int tex = 0, e = 0;
+    Color avg = m->albedo;
+    TRY(pbrt_tex_param(ld, ps, d, name, 0, &tex, &avg, &e));
+    if (!tex) return pbrt_get_spectrum(ld, ps, d, name, SPEC_REFLECTANCE, 1, &m->albedo, NULL);
+    Param *p = pbrt_find_param(ps, name);
+    float mx = color_max(ld->scene->textures[tex - 1].max);
+    if (mx > 1.0f) {
+        char nm[72];
+        if (ld->texs[e].clamped < 0) {
+            int id = 0;
+            TRY(pbrt_tex_map(ld, tex - 1, TEXOP_MIN1, color_s(0.0f), color_s(0.0f), p->loc, d, &id));
+            ld->texs[e].clamped = id;
+        }
+        tex = ld->texs[e].clamped + 1;
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: texture \"%s\" has values up to %g; "
+                     "clamped to 1 texel by texel (pbrt-v4 clamps the filtered reflectance)", d,
+                     pbrt_clip(p->strs[0], nm), (double)mx);
+    }
+    m->albedo_texture = tex;
+    m->albedo = ld->scene->textures[tex - 1].average;
+    return CST_OK;
+}
+
+CstStatus pbrt_add_mat_entry(Loader *ld, const char *name, const Material *m, int *out)
+{
+    if (!GROW(ld->mats, ld->cap_mats, ld->num_mats + 1)) return pbrt_oom(ld);
+    MatEntry *e = &ld->mats[ld->num_mats];
+    e->name = NULL;
+    if (name && !(e->name = pbrt_dup_str(name))) return pbrt_oom(ld);
+    e->m = *m;
+    e->scene_id = -1;
+    *out = ld->num_mats++;
+    return CST_OK;
+}
+
+static int find_named_material(Loader *ld, const char *name)
+{
+    for (int i = ld->num_mats - 1; i >= 0; i--)
+        if (ld->mats[i].name && strcmp(ld->mats[i].name, name) == 0) return i;
+    return -1;
+}
+
+/* pbrt's roughness parameters (names after `prefix`: "", "conductor." or "interface.") as
+ * caustic's perceptual roughness. pbrt-v4's GGX width is alpha = sqrt(roughness) when
+ * remaproughness is true, its default (TrowbridgeReitzDistribution::RoughnessToAlpha),
+ * else alpha = roughness; caustic's is alpha = r^2 (material.h), so r = sqrt(alpha), and
+ * below alpha 1e-3 both render the smooth delta lobes. Anisotropic widths become their
+ * geometric mean sqrt(alpha_u alpha_v): GGX's density of normals along the macro normal is
+ * 1 / (pi alpha_u alpha_v), so the isotropic lobe keeps that peak and the lobe's solid angle. */
+static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc,
+                                float *out, int *tex_out)
+{
+    char n_r[64], n_u[64], n_v[64];
+    snprintf(n_r, sizeof n_r, "%sroughness", prefix);
+    snprintf(n_u, sizeof n_u, "%suroughness", prefix);
+    snprintf(n_v, sizeof n_v, "%svroughness", prefix);
+    float r = 0.0f, ur = 0.0f, vr = 0.0f;
+    int remap = 1;
+    TRY(pbrt_get_bool(ld, ps, d, "remaproughness", 1, &remap));
+    if (tex_out) {
+        /* An isotropic roughness texture (u and v from the same one) becomes a roughness
+         * texture of caustic's perceptual roughness, r^(1/4) (remapped) or r^(1/2) texel by
+         * texel, as the constant below; anisotropic or mixed ones take their averages. */
+        Param *pr = pbrt_find_param(ps, n_r), *pu = pbrt_find_param(ps, n_u), *pv = pbrt_find_param(ps, n_v);
+        Param *eu = pu ? pu : pr, *ev = pv ? pv : pr;
+        *tex_out = 0;
+        if (eu && ev && eu->type == PT_TEXTURE && ev->type == PT_TEXTURE && eu->num_strs == 1 &&
+            ev->num_strs == 1 && strcmp(eu->strs[0], ev->strs[0]) == 0) {
+            int tex = 0, e = 0;
+            Color avg = color_s(0.0f);
+            TRY(pbrt_tex_param(ld, ps, d, eu->name, 1, &tex, &avg, &e));
+            if (ev != eu) TRY(pbrt_tex_param(ld, ps, d, ev->name, 1, &tex, &avg, &e));
+            if (tex) {
+                if (pr) pr->used = 1; /* shadowed by uroughness and vroughness */
+                int *id = &ld->texs[e].rough[remap != 0];
+                if (*id < 0) {
+                    int made = 0;
+                    TRY(pbrt_tex_map(ld, tex - 1, TEXOP_POW, color_s(remap ? 0.25f : 0.5f), color_s(0.0f), eu->loc, d, &made));
+                    *id = made;
+                }
+                const Texture *t = &ld->scene->textures[*id];
+                *tex_out = *id + 1;
+                *out = minf(t->average.c[0], 1.0f);
+                if (t->max.c[0] > 1.0f)
+                    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, eu->loc, "%s: roughness texture values up to "
+                                 "GGX alpha %g are beyond caustic's roughest (alpha 1); rendered with alpha 1",
+                                 d, (double)(t->max.c[0] * t->max.c[0]));
+                return CST_OK;
+            }
+        }
+    }
+    TRY(pbrt_get_float_tex(ld, ps, d, n_r, 0.0f, &r, NULL));
+    TRY(pbrt_get_float_tex(ld, ps, d, n_u, r, &ur, NULL));
+    TRY(pbrt_get_float_tex(ld, ps, d, n_v, r, &vr, NULL));
+    if (!(ur >= 0.0f) || !(vr >= 0.0f)) {
+        Param *p = pbrt_find_param(ps, !(ur >= 0.0f) ? n_u : n_v);
+        if (!p) p = pbrt_find_param(ps, n_r);
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc, "%s: roughness %g is negative; "
+                            "expected a roughness >= 0", d, (double)(!(ur >= 0.0f) ? ur : vr));
+    }
+    float au = remap ? sqrtf(ur) : ur, av = remap ? sqrtf(vr) : vr;
+    float alpha = au;
+    if (au != av) {
+        alpha = sqrtf(au * av);
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: anisotropic roughness (alpha %g along u, %g "
+                     "along v) approximated as isotropic with their geometric mean, alpha %g", d,
+                     (double)au, (double)av, (double)alpha);
+    }
+    *out = sqrtf(alpha);
+    if (*out > 1.0f) {
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: GGX alpha %g is beyond caustic's roughest "
+                     "(alpha 1); rendered with alpha 1", d, (double)alpha);
+        *out = 1.0f;
+    }
+    return CST_OK;
+}
+
+/* A conductor (pbrt-v4 ConductorMaterial): complex IOR from eta and k (default copper), or
+ * from "reflectance" as pbrt-v4 converts it: eta = 1, k = 2 sqrt(R) / sqrt(1 - R) with R
+ * clamped to [0, 0.9999], whose normal-incidence Fresnel reflectance ((n-1)^2 + k^2) /
+ * ((n+1)^2 + k^2) = k^2 / (4 + k^2) is exactly R. coatedconductor reads the same with
+ * prefix "conductor." (its reflectance keeps the plain name). */
+static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc,
+                           Material *m)
+{
+    char n_eta[64], n_k[64], nm[72];
+    snprintf(n_eta, sizeof n_eta, "%seta", prefix);
+    snprintf(n_k, sizeof n_k, "%sk", prefix);
+    Color eta, k, refl = color_s(0.0f);
+    material_metal("copper", &eta, &k); /* pbrt's default conductor is copper */
+    Param *pe = pbrt_find_param(ps, n_eta), *pk = pbrt_find_param(ps, n_k), *pr = pbrt_find_param(ps, "reflectance");
+    if (pr && (pe || pk))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pr->loc, "%s: \"reflectance\" given with \"%s\"; "
+                            "expected either reflectance or eta and k (as pbrt-v4)", d,
+                            pbrt_clip(pe ? pe->decl : pk->decl, nm));
+    int has_refl = 0;
+    if (pe && pe->type == PT_FLOAT) { /* pbrt-v4 also takes a plain float eta */
+        float eta_f = 1.0f;
+        TRY(pbrt_get_float(ld, ps, d, n_eta, 1.0f, &eta_f, NULL));
+        if (!(eta_f >= 0.0f))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pe->loc, "%s: eta %g is negative; expected "
+                                "the real part of a conductor's index of refraction, >= 0", d, (double)eta_f);
+        eta = color_s(eta_f);
+    } else {
+        TRY(pbrt_get_spectrum(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, NULL));
+    }
+    TRY(pbrt_get_spectrum(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL));
+    TRY(pbrt_get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &refl, &has_refl));
+    if (has_refl) {
+        float r[3] = {refl.c[0], refl.c[1], refl.c[2]}, kk[3];
+        for (int i = 0; i < 3; i++) {
+            float c = clampf(r[i], 0.0f, 0.9999f);
+            kk[i] = 2.0f * sqrtf(c) / sqrtf(1.0f - c);
+        }
+        eta = color_s(1.0f);
+        k = color_rgb(kk[0], kk[1], kk[2]);
+    }
+    m->type = MATERIAL_CONDUCTOR;
+    m->albedo = color_s(1.0f);
+    m->ior = 1.0f;
+    m->eta = eta;
+    m->k = k;
+    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_texture);
+}
+
+/* Layer parameters of pbrt-v4's coated materials that caustic's closed-form coat does not
+ * have: a warning for each given with other than pbrt's default (a non-absorbing layer of
+ * any thickness, isotropic phase); the random walk's maxdepth and nsamples are read
+ * silently. */
+static CstStatus coat_layer_params(Loader *ld, Params *ps, const char *d)
+{
+    static const struct { const char *name; float def; } skip[] = {{"thickness", 0.01f}, {"g", 0.0f}};
+    for (size_t i = 0; i < sizeof skip / sizeof skip[0]; i++) {
+        float v = skip[i].def;
+        int found = 0;
+        TRY(pbrt_get_float_tex(ld, ps, d, skip[i].name, skip[i].def, &v, &found));
+        if (found && v != skip[i].def)
+            pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pbrt_find_param(ps, skip[i].name)->loc,
+                    "%s: \"%s\" %g is not supported (caustic's coat is an interface without a "
+                         "scattering layer); ignored", d, skip[i].name, (double)v);
+    }
+    Color albedo = color_s(0.0f);
+    int found = 0;
+    TRY(pbrt_get_spectrum(ld, ps, d, "albedo", SPEC_REFLECTANCE, 1, &albedo, &found));
+    if (found && color_max(albedo) > 0.0f)
+        pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pbrt_find_param(ps, "albedo")->loc,
+                     "%s: a scattering layer (\"albedo\" > 0) is not supported; ignored", d);
+    int n = 0;
+    TRY(pbrt_get_int(ld, ps, d, "maxdepth", 10, &n));
+    TRY(pbrt_get_int(ld, ps, d, "nsamples", 1, &n));
+    return CST_OK;
+}
+
+static CstStatus dielectric_eta(Loader *ld, Params *ps, const char *d, const char *name, float *eta)
+{
+    Param *p = pbrt_find_param(ps, name);
+    if (p && p->type == PT_SPECTRUM) {
+        Color c = color_s(1.5f);
+        TRY(pbrt_get_spectrum(ld, ps, d, name, SPEC_UNBOUNDED, 0, &c, NULL));
+        *eta = c.c[1];
+        if (p->num_strs == 0)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: spectral eta taken as %g (no dispersion)",
+                         d, (double)*eta);
+    } else {
+        TRY(pbrt_get_float_tex(ld, ps, d, name, *eta, eta, NULL));
+    }
+    if (!(*eta > 0.0f)) {
+        Loc l = p ? p->loc : ld->end;
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, l, "%s: eta %g is not positive; expected an index "
+                            "of refraction > 0 (glass is about 1.5)", d, (double)*eta);
+    }
+    return CST_OK;
+}
+
+/* pbrt material `type` with its parameters as our nearest Material (docs/pbrt-compat.md). */
+static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc, Material *m)
+{
+    char d[96], nm[72];
+    snprintf(d, sizeof d, "material \"%s\"", pbrt_clip(type, nm));
+    /* Fields a mapping does not set keep their zero defaults. one_sided stays false: pbrt-v4's
+     * reflective BxDFs (diffuse, conductor, coated) reflect on both sides of a surface, as
+     * caustic's two-sided default does. */
+    memset(m, 0, sizeof *m);
+    m->type = MATERIAL_DIFFUSE;
+    m->albedo = color_s(0.5f);
+    m->ior = 1.0f;
+    if (strcmp(type, "diffuse") == 0) {
+        TRY(get_albedo(ld, ps, d, "reflectance", m));
+    } else if (strcmp(type, "matte") == 0) { /* pbrt-v3 */
+        TRY(get_albedo(ld, ps, d, "Kd", m));
+    } else if (strcmp(type, "coateddiffuse") == 0) {
+        /* caustic's plastic: the same interface over a Lambertian base, with the light
+         * between them in closed form (bsdf.c) instead of pbrt's random walk. */
+        m->type = MATERIAL_PLASTIC;
+        m->ior = 1.5f;
+        TRY(get_albedo(ld, ps, d, "reflectance", m));
+        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, NULL)); /* no plastic roughness textures */
+        TRY(coat_layer_params(ld, ps, d));
+        if (m->ior < 1.0f) {
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: coat eta %g below 1 rendered as 1 (no coat)",
+                         d, (double)m->ior);
+            m->ior = 1.0f;
+        }
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by caustic's plastic (reflectance "
+                "%g %g %g, eta %g, roughness %g): the light between coat and base is modelled in "
+                     "closed form (Kelemen & Szirmay-Kalos 2001), not by pbrt's random walk", d,
+                     (double)m->albedo.c[0], (double)m->albedo.c[1], (double)m->albedo.c[2], (double)m->ior,
+                     (double)m->roughness);
+    } else if (strcmp(type, "diffusetransmission") == 0) {
+        TRY(get_albedo(ld, ps, d, "reflectance", m));
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its reflectance "
+                     "(transmission is dropped)", d);
+    } else if (strcmp(type, "plastic") == 0 || strcmp(type, "substrate") == 0 ||
+               strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 ||
+               strcmp(type, "disney") == 0) { /* pbrt-v3 */
+        m->albedo = color_s(strcmp(type, "plastic") == 0 ? 0.25f : 0.5f);
+        TRY(get_albedo(ld, ps, d, strcmp(type, "disney") == 0 ? "color" : "Kd", m));
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its diffuse "
+                     "reflectance (specular lobes dropped)", d);
+    } else if (strcmp(type, "conductor") == 0 || strcmp(type, "metal") == 0) {
+        TRY(conductor(ld, ps, d, "", loc, m));
+    } else if (strcmp(type, "coatedconductor") == 0) {
+        TRY(conductor(ld, ps, d, "conductor.", loc, m));
+        /* The coat's parameters are read so that only the layer's unsupported ones warn. */
+        float coat_rough = 0.0f, coat_eta = 1.5f;
+        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &coat_rough, NULL));
+        TRY(dielectric_eta(ld, ps, d, "interface.eta", &coat_eta));
+        TRY(coat_layer_params(ld, ps, d));
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as its conductor (the "
+                     "dielectric coating, eta %g, is dropped)", d, (double)coat_eta);
+    } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
+        m->type = MATERIAL_MIRROR;
+        m->albedo = color_s(0.9f);
+        TRY(get_albedo(ld, ps, d, "Kr", m));
+    } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0 ||
+               strcmp(type, "thindielectric") == 0) {
+        m->type = MATERIAL_GLASS;
+        m->albedo = color_s(1.0f);
+        m->ior = 1.5f;
+        TRY(dielectric_eta(ld, ps, d, strcmp(type, "glass") == 0 && pbrt_find_param(ps, "index") ? "index" : "eta",
+                           &m->ior));
+        if (strcmp(type, "thindielectric") == 0) {
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as a solid dielectric (glass) "
+                         "of the same eta: rays refract at its surface instead of passing straight through", d);
+        } else {
+            /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
+             * DielectricBxDF; below alpha 1e-3 both are smooth. */
+            TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
+            if (m->roughness_texture || material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA)
+                m->type = MATERIAL_DIELECTRIC;
+            else m->roughness = 0.0f;
+        }
+    } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 || strcmp(type, "none") == 0) {
+        m->type = MATERIAL_GLASS;
+        m->albedo = color_s(1.0f);
+        m->ior = 1.0f;
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (a medium boundary) approximated as glass of "
+                     "eta 1: paths pass straight through, shadow rays are blocked", d);
+    } else if (strcmp(type, "mix") == 0) {
+        Param *p;
+        TRY(pbrt_lookup(ld, ps, d, "materials", PT_MASK(PT_STRING), "string", &p));
+        if (!p || p->num_strs != 2)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc,
+                                "%s: expected \"string materials\" with two named materials", d);
+        int a = find_named_material(ld, p->strs[0]), b = find_named_material(ld, p->strs[1]);
+        if (a < 0 || b < 0)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc,
+                           "%s: material \"%s\" is not defined; expected names given to "
+                                "MakeNamedMaterial before", d, pbrt_clip(p->strs[a < 0 ? 0 : 1], nm));
+        float amount = 0.5f;
+        TRY(pbrt_get_float_tex(ld, ps, d, "amount", 0.5f, &amount, NULL));
+        amount = clampf(amount, 0.0f, 1.0f);
+        Material ma = ld->mats[a].m, mb = ld->mats[b].m;
+        if (ma.type == mb.type && (ma.type == MATERIAL_DIFFUSE || ma.type == MATERIAL_MIRROR) &&
+            ma.one_sided == mb.one_sided && !ma.albedo_texture && !mb.albedo_texture) {
+            /* Choosing one of two Lambertian (or two mirror) lobes with probability amount
+             * is the same lobe with the blended albedo: exact. (Conductors, plastics and
+             * dielectrics are not linear in a single albedo.) */
+            *m = ma;
+            m->albedo = color_add(color_scale(ma.albedo, 1.0f - amount), color_scale(mb.albedo, amount));
+        } else {
+            *m = amount < 0.5f ? ma : mb;
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of materials that do not blend into one "
+                    "(two untextured diffuse or two mirrors would) approximated by the one with the larger "
+                         "weight, \"%s\"", d, pbrt_clip(p->strs[amount < 0.5f ? 0 : 1], nm));
+        }
+    } else if (strcmp(type, "measured") == 0 || strcmp(type, "hair") == 0 ||
+               strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
+               strcmp(type, "fourier") == 0) {
+        pbrt_params_mark_all_used(ps);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported; diffuse reflectance 0.5 is used instead", d);
+    } else {
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc,
+                       "unknown material type \"%s\"; expected one of: diffuse, coateddiffuse, "
+                       "conductor, coatedconductor, dielectric, thindielectric, diffusetransmission, "
+                            "interface, mix, measured, hair, subsurface", pbrt_clip(type, nm));
+    }
+    return CST_OK;
+}
+
+CstStatus pbrt_material_scene_id(Loader *ld, int entry, int *out)
+{
+    MatEntry *e = &ld->mats[entry];
+    if (e->scene_id < 0) TRY(scene_add_material(ld->scene, &e->m, &e->scene_id, ld->err));
+    *out = e->scene_id;
+    return CST_OK;
+}
+
+/* Material and MakeNamedMaterial. */
+CstStatus pbrt_material_directive(Loader *ld, NamedCall *call)
+{
+    Params *ps = &call->ps;
+    const char *type = call->type, *d = call->d, *dname = call->dname;
+    Loc loc = call->loc, tl = call->tl;
+    char nm[72];
+    if (!ld->in_world) {
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s before WorldBegin; expected materials in the world block", dname);
+    }
+    Material m = {0};
+    const char *mt = type;
+    if (dname[0] == 'M' && dname[1] == 'a' && dname[2] == 'k') {
+        /* MakeNamedMaterial "name" "string type" "diffuse" ... */
+        if (find_named_material(ld, type) >= 0) {
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "MakeNamedMaterial: \"%s\" is already "
+                              "defined; expected each name once", pbrt_clip(type, nm));
+        }
+        Loc l2 = loc;
+        TRY(pbrt_get_string(ld, ps, d, "type", &mt, &l2));
+        if (!mt) {
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string type\"; expected the "
+                              "material type, as in \"string type\" \"diffuse\"", d);
+        }
+    }
+    TRY(make_material(ld, mt, ps, loc, &m));
+    int id = 0;
+    TRY(pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id));
+    if (dname[2] != 'k') ld->gs.material = id;
+    return CST_OK;
+}
+
+CstStatus pbrt_named_material_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)loc;
+    char *s = NULL, nm[72];
+    CstStatus st = CST_OK;
+    Loc nl;
+    TRY(pbrt_expect_string(ld, lx, dname, "a material name", &s, &nl));
+    int i = find_named_material(ld, s);
+    if (i < 0)
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, nl, "NamedMaterial: \"%s\" is not defined; expected "
+                          "a name given to MakeNamedMaterial before", pbrt_clip(s, nm));
+    else
+        ld->gs.material = i;
+    free(s);
+    return st;
+}

@@ -1,0 +1,634 @@
+/* Shapes: spheres, disks, triangle meshes and PLY files placed by the CTM with pbrt's
+ * orientation rules; ObjectBegin/End definitions and their instances. */
+#include "scene/pbrt/pbrt_shape.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene/mesh_import.h"
+#include "scene/pbrt/pbrt_material.h"
+#include "scene/pbrt/pbrt_params.h"
+#include "scene/pbrt/pbrt_transform.h"
+
+/* Segments of a tessellated disk and rings/segments of a tessellated sphere. */
+#define PBRT_DISK_SEGMENTS 128
+
+#define PBRT_SPHERE_SEGMENTS 64
+
+#define PBRT_SPHERE_RINGS 32
+
+void pbrt_geom_free(ShapeGeom *g)
+{
+    free(g->p);
+    free(g->n);
+    free(g->uv);
+    free(g->idx);
+    memset(g, 0, sizeof *g);
+}
+
+static CstStatus geom_alloc(Loader *ld, ShapeGeom *g, int nv, int nt, int normals, int uvs)
+{
+    memset(g, 0, sizeof *g);
+    g->p = malloc((size_t)(nv ? nv : 1) * sizeof *g->p);
+    g->idx = malloc((size_t)(nt ? nt : 1) * 3 * sizeof *g->idx);
+    if (normals) g->n = malloc((size_t)(nv ? nv : 1) * sizeof *g->n);
+    if (uvs) g->uv = malloc((size_t)(nv ? nv : 1) * sizeof *g->uv);
+    if (!g->p || !g->idx || (normals && !g->n) || (uvs && !g->uv)) {
+        pbrt_geom_free(g);
+        return pbrt_oom(ld);
+    }
+    g->nv = nv;
+    g->nt = nt;
+    return CST_OK;
+}
+
+/* A UV sphere, outward-facing, for spheres under transforms that are not similarities. */
+static CstStatus sphere_mesh(Loader *ld, float radius, ShapeGeom *g)
+{
+    const int S = PBRT_SPHERE_SEGMENTS, R = PBRT_SPHERE_RINGS;
+    int nv = (R - 1) * S + 2, nt = 2 * S * (R - 1);
+    TRY(geom_alloc(ld, g, nv, nt, 1, 0));
+    int v = 0, t = 0;
+    g->n[v] = v3(0.0f, 0.0f, -1.0f);
+    g->p[v++] = v3(0.0f, 0.0f, -radius);
+    for (int r = 1; r < R; r++) {
+        double th = PBRT_PI * (double)r / R;
+        for (int s = 0; s < S; s++) {
+            double ph = 2.0 * PBRT_PI * (double)s / S;
+            Vec3 n = v3((float)(sin(th) * cos(ph)), (float)(sin(th) * sin(ph)), (float)-cos(th));
+            g->n[v] = n;
+            g->p[v++] = v3_scale(n, radius);
+        }
+    }
+    g->n[v] = v3(0.0f, 0.0f, 1.0f);
+    g->p[v++] = v3(0.0f, 0.0f, radius);
+    for (int s = 0; s < S; s++) { /* bottom cap: counter-clockwise seen from outside */
+        int a = 1 + s, b = 1 + (s + 1) % S;
+        g->idx[3 * t] = 0; g->idx[3 * t + 1] = b; g->idx[3 * t + 2] = a; t++;
+    }
+    for (int r = 0; r < R - 2; r++)
+        for (int s = 0; s < S; s++) {
+            int a = 1 + r * S + s, b = 1 + r * S + (s + 1) % S;
+            int c = a + S, e = b + S;
+            g->idx[3 * t] = a; g->idx[3 * t + 1] = b; g->idx[3 * t + 2] = e; t++;
+            g->idx[3 * t] = a; g->idx[3 * t + 1] = e; g->idx[3 * t + 2] = c; t++;
+        }
+    int top = nv - 1, base = 1 + (R - 2) * S;
+    for (int s = 0; s < S; s++) {
+        int a = base + s, b = base + (s + 1) % S;
+        g->idx[3 * t] = a; g->idx[3 * t + 1] = b; g->idx[3 * t + 2] = top; t++;
+    }
+    g->nt = t;
+    return CST_OK;
+}
+
+/* An annulus (inner may be 0) or sector at z = height facing +z, as a polygon whose
+ * radii are scaled so that its area equals the true disk's: an emitting disk keeps its
+ * power. */
+static CstStatus disk_mesh(Loader *ld, float height, float radius, float inner, float phimax_deg,
+                           ShapeGeom *g)
+{
+    double phimax = (double)clampf(phimax_deg, 0.0f, 360.0f) * PBRT_PI / 180.0;
+    int segs = (int)ceil(PBRT_DISK_SEGMENTS * phimax / (2.0 * PBRT_PI));
+    if (segs < 1) segs = 1;
+    double step = phimax / segs;
+    double k = sqrt(step / sin(step)); /* polygon area (segs/2) r^2 sin(step) -> (phimax/2) r^2 */
+    int full = phimax >= 2.0 * PBRT_PI - 1e-9;
+    int ring = full ? segs : segs + 1;
+    int annulus = inner > 0.0f;
+    int nv = annulus ? 2 * ring : ring + 1, nt = annulus ? 2 * segs : segs;
+    TRY(geom_alloc(ld, g, nv, nt, 0, 0));
+    for (int i = 0; i < ring; i++) {
+        double ph = step * i;
+        g->p[i] = v3((float)(k * (double)radius * cos(ph)), (float)(k * (double)radius * sin(ph)), height);
+        if (annulus) g->p[ring + i] = v3((float)(k * (double)inner * cos(ph)), (float)(k * (double)inner * sin(ph)), height);
+    }
+    if (!annulus) g->p[ring] = v3(0.0f, 0.0f, height);
+    for (int i = 0; i < segs; i++) {
+        int a = i, b = (i + 1) % ring;
+        if (!annulus) {
+            g->idx[3 * i] = ring; g->idx[3 * i + 1] = a; g->idx[3 * i + 2] = b;
+        } else {
+            int *t = &g->idx[6 * i];
+            t[0] = ring + a; t[1] = a; t[2] = b;
+            t[3] = ring + a; t[4] = b; t[5] = ring + b;
+        }
+    }
+    return CST_OK;
+}
+
+/* Linear part of m is a rotation times a uniform scale (to 1e-5): spheres stay spheres. */
+static int is_similarity(const Transform *m, float *scale)
+{
+    Vec3 c[3];
+    for (int k = 0; k < 3; k++) c[k] = v3(m->m[0][k], m->m[1][k], m->m[2][k]);
+    float l0 = v3_length(c[0]), l1 = v3_length(c[1]), l2 = v3_length(c[2]);
+    if (!(l0 > 0.0f)) return 0;
+    float tol = 1e-5f * l0;
+    if (fabsf(l1 - l0) > tol || fabsf(l2 - l0) > tol) return 0;
+    if (fabsf(v3_dot(c[0], c[1])) > tol * l0 || fabsf(v3_dot(c[0], c[2])) > tol * l0 ||
+        fabsf(v3_dot(c[1], c[2])) > tol * l0)
+        return 0;
+    *scale = l0;
+    return 1;
+}
+
+int pbrt_coords_ok(Vec3 p) { return v3_is_finite(p) && (double)v3_max_abs(p) <= PBRT_MAX_LENGTH; }
+
+/* Places an object-space shape with xf into the scene with the given material and area
+ * light. Winding follows pbrt's orientation rule: the geometric normal (v1-v0) x (v2-v0)
+ * is flipped when ReverseOrientation differs from whether xf mirrors, or, for meshes
+ * with normals, made to face the (possibly reversed) shading normals. */
+static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int reverse,
+                            int material, const AreaLight *al, Loc loc, const char *d)
+{
+    int mat = 0;
+    float s = 1.0f;
+    TRY(pbrt_material_scene_id(ld, material, &mat));
+    if (g->is_sphere && is_similarity(&xf->m, &s)) {
+        Vec3 c = transform_point(&xf->m, v3s(0.0f));
+        float r = g->radius * s;
+        if (!pbrt_coords_ok(c) || !(r > 1e-18f) || !((double)r <= PBRT_MAX_LENGTH))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: sphere at (%g, %g, %g) radius %g is "
+                                "beyond the scene limits (coordinates within 1e18, radius above 1e-18)",
+                                d, (double)c.x, (double)c.y, (double)c.z, (double)r);
+        Emission em = {color_s(0.0f), 0, 0};
+        if (al && al->active) {
+            em.radiance = color_scale(al->L, al->scale);
+            em.two_sided = al->two_sided;
+            if (al->power > 0.0f) {
+                double k_e = (al->two_sided ? 2.0 : 1.0) * 4.0 * PBRT_PI * (double)r * (double)r * PBRT_PI;
+                em.radiance = color_scale(em.radiance, (float)((double)al->power / k_e));
+            }
+            if (reverse && !al->two_sided)
+                pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: ReverseOrientation on an emitting sphere "
+                             "is ignored: it emits outward", d);
+        }
+        if (ld->scene->num_spheres >= INT_MAX - 1)
+            return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: too many spheres", d);
+        CstStatus st = scene_add_sphere(ld->scene, c, r, mat, &em, ld->err);
+        return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+    }
+    ShapeGeom tess = {0};
+    if (g->is_sphere) {
+        TRY(sphere_mesh(ld, g->radius, &tess));
+        g = &tess;
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: sphere under a non-uniform transform "
+                     "tessellated into %d triangles", d, tess.nt);
+    }
+    CstStatus st = CST_OK;
+    Vec3 *p = malloc((size_t)(g->nv ? g->nv : 1) * sizeof *p);
+    Vec3 *n = g->n ? malloc((size_t)g->nv * sizeof *n) : NULL;
+    int *idx = malloc((size_t)(g->nt ? g->nt : 1) * 3 * sizeof *idx);
+    if (!p || !idx || (g->n && !n)) { st = pbrt_oom(ld); goto done; }
+    if (g->nt > PBRT_MAX_TRIANGLES - ld->scene->num_triangles) {
+        st = pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: the scene would exceed %d triangles", d,
+                          PBRT_MAX_TRIANGLES);
+        goto done;
+    }
+    int swap = (transform_det(&xf->m) < 0.0) != (reverse != 0);
+    Transform nm = transform_identity();
+    transform_normal_matrix(&xf->m, &nm);
+    for (int i = 0; i < g->nv; i++) {
+        p[i] = transform_is_identity(&xf->m) ? g->p[i] : transform_point(&xf->m, g->p[i]);
+        if (!pbrt_coords_ok(p[i])) {
+            st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: vertex %d is at (%g, %g, %g), beyond the "
+                              "scene limit; expected coordinates of magnitude at most %g", d, i,
+                              (double)p[i].x, (double)p[i].y, (double)p[i].z, PBRT_MAX_LENGTH);
+            goto done;
+        }
+        if (n) {
+            n[i] = transform_normal(&nm, g->n[i]);
+            if (reverse) n[i] = v3_neg(n[i]);
+        }
+    }
+    for (int t = 0; t < g->nt; t++) {
+        int a = g->idx[3 * t], b = g->idx[3 * t + 1], c = g->idx[3 * t + 2];
+        int sw = swap;
+        if (n) {
+            Vec3 ng = v3_cross(v3_sub(p[b], p[a]), v3_sub(p[c], p[a]));
+            Vec3 ns = v3_add(v3_add(n[a], n[b]), n[c]);
+            sw = v3_dot(ng, ns) < 0.0f;
+        }
+        idx[3 * t] = a;
+        idx[3 * t + 1] = sw ? c : b;
+        idx[3 * t + 2] = sw ? b : c;
+    }
+    SceneMesh sm = {0};
+    sm.positions = p;
+    sm.num_vertices = g->nv;
+    sm.normals = n;
+    sm.uvs = g->uv;
+    sm.indices = idx;
+    sm.num_triangles = g->nt;
+    sm.material = mat;
+    sm.skip_degenerate = 1;
+    Emission em = {color_s(0.0f), 0, 0};
+    if (al && al->active) {
+        em.radiance = color_scale(al->L, al->scale);
+        em.two_sided = al->two_sided;
+    }
+    sm.emission = &em;
+    int dropped = 0;
+    if (al && al->active && al->power > 0.0f) {
+        /* pbrt-v4 makes one light per triangle and normalises each to `power` by its own
+         * area: L = power / (pi A sides) times the spectrum. */
+        for (int t = 0; t < g->nt && !st; t++) {
+            float area = triangle_area(p[idx[3 * t]], p[idx[3 * t + 1]], p[idx[3 * t + 2]]);
+            Emission et = em;
+            if (area > 0.0f)
+                et.radiance = color_scale(em.radiance, (float)((double)al->power /
+                                       (PBRT_PI * (double)area * (al->two_sided ? 2.0 : 1.0))));
+            SceneMesh one = sm;
+            one.indices = &idx[3 * t];
+            one.num_triangles = 1;
+            one.emission = &et;
+            int dr = 0;
+            st = scene_add_mesh_ex(ld->scene, &one, &dr, ld->err);
+            dropped += dr;
+        }
+    } else {
+        st = scene_add_mesh_ex(ld->scene, &sm, &dropped, ld->err);
+    }
+    if (st) {
+        st = pbrt_fail_wrap(ld, st, loc, d);
+        goto done;
+    }
+    if (dropped)
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: %d of %d triangles are degenerate (zero area) "
+                     "and were dropped", d, dropped, g->nt);
+done:
+    free(p);
+    free(n);
+    free(idx);
+    pbrt_geom_free(&tess);
+    return st;
+}
+
+/* Fills g from "point3 P", "integer indices" (optional for a single triangle), "normal N",
+ * "point2 uv". */
+static CstStatus read_mesh_params(Loader *ld, Params *ps, const char *d, Loc loc, int per_face,
+                                  ShapeGeom *g)
+{
+    Param *pp, *pi, *pn, *puv;
+    char nm[72];
+    TRY(pbrt_lookup(ld, ps, d, "P", PT_MASK(PT_POINT3), "point3", &pp));
+    TRY(pbrt_lookup(ld, ps, d, "indices", PT_MASK(PT_INTEGER), "integer", &pi));
+    TRY(pbrt_lookup(ld, ps, d, "N", PT_MASK(PT_NORMAL), "normal", &pn));
+    TRY(pbrt_lookup(ld, ps, d, "uv", PT_MASK(PT_POINT2) | PT_MASK(PT_FLOAT), "point2", &puv));
+    if (!puv) TRY(pbrt_lookup(ld, ps, d, "st", PT_MASK(PT_POINT2) | PT_MASK(PT_FLOAT), "point2", &puv));
+    if (!pp)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"point3 P\"; expected the vertex positions", d);
+    int nv = pp->num_nums / 3;
+    if (!pi && nv != per_face)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"integer indices\"; expected "
+                            "indices unless there are exactly %d vertices", d, per_face);
+    int ni = pi ? pi->num_nums : per_face;
+    if (ni % per_face != 0)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pi->loc, "%s: %d indices; expected a multiple of %d",
+                            d, ni, per_face);
+    if (pn && pn->num_nums != pp->num_nums)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pn->loc, "%s: %d normals for %d vertices; expected "
+                            "one per vertex", d, pn->num_nums / 3, nv);
+    if (puv && puv->num_nums != 2 * nv)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, puv->loc, "%s: \"%s\" has %d values for %d vertices; "
+                            "expected 2 per vertex", d, pbrt_clip(puv->decl, nm), puv->num_nums, nv);
+    int nfaces = ni / per_face, nt = per_face == 4 ? 2 * nfaces : nfaces;
+    TRY(geom_alloc(ld, g, nv, nt, pn != NULL, puv != NULL));
+    for (int i = 0; i < nv; i++) {
+        g->p[i] = v3((float)pp->nums[3 * i], (float)pp->nums[3 * i + 1], (float)pp->nums[3 * i + 2]);
+        if (!pbrt_coords_ok(g->p[i]))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pp->loc, "%s: vertex %d is beyond the scene limit; "
+                                "expected coordinates of magnitude at most %g", d, i, PBRT_MAX_LENGTH);
+        if (pn) {
+            Vec3 v = v3((float)pn->nums[3 * i], (float)pn->nums[3 * i + 1], (float)pn->nums[3 * i + 2]);
+            float l = v3_length(v);
+            g->n[i] = l > 0.0f && isfinite(l) ? v3_scale(v, 1.0f / l) : v3s(0.0f);
+        }
+        if (puv) g->uv[i] = v2((float)puv->nums[2 * i], (float)puv->nums[2 * i + 1]);
+    }
+    for (int i = 0; i < ni; i++) {
+        double v = pi ? pi->nums[i] : (double)i;
+        if (v < 0 || v >= nv)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pi->loc, "%s: index %g (number %d) is out of "
+                                "range; expected 0 to %d (there are %d vertices)", d, v, i, nv - 1, nv);
+    }
+    for (int f = 0; f < nfaces; f++) {
+        const double *q = pi ? &pi->nums[per_face * f] : NULL;
+        int v[4];
+        for (int k = 0; k < per_face; k++) v[k] = q ? (int)q[k] : per_face * f + k;
+        if (per_face == 3) {
+            for (int k = 0; k < 3; k++) g->idx[3 * f + k] = v[k];
+        } else {
+            /* bilinear patch p00 p10 p01 p11: (p00, p10, p11), (p00, p11, p01), the same
+             * side as pbrt's dp/du x dp/dv */
+            int *t = &g->idx[6 * f];
+            t[0] = v[0]; t[1] = v[1]; t[2] = v[3];
+            t[3] = v[0]; t[4] = v[3]; t[5] = v[2];
+        }
+    }
+    return CST_OK;
+}
+
+static CstStatus plymesh(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGeom *g)
+{
+    const char *file = NULL;
+    Loc fl = loc;
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    if (!file || !file[0])
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the PLY file", d);
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    ImportedMesh im = {0};
+    CstStatus st = mesh_import(path, &im, ld->err);
+    free(path);
+    if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    st = geom_alloc(ld, g, im.num_vertices, im.num_triangles, im.normals != NULL, im.uvs != NULL);
+    if (!st) {
+        memcpy(g->p, im.positions, (size_t)im.num_vertices * sizeof *g->p);
+        for (int i = 0; i < 3 * im.num_triangles; i++) g->idx[i] = im.indices[i];
+        if (im.normals) memcpy(g->n, im.normals, (size_t)im.num_vertices * sizeof *g->n);
+        if (im.uvs) memcpy(g->uv, im.uvs, (size_t)im.num_vertices * sizeof *g->uv);
+    }
+    mesh_import_free(&im);
+    return st;
+}
+
+CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)dname;
+    char *type = NULL, nm[72], d[96];
+    Params ps = {0};
+    ShapeGeom g = {0};
+    Loc tl;
+    CstStatus st = pbrt_expect_string(ld, lx, "Shape", "the shape type, as in \"trianglemesh\"", &type, &tl);
+    if (!st) st = pbrt_parse_params(ld, lx, &ps);
+    if (st) goto done;
+    snprintf(d, sizeof d, "Shape \"%s\"", pbrt_clip(type, nm));
+    if (!ld->in_world) {
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "Shape before WorldBegin; expected shapes in the world block");
+        goto done;
+    }
+    int skip = 0;
+    if (strcmp(type, "trianglemesh") == 0) {
+        st = read_mesh_params(ld, &ps, d, loc, 3, &g);
+    } else if (strcmp(type, "bilinearmesh") == 0) {
+        st = read_mesh_params(ld, &ps, d, loc, 4, &g);
+        if (!st)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two "
+                         "triangles (exact for planar patches)", d);
+    } else if (strcmp(type, "loopsubdiv") == 0) {
+        int levels = 3;
+        st = pbrt_get_int(ld, &ps, d, "levels", 3, &levels);
+        if (!st) st = read_mesh_params(ld, &ps, d, loc, 3, &g);
+        if (!st)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the control mesh is rendered without "
+                         "subdivision", d);
+    } else if (strcmp(type, "plymesh") == 0) {
+        st = plymesh(ld, &ps, d, loc, &g);
+    } else if (strcmp(type, "sphere") == 0) {
+        float r = 1.0f, zmin = 0, zmax = 0, phimax = 360.0f;
+        int hz0 = 0, hz1 = 0, hp = 0;
+        st = pbrt_get_float(ld, &ps, d, "radius", 1.0f, &r, NULL);
+        if (!st) st = pbrt_get_float(ld, &ps, d, "zmin", -r, &zmin, &hz0);
+        if (!st) st = pbrt_get_float(ld, &ps, d, "zmax", r, &zmax, &hz1);
+        if (!st) st = pbrt_get_float(ld, &ps, d, "phimax", 360.0f, &phimax, &hp);
+        if (st) goto done;
+        if (!(r > 0.0f)) {
+            st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: radius %g; expected a radius > 0", d, (double)r);
+            goto done;
+        }
+        if ((hz0 && zmin > -r) || (hz1 && zmax < r) || (hp && phimax < 360.0f))
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: partial sphere (zmin, zmax, phimax) "
+                         "rendered as the full sphere", d);
+        g.is_sphere = 1;
+        g.radius = r;
+    } else if (strcmp(type, "disk") == 0) {
+        float h = 0.0f, r = 1.0f, ri = 0.0f, phimax = 360.0f;
+        st = pbrt_get_float(ld, &ps, d, "height", 0.0f, &h, NULL);
+        if (!st) st = pbrt_get_float(ld, &ps, d, "radius", 1.0f, &r, NULL);
+        if (!st) st = pbrt_get_float(ld, &ps, d, "innerradius", 0.0f, &ri, NULL);
+        if (!st) st = pbrt_get_float(ld, &ps, d, "phimax", 360.0f, &phimax, NULL);
+        if (st) goto done;
+        if (!(r > 0.0f) || !(ri >= 0.0f) || !(ri < r) || !(phimax > 0.0f) || !pbrt_coords_ok(v3(r, h, 0.0f))) {
+            st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: radius %g, innerradius %g, phimax %g; "
+                              "expected 0 <= innerradius < radius and phimax > 0", d, (double)r,
+                              (double)ri, (double)phimax);
+            goto done;
+        }
+        st = disk_mesh(ld, h, r, ri, phimax, &g);
+        if (!st)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s tessellated into %d triangles of the same "
+                         "total area", d, g.nt);
+    } else if (strcmp(type, "cylinder") == 0 || strcmp(type, "cone") == 0 ||
+               strcmp(type, "paraboloid") == 0 || strcmp(type, "hyperboloid") == 0 ||
+               strcmp(type, "curve") == 0 || strcmp(type, "nurbs") == 0 ||
+               strcmp(type, "heightfield") == 0) {
+        skip = 1;
+        pbrt_params_mark_all_used(&ps);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported; skipped", d);
+    } else {
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown shape \"%s\"; expected one of: "
+                     "trianglemesh, plymesh, bilinearmesh, loopsubdiv, sphere, disk (or the "
+                          "unsupported cylinder, cone, paraboloid, hyperboloid, curve)", pbrt_clip(type, nm));
+    }
+    if (st || skip) goto done;
+    pbrt_params_warn_unused(ld, &ps, d);
+    if (ld->cur_obj >= 0) {
+        Object *o = &ld->objs[ld->cur_obj];
+        if (ld->gs.area.active)
+            pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: area lights inside ObjectBegin are not "
+                         "supported (as in pbrt-v4); the shape does not emit", d);
+        if (!GROW(o->shapes, o->cap, o->n + 1)) { st = pbrt_oom(ld); goto done; }
+        ObjShape *os = &o->shapes[o->n++];
+        os->g = g;
+        os->xf = ld->gs.ctm;
+        os->reverse = ld->gs.reverse;
+        os->material = ld->gs.material;
+        os->loc = loc;
+        memset(&g, 0, sizeof g);
+    } else {
+        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, loc, d);
+    }
+done:
+    pbrt_geom_free(&g);
+    free(type);
+    pbrt_params_free(&ps);
+    return st;
+}
+
+/* The object's triangles, placed by their definition transforms with pbrt's orientation
+ * rule (as emit_shape does), as one instanced object of the scene. Degenerate triangles
+ * are dropped; an object without triangles gets no prototype. */
+static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
+{
+    int nv = 0, nt = 0;
+    for (int i = 0; i < obj->n; i++)
+        if (!obj->shapes[i].g.is_sphere) {
+            if (obj->shapes[i].g.nv > INT_MAX - nv || obj->shapes[i].g.nt > PBRT_MAX_TRIANGLES - nt)
+                return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, obj->loc, "%s: the object has too many triangles", d);
+            nv += obj->shapes[i].g.nv;
+            nt += obj->shapes[i].g.nt;
+        }
+    if (nt == 0) return CST_OK;
+    CstStatus st = CST_OK;
+    int any_n = 0; /* vertex normals (N) on some shape: shading normals, zero where none */
+    for (int i = 0; i < obj->n; i++) any_n |= !obj->shapes[i].g.is_sphere && obj->shapes[i].g.n != NULL;
+    Vec3 *p = malloc((size_t)nv * sizeof *p), *n = any_n ? calloc((size_t)nv, sizeof *n) : NULL;
+    int *idx = malloc((size_t)nt * 3 * sizeof *idx), *mat = malloc((size_t)nt * sizeof *mat);
+    int vbase = 0, t_out = 0, dropped = 0;
+    if (!p || !idx || !mat || (any_n && !n)) {
+        st = pbrt_oom(ld);
+        goto done;
+    }
+    for (int i = 0; i < obj->n && !st; i++) {
+        const ObjShape *os = &obj->shapes[i];
+        const ShapeGeom *g = &os->g;
+        if (g->is_sphere) continue;
+        int m = 0;
+        if ((st = pbrt_material_scene_id(ld, os->material, &m))) goto done;
+        int swap = (transform_det(&os->xf.m) < 0.0) != (os->reverse != 0);
+        Transform nm = transform_identity();
+        transform_normal_matrix(&os->xf.m, &nm);
+        for (int v = 0; v < g->nv; v++) {
+            p[vbase + v] = transform_point(&os->xf.m, g->p[v]);
+            if (g->n) n[vbase + v] = transform_normal(&nm, g->n[v]);
+            if (!pbrt_coords_ok(p[vbase + v])) {
+                st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, os->loc, "%s: vertex %d of the object is beyond "
+                                  "the scene limit", d, v);
+                goto done;
+            }
+        }
+        for (int t = 0; t < g->nt; t++) {
+            int a = g->idx[3 * t], b = g->idx[3 * t + 1], c = g->idx[3 * t + 2];
+            int sw = swap;
+            if (g->n) {
+                Vec3 na = transform_normal(&nm, g->n[a]), nb = transform_normal(&nm, g->n[b]),
+                     nc = transform_normal(&nm, g->n[c]);
+                Vec3 ns = v3_add(v3_add(na, nb), nc);
+                if (os->reverse) ns = v3_neg(ns);
+                Vec3 ng = v3_cross(v3_sub(p[vbase + b], p[vbase + a]), v3_sub(p[vbase + c], p[vbase + a]));
+                sw = v3_dot(ng, ns) < 0.0f;
+            }
+            if (!(triangle_area(p[vbase + a], p[vbase + b], p[vbase + c]) > 0.0f)) {
+                dropped++;
+                continue;
+            }
+            idx[3 * t_out] = vbase + a;
+            idx[3 * t_out + 1] = vbase + (sw ? c : b);
+            idx[3 * t_out + 2] = vbase + (sw ? b : c);
+            mat[t_out++] = m;
+        }
+        vbase += g->nv;
+    }
+    if (dropped)
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, obj->loc, "ObjectBegin \"%s\": %d degenerate triangles dropped",
+                     obj->name, dropped);
+    if (t_out > 0) {
+        st = scene_add_instance_proto(ld->scene, p, n, nv, idx, mat, t_out, &obj->proto, ld->err);
+        if (st) st = pbrt_fail_wrap(ld, st, obj->loc, d);
+    }
+done:
+    free(p);
+    free(n);
+    free(idx);
+    free(mat);
+    return st;
+}
+
+CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)dname;
+    char *name = NULL, nm[72];
+    Loc nl;
+    TRY(pbrt_expect_string(ld, lx, "ObjectInstance", "the object's name", &name, &nl));
+    CstStatus st = CST_OK;
+    int o = -1;
+    for (int i = 0; i < ld->num_objs; i++)
+        if (strcmp(ld->objs[i].name, name) == 0) o = i;
+    if (!ld->in_world)
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectInstance before WorldBegin; expected it in the world block");
+    else if (ld->cur_obj >= 0)
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectInstance inside ObjectBegin \"%s\"; "
+                          "expected instances outside object definitions", pbrt_clip(ld->objs[ld->cur_obj].name, nm));
+    else if (o < 0)
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, nl, "ObjectInstance: object \"%s\" is not defined; "
+                          "expected a name given to ObjectBegin before", pbrt_clip(name, nm));
+    if (st) {
+        free(name);
+        return st;
+    }
+    char d[96];
+    snprintf(d, sizeof d, "ObjectInstance \"%s\"", pbrt_clip(name, nm));
+    free(name);
+    Object *obj = &ld->objs[o];
+    if (obj->proto < 0) {
+        st = make_proto(ld, obj, d);
+        if (st) return st;
+    }
+    if (obj->proto >= 0) {
+        Xf xf = ld->gs.ctm;
+        Transform inv;
+        if (!transform_invert(&xf.m, &inv)) {
+            /* flat (Scale 0) or not finite when inverted: nothing a ray could hit */
+            pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: the instance transform is singular; skipped", d);
+        } else {
+            st = scene_add_instance(ld->scene, obj->proto, &xf.m, ld->err);
+            if (st) return pbrt_fail_wrap(ld, st, loc, d);
+        }
+    }
+    /* Spheres are not instanced (the prototypes hold triangles): they are placed as copies. */
+    for (int i = 0; i < obj->n && !st; i++) {
+        const ObjShape *os = &obj->shapes[i];
+        if (!os->g.is_sphere) continue;
+        if (ld->num_instances_expanded++ == 0)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: spheres in instanced objects are placed "
+                         "as copies (only triangles are instanced)", d);
+        Xf xf = pbrt_xf_compose(&ld->gs.ctm, &os->xf);
+        st = emit_shape(ld, &os->g, &xf, os->reverse, os->material, NULL, loc, d);
+    }
+    return st;
+}
+
+CstStatus pbrt_object_begin_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    char *s = NULL, nm[72];
+    CstStatus st = CST_OK;
+    Loc nl;
+    TRY(pbrt_expect_string(ld, lx, dname, "the object's name", &s, &nl));
+    if (!ld->in_world) st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectBegin before WorldBegin; expected it in the world block");
+    else if (ld->cur_obj >= 0)
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectBegin inside ObjectBegin \"%s\"; "
+                          "expected ObjectEnd first", pbrt_clip(ld->objs[ld->cur_obj].name, nm));
+    for (int i = 0; !st && i < ld->num_objs; i++)
+        if (strcmp(ld->objs[i].name, s) == 0)
+            st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, nl, "ObjectBegin: \"%s\" is already defined "
+                              "(line %d); expected each name once", pbrt_clip(s, nm), ld->objs[i].loc.line);
+    if (!st) st = pbrt_push_state(ld, loc, 0);
+    if (!st && !GROW(ld->objs, ld->cap_objs, ld->num_objs + 1)) st = pbrt_oom(ld);
+    if (st) {
+        free(s);
+        return st;
+    }
+    Object *o = &ld->objs[ld->num_objs];
+    memset(o, 0, sizeof *o);
+    o->name = s;
+    o->loc = loc;
+    o->proto = -1;
+    ld->cur_obj = ld->num_objs++;
+    return CST_OK;
+}
+
+CstStatus pbrt_object_end_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)lx;
+    if (ld->cur_obj < 0)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "ObjectEnd without ObjectBegin; expected it "
+                            "only to close an object definition");
+    ld->cur_obj = -1;
+    return pbrt_pop_state(ld, loc, 0, dname);
+}

@@ -1,0 +1,474 @@
+/* Texture directives (imagemap, checkerboard, scale, mix, ...) and texture references in
+ * parameters, mapped onto the scene's textures. */
+#include "scene/pbrt/pbrt_texture.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io/image_io.h"
+#include "scene/pbrt/pbrt_params.h"
+#include "scene/pbrt/pbrt_spectrum.h"
+
+static int find_texture(Loader *ld, const char *name, int is_float)
+{
+    for (int i = ld->num_texs - 1; i >= 0; i--)
+        if (ld->texs[i].is_float == is_float && strcmp(ld->texs[i].name, name) == 0)
+            return i;
+    return -1;
+}
+
+/* The texture a "texture" parameter names, as an index into ld->texs; a located error if
+ * there is none of that type (pbrt-v4 looks float and spectrum textures up apart, and
+ * stops at a missing one). */
+static CstStatus texture_find_ref(Loader *ld, const Param *p, const char *d, int is_float, int *out)
+{
+    char nm[72];
+    TRY(pbrt_one_value(ld, p, d));
+    int i = find_texture(ld, p->strs[0], is_float);
+    if (i >= 0) {
+        *out = i;
+        return CST_OK;
+    }
+    if (find_texture(ld, p->strs[0], !is_float) >= 0)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc,
+                            "%s: texture \"%s\" is a %s texture; expected a %s texture here", d,
+                            pbrt_clip(p->strs[0], nm), is_float ? "spectrum" : "float", is_float ? "float" : "spectrum");
+    return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc,
+                   "%s: %s texture \"%s\" is not defined; expected the name of a Texture "
+                        "declared earlier as \"%s\"", d, is_float ? "float" : "spectrum",
+                        pbrt_clip(p->strs[0], nm), is_float ? "float" : "spectrum");
+}
+
+static int texture_is_constant(const Loader *ld, int entry)
+{
+    return ld->scene->textures[ld->texs[entry].id].type == TEXTURE_CONSTANT;
+}
+
+/* A texture where caustic takes one value: its average, with a warning unless it is constant. */
+CstStatus pbrt_texture_ref(Loader *ld, const Param *p, const char *d, int is_float, Color *out)
+{
+    int i = 0;
+    char nm[72], nm2[72];
+    TRY(texture_find_ref(ld, p, d, is_float, &i));
+    *out = ld->texs[i].value;
+    if (!texture_is_constant(ld, i))
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: \"%s\" cannot be textured in caustic; "
+                     "texture \"%s\" is taken as its average (%g, %g, %g)", d, pbrt_clip(p->decl, nm),
+                     pbrt_clip(p->strs[0], nm2), (double)out->c[0], (double)out->c[1], (double)out->c[2]);
+    return CST_OK;
+}
+
+/* A float parameter that may also name a float texture. */
+CstStatus pbrt_get_float_tex(Loader *ld, Params *ps, const char *d, const char *name, float def,
+                             float *out, int *found)
+{
+    Param *p;
+    *out = def;
+    if (found) *found = 0;
+    TRY(pbrt_lookup(ld, ps, d, name, PT_MASK(PT_FLOAT) | PT_MASK(PT_TEXTURE), "float or texture", &p));
+    if (!p) return CST_OK;
+    if (p->type == PT_TEXTURE) {
+        Color c;
+        TRY(pbrt_texture_ref(ld, p, d, 1, &c));
+        *out = c.c[0];
+    } else {
+        TRY(pbrt_one_value(ld, p, d));
+        *out = (float)p->nums[0];
+    }
+    if (!isfinite(*out)) {
+        char nm[72];
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" does not fit a 32-bit float", d,
+                            pbrt_clip(p->decl, nm));
+    }
+    if (found) *found = 1;
+    return CST_OK;
+}
+
+/* Adds t to the scene (which takes its image), failures located at loc. */
+static CstStatus tex_add(Loader *ld, Texture *t, Loc loc, const char *d, int *id)
+{
+    CstStatus st = scene_add_texture(ld->scene, t, id, ld->err);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
+static CstStatus tex_const(Loader *ld, Color c, Loc loc, const char *d, int *id)
+{
+    Texture t;
+    texture_constant(&t, c);
+    return tex_add(ld, &t, loc, d, id);
+}
+
+static Color texop_apply(TexOp op, Color a, Color b, Color v)
+{
+    switch (op) {
+    case TEXOP_AFFINE:
+        return color_rgb(maxf(0.0f, a.c[0] * v.c[0] + b.c[0]), maxf(0.0f, a.c[1] * v.c[1] + b.c[1]), maxf(0.0f, a.c[2] * v.c[2] + b.c[2]));
+    case TEXOP_MIN1: return color_rgb(minf(v.c[0], 1.0f), minf(v.c[1], 1.0f), minf(v.c[2], 1.0f));
+    case TEXOP_POW:
+        return color_rgb(powf(maxf(v.c[0], 0.0f), a.c[0]), powf(maxf(v.c[1], 0.0f), a.c[0]), powf(maxf(v.c[2], 0.0f), a.c[0]));
+    case TEXOP_RED: return color_s(v.c[0]);
+    }
+    return v;
+}
+
+/* A new scene texture: texture `id` with op applied to its values, or id itself when op
+ * changes nothing. A checkerboard's textures are mapped too, each once however often it
+ * is shared (nested checkerboards may share children), without recursion: children have
+ * lower indices, so one downward pass marks what is reachable and one upward pass copies. */
+CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, const char *d, int *out)
+{
+    *out = id;
+    /* Spectrum and image values are >= 0 already (get_spectrum, texture_image), so the
+     * identity's max(0, v) could only change a negative float constant: left as it is. */
+    if (op == TEXOP_AFFINE && a.c[0] == 1.0f && a.c[1] == 1.0f && a.c[2] == 1.0f && color_is_black(b)) return CST_OK;
+    int n = id + 1, *memo = malloc((size_t)n * sizeof *memo);
+    if (!memo) return pbrt_oom(ld);
+    for (int i = 0; i < n; i++) memo[i] = -1;
+    memo[id] = 0; /* reachable */
+    for (int i = id; i >= 0; i--) {
+        const Texture *t = &ld->scene->textures[i];
+        if (memo[i] == 0 && t->type == TEXTURE_CHECKERBOARD) memo[t->checker.even] = memo[t->checker.odd] = 0;
+    }
+    CstStatus st = CST_OK;
+    for (int i = 0; i < n && !st; i++) {
+        if (memo[i] < 0) continue;
+        Texture src = ld->scene->textures[i], t; /* a copy: adding may move the array */
+        if (src.type == TEXTURE_CONSTANT) {
+            texture_constant(&t, texop_apply(op, a, b, src.value));
+        } else if (src.type == TEXTURE_CHECKERBOARD) {
+            texture_checkerboard(&t, ld->scene->textures, memo[src.checker.even], memo[src.checker.odd],
+                                 src.checker.scale);
+        } else {
+            size_t np = (size_t)src.image.width * (size_t)src.image.height;
+            float *px = malloc(np * 3 * sizeof *px);
+            if (!px) {
+                st = pbrt_oom(ld);
+                break;
+            }
+            for (size_t k = 0; k < np; k++) {
+                const float *q = &src.image.rgb[3 * k];
+                Color v = texop_apply(op, a, b, color_rgb(q[0], q[1], q[2]));
+                px[3 * k] = v.c[0];
+                px[3 * k + 1] = v.c[1];
+                px[3 * k + 2] = v.c[2];
+            }
+            if ((st = texture_image(&t, px, src.image.width, src.image.height, src.image.wrap, ld->err))) {
+                st = pbrt_fail_wrap(ld, st, loc, d);
+                break;
+            }
+        }
+        texture_set_uv_transform(&t, src.uv_scale, src.uv_offset);
+        st = tex_add(ld, &t, loc, d, &memo[i]);
+    }
+    if (!st) *out = memo[id];
+    free(memo);
+    return st;
+}
+
+/* The scene texture for a "texture" parameter of a material (its albedo or roughness):
+ * 0 when the file gives a value or names a constant texture (*val then holds it), else
+ * 1 + the scene texture's index, as Material stores it. */
+CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
+                         int *tex, Color *val, int *entry)
+{
+    Param *p = pbrt_find_param(ps, name);
+    *tex = 0;
+    if (!p || p->type != PT_TEXTURE) return CST_OK;
+    int i = 0;
+    p->used = 1;
+    TRY(texture_find_ref(ld, p, d, is_float, &i));
+    *val = ld->texs[i].value;
+    if (entry) *entry = i;
+    if (!texture_is_constant(ld, i)) *tex = 1 + ld->texs[i].id;
+    return CST_OK;
+}
+
+/* op applied in place to image texture t's texels (its average and maximum recomputed),
+ * keeping its uv transform. */
+static CstStatus image_apply(Loader *ld, Texture *t, TexOp op, Color a, Color b, Loc loc, const char *d)
+{
+    Vec2 sc = t->uv_scale, off = t->uv_offset;
+    float *px = t->image.rgb;
+    int w = t->image.width, h = t->image.height;
+    size_t np = (size_t)w * (size_t)h;
+    for (size_t k = 0; k < np; k++) {
+        Color v = texop_apply(op, a, b, color_rgb(px[3 * k], px[3 * k + 1], px[3 * k + 2]));
+        px[3 * k] = v.c[0];
+        px[3 * k + 1] = v.c[1];
+        px[3 * k + 2] = v.c[2];
+    }
+    CstStatus st = texture_image(t, px, w, h, t->image.wrap, ld->err); /* takes px */
+    if (st) return pbrt_fail_wrap(ld, st, loc, d);
+    texture_set_uv_transform(t, sc, off);
+    return CST_OK;
+}
+
+/* pbrt's UVMapping ("uscale", "vscale", "udelta", "vdelta"): (s, t) = (su u + du, sv v + dv). */
+static CstStatus tex_uv_mapping(Loader *ld, Params *ps, const char *d, Vec2 *scale, Vec2 *offset)
+{
+    const char *mapping = NULL;
+    Loc ml;
+    char nm[72];
+    float su = 1.0f, sv = 1.0f, du = 0.0f, dv = 0.0f;
+    TRY(pbrt_get_string(ld, ps, d, "mapping", &mapping, &ml));
+    if (mapping && strcmp(mapping, "uv") != 0)
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, ml, "%s: mapping \"%s\" is not supported; the surface's "
+                     "(u, v) are used (\"uv\")", d, pbrt_clip(mapping, nm));
+    TRY(pbrt_get_float(ld, ps, d, "uscale", 1.0f, &su, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "vscale", 1.0f, &sv, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "udelta", 0.0f, &du, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "vdelta", 0.0f, &dv, NULL));
+    *scale = v2(su, sv);
+    *offset = v2(du, dv);
+    return CST_OK;
+}
+
+/* A texture-valued parameter of a Texture: another non-constant texture (*id >= 0), or a
+ * value (*id = -1, *val: given, a constant texture's, or def). */
+static CstStatus tex_operand(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
+                             float def, int *id, Color *val)
+{
+    int tex = 0;
+    *id = -1;
+    *val = color_s(def);
+    TRY(pbrt_tex_param(ld, ps, d, name, is_float, &tex, val, NULL));
+    if (tex) {
+        *id = tex - 1;
+        return CST_OK;
+    }
+    Param *p = pbrt_find_param(ps, name);
+    if (p && p->type == PT_TEXTURE) return CST_OK;
+    if (is_float) {
+        float f = def;
+        TRY(pbrt_get_float_tex(ld, ps, d, name, def, &f, NULL));
+        *val = color_s(f);
+        return CST_OK;
+    }
+    return pbrt_get_spectrum(ld, ps, d, name, SPEC_UNBOUNDED, 1, val, NULL);
+}
+
+/* pbrt-v4's "imagemap" as an image texture (docs/pbrt-compat.md): the image file, its
+ * decoding, pbrt's per-value scale and invert, and the uv mapping. *id < 0 (and *v set)
+ * when the file's format cannot be read. */
+static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc, int is_float, int *id, Color *v)
+{
+    const char *file = NULL, *filter = NULL, *wrap = NULL, *enc = NULL;
+    Loc fl = loc, wl = loc, el = loc, il = loc;
+    float scale = 1.0f, aniso = 8.0f, gamma = 0.0f;
+    int invert = 0;
+    char nm[72];
+    Vec2 uvs, uvo;
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    TRY(pbrt_get_string(ld, ps, d, "filter", &filter, &il));
+    TRY(pbrt_get_string(ld, ps, d, "wrap", &wrap, &wl));
+    TRY(pbrt_get_string(ld, ps, d, "encoding", &enc, &el));
+    TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "maxanisotropy", 8.0f, &aniso, NULL)); /* for EWA only */
+    TRY(pbrt_get_bool(ld, ps, d, "invert", 0, &invert));
+    TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+    *id = -1;
+    if (!file)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the image file", d);
+    TextureWrap tw = TEXTURE_WRAP_REPEAT;
+    if (wrap && strcmp(wrap, "clamp") == 0) {
+        tw = TEXTURE_WRAP_CLAMP;
+    } else if (wrap && (strcmp(wrap, "black") == 0 || strcmp(wrap, "octahedralsphere") == 0)) {
+        tw = TEXTURE_WRAP_CLAMP;
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, wl, "%s: wrap \"%s\" approximated by \"clamp\"", d, wrap);
+    } else if (wrap && strcmp(wrap, "repeat") != 0) {
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, wl, "%s: wrap \"%s\" is not known; expected \"repeat\", "
+                            "\"clamp\", \"black\" or \"octahedralsphere\"", d, pbrt_clip(wrap, nm));
+    }
+    if (filter && strcmp(filter, "bilinear") != 0)
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, il, "%s: filter \"%s\" approximated by \"bilinear\" (caustic "
+                     "has no MIP maps)", d, pbrt_clip(filter, nm));
+    int linear = 0; /* pbrt-v4's default is sRGB for PNG; caustic takes 8- and 16-bit files as sRGB */
+    if (enc) {
+        if (strcmp(enc, "linear") == 0) {
+            linear = 1;
+        } else if (strncmp(enc, "gamma ", 6) == 0) {
+            char *e = NULL;
+            gamma = strtof(enc + 6, &e);
+            if (!(gamma > 0.0f) || !isfinite(gamma) || *e)
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, el, "%s: encoding \"%s\"; expected \"gamma\" and "
+                                    "a number > 0, as in \"gamma 2.2\"", d, pbrt_clip(enc, nm));
+            linear = 1;
+        } else if (strcmp(enc, "sRGB") != 0) {
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, el, "%s: encoding \"%s\" is not known; expected "
+                                "\"sRGB\", \"linear\" or \"gamma\" and a number", d, pbrt_clip(enc, nm));
+        }
+    }
+    ImageFileFormat format = image_format_from_path(file);
+    int readable = format != IMAGE_FILE_NONE, is_float_file = image_format_is_float(format);
+    if (!readable) {
+        *v = color_s(0.5f);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR or "
+                     "PFM; the constant 0.5 is used instead", d, pbrt_clip(file, nm));
+        Color a = color_s(invert ? -scale : scale), b = color_s(invert ? 1.0f : 0.0f);
+        *v = texop_apply(TEXOP_AFFINE, a, b, *v);
+        return CST_OK;
+    }
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    Texture t;
+    CstStatus st = texture_image_load(&t, path, linear, tw, ld->err);
+    free(path);
+    if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    texture_set_uv_transform(&t, uvs, uvo);
+    /* pbrt's order: decode, take the first channel for a float texture, scale, invert. */
+    if (gamma > 0.0f && !is_float_file) st = image_apply(ld, &t, TEXOP_POW, color_s(gamma), color_s(0.0f), el, d);
+    if (!st && is_float) st = image_apply(ld, &t, TEXOP_RED, color_s(0.0f), color_s(0.0f), loc, d);
+    if (!st && (scale != 1.0f || invert))
+        st = image_apply(ld, &t, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f), loc, d);
+    if (st) {
+        texture_free(&t);
+        return st;
+    }
+    return tex_add(ld, &t, loc, d, id);
+}
+
+/* pbrt-v4's "checkerboard": a 2D checkerboard of tex1 (where floor(s) + floor(t) is even)
+ * and tex2, on the uv mapping. */
+static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc, int is_float, int *id)
+{
+    int a = -1, b = -1;
+    Color va, vb;
+    Vec2 uvs, uvo;
+    TRY(tex_operand(ld, ps, d, "tex1", is_float, 1.0f, &a, &va));
+    TRY(tex_operand(ld, ps, d, "tex2", is_float, 0.0f, &b, &vb));
+    TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+    if (a < 0) TRY(tex_const(ld, va, loc, d, &a));
+    if (b < 0) TRY(tex_const(ld, vb, loc, d, &b));
+    Texture t;
+    texture_checkerboard(&t, ld->scene->textures, a, b, 1.0f);
+    texture_set_uv_transform(&t, uvs, uvo);
+    return tex_add(ld, &t, loc, d, id);
+}
+
+CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
+{
+    (void)dname;
+    char *name = NULL, *ttype = NULL, *cls = NULL, nm[72], nm2[72];
+    Params ps = {0};
+    Loc tl;
+    CstStatus st = pbrt_expect_string(ld, lx, "Texture", "the texture's name", &name, NULL);
+    if (!st) st = pbrt_expect_string(ld, lx, "Texture", "its type, \"spectrum\" or \"float\"", &ttype, &tl);
+    if (!st) st = pbrt_expect_string(ld, lx, "Texture", "its class, as in \"imagemap\"", &cls, NULL);
+    if (!st) st = pbrt_parse_params(ld, lx, &ps);
+    if (st) goto done;
+    if (!ld->in_world) {
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "Texture before WorldBegin; expected textures "
+                          "in the world block");
+        goto done;
+    }
+    int is_float = strcmp(ttype, "float") == 0;
+    if (!is_float && strcmp(ttype, "spectrum") != 0 && strcmp(ttype, "color") != 0) {
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "Texture \"%s\": type \"%s\"; expected \"spectrum\" "
+                          "or \"float\"", pbrt_clip(name, nm), pbrt_clip(ttype, nm2));
+        goto done;
+    }
+    char d[160];
+    snprintf(d, sizeof d, "Texture \"%s\" \"%s\"", pbrt_clip(name, nm), pbrt_clip(cls, nm2));
+    Color v = color_s(1.0f); /* the value of a constant (id < 0) */
+    int id = -1;         /* the scene texture, when not a constant */
+    SpecKind sk = SPEC_UNBOUNDED;
+/* A texture-valued parameter of this texture taken as one value (its average). */
+#define TEXPARAM(pname, def, outv)                                                        \
+    do {                                                                                  \
+        (outv) = color_s(def);                                                              \
+        if (is_float) {                                                                   \
+            float f_ = (def);                                                             \
+            st = pbrt_get_float_tex(ld, &ps, d, (pname), (def), &f_, NULL);                    \
+            (outv) = color_s(f_);                                                           \
+        } else {                                                                          \
+            st = pbrt_get_spectrum(ld, &ps, d, (pname), sk, 1, &(outv), NULL);                 \
+        }                                                                                 \
+        if (st) goto done;                                                                \
+    } while (0)
+    if (strcmp(cls, "constant") == 0) {
+        TEXPARAM("value", 1.0f, v);
+    } else if (strcmp(cls, "scale") == 0) {
+        /* tex times scale (a float texture): a constant, or a textured operand with the
+         * other folded into its values. */
+        int ta = -1, tb = -1;
+        Color a, b;
+        if ((st = tex_operand(ld, &ps, d, "tex", is_float, 1.0f, &ta, &a))) goto done;
+        if ((st = tex_operand(ld, &ps, d, "scale", 1, 1.0f, &tb, &b))) goto done;
+        if (ta < 0 && tb < 0) {
+            v = color_mul(a, b);
+        } else if (ta >= 0 && tb >= 0) {
+            b = ld->scene->textures[tb].average;
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the product of two textures is approximated "
+                         "by \"tex\" times the average of \"scale\", %g", d, (double)b.c[0]);
+            st = pbrt_tex_map(ld, ta, TEXOP_AFFINE, b, color_s(0.0f), loc, d, &id);
+        } else {
+            st = pbrt_tex_map(ld, ta >= 0 ? ta : tb, TEXOP_AFFINE, ta >= 0 ? b : a, color_s(0.0f), loc, d, &id);
+        }
+        if (st) goto done;
+    } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
+        Color a, b;
+        float amount = 0.5f;
+        TEXPARAM("tex1", 0.0f, a);
+        TEXPARAM("tex2", 1.0f, b);
+        if (cls[0] == 'm') {
+            st = pbrt_get_float_tex(ld, &ps, d, "amount", 0.5f, &amount, NULL);
+            if (st) goto done;
+        }
+        v = color_add(color_scale(a, 1.0f - amount), color_scale(b, amount));
+        if (cls[0] == 'd')
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the average of its two textures", d);
+    } else if (strcmp(cls, "checkerboard") == 0) {
+        int dim = 2;
+        if ((st = pbrt_get_int(ld, &ps, d, "dimension", 2, &dim))) goto done;
+        if (dim == 3) {
+            Color a, b;
+            TEXPARAM("tex1", 1.0f, a);
+            TEXPARAM("tex2", 0.0f, b);
+            v = color_scale(color_add(a, b), 0.5f);
+            pbrt_params_mark_all_used(&ps); /* the 3D mapping's parameters */
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: a 3D (solid) checkerboard approximated by its "
+                         "average (%g, %g, %g)", d, (double)v.c[0], (double)v.c[1], (double)v.c[2]);
+        } else if (dim == 2) {
+            if ((st = texture_checker(ld, &ps, d, loc, is_float, &id))) goto done;
+        } else {
+            st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pbrt_find_param(&ps, "dimension")->loc, "%s: dimension %d; "
+                              "expected 2 or 3", d, dim);
+            goto done;
+        }
+    } else if (strcmp(cls, "bilerp") == 0) {
+        Color c[4];
+        static const char *const names[4] = {"v00", "v01", "v10", "v11"};
+        static const float defs[4] = {0.0f, 1.0f, 0.0f, 1.0f};
+        for (int i = 0; i < 4; i++) TEXPARAM(names[i], defs[i], c[i]);
+        v = color_scale(color_add(color_add(c[0], c[1]), color_add(c[2], c[3])), 0.25f);
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by its average", d);
+    } else if (strcmp(cls, "imagemap") == 0) {
+        if ((st = texture_imagemap(ld, &ps, d, loc, is_float, &id, &v))) goto done;
+    } else {
+        v = color_s(0.5f);
+        pbrt_params_mark_all_used(&ps);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: texture class not supported; the constant 0.5 "
+                     "is used instead", d);
+    }
+#undef TEXPARAM
+    pbrt_params_warn_unused(ld, &ps, d);
+    if (id < 0 && (st = tex_const(ld, v, loc, d, &id))) goto done;
+    if (!GROW(ld->texs, ld->cap_texs, ld->num_texs + 1)) { st = pbrt_oom(ld); goto done; }
+    ld->texs[ld->num_texs].name = name;
+    ld->texs[ld->num_texs].is_float = is_float;
+    ld->texs[ld->num_texs].id = id;
+    ld->texs[ld->num_texs].value = ld->scene->textures[id].average;
+    ld->texs[ld->num_texs].clamped = ld->texs[ld->num_texs].rough[0] = ld->texs[ld->num_texs].rough[1] = -1;
+    ld->num_texs++;
+    name = NULL;
+done:
+    free(name);
+    free(ttype);
+    free(cls);
+    pbrt_params_free(&ps);
+    return st;
+}
