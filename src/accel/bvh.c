@@ -588,7 +588,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     }
     for (int i = 0; i < num_spheres; i++) {
         Vec3 c = spheres[i].center;
-        float r = spheres[i].radius;
+        float r = fabsf(spheres[i].radius); /* sphere_intersect squares the radius: its sign is moot */
         bp[num_tris + i] = (BuildPrim){{c.x - r, c.y - r, c.z - r, 0.0f}, {c.x + r, c.y + r, c.z + r, 0.0f}};
     }
     for (int i = 0; i < n; i++) idx[i] = (uint32_t)i;
@@ -618,8 +618,9 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
 
     BBox root = nodes[0].box;
     Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, 0.0f, choice, bvh, NODE_UNITS};
-    /* Not smaller: at 2^-30 of the extent test_bvh's unit icosphere (coordinates around 0,
-     * where the relative widening vanishes) lost closest hits to the slab test's rounding.
+    /* Not smaller: at 2^-30 of the extent the conformance test's unit icosphere (coordinates
+     * around 0, where the relative widening vanishes) lost closest hits to the slab test's
+     * rounding.
      * Scene.offset_near (scene_commit) is four times this, so that rays leaving a surface
      * in a coordinate plane start outside its box: change the two together. */
     e.margin = 1e-7f * maxf(v3_max_abs(root.min), v3_max_abs(root.max)) + 1e-30f;

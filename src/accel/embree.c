@@ -50,6 +50,11 @@ struct EmbreeAccel {
     const Vec3 *positions; /* borrowed too, for the watertight triangle callbacks */
     const int32_t *tri_indices;
     uint32_t num_tris;     /* sphere j has scene primitive id num_tris + j */
+    /* Added to the user geometries' boxes, as the BVH widens its node boxes (bvh.c,
+     * widen): a ray lying exactly in a box's face plane with a zero direction component
+     * (an axis ray along a mesh's edge at coordinate 0, where two ulps are a denormal)
+     * would otherwise miss the box and a hit every other back end finds. */
+    float margin;
     /* Net bytes Embree allocated on this device (allocations minus frees) since the memory
      * monitor was installed. Embree builds with TBB threads: the callback runs
      * concurrently, hence the atomic. */
@@ -142,13 +147,14 @@ static void embree_sphere_bounds(const struct RTCBoundsFunctionArguments *args)
 {
     const EmbreeAccel *a = args->geometryUserPtr;
     const Sphere *s = &a->spheres[args->primID];
+    const float r = fabsf(s->radius); /* sphere_intersect squares the radius: its sign is moot */
     struct RTCBounds *b = args->bounds_o;
-    b->lower_x = nextafterf(s->center.x - s->radius, -INFINITY);
-    b->lower_y = nextafterf(s->center.y - s->radius, -INFINITY);
-    b->lower_z = nextafterf(s->center.z - s->radius, -INFINITY);
-    b->upper_x = nextafterf(s->center.x + s->radius, INFINITY);
-    b->upper_y = nextafterf(s->center.y + s->radius, INFINITY);
-    b->upper_z = nextafterf(s->center.z + s->radius, INFINITY);
+    b->lower_x = nextafterf(s->center.x - r, -INFINITY) - a->margin;
+    b->lower_y = nextafterf(s->center.y - r, -INFINITY) - a->margin;
+    b->lower_z = nextafterf(s->center.z - r, -INFINITY) - a->margin;
+    b->upper_x = nextafterf(s->center.x + r, INFINITY) + a->margin;
+    b->upper_y = nextafterf(s->center.y + r, INFINITY) + a->margin;
+    b->upper_z = nextafterf(s->center.z + r, INFINITY) + a->margin;
 }
 
 /* Closest hit: accept a root in (tnear, tfar) — sphere_intersect's open interval, the same
@@ -203,12 +209,12 @@ static void embree_triangle_bounds(const struct RTCBoundsFunctionArguments *args
     const int32_t *t = &a->tri_indices[3 * (size_t)args->primID];
     BBox b = bbox_add(bbox_add(bbox_add(bbox_empty(), a->positions[t[0]]), a->positions[t[1]]), a->positions[t[2]]);
     struct RTCBounds *o = args->bounds_o;
-    o->lower_x = nextafterf(nextafterf(b.min.x, -INFINITY), -INFINITY);
-    o->lower_y = nextafterf(nextafterf(b.min.y, -INFINITY), -INFINITY);
-    o->lower_z = nextafterf(nextafterf(b.min.z, -INFINITY), -INFINITY);
-    o->upper_x = nextafterf(nextafterf(b.max.x, INFINITY), INFINITY);
-    o->upper_y = nextafterf(nextafterf(b.max.y, INFINITY), INFINITY);
-    o->upper_z = nextafterf(nextafterf(b.max.z, INFINITY), INFINITY);
+    o->lower_x = nextafterf(nextafterf(b.min.x, -INFINITY), -INFINITY) - a->margin;
+    o->lower_y = nextafterf(nextafterf(b.min.y, -INFINITY), -INFINITY) - a->margin;
+    o->lower_z = nextafterf(nextafterf(b.min.z, -INFINITY), -INFINITY) - a->margin;
+    o->upper_x = nextafterf(nextafterf(b.max.x, INFINITY), INFINITY) + a->margin;
+    o->upper_y = nextafterf(nextafterf(b.max.y, INFINITY), INFINITY) + a->margin;
+    o->upper_z = nextafterf(nextafterf(b.max.z, INFINITY), INFINITY) + a->margin;
 }
 
 static inline bool embree_triangle_test(const EmbreeAccel *a, unsigned prim, const Ray *r, float *t, float *u,
@@ -333,6 +339,22 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode 
     a->positions = geom->positions;
     a->tri_indices = geom->tri_indices;
     a->num_tris = (uint32_t)geom->num_tris;
+    /* The BVH's margin: a hair (1e-7) of the largest finite coordinate. */
+    float extent = 0.0f;
+    for (int i = 0; i < 3 * geom->num_tris; i++) {
+        Vec3 p = geom->positions[geom->tri_indices[i]];
+        const float c[3] = {fabsf(p.x), fabsf(p.y), fabsf(p.z)};
+        for (int k = 0; k < 3; k++)
+            if (isfinite(c[k]) && c[k] > extent) extent = c[k];
+    }
+    for (int i = 0; i < geom->num_spheres; i++) {
+        Vec3 p = geom->spheres[i].center;
+        const float c[3] = {fabsf(p.x), fabsf(p.y), fabsf(p.z)}, r = fabsf(geom->spheres[i].radius);
+        for (int k = 0; k < 3; k++)
+            if (isfinite(c[k] + r) && c[k] + r > extent) extent = c[k] + r;
+    }
+    /* Capped: boxes grown past Embree's range (FLT_LARGE, 1.8e18) lose hits near them. */
+    a->margin = 1e-7f * fminf(extent, 1e18f) + 1e-30f;
     CstStatus st;
 
     /* Default configuration: all hardware threads build, best ISA the CPU supports. */

@@ -312,7 +312,7 @@ static void test_triangle_edges_and_vertices(void **state)
     (void)state;
     /* With exactly representable geometry the barycentrics come out exact and the
      * closed intervals u, v >= 0, u + v <= 1 make every edge and vertex a hit. With
-     * rounding this is NOT guaranteed (Moller-Trumbore is not watertight); test_bvh's
+     * rounding this is NOT guaranteed (Moller-Trumbore is not watertight); test_accel_conformance's
      * closed-mesh test covers shared edges under rounding. */
     const struct { float x, y; float u, v; const char *what; } pts[] = {
         {0.0f, 0.0f, 0.0f, 0.0f, "vertex v0"},
