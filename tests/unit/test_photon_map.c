@@ -83,10 +83,11 @@ static PhotonSet make_set(SetKind kind, size_t n, uint64_t seed)
             p = v3(x, y, 2.0f);
             break;
         }
-        default: /* integer points of [0, 4]^3: duplicates and exactly equal distances */
+        default: { /* integer points of [0, 4]^3: duplicates and exactly equal distances */
             uint32_t pz = pcg32_next(&rng) % 5u, py = pcg32_next(&rng) % 5u, px = pcg32_next(&rng) % 5u;
             p = v3((float)px, (float)py, (float)pz);
             break;
+        }
         }
         Vec3 wi = rnd_dir(&rng);
         s.ph[i].pos = p;
