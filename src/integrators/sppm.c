@@ -26,8 +26,6 @@
 #include "integrators/sppm.h"
 
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -347,6 +345,11 @@ enum { SPPM_PHOTON_CHUNK = 1024 };
 /* The three parallel phases of an iteration. */
 typedef enum SppmPhase { SPPM_PHASE_CAMERA, SPPM_PHASE_PHOTONS, SPPM_PHASE_DEPOSIT } SppmPhase;
 
+typedef struct SppmWorker {
+    uint64_t rays, nonfinite; /* integer totals: summed in any order */
+    char pad[64];             /* bumped per ray: no cache line shared with the next worker's */
+} SppmWorker;
+
 /* What every worker of a phase reads; `next` hands out its units of work. */
 typedef struct SppmJob {
     const Scene *s;
@@ -361,15 +364,9 @@ typedef struct SppmJob {
     int ranges;           /* pixel ranges of the deposit phase */
     int iter;
     SppmPhase phase;
-    atomic_int next;
+    SppmWorker *workers;  /* one per pool worker */
 } SppmJob;
 
-typedef struct SppmWorker {
-    SppmJob *job;
-    pthread_t thread;
-    uint64_t rays, nonfinite; /* integer totals: summed in any order */
-    char pad[64];             /* bumped per ray: no cache line shared with the next worker's */
-} SppmWorker;
 
 /* Pixel range r of the deposit phase is [range_lo(r), range_lo(r + 1)). */
 static inline uint32_t range_lo(const SppmJob *job, int r)
@@ -433,42 +430,33 @@ static void deposit_range(SppmJob *job, SppmWorker *w, int r)
     for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], &w->nonfinite);
 }
 
-static void *sppm_worker_main(void *arg)
+/* Unit u of the current phase (a row, a photon chunk, a pixel range) on pool worker
+ * `worker`. */
+static void sppm_item(void *ctx, int u, int worker)
 {
-    SppmWorker *w = arg;
-    SppmJob *job = w->job;
-    const int units = job->phase == SPPM_PHASE_CAMERA ? job->cam->height
-                    : job->phase == SPPM_PHASE_PHOTONS ? job->chunks : job->ranges;
-    for (;;) {
-        int u = atomic_fetch_add(&job->next, 1);
-        if (u >= units) break;
-        if (job->phase == SPPM_PHASE_CAMERA) {
-            camera_row(job->s, job->cam, job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
-        } else if (job->phase == SPPM_PHASE_PHOTONS) {
-            SppmHitList *l = &job->hits[u];
-            l->n = 0;
-            int first = u * SPPM_PHOTON_CHUNK;
-            int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
-            for (int i = first; i < last; i++) trace_photon(job->s, job->sp, l, (uint64_t)i, job->iter, &w->rays);
-            chunk_group_by_range(job, l);
-        } else {
-            deposit_range(job, w, u);
-        }
+    SppmJob *job = ctx;
+    SppmWorker *w = &job->workers[worker];
+    if (job->phase == SPPM_PHASE_CAMERA) {
+        camera_row(job->s, job->cam, job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
+    } else if (job->phase == SPPM_PHASE_PHOTONS) {
+        SppmHitList *l = &job->hits[u];
+        l->n = 0;
+        int first = u * SPPM_PHOTON_CHUNK;
+        int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
+        for (int i = first; i < last; i++) trace_photon(job->s, job->sp, l, (uint64_t)i, job->iter, &w->rays);
+        chunk_group_by_range(job, l);
+    } else {
+        deposit_range(job, w, u);
     }
-    return NULL;
 }
 
-/* Runs one phase on workers[0] (the calling thread) and threads - 1 helpers. A helper that
- * cannot be started leaves its share to the others: the result is the same. */
-static void run_phase(SppmJob *job, SppmWorker *workers, int threads, SppmPhase phase)
+/* Runs one phase over its units on the pool. */
+static void run_phase(SppmJob *job, SppmPhase phase)
 {
     job->phase = phase;
-    atomic_store(&job->next, 0);
-    int started = 1;
-    for (; started < threads; started++)
-        if (pthread_create(&workers[started].thread, NULL, sppm_worker_main, &workers[started]) != 0) break;
-    sppm_worker_main(&workers[0]);
-    for (int i = 1; i < started; i++) pthread_join(workers[i].thread, NULL);
+    const int units = phase == SPPM_PHASE_CAMERA ? job->cam->height
+                    : phase == SPPM_PHASE_PHOTONS ? job->chunks : job->ranges;
+    threadpool_for(job->sp->pool, units, sppm_item, job);
 }
 
 /* The automatic initial radius: photon.c's rule (the median distance to the 50th nearest
@@ -497,14 +485,14 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
         return cst_fail(err, CST_ERR_INVALID_ARG, "image of %zu pixels: too many for SPPM (at most %u)", count,
                         UINT32_MAX / 8u);
     const int photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
-    const int threads = sp->threads > 0 ? sp->threads : 1;
+    const int threads = threadpool_size(sp->pool);
     float r0;
     CstStatus st = initial_radius(s, cam, sp, photons, &r0, rays, err);
     if (st != CST_OK) return st;
     SppmGrid g = {0};
     g.buckets = 1;
     while (g.buckets < count && g.buckets < (1u << 30)) g.buckets <<= 1;
-    SppmJob job = {s, cam, sp, {0}, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, 0};
+    SppmJob job = {s, cam, sp, {0}, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, NULL};
     filter_init(&job.filter, sp->filter);
     job.chunks = (int)(((int64_t)photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
     /* Several pixel ranges per thread, so a range crowded with photons does not hold the
@@ -530,17 +518,17 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
         }
     }
     job.px = px;
-    for (int i = 0; i < threads; i++) workers[i].job = &job;
+    job.workers = workers;
     for (size_t i = 0; i < count; i++) px[i].r = r0;
     double t0 = clock_seconds();
     int iter = 0;
     while (sp->iterations <= 0 || iter < sp->iterations) {
         job.iter = iter;
-        run_phase(&job, workers, threads, SPPM_PHASE_CAMERA);
+        run_phase(&job, SPPM_PHASE_CAMERA);
         /* Serial, and cheap next to the passes: a counting sort over the pixels. */
         sppm_grid_build(&g, px, count);
         if (s->emitter_sampler.lights > 0) {
-            run_phase(&job, workers, threads, SPPM_PHASE_PHOTONS);
+            run_phase(&job, SPPM_PHASE_PHOTONS);
             for (int c = 0; c < job.chunks; c++)
                 if (job.hits[c].oom) {
                     st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon hits");
@@ -552,13 +540,16 @@ CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, F
                 memset(job.hits[c].range_start, 0, ((size_t)job.ranges + 1u) * sizeof *job.hits[c].range_start);
             }
         }
-        run_phase(&job, workers, threads, SPPM_PHASE_DEPOSIT);
+        run_phase(&job, SPPM_PHASE_DEPOSIT);
         iter++;
         double elapsed = clock_seconds() - t0;
         if (sp->progress) {
             double f = sp->iterations > 0 ? (double)iter / sp->iterations : 0.0;
             if (sp->time_limit > 0.0 && elapsed / sp->time_limit > f) f = elapsed / sp->time_limit;
-            sp->progress(sp->progress_user, f > 1.0 ? 1.0 : f, elapsed);
+            if (sp->progress(sp->progress_user, f > 1.0 ? 1.0 : f, elapsed) != 0) {
+                st = CST_ERR_CANCELLED; /* at an iteration's end: the film is left empty */
+                goto done;
+            }
         }
         if (sp->time_limit > 0.0 && elapsed >= sp->time_limit) break;
     }

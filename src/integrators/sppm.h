@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "camera/camera.h"
+#include "core/threadpool.h"
 #include "film/film.h"
 #include "scene/scene.h"
 
@@ -21,9 +22,9 @@ typedef struct SppmParams {
     int rr_depth;        /* Russian roulette from this photon bounce on */
     CstFilter filter;    /* how camera samples are placed in their pixel (render.c's rule) */
     uint64_t seed;
-    CstProgressFn progress; /* may be NULL; called after every iteration */
+    CstProgressFn progress; /* may be NULL; called after every iteration, nonzero: cancel */
     void *progress_user;
-    int threads;         /* workers, the calling thread included; <= 0 = 1 */
+    ThreadPool *pool;    /* runs the iterations' phases; the calling thread waits */
 } SppmParams;
 
 typedef struct SppmResult {
@@ -33,11 +34,12 @@ typedef struct SppmResult {
     uint64_t nonfinite;  /* NaN/Inf contributions dropped */
 } SppmResult;
 
-/* Renders into `film` (empty, width x height of cam) with sp->threads threads; the image is
+/* Renders into `film` (empty, width x height of cam) on sp->pool; the image is
  * a function of the params (but the thread count) and the scene only, bit for bit. The film receives the final estimate of every
  * pixel as one sample (film->spp = 1, so its per-pixel variance is unavailable, reported
  * as 0): SPPM's iterations are not independent samples of the pixel (each one's radius
- * depends on all before it). Fails with CST_ERR_OOM, or CST_ERR_INVALID_ARG for more than 2^29 pixels. */
+ * depends on all before it). Fails with CST_ERR_OOM, CST_ERR_CANCELLED (sp->progress asked to stop),
+ * or CST_ERR_INVALID_ARG for more than 2^29 pixels. */
 CstStatus sppm_render(const Scene *scene, const Camera *cam, const SppmParams *sp, Film *film,
                       SppmResult *res, uint64_t *rays, CstError *err);
 

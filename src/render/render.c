@@ -11,8 +11,6 @@
  * threads. */
 #include "render/render.h"
 
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -23,6 +21,7 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/rng.h"
+#include "core/threadpool.h"
 #include "film/film.h"
 #include "film/filter.h"
 #include "integrators/light.h"
@@ -222,12 +221,8 @@ typedef struct RenderJob {
     size_t vcm_cap;            /* capacity of vcm_vertices and vcm_cell_items */
     /* the pass in progress: samples [pass_first, pass_first + pass_spp) of every pixel */
     int pass_first, pass_spp;
-    atomic_int next_tile;
-    atomic_int tiles_done;
-    /* Signalled when the last tile of a pass is done, so the reporting thread wakes at
-     * once instead of at its next progress tick (which would inflate timings). */
-    pthread_mutex_t lock;
-    pthread_cond_t done;
+    ThreadPool *pool;         /* created once per render: every pass runs on it */
+    struct Worker *workers;   /* one per pool worker: its counters */
 } RenderJob;
 
 /* Every ray bumps `rays`: the padding keeps the counters of neighbouring workers in the
@@ -235,8 +230,6 @@ typedef struct RenderJob {
  * between cores (false sharing), which cost the light tracer a third of its time
  * (docs/benchmarks.md). */
 typedef struct Worker {
-    RenderJob *job;
-    pthread_t thread;
     uint64_t rays, nonfinite;
     char pad[64];
 } Worker;
@@ -430,76 +423,51 @@ static void light_merge_band(RenderJob *job, int unit)
         film_accumulate(job->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
 }
 
-static void *worker_main(void *arg)
+/* One work item of the current pass, on pool worker `worker`. */
+static void render_item(void *ctx, int item, int worker)
 {
-    Worker *w = arg;
-    RenderJob *job = w->job;
-    for (;;) {
-        int tile = atomic_fetch_add(&job->next_tile, 1);
-        if (tile >= job->units) break;
-        if (job->pass_kind == PASS_CHUNKS) light_chunk(job, w, tile);
-        else if (job->pass_kind == PASS_MERGE) light_merge_band(job, tile);
-        else if (job->pass_kind == PASS_GATHER) vcm_gather_chunk(job, tile);
-        else if (job->pass_kind == PASS_GRID_COUNT || job->pass_kind == PASS_GRID_FILL) vcm_grid_range(job, tile);
-        else render_tile(job, w, tile);
-        if (atomic_fetch_add(&job->tiles_done, 1) + 1 == job->units) {
-            pthread_mutex_lock(&job->lock);
-            pthread_cond_broadcast(&job->done);
-            pthread_mutex_unlock(&job->lock);
-        }
-    }
-    return NULL;
+    RenderJob *job = ctx;
+    Worker *w = &job->workers[worker];
+    if (job->pass_kind == PASS_CHUNKS) light_chunk(job, w, item);
+    else if (job->pass_kind == PASS_MERGE) light_merge_band(job, item);
+    else if (job->pass_kind == PASS_GATHER) vcm_gather_chunk(job, item);
+    else if (job->pass_kind == PASS_GRID_COUNT || job->pass_kind == PASS_GRID_FILL) vcm_grid_range(job, item);
+    else render_tile(job, w, item);
 }
 
-/* Waits until the pass is done or `seconds` have passed. */
-static void wait_for_pass(RenderJob *job, double seconds)
+/* Runs one pass over job->units items on the pool; the calling thread reports progress.
+ * Returns CST_ERR_CANCELLED when the progress callback asked to stop (the items
+ * already started finish; the pass's results are then incomplete). */
+static CstStatus run_pass(RenderJob *job, const CstRenderSettings *st, double t0, double done_before,
+                          double pass_fraction)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    long ns = ts.tv_nsec + (long)(seconds * 1e9);
-    ts.tv_sec += ns / 1000000000L;
-    ts.tv_nsec = ns % 1000000000L;
-    pthread_mutex_lock(&job->lock);
-    while (atomic_load(&job->tiles_done) < job->units)
-        if (pthread_cond_timedwait(&job->done, &job->lock, &ts) != 0) break;
-    pthread_mutex_unlock(&job->lock);
-}
-
-/* Runs one pass over all tiles with `threads` workers; the calling thread reports
- * progress. Returns 0 on thread-creation failure. */
-static int run_pass(RenderJob *job, Worker *workers, int threads, const CstRenderSettings *st,
-                    double t0, double done_before, double pass_fraction)
-{
-    atomic_store(&job->next_tile, 0);
-    atomic_store(&job->tiles_done, 0);
-    int started = 0;
-    if (threads > job->units) threads = job->units; /* idle workers would only cost their creation */
-    for (; started < threads; started++)
-        if (pthread_create(&workers[started].thread, NULL, worker_main, &workers[started]) != 0) break;
-    if (started == 0) return 0;
-    while (atomic_load(&job->tiles_done) < job->units) {
-        wait_for_pass(job, 0.1);
-        /* Each light-tracing iteration is a pass of its own and may take far less than
-         * 0.1 s: keep the reports about 10 a second. */
-        if (st->progress && job->light && clock_seconds() - job->last_progress < 0.1) continue;
-        if (st->progress) {
-            job->last_progress = clock_seconds();
-            double f = done_before + pass_fraction * atomic_load(&job->tiles_done) / job->units;
-            if (st->time_limit > 0.0) {
-                double ft = (clock_seconds() - t0) / st->time_limit;
-                f = ft > f ? ft : f;
-            }
-            st->progress(st->progress_user, f > 1.0 ? 1.0 : f, clock_seconds() - t0);
+    threadpool_begin(job->pool, job->units, render_item, job);
+    bool cancelled = false, done = false;
+    while (!done) {
+        done = threadpool_wait(job->pool, cancelled || !st->progress ? -1.0 : 0.1);
+        if (cancelled || !st->progress) continue;
+        /* Reported after every wait, the pass's end included. Each light-tracing
+         * iteration is a pass of its own and may take far less than 0.1 s: keep the
+         * reports about 10 a second. */
+        if (job->light && clock_seconds() - job->last_progress < 0.1) continue;
+        job->last_progress = clock_seconds();
+        double f = done_before + pass_fraction * threadpool_done(job->pool) / job->units;
+        if (st->time_limit > 0.0) {
+            double ft = (clock_seconds() - t0) / st->time_limit;
+            f = ft > f ? ft : f;
+        }
+        if (st->progress(st->progress_user, f > 1.0 ? 1.0 : f, clock_seconds() - t0) != 0) {
+            threadpool_cancel(job->pool);
+            cancelled = true;
         }
     }
-    for (int i = 0; i < started; i++) pthread_join(workers[i].thread, NULL);
-    return 1;
+    return cancelled ? CST_ERR_CANCELLED : CST_OK;
 }
 
 /* Samples [first, first + count) of every pixel: one pass over the tiles, or for light
  * tracing `count` iterations, each merged into the film before the next starts (the
  * iteration is the light tracer's pass unit for progress and time limits). */
-static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const CstRenderSettings *st,
+static CstStatus run_samples(RenderJob *job, const CstRenderSettings *st,
                              double t0, int first, int count, double done_before, double fraction)
 {
     if (!job->light) {
@@ -507,8 +475,9 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
         job->pass_spp = count;
         job->units = job->num_tiles;
         job->pass_kind = PASS_TILES;
-        return run_pass(job, workers, threads, st, t0, done_before, fraction) ? CST_OK : CST_ERR_INTERNAL;
+        return run_pass(job, st, t0, done_before, fraction);
     }
+    CstStatus status;
     for (int k = 0; k < count; k++) {
         job->iteration = first + k;
         double f0 = done_before + fraction * k / count, f1 = fraction / count;
@@ -517,34 +486,32 @@ static CstStatus run_samples(RenderJob *job, Worker *workers, int threads, const
                                job->vcm_radius, job->iteration);
         job->units = job->num_chunks;
         job->pass_kind = PASS_CHUNKS;
-        if (!run_pass(job, workers, threads, st, t0, f0, job->vcm ? 0.5 * f1 : f1))
-            return CST_ERR_INTERNAL;
+        if ((status = run_pass(job, st, t0, f0, job->vcm ? 0.5 * f1 : f1)) != CST_OK) return status;
         for (int c = 0; c < job->num_chunks; c++)
             if (job->chunks[c].splats.oom) return CST_ERR_OOM;
         if (job->vcm) {
-            if (!vcm_prepare(job, threads)) return CST_ERR_OOM;
+            if (!vcm_prepare(job, st->threads)) return CST_ERR_OOM;
             job->units = job->num_chunks;
             job->pass_kind = PASS_GATHER;
-            if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
+            if ((status = run_pass(job, st, t0, f0 + 0.5 * f1, 0.0)) != CST_OK) return status;
             if (job->grid_ranges) {
                 job->units = job->grid_ranges;
                 job->pass_kind = PASS_GRID_COUNT;
-                if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
+                if ((status = run_pass(job, st, t0, f0 + 0.5 * f1, 0.0)) != CST_OK) return status;
                 vcm_grid_bases(job->grid_base, job->grid_ranges);
                 job->pass_kind = PASS_GRID_FILL;
-                if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.0)) return CST_ERR_INTERNAL;
+                if ((status = run_pass(job, st, t0, f0 + 0.5 * f1, 0.0)) != CST_OK) return status;
             }
             /* One camera path per pixel: sample `iteration` of every pixel. */
             job->pass_first = job->iteration;
             job->pass_spp = 1;
             job->units = job->num_tiles;
             job->pass_kind = PASS_TILES;
-            if (!run_pass(job, workers, threads, st, t0, f0 + 0.5 * f1, 0.5 * f1))
-                return CST_ERR_INTERNAL;
+            if ((status = run_pass(job, st, t0, f0 + 0.5 * f1, 0.5 * f1)) != CST_OK) return status;
         }
         job->units = job->merge_units;
         job->pass_kind = PASS_MERGE;
-        if (!run_pass(job, workers, threads, st, t0, f0 + f1, 0.0)) return CST_ERR_INTERNAL;
+        if ((status = run_pass(job, st, t0, f0 + f1, 0.0)) != CST_OK) return status;
     }
     return CST_OK;
 }
@@ -636,8 +603,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         film_destroy(film); free(workers); free(job);
         return cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d film", st.width, st.height);
     }
-    pthread_mutex_init(&job->lock, NULL);
-    pthread_cond_init(&job->done, NULL);
+    job->workers = workers;
     job->scene = scene;
     job->film = film;
     camera_init(&job->camera, &scene->camera, st.width, st.height);
@@ -661,7 +627,6 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     job->tiles_x = (st.crop[1] - st.crop[0] + RENDER_TILE - 1) / RENDER_TILE;
     job->tiles_y = (st.crop[3] - st.crop[2] + RENDER_TILE - 1) / RENDER_TILE;
     job->num_tiles = job->tiles_x * job->tiles_y;
-    for (int i = 0; i < st.threads; i++) workers[i].job = job;
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
         st.integrator == CST_INTEGRATOR_VCM) {
         job->light = true;
@@ -716,33 +681,27 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             status = photon_maps_build(scene, &job->camera, &pp, &job->photon_maps, &photon_rays, err);
         }
         if (status != CST_OK) {
-            pthread_mutex_destroy(&job->lock);
-            pthread_cond_destroy(&job->done);
             film_destroy(film); free(workers); free(job);
             return status;
         }
     }
     SppmResult sppm_res = {0};
-    if (st.integrator == CST_INTEGRATOR_SPPM) {
-        /* SPPM runs its own iterations and threads (sppm.c: photons reach each visible
-         * point in photon order whatever the thread count); spp is the iteration count. */
+    if ((status = threadpool_create(st.threads, &job->pool)) != CST_OK) {
+        cst_fail(err, status, "could not start %d render threads", st.threads);
+    } else if (st.integrator == CST_INTEGRATOR_SPPM) {
+        /* SPPM runs its own iterations on the render's pool (sppm.c: photons reach each
+         * visible point in photon order whatever the thread count); spp is the iteration count. */
         SppmParams sp = {st.spp, st.time_limit, st.photons, (float)st.photon_radius, st.max_depth,
-                         st.rr_depth, st.filter, st.seed, st.progress, st.progress_user, st.threads};
+                         st.rr_depth, st.filter, st.seed, st.progress, st.progress_user, job->pool};
         if (st.photons < 0 || !(st.photon_radius >= 0.0) || !((float)st.photon_radius < INFINITY))
             status = cst_fail(err, CST_ERR_INVALID_ARG,
                               "photon count %d and radius %g: expected positive values (0 = default)",
                               st.photons, st.photon_radius);
         else
             status = sppm_render(scene, &job->camera, &sp, film, &sppm_res, &photon_rays, err);
-        if (status != CST_OK) {
-            pthread_mutex_destroy(&job->lock);
-            pthread_cond_destroy(&job->done);
-            film_destroy(film); free(workers); free(job);
-            return status;
-        }
     } else if (st.time_limit <= 0.0) {
         /* Fixed sample count: one pass, so accumulation order is fixed. */
-        status = run_samples(job, workers, st.threads, &st, t0, 0, st.spp, 0.0, 1.0);
+        status = run_samples(job, &st, t0, 0, st.spp, 0.0, 1.0);
         if (status == CST_OK) film->spp = st.spp;
     } else {
         /* Time budget: passes of growing size until the next one would not fit (or the
@@ -753,7 +712,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             if (pass <= 0) break;
             double pass_t0 = clock_seconds();
             double frac = st.spp > 0 ? (double)film->spp / st.spp : 0.0;
-            status = run_samples(job, workers, st.threads, &st, t0, film->spp, pass, frac,
+            status = run_samples(job, &st, t0, film->spp, pass, frac,
                                  st.spp > 0 ? (double)pass / st.spp : 0.0);
             if (status != CST_OK) break;
             film->spp += pass;
@@ -769,20 +728,21 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         }
     }
     double seconds = clock_seconds() - t0;
-    pthread_mutex_destroy(&job->lock);
-    pthread_cond_destroy(&job->done);
+    threadpool_destroy(job->pool);
     uint64_t splats_nonfinite = 0;
     if (job->light)
         for (int c = 0; c < job->num_chunks; c++) splats_nonfinite += job->chunks[c].splats.nonfinite;
     light_free(job);
     photon_maps_free(&job->photon_maps);
     if (status != CST_OK) {
+        const bool light = job->light;
         film_destroy(film);
         free(workers);
         free(job);
-        if (status == CST_ERR_OOM)
+        if (status == CST_ERR_OOM && light)
             return cst_fail(err, status, "out of memory for light-tracing splats (%dx%d)", st.width, st.height);
-        return cst_fail(err, status, "could not start render threads");
+        if (status == CST_ERR_CANCELLED) return cst_fail(err, status, "render cancelled by the progress callback");
+        return status; /* the message is set */
     }
     const int cw = st.crop[1] - st.crop[0], ch = st.crop[3] - st.crop[2];
     if (cw != st.width || ch != st.height) {
