@@ -8,8 +8,8 @@
 #include <stdint.h>
 
 #include "camera/camera.h"
-#include "core/rng.h"
 #include "integrators/photon_map.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 enum {
@@ -47,7 +47,7 @@ void photon_maps_free(PhotonMaps *maps);
 /* Radiance arriving along `ray` (toward its origin): emission seen directly or through
  * delta bounces, NEE, the caustic map and one final-gather ray at the first non-delta hit.
  * No allocation; safe from many threads on one committed scene and built maps. */
-Color photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Pcg32 *rng, uint64_t *rays);
+Color photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Sampler *rng, uint64_t *rays);
 
 /* Shared with sppm.c, which builds its visible points the same way. */
 struct Bsdf;
@@ -57,10 +57,10 @@ struct Bsdf;
  * stops with the probability of the non-delta ones (and *beta divided by it), and follows
  * a delta lobe otherwise: the caller then estimates only the non-delta part at *sh. False
  * if the ray leaves the scene, the chain dies or exceeds PHOTON_MAX_SPECULAR bounces. */
-bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Color *beta, Color *le, SurfaceHit *sh,
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, Color *beta, Color *le, SurfaceHit *sh,
                              struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays);
 /* Direct light at a non-delta point by one emitter sample, no MIS. */
 Color photon_direct_light(const Scene *s, const struct Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo,
-                        Pcg32 *rng, uint64_t *rays);
+                        Sampler *rng, uint64_t *rays);
 
 #endif

@@ -29,11 +29,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/clock.h"
 #include "core/error.h"
-#include "core/rng.h"
 #include "film/filter.h"
 #include "integrators/photon.h"
+#include "integrators/roulette.h"
 #include "materials/bsdf.h"
 #include "sampling/warp.h"
 
@@ -176,14 +177,7 @@ typedef struct SppmHitList {
 
 static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Color power)
 {
-    if (l->n == l->cap) {
-        size_t cap = l->cap ? 2 * l->cap : 1024;
-        SppmHit *v = realloc(l->v, cap * sizeof *v);
-        if (!v) { l->oom = true; return; }
-        l->v = v;
-        l->cap = cap;
-    }
-    l->v[l->n++] = (SppmHit){p, wi, n, power, 0, 0};
+    if (!array_push(l, ((SppmHit){p, wi, n, power, 0, 0}))) l->oom = true;
 }
 
 /* The candidates of a photon at pos: the entries of its cell's bucket, or none outside
@@ -237,11 +231,11 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *h
 static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out, uint64_t index, int iter,
                          uint64_t *rays)
 {
-    Pcg32 rng;
-    pcg32_seed_sample(&rng, sp->seed, index, SPPM_STREAM + (uint64_t)iter);
-    float u_sel = pcg32_float(&rng);
-    Vec2 u_pos = pcg32_v2(&rng);
-    Vec2 u_dir = pcg32_v2(&rng);
+    Sampler rng;
+    sampler_start_stream(&rng, sp->seed, index, SPPM_STREAM + (uint64_t)iter);
+    float u_sel = sampler_1d(&rng);
+    Vec2 u_pos = sampler_2d(&rng);
+    Vec2 u_dir = sampler_2d(&rng);
     EmissionSample es;
     EmitterGeometry eg = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
@@ -261,19 +255,17 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
             hit_list_push(out, sh.p, w_prev, v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng), power);
         if (sp->max_depth > 0 && depth >= sp->max_depth) break;
         BsdfSample bs;
-        float uc = pcg32_float(&rng);
-        Vec2 u = pcg32_v2(&rng);
+        float uc = sampler_1d(&rng);
+        Vec2 u = sampler_2d(&rng);
         /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
         if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
         power = color_mul(power, bs.weight);
         scatter = color_mul(scatter, bs.weight);
         if (color_is_black(scatter)) break;
-        if (depth >= sp->rr_depth) {
-            float q = minf(0.95f, color_max(scatter));
-            if (!(pcg32_float(&rng) < q)) break;
-            power = color_scale(power, 1.0f / q);
-            scatter = color_scale(scatter, 1.0f / q);
-        }
+        float rr = roulette(&rng, depth, sp->rr_depth, scatter); /* roulette.h */
+        if (rr == 0.0f) break;
+        power = color_scale(power, rr);
+        scatter = color_scale(scatter, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
 }
@@ -285,10 +277,10 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
     for (int x = 0; x < cam->width; x++) {
         int pixel = y * cam->width + x;
         SppmPixel *v = &px[pixel];
-        Pcg32 rng;
-        pcg32_seed_sample(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
-        Vec2 uf = pcg32_v2(&rng);
-        Vec2 ul = pcg32_v2(&rng);
+        Sampler rng;
+        sampler_start_stream(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
+        Vec2 uf = sampler_2d(&rng);
+        Vec2 ul = sampler_2d(&rng);
         /* render.c's rule: the filter's weight h / pdf scales the sample, so both the
          * direct part and the visible point's throughput. */
         float fw;
@@ -399,12 +391,10 @@ static void chunk_group_by_range(const SppmJob *job, SppmHitList *l)
             rs[r + 1]++;
     }
     for (int r = 0; r < R; r++) rs[r + 1] += rs[r];
-    if (rs[R] > l->order_cap) {
-        size_t cap = 2u * (size_t)rs[R];
-        uint32_t *o = realloc(l->order, cap * sizeof *o);
-        if (!o) { l->oom = true; l->n = 0; return; }
-        l->order = o;
-        l->order_cap = cap;
+    if (!array_grow(&l->order, &l->order_cap, rs[R], sizeof *l->order)) {
+        l->oom = true;
+        l->n = 0;
+        return;
     }
     /* Fill with rs[r] as range r's cursor, then shift the starts back (as in the grid). */
     for (size_t i = 0; i < l->n; i++) {

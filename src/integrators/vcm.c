@@ -13,7 +13,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "film/filter.h"
+#include "integrators/roulette.h"
 #include "materials/bsdf.h"
 
 /* The MIS exponent: the power heuristic. Applied to every factor of a ratio, which is
@@ -28,14 +30,7 @@ void vcm_vertex_list_free(VcmVertexList *l)
 
 static void push_vertex(VcmVertexList *l, const VcmVertex *v)
 {
-    if (l->n == l->cap) {
-        size_t cap = l->cap ? 2 * l->cap : 1024;
-        VcmVertex *nv = realloc(l->v, cap * sizeof *nv);
-        if (!nv) { l->oom = 1; return; }
-        l->v = nv;
-        l->cap = cap;
-    }
-    l->v[l->n++] = *v;
+    if (!array_push(l, *v)) l->oom = 1;
 }
 
 float vcm_default_radius(const Scene *s)
@@ -108,15 +103,13 @@ static inline void mis_arrive(SubPath *sp, float dist, float cos_in)
     sp->d_vm *= inv;
 }
 
-/* Throughput-following Russian roulette, as path.c and light.c do it. Returns false when
- * the path stops. */
-static inline bool roulette(SubPath *sp, int depth, int rr_depth, Pcg32 *rng)
+/* Russian roulette (roulette.h) on a subpath's throughputs. False when the path stops. */
+static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, Sampler *rng)
 {
-    if (depth < rr_depth) return true;
-    float q = minf(0.95f, color_max(sp->scatter));
-    if (!(pcg32_float(rng) < q)) return false;
-    sp->beta = color_scale(sp->beta, 1.0f / q);
-    sp->scatter = color_scale(sp->scatter, 1.0f / q);
+    float rr = roulette(rng, depth, rr_depth, sp->scatter);
+    if (rr == 0.0f) return false;
+    sp->beta = color_scale(sp->beta, rr);
+    sp->scatter = color_scale(sp->scatter, rr);
     return true;
 }
 
@@ -124,18 +117,18 @@ static inline bool roulette(SubPath *sp, int depth, int rr_depth, Pcg32 *rng)
  * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
  * quantities and the next ray. False when the subpath ends here. */
 static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const Bsdf *b, const SurfaceHit *sh, Vec3 wo,
-                    BsdfTransport mode, int depth, int rr_depth, Pcg32 *rng, Ray *ray)
+                    BsdfTransport mode, int depth, int rr_depth, Sampler *rng, Ray *ray)
 {
     BsdfSample bs;
-    float uc = pcg32_float(rng);
-    Vec2 u = pcg32_v2(rng);
+    float uc = sampler_1d(rng);
+    Vec2 u = sampler_2d(rng);
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
     if (!(bs.pdf > 0.0f)) return false;
     float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(b, bs.wi, wo);
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);
     if (color_is_black(sp->scatter)) return false;
-    if (!roulette(sp, depth, rr_depth, rng)) return false;
+    if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
     mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), pdf_rev);
     *ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
     return true;
@@ -170,12 +163,12 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
 }
 
 void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
-                     Pcg32 *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
+                     Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
-    float u_sel = pcg32_float(rng);
-    Vec2 u_pos = pcg32_v2(rng);
-    Vec2 u_dir = pcg32_v2(rng);
+    float u_sel = sampler_1d(rng);
+    Vec2 u_pos = sampler_2d(rng);
+    Vec2 u_dir = sampler_2d(rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
@@ -212,7 +205,7 @@ void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, con
             v = (VcmVertex){sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
                             sh.material, bounces, sh.uv};
             push_vertex(verts, &v);
-            u_lens = pcg32_v2(rng);
+            u_lens = sampler_2d(rng);
         }
         /* The next direction before this vertex's camera connection, with the random
          * numbers drawn in the same order (light.c says why). */
@@ -309,10 +302,10 @@ void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, in
 /* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF
  * sampling cannot hit it). */
 static Color connect_to_light(const Scene *s, const VcmIteration *it, const SubPath *sp,
-                            const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng, uint64_t *rays)
+                            const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Sampler *rng, uint64_t *rays)
 {
-    float u_sel = pcg32_float(rng);
-    Vec2 u = pcg32_v2(rng);
+    float u_sel = sampler_1d(rng);
+    Vec2 u = sampler_2d(rng);
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_li(&s->emitter_sampler, s->emitters, &g, sh->p, u_sel, u, &ls)) return color_s(0.0f);
@@ -481,7 +474,7 @@ static Color merge(const VcmParams *vp, const VcmIteration *it, const MergeQuery
 }
 
 Color vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
-                     int path, Ray ray, Pcg32 *rng, uint64_t *rays)
+                     int path, Ray ray, Sampler *rng, uint64_t *rays)
 {
     Color L = color_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);

@@ -10,8 +10,8 @@
 #include <stdint.h>
 
 #include "camera/camera.h"
-#include "core/rng.h"
 #include "film/film.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 typedef struct VcmParams {
@@ -86,7 +86,7 @@ void vcm_iteration_init(VcmIteration *it, const VcmParams *vp, const Camera *cam
  * connections to the camera (the t = 1 strategies, MIS-weighted) to *splats, per unit
  * film as light_trace() does. */
 void vcm_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
-                     Pcg32 *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays);
+                     Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays);
 
 /* The merging grid over it->vertices, a hashed grid of cells 2r wide from lo (the lowest
  * corner of the vertices), sorted into `cells` buckets of caller-owned arrays: cell_start
@@ -108,7 +108,7 @@ void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, in
  * (s = 1), connections to the light path's vertices, and with merging, merges with every
  * light vertex within the radius; all MIS-weighted. Returns the pixel sample. */
 Color vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
-                     int path, Ray ray, Pcg32 *rng, uint64_t *rays);
+                     int path, Ray ray, Sampler *rng, uint64_t *rays);
 
 /* A merging radius from the scene's size: the base radius r0 when none is given. */
 float vcm_default_radius(const Scene *s);

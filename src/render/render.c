@@ -18,9 +18,9 @@
 #include <unistd.h>
 
 #include "camera/camera.h"
+#include "core/array.h"
 #include "core/clock.h"
 #include "core/error.h"
-#include "core/rng.h"
 #include "core/threadpool.h"
 #include "film/film.h"
 #include "film/filter.h"
@@ -33,89 +33,6 @@
 #include "sampling/sampler.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
-
-static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] = {
-    {"path", CST_INTEGRATOR_PATH},       {"path-nee", CST_INTEGRATOR_PATH_NEE},
-    {"path-bsdf", CST_INTEGRATOR_PATH_BSDF}, {"mis", CST_INTEGRATOR_PATH},
-    {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
-    {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
-    {"whitted", CST_INTEGRATOR_WHITTED}, {"photon", CST_INTEGRATOR_PHOTON},
-    {"sppm", CST_INTEGRATOR_SPPM},       {"bdpt", CST_INTEGRATOR_BDPT},
-    {"vcm", CST_INTEGRATOR_VCM},
-};
-
-CstIntegrator cst_integrator_from_name(const char *name)
-{
-    for (size_t i = 0; i < sizeof INTEGRATOR_NAMES / sizeof INTEGRATOR_NAMES[0]; i++)
-        if (strcmp(name, INTEGRATOR_NAMES[i].name) == 0) return INTEGRATOR_NAMES[i].id;
-    return CST_INTEGRATOR_DEFAULT;
-}
-
-const char *cst_integrator_name(CstIntegrator integrator)
-{
-    switch (integrator) {
-    case CST_INTEGRATOR_PATH: return "path";
-    case CST_INTEGRATOR_PATH_NEE: return "path-nee";
-    case CST_INTEGRATOR_PATH_BSDF: return "path-bsdf";
-    case CST_INTEGRATOR_LIGHT: return "light";
-    case CST_INTEGRATOR_WHITTED: return "whitted";
-    case CST_INTEGRATOR_PHOTON: return "photon";
-    case CST_INTEGRATOR_SPPM: return "sppm";
-    case CST_INTEGRATOR_BDPT: return "bdpt";
-    case CST_INTEGRATOR_VCM: return "vcm";
-    case CST_INTEGRATOR_DEFAULT: break;
-    }
-    return "default";
-}
-
-CstFilter cst_filter_from_name(const char *name)
-{
-    if (strcmp(name, "box") == 0) return CST_FILTER_BOX;
-    if (strcmp(name, "tent") == 0) return CST_FILTER_TENT;
-    if (strcmp(name, "gaussian") == 0) return CST_FILTER_GAUSSIAN;
-    if (strcmp(name, "mitchell") == 0) return CST_FILTER_MITCHELL;
-    return CST_FILTER_DEFAULT;
-}
-
-const char *cst_filter_name(CstFilter filter)
-{
-    switch (filter) {
-    case CST_FILTER_BOX: return "box";
-    case CST_FILTER_TENT: return "tent";
-    case CST_FILTER_GAUSSIAN: return "gaussian";
-    case CST_FILTER_MITCHELL: return "mitchell";
-    case CST_FILTER_DEFAULT: break;
-    }
-    return "default";
-}
-
-CstSampler cst_sampler_from_name(const char *name)
-{
-    if (strcmp(name, "independent") == 0) return CST_SAMPLER_INDEPENDENT;
-    if (strcmp(name, "stratified") == 0) return CST_SAMPLER_STRATIFIED;
-    if (strcmp(name, "sobol") == 0) return CST_SAMPLER_SOBOL;
-    return CST_SAMPLER_DEFAULT;
-}
-
-const char *cst_sampler_name(CstSampler sampler)
-{
-    switch (sampler) {
-    case CST_SAMPLER_INDEPENDENT: return "independent";
-    case CST_SAMPLER_STRATIFIED: return "stratified";
-    case CST_SAMPLER_SOBOL: return "sobol";
-    case CST_SAMPLER_DEFAULT: break;
-    }
-    return "default";
-}
-
-int cst_aov_from_name(const char *name)
-{
-    if (strcmp(name, "albedo") == 0) return CST_AOV_ALBEDO;
-    if (strcmp(name, "normal") == 0) return CST_AOV_NORMAL;
-    if (strcmp(name, "depth") == 0) return CST_AOV_DEPTH;
-    if (strcmp(name, "variance") == 0) return CST_AOV_VARIANCE;
-    return 0;
-}
 
 #define PICK(field, dflt) out->field = in->field ? in->field : (sc->field ? sc->field : (dflt))
 void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out)
@@ -218,7 +135,7 @@ typedef struct RenderJob {
     uint32_t grid_base[GRID_RANGES_MAX + 1]; /* per range: its vertices, then the count below it */
     uint32_t *vcm_cell_start;
     VcmMergeVertex *vcm_cell_items;
-    size_t vcm_cap;            /* capacity of vcm_vertices and vcm_cell_items */
+    size_t vcm_cap[4];         /* capacities of the four arrays above (core/array.h) */
     /* the pass in progress: samples [pass_first, pass_first + pass_spp) of every pixel */
     int pass_first, pass_spp;
     ThreadPool *pool;         /* created once per render: every pass runs on it */
@@ -273,9 +190,10 @@ static void render_tile(RenderJob *job, Worker *w, int tile)
                 Ray ray = camera_generate_ray(&job->camera, fp.x, fp.y, ul);
                 if (job->aov_hit) render_aov(job, w, pixel, ray);
                 /* Photon mapping and BDPT/VCM continue from the sample's PCG32 stream. */
+                Sampler cont = sampler_continue(smp.rng);
                 Color L = job->vcm ? vcm_trace_camera(job->scene, &job->camera, &job->vcm_params,
-                                                    &job->vcm_it, pixel, ray, &smp.rng, &w->rays)
-                      : job->photon ? photon_li(job->scene, &job->photon_maps, ray, &smp.rng, &w->rays)
+                                                    &job->vcm_it, pixel, ray, &cont, &w->rays)
+                      : job->photon ? photon_li(job->scene, &job->photon_maps, ray, &cont, &w->rays)
                       : job->whitted ? whitted_li(job->scene, &job->whitted_params, ray, &smp, &w->rays)
                                      : path_li(job->scene, &job->params, ray, &smp, &w->rays);
                 if (!color_is_finite(L)) {
@@ -306,9 +224,9 @@ static void light_chunk(RenderJob *job, Worker *w, int chunk)
         VcmVertexList *verts = &job->chunks[chunk].verts;
         verts->n = 0;
         for (int i = first; i < last; i++) {
-            Pcg32 rng;
+            Sampler rng;
             /* A stream apart from the camera path of pixel i, which uses (seed, i, iteration). */
-            pcg32_seed_sample(&rng, job->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)job->iteration);
+            sampler_start_stream(&rng, job->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)job->iteration);
             size_t before = verts->n;
             vcm_trace_light(job->scene, &job->camera, &job->vcm_params, &job->vcm_it, &rng, verts, out,
                             &w->rays);
@@ -322,8 +240,8 @@ static void light_chunk(RenderJob *job, Worker *w, int chunk)
         job->chunks[chunk].lo = lo;
     } else {
         for (int i = first; i < last; i++) {
-            Pcg32 rng;
-            pcg32_seed_sample(&rng, job->seed, (uint64_t)i, (uint64_t)job->iteration);
+            Sampler rng;
+            sampler_start_stream(&rng, job->seed, (uint64_t)i, (uint64_t)job->iteration);
             light_trace(job->scene, &job->camera, &job->light_params, &rng, out, &w->rays);
         }
     }
@@ -346,22 +264,11 @@ static int vcm_prepare(RenderJob *job, int threads)
         lo = v3_min(lo, job->chunks[c].lo);
     }
     if (total > UINT32_MAX - 1) return 0;
-    if (total > job->vcm_cap) {
-        size_t cap = total + total / 4;
-        VcmVertex *v = realloc(job->vcm_vertices, cap * sizeof *v);
-        if (!v) return 0;
-        job->vcm_vertices = v;
-        VcmMergeVertex *items = realloc(job->vcm_cell_items, cap * sizeof *items);
-        if (!items) return 0;
-        job->vcm_cell_items = items;
-        uint32_t *starts = realloc(job->vcm_cell_start, (cap + 1) * sizeof *starts);
-        if (!starts) return 0;
-        job->vcm_cell_start = starts;
-        uint32_t *cell_of = realloc(job->vcm_cell_of, cap * sizeof *cell_of);
-        if (!cell_of) return 0;
-        job->vcm_cell_of = cell_of;
-        job->vcm_cap = cap;
-    }
+    if (!array_grow(&job->vcm_vertices, &job->vcm_cap[0], total, sizeof *job->vcm_vertices) ||
+        !array_grow(&job->vcm_cell_items, &job->vcm_cap[1], total, sizeof *job->vcm_cell_items) ||
+        !array_grow(&job->vcm_cell_start, &job->vcm_cap[2], total + 1, sizeof *job->vcm_cell_start) ||
+        !array_grow(&job->vcm_cell_of, &job->vcm_cap[3], total, sizeof *job->vcm_cell_of))
+        return 0;
     job->vcm_total = total;
     uint32_t *ps = job->vcm_path_start;
     ps[0] = 0;
