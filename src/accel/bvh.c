@@ -397,40 +397,33 @@ static void top_subtree_item(void *ctx, int item, int worker)
 static bool build_parallel(Builder *b, ThreadPool *pool, int n, Box4 box, Box4 cbox, SubtreeCost *out)
 {
     TopBuild tb = {b, {0}, {0}};
-    ARRAY(int) small = {0}; /* entries under BVH_PARALLEL_MIN: built whole, at the end */
     bool ok = false;
-    TopNode root = {0, 0, n, 0, box, cbox, false, {0}, {-1, -1}, {{0.0f}, 0, 0u}};
-    if (!array_push(&tb.top, root)) goto done;
-    /* Entries [level, top.n) are the level being split. */
-    size_t level = 0;
-    while (level < tb.top.n) {
+    if (!array_push(&tb.top, ((TopNode){.node = 0, .begin = 0, .end = n, .box = box, .cbox = cbox}))) goto done;
+    /* Entries [level, top.n) are the level being split; the ones under BVH_PARALLEL_MIN
+     * wait for the subtree step. */
+    for (size_t level = 0, next; level < tb.top.n; level = next) {
         tb.items.n = 0;
-        for (size_t i = level; i < tb.top.n; i++) {
-            const TopNode *t = &tb.top.v[i];
-            if (!(t->end - t->begin >= BVH_PARALLEL_MIN ? array_push(&tb.items, (int)i) : array_push(&small, (int)i)))
-                goto done;
-        }
+        for (size_t i = level; i < tb.top.n; i++)
+            if (tb.top.v[i].end - tb.top.v[i].begin >= BVH_PARALLEL_MIN && !array_push(&tb.items, (int)i)) goto done;
         threadpool_for(pool, (int)tb.items.n, top_split_item, &tb);
-        size_t next = tb.top.n;
+        next = tb.top.n;
         for (size_t k = 0; k < tb.items.n; k++) {
-            int i = tb.items.v[k];
-            if (!tb.top.v[i].inner) continue;
-            const TopNode t = tb.top.v[i];
+            const TopNode t = tb.top.v[tb.items.v[k]];
+            if (!t.inner) continue;
             const Split *sp = &t.split;
-            TopNode l = {t.node + 1, t.begin, sp->mid, t.depth + 1, sp->lbox, sp->lcbox, false, {0}, {-1, -1},
-                         {{0.0f}, 0, 0u}};
-            TopNode r = {b->nodes[t.node].offset, sp->mid, t.end, t.depth + 1, sp->rbox, sp->rcbox, false, {0},
-                         {-1, -1}, {{0.0f}, 0, 0u}};
-            if (!array_push(&tb.top, l) || !array_push(&tb.top, r)) goto done;
-            tb.top.v[i].kid[0] = (int)tb.top.n - 2;
-            tb.top.v[i].kid[1] = (int)tb.top.n - 1;
+            if (!array_push(&tb.top, ((TopNode){.node = t.node + 1, .begin = t.begin, .end = sp->mid,
+                                                .depth = t.depth + 1, .box = sp->lbox, .cbox = sp->lcbox})) ||
+                !array_push(&tb.top, ((TopNode){.node = b->nodes[t.node].offset, .begin = sp->mid, .end = t.end,
+                                                .depth = t.depth + 1, .box = sp->rbox, .cbox = sp->rcbox})))
+                goto done;
+            tb.top.v[tb.items.v[k]].kid[0] = (int)tb.top.n - 2;
+            tb.top.v[tb.items.v[k]].kid[1] = (int)tb.top.n - 1;
         }
-        level = next;
     }
     /* The subtrees under the top, one work item each. */
     tb.items.n = 0;
-    for (size_t k = 0; k < small.n; k++)
-        if (!array_push(&tb.items, small.v[k])) goto done;
+    for (size_t i = 0; i < tb.top.n; i++)
+        if (tb.top.v[i].end - tb.top.v[i].begin < BVH_PARALLEL_MIN && !array_push(&tb.items, (int)i)) goto done;
     threadpool_for(pool, (int)tb.items.n, top_subtree_item, &tb);
     /* Children come after their parent in the array: backwards is bottom-up. */
     for (size_t i = tb.top.n; i-- > 0;) {
@@ -440,7 +433,6 @@ static bool build_parallel(Builder *b, ThreadPool *pool, int n, Box4 box, Box4 c
     *out = tb.top.v[0].cost;
     ok = true;
 done:
-    array_free(&small);
     array_free(&tb.top);
     array_free(&tb.items);
     return ok;

@@ -30,7 +30,6 @@
 #include <string.h>
 
 #include "core/array.h"
-#include "core/clock.h"
 #include "core/error.h"
 #include "film/filter.h"
 #include "integrators/photon.h"
@@ -342,23 +341,27 @@ typedef struct SppmWorker {
     char pad[64];             /* bumped per ray: no cache line shared with the next worker's */
 } SppmWorker;
 
-/* What every worker of a phase reads; `next` hands out its units of work. */
-typedef struct SppmJob {
+/* The render's SPPM state (sppm.h): what every worker of a phase reads, and the
+ * progressive pixels. */
+struct Sppm {
     const Scene *s;
     const Camera *cam;
-    const SppmParams *sp;
-    Filter filter;        /* sp->filter's shape and tables */
+    SppmParams sp;
+    Filter filter;        /* sp.filter's shape and tables */
     SppmPixel *px;
     size_t count;         /* pixels */
-    const SppmGrid *g;
+    SppmGrid g;
     SppmHitList *hits;    /* one per chunk */
     int chunks, photons;
     int ranges;           /* pixel ranges of the deposit phase */
     int iter;
     SppmPhase phase;
     SppmWorker *workers;  /* one per pool worker */
-} SppmJob;
-
+    int num_workers;
+    float r0;             /* the initial radius */
+    uint64_t prepare_rays; /* traced by the automatic radius */
+};
+typedef struct Sppm SppmJob;
 
 /* Pixel range r of the deposit phase is [range_lo(r), range_lo(r + 1)). */
 static inline uint32_t range_lo(const SppmJob *job, int r)
@@ -378,13 +381,13 @@ static int range_of(const SppmJob *job, uint32_t pixel)
  * counting sort in hit order), so that a range reads only the hits that can reach it. */
 static void chunk_group_by_range(const SppmJob *job, SppmHitList *l)
 {
-    const uint32_t *entries = job->g->entries;
+    const uint32_t *entries = job->g.entries;
     const int R = job->ranges;
     uint32_t *rs = l->range_start;
     memset(rs, 0, ((size_t)R + 1u) * sizeof *rs);
     for (size_t i = 0; i < l->n; i++) {
         SppmHit *h = &l->v[i];
-        sppm_grid_candidates(job->g, h->p, &h->first, &h->last);
+        sppm_grid_candidates(&job->g, h->p, &h->first, &h->last);
         if (h->first == h->last) continue;
         /* Entries ascend, so the candidates' ranges are r0..r1. */
         for (int r = range_of(job, entries[h->first]), r1 = range_of(job, entries[h->last - 1]); r <= r1; r++)
@@ -415,38 +418,29 @@ static void deposit_range(SppmJob *job, SppmWorker *w, int r)
     for (int c = 0; c < job->chunks; c++) {
         const SppmHitList *l = &job->hits[c];
         for (uint32_t k = l->range_start[r]; k < l->range_start[r + 1]; k++)
-            sppm_grid_deposit(job->g, job->px, &l->v[l->order[k]], lo, hi);
+            sppm_grid_deposit(&job->g, job->px, &l->v[l->order[k]], lo, hi);
     }
     for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], &w->nonfinite);
 }
 
 /* Unit u of the current phase (a row, a photon chunk, a pixel range) on pool worker
  * `worker`. */
-static void sppm_item(void *ctx, int u, int worker)
+void sppm_item(void *ctx, int u, int worker)
 {
     SppmJob *job = ctx;
     SppmWorker *w = &job->workers[worker];
     if (job->phase == SPPM_PHASE_CAMERA) {
-        camera_row(job->s, job->cam, job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
+        camera_row(job->s, job->cam, &job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
     } else if (job->phase == SPPM_PHASE_PHOTONS) {
         SppmHitList *l = &job->hits[u];
         l->n = 0;
         int first = u * SPPM_PHOTON_CHUNK;
         int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
-        for (int i = first; i < last; i++) trace_photon(job->s, job->sp, l, (uint64_t)i, job->iter, &w->rays);
+        for (int i = first; i < last; i++) trace_photon(job->s, &job->sp, l, (uint64_t)i, job->iter, &w->rays);
         chunk_group_by_range(job, l);
     } else {
         deposit_range(job, w, u);
     }
-}
-
-/* Runs one phase over its units on the pool. */
-static void run_phase(SppmJob *job, SppmPhase phase)
-{
-    job->phase = phase;
-    const int units = phase == SPPM_PHASE_CAMERA ? job->cam->height
-                    : phase == SPPM_PHASE_PHOTONS ? job->chunks : job->ranges;
-    threadpool_for(job->sp->pool, units, sppm_item, job);
 }
 
 /* The automatic initial radius: photon.c's rule (the median distance to the 50th nearest
@@ -465,114 +459,115 @@ static CstStatus initial_radius(const Scene *s, const Camera *cam, const SppmPar
     return CST_OK;
 }
 
-CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, Film *film, SppmResult *res,
-                      uint64_t *rays, CstError *err)
+CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, int workers, Sppm **out,
+                      CstError *err)
 {
-    memset(res, 0, sizeof *res);
+    *out = NULL;
     const size_t count = (size_t)cam->width * (size_t)cam->height;
     /* The grid stores pixel indices and entry offsets (8 per pixel) as 32-bit integers. */
     if (count > (size_t)UINT32_MAX / 8u)
         return cst_fail(err, CST_ERR_INVALID_ARG, "image of %zu pixels: too many for SPPM (at most %u)", count,
                         UINT32_MAX / 8u);
-    const int photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
-    const int threads = threadpool_size(sp->pool);
-    float r0;
-    CstStatus st = initial_radius(s, cam, sp, photons, &r0, rays, err);
+    Sppm *job = calloc(1, sizeof *job);
+    if (!job) return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state");
+    *out = job;
+    job->s = s;
+    job->cam = cam;
+    job->sp = *sp;
+    job->count = count;
+    job->photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
+    const int threads = sp->threads > 0 ? sp->threads : 1;
+    CstStatus st = initial_radius(s, cam, sp, job->photons, &job->r0, &job->prepare_rays, err);
     if (st != CST_OK) return st;
-    SppmGrid g = {0};
-    g.buckets = 1;
-    while (g.buckets < count && g.buckets < (1u << 30)) g.buckets <<= 1;
-    SppmJob job = {s, cam, sp, {0}, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, NULL};
-    filter_init(&job.filter, sp->filter);
-    job.chunks = (int)(((int64_t)photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
+    SppmGrid *g = &job->g;
+    g->buckets = 1;
+    while (g->buckets < count && g->buckets < (1u << 30)) g->buckets <<= 1;
+    filter_init(&job->filter, sp->filter);
+    job->chunks = (int)(((int64_t)job->photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
     /* Several pixel ranges per thread, so a range crowded with photons does not hold the
      * others up; a hit is read once per range its candidates reach (mostly one or two),
      * and one thread needs one range. */
     const int ranges = threads == 1 ? 1 : 8 * threads;
-    job.ranges = count < (size_t)ranges ? (int)count : ranges;
-    SppmWorker *workers = calloc((size_t)threads, sizeof *workers);
-    SppmPixel *px = calloc(count, sizeof *px);
-    job.hits = calloc((size_t)job.chunks, sizeof *job.hits);
-    g.cell_start = malloc(((size_t)g.buckets + 1u) * sizeof *g.cell_start);
-    g.entries = malloc(8u * count * sizeof *g.entries);
-    g.discs = malloc(count * sizeof *g.discs);
-    if (!workers || !px || !job.hits || !g.cell_start || !g.entries || !g.discs) {
-        st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
-        goto done;
+    job->ranges = count < (size_t)ranges ? (int)count : ranges;
+    job->num_workers = workers;
+    job->workers = calloc((size_t)workers, sizeof *job->workers);
+    job->px = calloc(count, sizeof *job->px);
+    job->hits = calloc((size_t)job->chunks, sizeof *job->hits);
+    g->cell_start = malloc(((size_t)g->buckets + 1u) * sizeof *g->cell_start);
+    g->entries = malloc(8u * count * sizeof *g->entries);
+    g->discs = malloc(count * sizeof *g->discs);
+    if (!job->workers || !job->px || !job->hits || !g->cell_start || !g->entries || !g->discs)
+        return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
+    for (int c = 0; c < job->chunks; c++) {
+        job->hits[c].range_start = calloc((size_t)job->ranges + 1u, sizeof *job->hits[c].range_start);
+        if (!job->hits[c].range_start)
+            return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon chunks (%d)", job->chunks);
     }
-    for (int c = 0; c < job.chunks; c++) {
-        job.hits[c].range_start = calloc((size_t)job.ranges + 1u, sizeof *job.hits[c].range_start);
-        if (!job.hits[c].range_start) {
-            st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon chunks (%d)", job.chunks);
-            goto done;
-        }
-    }
-    job.px = px;
-    job.workers = workers;
-    for (size_t i = 0; i < count; i++) px[i].r = r0;
-    double t0 = clock_seconds();
-    int iter = 0;
-    while (sp->iterations <= 0 || iter < sp->iterations) {
-        job.iter = iter;
-        run_phase(&job, SPPM_PHASE_CAMERA);
+    for (size_t i = 0; i < count; i++) job->px[i].r = job->r0;
+    return CST_OK;
+}
+
+int sppm_phase_begin(Sppm *job, int iter, int phase)
+{
+    job->iter = iter;
+    job->phase = (SppmPhase)phase;
+    switch (job->phase) {
+    case SPPM_PHASE_CAMERA: return job->cam->height;
+    case SPPM_PHASE_PHOTONS:
         /* Serial, and cheap next to the passes: a counting sort over the pixels. */
-        sppm_grid_build(&g, px, count);
-        if (s->emitter_sampler.lights > 0) {
-            run_phase(&job, SPPM_PHASE_PHOTONS);
-            for (int c = 0; c < job.chunks; c++)
-                if (job.hits[c].oom) {
-                    st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon hits");
-                    goto done;
-                }
-        } else {
-            for (int c = 0; c < job.chunks; c++) {
-                job.hits[c].n = 0;
-                memset(job.hits[c].range_start, 0, ((size_t)job.ranges + 1u) * sizeof *job.hits[c].range_start);
-            }
+        sppm_grid_build(&job->g, job->px, job->count);
+        if (job->s->emitter_sampler.lights > 0) return job->chunks;
+        for (int c = 0; c < job->chunks; c++) {
+            job->hits[c].n = 0;
+            memset(job->hits[c].range_start, 0, ((size_t)job->ranges + 1u) * sizeof *job->hits[c].range_start);
         }
-        run_phase(&job, SPPM_PHASE_DEPOSIT);
-        iter++;
-        double elapsed = clock_seconds() - t0;
-        if (sp->progress) {
-            double f = sp->iterations > 0 ? (double)iter / sp->iterations : 0.0;
-            if (sp->time_limit > 0.0 && elapsed / sp->time_limit > f) f = elapsed / sp->time_limit;
-            if (sp->progress(sp->progress_user, f > 1.0 ? 1.0 : f, elapsed) != 0) {
-                st = CST_ERR_CANCELLED; /* at an iteration's end: the film is left empty */
-                goto done;
-            }
-        }
-        if (sp->time_limit > 0.0 && elapsed >= sp->time_limit) break;
+        return 0;
+    case SPPM_PHASE_DEPOSIT:
+        for (int c = 0; c < job->chunks; c++)
+            if (job->hits[c].oom) return -1;
+        return job->ranges;
     }
+    return 0;
+}
+
+void sppm_finish(const Sppm *job, Film *film, int iter)
+{
     /* The final estimate as the film's single sample (see sppm.h). */
-    const double n_emitted = (double)photons * (double)iter;
-    for (size_t i = 0; i < count; i++) {
-        const SppmPixel *v = &px[i];
+    const double n_emitted = (double)job->photons * (double)iter;
+    for (size_t i = 0; i < job->count; i++) {
+        const SppmPixel *v = &job->px[i];
         double area = (double)CST_PI * (double)v->r * (double)v->r;
         double L[3];
         for (int c = 0; c < 3; c++) L[c] = v->ld[c] / iter + (n_emitted > 0.0 ? v->tau[c] / (n_emitted * area) : 0.0);
         film_accumulate(film, (int)i, L[0], L[1], L[2]);
     }
     film->spp = 1;
-    res->iterations = iter;
-    res->photons = (uint64_t)photons * (uint64_t)iter;
-    res->radius0 = r0;
-done:
-    if (workers)
-        for (int i = 0; i < threads; i++) {
-            *rays += workers[i].rays;
-            res->nonfinite += workers[i].nonfinite;
+}
+
+void sppm_counters(const Sppm *job, uint64_t *rays, uint64_t *nonfinite)
+{
+    *rays += job->prepare_rays;
+    if (job->workers)
+        for (int i = 0; i < job->num_workers; i++) {
+            *rays += job->workers[i].rays;
+            *nonfinite += job->workers[i].nonfinite;
         }
-    if (job.hits)
-        for (int c = 0; c < job.chunks; c++) {
-            free(job.hits[c].v);
-            free(job.hits[c].order);
-            free(job.hits[c].range_start);
+}
+
+void sppm_destroy(Sppm *job)
+{
+    if (!job) return;
+    if (job->hits)
+        for (int c = 0; c < job->chunks; c++) {
+            free(job->hits[c].v);
+            free(job->hits[c].order);
+            free(job->hits[c].range_start);
         }
-    free(job.hits);
-    free(workers);
-    free(px);
-    free(g.cell_start);
-    free(g.entries);
-    free(g.discs);
-    return st;
+    free(job->hits);
+    free(job->workers);
+    free(job->px);
+    free(job->g.cell_start);
+    free(job->g.entries);
+    free(job->g.discs);
+    free(job);
 }
