@@ -59,8 +59,11 @@ static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ra
         return photon_li(it->scene, &it->photon, ray, &cont, &w->rays);
     case INTEGRATOR_BIDIR:
         cont = sampler_continue(smp->rng);
-        return vcm_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
-                                &cont, &w->rays);
+        if (it->light.vcm_params.merge)
+            return vcm_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
+                                    &cont, &w->rays);
+        return bdpt_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
+                                 &cont, &w->rays);
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_SPPM: break;
     }
@@ -127,7 +130,7 @@ static void light_chunk(void *ctx, int chunk, int worker)
             /* A stream apart from the camera path of pixel i, which uses (seed, i, iteration). */
             sampler_start_stream(&rng, it->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)it->iteration);
             size_t before = verts->n;
-            vcm_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, verts, out, &w->rays);
+            subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, verts, out, &w->rays);
             L->path_count[i] = (uint32_t)(verts->n - before);
         }
         /* The grid's corner, reduced over the chunks by bidir_prepare (min is exact in any

@@ -12,6 +12,7 @@
 #include "core/threadpool.h"
 #include "film/film.h"
 #include "film/filter.h"
+#include "integrators/bdpt.h"
 #include "integrators/light.h"
 #include "integrators/path.h"
 #include "integrators/photon.h"
