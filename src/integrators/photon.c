@@ -38,24 +38,22 @@ static int photon_array_push(PhotonArray *a, const Photon *ph)
     return array_push(a, *ph);
 }
 
-/* Traces photon path `index`; returns 0 on OOM. */
-static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, float inv_n,
-                        PhotonArray *global, PhotonArray *caustic, uint64_t *rays)
+bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVisit visit, void *ctx, uint64_t *rays)
 {
     Sampler rng;
-    sampler_start_stream(&rng, pp->seed, index, PHOTON_STREAM);
+    sampler_start_stream(&rng, pw->seed, index, pw->stream);
     float u_sel = sampler_1d(&rng);
     Vec2 u_pos = sampler_2d(&rng);
     Vec2 u_dir = sampler_2d(&rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, s->emitters, &g, u_sel, u_pos, u_dir, &es);
-    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return 1; /* still one of the N */
+    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return true; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
      * uniform emitter carry the same flux, L_e pi A / N one-sided, L_e 2 pi A / N
      * two-sided, summing to the emitted power; delta lights likewise (light.c). */
-    Color power = color_scale(es.beta, inv_n);
+    Color power = color_scale(es.beta, pw->scale);
     Color scatter = color_s(1.0f); /* what Russian roulette looks at, as in light.c */
     bool specular_only = true; /* every bounce so far was a delta lobe */
     Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
@@ -72,11 +70,9 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
             ph.wi = w_prev;
             ph.power = power;
             ph.n = v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng);
-            if (!photon_array_push(global, &ph)) return 0;
-            /* depth 1 is direct light (L D), which NEE handles at camera points. */
-            if (specular_only && depth > 1 && !photon_array_push(caustic, &ph)) return 0;
+            if (!visit(ctx, &ph, depth, specular_only)) return false;
         }
-        if (pp->max_depth > 0 && depth >= pp->max_depth) break;
+        if (pw->max_depth > 0 && depth >= pw->max_depth) break;
         BsdfSample bs;
         float uc = sampler_1d(&rng);
         Vec2 u = sampler_2d(&rng);
@@ -88,13 +84,27 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
         if (color_is_black(scatter)) break;
         /* Russian roulette (Jensen 2001 sec. 5.4 uses absorption probability; this is the
          * light tracer's rule, so both trace the same paths): unbiased, power scaled by 1/q. */
-        float rr = roulette(&rng, depth, pp->rr_depth, scatter);
+        float rr = roulette(&rng, depth, pw->rr_depth, scatter);
         if (rr == 0.0f) break;
         power = color_scale(power, rr);
         scatter = color_scale(scatter, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
-    return 1;
+    return true;
+}
+
+/* The photon maps' store: every non-delta hit to the global map, and L S+ D ones, past
+ * the first hit, to the caustic map too. */
+typedef struct PhotonStore {
+    PhotonArray *global, *caustic;
+} PhotonStore;
+
+static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_only)
+{
+    PhotonStore *st = ctx;
+    if (!photon_array_push(st->global, ph)) return false;
+    /* depth 1 is direct light (L D), which NEE handles at camera points. */
+    return !(specular_only && depth > 1) || photon_array_push(st->caustic, ph);
 }
 
 /* Follows delta lobes from `ray` (sampling one lobe at each; weights into *beta) to the
@@ -287,9 +297,10 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
     PhotonArray global = {0}, caustic = {0};
     CstStatus st = CST_OK;
     if (s->emitter_sampler.lights > 0) {
-        float inv_n = 1.0f / (float)n;
+        const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth};
+        PhotonStore store = {&global, &caustic};
         for (int i = 0; i < n; i++)
-            if (!trace_photon(s, pp, (uint64_t)i, inv_n, &global, &caustic, rays)) {
+            if (!photon_walk(s, &pw, (uint64_t)i, store_photon, &store, rays)) {
                 st = cst_fail(err, CST_ERR_OOM, "out of memory for %zu photons", global.n + caustic.n);
                 goto done;
             }

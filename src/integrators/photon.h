@@ -5,6 +5,7 @@
 #ifndef CST_INTEGRATORS_PHOTON_H
 #define CST_INTEGRATORS_PHOTON_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "camera/camera.h"
@@ -26,6 +27,25 @@ typedef struct PhotonParams {
     int rr_depth;    /* first bounce at which Russian roulette may stop a photon path */
     uint64_t seed;   /* the photon pass is a function of this seed only */
 } PhotonParams;
+
+/* A photon path's parameters: stream (seed, index, stream), emitted power scaled by
+ * `scale` (1 / photons for the maps; SPPM divides later). */
+typedef struct PhotonWalk {
+    uint64_t seed, stream;
+    float scale;
+    int max_depth, rr_depth;
+} PhotonWalk;
+
+/* Called at every non-delta hit of a photon path with the photon there, its depth (1:
+ * the first hit from the light) and whether every bounce before it was a delta lobe.
+ * Returns false to stop (OOM). */
+typedef bool (*PhotonVisit)(void *ctx, const Photon *ph, int depth, bool specular_only);
+
+/* The one photon path walk (photon maps and SPPM): emission sampling, importance-mode
+ * BSDF sampling (photons carry flux), Russian roulette (roulette.h). False if `visit`
+ * stopped it. */
+bool photon_walk(const Scene *scene, const PhotonWalk *pw, uint64_t index, PhotonVisit visit, void *ctx,
+                 uint64_t *rays);
 
 /* Both maps and the radius every estimate uses. A zeroed PhotonMaps is valid and empty. */
 typedef struct PhotonMaps {

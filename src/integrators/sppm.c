@@ -33,7 +33,6 @@
 #include "core/error.h"
 #include "film/filter.h"
 #include "integrators/photon.h"
-#include "integrators/roulette.h"
 #include "materials/bsdf.h"
 #include "sampling/warp.h"
 
@@ -225,48 +224,23 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *h
     }
 }
 
-/* Photon path `index` of iteration `iter`, photon.c's trace_photon, recording its hits
- * in `out` instead of a map; power unnormalised (see the file comment). */
+/* SPPM's photon store: every non-delta hit but the first one from the light (depth 1 =
+ * L D, which NEE counts at the visible points) into the chunk's hit list. */
+static bool store_hit(void *ctx, const Photon *ph, int depth, bool specular_only)
+{
+    (void)specular_only;
+    if (depth > 1) hit_list_push(ctx, ph->pos, ph->wi, ph->n, ph->power); /* sets oom, checked after the phase */
+    return true;
+}
+
+/* Photon path `index` of iteration `iter`, by photon.c's walk, recording its hits in `out`
+ * instead of a map; power unnormalised (see the file comment). */
 static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out, uint64_t index, int iter,
                          uint64_t *rays)
 {
-    Sampler rng;
-    sampler_start_stream(&rng, sp->seed, index, SPPM_STREAM + (uint64_t)iter);
-    float u_sel = sampler_1d(&rng);
-    Vec2 u_pos = sampler_2d(&rng);
-    Vec2 u_dir = sampler_2d(&rng);
-    EmissionSample es;
-    EmitterGeometry eg = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, s->emitters, &eg, u_sel, u_pos, u_dir, &es);
-    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
-    Color power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */
-    Color scatter = color_s(1.0f);
-    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
-    for (int depth = 1;; depth++) {
-        SurfaceHit sh;
-        ++*rays;
-        if (!scene_intersect(s, &ray, &sh)) break;
-        Vec3 w_prev = v3_neg(ray.d);
-        Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
-        /* depth 1 is direct light (L D): NEE counts it at the visible points. */
-        if (depth > 1 && !bsdf_is_delta(&bsdf))
-            hit_list_push(out, sh.p, w_prev, v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng), power);
-        if (sp->max_depth > 0 && depth >= sp->max_depth) break;
-        BsdfSample bs;
-        float uc = sampler_1d(&rng);
-        Vec2 u = sampler_2d(&rng);
-        /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
-        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
-        power = color_mul(power, bs.weight);
-        scatter = color_mul(scatter, bs.weight);
-        if (color_is_black(scatter)) break;
-        float rr = roulette(&rng, depth, sp->rr_depth, scatter); /* roulette.h */
-        if (rr == 0.0f) break;
-        power = color_scale(power, rr);
-        scatter = color_scale(scatter, rr);
-        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
-    }
+    /* Powers unscaled: the estimate divides by the photons of all iterations. */
+    const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth};
+    photon_walk(s, &pw, index, store_hit, out, rays);
 }
 
 /* The visible points of row y for iteration `iter`. */
