@@ -55,6 +55,7 @@ static int cli_exit_code(CstStatus status, CliStage stage)
         return stage == CLI_STAGE_LOAD ? CLI_EXIT_USAGE : CLI_EXIT_INTERNAL;
     case CST_ERR_OOM:
     case CST_ERR_INTERNAL:
+    case CST_ERR_CANCELLED: /* the CLI never cancels */
         return CLI_EXIT_INTERNAL;
     }
     return CLI_EXIT_INTERNAL;
@@ -197,7 +198,7 @@ static void cli_progress_draw(CliProgress *p, double fraction, double elapsed)
 }
 
 /* CstProgressFn: called from the rendering (calling) thread about ten times a second. */
-static void cli_progress_report(void *user, double fraction, double elapsed)
+static int cli_progress_report(void *user, double fraction, double elapsed)
 {
     CliProgress *p = user;
     if (!(fraction >= 0.0))
@@ -206,7 +207,7 @@ static void cli_progress_report(void *user, double fraction, double elapsed)
         fraction = 1.0;
     if (p->tty) {
         cli_progress_draw(p, fraction, elapsed);
-        return;
+        return 0;
     }
     /* A long gap between calls may cross several steps; print only the latest. */
     int step = (int)(fraction * 10.0 + 1e-9);
@@ -214,6 +215,7 @@ static void cli_progress_report(void *user, double fraction, double elapsed)
         p->last_step = step;
         fprintf(stderr, "caustic: %d%% (elapsed %.1f s)\n", step * 10, elapsed);
     }
+    return 0; /* never cancels */
 }
 
 /* After a successful render: complete the bar, or the 100% line if the library's last

@@ -24,7 +24,8 @@ typedef enum CstStatus {
     CST_ERR_PARSE,       /* malformed input text; the message names file:line:column */
     CST_ERR_UNSUPPORTED, /* a valid request this build cannot honour */
     CST_ERR_OOM,         /* allocation failed */
-    CST_ERR_INTERNAL     /* a bug or an unexpected library failure */
+    CST_ERR_INTERNAL,    /* a bug or an unexpected library failure */
+    CST_ERR_CANCELLED    /* the caller asked to stop (CstProgressFn returned nonzero) */
 } CstStatus;
 
 typedef struct CstError {
@@ -160,7 +161,10 @@ const char *cst_sampler_name(CstSampler sampler);
 /* "albedo", "normal", "depth", "variance" (one name) to its CST_AOV_ bit; 0 if unknown. */
 int cst_aov_from_name(const char *name);
 
-typedef void (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
+/* Returns 0 to go on; nonzero cancels the render: it stops at the next work-item
+ * boundary (a tile, a chunk of light paths, an SPPM phase's unit), and cst_render
+ * returns CST_ERR_CANCELLED without a film (*out stays NULL). */
+typedef int (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
 
 /* Zero-initialise, then set what you want: a zero field means "the scene's value, else
  * the default". Command-line values override scene-file values this way. */
@@ -193,7 +197,8 @@ typedef struct CstRenderSettings {
      * Each holds exactly the value it has in a whole render with the same seed. All zero =
      * the scene's crop, else the whole image. */
     int crop[4];
-    CstProgressFn progress;   /* called from the calling thread about 10 times a second */
+    CstProgressFn progress;   /* called from the calling thread about 10 times a second;
+                               * nonzero return: cancel (CST_ERR_CANCELLED) */
     void *progress_user;
 } CstRenderSettings;
 

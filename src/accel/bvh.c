@@ -6,14 +6,14 @@
 #include <immintrin.h>
 #include <float.h>
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include "core/array.h"
 #include "core/error.h"
 #include "core/memory.h"
+#include "core/threadpool.h"
 #include "geometry/sphere.h"
 
 enum {
@@ -130,7 +130,6 @@ typedef struct Builder {
     BinNode *nodes;
     CollapseChoice *choice;
     uint32_t num_tris; /* ids below are triangles, the rest spheres */
-    atomic_int spare_threads;
 } Builder;
 
 /* Bounds and centroid bounds of idx[begin, end): for the root and the rare splits that
@@ -253,30 +252,6 @@ static void find_split(Builder *b, int begin, int end, Box4 box, Box4 cbox, Spli
     out->mid = i;
 }
 
-static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth, SubtreeCost *out);
-
-typedef struct BuildTask {
-    Builder *b;
-    int node, begin, end, depth;
-    Box4 box, cbox;
-    SubtreeCost cost;
-} BuildTask;
-
-static void *build_task_run(void *arg)
-{
-    BuildTask *t = arg;
-    build_node(t->b, t->node, t->begin, t->end, t->box, t->cbox, t->depth, &t->cost);
-    return NULL;
-}
-
-static bool take_thread(Builder *b)
-{
-    int spare = atomic_load(&b->spare_threads);
-    while (spare > 0)
-        if (atomic_compare_exchange_weak(&b->spare_threads, &spare, spare - 1)) return true;
-    return false;
-}
-
 /* A leaf's SAH cost: its blocks, or its spheres, one at a time. */
 static inline float leaf_sah(float area, int count, bool tris)
 {
@@ -326,15 +301,16 @@ static void inner_cost(Builder *b, int node, const SubtreeCost *l, const Subtree
     }
 }
 
-static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth, SubtreeCost *out)
+/* Node `node` over idx[begin, end): its box, then a split (true, *s, the node inner with
+ * its right child at node + 2 * (s->mid - begin)) or a leaf (false). */
+static bool split_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth, Split *s)
 {
     BinNode *bn = &b->nodes[node];
     bn->box = box4_to_bbox(box);
     int n = end - begin;
-    Split s;
-    s.mid = -1;
-    if (n > 1 && depth < BVH_MAX_DEPTH) find_split(b, begin, end, box, cbox, &s);
-    if (s.mid < 0 && n > 1) {
+    s->mid = -1;
+    if (n > 1 && depth < BVH_MAX_DEPTH) find_split(b, begin, end, box, cbox, s);
+    if (s->mid < 0 && n > 1) {
         int split_at = -1;
         if (n > BVH_MAX_LEAF) {
             /* Coincident centroids (or too deep): any partition is correct, the middle
@@ -350,37 +326,116 @@ static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 
             if (i > begin && i < end) split_at = i;
         }
         if (split_at >= 0) {
-            s.mid = split_at;
-            range_bounds(b, begin, split_at, &s.lbox, &s.lcbox);
-            range_bounds(b, split_at, end, &s.rbox, &s.rcbox);
+            s->mid = split_at;
+            range_bounds(b, begin, split_at, &s->lbox, &s->lcbox);
+            range_bounds(b, split_at, end, &s->rbox, &s->rcbox);
         }
     }
-    if (s.mid < 0) {
+    if (s->mid < 0) {
         bn->offset = begin;
         bn->count = n;
+        return false;
+    }
+    bn->offset = node + 2 * (s->mid - begin);
+    bn->count = 0;
+    return true;
+}
+
+/* The subtree of `node`, depth first on the calling thread; *out its collapse costs. */
+static void build_node(Builder *b, int node, int begin, int end, Box4 box, Box4 cbox, int depth, SubtreeCost *out)
+{
+    Split s;
+    if (!split_node(b, node, begin, end, box, cbox, depth, &s)) {
         leaf_cost(b, node, out);
         return;
     }
-    int nl = s.mid - begin;
-    int left = node + 1, right = node + 2 * nl;
-    bn->offset = right;
-    bn->count = 0;
     SubtreeCost lc, rc;
-    if (n >= BVH_PARALLEL_MIN && take_thread(b)) {
-        BuildTask t = {b, right, s.mid, end, depth + 1, s.rbox, s.rcbox, {{0.0f}, 0, 0u}};
-        pthread_t tid;
-        if (pthread_create(&tid, NULL, build_task_run, &t) == 0) {
-            build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1, &lc);
-            pthread_join(tid, NULL);
-            atomic_fetch_add(&b->spare_threads, 1);
-            inner_cost(b, node, &lc, &t.cost, out);
-            return;
-        }
-        atomic_fetch_add(&b->spare_threads, 1);
-    }
-    build_node(b, left, begin, s.mid, s.lbox, s.lcbox, depth + 1, &lc);
-    build_node(b, right, s.mid, end, s.rbox, s.rcbox, depth + 1, &rc);
+    build_node(b, node + 1, begin, s.mid, s.lbox, s.lcbox, depth + 1, &lc);
+    build_node(b, b->nodes[node].offset, s.mid, end, s.rbox, s.rcbox, depth + 1, &rc);
     inner_cost(b, node, &lc, &rc, out);
+}
+
+/* The parallel build. Node numbering is fixed by the splits alone (left child node + 1,
+ * right child node + 2 * left count), so any thread may build any subtree and the tree
+ * is the serial one, bit for bit. The top of the tree, nodes of BVH_PARALLEL_MIN
+ * primitives or more, is split level by level, a level's nodes in parallel; the
+ * smaller subtrees under it are work items built whole; then the top's collapse costs
+ * are computed bottom-up, serially (a few nodes). */
+typedef struct TopNode {
+    int node, begin, end, depth;
+    Box4 box, cbox;
+    bool inner;        /* split; its children are entries kid[0], kid[1] */
+    Split split;       /* the split, from its parallel-for until its children are added */
+    int kid[2];
+    SubtreeCost cost;
+} TopNode;
+
+typedef struct TopBuild {
+    Builder *b;
+    ARRAY(TopNode) top;
+    ARRAY(int) items;  /* entries of the current parallel-for */
+} TopBuild;
+
+static void top_split_item(void *ctx, int item, int worker)
+{
+    (void)worker;
+    TopBuild *tb = ctx;
+    TopNode *t = &tb->top.v[tb->items.v[item]];
+    t->inner = split_node(tb->b, t->node, t->begin, t->end, t->box, t->cbox, t->depth, &t->split);
+    if (!t->inner) leaf_cost(tb->b, t->node, &t->cost);
+}
+
+static void top_subtree_item(void *ctx, int item, int worker)
+{
+    (void)worker;
+    TopBuild *tb = ctx;
+    TopNode *t = &tb->top.v[tb->items.v[item]];
+    build_node(tb->b, t->node, t->begin, t->end, t->box, t->cbox, t->depth, &t->cost);
+}
+
+/* Builds the whole tree on `pool` (see TopNode); *out is the root's costs. False on OOM. */
+static bool build_parallel(Builder *b, ThreadPool *pool, int n, Box4 box, Box4 cbox, SubtreeCost *out)
+{
+    TopBuild tb = {b, {0}, {0}};
+    bool ok = false;
+    if (!array_push(&tb.top, ((TopNode){.node = 0, .begin = 0, .end = n, .box = box, .cbox = cbox}))) goto done;
+    /* Entries [level, top.n) are the level being split; the ones under BVH_PARALLEL_MIN
+     * wait for the subtree step. */
+    for (size_t level = 0, next; level < tb.top.n; level = next) {
+        tb.items.n = 0;
+        for (size_t i = level; i < tb.top.n; i++)
+            if (tb.top.v[i].end - tb.top.v[i].begin >= BVH_PARALLEL_MIN && !array_push(&tb.items, (int)i)) goto done;
+        threadpool_for(pool, (int)tb.items.n, top_split_item, &tb);
+        next = tb.top.n;
+        for (size_t k = 0; k < tb.items.n; k++) {
+            const TopNode t = tb.top.v[tb.items.v[k]];
+            if (!t.inner) continue;
+            const Split *sp = &t.split;
+            if (!array_push(&tb.top, ((TopNode){.node = t.node + 1, .begin = t.begin, .end = sp->mid,
+                                                .depth = t.depth + 1, .box = sp->lbox, .cbox = sp->lcbox})) ||
+                !array_push(&tb.top, ((TopNode){.node = b->nodes[t.node].offset, .begin = sp->mid, .end = t.end,
+                                                .depth = t.depth + 1, .box = sp->rbox, .cbox = sp->rcbox})))
+                goto done;
+            tb.top.v[tb.items.v[k]].kid[0] = (int)tb.top.n - 2;
+            tb.top.v[tb.items.v[k]].kid[1] = (int)tb.top.n - 1;
+        }
+    }
+    /* The subtrees under the top, one work item each. */
+    tb.items.n = 0;
+    for (size_t i = 0; i < tb.top.n; i++)
+        if (tb.top.v[i].end - tb.top.v[i].begin < BVH_PARALLEL_MIN && !array_push(&tb.items, (int)i)) goto done;
+    threadpool_for(pool, (int)tb.items.n, top_subtree_item, &tb);
+    /* Children come after their parent in the array: backwards is bottom-up. */
+    for (size_t i = tb.top.n; i-- > 0;) {
+        TopNode *t = &tb.top.v[i];
+        if (t->inner) inner_cost(b, t->node, &tb.top.v[t->kid[0]].cost, &tb.top.v[t->kid[1]].cost, &t->cost);
+    }
+    *out = tb.top.v[0].cost;
+    ok = true;
+done:
+    array_free(&tb.top);
+    array_free(&tb.items);
+    return ok;
 }
 
 /* Node boxes are widened a little, outward: a ray lying exactly in a box's face plane
@@ -593,12 +648,19 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     }
     for (int i = 0; i < n; i++) idx[i] = (uint32_t)i;
 
-    Builder b = {bp, idx, nodes, choice, (uint32_t)num_tris, 0};
-    atomic_init(&b.spare_threads, build_threads() - 1);
+    Builder b = {bp, idx, nodes, choice, (uint32_t)num_tris};
     Box4 root_box, root_cbox;
     range_bounds(&b, 0, n, &root_box, &root_cbox);
     SubtreeCost root_cost;
-    build_node(&b, 0, 0, n, root_box, root_cbox, 0, &root_cost);
+    ThreadPool *pool = NULL;
+    /* Small scenes are built on the calling thread: the tree is the same either way. */
+    if (n >= BVH_PARALLEL_MIN && threadpool_create(build_threads(), &pool) == CST_OK) {
+        bool built = build_parallel(&b, pool, n, root_box, root_cbox, &root_cost);
+        threadpool_destroy(pool);
+        if (!built) goto oom;
+    } else {
+        build_node(&b, 0, 0, n, root_box, root_cbox, 0, &root_cost);
+    }
 
     /* A root that is a binary leaf is the single slot of a root node (below). */
     size_t wide = nodes[0].count > 0 ? 1 : 0, blocks = 0;

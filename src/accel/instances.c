@@ -5,27 +5,20 @@
  * on the way in and out, so hits from different instances compare in world t. */
 #include "accel/instances.h"
 
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/error.h"
 
 /* Depth of the top-level tree: median splits halve the count, so 64 covers any int count. */
 #define INST_STACK 64
 
-static int grow(void **arr, int *cap, int need, size_t size)
+/* Room for one more element; counts stay int, so INT_MAX of them at most. */
+static bool grow_one(void *arr, size_t *cap, int num, size_t size)
 {
-    if (need <= *cap) return 1;
-    int c = *cap ? *cap : 8;
-    while (c < need) {
-        if (c > INT32_MAX / 2) return 0;
-        c *= 2;
-    }
-    void *p = realloc(*arr, (size_t)c * size);
-    if (!p) return 0;
-    *arr = p;
-    *cap = c;
-    return 1;
+    return num < INT_MAX && array_grow(arr, cap, (size_t)num + 1, size);
 }
 
 CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec3 *normals,
@@ -33,7 +26,7 @@ CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec
                               int num_triangles, int *out_id, CstError *err)
 {
     if (set->built) return cst_fail(err, CST_ERR_INVALID_ARG, "instances already built");
-    if (!grow((void **)&set->protos, &set->cap_protos, set->num_protos + 1, sizeof *set->protos))
+    if (!grow_one(&set->protos, &set->cap_protos, set->num_protos, sizeof *set->protos))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding an instanced object");
     InstProto *p = &set->protos[set->num_protos];
     memset(p, 0, sizeof *p);
@@ -71,7 +64,7 @@ CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from
         !transform_normal_matrix(world_from_obj, &in.normal_matrix))
         return cst_fail(err, CST_ERR_INVALID_ARG, "instance transform is singular or not affine");
     in.proto = proto;
-    if (!grow((void **)&set->insts, &set->cap_insts, set->num_insts + 1, sizeof *set->insts))
+    if (!grow_one(&set->insts, &set->cap_insts, set->num_insts, sizeof *set->insts))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding an instance");
     set->insts[set->num_insts++] = in;
     return CST_OK;

@@ -40,9 +40,9 @@ typedef struct InstNode {
 
 typedef struct InstanceSet {
     InstProto *protos;
-    int num_protos, cap_protos;
+    int num_protos; size_t cap_protos;
     Instance *insts;
-    int num_insts, cap_insts;
+    int num_insts; size_t cap_insts;
     InstNode *nodes;
     int num_nodes;
     int32_t *order;

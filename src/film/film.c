@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/error.h"
 #include "film/filter.h"
 #include "io/image_io.h"
@@ -232,14 +233,7 @@ void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Color c)
     int x0, x1, y0, y1;
     /* (also drops positions so far off that the integer conversion would overflow) */
     if (!(fabsf(x) < 1e9f && fabsf(y) < 1e9f) || !splat_footprint(fr, x, y, &x0, &x1, &y0, &y1)) return;
-    if (l->n == l->cap) {
-        size_t cap = l->cap ? 2 * l->cap : 1024;
-        FilmSplat *v = realloc(l->v, cap * sizeof *v);
-        if (!v) { l->oom = 1; return; }
-        l->v = v;
-        l->cap = cap;
-    }
-    l->v[l->n++] = (FilmSplat){x, y, c.c[0], c.c[1], c.c[2], (uint16_t)y0, (uint16_t)y1};
+    if (!array_push(l, ((FilmSplat){x, y, c.c[0], c.c[1], c.c[2], (uint16_t)y0, (uint16_t)y1}))) l->oom = 1;
 }
 
 /* splat_spread for the tent, the light tracers' default filter: the two nearest pixel
@@ -334,12 +328,9 @@ int splat_list_bin(SplatList *l, const SplatFrame *fr)
     size_t total = 0;
     for (size_t i = 0; i < l->n; i++)
         for (int b = l->v[i].row0 >> fr->band_shift; b <= l->v[i].row1 >> fr->band_shift; b++) { start[b + 1]++; total++; }
-    if (l->binned_cap < total) {
-        size_t cap = total + total / 4;
-        FilmSplat *nb = realloc(l->binned, cap * sizeof *nb);
-        if (!nb) { l->oom = 1; return 0; }
-        l->binned = nb;
-        l->binned_cap = cap;
+    if (!array_grow(&l->binned, &l->binned_cap, total, sizeof *l->binned)) {
+        l->oom = 1;
+        return 0;
     }
     for (int b = 0; b < bands; b++) start[b + 1] += start[b];
     /* Placing through a running cursor per band keeps list order inside each band; the
@@ -362,4 +353,14 @@ void film_add_splats_band(const SplatList *l, const SplatFrame *fr, double *rgb,
 void film_add_splats(const SplatList *l, const SplatFrame *fr, double *rgb, double scale)
 {
     for (size_t i = 0; i < l->n; i++) splat_spread(&l->v[i], fr, rgb, scale, 0, fr->height);
+}
+
+/* The public AOV names (caustic.h). */
+int cst_aov_from_name(const char *name)
+{
+    if (strcmp(name, "albedo") == 0) return CST_AOV_ALBEDO;
+    if (strcmp(name, "normal") == 0) return CST_AOV_NORMAL;
+    if (strcmp(name, "depth") == 0) return CST_AOV_DEPTH;
+    if (strcmp(name, "variance") == 0) return CST_AOV_VARIANCE;
+    return 0;
 }

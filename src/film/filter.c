@@ -122,3 +122,25 @@ Vec2 filter_sample(const Filter *f, Vec2 u, float *weight)
         return v2(u.x - 0.5f, u.y - 0.5f);
     }
 }
+
+/* The public name table (caustic.h): the filter module owns its names. */
+CstFilter cst_filter_from_name(const char *name)
+{
+    if (strcmp(name, "box") == 0) return CST_FILTER_BOX;
+    if (strcmp(name, "tent") == 0) return CST_FILTER_TENT;
+    if (strcmp(name, "gaussian") == 0) return CST_FILTER_GAUSSIAN;
+    if (strcmp(name, "mitchell") == 0) return CST_FILTER_MITCHELL;
+    return CST_FILTER_DEFAULT;
+}
+
+const char *cst_filter_name(CstFilter filter)
+{
+    switch (filter) {
+    case CST_FILTER_BOX: return "box";
+    case CST_FILTER_TENT: return "tent";
+    case CST_FILTER_GAUSSIAN: return "gaussian";
+    case CST_FILTER_MITCHELL: return "mitchell";
+    case CST_FILTER_DEFAULT: break;
+    }
+    return "default";
+}

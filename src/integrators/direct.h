@@ -17,7 +17,7 @@ static inline float power_heuristic(float pdf_a, float pdf_b)
 
 /* f(wo, wi) L_i / pdf for one light picked by power (area point or delta light) with
  * u_sel, the point on it with u, and a shadow ray; black when the scene has no lights.
- * The caller draws the numbers (from its Sampler or its Pcg32). */
+ * The caller draws the numbers (from its Sampler). */
 Color direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,
                  uint64_t *rays);
 /* The same weighted by the power heuristic against BSDF sampling of the same direction

@@ -7,6 +7,7 @@
 #include "integrators/light.h"
 
 #include "film/filter.h"
+#include "integrators/roulette.h"
 #include "materials/bsdf.h"
 
 /* Splats weight * W_e / pdf_w if the lens point is visible; weight already holds the
@@ -22,15 +23,15 @@ static void splat_if_visible(const Scene *s, const LightParams *lp,
                color_scale(weight, cs->we / cs->pdf_w));
 }
 
-void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32 *rng,
+void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampler *rng,
                  SplatList *out, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
     /* The tent reaches half a pixel past the film's edge (film_splat). */
     const float margin = filter_radius(lp->frame.filter) - 0.5f;
-    float u_sel = pcg32_float(rng);
-    Vec2 u_pos = pcg32_v2(rng);
-    Vec2 u_dir = pcg32_v2(rng);
+    float u_sel = sampler_1d(rng);
+    Vec2 u_pos = sampler_2d(rng);
+    Vec2 u_dir = sampler_2d(rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
@@ -39,7 +40,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
      * lights are never seen, nor is the environment: it is no surface a connection could
      * reach). */
     CameraWiSample cs;
-    Vec2 u_lens = pcg32_v2(rng);
+    Vec2 u_lens = sampler_2d(rng);
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, margin, &cs)) {
         const Emitter *e = &s->emitters[es.emitter];
         Color le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
@@ -64,7 +65,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
         scene_bsdf(s, &sh, &bsdf);
         /* Delta lobes cannot be connected: f is a Dirac in the direction to the lens. */
         const bool connect = !bsdf_is_delta(&bsdf);
-        if (connect) u_lens = pcg32_v2(rng);
+        if (connect) u_lens = sampler_2d(rng);
         /* The next direction is sampled before this vertex's camera connection (the
          * random numbers are drawn in the same order as ever): the connection is a chain
          * of divisions and a shadow ray nothing else waits on, and after the sampling it
@@ -72,8 +73,8 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
         bool end = lp->max_depth > 0 && depth >= lp->max_depth;
         BsdfSample bs;
         if (!end) {
-            float uc = pcg32_float(rng);
-            Vec2 u = pcg32_v2(rng);
+            float uc = sampler_1d(rng);
+            Vec2 u = sampler_2d(rng);
             /* Adjoint sampling: wo is where the light came from, and refraction does not
              * scale flux by 1/eta^2 (bsdf.c). */
             end = !bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs);
@@ -96,12 +97,10 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Pcg32
         if (color_is_black(scatter)) break;
 
         /* Russian roulette as in path.c: from the same depth, the same survival rule. */
-        if (depth >= lp->rr_depth) {
-            float q = minf(0.95f, color_max(scatter));
-            if (!(pcg32_float(rng) < q)) break;
-            beta = color_scale(beta, 1.0f / q);
-            scatter = color_scale(scatter, 1.0f / q);
-        }
+        float rr = roulette(rng, depth, lp->rr_depth, scatter);
+        if (rr == 0.0f) break;
+        beta = color_scale(beta, rr);
+        scatter = color_scale(scatter, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
 }

@@ -7,8 +7,8 @@
 #include <stdint.h>
 
 #include "camera/camera.h"
-#include "core/rng.h"
 #include "film/film.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 typedef struct LightParams {
@@ -23,7 +23,7 @@ typedef struct LightParams {
  * times the sum of its splats. Adds the rays traced to *rays. No allocation except the
  * amortised growth of *out; safe to call from many threads on one committed scene, each
  * with its own list. */
-void light_trace(const Scene *scene, const Camera *cam, const LightParams *params, Pcg32 *rng,
+void light_trace(const Scene *scene, const Camera *cam, const LightParams *params, Sampler *rng,
                  SplatList *out, uint64_t *rays);
 
 #endif

@@ -3,6 +3,7 @@
 #include "integrators/path.h"
 
 #include "integrators/direct.h"
+#include "integrators/roulette.h"
 #include "materials/bsdf.h"
 
 Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_t *rays)
@@ -60,14 +61,10 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
         specular = bs.delta;
         prev_pdf = bs.pdf;
 
-        /* Russian roulette: survive with probability q, reweight by 1/q (unbiased).
-         * q follows the throughput so dim paths stop early; capped below 1 so even an
-         * albedo-1 furnace terminates. */
-        if (depth + 1 >= pp->rr_depth) {
-            float q = minf(0.95f, color_max(beta));
-            if (!(sampler_1d(smp) < q)) break;
-            beta = color_scale(beta, 1.0f / q);
-        }
+        /* Russian roulette (roulette.h): beta is the path's scatter. */
+        float rr = roulette(smp, depth + 1, pp->rr_depth, beta);
+        if (rr == 0.0f) break;
+        beta = color_scale(beta, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
     return L;

@@ -20,8 +20,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/error.h"
 #include "integrators/direct.h"
+#include "integrators/roulette.h"
 #include "materials/bsdf.h"
 
 /* Stream ids: the photon pass and the radius probes draw from (seed, index, id), disjoint
@@ -29,42 +31,29 @@
 #define PHOTON_STREAM ((uint64_t)1 << 62)
 #define RADIUS_STREAM (((uint64_t)1 << 62) + 1u)
 
-typedef struct PhotonArray {
-    Photon *data;
-    size_t n, cap;
-} PhotonArray;
+typedef ARRAY(Photon) PhotonArray;
 
 static int photon_array_push(PhotonArray *a, const Photon *ph)
 {
-    if (a->n == a->cap) {
-        size_t cap = a->cap ? 2 * a->cap : 4096;
-        Photon *d = realloc(a->data, cap * sizeof *d);
-        if (!d) return 0;
-        a->data = d;
-        a->cap = cap;
-    }
-    a->data[a->n++] = *ph;
-    return 1;
+    return array_push(a, *ph);
 }
 
-/* Traces photon path `index`; returns 0 on OOM. */
-static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, float inv_n,
-                        PhotonArray *global, PhotonArray *caustic, uint64_t *rays)
+bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVisit visit, void *ctx, uint64_t *rays)
 {
-    Pcg32 rng;
-    pcg32_seed_sample(&rng, pp->seed, index, PHOTON_STREAM);
-    float u_sel = pcg32_float(&rng);
-    Vec2 u_pos = pcg32_v2(&rng);
-    Vec2 u_dir = pcg32_v2(&rng);
+    Sampler rng;
+    sampler_start_stream(&rng, pw->seed, index, pw->stream);
+    float u_sel = sampler_1d(&rng);
+    Vec2 u_pos = sampler_2d(&rng);
+    Vec2 u_dir = sampler_2d(&rng);
     EmissionSample es;
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
-    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return 1; /* still one of the N */
+    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return true; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
      * uniform emitter carry the same flux, L_e pi A / N one-sided, L_e 2 pi A / N
      * two-sided, summing to the emitted power; delta lights likewise (light.c). */
-    Color power = color_scale(es.beta, inv_n);
+    Color power = color_scale(es.beta, pw->scale);
     Color scatter = color_s(1.0f); /* what Russian roulette looks at, as in light.c */
     bool specular_only = true; /* every bounce so far was a delta lobe */
     Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
@@ -81,14 +70,12 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
             ph.wi = w_prev;
             ph.power = power;
             ph.n = v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng);
-            if (!photon_array_push(global, &ph)) return 0;
-            /* depth 1 is direct light (L D), which NEE handles at camera points. */
-            if (specular_only && depth > 1 && !photon_array_push(caustic, &ph)) return 0;
+            if (!visit(ctx, &ph, depth, specular_only)) return false;
         }
-        if (pp->max_depth > 0 && depth >= pp->max_depth) break;
+        if (pw->max_depth > 0 && depth >= pw->max_depth) break;
         BsdfSample bs;
-        float uc = pcg32_float(&rng);
-        Vec2 u = pcg32_v2(&rng);
+        float uc = sampler_1d(&rng);
+        Vec2 u = sampler_2d(&rng);
         /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
         if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
         if (!bs.delta) specular_only = false;
@@ -97,22 +84,34 @@ static int trace_photon(const Scene *s, const PhotonParams *pp, uint64_t index, 
         if (color_is_black(scatter)) break;
         /* Russian roulette (Jensen 2001 sec. 5.4 uses absorption probability; this is the
          * light tracer's rule, so both trace the same paths): unbiased, power scaled by 1/q. */
-        if (depth >= pp->rr_depth) {
-            float q = minf(0.95f, color_max(scatter));
-            if (!(pcg32_float(&rng) < q)) break;
-            power = color_scale(power, 1.0f / q);
-            scatter = color_scale(scatter, 1.0f / q);
-        }
+        float rr = roulette(&rng, depth, pw->rr_depth, scatter);
+        if (rr == 0.0f) break;
+        power = color_scale(power, rr);
+        scatter = color_scale(scatter, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
-    return 1;
+    return true;
+}
+
+/* The photon maps' store: every non-delta hit to the global map, and L S+ D ones, past
+ * the first hit, to the caustic map too. */
+typedef struct PhotonStore {
+    PhotonArray *global, *caustic;
+} PhotonStore;
+
+static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_only)
+{
+    PhotonStore *st = ctx;
+    if (!photon_array_push(st->global, ph)) return false;
+    /* depth 1 is direct light (L D), which NEE handles at camera points. */
+    return !(specular_only && depth > 1) || photon_array_push(st->caustic, ph);
 }
 
 /* Follows delta lobes from `ray` (sampling one lobe at each; weights into *beta) to the
  * first non-delta hit; mixed BSDFs as photon.h says. Adds the emission it passes (and the
  * hit's) to *le when le is not NULL. *wo_out is the direction back along the last segment.
  * Returns false if the ray leaves the scene or the chain stops. */
-bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Color *beta, Color *le,
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, Color *beta, Color *le,
                              SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays)
 {
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
@@ -133,8 +132,8 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Color *beta, C
         }
         BsdfSample bs;
         bs.delta = false; /* a delta lobe that was taken but rejected sets it (bsdf.h) */
-        float uc = pcg32_float(rng);
-        Vec2 u = pcg32_v2(rng);
+        float uc = sampler_1d(rng);
+        Vec2 u = sampler_2d(rng);
         bool sampled = bsdf_sample(bsdf, wo, uc, u, &bs);
         if (!bsdf_is_delta(bsdf) && !bs.delta) {
             /* A BSDF with delta and non-delta lobes (smooth-coat plastic): bsdf_sample
@@ -187,15 +186,15 @@ static Color radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, 
 
 /* Direct light at a non-delta point by one emitter sample (path.c's NEE, without MIS:
  * BSDF-sampled rays that reach emitters add nothing here). */
-Color photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Pcg32 *rng,
+Color photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Sampler *rng,
                         uint64_t *rays)
 {
-    float u_sel = pcg32_float(rng);
-    Vec2 u = pcg32_v2(rng);
+    float u_sel = sampler_1d(rng);
+    Vec2 u = sampler_2d(rng);
     return direct_light(s, bsdf, sh, wo, u_sel, u, rays);
 }
 
-Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64_t *rays)
+Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint64_t *rays)
 {
     Color L = color_s(0.0f), beta = color_s(1.0f);
     SurfaceHit x;
@@ -209,8 +208,8 @@ Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Pcg32 *rng, uint64
     /* Final gathering (Jensen 2001 sec. 9.3.3): the global map's blur is hidden behind one
      * more bounce; reading it at x directly would show its low-frequency noise. */
     BsdfSample bs;
-    float uc = pcg32_float(rng);
-    Vec2 u = pcg32_v2(rng);
+    float uc = sampler_1d(rng);
+    Vec2 u = sampler_2d(rng);
     /* Only the non-delta part of x is estimated here (photon_trace_to_diffuse follows a
      * mixed BSDF's delta lobes itself): a delta gather sample adds nothing. Its weight
      * f / pdf has the probability of the non-delta lobes in pdf, so the estimate stays
@@ -265,10 +264,10 @@ static float auto_radius(const Scene *s, const Camera *cam, const PhotonParams *
     size_t count = photon_map_count(g);
     if (count == 0) return 1.0f; /* nothing to estimate: any radius gives zero */
     for (int i = 0; i < PHOTON_RADIUS_POINTS; i++) {
-        Pcg32 rng;
-        pcg32_seed_sample(&rng, pp->seed, (uint64_t)i, RADIUS_STREAM);
-        float fx = pcg32_float(&rng) * (float)cam->width, fy = pcg32_float(&rng) * (float)cam->height;
-        Vec2 ul = pcg32_v2(&rng);
+        Sampler rng;
+        sampler_start_stream(&rng, pp->seed, (uint64_t)i, RADIUS_STREAM);
+        float fx = sampler_1d(&rng) * (float)cam->width, fy = sampler_1d(&rng) * (float)cam->height;
+        Vec2 ul = sampler_2d(&rng);
         Ray r = camera_generate_ray(cam, fx, fy, ul);
         Color beta = color_s(1.0f);
         SurfaceHit sh;
@@ -298,20 +297,21 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
     PhotonArray global = {0}, caustic = {0};
     CstStatus st = CST_OK;
     if (s->emitter_sampler.lights > 0) {
-        float inv_n = 1.0f / (float)n;
+        const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth};
+        PhotonStore store = {&global, &caustic};
         for (int i = 0; i < n; i++)
-            if (!trace_photon(s, pp, (uint64_t)i, inv_n, &global, &caustic, rays)) {
+            if (!photon_walk(s, &pw, (uint64_t)i, store_photon, &store, rays)) {
                 st = cst_fail(err, CST_ERR_OOM, "out of memory for %zu photons", global.n + caustic.n);
                 goto done;
             }
     }
-    if ((st = photon_map_build(&out->global, global.data, global.n, err)) != CST_OK) goto done;
-    if ((st = photon_map_build(&out->caustic, caustic.data, caustic.n, err)) != CST_OK) goto done;
+    if ((st = photon_map_build(&out->global, global.v, global.n, err)) != CST_OK) goto done;
+    if ((st = photon_map_build(&out->caustic, caustic.v, caustic.n, err)) != CST_OK) goto done;
     out->emitted = n;
     out->radius = pp->radius > 0.0f ? pp->radius : auto_radius(s, cam, pp, &out->global, rays);
 done:
-    free(global.data);
-    free(caustic.data);
+    array_free(&global);
+    array_free(&caustic);
     if (st != CST_OK) photon_maps_free(out);
     return st;
 }

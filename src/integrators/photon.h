@@ -5,11 +5,12 @@
 #ifndef CST_INTEGRATORS_PHOTON_H
 #define CST_INTEGRATORS_PHOTON_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "camera/camera.h"
-#include "core/rng.h"
 #include "integrators/photon_map.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 enum {
@@ -26,6 +27,25 @@ typedef struct PhotonParams {
     int rr_depth;    /* first bounce at which Russian roulette may stop a photon path */
     uint64_t seed;   /* the photon pass is a function of this seed only */
 } PhotonParams;
+
+/* A photon path's parameters: stream (seed, index, stream), emitted power scaled by
+ * `scale` (1 / photons for the maps; SPPM divides later). */
+typedef struct PhotonWalk {
+    uint64_t seed, stream;
+    float scale;
+    int max_depth, rr_depth;
+} PhotonWalk;
+
+/* Called at every non-delta hit of a photon path with the photon there, its depth (1:
+ * the first hit from the light) and whether every bounce before it was a delta lobe.
+ * Returns false to stop (OOM). */
+typedef bool (*PhotonVisit)(void *ctx, const Photon *ph, int depth, bool specular_only);
+
+/* The one photon path walk (photon maps and SPPM): emission sampling, importance-mode
+ * BSDF sampling (photons carry flux), Russian roulette (roulette.h). False if `visit`
+ * stopped it. */
+bool photon_walk(const Scene *scene, const PhotonWalk *pw, uint64_t index, PhotonVisit visit, void *ctx,
+                 uint64_t *rays);
 
 /* Both maps and the radius every estimate uses. A zeroed PhotonMaps is valid and empty. */
 typedef struct PhotonMaps {
@@ -47,7 +67,7 @@ void photon_maps_free(PhotonMaps *maps);
 /* Radiance arriving along `ray` (toward its origin): emission seen directly or through
  * delta bounces, NEE, the caustic map and one final-gather ray at the first non-delta hit.
  * No allocation; safe from many threads on one committed scene and built maps. */
-Color photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Pcg32 *rng, uint64_t *rays);
+Color photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Sampler *rng, uint64_t *rays);
 
 /* Shared with sppm.c, which builds its visible points the same way. */
 struct Bsdf;
@@ -57,10 +77,10 @@ struct Bsdf;
  * stops with the probability of the non-delta ones (and *beta divided by it), and follows
  * a delta lobe otherwise: the caller then estimates only the non-delta part at *sh. False
  * if the ray leaves the scene, the chain dies or exceeds PHOTON_MAX_SPECULAR bounces. */
-bool photon_trace_to_diffuse(const Scene *s, Ray ray, Pcg32 *rng, Color *beta, Color *le, SurfaceHit *sh,
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, Color *beta, Color *le, SurfaceHit *sh,
                              struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays);
 /* Direct light at a non-delta point by one emitter sample, no MIS. */
 Color photon_direct_light(const Scene *s, const struct Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo,
-                        Pcg32 *rng, uint64_t *rays);
+                        Sampler *rng, uint64_t *rays);
 
 #endif

@@ -26,14 +26,11 @@
 #include "integrators/sppm.h"
 
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "core/clock.h"
+#include "core/array.h"
 #include "core/error.h"
-#include "core/rng.h"
 #include "film/filter.h"
 #include "integrators/photon.h"
 #include "materials/bsdf.h"
@@ -178,14 +175,7 @@ typedef struct SppmHitList {
 
 static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Color power)
 {
-    if (l->n == l->cap) {
-        size_t cap = l->cap ? 2 * l->cap : 1024;
-        SppmHit *v = realloc(l->v, cap * sizeof *v);
-        if (!v) { l->oom = true; return; }
-        l->v = v;
-        l->cap = cap;
-    }
-    l->v[l->n++] = (SppmHit){p, wi, n, power, 0, 0};
+    if (!array_push(l, ((SppmHit){p, wi, n, power, 0, 0}))) l->oom = true;
 }
 
 /* The candidates of a photon at pos: the entries of its cell's bucket, or none outside
@@ -234,50 +224,23 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *h
     }
 }
 
-/* Photon path `index` of iteration `iter`, photon.c's trace_photon, recording its hits
- * in `out` instead of a map; power unnormalised (see the file comment). */
+/* SPPM's photon store: every non-delta hit but the first one from the light (depth 1 =
+ * L D, which NEE counts at the visible points) into the chunk's hit list. */
+static bool store_hit(void *ctx, const Photon *ph, int depth, bool specular_only)
+{
+    (void)specular_only;
+    if (depth > 1) hit_list_push(ctx, ph->pos, ph->wi, ph->n, ph->power); /* sets oom, checked after the phase */
+    return true;
+}
+
+/* Photon path `index` of iteration `iter`, by photon.c's walk, recording its hits in `out`
+ * instead of a map; power unnormalised (see the file comment). */
 static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out, uint64_t index, int iter,
                          uint64_t *rays)
 {
-    Pcg32 rng;
-    pcg32_seed_sample(&rng, sp->seed, index, SPPM_STREAM + (uint64_t)iter);
-    float u_sel = pcg32_float(&rng);
-    Vec2 u_pos = pcg32_v2(&rng);
-    Vec2 u_dir = pcg32_v2(&rng);
-    EmissionSample es;
-    EmitterGeometry eg = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, &eg, u_sel, u_pos, u_dir, &es);
-    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return; /* still one of the emitted */
-    Color power = es.beta; /* L_e |cos| / (pdf_a pdf_w), or a delta light's (light.c) */
-    Color scatter = color_s(1.0f);
-    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
-    for (int depth = 1;; depth++) {
-        SurfaceHit sh;
-        ++*rays;
-        if (!scene_intersect(s, &ray, &sh)) break;
-        Vec3 w_prev = v3_neg(ray.d);
-        Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
-        /* depth 1 is direct light (L D): NEE counts it at the visible points. */
-        if (depth > 1 && !bsdf_is_delta(&bsdf))
-            hit_list_push(out, sh.p, w_prev, v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng), power);
-        if (sp->max_depth > 0 && depth >= sp->max_depth) break;
-        BsdfSample bs;
-        float uc = pcg32_float(&rng);
-        Vec2 u = pcg32_v2(&rng);
-        /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
-        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
-        power = color_mul(power, bs.weight);
-        scatter = color_mul(scatter, bs.weight);
-        if (color_is_black(scatter)) break;
-        if (depth >= sp->rr_depth) {
-            float q = minf(0.95f, color_max(scatter));
-            if (!(pcg32_float(&rng) < q)) break;
-            power = color_scale(power, 1.0f / q);
-            scatter = color_scale(scatter, 1.0f / q);
-        }
-        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
-    }
+    /* Powers unscaled: the estimate divides by the photons of all iterations. */
+    const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth};
+    photon_walk(s, &pw, index, store_hit, out, rays);
 }
 
 /* The visible points of row y for iteration `iter`. */
@@ -287,10 +250,10 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
     for (int x = 0; x < cam->width; x++) {
         int pixel = y * cam->width + x;
         SppmPixel *v = &px[pixel];
-        Pcg32 rng;
-        pcg32_seed_sample(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
-        Vec2 uf = pcg32_v2(&rng);
-        Vec2 ul = pcg32_v2(&rng);
+        Sampler rng;
+        sampler_start_stream(&rng, sp->seed, (uint64_t)pixel, (uint64_t)iter);
+        Vec2 uf = sampler_2d(&rng);
+        Vec2 ul = sampler_2d(&rng);
         /* render.c's rule: the filter's weight h / pdf scales the sample, so both the
          * direct part and the visible point's throughput. */
         float fw;
@@ -347,29 +310,32 @@ enum { SPPM_PHOTON_CHUNK = 1024 };
 /* The three parallel phases of an iteration. */
 typedef enum SppmPhase { SPPM_PHASE_CAMERA, SPPM_PHASE_PHOTONS, SPPM_PHASE_DEPOSIT } SppmPhase;
 
-/* What every worker of a phase reads; `next` hands out its units of work. */
-typedef struct SppmJob {
+typedef struct SppmWorker {
+    uint64_t rays, nonfinite; /* integer totals: summed in any order */
+    char pad[64];             /* bumped per ray: no cache line shared with the next worker's */
+} SppmWorker;
+
+/* The render's SPPM state (sppm.h): what every worker of a phase reads, and the
+ * progressive pixels. */
+struct Sppm {
     const Scene *s;
     const Camera *cam;
-    const SppmParams *sp;
-    Filter filter;        /* sp->filter's shape and tables */
+    SppmParams sp;
+    Filter filter;        /* sp.filter's shape and tables */
     SppmPixel *px;
     size_t count;         /* pixels */
-    const SppmGrid *g;
+    SppmGrid g;
     SppmHitList *hits;    /* one per chunk */
     int chunks, photons;
     int ranges;           /* pixel ranges of the deposit phase */
     int iter;
     SppmPhase phase;
-    atomic_int next;
-} SppmJob;
-
-typedef struct SppmWorker {
-    SppmJob *job;
-    pthread_t thread;
-    uint64_t rays, nonfinite; /* integer totals: summed in any order */
-    char pad[64];             /* bumped per ray: no cache line shared with the next worker's */
-} SppmWorker;
+    SppmWorker *workers;  /* one per pool worker */
+    int num_workers;
+    float r0;             /* the initial radius */
+    uint64_t prepare_rays; /* traced by the automatic radius */
+};
+typedef struct Sppm SppmJob;
 
 /* Pixel range r of the deposit phase is [range_lo(r), range_lo(r + 1)). */
 static inline uint32_t range_lo(const SppmJob *job, int r)
@@ -389,25 +355,23 @@ static int range_of(const SppmJob *job, uint32_t pixel)
  * counting sort in hit order), so that a range reads only the hits that can reach it. */
 static void chunk_group_by_range(const SppmJob *job, SppmHitList *l)
 {
-    const uint32_t *entries = job->g->entries;
+    const uint32_t *entries = job->g.entries;
     const int R = job->ranges;
     uint32_t *rs = l->range_start;
     memset(rs, 0, ((size_t)R + 1u) * sizeof *rs);
     for (size_t i = 0; i < l->n; i++) {
         SppmHit *h = &l->v[i];
-        sppm_grid_candidates(job->g, h->p, &h->first, &h->last);
+        sppm_grid_candidates(&job->g, h->p, &h->first, &h->last);
         if (h->first == h->last) continue;
         /* Entries ascend, so the candidates' ranges are r0..r1. */
         for (int r = range_of(job, entries[h->first]), r1 = range_of(job, entries[h->last - 1]); r <= r1; r++)
             rs[r + 1]++;
     }
     for (int r = 0; r < R; r++) rs[r + 1] += rs[r];
-    if (rs[R] > l->order_cap) {
-        size_t cap = 2u * (size_t)rs[R];
-        uint32_t *o = realloc(l->order, cap * sizeof *o);
-        if (!o) { l->oom = true; l->n = 0; return; }
-        l->order = o;
-        l->order_cap = cap;
+    if (!array_grow(&l->order, &l->order_cap, rs[R], sizeof *l->order)) {
+        l->oom = true;
+        l->n = 0;
+        return;
     }
     /* Fill with rs[r] as range r's cursor, then shift the starts back (as in the grid). */
     for (size_t i = 0; i < l->n; i++) {
@@ -428,47 +392,29 @@ static void deposit_range(SppmJob *job, SppmWorker *w, int r)
     for (int c = 0; c < job->chunks; c++) {
         const SppmHitList *l = &job->hits[c];
         for (uint32_t k = l->range_start[r]; k < l->range_start[r + 1]; k++)
-            sppm_grid_deposit(job->g, job->px, &l->v[l->order[k]], lo, hi);
+            sppm_grid_deposit(&job->g, job->px, &l->v[l->order[k]], lo, hi);
     }
     for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], &w->nonfinite);
 }
 
-static void *sppm_worker_main(void *arg)
+/* Unit u of the current phase (a row, a photon chunk, a pixel range) on pool worker
+ * `worker`. */
+void sppm_item(void *ctx, int u, int worker)
 {
-    SppmWorker *w = arg;
-    SppmJob *job = w->job;
-    const int units = job->phase == SPPM_PHASE_CAMERA ? job->cam->height
-                    : job->phase == SPPM_PHASE_PHOTONS ? job->chunks : job->ranges;
-    for (;;) {
-        int u = atomic_fetch_add(&job->next, 1);
-        if (u >= units) break;
-        if (job->phase == SPPM_PHASE_CAMERA) {
-            camera_row(job->s, job->cam, job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
-        } else if (job->phase == SPPM_PHASE_PHOTONS) {
-            SppmHitList *l = &job->hits[u];
-            l->n = 0;
-            int first = u * SPPM_PHOTON_CHUNK;
-            int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
-            for (int i = first; i < last; i++) trace_photon(job->s, job->sp, l, (uint64_t)i, job->iter, &w->rays);
-            chunk_group_by_range(job, l);
-        } else {
-            deposit_range(job, w, u);
-        }
+    SppmJob *job = ctx;
+    SppmWorker *w = &job->workers[worker];
+    if (job->phase == SPPM_PHASE_CAMERA) {
+        camera_row(job->s, job->cam, &job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
+    } else if (job->phase == SPPM_PHASE_PHOTONS) {
+        SppmHitList *l = &job->hits[u];
+        l->n = 0;
+        int first = u * SPPM_PHOTON_CHUNK;
+        int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
+        for (int i = first; i < last; i++) trace_photon(job->s, &job->sp, l, (uint64_t)i, job->iter, &w->rays);
+        chunk_group_by_range(job, l);
+    } else {
+        deposit_range(job, w, u);
     }
-    return NULL;
-}
-
-/* Runs one phase on workers[0] (the calling thread) and threads - 1 helpers. A helper that
- * cannot be started leaves its share to the others: the result is the same. */
-static void run_phase(SppmJob *job, SppmWorker *workers, int threads, SppmPhase phase)
-{
-    job->phase = phase;
-    atomic_store(&job->next, 0);
-    int started = 1;
-    for (; started < threads; started++)
-        if (pthread_create(&workers[started].thread, NULL, sppm_worker_main, &workers[started]) != 0) break;
-    sppm_worker_main(&workers[0]);
-    for (int i = 1; i < started; i++) pthread_join(workers[i].thread, NULL);
 }
 
 /* The automatic initial radius: photon.c's rule (the median distance to the 50th nearest
@@ -487,111 +433,115 @@ static CstStatus initial_radius(const Scene *s, const Camera *cam, const SppmPar
     return CST_OK;
 }
 
-CstStatus sppm_render(const Scene *s, const Camera *cam, const SppmParams *sp, Film *film, SppmResult *res,
-                      uint64_t *rays, CstError *err)
+CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, int workers, Sppm **out,
+                      CstError *err)
 {
-    memset(res, 0, sizeof *res);
+    *out = NULL;
     const size_t count = (size_t)cam->width * (size_t)cam->height;
     /* The grid stores pixel indices and entry offsets (8 per pixel) as 32-bit integers. */
     if (count > (size_t)UINT32_MAX / 8u)
         return cst_fail(err, CST_ERR_INVALID_ARG, "image of %zu pixels: too many for SPPM (at most %u)", count,
                         UINT32_MAX / 8u);
-    const int photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
+    Sppm *job = calloc(1, sizeof *job);
+    if (!job) return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state");
+    *out = job;
+    job->s = s;
+    job->cam = cam;
+    job->sp = *sp;
+    job->count = count;
+    job->photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
     const int threads = sp->threads > 0 ? sp->threads : 1;
-    float r0;
-    CstStatus st = initial_radius(s, cam, sp, photons, &r0, rays, err);
+    CstStatus st = initial_radius(s, cam, sp, job->photons, &job->r0, &job->prepare_rays, err);
     if (st != CST_OK) return st;
-    SppmGrid g = {0};
-    g.buckets = 1;
-    while (g.buckets < count && g.buckets < (1u << 30)) g.buckets <<= 1;
-    SppmJob job = {s, cam, sp, {0}, NULL, count, &g, NULL, 0, photons, 0, 0, SPPM_PHASE_CAMERA, 0};
-    filter_init(&job.filter, sp->filter);
-    job.chunks = (int)(((int64_t)photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
+    SppmGrid *g = &job->g;
+    g->buckets = 1;
+    while (g->buckets < count && g->buckets < (1u << 30)) g->buckets <<= 1;
+    filter_init(&job->filter, sp->filter);
+    job->chunks = (int)(((int64_t)job->photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
     /* Several pixel ranges per thread, so a range crowded with photons does not hold the
      * others up; a hit is read once per range its candidates reach (mostly one or two),
      * and one thread needs one range. */
     const int ranges = threads == 1 ? 1 : 8 * threads;
-    job.ranges = count < (size_t)ranges ? (int)count : ranges;
-    SppmWorker *workers = calloc((size_t)threads, sizeof *workers);
-    SppmPixel *px = calloc(count, sizeof *px);
-    job.hits = calloc((size_t)job.chunks, sizeof *job.hits);
-    g.cell_start = malloc(((size_t)g.buckets + 1u) * sizeof *g.cell_start);
-    g.entries = malloc(8u * count * sizeof *g.entries);
-    g.discs = malloc(count * sizeof *g.discs);
-    if (!workers || !px || !job.hits || !g.cell_start || !g.entries || !g.discs) {
-        st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
-        goto done;
+    job->ranges = count < (size_t)ranges ? (int)count : ranges;
+    job->num_workers = workers;
+    job->workers = calloc((size_t)workers, sizeof *job->workers);
+    job->px = calloc(count, sizeof *job->px);
+    job->hits = calloc((size_t)job->chunks, sizeof *job->hits);
+    g->cell_start = malloc(((size_t)g->buckets + 1u) * sizeof *g->cell_start);
+    g->entries = malloc(8u * count * sizeof *g->entries);
+    g->discs = malloc(count * sizeof *g->discs);
+    if (!job->workers || !job->px || !job->hits || !g->cell_start || !g->entries || !g->discs)
+        return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
+    for (int c = 0; c < job->chunks; c++) {
+        job->hits[c].range_start = calloc((size_t)job->ranges + 1u, sizeof *job->hits[c].range_start);
+        if (!job->hits[c].range_start)
+            return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon chunks (%d)", job->chunks);
     }
-    for (int c = 0; c < job.chunks; c++) {
-        job.hits[c].range_start = calloc((size_t)job.ranges + 1u, sizeof *job.hits[c].range_start);
-        if (!job.hits[c].range_start) {
-            st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon chunks (%d)", job.chunks);
-            goto done;
-        }
-    }
-    job.px = px;
-    for (int i = 0; i < threads; i++) workers[i].job = &job;
-    for (size_t i = 0; i < count; i++) px[i].r = r0;
-    double t0 = clock_seconds();
-    int iter = 0;
-    while (sp->iterations <= 0 || iter < sp->iterations) {
-        job.iter = iter;
-        run_phase(&job, workers, threads, SPPM_PHASE_CAMERA);
+    for (size_t i = 0; i < count; i++) job->px[i].r = job->r0;
+    return CST_OK;
+}
+
+int sppm_phase_begin(Sppm *job, int iter, int phase)
+{
+    job->iter = iter;
+    job->phase = (SppmPhase)phase;
+    switch (job->phase) {
+    case SPPM_PHASE_CAMERA: return job->cam->height;
+    case SPPM_PHASE_PHOTONS:
         /* Serial, and cheap next to the passes: a counting sort over the pixels. */
-        sppm_grid_build(&g, px, count);
-        if (s->emitter_sampler.lights > 0) {
-            run_phase(&job, workers, threads, SPPM_PHASE_PHOTONS);
-            for (int c = 0; c < job.chunks; c++)
-                if (job.hits[c].oom) {
-                    st = cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon hits");
-                    goto done;
-                }
-        } else {
-            for (int c = 0; c < job.chunks; c++) {
-                job.hits[c].n = 0;
-                memset(job.hits[c].range_start, 0, ((size_t)job.ranges + 1u) * sizeof *job.hits[c].range_start);
-            }
+        sppm_grid_build(&job->g, job->px, job->count);
+        if (job->s->emitter_sampler.lights > 0) return job->chunks;
+        for (int c = 0; c < job->chunks; c++) {
+            job->hits[c].n = 0;
+            memset(job->hits[c].range_start, 0, ((size_t)job->ranges + 1u) * sizeof *job->hits[c].range_start);
         }
-        run_phase(&job, workers, threads, SPPM_PHASE_DEPOSIT);
-        iter++;
-        double elapsed = clock_seconds() - t0;
-        if (sp->progress) {
-            double f = sp->iterations > 0 ? (double)iter / sp->iterations : 0.0;
-            if (sp->time_limit > 0.0 && elapsed / sp->time_limit > f) f = elapsed / sp->time_limit;
-            sp->progress(sp->progress_user, f > 1.0 ? 1.0 : f, elapsed);
-        }
-        if (sp->time_limit > 0.0 && elapsed >= sp->time_limit) break;
+        return 0;
+    case SPPM_PHASE_DEPOSIT:
+        for (int c = 0; c < job->chunks; c++)
+            if (job->hits[c].oom) return -1;
+        return job->ranges;
     }
+    return 0;
+}
+
+void sppm_finish(const Sppm *job, Film *film, int iter)
+{
     /* The final estimate as the film's single sample (see sppm.h). */
-    const double n_emitted = (double)photons * (double)iter;
-    for (size_t i = 0; i < count; i++) {
-        const SppmPixel *v = &px[i];
+    const double n_emitted = (double)job->photons * (double)iter;
+    for (size_t i = 0; i < job->count; i++) {
+        const SppmPixel *v = &job->px[i];
         double area = (double)CST_PI * (double)v->r * (double)v->r;
         double L[3];
         for (int c = 0; c < 3; c++) L[c] = v->ld[c] / iter + (n_emitted > 0.0 ? v->tau[c] / (n_emitted * area) : 0.0);
         film_accumulate(film, (int)i, L[0], L[1], L[2]);
     }
     film->spp = 1;
-    res->iterations = iter;
-    res->photons = (uint64_t)photons * (uint64_t)iter;
-    res->radius0 = r0;
-done:
-    if (workers)
-        for (int i = 0; i < threads; i++) {
-            *rays += workers[i].rays;
-            res->nonfinite += workers[i].nonfinite;
+}
+
+void sppm_counters(const Sppm *job, uint64_t *rays, uint64_t *nonfinite)
+{
+    *rays += job->prepare_rays;
+    if (job->workers)
+        for (int i = 0; i < job->num_workers; i++) {
+            *rays += job->workers[i].rays;
+            *nonfinite += job->workers[i].nonfinite;
         }
-    if (job.hits)
-        for (int c = 0; c < job.chunks; c++) {
-            free(job.hits[c].v);
-            free(job.hits[c].order);
-            free(job.hits[c].range_start);
+}
+
+void sppm_destroy(Sppm *job)
+{
+    if (!job) return;
+    if (job->hits)
+        for (int c = 0; c < job->chunks; c++) {
+            free(job->hits[c].v);
+            free(job->hits[c].order);
+            free(job->hits[c].range_start);
         }
-    free(job.hits);
-    free(workers);
-    free(px);
-    free(g.cell_start);
-    free(g.entries);
-    free(g.discs);
-    return st;
+    free(job->hits);
+    free(job->workers);
+    free(job->px);
+    free(job->g.cell_start);
+    free(job->g.entries);
+    free(job->g.discs);
+    free(job);
 }

@@ -13,32 +13,40 @@
 #define SPPM_ALPHA (2.0f / 3.0f) /* fraction of new photons kept per iteration (HJ 2009 sec. 4) */
 
 typedef struct SppmParams {
-    int iterations;      /* > 0; with time_limit, an upper bound (0 = no bound) */
-    double time_limit;   /* seconds; 0 = none: stop after the iteration that exceeds it */
     int photons;         /* photon paths per iteration; 0 = width x height */
     float radius;        /* initial radius (scene units); 0 = automatic (see sppm.c) */
     int max_depth;       /* bounces of a photon path; 0 = unbounded */
     int rr_depth;        /* Russian roulette from this photon bounce on */
     CstFilter filter;    /* how camera samples are placed in their pixel (render.c's rule) */
     uint64_t seed;
-    CstProgressFn progress; /* may be NULL; called after every iteration */
-    void *progress_user;
-    int threads;         /* workers, the calling thread included; <= 0 = 1 */
+    int threads;         /* the render's thread count: it sizes the deposit's pixel ranges,
+                          * which never changes the image */
 } SppmParams;
 
-typedef struct SppmResult {
-    int iterations;      /* completed */
-    uint64_t photons;    /* photon paths emitted in all */
-    float radius0;       /* initial radius used */
-    uint64_t nonfinite;  /* NaN/Inf contributions dropped */
-} SppmResult;
+/* The progressive state of one render. Its iterations are driven from outside
+ * (integrator.c): for iteration k = 0, 1, ..., every phase p in [0, SPPM_PHASES) in order,
+ * n = sppm_phase_begin(sppm, k, p) (serial work, then the phase's item count: 0 skips it,
+ * -1 means photon hits were lost to OOM), then sppm_item(sppm, i, worker) for every i in
+ * [0, n) on any threads. The image is a function of the params and the scene only, bit
+ * for bit, whatever the thread count or the order items run in. */
+typedef struct Sppm Sppm;
+enum { SPPM_PHASES = 3 };
 
-/* Renders into `film` (empty, width x height of cam) with sp->threads threads; the image is
- * a function of the params (but the thread count) and the scene only, bit for bit. The film receives the final estimate of every
- * pixel as one sample (film->spp = 1, so its per-pixel variance is unavailable, reported
- * as 0): SPPM's iterations are not independent samples of the pixel (each one's radius
- * depends on all before it). Fails with CST_ERR_OOM, or CST_ERR_INVALID_ARG for more than 2^29 pixels. */
-CstStatus sppm_render(const Scene *scene, const Camera *cam, const SppmParams *sp, Film *film,
-                      SppmResult *res, uint64_t *rays, CstError *err);
+/* For the film of `cam` (width x height), counters for `workers` pool workers. Traces the
+ * photons of the automatic radius. Fails with CST_ERR_OOM, or CST_ERR_INVALID_ARG for more
+ * than 2^29 pixels; *out is then NULL or to be destroyed. */
+CstStatus sppm_create(const Scene *scene, const Camera *cam, const SppmParams *sp, int workers, Sppm **out,
+                      CstError *err);
+int sppm_phase_begin(Sppm *sppm, int iteration, int phase);
+void sppm_item(void *sppm, int item, int worker);
+/* After `iterations` iterations: the film receives the final estimate of every pixel as
+ * one sample (film->spp = 1, so its per-pixel variance is unavailable, reported as 0):
+ * SPPM's iterations are not independent samples of the pixel (each one's radius depends
+ * on all before it). */
+void sppm_finish(const Sppm *sppm, Film *film, int iterations);
+/* Adds the rays traced and the NaN/Inf contributions dropped. */
+void sppm_counters(const Sppm *sppm, uint64_t *rays, uint64_t *nonfinite);
+/* Accepts NULL. */
+void sppm_destroy(Sppm *sppm);
 
 #endif

@@ -7,6 +7,8 @@
  * stratification, never uniformity. */
 #include "sampling/sampler.h"
 
+#include <string.h>
+
 #include <math.h>
 
 /* Sobol' generator matrices, as columns for index bits 0..31. Dimension 0 is the van der
@@ -158,4 +160,24 @@ Vec2 sampler_2d_ld(Sampler *s)
     uint32_t i = owen_scramble(s->index, (uint32_t)h);
     return v2(u32_to_float(owen_scramble(sobol_sample(i, 0), (uint32_t)(h >> 32))),
               u32_to_float(owen_scramble(sobol_sample(i, 1), (uint32_t)h2)));
+}
+
+/* The public name table (caustic.h): the sampler module owns its names. */
+CstSampler cst_sampler_from_name(const char *name)
+{
+    if (strcmp(name, "independent") == 0) return CST_SAMPLER_INDEPENDENT;
+    if (strcmp(name, "stratified") == 0) return CST_SAMPLER_STRATIFIED;
+    if (strcmp(name, "sobol") == 0) return CST_SAMPLER_SOBOL;
+    return CST_SAMPLER_DEFAULT;
+}
+
+const char *cst_sampler_name(CstSampler sampler)
+{
+    switch (sampler) {
+    case CST_SAMPLER_INDEPENDENT: return "independent";
+    case CST_SAMPLER_STRATIFIED: return "stratified";
+    case CST_SAMPLER_SOBOL: return "sobol";
+    case CST_SAMPLER_DEFAULT: break;
+    }
+    return "default";
 }

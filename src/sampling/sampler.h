@@ -29,6 +29,25 @@ typedef struct Sampler {
  * [0,1) into that many strata; 0 = not known in advance, e.g. a render with only a time
  * limit, and then it jitters without strata). type CST_SAMPLER_DEFAULT means independent. */
 void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index, uint32_t spp);
+/* An independent sampler on the PCG32 stream (seed, a, b): the random numbers of every
+ * path that is not a pixel sample (light subpaths, photons), so that every integrator
+ * draws through one type. */
+static inline void sampler_start_stream(Sampler *s, uint64_t seed, uint64_t a, uint64_t b)
+{
+    pcg32_seed_sample(&s->rng, seed, a, b);
+    s->type = CST_SAMPLER_INDEPENDENT;
+    s->dim = s->index = s->spp = 0;
+    s->nx = 1;
+    s->key = 0;
+}
+/* An independent sampler continuing from `rng`: camera paths of the photon mapper and
+ * BDPT/VCM draw past the film and lens dimensions from their pixel sample's PCG32
+ * stream, whatever the sampler (their strategies are not stratified). */
+static inline Sampler sampler_continue(Pcg32 rng)
+{
+    Sampler s = {rng, CST_SAMPLER_INDEPENDENT, 0, 0, 0, 1, 0};
+    return s;
+}
 /* The stratified and Sobol' draws (sampler.c); sampler_1d/2d call them. */
 float sampler_1d_ld(Sampler *s);
 Vec2 sampler_2d_ld(Sampler *s);

@@ -1,24 +1,21 @@
 /* Scene construction (growable arrays) and commit (BVH + emitter distribution). */
 #include "scene/scene.h"
 
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/error.h"
 
-/* Grows *arr to hold `need` elements of `size` bytes, doubling. */
-static int grow(void **arr, int *cap, int need, size_t size)
+/* Room for `need` elements of `size` bytes in the array at *arr (core/array.h's rule).
+ * Counts are int: `need`, computed by the caller in 64 bits, above INT_MAX fails like an
+ * OOM, so no count can overflow. */
+static bool grow(void *arr, size_t *cap, long long need, size_t size)
 {
-    if (need <= *cap) return 1;
-    int c = *cap ? *cap : 16;
-    while (c < need) c *= 2;
-    void *p = realloc(*arr, (size_t)c * size);
-    if (!p) return 0;
-    *arr = p;
-    *cap = c;
-    return 1;
+    return need >= 0 && need <= INT_MAX && array_grow(arr, cap, (size_t)need, size);
 }
-#define GROW(arr, cap, need) grow((void **)&(arr), &(cap), (need), sizeof *(arr))
+#define GROW(arr, cap, need) grow(&(arr), &(cap), (need), sizeof *(arr))
 
 float triangle_area(Vec3 a, Vec3 b, Vec3 c)
 {
@@ -80,7 +77,7 @@ CstStatus scene_add_texture(Scene *s, const Texture *t, int *out_id, CstError *e
                         "expected indices of textures already added (0 to %d)",
                         t->checker.even, t->checker.odd, s->num_textures - 1);
     }
-    if (!GROW(s->textures, s->cap_textures, s->num_textures + 1)) {
+    if (!GROW(s->textures, s->cap_textures, s->num_textures + 1LL)) {
         texture_free(&copy);
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a texture");
     }
@@ -98,7 +95,7 @@ CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError 
     if (m->type == MATERIAL_PLASTIC && m->roughness_texture)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "a plastic's roughness cannot be a texture "
                         "(its coat albedo table is computed for one roughness); expected a number");
-    if (!GROW(s->materials, s->cap_materials, s->num_materials + 1))
+    if (!GROW(s->materials, s->cap_materials, s->num_materials + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a material");
     s->materials[s->num_materials] = *m;
     /* Derived data (the rough plastic's coat table) is computed once here, not per hit. */
@@ -122,7 +119,7 @@ CstStatus scene_set_environment(Scene *s, const EnvMap *env, CstError *err)
 
 CstStatus scene_add_delta_light(Scene *s, const DeltaLight *l, CstError *err)
 {
-    if (!GROW(s->delta_lights, s->cap_delta_lights, s->num_delta_lights + 1))
+    if (!GROW(s->delta_lights, s->cap_delta_lights, s->num_delta_lights + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a light");
     s->delta_lights[s->num_delta_lights++] = *l;
     return CST_OK;
@@ -133,7 +130,7 @@ static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float 
 {
     *out = -1;
     if (!em || color_is_black(em->radiance)) return CST_OK;
-    if (!GROW(s->emitters, s->cap_emitters, s->num_emitters + 1))
+    if (!GROW(s->emitters, s->cap_emitters, s->num_emitters + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding an emitter");
     Emitter *e = &s->emitters[s->num_emitters];
     if (em->texture < 0 || em->texture > s->num_textures)
@@ -152,12 +149,12 @@ static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float 
 /* Makes room for an attribute array of elem bytes per position, in step with positions:
  * created on first use with zero fills for the positions before `base` (which count as
  * partial), then filled from src for the new vertices, or zeroed when src is NULL. */
-static int add_attribute(void **arr, int *cap, size_t elem, int base, int n, const void *src,
+static int add_attribute(void **arr, size_t *cap, size_t elem, int base, int n, const void *src,
                          int src_partial, int *partial)
 {
     if (!src && !*arr) return 1;
     int fresh = *arr == NULL;
-    if (!grow(arr, cap, base + n, elem)) return 0;
+    if (!grow(arr, cap, (long long)base + n, elem)) return 0;
     char *a = *arr;
     if (fresh && base > 0) {
         memset(a, 0, (size_t)base * elem);
@@ -199,8 +196,9 @@ CstStatus scene_add_mesh_ex(Scene *s, const SceneMesh *m, int *num_dropped, CstE
         if (!isfinite(m->uvs[i].x) || !isfinite(m->uvs[i].y))
             return cst_fail(err, CST_ERR_INVALID_ARG, "uv of vertex %d is not finite", i);
     int base = s->num_positions;
-    if (!GROW(s->positions, s->cap_positions, base + num_vertices) ||
-        !GROW(s->tri_indices, s->cap_triangles, 3 * (s->num_triangles + num_triangles)))
+    /* 3 * triangles within INT_MAX: the per-triangle sizes below cannot overflow. */
+    if (!GROW(s->positions, s->cap_positions, (long long)base + num_vertices) ||
+        !GROW(s->tri_indices, s->cap_triangles, 3LL * ((long long)s->num_triangles + num_triangles)))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding %d triangles", num_triangles);
     if (!add_attribute((void **)&s->normals, &s->cap_normals, sizeof *s->normals, base,
                        num_vertices, m->normals, m->normals_partial, &s->normals_partial) ||
@@ -278,7 +276,7 @@ CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,
         return cst_fail(err, CST_ERR_INVALID_ARG, "sphere radius must be a positive finite number");
     if (material < 0 || material >= s->num_materials)
         return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
-    if (!GROW(s->spheres, s->cap_spheres, s->num_spheres + 1))
+    if (!GROW(s->spheres, s->cap_spheres, s->num_spheres + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a sphere");
     PrimInfo *info = realloc(s->sphere_info, (size_t)(s->num_spheres + 1) * sizeof *info);
     if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding a sphere");

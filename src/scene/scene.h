@@ -36,27 +36,27 @@ typedef struct PrimInfo {
 typedef struct CstScene Scene;
 struct CstScene {
     /* geometry */
-    Vec3 *positions; int num_positions, cap_positions;
+    Vec3 *positions; int num_positions; size_t cap_positions;
     /* Per-position vertex attributes for shading, NULL until a mesh supplies them; then
      * positions of meshes without them hold zero fills (a zero normal means "none") and
      * the *_partial flag is set. */
-    Vec3 *normals; int cap_normals; /* unit shading normals */
-    Vec2 *uvs; int cap_uvs;         /* texture coordinates, channel 0 */
+    Vec3 *normals; size_t cap_normals; /* unit shading normals */
+    Vec2 *uvs; size_t cap_uvs;      /* texture coordinates, channel 0 */
     int normals_partial, uvs_partial;
     /* Per triangle, whether it takes its uvs from `uvs` (else the default (0,0), (1,0),
      * (0,1) at its vertices): NULL until a mesh with uvs arrives. */
     unsigned char *tri_has_uv;
     int32_t *tri_indices; /* 3 per triangle */
-    int num_triangles, cap_triangles;
-    Sphere *spheres; int num_spheres, cap_spheres;
+    int num_triangles; size_t cap_triangles; /* of tri_indices */
+    Sphere *spheres; int num_spheres; size_t cap_spheres;
     PrimInfo *tri_info;    /* num_triangles entries */
     Vec3 *tri_normals;     /* unit geometric normals, (v1-v0) x (v2-v0); made by commit */
     PrimInfo *sphere_info; /* num_spheres entries */
     /* appearance */
-    Texture *textures; int num_textures, cap_textures; /* referenced by index */
-    Material *materials; int num_materials, cap_materials;
-    Emitter *emitters; int num_emitters, cap_emitters;
-    DeltaLight *delta_lights; int num_delta_lights, cap_delta_lights; /* point, spot, directional */
+    Texture *textures; int num_textures; size_t cap_textures; /* referenced by index */
+    Material *materials; int num_materials; size_t cap_materials;
+    Emitter *emitters; int num_emitters; size_t cap_emitters;
+    DeltaLight *delta_lights; int num_delta_lights; size_t cap_delta_lights; /* point, spot, directional */
     EnvMap *env; /* the environment, or NULL */
     /* after commit */
     AccelType accel_type; /* what scene_commit builds; ACCEL_BVH unless set */

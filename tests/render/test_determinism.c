@@ -262,6 +262,44 @@ static void test_crop_equals_whole_image(void **state)
     cst_scene_destroy(s);
 }
 
+/* CstProgressFn that cancels at its first call, counting the calls. */
+static int cancel_at_once(void *user, double fraction, double elapsed)
+{
+    (void)fraction;
+    (void)elapsed;
+    ++*(int *)user;
+    return 1;
+}
+
+/* A progress callback that returns nonzero stops every integrator at the next work-item
+ * boundary: CST_ERR_CANCELLED, no film, no further progress report. */
+static void test_cancel(void **state)
+{
+    (void)state;
+    CstScene *s;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    const CstIntegrator all[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_WHITTED, CST_INTEGRATOR_PHOTON,
+                                 CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
+        CstRenderSettings st = {0};
+        st.integrator = all[i];
+        st.width = 32;
+        st.height = 32;
+        st.spp = 4;
+        st.threads = 2;
+        st.photons = 1000;
+        int calls = 0;
+        st.progress = cancel_at_once;
+        st.progress_user = &calls;
+        CstFilm *f = NULL;
+        assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_CANCELLED);
+        assert_null(f);
+        assert_int_equal(calls, 1);
+    }
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -274,6 +312,7 @@ int main(void)
         cmocka_unit_test(test_accel_backends_identical_images),
         cmocka_unit_test(test_json_cornell_equals_builtin),
         cmocka_unit_test(test_crop_equals_whole_image),
+        cmocka_unit_test(test_cancel),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

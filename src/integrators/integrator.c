@@ -1,0 +1,550 @@
+/* The integrator interface (integrator.h): every integrator's state behind one tagged
+ * union, the work items render.c runs for them (camera tiles, light-path chunks, the
+ * splat merge, BDPT/VCM's vertex gather and merging grid, SPPM's phases), the order of
+ * those steps within a pass, and the public name table.
+ * Determinism: each camera sample draws from its own Sampler started from (seed, pixel,
+ * sample index), and each pixel is accumulated by one thread in sample order. Light
+ * tracing splats anywhere on the film instead; it runs in iterations of width x height
+ * light paths, path i of iteration s seeded by (seed, i, s), cut into fixed chunks whose
+ * splat lists are added in chunk order once the iteration is done. BDPT and VCM run the
+ * same iterations: light-path chunks (vertex lists and camera splats per chunk,
+ * concatenated in chunk order), then one camera path per pixel, each pixel written by one
+ * thread. SPPM's phases keep photon order (sppm.c). So images are bit-identical for any
+ * thread count. */
+#include "integrators/integrator.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/array.h"
+#include "core/error.h"
+#include "materials/bsdf.h"
+
+/* Light paths per work item: small enough to balance threads on small films, large
+ * enough that an item's splat list amortises its bookkeeping. Fixed, because chunk
+ * boundaries decide the order in which splats are added. */
+enum { LIGHT_CHUNK = 1024 };
+
+/* ------------------------------------------------------------------ camera tiles */
+
+/* The AOVs of one camera sample (film.h): its first hit, traced again here so that no
+ * integrator has to report it. */
+static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
+{
+    SurfaceHit sh;
+    ++w->rays;
+    if (!scene_intersect(it->scene, &ray, &sh)) return;
+    Bsdf bsdf;
+    scene_bsdf(it->scene, &sh, &bsdf);
+    Vec3 n = v3_dot(sh.ng, ray.d) > 0.0f ? v3_neg(sh.ng) : sh.ng;
+    float z = v3_dot(v3_sub(sh.p, it->camera.origin), it->camera.forward);
+    double *a = &it->film->aov[FILM_AOV_STRIDE * (size_t)pixel];
+    const Color albedo = bsdf_albedo(&bsdf);
+    a[0] += (double)color_channel(albedo, 0);
+    a[1] += (double)color_channel(albedo, 1);
+    a[2] += (double)color_channel(albedo, 2);
+    a[3] += (double)n.x; a[4] += (double)n.y; a[5] += (double)n.z;
+    a[6] += (double)z;
+    a[7] += 1.0;
+}
+
+/* One camera sample's radiance, by the integrator's estimator. */
+static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ray ray, Sampler *smp)
+{
+    Sampler cont;
+    switch (it->kind) {
+    case INTEGRATOR_PATH: return path_li(it->scene, &it->path, ray, smp, &w->rays);
+    case INTEGRATOR_WHITTED: return whitted_li(it->scene, &it->whitted, ray, smp, &w->rays);
+    case INTEGRATOR_PHOTON:
+        /* Photon mapping and BDPT/VCM continue from the sample's PCG32 stream. */
+        cont = sampler_continue(smp->rng);
+        return photon_li(it->scene, &it->photon, ray, &cont, &w->rays);
+    case INTEGRATOR_BIDIR:
+        cont = sampler_continue(smp->rng);
+        if (it->light.vcm_params.merge)
+            return vcm_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
+                                    &cont, &w->rays);
+        return bdpt_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
+                                 &cont, &w->rays);
+    case INTEGRATOR_LIGHT:
+    case INTEGRATOR_SPPM: break;
+    }
+    return color_s(0.0f);
+}
+
+static void camera_tile(void *ctx, int tile, int worker)
+{
+    Integrator *it = ctx;
+    IntegratorWorker *w = &it->workers[worker];
+    /* Tiles cover the crop; pixels keep their whole-image index (seeds, film). */
+    const int W = it->film->width;
+    int x0 = it->crop_x0 + (tile % it->tiles_x) * INTEGRATOR_TILE;
+    int y0 = it->crop_y0 + (tile / it->tiles_x) * INTEGRATOR_TILE;
+    int x1 = x0 + INTEGRATOR_TILE < it->crop_x1 ? x0 + INTEGRATOR_TILE : it->crop_x1;
+    int y1 = y0 + INTEGRATOR_TILE < it->crop_y1 ? y0 + INTEGRATOR_TILE : it->crop_y1;
+    for (int y = y0; y < y1; y++) {
+        for (int x = x0; x < x1; x++) {
+            int pixel = y * W + x;
+            for (int s = it->tile_first; s < it->tile_first + it->tile_spp; s++) {
+                Sampler smp;
+                sampler_start(&smp, it->sampler, it->seed, (uint64_t)pixel, (uint32_t)s, it->sampler_spp);
+                Vec2 uf = sampler_2d(&smp);
+                Vec2 ul = sampler_2d(&smp);
+                float fw;
+                Vec2 fp = filter_film_position(&it->pixel_filter, x, y, uf, &fw);
+                Ray ray = camera_generate_ray(&it->camera, fp.x, fp.y, ul);
+                if (it->aov_hit) camera_aov(it, w, pixel, ray);
+                Color L = camera_li(it, w, pixel, ray, &smp);
+                if (!color_is_finite(L)) {
+                    /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
+                    w->nonfinite++;
+                    L = color_s(0.0f);
+                }
+                if (fw != 1.0f) L = color_scale(L, fw);
+                if (it->kind == INTEGRATOR_BIDIR) {
+                    /* The iteration's image; light_merge_band adds the splats and files it. */
+                    double *o = &it->light.iteration_rgb[3 * (size_t)pixel];
+                    o[0] = L.c[0]; o[1] = L.c[1]; o[2] = L.c[2];
+                } else {
+                    film_accumulate(it->film, pixel, L.c[0], L.c[1], L.c[2]);
+                }
+            }
+        }
+    }
+}
+
+/* --------------------------------------------------- light tracing, BDPT and VCM */
+
+static void light_chunk(void *ctx, int chunk, int worker)
+{
+    Integrator *it = ctx;
+    LightIterations *L = &it->light;
+    IntegratorWorker *w = &it->workers[worker];
+    SplatList *out = &L->chunks[chunk].splats;
+    out->n = 0;
+    int first = chunk * LIGHT_CHUNK;
+    int last = first + LIGHT_CHUNK < L->light_paths ? first + LIGHT_CHUNK : L->light_paths;
+    if (it->kind == INTEGRATOR_BIDIR) {
+        VcmVertexList *verts = &L->chunks[chunk].verts;
+        verts->n = 0;
+        for (int i = first; i < last; i++) {
+            Sampler rng;
+            /* A stream apart from the camera path of pixel i, which uses (seed, i, iteration). */
+            sampler_start_stream(&rng, it->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)it->iteration);
+            size_t before = verts->n;
+            subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, verts, out, &w->rays);
+            L->path_count[i] = (uint32_t)(verts->n - before);
+        }
+        /* The grid's corner, reduced over the chunks by bidir_prepare (min is exact in any
+         * order). */
+        Vec3 lo = v3(INFINITY, INFINITY, INFINITY);
+        if (L->vcm_params.merge)
+            for (size_t k = 0; k < verts->n; k++) lo = v3_min(lo, verts->v[k].p);
+        L->chunks[chunk].lo = lo;
+    } else {
+        for (int i = first; i < last; i++) {
+            Sampler rng;
+            sampler_start_stream(&rng, it->seed, (uint64_t)i, (uint64_t)it->iteration);
+            light_trace(it->scene, &it->camera, &L->params, &rng, out, &w->rays);
+        }
+    }
+    splat_list_bin(out, &L->params.frame); /* sets out->oom on failure, checked after the step */
+}
+
+/* Between the light and the camera step of a BDPT/VCM iteration: the chunks' vertex
+ * lists are concatenated in chunk order (so path i's vertices are a run starting at
+ * path_start[i]), and for VCM the merging grid is built over them. What is serial is
+ * here: sizes, offsets and the grid's corner; the copying and sorting are steps
+ * (bidir_gather_chunk, bidir_grid_range). Returns 0 on OOM. */
+static int bidir_prepare(LightIterations *L, int threads)
+{
+    size_t total = 0;
+    Vec3 lo = v3(INFINITY, INFINITY, INFINITY);
+    for (int c = 0; c < L->num_chunks; c++) {
+        if (L->chunks[c].verts.oom) return 0;
+        L->chunks[c].first = total;
+        total += L->chunks[c].verts.n;
+        lo = v3_min(lo, L->chunks[c].lo);
+    }
+    if (total > UINT32_MAX - 1) return 0;
+    if (!array_grow(&L->vertices, &L->cap[0], total, sizeof *L->vertices) ||
+        !array_grow(&L->cell_items, &L->cap[1], total, sizeof *L->cell_items) ||
+        !array_grow(&L->cell_start, &L->cap[2], total + 1, sizeof *L->cell_start) ||
+        !array_grow(&L->cell_of, &L->cap[3], total, sizeof *L->cell_of))
+        return 0;
+    L->total = total;
+    uint32_t *ps = L->path_start;
+    ps[0] = 0;
+    for (int i = 0; i < L->light_paths; i++) ps[i + 1] = ps[i] + L->path_count[i];
+    L->vcm_it.vertices = L->vertices;
+    L->vcm_it.path_start = ps;
+    L->vcm_it.cells = 0;
+    L->grid_ranges = 0;
+    if (L->vcm_params.merge && total > 0) {
+        vcm_grid_init(&L->vcm_it, lo, (uint32_t)total, L->cell_start, L->cell_items);
+        int ranges = 4 * threads;
+        L->grid_ranges = ranges < 1 ? 1 : ranges > GRID_RANGES_MAX ? GRID_RANGES_MAX : ranges;
+    }
+    return 1;
+}
+
+static void bidir_gather_chunk(void *ctx, int chunk, int worker)
+{
+    (void)worker;
+    LightIterations *L = &((Integrator *)ctx)->light;
+    const VcmVertexList *l = &L->chunks[chunk].verts;
+    size_t first = L->chunks[chunk].first;
+    if (l->n) memcpy(L->vertices + first, l->v, l->n * sizeof *l->v);
+    if (L->grid_ranges)
+        for (size_t k = 0; k < l->n; k++) L->cell_of[first + k] = vcm_grid_cell(&L->vcm_it, l->v[k].p);
+}
+
+/* Bucket range `range` of the merging grid: counted, or once all are counted, sorted. */
+static void bidir_grid_range(void *ctx, int range, int worker)
+{
+    (void)worker;
+    LightIterations *L = &((Integrator *)ctx)->light;
+    if (!L->grid_fill)
+        L->grid_base[range] = vcm_grid_count(&L->vcm_it, L->cell_of, L->total, range, L->grid_ranges,
+                                             L->cell_start);
+    else
+        vcm_grid_fill(&L->vcm_it, L->cell_of, L->total, range, L->grid_ranges, L->grid_base[range],
+                      L->cell_start, L->cell_items);
+}
+
+/* Adds the finished iteration to the film as one sample per pixel, for the rows of one
+ * band (SplatFrame). The light tracer's pixel estimate is (W H / paths) times the sum of
+ * its splats (splats are per unit film, camera.c), and W H / paths = 1 with one path per
+ * pixel. Adding the iteration, not the splats, as the sample keeps the film's sum of
+ * squares a per-pixel variance across iterations; splats are summed in chunk order and,
+ * within a chunk, in the order they were made (splat_list_bin is stable), so the
+ * floating-point sums depend neither on which thread traced which chunk nor on which
+ * thread merged which band. */
+static void light_merge_band(void *ctx, int unit, int worker)
+{
+    (void)worker;
+    Integrator *it = ctx;
+    LightIterations *L = &it->light;
+    const SplatFrame *fr = &L->params.frame;
+    const size_t pixels = (size_t)fr->width * (size_t)fr->height;
+    const double scale = (double)pixels / (double)L->light_paths;
+    size_t lo = (size_t)unit * (size_t)fr->band_rows * (size_t)fr->width;
+    size_t hi = lo + (size_t)fr->band_rows * (size_t)fr->width;
+    if (hi > pixels) hi = pixels;
+    double *rgb = L->iteration_rgb;
+    /* BDPT/VCM: the camera step already wrote its pixel samples there. */
+    if (it->kind != INTEGRATOR_BIDIR) memset(rgb + 3 * lo, 0, 3 * (hi - lo) * sizeof *rgb);
+    for (int c = 0; c < L->num_chunks; c++) film_add_splats_band(&L->chunks[c].splats, fr, rgb, scale, unit);
+    for (size_t p = lo; p < hi; p++)
+        film_accumulate(it->film, (int)p, rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]);
+}
+
+/* Per-render buffers of the light iterations: a splat list per chunk, sized for a few
+ * connections per path (they grow if a scene needs more, then stay), the iteration image,
+ * and for BDPT/VCM the per-path vertex counts. Returns 0 on OOM. */
+static int light_alloc(Integrator *it)
+{
+    LightIterations *L = &it->light;
+    size_t pixels = (size_t)it->film->width * (size_t)it->film->height;
+    /* Zeroed: BDPT/VCM camera steps over a crop never write the pixels outside it. */
+    L->iteration_rgb = calloc(3 * pixels, sizeof *L->iteration_rgb);
+    L->chunks = aligned_alloc(_Alignof(LightChunk), (size_t)L->num_chunks * sizeof *L->chunks);
+    if (!L->iteration_rgb || !L->chunks) return 0;
+    memset(L->chunks, 0, (size_t)L->num_chunks * sizeof *L->chunks);
+    for (int c = 0; c < L->num_chunks; c++)
+        if (!splat_list_init(&L->chunks[c].splats, 4 * (size_t)LIGHT_CHUNK)) return 0;
+    if (it->kind == INTEGRATOR_BIDIR) {
+        L->path_count = calloc(pixels, sizeof *L->path_count);
+        L->path_start = calloc(pixels + 1, sizeof *L->path_start);
+        if (!L->path_count || !L->path_start) return 0;
+    }
+    return 1;
+}
+
+static void light_free(LightIterations *L)
+{
+    if (L->chunks)
+        for (int c = 0; c < L->num_chunks; c++) {
+            splat_list_free(&L->chunks[c].splats);
+            vcm_vertex_list_free(&L->chunks[c].verts);
+        }
+    free(L->chunks);
+    free(L->iteration_rgb);
+    free(L->path_count);
+    free(L->path_start);
+    free(L->vertices);
+    free(L->cell_start);
+    free(L->cell_of);
+    free(L->cell_items);
+    memset(L, 0, sizeof *L);
+}
+
+static CstStatus light_prepare(Integrator *it, const CstRenderSettings *st, CstError *err)
+{
+    LightIterations *L = &it->light;
+    if (it->kind == INTEGRATOR_BIDIR) {
+        L->vcm_params.merge = st->integrator == CST_INTEGRATOR_VCM;
+        L->vcm_params.max_depth = st->max_depth;
+        L->vcm_params.rr_depth = st->rr_depth;
+        L->vcm_radius = st->photon_radius > 0.0 ? (float)st->photon_radius : vcm_default_radius(it->scene);
+        if (!(st->photon_radius >= 0.0) || !(L->vcm_radius > 0.0f) || !(L->vcm_radius < INFINITY))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "merging radius %g: expected a positive value (0 = automatic)",
+                            st->photon_radius);
+    }
+    L->params.max_depth = st->max_depth;
+    L->params.rr_depth = st->rr_depth;
+    /* One light path per pixel per iteration; 65536^2 pixels would overflow int. */
+    size_t pixels = (size_t)st->width * (size_t)st->height;
+    if (pixels > (size_t)INT32_MAX - LIGHT_CHUNK)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "image size %dx%d: too many pixels for the light tracer (at most %d)",
+                        st->width, st->height, INT32_MAX - LIGHT_CHUNK);
+    L->light_paths = (int)pixels;
+    L->num_chunks = (L->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
+    L->params.frame = L->vcm_params.frame = splat_frame(st->width, st->height, st->filter);
+    if (!light_alloc(it))
+        return cst_fail(err, CST_ERR_OOM, "out of memory for light-tracing buffers (%dx%d)", st->width, st->height);
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------------------ steps */
+
+static void set_step(IntegratorStep *step, int items, ThreadPoolFn fn, void *ctx, double lo, double hi,
+                     bool throttle)
+{
+    *step = (IntegratorStep){items, fn, ctx, lo, hi, throttle};
+}
+
+static CstStatus splats_lost(const Integrator *it, CstError *err)
+{
+    for (int c = 0; c < it->light.num_chunks; c++)
+        if (it->light.chunks[c].splats.oom)
+            return cst_fail(err, CST_ERR_OOM, "out of memory for light-tracing splats (%dx%d)", it->film->width,
+                            it->film->height);
+    return CST_OK;
+}
+
+/* Step it->step of the current iteration into *step (items 0: the iteration is done).
+ * [lo, hi]: the iteration's share of the pass's progress. */
+static CstStatus iteration_step(Integrator *it, IntegratorStep *step, double lo, double hi, CstError *err)
+{
+    LightIterations *L = &it->light;
+    const double mid = it->kind == INTEGRATOR_BIDIR ? lo + 0.5 * (hi - lo) : hi;
+    CstStatus st;
+    switch (it->kind) {
+    case INTEGRATOR_PATH:
+    case INTEGRATOR_WHITTED:
+    case INTEGRATOR_PHOTON:
+        /* One step for the whole pass: every sample of a pixel in one tile item, so the
+         * pixel's accumulation order is fixed. */
+        if (it->step++ > 0) return CST_OK;
+        it->tile_first = it->pass_first;
+        it->tile_spp = it->pass_count;
+        it->iteration = it->pass_first + it->pass_count - 1;
+        set_step(step, it->num_tiles, camera_tile, it, 0.0, 1.0, false);
+        return CST_OK;
+    case INTEGRATOR_LIGHT:
+    case INTEGRATOR_BIDIR:
+        for (;;) {
+            switch (it->step++) {
+            case 0:
+                if (it->kind == INTEGRATOR_BIDIR)
+                    vcm_iteration_init(&L->vcm_it, &L->vcm_params, &it->camera, L->light_paths, L->vcm_radius,
+                                       it->iteration);
+                set_step(step, L->num_chunks, light_chunk, it, lo, mid, true);
+                return CST_OK;
+            case 1:
+                if ((st = splats_lost(it, err)) != CST_OK) return st;
+                if (it->kind == INTEGRATOR_LIGHT) { it->step = 5; continue; }
+                if (!bidir_prepare(L, it->threads))
+                    return cst_fail(err, CST_ERR_OOM, "out of memory for the light vertices of an iteration");
+                set_step(step, L->num_chunks, bidir_gather_chunk, it, mid, mid, true);
+                return CST_OK;
+            case 2:
+                if (!L->grid_ranges) { it->step = 4; continue; }
+                L->grid_fill = false;
+                set_step(step, L->grid_ranges, bidir_grid_range, it, mid, mid, true);
+                return CST_OK;
+            case 3:
+                vcm_grid_bases(L->grid_base, L->grid_ranges);
+                L->grid_fill = true;
+                set_step(step, L->grid_ranges, bidir_grid_range, it, mid, mid, true);
+                return CST_OK;
+            case 4:
+                /* One camera path per pixel: sample `iteration` of every pixel. */
+                it->tile_first = it->iteration;
+                it->tile_spp = 1;
+                set_step(step, it->num_tiles, camera_tile, it, mid, hi, true);
+                return CST_OK;
+            case 5:
+                set_step(step, L->params.frame.bands, light_merge_band, it, hi, hi, true);
+                return CST_OK;
+            default: return CST_OK;
+            }
+        }
+    case INTEGRATOR_SPPM:
+        while (it->step < SPPM_PHASES) {
+            int p = it->step++;
+            int n = sppm_phase_begin(it->sppm, it->iteration, p);
+            if (n < 0) return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon hits");
+            if (n == 0) continue;
+            set_step(step, n, sppm_item, it->sppm, lo + (hi - lo) * p / SPPM_PHASES,
+                     lo + (hi - lo) * (p + 1) / SPPM_PHASES, false);
+            return CST_OK;
+        }
+        return CST_OK;
+    }
+    return CST_OK;
+}
+
+void integrator_pass_begin(Integrator *it, int first, int count)
+{
+    it->pass_first = first;
+    it->pass_count = count;
+    it->iteration = first;
+    it->step = 0;
+}
+
+CstStatus integrator_next_step(Integrator *it, IntegratorStep *step, CstError *err)
+{
+    for (;;) {
+        const int k = it->iteration - it->pass_first;
+        set_step(step, 0, NULL, it, 1.0, 1.0, false);
+        if (k >= it->pass_count) return CST_OK;
+        CstStatus st = iteration_step(it, step, (double)k / it->pass_count, (double)(k + 1) / it->pass_count, err);
+        if (st != CST_OK || step->items > 0) return st;
+        it->iteration++;
+        it->step = 0;
+    }
+}
+
+/* ---------------------------------------------------------------------- lifetime */
+
+CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRenderSettings *st, Film *film,
+                             IntegratorWorker *workers, uint64_t *rays, CstError *err)
+{
+    memset(it, 0, sizeof *it);
+    switch (st->integrator) {
+    case CST_INTEGRATOR_WHITTED: it->kind = INTEGRATOR_WHITTED; break;
+    case CST_INTEGRATOR_PHOTON: it->kind = INTEGRATOR_PHOTON; break;
+    case CST_INTEGRATOR_LIGHT: it->kind = INTEGRATOR_LIGHT; break;
+    case CST_INTEGRATOR_BDPT:
+    case CST_INTEGRATOR_VCM: it->kind = INTEGRATOR_BIDIR; break;
+    case CST_INTEGRATOR_SPPM: it->kind = INTEGRATOR_SPPM; break;
+    case CST_INTEGRATOR_PATH:
+    case CST_INTEGRATOR_PATH_NEE:
+    case CST_INTEGRATOR_PATH_BSDF:
+    case CST_INTEGRATOR_DEFAULT: it->kind = INTEGRATOR_PATH; break;
+    }
+    it->scene = scene;
+    it->film = film;
+    it->workers = workers;
+    it->threads = st->threads;
+    it->seed = st->seed;
+    camera_init(&it->camera, &scene->camera, st->width, st->height);
+    if (scene->camera_mirror) camera_mirror_x(&it->camera);
+    filter_init(&it->pixel_filter, st->filter);
+    it->sampler = st->sampler;
+    /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
+    it->sampler_spp = (uint32_t)st->spp;
+    it->aov_hit = (st->aovs & FILM_AOV_FIRST_HIT) != 0;
+    it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
+    it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
+    it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;
+    int tiles_y = (st->crop[3] - st->crop[2] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;
+    it->num_tiles = it->tiles_x * tiles_y;
+    const bool photons_ok = st->photons >= 0 && st->photon_radius >= 0.0 && (float)st->photon_radius < INFINITY;
+    switch (it->kind) {
+    case INTEGRATOR_PATH:
+        it->path.mode = st->integrator == CST_INTEGRATOR_PATH_NEE ? PATH_NEE
+                      : st->integrator == CST_INTEGRATOR_PATH_BSDF ? PATH_BSDF : PATH_MIS;
+        it->path.max_depth = st->max_depth;
+        it->path.rr_depth = st->rr_depth;
+        return CST_OK;
+    case INTEGRATOR_WHITTED:
+        it->whitted.max_depth = st->max_depth;
+        it->whitted.light_samples = 1;
+        return CST_OK;
+    case INTEGRATOR_PHOTON: {
+        /* The photon pass is part of the render's time (and of a time limit's budget). It
+         * runs single-threaded from the render seed, so the maps, and with them the image,
+         * do not depend on the thread count. */
+        if (!photons_ok) break;
+        PhotonParams pp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->seed};
+        return photon_maps_build(scene, &it->camera, &pp, &it->photon, rays, err);
+    }
+    case INTEGRATOR_LIGHT:
+    case INTEGRATOR_BIDIR: return light_prepare(it, st, err);
+    case INTEGRATOR_SPPM: {
+        /* spp is the iteration count; photons reach each visible point in photon order
+         * whatever the thread count (sppm.c). */
+        if (!photons_ok) break;
+        SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
+                         st->threads};
+        return sppm_create(scene, &it->camera, &sp, st->threads, &it->sppm, err);
+    }
+    }
+    return cst_fail(err, CST_ERR_INVALID_ARG, "photon count %d and radius %g: expected positive values (0 = default)",
+                    st->photons, st->photon_radius);
+}
+
+void integrator_finish(Integrator *it, int samples)
+{
+    if (it->kind == INTEGRATOR_SPPM) sppm_finish(it->sppm, it->film, samples);
+    else it->film->spp = samples;
+}
+
+void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfinite)
+{
+    if (it->kind == INTEGRATOR_SPPM && it->sppm) sppm_counters(it->sppm, rays, nonfinite);
+    if ((it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR) && it->light.chunks)
+        for (int c = 0; c < it->light.num_chunks; c++) *nonfinite += it->light.chunks[c].splats.nonfinite;
+}
+
+void integrator_destroy(Integrator *it)
+{
+    switch (it->kind) {
+    case INTEGRATOR_PHOTON: photon_maps_free(&it->photon); break;
+    case INTEGRATOR_LIGHT:
+    case INTEGRATOR_BIDIR: light_free(&it->light); break;
+    case INTEGRATOR_SPPM: sppm_destroy(it->sppm); it->sppm = NULL; break;
+    case INTEGRATOR_PATH:
+    case INTEGRATOR_WHITTED: break;
+    }
+}
+
+/* ------------------------------------------------------------------- name table */
+
+static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] = {
+    {"path", CST_INTEGRATOR_PATH},       {"path-nee", CST_INTEGRATOR_PATH_NEE},
+    {"path-bsdf", CST_INTEGRATOR_PATH_BSDF}, {"mis", CST_INTEGRATOR_PATH},
+    {"nee", CST_INTEGRATOR_PATH_NEE},    {"bsdf", CST_INTEGRATOR_PATH_BSDF},
+    {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
+    {"whitted", CST_INTEGRATOR_WHITTED}, {"photon", CST_INTEGRATOR_PHOTON},
+    {"sppm", CST_INTEGRATOR_SPPM},       {"bdpt", CST_INTEGRATOR_BDPT},
+    {"vcm", CST_INTEGRATOR_VCM},
+};
+
+CstIntegrator cst_integrator_from_name(const char *name)
+{
+    for (size_t i = 0; i < sizeof INTEGRATOR_NAMES / sizeof INTEGRATOR_NAMES[0]; i++)
+        if (strcmp(name, INTEGRATOR_NAMES[i].name) == 0) return INTEGRATOR_NAMES[i].id;
+    return CST_INTEGRATOR_DEFAULT;
+}
+
+const char *cst_integrator_name(CstIntegrator integrator)
+{
+    switch (integrator) {
+    case CST_INTEGRATOR_PATH: return "path";
+    case CST_INTEGRATOR_PATH_NEE: return "path-nee";
+    case CST_INTEGRATOR_PATH_BSDF: return "path-bsdf";
+    case CST_INTEGRATOR_LIGHT: return "light";
+    case CST_INTEGRATOR_WHITTED: return "whitted";
+    case CST_INTEGRATOR_PHOTON: return "photon";
+    case CST_INTEGRATOR_SPPM: return "sppm";
+    case CST_INTEGRATOR_BDPT: return "bdpt";
+    case CST_INTEGRATOR_VCM: return "vcm";
+    case CST_INTEGRATOR_DEFAULT: break;
+    }
+    return "default";
+}

@@ -1,0 +1,350 @@
+/* Bidirectional subpaths (subpath.h), after Georgiev et al. 2012 and the recursive MIS of
+ * Georgiev's technical report "Implementing Vertex Connection and Merging" (2012; the
+ * "tech. rep." equations below), with the power heuristic (beta = 2, Veach eq. 9.13).
+ *
+ * Every strategy's MIS weight is 1 / (sum over strategies of (p_k / p_s)^2); the ratios
+ * are carried along each subpath in three numbers (d_vcm, d_vc, d_vm) so that a weight
+ * costs O(1) instead of a walk over the path. The pdfs in the weights leave out Russian
+ * roulette (our roulette follows the throughput, which the reverse direction cannot know):
+ * weights that sum to one over the strategies of a path keep the estimator unbiased
+ * whatever pdfs they are computed from, so this only makes them slightly less optimal. */
+#include "integrators/subpath.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/array.h"
+#include "film/filter.h"
+#include "integrators/roulette.h"
+
+void vcm_vertex_list_free(VcmVertexList *l)
+{
+    free(l->v);
+    memset(l, 0, sizeof *l);
+}
+
+static void push_vertex(VcmVertexList *l, const VcmVertex *v)
+{
+    if (!array_push(l, *v)) l->oom = 1;
+}
+
+
+/* The density, per unit solid angle, with which a camera sample of one pixel picks the
+ * direction at angle theta to the view axis: 1 / (pixel area cos^3 theta) on the image
+ * plane at distance 1 (camera.c). Exact for the box filter; for the tent and the thin
+ * lens it is the same function used consistently by every strategy, which is all the
+ * weights need. */
+static inline float camera_pdf_w(const VcmIteration *it, float cos_theta)
+{
+    return 1.0f / (it->pixel_area * cos_theta * cos_theta * cos_theta);
+}
+
+
+/* After scattering at a vertex into a direction with |cos| cos_out, forward pdf pdf_fwd
+ * and reverse pdf pdf_rev (tech. rep. eqs. 34-36; for delta lobes eqs. 53-55, where the
+ * forward and reverse discrete probabilities are the same and cancel). The division by
+ * the next vertex's distance and cosine happens at the next hit. */
+static inline void mis_scatter(SubPath *sp, const VcmIteration *it, const BsdfSample *bs,
+                               float cos_out, float pdf_rev)
+{
+    if (bs->delta) {
+        sp->d_vcm = 0.0f;
+        sp->d_vc *= mis(cos_out);
+        sp->d_vm *= mis(cos_out);
+        return;
+    }
+    float g = mis(cos_out / bs->pdf);
+    sp->d_vc = g * (sp->d_vc * mis(pdf_rev) + sp->d_vcm + it->mis_vm);
+    sp->d_vm = g * (sp->d_vm * mis(pdf_rev) + sp->d_vcm * it->mis_vc + 1.0f);
+    sp->d_vcm = mis(1.0f / bs->pdf);
+}
+
+/* At a hit at distance dist with |cos| cos_in to the incoming direction: completes the
+ * area conversion of the previous scattering (tech. rep. eqs. 31-33, 37-38). */
+static inline void mis_arrive(SubPath *sp, float dist, float cos_in)
+{
+    sp->d_vcm *= mis(dist * dist);
+    float inv = 1.0f / mis(cos_in);
+    sp->d_vcm *= inv;
+    sp->d_vc *= inv;
+    sp->d_vm *= inv;
+}
+
+/* Russian roulette (roulette.h) on a subpath's throughputs. False when the path stops. */
+static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, Sampler *rng)
+{
+    float rr = roulette(rng, depth, rr_depth, sp->scatter);
+    if (rr == 0.0f) return false;
+    sp->beta = color_scale(sp->beta, rr);
+    sp->scatter = color_scale(sp->scatter, rr);
+    return true;
+}
+
+/* The continuation of a subpath at a vertex (wo: back along the subpath; mode: what it
+ * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
+ * quantities and the next ray. False when the subpath ends here. */
+static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const Bsdf *b, const SurfaceHit *sh, Vec3 wo,
+                    BsdfTransport mode, int depth, int rr_depth, Sampler *rng, Ray *ray)
+{
+    BsdfSample bs;
+    float uc = sampler_1d(rng);
+    Vec2 u = sampler_2d(rng);
+    if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
+    if (!(bs.pdf > 0.0f)) return false;
+    float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(b, bs.wi, wo);
+    sp->beta = color_mul(sp->beta, bs.weight);
+    sp->scatter = color_mul(sp->scatter, bs.weight);
+    if (color_is_black(sp->scatter)) return false;
+    if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
+    mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), pdf_rev);
+    *ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    return true;
+}
+
+/* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
+static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams *vp,
+                              const VcmIteration *it, const VcmVertex *v, const Bsdf *b,
+                              Vec2 u_lens, SplatList *splats, uint64_t *rays)
+{
+    const float margin = filter_radius(vp->frame.filter) - 0.5f;
+    CameraWiSample cs;
+    if (!camera_sample_wi(cam, v->p, u_lens, margin, &cs)) return;
+    float cos_prev = fabsf(v3_dot(v->ng, v->w_prev));
+    float cos_cam = fabsf(v3_dot(v->ng, cs.wi));
+    if (!(cos_prev > 0.0f) || !(cos_cam > 0.0f)) return;
+    /* f(wo = toward the camera, wi = toward the light) |cos theta_cam|, evaluated the way
+     * the camera path sees this vertex (light.c explains the cosine swap). */
+    float pdf_rev, pdf_unused;
+    Color f = color_scale(bsdf_eval_pdfs(b, cs.wi, v->w_prev, &pdf_rev, &pdf_unused), cos_cam / cos_prev);
+    if (color_is_black(f)) return;
+    float cos_theta = v3_dot(v3_neg(cs.wi), cam->forward);
+    /* The camera's density of this vertex per unit area, per pixel (tech. rep. eq. 46). */
+    float cam_pdf_a = camera_pdf_w(it, cos_theta) * cos_cam / (cs.dist * cs.dist);
+    float w_light = mis(cam_pdf_a / (float)it->light_paths) *
+                    (it->mis_vm + v->d_vcm + v->d_vc * mis(pdf_rev));
+    float weight = 1.0f / (1.0f + w_light);
+    ++*rays;
+    if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
+    film_splat(splats, &vp->frame, cs.raster.x, cs.raster.y,
+               color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w));
+}
+
+void subpath_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
+                     Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return;
+    float u_sel = sampler_1d(rng);
+    Vec2 u_pos = sampler_2d(rng);
+    Vec2 u_dir = sampler_2d(rng);
+    EmissionSample es;
+    EmitterGeometry g = scene_emitter_geometry(s);
+    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
+    if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
+    float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
+
+    /* tech. rep. eqs. 31-33: the light vertex's NEE density against its emission density;
+     * a delta light cannot be hit, so no strategy reaches it by a connection (d_vc = 0). */
+    SubPath sp;
+    sp.beta = es.beta;
+    sp.scatter = color_s(1.0f);
+    sp.d_vcm = mis(es.nee_pdf / emission_pdf);
+    sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
+    sp.d_vm = sp.d_vc * it->mis_vc;
+
+    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
+    for (int bounces = 1;; bounces++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) break;
+        Vec3 w_prev = v3_neg(ray.d);
+        float cos_in = fabsf(v3_dot(sh.ng, w_prev));
+        if (!(cos_in > 0.0f)) break;
+        /* From a directional light the first segment has no distance: its density is
+         * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
+        mis_arrive(&sp, bounces > 1 || es.finite ? sh.t : 1.0f, cos_in);
+
+        Bsdf bsdf;
+        scene_bsdf(s, &sh, &bsdf);
+        const bool connect = !bsdf_is_delta(&bsdf);
+        VcmVertex v;
+        Vec2 u_lens;
+        if (connect) {
+            v = (VcmVertex){sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
+                            sh.material, bounces, sh.uv};
+            push_vertex(verts, &v);
+            u_lens = sampler_2d(rng);
+        }
+        /* The next direction before this vertex's camera connection, with the random
+         * numbers drawn in the same order (light.c says why). */
+        const bool more = !(vp->max_depth > 0 && bounces >= vp->max_depth) &&
+                          scatter(s, &sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray);
+        if (connect) connect_to_camera(s, cam, vp, it, &v, &bsdf, u_lens, splats, rays);
+        if (!more) break;
+    }
+}
+
+
+/* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF
+ * sampling cannot hit it). */
+static Color connect_to_light(const Scene *s, const VcmIteration *it, const SubPath *sp,
+                            const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Sampler *rng, uint64_t *rays)
+{
+    float u_sel = sampler_1d(rng);
+    Vec2 u = sampler_2d(rng);
+    LightLi ls;
+    EmitterGeometry g = scene_emitter_geometry(s);
+    if (!light_sample_li(&s->emitter_sampler, &g, sh->p, u_sel, u, &ls)) return color_s(0.0f);
+    float cos_x = fabsf(v3_dot(sh->ng, ls.wi));
+    if (!(cos_x > 0.0f)) return color_s(0.0f);
+    float bsdf_pdf_fwd, bsdf_pdf_rev;
+    Color f = bsdf_eval_pdfs(b, wo, ls.wi, &bsdf_pdf_fwd, &bsdf_pdf_rev);
+    if (color_is_black(f)) return color_s(0.0f);
+    float w_light = ls.delta ? 0.0f : mis(bsdf_pdf_fwd / ls.direct_pdf);
+    float w_camera = mis(ls.emit_pdf * cos_x / (ls.direct_pdf * ls.cos_light)) *
+                     (it->mis_vm + sp->d_vcm + sp->d_vc * mis(bsdf_pdf_rev));
+    float weight = 1.0f / (w_light + 1.0f + w_camera);
+    ++*rays;
+    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
+    return color_scale(color_mul(f, ls.li), weight / ls.pdf);
+}
+
+/* The BSDFs of one light path's first vertices, built when a connection first needs
+ * them: every vertex of the camera path connects to the same light vertices, and
+ * rebuilding y's BSDF for each (a frame, the material's constants, textures) was a
+ * visible part of BDPT's time (docs/benchmarks.md). */
+enum { LIGHT_BSDF_CACHE = 16 };
+typedef struct LightBsdfs {
+    Bsdf b[LIGHT_BSDF_CACHE];
+    uint32_t built; /* bit j: b[j] holds vertex j's BSDF */
+} LightBsdfs;
+
+/* y's BSDF as the light subpath saw it, through the scene's one hit-to-BSDF routine;
+ * vertex j of its path, cached in c when j is small enough (else built into *tmp). */
+static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const VcmVertex *y, Bsdf *tmp)
+{
+    Bsdf *b = j < LIGHT_BSDF_CACHE ? &c->b[j] : tmp;
+    if (j < LIGHT_BSDF_CACHE && (c->built >> j & 1u)) return b;
+    SurfaceHit yh = {.p = y->p, .ng = y->ng, .ns = y->ns, .material = y->material, .emitter = -1, .uv = y->uv};
+    scene_bsdf(s, &yh, b);
+    if (j < LIGHT_BSDF_CACHE) c->built |= 1u << j;
+    return b;
+}
+
+/* A connection between camera vertex x and light vertex y, vertex j of its light path
+ * (tech. rep. eqs. 40-41). */
+static Color connect_vertices(const Scene *s, const VcmIteration *it, const SubPath *sp,
+                            const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const VcmVertex *y, int j,
+                            LightBsdfs *cache, uint64_t *rays)
+{
+    Vec3 to = v3_sub(y->p, x->p);
+    float dist2 = v3_length2(to);
+    if (!(dist2 > 0.0f)) return color_s(0.0f);
+    float dist = sqrtf(dist2);
+    Vec3 d = v3_scale(to, 1.0f / dist); /* x -> y */
+    Vec3 nd = v3_neg(d);
+    float cos_x = fabsf(v3_dot(x->ng, d)), cos_y = fabsf(v3_dot(y->ng, d));
+    float cos_y_prev = fabsf(v3_dot(y->ng, y->w_prev));
+    if (!(cos_x > 0.0f) || !(cos_y > 0.0f) || !(cos_y_prev > 0.0f)) return color_s(0.0f);
+    float x_fwd, x_rev;
+    Color fx = bsdf_eval_pdfs(bx, wo, d, &x_fwd, &x_rev);
+    if (color_is_black(fx)) return color_s(0.0f);
+    Bsdf tmp;
+    const Bsdf *by = light_bsdf(s, cache, j, y, &tmp);
+    /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
+     * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */
+    float y_fwd, y_rev; /* y's own direction is toward the light: forward is w_prev -> nd */
+    Color fy = color_scale(bsdf_eval_pdfs(by, nd, y->w_prev, &y_rev, &y_fwd), cos_y / cos_y_prev);
+    if (color_is_black(fy)) return color_s(0.0f);
+    float x_fwd_a = x_fwd * cos_y / dist2; /* the camera subpath reaching y */
+    float y_fwd_a = y_fwd * cos_x / dist2; /* the light subpath reaching x */
+    float w_light = mis(x_fwd_a) * (it->mis_vm + y->d_vcm + y->d_vc * mis(y_rev));
+    float w_camera = mis(y_fwd_a) * (it->mis_vm + sp->d_vcm + sp->d_vc * mis(x_rev));
+    float weight = 1.0f / (w_light + 1.0f + w_camera);
+    ++*rays;
+    if (!scene_visible(s, x->p, x->ng, y->p, y->ng)) return color_s(0.0f);
+    return color_scale(color_mul(color_mul(fx, fy), y->beta), weight / dist2);
+}
+
+
+Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it, int path,
+                           Ray ray, Sampler *rng, uint64_t *rays, const SubpathMerge *merge)
+{
+    Color L = color_s(0.0f);
+    float cos_theta = v3_dot(ray.d, cam->forward);
+    if (!(cos_theta > 0.0f)) return L;
+    /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic
+     * camera cannot be connected to (camera.h): like a delta vertex, 0 drops the t = 1
+     * strategy from every weight. */
+    SubPath sp = {color_s(1.0f), color_s(1.0f),
+                  camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
+                  0.0f, 0.0f};
+    const VcmVertex *lv = it->vertices + it->path_start[path];
+    const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
+    const bool has_lights = s->emitter_sampler.lights > 0;
+    LightBsdfs light_bsdfs;
+    light_bsdfs.built = 0;
+    for (int t = 1;; t++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) {
+            /* s = 0 with the environment: an infinitely distant light, so its densities
+             * have no distance factor and the last segment's is not converted (tech.
+             * rep. sec. 5.1, SmallVCM's background). */
+            Color le = light_env_radiance(&s->emitter_sampler, ray.d);
+            if (!color_is_black(le)) {
+                float w = 1.0f;
+                if (t > 1) {
+                    float direct = light_env_pdf(&s->emitter_sampler, ray.d);
+                    float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
+                    w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
+                }
+                L = color_madd(L, sp.beta, color_scale(le, w));
+            }
+            break;
+        }
+        Vec3 wo = v3_neg(ray.d);
+        float cos_in = fabsf(v3_dot(sh.ng, wo));
+        if (!(cos_in > 0.0f)) break;
+        mis_arrive(&sp, sh.t, cos_in);
+
+        /* s = 0: the camera subpath hits an emitter (tech. rep. eq. 39). Seen directly
+         * there is no other strategy (light vertices on emitters are not splatted). */
+        if (sh.emitter >= 0) {
+            const Emitter *e = &s->emitters[sh.emitter];
+            Color le = scene_emission(s, &sh, wo);
+            if (!color_is_black(le)) {
+                float w = 1.0f;
+                if (t > 1) {
+                    float pdf_a = emitter_pdf_a(&s->emitter_sampler, sh.emitter);
+                    float emission_pdf = pdf_a * emitter_emission_pdf_w(e, sh.ng, wo);
+                    w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
+                }
+                L = color_madd(L, sp.beta, color_scale(le, w));
+            }
+        }
+        /* The camera path's vertices so far are t bounces once this one scatters. */
+        if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
+
+        Bsdf bsdf;
+        scene_bsdf(s, &sh, &bsdf);
+        if (!bsdf_is_delta(&bsdf)) {
+            const bool merging = merge && it->cells > 0;
+            MergeQuery mq;
+            if (merging) merge->plan(it, sh.p, &mq);
+            if (has_lights)
+                L = color_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, rays));
+            if (merging) merge->fetch(it, &mq);
+            Color c = color_s(0.0f);
+            for (int j = 0; j < nlv; j++) {
+                if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
+                c = color_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, rays));
+            }
+            L = color_madd(L, sp.beta, c);
+            if (merging) L = color_madd(L, sp.beta, merge->merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));
+        }
+
+        if (!scatter(s, &sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
+    }
+    return L;
+}
+
