@@ -98,6 +98,167 @@ typedef struct CstSceneInfo {
 } CstSceneInfo;
 void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
 
+/* ---------------------------------------------------------------- building scenes
+ * A scene built in code, the way a loader builds one: cst_scene_create, then textures,
+ * materials, shapes, lights, an environment and a camera in any order (a thing must be
+ * added before another refers to it by id), then cst_scene_commit, after which the scene
+ * is read-only and can be rendered. Every call validates its input (non-finite numbers,
+ * negative or zero sizes, ids and indices out of range, strides smaller than an element)
+ * and fails with CST_ERR_INVALID_ARG and a message naming the bad value, leaving the scene
+ * as it was before the call. Coordinates and lengths must lie within 1e18 in magnitude.
+ * Ids are small integers handed out in order; texture ids start at 1, so that 0 means
+ * "no texture" in a zero-initialised description. */
+
+/* An empty scene with a default camera (at (0, 0, 5) looking at the origin, 40 degrees).
+ * Caller owns it: cst_scene_destroy. */
+CstStatus cst_scene_create(CstScene **out, CstError *err);
+
+typedef enum CstTextureType {
+    CST_TEXTURE_CONSTANT = 1, /* one RGB value */
+    CST_TEXTURE_CHECKERBOARD, /* squares alternating between two other textures */
+    CST_TEXTURE_IMAGE         /* an image file or caller's pixels, bilinear */
+} CstTextureType;
+
+typedef enum CstTextureWrap {
+    CST_TEXTURE_WRAP_REPEAT = 0, /* the image tiles the uv plane */
+    CST_TEXTURE_WRAP_CLAMP       /* uv outside [0, 1] sees the border texels */
+} CstTextureWrap;
+
+/* Zero-initialise, then set the type and its fields. Images: v = 0 is the bottom row,
+ * u = 0 the left column (OBJ and glTF meshes' convention). */
+typedef struct CstTextureDesc {
+    CstTextureType type;
+    float value[3];       /* constant: linear RGB, >= 0 */
+    int even, odd;        /* checkerboard: ids of textures already in the scene */
+    float scale;          /* checkerboard: squares per unit of u and v, > 0 (0 = 1) */
+    const char *path;     /* image: PNG, JPEG, BMP, TGA, HDR, EXR or PFM file, or NULL and */
+    const float *pixels;  /* image: width * height * 3 linear floats, row 0 = top (copied) */
+    int width, height;    /* image: the size of `pixels` */
+    int linear;           /* image file: 1 = 8/16-bit values are data (roughness maps), not sRGB */
+    CstTextureWrap wrap;  /* image */
+    /* Every type: evaluate at (uv_scale u + uv_offset[0], uv_scale v + uv_offset[1]);
+     * uv_scale {0, 0} = {1, 1}. */
+    float uv_scale[2], uv_offset[2];
+} CstTextureDesc;
+
+/* *out_id (>= 1) names the texture in later descriptions. */
+CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *desc, int *out_id,
+                                CstError *err);
+
+typedef enum CstMaterialType {
+    CST_MATERIAL_DIFFUSE = 1, /* Lambertian: albedo = hemispherical reflectance */
+    CST_MATERIAL_MIRROR,      /* perfect specular reflection times albedo */
+    CST_MATERIAL_GLASS,       /* smooth dielectric: exact Fresnel; albedo tints both lobes */
+    CST_MATERIAL_CONDUCTOR,   /* metal: complex IOR (eta + i k, or a named metal), GGX if rough */
+    CST_MATERIAL_DIELECTRIC,  /* glass that may be rough (GGX reflection + transmission) */
+    CST_MATERIAL_PLASTIC      /* dielectric coat (smooth or GGX) over Lambert */
+} CstMaterialType;
+
+/* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
+typedef struct CstMaterialDesc {
+    CstMaterialType type;
+    float albedo[3];        /* reflectance in [0, 1] per channel (default 0.5 for diffuse and
+                             * plastic, else 1) */
+    int albedo_texture;     /* a texture id replacing albedo (values at most 1), or 0 */
+    float ior;              /* glass, dielectric, plastic: interior over exterior, > 0
+                             * (plastic: >= 1); default 1.5 */
+    float roughness;        /* conductor, dielectric, plastic: perceptual, in [0, 1]; 0 = smooth */
+    int roughness_texture;  /* a texture id replacing roughness (not for plastic), or 0 */
+    const char *metal;      /* conductor: "gold", "silver", "copper", "aluminium", or NULL and */
+    float eta[3], k[3];     /* conductor: complex IOR per channel, >= 0 */
+    int two_sided;          /* diffuse, mirror, conductor, plastic: 1 (default) reflects on both
+                             * sides, 0 leaves the back black; dielectrics ignore it */
+} CstMaterialDesc;
+
+void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);
+CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *desc, int *out_id,
+                                 CstError *err);
+
+/* Light a surface sends out; zero-initialised = none. */
+typedef struct CstEmission {
+    float radiance[3];  /* linear RGB radiance, >= 0 (times the texture's value, if any) */
+    int texture;        /* a texture id, or 0 */
+    int two_sided;      /* 0: emits only on the side the geometric normal points to */
+} CstEmission;
+
+/* A triangle mesh read from the caller's arrays, Embree-style: each attribute is a pointer
+ * to its first element and a stride in bytes between consecutive elements (0 = tightly
+ * packed), so positions, normals and uvs may sit inside one interleaved vertex struct.
+ * The data are copied; the caller's arrays can be freed after the call. Zero-initialise. */
+typedef struct CstMeshDesc {
+    const void *positions;   /* num_vertices x 3 floats */
+    size_t position_stride;  /* bytes, 0 or >= 12 */
+    int num_vertices;
+    const void *normals;     /* optional: num_vertices x 3 floats, nonzero (normalised here);
+                              * shading normals, interpolated over each triangle */
+    size_t normal_stride;    /* 0 or >= 12 */
+    const void *uvs;         /* optional: num_vertices x 2 floats, texture coordinates */
+    size_t uv_stride;        /* 0 or >= 8 */
+    const void *indices;     /* num_triangles x 3 uint32_t vertex indices, < num_vertices */
+    size_t index_stride;     /* bytes between triangles, 0 or >= 12 */
+    int num_triangles;
+    int material;            /* a material id */
+    CstEmission emission;    /* zero: not an emitter */
+    int skip_degenerate;     /* 1: drop zero-area triangles (counted in *num_dropped) instead
+                              * of failing */
+} CstMeshDesc;
+
+/* num_dropped may be NULL. */
+CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *desc, int *num_dropped,
+                             CstError *err);
+/* emission may be NULL. */
+CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius,
+                               int material, const CstEmission *emission, CstError *err);
+
+typedef enum CstLightType {
+    CST_LIGHT_POINT = 1,  /* isotropic: intensity (W/sr) in every direction */
+    CST_LIGHT_SPOT,       /* a point with a cone: intensity on the axis, smooth falloff */
+    CST_LIGHT_DIRECTIONAL /* parallel light from infinitely far: irradiance (W/m^2) */
+} CstLightType;
+
+/* Zero-initialise, then set. */
+typedef struct CstLightDesc {
+    CstLightType type;
+    float position[3];   /* point, spot */
+    float direction[3];  /* spot: the axis; directional: the way the light travels; nonzero,
+                          * any length */
+    float intensity[3];  /* point, spot: W/sr; directional: irradiance; >= 0 */
+    float cone_angle;    /* spot: half-angle of the cone in degrees, (0, 90] (pbrt: 30) */
+    float cone_delta;    /* spot: degrees of falloff at the cone's edge, [0, cone_angle]
+                          * (pbrt: 5) */
+} CstLightDesc;
+
+CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *desc, CstError *err);
+/* A constant environment: radiance from every direction (replaces one set before). */
+CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radiance[3],
+                                             CstError *err);
+/* An equirectangular environment image (EXR, PFM, PNG...) times scale (NULL = 1), sampled
+ * by importance (replaces one set before). */
+CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path,
+                                          const float scale[3], CstError *err);
+
+typedef enum CstCameraType {
+    CST_CAMERA_PERSPECTIVE = 1, /* a pinhole, or a thin lens when aperture_radius > 0 */
+    CST_CAMERA_ORTHOGRAPHIC     /* parallel rays; fov and the lens are unused */
+} CstCameraType;
+
+/* Zero-initialise, then set. */
+typedef struct CstCameraDesc {
+    CstCameraType type;
+    float position[3], look_at[3];
+    float up[3];            /* not parallel to look_at - position; {0, 0, 0} = {0, 1, 0} */
+    float fov;              /* perspective: vertical field of view, degrees, in (0, 180) */
+    float aperture_radius;  /* perspective: lens radius, >= 0; 0 = pinhole */
+    float focus_distance;   /* perspective: distance to the plane in focus, > 0;
+                             * 0 = |look_at - position| */
+    float height;           /* orthographic: the view's height in scene units, > 0 */
+} CstCameraDesc;
+
+CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *desc, CstError *err);
+/* Builds the acceleration structure and the light distribution; after it the scene can
+ * be rendered and accepts no more additions. */
+CstStatus cst_scene_commit(CstScene *scene, CstError *err);
+
 /* ---------------------------------------------------------------- rendering */
 typedef enum CstIntegrator {
     CST_INTEGRATOR_DEFAULT = 0, /* the scene's choice, else CST_INTEGRATOR_PATH */
