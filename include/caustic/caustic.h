@@ -323,43 +323,67 @@ int cst_aov_from_name(const char *name);
 
 typedef void (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
 
-/* Zero-initialise, then set what you want: a zero field means "the scene's value, else
- * the default". Command-line values override scene-file values this way. */
+/* The value cst_render_settings_init gives every int and double field of
+ * CstRenderSettings: "not set here: the scene's value, else the default". Compare with
+ * == CST_UNSET (doubles hold it exactly). */
+#define CST_UNSET (-2147483647 - 1)
+
+/* Render settings, each either set or unset. Unset fields take the scene file's value,
+ * else the default, so command-line values override scene-file values; a set field
+ * overrides the scene even with 0 where 0 means something (max_depth 0 = unbounded
+ * replaces a scene's max_depth 5; time_limit 0 = none; png_linear 0 = sRGB; aovs 0 =
+ * none; an all-zero crop = the whole image; threads 0 = all cores).
+ *
+ *     CstRenderSettings s;
+ *     cst_render_settings_init(&s);   every field unset
+ *     s.spp = 64;                     the rest from the scene, else the defaults
+ *
+ * Compatibility: in a zero-initialised struct (the form before cst_render_settings_init)
+ * the fields where 0 means nothing (width, height, spp, rr_depth, photons,
+ * photon_radius, and the enums' *_DEFAULT) still read 0 as unset; the others read 0 as
+ * the value 0. seed and exposure keep their own *_set flags. */
 typedef struct CstRenderSettings {
-    int width, height;        /* default 512 x 512 */
+    int width, height;        /* > 0; default 512 x 512 */
     int spp;                  /* samples per pixel (light tracing: iterations of width x height
-                               * light paths); default 16 (or unlimited with time_limit) */
-    double time_limit;        /* seconds; 0 = none. With spp also set, stops at whichever comes first */
-    int threads;              /* 0 = all cores */
-    uint64_t seed;            /* used when seed_set != 0; default 0 */
+                               * light paths), > 0; default 16 (or unlimited with time_limit) */
+    double time_limit;        /* seconds; 0 = none (the default). With spp also set, stops at
+                               * whichever comes first */
+    int threads;              /* 0 = all cores (the default) */
+    uint64_t seed;            /* used when seed_set != 0; default the scene's, else 0 */
     int seed_set;
-    CstIntegrator integrator;
-    CstFilter filter;
+    CstIntegrator integrator; /* CST_INTEGRATOR_DEFAULT = unset */
+    CstFilter filter;         /* CST_FILTER_DEFAULT = unset */
     int max_depth;            /* maximum bounces (scattering vertices) of a path, light paths
-                               * included; 0 = unbounded */
-    int rr_depth;             /* Russian roulette starts at this depth; 0 = default 3 */
-    int photons;              /* photon integrator: photon paths emitted per render;
-                               * 0 = default 200000 */
-    double photon_radius;     /* photon integrator: gather radius in scene units; 0 = automatic
-                               * (about 50 photons at a typical visible point) */
-    CstSampler sampler;       /* camera-path sampler; default independent */
+                               * included; 0 = unbounded (the default) */
+    int rr_depth;             /* Russian roulette starts at this depth, > 0; default 3 */
+    int photons;              /* photon integrator: photon paths emitted per render, > 0;
+                               * default 200000 */
+    double photon_radius;     /* photon integrator: gather radius in scene units, > 0; default
+                               * automatic (about 50 photons at a typical visible point) */
+    CstSampler sampler;       /* camera-path sampler (CST_SAMPLER_DEFAULT = unset); default
+                               * independent */
     /* Output, applied when the film is written (cst_film_write), never to the stored means */
     double exposure;          /* used when exposure_set != 0: pixels times 2^exposure; default 0 */
     int exposure_set;
-    int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0 = the scene's,
-                               * else sRGB. EXR and PFM are always linear. */
-    int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = the scene's, else none */
+    int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0: sRGB (the
+                               * default). EXR and PFM are always linear. */
+    int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = none (the default) */
     /* Crop: only the pixels [crop[0], crop[1]) x [crop[2], crop[3]) of the width x height
      * image (x0, x1, y0, y1; y = 0 the top row) are rendered, and the film holds just them.
      * Each holds exactly the value it has in a whole render with the same seed. All zero =
-     * the scene's crop, else the whole image. */
+     * the whole image (the default); unset when crop[0] == CST_UNSET. */
     int crop[4];
     CstProgressFn progress;   /* called from the calling thread about 10 times a second */
     void *progress_user;
 } CstRenderSettings;
 
-/* The settings a render of `scene` would use: every zero field of `in` (which may be
- * NULL) filled from the scene file, then from the defaults (threads: the core count). */
+/* Marks every field unset (CST_UNSET, the enums' *_DEFAULT, seed_set = exposure_set = 0,
+ * no progress callback). */
+void cst_render_settings_init(CstRenderSettings *settings);
+
+/* The settings a render of `scene` would use, every field set: each unset field of `in`
+ * (NULL = all unset) filled from the scene file, then from the defaults (threads: the
+ * core count; crop: the whole image as [0, width) x [0, height)). */
 void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in,
                                  CstRenderSettings *out);
 

@@ -1377,7 +1377,8 @@ static void test_instances_memory(void **state)
     assert_true(table < (size_t)INSTANCES * 400);
     assert_true(info.instance_bytes < one_copy + (size_t)INSTANCES * 400);
     /* and it renders: the mesh field is lit, not black */
-    CstRenderSettings st = {0};
+    CstRenderSettings st;
+    cst_render_settings_init(&st); /* the scene's max_depth (pbrt: 5) */
     st.width = st.height = 24;
     st.spp = 4;
     st.threads = 2;
@@ -1512,7 +1513,8 @@ static void test_orthographic_camera(void **state)
 
 static Film *render_small(const CstScene *s, int w, int h, int spp)
 {
-    CstRenderSettings st = {0};
+    CstRenderSettings st;
+    cst_render_settings_init(&st); /* the scene's max_depth (pbrt: 5) */
     st.width = w;
     st.height = h;
     st.spp = spp;
