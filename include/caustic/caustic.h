@@ -412,6 +412,12 @@ int cst_film_spp(const CstFilm *film);
 void cst_film_pixel(const CstFilm *film, int x, int y, double rgb[3]);
 /* Estimated variance of that mean (sample variance / spp), per channel. */
 void cst_film_pixel_variance(const CstFilm *film, int x, int y, double var[3]);
+/* Every pixel at once, for copying a film out without a call per pixel: rgb_out receives
+ * width * height * 3 floats, rows from the top, R, G, B per pixel: cst_film_pixel's means
+ * rounded to float (the stored means; exposure applies only when the film is written). */
+void cst_film_pixels(const CstFilm *film, float *rgb_out);
+/* The same layout for cst_film_pixel_variance's variances of the means. */
+void cst_film_variances(const CstFilm *film, float *var_out);
 /* Writes the film; the format follows the extension: .png (8-bit sRGB, or linear when
  * the render's png_linear was set), .exr (float, linear), .pfm (float, linear), scaled
  * by the render's 2^exposure. A film rendered with AOVs writes them as extra EXR channels

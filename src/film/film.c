@@ -92,6 +92,22 @@ void cst_film_pixel_variance(const CstFilm *f, int x, int y, double var[3])
     }
 }
 
+void cst_film_pixels(const CstFilm *f, float *rgb_out)
+{
+    film_resolve(f, rgb_out); /* the means cst_film_pixel gives, rounded to float */
+}
+
+void cst_film_variances(const CstFilm *f, float *var_out)
+{
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++) {
+            double var[3];
+            cst_film_pixel_variance(f, x, y, var);
+            float *o = &var_out[3 * ((size_t)y * (size_t)f->width + (size_t)x)];
+            for (int c = 0; c < 3; c++) o[c] = (float)var[c];
+        }
+}
+
 void film_resolve(const Film *f, float *rgb_out)
 {
     double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;

@@ -229,6 +229,37 @@ static void test_strided_equals_packed(void **state)
     cst_scene_destroy(s[1]);
 }
 
+/* cst_film_pixels / cst_film_variances: the per-pixel getters' values, rows from the top. */
+static void test_film_bulk(void **state)
+{
+    (void)state;
+    CstScene *s = build_api_scene();
+    CstRenderSettings rs;
+    cst_render_settings_init(&rs);
+    rs.width = 13, rs.height = 7, rs.spp = 3, rs.threads = 2;
+    CstFilm *f = NULL;
+    CstError e;
+    ok(cst_render(s, &rs, &f, NULL, &e), &e);
+    float rgb[13 * 7 * 3], var[13 * 7 * 3];
+    cst_film_pixels(f, rgb);
+    cst_film_variances(f, var);
+    int nonzero = 0;
+    for (int y = 0; y < 7; y++)
+        for (int x = 0; x < 13; x++) {
+            double m[3], v[3];
+            cst_film_pixel(f, x, y, m);
+            cst_film_pixel_variance(f, x, y, v);
+            for (int c = 0; c < 3; c++) {
+                assert_true(rgb[3 * (y * 13 + x) + c] == (float)m[c]);
+                assert_true(var[3 * (y * 13 + x) + c] == (float)v[c]);
+                nonzero += v[c] > 0.0;
+            }
+        }
+    assert_true(nonzero > 0);
+    cst_film_destroy(f);
+    cst_scene_destroy(s);
+}
+
 /* ------------------------------------------------------------------ rejected input */
 
 typedef struct Fixture {
@@ -435,6 +466,7 @@ int main(void)
         cmocka_unit_test(test_rejects_mesh_input),
         cmocka_unit_test(test_rejects_other_input),
         cmocka_unit_test(test_camera_types),
+        cmocka_unit_test(test_film_bulk),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
