@@ -7,6 +7,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -377,6 +378,9 @@ typedef struct CstRenderSettings {
     void *progress_user;
 } CstRenderSettings;
 
+/* Photon paths the photon integrator emits when the settings leave photons unset. */
+#define CST_DEFAULT_PHOTONS 200000
+
 /* Marks every field unset (CST_UNSET, the enums' *_DEFAULT, seed_set = exposure_set = 0,
  * no progress callback). */
 void cst_render_settings_init(CstRenderSettings *settings);
@@ -425,6 +429,118 @@ void cst_film_variances(const CstFilm *film, float *var_out);
  * file then renamed, so a failed write never leaves a partial image behind. */
 CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
 void cst_film_destroy(CstFilm *film);
+
+/* ---------------------------------------------------------------- images */
+/* Reads a PNG (sRGB decoded to linear), EXR or PFM as linear RGB floats: *rgb (width x
+ * height x 3, row 0 = top) is the caller's to free(). */
+CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
+/* Writes width x height x 3 linear floats (row 0 = top); the format follows the extension
+ * (.png 8-bit sRGB, .exr, .pfm), atomically as cst_film_write does. */
+CstStatus cst_image_write(const char *path, const float *rgb, int width, int height, CstError *err);
+
+/* ---------------------------------------------------------------- comparing renders
+ * The statistics of `caustic verify` (docs/cli.md): two independent films of the same
+ * scene agree when every z-score of their difference, of the image mean and of every
+ * block of block x block pixels, per channel, is within a Sidak-corrected critical
+ * value; consistent (biased) estimators are judged by whether their mean squared block
+ * bias against an unbiased reference shrinks as their work grows 4x per level. */
+
+/* The standard normal quantile Phi^-1(p), p in (0, 1). */
+double cst_compare_normal_quantile(double p);
+/* The per-test level 1 - (1 - alpha)^(1/m) of m tests at family-wise level alpha. */
+double cst_compare_sidak_alpha(double alpha, double m);
+/* The two-sided critical |z| of m tests at family-wise level alpha. */
+double cst_compare_z_critical(double alpha, double m);
+/* Blocks across and down a width x height image (the last ones may be partial). */
+int cst_compare_blocks_x(int width, int block);
+int cst_compare_blocks_y(int height, int block);
+/* The tests cst_film_compare makes: 3 channels x (1 image mean + the blocks). */
+int64_t cst_compare_tests_per_pair(int width, int height, int block);
+
+typedef struct CstFilmComparison {
+    /* z = (mean_a - mean_b) / sqrt(var_a + var_b) of the image mean, per channel; +-INFINITY
+     * when both variances are zero and the means differ (an outright disagreement). */
+    double z_mean[3];
+    double max_abs_block_z;  /* largest |z| over blocks and channels (INFINITY as above) */
+    double worst_z;          /* that z with its sign: > 0 where a is brighter */
+    int worst_bx, worst_by;  /* the block where it was found (block column, row) */
+    int worst_channel;       /* 0 r, 1 g, 2 b */
+    int blocks;              /* blocks tested */
+    int blocks_failing;      /* blocks with |z| > z_crit (or NaN) in any channel */
+    int zero_variance_disagreements; /* tests (image or block, per channel) with zero variance
+                                      * in both films and different means */
+    int pass;                /* every image-mean and block |z| <= z_crit */
+} CstFilmComparison;
+
+/* Compares two films of the same size; block_abs_z (NULL, or one per block, row-major)
+ * receives each block's largest |z| over the channels. */
+CstStatus cst_film_compare(const CstFilm *a, const CstFilm *b, int block, double z_crit,
+                           CstFilmComparison *out, double *block_abs_z, CstError *err);
+
+typedef struct CstConvergenceLevel {
+    double d2;           /* D = mean of t_b over blocks: the mean squared block bias (radiance^2) */
+    double d2_se;        /* its standard error */
+    double mean_diff[3]; /* image mean of (x1 + x2) / 2 minus the reference's */
+    double mean_z[3];    /* mean_diff over its standard error */
+    int blocks;
+} CstConvergenceLevel;
+
+/* One level of the convergence check: two independent films x1, x2 of the estimator at
+ * that level against the reference; terms (one per block) keeps each block's t_b for
+ * cst_compare_convergence_step. */
+CstStatus cst_compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2,
+                                        int block, double *terms, CstConvergenceLevel *out,
+                                        CstError *err);
+/* The change of D between two levels' terms, and its standard error (paired by block). */
+void cst_compare_convergence_step(const double *terms_a, const double *terms_b, int blocks,
+                                  double *diff, double *se);
+
+typedef enum CstConvergenceVerdict {
+    CST_CONVERGENCE_WITHIN_NOISE, /* D at the last level is not significantly above 0 */
+    CST_CONVERGENCE_SHRINKS,      /* D falls significantly at every step */
+    CST_CONVERGENCE_FAILS         /* neither: a bias remains and it is not shown to shrink */
+} CstConvergenceVerdict;
+
+/* The verdict from `levels` levels and their levels - 1 steps; z: the one-sided critical
+ * value of the steps and of D, z_mean: the two-sided one of the image means. */
+CstConvergenceVerdict cst_compare_convergence_judge(const CstConvergenceLevel *lv,
+                                                    const double *step_diff,
+                                                    const double *step_se, int levels,
+                                                    double z, double z_mean);
+/* A map of block_abs_z (one per block) as width x height x 3 linear floats, one flat cell
+ * per block: black at 0 ramping to blue at z_crit/2, to yellow at z_crit, red above. */
+void cst_compare_map_image(const double *block_abs_z, int width, int height, int block,
+                           double z_crit, float *rgb);
+
+/* ---------------------------------------------------------------- ray benchmark */
+#define CST_BENCH_MAX_ACCELS 6
+
+/* `caustic bench rays` (docs/cli.md): zero-initialise, then set. */
+typedef struct CstBenchRaysOptions {
+    const char *mesh_path; /* a mesh file, or NULL: the built-in Cornell box (with stadium
+                            * alone: the built-in dense ball) */
+    int cornell;           /* the Cornell box even with stadium */
+    int stadium;           /* the scene inside a huge sparse box */
+    int json;              /* one JSON object per row instead of the table */
+    int threads;           /* the second thread count; 0 = one per core */
+    const char *accels[CST_BENCH_MAX_ACCELS]; /* back-end names ("bvh", ..., "embree",
+                                               * "embree-robust") in order; none = all */
+    int num_accels;
+    FILE *out;             /* the table or the JSON lines */
+    FILE *log;             /* notes (back ends skipped, built, tracing), or NULL */
+    int verbose;           /* with log: also the build and tracing notes */
+} CstBenchRaysOptions;
+
+typedef struct CstBenchRaysResult {
+    int checks;      /* rows checked */
+    int mismatches;  /* rows whose hits or sum of t do not match */
+    int input_error; /* on failure: 1 when the options or the mesh file were at fault */
+} CstBenchRaysResult;
+
+/* Runs the benchmark, writing to options->out. CST_OK also with mismatches (counted in
+ * result); a failure leaves err's message and says in result->input_error whose it was. */
+CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRaysResult *result,
+                         CstError *err);
 
 #ifdef __cplusplus
 }

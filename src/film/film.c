@@ -108,6 +108,16 @@ void cst_film_variances(const CstFilm *f, float *var_out)
         }
 }
 
+CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err)
+{
+    return image_read(path, rgb, width, height, err);
+}
+
+CstStatus cst_image_write(const char *path, const float *rgb, int width, int height, CstError *err)
+{
+    return image_write(path, rgb, width, height, err);
+}
+
 void film_resolve(const Film *f, float *rgb_out)
 {
     double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
