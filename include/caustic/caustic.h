@@ -9,6 +9,14 @@
 #include <stdint.h>
 #include <stdio.h>
 
+/* Marks the library's exported functions: libcaustic.so is built with hidden visibility
+ * and exports these alone. */
+#if defined(__GNUC__) || defined(__clang__)
+#define CST_API __attribute__((visibility("default")))
+#else
+#define CST_API
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -34,17 +42,17 @@ typedef struct CstError {
 } CstError;
 
 /* "CST_ERR_PARSE" etc. */
-const char *cst_status_name(CstStatus status);
+CST_API const char *cst_status_name(CstStatus status);
 
 /* ---------------------------------------------------------------- scenes */
 typedef struct CstScene CstScene;
 
 /* The built-in Cornell box (original Cornell measured data, millimetres). */
-CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err);
+CST_API CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err);
 /* A scene in caustic's JSON format (docs/scene-format.md). Errors name path:line:column. */
-CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err);
+CST_API CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err);
 /* The same from memory; `name` stands for the file name in messages. */
-CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
+CST_API CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
                                      CstScene **out, CstError *err);
 
 /* Diagnostics a loader reports without failing: something in the file that the render
@@ -70,21 +78,21 @@ typedef struct CstLoadOptions {
  * approximated or not is in docs/pbrt-compat.md. Relative file names (Include, plymesh,
  * imagemap) are resolved against the directory of `path`, as pbrt does. Errors name
  * file:line:column. options may be NULL. */
-CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *options, CstScene **out,
+CST_API CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *options, CstScene **out,
                               CstError *err);
 /* The same from memory; `name` stands for the file name in messages and its directory
  * for relative file names. */
-CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *name,
+CST_API CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *name,
                                      const CstLoadOptions *options, CstScene **out,
                                      CstError *err);
 /* Accepts NULL. */
-void cst_scene_destroy(CstScene *scene);
+CST_API void cst_scene_destroy(CstScene *scene);
 /* The output path named in the scene file, or NULL. Owned by the scene. */
-const char *cst_scene_output_path(const CstScene *scene);
+CST_API const char *cst_scene_output_path(const CstScene *scene);
 
 /* Rebuilds the scene's acceleration structure: "bvh" (default), "kdtree", "grid", "list"
  * (brute force) or "embree" (only in builds with Embree). On failure the old one stays. */
-CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
+CST_API CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
 
 typedef struct CstSceneInfo {
     int triangles, spheres, emitters, materials;
@@ -97,7 +105,7 @@ typedef struct CstSceneInfo {
     size_t instance_bytes;      /* the objects' geometry and BVHs, the instance records and
                                  * the top-level tree */
 } CstSceneInfo;
-void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
+CST_API void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
 
 /* ---------------------------------------------------------------- building scenes
  * A scene built in code, the way a loader builds one: cst_scene_create, then textures,
@@ -112,7 +120,7 @@ void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
 
 /* An empty scene with a default camera (at (0, 0, 5) looking at the origin, 40 degrees).
  * Caller owns it: cst_scene_destroy. */
-CstStatus cst_scene_create(CstScene **out, CstError *err);
+CST_API CstStatus cst_scene_create(CstScene **out, CstError *err);
 
 typedef enum CstTextureType {
     CST_TEXTURE_CONSTANT = 1, /* one RGB value */
@@ -143,7 +151,7 @@ typedef struct CstTextureDesc {
 } CstTextureDesc;
 
 /* *out_id (>= 1) names the texture in later descriptions. */
-CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *desc, int *out_id,
+CST_API CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *desc, int *out_id,
                                 CstError *err);
 
 typedef enum CstMaterialType {
@@ -171,8 +179,8 @@ typedef struct CstMaterialDesc {
                              * sides, 0 leaves the back black; dielectrics ignore it */
 } CstMaterialDesc;
 
-void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);
-CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *desc, int *out_id,
+CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);
+CST_API CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *desc, int *out_id,
                                  CstError *err);
 
 /* Light a surface sends out; zero-initialised = none. */
@@ -205,10 +213,10 @@ typedef struct CstMeshDesc {
 } CstMeshDesc;
 
 /* num_dropped may be NULL. */
-CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *desc, int *num_dropped,
+CST_API CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *desc, int *num_dropped,
                              CstError *err);
 /* emission may be NULL. */
-CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius,
+CST_API CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius,
                                int material, const CstEmission *emission, CstError *err);
 
 typedef enum CstLightType {
@@ -229,13 +237,13 @@ typedef struct CstLightDesc {
                           * (pbrt: 5) */
 } CstLightDesc;
 
-CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *desc, CstError *err);
+CST_API CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *desc, CstError *err);
 /* A constant environment: radiance from every direction (replaces one set before). */
-CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radiance[3],
+CST_API CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radiance[3],
                                              CstError *err);
 /* An equirectangular environment image (EXR, PFM, PNG...) times scale (NULL = 1), sampled
  * by importance (replaces one set before). */
-CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path,
+CST_API CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path,
                                           const float scale[3], CstError *err);
 
 typedef enum CstCameraType {
@@ -255,10 +263,10 @@ typedef struct CstCameraDesc {
     float height;           /* orthographic: the view's height in scene units, > 0 */
 } CstCameraDesc;
 
-CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *desc, CstError *err);
+CST_API CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *desc, CstError *err);
 /* Builds the acceleration structure and the light distribution; after it the scene can
  * be rendered and accepts no more additions. */
-CstStatus cst_scene_commit(CstScene *scene, CstError *err);
+CST_API CstStatus cst_scene_commit(CstScene *scene, CstError *err);
 
 /* ---------------------------------------------------------------- rendering */
 typedef enum CstIntegrator {
@@ -312,15 +320,15 @@ enum {
 
 /* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",
  * "vcm" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
-CstIntegrator cst_integrator_from_name(const char *name);
-const char *cst_integrator_name(CstIntegrator integrator);
-CstFilter cst_filter_from_name(const char *name);
-const char *cst_filter_name(CstFilter filter);
+CST_API CstIntegrator cst_integrator_from_name(const char *name);
+CST_API const char *cst_integrator_name(CstIntegrator integrator);
+CST_API CstFilter cst_filter_from_name(const char *name);
+CST_API const char *cst_filter_name(CstFilter filter);
 /* "independent", "stratified", "sobol"; CST_SAMPLER_DEFAULT for an unknown name. */
-CstSampler cst_sampler_from_name(const char *name);
-const char *cst_sampler_name(CstSampler sampler);
+CST_API CstSampler cst_sampler_from_name(const char *name);
+CST_API const char *cst_sampler_name(CstSampler sampler);
 /* "albedo", "normal", "depth", "variance" (one name) to its CST_AOV_ bit; 0 if unknown. */
-int cst_aov_from_name(const char *name);
+CST_API int cst_aov_from_name(const char *name);
 
 typedef void (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
 
@@ -383,12 +391,12 @@ typedef struct CstRenderSettings {
 
 /* Marks every field unset (CST_UNSET, the enums' *_DEFAULT, seed_set = exposure_set = 0,
  * no progress callback). */
-void cst_render_settings_init(CstRenderSettings *settings);
+CST_API void cst_render_settings_init(CstRenderSettings *settings);
 
 /* The settings a render of `scene` would use, every field set: each unset field of `in`
  * (NULL = all unset) filled from the scene file, then from the defaults (threads: the
  * core count; crop: the whole image as [0, width) x [0, height)). */
-void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in,
+CST_API void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in,
                                  CstRenderSettings *out);
 
 typedef struct CstRenderStats {
@@ -405,38 +413,38 @@ typedef struct CstRenderStats {
 typedef struct CstFilm CstFilm;
 
 /* Renders the scene. On success *out is a new film the caller owns (cst_film_destroy). */
-CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings,
+CST_API CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings,
                      CstFilm **out, CstRenderStats *stats, CstError *err);
 
 /* ---------------------------------------------------------------- films */
-int cst_film_width(const CstFilm *film);
-int cst_film_height(const CstFilm *film);
-int cst_film_spp(const CstFilm *film);
+CST_API int cst_film_width(const CstFilm *film);
+CST_API int cst_film_height(const CstFilm *film);
+CST_API int cst_film_spp(const CstFilm *film);
 /* Linear RGB mean of pixel (x, y); y = 0 is the top row. */
-void cst_film_pixel(const CstFilm *film, int x, int y, double rgb[3]);
+CST_API void cst_film_pixel(const CstFilm *film, int x, int y, double rgb[3]);
 /* Estimated variance of that mean (sample variance / spp), per channel. */
-void cst_film_pixel_variance(const CstFilm *film, int x, int y, double var[3]);
+CST_API void cst_film_pixel_variance(const CstFilm *film, int x, int y, double var[3]);
 /* Every pixel at once, for copying a film out without a call per pixel: rgb_out receives
  * width * height * 3 floats, rows from the top, R, G, B per pixel: cst_film_pixel's means
  * rounded to float (the stored means; exposure applies only when the film is written). */
-void cst_film_pixels(const CstFilm *film, float *rgb_out);
+CST_API void cst_film_pixels(const CstFilm *film, float *rgb_out);
 /* The same layout for cst_film_pixel_variance's variances of the means. */
-void cst_film_variances(const CstFilm *film, float *var_out);
+CST_API void cst_film_variances(const CstFilm *film, float *var_out);
 /* Writes the film; the format follows the extension: .png (8-bit sRGB, or linear when
  * the render's png_linear was set), .exr (float, linear), .pfm (float, linear), scaled
  * by the render's 2^exposure. A film rendered with AOVs writes them as extra EXR channels
  * and cannot be written to another format (CST_ERR_INVALID_ARG). Written to a temporary
  * file then renamed, so a failed write never leaves a partial image behind. */
-CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
-void cst_film_destroy(CstFilm *film);
+CST_API CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
+CST_API void cst_film_destroy(CstFilm *film);
 
 /* ---------------------------------------------------------------- images */
 /* Reads a PNG (sRGB decoded to linear), EXR or PFM as linear RGB floats: *rgb (width x
  * height x 3, row 0 = top) is the caller's to free(). */
-CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
+CST_API CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
 /* Writes width x height x 3 linear floats (row 0 = top); the format follows the extension
  * (.png 8-bit sRGB, .exr, .pfm), atomically as cst_film_write does. */
-CstStatus cst_image_write(const char *path, const float *rgb, int width, int height, CstError *err);
+CST_API CstStatus cst_image_write(const char *path, const float *rgb, int width, int height, CstError *err);
 
 /* ---------------------------------------------------------------- comparing renders
  * The statistics of `caustic verify` (docs/cli.md): two independent films of the same
@@ -446,16 +454,16 @@ CstStatus cst_image_write(const char *path, const float *rgb, int width, int hei
  * bias against an unbiased reference shrinks as their work grows 4x per level. */
 
 /* The standard normal quantile Phi^-1(p), p in (0, 1). */
-double cst_compare_normal_quantile(double p);
+CST_API double cst_compare_normal_quantile(double p);
 /* The per-test level 1 - (1 - alpha)^(1/m) of m tests at family-wise level alpha. */
-double cst_compare_sidak_alpha(double alpha, double m);
+CST_API double cst_compare_sidak_alpha(double alpha, double m);
 /* The two-sided critical |z| of m tests at family-wise level alpha. */
-double cst_compare_z_critical(double alpha, double m);
+CST_API double cst_compare_z_critical(double alpha, double m);
 /* Blocks across and down a width x height image (the last ones may be partial). */
-int cst_compare_blocks_x(int width, int block);
-int cst_compare_blocks_y(int height, int block);
+CST_API int cst_compare_blocks_x(int width, int block);
+CST_API int cst_compare_blocks_y(int height, int block);
 /* The tests cst_film_compare makes: 3 channels x (1 image mean + the blocks). */
-int64_t cst_compare_tests_per_pair(int width, int height, int block);
+CST_API int64_t cst_compare_tests_per_pair(int width, int height, int block);
 
 typedef struct CstFilmComparison {
     /* z = (mean_a - mean_b) / sqrt(var_a + var_b) of the image mean, per channel; +-INFINITY
@@ -474,7 +482,7 @@ typedef struct CstFilmComparison {
 
 /* Compares two films of the same size; block_abs_z (NULL, or one per block, row-major)
  * receives each block's largest |z| over the channels. */
-CstStatus cst_film_compare(const CstFilm *a, const CstFilm *b, int block, double z_crit,
+CST_API CstStatus cst_film_compare(const CstFilm *a, const CstFilm *b, int block, double z_crit,
                            CstFilmComparison *out, double *block_abs_z, CstError *err);
 
 typedef struct CstConvergenceLevel {
@@ -488,11 +496,11 @@ typedef struct CstConvergenceLevel {
 /* One level of the convergence check: two independent films x1, x2 of the estimator at
  * that level against the reference; terms (one per block) keeps each block's t_b for
  * cst_compare_convergence_step. */
-CstStatus cst_compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2,
+CST_API CstStatus cst_compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2,
                                         int block, double *terms, CstConvergenceLevel *out,
                                         CstError *err);
 /* The change of D between two levels' terms, and its standard error (paired by block). */
-void cst_compare_convergence_step(const double *terms_a, const double *terms_b, int blocks,
+CST_API void cst_compare_convergence_step(const double *terms_a, const double *terms_b, int blocks,
                                   double *diff, double *se);
 
 typedef enum CstConvergenceVerdict {
@@ -503,13 +511,13 @@ typedef enum CstConvergenceVerdict {
 
 /* The verdict from `levels` levels and their levels - 1 steps; z: the one-sided critical
  * value of the steps and of D, z_mean: the two-sided one of the image means. */
-CstConvergenceVerdict cst_compare_convergence_judge(const CstConvergenceLevel *lv,
+CST_API CstConvergenceVerdict cst_compare_convergence_judge(const CstConvergenceLevel *lv,
                                                     const double *step_diff,
                                                     const double *step_se, int levels,
                                                     double z, double z_mean);
 /* A map of block_abs_z (one per block) as width x height x 3 linear floats, one flat cell
  * per block: black at 0 ramping to blue at z_crit/2, to yellow at z_crit, red above. */
-void cst_compare_map_image(const double *block_abs_z, int width, int height, int block,
+CST_API void cst_compare_map_image(const double *block_abs_z, int width, int height, int block,
                            double z_crit, float *rgb);
 
 /* ---------------------------------------------------------------- ray benchmark */
@@ -539,7 +547,7 @@ typedef struct CstBenchRaysResult {
 
 /* Runs the benchmark, writing to options->out. CST_OK also with mismatches (counted in
  * result); a failure leaves err's message and says in result->input_error whose it was. */
-CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRaysResult *result,
+CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRaysResult *result,
                          CstError *err);
 
 #ifdef __cplusplus
