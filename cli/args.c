@@ -17,7 +17,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_OUTPUT, ARGS_OPT_SPP, ARGS_OPT_TIME, ARGS_OPT_THREADS, ARGS_OPT_SEED,
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
-    ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP
+    ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH
 } ArgsOpt;
 
 typedef struct ArgsOptSpec {
@@ -43,6 +43,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"png-linear", 0,   false, ARGS_OPT_PNG_LINEAR},
     {"aov",        0,   true,  ARGS_OPT_AOV},
     {"crop",       0,   true,  ARGS_OPT_CROP},
+    {"max-depth",  0,   true,  ARGS_OPT_MAX_DEPTH},
     {"quiet",      'q', false, ARGS_OPT_QUIET},
     {"help",       'h', false, ARGS_OPT_HELP},
 };
@@ -109,6 +110,8 @@ void args_print_help(FILE *f)
 "                       choose square or power-of-two spp) or sobol (Owen-scrambled\n"
 "                       Sobol'; fewer samples for the same noise, see docs/benchmarks.md).\n"
 "                       Light paths (light, photon, sppm, bdpt, vcm) stay independent\n"
+"      --max-depth N    maximum bounces of a path, 0..2147483647; 0 = unbounded, also\n"
+"                       over a scene's own limit (default: the scene's, else unbounded)\n"
 "      --exposure EV    scale the written image by 2^EV, -64..64 (default: the scene's,\n"
 "                       else 0); the film's stored means are not changed\n"
 "      --png-linear     write PNG values linearly (no sRGB curve; tagged gAMA 1.0)\n"
@@ -483,6 +486,14 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         }
         return true;
     }
+    case ARGS_OPT_MAX_DEPTH:
+        if (!args_parse_long(value, 0, INT_MAX, &v)) {
+            args_fail(err, false, "--max-depth: expected an integer from 0 (unbounded) to %d, got '%s'",
+                      INT_MAX, value);
+            return false;
+        }
+        s->max_depth = (int)v; /* 0 is a value: unbounded, even over the scene's limit */
+        return true;
     case ARGS_OPT_QUIET:
         out->quiet = true;
         return true;
@@ -926,6 +937,7 @@ static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, Ar
 bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
 {
     memset(out, 0, sizeof *out);
+    cst_render_settings_init(&out->settings); /* every setting unset: the scene's, else the default */
     err->msg[0] = '\0';
     err->hint = false;
 

@@ -7,6 +7,15 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
+
+/* Marks the library's exported functions: libcaustic.so is built with hidden visibility
+ * and exports these alone. */
+#if defined(__GNUC__) || defined(__clang__)
+#define CST_API __attribute__((visibility("default")))
+#else
+#define CST_API
+#endif
 
 #ifdef __cplusplus
 extern "C" {
@@ -34,17 +43,17 @@ typedef struct CstError {
 } CstError;
 
 /* "CST_ERR_PARSE" etc. */
-const char *cst_status_name(CstStatus status);
+CST_API const char *cst_status_name(CstStatus status);
 
 /* ---------------------------------------------------------------- scenes */
 typedef struct CstScene CstScene;
 
 /* The built-in Cornell box (original Cornell measured data, millimetres). */
-CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err);
+CST_API CstStatus cst_scene_create_cornell_box(CstScene **out, CstError *err);
 /* A scene in caustic's JSON format (docs/scene-format.md). Errors name path:line:column. */
-CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err);
+CST_API CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err);
 /* The same from memory; `name` stands for the file name in messages. */
-CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
+CST_API CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
                                      CstScene **out, CstError *err);
 
 /* Diagnostics a loader reports without failing: something in the file that the render
@@ -70,21 +79,21 @@ typedef struct CstLoadOptions {
  * approximated or not is in docs/pbrt-compat.md. Relative file names (Include, plymesh,
  * imagemap) are resolved against the directory of `path`, as pbrt does. Errors name
  * file:line:column. options may be NULL. */
-CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *options, CstScene **out,
+CST_API CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *options, CstScene **out,
                               CstError *err);
 /* The same from memory; `name` stands for the file name in messages and its directory
  * for relative file names. */
-CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *name,
+CST_API CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *name,
                                      const CstLoadOptions *options, CstScene **out,
                                      CstError *err);
 /* Accepts NULL. */
-void cst_scene_destroy(CstScene *scene);
+CST_API void cst_scene_destroy(CstScene *scene);
 /* The output path named in the scene file, or NULL. Owned by the scene. */
-const char *cst_scene_output_path(const CstScene *scene);
+CST_API const char *cst_scene_output_path(const CstScene *scene);
 
 /* Rebuilds the scene's acceleration structure: "bvh" (default), "kdtree", "grid", "list"
  * (brute force) or "embree" (only in builds with Embree). On failure the old one stays. */
-CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
+CST_API CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
 
 typedef struct CstSceneInfo {
     int triangles, spheres, emitters, materials;
@@ -97,7 +106,168 @@ typedef struct CstSceneInfo {
     size_t instance_bytes;      /* the objects' geometry and BVHs, the instance records and
                                  * the top-level tree */
 } CstSceneInfo;
-void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
+CST_API void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
+
+/* ---------------------------------------------------------------- building scenes
+ * A scene built in code, the way a loader builds one: cst_scene_create, then textures,
+ * materials, shapes, lights, an environment and a camera in any order (a thing must be
+ * added before another refers to it by id), then cst_scene_commit, after which the scene
+ * is read-only and can be rendered. Every call validates its input (non-finite numbers,
+ * negative or zero sizes, ids and indices out of range, strides smaller than an element)
+ * and fails with CST_ERR_INVALID_ARG and a message naming the bad value, leaving the scene
+ * as it was before the call. Coordinates and lengths must lie within 1e18 in magnitude.
+ * Ids are small integers handed out in order; texture ids start at 1, so that 0 means
+ * "no texture" in a zero-initialised description. */
+
+/* An empty scene with a default camera (at (0, 0, 5) looking at the origin, 40 degrees).
+ * Caller owns it: cst_scene_destroy. */
+CST_API CstStatus cst_scene_create(CstScene **out, CstError *err);
+
+typedef enum CstTextureType {
+    CST_TEXTURE_CONSTANT = 1, /* one RGB value */
+    CST_TEXTURE_CHECKERBOARD, /* squares alternating between two other textures */
+    CST_TEXTURE_IMAGE         /* an image file or caller's pixels, bilinear */
+} CstTextureType;
+
+typedef enum CstTextureWrap {
+    CST_TEXTURE_WRAP_REPEAT = 0, /* the image tiles the uv plane */
+    CST_TEXTURE_WRAP_CLAMP       /* uv outside [0, 1] sees the border texels */
+} CstTextureWrap;
+
+/* Zero-initialise, then set the type and its fields. Images: v = 0 is the bottom row,
+ * u = 0 the left column (OBJ and glTF meshes' convention). */
+typedef struct CstTextureDesc {
+    CstTextureType type;
+    float value[3];       /* constant: linear RGB, >= 0 */
+    int even, odd;        /* checkerboard: ids of textures already in the scene */
+    float scale;          /* checkerboard: squares per unit of u and v, > 0 (0 = 1) */
+    const char *path;     /* image: PNG, JPEG, BMP, TGA, HDR, EXR or PFM file, or NULL and */
+    const float *pixels;  /* image: width * height * 3 linear floats, row 0 = top (copied) */
+    int width, height;    /* image: the size of `pixels` */
+    int linear;           /* image file: 1 = 8/16-bit values are data (roughness maps), not sRGB */
+    CstTextureWrap wrap;  /* image */
+    /* Every type: evaluate at (uv_scale u + uv_offset[0], uv_scale v + uv_offset[1]);
+     * uv_scale {0, 0} = {1, 1}. */
+    float uv_scale[2], uv_offset[2];
+} CstTextureDesc;
+
+/* *out_id (>= 1) names the texture in later descriptions. */
+CST_API CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *desc, int *out_id,
+                                CstError *err);
+
+typedef enum CstMaterialType {
+    CST_MATERIAL_DIFFUSE = 1, /* Lambertian: albedo = hemispherical reflectance */
+    CST_MATERIAL_MIRROR,      /* perfect specular reflection times albedo */
+    CST_MATERIAL_GLASS,       /* smooth dielectric: exact Fresnel; albedo tints both lobes */
+    CST_MATERIAL_CONDUCTOR,   /* metal: complex IOR (eta + i k, or a named metal), GGX if rough */
+    CST_MATERIAL_DIELECTRIC,  /* glass that may be rough (GGX reflection + transmission) */
+    CST_MATERIAL_PLASTIC      /* dielectric coat (smooth or GGX) over Lambert */
+} CstMaterialType;
+
+/* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
+typedef struct CstMaterialDesc {
+    CstMaterialType type;
+    float albedo[3];        /* reflectance in [0, 1] per channel (default 0.5 for diffuse and
+                             * plastic, else 1) */
+    int albedo_texture;     /* a texture id replacing albedo (values at most 1), or 0 */
+    float ior;              /* glass, dielectric, plastic: interior over exterior, > 0
+                             * (plastic: >= 1); default 1.5 */
+    float roughness;        /* conductor, dielectric, plastic: perceptual, in [0, 1]; 0 = smooth */
+    int roughness_texture;  /* a texture id replacing roughness (not for plastic), or 0 */
+    const char *metal;      /* conductor: "gold", "silver", "copper", "aluminium", or NULL and */
+    float eta[3], k[3];     /* conductor: complex IOR per channel, >= 0 */
+    int two_sided;          /* diffuse, mirror, conductor, plastic: 1 (default) reflects on both
+                             * sides, 0 leaves the back black; dielectrics ignore it */
+} CstMaterialDesc;
+
+CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);
+CST_API CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *desc, int *out_id,
+                                 CstError *err);
+
+/* Light a surface sends out; zero-initialised = none. */
+typedef struct CstEmission {
+    float radiance[3];  /* linear RGB radiance, >= 0 (times the texture's value, if any) */
+    int texture;        /* a texture id, or 0 */
+    int two_sided;      /* 0: emits only on the side the geometric normal points to */
+} CstEmission;
+
+/* A triangle mesh read from the caller's arrays, Embree-style: each attribute is a pointer
+ * to its first element and a stride in bytes between consecutive elements (0 = tightly
+ * packed), so positions, normals and uvs may sit inside one interleaved vertex struct.
+ * The data are copied; the caller's arrays can be freed after the call. Zero-initialise. */
+typedef struct CstMeshDesc {
+    const void *positions;   /* num_vertices x 3 floats */
+    size_t position_stride;  /* bytes, 0 or >= 12 */
+    int num_vertices;
+    const void *normals;     /* optional: num_vertices x 3 floats, nonzero (normalised here);
+                              * shading normals, interpolated over each triangle */
+    size_t normal_stride;    /* 0 or >= 12 */
+    const void *uvs;         /* optional: num_vertices x 2 floats, texture coordinates */
+    size_t uv_stride;        /* 0 or >= 8 */
+    const void *indices;     /* num_triangles x 3 uint32_t vertex indices, < num_vertices */
+    size_t index_stride;     /* bytes between triangles, 0 or >= 12 */
+    int num_triangles;
+    int material;            /* a material id */
+    CstEmission emission;    /* zero: not an emitter */
+    int skip_degenerate;     /* 1: drop zero-area triangles (counted in *num_dropped) instead
+                              * of failing */
+} CstMeshDesc;
+
+/* num_dropped may be NULL. */
+CST_API CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *desc, int *num_dropped,
+                             CstError *err);
+/* emission may be NULL. */
+CST_API CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius,
+                               int material, const CstEmission *emission, CstError *err);
+
+typedef enum CstLightType {
+    CST_LIGHT_POINT = 1,  /* isotropic: intensity (W/sr) in every direction */
+    CST_LIGHT_SPOT,       /* a point with a cone: intensity on the axis, smooth falloff */
+    CST_LIGHT_DIRECTIONAL /* parallel light from infinitely far: irradiance (W/m^2) */
+} CstLightType;
+
+/* Zero-initialise, then set. */
+typedef struct CstLightDesc {
+    CstLightType type;
+    float position[3];   /* point, spot */
+    float direction[3];  /* spot: the axis; directional: the way the light travels; nonzero,
+                          * any length */
+    float intensity[3];  /* point, spot: W/sr; directional: irradiance; >= 0 */
+    float cone_angle;    /* spot: half-angle of the cone in degrees, (0, 90] (pbrt: 30) */
+    float cone_delta;    /* spot: degrees of falloff at the cone's edge, [0, cone_angle]
+                          * (pbrt: 5) */
+} CstLightDesc;
+
+CST_API CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *desc, CstError *err);
+/* A constant environment: radiance from every direction (replaces one set before). */
+CST_API CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radiance[3],
+                                             CstError *err);
+/* An equirectangular environment image (EXR, PFM, PNG...) times scale (NULL = 1), sampled
+ * by importance (replaces one set before). */
+CST_API CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path,
+                                          const float scale[3], CstError *err);
+
+typedef enum CstCameraType {
+    CST_CAMERA_PERSPECTIVE = 1, /* a pinhole, or a thin lens when aperture_radius > 0 */
+    CST_CAMERA_ORTHOGRAPHIC     /* parallel rays; fov and the lens are unused */
+} CstCameraType;
+
+/* Zero-initialise, then set. */
+typedef struct CstCameraDesc {
+    CstCameraType type;
+    float position[3], look_at[3];
+    float up[3];            /* not parallel to look_at - position; {0, 0, 0} = {0, 1, 0} */
+    float fov;              /* perspective: vertical field of view, degrees, in (0, 180) */
+    float aperture_radius;  /* perspective: lens radius, >= 0; 0 = pinhole */
+    float focus_distance;   /* perspective: distance to the plane in focus, > 0;
+                             * 0 = |look_at - position| */
+    float height;           /* orthographic: the view's height in scene units, > 0 */
+} CstCameraDesc;
+
+CST_API CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *desc, CstError *err);
+/* Builds the acceleration structure and the light distribution; after it the scene can
+ * be rendered and accepts no more additions. */
+CST_API CstStatus cst_scene_commit(CstScene *scene, CstError *err);
 
 /* ---------------------------------------------------------------- rendering */
 typedef enum CstIntegrator {
@@ -151,60 +321,87 @@ enum {
 
 /* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",
  * "vcm" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
-CstIntegrator cst_integrator_from_name(const char *name);
-const char *cst_integrator_name(CstIntegrator integrator);
-CstFilter cst_filter_from_name(const char *name);
-const char *cst_filter_name(CstFilter filter);
+CST_API CstIntegrator cst_integrator_from_name(const char *name);
+CST_API const char *cst_integrator_name(CstIntegrator integrator);
+CST_API CstFilter cst_filter_from_name(const char *name);
+CST_API const char *cst_filter_name(CstFilter filter);
 /* "independent", "stratified", "sobol"; CST_SAMPLER_DEFAULT for an unknown name. */
-CstSampler cst_sampler_from_name(const char *name);
-const char *cst_sampler_name(CstSampler sampler);
+CST_API CstSampler cst_sampler_from_name(const char *name);
+CST_API const char *cst_sampler_name(CstSampler sampler);
 /* "albedo", "normal", "depth", "variance" (one name) to its CST_AOV_ bit; 0 if unknown. */
-int cst_aov_from_name(const char *name);
+CST_API int cst_aov_from_name(const char *name);
 
 /* Returns 0 to go on; nonzero cancels the render: it stops at the next work-item
  * boundary (a tile, a chunk of light paths, an SPPM phase's unit), and cst_render
  * returns CST_ERR_CANCELLED without a film (*out stays NULL). */
 typedef int (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
 
-/* Zero-initialise, then set what you want: a zero field means "the scene's value, else
- * the default". Command-line values override scene-file values this way. */
+/* The value cst_render_settings_init gives every int and double field of
+ * CstRenderSettings: "not set here: the scene's value, else the default". Compare with
+ * == CST_UNSET (doubles hold it exactly). */
+#define CST_UNSET (-2147483647 - 1)
+
+/* Render settings, each either set or unset. Unset fields take the scene file's value,
+ * else the default, so command-line values override scene-file values; a set field
+ * overrides the scene even with 0 where 0 means something (max_depth 0 = unbounded
+ * replaces a scene's max_depth 5; time_limit 0 = none; png_linear 0 = sRGB; aovs 0 =
+ * none; an all-zero crop = the whole image; threads 0 = all cores).
+ *
+ *     CstRenderSettings s;
+ *     cst_render_settings_init(&s);   every field unset
+ *     s.spp = 64;                     the rest from the scene, else the defaults
+ *
+ * Compatibility: in a zero-initialised struct (the form before cst_render_settings_init)
+ * the fields where 0 means nothing (width, height, spp, rr_depth, photons,
+ * photon_radius, and the enums' *_DEFAULT) still read 0 as unset; the others read 0 as
+ * the value 0. seed and exposure keep their own *_set flags. */
 typedef struct CstRenderSettings {
-    int width, height;        /* default 512 x 512 */
+    int width, height;        /* > 0; default 512 x 512 */
     int spp;                  /* samples per pixel (light tracing: iterations of width x height
-                               * light paths); default 16 (or unlimited with time_limit) */
-    double time_limit;        /* seconds; 0 = none. With spp also set, stops at whichever comes first */
-    int threads;              /* 0 = all cores */
-    uint64_t seed;            /* used when seed_set != 0; default 0 */
+                               * light paths), > 0; default 16 (or unlimited with time_limit) */
+    double time_limit;        /* seconds; 0 = none (the default). With spp also set, stops at
+                               * whichever comes first */
+    int threads;              /* 0 = all cores (the default) */
+    uint64_t seed;            /* used when seed_set != 0; default the scene's, else 0 */
     int seed_set;
-    CstIntegrator integrator;
-    CstFilter filter;
+    CstIntegrator integrator; /* CST_INTEGRATOR_DEFAULT = unset */
+    CstFilter filter;         /* CST_FILTER_DEFAULT = unset */
     int max_depth;            /* maximum bounces (scattering vertices) of a path, light paths
-                               * included; 0 = unbounded */
-    int rr_depth;             /* Russian roulette starts at this depth; 0 = default 3 */
-    int photons;              /* photon integrator: photon paths emitted per render;
-                               * 0 = default 200000 */
-    double photon_radius;     /* photon integrator: gather radius in scene units; 0 = automatic
-                               * (about 50 photons at a typical visible point) */
-    CstSampler sampler;       /* camera-path sampler; default independent */
+                               * included; 0 = unbounded (the default) */
+    int rr_depth;             /* Russian roulette starts at this depth, > 0; default 3 */
+    int photons;              /* photon integrator: photon paths emitted per render, > 0;
+                               * default 200000 */
+    double photon_radius;     /* photon integrator: gather radius in scene units, > 0; default
+                               * automatic (about 50 photons at a typical visible point) */
+    CstSampler sampler;       /* camera-path sampler (CST_SAMPLER_DEFAULT = unset); default
+                               * independent */
     /* Output, applied when the film is written (cst_film_write), never to the stored means */
     double exposure;          /* used when exposure_set != 0: pixels times 2^exposure; default 0 */
     int exposure_set;
-    int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0 = the scene's,
-                               * else sRGB. EXR and PFM are always linear. */
-    int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = the scene's, else none */
+    int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0: sRGB (the
+                               * default). EXR and PFM are always linear. */
+    int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = none (the default) */
     /* Crop: only the pixels [crop[0], crop[1]) x [crop[2], crop[3]) of the width x height
      * image (x0, x1, y0, y1; y = 0 the top row) are rendered, and the film holds just them.
      * Each holds exactly the value it has in a whole render with the same seed. All zero =
-     * the scene's crop, else the whole image. */
+     * the whole image (the default); unset when crop[0] == CST_UNSET. */
     int crop[4];
     CstProgressFn progress;   /* called from the calling thread about 10 times a second;
                                * nonzero return: cancel (CST_ERR_CANCELLED) */
     void *progress_user;
 } CstRenderSettings;
 
-/* The settings a render of `scene` would use: every zero field of `in` (which may be
- * NULL) filled from the scene file, then from the defaults (threads: the core count). */
-void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in,
+/* Photon paths the photon integrator emits when the settings leave photons unset. */
+#define CST_DEFAULT_PHOTONS 200000
+
+/* Marks every field unset (CST_UNSET, the enums' *_DEFAULT, seed_set = exposure_set = 0,
+ * no progress callback). */
+CST_API void cst_render_settings_init(CstRenderSettings *settings);
+
+/* The settings a render of `scene` would use, every field set: each unset field of `in`
+ * (NULL = all unset) filled from the scene file, then from the defaults (threads: the
+ * core count; crop: the whole image as [0, width) x [0, height)). */
+CST_API void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in,
                                  CstRenderSettings *out);
 
 typedef struct CstRenderStats {
@@ -221,24 +418,147 @@ typedef struct CstRenderStats {
 typedef struct CstFilm CstFilm;
 
 /* Renders the scene. On success *out is a new film the caller owns (cst_film_destroy). */
-CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings,
+CST_API CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings,
                      CstFilm **out, CstRenderStats *stats, CstError *err);
 
 /* ---------------------------------------------------------------- films */
-int cst_film_width(const CstFilm *film);
-int cst_film_height(const CstFilm *film);
-int cst_film_spp(const CstFilm *film);
+CST_API int cst_film_width(const CstFilm *film);
+CST_API int cst_film_height(const CstFilm *film);
+CST_API int cst_film_spp(const CstFilm *film);
 /* Linear RGB mean of pixel (x, y); y = 0 is the top row. */
-void cst_film_pixel(const CstFilm *film, int x, int y, double rgb[3]);
+CST_API void cst_film_pixel(const CstFilm *film, int x, int y, double rgb[3]);
 /* Estimated variance of that mean (sample variance / spp), per channel. */
-void cst_film_pixel_variance(const CstFilm *film, int x, int y, double var[3]);
+CST_API void cst_film_pixel_variance(const CstFilm *film, int x, int y, double var[3]);
+/* Every pixel at once, for copying a film out without a call per pixel: rgb_out receives
+ * width * height * 3 floats, rows from the top, R, G, B per pixel: cst_film_pixel's means
+ * rounded to float (the stored means; exposure applies only when the film is written). */
+CST_API void cst_film_pixels(const CstFilm *film, float *rgb_out);
+/* The same layout for cst_film_pixel_variance's variances of the means. */
+CST_API void cst_film_variances(const CstFilm *film, float *var_out);
 /* Writes the film; the format follows the extension: .png (8-bit sRGB, or linear when
  * the render's png_linear was set), .exr (float, linear), .pfm (float, linear), scaled
  * by the render's 2^exposure. A film rendered with AOVs writes them as extra EXR channels
  * and cannot be written to another format (CST_ERR_INVALID_ARG). Written to a temporary
  * file then renamed, so a failed write never leaves a partial image behind. */
-CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
-void cst_film_destroy(CstFilm *film);
+CST_API CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
+CST_API void cst_film_destroy(CstFilm *film);
+
+/* ---------------------------------------------------------------- images */
+/* Reads a PNG (sRGB decoded to linear), EXR or PFM as linear RGB floats: *rgb (width x
+ * height x 3, row 0 = top) is the caller's to free(). */
+CST_API CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
+/* Writes width x height x 3 linear floats (row 0 = top); the format follows the extension
+ * (.png 8-bit sRGB, .exr, .pfm), atomically as cst_film_write does. */
+CST_API CstStatus cst_image_write(const char *path, const float *rgb, int width, int height, CstError *err);
+/* The one extension rule of every image the library writes or reads (case-insensitive):
+ * 1 when `path` ends in an extension cst_image_write and cst_film_write can produce
+ * (.png, .exr, .pfm), else 0; and 1 when it names an EXR (the only format with AOVs). */
+CST_API int cst_image_path_writable(const char *path);
+CST_API int cst_image_path_is_exr(const char *path);
+
+/* ---------------------------------------------------------------- comparing renders
+ * The statistics of `caustic verify` (docs/cli.md): two independent films of the same
+ * scene agree when every z-score of their difference, of the image mean and of every
+ * block of block x block pixels, per channel, is within a Sidak-corrected critical
+ * value; consistent (biased) estimators are judged by whether their mean squared block
+ * bias against an unbiased reference shrinks as their work grows 4x per level. */
+
+/* The standard normal quantile Phi^-1(p), p in (0, 1). */
+CST_API double cst_compare_normal_quantile(double p);
+/* The per-test level 1 - (1 - alpha)^(1/m) of m tests at family-wise level alpha. */
+CST_API double cst_compare_sidak_alpha(double alpha, double m);
+/* The two-sided critical |z| of m tests at family-wise level alpha. */
+CST_API double cst_compare_z_critical(double alpha, double m);
+/* Blocks across and down a width x height image (the last ones may be partial). */
+CST_API int cst_compare_blocks_x(int width, int block);
+CST_API int cst_compare_blocks_y(int height, int block);
+/* The tests cst_film_compare makes: 3 channels x (1 image mean + the blocks). */
+CST_API int64_t cst_compare_tests_per_pair(int width, int height, int block);
+
+typedef struct CstFilmComparison {
+    /* z = (mean_a - mean_b) / sqrt(var_a + var_b) of the image mean, per channel; +-INFINITY
+     * when both variances are zero and the means differ (an outright disagreement). */
+    double z_mean[3];
+    double max_abs_block_z;  /* largest |z| over blocks and channels (INFINITY as above) */
+    double worst_z;          /* that z with its sign: > 0 where a is brighter */
+    int worst_bx, worst_by;  /* the block where it was found (block column, row) */
+    int worst_channel;       /* 0 r, 1 g, 2 b */
+    int blocks;              /* blocks tested */
+    int blocks_failing;      /* blocks with |z| > z_crit (or NaN) in any channel */
+    int zero_variance_disagreements; /* tests (image or block, per channel) with zero variance
+                                      * in both films and different means */
+    int pass;                /* every image-mean and block |z| <= z_crit */
+} CstFilmComparison;
+
+/* Compares two films of the same size; block_abs_z (NULL, or one per block, row-major)
+ * receives each block's largest |z| over the channels. */
+CST_API CstStatus cst_film_compare(const CstFilm *a, const CstFilm *b, int block, double z_crit,
+                           CstFilmComparison *out, double *block_abs_z, CstError *err);
+
+typedef struct CstConvergenceLevel {
+    double d2;           /* D = mean of t_b over blocks: the mean squared block bias (radiance^2) */
+    double d2_se;        /* its standard error */
+    double mean_diff[3]; /* image mean of (x1 + x2) / 2 minus the reference's */
+    double mean_z[3];    /* mean_diff over its standard error */
+    int blocks;
+} CstConvergenceLevel;
+
+/* One level of the convergence check: two independent films x1, x2 of the estimator at
+ * that level against the reference; terms (one per block) keeps each block's t_b for
+ * cst_compare_convergence_step. */
+CST_API CstStatus cst_compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2,
+                                        int block, double *terms, CstConvergenceLevel *out,
+                                        CstError *err);
+/* The change of D between two levels' terms, and its standard error (paired by block). */
+CST_API void cst_compare_convergence_step(const double *terms_a, const double *terms_b, int blocks,
+                                  double *diff, double *se);
+
+typedef enum CstConvergenceVerdict {
+    CST_CONVERGENCE_WITHIN_NOISE, /* D at the last level is not significantly above 0 */
+    CST_CONVERGENCE_SHRINKS,      /* D falls significantly at every step */
+    CST_CONVERGENCE_FAILS         /* neither: a bias remains and it is not shown to shrink */
+} CstConvergenceVerdict;
+
+/* The verdict from `levels` levels and their levels - 1 steps; z: the one-sided critical
+ * value of the steps and of D, z_mean: the two-sided one of the image means. */
+CST_API CstConvergenceVerdict cst_compare_convergence_judge(const CstConvergenceLevel *lv,
+                                                    const double *step_diff,
+                                                    const double *step_se, int levels,
+                                                    double z, double z_mean);
+/* A map of block_abs_z (one per block) as width x height x 3 linear floats, one flat cell
+ * per block: black at 0 ramping to blue at z_crit/2, to yellow at z_crit, red above. */
+CST_API void cst_compare_map_image(const double *block_abs_z, int width, int height, int block,
+                           double z_crit, float *rgb);
+
+/* ---------------------------------------------------------------- ray benchmark */
+#define CST_BENCH_MAX_ACCELS 6
+
+/* `caustic bench rays` (docs/cli.md): zero-initialise, then set. */
+typedef struct CstBenchRaysOptions {
+    const char *mesh_path; /* a mesh file, or NULL: the built-in Cornell box (with stadium
+                            * alone: the built-in dense ball) */
+    int cornell;           /* the Cornell box even with stadium */
+    int stadium;           /* the scene inside a huge sparse box */
+    int json;              /* one JSON object per row instead of the table */
+    int threads;           /* the second thread count; 0 = one per core */
+    const char *accels[CST_BENCH_MAX_ACCELS]; /* back-end names ("bvh", ..., "embree",
+                                               * "embree-robust") in order; none = all */
+    int num_accels;
+    FILE *out;             /* the table or the JSON lines */
+    FILE *log;             /* notes (back ends skipped, built, tracing), or NULL */
+    int verbose;           /* with log: also the build and tracing notes */
+} CstBenchRaysOptions;
+
+typedef struct CstBenchRaysResult {
+    int checks;      /* rows checked */
+    int mismatches;  /* rows whose hits or sum of t do not match */
+    int input_error; /* on failure: 1 when the options or the mesh file were at fault */
+} CstBenchRaysResult;
+
+/* Runs the benchmark, writing to options->out. CST_OK also with mismatches (counted in
+ * result); a failure leaves err's message and says in result->input_error whose it was. */
+CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRaysResult *result,
+                         CstError *err);
 
 #ifdef __cplusplus
 }

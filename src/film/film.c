@@ -93,6 +93,35 @@ void cst_film_pixel_variance(const CstFilm *f, int x, int y, double var[3])
     }
 }
 
+void cst_film_pixels(const CstFilm *f, float *rgb_out)
+{
+    film_resolve(f, rgb_out); /* the means cst_film_pixel gives, rounded to float */
+}
+
+void cst_film_variances(const CstFilm *f, float *var_out)
+{
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++) {
+            double var[3];
+            cst_film_pixel_variance(f, x, y, var);
+            float *o = &var_out[3 * ((size_t)y * (size_t)f->width + (size_t)x)];
+            for (int c = 0; c < 3; c++) o[c] = (float)var[c];
+        }
+}
+
+CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err)
+{
+    return image_read(path, rgb, width, height, err);
+}
+
+CstStatus cst_image_write(const char *path, const float *rgb, int width, int height, CstError *err)
+{
+    return image_write(path, rgb, width, height, err);
+}
+
+int cst_image_path_writable(const char *path) { return image_format_is_writable(image_format_from_path(path)); }
+int cst_image_path_is_exr(const char *path) { return image_path_is_exr(path); }
+
 void film_resolve(const Film *f, float *rgb_out)
 {
     double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;

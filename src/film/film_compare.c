@@ -317,3 +317,45 @@ void compare_map_image(const double *block_abs_z, int width, int height, int blo
             compare_map_colour(block_abs_z[(y / block) * nbx + x / block], z_crit,
                                &rgb[3 * ((size_t)y * (size_t)width + (size_t)x)]);
 }
+
+/* ------------------------------------------------------------ public names */
+
+double cst_compare_normal_quantile(double p) { return compare_normal_quantile(p); }
+double cst_compare_sidak_alpha(double alpha, double m) { return compare_sidak_alpha(alpha, m); }
+double cst_compare_z_critical(double alpha, double m) { return compare_z_critical(alpha, m); }
+int cst_compare_blocks_x(int width, int block) { return compare_blocks_x(width, block); }
+int cst_compare_blocks_y(int height, int block) { return compare_blocks_y(height, block); }
+int64_t cst_compare_tests_per_pair(int width, int height, int block)
+{
+    return compare_tests_per_pair(width, height, block);
+}
+
+CstStatus cst_film_compare(const CstFilm *a, const CstFilm *b, int block, double z_crit,
+                           CstFilmComparison *out, double *block_abs_z, CstError *err)
+{
+    return compare_films(a, b, block, z_crit, out, block_abs_z, err);
+}
+
+CstStatus cst_compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2, int block,
+                                        double *terms, CstConvergenceLevel *out, CstError *err)
+{
+    return compare_convergence_level(ref, x1, x2, block, terms, out, err);
+}
+
+void cst_compare_convergence_step(const double *terms_a, const double *terms_b, int blocks, double *diff,
+                                  double *se)
+{
+    compare_convergence_step(terms_a, terms_b, blocks, diff, se);
+}
+
+CstConvergenceVerdict cst_compare_convergence_judge(const CstConvergenceLevel *lv, const double *step_diff,
+                                                    const double *step_se, int levels, double z, double z_mean)
+{
+    return compare_convergence_judge(lv, step_diff, step_se, levels, z, z_mean);
+}
+
+void cst_compare_map_image(const double *block_abs_z, int width, int height, int block, double z_crit,
+                           float *rgb)
+{
+    compare_map_image(block_abs_z, width, height, block, z_crit, rgb);
+}

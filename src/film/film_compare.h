@@ -36,20 +36,8 @@ int compare_blocks_y(int height, int block);
 /* Tests one pair of films contributes: 3 channels x (the image mean + every block). */
 int64_t compare_tests_per_pair(int width, int height, int block);
 
-typedef struct CompareResult {
-    /* z = (mean_a - mean_b) / sqrt(var_a + var_b) of the image mean, per channel; +-INFINITY
-     * when both variances are zero and the means differ (an outright disagreement). */
-    double z_mean[3];
-    double max_abs_block_z;  /* largest |z| over blocks and channels (INFINITY as above) */
-    double worst_z;          /* that z with its sign: > 0 where a is brighter */
-    int worst_bx, worst_by;  /* the block where it was found (block column, row) */
-    int worst_channel;       /* 0 r, 1 g, 2 b */
-    int blocks;              /* blocks tested */
-    int blocks_failing;      /* blocks with |z| > z_crit (or NaN) in any channel */
-    int zero_variance_disagreements; /* tests (image or block, per channel) with zero variance
-                                      * in both films and different means */
-    bool pass;               /* every image-mean and block |z| <= z_crit */
-} CompareResult;
+/* The public CstFilmComparison (caustic.h documents its fields). */
+typedef CstFilmComparison CompareResult;
 
 /* Compares films a and b (same size, at least 2 samples per pixel each: the variance of a
  * pixel mean is estimated from its samples) over block x block blocks, failing tests with
@@ -73,15 +61,8 @@ CstStatus compare_films(const CstFilm *a, const CstFilm *b, int block, double z_
  * correlations between pixels (the photons are shared by the whole image, so X's per-pixel
  * variances, when it has any, understate it; the two renders are independent), so t_b
  * estimates the block's squared bias, summed over channels, without bias. */
-typedef struct ConvergenceLevel {
-    double d2;           /* D = mean of t_b over blocks: the mean squared block bias (radiance^2) */
-    double d2_se;        /* its standard error: sd of t_b over blocks / sqrt(blocks) */
-    double mean_diff[3]; /* image mean of (x1 + x2) / 2 minus the reference's */
-    double mean_z[3];    /* mean_diff over its standard error: X's variance pooled over the
-                          * blocks' (x1 - x2)^2 / 4 (so blocks are taken as independent), r's
-                          * from its pixels */
-    int blocks;
-} ConvergenceLevel;
+/* The public CstConvergenceLevel (caustic.h documents its fields). */
+typedef CstConvergenceLevel ConvergenceLevel;
 
 /* Fills *out and terms[b] = t_b (compare_blocks_x * compare_blocks_y entries, row-major).
  * CST_ERR_INVALID_ARG for films of different sizes, a reference with fewer than 2 spp,
@@ -96,11 +77,11 @@ CstStatus compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const
 void compare_convergence_step(const double *terms_a, const double *terms_b, int blocks, double *diff,
                               double *se);
 
-typedef enum ConvergenceVerdict {
-    CONVERGENCE_WITHIN_NOISE, /* D at the last level is not significantly above 0 */
-    CONVERGENCE_SHRINKS,      /* D falls significantly at every step */
-    CONVERGENCE_FAILS         /* neither: a bias remains and it is not shown to shrink */
-} ConvergenceVerdict;
+/* The public CstConvergenceVerdict under the module's own names. */
+typedef CstConvergenceVerdict ConvergenceVerdict;
+#define CONVERGENCE_WITHIN_NOISE CST_CONVERGENCE_WITHIN_NOISE
+#define CONVERGENCE_SHRINKS CST_CONVERGENCE_SHRINKS
+#define CONVERGENCE_FAILS CST_CONVERGENCE_FAILS
 
 /* The rule of `caustic verify` for `levels` >= 2 levels of growing work (step k compares
  * level k with k + 1, step_diff[k] = D_k - D_k+1): within noise if at the last level

@@ -16,41 +16,6 @@
 #include "integrators/integrator.h"
 #include "scene/scene.h"
 
-#define PICK(field, dflt) out->field = in->field ? in->field : (sc->field ? sc->field : (dflt))
-void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in, CstRenderSettings *out)
-{
-    static const CstRenderSettings zero;
-    if (!in) in = &zero;
-    const CstRenderSettings *sc = &scene->settings;
-    *out = *in;
-    PICK(width, CST_DEFAULT_WIDTH);
-    PICK(height, CST_DEFAULT_HEIGHT);
-    PICK(integrator, CST_INTEGRATOR_PATH);
-    PICK(filter, CST_FILTER_BOX);
-    PICK(max_depth, 0);
-    PICK(rr_depth, CST_DEFAULT_RR_DEPTH);
-    PICK(time_limit, 0.0);
-    PICK(photons, 0);          /* 0 stays: the photon integrator's default */
-    PICK(photon_radius, 0.0);  /* 0 stays: automatic */
-    PICK(sampler, CST_SAMPLER_INDEPENDENT);
-    PICK(png_linear, 0);
-    PICK(aovs, 0);
-    /* A time limit alone means "as many samples as fit"; otherwise the default count. */
-    PICK(spp, out->time_limit > 0.0 ? 0 : CST_DEFAULT_SPP);
-    if (!(in->crop[0] | in->crop[1] | in->crop[2] | in->crop[3])) memcpy(out->crop, sc->crop, sizeof out->crop);
-    if (!(out->crop[0] | out->crop[1] | out->crop[2] | out->crop[3])) {
-        out->crop[0] = 0; out->crop[1] = out->width;
-        out->crop[2] = 0; out->crop[3] = out->height;
-    }
-    if (!in->seed_set) { out->seed = sc->seed_set ? sc->seed : 0; out->seed_set = 1; }
-    if (!in->exposure_set) { out->exposure = sc->exposure_set ? sc->exposure : 0.0; out->exposure_set = 1; }
-    if (out->threads <= 0) {
-        long n = sysconf(_SC_NPROCESSORS_ONLN);
-        out->threads = n > 0 ? (int)n : 1;
-    }
-}
-#undef PICK
-
 /* What the passes share: the pool, the integrator, and progress reporting. */
 typedef struct Driver {
     ThreadPool *pool;

@@ -32,6 +32,15 @@ Scene *scene_create(void)
     s->camera.up = v3(0.0f, 1.0f, 0.0f);
     s->camera.vfov_deg = 40.0f;
     s->camera.focus_distance = 5.0f;
+    /* Nothing asked for until a loader reads it: resolve then takes the defaults. The
+     * fields where 0 also reads as unset stay 0, the form the loaders test ("film width
+     * given" is `rs->width != 0` in scene_json.c's crop check), and so do the AOVs, which
+     * scene_json.c ORs bits into: a scene's 0 ("none") resolves as the unset default does. */
+    cst_render_settings_init(&s->settings);
+    s->settings.width = s->settings.height = s->settings.spp = 0;
+    s->settings.rr_depth = s->settings.photons = 0;
+    s->settings.photon_radius = 0.0;
+    s->settings.aovs = 0;
     return s;
 }
 

@@ -76,7 +76,7 @@ struct CstScene {
     CameraDesc camera;
     int camera_set;
     int camera_mirror; /* render with camera_mirror_x (pbrt's left-handed LookAt) */
-    CstRenderSettings settings; /* what the scene file asked for; zero = default */
+    CstRenderSettings settings; /* what the scene file asked for; unset (scene_create) = default */
     char *output_path;
 };
 

@@ -77,7 +77,7 @@ expect "--help exits 0" 0
 if [ -s "$ERR" ]; then fail "--help writes nothing to stderr"; else pass "--help writes nothing to stderr"; fi
 missing=""
 for opt in render SCENE -o --output --spp --time --threads --seed --integrator --filter \
-           --sampler --exposure --png-linear --aov --crop --width --height --quiet --help --version \
+           --sampler --max-depth --exposure --png-linear --aov --crop --width --height --quiet --help --version \
            path path-nee path-bsdf box tent .png .exr .pfm cornell-box.png "Exit status"; do
     grep -qF -- "$opt" "$OUT" || missing="$missing $opt"
 done
@@ -277,6 +277,18 @@ run "$dir" render --spp 1 -q -o cb.png "$SRC/scenes/cornell-box.pbrt"
 expect "scenes/cornell-box.pbrt renders without warnings" 0
 if [ -s "$ERR" ]; then fail "scenes/cornell-box.pbrt: no warnings" "stderr: $(cat "$ERR")"
 else pass "scenes/cornell-box.pbrt: no warnings"; fi
+
+# --max-depth: 2 is the scene's own limit; 0 overrides it with "unbounded".
+sed 's/"max_depth": 0/"max_depth": 2/' "$SRC/scenes/cornell-spheres.json" >"$dir/depth2.json"
+run "$dir" render --spp 1 --width 32 --height 32 -q -o d-scene.pfm depth2.json
+run "$dir" render --spp 1 --width 32 --height 32 -q --max-depth 2 -o d2.pfm depth2.json
+run "$dir" render --spp 1 --width 32 --height 32 -q --max-depth 0 -o d0.pfm depth2.json
+expect "--max-depth 0 renders" 0
+if cmp -s "$dir/d-scene.pfm" "$dir/d2.pfm" && ! cmp -s "$dir/d2.pfm" "$dir/d0.pfm"; then
+    pass "--max-depth 2 = the scene's limit; --max-depth 0 overrides it (unbounded)"
+else fail "--max-depth 2 = the scene's limit; --max-depth 0 overrides it (unbounded)"; fi
+run "$dir" render --max-depth -1 -o x.png
+expect "--max-depth -1 is rejected" 2 "--max-depth: expected an integer from 0"
 sed 's/"float fov" 40/"integer fov" 40/' "$dir/tiny.pbrt" >"$dir/badtype.pbrt"
 run "$dir" render --spp 1 badtype.pbrt
 expect "pbrt wrong parameter type: exit 2, file:line:col" 2 \

@@ -486,7 +486,8 @@ static void test_orthographic_camera(void **state)
 
 static Film *render_small(const CstScene *s, int w, int h, int spp)
 {
-    CstRenderSettings st = {0};
+    CstRenderSettings st;
+    cst_render_settings_init(&st); /* the scene's max_depth (pbrt: 5) */
     st.width = w;
     st.height = h;
     st.spp = spp;

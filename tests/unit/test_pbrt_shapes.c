@@ -267,7 +267,8 @@ static void test_instances_memory(void **state)
     assert_true(table < (size_t)INSTANCES * 400);
     assert_true(info.instance_bytes < one_copy + (size_t)INSTANCES * 400);
     /* and it renders: the mesh field is lit, not black */
-    CstRenderSettings st = {0};
+    CstRenderSettings st;
+    cst_render_settings_init(&st); /* the scene's max_depth (pbrt: 5) */
     st.width = st.height = 24;
     st.spp = 4;
     st.threads = 2;

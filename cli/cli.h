@@ -1,0 +1,54 @@
+/* What the CLI's files share: exit codes, error printing, output and scene path checks,
+ * scene loading (common.c) and the progress display. Every file of the CLI reaches the
+ * library through include/caustic/caustic.h only. */
+#ifndef CST_CLI_CLI_H
+#define CST_CLI_CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "args.h"
+#include "caustic/caustic.h"
+
+/* Exit codes: the contract with scripts, documented in --help and docs/cli.md. */
+#define CLI_EXIT_OK       0
+#define CLI_EXIT_INTERNAL 1 /* not the user's fault: OOM, library failure, I/O while writing */
+#define CLI_EXIT_USAGE    2 /* bad command line, bad scene file, unusable output path */
+#define CLI_EXIT_MISMATCH 1 /* bench rays: a checksum did not match */
+#define CLI_EXIT_DISAGREE 1 /* verify: a pair of integrators disagrees */
+
+#define CLI_BUILTIN_OUTPUT "cornell-box.png"
+
+/* Where a library call failed; an I/O error means a different thing at each stage. */
+typedef enum CliStage { CLI_STAGE_LOAD, CLI_STAGE_RENDER, CLI_STAGE_WRITE } CliStage;
+
+
+/* Maps a library status to an exit code (common.c explains the I/O rule). */
+int cli_exit_code(CstStatus status, CliStage stage);
+/* "caustic: error: <message>" on stderr. */
+void cli_print_error(const CstError *err, CstStatus status);
+bool cli_has_suffix(const char *s, const char *suffix);
+/* Whether `path` (named `origin` in messages) can take an image: a known extension and a
+ * writable directory; prints the error and returns false if not. */
+bool cli_check_output(const char *path, const char *origin);
+bool cli_check_scene_path(const CliArgs *a);
+int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds);
+/* Seconds on the monotonic clock (CLOCK_MONOTONIC): only differences mean anything. */
+double cli_clock_seconds(void);
+
+typedef struct CliProgress {
+    bool tty;      /* redraw a bar in place; otherwise one line per 10% */
+    int last_step; /* plain mode: the last 10% step printed, 0..10 */
+    int last_len;  /* bar mode: characters of the last line drawn, to blank leftovers */
+    bool drawn;    /* bar mode: a bar is on screen without its newline */
+} CliProgress;
+
+/* A CstProgressFn: user is a CliProgress. */
+int cli_progress_report(void *user, double fraction, double elapsed);
+void cli_progress_finish(CliProgress *p, double seconds);
+void cli_progress_abort(CliProgress *p);
+
+int cli_render(const CliArgs *a);
+int cli_verify(const CliArgs *a);
+
+#endif

@@ -1,0 +1,204 @@
+/* caustic render and caustic info: load the scene, print the job line, render with
+ * progress, write the image and the summary; info prints the scene's size and its
+ * acceleration structure's build time and memory. */
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+/* "<stem of the scene file>.png" in the current directory; "scene.png" if the stem is
+ * empty. Returns false if it does not fit. */
+static bool cli_default_output(const char *scene_path, char *buf, size_t size)
+{
+    const char *base = strrchr(scene_path, '/');
+    base = base ? base + 1 : scene_path;
+    size_t stem = strlen(base);
+    const char *dot = strrchr(base, '.');
+    if (dot)
+        stem = (size_t)(dot - base);
+    int n = stem ? snprintf(buf, size, "%.*s.png", (int)stem, base)
+                 : snprintf(buf, size, "scene.png");
+    return n > 0 && (size_t)n < size;
+}
+
+/* ------------------------------------------------------------ job and summary lines */
+
+/* "N M", "N.N M" or "N.NN M" per second: three significant digits from 1 M/s on. */
+static void cli_format_rate(double count, double seconds, char *buf, size_t size)
+{
+    double m = count / seconds / 1e6;
+    snprintf(buf, size, m >= 100.0 ? "%.0f" : m >= 10.0 ? "%.1f" : "%.2f", m);
+}
+
+/* One line describing the job, with the settings the render will really use. */
+static void cli_print_job(const CliArgs *a, const CstScene *scene, const CstRenderSettings *settings,
+                          const char *output)
+{
+    CstRenderSettings s;
+    cst_render_settings_resolve(scene, settings, &s);
+    char work[96];
+    if (s.spp && s.time_limit > 0.0)
+        snprintf(work, sizeof work, "%d spp or %g s, whichever comes first", s.spp, s.time_limit);
+    else if (s.time_limit > 0.0)
+        snprintf(work, sizeof work, "time limit %g s", s.time_limit);
+    else
+        snprintf(work, sizeof work, "%d spp", s.spp);
+    char crop[96] = "";
+    if (s.crop[0] != 0 || s.crop[1] != s.width || s.crop[2] != 0 || s.crop[3] != s.height)
+        snprintf(crop, sizeof crop, " cropped to [%d, %d) x [%d, %d)", s.crop[0], s.crop[1], s.crop[2], s.crop[3]);
+    fprintf(stderr, "caustic: rendering %s (%dx%d%s, %s, %s, %s filter, %d thread%s) to %s\n",
+            a->scene_path ? a->scene_path : "the built-in Cornell box", s.width, s.height, crop, work,
+            cst_integrator_name(s.integrator), cst_filter_name(s.filter), s.threads,
+            s.threads == 1 ? "" : "s", output);
+}
+
+/* `caustic info`: what the scene holds and what its acceleration structure costs. */
+static void cli_print_info(const CliArgs *a, const CstScene *scene, double read_seconds)
+{
+    CstSceneInfo in;
+    cst_scene_info(scene, &in);
+    printf("scene:       %s\n", a->scene_path ? a->scene_path : "built-in Cornell box");
+    printf("load:        %.2f ms (parsing and mesh import)\n", read_seconds * 1e3);
+    printf("triangles:   %d\n", in.triangles);
+    printf("spheres:     %d\n", in.spheres);
+    printf("emitters:    %d\n", in.emitters);
+    printf("materials:   %d\n", in.materials);
+    printf("accel:       %s\n", in.accel);
+    printf("build:       %.2f ms\n", in.accel_build_seconds * 1e3);
+    printf("memory:      %zu bytes", in.accel_bytes);
+    int prims = in.triangles + in.spheres;
+    if (prims > 0) printf(" (%.1f bytes per primitive)", (double)in.accel_bytes / prims);
+    printf("\n");
+    if (in.instances > 0)
+        printf("instances:   %d of %d object%s (%zu triangles), %zu bytes\n", in.instances,
+               in.instanced_objects, in.instanced_objects == 1 ? "" : "s", in.instanced_triangles,
+               in.instance_bytes);
+}
+
+static void cli_print_summary(const char *output, const CstRenderStats *st)
+{
+    char line[512];
+    int n = snprintf(line, sizeof line, "caustic: wrote %s: %dx%d, %d spp, %s, %d thread%s, %.2f s",
+                     output, st->width, st->height, st->spp,
+                     cst_integrator_name(st->integrator), st->threads,
+                     st->threads == 1 ? "" : "s", st->seconds);
+    if (n > 0 && (size_t)n < sizeof line && st->seconds > 0.0) {
+        char samples[32], rays[32];
+        cli_format_rate((double)st->samples, st->seconds, samples, sizeof samples);
+        cli_format_rate((double)st->rays, st->seconds, rays, sizeof rays);
+        snprintf(line + n, sizeof line - (size_t)n, ", %s M samples/s, %s M rays/s", samples,
+                 rays);
+    }
+    fprintf(stderr, "%s\n", line);
+}
+
+/* ------------------------------------------------------------ commands */
+
+int cli_render(const CliArgs *a)
+{
+    int code = CLI_EXIT_INTERNAL;
+    CstScene *scene = NULL;
+    CstFilm *film = NULL;
+    CstError err = {0};
+    CstStatus status;
+    char default_output[4096];
+    const char *output = a->output_path;
+    CliProgress progress = {.tty = isatty(STDERR_FILENO) == 1};
+    CstRenderSettings settings = a->settings;
+    CstRenderStats stats = {0};
+
+    /* Everything checkable from the command line alone, before the scene is loaded. */
+    if (!cli_check_scene_path(a))
+        return CLI_EXIT_USAGE;
+    if (output && !cli_check_output(output, "output"))
+        return CLI_EXIT_USAGE;
+
+    double read_seconds = 0.0;
+    code = cli_load_scene(a, &scene, &read_seconds);
+    if (code != CLI_EXIT_OK)
+        return code;
+    code = CLI_EXIT_INTERNAL;
+    if (a->command == ARGS_CMD_INFO) {
+        cli_print_info(a, scene, read_seconds);
+        code = CLI_EXIT_OK;
+        goto done;
+    }
+
+    if (!output) {
+        const char *from_scene = cst_scene_output_path(scene);
+        if (from_scene) {
+            output = from_scene;
+            if (!cli_check_output(output, "the scene's output")) {
+                fprintf(stderr, "caustic: use -o to write somewhere else\n");
+                code = CLI_EXIT_USAGE;
+                goto done;
+            }
+        } else {
+            if (!a->scene_path)
+                snprintf(default_output, sizeof default_output, "%s", CLI_BUILTIN_OUTPUT);
+            else if (!cli_default_output(a->scene_path, default_output, sizeof default_output)) {
+                fprintf(stderr, "caustic: error: scene path too long: '%s'\n", a->scene_path);
+                code = CLI_EXIT_USAGE;
+                goto done;
+            }
+            output = default_output;
+            if (!cli_check_output(output, "output")) {
+                code = CLI_EXIT_USAGE;
+                goto done;
+            }
+        }
+    }
+
+    {
+        /* AOVs are EXR channels: refused before rendering, not after. */
+        CstRenderSettings rs;
+        cst_render_settings_resolve(scene, &settings, &rs);
+        if (rs.aovs && !cst_image_path_is_exr(output)) {
+            fprintf(stderr, "caustic: error: output '%s': AOVs (--aov or the scene's \"aovs\") are "
+                            "written as extra EXR channels; expected an output ending in .exr\n", output);
+            code = CLI_EXIT_USAGE;
+            goto done;
+        }
+    }
+    if (!a->quiet) {
+        settings.progress = cli_progress_report;
+        settings.progress_user = &progress;
+        cli_print_job(a, scene, &settings, output);
+    }
+
+    status = cst_render(scene, &settings, &film, &stats, &err);
+    if (status != CST_OK) {
+        if (!a->quiet)
+            cli_progress_abort(&progress);
+        cli_print_error(&err, status);
+        code = cli_exit_code(status, CLI_STAGE_RENDER);
+        goto done;
+    }
+    if (!a->quiet)
+        cli_progress_finish(&progress, stats.seconds);
+
+    status = cst_film_write(film, output, &err);
+    if (status != CST_OK) {
+        cli_print_error(&err, status);
+        code = cli_exit_code(status, CLI_STAGE_WRITE);
+        goto done;
+    }
+    if (!a->quiet)
+        cli_print_summary(output, &stats);
+    if (stats.nonfinite > 0)
+        fprintf(stderr, "caustic: warning: %" PRIu64 " NaN/Inf samples discarded "
+                "(%.3g%% of %" PRIu64 "; counted, never added to the image)\n",
+                stats.nonfinite,
+                stats.samples ? 100.0 * (double)stats.nonfinite / (double)stats.samples : 0.0,
+                stats.samples);
+    code = CLI_EXIT_OK;
+
+done:
+    cst_film_destroy(film);
+    cst_scene_destroy(scene);
+    return code;
+}
+

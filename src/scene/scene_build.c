@@ -1,0 +1,527 @@
+/* The public scene builder (cst_scene_create ... cst_scene_commit): validates what callers
+ * pass through include/caustic/caustic.h, converts it to the internal types and adds it
+ * with the scene_add_* calls, as the JSON and pbrt loaders do. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "io/image_io.h"
+#include "scene/scene.h"
+
+/* The loaders' bound on coordinates and lengths (scene_json.c explains the figure). */
+#define BUILD_MAX_LENGTH 1e18f
+/* A sphere's area must not underflow (scene_json.c's LOADER_MIN_RADIUS). */
+#define BUILD_MIN_RADIUS 1e-18f
+
+static CstStatus check_scene(const Scene *s, const char *fn, CstError *err)
+{
+    if (!s) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: scene is NULL", fn);
+    if (s->committed)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: the scene is already committed; expected "
+                        "additions before cst_scene_commit", fn);
+    return CST_OK;
+}
+
+/* A point or vector: every component finite and within BUILD_MAX_LENGTH. */
+static CstStatus read_vec3(const float v[3], const char *fn, const char *what, Vec3 *out, CstError *err)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(fabsf(v[k]) <= BUILD_MAX_LENGTH))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s (%g, %g, %g) is not finite or beyond "
+                            "1e18; expected finite coordinates", fn, what, (double)v[0], (double)v[1], (double)v[2]);
+    *out = v3(v[0], v[1], v[2]);
+    return CST_OK;
+}
+
+/* A colour: finite, >= 0 and, for reflectances (max_one), <= 1. */
+static CstStatus read_rgb(const float c[3], int max_one, const char *fn, const char *what, Color *out,
+                          CstError *err)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(c[k] >= 0.0f && c[k] <= (max_one ? 1.0f : FLT_MAX)))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s (%g, %g, %g) is out of range; expected %s",
+                            fn, what, (double)c[0], (double)c[1], (double)c[2],
+                            max_one ? "values from 0 to 1 (more than 1 would create energy)" : "finite values >= 0");
+    *out = color_rgb(c[0], c[1], c[2]);
+    return CST_OK;
+}
+
+/* A public texture id (>= 1, 0 = none) checked against the scene. */
+static CstStatus check_texture_id(const Scene *s, int id, int allow_none, const char *fn, const char *what,
+                                  CstError *err)
+{
+    if ((allow_none && id == 0) || (id >= 1 && id <= s->num_textures)) return CST_OK;
+    return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s %d is not a texture of this scene; expected %s1 to %d",
+                    fn, what, id, allow_none ? "0 (none) or " : "", s->num_textures);
+}
+
+CstStatus cst_scene_create(CstScene **out, CstError *err)
+{
+    cst_error_clear(err);
+    if (!out) return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_create: out is NULL");
+    *out = scene_create();
+    return *out ? CST_OK : cst_fail(err, CST_ERR_OOM, "cst_scene_create: out of memory");
+}
+
+/* ------------------------------------------------------------------ textures */
+
+static CstStatus image_texture(Scene *s, const CstTextureDesc *d, Texture *t, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_texture";
+    TextureWrap wrap = d->wrap == CST_TEXTURE_WRAP_CLAMP ? TEXTURE_WRAP_CLAMP : TEXTURE_WRAP_REPEAT;
+    (void)s;
+    if (d->wrap != CST_TEXTURE_WRAP_REPEAT && d->wrap != CST_TEXTURE_WRAP_CLAMP)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown wrap mode %d; expected CST_TEXTURE_WRAP_REPEAT "
+                        "or CST_TEXTURE_WRAP_CLAMP", fn, (int)d->wrap);
+    if (!d->path == !d->pixels)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: an image texture needs exactly one of path and pixels", fn);
+    if (d->path) return texture_image_load(t, d->path, d->linear != 0, wrap, err);
+    if (d->width <= 0 || d->height <= 0 || d->width > 65536 || d->height > 65536)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: image of %d x %d pixels; expected 1 to 65536 on each side",
+                        fn, d->width, d->height);
+    size_t n = (size_t)d->width * (size_t)d->height * 3;
+    float *rgb = malloc(n * sizeof *rgb);
+    if (!rgb) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d image", fn, d->width, d->height);
+    memcpy(rgb, d->pixels, n * sizeof *rgb);
+    return texture_image(t, rgb, d->width, d->height, wrap, err); /* validates the pixels */
+}
+
+CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *out_id, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_texture";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
+    float su = d->uv_scale[0], sv = d->uv_scale[1];
+    if (su == 0.0f && sv == 0.0f) su = sv = 1.0f;
+    if (!isfinite(su) || !isfinite(sv) || !isfinite(d->uv_offset[0]) || !isfinite(d->uv_offset[1]))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: uv_scale (%g, %g) or uv_offset (%g, %g) is not finite",
+                        fn, (double)su, (double)sv, (double)d->uv_offset[0], (double)d->uv_offset[1]);
+    Texture t;
+    switch (d->type) {
+    case CST_TEXTURE_CONSTANT: {
+        Color c;
+        if ((st = read_rgb(d->value, 0, fn, "value", &c, err)) != CST_OK) return st;
+        texture_constant(&t, c);
+        break;
+    }
+    case CST_TEXTURE_CHECKERBOARD: {
+        float scale = d->scale == 0.0f ? 1.0f : d->scale;
+        if (!(scale > 0.0f && scale <= FLT_MAX))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: scale %g; expected squares per unit of u and v, > 0",
+                            fn, (double)d->scale);
+        if ((st = check_texture_id(scene, d->even, 0, fn, "even", err)) != CST_OK ||
+            (st = check_texture_id(scene, d->odd, 0, fn, "odd", err)) != CST_OK)
+            return st;
+        texture_checkerboard(&t, scene->textures, d->even - 1, d->odd - 1, scale);
+        break;
+    }
+    case CST_TEXTURE_IMAGE:
+        if ((st = image_texture(scene, d, &t, err)) != CST_OK) return st;
+        break;
+    default:
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown texture type %d; expected CST_TEXTURE_CONSTANT, "
+                        "_CHECKERBOARD or _IMAGE", fn, (int)d->type);
+    }
+    if (su != 1.0f || sv != 1.0f || d->uv_offset[0] != 0.0f || d->uv_offset[1] != 0.0f)
+        texture_set_uv_transform(&t, v2(su, sv), v2(d->uv_offset[0], d->uv_offset[1]));
+    int id = 0;
+    if ((st = scene_add_texture(scene, &t, &id, err)) != CST_OK) return st;
+    *out_id = id + 1;
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------------ materials */
+
+void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
+{
+    memset(d, 0, sizeof *d);
+    d->type = type;
+    float a = type == CST_MATERIAL_DIFFUSE || type == CST_MATERIAL_PLASTIC ? 0.5f : 1.0f;
+    d->albedo[0] = d->albedo[1] = d->albedo[2] = a;
+    d->ior = type == CST_MATERIAL_GLASS || type == CST_MATERIAL_DIELECTRIC || type == CST_MATERIAL_PLASTIC ? 1.5f : 1.0f;
+    d->two_sided = 1;
+}
+
+/* A texture standing for a reflectance or a roughness: its values must stay within 1. */
+static CstStatus check_unit_texture(const Scene *s, int id, const char *what, CstError *err)
+{
+    CstStatus st = check_texture_id(s, id, 1, "cst_scene_add_material", what, err);
+    if (st != CST_OK || id == 0) return st;
+    float mx = color_max(s->textures[id - 1].max);
+    if (mx > 1.0f)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_add_material: %s %d has values up to %g; "
+                        "expected at most 1", what, id, (double)mx);
+    return CST_OK;
+}
+
+static CstStatus build_conductor(const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    if (d->metal) {
+        if (!material_metal(d->metal, &m->eta, &m->k))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown metal \"%.64s\"; expected gold, silver, "
+                            "copper or aluminium", fn, d->metal);
+        return CST_OK;
+    }
+    CstStatus st = read_rgb(d->eta, 0, fn, "eta", &m->eta, err);
+    if (st == CST_OK) st = read_rgb(d->k, 0, fn, "k", &m->k, err);
+    return st;
+}
+
+CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int *out_id, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    static const MaterialType types[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
+                                         MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC};
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_PLASTIC)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
+                        "to CST_MATERIAL_PLASTIC (cst_material_desc_init sets it)", fn, (int)d->type);
+    Material m = {0};
+    m.type = types[d->type - CST_MATERIAL_DIFFUSE];
+    if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
+    if ((st = check_unit_texture(scene, d->albedo_texture, "albedo_texture", err)) != CST_OK ||
+        (st = check_unit_texture(scene, d->roughness_texture, "roughness_texture", err)) != CST_OK)
+        return st;
+    m.albedo_texture = d->albedo_texture;
+    m.roughness_texture = d->roughness_texture;
+    if (!(d->ior > 0.0f && d->ior <= FLT_MAX))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ior %g; expected an index of refraction > 0 "
+                        "(glass is about 1.5)", fn, (double)d->ior);
+    if (d->type == CST_MATERIAL_PLASTIC && !(d->ior >= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ior %g is below 1; expected the coat's index of "
+                        "refraction >= 1", fn, (double)d->ior);
+    m.ior = d->ior;
+    if (!(d->roughness >= 0.0f && d->roughness <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness %g is outside [0, 1]; expected 0 (smooth) "
+                        "to 1 (roughest)", fn, (double)d->roughness);
+    m.roughness = d->roughness;
+    if (d->two_sided != 0 && d->two_sided != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: two_sided %d; expected 0 or 1", fn, d->two_sided);
+    m.one_sided = !d->two_sided;
+    if (d->type == CST_MATERIAL_CONDUCTOR && (st = build_conductor(d, &m, err)) != CST_OK) return st;
+    return scene_add_material(scene, &m, out_id, err);
+}
+
+/* ------------------------------------------------------------------ shapes */
+
+static CstStatus read_emission(const Scene *s, const CstEmission *e, const char *fn, Emission *out, CstError *err)
+{
+    memset(out, 0, sizeof *out);
+    if (!e) return CST_OK;
+    CstStatus st = read_rgb(e->radiance, 0, fn, "emission radiance", &out->radiance, err);
+    if (st == CST_OK) st = check_texture_id(s, e->texture, 1, fn, "emission texture", err);
+    if (st != CST_OK) return st;
+    if (e->two_sided != 0 && e->two_sided != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: emission two_sided %d; expected 0 or 1", fn, e->two_sided);
+    out->texture = e->texture;
+    out->two_sided = e->two_sided;
+    return CST_OK;
+}
+
+/* The effective stride of an attribute of `elem` bytes: 0 means packed. */
+static CstStatus check_stride(size_t *stride, size_t elem, const char *what, CstError *err)
+{
+    if (*stride == 0) *stride = elem;
+    if (*stride < elem)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_add_mesh: %s_stride %zu is smaller than an "
+                        "element (%zu bytes); expected 0 (packed) or at least %zu", what, *stride, elem, elem);
+    return CST_OK;
+}
+
+/* n floats at element i of a strided array (memcpy: the caller's struct may not align them). */
+static void fetch(const void *base, size_t stride, int i, int n, float *out)
+{
+    memcpy(out, (const char *)base + (size_t)i * stride, (size_t)n * sizeof(float));
+}
+
+/* The caller's strided arrays gathered into packed, validated internal arrays. */
+typedef struct MeshArrays {
+    Vec3 *pos, *nrm;
+    Vec2 *uv;
+    int *idx;
+} MeshArrays;
+
+static CstStatus gather_mesh(const CstMeshDesc *d, MeshArrays *a, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_mesh";
+    size_t ps = d->position_stride, ns = d->normal_stride, us = d->uv_stride, is = d->index_stride;
+    CstStatus st;
+    if ((st = check_stride(&ps, 3 * sizeof(float), "position", err)) != CST_OK ||
+        (d->normals && (st = check_stride(&ns, 3 * sizeof(float), "normal", err)) != CST_OK) ||
+        (d->uvs && (st = check_stride(&us, 2 * sizeof(float), "uv", err)) != CST_OK) ||
+        (st = check_stride(&is, 3 * sizeof(uint32_t), "index", err)) != CST_OK)
+        return st;
+    int nv = d->num_vertices, nt = d->num_triangles;
+    a->pos = malloc((size_t)nv * sizeof *a->pos);
+    a->idx = malloc((size_t)nt * 3 * sizeof *a->idx);
+    a->nrm = d->normals ? malloc((size_t)nv * sizeof *a->nrm) : NULL;
+    a->uv = d->uvs ? malloc((size_t)nv * sizeof *a->uv) : NULL;
+    if (!a->pos || !a->idx || (d->normals && !a->nrm) || (d->uvs && !a->uv))
+        return cst_fail(err, CST_ERR_OOM, "%s: out of memory for %d vertices and %d triangles", fn, nv, nt);
+    for (int i = 0; i < nv; i++) {
+        float p[3];
+        fetch(d->positions, ps, i, 3, p);
+        if ((st = read_vec3(p, fn, "a position", &a->pos[i], err)) != CST_OK)
+            return cst_fail(err, st, "%s: position of vertex %d (%g, %g, %g) is not finite or beyond 1e18",
+                            fn, i, (double)p[0], (double)p[1], (double)p[2]);
+        if (d->normals) {
+            float n[3];
+            fetch(d->normals, ns, i, 3, n);
+            Vec3 v = v3(n[0], n[1], n[2]);
+            if (!v3_is_finite(v) || !(v3_max_abs(v) > 0.0f))
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normal of vertex %d (%g, %g, %g) is zero or not "
+                                "finite; expected a nonzero vector", fn, i, (double)n[0], (double)n[1], (double)n[2]);
+            /* Scaled first, as the JSON loader does, so tiny or huge normals normalise. */
+            a->nrm[i] = v3_normalize(v3_scale(v, 1.0f / v3_max_abs(v)));
+        }
+        if (d->uvs) {
+            float t[2];
+            fetch(d->uvs, us, i, 2, t);
+            if (!isfinite(t[0]) || !isfinite(t[1]))
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: uv of vertex %d (%g, %g) is not finite",
+                                fn, i, (double)t[0], (double)t[1]);
+            a->uv[i] = v2(t[0], t[1]);
+        }
+    }
+    for (int t = 0; t < nt; t++) {
+        uint32_t tri[3];
+        memcpy(tri, (const char *)d->indices + (size_t)t * is, sizeof tri);
+        for (int k = 0; k < 3; k++) {
+            if (tri[k] >= (uint32_t)nv)
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: triangle %d: vertex index %u is out of range; "
+                                "expected 0 to %d", fn, t, tri[k], nv - 1);
+            a->idx[3 * t + k] = (int)tri[k];
+        }
+    }
+    return CST_OK;
+}
+
+CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dropped, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_mesh";
+    cst_error_clear(err);
+    if (num_dropped) *num_dropped = 0;
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
+    if (d->num_vertices <= 0 || d->num_triangles <= 0 || !d->positions || !d->indices)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d vertices and %d triangles (positions %s, indices %s); "
+                        "expected at least one of each, with their arrays", fn, d->num_vertices, d->num_triangles,
+                        d->positions ? "given" : "NULL", d->indices ? "given" : "NULL");
+    if (d->num_triangles > INT32_MAX / 3)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d triangles; expected fewer than %d", fn,
+                        d->num_triangles, INT32_MAX / 3);
+    if (d->material < 0 || d->material >= scene->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
+                        fn, d->material, scene->num_materials - 1);
+    if (d->skip_degenerate != 0 && d->skip_degenerate != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: skip_degenerate %d; expected 0 or 1", fn, d->skip_degenerate);
+    Emission em;
+    if ((st = read_emission(scene, &d->emission, fn, &em, err)) != CST_OK) return st;
+    MeshArrays a = {0};
+    st = gather_mesh(d, &a, err);
+    if (st == CST_OK && !d->skip_degenerate) {
+        /* Checked here so that a failure leaves the scene untouched: scene_add_mesh_ex
+         * finds a degenerate triangle only after adding the ones before it. */
+        for (int t = 0; t < d->num_triangles; t++) {
+            const int *i = &a.idx[3 * t];
+            if (!(triangle_area(a.pos[i[0]], a.pos[i[1]], a.pos[i[2]]) > 0.0f)) {
+                st = cst_fail(err, CST_ERR_INVALID_ARG, "%s: triangle %d (vertices %d, %d, %d) has zero area; "
+                              "expected distinct, non-collinear vertices (or skip_degenerate = 1)",
+                              fn, t, i[0], i[1], i[2]);
+                break;
+            }
+        }
+    }
+    if (st == CST_OK) {
+        SceneMesh sm = {0};
+        sm.positions = a.pos;
+        sm.num_vertices = d->num_vertices;
+        sm.normals = a.nrm;
+        sm.uvs = a.uv;
+        sm.indices = a.idx;
+        sm.num_triangles = d->num_triangles;
+        sm.material = d->material;
+        sm.emission = &em;
+        sm.skip_degenerate = d->skip_degenerate;
+        st = scene_add_mesh_ex(scene, &sm, num_dropped, err);
+    }
+    free(a.pos);
+    free(a.nrm);
+    free(a.uv);
+    free(a.idx);
+    return st;
+}
+
+CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,
+                               const CstEmission *emission, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_sphere";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!center) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: center is NULL", fn);
+    Vec3 c;
+    if ((st = read_vec3(center, fn, "center", &c, err)) != CST_OK) return st;
+    if (!(radius >= BUILD_MIN_RADIUS && radius <= BUILD_MAX_LENGTH))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: radius %g; expected a finite radius from 1e-18 to 1e18",
+                        fn, (double)radius);
+    if (material < 0 || material >= scene->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
+                        fn, material, scene->num_materials - 1);
+    Emission em;
+    if ((st = read_emission(scene, emission, fn, &em, err)) != CST_OK) return st;
+    return scene_add_sphere(scene, c, radius, material, &em, err);
+}
+
+/* ------------------------------------------------------------------ lights, camera */
+
+/* v / |v| for a nonzero finite v. */
+static CstStatus read_direction(const float d[3], const char *fn, const char *what, Vec3 *out, CstError *err)
+{
+    Vec3 v = {0.0f, 0.0f, 0.0f};
+    CstStatus st = read_vec3(d, fn, what, &v, err);
+    if (st != CST_OK) return st;
+    float len = v3_length(v);
+    if (!(len > 0.0f) || !isfinite(len))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s (%g, %g, %g) has no length; expected a nonzero vector",
+                        fn, what, (double)d[0], (double)d[1], (double)d[2]);
+    *out = v3_scale(v, 1.0f / len);
+    return CST_OK;
+}
+
+CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_light";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    if ((st = read_rgb(d->intensity, 0, fn, d->type == CST_LIGHT_DIRECTIONAL ? "irradiance" : "intensity",
+                       &l.intensity, err)) != CST_OK)
+        return st;
+    switch (d->type) {
+    case CST_LIGHT_DIRECTIONAL:
+        l.type = DELTA_DIRECTIONAL;
+        if ((st = read_direction(d->direction, fn, "direction", &l.dir, err)) != CST_OK) return st;
+        break;
+    case CST_LIGHT_POINT:
+    case CST_LIGHT_SPOT:
+        l.type = d->type == CST_LIGHT_POINT ? DELTA_POINT : DELTA_SPOT;
+        if ((st = read_vec3(d->position, fn, "position", &l.p, err)) != CST_OK) return st;
+        if (d->type == CST_LIGHT_POINT) break;
+        if ((st = read_direction(d->direction, fn, "direction", &l.dir, err)) != CST_OK) return st;
+        if (!(d->cone_angle >= 0.001f && d->cone_angle <= 90.0f))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: cone_angle %g; expected degrees from 0.001 to 90",
+                            fn, (double)d->cone_angle);
+        if (!(d->cone_delta >= 0.0f && d->cone_delta <= d->cone_angle))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: cone_delta %g; expected degrees from 0 to cone_angle (%g)",
+                            fn, (double)d->cone_delta, (double)d->cone_angle);
+        l.cos_outer = cosf(d->cone_angle * (CST_PI / 180.0f));
+        l.cos_inner = cosf((d->cone_angle - d->cone_delta) * (CST_PI / 180.0f));
+        break;
+    default:
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light type %d; expected CST_LIGHT_POINT, _SPOT or "
+                        "_DIRECTIONAL", fn, (int)d->type);
+    }
+    return scene_add_delta_light(scene, &l, err);
+}
+
+CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radiance[3], CstError *err)
+{
+    static const char fn[] = "cst_scene_set_environment_constant";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!radiance) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: radiance is NULL", fn);
+    Color L;
+    EnvMap env;
+    if ((st = read_rgb(radiance, 0, fn, "radiance", &L, err)) != CST_OK) return st;
+    if ((st = envmap_init_constant(&env, L, err)) != CST_OK) return st;
+    return scene_set_environment(scene, &env, err);
+}
+
+CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path, const float scale[3], CstError *err)
+{
+    static const char fn[] = "cst_scene_set_environment_image";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!path || !path[0]) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: path is NULL or empty", fn);
+    Color k = color_s(1.0f);
+    if (scale && (st = read_rgb(scale, 0, fn, "scale", &k, err)) != CST_OK) return st;
+    float *rgb = NULL;
+    int w = 0, h = 0;
+    EnvMap env;
+    if ((st = image_read(path, &rgb, &w, &h, err)) != CST_OK) return st;
+    if ((st = envmap_init_image(&env, rgb, w, h, k, err)) != CST_OK) return st;
+    return scene_set_environment(scene, &env, err);
+}
+
+CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *d, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_camera";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
+    if (d->type != CST_CAMERA_PERSPECTIVE && d->type != CST_CAMERA_ORTHOGRAPHIC)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown camera type %d; expected CST_CAMERA_PERSPECTIVE "
+                        "or CST_CAMERA_ORTHOGRAPHIC", fn, (int)d->type);
+    CameraDesc c = {0};
+    if ((st = read_vec3(d->position, fn, "position", &c.position, err)) != CST_OK ||
+        (st = read_vec3(d->look_at, fn, "look_at", &c.look_at, err)) != CST_OK ||
+        (st = read_vec3(d->up, fn, "up", &c.up, err)) != CST_OK)
+        return st;
+    if (c.up.x == 0.0f && c.up.y == 0.0f && c.up.z == 0.0f) c.up = v3(0.0f, 1.0f, 0.0f);
+    Vec3 forward = v3_sub(c.look_at, c.position);
+    float dist = v3_length(forward);
+    if (!(dist > 0.0f) || !isfinite(dist))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: look_at equals position, so there is no view direction", fn);
+    /* The same test as the JSON loader: right = normalize(forward x up) must exist. */
+    float ul = v3_length(c.up);
+    if (!(v3_length(v3_cross(v3_scale(forward, 1.0f / dist), c.up)) > 1e-4f * ul))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: up (%g, %g, %g) is parallel to the view direction; "
+                        "expected a vector not parallel to look_at - position",
+                        fn, (double)c.up.x, (double)c.up.y, (double)c.up.z);
+    c.focus_distance = dist;
+    if (d->type == CST_CAMERA_ORTHOGRAPHIC) {
+        if (!(d->height > 0.0f && d->height <= BUILD_MAX_LENGTH))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: height %g; expected the view's height in scene units, > 0",
+                            fn, (double)d->height);
+        c.ortho_height = d->height;
+        scene_set_camera(scene, &c);
+        return CST_OK;
+    }
+    if (!(d->fov > 0.0f && d->fov < 180.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: fov %g; expected the vertical field of view in degrees, "
+                        "greater than 0 and less than 180", fn, (double)d->fov);
+    if (!(d->aperture_radius >= 0.0f && d->aperture_radius <= BUILD_MAX_LENGTH))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: aperture_radius %g; expected a lens radius >= 0",
+                        fn, (double)d->aperture_radius);
+    if (!(d->focus_distance >= 0.0f && d->focus_distance <= BUILD_MAX_LENGTH))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: focus_distance %g; expected a distance > 0 (or 0 for "
+                        "|look_at - position|)", fn, (double)d->focus_distance);
+    c.vfov_deg = d->fov;
+    c.aperture_radius = d->aperture_radius;
+    if (d->focus_distance > 0.0f) c.focus_distance = d->focus_distance;
+    scene_set_camera(scene, &c);
+    return CST_OK;
+}
+
+CstStatus cst_scene_commit(CstScene *scene, CstError *err)
+{
+    cst_error_clear(err);
+    if (!scene) return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_commit: scene is NULL");
+    return scene_commit(scene, err);
+}
