@@ -49,9 +49,8 @@ static const ArgsOptSpec ARGS_OPTS[] = {
 };
 #define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
 
-void args_print_help(FILE *f)
-{
-    fputs(
+/* The --help text (docs/cli.md says the same at more length). */
+static const char ARGS_HELP[] =
 "caustic " CST_VERSION_STRING ": a physically based renderer\n"
 "\n"
 "Usage:\n"
@@ -202,9 +201,9 @@ void args_print_help(FILE *f)
 "  caustic render scenes/cornell-box.json --time 60 --threads 8 -o box.exr\n"
 "  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n"
 "  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n"
-"  caustic verify --integrators path,path-nee,path-bsdf --spp 64 --map z.png\n",
-        f);
-}
+"  caustic verify --integrators path,path-nee,path-bsdf --spp 64 --map z.png\n";
+
+void args_print_help(FILE *f) { fputs(ARGS_HELP, f); }
 
 static void args_fail(ArgsError *err, bool hint, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));

@@ -14,6 +14,7 @@ PKGS=(
   libassimp-dev       # mesh import (OBJ/PLY/glTF)
   libembree-dev       # optional comparison back end
   libcmocka-dev       # unit test framework, driven by CTest
+  python3             # scripts/check-layout.sh (the CTest test "layout")
 )
 
 missing=()

@@ -12,8 +12,8 @@ static Color sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3
     if (color_is_black(f)) return color_s(0.0f);
     ++*rays;
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
-    float w = mis && !ls.delta ? power_heuristic(ls.pdf, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
-    return color_scale(color_mul(f, ls.li), w / ls.pdf);
+    float w = mis && !ls.delta ? power_heuristic(ls.pdf_w, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
+    return color_scale(color_mul(f, ls.li), w / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
 Color direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,

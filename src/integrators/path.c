@@ -59,7 +59,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
         beta = color_mul(beta, bs.weight);
         if (color_is_black(beta)) break;
         specular = bs.delta;
-        prev_pdf = bs.pdf;
+        prev_pdf = bs.delta ? bs.pmf : bs.pdf_w;
 
         /* Russian roulette (roulette.h): beta is the path's scatter. */
         float rr = roulette(smp, depth + 1, pp->rr_depth, beta);

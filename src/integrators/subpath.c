@@ -53,10 +53,10 @@ static inline void mis_scatter(SubPath *sp, const VcmIteration *it, const BsdfSa
         sp->d_vm *= mis(cos_out);
         return;
     }
-    float g = mis(cos_out / bs->pdf);
+    float g = mis(cos_out / bs->pdf_w);
     sp->d_vc = g * (sp->d_vc * mis(pdf_rev) + sp->d_vcm + it->mis_vm);
     sp->d_vm = g * (sp->d_vm * mis(pdf_rev) + sp->d_vcm * it->mis_vc + 1.0f);
-    sp->d_vcm = mis(1.0f / bs->pdf);
+    sp->d_vcm = mis(1.0f / bs->pdf_w);
 }
 
 /* At a hit at distance dist with |cos| cos_in to the incoming direction: completes the
@@ -90,8 +90,8 @@ static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const B
     float uc = sampler_1d(rng);
     Vec2 u = sampler_2d(rng);
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
-    if (!(bs.pdf > 0.0f)) return false;
-    float pdf_rev = bs.delta ? bs.pdf : bsdf_pdf(b, bs.wi, wo);
+    if (!((bs.delta ? bs.pmf : bs.pdf_w) > 0.0f)) return false;
+    float pdf_rev = bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo);
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);
     if (color_is_black(sp->scatter)) return false;
@@ -205,7 +205,7 @@ static Color connect_to_light(const Scene *s, const VcmIteration *it, const SubP
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
-    return color_scale(color_mul(f, ls.li), weight / ls.pdf);
+    return color_scale(color_mul(f, ls.li), weight / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
 /* The BSDFs of one light path's first vertices, built when a connection first needs

@@ -64,7 +64,7 @@ static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int
         if (reflect ? reflected : refracted) continue;
         if (reflect) reflected = true;
         else refracted = true;
-        Color w = color_scale(bs.weight, bs.pdf);
+        Color w = color_scale(bs.weight, bs.pmf);
         float wmax = weight * color_max(w);
         if (!(wmax >= WHITTED_MIN_WEIGHT)) continue;
         Ray next = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);

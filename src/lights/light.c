@@ -170,10 +170,10 @@ static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry
     out->li = emitter_radiance(e, g->textures, out->n, uv, v3_neg(out->wi));
     if (color_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
     /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
-    out->pdf = s->pdf_a[i] * dist2 / out->cos_light;
+    out->pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
     out->finite = true;
     out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
-    out->direct_pdf = out->pdf;
+    out->direct_pdf = out->pdf_w;
     return true;
 }
 
@@ -184,22 +184,22 @@ static bool env_sample_li(const EmitterSampler *s, float pmf, Vec3 x, Vec2 u, Li
     float pdf_w;
     out->wi = envmap_sample(s->env, u, &pdf_w);
     if (!(pdf_w > 0.0f)) return false;
-    out->pdf = pmf * pdf_w;
+    out->pdf_w = pmf * pdf_w;
     out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
     out->p = v3_madd(x, out->wi, out->dist);
     out->n = v3_neg(out->wi);
     out->li = envmap_eval(s->env, out->wi);
     out->finite = false;
     out->cos_light = 1.0f;
-    out->emit_pdf = out->pdf / (CST_PI * s->radius * s->radius);
-    out->direct_pdf = out->pdf;
+    out->emit_pdf = out->pdf_w / (CST_PI * s->radius * s->radius);
+    out->direct_pdf = out->pdf_w;
     return !color_is_black(out->li);
 }
 
 static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, Vec3 x, LightLi *out)
 {
     out->delta = true;
-    out->pdf = pmf;
+    out->pmf = pmf;
     out->cos_light = 1.0f;
     out->emit_pdf = pmf * delta_emit_pdf_w(l);
     if (l->type == LIGHT_DIRECTIONAL) {

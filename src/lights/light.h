@@ -144,8 +144,11 @@ typedef struct LightLi {
     Vec3 wi;     /* unit, from x toward the light */
     float dist;  /* |p - x| */
     Color li;      /* area: L_e toward x; point/spot: I(-wi) / dist^2; directional: E */
-    float pdf;   /* area: density of wi per unit solid angle; delta: the selection
-                  * probability (a discrete one: the estimate has no MIS partner) */
+    float pdf_w; /* area, environment: density of wi per unit solid angle, the light's
+                  * selection included; 0 for delta lights */
+    float pmf;   /* delta lights: the probability of picking this light, the whole
+                  * density of the sample (a discrete one: the estimate has no MIS
+                  * partner); 0 for the others. The estimate divides by pmf or pdf_w. */
     bool delta;
     bool finite; /* false for directional lights (no distance falloff) */
     int light;   /* area: emitter index; delta: count + delta light index */

@@ -86,7 +86,8 @@ static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
 {
     if (b->lobe.conductor.alpha == 0.0f) {
         out->wi = mirror_z(wo);
-        out->pdf = 1.0f;
+        out->pmf = 1.0f;
+        out->pdf_w = 0.0f;
         out->weight = fresnel_conductor_rgb(wo.z, b->lobe.conductor.eta, b->lobe.conductor.k);
         out->delta = true;
         return true;
@@ -95,7 +96,8 @@ static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
     Vec3 wi = reflect_about(wo, m);
     if (wi.z <= 0.0f) return false; /* reflected into the surface: lost (single scattering) */
     out->wi = wi;
-    out->pdf = microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha);
+    out->pdf_w = microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha);
+    out->pmf = 0.0f;
     /* f cos_i / pdf = F G2 / G1(wo): D and the Jacobian cancel. */
     float g = ggx_g2(wo, wi, b->lobe.conductor.alpha) / ggx_g1(wo, b->lobe.conductor.alpha);
     out->weight = color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->lobe.conductor.eta, b->lobe.conductor.k), g);
@@ -176,7 +178,8 @@ static bool dielectric_smooth_sample(const Bsdf *b, Vec3 wo, float uc, BsdfTrans
     out->delta = true;
     if (uc < f) {
         out->wi = mirror_z(wo);
-        out->pdf = f;
+        out->pmf = f;
+        out->pdf_w = 0.0f;
         out->weight = b->lobe.dielectric.tint; /* (F / |cos|) |cos| / F */
         return true;
     }
@@ -185,7 +188,8 @@ static bool dielectric_smooth_sample(const Bsdf *b, Vec3 wo, float uc, BsdfTrans
     float etap;
     if (!refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->lobe.dielectric.eta, &wt, &etap)) return false; /* f == 1 under TIR */
     out->wi = v3_normalize(wt);
-    out->pdf = 1.0f - f;
+    out->pmf = 1.0f - f;
+    out->pdf_w = 0.0f;
     /* Radiance is compressed by 1/etap^2 entering a denser medium (Veach thesis sec. 5.2,
      * pbrt-v4 sec. 9.5.2); camera paths carry radiance, so the factor applies to them.
      * Light paths carry flux, which refraction does not compress: the adjoint BTDF lacks
@@ -213,7 +217,8 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
         if (mode == BSDF_RADIANCE) extra = 1.0f / (etap * etap);
     }
     out->wi = wi;
-    out->pdf = dielectric_pdf(b, wo, wi);
+    out->pdf_w = dielectric_pdf(b, wo, wi);
+    out->pmf = 0.0f;
     out->delta = false;
     /* f |cos_i| / pdf = G2 / G1(wo) for both lobes (D, F and the Jacobians cancel), times
      * 1 / etap^2 for radiance through refraction. */
@@ -298,7 +303,8 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
     if (uc < pc) {
         if (b->lobe.plastic.alpha == 0.0f) {
             out->wi = mirror_z(wo);
-            out->pdf = pc;
+            out->pmf = pc;
+            out->pdf_w = 0.0f;
             out->weight = color_s(fresnel_dielectric(wo.z, b->lobe.plastic.eta) / pc);
             out->delta = true;
             return true;
@@ -312,8 +318,9 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
     /* One-sample MIS over the lobes (the mixture pdf), so the weight is f / pdf of the
      * whole non-delta part whichever lobe drew wi. */
     out->wi = wi;
-    out->pdf = plastic_pdf(b, wo, wi);
-    out->weight = color_scale(plastic_eval(b, wo, wi), 1.0f / out->pdf);
+    out->pdf_w = plastic_pdf(b, wo, wi);
+    out->pmf = 0.0f;
+    out->weight = color_scale(plastic_eval(b, wo, wi), 1.0f / out->pdf_w);
     out->delta = false;
     return true;
 }
@@ -449,7 +456,8 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
     case MATERIAL_DIFFUSE:
         if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
         out->wi = warp_cosine_hemisphere(u);
-        out->pdf = out->wi.z * CST_INV_PI;
+        out->pdf_w = out->wi.z * CST_INV_PI;
+        out->pmf = 0.0f;
         out->weight = b->lobe.diffuse.albedo; /* (albedo/pi) |cos| / (|cos|/pi) */
         out->delta = false;
         ok = out->wi.z > 0.0f;
@@ -458,7 +466,8 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         /* Mirrors reflect on both sides unless one-sided. */
         if (wo.z < 0.0f && b->one_sided) return false;
         out->wi = mirror_z(wo);
-        out->pdf = 1.0f;
+        out->pmf = 1.0f;
+        out->pdf_w = 0.0f;
         out->weight = b->lobe.diffuse.albedo;
         out->delta = true;
         ok = true;
@@ -482,7 +491,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
     }
     /* The one place degenerate samples are rejected: no pdf, or a weight that is not a
      * number (e.g. a direction exactly in the tangent plane). */
-    if (!ok || !(out->pdf > 0.0f) || !color_is_finite(out->weight)) return false;
+    if (!ok || !((out->delta ? out->pmf : out->pdf_w) > 0.0f) || !color_is_finite(out->weight)) return false;
     if (flipped) out->wi.z = -out->wi.z;
     const float z_i = out->wi.z;
     out->wi = frame_to_world(&b->frame, out->wi);

@@ -68,11 +68,15 @@ typedef enum BsdfTransport {
 
 typedef struct BsdfSample {
     Vec3 wi;      /* world space */
-    Color weight;   /* f * |cos theta_i| / pdf */
-    /* solid angle; for delta lobes, the discrete probability of the lobe. For a non-delta
-     * sample of a BSDF with delta lobes too, it includes the probability of not taking
-     * them, and equals bsdf_pdf(wo, wi). */
-    float pdf;
+    Color weight; /* f * |cos theta_i| / pdf_w, or the delta lobe's weight / pmf */
+    /* Non-delta samples: density of wi per unit solid angle; for a BSDF with delta lobes
+     * too it includes the probability of not taking them, and equals bsdf_pdf(wo, wi).
+     * 0 for delta samples. */
+    float pdf_w;
+    /* Delta samples: the discrete probability of the lobe taken (glass: F or 1 - F);
+     * 0 for non-delta samples. MIS bookkeeping that treats both alike (SmallVCM's
+     * "pdf") reads delta ? pmf : pdf_w. */
+    float pmf;
     bool delta;
 } BsdfSample;
 
@@ -253,10 +257,11 @@ static inline bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 
     if (z_o == 0.0f || (z_o < 0.0f && b->one_sided)) return false;
     Vec3 wi = warp_cosine_hemisphere(u);
     out->wi = wi;
-    out->pdf = wi.z * CST_INV_PI;
+    out->pdf_w = wi.z * CST_INV_PI;
+    out->pmf = 0.0f;
     out->weight = b->lobe.diffuse.albedo;
     out->delta = false;
-    if (!(wi.z > 0.0f) || !(out->pdf > 0.0f) || !color_is_finite(out->weight)) return false;
+    if (!(wi.z > 0.0f) || !(out->pdf_w > 0.0f) || !color_is_finite(out->weight)) return false;
     if (z_o < 0.0f) wi.z = -wi.z;
     out->wi = frame_to_world(&b->frame, wi);
     return true;

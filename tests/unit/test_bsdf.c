@@ -228,12 +228,12 @@ static ChiResult run_chi2(const Case *c, uint64_t seed)
         /* The sample's own pdf and weight against eval and pdf. */
         double pdf = (double)bsdf_pdf(&b, wo, s.wi);
         Color f = bsdf_eval_transport(&b, wo, s.wi, c->mode);
-        double rp = fabs((double)s.pdf - pdf) / fmax(pdf, 1e-30);
+        double rp = fabs((double)s.pdf_w - pdf) / fmax(pdf, 1e-30);
         double fw[3] = {(double)f.c[0], (double)f.c[1], (double)f.c[2]}, ww[3] = {(double)s.weight.c[0], (double)s.weight.c[1],
                                                                           (double)s.weight.c[2]};
         double rw = 0.0;
         for (int k = 0; k < 3; k++) {
-            double want = fw[k] / (double)s.pdf;
+            double want = fw[k] / (double)s.pdf_w;
             rw = fmax(rw, fabs(ww[k] - want) / fmax(fabs(want), 1e-6));
         }
         res.max_rel_pdf = fmax(res.max_rel_pdf, rp);
@@ -693,8 +693,8 @@ static void test_plain_diffuse_matches_general(void **state)
             bool ok1 = bsdf_sample_transport_general(&b, wo, uc, u, mode, &bs1);
             if (ok != ok1 || (ok && memcmp(&bs, &bs1, sizeof bs) != 0))
                 fail_msg("one_sided %d, wo.z %g: sample %d (%g, %g, %g) against %d (%g, %g, %g)", one_sided,
-                         (double)wo.z, ok, (double)bs.wi.x, (double)bs.wi.y, (double)bs.pdf, ok1, (double)bs1.wi.x,
-                         (double)bs1.wi.y, (double)bs1.pdf);
+                         (double)wo.z, ok, (double)bs.wi.x, (double)bs.wi.y, (double)bs.pdf_w, ok1, (double)bs1.wi.x,
+                         (double)bs1.wi.y, (double)bs1.pdf_w);
         }
         assert_true(checked > 2000);
     }

@@ -117,7 +117,7 @@ static void test_nee_densities(void **state)
         int src = source_of(s, ls.light);
         if (ls.delta) {
             double expect = power[src] / total;
-            assert_true(fabs((double)ls.pdf - expect) <= 1e-5 * expect);
+            assert_true(fabs((double)ls.pmf - expect) <= 1e-5 * expect);
             continue;
         }
         const Emitter *e = &s->emitters[ls.light];
@@ -126,7 +126,7 @@ static void test_nee_densities(void **state)
         double pmf = power[src] / total * (double)e->area / area_src;
         double d2 = (double)ls.dist * (double)ls.dist;
         double expect = pmf / (double)e->area * d2 / (double)ls.cos_light;
-        assert_true(fabs((double)ls.pdf - expect) <= 1e-4 * expect);
+        assert_true(fabs((double)ls.pdf_w - expect) <= 1e-4 * expect);
     }
     for (int i = 0; i < 8; i++) assert_true(seen[i]);
     scene_destroy(s);
