@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/error.h"
 #include "geometry/sphere.h"
 #include "geometry/triangle.h"
@@ -186,7 +187,7 @@ typedef struct Builder {
     KdTree *out;
     uint32_t *ids;        /* leaf lists (scene ids); a leaf node's `first` indexes it until store_leaves */
     int num_ids;
-    int cap_nodes, cap_ids;
+    size_t cap_nodes, cap_ids; /* core/array.h's growth rule */
     bool oom, too_big;
 } Builder;
 
@@ -253,12 +254,9 @@ static int new_node(Builder *b)
 {
     KdTree *t = b->out;
     if (t->num_nodes >= KD_MAX_NODES) { b->too_big = true; return -1; }
-    if (t->num_nodes == b->cap_nodes) {
-        int cap = b->cap_nodes < KD_MAX_NODES / 2 ? 2 * b->cap_nodes : KD_MAX_NODES;
-        KdNode *n = realloc(t->nodes, (size_t)cap * sizeof *n);
-        if (!n) { b->oom = true; return -1; }
-        t->nodes = n;
-        b->cap_nodes = cap;
+    if (!array_grow(&t->nodes, &b->cap_nodes, (size_t)t->num_nodes + 1, sizeof *t->nodes)) {
+        b->oom = true;
+        return -1;
     }
     return t->num_nodes++;
 }
@@ -279,14 +277,9 @@ static void make_leaf(Builder *b, int node, const EventLists *E, int num_prims)
     nd->first = (uint32_t)b->num_ids;
     if (num_prims == 0) return;
     if (num_prims >= (1 << 28) || b->num_ids > INT32_MAX - num_prims) { b->too_big = true; return; }
-    if (b->num_ids + num_prims > b->cap_ids) {
-        long long want = 2LL * b->cap_ids > (long long)b->num_ids + num_prims ? 2LL * b->cap_ids
-                                                                              : (long long)b->num_ids + num_prims;
-        int cap = want > INT32_MAX ? INT32_MAX : (int)want;
-        uint32_t *ids = realloc(b->ids, (size_t)cap * sizeof *ids);
-        if (!ids) { b->oom = true; return; }
-        b->ids = ids;
-        b->cap_ids = cap;
+    if (!array_grow(&b->ids, &b->cap_ids, (size_t)b->num_ids + (size_t)num_prims, sizeof *b->ids)) {
+        b->oom = true;
+        return;
     }
     /* Every primitive has exactly one start or planar event on axis 0. */
     uint32_t *ids = &b->ids[b->num_ids];
@@ -601,8 +594,8 @@ CstStatus kdtree_build(KdTree *t, const AccelGeometry *geom, CstError *err)
     /* pbrt's depth limit, 8 + 1.3 log2 N. */
     int depth = (int)lroundf(8.0f + 1.3f * log2f((float)used));
     t->max_depth = depth < KD_MAX_DEPTH ? depth : KD_MAX_DEPTH;
-    b.cap_nodes = 2 * used + 16;
-    b.cap_ids = 2 * used + 16;
+    b.cap_nodes = 2 * (size_t)used + 16;
+    b.cap_ids = 2 * (size_t)used + 16;
     t->nodes = malloc((size_t)b.cap_nodes * sizeof *t->nodes);
     b.ids = malloc((size_t)b.cap_ids * sizeof *b.ids);
     if (!t->nodes || !b.ids) { free(E.block); goto oom; }
