@@ -82,23 +82,71 @@ static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, Sample
 
 /* The continuation of a subpath at a vertex (wo: back along the subpath; mode: what it
  * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
- * quantities and the next ray. False when the subpath ends here. */
+ * quantities (with an iteration `it`; NULL: none) and the next ray. False when the
+ * subpath ends here. */
 static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const Bsdf *b, const SurfaceHit *sh, Vec3 wo,
                     BsdfTransport mode, int depth, int rr_depth, Sampler *rng, Ray *ray)
 {
     BsdfSample bs;
     float uc = sampler_1d(rng);
     Vec2 u = sampler_2d(rng);
+    /* bsdf_sample_transport rejects samples without a density (bsdf.h): the MIS ratios
+     * below may divide by it. */
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
-    if (!((bs.delta ? bs.pmf : bs.pdf_w) > 0.0f)) return false;
-    float pdf_rev = bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo);
+    sp->specular_only = sp->specular_only && bs.delta;
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);
     if (color_is_black(sp->scatter)) return false;
     if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
-    mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), pdf_rev);
+    if (it) mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo));
     *ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
     return true;
+}
+
+void subpath_emit(const Scene *s, Sampler *rng, EmissionSample *es)
+{
+    float u_sel = sampler_1d(rng);
+    Vec2 u_pos = sampler_2d(rng);
+    Vec2 u_dir = sampler_2d(rng);
+    EmitterGeometry g = scene_emitter_geometry(s);
+    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, es);
+}
+
+bool subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es, SubPath sp, Sampler *rng,
+                        uint64_t *rays)
+{
+    const VcmIteration *it = w->mis;
+    Ray ray = ray_make(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY);
+    for (int bounces = 1;; bounces++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) return true;
+        Vec3 w_prev = v3_neg(ray.d); /* toward the previous vertex, where the light came from */
+        if (it) {
+            float cos_in = fabsf(v3_dot(sh.ng, w_prev));
+            if (!(cos_in > 0.0f)) return true;
+            /* From a directional light the first segment has no distance: its density is
+             * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
+            mis_arrive(&sp, bounces > 1 || es->finite ? sh.t : 1.0f, cos_in);
+        }
+        Bsdf bsdf;
+        scene_bsdf(s, &sh, &bsdf);
+        /* Delta lobes can neither be connected to (f is a Dirac in the direction of the
+         * other vertex) nor hold photons (no density estimate can find their direction). */
+        const bool visit = !bsdf_is_delta(&bsdf);
+        LightVertex v;
+        if (visit) {
+            v = (LightVertex){&sh, &bsdf, w_prev, sp, bounces, {0.0f, 0.0f}};
+            if (w->lens) v.u_lens = sampler_2d(rng);
+        }
+        /* The next direction before the visit, whose camera connection is a chain of
+         * divisions and a shadow ray nothing else waits on: after the sampling it overlaps
+         * the next bounce instead of holding it back. */
+        const bool more = !(w->max_depth > 0 && bounces >= w->max_depth) &&
+                          scatter(s, &sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, w->rr_depth, rng, &ray);
+        if (visit && !w->visit(w->ctx, &v)) return false;
+        if (!more) return true;
+    }
 }
 
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
@@ -129,58 +177,48 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
                color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w));
 }
 
+/* subpath_trace_light's visitor: stores the vertex and makes its t = 1 connection. */
+typedef struct LightSubpathCtx {
+    const Scene *s;
+    const Camera *cam;
+    const VcmParams *vp;
+    const VcmIteration *it;
+    VcmVertexList *verts;
+    SplatList *splats;
+    uint64_t *rays;
+} LightSubpathCtx;
+
+static bool store_and_connect(void *ctx, const LightVertex *lv)
+{
+    const LightSubpathCtx *c = ctx;
+    const SurfaceHit *sh = lv->sh;
+    const SubPath *sp = &lv->sp;
+    VcmVertex v = {sh->p, sh->ng, sh->ns, lv->w_prev, sp->beta, sp->d_vcm, sp->d_vc, sp->d_vm,
+                   sh->material, lv->bounces, sh->uv};
+    push_vertex(c->verts, &v);
+    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, c->splats, c->rays);
+    return true; /* OOM is the list's flag, checked after the step */
+}
+
 void subpath_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
                      Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
-    float u_sel = sampler_1d(rng);
-    Vec2 u_pos = sampler_2d(rng);
-    Vec2 u_dir = sampler_2d(rng);
     EmissionSample es;
-    EmitterGeometry g = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
+    subpath_emit(s, rng, &es);
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
 
     /* tech. rep. eqs. 31-33: the light vertex's NEE density against its emission density;
      * a delta light cannot be hit, so no strategy reaches it by a connection (d_vc = 0). */
-    SubPath sp;
-    sp.beta = es.beta;
-    sp.scatter = color_s(1.0f);
+    SubPath sp = subpath_start(es.beta);
     sp.d_vcm = mis(es.nee_pdf / emission_pdf);
     sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
 
-    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
-    for (int bounces = 1;; bounces++) {
-        SurfaceHit sh;
-        ++*rays;
-        if (!scene_intersect(s, &ray, &sh)) break;
-        Vec3 w_prev = v3_neg(ray.d);
-        float cos_in = fabsf(v3_dot(sh.ng, w_prev));
-        if (!(cos_in > 0.0f)) break;
-        /* From a directional light the first segment has no distance: its density is
-         * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
-        mis_arrive(&sp, bounces > 1 || es.finite ? sh.t : 1.0f, cos_in);
-
-        Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
-        const bool connect = !bsdf_is_delta(&bsdf);
-        VcmVertex v;
-        Vec2 u_lens;
-        if (connect) {
-            v = (VcmVertex){sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
-                            sh.material, bounces, sh.uv};
-            push_vertex(verts, &v);
-            u_lens = sampler_2d(rng);
-        }
-        /* The next direction before this vertex's camera connection, with the random
-         * numbers drawn in the same order (light.c says why). */
-        const bool more = !(vp->max_depth > 0 && bounces >= vp->max_depth) &&
-                          scatter(s, &sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray);
-        if (connect) connect_to_camera(s, cam, vp, it, &v, &bsdf, u_lens, splats, rays);
-        if (!more) break;
-    }
+    LightSubpathCtx c = {s, cam, vp, it, verts, splats, rays};
+    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, store_and_connect, &c};
+    subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
 
 
@@ -277,7 +315,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *v
      * strategy from every weight. */
     SubPath sp = {color_s(1.0f), color_s(1.0f),
                   camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
-                  0.0f, 0.0f};
+                  0.0f, 0.0f, false};
     const VcmVertex *lv = it->vertices + it->path_start[path];
     const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
     const bool has_lights = s->emitter_sampler.lights > 0;
