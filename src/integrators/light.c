@@ -8,7 +8,7 @@
 #include "integrators/light.h"
 
 #include "film/filter.h"
-#include "integrators/subpath.h"
+#include "integrators/subpath_walk.h"
 #include "materials/bsdf.h"
 
 /* What the camera connections of one light path need. */

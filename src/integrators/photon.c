@@ -23,7 +23,7 @@
 #include "core/array.h"
 #include "core/error.h"
 #include "integrators/direct.h"
-#include "integrators/subpath.h"
+#include "integrators/subpath_walk.h"
 #include "materials/bsdf.h"
 
 /* Stream ids: the photon pass and the radius probes draw from (seed, index, id), disjoint

@@ -1,10 +1,10 @@
-/* The subpaths of light-path estimators: the one light subpath walk (light tracing, photon
- * mapping, SPPM, BDPT, VCM; each looks at its vertices through a visitor) and the camera
- * subpath walk of the bidirectional estimators, with the recursive MIS quantities of
- * Georgiev's technical report ("Implementing Vertex Connection and Merging", 2012), the
- * stored light vertices, and the connection strategies (s = 0 emission hits, s = 1 NEE,
- * t = 1 camera connections, vertex connections). BDPT is this module alone (bdpt.c); VCM
- * adds merging (vcm.c) through the camera walk's merge hooks. */
+/* The subpaths of light-path estimators: the state a subpath carries, with the recursive
+ * MIS quantities of Georgiev's technical report ("Implementing Vertex Connection and
+ * Merging", 2012); the stored light vertices; BDPT/VCM's light subpaths and their camera
+ * subpath walk with the connection strategies (s = 0 emission hits, s = 1 NEE, t = 1 camera
+ * connections, vertex connections). The one light subpath walk, which light tracing and
+ * the photon passes share with BDPT/VCM, is subpath_walk.h. BDPT is this module alone
+ * (bdpt.c); VCM adds merging (vcm.c) through the camera walk's merge hooks. */
 #ifndef CST_INTEGRATORS_SUBPATH_H
 #define CST_INTEGRATORS_SUBPATH_H
 
@@ -89,55 +89,6 @@ typedef struct SubPath {
     float d_vcm, d_vc, d_vm; /* MIS quantities: only a walk with a VcmIteration keeps them */
     bool specular_only;  /* every BSDF sample so far took a delta lobe (photon maps' caustics) */
 } SubPath;
-
-/* A light subpath's first state: throughput beta (the emission sample's, or a scaled
- * one), nothing scattered yet, MIS quantities zero (subpath_trace_light sets its own). */
-static inline SubPath subpath_start(Color beta)
-{
-    return (SubPath){beta, color_s(1.0f), 0.0f, 0.0f, 0.0f, true};
-}
-
-/* A non-delta vertex of a light subpath (a BSDF with a non-delta part: one a camera
- * connection or a photon can use), as the walk hands it to its visitor. */
-typedef struct LightVertex {
-    const SurfaceHit *sh;
-    const Bsdf *bsdf;
-    Vec3 w_prev;     /* unit, toward the previous vertex (where the light came from) */
-    SubPath sp;      /* on arrival, before this vertex scatters: beta is the flux reaching it */
-    int bounces;     /* 1 for the first hit after the emitter */
-    Vec2 u_lens;     /* the lens sample drawn for this vertex (LightWalk.lens), else 0 */
-} LightVertex;
-
-/* Called at every non-delta vertex, after the walk has sampled the vertex's continuation
- * (so a camera connection's shadow ray overlaps the next bounce instead of holding it back;
- * the vertex is what it was before scattering). Returns false to stop the walk (OOM). */
-typedef bool (*LightVisit)(void *ctx, const LightVertex *v);
-
-/* How a light subpath is walked. The random numbers a walk draws: per vertex, with `lens`
- * a 2D lens sample if the vertex is non-delta, then (unless max_depth ends the path) the
- * BSDF sample's 1D + 2D, then Russian roulette's 1D from rr_depth on (roulette.h). */
-typedef struct LightWalk {
-    int max_depth;  /* bounces; 0 = unbounded */
-    int rr_depth;   /* first bounce at which Russian roulette may stop the path */
-    const VcmIteration *mis; /* BDPT/VCM: carry the MIS quantities of this iteration (and end
-                              * at a hit at grazing incidence, which their area conversion
-                              * divides by); NULL: none (light tracing, photons) */
-    bool lens;      /* draw LightVertex.u_lens (the estimators that connect to the camera) */
-    LightVisit visit;
-    void *ctx;
-} LightWalk;
-
-/* The emission sample that starts every light subpath: a light by power, a point and a
- * direction on it (emitter_sample_emission), from 1D + 2D + 2D of rng. */
-void subpath_emit(const Scene *s, Sampler *rng, EmissionSample *es);
-
-/* The one light subpath walk: from es with state sp, traces importance-mode BSDF samples
- * (adjoint: light carries flux, refraction does not scale it by 1/eta^2) with Russian
- * roulette (roulette.h), calling w->visit at every non-delta vertex. Adds the rays it
- * traces to *rays. False if the visitor stopped it. */
-bool subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es, SubPath sp, Sampler *rng,
-                        uint64_t *rays);
-
 
 /* Traces one light subpath of BDPT/VCM (subpath_walk_light with MIS): appends its
  * non-delta vertices to *verts and splats its connections to the camera (the t = 1
