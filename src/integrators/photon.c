@@ -23,7 +23,7 @@
 #include "core/array.h"
 #include "core/error.h"
 #include "integrators/direct.h"
-#include "integrators/roulette.h"
+#include "integrators/subpath_walk.h"
 #include "materials/bsdf.h"
 
 /* Stream ids: the photon pass and the radius probes draw from (seed, index, id), disjoint
@@ -38,59 +38,41 @@ static int photon_array_push(PhotonArray *a, const Photon *ph)
     return array_push(a, *ph);
 }
 
+/* photon_walk's visitor: the photon at a vertex, handed to the caller's PhotonVisit. */
+typedef struct PhotonWalkCtx {
+    PhotonVisit visit;
+    void *ctx;
+} PhotonWalkCtx;
+
+static bool photon_at_vertex(void *ctx, const LightVertex *v)
+{
+    const PhotonWalkCtx *c = ctx;
+    Vec3 ng = v->sh->ng;
+    Photon ph;
+    ph.pos = v->sh->p;
+    ph.wi = v->w_prev;
+    ph.power = v->sp.beta;
+    ph.n = v3_dot(ng, v->w_prev) >= 0.0f ? ng : v3_neg(ng);
+    return c->visit(c->ctx, &ph, v->bounces, v->sp.specular_only);
+}
+
 bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVisit visit, void *ctx, uint64_t *rays)
 {
     Sampler rng;
     sampler_start_stream(&rng, pw->seed, index, pw->stream);
-    float u_sel = sampler_1d(&rng);
-    Vec2 u_pos = sampler_2d(&rng);
-    Vec2 u_dir = sampler_2d(&rng);
     EmissionSample es;
-    EmitterGeometry g = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
+    subpath_emit(s, &rng, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return true; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
      * uniform emitter carry the same flux, L_e pi A / N one-sided, L_e 2 pi A / N
-     * two-sided, summing to the emitted power; delta lights likewise (light.c). */
-    Color power = color_scale(es.beta, pw->scale);
-    Color scatter = color_s(1.0f); /* what Russian roulette looks at, as in light.c */
-    bool specular_only = true; /* every bounce so far was a delta lobe */
-    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
-    for (int depth = 1;; depth++) {
-        SurfaceHit sh;
-        ++*rays;
-        if (!scene_intersect(s, &ray, &sh)) break;
-        Vec3 w_prev = v3_neg(ray.d);
-        Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
-        if (!bsdf_is_delta(&bsdf)) {
-            Photon ph;
-            ph.pos = sh.p;
-            ph.wi = w_prev;
-            ph.power = power;
-            ph.n = v3_dot(sh.ng, w_prev) >= 0.0f ? sh.ng : v3_neg(sh.ng);
-            if (!visit(ctx, &ph, depth, specular_only)) return false;
-        }
-        if (pw->max_depth > 0 && depth >= pw->max_depth) break;
-        BsdfSample bs;
-        float uc = sampler_1d(&rng);
-        Vec2 u = sampler_2d(&rng);
-        /* Adjoint sampling: photons carry flux, not radiance (no 1/eta^2 on refraction). */
-        if (!bsdf_sample_transport(&bsdf, w_prev, uc, u, BSDF_IMPORTANCE, &bs)) break;
-        if (!bs.delta) specular_only = false;
-        power = color_mul(power, bs.weight);
-        scatter = color_mul(scatter, bs.weight);
-        if (color_is_black(scatter)) break;
-        /* Russian roulette (Jensen 2001 sec. 5.4 uses absorption probability; this is the
-         * light tracer's rule, so both trace the same paths): unbiased, power scaled by 1/q. */
-        float rr = roulette(&rng, depth, pw->rr_depth, scatter);
-        if (rr == 0.0f) break;
-        power = color_scale(power, rr);
-        scatter = color_scale(scatter, rr);
-        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
-    }
-    return true;
+     * two-sided, summing to the emitted power; delta lights likewise (light.c). The walk
+     * is the light tracer's (subpath.h), so photons and light paths follow the same paths
+     * (Russian roulette by the BSDF weights, not Jensen 2001 sec. 5.4's absorption
+     * probability: unbiased, the power scaled by 1/q). */
+    PhotonWalkCtx c = {visit, ctx};
+    const LightWalk w = {pw->max_depth, pw->rr_depth, NULL, false, photon_at_vertex, &c};
+    return subpath_walk_light(s, &w, &es, subpath_start(color_scale(es.beta, pw->scale)), &rng, rays);
 }
 
 /* The photon maps' store: every non-delta hit to the global map, and L S+ D ones, past

@@ -41,9 +41,9 @@ typedef struct PhotonWalk {
  * Returns false to stop (OOM). */
 typedef bool (*PhotonVisit)(void *ctx, const Photon *ph, int depth, bool specular_only);
 
-/* The one photon path walk (photon maps and SPPM): emission sampling, importance-mode
- * BSDF sampling (photons carry flux), Russian roulette (roulette.h). False if `visit`
- * stopped it. */
+/* The photon path walk of photon maps and SPPM: the light tracer's and BDPT's light
+ * subpath walk (subpath_walk_light: emission sampling, importance-mode BSDF sampling,
+ * photons carry flux, Russian roulette), without lens samples. False if `visit` stopped it. */
 bool photon_walk(const Scene *scene, const PhotonWalk *pw, uint64_t index, PhotonVisit visit, void *ctx,
                  uint64_t *rays);
 

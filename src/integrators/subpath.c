@@ -15,7 +15,7 @@
 
 #include "core/array.h"
 #include "film/filter.h"
-#include "integrators/roulette.h"
+#include "integrators/subpath_walk.h"
 
 void vcm_vertex_list_free(VcmVertexList *l)
 {
@@ -40,65 +40,13 @@ static inline float camera_pdf_w(const VcmIteration *it, float cos_theta)
 }
 
 
-/* After scattering at a vertex into a direction with |cos| cos_out, forward pdf pdf_fwd
- * and reverse pdf pdf_rev (tech. rep. eqs. 34-36; for delta lobes eqs. 53-55, where the
- * forward and reverse discrete probabilities are the same and cancel). The division by
- * the next vertex's distance and cosine happens at the next hit. */
-static inline void mis_scatter(SubPath *sp, const VcmIteration *it, const BsdfSample *bs,
-                               float cos_out, float pdf_rev)
+void subpath_emit(const Scene *s, Sampler *rng, EmissionSample *es)
 {
-    if (bs->delta) {
-        sp->d_vcm = 0.0f;
-        sp->d_vc *= mis(cos_out);
-        sp->d_vm *= mis(cos_out);
-        return;
-    }
-    float g = mis(cos_out / bs->pdf_w);
-    sp->d_vc = g * (sp->d_vc * mis(pdf_rev) + sp->d_vcm + it->mis_vm);
-    sp->d_vm = g * (sp->d_vm * mis(pdf_rev) + sp->d_vcm * it->mis_vc + 1.0f);
-    sp->d_vcm = mis(1.0f / bs->pdf_w);
-}
-
-/* At a hit at distance dist with |cos| cos_in to the incoming direction: completes the
- * area conversion of the previous scattering (tech. rep. eqs. 31-33, 37-38). */
-static inline void mis_arrive(SubPath *sp, float dist, float cos_in)
-{
-    sp->d_vcm *= mis(dist * dist);
-    float inv = 1.0f / mis(cos_in);
-    sp->d_vcm *= inv;
-    sp->d_vc *= inv;
-    sp->d_vm *= inv;
-}
-
-/* Russian roulette (roulette.h) on a subpath's throughputs. False when the path stops. */
-static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, Sampler *rng)
-{
-    float rr = roulette(rng, depth, rr_depth, sp->scatter);
-    if (rr == 0.0f) return false;
-    sp->beta = color_scale(sp->beta, rr);
-    sp->scatter = color_scale(sp->scatter, rr);
-    return true;
-}
-
-/* The continuation of a subpath at a vertex (wo: back along the subpath; mode: what it
- * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
- * quantities and the next ray. False when the subpath ends here. */
-static bool scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const Bsdf *b, const SurfaceHit *sh, Vec3 wo,
-                    BsdfTransport mode, int depth, int rr_depth, Sampler *rng, Ray *ray)
-{
-    BsdfSample bs;
-    float uc = sampler_1d(rng);
-    Vec2 u = sampler_2d(rng);
-    if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
-    if (!((bs.delta ? bs.pmf : bs.pdf_w) > 0.0f)) return false;
-    float pdf_rev = bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo);
-    sp->beta = color_mul(sp->beta, bs.weight);
-    sp->scatter = color_mul(sp->scatter, bs.weight);
-    if (color_is_black(sp->scatter)) return false;
-    if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
-    mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), pdf_rev);
-    *ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
-    return true;
+    float u_sel = sampler_1d(rng);
+    Vec2 u_pos = sampler_2d(rng);
+    Vec2 u_dir = sampler_2d(rng);
+    EmitterGeometry g = scene_emitter_geometry(s);
+    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, es);
 }
 
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
@@ -129,58 +77,48 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
                color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w));
 }
 
+/* subpath_trace_light's visitor: stores the vertex and makes its t = 1 connection. */
+typedef struct LightSubpathCtx {
+    const Scene *s;
+    const Camera *cam;
+    const VcmParams *vp;
+    const VcmIteration *it;
+    VcmVertexList *verts;
+    SplatList *splats;
+    uint64_t *rays;
+} LightSubpathCtx;
+
+static bool store_and_connect(void *ctx, const LightVertex *lv)
+{
+    const LightSubpathCtx *c = ctx;
+    const SurfaceHit *sh = lv->sh;
+    const SubPath *sp = &lv->sp;
+    VcmVertex v = {sh->p, sh->ng, sh->ns, lv->w_prev, sp->beta, sp->d_vcm, sp->d_vc, sp->d_vm,
+                   sh->material, lv->bounces, sh->uv};
+    push_vertex(c->verts, &v);
+    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, c->splats, c->rays);
+    return true; /* OOM is the list's flag, checked after the step */
+}
+
 void subpath_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
                      Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
-    float u_sel = sampler_1d(rng);
-    Vec2 u_pos = sampler_2d(rng);
-    Vec2 u_dir = sampler_2d(rng);
     EmissionSample es;
-    EmitterGeometry g = scene_emitter_geometry(s);
-    emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, &es);
+    subpath_emit(s, rng, &es);
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
 
     /* tech. rep. eqs. 31-33: the light vertex's NEE density against its emission density;
      * a delta light cannot be hit, so no strategy reaches it by a connection (d_vc = 0). */
-    SubPath sp;
-    sp.beta = es.beta;
-    sp.scatter = color_s(1.0f);
+    SubPath sp = subpath_start(es.beta);
     sp.d_vcm = mis(es.nee_pdf / emission_pdf);
     sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
 
-    Ray ray = ray_make(scene_offset(s, es.p, es.n, es.w), es.w, 0.0f, INFINITY);
-    for (int bounces = 1;; bounces++) {
-        SurfaceHit sh;
-        ++*rays;
-        if (!scene_intersect(s, &ray, &sh)) break;
-        Vec3 w_prev = v3_neg(ray.d);
-        float cos_in = fabsf(v3_dot(sh.ng, w_prev));
-        if (!(cos_in > 0.0f)) break;
-        /* From a directional light the first segment has no distance: its density is
-         * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
-        mis_arrive(&sp, bounces > 1 || es.finite ? sh.t : 1.0f, cos_in);
-
-        Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
-        const bool connect = !bsdf_is_delta(&bsdf);
-        VcmVertex v;
-        Vec2 u_lens;
-        if (connect) {
-            v = (VcmVertex){sh.p, sh.ng, sh.ns, w_prev, sp.beta, sp.d_vcm, sp.d_vc, sp.d_vm,
-                            sh.material, bounces, sh.uv};
-            push_vertex(verts, &v);
-            u_lens = sampler_2d(rng);
-        }
-        /* The next direction before this vertex's camera connection, with the random
-         * numbers drawn in the same order (light.c says why). */
-        const bool more = !(vp->max_depth > 0 && bounces >= vp->max_depth) &&
-                          scatter(s, &sp, it, &bsdf, &sh, w_prev, BSDF_IMPORTANCE, bounces, vp->rr_depth, rng, &ray);
-        if (connect) connect_to_camera(s, cam, vp, it, &v, &bsdf, u_lens, splats, rays);
-        if (!more) break;
-    }
+    LightSubpathCtx c = {s, cam, vp, it, verts, splats, rays};
+    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, store_and_connect, &c};
+    subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
 
 
@@ -277,7 +215,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *v
      * strategy from every weight. */
     SubPath sp = {color_s(1.0f), color_s(1.0f),
                   camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
-                  0.0f, 0.0f};
+                  0.0f, 0.0f, false};
     const VcmVertex *lv = it->vertices + it->path_start[path];
     const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
     const bool has_lights = s->emitter_sampler.lights > 0;
@@ -343,7 +281,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *v
             if (merging) L = color_madd(L, sp.beta, merge->merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));
         }
 
-        if (!scatter(s, &sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
+        if (!subpath_scatter(s, &sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
     }
     return L;
 }

@@ -1,9 +1,10 @@
-/* The subpaths of bidirectional estimators (BDPT, VCM): light and camera subpath walks
- * with the recursive MIS quantities of Georgiev's technical report ("Implementing Vertex
- * Connection and Merging", 2012), the stored light vertices, and the connection
- * strategies (s = 0 emission hits, s = 1 NEE, t = 1 camera connections, vertex
- * connections). BDPT is this module alone (bdpt.c); VCM adds merging (vcm.c) through the
- * camera walk's merge hooks. */
+/* The subpaths of light-path estimators: the state a subpath carries, with the recursive
+ * MIS quantities of Georgiev's technical report ("Implementing Vertex Connection and
+ * Merging", 2012); the stored light vertices; BDPT/VCM's light subpaths and their camera
+ * subpath walk with the connection strategies (s = 0 emission hits, s = 1 NEE, t = 1 camera
+ * connections, vertex connections). The one light subpath walk, which light tracing and
+ * the photon passes share with BDPT/VCM, is subpath_walk.h. BDPT is this module alone
+ * (bdpt.c); VCM adds merging (vcm.c) through the camera walk's merge hooks. */
 #ifndef CST_INTEGRATORS_SUBPATH_H
 #define CST_INTEGRATORS_SUBPATH_H
 
@@ -85,13 +86,13 @@ static inline float mis(float x) { return x * x; }
 /* The subpath state between vertices. */
 typedef struct SubPath {
     Color beta, scatter; /* throughput; scatter = product of BSDF weights (roulette's input) */
-    float d_vcm, d_vc, d_vm;
+    float d_vcm, d_vc, d_vm; /* MIS quantities: only a walk with a VcmIteration keeps them */
+    bool specular_only;  /* every BSDF sample so far took a delta lobe (photon maps' caustics) */
 } SubPath;
 
-
-/* Traces one light subpath: appends its non-delta vertices to *verts and splats its
- * connections to the camera (the t = 1 strategies, MIS-weighted) to *splats, per unit
- * film as light_trace() does. */
+/* Traces one light subpath of BDPT/VCM (subpath_walk_light with MIS): appends its
+ * non-delta vertices to *verts and splats its connections to the camera (the t = 1
+ * strategies, MIS-weighted) to *splats, per unit film as light_trace() does. */
 void subpath_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
                      Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays);
 
