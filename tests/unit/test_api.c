@@ -458,6 +458,63 @@ static void test_camera_types(void **state)
     cst_scene_destroy(f.s);
 }
 
+/* The output path and the render settings a scene asks for: set fields replace the scene's,
+ * unset ones leave it, resolve reads them back; bad values fail and change nothing. */
+static void test_output_and_settings(void **state)
+{
+    (void)state;
+    Fixture f = fixture();
+    CstError e;
+    assert_null(cst_scene_output_path(f.s));
+    ok(cst_scene_set_output_path(f.s, "out.exr", &e), &e);
+    assert_string_equal(cst_scene_output_path(f.s), "out.exr");
+    assert_int_equal(cst_scene_set_output_path(f.s, "", &e), CST_ERR_INVALID_ARG);
+    assert_string_equal(cst_scene_output_path(f.s), "out.exr");
+
+    CstRenderSettings rs, got;
+    cst_render_settings_init(&rs);
+    rs.width = 64;
+    rs.spp = 8;
+    rs.max_depth = 0; /* set: unbounded */
+    rs.seed = 42;
+    rs.seed_set = 1;
+    rs.integrator = CST_INTEGRATOR_BDPT;
+    ok(cst_scene_set_render_settings(f.s, &rs, &e), &e);
+    cst_render_settings_init(&rs); /* all unset: nothing changes */
+    rs.height = 32;
+    ok(cst_scene_set_render_settings(f.s, &rs, &e), &e);
+    cst_render_settings_resolve(f.s, NULL, &got);
+    assert_int_equal(got.width, 64);
+    assert_int_equal(got.height, 32);
+    assert_int_equal(got.spp, 8);
+    assert_int_equal(got.max_depth, 0);
+    assert_int_equal((int)got.seed, 42);
+    assert_int_equal(got.integrator, CST_INTEGRATOR_BDPT);
+    assert_int_equal(got.filter, CST_FILTER_BOX); /* never set: the default */
+
+    static const char *const words[] = {"spp", "threads", "integrator", "crop", "photon_radius", "aovs"};
+    for (int k = 0; k < 6; k++) {
+        cst_render_settings_init(&rs);
+        if (k == 0) rs.spp = -3;
+        if (k == 1) rs.threads = 4;
+        if (k == 2) rs.integrator = (CstIntegrator)99;
+        if (k == 3) { rs.crop[0] = 10; rs.crop[1] = 5; rs.crop[2] = 0; rs.crop[3] = 4; }
+        if (k == 4) rs.photon_radius = -1.0;
+        if (k == 5) rs.aovs = 64;
+        assert_int_equal(cst_scene_set_render_settings(f.s, &rs, &e), CST_ERR_INVALID_ARG);
+        if (!strstr(e.msg, words[k])) fail_msg("message \"%s\" does not mention \"%s\"", e.msg, words[k]);
+    }
+    cst_render_settings_resolve(f.s, NULL, &got);
+    assert_int_equal(got.spp, 8);
+    assert_int_equal(got.integrator, CST_INTEGRATOR_BDPT);
+    assert_int_equal(cst_scene_set_render_settings(f.s, NULL, &e), CST_ERR_INVALID_ARG);
+    ok(cst_scene_commit(f.s, &e), &e);
+    cst_render_settings_init(&rs);
+    assert_int_equal(cst_scene_set_render_settings(f.s, &rs, &e), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_scene_set_output_path(f.s, "x.png", &e), CST_ERR_INVALID_ARG);
+    cst_scene_destroy(f.s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -467,6 +524,7 @@ int main(void)
         cmocka_unit_test(test_rejects_other_input),
         cmocka_unit_test(test_camera_types),
         cmocka_unit_test(test_film_bulk),
+        cmocka_unit_test(test_output_and_settings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
