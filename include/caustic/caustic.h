@@ -211,6 +211,11 @@ typedef struct CstMeshDesc {
     CstEmission emission;    /* zero: not an emitter */
     int skip_degenerate;     /* 1: drop zero-area triangles (counted in *num_dropped) instead
                               * of failing */
+    const int *triangle_materials; /* optional: num_triangles material ids, one per triangle,
+                                    * used instead of material (mesh files with several) */
+    int normals_unit;        /* 1: normals are already unit length, or zero where a vertex has
+                              * none (its triangles shade with the geometric normal); stored
+                              * as given instead of normalised */
 } CstMeshDesc;
 
 /* num_dropped may be NULL. */

@@ -247,6 +247,7 @@ typedef struct MeshArrays {
     Vec3 *pos, *nrm;
     Vec2 *uv;
     int *idx;
+    int normals_partial; /* some normals are zero (normals_unit) */
 } MeshArrays;
 
 static CstStatus gather_mesh(const CstMeshDesc *d, MeshArrays *a, CstError *err)
@@ -276,11 +277,19 @@ static CstStatus gather_mesh(const CstMeshDesc *d, MeshArrays *a, CstError *err)
             float n[3];
             fetch(d->normals, ns, i, 3, n);
             Vec3 v = v3(n[0], n[1], n[2]);
-            if (!v3_is_finite(v) || !(v3_max_abs(v) > 0.0f))
+            if (d->normals_unit) {
+                float l2 = v3_length2(v);
+                if (!(l2 == 0.0f || fabsf(l2 - 1.0f) <= 1e-3f))
+                    return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normal of vertex %d (%g, %g, %g) is neither "
+                                    "unit length nor zero, as normals_unit = 1 requires", fn, i,
+                                    (double)n[0], (double)n[1], (double)n[2]);
+                a->nrm[i] = v;
+                a->normals_partial |= l2 == 0.0f;
+            } else if (!v3_is_finite(v) || !(v3_max_abs(v) > 0.0f))
                 return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normal of vertex %d (%g, %g, %g) is zero or not "
                                 "finite; expected a nonzero vector", fn, i, (double)n[0], (double)n[1], (double)n[2]);
-            /* Scaled first, as the JSON loader does, so tiny or huge normals normalise. */
-            a->nrm[i] = v3_normalize(v3_scale(v, 1.0f / v3_max_abs(v)));
+            else /* scaled first, so tiny or huge normals normalise */
+                a->nrm[i] = v3_normalize(v3_scale(v, 1.0f / v3_max_abs(v)));
         }
         if (d->uvs) {
             float t[2];
@@ -319,11 +328,17 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
     if (d->num_triangles > INT32_MAX / 3)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d triangles; expected fewer than %d", fn,
                         d->num_triangles, INT32_MAX / 3);
-    if (d->material < 0 || d->material >= scene->num_materials)
+    if (!d->triangle_materials && (d->material < 0 || d->material >= scene->num_materials))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
                         fn, d->material, scene->num_materials - 1);
+    for (int t = 0; d->triangle_materials && t < d->num_triangles; t++)
+        if (d->triangle_materials[t] < 0 || d->triangle_materials[t] >= scene->num_materials)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: triangle_materials[%d] = %d is not a material of this "
+                            "scene; expected 0 to %d", fn, t, d->triangle_materials[t], scene->num_materials - 1);
     if (d->skip_degenerate != 0 && d->skip_degenerate != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: skip_degenerate %d; expected 0 or 1", fn, d->skip_degenerate);
+    if (d->normals_unit != 0 && d->normals_unit != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normals_unit %d; expected 0 or 1", fn, d->normals_unit);
     Emission em;
     if ((st = read_emission(scene, &d->emission, fn, &em, err)) != CST_OK) return st;
     MeshArrays a = {0};
@@ -346,10 +361,12 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
         sm.positions = a.pos;
         sm.num_vertices = d->num_vertices;
         sm.normals = a.nrm;
+        sm.normals_partial = a.normals_partial;
         sm.uvs = a.uv;
         sm.indices = a.idx;
         sm.num_triangles = d->num_triangles;
         sm.material = d->material;
+        sm.tri_material = d->triangle_materials;
         sm.emission = &em;
         sm.skip_degenerate = d->skip_degenerate;
         st = scene_add_mesh_ex(scene, &sm, num_dropped, err);

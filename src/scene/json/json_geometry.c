@@ -491,9 +491,7 @@ static CstStatus file_materials(Loader *ld, const ImportedMesh *im, int *tri_ids
             m.type = (MaterialType)fm->type;
             m.albedo = fm->albedo;
             m.ior = fm->ior;
-            st = scene_add_material(ld->scene, &m, id, ld->err);
-            if (st != CST_OK)
-                st = json_fail_builder(ld, st);
+            st = json_add_material(ld, &m, id);
         }
         tri_ids[t] = *id;
     }
@@ -556,21 +554,25 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
         if (st != CST_OK)
             goto done;
     }
-    SceneMesh sm = {0};
-    sm.positions = im.positions;
-    sm.num_vertices = im.num_vertices;
-    sm.normals = flat ? NULL : im.normals;
-    sm.uvs = im.uvs;
-    sm.normals_partial = !flat && im.normals_partial;
-    sm.uvs_partial = im.uvs_partial;
-    sm.indices = im.indices;
-    sm.num_triangles = im.num_triangles;
-    sm.material = material;
-    sm.tri_material = tri_ids;
-    sm.emission = em;
-    sm.skip_degenerate = 1; /* scanned meshes have some; documented in scene-format.md */
+    /* mesh_import's normals are unit (transform_normal) or zero where a mesh has none. */
+    CstMeshDesc mesh = {0};
+    mesh.positions = im.positions;
+    mesh.position_stride = sizeof(Vec3);
+    mesh.num_vertices = im.num_vertices;
+    mesh.normals = flat ? NULL : im.normals;
+    mesh.normal_stride = sizeof(Vec3);
+    mesh.normals_unit = 1;
+    mesh.uvs = im.uvs;
+    mesh.uv_stride = sizeof(Vec2);
+    mesh.indices = im.indices;
+    mesh.index_stride = 3 * sizeof(int32_t);
+    mesh.num_triangles = im.num_triangles;
+    mesh.material = material;
+    mesh.triangle_materials = tri_ids;
+    mesh.emission = emission_desc(em);
+    mesh.skip_degenerate = 1; /* scanned meshes have some; documented in scene-format.md */
     int dropped = 0;
-    st = scene_add_mesh_ex(ld->scene, &sm, &dropped, ld->err);
+    st = cst_scene_add_mesh(ld->scene, &mesh, &dropped, ld->err);
     if (st != CST_OK) {
         st = json_fail_builder(ld, st);
     } else if (dropped == im.num_triangles) {
