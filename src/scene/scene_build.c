@@ -146,6 +146,25 @@ void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
     d->two_sided = 1;
 }
 
+void scene_material_desc(const Material *m, CstMaterialDesc *d)
+{
+    static const CstMaterialType types[] = {
+        [MATERIAL_DIFFUSE] = CST_MATERIAL_DIFFUSE, [MATERIAL_MIRROR] = CST_MATERIAL_MIRROR,
+        [MATERIAL_GLASS] = CST_MATERIAL_GLASS, [MATERIAL_CONDUCTOR] = CST_MATERIAL_CONDUCTOR,
+        [MATERIAL_DIELECTRIC] = CST_MATERIAL_DIELECTRIC, [MATERIAL_PLASTIC] = CST_MATERIAL_PLASTIC};
+    cst_material_desc_init(d, types[m->type]);
+    for (int k = 0; k < 3; k++) {
+        d->albedo[k] = color_channel(m->albedo, k);
+        d->eta[k] = color_channel(m->eta, k);
+        d->k[k] = color_channel(m->k, k);
+    }
+    d->albedo_texture = m->albedo_texture;
+    d->ior = m->ior;
+    d->roughness = m->roughness;
+    d->roughness_texture = m->roughness_texture;
+    d->two_sided = !m->one_sided;
+}
+
 /* A texture standing for a reflectance or a roughness: its values must stay within 1. */
 static CstStatus check_unit_texture(const Scene *s, int id, const char *what, CstError *err)
 {

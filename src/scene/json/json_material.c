@@ -129,20 +129,8 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
  * public ones) through the public builder. Fails at the current path. */
 CstStatus json_add_material(Loader *ld, const Material *m, int *out_id)
 {
-    static const CstMaterialType types[] = {
-        [MATERIAL_DIFFUSE] = CST_MATERIAL_DIFFUSE, [MATERIAL_MIRROR] = CST_MATERIAL_MIRROR,
-        [MATERIAL_GLASS] = CST_MATERIAL_GLASS, [MATERIAL_CONDUCTOR] = CST_MATERIAL_CONDUCTOR,
-        [MATERIAL_DIELECTRIC] = CST_MATERIAL_DIELECTRIC, [MATERIAL_PLASTIC] = CST_MATERIAL_PLASTIC};
     CstMaterialDesc d;
-    cst_material_desc_init(&d, types[m->type]);
-    json_color_floats(m->albedo, d.albedo);
-    d.albedo_texture = m->albedo_texture;
-    d.ior = m->ior;
-    d.roughness = m->roughness;
-    d.roughness_texture = m->roughness_texture;
-    json_color_floats(m->eta, d.eta);
-    json_color_floats(m->k, d.k);
-    d.two_sided = !m->one_sided;
+    scene_material_desc(m, &d);
     CstStatus st = cst_scene_add_material(ld->scene, &d, out_id, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }

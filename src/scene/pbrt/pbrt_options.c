@@ -36,7 +36,7 @@ CstStatus pbrt_film_directive(Loader *ld, NamedCall *call)
     rs->width = w;
     rs->height = h;
     if (file && image_path_is_scene_output(file)) {
-        TRY(scene_set_output_path(ld->scene, file, ld->err));
+        TRY(cst_scene_set_output_path(ld->scene, file, ld->err));
     } else if (file) {
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: output \"%s\" is not .png, .exr or .pfm; "
                      "ignored (the default output name is used)", d, pbrt_clip(file, nm));
