@@ -211,6 +211,11 @@ typedef struct CstMeshDesc {
     CstEmission emission;    /* zero: not an emitter */
     int skip_degenerate;     /* 1: drop zero-area triangles (counted in *num_dropped) instead
                               * of failing */
+    const int *triangle_materials; /* optional: num_triangles material ids, one per triangle,
+                                    * used instead of material (mesh files with several) */
+    int normals_unit;        /* 1: normals are already unit length, or zero where a vertex has
+                              * none (its triangles shade with the geometric normal); stored
+                              * as given instead of normalised */
 } CstMeshDesc;
 
 /* num_dropped may be NULL. */
@@ -265,6 +270,9 @@ typedef struct CstCameraDesc {
 } CstCameraDesc;
 
 CST_API CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *desc, CstError *err);
+/* The file the scene asks its render to be written to (cst_scene_output_path reads it
+ * back); a non-empty path, copied; replaces one set before. */
+CST_API CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err);
 /* Builds the acceleration structure and the light distribution; after it the scene can
  * be rendered and accepts no more additions. */
 CST_API CstStatus cst_scene_commit(CstScene *scene, CstError *err);
@@ -403,6 +411,14 @@ CST_API void cst_render_settings_init(CstRenderSettings *settings);
  * core count; crop: the whole image as [0, width) x [0, height)). */
 CST_API void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings *in,
                                  CstRenderSettings *out);
+
+/* The render settings the scene asks for, as a scene file's film and integrator sections
+ * do: every set field of `settings` (the rules above) replaces the scene's value, unset
+ * fields leave it, and cst_render_settings_resolve takes them for fields its caller leaves
+ * unset. threads, progress and progress_user are not the scene's and must stay unset.
+ * Before cst_scene_commit; fails on values out of range, leaving the scene as it was. */
+CST_API CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings *settings,
+                                                CstError *err);
 
 typedef struct CstRenderStats {
     double seconds;           /* wall time of the render proper (not scene loading) */

@@ -89,6 +89,9 @@ void scene_destroy(Scene *scene);
 CstStatus scene_add_texture(Scene *scene, const Texture *t, int *out_id, CstError *err);
 /* The material's textures must already be in the scene. */
 CstStatus scene_add_material(Scene *scene, const Material *m, int *out_id, CstError *err);
+/* The public description of a loader's Material (its texture ids are 1-based, as the
+ * public ones), for cst_scene_add_material: the same material, bit for bit. */
+void scene_material_desc(const Material *m, CstMaterialDesc *d);
 /* Indices are 3 per triangle into positions; all must be in range and the triangles
  * non-degenerate (callers that know file locations check first for better messages).
  * emission may be NULL. */

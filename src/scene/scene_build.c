@@ -146,6 +146,25 @@ void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
     d->two_sided = 1;
 }
 
+void scene_material_desc(const Material *m, CstMaterialDesc *d)
+{
+    static const CstMaterialType types[] = {
+        [MATERIAL_DIFFUSE] = CST_MATERIAL_DIFFUSE, [MATERIAL_MIRROR] = CST_MATERIAL_MIRROR,
+        [MATERIAL_GLASS] = CST_MATERIAL_GLASS, [MATERIAL_CONDUCTOR] = CST_MATERIAL_CONDUCTOR,
+        [MATERIAL_DIELECTRIC] = CST_MATERIAL_DIELECTRIC, [MATERIAL_PLASTIC] = CST_MATERIAL_PLASTIC};
+    cst_material_desc_init(d, types[m->type]);
+    for (int k = 0; k < 3; k++) {
+        d->albedo[k] = color_channel(m->albedo, k);
+        d->eta[k] = color_channel(m->eta, k);
+        d->k[k] = color_channel(m->k, k);
+    }
+    d->albedo_texture = m->albedo_texture;
+    d->ior = m->ior;
+    d->roughness = m->roughness;
+    d->roughness_texture = m->roughness_texture;
+    d->two_sided = !m->one_sided;
+}
+
 /* A texture standing for a reflectance or a roughness: its values must stay within 1. */
 static CstStatus check_unit_texture(const Scene *s, int id, const char *what, CstError *err)
 {
@@ -247,6 +266,7 @@ typedef struct MeshArrays {
     Vec3 *pos, *nrm;
     Vec2 *uv;
     int *idx;
+    int normals_partial; /* some normals are zero (normals_unit) */
 } MeshArrays;
 
 static CstStatus gather_mesh(const CstMeshDesc *d, MeshArrays *a, CstError *err)
@@ -276,11 +296,19 @@ static CstStatus gather_mesh(const CstMeshDesc *d, MeshArrays *a, CstError *err)
             float n[3];
             fetch(d->normals, ns, i, 3, n);
             Vec3 v = v3(n[0], n[1], n[2]);
-            if (!v3_is_finite(v) || !(v3_max_abs(v) > 0.0f))
+            if (d->normals_unit) {
+                float l2 = v3_length2(v);
+                if (!(l2 == 0.0f || fabsf(l2 - 1.0f) <= 1e-3f))
+                    return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normal of vertex %d (%g, %g, %g) is neither "
+                                    "unit length nor zero, as normals_unit = 1 requires", fn, i,
+                                    (double)n[0], (double)n[1], (double)n[2]);
+                a->nrm[i] = v;
+                a->normals_partial |= l2 == 0.0f;
+            } else if (!v3_is_finite(v) || !(v3_max_abs(v) > 0.0f))
                 return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normal of vertex %d (%g, %g, %g) is zero or not "
                                 "finite; expected a nonzero vector", fn, i, (double)n[0], (double)n[1], (double)n[2]);
-            /* Scaled first, as the JSON loader does, so tiny or huge normals normalise. */
-            a->nrm[i] = v3_normalize(v3_scale(v, 1.0f / v3_max_abs(v)));
+            else /* scaled first, so tiny or huge normals normalise */
+                a->nrm[i] = v3_normalize(v3_scale(v, 1.0f / v3_max_abs(v)));
         }
         if (d->uvs) {
             float t[2];
@@ -319,11 +347,17 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
     if (d->num_triangles > INT32_MAX / 3)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d triangles; expected fewer than %d", fn,
                         d->num_triangles, INT32_MAX / 3);
-    if (d->material < 0 || d->material >= scene->num_materials)
+    if (!d->triangle_materials && (d->material < 0 || d->material >= scene->num_materials))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
                         fn, d->material, scene->num_materials - 1);
+    for (int t = 0; d->triangle_materials && t < d->num_triangles; t++)
+        if (d->triangle_materials[t] < 0 || d->triangle_materials[t] >= scene->num_materials)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: triangle_materials[%d] = %d is not a material of this "
+                            "scene; expected 0 to %d", fn, t, d->triangle_materials[t], scene->num_materials - 1);
     if (d->skip_degenerate != 0 && d->skip_degenerate != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: skip_degenerate %d; expected 0 or 1", fn, d->skip_degenerate);
+    if (d->normals_unit != 0 && d->normals_unit != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normals_unit %d; expected 0 or 1", fn, d->normals_unit);
     Emission em;
     if ((st = read_emission(scene, &d->emission, fn, &em, err)) != CST_OK) return st;
     MeshArrays a = {0};
@@ -346,10 +380,12 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
         sm.positions = a.pos;
         sm.num_vertices = d->num_vertices;
         sm.normals = a.nrm;
+        sm.normals_partial = a.normals_partial;
         sm.uvs = a.uv;
         sm.indices = a.idx;
         sm.num_triangles = d->num_triangles;
         sm.material = d->material;
+        sm.tri_material = d->triangle_materials;
         sm.emission = &em;
         sm.skip_degenerate = d->skip_degenerate;
         st = scene_add_mesh_ex(scene, &sm, num_dropped, err);
@@ -518,6 +554,90 @@ CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *d, CstError
     scene_set_camera(scene, &c);
     return CST_OK;
 }
+
+CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_output_path";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!path || !path[0]) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: path is NULL or empty", fn);
+    return scene_set_output_path(scene, path, err);
+}
+
+/* ------------------------------------------------------------------ render settings */
+
+/* cst_render_settings_resolve's rule: a field holds a value unless it is CST_UNSET or, where
+ * 0 means nothing, 0. */
+static int setting_set(double v, int zero_unset) { return v != CST_UNSET && !(zero_unset && v == 0.0); }
+
+static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_render_settings";
+    if (setting_set(r->threads, 0) || r->progress || r->progress_user)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: threads, progress and progress_user belong to a render, "
+                        "not to a scene; expected them unset (cst_render_settings_init)", fn);
+    const int ints[] = {r->width, r->height, r->spp, r->rr_depth, r->photons};
+    static const char *const names[] = {"width", "height", "spp", "rr_depth", "photons"};
+    for (int k = 0; k < 5; k++)
+        if (setting_set(ints[k], 1) && ints[k] < 1)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s %d; expected > 0", fn, names[k], ints[k]);
+    if (setting_set(r->max_depth, 0) && r->max_depth < 0)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: max_depth %d; expected >= 0 (0 = unbounded)", fn, r->max_depth);
+    if (setting_set(r->time_limit, 0) && !(r->time_limit >= 0.0 && isfinite(r->time_limit)))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: time_limit %g; expected seconds >= 0 (0 = none)", fn, r->time_limit);
+    if (setting_set(r->photon_radius, 1) && !(r->photon_radius > 0.0 && isfinite(r->photon_radius)))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: photon_radius %g; expected a radius > 0", fn, r->photon_radius);
+    if (r->exposure_set && !isfinite(r->exposure))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: exposure %g; expected a finite number of stops", fn, r->exposure);
+    if ((int)r->integrator < CST_INTEGRATOR_DEFAULT || r->integrator > CST_INTEGRATOR_VCM ||
+        (int)r->filter < CST_FILTER_DEFAULT || r->filter > CST_FILTER_MITCHELL ||
+        (int)r->sampler < CST_SAMPLER_DEFAULT || r->sampler > CST_SAMPLER_SOBOL)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: integrator %d, filter %d or sampler %d is not one of the "
+                        "CstIntegrator, CstFilter or CstSampler values", fn, (int)r->integrator, (int)r->filter,
+                        (int)r->sampler);
+    if (setting_set(r->png_linear, 0) && r->png_linear != 0 && r->png_linear != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: png_linear %d; expected 0 or 1", fn, r->png_linear);
+    if (setting_set(r->aovs, 0) && (r->aovs & ~(CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH | CST_AOV_VARIANCE)))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: aovs 0x%x holds bits other than CST_AOV_*", fn, (unsigned)r->aovs);
+    if (r->crop[0] != CST_UNSET && (r->crop[0] | r->crop[1] | r->crop[2] | r->crop[3]) &&
+        !(r->crop[0] >= 0 && r->crop[2] >= 0 && r->crop[0] < r->crop[1] && r->crop[2] < r->crop[3]))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: crop [%d, %d, %d, %d]; expected 0 <= x0 < x1 and "
+                        "0 <= y0 < y1 (or all zero)", fn, r->crop[0], r->crop[1], r->crop[2], r->crop[3]);
+    return CST_OK;
+}
+
+#define SETTING_MERGE(field, zero_unset) \
+    if (setting_set(r->field, zero_unset)) sc->field = r->field
+
+CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings *r, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_render_settings";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!r) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: settings is NULL", fn);
+    if ((st = check_settings(r, err)) != CST_OK) return st;
+    CstRenderSettings *sc = &scene->settings;
+    SETTING_MERGE(width, 1);
+    SETTING_MERGE(height, 1);
+    SETTING_MERGE(spp, 1);
+    SETTING_MERGE(time_limit, 0);
+    SETTING_MERGE(integrator, 1);
+    SETTING_MERGE(filter, 1);
+    SETTING_MERGE(max_depth, 0);
+    SETTING_MERGE(rr_depth, 1);
+    SETTING_MERGE(photons, 1);
+    SETTING_MERGE(photon_radius, 1);
+    SETTING_MERGE(sampler, 1);
+    SETTING_MERGE(png_linear, 0);
+    SETTING_MERGE(aovs, 0);
+    if (r->seed_set) { sc->seed = r->seed; sc->seed_set = 1; }
+    if (r->exposure_set) { sc->exposure = r->exposure; sc->exposure_set = 1; }
+    if (r->crop[0] != CST_UNSET) memcpy(sc->crop, r->crop, sizeof sc->crop);
+    return CST_OK;
+}
+#undef SETTING_MERGE
 
 CstStatus cst_scene_commit(CstScene *scene, CstError *err)
 {

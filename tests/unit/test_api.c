@@ -458,6 +458,112 @@ static void test_camera_types(void **state)
     cst_scene_destroy(f.s);
 }
 
+/* The output path and the render settings a scene asks for: set fields replace the scene's,
+ * unset ones leave it, resolve reads them back; bad values fail and change nothing. */
+static void test_output_and_settings(void **state)
+{
+    (void)state;
+    Fixture f = fixture();
+    CstError e;
+    assert_null(cst_scene_output_path(f.s));
+    ok(cst_scene_set_output_path(f.s, "out.exr", &e), &e);
+    assert_string_equal(cst_scene_output_path(f.s), "out.exr");
+    assert_int_equal(cst_scene_set_output_path(f.s, "", &e), CST_ERR_INVALID_ARG);
+    assert_string_equal(cst_scene_output_path(f.s), "out.exr");
+
+    CstRenderSettings rs, got;
+    cst_render_settings_init(&rs);
+    rs.width = 64;
+    rs.spp = 8;
+    rs.max_depth = 0; /* set: unbounded */
+    rs.seed = 42;
+    rs.seed_set = 1;
+    rs.integrator = CST_INTEGRATOR_BDPT;
+    ok(cst_scene_set_render_settings(f.s, &rs, &e), &e);
+    cst_render_settings_init(&rs); /* all unset: nothing changes */
+    rs.height = 32;
+    ok(cst_scene_set_render_settings(f.s, &rs, &e), &e);
+    cst_render_settings_resolve(f.s, NULL, &got);
+    assert_int_equal(got.width, 64);
+    assert_int_equal(got.height, 32);
+    assert_int_equal(got.spp, 8);
+    assert_int_equal(got.max_depth, 0);
+    assert_int_equal((int)got.seed, 42);
+    assert_int_equal(got.integrator, CST_INTEGRATOR_BDPT);
+    assert_int_equal(got.filter, CST_FILTER_BOX); /* never set: the default */
+
+    static const char *const words[] = {"spp", "threads", "integrator", "crop", "photon_radius", "aovs"};
+    for (int k = 0; k < 6; k++) {
+        cst_render_settings_init(&rs);
+        if (k == 0) rs.spp = -3;
+        if (k == 1) rs.threads = 4;
+        if (k == 2) rs.integrator = (CstIntegrator)99;
+        if (k == 3) { rs.crop[0] = 10; rs.crop[1] = 5; rs.crop[2] = 0; rs.crop[3] = 4; }
+        if (k == 4) rs.photon_radius = -1.0;
+        if (k == 5) rs.aovs = 64;
+        assert_int_equal(cst_scene_set_render_settings(f.s, &rs, &e), CST_ERR_INVALID_ARG);
+        if (!strstr(e.msg, words[k])) fail_msg("message \"%s\" does not mention \"%s\"", e.msg, words[k]);
+    }
+    cst_render_settings_resolve(f.s, NULL, &got);
+    assert_int_equal(got.spp, 8);
+    assert_int_equal(got.integrator, CST_INTEGRATOR_BDPT);
+    assert_int_equal(cst_scene_set_render_settings(f.s, NULL, &e), CST_ERR_INVALID_ARG);
+    ok(cst_scene_commit(f.s, &e), &e);
+    cst_render_settings_init(&rs);
+    assert_int_equal(cst_scene_set_render_settings(f.s, &rs, &e), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_scene_set_output_path(f.s, "x.png", &e), CST_ERR_INVALID_ARG);
+    cst_scene_destroy(f.s);
+}
+
+/* A mesh with a material per triangle and normals stored as given (unit, or zero for a
+ * vertex without one); ids out of range and non-unit normals fail and change nothing. */
+static void test_mesh_materials_and_unit_normals(void **state)
+{
+    (void)state;
+    Fixture f = fixture();
+    CstError e;
+    CstMaterialDesc md;
+    int mat2 = 0;
+    cst_material_desc_init(&md, CST_MATERIAL_MIRROR);
+    ok(cst_scene_add_material(f.s, &md, &mat2, &e), &e);
+    static const float pos[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    /* 0.6, 0.8 is not exactly unit in float: stored as given, not renormalised */
+    static const float nrm[4][3] = {{0, 0, 1}, {0.6f, 0, 0.8f}, {0, 0, 0}, {0, 0, 1}};
+    static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    int tri_mats[2] = {mat2, f.mat};
+    CstMeshDesc d = {0};
+    d.positions = pos;
+    d.num_vertices = 4;
+    d.normals = nrm;
+    d.normals_unit = 1;
+    d.indices = idx;
+    d.num_triangles = 2;
+    d.material = -1; /* unused with triangle_materials */
+    d.triangle_materials = tri_mats;
+
+    tri_mats[1] = 7;
+    expect_invalid(&f, cst_scene_add_mesh(f.s, &d, NULL, &e), &e, "triangle_materials[1]");
+    tri_mats[1] = f.mat;
+    float bad[4][3];
+    memcpy(bad, nrm, sizeof bad);
+    bad[3][2] = 2.0f;
+    d.normals = bad;
+    expect_invalid(&f, cst_scene_add_mesh(f.s, &d, NULL, &e), &e, "normals_unit");
+    d.normals = nrm;
+    d.normals_unit = 2;
+    expect_invalid(&f, cst_scene_add_mesh(f.s, &d, NULL, &e), &e, "normals_unit");
+    d.normals_unit = 1;
+
+    ok(cst_scene_add_mesh(f.s, &d, NULL, &e), &e);
+    assert_int_equal(f.s->num_triangles, 2);
+    assert_int_equal(f.s->tri_info[0].material, mat2);
+    assert_int_equal(f.s->tri_info[1].material, f.mat);
+    assert_true(f.s->normals[1].x == 0.6f && f.s->normals[1].z == 0.8f);
+    assert_true(f.s->normals[2].x == 0.0f && f.s->normals[2].y == 0.0f && f.s->normals[2].z == 0.0f);
+    assert_int_equal(f.s->normals_partial, 1);
+    cst_scene_destroy(f.s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -467,6 +573,8 @@ int main(void)
         cmocka_unit_test(test_rejects_other_input),
         cmocka_unit_test(test_camera_types),
         cmocka_unit_test(test_film_bulk),
+        cmocka_unit_test(test_output_and_settings),
+        cmocka_unit_test(test_mesh_materials_and_unit_normals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

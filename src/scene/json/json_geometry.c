@@ -14,6 +14,11 @@
 #include "scene/json/json_material.h"
 #include "scene/mesh_import.h"
 
+/* parse_mesh hands its Vec3/Vec2/int arrays to cst_scene_add_mesh as packed floats and
+ * uint32_t indices. */
+_Static_assert(sizeof(Vec3) == 3 * sizeof(float) && sizeof(Vec2) == 2 * sizeof(float) &&
+               sizeof(int) == sizeof(uint32_t), "packed vertex arrays");
+
 /* A quad's fourth vertex may lie this fraction of the quad's longer diagonal off the plane
  * of the other three. The measured Cornell box data is off by 0.41% (the left wall: the
  * room was surveyed, not modelled), so 1% passes it while a visibly bent quad fails. */
@@ -28,6 +33,15 @@ static int triangle_ok(Vec3 a, Vec3 b, Vec3 c)
 {
     float area = triangle_area(a, b, c);
     return area > 0.0f && isfinite(area);
+}
+
+static CstEmission emission_desc(const Emission *em)
+{
+    CstEmission e = {{0.0f, 0.0f, 0.0f}, 0, 0};
+    json_color_floats(em->radiance, e.radiance);
+    e.texture = em->texture;
+    e.two_sided = em->two_sided;
+    return e;
 }
 
 static CstStatus parse_quad(Loader *ld, const json_t *shape, int material, const Emission *em)
@@ -80,7 +94,20 @@ static CstStatus parse_quad(Loader *ld, const json_t *shape, int material, const
                                   "than %g, 1%% of its longer diagonal); expected 4 coplanar vertices",
                               off, tol);
     json_path_pop(ld);
-    CstStatus st = scene_add_quad(ld->scene, v, material, em, ld->err);
+    /* Two triangles (v0, v1, v2), (v0, v2, v3) with uvs (0,0), (1,0), (1,1), (0,1). */
+    static const uint32_t quad_idx[6] = {0, 1, 2, 0, 2, 3};
+    static const float quad_uv[8] = {0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f};
+    float pos[4][3];
+    for (int k = 0; k < 4; k++) json_vec3_floats(v[k], pos[k]);
+    CstMeshDesc mesh = {0};
+    mesh.positions = pos;
+    mesh.num_vertices = 4;
+    mesh.uvs = quad_uv;
+    mesh.indices = quad_idx;
+    mesh.num_triangles = 2;
+    mesh.material = material;
+    mesh.emission = emission_desc(em);
+    CstStatus st = cst_scene_add_mesh(ld->scene, &mesh, NULL, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 
@@ -118,7 +145,7 @@ static CstStatus read_mesh_indices(Loader *ld, const json_t *arr, int num_vertic
     return CST_OK;
 }
 
-/* An inline mesh's "normals": one nonzero vector per vertex, stored normalised. */
+/* An inline mesh's "normals": one nonzero vector per vertex. */
 static CstStatus read_mesh_normals(Loader *ld, const json_t *narr, size_t nv, Vec3 **out)
 {
     char kind[48];
@@ -138,8 +165,8 @@ static CstStatus read_mesh_normals(Loader *ld, const json_t *narr, size_t nv, Ve
             free(n);
             return st;
         }
-        /* Scaled first, so tiny or huge normals normalise without under- or overflow. */
-        n[k] = v3_normalize(v3_scale(n[k], 1.0f / v3_max_abs(n[k])));
+        /* Kept as read: the builder normalises it (scaled first, so tiny or huge normals
+         * normalise without under- or overflow). */
         json_path_pop(ld);
     }
     json_path_pop(ld);
@@ -247,16 +274,22 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
     json_t *narr = json_object_get(shape, "normals");
     if (narr && (st = read_mesh_normals(ld, narr, nv, &nrm)) != CST_OK)
         goto done;
-    SceneMesh sm = {0};
-    sm.positions = pos;
-    sm.num_vertices = (int)nv;
-    sm.uvs = uvs;
-    sm.normals = flat ? NULL : nrm;
-    sm.indices = idx;
-    sm.num_triangles = (int)nt;
-    sm.material = material;
-    sm.emission = em;
-    st = scene_add_mesh_ex(ld->scene, &sm, NULL, ld->err);
+    /* Vec3 and Vec2 are packed floats and the indices non-negative ints, which the
+     * builder reads as uint32_t (the same bytes). */
+    CstMeshDesc mesh = {0};
+    mesh.positions = pos;
+    mesh.position_stride = sizeof *pos;
+    mesh.num_vertices = (int)nv;
+    mesh.uvs = uvs;
+    mesh.uv_stride = sizeof(Vec2);
+    mesh.normals = flat ? NULL : nrm;
+    mesh.normal_stride = sizeof(Vec3);
+    mesh.indices = idx;
+    mesh.index_stride = 3 * sizeof *idx;
+    mesh.num_triangles = (int)nt;
+    mesh.material = material;
+    mesh.emission = emission_desc(em);
+    st = cst_scene_add_mesh(ld->scene, &mesh, NULL, ld->err);
     if (st != CST_OK)
         st = json_fail_builder(ld, st);
 done:
@@ -286,7 +319,10 @@ static CstStatus parse_sphere(Loader *ld, const json_t *shape, int material, con
                                   "expected a radius of at least %g",
                               (double)radius, LOADER_MIN_RADIUS);
     json_path_pop(ld);
-    CstStatus st = scene_add_sphere(ld->scene, center, radius, material, em, ld->err);
+    float c[3];
+    json_vec3_floats(center, c);
+    CstEmission e = emission_desc(em);
+    CstStatus st = cst_scene_add_sphere(ld->scene, c, radius, material, &e, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 
@@ -455,9 +491,7 @@ static CstStatus file_materials(Loader *ld, const ImportedMesh *im, int *tri_ids
             m.type = (MaterialType)fm->type;
             m.albedo = fm->albedo;
             m.ior = fm->ior;
-            st = scene_add_material(ld->scene, &m, id, ld->err);
-            if (st != CST_OK)
-                st = json_fail_builder(ld, st);
+            st = json_add_material(ld, &m, id);
         }
         tri_ids[t] = *id;
     }
@@ -520,21 +554,25 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
         if (st != CST_OK)
             goto done;
     }
-    SceneMesh sm = {0};
-    sm.positions = im.positions;
-    sm.num_vertices = im.num_vertices;
-    sm.normals = flat ? NULL : im.normals;
-    sm.uvs = im.uvs;
-    sm.normals_partial = !flat && im.normals_partial;
-    sm.uvs_partial = im.uvs_partial;
-    sm.indices = im.indices;
-    sm.num_triangles = im.num_triangles;
-    sm.material = material;
-    sm.tri_material = tri_ids;
-    sm.emission = em;
-    sm.skip_degenerate = 1; /* scanned meshes have some; documented in scene-format.md */
+    /* mesh_import's normals are unit (transform_normal) or zero where a mesh has none. */
+    CstMeshDesc mesh = {0};
+    mesh.positions = im.positions;
+    mesh.position_stride = sizeof(Vec3);
+    mesh.num_vertices = im.num_vertices;
+    mesh.normals = flat ? NULL : im.normals;
+    mesh.normal_stride = sizeof(Vec3);
+    mesh.normals_unit = 1;
+    mesh.uvs = im.uvs;
+    mesh.uv_stride = sizeof(Vec2);
+    mesh.indices = im.indices;
+    mesh.index_stride = 3 * sizeof(int32_t);
+    mesh.num_triangles = im.num_triangles;
+    mesh.material = material;
+    mesh.triangle_materials = tri_ids;
+    mesh.emission = emission_desc(em);
+    mesh.skip_degenerate = 1; /* scanned meshes have some; documented in scene-format.md */
     int dropped = 0;
-    st = scene_add_mesh_ex(ld->scene, &sm, &dropped, ld->err);
+    st = cst_scene_add_mesh(ld->scene, &mesh, &dropped, ld->err);
     if (st != CST_OK) {
         st = json_fail_builder(ld, st);
     } else if (dropped == im.num_triangles) {

@@ -8,11 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/image_io.h"
 #include "io/path.h"
 
-/* A unit direction from a vector that must not be zero. */
-static CstStatus read_direction(Loader *ld, const json_t *v, Vec3 *out)
+/* A direction that must not be zero, as read (the builder normalises it). */
+static CstStatus read_direction(Loader *ld, const json_t *v, float out[3])
 {
     Vec3 d;
     LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &d));
@@ -20,7 +19,7 @@ static CstStatus read_direction(Loader *ld, const json_t *v, Vec3 *out)
     if (!(len > 0.0f) || !isfinite(len))
         return json_fail_here(ld, "direction [%g, %g, %g] has no length; expected a nonzero vector",
                               (double)d.x, (double)d.y, (double)d.z);
-    *out = v3_scale(d, 1.0f / len);
+    json_vec3_floats(d, out);
     return CST_OK;
 }
 
@@ -49,53 +48,54 @@ static CstStatus parse_light(Loader *ld, const json_t *obj)
     static const char *const dir_keys[] = {"type", "direction", "irradiance"};
     int type = 0;
     json_t *v;
-    DeltaLight l;
-    memset(&l, 0, sizeof l);
+    CstLightDesc l = {0};
+    Color c;
+    Vec3 p;
     LOADER_TRY(json_expect_object(ld, obj, "a light object"));
     LOADER_TRY(json_read_type(ld, obj, "light type", types, 3, -1, &type));
     if (type == 2) {
         LOADER_TRY(json_check_keys(ld, obj, dir_keys, 3));
-        l.type = DELTA_DIRECTIONAL;
+        l.type = CST_LIGHT_DIRECTIONAL;
         LOADER_TRY(json_member_required(ld, obj, "direction", "the direction the light travels, 3 numbers", &v));
         json_path_push_key(ld, "direction");
-        LOADER_TRY(read_direction(ld, v, &l.dir));
+        LOADER_TRY(read_direction(ld, v, l.direction));
         json_path_pop(ld);
         LOADER_TRY(json_member_required(ld, obj, "irradiance", "an array of 3 numbers >= 0", &v));
         json_path_push_key(ld, "irradiance");
-        LOADER_TRY(json_read_rgb(ld, v, 0, &l.intensity));
+        LOADER_TRY(json_read_rgb(ld, v, 0, &c));
+        json_color_floats(c, l.intensity);
         json_path_pop(ld);
     } else {
         LOADER_TRY(json_check_keys(ld, obj, type == 0 ? point_keys : spot_keys, type == 0 ? 3 : 6));
-        l.type = type == 0 ? DELTA_POINT : DELTA_SPOT;
+        l.type = type == 0 ? CST_LIGHT_POINT : CST_LIGHT_SPOT;
         LOADER_TRY(json_member_required(ld, obj, "position", "the light's position, 3 numbers", &v));
         json_path_push_key(ld, "position");
-        LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &l.p));
+        LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &p));
+        json_vec3_floats(p, l.position);
         json_path_pop(ld);
         LOADER_TRY(json_member_required(ld, obj, "intensity", "an array of 3 numbers >= 0 (W/sr)", &v));
         json_path_push_key(ld, "intensity");
-        LOADER_TRY(json_read_rgb(ld, v, 0, &l.intensity));
+        LOADER_TRY(json_read_rgb(ld, v, 0, &c));
+        json_color_floats(c, l.intensity);
         json_path_pop(ld);
         if (type == 1) {
             Vec3 at;
             LOADER_TRY(json_member_required(ld, obj, "look_at", "the point the spot's axis goes through", &v));
             json_path_push_key(ld, "look_at");
             LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &at));
-            Vec3 d = v3_sub(at, l.p);
+            Vec3 d = v3_sub(at, p);
             float len = v3_length(d);
             if (!(len > 0.0f) || !isfinite(len))
                 return json_fail_here(ld, "look_at equals position; expected a point away from the light");
-            l.dir = v3_scale(d, 1.0f / len);
+            json_vec3_floats(d, l.direction); /* the builder normalises it */
             json_path_pop(ld);
             /* pbrt-v4's parameters: the cone's half-angle, and how much of it the falloff
              * takes at its edge. */
-            float cone, delta;
-            LOADER_TRY(read_angle(ld, obj, "cone_angle", 30.0f, 0.001f, 90.0f, &cone));
-            LOADER_TRY(read_angle(ld, obj, "cone_delta", 5.0f, 0.0f, cone, &delta));
-            l.cos_outer = cosf(cone * (CST_PI / 180.0f));
-            l.cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
+            LOADER_TRY(read_angle(ld, obj, "cone_angle", 30.0f, 0.001f, 90.0f, &l.cone_angle));
+            LOADER_TRY(read_angle(ld, obj, "cone_delta", 5.0f, 0.0f, l.cone_angle, &l.cone_delta));
         }
     }
-    return scene_add_delta_light(ld->scene, &l, ld->err);
+    return cst_scene_add_light(ld->scene, &l, ld->err);
 }
 
 CstStatus json_parse_lights(Loader *ld, const json_t *lights)
@@ -125,18 +125,18 @@ CstStatus json_parse_environment(Loader *ld, const json_t *obj)
     if (!rad == !file)
         return json_fail_here(ld, "expected exactly one of radiance (a constant environment) and file "
                                   "(an equirectangular image)");
-    EnvMap env;
     if (rad) {
         if (json_object_get(obj, "scale")) {
             json_path_push_key(ld, "scale");
             return json_fail_here(ld, "scale goes with file; a constant environment is just its radiance");
         }
         Color L;
+        float radiance[3];
         json_path_push_key(ld, "radiance");
         LOADER_TRY(json_read_rgb(ld, rad, 0, &L));
         json_path_pop(ld);
-        LOADER_TRY(envmap_init_constant(&env, L, ld->err));
-        return scene_set_environment(ld->scene, &env, ld->err);
+        json_color_floats(L, radiance);
+        return cst_scene_set_environment_constant(ld->scene, radiance, ld->err);
     }
     Color scale = color_s(1.0f);
     if ((v = json_object_get(obj, "scale"))) {
@@ -157,13 +157,11 @@ CstStatus json_parse_environment(Loader *ld, const json_t *obj)
     if (!name[0]) return json_fail_here(ld, "the file name is empty; expected the path of an image");
     char *path = path_resolve(ld->name, name);
     if (!path) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
-    float *rgb = NULL;
-    int w = 0, h = 0;
-    CstStatus st = image_read(path, &rgb, &w, &h, ld->err);
+    float k[3];
+    json_color_floats(scale, k);
+    CstStatus st = cst_scene_set_environment_image(ld->scene, path, k, ld->err);
     free(path);
-    if (st != CST_OK) return json_fail_builder(ld, st);
-    st = envmap_init_image(&env, rgb, w, h, scale, ld->err);
-    if (st != CST_OK) return json_fail_builder(ld, st);
+    if (st != CST_OK) return json_fail_builder(ld, st); /* at "file": the image's own errors */
     json_path_pop(ld);
-    return scene_set_environment(ld->scene, &env, ld->err);
+    return CST_OK;
 }

@@ -125,6 +125,16 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     return CST_OK;
 }
 
+/* Adds a material the loader filled (Material's fields, its texture ids 1-based as the
+ * public ones) through the public builder. Fails at the current path. */
+CstStatus json_add_material(Loader *ld, const Material *m, int *out_id)
+{
+    CstMaterialDesc d;
+    scene_material_desc(m, &d);
+    CstStatus st = cst_scene_add_material(ld->scene, &d, out_id, ld->err);
+    return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
+}
+
 CstStatus json_parse_materials(Loader *ld, const json_t *mats)
 {
     LOADER_TRY(json_expect_object(ld, mats, "an object mapping material names to materials"));
@@ -142,9 +152,7 @@ CstStatus json_parse_materials(Loader *ld, const json_t *mats)
         int id = 0;
         json_path_push_key(ld, name);
         LOADER_TRY(parse_material(ld, v, &m));
-        CstStatus st = scene_add_material(ld->scene, &m, &id, ld->err);
-        if (st != CST_OK)
-            return json_fail_builder(ld, st);
+        LOADER_TRY(json_add_material(ld, &m, &id));
         json_path_pop(ld);
         ld->mat_names[ld->num_materials] = name;
         ld->mat_ids[ld->num_materials] = id;

@@ -13,5 +13,7 @@ CstStatus json_read_material_ref(Loader *ld, const json_t *shape, int *out);
 
 /* A shape's optional "emission" object (radiance, two_sided, scale) into *em. */
 CstStatus json_read_emission(Loader *ld, const json_t *shape, Emission *em);
+/* Adds m (filled by the loader) through the public builder; fails at the current path. */
+CstStatus json_add_material(Loader *ld, const Material *m, int *out_id);
 
 #endif

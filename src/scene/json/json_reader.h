@@ -53,6 +53,10 @@ typedef struct Loader {
     const char **tex_names;
     int *tex_state, *tex_ids;
     int num_textures;
+    /* What the film, integrator and sampler sections ask for, handed to the scene with
+     * cst_scene_set_render_settings before commit. Starts as a new scene's settings: unset,
+     * with 0 for the fields where 0 reads as unset (and aovs, which sections OR into). */
+    CstRenderSettings settings;
 } Loader;
 
 /* The path of the value being read (for messages): push an object member, an array element;
@@ -85,6 +89,17 @@ CstStatus json_fail_key(Loader *ld, const char *fmt, ...) __attribute__((format(
 
 /* A builder call failed: keep its status and text, add where in the file it came from. */
 CstStatus json_fail_builder(Loader *ld, CstStatus status);
+/* A colour the loader read, as the three floats the public builder takes (exact). */
+static inline void json_color_floats(Color c, float out[3])
+{
+    for (int k = 0; k < 3; k++) out[k] = color_channel(c, k);
+}
+static inline void json_vec3_floats(Vec3 v, float out[3])
+{
+    out[0] = v.x;
+    out[1] = v.y;
+    out[2] = v.z;
+}
 
 /* Each reads the value at the current path and fails there with what it expected. */
 

@@ -1,6 +1,6 @@
 /* The JSON scene loader (format: docs/scene-format.md): the entry points and the root
  * object. jansson parses; the json_*.c files beside this one validate every value, name
- * its file:line:column on error, and build the scene through the scene_add_* builder only. */
+ * its file:line:column on error, and build the scene through the public builder (cst_scene_*) only. */
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -133,14 +133,20 @@ CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *n
     ld.len = len;
     ld.name = name;
     ld.err = err;
-    ld.scene = scene_create();
+    cst_render_settings_init(&ld.settings);
+    ld.settings.width = ld.settings.height = ld.settings.spp = 0;
+    ld.settings.rr_depth = ld.settings.photons = 0;
+    ld.settings.photon_radius = 0.0;
+    ld.settings.aovs = 0;
     CstStatus st;
-    if (!ld.scene) {
+    if (cst_scene_create(&ld.scene, err) != CST_OK) {
         st = cst_fail(err, CST_ERR_OOM, "%.200s: out of memory creating the scene", name);
     } else {
         st = parse_root(&ld, root);
+        if (st == CST_OK && (st = cst_scene_set_render_settings(ld.scene, &ld.settings, err)) != CST_OK)
+            st = json_fail_builder(&ld, st);
         if (st == CST_OK) {
-            st = scene_commit(ld.scene, err);
+            st = cst_scene_commit(ld.scene, err);
             if (st != CST_OK) {
                 char msg[sizeof err->msg];
                 memcpy(msg, err->msg, sizeof msg);
@@ -156,7 +162,7 @@ CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *n
     free(ld.tex_ids);
     json_decref(root);
     if (st != CST_OK) {
-        scene_destroy(ld.scene);
+        cst_scene_destroy(ld.scene);
         return st;
     }
     *out = ld.scene;

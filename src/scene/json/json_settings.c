@@ -16,7 +16,7 @@ CstStatus json_parse_film(Loader *ld, const json_t *film)
 {
     static const char *const keys[] = {"width", "height", "filter", "output", "exposure", "png_encoding",
                                        "aovs", "crop"};
-    CstRenderSettings *rs = &ld->scene->settings;
+    CstRenderSettings *rs = &ld->settings;
     LOADER_TRY(json_expect_object(ld, film,
                                   "an object with width, height, filter, output, exposure, png_encoding, aovs, crop"));
     LOADER_TRY(json_check_keys(ld, film, keys, 8));
@@ -59,7 +59,7 @@ CstStatus json_parse_film(Loader *ld, const json_t *film)
                                       "name ending in .png, .exr or .pfm",
                                   json_clip_name(s, name));
         }
-        CstStatus st = scene_set_output_path(ld->scene, s, ld->err);
+        CstStatus st = cst_scene_set_output_path(ld->scene, s, ld->err);
         if (st != CST_OK)
             return json_fail_builder(ld, st);
         json_path_pop(ld);
@@ -127,6 +127,22 @@ CstStatus json_parse_film(Loader *ld, const json_t *film)
 
 enum { CAMERA_PINHOLE, CAMERA_THINLENS, CAMERA_ORTHOGRAPHIC };
 
+/* The camera the loader read and checked, through the public builder. */
+static CstStatus set_camera(Loader *ld, const CameraDesc *c, CstCameraType type)
+{
+    CstCameraDesc d = {0};
+    d.type = type;
+    json_vec3_floats(c->position, d.position);
+    json_vec3_floats(c->look_at, d.look_at);
+    json_vec3_floats(c->up, d.up);
+    d.fov = c->vfov_deg;
+    d.aperture_radius = c->aperture_radius;
+    d.focus_distance = c->focus_distance;
+    d.height = c->ortho_height;
+    CstStatus st = cst_scene_set_camera(ld->scene, &d, ld->err);
+    return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
+}
+
 CstStatus json_parse_camera(Loader *ld, const json_t *cam)
 {
     static const char *const types[] = {"pinhole", "thinlens", "orthographic"};
@@ -141,7 +157,7 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
     if (type == CAMERA_ORTHOGRAPHIC) LOADER_TRY(json_check_keys(ld, cam, ortho_keys, 5));
     else LOADER_TRY(json_check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 7 : 5));
 
-    CameraDesc desc = {0};
+    CameraDesc desc = {0}; /* read and checked here, then handed over as a CstCameraDesc */
     desc.up = v3(0.0f, 1.0f, 0.0f);
     LOADER_TRY(json_member_required(ld, cam, "position", "the eye point, an array of 3 numbers", &v));
     json_path_push_key(ld, "position");
@@ -184,10 +200,7 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
             return json_fail_here(ld, "height %g is not positive; expected the view's height in scene units, > 0",
                                   (double)desc.ortho_height);
         json_path_pop(ld);
-        desc.vfov_deg = 0.0f;
-        desc.focus_distance = dist;
-        scene_set_camera(ld->scene, &desc);
-        return CST_OK;
+        return set_camera(ld, &desc, CST_CAMERA_ORTHOGRAPHIC);
     }
     LOADER_TRY(json_member_required(ld, cam, "fov",
                                     "the vertical field of view in degrees, in (0, 180)", &v));
@@ -200,7 +213,7 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
     json_path_pop(ld);
 
     desc.aperture_radius = 0.0f;
-    desc.focus_distance = dist;
+    desc.focus_distance = 0.0f; /* the builder's default: |look_at - position| */
     if (type == CAMERA_THINLENS) {
         LOADER_TRY(json_member_required(ld, cam, "aperture_radius",
                                         "the lens radius in scene units, >= 0", &v));
@@ -219,14 +232,13 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
             json_path_pop(ld);
         }
     }
-    scene_set_camera(ld->scene, &desc);
-    return CST_OK;
+    return set_camera(ld, &desc, CST_CAMERA_PERSPECTIVE);
 }
 
 CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 {
     static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius"};
-    CstRenderSettings *rs = &ld->scene->settings;
+    CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
     LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius"));
@@ -283,7 +295,7 @@ CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 CstStatus json_parse_sampler(Loader *ld, const json_t *sampler)
 {
     static const char *const keys[] = {"spp", "seed", "type"};
-    CstRenderSettings *rs = &ld->scene->settings;
+    CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
     LOADER_TRY(json_expect_object(ld, sampler, "an object with spp, seed, type"));

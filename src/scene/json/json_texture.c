@@ -11,6 +11,17 @@
 
 #include "io/path.h"
 
+/* Adds the texture through the public builder; *out gets the loader's 0-based id (the
+ * public id - 1), the index into the scene's textures it reads back. */
+static CstStatus add_texture(Loader *ld, const CstTextureDesc *t, int *out)
+{
+    int id = 0;
+    CstStatus st = cst_scene_add_texture(ld->scene, t, &id, ld->err);
+    if (st != CST_OK) return json_fail_builder(ld, st);
+    *out = id - 1;
+    return CST_OK;
+}
+
 /* A checkerboard's "even" or "odd": a colour (a new constant texture) or a texture name. */
 static CstStatus read_texture_operand(Loader *ld, const json_t *obj, const char *key, int *out)
 {
@@ -21,11 +32,11 @@ static CstStatus read_texture_operand(Loader *ld, const json_t *obj, const char 
         LOADER_TRY(json_read_texture_name(ld, json_string_value(v), out));
     } else {
         Color c;
-        Texture t;
         LOADER_TRY(json_read_rgb(ld, v, 0, &c));
-        texture_constant(&t, c);
-        CstStatus st = scene_add_texture(ld->scene, &t, out, ld->err);
-        if (st != CST_OK) return json_fail_builder(ld, st);
+        CstTextureDesc t = {0};
+        t.type = CST_TEXTURE_CONSTANT;
+        json_color_floats(c, t.value);
+        LOADER_TRY(add_texture(ld, &t, out));
     }
     json_path_pop(ld);
     return CST_OK;
@@ -40,8 +51,7 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
     static const char *const keys_image[] = {"type", "file", "linear", "wrap"};
     int type = 0;
     json_t *v;
-    Texture t;
-    CstStatus st;
+    CstTextureDesc t = {0};
     LOADER_TRY(json_expect_object(ld, obj, "a texture object"));
     LOADER_TRY(json_read_type(ld, obj, "texture type", types, 3, -1, &type));
     if (type == TEXTURE_CONSTANT) {
@@ -51,7 +61,8 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
         json_path_push_key(ld, "value");
         LOADER_TRY(json_read_rgb(ld, v, 0, &c));
         json_path_pop(ld);
-        texture_constant(&t, c);
+        t.type = CST_TEXTURE_CONSTANT;
+        json_color_floats(c, t.value);
     } else if (type == TEXTURE_CHECKERBOARD) {
         int even = 0, odd = 0;
         float scale = 1.0f;
@@ -66,12 +77,15 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
         }
         LOADER_TRY(read_texture_operand(ld, obj, "even", &even));
         LOADER_TRY(read_texture_operand(ld, obj, "odd", &odd));
-        texture_checkerboard(&t, ld->scene->textures, even, odd, scale);
+        t.type = CST_TEXTURE_CHECKERBOARD;
+        t.even = even + 1;
+        t.odd = odd + 1;
+        t.scale = scale;
     } else {
         static const char *const wraps[] = {"repeat", "clamp"};
         const char *file = NULL;
         int linear = 0;
-        TextureWrap wrap = TEXTURE_WRAP_REPEAT;
+        CstTextureWrap wrap = CST_TEXTURE_WRAP_REPEAT;
         LOADER_TRY(json_check_keys(ld, obj, keys_image, 4));
         if ((v = json_object_get(obj, "linear"))) {
             json_path_push_key(ld, "linear");
@@ -82,8 +96,8 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
             const char *w = NULL;
             json_path_push_key(ld, "wrap");
             LOADER_TRY(json_read_string(ld, v, &w));
-            if (strcmp(w, wraps[0]) == 0) wrap = TEXTURE_WRAP_REPEAT;
-            else if (strcmp(w, wraps[1]) == 0) wrap = TEXTURE_WRAP_CLAMP;
+            if (strcmp(w, wraps[0]) == 0) wrap = CST_TEXTURE_WRAP_REPEAT;
+            else if (strcmp(w, wraps[1]) == 0) wrap = CST_TEXTURE_WRAP_CLAMP;
             else {
                 char name[72];
                 return json_fail_here(ld, "unknown wrap mode \"%s\"; expected one of: repeat, clamp",
@@ -97,14 +111,17 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
         if (!file[0]) return json_fail_here(ld, "the file name is empty; expected the path of an image");
         char *path = path_resolve(ld->name, file);
         if (!path) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
-        st = texture_image_load(&t, path, linear, wrap, ld->err);
+        t.type = CST_TEXTURE_IMAGE;
+        t.path = path;
+        t.linear = linear;
+        t.wrap = wrap;
+        CstStatus st = add_texture(ld, &t, out); /* at "file": the image's own errors */
         free(path);
-        if (st != CST_OK) return json_fail_builder(ld, st);
+        if (st != CST_OK) return st;
         json_path_pop(ld);
+        return CST_OK;
     }
-    st = scene_add_texture(ld->scene, &t, out, ld->err);
-    if (st != CST_OK) return json_fail_builder(ld, st);
-    return CST_OK;
+    return add_texture(ld, &t, out);
 }
 
 /* Scene id of the texture called `name`, read now if it has not been. The error points at

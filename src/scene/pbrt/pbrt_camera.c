@@ -124,7 +124,7 @@ CstStatus pbrt_camera_finish(Loader *ld)
     desc.look_at = v3_add(desc.position, v3_scale(f, s));
     desc.up = u;
     int mirror = v3_dot(x, v3_cross(f, u)) < 0.0f;
-    int w_px = ld->scene->settings.width, h_px = ld->scene->settings.height;
+    int w_px = ld->settings.width, h_px = ld->settings.height;
     double aspect = (double)w_px / (double)h_px;
     double frame = c.has_frame ? (double)c.frame : aspect;
     /* pbrt's default screen window spans [-1, 1] on the shorter axis. */

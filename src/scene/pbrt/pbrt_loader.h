@@ -166,6 +166,9 @@ typedef struct NamedCall {
 typedef struct Loader {
     Scene *scene;
     CstError *err;
+    /* What Film, Sampler and Integrator ask for (over pbrt's defaults), handed to the scene
+     * with cst_scene_set_render_settings before commit. */
+    CstRenderSettings settings;
     CstLoadOptions opt;
     char *base_dir; /* with trailing '/', or "" */
     char **files;   /* every file name seen; Locs point into these */

@@ -361,7 +361,11 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
 CstStatus pbrt_material_scene_id(Loader *ld, int entry, int *out)
 {
     MatEntry *e = &ld->mats[entry];
-    if (e->scene_id < 0) TRY(scene_add_material(ld->scene, &e->m, &e->scene_id, ld->err));
+    if (e->scene_id < 0) {
+        CstMaterialDesc desc;
+        scene_material_desc(&e->m, &desc);
+        TRY(cst_scene_add_material(ld->scene, &desc, &e->scene_id, ld->err));
+    }
     *out = e->scene_id;
     return CST_OK;
 }

@@ -22,7 +22,7 @@ CstStatus pbrt_film_directive(Loader *ld, NamedCall *call)
     const char *type = call->type, *d = call->d;
     Loc loc = call->loc, tl = call->tl;
     char nm[72];
-    CstRenderSettings *rs = &ld->scene->settings;
+    CstRenderSettings *rs = &ld->settings;
     int w = 1280, h = 720;
     const char *file = NULL;
     Loc fl = loc;
@@ -36,7 +36,7 @@ CstStatus pbrt_film_directive(Loader *ld, NamedCall *call)
     rs->width = w;
     rs->height = h;
     if (file && image_path_is_scene_output(file)) {
-        TRY(scene_set_output_path(ld->scene, file, ld->err));
+        TRY(cst_scene_set_output_path(ld->scene, file, ld->err));
     } else if (file) {
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: output \"%s\" is not .png, .exr or .pfm; "
                      "ignored (the default output name is used)", d, pbrt_clip(file, nm));
@@ -84,7 +84,7 @@ CstStatus pbrt_sampler_directive(Loader *ld, NamedCall *call)
     Params *ps = &call->ps;
     const char *type = call->type, *d = call->d;
     Loc loc = call->loc, tl = call->tl;
-    CstRenderSettings *rs = &ld->scene->settings;
+    CstRenderSettings *rs = &ld->settings;
     int spp = 16, seed = 0;
     Param *ps_seed = pbrt_find_param(ps, "seed");
     if (strcmp(type, "stratified") == 0) {
@@ -131,7 +131,7 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
     const char *type = call->type, *d = call->d;
     Loc loc = call->loc, tl = call->tl;
     char nm[72];
-    CstRenderSettings *rs = &ld->scene->settings;
+    CstRenderSettings *rs = &ld->settings;
     static const struct { const char *pbrt; CstIntegrator ours; int exact; } map[] = {
         {"path", CST_INTEGRATOR_PATH, 1}, {"volpath", CST_INTEGRATOR_PATH, 0},
         {"simplepath", CST_INTEGRATOR_PATH_NEE, 0}, {"randomwalk", CST_INTEGRATOR_PATH_BSDF, 0},
@@ -187,7 +187,7 @@ CstStatus pbrt_pixel_filter_directive(Loader *ld, NamedCall *call)
     const char *type = call->type, *d = call->d;
     Loc loc = call->loc, tl = call->tl;
     char nm[72];
-    CstRenderSettings *rs = &ld->scene->settings;
+    CstRenderSettings *rs = &ld->settings;
     float rx = 0.0f, ry = 0.0f;
     int hx = 0, hy = 0;
     TRY(pbrt_get_float(ld, ps, d, "xradius", 0.0f, &rx, &hx));

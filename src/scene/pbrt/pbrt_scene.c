@@ -204,7 +204,8 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     CstStatus st = CST_OK;
     size_t dl = path_dir_len(name);
     ld.base_dir = malloc(dl + 1);
-    ld.scene = scene_create();
+    CstError create_err;
+    if (cst_scene_create(&ld.scene, &create_err) != CST_OK) ld.scene = NULL;
     if (!ld.base_dir || !ld.scene) {
         st = pbrt_oom(&ld);
         goto done;
@@ -214,11 +215,15 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     /* pbrt's defaults where they differ from caustic's: a 1280 x 720 film, the volumetric
      * path tracer with at most 5 bounces (as "path"), the Gaussian filter (sigma 0.5, radius
      * 1.5: caustic's). */
-    ld.scene->settings.width = 1280;
-    ld.scene->settings.height = 720;
-    ld.scene->settings.integrator = CST_INTEGRATOR_PATH;
-    ld.scene->settings.max_depth = 5;
-    ld.scene->settings.filter = CST_FILTER_GAUSSIAN;
+    cst_render_settings_init(&ld.settings);
+    ld.settings.spp = ld.settings.rr_depth = ld.settings.photons = 0; /* 0 reads as unset */
+    ld.settings.photon_radius = 0.0;
+    ld.settings.aovs = 0;
+    ld.settings.width = 1280;
+    ld.settings.height = 720;
+    ld.settings.integrator = CST_INTEGRATOR_PATH;
+    ld.settings.max_depth = 5;
+    ld.settings.filter = CST_FILTER_GAUSSIAN;
     Material def = {.type = MATERIAL_DIFFUSE, .albedo = color_s(0.5f), .ior = 1.0f};
     if ((st = pbrt_add_mat_entry(&ld, NULL, &def, &ld.gs.material))) goto done;
 
@@ -239,7 +244,8 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
         goto done;
     }
     if ((st = pbrt_camera_finish(&ld))) goto done;
-    st = scene_commit(ld.scene, err);
+    st = cst_scene_set_render_settings(ld.scene, &ld.settings, err);
+    if (!st) st = cst_scene_commit(ld.scene, err);
     if (st) {
         char msg[sizeof err->msg];
         memcpy(msg, err->msg, sizeof msg);
@@ -249,7 +255,7 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
 done:
     pbrt_loader_free(&ld);
     if (st) {
-        scene_destroy(ld.scene);
+        cst_scene_destroy(ld.scene);
         return st;
     }
     *out = ld.scene;

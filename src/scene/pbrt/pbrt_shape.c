@@ -29,6 +29,14 @@ void pbrt_geom_free(ShapeGeom *g)
     memset(g, 0, sizeof *g);
 }
 
+
+/* The loader's emission as the public builder's (exact: three floats per colour). */
+static CstEmission emission_desc(const Emission *em)
+{
+    CstEmission e = {{0.0f, 0.0f, 0.0f}, em->texture, em->two_sided};
+    for (int k = 0; k < 3; k++) e.radiance[k] = color_channel(em->radiance, k);
+    return e;
+}
 static CstStatus geom_alloc(Loader *ld, ShapeGeom *g, int nv, int nt, int normals, int uvs)
 {
     memset(g, 0, sizeof *g);
@@ -169,7 +177,9 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
         }
         if (ld->scene->num_spheres >= INT_MAX - 1)
             return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: too many spheres", d);
-        CstStatus st = scene_add_sphere(ld->scene, c, r, mat, &em, ld->err);
+        float cf[3] = {c.x, c.y, c.z};
+        CstEmission e = emission_desc(&em);
+        CstStatus st = cst_scene_add_sphere(ld->scene, cf, r, mat, &e, ld->err);
         return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
     }
     ShapeGeom tess = {0};
@@ -217,12 +227,19 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
         idx[3 * t + 1] = sw ? c : b;
         idx[3 * t + 2] = sw ? b : c;
     }
-    SceneMesh sm = {0};
+    /* Normals come from transform_normal: unit, or zero where it degenerates. The indices
+     * are non-negative ints, read by the builder as uint32_t (the same bytes). */
+    CstMeshDesc sm = {0};
     sm.positions = p;
+    sm.position_stride = sizeof *p;
     sm.num_vertices = g->nv;
     sm.normals = n;
+    sm.normal_stride = sizeof(Vec3);
+    sm.normals_unit = 1;
     sm.uvs = g->uv;
+    sm.uv_stride = sizeof(Vec2);
     sm.indices = idx;
+    sm.index_stride = 3 * sizeof *idx;
     sm.num_triangles = g->nt;
     sm.material = mat;
     sm.skip_degenerate = 1;
@@ -231,8 +248,9 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
         em.radiance = color_scale(al->L, al->scale);
         em.two_sided = al->two_sided;
     }
-    sm.emission = &em;
+    sm.emission = emission_desc(&em);
     int dropped = 0;
+    if (g->nt == 0) goto done; /* "indices" []: nothing to add (the builder wants a triangle) */
     if (al && al->active && al->power > 0.0f) {
         /* pbrt-v4 makes one light per triangle and normalises each to `power` by its own
          * area: L = power / (pi A sides) times the spectrum. */
@@ -242,16 +260,16 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             if (area > 0.0f)
                 et.radiance = color_scale(em.radiance, (float)((double)al->power /
                                        (PBRT_PI * (double)area * (al->two_sided ? 2.0 : 1.0))));
-            SceneMesh one = sm;
+            CstMeshDesc one = sm;
             one.indices = &idx[3 * t];
             one.num_triangles = 1;
-            one.emission = &et;
+            one.emission = emission_desc(&et);
             int dr = 0;
-            st = scene_add_mesh_ex(ld->scene, &one, &dr, ld->err);
+            st = cst_scene_add_mesh(ld->scene, &one, &dr, ld->err);
             dropped += dr;
         }
     } else {
-        st = scene_add_mesh_ex(ld->scene, &sm, &dropped, ld->err);
+        st = cst_scene_add_mesh(ld->scene, &sm, &dropped, ld->err);
     }
     if (st) {
         st = pbrt_fail_wrap(ld, st, loc, d);
