@@ -10,24 +10,23 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/error.h"
 #include "io/path.h"
 #include "scene/pbrt/pbrt_shape.h"
 
 int pbrt_grow(void **arr, int *cap, int need, size_t size)
 {
+    /* core/array.h's growth rule; the parameter lists count with ints, so bounded below
+     * INT_MAX / 2 as well. */
     if (need <= *cap)
         return 1;
     if (need > INT_MAX / 2)
         return 0;
-    int c = *cap ? *cap : 8;
-    while (c < need)
-        c *= 2;
-    void *p = realloc(*arr, (size_t)c * size);
-    if (!p)
+    size_t c = (size_t)*cap;
+    if (!array_grow(arr, &c, (size_t)need, size))
         return 0;
-    *arr = p;
-    *cap = c;
+    *cap = c > INT_MAX ? INT_MAX : (int)c;
     return 1;
 }
 
