@@ -64,7 +64,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
     CameraWiSample cs;
     Vec2 u_lens = sampler_2d(rng);
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, c.margin, &cs)) {
-        const Emitter *e = &s->emitters[es.emitter];
+        const Emitter *e = &s->emitter_sampler.light[es.emitter].u.area;
         Color le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
         splat_if_visible(&c, es.p, es.n, &cs, color_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a));
     }

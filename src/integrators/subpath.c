@@ -248,7 +248,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *v
         /* s = 0: the camera subpath hits an emitter (tech. rep. eq. 39). Seen directly
          * there is no other strategy (light vertices on emitters are not splatted). */
         if (sh.emitter >= 0) {
-            const Emitter *e = &s->emitters[sh.emitter];
+            const Emitter *e = &s->emitter_sampler.light[sh.emitter].u.area;
             Color le = scene_emission(s, &sh, wo);
             if (!color_is_black(le)) {
                 float w = 1.0f;

@@ -252,24 +252,23 @@ CstStatus pbrt_color_space_directive(Loader *ld, NamedCall *call)
     return CST_OK;
 }
 
+/* A directive caustic skips whole: its parameters count as used (no second warning per
+ * parameter) and one warning says what is missing. */
+static CstStatus ignore_directive(Loader *ld, NamedCall *call, const char *what)
+{
+    pbrt_params_mark_all_used(&call->ps);
+    pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, call->loc, "%s: %s are not supported; ignored", call->d, what);
+    return CST_OK;
+}
+
 CstStatus pbrt_make_named_medium_directive(Loader *ld, NamedCall *call)
 {
-    Params *ps = &call->ps;
-    const char *d = call->d;
-    Loc loc = call->loc;
-    pbrt_params_mark_all_used(ps);
-    pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: participating media are not supported; ignored", d);
-    return CST_OK;
+    return ignore_directive(ld, call, "participating media");
 }
 
 CstStatus pbrt_attribute_directive(Loader *ld, NamedCall *call)
 {
-    Params *ps = &call->ps;
-    const char *d = call->d;
-    Loc loc = call->loc;
-    pbrt_params_mark_all_used(ps);
-    pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: default parameters by Attribute are not supported; ignored", d);
-    return CST_OK;
+    return ignore_directive(ld, call, "default parameters by Attribute");
 }
 
 CstStatus pbrt_medium_interface_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
