@@ -104,6 +104,14 @@ bool cli_check_output(const char *path, const char *origin)
                 origin, path, dir, strerror(errno));
         return false;
     }
+    /* access() does not know every refusal (a name too long for the temporary file, /sys
+     * and /proc for root): the library creates and removes the very temporary file the
+     * write will use. */
+    CstError err = {0};
+    if (cst_image_write_check(path, &err) != CST_OK) {
+        fprintf(stderr, "caustic: error: %s: %s\n", origin, err.msg);
+        return false;
+    }
     return true;
 }
 

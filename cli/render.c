@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "metadata.h"
+#include "signals.h"
 
 /* "<stem of the scene file>.png" in the current directory; "scene.png" if the stem is
  * empty. Returns false if it does not fit. */
@@ -109,6 +111,7 @@ int cli_render(const CliArgs *a)
     CliProgress progress = {.tty = isatty(STDERR_FILENO) == 1};
     CstRenderSettings settings = a->settings;
     CstRenderStats stats = {0};
+    CliMetadata meta = {0};
 
     /* Everything checkable from the command line alone, before the scene is loaded. */
     if (!cli_check_scene_path(a))
@@ -169,6 +172,7 @@ int cli_render(const CliArgs *a)
         cli_print_job(a, scene, &settings, output);
     }
 
+    cli_metadata_begin(&meta, a->scene_path);
     status = cst_render(scene, &settings, &film, &stats, &err);
     if (status != CST_OK) {
         if (!a->quiet)
@@ -180,7 +184,16 @@ int cli_render(const CliArgs *a)
     if (!a->quiet)
         cli_progress_finish(&progress, stats.seconds);
 
-    status = cst_film_write(film, output, &err);
+    {
+        /* The image records how it was made (docs/cli.md, "Metadata"); no temporary file
+         * survives a signal during the write. */
+        CstRenderSettings used;
+        cst_render_settings_resolve(scene, &settings, &used);
+        cli_metadata_finish(&meta, &used, &stats);
+        CstImageWriteOptions wo = {meta.entry, meta.count, cli_signals_temp_file, NULL};
+        cli_signals_install();
+        status = cst_film_write_opt(film, output, &wo, &err);
+    }
     if (status != CST_OK) {
         cli_print_error(&err, status);
         code = cli_exit_code(status, CLI_STAGE_WRITE);
@@ -197,6 +210,7 @@ int cli_render(const CliArgs *a)
     code = CLI_EXIT_OK;
 
 done:
+    cli_metadata_free(&meta);
     cst_film_destroy(film);
     cst_scene_destroy(scene);
     return code;

@@ -459,6 +459,41 @@ CST_API void cst_film_variances(const CstFilm *film, float *var_out);
 CST_API CstStatus cst_film_write(const CstFilm *film, const char *path, CstError *err);
 CST_API void cst_film_destroy(CstFilm *film);
 
+/* ---------------------------------------------------------------- image write options
+ * Metadata: text entries stored in the image, for reproducibility (the caustic CLI writes
+ * caustic.version, caustic.command, caustic.scene_sha256, ... : docs/cli.md). PNG keeps
+ * each as a tEXt chunk (an iTXt chunk, UTF-8, when the value is not printable ASCII), EXR
+ * as a string attribute of the header. PFM has no place for metadata: a PFM write
+ * ignores it. A key is 1 to 31 bytes of A-Z a-z 0-9 . _ - (EXR's short attribute names),
+ * unique in the list and not one of EXR's own header attributes (channels, compression,
+ * dataWindow, ...); a value is NUL-terminated valid UTF-8. Anything else fails the write
+ * with CST_ERR_INVALID_ARG before a file is created. */
+typedef struct CstImageMetadata {
+    const char *key;
+    const char *value;
+} CstImageMetadata;
+
+/* Every write goes to a temporary file in the output's directory, renamed into place when
+ * complete (the name rule is in docs/cli.md). The callback is called with the temporary's
+ * name before the file is created, and with NULL once no file of that name is left
+ * (renamed, or removed after a failure), so a signal handler can unlink(2) the last name
+ * it was given and never leave a partial file behind. The name is valid only until the
+ * next call. It is called on the writing thread; it must not call back into caustic. */
+typedef void (*CstTempFileFn)(void *user, const char *temp_path);
+
+/* Zero-initialise, then set what you want: all zero = no metadata, no callback. */
+typedef struct CstImageWriteOptions {
+    const CstImageMetadata *metadata; /* metadata_count entries (at most 256), or NULL */
+    int metadata_count;
+    CstTempFileFn temp_file;          /* NULL = not told */
+    void *temp_file_user;
+} CstImageWriteOptions;
+
+/* cst_film_write with options (NULL = none). Before writing, removes the temporaries of
+ * `path` left behind by processes that no longer exist (docs/cli.md). */
+CST_API CstStatus cst_film_write_opt(const CstFilm *film, const char *path,
+                                     const CstImageWriteOptions *options, CstError *err);
+
 /* ---------------------------------------------------------------- images */
 /* Reads a PNG (sRGB decoded to linear), EXR or PFM as linear RGB floats: *rgb (width x
  * height x 3, row 0 = top) is the caller's to free(). */
@@ -466,6 +501,14 @@ CST_API CstStatus cst_image_read(const char *path, float **rgb, int *width, int 
 /* Writes width x height x 3 linear floats (row 0 = top); the format follows the extension
  * (.png 8-bit sRGB, .exr, .pfm), atomically as cst_film_write does. */
 CST_API CstStatus cst_image_write(const char *path, const float *rgb, int width, int height, CstError *err);
+/* The same with options (NULL = none), as cst_film_write_opt. */
+CST_API CstStatus cst_image_write_opt(const char *path, const float *rgb, int width, int height,
+                                      const CstImageWriteOptions *options, CstError *err);
+/* Whether a write to `path` can succeed, checked before a long render rather than after
+ * it: a writable extension, not a directory, a name the file system accepts, and the
+ * temporary file the write will use (same name rule) created and removed again. CST_OK,
+ * or CST_ERR_INVALID_ARG (extension) or CST_ERR_IO with the reason. */
+CST_API CstStatus cst_image_write_check(const char *path, CstError *err);
 /* The one extension rule of every image the library writes or reads (case-insensitive):
  * 1 when `path` ends in an extension cst_image_write and cst_film_write can produce
  * (.png, .exr, .pfm), else 0; and 1 when it names an EXR (the only format with AOVs). */

@@ -119,6 +119,15 @@ CstStatus cst_image_write(const char *path, const float *rgb, int width, int hei
     return image_write(path, rgb, width, height, err);
 }
 
+CstStatus cst_image_write_opt(const char *path, const float *rgb, int width, int height,
+                              const CstImageWriteOptions *options, CstError *err)
+{
+    ImageWriteOptions opt = {.out = options};
+    return image_write_opt(path, rgb, width, height, &opt, err);
+}
+
+CstStatus cst_image_write_check(const char *path, CstError *err) { return image_write_check(path, err); }
+
 int cst_image_path_writable(const char *path) { return image_format_is_writable(image_format_from_path(path)); }
 int cst_image_path_is_exr(const char *path) { return image_path_is_exr(path); }
 
@@ -171,6 +180,12 @@ static void film_aov_pixel(const Film *f, size_t i, float *out)
 
 CstStatus cst_film_write(const CstFilm *f, const char *path, CstError *err)
 {
+    return cst_film_write_opt(f, path, NULL, err);
+}
+
+CstStatus cst_film_write_opt(const CstFilm *f, const char *path, const CstImageWriteOptions *options,
+                             CstError *err)
+{
     size_t pixels = (size_t)f->width * (size_t)f->height;
     const char *names[IMAGE_MAX_EXTRA];
     int extra = film_aov_channels(f->aovs, names);
@@ -189,7 +204,7 @@ CstStatus cst_film_write(const CstFilm *f, const char *path, CstError *err)
     if (f->exposure_scale != 1.0)
         for (size_t i = 0; i < 3 * pixels; i++) rgb[i] = (float)((double)rgb[i] * f->exposure_scale);
     for (size_t i = 0; extra > 0 && i < pixels; i++) film_aov_pixel(f, i, aux + i * (size_t)extra);
-    ImageWriteOptions opt = {f->png_linear != 0, extra, names, aux};
+    ImageWriteOptions opt = {f->png_linear != 0, extra, names, aux, options};
     CstStatus st = image_write_opt(path, rgb, f->width, f->height, &opt, err);
     free(rgb);
     free(aux);

@@ -5,12 +5,12 @@
 #include "io/image_io.h"
 
 #include "core/error.h"
+#include "io/path.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -293,6 +293,8 @@ typedef struct PngWriteJob {
     int w, h;
     uint8_t *row;
     bool linear; /* bytes are linear values, tagged gAMA 1.0, instead of sRGB */
+    png_text *text; /* the metadata, one chunk each */
+    int ntext;
 } PngWriteJob;
 
 /* setjmp lives in its own function: nothing the caller owns is modified after it, so
@@ -307,6 +309,7 @@ static bool image_png_write_body(png_structp png, png_infop info, const PngWrite
      * that go with it help decoders that predate sRGB (PNG spec 11.3.3.5). */
     if (job->linear) png_set_gAMA(png, info, 1.0);
     else png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    if (job->ntext > 0) png_set_text(png, info, job->text, job->ntext);
     png_write_info(png, info);
     size_t row_floats = (size_t)job->w * 3;
     for (int y = 0; y < job->h; ++y) {
@@ -319,6 +322,20 @@ static bool image_png_write_body(png_structp png, png_infop info, const PngWrite
     return true;
 }
 
+/* One metadata entry as a text chunk: tEXt (Latin-1, here printable ASCII and line feeds)
+ * when the value allows it, else iTXt, which holds UTF-8 (PNG spec 11.3.4). libpng copies
+ * the strings, so they are passed as they are. */
+static void image_png_text(png_text *t, const CstImageMetadata *m)
+{
+    bool plain = true;
+    for (const char *c = m->value; *c && plain; ++c)
+        plain = (*c >= 0x20 && *c < 0x7f) || *c == '\n';
+    t->compression = plain ? PNG_TEXT_COMPRESSION_NONE : PNG_ITXT_COMPRESSION_NONE;
+    t->key = (png_charp)(uintptr_t)m->key;
+    t->text = (png_charp)(uintptr_t)m->value;
+    t->text_length = strlen(m->value);
+}
+
 static CstStatus image_write_png(FILE *fp, const char *path, const float *rgb, int w, int h,
                                  const ImageWriteOptions *opt, CstError *err)
 {
@@ -327,12 +344,15 @@ static CstStatus image_write_png(FILE *fp, const char *path, const float *rgb, i
         return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: %d x %d exceeds the PNG writer's limit of %d per side",
                         path, w, h, (int)PNG_USER_WIDTH_MAX);
     PngIo io = {{0}, 0};
-    PngWriteJob job = {fp, rgb, w, h, malloc((size_t)w * 3), opt->png_linear};
+    int ntext = opt->out ? opt->out->metadata_count : 0;
+    PngWriteJob job = {fp, rgb, w, h, malloc((size_t)w * 3), opt->png_linear,
+                       ntext > 0 ? calloc((size_t)ntext, sizeof(png_text)) : NULL, ntext};
+    for (int i = 0; job.text && i < ntext; ++i) image_png_text(&job.text[i], &opt->out->metadata[i]);
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &io, image_png_on_error,
                                               image_png_on_warning);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     CstStatus st = CST_OK;
-    if (!job.row || !info) {
+    if (!job.row || !info || (ntext > 0 && !job.text)) {
         st = cst_fail(err, CST_ERR_OOM, "%s: out of memory starting the PNG encoder", path);
     } else if (!image_png_write_body(png, info, &job)) {
         char buf[128];
@@ -342,6 +362,7 @@ static CstStatus image_write_png(FILE *fp, const char *path, const float *rgb, i
     }
     png_destroy_write_struct(&png, &info);
     free(job.row);
+    free(job.text);
     return st;
 }
 
@@ -634,6 +655,8 @@ static CstStatus image_write_exr(FILE *fp, const char *path, const float *rgb, i
         rv = exr_add_channel(ctx, part, names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
     for (int c = 0; c < opt->extra_channels && rv == EXR_ERR_SUCCESS; ++c)
         rv = exr_add_channel(ctx, part, opt->extra_names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    for (int i = 0; opt->out && i < opt->out->metadata_count && rv == EXR_ERR_SUCCESS; ++i)
+        rv = exr_attr_set_string(ctx, part, opt->out->metadata[i].key, opt->out->metadata[i].value);
     if (rv == EXR_ERR_SUCCESS) rv = exr_write_header(ctx);
     if (rv == EXR_ERR_SUCCESS) rv = image_exr_encode(ctx, part, rgb, w, h, opt);
     if (ctx) {
@@ -868,47 +891,121 @@ bool image_path_is_exr(const char *path)
     return image_format_from_path(path) == IMAGE_FILE_EXR;
 }
 
-static atomic_uint image_tmp_serial;
+/* ---------------------------------------------------------------- metadata */
 
-/* Creates "<path>.tmp.<pid>.<n>" exclusively: in the target's directory so rename() stays
- * on one filesystem and is atomic, and with mode 0666 so the umask decides the final
- * permissions as it would for a plain fopen (mkstemp would force 0600). */
-static CstStatus image_open_temp(const char *path, char **tmp_out, int *fd_out, CstError *err)
+/* Well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, at most U+10FFFF). */
+static bool image_utf8_valid(const char *s)
 {
-    size_t n = strlen(path) + 48;
-    char *tmp = malloc(n);
-    if (!tmp) return cst_fail(err, CST_ERR_OOM, "%s: out of memory", path);
-    for (int attempt = 0; attempt < 64; ++attempt) {
-        unsigned serial = atomic_fetch_add(&image_tmp_serial, 1u);
-        snprintf(tmp, n, "%s.tmp.%ld.%u", path, (long)getpid(), serial);
-        int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        if (fd >= 0) {
-            *tmp_out = tmp;
-            *fd_out = fd;
+    const uint8_t *p = (const uint8_t *)s;
+    while (*p) {
+        uint32_t c = *p++;
+        int more = c < 0x80 ? 0 : (c & 0xe0) == 0xc0 ? 1 : (c & 0xf0) == 0xe0 ? 2 : (c & 0xf8) == 0xf0 ? 3 : -1;
+        if (more < 0) return false;
+        c &= 0x7fu >> more;
+        for (int i = 0; i < more; ++i, ++p) {
+            if ((*p & 0xc0) != 0x80) return false;
+            c = c << 6 | (*p & 0x3fu);
+        }
+        static const uint32_t least[4] = {0, 0x80, 0x800, 0x10000};
+        if (c < least[more] || c > 0x10ffff || (c >= 0xd800 && c <= 0xdfff)) return false;
+    }
+    return true;
+}
+
+/* The public header's rules for metadata (caustic.h, CstImageMetadata). */
+static CstStatus image_metadata_check(const char *path, const CstImageWriteOptions *o, CstError *err)
+{
+    /* EXR's own header attributes (OpenEXR file layout, "Header Attributes"). */
+    static const char *const reserved[] = {
+        "channels", "compression", "dataWindow", "displayWindow", "lineOrder", "pixelAspectRatio",
+        "screenWindowCenter", "screenWindowWidth", "tiles", "type", "name", "version",
+        "chunkCount", "view", "multiView"};
+    if (!o) return CST_OK;
+    if (o->metadata_count < 0 || o->metadata_count > 256 || (o->metadata_count > 0 && !o->metadata))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d metadata entries (expected 0 to 256 with a list)",
+                        path, o->metadata_count);
+    for (int i = 0; i < o->metadata_count; ++i) {
+        const char *k = o->metadata[i].key, *v = o->metadata[i].value;
+        size_t n = k ? strspn(k, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") : 0;
+        if (!k || n == 0 || n > 31 || k[n])
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: metadata key \"%s\": expected 1 to 31 of "
+                            "A-Z a-z 0-9 . _ -", path, k ? k : "(null)");
+        for (size_t r = 0; r < sizeof reserved / sizeof reserved[0]; ++r)
+            if (strcmp(k, reserved[r]) == 0)
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: metadata key \"%s\" is an EXR header "
+                                "attribute of its own", path, k);
+        for (int j = 0; j < i; ++j)
+            if (strcmp(k, o->metadata[j].key) == 0)
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: metadata key \"%s\" given twice", path, k);
+        if (!v || !image_utf8_valid(v))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: metadata \"%s\": the value is %s", path, k,
+                            v ? "not valid UTF-8" : "NULL");
+    }
+    return CST_OK;
+}
+
+/* ---------------------------------------------------------------- writing */
+
+/* The writer for `path`'s extension in *out, or the error. */
+static CstStatus image_writer_for(const char *path, const ImageWriter **out, CstError *err)
+{
+    ImageFileFormat format = image_format_from_path(path);
+    for (size_t i = 0; i < sizeof image_writers / sizeof image_writers[0]; ++i)
+        if (image_writers[i].format == format) {
+            *out = &image_writers[i];
             return CST_OK;
         }
-        if (errno == EEXIST || errno == EINTR) continue;
-        int e = errno;
-        free(tmp);
-        const char *slash = strrchr(path, '/');
-        const char *dir = slash ? path : ".";
-        int dir_len = slash && slash != path ? (int)(slash - path) : 1;
-        char buf[128];
-        if (e == ENOENT || e == ENOTDIR)
-            return cst_fail(err, CST_ERR_IO, "%s: cannot write: directory \"%.*s\" does not exist (%s)",
-                            path, dir_len, dir, image_strerror(e, buf, sizeof buf));
-        return cst_fail(err, CST_ERR_IO, "%s: cannot create a file in directory \"%.*s\": %s", path,
-                        dir_len, dir, image_strerror(e, buf, sizeof buf));
-    }
+    const char *ext = image_path_ext(path);
+    if (!ext)
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "%s: no file extension to choose an image format (" IMAGE_SUPPORTED ")", path);
+    return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown image extension \".%s\" (" IMAGE_SUPPORTED ")",
+                    path, ext);
+}
+
+CstStatus image_write_check(const char *path, CstError *err)
+{
+    if (!path || !path[0]) return cst_fail(err, CST_ERR_INVALID_ARG, "image_write: empty path");
+    const ImageWriter *fmt;
+    CstStatus st = image_writer_for(path, &fmt, err);
+    if (st != CST_OK) return st;
+    struct stat sb;
+    int r = stat(path, &sb);
+    if (r == 0 && S_ISDIR(sb.st_mode)) return cst_fail(err, CST_ERR_IO, "%s: is a directory", path);
+    if (r != 0 && errno == ENAMETOOLONG) return image_fail_errno(err, errno, path, "cannot write");
+    /* The temporary file is where a name too long, a read-only or pseudo file system
+     * (/proc, /sys) or a missing permission shows: make it exactly as the write will. */
+    char *tmp = NULL;
+    int fd = -1;
+    st = path_temp_create(path, NULL, NULL, &tmp, &fd, err);
+    if (st != CST_OK) return st;
+    close(fd);
+    unlink(tmp);
     free(tmp);
-    return cst_fail(err, CST_ERR_IO, "%s: cannot create a temporary file (names %s.tmp.* all taken)",
-                    path, path);
+    return CST_OK;
 }
 
 CstStatus image_write(const char *path, const float *rgb, int width, int height, CstError *err)
 {
     static const ImageWriteOptions plain;
     return image_write_opt(path, rgb, width, height, &plain, err);
+}
+
+/* Encodes into the open temporary file and moves it into place. */
+static CstStatus image_write_temp(FILE *fp, const char *tmp, const char *path, const ImageWriter *fmt,
+                                  const float *rgb, int width, int height,
+                                  const ImageWriteOptions *opt, CstError *err)
+{
+    CstStatus st = fmt->write(fp, path, rgb, width, height, opt, err);
+    if (st == CST_OK && fflush(fp) != 0) st = image_fail_errno(err, errno, path, "write failed");
+    /* Data on disk before the rename: otherwise a crash right after it can leave an
+     * empty file under the final name on some filesystems. */
+    if (st == CST_OK && fsync(fileno(fp)) != 0 && errno != EINVAL)
+        st = image_fail_errno(err, errno, path, "fsync failed");
+    if (fclose(fp) != 0 && st == CST_OK) st = image_fail_errno(err, errno, path, "write failed");
+    if (st == CST_OK && rename(tmp, path) != 0)
+        st = image_fail_errno(err, errno, path, "cannot move the temporary file into place");
+    return st;
 }
 
 CstStatus image_write_opt(const char *path, const float *rgb, int width, int height,
@@ -918,44 +1015,33 @@ CstStatus image_write_opt(const char *path, const float *rgb, int width, int hei
     if (!rgb || width <= 0 || height <= 0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: invalid image (%d x %d%s)", path, width,
                         height, rgb ? "" : ", no pixels");
-    const char *ext = image_path_ext(path);
-    ImageFileFormat format = image_format_from_path(path);
-    const ImageWriter *fmt = NULL;
-    for (size_t i = 0; i < sizeof image_writers / sizeof image_writers[0]; ++i)
-        if (image_writers[i].format == format) fmt = &image_writers[i];
-    if (fmt && opt->extra_channels > 0 && fmt->write != image_write_exr)
+    const ImageWriter *fmt;
+    CstStatus st = image_writer_for(path, &fmt, err);
+    if (st != CST_OK) return st;
+    if (opt->extra_channels > 0 && fmt->write != image_write_exr)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: extra channels need an .exr output", path);
     if (opt->extra_channels < 0 || opt->extra_channels > IMAGE_MAX_EXTRA)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d extra channels (at most %d)", path,
                         opt->extra_channels, IMAGE_MAX_EXTRA);
-    if (!fmt) {
-        if (!ext)
-            return cst_fail(err, CST_ERR_INVALID_ARG,
-                            "%s: no file extension to choose an image format (" IMAGE_SUPPORTED ")", path);
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown image extension \".%s\" (" IMAGE_SUPPORTED ")",
-                        path, ext);
-    }
+    st = image_metadata_check(path, opt->out, err);
+    if (st != CST_OK) return st;
 
+    path_temp_remove_stale(path);
+    CstTempFileFn told = opt->out ? opt->out->temp_file : NULL;
+    void *user = opt->out ? opt->out->temp_file_user : NULL;
     char *tmp = NULL;
     int fd = -1;
-    CstStatus st = image_open_temp(path, &tmp, &fd, err);
+    st = path_temp_create(path, told, user, &tmp, &fd, err);
     if (st != CST_OK) return st;
     FILE *fp = fdopen(fd, "wb");
     if (!fp) {
         st = image_fail_errno(err, errno, path, "cannot open temporary file");
         close(fd);
     } else {
-        st = fmt->write(fp, path, rgb, width, height, opt, err);
-        if (st == CST_OK && fflush(fp) != 0) st = image_fail_errno(err, errno, path, "write failed");
-        /* Data on disk before the rename: otherwise a crash right after it can leave an
-         * empty file under the final name on some filesystems. */
-        if (st == CST_OK && fsync(fileno(fp)) != 0 && errno != EINVAL)
-            st = image_fail_errno(err, errno, path, "fsync failed");
-        if (fclose(fp) != 0 && st == CST_OK) st = image_fail_errno(err, errno, path, "write failed");
-        if (st == CST_OK && rename(tmp, path) != 0)
-            st = image_fail_errno(err, errno, path, "cannot move the temporary file into place");
+        st = image_write_temp(fp, tmp, path, fmt, rgb, width, height, opt, err);
     }
     if (st != CST_OK) unlink(tmp);
+    if (told) told(user, NULL);
     free(tmp);
     return st;
 }

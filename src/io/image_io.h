@@ -16,6 +16,10 @@ typedef struct ImageWriteOptions {
     int extra_channels;       /* EXR only: channels after R, G, B (0..IMAGE_MAX_EXTRA) */
     const char *const *extra_names; /* their EXR names, e.g. "albedo.R", "Z" */
     const float *extra;       /* width * height * extra_channels floats, interleaved per pixel */
+    /* The caller's metadata (PNG text chunks, EXR string attributes; PFM has none) and
+     * temporary-file callback; NULL = neither. Keys and values are checked as the public
+     * header states (image_write_opt fails with CST_ERR_INVALID_ARG otherwise). */
+    const CstImageWriteOptions *out;
 } ImageWriteOptions;
 
 /* rgb: width * height * 3 linear floats, row 0 = the top row of the image. */
@@ -23,6 +27,11 @@ CstStatus image_write(const char *path, const float *rgb, int width, int height,
 /* The same with options; extra channels with a non-EXR path fail with CST_ERR_INVALID_ARG. */
 CstStatus image_write_opt(const char *path, const float *rgb, int width, int height,
                           const ImageWriteOptions *opt, CstError *err);
+/* What image_write_opt checks before it writes, so that a render is refused before it
+ * starts rather than thrown away at the end: a writable format, a path that is not a
+ * directory and whose name is not too long, and the temporary file the write will use
+ * (same name rule, io/path.h), created and removed. */
+CstStatus image_write_check(const char *path, CstError *err);
 /* Image file formats caustic reads (textures) or writes (renders). */
 typedef enum ImageFileFormat {
     IMAGE_FILE_NONE, /* no extension, or one that names no image format below */
