@@ -1,6 +1,5 @@
-/* Command-line parsing for the caustic tool: the option table, strict number parsing
- * (whole string consumed, range checked) and the help text, kept side by side so they
- * cannot drift apart. */
+/* Command-line parsing for the caustic tool: the option tables and strict number parsing
+ * (whole string consumed, range checked); the help texts are in help.c. */
 #include "args.h"
 
 #include <ctype.h>
@@ -17,7 +16,8 @@ typedef enum ArgsOpt {
     ARGS_OPT_OUTPUT, ARGS_OPT_SPP, ARGS_OPT_TIME, ARGS_OPT_THREADS, ARGS_OPT_SEED,
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
-    ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH
+    ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
+    ARGS_OPT_FORCE
 } ArgsOpt;
 
 typedef struct ArgsOptSpec {
@@ -44,166 +44,13 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"aov",        0,   true,  ARGS_OPT_AOV},
     {"crop",       0,   true,  ARGS_OPT_CROP},
     {"max-depth",  0,   true,  ARGS_OPT_MAX_DEPTH},
+    {"json",       0,   false, ARGS_OPT_JSON},  /* --json or --json=FILE */
+    {"force",      0,   false, ARGS_OPT_FORCE},
     {"quiet",      'q', false, ARGS_OPT_QUIET},
     {"help",       'h', false, ARGS_OPT_HELP},
 };
 #define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
 
-/* The --help text (docs/cli.md says the same at more length). */
-static const char ARGS_HELP[] =
-"caustic " CST_VERSION_STRING ": a physically based renderer\n"
-"\n"
-"Usage:\n"
-"  caustic render [SCENE] [options]\n"
-"  caustic render --help\n"
-"  caustic info [SCENE] [--accel NAME]\n"
-"  caustic bench rays [MESH | --cornell] [--stadium] [--accel NAME[,NAME...]]\n"
-"                     [--threads N] [--json]\n"
-"  caustic verify [SCENE] --integrators NAME,NAME[,...] [--spp N | --time S]\n"
-"                 [--threads N] [--seed S] [--alpha A] [--block N] [--map OUT.png]\n"
-"                 [--convergence K] [--json] [--width W] [--height H] [--quiet]\n"
-"  caustic --help | -h\n"
-"  caustic --version\n"
-"\n"
-"Renders SCENE, a caustic JSON scene file (*.json, see docs/scene-format.md) or a\n"
-"pbrt-v4 scene (*.pbrt, see docs/pbrt-compat.md), or the built-in Cornell box when SCENE\n"
-"is omitted, and writes one image. 'info' loads the scene, builds its acceleration\n"
-"structure and prints the load time, its size, build time and memory.\n"
-"\n"
-"Options (both --opt VALUE and --opt=VALUE are accepted; a later option wins):\n"
-"  -o, --output OUT     output image; the format follows the extension: .png (8-bit\n"
-"                       sRGB), .exr or .pfm (linear float). Default: the scene file's\n"
-"                       \"output\", else <scene file stem>.png in the current directory,\n"
-"                       cornell-box.png for the built-in scene. The extension and the\n"
-"                       directory are checked before rendering starts.\n"
-"      --spp N          samples per pixel, N >= 1 (default: the scene's, else 16)\n"
-"      --time SECONDS   stop after SECONDS of rendering, > 0; with --spp too, stops at\n"
-"                       whichever comes first (default: no time limit)\n"
-"      --threads N      render threads, 0..1024; 0 = one per core (the default)\n"
-"      --seed S         random seed, any unsigned 64-bit integer, decimal or 0x-hex\n"
-"                       (default: the scene's, else 0)\n"
-"      --integrator NAME  path (default: NEE and BSDF sampling combined by MIS),\n"
-"                       path-nee (emitters reached by NEE only), path-bsdf (BSDF\n"
-"                       sampling only), light (light tracing from the emitters; --spp\n"
-"                       counts iterations of W x H light paths; misses what is seen in\n"
-"                       mirrors or through glass), whitted (mirror and glass recursion\n"
-"                       with direct light only; biased by design), photon (photon\n"
-"                       mapping with final gathering; consistent but biased, photon\n"
-"                       count and radius from the scene file), sppm (stochastic\n"
-"                       progressive photon mapping; --spp counts iterations, each one\n"
-"                       camera sample per pixel and one photon pass; consistent but\n"
-"                       biased), bdpt (bidirectional path tracing, all\n"
-"                       connection strategies with MIS; --spp counts iterations of one\n"
-"                       light and one camera path per pixel), vcm (vertex connection\n"
-"                       and merging: bdpt plus photon merging with a shrinking radius,\n"
-"                       the first from the scene's \"radius\", else automatic;\n"
-"                       consistent); default: the scene's, else path\n"
-"      --filter NAME    box, tent, gaussian or mitchell (default: the scene's, else box)\n"
-"      --width W        image width in pixels, 1..65536 (default: the scene's, else 512)\n"
-"      --height H       image height in pixels, 1..65536 (default: the scene's, else\n"
-"                       512); --width and --height may each be given alone\n"
-"      --accel NAME     acceleration structure: bvh (default), kdtree, grid, list (brute\n"
-"                       force) or embree (when built with Embree); default: the scene's\n"
-"      --sampler NAME   random numbers of camera paths: independent (PCG32, the\n"
-"                       default), stratified (jittered; 2D strata nx x ny = spp, so\n"
-"                       choose square or power-of-two spp) or sobol (Owen-scrambled\n"
-"                       Sobol'; fewer samples for the same noise, see docs/benchmarks.md).\n"
-"                       Light paths (light, photon, sppm, bdpt, vcm) stay independent\n"
-"      --max-depth N    maximum bounces of a path, 0..2147483647; 0 = unbounded, also\n"
-"                       over a scene's own limit (default: the scene's, else unbounded)\n"
-"      --exposure EV    scale the written image by 2^EV, -64..64 (default: the scene's,\n"
-"                       else 0); the film's stored means are not changed\n"
-"      --png-linear     write PNG values linearly (no sRGB curve; tagged gAMA 1.0)\n"
-"      --aov LIST       extra EXR channels, comma-separated: albedo (albedo.R/G/B),\n"
-"                       normal (N.X/Y/Z), depth (Z), variance (variance.R/G/B); needs an\n"
-"                       .exr output (docs/cli.md)\n"
-"      --crop X0,X1,Y0,Y1  render and write only the pixels X0 <= x < X1, Y0 <= y < Y1\n"
-"                       (y = 0 the top row) of the image; each holds the value it has in\n"
-"                       the whole image (default: the scene's crop, else none)\n"
-"  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
-"  -h, --help           show this help and exit\n"
-"      --version        print the version and exit\n"
-"\n"
-"Progress goes to stderr: a redrawn bar when stderr is a terminal, otherwise one line\n"
-"per 10% of the render. The image is written atomically (temporary file, rename).\n"
-"\n"
-"Benchmark: caustic bench rays\n"
-"Traces the acceleration benchmark's three ray sets (/work/shared/bench/RAYSETS.md:\n"
-"primary closest hits, secondary bounce rays generated once and shared by every back\n"
-"end, and the bounce rays as occlusion queries) through each back end with 1 thread and\n"
-"with N threads, and prints build time, bytes per triangle, M rays/s, the speed ratios to\n"
-"Embree (its default configuration) and to Embree in its robust mode (robust box test,\n"
-"edge-consistent triangle test: the guarantees of our BVH), hits and sum of t, checked\n"
-"against the published checksums (or, for scenes without them, against the first back\n"
-"end).\n"
-"  MESH                 a triangle mesh file (read through the mesh importer, e.g. a\n"
-"                       PLY of /work/shared/meshes); default: the built-in Cornell box\n"
-"      --cornell        the built-in Cornell box (the default)\n"
-"      --stadium        put the scene inside a huge box of 12 triangles (teapot in a\n"
-"                       stadium); alone: a built-in 20,480-triangle bumpy ball inside it\n"
-"      --accel LIST     comma-separated back ends: bvh, kdtree, grid, list, embree,\n"
-"                       embree-robust (default: all this build has; list only for\n"
-"                       scenes of at most 1,000 triangles)\n"
-"      --threads N      the second thread count, 0..1024; 0 = one per core (default)\n"
-"      --json           one JSON object per line on stdout instead of the table\n"
-"\n"
-"Consistency check: caustic verify\n"
-"Renders SCENE (or the built-in Cornell box) once per integrator, each with its own seed,\n"
-"and tests every pair for agreement: per channel, the z-score of the difference of the\n"
-"image means and of every NxN block mean, z = (mean_a - mean_b) / sqrt(var_a + var_b),\n"
-"with variances from the per-pixel sample variances. A pair disagrees if any |z| exceeds\n"
-"the critical z of a Sidak correction over all tests of all pairs at family-wise\n"
-"significance A. Prints one row per pair (image-mean z per channel, largest |block z|,\n"
-"failing blocks) and the critical z; see docs/cli.md for the statistics.\n"
-"Consistent but biased integrators (photon, sppm, vcm) are judged by convergence\n"
-"instead, against the first unbiased integrator in the list (the reference, e.g. path):\n"
-"each is rendered twice (independent seeds) at K levels of work, 1, 4, 16, ... times the\n"
-"base (sppm, vcm: --spp iterations; photon: the scene's photon count, and its radius\n"
-"halved per level if the scene fixes one); the disagreement D (the mean squared block\n"
-"bias, estimated net of noise) and the image mean must be within noise at the last\n"
-"level, or D must fall significantly at every step.\n"
-"  SCENE                a caustic JSON or pbrt-v4 scene; default: the built-in Cornell box\n"
-"      --integrators LIST  comma-separated, at least two (any name --integrator takes;\n"
-"                       a name may repeat: a same-integrator pair checks the test itself)\n"
-"      --spp N          samples per pixel of each render (default: the scene's, else 16)\n"
-"      --time SECONDS   render each integrator for SECONDS (equal time); with --spp\n"
-"                       (or a scene's spp) too, each stops at whichever comes first\n"
-"      --seed S         base seed (default: the scene's, else 0); integrator k (0-based,\n"
-"                       in list order) renders with SplitMix64's output k+1 from S, shown\n"
-"                       in the report, so 'caustic render --seed' reproduces it\n"
-"      --alpha A        family-wise significance, 0 < A < 1 (default: 0.01)\n"
-"      --block N        block side in pixels, 1..65536 (default: 16); edge blocks are\n"
-"                       partial and tested with their own pixel counts. Each block needs\n"
-"                       many samples (block^2 x spp >= 65536, else a warning) for z to be\n"
-"                       near normal with heavy-tailed estimators such as path-bsdf\n"
-"      --map OUT        false-colour map of the largest block |z| over channels and\n"
-"                       pairs, at the image's size (.png, .exr or .pfm): black to blue\n"
-"                       up to z_crit/2, blue to yellow at z_crit, red beyond\n"
-"      --convergence K  levels of the convergence check, 2..6 (default: 3)\n"
-"      --json           one JSON object per pair (then per convergence check) on stdout\n"
-"                       instead of the report\n"
-"      --width W, --height H, --threads N, -q/--quiet: as for render\n"
-"\n"
-"Exit status:\n"
-"  0  success: the image was written (bench rays: every check passed; verify: every\n"
-"     pair of integrators agrees and every consistent one converges)\n"
-"  1  internal error: out of memory, a library failure, or an I/O error while writing\n"
-"     the image although its directory was checked writable before rendering\n"
-"     (disk full, file system error)\n"
-"     bench rays: a checksum did not match; verify: a pair of integrators disagrees\n"
-"     or a consistent integrator is not shown to converge\n"
-"  2  bad input or usage: unknown command or option, invalid value, unsupported scene\n"
-"     or output format, a scene file that is missing, unreadable or invalid, an output\n"
-"     directory that does not exist or is not writable (checked before rendering)\n"
-"\n"
-"Examples:\n"
-"  caustic render --spp 64 -o box.png\n"
-"  caustic render scenes/cornell-box.json --time 60 --threads 8 -o box.exr\n"
-"  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n"
-"  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n"
-"  caustic verify --integrators path,path-nee,path-bsdf --spp 64 --map z.png\n";
-
-void args_print_help(FILE *f) { fputs(ARGS_HELP, f); }
 
 static void args_fail(ArgsError *err, bool hint, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
@@ -357,6 +204,32 @@ static void args_fail_unknown_option(ArgsError *err, const char *arg, const char
 
 /* ------------------------------------------------------------ option values */
 
+/* --crop X0,X1,Y0,Y1 into s->crop. */
+static bool args_parse_crop(const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    /* Four integers; their bounds against the image are checked by cst_render, which
+     * knows the final width and height. */
+    const char *p = value;
+    for (int k = 0; k < 4; k++) {
+        char *end;
+        errno = 0;
+        long c = strtol(p, &end, 10);
+        bool sep_ok = k < 3 ? *end == ',' : *end == '\0';
+        if (end == p || errno || !sep_ok || c < 0 || c > ARGS_MAX_DIMENSION) {
+            args_fail(err, false, "--crop: expected X0,X1,Y0,Y1: four integers from 0 to %d, got '%s'",
+                      ARGS_MAX_DIMENSION, value);
+            return false;
+        }
+        s->crop[k] = (int)c;
+        p = end + 1;
+    }
+    if (!(s->crop[0] < s->crop[1] && s->crop[2] < s->crop[3])) {
+        args_fail(err, false, "--crop: expected X0 < X1 and Y0 < Y1, got '%s'", value);
+        return false;
+    }
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -462,29 +335,8 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         }
         return true;
     }
-    case ARGS_OPT_CROP: {
-        /* Four integers; their bounds against the image are checked by cst_render, which
-         * knows the final width and height. */
-        const char *p = value;
-        for (int k = 0; k < 4; k++) {
-            char *end;
-            errno = 0;
-            long c = strtol(p, &end, 10);
-            bool sep_ok = k < 3 ? *end == ',' : *end == '\0';
-            if (end == p || errno || !sep_ok || c < 0 || c > ARGS_MAX_DIMENSION) {
-                args_fail(err, false, "--crop: expected X0,X1,Y0,Y1: four integers from 0 to %d, got '%s'",
-                          ARGS_MAX_DIMENSION, value);
-                return false;
-            }
-            s->crop[k] = (int)c;
-            p = end + 1;
-        }
-        if (!(s->crop[0] < s->crop[1] && s->crop[2] < s->crop[3])) {
-            args_fail(err, false, "--crop: expected X0 < X1 and Y0 < Y1, got '%s'", value);
-            return false;
-        }
-        return true;
-    }
+    case ARGS_OPT_CROP:
+        return args_parse_crop(value, s, err);
     case ARGS_OPT_MAX_DEPTH:
         if (!args_parse_long(value, 0, INT_MAX, &v)) {
             args_fail(err, false, "--max-depth: expected an integer from 0 (unbounded) to %d, got '%s'",
@@ -496,8 +348,20 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     case ARGS_OPT_QUIET:
         out->quiet = true;
         return true;
+    case ARGS_OPT_JSON:
+        if (value && value[0] == '\0') {
+            args_fail(err, false, "--json=FILE: expected a file name, got ''");
+            return false;
+        }
+        out->json = true;
+        out->json_path = value; /* NULL: stdout */
+        return true;
+    case ARGS_OPT_FORCE:
+        out->force = true;
+        return true;
     case ARGS_OPT_HELP:
-        out->command = ARGS_CMD_RENDER_HELP;
+        if (out->command != ARGS_CMD_HELP) out->help_for = out->command;
+        out->command = ARGS_CMD_HELP;
         return true;
     }
     args_fail(err, false, "internal error: unhandled option --%s", o->long_name);
@@ -543,7 +407,7 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
                 args_fail_unknown_option(err, arg, name, len);
                 return false;
             }
-            if (eq && !o->takes_value) {
+            if (eq && !o->takes_value && o->id != ARGS_OPT_JSON) { /* --json=FILE: optional */
                 args_fail(err, true, "--%s does not take a value (got '%s')", o->long_name,
                           arg);
                 return false;
@@ -569,6 +433,11 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
         if (!args_apply(o, value, out, err))
             return false;
     }
+    /* --time without --spp: as many samples as fit, whatever spp the scene file sets
+     * (the README's promise); with both, whichever comes first. */
+    if (out->command == ARGS_CMD_RENDER && out->settings.time_limit != CST_UNSET &&
+        out->settings.spp == CST_UNSET)
+        out->settings.spp = CST_SPP_UNLIMITED;
     return true;
 }
 
@@ -639,6 +508,7 @@ static bool args_parse_bench_rays(int argc, char **argv, int first, CliArgs *out
         }
         if (strcmp(arg, "-h") == 0) {
             out->command = ARGS_CMD_HELP;
+            out->help_for = ARGS_CMD_BENCH_RAYS;
             continue;
         }
         const char *name = arg + 2, *eq = strchr(name, '=');
@@ -686,6 +556,7 @@ static bool args_parse_bench_rays(int argc, char **argv, int first, CliArgs *out
             b->json = true;
         } else if (strcmp(o->long_name, "help") == 0) {
             out->command = ARGS_CMD_HELP;
+            out->help_for = ARGS_CMD_BENCH_RAYS;
         } else if (strcmp(o->long_name, "threads") == 0) {
             if (!args_parse_long(value, 0, ARGS_MAX_THREADS, &v)) {
                 args_fail(err, false,
@@ -714,6 +585,7 @@ static bool args_parse_bench(int argc, char **argv, CliArgs *out, ArgsError *err
     const char *what = argv[2];
     if (strcmp(what, "--help") == 0 || strcmp(what, "-h") == 0) {
         out->command = ARGS_CMD_HELP;
+        out->help_for = ARGS_CMD_BENCH_RAYS;
         return true;
     }
     if (strcmp(what, "rays") != 0) {
@@ -847,6 +719,7 @@ static bool args_apply_verify(const ArgsVerifyOpt *o, const char *value, CliArgs
     }
     if (strcmp(o->long_name, "help") == 0) {
         out->command = ARGS_CMD_HELP;
+        out->help_for = ARGS_CMD_VERIFY;
         return true;
     }
     for (size_t k = 0; k < ARGS_NUM_OPTS; k++) /* shared with render */
@@ -933,6 +806,53 @@ static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, Ar
     return true;
 }
 
+/* ------------------------------------------------------------ caustic help, caustic list */
+
+static const struct { const char *name; ArgsCommand command; } ARGS_COMMANDS[] = {
+    {"render", ARGS_CMD_RENDER}, {"info", ARGS_CMD_INFO},     {"bench", ARGS_CMD_BENCH_RAYS},
+    {"verify", ARGS_CMD_VERIFY}, {"list", ARGS_CMD_LIST},
+};
+
+static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *err)
+{
+    for (size_t k = 0; k < sizeof ARGS_COMMANDS / sizeof ARGS_COMMANDS[0]; k++)
+        if (strcmp(topic, ARGS_COMMANDS[k].name) == 0) {
+            out->command = ARGS_CMD_HELP;
+            out->help_for = ARGS_COMMANDS[k].command;
+            return true;
+        }
+    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list)", topic);
+    return false;
+}
+
+/* The kinds of `caustic list KIND` (cli/list.c lists them). */
+const char *const ARGS_LIST_KINDS[] = {"integrators", "samplers", "filters", "accels", "materials",
+                                       "lights", "formats", "metals", NULL};
+
+static bool args_parse_list(int argc, char **argv, CliArgs *out, ArgsError *err)
+{
+    out->command = ARGS_CMD_LIST;
+    if (argc < 3) return true;
+    const char *kind = argv[2];
+    if (strcmp(kind, "--help") == 0 || strcmp(kind, "-h") == 0) {
+        out->command = ARGS_CMD_HELP;
+        out->help_for = ARGS_CMD_LIST;
+        return true;
+    }
+    if (argc > 3) {
+        args_fail(err, true, "list: unexpected argument '%s' (only one KIND may be given)", argv[3]);
+        return false;
+    }
+    for (int k = 0; ARGS_LIST_KINDS[k]; k++)
+        if (strcmp(kind, ARGS_LIST_KINDS[k]) == 0) {
+            out->list_kind = ARGS_LIST_KINDS[k];
+            return true;
+        }
+    args_fail(err, true, "list: unknown kind '%s' (kinds: integrators, samplers, filters, accels, "
+              "materials, lights, formats, metals)", kind);
+    return false;
+}
+
 bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
 {
     memset(out, 0, sizeof *out);
@@ -945,8 +865,13 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         return false;
     }
     const char *cmd = argv[1];
-    if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
+    if (strcmp(cmd, "help") == 0 && argc == 3) { /* caustic help COMMAND */
+        return args_parse_help_topic(argv[2], out, err);
+    } else if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
         out->command = ARGS_CMD_HELP;
+        out->help_for = ARGS_CMD_HELP;
+    } else if (strcmp(cmd, "list") == 0) {
+        return args_parse_list(argc, argv, out, err);
     } else if (strcmp(cmd, "--version") == 0) {
         out->command = ARGS_CMD_VERSION;
     } else if (strcmp(cmd, "render") == 0) {
@@ -982,7 +907,7 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         else if (args_edit_distance(cmd, strlen(cmd), "verify") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'verify'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify)", cmd);
+            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list)", cmd);
         return false;
     }
     if (argc > 2) {

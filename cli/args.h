@@ -25,12 +25,12 @@
 
 typedef enum ArgsCommand {
     ARGS_CMD_RENDER,      /* caustic render ... */
-    ARGS_CMD_HELP,        /* caustic --help | -h | help */
-    ARGS_CMD_RENDER_HELP, /* caustic render --help */
+    ARGS_CMD_HELP,        /* caustic --help | -h | help [COMMAND] | COMMAND --help: help_for */
     ARGS_CMD_INFO,        /* caustic info [SCENE] [--accel NAME] */
     ARGS_CMD_VERSION,     /* caustic --version */
     ARGS_CMD_BENCH_RAYS,  /* caustic bench rays [MESH | --cornell] [--stadium] [--accel LIST] ... */
-    ARGS_CMD_VERIFY       /* caustic verify [SCENE] --integrators NAME,NAME[,...] ... */
+    ARGS_CMD_VERIFY,      /* caustic verify [SCENE] --integrators NAME,NAME[,...] ... */
+    ARGS_CMD_LIST         /* caustic list [KIND] */
 } ArgsCommand;
 
 #define ARGS_BENCH_MAX_ACCELS 6 /* each back end at most once */
@@ -75,6 +75,13 @@ typedef struct CliArgs {
      * default. progress and progress_user are left for main.c. */
     CstRenderSettings settings;
     bool quiet;
+    /* render: --json (summary on stdout) or --json=FILE (json_path); --force (render even
+     * when the images' memory estimate exceeds the memory available) */
+    bool json;
+    const char *json_path;
+    bool force;
+    ArgsCommand help_for; /* ARGS_CMD_HELP: the command whose help (ARGS_CMD_HELP: all) */
+    const char *list_kind; /* ARGS_CMD_LIST: NULL = every kind; points into argv */
     BenchArgs bench;   /* ARGS_CMD_BENCH_RAYS only */
     VerifyArgs verify; /* ARGS_CMD_VERIFY only */
 } CliArgs;
@@ -84,10 +91,15 @@ typedef struct ArgsError {
     bool hint;     /* append "see caustic --help": the command line itself was malformed */
 } ArgsError;
 
+/* The KINDs of `caustic list KIND`, NULL-terminated. */
+extern const char *const ARGS_LIST_KINDS[];
+
 /* Parses argv. Returns false on any usage error and fills *err; *out is then undefined. */
 bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err);
 
-/* Writes the full usage text (every option, defaults, exit codes, examples). */
-void args_print_help(FILE *f);
+/* Writes the usage text of one command (ARGS_CMD_RENDER, _INFO, _BENCH_RAYS, _VERIFY,
+ * _LIST: its options, exit codes and examples), or with ARGS_CMD_HELP every command's
+ * (cli/help.c). */
+void args_print_help(FILE *f, ArgsCommand command);
 
 #endif

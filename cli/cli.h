@@ -6,6 +6,8 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
 
 #include "args.h"
 #include "caustic/caustic.h"
@@ -36,19 +38,43 @@ int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds);
 /* Seconds on the monotonic clock (CLOCK_MONOTONIC): only differences mean anything. */
 double cli_clock_seconds(void);
 
+/* The progress display (progress.c). Zero-initialise, then set tty. */
 typedef struct CliProgress {
     bool tty;      /* redraw a bar in place; otherwise one line per 10% */
     int last_step; /* plain mode: the last 10% step printed, 0..10 */
     int last_len;  /* bar mode: characters of the last line drawn, to blank leftovers */
     bool drawn;    /* bar mode: a bar is on screen without its newline */
+    char phase[32];      /* the current phase (CST_PHASE_*), "" before the first */
+    double phase_start;  /* the render's elapsed seconds when it began: its ETA's origin */
+    double last_elapsed; /* the last elapsed time reported */
 } CliProgress;
 
-/* A CstProgressFn: user is a CliProgress. */
+/* A CstProgressFn and a CstPhaseFn: user is a CliProgress. */
 int cli_progress_report(void *user, double fraction, double elapsed);
+void cli_progress_phase(void *user, const char *phase);
 void cli_progress_finish(CliProgress *p, double seconds);
 void cli_progress_abort(CliProgress *p);
 
+/* summary.c: the memory check before a render and the --json summary after it. */
+typedef struct CliSummary {
+    const char *scene;   /* NULL: the built-in Cornell box */
+    const char *output;
+    double load_seconds, accel_seconds, write_seconds, total_seconds;
+    CstRenderStats stats; /* its seconds: the render's */
+    uint64_t memory_estimate;
+} CliSummary;
+uint64_t cli_available_memory(void);
+/* Whether the images' estimated memory (*estimate) fits in the memory available; prints
+ * the error (or, with force, a warning) when not. */
+bool cli_check_memory(const CstScene *scene, const CstRenderSettings *settings, bool force,
+                      uint64_t *estimate);
+FILE *cli_summary_open(const char *path);
+bool cli_summary_write(FILE *f, const CliSummary *s);
+
 int cli_render(const CliArgs *a);
 int cli_verify(const CliArgs *a);
+/* caustic list [KIND] and caustic --version (list.c), on stdout. */
+int cli_list(const CliArgs *a);
+int cli_version(void);
 
 #endif

@@ -1,5 +1,5 @@
 /* The CLI's shared helpers: exit codes, error printing, output and scene path checks,
- * scene loading with --accel, and the progress display on stderr. */
+ * scene loading with --accel (the progress display is in progress.c). */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -116,99 +116,6 @@ bool cli_check_output(const char *path, const char *origin)
 }
 
 
-/* ------------------------------------------------------------ progress */
-
-
-/* m:ss, or h:mm:ss from one hour on. */
-static void cli_format_clock(double seconds, char *buf, size_t size)
-{
-    if (!(seconds >= 0.0) || seconds > 359999.0) {
-        snprintf(buf, size, "--:--");
-        return;
-    }
-    long s = (long)(seconds + 0.5);
-    if (s >= 3600)
-        snprintf(buf, size, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
-    else
-        snprintf(buf, size, "%ld:%02ld", s / 60, s % 60);
-}
-
-static void cli_progress_draw(CliProgress *p, double fraction, double elapsed)
-{
-    enum { BAR = 30 };
-    char line[160], eta[32], el[32];
-    int filled = (int)(fraction * BAR);
-    /* The first instants extrapolate badly; show no ETA until there is something to go on. */
-    if (fraction > 0.0 && fraction < 1.0 && elapsed >= 0.5)
-        cli_format_clock(elapsed * (1.0 - fraction) / fraction, eta, sizeof eta);
-    else if (fraction >= 1.0)
-        cli_format_clock(0.0, eta, sizeof eta);
-    else
-        snprintf(eta, sizeof eta, "--:--");
-    cli_format_clock(elapsed, el, sizeof el);
-
-    int n = snprintf(line, sizeof line, "\r[%.*s%.*s] %3d%%  ETA %s  elapsed %s",
-                     filled, "##############################",
-                     BAR - filled, "..............................",
-                     (int)(fraction * 100.0), eta, el);
-    if (n < 0)
-        return;
-    if (n >= (int)sizeof line)
-        n = (int)sizeof line - 1;
-    int len = n - 1; /* without the '\r' */
-    fputs(line, stderr);
-    if (len < p->last_len)
-        fprintf(stderr, "%*s", p->last_len - len, "");
-    fflush(stderr);
-    p->last_len = len;
-    p->drawn = true;
-}
-
-/* CstProgressFn: called from the rendering (calling) thread about ten times a second.
- * Returns 0: the CLI never cancels a render. */
-int cli_progress_report(void *user, double fraction, double elapsed)
-{
-    CliProgress *p = user;
-    if (!(fraction >= 0.0))
-        fraction = 0.0;
-    if (fraction > 1.0)
-        fraction = 1.0;
-    if (p->tty) {
-        cli_progress_draw(p, fraction, elapsed);
-        return 0;
-    }
-    /* A long gap between calls may cross several steps; print only the latest. */
-    int step = (int)(fraction * 10.0 + 1e-9);
-    if (step > p->last_step) {
-        p->last_step = step;
-        fprintf(stderr, "caustic: %d%% (elapsed %.1f s)\n", step * 10, elapsed);
-    }
-    return 0;
-}
-
-/* After a successful render: complete the bar, or the 100% line if the library's last
- * report fell short of it (a very short render may not report at all). */
-void cli_progress_finish(CliProgress *p, double seconds)
-{
-    if (p->tty) {
-        cli_progress_draw(p, 1.0, seconds);
-        fputc('\n', stderr);
-        p->drawn = false;
-    } else if (p->last_step < 10) {
-        p->last_step = 10;
-        fprintf(stderr, "caustic: 100%% (elapsed %.1f s)\n", seconds);
-    }
-}
-
-/* After a failed render: end the bar's line so the error message starts on its own. */
-void cli_progress_abort(CliProgress *p)
-{
-    if (p->tty && p->drawn) {
-        fputc('\n', stderr);
-        p->drawn = false;
-    }
-}
-
 /* ------------------------------------------------------------ scenes */
 
 /* The scene argument's format, checkable before anything is loaded. */
@@ -225,8 +132,9 @@ bool cli_check_scene_path(const CliArgs *a)
     return true;
 }
 
-/* Loader warnings (pbrt scenes): printed as they come; a long list is cut after the
- * first CLI_MAX_WARNINGS with a count of the rest, printed by cli_load_scene. */
+/* Loader warnings (pbrt's approximations, a JSON mesh's missing .mtl): printed as they
+ * come; a long list is cut after the first CLI_MAX_WARNINGS with a count of the rest,
+ * printed by cli_load_scene. */
 #define CLI_MAX_WARNINGS 50
 static void cli_print_warning(void *user, CstWarningCode code, const char *message)
 {
@@ -258,18 +166,17 @@ int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds)
             fprintf(stderr, "caustic: error: scene '%s' is a directory\n", a->scene_path);
             return CLI_EXIT_USAGE;
         }
-        if (cli_has_suffix(a->scene_path, ".pbrt")) {
-            int warnings = 0;
-            CstLoadOptions opt = {0};
-            opt.warning = cli_print_warning;
-            opt.warning_user = &warnings;
+        int warnings = 0;
+        CstLoadOptions opt = {0};
+        opt.warning = cli_print_warning;
+        opt.warning_user = &warnings;
+        if (cli_has_suffix(a->scene_path, ".pbrt"))
             status = cst_scene_load_pbrt(a->scene_path, &opt, &scene, &err);
-            if (warnings > CLI_MAX_WARNINGS)
-                fprintf(stderr, "caustic: warning: %d more warnings not shown\n",
-                        warnings - CLI_MAX_WARNINGS);
-        } else {
-            status = cst_scene_load_json(a->scene_path, &scene, &err);
-        }
+        else
+            status = cst_scene_load_json_opt(a->scene_path, &opt, &scene, &err);
+        if (warnings > CLI_MAX_WARNINGS)
+            fprintf(stderr, "caustic: warning: %d more warnings not shown\n",
+                    warnings - CLI_MAX_WARNINGS);
     } else {
         status = cst_scene_create_cornell_box(&scene, &err);
     }
@@ -279,11 +186,14 @@ int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds)
         /* Nothing the user wrote can break the built-in scene. */
         return a->scene_path ? cli_exit_code(status, CLI_STAGE_LOAD) : CLI_EXIT_INTERNAL;
     }
-    if (read_seconds) {
-        CstSceneInfo in;
-        cst_scene_info(scene, &in);
+    CstSceneInfo in;
+    cst_scene_info(scene, &in);
+    if (read_seconds)
         *read_seconds = cli_clock_seconds() - t0 - in.accel_build_seconds;
-    }
+    if (in.lights == 0)
+        fprintf(stderr, "caustic: warning: %s has no light: no emitting shape, no point, spot or "
+                "directional light and no environment, so every image of it is black\n",
+                a->scene_path ? a->scene_path : "the scene");
     if (a->accel) {
         status = cst_scene_set_accel(scene, a->accel, &err);
         if (status != CST_OK) {

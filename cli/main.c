@@ -64,12 +64,15 @@ int main(int argc, char **argv)
     int code = CLI_EXIT_OK;
     switch (args.command) {
     case ARGS_CMD_HELP:
-    case ARGS_CMD_RENDER_HELP:
-        args_print_help(stdout);
+        args_print_help(stdout, args.help_for);
         code = cli_finish_stdout();
         break;
     case ARGS_CMD_VERSION:
-        printf("caustic %s\n", CST_VERSION_STRING);
+        cli_version();
+        code = cli_finish_stdout();
+        break;
+    case ARGS_CMD_LIST:
+        cli_list(&args);
         code = cli_finish_stdout();
         break;
     case ARGS_CMD_RENDER:

@@ -1,6 +1,7 @@
 /* caustic render and caustic info: load the scene, print the job line, render with
  * progress, write the image and the summary; info prints the scene's size and its
  * acceleration structure's build time and memory. */
+#include <errno.h>
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -112,6 +113,9 @@ int cli_render(const CliArgs *a)
     CstRenderSettings settings = a->settings;
     CstRenderStats stats = {0};
     CliMetadata meta = {0};
+    CliSummary summary = {.scene = a->scene_path};
+    FILE *json = NULL;
+    const double t_start = cli_clock_seconds();
 
     /* Everything checkable from the command line alone, before the scene is loaded. */
     if (!cli_check_scene_path(a))
@@ -124,6 +128,9 @@ int cli_render(const CliArgs *a)
     if (code != CLI_EXIT_OK)
         return code;
     code = CLI_EXIT_INTERNAL;
+    /* The loader's time without its acceleration build(s), which --accel may repeat. */
+    summary.load_seconds = read_seconds;
+    summary.accel_seconds = cli_clock_seconds() - t_start - read_seconds;
     if (a->command == ARGS_CMD_INFO) {
         cli_print_info(a, scene, read_seconds);
         code = CLI_EXIT_OK;
@@ -166,8 +173,17 @@ int cli_render(const CliArgs *a)
             goto done;
         }
     }
+    if (!cli_check_memory(scene, &settings, a->force, &summary.memory_estimate)) {
+        code = CLI_EXIT_USAGE;
+        goto done;
+    }
+    if (a->json && !(json = cli_summary_open(a->json_path))) {
+        code = CLI_EXIT_USAGE;
+        goto done;
+    }
     if (!a->quiet) {
         settings.progress = cli_progress_report;
+        settings.progress_phase = cli_progress_phase;
         settings.progress_user = &progress;
         cli_print_job(a, scene, &settings, output);
     }
@@ -184,6 +200,7 @@ int cli_render(const CliArgs *a)
     if (!a->quiet)
         cli_progress_finish(&progress, stats.seconds);
 
+    double t_write = cli_clock_seconds();
     {
         /* The image records how it was made (docs/cli.md, "Metadata"); no temporary file
          * survives a signal during the write. */
@@ -199,6 +216,7 @@ int cli_render(const CliArgs *a)
         code = cli_exit_code(status, CLI_STAGE_WRITE);
         goto done;
     }
+    summary.write_seconds = cli_clock_seconds() - t_write;
     if (!a->quiet)
         cli_print_summary(output, &stats);
     if (stats.nonfinite > 0)
@@ -208,9 +226,20 @@ int cli_render(const CliArgs *a)
                 stats.samples ? 100.0 * (double)stats.nonfinite / (double)stats.samples : 0.0,
                 stats.samples);
     code = CLI_EXIT_OK;
+    if (json) {
+        summary.output = output;
+        summary.stats = stats;
+        summary.total_seconds = cli_clock_seconds() - t_start;
+        if (!cli_summary_write(json, &summary)) {
+            fprintf(stderr, "caustic: error: writing the --json summary: %s\n", strerror(errno));
+            code = CLI_EXIT_INTERNAL;
+        }
+    }
 
 done:
     cli_metadata_free(&meta);
+    if (json && json != stdout)
+        fclose(json);
     cst_film_destroy(film);
     cst_scene_destroy(scene);
     return code;

@@ -289,6 +289,7 @@ static int cli_verify_render(const CliArgs *a, CstScene *scene, CstRenderSetting
     if (!a->quiet && progress.tty) {
         settings.progress = cli_progress_report;
         settings.progress_user = &progress;
+        settings.progress_phase = cli_progress_phase;
     }
     CstStatus status = cst_render(scene, &settings, film, stats, &err);
     if (status != CST_OK) {

@@ -63,7 +63,9 @@ typedef enum CstWarningCode {
     CST_WARN_UNSUPPORTED = 1, /* a directive, type or feature skipped entirely */
     CST_WARN_APPROXIMATED,    /* mapped to the nearest thing caustic has (docs/pbrt-compat.md) */
     CST_WARN_PARAMETER_IGNORED, /* a parameter the mapping does not use */
-    CST_WARN_GEOMETRY         /* degenerate triangles dropped, unclosed blocks and the like */
+    CST_WARN_GEOMETRY,        /* degenerate triangles dropped, unclosed blocks and the like */
+    CST_WARN_MISSING_FILE     /* a file another file names is missing (an OBJ's .mtl):
+                               * loaded with defaults instead */
 } CstWarningCode;
 typedef void (*CstWarningFn)(void *user, CstWarningCode code, const char *message);
 
@@ -86,6 +88,10 @@ CST_API CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *op
 CST_API CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *name,
                                      const CstLoadOptions *options, CstScene **out,
                                      CstError *err);
+/* cst_scene_load_json with load options: the warning callback (a mesh file's missing
+ * .mtl, ...); no_file_access is not honoured by the JSON loader. options may be NULL. */
+CST_API CstStatus cst_scene_load_json_opt(const char *path, const CstLoadOptions *options,
+                                          CstScene **out, CstError *err);
 /* Accepts NULL. */
 CST_API void cst_scene_destroy(CstScene *scene);
 /* The output path named in the scene file, or NULL. Owned by the scene. */
@@ -105,6 +111,9 @@ typedef struct CstSceneInfo {
     size_t instanced_triangles; /* triangles of those objects, each counted once */
     size_t instance_bytes;      /* the objects' geometry and BVHs, the instance records and
                                  * the top-level tree */
+    int lights;                 /* every light source: emitting shapes, point, spot and
+                                 * directional lights, the environment; 0 = the render is
+                                 * black (callers warn) */
 } CstSceneInfo;
 CST_API void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
 
@@ -339,10 +348,47 @@ CST_API const char *cst_sampler_name(CstSampler sampler);
 /* "albedo", "normal", "depth", "variance" (one name) to its CST_AOV_ bit; 0 if unknown. */
 CST_API int cst_aov_from_name(const char *name);
 
+/* The names the library accepts, for listings (`caustic list`): each kind's table read
+ * where the library keeps it. */
+typedef enum CstNameKind {
+    CST_NAMES_INTEGRATOR = 1, /* cst_integrator_from_name's names (not the aliases) */
+    CST_NAMES_SAMPLER,        /* cst_sampler_from_name */
+    CST_NAMES_FILTER,         /* cst_filter_from_name */
+    CST_NAMES_ACCEL,          /* cst_scene_set_accel, only the back ends this build has */
+    CST_NAMES_MATERIAL,       /* a JSON scene's material "type" */
+    CST_NAMES_LIGHT,          /* a JSON scene's light "type" (area lights are shapes with
+                               * "emission"; the environment is its own section) */
+    CST_NAMES_OUTPUT_FORMAT,  /* extensions cst_film_write writes: "png", "exr", "pfm" */
+    CST_NAMES_METAL           /* a conductor's "metal" presets */
+} CstNameKind;
+/* The index-th name (from 0) of a kind, or NULL past the last one (or for an unknown
+ * kind). Static strings. */
+CST_API const char *cst_list_names(CstNameKind kind, int index);
+
+/* What this build of the library is: for `caustic --version` and bug reports. */
+typedef struct CstBuildInfo {
+    const char *version;    /* CST_VERSION_STRING of the library */
+    const char *compiler;   /* e.g. "gcc 12.2.0" */
+    const char *isa;        /* the widest vector ISA compiled for: "AVX-512", "AVX2",
+                             * "AVX", "SSE4.2", "SSE2" or "generic" */
+    const char *build_type; /* CMake's build type ("Release", ...), or "unknown" */
+    int embree;             /* 1: the Embree back end is built in */
+    int mpi, sdl2;          /* 1: built with MPI (distributed rendering), SDL2 (preview) */
+    int sanitizers;         /* 1: built with -fsanitize */
+} CstBuildInfo;
+CST_API void cst_build_info(CstBuildInfo *info);
+
 /* Returns 0 to go on; nonzero cancels the render: it stops at the next work-item
  * boundary (a tile, a chunk of light paths, an SPPM phase's unit), and cst_render
  * returns CST_ERR_CANCELLED without a film (*out stays NULL). */
 typedef int (*CstProgressFn)(void *user, double fraction_done, double elapsed_seconds);
+
+/* The phases a render reports through CstRenderSettings.progress_phase: CST_PHASE_PHOTONS,
+ * the photon integrator's single-threaded photon pass (maps built before any camera
+ * ray); CST_PHASE_RENDER, the passes of samples or iterations (every integrator). */
+#define CST_PHASE_PHOTONS "photons"
+#define CST_PHASE_RENDER  "render"
+typedef void (*CstPhaseFn)(void *user, const char *phase);
 
 /* The value cst_render_settings_init gives every int and double field of
  * CstRenderSettings: "not set here: the scene's value, else the default". Compare with
@@ -397,7 +443,15 @@ typedef struct CstRenderSettings {
     CstProgressFn progress;   /* called from the calling thread about 10 times a second;
                                * nonzero return: cancel (CST_ERR_CANCELLED) */
     void *progress_user;
+    /* Optional, with progress: called (with progress_user) as each phase of the render
+     * starts, and progress's fraction_done then counts within that phase. NULL: one
+     * fraction over the whole render. */
+    CstPhaseFn progress_phase;
 } CstRenderSettings;
+
+/* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit
+ * (required), as many samples (iterations, passes) as fit in it. Resolves to spp 0. */
+#define CST_SPP_UNLIMITED (-1)
 
 /* Photon paths the photon integrator emits when the settings leave photons unset. */
 #define CST_DEFAULT_PHOTONS 200000
@@ -432,6 +486,13 @@ typedef struct CstRenderStats {
 } CstRenderStats;
 
 typedef struct CstFilm CstFilm;
+
+/* Bytes a render of `scene` with `settings` (resolved as cst_render resolves them) will
+ * allocate for images: the film's sums (48 bytes per pixel), its AOVs, the crop's copy,
+ * the light tracers' per-iteration image, and the float image cst_film_write makes. The
+ * scene and acceleration structure are not included (cst_scene_info). For checking a size
+ * against the memory available before a render starts. */
+CST_API uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettings *settings);
 
 /* Renders the scene. On success *out is a new film the caller owns (cst_film_destroy). */
 CST_API CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings,

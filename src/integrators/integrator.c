@@ -421,7 +421,8 @@ CstStatus integrator_next_step(Integrator *it, IntegratorStep *step, CstError *e
 /* ---------------------------------------------------------------------- lifetime */
 
 CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRenderSettings *st, Film *film,
-                             IntegratorWorker *workers, uint64_t *rays, CstError *err)
+                             IntegratorWorker *workers, uint64_t *rays, int (*progress)(void *, double),
+                             void *progress_user, CstError *err)
 {
     memset(it, 0, sizeof *it);
     switch (st->integrator) {
@@ -470,7 +471,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
          * runs single-threaded from the render seed, so the maps, and with them the image,
          * do not depend on the thread count. */
         if (!photons_ok) break;
-        PhotonParams pp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->seed};
+        PhotonParams pp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->seed,
+                           progress, progress_user};
         return photon_maps_build(scene, &it->camera, &pp, &it->photon, rays, err);
     }
     case INTEGRATOR_LIGHT:

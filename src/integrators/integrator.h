@@ -128,9 +128,12 @@ typedef struct Integrator {
  * caller) to render into `film`, with `workers` counters for a pool that size: the photon
  * maps, the light-path buffers, SPPM's state. Adds the rays prepare traces to *rays.
  * Fails with CST_ERR_OOM or CST_ERR_INVALID_ARG (photon or radius settings), message set.
- * Caller frees with integrator_destroy, also after a failure. */
+ * Caller frees with integrator_destroy, also after a failure. progress (may be NULL)
+ * reports the photon integrator's photon pass as PhotonParams.progress does (nonzero:
+ * CST_ERR_CANCELLED). */
 CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRenderSettings *st, Film *film,
-                             IntegratorWorker *workers, uint64_t *rays, CstError *err);
+                             IntegratorWorker *workers, uint64_t *rays, int (*progress)(void *, double),
+                             void *progress_user, CstError *err);
 /* Starts the pass of samples (iterations) [first, first + count). */
 void integrator_pass_begin(Integrator *it, int first, int count);
 /* The next step of the pass into *step (items 0 once the pass is complete), after the

@@ -281,11 +281,16 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
     if (s->emitter_sampler.lights > 0) {
         const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth};
         PhotonStore store = {&global, &caustic};
-        for (int i = 0; i < n; i++)
+        for (int i = 0; i < n; i++) {
+            if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 && pp->progress(pp->progress_user, (double)i / n)) {
+                st = cst_fail(err, CST_ERR_CANCELLED, "render cancelled by the progress callback");
+                goto done;
+            }
             if (!photon_walk(s, &pw, (uint64_t)i, store_photon, &store, rays)) {
                 st = cst_fail(err, CST_ERR_OOM, "out of memory for %zu photons", global.n + caustic.n);
                 goto done;
             }
+        }
     }
     if ((st = photon_map_build(&out->global, global.v, global.n, err)) != CST_OK) goto done;
     if ((st = photon_map_build(&out->caustic, caustic.v, caustic.n, err)) != CST_OK) goto done;

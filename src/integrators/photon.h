@@ -26,7 +26,12 @@ typedef struct PhotonParams {
     int max_depth;   /* bounces of a photon path; 0 = unbounded (Russian roulette only) */
     int rr_depth;    /* first bounce at which Russian roulette may stop a photon path */
     uint64_t seed;   /* the photon pass is a function of this seed only */
+    /* Optional: called every PHOTON_PROGRESS_EVERY photon paths with the fraction of the
+     * pass done; nonzero return stops the pass (CST_ERR_CANCELLED). */
+    int (*progress)(void *user, double fraction);
+    void *progress_user;
 } PhotonParams;
+enum { PHOTON_PROGRESS_EVERY = 4096 };
 
 /* A photon path's parameters: stream (seed, index, stream), emitted power scaled by
  * `scale` (1 / photons for the maps; SPPM divides later). */

@@ -858,12 +858,21 @@ static const char *image_path_ext(const char *path)
     return dot && dot[1] ? dot + 1 : NULL;
 }
 
+/* Every extension an image file may have, and its format. */
+static const struct { const char *ext; ImageFileFormat format; } exts[] = {
+    {"png", IMAGE_FILE_PNG}, {"jpg", IMAGE_FILE_JPEG}, {"jpeg", IMAGE_FILE_JPEG},
+    {"bmp", IMAGE_FILE_BMP}, {"tga", IMAGE_FILE_TGA},  {"hdr", IMAGE_FILE_HDR},
+    {"exr", IMAGE_FILE_EXR}, {"pfm", IMAGE_FILE_PFM}};
+
+const char *image_writable_extension(int index)
+{
+    for (size_t i = 0; i < sizeof exts / sizeof exts[0]; ++i)
+        if (image_format_is_writable(exts[i].format) && index-- == 0) return exts[i].ext;
+    return NULL;
+}
+
 ImageFileFormat image_format_from_path(const char *path)
 {
-    static const struct { const char *ext; ImageFileFormat format; } exts[] = {
-        {"png", IMAGE_FILE_PNG}, {"jpg", IMAGE_FILE_JPEG}, {"jpeg", IMAGE_FILE_JPEG},
-        {"bmp", IMAGE_FILE_BMP}, {"tga", IMAGE_FILE_TGA},  {"hdr", IMAGE_FILE_HDR},
-        {"exr", IMAGE_FILE_EXR}, {"pfm", IMAGE_FILE_PFM}};
     const char *ext = path ? image_path_ext(path) : NULL;
     for (size_t i = 0; ext && i < sizeof exts / sizeof exts[0]; ++i)
         if (image_ext_equal(ext, exts[i].ext)) return exts[i].format;

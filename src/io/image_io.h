@@ -45,6 +45,8 @@ typedef enum ImageFileFormat {
  * "dir.png/a" and "png" are IMAGE_FILE_NONE. The scene loaders and the CLI use it to
  * reject names that image_write would refuse before rendering. */
 ImageFileFormat image_format_from_path(const char *path);
+/* The index-th (from 0) extension image_write writes ("png", "exr", "pfm"), else NULL. */
+const char *image_writable_extension(int index);
 /* True for the formats image_write can produce: PNG, EXR and PFM. */
 bool image_format_is_writable(ImageFileFormat f);
 /* An output name a scene file may give: a writable format and something before the '.' of

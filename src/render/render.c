@@ -5,6 +5,7 @@
  * is cut into items by the integrator, never by the threads (integrator.c). */
 #include "render/render.h"
 
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -15,6 +16,9 @@
 #include "film/film.h"
 #include "integrators/integrator.h"
 #include "scene/scene.h"
+
+/* Passes a fixed-spp render of few camera tiles is cut into, for progress (run_passes). */
+enum { RENDER_SPLIT_PASSES = 20 };
 
 /* What the passes share: the pool, the integrator, and progress reporting. */
 typedef struct Driver {
@@ -75,17 +79,32 @@ static CstStatus run_passes(Driver *d, int *done, CstError *err)
 {
     const CstRenderSettings *st = d->st;
     *done = 0;
-    /* Fixed sample count: one pass, so accumulation order is fixed. */
+    /* Fixed sample count: one pass. With camera tiles too few to show progress (a small
+     * image or crop at high spp), up to RENDER_SPLIT_PASSES passes of consecutive
+     * samples: each pixel still gets its samples in order, so the image is the same bit
+     * for bit. */
     if (st->time_limit <= 0.0) {
-        CstStatus status = run_pass(d, 0, st->spp, 0.0, 1.0, err);
-        if (status == CST_OK) *done = st->spp;
-        return status;
+        const IntegratorKind kind = d->it->kind;
+        int passes = 1;
+        if ((kind == INTEGRATOR_PATH || kind == INTEGRATOR_WHITTED || kind == INTEGRATOR_PHOTON) &&
+            d->it->num_tiles < 8 * st->threads)
+            passes = st->spp < RENDER_SPLIT_PASSES ? st->spp : RENDER_SPLIT_PASSES;
+        for (int k = 0; k < passes; k++) {
+            int first = (int)((int64_t)st->spp * k / passes), last = (int)((int64_t)st->spp * (k + 1) / passes);
+            CstStatus status = run_pass(d, first, last - first, (double)first / st->spp,
+                                        (double)(last - first) / st->spp, err);
+            if (status != CST_OK) return status;
+            *done = last;
+        }
+        return CST_OK;
     }
     /* Time budget: passes of growing size until the next one would not fit (or the
-     * sample cap is reached). Every pixel always holds the same number of samples. */
+     * sample cap is reached; without one, INT_MAX). Every pixel always holds the same
+     * number of samples. */
+    const int cap = st->spp > 0 ? st->spp : INT_MAX;
     int pass = 1;
     for (;;) {
-        if (st->spp > 0 && *done + pass > st->spp) pass = st->spp - *done;
+        if (pass > cap - *done) pass = cap - *done;
         if (pass <= 0) return CST_OK;
         double pass_t0 = clock_seconds();
         double frac = st->spp > 0 ? (double)*done / st->spp : 0.0;
@@ -97,11 +116,42 @@ static CstStatus run_passes(Driver *d, int *done, CstError *err)
         if (left <= 0.0) return CST_OK;
         /* Next pass: the largest of 2x, x, x/2, ... that is predicted to fit in the time left. */
         double per_spp = pass_time / pass;
-        int next = pass * 2;
+        int next = pass <= INT_MAX / 2 ? pass * 2 : pass;
         while (next > 1 && per_spp * next > left) next /= 2;
         if (per_spp * next > left) return CST_OK;
         pass = next;
     }
+}
+
+/* The photon pass's progress (integrator_prepare), throttled like run_step's: the phase's
+ * own fraction when the caller follows phases, else 0 (or the time limit's share). */
+static int prepare_progress(void *user, double fraction)
+{
+    Driver *d = user;
+    const CstRenderSettings *st = d->st;
+    double now = clock_seconds();
+    if (now - d->last_progress < 0.1) return 0;
+    d->last_progress = now;
+    double f = st->progress_phase ? fraction : 0.0;
+    if (!st->progress_phase && st->time_limit > 0.0) f = (now - d->t0) / st->time_limit;
+    return st->progress(st->progress_user, f > 1.0 ? 1.0 : f, now - d->t0);
+}
+
+uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettings *settings)
+{
+    CstRenderSettings st;
+    cst_render_settings_resolve(scene, settings, &st);
+    const uint64_t pixels = (uint64_t)(st.width > 0 ? st.width : 0) * (uint64_t)(st.height > 0 ? st.height : 0);
+    const uint64_t cw = (uint64_t)(st.crop[1] > st.crop[0] ? st.crop[1] - st.crop[0] : 0);
+    const uint64_t crop = cw * (uint64_t)(st.crop[3] > st.crop[2] ? st.crop[3] - st.crop[2] : 0);
+    uint64_t per_pixel = 6 * sizeof(double); /* film_create: sum and sum of squares */
+    if (st.aovs & FILM_AOV_FIRST_HIT) per_pixel += FILM_AOV_STRIDE * sizeof(double);
+    if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
+        st.integrator == CST_INTEGRATOR_VCM)
+        per_pixel += 3 * sizeof(double); /* the iteration's image */
+    uint64_t bytes = pixels * per_pixel;
+    if (crop != pixels) bytes += crop * (6 + ((st.aovs & FILM_AOV_FIRST_HIT) ? FILM_AOV_STRIDE : 0)) * sizeof(double);
+    return bytes + crop * 3 * sizeof(float); /* cst_film_write's float image */
 }
 
 static void fill_stats(CstRenderStats *stats, const CstRenderSettings *st, const Integrator *it,
@@ -142,6 +192,9 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         st.width, st.height);
     if (st.spp < 0 || st.time_limit < 0.0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
+    if (st.spp == 0 && !(st.time_limit > 0.0))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "spp CST_SPP_UNLIMITED without a time limit would never end; "
+                        "expected a time limit, or a sample count");
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
     if (!(0 <= st.crop[0] && st.crop[0] < st.crop[1] && st.crop[1] <= st.width && 0 <= st.crop[2] &&
           st.crop[2] < st.crop[3] && st.crop[3] <= st.height))
@@ -178,10 +231,17 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     else if ((status = threadpool_create(st.threads, &d.pool)) != CST_OK)
         cst_fail(err, status, "could not start %d render threads", st.threads);
     /* The integrator's preparation (photon maps, SPPM's radius) is part of the render's
-     * time, and of a time limit's budget. */
-    else if ((status = integrator_prepare(it, scene, &st, film, workers, &rays, err)) == CST_OK &&
-             (status = run_passes(&d, &samples, err)) == CST_OK)
-        integrator_finish(it, samples);
+     * time, and of a time limit's budget; the photon pass is a phase of its own. */
+    else {
+        if (st.progress && st.progress_phase && st.integrator == CST_INTEGRATOR_PHOTON)
+            st.progress_phase(st.progress_user, CST_PHASE_PHOTONS);
+        status = integrator_prepare(it, scene, &st, film, workers, &rays, st.progress ? prepare_progress : NULL, &d,
+                                    err);
+        if (status == CST_OK && st.progress && st.progress_phase)
+            st.progress_phase(st.progress_user, CST_PHASE_RENDER);
+        if (status == CST_OK && (status = run_passes(&d, &samples, err)) == CST_OK)
+            integrator_finish(it, samples);
+    }
     double seconds = clock_seconds() - d.t0;
     threadpool_destroy(d.pool);
     const int cw = st.crop[1] - st.crop[0], ch = st.crop[3] - st.crop[2];

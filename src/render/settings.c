@@ -45,8 +45,11 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(sampler, 1, CST_SAMPLER_INDEPENDENT);
     PICK_INT(png_linear, 0, 0);
     PICK_INT(aovs, 0, 0);
-    /* A time limit alone means "as many samples as fit"; otherwise the default count. */
+    /* A time limit alone means "as many samples as fit"; otherwise the default count.
+     * CST_SPP_UNLIMITED says so over a scene's spp (cst_render refuses it without a time
+     * limit). */
     PICK_INT(spp, 1, out->time_limit > 0.0 ? 0 : CST_DEFAULT_SPP);
+    if (in->spp == CST_SPP_UNLIMITED) out->spp = 0;
     if (in->crop[0] == CST_UNSET) memcpy(out->crop, sc->crop, sizeof out->crop);
     if (out->crop[0] == CST_UNSET || !(out->crop[0] | out->crop[1] | out->crop[2] | out->crop[3])) {
         out->crop[0] = 0; out->crop[1] = out->width;

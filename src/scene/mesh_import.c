@@ -14,9 +14,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 
 #include "core/error.h"
+#include "io/path.h"
 #include "materials/material.h"
 #include "math/transform.h"
 
@@ -518,6 +520,43 @@ done:
     return st;
 }
 
+/* ------------------------------------------------------------------ OBJ material libraries */
+
+/* assimp imports an OBJ whose "mtllib" file is missing without a word (its logger is
+ * not attached), every face then on its default material: look for each named library
+ * the way assimp does (the rest of the line, relative to the OBJ's directory) and note
+ * the first one missing in out->warning. Only the "mtllib" lines are read. */
+static void obj_check_mtl(const char *path, ImportedMesh *out)
+{
+    size_t n = strlen(path);
+    if (n < 4 || strcasecmp(path + n - 4, ".obj") != 0) return;
+    FILE *fp = fopen(path, "rb");
+    if (!fp) return;
+    char line[1024];
+    int lineno = 0;
+    while (fgets(line, sizeof line, fp)) {
+        lineno++;
+        const char *p = line + strspn(line, " \t");
+        if (strncmp(p, "mtllib", 6) != 0 || (p[6] != ' ' && p[6] != '\t')) continue;
+        p += 6 + strspn(p + 6, " \t");
+        size_t len = strcspn(p, "\r\n");
+        while (len > 0 && (p[len - 1] == ' ' || p[len - 1] == '\t')) len--;
+        if (len == 0) continue;
+        char name[512];
+        snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), p);
+        char *lib = path_resolve(path, name);
+        struct stat sb;
+        int found = lib && stat(lib, &sb) == 0 && S_ISREG(sb.st_mode);
+        if (!found)
+            snprintf(out->warning, sizeof out->warning, "%.160s:%d: material library '%.100s' not found "
+                     "(looked for '%.120s'): the mesh is loaded without its materials", path, lineno,
+                     name, lib ? lib : name);
+        free(lib);
+        if (!found) break;
+    }
+    fclose(fp);
+}
+
 /* ------------------------------------------------------------------ entry points */
 
 void mesh_import_free(ImportedMesh *mesh)
@@ -623,5 +662,6 @@ CstStatus mesh_import(const char *path, ImportedMesh *out, CstError *err)
 done:
     aiReleaseImport(scene);
     if (st != CST_OK) mesh_import_free(out);
+    else obj_check_mtl(path, out);
     return st;
 }

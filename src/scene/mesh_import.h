@@ -34,6 +34,8 @@ typedef struct ImportedMesh {
     /* Meshes of the file without normals (UVs) got zero fills next to others with them. */
     int normals_partial, uvs_partial;
     int num_skipped_primitives; /* point and line faces, not imported */
+    char warning[512]; /* "": none; else what the loader should pass on (an OBJ's missing
+                        * .mtl: CST_WARN_MISSING_FILE) */
 } ImportedMesh;
 
 /* Reads every mesh of the file into one triangle list. Errors name the file (and, where

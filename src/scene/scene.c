@@ -433,6 +433,7 @@ void cst_scene_info(const CstScene *s, CstSceneInfo *info)
     info->spheres = s->num_spheres;
     info->emitters = s->num_emitters;
     info->materials = s->num_materials;
+    info->lights = s->emitter_sampler.lights; /* set by commit */
     info->accel = accel_type_name(s->accel.type);
     info->accel_build_seconds = s->accel.build_seconds;
     info->accel_bytes = accel_memory_bytes(&s->accel);

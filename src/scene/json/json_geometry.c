@@ -529,6 +529,8 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
         st = json_fail_builder(ld, st); /* "<json>:l:c: shapes[i].file: <resolved path>: ..." */
         goto done;
     }
+    if (im.warning[0] && ld->opt && ld->opt->warning)
+        ld->opt->warning(ld->opt->warning_user, CST_WARN_MISSING_FILE, im.warning);
     if (!transform_is_identity(&xf))
         transform_mesh(&im, &xf);
     for (int i = 0; i < im.num_vertices; i++) {

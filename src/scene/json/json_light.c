@@ -38,10 +38,13 @@ static CstStatus read_angle(Loader *ld, const json_t *obj, const char *key, floa
     return CST_OK;
 }
 
+/* A light's "type" (json_light.h). */
+const char *const json_light_types[] = {"point", "spot", "directional", NULL};
+
 /* "lights": point, spot and directional lights (area lights are shapes with "emission"). */
 static CstStatus parse_light(Loader *ld, const json_t *obj)
 {
-    static const char *const types[] = {"point", "spot", "directional"};
+    const char *const *types = json_light_types;
     static const char *const point_keys[] = {"type", "position", "intensity"};
     static const char *const spot_keys[] = {"type", "position", "look_at", "intensity", "cone_angle",
                                             "cone_delta"};

@@ -4,6 +4,8 @@
 
 #include "scene/json/json_reader.h"
 
+/* The light "type" names, NULL-terminated (cst_list_names). */
+extern const char *const json_light_types[];
 /* The "lights" array. */
 CstStatus json_parse_lights(Loader *ld, const json_t *lights);
 

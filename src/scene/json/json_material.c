@@ -13,6 +13,10 @@
 
 enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COUNT };
 
+/* A material's "type", in MAT_* order (json_material.h). */
+const char *const json_material_types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric",
+                                           "plastic", NULL};
+
 /* "roughness": perceptual, in [0, 1] (material.h: alpha = roughness^2). */
 static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
 {
@@ -27,7 +31,7 @@ static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
 
 static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
 {
-    static const char *const types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric", "plastic"};
+    const char *const *types = json_material_types;
     static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC};
     /* The keys each type accepts, "type" first. */

@@ -5,6 +5,8 @@
 
 #include "scene/json/json_reader.h"
 
+/* The material "type" names, NULL-terminated (cst_list_names). */
+extern const char *const json_material_types[];
 /* The "materials" object: every material, added to the scene in file order. */
 CstStatus json_parse_materials(Loader *ld, const json_t *mats);
 

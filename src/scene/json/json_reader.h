@@ -42,6 +42,7 @@ typedef struct Loader {
     int depth;
     Scene *scene;
     CstError *err; /* never NULL: the entry points substitute a local one */
+    const CstLoadOptions *opt; /* the caller's warning callback, or NULL */
     /* Material names (keys owned by the jansson root) and their scene ids, in file order. */
     const char **mat_names;
     int *mat_ids;

@@ -86,8 +86,9 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
     return CST_OK;
 }
 
-CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
-                                     CstScene **out, CstError *err)
+/* opt: the caller's load options (warnings), or NULL. */
+static CstStatus load_json_string(const char *text, size_t len, const char *name, const CstLoadOptions *opt,
+                                  CstScene **out, CstError *err)
 {
     CstError local;
     if (!err)
@@ -133,6 +134,7 @@ CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *n
     ld.len = len;
     ld.name = name;
     ld.err = err;
+    ld.opt = opt;
     cst_render_settings_init(&ld.settings);
     ld.settings.width = ld.settings.height = ld.settings.spp = 0;
     ld.settings.rr_depth = ld.settings.photons = 0;
@@ -169,7 +171,19 @@ CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *n
     return CST_OK;
 }
 
+CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *name,
+                                     CstScene **out, CstError *err)
+{
+    return load_json_string(text, len, name, NULL, out, err);
+}
+
 CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err)
+{
+    return cst_scene_load_json_opt(path, NULL, out, err);
+}
+
+CstStatus cst_scene_load_json_opt(const char *path, const CstLoadOptions *options, CstScene **out,
+                                  CstError *err)
 {
     CstError local;
     if (!err)
@@ -183,7 +197,7 @@ CstStatus cst_scene_load_json(const char *path, CstScene **out, CstError *err)
     CstStatus st = file_read_all(path, &text, &len, err);
     if (st != CST_OK)
         return st;
-    st = cst_scene_load_json_string(text, len, path, out, err);
+    st = load_json_string(text, len, path, options, out, err);
     free(text);
     return st;
 }

@@ -1,0 +1,241 @@
+/* The help texts: one per command (caustic COMMAND --help, caustic help COMMAND) and all
+ * of them together (caustic --help). Kept beside each other so that the sections cannot
+ * drift apart; docs/cli.md says the same at more length. */
+#include "args.h"
+
+#define HELP_HEADER "caustic " CST_VERSION_STRING ": a physically based renderer\n\n"
+
+static const char HELP_USAGE_ALL[] =
+"Usage:\n"
+"  caustic render [SCENE] [options]\n"
+"  caustic info [SCENE] [--accel NAME]\n"
+"  caustic bench rays [MESH | --cornell] [--stadium] [--accel NAME[,NAME...]]\n"
+"                     [--threads N] [--json]\n"
+"  caustic verify [SCENE] --integrators NAME,NAME[,...] [--spp N | --time S]\n"
+"                 [--threads N] [--seed S] [--alpha A] [--block N] [--map OUT.png]\n"
+"                 [--convergence K] [--json] [--width W] [--height H] [--quiet]\n"
+"  caustic list [KIND]\n"
+"  caustic COMMAND --help | caustic help COMMAND   (one command's options)\n"
+"  caustic --help | -h\n"
+"  caustic --version\n"
+"\n";
+
+static const char HELP_RENDER[] =
+"Render: caustic render [SCENE] [options]\n"
+"Renders SCENE, a caustic JSON scene file (*.json, see docs/scene-format.md) or a\n"
+"pbrt-v4 scene (*.pbrt, see docs/pbrt-compat.md), or the built-in Cornell box when SCENE\n"
+"is omitted, and writes one image.\n"
+"\n"
+"Options (both --opt VALUE and --opt=VALUE are accepted; a later option wins):\n"
+"  -o, --output OUT     output image; the format follows the extension: .png (8-bit\n"
+"                       sRGB), .exr or .pfm (linear float). Default: the scene file's\n"
+"                       \"output\", else <scene file stem>.png in the current directory,\n"
+"                       cornell-box.png for the built-in scene. The extension and the\n"
+"                       directory are checked before rendering starts.\n"
+"      --spp N          samples per pixel, N >= 1 (default: the scene's, else 16)\n"
+"      --time SECONDS   render for SECONDS, > 0: progressive passes (for sppm, vcm,\n"
+"                       bdpt and light: iterations) until the time is up, over any spp\n"
+"                       the scene file sets; with --spp too, stops at whichever comes\n"
+"                       first (default: no time limit)\n"
+"      --threads N      render threads, 0..1024; 0 = one per core (the default)\n"
+"      --seed S         random seed, any unsigned 64-bit integer, decimal or 0x-hex\n"
+"                       (default: the scene's, else 0)\n"
+"      --integrator NAME  path (default: NEE and BSDF sampling combined by MIS),\n"
+"                       path-nee (emitters reached by NEE only), path-bsdf (BSDF\n"
+"                       sampling only), light (light tracing from the emitters; --spp\n"
+"                       counts iterations of W x H light paths; misses what is seen in\n"
+"                       mirrors or through glass), whitted (mirror and glass recursion\n"
+"                       with direct light only; biased by design), photon (photon\n"
+"                       mapping with final gathering; consistent but biased, photon\n"
+"                       count and radius from the scene file), sppm (stochastic\n"
+"                       progressive photon mapping; --spp counts iterations, each one\n"
+"                       camera sample per pixel and one photon pass; consistent but\n"
+"                       biased), bdpt (bidirectional path tracing, all\n"
+"                       connection strategies with MIS; --spp counts iterations of one\n"
+"                       light and one camera path per pixel), vcm (vertex connection\n"
+"                       and merging: bdpt plus photon merging with a shrinking radius,\n"
+"                       the first from the scene's \"radius\", else automatic;\n"
+"                       consistent); default: the scene's, else path\n"
+"      --filter NAME    box, tent, gaussian or mitchell (default: the scene's, else box)\n"
+"      --width W        image width in pixels, 1..65536 (default: the scene's, else 512)\n"
+"      --height H       image height in pixels, 1..65536 (default: the scene's, else\n"
+"                       512); --width and --height may each be given alone\n"
+"      --accel NAME     acceleration structure: bvh (default), kdtree, grid, list (brute\n"
+"                       force) or embree (when built with Embree); default: the scene's\n"
+"      --sampler NAME   random numbers of camera paths: independent (PCG32, the\n"
+"                       default), stratified (jittered; 2D strata nx x ny = spp, so\n"
+"                       choose square or power-of-two spp) or sobol (Owen-scrambled\n"
+"                       Sobol'; fewer samples for the same noise, see docs/benchmarks.md).\n"
+"                       Light paths (light, photon, sppm, bdpt, vcm) stay independent\n"
+"      --max-depth N    maximum bounces of a path, 0..2147483647; 0 = unbounded, also\n"
+"                       over a scene's own limit (default: the scene's, else unbounded)\n"
+"      --exposure EV    scale the written image by 2^EV, -64..64 (default: the scene's,\n"
+"                       else 0); the film's stored means are not changed\n"
+"      --png-linear     write PNG values linearly (no sRGB curve; tagged gAMA 1.0)\n"
+"      --aov LIST       extra EXR channels, comma-separated: albedo (albedo.R/G/B),\n"
+"                       normal (N.X/Y/Z), depth (Z), variance (variance.R/G/B); needs an\n"
+"                       .exr output (docs/cli.md)\n"
+"      --crop X0,X1,Y0,Y1  render and write only the pixels X0 <= x < X1, Y0 <= y < Y1\n"
+"                       (y = 0 the top row) of the image; each holds the value it has in\n"
+"                       the whole image (default: the scene's crop, else none)\n"
+"      --json[=FILE]    after writing, a JSON summary (times of load, accel build,\n"
+"                       render and write; samples, rays, NaN/Inf discarded, peak\n"
+"                       memory, output path) on stdout, or in FILE\n"
+"      --force          render even when the images' estimated memory exceeds the\n"
+"                       memory available (otherwise refused before rendering, exit 2)\n"
+"  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
+"  -h, --help           show this help and exit\n"
+"\n"
+"Progress goes to stderr: a redrawn bar with an ETA when stderr is a terminal, otherwise\n"
+"one line per 10% of each phase (the photon pass, then the render) with its ETA. The\n"
+"image is written atomically (temporary file, rename). A scene without any light, and a\n"
+"mesh whose .mtl file is missing, draw a warning.\n"
+"\n";
+
+static const char HELP_INFO[] =
+"Scene information: caustic info [SCENE] [--accel NAME]\n"
+"Loads SCENE (or the built-in Cornell box), builds its acceleration structure and prints\n"
+"the load time, its size (triangles, spheres, emitters, materials), the structure's\n"
+"build time and memory.\n"
+"      --accel NAME     bvh (default), kdtree, grid, list or embree (see caustic list)\n"
+"  -h, --help           show this help and exit\n"
+"\n";
+
+static const char HELP_BENCH[] =
+"Benchmark: caustic bench rays\n"
+"Traces the acceleration benchmark's three ray sets (/work/shared/bench/RAYSETS.md:\n"
+"primary closest hits, secondary bounce rays generated once and shared by every back\n"
+"end, and the bounce rays as occlusion queries) through each back end with 1 thread and\n"
+"with N threads, and prints build time, bytes per triangle, M rays/s, the speed ratios to\n"
+"Embree (its default configuration) and to Embree in its robust mode (robust box test,\n"
+"edge-consistent triangle test: the guarantees of our BVH), hits and sum of t, checked\n"
+"against the published checksums (or, for scenes without them, against the first back\n"
+"end).\n"
+"  MESH                 a triangle mesh file (read through the mesh importer, e.g. a\n"
+"                       PLY of /work/shared/meshes); default: the built-in Cornell box\n"
+"      --cornell        the built-in Cornell box (the default)\n"
+"      --stadium        put the scene inside a huge box of 12 triangles (teapot in a\n"
+"                       stadium); alone: a built-in 20,480-triangle bumpy ball inside it\n"
+"      --accel LIST     comma-separated back ends: bvh, kdtree, grid, list, embree,\n"
+"                       embree-robust (default: all this build has; list only for\n"
+"                       scenes of at most 1,000 triangles)\n"
+"      --threads N      the second thread count, 0..1024; 0 = one per core (default)\n"
+"      --json           one JSON object per line on stdout instead of the table\n"
+"  -h, --help           show this help and exit\n"
+"\n";
+
+static const char HELP_VERIFY[] =
+"Consistency check: caustic verify\n"
+"Renders SCENE (or the built-in Cornell box) once per integrator, each with its own seed,\n"
+"and tests every pair for agreement: per channel, the z-score of the difference of the\n"
+"image means and of every NxN block mean, z = (mean_a - mean_b) / sqrt(var_a + var_b),\n"
+"with variances from the per-pixel sample variances. A pair disagrees if any |z| exceeds\n"
+"the critical z of a Sidak correction over all tests of all pairs at family-wise\n"
+"significance A. Prints one row per pair (image-mean z per channel, largest |block z|,\n"
+"failing blocks) and the critical z; see docs/cli.md for the statistics.\n"
+"Consistent but biased integrators (photon, sppm, vcm) are judged by convergence\n"
+"instead, against the first unbiased integrator in the list (the reference, e.g. path):\n"
+"each is rendered twice (independent seeds) at K levels of work, 1, 4, 16, ... times the\n"
+"base (sppm, vcm: --spp iterations; photon: the scene's photon count, and its radius\n"
+"halved per level if the scene fixes one); the disagreement D (the mean squared block\n"
+"bias, estimated net of noise) and the image mean must be within noise at the last\n"
+"level, or D must fall significantly at every step.\n"
+"  SCENE                a caustic JSON or pbrt-v4 scene; default: the built-in Cornell box\n"
+"      --integrators LIST  comma-separated, at least two (any name --integrator takes;\n"
+"                       a name may repeat: a same-integrator pair checks the test itself)\n"
+"      --spp N          samples per pixel of each render (default: the scene's, else 16)\n"
+"      --time SECONDS   render each integrator for SECONDS (equal time); with --spp\n"
+"                       (or a scene's spp) too, each stops at whichever comes first\n"
+"      --seed S         base seed (default: the scene's, else 0); integrator k (0-based,\n"
+"                       in list order) renders with SplitMix64's output k+1 from S, shown\n"
+"                       in the report, so 'caustic render --seed' reproduces it\n"
+"      --alpha A        family-wise significance, 0 < A < 1 (default: 0.01)\n"
+"      --block N        block side in pixels, 1..65536 (default: 16); edge blocks are\n"
+"                       partial and tested with their own pixel counts. Each block needs\n"
+"                       many samples (block^2 x spp >= 65536, else a warning) for z to be\n"
+"                       near normal with heavy-tailed estimators such as path-bsdf\n"
+"      --map OUT        false-colour map of the largest block |z| over channels and\n"
+"                       pairs, at the image's size (.png, .exr or .pfm): black to blue\n"
+"                       up to z_crit/2, blue to yellow at z_crit, red beyond\n"
+"      --convergence K  levels of the convergence check, 2..6 (default: 3)\n"
+"      --json           one JSON object per pair (then per convergence check) on stdout\n"
+"                       instead of the report\n"
+"      --width W, --height H, --threads N, -q/--quiet: as for render\n"
+"  -h, --help           show this help and exit\n"
+"\n";
+
+static const char HELP_LIST[] =
+"Names: caustic list [KIND]\n"
+"Prints the names this build accepts, read from the library's own tables: integrators,\n"
+"samplers, filters, accels (the back ends built in), materials and lights (a JSON\n"
+"scene's \"type\"s), formats (output image extensions), metals (conductor presets).\n"
+"With KIND, only those names, one per line (for scripts).\n"
+"\n";
+
+static const char HELP_EXIT[] =
+"Exit status:\n"
+"  0  success: the image was written (bench rays: every check passed; verify: every\n"
+"     pair of integrators agrees and every consistent one converges)\n"
+"  1  internal error: out of memory, a library failure, or an I/O error while writing\n"
+"     the image although its directory was checked writable before rendering\n"
+"     (disk full, file system error)\n"
+"     bench rays: a checksum did not match; verify: a pair of integrators disagrees\n"
+"     or a consistent integrator is not shown to converge\n"
+"  2  bad input or usage: unknown command or option, invalid value, unsupported scene\n"
+"     or output format, a scene file that is missing, unreadable or invalid, an output\n"
+"     directory that does not exist or is not writable (checked before rendering)\n"
+"\n";
+
+static const char HELP_EXAMPLES_RENDER[] =
+"  caustic render --spp 64 -o box.png\n"
+"  caustic render scenes/cornell-box.json --time 60 --threads 8 -o box.exr\n"
+"  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n"
+"  caustic render --spp 4 --json=summary.json -o box.png\n";
+static const char HELP_EXAMPLES_BENCH[] =
+"  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n";
+static const char HELP_EXAMPLES_VERIFY[] =
+"  caustic verify --integrators path,path-nee,path-bsdf --spp 64 --map z.png\n";
+
+void args_print_help(FILE *f, ArgsCommand command)
+{
+    fputs(HELP_HEADER, f);
+    switch (command) {
+    case ARGS_CMD_RENDER:
+        fputs(HELP_RENDER, f);
+        fputs(HELP_EXIT, f);
+        fprintf(f, "Examples:\n%s\n", HELP_EXAMPLES_RENDER);
+        break;
+    case ARGS_CMD_INFO:
+        fputs(HELP_INFO, f);
+        fputs(HELP_EXIT, f);
+        break;
+    case ARGS_CMD_BENCH_RAYS:
+        fputs(HELP_BENCH, f);
+        fputs(HELP_EXIT, f);
+        fprintf(f, "Example:\n%s\n", HELP_EXAMPLES_BENCH);
+        break;
+    case ARGS_CMD_VERIFY:
+        fputs(HELP_VERIFY, f);
+        fputs(HELP_EXIT, f);
+        fprintf(f, "Example:\n%s\n", HELP_EXAMPLES_VERIFY);
+        break;
+    case ARGS_CMD_LIST:
+        fputs(HELP_LIST, f);
+        break;
+    case ARGS_CMD_HELP:
+    case ARGS_CMD_VERSION:
+        fputs(HELP_USAGE_ALL, f);
+        fputs(HELP_RENDER, f);
+        fputs(HELP_INFO, f);
+        fputs(HELP_BENCH, f);
+        fputs(HELP_VERIFY, f);
+        fputs(HELP_LIST, f);
+        fputs("      --version        print the version and the build (compiler, ISA, Embree,\n"
+              "                       MPI, SDL2, build type) and exit\n\n", f);
+        fputs(HELP_EXIT, f);
+        fprintf(f, "Examples:\n%s%s%s", HELP_EXAMPLES_RENDER, HELP_EXAMPLES_BENCH, HELP_EXAMPLES_VERIFY);
+        break;
+    }
+    if (command != ARGS_CMD_HELP && command != ARGS_CMD_VERSION)
+        fputs("Every command: caustic --help; the names an option takes: caustic list.\n", f);
+}
