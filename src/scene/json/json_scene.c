@@ -160,6 +160,7 @@ CstStatus cst_scene_load_json_string(const char *text, size_t len, const char *n
     free(ld.tex_names);
     free(ld.tex_state);
     free(ld.tex_ids);
+    free(ld.tex_sorted);
     json_decref(root);
     if (st != CST_OK) {
         cst_scene_destroy(ld.scene);
