@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "io/path.h"
+#include "core/file.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -1063,15 +1064,12 @@ CstStatus image_read(const char *path, float **rgb, int *width, int *height, Cst
     *width = *height = 0;
     if (!path || !path[0]) return cst_fail(err, CST_ERR_INVALID_ARG, "image_read: empty path");
 
-    FILE *fp = fopen(path, "rb");
-    if (!fp) return image_fail_errno(err, errno, path, "cannot open");
-    struct stat sb;
-    CstStatus st = CST_OK;
+    FILE *fp = NULL;
+    CstStatus st = file_open_input(path, &fp, NULL, err); /* regular files only, bounded */
+    if (st != CST_OK) return st;
     uint8_t magic[8] = {0};
     size_t got = 0;
-    if (fstat(fileno(fp), &sb) != 0) st = image_fail_errno(err, errno, path, "stat failed");
-    else if (S_ISDIR(sb.st_mode)) st = cst_fail(err, CST_ERR_IO, "%s: is a directory", path);
-    else if ((got = fread(magic, 1, sizeof magic, fp)) == 0 && ferror(fp))
+    if ((got = fread(magic, 1, sizeof magic, fp)) == 0 && ferror(fp))
         st = image_fail_errno(err, errno, path, "read failed");
     else if (got == 0) st = cst_fail(err, CST_ERR_PARSE, "%s: empty file", path);
     if (st != CST_OK) {
@@ -1089,5 +1087,34 @@ CstStatus image_read(const char *path, float **rgb, int *width, int *height, Cst
     else
         st = cst_fail(err, CST_ERR_UNSUPPORTED, "%s: not a PNG, OpenEXR or PFM file", path);
     fclose(fp);
+    return st;
+}
+
+/* ---------------------------------------------------------------- radiance inputs */
+
+CstStatus image_check_radiance(const float *rgb, int width, int height, const char *what, CstError *err)
+{
+    static const char channel[3] = {'R', 'G', 'B'};
+    size_t n = 3u * (size_t)(width > 0 ? width : 0) * (size_t)(height > 0 ? height : 0);
+    for (size_t i = 0; i < n; i++) {
+        float v = rgb[i];
+        if (isfinite(v) && v >= 0.0f) continue;
+        size_t px = i / 3, w = (size_t)width;
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%.300s: pixel (%zu, %zu) channel %c is %g; expected a "
+                        "finite value >= 0 (x from the left, y from the top row)", what ? what : "image",
+                        px % w, px / w, channel[i % 3], (double)v);
+    }
+    return CST_OK;
+}
+
+CstStatus image_read_radiance(const char *path, float **rgb, int *width, int *height, CstError *err)
+{
+    CstStatus st = image_read(path, rgb, width, height, err);
+    if (st != CST_OK) return st;
+    if ((st = image_check_radiance(*rgb, *width, *height, path, err)) != CST_OK) {
+        free(*rgb);
+        *rgb = NULL;
+        *width = *height = 0;
+    }
     return st;
 }

@@ -59,6 +59,13 @@ bool image_path_is_exr(const char *path);
 /* Reads a PNG (decoded to linear), EXR or PFM into a new malloc'd buffer in the same layout.
  * Caller frees *rgb. */
 CstStatus image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
+/* The one rule for images that become light or reflectance (textures, environment maps,
+ * both loaders and the builder): every value finite and >= 0. Fails with
+ * CST_ERR_INVALID_ARG naming `what` (a path, or NULL for "image") and the first offending
+ * pixel's x, y (row 0 at the top) and channel. */
+CstStatus image_check_radiance(const float *rgb, int width, int height, const char *what, CstError *err);
+/* image_read, then image_check_radiance; on failure *rgb is freed and NULL. */
+CstStatus image_read_radiance(const char *path, float **rgb, int *width, int *height, CstError *err);
 /* sRGB OETF (IEC 61966-2-1) of a linear value, clamped to [0, 1]. */
 float image_linear_to_srgb(float v);
 /* Its inverse, the sRGB EOTF, of an encoded value s in [0, 1]. */

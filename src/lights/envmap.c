@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "io/image_io.h"
 #include "sampling/warp.h"
 
 CstStatus envmap_init_constant(EnvMap *m, Color radiance, CstError *err)
@@ -38,12 +39,18 @@ static float pixel_weight(const float *p)
 CstStatus envmap_init_image(EnvMap *m, float *rgb, int width, int height, Color scale, CstError *err)
 {
     memset(m, 0, sizeof *m);
+    /* NaN, Inf or negative radiance is an error, as for every image input (it used to be
+     * zeroed here, silently: a black sky). The loaders have checked their files already
+     * with the file's name; this keeps the rule for every other caller. */
+    CstStatus bad = image_check_radiance(rgb, width, height, "environment map", err);
+    if (bad != CST_OK) {
+        free(rgb);
+        return bad;
+    }
     m->rgb = rgb;
     m->width = width;
     m->height = height;
     m->scale = scale;
-    for (size_t i = 0; i < 3u * (size_t)width * (size_t)height; i++)
-        if (!(rgb[i] >= 0.0f) || !isfinite(rgb[i])) rgb[i] = 0.0f; /* NaN, Inf, negative: no light */
     m->rows = calloc((size_t)height, sizeof *m->rows);
     float *w = malloc((size_t)(width > height ? width : height) * sizeof *w);
     float *row_w = malloc((size_t)height * sizeof *row_w);

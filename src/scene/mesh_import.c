@@ -4,13 +4,16 @@
 #include "scene/mesh_import.h"
 
 #include <assimp/ObjMaterial.h>
+#include <assimp/cfileio.h>
 #include <assimp/cimport.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <errno.h>
+#include <jansson.h>
 #include <limits.h>
 #include <pthread.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +22,7 @@
 
 #include "core/error.h"
 #include "io/path.h"
+#include "core/file.h"
 #include "materials/material.h"
 #include "math/transform.h"
 
@@ -232,6 +236,7 @@ typedef struct PlyProp {
     int size;       /* bytes of a scalar, or of a list's items */
     int count_size; /* list: bytes of the count; 0 for a scalar */
     int is_int;     /* integer type (of the scalar or the list items) */
+    int face_index; /* the vertex index list of a face (face.vertex_indices or vertex_index) */
 } PlyProp;
 
 typedef struct PlyElement {
@@ -273,6 +278,12 @@ static int ply_type_size(const char *name, int *is_int)
             return types[i].size;
         }
     return 0;
+}
+
+/* The property assimp reads a face's corners from. */
+static int ply_is_face_index(const char *element, const char *prop)
+{
+    return strcmp(element, "face") == 0 && (strcmp(prop, "vertex_indices") == 0 || strcmp(prop, "vertex_index") == 0);
 }
 
 /* Parses the header in buf[0, len); *body gets the offset after end_header's line. */
@@ -331,9 +342,11 @@ static CstStatus ply_parse_header(PlyCheck *pc, const char *buf, size_t len, siz
                 p->size = ply_type_size(w[3], &p->is_int);
                 if (!p->count_size || !count_int || !p->size)
                     return ply_fail(pc, line, "bad list property: ", text);
+                p->face_index = ply_is_face_index(pc->elems[pc->num_elems - 1].name, w[4]);
             } else {
                 if (nw != 3) return ply_fail(pc, line, "bad property line: ", text);
                 p->count_size = 0;
+                p->face_index = 0;
                 p->size = ply_type_size(w[1], &p->is_int);
                 if (!p->size) return ply_fail(pc, line, "unknown property type ", w[1]);
             }
@@ -348,6 +361,15 @@ static CstStatus ply_parse_header(PlyCheck *pc, const char *buf, size_t len, siz
     if (!have_format) return ply_fail(pc, 0, "the header has no format line", "");
     *body = pos;
     return CST_OK;
+}
+
+/* A face with no corners: assimp 5.2.5's triangulation asserts on it (abort, exit 134). */
+static CstStatus ply_empty_face(PlyCheck *pc, int line, const PlyElement *e, long long r)
+{
+    char what[160];
+    snprintf(what, sizeof what, "%s %lld of %lld has no vertices; expected a list of vertex indices", e->name,
+             r + 1, e->count);
+    return ply_fail(pc, line, what, "");
 }
 
 static CstStatus ply_truncated(PlyCheck *pc, const PlyElement *e, long long r)
@@ -392,6 +414,7 @@ static CstStatus ply_check_binary(PlyCheck *pc, const unsigned char *buf, size_t
                 if (len - pos < (size_t)p->count_size) return ply_truncated(pc, e, r);
                 long long n = ply_read_count(buf + pos, p->count_size, pc->format == 2);
                 pos += (size_t)p->count_size;
+                if (n == 0 && p->face_index) return ply_empty_face(pc, 0, e, r);
                 if ((unsigned long long)n > (len - pos) / (size_t)p->size) return ply_truncated(pc, e, r);
                 pos += (size_t)n * (size_t)p->size;
             }
@@ -447,6 +470,7 @@ static CstStatus ply_check_ascii(PlyCheck *pc, const char *buf, size_t body, int
                     if (!ply_number(t, tlen, 1, &v) || v < 0.0)
                         return ply_fail(pc, line, "expected a list length, got ", t);
                     n = (long long)v;
+                    if (n == 0 && p->face_index) return ply_empty_face(pc, line, e, r);
                 }
                 for (long long i = 0; i < n; i++) {
                     const char *t = ply_token(&cur, &line, &tlen);
@@ -466,8 +490,9 @@ static CstStatus ply_check_ascii(PlyCheck *pc, const char *buf, size_t body, int
 /* Checks a file that starts like a PLY; other files pass untouched. */
 static CstStatus ply_precheck(const char *path, CstError *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: %s", path, strerror(errno));
+    FILE *f = NULL;
+    CstStatus open_st = file_open_input(path, &f, NULL, err); /* regular files only, bounded */
+    if (open_st != CST_OK) return open_st;
     char magic[4] = {0};
     size_t got = fread(magic, 1, 4, f);
     if (got < 4 || (memcmp(magic, "ply", 3) != 0 && memcmp(magic, "PLY", 3) != 0) ||
@@ -557,6 +582,271 @@ static void obj_check_mtl(const char *path, ImportedMesh *out)
     fclose(fp);
 }
 
+/* ------------------------------------------------------------------ glTF pre-check */
+/* assimp 5.2.5's glTF 2.0 importer aborts or writes out of bounds on some valid-looking
+ * files: a LINE_LOOP whose first segments are dropped dereferences an empty face (SIGSEGV),
+ * one of 1 index fails an ai_assert (abort, exit 134); a LINE_STRIP of 1 and a strip or
+ * fan of 2 vertices write past an empty face array; a node hierarchy some thousands deep
+ * overflows its recursion. So a glTF file's JSON is read here (jansson bounds its own
+ * nesting at JSON_PARSER_MAX_DEPTH) and those cases are refused before assimp sees it. */
+
+/* Deeper than any real scene graph, far below what overflows assimp's recursion. */
+#define GLTF_MAX_NODE_DEPTH 256
+
+static CstStatus gltf_fail(CstError *err, CstStatus st, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+static CstStatus gltf_fail(CstError *err, CstStatus st, const char *path, const char *fmt, ...)
+{
+    char what[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    return cst_fail(err, st, "%.300s: %s glTF file: %s", path, st == CST_ERR_PARSE ? "malformed" : "unsupported",
+                    what);
+}
+
+static uint32_t gltf_le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* True when the file name ends in ext (".gltf"), ASCII case-insensitively. */
+static int gltf_has_ext(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    if (n < e) return 0;
+    for (size_t i = 0; i < e; i++) {
+        char c = path[n - e + i];
+        if ((c >= 'A' && c <= 'Z' ? c + 32 : c) != ext[i]) return 0;
+    }
+    return 1;
+}
+
+/* nodes[]: a tree (one parent per node, as glTF 2.0 requires) no deeper than the limit. */
+static CstStatus gltf_check_nodes(const json_t *nodes, const char *path, CstError *err)
+{
+    size_t n = json_array_size(nodes);
+    if (n == 0) return CST_OK;
+    long long *parent = malloc(n * sizeof *parent);
+    if (!parent) return cst_fail(err, CST_ERR_OOM, "%.300s: out of memory", path);
+    for (size_t i = 0; i < n; i++) parent[i] = -1;
+    CstStatus st = CST_OK;
+    for (size_t i = 0; i < n && st == CST_OK; i++) {
+        const json_t *children = json_object_get(json_array_get(nodes, i), "children");
+        for (size_t k = 0; k < json_array_size(children) && st == CST_OK; k++) {
+            const json_t *c = json_array_get(children, k);
+            if (!json_is_integer(c) || json_integer_value(c) < 0 || (size_t)json_integer_value(c) >= n)
+                continue; /* assimp reports bad references itself */
+            size_t ci = (size_t)json_integer_value(c);
+            if (parent[ci] >= 0)
+                st = gltf_fail(err, CST_ERR_PARSE, path, "node %zu is a child of nodes %lld and %zu; expected "
+                               "a tree (one parent per node)", ci, parent[ci], i);
+            parent[ci] = (long long)i;
+        }
+    }
+    /* Each node has at most one parent now, so walking up is a chain: a long one is too
+     * deep, an endless one a cycle. */
+    for (size_t i = 0; i < n && st == CST_OK; i++) {
+        long long p = (long long)i;
+        int depth = 0;
+        while (p >= 0 && depth <= GLTF_MAX_NODE_DEPTH) {
+            p = parent[p];
+            depth++;
+        }
+        if (depth > GLTF_MAX_NODE_DEPTH)
+            st = gltf_fail(err, CST_ERR_UNSUPPORTED, path, "node %zu is nested more than %d deep (or in a cycle "
+                           "of children); expected at most %d levels", i, GLTF_MAX_NODE_DEPTH, GLTF_MAX_NODE_DEPTH);
+    }
+    free(parent);
+    return st;
+}
+
+/* The vertex count a primitive's faces are built from: its indices' count, else its
+ * positions'; -1 when the file does not say (assimp then reports the file itself). */
+static long long gltf_prim_count(const json_t *prim, const json_t *accessors)
+{
+    const json_t *a = json_object_get(prim, "indices");
+    if (!a) a = json_object_get(json_object_get(prim, "attributes"), "POSITION");
+    if (!json_is_integer(a) || json_integer_value(a) < 0) return -1;
+    const json_t *count = json_object_get(json_array_get(accessors, (size_t)json_integer_value(a)), "count");
+    return json_is_integer(count) ? (long long)json_integer_value(count) : -1;
+}
+
+static CstStatus gltf_check_meshes(const json_t *root, const char *path, CstError *err)
+{
+    const json_t *meshes = json_object_get(root, "meshes"), *accessors = json_object_get(root, "accessors");
+    for (size_t m = 0; m < json_array_size(meshes); m++) {
+        const json_t *prims = json_object_get(json_array_get(meshes, m), "primitives");
+        for (size_t k = 0; k < json_array_size(prims); k++) {
+            const json_t *prim = json_array_get(prims, k), *mode_v = json_object_get(prim, "mode");
+            long long mode = json_is_integer(mode_v) ? (long long)json_integer_value(mode_v) : 4;
+            long long count = gltf_prim_count(prim, accessors);
+            if (mode == 2)
+                return gltf_fail(err, CST_ERR_UNSUPPORTED, path, "meshes[%zu].primitives[%zu] is a LINE_LOOP; "
+                                 "expected triangles (assimp 5.2 can crash on line loops, and caustic skips "
+                                 "lines anyway)", m, k);
+            long long need = mode == 3 ? 2 : (mode == 5 || mode == 6) ? 3 : 0;
+            if (count >= 0 && count < need)
+                return gltf_fail(err, CST_ERR_PARSE, path, "meshes[%zu].primitives[%zu] is a %s of %lld "
+                                 "vertices; expected at least %lld", m, k, mode == 3 ? "LINE_STRIP" : mode == 5
+                                 ? "TRIANGLE_STRIP" : "TRIANGLE_FAN", count, need);
+        }
+    }
+    return CST_OK;
+}
+
+/* Reads the JSON of a .gltf file, or of a GLB container's first chunk, into a new buffer;
+ * *json stays NULL for files that are neither (or glTF 1.0 binaries: left to assimp). */
+static CstStatus gltf_read_json(FILE *f, uint64_t size, const char *path, char **json, size_t *len,
+                                CstError *err)
+{
+    unsigned char hdr[20] = {0};
+    size_t got = fread(hdr, 1, sizeof hdr, f);
+    uint64_t off = 0;
+    *json = NULL;
+    if (got >= 4 && memcmp(hdr, "glTF", 4) == 0) {
+        if (got >= 8 && gltf_le32(hdr + 4) != 2) return CST_OK;
+        if (got < 20) return gltf_fail(err, CST_ERR_PARSE, path, "the file ends inside its %zu-byte header", sizeof hdr);
+        if (gltf_le32(hdr + 16) != 0x4E4F534Au)
+            return gltf_fail(err, CST_ERR_PARSE, path, "the first chunk is not JSON");
+        *len = gltf_le32(hdr + 12);
+        if (*len > size - 20)
+            return gltf_fail(err, CST_ERR_PARSE, path, "a JSON chunk of %zu bytes, but only %llu bytes follow "
+                             "the header", *len, (unsigned long long)(size - 20));
+        off = 20;
+    } else if (gltf_has_ext(path, ".gltf")) {
+        *len = (size_t)size;
+    } else {
+        return CST_OK;
+    }
+    char *buf = malloc(*len + 1);
+    if (!buf) return cst_fail(err, CST_ERR_OOM, "%.300s: out of memory reading the file", path);
+    if (fseeko(f, (off_t)off, SEEK_SET) != 0 || fread(buf, 1, *len, f) != *len) {
+        free(buf);
+        return cst_fail(err, CST_ERR_IO, "%.300s: cannot read: %s", path, strerror(errno));
+    }
+    *json = buf;
+    return CST_OK;
+}
+
+static CstStatus gltf_precheck(const char *path, CstError *err)
+{
+    FILE *f = NULL;
+    uint64_t size = 0;
+    CstStatus st = file_open_input(path, &f, &size, err);
+    if (st != CST_OK) return st;
+    char *text = NULL;
+    size_t len = 0;
+    st = gltf_read_json(f, size, path, &text, &len, err);
+    fclose(f);
+    if (st != CST_OK || !text) return st;
+    json_error_t jerr;
+    json_t *root = json_loadb(text, len, 0, &jerr);
+    free(text);
+    if (!root)
+        return gltf_fail(err, CST_ERR_PARSE, path, "JSON line %d, column %d: %.200s", jerr.line, jerr.column,
+                         jerr.text);
+    const json_t *version = json_object_get(json_object_get(root, "asset"), "version");
+    if (json_is_string(version) && json_string_value(version)[0] == '2') {
+        st = gltf_check_nodes(json_object_get(root, "nodes"), path, err);
+        if (st == CST_OK) st = gltf_check_meshes(root, path, err);
+    }
+    json_decref(root);
+    return st;
+}
+
+/* Every check before assimp reads the file; each opens it through file_open_input. */
+static CstStatus mesh_precheck(const char *path, CstError *err)
+{
+    CstStatus st = ply_precheck(path, err);
+    return st != CST_OK ? st : gltf_precheck(path, err);
+}
+
+/* ------------------------------------------------------------------ assimp's file access */
+/* assimp opens files through these (the mesh and what it references: .mtl, .bin), so they
+ * pass the same gate as every input. A refusal of a file that exists is kept, to be the
+ * message when the import then fails. */
+
+typedef struct ImportIo {
+    int refused;
+    CstError err;
+} ImportIo;
+
+typedef struct ImportFile {
+    struct aiFile file; /* first: assimp hands back this pointer */
+    FILE *fp;
+    uint64_t size;
+} ImportFile;
+
+static size_t import_read(struct aiFile *af, char *buf, size_t size, size_t count)
+{
+    return fread(buf, size, count, ((ImportFile *)af)->fp);
+}
+
+static size_t import_write(struct aiFile *af, const char *buf, size_t size, size_t count)
+{
+    (void)af, (void)buf, (void)size, (void)count;
+    return 0;
+}
+
+static size_t import_tell(struct aiFile *af)
+{
+    off_t p = ftello(((ImportFile *)af)->fp);
+    return p < 0 ? 0 : (size_t)p;
+}
+
+static size_t import_size(struct aiFile *af) { return (size_t)((ImportFile *)af)->size; }
+
+static void import_flush(struct aiFile *af) { (void)af; }
+
+static enum aiReturn import_seek(struct aiFile *af, size_t offset, enum aiOrigin origin)
+{
+    int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+    /* (off_t) of a size_t: assimp passes backward moves as wrapped-around offsets */
+    return fseeko(((ImportFile *)af)->fp, (off_t)offset, whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+}
+
+static struct aiFile *import_open(struct aiFileIO *fio, const char *path, const char *mode)
+{
+    ImportIo *io = (ImportIo *)(void *)fio->UserData;
+    if (!path || !mode || strchr(mode, 'w') || strchr(mode, 'a') || strchr(mode, '+')) return NULL;
+    ImportFile *f = calloc(1, sizeof *f);
+    if (!f) return NULL;
+    CstError e;
+    if (file_open_input(path, &f->fp, &f->size, &e) != CST_OK) {
+        struct stat sb;
+        if (!io->refused && stat(path, &sb) == 0) { /* not a probe for a missing file */
+            io->refused = 1;
+            io->err = e;
+        }
+        free(f);
+        return NULL;
+    }
+    f->file.ReadProc = import_read;
+    f->file.WriteProc = import_write;
+    f->file.TellProc = import_tell;
+    f->file.FileSizeProc = import_size;
+    f->file.SeekProc = import_seek;
+    f->file.FlushProc = import_flush;
+    return &f->file;
+}
+
+static void import_close(struct aiFileIO *fio, struct aiFile *af)
+{
+    (void)fio;
+    if (!af) return;
+    fclose(((ImportFile *)af)->fp);
+    free(af);
+}
+
+static struct aiFileIO import_file_io(ImportIo *io)
+{
+    struct aiFileIO fio = {import_open, import_close, (aiUserData)(void *)io};
+    return fio;
+}
+
 /* ------------------------------------------------------------------ entry points */
 
 void mesh_import_free(ImportedMesh *mesh)
@@ -581,16 +871,10 @@ static CstStatus import_error_status(const char *msg)
 CstStatus mesh_import(const char *path, ImportedMesh *out, CstError *err)
 {
     memset(out, 0, sizeof *out);
-    /* assimp's own message for a missing file lacks the reason; ask the system first. */
-    struct stat sb;
-    if (stat(path, &sb) != 0)
-        return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: %s", path, strerror(errno));
-    if (S_ISDIR(sb.st_mode))
-        return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: %s", path, strerror(EISDIR));
-    /* Not a FIFO or device: assimp would block on one, or read forever. */
-    if (!S_ISREG(sb.st_mode))
-        return cst_fail(err, CST_ERR_IO, "%.300s: cannot open: not a regular file", path);
-    CstStatus pre = ply_precheck(path, err); /* also tells an unreadable file (IO) */
+    /* assimp's own message for a missing file lacks the reason, and it would block on a
+     * FIFO or read a device forever: the pre-checks open the file through the one gate
+     * (core/file.h), and so does assimp, for the file and what it references (.mtl, .bin). */
+    CstStatus pre = mesh_precheck(path, err);
     if (pre != CST_OK) return pre;
 
     struct aiPropertyStore *props = aiCreatePropertyStore();
@@ -598,9 +882,13 @@ CstStatus mesh_import(const char *path, ImportedMesh *out, CstError *err)
     /* Files with bones but no meshes would otherwise get a made-up skeleton mesh. */
     aiSetImportPropertyInteger(props, AI_CONFIG_IMPORT_NO_SKELETON_MESHES, 1);
     pthread_mutex_lock(&import_lock);
-    const struct aiScene *scene = aiImportFileExWithProperties(path, MESH_IMPORT_FLAGS, NULL, props);
+    ImportIo io = {0};
+    struct aiFileIO fio = import_file_io(&io);
+    const struct aiScene *scene = aiImportFileExWithProperties(path, MESH_IMPORT_FLAGS, &fio, props);
     CstStatus st = CST_OK;
-    if (!scene) {
+    if (!scene && io.refused) { /* our reason, not assimp's "could not open" */
+        st = cst_fail(err, io.err.status, "%.300s: cannot import: %.600s", path, io.err.msg);
+    } else if (!scene) {
         const char *msg = aiGetErrorString();
         msg = msg && *msg ? msg : "unknown error";
         st = cst_fail(err, import_error_status(msg), "%.300s: cannot import: %.600s", path, msg);

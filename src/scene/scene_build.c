@@ -499,7 +499,7 @@ CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path, con
     float *rgb = NULL;
     int w = 0, h = 0;
     EnvMap env;
-    if ((st = image_read(path, &rgb, &w, &h, err)) != CST_OK) return st;
+    if ((st = image_read_radiance(path, &rgb, &w, &h, err)) != CST_OK) return st; /* NaN, Inf, < 0: errors */
     if ((st = envmap_init_image(&env, rgb, w, h, k, err)) != CST_OK) return st;
     return scene_set_environment(scene, &env, err);
 }

@@ -12,6 +12,7 @@
 #include <stb_image.h>
 
 #include "core/error.h"
+#include "core/file.h"
 #include "io/image_io.h"
 
 static Color rgb_max3(Color a, Color b) { return color_rgb(maxf(a.c[0], b.c[0]), maxf(a.c[1], b.c[1]), maxf(a.c[2], b.c[2])); }
@@ -47,18 +48,17 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
                         rgb_data ? "" : " without pixels");
     }
     size_t n = (size_t)width * (size_t)height;
+    /* The rule of every image input (io/image_io.h); the message reads the pixel, so the
+     * image is freed after it is written. */
+    CstStatus bad = image_check_radiance(rgb_data, width, height, "texture image", err);
+    if (bad != CST_OK) {
+        free(rgb_data);
+        return bad;
+    }
     double sum[3] = {0.0, 0.0, 0.0};
     Color mx = color_s(0.0f);
     for (size_t i = 0; i < n; i++) {
         const float *p = &rgb_data[3 * i];
-        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]) || p[0] < 0.0f || p[1] < 0.0f || p[2] < 0.0f) {
-            /* The message reads the pixel, so the image is freed after it is written. */
-            CstStatus st = cst_fail(err, CST_ERR_INVALID_ARG,
-                                    "texture image pixel (%zu, %zu) is (%g, %g, %g); expected finite values >= 0",
-                                    i % (size_t)width, i / (size_t)width, (double)p[0], (double)p[1], (double)p[2]);
-            free(rgb_data);
-            return st;
-        }
         for (int c = 0; c < 3; c++) sum[c] += (double)p[c];
         mx = rgb_max3(mx, color_rgb(p[0], p[1], p[2]));
     }
@@ -94,8 +94,9 @@ static float *texture_decode_ints(const void *px, bool sixteen, size_t n, bool l
 CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureWrap wrap, CstError *err)
 {
     memset(t, 0, sizeof *t);
-    FILE *fp = fopen(path, "rb");
-    if (!fp) return cst_fail(err, CST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    FILE *fp = NULL;
+    CstStatus open_st = file_open_input(path, &fp, NULL, err); /* regular files only */
+    if (open_st != CST_OK) return open_st;
     unsigned char magic[4] = {0};
     size_t got = fread(magic, 1, sizeof magic, fp);
     bool exr = got == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
@@ -105,7 +106,7 @@ CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureW
         fclose(fp);
         float *px = NULL;
         int w = 0, h = 0;
-        CstStatus st = image_read(path, &px, &w, &h, err);
+        CstStatus st = image_read_radiance(path, &px, &w, &h, err);
         if (st != CST_OK) return st;
         return texture_image(t, px, w, h, wrap, err);
     }
@@ -148,7 +149,12 @@ CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureW
                         "%s: cannot decode the image (%s); expected a PNG, JPEG, BMP, TGA, HDR, EXR or PFM file",
                         path, why ? why : "unknown reason");
     }
-    CstStatus st = texture_image(t, px, w, h, wrap, err);
+    CstStatus st = image_check_radiance(px, w, h, path, err); /* HDR files: NaN, Inf, < 0 */
+    if (st != CST_OK) {
+        free(px);
+        return st;
+    }
+    st = texture_image(t, px, w, h, wrap, err);
     if (st != CST_OK) {
         char msg[sizeof err->msg];
         memcpy(msg, err->msg, sizeof msg);

@@ -53,6 +53,7 @@ typedef struct Loader {
     const json_t *tex_obj;
     const char **tex_names;
     int *tex_state, *tex_ids;
+    int *tex_sorted; /* indices into tex_names in strcmp order: lookups by binary search */
     int num_textures;
     /* What the film, integrator and sampler sections ask for, handed to the scene with
      * cst_scene_set_render_settings before commit. Starts as a new scene's settings: unset,

@@ -103,6 +103,18 @@ static CstStatus load_json_string(const char *text, size_t len, const char *name
     if (!text && len > 0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%.200s: text is NULL", name);
 
+    /* A UTF-8 byte order mark (some Windows editors write one) is skipped, as RFC 8259 §8.1
+     * allows a reader to; jansson would stop at it. Positions count from after it, as an
+     * editor shows them. UTF-16 text is named as such rather than as a NUL byte. */
+    if (text && len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0) {
+        text += 3;
+        len -= 3;
+    } else if (text && len >= 2 && ((unsigned char)text[0] == 0xFF || (unsigned char)text[0] == 0xFE) &&
+               (unsigned char)text[1] == ((unsigned char)text[0] ^ 0x01)) {
+        return cst_fail(err, CST_ERR_PARSE, "%.200s:1:1: the text is UTF-16 (it starts with a UTF-16 byte "
+                        "order mark); expected UTF-8", name);
+    }
+
     /* JSON text never holds a raw NUL, but jansson drops one that directly follows a number
      * or literal ("51\0," parses as "51,"): its one-character push-back cannot tell a NUL
      * from an empty buffer. Reject it here so the text json_locate walks is what jansson
@@ -162,6 +174,7 @@ static CstStatus load_json_string(const char *text, size_t len, const char *name
     free(ld.tex_names);
     free(ld.tex_state);
     free(ld.tex_ids);
+    free(ld.tex_sorted);
     json_decref(root);
     if (st != CST_OK) {
         cst_scene_destroy(ld.scene);

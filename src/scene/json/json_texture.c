@@ -124,32 +124,84 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
     return add_texture(ld, &t, out);
 }
 
+/* Index of the texture called `name` in ld->tex_names, or -1. */
+static int texture_index(const Loader *ld, const char *name)
+{
+    int lo = 0, hi = ld->num_textures;
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2, c = strcmp(ld->tex_names[ld->tex_sorted[mid]], name);
+        if (c == 0) return ld->tex_sorted[mid];
+        if (c < 0) lo = mid + 1;
+        else hi = mid;
+    }
+    return -1;
+}
+
+/* A texture that texture i's checkerboard operands name and that has not been read yet,
+ * or -1. Anything malformed is left for parse_texture to report at its place. */
+static int texture_pending_operand(const Loader *ld, int i)
+{
+    const json_t *obj = json_object_get(ld->tex_obj, ld->tex_names[i]);
+    const json_t *type = json_object_get(obj, "type");
+    if (!json_is_string(type) || strcmp(json_string_value(type), "checkerboard") != 0) return -1;
+    static const char *const keys[] = {"even", "odd"};
+    for (int k = 0; k < 2; k++) {
+        const json_t *v = json_object_get(obj, keys[k]);
+        int j = json_is_string(v) ? texture_index(ld, json_string_value(v)) : -1;
+        if (j >= 0 && ld->tex_state[j] == 0) return j;
+    }
+    return -1;
+}
+
+/* Reads texture `root` and, first, every unread texture its checkerboards reach. Chains of
+ * checkerboards are as long as the file makes them (a chain of 100,000 overflowed the stack
+ * when this recursed), so the walk keeps its own stack: a texture is pushed once (state 1)
+ * and parsed when the textures it names are read, so parse_texture finds them read and
+ * never descends. A texture naming one still on the stack is a cycle, reported by
+ * read_texture_operand at the name that closes it. */
+static CstStatus read_texture_tree(Loader *ld, int root)
+{
+    int *stack = malloc((size_t)ld->num_textures * sizeof *stack), top = 0;
+    if (!stack) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+    JsonPathStep saved[LOADER_MAX_DEPTH];
+    int saved_depth = ld->depth;
+    memcpy(saved, ld->path, sizeof saved);
+    stack[top++] = root;
+    ld->tex_state[root] = 1;
+    CstStatus st = CST_OK;
+    while (top > 0 && st == CST_OK) {
+        int i = stack[top - 1], dep = texture_pending_operand(ld, i);
+        if (dep >= 0) {
+            ld->tex_state[dep] = 1;
+            stack[top++] = dep;
+            continue;
+        }
+        /* Read it at its own path. */
+        ld->depth = 0;
+        json_path_push_key(ld, "textures");
+        json_path_push_key(ld, ld->tex_names[i]);
+        st = parse_texture(ld, json_object_get(ld->tex_obj, ld->tex_names[i]), &ld->tex_ids[i]);
+        ld->tex_state[i] = 2;
+        top--;
+    }
+    free(stack);
+    if (st != CST_OK) return st; /* the path stays at the error */
+    memcpy(ld->path, saved, sizeof saved);
+    ld->depth = saved_depth;
+    return CST_OK;
+}
+
 /* Scene id of the texture called `name`, read now if it has not been. The error points at
  * the current path (the value naming it). */
 CstStatus json_read_texture_name(Loader *ld, const char *name, int *out)
 {
     char clipped[72];
-    for (int i = 0; i < ld->num_textures; i++) {
-        if (strcmp(ld->tex_names[i], name) != 0) continue;
-        if (ld->tex_state[i] == 2) {
-            *out = ld->tex_ids[i];
-            return CST_OK;
-        }
+    int i = texture_index(ld, name);
+    if (i >= 0) {
         if (ld->tex_state[i] == 1)
             return json_fail_here(ld, "texture \"%s\" contains itself through checkerboards; expected "
                                       "no cycles", json_clip_name(name, clipped));
-        /* Read it at its own path, then come back. */
-        JsonPathStep saved[LOADER_MAX_DEPTH];
-        int saved_depth = ld->depth;
-        memcpy(saved, ld->path, sizeof saved);
-        ld->depth = 0;
-        json_path_push_key(ld, "textures");
-        json_path_push_key(ld, ld->tex_names[i]);
-        ld->tex_state[i] = 1;
-        LOADER_TRY(parse_texture(ld, json_object_get(ld->tex_obj, ld->tex_names[i]), &ld->tex_ids[i]));
-        ld->tex_state[i] = 2;
-        memcpy(ld->path, saved, sizeof saved);
-        ld->depth = saved_depth;
+        if (ld->tex_state[i] == 0) LOADER_TRY(read_texture_tree(ld, i));
         *out = ld->tex_ids[i];
         return CST_OK;
     }
@@ -159,6 +211,16 @@ CstStatus json_read_texture_name(Loader *ld, const char *name, int *out)
     char list[512];
     json_join_names(ld->tex_names, ld->num_textures, list, sizeof list);
     return json_fail_here(ld, "texture \"%s\" is not defined; expected one of: %s", json_clip_name(name, clipped), list);
+}
+
+typedef struct TexKey {
+    const char *name;
+    int index;
+} TexKey;
+
+static int tex_key_cmp(const void *a, const void *b)
+{
+    return strcmp(((const TexKey *)a)->name, ((const TexKey *)b)->name);
 }
 
 CstStatus json_parse_textures(Loader *ld, const json_t *texs)
@@ -171,11 +233,21 @@ CstStatus json_parse_textures(Loader *ld, const json_t *texs)
     ld->tex_names = malloc((n ? n : 1) * sizeof *ld->tex_names);
     ld->tex_state = calloc(n ? n : 1, sizeof *ld->tex_state);
     ld->tex_ids = calloc(n ? n : 1, sizeof *ld->tex_ids);
-    if (!ld->tex_names || !ld->tex_state || !ld->tex_ids)
+    ld->tex_sorted = malloc((n ? n : 1) * sizeof *ld->tex_sorted);
+    TexKey *keys = malloc((n ? n : 1) * sizeof *keys);
+    if (!ld->tex_names || !ld->tex_state || !ld->tex_ids || !ld->tex_sorted || !keys) {
+        free(keys);
         return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+    }
     const char *name;
     json_t *v;
-    json_object_foreach((json_t *)texs, name, v) ld->tex_names[ld->num_textures++] = name;
+    json_object_foreach((json_t *)texs, name, v) {
+        keys[ld->num_textures] = (TexKey){name, ld->num_textures};
+        ld->tex_names[ld->num_textures++] = name;
+    }
+    qsort(keys, n, sizeof *keys, tex_key_cmp);
+    for (size_t i = 0; i < n; i++) ld->tex_sorted[i] = keys[i].index;
+    free(keys);
     /* Every texture is read (and so checked) even when nothing uses it. */
     for (int i = 0; i < ld->num_textures; i++) {
         int id;

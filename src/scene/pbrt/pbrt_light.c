@@ -165,16 +165,9 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         if (!path) return pbrt_oom(ld);
         float *src = NULL;
         int w = 0, h = 0;
-        st = image_read(path, &src, &w, &h, ld->err);
+        st = image_read_radiance(path, &src, &w, &h, ld->err); /* NaN, Inf, < 0: errors */
         free(path);
         if (st) return pbrt_fail_wrap(ld, st, fl, d);
-        size_t n = 3u * (size_t)w * (size_t)h;
-        for (size_t i = 0; i < n; i++)
-            if (!isfinite(src[i])) {
-                free(src);
-                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: \"%s\" has infinite or NaN pixels; "
-                                    "expected finite radiance (as pbrt-v4)", d, pbrt_clip(file, nm));
-            }
         if (w != h)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, fl, "%s: \"%s\" is %d x %d, not square: pbrt-v4 "
                     "expects an equal-area (square) image; read as an equirectangular map in "

@@ -73,6 +73,7 @@ void pbrt_warn_at(Loader *ld, CstWarningCode code, Loc loc, const char *fmt, ...
     vsnprintf(what, sizeof what, fmt, ap);
     va_end(ap);
     snprintf(msg, sizeof msg, "%.200s:%d:%d: %s", loc.file, loc.line, loc.col, what);
+    cst_escape_message(msg, sizeof msg); /* as cst_fail does for errors */
     ld->opt.warning(ld->opt.warning_user, code, msg);
 }
 

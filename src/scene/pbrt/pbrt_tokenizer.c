@@ -18,6 +18,12 @@ void pbrt_tokenizer_init(PbrtTokenizer *tz, const char *text, size_t len, const 
 {
     tz->text = text ? text : "";
     tz->len = text ? len : 0;
+    /* A UTF-8 byte order mark (some Windows editors write one) is skipped: pbrt-v4 would
+     * read it as part of the first directive's name. Columns count from after it. */
+    if (tz->len >= 3 && memcmp(tz->text, "\xEF\xBB\xBF", 3) == 0) {
+        tz->text += 3;
+        tz->len -= 3;
+    }
     tz->pos = 0;
     tz->line = 1;
     tz->column = 1;
@@ -75,6 +81,9 @@ CstStatus pbrt_next_token(PbrtTokenizer *tz, PbrtToken *tok, CstError *err)
         return CST_OK;
     }
     unsigned char c = (unsigned char)tz->text[tz->pos];
+    if (tz->pos == 0 && tz->len >= 2 && (c == 0xFF || c == 0xFE) && (unsigned char)tz->text[1] == (c ^ 0x01))
+        return lex_error(tz, 1, 1, err, "the file is UTF-16 (it starts with a UTF-16 byte order mark); "
+                         "expected UTF-8 or ASCII (pbrt-v4 rejects UTF-16 too)");
     if (c == '[' || c == ']') {
         tok->kind = c == '[' ? PBRT_TOK_LBRACKET : PBRT_TOK_RBRACKET;
         tok->len = 1;
