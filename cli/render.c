@@ -170,6 +170,10 @@ int cli_render(const CliArgs *a)
     }
 
     status = cst_render(scene, &settings, &film, &stats, &err);
+    /* Too many NaN/Inf samples: the film is still written, for inspection, then exit 1. */
+    CstStatus render_status = status;
+    CstError render_err = err;
+    if (status == CST_ERR_NONFINITE) status = CST_OK;
     if (status != CST_OK) {
         if (!a->quiet)
             cli_progress_abort(&progress);
@@ -188,6 +192,12 @@ int cli_render(const CliArgs *a)
     }
     if (!a->quiet)
         cli_print_summary(output, &stats);
+    if (render_status != CST_OK) {
+        cli_print_error(&render_err, render_status);
+        fprintf(stderr, "caustic: %s was written for inspection only: the render failed\n", output);
+        code = cli_exit_code(render_status, CLI_STAGE_RENDER);
+        goto done;
+    }
     if (stats.nonfinite > 0)
         fprintf(stderr, "caustic: warning: %" PRIu64 " NaN/Inf samples discarded "
                 "(%.3g%% of %" PRIu64 "; counted, never added to the image)\n",
