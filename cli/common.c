@@ -35,6 +35,7 @@ int cli_exit_code(CstStatus status, CliStage stage)
     case CST_ERR_OOM:
     case CST_ERR_INTERNAL:
     case CST_ERR_CANCELLED: /* the CLI never cancels */
+    case CST_ERR_NONFINITE: /* the render ran and failed: like a failed check, 1 */
         return CLI_EXIT_INTERNAL;
     }
     return CLI_EXIT_INTERNAL;

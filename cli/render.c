@@ -100,6 +100,31 @@ static void cli_print_summary(const char *output, const CstRenderStats *st)
 
 /* ------------------------------------------------------------ commands */
 
+/* The output path: -o, else the scene's "output", else the scene's name with .png (the
+ * built-in box: CLI_BUILTIN_OUTPUT), checked writable before rendering; NULL (after a
+ * message) when it is not. buf holds a derived name. */
+static const char *cli_resolve_output(const CliArgs *a, CstScene *scene, char *buf, size_t size)
+{
+    if (a->output_path)
+        return a->output_path;
+    const char *from_scene = cst_scene_output_path(scene);
+    if (from_scene) {
+        if (!cli_check_output(from_scene, "the scene's output")) {
+            fprintf(stderr, "caustic: use -o to write somewhere else\n");
+            return NULL;
+        }
+        return from_scene;
+    }
+    if (!a->scene_path)
+        snprintf(buf, size, "%s", CLI_BUILTIN_OUTPUT);
+    else if (!cli_default_output(a->scene_path, buf, size)) {
+        fprintf(stderr, "caustic: error: scene path too long: '%s'\n", a->scene_path);
+        return NULL;
+    }
+    return cli_check_output(buf, "output") ? buf : NULL;
+}
+
+
 int cli_render(const CliArgs *a)
 {
     int code = CLI_EXIT_INTERNAL;
@@ -137,29 +162,9 @@ int cli_render(const CliArgs *a)
         goto done;
     }
 
-    if (!output) {
-        const char *from_scene = cst_scene_output_path(scene);
-        if (from_scene) {
-            output = from_scene;
-            if (!cli_check_output(output, "the scene's output")) {
-                fprintf(stderr, "caustic: use -o to write somewhere else\n");
-                code = CLI_EXIT_USAGE;
-                goto done;
-            }
-        } else {
-            if (!a->scene_path)
-                snprintf(default_output, sizeof default_output, "%s", CLI_BUILTIN_OUTPUT);
-            else if (!cli_default_output(a->scene_path, default_output, sizeof default_output)) {
-                fprintf(stderr, "caustic: error: scene path too long: '%s'\n", a->scene_path);
-                code = CLI_EXIT_USAGE;
-                goto done;
-            }
-            output = default_output;
-            if (!cli_check_output(output, "output")) {
-                code = CLI_EXIT_USAGE;
-                goto done;
-            }
-        }
+    if (!(output = cli_resolve_output(a, scene, default_output, sizeof default_output))) {
+        code = CLI_EXIT_USAGE;
+        goto done;
     }
 
     {
@@ -190,6 +195,10 @@ int cli_render(const CliArgs *a)
 
     cli_metadata_begin(&meta, a->scene_path);
     status = cst_render(scene, &settings, &film, &stats, &err);
+    /* Too many NaN/Inf samples: the film is still written, for inspection, then exit 1. */
+    CstStatus render_status = status;
+    CstError render_err = err;
+    if (status == CST_ERR_NONFINITE) status = CST_OK;
     if (status != CST_OK) {
         if (!a->quiet)
             cli_progress_abort(&progress);
@@ -219,6 +228,12 @@ int cli_render(const CliArgs *a)
     summary.write_seconds = cli_clock_seconds() - t_write;
     if (!a->quiet)
         cli_print_summary(output, &stats);
+    if (render_status != CST_OK) {
+        cli_print_error(&render_err, render_status);
+        fprintf(stderr, "caustic: %s was written for inspection only: the render failed\n", output);
+        code = cli_exit_code(render_status, CLI_STAGE_RENDER);
+        goto done;
+    }
     if (stats.nonfinite > 0)
         fprintf(stderr, "caustic: warning: %" PRIu64 " NaN/Inf samples discarded "
                 "(%.3g%% of %" PRIu64 "; counted, never added to the image)\n",

@@ -34,7 +34,9 @@ typedef enum CstStatus {
     CST_ERR_UNSUPPORTED, /* a valid request this build cannot honour */
     CST_ERR_OOM,         /* allocation failed */
     CST_ERR_INTERNAL,    /* a bug or an unexpected library failure */
-    CST_ERR_CANCELLED    /* the caller asked to stop (CstProgressFn returned nonzero) */
+    CST_ERR_CANCELLED,   /* the caller asked to stop (CstProgressFn returned nonzero) */
+    CST_ERR_NONFINITE    /* cst_render: more than CST_NONFINITE_LIMIT of the samples were NaN
+                          * or infinite and were discarded; the film is still returned */
 } CstStatus;
 
 typedef struct CstError {
@@ -494,7 +496,19 @@ typedef struct CstFilm CstFilm;
  * against the memory available before a render starts. */
 CST_API uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettings *settings);
 
-/* Renders the scene. On success *out is a new film the caller owns (cst_film_destroy). */
+/* The fraction of a render's samples that may be discarded as NaN or infinite (counted,
+ * never added to the film: CstRenderStats.nonfinite over .samples) before cst_render fails
+ * with CST_ERR_NONFINITE. A lost sample counts as zero, so the image is biased low where
+ * they fall; up to 1 in 10,000 (a few per million pixels-samples from rare degenerate
+ * configurations) that bias stays below 8-bit quantisation and the noise of any practical
+ * sample count, beyond it the losses are systematic (overflowing values, a broken
+ * parameter) and the image is not what the scene describes. */
+#define CST_NONFINITE_LIMIT 1e-4
+
+/* Renders the scene. On success *out is a new film the caller owns (cst_film_destroy).
+ * CST_ERR_NONFINITE (more than CST_NONFINITE_LIMIT of the samples discarded as NaN/Inf)
+ * is the one failure that still sets *out and *stats: the caller owns that film too, so
+ * that the image can be inspected; every other failure leaves *out NULL. */
 CST_API CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings,
                      CstFilm **out, CstRenderStats *stats, CstError *err);
 

@@ -94,6 +94,7 @@ const char *cst_status_name(CstStatus status)
     case CST_ERR_OOM: return "CST_ERR_OOM";
     case CST_ERR_INTERNAL: return "CST_ERR_INTERNAL";
     case CST_ERR_CANCELLED: return "CST_ERR_CANCELLED";
+    case CST_ERR_NONFINITE: return "CST_ERR_NONFINITE";
     }
     return "CST_ERR_UNKNOWN";
 }

@@ -88,7 +88,7 @@ static void camera_tile(void *ctx, int tile, int worker)
             int pixel = y * W + x;
             for (int s = it->tile_first; s < it->tile_first + it->tile_spp; s++) {
                 Sampler smp;
-                sampler_start(&smp, it->sampler, it->seed, (uint64_t)pixel, (uint32_t)s, it->sampler_spp);
+                sampler_start(&smp, &it->sampler, (uint64_t)pixel, (uint32_t)s);
                 Vec2 uf = sampler_2d(&smp);
                 Vec2 ul = sampler_2d(&smp);
                 float fw;
@@ -280,6 +280,30 @@ static void light_free(LightIterations *L)
     memset(L, 0, sizeof *L);
 }
 
+/* A photon gather or VCM merging radius given by the settings (issue 25: 1e-30 was accepted
+ * and most samples came out NaN). The density estimates divide by pi r^2 N in float
+ * (photon.c, sppm.c; VCM's eta = pi r^2 N, tech. rep. eq. 12): r^2 underflowed to 0 and
+ * 0 x inf gave NaN. A photon's flux grows with the scene's area, so an estimate scales as
+ * (scene diagonal / r)^2: from RADIUS_MIN_REL of the diagonal that factor stays within 1e12,
+ * far inside float's range for any sensible radiance (and such a radius gathers no photon
+ * anyway: the automatic one is about 3e-3 of the diagonal). RADIUS_MIN_ABS keeps r^2 a
+ * normal float in tiny scenes, as the builder's smallest sphere radius does; RADIUS_MAX is
+ * the loaders' bound on lengths, whose square stays finite. Out-of-range values are
+ * refused, not clamped: a radius the user chose should not change silently. */
+#define RADIUS_MIN_REL 1e-6
+#define RADIUS_MIN_ABS 1e-18
+#define RADIUS_MAX 1e18
+static CstStatus check_radius(const Scene *s, double r, const char *what, CstError *err)
+{
+    double diag = 2.0 * (double)s->emitter_sampler.radius; /* the scene's bounding-box diagonal */
+    double lo = RADIUS_MIN_REL * diag > RADIUS_MIN_ABS ? RADIUS_MIN_REL * diag : RADIUS_MIN_ABS;
+    if (r >= lo && r <= RADIUS_MAX) return CST_OK;
+    return cst_fail(err, CST_ERR_INVALID_ARG,
+                    "%s radius %g: expected %g to %g (at least 1e-6 of the scene's bounding-box diagonal, %g, "
+                    "and 1e-18; at most 1e18), or 0 / no radius for the automatic one",
+                    what, r, lo, RADIUS_MAX, diag);
+}
+
 static CstStatus light_prepare(Integrator *it, const CstRenderSettings *st, CstError *err)
 {
     LightIterations *L = &it->light;
@@ -291,6 +315,9 @@ static CstStatus light_prepare(Integrator *it, const CstRenderSettings *st, CstE
         if (!(st->photon_radius >= 0.0) || !(L->vcm_radius > 0.0f) || !(L->vcm_radius < INFINITY))
             return cst_fail(err, CST_ERR_INVALID_ARG, "merging radius %g: expected a positive value (0 = automatic)",
                             st->photon_radius);
+        CstStatus rs = L->vcm_params.merge && st->photon_radius > 0.0
+                           ? check_radius(it->scene, st->photon_radius, "merging", err) : CST_OK;
+        if (rs != CST_OK) return rs;
     }
     L->params.max_depth = st->max_depth;
     L->params.rr_depth = st->rr_depth;
@@ -445,9 +472,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     camera_init(&it->camera, &scene->camera, st->width, st->height);
     if (scene->camera_mirror) camera_mirror_x(&it->camera);
     filter_init(&it->pixel_filter, st->filter);
-    it->sampler = st->sampler;
     /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
-    it->sampler_spp = (uint32_t)st->spp;
+    it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp);
     it->aov_hit = (st->aovs & FILM_AOV_FIRST_HIT) != 0;
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
@@ -471,6 +497,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
          * runs single-threaded from the render seed, so the maps, and with them the image,
          * do not depend on the thread count. */
         if (!photons_ok) break;
+        CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "photon gather", err) : CST_OK;
+        if (rs != CST_OK) return rs;
         PhotonParams pp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->seed,
                            progress, progress_user};
         return photon_maps_build(scene, &it->camera, &pp, &it->photon, rays, err);
@@ -481,6 +509,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         /* spp is the iteration count; photons reach each visible point in photon order
          * whatever the thread count (sppm.c). */
         if (!photons_ok) break;
+        CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "SPPM initial", err) : CST_OK;
+        if (rs != CST_OK) return rs;
         SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
                          st->threads};
         return sppm_create(scene, &it->camera, &sp, st->threads, &it->sppm, err);

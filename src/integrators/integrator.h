@@ -105,8 +105,8 @@ typedef struct Integrator {
     IntegratorWorker *workers;   /* one per pool worker */
     /* Camera tiles: INTEGRATOR_TILE-square tiles over the crop, one thread per tile. */
     Filter pixel_filter;
-    CstSampler sampler;          /* camera paths' */
-    uint32_t sampler_spp;        /* the sample count strata divide; 0 = not known (time limit) */
+    SamplerSetup sampler;        /* camera paths': type, seed, the sample count strata divide
+                                  * (0 = not known: a time limit) and the strata, set once */
     bool aov_hit;                /* albedo, normal or depth AOVs: trace the first hit for them */
     int tiles_x, num_tiles;
     int crop_x0, crop_x1, crop_y0, crop_y1;

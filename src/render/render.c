@@ -6,6 +6,7 @@
 #include "render/render.h"
 
 #include <limits.h>
+#include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -255,8 +256,20 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     }
     if (status == CST_OK) {
         if (st.progress) st.progress(st.progress_user, 1.0, seconds);
-        if (stats) fill_stats(stats, &st, it, workers, samples, rays, seconds);
+        CstRenderStats done;
+        fill_stats(&done, &st, it, workers, samples, rays, seconds);
+        if (stats) *stats = done;
         *out = film;
+        /* Issue 25: a render that lost many samples to NaN/Inf fails, film kept (caustic.h). */
+        if ((double)done.nonfinite > CST_NONFINITE_LIMIT * (double)done.samples)
+            status = cst_fail(err, CST_ERR_NONFINITE,
+                              "%" PRIu64 " of %" PRIu64 " samples (%.3g%%) were NaN or infinite and were discarded, "
+                              "more than the %g%% a render may lose (CST_NONFINITE_LIMIT): the image is biased. "
+                              "Expected finite values: look for emission, light or texture values near the float "
+                              "limit (3.4e38) or a radius tiny for the scene",
+                              done.nonfinite, done.samples,
+                              done.samples ? 100.0 * (double)done.nonfinite / (double)done.samples : 100.0,
+                              100.0 * CST_NONFINITE_LIMIT);
     } else {
         film_destroy(film);
     }

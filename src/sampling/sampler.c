@@ -112,21 +112,33 @@ static inline uint64_t dim_key(const Sampler *s)
     return mix64(s->key ^ ((uint64_t)s->dim + 1u) * 0x9e3779b97f4a7c15ULL);
 }
 
-void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index, uint32_t spp)
+/* 2D strata: nx x (spp / nx) with nx the largest divisor of spp not above its square root,
+ * so every sample index owns exactly one cell: 16 -> 4 x 4, 32 -> 4 x 8, a prime p -> 1 x p
+ * (plain 1D stratification in y: choose square or power-of-two counts). */
+static uint32_t strata_nx(uint32_t spp)
 {
-    pcg32_seed_sample(&s->rng, seed, pixel, index);
-    s->type = type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_INDEPENDENT : type;
+    uint32_t nx = 1;
+    for (uint32_t d = 1; d <= spp / d; d++)
+        if (spp % d == 0) nx = d;
+    return nx;
+}
+
+SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp)
+{
+    SamplerSetup u = {type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_INDEPENDENT : type, seed, spp, 1};
+    if (u.type == CST_SAMPLER_STRATIFIED) u.nx = strata_nx(spp);
+    return u;
+}
+
+void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
+{
+    pcg32_seed_sample(&s->rng, u->seed, pixel, index);
+    s->type = u->type;
     s->dim = 0;
     s->index = index;
-    s->spp = spp;
-    s->key = mix64(mix64(seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
-    /* 2D strata: nx x (spp / nx) with nx the largest divisor of spp not above its square
-     * root, so every sample index owns exactly one cell: 16 -> 4 x 4, 32 -> 4 x 8, a prime
-     * p -> 1 x p (plain 1D stratification in y: choose square or power-of-two counts). */
-    s->nx = 1;
-    if (s->type == CST_SAMPLER_STRATIFIED)
-        for (uint32_t d = 1; d <= spp / d; d++)
-            if (spp % d == 0) s->nx = d;
+    s->spp = u->spp;
+    s->nx = u->nx;
+    s->key = mix64(mix64(u->seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
 }
 
 /* Stratified or Sobol' only: sampler_1d/2d (sampler.h) draw the independent ones inline. */

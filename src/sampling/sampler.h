@@ -25,10 +25,23 @@ typedef struct Sampler {
     uint64_t key;      /* hash of (seed, pixel): seeds every per-dimension scramble */
 } Sampler;
 
-/* Starts sample `index` of `pixel` (of `spp` per pixel: the stratified sampler divides
+/* What every camera sample of a render shares: the sampler type, the seed and the sample
+ * count, with the stratified sampler's 2D grid worked out from that count once, by
+ * sampler_setup, not per sample: finding the grid is a divisor search of O(sqrt(spp)) steps,
+ * which at spp = 2^31 - 1 took 46,000 steps per sample (issue 25). */
+typedef struct SamplerSetup {
+    CstSampler type;   /* never CST_SAMPLER_DEFAULT */
+    uint64_t seed;
+    uint32_t spp;      /* stratified: the sample count the strata divide; 0 = unknown */
+    uint32_t nx;       /* stratified: 2D strata are nx x (spp / nx); 1 otherwise */
+} SamplerSetup;
+
+/* The setup of a render's camera samples: `spp` per pixel (the stratified sampler divides
  * [0,1) into that many strata; 0 = not known in advance, e.g. a render with only a time
  * limit, and then it jitters without strata). type CST_SAMPLER_DEFAULT means independent. */
-void sampler_start(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index, uint32_t spp);
+SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp);
+/* Starts sample `index` of `pixel`; O(1) for every type. */
+void sampler_start(Sampler *s, const SamplerSetup *setup, uint64_t pixel, uint32_t index);
 /* An independent sampler on the PCG32 stream (seed, a, b): the random numbers of every
  * path that is not a pixel sample (light subpaths, photons), so that every integrator
  * draws through one type. */

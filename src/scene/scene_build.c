@@ -48,6 +48,22 @@ static CstStatus read_rgb(const float c[3], int max_one, const char *fn, const c
     return CST_OK;
 }
 
+/* Products of values that are each in range but overflow together (issue 25: an emission
+ * radiance of 1e30 times a scale of 1e30 rendered black with exit 0): a light's radiance
+ * after its scale and texture, and its power, must be finite floats. Power is what light
+ * selection and every light path start from (light_power(), emitter_sample_emission()):
+ * pi x area x radiance for an emitting surface (x 2 two-sided), 4 pi x intensity for a
+ * point light, 4 pi x radiance for an environment; per channel, in double. */
+static CstStatus check_product(const char *fn, const char *what, double value, const char *expect, CstError *err)
+{
+    if (value <= (double)FLT_MAX) return CST_OK;
+    return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s = %g overflows a float (above 3.4e38); expected %s",
+                    fn, what, value, expect);
+}
+
+/* The largest channel of a colour, in double. */
+static double color_peak(Color c) { return (double)color_max(c); }
+
 /* A public texture id (>= 1, 0 = none) checked against the scene. */
 static CstStatus check_texture_id(const Scene *s, int id, int allow_none, const char *fn, const char *what,
                                   CstError *err)
@@ -231,13 +247,24 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
 
 /* ------------------------------------------------------------------ shapes */
 
-static CstStatus read_emission(const Scene *s, const CstEmission *e, const char *fn, Emission *out, CstError *err)
+/* *peak: the largest radiance of any channel anywhere on the surface (radiance x the
+ * texture's largest value), for the power checks of the shapes. */
+static CstStatus read_emission(const Scene *s, const CstEmission *e, const char *fn, Emission *out, double *peak,
+                               CstError *err)
 {
     memset(out, 0, sizeof *out);
+    *peak = 0.0;
     if (!e) return CST_OK;
     CstStatus st = read_rgb(e->radiance, 0, fn, "emission radiance", &out->radiance, err);
     if (st == CST_OK) st = check_texture_id(s, e->texture, 1, fn, "emission texture", err);
     if (st != CST_OK) return st;
+    *peak = color_peak(out->radiance);
+    if (e->texture) {
+        *peak *= color_peak(s->textures[e->texture - 1].max);
+        if ((st = check_product(fn, "emission radiance x its texture's largest value", *peak,
+                                "a smaller radiance (or scale) or texture", err)) != CST_OK)
+            return st;
+    }
     if (e->two_sided != 0 && e->two_sided != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: emission two_sided %d; expected 0 or 1", fn, e->two_sided);
     out->texture = e->texture;
@@ -359,9 +386,22 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
     if (d->normals_unit != 0 && d->normals_unit != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normals_unit %d; expected 0 or 1", fn, d->normals_unit);
     Emission em;
-    if ((st = read_emission(scene, &d->emission, fn, &em, err)) != CST_OK) return st;
+    double peak = 0.0;
+    if ((st = read_emission(scene, &d->emission, fn, &em, &peak, err)) != CST_OK) return st;
     MeshArrays a = {0};
     st = gather_mesh(d, &a, err);
+    if (st == CST_OK && peak > 0.0) {
+        /* Each emitting triangle is a light of power pi x area x radiance (x 2 two-sided). */
+        double area = 0.0;
+        for (int t = 0; t < d->num_triangles; t++) {
+            const int *i = &a.idx[3 * t];
+            double at = (double)triangle_area(a.pos[i[0]], a.pos[i[1]], a.pos[i[2]]);
+            if (at > area) area = at;
+        }
+        st = check_product(fn, "the emitted power pi x area x radiance of its largest triangle",
+                           (double)CST_PI * area * peak * (em.two_sided ? 2.0 : 1.0),
+                           "a smaller radiance (or scale) or smaller triangles", err);
+    }
     if (st == CST_OK && !d->skip_degenerate) {
         /* Checked here so that a failure leaves the scene untouched: scene_add_mesh_ex
          * finds a degenerate triangle only after adding the ones before it. */
@@ -414,7 +454,13 @@ CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float rad
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
                         fn, material, scene->num_materials - 1);
     Emission em;
-    if ((st = read_emission(scene, emission, fn, &em, err)) != CST_OK) return st;
+    double peak = 0.0;
+    if ((st = read_emission(scene, emission, fn, &em, &peak, err)) != CST_OK) return st;
+    if (peak > 0.0 && (st = check_product(fn, "the emitted power pi x 4 pi r^2 x radiance",
+                                          4.0 * (double)CST_PI * (double)CST_PI * (double)radius * (double)radius *
+                                              peak * (em.two_sided ? 2.0 : 1.0),
+                                          "a smaller radiance (or scale) or radius", err)) != CST_OK)
+        return st;
     return scene_add_sphere(scene, c, radius, material, &em, err);
 }
 
@@ -470,6 +516,11 @@ CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light type %d; expected CST_LIGHT_POINT, _SPOT or "
                         "_DIRECTIONAL", fn, (int)d->type);
     }
+    /* A directional light's power depends on the scene's size: cst_scene_commit checks it. */
+    if (d->type != CST_LIGHT_DIRECTIONAL &&
+        (st = check_product(fn, "the power 4 pi x intensity", 4.0 * (double)CST_PI * color_peak(l.intensity),
+                            "a smaller intensity", err)) != CST_OK)
+        return st;
     return scene_add_delta_light(scene, &l, err);
 }
 
@@ -483,6 +534,9 @@ CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radian
     Color L;
     EnvMap env;
     if ((st = read_rgb(radiance, 0, fn, "radiance", &L, err)) != CST_OK) return st;
+    if ((st = check_product(fn, "4 pi x radiance (the radiance over the sphere of directions)",
+                            4.0 * (double)CST_PI * color_peak(L), "a smaller radiance", err)) != CST_OK)
+        return st;
     if ((st = envmap_init_constant(&env, L, err)) != CST_OK) return st;
     return scene_set_environment(scene, &env, err);
 }
@@ -500,6 +554,14 @@ CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path, con
     int w = 0, h = 0;
     EnvMap env;
     if ((st = image_read_radiance(path, &rgb, &w, &h, err)) != CST_OK) return st; /* NaN, Inf, < 0: errors */
+    double brightest = 0.0;
+    for (size_t i = 0; i < (size_t)w * (size_t)h * 3; i++)
+        if ((double)rgb[i] > brightest) brightest = (double)rgb[i];
+    if ((st = check_product(fn, "4 pi x scale x the image's largest value",
+                            4.0 * (double)CST_PI * color_peak(k) * brightest, "a smaller scale", err)) != CST_OK) {
+        free(rgb);
+        return st;
+    }
     if ((st = envmap_init_image(&env, rgb, w, h, k, err)) != CST_OK) return st;
     return scene_set_environment(scene, &env, err);
 }
@@ -639,9 +701,56 @@ CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings
 }
 #undef SETTING_MERGE
 
+/* Every light's power once the scene's size is known (check_product): directional lights
+ * and the environment send pi R^2 x their irradiance through the scene's bounding sphere
+ * of radius R; the pbrt loader adds its point, spot and distant lights and environment
+ * without the public calls, so all lights are checked here. */
+static CstStatus check_light_powers(const Scene *s, CstError *err)
+{
+    static const char fn[] = "cst_scene_commit";
+    const EmitterSampler *es = &s->emitter_sampler;
+    const double disk = (double)CST_PI * (double)es->radius * (double)es->radius;
+    for (int i = 0; i < es->lights; i++) {
+        const Light *l = &es->light[i];
+        double power = 0.0;
+        const char *what = "";
+        switch (l->type) {
+        case LIGHT_AREA: {
+            const Emitter *e = &l->u.area;
+            double peak = color_peak(e->radiance) * (e->texture ? color_peak(s->textures[e->texture - 1].max) : 1.0);
+            power = (double)CST_PI * (double)e->area * peak * (e->two_sided ? 2.0 : 1.0);
+            what = "an emitting surface's power pi x area x radiance";
+            break;
+        }
+        case LIGHT_POINT:
+            power = 4.0 * (double)CST_PI * color_peak(l->u.point.intensity);
+            what = "a point light's power 4 pi x intensity";
+            break;
+        case LIGHT_SPOT:
+            power = 4.0 * (double)CST_PI * color_peak(l->u.spot.intensity);
+            what = "a spot light's power (bound) 4 pi x intensity";
+            break;
+        case LIGHT_DIRECTIONAL:
+            power = disk * color_peak(l->u.directional.irradiance);
+            what = "a directional light's power pi R^2 x irradiance (R the scene's bounding radius)";
+            break;
+        case LIGHT_ENVIRONMENT:
+            power = disk * (double)l->u.env->power;
+            what = "the environment's power pi R^2 x its radiance over the sphere (R the scene's bounding radius)";
+            break;
+        }
+        if (!(power <= (double)FLT_MAX))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: light %d: %s = %g overflows a float (above 3.4e38); "
+                            "expected a smaller value (or a smaller scene)", fn, i, what, power);
+    }
+    return CST_OK;
+}
+
 CstStatus cst_scene_commit(CstScene *scene, CstError *err)
 {
     cst_error_clear(err);
     if (!scene) return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_commit: scene is NULL");
-    return scene_commit(scene, err);
+    CstStatus st = scene_commit(scene, err);
+    /* After a failure here the scene can only be destroyed (the loaders do). */
+    return st == CST_OK ? check_light_powers(scene, err) : st;
 }

@@ -15,6 +15,14 @@
 
 static const CstSampler TYPES[] = {CST_SAMPLER_INDEPENDENT, CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL};
 
+/* One sample from a setup made for it alone (renders make one setup for all samples). */
+static void sampler_start_for_test(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index,
+                                   uint32_t spp)
+{
+    SamplerSetup u = sampler_setup(type, seed, spp);
+    sampler_start(s, &u, pixel, index);
+}
+
 static void test_independent_is_pcg32(void **state)
 {
     (void)state;
@@ -22,7 +30,7 @@ static void test_independent_is_pcg32(void **state)
         for (uint32_t i = 0; i < 4; i++) {
             Sampler s;
             Pcg32 r;
-            sampler_start(&s, CST_SAMPLER_INDEPENDENT, 42, pixel, i, 4);
+            sampler_start_for_test(&s, CST_SAMPLER_INDEPENDENT, 42, pixel, i, 4);
             pcg32_seed_sample(&r, 42, pixel, i);
             for (int k = 0; k < 10; k++) {
                 /* The order the renderer drew in before the Sampler existed (sampler.c). */
@@ -40,8 +48,8 @@ static void test_deterministic(void **state)
     (void)state;
     for (size_t t = 0; t < 3; t++) {
         Sampler a, b;
-        sampler_start(&a, TYPES[t], 7, 1234, 5, 16);
-        sampler_start(&b, TYPES[t], 7, 1234, 5, 16);
+        sampler_start_for_test(&a, TYPES[t], 7, 1234, 5, 16);
+        sampler_start_for_test(&b, TYPES[t], 7, 1234, 5, 16);
         for (int k = 0; k < 20; k++) {
             assert_true(sampler_1d(&a) == sampler_1d(&b));
             Vec2 u = sampler_2d(&a), v = sampler_2d(&b);
@@ -92,7 +100,7 @@ static void check_strata(CstSampler type, uint32_t n, uint32_t first)
         Vec2 u2[REQUESTS][1024];
         for (uint32_t i = 0; i < n; i++) {
             Sampler s;
-            sampler_start(&s, type, 3, pixel, first + i, type == CST_SAMPLER_STRATIFIED ? n : 0);
+            sampler_start_for_test(&s, type, 3, pixel, first + i, type == CST_SAMPLER_STRATIFIED ? n : 0);
             for (int r = 0; r < REQUESTS; r++) {
                 if (r % 2) u2[r][i] = sampler_2d(&s);
                 else u1[r][i] = sampler_1d(&s);
@@ -179,7 +187,7 @@ static void test_uniform_across_pixels(void **state)
             memset(hp, 0, sizeof hp);
             for (uint64_t p = 0; p < PIXELS; p++) {
                 Sampler s;
-                sampler_start(&s, TYPES[t], 11, p, indices[k], SPP);
+                sampler_start_for_test(&s, TYPES[t], 11, p, indices[k], SPP);
                 float a = sampler_1d(&s);
                 Vec2 b = sampler_2d(&s);
                 float c = sampler_1d(&s);
@@ -195,6 +203,22 @@ static void test_uniform_across_pixels(void **state)
     }
 }
 
+/* The stratified grid is worked out once per setup (issue 25: it was searched for every
+ * sample): the largest divisor of spp not above its square root. */
+static void test_setup_strata(void **state)
+{
+    (void)state;
+    static const uint32_t spp[][2] = {{0, 1}, {1, 1}, {16, 4}, {32, 4}, {36, 6}, {97, 1}, {1u << 30, 1u << 15},
+                                      {2147483647u, 1}, {4294967295u, 65535}};
+    for (size_t k = 0; k < sizeof spp / sizeof spp[0]; k++) {
+        SamplerSetup u = sampler_setup(CST_SAMPLER_STRATIFIED, 5, spp[k][0]);
+        assert_int_equal(u.nx, spp[k][1]);
+        assert_int_equal(u.spp, spp[k][0]);
+        assert_int_equal(sampler_setup(CST_SAMPLER_SOBOL, 5, spp[k][0]).nx, 1);
+    }
+    assert_int_equal(sampler_setup(CST_SAMPLER_DEFAULT, 5, 16).type, CST_SAMPLER_INDEPENDENT);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -205,6 +229,7 @@ int main(void)
         cmocka_unit_test(test_stratified_strata),
         cmocka_unit_test(test_sobol_strata),
         cmocka_unit_test(test_uniform_across_pixels),
+        cmocka_unit_test(test_setup_strata),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

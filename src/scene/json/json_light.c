@@ -98,7 +98,8 @@ static CstStatus parse_light(Loader *ld, const json_t *obj)
             LOADER_TRY(read_angle(ld, obj, "cone_delta", 5.0f, 0.0f, l.cone_angle, &l.cone_delta));
         }
     }
-    return cst_scene_add_light(ld->scene, &l, ld->err);
+    CstStatus st = cst_scene_add_light(ld->scene, &l, ld->err);
+    return st == CST_OK ? st : json_fail_builder(ld, st); /* located: the power check (issue 25) */
 }
 
 CstStatus json_parse_lights(Loader *ld, const json_t *lights)
@@ -139,7 +140,8 @@ CstStatus json_parse_environment(Loader *ld, const json_t *obj)
         LOADER_TRY(json_read_rgb(ld, rad, 0, &L));
         json_path_pop(ld);
         json_color_floats(L, radiance);
-        return cst_scene_set_environment_constant(ld->scene, radiance, ld->err);
+        CstStatus st = cst_scene_set_environment_constant(ld->scene, radiance, ld->err);
+        return st == CST_OK ? st : json_fail_builder(ld, st); /* located (issue 25) */
     }
     Color scale = color_s(1.0f);
     if ((v = json_object_get(obj, "scale"))) {

@@ -218,6 +218,12 @@ CstStatus json_read_emission(Loader *ld, const json_t *shape, Emission *em)
         json_path_push_key(ld, "scale");
         LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &k));
         if (!(k >= 0.0f)) return json_fail_here(ld, "scale %g is negative; expected a number >= 0", (double)k);
+        /* Each in range, the product may not be (issue 25: 1e30 x 1e30 rendered black). */
+        double product = (double)color_max(em->radiance) * (double)k;
+        if (!(product <= (double)FLT_MAX))
+            return json_fail_here(ld, "radiance %g x scale %g = %g overflows a float (above 3.4e38); expected "
+                                      "a product of at most 3.4e38",
+                                  (double)color_max(em->radiance), (double)k, product);
         em->radiance = color_scale(em->radiance, k);
         json_path_pop(ld);
     }

@@ -286,6 +286,13 @@ CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
             return json_fail_here(ld, "radius %g is not positive; expected a gather radius > 0 (omit it for "
                                       "the automatic radius)",
                                   (double)r);
+        /* r^2 must stay a normal float (issue 25); the render also refuses radii below 1e-6 of
+         * the scene's diagonal (integrator.c's check_radius), which only it knows. */
+        if (!(r >= 1e-18f))
+            return json_fail_here(ld, "radius %g is below 1e-18, whose square underflows; expected a gather "
+                                      "radius of at least 1e-6 of the scene's size (omit it for the automatic "
+                                      "radius)",
+                                  (double)r);
         rs->photon_radius = (double)r;
         json_path_pop(ld);
     }

@@ -164,6 +164,11 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
         TRY(pbrt_get_int(ld, ps, d, "photonsperiteration", -1, &photons));
         TRY(pbrt_get_float(ld, ps, d, "radius", 1.0f, &radius, &has_r));
         if (photons > 0) rs->photons = photons < (1 << 28) ? photons : (1 << 28);
+        /* The radius's square must stay a finite normal float (issue 25); the render also
+         * refuses radii below 1e-6 of the scene's diagonal (integrators/integrator.c). */
+        if (has_r && radius > 0.0f && !(radius >= 1e-18f && radius <= 1e18f))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: radius %g; expected 1e-18 to 1e18 (and at "
+                                "least 1e-6 of the scene's size)", d, (double)radius);
         if (has_r && radius > 0.0f) rs->photon_radius = (double)radius;
         int iters = 0;
         TRY(pbrt_get_int(ld, ps, d, "iterations", 0, &iters));
