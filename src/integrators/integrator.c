@@ -105,9 +105,9 @@ static void camera_tile(void *ctx, int tile, int worker)
                 if (it->kind == INTEGRATOR_BIDIR) {
                     /* The iteration's image; light_merge_band adds the splats and files it. */
                     double *o = &it->light.iteration_rgb[3 * (size_t)pixel];
-                    o[0] = L.c[0]; o[1] = L.c[1]; o[2] = L.c[2];
+                    o[0] = (double)L.c[0]; o[1] = (double)L.c[1]; o[2] = (double)L.c[2];
                 } else {
-                    film_accumulate(it->film, pixel, L.c[0], L.c[1], L.c[2]);
+                    film_accumulate(it->film, pixel, (double)L.c[0], (double)L.c[1], (double)L.c[2]);
                 }
             }
         }
