@@ -68,8 +68,8 @@ static CstStatus rayset_scene_alloc(RaysetScene *s, int num_positions, int num_t
  * vertices: see meshes/README.md) and diag = |max - min|, in double. */
 static void rayset_scene_bbox(const RaysetScene *s, D3 *lo, D3 *hi, double *diag)
 {
-    *lo = d3(INFINITY, INFINITY, INFINITY);
-    *hi = d3(-INFINITY, -INFINITY, -INFINITY);
+    *lo = d3(HUGE_VAL, HUGE_VAL, HUGE_VAL); /* double infinities: INFINITY is a float */
+    *hi = d3(-HUGE_VAL, -HUGE_VAL, -HUGE_VAL);
     for (int i = 0; i < 3 * s->num_tris; i++) {
         D3 p = d3_of(s->positions[s->tri_indices[i]]);
         lo->x = fmin(lo->x, p.x); lo->y = fmin(lo->y, p.y); lo->z = fmin(lo->z, p.z);

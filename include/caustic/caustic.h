@@ -100,7 +100,8 @@ CST_API void cst_scene_destroy(CstScene *scene);
 CST_API const char *cst_scene_output_path(const CstScene *scene);
 
 /* Rebuilds the scene's acceleration structure: "bvh" (default), "kdtree", "grid", "list"
- * (brute force) or "embree" (only in builds with Embree). On failure the old one stays. */
+ * (brute force) or "embree" (only in builds with Embree). On failure the old one stays.
+ * Before cst_scene_commit: chooses the one commit builds. */
 CST_API CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
 
 typedef struct CstSceneInfo {
@@ -117,6 +118,8 @@ typedef struct CstSceneInfo {
                                  * directional lights, the environment; 0 = the render is
                                  * black (callers warn) */
 } CstSceneInfo;
+/* Also before cst_scene_commit: the counts so far (the accel fields then describe no
+ * structure yet). */
 CST_API void cst_scene_info(const CstScene *scene, CstSceneInfo *info);
 
 /* ---------------------------------------------------------------- building scenes
@@ -165,6 +168,21 @@ typedef struct CstTextureDesc {
 /* *out_id (>= 1) names the texture in later descriptions. */
 CST_API CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *desc, int *out_id,
                                 CstError *err);
+
+/* What the scene holds for a texture, so that a caller (a loader deriving one texture from
+ * another: pbrt's scale, clamps and roughness remapping) can read it back. */
+typedef struct CstTextureInfo {
+    /* The description that adds this texture again: type, value, even/odd, scale, wrap and
+     * the uv transform as stored; for an image, pixels points to the scene's own copy
+     * (width * height * 3 floats, valid until cst_scene_destroy) and path is NULL. */
+    CstTextureDesc desc;
+    float average[3]; /* mean over the uv plane (an image: over its texels) */
+    float max[3];     /* largest value of each channel */
+} CstTextureInfo;
+
+/* Fills *info for texture `id` (>= 1); also after cst_scene_commit. */
+CST_API CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *info,
+                                         CstError *err);
 
 typedef enum CstMaterialType {
     CST_MATERIAL_DIFFUSE = 1, /* Lambertian: albedo = hemispherical reflectance */
@@ -232,6 +250,21 @@ typedef struct CstMeshDesc {
 /* num_dropped may be NULL. */
 CST_API CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *desc, int *num_dropped,
                              CstError *err);
+/* Instancing (Embree's instances, pbrt's ObjectInstance): an object is a mesh in its own
+ * space, stored once with its own BVH; each instance places it with an affine transform.
+ * Instances do not emit and carry no texture coordinates, so the object's desc must leave
+ * emission zero and uvs NULL (else CST_ERR_UNSUPPORTED); everything else is read and
+ * checked as by cst_scene_add_mesh (skip_degenerate drops zero-area triangles, counted in
+ * *num_dropped, which may be NULL). *out_id (>= 0) names the object; an object whose
+ * triangles were all dropped fails. */
+CST_API CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *desc, int *out_id,
+                                       int *num_dropped, CstError *err);
+/* Places object `object` by world_from_object, a 3 x 4 row-major affine matrix (the rows
+ * of the linear part, each followed by its translation: Embree's FLOAT3X4_ROW_MAJOR),
+ * finite and invertible. */
+CST_API CstStatus cst_scene_add_instance(CstScene *scene, int object,
+                                         const float world_from_object[12], CstError *err);
+
 /* emission may be NULL. */
 CST_API CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius,
                                int material, const CstEmission *emission, CstError *err);
@@ -262,6 +295,19 @@ CST_API CstStatus cst_scene_set_environment_constant(CstScene *scene, const floa
  * by importance (replaces one set before). */
 CST_API CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path,
                                           const float scale[3], CstError *err);
+/* An equirectangular environment from the caller's pixels (replaces one set before), in
+ * caustic's convention: +y up, row 0 at theta = 0 (straight up), theta = acos(w.y) down
+ * the rows, phi = atan2(w.z, w.x) in [0, 2 pi) across the columns. Strided, Embree-style:
+ * pixel (x, y) is the 3 floats (R, G, B, linear, finite, >= 0) at rgb + y * row_stride +
+ * x * pixel_stride bytes; pixel_stride 0 = 12, row_stride 0 = width * pixel_stride. The
+ * pixels are copied; the caller keeps its buffer. scale: NULL = 1. world_from_map: NULL,
+ * or a 3 x 3 row-major invertible linear map that turns the map's directions into world
+ * directions (a rotation, typically); the image is then resampled once, by nearest
+ * lookup, into a map of the same size in world space. */
+CST_API CstStatus cst_scene_set_environment_pixels(CstScene *scene, const float *rgb, int width,
+                                                   int height, size_t pixel_stride,
+                                                   size_t row_stride, const float scale[3],
+                                                   const float world_from_map[9], CstError *err);
 
 typedef enum CstCameraType {
     CST_CAMERA_PERSPECTIVE = 1, /* a pinhole, or a thin lens when aperture_radius > 0 */
@@ -271,13 +317,21 @@ typedef enum CstCameraType {
 /* Zero-initialise, then set. */
 typedef struct CstCameraDesc {
     CstCameraType type;
-    float position[3], look_at[3];
+    float position[3];
+    float look_at[3];       /* a point on the view axis: finite, != position; only the
+                             * direction counts, so it may lie beyond the 1e18 bound of
+                             * coordinates (within about 1e19 of position) */
     float up[3];            /* not parallel to look_at - position; {0, 0, 0} = {0, 1, 0} */
-    float fov;              /* perspective: vertical field of view, degrees, in (0, 180) */
+    float fov;              /* perspective: vertical field of view, degrees, in (0, 180);
+                             * orthographic: 0, or in (0, 180): not used by the rays, only
+                             * by the film-area term of the bdpt and vcm integrators' MIS */
     float aperture_radius;  /* perspective: lens radius, >= 0; 0 = pinhole */
     float focus_distance;   /* perspective: distance to the plane in focus, > 0;
                              * 0 = |look_at - position| */
     float height;           /* orthographic: the view's height in scene units, > 0 */
+    int mirror;             /* 0: image right = forward x up (right-handed); 1: up x forward,
+                             * the image flipped left to right, as a left-handed frame (pbrt's
+                             * LookAt) shows it */
 } CstCameraDesc;
 
 CST_API CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *desc, CstError *err);

@@ -735,8 +735,6 @@ static inline F8 f8_set1(float x) { return _mm256_set1_ps(x); }
 static inline F8 f8_load(const float *p) { return _mm256_load_ps(p); }
 static inline F8 f8_sub(F8 a, F8 b) { return _mm256_sub_ps(a, b); }
 static inline F8 f8_mul(F8 a, F8 b) { return _mm256_mul_ps(a, b); }
-static inline F8 f8_min(F8 a, F8 b) { return _mm256_min_ps(a, b); }
-static inline F8 f8_max(F8 a, F8 b) { return _mm256_max_ps(a, b); }
 static inline unsigned f8_le_mask(F8 a, F8 b) { return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)); }
 static inline void f8_store(float *p, F8 a) { _mm256_storeu_ps(p, a); }
 #if defined(__AVX2__)
@@ -753,8 +751,8 @@ static inline F8 f8_mini(F8 a, F8 b)
     return _mm256_castsi256_ps(_mm256_min_epi32(_mm256_castps_si256(a), _mm256_castps_si256(b)));
 }
 #else
-static inline F8 f8_maxi(F8 a, F8 b) { return f8_max(a, b); }
-static inline F8 f8_mini(F8 a, F8 b) { return f8_min(a, b); }
+static inline F8 f8_maxi(F8 a, F8 b) { return _mm256_max_ps(a, b); }
+static inline F8 f8_mini(F8 a, F8 b) { return _mm256_min_ps(a, b); }
 #endif
 #else
 typedef struct F8 {

@@ -184,7 +184,8 @@ static size_t grid_insert(const Grid *g, const AccelGeometry *geom, int id, uint
     BBox box;
     if (!prim_bounds(geom, id, &box)) return 0;
     double m = (double)g->margin;
-    double bmin[3] = {box.min.x, box.min.y, box.min.z}, bmax[3] = {box.max.x, box.max.y, box.max.z};
+    double bmin[3] = {(double)box.min.x, (double)box.min.y, (double)box.min.z},
+           bmax[3] = {(double)box.max.x, (double)box.max.y, (double)box.max.z};
     int lo[3], hi[3], spanning = 0;
     for (int a = 0; a < 3; a++) {
         double f0 = floor((bmin[a] - m - g->org[a]) * g->inv_cell_size[a]);
@@ -201,11 +202,11 @@ static size_t grid_insert(const Grid *g, const AccelGeometry *geom, int id, uint
     if (is_tri) {
         for (int i = 0; i < 3; i++) {
             Vec3 p = geom->positions[geom->tri_indices[3 * id + i]];
-            tv[i][0] = p.x; tv[i][1] = p.y; tv[i][2] = p.z;
+            tv[i][0] = (double)p.x; tv[i][1] = (double)p.y; tv[i][2] = (double)p.z;
         }
     } else {
         const Sphere *s = &geom->spheres[id - geom->num_tris];
-        sc[0] = s->center.x; sc[1] = s->center.y; sc[2] = s->center.z;
+        sc[0] = (double)s->center.x; sc[1] = (double)s->center.y; sc[2] = (double)s->center.z;
         sr = fabs((double)s->radius);
     }
     size_t n = 0;
@@ -526,7 +527,8 @@ static inline double brick_exit(const GridWalk *w, int a, int b)
 static inline bool walk_begin(const Grid *g, const Ray *r, GridWalk *w)
 {
     double t0 = (double)r->t_min, t1 = (double)r->t_max;
-    double o[3] = {r->o.x, r->o.y, r->o.z}, d[3] = {r->d.x, r->d.y, r->d.z}, inv[3];
+    double o[3] = {(double)r->o.x, (double)r->o.y, (double)r->o.z}, d[3] = {(double)r->d.x, (double)r->d.y, (double)r->d.z},
+           inv[3];
     for (int a = 0; a < 3; a++) {
         double lo = g->org[a], hi = g->org[a] + (double)g->res[a] * g->cell_size[a];
         if (d[a] > 0.0 || d[a] < 0.0) {
@@ -718,7 +720,7 @@ static inline bool walk_next_brick(const Grid *g, GridWalk *w, uint64_t bits)
     /* A jump over a cube of empty bricks: the exit of its last brick on each axis. */
     const int r = (int)dist - 1;
     int last[3], e = 0;
-    double t_exit = INFINITY;
+    double t_exit = HUGE_VAL;
     for (int a = 0; a < 3; a++) {
         last[a] = w->b[a] + w->step[a] * r;
         double t = brick_exit(w, a, last[a]); /* inf on an axis without steps */

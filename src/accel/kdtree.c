@@ -161,7 +161,7 @@ static bool clip_triangle(Vec3 p0, Vec3 p1, Vec3 p2, BBox cell, BBox *out)
         cur ^= 1;
     }
     if (n == 0) return false;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for (int i = 0; i < n; i++)
         for (int k = 0; k < 3; k++) {
             lo[k] = fmin(lo[k], poly[cur][i][k]);

@@ -8,6 +8,13 @@
 
 #include "geometry/ray.h"
 
+/* Area of triangle (a, b, c): half the length of (b - a) x (c - a); 0 for a degenerate one.
+ * The one test of degeneracy every loader and the scene builder share. */
+static inline float triangle_area(Vec3 a, Vec3 b, Vec3 c)
+{
+    return 0.5f * v3_length(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+}
+
 /* Two-sided test. On a hit in (t_min, t_max) writes t and the barycentrics (u, v) of v1
  * and v2. A ray parallel to the plane (det == 0) never hits, including rays lying in the
  * plane: such grazing hits have no well-defined t and are left to the neighbours. */

@@ -3,7 +3,7 @@
  * mis_vc at 0 when vp->merge is false), which are the balance of BDPT's strategies alone. */
 #include "integrators/bdpt.h"
 
-Color bdpt_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it, int path,
+Color bdpt_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                         Ray ray, Sampler *rng, uint64_t *rays)
 {
     return subpath_trace_camera(s, cam, vp, it, path, ray, rng, rays, NULL);

@@ -10,7 +10,7 @@
 /* One camera path for the pixel whose light path is `path` (vp->merge is false): emission
  * hits, NEE, connections to the light path's vertices, MIS-weighted. The light paths are
  * subpath_trace_light's. Returns the pixel sample. */
-Color bdpt_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it, int path,
+Color bdpt_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                         Ray ray, Sampler *rng, uint64_t *rays);
 
 #endif

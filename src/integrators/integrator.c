@@ -105,9 +105,9 @@ static void camera_tile(void *ctx, int tile, int worker)
                 if (it->kind == INTEGRATOR_BIDIR) {
                     /* The iteration's image; light_merge_band adds the splats and files it. */
                     double *o = &it->light.iteration_rgb[3 * (size_t)pixel];
-                    o[0] = L.c[0]; o[1] = L.c[1]; o[2] = L.c[2];
+                    o[0] = (double)L.c[0]; o[1] = (double)L.c[1]; o[2] = (double)L.c[2];
                 } else {
-                    film_accumulate(it->film, pixel, L.c[0], L.c[1], L.c[2]);
+                    film_accumulate(it->film, pixel, (double)L.c[0], (double)L.c[1], (double)L.c[2]);
                 }
             }
         }
@@ -126,7 +126,7 @@ static void light_chunk(void *ctx, int chunk, int worker)
     int first = chunk * LIGHT_CHUNK;
     int last = first + LIGHT_CHUNK < L->light_paths ? first + LIGHT_CHUNK : L->light_paths;
     if (it->kind == INTEGRATOR_BIDIR) {
-        VcmVertexList *verts = &L->chunks[chunk].verts;
+        SubpathVertexList *verts = &L->chunks[chunk].verts;
         verts->n = 0;
         for (int i = first; i < last; i++) {
             Sampler rng;
@@ -193,7 +193,7 @@ static void bidir_gather_chunk(void *ctx, int chunk, int worker)
 {
     (void)worker;
     LightIterations *L = &((Integrator *)ctx)->light;
-    const VcmVertexList *l = &L->chunks[chunk].verts;
+    const SubpathVertexList *l = &L->chunks[chunk].verts;
     size_t first = L->chunks[chunk].first;
     if (l->n) memcpy(L->vertices + first, l->v, l->n * sizeof *l->v);
     if (L->grid_ranges)
@@ -267,7 +267,7 @@ static void light_free(LightIterations *L)
     if (L->chunks)
         for (int c = 0; c < L->num_chunks; c++) {
             splat_list_free(&L->chunks[c].splats);
-            vcm_vertex_list_free(&L->chunks[c].verts);
+            subpath_vertex_list_free(&L->chunks[c].verts);
         }
     free(L->chunks);
     free(L->iteration_rgb);

@@ -61,7 +61,7 @@ typedef struct IntegratorStep {
  * docs/benchmarks.md has the figures). */
 typedef struct LightChunk {
     _Alignas(64) SplatList splats;
-    VcmVertexList verts;
+    SubpathVertexList verts;
     Vec3 lo;      /* VCM: the lowest corner of the vertices' positions */
     size_t first; /* BDPT/VCM: where the vertices go in the iteration's array */
 } LightChunk;
@@ -78,19 +78,19 @@ typedef struct LightIterations {
     LightChunk *chunks;    /* one per chunk, reused by every iteration */
     double *iteration_rgb; /* the iteration's image, width x height x 3 */
     /* BDPT / VCM */
-    VcmParams vcm_params;
+    SubpathParams vcm_params;
     float vcm_radius;          /* the first iteration's merging radius */
-    VcmIteration vcm_it;       /* the iteration in progress */
+    SubpathIteration vcm_it;       /* the iteration in progress */
     uint32_t *path_count;      /* light_paths: vertices each path stored */
     uint32_t *path_start;      /* light_paths + 1 */
-    VcmVertex *vertices;       /* the iteration's, concatenated */
+    SubpathVertex *vertices;       /* the iteration's, concatenated */
     uint32_t *cell_of;         /* VCM: each vertex's grid bucket */
     size_t total;              /* vertices this iteration */
     int grid_ranges;
     uint32_t grid_base[GRID_RANGES_MAX + 1]; /* per range: its vertices, then the count below it */
     bool grid_fill;            /* the grid step in progress: false counts, true fills */
     uint32_t *cell_start;
-    VcmMergeVertex *cell_items;
+    MergeVertex *cell_items;
     size_t cap[4];             /* capacities of vertices, cell_items, cell_start, cell_of */
 } LightIterations;
 

@@ -17,13 +17,13 @@
 #include "film/filter.h"
 #include "integrators/subpath_walk.h"
 
-void vcm_vertex_list_free(VcmVertexList *l)
+void subpath_vertex_list_free(SubpathVertexList *l)
 {
     free(l->v);
     memset(l, 0, sizeof *l);
 }
 
-static void push_vertex(VcmVertexList *l, const VcmVertex *v)
+static void push_vertex(SubpathVertexList *l, const SubpathVertex *v)
 {
     if (!array_push(l, *v)) l->oom = 1;
 }
@@ -34,7 +34,7 @@ static void push_vertex(VcmVertexList *l, const VcmVertex *v)
  * plane at distance 1 (camera.c). Exact for the box filter; for the tent and the thin
  * lens it is the same function used consistently by every strategy, which is all the
  * weights need. */
-static inline float camera_pdf_w(const VcmIteration *it, float cos_theta)
+static inline float camera_pdf_w(const SubpathIteration *it, float cos_theta)
 {
     return 1.0f / (it->pixel_area * cos_theta * cos_theta * cos_theta);
 }
@@ -50,8 +50,8 @@ void subpath_emit(const Scene *s, Sampler *rng, EmissionSample *es)
 }
 
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
-static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams *vp,
-                              const VcmIteration *it, const VcmVertex *v, const Bsdf *b,
+static void connect_to_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
+                              const SubpathIteration *it, const SubpathVertex *v, const Bsdf *b,
                               Vec2 u_lens, SplatList *splats, uint64_t *rays)
 {
     const float margin = filter_radius(vp->frame.filter) - 0.5f;
@@ -81,9 +81,9 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const VcmParams
 typedef struct LightSubpathCtx {
     const Scene *s;
     const Camera *cam;
-    const VcmParams *vp;
-    const VcmIteration *it;
-    VcmVertexList *verts;
+    const SubpathParams *vp;
+    const SubpathIteration *it;
+    SubpathVertexList *verts;
     SplatList *splats;
     uint64_t *rays;
 } LightSubpathCtx;
@@ -93,15 +93,15 @@ static bool store_and_connect(void *ctx, const LightVertex *lv)
     const LightSubpathCtx *c = ctx;
     const SurfaceHit *sh = lv->sh;
     const SubPath *sp = &lv->sp;
-    VcmVertex v = {sh->p, sh->ng, sh->ns, lv->w_prev, sp->beta, sp->d_vcm, sp->d_vc, sp->d_vm,
+    SubpathVertex v = {sh->p, sh->ng, sh->ns, lv->w_prev, sp->beta, sp->d_vcm, sp->d_vc, sp->d_vm,
                    sh->material, lv->bounces, sh->uv};
     push_vertex(c->verts, &v);
     connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, c->splats, c->rays);
     return true; /* OOM is the list's flag, checked after the step */
 }
 
-void subpath_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
-                     Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays)
+void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
+                     Sampler *rng, SubpathVertexList *verts, SplatList *splats, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
     EmissionSample es;
@@ -124,7 +124,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp,
 
 /* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF
  * sampling cannot hit it). */
-static Color connect_to_light(const Scene *s, const VcmIteration *it, const SubPath *sp,
+static Color connect_to_light(const Scene *s, const SubpathIteration *it, const SubPath *sp,
                             const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Sampler *rng, uint64_t *rays)
 {
     float u_sel = sampler_1d(rng);
@@ -158,7 +158,7 @@ typedef struct LightBsdfs {
 
 /* y's BSDF as the light subpath saw it, through the scene's one hit-to-BSDF routine;
  * vertex j of its path, cached in c when j is small enough (else built into *tmp). */
-static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const VcmVertex *y, Bsdf *tmp)
+static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const SubpathVertex *y, Bsdf *tmp)
 {
     Bsdf *b = j < LIGHT_BSDF_CACHE ? &c->b[j] : tmp;
     if (j < LIGHT_BSDF_CACHE && (c->built >> j & 1u)) return b;
@@ -170,8 +170,8 @@ static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const
 
 /* A connection between camera vertex x and light vertex y, vertex j of its light path
  * (tech. rep. eqs. 40-41). */
-static Color connect_vertices(const Scene *s, const VcmIteration *it, const SubPath *sp,
-                            const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const VcmVertex *y, int j,
+static Color connect_vertices(const Scene *s, const SubpathIteration *it, const SubPath *sp,
+                            const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const SubpathVertex *y, int j,
                             LightBsdfs *cache, uint64_t *rays)
 {
     Vec3 to = v3_sub(y->p, x->p);
@@ -204,7 +204,7 @@ static Color connect_vertices(const Scene *s, const VcmIteration *it, const SubP
 }
 
 
-Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it, int path,
+Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                            Ray ray, Sampler *rng, uint64_t *rays, const SubpathMerge *merge)
 {
     Color L = color_s(0.0f);
@@ -216,7 +216,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *v
     SubPath sp = {color_s(1.0f), color_s(1.0f),
                   camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
                   0.0f, 0.0f, false};
-    const VcmVertex *lv = it->vertices + it->path_start[path];
+    const SubpathVertex *lv = it->vertices + it->path_start[path];
     const int nlv = (int)(it->path_start[path + 1] - it->path_start[path]);
     const bool has_lights = s->emitter_sampler.lights > 0;
     LightBsdfs light_bsdfs;

@@ -17,17 +17,17 @@
 #include "sampling/sampler.h"
 #include "scene/scene.h"
 
-typedef struct VcmParams {
+typedef struct SubpathParams {
     bool merge;      /* false: BDPT (connections only); true: VCM */
     int max_depth;   /* bounces of a full path, as PathParams; 0 = unbounded */
     int rr_depth;    /* first bounce at which Russian roulette may stop a subpath */
     SplatFrame frame; /* the film the t = 1 splats are for: its size and pixel filter */
-} VcmParams;
+} SubpathParams;
 
 /* A stored light vertex (a non-delta surface hit of a light subpath). The d_* are the
  * recursive MIS quantities of Georgiev's technical report ("Implementing Vertex
  * Connection and Merging", 2012, eqs. 31-38) at this vertex, already powered (mis()). */
-typedef struct VcmVertex {
+typedef struct SubpathVertex {
     Vec3 p, ng;
     Vec3 ns;       /* shading normal (SurfaceHit.ns): y's BSDF is rebuilt from it */
     Vec3 w_prev;   /* unit, toward the previous vertex (where the light came from) */
@@ -36,48 +36,48 @@ typedef struct VcmVertex {
     int32_t material;
     int32_t bounces; /* 1 for the first hit after the emitter */
     Vec2 uv;         /* texture coordinates (the BSDF is rebuilt from material, ns, ng, uv) */
-} VcmVertex;
+} SubpathVertex;
 
-/* The part of a VcmVertex that merging reads (48 bytes of its 88): about nine in ten
+/* The part of a SubpathVertex that merging reads (48 bytes of its 88): about nine in ten
  * candidates of a query fail the distance test, so the bytes streamed per candidate are
  * most of a merge's cost. */
-typedef struct VcmMergeVertex {
+typedef struct MergeVertex {
     Vec3 p;
     Vec3 w_prev;
     Color beta;
     float d_vcm, d_vm;
     int32_t bounces;
-} VcmMergeVertex;
+} MergeVertex;
 
 /* A growable list of light vertices; one per work unit, reused by every iteration. */
-typedef struct VcmVertexList {
-    VcmVertex *v;
+typedef struct SubpathVertexList {
+    SubpathVertex *v;
     size_t n, cap;
     int oom;
-} VcmVertexList;
+} SubpathVertexList;
 
-void vcm_vertex_list_free(VcmVertexList *l);
+void subpath_vertex_list_free(SubpathVertexList *l);
 
 /* What every light and camera path of one iteration shares. */
-typedef struct VcmIteration {
+typedef struct SubpathIteration {
     int light_paths;     /* light paths this iteration (one per pixel) */
     float radius;        /* merging radius of this iteration */
     float mis_vm, mis_vc; /* mis(eta_vcm), mis(1 / eta_vcm); 0 without merging */
     float vm_norm;       /* 1 / (pi r^2 light_paths) */
     float pixel_area;    /* one pixel's area on the image plane at distance 1 */
     /* All light vertices of the iteration, path by path, and where each path's start. */
-    const VcmVertex *vertices;
+    const SubpathVertex *vertices;
     const uint32_t *path_start; /* light_paths + 1 entries */
     /* Merging: a hashed grid of cell size 2r over `vertices` (empty without merging). */
     const uint32_t *cell_start;     /* cells + 1 entries */
-    const VcmMergeVertex *cell_vertices; /* what merging reads of the vertices, cell by
+    const MergeVertex *cell_vertices; /* what merging reads of the vertices, cell by
                                           * cell, in vertex order: a query streams through
                                           * a cell's run instead of missing the cache on
                                           * every candidate */
     uint32_t cells;
     Vec3 grid_lo;
     float inv_cell;
-} VcmIteration;
+} SubpathIteration;
 
 /* The MIS exponent: the power heuristic (Veach eq. 9.13, beta = 2). Applied to every
  * factor of a ratio, which is the same as to the ratio: (ab)^2 = a^2 b^2. */
@@ -86,15 +86,15 @@ static inline float mis(float x) { return x * x; }
 /* The subpath state between vertices. */
 typedef struct SubPath {
     Color beta, scatter; /* throughput; scatter = product of BSDF weights (roulette's input) */
-    float d_vcm, d_vc, d_vm; /* MIS quantities: only a walk with a VcmIteration keeps them */
+    float d_vcm, d_vc, d_vm; /* MIS quantities: only a walk with a SubpathIteration keeps them */
     bool specular_only;  /* every BSDF sample so far took a delta lobe (photon maps' caustics) */
 } SubPath;
 
 /* Traces one light subpath of BDPT/VCM (subpath_walk_light with MIS): appends its
  * non-delta vertices to *verts and splats its connections to the camera (the t = 1
  * strategies, MIS-weighted) to *splats, per unit film as light_trace() does. */
-void subpath_trace_light(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it,
-                     Sampler *rng, VcmVertexList *verts, SplatList *splats, uint64_t *rays);
+void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
+                     Sampler *rng, SubpathVertexList *verts, SplatList *splats, uint64_t *rays);
 
 /* A merging query at one camera vertex (vcm.c), in three steps so that its two rounds of
  * cache misses overlap the vertex's NEE and connections instead of stalling the path:
@@ -109,9 +109,9 @@ typedef struct MergeQuery {
 /* VCM's merging at a camera vertex, as hooks of the one camera walk: plan before NEE,
  * fetch after it, merge after the connections. */
 typedef struct SubpathMerge {
-    void (*plan)(const VcmIteration *it, Vec3 p, MergeQuery *q);
-    void (*fetch)(const VcmIteration *it, MergeQuery *q);
-    Color (*merge)(const VcmParams *vp, const VcmIteration *it, const MergeQuery *q, const SubPath *sp,
+    void (*plan)(const SubpathIteration *it, Vec3 p, MergeQuery *q);
+    void (*fetch)(const SubpathIteration *it, MergeQuery *q);
+    Color (*merge)(const SubpathParams *vp, const SubpathIteration *it, const MergeQuery *q, const SubPath *sp,
                    const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces);
 } SubpathMerge;
 
@@ -119,7 +119,7 @@ typedef struct SubpathMerge {
  * NEE (s = 1), connections to the light path's vertices, and with `merge` (NULL: none;
  * used only when the iteration has a grid), merges with every light vertex within the
  * radius; all MIS-weighted. Returns the pixel sample. */
-Color subpath_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it, int path,
+Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                            Ray ray, Sampler *rng, uint64_t *rays, const SubpathMerge *merge);
 
 #endif

@@ -39,7 +39,7 @@ typedef bool (*LightVisit)(void *ctx, const LightVertex *v);
 typedef struct LightWalk {
     int max_depth;  /* bounces; 0 = unbounded */
     int rr_depth;   /* first bounce at which Russian roulette may stop the path */
-    const VcmIteration *mis; /* BDPT/VCM: carry the MIS quantities of this iteration (and end
+    const SubpathIteration *mis; /* BDPT/VCM: carry the MIS quantities of this iteration (and end
                               * at a hit at grazing incidence, which their area conversion
                               * divides by); NULL: none (light tracing, photons) */
     bool lens;      /* draw LightVertex.u_lens (the estimators that connect to the camera) */
@@ -55,7 +55,7 @@ void subpath_emit(const Scene *s, Sampler *rng, EmissionSample *es);
  * and reverse pdf pdf_rev (tech. rep. eqs. 34-36; for delta lobes eqs. 53-55, where the
  * forward and reverse discrete probabilities are the same and cancel). The division by
  * the next vertex's distance and cosine happens at the next hit. */
-static inline void mis_scatter(SubPath *sp, const VcmIteration *it, const BsdfSample *bs,
+static inline void mis_scatter(SubPath *sp, const SubpathIteration *it, const BsdfSample *bs,
                                float cos_out, float pdf_rev)
 {
     if (bs->delta) {
@@ -95,7 +95,7 @@ static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, Sample
  * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
  * quantities (with an iteration `it`; NULL: none) and the next ray. False when the
  * subpath ends here. */
-static inline bool subpath_scatter(const Scene *s, SubPath *sp, const VcmIteration *it, const Bsdf *b,
+static inline bool subpath_scatter(const Scene *s, SubPath *sp, const SubpathIteration *it, const Bsdf *b,
                                    const SurfaceHit *sh, Vec3 wo, BsdfTransport mode, int depth, int rr_depth,
                                    Sampler *rng, Ray *ray)
 {
@@ -123,7 +123,7 @@ static inline __attribute__((always_inline)) bool
 subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es, SubPath sp, Sampler *rng,
                    uint64_t *rays)
 {
-    const VcmIteration *it = w->mis;
+    const SubpathIteration *it = w->mis;
     Ray ray = ray_make(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY);
     for (int bounces = 1;; bounces++) {
         SurfaceHit sh;

@@ -17,7 +17,7 @@ float vcm_default_radius(const Scene *s)
     return isfinite(r) && r > 0.0f ? 0.003f * r : 1e-3f;
 }
 
-void vcm_iteration_init(VcmIteration *it, const VcmParams *vp, const Camera *cam, int light_paths,
+void vcm_iteration_init(SubpathIteration *it, const SubpathParams *vp, const Camera *cam, int light_paths,
                         float base_radius, int index)
 {
     memset(it, 0, sizeof *it);
@@ -34,7 +34,7 @@ void vcm_iteration_init(VcmIteration *it, const VcmParams *vp, const Camera *cam
 
 
 /* A hashed grid cell index of integer cell coordinates (Teschner et al. 2003 primes). */
-static inline uint32_t cell_hash(const VcmIteration *it, int x, int y, int z)
+static inline uint32_t cell_hash(const SubpathIteration *it, int x, int y, int z)
 {
     uint32_t h = ((uint32_t)x * 73856093u) ^ ((uint32_t)y * 19349663u) ^ ((uint32_t)z * 83492791u);
     return h % it->cells;
@@ -45,7 +45,7 @@ static inline int cell_coord(float p, float lo, float inv_cell)
     return (int)floorf((p - lo) * inv_cell);
 }
 
-void vcm_grid_init(VcmIteration *it, Vec3 lo, uint32_t cells, uint32_t *cell_start, VcmMergeVertex *cell_vertices)
+void vcm_grid_init(SubpathIteration *it, Vec3 lo, uint32_t cells, uint32_t *cell_start, MergeVertex *cell_vertices)
 {
     it->cells = cells;
     it->cell_start = cell_start;
@@ -55,7 +55,7 @@ void vcm_grid_init(VcmIteration *it, Vec3 lo, uint32_t cells, uint32_t *cell_sta
     cell_start[0] = 0;
 }
 
-uint32_t vcm_grid_cell(const VcmIteration *it, Vec3 p)
+uint32_t vcm_grid_cell(const SubpathIteration *it, Vec3 p)
 {
     const Vec3 lo = it->grid_lo;
     return cell_hash(it, cell_coord(p.x, lo.x, it->inv_cell), cell_coord(p.y, lo.y, it->inv_cell),
@@ -66,13 +66,13 @@ uint32_t vcm_grid_cell(const VcmIteration *it, Vec3 p)
  * are summed is then a function of the iteration alone. Range r of n owns the buckets
  * [c0, c1) below and cell_start[c0 + 1 .. c1] (the ends of its buckets; entry 0 is
  * vcm_grid_init's), so ranges never write each other's entries. */
-static void range_buckets(const VcmIteration *it, int range, int ranges, uint32_t *c0, uint32_t *c1)
+static void range_buckets(const SubpathIteration *it, int range, int ranges, uint32_t *c0, uint32_t *c1)
 {
     *c0 = (uint32_t)((uint64_t)it->cells * (uint64_t)range / (uint64_t)ranges);
     *c1 = (uint32_t)((uint64_t)it->cells * (uint64_t)(range + 1) / (uint64_t)ranges);
 }
 
-uint32_t vcm_grid_count(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges,
+uint32_t vcm_grid_count(const SubpathIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges,
                         uint32_t *cell_start)
 {
     uint32_t c0, c1;
@@ -97,8 +97,8 @@ uint32_t vcm_grid_bases(uint32_t *per_range, int ranges)
     return below;
 }
 
-void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges, uint32_t base,
-                   uint32_t *cell_start, VcmMergeVertex *cell_vertices)
+void vcm_grid_fill(const SubpathIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges, uint32_t base,
+                   uint32_t *cell_start, MergeVertex *cell_vertices)
 {
     uint32_t c0, c1;
     range_buckets(it, range, ranges, &c0, &c1);
@@ -110,8 +110,8 @@ void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, in
     for (size_t i = 0; i < n; i++) {
         uint32_t c = cell_of[i];
         if (c - c0 >= width) continue;
-        const VcmVertex *v = &it->vertices[i];
-        cell_vertices[cell_start[c + 1]++] = (VcmMergeVertex){
+        const SubpathVertex *v = &it->vertices[i];
+        cell_vertices[cell_start[c + 1]++] = (MergeVertex){
             .p = v->p, .w_prev = v->w_prev, .beta = v->beta, .d_vcm = v->d_vcm, .d_vm = v->d_vm, .bounces = v->bounces};
     }
 }
@@ -121,7 +121,7 @@ void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, in
  * x 2 cells (cells are 2r wide); distinct cells can hash to the same bucket, which must
  * be visited once. Their bounds are prefetched together: the lookups are independent
  * cache misses, and issuing them at once overlaps their latency (docs/benchmarks.md). */
-static void merge_plan(const VcmIteration *it, Vec3 p, MergeQuery *q)
+static void merge_plan(const SubpathIteration *it, Vec3 p, MergeQuery *q)
 {
     const float r = it->radius;
     int lo[3], hi[3];
@@ -153,7 +153,7 @@ static void merge_plan(const VcmIteration *it, Vec3 p, MergeQuery *q)
 
 /* Step 2: where each bucket's run lies, and the run prefetched (up to eight lines; a run
  * is a few vertices). */
-static void merge_fetch(const VcmIteration *it, MergeQuery *q)
+static void merge_fetch(const SubpathIteration *it, MergeQuery *q)
 {
     for (int b = 0; b < q->nb; b++) {
         q->first[b] = it->cell_start[q->bucket[b]];
@@ -173,14 +173,14 @@ static void merge_fetch(const VcmIteration *it, MergeQuery *q)
 
 /* Step 3, merging at camera vertex x: the density estimate over every light vertex within
  * the radius, each MIS-weighted (tech. rep. eqs. 42-43), scaled by 1 / (pi r^2 N). */
-static Color merge(const VcmParams *vp, const VcmIteration *it, const MergeQuery *q, const SubPath *sp,
+static Color merge(const SubpathParams *vp, const SubpathIteration *it, const MergeQuery *q, const SubPath *sp,
                  const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces)
 {
     const float r = it->radius, r2 = r * r;
     Color acc = color_s(0.0f);
     for (int b = 0; b < q->nb; b++)
         for (uint32_t k = q->first[b]; k < q->last[b]; k++) {
-            const VcmMergeVertex *y = &it->cell_vertices[k];
+            const MergeVertex *y = &it->cell_vertices[k];
             Vec3 dv = v3_sub(y->p, x->p);
             if (v3_dot(dv, dv) > r2) continue;
             /* The merged path has the camera vertices and y's, sharing one. */
@@ -203,7 +203,7 @@ static Color merge(const VcmParams *vp, const VcmIteration *it, const MergeQuery
 
 static const SubpathMerge VCM_MERGE = {merge_plan, merge_fetch, merge};
 
-Color vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it, int path,
+Color vcm_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                        Ray ray, Sampler *rng, uint64_t *rays)
 {
     return subpath_trace_camera(s, cam, vp, it, path, ray, rng, rays, &VCM_MERGE);

@@ -15,7 +15,7 @@
 /* Sets everything but the vertex and grid arrays for iteration `index` (0-based): the
  * radius shrinks as r0 (index + 1)^((alpha - 1) / 2), alpha = 3/4 (Knaus and Zwicker
  * 2011, as SmallVCM does), so merging's bias vanishes as iterations grow. */
-void vcm_iteration_init(VcmIteration *it, const VcmParams *vp, const Camera *cam, int light_paths,
+void vcm_iteration_init(SubpathIteration *it, const SubpathParams *vp, const Camera *cam, int light_paths,
                         float base_radius, int index);
 
 /* The merging grid over it->vertices, a hashed grid of cells 2r wide from lo (the lowest
@@ -26,18 +26,18 @@ void vcm_iteration_init(VcmIteration *it, const VcmParams *vp, const Camera *cam
  * range is counted, vcm_grid_bases turns the per-range counts into each range's first
  * index (returning the total), and vcm_grid_fill sorts range r from there. Any number of
  * ranges gives the same grid. */
-void vcm_grid_init(VcmIteration *it, Vec3 lo, uint32_t cells, uint32_t *cell_start, VcmMergeVertex *cell_vertices);
-uint32_t vcm_grid_cell(const VcmIteration *it, Vec3 p);
-uint32_t vcm_grid_count(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges,
+void vcm_grid_init(SubpathIteration *it, Vec3 lo, uint32_t cells, uint32_t *cell_start, MergeVertex *cell_vertices);
+uint32_t vcm_grid_cell(const SubpathIteration *it, Vec3 p);
+uint32_t vcm_grid_count(const SubpathIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges,
                         uint32_t *cell_start);
 uint32_t vcm_grid_bases(uint32_t *per_range, int ranges);
-void vcm_grid_fill(const VcmIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges, uint32_t base,
-                   uint32_t *cell_start, VcmMergeVertex *cell_vertices);
+void vcm_grid_fill(const SubpathIteration *it, const uint32_t *cell_of, size_t n, int range, int ranges, uint32_t base,
+                   uint32_t *cell_start, MergeVertex *cell_vertices);
 
 /* One camera path for the pixel whose light path is `path`: emission hits (s = 0), NEE
  * (s = 1), connections to the light path's vertices, and merges with every light vertex
  * within the radius; all MIS-weighted. Returns the pixel sample. */
-Color vcm_trace_camera(const Scene *s, const Camera *cam, const VcmParams *vp, const VcmIteration *it, int path,
+Color vcm_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                        Ray ray, Sampler *rng, uint64_t *rays);
 
 /* A merging radius from the scene's size: the base radius r0 when none is given. */

@@ -17,11 +17,6 @@ static bool grow(void *arr, size_t *cap, long long need, size_t size)
 }
 #define GROW(arr, cap, need) grow(&(arr), &(cap), (need), sizeof *(arr))
 
-float triangle_area(Vec3 a, Vec3 b, Vec3 c)
-{
-    return 0.5f * v3_length(v3_cross(v3_sub(b, a), v3_sub(c, a)));
-}
-
 Scene *scene_create(void)
 {
     Scene *s = calloc(1, sizeof *s);

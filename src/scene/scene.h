@@ -19,6 +19,7 @@
 #include "materials/material.h"
 #include "math/color.h"
 #include "math/vec3.h"
+#include "scene/scene_build.h"
 #include "textures/texture.h"
 
 typedef struct Emission {
@@ -89,9 +90,6 @@ void scene_destroy(Scene *scene);
 CstStatus scene_add_texture(Scene *scene, const Texture *t, int *out_id, CstError *err);
 /* The material's textures must already be in the scene. */
 CstStatus scene_add_material(Scene *scene, const Material *m, int *out_id, CstError *err);
-/* The public description of a loader's Material (its texture ids are 1-based, as the
- * public ones), for cst_scene_add_material: the same material, bit for bit. */
-void scene_material_desc(const Material *m, CstMaterialDesc *d);
 /* Indices are 3 per triangle into positions; all must be in range and the triangles
  * non-degenerate (callers that know file locations check first for better messages).
  * emission may be NULL. */
@@ -319,9 +317,6 @@ static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
     Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
     return !scene_occluded(s, &r);
 }
-
-/* Area of a triangle with nonzero normal; shared by loaders for validation. */
-float triangle_area(Vec3 a, Vec3 b, Vec3 c);
 
 /* Defaults applied by the renderer to zero fields. */
 #define CST_DEFAULT_WIDTH 512

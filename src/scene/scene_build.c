@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "io/image_io.h"
 #include "scene/scene.h"
+#include "scene/scene_build.h"
 
 /* The loaders' bound on coordinates and lengths (scene_json.c explains the figure). */
 #define BUILD_MAX_LENGTH 1e18f
@@ -150,6 +151,47 @@ CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *o
     return CST_OK;
 }
 
+static void color_floats(Color c, float out[3])
+{
+    for (int k = 0; k < 3; k++) out[k] = color_channel(c, k);
+}
+
+CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *info, CstError *err)
+{
+    static const char fn[] = "cst_scene_texture_info";
+    cst_error_clear(err);
+    if (!scene || !info) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: scene and info must not be NULL", fn);
+    CstStatus st = check_texture_id(scene, id, 0, fn, "id", err);
+    if (st != CST_OK) return st;
+    const Texture *t = &scene->textures[id - 1];
+    memset(info, 0, sizeof *info);
+    CstTextureDesc *d = &info->desc;
+    switch (t->type) {
+    case TEXTURE_CONSTANT:
+        d->type = CST_TEXTURE_CONSTANT;
+        color_floats(t->value, d->value);
+        break;
+    case TEXTURE_CHECKERBOARD:
+        d->type = CST_TEXTURE_CHECKERBOARD;
+        d->even = t->checker.even + 1;
+        d->odd = t->checker.odd + 1;
+        d->scale = t->checker.scale;
+        break;
+    case TEXTURE_IMAGE:
+        d->type = CST_TEXTURE_IMAGE;
+        d->pixels = t->image.rgb;
+        d->width = t->image.width;
+        d->height = t->image.height;
+        d->wrap = t->image.wrap == TEXTURE_WRAP_CLAMP ? CST_TEXTURE_WRAP_CLAMP : CST_TEXTURE_WRAP_REPEAT;
+        break;
+    }
+    d->uv_scale[0] = t->uv_scale.x, d->uv_scale[1] = t->uv_scale.y;
+    d->uv_offset[0] = t->uv_offset.x, d->uv_offset[1] = t->uv_offset.y;
+    color_floats(t->average, info->average);
+    color_floats(t->max, info->max);
+    return CST_OK;
+}
+
 /* ------------------------------------------------------------------ materials */
 
 void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
@@ -273,12 +315,12 @@ static CstStatus read_emission(const Scene *s, const CstEmission *e, const char 
 }
 
 /* The effective stride of an attribute of `elem` bytes: 0 means packed. */
-static CstStatus check_stride(size_t *stride, size_t elem, const char *what, CstError *err)
+static CstStatus check_stride(size_t *stride, size_t elem, const char *fn, const char *what, CstError *err)
 {
     if (*stride == 0) *stride = elem;
     if (*stride < elem)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_add_mesh: %s_stride %zu is smaller than an "
-                        "element (%zu bytes); expected 0 (packed) or at least %zu", what, *stride, elem, elem);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s_stride %zu is smaller than an element (%zu bytes); "
+                        "expected 0 (packed) or at least %zu", fn, what, *stride, elem, elem);
     return CST_OK;
 }
 
@@ -296,15 +338,14 @@ typedef struct MeshArrays {
     int normals_partial; /* some normals are zero (normals_unit) */
 } MeshArrays;
 
-static CstStatus gather_mesh(const CstMeshDesc *d, MeshArrays *a, CstError *err)
+static CstStatus gather_mesh(const CstMeshDesc *d, const char *fn, MeshArrays *a, CstError *err)
 {
-    static const char fn[] = "cst_scene_add_mesh";
     size_t ps = d->position_stride, ns = d->normal_stride, us = d->uv_stride, is = d->index_stride;
     CstStatus st;
-    if ((st = check_stride(&ps, 3 * sizeof(float), "position", err)) != CST_OK ||
-        (d->normals && (st = check_stride(&ns, 3 * sizeof(float), "normal", err)) != CST_OK) ||
-        (d->uvs && (st = check_stride(&us, 2 * sizeof(float), "uv", err)) != CST_OK) ||
-        (st = check_stride(&is, 3 * sizeof(uint32_t), "index", err)) != CST_OK)
+    if ((st = check_stride(&ps, 3 * sizeof(float), fn, "position", err)) != CST_OK ||
+        (d->normals && (st = check_stride(&ns, 3 * sizeof(float), fn, "normal", err)) != CST_OK) ||
+        (d->uvs && (st = check_stride(&us, 2 * sizeof(float), fn, "uv", err)) != CST_OK) ||
+        (st = check_stride(&is, 3 * sizeof(uint32_t), fn, "index", err)) != CST_OK)
         return st;
     int nv = d->num_vertices, nt = d->num_triangles;
     a->pos = malloc((size_t)nv * sizeof *a->pos);
@@ -359,13 +400,10 @@ static CstStatus gather_mesh(const CstMeshDesc *d, MeshArrays *a, CstError *err)
     return CST_OK;
 }
 
-CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dropped, CstError *err)
+/* The checks of a mesh description that need no pass over its arrays (cst_scene_add_mesh,
+ * cst_scene_add_object). */
+static CstStatus check_mesh_desc(const Scene *scene, const CstMeshDesc *d, const char *fn, CstError *err)
 {
-    static const char fn[] = "cst_scene_add_mesh";
-    cst_error_clear(err);
-    if (num_dropped) *num_dropped = 0;
-    CstStatus st = check_scene(scene, fn, err);
-    if (st != CST_OK) return st;
     if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
     if (d->num_vertices <= 0 || d->num_triangles <= 0 || !d->positions || !d->indices)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d vertices and %d triangles (positions %s, indices %s); "
@@ -385,11 +423,45 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: skip_degenerate %d; expected 0 or 1", fn, d->skip_degenerate);
     if (d->normals_unit != 0 && d->normals_unit != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: normals_unit %d; expected 0 or 1", fn, d->normals_unit);
+    return CST_OK;
+}
+
+/* Without skip_degenerate, fails at the first zero-area triangle (before anything is added,
+ * so that a failure leaves the scene untouched: scene_add_mesh_ex finds a degenerate
+ * triangle only after adding the ones before it). */
+static CstStatus check_degenerate(const CstMeshDesc *d, const MeshArrays *a, const char *fn, CstError *err)
+{
+    for (int t = 0; !d->skip_degenerate && t < d->num_triangles; t++) {
+        const int *i = &a->idx[3 * t];
+        if (!(triangle_area(a->pos[i[0]], a->pos[i[1]], a->pos[i[2]]) > 0.0f))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: triangle %d (vertices %d, %d, %d) has zero area; "
+                            "expected distinct, non-collinear vertices (or skip_degenerate = 1)",
+                            fn, t, i[0], i[1], i[2]);
+    }
+    return CST_OK;
+}
+
+static void mesh_arrays_free(MeshArrays *a)
+{
+    free(a->pos);
+    free(a->nrm);
+    free(a->uv);
+    free(a->idx);
+}
+
+CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dropped, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_mesh";
+    cst_error_clear(err);
+    if (num_dropped) *num_dropped = 0;
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if ((st = check_mesh_desc(scene, d, fn, err)) != CST_OK) return st;
     Emission em;
     double peak = 0.0;
     if ((st = read_emission(scene, &d->emission, fn, &em, &peak, err)) != CST_OK) return st;
     MeshArrays a = {0};
-    st = gather_mesh(d, &a, err);
+    st = gather_mesh(d, fn, &a, err);
     if (st == CST_OK && peak > 0.0) {
         /* Each emitting triangle is a light of power pi x area x radiance (x 2 two-sided). */
         double area = 0.0;
@@ -402,19 +474,7 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
                            (double)CST_PI * area * peak * (em.two_sided ? 2.0 : 1.0),
                            "a smaller radiance (or scale) or smaller triangles", err);
     }
-    if (st == CST_OK && !d->skip_degenerate) {
-        /* Checked here so that a failure leaves the scene untouched: scene_add_mesh_ex
-         * finds a degenerate triangle only after adding the ones before it. */
-        for (int t = 0; t < d->num_triangles; t++) {
-            const int *i = &a.idx[3 * t];
-            if (!(triangle_area(a.pos[i[0]], a.pos[i[1]], a.pos[i[2]]) > 0.0f)) {
-                st = cst_fail(err, CST_ERR_INVALID_ARG, "%s: triangle %d (vertices %d, %d, %d) has zero area; "
-                              "expected distinct, non-collinear vertices (or skip_degenerate = 1)",
-                              fn, t, i[0], i[1], i[2]);
-                break;
-            }
-        }
-    }
+    if (st == CST_OK) st = check_degenerate(d, &a, fn, err);
     if (st == CST_OK) {
         SceneMesh sm = {0};
         sm.positions = a.pos;
@@ -430,11 +490,76 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
         sm.skip_degenerate = d->skip_degenerate;
         st = scene_add_mesh_ex(scene, &sm, num_dropped, err);
     }
-    free(a.pos);
-    free(a.nrm);
-    free(a.uv);
-    free(a.idx);
+    mesh_arrays_free(&a);
     return st;
+}
+
+/* ------------------------------------------------------------------ instancing */
+
+CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *d, int *out_id, int *num_dropped, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_object";
+    cst_error_clear(err);
+    if (num_dropped) *num_dropped = 0;
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: out_id is NULL", fn);
+    if ((st = check_mesh_desc(scene, d, fn, err)) != CST_OK) return st;
+    const CstEmission *e = &d->emission;
+    if (e->radiance[0] != 0.0f || e->radiance[1] != 0.0f || e->radiance[2] != 0.0f || e->texture || e->two_sided)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has an emission; instances do not emit "
+                        "(expected a zero emission; add emitters with cst_scene_add_mesh)", fn);
+    if (d->uvs)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has uvs; instances carry no texture "
+                        "coordinates (expected uvs NULL)", fn);
+    MeshArrays a = {0};
+    int *mat = malloc((size_t)d->num_triangles * sizeof *mat);
+    st = mat ? gather_mesh(d, fn, &a, err)
+             : cst_fail(err, CST_ERR_OOM, "%s: out of memory for %d triangles", fn, d->num_triangles);
+    if (st == CST_OK) st = check_degenerate(d, &a, fn, err);
+    int kept = 0;
+    for (int t = 0; st == CST_OK && t < d->num_triangles; t++) {
+        const int *i = &a.idx[3 * t];
+        if (!(triangle_area(a.pos[i[0]], a.pos[i[1]], a.pos[i[2]]) > 0.0f)) continue; /* skip_degenerate */
+        memmove(&a.idx[3 * kept], i, 3 * sizeof *i);
+        mat[kept++] = d->triangle_materials ? d->triangle_materials[t] : d->material;
+    }
+    if (st == CST_OK && kept == 0)
+        st = cst_fail(err, CST_ERR_INVALID_ARG, "%s: all %d triangles have zero area; expected at least one "
+                      "that is not degenerate", fn, d->num_triangles);
+    if (st == CST_OK)
+        st = scene_add_instance_proto(scene, a.pos, a.nrm, d->num_vertices, a.idx, mat, kept, out_id, err);
+    if (st == CST_OK && num_dropped) *num_dropped = d->num_triangles - kept;
+    mesh_arrays_free(&a);
+    free(mat);
+    return st;
+}
+
+CstStatus cst_scene_add_instance(CstScene *scene, int object, const float m[12], CstError *err)
+{
+    static const char fn[] = "cst_scene_add_instance";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!m) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is NULL", fn);
+    int objects = scene->instances ? scene->instances->num_protos : 0;
+    if (object < 0 || object >= objects)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: object %d is not an object of this scene; expected %s%d",
+                        fn, object, objects ? "0 to " : "an id from cst_scene_add_object (there are none), ",
+                        objects - 1);
+    float rows[16] = {0};
+    for (int k = 0; k < 12; k++) {
+        if (!isfinite(m[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers",
+                            fn, k, (double)m[k]);
+        rows[k] = m[k];
+    }
+    rows[15] = 1.0f;
+    Transform xf = transform_from_rows(rows), inv;
+    if (!transform_invert(&xf, &inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
+                        "finite); expected an invertible affine transform", fn);
+    return scene_add_instance(scene, object, &xf, err);
 }
 
 CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,
@@ -566,6 +691,118 @@ CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path, con
     return scene_set_environment(scene, &env, err);
 }
 
+/* The largest side of an environment image from pixels (as for image textures). */
+#define BUILD_MAX_ENV_SIDE 65536
+
+/* Pixel (x, y) of a caller's strided RGB image. */
+static const float *env_pixel(const float *rgb, size_t ps, size_t rs, int x, int y)
+{
+    return (const float *)(const void *)((const char *)rgb + (size_t)y * rs + (size_t)x * ps);
+}
+
+/* 3 x 3 inverse in double (cofactors over the determinant); false when singular or not
+ * finite. */
+static int invert3(const double m[9], double inv[9])
+{
+    double c[9] = {m[4] * m[8] - m[5] * m[7], m[2] * m[7] - m[1] * m[8], m[1] * m[5] - m[2] * m[4],
+                   m[5] * m[6] - m[3] * m[8], m[0] * m[8] - m[2] * m[6], m[2] * m[3] - m[0] * m[5],
+                   m[3] * m[7] - m[4] * m[6], m[1] * m[6] - m[0] * m[7], m[0] * m[4] - m[1] * m[3]};
+    double det = m[0] * c[0] + m[1] * c[3] + m[2] * c[6];
+    if (!(det != 0.0) || !isfinite(det)) return 0;
+    for (int k = 0; k < 9; k++) {
+        inv[k] = c[k] / det;
+        if (!isfinite(inv[k])) return 0;
+    }
+    return 1;
+}
+
+/* out (w x h, packed) = the map `in` seen through world_from_map: each pixel takes, by
+ * nearest lookup, the pixel of `in` that its centre's world direction has in map space
+ * (envmap.h's convention on both sides). */
+static void env_resample(const float *in, int w, int h, const double map_from_world[9], float *out)
+{
+    const double pi = 3.14159265358979323846;
+    for (int y = 0; y < h; y++) {
+        double th = pi * (y + 0.5) / h;
+        for (int x = 0; x < w; x++) {
+            double ph = 2.0 * pi * (x + 0.5) / w;
+            double wv[3] = {sin(th) * cos(ph), cos(th), sin(th) * sin(ph)}, dm[3], len = 0.0;
+            for (int r = 0; r < 3; r++) {
+                dm[r] = map_from_world[3 * r] * wv[0] + map_from_world[3 * r + 1] * wv[1] +
+                        map_from_world[3 * r + 2] * wv[2];
+                len += dm[r] * dm[r];
+            }
+            len = sqrt(len);
+            double phi = atan2(dm[2] / len, dm[0] / len), theta = acos(fmax(-1.0, fmin(1.0, dm[1] / len)));
+            if (phi < 0.0) phi += 2.0 * pi;
+            int sx = (int)(phi / (2.0 * pi) * w), sy = (int)(theta / pi * h);
+            sx = sx < 0 ? 0 : sx >= w ? w - 1 : sx;
+            sy = sy < 0 ? 0 : sy >= h ? h - 1 : sy;
+            memcpy(&out[3 * ((size_t)y * (size_t)w + (size_t)x)], &in[3 * ((size_t)sy * (size_t)w + (size_t)sx)],
+                   3 * sizeof *out);
+        }
+    }
+}
+
+CstStatus cst_scene_set_environment_pixels(CstScene *scene, const float *rgb, int w, int h, size_t ps, size_t rs,
+                                           const float scale[3], const float world_from_map[9], CstError *err)
+{
+    static const char fn[] = "cst_scene_set_environment_pixels";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!rgb) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: rgb is NULL", fn);
+    if (w <= 0 || h <= 0 || w > BUILD_MAX_ENV_SIDE || h > BUILD_MAX_ENV_SIDE)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: image of %d x %d pixels; expected 1 to %d on each side",
+                        fn, w, h, BUILD_MAX_ENV_SIDE);
+    if ((st = check_stride(&ps, 3 * sizeof(float), fn, "pixel", err)) != CST_OK) return st;
+    size_t row_min = (size_t)(w - 1) * ps + 3 * sizeof(float);
+    if (rs == 0) rs = (size_t)w * ps;
+    if (rs < row_min)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: row_stride %zu is shorter than a row (%zu bytes); expected "
+                        "0 (width * pixel_stride) or at least %zu", fn, rs, row_min, row_min);
+    Color k = color_s(1.0f);
+    if (scale && (st = read_rgb(scale, 0, fn, "scale", &k, err)) != CST_OK) return st;
+    double m[9], inv[9];
+    int rotate = 0;
+    for (int i = 0; world_from_map && i < 9; i++) {
+        m[i] = (double)world_from_map[i];
+        rotate |= world_from_map[i] != ((i % 4) == 0 ? 1.0f : 0.0f); /* the identity needs no resampling */
+    }
+    if (rotate && !invert3(m, inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_map is singular or not finite; expected an "
+                        "invertible 3 x 3 matrix (a rotation)", fn);
+    size_t n = (size_t)w * (size_t)h * 3;
+    float *px = malloc(n * sizeof *px), *turned = rotate ? malloc(n * sizeof *turned) : NULL;
+    if (!px || (rotate && !turned)) {
+        free(px);
+        free(turned);
+        return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d environment", fn, w, h);
+    }
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            const float *p = env_pixel(rgb, ps, rs, x, y);
+            float *o = &px[3 * ((size_t)y * (size_t)w + (size_t)x)];
+            memcpy(o, p, 3 * sizeof *o);
+            if (!(o[0] >= 0.0f && o[1] >= 0.0f && o[2] >= 0.0f && o[0] <= FLT_MAX && o[1] <= FLT_MAX &&
+                  o[2] <= FLT_MAX)) {
+                st = cst_fail(err, CST_ERR_INVALID_ARG, "%s: pixel (%d, %d) is (%g, %g, %g); expected finite "
+                              "radiance >= 0", fn, x, y, (double)o[0], (double)o[1], (double)o[2]);
+                free(px);
+                free(turned);
+                return st;
+            }
+        }
+    if (rotate) {
+        env_resample(px, w, h, inv, turned);
+        free(px);
+        px = turned;
+    }
+    EnvMap env;
+    if ((st = envmap_init_image(&env, px, w, h, k, err)) != CST_OK) return st; /* takes px */
+    return scene_set_environment(scene, &env, err);
+}
+
 CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *d, CstError *err)
 {
     static const char fn[] = "cst_scene_set_camera";
@@ -578,27 +815,42 @@ CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *d, CstError
                         "or CST_CAMERA_ORTHOGRAPHIC", fn, (int)d->type);
     CameraDesc c = {0};
     if ((st = read_vec3(d->position, fn, "position", &c.position, err)) != CST_OK ||
-        (st = read_vec3(d->look_at, fn, "look_at", &c.look_at, err)) != CST_OK ||
         (st = read_vec3(d->up, fn, "up", &c.up, err)) != CST_OK)
         return st;
+    /* Only look_at's direction from position counts: it may lie beyond BUILD_MAX_LENGTH
+     * (pbrt's loader puts it a power of two past |position|, which keeps the difference
+     * exact), as long as that difference has a finite length. */
+    if (!isfinite(d->look_at[0]) || !isfinite(d->look_at[1]) || !isfinite(d->look_at[2]))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: look_at (%g, %g, %g) is not finite; expected a point on "
+                        "the view axis", fn, (double)d->look_at[0], (double)d->look_at[1], (double)d->look_at[2]);
+    c.look_at = v3(d->look_at[0], d->look_at[1], d->look_at[2]);
     if (c.up.x == 0.0f && c.up.y == 0.0f && c.up.z == 0.0f) c.up = v3(0.0f, 1.0f, 0.0f);
     Vec3 forward = v3_sub(c.look_at, c.position);
     float dist = v3_length(forward);
     if (!(dist > 0.0f) || !isfinite(dist))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: look_at equals position, so there is no view direction", fn);
-    /* The same test as the JSON loader: right = normalize(forward x up) must exist. */
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: look_at equals position or lies too far from it (more "
+                        "than about 1e19), so there is no view direction", fn);
+    /* right = normalize(forward x up) must exist: sin(forward, up) > 1e-6, the bound the
+     * pbrt loader has always used (the JSON loader checks 1e-4 first, for its own message). */
     float ul = v3_length(c.up);
-    if (!(v3_length(v3_cross(v3_scale(forward, 1.0f / dist), c.up)) > 1e-4f * ul))
+    if (!(v3_length(v3_cross(v3_scale(forward, 1.0f / dist), c.up)) > 1e-6f * ul))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: up (%g, %g, %g) is parallel to the view direction; "
                         "expected a vector not parallel to look_at - position",
                         fn, (double)c.up.x, (double)c.up.y, (double)c.up.z);
+    if (d->mirror != 0 && d->mirror != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mirror %d; expected 0 or 1", fn, d->mirror);
     c.focus_distance = dist;
     if (d->type == CST_CAMERA_ORTHOGRAPHIC) {
         if (!(d->height > 0.0f && d->height <= BUILD_MAX_LENGTH))
             return cst_fail(err, CST_ERR_INVALID_ARG, "%s: height %g; expected the view's height in scene units, > 0",
                             fn, (double)d->height);
+        if (!(d->fov == 0.0f || (d->fov > 0.0f && d->fov < 180.0f)))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: fov %g for an orthographic camera; expected 0 or "
+                            "degrees in (0, 180)", fn, (double)d->fov);
         c.ortho_height = d->height;
+        c.vfov_deg = d->fov; /* not the rays': the film-area term of bdpt/vcm (subpath.c) */
         scene_set_camera(scene, &c);
+        scene->camera_mirror = d->mirror;
         return CST_OK;
     }
     if (!(d->fov > 0.0f && d->fov < 180.0f))
@@ -614,6 +866,7 @@ CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *d, CstError
     c.aperture_radius = d->aperture_radius;
     if (d->focus_distance > 0.0f) c.focus_distance = d->focus_distance;
     scene_set_camera(scene, &c);
+    scene->camera_mirror = d->mirror;
     return CST_OK;
 }
 

@@ -98,7 +98,7 @@ static void test_checker_plane_closed_form(void **state)
                 RegionStat r0 = region_stat(f, 0, 0, SQUARE, SQUARE);
                 assert_int_equal(is_a, (r0.mean[0] > 0.5) ^ ((bx + by) & 1));
                 Color want = is_a ? A : B;
-                const double w[3] = {want.c[0], want.c[1], want.c[2]};
+                const double w[3] = {(double)want.c[0], (double)want.c[1], (double)want.c[2]};
                 for (int c = 0; c < 3; c++) {
                     double z = (r.mean[c] - w[c]) / r.se[c];
                     if (fabs(z) > worst) worst = fabs(z);

@@ -108,14 +108,14 @@ static double dist_to_prim(const Soup *s, int id, const double p[3])
 {
     if (id >= s->num_tris) {
         const Sphere *sp = &s->spheres[id - s->num_tris];
-        double c[3] = {sp->center.x, sp->center.y, sp->center.z}, d2 = 0.0;
+        double c[3] = {(double)sp->center.x, (double)sp->center.y, (double)sp->center.z}, d2 = 0.0;
         for (int k = 0; k < 3; k++) d2 += (p[k] - c[k]) * (p[k] - c[k]);
         return fabs(sqrt(d2) - fabs((double)sp->radius));
     }
     double v[3][3];
     for (int i = 0; i < 3; i++) {
         Vec3 q = s->pos[s->idx[3 * id + i]];
-        v[i][0] = q.x; v[i][1] = q.y; v[i][2] = q.z;
+        v[i][0] = (double)q.x; v[i][1] = (double)q.y; v[i][2] = (double)q.z;
     }
     double e1[3], e2[3], w[3];
     for (int k = 0; k < 3; k++) { e1[k] = v[1][k] - v[0][k]; e2[k] = v[2][k] - v[0][k]; w[k] = p[k] - v[0][k]; }

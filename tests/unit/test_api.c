@@ -88,7 +88,7 @@ static CstScene *build_api_scene(void)
     CstError e;
     CstScene *s = NULL;
     ok(cst_scene_create(&s, &e), &e);
-    CstCameraDesc cam = {CST_CAMERA_PERSPECTIVE, {0, 1, 5}, {0, 0.5f, 0}, {0, 0, 0}, 40, 0.05f, 4.5f, 0};
+    CstCameraDesc cam = {CST_CAMERA_PERSPECTIVE, {0, 1, 5}, {0, 0.5f, 0}, {0, 0, 0}, 40, 0.05f, 4.5f, 0, 0};
     ok(cst_scene_set_camera(s, &cam, &e), &e);
     CstTextureDesc ta = {0}, tb = {0}, tc = {0};
     int a = 0, b = 0, check = 0;
@@ -213,7 +213,7 @@ static void test_strided_equals_packed(void **state)
         }
         ok(cst_scene_add_mesh(s[k], &m, NULL, &e), &e);
         ok(cst_scene_set_environment_constant(s[k], (const float[3]){1, 1, 1}, &e), &e);
-        CstCameraDesc cam = {CST_CAMERA_PERSPECTIVE, {0, 3, 6}, {0, 0, 0}, {0, 0, 0}, 40, 0, 0, 0};
+        CstCameraDesc cam = {CST_CAMERA_PERSPECTIVE, {0, 3, 6}, {0, 0, 0}, {0, 0, 0}, 40, 0, 0, 0, 0};
         ok(cst_scene_set_camera(s[k], &cam, &e), &e);
         ok(cst_scene_commit(s[k], &e), &e);
     }
@@ -420,7 +420,7 @@ static void test_rejects_other_input(void **state)
     expect_invalid(&f, cst_scene_set_environment_constant(f.s, (const float[3]){1, INFINITY, 1}, &e), &e, "radiance");
     assert_null(f.s->env);
 
-    CstCameraDesc cam = {CST_CAMERA_PERSPECTIVE, {0, 0, 5}, {0, 0, 0}, {0, 0, 0}, 180, 0, 0, 0};
+    CstCameraDesc cam = {CST_CAMERA_PERSPECTIVE, {0, 0, 5}, {0, 0, 0}, {0, 0, 0}, 180, 0, 0, 0, 0};
     expect_invalid(&f, cst_scene_set_camera(f.s, &cam, &e), &e, "fov 180");
     cam.fov = 40, cam.up[2] = 1;
     expect_invalid(&f, cst_scene_set_camera(f.s, &cam, &e), &e, "parallel");
@@ -448,10 +448,10 @@ static void test_camera_types(void **state)
     (void)state;
     Fixture f = fixture();
     CstError e;
-    CstCameraDesc cam = {CST_CAMERA_ORTHOGRAPHIC, {0, 0, 5}, {0, 0, 0}, {0, 0, 0}, 0, 0, 0, 2.5f};
+    CstCameraDesc cam = {CST_CAMERA_ORTHOGRAPHIC, {0, 0, 5}, {0, 0, 0}, {0, 0, 0}, 0, 0, 0, 2.5f, 0};
     ok(cst_scene_set_camera(f.s, &cam, &e), &e);
     assert_true(f.s->camera.ortho_height == 2.5f);
-    cam = (CstCameraDesc){CST_CAMERA_PERSPECTIVE, {0, 0, 5}, {0, 0, 0}, {0, 1, 0}, 30, 0.2f, 3, 0};
+    cam = (CstCameraDesc){CST_CAMERA_PERSPECTIVE, {0, 0, 5}, {0, 0, 0}, {0, 1, 0}, 30, 0.2f, 3, 0, 0};
     ok(cst_scene_set_camera(f.s, &cam, &e), &e);
     assert_true(f.s->camera.ortho_height == 0.0f && f.s->camera.aperture_radius == 0.2f);
     assert_true(f.s->camera.focus_distance == 3.0f && f.s->camera.vfov_deg == 30.0f);

@@ -24,6 +24,12 @@
 #include "sampling/warp.h"
 #include "unit/chi2.h"
 
+/* C11's CMPLX, which glibc defines only for GCC (through __builtin_complex): Clang has
+ * __builtin_complex too. */
+#ifndef CMPLX
+#define CMPLX(x, y) __builtin_complex((double)(x), (double)(y))
+#endif
+
 #define PI_D 3.14159265358979323846
 
 /* ------------------------------------------------------------------ cases */
@@ -443,7 +449,7 @@ static void test_white_furnace(void **state)
 {
     (void)state;
     const int n = FURNACE_SAMPLES;
-    double worst_excess_z = -INFINITY;
+    double worst_excess_z = -HUGE_VAL;
     for (int a = 0; a < NELEM(FURNACE_COS); a++) {
         float c = FURNACE_COS[a];
         Material lam = {.type = MATERIAL_DIFFUSE, .albedo = {{1, 1, 1}}, .ior = 1.0f};

@@ -243,10 +243,10 @@ static void test_bvh_empty(void **state)
 static bool exact_slab(const float o[3], const float d[3], const float lo[3], const float hi[3], float t_min,
                        float t_max)
 {
-    __float128 nn = t_min, nd = 1, fn = t_max, fd = 1; /* entry nn / nd, exit fn / fd */
+    __float128 nn = (__float128)t_min, nd = 1, fn = (__float128)t_max, fd = 1; /* entry nn / nd, exit fn / fd */
     for (int a = 0; a < 3; a++) {
         __float128 den = (__float128)fabsf(d[a]), sign = d[a] > 0.0f ? 1 : -1;
-        __float128 n0 = ((__float128)lo[a] - o[a]) * sign, n1 = ((__float128)hi[a] - o[a]) * sign;
+        __float128 n0 = ((__float128)lo[a] - (__float128)o[a]) * sign, n1 = ((__float128)hi[a] - (__float128)o[a]) * sign;
         if (n0 > n1) { __float128 t = n0; n0 = n1; n1 = t; }
         if (n0 * nd > nn * den) { nn = n0; nd = den; }
         if (n1 * fd < fn * den) { fn = n1; fd = den; }
@@ -306,7 +306,7 @@ static void test_bvh_node_test_exact(void **state)
         const int free_axes = (int)(pcg32_next(&rng) % 3u);
         for (int f = 0; f < free_axes; f++) {
             const int a = (int)(pcg32_next(&rng) % 3u);
-            p[a] = (float)rnd(&rng, lo[k][a], hi[k][a]);
+            p[a] = (float)rnd(&rng, (double)lo[k][a], (double)hi[k][a]);
         }
         if (pcg32_next(&rng) % 3u == 0u) {
             const int a = (int)(pcg32_next(&rng) % 3u);

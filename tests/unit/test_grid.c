@@ -129,7 +129,7 @@ static bool cell_lists(const Grid *g, int cell, int id)
 static int cell_of_point(const Grid *g, Vec3 p)
 {
     int c[3];
-    double q[3] = {p.x, p.y, p.z};
+    double q[3] = {(double)p.x, (double)p.y, (double)p.z};
     for (int a = 0; a < 3; a++) {
         double f = floor((q[a] - g->org[a]) * g->inv_cell_size[a]);
         c[a] = f < 0.0 ? 0 : (f >= (double)g->res[a] ? g->res[a] - 1 : (int)f);

@@ -118,9 +118,10 @@ static void check_fixture(const Fixture *f, AccelType type, bool exact, bool che
         assert_true(rayset_hits_match(ps.hits, ref->primary_hits));
         assert_true(rayset_hits_match(ss.hits, ref->secondary_hits));
         assert_true(rayset_hits_match(os.hits, ref->secondary_hits));
-        assert_true(rayset_sum_t_match(ps.sum_t, ref->primary_sum_t, ps.hits, ref->primary_hits, ps.max_t));
+        assert_true(rayset_sum_t_match(ps.sum_t, ref->primary_sum_t, ps.hits, ref->primary_hits, (double)ps.max_t));
         if (check_secondary_sum)
-            assert_true(rayset_sum_t_match(ss.sum_t, ref->secondary_sum_t, ss.hits, ref->secondary_hits, ss.max_t));
+            assert_true(rayset_sum_t_match(ss.sum_t, ref->secondary_sum_t, ss.hits, ref->secondary_hits,
+                                           (double)ss.max_t));
     }
     /* Closest-hit and any-hit agree on which rays hit something. */
     assert_int_equal(os.hits, ss.hits);

@@ -257,14 +257,15 @@ static void test_uv_transform(void **state)
     texture_set_uv_transform(&tex[0], v2(0.5f, 2.0f), v2(0.25f, -0.5f));
     Vec2 at = centre(1, 0);
     texel(1, 0, c);
-    assert_rgb_near(texture_eval(tex, 0, v2((at.x - 0.25f) / 0.5f, (at.y + 0.5f) / 2.0f)), c[0], c[1], c[2], 1e-6);
+    assert_rgb_near(texture_eval(tex, 0, v2((at.x - 0.25f) / 0.5f, (at.y + 0.5f) / 2.0f)), (double)c[0], (double)c[1],
+                    (double)c[2], 1e-6);
     texture_constant(&tex[1], color_rgb(0.1f, 0.2f, 0.3f));
     texture_constant(&tex[2], color_rgb(0.9f, 0.8f, 0.7f));
     texture_checkerboard(&tex[3], tex, 0, 1, 1.0f);
     texture_set_uv_transform(&tex[3], v2(2.0f, 1.0f), v2(-0.5f, 0.0f));
     /* uv = (0.5, 0.625) -> (s, t) = (0.5, 0.625), even: the image, at the unmapped uv */
     Vec2 uv = v2((at.x - 0.25f) / 0.5f, (at.y + 0.5f) / 2.0f);
-    assert_rgb_near(texture_eval(tex, 3, uv), c[0], c[1], c[2], 1e-6);
+    assert_rgb_near(texture_eval(tex, 3, uv), (double)c[0], (double)c[1], (double)c[2], 1e-6);
     assert_rgb_near(texture_eval(tex, 3, v2(0.8f, 0.5f)), 0.1, 0.2, 0.3, 1e-7); /* s = 1.1: odd */
     texture_free(&tex[0]);
 }
@@ -338,16 +339,16 @@ static void test_uv_at_hits(void **state)
         float b1 = bs[i][0], b2 = bs[i][1], b0 = 1.0f - b1 - b2;
         /* the default mapping: (b1, b2) */
         Vec3 p = bary(t0[0], t0[1], t0[2], b1, b2);
-        assert_uv(hit_toward(s, v3(p.x, p.y, -1), p).uv, b1, b2);
+        assert_uv(hit_toward(s, v3(p.x, p.y, -1), p).uv, (double)b1, (double)b2);
         p = bary(t3[0], t3[1], t3[2], b1, b2);
-        assert_uv(hit_toward(s, v3(p.x, p.y, 3.5f), p).uv, b1, b2);
+        assert_uv(hit_toward(s, v3(p.x, p.y, 3.5f), p).uv, (double)b1, (double)b2);
         /* interpolated */
         p = bary(t1[0], t1[1], t1[2], b1, b2);
-        assert_uv(hit_toward(s, v3(p.x, p.y, 0.5f), p).uv, 0.2f * b0 + 0.8f * b1 + 0.4f * b2,
-                  0.3f * b0 + 0.1f * b1 + 0.9f * b2);
+        assert_uv(hit_toward(s, v3(p.x, p.y, 0.5f), p).uv, (double)(0.2f * b0 + 0.8f * b1 + 0.4f * b2),
+                  (double)(0.3f * b0 + 0.1f * b1 + 0.9f * b2));
         /* instances have no uvs: the default */
         p = bary(t0[0], t0[1], t0[2], b1, b2);
-        assert_uv(hit_toward(s, v3(p.x + 20, p.y, 4), v3(p.x + 20, p.y, 5)).uv, b1, b2);
+        assert_uv(hit_toward(s, v3(p.x + 20, p.y, 4), v3(p.x + 20, p.y, 5)).uv, (double)b1, (double)b2);
     }
     /* the quad: (0,0), (1,0), (1,1), (0,1) at its corners, linear across it */
     const float qp[4][2] = {{0.5f, 0.5f}, {1.5f, 0.3f}, {0.2f, 1.7f}, {1.9f, 1.9f}};
@@ -397,11 +398,11 @@ static void test_emitter_sample_uv(void **state)
             Vec2 uv;
             emitter_sample_point(&s->emitters[e], &g, u, &p, &n, &uv);
             if ((int)s->emitters[e].prim < s->num_triangles) assert_uv(uv, (double)p.x / 4.0, (double)p.z / 4.0);
-            else assert_uv(uv, sphere_uv(v3_sub(p, v3(0, 10, 0))).x, sphere_uv(v3_sub(p, v3(0, 10, 0))).y);
+            else assert_uv(uv, (double)sphere_uv(v3_sub(p, v3(0, 10, 0))).x, (double)sphere_uv(v3_sub(p, v3(0, 10, 0))).y);
             /* the radiance there is the texture's, scaled */
             Color want = color_scale(texture_eval(s->textures, tid, uv), 2.0f);
             Color got = emitter_radiance(&s->emitters[e], s->textures, n, uv, n);
-            assert_rgb_near(got, want.c[0], want.c[1], want.c[2], 0.0);
+            assert_rgb_near(got, (double)want.c[0], (double)want.c[1], (double)want.c[2], 0.0);
             checked++;
         }
     }
@@ -416,7 +417,7 @@ static void test_emitter_sample_uv(void **state)
         Vec2 uv = ls.light == 0 || ls.light == 1 ? v2(ls.p.x / 4.0f, ls.p.z / 4.0f)
                                                   : sphere_uv(v3_normalize(v3_sub(ls.p, v3(0, 10, 0))));
         Color want = color_scale(texture_eval(s->textures, tid, uv), 2.0f);
-        assert_rgb_near(ls.li, want.c[0], want.c[1], want.c[2], 1e-6);
+        assert_rgb_near(ls.li, (double)want.c[0], (double)want.c[1], (double)want.c[2], 1e-6);
     }
     scene_destroy(s);
 }

@@ -17,13 +17,13 @@
 
 typedef struct SortedGrid {
     uint32_t *cell_start;
-    VcmMergeVertex *items;
+    MergeVertex *items;
 } SortedGrid;
 
 /* Sorts it->vertices[0, n) into `cells` buckets with `ranges` ranges, counted then
  * filled, each step over the ranges in an order that is not the natural one (threads
  * finish in any). */
-static SortedGrid sort_with_ranges(VcmIteration *it, const uint32_t *cell_of, size_t n, uint32_t cells, int ranges)
+static SortedGrid sort_with_ranges(SubpathIteration *it, const uint32_t *cell_of, size_t n, uint32_t cells, int ranges)
 {
     SortedGrid g = {malloc((cells + 1) * sizeof *g.cell_start), malloc((n ? n : 1) * sizeof *g.items)};
     assert_non_null(g.cell_start);
@@ -54,7 +54,7 @@ static void test_sort_against_definition(void **state)
     const int partitions[] = {1, 2, 3, 7, 64, 97};
     for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++) {
         const size_t n = sizes[si];
-        VcmVertex *v = calloc(n ? n : 1, sizeof *v);
+        SubpathVertex *v = calloc(n ? n : 1, sizeof *v);
         uint32_t *cell_of = calloc(n ? n : 1, sizeof *cell_of);
         assert_non_null(v);
         assert_non_null(cell_of);
@@ -68,7 +68,7 @@ static void test_sort_against_definition(void **state)
             v[i].d_vcm = (float)i;
             v[i].bounces = (int32_t)(i % 5) + 1;
         }
-        VcmIteration it;
+        SubpathIteration it;
         memset(&it, 0, sizeof it);
         it.radius = 0.25f;
         it.grid_lo = v3(0.0f, 0.0f, 0.0f);
@@ -128,7 +128,7 @@ static void test_sort_against_definition(void **state)
 static void test_buckets_spread(void **state)
 {
     (void)state;
-    VcmIteration it;
+    SubpathIteration it;
     memset(&it, 0, sizeof it);
     it.radius = 0.5f; /* cells 1 wide */
     uint32_t start0;

@@ -91,10 +91,10 @@ done:
     return st;
 }
 
-/* The CameraDesc equal to pbrt's view: position and axes from world-from-camera; pbrt's
+/* The CstCameraDesc equal to pbrt's view: position and axes from world-from-camera; pbrt's
  * image right is the camera's +x, ours forward x up, so a frame where those disagree
- * (every plain LookAt: x = up x dir) is rendered mirrored (Scene.camera_mirror). fov spans the shorter image
- * axis in pbrt and the vertical one in caustic. */
+ * (every plain LookAt: x = up x dir) is rendered mirrored (CstCameraDesc.mirror). fov spans
+ * the shorter image axis in pbrt and the vertical one in caustic. */
 CstStatus pbrt_camera_finish(Loader *ld)
 {
     CamRec c = ld->cam;
@@ -105,25 +105,26 @@ CstStatus pbrt_camera_finish(Loader *ld)
         c.loc = ld->end;
     }
     const Transform *w = &c.ctm.inv;
-    CameraDesc desc = {0};
-    desc.position = transform_point(w, v3s(0.0f));
+    CstCameraDesc desc = {0};
+    Vec3 pos = transform_point(w, v3s(0.0f));
     Vec3 f = transform_vector(w, v3(0.0f, 0.0f, 1.0f));
     Vec3 u = transform_vector(w, v3(0.0f, 1.0f, 0.0f));
     Vec3 x = transform_vector(w, v3(1.0f, 0.0f, 0.0f));
     float fl = v3_length(f);
-    if (!pbrt_coords_ok(desc.position) || !(fl > 0.0f) || !isfinite(fl) || !v3_is_finite(u) ||
+    if (!pbrt_coords_ok(pos) || !(fl > 0.0f) || !isfinite(fl) || !v3_is_finite(u) ||
         !(v3_length(v3_cross(f, u)) > 1e-6f * fl * v3_length(u)))
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, c.loc, "Camera: the camera transform gives no usable "
                             "view (position (%g, %g, %g)); expected an invertible, finite transform",
-                            (double)desc.position.x, (double)desc.position.y, (double)desc.position.z);
+                            (double)pos.x, (double)pos.y, (double)pos.z);
     f = v3_scale(f, 1.0f / fl);
     /* look_at a power-of-two multiple of the unit forward away, at least |position|: the
      * scaling is exact and the difference look_at - position loses at most an ulp. */
     float s = 1.0f;
-    while (s < v3_max_abs(desc.position) && s < 1e30f) s *= 2.0f;
-    desc.look_at = v3_add(desc.position, v3_scale(f, s));
-    desc.up = u;
-    int mirror = v3_dot(x, v3_cross(f, u)) < 0.0f;
+    while (s < v3_max_abs(pos) && s < 1e30f) s *= 2.0f;
+    pbrt_vec3_floats(pos, desc.position);
+    pbrt_vec3_floats(v3_add(pos, v3_scale(f, s)), desc.look_at);
+    pbrt_vec3_floats(u, desc.up);
+    desc.mirror = v3_dot(x, v3_cross(f, u)) < 0.0f;
     int w_px = ld->settings.width, h_px = ld->settings.height;
     double aspect = (double)w_px / (double)h_px;
     double frame = c.has_frame ? (double)c.frame : aspect;
@@ -143,25 +144,32 @@ CstStatus pbrt_camera_finish(Loader *ld)
     if (c.ortho) {
         /* pbrt's orthographic rays leave the screen window at z = 0 in camera space, so the
          * view's height is the window's, in camera units scaled into the world. */
-        desc.vfov_deg = 90.0f; /* unused */
-        desc.ortho_height = (float)(2.0 * half_h * (double)v3_length(u));
-        if (!(desc.ortho_height > 0.0f) || !isfinite(desc.ortho_height))
+        desc.type = CST_CAMERA_ORTHOGRAPHIC;
+        desc.fov = 90.0f; /* not the rays': bdpt/vcm's film-area term, as it has always been */
+        desc.height = (float)(2.0 * half_h * (double)v3_length(u));
+        if (!(desc.height > 0.0f) || !isfinite(desc.height))
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, c.loc, "Camera: the orthographic view is %g high; "
                                 "expected a finite height > 0 (from screenwindow and the transform)",
-                                (double)desc.ortho_height);
-    } else if (half_h == 1.0) {
-        desc.vfov_deg = c.fov; /* the common case, bit for bit */
+                                (double)desc.height);
     } else {
-        double t = tan((double)c.fov * PBRT_PI / 360.0) * half_h;
-        desc.vfov_deg = (float)(360.0 / PBRT_PI * atan(t));
+        desc.type = CST_CAMERA_PERSPECTIVE;
+        if (half_h == 1.0) {
+            desc.fov = c.fov; /* the common case, bit for bit */
+        } else {
+            double t = tan((double)c.fov * PBRT_PI / 360.0) * half_h;
+            desc.fov = (float)(360.0 / PBRT_PI * atan(t));
+        }
+        if (!(desc.fov > 0.0f && desc.fov < 180.0f))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, c.loc, "Camera: fov %g with this screen window gives a "
+                                "vertical field of view of %g degrees; expected less than 180",
+                                (double)c.fov, (double)desc.fov);
+        desc.aperture_radius = c.lens_radius;
+        /* The builder's bound on lengths; only a thin lens reads the distance. */
+        desc.focus_distance = minf(c.focal_distance, (float)PBRT_MAX_LENGTH);
+        if (c.lens_radius > 0.0f && c.focal_distance > desc.focus_distance)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, c.loc, "Camera: focaldistance %g is beyond caustic's limit "
+                         "on lengths; focused at %g", (double)c.focal_distance, PBRT_MAX_LENGTH);
     }
-    if (!(desc.vfov_deg > 0.0f && desc.vfov_deg < 180.0f))
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, c.loc, "Camera: fov %g with this screen window gives a "
-                            "vertical field of view of %g degrees; expected less than 180",
-                            (double)c.fov, (double)desc.vfov_deg);
-    desc.aperture_radius = c.lens_radius;
-    desc.focus_distance = c.focal_distance;
-    scene_set_camera(ld->scene, &desc);
-    ld->scene->camera_mirror = mirror;
-    return CST_OK;
+    CstStatus st = cst_scene_set_camera(ld->scene, &desc, ld->err);
+    return st ? pbrt_fail_wrap(ld, st, c.loc, "Camera") : CST_OK;
 }

@@ -148,14 +148,15 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
     if (!(scale >= 0.0f))
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g; expected a finite scale >= 0", d,
                             (double)scale);
-    EnvMap env;
     CstStatus st;
     if (!file) {
         double k = (double)scale * (illum > 0.0f ? (double)illum / PBRT_PI : 1.0);
         Color L = color_scale(c, (float)k);
         if (!color_is_finite(L))
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the radiance is not finite", d);
-        TRY(envmap_init_constant(&env, L, ld->err));
+        float lf[3];
+        pbrt_color_floats(L, lf);
+        st = cst_scene_set_environment_constant(ld->scene, lf, ld->err);
     } else {
         if (!ld->gs.ctm.inv_ok)
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; "
@@ -207,10 +208,11 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         free(src);
         if (!isfinite(k))
             k = 0.0;
-        st = envmap_init_image(&env, out, ow, oh, color_s((float)k), ld->err);
-        if (st) return pbrt_fail_wrap(ld, st, fl, d);
+        /* Already in world space: no world_from_map. The builder copies the pixels. */
+        float kf[3] = {(float)k, (float)k, (float)k};
+        st = cst_scene_set_environment_pixels(ld->scene, out, ow, oh, 0, 0, kf, NULL, ld->err);
+        free(out);
     }
-    st = scene_set_environment(ld->scene, &env, ld->err);
     if (st) return pbrt_fail_wrap(ld, st, loc, d);
     ld->env_set = 1;
     return CST_OK;
@@ -233,7 +235,7 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
                      "spot, distant and infinite lights); skipped", d);
         return CST_OK;
     }
-    DeltaLight l;
+    CstLightDesc l;
     memset(&l, 0, sizeof l);
     Color c = color_s(1.0f);
     float scale = 1.0f, power = 0.0f, illum = 0.0f;
@@ -251,46 +253,52 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
     const Transform *m = &ld->gs.ctm.m;
     double k = (double)scale;
     if (point || spot) {
-        l.type = point ? DELTA_POINT : DELTA_SPOT;
-        l.p = transform_point(m, from);
+        l.type = point ? CST_LIGHT_POINT : CST_LIGHT_SPOT;
+        Vec3 p = transform_point(m, from);
         if (spot) {
             float cone = 30.0f, delta = 5.0f;
             TRY(pbrt_get_float(ld, ps, d, "coneangle", 30.0f, &cone, NULL));
             TRY(pbrt_get_float(ld, ps, d, "conedelta", 5.0f, &delta, NULL));
-            if (!(cone > 0.0f && cone <= 90.0f) || !(delta >= 0.0f && delta <= cone))
+            /* The builder's range: a cone under 0.001 degrees has cos = 1 in float, no
+             * directions at all (pbrt itself takes any coneangle > 0). */
+            if (!(cone >= 0.001f && cone <= 90.0f) || !(delta >= 0.0f && delta <= cone))
                 return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: coneangle %g, conedelta %g; expected "
-                                    "0 < coneangle <= 90 and 0 <= conedelta <= coneangle", d,
+                                    "0.001 <= coneangle <= 90 and 0 <= conedelta <= coneangle", d,
                                     (double)cone, (double)delta);
-            l.cos_outer = cosf(cone * (CST_PI / 180.0f));
-            l.cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
+            l.cone_angle = cone;
+            l.cone_delta = delta;
+            /* The cosines the builder derives from the angles, for pbrt's power. */
+            float cos_outer = cosf(cone * (CST_PI / 180.0f)), cos_inner = cosf((cone - delta) * (CST_PI / 180.0f));
             Vec3 axis = transform_vector(m, v3_sub(to, from));
             float len = v3_length(axis);
             if (!(len > 0.0f) || !isfinite(len))
                 return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: \"from\" equals \"to\"; expected the "
                                     "spot's axis", d);
-            l.dir = v3_scale(axis, 1.0f / len);
+            pbrt_vec3_floats(axis, l.direction); /* normalised by the builder */
             if (power > 0.0f)
-                k *= (double)power / (2.0 * PBRT_PI * (1.0 - 0.5 * ((double)l.cos_inner + (double)l.cos_outer)));
+                k *= (double)power / (2.0 * PBRT_PI * (1.0 - 0.5 * ((double)cos_inner + (double)cos_outer)));
         } else if (power > 0.0f) {
             k *= (double)power / (4.0 * PBRT_PI);
         }
-        if (!pbrt_coords_ok(l.p))
+        if (!pbrt_coords_ok(p))
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's position is beyond the scene limit", d);
+        pbrt_vec3_floats(p, l.position);
     } else {
-        l.type = DELTA_DIRECTIONAL;
+        l.type = CST_LIGHT_DIRECTIONAL;
         Vec3 dir = transform_vector(m, v3_sub(to, from)); /* the way the light travels */
         float len = v3_length(dir);
         if (!(len > 0.0f) || !isfinite(len))
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: \"from\" equals \"to\"; expected the "
                                 "light's direction", d);
-        l.dir = v3_scale(dir, 1.0f / len);
+        pbrt_vec3_floats(dir, l.direction); /* normalised by the builder */
         if (illum > 0.0f) k *= (double)illum;
     }
-    l.intensity = color_scale(c, (float)k);
-    if (!color_is_finite(l.intensity) || !(k >= 0.0))
+    Color intensity = color_scale(c, (float)k);
+    if (!color_is_finite(intensity) || !(k >= 0.0))
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative "
                             "or not finite", d, (double)scale);
-    CstStatus st = scene_add_delta_light(ld->scene, &l, ld->err);
+    pbrt_color_floats(intensity, l.intensity);
+    CstStatus st = cst_scene_add_light(ld->scene, &l, ld->err);
     return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
 }
 

@@ -11,8 +11,9 @@
 #include "caustic/caustic.h"
 #include "math/color.h"
 #include "math/transform.h"
+#include "materials/material.h"
+#include "math/vec3.h"
 #include "scene/pbrt/pbrt_tokenizer.h"
-#include "scene/scene.h"
 
 /* Same bound on coordinates as the JSON loader (LOADER_MAX_LENGTH, json/json_reader.h): squared distances of
  * coordinates within 1e18 stay finite in float. */
@@ -91,8 +92,10 @@ typedef struct MatEntry {
 typedef struct TexEntry {
     char *name;
     int is_float; /* pbrt keeps float and spectrum textures in two name spaces */
-    int id;       /* the scene's texture; float textures hold the value in all three channels */
-    Color value;    /* its average, for parameters caustic cannot texture */
+    int id;       /* the scene's texture (its public id - 1), or -1 for a constant, which
+                   * is kept here alone; float textures hold the value in all three channels */
+    Color value;    /* a constant's value, else the texture's average: for parameters caustic
+                     * cannot texture */
     /* Derived scene textures made on first use and shared by every material that uses
      * them (an image is copied once): clamped to 1 as a reflectance; as caustic's
      * roughness without and with pbrt's remapping. -1 until made. */
@@ -163,8 +166,10 @@ typedef struct NamedCall {
     char d[128];       /* "Film \"rgb\"": the prefix of its messages */
 } NamedCall;
 
+/* The loader builds its scene through the public builder alone (the cst_scene_* calls of
+ * include/caustic/caustic.h), as any program could; it never reaches into Scene. */
 typedef struct Loader {
-    Scene *scene;
+    CstScene *scene;
     CstError *err;
     /* What Film, Sampler and Integrator ask for (over pbrt's defaults), handed to the scene
      * with cst_scene_set_render_settings before commit. */
@@ -191,8 +196,20 @@ typedef struct Loader {
     CamRec cam;
     int env_set; /* an infinite light has made the scene's environment */
     int num_instances_expanded; /* instances whose spheres were copied */
+    int num_triangles, num_spheres; /* added to the scene so far (for its limits) */
     Loc end; /* end of the main file, for errors about the whole scene */
 } Loader;
+
+/* The three floats of v or c, as the public builder's descriptions take them (exact). */
+static inline void pbrt_vec3_floats(Vec3 v, float out[3])
+{
+    out[0] = v.x, out[1] = v.y, out[2] = v.z;
+}
+
+static inline void pbrt_color_floats(Color c, float out[3])
+{
+    for (int k = 0; k < 3; k++) out[k] = color_channel(c, k);
+}
 
 /* Grows *arr (element size `size`) to hold `need` elements, doubling; 0 on overflow or OOM.
  * Use through GROW(arr, cap, need). */

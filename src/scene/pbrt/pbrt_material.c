@@ -11,6 +11,7 @@
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
 #include "scene/pbrt/pbrt_texture.h"
+#include "scene/scene_build.h"
 
 /* A reflectance parameter (diffuse "reflectance", pbrt-v3 "Kd", ...) as albedo or albedo
  * texture. pbrt-v4's materials clamp reflectances to [0, 1]; a texture with larger values
@@ -22,7 +23,9 @@ static CstStatus get_albedo(Loader *ld, Params *ps, const char *d, const char *n
     TRY(pbrt_tex_param(ld, ps, d, name, 0, &tex, &avg, &e));
     if (!tex) return pbrt_get_spectrum(ld, ps, d, name, SPEC_REFLECTANCE, 1, &m->albedo, NULL);
     Param *p = pbrt_find_param(ps, name);
-    float mx = color_max(ld->scene->textures[tex - 1].max);
+    CstTextureInfo info;
+    TRY(pbrt_texture_info(ld, tex - 1, &info));
+    float mx = maxf(info.max[0], maxf(info.max[1], info.max[2]));
     if (mx > 1.0f) {
         char nm[72];
         if (ld->texs[e].clamped < 0) {
@@ -36,7 +39,8 @@ static CstStatus get_albedo(Loader *ld, Params *ps, const char *d, const char *n
                      pbrt_clip(p->strs[0], nm), (double)mx);
     }
     m->albedo_texture = tex;
-    m->albedo = ld->scene->textures[tex - 1].average;
+    TRY(pbrt_texture_info(ld, tex - 1, &info));
+    m->albedo = color_rgb(info.average[0], info.average[1], info.average[2]);
     return CST_OK;
 }
 
@@ -97,13 +101,14 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
                     TRY(pbrt_tex_map(ld, tex - 1, TEXOP_POW, color_s(remap ? 0.25f : 0.5f), color_s(0.0f), eu->loc, d, &made));
                     *id = made;
                 }
-                const Texture *t = &ld->scene->textures[*id];
+                CstTextureInfo t;
+                TRY(pbrt_texture_info(ld, *id, &t));
                 *tex_out = *id + 1;
-                *out = minf(t->average.c[0], 1.0f);
-                if (t->max.c[0] > 1.0f)
+                *out = minf(t.average[0], 1.0f);
+                if (t.max[0] > 1.0f)
                     pbrt_warn_at(ld, CST_WARN_APPROXIMATED, eu->loc, "%s: roughness texture values up to "
                                  "GGX alpha %g are beyond caustic's roughest (alpha 1); rendered with alpha 1",
-                                 d, (double)(t->max.c[0] * t->max.c[0]));
+                                 d, (double)(t.max[0] * t.max[0]));
                 return CST_OK;
             }
         }

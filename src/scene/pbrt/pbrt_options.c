@@ -242,7 +242,7 @@ CstStatus pbrt_accelerator_directive(Loader *ld, NamedCall *call)
     const char *type = call->type, *d = call->d;
     Loc tl = call->tl;
     pbrt_params_mark_all_used(ps);
-    if (strcmp(type, "kdtree") == 0) ld->scene->accel_type = ACCEL_KDTREE;
+    if (strcmp(type, "kdtree") == 0) TRY(cst_scene_set_accel(ld->scene, "kdtree", ld->err));
     else if (strcmp(type, "bvh") != 0)
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not known; the BVH is used", d);
     return CST_OK;

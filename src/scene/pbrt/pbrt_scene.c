@@ -237,8 +237,9 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     }
     if (!ld.in_world)
         pbrt_warn_at(&ld, CST_WARN_GEOMETRY, ld.end, "the file has no WorldBegin");
-    if (ld.scene->num_triangles == 0 && ld.scene->num_spheres == 0 &&
-        !(ld.scene->instances && ld.scene->instances->num_insts > 0)) {
+    CstSceneInfo info;
+    cst_scene_info(ld.scene, &info);
+    if (info.triangles == 0 && info.spheres == 0 && info.instances == 0) {
         st = pbrt_fail_at(&ld, CST_ERR_INVALID_ARG, ld.end, "the scene has no shapes caustic can render; "
                           "expected at least one supported Shape in the world block");
         goto done;

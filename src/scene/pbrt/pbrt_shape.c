@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/triangle.h"
 #include "scene/mesh_import.h"
 #include "scene/pbrt/pbrt_material.h"
 #include "scene/pbrt/pbrt_params.h"
@@ -30,8 +31,15 @@ void pbrt_geom_free(ShapeGeom *g)
 }
 
 
+/* An area light's emission while the loader works it out (scaled by power per shape). */
+typedef struct ShapeEmission {
+    Color radiance;
+    int two_sided;
+    int texture;
+} ShapeEmission;
+
 /* The loader's emission as the public builder's (exact: three floats per colour). */
-static CstEmission emission_desc(const Emission *em)
+static CstEmission emission_desc(const ShapeEmission *em)
 {
     CstEmission e = {{0.0f, 0.0f, 0.0f}, em->texture, em->two_sided};
     for (int k = 0; k < 3; k++) e.radiance[k] = color_channel(em->radiance, k);
@@ -163,7 +171,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: sphere at (%g, %g, %g) radius %g is "
                                 "beyond the scene limits (coordinates within 1e18, radius above 1e-18)",
                                 d, (double)c.x, (double)c.y, (double)c.z, (double)r);
-        Emission em = {color_s(0.0f), 0, 0};
+        ShapeEmission em = {color_s(0.0f), 0, 0};
         if (al && al->active) {
             em.radiance = color_scale(al->L, al->scale);
             em.two_sided = al->two_sided;
@@ -175,12 +183,14 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
                 pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: ReverseOrientation on an emitting sphere "
                              "is ignored: it emits outward", d);
         }
-        if (ld->scene->num_spheres >= INT_MAX - 1)
+        if (ld->num_spheres >= INT_MAX - 1)
             return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: too many spheres", d);
         float cf[3] = {c.x, c.y, c.z};
         CstEmission e = emission_desc(&em);
         CstStatus st = cst_scene_add_sphere(ld->scene, cf, r, mat, &e, ld->err);
-        return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+        if (st) return pbrt_fail_wrap(ld, st, loc, d);
+        ld->num_spheres++;
+        return CST_OK;
     }
     ShapeGeom tess = {0};
     if (g->is_sphere) {
@@ -194,7 +204,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     Vec3 *n = g->n ? malloc((size_t)g->nv * sizeof *n) : NULL;
     int *idx = malloc((size_t)(g->nt ? g->nt : 1) * 3 * sizeof *idx);
     if (!p || !idx || (g->n && !n)) { st = pbrt_oom(ld); goto done; }
-    if (g->nt > PBRT_MAX_TRIANGLES - ld->scene->num_triangles) {
+    if (g->nt > PBRT_MAX_TRIANGLES - ld->num_triangles) {
         st = pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: the scene would exceed %d triangles", d,
                           PBRT_MAX_TRIANGLES);
         goto done;
@@ -243,7 +253,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     sm.num_triangles = g->nt;
     sm.material = mat;
     sm.skip_degenerate = 1;
-    Emission em = {color_s(0.0f), 0, 0};
+    ShapeEmission em = {color_s(0.0f), 0, 0};
     if (al && al->active) {
         em.radiance = color_scale(al->L, al->scale);
         em.two_sided = al->two_sided;
@@ -256,7 +266,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
          * area: L = power / (pi A sides) times the spectrum. */
         for (int t = 0; t < g->nt && !st; t++) {
             float area = triangle_area(p[idx[3 * t]], p[idx[3 * t + 1]], p[idx[3 * t + 2]]);
-            Emission et = em;
+            ShapeEmission et = em;
             if (area > 0.0f)
                 et.radiance = color_scale(em.radiance, (float)((double)al->power /
                                        (PBRT_PI * (double)area * (al->two_sided ? 2.0 : 1.0))));
@@ -275,6 +285,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
         st = pbrt_fail_wrap(ld, st, loc, d);
         goto done;
     }
+    ld->num_triangles += g->nt - dropped;
     if (dropped)
         pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: %d of %d triangles are degenerate (zero area) "
                      "and were dropped", d, dropped, g->nt);
@@ -547,7 +558,19 @@ static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
         pbrt_warn_at(ld, CST_WARN_GEOMETRY, obj->loc, "ObjectBegin \"%s\": %d degenerate triangles dropped",
                      obj->name, dropped);
     if (t_out > 0) {
-        st = scene_add_instance_proto(ld->scene, p, n, nv, idx, mat, t_out, &obj->proto, ld->err);
+        /* Normals as emit_shape passes them: unit from transform_normal, zero where none. */
+        CstMeshDesc od = {0};
+        od.positions = p;
+        od.position_stride = sizeof *p;
+        od.num_vertices = nv;
+        od.normals = n;
+        od.normal_stride = sizeof(Vec3);
+        od.normals_unit = 1;
+        od.indices = idx;
+        od.index_stride = 3 * sizeof *idx;
+        od.num_triangles = t_out;
+        od.triangle_materials = mat;
+        st = cst_scene_add_object(ld->scene, &od, &obj->proto, NULL, ld->err);
         if (st) st = pbrt_fail_wrap(ld, st, obj->loc, d);
     }
 done:
@@ -594,8 +617,13 @@ CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const c
         if (!transform_invert(&xf.m, &inv)) {
             /* flat (Scale 0) or not finite when inverted: nothing a ray could hit */
             pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: the instance transform is singular; skipped", d);
+        } else if (!transform_is_affine(&xf.m)) {
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the instance transform is projective; "
+                                "expected an affine transform (bottom row 0 0 0 1)", d);
         } else {
-            st = scene_add_instance(ld->scene, obj->proto, &xf.m, ld->err);
+            float rows[12];
+            for (int r = 0; r < 3; r++) memcpy(&rows[4 * r], xf.m.m[r], sizeof xf.m.m[r]);
+            st = cst_scene_add_instance(ld->scene, obj->proto, rows, ld->err);
             if (st) return pbrt_fail_wrap(ld, st, loc, d);
         }
     }

@@ -11,6 +11,7 @@
 #include "io/image_io.h"
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
+#include "textures/texture.h"
 
 static int find_texture(Loader *ld, const char *name, int is_float)
 {
@@ -42,10 +43,15 @@ static CstStatus texture_find_ref(Loader *ld, const Param *p, const char *d, int
                         pbrt_clip(p->strs[0], nm), is_float ? "float" : "spectrum");
 }
 
-static int texture_is_constant(const Loader *ld, int entry)
+/* Constants live in the loader alone (TexEntry.id < 0) until a checkerboard needs one. */
+static int texture_is_constant(const Loader *ld, int entry) { return ld->texs[entry].id < 0; }
+
+CstStatus pbrt_texture_info(Loader *ld, int id, CstTextureInfo *info)
 {
-    return ld->scene->textures[ld->texs[entry].id].type == TEXTURE_CONSTANT;
+    return cst_scene_texture_info(ld->scene, id + 1, info, ld->err);
 }
+
+static Color color_of(const float v[3]) { return color_rgb(v[0], v[1], v[2]); }
 
 /* A texture where caustic takes one value: its average, with a warning unless it is constant. */
 CstStatus pbrt_texture_ref(Loader *ld, const Param *p, const char *d, int is_float, Color *out)
@@ -87,17 +93,29 @@ CstStatus pbrt_get_float_tex(Loader *ld, Params *ps, const char *d, const char *
     return CST_OK;
 }
 
-/* Adds t to the scene (which takes its image), failures located at loc. */
-static CstStatus tex_add(Loader *ld, Texture *t, Loc loc, const char *d, int *id)
+/* Adds desc to the scene (which copies any pixels), failures located at loc; *id is the
+ * public id - 1. */
+static CstStatus tex_add(Loader *ld, const CstTextureDesc *desc, Loc loc, const char *d, int *id)
 {
-    CstStatus st = scene_add_texture(ld->scene, t, id, ld->err);
-    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+    int pid = 0;
+    CstStatus st = cst_scene_add_texture(ld->scene, desc, &pid, ld->err);
+    if (st) return pbrt_fail_wrap(ld, st, loc, d);
+    *id = pid - 1;
+    return CST_OK;
 }
 
+/* A constant as a scene texture (a checkerboard's square). The builder takes values >= 0;
+ * a negative float constant (nothing pbrt renders meaningfully) becomes 0. */
 static CstStatus tex_const(Loader *ld, Color c, Loc loc, const char *d, int *id)
 {
-    Texture t;
-    texture_constant(&t, c);
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_CONSTANT;
+    pbrt_color_floats(c, t.value);
+    if (t.value[0] < 0.0f || t.value[1] < 0.0f || t.value[2] < 0.0f) {
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the negative value (%g, %g, %g) is clamped to 0",
+                     d, (double)t.value[0], (double)t.value[1], (double)t.value[2]);
+        for (int k = 0; k < 3; k++) t.value[k] = maxf(t.value[k], 0.0f);
+    }
     return tex_add(ld, &t, loc, d, id);
 }
 
@@ -128,40 +146,33 @@ CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, 
     if (!memo) return pbrt_oom(ld);
     for (int i = 0; i < n; i++) memo[i] = -1;
     memo[id] = 0; /* reachable */
-    for (int i = id; i >= 0; i--) {
-        const Texture *t = &ld->scene->textures[i];
-        if (memo[i] == 0 && t->type == TEXTURE_CHECKERBOARD) memo[t->checker.even] = memo[t->checker.odd] = 0;
-    }
     CstStatus st = CST_OK;
+    CstTextureInfo info;
+    for (int i = id; i >= 0 && !st; i--) {
+        if (memo[i] < 0 || (st = pbrt_texture_info(ld, i, &info))) continue;
+        if (info.desc.type == CST_TEXTURE_CHECKERBOARD) memo[info.desc.even - 1] = memo[info.desc.odd - 1] = 0;
+    }
     for (int i = 0; i < n && !st; i++) {
-        if (memo[i] < 0) continue;
-        Texture src = ld->scene->textures[i], t; /* a copy: adding may move the array */
-        if (src.type == TEXTURE_CONSTANT) {
-            texture_constant(&t, texop_apply(op, a, b, src.value));
-        } else if (src.type == TEXTURE_CHECKERBOARD) {
-            texture_checkerboard(&t, ld->scene->textures, memo[src.checker.even], memo[src.checker.odd],
-                                 src.checker.scale);
+        if (memo[i] < 0 || (st = pbrt_texture_info(ld, i, &info))) continue;
+        CstTextureDesc t = info.desc; /* uv transform, wrap and scale as they are */
+        float *px = NULL;
+        if (t.type == CST_TEXTURE_CONSTANT) {
+            pbrt_color_floats(texop_apply(op, a, b, color_of(t.value)), t.value);
+        } else if (t.type == CST_TEXTURE_CHECKERBOARD) {
+            t.even = memo[t.even - 1] + 1;
+            t.odd = memo[t.odd - 1] + 1;
         } else {
-            size_t np = (size_t)src.image.width * (size_t)src.image.height;
-            float *px = malloc(np * 3 * sizeof *px);
-            if (!px) {
+            size_t np = (size_t)t.width * (size_t)t.height;
+            if (!(px = malloc(np * 3 * sizeof *px))) {
                 st = pbrt_oom(ld);
                 break;
             }
-            for (size_t k = 0; k < np; k++) {
-                const float *q = &src.image.rgb[3 * k];
-                Color v = texop_apply(op, a, b, color_rgb(q[0], q[1], q[2]));
-                px[3 * k] = v.c[0];
-                px[3 * k + 1] = v.c[1];
-                px[3 * k + 2] = v.c[2];
-            }
-            if ((st = texture_image(&t, px, src.image.width, src.image.height, src.image.wrap, ld->err))) {
-                st = pbrt_fail_wrap(ld, st, loc, d);
-                break;
-            }
+            for (size_t k = 0; k < np; k++)
+                pbrt_color_floats(texop_apply(op, a, b, color_of(&t.pixels[3 * k])), &px[3 * k]);
+            t.pixels = px;
         }
-        texture_set_uv_transform(&t, src.uv_scale, src.uv_offset);
         st = tex_add(ld, &t, loc, d, &memo[i]);
+        free(px);
     }
     if (!st) *out = memo[id];
     free(memo);
@@ -186,24 +197,10 @@ CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name
     return CST_OK;
 }
 
-/* op applied in place to image texture t's texels (its average and maximum recomputed),
- * keeping its uv transform. */
-static CstStatus image_apply(Loader *ld, Texture *t, TexOp op, Color a, Color b, Loc loc, const char *d)
+/* op applied in place to n texels. */
+static void texels_apply(float *px, size_t n, TexOp op, Color a, Color b)
 {
-    Vec2 sc = t->uv_scale, off = t->uv_offset;
-    float *px = t->image.rgb;
-    int w = t->image.width, h = t->image.height;
-    size_t np = (size_t)w * (size_t)h;
-    for (size_t k = 0; k < np; k++) {
-        Color v = texop_apply(op, a, b, color_rgb(px[3 * k], px[3 * k + 1], px[3 * k + 2]));
-        px[3 * k] = v.c[0];
-        px[3 * k + 1] = v.c[1];
-        px[3 * k + 2] = v.c[2];
-    }
-    CstStatus st = texture_image(t, px, w, h, t->image.wrap, ld->err); /* takes px */
-    if (st) return pbrt_fail_wrap(ld, st, loc, d);
-    texture_set_uv_transform(t, sc, off);
-    return CST_OK;
+    for (size_t k = 0; k < n; k++) pbrt_color_floats(texop_apply(op, a, b, color_of(&px[3 * k])), &px[3 * k]);
 }
 
 /* pbrt's UVMapping ("uscale", "vscale", "udelta", "vdelta"): (s, t) = (su u + du, sv v + dv). */
@@ -221,9 +218,21 @@ static CstStatus tex_uv_mapping(Loader *ld, Params *ps, const char *d, Vec2 *sca
     TRY(pbrt_get_float(ld, ps, d, "vscale", 1.0f, &sv, NULL));
     TRY(pbrt_get_float(ld, ps, d, "udelta", 0.0f, &du, NULL));
     TRY(pbrt_get_float(ld, ps, d, "vdelta", 0.0f, &dv, NULL));
+    if (su == 0.0f && sv == 0.0f) {
+        /* The builder reads a zero uv_scale as "unset" (1, 1). */
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, ml, "%s: uscale and vscale 0 (the texture squeezed to one "
+                     "point) are read as 1", d);
+        su = sv = 1.0f;
+    }
     *scale = v2(su, sv);
     *offset = v2(du, dv);
     return CST_OK;
+}
+
+static void desc_uv(CstTextureDesc *t, Vec2 scale, Vec2 offset)
+{
+    t->uv_scale[0] = scale.x, t->uv_scale[1] = scale.y;
+    t->uv_offset[0] = offset.x, t->uv_offset[1] = offset.y;
 }
 
 /* A texture-valued parameter of a Texture: another non-constant texture (*id >= 0), or a
@@ -272,11 +281,11 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     *id = -1;
     if (!file)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the image file", d);
-    TextureWrap tw = TEXTURE_WRAP_REPEAT;
+    CstTextureWrap tw = CST_TEXTURE_WRAP_REPEAT;
     if (wrap && strcmp(wrap, "clamp") == 0) {
-        tw = TEXTURE_WRAP_CLAMP;
+        tw = CST_TEXTURE_WRAP_CLAMP;
     } else if (wrap && (strcmp(wrap, "black") == 0 || strcmp(wrap, "octahedralsphere") == 0)) {
-        tw = TEXTURE_WRAP_CLAMP;
+        tw = CST_TEXTURE_WRAP_CLAMP;
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, wl, "%s: wrap \"%s\" approximated by \"clamp\"", d, wrap);
     } else if (wrap && strcmp(wrap, "repeat") != 0) {
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, wl, "%s: wrap \"%s\" is not known; expected \"repeat\", "
@@ -314,21 +323,28 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     TRY(pbrt_check_file_access(ld, fl, d));
     char *path = pbrt_resolve_path(ld, file);
     if (!path) return pbrt_oom(ld);
-    Texture t;
-    CstStatus st = texture_image_load(&t, path, linear, tw, ld->err);
+    /* Decoded by the textures module's reader (sRGB or linear as the builder would), the
+     * texels mapped here, then handed to the builder as pixels. */
+    Texture img;
+    CstStatus st = texture_image_load(&img, path, linear, TEXTURE_WRAP_REPEAT, ld->err);
     free(path);
     if (st) return pbrt_fail_wrap(ld, st, fl, d);
-    texture_set_uv_transform(&t, uvs, uvo);
+    size_t np = (size_t)img.image.width * (size_t)img.image.height;
     /* pbrt's order: decode, take the first channel for a float texture, scale, invert. */
-    if (gamma > 0.0f && !is_float_file) st = image_apply(ld, &t, TEXOP_POW, color_s(gamma), color_s(0.0f), el, d);
-    if (!st && is_float) st = image_apply(ld, &t, TEXOP_RED, color_s(0.0f), color_s(0.0f), loc, d);
-    if (!st && (scale != 1.0f || invert))
-        st = image_apply(ld, &t, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f), loc, d);
-    if (st) {
-        texture_free(&t);
-        return st;
-    }
-    return tex_add(ld, &t, loc, d, id);
+    if (gamma > 0.0f && !is_float_file) texels_apply(img.image.rgb, np, TEXOP_POW, color_s(gamma), color_s(0.0f));
+    if (is_float) texels_apply(img.image.rgb, np, TEXOP_RED, color_s(0.0f), color_s(0.0f));
+    if (scale != 1.0f || invert)
+        texels_apply(img.image.rgb, np, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f));
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_IMAGE;
+    t.pixels = img.image.rgb;
+    t.width = img.image.width;
+    t.height = img.image.height;
+    t.wrap = tw;
+    desc_uv(&t, uvs, uvo);
+    st = tex_add(ld, &t, loc, d, id);
+    texture_free(&img);
+    return st;
 }
 
 /* pbrt-v4's "checkerboard": a 2D checkerboard of tex1 (where floor(s) + floor(t) is even)
@@ -343,9 +359,12 @@ static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc,
     TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
     if (a < 0) TRY(tex_const(ld, va, loc, d, &a));
     if (b < 0) TRY(tex_const(ld, vb, loc, d, &b));
-    Texture t;
-    texture_checkerboard(&t, ld->scene->textures, a, b, 1.0f);
-    texture_set_uv_transform(&t, uvs, uvo);
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_CHECKERBOARD;
+    t.even = a + 1;
+    t.odd = b + 1;
+    t.scale = 1.0f;
+    desc_uv(&t, uvs, uvo);
     return tex_add(ld, &t, loc, d, id);
 }
 
@@ -401,7 +420,9 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
         if (ta < 0 && tb < 0) {
             v = color_mul(a, b);
         } else if (ta >= 0 && tb >= 0) {
-            b = ld->scene->textures[tb].average;
+            CstTextureInfo info;
+            if ((st = pbrt_texture_info(ld, tb, &info))) goto done;
+            b = color_of(info.average);
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the product of two textures is approximated "
                          "by \"tex\" times the average of \"scale\", %g", d, (double)b.c[0]);
             st = pbrt_tex_map(ld, ta, TEXOP_AFFINE, b, color_s(0.0f), loc, d, &id);
@@ -456,12 +477,16 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
     }
 #undef TEXPARAM
     pbrt_params_warn_unused(ld, &ps, d);
-    if (id < 0 && (st = tex_const(ld, v, loc, d, &id))) goto done;
+    if (id >= 0) { /* else a constant: v, kept by the loader */
+        CstTextureInfo info;
+        if ((st = pbrt_texture_info(ld, id, &info))) goto done;
+        v = color_of(info.average);
+    }
     if (!GROW(ld->texs, ld->cap_texs, ld->num_texs + 1)) { st = pbrt_oom(ld); goto done; }
     ld->texs[ld->num_texs].name = name;
     ld->texs[ld->num_texs].is_float = is_float;
     ld->texs[ld->num_texs].id = id;
-    ld->texs[ld->num_texs].value = ld->scene->textures[id].average;
+    ld->texs[ld->num_texs].value = v;
     ld->texs[ld->num_texs].clamped = ld->texs[ld->num_texs].rough[0] = ld->texs[ld->num_texs].rough[1] = -1;
     ld->num_texs++;
     name = NULL;

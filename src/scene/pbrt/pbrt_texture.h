@@ -35,6 +35,9 @@ CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, 
 CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
                          int *tex, Color *val, int *entry);
 
+/* The scene's texture `id` (public id - 1, as TexEntry.id) read back through the builder. */
+CstStatus pbrt_texture_info(Loader *ld, int id, CstTextureInfo *info);
+
 /* Directive handler, called through the table in pbrt_scene.c. */
 CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
 
