@@ -37,7 +37,7 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
         if (!accel_type_available(type))
             return json_fail_here(ld, "acceleration structure \"%s\" is not available in this build; "
                                       "expected one of: bvh, kdtree, grid, list", name);
-        ld->scene->accel_type = type;
+        LOADER_TRY(cst_scene_set_accel(ld->scene, name, ld->err)); /* before commit: its choice */
         json_path_pop(ld);
     }
     if ((v = json_object_get(root, "film"))) {

@@ -263,11 +263,13 @@ CstStatus json_read_param_texture(Loader *ld, const json_t *v, const char *what,
 {
     int id = 0;
     LOADER_TRY(json_read_texture_name(ld, json_string_value(v), &id));
-    Color mx = ld->scene->textures[id].max;
-    if (color_max(mx) > 1.0f) {
+    CstTextureInfo info;
+    LOADER_TRY(cst_scene_texture_info(ld->scene, id + 1, &info, ld->err));
+    float mx = fmaxf(info.max[0], fmaxf(info.max[1], info.max[2]));
+    if (mx > 1.0f) {
         char clipped[72];
         return json_fail_here(ld, "texture \"%s\" has values up to %g; expected %s, at most 1",
-                              json_clip_name(json_string_value(v), clipped), (double)color_max(mx), what);
+                              json_clip_name(json_string_value(v), clipped), (double)mx, what);
     }
     *out = id + 1;
     return CST_OK;
