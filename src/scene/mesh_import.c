@@ -487,16 +487,27 @@ static CstStatus ply_check_ascii(PlyCheck *pc, const char *buf, size_t body, int
     return CST_OK;
 }
 
-/* Checks a file that starts like a PLY; other files pass untouched. */
+/* True when assimp may take the file for a PLY: its name ends in .ply, or its first three
+ * bytes spell "ply" in any case. assimp 5.2's PLY reader only compares those three bytes,
+ * so a file starting "plyply" or "plyformat" reached it unchecked and made it spin or read
+ * out of bounds (docs/fuzzing.md); every such file now goes through the whole pre-check,
+ * whose first rule is that the first line is "ply" alone. */
+static int ply_candidate(const char *path, const char magic[3], size_t got)
+{
+    size_t n = strlen(path);
+    if (n >= 4 && strcasecmp(path + n - 4, ".ply") == 0) return 1;
+    return got >= 3 && strncasecmp(magic, "ply", 3) == 0;
+}
+
+/* Checks a file assimp may read as a PLY (ply_candidate); other files pass untouched. */
 static CstStatus ply_precheck(const char *path, CstError *err)
 {
     FILE *f = NULL;
     CstStatus open_st = file_open_input(path, &f, NULL, err); /* regular files only, bounded */
     if (open_st != CST_OK) return open_st;
-    char magic[4] = {0};
-    size_t got = fread(magic, 1, 4, f);
-    if (got < 4 || (memcmp(magic, "ply", 3) != 0 && memcmp(magic, "PLY", 3) != 0) ||
-        (magic[3] != '\n' && magic[3] != '\r')) {
+    char magic[3] = {0};
+    size_t got = fread(magic, 1, 3, f);
+    if (!ply_candidate(path, magic, got)) {
         fclose(f);
         return CST_OK;
     }

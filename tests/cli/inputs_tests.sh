@@ -197,6 +197,16 @@ pbrt_scene ply0.pbrt 'Shape "plymesh" "string filename" "face0.ply"'
 run 20 info ply0.pbrt
 expect "pbrt plymesh, PLY face with 0 vertices: error, not abort" 2 \
     'ply0\.pbrt:7:[0-9]+: Shape "plymesh": face0\.ply:14: malformed PLY file: face 2 of 2 has no vertices'
+# assimp 5.2 takes any file whose first three bytes are "ply" for a PLY: a first line that
+# is not "ply" alone made it spin or read out of bounds (fuzz_mesh, docs/fuzzing.md).
+printf 'plyply\nformat binary_little' >plyply.ply
+printf 'plyformat ascii 1.0\nelement vertex 3\nend_header\n' >plyformat.obj
+for f in plyply.ply plyformat.obj; do
+    json_scene "mesh_${f%.*}.json" mesh "$f"
+    run 20 info "mesh_${f%.*}.json"
+    expect "mesh file starting \"ply\" without the line \"ply\" ($f): error, no hang" 2 \
+        "$f:1: malformed PLY file: expected \"ply\""
+done
 # glTF: one triangle (three positions, three uint16 indices) in an embedded buffer;
 # MODE and COUNT are the primitive's mode and its index count.
 gltf() { # gltf OUT MODE COUNT [NODES]
