@@ -24,8 +24,8 @@
    "shapes") loads with `caustic info`.
 5. Names: every option in `caustic --help` and `caustic render --help` appears in
    docs/cli.md, and every name `--integrator`, `--filter`, `--sampler` and `--accel` accept
-   (the list the CLI prints for an unknown one) appears there as `name`; the integrator
-   names in docs/scene-format.md too.
+   (the list the CLI prints for an unknown one) appears as `name` in that option's row of
+   the options table of docs/cli.md; the integrator names in docs/scene-format.md too.
 
 Usage: docs_check.py REPO_ROOT CAUSTIC_BINARY. Exit 0 when everything passes, 1 otherwise,
 with one line per problem naming file:line.
@@ -299,9 +299,11 @@ def check_names(root, binary, problems):
         if not m:
             print(f"docs test: note: no list of valid --{opt} names in: {r.stderr.strip()}")
             continue
+        # In cli.md, the option's row of the options table when there is one.
+        row = next((l for l in cli_md.splitlines() if l.startswith(f"| `--{opt} ")), cli_md)
         for name in (n.strip() for n in m.group(1).split(",")):
-            docs = [("docs/cli.md", cli_md)] + ([("docs/scene-format.md", scene_md)]
-                                                 if opt == "integrator" else [])
+            docs = [("docs/cli.md", row)] + ([("docs/scene-format.md", scene_md)]
+                                              if opt == "integrator" else [])
             for rel, t in docs:
                 if f"`{name}`" not in t and f'`"{name}"`' not in t:
                     problems.append(f"{rel}: --{opt} {name} (accepted by caustic) is not documented")
