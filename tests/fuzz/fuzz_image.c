@@ -42,15 +42,16 @@ static void check_read(CstStatus st, const float *rgb, int w, int h, const CstEr
  *    stbi__huffman.size[257] (UBSan: index 257 out of bounds), i.e. a heap overflow.
  * 2. No pixel limit on the stb path: stb fills a truncated RLE TGA with zeros, so a 94-byte
  *    file declaring 26192 x 13066 pixels takes 5 GB and 150 s to load as a texture. Inputs
- *    declaring more than FUZZ_MAX_PIXELS are skipped: under ASan even 3M pixels take
- *    seconds, which would stall the fuzzer without finding anything new. */
-#define FUZZ_MAX_PIXELS ((uint64_t)1 << 20)
+ *    declaring more than FUZZ_MAX_PIXELS (256 x 256) are skipped: under ASan 3M pixels
+ *    take seconds, which would hold the fuzzer to a few inputs a second for no new code. */
+#define FUZZ_MAX_PIXELS ((uint64_t)1 << 16)
+
 static bool jpeg_dht_overflows(const uint8_t *d, size_t n)
 {
-    /* Every FF C4 anywhere (stb skips junk between markers, and progressive files have
-     * tables between scans): over-inclusive, which only skips a few more inputs. */
-    if (n < 4 || d[0] != 0xff || d[1] != 0xd8) return false;
-    for (size_t i = 2; i + 4 <= n; i++) {
+    /* Every FF C4 anywhere, whatever the start (stb takes FF FF D8 for the SOI marker,
+     * skips junk between markers, and progressive files have tables between scans):
+     * over-inclusive, which only skips a few more inputs. */
+    for (size_t i = 0; i + 4 <= n; i++) {
         if (d[i] != 0xff || d[i + 1] != 0xc4) continue;
         size_t end = i + 2 + ((size_t)d[i + 2] << 8 | d[i + 3]);
         for (size_t p = i + 4; p < n && p < end;) { /* stb reads 0 past the end */
