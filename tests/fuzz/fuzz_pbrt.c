@@ -1,18 +1,10 @@
 /* libFuzzer target for the pbrt tokenizer and loader: any bytes must give CST_OK or a
  * located error, never a crash, an out-of-bounds read or a leak; every warning must be
  * located too. File access is disabled (Include, plymesh and imagemap fail cleanly), so
- * the fuzzer cannot wander the file system. Not part of the default build.
+ * the fuzzer cannot wander the file system.
  *
- * Build and run (clang with libFuzzer; the library itself instrumented for coverage):
- *   cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=Debug \
- *         -DCST_SANITIZE=ON -DCST_BUILD_TESTS=OFF -DCST_EMBREE=OFF \
- *         -DCMAKE_C_FLAGS=-fsanitize=fuzzer-no-link
- *   cmake --build build-fuzz --target caustic
- *   clang -g -O1 -fsanitize=fuzzer,address,undefined -Iinclude -Isrc tests/fuzz/fuzz_pbrt.c \
- *         build-fuzz/libcaustic.a $(pkg-config --libs jansson libpng assimp) -lOpenEXRCore \
- *         -lm -lpthread -o build-fuzz/fuzz_pbrt
- *   mkdir -p build-fuzz/corpus-pbrt && cp scenes/cornell-box.pbrt build-fuzz/corpus-pbrt/
- *   ./build-fuzz/fuzz_pbrt -dict=tests/fuzz/pbrt.dict -max_len=4096 -runs=1000000 build-fuzz/corpus-pbrt
+ * Built by -DCST_FUZZ=ON (clang; tests/fuzz/CMakeLists.txt), run by scripts/fuzz.sh with
+ * its seed corpus tests/fuzz/corpus/fuzz_pbrt/: see docs/fuzzing.md.
  *
  * Without clang, -DFUZZ_STANDALONE adds a main() that replays the files named on the
  * command line through the same entry point. */

@@ -1,15 +1,8 @@
 /* libFuzzer target for the JSON scene loader: any bytes must give CST_OK or a located
- * error, never a crash, an out-of-bounds read or a leak. Not part of the default build.
+ * error, never a crash, an out-of-bounds read or a leak.
  *
- * Build and run (clang with libFuzzer; the library itself instrumented for coverage):
- *   cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=Debug \
- *         -DCST_SANITIZE=ON -DCST_BUILD_TESTS=OFF -DCMAKE_C_FLAGS=-fsanitize=fuzzer-no-link
- *   cmake --build build-fuzz --target caustic
- *   clang -g -O1 -fsanitize=fuzzer,address,undefined -Iinclude tests/fuzz/fuzz_scene_json.c \
- *         build-fuzz/libcaustic.a $(pkg-config --libs jansson libpng) -lOpenEXRCore -lm \
- *         -lpthread -o build-fuzz/fuzz_scene_json
- *   mkdir -p build-fuzz/corpus && cp scenes/cornell-box.json scenes/cornell-spheres.json build-fuzz/corpus/
- *   ./build-fuzz/fuzz_scene_json -dict=tests/fuzz/scene_json.dict -max_len=4096 build-fuzz/corpus
+ * Built by -DCST_FUZZ=ON (clang; tests/fuzz/CMakeLists.txt), run by scripts/fuzz.sh with
+ * its seed corpus tests/fuzz/corpus/fuzz_scene_json/: see docs/fuzzing.md.
  *
  * Without clang, -DFUZZ_STANDALONE adds a main() that replays the files named on the
  * command line (a crash corpus, say) through the same entry point, e.g. with gcc -fsanitize=address. */

@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Rebuilds the committed seed corpora of tests/fuzz/corpus/<target>/ from the repository's
+# scenes and tiny generated images (a few pixels each, so the fuzzer's mutations stay
+# cheap). Usage: tests/fuzz/make_corpus.sh CAUSTIC_BINARY (any build; it writes the EXR
+# seeds). Needs python3 and a C compiler with stb_image_write.h (libstb-dev) for JPEG.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+caustic=$(realpath "${1:?usage: tests/fuzz/make_corpus.sh CAUSTIC_BINARY}")
+out=tests/fuzz/corpus
+rm -rf "$out"
+mkdir -p "$out"/{fuzz_scene_json,fuzz_pbrt,fuzz_mesh,fuzz_image}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+# JSON scenes: every shipped scene (the loader's file references fail cleanly in the
+# fuzzer's directory, which exercises the error paths; the rest of each file still counts).
+for f in scenes/*.json; do cp "$f" "$out/fuzz_scene_json/$(basename "$f" .json)"; done
+
+# pbrt: the shipped scene and the pbrt test inputs small enough to mutate.
+cp scenes/cornell-box.pbrt "$out/fuzz_pbrt/cornell-box"
+python3 - "$out/fuzz_pbrt" <<'PY'
+import sys, os
+d = sys.argv[1]
+seeds = {
+ "instances": 'LookAt 0 0 5 0 0 0 0 1 0\nCamera "perspective" "float fov" 45\nFilm "rgb" "integer xresolution" 8 "integer yresolution" 8\nWorldBegin\nObjectBegin "a"\nShape "sphere" "float radius" 1\nObjectEnd\nAttributeBegin\nTranslate 1 0 0\nObjectInstance "a"\nAttributeEnd\nLightSource "infinite" "rgb L" [1 1 1]\n',
+ "trianglemesh": 'Camera "perspective"\nWorldBegin\nMaterial "conductor" "float roughness" 0.2\nAttributeBegin\nAreaLightSource "diffuse" "blackbody L" 5500\nShape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2] "point2 uv" [0 0 1 0 0 1]\nAttributeEnd\nShape "bilinearmesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0]\n',
+ "textures": 'Camera "orthographic" "float screenwindow" [-1 1 -1 1]\nSampler "halton" "integer pixelsamples" 4\nIntegrator "volpath" "integer maxdepth" 3\nWorldBegin\nTexture "c" "spectrum" "checkerboard" "float uscale" 4 "rgb tex1" [1 0 0] "rgb tex2" [0 0 1]\nTexture "s" "float" "scale" "float scale" 0.5 "float tex" 0.3\nMakeNamedMaterial "m" "string type" "coateddiffuse" "texture reflectance" "c" "texture roughness" "s"\nNamedMaterial "m"\nShape "disk" "float radius" 2\nLightSource "spot" "point3 from" [0 0 3] "point3 to" [0 0 0] "float coneangle" 30 "spectrum I" "stdillum-D65"\nLightSource "distant" "point3 to" [0 0 -1] "rgb L" [0.5 0.5 0.5]\n',
+}
+for k, v in seeds.items():
+    open(os.path.join(d, k), "w").write(v)
+PY
+
+# Meshes: the shipped OBJ (small) and hand-made PLY in every encoding; OBJ with materials.
+cp scenes/meshes/torus-on-plinth.obj "$out/fuzz_mesh/torus-on-plinth-obj"
+python3 - "$out/fuzz_mesh" <<'PY'
+import sys, os, struct
+d = sys.argv[1]
+verts = [(0,0,0),(1,0,0),(1,1,0),(0,1,0)]
+faces = [(0,1,2),(0,2,3)]
+def header(fmt, extra_v="", face="property list uchar int vertex_indices"):
+    return ("ply\nformat %s 1.0\ncomment seed\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n%s"
+            "element face 2\n%s\nend_header\n" % (fmt, extra_v, face)).encode()
+asc = header("ascii") + b"".join(b"%g %g %g\n" % v for v in verts) + b"".join(b"3 %d %d %d\n" % f for f in faces)
+open(os.path.join(d, "quad-ascii-ply"), "wb").write(asc)
+for fmt, e in (("binary_little_endian", "<"), ("binary_big_endian", ">")):
+    body = b"".join(struct.pack(e + "3f", *v) for v in verts) + b"".join(struct.pack(e + "B3i", 3, *f) for f in faces)
+    open(os.path.join(d, "quad-%s-ply" % fmt), "wb").write(header(fmt) + body)
+nrm = header("binary_little_endian", "property float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\n",
+             "property list uchar uint vertex_indices")
+body = b"".join(struct.pack("<8f", *v, 0, 0, 1, v[0], v[1]) for v in verts) + b"".join(struct.pack("<B3I", 3, *f) for f in faces)
+open(os.path.join(d, "quad-normals-uv-ply"), "wb").write(nrm + body)
+open(os.path.join(d, "quad-obj"), "w").write(
+    "# quad with normals, uvs and a missing mtllib\nmtllib none.mtl\no quad\n"
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n"
+    "g a\nusemtl red\nf 1/1/1 2/2/1 3/3/1 4/4/1\ng b\nusemtl glass\nf -4//1 -2//1 -1//1\nl 1 2\np 3\n")
+PY
+
+# Images: a few pixels in every format and variant the readers take.
+python3 - "$out/fuzz_image" <<'PY'
+import sys, os, struct, zlib
+d = sys.argv[1]
+w, h = 3, 2
+def png(name, bit_depth, color_type, rows, extra=b""):
+    def chunk(t, data):
+        return struct.pack(">I", len(data)) + t + data + struct.pack(">I", zlib.crc32(t + data) & 0xffffffff)
+    raw = b"".join(b"\0" + r for r in rows)
+    data = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, bit_depth, color_type, 0, 0, 0))
+            + extra + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    open(os.path.join(d, name), "wb").write(data)
+png("png-rgb8", 8, 2, [bytes(range(y * 9, y * 9 + 9)) for y in range(h)])
+png("png-rgba16", 16, 6, [bytes(range(y * 24, y * 24 + 24)) for y in range(h)])
+png("png-gray8", 8, 0, [bytes([10, 128, 250]) for y in range(h)])
+png("png-gray1", 1, 0, [b"\xa0" for y in range(h)])
+def plte_chunk():
+    data = bytes([255, 0, 0, 0, 255, 0, 0, 0, 255])
+    t = b"PLTE"
+    return struct.pack(">I", len(data)) + t + data + struct.pack(">I", zlib.crc32(t + data) & 0xffffffff)
+png("png-palette", 8, 3, [bytes([0, 1, 2]) for y in range(h)], plte_chunk())
+# PFM: colour little-endian, grey big-endian.
+px = [0.1 * i for i in range(w * h * 3)]
+open(os.path.join(d, "pfm-rgb"), "wb").write(b"PF\n%d %d\n-1.0\n" % (w, h) + struct.pack("<%df" % len(px), *px))
+open(os.path.join(d, "pfm-grey"), "wb").write(b"Pf\n%d %d\n1.0\n" % (w, h) + struct.pack(">%df" % (w * h), *px[:w * h]))
+# Radiance HDR: flat (uncompressed) RGBE scanlines.
+hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (h, w) + bytes([128, 64, 32, 129] * (w * h))
+open(os.path.join(d, "hdr-flat"), "wb").write(hdr)
+# BMP, 24-bit bottom-up.
+row = bytes([0, 0, 255, 0, 255, 0, 255, 0, 0]) + b"\0" * 3
+bmp_px = row * h
+bmp = b"BM" + struct.pack("<IHHI", 54 + len(bmp_px), 0, 0, 54) + struct.pack("<IiiHHIIiiII", 40, w, h, 1, 24, 0, len(bmp_px), 2835, 2835, 0, 0) + bmp_px
+open(os.path.join(d, "bmp-rgb24"), "wb").write(bmp)
+# TGA, uncompressed true colour and RLE.
+tga_hdr = lambda kind: struct.pack("<BBBHHBHHHHBB", 0, 0, kind, 0, 0, 0, 0, 0, w, h, 24, 0)
+open(os.path.join(d, "tga-rgb"), "wb").write(tga_hdr(2) + bytes(range(w * h * 3)))
+open(os.path.join(d, "tga-rle"), "wb").write(tga_hdr(10) + bytes([0x80 | (w * h - 1), 10, 20, 30]))
+PY
+# EXR: the renderer's own writer, plain and with AOV channels.
+"$caustic" render --width 3 --height 2 --spp 1 -q -o "$tmp/a.exr"
+"$caustic" render --width 2 --height 2 --spp 1 -q --aov albedo,depth -o "$tmp/b.exr"
+cp "$tmp/a.exr" "$out/fuzz_image/exr-rgb"
+cp "$tmp/b.exr" "$out/fuzz_image/exr-aov"
+# JPEG (baseline and progressive would need libjpeg; stb writes baseline).
+cat > "$tmp/jpg.c" <<'C'
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image_write.h>
+int main(int argc, char **argv)
+{
+    unsigned char px[4 * 4 * 3];
+    for (int i = 0; i < 48; i++) px[i] = (unsigned char)(i * 5);
+    return !(argc > 1 && stbi_write_jpg(argv[1], 4, 4, 3, px, 50));
+}
+C
+cc -o "$tmp/jpg" "$tmp/jpg.c" -lm
+"$tmp/jpg" "$out/fuzz_image/jpeg-rgb"
+du -sh "$out"; ls "$out"/*
