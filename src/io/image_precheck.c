@@ -1,6 +1,6 @@
 /* Checks of an image file's bytes before stb_image decodes them: the format as stb tells
  * it, JPEG Huffman tables stb 2.27 overflows on, and declared sizes the pixel limit or
- * the file's length refuses (docs/fuzzing.md, fixed findings 2, 3 and 4). */
+ * the file's length refuses, scans using undefined tables (docs/fuzzing.md, "Fixed findings"). */
 #include "io/image_precheck.h"
 
 #include <limits.h>
@@ -104,8 +104,9 @@ static int precheck_scan_end(PrecheckBytes *b)
 /* One DHT segment as stbi__process_marker reads it (tables one after another while its
  * length lasts). stb 2.27 builds each table's code-size list from the 16 counts before
  * checking them, so counts adding up to more than 256 write past stbi__huffman.size[257];
- * 2.28 refuses them, and so do we. *stop is set where stb itself gives up. */
-static CstStatus precheck_dht(const char *path, PrecheckBytes *b, bool *stop, CstError *err)
+ * 2.28 refuses them, and so do we. Each table read is marked in *defined (bit 4 tc + th).
+ * *stop is set where stb itself gives up. */
+static CstStatus precheck_dht(const char *path, PrecheckBytes *b, unsigned *defined, bool *stop, CstError *err)
 {
     size_t at = b->pos - 2;
     long left = (long)precheck_get16(b) - 2;
@@ -121,6 +122,7 @@ static CstStatus precheck_dht(const char *path, PrecheckBytes *b, bool *stop, Cs
             return cst_fail(err, CST_ERR_PARSE,
                             "%s: corrupt JPEG: the Huffman table (DHT segment at byte %zu) declares %u "
                             "codes; at most 256 are possible", path, at, total);
+        *defined |= 1u << ((q >> 4) * 4 + (q & 15)); /* bit 4 tc + th */
         precheck_skip(b, total);
         left -= 17 + (long)total;
     }
@@ -128,35 +130,104 @@ static CstStatus precheck_dht(const char *path, PrecheckBytes *b, bool *stop, Cs
     return CST_OK;
 }
 
+/* One SOS header as stbi__process_scan_header reads it. stb 2.27 allocates its decoder
+ * without clearing it, so a scan decoding with a Huffman table no DHT defined reads heap
+ * garbage as a table, and a garbage table indexes past its symbols (an assertion in a
+ * debug build, an out-of-bounds read in a release one). The tables a scan decodes with:
+ * baseline, each component's DC and AC table; progressive, the DC table in a first DC
+ * scan, none in a DC refinement, the AC table in an AC scan. */
+static CstStatus precheck_sos(const char *path, PrecheckBytes *b, bool progressive, unsigned defined,
+                              bool *stop, CstError *err)
+{
+    size_t at = b->pos - 2;
+    unsigned len = precheck_get16(b), ns = precheck_get8(b);
+    if (ns < 1 || ns > 4 || len != 6 + 2 * ns) { /* stb: "bad SOS component count", "bad SOS len" */
+        *stop = true;
+        return CST_OK;
+    }
+    unsigned tables[4];
+    for (unsigned i = 0; i < ns; i++) {
+        precheck_get8(b); /* component id */
+        tables[i] = precheck_get8(b);
+    }
+    unsigned ss = precheck_get8(b);
+    precheck_get8(b); /* end of spectral selection */
+    unsigned ah = precheck_get8(b) >> 4;
+    bool dc = !progressive || (ss == 0 && ah == 0), ac = !progressive || ss != 0;
+    for (unsigned i = 0; i < ns; i++) {
+        unsigned td = tables[i] >> 4, ta = tables[i] & 15;
+        if (td > 3 || ta > 3) { /* stb: "bad DC huff", "bad AC huff" */
+            *stop = true;
+            return CST_OK;
+        }
+        unsigned tc = dc && !(defined & 1u << td) ? 0 : ac && !(defined & 1u << (4 + ta)) ? 1 : 2;
+        if (tc < 2)
+            return cst_fail(err, CST_ERR_PARSE,
+                            "%s: corrupt JPEG: the scan at byte %zu decodes with %s Huffman table %u, which no "
+                            "DHT segment before it defines", path, at, tc == 0 ? "DC" : "AC", tc == 0 ? td : ta);
+    }
+    return CST_OK;
+}
+
 /* Walks the marker segments stb reads, in its order, up to EOI or the point where stb
- * stops, and checks every Huffman table on the way. Segment data (APPn, COM, ...) is
- * skipped by its length, so bytes inside it are not taken for markers. */
+ * stops; checks every Huffman table on the way, and that the ones each scan decodes with
+ * are defined. Segment data (APPn, COM, ...) is skipped by its length, so bytes inside it
+ * are not taken for markers. */
 static CstStatus precheck_jpeg_tables(const char *path, const unsigned char *d, size_t n, CstError *err)
 {
     PrecheckBytes b = {d, n, 0};
     while (b.d[b.pos] == 0xff) b.pos++;
     b.pos++; /* SOI (image_precheck_format) */
+    unsigned defined = 0; /* Huffman tables read so far: bit 4 tc + th */
+    bool progressive = false;
     int m = precheck_next_marker(&b);
     for (;;) {
         if (m < 0 || m == 0xd9) return CST_OK; /* the end of the file, or EOI */
+        bool stop = false;
         if (m == 0xc4) {
-            bool stop = false;
-            CstStatus st = precheck_dht(path, &b, &stop, err);
+            CstStatus st = precheck_dht(path, &b, &defined, &stop, err);
             if (st != CST_OK || stop) return st;
-        } else if (m == 0xda || m == 0xc0 || m == 0xc1 || m == 0xc2 || m == 0xdb || m == 0xdd ||
-                   m == 0xdc || (m >= 0xe0 && m <= 0xef) || m == 0xfe) {
+        } else if (m == 0xda) { /* SOS, then entropy-coded data up to the next marker */
+            CstStatus st = precheck_sos(path, &b, progressive, defined, &stop, err);
+            if (st != CST_OK || stop) return st;
+            m = precheck_scan_end(&b);
+            continue;
+        } else if (m == 0xc0 || m == 0xc1 || m == 0xc2 || m == 0xdb || m == 0xdd || m == 0xdc ||
+                   (m >= 0xe0 && m <= 0xef) || m == 0xfe) {
+            if (m == 0xc2) progressive = true;
             unsigned len = precheck_get16(&b);
             if (len < 2) return CST_OK; /* stb: a bad length, it fails */
             precheck_skip(&b, len - 2);
-            if (m == 0xda) { /* SOS: entropy-coded data up to the next marker */
-                m = precheck_scan_end(&b);
-                continue;
-            }
         } else {
             return CST_OK; /* stb: "unknown marker", it fails */
         }
         m = precheck_next_marker(&b);
     }
+}
+
+/* ---------------------------------------------------------------- PNG chunks */
+
+static uint32_t be32(const unsigned char *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | (uint32_t)p[3];
+}
+
+/* Every chunk up to IEND must fit in the file: stb 2.27 grows its IDAT buffer to a chunk's
+ * declared length before reading it, so a 100-byte file declaring a 2 GB chunk costs a
+ * 2 GB allocation before stb finds the data missing. A file stb decodes never has such a
+ * chunk (stb stops at IEND and fails on whatever follows a truncated chunk). */
+static CstStatus precheck_png_chunks(const char *path, const unsigned char *d, size_t n, CstError *err)
+{
+    for (size_t at = 8; at + 8 <= n;) {
+        uint32_t len = be32(d + at);
+        if (memcmp(d + at + 4, "IEND", 4) == 0) return CST_OK;
+        if ((uint64_t)len + 12 > n - at)
+            return cst_fail(err, CST_ERR_PARSE,
+                            "%s: truncated or corrupt PNG: the chunk at byte %zu declares %lu bytes of data, "
+                            "the file has %zu after its header", path, at, (unsigned long)len, n - at - 8);
+        at += 12 + (size_t)len;
+    }
+    return CST_OK; /* no IEND: stb fails on its own */
 }
 
 /* ---------------------------------------------------------------- declared sizes */
@@ -182,7 +253,7 @@ static uint64_t precheck_tga_min_bytes(const unsigned char *d, uint64_t w, uint6
 }
 
 /* The least a file declaring w x h pixels can hold in its format (a lower bound). */
-static uint64_t precheck_min_bytes(ImageStbFormat f, const unsigned char *d, uint64_t w, uint64_t h)
+static uint64_t precheck_min_bytes(ImageStbFormat f, const unsigned char *d, size_t n, uint64_t w, uint64_t h)
 {
     switch (f) {
     case IMAGE_STB_PNG:
@@ -194,9 +265,12 @@ static uint64_t precheck_min_bytes(ImageStbFormat f, const unsigned char *d, uin
          * a component subsampled at most 4 x 4 has at least ceil(w/32) ceil(h/32) blocks. */
         return div_up(div_up(w, 32) * div_up(h, 32), 8);
     case IMAGE_STB_BMP: {
-        /* stb reads only uncompressed BMPs: rows of w pixels of the header's bit depth. */
-        unsigned bits = le32(d + 14) == 12 ? le16(d + 24) : le16(d + 28);
-        return h * div_up(w * (bits ? bits : 1), 8);
+        /* stb reads only uncompressed BMPs: both headers (14 bytes, then the info header
+         * of the size it states), then rows of w pixels of the header's bit depth. */
+        uint64_t header = 14 + (uint64_t)le32(d + 14);
+        if (header > n) return header; /* the bit depth is not even there */
+        unsigned bits = header == 26 ? le16(d + 24) : le16(d + 28);
+        return header + h * div_up(w * (bits ? bits : 1), 8);
     }
     case IMAGE_STB_HDR: {
         /* Flat: 4 bytes a pixel. RLE (widths 8 to 32767): a 4-byte scanline header, then for
@@ -235,6 +309,9 @@ CstStatus image_precheck_stb(const char *path, const unsigned char *data, size_t
     if (f == IMAGE_STB_JPEG) { /* before stbi_info, which reads the tables too */
         CstStatus st = precheck_jpeg_tables(path, data, size, err);
         if (st != CST_OK) return st;
+    } else if (f == IMAGE_STB_PNG) {
+        CstStatus st = precheck_png_chunks(path, data, size, err);
+        if (st != CST_OK) return st;
     }
     uint64_t w, h;
     if (f == IMAGE_STB_TGA) { /* read here: stbi_info refuses some headers stbi_load takes */
@@ -253,7 +330,7 @@ CstStatus image_precheck_stb(const char *path, const unsigned char *data, size_t
                         "%s: the %s declares %llu x %llu pixels; images are limited to %llu pixels "
                         "(16384 x 16384) and %d on a side", path, precheck_name(f), (unsigned long long)w,
                         (unsigned long long)h, (unsigned long long)IMAGE_MAX_PIXELS, IMAGE_STB_MAX_SIDE);
-    uint64_t need = precheck_min_bytes(f, data, w, h);
+    uint64_t need = precheck_min_bytes(f, data, size, w, h);
     if (need > size)
         return cst_fail(err, CST_ERR_PARSE,
                         "%s: truncated or corrupt %s: %llu x %llu pixels need at least %llu bytes, the file "

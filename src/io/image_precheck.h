@@ -19,7 +19,10 @@ ImageStbFormat image_precheck_format(const unsigned char *data, size_t size);
  * - a format stb knows but caustic does not read (GIF, PSD, PIC, PNM): CST_ERR_UNSUPPORTED
  *   naming it and the formats that are read; content of no known format: CST_ERR_PARSE;
  * - a JPEG Huffman table (DHT) of more than 256 codes, which stb 2.27 writes past its
- *   table for (docs/fuzzing.md, finding 2): CST_ERR_PARSE;
+ *   table for (docs/fuzzing.md, fixed finding 1), and a scan decoding with a table no DHT
+ *   defined, which stb reads from uninitialised memory: CST_ERR_PARSE;
+ * - a PNG chunk before IEND longer than the rest of the file, for which stb 2.27
+ *   allocates its declared length before reading: CST_ERR_PARSE;
  * - a declared size image_size_ok refuses: CST_ERR_UNSUPPORTED;
  * - a declared size the file is too short to hold in its format (uncompressed and RLE
  *   data, JPEG's 1 bit per 8 x 8 block, deflate's 1032:1), which stb would fill with

@@ -1,6 +1,6 @@
 /* stb_image's implementation, compiled here from Debian's libstb-dev header instead of
  * linking libstb.so, so that only the documented formats are built in (docs/fuzzing.md,
- * known finding 4: stb's GIF, PSD, PIC and PNM readers are out). Reached only through
+ * fixed finding 3: stb's GIF, PSD, PIC and PNM readers are out). Reached only through
  * io/image_stb.h; untrusted bytes are checked first by io/image_precheck.h. */
 #include "io/image_stb.h"
 

@@ -60,6 +60,11 @@ dht="scene\\.json:[0-9]+:[0-9]+: textures\\.t\\.file: .*t\\.jpg: corrupt JPEG: t
 check "JPEG DHT of 257 codes" "$CRASHES/jpeg-dht-257-codes" jpg 2 "$dht"
 check "JPEG DHT of 257 codes, FF FF D8 start and padding" "$CRASHES/jpeg-dht-ff-fill-start" jpg 2 "$dht"
 check "JPEG DHT of 257 codes after the scan" "$CRASHES/jpeg-dht-after-scan" jpg 2 "$dht"
+# Found by fuzz_image: a scan decoding with an AC table no DHT defines; stb 2.27 reads its
+# uninitialised decoder as the table (valgrind: uses of uninitialised values; an assertion
+# under the fuzzer; on main the error message changes with MALLOC_PERTURB_).
+check "JPEG scan with an undefined Huffman table" "$CRASHES/jpeg-undefined-huffman-table" jpg 2 \
+    "t\\.jpg: corrupt JPEG: the scan at byte 542 decodes with AC Huffman table 0, which no DHT segment before it defines"
 # Bytes inside a segment are not markers: an APP1 holding FF C4 and a "table" of 16 x 255
 # codes is skipped as stb skips it, and the image loads.
 seed=$SEEDS/jpeg-rgb
@@ -77,6 +82,13 @@ check "flat HDR of 4 x 4096 in 56 bytes: truncated" "$CRASHES/hdr-flat-truncated
     "t\\.hdr: truncated or corrupt Radiance HDR: 4 x 4096 pixels"
 check "BMP of 4096 x 4096 in 66 bytes: truncated" "$CRASHES/bmp-truncated" bmp 2 \
     "t\\.bmp: truncated or corrupt BMP: 4096 x 4096 pixels"
+# Found by fuzz_image in the pre-check itself (it read the bit depth past a 28-byte file).
+check "BMP whose info header is cut short" "$CRASHES/bmp-short-info-header" bmp 2 \
+    "t\\.bmp: truncated or corrupt BMP: 3 x 2 pixels need at least [0-9]+ bytes, the file has 28"
+# Found by fuzz_image: an IDAT chunk declaring 1 GB in a 214-byte file, for which stb 2.27
+# allocates 2 GB before it reads (an out-of-memory under the fuzzer, "outofmem" here on main).
+check "PNG chunk longer than the file" "$CRASHES/png-chunk-2gb" png 2 \
+    "t\\.png: truncated or corrupt PNG: the chunk at byte 103 declares 1073741882 bytes of data, the file has 111"
 check "PNG of 16384 x 16384 in 69 bytes: past deflate's 1032:1" "$CRASHES/png-16384-tiny" png 2 \
     "t\\.png: truncated or corrupt PNG: 16384 x 16384 pixels"
 

@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Writes the stb_image reproducers of tests/fuzz/crashes/fuzz_image/ (docs/fuzzing.md,
 fixed findings 2-4), byte by byte, from the seed tests/fuzz/corpus/fuzz_image/jpeg-rgb.
-Run from the repository root: python3 tests/fuzz/crashes/make_image_crashes.py"""
+Run from the repository root: python3 tests/fuzz/crashes/make_image_crashes.py
+The other files there (bmp-short-info-header, png-chunk-2gb, jpeg-undefined-huffman-table)
+are fuzz_image's own artifacts, committed as found."""
 import struct
 
 OUT = "tests/fuzz/crashes/fuzz_image/"
