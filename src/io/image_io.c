@@ -24,10 +24,6 @@
 #include <openexr.h>
 #include <png.h>
 
-/* Readers refuse images above this many pixels (16384 x 16384) so that a corrupt header
- * cannot make us allocate tens of gigabytes before the data turns out to be missing. */
-#define IMAGE_MAX_PIXELS ((uint64_t)1 << 28)
-
 /* Encoders and decoders address rows with int32 byte strides (OpenEXR), 12 bytes a pixel. */
 #define IMAGE_MAX_WIDTH (INT32_MAX / 12)
 
@@ -47,7 +43,7 @@ static CstStatus image_fail_errno(CstError *err, int e, const char *path, const 
     return cst_fail(err, CST_ERR_IO, "%s: %s: %s", path, what, image_strerror(e, buf, sizeof buf));
 }
 
-static bool image_size_ok(uint64_t w, uint64_t h)
+bool image_size_ok(uint64_t w, uint64_t h)
 {
     return w > 0 && h > 0 && w <= (uint64_t)IMAGE_MAX_WIDTH && w * h <= IMAGE_MAX_PIXELS;
 }

@@ -7,6 +7,7 @@
 #include "caustic/caustic.h"
 
 #include <stdbool.h>
+#include <stdint.h>
 
 enum { IMAGE_MAX_EXTRA = 16 };
 
@@ -56,6 +57,13 @@ bool image_path_is_scene_output(const char *path);
 bool image_format_is_float(ImageFileFormat f);
 /* True when the path's extension is .exr (any case). */
 bool image_path_is_exr(const char *path);
+/* Readers refuse images above this many pixels (16384 x 16384) so that a corrupt header
+ * cannot make us allocate tens of gigabytes before the data turns out to be missing. */
+#define IMAGE_MAX_PIXELS ((uint64_t)1 << 28)
+/* The size every image reader accepts (image_read, and textures decoded by stb_image):
+ * both sides positive, at most IMAGE_MAX_PIXELS pixels, and a width whose float rows
+ * OpenEXR can address. */
+bool image_size_ok(uint64_t width, uint64_t height);
 /* Reads a PNG (decoded to linear), EXR or PFM into a new malloc'd buffer in the same layout.
  * Caller frees *rgb. */
 CstStatus image_read(const char *path, float **rgb, int *width, int *height, CstError *err);

@@ -9,11 +9,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <stb_image.h>
-
 #include "core/error.h"
 #include "core/file.h"
 #include "io/image_io.h"
+#include "io/image_precheck.h"
+#include "io/image_stb.h"
 
 static Color rgb_max3(Color a, Color b) { return color_rgb(maxf(a.c[0], b.c[0]), maxf(a.c[1], b.c[1]), maxf(a.c[2], b.c[2])); }
 
@@ -91,65 +91,70 @@ static float *texture_decode_ints(const void *px, bool sixteen, size_t n, bool l
     return out;
 }
 
+/* PNG, JPEG, BMP, TGA or Radiance HDR bytes through stb_image (io/image_stb.h), after the
+ * checks stb lacks (io/image_precheck.h). */
+static CstStatus texture_decode_stb(const char *path, const unsigned char *data, size_t size, bool linear,
+                                    float **out, int *width, int *height, CstError *err)
+{
+    int dw = 0, dh = 0;
+    CstStatus st = image_precheck_stb(path, data, size, &dw, &dh, err);
+    if (st != CST_OK) return st;
+    int len = (int)size; /* image_precheck_stb: size <= INT_MAX */
+    int w = 0, h = 0;
+    float *px = NULL;
+    bool oom = false;
+    if (image_stb_is_hdr(data, len)) {
+        /* Radiance HDR: linear floats, taken as they are (stbi_loadf would gamma-decode
+         * an 8-bit image with its own 2.2 curve, so it is used for HDR files only). stb's
+         * buffer is malloc'd (io/image_stb.c), so it is kept. */
+        px = image_stb_load(data, len, 32, &w, &h);
+    } else {
+        bool sixteen = image_stb_is_16_bit(data, len);
+        void *ints = image_stb_load(data, len, sixteen ? 16 : 8, &w, &h);
+        if (ints) {
+            if (!(px = texture_decode_ints(ints, sixteen, (size_t)w * (size_t)h, linear))) oom = true;
+            free(ints);
+        }
+    }
+    if (oom) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d texture", path, w, h);
+    if (!px)
+        return cst_fail(err, CST_ERR_PARSE,
+                        "%s: cannot decode the image (%s); expected a PNG, JPEG, BMP, TGA, HDR, EXR or PFM file",
+                        path, image_stb_failure_reason());
+    if (w != dw || h != dh) { /* the header read twice by stb: cannot differ */
+        free(px);
+        return cst_fail(err, CST_ERR_INTERNAL, "%s: decoded %d x %d pixels, the header declares %d x %d", path,
+                        w, h, dw, dh);
+    }
+    *out = px;
+    *width = w;
+    *height = h;
+    return CST_OK;
+}
+
 CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureWrap wrap, CstError *err)
 {
     memset(t, 0, sizeof *t);
-    FILE *fp = NULL;
-    CstStatus open_st = file_open_input(path, &fp, NULL, err); /* regular files only */
-    if (open_st != CST_OK) return open_st;
-    unsigned char magic[4] = {0};
-    size_t got = fread(magic, 1, sizeof magic, fp);
-    bool exr = got == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
-    bool pfm = got >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f');
+    char *bytes = NULL;
+    size_t size = 0;
+    CstStatus st = file_read_all(path, &bytes, &size, err); /* regular files only */
+    if (st != CST_OK) return st;
+    const unsigned char *magic = (const unsigned char *)bytes;
+    bool exr = size >= 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
+    bool pfm = size >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f');
+    float *px = NULL;
+    int w = 0, h = 0;
     if (exr || pfm) {
         /* Float formats through the film's readers (OpenEXR's C API, our PFM parser). */
-        fclose(fp);
-        float *px = NULL;
-        int w = 0, h = 0;
-        CstStatus st = image_read_radiance(path, &px, &w, &h, err);
+        free(bytes);
+        st = image_read_radiance(path, &px, &w, &h, err);
         if (st != CST_OK) return st;
         return texture_image(t, px, w, h, wrap, err);
     }
-    if (fseek(fp, 0, SEEK_SET) != 0) {
-        fclose(fp);
-        return cst_fail(err, CST_ERR_IO, "%s: cannot seek: %s", path, strerror(errno));
-    }
-    int w = 0, h = 0, comp = 0;
-    float *px = NULL;
-    bool oom = false;
-    if (stbi_is_hdr_from_file(fp)) {
-        /* Radiance HDR: linear floats, taken as they are (stbi_loadf would gamma-decode
-         * an 8-bit image with its own 2.2 curve, so it is used for HDR files only). */
-        float *f = stbi_loadf_from_file(fp, &w, &h, &comp, 3);
-        if (f) {
-            size_t n = (size_t)w * (size_t)h * 3;
-            px = malloc(n * sizeof *px);
-            if (px) memcpy(px, f, n * sizeof *px);
-            else oom = true;
-            stbi_image_free(f);
-        }
-    } else if (stbi_is_16_bit_from_file(fp)) {
-        stbi_us *s = stbi_load_from_file_16(fp, &w, &h, &comp, 3);
-        if (s) {
-            if (!(px = texture_decode_ints(s, true, (size_t)w * (size_t)h, linear))) oom = true;
-            stbi_image_free(s);
-        }
-    } else {
-        stbi_uc *b = stbi_load_from_file(fp, &w, &h, &comp, 3);
-        if (b) {
-            if (!(px = texture_decode_ints(b, false, (size_t)w * (size_t)h, linear))) oom = true;
-            stbi_image_free(b);
-        }
-    }
-    fclose(fp);
-    if (oom) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d texture", path, w, h);
-    if (!px) {
-        const char *why = stbi_failure_reason();
-        return cst_fail(err, CST_ERR_PARSE,
-                        "%s: cannot decode the image (%s); expected a PNG, JPEG, BMP, TGA, HDR, EXR or PFM file",
-                        path, why ? why : "unknown reason");
-    }
-    CstStatus st = image_check_radiance(px, w, h, path, err); /* HDR files: NaN, Inf, < 0 */
+    st = texture_decode_stb(path, magic, size, linear, &px, &w, &h, err);
+    free(bytes);
+    if (st != CST_OK) return st;
+    st = image_check_radiance(px, w, h, path, err); /* HDR files: NaN, Inf, < 0 */
     if (st != CST_OK) {
         free(px);
         return st;
