@@ -165,5 +165,27 @@ expect "compare --help documents the exit codes" 0 'Exit status: 0 the compariso
 run help compare
 expect "caustic help compare" 0 'Image comparison: caustic compare A B'
 
+# ---------------------------------------------------------------- the corpus script
+# scripts/pbrt-corpus.sh skips cleanly without the collection, and runs end to end on a
+# one-scene collection (scenes/cornell-box.pbrt) when pbrt-v4 is there.
+SRC=$(realpath "$2")
+(cd "$TMP" && python3 "$SRC/scripts/pbrt-corpus.py" --caustic "$BIN" --scenes "$TMP/no-scenes" \
+    --cache "$TMP/cache" >"$OUT" 2>"$ERR")
+RC=$?
+expect "pbrt-corpus.sh without the scene collection: skipped, exit 0" 0 'skipped: no scene collection'
+PBRT=${CST_PBRT:-$SRC/../shared/tools/pbrt-v4/pbrt}
+if [ -x "$PBRT" ]; then
+    mkdir -p "$TMP/corpus/cornell" && cp "$SRC/scenes/cornell-box.pbrt" "$TMP/corpus/cornell/"
+    (cd "$TMP" && timeout 600 python3 "$SRC/scripts/pbrt-corpus.py" --caustic "$BIN" --pbrt "$PBRT" \
+        --scenes "$TMP/corpus" --cache "$TMP/cache" --size 24 --spp 2 --timeout 120 >"$OUT" 2>"$ERR")
+    RC=$?
+    row=$(grep '^| cornell/cornell-box.pbrt |' "$OUT")
+    if [ "$RC" -eq 0 ] && [ -n "$row" ] && echo "$row" | grep -Eq '\| ok \| ok \| .* \| ok [0-9.]+ s \| .* \| [0-9.]+ \(hdr\) \|$'; then
+        pass "pbrt-corpus.sh on the Cornell box: loads, renders in both, compares"
+    else fail "pbrt-corpus.sh on the Cornell box" "exit $RC" "row: $row"; fi
+else
+    echo "SKIP: pbrt-corpus.sh end to end: no pbrt-v4 at $PBRT"
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
