@@ -329,7 +329,7 @@ static void compare_image_region(const float *a, const float *b, const float *va
         for (int x = x0; x < x1; x++) {
             size_t i = 3 * ((size_t)y * (size_t)w + (size_t)x);
             for (int c = 0; c < 3; c++) {
-                double pa = a[i + (size_t)c], pb = b[i + (size_t)c];
+                double pa = (double)a[i + (size_t)c], pb = (double)b[i + (size_t)c];
                 double qa = va ? (double)va[i + (size_t)c] : 0.0, qb = vb ? (double)vb[i + (size_t)c] : 0.0;
                 if (!isfinite(pa) || !isfinite(pb) || !isfinite(qa) || !isfinite(qb)) continue;
                 s[0][c] += pa;
@@ -361,7 +361,7 @@ CstStatus compare_images(const float *a, const float *b, int w, int h, const flo
     size_t n = (size_t)w * (size_t)h;
     for (size_t i = 0; i < n; i++)
         for (int c = 0; c < 3; c++) {
-            double pa = a[3 * i + (size_t)c], pb = b[3 * i + (size_t)c];
+            double pa = (double)a[3 * i + (size_t)c], pb = (double)b[3 * i + (size_t)c];
             if (!isfinite(pa) || !isfinite(pb)) {
                 out->nonfinite++;
                 continue;

@@ -258,10 +258,10 @@ static void flip_features(const FlipFeature *f, const float *lum, float *edge, f
     size_t n = (size_t)w * (size_t)h;
     flip_filter2(lum, tmp2, tmp, w, h, f->edge, f->gauss, f->r);  /* d/dx */
     flip_filter2(lum, edge, tmp, w, h, f->gauss, f->edge, f->r);  /* d/dy */
-    for (size_t i = 0; i < n; i++) edge[i] = (float)hypot(tmp2[i], edge[i]);
+    for (size_t i = 0; i < n; i++) edge[i] = (float)hypot((double)tmp2[i], (double)edge[i]);
     flip_filter2(lum, tmp2, tmp, w, h, f->point, f->gauss, f->r);
     flip_filter2(lum, point, tmp, w, h, f->gauss, f->point, f->r);
-    for (size_t i = 0; i < n; i++) point[i] = (float)hypot(tmp2[i], point[i]);
+    for (size_t i = 0; i < n; i++) point[i] = (float)hypot((double)tmp2[i], (double)point[i]);
 }
 
 CstStatus flip_ldr(const float *reference, const float *test, int w, int h, double ppd, float *err,
@@ -302,8 +302,8 @@ CstStatus flip_ldr(const float *reference, const float *test, int w, int h, doub
     const double qc = 0.7, pc = 0.4, pt = 0.95, qf = 0.5;
     double pccmax = pc * s.cmax;
     for (size_t i = 0; i < n; i++) {
-        double p[3] = {col[0][i], col[0][n + i], col[0][2 * n + i]};
-        double q[3] = {col[1][i], col[1][n + i], col[1][2 * n + i]};
+        double p[3] = {(double)col[0][i], (double)col[0][n + i], (double)col[0][2 * n + i]};
+        double q[3] = {(double)col[1][i], (double)col[1][n + i], (double)col[1][2 * n + i]};
         double e = pow(flip_hyab(p, q), qc);
         double dc = e < pccmax ? pt / pccmax * e : pt + (e - pccmax) / (s.cmax - pccmax) * (1.0 - pt);
         double df = fmax(fabs((double)edge[0][i] - (double)edge[1][i]), fabs((double)point[0][i] - (double)point[1][i]));
@@ -392,8 +392,8 @@ CstStatus flip_hdr(const float *reference, const float *test, int w, int h, doub
     for (int k = 0; k < count && st == CST_OK; k++) {
         double exposure = start + k * step;
         for (size_t i = 0; i < 3 * n; i++) {
-            ref[i] = (float)flip_tone_map(reference[i], exposure);
-            tst[i] = (float)flip_tone_map(test[i], exposure);
+            ref[i] = (float)flip_tone_map((double)reference[i], exposure);
+            tst[i] = (float)flip_tone_map((double)test[i], exposure);
         }
         st = flip_ldr(ref, tst, w, h, ppd, e, error);
         for (size_t i = 0; st == CST_OK && i < n; i++)
