@@ -278,7 +278,8 @@ def warning_kinds(log_text):
 def last_error(log_text):
     for line in reversed(log_text.splitlines()):
         if 'error' in line.lower():
-            return re.sub(r'\x1b\[[0-9;]*m', '', line).strip()
+            line = re.sub(r'\x1b\[[0-9;]*m', '', line).strip()
+            return re.sub(r'^caustic: error: ', '', line)
     lines = [l for l in log_text.splitlines() if l.strip()]
     return lines[-1].strip() if lines else ''
 
@@ -392,7 +393,7 @@ def row(scene_rel, r):
     if len(top) > 8:
         kinds += '; %d more kinds' % (len(top) - 8)
     wcell = '%d%s' % (nwarn, (': ' + kinds) if kinds else '') if c else '–'
-    pcell = 'ok %.1f s' % p['wall'] if p.get('status') == 'ok' else (
+    pcell = 'ok %.1f s, %s MiB' % (p['wall'], fmt(p.get('peak_mib'), '%.0f')) if p.get('status') == 'ok' else (
         '%s: %s' % (p.get('status'), p.get('error', '')) if p else r.get('pbrt_skipped', '–'))
     if 'error' in cmp_:
         means = reldiff = relmse = flip = esc(cmp_['error'])[:80]
@@ -504,7 +505,7 @@ def main():
         'EXR, an empty included .pbrt; "missing" where none, and pbrt-v4 is then not run); '
         "caustic's load result; its warnings (count, then by kind); its load and render seconds "
         '(`--json` summary) and peak resident memory (`/usr/bin/time -v`, MiB); pbrt-v4 (wall '
-        'seconds); `caustic compare caustic.exr pbrt.exr`: the mean per channel (R / G / B, caustic '
+        'seconds and peak memory); `caustic compare caustic.exr pbrt.exr`: the mean per channel (R / G / B, caustic '
         'vs pbrt), the relative difference of the means, relMSE and mean FLIP (HDR-FLIP for these '
         'EXR images). Both render the same small copy of the scene (longer side %d px) at %d spp, '
         'each under a %d s limit.' % (args.size, args.spp, args.timeout),

@@ -724,8 +724,9 @@ CST_API void cst_compare_map_image(const double *block_abs_z, int width, int hei
  * variance AOV, cst_image_read_layer(..., "variance", ...)), z-scores of the block means;
  * and FLIP (cst_image_flip). */
 
-/* relMSE = mean over pixels of (a - b)^2 / (b^2 + CST_RELMSE_EPS) (Rousselle, Knaus and
- * Zwicker 2011): the epsilon keeps black reference pixels from dominating. */
+/* relMSE = mean over pixels of (a - b)^2 / (b^2 + CST_RELMSE_EPS), the relative MSE of
+ * Rousselle, Knaus and Zwicker 2011; the epsilon (our choice of value) keeps black
+ * reference pixels from dominating. */
 #define CST_RELMSE_EPS 0.01
 /* A block "stands out" when |z| exceeds this (frac_above in CstImageComparison). */
 #define CST_COMPARE_Z_OUTLIER 4.0

@@ -180,7 +180,7 @@ if [ -x "$PBRT" ]; then
         --scenes "$TMP/corpus" --cache "$TMP/cache" --size 24 --spp 2 --timeout 120 >"$OUT" 2>"$ERR")
     RC=$?
     row=$(grep '^| cornell/cornell-box.pbrt |' "$OUT")
-    if [ "$RC" -eq 0 ] && [ -n "$row" ] && echo "$row" | grep -Eq '\| ok \| ok \| .* \| ok [0-9.]+ s \| .* \| [0-9.]+ \(hdr\) \|$'; then
+    if [ "$RC" -eq 0 ] && [ -n "$row" ] && echo "$row" | grep -Eq '\| ok \| ok \| .* \| ok [0-9.]+ s, [^|]* MiB \| .* \| [0-9.]+ \(hdr\) \|$'; then
         pass "pbrt-corpus.sh on the Cornell box: loads, renders in both, compares"
     else fail "pbrt-corpus.sh on the Cornell box" "exit $RC" "row: $row"; fi
 else
