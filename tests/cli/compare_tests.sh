@@ -126,6 +126,22 @@ if [ "$RC" -eq 0 ] && [ "$(json_get "j['z']['variance_a']")" = "the image given"
     pass "--variance-a names a plain image: its RGB are the variances"
 else fail "--variance-a plain image" "exit $RC: $(head -c 600 "$OUT")"; fi
 
+# A Radiance HDR (RGBE) and a PFM holding the same values (1 and 0.5 per row; rows equal, so
+# PFM's bottom-up order does not matter) compare as identical.
+python3 - "$TMP" <<'PY'
+import struct, sys
+d = sys.argv[1]
+# RGBE (128, 128, 128, 129) = 1.0, (64, 64, 64, 129) = 0.5: m * 2^(e - 136)
+row = bytes([128, 128, 128, 129, 64, 64, 64, 129])
+open(f"{d}/t.hdr", "wb").write(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 2\n" + row + row)
+px = struct.pack("<6f", 1, 1, 1, 0.5, 0.5, 0.5)
+open(f"{d}/t.pfm", "wb").write(b"PF\n2 2\n-1.0\n" + px + px)
+PY
+run compare t.hdr t.pfm --json
+if [ "$RC" -eq 0 ] && [ "$(json_get "j['rmse'], j['channels'][0]['mean_a'], j['flip']['mean']")" = "0.0 0.75 0.0" ]; then
+    pass "a Radiance HDR file reads as the same values as a PFM"
+else fail "Radiance HDR input" "exit $RC: $(head -c 600 "$OUT")"; fi
+
 # ---------------------------------------------------------------- the map
 run compare a.exr b.exr --map "$TMP/flip.png"
 if [ "$RC" -eq 0 ] && [ -s "$TMP/flip.png" ] && [ -z "$(find "$TMP" -name '*.tmp*')" ]; then
