@@ -806,11 +806,125 @@ static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, Ar
     return true;
 }
 
+/* ------------------------------------------------------------ caustic compare */
+
+static const char *const ARGS_COMPARE_OPTS[] = {"map", "json", "variance-a", "variance-b", "block", "flip",
+                                                "ppd", "help", NULL};
+
+static bool args_apply_compare(const char *name, const char *value, CliArgs *out, ArgsError *err)
+{
+    CompareArgs *c = &out->compare;
+    long n;
+    if (strcmp(name, "json") == 0) {
+        c->json = true;
+    } else if (strcmp(name, "help") == 0) {
+        out->command = ARGS_CMD_HELP;
+        out->help_for = ARGS_CMD_COMPARE;
+    } else if (value[0] == '\0') {
+        args_fail(err, false, "--%s: expected a value, got ''", name);
+        return false;
+    } else if (strcmp(name, "map") == 0) {
+        c->map_path = value;
+    } else if (strcmp(name, "variance-a") == 0) {
+        c->var_a = value;
+    } else if (strcmp(name, "variance-b") == 0) {
+        c->var_b = value;
+    } else if (strcmp(name, "block") == 0) {
+        if (!args_parse_long(value, 1, ARGS_MAX_DIMENSION, &n)) {
+            args_fail(err, false, "--block: expected an integer from 1 to %d, got '%s'", ARGS_MAX_DIMENSION, value);
+            return false;
+        }
+        c->block = (int)n;
+    } else if (strcmp(name, "flip") == 0) {
+        if (strcmp(value, "ldr") == 0) c->flip = CST_FLIP_LDR;
+        else if (strcmp(value, "hdr") == 0) c->flip = CST_FLIP_HDR;
+        else if (strcmp(value, "auto") == 0) c->flip = 0;
+        else {
+            args_fail(err, false, "--flip: expected ldr, hdr or auto, got '%s'", value);
+            return false;
+        }
+    } else { /* ppd */
+        if (!args_parse_seconds(value, &c->ppd) || c->ppd > ARGS_COMPARE_MAX_PPD) {
+            args_fail(err, false, "--ppd: expected pixels per degree, a number > 0 and <= %g, got '%s'",
+                      ARGS_COMPARE_MAX_PPD, value);
+            return false;
+        }
+    }
+    return true;
+}
+
+/* caustic compare A B [options]: exactly two images, options anywhere (--name VALUE or
+ * --name=VALUE, -h), "--" ends the options. */
+static bool args_parse_compare(int argc, char **argv, int first, CliArgs *out, ArgsError *err)
+{
+    CompareArgs *c = &out->compare;
+    c->block = ARGS_COMPARE_DEFAULT_BLOCK;
+    bool only_positional = false;
+    for (int i = first; i < argc; i++) {
+        const char *arg = argv[i];
+        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
+            if (c->a && c->b) {
+                args_fail(err, true, "compare: unexpected argument '%s' (give two images: A B)", arg);
+                return false;
+            }
+            *(c->a ? &c->b : &c->a) = arg;
+            continue;
+        }
+        if (strcmp(arg, "--") == 0) {
+            only_positional = true;
+            continue;
+        }
+        const char *name = arg[1] == '-' ? arg + 2 : strcmp(arg, "-h") == 0 ? "help" : "";
+        const char *eq = strchr(name, '=');
+        size_t len = eq ? (size_t)(eq - name) : strlen(name);
+        const char *opt = NULL;
+        for (int k = 0; ARGS_COMPARE_OPTS[k]; k++)
+            if (strlen(ARGS_COMPARE_OPTS[k]) == len && strncmp(ARGS_COMPARE_OPTS[k], name, len) == 0)
+                opt = ARGS_COMPARE_OPTS[k];
+        if (!opt) {
+            const char *best = NULL;
+            size_t best_d = 3;
+            for (int k = 0; ARGS_COMPARE_OPTS[k]; k++) {
+                size_t d = args_edit_distance(name, len, ARGS_COMPARE_OPTS[k]);
+                if (d < best_d && d < strlen(ARGS_COMPARE_OPTS[k])) {
+                    best_d = d;
+                    best = ARGS_COMPARE_OPTS[k];
+                }
+            }
+            if (best)
+                args_fail(err, true, "unknown option '%s' for 'compare' (did you mean --%s?)", arg, best);
+            else
+                args_fail(err, true, "unknown option '%s' for 'compare'", arg);
+            return false;
+        }
+        bool flag = strcmp(opt, "json") == 0 || strcmp(opt, "help") == 0;
+        const char *value = eq ? eq + 1 : NULL;
+        if (flag && value) {
+            args_fail(err, true, "--%s does not take a value (got '%s')", opt, arg);
+            return false;
+        }
+        if (!flag && !value) {
+            if (i + 1 >= argc) {
+                args_fail(err, true, "--%s: missing value", opt);
+                return false;
+            }
+            value = argv[++i];
+        }
+        if (!args_apply_compare(opt, value ? value : "", out, err)) return false;
+    }
+    if (out->command == ARGS_CMD_COMPARE && !c->b) {
+        args_fail(err, true, "compare: expected two images, A and the reference B (got %s)",
+                  c->a ? "one" : "none");
+        return false;
+    }
+    return true;
+}
+
 /* ------------------------------------------------------------ caustic help, caustic list */
 
 static const struct { const char *name; ArgsCommand command; } ARGS_COMMANDS[] = {
     {"render", ARGS_CMD_RENDER}, {"info", ARGS_CMD_INFO},     {"bench", ARGS_CMD_BENCH_RAYS},
-    {"verify", ARGS_CMD_VERIFY}, {"list", ARGS_CMD_LIST},
+    {"verify", ARGS_CMD_VERIFY}, {"list", ARGS_CMD_LIST},     {"compare", ARGS_CMD_COMPARE},
 };
 
 static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *err)
@@ -821,7 +935,8 @@ static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *er
             out->help_for = ARGS_COMMANDS[k].command;
             return true;
         }
-    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list)", topic);
+    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list, compare)",
+              topic);
     return false;
 }
 
@@ -885,6 +1000,9 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
     } else if (strcmp(cmd, "verify") == 0) {
         out->command = ARGS_CMD_VERIFY;
         return args_parse_verify(argc, argv, 2, out, err);
+    } else if (strcmp(cmd, "compare") == 0) {
+        out->command = ARGS_CMD_COMPARE;
+        return args_parse_compare(argc, argv, 2, out, err);
     } else if (cmd[0] == '-') {
         const char *name = cmd + strspn(cmd, "-");
         for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
@@ -906,8 +1024,11 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
             args_fail(err, true, "unknown command '%s' (did you mean 'render'?)", cmd);
         else if (args_edit_distance(cmd, strlen(cmd), "verify") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'verify'?)", cmd);
+        else if (args_edit_distance(cmd, strlen(cmd), "compare") <= 2)
+            args_fail(err, true, "unknown command '%s' (did you mean 'compare'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list)", cmd);
+            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list, compare)",
+                      cmd);
         return false;
     }
     if (argc > 2) {

@@ -30,7 +30,8 @@ typedef enum ArgsCommand {
     ARGS_CMD_VERSION,     /* caustic --version */
     ARGS_CMD_BENCH_RAYS,  /* caustic bench rays [MESH | --cornell] [--stadium] [--accel LIST] ... */
     ARGS_CMD_VERIFY,      /* caustic verify [SCENE] --integrators NAME,NAME[,...] ... */
-    ARGS_CMD_LIST         /* caustic list [KIND] */
+    ARGS_CMD_LIST,        /* caustic list [KIND] */
+    ARGS_CMD_COMPARE      /* caustic compare A B [--map OUT] [--json] [--variance-a VA] ... */
 } ArgsCommand;
 
 #define ARGS_BENCH_MAX_ACCELS 6 /* each back end at most once */
@@ -66,6 +67,20 @@ typedef struct VerifyArgs {
     int levels;           /* --convergence: work levels of consistent integrators, 2..MAX */
 } VerifyArgs;
 
+#define ARGS_COMPARE_DEFAULT_BLOCK 16
+#define ARGS_COMPARE_MAX_PPD      10000.0
+
+/* `caustic compare A B`: two images, B the reference. */
+typedef struct CompareArgs {
+    const char *a, *b;        /* points into argv */
+    const char *var_a, *var_b; /* --variance-a/-b: NULL = the EXR's variance AOV if it has one */
+    const char *map_path;     /* --map: NULL = none */
+    bool json;                /* --json: one JSON object on stdout */
+    int block;                /* --block: z blocks' side, >= 1 */
+    int flip;                 /* --flip: 0 auto (LDR for two PNGs, else HDR), CST_FLIP_LDR/_HDR */
+    double ppd;               /* --ppd: pixels per degree, 0 = FLIP's default */
+} CompareArgs;
+
 typedef struct CliArgs {
     ArgsCommand command;
     const char *scene_path;  /* NULL = the built-in Cornell box; points into argv */
@@ -84,6 +99,7 @@ typedef struct CliArgs {
     const char *list_kind; /* ARGS_CMD_LIST: NULL = every kind; points into argv */
     BenchArgs bench;   /* ARGS_CMD_BENCH_RAYS only */
     VerifyArgs verify; /* ARGS_CMD_VERIFY only */
+    CompareArgs compare; /* ARGS_CMD_COMPARE only */
 } CliArgs;
 
 typedef struct ArgsError {
@@ -98,7 +114,7 @@ extern const char *const ARGS_LIST_KINDS[];
 bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err);
 
 /* Writes the usage text of one command (ARGS_CMD_RENDER, _INFO, _BENCH_RAYS, _VERIFY,
- * _LIST: its options, exit codes and examples), or with ARGS_CMD_HELP every command's
+ * _LIST, _COMPARE: its options, exit codes and examples), or with ARGS_CMD_HELP every command's
  * (cli/help.c). */
 void args_print_help(FILE *f, ArgsCommand command);
 

@@ -73,6 +73,8 @@ bool cli_summary_write(FILE *f, const CliSummary *s);
 
 int cli_render(const CliArgs *a);
 int cli_verify(const CliArgs *a);
+/* caustic compare A B (compare.c): the numbers on stdout, the FLIP map to --map. */
+int cli_compare(const CliArgs *a);
 /* caustic list [KIND] and caustic --version (list.c), on stdout. */
 int cli_list(const CliArgs *a);
 int cli_version(void);

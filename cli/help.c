@@ -15,6 +15,8 @@ static const char HELP_USAGE_ALL[] =
 "                 [--threads N] [--seed S] [--alpha A] [--block N] [--map OUT.png]\n"
 "                 [--convergence K] [--json] [--width W] [--height H] [--quiet]\n"
 "  caustic list [KIND]\n"
+"  caustic compare A B [--map OUT.png] [--json] [--variance-a VA] [--variance-b VB]\n"
+"                  [--block N] [--flip ldr|hdr|auto] [--ppd P]\n"
 "  caustic COMMAND --help | caustic help COMMAND   (one command's options)\n"
 "  caustic --help | -h\n"
 "  caustic --version\n"
@@ -172,6 +174,36 @@ static const char HELP_LIST[] =
 "With KIND, only those names, one per line (for scripts).\n"
 "\n";
 
+static const char HELP_COMPARE[] =
+"Image comparison: caustic compare A B\n"
+"Compares image A with the reference B (each .exr, .pfm, .png or .hdr; same size, else\n"
+"exit 2) and prints per channel the means of A and B, their difference (absolute and\n"
+"relative to B's mean), RMSE and relMSE = mean of (a - b)^2 / (b^2 + 0.01); then FLIP\n"
+"(Andersson et al. 2020), the perceived difference in [0, 1]: LDR-FLIP when both images\n"
+"are PNGs, else HDR-FLIP (LDR-FLIP's maximum over tone-mapped exposures, 2021), at 67\n"
+"pixels per degree (a 0.7 m wide 4K monitor seen from 0.7 m). With the variances of the\n"
+"pixel values (--variance-a/-b, or the variance AOV of an EXR written with --aov\n"
+"variance, used by default), the z-score of every NxN block mean difference,\n"
+"z = (mean_a - mean_b) / sqrt(var_a + var_b), summarised as the largest |z| and the\n"
+"fraction of block tests with |z| > 4; see docs/cli.md.\n"
+"  A, B                 the images; B is the reference (relMSE, FLIP)\n"
+"      --map OUT        the per-pixel FLIP error as a grey image (0 black to 1 white;\n"
+"                       .png, .exr or .pfm), written atomically\n"
+"      --json           the same numbers as one JSON object on stdout\n"
+"      --variance-a VA  an image of the variances of A's pixel values (e.g. the\n"
+"                       variance.R/G/B of caustic render --aov variance: give the EXR\n"
+"                       itself, its variance channels are read); default: A's own\n"
+"                       variance AOV if A is an EXR that has one\n"
+"      --variance-b VB  the same for B; an image without variances counts as exact\n"
+"      --block N        z blocks' side in pixels, 1..65536 (default: 16)\n"
+"      --flip KIND      ldr, hdr or auto (default: auto, as above)\n"
+"      --ppd P          FLIP's pixels per degree of visual angle (default: 67.02)\n"
+"  -h, --help           show this help and exit\n"
+"Exit status: 0 the comparison was made (whatever the difference); 1 internal error\n"
+"(out of memory, the map could not be written); 2 bad usage, an image that is missing,\n"
+"unreadable or of another size than the other, variances of the wrong size.\n"
+"\n";
+
 static const char HELP_EXIT[] =
 "Exit status:\n"
 "  0  success: the image was written (bench rays: every check passed; verify: every\n"
@@ -195,6 +227,8 @@ static const char HELP_EXAMPLES_BENCH[] =
 "  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n";
 static const char HELP_EXAMPLES_VERIFY[] =
 "  caustic verify --integrators path,path-nee,path-bsdf --spp 64 --map z.png\n";
+static const char HELP_EXAMPLES_COMPARE[] =
+"  caustic compare new.exr reference.exr --map flip.png\n";
 
 void args_print_help(FILE *f, ArgsCommand command)
 {
@@ -222,6 +256,10 @@ void args_print_help(FILE *f, ArgsCommand command)
     case ARGS_CMD_LIST:
         fputs(HELP_LIST, f);
         break;
+    case ARGS_CMD_COMPARE:
+        fputs(HELP_COMPARE, f);
+        fprintf(f, "Example:\n%s\n", HELP_EXAMPLES_COMPARE);
+        break;
     case ARGS_CMD_HELP:
     case ARGS_CMD_VERSION:
         fputs(HELP_USAGE_ALL, f);
@@ -230,10 +268,12 @@ void args_print_help(FILE *f, ArgsCommand command)
         fputs(HELP_BENCH, f);
         fputs(HELP_VERIFY, f);
         fputs(HELP_LIST, f);
+        fputs(HELP_COMPARE, f);
         fputs("      --version        print the version and the build (compiler, ISA, Embree,\n"
               "                       MPI, SDL2, build type) and exit\n\n", f);
         fputs(HELP_EXIT, f);
-        fprintf(f, "Examples:\n%s%s%s", HELP_EXAMPLES_RENDER, HELP_EXAMPLES_BENCH, HELP_EXAMPLES_VERIFY);
+        fprintf(f, "Examples:\n%s%s%s%s", HELP_EXAMPLES_RENDER, HELP_EXAMPLES_BENCH, HELP_EXAMPLES_VERIFY,
+                HELP_EXAMPLES_COMPARE);
         break;
     }
     if (command != ARGS_CMD_HELP && command != ARGS_CMD_VERSION)

@@ -624,7 +624,7 @@ CST_API CstStatus cst_film_write_opt(const CstFilm *film, const char *path,
                                      const CstImageWriteOptions *options, CstError *err);
 
 /* ---------------------------------------------------------------- images */
-/* Reads a PNG (sRGB decoded to linear), EXR or PFM as linear RGB floats: *rgb (width x
+/* Reads a PNG (sRGB decoded to linear), EXR, PFM or Radiance HDR as linear RGB floats: *rgb (width x
  * height x 3, row 0 = top) is the caller's to free(). */
 CST_API CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
 /* Writes width x height x 3 linear floats (row 0 = top); the format follows the extension
@@ -717,6 +717,78 @@ CST_API CstConvergenceVerdict cst_compare_convergence_judge(const CstConvergence
  * per block: black at 0 ramping to blue at z_crit/2, to yellow at z_crit, red above. */
 CST_API void cst_compare_map_image(const double *block_abs_z, int width, int height, int block,
                            double z_crit, float *rgb);
+
+/* ---------------------------------------------------------------- comparing images
+ * The numbers of `caustic compare A B` (docs/cli.md): B is the reference. Means, their
+ * difference, RMSE and relMSE per channel; with per-pixel variances of A and/or B (the
+ * variance AOV, cst_image_read_layer(..., "variance", ...)), z-scores of the block means;
+ * and FLIP (cst_image_flip). */
+
+/* relMSE = mean over pixels of (a - b)^2 / (b^2 + CST_RELMSE_EPS), the relative MSE of
+ * Rousselle, Knaus and Zwicker 2011; the epsilon (our choice of value) keeps black
+ * reference pixels from dominating. */
+#define CST_RELMSE_EPS 0.01
+/* A block "stands out" when |z| exceeds this (frac_above in CstImageComparison). */
+#define CST_COMPARE_Z_OUTLIER 4.0
+
+typedef struct CstImageComparison {
+    double mean_a[3], mean_b[3]; /* per channel, over the pixels where both are finite */
+    double diff[3];              /* mean_a - mean_b */
+    double rel_diff[3];          /* diff / |mean_b|; NaN where mean_b is 0 */
+    double rmse[3], rmse_all;    /* root mean square of a - b; _all over the 3 channels */
+    double relmse[3], relmse_all;
+    int64_t nonfinite;           /* values (pixel x channel) NaN or infinite in a or b: left out */
+    /* With variances (var_a and/or var_b given; a missing one counts as exact): */
+    int has_z;
+    double z_mean[3];            /* the image mean's z per channel */
+    int blocks;                  /* blocks tested (each in 3 channels) */
+    double max_abs_z;            /* largest block |z| over blocks and channels */
+    double worst_z;              /* that z with its sign: > 0 where a is brighter */
+    int worst_bx, worst_by, worst_channel;
+    int above;                   /* block tests (block x channel) with |z| > CST_COMPARE_Z_OUTLIER */
+    double frac_above;           /* above / (3 blocks) */
+} CstImageComparison;
+
+/* Compares a with the reference b (width x height x 3 linear floats each, row 0 = top);
+ * var_a, var_b: the variances of the pixel values (same layout) or NULL; block: the z
+ * blocks' side in pixels (>= 1); block_abs_z (NULL, or one per block, row-major) receives
+ * each block's largest |z| over the channels when variances are given. */
+CST_API CstStatus cst_image_compare(const float *a, const float *b, int width, int height, const float *var_a,
+                                    const float *var_b, int block, CstImageComparison *out,
+                                    double *block_abs_z, CstError *err);
+
+typedef enum CstFlipKind {
+    CST_FLIP_LDR = 1, /* LDR-FLIP (HPG 2020) of the images clamped to [0, 1] */
+    CST_FLIP_HDR = 2  /* HDR-FLIP (EG 2021): the maximum of LDR-FLIP over tone-mapped exposures */
+} CstFlipKind;
+
+/* Zero-initialised: HDR-FLIP at the papers' 67.02 pixels per degree, exposures automatic. */
+typedef struct CstFlipOptions {
+    CstFlipKind kind;           /* 0: HDR */
+    double pixels_per_degree;   /* 0: the papers' default (0.7 m wide 4K monitor at 0.7 m) */
+    int exposures;              /* HDR: 0 = the paper's automatic range; else start..stop */
+    double start_exposure, stop_exposure;
+} CstFlipOptions;
+
+typedef struct CstFlipResult {
+    CstFlipKind kind;
+    double pixels_per_degree;
+    double mean, max;           /* of the per-pixel FLIP error, in [0, 1] */
+    double start_exposure, stop_exposure; /* HDR: the bracket used (stops) */
+    int exposures;              /* HDR: how many; LDR: 0 */
+} CstFlipResult;
+
+/* FLIP of `test` against `reference` (width x height x 3 linear floats each); map (NULL,
+ * or width x height floats) receives the per-pixel error. HDR-FLIP's automatic exposures
+ * come from the reference. CST_ERR_OOM, CST_ERR_INVALID_ARG. */
+CST_API CstStatus cst_image_flip(const float *test, const float *reference, int width, int height,
+                                 const CstFlipOptions *options, float *map, CstFlipResult *out, CstError *err);
+
+/* Reads the EXR channels "<layer>.R", "<layer>.G", "<layer>.B" (e.g. layer "variance":
+ * the variance AOV of caustic render --aov variance) as an RGB image like cst_image_read.
+ * CST_ERR_UNSUPPORTED when the file is not an EXR or has no such channels. */
+CST_API CstStatus cst_image_read_layer(const char *path, const char *layer, float **rgb, int *width,
+                                       int *height, CstError *err);
 
 /* ---------------------------------------------------------------- ray benchmark */
 #define CST_BENCH_MAX_ACCELS 6

@@ -318,6 +318,116 @@ void compare_map_image(const double *block_abs_z, int width, int height, int blo
                                &rgb[3 * ((size_t)y * (size_t)width + (size_t)x)]);
 }
 
+/* ------------------------------------------------------------ images */
+
+/* Sums over [x0,x1) x [y0,y1) of the values of a and b and of their variances (0 where
+ * none is given), per channel, over the values finite in both images (and variances). */
+static void compare_image_region(const float *a, const float *b, const float *va, const float *vb, int w,
+                                 int x0, int y0, int x1, int y1, double s[2][3], double v[2][3], double n[3])
+{
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            size_t i = 3 * ((size_t)y * (size_t)w + (size_t)x);
+            for (int c = 0; c < 3; c++) {
+                double pa = (double)a[i + (size_t)c], pb = (double)b[i + (size_t)c];
+                double qa = va ? (double)va[i + (size_t)c] : 0.0, qb = vb ? (double)vb[i + (size_t)c] : 0.0;
+                if (!isfinite(pa) || !isfinite(pb) || !isfinite(qa) || !isfinite(qb)) continue;
+                s[0][c] += pa;
+                s[1][c] += pb;
+                v[0][c] += qa;
+                v[1][c] += qb;
+                n[c] += 1.0;
+            }
+        }
+}
+
+/* The z test of the region sums: the block mean difference over its standard error,
+ * (s_a - s_b)/n / (sqrt(v_a + v_b)/n); the n cancel (compare_z). No values: z = 0. */
+static double compare_image_z(const double s[2][3], const double v[2][3], const double n[3], int c)
+{
+    bool outright = false;
+    return n[c] > 0.0 ? compare_z(s[0][c], v[0][c], s[1][c], v[1][c], &outright) : 0.0;
+}
+
+CstStatus compare_images(const float *a, const float *b, int w, int h, const float *var_a, const float *var_b,
+                         int block, ImageComparison *out, double *block_abs_z, CstError *err)
+{
+    if (w < 1 || h < 1) return cst_fail(err, CST_ERR_INVALID_ARG, "empty image (%dx%d)", w, h);
+    if (block < 1) return cst_fail(err, CST_ERR_INVALID_ARG, "block size must be >= 1 (got %d)", block);
+    memset(out, 0, sizeof *out);
+    /* Means, RMSE and relMSE: one pass, sums in double (an image of 2^28 pixels of values
+     * ~1 keeps ~8 significant digits). */
+    double sum[2][3] = {{0}}, se[3] = {0}, rel[3] = {0}, cnt[3] = {0};
+    size_t n = (size_t)w * (size_t)h;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            double pa = (double)a[3 * i + (size_t)c], pb = (double)b[3 * i + (size_t)c];
+            if (!isfinite(pa) || !isfinite(pb)) {
+                out->nonfinite++;
+                continue;
+            }
+            double d = pa - pb;
+            sum[0][c] += pa;
+            sum[1][c] += pb;
+            se[c] += d * d;
+            rel[c] += d * d / (pb * pb + CST_RELMSE_EPS);
+            cnt[c] += 1.0;
+        }
+    double se_all = 0.0, rel_all = 0.0, cnt_all = 0.0;
+    for (int c = 0; c < 3; c++) {
+        double k = cnt[c] > 0.0 ? cnt[c] : (double)NAN;
+        out->mean_a[c] = sum[0][c] / k;
+        out->mean_b[c] = sum[1][c] / k;
+        out->diff[c] = out->mean_a[c] - out->mean_b[c];
+        out->rel_diff[c] = out->mean_b[c] != 0.0 ? out->diff[c] / fabs(out->mean_b[c]) : (double)NAN;
+        out->rmse[c] = sqrt(se[c] / k);
+        out->relmse[c] = rel[c] / k;
+        se_all += se[c];
+        rel_all += rel[c];
+        cnt_all += cnt[c];
+    }
+    out->rmse_all = cnt_all > 0.0 ? sqrt(se_all / cnt_all) : (double)NAN;
+    out->relmse_all = cnt_all > 0.0 ? rel_all / cnt_all : (double)NAN;
+    if (!var_a && !var_b) return CST_OK;
+
+    /* z-scores: the variances are those of the pixel values (the variance AOV: of each
+     * pixel mean), pixels independent, so a block mean's variance is the sum over n^2. */
+    out->has_z = 1;
+    int nbx = compare_blocks_x(w, block), nby = compare_blocks_y(h, block);
+    double img_s[2][3] = {{0}}, img_v[2][3] = {{0}}, img_n[3] = {0};
+    out->max_abs_z = -1.0;
+    for (int by = 0; by < nby; by++)
+        for (int bx = 0; bx < nbx; bx++) {
+            int x0 = bx * block, y0 = by * block;
+            int x1 = x0 + block < w ? x0 + block : w, y1 = y0 + block < h ? y0 + block : h;
+            double s[2][3] = {{0}}, v[2][3] = {{0}}, cn[3] = {0}, worst = 0.0;
+            compare_image_region(a, b, var_a, var_b, w, x0, y0, x1, y1, s, v, cn);
+            for (int c = 0; c < 3; c++) {
+                double z = compare_image_z(s, v, cn, c);
+                double az = isnan(z) ? HUGE_VAL : fabs(z);
+                out->above += az > CST_COMPARE_Z_OUTLIER;
+                if (az > worst) worst = az;
+                if (az > out->max_abs_z) {
+                    out->max_abs_z = az;
+                    out->worst_z = z;
+                    out->worst_bx = bx;
+                    out->worst_by = by;
+                    out->worst_channel = c;
+                }
+                for (int k = 0; k < 2; k++) {
+                    img_s[k][c] += s[k][c];
+                    img_v[k][c] += v[k][c];
+                }
+                img_n[c] += cn[c];
+            }
+            if (block_abs_z) block_abs_z[by * nbx + bx] = worst;
+        }
+    out->blocks = nbx * nby;
+    out->frac_above = (double)out->above / (3.0 * out->blocks);
+    for (int c = 0; c < 3; c++) out->z_mean[c] = compare_image_z(img_s, img_v, img_n, c);
+    return CST_OK;
+}
+
 /* ------------------------------------------------------------ public names */
 
 double cst_compare_normal_quantile(double p) { return compare_normal_quantile(p); }
@@ -358,4 +468,11 @@ void cst_compare_map_image(const double *block_abs_z, int width, int height, int
                            float *rgb)
 {
     compare_map_image(block_abs_z, width, height, block, z_crit, rgb);
+}
+
+CstStatus cst_image_compare(const float *a, const float *b, int width, int height, const float *var_a,
+                            const float *var_b, int block, CstImageComparison *out, double *block_abs_z,
+                            CstError *err)
+{
+    return compare_images(a, b, width, height, var_a, var_b, block, out, block_abs_z, err);
 }

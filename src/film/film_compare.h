@@ -101,4 +101,17 @@ void compare_map_colour(double abs_z, double z_crit, float rgb[3]);
 void compare_map_image(const double *block_abs_z, int width, int height, int block,
                        double z_crit, float *rgb);
 
+/* ------------------------------------------------------------ images */
+
+/* The public CstImageComparison (caustic.h documents its fields). */
+typedef CstImageComparison ImageComparison;
+
+/* `caustic compare`: a against the reference b (w x h x 3 linear floats): means, RMSE and
+ * relMSE (epsilon CST_RELMSE_EPS) per channel over the values finite in both; with
+ * variances of the pixel values (var_a and/or var_b; NULL counts as zero), the z-score of
+ * the image mean and of every block x block block mean per channel, the same statistic as
+ * compare_films but from variance images instead of films. Allocates nothing. */
+CstStatus compare_images(const float *a, const float *b, int w, int h, const float *var_a, const float *var_b,
+                         int block, ImageComparison *out, double *block_abs_z, CstError *err);
+
 #endif

@@ -7,6 +7,8 @@
 #include "core/error.h"
 #include "io/path.h"
 #include "core/file.h"
+#include "io/image_precheck.h"
+#include "io/image_stb.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -550,12 +552,22 @@ static int64_t image_exr_write_fn(exr_const_context_t ctxt, void *user, const vo
     return (int64_t)done;
 }
 
+/* The layer image_read_exr reads on this thread: NULL for R, G, B (or Y); "variance" for
+ * variance.R/G/B (image_read_layer). Thread-local like image_exr_sink, so the slot rule
+ * keeps its signature for the writer too. */
+static _Thread_local const char *image_exr_layer;
+
 /* Interleaved slot (0 = R, 1 = G, 2 = B) of a channel, or -1. The file keeps channels
  * sorted by name (B, G, R), so slots go by name, never by position. When the file is
  * greyscale, "Y" lands in slot 0 and is replicated afterwards. */
 static int image_exr_slot(const char *name, bool grey)
 {
     if (!name) return -1;
+    if (image_exr_layer) { /* "<layer>.R" ... */
+        size_t n = strlen(image_exr_layer);
+        if (grey || strncmp(name, image_exr_layer, n) != 0 || name[n] != '.') return -1;
+        name += n + 1;
+    }
     if (grey) return strcmp(name, "Y") == 0 ? 0 : -1;
     if (strcmp(name, "R") == 0) return 0;
     if (strcmp(name, "G") == 0) return 1;
@@ -1052,6 +1064,31 @@ CstStatus image_write_opt(const char *path, const float *rgb, int width, int hei
     return st;
 }
 
+/* A Radiance HDR file through stb_image, after the pre-check (io/image_precheck.h): linear
+ * floats as stored. */
+static CstStatus image_read_rgbe(const char *path, float **out, int *wout, int *hout, CstError *err)
+{
+    char *bytes = NULL;
+    size_t size = 0;
+    CstStatus st = file_read_all(path, &bytes, &size, err);
+    if (st != CST_OK) return st;
+    int dw = 0, dh = 0, w = 0, h = 0;
+    st = image_precheck_stb(path, (const unsigned char *)bytes, size, &dw, &dh, err);
+    if (st == CST_OK) {
+        float *px = image_stb_load((const unsigned char *)bytes, (int)size, 32, &w, &h);
+        if (!px)
+            st = cst_fail(err, CST_ERR_PARSE, "%s: cannot decode the Radiance HDR image (%s)", path,
+                          image_stb_failure_reason());
+        else {
+            *out = px;
+            *wout = w;
+            *hout = h;
+        }
+    }
+    free(bytes);
+    return st;
+}
+
 CstStatus image_read(const char *path, float **rgb, int *width, int *height, CstError *err)
 {
     if (!rgb || !width || !height)
@@ -1080,10 +1117,47 @@ CstStatus image_read(const char *path, float **rgb, int *width, int *height, Cst
         st = image_read_exr(fp, path, rgb, width, height, err);
     else if (got >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f'))
         st = image_read_pfm(fp, path, rgb, width, height, err);
+    else if (got >= 2 && magic[0] == '#' && magic[1] == '?') /* #?RADIANCE, #?RGBE */
+        st = image_read_rgbe(path, rgb, width, height, err);
     else
-        st = cst_fail(err, CST_ERR_UNSUPPORTED, "%s: not a PNG, OpenEXR or PFM file", path);
+        st = cst_fail(err, CST_ERR_UNSUPPORTED, "%s: not a PNG, OpenEXR, PFM or Radiance HDR file", path);
     fclose(fp);
     return st;
+}
+
+CstStatus image_read_layer(const char *path, const char *layer, float **rgb, int *width, int *height,
+                           CstError *err)
+{
+    if (!layer || !layer[0]) return image_read(path, rgb, width, height, err);
+    if (!rgb || !width || !height || !path)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "image_read_layer: NULL argument");
+    *rgb = NULL;
+    *width = *height = 0;
+    FILE *fp = NULL;
+    CstStatus st = file_open_input(path, &fp, NULL, err);
+    if (st != CST_OK) return st;
+    uint8_t magic[4] = {0};
+    if (fread(magic, 1, sizeof magic, fp) != 4 || magic[0] != 0x76 || magic[1] != 0x2f || magic[2] != 0x31 ||
+        magic[3] != 0x01) {
+        fclose(fp);
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: not an OpenEXR file (only EXR images have a \"%s\" "
+                        "layer)", path, layer);
+    }
+    const char *outer = image_exr_layer;
+    image_exr_layer = layer;
+    st = image_read_exr(fp, path, rgb, width, height, err);
+    image_exr_layer = outer;
+    fclose(fp);
+    if (st == CST_ERR_UNSUPPORTED)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: no full-resolution %s.R, %s.G, %s.B channels", path,
+                        layer, layer, layer);
+    return st;
+}
+
+CstStatus cst_image_read_layer(const char *path, const char *layer, float **rgb, int *width, int *height,
+                               CstError *err)
+{
+    return image_read_layer(path, layer, rgb, width, height, err);
 }
 
 /* ---------------------------------------------------------------- radiance inputs */

@@ -64,9 +64,13 @@ bool image_path_is_exr(const char *path);
  * both sides positive, at most IMAGE_MAX_PIXELS pixels, and a width whose float rows
  * OpenEXR can address. */
 bool image_size_ok(uint64_t width, uint64_t height);
-/* Reads a PNG (decoded to linear), EXR or PFM into a new malloc'd buffer in the same layout.
+/* Reads a PNG (decoded to linear), EXR, PFM or Radiance HDR into a new malloc'd buffer in the same layout.
  * Caller frees *rgb. */
 CstStatus image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
+/* The EXR channels "<layer>.R/G/B" of path as image_read's RGB (layer NULL or "": image_read).
+ * CST_ERR_UNSUPPORTED when path is no EXR or lacks them. */
+CstStatus image_read_layer(const char *path, const char *layer, float **rgb, int *width, int *height,
+                           CstError *err);
 /* The one rule for images that become light or reflectance (textures, environment maps,
  * both loaders and the builder): every value finite and >= 0. Fails with
  * CST_ERR_INVALID_ARG naming `what` (a path, or NULL for "image") and the first offending
