@@ -383,6 +383,14 @@ static CstStatus plymesh(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGe
         if (im.normals) memcpy(g->n, im.normals, (size_t)im.num_vertices * sizeof *g->n);
         if (im.uvs) memcpy(g->uv, im.uvs, (size_t)im.num_vertices * sizeof *g->uv);
     }
+    if (!st && im.num_skipped_primitives)
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, fl, "%s: \"%s\": %d faces of other than 3 or 4 vertices "
+                     "skipped (the first has %d), as pbrt-v4 skips them", d, file,
+                     im.num_skipped_primitives, im.skipped_face_size);
+    if (!st && im.num_quads)
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, fl, "%s: \"%s\": %d quads each split into two "
+                     "triangles (pbrt-v4 renders them as bilinear patches; exact for planar quads)",
+                     d, file, im.num_quads);
     mesh_import_free(&im);
     return st;
 }
