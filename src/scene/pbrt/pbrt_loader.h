@@ -149,10 +149,25 @@ typedef struct CamRec {
     Loc loc;
 } CamRec;
 
+/* A file whose reading an Include interrupted: its tokenizer, resumed when the included
+ * file's tokens end, and the text it reads (owned, NULL for the caller's text). */
+typedef struct LexSaved {
+    PbrtTokenizer tz;
+    char *text;
+} LexSaved;
+
+/* Tokens of one file and, as pbrt-v4 reads them, of the files it Includes: an included
+ * file's tokens are spliced into the includer's stream, so a parameter list that an
+ * included file leaves open goes on after the Include in the includer. */
 typedef struct Lexer {
     PbrtTokenizer tz;
     PbrtToken peek;
     int has_peek;
+    char *text;          /* what tz reads, when owned (an included file) */
+    LexSaved *saved;     /* the includers of tz, innermost last */
+    int num_saved, cap_saved;
+    char *retired;       /* the text of the last file finished: freed one file later, as
+                            a token of it may still be in use */
 } Lexer;
 
 /* A directive with a quoted type name and a parameter list (Film "rgb" ..., Material
@@ -239,6 +254,13 @@ Loc pbrt_tok_loc(const Lexer *lx, const PbrtToken *t);
 
 /* True when t's text is exactly `word`. */
 int pbrt_tok_is(const PbrtToken *t, const char *word);
+
+/* Continues lx with text (owned by lx from now on, freed when its tokens end or by
+ * pbrt_lex_free) named name, the includer resuming after it. */
+CstStatus pbrt_lex_push(Loader *ld, Lexer *lx, char *text, size_t len, const char *name);
+
+/* Frees what lx owns (the texts of unfinished includes). */
+void pbrt_lex_free(Lexer *lx);
 
 /* The next token, left for the next pbrt_lex_next. */
 CstStatus pbrt_lex_peek(Loader *ld, Lexer *lx, PbrtToken *t);

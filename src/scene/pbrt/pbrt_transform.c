@@ -200,10 +200,21 @@ CstStatus pbrt_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
     for (int r = 0; r < 4; r++)
         for (int c = 0; c < 4; c++) rows[4 * r + c] = (float)v[4 * c + r];
     Transform m = transform_from_rows(rows);
-    if (!transform_is_affine(&m))
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: a projective or non-finite matrix; "
-                       "expected an affine one (translation in elements 13-15, then 0 0 0 1 "
-                            "in elements 4, 8, 12, 16)", d);
+    for (int k = 0; k < 16; k++)
+        if (!isfinite(rows[k]))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: element %d is not finite in 32-bit "
+                                "floats; expected finite numbers", d, 4 * (k % 4) + k / 4 + 1);
+    if (!transform_is_affine(&m)) {
+        /* pbrt-v4 keeps the whole 4x4 matrix: points are divided by w (triangle meshes get
+         * exactly that, pbrt_shape.c), directions and normals use the upper 3x3 alone (as
+         * we do everywhere). What caustic cannot follow: points of lights and cameras, and
+         * spheres (tessellated), use the affine part; the inverse is the affine part's. */
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: a projective matrix (bottom row %g %g %g %g, "
+                     "elements 4, 8, 12, 16): kept as pbrt-v4 keeps it; triangle meshes are "
+                     "divided by w as in pbrt-v4, directions use the 3x3 part as in pbrt-v4, "
+                     "light and camera positions and spheres use the affine part", d,
+                     v[3], v[7], v[11], v[15]);
+    }
     Xf x = xf_from(m);
     if (d[0] == 'T') {
         if (!ld->active_start) return CST_OK;
