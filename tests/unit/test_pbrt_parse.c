@@ -392,6 +392,22 @@ static void test_duplicate_parameter(void **state)
     cst_scene_destroy(s);
 }
 
+/* Motion: a transform under ActiveTransform StartTime alone moves only the start (pbrt-v4
+ * blurs between start and end): a located warning, not a silent difference. */
+static void test_motion_warnings(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD("ActiveTransform StartTime\nTranslate 1 0 0\nActiveTransform All\n"
+                               "Translate 0 1 0\nTransformTimes 0 1\n" TRI), &w);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: Translate under ActiveTransform "
+                             "StartTime: motion blur is not supported") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:8:1: TransformTimes") >= 0);
+    assert_int_equal(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:7:1:"), -1); /* All: no motion */
+    assert_vec(tri_vertex(s, 0, 0), 1.0f, 1.0f, 0.0f, 0.0f);
+    cst_scene_destroy(s);
+}
+
 /* A projective ConcatTransform (the sssdragon scenes have one): accepted with a warning;
  * triangle vertices divided by w as pbrt-v4's point transform does. */
 static void test_projective_transform(void **state)
@@ -795,6 +811,7 @@ int main(void)
         cmocka_unit_test(test_include_splices_tokens),
         cmocka_unit_test(test_duplicate_parameter),
         cmocka_unit_test(test_projective_transform),
+        cmocka_unit_test(test_motion_warnings),
         cmocka_unit_test(test_parameter_types),
         cmocka_unit_test(test_colour_conversions),
         cmocka_unit_test(test_camera_and_options),

@@ -208,6 +208,7 @@ typedef struct Loader {
     int cur_obj; /* -1 outside ObjectBegin/End */
     int in_world;
     int active_start; /* ActiveTransform includes StartTime: transforms apply */
+    int active_end;   /* ActiveTransform includes EndTime (for the motion warning) */
     CamRec cam;
     int env_set; /* an infinite light has made the scene's environment */
     int num_instances_expanded; /* instances whose spheres were copied */

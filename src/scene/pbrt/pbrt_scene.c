@@ -209,6 +209,7 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     if (options) ld.opt = *options;
     ld.cur_obj = -1;
     ld.active_start = 1;
+    ld.active_end = 1;
     ld.gs.ctm = pbrt_xf_identity();
     ld.end = (Loc){name, 1, 1};
     CstStatus st = CST_OK;
