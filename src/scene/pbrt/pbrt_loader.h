@@ -79,6 +79,9 @@ typedef struct GState {
     int reverse;
     int material; /* index into Loader.mats */
     AreaLight area;
+    int active_start;   /* ActiveTransform includes StartTime: transforms apply */
+    int active_end;     /* ActiveTransform includes EndTime (for the motion warning); both
+                           are attributes, restored by AttributeEnd, as in pbrt-v4 */
     int transform_only; /* pushed by TransformBegin (pbrt-v3): pops only the CTM */
     Loc loc;            /* of the Begin, for messages */
 } GState;
@@ -207,8 +210,6 @@ typedef struct Loader {
     int num_objs, cap_objs;
     int cur_obj; /* -1 outside ObjectBegin/End */
     int in_world;
-    int active_start; /* ActiveTransform includes StartTime: transforms apply */
-    int active_end;   /* ActiveTransform includes EndTime (for the motion warning) */
     CamRec cam;
     int env_set; /* an infinite light has made the scene's environment */
     int num_instances_expanded; /* instances whose spheres were copied */

@@ -208,8 +208,8 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     ld.err = err;
     if (options) ld.opt = *options;
     ld.cur_obj = -1;
-    ld.active_start = 1;
-    ld.active_end = 1;
+    ld.gs.active_start = 1;
+    ld.gs.active_end = 1;
     ld.gs.ctm = pbrt_xf_identity();
     ld.end = (Loc){name, 1, 1};
     CstStatus st = CST_OK;

@@ -89,7 +89,7 @@ static int xf_finite(const Xf *x)
  * then blurs what follows between the start and end transforms; we render the start. */
 static void warn_start_only(Loader *ld, Loc loc, const char *d)
 {
-    if (ld->active_start && !ld->active_end)
+    if (ld->gs.active_start && !ld->gs.active_end)
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s under ActiveTransform StartTime: motion blur "
                      "is not supported; what follows is rendered at its start-time transform "
                      "(pbrt-v4 blurs it towards the end-time one)", d);
@@ -100,7 +100,7 @@ static CstStatus apply_ctm(Loader *ld, Xf t, Loc loc, const char *d)
     if (!xf_finite(&t))
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the transform is not finite in 32-bit floats", d);
     warn_start_only(ld, loc, d);
-    if (!ld->active_start) return CST_OK; /* only the end time is affected: no motion blur */
+    if (!ld->gs.active_start) return CST_OK; /* only the end time is affected: no motion blur */
     ld->gs.ctm = pbrt_xf_compose(&ld->gs.ctm, &t);
     return CST_OK;
 }
@@ -229,7 +229,7 @@ CstStatus pbrt_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
     Xf x = xf_from(m);
     if (d[0] == 'T') {
         warn_start_only(ld, loc, d);
-        if (!ld->active_start) return CST_OK;
+        if (!ld->gs.active_start) return CST_OK;
         ld->gs.ctm = x;
         return CST_OK;
     }
@@ -240,7 +240,7 @@ CstStatus pbrt_identity_directive(Loader *ld, Lexer *lx, Loc loc, const char *dn
 {
     (void)lx;
     warn_start_only(ld, loc, dname);
-    if (ld->active_start) ld->gs.ctm = pbrt_xf_identity();
+    if (ld->gs.active_start) ld->gs.ctm = pbrt_xf_identity();
     return CST_OK;
 }
 
@@ -271,13 +271,13 @@ CstStatus pbrt_active_transform_directive(Loader *ld, Lexer *lx, Loc loc, const 
     (void)dname;
     PbrtToken w;
     TRY(pbrt_lex_next(ld, lx, &w));
-    if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "StartTime")) { ld->active_start = 1; ld->active_end = 0; }
+    if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "StartTime")) { ld->gs.active_start = 1; ld->gs.active_end = 0; }
     else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "EndTime")) {
-        ld->active_start = 0;
-        ld->active_end = 1;
+        ld->gs.active_start = 0;
+        ld->gs.active_end = 1;
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "ActiveTransform EndTime: motion blur is not "
                      "supported; end-time transforms are ignored");
-    } else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "All")) { ld->active_start = ld->active_end = 1; }
+    } else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "All")) { ld->gs.active_start = ld->gs.active_end = 1; }
     else {
         char got[96];
         pbrt_token_describe(&w, got, sizeof got);
