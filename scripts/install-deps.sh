@@ -11,7 +11,8 @@ PKGS=(
   libpng-dev          # PNG output
   libopenexr-dev      # OpenEXR C API (openexr.h) for EXR output
   libstb-dev          # stb_image for texture loading
-  libassimp-dev       # mesh import (OBJ/PLY/glTF)
+  libassimp-dev       # mesh import (OBJ/glTF)
+  zlib1g-dev          # gzip-compressed PLY meshes and pbrt includes
   libembree-dev       # optional comparison back end
   libcmocka-dev       # unit test framework, driven by CTest
   python3             # scripts/check-layout.sh (the CTest test "layout")

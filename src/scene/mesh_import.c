@@ -1,6 +1,6 @@
 /* Mesh files in through assimp's C API (the only file that includes assimp): the node
  * hierarchy flattened into one triangle list in world space, with per-vertex normals and
- * UVs, and the file's materials mapped onto ours. */
+ * UVs, and the file's materials mapped onto ours. PLY files go to our own reader (io/ply.c). */
 #include "scene/mesh_import.h"
 
 #include <assimp/ObjMaterial.h>
@@ -23,6 +23,8 @@
 #include "core/error.h"
 #include "io/path.h"
 #include "core/file.h"
+#include "io/gzip.h"
+#include "io/ply.h"
 #include "materials/material.h"
 #include "math/transform.h"
 
@@ -221,339 +223,67 @@ static void flatten_node(Flatten *fl, const struct aiNode *node, const Transform
     for (unsigned i = 0; i < node->mNumChildren; i++) flatten_node(fl, node->mChildren[i], &to_world);
 }
 
-/* ------------------------------------------------------------------ PLY pre-check */
-/* assimp 5.2's PLY reader is not safe on malformed files: it loops forever on a header
- * without end_header, crashes on a binary body cut short, and reads past the end of a
- * body short by one byte (all seen with 5.2.4; 10 of 150 random mutations of a small
- * ASCII PLY hung it). So a PLY file's header is parsed here and its body walked record
- * by record against the header, before assimp sees the file. Lines are counted for
- * messages. */
-
-#define PLY_MAX_ELEMENTS 32
-#define PLY_MAX_PROPS 256
-
-typedef struct PlyProp {
-    int size;       /* bytes of a scalar, or of a list's items */
-    int count_size; /* list: bytes of the count; 0 for a scalar */
-    int is_int;     /* integer type (of the scalar or the list items) */
-    int face_index; /* the vertex index list of a face (face.vertex_indices or vertex_index) */
-} PlyProp;
-
-typedef struct PlyElement {
-    char name[32];
-    long long count;
-    int first_prop, num_props;
-} PlyElement;
-
-typedef struct PlyCheck {
-    const char *path;
-    CstError *err;
-    int format; /* 0 ascii, 1 binary little-endian, 2 binary big-endian */
-    PlyElement elems[PLY_MAX_ELEMENTS];
-    PlyProp props[PLY_MAX_PROPS];
-    int num_elems, num_props;
-} PlyCheck;
-
-static CstStatus ply_fail(PlyCheck *pc, int line, const char *what, const char *detail)
+/* ------------------------------------------------------------------ PLY: our reader */
+/* Every PLY goes to io/ply.c, never to assimp: assimp 5.2.5 misread binary PLYs whose first
+ * data byte is 0x0A (it skipped it as white space before the data), aborted on one, and
+ * looped or read out of bounds on malformed headers (docs/fuzzing.md). A file is a PLY here
+ * when its name ends in .ply or .ply.gz, when its first three bytes spell "ply" in any case
+ * (assimp's own test, so no malformed PLY reaches assimp under another name), or when it is
+ * gzip data (no other mesh format is read compressed). */
+static CstStatus mesh_is_ply(const char *path, int *is_ply, CstError *err)
 {
-    if (line > 0)
-        return cst_fail(pc->err, CST_ERR_PARSE, "%.300s:%d: malformed PLY file: %s%.100s", pc->path,
-                        line, what, detail);
-    return cst_fail(pc->err, CST_ERR_PARSE, "%.300s: malformed PLY file: %s%.100s", pc->path, what,
-                    detail);
-}
-
-/* Size in bytes of a PLY type name, 0 if unknown; *is_int tells integers from floats. */
-static int ply_type_size(const char *name, int *is_int)
-{
-    static const struct { const char *name; int size, is_int; } types[] = {
-        {"char", 1, 1},   {"uchar", 1, 1},   {"int8", 1, 1},    {"uint8", 1, 1},
-        {"short", 2, 1},  {"ushort", 2, 1},  {"int16", 2, 1},   {"uint16", 2, 1},
-        {"int", 4, 1},    {"uint", 4, 1},    {"int32", 4, 1},   {"uint32", 4, 1},
-        {"float", 4, 0},  {"float32", 4, 0}, {"double", 8, 0},  {"float64", 8, 0},
-    };
-    for (size_t i = 0; i < sizeof types / sizeof types[0]; i++)
-        if (strcmp(name, types[i].name) == 0) {
-            *is_int = types[i].is_int;
-            return types[i].size;
-        }
-    return 0;
-}
-
-/* The property assimp reads a face's corners from. */
-static int ply_is_face_index(const char *element, const char *prop)
-{
-    return strcmp(element, "face") == 0 && (strcmp(prop, "vertex_indices") == 0 || strcmp(prop, "vertex_index") == 0);
-}
-
-/* Parses the header in buf[0, len); *body gets the offset after end_header's line. */
-static CstStatus ply_parse_header(PlyCheck *pc, const char *buf, size_t len, size_t *body)
-{
-    size_t pos = 0;
-    int line = 0, have_format = 0;
-    char text[256];
-    for (;;) {
-        line++;
-        const char *nl = memchr(buf + pos, '\n', len - pos);
-        if (!nl) return ply_fail(pc, line, "the header has no end_header line", "");
-        size_t n = (size_t)(nl - (buf + pos));
-        if (n > 0 && buf[pos + n - 1] == '\r') n--;
-        if (n >= sizeof text) return ply_fail(pc, line, "header line too long", "");
-        memcpy(text, buf + pos, n);
-        text[n] = '\0';
-        pos = (size_t)(nl - buf) + 1;
-        char w[5][64];
-        char extra[2];
-        int nw = sscanf(text, "%63s %63s %63s %63s %63s %1s", w[0], w[1], w[2], w[3], w[4], extra);
-        if (line == 1) {
-            if (nw != 1 || (strcmp(w[0], "ply") != 0 && strcmp(w[0], "PLY") != 0))
-                return ply_fail(pc, line, "expected \"ply\"", "");
-        } else if (nw <= 0) {
-            continue;
-        } else if (strcmp(w[0], "comment") == 0 || strcmp(w[0], "obj_info") == 0) {
-            continue;
-        } else if (strcmp(w[0], "format") == 0) {
-            if (nw != 3 || have_format) return ply_fail(pc, line, "bad format line: ", text);
-            if (strcmp(w[1], "ascii") == 0) pc->format = 0;
-            else if (strcmp(w[1], "binary_little_endian") == 0) pc->format = 1;
-            else if (strcmp(w[1], "binary_big_endian") == 0) pc->format = 2;
-            else return ply_fail(pc, line, "unknown format ", w[1]);
-            have_format = 1;
-        } else if (strcmp(w[0], "element") == 0) {
-            char *end;
-            errno = 0;
-            long long count = nw == 3 ? strtoll(w[2], &end, 10) : -1;
-            if (nw != 3 || errno || *end || count < 0 || count > INT_MAX)
-                return ply_fail(pc, line, "bad element line: ", text);
-            if (pc->num_elems == PLY_MAX_ELEMENTS) return ply_fail(pc, line, "too many elements", "");
-            PlyElement *e = &pc->elems[pc->num_elems++];
-            snprintf(e->name, sizeof e->name, "%.31s", w[1]);
-            e->count = count;
-            e->first_prop = pc->num_props;
-            e->num_props = 0;
-        } else if (strcmp(w[0], "property") == 0) {
-            if (pc->num_elems == 0) return ply_fail(pc, line, "property before any element", "");
-            if (pc->num_props == PLY_MAX_PROPS) return ply_fail(pc, line, "too many properties", "");
-            PlyProp *p = &pc->props[pc->num_props];
-            int count_int = 0;
-            if (strcmp(w[1], "list") == 0) {
-                if (nw != 5) return ply_fail(pc, line, "bad property line: ", text);
-                p->count_size = ply_type_size(w[2], &count_int);
-                p->size = ply_type_size(w[3], &p->is_int);
-                if (!p->count_size || !count_int || !p->size)
-                    return ply_fail(pc, line, "bad list property: ", text);
-                p->face_index = ply_is_face_index(pc->elems[pc->num_elems - 1].name, w[4]);
-            } else {
-                if (nw != 3) return ply_fail(pc, line, "bad property line: ", text);
-                p->count_size = 0;
-                p->face_index = 0;
-                p->size = ply_type_size(w[1], &p->is_int);
-                if (!p->size) return ply_fail(pc, line, "unknown property type ", w[1]);
-            }
-            pc->num_props++;
-            pc->elems[pc->num_elems - 1].num_props++;
-        } else if (strcmp(w[0], "end_header") == 0 && nw == 1) {
-            break;
-        } else {
-            return ply_fail(pc, line, "unknown header line: ", text);
-        }
-    }
-    if (!have_format) return ply_fail(pc, 0, "the header has no format line", "");
-    *body = pos;
-    return CST_OK;
-}
-
-/* A face with no corners: assimp 5.2.5's triangulation asserts on it (abort, exit 134). */
-static CstStatus ply_empty_face(PlyCheck *pc, int line, const PlyElement *e, long long r)
-{
-    char what[160];
-    snprintf(what, sizeof what, "%s %lld of %lld has no vertices; expected a list of vertex indices", e->name,
-             r + 1, e->count);
-    return ply_fail(pc, line, what, "");
-}
-
-static CstStatus ply_truncated(PlyCheck *pc, const PlyElement *e, long long r)
-{
-    char what[160];
-    snprintf(what, sizeof what, "the data ends inside %s %lld of %lld", e->name, r + 1, e->count);
-    return ply_fail(pc, 0, what, "");
-}
-
-static long long ply_read_count(const unsigned char *p, int size, int big_endian)
-{
-    unsigned long long v = 0;
-    for (int i = 0; i < size; i++) v |= (unsigned long long)p[big_endian ? size - 1 - i : i] << (8 * i);
-    return (long long)v; /* counts are read unsigned: a "negative" one is just huge */
-}
-
-static CstStatus ply_check_binary(PlyCheck *pc, const unsigned char *buf, size_t len, size_t pos)
-{
-    for (int ei = 0; ei < pc->num_elems; ei++) {
-        const PlyElement *e = &pc->elems[ei];
-        const PlyProp *props = &pc->props[e->first_prop];
-        size_t fixed = 0;
-        int has_list = 0;
-        for (int k = 0; k < e->num_props; k++) {
-            has_list |= props[k].count_size != 0;
-            fixed += (size_t)props[k].size;
-        }
-        if (!has_list) { /* one step: count (<= INT_MAX) times at most 256 * 8 bytes fits */
-            size_t need = (size_t)e->count * fixed;
-            if (len - pos < need) return ply_truncated(pc, e, (long long)((len - pos) / (fixed ? fixed : 1)));
-            pos += need;
-            continue;
-        }
-        for (long long r = 0; r < e->count; r++)
-            for (int k = 0; k < e->num_props; k++) {
-                const PlyProp *p = &props[k];
-                if (!p->count_size) {
-                    if (len - pos < (size_t)p->size) return ply_truncated(pc, e, r);
-                    pos += (size_t)p->size;
-                    continue;
-                }
-                if (len - pos < (size_t)p->count_size) return ply_truncated(pc, e, r);
-                long long n = ply_read_count(buf + pos, p->count_size, pc->format == 2);
-                pos += (size_t)p->count_size;
-                if (n == 0 && p->face_index) return ply_empty_face(pc, 0, e, r);
-                if ((unsigned long long)n > (len - pos) / (size_t)p->size) return ply_truncated(pc, e, r);
-                pos += (size_t)n * (size_t)p->size;
-            }
-    }
-    return CST_OK;
-}
-
-/* Next whitespace-separated token of buf (NUL-terminated); counts lines. */
-static const char *ply_token(const char **cur, int *line, size_t *tlen)
-{
-    const char *p = *cur;
-    while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
-        if (*p == '\n') (*line)++;
-        p++;
-    }
-    if (!*p) return NULL;
-    const char *t = p;
-    while (*p && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n') p++;
-    *tlen = (size_t)(p - t);
-    *cur = p;
-    return t;
-}
-
-/* The token is one number (an integer when is_int); *value gets it. */
-static int ply_number(const char *t, size_t tlen, int is_int, double *value)
-{
-    char *end;
-    errno = 0;
-    if (is_int) {
-        long long v = strtoll(t, &end, 10);
-        *value = (double)v;
-    } else {
-        *value = strtod(t, &end);
-    }
-    return end == t + tlen && errno == 0;
-}
-
-static CstStatus ply_check_ascii(PlyCheck *pc, const char *buf, size_t body, int header_lines)
-{
-    const char *cur = buf + body;
-    int line = header_lines + 1;
-    for (int ei = 0; ei < pc->num_elems; ei++) {
-        const PlyElement *e = &pc->elems[ei];
-        for (long long r = 0; r < e->count; r++)
-            for (int k = 0; k < e->num_props; k++) {
-                const PlyProp *p = &pc->props[e->first_prop + k];
-                size_t tlen = 0;
-                double v = 0.0;
-                long long n = 1;
-                if (p->count_size) {
-                    const char *t = ply_token(&cur, &line, &tlen);
-                    if (!t) return ply_truncated(pc, e, r);
-                    if (!ply_number(t, tlen, 1, &v) || v < 0.0)
-                        return ply_fail(pc, line, "expected a list length, got ", t);
-                    n = (long long)v;
-                    if (n == 0 && p->face_index) return ply_empty_face(pc, line, e, r);
-                }
-                for (long long i = 0; i < n; i++) {
-                    const char *t = ply_token(&cur, &line, &tlen);
-                    if (!t) return ply_truncated(pc, e, r);
-                    if (!ply_number(t, tlen, p->is_int, &v)) {
-                        char tok[40];
-                        snprintf(tok, sizeof tok, "%.*s", (int)(tlen < 32 ? tlen : 32), t);
-                        return ply_fail(pc, line, p->is_int ? "expected an integer, got "
-                                                             : "expected a number, got ", tok);
-                    }
-                }
-            }
-    }
-    return CST_OK;
-}
-
-/* True when assimp may take the file for a PLY: its name ends in .ply, or its first three
- * bytes spell "ply" in any case. assimp 5.2's PLY reader only compares those three bytes,
- * so a file starting "plyply" or "plyformat" reached it unchecked and made it spin or read
- * out of bounds (docs/fuzzing.md); every such file now goes through the whole pre-check,
- * whose first rule is that the first line is "ply" alone. */
-static int ply_candidate(const char *path, const char magic[3], size_t got)
-{
-    size_t n = strlen(path);
-    if (n >= 4 && strcasecmp(path + n - 4, ".ply") == 0) return 1;
-    return got >= 3 && strncasecmp(magic, "ply", 3) == 0;
-}
-
-/* Checks a file assimp may read as a PLY (ply_candidate); other files pass untouched. */
-static CstStatus ply_precheck(const char *path, CstError *err)
-{
+    *is_ply = ply_is_ply(path, NULL, 0);
+    if (*is_ply) return CST_OK;
     FILE *f = NULL;
-    CstStatus open_st = file_open_input(path, &f, NULL, err); /* regular files only, bounded */
-    if (open_st != CST_OK) return open_st;
+    CstStatus st = file_open_input(path, &f, NULL, err); /* regular files only, bounded */
+    if (st != CST_OK) return st;
     char magic[3] = {0};
     size_t got = fread(magic, 1, 3, f);
-    if (!ply_candidate(path, magic, got)) {
-        fclose(f);
-        return CST_OK;
-    }
-    CstStatus st = CST_OK;
-    char *buf = NULL;
-    size_t len = 0;
-    long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
-    if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
-        st = cst_fail(err, CST_ERR_IO, "%.300s: cannot read: %s", path, strerror(errno));
-        goto done;
-    }
-    len = (size_t)size;
-    buf = malloc(len + 1);
-    if (!buf) {
-        st = cst_fail(err, CST_ERR_OOM, "%.300s: out of memory reading the file", path);
-        goto done;
-    }
-    if (fread(buf, 1, len, f) != len) {
-        st = cst_fail(err, CST_ERR_IO, "%.300s: cannot read: %s", path, strerror(errno));
-        goto done;
-    }
-    buf[len] = '\0';
-    PlyCheck *pc = calloc(1, sizeof *pc);
-    if (!pc) {
-        st = cst_fail(err, CST_ERR_OOM, "%.300s: out of memory", path);
-        goto done;
-    }
-    pc->path = path;
-    pc->err = err;
-    size_t body = 0;
-    st = ply_parse_header(pc, buf, len, &body);
-    if (st == CST_OK && pc->format == 0) {
-        int header_lines = 0;
-        for (size_t i = 0; i < body; i++) header_lines += buf[i] == '\n';
-        if (memchr(buf + body, '\0', len - body))
-            st = ply_fail(pc, 0, "NUL byte in ASCII data", "");
-        else
-            st = ply_check_ascii(pc, buf, body, header_lines);
-    } else if (st == CST_OK) {
-        st = ply_check_binary(pc, (const unsigned char *)buf, len, body);
-    }
-    free(pc);
-done:
-    free(buf);
     fclose(f);
-    return st;
+    *is_ply = (got == 3 && strncasecmp(magic, "ply", 3) == 0) || gzip_is_compressed(path, magic, got);
+    return CST_OK;
+}
+
+/* A PlyMesh as an ImportedMesh: the arrays are moved, normals made unit (zero where they
+ * cannot be, as for assimp's meshes), one stand-in material (a PLY names none). */
+static CstStatus ply_import(const char *path, ImportedMesh *out, CstError *err)
+{
+    PlyMesh pm;
+    CstStatus st = ply_read_file(path, &pm, err);
+    if (st != CST_OK) return st;
+    if (pm.num_triangles == 0) {
+        st = cst_fail(err, CST_ERR_PARSE, "%.300s: no triangles in the file (%d faces of other "
+                      "than 3 or 4 vertices skipped)", path, pm.num_skipped_faces);
+        ply_free(&pm);
+        return st;
+    }
+    out->tri_material = calloc((size_t)pm.num_triangles, sizeof *out->tri_material);
+    out->materials = calloc(1, sizeof *out->materials);
+    if (!out->tri_material || !out->materials) {
+        ply_free(&pm);
+        mesh_import_free(out);
+        return cst_fail(err, CST_ERR_OOM, "%.300s: out of memory for %d triangles", path, pm.num_triangles);
+    }
+    Transform id = transform_identity();
+    if (pm.normals)
+        for (int i = 0; i < pm.num_vertices; i++) pm.normals[i] = transform_normal(&id, pm.normals[i]);
+    out->positions = pm.positions;
+    out->num_vertices = pm.num_vertices;
+    out->indices = pm.indices;
+    out->num_triangles = pm.num_triangles;
+    out->normals = pm.normals;
+    out->uvs = pm.uvs;
+    out->num_materials = 1;
+    strcpy(out->materials[0].name, "DefaultMaterial");
+    out->materials[0].type = MATERIAL_DIFFUSE;
+    out->materials[0].albedo = color_s(0.5f);
+    out->materials[0].ior = 1.0f;
+    out->num_skipped_primitives = pm.num_skipped_faces;
+    out->skipped_face_size = pm.skipped_face_size;
+    out->num_quads = pm.num_quads;
+    out->from_ply = 1;
+    free(pm.face_indices); /* pbrt-v4 keeps them for ptex textures only, which we lack */
+    return CST_OK;
 }
 
 /* ------------------------------------------------------------------ OBJ material libraries */
@@ -771,8 +501,7 @@ static CstStatus gltf_precheck(const char *path, CstError *err)
 /* Every check before assimp reads the file; each opens it through file_open_input. */
 static CstStatus mesh_precheck(const char *path, CstError *err)
 {
-    CstStatus st = ply_precheck(path, err);
-    return st != CST_OK ? st : gltf_precheck(path, err);
+    return gltf_precheck(path, err);
 }
 
 /* ------------------------------------------------------------------ assimp's file access */
@@ -882,6 +611,10 @@ static CstStatus import_error_status(const char *msg)
 CstStatus mesh_import(const char *path, ImportedMesh *out, CstError *err)
 {
     memset(out, 0, sizeof *out);
+    int is_ply = 0;
+    CstStatus route = mesh_is_ply(path, &is_ply, err);
+    if (route != CST_OK) return route;
+    if (is_ply) return ply_import(path, out, err);
     /* assimp's own message for a missing file lacks the reason, and it would block on a
      * FIFO or read a device forever: the pre-checks open the file through the one gate
      * (core/file.h), and so does assimp, for the file and what it references (.mtl, .bin). */

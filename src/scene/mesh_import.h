@@ -1,5 +1,6 @@
-/* Mesh files in through assimp's C API: OBJ (with MTL materials), PLY (binary and ASCII),
- * glTF 2.0 and whatever else assimp reads. Triangles keep the file's face order (so a PLY
+/* Mesh files in: PLY (binary and ASCII, gzip-compressed or not) through our own reader
+ * (io/ply.h), OBJ (with MTL materials), glTF 2.0 and whatever else assimp reads through
+ * assimp's C API. Triangles keep the file's face order (so a PLY
  * face's index is its triangle's index), vertices keep their positions bit for bit (where
  * the file's node transforms are the identity, as in PLY and OBJ). */
 #ifndef CST_SCENE_MESH_IMPORT_H
@@ -33,7 +34,11 @@ typedef struct ImportedMesh {
     int num_materials;
     /* Meshes of the file without normals (UVs) got zero fills next to others with them. */
     int normals_partial, uvs_partial;
-    int num_skipped_primitives; /* point and line faces, not imported */
+    int num_skipped_primitives; /* point and line faces, not imported; for a PLY, faces of
+                                   other than 3 or 4 vertices (skipped as pbrt-v4 does) */
+    int from_ply;               /* read by io/ply.c */
+    int skipped_face_size;      /* PLY: the vertex count of the first such face */
+    int num_quads;              /* PLY: faces of 4 vertices, each split into two triangles */
     char warning[512]; /* "": none; else what the loader should pass on (an OBJ's missing
                         * .mtl: CST_WARN_MISSING_FILE) */
 } ImportedMesh;

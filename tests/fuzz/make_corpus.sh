@@ -8,7 +8,7 @@ cd "$(dirname "$0")/../.."
 caustic=$(realpath "${1:?usage: tests/fuzz/make_corpus.sh CAUSTIC_BINARY}")
 out=tests/fuzz/corpus
 rm -rf "$out"
-mkdir -p "$out"/{fuzz_scene_json,fuzz_pbrt,fuzz_mesh,fuzz_image}
+mkdir -p "$out"/{fuzz_scene_json,fuzz_pbrt,fuzz_mesh,fuzz_image,fuzz_ply}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -92,6 +92,41 @@ open(os.path.join(d, "bmp-rgb24"), "wb").write(bmp)
 tga_hdr = lambda kind: struct.pack("<BBBHHBHHHHBB", 0, 0, kind, 0, 0, 0, 0, 0, w, h, 24, 0)
 open(os.path.join(d, "tga-rgb"), "wb").write(tga_hdr(2) + bytes(range(w * h * 3)))
 open(os.path.join(d, "tga-rle"), "wb").write(tga_hdr(10) + bytes([0x80 | (w * h - 1), 10, 20, 30]))
+PY
+# PLY reader (fuzz_ply): a triangle and a quad with normals, uvs under pbrt-v4's four
+# names, face_indices, list properties and an extra element to skip; plain, gzip, and
+# 'Z' + text (the target gzips it itself).
+python3 - "$out/fuzz_ply" <<'PY'
+import sys, os, struct, gzip
+d = sys.argv[1]
+verts = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0.5)]
+def mk(fmt, uv=("u", "v"), quad=True, extra=False):
+    h = "ply\nformat %s 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float %s\nproperty float %s\n" % (fmt, uv[0], uv[1])
+    if extra: h += "property list uchar int junk\n"
+    h += "element face 2\nproperty list uchar int vertex_indices\nproperty int face_indices\n"
+    if extra: h += "element edge 1\nproperty int a\nproperty list ushort double b\n"
+    h += "end_header\n"
+    faces = [(0, 1, 3), (0, 1, 2, 3)] if quad else [(0, 1, 2), (0, 2, 3)]
+    if fmt == "ascii":
+        b = h
+        for v in verts: b += "%g %g %g 0 0 1 %g %g%s\n" % (v[0], v[1], v[2], v[0], v[1], " 2 7 8" if extra else "")
+        for i, f in enumerate(faces): b += "%d %s %d\n" % (len(f), " ".join(map(str, f)), i)
+        if extra: b += "5 1 2.5\n"
+        return b.encode()
+    e = "<" if fmt == "binary_little_endian" else ">"
+    b = h.encode()
+    for v in verts:
+        b += struct.pack(e + "8f", v[0], v[1], v[2], 0, 0, 1, v[0], v[1])
+        if extra: b += struct.pack(e + "B2i", 2, 7, 8)
+    for i, f in enumerate(faces): b += struct.pack(e + "B%di" % len(f), len(f), *f) + struct.pack(e + "i", i)
+    if extra: b += struct.pack(e + "iHd", 5, 1, 2.5)
+    return b
+open(os.path.join(d, "ascii"), "wb").write(mk("ascii"))
+open(os.path.join(d, "le"), "wb").write(mk("binary_little_endian", ("s", "t")))
+open(os.path.join(d, "be"), "wb").write(mk("binary_big_endian", ("texture_u", "texture_v"), extra=True))
+open(os.path.join(d, "ascii-extra"), "wb").write(mk("ascii", ("texture_s", "texture_t"), quad=False, extra=True))
+open(os.path.join(d, "le-gz"), "wb").write(gzip.compress(mk("binary_little_endian"), mtime=0))
+open(os.path.join(d, "Z-ascii"), "wb").write(b"Z" + mk("ascii", extra=True))
 PY
 # EXR: the renderer's own writer, plain and with AOV channels.
 "$caustic" render --width 3 --height 2 --spp 1 -q -o "$tmp/a.exr"

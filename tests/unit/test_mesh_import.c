@@ -455,18 +455,18 @@ static void test_import_errors(void **state)
     expect_import_error("", CST_ERR_IO, "is not a regular file (a directory)"); /* the temp dir itself */
     /* PLY files are checked before assimp sees them (it hangs or crashes on these). */
     write_text("garbage.ply", "ply\nthis is not a header\n\x01\x02\x03");
-    expect_import_error("garbage.ply", CST_ERR_PARSE, "garbage.ply:2: malformed PLY file");
+    expect_import_error("garbage.ply", CST_ERR_PARSE, "garbage.ply:2: malformed PLY header");
     write_text("noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
     expect_import_error("noend.ply", CST_ERR_PARSE, "no end_header");
     write_text("short.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                             "property float y\nproperty float z\nelement face 1\n"
                             "property list uchar int vertex_indices\nend_header\n"
                             "0 0 0\n1 0 0\n0 1 0\n3 0 1\n");
-    expect_import_error("short.ply", CST_ERR_PARSE, "ends inside face 1 of 1");
+    expect_import_error("short.ply", CST_ERR_PARSE, "face 1 of 1: the file ends inside the record");
     write_text("word.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                            "property float y\nproperty float z\nend_header\n"
                            "0 0 0\n1 zero 0\n0 1 0\n");
-    expect_import_error("word.ply", CST_ERR_PARSE, "word.ply:9: malformed PLY file: expected a number");
+    expect_import_error("word.ply", CST_ERR_PARSE, "word.ply:9: malformed PLY data: vertex 2 of 3: \"zero\"; expected a number");
     const float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     const int32_t idx[6] = {0, 1, 2, 0, 2, 1};
     write_binary_ply("cut.ply", pos, 3, idx, 2);
@@ -476,9 +476,9 @@ static void test_import_errors(void **state)
     size_t n = fread(whole, 1, sizeof whole, f);
     fclose(f);
     write_file("cut.ply", whole, n - 1); /* one byte short: assimp would read past the end */
-    expect_import_error("cut.ply", CST_ERR_PARSE, "ends inside face 2 of 2");
+    expect_import_error("cut.ply", CST_ERR_PARSE, "face 2 of 2 (starting at byte");
     write_file("cut.ply", whole, n - 20); /* into the faces: assimp would crash */
-    expect_import_error("cut.ply", CST_ERR_PARSE, "ends inside face 1 of 2");
+    expect_import_error("cut.ply", CST_ERR_PARSE, "face 1 of 2 (starting at byte");
     unsigned char noise[2048];
     uint32_t x = 12345;
     for (size_t i = 0; i < sizeof noise; i++) {
@@ -701,7 +701,7 @@ static void test_json_meshfile_errors(void **state)
     write_text("junk.ply", "ply\nformat ascii 1.0\nelement vertex x\n");
     expect_scene_error(SCENE_HEAD "  {\"type\": \"meshfile\", \"material\": \"white\", \"file\": "
                                   "\"junk.ply\"}\n ]}\n",
-                       CST_ERR_PARSE, "\"junk.ply\"", "junk.ply:3: malformed PLY file", NULL);
+                       CST_ERR_PARSE, "\"junk.ply\"", "junk.ply:3: malformed PLY header", NULL);
     write_file("junk.obj", "\x7f\x45\x4c\x46\x02\x01\x01", 7);
     expect_scene_error(SCENE_HEAD "  {\"type\": \"meshfile\", \"material\": \"white\", \"file\": "
                                   "\"junk.obj\"}\n ]}\n",

@@ -58,6 +58,30 @@ static void test_plymesh(void **state)
     assert_int_equal(s->num_triangles, 2);
     assert_vec(tri_vertex(s, 1, 2), 0, 1, 7, 0);
     cst_scene_destroy(s);
+    /* the same square as one quad and a pentagon, gzip-compressed (`gzip -9n`): the quad
+     * split as pbrt-v4 splits it, (v0 v1 v2) (v0 v2 v3), with an approximation warning; the
+     * pentagon skipped with a warning, as pbrt-v4 skips it */
+    static const char quad[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+        "property float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+        "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n5 0 1 2 3 0\n";
+    FILE *gz = popen("gzip -9n > " CST_BINARY_DIR "/pbrt_quad.ply.gz", "w");
+    assert_non_null(gz);
+    fputs(quad, gz);
+    assert_int_equal(pclose(gz), 0);
+    text = WORLD("Translate 0 0 7\nShape \"plymesh\" \"string filename\" \"pbrt_quad.ply.gz\"\n");
+    Warnings w = {0};
+    CstLoadOptions opt = {collect, &w, 0};
+    st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err);
+    if (st != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(s->num_triangles, 2);
+    assert_vec(tri_vertex(s, 0, 2), 1, 1, 7, 0);
+    assert_vec(tri_vertex(s, 1, 1), 1, 1, 7, 0);
+    assert_vec(tri_vertex(s, 1, 2), 0, 1, 7, 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "t.pbrt:5:17: Shape \"plymesh\": "
+                             "\"pbrt_quad.ply.gz\": 1 quads each split into two triangles") >= 0);
+    assert_true(find_warning(&w, CST_WARN_GEOMETRY, "1 faces of other than 3 or 4 vertices "
+                             "skipped (the first has 5)") >= 0);
+    cst_scene_destroy(s);
 }
 
 /* Directives that only warn, and the v3 leftovers that are accepted silently. */

@@ -531,6 +531,13 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
     }
     if (im.warning[0] && ld->opt && ld->opt->warning)
         ld->opt->warning(ld->opt->warning_user, CST_WARN_MISSING_FILE, im.warning);
+    if (im.num_skipped_primitives && im.from_ply && ld->opt && ld->opt->warning) {
+        /* a PLY's faces of other than 3 or 4 vertices, skipped as pbrt-v4 skips them */
+        char msg[700];
+        snprintf(msg, sizeof msg, "%.400s: %d faces of other than 3 or 4 vertices skipped (the "
+                 "first has %d)", path, im.num_skipped_primitives, im.skipped_face_size);
+        ld->opt->warning(ld->opt->warning_user, CST_WARN_GEOMETRY, msg);
+    }
     if (!transform_is_identity(&xf))
         transform_mesh(&im, &xf);
     for (int i = 0; i < im.num_vertices; i++) {

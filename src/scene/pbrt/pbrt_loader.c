@@ -79,7 +79,7 @@ void pbrt_warn_at(Loader *ld, CstWarningCode code, Loc loc, const char *fmt, ...
 
 Loc pbrt_tok_loc(const Lexer *lx, const PbrtToken *t)
 {
-    Loc l = {lx->tz.name, t->line, t->column};
+    Loc l = {t->file ? t->file : lx->tz.name, t->line, t->column};
     return l;
 }
 
@@ -89,10 +89,42 @@ int pbrt_tok_is(const PbrtToken *t, const char *word)
     return t->len == n && memcmp(t->text, word, n) == 0;
 }
 
+CstStatus pbrt_lex_push(Loader *ld, Lexer *lx, char *text, size_t len, const char *name)
+{
+    if (!GROW(lx->saved, lx->cap_saved, lx->num_saved + 1)) {
+        free(text);
+        return pbrt_oom(ld);
+    }
+    lx->saved[lx->num_saved++] = (LexSaved){lx->tz, lx->text};
+    lx->text = text;
+    pbrt_tokenizer_init(&lx->tz, text, len, name);
+    lx->has_peek = 0; /* callers push between directives, with nothing peeked */
+    return CST_OK;
+}
+
+void pbrt_lex_free(Lexer *lx)
+{
+    free(lx->text);
+    for (int i = 0; i < lx->num_saved; i++) free(lx->saved[i].text);
+    free(lx->saved);
+    free(lx->retired);
+    memset(lx, 0, sizeof *lx);
+}
+
 CstStatus pbrt_lex_peek(Loader *ld, Lexer *lx, PbrtToken *t)
 {
-    if (!lx->has_peek) {
+    while (!lx->has_peek) {
         TRY(pbrt_next_token(&lx->tz, &lx->peek, ld->err));
+        if (lx->peek.kind == PBRT_TOK_EOF && lx->num_saved > 0) {
+            /* an included file ends: its includer goes on (pbrt-v4's parser pops its
+             * file stack the same way, in the middle of a parameter list too) */
+            free(lx->retired);
+            lx->retired = lx->text;
+            LexSaved sv = lx->saved[--lx->num_saved];
+            lx->tz = sv.tz;
+            lx->text = sv.text;
+            continue;
+        }
         lx->has_peek = 1;
     }
     *t = lx->peek;

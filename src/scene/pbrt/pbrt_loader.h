@@ -79,6 +79,9 @@ typedef struct GState {
     int reverse;
     int material; /* index into Loader.mats */
     AreaLight area;
+    int active_start;   /* ActiveTransform includes StartTime: transforms apply */
+    int active_end;     /* ActiveTransform includes EndTime (for the motion warning); both
+                           are attributes, restored by AttributeEnd, as in pbrt-v4 */
     int transform_only; /* pushed by TransformBegin (pbrt-v3): pops only the CTM */
     Loc loc;            /* of the Begin, for messages */
 } GState;
@@ -149,10 +152,25 @@ typedef struct CamRec {
     Loc loc;
 } CamRec;
 
+/* A file whose reading an Include interrupted: its tokenizer, resumed when the included
+ * file's tokens end, and the text it reads (owned, NULL for the caller's text). */
+typedef struct LexSaved {
+    PbrtTokenizer tz;
+    char *text;
+} LexSaved;
+
+/* Tokens of one file and, as pbrt-v4 reads them, of the files it Includes: an included
+ * file's tokens are spliced into the includer's stream, so a parameter list that an
+ * included file leaves open goes on after the Include in the includer. */
 typedef struct Lexer {
     PbrtTokenizer tz;
     PbrtToken peek;
     int has_peek;
+    char *text;          /* what tz reads, when owned (an included file) */
+    LexSaved *saved;     /* the includers of tz, innermost last */
+    int num_saved, cap_saved;
+    char *retired;       /* the text of the last file finished: freed one file later, as
+                            a token of it may still be in use */
 } Lexer;
 
 /* A directive with a quoted type name and a parameter list (Film "rgb" ..., Material
@@ -192,7 +210,6 @@ typedef struct Loader {
     int num_objs, cap_objs;
     int cur_obj; /* -1 outside ObjectBegin/End */
     int in_world;
-    int active_start; /* ActiveTransform includes StartTime: transforms apply */
     CamRec cam;
     int env_set; /* an infinite light has made the scene's environment */
     int num_instances_expanded; /* instances whose spheres were copied */
@@ -239,6 +256,13 @@ Loc pbrt_tok_loc(const Lexer *lx, const PbrtToken *t);
 
 /* True when t's text is exactly `word`. */
 int pbrt_tok_is(const PbrtToken *t, const char *word);
+
+/* Continues lx with text (owned by lx from now on, freed when its tokens end or by
+ * pbrt_lex_free) named name, the includer resuming after it. */
+CstStatus pbrt_lex_push(Loader *ld, Lexer *lx, char *text, size_t len, const char *name);
+
+/* Frees what lx owns (the texts of unfinished includes). */
+void pbrt_lex_free(Lexer *lx);
 
 /* The next token, left for the next pbrt_lex_next. */
 CstStatus pbrt_lex_peek(Loader *ld, Lexer *lx, PbrtToken *t);

@@ -203,11 +203,21 @@ CstStatus pbrt_parse_params(Loader *ld, Lexer *lx, Params *ps)
         }
         for (int i = 0; i < ps->n; i++)
             if (strcmp(ps->v[i].name, pname) == 0) {
-                CstStatus st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc,
-                                       "parameter \"%s\" given twice (first at line %d); expected "
-                                            "each parameter once", pbrt_clip(pname, nm), ps->v[i].loc.line);
-                free(decl);
-                return st;
+                /* pbrt-v4 takes the last one (its ParameterDictionary looks the list up
+                 * from the end), silently; we say so. */
+                Loc first = ps->v[i].loc;
+                pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, loc, "parameter \"%s\" given twice: "
+                             "this one is used, the one at %.200s:%d:%d is ignored (as pbrt-v4 "
+                             "does)", pbrt_clip(pname, nm), first.file, first.line, first.col);
+                Param *old = &ps->v[i];
+                free(old->name);
+                free(old->decl);
+                free(old->nums);
+                for (int k = 0; k < old->num_strs; k++) free(old->strs[k]);
+                free(old->strs);
+                memmove(old, old + 1, (size_t)(ps->n - i - 1) * sizeof *ps->v);
+                ps->n--;
+                break;
             }
         if (!GROW(ps->v, ps->cap, ps->n + 1)) {
             free(decl);
@@ -236,8 +246,8 @@ CstStatus pbrt_parse_params(Loader *ld, Lexer *lx, Params *ps)
                     if (t.kind == PBRT_TOK_EOF || t.kind == PBRT_TOK_WORD)
                         return pbrt_fail_at(ld, CST_ERR_PARSE, pbrt_tok_loc(lx, &t),
                                        "got %s inside the values of \"%s\"; expected ']' to "
-                                            "close the '[' at %d:%d", got, pbrt_clip(decl, nm), open.line,
-                                            open.col);
+                                            "close the '[' at %.200s:%d:%d", got, pbrt_clip(decl, nm),
+                                            open.file, open.line, open.col);
                     return pbrt_fail_at(ld, CST_ERR_PARSE, pbrt_tok_loc(lx, &t),
                                    "got %s inside the values of \"%s\"; expected numbers, "
                                         "strings or ']'", got, pbrt_clip(decl, nm));

@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/file.h"
+#include "io/gzip.h"
 #include "io/path.h"
 #include "scene/pbrt/pbrt_camera.h"
 #include "scene/pbrt/pbrt_light.h"
@@ -27,13 +28,17 @@
 
 static CstStatus parse_text(Loader *ld, const char *text, size_t len, const char *name);
 
+/* Include splices the file's tokens into the includer's (pbrt_lex_push), as pbrt-v4 does: a
+ * parameter list left open at its end goes on after the Include. Import parses the file
+ * on its own (pbrt-v4 reads it separately, so its lists end with it). Either may be
+ * gzip-compressed (.gz or the gzip magic: io/gzip.h). */
 static CstStatus include_directive(Loader *ld, Lexer *lx, Loc loc, const char *d)
 {
     char *file = NULL;
     Loc fl;
     TRY(pbrt_expect_string(ld, lx, d, "a file name", &file, &fl));
     CstStatus st = pbrt_check_file_access(ld, fl, d);
-    if (!st && ld->depth >= PBRT_MAX_INCLUDE_DEPTH)
+    if (!st && ld->depth + lx->num_saved >= PBRT_MAX_INCLUDE_DEPTH)
         st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: more than %d nested includes (does a file "
                           "include itself?)", d, PBRT_MAX_INCLUDE_DEPTH);
     char *path = st ? NULL : pbrt_resolve_path(ld, file);
@@ -47,8 +52,9 @@ static CstStatus include_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
     ld->files[ld->num_files++] = path; /* owned by the loader; Locs point into it */
     char *text = NULL;
     size_t len = 0;
-    st = file_read_all(path, &text, &len, ld->err);
+    st = gzip_read_file(path, &text, &len, ld->err);
     if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    if (strcmp(d, "Include") == 0) return pbrt_lex_push(ld, lx, text, len, path);
     ld->depth++;
     st = parse_text(ld, text, len, path);
     ld->depth--;
@@ -164,22 +170,26 @@ static CstStatus parse_text(Loader *ld, const char *text, size_t len, const char
 {
     Lexer lx = {0};
     pbrt_tokenizer_init(&lx.tz, text, len, name);
+    CstStatus st = CST_OK;
     for (;;) {
         PbrtToken t;
-        TRY(pbrt_lex_next(ld, &lx, &t));
+        if ((st = pbrt_lex_next(ld, &lx, &t))) break;
         if (t.kind == PBRT_TOK_EOF) {
             if (ld->depth == 0) ld->end = pbrt_tok_loc(&lx, &t);
-            return CST_OK;
+            break;
         }
         if (t.kind != PBRT_TOK_WORD) {
             char got[96];
             pbrt_token_describe(&t, got, sizeof got);
-            return pbrt_fail_at(ld, CST_ERR_PARSE, pbrt_tok_loc(&lx, &t),
-                                "got %s; expected a directive such as Shape or AttributeBegin%s", got,
-                                t.kind == PBRT_TOK_STRING ? " (a parameter outside a directive?)" : "");
+            st = pbrt_fail_at(ld, CST_ERR_PARSE, pbrt_tok_loc(&lx, &t),
+                              "got %s; expected a directive such as Shape or AttributeBegin%s", got,
+                              t.kind == PBRT_TOK_STRING ? " (a parameter outside a directive?)" : "");
+            break;
         }
-        TRY(directive(ld, &lx, &t));
+        if ((st = directive(ld, &lx, &t))) break;
     }
+    pbrt_lex_free(&lx);
+    return st;
 }
 
 CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *name,
@@ -198,7 +208,8 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     ld.err = err;
     if (options) ld.opt = *options;
     ld.cur_obj = -1;
-    ld.active_start = 1;
+    ld.gs.active_start = 1;
+    ld.gs.active_end = 1;
     ld.gs.ctm = pbrt_xf_identity();
     ld.end = (Loc){name, 1, 1};
     CstStatus st = CST_OK;
@@ -273,7 +284,7 @@ CstStatus cst_scene_load_pbrt(const char *path, const CstLoadOptions *options, C
     *out = NULL;
     char *text = NULL;
     size_t len = 0;
-    CstStatus st = file_read_all(path, &text, &len, err);
+    CstStatus st = gzip_read_file(path, &text, &len, err); /* scene.pbrt.gz too */
     if (st) return st;
     st = cst_scene_load_pbrt_string(text, len, path, options, out, err);
     free(text);

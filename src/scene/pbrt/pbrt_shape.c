@@ -164,7 +164,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     int mat = 0;
     float s = 1.0f;
     TRY(pbrt_material_scene_id(ld, material, &mat));
-    if (g->is_sphere && is_similarity(&xf->m, &s)) {
+    if (g->is_sphere && transform_is_affine(&xf->m) && is_similarity(&xf->m, &s)) {
         Vec3 c = transform_point(&xf->m, v3s(0.0f));
         float r = g->radius * s;
         if (!pbrt_coords_ok(c) || !(r > 1e-18f) || !((double)r <= PBRT_MAX_LENGTH))
@@ -212,8 +212,16 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     int swap = (transform_det(&xf->m) < 0.0) != (reverse != 0);
     Transform nm = transform_identity();
     transform_normal_matrix(&xf->m, &nm);
+    int projective = !transform_is_affine(&xf->m);
     for (int i = 0; i < g->nv; i++) {
         p[i] = transform_is_identity(&xf->m) ? g->p[i] : transform_point(&xf->m, g->p[i]);
+        if (projective) { /* pbrt-v4's point transform: divided by w where w != 1 */
+            const float *r3 = xf->m.m[3];
+            double w = (double)r3[0] * (double)g->p[i].x + (double)r3[1] * (double)g->p[i].y +
+                       (double)r3[2] * (double)g->p[i].z + (double)r3[3];
+            if (w != 1.0)
+                p[i] = v3((float)((double)p[i].x / w), (float)((double)p[i].y / w), (float)((double)p[i].z / w));
+        }
         if (!pbrt_coords_ok(p[i])) {
             st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: vertex %d is at (%g, %g, %g), beyond the "
                               "scene limit; expected coordinates of magnitude at most %g", d, i,
@@ -383,6 +391,14 @@ static CstStatus plymesh(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGe
         if (im.normals) memcpy(g->n, im.normals, (size_t)im.num_vertices * sizeof *g->n);
         if (im.uvs) memcpy(g->uv, im.uvs, (size_t)im.num_vertices * sizeof *g->uv);
     }
+    if (!st && im.num_skipped_primitives)
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, fl, "%s: \"%s\": %d faces of other than 3 or 4 vertices "
+                     "skipped (the first has %d), as pbrt-v4 skips them", d, file,
+                     im.num_skipped_primitives, im.skipped_face_size);
+    if (!st && im.num_quads)
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, fl, "%s: \"%s\": %d quads each split into two "
+                     "triangles (pbrt-v4 renders them as bilinear patches; exact for planar quads)",
+                     d, file, im.num_quads);
     mesh_import_free(&im);
     return st;
 }
@@ -617,10 +633,9 @@ CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const c
         if (!transform_invert(&xf.m, &inv)) {
             /* flat (Scale 0) or not finite when inverted: nothing a ray could hit */
             pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: the instance transform is singular; skipped", d);
-        } else if (!transform_is_affine(&xf.m)) {
-            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the instance transform is projective; "
-                                "expected an affine transform (bottom row 0 0 0 1)", d);
         } else {
+            /* a projective instance transform (warned at its ConcatTransform/Transform):
+             * its affine part, the instance BVH being affine */
             float rows[12];
             for (int r = 0; r < 3; r++) memcpy(&rows[4 * r], xf.m.m[r], sizeof xf.m.m[r]);
             st = cst_scene_add_instance(ld->scene, obj->proto, rows, ld->err);

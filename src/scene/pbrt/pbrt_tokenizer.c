@@ -75,6 +75,7 @@ CstStatus pbrt_next_token(PbrtTokenizer *tz, PbrtToken *tok, CstError *err)
     }
     tok->line = tz->line;
     tok->column = tz->column;
+    tok->file = tz->name;
     tok->text = tz->text + tz->pos;
     if (tz->pos >= tz->len) {
         tok->kind = PBRT_TOK_EOF;

@@ -21,6 +21,7 @@ typedef struct PbrtToken {
     const char *text; /* into the tokenizer's buffer; not NUL-terminated */
     size_t len;
     int line, column; /* of the token's first character, 1-based; columns count code points */
+    const char *file; /* the tokenizer's name: the file the token is in */
     double number;
 } PbrtToken;
 

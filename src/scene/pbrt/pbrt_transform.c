@@ -85,11 +85,22 @@ static int xf_finite(const Xf *x)
     return 1;
 }
 
+/* A transform while only StartTime is active changes the start transform alone: pbrt-v4
+ * then blurs what follows between the start and end transforms; we render the start. */
+static void warn_start_only(Loader *ld, Loc loc, const char *d)
+{
+    if (ld->gs.active_start && !ld->gs.active_end)
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s under ActiveTransform StartTime: motion blur "
+                     "is not supported; what follows is rendered at its start-time transform "
+                     "(pbrt-v4 blurs it towards the end-time one)", d);
+}
+
 static CstStatus apply_ctm(Loader *ld, Xf t, Loc loc, const char *d)
 {
     if (!xf_finite(&t))
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the transform is not finite in 32-bit floats", d);
-    if (!ld->active_start) return CST_OK; /* only the end time is affected: no motion blur */
+    warn_start_only(ld, loc, d);
+    if (!ld->gs.active_start) return CST_OK; /* only the end time is affected: no motion blur */
     ld->gs.ctm = pbrt_xf_compose(&ld->gs.ctm, &t);
     return CST_OK;
 }
@@ -200,13 +211,25 @@ CstStatus pbrt_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
     for (int r = 0; r < 4; r++)
         for (int c = 0; c < 4; c++) rows[4 * r + c] = (float)v[4 * c + r];
     Transform m = transform_from_rows(rows);
-    if (!transform_is_affine(&m))
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: a projective or non-finite matrix; "
-                       "expected an affine one (translation in elements 13-15, then 0 0 0 1 "
-                            "in elements 4, 8, 12, 16)", d);
+    for (int k = 0; k < 16; k++)
+        if (!isfinite(rows[k]))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: element %d is not finite in 32-bit "
+                                "floats; expected finite numbers", d, 4 * (k % 4) + k / 4 + 1);
+    if (!transform_is_affine(&m)) {
+        /* pbrt-v4 keeps the whole 4x4 matrix: points are divided by w (triangle meshes get
+         * exactly that, pbrt_shape.c), directions and normals use the upper 3x3 alone (as
+         * we do everywhere). What caustic cannot follow: points of lights and cameras, and
+         * spheres (tessellated), use the affine part; the inverse is the affine part's. */
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: a projective matrix (bottom row %g %g %g %g, "
+                     "elements 4, 8, 12, 16): kept as pbrt-v4 keeps it; triangle meshes are "
+                     "divided by w as in pbrt-v4, directions use the 3x3 part as in pbrt-v4, "
+                     "light and camera positions and spheres use the affine part", d,
+                     v[3], v[7], v[11], v[15]);
+    }
     Xf x = xf_from(m);
     if (d[0] == 'T') {
-        if (!ld->active_start) return CST_OK;
+        warn_start_only(ld, loc, d);
+        if (!ld->gs.active_start) return CST_OK;
         ld->gs.ctm = x;
         return CST_OK;
     }
@@ -215,8 +238,9 @@ CstStatus pbrt_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
 
 CstStatus pbrt_identity_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
-    (void)lx, (void)loc, (void)dname;
-    if (ld->active_start) ld->gs.ctm = pbrt_xf_identity();
+    (void)lx;
+    warn_start_only(ld, loc, dname);
+    if (ld->gs.active_start) ld->gs.ctm = pbrt_xf_identity();
     return CST_OK;
 }
 
@@ -247,12 +271,13 @@ CstStatus pbrt_active_transform_directive(Loader *ld, Lexer *lx, Loc loc, const 
     (void)dname;
     PbrtToken w;
     TRY(pbrt_lex_next(ld, lx, &w));
-    if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "StartTime")) { ld->active_start = 1; }
+    if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "StartTime")) { ld->gs.active_start = 1; ld->gs.active_end = 0; }
     else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "EndTime")) {
-        ld->active_start = 0;
+        ld->gs.active_start = 0;
+        ld->gs.active_end = 1;
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "ActiveTransform EndTime: motion blur is not "
                      "supported; end-time transforms are ignored");
-    } else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "All")) { ld->active_start = 1; }
+    } else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "All")) { ld->gs.active_start = ld->gs.active_end = 1; }
     else {
         char got[96];
         pbrt_token_describe(&w, got, sizeof got);
