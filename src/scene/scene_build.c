@@ -84,17 +84,44 @@ CstStatus cst_scene_create(CstScene **out, CstError *err)
 
 /* ------------------------------------------------------------------ textures */
 
-static CstStatus image_texture(Scene *s, const CstTextureDesc *d, Texture *t, CstError *err)
+/* The pixels of an image description: shared with a source texture, loaded or copied. */
+static CstStatus image_pixels(Scene *s, const CstTextureDesc *d, TextureWrap wrap, Texture *t, CstError *err)
 {
     static const char fn[] = "cst_scene_add_texture";
-    TextureWrap wrap = d->wrap == CST_TEXTURE_WRAP_CLAMP ? TEXTURE_WRAP_CLAMP : TEXTURE_WRAP_REPEAT;
-    (void)s;
-    if (d->wrap != CST_TEXTURE_WRAP_REPEAT && d->wrap != CST_TEXTURE_WRAP_CLAMP)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown wrap mode %d; expected CST_TEXTURE_WRAP_REPEAT "
-                        "or CST_TEXTURE_WRAP_CLAMP", fn, (int)d->wrap);
+    if (d->source) {
+        CstStatus st = check_texture_id(s, d->source, 0, fn, "source", err);
+        if (st != CST_OK) return st;
+        const Texture *src = &s->textures[d->source - 1];
+        if (src->type != TEXTURE_IMAGE)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: source %d is not an image texture", fn, d->source);
+        texture_share(t, src);
+        t->num_ops = 0;
+        t->uv_scale = v2(1.0f, 1.0f), t->uv_offset = v2(0.0f, 0.0f);
+        t->image.wrap = wrap;
+        t->image.filter = TEXTURE_FILTER_NONE;
+        return CST_OK;
+    }
     if (!d->path == !d->pixels)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: an image texture needs exactly one of path and pixels", fn);
-    if (d->path) return texture_image_load(t, d->path, d->linear != 0, wrap, err);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: an image texture needs exactly one of path, pixels and "
+                        "source", fn);
+    if (d->path) {
+        TexelEncoding enc = d->linear ? TEXEL_LINEAR : TEXEL_SRGB;
+        float gamma = 1.0f;
+        switch (d->encoding) {
+        case CST_TEXTURE_ENCODING_DEFAULT: break;
+        case CST_TEXTURE_ENCODING_SRGB: enc = TEXEL_SRGB; break;
+        case CST_TEXTURE_ENCODING_LINEAR: enc = TEXEL_LINEAR; break;
+        case CST_TEXTURE_ENCODING_GAMMA:
+            if (!(d->gamma > 0.0f && d->gamma <= 1e6f))
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: gamma %g; expected a number > 0", fn, (double)d->gamma);
+            enc = TEXEL_GAMMA, gamma = d->gamma;
+            break;
+        default:
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown encoding %d; expected a CST_TEXTURE_ENCODING_*",
+                            fn, (int)d->encoding);
+        }
+        return texture_image_load_encoded(t, d->path, enc, gamma, wrap, err);
+    }
     if (d->width <= 0 || d->height <= 0 || d->width > 65536 || d->height > 65536)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: image of %d x %d pixels; expected 1 to 65536 on each side",
                         fn, d->width, d->height);
@@ -103,6 +130,47 @@ static CstStatus image_texture(Scene *s, const CstTextureDesc *d, Texture *t, Cs
     if (!rgb) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d image", fn, d->width, d->height);
     memcpy(rgb, d->pixels, n * sizeof *rgb);
     return texture_image(t, rgb, d->width, d->height, wrap, err); /* validates the pixels */
+}
+
+static CstStatus image_texture(Scene *s, const CstTextureDesc *d, Texture *t, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_texture";
+    TextureWrap wrap = d->wrap == CST_TEXTURE_WRAP_CLAMP ? TEXTURE_WRAP_CLAMP : TEXTURE_WRAP_REPEAT;
+    if (d->wrap != CST_TEXTURE_WRAP_REPEAT && d->wrap != CST_TEXTURE_WRAP_CLAMP)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown wrap mode %d; expected CST_TEXTURE_WRAP_REPEAT "
+                        "or CST_TEXTURE_WRAP_CLAMP", fn, (int)d->wrap);
+    if ((unsigned)d->filter > (unsigned)CST_TEXTURE_FILTER_EWA)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown filter %d; expected a CST_TEXTURE_FILTER_*", fn,
+                        (int)d->filter);
+    if (!(d->max_anisotropy >= 0.0f && d->max_anisotropy <= 1e6f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: max_anisotropy %g; expected >= 1 (0 = 8)", fn,
+                        (double)d->max_anisotropy);
+    if (d->num_ops < 0 || d->num_ops > CST_TEXTURE_MAX_OPS)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d ops; expected 0 to %d", fn, d->num_ops, CST_TEXTURE_MAX_OPS);
+    for (int i = 0; i < d->num_ops; i++) {
+        const CstTextureOp *op = &d->ops[i];
+        if (op->type < CST_TEXTURE_OP_AFFINE || op->type > CST_TEXTURE_OP_RED)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ops[%d] has unknown type %d", fn, i, (int)op->type);
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(op->a[k]) || !isfinite(op->b[k]))
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ops[%d] has a value that is not finite", fn, i);
+    }
+    CstStatus st = image_pixels(s, d, wrap, t, err);
+    if (st != CST_OK) return st;
+    static const TextureOpType types[] = {TEXTURE_OP_AFFINE, TEXTURE_OP_AFFINE, TEXTURE_OP_MIN1, TEXTURE_OP_POW,
+                                          TEXTURE_OP_RED};
+    for (int i = 0; i < d->num_ops; i++) {
+        const CstTextureOp *op = &d->ops[i];
+        texture_add_op(t, types[op->type], color_rgb(op->a[0], op->a[1], op->a[2]),
+                       color_rgb(op->b[0], op->b[1], op->b[2]));
+    }
+    static const TextureFilter filters[] = {TEXTURE_FILTER_NONE, TEXTURE_FILTER_POINT, TEXTURE_FILTER_BILINEAR,
+                                            TEXTURE_FILTER_TRILINEAR, TEXTURE_FILTER_EWA};
+    if ((st = texture_set_filter(t, filters[d->filter], d->max_anisotropy, err)) != CST_OK) {
+        texture_free(t);
+        return st;
+    }
+    return CST_OK;
 }
 
 CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *out_id, CstError *err)
@@ -179,7 +247,20 @@ CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *
         break;
     case TEXTURE_IMAGE:
         d->type = CST_TEXTURE_IMAGE;
-        d->pixels = t->image.rgb;
+        /* Images stored as 3-channel floats only (files keep their compact formats). */
+        d->pixels = t->image.im->format == TEXEL_F32 && t->image.im->channels == 3
+                        ? (const float *)t->image.im->level[0].texels : NULL;
+        d->source = id;
+        d->filter = (CstTextureFilter)t->image.filter; /* the enums agree */
+        d->max_anisotropy = t->image.max_aniso;
+        d->num_ops = t->num_ops;
+        for (int i = 0; i < t->num_ops; i++) {
+            static const CstTextureOpType types[] = {CST_TEXTURE_OP_AFFINE, CST_TEXTURE_OP_MIN1, CST_TEXTURE_OP_POW,
+                                                     CST_TEXTURE_OP_RED};
+            d->ops[i].type = types[t->ops[i].type];
+            color_floats(t->ops[i].a, d->ops[i].a);
+            color_floats(t->ops[i].b, d->ops[i].b);
+        }
         d->width = t->image.width;
         d->height = t->image.height;
         d->wrap = t->image.wrap == TEXTURE_WRAP_CLAMP ? CST_TEXTURE_WRAP_CLAMP : CST_TEXTURE_WRAP_REPEAT;

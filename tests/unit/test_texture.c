@@ -23,6 +23,7 @@
 
 #include "io/image_io.h"
 #include "scene/scene.h"
+#include "textures/mipmap.h"
 #include "textures/texture.h"
 
 static int group_setup(void **state)
@@ -173,6 +174,174 @@ static void test_srgb_decode(void **state)
     /* Known values of the curve: byte 128 is 0.2158605 linear, byte 10 is 10/255/12.92. */
     assert_true(fabs(srgb_eotf(128 / 255.0) - 0.21586050011389923) < 1e-12);
     assert_true(fabs(srgb_eotf(10 / 255.0) - 0.0030352698354883752) < 1e-12);
+}
+
+/* 8-bit files stay 8-bit (one byte per channel, grey files one channel) and decode at
+ * lookup to exactly the floats of the sRGB curve's table; a gamma encoding decodes to
+ * (code / 255)^g. */
+static void test_compact_storage(void **state)
+{
+    (void)state;
+    enum { W = 5, H = 3 };
+    unsigned char rgb[W * H * 3], grey[W * H];
+    for (int i = 0; i < W * H * 3; i++) rgb[i] = (unsigned char)(17 * i + 3);
+    for (int i = 0; i < W * H; i++) grey[i] = (unsigned char)(29 * i + 1);
+    char prgb[512], pgrey[512];
+    tpath(prgb, sizeof prgb, "compact_rgb.png");
+    tpath(pgrey, sizeof pgrey, "compact_grey.png");
+    assert_true(stbi_write_png(prgb, W, H, 3, rgb, W * 3));
+    assert_true(stbi_write_png(pgrey, W, H, 1, grey, W));
+    CstError err;
+    Texture t, g, gam;
+    assert_int_equal(texture_image_load(&t, prgb, false, TEXTURE_WRAP_CLAMP, &err), CST_OK);
+    assert_int_equal(texture_image_load(&g, pgrey, false, TEXTURE_WRAP_CLAMP, &err), CST_OK);
+    assert_int_equal(texture_image_load_encoded(&gam, pgrey, TEXEL_GAMMA, 2.2f, TEXTURE_WRAP_CLAMP, &err), CST_OK);
+    assert_int_equal(t.image.im->format, TEXEL_U8);
+    assert_int_equal(t.image.im->channels, 3);
+    assert_int_equal(g.image.im->channels, 1);
+    assert_int_equal(texture_image_bytes(&t), W * H * 3);
+    assert_int_equal(texture_image_bytes(&g), W * H);
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            Color c = texture_texel(&t, 0, x, y), cg = texture_texel(&g, 0, x, y), cm = texture_texel(&gam, 0, x, y);
+            for (int k = 0; k < 3; k++) {
+                assert_true(c.c[k] == image_srgb_to_linear(rgb[(y * W + x) * 3 + k] / 255.0));
+                if (cg.c[k] != image_srgb_to_linear(grey[y * W + x] / 255.0))
+                    fail_msg("grey texel (%d, %d): %.9g, code %d", x, y, (double)cg.c[k], grey[y * W + x]);
+                assert_true(fabsf(cm.c[k] - powf(grey[y * W + x] / 255.0f, 2.2f)) <= 1e-7f);
+            }
+        }
+    /* A shared copy with a value map: no new pixels, the map applied after the lookup. */
+    Texture s2;
+    texture_share(&s2, &t);
+    assert_true(texture_add_op(&s2, TEXTURE_OP_AFFINE, color_s(-0.5f), color_s(1.0f)));
+    assert_true(s2.image.im == t.image.im && t.image.im->refs == 2);
+    Color a = texture_eval(&t, 0, v2(0.3f, 0.3f)), b = texture_eval(&s2, 0, v2(0.3f, 0.3f));
+    for (int k = 0; k < 3; k++) assert_true(b.c[k] == maxf(0.0f, -0.5f * a.c[k] + 1.0f));
+    texture_free(&s2);
+    assert_int_equal(t.image.im->refs, 1);
+    texture_free(&t);
+    texture_free(&g);
+    texture_free(&gam);
+}
+
+/* A float image of w x h texels from f(x, y, channel). */
+static Texture float_image(int w, int h, float (*f)(int, int, int))
+{
+    float *px = malloc((size_t)w * (size_t)h * 3 * sizeof *px);
+    assert_non_null(px);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++)
+            for (int k = 0; k < 3; k++) px[(y * w + x) * 3 + k] = f(x, y, k);
+    Texture t;
+    CstError err;
+    assert_int_equal(texture_image(&t, px, w, h, TEXTURE_WRAP_REPEAT, &err), CST_OK);
+    return t;
+}
+
+static float f_const(int x, int y, int k) { (void)x, (void)y; return 0.25f + 0.25f * (float)k; }
+static float f_hash(int x, int y, int k)
+{
+    uint32_t v = (uint32_t)x * 73856093u ^ (uint32_t)y * 19349663u ^ (uint32_t)k * 83492791u;
+    v ^= v >> 13, v *= 0x5bd1e995u, v ^= v >> 15;
+    return (float)(v & 0xffff) / 65535.0f;
+}
+static float f_checker(int x, int y, int k) { (void)k; return (float)((x + y) & 1); }
+
+/* The mean of level l's texels, channel k. */
+static double level_mean(const Texture *t, int l, int k)
+{
+    const TexLevel *lv = &t->image.im->level[l];
+    double sum = 0.0;
+    for (int y = 0; y < lv->height; y++)
+        for (int x = 0; x < lv->width; x++) sum += (double)texture_texel(t, l, x, y).c[k];
+    return sum / ((double)lv->width * (double)lv->height);
+}
+
+/* MIP pyramids: levels halve (rounded up) down to 1 x 1; an area-weighted box filter keeps
+ * every level's mean equal to level 0's (odd sizes included); a constant image stays that
+ * constant on every level and through every filter and footprint. */
+static void test_mipmap_levels(void **state)
+{
+    (void)state;
+    CstError err;
+    static const int sizes[3][2] = {{64, 48}, {37, 21}, {1, 9}};
+    for (int si = 0; si < 3; si++) {
+        int w = sizes[si][0], h = sizes[si][1];
+        Texture t = float_image(w, h, f_hash);
+        assert_int_equal(texture_set_filter(&t, TEXTURE_FILTER_TRILINEAR, 0.0f, &err), CST_OK);
+        const TexImage *im = t.image.im;
+        int lw = w, lh = h, l = 0;
+        for (; l < im->num_levels; l++) {
+            assert_int_equal(im->level[l].width, lw);
+            assert_int_equal(im->level[l].height, lh);
+            for (int k = 0; k < 3; k++) {
+                double m0 = level_mean(&t, 0, k), ml = level_mean(&t, l, k);
+                if (fabs(ml - m0) > 1e-6) fail_msg("%dx%d level %d channel %d: mean %.9f, level 0 %.9f", w, h, l, k, ml, m0);
+            }
+            lw = lw > 1 ? (lw + 1) / 2 : 1, lh = lh > 1 ? (lh + 1) / 2 : 1;
+        }
+        assert_int_equal(im->level[im->num_levels - 1].width * im->level[im->num_levels - 1].height, 1);
+        texture_free(&t);
+    }
+    Texture c = float_image(37, 21, f_const);
+    assert_int_equal(texture_set_filter(&c, TEXTURE_FILTER_EWA, 0.0f, &err), CST_OK);
+    for (int l = 0; l < c.image.im->num_levels; l++)
+        for (int k = 0; k < 3; k++) assert_true(fabs(level_mean(&c, l, k) - (double)f_const(0, 0, k)) < 1e-7);
+    static const TextureFilter filters[4] = {TEXTURE_FILTER_POINT, TEXTURE_FILTER_BILINEAR, TEXTURE_FILTER_TRILINEAR,
+                                             TEXTURE_FILTER_EWA};
+    for (int fi = 0; fi < 4; fi++)
+        for (int i = 0; i < 200; i++) {
+            float d = ldexpf(1.0f, -(i % 12)) * (float)(1 + i % 3);
+            Vec2 st = v2(f_hash(i, 1, 0) * 3.0f - 1.0f, f_hash(i, 2, 0) * 3.0f - 1.0f);
+            Color v = mipmap_filter(c.image.im, TEXTURE_WRAP_REPEAT, filters[fi], 8.0f, st, v2(d, 0.3f * d),
+                                    v2(-0.1f * d, 0.5f * d));
+            assert_rgb_near(v, 0.25, 0.5, 0.75, 2e-6);
+        }
+    texture_free(&c);
+}
+
+/* Level selection (pbrt-v4 MIPMap::Filter): a checkerboard of single texels is 0 or 1 on
+ * level 0 and 0.5 on every coarser level, so the footprint decides which one is seen. */
+static void test_mipmap_filters(void **state)
+{
+    (void)state;
+    CstError err;
+    Texture t = float_image(64, 64, f_checker);
+    assert_int_equal(texture_set_filter(&t, TEXTURE_FILTER_BILINEAR, 0.0f, &err), CST_OK);
+    const TexImage *im = t.image.im;
+    assert_int_equal(im->num_levels, 7);
+    Vec2 centre = v2(10.5f / 64.0f, 1.0f - 20.5f / 64.0f); /* texel (10, 20): even, 0 */
+    Vec2 z = v2(0.0f, 0.0f);
+    /* No footprint: level 0. A footprint of 2 texels (width = 2 max|d| = 2/64): level 1. */
+    for (int fi = TEXTURE_FILTER_POINT; fi <= TEXTURE_FILTER_EWA; fi++) {
+        Color v0 = mipmap_filter(im, TEXTURE_WRAP_REPEAT, (TextureFilter)fi, 8.0f, centre, z, z);
+        if (fi == TEXTURE_FILTER_EWA) assert_true(v0.c[0] == 0.0f); /* falls back to level 0's bilinear */
+        else assert_rgb_near(v0, 0.0, 0.0, 0.0, 0.0);
+    }
+    Vec2 d1 = v2(1.0f / 64.0f, 0.0f), d2 = v2(0.0f, 1.0f / 64.0f);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_BILINEAR, 8.0f, centre, d1, d2), 0.5, 0.5, 0.5, 0.0);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_POINT, 8.0f, centre, d1, d2), 0.5, 0.5, 0.5, 0.0);
+    /* Half a texel: level 0 (log2(1/64) = -6 below the top of 6). */
+    Vec2 h1 = v2(0.5f / 64.0f, 0.0f), h2 = v2(0.0f, 0.5f / 64.0f);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_BILINEAR, 8.0f, centre, h1, h2), 0.0, 0.0, 0.0, 0.0);
+    /* Trilinear between level 0 (0) and 1 (0.5) is pbrt-v4's level-0 bilinear below level
+     * 1; between levels 1 and 2 both are 0.5. */
+    Vec2 t1 = v2(1.5f / 64.0f, 0.0f);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_TRILINEAR, 8.0f, centre, t1, d2), 0.5, 0.5, 0.5, 1e-7);
+    /* EWA over a footprint of several texels averages the checker to about 0.5. */
+    Vec2 e1 = v2(4.0f / 64.0f, 1.0f / 64.0f), e2 = v2(-1.0f / 64.0f, 3.0f / 64.0f);
+    Color e = mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_EWA, 8.0f, centre, e1, e2);
+    assert_rgb_near(e, 0.5, 0.5, 0.5, 0.02);
+    /* Huge footprints: the 1 x 1 top level, the image's mean. */
+    Vec2 b1 = v2(4.0f, 0.0f), b2 = v2(0.0f, 4.0f);
+    for (int fi = TEXTURE_FILTER_POINT; fi <= TEXTURE_FILTER_EWA; fi++)
+        assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, (TextureFilter)fi, 8.0f, centre, b1, b2), 0.5, 0.5, 0.5, 1e-6);
+    /* Through texture_eval_ctx: the footprint is scaled by the texture's uv map. */
+    texture_set_uv_transform(&t, v2(2.0f, 2.0f), v2(0.0f, 0.0f));
+    TexCtx ctx = {v2(centre.x * 0.5f, centre.y * 0.5f), 0.5f / 64.0f, 0.0f, 0.0f, 0.5f / 64.0f};
+    assert_rgb_near(texture_eval_ctx(&t, 0, &ctx), 0.5, 0.5, 0.5, 0.0);
+    texture_free(&t);
 }
 
 /* Float files are linear: EXR and PFM (through image_read) and Radiance HDR (stb_image)
@@ -553,6 +722,9 @@ int main(void)
         cmocka_unit_test(test_image_rejects_bad_texels),
         cmocka_unit_test(test_srgb_decode),
         cmocka_unit_test(test_float_and_jpeg),
+        cmocka_unit_test(test_compact_storage),
+        cmocka_unit_test(test_mipmap_levels),
+        cmocka_unit_test(test_mipmap_filters),
         cmocka_unit_test(test_checkerboard),
         cmocka_unit_test(test_uv_transform),
         cmocka_unit_test(test_uv_at_hits),

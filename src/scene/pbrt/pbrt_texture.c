@@ -132,9 +132,46 @@ static Color texop_apply(TexOp op, Color a, Color b, Color v)
     return v;
 }
 
+/* The builder's value map for a TexOp. */
+static CstTextureOpType texop_type(TexOp op)
+{
+    switch (op) {
+    case TEXOP_AFFINE: return CST_TEXTURE_OP_AFFINE;
+    case TEXOP_MIN1: return CST_TEXTURE_OP_MIN1;
+    case TEXOP_POW: return CST_TEXTURE_OP_POW;
+    case TEXOP_RED: return CST_TEXTURE_OP_RED;
+    }
+    return CST_TEXTURE_OP_AFFINE;
+}
+
+/* An image description with op appended to its value maps (the image's pixels are shared,
+ * never copied). Two pure scales (b = 0, a >= 0) in a row fold into one, exactly, as image
+ * values are >= 0. A located error when the chain is full. */
+static CstStatus desc_append_op(Loader *ld, CstTextureDesc *t, TexOp op, Color a, Color b, Loc loc, const char *d)
+{
+    if (op == TEXOP_AFFINE && t->num_ops > 0 && color_is_black(b)) {
+        CstTextureOp *last = &t->ops[t->num_ops - 1];
+        int pure = last->type == CST_TEXTURE_OP_AFFINE;
+        for (int k = 0; k < 3; k++) pure &= last->b[k] == 0.0f && last->a[k] >= 0.0f && a.c[k] >= 0.0f;
+        if (pure) {
+            for (int k = 0; k < 3; k++) last->a[k] *= a.c[k];
+            return CST_OK;
+        }
+    }
+    if (t->num_ops >= CST_TEXTURE_MAX_OPS)
+        return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: more than %d scales, clamps and remappings "
+                            "applied to one image texture", d, CST_TEXTURE_MAX_OPS);
+    CstTextureOp *o = &t->ops[t->num_ops++];
+    o->type = texop_type(op);
+    pbrt_color_floats(a, o->a);
+    pbrt_color_floats(b, o->b);
+    return CST_OK;
+}
+
 /* A new scene texture: texture `id` with op applied to its values, or id itself when op
- * changes nothing. A checkerboard's textures are mapped too, each once however often it
- * is shared (nested checkerboards may share children), without recursion: children have
+ * changes nothing. Constants take the op in their value, images one more value map over
+ * their shared pixels; a checkerboard's textures are mapped too, each once however often
+ * it is shared (nested checkerboards may share children), without recursion: children have
  * lower indices, so one downward pass marks what is reachable and one upward pass copies. */
 CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, const char *d, int *out)
 {
@@ -154,25 +191,16 @@ CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, 
     }
     for (int i = 0; i < n && !st; i++) {
         if (memo[i] < 0 || (st = pbrt_texture_info(ld, i, &info))) continue;
-        CstTextureDesc t = info.desc; /* uv transform, wrap and scale as they are */
-        float *px = NULL;
+        CstTextureDesc t = info.desc; /* uv transform, wrap, filter and the image's source as they are */
         if (t.type == CST_TEXTURE_CONSTANT) {
             pbrt_color_floats(texop_apply(op, a, b, color_of(t.value)), t.value);
         } else if (t.type == CST_TEXTURE_CHECKERBOARD) {
             t.even = memo[t.even - 1] + 1;
             t.odd = memo[t.odd - 1] + 1;
-        } else {
-            size_t np = (size_t)t.width * (size_t)t.height;
-            if (!(px = malloc(np * 3 * sizeof *px))) {
-                st = pbrt_oom(ld);
-                break;
-            }
-            for (size_t k = 0; k < np; k++)
-                pbrt_color_floats(texop_apply(op, a, b, color_of(&t.pixels[3 * k])), &px[3 * k]);
-            t.pixels = px;
+        } else if ((st = desc_append_op(ld, &t, op, a, b, loc, d))) {
+            break;
         }
         st = tex_add(ld, &t, loc, d, &memo[i]);
-        free(px);
     }
     if (!st) *out = memo[id];
     free(memo);
@@ -195,12 +223,6 @@ CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name
     if (entry) *entry = i;
     if (!texture_is_constant(ld, i)) *tex = 1 + ld->texs[i].id;
     return CST_OK;
-}
-
-/* op applied in place to n texels. */
-static void texels_apply(float *px, size_t n, TexOp op, Color a, Color b)
-{
-    for (size_t k = 0; k < n; k++) pbrt_color_floats(texop_apply(op, a, b, color_of(&px[3 * k])), &px[3 * k]);
 }
 
 /* pbrt's UVMapping ("uscale", "vscale", "udelta", "vdelta"): (s, t) = (su u + du, sv v + dv). */
@@ -291,9 +313,15 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, wl, "%s: wrap \"%s\" is not known; expected \"repeat\", "
                             "\"clamp\", \"black\" or \"octahedralsphere\"", d, pbrt_clip(wrap, nm));
     }
-    if (filter && strcmp(filter, "bilinear") != 0)
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, il, "%s: filter \"%s\" approximated by \"bilinear\" (caustic "
-                     "has no MIP maps)", d, pbrt_clip(filter, nm));
+    CstTextureFilter tf = CST_TEXTURE_FILTER_BILINEAR; /* pbrt-v4's default */
+    if (filter) {
+        if (strcmp(filter, "point") == 0) tf = CST_TEXTURE_FILTER_POINT;
+        else if (strcmp(filter, "trilinear") == 0) tf = CST_TEXTURE_FILTER_TRILINEAR;
+        else if (strcmp(filter, "ewa") == 0 || strcmp(filter, "EWA") == 0) tf = CST_TEXTURE_FILTER_EWA;
+        else if (strcmp(filter, "bilinear") != 0)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, il, "%s: filter \"%s\" is not known; expected \"point\", "
+                                "\"bilinear\", \"trilinear\" or \"ewa\"", d, pbrt_clip(filter, nm));
+    }
     int linear = 0; /* pbrt-v4's default is sRGB for PNG; caustic takes 8- and 16-bit files as sRGB */
     if (enc) {
         if (strcmp(enc, "linear") == 0) {
@@ -311,7 +339,7 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
         }
     }
     ImageFileFormat format = image_format_from_path(file);
-    int readable = format != IMAGE_FILE_NONE, is_float_file = image_format_is_float(format);
+    int readable = format != IMAGE_FILE_NONE;
     if (!readable) {
         *v = color_s(0.5f);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR or "
@@ -323,27 +351,25 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     TRY(pbrt_check_file_access(ld, fl, d));
     char *path = pbrt_resolve_path(ld, file);
     if (!path) return pbrt_oom(ld);
-    /* Decoded by the textures module's reader (sRGB or linear as the builder would), the
-     * texels mapped here, then handed to the builder as pixels. */
-    Texture img;
-    CstStatus st = texture_image_load(&img, path, linear, TEXTURE_WRAP_REPEAT, ld->err);
-    free(path);
-    if (st) return pbrt_fail_wrap(ld, st, fl, d);
-    size_t np = (size_t)img.image.width * (size_t)img.image.height;
-    /* pbrt's order: decode, take the first channel for a float texture, scale, invert. */
-    if (gamma > 0.0f && !is_float_file) texels_apply(img.image.rgb, np, TEXOP_POW, color_s(gamma), color_s(0.0f));
-    if (is_float) texels_apply(img.image.rgb, np, TEXOP_RED, color_s(0.0f), color_s(0.0f));
-    if (scale != 1.0f || invert)
-        texels_apply(img.image.rgb, np, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f));
+    /* The image in its file's storage; pbrt's order after the lookup and filtering: the
+     * first channel for a float texture, then scale, then invert (pbrt-v4 ImageTexture). */
     CstTextureDesc t = {0};
     t.type = CST_TEXTURE_IMAGE;
-    t.pixels = img.image.rgb;
-    t.width = img.image.width;
-    t.height = img.image.height;
+    t.path = path;
+    t.encoding = gamma > 0.0f ? CST_TEXTURE_ENCODING_GAMMA : linear ? CST_TEXTURE_ENCODING_LINEAR
+                                                                  : CST_TEXTURE_ENCODING_SRGB;
+    t.gamma = gamma;
     t.wrap = tw;
+    t.filter = tf;
+    t.max_anisotropy = aniso >= 1.0f && aniso <= 1e6f ? aniso : 8.0f;
     desc_uv(&t, uvs, uvo);
-    st = tex_add(ld, &t, loc, d, id);
-    texture_free(&img);
+    CstStatus st = CST_OK;
+    if (is_float) st = desc_append_op(ld, &t, TEXOP_RED, color_s(0.0f), color_s(0.0f), loc, d);
+    if (!st && (scale != 1.0f || invert))
+        st = desc_append_op(ld, &t, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f),
+                            loc, d);
+    if (!st) st = tex_add(ld, &t, fl, d, id);
+    free(path);
     return st;
 }
 

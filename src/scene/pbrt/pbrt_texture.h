@@ -12,10 +12,9 @@ CstStatus pbrt_texture_ref(Loader *ld, const Param *p, const char *d, int is_flo
 CstStatus pbrt_get_float_tex(Loader *ld, Params *ps, const char *d, const char *name, float def,
                              float *out, int *found);
 
-/* Per-value maps that pbrt applies after its lookups, applied here to every value a
- * texture holds (constants, texels, a checkerboard's two textures). Bilinear filtering
- * commutes with the affine maps; for the others (clamps, powers) mapping texels before
- * filtering differs from pbrt only between texels across a kink. */
+/* Per-value maps that pbrt applies after its lookups: folded into constants, appended to an
+ * image texture's value maps (applied after its lookup and filtering, as pbrt does, over
+ * pixels shared with the unmapped texture), and applied to a checkerboard's two textures. */
 typedef enum TexOp {
     TEXOP_AFFINE, /* max(0, a v + b): pbrt's scale, invert and ScaleTexture */
     TEXOP_MIN1,   /* min(v, 1): the reflectance clamp of pbrt's materials */
