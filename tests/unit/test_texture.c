@@ -344,6 +344,42 @@ static void test_mipmap_filters(void **state)
     texture_free(&t);
 }
 
+/* Footprints (scene/footprint.c): an orthographic camera's pixel is 2 h aspect / W wide,
+ * scaled by pbrt-v4's max(1/8, 1/sqrt(spp)); on a quad facing it whose u spans 4 units,
+ * du/dx is that over 4. A 90-degree pinhole's smallest per-pixel change of direction is
+ * at the film's corner, |d normalize(v) / d sx| = sqrt(6) / 3 / sqrt(3) at v = (1, 1, 1),
+ * times the step 2 / H, and the footprint at distance L on a facing plane is L times it. */
+static void test_footprint(void **state)
+{
+    (void)state;
+    CameraDesc o = {0};
+    o.position = v3(0, 0, -5), o.look_at = v3(0, 0, 0), o.up = v3(0, 1, 0);
+    o.vfov_deg = 40.0f, o.focus_distance = 1.0f, o.ortho_height = 2.0f;
+    Footprint fp;
+    footprint_init(&fp, &o, false, 100, 50, 16);
+    assert_true(fabsf(fp.spp_scale - 0.25f) < 1e-7f);
+    TexCtx c = footprint_tex_ctx(&fp, v3(0.3f, -0.2f, 0.0f), v3(0, 0, -1), v2(0.5f, 0.5f), v3(4, 0, 0), v3(0, 4, 0));
+    double px = 2.0 * 1.0 * 2.0 / 100.0 * 0.25;
+    if (fabs(fabs((double)c.dudx) - px / 4.0) > 1e-6 || fabs((double)c.dvdx) > 1e-6 ||
+        fabs((double)c.dudy) > 1e-6 || fabs(fabs((double)c.dvdy) - px / 4.0) > 1e-6)
+        fail_msg("orthographic: du/dx %g dv/dx %g du/dy %g dv/dy %g, expected +-%g on the diagonal", (double)c.dudx,
+                 (double)c.dvdx, (double)c.dudy, (double)c.dvdy, px / 4.0);
+    /* Tilted 60 degrees about x: the y footprint stretches by 1 / cos 60 = 2 on the plane. */
+    Vec3 n = v3(0.0f, sinf(CST_PI / 3.0f), -cosf(CST_PI / 3.0f));
+    Vec3 dpdx, dpdy;
+    footprint_dp_dxy(&fp, v3(0, 0, 0), n, &dpdx, &dpdy);
+    assert_true(fabs((double)v3_length(dpdx) - px) < 1e-6 && fabs((double)v3_length(dpdy) - 2.0 * px) < 1e-5);
+    CameraDesc pc = {0};
+    pc.position = v3(0, 0, 0), pc.look_at = v3(0, 0, 1), pc.up = v3(0, 1, 0);
+    pc.vfov_deg = 90.0f, pc.focus_distance = 1.0f;
+    footprint_init(&fp, &pc, false, 64, 64, 1);
+    double want = sqrt(6.0) / 3.0 / sqrt(3.0) * 2.0 / 64.0;
+    if (fabs((double)fp.dir_dx - want) > 0.03 * want) fail_msg("pinhole: dir_dx %g, expected %g", (double)fp.dir_dx, want);
+    footprint_dp_dxy(&fp, v3(0, 0, 7), v3(0, 0, -1), &dpdx, &dpdy);
+    assert_true(fabs((double)v3_length(dpdx) - 7.0 * (double)fp.dir_dx) < 1e-5);
+    assert_true(fabs((double)v3_length(dpdy) - 7.0 * (double)fp.dir_dy) < 1e-5);
+}
+
 /* Float files are linear: EXR and PFM (through image_read) and Radiance HDR (stb_image)
  * come back as written; an 8-bit JPEG decodes through the sRGB curve. */
 static void test_float_and_jpeg(void **state)
@@ -725,6 +761,7 @@ int main(void)
         cmocka_unit_test(test_compact_storage),
         cmocka_unit_test(test_mipmap_levels),
         cmocka_unit_test(test_mipmap_filters),
+        cmocka_unit_test(test_footprint),
         cmocka_unit_test(test_checkerboard),
         cmocka_unit_test(test_uv_transform),
         cmocka_unit_test(test_uv_at_hits),
