@@ -140,7 +140,18 @@ CST_API CstStatus cst_scene_create(CstScene **out, CstError *err);
 typedef enum CstTextureType {
     CST_TEXTURE_CONSTANT = 1, /* one RGB value */
     CST_TEXTURE_CHECKERBOARD, /* squares alternating between two other textures */
-    CST_TEXTURE_IMAGE         /* an image file or caller's pixels, bilinear */
+    CST_TEXTURE_IMAGE,        /* an image file or caller's pixels, bilinear */
+    /* pbrt-v4's procedural and combining textures (tex1, tex2, amount: texture ids): */
+    CST_TEXTURE_MIX,          /* (1 - a) tex1 + a tex2, a = amount's channel mean or amount_value */
+    CST_TEXTURE_DIRECTIONMIX, /* |n . dir| tex1 + (1 - |n . dir|) tex2, n the geometric normal */
+    CST_TEXTURE_SCALE,        /* tex1 times the channel mean of texture amount */
+    CST_TEXTURE_BILERP,       /* corners[0..3] = v00, v01, v10, v11 bilinear over (u, v) */
+    CST_TEXTURE_CHECKERBOARD_3D, /* tex1 where floor(x)+floor(y)+floor(z) of the mapped point is even */
+    CST_TEXTURE_DOTS,         /* tex1 inside pbrt's noise-placed dots, tex2 outside, over (u, v) */
+    CST_TEXTURE_FBM,          /* fBm of Perlin noise at the mapped point (octaves, roughness) */
+    CST_TEXTURE_WRINKLED,     /* turbulence (octaves, roughness) */
+    CST_TEXTURE_WINDY,        /* pbrt's waves */
+    CST_TEXTURE_MARBLE        /* pbrt's marble (octaves, roughness, noise_scale, variation) */
 } CstTextureType;
 
 typedef enum CstTextureWrap {
@@ -202,6 +213,16 @@ typedef struct CstTextureDesc {
     float max_anisotropy;        /* CST_TEXTURE_FILTER_EWA: 0 = 8 */
     int num_ops;                 /* image: value maps (ops) after the lookup */
     CstTextureOp ops[CST_TEXTURE_MAX_OPS];
+    int tex1, tex2, amount;      /* procedural: ids of operand textures (0 = none) */
+    float amount_value;          /* mix without an amount texture */
+    float dir[3];                /* directionmix: world-space direction (normalised here) */
+    /* Solid textures (checkerboard 3D, fbm, wrinkled, windy, marble): the texture-space
+     * point is texture_from_world times the world point (row-major 3 x 4; all 0 = identity). */
+    float texture_from_world[12];
+    int octaves;                 /* noise: 0 = 8 */
+    float roughness;             /* noise: the octaves' weight ratio (pbrt's omega); 0 = 0.5 */
+    float noise_scale, variation; /* marble: 0 = 1 and 0 = 0.2 */
+    float corners[4][3];         /* bilerp */
     /* Every type: evaluate at (uv_scale u + uv_offset[0], uv_scale v + uv_offset[1]);
      * uv_scale {0, 0} = {1, 1}. */
     float uv_scale[2], uv_offset[2];

@@ -82,9 +82,10 @@ static float clamp_deriv(float v) { return isfinite(v) ? clampf(v, -1e8f, 1e8f) 
 
 TexCtx footprint_tex_ctx(const Footprint *fp, Vec3 p, Vec3 n, Vec2 uv, Vec3 dpdu, Vec3 dpdv)
 {
-    TexCtx c = {uv, 0.0f, 0.0f, 0.0f, 0.0f};
+    TexCtx c = {.uv = uv, .p = p, .n = n};
     Vec3 dpdx, dpdy;
     footprint_dp_dxy(fp, p, n, &dpdx, &dpdy);
+    c.dpdx = dpdx, c.dpdy = dpdy;
     /* Normal equations of the 3 x 2 system [dpdu dpdv] (du, dv)^T = dp. */
     float a00 = v3_dot(dpdu, dpdu), a01 = v3_dot(dpdu, dpdv), a11 = v3_dot(dpdv, dpdv);
     float inv_det = 1.0f / (a00 * a11 - a01 * a01);

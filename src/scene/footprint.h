@@ -34,7 +34,7 @@ void footprint_init(Footprint *fp, const CameraDesc *desc, bool mirror, int widt
  * plane. */
 void footprint_dp_dxy(const Footprint *fp, Vec3 p, Vec3 n, Vec3 *dpdx, Vec3 *dpdy);
 
-/* The texture context at p: uv and its derivatives, the least-squares solution of
+/* The texture context at p (normal n): p, n, dp/dx, dp/dy, uv and its derivatives, the least-squares solution of
  * dp/dx = dpdu du/dx + dpdv dv/dx (and for y) (PBR 4th ed. eq. 10.7), clamped to 1e8. */
 TexCtx footprint_tex_ctx(const Footprint *fp, Vec3 p, Vec3 n, Vec2 uv, Vec3 dpdu, Vec3 dpdv);
 

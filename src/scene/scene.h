@@ -281,7 +281,7 @@ static inline bool scene_dpduv(const Scene *s, const SurfaceHit *sh, Vec3 *dpdu,
  * constants; with a footprint when the scene's textures filter with one. */
 static inline void scene_bsdf_textures(const Scene *s, const Material *m, const SurfaceHit *sh, Bsdf *b)
 {
-    TexCtx c = {sh->uv, 0.0f, 0.0f, 0.0f, 0.0f};
+    TexCtx c = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
     Vec3 dpdu, dpdv;
     if (s->footprint.enabled && scene_dpduv(s, sh, &dpdu, &dpdv))
         c = footprint_tex_ctx(&s->footprint, sh->p, sh->ng, sh->uv, dpdu, dpdv);

@@ -84,6 +84,34 @@ CstStatus cst_scene_create(CstScene **out, CstError *err)
 
 /* ------------------------------------------------------------------ textures */
 
+static CstStatus check_ops(const CstTextureDesc *d, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_texture";
+    if (d->num_ops < 0 || d->num_ops > CST_TEXTURE_MAX_OPS)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d ops; expected 0 to %d", fn, d->num_ops, CST_TEXTURE_MAX_OPS);
+    for (int i = 0; i < d->num_ops; i++) {
+        const CstTextureOp *op = &d->ops[i];
+        if (op->type < CST_TEXTURE_OP_AFFINE || op->type > CST_TEXTURE_OP_RED)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ops[%d] has unknown type %d", fn, i, (int)op->type);
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(op->a[k]) || !isfinite(op->b[k]))
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ops[%d] has a value that is not finite", fn, i);
+    }
+    return CST_OK;
+}
+
+/* The description's value maps on t (checked by check_ops; at most TEXTURE_MAX_OPS). */
+static void add_ops(const CstTextureDesc *d, Texture *t)
+{
+    static const TextureOpType types[] = {TEXTURE_OP_AFFINE, TEXTURE_OP_AFFINE, TEXTURE_OP_MIN1, TEXTURE_OP_POW,
+                                          TEXTURE_OP_RED};
+    for (int i = 0; i < d->num_ops; i++) {
+        const CstTextureOp *op = &d->ops[i];
+        texture_add_op(t, types[op->type], color_rgb(op->a[0], op->a[1], op->a[2]),
+                       color_rgb(op->b[0], op->b[1], op->b[2]));
+    }
+}
+
 /* The pixels of an image description: shared with a source texture, loaded or copied. */
 static CstStatus image_pixels(Scene *s, const CstTextureDesc *d, TextureWrap wrap, Texture *t, CstError *err)
 {
@@ -102,8 +130,8 @@ static CstStatus image_pixels(Scene *s, const CstTextureDesc *d, TextureWrap wra
         return CST_OK;
     }
     if (!d->path == !d->pixels)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: an image texture needs exactly one of path, pixels and "
-                        "source", fn);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: an image texture needs exactly one of path and pixels "
+                        "(or a source)", fn);
     if (d->path) {
         TexelEncoding enc = d->linear ? TEXEL_LINEAR : TEXEL_SRGB;
         float gamma = 1.0f;
@@ -145,31 +173,77 @@ static CstStatus image_texture(Scene *s, const CstTextureDesc *d, Texture *t, Cs
     if (!(d->max_anisotropy >= 0.0f && d->max_anisotropy <= 1e6f))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: max_anisotropy %g; expected >= 1 (0 = 8)", fn,
                         (double)d->max_anisotropy);
-    if (d->num_ops < 0 || d->num_ops > CST_TEXTURE_MAX_OPS)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %d ops; expected 0 to %d", fn, d->num_ops, CST_TEXTURE_MAX_OPS);
-    for (int i = 0; i < d->num_ops; i++) {
-        const CstTextureOp *op = &d->ops[i];
-        if (op->type < CST_TEXTURE_OP_AFFINE || op->type > CST_TEXTURE_OP_RED)
-            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ops[%d] has unknown type %d", fn, i, (int)op->type);
-        for (int k = 0; k < 3; k++)
-            if (!isfinite(op->a[k]) || !isfinite(op->b[k]))
-                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ops[%d] has a value that is not finite", fn, i);
-    }
-    CstStatus st = image_pixels(s, d, wrap, t, err);
+    CstStatus st = check_ops(d, err);
     if (st != CST_OK) return st;
-    static const TextureOpType types[] = {TEXTURE_OP_AFFINE, TEXTURE_OP_AFFINE, TEXTURE_OP_MIN1, TEXTURE_OP_POW,
-                                          TEXTURE_OP_RED};
-    for (int i = 0; i < d->num_ops; i++) {
-        const CstTextureOp *op = &d->ops[i];
-        texture_add_op(t, types[op->type], color_rgb(op->a[0], op->a[1], op->a[2]),
-                       color_rgb(op->b[0], op->b[1], op->b[2]));
-    }
+    if ((st = image_pixels(s, d, wrap, t, err)) != CST_OK) return st;
+    add_ops(d, t);
     static const TextureFilter filters[] = {TEXTURE_FILTER_NONE, TEXTURE_FILTER_POINT, TEXTURE_FILTER_BILINEAR,
                                             TEXTURE_FILTER_TRILINEAR, TEXTURE_FILTER_EWA};
     if ((st = texture_set_filter(t, filters[d->filter], d->max_anisotropy, err)) != CST_OK) {
         texture_free(t);
         return st;
     }
+    return CST_OK;
+}
+
+/* The procedural and combining textures: operands checked (ids of textures already in the
+ * scene, the ones each type needs), parameters defaulted and range-checked. */
+static CstStatus procedural_texture(Scene *s, const CstTextureDesc *d, Texture *t, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_texture";
+    static const TextureType types[] = {TEXTURE_MIX, TEXTURE_DIRECTIONMIX, TEXTURE_SCALE, TEXTURE_BILERP,
+                                        TEXTURE_CHECKER3D, TEXTURE_DOTS, TEXTURE_FBM, TEXTURE_WRINKLED,
+                                        TEXTURE_WINDY, TEXTURE_MARBLE};
+    TextureType type = types[d->type - CST_TEXTURE_MIX];
+    bool two = d->type == CST_TEXTURE_MIX || d->type == CST_TEXTURE_DIRECTIONMIX || d->type == CST_TEXTURE_DOTS ||
+               d->type == CST_TEXTURE_CHECKERBOARD_3D;
+    CstStatus st;
+    TextureProc pr;
+    memset(&pr, 0, sizeof pr);
+    pr.tex1 = pr.tex2 = pr.amount = -1;
+    if (two || d->type == CST_TEXTURE_SCALE) {
+        if ((st = check_texture_id(s, d->tex1, 0, fn, "tex1", err)) != CST_OK) return st;
+        pr.tex1 = d->tex1 - 1;
+    }
+    if (two) {
+        if ((st = check_texture_id(s, d->tex2, 0, fn, "tex2", err)) != CST_OK) return st;
+        pr.tex2 = d->tex2 - 1;
+    }
+    if (d->type == CST_TEXTURE_SCALE || (d->type == CST_TEXTURE_MIX && d->amount)) {
+        if ((st = check_texture_id(s, d->amount, 0, fn, "amount", err)) != CST_OK) return st;
+        pr.amount = d->amount - 1;
+    }
+    if (!isfinite(d->amount_value))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: amount_value is not finite", fn);
+    pr.amount_value = d->amount_value;
+    if (d->type == CST_TEXTURE_DIRECTIONMIX) {
+        Vec3 dir = v3(d->dir[0], d->dir[1], d->dir[2]);
+        float len = v3_length(dir);
+        if (!(len > 0.0f) || !isfinite(len))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: dir (%g, %g, %g); expected a nonzero finite direction", fn,
+                            (double)d->dir[0], (double)d->dir[1], (double)d->dir[2]);
+        pr.dir = v3_scale(dir, 1.0f / len);
+    }
+    for (int i = 0; i < 12; i++) {
+        if (!isfinite(d->texture_from_world[i]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: texture_from_world has a value that is not finite", fn);
+        pr.xf[i] = d->texture_from_world[i];
+    }
+    for (int i = 0; i < 4; i++)
+        if ((st = read_rgb(d->corners[i], 0, fn, "corners", &pr.corner[i], err)) != CST_OK) return st;
+    pr.octaves = d->octaves ? d->octaves : 8;
+    pr.omega = d->roughness != 0.0f ? d->roughness : 0.5f;
+    pr.scale = d->noise_scale != 0.0f ? d->noise_scale : 1.0f;
+    pr.variation = d->variation != 0.0f ? d->variation : 0.2f;
+    if (pr.octaves < 1 || pr.octaves > 32 || !(pr.omega > 0.0f && pr.omega < 1e3f) || !isfinite(pr.scale) ||
+        !isfinite(pr.variation))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: octaves %d (expected 1 to 32), roughness %g (expected > 0), "
+                        "noise_scale %g, variation %g (expected finite)", fn, pr.octaves, (double)pr.omega,
+                        (double)pr.scale, (double)pr.variation);
+    if ((st = check_ops(d, err)) != CST_OK) return st;
+    if (!texture_procedural(t, type, &pr, s->textures))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: textures nested more than %d deep", fn, TEXTURE_MAX_DEPTH);
+    add_ops(d, t);
     return CST_OK;
 }
 
@@ -207,6 +281,11 @@ CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *o
     case CST_TEXTURE_IMAGE:
         if ((st = image_texture(scene, d, &t, err)) != CST_OK) return st;
         break;
+    case CST_TEXTURE_MIX: case CST_TEXTURE_DIRECTIONMIX: case CST_TEXTURE_SCALE: case CST_TEXTURE_BILERP:
+    case CST_TEXTURE_CHECKERBOARD_3D: case CST_TEXTURE_DOTS: case CST_TEXTURE_FBM: case CST_TEXTURE_WRINKLED:
+    case CST_TEXTURE_WINDY: case CST_TEXTURE_MARBLE:
+        if ((st = procedural_texture(scene, d, &t, err)) != CST_OK) return st;
+        break;
     default:
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown texture type %d; expected CST_TEXTURE_CONSTANT, "
                         "_CHECKERBOARD or _IMAGE", fn, (int)d->type);
@@ -222,6 +301,18 @@ CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *o
 static void color_floats(Color c, float out[3])
 {
     for (int k = 0; k < 3; k++) out[k] = color_channel(c, k);
+}
+
+static void info_ops(const Texture *t, CstTextureDesc *d)
+{
+    static const CstTextureOpType types[] = {CST_TEXTURE_OP_AFFINE, CST_TEXTURE_OP_MIN1, CST_TEXTURE_OP_POW,
+                                             CST_TEXTURE_OP_RED};
+    d->num_ops = t->num_ops;
+    for (int i = 0; i < t->num_ops; i++) {
+        d->ops[i].type = types[t->ops[i].type];
+        color_floats(t->ops[i].a, d->ops[i].a);
+        color_floats(t->ops[i].b, d->ops[i].b);
+    }
 }
 
 CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *info, CstError *err)
@@ -245,6 +336,23 @@ CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *
         d->odd = t->checker.odd + 1;
         d->scale = t->checker.scale;
         break;
+    case TEXTURE_MIX: case TEXTURE_DIRECTIONMIX: case TEXTURE_SCALE: case TEXTURE_BILERP: case TEXTURE_CHECKER3D:
+    case TEXTURE_DOTS: case TEXTURE_FBM: case TEXTURE_WRINKLED: case TEXTURE_WINDY: case TEXTURE_MARBLE: {
+        static const CstTextureType types[] = {CST_TEXTURE_MIX, CST_TEXTURE_DIRECTIONMIX, CST_TEXTURE_SCALE,
+                                               CST_TEXTURE_BILERP, CST_TEXTURE_CHECKERBOARD_3D, CST_TEXTURE_DOTS,
+                                               CST_TEXTURE_FBM, CST_TEXTURE_WRINKLED, CST_TEXTURE_WINDY,
+                                               CST_TEXTURE_MARBLE};
+        const TextureProc *pr = &t->proc;
+        d->type = types[t->type - TEXTURE_MIX];
+        d->tex1 = pr->tex1 + 1, d->tex2 = pr->tex2 + 1, d->amount = pr->amount + 1;
+        d->amount_value = pr->amount_value;
+        d->dir[0] = pr->dir.x, d->dir[1] = pr->dir.y, d->dir[2] = pr->dir.z;
+        memcpy(d->texture_from_world, pr->xf, sizeof pr->xf);
+        d->octaves = pr->octaves, d->roughness = pr->omega, d->noise_scale = pr->scale, d->variation = pr->variation;
+        for (int i = 0; i < 4; i++) color_floats(pr->corner[i], d->corners[i]);
+        info_ops(t, d);
+        break;
+    }
     case TEXTURE_IMAGE:
         d->type = CST_TEXTURE_IMAGE;
         /* Images stored as 3-channel floats only (files keep their compact formats). */
@@ -253,14 +361,7 @@ CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *
         d->source = id;
         d->filter = (CstTextureFilter)t->image.filter; /* the enums agree */
         d->max_anisotropy = t->image.max_aniso;
-        d->num_ops = t->num_ops;
-        for (int i = 0; i < t->num_ops; i++) {
-            static const CstTextureOpType types[] = {CST_TEXTURE_OP_AFFINE, CST_TEXTURE_OP_MIN1, CST_TEXTURE_OP_POW,
-                                                     CST_TEXTURE_OP_RED};
-            d->ops[i].type = types[t->ops[i].type];
-            color_floats(t->ops[i].a, d->ops[i].a);
-            color_floats(t->ops[i].b, d->ops[i].b);
-        }
+        info_ops(t, d);
         d->width = t->image.width;
         d->height = t->image.height;
         d->wrap = t->image.wrap == TEXTURE_WRAP_CLAMP ? CST_TEXTURE_WRAP_CLAMP : CST_TEXTURE_WRAP_REPEAT;

@@ -16,6 +16,7 @@
 #include "io/image_precheck.h"
 #include "io/image_stb.h"
 #include "textures/mipmap.h"
+#include "textures/noise.h"
 
 static Color rgb_max3(Color a, Color b) { return color_rgb(maxf(a.c[0], b.c[0]), maxf(a.c[1], b.c[1]), maxf(a.c[2], b.c[2])); }
 
@@ -23,6 +24,7 @@ void texture_constant(Texture *t, Color value)
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_CONSTANT;
+    t->depth = 1;
     t->uv_scale = v2(1.0f, 1.0f);
     t->value = value;
     t->average = t->max = value;
@@ -32,6 +34,7 @@ void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_CHECKERBOARD;
+    t->depth = 1 + (textures[even].depth > textures[odd].depth ? textures[even].depth : textures[odd].depth);
     t->uv_scale = v2(1.0f, 1.0f);
     t->checker.even = even;
     t->checker.odd = odd;
@@ -93,6 +96,7 @@ static void texture_over(Texture *t, TexImage *im, TextureWrap wrap)
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_IMAGE;
+    t->depth = 1;
     t->uv_scale = v2(1.0f, 1.0f);
     t->image.im = im;
     t->image.width = im->level[0].width;
@@ -239,9 +243,14 @@ bool texture_add_op(Texture *t, TextureOpType type, Color a, Color b)
         t->average = t->max = t->value;
         return true;
     }
-    if (t->type != TEXTURE_IMAGE || t->num_ops >= TEXTURE_MAX_OPS) return false;
+    if (t->type == TEXTURE_CHECKERBOARD || t->num_ops >= TEXTURE_MAX_OPS) return false;
     t->ops[t->num_ops++] = op;
-    texture_image_stats(t);
+    if (t->type == TEXTURE_IMAGE) {
+        texture_image_stats(t);
+    } else { /* procedural: the maps are monotone, so they bound max; the average is estimated */
+        t->average = texture_op(&op, t->average);
+        t->max = texture_op(&op, t->max);
+    }
     return true;
 }
 
@@ -290,7 +299,75 @@ Color texture_texel(const Texture *t, int level, int x, int y)
 
 bool texture_needs_footprint(const Texture *t)
 {
-    return t->type == TEXTURE_IMAGE && t->image.filter != TEXTURE_FILTER_NONE;
+    switch (t->type) {
+    case TEXTURE_IMAGE: return t->image.filter != TEXTURE_FILTER_NONE;
+    case TEXTURE_FBM: case TEXTURE_WRINKLED: case TEXTURE_WINDY: case TEXTURE_MARBLE: return true;
+    default: return false;
+    }
+}
+
+static float color_mean(Color c) { return (c.c[0] + c.c[1] + c.c[2]) * (1.0f / 3.0f); }
+
+/* The largest |sum| of octaves of weight omega^i, noise within [-1, 1]. */
+static float octave_bound(float omega, int octaves)
+{
+    float sum = 0.0f, o = 1.0f;
+    for (int i = 0; i <= octaves; i++, o *= omega) sum += o;
+    return sum;
+}
+
+bool texture_procedural(Texture *t, TextureType type, const TextureProc *pr, const Texture *textures)
+{
+    memset(t, 0, sizeof *t);
+    t->type = type;
+    t->uv_scale = v2(1.0f, 1.0f);
+    t->proc = *pr;
+    bool zero = true;
+    for (int i = 0; i < 12; i++) zero &= pr->xf[i] == 0.0f;
+    if (zero) t->proc.xf[0] = t->proc.xf[5] = t->proc.xf[10] = 1.0f;
+    int depth = 0;
+    const int kids[3] = {pr->tex1, pr->tex2, pr->amount};
+    for (int k = 0; k < 3; k++)
+        if (kids[k] >= 0 && textures[kids[k]].depth > depth) depth = textures[kids[k]].depth;
+    t->depth = depth + 1;
+    Color a1 = pr->tex1 >= 0 ? textures[pr->tex1].average : color_s(0.0f);
+    Color a2 = pr->tex2 >= 0 ? textures[pr->tex2].average : color_s(0.0f);
+    Color m1 = pr->tex1 >= 0 ? textures[pr->tex1].max : color_s(0.0f);
+    Color m2 = pr->tex2 >= 0 ? textures[pr->tex2].max : color_s(0.0f);
+    float bound = octave_bound(pr->omega, pr->octaves);
+    switch (type) {
+    case TEXTURE_MIX: {
+        float a = pr->amount >= 0 ? color_mean(textures[pr->amount].average) : pr->amount_value;
+        t->average = color_add(color_scale(a1, 1.0f - a), color_scale(a2, a));
+        t->max = rgb_max3(m1, m2);
+        break;
+    }
+    case TEXTURE_DIRECTIONMIX: /* |n . dir| averages 1/2 over directions */
+    case TEXTURE_CHECKER3D:    /* equal volumes */
+        t->average = color_scale(color_add(a1, a2), 0.5f);
+        t->max = rgb_max3(m1, m2);
+        break;
+    case TEXTURE_DOTS: { /* a dot in half the cells (noise > 0), of area pi 0.35^2 */
+        float f = 0.5f * CST_PI * 0.35f * 0.35f;
+        t->average = color_add(color_scale(a1, f), color_scale(a2, 1.0f - f));
+        t->max = rgb_max3(m1, m2);
+        break;
+    }
+    case TEXTURE_SCALE:
+        t->average = color_scale(a1, color_mean(textures[pr->amount].average));
+        t->max = color_scale(m1, color_max(textures[pr->amount].max));
+        break;
+    case TEXTURE_BILERP:
+        t->average = color_scale(color_add(color_add(pr->corner[0], pr->corner[1]), color_add(pr->corner[2], pr->corner[3])), 0.25f);
+        t->max = rgb_max3(rgb_max3(pr->corner[0], pr->corner[1]), rgb_max3(pr->corner[2], pr->corner[3]));
+        break;
+    case TEXTURE_FBM: t->average = color_s(0.0f), t->max = color_s(bound); break;
+    case TEXTURE_WRINKLED: t->average = color_s(0.2f * bound), t->max = color_s(bound); break;
+    case TEXTURE_WINDY: t->average = color_s(0.0f), t->max = color_s(octave_bound(0.5f, 3) * octave_bound(0.5f, 6)); break;
+    case TEXTURE_MARBLE: t->average = color_rgb(0.84f, 0.83f, 0.86f), t->max = color_rgb(0.9f, 0.9f, 0.9f); break;
+    default: break;
+    }
+    return t->depth <= TEXTURE_MAX_DEPTH;
 }
 
 /* An image texture at st (already mapped), its footprint scaled by the uv map. */
@@ -303,9 +380,109 @@ static Color texture_image_eval(const Texture *t, Vec2 st, const TexCtx *c)
     return mipmap_filter(ti->im, ti->wrap, ti->filter, ti->max_aniso, st, dst0, dst1);
 }
 
-Color texture_eval_ctx(const Texture *textures, int id, const TexCtx *c)
+/* p through a solid texture's texture_from_world (points), and a vector (no translation). */
+static inline Vec3 xf_point(const float *m, Vec3 p)
 {
-    /* Checkerboards only select another texture, so nesting is a loop; children have
+    return v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+              m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+static inline Vec3 xf_vector(const float *m, Vec3 v)
+{
+    return v3(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+              m[8] * v.x + m[9] * v.y + m[10] * v.z);
+}
+
+static inline Color lerp_color(float t, Color a, Color b) { return color_add(color_scale(a, 1.0f - t), color_scale(b, t)); }
+
+/* pbrt-v4's marble colours (MarbleTexture), a cubic Bezier spline through 9 RGB points. */
+static Color marble_colour(float t)
+{
+    static const float c[9][3] = {{0.58f, 0.58f, 0.6f}, {0.58f, 0.58f, 0.6f}, {0.58f, 0.58f, 0.6f},
+                                  {0.5f, 0.5f, 0.5f},   {0.6f, 0.59f, 0.58f}, {0.58f, 0.58f, 0.6f},
+                                  {0.58f, 0.58f, 0.6f}, {0.2f, 0.2f, 0.33f},  {0.58f, 0.58f, 0.6f}};
+    enum { NSEG = 9 - 3 };
+    t = clampf(t, 0.0f, 1.0f);
+    int first = (int)floorf(t * NSEG);
+    if (first > NSEG - 1) first = NSEG - 1;
+    t = t * NSEG - (float)first;
+    Color p[4];
+    for (int i = 0; i < 4; i++) p[i] = color_rgb(c[first + i][0], c[first + i][1], c[first + i][2]);
+    /* de Casteljau */
+    Color s0 = lerp_color(t, p[0], p[1]), s1 = lerp_color(t, p[1], p[2]), s2 = lerp_color(t, p[2], p[3]);
+    s0 = lerp_color(t, s0, s1), s1 = lerp_color(t, s1, s2);
+    return color_scale(lerp_color(t, s0, s1), 1.5f); /* pbrt's extra 1.5 for more variation */
+}
+
+static Color eval_rec(const Texture *textures, int id, const TexCtx *c);
+
+/* A procedural or combining texture (depth-bounded recursion, TEXTURE_MAX_DEPTH). */
+static Color eval_proc(const Texture *textures, const Texture *t, Vec2 st, const TexCtx *c)
+{
+    const TextureProc *pr = &t->proc;
+    switch (t->type) {
+    case TEXTURE_MIX: {
+        float a = pr->amount >= 0 ? color_mean(eval_rec(textures, pr->amount, c)) : pr->amount_value;
+        Color t1 = a != 1.0f ? eval_rec(textures, pr->tex1, c) : color_s(0.0f);
+        Color t2 = a != 0.0f ? eval_rec(textures, pr->tex2, c) : color_s(0.0f);
+        return color_add(color_scale(t1, 1.0f - a), color_scale(t2, a));
+    }
+    case TEXTURE_DIRECTIONMIX: {
+        float a = fabsf(v3_dot(c->n, pr->dir));
+        Color t1 = a != 0.0f ? eval_rec(textures, pr->tex1, c) : color_s(0.0f);
+        Color t2 = a != 1.0f ? eval_rec(textures, pr->tex2, c) : color_s(0.0f);
+        return color_add(color_scale(t1, a), color_scale(t2, 1.0f - a));
+    }
+    case TEXTURE_SCALE: {
+        float k = color_mean(eval_rec(textures, pr->amount, c));
+        return k == 0.0f ? color_s(0.0f) : color_scale(eval_rec(textures, pr->tex1, c), k);
+    }
+    case TEXTURE_BILERP: {
+        float s = st.x, u = st.y;
+        return color_add(color_add(color_scale(pr->corner[0], (1.0f - s) * (1.0f - u)), color_scale(pr->corner[1], (1.0f - s) * u)),
+                         color_add(color_scale(pr->corner[2], s * (1.0f - u)), color_scale(pr->corner[3], s * u)));
+    }
+    case TEXTURE_DOTS: {
+        /* One candidate dot per unit cell around integer (s, t), present where the noise
+         * at the cell is positive, its centre jittered by two more noise lookups. */
+        float sc = floorf(st.x + 0.5f), tc = floorf(st.y + 0.5f);
+        if (noise3(v3(sc + 0.5f, tc + 0.5f, 0.5f)) > 0.0f) {
+            const float radius = 0.35f, shift = 0.5f - radius;
+            float cs = sc + shift * noise3(v3(sc + 1.5f, tc + 2.8f, 0.5f));
+            float ct = tc + shift * noise3(v3(sc + 4.5f, tc + 9.8f, 0.5f));
+            float ds = st.x - cs, dt = st.y - ct;
+            if (ds * ds + dt * dt < radius * radius) return eval_rec(textures, pr->tex1, c);
+        }
+        return eval_rec(textures, pr->tex2, c);
+    }
+    default: break;
+    }
+    /* Solid textures: p and its footprint in texture space. */
+    Vec3 p = xf_point(pr->xf, c->p), dx = xf_vector(pr->xf, c->dpdx), dy = xf_vector(pr->xf, c->dpdy);
+    switch (t->type) {
+    case TEXTURE_CHECKER3D: {
+        float sum = floorf(p.x) + floorf(p.y) + floorf(p.z);
+        float parity = fmodf(sum, 2.0f); /* exact; NaN counts as even */
+        return eval_rec(textures, parity == 1.0f || parity == -1.0f ? pr->tex2 : pr->tex1, c);
+    }
+    case TEXTURE_FBM: return color_s(noise_fbm(p, dx, dy, pr->omega, pr->octaves));
+    case TEXTURE_WRINKLED: return color_s(noise_turbulence(p, dx, dy, pr->omega, pr->octaves));
+    case TEXTURE_WINDY: {
+        float wind = noise_fbm(v3_scale(p, 0.1f), v3_scale(dx, 0.1f), v3_scale(dy, 0.1f), 0.5f, 3);
+        float wave = noise_fbm(p, dx, dy, 0.5f, 6);
+        return color_s(fabsf(wind) * wave);
+    }
+    case TEXTURE_MARBLE: {
+        p = v3_scale(p, pr->scale);
+        float m = p.y + pr->variation * noise_fbm(p, v3_scale(dx, pr->scale), v3_scale(dy, pr->scale), pr->omega, pr->octaves);
+        return marble_colour(0.5f + 0.5f * sinf(m));
+    }
+    default: return color_s(0.0f);
+    }
+}
+
+static Color eval_rec(const Texture *textures, int id, const TexCtx *c)
+{
+    /* Checkerboards only select another texture, so their nesting is a loop; children have
      * lower indices, so it ends. */
     Vec2 uv = c->uv;
     for (;;) {
@@ -325,6 +502,12 @@ Color texture_eval_ctx(const Texture *textures, int id, const TexCtx *c)
             id = parity == 1.0f || parity == -1.0f ? t->checker.odd : t->checker.even;
             break;
         }
+        default: {
+            Color v = eval_proc(textures, t, st, c);
+            return t->num_ops ? texture_apply_ops(t, v) : v;
+        }
         }
     }
 }
+
+Color texture_eval_ctx(const Texture *textures, int id, const TexCtx *c) { return eval_rec(textures, id, c); }

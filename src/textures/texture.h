@@ -24,8 +24,22 @@
 typedef enum TextureType {
     TEXTURE_CONSTANT,
     TEXTURE_CHECKERBOARD,
-    TEXTURE_IMAGE
+    TEXTURE_IMAGE,
+    /* pbrt-v4's procedural and combining textures (TextureProc): */
+    TEXTURE_MIX,          /* (1 - amount) tex1 + amount tex2 */
+    TEXTURE_DIRECTIONMIX, /* |n . dir| tex1 + (1 - |n . dir|) tex2 */
+    TEXTURE_SCALE,        /* tex1 times the scalar texture `amount` */
+    TEXTURE_BILERP,       /* bilinear between four corner values over (s, t) */
+    TEXTURE_CHECKER3D,    /* tex1 where floor(x) + floor(y) + floor(z) is even, else tex2 */
+    TEXTURE_DOTS,         /* tex1 in randomly placed dots of radius 0.35 per unit cell, else tex2 */
+    TEXTURE_FBM,          /* fractional Brownian motion of Perlin noise */
+    TEXTURE_WRINKLED,     /* turbulence */
+    TEXTURE_WINDY,        /* |fbm(0.1 p, 3 octaves)| fbm(p, 6 octaves): waves */
+    TEXTURE_MARBLE        /* a colour spline at sin(y + variation fbm) */
 } TextureType;
+
+/* The most textures nested in one (a mix of mixes ...): evaluation recurses that deep. */
+#define TEXTURE_MAX_DEPTH 64
 
 typedef enum TextureWrap {
     TEXTURE_WRAP_REPEAT, /* the image tiles the uv plane */
@@ -79,6 +93,20 @@ typedef struct TextureChecker {
     float scale;   /* squares per unit of u and of v */
 } TextureChecker;
 
+/* The procedural and combining textures' parameters. Child textures are indices lower
+ * than the texture's own, -1 for none. Solid textures (checker3d, noise, marble) take
+ * p through texture_from_world (pbrt-v4: the inverse of the CTM at the definition). */
+typedef struct TextureProc {
+    int tex1, tex2;
+    int amount;         /* mix: a scalar texture, or -1 for amount_value; scale: the factor */
+    float amount_value;
+    Vec3 dir;           /* directionmix: unit, world space */
+    float xf[12];       /* texture_from_world, row-major 3 x 4 */
+    int octaves;
+    float omega, scale, variation; /* noise: roughness (omega); marble: scale, variation */
+    Color corner[4];    /* bilerp: v00, v01, v10, v11 */
+} TextureProc;
+
 typedef struct TextureImage {
     TexImage *im; /* shared; see TexImage.refs */
     int width, height; /* of level 0 */
@@ -109,11 +137,13 @@ typedef struct Texture {
     Color max;     /* largest value of each channel: validation (an albedo must stay <= 1) */
     Vec2 uv_scale, uv_offset; /* (1, 1) and (0, 0) unless texture_set_uv_transform */
     int num_ops; /* value maps (images and constants; never on checkerboards) */
+    int depth;   /* 1 + the deepest child's depth; at most TEXTURE_MAX_DEPTH */
     TextureOp ops[TEXTURE_MAX_OPS];
     union {
         Color value; /* constant */
         TextureChecker checker;
         TextureImage image;
+        TextureProc proc;
     };
 } Texture;
 
@@ -122,6 +152,8 @@ typedef struct Texture {
 typedef struct TexCtx {
     Vec2 uv;
     float dudx, dudy, dvdx, dvdy; /* per pixel step in x and y */
+    Vec3 p, n;         /* world-space point and unit geometric normal (solid textures, directionmix) */
+    Vec3 dpdx, dpdy;   /* change of p per pixel step (noise octaves); zero: all octaves */
 } TexCtx;
 
 void texture_constant(Texture *t, Color value);
@@ -139,9 +171,15 @@ CstStatus texture_image_load_encoded(Texture *t, const char *path, TexelEncoding
                                      TextureWrap wrap, CstError *err);
 /* dst becomes a copy of image texture src sharing its pixels (one more reference). */
 void texture_share(Texture *dst, const Texture *src);
-/* Appends a value map to an image or constant texture (constants fold it into their value)
- * and updates average and max (images: one pass over the level-0 texels). False when the
- * texture is a checkerboard or already holds TEXTURE_MAX_OPS maps. */
+/* A procedural or combining texture of type `type` (TEXTURE_MIX and after) with parameters
+ * pr, whose child indices must be in textures (the array it will be added to); average
+ * and max are estimated from the children's and the type's range. Identity xf when all
+ * zero. False when the nesting would exceed TEXTURE_MAX_DEPTH. */
+bool texture_procedural(Texture *t, TextureType type, const TextureProc *pr, const Texture *textures);
+/* Appends a value map to an image, constant or procedural texture (constants fold it into
+ * their value) and updates average and max (images: one pass over the level-0 texels;
+ * procedural: the map of each). False when the texture is a checkerboard or already holds
+ * TEXTURE_MAX_OPS maps. */
 bool texture_add_op(Texture *t, TextureOpType type, Color a, Color b);
 /* Chooses an image texture's filter, building the MIP pyramid (shared by every texture of
  * the image) for the filters that need one. max_aniso <= 0 means pbrt-v4's 8. */
@@ -161,7 +199,7 @@ Color texture_eval_ctx(const Texture *textures, int id, const TexCtx *ctx);
 /* The value at uv with no footprint: the finest level. */
 static inline Color texture_eval(const Texture *textures, int id, Vec2 uv)
 {
-    TexCtx c = {uv, 0.0f, 0.0f, 0.0f, 0.0f};
+    TexCtx c = {.uv = uv};
     return texture_eval_ctx(textures, id, &c);
 }
 /* A scalar texture (roughness): the mean of the three channels. */

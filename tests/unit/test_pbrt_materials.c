@@ -455,15 +455,24 @@ static void test_texture_classes(void **state)
     assert_int_equal(s3->type, TEXTURE_CHECKERBOARD);
     assert_rgb(s->textures[s3->checker.even].value, 0.25f, 0.125f, 0, 0);
     assert_rgb(s->textures[s3->checker.odd].value, 1, 0.5f, 0, 0);
-    /* 3D checkerboards, mix and fbm: their averages, with warnings at their lines */
-    assert_int_equal(tri_material(s, 6)->albedo_texture, 0);
-    assert_rgb(tri_material(s, 6)->albedo, 0.5f, 0.5f, 0.5f, 0);
-    assert_warning_at(&w, CST_WARN_APPROXIMATED, "3D (solid) checkerboard", text, "Texture \"k3\"", 0);
-    assert_int_equal(tri_material(s, 7)->albedo_texture, 0);
-    assert_rgb(tri_material(s, 7)->albedo, 0.775f, 0.55f, 0.575f, 1e-6f);
-    assert_warning_at(&w, CST_WARN_APPROXIMATED, "texture \"k\" is taken as its average", text, "\"texture tex1\" \"k\"", 1);
-    assert_warning_at(&w, CST_WARN_UNSUPPORTED, "texture class not supported", text, "Texture \"f\"", 0);
-    assert_int_equal(tri_material(s, 8)->albedo_texture, 0);
+    /* 3D checkerboards, mix and fbm: caustic textures, evaluated at points and uvs */
+    const Texture *k3 = albedo_tex(s, 6);
+    assert_int_equal(k3->type, TEXTURE_CHECKER3D);
+    TexCtx c = {.uv = v2(0.1f, 0.4f), .p = v3(0.5f, 0.5f, 0.5f), .n = v3(0, 0, 1)};
+    int k3id = tri_material(s, 6)->albedo_texture - 1, mid = tri_material(s, 7)->albedo_texture - 1;
+    int fid = tri_material(s, 8)->albedo_texture - 1;
+    assert_rgb(texture_eval_ctx(s->textures, k3id, &c), 1, 1, 1, 0);
+    c.p = v3(1.5f, 0.5f, -0.5f); /* 1 + 0 - 1: even */
+    assert_rgb(texture_eval_ctx(s->textures, k3id, &c), 1, 1, 1, 0);
+    c.p = v3(1.5f, 0.5f, 0.5f);
+    assert_rgb(texture_eval_ctx(s->textures, k3id, &c), 0, 0, 0, 0);
+    assert_int_equal(s->textures[mid].type, TEXTURE_MIX);
+    assert_rgb(texture_eval_ctx(s->textures, mid, &c), 1, 0.5f, 0.5f, 1e-6f); /* k is (1, 0, 0) at uv */
+    assert_int_equal(s->textures[fid].type, TEXTURE_FBM);
+    c.p = v3(0, 0, 0); /* noise vanishes on the lattice, and every octave's point is on it */
+    assert_rgb(texture_eval_ctx(s->textures, fid, &c), 0, 0, 0, 0);
+    for (int i = 0; i < w.n; i++) /* fbm reaches 1.996: the reflectance clamp's note only */
+        if (!strstr(w.msg[i], "texture \"f\" has values up to")) fail_msg("unexpected warning: %s", w.msg[i]);
     cst_scene_destroy(s);
     expect_error(WORLD("Texture \"k\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"nope\"\n" TRI),
                  CST_ERR_INVALID_ARG, "\"texture tex1\"", 0, "spectrum texture \"nope\" is not defined");

@@ -24,6 +24,7 @@
 #include "io/image_io.h"
 #include "scene/scene.h"
 #include "textures/mipmap.h"
+#include "textures/noise.h"
 #include "textures/texture.h"
 
 static int group_setup(void **state)
@@ -339,7 +340,7 @@ static void test_mipmap_filters(void **state)
         assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, (TextureFilter)fi, 8.0f, centre, b1, b2), 0.5, 0.5, 0.5, 1e-6);
     /* Through texture_eval_ctx: the footprint is scaled by the texture's uv map. */
     texture_set_uv_transform(&t, v2(2.0f, 2.0f), v2(0.0f, 0.0f));
-    TexCtx ctx = {v2(centre.x * 0.5f, centre.y * 0.5f), 0.5f / 64.0f, 0.0f, 0.0f, 0.5f / 64.0f};
+    TexCtx ctx = {.uv = v2(centre.x * 0.5f, centre.y * 0.5f), .dudx = 0.5f / 64.0f, .dvdy = 0.5f / 64.0f};
     assert_rgb_near(texture_eval_ctx(&t, 0, &ctx), 0.5, 0.5, 0.5, 0.0);
     texture_free(&t);
 }
@@ -378,6 +379,120 @@ static void test_footprint(void **state)
     footprint_dp_dxy(&fp, v3(0, 0, 7), v3(0, 0, -1), &dpdx, &dpdy);
     assert_true(fabs((double)v3_length(dpdx) - 7.0 * (double)fp.dir_dx) < 1e-5);
     assert_true(fabs((double)v3_length(dpdy) - 7.0 * (double)fp.dir_dy) < 1e-5);
+}
+
+/* Perlin noise: 0 on the integer lattice, period 256, within [-1, 1], continuous. Octave
+ * sums: a footprint of one unit resolves no octave (n = -1 - log2(1) / 2 < 0), so fBm is 0
+ * and turbulence is 0.2 sum omega^i over the octaves, exactly. */
+static void test_noise(void **state)
+{
+    (void)state;
+    for (int i = -5; i <= 5; i++) assert_true(noise3(v3((float)i, (float)(2 * i), (float)(300 - i))) == 0.0f);
+    float lo = 0.0f, hi = 0.0f;
+    for (int i = 0; i < 20000; i++) {
+        Vec3 p = v3(f_hash(i, 0, 0) * 40.0f - 20.0f, f_hash(i, 1, 0) * 40.0f - 20.0f, f_hash(i, 2, 0) * 40.0f - 20.0f);
+        float n = noise3(p);
+        lo = minf(lo, n), hi = maxf(hi, n);
+        assert_true(fabsf(noise3(v3(p.x + 256.0f, p.y, p.z - 256.0f)) - n) < 1e-4f); /* period */
+        assert_true(fabsf(noise3(v3(p.x + 1e-3f, p.y, p.z)) - n) < 1e-2f);         /* continuity */
+    }
+    assert_true(lo >= -1.0f && hi <= 1.0f && lo < -0.5f && hi > 0.5f);
+    Vec3 one = v3(1.0f, 0.0f, 0.0f), z = v3(0.0f, 0.0f, 0.0f);
+    assert_true(noise_fbm(v3(0.3f, 0.7f, 0.1f), one, z, 0.5f, 8) == 0.0f);
+    /* pbrt-v4's Turbulence: the partly resolved octave (here none of it) blends toward 0.2,
+     * then each octave from it on adds 0.2 omega^i, the first at the same weight. */
+    float want = 0.2f, o = 1.0f;
+    for (int i = 0; i < 8; i++, o *= 0.5f) want += 0.2f * o;
+    assert_true(fabsf(noise_turbulence(v3(0.3f, 0.7f, 0.1f), one, z, 0.5f, 8) - want) < 1e-6f);
+    /* No footprint: all octaves, the sum of the scaled lookups. */
+    Vec3 p = v3(0.3f, 0.7f, 0.1f);
+    float sum = 0.0f, lambda = 1.0f;
+    o = 1.0f;
+    for (int i = 0; i < 3; i++, lambda *= 1.99f, o *= 0.6f) sum += o * noise3(v3_scale(p, lambda));
+    assert_true(fabsf(noise_fbm(p, z, z, 0.6f, 3) - sum) < 1e-6f);
+}
+
+/* Procedural and combining textures against closed forms: mix, scale and bilerp values,
+ * directionmix at |n . dir| = 1, 0 and 0.6, the 3D checkerboard's mean over a cube of
+ * whole cells (exactly 1/2 at cell centres), its texture_from_world map, the dots' area
+ * fraction near pi 0.35^2 / 2, the marble spline's range. */
+static void test_procedural(void **state)
+{
+    (void)state;
+    Texture tex[12];
+    texture_constant(&tex[0], color_rgb(0.2f, 0.4f, 0.6f));
+    texture_constant(&tex[1], color_rgb(1.0f, 0.5f, 0.0f));
+    texture_constant(&tex[2], color_s(0.25f));
+    TextureProc pr;
+    memset(&pr, 0, sizeof pr);
+    pr.tex1 = 0, pr.tex2 = 1, pr.amount = 2;
+    assert_true(texture_procedural(&tex[3], TEXTURE_MIX, &pr, tex));
+    pr.amount = -1, pr.dir = v3(0.0f, 0.0f, 1.0f);
+    assert_true(texture_procedural(&tex[4], TEXTURE_DIRECTIONMIX, &pr, tex));
+    pr.tex2 = -1, pr.amount = 2;
+    assert_true(texture_procedural(&tex[5], TEXTURE_SCALE, &pr, tex));
+    memset(&pr, 0, sizeof pr);
+    pr.tex1 = pr.tex2 = pr.amount = -1;
+    pr.corner[0] = color_s(0.0f), pr.corner[1] = color_s(1.0f), pr.corner[2] = color_s(2.0f), pr.corner[3] = color_s(4.0f);
+    assert_true(texture_procedural(&tex[6], TEXTURE_BILERP, &pr, tex));
+    pr.tex1 = 0, pr.tex2 = 1;
+    assert_true(texture_procedural(&tex[7], TEXTURE_CHECKER3D, &pr, tex));
+    pr.xf[0] = 2.0f, pr.xf[5] = 1.0f, pr.xf[10] = 1.0f, pr.xf[3] = 0.5f; /* x' = 2x + 0.5 */
+    assert_true(texture_procedural(&tex[8], TEXTURE_CHECKER3D, &pr, tex));
+    memset(pr.xf, 0, sizeof pr.xf);
+    assert_true(texture_procedural(&tex[9], TEXTURE_DOTS, &pr, tex));
+    pr.tex1 = pr.tex2 = -1, pr.octaves = 8, pr.omega = 0.5f, pr.scale = 1.0f, pr.variation = 0.2f;
+    assert_true(texture_procedural(&tex[10], TEXTURE_MARBLE, &pr, tex));
+    TexCtx c = {.uv = v2(0.25f, 0.75f), .n = v3(0.0f, 0.0f, 1.0f)};
+    assert_rgb_near(texture_eval_ctx(tex, 3, &c), 0.75 * 0.2 + 0.25, 0.75 * 0.4 + 0.125, 0.75 * 0.6, 1e-6);
+    assert_rgb_near(texture_eval_ctx(tex, 4, &c), 0.2, 0.4, 0.6, 1e-7);
+    c.n = v3(1.0f, 0.0f, 0.0f);
+    assert_rgb_near(texture_eval_ctx(tex, 4, &c), 1.0, 0.5, 0.0, 1e-7);
+    c.n = v3(0.8f, 0.0f, -0.6f);
+    assert_rgb_near(texture_eval_ctx(tex, 4, &c), 0.6 * 0.2 + 0.4, 0.6 * 0.4 + 0.2, 0.6 * 0.6, 1e-6);
+    assert_rgb_near(texture_eval_ctx(tex, 5, &c), 0.05, 0.1, 0.15, 1e-7);
+    /* bilerp (1-s)(1-t) v00 + (1-s) t v01 + s (1-t) v10 + s t v11 at (0.25, 0.75) */
+    double b = 0.75 * 0.25 * 0 + 0.75 * 0.75 * 1 + 0.25 * 0.25 * 2 + 0.25 * 0.75 * 4;
+    assert_rgb_near(texture_eval_ctx(tex, 6, &c), b, b, b, 1e-6);
+    assert_rgb_near(tex[6].average, 1.75, 1.75, 1.75, 1e-6);
+    /* 3D checker: the mean over the 4 x 4 x 4 cells' centres is exactly half of each. */
+    double sum[2] = {0.0, 0.0};
+    for (int i = 0; i < 64; i++) {
+        c.p = v3((float)(i % 4) - 1.5f, (float)(i / 4 % 4) - 1.5f, (float)(i / 16) - 1.5f);
+        sum[0] += (double)texture_eval_ctx(tex, 7, &c).c[0];
+        sum[1] += (double)texture_eval_ctx(tex, 8, &c).c[0];
+    }
+    assert_true(fabs(sum[0] / 64.0 - 0.6) < 1e-6 && fabs(sum[1] / 64.0 - 0.6) < 1e-6);
+    c.p = v3(0.3f, 0.5f, 0.5f); /* x' = 1.1: odd */
+    assert_rgb_near(texture_eval_ctx(tex, 8, &c), 1.0, 0.5, 0.0, 1e-7);
+    c.p = v3(0.2f, 0.5f, 0.5f); /* x' = 0.9: even */
+    assert_rgb_near(texture_eval_ctx(tex, 8, &c), 0.2, 0.4, 0.6, 1e-7);
+    /* dots: the inside fraction over 40 x 40 cells, 16 x 16 points each */
+    long inside = 0, total = 0;
+    for (int y = 0; y < 640; y++)
+        for (int x = 0; x < 640; x++, total++) {
+            c.uv = v2(((float)x + 0.5f) / 16.0f, ((float)y + 0.5f) / 16.0f);
+            inside += texture_eval_ctx(tex, 9, &c).c[0] == 0.2f;
+        }
+    double frac = (double)inside / (double)total;
+    if (!(frac > 0.12 && frac < 0.27)) fail_msg("dots cover %.3f of the plane, expected about 0.19", frac);
+    for (int i = 0; i < 500; i++) {
+        c.p = v3(f_hash(i, 5, 0) * 10.0f, f_hash(i, 6, 0) * 10.0f, f_hash(i, 7, 0) * 10.0f);
+        Color m = texture_eval_ctx(tex, 10, &c);
+        assert_true(m.c[0] >= 1.5f * 0.2f - 1e-6f && m.c[0] <= 1.5f * 0.6f + 1e-6f);
+    }
+    /* nesting depth is bounded */
+    Texture deep[TEXTURE_MAX_DEPTH + 2];
+    texture_constant(&deep[0], color_s(1.0f));
+    memset(&pr, 0, sizeof pr);
+    pr.tex2 = -1, pr.amount = -1, pr.amount_value = 0.5f;
+    bool ok = true;
+    for (int i = 1; i < TEXTURE_MAX_DEPTH + 2 && ok; i++) {
+        pr.tex1 = pr.tex2 = i - 1;
+        ok = texture_procedural(&deep[i], TEXTURE_MIX, &pr, deep);
+        if (!ok) assert_int_equal(i, TEXTURE_MAX_DEPTH);
+    }
+    assert_false(ok);
 }
 
 /* Float files are linear: EXR and PFM (through image_read) and Radiance HDR (stb_image)
@@ -762,6 +877,8 @@ int main(void)
         cmocka_unit_test(test_mipmap_levels),
         cmocka_unit_test(test_mipmap_filters),
         cmocka_unit_test(test_footprint),
+        cmocka_unit_test(test_noise),
+        cmocka_unit_test(test_procedural),
         cmocka_unit_test(test_checkerboard),
         cmocka_unit_test(test_uv_transform),
         cmocka_unit_test(test_uv_at_hits),

@@ -394,6 +394,125 @@ static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc,
     return tex_add(ld, &t, loc, d, id);
 }
 
+/* A texture operand as a scene texture id (public id - 1): the named texture, or a constant
+ * texture made of the given or default value. */
+static CstStatus tex_operand_id(Loader *ld, Params *ps, const char *d, const char *name, int is_float, float def,
+                                Loc loc, int *id)
+{
+    Color v;
+    TRY(tex_operand(ld, ps, d, name, is_float, def, id, &v));
+    if (*id < 0) TRY(tex_const(ld, v, loc, d, id));
+    return CST_OK;
+}
+
+/* texture_from_world of a solid texture: the inverse of the CTM at its definition
+ * (pbrt-v4 TextureMapping3D: renderFromTexture is the CTM). */
+static void desc_solid_xf(Loader *ld, CstTextureDesc *t)
+{
+    if (!ld->gs.ctm.inv_ok) return; /* identity */
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) t->texture_from_world[4 * r + c] = ld->gs.ctm.inv.m[r][c];
+}
+
+/* Whether a mix's operands are all values or constant textures (amount too, for "mix"). */
+static int mix_is_constant(Loader *ld, Params *ps, int is_float)
+{
+    static const char *const names[3] = {"tex1", "tex2", "amount"};
+    for (int i = 0; i < 3; i++) {
+        Param *p = pbrt_find_param(ps, names[i]);
+        if (!p || p->type != PT_TEXTURE || p->num_strs < 1) continue;
+        int k = find_texture(ld, p->strs[0], i == 2 ? 1 : is_float);
+        if (k >= 0 && !texture_is_constant(ld, k)) return 0;
+    }
+    return 1;
+}
+
+/* pbrt-v4's procedural and combining textures through the builder (docs/pbrt-compat.md). */
+static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d, Loc loc, const char *cls,
+                                          int is_float, int *id)
+{
+    CstTextureDesc t = {0};
+    Vec2 uvs = v2(1.0f, 1.0f), uvo = v2(0.0f, 0.0f);
+    int a = -1, b = -1;
+    if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
+        TRY(tex_operand_id(ld, ps, d, "tex1", is_float, 0.0f, loc, &a));
+        TRY(tex_operand_id(ld, ps, d, "tex2", is_float, 1.0f, loc, &b));
+        t.tex1 = a + 1, t.tex2 = b + 1;
+        if (cls[0] == 'm') {
+            int am = -1;
+            Color av;
+            TRY(tex_operand(ld, ps, d, "amount", 1, 0.5f, &am, &av));
+            t.type = CST_TEXTURE_MIX;
+            t.amount = am + 1;
+            t.amount_value = av.c[0];
+        } else {
+            Param *p;
+            t.type = CST_TEXTURE_DIRECTIONMIX;
+            Vec3 dir = v3(0.0f, 1.0f, 0.0f);
+            TRY(pbrt_lookup(ld, ps, d, "dir", PT_MASK(PT_VECTOR3), "vector3", &p));
+            if (p) {
+                if (p->num_nums != 3)
+                    return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"dir\" has %d values; expected 3", d,
+                                        p->num_nums);
+                dir = v3((float)p->nums[0], (float)p->nums[1], (float)p->nums[2]);
+            }
+            /* pbrt-v4 carries dir by the CTM at the definition. */
+            dir = transform_vector(&ld->gs.ctm.m, dir);
+            t.dir[0] = dir.x, t.dir[1] = dir.y, t.dir[2] = dir.z;
+        }
+    } else if (strcmp(cls, "checkerboard") == 0) { /* dimension 3 */
+        TRY(tex_operand_id(ld, ps, d, "tex1", is_float, 1.0f, loc, &a));
+        TRY(tex_operand_id(ld, ps, d, "tex2", is_float, 0.0f, loc, &b));
+        t.type = CST_TEXTURE_CHECKERBOARD_3D;
+        t.tex1 = a + 1, t.tex2 = b + 1;
+        desc_solid_xf(ld, &t);
+    } else if (strcmp(cls, "dots") == 0) {
+        TRY(tex_operand_id(ld, ps, d, "inside", is_float, 1.0f, loc, &a));
+        TRY(tex_operand_id(ld, ps, d, "outside", is_float, 0.0f, loc, &b));
+        TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+        t.type = CST_TEXTURE_DOTS;
+        t.tex1 = a + 1, t.tex2 = b + 1;
+    } else if (strcmp(cls, "bilerp") == 0) {
+        static const char *const names[4] = {"v00", "v01", "v10", "v11"};
+        static const float defs[4] = {0.0f, 1.0f, 0.0f, 1.0f};
+        for (int i = 0; i < 4; i++) {
+            Color c = color_s(defs[i]);
+            if (is_float) {
+                float f = defs[i];
+                TRY(pbrt_get_float(ld, ps, d, names[i], defs[i], &f, NULL));
+                c = color_s(maxf(f, 0.0f));
+            } else {
+                TRY(pbrt_get_spectrum(ld, ps, d, names[i], SPEC_UNBOUNDED, 1, &c, NULL));
+            }
+            pbrt_color_floats(c, t.corners[i]);
+        }
+        TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+        t.type = CST_TEXTURE_BILERP;
+    } else { /* fbm, wrinkled, windy, marble */
+        float rough = 0.5f, sc = 1.0f, var = 0.2f;
+        int oct = 8;
+        t.type = strcmp(cls, "fbm") == 0 ? CST_TEXTURE_FBM : strcmp(cls, "wrinkled") == 0 ? CST_TEXTURE_WRINKLED
+                 : strcmp(cls, "windy") == 0 ? CST_TEXTURE_WINDY : CST_TEXTURE_MARBLE;
+        if (t.type != CST_TEXTURE_WINDY) {
+            TRY(pbrt_get_int(ld, ps, d, "octaves", 8, &oct));
+            TRY(pbrt_get_float(ld, ps, d, "roughness", 0.5f, &rough, NULL));
+            if (oct < 1 || oct > 32 || !(rough > 0.0f))
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: octaves %d and roughness %g; expected 1 to 32 "
+                                    "octaves and a roughness > 0", d, oct, (double)rough);
+        }
+        if (t.type == CST_TEXTURE_MARBLE) {
+            TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &sc, NULL));
+            TRY(pbrt_get_float(ld, ps, d, "variation", 0.2f, &var, NULL));
+            if (sc == 0.0f) sc = 1e-30f; /* the builder reads 0 as "unset" (1) */
+            if (var == 0.0f) var = 1e-30f;
+        }
+        t.octaves = oct, t.roughness = rough, t.noise_scale = sc, t.variation = var;
+        desc_solid_xf(ld, &t);
+    }
+    desc_uv(&t, uvs, uvo);
+    return tex_add(ld, &t, loc, d, id);
+}
+
 CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     (void)dname;
@@ -446,17 +565,16 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
         if (ta < 0 && tb < 0) {
             v = color_mul(a, b);
         } else if (ta >= 0 && tb >= 0) {
-            CstTextureInfo info;
-            if ((st = pbrt_texture_info(ld, tb, &info))) goto done;
-            b = color_of(info.average);
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the product of two textures is approximated "
-                         "by \"tex\" times the average of \"scale\", %g", d, (double)b.c[0]);
-            st = pbrt_tex_map(ld, ta, TEXOP_AFFINE, b, color_s(0.0f), loc, d, &id);
+            CstTextureDesc t = {0};
+            t.type = CST_TEXTURE_SCALE;
+            t.tex1 = ta + 1, t.amount = tb + 1;
+            st = tex_add(ld, &t, loc, d, &id);
         } else {
             st = pbrt_tex_map(ld, ta >= 0 ? ta : tb, TEXOP_AFFINE, ta >= 0 ? b : a, color_s(0.0f), loc, d, &id);
         }
         if (st) goto done;
-    } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
+    } else if ((strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) && mix_is_constant(ld, &ps, is_float)) {
+        /* Constant operands: the loader keeps the value. */
         Color a, b;
         float amount = 0.5f;
         TEXPARAM("tex1", 0.0f, a);
@@ -464,21 +582,19 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
         if (cls[0] == 'm') {
             st = pbrt_get_float_tex(ld, &ps, d, "amount", 0.5f, &amount, NULL);
             if (st) goto done;
+            v = color_add(color_scale(a, 1.0f - amount), color_scale(b, amount));
+        } else if ((st = texture_procedural_class(ld, &ps, d, loc, cls, is_float, &id))) {
+            goto done;
         }
-        v = color_add(color_scale(a, 1.0f - amount), color_scale(b, amount));
-        if (cls[0] == 'd')
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the average of its two textures", d);
+    } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0 || strcmp(cls, "dots") == 0 ||
+               strcmp(cls, "bilerp") == 0 || strcmp(cls, "fbm") == 0 || strcmp(cls, "wrinkled") == 0 ||
+               strcmp(cls, "windy") == 0 || strcmp(cls, "marble") == 0) {
+        if ((st = texture_procedural_class(ld, &ps, d, loc, cls, is_float, &id))) goto done;
     } else if (strcmp(cls, "checkerboard") == 0) {
         int dim = 2;
         if ((st = pbrt_get_int(ld, &ps, d, "dimension", 2, &dim))) goto done;
         if (dim == 3) {
-            Color a, b;
-            TEXPARAM("tex1", 1.0f, a);
-            TEXPARAM("tex2", 0.0f, b);
-            v = color_scale(color_add(a, b), 0.5f);
-            pbrt_params_mark_all_used(&ps); /* the 3D mapping's parameters */
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: a 3D (solid) checkerboard approximated by its "
-                         "average (%g, %g, %g)", d, (double)v.c[0], (double)v.c[1], (double)v.c[2]);
+            if ((st = texture_procedural_class(ld, &ps, d, loc, cls, is_float, &id))) goto done;
         } else if (dim == 2) {
             if ((st = texture_checker(ld, &ps, d, loc, is_float, &id))) goto done;
         } else {
@@ -486,13 +602,6 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
                               "expected 2 or 3", d, dim);
             goto done;
         }
-    } else if (strcmp(cls, "bilerp") == 0) {
-        Color c[4];
-        static const char *const names[4] = {"v00", "v01", "v10", "v11"};
-        static const float defs[4] = {0.0f, 1.0f, 0.0f, 1.0f};
-        for (int i = 0; i < 4; i++) TEXPARAM(names[i], defs[i], c[i]);
-        v = color_scale(color_add(color_add(c[0], c[1]), color_add(c[2], c[3])), 0.25f);
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by its average", d);
     } else if (strcmp(cls, "imagemap") == 0) {
         if ((st = texture_imagemap(ld, &ps, d, loc, is_float, &id, &v))) goto done;
     } else {
