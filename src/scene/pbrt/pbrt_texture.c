@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "io/image_io.h"
 #include "scene/pbrt/pbrt_params.h"
@@ -322,7 +323,9 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, il, "%s: filter \"%s\" is not known; expected \"point\", "
                                 "\"bilinear\", \"trilinear\" or \"ewa\"", d, pbrt_clip(filter, nm));
     }
-    int linear = 0; /* pbrt-v4's default is sRGB for PNG; caustic takes 8- and 16-bit files as sRGB */
+    /* pbrt-v4's default: sRGB for PNG files, linear for every other file (JPEG, TGA, ...). */
+    size_t fn_len = strlen(file);
+    int linear = !(fn_len >= 4 && strcasecmp(file + fn_len - 4, ".png") == 0);
     if (enc) {
         if (strcmp(enc, "linear") == 0) {
             linear = 1;
@@ -471,7 +474,9 @@ static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d,
         TRY(tex_operand_id(ld, ps, d, "outside", is_float, 0.0f, loc, &b));
         TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
         t.type = CST_TEXTURE_DOTS;
-        t.tex1 = a + 1, t.tex2 = b + 1;
+        /* pbrt-v4 (DotsTexture::Create) hands "inside" to the constructor's outsideDot and
+         * "outside" to its insideDot, so its dots show "outside": rendered as pbrt does. */
+        t.tex1 = b + 1, t.tex2 = a + 1;
     } else if (strcmp(cls, "bilerp") == 0) {
         static const char *const names[4] = {"v00", "v01", "v10", "v11"};
         static const float defs[4] = {0.0f, 1.0f, 0.0f, 1.0f};
