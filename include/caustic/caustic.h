@@ -273,6 +273,8 @@ typedef struct CstMaterialDesc {
     float eta[3], k[3];     /* conductor: complex IOR per channel, >= 0 */
     int two_sided;          /* diffuse, mirror, conductor, plastic: 1 (default) reflects on both
                              * sides, 0 leaves the back black; dielectrics ignore it */
+    int displacement_texture; /* a texture id: bump mapping by its channel mean (scene units), or 0 */
+    int normal_map_texture;   /* a texture id: a tangent-space normal map, (2 rgb - 1), or 0 */
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

@@ -403,6 +403,8 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
     d->roughness = m->roughness;
     d->roughness_texture = m->roughness_texture;
     d->two_sided = !m->one_sided;
+    d->displacement_texture = m->displacement_texture;
+    d->normal_map_texture = m->normal_map_texture;
 }
 
 /* A texture standing for a reflectance or a roughness: its values must stay within 1. */
@@ -451,6 +453,11 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         return st;
     m.albedo_texture = d->albedo_texture;
     m.roughness_texture = d->roughness_texture;
+    if ((st = check_texture_id(scene, d->displacement_texture, 1, fn, "displacement_texture", err)) != CST_OK ||
+        (st = check_texture_id(scene, d->normal_map_texture, 1, fn, "normal_map_texture", err)) != CST_OK)
+        return st;
+    m.displacement_texture = d->displacement_texture;
+    m.normal_map_texture = d->normal_map_texture;
     if (!(d->ior > 0.0f && d->ior <= FLT_MAX))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ior %g; expected an index of refraction > 0 "
                         "(glass is about 1.5)", fn, (double)d->ior);

@@ -495,6 +495,71 @@ static void test_procedural(void **state)
     assert_false(ok);
 }
 
+/* The hit of a ray straight down (-z) at (x, y) on a scene's quad. */
+static SurfaceHit hit_at(const Scene *s, float x, float y)
+{
+    Ray r = ray_make(v3(x, y, 1.0f), v3(0.0f, 0.0f, -1.0f), 0.0f, 10.0f);
+    SurfaceHit sh;
+    assert_true(scene_intersect(s, &r, &sh));
+    return sh;
+}
+
+/* Bump mapping of a known height field: on the unit quad z = 0 with (u, v) = (x, y), the
+ * displacement h = a u + b v (a bilerp texture) moves the surface to (u, v, h), whose
+ * normal is normalize(-a, -b, 1); forward differences are exact on a plane. A normal map
+ * of one tangent-space normal t (float texels 0.5 + 0.5 t) gives t in the frame (dp/du,
+ * n x dp/du, n) = (x, y, z). */
+static void test_bump_and_normal_map(void **state)
+{
+    (void)state;
+    CstError err;
+    for (int kind = 0; kind < 2; kind++) {
+        CstScene *cs = NULL;
+        assert_int_equal(cst_scene_create(&cs, &err), CST_OK);
+        const float a = 0.3f, b = 0.15f;
+        Vec3 want;
+        int tid = 0;
+        CstTextureDesc t = {0};
+        if (kind == 0) {
+            t.type = CST_TEXTURE_BILERP;
+            float c[4] = {0.0f, b, a, a + b}; /* v00, v01, v10, v11 */
+            for (int i = 0; i < 4; i++) t.corners[i][0] = t.corners[i][1] = t.corners[i][2] = c[i];
+            want = v3_normalize(v3(-a, -b, 1.0f));
+        } else {
+            Vec3 tn = v3_normalize(v3(0.3f, -0.2f, 1.0f));
+            static float px[4 * 3];
+            for (int i = 0; i < 4; i++)
+                px[3 * i] = 0.5f + 0.5f * tn.x, px[3 * i + 1] = 0.5f + 0.5f * tn.y, px[3 * i + 2] = 0.5f + 0.5f * tn.z;
+            t.type = CST_TEXTURE_IMAGE;
+            t.pixels = px, t.width = 2, t.height = 2;
+            want = tn;
+        }
+        assert_int_equal(cst_scene_add_texture(cs, &t, &tid, &err), CST_OK);
+        CstMaterialDesc md;
+        cst_material_desc_init(&md, CST_MATERIAL_DIFFUSE);
+        if (kind == 0) md.displacement_texture = tid;
+        else md.normal_map_texture = tid;
+        int mid = 0;
+        assert_int_equal(cst_scene_add_material(cs, &md, &mid, &err), CST_OK);
+        Scene *s = cs;
+        const Vec3 q[4] = {v3(0, 0, 0), v3(1, 0, 0), v3(1, 1, 0), v3(0, 1, 0)};
+        if (scene_add_quad(s, q, mid, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
+        assert_int_equal(scene_commit(s, &err), CST_OK);
+        for (int i = 0; i < 5; i++) {
+            SurfaceHit sh = hit_at(s, 0.1f + 0.17f * (float)i, 0.8f - 0.13f * (float)i);
+            Vec3 n = scene_bump(s, &s->materials[sh.material], &sh);
+            /* Forward differences over du = 0.0005 of float heights up to 0.45 round the
+             * slope by up to 2 ulp(0.45) / 0.0005 = 1.2e-4; the normal map is exact. */
+            if (v3_length(v3_sub(n, want)) > (kind == 0 ? 2e-4f : 1e-6f))
+                fail_msg("%s at hit %d: (%g, %g, %g), expected (%g, %g, %g)", kind ? "normal map" : "bump", i,
+                         (double)n.x, (double)n.y, (double)n.z, (double)want.x, (double)want.y, (double)want.z);
+            Bsdf bs;
+            scene_bsdf(s, &sh, &bs);
+        }
+        cst_scene_destroy(cs);
+    }
+}
+
 /* Float files are linear: EXR and PFM (through image_read) and Radiance HDR (stb_image)
  * come back as written; an 8-bit JPEG decodes through the sRGB curve. */
 static void test_float_and_jpeg(void **state)
@@ -879,6 +944,7 @@ int main(void)
         cmocka_unit_test(test_footprint),
         cmocka_unit_test(test_noise),
         cmocka_unit_test(test_procedural),
+        cmocka_unit_test(test_bump_and_normal_map),
         cmocka_unit_test(test_checkerboard),
         cmocka_unit_test(test_uv_transform),
         cmocka_unit_test(test_uv_at_hits),

@@ -518,6 +518,37 @@ static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d,
     return tex_add(ld, &t, loc, d, id);
 }
 
+CstStatus pbrt_material_normal_textures(Loader *ld, Params *ps, const char *d, Material *m)
+{
+    Param *p = pbrt_find_param(ps, "displacement");
+    if (p && p->type == PT_TEXTURE) {
+        int tex = 0;
+        Color val;
+        TRY(pbrt_tex_param(ld, ps, d, "displacement", 1, &tex, &val, NULL));
+        m->displacement_texture = tex; /* 0 for a constant texture: no bending */
+    } else if (p) {
+        float f = 0.0f;
+        TRY(pbrt_get_float(ld, ps, d, "displacement", 0.0f, &f, NULL)); /* a constant: no bending */
+    }
+    const char *file = NULL;
+    Loc fl;
+    TRY(pbrt_get_string(ld, ps, d, "normalmap", &file, &fl));
+    if (!file) return CST_OK;
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_IMAGE;
+    t.path = path;
+    t.encoding = CST_TEXTURE_ENCODING_LINEAR;
+    int id = 0;
+    CstStatus st = tex_add(ld, &t, fl, d, &id);
+    free(path);
+    if (st) return st;
+    m->normal_map_texture = id + 1;
+    return CST_OK;
+}
+
 CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     (void)dname;

@@ -34,6 +34,11 @@ CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, 
 CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
                          int *tex, Color *val, int *entry);
 
+/* A material's shading-normal parameters (every pbrt-v4 material takes them): "texture
+ * displacement" (a float texture; a constant displacement bends nothing) and "string
+ * normalmap" (an image file read linear, as pbrt-v4 reads it), into m's texture slots. */
+CstStatus pbrt_material_normal_textures(Loader *ld, Params *ps, const char *d, Material *m);
+
 /* The scene's texture `id` (public id - 1, as TexEntry.id) read back through the builder. */
 CstStatus pbrt_texture_info(Loader *ld, int id, CstTextureInfo *info);
 
