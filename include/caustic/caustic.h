@@ -140,13 +140,57 @@ CST_API CstStatus cst_scene_create(CstScene **out, CstError *err);
 typedef enum CstTextureType {
     CST_TEXTURE_CONSTANT = 1, /* one RGB value */
     CST_TEXTURE_CHECKERBOARD, /* squares alternating between two other textures */
-    CST_TEXTURE_IMAGE         /* an image file or caller's pixels, bilinear */
+    CST_TEXTURE_IMAGE,        /* an image file or caller's pixels, bilinear */
+    /* pbrt-v4's procedural and combining textures (tex1, tex2, amount: texture ids): */
+    CST_TEXTURE_MIX,          /* (1 - a) tex1 + a tex2, a = amount's channel mean or amount_value */
+    CST_TEXTURE_DIRECTIONMIX, /* |n . dir| tex1 + (1 - |n . dir|) tex2, n the geometric normal */
+    CST_TEXTURE_SCALE,        /* tex1 times the channel mean of texture amount */
+    CST_TEXTURE_BILERP,       /* corners[0..3] = v00, v01, v10, v11 bilinear over (u, v) */
+    CST_TEXTURE_CHECKERBOARD_3D, /* tex1 where floor(x)+floor(y)+floor(z) of the mapped point is even */
+    CST_TEXTURE_DOTS,         /* tex1 inside pbrt's noise-placed dots, tex2 outside, over (u, v) */
+    CST_TEXTURE_FBM,          /* fBm of Perlin noise at the mapped point (octaves, roughness) */
+    CST_TEXTURE_WRINKLED,     /* turbulence (octaves, roughness) */
+    CST_TEXTURE_WINDY,        /* pbrt's waves */
+    CST_TEXTURE_MARBLE        /* pbrt's marble (octaves, roughness, noise_scale, variation) */
 } CstTextureType;
 
 typedef enum CstTextureWrap {
     CST_TEXTURE_WRAP_REPEAT = 0, /* the image tiles the uv plane */
     CST_TEXTURE_WRAP_CLAMP       /* uv outside [0, 1] sees the border texels */
 } CstTextureWrap;
+
+/* An image's filter (pbrt-v4's): none = bilinear on the full image without a MIP map
+ * (the default); the others build a MIP map and filter over each hit's footprint. */
+typedef enum CstTextureFilter {
+    CST_TEXTURE_FILTER_NONE = 0,
+    CST_TEXTURE_FILTER_POINT,
+    CST_TEXTURE_FILTER_BILINEAR,
+    CST_TEXTURE_FILTER_TRILINEAR,
+    CST_TEXTURE_FILTER_EWA
+} CstTextureFilter;
+
+/* How an image file's 8- and 16-bit values encode linear ones. */
+typedef enum CstTextureEncoding {
+    CST_TEXTURE_ENCODING_DEFAULT = 0, /* sRGB, or linear when `linear` is set */
+    CST_TEXTURE_ENCODING_SRGB,
+    CST_TEXTURE_ENCODING_LINEAR,
+    CST_TEXTURE_ENCODING_GAMMA /* (code / max)^gamma */
+} CstTextureEncoding;
+
+/* A map of an image texture's values after its lookup, applied in order. */
+typedef enum CstTextureOpType {
+    CST_TEXTURE_OP_AFFINE = 1, /* max(0, a v + b) per channel */
+    CST_TEXTURE_OP_MIN1,       /* min(v, 1) */
+    CST_TEXTURE_OP_POW,        /* max(v, 0)^a[0] */
+    CST_TEXTURE_OP_RED         /* the first channel in all three */
+} CstTextureOpType;
+
+typedef struct CstTextureOp {
+    CstTextureOpType type;
+    float a[3], b[3];
+} CstTextureOp;
+
+#define CST_TEXTURE_MAX_OPS 6
 
 /* Zero-initialise, then set the type and its fields. Images: v = 0 is the bottom row,
  * u = 0 the left column (OBJ and glTF meshes' convention). */
@@ -160,6 +204,25 @@ typedef struct CstTextureDesc {
     int width, height;    /* image: the size of `pixels` */
     int linear;           /* image file: 1 = 8/16-bit values are data (roughness maps), not sRGB */
     CstTextureWrap wrap;  /* image */
+    /* image: 1 + an image texture already in the scene whose pixels (and MIP map) this one
+     * shares, taking precedence over path and pixels; 0 = none */
+    int source;
+    CstTextureEncoding encoding; /* image file */
+    float gamma;                 /* CST_TEXTURE_ENCODING_GAMMA: > 0 */
+    CstTextureFilter filter;     /* image */
+    float max_anisotropy;        /* CST_TEXTURE_FILTER_EWA: 0 = 8 */
+    int num_ops;                 /* image: value maps (ops) after the lookup */
+    CstTextureOp ops[CST_TEXTURE_MAX_OPS];
+    int tex1, tex2, amount;      /* procedural: ids of operand textures (0 = none) */
+    float amount_value;          /* mix without an amount texture */
+    float dir[3];                /* directionmix: world-space direction (normalised here) */
+    /* Solid textures (checkerboard 3D, fbm, wrinkled, windy, marble): the texture-space
+     * point is texture_from_world times the world point (row-major 3 x 4; all 0 = identity). */
+    float texture_from_world[12];
+    int octaves;                 /* noise: 0 = 8 */
+    float roughness;             /* noise: the octaves' weight ratio (pbrt's omega); 0 = 0.5 */
+    float noise_scale, variation; /* marble: 0 = 1 and 0 = 0.2 */
+    float corners[4][3];         /* bilerp */
     /* Every type: evaluate at (uv_scale u + uv_offset[0], uv_scale v + uv_offset[1]);
      * uv_scale {0, 0} = {1, 1}. */
     float uv_scale[2], uv_offset[2];
@@ -173,8 +236,11 @@ CST_API CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d
  * another: pbrt's scale, clamps and roughness remapping) can read it back. */
 typedef struct CstTextureInfo {
     /* The description that adds this texture again: type, value, even/odd, scale, wrap and
-     * the uv transform as stored; for an image, pixels points to the scene's own copy
-     * (width * height * 3 floats, valid until cst_scene_destroy) and path is NULL. */
+     * the uv transform as stored; for an image given as floats, pixels points to the scene's
+     * own copy (width * height * 3 floats, valid until cst_scene_destroy); an image read
+     * from a file keeps the file's compact storage (8-bit, 16-bit, grey), and pixels is
+     * NULL; path is NULL; source is the texture's own id, so the description shares the
+     * pixels when added again. */
     CstTextureDesc desc;
     float average[3]; /* mean over the uv plane (an image: over its texels) */
     float max[3];     /* largest value of each channel */
@@ -207,6 +273,8 @@ typedef struct CstMaterialDesc {
     float eta[3], k[3];     /* conductor: complex IOR per channel, >= 0 */
     int two_sided;          /* diffuse, mirror, conductor, plastic: 1 (default) reflects on both
                              * sides, 0 leaves the back black; dielectrics ignore it */
+    int displacement_texture; /* a texture id: bump mapping by its channel mean (scene units), or 0 */
+    int normal_map_texture;   /* a texture id: a tangent-space normal map, (2 rgb - 1), or 0 */
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

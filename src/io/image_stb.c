@@ -54,6 +54,16 @@ void *image_stb_load(const unsigned char *data, int len, int bits, int *width, i
     return stbi_load_from_memory(data, len, width, height, &comp, 3);
 }
 
+void *image_stb_load_channels(const unsigned char *data, int len, int bits, int *width, int *height,
+                              int *channels)
+{
+    int x = 0, y = 0, comp = 0;
+    int want = stbi_info_from_memory(data, len, &x, &y, &comp) && comp <= 2 ? 1 : 3;
+    *channels = want;
+    if (bits == 16) return stbi_load_16_from_memory(data, len, width, height, &comp, want);
+    return stbi_load_from_memory(data, len, width, height, &comp, want);
+}
+
 const char *image_stb_failure_reason(void)
 {
     const char *why = stbi_failure_reason();

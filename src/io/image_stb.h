@@ -19,6 +19,10 @@ bool image_stb_is_16_bit(const unsigned char *data, int len);
  * (Radiance HDR only: stbi_loadf, linear). The result is free()d by the caller; NULL on
  * failure, with the reason in image_stb_failure_reason(). */
 void *image_stb_load(const unsigned char *data, int len, int bits, int *width, int *height);
+/* image_stb_load of an 8- or 16-bit image keeping grey images grey: *channels is 1 for
+ * grey and grey + alpha files (alpha dropped), else 3 (alpha dropped). */
+void *image_stb_load_channels(const unsigned char *data, int len, int bits, int *width, int *height,
+                              int *channels);
 /* stb's reason for the last failure on this thread ("unknown reason" when it gave none). */
 const char *image_stb_failure_reason(void);
 

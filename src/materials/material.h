@@ -36,6 +36,10 @@ typedef struct Material {
      * none (so a zero-initialised Material has none). A roughness texture gives the mean of
      * its channels; a rough plastic cannot take one (its coat table depends on roughness). */
     int albedo_texture, roughness_texture;
+    /* Shading-normal textures, 1 + a texture index or 0 (scene_bsdf applies them): a float
+     * displacement for bump mapping and a tangent-space normal map (pbrt-v4 BumpMap and
+     * NormalMap); the displacement wins when both are set, as in pbrt-v4. */
+    int displacement_texture, normal_map_texture;
     /* Reflective materials (diffuse, mirror, conductor, plastic) reflect on both sides
      * unless one_sided is set, when the back (against the normal) is black. Stored
      * inverted so that a zero-initialised Material keeps the historical two-sided

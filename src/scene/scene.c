@@ -390,6 +390,17 @@ CstStatus scene_commit(Scene *s, CstError *err)
         extent = maxf(extent, maxf(v3_max_abs(s->instances->nodes[0].box.min),
                                    v3_max_abs(s->instances->nodes[0].box.max)));
     s->offset_near = maxf(RAY_OFFSET_NEAR_MIN, isfinite(extent) ? 4e-7f * extent : 0.0f);
+    /* Footprints for MIP-filtered textures, from the scene file's view (a render at another
+     * resolution or sample count keeps these: pbrt-v4 takes them from its film). */
+    for (int i = 0; i < s->num_textures; i++)
+        if (texture_needs_footprint(&s->textures[i])) {
+            const CstRenderSettings *rs = &s->settings;
+            footprint_init(&s->footprint, &s->camera, s->camera_mirror != 0,
+                           rs->width > 0 ? rs->width : CST_DEFAULT_WIDTH, rs->height > 0 ? rs->height : CST_DEFAULT_HEIGHT,
+                           rs->spp > 0 ? rs->spp : CST_DEFAULT_SPP);
+            s->footprint.enabled = true;
+            break;
+        }
     s->committed = 1;
     return CST_OK;
 }

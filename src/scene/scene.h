@@ -19,6 +19,7 @@
 #include "materials/material.h"
 #include "math/color.h"
 #include "math/vec3.h"
+#include "scene/footprint.h"
 #include "scene/scene_build.h"
 #include "textures/texture.h"
 
@@ -72,6 +73,9 @@ struct CstScene {
      * BVH box, which is widened by 1e-7 of that coordinate (bvh.c), instead of testing
      * the surface again on every bounce and shadow ray. Set by scene_commit. */
     float offset_near;
+    /* Texture footprints at hits (scene/footprint.h), enabled by scene_commit when a texture
+     * has a MIP filter; for the scene file's camera, resolution and samples per pixel. */
+    Footprint footprint;
     int committed;
     /* view and settings */
     CameraDesc camera;
@@ -243,13 +247,102 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     return true;
 }
 
-/* A material's textures evaluated at texture coordinates uv, over what bsdf_init took
- * from the material's constants. */
-static inline void scene_bsdf_textures(const Scene *s, const Material *m, Vec2 uv, Bsdf *b)
+/* The partial derivatives of the surface position with respect to the texture coordinates
+ * at a hit (pbrt-v4 Triangle::InteractionFromIntersection, Sphere): false for instances,
+ * which carry no uvs. */
+static inline bool scene_dpduv(const Scene *s, const SurfaceHit *sh, Vec3 *dpdu, Vec3 *dpdv)
 {
-    if (m->albedo_texture) bsdf_set_albedo(b, texture_eval(s->textures, m->albedo_texture - 1, uv));
+    if (sh->prim == UINT32_MAX) return false;
+    if ((int)sh->prim < s->num_triangles) {
+        const int32_t *t = &s->tri_indices[3 * sh->prim];
+        Vec3 p0 = s->positions[t[0]], p1 = s->positions[t[1]], p2 = s->positions[t[2]];
+        Vec2 uv0 = v2(0.0f, 0.0f), uv1 = v2(1.0f, 0.0f), uv2 = v2(0.0f, 1.0f); /* triangle_uv's default */
+        if (s->tri_has_uv && s->tri_has_uv[sh->prim]) uv0 = s->uvs[t[0]], uv1 = s->uvs[t[1]], uv2 = s->uvs[t[2]];
+        Vec2 d02 = v2(uv0.x - uv2.x, uv0.y - uv2.y), d12 = v2(uv1.x - uv2.x, uv1.y - uv2.y);
+        Vec3 dp02 = v3_sub(p0, p2), dp12 = v3_sub(p1, p2);
+        float det = d02.x * d12.y - d02.y * d12.x;
+        if (!(fabsf(det) > 1e-9f)) return false; /* degenerate uvs: no footprint */
+        float inv = 1.0f / det;
+        *dpdu = v3_scale(v3_sub(v3_scale(dp02, d12.y), v3_scale(dp12, d02.y)), inv);
+        *dpdv = v3_scale(v3_sub(v3_scale(dp12, d02.x), v3_scale(dp02, d12.x)), inv);
+        return true;
+    }
+    /* sphere_uv: u = phi / 2pi, phi = atan2(d.x, d.z); v = theta / pi, theta = acos(-d.y). */
+    const Sphere *sp = &s->spheres[(int)sh->prim - s->num_triangles];
+    Vec3 d = sh->ng;
+    float sin_t = sqrtf(d.x * d.x + d.z * d.z);
+    if (!(sin_t > 1e-6f)) return false; /* the poles */
+    *dpdu = v3_scale(v3(d.z, 0.0f, -d.x), 2.0f * CST_PI * sp->radius);
+    *dpdv = v3_scale(v3(-d.y * d.x / sin_t, sin_t, -d.y * d.z / sin_t), CST_PI * sp->radius);
+    return true;
+}
+
+/* A material's textures evaluated at the hit, over what bsdf_init took from the material's
+ * constants; with a footprint when the scene's textures filter with one. */
+static inline void scene_bsdf_textures(const Scene *s, const Material *m, const SurfaceHit *sh, Bsdf *b)
+{
+    TexCtx c = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
+    Vec3 dpdu, dpdv;
+    if (s->footprint.enabled && scene_dpduv(s, sh, &dpdu, &dpdv))
+        c = footprint_tex_ctx(&s->footprint, sh->p, sh->ng, sh->uv, dpdu, dpdv);
+    if (m->albedo_texture) bsdf_set_albedo(b, texture_eval_ctx(s->textures, m->albedo_texture - 1, &c));
     if (m->roughness_texture)
-        bsdf_set_alpha(b, material_bsdf_alpha(clampf(texture_eval_scalar(s->textures, m->roughness_texture - 1, uv), 0.0f, 1.0f)));
+        bsdf_set_alpha(b, material_bsdf_alpha(clampf(texture_eval_scalar_ctx(s->textures, m->roughness_texture - 1, &c), 0.0f, 1.0f)));
+}
+
+/* The shading normal bent by the material's displacement (pbrt-v4 BumpMap: forward
+ * differences of the displacement d over du, dv of half the footprint, or 0.0005, moving
+ * dp/du by (d(u + du) - d(u)) / du n + d dn/du; PBR 4th ed. eq. 10.12) or normal map
+ * (pbrt-v4 NormalMap: 2 rgb - 1 in the frame of dp/du and the shading normal), as
+ * normalize(dp/du' x dp/dv') turned to the shading normal's side. dn/du is that of
+ * spheres; triangles' vertex-normal derivatives are left out. The unbent normal where
+ * the hit has no dp/du (instances) or the result is degenerate. */
+static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHit *sh)
+{
+    Vec3 dpdu, dpdv, n = sh->ns;
+    if (!scene_dpduv(s, sh, &dpdu, &dpdv)) return n;
+    TexCtx c = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
+    if (s->footprint.enabled) c = footprint_tex_ctx(&s->footprint, sh->p, sh->ng, sh->uv, dpdu, dpdv);
+    Vec3 du_dir = dpdu, dv_dir = dpdv;
+    if (m->displacement_texture) {
+        int id = m->displacement_texture - 1;
+        float du = 0.5f * (fabsf(c.dudx) + fabsf(c.dudy)), dv = 0.5f * (fabsf(c.dvdx) + fabsf(c.dvdy));
+        if (!(du > 0.0f)) du = 0.0005f;
+        if (!(dv > 0.0f)) dv = 0.0005f;
+        TexCtx cu = c, cv = c;
+        cu.p = v3_madd(c.p, dpdu, du), cu.uv = v2(c.uv.x + du, c.uv.y);
+        cv.p = v3_madd(c.p, dpdv, dv), cv.uv = v2(c.uv.x, c.uv.y + dv);
+        float d0 = texture_eval_scalar_ctx(s->textures, id, &c);
+        float d_u = texture_eval_scalar_ctx(s->textures, id, &cu), d_v = texture_eval_scalar_ctx(s->textures, id, &cv);
+        du_dir = v3_madd(dpdu, n, (d_u - d0) / du);
+        dv_dir = v3_madd(dpdv, n, (d_v - d0) / dv);
+        if ((int)sh->prim >= s->num_triangles) { /* a sphere: dn/du = dp/du / r */
+            float r = s->spheres[(int)sh->prim - s->num_triangles].radius;
+            du_dir = v3_madd(du_dir, dpdu, d0 / r);
+            dv_dir = v3_madd(dv_dir, dpdv, d0 / r);
+        }
+    } else {
+        Color rgb = texture_eval(s->textures, m->normal_map_texture - 1, sh->uv);
+        Vec3 t = v3(2.0f * rgb.c[0] - 1.0f, 2.0f * rgb.c[1] - 1.0f, 2.0f * rgb.c[2] - 1.0f);
+        float tl = v3_length(t);
+        Vec3 x = v3_sub(dpdu, v3_scale(n, v3_dot(n, dpdu)));
+        float xl = v3_length(x);
+        if (!(tl > 0.0f) || !(xl > 0.0f)) return n;
+        x = v3_scale(x, 1.0f / xl);
+        Vec3 y = v3_cross(n, x);
+        Vec3 nm = v3_scale(v3_add(v3_add(v3_scale(x, t.x), v3_scale(y, t.y)), v3_scale(n, t.z)), 1.0f / tl);
+        float ulen = v3_length(dpdu), vlen = v3_length(dpdv);
+        Vec3 gu = v3_sub(dpdu, v3_scale(nm, v3_dot(nm, dpdu)));
+        float gl = v3_length(gu);
+        if (!(gl > 0.0f)) return n;
+        du_dir = v3_scale(gu, ulen / gl);
+        dv_dir = v3_scale(v3_normalize(v3_cross(nm, du_dir)), vlen);
+    }
+    Vec3 nb = v3_cross(du_dir, dv_dir);
+    float l2 = v3_length2(nb);
+    if (!(l2 > 0.0f) || !isfinite(l2)) return n;
+    nb = v3_scale(nb, 1.0f / sqrtf(l2));
+    return v3_dot(nb, n) < 0.0f ? v3_neg(nb) : nb;
 }
 
 /* The BSDF at a hit: the one place where a hit's material, normals and texture
@@ -257,8 +350,12 @@ static inline void scene_bsdf_textures(const Scene *s, const Material *m, Vec2 u
 static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
 {
     const Material *m = &s->materials[sh->material];
-    bsdf_init_shading(b, m, sh->ns, sh->ng);
-    if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh->uv, b);
+    if (m->displacement_texture | m->normal_map_texture) {
+        bsdf_init_shading(b, m, scene_bump(s, m, sh), sh->ng);
+    } else {
+        bsdf_init_shading(b, m, sh->ns, sh->ng);
+    }
+    if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh, b);
 }
 
 /* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be

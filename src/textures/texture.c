@@ -1,5 +1,6 @@
-/* Texture construction (constants, checkerboards, images from memory or files) and
- * evaluation: bilinear filtering with repeat or clamp wrapping. */
+/* Texture construction (constants, checkerboards, images from memory or files, kept in their
+ * files' compact formats and shared between derived textures) and evaluation (lookups in
+ * textures/mipmap.c, then the value maps). */
 #include "textures/texture.h"
 
 #include <errno.h>
@@ -14,6 +15,8 @@
 #include "io/image_io.h"
 #include "io/image_precheck.h"
 #include "io/image_stb.h"
+#include "textures/mipmap.h"
+#include "textures/noise.h"
 
 static Color rgb_max3(Color a, Color b) { return color_rgb(maxf(a.c[0], b.c[0]), maxf(a.c[1], b.c[1]), maxf(a.c[2], b.c[2])); }
 
@@ -21,6 +24,7 @@ void texture_constant(Texture *t, Color value)
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_CONSTANT;
+    t->depth = 1;
     t->uv_scale = v2(1.0f, 1.0f);
     t->value = value;
     t->average = t->max = value;
@@ -30,6 +34,7 @@ void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd
 {
     memset(t, 0, sizeof *t);
     t->type = TEXTURE_CHECKERBOARD;
+    t->depth = 1 + (textures[even].depth > textures[odd].depth ? textures[even].depth : textures[odd].depth);
     t->uv_scale = v2(1.0f, 1.0f);
     t->checker.even = even;
     t->checker.odd = odd;
@@ -37,6 +42,69 @@ void texture_checkerboard(Texture *t, const Texture *textures, int even, int odd
     /* The two kinds of square cover equal areas of the uv plane. */
     t->average = color_scale(color_add(textures[even].average, textures[odd].average), 0.5f);
     t->max = rgb_max3(textures[even].max, textures[odd].max);
+}
+
+/* A new TexImage of one level holding texels (taken over), or NULL on OOM (texels freed). */
+static TexImage *teximage_new(void *texels, int width, int height, TexelFormat format, int channels,
+                              TexelEncoding enc, float gamma)
+{
+    TexImage *im = calloc(1, sizeof *im);
+    if (!im) {
+        free(texels);
+        return NULL;
+    }
+    im->refs = 1;
+    im->format = format;
+    im->channels = channels;
+    im->encoding = enc;
+    im->gamma = gamma;
+    /* The historical decoders' expressions, so 8-bit images decode to the same floats. */
+    for (int i = 0; i < 256; i++)
+        im->lut[i] = enc == TEXEL_LINEAR ? (float)i / 255.0f
+                   : enc == TEXEL_SRGB  ? image_srgb_to_linear(i / 255.0)
+                                        : powf((float)i / 255.0f, gamma);
+    im->num_levels = 1;
+    im->level[0].width = width;
+    im->level[0].height = height;
+    im->level[0].texels = texels;
+    return im;
+}
+
+static Color texture_apply_ops(const Texture *t, Color v);
+
+/* average and max of an image texture: its level-0 texels through its value maps (double
+ * sums, as before compact storage, so unmapped images keep their exact averages). */
+static void texture_image_stats(Texture *t)
+{
+    const TexImage *im = t->image.im;
+    size_t n = (size_t)t->image.width * (size_t)t->image.height;
+    double sum[3] = {0.0, 0.0, 0.0};
+    Color mx = color_s(0.0f);
+    for (size_t i = 0; i < n; i++) {
+        Color c = mipmap_texel(im, 0, (int)(i % (size_t)t->image.width), (int)(i / (size_t)t->image.width),
+                               TEXTURE_WRAP_CLAMP);
+        if (t->num_ops) c = texture_apply_ops(t, c);
+        for (int k = 0; k < 3; k++) sum[k] += (double)c.c[k];
+        mx = rgb_max3(mx, c);
+    }
+    t->average = color_rgb((float)(sum[0] / (double)n), (float)(sum[1] / (double)n), (float)(sum[2] / (double)n));
+    t->max = mx;
+}
+
+/* An image texture over im (its one reference moves to t). */
+static void texture_over(Texture *t, TexImage *im, TextureWrap wrap)
+{
+    memset(t, 0, sizeof *t);
+    t->type = TEXTURE_IMAGE;
+    t->depth = 1;
+    t->uv_scale = v2(1.0f, 1.0f);
+    t->image.im = im;
+    t->image.width = im->level[0].width;
+    t->image.height = im->level[0].height;
+    t->image.wrap = wrap;
+    t->image.filter = TEXTURE_FILTER_NONE;
+    t->image.max_aniso = 8.0f;
+    texture_image_stats(t);
 }
 
 CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, TextureWrap wrap, CstError *err)
@@ -47,7 +115,6 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
         return cst_fail(err, CST_ERR_INVALID_ARG, "texture image of %d x %d pixels%s", width, height,
                         rgb_data ? "" : " without pixels");
     }
-    size_t n = (size_t)width * (size_t)height;
     /* The rule of every image input (io/image_io.h); the message reads the pixel, so the
      * image is freed after it is written. */
     CstStatus bad = image_check_radiance(rgb_data, width, height, "texture image", err);
@@ -55,68 +122,43 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
         free(rgb_data);
         return bad;
     }
-    double sum[3] = {0.0, 0.0, 0.0};
-    Color mx = color_s(0.0f);
-    for (size_t i = 0; i < n; i++) {
-        const float *p = &rgb_data[3 * i];
-        for (int c = 0; c < 3; c++) sum[c] += (double)p[c];
-        mx = rgb_max3(mx, color_rgb(p[0], p[1], p[2]));
-    }
-    t->type = TEXTURE_IMAGE;
-    t->uv_scale = v2(1.0f, 1.0f);
-    t->image.rgb = rgb_data;
-    t->image.width = width;
-    t->image.height = height;
-    t->image.wrap = wrap;
-    t->average = color_rgb((float)(sum[0] / (double)n), (float)(sum[1] / (double)n), (float)(sum[2] / (double)n));
-    t->max = mx;
+    TexImage *im = teximage_new(rgb_data, width, height, TEXEL_F32, 3, TEXEL_LINEAR, 1.0f);
+    if (!im) return cst_fail(err, CST_ERR_OOM, "out of memory for a %d x %d texture", width, height);
+    texture_over(t, im, wrap);
     return CST_OK;
 }
 
-/* An sRGB-encoded (or linear) integer image of 3 channels, maxval 255 or 65535, as floats. */
-static float *texture_decode_ints(const void *px, bool sixteen, size_t n, bool linear)
-{
-    float *out = malloc(n * 3 * sizeof *out);
-    if (!out) return NULL;
-    if (!sixteen) {
-        float lut[256];
-        for (int i = 0; i < 256; i++) lut[i] = linear ? (float)i / 255.0f : image_srgb_to_linear(i / 255.0);
-        const unsigned char *b = px;
-        for (size_t i = 0; i < 3 * n; i++) out[i] = lut[b[i]];
-    } else {
-        const uint16_t *w = px;
-        for (size_t i = 0; i < 3 * n; i++)
-            out[i] = linear ? (float)w[i] / 65535.0f : image_srgb_to_linear(w[i] / 65535.0);
-    }
-    return out;
-}
-
 /* PNG, JPEG, BMP, TGA or Radiance HDR bytes through stb_image (io/image_stb.h), after the
- * checks stb lacks (io/image_precheck.h). */
-static CstStatus texture_decode_stb(const char *path, const unsigned char *data, size_t size, bool linear,
-                                    float **out, int *width, int *height, CstError *err)
+ * checks stb lacks (io/image_precheck.h): a TexImage in the file's own storage (8-bit,
+ * 16-bit or float; grey files one channel). */
+static CstStatus texture_decode_stb(const char *path, const unsigned char *data, size_t size, TexelEncoding enc,
+                                    float gamma, TexImage **out, CstError *err)
 {
     int dw = 0, dh = 0;
     CstStatus st = image_precheck_stb(path, data, size, &dw, &dh, err);
     if (st != CST_OK) return st;
     int len = (int)size; /* image_precheck_stb: size <= INT_MAX */
-    int w = 0, h = 0;
-    float *px = NULL;
-    bool oom = false;
+    int w = 0, h = 0, ch = 3;
+    void *px = NULL;
+    TexelFormat format = TEXEL_F32;
     if (image_stb_is_hdr(data, len)) {
         /* Radiance HDR: linear floats, taken as they are (stbi_loadf would gamma-decode
          * an 8-bit image with its own 2.2 curve, so it is used for HDR files only). stb's
          * buffer is malloc'd (io/image_stb.c), so it is kept. */
         px = image_stb_load(data, len, 32, &w, &h);
+        if (px) {
+            st = image_check_radiance(px, w, h, path, err); /* NaN, Inf, < 0 */
+            if (st != CST_OK) {
+                free(px);
+                return st;
+            }
+        }
+        enc = TEXEL_LINEAR;
     } else {
         bool sixteen = image_stb_is_16_bit(data, len);
-        void *ints = image_stb_load(data, len, sixteen ? 16 : 8, &w, &h);
-        if (ints) {
-            if (!(px = texture_decode_ints(ints, sixteen, (size_t)w * (size_t)h, linear))) oom = true;
-            free(ints);
-        }
+        format = sixteen ? TEXEL_U16 : TEXEL_U8;
+        px = image_stb_load_channels(data, len, sixteen ? 16 : 8, &w, &h, &ch);
     }
-    if (oom) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d texture", path, w, h);
     if (!px)
         return cst_fail(err, CST_ERR_PARSE,
                         "%s: cannot decode the image (%s); expected a PNG, JPEG, BMP, TGA, HDR, EXR or PFM file",
@@ -126,13 +168,13 @@ static CstStatus texture_decode_stb(const char *path, const unsigned char *data,
         return cst_fail(err, CST_ERR_INTERNAL, "%s: decoded %d x %d pixels, the header declares %d x %d", path,
                         w, h, dw, dh);
     }
-    *out = px;
-    *width = w;
-    *height = h;
+    if (!(*out = teximage_new(px, w, h, format, ch, enc, gamma)))
+        return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d texture", path, w, h);
     return CST_OK;
 }
 
-CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureWrap wrap, CstError *err)
+CstStatus texture_image_load_encoded(Texture *t, const char *path, TexelEncoding enc, float gamma,
+                                     TextureWrap wrap, CstError *err)
 {
     memset(t, 0, sizeof *t);
     char *bytes = NULL;
@@ -142,36 +184,106 @@ CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureW
     const unsigned char *magic = (const unsigned char *)bytes;
     bool exr = size >= 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
     bool pfm = size >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f');
-    float *px = NULL;
-    int w = 0, h = 0;
     if (exr || pfm) {
-        /* Float formats through the film's readers (OpenEXR's C API, our PFM parser). */
+        /* Float formats through the film's readers (OpenEXR's C API, our PFM parser),
+         * which return 32-bit floats (a half EXR is widened). */
+        float *px = NULL;
+        int w = 0, h = 0;
         free(bytes);
         st = image_read_radiance(path, &px, &w, &h, err);
         if (st != CST_OK) return st;
         return texture_image(t, px, w, h, wrap, err);
     }
-    st = texture_decode_stb(path, magic, size, linear, &px, &w, &h, err);
+    TexImage *im = NULL;
+    st = texture_decode_stb(path, magic, size, enc, gamma, &im, err);
     free(bytes);
     if (st != CST_OK) return st;
-    st = image_check_radiance(px, w, h, path, err); /* HDR files: NaN, Inf, < 0 */
-    if (st != CST_OK) {
-        free(px);
-        return st;
-    }
-    st = texture_image(t, px, w, h, wrap, err);
-    if (st != CST_OK) {
-        char msg[sizeof err->msg];
-        memcpy(msg, err->msg, sizeof msg);
-        msg[sizeof msg - 1] = '\0';
-        return cst_fail(err, st, "%s: %s", path, msg);
-    }
+    texture_over(t, im, wrap);
     return CST_OK;
+}
+
+CstStatus texture_image_load(Texture *t, const char *path, bool linear, TextureWrap wrap, CstError *err)
+{
+    return texture_image_load_encoded(t, path, linear ? TEXEL_LINEAR : TEXEL_SRGB, 1.0f, wrap, err);
+}
+
+void texture_share(Texture *dst, const Texture *src)
+{
+    *dst = *src;
+    if (src->type == TEXTURE_IMAGE) src->image.im->refs++;
+}
+
+static Color texture_op(const TextureOp *op, Color v)
+{
+    Color a = op->a, b = op->b;
+    switch (op->type) {
+    case TEXTURE_OP_AFFINE:
+        return color_rgb(maxf(0.0f, a.c[0] * v.c[0] + b.c[0]), maxf(0.0f, a.c[1] * v.c[1] + b.c[1]),
+                         maxf(0.0f, a.c[2] * v.c[2] + b.c[2]));
+    case TEXTURE_OP_MIN1: return color_rgb(minf(v.c[0], 1.0f), minf(v.c[1], 1.0f), minf(v.c[2], 1.0f));
+    case TEXTURE_OP_POW:
+        return color_rgb(powf(maxf(v.c[0], 0.0f), a.c[0]), powf(maxf(v.c[1], 0.0f), a.c[0]),
+                         powf(maxf(v.c[2], 0.0f), a.c[0]));
+    case TEXTURE_OP_RED: return color_s(v.c[0]);
+    }
+    return v;
+}
+
+static Color texture_apply_ops(const Texture *t, Color v)
+{
+    for (int i = 0; i < t->num_ops; i++) v = texture_op(&t->ops[i], v);
+    return v;
+}
+
+bool texture_add_op(Texture *t, TextureOpType type, Color a, Color b)
+{
+    TextureOp op = {type, a, b};
+    if (t->type == TEXTURE_CONSTANT) {
+        t->value = texture_op(&op, t->value);
+        t->average = t->max = t->value;
+        return true;
+    }
+    if (t->type == TEXTURE_CHECKERBOARD || t->num_ops >= TEXTURE_MAX_OPS) return false;
+    t->ops[t->num_ops++] = op;
+    if (t->type == TEXTURE_IMAGE) {
+        texture_image_stats(t);
+    } else { /* procedural: the maps are monotone, so they bound max; the average is estimated */
+        t->average = texture_op(&op, t->average);
+        t->max = texture_op(&op, t->max);
+    }
+    return true;
+}
+
+CstStatus texture_set_filter(Texture *t, TextureFilter filter, float max_aniso, CstError *err)
+{
+    if (t->type != TEXTURE_IMAGE) return CST_OK;
+    if (filter != TEXTURE_FILTER_NONE) {
+        CstStatus st = mipmap_build(t->image.im, err);
+        if (st != CST_OK) return st;
+    }
+    t->image.filter = filter;
+    t->image.max_aniso = max_aniso > 0.0f ? max_aniso : 8.0f;
+    return CST_OK;
+}
+
+size_t texture_image_bytes(const Texture *t)
+{
+    if (t->type != TEXTURE_IMAGE) return 0;
+    const TexImage *im = t->image.im;
+    size_t esize = im->format == TEXEL_U8 ? 1 : im->format == TEXEL_U16 ? 2 : 4, n = 0;
+    for (int l = 0; l < im->num_levels; l++)
+        n += (size_t)im->level[l].width * (size_t)im->level[l].height * (size_t)im->channels * esize;
+    return n;
 }
 
 void texture_free(Texture *t)
 {
-    if (t && t->type == TEXTURE_IMAGE) free(t->image.rgb);
+    if (!t || t->type != TEXTURE_IMAGE || !t->image.im) return;
+    TexImage *im = t->image.im;
+    t->image.im = NULL;
+    if (--im->refs > 0) return;
+    for (int l = 0; l < im->num_levels; l++) free(im->level[l].texels);
+    free(im);
 }
 
 void texture_set_uv_transform(Texture *t, Vec2 scale, Vec2 offset)
@@ -180,55 +292,209 @@ void texture_set_uv_transform(Texture *t, Vec2 scale, Vec2 offset)
     t->uv_offset = offset;
 }
 
-/* A texel index along an axis of n texels. */
-static inline int texture_wrap(int i, int n, TextureWrap wrap)
+Color texture_texel(const Texture *t, int level, int x, int y)
 {
-    if (wrap == TEXTURE_WRAP_CLAMP) return i < 0 ? 0 : i >= n ? n - 1 : i;
-    return i < 0 ? i + n : i >= n ? i - n : i; /* i is within one period (see below) */
+    return mipmap_texel(t->image.im, level, x, y, t->image.wrap);
 }
 
-/* Bilinear interpolation between the four texel centres around uv. */
-static Color texture_image_eval(const TextureImage *im, Vec2 uv)
+bool texture_needs_footprint(const Texture *t)
 {
-    float u = uv.x, v = uv.y;
-    if (!isfinite(u)) u = 0.0f;
-    if (!isfinite(v)) v = 0.0f;
-    /* Reduce to one period first (repeat) or to the unit square (clamp), so the texel
-     * coordinates below are small and their conversion to int cannot overflow. */
-    if (im->wrap == TEXTURE_WRAP_REPEAT) {
-        u -= floorf(u);
-        v -= floorf(v);
-    } else {
-        u = clampf(u, 0.0f, 1.0f);
-        v = clampf(v, 0.0f, 1.0f);
+    switch (t->type) {
+    case TEXTURE_IMAGE: return t->image.filter != TEXTURE_FILTER_NONE;
+    case TEXTURE_FBM: case TEXTURE_WRINKLED: case TEXTURE_WINDY: case TEXTURE_MARBLE: return true;
+    default: return false;
     }
-    float x = u * (float)im->width - 0.5f, y = (1.0f - v) * (float)im->height - 0.5f;
-    float fx0 = floorf(x), fy0 = floorf(y);
-    float dx = x - fx0, dy = y - fy0;
-    int x0 = (int)fx0, y0 = (int)fy0;
-    int xa = texture_wrap(x0, im->width, im->wrap), xb = texture_wrap(x0 + 1, im->width, im->wrap);
-    int ya = texture_wrap(y0, im->height, im->wrap), yb = texture_wrap(y0 + 1, im->height, im->wrap);
-    const float *p00 = &im->rgb[3 * ((size_t)ya * (size_t)im->width + (size_t)xa)];
-    const float *p10 = &im->rgb[3 * ((size_t)ya * (size_t)im->width + (size_t)xb)];
-    const float *p01 = &im->rgb[3 * ((size_t)yb * (size_t)im->width + (size_t)xa)];
-    const float *p11 = &im->rgb[3 * ((size_t)yb * (size_t)im->width + (size_t)xb)];
-    float w00 = (1.0f - dx) * (1.0f - dy), w10 = dx * (1.0f - dy), w01 = (1.0f - dx) * dy, w11 = dx * dy;
-    return color_rgb(w00 * p00[0] + w10 * p10[0] + w01 * p01[0] + w11 * p11[0],
-               w00 * p00[1] + w10 * p10[1] + w01 * p01[1] + w11 * p11[1],
-               w00 * p00[2] + w10 * p10[2] + w01 * p01[2] + w11 * p11[2]);
 }
 
-Color texture_eval(const Texture *textures, int id, Vec2 uv)
+static float color_mean(Color c) { return (c.c[0] + c.c[1] + c.c[2]) * (1.0f / 3.0f); }
+
+/* The largest |sum| of octaves of weight omega^i, noise within [-1, 1]. */
+static float octave_bound(float omega, int octaves)
 {
-    /* Checkerboards only select another texture, so nesting is a loop; children have
+    float sum = 0.0f, o = 1.0f;
+    for (int i = 0; i <= octaves; i++, o *= omega) sum += o;
+    return sum;
+}
+
+bool texture_procedural(Texture *t, TextureType type, const TextureProc *pr, const Texture *textures)
+{
+    memset(t, 0, sizeof *t);
+    t->type = type;
+    t->uv_scale = v2(1.0f, 1.0f);
+    t->proc = *pr;
+    bool zero = true;
+    for (int i = 0; i < 12; i++) zero &= pr->xf[i] == 0.0f;
+    if (zero) t->proc.xf[0] = t->proc.xf[5] = t->proc.xf[10] = 1.0f;
+    int depth = 0;
+    const int kids[3] = {pr->tex1, pr->tex2, pr->amount};
+    for (int k = 0; k < 3; k++)
+        if (kids[k] >= 0 && textures[kids[k]].depth > depth) depth = textures[kids[k]].depth;
+    t->depth = depth + 1;
+    Color a1 = pr->tex1 >= 0 ? textures[pr->tex1].average : color_s(0.0f);
+    Color a2 = pr->tex2 >= 0 ? textures[pr->tex2].average : color_s(0.0f);
+    Color m1 = pr->tex1 >= 0 ? textures[pr->tex1].max : color_s(0.0f);
+    Color m2 = pr->tex2 >= 0 ? textures[pr->tex2].max : color_s(0.0f);
+    float bound = octave_bound(pr->omega, pr->octaves);
+    switch (type) {
+    case TEXTURE_MIX: {
+        float a = pr->amount >= 0 ? color_mean(textures[pr->amount].average) : pr->amount_value;
+        t->average = color_add(color_scale(a1, 1.0f - a), color_scale(a2, a));
+        t->max = rgb_max3(m1, m2);
+        break;
+    }
+    case TEXTURE_DIRECTIONMIX: /* |n . dir| averages 1/2 over directions */
+    case TEXTURE_CHECKER3D:    /* equal volumes */
+        t->average = color_scale(color_add(a1, a2), 0.5f);
+        t->max = rgb_max3(m1, m2);
+        break;
+    case TEXTURE_DOTS: { /* a dot in half the cells (noise > 0), of area pi 0.35^2 */
+        float f = 0.5f * CST_PI * 0.35f * 0.35f;
+        t->average = color_add(color_scale(a1, f), color_scale(a2, 1.0f - f));
+        t->max = rgb_max3(m1, m2);
+        break;
+    }
+    case TEXTURE_SCALE:
+        t->average = color_scale(a1, color_mean(textures[pr->amount].average));
+        t->max = color_scale(m1, color_max(textures[pr->amount].max));
+        break;
+    case TEXTURE_BILERP:
+        t->average = color_scale(color_add(color_add(pr->corner[0], pr->corner[1]), color_add(pr->corner[2], pr->corner[3])), 0.25f);
+        t->max = rgb_max3(rgb_max3(pr->corner[0], pr->corner[1]), rgb_max3(pr->corner[2], pr->corner[3]));
+        break;
+    case TEXTURE_FBM: t->average = color_s(0.0f), t->max = color_s(bound); break;
+    case TEXTURE_WRINKLED: t->average = color_s(0.2f * bound), t->max = color_s(bound); break;
+    case TEXTURE_WINDY: t->average = color_s(0.0f), t->max = color_s(octave_bound(0.5f, 3) * octave_bound(0.5f, 6)); break;
+    case TEXTURE_MARBLE: t->average = color_rgb(0.84f, 0.83f, 0.86f), t->max = color_rgb(0.9f, 0.9f, 0.9f); break;
+    default: break;
+    }
+    return t->depth <= TEXTURE_MAX_DEPTH;
+}
+
+/* An image texture at st (already mapped), its footprint scaled by the uv map. */
+static Color texture_image_eval(const Texture *t, Vec2 st, const TexCtx *c)
+{
+    const TextureImage *ti = &t->image;
+    if (ti->filter == TEXTURE_FILTER_NONE) return mipmap_bilerp(ti->im, 0, ti->wrap, st);
+    Vec2 dst0 = v2(t->uv_scale.x * c->dudx, t->uv_scale.y * c->dvdx);
+    Vec2 dst1 = v2(t->uv_scale.x * c->dudy, t->uv_scale.y * c->dvdy);
+    return mipmap_filter(ti->im, ti->wrap, ti->filter, ti->max_aniso, st, dst0, dst1);
+}
+
+/* p through a solid texture's texture_from_world (points), and a vector (no translation). */
+static inline Vec3 xf_point(const float *m, Vec3 p)
+{
+    return v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+              m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+static inline Vec3 xf_vector(const float *m, Vec3 v)
+{
+    return v3(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+              m[8] * v.x + m[9] * v.y + m[10] * v.z);
+}
+
+static inline Color lerp_color(float t, Color a, Color b) { return color_add(color_scale(a, 1.0f - t), color_scale(b, t)); }
+
+/* pbrt-v4's marble colours (MarbleTexture), a cubic Bezier spline through 9 RGB points. */
+static Color marble_colour(float t)
+{
+    static const float c[9][3] = {{0.58f, 0.58f, 0.6f}, {0.58f, 0.58f, 0.6f}, {0.58f, 0.58f, 0.6f},
+                                  {0.5f, 0.5f, 0.5f},   {0.6f, 0.59f, 0.58f}, {0.58f, 0.58f, 0.6f},
+                                  {0.58f, 0.58f, 0.6f}, {0.2f, 0.2f, 0.33f},  {0.58f, 0.58f, 0.6f}};
+    enum { NSEG = 9 - 3 };
+    t = clampf(t, 0.0f, 1.0f);
+    int first = (int)floorf(t * NSEG);
+    if (first > NSEG - 1) first = NSEG - 1;
+    t = t * NSEG - (float)first;
+    Color p[4];
+    for (int i = 0; i < 4; i++) p[i] = color_rgb(c[first + i][0], c[first + i][1], c[first + i][2]);
+    /* de Casteljau */
+    Color s0 = lerp_color(t, p[0], p[1]), s1 = lerp_color(t, p[1], p[2]), s2 = lerp_color(t, p[2], p[3]);
+    s0 = lerp_color(t, s0, s1), s1 = lerp_color(t, s1, s2);
+    return color_scale(lerp_color(t, s0, s1), 1.5f); /* pbrt's extra 1.5 for more variation */
+}
+
+static Color eval_rec(const Texture *textures, int id, const TexCtx *c);
+
+/* A procedural or combining texture (depth-bounded recursion, TEXTURE_MAX_DEPTH). */
+static Color eval_proc(const Texture *textures, const Texture *t, Vec2 st, const TexCtx *c)
+{
+    const TextureProc *pr = &t->proc;
+    switch (t->type) {
+    case TEXTURE_MIX: {
+        float a = pr->amount >= 0 ? color_mean(eval_rec(textures, pr->amount, c)) : pr->amount_value;
+        Color t1 = a != 1.0f ? eval_rec(textures, pr->tex1, c) : color_s(0.0f);
+        Color t2 = a != 0.0f ? eval_rec(textures, pr->tex2, c) : color_s(0.0f);
+        return color_add(color_scale(t1, 1.0f - a), color_scale(t2, a));
+    }
+    case TEXTURE_DIRECTIONMIX: {
+        float a = fabsf(v3_dot(c->n, pr->dir));
+        Color t1 = a != 0.0f ? eval_rec(textures, pr->tex1, c) : color_s(0.0f);
+        Color t2 = a != 1.0f ? eval_rec(textures, pr->tex2, c) : color_s(0.0f);
+        return color_add(color_scale(t1, a), color_scale(t2, 1.0f - a));
+    }
+    case TEXTURE_SCALE: {
+        float k = color_mean(eval_rec(textures, pr->amount, c));
+        return k == 0.0f ? color_s(0.0f) : color_scale(eval_rec(textures, pr->tex1, c), k);
+    }
+    case TEXTURE_BILERP: {
+        float s = st.x, u = st.y;
+        return color_add(color_add(color_scale(pr->corner[0], (1.0f - s) * (1.0f - u)), color_scale(pr->corner[1], (1.0f - s) * u)),
+                         color_add(color_scale(pr->corner[2], s * (1.0f - u)), color_scale(pr->corner[3], s * u)));
+    }
+    case TEXTURE_DOTS: {
+        /* One candidate dot per unit cell around integer (s, t), present where the noise
+         * at the cell is positive, its centre jittered by two more noise lookups. */
+        float sc = floorf(st.x + 0.5f), tc = floorf(st.y + 0.5f);
+        if (noise3(v3(sc + 0.5f, tc + 0.5f, 0.5f)) > 0.0f) {
+            const float radius = 0.35f, shift = 0.5f - radius;
+            float cs = sc + shift * noise3(v3(sc + 1.5f, tc + 2.8f, 0.5f));
+            float ct = tc + shift * noise3(v3(sc + 4.5f, tc + 9.8f, 0.5f));
+            float ds = st.x - cs, dt = st.y - ct;
+            if (ds * ds + dt * dt < radius * radius) return eval_rec(textures, pr->tex1, c);
+        }
+        return eval_rec(textures, pr->tex2, c);
+    }
+    default: break;
+    }
+    /* Solid textures: p and its footprint in texture space. */
+    Vec3 p = xf_point(pr->xf, c->p), dx = xf_vector(pr->xf, c->dpdx), dy = xf_vector(pr->xf, c->dpdy);
+    switch (t->type) {
+    case TEXTURE_CHECKER3D: {
+        float sum = floorf(p.x) + floorf(p.y) + floorf(p.z);
+        float parity = fmodf(sum, 2.0f); /* exact; NaN counts as even */
+        return eval_rec(textures, parity == 1.0f || parity == -1.0f ? pr->tex2 : pr->tex1, c);
+    }
+    case TEXTURE_FBM: return color_s(noise_fbm(p, dx, dy, pr->omega, pr->octaves));
+    case TEXTURE_WRINKLED: return color_s(noise_turbulence(p, dx, dy, pr->omega, pr->octaves));
+    case TEXTURE_WINDY: {
+        float wind = noise_fbm(v3_scale(p, 0.1f), v3_scale(dx, 0.1f), v3_scale(dy, 0.1f), 0.5f, 3);
+        float wave = noise_fbm(p, dx, dy, 0.5f, 6);
+        return color_s(fabsf(wind) * wave);
+    }
+    case TEXTURE_MARBLE: {
+        p = v3_scale(p, pr->scale);
+        float m = p.y + pr->variation * noise_fbm(p, v3_scale(dx, pr->scale), v3_scale(dy, pr->scale), pr->omega, pr->octaves);
+        return marble_colour(0.5f + 0.5f * sinf(m));
+    }
+    default: return color_s(0.0f);
+    }
+}
+
+static Color eval_rec(const Texture *textures, int id, const TexCtx *c)
+{
+    /* Checkerboards only select another texture, so their nesting is a loop; children have
      * lower indices, so it ends. */
+    Vec2 uv = c->uv;
     for (;;) {
         const Texture *t = &textures[id];
         /* Exact for the identity (x * 1 + 0 == x), so untransformed textures are unchanged. */
         Vec2 st = v2(uv.x * t->uv_scale.x + t->uv_offset.x, uv.y * t->uv_scale.y + t->uv_offset.y);
         switch (t->type) {
-        case TEXTURE_CONSTANT: return t->value;
-        case TEXTURE_IMAGE: return texture_image_eval(&t->image, st);
+        case TEXTURE_CONSTANT: return t->value; /* its maps are folded in */
+        case TEXTURE_IMAGE: {
+            Color v = texture_image_eval(t, st, c);
+            return t->num_ops ? texture_apply_ops(t, v) : v;
+        }
         case TEXTURE_CHECKERBOARD: {
             float su = floorf(st.x * t->checker.scale), sv = floorf(st.y * t->checker.scale);
             /* fmodf is exact; beyond 2^24 every float is even, and NaN counts as even. */
@@ -236,6 +502,12 @@ Color texture_eval(const Texture *textures, int id, Vec2 uv)
             id = parity == 1.0f || parity == -1.0f ? t->checker.odd : t->checker.even;
             break;
         }
+        default: {
+            Color v = eval_proc(textures, t, st, c);
+            return t->num_ops ? texture_apply_ops(t, v) : v;
+        }
         }
     }
 }
+
+Color texture_eval_ctx(const Texture *textures, int id, const TexCtx *c) { return eval_rec(textures, id, c); }

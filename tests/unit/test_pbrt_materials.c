@@ -361,6 +361,16 @@ static const Texture *albedo_tex(const Scene *s, int t)
     return &s->textures[id - 1];
 }
 
+/* Texel i (row-major, row 0 at the top) of a w-texel-wide image texture through its
+ * value maps: the texture looked up at the texel's centre without its uv transform. */
+static Color texel_value(const Texture *t, int i, int w, int h)
+{
+    Texture u = *t; /* a view: never freed */
+    u.uv_scale = v2(1.0f, 1.0f), u.uv_offset = v2(0.0f, 0.0f);
+    u.image.filter = TEXTURE_FILTER_NONE;
+    return texture_eval(&u, 0, v2(((float)(i % w) + 0.5f) / (float)w, 1.0f - ((float)(i / w) + 0.5f) / (float)h));
+}
+
 static void assert_rgb(Color c, float r, float g, float b, float tol)
 {
     if (!(fabsf(c.c[0] - r) <= tol && fabsf(c.c[1] - g) <= tol && fabsf(c.c[2] - b) <= tol))
@@ -445,15 +455,24 @@ static void test_texture_classes(void **state)
     assert_int_equal(s3->type, TEXTURE_CHECKERBOARD);
     assert_rgb(s->textures[s3->checker.even].value, 0.25f, 0.125f, 0, 0);
     assert_rgb(s->textures[s3->checker.odd].value, 1, 0.5f, 0, 0);
-    /* 3D checkerboards, mix and fbm: their averages, with warnings at their lines */
-    assert_int_equal(tri_material(s, 6)->albedo_texture, 0);
-    assert_rgb(tri_material(s, 6)->albedo, 0.5f, 0.5f, 0.5f, 0);
-    assert_warning_at(&w, CST_WARN_APPROXIMATED, "3D (solid) checkerboard", text, "Texture \"k3\"", 0);
-    assert_int_equal(tri_material(s, 7)->albedo_texture, 0);
-    assert_rgb(tri_material(s, 7)->albedo, 0.775f, 0.55f, 0.575f, 1e-6f);
-    assert_warning_at(&w, CST_WARN_APPROXIMATED, "texture \"k\" is taken as its average", text, "\"texture tex1\" \"k\"", 1);
-    assert_warning_at(&w, CST_WARN_UNSUPPORTED, "texture class not supported", text, "Texture \"f\"", 0);
-    assert_int_equal(tri_material(s, 8)->albedo_texture, 0);
+    /* 3D checkerboards, mix and fbm: caustic textures, evaluated at points and uvs */
+    const Texture *k3 = albedo_tex(s, 6);
+    assert_int_equal(k3->type, TEXTURE_CHECKER3D);
+    TexCtx c = {.uv = v2(0.1f, 0.4f), .p = v3(0.5f, 0.5f, 0.5f), .n = v3(0, 0, 1)};
+    int k3id = tri_material(s, 6)->albedo_texture - 1, mid = tri_material(s, 7)->albedo_texture - 1;
+    int fid = tri_material(s, 8)->albedo_texture - 1;
+    assert_rgb(texture_eval_ctx(s->textures, k3id, &c), 1, 1, 1, 0);
+    c.p = v3(1.5f, 0.5f, -0.5f); /* 1 + 0 - 1: even */
+    assert_rgb(texture_eval_ctx(s->textures, k3id, &c), 1, 1, 1, 0);
+    c.p = v3(1.5f, 0.5f, 0.5f);
+    assert_rgb(texture_eval_ctx(s->textures, k3id, &c), 0, 0, 0, 0);
+    assert_int_equal(s->textures[mid].type, TEXTURE_MIX);
+    assert_rgb(texture_eval_ctx(s->textures, mid, &c), 1, 0.5f, 0.5f, 1e-6f); /* k is (1, 0, 0) at uv */
+    assert_int_equal(s->textures[fid].type, TEXTURE_FBM);
+    c.p = v3(0, 0, 0); /* noise vanishes on the lattice, and every octave's point is on it */
+    assert_rgb(texture_eval_ctx(s->textures, fid, &c), 0, 0, 0, 0);
+    for (int i = 0; i < w.n; i++) /* fbm reaches 1.996: the reflectance clamp's note only */
+        if (!strstr(w.msg[i], "texture \"f\" has values up to")) fail_msg("unexpected warning: %s", w.msg[i]);
     cst_scene_destroy(s);
     expect_error(WORLD("Texture \"k\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"nope\"\n" TRI),
                  CST_ERR_INVALID_ARG, "\"texture tex1\"", 0, "spectrum texture \"nope\" is not defined");
@@ -563,11 +582,12 @@ static void test_imagemap_params(void **state)
     const Texture *a = albedo_tex(s, 0);
     assert_int_equal(a->type, TEXTURE_IMAGE);
     assert_int_equal(a->image.wrap, TEXTURE_WRAP_CLAMP);
-    const float *p = a->image.rgb; /* max(0, 1 - 0.5 v) */
-    assert_rgb(color_rgb(p[0], p[1], p[2]), 0.5f, 1, 1, 0);
-    assert_rgb(color_rgb(p[9], p[10], p[11]), 0.5f, 0.5f, 0.5f, 0);
+    /* max(0, 1 - 0.5 v) */
+    assert_rgb(texel_value(a, 0, 2, 2), 0.5f, 1, 1, 0);
+    assert_rgb(texel_value(a, 3, 2, 2), 0.5f, 0.5f, 0.5f, 0);
     assert_warning_at(&w, CST_WARN_APPROXIMATED, "wrap \"black\" approximated by \"clamp\"", text, "\"string wrap\"", 0);
-    assert_warning_at(&w, CST_WARN_APPROXIMATED, "filter \"ewa\" approximated", text, "\"string filter\"", 0);
+    assert_int_equal(a->image.filter, TEXTURE_FILTER_EWA); /* supported: a MIP map, no warning */
+    assert_true(a->image.im->num_levels == 2);
     /* the float texture: red channel, then caustic's roughness sqrt(v) */
     const Material *m = tri_material(s, 1);
     const Texture *f = &s->textures[m->roughness_texture - 1];
@@ -575,14 +595,13 @@ static void test_imagemap_params(void **state)
     assert_true(f->uv_scale.x == 2.0f && f->uv_scale.y == 0.5f && f->uv_offset.x == 0.25f && f->uv_offset.y == 0.125f);
     const float expect_red[4] = {1, 0, 0, 1};
     for (int i = 0; i < 4; i++)
-        assert_rgb(color_rgb(f->image.rgb[3 * i], f->image.rgb[3 * i + 1], f->image.rgb[3 * i + 2]), expect_red[i],
-                   expect_red[i], expect_red[i], 0);
+        assert_rgb(texel_value(f, i, 2, 2), expect_red[i], expect_red[i], expect_red[i], 0);
     /* encodings of one 8-bit PNG: gamma 2.2 of the linear codes; sRGB decodes to the floats written */
     const Texture *lin = albedo_tex(s, 2), *gam = albedo_tex(s, 3), *srgb = albedo_tex(s, 4);
     for (int i = 0; i < 12; i++) {
-        float l = lin->image.rgb[i];
-        assert_true(fabsf(gam->image.rgb[i] - powf(l, 2.2f)) < 1e-6f);
-        assert_true(fabsf(srgb->image.rgb[i] - grey[i]) < 0.004f);
+        float l = texel_value(lin, i / 3, 2, 2).c[i % 3];
+        assert_true(fabsf(texel_value(gam, i / 3, 2, 2).c[i % 3] - powf(l, 2.2f)) < 1e-6f);
+        assert_true(fabsf(texel_value(srgb, i / 3, 2, 2).c[i % 3] - grey[i]) < 0.004f);
         assert_true(fabsf(l - grey[i]) > 0.05f); /* linear really is the raw codes */
     }
     cst_scene_destroy(s);

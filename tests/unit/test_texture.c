@@ -23,6 +23,8 @@
 
 #include "io/image_io.h"
 #include "scene/scene.h"
+#include "textures/mipmap.h"
+#include "textures/noise.h"
 #include "textures/texture.h"
 
 static int group_setup(void **state)
@@ -173,6 +175,389 @@ static void test_srgb_decode(void **state)
     /* Known values of the curve: byte 128 is 0.2158605 linear, byte 10 is 10/255/12.92. */
     assert_true(fabs(srgb_eotf(128 / 255.0) - 0.21586050011389923) < 1e-12);
     assert_true(fabs(srgb_eotf(10 / 255.0) - 0.0030352698354883752) < 1e-12);
+}
+
+/* 8-bit files stay 8-bit (one byte per channel, grey files one channel) and decode at
+ * lookup to exactly the floats of the sRGB curve's table; a gamma encoding decodes to
+ * (code / 255)^g. */
+static void test_compact_storage(void **state)
+{
+    (void)state;
+    enum { W = 5, H = 3 };
+    unsigned char rgb[W * H * 3], grey[W * H];
+    for (int i = 0; i < W * H * 3; i++) rgb[i] = (unsigned char)(17 * i + 3);
+    for (int i = 0; i < W * H; i++) grey[i] = (unsigned char)(29 * i + 1);
+    char prgb[512], pgrey[512];
+    tpath(prgb, sizeof prgb, "compact_rgb.png");
+    tpath(pgrey, sizeof pgrey, "compact_grey.png");
+    assert_true(stbi_write_png(prgb, W, H, 3, rgb, W * 3));
+    assert_true(stbi_write_png(pgrey, W, H, 1, grey, W));
+    CstError err;
+    Texture t, g, gam;
+    assert_int_equal(texture_image_load(&t, prgb, false, TEXTURE_WRAP_CLAMP, &err), CST_OK);
+    assert_int_equal(texture_image_load(&g, pgrey, false, TEXTURE_WRAP_CLAMP, &err), CST_OK);
+    assert_int_equal(texture_image_load_encoded(&gam, pgrey, TEXEL_GAMMA, 2.2f, TEXTURE_WRAP_CLAMP, &err), CST_OK);
+    assert_int_equal(t.image.im->format, TEXEL_U8);
+    assert_int_equal(t.image.im->channels, 3);
+    assert_int_equal(g.image.im->channels, 1);
+    assert_int_equal(texture_image_bytes(&t), W * H * 3);
+    assert_int_equal(texture_image_bytes(&g), W * H);
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            Color c = texture_texel(&t, 0, x, y), cg = texture_texel(&g, 0, x, y), cm = texture_texel(&gam, 0, x, y);
+            for (int k = 0; k < 3; k++) {
+                assert_true(c.c[k] == image_srgb_to_linear(rgb[(y * W + x) * 3 + k] / 255.0));
+                if (cg.c[k] != image_srgb_to_linear(grey[y * W + x] / 255.0))
+                    fail_msg("grey texel (%d, %d): %.9g, code %d", x, y, (double)cg.c[k], grey[y * W + x]);
+                assert_true(fabsf(cm.c[k] - powf(grey[y * W + x] / 255.0f, 2.2f)) <= 1e-7f);
+            }
+        }
+    /* A shared copy with a value map: no new pixels, the map applied after the lookup. */
+    Texture s2;
+    texture_share(&s2, &t);
+    assert_true(texture_add_op(&s2, TEXTURE_OP_AFFINE, color_s(-0.5f), color_s(1.0f)));
+    assert_true(s2.image.im == t.image.im && t.image.im->refs == 2);
+    Color a = texture_eval(&t, 0, v2(0.3f, 0.3f)), b = texture_eval(&s2, 0, v2(0.3f, 0.3f));
+    for (int k = 0; k < 3; k++) assert_true(b.c[k] == maxf(0.0f, -0.5f * a.c[k] + 1.0f));
+    texture_free(&s2);
+    assert_int_equal(t.image.im->refs, 1);
+    texture_free(&t);
+    texture_free(&g);
+    texture_free(&gam);
+}
+
+/* A float image of w x h texels from f(x, y, channel). */
+static Texture float_image(int w, int h, float (*f)(int, int, int))
+{
+    float *px = malloc((size_t)w * (size_t)h * 3 * sizeof *px);
+    assert_non_null(px);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++)
+            for (int k = 0; k < 3; k++) px[(y * w + x) * 3 + k] = f(x, y, k);
+    Texture t;
+    CstError err;
+    assert_int_equal(texture_image(&t, px, w, h, TEXTURE_WRAP_REPEAT, &err), CST_OK);
+    return t;
+}
+
+static float f_const(int x, int y, int k) { (void)x, (void)y; return 0.25f + 0.25f * (float)k; }
+static float f_hash(int x, int y, int k)
+{
+    uint32_t v = (uint32_t)x * 73856093u ^ (uint32_t)y * 19349663u ^ (uint32_t)k * 83492791u;
+    v ^= v >> 13, v *= 0x5bd1e995u, v ^= v >> 15;
+    return (float)(v & 0xffff) / 65535.0f;
+}
+static float f_checker(int x, int y, int k) { (void)k; return (float)((x + y) & 1); }
+
+/* The mean of level l's texels, channel k. */
+static double level_mean(const Texture *t, int l, int k)
+{
+    const TexLevel *lv = &t->image.im->level[l];
+    double sum = 0.0;
+    for (int y = 0; y < lv->height; y++)
+        for (int x = 0; x < lv->width; x++) sum += (double)texture_texel(t, l, x, y).c[k];
+    return sum / ((double)lv->width * (double)lv->height);
+}
+
+/* MIP pyramids: levels halve (rounded up) down to 1 x 1; an area-weighted box filter keeps
+ * every level's mean equal to level 0's (odd sizes included); a constant image stays that
+ * constant on every level and through every filter and footprint. */
+static void test_mipmap_levels(void **state)
+{
+    (void)state;
+    CstError err;
+    static const int sizes[3][2] = {{64, 48}, {37, 21}, {1, 9}};
+    for (int si = 0; si < 3; si++) {
+        int w = sizes[si][0], h = sizes[si][1];
+        Texture t = float_image(w, h, f_hash);
+        assert_int_equal(texture_set_filter(&t, TEXTURE_FILTER_TRILINEAR, 0.0f, &err), CST_OK);
+        const TexImage *im = t.image.im;
+        int lw = w, lh = h, l = 0;
+        for (; l < im->num_levels; l++) {
+            assert_int_equal(im->level[l].width, lw);
+            assert_int_equal(im->level[l].height, lh);
+            for (int k = 0; k < 3; k++) {
+                double m0 = level_mean(&t, 0, k), ml = level_mean(&t, l, k);
+                if (fabs(ml - m0) > 1e-6) fail_msg("%dx%d level %d channel %d: mean %.9f, level 0 %.9f", w, h, l, k, ml, m0);
+            }
+            lw = lw > 1 ? (lw + 1) / 2 : 1, lh = lh > 1 ? (lh + 1) / 2 : 1;
+        }
+        assert_int_equal(im->level[im->num_levels - 1].width * im->level[im->num_levels - 1].height, 1);
+        texture_free(&t);
+    }
+    Texture c = float_image(37, 21, f_const);
+    assert_int_equal(texture_set_filter(&c, TEXTURE_FILTER_EWA, 0.0f, &err), CST_OK);
+    for (int l = 0; l < c.image.im->num_levels; l++)
+        for (int k = 0; k < 3; k++) assert_true(fabs(level_mean(&c, l, k) - (double)f_const(0, 0, k)) < 1e-7);
+    static const TextureFilter filters[4] = {TEXTURE_FILTER_POINT, TEXTURE_FILTER_BILINEAR, TEXTURE_FILTER_TRILINEAR,
+                                             TEXTURE_FILTER_EWA};
+    for (int fi = 0; fi < 4; fi++)
+        for (int i = 0; i < 200; i++) {
+            float d = ldexpf(1.0f, -(i % 12)) * (float)(1 + i % 3);
+            Vec2 st = v2(f_hash(i, 1, 0) * 3.0f - 1.0f, f_hash(i, 2, 0) * 3.0f - 1.0f);
+            Color v = mipmap_filter(c.image.im, TEXTURE_WRAP_REPEAT, filters[fi], 8.0f, st, v2(d, 0.3f * d),
+                                    v2(-0.1f * d, 0.5f * d));
+            assert_rgb_near(v, 0.25, 0.5, 0.75, 2e-6);
+        }
+    texture_free(&c);
+}
+
+/* Level selection (pbrt-v4 MIPMap::Filter): a checkerboard of single texels is 0 or 1 on
+ * level 0 and 0.5 on every coarser level, so the footprint decides which one is seen. */
+static void test_mipmap_filters(void **state)
+{
+    (void)state;
+    CstError err;
+    Texture t = float_image(64, 64, f_checker);
+    assert_int_equal(texture_set_filter(&t, TEXTURE_FILTER_BILINEAR, 0.0f, &err), CST_OK);
+    const TexImage *im = t.image.im;
+    assert_int_equal(im->num_levels, 7);
+    Vec2 centre = v2(10.5f / 64.0f, 1.0f - 20.5f / 64.0f); /* texel (10, 20): even, 0 */
+    Vec2 z = v2(0.0f, 0.0f);
+    /* No footprint: level 0. A footprint of 2 texels (width = 2 max|d| = 2/64): level 1. */
+    for (int fi = TEXTURE_FILTER_POINT; fi <= TEXTURE_FILTER_EWA; fi++) {
+        Color v0 = mipmap_filter(im, TEXTURE_WRAP_REPEAT, (TextureFilter)fi, 8.0f, centre, z, z);
+        if (fi == TEXTURE_FILTER_EWA) assert_true(v0.c[0] == 0.0f); /* falls back to level 0's bilinear */
+        else assert_rgb_near(v0, 0.0, 0.0, 0.0, 0.0);
+    }
+    Vec2 d1 = v2(1.0f / 64.0f, 0.0f), d2 = v2(0.0f, 1.0f / 64.0f);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_BILINEAR, 8.0f, centre, d1, d2), 0.5, 0.5, 0.5, 0.0);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_POINT, 8.0f, centre, d1, d2), 0.5, 0.5, 0.5, 0.0);
+    /* Half a texel: level 0 (log2(1/64) = -6 below the top of 6). */
+    Vec2 h1 = v2(0.5f / 64.0f, 0.0f), h2 = v2(0.0f, 0.5f / 64.0f);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_BILINEAR, 8.0f, centre, h1, h2), 0.0, 0.0, 0.0, 0.0);
+    /* Trilinear between level 0 (0) and 1 (0.5) is pbrt-v4's level-0 bilinear below level
+     * 1; between levels 1 and 2 both are 0.5. */
+    Vec2 t1 = v2(1.5f / 64.0f, 0.0f);
+    assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_TRILINEAR, 8.0f, centre, t1, d2), 0.5, 0.5, 0.5, 1e-7);
+    /* EWA over a footprint of several texels averages the checker to about 0.5. */
+    Vec2 e1 = v2(4.0f / 64.0f, 1.0f / 64.0f), e2 = v2(-1.0f / 64.0f, 3.0f / 64.0f);
+    Color e = mipmap_filter(im, TEXTURE_WRAP_REPEAT, TEXTURE_FILTER_EWA, 8.0f, centre, e1, e2);
+    assert_rgb_near(e, 0.5, 0.5, 0.5, 0.02);
+    /* Huge footprints: the 1 x 1 top level, the image's mean. */
+    Vec2 b1 = v2(4.0f, 0.0f), b2 = v2(0.0f, 4.0f);
+    for (int fi = TEXTURE_FILTER_POINT; fi <= TEXTURE_FILTER_EWA; fi++)
+        assert_rgb_near(mipmap_filter(im, TEXTURE_WRAP_REPEAT, (TextureFilter)fi, 8.0f, centre, b1, b2), 0.5, 0.5, 0.5, 1e-6);
+    /* Through texture_eval_ctx: the footprint is scaled by the texture's uv map. */
+    texture_set_uv_transform(&t, v2(2.0f, 2.0f), v2(0.0f, 0.0f));
+    TexCtx ctx = {.uv = v2(centre.x * 0.5f, centre.y * 0.5f), .dudx = 0.5f / 64.0f, .dvdy = 0.5f / 64.0f};
+    assert_rgb_near(texture_eval_ctx(&t, 0, &ctx), 0.5, 0.5, 0.5, 0.0);
+    texture_free(&t);
+}
+
+/* Footprints (scene/footprint.c): an orthographic camera's pixel is 2 h aspect / W wide,
+ * scaled by pbrt-v4's max(1/8, 1/sqrt(spp)); on a quad facing it whose u spans 4 units,
+ * du/dx is that over 4. A 90-degree pinhole's smallest per-pixel change of direction is
+ * at the film's corner, |d normalize(v) / d sx| = sqrt(6) / 3 / sqrt(3) at v = (1, 1, 1),
+ * times the step 2 / H, and the footprint at distance L on a facing plane is L times it. */
+static void test_footprint(void **state)
+{
+    (void)state;
+    CameraDesc o = {0};
+    o.position = v3(0, 0, -5), o.look_at = v3(0, 0, 0), o.up = v3(0, 1, 0);
+    o.vfov_deg = 40.0f, o.focus_distance = 1.0f, o.ortho_height = 2.0f;
+    Footprint fp;
+    footprint_init(&fp, &o, false, 100, 50, 16);
+    assert_true(fabsf(fp.spp_scale - 0.25f) < 1e-7f);
+    TexCtx c = footprint_tex_ctx(&fp, v3(0.3f, -0.2f, 0.0f), v3(0, 0, -1), v2(0.5f, 0.5f), v3(4, 0, 0), v3(0, 4, 0));
+    double px = 2.0 * 1.0 * 2.0 / 100.0 * 0.25;
+    if (fabs(fabs((double)c.dudx) - px / 4.0) > 1e-6 || fabs((double)c.dvdx) > 1e-6 ||
+        fabs((double)c.dudy) > 1e-6 || fabs(fabs((double)c.dvdy) - px / 4.0) > 1e-6)
+        fail_msg("orthographic: du/dx %g dv/dx %g du/dy %g dv/dy %g, expected +-%g on the diagonal", (double)c.dudx,
+                 (double)c.dvdx, (double)c.dudy, (double)c.dvdy, px / 4.0);
+    /* Tilted 60 degrees about x: the y footprint stretches by 1 / cos 60 = 2 on the plane. */
+    Vec3 n = v3(0.0f, sinf(CST_PI / 3.0f), -cosf(CST_PI / 3.0f));
+    Vec3 dpdx, dpdy;
+    footprint_dp_dxy(&fp, v3(0, 0, 0), n, &dpdx, &dpdy);
+    assert_true(fabs((double)v3_length(dpdx) - px) < 1e-6 && fabs((double)v3_length(dpdy) - 2.0 * px) < 1e-5);
+    CameraDesc pc = {0};
+    pc.position = v3(0, 0, 0), pc.look_at = v3(0, 0, 1), pc.up = v3(0, 1, 0);
+    pc.vfov_deg = 90.0f, pc.focus_distance = 1.0f;
+    footprint_init(&fp, &pc, false, 64, 64, 1);
+    double want = sqrt(6.0) / 3.0 / sqrt(3.0) * 2.0 / 64.0;
+    if (fabs((double)fp.dir_dx - want) > 0.03 * want) fail_msg("pinhole: dir_dx %g, expected %g", (double)fp.dir_dx, want);
+    footprint_dp_dxy(&fp, v3(0, 0, 7), v3(0, 0, -1), &dpdx, &dpdy);
+    assert_true(fabs((double)v3_length(dpdx) - 7.0 * (double)fp.dir_dx) < 1e-5);
+    assert_true(fabs((double)v3_length(dpdy) - 7.0 * (double)fp.dir_dy) < 1e-5);
+}
+
+/* Perlin noise: 0 on the integer lattice, period 256, within [-1, 1], continuous. Octave
+ * sums: a footprint of one unit resolves no octave (n = -1 - log2(1) / 2 < 0), so fBm is 0
+ * and turbulence is 0.2 sum omega^i over the octaves, exactly. */
+static void test_noise(void **state)
+{
+    (void)state;
+    for (int i = -5; i <= 5; i++) assert_true(noise3(v3((float)i, (float)(2 * i), (float)(300 - i))) == 0.0f);
+    float lo = 0.0f, hi = 0.0f;
+    for (int i = 0; i < 20000; i++) {
+        Vec3 p = v3(f_hash(i, 0, 0) * 40.0f - 20.0f, f_hash(i, 1, 0) * 40.0f - 20.0f, f_hash(i, 2, 0) * 40.0f - 20.0f);
+        float n = noise3(p);
+        lo = minf(lo, n), hi = maxf(hi, n);
+        assert_true(fabsf(noise3(v3(p.x + 256.0f, p.y, p.z - 256.0f)) - n) < 1e-4f); /* period */
+        assert_true(fabsf(noise3(v3(p.x + 1e-3f, p.y, p.z)) - n) < 1e-2f);         /* continuity */
+    }
+    assert_true(lo >= -1.0f && hi <= 1.0f && lo < -0.5f && hi > 0.5f);
+    Vec3 one = v3(1.0f, 0.0f, 0.0f), z = v3(0.0f, 0.0f, 0.0f);
+    assert_true(noise_fbm(v3(0.3f, 0.7f, 0.1f), one, z, 0.5f, 8) == 0.0f);
+    /* pbrt-v4's Turbulence: the partly resolved octave (here none of it) blends toward 0.2,
+     * then each octave from it on adds 0.2 omega^i, the first at the same weight. */
+    float want = 0.2f, o = 1.0f;
+    for (int i = 0; i < 8; i++, o *= 0.5f) want += 0.2f * o;
+    assert_true(fabsf(noise_turbulence(v3(0.3f, 0.7f, 0.1f), one, z, 0.5f, 8) - want) < 1e-6f);
+    /* No footprint: all octaves, the sum of the scaled lookups. */
+    Vec3 p = v3(0.3f, 0.7f, 0.1f);
+    float sum = 0.0f, lambda = 1.0f;
+    o = 1.0f;
+    for (int i = 0; i < 3; i++, lambda *= 1.99f, o *= 0.6f) sum += o * noise3(v3_scale(p, lambda));
+    assert_true(fabsf(noise_fbm(p, z, z, 0.6f, 3) - sum) < 1e-6f);
+}
+
+/* Procedural and combining textures against closed forms: mix, scale and bilerp values,
+ * directionmix at |n . dir| = 1, 0 and 0.6, the 3D checkerboard's mean over a cube of
+ * whole cells (exactly 1/2 at cell centres), its texture_from_world map, the dots' area
+ * fraction near pi 0.35^2 / 2, the marble spline's range. */
+static void test_procedural(void **state)
+{
+    (void)state;
+    Texture tex[12];
+    texture_constant(&tex[0], color_rgb(0.2f, 0.4f, 0.6f));
+    texture_constant(&tex[1], color_rgb(1.0f, 0.5f, 0.0f));
+    texture_constant(&tex[2], color_s(0.25f));
+    TextureProc pr;
+    memset(&pr, 0, sizeof pr);
+    pr.tex1 = 0, pr.tex2 = 1, pr.amount = 2;
+    assert_true(texture_procedural(&tex[3], TEXTURE_MIX, &pr, tex));
+    pr.amount = -1, pr.dir = v3(0.0f, 0.0f, 1.0f);
+    assert_true(texture_procedural(&tex[4], TEXTURE_DIRECTIONMIX, &pr, tex));
+    pr.tex2 = -1, pr.amount = 2;
+    assert_true(texture_procedural(&tex[5], TEXTURE_SCALE, &pr, tex));
+    memset(&pr, 0, sizeof pr);
+    pr.tex1 = pr.tex2 = pr.amount = -1;
+    pr.corner[0] = color_s(0.0f), pr.corner[1] = color_s(1.0f), pr.corner[2] = color_s(2.0f), pr.corner[3] = color_s(4.0f);
+    assert_true(texture_procedural(&tex[6], TEXTURE_BILERP, &pr, tex));
+    pr.tex1 = 0, pr.tex2 = 1;
+    assert_true(texture_procedural(&tex[7], TEXTURE_CHECKER3D, &pr, tex));
+    pr.xf[0] = 2.0f, pr.xf[5] = 1.0f, pr.xf[10] = 1.0f, pr.xf[3] = 0.5f; /* x' = 2x + 0.5 */
+    assert_true(texture_procedural(&tex[8], TEXTURE_CHECKER3D, &pr, tex));
+    memset(pr.xf, 0, sizeof pr.xf);
+    assert_true(texture_procedural(&tex[9], TEXTURE_DOTS, &pr, tex));
+    pr.tex1 = pr.tex2 = -1, pr.octaves = 8, pr.omega = 0.5f, pr.scale = 1.0f, pr.variation = 0.2f;
+    assert_true(texture_procedural(&tex[10], TEXTURE_MARBLE, &pr, tex));
+    TexCtx c = {.uv = v2(0.25f, 0.75f), .n = v3(0.0f, 0.0f, 1.0f)};
+    assert_rgb_near(texture_eval_ctx(tex, 3, &c), 0.75 * 0.2 + 0.25, 0.75 * 0.4 + 0.125, 0.75 * 0.6, 1e-6);
+    assert_rgb_near(texture_eval_ctx(tex, 4, &c), 0.2, 0.4, 0.6, 1e-7);
+    c.n = v3(1.0f, 0.0f, 0.0f);
+    assert_rgb_near(texture_eval_ctx(tex, 4, &c), 1.0, 0.5, 0.0, 1e-7);
+    c.n = v3(0.8f, 0.0f, -0.6f);
+    assert_rgb_near(texture_eval_ctx(tex, 4, &c), 0.6 * 0.2 + 0.4, 0.6 * 0.4 + 0.2, 0.6 * 0.6, 1e-6);
+    assert_rgb_near(texture_eval_ctx(tex, 5, &c), 0.05, 0.1, 0.15, 1e-7);
+    /* bilerp (1-s)(1-t) v00 + (1-s) t v01 + s (1-t) v10 + s t v11 at (0.25, 0.75) */
+    double b = 0.75 * 0.25 * 0 + 0.75 * 0.75 * 1 + 0.25 * 0.25 * 2 + 0.25 * 0.75 * 4;
+    assert_rgb_near(texture_eval_ctx(tex, 6, &c), b, b, b, 1e-6);
+    assert_rgb_near(tex[6].average, 1.75, 1.75, 1.75, 1e-6);
+    /* 3D checker: the mean over the 4 x 4 x 4 cells' centres is exactly half of each. */
+    double sum[2] = {0.0, 0.0};
+    for (int i = 0; i < 64; i++) {
+        c.p = v3((float)(i % 4) - 1.5f, (float)(i / 4 % 4) - 1.5f, (float)(i / 16) - 1.5f);
+        sum[0] += (double)texture_eval_ctx(tex, 7, &c).c[0];
+        sum[1] += (double)texture_eval_ctx(tex, 8, &c).c[0];
+    }
+    assert_true(fabs(sum[0] / 64.0 - 0.6) < 1e-6 && fabs(sum[1] / 64.0 - 0.6) < 1e-6);
+    c.p = v3(0.3f, 0.5f, 0.5f); /* x' = 1.1: odd */
+    assert_rgb_near(texture_eval_ctx(tex, 8, &c), 1.0, 0.5, 0.0, 1e-7);
+    c.p = v3(0.2f, 0.5f, 0.5f); /* x' = 0.9: even */
+    assert_rgb_near(texture_eval_ctx(tex, 8, &c), 0.2, 0.4, 0.6, 1e-7);
+    /* dots: the inside fraction over 40 x 40 cells, 16 x 16 points each */
+    long inside = 0, total = 0;
+    for (int y = 0; y < 640; y++)
+        for (int x = 0; x < 640; x++, total++) {
+            c.uv = v2(((float)x + 0.5f) / 16.0f, ((float)y + 0.5f) / 16.0f);
+            inside += texture_eval_ctx(tex, 9, &c).c[0] == 0.2f;
+        }
+    double frac = (double)inside / (double)total;
+    if (!(frac > 0.12 && frac < 0.27)) fail_msg("dots cover %.3f of the plane, expected about 0.19", frac);
+    for (int i = 0; i < 500; i++) {
+        c.p = v3(f_hash(i, 5, 0) * 10.0f, f_hash(i, 6, 0) * 10.0f, f_hash(i, 7, 0) * 10.0f);
+        Color m = texture_eval_ctx(tex, 10, &c);
+        assert_true(m.c[0] >= 1.5f * 0.2f - 1e-6f && m.c[0] <= 1.5f * 0.6f + 1e-6f);
+    }
+    /* nesting depth is bounded */
+    Texture deep[TEXTURE_MAX_DEPTH + 2];
+    texture_constant(&deep[0], color_s(1.0f));
+    memset(&pr, 0, sizeof pr);
+    pr.tex2 = -1, pr.amount = -1, pr.amount_value = 0.5f;
+    bool ok = true;
+    for (int i = 1; i < TEXTURE_MAX_DEPTH + 2 && ok; i++) {
+        pr.tex1 = pr.tex2 = i - 1;
+        ok = texture_procedural(&deep[i], TEXTURE_MIX, &pr, deep);
+        if (!ok) assert_int_equal(i, TEXTURE_MAX_DEPTH);
+    }
+    assert_false(ok);
+}
+
+/* The hit of a ray straight down (-z) at (x, y) on a scene's quad. */
+static SurfaceHit hit_at(const Scene *s, float x, float y)
+{
+    Ray r = ray_make(v3(x, y, 1.0f), v3(0.0f, 0.0f, -1.0f), 0.0f, 10.0f);
+    SurfaceHit sh;
+    assert_true(scene_intersect(s, &r, &sh));
+    return sh;
+}
+
+/* Bump mapping of a known height field: on the unit quad z = 0 with (u, v) = (x, y), the
+ * displacement h = a u + b v (a bilerp texture) moves the surface to (u, v, h), whose
+ * normal is normalize(-a, -b, 1); forward differences are exact on a plane. A normal map
+ * of one tangent-space normal t (float texels 0.5 + 0.5 t) gives t in the frame (dp/du,
+ * n x dp/du, n) = (x, y, z). */
+static void test_bump_and_normal_map(void **state)
+{
+    (void)state;
+    CstError err;
+    for (int kind = 0; kind < 2; kind++) {
+        CstScene *cs = NULL;
+        assert_int_equal(cst_scene_create(&cs, &err), CST_OK);
+        const float a = 0.3f, b = 0.15f;
+        Vec3 want;
+        int tid = 0;
+        CstTextureDesc t = {0};
+        if (kind == 0) {
+            t.type = CST_TEXTURE_BILERP;
+            float c[4] = {0.0f, b, a, a + b}; /* v00, v01, v10, v11 */
+            for (int i = 0; i < 4; i++) t.corners[i][0] = t.corners[i][1] = t.corners[i][2] = c[i];
+            want = v3_normalize(v3(-a, -b, 1.0f));
+        } else {
+            Vec3 tn = v3_normalize(v3(0.3f, -0.2f, 1.0f));
+            static float px[4 * 3];
+            for (int i = 0; i < 4; i++)
+                px[3 * i] = 0.5f + 0.5f * tn.x, px[3 * i + 1] = 0.5f + 0.5f * tn.y, px[3 * i + 2] = 0.5f + 0.5f * tn.z;
+            t.type = CST_TEXTURE_IMAGE;
+            t.pixels = px, t.width = 2, t.height = 2;
+            want = tn;
+        }
+        assert_int_equal(cst_scene_add_texture(cs, &t, &tid, &err), CST_OK);
+        CstMaterialDesc md;
+        cst_material_desc_init(&md, CST_MATERIAL_DIFFUSE);
+        if (kind == 0) md.displacement_texture = tid;
+        else md.normal_map_texture = tid;
+        int mid = 0;
+        assert_int_equal(cst_scene_add_material(cs, &md, &mid, &err), CST_OK);
+        Scene *s = cs;
+        const Vec3 q[4] = {v3(0, 0, 0), v3(1, 0, 0), v3(1, 1, 0), v3(0, 1, 0)};
+        if (scene_add_quad(s, q, mid, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
+        assert_int_equal(scene_commit(s, &err), CST_OK);
+        for (int i = 0; i < 5; i++) {
+            SurfaceHit sh = hit_at(s, 0.1f + 0.17f * (float)i, 0.8f - 0.13f * (float)i);
+            Vec3 n = scene_bump(s, &s->materials[sh.material], &sh);
+            /* Forward differences over du = 0.0005 of float heights up to 0.45 round the
+             * slope by up to 2 ulp(0.45) / 0.0005 = 1.2e-4; the normal map is exact. */
+            if (v3_length(v3_sub(n, want)) > (kind == 0 ? 2e-4f : 1e-6f))
+                fail_msg("%s at hit %d: (%g, %g, %g), expected (%g, %g, %g)", kind ? "normal map" : "bump", i,
+                         (double)n.x, (double)n.y, (double)n.z, (double)want.x, (double)want.y, (double)want.z);
+            Bsdf bs;
+            scene_bsdf(s, &sh, &bs);
+        }
+        cst_scene_destroy(cs);
+    }
 }
 
 /* Float files are linear: EXR and PFM (through image_read) and Radiance HDR (stb_image)
@@ -553,6 +938,13 @@ int main(void)
         cmocka_unit_test(test_image_rejects_bad_texels),
         cmocka_unit_test(test_srgb_decode),
         cmocka_unit_test(test_float_and_jpeg),
+        cmocka_unit_test(test_compact_storage),
+        cmocka_unit_test(test_mipmap_levels),
+        cmocka_unit_test(test_mipmap_filters),
+        cmocka_unit_test(test_footprint),
+        cmocka_unit_test(test_noise),
+        cmocka_unit_test(test_procedural),
+        cmocka_unit_test(test_bump_and_normal_map),
         cmocka_unit_test(test_checkerboard),
         cmocka_unit_test(test_uv_transform),
         cmocka_unit_test(test_uv_at_hits),

@@ -401,6 +401,7 @@ CstStatus pbrt_material_directive(Loader *ld, NamedCall *call)
         }
     }
     TRY(make_material(ld, mt, ps, loc, &m));
+    TRY(pbrt_material_normal_textures(ld, ps, d, &m));
     int id = 0;
     TRY(pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id));
     if (dname[2] != 'k') ld->gs.material = id;

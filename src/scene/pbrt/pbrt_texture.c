@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "io/image_io.h"
 #include "scene/pbrt/pbrt_params.h"
@@ -132,9 +133,46 @@ static Color texop_apply(TexOp op, Color a, Color b, Color v)
     return v;
 }
 
+/* The builder's value map for a TexOp. */
+static CstTextureOpType texop_type(TexOp op)
+{
+    switch (op) {
+    case TEXOP_AFFINE: return CST_TEXTURE_OP_AFFINE;
+    case TEXOP_MIN1: return CST_TEXTURE_OP_MIN1;
+    case TEXOP_POW: return CST_TEXTURE_OP_POW;
+    case TEXOP_RED: return CST_TEXTURE_OP_RED;
+    }
+    return CST_TEXTURE_OP_AFFINE;
+}
+
+/* An image description with op appended to its value maps (the image's pixels are shared,
+ * never copied). Two pure scales (b = 0, a >= 0) in a row fold into one, exactly, as image
+ * values are >= 0. A located error when the chain is full. */
+static CstStatus desc_append_op(Loader *ld, CstTextureDesc *t, TexOp op, Color a, Color b, Loc loc, const char *d)
+{
+    if (op == TEXOP_AFFINE && t->num_ops > 0 && color_is_black(b)) {
+        CstTextureOp *last = &t->ops[t->num_ops - 1];
+        int pure = last->type == CST_TEXTURE_OP_AFFINE;
+        for (int k = 0; k < 3; k++) pure &= last->b[k] == 0.0f && last->a[k] >= 0.0f && a.c[k] >= 0.0f;
+        if (pure) {
+            for (int k = 0; k < 3; k++) last->a[k] *= a.c[k];
+            return CST_OK;
+        }
+    }
+    if (t->num_ops >= CST_TEXTURE_MAX_OPS)
+        return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: more than %d scales, clamps and remappings "
+                            "applied to one image texture", d, CST_TEXTURE_MAX_OPS);
+    CstTextureOp *o = &t->ops[t->num_ops++];
+    o->type = texop_type(op);
+    pbrt_color_floats(a, o->a);
+    pbrt_color_floats(b, o->b);
+    return CST_OK;
+}
+
 /* A new scene texture: texture `id` with op applied to its values, or id itself when op
- * changes nothing. A checkerboard's textures are mapped too, each once however often it
- * is shared (nested checkerboards may share children), without recursion: children have
+ * changes nothing. Constants take the op in their value, images one more value map over
+ * their shared pixels; a checkerboard's textures are mapped too, each once however often
+ * it is shared (nested checkerboards may share children), without recursion: children have
  * lower indices, so one downward pass marks what is reachable and one upward pass copies. */
 CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, const char *d, int *out)
 {
@@ -154,25 +192,16 @@ CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, 
     }
     for (int i = 0; i < n && !st; i++) {
         if (memo[i] < 0 || (st = pbrt_texture_info(ld, i, &info))) continue;
-        CstTextureDesc t = info.desc; /* uv transform, wrap and scale as they are */
-        float *px = NULL;
+        CstTextureDesc t = info.desc; /* uv transform, wrap, filter and the image's source as they are */
         if (t.type == CST_TEXTURE_CONSTANT) {
             pbrt_color_floats(texop_apply(op, a, b, color_of(t.value)), t.value);
         } else if (t.type == CST_TEXTURE_CHECKERBOARD) {
             t.even = memo[t.even - 1] + 1;
             t.odd = memo[t.odd - 1] + 1;
-        } else {
-            size_t np = (size_t)t.width * (size_t)t.height;
-            if (!(px = malloc(np * 3 * sizeof *px))) {
-                st = pbrt_oom(ld);
-                break;
-            }
-            for (size_t k = 0; k < np; k++)
-                pbrt_color_floats(texop_apply(op, a, b, color_of(&t.pixels[3 * k])), &px[3 * k]);
-            t.pixels = px;
+        } else if ((st = desc_append_op(ld, &t, op, a, b, loc, d))) {
+            break;
         }
         st = tex_add(ld, &t, loc, d, &memo[i]);
-        free(px);
     }
     if (!st) *out = memo[id];
     free(memo);
@@ -195,12 +224,6 @@ CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name
     if (entry) *entry = i;
     if (!texture_is_constant(ld, i)) *tex = 1 + ld->texs[i].id;
     return CST_OK;
-}
-
-/* op applied in place to n texels. */
-static void texels_apply(float *px, size_t n, TexOp op, Color a, Color b)
-{
-    for (size_t k = 0; k < n; k++) pbrt_color_floats(texop_apply(op, a, b, color_of(&px[3 * k])), &px[3 * k]);
 }
 
 /* pbrt's UVMapping ("uscale", "vscale", "udelta", "vdelta"): (s, t) = (su u + du, sv v + dv). */
@@ -291,10 +314,18 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, wl, "%s: wrap \"%s\" is not known; expected \"repeat\", "
                             "\"clamp\", \"black\" or \"octahedralsphere\"", d, pbrt_clip(wrap, nm));
     }
-    if (filter && strcmp(filter, "bilinear") != 0)
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, il, "%s: filter \"%s\" approximated by \"bilinear\" (caustic "
-                     "has no MIP maps)", d, pbrt_clip(filter, nm));
-    int linear = 0; /* pbrt-v4's default is sRGB for PNG; caustic takes 8- and 16-bit files as sRGB */
+    CstTextureFilter tf = CST_TEXTURE_FILTER_BILINEAR; /* pbrt-v4's default */
+    if (filter) {
+        if (strcmp(filter, "point") == 0) tf = CST_TEXTURE_FILTER_POINT;
+        else if (strcmp(filter, "trilinear") == 0) tf = CST_TEXTURE_FILTER_TRILINEAR;
+        else if (strcmp(filter, "ewa") == 0 || strcmp(filter, "EWA") == 0) tf = CST_TEXTURE_FILTER_EWA;
+        else if (strcmp(filter, "bilinear") != 0)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, il, "%s: filter \"%s\" is not known; expected \"point\", "
+                                "\"bilinear\", \"trilinear\" or \"ewa\"", d, pbrt_clip(filter, nm));
+    }
+    /* pbrt-v4's default: sRGB for PNG files, linear for every other file (JPEG, TGA, ...). */
+    size_t fn_len = strlen(file);
+    int linear = !(fn_len >= 4 && strcasecmp(file + fn_len - 4, ".png") == 0);
     if (enc) {
         if (strcmp(enc, "linear") == 0) {
             linear = 1;
@@ -311,7 +342,7 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
         }
     }
     ImageFileFormat format = image_format_from_path(file);
-    int readable = format != IMAGE_FILE_NONE, is_float_file = image_format_is_float(format);
+    int readable = format != IMAGE_FILE_NONE;
     if (!readable) {
         *v = color_s(0.5f);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR or "
@@ -323,27 +354,25 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     TRY(pbrt_check_file_access(ld, fl, d));
     char *path = pbrt_resolve_path(ld, file);
     if (!path) return pbrt_oom(ld);
-    /* Decoded by the textures module's reader (sRGB or linear as the builder would), the
-     * texels mapped here, then handed to the builder as pixels. */
-    Texture img;
-    CstStatus st = texture_image_load(&img, path, linear, TEXTURE_WRAP_REPEAT, ld->err);
-    free(path);
-    if (st) return pbrt_fail_wrap(ld, st, fl, d);
-    size_t np = (size_t)img.image.width * (size_t)img.image.height;
-    /* pbrt's order: decode, take the first channel for a float texture, scale, invert. */
-    if (gamma > 0.0f && !is_float_file) texels_apply(img.image.rgb, np, TEXOP_POW, color_s(gamma), color_s(0.0f));
-    if (is_float) texels_apply(img.image.rgb, np, TEXOP_RED, color_s(0.0f), color_s(0.0f));
-    if (scale != 1.0f || invert)
-        texels_apply(img.image.rgb, np, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f));
+    /* The image in its file's storage; pbrt's order after the lookup and filtering: the
+     * first channel for a float texture, then scale, then invert (pbrt-v4 ImageTexture). */
     CstTextureDesc t = {0};
     t.type = CST_TEXTURE_IMAGE;
-    t.pixels = img.image.rgb;
-    t.width = img.image.width;
-    t.height = img.image.height;
+    t.path = path;
+    t.encoding = gamma > 0.0f ? CST_TEXTURE_ENCODING_GAMMA : linear ? CST_TEXTURE_ENCODING_LINEAR
+                                                                  : CST_TEXTURE_ENCODING_SRGB;
+    t.gamma = gamma;
     t.wrap = tw;
+    t.filter = tf;
+    t.max_anisotropy = aniso >= 1.0f && aniso <= 1e6f ? aniso : 8.0f;
     desc_uv(&t, uvs, uvo);
-    st = tex_add(ld, &t, loc, d, id);
-    texture_free(&img);
+    CstStatus st = CST_OK;
+    if (is_float) st = desc_append_op(ld, &t, TEXOP_RED, color_s(0.0f), color_s(0.0f), loc, d);
+    if (!st && (scale != 1.0f || invert))
+        st = desc_append_op(ld, &t, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f),
+                            loc, d);
+    if (!st) st = tex_add(ld, &t, fl, d, id);
+    free(path);
     return st;
 }
 
@@ -366,6 +395,158 @@ static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc,
     t.scale = 1.0f;
     desc_uv(&t, uvs, uvo);
     return tex_add(ld, &t, loc, d, id);
+}
+
+/* A texture operand as a scene texture id (public id - 1): the named texture, or a constant
+ * texture made of the given or default value. */
+static CstStatus tex_operand_id(Loader *ld, Params *ps, const char *d, const char *name, int is_float, float def,
+                                Loc loc, int *id)
+{
+    Color v;
+    TRY(tex_operand(ld, ps, d, name, is_float, def, id, &v));
+    if (*id < 0) TRY(tex_const(ld, v, loc, d, id));
+    return CST_OK;
+}
+
+/* texture_from_world of a solid texture: the inverse of the CTM at its definition
+ * (pbrt-v4 TextureMapping3D: renderFromTexture is the CTM). */
+static void desc_solid_xf(Loader *ld, CstTextureDesc *t)
+{
+    if (!ld->gs.ctm.inv_ok) return; /* identity */
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) t->texture_from_world[4 * r + c] = ld->gs.ctm.inv.m[r][c];
+}
+
+/* Whether a mix's operands are all values or constant textures (amount too, for "mix"). */
+static int mix_is_constant(Loader *ld, Params *ps, int is_float)
+{
+    static const char *const names[3] = {"tex1", "tex2", "amount"};
+    for (int i = 0; i < 3; i++) {
+        Param *p = pbrt_find_param(ps, names[i]);
+        if (!p || p->type != PT_TEXTURE || p->num_strs < 1) continue;
+        int k = find_texture(ld, p->strs[0], i == 2 ? 1 : is_float);
+        if (k >= 0 && !texture_is_constant(ld, k)) return 0;
+    }
+    return 1;
+}
+
+/* pbrt-v4's procedural and combining textures through the builder (docs/pbrt-compat.md). */
+static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d, Loc loc, const char *cls,
+                                          int is_float, int *id)
+{
+    CstTextureDesc t = {0};
+    Vec2 uvs = v2(1.0f, 1.0f), uvo = v2(0.0f, 0.0f);
+    int a = -1, b = -1;
+    if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
+        TRY(tex_operand_id(ld, ps, d, "tex1", is_float, 0.0f, loc, &a));
+        TRY(tex_operand_id(ld, ps, d, "tex2", is_float, 1.0f, loc, &b));
+        t.tex1 = a + 1, t.tex2 = b + 1;
+        if (cls[0] == 'm') {
+            int am = -1;
+            Color av;
+            TRY(tex_operand(ld, ps, d, "amount", 1, 0.5f, &am, &av));
+            t.type = CST_TEXTURE_MIX;
+            t.amount = am + 1;
+            t.amount_value = av.c[0];
+        } else {
+            Param *p;
+            t.type = CST_TEXTURE_DIRECTIONMIX;
+            Vec3 dir = v3(0.0f, 1.0f, 0.0f);
+            TRY(pbrt_lookup(ld, ps, d, "dir", PT_MASK(PT_VECTOR3), "vector3", &p));
+            if (p) {
+                if (p->num_nums != 3)
+                    return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"dir\" has %d values; expected 3", d,
+                                        p->num_nums);
+                dir = v3((float)p->nums[0], (float)p->nums[1], (float)p->nums[2]);
+            }
+            /* pbrt-v4 carries dir by the CTM at the definition. */
+            dir = transform_vector(&ld->gs.ctm.m, dir);
+            t.dir[0] = dir.x, t.dir[1] = dir.y, t.dir[2] = dir.z;
+        }
+    } else if (strcmp(cls, "checkerboard") == 0) { /* dimension 3 */
+        TRY(tex_operand_id(ld, ps, d, "tex1", is_float, 1.0f, loc, &a));
+        TRY(tex_operand_id(ld, ps, d, "tex2", is_float, 0.0f, loc, &b));
+        t.type = CST_TEXTURE_CHECKERBOARD_3D;
+        t.tex1 = a + 1, t.tex2 = b + 1;
+        desc_solid_xf(ld, &t);
+    } else if (strcmp(cls, "dots") == 0) {
+        TRY(tex_operand_id(ld, ps, d, "inside", is_float, 1.0f, loc, &a));
+        TRY(tex_operand_id(ld, ps, d, "outside", is_float, 0.0f, loc, &b));
+        TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+        t.type = CST_TEXTURE_DOTS;
+        /* pbrt-v4 (DotsTexture::Create) hands "inside" to the constructor's outsideDot and
+         * "outside" to its insideDot, so its dots show "outside": rendered as pbrt does. */
+        t.tex1 = b + 1, t.tex2 = a + 1;
+    } else if (strcmp(cls, "bilerp") == 0) {
+        static const char *const names[4] = {"v00", "v01", "v10", "v11"};
+        static const float defs[4] = {0.0f, 1.0f, 0.0f, 1.0f};
+        for (int i = 0; i < 4; i++) {
+            Color c = color_s(defs[i]);
+            if (is_float) {
+                float f = defs[i];
+                TRY(pbrt_get_float(ld, ps, d, names[i], defs[i], &f, NULL));
+                c = color_s(maxf(f, 0.0f));
+            } else {
+                TRY(pbrt_get_spectrum(ld, ps, d, names[i], SPEC_UNBOUNDED, 1, &c, NULL));
+            }
+            pbrt_color_floats(c, t.corners[i]);
+        }
+        TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+        t.type = CST_TEXTURE_BILERP;
+    } else { /* fbm, wrinkled, windy, marble */
+        float rough = 0.5f, sc = 1.0f, var = 0.2f;
+        int oct = 8;
+        t.type = strcmp(cls, "fbm") == 0 ? CST_TEXTURE_FBM : strcmp(cls, "wrinkled") == 0 ? CST_TEXTURE_WRINKLED
+                 : strcmp(cls, "windy") == 0 ? CST_TEXTURE_WINDY : CST_TEXTURE_MARBLE;
+        if (t.type != CST_TEXTURE_WINDY) {
+            TRY(pbrt_get_int(ld, ps, d, "octaves", 8, &oct));
+            TRY(pbrt_get_float(ld, ps, d, "roughness", 0.5f, &rough, NULL));
+            if (oct < 1 || oct > 32 || !(rough > 0.0f))
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: octaves %d and roughness %g; expected 1 to 32 "
+                                    "octaves and a roughness > 0", d, oct, (double)rough);
+        }
+        if (t.type == CST_TEXTURE_MARBLE) {
+            TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &sc, NULL));
+            TRY(pbrt_get_float(ld, ps, d, "variation", 0.2f, &var, NULL));
+            if (sc == 0.0f) sc = 1e-30f; /* the builder reads 0 as "unset" (1) */
+            if (var == 0.0f) var = 1e-30f;
+        }
+        t.octaves = oct, t.roughness = rough, t.noise_scale = sc, t.variation = var;
+        desc_solid_xf(ld, &t);
+    }
+    desc_uv(&t, uvs, uvo);
+    return tex_add(ld, &t, loc, d, id);
+}
+
+CstStatus pbrt_material_normal_textures(Loader *ld, Params *ps, const char *d, Material *m)
+{
+    Param *p = pbrt_find_param(ps, "displacement");
+    if (p && p->type == PT_TEXTURE) {
+        int tex = 0;
+        Color val;
+        TRY(pbrt_tex_param(ld, ps, d, "displacement", 1, &tex, &val, NULL));
+        m->displacement_texture = tex; /* 0 for a constant texture: no bending */
+    } else if (p) {
+        float f = 0.0f;
+        TRY(pbrt_get_float(ld, ps, d, "displacement", 0.0f, &f, NULL)); /* a constant: no bending */
+    }
+    const char *file = NULL;
+    Loc fl;
+    TRY(pbrt_get_string(ld, ps, d, "normalmap", &file, &fl));
+    if (!file) return CST_OK;
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_IMAGE;
+    t.path = path;
+    t.encoding = CST_TEXTURE_ENCODING_LINEAR;
+    int id = 0;
+    CstStatus st = tex_add(ld, &t, fl, d, &id);
+    free(path);
+    if (st) return st;
+    m->normal_map_texture = id + 1;
+    return CST_OK;
 }
 
 CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
@@ -420,17 +601,16 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
         if (ta < 0 && tb < 0) {
             v = color_mul(a, b);
         } else if (ta >= 0 && tb >= 0) {
-            CstTextureInfo info;
-            if ((st = pbrt_texture_info(ld, tb, &info))) goto done;
-            b = color_of(info.average);
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the product of two textures is approximated "
-                         "by \"tex\" times the average of \"scale\", %g", d, (double)b.c[0]);
-            st = pbrt_tex_map(ld, ta, TEXOP_AFFINE, b, color_s(0.0f), loc, d, &id);
+            CstTextureDesc t = {0};
+            t.type = CST_TEXTURE_SCALE;
+            t.tex1 = ta + 1, t.amount = tb + 1;
+            st = tex_add(ld, &t, loc, d, &id);
         } else {
             st = pbrt_tex_map(ld, ta >= 0 ? ta : tb, TEXOP_AFFINE, ta >= 0 ? b : a, color_s(0.0f), loc, d, &id);
         }
         if (st) goto done;
-    } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
+    } else if ((strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) && mix_is_constant(ld, &ps, is_float)) {
+        /* Constant operands: the loader keeps the value. */
         Color a, b;
         float amount = 0.5f;
         TEXPARAM("tex1", 0.0f, a);
@@ -438,21 +618,19 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
         if (cls[0] == 'm') {
             st = pbrt_get_float_tex(ld, &ps, d, "amount", 0.5f, &amount, NULL);
             if (st) goto done;
+            v = color_add(color_scale(a, 1.0f - amount), color_scale(b, amount));
+        } else if ((st = texture_procedural_class(ld, &ps, d, loc, cls, is_float, &id))) {
+            goto done;
         }
-        v = color_add(color_scale(a, 1.0f - amount), color_scale(b, amount));
-        if (cls[0] == 'd')
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by the average of its two textures", d);
+    } else if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0 || strcmp(cls, "dots") == 0 ||
+               strcmp(cls, "bilerp") == 0 || strcmp(cls, "fbm") == 0 || strcmp(cls, "wrinkled") == 0 ||
+               strcmp(cls, "windy") == 0 || strcmp(cls, "marble") == 0) {
+        if ((st = texture_procedural_class(ld, &ps, d, loc, cls, is_float, &id))) goto done;
     } else if (strcmp(cls, "checkerboard") == 0) {
         int dim = 2;
         if ((st = pbrt_get_int(ld, &ps, d, "dimension", 2, &dim))) goto done;
         if (dim == 3) {
-            Color a, b;
-            TEXPARAM("tex1", 1.0f, a);
-            TEXPARAM("tex2", 0.0f, b);
-            v = color_scale(color_add(a, b), 0.5f);
-            pbrt_params_mark_all_used(&ps); /* the 3D mapping's parameters */
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: a 3D (solid) checkerboard approximated by its "
-                         "average (%g, %g, %g)", d, (double)v.c[0], (double)v.c[1], (double)v.c[2]);
+            if ((st = texture_procedural_class(ld, &ps, d, loc, cls, is_float, &id))) goto done;
         } else if (dim == 2) {
             if ((st = texture_checker(ld, &ps, d, loc, is_float, &id))) goto done;
         } else {
@@ -460,13 +638,6 @@ CstStatus pbrt_texture_directive(Loader *ld, Lexer *lx, Loc loc, const char *dna
                               "expected 2 or 3", d, dim);
             goto done;
         }
-    } else if (strcmp(cls, "bilerp") == 0) {
-        Color c[4];
-        static const char *const names[4] = {"v00", "v01", "v10", "v11"};
-        static const float defs[4] = {0.0f, 1.0f, 0.0f, 1.0f};
-        for (int i = 0; i < 4; i++) TEXPARAM(names[i], defs[i], c[i]);
-        v = color_scale(color_add(color_add(c[0], c[1]), color_add(c[2], c[3])), 0.25f);
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by its average", d);
     } else if (strcmp(cls, "imagemap") == 0) {
         if ((st = texture_imagemap(ld, &ps, d, loc, is_float, &id, &v))) goto done;
     } else {

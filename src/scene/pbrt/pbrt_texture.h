@@ -12,10 +12,9 @@ CstStatus pbrt_texture_ref(Loader *ld, const Param *p, const char *d, int is_flo
 CstStatus pbrt_get_float_tex(Loader *ld, Params *ps, const char *d, const char *name, float def,
                              float *out, int *found);
 
-/* Per-value maps that pbrt applies after its lookups, applied here to every value a
- * texture holds (constants, texels, a checkerboard's two textures). Bilinear filtering
- * commutes with the affine maps; for the others (clamps, powers) mapping texels before
- * filtering differs from pbrt only between texels across a kink. */
+/* Per-value maps that pbrt applies after its lookups: folded into constants, appended to an
+ * image texture's value maps (applied after its lookup and filtering, as pbrt does, over
+ * pixels shared with the unmapped texture), and applied to a checkerboard's two textures. */
 typedef enum TexOp {
     TEXOP_AFFINE, /* max(0, a v + b): pbrt's scale, invert and ScaleTexture */
     TEXOP_MIN1,   /* min(v, 1): the reflectance clamp of pbrt's materials */
@@ -34,6 +33,11 @@ CstStatus pbrt_tex_map(Loader *ld, int id, TexOp op, Color a, Color b, Loc loc, 
  * 1 + the scene texture's index, as Material stores it. */
 CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name, int is_float,
                          int *tex, Color *val, int *entry);
+
+/* A material's shading-normal parameters (every pbrt-v4 material takes them): "texture
+ * displacement" (a float texture; a constant displacement bends nothing) and "string
+ * normalmap" (an image file read linear, as pbrt-v4 reads it), into m's texture slots. */
+CstStatus pbrt_material_normal_textures(Loader *ld, Params *ps, const char *d, Material *m);
 
 /* The scene's texture `id` (public id - 1, as TexEntry.id) read back through the builder. */
 CstStatus pbrt_texture_info(Loader *ld, int id, CstTextureInfo *info);
