@@ -144,6 +144,58 @@ void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Ve
     }
 }
 
+/* The cone of directions a sphere subtends from an outside point x: half angle theta_max
+ * with sin^2 theta_max = r^2 / |c - x|^2, returned as 1 - cos theta_max. Computed as
+ * s / (1 + sqrt(1 - s)), which keeps its digits for distant spheres where 1 - sqrt(1 - s)
+ * cancels to 0 in float (pbrt-v4 Sphere::Sample switches to the Taylor term s / 2 below
+ * sin^2 = sin^2(1.5 deg) instead; this form needs no threshold). Returns false when x is
+ * inside the sphere or on it: there is no cone and the point is sampled by area. "On it"
+ * is a shell of 5e-5 r outside: a hit point on the sphere itself (inside a two-sided
+ * emitting sphere, say) is off the surface by rounding, to either side, and a cone of
+ * nearly 90 degrees from just outside would be the wrong density for it (pbrt-v4 makes
+ * the same call from the point offset toward the centre). */
+static bool sphere_cone(const Sphere *sp, Vec3 x, float *one_minus_cos_max, float *sin2_max)
+{
+    float d2 = v3_length2(v3_sub(sp->center, x));
+    float r2 = sp->radius * sp->radius;
+    if (!(d2 > 1.0001f * r2)) return false;
+    float s2 = r2 / d2;
+    *sin2_max = s2;
+    *one_minus_cos_max = s2 / (1.0f + sqrtf(1.0f - s2));
+    return *one_minus_cos_max > 0.0f;
+}
+
+/* A point on sphere sp seen from outside point x, by a direction uniform in the cone the
+ * sphere subtends (pbrt-v4 Sphere::Sample(ctx, u); the geometry is pbrt-v3 book sec.
+ * 14.2.2): 1 - cos theta uniform in [0, 1 - cos theta_max] by u.x, phi = 2 pi u.y, then the
+ * nearer intersection of that direction with the sphere, found by the angle alpha at the
+ * centre: cos alpha = sin^2 theta / sin theta_max + cos theta sqrt(1 - sin^2 theta /
+ * sin^2 theta_max). The density is 1 / (2 pi (1 - cos theta_max)) per unit solid angle.
+ * sin^2 theta comes from t = 1 - cos theta as t (2 - t), exact for small cones. */
+static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, float sin2_max, Vec3 *n)
+{
+    float t = u.x * omc_max;
+    float sin2 = t * (2.0f - t), cos_t = 1.0f - t;
+    float ratio = fminf(sin2 / sin2_max, 1.0f);
+    float cos_a = sin2 / sqrtf(sin2_max) + cos_t * sqrtf(1.0f - ratio);
+    cos_a = clampf(cos_a, -1.0f, 1.0f);
+    float sin_a = sqrtf(fmaxf(0.0f, 1.0f - cos_a * cos_a));
+    float phi = 2.0f * CST_PI * u.y;
+    Frame f = frame_from_normal(v3_normalize(v3_sub(sp->center, x)));
+    /* The normal points back toward x's side: -z in the frame whose z runs from x to c. */
+    *n = frame_to_world(&f, v3(-sin_a * cosf(phi), -sin_a * sinf(phi), -cos_a));
+}
+
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l)
+{
+    const Emitter *em = &s->light[e].u.area;
+    float omc, sin2;
+    if ((int)em->prim >= g->num_triangles &&
+        sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
+        return s->by_power.pmf[e] / (2.0f * CST_PI * omc);
+    return cos_l > 0.0f ? s->pdf_a[e] * dist * dist / cos_l : 0.0f;
+}
+
 /* The emission direction density at a delta light (per unit solid angle). */
 static float delta_emit_pdf_w(const Light *l)
 {
@@ -160,7 +212,16 @@ static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry
 {
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
-    emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
+    float omc = 0.0f, sin2 = 0.0f;
+    const Sphere *sp = (int)e->prim >= g->num_triangles ? &g->spheres[(int)e->prim - g->num_triangles] : NULL;
+    const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
+    if (cone) {
+        sphere_sample_cone(sp, x, u, omc, sin2, &out->n);
+        out->p = v3_madd(sp->center, out->n, sp->radius);
+        uv = e->texture ? sphere_uv(out->n) : v2(0.0f, 0.0f);
+    } else {
+        emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
+    }
     Vec3 to = v3_sub(out->p, x);
     float dist2 = v3_length2(to);
     if (!(dist2 > 0.0f)) return false;
@@ -169,11 +230,15 @@ static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry
     out->cos_light = fabsf(v3_dot(out->n, out->wi));
     out->li = emitter_radiance(e, g->textures, out->n, uv, v3_neg(out->wi));
     if (color_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
-    /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
-    out->pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
+    /* Area sampling: dA -> d omega, pdf_w = pdf_a dist^2 / |cos theta_light|. This is also
+     * the density the bidirectional MIS weights use for NEE (direct_pdf) even when the
+     * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
+     * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
+    const float area_pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
+    out->pdf_w = cone ? s->by_power.pmf[i] / (2.0f * CST_PI * omc) : area_pdf_w;
     out->finite = true;
     out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
-    out->direct_pdf = out->pdf_w;
+    out->direct_pdf = area_pdf_w;
     return true;
 }
 

@@ -1,6 +1,7 @@
 /* Lights: area emitters (any primitive with emission) and delta lights (point, spot,
  * directional). NEE picks a light with probability proportional to its power and, on an
- * area emitter, a uniform point; light paths start the same way and add a direction. */
+ * area emitter, a point: uniform by area on triangles, by the subtended cone on spheres;
+ * light paths start from a uniform point and add a direction. */
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
@@ -135,8 +136,16 @@ static inline float light_env_pdf(const EmitterSampler *s, Vec3 w)
 }
 static inline int light_env_index(const EmitterSampler *s) { return s->count + s->num_delta; }
 
+/* NEE's density (per unit solid angle at x, selection included) of sampling the point at
+ * distance dist on area emitter e, |cos| cos_l there, from x: what light_sample_li reports
+ * as pdf_w for it, for the MIS weight of a BSDF-sampled ray that hits e. Spheres seen from
+ * outside: pmf / (2 pi (1 - cos theta_max)); otherwise pdf_a dist^2 / cos_l. */
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l);
+
 /* Next-event estimation at x: a light picked by power (u_sel) and, for an area emitter, a
- * uniform point on it (u). The estimate of direct light is f(wo, wi) li / pdf with the
+ * point on it (u): uniform by area on triangles and, from inside, on spheres; a sphere
+ * seen from outside by a direction uniform in the cone it subtends (pbrt-v4
+ * Sphere::Sample(ctx, u)). The estimate of direct light is f(wo, wi) li / pdf with the
  * shadow ray from x toward p (an area point or a delta light's position; for a
  * directional light a point beyond the scene). */
 typedef struct LightLi {
@@ -145,7 +154,8 @@ typedef struct LightLi {
     float dist;  /* |p - x| */
     Color li;      /* area: L_e toward x; point/spot: I(-wi) / dist^2; directional: E */
     float pdf_w; /* area, environment: density of wi per unit solid angle, the light's
-                  * selection included; 0 for delta lights */
+                  * selection included (the density the sample was drawn with; divide by
+                  * it); 0 for delta lights */
     float pmf;   /* delta lights: the probability of picking this light, the whole
                   * density of the sample (a discrete one: the estimate has no MIS
                   * partner); 0 for the others. The estimate divides by pmf or pdf_w. */
@@ -155,7 +165,10 @@ typedef struct LightLi {
     /* For bidirectional MIS (vcm.c; Georgiev's tech. rep. eqs. 44-45): a light path's
      * density of leaving the light toward x (position density per area, or selection
      * for delta positions, times the direction's per solid angle), the density NEE picks
-     * the light point with expressed as SmallVCM's "directPdfW", and |cos| at the light. */
+     * the light point with expressed as SmallVCM's "directPdfW", and |cos| at the light.
+     * For area lights direct_pdf is area sampling's, pdf_a dist^2 / |cos|, also where
+     * the sample came from a sphere's cone: the bidirectional weights stay on the
+     * densities of emitter_pdf_a, which the s = 0 strategy uses too. */
     float emit_pdf;
     float direct_pdf;
     float cos_light;

@@ -1,7 +1,7 @@
 /* Light selection: every light (area emitters, point, spot, directional) is picked with
  * probability proportional to its power, checked by a chi-square test of 10^6 picks against
- * powers computed here from their closed forms; and the densities NEE reports agree with
- * those probabilities. */
+ * powers computed here from their closed forms; the densities NEE reports agree with
+ * those probabilities; sphere lights' cone sampling against its pdf (chi-square). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -94,7 +94,7 @@ static void test_selection_by_power(void **state)
     scene_destroy(s);
 }
 
-/* NEE's densities: an area point has pdf_a = pmf / area (converted to solid angle), a delta
+/* NEE's densities: a point on a triangle has pdf_a = pmf / area (converted to solid angle), a delta
  * light reports its pick probability, and each pmf is the light's share of the power. */
 static void test_nee_densities(void **state)
 {
@@ -126,6 +126,15 @@ static void test_nee_densities(void **state)
         double pmf = power[src] / total * (double)e->area / area_src;
         double d2 = (double)ls.dist * (double)ls.dist;
         double expect = pmf / (double)e->area * d2 / (double)ls.cos_light;
+        /* direct_pdf (the bidirectional weights' density) is area sampling's always;
+         * the sphere, seen from outside, is sampled by its cone: pdf_w = pmf / (2 pi
+         * (1 - cos theta_max)) with sin^2 theta_max = r^2 / |c - x|^2. */
+        assert_true(fabs((double)ls.direct_pdf - expect) <= 1e-4 * expect);
+        if (src == 2) {
+            double dx = 5.0 - 1.5, dy = 5.0 + 1.0, dz = 5.0 - 1.0;
+            double s2 = 0.0625 / (dx * dx + dy * dy + dz * dz);
+            expect = pmf / (2.0 * PI_D * (1.0 - sqrt(1.0 - s2)));
+        }
         assert_true(fabs((double)ls.pdf_w - expect) <= 1e-4 * expect);
     }
     for (int i = 0; i < 8; i++) assert_true(seen[i]);
@@ -201,12 +210,136 @@ static void test_envmap_chi2(void **state)
     envmap_free(&m);
 }
 
+/* One sphere emitter (centre c, radius r, radiance 1): its only light, pmf 1. */
+static Scene *scene_with_sphere(Vec3 c, float r)
+{
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    int mat;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.5f, 0.5f, 0.5f}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &mat, &err), CST_OK);
+    Emission e = {{{1.0f, 1.0f, 1.0f}}, 0, 0};
+    assert_int_equal(scene_add_sphere(s, c, r, mat, &e, &err), CST_OK);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    return s;
+}
+
+/* Sphere lights seen from outside are sampled by the cone they subtend (light.c,
+ * sphere_sample_cone): the direction toward the returned point must be uniform in that
+ * cone. 10^6 directions from x binned by t = (1 - cos theta) / (1 - cos theta_max) (theta
+ * from the axis toward the centre, computed here in double) and phi, 32 x 32 equal-solid-
+ * angle cells, against the uniform expectation pdf_w gives; every sample's pdf_w must be
+ * 1 / (2 pi (1 - cos theta_max)) and equal light_area_pdf_w's; the point must lie on the
+ * sphere with its normal toward x (so it is the nearer hit along wi). Three sizes: a near sphere (theta_max
+ * 53 deg), a mid one (5.7 deg) and a far one (0.057 deg, where 1 - sqrt(1 - s) in float
+ * would have lost most digits). */
+static void cone_case(double dist, double radius, uint64_t seed)
+{
+    const Vec3 x = v3(0.3f, -0.2f, 0.1f);
+    const Vec3 axis_f = v3_normalize(v3(1.0f, 2.0f, -0.5f));
+    const Vec3 c = v3_madd(x, axis_f, (float)dist);
+    Scene *s = scene_with_sphere(c, (float)radius);
+    EmitterGeometry g = scene_emitter_geometry(s);
+    /* The axis and theta_max in double, from the float centre actually stored. */
+    double ax = (double)c.x - (double)x.x, ay = (double)c.y - (double)x.y, az = (double)c.z - (double)x.z;
+    double d = sqrt(ax * ax + ay * ay + az * az);
+    ax /= d; ay /= d; az /= d;
+    double s2 = (double)radius * (double)radius / (d * d);
+    double omc_max = s2 / (1.0 + sqrt(1.0 - s2));
+    double pdf_expect = 1.0 / (2.0 * PI_D * omc_max);
+    /* A frame around the axis for phi. */
+    double bx, by, bz;
+    if (fabs(ax) < 0.9) { bx = 0; by = az; bz = -ay; } else { bx = -az; by = 0; bz = ax; }
+    double bl = sqrt(bx * bx + by * by + bz * bz);
+    bx /= bl; by /= bl; bz /= bl;
+    double tx = ay * bz - az * by, ty = az * bx - ax * bz, tz = ax * by - ay * bx;
+    enum { NT = 32, NP = 32, N = 1000000 };
+    static double obs[NT * NP], expd[NT * NP];
+    memset(obs, 0, sizeof obs);
+    Pcg32 rng;
+    pcg32_seed(&rng, seed, 7u);
+    double max_pdf_err = 0.0, max_radius_err = 0.0, max_facing = -1.0;
+    for (int n = 0; n < N; n++) {
+        LightLi ls;
+        float u_sel = pcg32_float(&rng);
+        Vec2 u = pcg32_v2(&rng);
+        if (!light_sample_li(&s->emitter_sampler, &g, x, u_sel, u, &ls)) continue;
+        max_pdf_err = fmax(max_pdf_err, fabs((double)ls.pdf_w / pdf_expect - 1.0));
+        float pw = light_area_pdf_w(&s->emitter_sampler, &g, 0, x, ls.dist, ls.cos_light);
+        if (!(pw == ls.pdf_w)) fail_msg("sample %d: pdf_w %g, light_area_pdf_w %g", n, (double)ls.pdf_w, (double)pw);
+        double px = (double)ls.p.x - (double)c.x, py = (double)ls.p.y - (double)c.y, pz = (double)ls.p.z - (double)c.z;
+        max_radius_err = fmax(max_radius_err, fabs(sqrt(px * px + py * py + pz * pz) / radius - 1.0));
+        /* On the sphere and facing x: the nearer of the two intersections along wi. */
+        double facing = (double)v3_dot(ls.n, ls.wi);
+        if (!(facing <= 1e-6)) fail_msg("sample %d: the point faces away from x (n . wi = %g)", n, facing);
+        max_facing = fmax(max_facing, facing);
+        double wx = (double)ls.wi.x, wy = (double)ls.wi.y, wz = (double)ls.wi.z;
+        double wl = sqrt(wx * wx + wy * wy + wz * wz);
+        wx /= wl; wy /= wl; wz /= wl;
+        /* 1 - cos theta without cancellation: |w - axis|^2 / 2. */
+        double ex = wx - ax, ey = wy - ay, ez = wz - az;
+        double omc = 0.5 * (ex * ex + ey * ey + ez * ez);
+        double phi = atan2(wx * tx + wy * ty + wz * tz, wx * bx + wy * by + wz * bz);
+        if (phi < 0.0) phi += 2.0 * PI_D;
+        int i = (int)(omc / omc_max * NT), j = (int)(phi / (2.0 * PI_D) * NP);
+        i = i < 0 ? 0 : i >= NT ? NT - 1 : i;
+        j = j < 0 ? 0 : j >= NP ? NP - 1 : j;
+        obs[i * NP + j] += 1.0;
+    }
+    for (int k = 0; k < NT * NP; k++) expd[k] = (double)N / (NT * NP);
+    double chi2, outside;
+    int dof;
+    double p = chi2_pvalue(obs, expd, NT * NP, &dof, &chi2, &outside);
+    print_message("  sphere cone, theta_max %.4g deg: chi2 = %.1f, dof %d, p = %.4f; max |pdf_w rel err| %.1e, "
+                  "|p - c| / r - 1 %.1e, max n . wi %.1e\n",
+                  asin(sqrt(s2)) * 180.0 / PI_D, chi2, dof, p, max_pdf_err, max_radius_err, max_facing);
+    assert_true(p > 0.01);
+    assert_true(max_pdf_err < 1e-4);
+    assert_true(max_radius_err < 1e-4);
+    scene_destroy(s);
+}
+
+static void test_sphere_cone_chi2(void **state)
+{
+    (void)state;
+    cone_case(2.5, 2.0, 31u);
+    cone_case(10.0, 1.0, 32u);
+    cone_case(1000.0, 1.0, 33u);
+}
+
+/* Inside a sphere light there is no cone: a uniform point by area, pdf_w = dist^2 /
+ * (A |cos|), and light_area_pdf_w agrees. */
+static void test_sphere_inside(void **state)
+{
+    (void)state;
+    const Vec3 c = v3(1.0f, 2.0f, 3.0f);
+    Scene *s = scene_with_sphere(c, 2.0f);
+    EmitterGeometry g = scene_emitter_geometry(s);
+    Pcg32 rng;
+    pcg32_seed(&rng, 41u, 2u);
+    const Vec3 x = v3(1.5f, 2.5f, 2.0f);
+    for (int n = 0; n < 1000; n++) {
+        LightLi ls;
+        float u_sel = pcg32_float(&rng);
+        Vec2 u = pcg32_v2(&rng);
+        if (!light_sample_li(&s->emitter_sampler, &g, x, u_sel, u, &ls)) continue; /* one-sided: dark inside */
+        fail_msg("a one-sided sphere light lit its inside");
+    }
+    float pa = light_area_pdf_w(&s->emitter_sampler, &g, 0, x, 2.0f, 0.5f);
+    double expect = 4.0 / (4.0 * PI_D * 4.0) / 0.5;
+    assert_true(fabs((double)pa - expect) <= 1e-5 * expect);
+    scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_selection_by_power),
         cmocka_unit_test(test_nee_densities),
         cmocka_unit_test(test_envmap_chi2),
+        cmocka_unit_test(test_sphere_cone_chi2),
+        cmocka_unit_test(test_sphere_inside),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
