@@ -163,6 +163,39 @@ static void test_lights(void **state)
     cst_scene_destroy(s);
 }
 
+/* The flux pi A L (one-sided) of emitters [first, last) of a scene's emitter list. */
+static double emitted_power(const Scene *s, int first, int last)
+{
+    double sum = 0.0;
+    for (int i = first; i < last; i++)
+        sum += 3.14159265358979323846 * (double)s->emitters[i].area * (double)s->emitters[i].radiance.c[1];
+    return sum;
+}
+
+/* An area light's "power" is per pbrt-v4 shape (DiffuseAreaLight::Create normalises each
+ * light by its shape's area): a disk, tessellated here, emits 10 W in all; a bilinear
+ * patch, two triangles here, 10 W; a triangle mesh of two triangles 10 W per triangle. */
+static void test_area_power_per_shape(void **state)
+{
+    (void)state;
+    const char *shapes[3] = {
+        "Shape \"disk\" \"float radius\" 1.5\n",
+        "Shape \"bilinearmesh\" \"point3 P\" [0 0 0  2 0 0  0 1 0  2 1 0]\n",
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  1 1 0  0 3 0] \"integer indices\" [0 1 2  0 2 3]\n"};
+    const double expect[3] = {10.0, 10.0, 20.0};
+    for (int k = 0; k < 3; k++) {
+        char text[1024];
+        snprintf(text, sizeof text, "%s%sAttributeEnd\n",
+                 WORLD("AttributeBegin\nAreaLightSource \"diffuse\" \"float power\" 10\n"), shapes[k]);
+        Warnings w = {0};
+        Scene *s = expect_ok(text, &w);
+        double phi = emitted_power(s, 0, s->num_emitters);
+        print_message("  shape %d: %d emitters, %.6f W (expected %.1f)\n", k, s->num_emitters, phi, expect[k]);
+        assert_true(fabs(phi - expect[k]) < 1e-4 * expect[k]);
+        cst_scene_destroy(s);
+    }
+}
+
 /* The equal-area octahedral map of pbrt-v4's environment images: its landmarks, and
  * square -> sphere -> square is the identity. */
 static void test_equal_area_map(void **state)
@@ -320,7 +353,7 @@ static void test_delta_lights(void **state)
         "\"point3 from\" [0 0 1]\nAttributeEnd\n"
         "LightSource \"point\" \"float power\" 100\n"
         "LightSource \"spot\" \"point3 from\" [0 5 0] \"point3 to\" [0 0 0] \"float coneangle\" 20 "
-        "\"float conedelta\" 10 \"float power\" 50\n"
+        "\"float conedeltaangle\" 10 \"float power\" 50\n"
         "AttributeBegin\nRotate 90 0 0 1\nLightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [1 0 0] "
         "\"blackbody L\" 5500 \"float illuminance\" 3\nAttributeEnd\n"
         "LightSource \"goniometric\"\n" TRI), &w);
@@ -638,6 +671,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_lights),
+        cmocka_unit_test(test_area_power_per_shape),
         cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_equal_area_map),
         cmocka_unit_test(test_infinite_lights),

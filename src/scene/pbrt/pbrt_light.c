@@ -258,12 +258,14 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
         if (spot) {
             float cone = 30.0f, delta = 5.0f;
             TRY(pbrt_get_float(ld, ps, d, "coneangle", 30.0f, &cone, NULL));
-            TRY(pbrt_get_float(ld, ps, d, "conedelta", 5.0f, &delta, NULL));
+            /* pbrt-v4's name (SpotLight::Create); the falloff is smoothstep from
+             * cos(coneangle) to cos(coneangle - conedeltaangle). */
+            TRY(pbrt_get_float(ld, ps, d, "conedeltaangle", 5.0f, &delta, NULL));
             /* The builder's range: a cone under 0.001 degrees has cos = 1 in float, no
              * directions at all (pbrt itself takes any coneangle > 0). */
             if (!(cone >= 0.001f && cone <= 90.0f) || !(delta >= 0.0f && delta <= cone))
-                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: coneangle %g, conedelta %g; expected "
-                                    "0.001 <= coneangle <= 90 and 0 <= conedelta <= coneangle", d,
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: coneangle %g, conedeltaangle %g; expected "
+                                    "0.001 <= coneangle <= 90 and 0 <= conedeltaangle <= coneangle", d,
                                     (double)cone, (double)delta);
             l.cone_angle = cone;
             l.cone_delta = delta;

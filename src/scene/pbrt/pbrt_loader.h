@@ -118,6 +118,9 @@ typedef struct ShapeGeom {
     int nv;
     int *idx;
     int nt;
+    int power_group; /* triangles per pbrt shape, for an area light's "power": 2 for a
+                      * bilinear patch, all of them for a tessellated disk or sphere;
+                      * 0 = 1 (each triangle is a shape in pbrt-v4) */
 } ShapeGeom;
 
 typedef struct ObjShape {
