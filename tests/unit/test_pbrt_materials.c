@@ -1,6 +1,7 @@
 /* Unit tests for the pbrt-v4 loader (scene/pbrt/), appearance: materials, area, delta and
  * infinite lights (with the equal-area environment remapping), and textures, with the
  * warnings (by code) for what is approximated or skipped. */
+#include "core/rng.h"
 #include "unit/pbrt_test_util.h"
 
 /* ------------------------------------------------------------------ materials */
@@ -288,8 +289,9 @@ static void test_infinite_lights(void **state)
                                "LightSource \"infinite\" \"rgb L\" [5 5 5]\n" TRI), &w);
     assert_non_null(s->env);
     assert_null(s->env->rgb);
-    assert_true(s->env->scale.c[0] == 2.0f && s->env->scale.c[1] == 4.0f && s->env->scale.c[2] == 6.0f);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\": caustic has one environment") >= 0);
+    /* pbrt-v4 sums its infinite lights: (1 2 3) x 2 + (5 5 5) */
+    assert_true(s->env->scale.c[0] == 7.0f && s->env->scale.c[1] == 9.0f && s->env->scale.c[2] == 11.0f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "t.pbrt:5:1: LightSource \"infinite\": another infinite light") >= 0);
     cst_scene_destroy(s);
     /* illuminance E: a uniform sky of radiance L gives pi L on an upward patch, so L E / pi */
     s = expect_ok(WORLD("LightSource \"infinite\" \"float illuminance\" 10\n" TRI), NULL);
@@ -329,6 +331,45 @@ static void test_infinite_lights(void **state)
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "is 32 x 16, not square") >= 0);
     check_sides(s->env, ident, 1.0f);
     cst_scene_destroy(s);
+
+    /* several infinite lights: pbrt-v4 sums them. Two images (the square one becomes 128 x
+     * 64, the other is 32 x 16, which that grid refines) and a constant: the sum on the
+     * larger grid equals the three looked up apart, in every direction. */
+    const char *parts[3] = {"LightSource \"infinite\" \"string filename\" \"pbrt_env_ll.pfm\" \"float scale\" 3\n",
+                            "LightSource \"infinite\" \"rgb L\" [0.5 0.25 0.125]\n",
+                            ("AttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" "
+                             "\"string filename\" \"pbrt_env_sq.pfm\" \"float scale\" 2\nAttributeEnd\n")};
+    Scene *one[3];
+    char all[1024] = "";
+    for (int i = 0; i < 3; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "%s%s", parts[i], TRI);
+        char body[768];
+        snprintf(body, sizeof body, WORLD("%s"), text);
+        Warnings w1 = {0};
+        one[i] = load_file_scene(body, &w1);
+        strncat(all, parts[i], sizeof all - strlen(all) - 1);
+    }
+    strncat(all, TRI, sizeof all - strlen(all) - 1);
+    char body[1536];
+    snprintf(body, sizeof body, WORLD("%s"), all);
+    memset(&w, 0, sizeof w);
+    s = load_file_scene(body, &w);
+    assert_int_equal(s->env->width, 128);
+    assert_int_equal(s->env->height, 64);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "another infinite light") >= 0);
+    Pcg32 rng;
+    pcg32_seed(&rng, 3u, 1u);
+    for (int n = 0; n < 2000; n++) {
+        Vec3 d = warp_uniform_sphere(pcg32_v2(&rng));
+        Color got = envmap_eval(s->env, d), want = color_s(0.0f);
+        for (int i = 0; i < 3; i++) want = color_add(want, envmap_eval(one[i]->env, d));
+        for (int c = 0; c < 3; c++)
+            if (!(fabsf(got.c[c] - want.c[c]) <= 1e-5f * want.c[c]))
+                fail_msg("direction %d channel %d: sum map %g, lights apart %g", n, c, (double)got.c[c], (double)want.c[c]);
+    }
+    cst_scene_destroy(s);
+    for (int i = 0; i < 3; i++) cst_scene_destroy(one[i]);
 
     expect_error(WORLD("LightSource \"infinite\" \"rgb L\" [1 1 1] \"string filename\" \"sky.exr\"\n" TRI),
                  CST_ERR_INVALID_ARG, "\"string filename\"", 0, "both \"L\" and \"filename\"");

@@ -110,6 +110,77 @@ static double env_illuminance(const float *px, int w, int h)
     return sum;
 }
 
+/* Pixel of a w x h map in caustic's equirectangular layout at (u, v) in [0,1)^2. */
+static const float *env_at(const float *rgb, int w, int h, double u, double v)
+{
+    int x = (int)(u * w), y = (int)(v * h);
+    x = x < 0 ? 0 : x >= w ? w - 1 : x;
+    y = y < 0 ? 0 : y >= h ? h - 1 : y;
+    return &rgb[3 * ((size_t)y * (size_t)w + (size_t)x)];
+}
+
+/* Makes the scene's environment the sum of the infinite lights so far plus this one:
+ * pbrt-v4 adds the radiance of every infinite light; caustic has one environment map,
+ * which then holds their sum. img (owned; NULL for a constant light c) is in caustic's
+ * equirectangular layout, times k. The first light is set as it comes (exactly as
+ * before); a later one is added pixel by pixel, constants to every pixel, two images on
+ * the grid of the larger (nearest lookup of each at the pixel centre, which is exact for
+ * equal sizes). NEE then samples the sum's luminance rather than each light by its own
+ * distribution: the same radiance, different noise. */
+static CstStatus env_accumulate(Loader *ld, float *img, int w, int h, const float k[3], const float c[3], Loc loc,
+                                const char *d)
+{
+    CstStatus st;
+    if (!ld->env_set) {
+        ld->env_rgb = img;
+        ld->env_w = w;
+        ld->env_h = h;
+        for (int i = 0; i < 3; i++) {
+            ld->env_k[i] = k[i];
+            ld->env_const[i] = img ? 0.0f : c[i];
+        }
+        st = img ? cst_scene_set_environment_pixels(ld->scene, img, w, h, 0, 0, k, NULL, ld->err)
+                 : cst_scene_set_environment_constant(ld->scene, c, ld->err);
+        if (!st) ld->env_set = 1;
+        return st;
+    }
+    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: another infinite light; caustic adds it to the "
+                 "environment (one map, the sum of the lights, as pbrt-v4 renders them)", d);
+    for (int i = 0; i < 3; i++) ld->env_const[i] += img ? 0.0f : c[i];
+    if (!img && !ld->env_rgb) return cst_scene_set_environment_constant(ld->scene, ld->env_const, ld->err);
+    const bool on_old = ld->env_rgb && (!img || ld->env_w * (long long)ld->env_h > w * (long long)h);
+    int ow = on_old ? ld->env_w : w, oh = on_old ? ld->env_h : h;
+    float *sum = malloc(3u * (size_t)ow * (size_t)oh * sizeof *sum);
+    if (!sum) {
+        free(img);
+        return pbrt_oom(ld);
+    }
+    for (int y = 0; y < oh; y++)
+        for (int x = 0; x < ow; x++) {
+            double u = (x + 0.5) / ow, v = (y + 0.5) / oh;
+            float *o = &sum[3 * ((size_t)y * (size_t)ow + (size_t)x)];
+            for (int i = 0; i < 3; i++) o[i] = ld->env_const[i];
+            if (ld->env_rgb) {
+                const float *p = env_at(ld->env_rgb, ld->env_w, ld->env_h, u, v);
+                for (int i = 0; i < 3; i++) o[i] += p[i] * ld->env_k[i];
+            }
+            if (img) {
+                const float *p = env_at(img, w, h, u, v);
+                for (int i = 0; i < 3; i++) o[i] += p[i] * k[i];
+            }
+        }
+    free(img);
+    free(ld->env_rgb);
+    ld->env_rgb = sum;
+    ld->env_w = ow;
+    ld->env_h = oh;
+    for (int i = 0; i < 3; i++) {
+        ld->env_k[i] = 1.0f;
+        ld->env_const[i] = 0.0f;
+    }
+    return cst_scene_set_environment_pixels(ld->scene, sum, ow, oh, 0, 0, ld->env_k, NULL, ld->err);
+}
+
 /* LightSource "infinite": the scene's environment (lights/envmap.h). A constant one is
  * L x scale, with pbrt-v4's "illuminance" E making it L x scale x E / pi (the illuminance of a
  * uniform unit sky on an upward patch is pi). An image is resampled once, at load, into
@@ -121,12 +192,6 @@ static double env_illuminance(const float *px, int w, int h)
 static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
 {
     char nm[72];
-    if (ld->env_set) {
-        pbrt_params_mark_all_used(ps);
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: caustic has one environment and an infinite "
-                     "light was given before; skipped", d);
-        return CST_OK;
-    }
     Color c = color_s(1.0f);
     float scale = 1.0f, illum = 0.0f;
     int has_l = 0;
@@ -154,9 +219,9 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         Color L = color_scale(c, (float)k);
         if (!color_is_finite(L))
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the radiance is not finite", d);
-        float lf[3];
+        float lf[3], one[3] = {1.0f, 1.0f, 1.0f};
         pbrt_color_floats(L, lf);
-        st = cst_scene_set_environment_constant(ld->scene, lf, ld->err);
+        st = env_accumulate(ld, NULL, 0, 0, one, lf, loc, d);
     } else {
         if (!ld->gs.ctm.inv_ok)
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; "
@@ -209,12 +274,10 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         if (!isfinite(k))
             k = 0.0;
         /* Already in world space: no world_from_map. The builder copies the pixels. */
-        float kf[3] = {(float)k, (float)k, (float)k};
-        st = cst_scene_set_environment_pixels(ld->scene, out, ow, oh, 0, 0, kf, NULL, ld->err);
-        free(out);
+        float kf[3] = {(float)k, (float)k, (float)k}, zero[3] = {0.0f, 0.0f, 0.0f};
+        st = env_accumulate(ld, out, ow, oh, kf, zero, loc, d); /* takes out */
     }
     if (st) return pbrt_fail_wrap(ld, st, loc, d);
-    ld->env_set = 1;
     return CST_OK;
 }
 
