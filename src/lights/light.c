@@ -20,6 +20,40 @@ static float spot_falloff(const SpotLight *l, float cos_theta)
     return t * t * (3.0f - 2.0f * t);
 }
 
+/* The factor a goniometric image gives world direction w (unit, away from the light):
+ * Clarberg's equal-area octahedral map of the light-space direction ("Fast Equal-Area
+ * Mapping of the (Hemi)Sphere using SIMD", JGT 2008; pbrt-v4 EqualAreaSphereToSquare,
+ * here with the exact arctangent), nearest pixel as pbrt-v4's GoniometricLight::I. */
+static float gonio_factor(const GonioImage *g, Vec3 w)
+{
+    const float *m = g->light_from_world;
+    double d[3];
+    double len = 0.0;
+    for (int r = 0; r < 3; r++) {
+        d[r] = (double)m[3 * r] * (double)w.x + (double)m[3 * r + 1] * (double)w.y + (double)m[3 * r + 2] * (double)w.z;
+        len += d[r] * d[r];
+    }
+    len = sqrt(len);
+    if (!(len > 0.0)) return 0.0f;
+    double x = fabs(d[0]) / len, y = fabs(d[1]) / len, z = fabs(d[2]) / len;
+    double rr = sqrt(fmax(0.0, 1.0 - z));
+    double a = fmax(x, y), b = fmin(x, y);
+    double phi = atan(a == 0.0 ? 0.0 : b / a) * (2.0 / (double)CST_PI);
+    if (x < y) phi = 1.0 - phi;
+    double v = phi * rr, u = rr - v;
+    if (d[2] < 0.0) {
+        double t = u;
+        u = 1.0 - v;
+        v = 1.0 - t;
+    }
+    u = 0.5 * (copysign(u, d[0]) + 1.0);
+    v = 0.5 * (copysign(v, d[1]) + 1.0);
+    int px = (int)(u * g->n), py = (int)(v * g->n);
+    px = px < 0 ? 0 : px >= g->n ? g->n - 1 : px;
+    py = py < 0 ? 0 : py >= g->n ? g->n - 1 : py;
+    return g->factor[(size_t)py * (size_t)g->n + (size_t)px];
+}
+
 /* A Lambertian emitter of radiance L and area A emits pi A L per side; a textured one is
  * weighted by its texture's average, which only shifts samples between lights (the point
  * density on an emitter stays uniform by area, so NEE's pdf is unchanged). 4 pi I for a
@@ -41,6 +75,8 @@ float light_power(const Light *l, float scene_radius)
     case LIGHT_DIRECTIONAL:
         return CST_PI * scene_radius * scene_radius * color_luminance(l->u.directional.irradiance);
     case LIGHT_ENVIRONMENT: return CST_PI * scene_radius * scene_radius * l->u.env->power;
+    /* pbrt-v4 GoniometricLight::Phi: 4 pi I times the image's mean (equal-area pixels). */
+    case LIGHT_GONIO: return 4.0f * CST_PI * color_luminance(l->u.gonio.intensity) * l->u.gonio.image.mean;
     }
     return 0.0f;
 }
@@ -67,6 +103,12 @@ static Light light_from_delta(const DeltaLight *d)
         l.type = LIGHT_DIRECTIONAL;
         l.u.directional.dir = d->dir;
         l.u.directional.irradiance = d->intensity;
+        break;
+    case DELTA_GONIO:
+        l.type = LIGHT_GONIO;
+        l.u.gonio.p = d->p;
+        l.u.gonio.intensity = d->intensity;
+        l.u.gonio.image = d->gonio;
         break;
     }
     return l;
@@ -277,7 +319,8 @@ float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e,
 static float delta_emit_pdf_w(const Light *l)
 {
     switch (l->type) {
-    case LIGHT_POINT: return CST_INV_4PI;
+    case LIGHT_POINT:
+    case LIGHT_GONIO: return CST_INV_4PI;
     case LIGHT_SPOT: return warp_uniform_cone_pdf(l->u.spot.cos_outer);
     case LIGHT_DIRECTIONAL: return 1.0f;
     default: return 0.0f;
@@ -378,7 +421,7 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
         out->direct_pdf = pmf;
         return true;
     }
-    const Vec3 lp = l->type == LIGHT_SPOT ? l->u.spot.p : l->u.point.p;
+    const Vec3 lp = l->type == LIGHT_SPOT ? l->u.spot.p : l->type == LIGHT_GONIO ? l->u.gonio.p : l->u.point.p;
     Vec3 to = v3_sub(lp, x);
     float dist2 = v3_length2(to);
     if (!(dist2 > 0.0f)) return false;
@@ -387,8 +430,12 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     out->wi = v3_scale(to, 1.0f / out->dist);
     out->n = v3_neg(out->wi);
     out->finite = true;
-    float falloff = l->type == LIGHT_SPOT ? spot_falloff(&l->u.spot, v3_dot(l->u.spot.dir, v3_neg(out->wi))) : 1.0f;
-    const Color intensity = l->type == LIGHT_SPOT ? l->u.spot.intensity : l->u.point.intensity;
+    float falloff = l->type == LIGHT_SPOT    ? spot_falloff(&l->u.spot, v3_dot(l->u.spot.dir, v3_neg(out->wi)))
+                    : l->type == LIGHT_GONIO ? gonio_factor(&l->u.gonio.image, v3_neg(out->wi))
+                                             : 1.0f;
+    const Color intensity = l->type == LIGHT_SPOT    ? l->u.spot.intensity
+                            : l->type == LIGHT_GONIO ? l->u.gonio.intensity
+                                                     : l->u.point.intensity;
     out->li = color_scale(intensity, falloff / dist2);
     out->direct_pdf = pmf * dist2;
     return falloff > 0.0f;
@@ -414,6 +461,7 @@ bool light_sample_li_at(const EmitterSampler *s, const EmitterGeometry *g, Vec3 
     case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
     case LIGHT_POINT:
     case LIGHT_SPOT:
+    case LIGHT_GONIO:
     case LIGHT_DIRECTIONAL: return delta_sample_li(s, l, pmf, x, out);
     }
     return false;
@@ -484,6 +532,16 @@ static void delta_sample_emission(const EmitterSampler *s, const Light *l, float
         out->beta = color_scale(l->u.point.intensity, 1.0f / (pmf * out->pdf_w));
         out->finite = true;
         break;
+    case LIGHT_GONIO:
+        /* A uniform direction weighted by the image (pbrt-v4 samples the image's own
+         * distribution: same expectation, more noise where the image is uneven). */
+        out->p = l->u.gonio.p;
+        out->w = warp_uniform_sphere(u_dir);
+        out->pdf_a = pmf;
+        out->pdf_w = CST_INV_4PI;
+        out->beta = color_scale(l->u.gonio.intensity, gonio_factor(&l->u.gonio.image, out->w) / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
     case LIGHT_SPOT: {
         const SpotLight *sp = &l->u.spot;
         Frame f = frame_from_normal(sp->dir);
@@ -531,6 +589,7 @@ void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, 
     case LIGHT_ENVIRONMENT: env_sample_emission(s, pmf, u_pos, u_dir, out); return;
     case LIGHT_POINT:
     case LIGHT_SPOT:
+    case LIGHT_GONIO:
     case LIGHT_DIRECTIONAL: delta_sample_emission(s, l, pmf, u_pos, u_dir, out); return;
     }
 }

@@ -30,8 +30,19 @@ typedef struct Emitter {
 typedef enum DeltaLightType {
     DELTA_POINT,       /* isotropic point: intensity I in every direction */
     DELTA_SPOT,        /* point with a cone: I on the axis, smoothstep falloff to 0 at cos_outer */
-    DELTA_DIRECTIONAL  /* parallel light from infinitely far: irradiance E on a surface facing it */
+    DELTA_DIRECTIONAL, /* parallel light from infinitely far: irradiance E on a surface facing it */
+    DELTA_GONIO        /* point whose intensity I times an image over the sphere (goniometric) */
 } DeltaLightType;
+
+/* A goniometric light's angular distribution (pbrt-v4 GoniometricLight): an n x n image of
+ * factors over the sphere in Clarberg's equal-area octahedral layout (row 0 at the top,
+ * as pbrt-v4 reads it), looked up nearest at the light-space direction light_from_world w. */
+typedef struct GonioImage {
+    const float *factor;     /* n * n values >= 0, owned by the scene */
+    int n;
+    float light_from_world[9]; /* row-major 3 x 3 */
+    float mean;              /* the factors' mean: the light emits 4 pi I mean */
+} GonioImage;
 
 /* A point, spot or directional light as a scene is built (scene_add_delta_light);
  * emitter_sampler_init turns each into its Light. */
@@ -41,6 +52,7 @@ typedef struct DeltaLight {
     Vec3 dir;      /* spot: unit axis; directional: unit direction the light travels */
     Color intensity; /* point, spot: radiant intensity (W/sr) on the axis; directional: irradiance */
     float cos_inner, cos_outer; /* spot: full intensity within cos_inner, none beyond cos_outer */
+    GonioImage gonio;           /* goniometric */
 } DeltaLight;
 
 /* The kinds of light, one tag of the Light union. */
@@ -49,7 +61,8 @@ typedef enum LightType {
     LIGHT_POINT,       /* isotropic point */
     LIGHT_SPOT,        /* point with a cone and smoothstep falloff */
     LIGHT_DIRECTIONAL, /* parallel light from infinitely far */
-    LIGHT_ENVIRONMENT  /* radiance from every direction at infinity (EnvMap) */
+    LIGHT_ENVIRONMENT, /* radiance from every direction at infinity (EnvMap) */
+    LIGHT_GONIO        /* point with an image of its intensity over the sphere */
 } LightType;
 
 typedef struct PointLight {
@@ -61,6 +74,11 @@ typedef struct SpotLight {
     Color intensity; /* I on the axis, W/sr */
     float cos_inner, cos_outer; /* full intensity within cos_inner, none beyond cos_outer */
 } SpotLight;
+typedef struct GonioLight {
+    Vec3 p;
+    Color intensity; /* times the image's factor in each direction, W/sr */
+    GonioImage image;
+} GonioLight;
 typedef struct DirectionalLight {
     Vec3 dir;         /* unit direction the light travels */
     Color irradiance; /* E on a surface facing it, W/m^2 */
@@ -74,6 +92,7 @@ typedef struct Light {
         PointLight point;
         SpotLight spot;
         DirectionalLight directional;
+        GonioLight gonio;
         const EnvMap *env; /* borrowed from the scene */
     } u;
 } Light;
@@ -198,7 +217,7 @@ void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Ve
 
 /* The start of a light path. Area emitters: a uniform point and a cosine-weighted
  * direction around the emitting side's normal (two-sided ones pick either side with
- * probability 1/2). Point lights: a uniform direction; spots: uniform in the cone;
+ * probability 1/2). Point and goniometric lights: a uniform direction; spots: uniform in the cone;
  * directional: a uniform point on the disk of the scene's bounding sphere, upstream. */
 typedef struct EmissionSample {
     Vec3 p, n;   /* point and unit normal (delta lights: n = w) */

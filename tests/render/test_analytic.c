@@ -362,6 +362,22 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
         l.cos_inner = (float)cos(inner);
         double t = (cos(tilt) - cos(cone)) / (cos(inner) - cos(cone));
         expected = (double)RHO / pi * I * t * t * (3.0 - 2.0 * t) / (h * h);
+    } else if (kind == 3) {
+        /* A goniometric light straight above: an 8 x 8 equal-area image with factor 2 on its
+         * top half (where light-space -y, straight down, falls: row 0) and 0.5 elsewhere, so
+         * light paths leave with the image's weights and NEE sees factor 2. */
+        enum { N = 8 };
+        float *img = malloc(N * N * sizeof *img);
+        assert_non_null(img);
+        for (int i = 0; i < N * N; i++) img[i] = i < N * N / 2 ? 2.0f : 0.5f;
+        l.type = DELTA_GONIO;
+        l.p = v3(0, (float)h, 0);
+        l.intensity = color_s((float)I);
+        l.gonio.factor = img;
+        l.gonio.n = N;
+        l.gonio.mean = 1.25f;
+        for (int k = 0; k < 9; k++) l.gonio.light_from_world[k] = k % 4 == 0 ? 1.0f : 0.0f;
+        expected = (double)RHO / pi * I * 2.0 / (h * h);
     } else {
         const double beta = 30.0 * pi / 180.0;
         l.type = DELTA_DIRECTIONAL;
@@ -504,7 +520,7 @@ static void test_delta_lights(void **state)
                                CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_BDPT,
                                CST_INTEGRATOR_VCM};
     for (int i = 0; i < 7; i++)
-        for (int kind = 0; kind < 3; kind++)
+        for (int kind = 0; kind < 4; kind++)
             run_delta_case(v[i], kind, v[i] >= CST_INTEGRATOR_SPPM ? 1024 : 65536, 100 + 10 * (uint64_t)i + (uint64_t)kind);
 }
 

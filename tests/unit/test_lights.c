@@ -32,9 +32,9 @@ static Scene *scene_with_lights(double power[6])
     assert_int_equal(scene_add_quad(s, q1, mat, &e1, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, q2, mat, &e2, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(5, 5, 5), 0.25f, mat, &e3, &err), CST_OK);
-    DeltaLight pt = {DELTA_POINT, {1, 1, 1}, {0, 0, 0}, {{2, 2, 2}}, 0, 0};
-    DeltaLight sp = {DELTA_SPOT, {2, 1, 1}, {0, -1, 0}, {{8, 4, 2}}, 0.9f, 0.8f};
-    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {{0.01f, 0.01f, 0.01f}}, 0, 0};
+    DeltaLight pt = {DELTA_POINT, {1, 1, 1}, {0, 0, 0}, {{2, 2, 2}}, 0, 0, {0}};
+    DeltaLight sp = {DELTA_SPOT, {2, 1, 1}, {0, -1, 0}, {{8, 4, 2}}, 0.9f, 0.8f, {0}};
+    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {{0.01f, 0.01f, 0.01f}}, 0, 0, {0}};
     assert_int_equal(scene_add_delta_light(s, &pt, &err), CST_OK);
     assert_int_equal(scene_add_delta_light(s, &sp, &err), CST_OK);
     assert_int_equal(scene_add_delta_light(s, &dl, &err), CST_OK);
@@ -474,6 +474,57 @@ static void test_triangle_far_by_area(void **state)
     scene_destroy(s);
 }
 
+/* A goniometric light's light paths carry its flux: the mean of beta over emission
+ * samples is 4 pi I mean(image) (with one light, pmf 1), within 4 standard errors; and
+ * its selection weight (power) is that flux's luminance. The image: 16 x 16 factors
+ * 0, 1, ..., 255 scaled by 1/64, uneven enough to catch a direction that ignores it. */
+static void test_gonio_emission(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    assert_non_null(s);
+    enum { N = 16 };
+    float *img = malloc(N * N * sizeof *img);
+    assert_non_null(img);
+    double sum = 0.0;
+    for (int i = 0; i < N * N; i++) sum += (double)(img[i] = (float)i / 64.0f);
+    DeltaLight l;
+    memset(&l, 0, sizeof l);
+    l.type = DELTA_GONIO;
+    l.p = v3(0.5f, 1.0f, -0.5f);
+    l.intensity = color_rgb(2.0f, 1.0f, 0.5f);
+    l.gonio.factor = img;
+    l.gonio.n = N;
+    l.gonio.mean = (float)(sum / (N * N));
+    const float rot[9] = {0, 0, 1, 1, 0, 0, 0, 1, 0};
+    memcpy(l.gonio.light_from_world, rot, sizeof rot);
+    assert_int_equal(scene_add_delta_light(s, &l, &err), CST_OK);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    EmitterGeometry g = scene_emitter_geometry(s);
+    Pcg32 rng;
+    pcg32_seed(&rng, 71u, 5u);
+    enum { M = 400000 };
+    double m = 0.0, m2 = 0.0;
+    for (int k = 0; k < M; k++) {
+        EmissionSample es;
+        float u_sel = pcg32_float(&rng);
+        Vec2 a = pcg32_v2(&rng), b = pcg32_v2(&rng);
+        emitter_sample_emission(&s->emitter_sampler, &g, u_sel, a, b, &es);
+        double v = (double)es.beta.c[0];
+        m += v;
+        m2 += v * v;
+    }
+    m /= M;
+    double se = sqrt((m2 / M - m * m) / M);
+    double flux = 4.0 * PI_D * 2.0 * sum / (N * N);
+    print_message("  goniometric emission: mean beta %.4f (se %.4f), 4 pi I mean %.4f\n", m, se, flux);
+    assert_true(fabs(m - flux) <= 4.0 * se);
+    double y = 0.2126 * 2.0 + 0.7152 * 1.0 + 0.0722 * 0.5;
+    assert_true(fabs((double)light_power(&s->emitter_sampler.light[0], 1.0f) / (4.0 * PI_D * y * sum / (N * N)) - 1.0) < 1e-5);
+    scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -484,6 +535,7 @@ int main(void)
         cmocka_unit_test(test_sphere_inside),
         cmocka_unit_test(test_triangle_solid_angle_chi2),
         cmocka_unit_test(test_triangle_far_by_area),
+        cmocka_unit_test(test_gonio_emission),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -383,6 +383,59 @@ static void test_infinite_lights(void **state)
 
 /* ------------------------------------------------------------------ delta lights */
 
+/* The intensity NEE sees from a scene's only light, a delta light at p, in world
+ * direction w (away from the light). */
+static Color intensity_toward(const Scene *s, Vec3 p, Vec3 w)
+{
+    EmitterGeometry g = scene_emitter_geometry(s);
+    LightLi ls;
+    if (!light_sample_li(&s->emitter_sampler, &g, v3_madd(p, w, 2.0f), 0.5f, v2(0.5f, 0.5f), &ls)) return color_s(0.0f);
+    return color_scale(ls.li, 4.0f); /* I / dist^2 at dist 2 */
+}
+
+/* LightSource "goniometric" (pbrt-v4): I x scale times the image's per-pixel mean of R, G,
+ * B at the light-space direction, light space = the CTM's with y and z swapped. The sides
+ * image (R = x > 0, G = y > 0, B = z > 0 in light space) gives 0, 1/3, 2/3 or 1 by octant;
+ * "power" makes 4 pi I mean(image) the flux. */
+static void test_goniometric_light(void **state)
+{
+    (void)state;
+    write_sides_image(CST_BINARY_DIR "/pbrt_gonio.pfm", 64, 64);
+    Warnings w = {0};
+    Scene *s = load_file_scene(WORLD("AttributeBegin\nTranslate 1 2 3\nLightSource \"goniometric\" "
+                                     "\"string filename\" \"pbrt_gonio.pfm\" \"rgb I\" [3 3 3]\nAttributeEnd\n" TRI), &w);
+    assert_int_equal(s->num_delta_lights, 1);
+    assert_int_equal(s->delta_lights[0].type, DELTA_GONIO);
+    assert_int_equal(w.n, 0);
+    const Vec3 p = v3(1, 2, 3);
+    assert_vec(s->delta_lights[0].p, 1, 2, 3, 0);
+    /* world (x, y, z) is light (x, z, y) */
+    const float want[4] = {3.0f * 2.0f / 3.0f, 3.0f * 2.0f / 3.0f, 0.0f, 3.0f};
+    const Vec3 dirs[4] = {v3_normalize(v3(0.6f, 0.6f, -0.53f)), v3_normalize(v3(-0.6f, 0.6f, 0.53f)),
+                          v3_normalize(v3(-0.6f, -0.6f, -0.53f)), v3_normalize(v3(0.6f, 0.6f, 0.53f))};
+    for (int i = 0; i < 4; i++) {
+        Color I = intensity_toward(s, p, dirs[i]);
+        if (!(fabsf(I.c[1] - want[i]) <= 1e-4f)) fail_msg("direction %d: intensity %g, expected %g", i, (double)I.c[1], (double)want[i]);
+    }
+    cst_scene_destroy(s);
+    /* power 100 W: the sides image's mean is 1/2, so I = 100 / (4 pi 0.5) */
+    s = load_file_scene(WORLD("LightSource \"goniometric\" \"string filename\" \"pbrt_gonio.pfm\" "
+                              "\"float power\" 100\n" TRI), &w);
+    double mean = (double)s->delta_lights[0].gonio.mean;
+    assert_true(fabs(mean - 0.5) < 0.02);
+    double expect = 100.0 / (4.0 * 3.14159265358979323846 * mean);
+    assert_true(fabs((double)s->delta_lights[0].intensity.c[0] / expect - 1.0) < 1e-5);
+    cst_scene_destroy(s);
+    write_sides_image(CST_BINARY_DIR "/pbrt_gonio_ll.pfm", 32, 16);
+    s = NULL;
+    CstError err;
+    CstLoadOptions opt = {collect, &w, 0};
+    const char *bad = WORLD("LightSource \"goniometric\" \"string filename\" \"pbrt_gonio_ll.pfm\"\n" TRI);
+    assert_int_equal(cst_scene_load_pbrt_string(bad, strlen(bad), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err),
+                     CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "expected a square"));
+}
+
 /* point, spot and distant lights as delta lights, placed by the CTM, with pbrt's power and
  * illuminance normalisation. */
 static void test_delta_lights(void **state)
@@ -397,7 +450,7 @@ static void test_delta_lights(void **state)
         "\"float conedeltaangle\" 10 \"float power\" 50\n"
         "AttributeBegin\nRotate 90 0 0 1\nLightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [1 0 0] "
         "\"blackbody L\" 5500 \"float illuminance\" 3\nAttributeEnd\n"
-        "LightSource \"goniometric\"\n" TRI), &w);
+        "LightSource \"projection\"\n" TRI), &w);
     assert_int_equal(s->num_delta_lights, 4);
     const DeltaLight *l = s->delta_lights;
     assert_int_equal(l[0].type, DELTA_POINT);
@@ -418,7 +471,7 @@ static void test_delta_lights(void **state)
     assert_int_equal(l[3].type, DELTA_DIRECTIONAL);
     assert_vec(l[3].dir, 0, 1, 0, 1e-6f); /* (1, 0, 0) turned 90 degrees about z */
     assert_true(fabsf(color_luminance(l[3].intensity) - 3.0f) < 0.01f);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "LightSource \"goniometric\" is not supported") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "LightSource \"projection\" is not supported") >= 0);
     cst_scene_destroy(s);
     expect_error(WORLD("LightSource \"spot\" \"float coneangle\" 120\n" TRI), CST_ERR_INVALID_ARG,
                  "LightSource", 0, "coneangle 120");
@@ -713,6 +766,7 @@ int main(void)
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_lights),
         cmocka_unit_test(test_area_power_per_shape),
+        cmocka_unit_test(test_goniometric_light),
         cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_equal_area_map),
         cmocka_unit_test(test_infinite_lights),

@@ -281,6 +281,77 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
     return CST_OK;
 }
 
+/* LightSource "goniometric" (pbrt-v4 GoniometricLight::Create): a point at the CTM's origin
+ * whose intensity I x scale is multiplied per direction by a square image in the equal-area
+ * layout, each pixel the mean of its R, G, B; light space is the CTM's with y and z
+ * swapped (pbrt-v4's swapYZ), so the image's +z (its centre) is the CTM's +y. "power" > 0
+ * scales to that flux: 4 pi I mean(image). */
+static CstStatus gonio_light(Loader *ld, Params *ps, Loc loc, const char *d)
+{
+    char nm[72];
+    Color c = color_s(1.0f);
+    float scale = 1.0f, power = 0.0f;
+    const char *file = NULL;
+    Loc fl = loc;
+    TRY(pbrt_get_spectrum(ld, ps, d, "I", SPEC_ILLUMINANT, 0, &c, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &power, NULL));
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    if (!ld->gs.ctm.inv_ok)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; expected an "
+                            "invertible transform", d);
+    float *px = NULL;
+    int w = 1, h = 1;
+    if (!file || !file[0]) {
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: no \"filename\"; the light is isotropic", d);
+        if (!(px = malloc(3 * sizeof *px))) return pbrt_oom(ld);
+        px[0] = px[1] = px[2] = 1.0f;
+    } else {
+        TRY(pbrt_check_file_access(ld, fl, d));
+        char *path = pbrt_resolve_path(ld, file);
+        if (!path) return pbrt_oom(ld);
+        CstStatus st = image_read_radiance(path, &px, &w, &h, ld->err); /* NaN, Inf, < 0: errors */
+        free(path);
+        if (st) return pbrt_fail_wrap(ld, st, fl, d);
+        if (w != h) {
+            free(px);
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: \"%s\" is %d x %d; expected a square "
+                                "(equal-area) image, as pbrt-v4", d, pbrt_clip(file, nm), w, h);
+        }
+    }
+    size_t count = (size_t)w * (size_t)h;
+    double sum = 0.0;
+    for (size_t i = 0; i < count; i++) { /* in place: pixel i's mean over its channels */
+        px[i] = (px[3 * i] + px[3 * i + 1] + px[3 * i + 2]) / 3.0f;
+        sum += (double)px[i];
+    }
+    double k = (double)scale;
+    if (power > 0.0f && sum > 0.0) k *= (double)power / (4.0 * PBRT_PI * sum / (double)count);
+    Color intensity = color_scale(c, (float)k);
+    if (!color_is_finite(intensity) || !(k >= 0.0)) {
+        free(px);
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative or "
+                            "not finite", d, (double)scale);
+    }
+    CstLightDesc l;
+    memset(&l, 0, sizeof l);
+    l.type = CST_LIGHT_GONIOMETRIC;
+    Vec3 p = transform_point(&ld->gs.ctm.m, v3s(0.0f));
+    pbrt_vec3_floats(p, l.position);
+    pbrt_color_floats(intensity, l.intensity);
+    l.image = px;
+    l.image_size = w;
+    /* light from world: swapYZ x (the CTM's inverse), linear part */
+    static const int row[3] = {0, 2, 1};
+    for (int r = 0; r < 3; r++)
+        for (int col = 0; col < 3; col++) l.light_from_world[3 * r + col] = ld->gs.ctm.inv.m[row[r]][col];
+    CstStatus st = pbrt_coords_ok(p) ? cst_scene_add_light(ld->scene, &l, ld->err) : CST_ERR_INVALID_ARG;
+    free(px);
+    if (st == CST_ERR_INVALID_ARG && !pbrt_coords_ok(p))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's position is beyond the scene limit", d);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
 /* LightSource: point, spot and distant as caustic's delta lights, placed by the CTM, with
  * pbrt-v4's scale and power (phi / 4 pi for a point; phi / (2 pi (1 - (cos_start +
  * cos_end) / 2)) for a spot) and illuminance for a distant light; as for area lights an
@@ -292,10 +363,11 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
     int point = strcmp(type, "point") == 0, spot = strcmp(type, "spot") == 0,
         distant = strcmp(type, "distant") == 0;
     if (strcmp(type, "infinite") == 0) return infinite_light(ld, ps, loc, d);
+    if (strcmp(type, "goniometric") == 0) return gonio_light(ld, ps, loc, d);
     if (!point && !spot && !distant) {
         pbrt_params_mark_all_used(ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported (caustic has area, point, "
-                     "spot, distant and infinite lights); skipped", d);
+                     "spot, goniometric, distant and infinite lights); skipped", d);
         return CST_OK;
     }
     CstLightDesc l;
