@@ -340,7 +340,9 @@ CST_API CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], f
 typedef enum CstLightType {
     CST_LIGHT_POINT = 1,  /* isotropic: intensity (W/sr) in every direction */
     CST_LIGHT_SPOT,       /* a point with a cone: intensity on the axis, smooth falloff */
-    CST_LIGHT_DIRECTIONAL /* parallel light from infinitely far: irradiance (W/m^2) */
+    CST_LIGHT_DIRECTIONAL, /* parallel light from infinitely far: irradiance (W/m^2) */
+    CST_LIGHT_GONIOMETRIC  /* a point whose intensity is scaled per direction by an image
+                            * (pbrt-v4's "goniometric" light) */
 } CstLightType;
 
 /* Zero-initialise, then set. */
@@ -353,6 +355,14 @@ typedef struct CstLightDesc {
     float cone_angle;    /* spot: half-angle of the cone in degrees, (0, 90] (pbrt: 30) */
     float cone_delta;    /* spot: degrees of falloff at the cone's edge, [0, cone_angle]
                           * (pbrt: 5) */
+    /* goniometric: image_size^2 factors (finite, >= 0; copied) over the sphere in Clarberg's
+     * equal-area octahedral layout, row 0 first (pbrt-v4's: square centre = light-space +z,
+     * u = 1 edge +x, v = 1 edge +y); the intensity in world direction w (away from the
+     * light) is intensity x the nearest factor at light_from_world w, a row-major 3 x 3
+     * map (all zeros: the identity). */
+    const float *image;
+    int image_size;
+    float light_from_world[9];
 } CstLightDesc;
 
 CST_API CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *desc, CstError *err);

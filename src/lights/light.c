@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "geometry/triangle.h"
 #include "math/frame.h"
+#include "sampling/spherical_triangle.h"
 #include "sampling/warp.h"
 
 /* pbrt-v4's spotlight falloff (SpotLight::I): smoothstep between the cone's cosines. */
@@ -17,6 +18,40 @@ static float spot_falloff(const SpotLight *l, float cos_theta)
     if (cos_theta <= l->cos_outer) return 0.0f;
     float t = (cos_theta - l->cos_outer) / (l->cos_inner - l->cos_outer);
     return t * t * (3.0f - 2.0f * t);
+}
+
+/* The factor a goniometric image gives world direction w (unit, away from the light):
+ * Clarberg's equal-area octahedral map of the light-space direction ("Fast Equal-Area
+ * Mapping of the (Hemi)Sphere using SIMD", JGT 2008; pbrt-v4 EqualAreaSphereToSquare,
+ * here with the exact arctangent), nearest pixel as pbrt-v4's GoniometricLight::I. */
+static float gonio_factor(const GonioImage *g, Vec3 w)
+{
+    const float *m = g->light_from_world;
+    double d[3];
+    double len = 0.0;
+    for (int r = 0; r < 3; r++) {
+        d[r] = (double)m[3 * r] * (double)w.x + (double)m[3 * r + 1] * (double)w.y + (double)m[3 * r + 2] * (double)w.z;
+        len += d[r] * d[r];
+    }
+    len = sqrt(len);
+    if (!(len > 0.0)) return 0.0f;
+    double x = fabs(d[0]) / len, y = fabs(d[1]) / len, z = fabs(d[2]) / len;
+    double rr = sqrt(fmax(0.0, 1.0 - z));
+    double a = fmax(x, y), b = fmin(x, y);
+    double phi = atan(a == 0.0 ? 0.0 : b / a) * (2.0 / (double)CST_PI);
+    if (x < y) phi = 1.0 - phi;
+    double v = phi * rr, u = rr - v;
+    if (d[2] < 0.0) {
+        double t = u;
+        u = 1.0 - v;
+        v = 1.0 - t;
+    }
+    u = 0.5 * (copysign(u, d[0]) + 1.0);
+    v = 0.5 * (copysign(v, d[1]) + 1.0);
+    int px = (int)(u * g->n), py = (int)(v * g->n);
+    px = px < 0 ? 0 : px >= g->n ? g->n - 1 : px;
+    py = py < 0 ? 0 : py >= g->n ? g->n - 1 : py;
+    return g->factor[(size_t)py * (size_t)g->n + (size_t)px];
 }
 
 /* A Lambertian emitter of radiance L and area A emits pi A L per side; a textured one is
@@ -40,6 +75,8 @@ float light_power(const Light *l, float scene_radius)
     case LIGHT_DIRECTIONAL:
         return CST_PI * scene_radius * scene_radius * color_luminance(l->u.directional.irradiance);
     case LIGHT_ENVIRONMENT: return CST_PI * scene_radius * scene_radius * l->u.env->power;
+    /* pbrt-v4 GoniometricLight::Phi: 4 pi I times the image's mean (equal-area pixels). */
+    case LIGHT_GONIO: return 4.0f * CST_PI * color_luminance(l->u.gonio.intensity) * l->u.gonio.image.mean;
     }
     return 0.0f;
 }
@@ -66,6 +103,12 @@ static Light light_from_delta(const DeltaLight *d)
         l.type = LIGHT_DIRECTIONAL;
         l.u.directional.dir = d->dir;
         l.u.directional.irradiance = d->intensity;
+        break;
+    case DELTA_GONIO:
+        l.type = LIGHT_GONIO;
+        l.u.gonio.p = d->p;
+        l.u.gonio.intensity = d->intensity;
+        l.u.gonio.image = d->gonio;
         break;
     }
     return l;
@@ -144,23 +187,180 @@ void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Ve
     }
 }
 
+/* The cone of directions a sphere subtends from an outside point x: half angle theta_max
+ * with sin^2 theta_max = r^2 / |c - x|^2, returned as 1 - cos theta_max. Computed as
+ * s / (1 + sqrt(1 - s)), which keeps its digits for distant spheres where 1 - sqrt(1 - s)
+ * cancels to 0 in float (pbrt-v4 Sphere::Sample switches to the Taylor term s / 2 below
+ * sin^2 = sin^2(1.5 deg) instead; this form needs no threshold). Returns false when x is
+ * inside the sphere or on it: there is no cone and the point is sampled by area. "On it"
+ * is a shell of 5e-5 r outside: a hit point on the sphere itself (inside a two-sided
+ * emitting sphere, say) is off the surface by rounding, to either side, and a cone of
+ * nearly 90 degrees from just outside would be the wrong density for it (pbrt-v4 makes
+ * the same call from the point offset toward the centre). */
+static bool sphere_cone(const Sphere *sp, Vec3 x, float *one_minus_cos_max, float *sin2_max)
+{
+    float d2 = v3_length2(v3_sub(sp->center, x));
+    float r2 = sp->radius * sp->radius;
+    if (!(d2 > 1.0001f * r2)) return false;
+    float s2 = r2 / d2;
+    *sin2_max = s2;
+    *one_minus_cos_max = s2 / (1.0f + sqrtf(1.0f - s2));
+    return *one_minus_cos_max > 0.0f;
+}
+
+/* A point on sphere sp seen from outside point x, by a direction uniform in the cone the
+ * sphere subtends (pbrt-v4 Sphere::Sample(ctx, u); the geometry is pbrt-v3 book sec.
+ * 14.2.2): 1 - cos theta uniform in [0, 1 - cos theta_max] by u.x, phi = 2 pi u.y, then the
+ * nearer intersection of that direction with the sphere, found by the angle alpha at the
+ * centre: cos alpha = sin^2 theta / sin theta_max + cos theta sqrt(1 - sin^2 theta /
+ * sin^2 theta_max). The density is 1 / (2 pi (1 - cos theta_max)) per unit solid angle.
+ * sin^2 theta comes from t = 1 - cos theta as t (2 - t), exact for small cones. */
+static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, float sin2_max, Vec3 *n)
+{
+    float t = u.x * omc_max;
+    float sin2 = t * (2.0f - t), cos_t = 1.0f - t;
+    float ratio = fminf(sin2 / sin2_max, 1.0f);
+    float cos_a = sin2 / sqrtf(sin2_max) + cos_t * sqrtf(1.0f - ratio);
+    cos_a = clampf(cos_a, -1.0f, 1.0f);
+    float sin_a = sqrtf(fmaxf(0.0f, 1.0f - cos_a * cos_a));
+    float phi = 2.0f * CST_PI * u.y;
+    Frame f = frame_from_normal(v3_normalize(v3_sub(sp->center, x)));
+    /* The normal points back toward x's side: -z in the frame whose z runs from x to c. */
+    *n = frame_to_world(&f, v3(-sin_a * cosf(phi), -sin_a * sinf(phi), -cos_a));
+}
+
+/* pbrt-v4's bounds for sampling a triangle by solid angle (Triangle::MinSphericalSampleArea
+ * and MaxSphericalSampleArea, sr): below 3e-4 sr area sampling is nearly as good and the
+ * spherical formulas start to lose precision; above 6.22 sr (close to the 2 pi of a
+ * triangle seen from its own plane) they are unstable. Outside the range: area sampling. */
+static const float TRI_MIN_SOLID_ANGLE = 3e-4f, TRI_MAX_SOLID_ANGLE = 6.22f;
+
+/* A triangle emitter as seen from x: unit directions to its vertices, the solid angle
+ * and, with a shading normal ns at x (nonzero), pbrt-v4's bilinear warp weights: |cos|
+ * between ns and the directions to vertices 1, 1, 0, 2 at the corners (0,0), (1,0), (0,1),
+ * (1,1) of the square spherical_triangle_sample maps to vertices 1, 1, 0, 2, floored at
+ * 0.01 so no part of the triangle gets density 0. False: sample by area instead. */
+typedef struct TriangleView {
+    Vec3 w[3];
+    float omega;
+    float corner[4];
+    bool warp;
+} TriangleView;
+
+static bool triangle_view(const EmitterGeometry *g, uint32_t prim, Vec3 x, Vec3 ns, TriangleView *tv)
+{
+    const int32_t *t = &g->tri_indices[3 * prim];
+    for (int k = 0; k < 3; k++) {
+        Vec3 d = v3_sub(g->positions[t[k]], x);
+        float l = v3_length(d);
+        if (!(l > 0.0f)) return false;
+        tv->w[k] = v3_scale(d, 1.0f / l);
+    }
+    tv->omega = spherical_triangle_area(tv->w[0], tv->w[1], tv->w[2]);
+    if (!(tv->omega >= TRI_MIN_SOLID_ANGLE && tv->omega <= TRI_MAX_SOLID_ANGLE)) return false;
+    tv->warp = v3_length2(ns) > 0.0f;
+    if (tv->warp) {
+        tv->corner[0] = tv->corner[1] = fmaxf(0.01f, fabsf(v3_dot(ns, tv->w[1])));
+        tv->corner[2] = fmaxf(0.01f, fabsf(v3_dot(ns, tv->w[0])));
+        tv->corner[3] = fmaxf(0.01f, fabsf(v3_dot(ns, tv->w[2])));
+    }
+    return true;
+}
+
+/* The density per unit solid angle of direction wi within the triangle's view, selection
+ * excluded: 1 / Omega times the bilinear warp's density at the square's point for wi. */
+static float triangle_view_pdf(const TriangleView *tv, Vec3 wi)
+{
+    float pdf = 1.0f / tv->omega;
+    if (tv->warp) pdf *= warp_bilinear_pdf(spherical_triangle_invert(tv->w[0], tv->w[1], tv->w[2], wi), tv->corner);
+    return pdf;
+}
+
+/* Where the ray x + t d meets the triangle's plane, as barycentrics (b1, b2) of vertices
+ * 1 and 2 (Moller-Trumbore), pulled back onto the triangle: d comes from inside the
+ * spherical triangle, so only rounding takes it outside. False when d runs along the plane. */
+static bool triangle_barycentrics(const EmitterGeometry *g, uint32_t prim, Vec3 x, Vec3 d, Vec2 *bc)
+{
+    const int32_t *t = &g->tri_indices[3 * prim];
+    Vec3 a = g->positions[t[0]];
+    Vec3 e1 = v3_sub(g->positions[t[1]], a), e2 = v3_sub(g->positions[t[2]], a);
+    Vec3 pv = v3_cross(d, e2);
+    float det = v3_dot(e1, pv);
+    if (!(fabsf(det) > 0.0f)) return false;
+    float inv = 1.0f / det;
+    Vec3 tv = v3_sub(x, a);
+    float b1 = v3_dot(tv, pv) * inv;
+    float b2 = v3_dot(d, v3_cross(tv, e1)) * inv;
+    b1 = fmaxf(b1, 0.0f);
+    b2 = fmaxf(b2, 0.0f);
+    float sum = b1 + b2;
+    if (sum > 1.0f) { b1 /= sum; b2 /= sum; }
+    if (!isfinite(b1) || !isfinite(b2)) return false;
+    *bc = v2(b1, b2);
+    return true;
+}
+
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 ns, Vec3 wi,
+                       float dist, float cos_l)
+{
+    const Emitter *em = &s->light[e].u.area;
+    float omc, sin2;
+    if ((int)em->prim >= g->num_triangles) {
+        if (sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
+            return s->by_power.pmf[e] / (2.0f * CST_PI * omc);
+    } else {
+        TriangleView tv;
+        if (triangle_view(g, em->prim, x, ns, &tv)) return s->by_power.pmf[e] * triangle_view_pdf(&tv, wi);
+    }
+    return cos_l > 0.0f ? s->pdf_a[e] * dist * dist / cos_l : 0.0f;
+}
+
 /* The emission direction density at a delta light (per unit solid angle). */
 static float delta_emit_pdf_w(const Light *l)
 {
     switch (l->type) {
-    case LIGHT_POINT: return CST_INV_4PI;
+    case LIGHT_POINT:
+    case LIGHT_GONIO: return CST_INV_4PI;
     case LIGHT_SPOT: return warp_uniform_cone_pdf(l->u.spot.cos_outer);
     case LIGHT_DIRECTIONAL: return 1.0f;
     default: return 0.0f;
     }
 }
 
-static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec3 x, Vec2 u,
+static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec3 x, Vec3 ns, Vec2 u,
                            LightLi *out)
 {
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
-    emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
+    float omc = 0.0f, sin2 = 0.0f, solid_pdf = 0.0f;
+    const Sphere *sp = (int)e->prim >= g->num_triangles ? &g->spheres[(int)e->prim - g->num_triangles] : NULL;
+    const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
+    TriangleView tv;
+    const bool spherical = !sp && triangle_view(g, e->prim, x, ns, &tv);
+    if (cone) {
+        sphere_sample_cone(sp, x, u, omc, sin2, &out->n);
+        out->p = v3_madd(sp->center, out->n, sp->radius);
+        uv = e->texture ? sphere_uv(out->n) : v2(0.0f, 0.0f);
+    } else if (spherical) {
+        /* pbrt-v4 Triangle::Sample(ctx, u): the bilinear warp (cosine at x), then a
+         * direction uniform in the spherical triangle, then the point it sees. */
+        Vec2 uw = tv.warp ? warp_bilinear(u, tv.corner) : u;
+        float omega;
+        Vec3 d;
+        Vec2 bc;
+        if (!spherical_triangle_sample(tv.w[0], tv.w[1], tv.w[2], uw, &d, &omega) ||
+            !triangle_barycentrics(g, e->prim, x, d, &bc))
+            return false;
+        solid_pdf = (tv.warp ? warp_bilinear_pdf(uw, tv.corner) : 1.0f) / tv.omega;
+        const int32_t *t = &g->tri_indices[3 * e->prim];
+        Vec3 a = g->positions[t[0]];
+        out->p = v3_add(a, v3_add(v3_scale(v3_sub(g->positions[t[1]], a), bc.x),
+                                  v3_scale(v3_sub(g->positions[t[2]], a), bc.y)));
+        out->n = e->n;
+        uv = e->texture ? triangle_uv(g->uvs, g->tri_has_uv, g->tri_indices, e->prim, bc.x, bc.y) : v2(0.0f, 0.0f);
+    } else {
+        emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
+    }
     Vec3 to = v3_sub(out->p, x);
     float dist2 = v3_length2(to);
     if (!(dist2 > 0.0f)) return false;
@@ -169,11 +369,16 @@ static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry
     out->cos_light = fabsf(v3_dot(out->n, out->wi));
     out->li = emitter_radiance(e, g->textures, out->n, uv, v3_neg(out->wi));
     if (color_is_black(out->li) || !(out->cos_light > 0.0f)) return false;
-    /* dA -> d omega: pdf_w = pdf_a dist^2 / |cos theta_light|. */
-    out->pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
+    /* Area sampling: dA -> d omega, pdf_w = pdf_a dist^2 / |cos theta_light|. This is also
+     * the density the bidirectional MIS weights use for NEE (direct_pdf) even when the
+     * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
+     * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
+    const float area_pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
+    out->pdf_w = cone ? s->by_power.pmf[i] / (2.0f * CST_PI * omc)
+                 : spherical ? s->by_power.pmf[i] * solid_pdf : area_pdf_w;
     out->finite = true;
     out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
-    out->direct_pdf = out->pdf_w;
+    out->direct_pdf = area_pdf_w;
     return true;
 }
 
@@ -216,7 +421,7 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
         out->direct_pdf = pmf;
         return true;
     }
-    const Vec3 lp = l->type == LIGHT_SPOT ? l->u.spot.p : l->u.point.p;
+    const Vec3 lp = l->type == LIGHT_SPOT ? l->u.spot.p : l->type == LIGHT_GONIO ? l->u.gonio.p : l->u.point.p;
     Vec3 to = v3_sub(lp, x);
     float dist2 = v3_length2(to);
     if (!(dist2 > 0.0f)) return false;
@@ -225,8 +430,12 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     out->wi = v3_scale(to, 1.0f / out->dist);
     out->n = v3_neg(out->wi);
     out->finite = true;
-    float falloff = l->type == LIGHT_SPOT ? spot_falloff(&l->u.spot, v3_dot(l->u.spot.dir, v3_neg(out->wi))) : 1.0f;
-    const Color intensity = l->type == LIGHT_SPOT ? l->u.spot.intensity : l->u.point.intensity;
+    float falloff = l->type == LIGHT_SPOT    ? spot_falloff(&l->u.spot, v3_dot(l->u.spot.dir, v3_neg(out->wi)))
+                    : l->type == LIGHT_GONIO ? gonio_factor(&l->u.gonio.image, v3_neg(out->wi))
+                                             : 1.0f;
+    const Color intensity = l->type == LIGHT_SPOT    ? l->u.spot.intensity
+                            : l->type == LIGHT_GONIO ? l->u.gonio.intensity
+                                                     : l->u.point.intensity;
     out->li = color_scale(intensity, falloff / dist2);
     out->direct_pdf = pmf * dist2;
     return falloff > 0.0f;
@@ -235,6 +444,12 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
 bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
                      LightLi *out)
 {
+    return light_sample_li_at(s, g, x, v3s(0.0f), u_sel, u, out);
+}
+
+bool light_sample_li_at(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 ns, float u_sel, Vec2 u,
+                        LightLi *out)
+{
     memset(out, 0, sizeof *out);
     if (s->lights == 0) return false;
     int i = distrib1d_sample(&s->by_power, u_sel);
@@ -242,10 +457,11 @@ bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, 
     out->light = i;
     const Light *l = &s->light[i];
     switch (l->type) {
-    case LIGHT_AREA: return area_sample_li(s, i, g, x, u, out);
+    case LIGHT_AREA: return area_sample_li(s, i, g, x, ns, u, out);
     case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
     case LIGHT_POINT:
     case LIGHT_SPOT:
+    case LIGHT_GONIO:
     case LIGHT_DIRECTIONAL: return delta_sample_li(s, l, pmf, x, out);
     }
     return false;
@@ -316,6 +532,16 @@ static void delta_sample_emission(const EmitterSampler *s, const Light *l, float
         out->beta = color_scale(l->u.point.intensity, 1.0f / (pmf * out->pdf_w));
         out->finite = true;
         break;
+    case LIGHT_GONIO:
+        /* A uniform direction weighted by the image (pbrt-v4 samples the image's own
+         * distribution: same expectation, more noise where the image is uneven). */
+        out->p = l->u.gonio.p;
+        out->w = warp_uniform_sphere(u_dir);
+        out->pdf_a = pmf;
+        out->pdf_w = CST_INV_4PI;
+        out->beta = color_scale(l->u.gonio.intensity, gonio_factor(&l->u.gonio.image, out->w) / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
     case LIGHT_SPOT: {
         const SpotLight *sp = &l->u.spot;
         Frame f = frame_from_normal(sp->dir);
@@ -363,6 +589,7 @@ void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, 
     case LIGHT_ENVIRONMENT: env_sample_emission(s, pmf, u_pos, u_dir, out); return;
     case LIGHT_POINT:
     case LIGHT_SPOT:
+    case LIGHT_GONIO:
     case LIGHT_DIRECTIONAL: delta_sample_emission(s, l, pmf, u_pos, u_dir, out); return;
     }
 }

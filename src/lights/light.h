@@ -1,6 +1,8 @@
 /* Lights: area emitters (any primitive with emission) and delta lights (point, spot,
  * directional). NEE picks a light with probability proportional to its power and, on an
- * area emitter, a uniform point; light paths start the same way and add a direction. */
+ * area emitter, a point: by the subtended cone on spheres, by solid angle on triangles
+ * (uniform by area where that is as good); light paths start from a uniform point and
+ * add a direction. */
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
@@ -28,8 +30,19 @@ typedef struct Emitter {
 typedef enum DeltaLightType {
     DELTA_POINT,       /* isotropic point: intensity I in every direction */
     DELTA_SPOT,        /* point with a cone: I on the axis, smoothstep falloff to 0 at cos_outer */
-    DELTA_DIRECTIONAL  /* parallel light from infinitely far: irradiance E on a surface facing it */
+    DELTA_DIRECTIONAL, /* parallel light from infinitely far: irradiance E on a surface facing it */
+    DELTA_GONIO        /* point whose intensity I times an image over the sphere (goniometric) */
 } DeltaLightType;
+
+/* A goniometric light's angular distribution (pbrt-v4 GoniometricLight): an n x n image of
+ * factors over the sphere in Clarberg's equal-area octahedral layout (row 0 at the top,
+ * as pbrt-v4 reads it), looked up nearest at the light-space direction light_from_world w. */
+typedef struct GonioImage {
+    const float *factor;     /* n * n values >= 0, owned by the scene */
+    int n;
+    float light_from_world[9]; /* row-major 3 x 3 */
+    float mean;              /* the factors' mean: the light emits 4 pi I mean */
+} GonioImage;
 
 /* A point, spot or directional light as a scene is built (scene_add_delta_light);
  * emitter_sampler_init turns each into its Light. */
@@ -39,6 +52,7 @@ typedef struct DeltaLight {
     Vec3 dir;      /* spot: unit axis; directional: unit direction the light travels */
     Color intensity; /* point, spot: radiant intensity (W/sr) on the axis; directional: irradiance */
     float cos_inner, cos_outer; /* spot: full intensity within cos_inner, none beyond cos_outer */
+    GonioImage gonio;           /* goniometric */
 } DeltaLight;
 
 /* The kinds of light, one tag of the Light union. */
@@ -47,7 +61,8 @@ typedef enum LightType {
     LIGHT_POINT,       /* isotropic point */
     LIGHT_SPOT,        /* point with a cone and smoothstep falloff */
     LIGHT_DIRECTIONAL, /* parallel light from infinitely far */
-    LIGHT_ENVIRONMENT  /* radiance from every direction at infinity (EnvMap) */
+    LIGHT_ENVIRONMENT, /* radiance from every direction at infinity (EnvMap) */
+    LIGHT_GONIO        /* point with an image of its intensity over the sphere */
 } LightType;
 
 typedef struct PointLight {
@@ -59,6 +74,11 @@ typedef struct SpotLight {
     Color intensity; /* I on the axis, W/sr */
     float cos_inner, cos_outer; /* full intensity within cos_inner, none beyond cos_outer */
 } SpotLight;
+typedef struct GonioLight {
+    Vec3 p;
+    Color intensity; /* times the image's factor in each direction, W/sr */
+    GonioImage image;
+} GonioLight;
 typedef struct DirectionalLight {
     Vec3 dir;         /* unit direction the light travels */
     Color irradiance; /* E on a surface facing it, W/m^2 */
@@ -72,6 +92,7 @@ typedef struct Light {
         PointLight point;
         SpotLight spot;
         DirectionalLight directional;
+        GonioLight gonio;
         const EnvMap *env; /* borrowed from the scene */
     } u;
 } Light;
@@ -135,8 +156,20 @@ static inline float light_env_pdf(const EmitterSampler *s, Vec3 w)
 }
 static inline int light_env_index(const EmitterSampler *s) { return s->count + s->num_delta; }
 
+/* NEE's density (per unit solid angle at x, selection included) of sampling the point at
+ * distance dist in unit direction wi on area emitter e, |cos| cos_l there, from x with
+ * shading normal ns (zero: none): what light_sample_li_at reports as pdf_w for it, for the
+ * MIS weight of a BSDF-sampled ray that hits e. Spheres seen from outside: pmf / (2 pi (1 -
+ * cos theta_max)); triangles of 3e-4 to 6.22 sr: pmf / Omega times the bilinear warp's
+ * density; otherwise pdf_a dist^2 / cos_l. */
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 ns, Vec3 wi,
+                       float dist, float cos_l);
+
 /* Next-event estimation at x: a light picked by power (u_sel) and, for an area emitter, a
- * uniform point on it (u). The estimate of direct light is f(wo, wi) li / pdf with the
+ * point on it (u). A sphere seen from outside by a direction uniform in the cone it
+ * subtends (pbrt-v4 Sphere::Sample(ctx, u)); a triangle that subtends 3e-4 to 6.22 sr by a
+ * direction in its spherical triangle (Arvo 1995), warped toward the cosine at x when x
+ * has a shading normal (pbrt-v4 Triangle::Sample(ctx, u)); otherwise uniform by area. The estimate of direct light is f(wo, wi) li / pdf with the
  * shadow ray from x toward p (an area point or a delta light's position; for a
  * directional light a point beyond the scene). */
 typedef struct LightLi {
@@ -145,7 +178,8 @@ typedef struct LightLi {
     float dist;  /* |p - x| */
     Color li;      /* area: L_e toward x; point/spot: I(-wi) / dist^2; directional: E */
     float pdf_w; /* area, environment: density of wi per unit solid angle, the light's
-                  * selection included; 0 for delta lights */
+                  * selection included (the density the sample was drawn with; divide by
+                  * it); 0 for delta lights */
     float pmf;   /* delta lights: the probability of picking this light, the whole
                   * density of the sample (a discrete one: the estimate has no MIS
                   * partner); 0 for the others. The estimate divides by pmf or pdf_w. */
@@ -155,7 +189,10 @@ typedef struct LightLi {
     /* For bidirectional MIS (vcm.c; Georgiev's tech. rep. eqs. 44-45): a light path's
      * density of leaving the light toward x (position density per area, or selection
      * for delta positions, times the direction's per solid angle), the density NEE picks
-     * the light point with expressed as SmallVCM's "directPdfW", and |cos| at the light. */
+     * the light point with expressed as SmallVCM's "directPdfW", and |cos| at the light.
+     * For area lights direct_pdf is area sampling's, pdf_a dist^2 / |cos|, also where
+     * the sample came from a sphere's cone: the bidirectional weights stay on the
+     * densities of emitter_pdf_a, which the s = 0 strategy uses too. */
     float emit_pdf;
     float direct_pdf;
     float cos_light;
@@ -165,6 +202,10 @@ typedef struct LightLi {
  * cone); li is then black. */
 bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
                      LightLi *out);
+/* The same at a surface point with unit shading normal ns, which steers the triangles'
+ * bilinear warp (light_sample_li: none, ns = 0). */
+bool light_sample_li_at(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 ns, float u_sel, Vec2 u,
+                        LightLi *out);
 
 typedef struct EmitterSample {
     Vec3 p, n; /* point and unit geometric normal */
@@ -176,7 +217,7 @@ void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Ve
 
 /* The start of a light path. Area emitters: a uniform point and a cosine-weighted
  * direction around the emitting side's normal (two-sided ones pick either side with
- * probability 1/2). Point lights: a uniform direction; spots: uniform in the cone;
+ * probability 1/2). Point and goniometric lights: a uniform direction; spots: uniform in the cone;
  * directional: a uniform point on the disk of the scene's bounding sphere, upstream. */
 typedef struct EmissionSample {
     Vec3 p, n;   /* point and unit normal (delta lights: n = w) */

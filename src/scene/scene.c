@@ -55,6 +55,8 @@ void scene_destroy(Scene *s)
     for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
     free(s->textures);
     free(s->emitters);
+    for (int i = 0; i < s->num_delta_lights; i++)
+        if (s->delta_lights[i].type == DELTA_GONIO) free((void *)(uintptr_t)s->delta_lights[i].gonio.factor);
     free(s->delta_lights);
     if (s->env) envmap_free(s->env);
     free(s->env);

@@ -794,6 +794,40 @@ static CstStatus read_direction(const float d[3], const char *fn, const char *wh
     return CST_OK;
 }
 
+/* A goniometric light's image and map, copied (the scene frees the copy). */
+#define GONIO_MAX_SIDE 65536
+static CstStatus read_gonio(const CstLightDesc *d, const char *fn, GonioImage *g, CstError *err)
+{
+    const int n = d->image_size;
+    if (!d->image || !(n >= 1 && n <= GONIO_MAX_SIDE))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: goniometric image %s of size %d; expected an image of "
+                        "1 to %d pixels square", fn, d->image ? "given" : "NULL", n, GONIO_MAX_SIDE);
+    bool zero = true;
+    for (int k = 0; k < 9; k++) {
+        if (!isfinite(d->light_from_world[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: light_from_world[%d] is not finite", fn, k);
+        zero &= d->light_from_world[k] == 0.0f;
+    }
+    for (int k = 0; k < 9; k++) g->light_from_world[k] = zero ? (k % 4 == 0 ? 1.0f : 0.0f) : d->light_from_world[k];
+    size_t count = (size_t)n * (size_t)n;
+    float *f = malloc(count * sizeof *f);
+    if (!f) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d goniometric image", fn, n, n);
+    double sum = 0.0;
+    for (size_t i = 0; i < count; i++) {
+        if (!(d->image[i] >= 0.0f) || !isfinite(d->image[i])) {
+            free(f);
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: goniometric image pixel (%d, %d) is %g; expected a "
+                            "finite value >= 0", fn, (int)(i % (size_t)n), (int)(i / (size_t)n), (double)d->image[i]);
+        }
+        f[i] = d->image[i];
+        sum += (double)f[i];
+    }
+    g->factor = f;
+    g->n = n;
+    g->mean = (float)(sum / (double)count);
+    return CST_OK;
+}
+
 CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *err)
 {
     static const char fn[] = "cst_scene_add_light";
@@ -826,16 +860,23 @@ CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *
         l.cos_outer = cosf(d->cone_angle * (CST_PI / 180.0f));
         l.cos_inner = cosf((d->cone_angle - d->cone_delta) * (CST_PI / 180.0f));
         break;
+    case CST_LIGHT_GONIOMETRIC:
+        l.type = DELTA_GONIO;
+        if ((st = read_vec3(d->position, fn, "position", &l.p, err)) != CST_OK) return st;
+        if ((st = read_gonio(d, fn, &l.gonio, err)) != CST_OK) return st;
+        break;
     default:
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light type %d; expected CST_LIGHT_POINT, _SPOT or "
-                        "_DIRECTIONAL", fn, (int)d->type);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light type %d; expected CST_LIGHT_POINT, _SPOT, "
+                        "_DIRECTIONAL or _GONIOMETRIC", fn, (int)d->type);
     }
     /* A directional light's power depends on the scene's size: cst_scene_commit checks it. */
-    if (d->type != CST_LIGHT_DIRECTIONAL &&
-        (st = check_product(fn, "the power 4 pi x intensity", 4.0 * (double)CST_PI * color_peak(l.intensity),
-                            "a smaller intensity", err)) != CST_OK)
-        return st;
-    return scene_add_delta_light(scene, &l, err);
+    if (d->type != CST_LIGHT_DIRECTIONAL)
+        st = check_product(fn, "the power 4 pi x intensity", 4.0 * (double)CST_PI * color_peak(l.intensity),
+                           "a smaller intensity", err);
+    if (st == CST_OK) st = scene_add_delta_light(scene, &l, err);
+    if (st != CST_OK && l.type == DELTA_GONIO)
+        free((void *)(uintptr_t)l.gonio.factor);
+    return st;
 }
 
 CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radiance[3], CstError *err)
@@ -1171,6 +1212,10 @@ static CstStatus check_light_powers(const Scene *s, CstError *err)
         case LIGHT_SPOT:
             power = 4.0 * (double)CST_PI * color_peak(l->u.spot.intensity);
             what = "a spot light's power (bound) 4 pi x intensity";
+            break;
+        case LIGHT_GONIO:
+            power = 4.0 * (double)CST_PI * color_peak(l->u.gonio.intensity) * (double)l->u.gonio.image.mean;
+            what = "a goniometric light's power 4 pi x intensity x the image's mean";
             break;
         case LIGHT_DIRECTIONAL:
             power = disk * color_peak(l->u.directional.irradiance);

@@ -1,5 +1,5 @@
-/* Analytic test: radiance reflected by a diffuse plane under a rectangular emitter,
- * against the closed-form irradiance: at one point for the path tracers, over a whole
+/* Analytic test: radiance reflected by a diffuse plane under a rectangular emitter (and a
+ * sphere light, a point or spot light, an environment), against the closed-form irradiance: at one point for the path tracers, over a whole
  * image for the light tracer. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -362,6 +362,22 @@ static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed
         l.cos_inner = (float)cos(inner);
         double t = (cos(tilt) - cos(cone)) / (cos(inner) - cos(cone));
         expected = (double)RHO / pi * I * t * t * (3.0 - 2.0 * t) / (h * h);
+    } else if (kind == 3) {
+        /* A goniometric light straight above: an 8 x 8 equal-area image with factor 2 on its
+         * top half (where light-space -y, straight down, falls: row 0) and 0.5 elsewhere, so
+         * light paths leave with the image's weights and NEE sees factor 2. */
+        enum { N = 8 };
+        float *img = malloc(N * N * sizeof *img);
+        assert_non_null(img);
+        for (int i = 0; i < N * N; i++) img[i] = i < N * N / 2 ? 2.0f : 0.5f;
+        l.type = DELTA_GONIO;
+        l.p = v3(0, (float)h, 0);
+        l.intensity = color_s((float)I);
+        l.gonio.factor = img;
+        l.gonio.n = N;
+        l.gonio.mean = 1.25f;
+        for (int k = 0; k < 9; k++) l.gonio.light_from_world[k] = k % 4 == 0 ? 1.0f : 0.0f;
+        expected = (double)RHO / pi * I * 2.0 / (h * h);
     } else {
         const double beta = 30.0 * pi / 180.0;
         l.type = DELTA_DIRECTIONAL;
@@ -434,6 +450,57 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
     scene_destroy(s);
 }
 
+/* A diffuse plane (albedo RHO, normal +y) lit by a sphere light of radius r and radiance
+ * LE centred at (dx, h, 0), wholly above the horizon of the point at the origin: the
+ * irradiance there is pi LE sin^2 theta_max cos beta (a uniformly bright sphere's projected
+ * solid angle; sin theta_max = r / d, cos beta = h / d), so L_o = RHO LE (r / d)^2 h / d.
+ * NEE samples the sphere by its cone (light.c); the MIS weights of BSDF-sampled hits use
+ * light_area_pdf_w, so a wrong density in either biases path and whitted here. */
+static void run_sphere_case(CstIntegrator integ, double dx, double h, double r, int spp, uint64_t seed)
+{
+    CstError err;
+    Scene *s = scene_create();
+    int plane_mat, light_mat;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
+    m.albedo = color_s(0.0f);
+    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
+    Vec3 plane[4] = {{-500, 0, -500}, {-500, 0, 500}, {500, 0, 500}, {500, 0, -500}};
+    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    Emission em = {{{LE, LE, LE}}, 0, 0};
+    assert_int_equal(scene_add_sphere(s, v3((float)dx, (float)h, 0), (float)r, light_mat, &em, &err), CST_OK);
+    CameraDesc cam = {{0, 0.05f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    /* From the float centre and radius the scene holds. */
+    double fx = (double)(float)dx, fh = (double)(float)h, fr = (double)(float)r;
+    double d2 = fx * fx + fh * fh;
+    double expected = (double)RHO * (double)LE * fr * fr / d2 * fh / sqrt(d2);
+    RegionStat st = render_pixel(s, integ, spp, seed);
+    for (int c = 0; c < 3; c++) {
+        double z = (st.mean[c] - expected) / st.se[c];
+        if (!(fabs(z) <= Z_LIMIT))
+            fail_msg("%s, sphere light r=%g at (%g, %g): L = %.7f, closed form %.7f (z = %.2f)",
+                     cst_integrator_name(integ), r, dx, h, st.mean[c], expected, z);
+    }
+    print_message("%s, sphere r=%g at (%g, %g): L = %.6g (se %.1e), closed form %.6g\n", cst_integrator_name(integ),
+                  r, dx, h, st.mean[0], st.se[0], expected);
+    scene_destroy(s);
+}
+
+static void test_sphere_irradiance(void **state)
+{
+    (void)state;
+    const CstIntegrator v[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_NEE, CST_INTEGRATOR_WHITTED,
+                               CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
+    for (int i = 0; i < 5; i++) {
+        int spp = v[i] >= CST_INTEGRATOR_SPPM ? 4096 : 1 << 16;
+        run_sphere_case(v[i], 0.5, 2.0, 1.0, spp, 300 + 10 * (uint64_t)i);   /* large, theta_max 29 deg */
+        run_sphere_case(v[i], 3.0, 4.0, 0.05, spp, 301 + 10 * (uint64_t)i);  /* small and oblique */
+    }
+    run_sphere_case(CST_INTEGRATOR_PATH_BSDF, 0.5, 2.0, 1.0, 1 << 20, 399);
+}
+
 static void test_environment_irradiance(void **state)
 {
     (void)state;
@@ -453,7 +520,7 @@ static void test_delta_lights(void **state)
                                CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_BDPT,
                                CST_INTEGRATOR_VCM};
     for (int i = 0; i < 7; i++)
-        for (int kind = 0; kind < 3; kind++)
+        for (int kind = 0; kind < 4; kind++)
             run_delta_case(v[i], kind, v[i] >= CST_INTEGRATOR_SPPM ? 1024 : 65536, 100 + 10 * (uint64_t)i + (uint64_t)kind);
 }
 
@@ -463,6 +530,7 @@ int main(void)
         cmocka_unit_test(test_rectangle_irradiance),
         cmocka_unit_test(test_rectangle_irradiance_bidir),
         cmocka_unit_test(test_delta_lights),
+        cmocka_unit_test(test_sphere_irradiance),
         cmocka_unit_test(test_environment_irradiance),
         cmocka_unit_test(test_orthographic),
         cmocka_unit_test(test_light_tracer_irradiance),

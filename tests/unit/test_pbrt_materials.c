@@ -1,6 +1,7 @@
 /* Unit tests for the pbrt-v4 loader (scene/pbrt/), appearance: materials, area, delta and
  * infinite lights (with the equal-area environment remapping), and textures, with the
  * warnings (by code) for what is approximated or skipped. */
+#include "core/rng.h"
 #include "unit/pbrt_test_util.h"
 
 /* ------------------------------------------------------------------ materials */
@@ -163,6 +164,39 @@ static void test_lights(void **state)
     cst_scene_destroy(s);
 }
 
+/* The flux pi A L (one-sided) of emitters [first, last) of a scene's emitter list. */
+static double emitted_power(const Scene *s, int first, int last)
+{
+    double sum = 0.0;
+    for (int i = first; i < last; i++)
+        sum += 3.14159265358979323846 * (double)s->emitters[i].area * (double)s->emitters[i].radiance.c[1];
+    return sum;
+}
+
+/* An area light's "power" is per pbrt-v4 shape (DiffuseAreaLight::Create normalises each
+ * light by its shape's area): a disk, tessellated here, emits 10 W in all; a bilinear
+ * patch, two triangles here, 10 W; a triangle mesh of two triangles 10 W per triangle. */
+static void test_area_power_per_shape(void **state)
+{
+    (void)state;
+    const char *shapes[3] = {
+        "Shape \"disk\" \"float radius\" 1.5\n",
+        "Shape \"bilinearmesh\" \"point3 P\" [0 0 0  2 0 0  0 1 0  2 1 0]\n",
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  1 1 0  0 3 0] \"integer indices\" [0 1 2  0 2 3]\n"};
+    const double expect[3] = {10.0, 10.0, 20.0};
+    for (int k = 0; k < 3; k++) {
+        char text[1024];
+        snprintf(text, sizeof text, "%s%sAttributeEnd\n",
+                 WORLD("AttributeBegin\nAreaLightSource \"diffuse\" \"float power\" 10\n"), shapes[k]);
+        Warnings w = {0};
+        Scene *s = expect_ok(text, &w);
+        double phi = emitted_power(s, 0, s->num_emitters);
+        print_message("  shape %d: %d emitters, %.6f W (expected %.1f)\n", k, s->num_emitters, phi, expect[k]);
+        assert_true(fabs(phi - expect[k]) < 1e-4 * expect[k]);
+        cst_scene_destroy(s);
+    }
+}
+
 /* The equal-area octahedral map of pbrt-v4's environment images: its landmarks, and
  * square -> sphere -> square is the identity. */
 static void test_equal_area_map(void **state)
@@ -255,8 +289,9 @@ static void test_infinite_lights(void **state)
                                "LightSource \"infinite\" \"rgb L\" [5 5 5]\n" TRI), &w);
     assert_non_null(s->env);
     assert_null(s->env->rgb);
-    assert_true(s->env->scale.c[0] == 2.0f && s->env->scale.c[1] == 4.0f && s->env->scale.c[2] == 6.0f);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: LightSource \"infinite\": caustic has one environment") >= 0);
+    /* pbrt-v4 sums its infinite lights: (1 2 3) x 2 + (5 5 5) */
+    assert_true(s->env->scale.c[0] == 7.0f && s->env->scale.c[1] == 9.0f && s->env->scale.c[2] == 11.0f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "t.pbrt:5:1: LightSource \"infinite\": another infinite light") >= 0);
     cst_scene_destroy(s);
     /* illuminance E: a uniform sky of radiance L gives pi L on an upward patch, so L E / pi */
     s = expect_ok(WORLD("LightSource \"infinite\" \"float illuminance\" 10\n" TRI), NULL);
@@ -297,6 +332,45 @@ static void test_infinite_lights(void **state)
     check_sides(s->env, ident, 1.0f);
     cst_scene_destroy(s);
 
+    /* several infinite lights: pbrt-v4 sums them. Two images (the square one becomes 128 x
+     * 64, the other is 32 x 16, which that grid refines) and a constant: the sum on the
+     * larger grid equals the three looked up apart, in every direction. */
+    const char *parts[3] = {"LightSource \"infinite\" \"string filename\" \"pbrt_env_ll.pfm\" \"float scale\" 3\n",
+                            "LightSource \"infinite\" \"rgb L\" [0.5 0.25 0.125]\n",
+                            ("AttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" "
+                             "\"string filename\" \"pbrt_env_sq.pfm\" \"float scale\" 2\nAttributeEnd\n")};
+    Scene *one[3];
+    char all[1024] = "";
+    for (int i = 0; i < 3; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "%s%s", parts[i], TRI);
+        char body[768];
+        snprintf(body, sizeof body, WORLD("%s"), text);
+        Warnings w1 = {0};
+        one[i] = load_file_scene(body, &w1);
+        strncat(all, parts[i], sizeof all - strlen(all) - 1);
+    }
+    strncat(all, TRI, sizeof all - strlen(all) - 1);
+    char body[1536];
+    snprintf(body, sizeof body, WORLD("%s"), all);
+    memset(&w, 0, sizeof w);
+    s = load_file_scene(body, &w);
+    assert_int_equal(s->env->width, 128);
+    assert_int_equal(s->env->height, 64);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "another infinite light") >= 0);
+    Pcg32 rng;
+    pcg32_seed(&rng, 3u, 1u);
+    for (int n = 0; n < 2000; n++) {
+        Vec3 d = warp_uniform_sphere(pcg32_v2(&rng));
+        Color got = envmap_eval(s->env, d), want = color_s(0.0f);
+        for (int i = 0; i < 3; i++) want = color_add(want, envmap_eval(one[i]->env, d));
+        for (int c = 0; c < 3; c++)
+            if (!(fabsf(got.c[c] - want.c[c]) <= 1e-5f * want.c[c]))
+                fail_msg("direction %d channel %d: sum map %g, lights apart %g", n, c, (double)got.c[c], (double)want.c[c]);
+    }
+    cst_scene_destroy(s);
+    for (int i = 0; i < 3; i++) cst_scene_destroy(one[i]);
+
     expect_error(WORLD("LightSource \"infinite\" \"rgb L\" [1 1 1] \"string filename\" \"sky.exr\"\n" TRI),
                  CST_ERR_INVALID_ARG, "\"string filename\"", 0, "both \"L\" and \"filename\"");
     expect_error(WORLD("LightSource \"infinite\" \"string filename\" \"sky.exr\"\n" TRI),
@@ -309,6 +383,59 @@ static void test_infinite_lights(void **state)
 
 /* ------------------------------------------------------------------ delta lights */
 
+/* The intensity NEE sees from a scene's only light, a delta light at p, in world
+ * direction w (away from the light). */
+static Color intensity_toward(const Scene *s, Vec3 p, Vec3 w)
+{
+    EmitterGeometry g = scene_emitter_geometry(s);
+    LightLi ls;
+    if (!light_sample_li(&s->emitter_sampler, &g, v3_madd(p, w, 2.0f), 0.5f, v2(0.5f, 0.5f), &ls)) return color_s(0.0f);
+    return color_scale(ls.li, 4.0f); /* I / dist^2 at dist 2 */
+}
+
+/* LightSource "goniometric" (pbrt-v4): I x scale times the image's per-pixel mean of R, G,
+ * B at the light-space direction, light space = the CTM's with y and z swapped. The sides
+ * image (R = x > 0, G = y > 0, B = z > 0 in light space) gives 0, 1/3, 2/3 or 1 by octant;
+ * "power" makes 4 pi I mean(image) the flux. */
+static void test_goniometric_light(void **state)
+{
+    (void)state;
+    write_sides_image(CST_BINARY_DIR "/pbrt_gonio.pfm", 64, 64);
+    Warnings w = {0};
+    Scene *s = load_file_scene(WORLD("AttributeBegin\nTranslate 1 2 3\nLightSource \"goniometric\" "
+                                     "\"string filename\" \"pbrt_gonio.pfm\" \"rgb I\" [3 3 3]\nAttributeEnd\n" TRI), &w);
+    assert_int_equal(s->num_delta_lights, 1);
+    assert_int_equal(s->delta_lights[0].type, DELTA_GONIO);
+    assert_int_equal(w.n, 0);
+    const Vec3 p = v3(1, 2, 3);
+    assert_vec(s->delta_lights[0].p, 1, 2, 3, 0);
+    /* world (x, y, z) is light (x, z, y) */
+    const float want[4] = {3.0f * 2.0f / 3.0f, 3.0f * 2.0f / 3.0f, 0.0f, 3.0f};
+    const Vec3 dirs[4] = {v3_normalize(v3(0.6f, 0.6f, -0.53f)), v3_normalize(v3(-0.6f, 0.6f, 0.53f)),
+                          v3_normalize(v3(-0.6f, -0.6f, -0.53f)), v3_normalize(v3(0.6f, 0.6f, 0.53f))};
+    for (int i = 0; i < 4; i++) {
+        Color I = intensity_toward(s, p, dirs[i]);
+        if (!(fabsf(I.c[1] - want[i]) <= 1e-4f)) fail_msg("direction %d: intensity %g, expected %g", i, (double)I.c[1], (double)want[i]);
+    }
+    cst_scene_destroy(s);
+    /* power 100 W: the sides image's mean is 1/2, so I = 100 / (4 pi 0.5) */
+    s = load_file_scene(WORLD("LightSource \"goniometric\" \"string filename\" \"pbrt_gonio.pfm\" "
+                              "\"float power\" 100\n" TRI), &w);
+    double mean = (double)s->delta_lights[0].gonio.mean;
+    assert_true(fabs(mean - 0.5) < 0.02);
+    double expect = 100.0 / (4.0 * 3.14159265358979323846 * mean);
+    assert_true(fabs((double)s->delta_lights[0].intensity.c[0] / expect - 1.0) < 1e-5);
+    cst_scene_destroy(s);
+    write_sides_image(CST_BINARY_DIR "/pbrt_gonio_ll.pfm", 32, 16);
+    s = NULL;
+    CstError err;
+    CstLoadOptions opt = {collect, &w, 0};
+    const char *bad = WORLD("LightSource \"goniometric\" \"string filename\" \"pbrt_gonio_ll.pfm\"\n" TRI);
+    assert_int_equal(cst_scene_load_pbrt_string(bad, strlen(bad), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err),
+                     CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "expected a square"));
+}
+
 /* point, spot and distant lights as delta lights, placed by the CTM, with pbrt's power and
  * illuminance normalisation. */
 static void test_delta_lights(void **state)
@@ -320,10 +447,10 @@ static void test_delta_lights(void **state)
         "\"point3 from\" [0 0 1]\nAttributeEnd\n"
         "LightSource \"point\" \"float power\" 100\n"
         "LightSource \"spot\" \"point3 from\" [0 5 0] \"point3 to\" [0 0 0] \"float coneangle\" 20 "
-        "\"float conedelta\" 10 \"float power\" 50\n"
+        "\"float conedeltaangle\" 10 \"float power\" 50\n"
         "AttributeBegin\nRotate 90 0 0 1\nLightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [1 0 0] "
         "\"blackbody L\" 5500 \"float illuminance\" 3\nAttributeEnd\n"
-        "LightSource \"goniometric\"\n" TRI), &w);
+        "LightSource \"projection\"\n" TRI), &w);
     assert_int_equal(s->num_delta_lights, 4);
     const DeltaLight *l = s->delta_lights;
     assert_int_equal(l[0].type, DELTA_POINT);
@@ -344,7 +471,7 @@ static void test_delta_lights(void **state)
     assert_int_equal(l[3].type, DELTA_DIRECTIONAL);
     assert_vec(l[3].dir, 0, 1, 0, 1e-6f); /* (1, 0, 0) turned 90 degrees about z */
     assert_true(fabsf(color_luminance(l[3].intensity) - 3.0f) < 0.01f);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "LightSource \"goniometric\" is not supported") >= 0);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "LightSource \"projection\" is not supported") >= 0);
     cst_scene_destroy(s);
     expect_error(WORLD("LightSource \"spot\" \"float coneangle\" 120\n" TRI), CST_ERR_INVALID_ARG,
                  "LightSource", 0, "coneangle 120");
@@ -657,6 +784,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_lights),
+        cmocka_unit_test(test_area_power_per_shape),
+        cmocka_unit_test(test_goniometric_light),
         cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_equal_area_map),
         cmocka_unit_test(test_infinite_lights),

@@ -110,6 +110,77 @@ static double env_illuminance(const float *px, int w, int h)
     return sum;
 }
 
+/* Pixel of a w x h map in caustic's equirectangular layout at (u, v) in [0,1)^2. */
+static const float *env_at(const float *rgb, int w, int h, double u, double v)
+{
+    int x = (int)(u * w), y = (int)(v * h);
+    x = x < 0 ? 0 : x >= w ? w - 1 : x;
+    y = y < 0 ? 0 : y >= h ? h - 1 : y;
+    return &rgb[3 * ((size_t)y * (size_t)w + (size_t)x)];
+}
+
+/* Makes the scene's environment the sum of the infinite lights so far plus this one:
+ * pbrt-v4 adds the radiance of every infinite light; caustic has one environment map,
+ * which then holds their sum. img (owned; NULL for a constant light c) is in caustic's
+ * equirectangular layout, times k. The first light is set as it comes (exactly as
+ * before); a later one is added pixel by pixel, constants to every pixel, two images on
+ * the grid of the larger (nearest lookup of each at the pixel centre, which is exact for
+ * equal sizes). NEE then samples the sum's luminance rather than each light by its own
+ * distribution: the same radiance, different noise. */
+static CstStatus env_accumulate(Loader *ld, float *img, int w, int h, const float k[3], const float c[3], Loc loc,
+                                const char *d)
+{
+    CstStatus st;
+    if (!ld->env_set) {
+        ld->env_rgb = img;
+        ld->env_w = w;
+        ld->env_h = h;
+        for (int i = 0; i < 3; i++) {
+            ld->env_k[i] = k[i];
+            ld->env_const[i] = img ? 0.0f : c[i];
+        }
+        st = img ? cst_scene_set_environment_pixels(ld->scene, img, w, h, 0, 0, k, NULL, ld->err)
+                 : cst_scene_set_environment_constant(ld->scene, c, ld->err);
+        if (!st) ld->env_set = 1;
+        return st;
+    }
+    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: another infinite light; caustic adds it to the "
+                 "environment (one map, the sum of the lights, as pbrt-v4 renders them)", d);
+    for (int i = 0; i < 3; i++) ld->env_const[i] += img ? 0.0f : c[i];
+    if (!img && !ld->env_rgb) return cst_scene_set_environment_constant(ld->scene, ld->env_const, ld->err);
+    const bool on_old = ld->env_rgb && (!img || ld->env_w * (long long)ld->env_h > w * (long long)h);
+    int ow = on_old ? ld->env_w : w, oh = on_old ? ld->env_h : h;
+    float *sum = malloc(3u * (size_t)ow * (size_t)oh * sizeof *sum);
+    if (!sum) {
+        free(img);
+        return pbrt_oom(ld);
+    }
+    for (int y = 0; y < oh; y++)
+        for (int x = 0; x < ow; x++) {
+            double u = (x + 0.5) / ow, v = (y + 0.5) / oh;
+            float *o = &sum[3 * ((size_t)y * (size_t)ow + (size_t)x)];
+            for (int i = 0; i < 3; i++) o[i] = ld->env_const[i];
+            if (ld->env_rgb) {
+                const float *p = env_at(ld->env_rgb, ld->env_w, ld->env_h, u, v);
+                for (int i = 0; i < 3; i++) o[i] += p[i] * ld->env_k[i];
+            }
+            if (img) {
+                const float *p = env_at(img, w, h, u, v);
+                for (int i = 0; i < 3; i++) o[i] += p[i] * k[i];
+            }
+        }
+    free(img);
+    free(ld->env_rgb);
+    ld->env_rgb = sum;
+    ld->env_w = ow;
+    ld->env_h = oh;
+    for (int i = 0; i < 3; i++) {
+        ld->env_k[i] = 1.0f;
+        ld->env_const[i] = 0.0f;
+    }
+    return cst_scene_set_environment_pixels(ld->scene, sum, ow, oh, 0, 0, ld->env_k, NULL, ld->err);
+}
+
 /* LightSource "infinite": the scene's environment (lights/envmap.h). A constant one is
  * L x scale, with pbrt-v4's "illuminance" E making it L x scale x E / pi (the illuminance of a
  * uniform unit sky on an upward patch is pi). An image is resampled once, at load, into
@@ -121,12 +192,6 @@ static double env_illuminance(const float *px, int w, int h)
 static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
 {
     char nm[72];
-    if (ld->env_set) {
-        pbrt_params_mark_all_used(ps);
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: caustic has one environment and an infinite "
-                     "light was given before; skipped", d);
-        return CST_OK;
-    }
     Color c = color_s(1.0f);
     float scale = 1.0f, illum = 0.0f;
     int has_l = 0;
@@ -154,9 +219,9 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         Color L = color_scale(c, (float)k);
         if (!color_is_finite(L))
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the radiance is not finite", d);
-        float lf[3];
+        float lf[3], one[3] = {1.0f, 1.0f, 1.0f};
         pbrt_color_floats(L, lf);
-        st = cst_scene_set_environment_constant(ld->scene, lf, ld->err);
+        st = env_accumulate(ld, NULL, 0, 0, one, lf, loc, d);
     } else {
         if (!ld->gs.ctm.inv_ok)
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; "
@@ -209,13 +274,82 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         if (!isfinite(k))
             k = 0.0;
         /* Already in world space: no world_from_map. The builder copies the pixels. */
-        float kf[3] = {(float)k, (float)k, (float)k};
-        st = cst_scene_set_environment_pixels(ld->scene, out, ow, oh, 0, 0, kf, NULL, ld->err);
-        free(out);
+        float kf[3] = {(float)k, (float)k, (float)k}, zero[3] = {0.0f, 0.0f, 0.0f};
+        st = env_accumulate(ld, out, ow, oh, kf, zero, loc, d); /* takes out */
     }
     if (st) return pbrt_fail_wrap(ld, st, loc, d);
-    ld->env_set = 1;
     return CST_OK;
+}
+
+/* LightSource "goniometric" (pbrt-v4 GoniometricLight::Create): a point at the CTM's origin
+ * whose intensity I x scale is multiplied per direction by a square image in the equal-area
+ * layout, each pixel the mean of its R, G, B; light space is the CTM's with y and z
+ * swapped (pbrt-v4's swapYZ), so the image's +z (its centre) is the CTM's +y. "power" > 0
+ * scales to that flux: 4 pi I mean(image). */
+static CstStatus gonio_light(Loader *ld, Params *ps, Loc loc, const char *d)
+{
+    char nm[72];
+    Color c = color_s(1.0f);
+    float scale = 1.0f, power = 0.0f;
+    const char *file = NULL;
+    Loc fl = loc;
+    TRY(pbrt_get_spectrum(ld, ps, d, "I", SPEC_ILLUMINANT, 0, &c, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &power, NULL));
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    if (!ld->gs.ctm.inv_ok)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; expected an "
+                            "invertible transform", d);
+    float *px = NULL;
+    int w = 1, h = 1;
+    if (!file || !file[0]) {
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: no \"filename\"; the light is isotropic", d);
+        if (!(px = malloc(3 * sizeof *px))) return pbrt_oom(ld);
+        px[0] = px[1] = px[2] = 1.0f;
+    } else {
+        TRY(pbrt_check_file_access(ld, fl, d));
+        char *path = pbrt_resolve_path(ld, file);
+        if (!path) return pbrt_oom(ld);
+        CstStatus st = image_read_radiance(path, &px, &w, &h, ld->err); /* NaN, Inf, < 0: errors */
+        free(path);
+        if (st) return pbrt_fail_wrap(ld, st, fl, d);
+        if (w != h) {
+            free(px);
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: \"%s\" is %d x %d; expected a square "
+                                "(equal-area) image, as pbrt-v4", d, pbrt_clip(file, nm), w, h);
+        }
+    }
+    size_t count = (size_t)w * (size_t)h;
+    double sum = 0.0;
+    for (size_t i = 0; i < count; i++) { /* in place: pixel i's mean over its channels */
+        px[i] = (px[3 * i] + px[3 * i + 1] + px[3 * i + 2]) / 3.0f;
+        sum += (double)px[i];
+    }
+    double k = (double)scale;
+    if (power > 0.0f && sum > 0.0) k *= (double)power / (4.0 * PBRT_PI * sum / (double)count);
+    Color intensity = color_scale(c, (float)k);
+    if (!color_is_finite(intensity) || !(k >= 0.0)) {
+        free(px);
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative or "
+                            "not finite", d, (double)scale);
+    }
+    CstLightDesc l;
+    memset(&l, 0, sizeof l);
+    l.type = CST_LIGHT_GONIOMETRIC;
+    Vec3 p = transform_point(&ld->gs.ctm.m, v3s(0.0f));
+    pbrt_vec3_floats(p, l.position);
+    pbrt_color_floats(intensity, l.intensity);
+    l.image = px;
+    l.image_size = w;
+    /* light from world: swapYZ x (the CTM's inverse), linear part */
+    static const int row[3] = {0, 2, 1};
+    for (int r = 0; r < 3; r++)
+        for (int col = 0; col < 3; col++) l.light_from_world[3 * r + col] = ld->gs.ctm.inv.m[row[r]][col];
+    CstStatus st = pbrt_coords_ok(p) ? cst_scene_add_light(ld->scene, &l, ld->err) : CST_ERR_INVALID_ARG;
+    free(px);
+    if (st == CST_ERR_INVALID_ARG && !pbrt_coords_ok(p))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's position is beyond the scene limit", d);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
 }
 
 /* LightSource: point, spot and distant as caustic's delta lights, placed by the CTM, with
@@ -229,10 +363,11 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
     int point = strcmp(type, "point") == 0, spot = strcmp(type, "spot") == 0,
         distant = strcmp(type, "distant") == 0;
     if (strcmp(type, "infinite") == 0) return infinite_light(ld, ps, loc, d);
+    if (strcmp(type, "goniometric") == 0) return gonio_light(ld, ps, loc, d);
     if (!point && !spot && !distant) {
         pbrt_params_mark_all_used(ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported (caustic has area, point, "
-                     "spot, distant and infinite lights); skipped", d);
+                     "spot, goniometric, distant and infinite lights); skipped", d);
         return CST_OK;
     }
     CstLightDesc l;
@@ -258,12 +393,14 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
         if (spot) {
             float cone = 30.0f, delta = 5.0f;
             TRY(pbrt_get_float(ld, ps, d, "coneangle", 30.0f, &cone, NULL));
-            TRY(pbrt_get_float(ld, ps, d, "conedelta", 5.0f, &delta, NULL));
+            /* pbrt-v4's name (SpotLight::Create); the falloff is smoothstep from
+             * cos(coneangle) to cos(coneangle - conedeltaangle). */
+            TRY(pbrt_get_float(ld, ps, d, "conedeltaangle", 5.0f, &delta, NULL));
             /* The builder's range: a cone under 0.001 degrees has cos = 1 in float, no
              * directions at all (pbrt itself takes any coneangle > 0). */
             if (!(cone >= 0.001f && cone <= 90.0f) || !(delta >= 0.0f && delta <= cone))
-                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: coneangle %g, conedelta %g; expected "
-                                    "0.001 <= coneangle <= 90 and 0 <= conedelta <= coneangle", d,
+                return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: coneangle %g, conedeltaangle %g; expected "
+                                    "0.001 <= coneangle <= 90 and 0 <= conedeltaangle <= coneangle", d,
                                     (double)cone, (double)delta);
             l.cone_angle = cone;
             l.cone_delta = delta;

@@ -217,6 +217,7 @@ CstStatus pbrt_check_file_access(Loader *ld, Loc loc, const char *d)
 
 void pbrt_loader_free(Loader *ld)
 {
+    free(ld->env_rgb);
     for (int i = 0; i < ld->num_files; i++) free(ld->files[i]);
     free(ld->files);
     free(ld->stack);

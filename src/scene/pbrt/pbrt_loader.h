@@ -121,6 +121,9 @@ typedef struct ShapeGeom {
     int nv;
     int *idx;
     int nt;
+    int power_group; /* triangles per pbrt shape, for an area light's "power": 2 for a
+                      * bilinear patch, all of them for a tessellated disk or sphere;
+                      * 0 = 1 (each triangle is a shape in pbrt-v4) */
 } ShapeGeom;
 
 typedef struct ObjShape {
@@ -212,6 +215,12 @@ typedef struct Loader {
     int in_world;
     CamRec cam;
     int env_set; /* an infinite light has made the scene's environment */
+    /* The sum of the infinite lights so far (pbrt-v4 sums them; caustic has one
+     * environment): env_const plus, when env_rgb is not NULL, env_w x env_h pixels (caustic's
+     * equirectangular layout) times env_k. Owned; freed by pbrt_loader_free. */
+    float *env_rgb;
+    int env_w, env_h;
+    float env_k[3], env_const[3];
     int num_instances_expanded; /* instances whose spheres were copied */
     int num_triangles, num_spheres; /* added to the scene so far (for its limits) */
     Loc end; /* end of the main file, for errors about the whole scene */

@@ -152,6 +152,16 @@ static int is_similarity(const Transform *m, float *scale)
     return 1;
 }
 
+/* The area of triangles [t, t + n) of a mesh: one pbrt shape's, for its power (a single
+ * triangle's exactly as triangle_area gives it). */
+static float group_area(const Vec3 *p, const int *idx, int t, int n)
+{
+    if (n == 1) return triangle_area(p[idx[3 * t]], p[idx[3 * t + 1]], p[idx[3 * t + 2]]);
+    double sum = 0.0;
+    for (int k = t; k < t + n; k++) sum += (double)triangle_area(p[idx[3 * k]], p[idx[3 * k + 1]], p[idx[3 * k + 2]]);
+    return (float)sum;
+}
+
 int pbrt_coords_ok(Vec3 p) { return v3_is_finite(p) && (double)v3_max_abs(p) <= PBRT_MAX_LENGTH; }
 
 /* Places an object-space shape with xf into the scene with the given material and area
@@ -195,6 +205,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     ShapeGeom tess = {0};
     if (g->is_sphere) {
         TRY(sphere_mesh(ld, g->radius, &tess));
+        tess.power_group = tess.nt; /* one sphere: its power over all its triangles */
         g = &tess;
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: sphere under a non-uniform transform "
                      "tessellated into %d triangles", d, tess.nt);
@@ -270,10 +281,15 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     int dropped = 0;
     if (g->nt == 0) goto done; /* "indices" []: nothing to add (the builder wants a triangle) */
     if (al && al->active && al->power > 0.0f) {
-        /* pbrt-v4 makes one light per triangle and normalises each to `power` by its own
-         * area: L = power / (pi A sides) times the spectrum. */
+        /* pbrt-v4 makes one light per shape and normalises each to `power` by its own
+         * area: L = power / (pi A sides) times the spectrum (DiffuseAreaLight::Create). A
+         * triangle mesh's shapes are its triangles; a bilinear patch is two triangles
+         * here and a disk or a tessellated sphere all of theirs (power_group), which
+         * share the area of their group. */
+        const int grp = g->power_group > 1 ? g->power_group : 1;
+        float area = 0.0f;
         for (int t = 0; t < g->nt && !st; t++) {
-            float area = triangle_area(p[idx[3 * t]], p[idx[3 * t + 1]], p[idx[3 * t + 2]]);
+            if (t % grp == 0) area = group_area(p, idx, t, grp < g->nt - t ? grp : g->nt - t);
             ShapeEmission et = em;
             if (area > 0.0f)
                 et.radiance = color_scale(em.radiance, (float)((double)al->power /
@@ -423,6 +439,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         st = read_mesh_params(ld, &ps, d, loc, 3, &g);
     } else if (strcmp(type, "bilinearmesh") == 0) {
         st = read_mesh_params(ld, &ps, d, loc, 4, &g);
+        g.power_group = 2;
         if (!st)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two "
                          "triangles (exact for planar patches)", d);
@@ -466,6 +483,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
             goto done;
         }
         st = disk_mesh(ld, h, r, ri, phimax, &g);
+        g.power_group = g.nt; /* one disk: its power over all its triangles */
         if (!st)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s tessellated into %d triangles of the same "
                          "total area", d, g.nt);
