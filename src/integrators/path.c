@@ -11,7 +11,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
     Color L = color_s(0.0f), beta = color_s(1.0f);
     bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
     float prev_pdf = 0.0f;
-    Vec3 prev_p = ray.o, prev_ns = v3s(0.0f); /* the previous vertex: NEE's reference point there */
+    Vec3 prev_p = ray.o; /* the previous vertex: NEE's reference point there */
     bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
     for (int depth = 0;; depth++) {
         SurfaceHit sh;
@@ -37,7 +37,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
                 } else if (pp->mode == PATH_MIS) {
                     float cos_l = fabsf(v3_dot(sh.ng, wo));
                     EmitterGeometry g = scene_emitter_geometry(s);
-                    float pdf_light = light_area_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, prev_ns, ray.d, sh.t, cos_l);
+                    float pdf_light = light_area_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, sh.t, cos_l);
                     L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, pdf_light)));
                 }
                 /* PATH_NEE: this emitter was already counted by the previous vertex's NEE. */
@@ -63,7 +63,6 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
         specular = bs.delta;
         prev_pdf = bs.delta ? bs.pmf : bs.pdf_w;
         prev_p = sh.p;
-        prev_ns = sh.ns;
 
         /* Russian roulette (roulette.h): beta is the path's scatter. */
         float rr = roulette(smp, depth + 1, pp->rr_depth, beta);

@@ -8,7 +8,6 @@
 #include "core/error.h"
 #include "geometry/triangle.h"
 #include "math/frame.h"
-#include "sampling/spherical_triangle.h"
 #include "sampling/warp.h"
 
 /* pbrt-v4's spotlight falloff (SpotLight::I): smoothstep between the cone's cosines. */
@@ -229,89 +228,13 @@ static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, 
     *n = frame_to_world(&f, v3(-sin_a * cosf(phi), -sin_a * sinf(phi), -cos_a));
 }
 
-/* pbrt-v4's bounds for sampling a triangle by solid angle (Triangle::MinSphericalSampleArea
- * and MaxSphericalSampleArea, sr): below 3e-4 sr area sampling is nearly as good and the
- * spherical formulas start to lose precision; above 6.22 sr (close to the 2 pi of a
- * triangle seen from its own plane) they are unstable. Outside the range: area sampling. */
-static const float TRI_MIN_SOLID_ANGLE = 3e-4f, TRI_MAX_SOLID_ANGLE = 6.22f;
-
-/* A triangle emitter as seen from x: unit directions to its vertices, the solid angle
- * and, with a shading normal ns at x (nonzero), pbrt-v4's bilinear warp weights: |cos|
- * between ns and the directions to vertices 1, 1, 0, 2 at the corners (0,0), (1,0), (0,1),
- * (1,1) of the square spherical_triangle_sample maps to vertices 1, 1, 0, 2, floored at
- * 0.01 so no part of the triangle gets density 0. False: sample by area instead. */
-typedef struct TriangleView {
-    Vec3 w[3];
-    float omega;
-    float corner[4];
-    bool warp;
-} TriangleView;
-
-static bool triangle_view(const EmitterGeometry *g, uint32_t prim, Vec3 x, Vec3 ns, TriangleView *tv)
-{
-    const int32_t *t = &g->tri_indices[3 * prim];
-    for (int k = 0; k < 3; k++) {
-        Vec3 d = v3_sub(g->positions[t[k]], x);
-        float l = v3_length(d);
-        if (!(l > 0.0f)) return false;
-        tv->w[k] = v3_scale(d, 1.0f / l);
-    }
-    tv->omega = spherical_triangle_area(tv->w[0], tv->w[1], tv->w[2]);
-    if (!(tv->omega >= TRI_MIN_SOLID_ANGLE && tv->omega <= TRI_MAX_SOLID_ANGLE)) return false;
-    tv->warp = v3_length2(ns) > 0.0f;
-    if (tv->warp) {
-        tv->corner[0] = tv->corner[1] = fmaxf(0.01f, fabsf(v3_dot(ns, tv->w[1])));
-        tv->corner[2] = fmaxf(0.01f, fabsf(v3_dot(ns, tv->w[0])));
-        tv->corner[3] = fmaxf(0.01f, fabsf(v3_dot(ns, tv->w[2])));
-    }
-    return true;
-}
-
-/* The density per unit solid angle of direction wi within the triangle's view, selection
- * excluded: 1 / Omega times the bilinear warp's density at the square's point for wi. */
-static float triangle_view_pdf(const TriangleView *tv, Vec3 wi)
-{
-    float pdf = 1.0f / tv->omega;
-    if (tv->warp) pdf *= warp_bilinear_pdf(spherical_triangle_invert(tv->w[0], tv->w[1], tv->w[2], wi), tv->corner);
-    return pdf;
-}
-
-/* Where the ray x + t d meets the triangle's plane, as barycentrics (b1, b2) of vertices
- * 1 and 2 (Moller-Trumbore), pulled back onto the triangle: d comes from inside the
- * spherical triangle, so only rounding takes it outside. False when d runs along the plane. */
-static bool triangle_barycentrics(const EmitterGeometry *g, uint32_t prim, Vec3 x, Vec3 d, Vec2 *bc)
-{
-    const int32_t *t = &g->tri_indices[3 * prim];
-    Vec3 a = g->positions[t[0]];
-    Vec3 e1 = v3_sub(g->positions[t[1]], a), e2 = v3_sub(g->positions[t[2]], a);
-    Vec3 pv = v3_cross(d, e2);
-    float det = v3_dot(e1, pv);
-    if (!(fabsf(det) > 0.0f)) return false;
-    float inv = 1.0f / det;
-    Vec3 tv = v3_sub(x, a);
-    float b1 = v3_dot(tv, pv) * inv;
-    float b2 = v3_dot(d, v3_cross(tv, e1)) * inv;
-    b1 = fmaxf(b1, 0.0f);
-    b2 = fmaxf(b2, 0.0f);
-    float sum = b1 + b2;
-    if (sum > 1.0f) { b1 /= sum; b2 /= sum; }
-    if (!isfinite(b1) || !isfinite(b2)) return false;
-    *bc = v2(b1, b2);
-    return true;
-}
-
-float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 ns, Vec3 wi,
-                       float dist, float cos_l)
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l)
 {
     const Emitter *em = &s->light[e].u.area;
     float omc, sin2;
-    if ((int)em->prim >= g->num_triangles) {
-        if (sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
-            return s->by_power.pmf[e] / (2.0f * CST_PI * omc);
-    } else {
-        TriangleView tv;
-        if (triangle_view(g, em->prim, x, ns, &tv)) return s->by_power.pmf[e] * triangle_view_pdf(&tv, wi);
-    }
+    if ((int)em->prim >= g->num_triangles &&
+        sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
+        return s->by_power.pmf[e] / (2.0f * CST_PI * omc);
     return cos_l > 0.0f ? s->pdf_a[e] * dist * dist / cos_l : 0.0f;
 }
 
@@ -327,37 +250,18 @@ static float delta_emit_pdf_w(const Light *l)
     }
 }
 
-static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec3 x, Vec3 ns, Vec2 u,
+static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec3 x, Vec2 u,
                            LightLi *out)
 {
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
-    float omc = 0.0f, sin2 = 0.0f, solid_pdf = 0.0f;
+    float omc = 0.0f, sin2 = 0.0f;
     const Sphere *sp = (int)e->prim >= g->num_triangles ? &g->spheres[(int)e->prim - g->num_triangles] : NULL;
     const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
-    TriangleView tv;
-    const bool spherical = !sp && triangle_view(g, e->prim, x, ns, &tv);
     if (cone) {
         sphere_sample_cone(sp, x, u, omc, sin2, &out->n);
         out->p = v3_madd(sp->center, out->n, sp->radius);
         uv = e->texture ? sphere_uv(out->n) : v2(0.0f, 0.0f);
-    } else if (spherical) {
-        /* pbrt-v4 Triangle::Sample(ctx, u): the bilinear warp (cosine at x), then a
-         * direction uniform in the spherical triangle, then the point it sees. */
-        Vec2 uw = tv.warp ? warp_bilinear(u, tv.corner) : u;
-        float omega;
-        Vec3 d;
-        Vec2 bc;
-        if (!spherical_triangle_sample(tv.w[0], tv.w[1], tv.w[2], uw, &d, &omega) ||
-            !triangle_barycentrics(g, e->prim, x, d, &bc))
-            return false;
-        solid_pdf = (tv.warp ? warp_bilinear_pdf(uw, tv.corner) : 1.0f) / tv.omega;
-        const int32_t *t = &g->tri_indices[3 * e->prim];
-        Vec3 a = g->positions[t[0]];
-        out->p = v3_add(a, v3_add(v3_scale(v3_sub(g->positions[t[1]], a), bc.x),
-                                  v3_scale(v3_sub(g->positions[t[2]], a), bc.y)));
-        out->n = e->n;
-        uv = e->texture ? triangle_uv(g->uvs, g->tri_has_uv, g->tri_indices, e->prim, bc.x, bc.y) : v2(0.0f, 0.0f);
     } else {
         emitter_sample_point(e, g, u, &out->p, &out->n, &uv);
     }
@@ -374,8 +278,7 @@ static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry
      * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
      * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
     const float area_pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
-    out->pdf_w = cone ? s->by_power.pmf[i] / (2.0f * CST_PI * omc)
-                 : spherical ? s->by_power.pmf[i] * solid_pdf : area_pdf_w;
+    out->pdf_w = cone ? s->by_power.pmf[i] / (2.0f * CST_PI * omc) : area_pdf_w;
     out->finite = true;
     out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
     out->direct_pdf = area_pdf_w;
@@ -444,12 +347,6 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
 bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
                      LightLi *out)
 {
-    return light_sample_li_at(s, g, x, v3s(0.0f), u_sel, u, out);
-}
-
-bool light_sample_li_at(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 ns, float u_sel, Vec2 u,
-                        LightLi *out)
-{
     memset(out, 0, sizeof *out);
     if (s->lights == 0) return false;
     int i = distrib1d_sample(&s->by_power, u_sel);
@@ -457,7 +354,7 @@ bool light_sample_li_at(const EmitterSampler *s, const EmitterGeometry *g, Vec3 
     out->light = i;
     const Light *l = &s->light[i];
     switch (l->type) {
-    case LIGHT_AREA: return area_sample_li(s, i, g, x, ns, u, out);
+    case LIGHT_AREA: return area_sample_li(s, i, g, x, u, out);
     case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
     case LIGHT_POINT:
     case LIGHT_SPOT:

@@ -1,8 +1,7 @@
 /* Lights: area emitters (any primitive with emission) and delta lights (point, spot,
  * directional). NEE picks a light with probability proportional to its power and, on an
- * area emitter, a point: by the subtended cone on spheres, by solid angle on triangles
- * (uniform by area where that is as good); light paths start from a uniform point and
- * add a direction. */
+ * area emitter, a point: uniform by area on triangles, by the subtended cone on spheres;
+ * light paths start from a uniform point and add a direction. */
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
@@ -157,19 +156,15 @@ static inline float light_env_pdf(const EmitterSampler *s, Vec3 w)
 static inline int light_env_index(const EmitterSampler *s) { return s->count + s->num_delta; }
 
 /* NEE's density (per unit solid angle at x, selection included) of sampling the point at
- * distance dist in unit direction wi on area emitter e, |cos| cos_l there, from x with
- * shading normal ns (zero: none): what light_sample_li_at reports as pdf_w for it, for the
- * MIS weight of a BSDF-sampled ray that hits e. Spheres seen from outside: pmf / (2 pi (1 -
- * cos theta_max)); triangles of 3e-4 to 6.22 sr: pmf / Omega times the bilinear warp's
- * density; otherwise pdf_a dist^2 / cos_l. */
-float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 ns, Vec3 wi,
-                       float dist, float cos_l);
+ * distance dist on area emitter e, |cos| cos_l there, from x: what light_sample_li reports
+ * as pdf_w for it, for the MIS weight of a BSDF-sampled ray that hits e. Spheres seen from
+ * outside: pmf / (2 pi (1 - cos theta_max)); otherwise pdf_a dist^2 / cos_l. */
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l);
 
 /* Next-event estimation at x: a light picked by power (u_sel) and, for an area emitter, a
- * point on it (u). A sphere seen from outside by a direction uniform in the cone it
- * subtends (pbrt-v4 Sphere::Sample(ctx, u)); a triangle that subtends 3e-4 to 6.22 sr by a
- * direction in its spherical triangle (Arvo 1995), warped toward the cosine at x when x
- * has a shading normal (pbrt-v4 Triangle::Sample(ctx, u)); otherwise uniform by area. The estimate of direct light is f(wo, wi) li / pdf with the
+ * point on it (u): uniform by area on triangles and, from inside, on spheres; a sphere
+ * seen from outside by a direction uniform in the cone it subtends (pbrt-v4
+ * Sphere::Sample(ctx, u)). The estimate of direct light is f(wo, wi) li / pdf with the
  * shadow ray from x toward p (an area point or a delta light's position; for a
  * directional light a point beyond the scene). */
 typedef struct LightLi {
@@ -202,10 +197,6 @@ typedef struct LightLi {
  * cone); li is then black. */
 bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
                      LightLi *out);
-/* The same at a surface point with unit shading normal ns, which steers the triangles'
- * bilinear warp (light_sample_li: none, ns = 0). */
-bool light_sample_li_at(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 ns, float u_sel, Vec2 u,
-                        LightLi *out);
 
 typedef struct EmitterSample {
     Vec3 p, n; /* point and unit geometric normal */
