@@ -239,7 +239,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
                          uint64_t *rays)
 {
     /* Powers unscaled: the estimate divides by the photons of all iterations. */
-    const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth};
+    const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth, NULL};
     photon_walk(s, &pw, index, store_hit, out, rays);
 }
 
@@ -261,9 +261,9 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
         Color L = color_s(0.0f), beta = color_s(fw);
         SurfaceHit sh;
-        v->valid = photon_trace_to_diffuse(s, ray, &rng, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
+        v->valid = photon_trace_to_diffuse(s, ray, &rng, NULL, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
         if (v->valid) {
-            L = color_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, rays));
+            L = color_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, NULL, rays));
             v->p = sh.p;
             v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
             v->beta = beta;

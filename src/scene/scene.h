@@ -16,8 +16,10 @@
 #include "geometry/triangle.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
+#include "materials/bsdf_spectral.h"
 #include "materials/material.h"
 #include "math/color.h"
+#include "math/spectrum.h"
 #include "math/vec3.h"
 #include "scene/scene_build.h"
 #include "textures/texture.h"
@@ -253,19 +255,37 @@ static inline void scene_bsdf_textures(const Scene *s, const Material *m, Vec2 u
 }
 
 /* The BSDF at a hit: the one place where a hit's material, normals and texture
- * coordinates become a Bsdf, so every integrator sees the same surface. */
-static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
+ * coordinates become a Bsdf, so every integrator sees the same surface. Spectral mode
+ * (wl: the path's wavelengths; NULL in RGB mode): built in RGB, then its colours taken
+ * at wl (bsdf_at_wavelengths). */
+static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavelengths *wl, Bsdf *b)
 {
     const Material *m = &s->materials[sh->material];
     bsdf_init_shading(b, m, sh->ns, sh->ng);
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh->uv, b);
+    if (wl) bsdf_at_wavelengths(b, wl);
+}
+
+/* Every emitted quantity (radiance, intensity, irradiance, a light path's flux) is an RGB
+ * value times a scalar in the lights' module; in spectral mode this turns it into its
+ * values at wl as an illuminant spectrum (math/spectrum.h), which commutes with the
+ * scalar. The identity in RGB mode (wl NULL). */
+static inline Color scene_light_color(Color rgb, const Wavelengths *wl)
+{
+    return wl ? spectrum_illuminant(rgb, wl) : rgb;
 }
 
 /* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be
  * on an emitter (sh->emitter >= 0). */
-static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w)
+static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w, const Wavelengths *wl)
 {
-    return emitter_radiance(&s->emitter_sampler.light[sh->emitter].u.area, s->textures, sh->ng, sh->uv, w);
+    return scene_light_color(emitter_radiance(&s->emitter_sampler.light[sh->emitter].u.area, s->textures, sh->ng, sh->uv, w), wl);
+}
+
+/* The environment's radiance arriving from direction w (black without one). */
+static inline Color scene_env_radiance(const Scene *s, Vec3 w, const Wavelengths *wl)
+{
+    return s->emitter_sampler.env ? scene_light_color(light_env_radiance(&s->emitter_sampler, w), wl) : color_s(0.0f);
 }
 
 /* What NEE and light-path starts need of the scene's geometry and textures. */

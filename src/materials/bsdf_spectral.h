@@ -1,0 +1,16 @@
+/* The spectral mode's conversion of a BSDF: its RGB parameters at a path's four
+ * wavelengths (math/spectrum.h). */
+#ifndef CST_MATERIALS_BSDF_SPECTRAL_H
+#define CST_MATERIALS_BSDF_SPECTRAL_H
+
+#include "materials/bsdf.h"
+#include "math/spectrum.h"
+
+/* Replaces every Color field of b's lobe, built in RGB by bsdf_init_shading (and the
+ * texture overrides), by its values at wl: reflectances and tints as bounded reflectance
+ * spectra (pbrt-v4 RGBAlbedoSpectrum), a conductor's eta and k as unbounded spectra
+ * (RGBUnboundedSpectrum). Scalars (roughness, a dielectric's eta) are unchanged.
+ * New lobes' Color fields must be added here. */
+void bsdf_at_wavelengths(Bsdf *b, const Wavelengths *wl);
+
+#endif
