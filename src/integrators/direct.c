@@ -13,7 +13,7 @@ static Color sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3
     ++*rays;
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
     float w = mis && !ls.delta ? power_heuristic(ls.pdf_w, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
-    return color_scale(color_mul(f, scene_light_color(ls.li, wl)), w / (ls.delta ? ls.pmf : ls.pdf_w));
+    return color_scale(color_mul(f, scene_light_li(s, &ls, wl)), w / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
 Color direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,

@@ -147,7 +147,7 @@ static Color connect_to_light(const Scene *s, const SubpathIteration *it, const 
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
-    return color_scale(color_mul(f, scene_light_color(ls.li, wl)), weight / (ls.delta ? ls.pmf : ls.pdf_w));
+    return color_scale(color_mul(f, scene_light_li(s, &ls, wl)), weight / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
 /* The BSDFs of one light path's first vertices, built when a connection first needs

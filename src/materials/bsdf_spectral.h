@@ -13,4 +13,14 @@
  * New lobes' Color fields must be added here. */
 void bsdf_at_wavelengths(Bsdf *b, const Wavelengths *wl);
 
+/* A material's colours looked up once (scene_commit): its albedo (reflectance or tint)
+ * and a conductor's eta and k. */
+typedef struct MaterialSpectra {
+    SpectrumRgb albedo, eta, k;
+} MaterialSpectra;
+MaterialSpectra material_spectra(const Material *m);
+/* bsdf_at_wavelengths for a BSDF made from m's constants alone (no texture override),
+ * from ms = material_spectra(m): the same values without the table lookups. */
+void bsdf_at_wavelengths_prepared(Bsdf *b, const MaterialSpectra *ms, const Wavelengths *wl);
+
 #endif

@@ -95,6 +95,20 @@ float spectrum_d65(float lambda)
     return cie_at(cie_d65, i, f) * (1.0f / CIE_D65_Y_INTEGRAL);
 }
 
+SpectrumRgb spectrum_rgb_albedo(Color rgb)
+{
+    SpectrumRgb s = {spectrum_rgb_sigmoid(rgb), 1.0f};
+    return s;
+}
+
+Color spectrum_rgb_eval_illuminant(const SpectrumRgb *s, const Wavelengths *wl)
+{
+    Color o;
+    for (int i = 0; i < COLOR_LANES; i++)
+        o.c[i] = s->scale * sigmoid_poly_eval(s->poly, wl->lambda[i]) * spectrum_d65(wl->lambda[i]);
+    return o;
+}
+
 Color spectrum_albedo(Color rgb, const Wavelengths *wl)
 {
     SigmoidPoly p = spectrum_rgb_sigmoid(rgb);
@@ -115,6 +129,13 @@ static SigmoidPoly unbounded_sigmoid(Color rgb, float *scale)
     }
     *scale = 2.0f * m;
     return spectrum_rgb_sigmoid(color_scale(rgb, 1.0f / *scale));
+}
+
+SpectrumRgb spectrum_rgb_unbounded(Color rgb)
+{
+    SpectrumRgb s;
+    s.poly = unbounded_sigmoid(rgb, &s.scale);
+    return s;
 }
 
 Color spectrum_unbounded(Color rgb, const Wavelengths *wl)

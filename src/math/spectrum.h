@@ -49,15 +49,19 @@ static inline float wavelengths_visible_sample(float u)
     return 538.0f - 138.888889f * atanhf(0.85691062f - 1.82750197f * u);
 }
 /* Four wavelengths from one uniform number: u, u + 1/4, u + 1/2, u + 3/4 (mod 1), each
- * through the visible-range warp. Each lane alone has density wavelengths_visible_pdf. */
+ * through the visible-range warp. Each lane alone has density wavelengths_visible_pdf,
+ * evaluated here without cosh: 0.0072 * 138.888889 = 1, so with x = 0.85691062 -
+ * 1.82750197 u the lane's cosh^2(0.0072 (lambda - 538)) is cosh^2(atanh x) = 1 / (1 - x^2),
+ * and atanh x = log((1 + x) / (1 - x)) / 2: one logf per lane. */
 static inline Wavelengths wavelengths_sample(float u)
 {
     Wavelengths wl;
     for (int i = 0; i < COLOR_LANES; i++) {
         float up = u + (float)i * (1.0f / (float)COLOR_LANES);
         if (up >= 1.0f) up -= 1.0f;
-        wl.lambda[i] = wavelengths_visible_sample(up);
-        wl.pdf[i] = wavelengths_visible_pdf(wl.lambda[i]);
+        float x = 0.85691062f - 1.82750197f * up;
+        wl.lambda[i] = 538.0f - 138.888889f * 0.5f * logf((1.0f + x) / (1.0f - x));
+        wl.pdf[i] = 0.0039398042f * (1.0f - x * x);
     }
     return wl;
 }
@@ -95,6 +99,24 @@ static inline float sigmoid_poly_eval(SigmoidPoly p, float lambda)
 /* The smooth reflectance whose colour under D65 is rgb (linear sRGB, each clamped to
  * [0, 1]): the table's trilinear interpolation; exact constants for greys. */
 SigmoidPoly spectrum_rgb_sigmoid(Color rgb);
+
+/* An RGB value's spectrum looked up once (the table lookup is most of a conversion's
+ * cost): scale times the sigmoid polynomial. Scenes keep one per constant material colour
+ * and emitter (scene.h), so hits and light samples only evaluate it. */
+typedef struct SpectrumRgb {
+    SigmoidPoly poly;
+    float scale;
+} SpectrumRgb;
+SpectrumRgb spectrum_rgb_albedo(Color rgb);    /* as spectrum_albedo */
+SpectrumRgb spectrum_rgb_unbounded(Color rgb); /* as spectrum_unbounded and _illuminant */
+static inline Color spectrum_rgb_eval(const SpectrumRgb *s, const Wavelengths *wl)
+{
+    Color o;
+    for (int i = 0; i < COLOR_LANES; i++) o.c[i] = s->scale * sigmoid_poly_eval(s->poly, wl->lambda[i]);
+    return o;
+}
+/* The same times D65 at luminance 1 (spectrum_illuminant). */
+Color spectrum_rgb_eval_illuminant(const SpectrumRgb *s, const Wavelengths *wl);
 
 /* RGB inputs at the path's wavelengths, the three kinds pbrt-v4 distinguishes:
  * a reflectance in [0, 1] (RGBAlbedoSpectrum); an unbounded non-negative value such as a

@@ -68,6 +68,11 @@ struct CstScene {
      * two-level structure queried after `accel`. Instances do not emit. */
     InstanceSet *instances;
     EmitterSampler emitter_sampler;
+    /* Spectral mode's lookups done once by commit (math/spectrum.h): per material, its
+     * colours; per area emitter, its radiance (NULL before commit or on OOM: converted at
+     * each use instead). */
+    MaterialSpectra *material_spectra;
+    SpectrumRgb *emitter_spectra;
     /* ray_offset_origin's offset near the origin: RAY_OFFSET_NEAR_MIN, or 4e-7 of the
      * scene's largest coordinate if that is more, so that a ray leaving a surface that
      * lies in a coordinate plane (a floor at y = 0) starts outside that surface's own
@@ -263,7 +268,10 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavele
     const Material *m = &s->materials[sh->material];
     bsdf_init_shading(b, m, sh->ns, sh->ng);
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh->uv, b);
-    if (wl) bsdf_at_wavelengths(b, wl);
+    if (wl) {
+        if (!m->albedo_texture && s->material_spectra) bsdf_at_wavelengths_prepared(b, &s->material_spectra[sh->material], wl);
+        else bsdf_at_wavelengths(b, wl);
+    }
 }
 
 /* Every emitted quantity (radiance, intensity, irradiance, a light path's flux) is an RGB
@@ -279,7 +287,23 @@ static inline Color scene_light_color(Color rgb, const Wavelengths *wl)
  * on an emitter (sh->emitter >= 0). */
 static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w, const Wavelengths *wl)
 {
-    return scene_light_color(emitter_radiance(&s->emitter_sampler.light[sh->emitter].u.area, s->textures, sh->ng, sh->uv, w), wl);
+    const Emitter *e = &s->emitter_sampler.light[sh->emitter].u.area;
+    Color le = emitter_radiance(e, s->textures, sh->ng, sh->uv, w);
+    if (!wl) return le;
+    if (!e->texture && s->emitter_spectra && !color_is_black(le))
+        return spectrum_rgb_eval_illuminant(&s->emitter_spectra[sh->emitter], wl);
+    return spectrum_illuminant(le, wl);
+}
+
+/* NEE's light value ls->li at wl (scene_light_color, from the emitter's prepared spectrum
+ * when it is an untextured area light: li is then its radiance). */
+static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wavelengths *wl)
+{
+    if (!wl) return ls->li;
+    if (ls->light < s->emitter_sampler.count && s->emitter_spectra &&
+        !s->emitter_sampler.light[ls->light].u.area.texture && !color_is_black(ls->li))
+        return spectrum_rgb_eval_illuminant(&s->emitter_spectra[ls->light], wl);
+    return spectrum_illuminant(ls->li, wl);
 }
 
 /* The environment's radiance arriving from direction w (black without one). */
