@@ -58,8 +58,11 @@ static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
 static Wavelengths bidir_wavelengths(const Integrator *it, uint64_t path, int iteration)
 {
     Pcg32 r;
-    pcg32_seed_sample(&r, it->seed ^ 0x3c6ef372fe94f82bULL, it->light.vcm_params.merge ? 0 : path + 1,
-                      (uint64_t)iteration);
+    if (it->light.vcm_params.merge) { /* stratified over iterations (wavelengths_pass_u) */
+        pcg32_seed_sample(&r, it->seed ^ 0x3c6ef372fe94f82bULL, 0, 0);
+        return wavelengths_sample(wavelengths_pass_u((uint32_t)iteration, pcg32_next(&r)));
+    }
+    pcg32_seed_sample(&r, it->seed ^ 0x3c6ef372fe94f82bULL, path + 1, (uint64_t)iteration);
     return wavelengths_sample(pcg32_float(&r));
 }
 
@@ -506,7 +509,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp);
     it->aov_hit = (st->aovs & FILM_AOV_FIRST_HIT) != 0;
     it->spectral = st->color_mode == CST_COLOR_SPECTRAL;
-    if (it->spectral && (it->kind == INTEGRATOR_PHOTON || it->kind == INTEGRATOR_SPPM))
+    if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
@@ -546,7 +549,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "SPPM initial", err) : CST_OK;
         if (rs != CST_OK) return rs;
         SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
-                         st->threads};
+                         st->threads, it->spectral};
         return sppm_create(scene, &it->camera, &sp, st->threads, &it->sppm, err);
     }
     }

@@ -12,6 +12,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "math/color.h"
 
@@ -65,6 +66,23 @@ static inline Wavelengths wavelengths_sample(float u)
     }
     return wl;
 }
+/* The wavelength sample of pass `pass` when a whole pass shares one set (VCM, SPPM): the
+ * van der Corput point of pass (base 2) shifted by `offset` mod 1 (Cranley-Patterson
+ * rotation, a per-render random offset), so each pass's u is uniform (an unbiased pass)
+ * and the passes together stratify [0, 1): the colour error of the average falls about as
+ * 1/passes instead of 1/sqrt(passes). Then wavelengths_sample(u). */
+static inline float wavelengths_pass_u(uint32_t pass, uint32_t offset)
+{
+    uint32_t b = pass;
+    b = (b << 16) | (b >> 16);
+    b = ((b & 0x00ff00ffu) << 8) | ((b & 0xff00ff00u) >> 8);
+    b = ((b & 0x0f0f0f0fu) << 4) | ((b & 0xf0f0f0f0u) >> 4);
+    b = ((b & 0x33333333u) << 2) | ((b & 0xccccccccu) >> 2);
+    b = ((b & 0x55555555u) << 1) | ((b & 0xaaaaaaaau) >> 1);
+    uint32_t v = (b + offset) >> 8; /* 24 bits: exactly representable, below 1 */
+    return (float)v * 0x1p-24f;
+}
+
 static inline bool wavelengths_secondary_terminated(const Wavelengths *wl)
 {
     for (int i = 1; i < COLOR_LANES; i++)
