@@ -176,7 +176,7 @@ static void solve_line(const Job *jb, int line)
     for (int pass = 0; pass < 2; pass++) {
         double c[3] = {0.0, 0.0, 0.0};
         for (int zi = start; pass == 0 ? zi < R : zi >= 0; zi += pass == 0 ? 1 : -1) {
-            double z = jb->znodes[zi], rgb[3];
+            double z = (double)jb->znodes[zi], rgb[3];
             rgb[l] = z;
             rgb[(l + 1) % 3] = x * z;
             rgb[(l + 2) % 3] = y * z;
