@@ -406,6 +406,24 @@ static void test_camera_and_options(void **state)
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Integrator \"mlt\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "PixelFilter \"gaussian\"") < 0);
     cst_scene_destroy(s);
+    /* The sensor's imaging ratio (shutterclose - shutteropen) iso / 100, as exposure stops:
+     * 0.5 * 400 / 100 = 2 is one stop, whichever of Film and Camera comes first; another
+     * sensor is a located approximation, white balance a located warning. */
+    Warnings w2 = {0};
+    s = expect_ok("Film \"rgb\" \"float iso\" 400 \"string sensor\" \"nikon_d850\" \"float whitebalance\" 5000\n"
+                  "LookAt 0 0 -5  0 0 0  0 1 0\n"
+                  "Camera \"perspective\" \"float shutteropen\" 0.25 \"float shutterclose\" 0.75\n"
+                  "WorldBegin\n" TRI, &w2);
+    assert_true(s->settings.exposure_set && fabs(s->settings.exposure - 1.0) < 1e-6);
+    assert_true(find_warning(&w2, CST_WARN_APPROXIMATED, "approximated by cie1931") >= 0);
+    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "whitebalance") >= 0);
+    cst_scene_destroy(s);
+    s = expect_ok("LookAt 0 0 -5  0 0 0  0 1 0\n"
+                  "Camera \"perspective\" \"float shutterclose\" 0.5\n"
+                  "Film \"rgb\" \"float iso\" 400\n"
+                  "WorldBegin\n" TRI, NULL);
+    assert_true(s->settings.exposure_set && fabs(s->settings.exposure - 1.0) < 1e-6);
+    cst_scene_destroy(s);
     /* pbrt defaults; Scale -1 1 1 before LookAt makes the frame right-handed */
     s = expect_ok("Scale -1 1 1\nLookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n" TRI, NULL);
     assert_int_equal(s->settings.width, 1280);
