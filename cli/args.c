@@ -17,7 +17,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
     ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
-    ARGS_OPT_FORCE
+    ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB
 } ArgsOpt;
 
 typedef struct ArgsOptSpec {
@@ -41,6 +41,8 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"sampler",    0,   true,  ARGS_OPT_SAMPLER},
     {"exposure",   0,   true,  ARGS_OPT_EXPOSURE},
     {"png-linear", 0,   false, ARGS_OPT_PNG_LINEAR},
+    {"spectral",   0,   false, ARGS_OPT_SPECTRAL},
+    {"rgb",        0,   false, ARGS_OPT_RGB},
     {"aov",        0,   true,  ARGS_OPT_AOV},
     {"crop",       0,   true,  ARGS_OPT_CROP},
     {"max-depth",  0,   true,  ARGS_OPT_MAX_DEPTH},
@@ -325,6 +327,10 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         return true;
     case ARGS_OPT_PNG_LINEAR:
         s->png_linear = 1;
+        return true;
+    case ARGS_OPT_SPECTRAL:
+    case ARGS_OPT_RGB:
+        s->color_mode = o->id == ARGS_OPT_SPECTRAL ? CST_COLOR_SPECTRAL : CST_COLOR_RGB;
         return true;
     case ARGS_OPT_AOV: {
         char bad[64];

@@ -235,6 +235,7 @@ void cli_metadata_finish(CliMetadata *md, const CstRenderSettings *used, const C
     cli_metadata_add(md, "caustic.scene_sha256", md->sha256);
     cli_metadata_add(md, "caustic.integrator", cst_integrator_name(stats->integrator));
     cli_metadata_add(md, "caustic.sampler", cst_sampler_name(used->sampler));
+    cli_metadata_add(md, "caustic.color", used->color_mode == CST_COLOR_SPECTRAL ? "spectral" : "rgb");
     cli_metadata_add(md, "caustic.filter", cst_filter_name(stats->filter));
     cli_metadata_add(md, "caustic.seed", md->seed);
     cli_metadata_add(md, "caustic.spp", md->spp);

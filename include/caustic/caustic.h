@@ -470,6 +470,14 @@ enum {
     CST_AOV_VARIANCE = 8  /* variance.R/G/B: the variance of each pixel mean */
 };
 
+/* How colour is transported (docs/integrators.md, "Spectral mode"). */
+typedef enum CstColorMode {
+    CST_COLOR_DEFAULT = 0, /* the scene's choice (pbrt-v4 scenes: spectral), else RGB */
+    CST_COLOR_RGB,         /* linear sRGB per path: three channels */
+    CST_COLOR_SPECTRAL     /* four sampled wavelengths per path, RGB inputs upsampled, the film
+                            * integrating the CIE 1931 matching functions (pbrt-v4's model) */
+} CstColorMode;
+
 /* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",
  * "vcm" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CST_API CstIntegrator cst_integrator_from_name(const char *name);
@@ -581,6 +589,7 @@ typedef struct CstRenderSettings {
      * starts, and progress's fraction_done then counts within that phase. NULL: one
      * fraction over the whole render. */
     CstPhaseFn progress_phase;
+    CstColorMode color_mode;  /* CST_COLOR_DEFAULT = unset */
 } CstRenderSettings;
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit

@@ -4,7 +4,7 @@
 #include "integrators/bdpt.h"
 
 Color bdpt_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
-                        Ray ray, Sampler *rng, uint64_t *rays)
+                        Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays)
 {
-    return subpath_trace_camera(s, cam, vp, it, path, ray, rng, rays, NULL);
+    return subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays, NULL);
 }

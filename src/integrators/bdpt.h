@@ -11,6 +11,6 @@
  * hits, NEE, connections to the light path's vertices, MIS-weighted. The light paths are
  * subpath_trace_light's. Returns the pixel sample. */
 Color bdpt_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
-                        Ray ray, Sampler *rng, uint64_t *rays);
+                        Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays);
 
 #endif

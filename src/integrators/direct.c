@@ -2,7 +2,7 @@
 #include "integrators/direct.h"
 
 static Color sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, bool mis, float u_sel,
-                  Vec2 u, uint64_t *rays)
+                  Vec2 u, const Wavelengths *wl, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return color_s(0.0f);
     LightLi ls;
@@ -13,17 +13,17 @@ static Color sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3
     ++*rays;
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
     float w = mis && !ls.delta ? power_heuristic(ls.pdf_w, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
-    return color_scale(color_mul(f, ls.li), w / (ls.delta ? ls.pmf : ls.pdf_w));
+    return color_scale(color_mul(f, scene_light_li(s, &ls, wl)), w / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
 Color direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,
-                 uint64_t *rays)
+                 const Wavelengths *wl, uint64_t *rays)
 {
-    return sample(s, bsdf, sh, wo, false, u_sel, u, rays);
+    return sample(s, bsdf, sh, wo, false, u_sel, u, wl, rays);
 }
 
 Color direct_light_mis(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
-                     Vec2 u, uint64_t *rays)
+                     Vec2 u, const Wavelengths *wl, uint64_t *rays)
 {
-    return sample(s, bsdf, sh, wo, true, u_sel, u, rays);
+    return sample(s, bsdf, sh, wo, true, u_sel, u, wl, rays);
 }

@@ -36,7 +36,7 @@ static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
     ++w->rays;
     if (!scene_intersect(it->scene, &ray, &sh)) return;
     Bsdf bsdf;
-    scene_bsdf(it->scene, &sh, &bsdf);
+    scene_bsdf(it->scene, &sh, NULL, &bsdf);
     Vec3 n = v3_dot(sh.ng, ray.d) > 0.0f ? v3_neg(sh.ng) : sh.ng;
     float z = v3_dot(v3_sub(sh.p, it->camera.origin), it->camera.forward);
     double *a = &it->film->aov[FILM_AOV_STRIDE * (size_t)pixel];
@@ -49,13 +49,32 @@ static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
     a[7] += 1.0;
 }
 
-/* One camera sample's radiance, by the integrator's estimator. */
-static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ray ray, Sampler *smp)
+/* Spectral mode, BDPT and VCM: the wavelengths of light path `path` of iteration
+ * `iteration`, which BDPT's camera path of pixel `path` shares (the connections join
+ * the two, so both must carry the same wavelengths); VCM merges every camera path with
+ * every light path of the iteration, so all its paths share one set (path ignored): each
+ * iteration is then an unbiased estimate of the spectral integral, and their average
+ * converges. From a stream of their own, so no other draw moves. */
+static Wavelengths bidir_wavelengths(const Integrator *it, uint64_t path, int iteration)
+{
+    Pcg32 r;
+    if (it->light.vcm_params.merge) { /* stratified over iterations (wavelengths_pass_u) */
+        pcg32_seed_sample(&r, it->seed ^ 0x3c6ef372fe94f82bULL, 0, 0);
+        return wavelengths_sample(wavelengths_pass_u((uint32_t)iteration, pcg32_next(&r)));
+    }
+    pcg32_seed_sample(&r, it->seed ^ 0x3c6ef372fe94f82bULL, path + 1, (uint64_t)iteration);
+    return wavelengths_sample(pcg32_float(&r));
+}
+
+/* One camera sample's radiance, by the integrator's estimator (spectral mode: at wl's
+ * wavelengths; wl NULL in RGB mode). */
+static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ray ray, Sampler *smp,
+                              Wavelengths *wl)
 {
     Sampler cont;
     switch (it->kind) {
-    case INTEGRATOR_PATH: return path_li(it->scene, &it->path, ray, smp, &w->rays);
-    case INTEGRATOR_WHITTED: return whitted_li(it->scene, &it->whitted, ray, smp, &w->rays);
+    case INTEGRATOR_PATH: return path_li(it->scene, &it->path, ray, smp, wl, &w->rays);
+    case INTEGRATOR_WHITTED: return whitted_li(it->scene, &it->whitted, ray, smp, wl, &w->rays);
     case INTEGRATOR_PHOTON:
         /* Photon mapping and BDPT/VCM continue from the sample's PCG32 stream. */
         cont = sampler_continue(smp->rng);
@@ -64,9 +83,9 @@ static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ra
         cont = sampler_continue(smp->rng);
         if (it->light.vcm_params.merge)
             return vcm_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
-                                    &cont, &w->rays);
+                                    &cont, wl, &w->rays);
         return bdpt_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
-                                 &cont, &w->rays);
+                                 &cont, wl, &w->rays);
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_SPPM: break;
     }
@@ -95,7 +114,17 @@ static void camera_tile(void *ctx, int tile, int worker)
                 Vec2 fp = filter_film_position(&it->pixel_filter, x, y, uf, &fw);
                 Ray ray = camera_generate_ray(&it->camera, fp.x, fp.y, ul);
                 if (it->aov_hit) camera_aov(it, w, pixel, ray);
-                Color L = camera_li(it, w, pixel, ray, &smp);
+                /* Spectral mode: the path's wavelengths, from the dimension after the
+                 * film and lens ones (BDPT/VCM: shared with light paths, above). */
+                Wavelengths wl, *wlp = NULL;
+                if (it->spectral) {
+                    wl = it->kind == INTEGRATOR_BIDIR ? bidir_wavelengths(it, (uint64_t)pixel, s)
+                                                      : wavelengths_sample(sampler_1d(&smp));
+                    wlp = &wl;
+                }
+                Color L = camera_li(it, w, pixel, ray, &smp, wlp);
+                /* The film's sensor: the path's four spectral values to linear sRGB. */
+                if (wlp) L = spectrum_to_rgb(L, wlp);
                 if (!color_is_finite(L)) {
                     /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
                     w->nonfinite++;
@@ -133,7 +162,10 @@ static void light_chunk(void *ctx, int chunk, int worker)
             /* A stream apart from the camera path of pixel i, which uses (seed, i, iteration). */
             sampler_start_stream(&rng, it->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)it->iteration);
             size_t before = verts->n;
-            subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, verts, out, &w->rays);
+            Wavelengths wl;
+            if (it->spectral) wl = bidir_wavelengths(it, (uint64_t)i, it->iteration);
+            subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, it->spectral ? &wl : NULL,
+                                verts, out, &w->rays);
             L->path_count[i] = (uint32_t)(verts->n - before);
         }
         /* The grid's corner, reduced over the chunks by bidir_prepare (min is exact in any
@@ -321,6 +353,7 @@ static CstStatus light_prepare(Integrator *it, const CstRenderSettings *st, CstE
     }
     L->params.max_depth = st->max_depth;
     L->params.rr_depth = st->rr_depth;
+    L->params.spectral = it->spectral;
     /* One light path per pixel per iteration; 65536^2 pixels would overflow int. */
     size_t pixels = (size_t)st->width * (size_t)st->height;
     if (pixels > (size_t)INT32_MAX - LIGHT_CHUNK)
@@ -475,6 +508,10 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
     it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp);
     it->aov_hit = (st->aovs & FILM_AOV_FIRST_HIT) != 0;
+    it->spectral = st->color_mode == CST_COLOR_SPECTRAL;
+    if (it->spectral && it->kind == INTEGRATOR_PHOTON)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
+                        "use --rgb or another integrator", cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;
@@ -512,7 +549,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "SPPM initial", err) : CST_OK;
         if (rs != CST_OK) return rs;
         SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
-                         st->threads};
+                         st->threads, it->spectral};
         return sppm_create(scene, &it->camera, &sp, st->threads, &it->sppm, err);
     }
     }

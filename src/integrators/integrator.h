@@ -108,6 +108,7 @@ typedef struct Integrator {
     SamplerSetup sampler;        /* camera paths': type, seed, the sample count strata divide
                                   * (0 = not known: a time limit) and the strata, set once */
     bool aov_hit;                /* albedo, normal or depth AOVs: trace the first hit for them */
+    bool spectral;               /* spectral mode (math/spectrum.h): paths carry 4 wavelengths */
     int tiles_x, num_tiles;
     int crop_x0, crop_x1, crop_y0, crop_y1;
     /* The pass in progress: samples (iterations) [pass_first, pass_first + pass_count);

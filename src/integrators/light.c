@@ -18,6 +18,7 @@ typedef struct LightTraceCtx {
     const LightParams *lp;
     float margin; /* the tent reaches half a pixel past the film's edge (film_splat) */
     SplatList *out;
+    const Wavelengths *wl; /* spectral mode: the path's; NULL in RGB mode */
     uint64_t *rays;
 } LightTraceCtx;
 
@@ -28,7 +29,8 @@ static void splat_if_visible(const LightTraceCtx *c, Vec3 p, Vec3 ng, const Came
     if (color_is_black(weight)) return;
     ++*c->rays;
     if (!scene_visible_point(c->s, p, ng, cs->p_lens)) return;
-    film_splat(c->out, &c->lp->frame, cs->raster.x, cs->raster.y, color_scale(weight, cs->we / cs->pdf_w));
+    Color v = color_scale(weight, cs->we / cs->pdf_w);
+    film_splat(c->out, &c->lp->frame, cs->raster.x, cs->raster.y, c->wl ? spectrum_to_rgb(v, c->wl) : v);
 }
 
 /* The walk's visitor: y_j (j >= 1) connected to the lens point drawn for it. */
@@ -54,9 +56,12 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
                  SplatList *out, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
-    LightTraceCtx c = {s, cam, lp, filter_radius(lp->frame.filter) - 0.5f, out, rays};
+    /* Spectral mode: the path's own wavelengths, from its first random number. */
+    Wavelengths wl;
+    if (lp->spectral) wl = wavelengths_sample(sampler_1d(rng));
+    LightTraceCtx c = {s, cam, lp, filter_radius(lp->frame.filter) - 0.5f, out, lp->spectral ? &wl : NULL, rays};
     EmissionSample es;
-    subpath_emit(s, rng, &es);
+    subpath_emit(s, rng, c.wl, &es);
 
     /* y0 seen directly: the only way this estimator renders visible emitters (delta
      * lights are never seen, nor is the environment: it is no surface a connection could
@@ -65,7 +70,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
     Vec2 u_lens = sampler_2d(rng);
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, c.margin, &cs)) {
         const Emitter *e = &s->emitter_sampler.light[es.emitter].u.area;
-        Color le = emitter_radiance(e, s->textures, es.n, es.uv, cs.wi);
+        Color le = scene_light_color(emitter_radiance(e, s->textures, es.n, es.uv, cs.wi), c.wl);
         splat_if_visible(&c, es.p, es.n, &cs, color_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a));
     }
     if (!(es.pdf_w > 0.0f)) return;
@@ -74,6 +79,6 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
      * path carries. Russian roulette looks at the product of the BSDF weights (and 1/q),
      * which is what the path tracer's beta is: beta's flux scale would keep every path
      * alive (roulette.h). */
-    const LightWalk w = {lp->max_depth, lp->rr_depth, NULL, true, connect_to_camera, &c};
+    const LightWalk w = {lp->max_depth, lp->rr_depth, NULL, true, c.wl, connect_to_camera, &c};
     subpath_walk_light(s, &w, &es, subpath_start(es.beta), rng, rays);
 }

@@ -16,6 +16,7 @@ typedef struct LightParams {
                       * makes a camera path of b bounces; 0 = unbounded */
     int rr_depth;    /* first bounce at which Russian roulette may stop a path */
     SplatFrame frame; /* the film the splats are for: its size and pixel filter */
+    bool spectral;    /* spectral mode: each path draws its own wavelengths (math/spectrum.h) */
 } LightParams;
 
 /* Traces one light path and splats each camera connection into *out, per unit film

@@ -6,7 +6,7 @@
 #include "integrators/roulette.h"
 #include "materials/bsdf.h"
 
-Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint64_t *rays)
+Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays)
 {
     Color L = color_s(0.0f), beta = color_s(1.0f);
     bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
@@ -19,7 +19,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
         if (!scene_intersect(s, &ray, &sh)) {
             /* The environment: counted like an emitter hit, with the same MIS against
              * NEE's density of sampling this direction. */
-            Color le = light_env_radiance(&s->emitter_sampler, ray.d);
+            Color le = scene_env_radiance(s, ray.d, wl);
             if (!color_is_black(le)) {
                 if (specular || pp->mode == PATH_BSDF) L = color_madd(L, beta, le);
                 else if (pp->mode == PATH_MIS)
@@ -30,7 +30,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
         Vec3 wo = v3_neg(ray.d);
 
         if (sh.emitter >= 0) {
-            Color le = scene_emission(s, &sh, wo);
+            Color le = scene_emission(s, &sh, wo, wl);
             if (!color_is_black(le)) {
                 if (specular || pp->mode == PATH_BSDF) {
                     L = color_madd(L, beta, le);
@@ -46,12 +46,12 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, uint6
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
 
         Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
+        scene_bsdf(s, &sh, wl, &bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             float u_sel = sampler_1d(smp);
             Vec2 u_light = sampler_2d(smp);
-            L = color_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, u_sel, u_light, rays)
-                                                       : direct_light(s, &bsdf, &sh, wo, u_sel, u_light, rays));
+            L = color_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, u_sel, u_light, wl, rays)
+                                                       : direct_light(s, &bsdf, &sh, wo, u_sel, u_light, wl, rays));
         }
 
         BsdfSample bs;

@@ -18,6 +18,6 @@ typedef struct PathParams {
 
 /* Radiance arriving along `ray` (toward its origin). Adds the number of rays traced to
  * *rays. No allocation; safe to call from many threads on one committed scene. */
-Color path_li(const Scene *scene, const PathParams *params, Ray ray, Sampler *smp, uint64_t *rays);
+Color path_li(const Scene *scene, const PathParams *params, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays);
 
 #endif

@@ -61,7 +61,7 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
     Sampler rng;
     sampler_start_stream(&rng, pw->seed, index, pw->stream);
     EmissionSample es;
-    subpath_emit(s, &rng, &es);
+    subpath_emit(s, &rng, pw->wl, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return true; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
@@ -71,7 +71,7 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
      * (Russian roulette by the BSDF weights, not Jensen 2001 sec. 5.4's absorption
      * probability: unbiased, the power scaled by 1/q). */
     PhotonWalkCtx c = {visit, ctx};
-    const LightWalk w = {pw->max_depth, pw->rr_depth, NULL, false, photon_at_vertex, &c};
+    const LightWalk w = {pw->max_depth, pw->rr_depth, NULL, false, pw->wl, photon_at_vertex, &c};
     return subpath_walk_light(s, &w, &es, subpath_start(color_scale(es.beta, pw->scale)), &rng, rays);
 }
 
@@ -93,20 +93,20 @@ static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_o
  * first non-delta hit; mixed BSDFs as photon.h says. Adds the emission it passes (and the
  * hit's) to *le when le is not NULL. *wo_out is the direction back along the last segment.
  * Returns false if the ray leaves the scene or the chain stops. */
-bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, Color *beta, Color *le,
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color *beta, Color *le,
                              SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays)
 {
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
         ++*rays;
         if (!scene_intersect(s, &ray, sh)) {
             /* The environment seen from the camera, directly or through the chain. */
-            if (le) *le = color_madd(*le, *beta, light_env_radiance(&s->emitter_sampler, ray.d));
+            if (le) *le = color_madd(*le, *beta, scene_env_radiance(s, ray.d, wl));
             return false;
         }
         Vec3 wo = v3_neg(ray.d);
         if (le && sh->emitter >= 0)
-            *le = color_madd(*le, *beta, scene_emission(s, sh, wo));
-        scene_bsdf(s, sh, bsdf);
+            *le = color_madd(*le, *beta, scene_emission(s, sh, wo, wl));
+        scene_bsdf(s, sh, wl, bsdf);
         float p_delta = bsdf_delta_probability(bsdf, wo);
         if (!(p_delta > 0.0f)) {
             *wo_out = wo;
@@ -169,11 +169,11 @@ static Color radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, 
 /* Direct light at a non-delta point by one emitter sample (path.c's NEE, without MIS:
  * BSDF-sampled rays that reach emitters add nothing here). */
 Color photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Sampler *rng,
-                        uint64_t *rays)
+                        const Wavelengths *wl, uint64_t *rays)
 {
     float u_sel = sampler_1d(rng);
     Vec2 u = sampler_2d(rng);
-    return direct_light(s, bsdf, sh, wo, u_sel, u, rays);
+    return direct_light(s, bsdf, sh, wo, u_sel, u, wl, rays);
 }
 
 Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint64_t *rays)
@@ -182,9 +182,9 @@ Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint
     SurfaceHit x;
     Bsdf bsdf_x;
     Vec3 wo;
-    if (!photon_trace_to_diffuse(s, ray, rng, &beta, &L, &x, &bsdf_x, &wo, rays)) return L;
+    if (!photon_trace_to_diffuse(s, ray, rng, NULL, &beta, &L, &x, &bsdf_x, &wo, rays)) return L;
 
-    Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, rays);
+    Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, NULL, rays);
     lx = color_add(lx, radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo));
 
     /* Final gathering (Jensen 2001 sec. 9.3.3): the global map's blur is hidden behind one
@@ -203,7 +203,7 @@ Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint
         Vec3 wo_y;
         Ray gr = ray_make(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
-        if (photon_trace_to_diffuse(s, gr, rng, &g, NULL, &y, &bsdf_y, &wo_y, rays))
+        if (photon_trace_to_diffuse(s, gr, rng, NULL, &g, NULL, &y, &bsdf_y, &wo_y, rays))
             lx = color_add(lx, color_mul(g, radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y)));
     }
     return color_madd(L, beta, lx);
@@ -255,7 +255,7 @@ static float auto_radius(const Scene *s, const Camera *cam, const PhotonParams *
         SurfaceHit sh;
         Bsdf b;
         Vec3 wo;
-        if (!photon_trace_to_diffuse(s, r, &rng, &beta, NULL, &sh, &b, &wo, rays)) continue;
+        if (!photon_trace_to_diffuse(s, r, &rng, NULL, &beta, NULL, &sh, &b, &wo, rays)) continue;
         float v = knn_dist2(g, sh.p);
         if (v > 0.0f) d2[n++] = v;
     }
@@ -279,7 +279,7 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
     PhotonArray global = {0}, caustic = {0};
     CstStatus st = CST_OK;
     if (s->emitter_sampler.lights > 0) {
-        const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth};
+        const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth, NULL};
         PhotonStore store = {&global, &caustic};
         for (int i = 0; i < n; i++) {
             if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 && pp->progress(pp->progress_user, (double)i / n)) {

@@ -39,6 +39,7 @@ typedef struct PhotonWalk {
     uint64_t seed, stream;
     float scale;
     int max_depth, rr_depth;
+    const Wavelengths *wl; /* spectral mode (SPPM): the iteration's wavelengths; NULL: RGB */
 } PhotonWalk;
 
 /* Called at every non-delta hit of a photon path with the photon there, its depth (1:
@@ -82,10 +83,10 @@ struct Bsdf;
  * stops with the probability of the non-delta ones (and *beta divided by it), and follows
  * a delta lobe otherwise: the caller then estimates only the non-delta part at *sh. False
  * if the ray leaves the scene, the chain dies or exceeds PHOTON_MAX_SPECULAR bounces. */
-bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, Color *beta, Color *le, SurfaceHit *sh,
-                             struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays);
+bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color *beta, Color *le,
+                             SurfaceHit *sh, struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays);
 /* Direct light at a non-delta point by one emitter sample, no MIS. */
 Color photon_direct_light(const Scene *s, const struct Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo,
-                        Sampler *rng, uint64_t *rays);
+                        Sampler *rng, const Wavelengths *wl, uint64_t *rays);
 
 #endif

@@ -41,6 +41,19 @@
  * which the automatic radius uses. */
 #define SPPM_STREAM (((uint64_t)1 << 62) + 2u)
 
+/* Spectral mode: the wavelengths of every camera and photon path of iteration `iter`. A
+ * photon meets many visible points, so all paths of an iteration share one set: each
+ * iteration is an unbiased estimate of the spectral integral (its flux converted to RGB
+ * with that iteration's wavelengths before it joins tau), and the progressive average
+ * converges to the spectral image; the iterations' wavelengths are stratified
+ * (wavelengths_pass_u). From a stream of its own: no other draw moves. */
+static Wavelengths sppm_wavelengths(const SppmParams *sp, int iter)
+{
+    Pcg32 r;
+    pcg32_seed_sample(&r, sp->seed ^ 0x3c6ef372fe94f82bULL, UINT64_MAX, 0);
+    return wavelengths_sample(wavelengths_pass_u((uint32_t)iter, pcg32_next(&r)));
+}
+
 typedef struct SppmPixel {
     /* the visible point of the current iteration */
     Vec3 p, wo, n;   /* n: geometric normal on wo's side */
@@ -50,7 +63,7 @@ typedef struct SppmPixel {
     /* progressive state */
     double ld[3];    /* sum over iterations of emission + NEE */
     double tau[3];   /* accumulated flux (unnormalised photon powers) */
-    double phi[3];   /* this iteration's sum of f Phi / |cos| */
+    double phi[4];   /* this iteration's sum of f Phi / |cos| (spectral mode: 4 lanes) */
     double n_photons; /* N */
     long m;          /* M: photons found this iteration */
     float r;
@@ -220,6 +233,7 @@ static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *h
         v->phi[0] += (double)d.c[0];
         v->phi[1] += (double)d.c[1];
         v->phi[2] += (double)d.c[2];
+        v->phi[3] += (double)d.c[3];
         v->m++;
     }
 }
@@ -239,7 +253,10 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
                          uint64_t *rays)
 {
     /* Powers unscaled: the estimate divides by the photons of all iterations. */
-    const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth};
+    Wavelengths wl;
+    if (sp->spectral) wl = sppm_wavelengths(sp, iter);
+    const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth,
+                           sp->spectral ? &wl : NULL};
     photon_walk(s, &pw, index, store_hit, out, rays);
 }
 
@@ -247,6 +264,9 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
 static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, const Filter *filter, SppmPixel *px,
                        int y, int iter, uint64_t *nonfinite, uint64_t *rays)
 {
+    Wavelengths wl;
+    if (sp->spectral) wl = sppm_wavelengths(sp, iter);
+    const Wavelengths *wlp = sp->spectral ? &wl : NULL;
     for (int x = 0; x < cam->width; x++) {
         int pixel = y * cam->width + x;
         SppmPixel *v = &px[pixel];
@@ -261,14 +281,15 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
         Color L = color_s(0.0f), beta = color_s(fw);
         SurfaceHit sh;
-        v->valid = photon_trace_to_diffuse(s, ray, &rng, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
+        v->valid = photon_trace_to_diffuse(s, ray, &rng, wlp, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
         if (v->valid) {
-            L = color_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, rays));
+            L = color_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, wlp, rays));
             v->p = sh.p;
             v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
             v->beta = beta;
             v->valid = color_is_finite(beta) && !color_is_black(beta);
         }
+        if (wlp) L = spectrum_to_rgb(L, wlp); /* the film's sensor */
         if (!color_is_finite(L)) {
             ++*nonfinite; /* dropped as a zero sample, as render.c does */
             L = color_s(0.0f);
@@ -281,10 +302,21 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
 
 /* HJ 2009 eqs. 6-7 (pbrt-v3 eq. 16.10): keep alpha of the new photons, shrink the disc so
  * the density stays, and rescale the flux to the smaller disc. */
-static void progressive_update(SppmPixel *v, uint64_t *nonfinite)
+static void progressive_update(SppmPixel *v, const Wavelengths *wl, uint64_t *nonfinite)
 {
     if (v->valid && v->m > 0) {
         double b[3] = {(double)v->beta.c[0], (double)v->beta.c[1], (double)v->beta.c[2]};
+        if (wl) {
+            /* Spectral: beta phi at the iteration's wavelengths, to RGB by the film's
+             * sensor; tau then accumulates RGB as in RGB mode (b = 1). */
+            Color bp;
+            for (int i = 0; i < COLOR_LANES; i++) bp.c[i] = (float)((double)v->beta.c[i] * v->phi[i]);
+            Color rgb = spectrum_to_rgb(bp, wl);
+            for (int c = 0; c < 3; c++) {
+                v->phi[c] = (double)rgb.c[c];
+                b[c] = 1.0;
+            }
+        }
         double n_new = v->n_photons + (double)SPPM_ALPHA * (double)v->m;
         double r_new = (double)v->r * sqrt(n_new / (v->n_photons + (double)v->m));
         double shrink = r_new * r_new / ((double)v->r * (double)v->r);
@@ -299,7 +331,7 @@ static void progressive_update(SppmPixel *v, uint64_t *nonfinite)
         }
     }
     v->m = 0;
-    v->phi[0] = v->phi[1] = v->phi[2] = 0.0;
+    v->phi[0] = v->phi[1] = v->phi[2] = v->phi[3] = 0.0;
 }
 
 /* Photon paths per chunk: a chunk is the unit of work of the photon phase. Any size gives
@@ -394,7 +426,9 @@ static void deposit_range(SppmJob *job, SppmWorker *w, int r)
         for (uint32_t k = l->range_start[r]; k < l->range_start[r + 1]; k++)
             sppm_grid_deposit(&job->g, job->px, &l->v[l->order[k]], lo, hi);
     }
-    for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], &w->nonfinite);
+    Wavelengths wl;
+    if (job->sp.spectral) wl = sppm_wavelengths(&job->sp, job->iter);
+    for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], job->sp.spectral ? &wl : NULL, &w->nonfinite);
 }
 
 /* Unit u of the current phase (a row, a photon chunk, a pixel range) on pool worker

@@ -21,6 +21,7 @@ typedef struct SppmParams {
     uint64_t seed;
     int threads;         /* the render's thread count: it sizes the deposit's pixel ranges,
                           * which never changes the image */
+    bool spectral;       /* spectral mode: each iteration's paths share one set of wavelengths */
 } SppmParams;
 
 /* The progressive state of one render. Its iterations are driven from outside

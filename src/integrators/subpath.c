@@ -40,19 +40,20 @@ static inline float camera_pdf_w(const SubpathIteration *it, float cos_theta)
 }
 
 
-void subpath_emit(const Scene *s, Sampler *rng, EmissionSample *es)
+void subpath_emit(const Scene *s, Sampler *rng, const Wavelengths *wl, EmissionSample *es)
 {
     float u_sel = sampler_1d(rng);
     Vec2 u_pos = sampler_2d(rng);
     Vec2 u_dir = sampler_2d(rng);
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, es);
+    es->beta = scene_light_color(es->beta, wl);
 }
 
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
 static void connect_to_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
                               const SubpathIteration *it, const SubpathVertex *v, const Bsdf *b,
-                              Vec2 u_lens, SplatList *splats, uint64_t *rays)
+                              Vec2 u_lens, const Wavelengths *wl, SplatList *splats, uint64_t *rays)
 {
     const float margin = filter_radius(vp->frame.filter) - 0.5f;
     CameraWiSample cs;
@@ -73,8 +74,8 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const SubpathPa
     float weight = 1.0f / (1.0f + w_light);
     ++*rays;
     if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
-    film_splat(splats, &vp->frame, cs.raster.x, cs.raster.y,
-               color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w));
+    Color c = color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w);
+    film_splat(splats, &vp->frame, cs.raster.x, cs.raster.y, wl ? spectrum_to_rgb(c, wl) : c);
 }
 
 /* subpath_trace_light's visitor: stores the vertex and makes its t = 1 connection. */
@@ -85,6 +86,7 @@ typedef struct LightSubpathCtx {
     const SubpathIteration *it;
     SubpathVertexList *verts;
     SplatList *splats;
+    const Wavelengths *wl;
     uint64_t *rays;
 } LightSubpathCtx;
 
@@ -96,16 +98,17 @@ static bool store_and_connect(void *ctx, const LightVertex *lv)
     SubpathVertex v = {sh->p, sh->ng, sh->ns, lv->w_prev, sp->beta, sp->d_vcm, sp->d_vc, sp->d_vm,
                    sh->material, lv->bounces, sh->uv};
     push_vertex(c->verts, &v);
-    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, c->splats, c->rays);
+    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, c->wl, c->splats, c->rays);
     return true; /* OOM is the list's flag, checked after the step */
 }
 
 void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                     Sampler *rng, SubpathVertexList *verts, SplatList *splats, uint64_t *rays)
+                     Sampler *rng, const Wavelengths *wl, SubpathVertexList *verts, SplatList *splats,
+                     uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
     EmissionSample es;
-    subpath_emit(s, rng, &es);
+    subpath_emit(s, rng, wl, &es);
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
 
@@ -116,8 +119,8 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
     sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
 
-    LightSubpathCtx c = {s, cam, vp, it, verts, splats, rays};
-    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, store_and_connect, &c};
+    LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, rays};
+    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c};
     subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
 
@@ -125,7 +128,8 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
 /* NEE, the s = 1 strategy (tech. rep. eqs. 44-45; a delta light has no w_light: BSDF
  * sampling cannot hit it). */
 static Color connect_to_light(const Scene *s, const SubpathIteration *it, const SubPath *sp,
-                            const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Sampler *rng, uint64_t *rays)
+                            const Bsdf *b, const SurfaceHit *sh, Vec3 wo, Sampler *rng, const Wavelengths *wl,
+                            uint64_t *rays)
 {
     float u_sel = sampler_1d(rng);
     Vec2 u = sampler_2d(rng);
@@ -143,7 +147,7 @@ static Color connect_to_light(const Scene *s, const SubpathIteration *it, const 
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
-    return color_scale(color_mul(f, ls.li), weight / (ls.delta ? ls.pmf : ls.pdf_w));
+    return color_scale(color_mul(f, scene_light_li(s, &ls, wl)), weight / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
 /* The BSDFs of one light path's first vertices, built when a connection first needs
@@ -158,12 +162,13 @@ typedef struct LightBsdfs {
 
 /* y's BSDF as the light subpath saw it, through the scene's one hit-to-BSDF routine;
  * vertex j of its path, cached in c when j is small enough (else built into *tmp). */
-static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const SubpathVertex *y, Bsdf *tmp)
+static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const SubpathVertex *y,
+                                     const Wavelengths *wl, Bsdf *tmp)
 {
     Bsdf *b = j < LIGHT_BSDF_CACHE ? &c->b[j] : tmp;
     if (j < LIGHT_BSDF_CACHE && (c->built >> j & 1u)) return b;
     SurfaceHit yh = {.p = y->p, .ng = y->ng, .ns = y->ns, .material = y->material, .emitter = -1, .uv = y->uv};
-    scene_bsdf(s, &yh, b);
+    scene_bsdf(s, &yh, wl, b);
     if (j < LIGHT_BSDF_CACHE) c->built |= 1u << j;
     return b;
 }
@@ -172,7 +177,7 @@ static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const
  * (tech. rep. eqs. 40-41). */
 static Color connect_vertices(const Scene *s, const SubpathIteration *it, const SubPath *sp,
                             const Bsdf *bx, const SurfaceHit *x, Vec3 wo, const SubpathVertex *y, int j,
-                            LightBsdfs *cache, uint64_t *rays)
+                            LightBsdfs *cache, const Wavelengths *wl, uint64_t *rays)
 {
     Vec3 to = v3_sub(y->p, x->p);
     float dist2 = v3_length2(to);
@@ -187,7 +192,7 @@ static Color connect_vertices(const Scene *s, const SubpathIteration *it, const 
     Color fx = bsdf_eval_pdfs(bx, wo, d, &x_fwd, &x_rev);
     if (color_is_black(fx)) return color_s(0.0f);
     Bsdf tmp;
-    const Bsdf *by = light_bsdf(s, cache, j, y, &tmp);
+    const Bsdf *by = light_bsdf(s, cache, j, y, wl, &tmp);
     /* y seen from the camera side: wo = toward x, wi = toward the light; the cosine
      * swap of light.c turns |cos theta_prev| into |cos theta_x-side|. */
     float y_fwd, y_rev; /* y's own direction is toward the light: forward is w_prev -> nd */
@@ -205,7 +210,7 @@ static Color connect_vertices(const Scene *s, const SubpathIteration *it, const 
 
 
 Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
-                           Ray ray, Sampler *rng, uint64_t *rays, const SubpathMerge *merge)
+                           Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays, const SubpathMerge *merge)
 {
     Color L = color_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);
@@ -228,7 +233,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
             /* s = 0 with the environment: an infinitely distant light, so its densities
              * have no distance factor and the last segment's is not converted (tech.
              * rep. sec. 5.1, SmallVCM's background). */
-            Color le = light_env_radiance(&s->emitter_sampler, ray.d);
+            Color le = scene_env_radiance(s, ray.d, wl);
             if (!color_is_black(le)) {
                 float w = 1.0f;
                 if (t > 1) {
@@ -249,7 +254,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
          * there is no other strategy (light vertices on emitters are not splatted). */
         if (sh.emitter >= 0) {
             const Emitter *e = &s->emitter_sampler.light[sh.emitter].u.area;
-            Color le = scene_emission(s, &sh, wo);
+            Color le = scene_emission(s, &sh, wo, wl);
             if (!color_is_black(le)) {
                 float w = 1.0f;
                 if (t > 1) {
@@ -264,18 +269,18 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
 
         Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
+        scene_bsdf(s, &sh, wl, &bsdf);
         if (!bsdf_is_delta(&bsdf)) {
             const bool merging = merge && it->cells > 0;
             MergeQuery mq;
             if (merging) merge->plan(it, sh.p, &mq);
             if (has_lights)
-                L = color_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, rays));
+                L = color_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, wl, rays));
             if (merging) merge->fetch(it, &mq);
             Color c = color_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
-                c = color_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, rays));
+                c = color_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, wl, rays));
             }
             L = color_madd(L, sp.beta, c);
             if (merging) L = color_madd(L, sp.beta, merge->merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));

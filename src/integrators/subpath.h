@@ -94,7 +94,8 @@ typedef struct SubPath {
  * non-delta vertices to *verts and splats its connections to the camera (the t = 1
  * strategies, MIS-weighted) to *splats, per unit film as light_trace() does. */
 void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                     Sampler *rng, SubpathVertexList *verts, SplatList *splats, uint64_t *rays);
+                     Sampler *rng, const Wavelengths *wl, SubpathVertexList *verts, SplatList *splats,
+                     uint64_t *rays);
 
 /* A merging query at one camera vertex (vcm.c), in three steps so that its two rounds of
  * cache misses overlap the vertex's NEE and connections instead of stalling the path:
@@ -120,6 +121,6 @@ typedef struct SubpathMerge {
  * used only when the iteration has a grid), merges with every light vertex within the
  * radius; all MIS-weighted. Returns the pixel sample. */
 Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
-                           Ray ray, Sampler *rng, uint64_t *rays, const SubpathMerge *merge);
+                           Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays, const SubpathMerge *merge);
 
 #endif

@@ -43,13 +43,15 @@ typedef struct LightWalk {
                               * at a hit at grazing incidence, which their area conversion
                               * divides by); NULL: none (light tracing, photons) */
     bool lens;      /* draw LightVertex.u_lens (the estimators that connect to the camera) */
+    const Wavelengths *wl; /* spectral mode: the path's wavelengths; NULL in RGB mode */
     LightVisit visit;
     void *ctx;
 } LightWalk;
 
 /* The emission sample that starts every light subpath: a light by power, a point and a
- * direction on it (emitter_sample_emission), from 1D + 2D + 2D of rng. */
-void subpath_emit(const Scene *s, Sampler *rng, EmissionSample *es);
+ * direction on it (emitter_sample_emission), from 1D + 2D + 2D of rng; its flux at wl in
+ * spectral mode (wl NULL: RGB). */
+void subpath_emit(const Scene *s, Sampler *rng, const Wavelengths *wl, EmissionSample *es);
 
 /* After scattering at a vertex into a direction with |cos| cos_out, forward pdf pdf_fwd
  * and reverse pdf pdf_rev (tech. rep. eqs. 34-36; for delta lobes eqs. 53-55, where the
@@ -138,7 +140,7 @@ subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es,
             mis_arrive(&sp, bounces > 1 || es->finite ? sh.t : 1.0f, cos_in);
         }
         Bsdf bsdf;
-        scene_bsdf(s, &sh, &bsdf);
+        scene_bsdf(s, &sh, w->wl, &bsdf);
         /* Delta lobes can neither be connected to (f is a Dirac in the direction of the
          * other vertex) nor hold photons (no density estimate can find their direction). */
         const bool visit = !bsdf_is_delta(&bsdf);

@@ -204,7 +204,7 @@ static Color merge(const SubpathParams *vp, const SubpathIteration *it, const Me
 static const SubpathMerge VCM_MERGE = {merge_plan, merge_fetch, merge};
 
 Color vcm_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
-                       Ray ray, Sampler *rng, uint64_t *rays)
+                       Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays)
 {
-    return subpath_trace_camera(s, cam, vp, it, path, ray, rng, rays, &VCM_MERGE);
+    return subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays, &VCM_MERGE);
 }

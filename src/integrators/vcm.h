@@ -38,7 +38,7 @@ void vcm_grid_fill(const SubpathIteration *it, const uint32_t *cell_of, size_t n
  * (s = 1), connections to the light path's vertices, and merges with every light vertex
  * within the radius; all MIS-weighted. Returns the pixel sample. */
 Color vcm_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
-                       Ray ray, Sampler *rng, uint64_t *rays);
+                       Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays);
 
 /* A merging radius from the scene's size: the base radius r0 when none is given. */
 float vcm_default_radius(const Scene *s);

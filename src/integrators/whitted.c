@@ -18,33 +18,33 @@ static const float WHITTED_MIN_WEIGHT = 1e-4f;
  * converted to solid angle with dist^2 / |cos theta_light|, or point, spot and
  * directional lights, whose shadow rays are Whitted's own). */
 static Color whitted_direct(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, int n, Sampler *smp,
-                          uint64_t *rays)
+                          const Wavelengths *wl, uint64_t *rays)
 {
     Color sum = color_s(0.0f);
     for (int i = 0; i < n; i++) {
         float u_sel = sampler_1d(smp);
         Vec2 u = sampler_2d(smp);
-        sum = color_add(sum, direct_light(s, bsdf, sh, wo, u_sel, u, rays));
+        sum = color_add(sum, direct_light(s, bsdf, sh, wo, u_sel, u, wl, rays));
     }
     return color_scale(sum, 1.0f / (float)n);
 }
 
 static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int depth, float weight, Sampler *smp,
-                         uint64_t *rays)
+                         const Wavelengths *wl, uint64_t *rays)
 {
     SurfaceHit sh;
     ++*rays;
-    if (!scene_intersect(s, &ray, &sh)) return light_env_radiance(&s->emitter_sampler, ray.d);
+    if (!scene_intersect(s, &ray, &sh)) return scene_env_radiance(s, ray.d, wl);
     Vec3 wo = v3_neg(ray.d);
-    Color L = sh.emitter >= 0 ? scene_emission(s, &sh, wo) : color_s(0.0f);
+    Color L = sh.emitter >= 0 ? scene_emission(s, &sh, wo, wl) : color_s(0.0f);
 
     Bsdf bsdf;
-    scene_bsdf(s, &sh, &bsdf);
+    scene_bsdf(s, &sh, wl, &bsdf);
     /* Non-delta lobes (diffuse, and glossy ones: rough metal, rough glass, the base of
      * plastic) get direct light only, Whitted's diffuse rule; a BSDF that also has delta
      * lobes (smooth-coat plastic) then branches into those below as well. */
     if (!bsdf_is_delta(&bsdf)) {
-        if (s->emitter_sampler.lights > 0) L = color_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, smp, rays));
+        if (s->emitter_sampler.lights > 0) L = color_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, smp, wl, rays));
         if (!bsdf_has_delta(&bsdf)) return L;
     }
     if (depth >= wp->max_depth) return L;
@@ -68,15 +68,15 @@ static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int
         float wmax = weight * color_max(w);
         if (!(wmax >= WHITTED_MIN_WEIGHT)) continue;
         Ray next = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
-        L = color_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, smp, rays));
+        L = color_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, smp, wl, rays));
     }
     return L;
 }
 
-Color whitted_li(const Scene *s, const WhittedParams *wp, Ray ray, Sampler *smp, uint64_t *rays)
+Color whitted_li(const Scene *s, const WhittedParams *wp, Ray ray, Sampler *smp, const Wavelengths *wl, uint64_t *rays)
 {
     WhittedParams p = *wp;
     if (p.max_depth <= 0) p.max_depth = WHITTED_DEFAULT_DEPTH;
     if (p.light_samples <= 0) p.light_samples = 1;
-    return whitted_trace(s, &p, ray, 0, 1.0f, smp, rays);
+    return whitted_trace(s, &p, ray, 0, 1.0f, smp, wl, rays);
 }

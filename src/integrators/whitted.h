@@ -18,6 +18,7 @@ enum { WHITTED_DEFAULT_DEPTH = 10 };
 
 /* Radiance arriving along `ray` (toward its origin) under the Whitted model. Adds the
  * number of rays traced to *rays. No allocation (recursion depth <= max_depth). */
-Color whitted_li(const Scene *scene, const WhittedParams *params, Ray ray, Sampler *smp, uint64_t *rays);
+Color whitted_li(const Scene *scene, const WhittedParams *params, Ray ray, Sampler *smp, const Wavelengths *wl,
+                 uint64_t *rays);
 
 #endif

@@ -41,8 +41,10 @@ float fresnel_conductor(float cos_i, float eta, float k)
 
 Color fresnel_conductor_rgb(float cos_i, Color eta, Color k)
 {
-    return color_rgb(fresnel_conductor(cos_i, eta.c[0], k.c[0]), fresnel_conductor(cos_i, eta.c[1], k.c[1]),
-               fresnel_conductor(cos_i, eta.c[2], k.c[2]));
+    /* Every lane: in spectral mode lane 3 is a fourth wavelength (color.h). */
+    Color r;
+    for (int i = 0; i < COLOR_LANES; i++) r.c[i] = fresnel_conductor(cos_i, eta.c[i], k.c[i]);
+    return r;
 }
 
 /* 2 int_0^1 F(mu) mu dmu for unpolarised light entering a medium of relative IOR n > 1:

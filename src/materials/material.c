@@ -23,12 +23,13 @@
  * the Drude-Lorentz fit of Rakic et al., Appl. Opt. 37, 5271 (1998), at those wavelengths.
  * Normal-incidence reflectance ((n-1)^2 + k^2) / ((n+1)^2 + k^2) gives gold (0.96, 0.79,
  * 0.41), silver (0.99, 0.98, 0.98), copper (0.94, 0.64, 0.55), aluminium (0.91, 0.92, 0.93). */
+/* Lane 3 repeats green, as color_rgb() makes it (math/color.h). */
 typedef struct MetalPreset { const char *name; Color eta, k; } MetalPreset;
 static const MetalPreset METALS[] = {
-    {"gold", {{0.14f, 0.43f, 1.38f}}, {{3.697f, 2.455f, 1.914f}}},
-    {"silver", {{0.05f, 0.06f, 0.04f}}, {{4.483f, 3.586f, 2.657f}}},
-    {"copper", {{0.214f, 0.943f, 1.169f}}, {{3.67f, 2.594f, 2.36f}}},
-    {"aluminium", {{1.47f, 0.958f, 0.618f}}, {{7.79f, 6.69f, 5.47f}}},
+    {"gold", {{0.14f, 0.43f, 1.38f, 0.43f}}, {{3.697f, 2.455f, 1.914f, 2.455f}}},
+    {"silver", {{0.05f, 0.06f, 0.04f, 0.06f}}, {{4.483f, 3.586f, 2.657f, 3.586f}}},
+    {"copper", {{0.214f, 0.943f, 1.169f, 0.943f}}, {{3.67f, 2.594f, 2.36f, 2.594f}}},
+    {"aluminium", {{1.47f, 0.958f, 0.618f, 0.958f}}, {{7.79f, 6.69f, 5.47f, 6.69f}}},
 };
 const char *const material_metal_names[] = {"gold", "silver", "copper", "aluminium", NULL};
 

@@ -2,10 +2,15 @@
  * BSDF does its colour arithmetic through these functions, so that the spectral mode
  * (four sampled wavelengths) changes this module and the conversions at the inputs
  * (color_rgb) and outputs (color_channel), not the estimators.
- * Today the lanes hold linear RGB with sRGB primaries, never gamma-encoded (encoding
- * happens only when an image is written); lane 3 is padding, 0 from every constructor.
- * Lane-wise arithmetic runs over all four lanes (one SSE operation), so lane 3 may turn
- * NaN (0 * inf): the reductions (max, finite, black, luminance) read only the channels. */
+ * RGB mode: lanes 0-2 hold linear RGB with sRGB primaries, never gamma-encoded (encoding
+ * happens only when an image is written); lane 3 is a copy of lane 1 (green) from every
+ * constructor, and stays one bit for bit through the lane-wise arithmetic below (the
+ * same operation on the same operands, no contraction), so the reductions (max, black,
+ * finite) can read all four lanes and still give the three channels' answer.
+ * Spectral mode (math/spectrum.h): lane i is the value at the path's wavelength i; every
+ * lane carries colour, and the reductions must see all four, which they do. Estimators
+ * never tell the modes apart: only the conversions at the inputs (materials, lights) and
+ * the film do. Luminance is RGB-only (light selection, statistics). */
 #ifndef CST_MATH_COLOR_H
 #define CST_MATH_COLOR_H
 
@@ -19,13 +24,13 @@ enum {
 
 typedef struct Color { float c[COLOR_LANES]; } Color;
 
-/* From linear RGB (sRGB primaries): the input conversion. */
+/* From linear RGB (sRGB primaries): the input conversion. Lane 3 mirrors green (above). */
 static inline Color color_rgb(float r, float g, float b)
 {
-    Color o = {{r, g, b, 0.0f}};
+    Color o = {{r, g, b, g}};
     return o;
 }
-/* The same value in every channel (a grey, or a scalar weight). */
+/* The same value in every lane (a grey, or a scalar weight). */
 static inline Color color_s(float s) { return color_rgb(s, s, s); }
 /* Channel i (0..COLOR_CHANNELS-1) as linear RGB: the output conversion. */
 static inline float color_channel(Color a, int i) { return a.c[i]; }
@@ -69,29 +74,29 @@ static inline Color color_div_safe(Color a, Color b)
     for (int i = 0; i < COLOR_LANES; i++) o.c[i] = b.c[i] != 0.0f ? a.c[i] / b.c[i] : 0.0f;
     return o;
 }
-/* Lane-wise f applied to each channel (exp, sqrt: attenuation, roughness maps). */
+/* Lane-wise f applied to each lane (exp, sqrt: attenuation, roughness maps). */
 static inline Color color_map(Color a, float (*f)(float))
 {
-    Color o = a;
-    for (int i = 0; i < COLOR_CHANNELS; i++) o.c[i] = f(a.c[i]);
+    Color o;
+    for (int i = 0; i < COLOR_LANES; i++) o.c[i] = f(a.c[i]);
     return o;
 }
 
 static inline float color_max(Color a)
 {
     float m = a.c[0];
-    for (int i = 1; i < COLOR_CHANNELS; i++) m = m > a.c[i] ? m : a.c[i];
+    for (int i = 1; i < COLOR_LANES; i++) m = m > a.c[i] ? m : a.c[i];
     return m;
 }
 static inline bool color_is_black(Color a)
 {
-    for (int i = 0; i < COLOR_CHANNELS; i++)
+    for (int i = 0; i < COLOR_LANES; i++)
         if (a.c[i] != 0.0f) return false;
     return true;
 }
 static inline bool color_is_finite(Color a)
 {
-    for (int i = 0; i < COLOR_CHANNELS; i++)
+    for (int i = 0; i < COLOR_LANES; i++)
         if (!isfinite(a.c[i])) return false;
     return true;
 }

@@ -43,6 +43,11 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(photons, 1, 0);                  /* 0 stays: the photon integrator's default */
     PICK_DBL(photon_radius, 1, 0.0);          /* 0 stays: automatic */
     PICK_INT(sampler, 1, CST_SAMPLER_INDEPENDENT);
+    PICK_INT(color_mode, 1, CST_COLOR_RGB);
+    /* The photon integrator builds its maps once per render, so no per-pass wavelengths
+     * can be shared by photons and camera paths: it transports RGB in either mode (the
+     * settings, and so the output's metadata, say so). */
+    if (out->integrator == CST_INTEGRATOR_PHOTON) out->color_mode = CST_COLOR_RGB;
     PICK_INT(png_linear, 0, 0);
     PICK_INT(aovs, 0, 0);
     /* A time limit alone means "as many samples as fit"; otherwise the default count.

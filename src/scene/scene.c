@@ -57,6 +57,8 @@ void scene_destroy(Scene *s)
     free(s->emitters);
     for (int i = 0; i < s->num_delta_lights; i++)
         if (s->delta_lights[i].type == DELTA_GONIO) free((void *)(uintptr_t)s->delta_lights[i].gonio.factor);
+    free(s->material_spectra);
+    free(s->emitter_spectra);
     free(s->delta_lights);
     if (s->env) envmap_free(s->env);
     free(s->env);
@@ -382,6 +384,16 @@ CstStatus scene_commit(Scene *s, CstError *err)
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, s->delta_lights,
                               s->num_delta_lights, s->env, bounds.min, bounds.max, err);
     if (st != CST_OK) return st;
+    /* The spectral mode's table lookups of constant colours, once (scene.h); optional:
+     * without them each use converts. Emitters are in emitter_sampler order (area lights
+     * first, an emitter's index is its light index). */
+    s->material_spectra = malloc((size_t)(s->num_materials > 0 ? s->num_materials : 1) * sizeof *s->material_spectra);
+    if (s->material_spectra)
+        for (int i = 0; i < s->num_materials; i++) s->material_spectra[i] = material_spectra(&s->materials[i]);
+    s->emitter_spectra = malloc((size_t)(s->emitter_sampler.count > 0 ? s->emitter_sampler.count : 1) * sizeof *s->emitter_spectra);
+    if (s->emitter_spectra)
+        for (int i = 0; i < s->emitter_sampler.count; i++)
+            s->emitter_spectra[i] = spectrum_rgb_unbounded(s->emitter_sampler.light[i].u.area.radiance);
     /* From the geometry, not from `bounds` (the back end's): every back end must offset
      * rays alike for their images to agree bit for bit. */
     float extent = 0.0f;

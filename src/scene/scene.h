@@ -16,8 +16,10 @@
 #include "geometry/triangle.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
+#include "materials/bsdf_spectral.h"
 #include "materials/material.h"
 #include "math/color.h"
+#include "math/spectrum.h"
 #include "math/vec3.h"
 #include "scene/footprint.h"
 #include "scene/scene_build.h"
@@ -67,6 +69,11 @@ struct CstScene {
      * two-level structure queried after `accel`. Instances do not emit. */
     InstanceSet *instances;
     EmitterSampler emitter_sampler;
+    /* Spectral mode's lookups done once by commit (math/spectrum.h): per material, its
+     * colours; per area emitter, its radiance (NULL before commit or on OOM: converted at
+     * each use instead). */
+    MaterialSpectra *material_spectra;
+    SpectrumRgb *emitter_spectra;
     /* ray_offset_origin's offset near the origin: RAY_OFFSET_NEAR_MIN, or 4e-7 of the
      * scene's largest coordinate if that is more, so that a ray leaving a surface that
      * lies in a coordinate plane (a floor at y = 0) starts outside that surface's own
@@ -346,8 +353,10 @@ static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHi
 }
 
 /* The BSDF at a hit: the one place where a hit's material, normals and texture
- * coordinates become a Bsdf, so every integrator sees the same surface. */
-static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
+ * coordinates become a Bsdf, so every integrator sees the same surface. Spectral mode
+ * (wl: the path's wavelengths; NULL in RGB mode): built in RGB, then its colours taken
+ * at wl (bsdf_at_wavelengths). */
+static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavelengths *wl, Bsdf *b)
 {
     const Material *m = &s->materials[sh->material];
     if (m->displacement_texture | m->normal_map_texture) {
@@ -356,13 +365,48 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
         bsdf_init_shading(b, m, sh->ns, sh->ng);
     }
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh, b);
+    if (wl) {
+        if (!m->albedo_texture && s->material_spectra) bsdf_at_wavelengths_prepared(b, &s->material_spectra[sh->material], wl);
+        else bsdf_at_wavelengths(b, wl);
+    }
+}
+
+/* Every emitted quantity (radiance, intensity, irradiance, a light path's flux) is an RGB
+ * value times a scalar in the lights' module; in spectral mode this turns it into its
+ * values at wl as an illuminant spectrum (math/spectrum.h), which commutes with the
+ * scalar. The identity in RGB mode (wl NULL). */
+static inline Color scene_light_color(Color rgb, const Wavelengths *wl)
+{
+    return wl ? spectrum_illuminant(rgb, wl) : rgb;
 }
 
 /* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be
  * on an emitter (sh->emitter >= 0). */
-static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w)
+static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w, const Wavelengths *wl)
 {
-    return emitter_radiance(&s->emitter_sampler.light[sh->emitter].u.area, s->textures, sh->ng, sh->uv, w);
+    const Emitter *e = &s->emitter_sampler.light[sh->emitter].u.area;
+    Color le = emitter_radiance(e, s->textures, sh->ng, sh->uv, w);
+    if (!wl) return le;
+    if (!e->texture && s->emitter_spectra && !color_is_black(le))
+        return spectrum_rgb_eval_illuminant(&s->emitter_spectra[sh->emitter], wl);
+    return spectrum_illuminant(le, wl);
+}
+
+/* NEE's light value ls->li at wl (scene_light_color, from the emitter's prepared spectrum
+ * when it is an untextured area light: li is then its radiance). */
+static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wavelengths *wl)
+{
+    if (!wl) return ls->li;
+    if (ls->light < s->emitter_sampler.count && s->emitter_spectra &&
+        !s->emitter_sampler.light[ls->light].u.area.texture && !color_is_black(ls->li))
+        return spectrum_rgb_eval_illuminant(&s->emitter_spectra[ls->light], wl);
+    return spectrum_illuminant(ls->li, wl);
+}
+
+/* The environment's radiance arriving from direction w (black without one). */
+static inline Color scene_env_radiance(const Scene *s, Vec3 w, const Wavelengths *wl)
+{
+    return s->emitter_sampler.env ? scene_light_color(light_env_radiance(&s->emitter_sampler, w), wl) : color_s(0.0f);
 }
 
 /* What NEE and light-path starts need of the scene's geometry and textures. */

@@ -1141,6 +1141,9 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: integrator %d, filter %d or sampler %d is not one of the "
                         "CstIntegrator, CstFilter or CstSampler values", fn, (int)r->integrator, (int)r->filter,
                         (int)r->sampler);
+    if ((int)r->color_mode < CST_COLOR_DEFAULT || r->color_mode > CST_COLOR_SPECTRAL)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: color_mode %d is not a CstColorMode value", fn,
+                        (int)r->color_mode);
     if (setting_set(r->png_linear, 0) && r->png_linear != 0 && r->png_linear != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: png_linear %d; expected 0 or 1", fn, r->png_linear);
     if (setting_set(r->aovs, 0) && (r->aovs & ~(CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH | CST_AOV_VARIANCE)))
@@ -1175,6 +1178,7 @@ CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings
     SETTING_MERGE(photons, 1);
     SETTING_MERGE(photon_radius, 1);
     SETTING_MERGE(sampler, 1);
+    SETTING_MERGE(color_mode, 1);
     SETTING_MERGE(png_linear, 0);
     SETTING_MERGE(aovs, 0);
     if (r->seed_set) { sc->seed = r->seed; sc->seed_set = 1; }

@@ -18,11 +18,16 @@
 #include "render/test_scenes.h"
 #include "scene/scene.h"
 
+/* The colour mode of every render (`test_bidir --spectral`: spectral mode, where BDPT's
+ * light and camera subpaths share per-path wavelengths and VCM's iterations one set). */
+static CstColorMode g_color_mode = CST_COLOR_RGB;
+
 static CstRenderSettings sized(int size, CstFilter filter)
 {
     CstRenderSettings st = {0};
     st.width = st.height = size;
     st.filter = filter;
+    st.color_mode = g_color_mode;
     return st;
 }
 
@@ -211,8 +216,9 @@ static void test_environment_scene(void **state)
     scene_destroy(s);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_box),
         cmocka_unit_test(test_cornell_spheres),

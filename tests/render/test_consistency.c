@@ -1,6 +1,8 @@
 /* Consistency: BSDF-only, NEE-only and MIS path tracing estimate the same integral, and
  * so does light tracing wherever the camera sees no delta surface, so their images must
- * agree within noise, per channel, on the image mean and on every block. */
+ * agree within noise, per channel, on the image mean and on every block.
+ * `test_consistency --spectral` runs every test in spectral mode (math/spectrum.h): the
+ * estimators are the same code, the wavelengths each path carries only add colour noise. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -15,6 +17,9 @@
 #include "scene/scene.h"
 
 enum { SIZE = 128, BLOCK = 32 };
+
+/* The colour mode of every render: set once by main from the command line. */
+static CstColorMode g_color_mode = CST_COLOR_RGB;
 
 /* The light tracer's pixel estimates are correlated within an iteration (a light path
  * splats into several pixels; the path count is fixed), so its region standard errors
@@ -48,6 +53,7 @@ static CstRenderSettings sized(int size, CstFilter filter)
     CstRenderSettings st = {0};
     st.width = st.height = size;
     st.filter = filter;
+    st.color_mode = g_color_mode;
     return st;
 }
 
@@ -185,8 +191,9 @@ static void test_light_through_glass(void **state)
     scene_destroy(s);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_variants_agree),
         cmocka_unit_test(test_cornell_light_tent),

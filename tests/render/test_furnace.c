@@ -1,16 +1,22 @@
 /* White-furnace tests: closed scenes whose radiance is known exactly, rendered by every
- * path-tracing variant and by the light tracer. */
+ * path-tracing variant and by the light tracer. `test_furnace --spectral`: the same in
+ * spectral mode (grey albedos are constant spectra and a white emitter is D65, whose film
+ * value is white: the same expected images, no longer zero-variance). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <string.h>
 #include <cmocka.h>
 
 #include "render/regions.h"
 #include "render/render_util.h"
 #include "render/test_scenes.h"
 #include "scene/scene.h"
+
+/* The colour mode of every render: set once by main from the command line. */
+static CstColorMode g_color_mode = CST_COLOR_RGB;
 
 static const CstIntegrator VARIANTS[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_NEE,
                                          CST_INTEGRATOR_PATH_BSDF};
@@ -39,7 +45,7 @@ static void check_uniform(const CstFilm *film, double expected, const char *what
 
 static CstFilm *render(const Scene *s, CstIntegrator integ, int size, int spp, uint64_t seed)
 {
-    CstRenderSettings st = {.width = size, .height = size};
+    CstRenderSettings st = {.width = size, .height = size, .color_mode = g_color_mode};
     return render_film(s, &st, integ, spp, seed);
 }
 
@@ -114,6 +120,7 @@ static void test_light_furnace_emitting_sphere(void **state)
     CstRenderSettings st = {0};
     st.width = st.height = 32;
     st.integrator = CST_INTEGRATOR_LIGHT;
+    st.color_mode = g_color_mode;
     int rect[17][4];
     for (int b = -1; b < 16; b++) {
         int *r = rect[b + 1];
@@ -137,8 +144,9 @@ static void test_light_furnace_emitting_sphere(void **state)
     scene_destroy(s);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_white_furnace_albedo_one),
         cmocka_unit_test(test_furnace_emitting_sphere),

@@ -772,7 +772,7 @@ static void test_texture_orientation(void **state)
             SurfaceHit sh = {0};
             assert_true(scene_intersect(s, &r, &sh));
             Bsdf b;
-            scene_bsdf(s, &sh, &b);
+            scene_bsdf(s, &sh, NULL, &b);
             const float *t = &px[3 * (2 * y + x)];
             assert_rgb(bsdf_albedo(&b), t[0], t[1], t[2], 1e-4f);
         }

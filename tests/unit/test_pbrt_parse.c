@@ -517,10 +517,30 @@ static void test_camera_and_options(void **state)
     assert_vec(s->camera.position, 1, 2, 3, 0);
     assert_true(s->camera_mirror); /* a plain LookAt is left-handed */
     assert_true(s->camera.aperture_radius == 0.1f && s->camera.focus_distance == 7.0f);
-    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"float iso\"") >= 0);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"float iso\"") < 0); /* the sensor's */
+    assert_true(s->settings.exposure_set && s->settings.exposure == 0.0); /* iso 100: ratio 1 */
+    assert_int_equal(s->settings.color_mode, CST_COLOR_SPECTRAL);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Sampler \"halton\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Integrator \"mlt\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "PixelFilter \"gaussian\"") < 0);
+    cst_scene_destroy(s);
+    /* The sensor's imaging ratio (shutterclose - shutteropen) iso / 100, as exposure stops:
+     * 0.5 * 400 / 100 = 2 is one stop, whichever of Film and Camera comes first; another
+     * sensor is a located approximation, white balance a located warning. */
+    Warnings w2 = {0};
+    s = expect_ok("Film \"rgb\" \"float iso\" 400 \"string sensor\" \"nikon_d850\" \"float whitebalance\" 5000\n"
+                  "LookAt 0 0 -5  0 0 0  0 1 0\n"
+                  "Camera \"perspective\" \"float shutteropen\" 0.25 \"float shutterclose\" 0.75\n"
+                  "WorldBegin\n" TRI, &w2);
+    assert_true(s->settings.exposure_set && fabs(s->settings.exposure - 1.0) < 1e-6);
+    assert_true(find_warning(&w2, CST_WARN_APPROXIMATED, "approximated by cie1931") >= 0);
+    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "whitebalance") >= 0);
+    cst_scene_destroy(s);
+    s = expect_ok("LookAt 0 0 -5  0 0 0  0 1 0\n"
+                  "Camera \"perspective\" \"float shutterclose\" 0.5\n"
+                  "Film \"rgb\" \"float iso\" 400\n"
+                  "WorldBegin\n" TRI, NULL);
+    assert_true(s->settings.exposure_set && fabs(s->settings.exposure - 1.0) < 1e-6);
     cst_scene_destroy(s);
     /* pbrt defaults; Scale -1 1 1 before LookAt makes the frame right-handed */
     s = expect_ok("Scale -1 1 1\nLookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n" TRI, NULL);
@@ -614,6 +634,7 @@ static Film *render_small(const CstScene *s, int w, int h, int spp)
     st.integrator = CST_INTEGRATOR_PATH;
     st.seed = 9;
     st.seed_set = 1;
+    st.color_mode = CST_COLOR_RGB; /* pbrt scenes default to spectral: compare like with like */
     CstFilm *f = NULL;
     CstError err;
     if (cst_render(s, &st, &f, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
@@ -660,6 +681,8 @@ static void test_cornell_pbrt_equals_json(void **state)
     assert_int_equal(a.filter, b.filter);
     assert_int_equal(a.max_depth, b.max_depth);
     assert_int_equal(a.rr_depth, b.rr_depth);
+    assert_int_equal(a.color_mode, CST_COLOR_RGB); /* JSON: RGB by default, pbrt: spectral */
+    assert_int_equal(b.color_mode, CST_COLOR_SPECTRAL);
     assert_string_equal(cst_scene_output_path(json), cst_scene_output_path(pbrt));
     Film *fa = render_small(json, 96, 80, 8), *fb = render_small(pbrt, 96, 80, 8);
     assert_true(films_identical(fa, fb));

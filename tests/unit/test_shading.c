@@ -81,7 +81,7 @@ static void test_interpolation(void **state)
     assert_true(vec_equal(sp.ns, sp.ng));
     /* The BSDF's frame is the shading normal's, its ng the geometric one. */
     Bsdf b;
-    scene_bsdf(s, &sh, &b);
+    scene_bsdf(s, &sh, NULL, &b);
     assert_true(vec_equal(b.frame.n, sh.ns) && vec_equal(b.ng, sh.ng) && b.shading);
     scene_destroy(s);
 }
@@ -108,7 +108,7 @@ static void test_flat(void **state)
     SurfaceHit sh = hit_at(s, 0.2f, 0.3f);
     assert_true(vec_equal(sh.ns, sh.ng));
     Bsdf b;
-    scene_bsdf(s, &sh, &b);
+    scene_bsdf(s, &sh, NULL, &b);
     assert_false(b.shading);
     scene_destroy(s);
     Vec3 n[3] = {v3(0, 0, 1), v3(0, 0, 0), v3_normalize(v3(0, 1, 2))};

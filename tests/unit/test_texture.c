@@ -554,7 +554,7 @@ static void test_bump_and_normal_map(void **state)
                 fail_msg("%s at hit %d: (%g, %g, %g), expected (%g, %g, %g)", kind ? "normal map" : "bump", i,
                          (double)n.x, (double)n.y, (double)n.z, (double)want.x, (double)want.y, (double)want.z);
             Bsdf bs;
-            scene_bsdf(s, &sh, &bs);
+            scene_bsdf(s, &sh, NULL, &bs);
         }
         cst_scene_destroy(cs);
     }
@@ -875,7 +875,7 @@ static void test_json_textures(void **state)
     SurfaceHit sh = hit_toward(s, v3(0.6f, 0.1f, 1), v3(0.6f, 0.1f, 0));
     assert_uv(sh.uv, 0.3, 0.05);
     Bsdf b;
-    scene_bsdf(s, &sh, &b);
+    scene_bsdf(s, &sh, NULL, &b);
     assert_rgb_near(bsdf_albedo(&b), 0.1, 0.2, 0.3, 1e-7);
     cst_scene_destroy(s);
 

@@ -237,12 +237,26 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
 
 CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 {
-    static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius"};
+    static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius", "color"};
     CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
-    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius"));
-    LOADER_TRY(json_check_keys(ld, integ, keys, 5));
+    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius, color"));
+    LOADER_TRY(json_check_keys(ld, integ, keys, 6));
+    if ((v = json_object_get(integ, "color"))) {
+        /* "rgb" (the default) or "spectral" (docs/scene-format.md). */
+        const char *s = NULL;
+        json_path_push_key(ld, "color");
+        LOADER_TRY(json_read_string(ld, v, &s));
+        if (strcmp(s, "rgb") == 0) rs->color_mode = CST_COLOR_RGB;
+        else if (strcmp(s, "spectral") == 0) rs->color_mode = CST_COLOR_SPECTRAL;
+        else {
+            char name[72];
+            return json_fail_here(ld, "unknown color mode \"%s\"; expected \"rgb\" or \"spectral\"",
+                                  json_clip_name(s, name));
+        }
+        json_path_pop(ld);
+    }
     if ((v = json_object_get(integ, "type"))) {
         const char *s = NULL;
         json_path_push_key(ld, "type");

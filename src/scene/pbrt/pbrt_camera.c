@@ -49,6 +49,22 @@ CstStatus pbrt_camera_directive(Loader *ld, Lexer *lx, Loc loc, const char *dnam
     if ((st = pbrt_get_float(ld, &ps, d, "lensradius", 0.0f, &c->lens_radius, NULL))) goto done;
     if ((st = pbrt_get_float(ld, &ps, d, "focaldistance", 1e6f, &c->focal_distance, NULL))) goto done;
     if ((st = pbrt_get_float(ld, &ps, d, "frameaspectratio", 0.0f, &c->frame, &c->has_frame))) goto done;
+    /* pbrt-v4's sensor exposes for shutterclose - shutteropen (default 1): the imaging
+     * ratio exposure_time * iso / 100 (film.cpp PixelSensor::Create), here stops of the
+     * output exposure, added to the Film's iso ones (pbrt_options.c) in either order. */
+    float t0 = 0.0f, t1 = 1.0f;
+    if ((st = pbrt_get_float(ld, &ps, d, "shutteropen", 0.0f, &t0, NULL))) goto done;
+    if ((st = pbrt_get_float(ld, &ps, d, "shutterclose", 1.0f, &t1, NULL))) goto done;
+    if (t1 - t0 != 1.0f) {
+        if (!(t1 > t0) || !isfinite(t1 - t0)) {
+            st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: shutteropen %g, shutterclose %g; expected "
+                              "shutteropen < shutterclose (the exposure time is their difference)", d,
+                              (double)t0, (double)t1);
+            goto done;
+        }
+        ld->settings.exposure = (ld->settings.exposure_set ? ld->settings.exposure : 0.0) + log2((double)(t1 - t0));
+        ld->settings.exposure_set = 1;
+    }
     if ((st = pbrt_lookup(ld, &ps, d, "screenwindow", PT_MASK(PT_FLOAT), "float", &p))) goto done;
     if (p) {
         if (p->num_nums != 4) {

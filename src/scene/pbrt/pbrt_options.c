@@ -74,6 +74,29 @@ CstStatus pbrt_film_directive(Loader *ld, NamedCall *call)
         }
         for (int k = 0; k < 4; k++) rs->crop[k] = (int)b[k];
     }
+    /* The sensor (pbrt-v4 film.cpp PixelSensor::Create): the imaging ratio exposure_time *
+     * iso / 100 scales the image in both colour modes; as stops of the output exposure,
+     * added to the camera's shutter ones (pbrt_camera.c). */
+    float iso = 100.0f, wb = 0.0f;
+    int has_iso = 0, has_wb = 0;
+    TRY(pbrt_get_float(ld, ps, d, "iso", 100.0f, &iso, &has_iso));
+    if (has_iso) {
+        if (!(iso > 0.0f) || !isfinite(iso))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: iso %g; expected a positive number (100: "
+                                "no scaling)", d, (double)iso);
+        rs->exposure = (rs->exposure_set ? rs->exposure : 0.0) + log2((double)iso / 100.0);
+        rs->exposure_set = 1;
+    }
+    const char *sensor = NULL;
+    Loc sl = loc;
+    TRY(pbrt_get_string(ld, ps, d, "sensor", &sensor, &sl));
+    TRY(pbrt_get_float(ld, ps, d, "whitebalance", 0.0f, &wb, &has_wb));
+    if (sensor && strcmp(sensor, "cie1931") != 0)
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, sl, "%s: sensor \"%s\" approximated by cie1931 (the CIE 1931 "
+                     "matching functions; no camera curves)", d, pbrt_clip(sensor, nm));
+    if (has_wb && wb != 0.0f)
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: whitebalance %g ignored (no white balancing)", d,
+                     (double)wb);
     if (strcmp(type, "rgb") != 0 && strcmp(type, "image") != 0)
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered as an RGB film", d);
     return CST_OK;

@@ -234,6 +234,7 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     ld.settings.height = 720;
     ld.settings.integrator = CST_INTEGRATOR_PATH;
     ld.settings.max_depth = 5;
+    ld.settings.color_mode = CST_COLOR_SPECTRAL; /* pbrt-v4 is a spectral renderer */
     ld.settings.filter = CST_FILTER_GAUSSIAN;
     Material def = {.type = MATERIAL_DIFFUSE, .albedo = color_s(0.5f), .ior = 1.0f};
     if ((st = pbrt_add_mat_entry(&ld, NULL, &def, &ld.gs.material))) goto done;

@@ -1,0 +1,40 @@
+/* bsdf_at_wavelengths (bsdf_spectral.h): the one place a BSDF's colours become spectral
+ * values; scene_bsdf calls it after building the BSDF in RGB. */
+#include "materials/bsdf_spectral.h"
+
+void bsdf_at_wavelengths(Bsdf *b, const Wavelengths *wl)
+{
+    switch (b->type) {
+    case MATERIAL_DIFFUSE:
+    case MATERIAL_MIRROR: b->lobe.diffuse.albedo = spectrum_albedo(b->lobe.diffuse.albedo, wl); break;
+    case MATERIAL_GLASS:
+    case MATERIAL_DIELECTRIC: b->lobe.dielectric.tint = spectrum_albedo(b->lobe.dielectric.tint, wl); break;
+    case MATERIAL_CONDUCTOR:
+        b->lobe.conductor.eta = spectrum_unbounded(b->lobe.conductor.eta, wl);
+        b->lobe.conductor.k = spectrum_unbounded(b->lobe.conductor.k, wl);
+        break;
+    case MATERIAL_PLASTIC: b->lobe.plastic.albedo = spectrum_albedo(b->lobe.plastic.albedo, wl); break;
+    }
+}
+
+MaterialSpectra material_spectra(const Material *m)
+{
+    MaterialSpectra ms = {spectrum_rgb_albedo(m->albedo), spectrum_rgb_unbounded(m->eta), spectrum_rgb_unbounded(m->k)};
+    return ms;
+}
+
+void bsdf_at_wavelengths_prepared(Bsdf *b, const MaterialSpectra *ms, const Wavelengths *wl)
+{
+    switch (b->type) {
+    case MATERIAL_DIFFUSE:
+    case MATERIAL_MIRROR: b->lobe.diffuse.albedo = spectrum_rgb_eval(&ms->albedo, wl); break;
+    case MATERIAL_GLASS:
+    case MATERIAL_DIELECTRIC: b->lobe.dielectric.tint = spectrum_rgb_eval(&ms->albedo, wl); break;
+    case MATERIAL_CONDUCTOR:
+        b->lobe.conductor.eta = spectrum_rgb_eval(&ms->eta, wl);
+        b->lobe.conductor.k = spectrum_rgb_eval(&ms->k, wl);
+        break;
+    case MATERIAL_PLASTIC: b->lobe.plastic.albedo = spectrum_rgb_eval(&ms->albedo, wl); break;
+    default: bsdf_at_wavelengths(b, wl); break; /* types without a prepared form */
+    }
+}
