@@ -280,7 +280,7 @@ static void test_wrong_t_still_fails(void **state)
     size_t ties;
     double dt;
     assert_int_equal(rayset_compare_ties(&f->scene, f->secondary, good, good, n, &ties, &dt), 0);
-    assert_true(rayset_sum_t_match_ties(st.sum_t, st.sum_t, st.hits, st.hits, st.max_t, n, ties, dt));
+    assert_true(rayset_sum_t_match_ties(st.sum_t, st.sum_t, st.hits, st.hits, (double)st.max_t, n, ties, dt));
 
     memcpy(bad, good, n * sizeof *bad);
     double sum = 0.0;
@@ -298,7 +298,7 @@ static void test_wrong_t_still_fails(void **state)
                   ties, sum, st.sum_t);
     assert_int_equal(differ, wrong);
     assert_true(wrong > rayset_rays_tolerance(n));
-    assert_false(rayset_sum_t_match_ties(sum, st.sum_t, st.hits, st.hits, st.max_t, n, ties, dt));
+    assert_false(rayset_sum_t_match_ties(sum, st.sum_t, st.hits, st.hits, (double)st.max_t, n, ties, dt));
 
     /* One ray 300 units off, in the middle of a face: beyond 1e-6 x 5.25e7 and no tie. */
     memcpy(bad, good, n * sizeof *bad);
@@ -307,7 +307,7 @@ static void test_wrong_t_still_fails(void **state)
     bad[k].t += 300.0f;
     assert_int_equal(rayset_compare_ties(&f->scene, f->secondary, bad, good, n, &ties, &dt), 1);
     assert_int_equal(ties, 0);
-    assert_false(rayset_sum_t_match_ties(st.sum_t + 300.0, st.sum_t, st.hits, st.hits, st.max_t, n, ties, dt));
+    assert_false(rayset_sum_t_match_ties(st.sum_t + 300.0, st.sum_t, st.hits, st.hits, (double)st.max_t, n, ties, dt));
     free(good);
     free(bad);
 }
