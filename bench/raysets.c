@@ -492,3 +492,94 @@ size_t rayset_compare(const RaysetResult *a, const RaysetResult *b, size_t n, Ra
     *dt_sum = dt;
     return differ;
 }
+
+/* ------------------------------------------------------------ grazing ties */
+
+static double d3_len(D3 a) { return sqrt(d3_dot(a, a)); }
+static bool v3_same(Vec3 a, Vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+/* Whether the edge (a, b) of triangle `tri` (a before b in its winding) is a silhouette for
+ * direction d: no other triangle has it (a boundary), or one that has it faces d the other
+ * way once both are wound consistently (the edge runs b -> a in the neighbour). Across a
+ * non-silhouette edge both faces face d alike: a ray through it crosses the surface, and
+ * must hit one of them (watertightness), so a miss there is no tie. Brute force over the
+ * triangles: only run for the few rays two back ends disagree on. */
+static bool rayset_edge_is_silhouette(const RaysetScene *s, int tri, int ea, int eb, D3 d)
+{
+    const int32_t *ti = &s->tri_indices[3 * tri];
+    Vec3 a = s->positions[ti[ea]], b = s->positions[ti[eb]];
+    D3 p0 = d3_of(s->positions[ti[0]]);
+    double facing = d3_dot(d3_cross(d3_sub(d3_of(s->positions[ti[1]]), p0), d3_sub(d3_of(s->positions[ti[2]]), p0)), d);
+    bool neighbour = false;
+    for (int k = 0; k < s->num_tris; k++) {
+        if (k == tri) continue;
+        const int32_t *tk = &s->tri_indices[3 * k];
+        int ia = -1, ib = -1;
+        for (int v = 0; v < 3; v++) {
+            if (v3_same(s->positions[tk[v]], a)) ia = v;
+            else if (v3_same(s->positions[tk[v]], b)) ib = v;
+        }
+        if (ia < 0 || ib < 0) continue;
+        neighbour = true;
+        D3 q0 = d3_of(s->positions[tk[0]]);
+        double nf = d3_dot(d3_cross(d3_sub(d3_of(s->positions[tk[1]]), q0), d3_sub(d3_of(s->positions[tk[2]]), q0)), d);
+        if ((ib + 1) % 3 != ia) nf = -nf; /* a -> b in the neighbour too: opposite winding */
+        if ((facing > 0.0) != (nf > 0.0)) return true;
+    }
+    return !neighbour;
+}
+
+/* Whether `ray` grazes triangle `tri`: it meets the triangle's plane within `eps` of a
+ * silhouette edge, or runs within 1e-6 rad of parallel to the plane. */
+static bool rayset_ray_grazes(const RaysetScene *s, const Ray *ray, uint32_t tri, double eps)
+{
+    if (tri >= (uint32_t)s->num_tris) return false;
+    const int32_t *ti = &s->tri_indices[3 * tri];
+    D3 p[3] = {d3_of(s->positions[ti[0]]), d3_of(s->positions[ti[1]]), d3_of(s->positions[ti[2]])};
+    D3 o = d3_of(ray->o), d = d3_of(ray->d);
+    D3 n = d3_cross(d3_sub(p[1], p[0]), d3_sub(p[2], p[0]));
+    double nd = d3_dot(n, d), nl = d3_len(n), dl = d3_len(d);
+    if (nl == 0.0 || dl == 0.0) return false;
+    if (fabs(nd) <= 1e-6 * nl * dl) return true;
+    double t = d3_dot(n, d3_sub(p[0], o)) / nd;
+    D3 x = {o.x + t * d.x, o.y + t * d.y, o.z + t * d.z};
+    for (int e = 0; e < 3; e++) {
+        D3 a = p[e], ab = d3_sub(p[(e + 1) % 3], a);
+        double len = d3_len(ab);
+        if (len == 0.0) continue;
+        double dist = d3_len(d3_cross(d3_sub(x, a), ab)) / len;
+        if (dist <= eps && rayset_edge_is_silhouette(s, (int)tri, e, (e + 1) % 3, d)) return true;
+    }
+    return false;
+}
+
+size_t rayset_compare_ties(const RaysetScene *s, const Ray *rays, const RaysetResult *a, const RaysetResult *b,
+                           size_t n, size_t *ties, double *dt_ties)
+{
+    size_t differ = 0, tie = 0, cap = rayset_rays_tolerance(n);
+    double dt = 0.0, eps = RAYSET_EDGE_TOLERANCE * s->diag;
+    for (size_t i = 0; i < n; i++) {
+        bool ha = a[i].prim != RAYSET_MISS, hb = b[i].prim != RAYSET_MISS;
+        double ta = ha ? (double)a[i].t : 0.0, tb = hb ? (double)b[i].t : 0.0;
+        if (ha == hb && (!ha || fabs(ta - tb) <= RAYSET_T_TOLERANCE * fmax(fabs(ta), fabs(tb)))) continue;
+        differ++;
+        if (tie > cap) continue; /* past the tolerance the allowance is void anyway */
+        /* The nearer hit is the one the other back end went past. */
+        uint32_t near = !hb || (ha && ta <= tb) ? a[i].prim : b[i].prim;
+        if (rayset_ray_grazes(s, &rays[i], near, eps)) {
+            tie++;
+            dt += fabs(ta - tb);
+        }
+    }
+    *ties = tie;
+    *dt_ties = dt;
+    return differ;
+}
+
+bool rayset_sum_t_match_ties(double sum_t, double ref_sum_t, size_t hits, size_t ref_hits, double max_t,
+                             size_t rays, size_t ties, double dt_ties)
+{
+    double allowance = ties <= rayset_rays_tolerance(rays) ? dt_ties : 0.0;
+    double dh = fabs((double)hits - (double)ref_hits);
+    return fabs(sum_t - ref_sum_t) <= RAYSET_SUM_T_TOLERANCE * fabs(ref_sum_t) + dh * max_t + allowance;
+}
