@@ -190,7 +190,12 @@ typedef enum CstMaterialType {
     CST_MATERIAL_GLASS,       /* smooth dielectric: exact Fresnel; albedo tints both lobes */
     CST_MATERIAL_CONDUCTOR,   /* metal: complex IOR (eta + i k, or a named metal), GGX if rough */
     CST_MATERIAL_DIELECTRIC,  /* glass that may be rough (GGX reflection + transmission) */
-    CST_MATERIAL_PLASTIC      /* dielectric coat (smooth or GGX) over Lambert */
+    CST_MATERIAL_PLASTIC,     /* dielectric coat (smooth or GGX) over Lambert */
+    /* pbrt-v4's layered materials, by its stochastic random walk: a dielectric interface
+     * (ior, roughness) over Lambert (albedo) or a conductor (metal or eta and k;
+     * base_roughness), with a scattering layer between */
+    CST_MATERIAL_COATED_DIFFUSE,
+    CST_MATERIAL_COATED_CONDUCTOR
 } CstMaterialType;
 
 /* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
@@ -207,6 +212,13 @@ typedef struct CstMaterialDesc {
     float eta[3], k[3];     /* conductor: complex IOR per channel, >= 0 */
     int two_sided;          /* diffuse, mirror, conductor, plastic: 1 (default) reflects on both
                              * sides, 0 leaves the back black; dielectrics ignore it */
+    /* Coated materials (defaults: pbrt-v4's) */
+    float base_roughness;   /* coated conductor: the conductor's perceptual roughness in [0, 1] */
+    float thickness;        /* the layer's optical thickness, >= 0 (default 0.01) */
+    float layer_albedo[3];  /* the layer's single-scattering albedo in [0, 1] (default 0) */
+    float g;                /* the layer's Henyey-Greenstein asymmetry in (-1, 1) (default 0) */
+    int max_depth;          /* random-walk steps per estimate, >= 1 (default 10) */
+    int nsamples;           /* walks averaged per estimate, >= 1 (default 1) */
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

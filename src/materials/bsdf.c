@@ -1,5 +1,6 @@
 /* BSDF lobes: Lambert, perfect mirror, smooth and rough conductor, smooth and rough
- * dielectric, plastic (a dielectric coat over Lambert). Everything below works in the local
+ * dielectric, plastic (a dielectric coat over Lambert); the coated materials' random walk
+ * is layered.c's. Everything below works in the local
  * shading frame (normal +z); the public wrappers at the end convert and reject degenerate
  * samples in one place. Microfacet lobes use GGX with height-correlated Smith G2 and
  * visible-normal sampling (microfacet.h). */
@@ -21,6 +22,8 @@ Color bsdf_albedo(const Bsdf *b)
     case MATERIAL_DIELECTRIC: return b->lobe.dielectric.tint;
     case MATERIAL_PLASTIC: return b->lobe.plastic.albedo;
     case MATERIAL_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.conductor.eta, b->lobe.conductor.k);
+    case MATERIAL_COATED_DIFFUSE: return b->lobe.layered.reflectance;
+    case MATERIAL_COATED_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.layered.eta, b->lobe.layered.k);
     }
     return color_s(0.0f);
 }
@@ -325,12 +328,31 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
     return true;
 }
 
+/* ------------------------------------------------------------------ coated (layered.c) */
+
+/* A walk's sample as a BsdfSample. Its weight is the walk's own f |cos| / pdf, an unbiased
+ * estimate; the density a non-delta sample reports is layered_pdf's estimate instead of
+ * the walk's (as pbrt-v4's integrators use BSDF::PDF when pdfIsProportional), so that MIS
+ * weights computed from the sample and from bsdf_pdf at the same hit agree exactly. */
+static bool layered_bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode, BsdfSample *out)
+{
+    LayeredSample ls;
+    if (!layered_sample(&b->lobe.layered, wo, uc, u, mode == BSDF_IMPORTANCE, &ls)) return false;
+    out->wi = ls.wi;
+    out->weight = ls.weight;
+    out->delta = ls.delta;
+    out->pmf = ls.delta ? ls.pdf : 0.0f;
+    out->pdf_w = ls.delta ? 0.0f : layered_pdf(&b->lobe.layered, wo, ls.wi);
+    return true;
+}
+
 float bsdf_delta_probability(const Bsdf *b, Vec3 wo_world)
 {
     if (bsdf_is_delta(b)) return 1.0f;
     if (!bsdf_has_delta(b)) return 0.0f;
     Vec3 wo = frame_to_local(&b->frame, wo_world);
     if (!reflect_side(b, &wo, NULL)) return 0.0f;
+    if (material_is_layered(b->type)) return layered_delta_probability(&b->lobe.layered, wo.z);
     return plastic_coat_prob(b, wo.z);
 }
 
@@ -377,6 +399,10 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
     case MATERIAL_PLASTIC:
         if (!reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return plastic_eval(b, wo, wi);
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
+        return layered_eval(&b->lobe.layered, wo, wi, mode == BSDF_IMPORTANCE);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS: break;
     }
@@ -408,6 +434,10 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
     case MATERIAL_PLASTIC:
         if (!reflect_side(b, &wo, &wi)) return 0.0f;
         return plastic_pdf(b, wo, wi);
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return 0.0f;
+        return layered_pdf(&b->lobe.layered, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS: break;
     }
@@ -487,6 +517,12 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
         if (flipped) wo.z = -wo.z;
         ok = plastic_sample(b, wo, uc, u, out);
+        break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
+        if (flipped) wo.z = -wo.z;
+        ok = layered_bsdf_sample(b, wo, uc, u, mode, out);
         break;
     }
     /* The one place degenerate samples are rejected: no pdf, or a weight that is not a

@@ -12,6 +12,7 @@
 #include <stddef.h>
 
 #include "materials/fresnel.h"
+#include "materials/layered.h"
 #include "materials/material.h"
 #include "math/frame.h"
 #include "math/color.h"
@@ -56,6 +57,7 @@ typedef struct Bsdf {
         ConductorLobe conductor;
         DielectricLobe dielectric; /* glass and dielectric */
         PlasticLobe plastic;
+        LayeredLobe layered; /* coated diffuse and coated conductor */
     } lobe;
 } Bsdf;
 
@@ -123,12 +125,15 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
         b->lobe.plastic.coat_e = NULL;
         b->lobe.plastic.coat_e_avg = 0.0f;
         break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR: layered_init(&b->lobe.layered, m); break;
     }
 }
 /* Inline for those materials: every hit of every path builds one. */
 static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
-    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC)
+    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC ||
+        material_is_layered(m->type))
         bsdf_init_shading_general(b, m, ns, ng);
     else
         bsdf_init_smooth(b, m, ns, ng);
@@ -141,14 +146,18 @@ static inline bool bsdf_is_delta(const Bsdf *b)
     case MATERIAL_GLASS: return true;
     case MATERIAL_CONDUCTOR: return b->lobe.conductor.alpha == 0.0f;
     case MATERIAL_DIELECTRIC: return b->lobe.dielectric.alpha == 0.0f;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR: return layered_is_delta(&b->lobe.layered);
     default: return false;
     }
 }
 /* True when some lobe is a delta lobe (all-delta BSDFs, and the smooth-coat plastic, which
- * mixes a delta coat reflection with a diffuse base). */
+ * mixes a delta coat reflection with a diffuse base; so do the coated materials with a
+ * smooth interface). */
 static inline bool bsdf_has_delta(const Bsdf *b)
 {
-    return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->lobe.plastic.alpha == 0.0f);
+    return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->lobe.plastic.alpha == 0.0f) ||
+           (material_is_layered(b->type) && b->lobe.layered.top_alpha == 0.0f);
 }
 /* True when some lobe transmits (light crosses to the other side of the surface). */
 static inline bool bsdf_has_transmission(const Bsdf *b)
@@ -166,7 +175,9 @@ static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
     case MATERIAL_GLASS:
     case MATERIAL_DIELECTRIC: b->lobe.dielectric.tint = albedo; break;
     case MATERIAL_PLASTIC: b->lobe.plastic.albedo = albedo; break;
-    case MATERIAL_CONDUCTOR: break;
+    case MATERIAL_COATED_DIFFUSE: b->lobe.layered.reflectance = albedo; break;
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_COATED_CONDUCTOR: break;
     }
 }
 static inline void bsdf_set_alpha(Bsdf *b, float alpha)
@@ -175,6 +186,8 @@ static inline void bsdf_set_alpha(Bsdf *b, float alpha)
     case MATERIAL_CONDUCTOR: b->lobe.conductor.alpha = alpha; break;
     case MATERIAL_DIELECTRIC: b->lobe.dielectric.alpha = alpha; break;
     case MATERIAL_PLASTIC: b->lobe.plastic.alpha = alpha; break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR: b->lobe.layered.top_alpha = alpha; break; /* the interface's */
     default: break;
     }
 }

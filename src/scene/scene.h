@@ -259,6 +259,10 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, Bsdf *b)
     const Material *m = &s->materials[sh->material];
     bsdf_init_shading(b, m, sh->ns, sh->ng);
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh->uv, b);
+    /* The coated materials' stochastic estimates draw their random numbers from a hash of
+     * the hit (here) and of the directions (layered.c): the same query at the same hit
+     * always gets the same number, different hits independent ones. */
+    if (material_is_layered(m->type)) b->lobe.layered.seed = layered_hit_seed(sh->p, sh->prim);
 }
 
 /* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be
