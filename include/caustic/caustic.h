@@ -195,7 +195,10 @@ typedef enum CstMaterialType {
      * (ior, roughness) over Lambert (albedo) or a conductor (metal or eta and k;
      * base_roughness), with a scattering layer between */
     CST_MATERIAL_COATED_DIFFUSE,
-    CST_MATERIAL_COATED_CONDUCTOR
+    CST_MATERIAL_COATED_CONDUCTOR,
+    /* pbrt-v4's mix: at each hit one of two materials (mix_materials), the second with
+     * probability amount (chosen by a hash of the hit) */
+    CST_MATERIAL_MIX
 } CstMaterialType;
 
 /* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
@@ -219,6 +222,11 @@ typedef struct CstMaterialDesc {
     float g;                /* the layer's Henyey-Greenstein asymmetry in (-1, 1) (default 0) */
     int max_depth;          /* random-walk steps per estimate, >= 1 (default 10) */
     int nsamples;           /* walks averaged per estimate, >= 1 (default 1) */
+    /* Mix */
+    int mix_materials[2];   /* two material ids of this scene (added before the mix) */
+    float amount;           /* the probability of the second, in [0, 1] (default 0.5) */
+    int amount_texture;     /* a texture id replacing amount (its channels' mean, clamped to
+                             * [0, 1]), or 0 */
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

@@ -24,6 +24,7 @@ Color bsdf_albedo(const Bsdf *b)
     case MATERIAL_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.conductor.eta, b->lobe.conductor.k);
     case MATERIAL_COATED_DIFFUSE: return b->lobe.layered.reflectance;
     case MATERIAL_COATED_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.layered.eta, b->lobe.layered.k);
+    case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
 }
@@ -404,7 +405,8 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return layered_eval(&b->lobe.layered, wo, wi, mode == BSDF_IMPORTANCE);
     case MATERIAL_MIRROR:
-    case MATERIAL_GLASS: break;
+    case MATERIAL_GLASS:
+    case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
 }
@@ -439,7 +441,8 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return 0.0f;
         return layered_pdf(&b->lobe.layered, wo, wi);
     case MATERIAL_MIRROR:
-    case MATERIAL_GLASS: break;
+    case MATERIAL_GLASS:
+    case MATERIAL_MIX: break;
     }
     return 0.0f;
 }
@@ -524,6 +527,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         if (flipped) wo.z = -wo.z;
         ok = layered_bsdf_sample(b, wo, uc, u, mode, out);
         break;
+    case MATERIAL_MIX: return false;
     }
     /* The one place degenerate samples are rejected: no pdf, or a weight that is not a
      * number (e.g. a direction exactly in the tangent plane). */

@@ -127,6 +127,10 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
         break;
     case MATERIAL_COATED_DIFFUSE:
     case MATERIAL_COATED_CONDUCTOR: layered_init(&b->lobe.layered, m); break;
+    case MATERIAL_MIX: /* resolved by scene_bsdf; black if it ever gets here */
+        b->type = MATERIAL_DIFFUSE;
+        b->lobe.diffuse.albedo = color_s(0.0f);
+        break;
     }
 }
 /* Inline for those materials: every hit of every path builds one. */
@@ -177,7 +181,8 @@ static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
     case MATERIAL_PLASTIC: b->lobe.plastic.albedo = albedo; break;
     case MATERIAL_COATED_DIFFUSE: b->lobe.layered.reflectance = albedo; break;
     case MATERIAL_CONDUCTOR:
-    case MATERIAL_COATED_CONDUCTOR: break;
+    case MATERIAL_COATED_CONDUCTOR:
+    case MATERIAL_MIX: break;
     }
 }
 static inline void bsdf_set_alpha(Bsdf *b, float alpha)

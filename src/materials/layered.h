@@ -36,15 +36,6 @@ typedef struct LayeredLobe {
  * its roughness says (material_bsdf_alpha), seed 0. */
 void layered_init(LayeredLobe *l, const Material *m);
 
-/* A seed for LayeredLobe.seed from a hit: its position's bits and its primitive. */
-static inline uint64_t layered_hit_seed(Vec3 p, uint32_t prim)
-{
-    union { float f[3]; uint32_t u[3]; } b = {{p.x, p.y, p.z}};
-    uint64_t h = ((uint64_t)b.u[0] << 32 | b.u[1]) * 0x9e3779b97f4a7c15ULL;
-    h ^= ((uint64_t)b.u[2] << 32 | prim) + 0xd1b54a32d192ed03ULL + (h << 6) + (h >> 2);
-    return h;
-}
-
 /* `importance` below: the walk carries importance (bsdf.h's BSDF_IMPORTANCE, light paths)
  * rather than radiance; it changes the refractions' 1 / eta^2 factor. */
 typedef struct LayeredSample {

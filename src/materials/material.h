@@ -22,7 +22,10 @@ typedef enum MaterialType {
      * Lambert (albedo) or a conductor (eta, k, base_roughness) with a scattering slab between,
      * evaluated by a stochastic random walk. */
     MATERIAL_COATED_DIFFUSE,
-    MATERIAL_COATED_CONDUCTOR
+    MATERIAL_COATED_CONDUCTOR,
+    /* pbrt-v4's mix: at each hit one of two materials, the second with probability amount
+     * (scene_bsdf chooses; a Bsdf is never of this type). */
+    MATERIAL_MIX
 } MaterialType;
 
 static inline bool material_is_layered(MaterialType t)
@@ -50,6 +53,12 @@ typedef struct Material {
     float thickness, g;
     Color layer_albedo;
     int max_depth, nsamples;
+    /* Mix: the two materials (indices into the scene's materials, both added before this
+     * one, so chains of mixes end), the probability of the second, and a texture replacing
+     * it (1 + index, 0 for none; its mean over channels, clamped to [0, 1]). */
+    int mix[2];
+    float amount;
+    int amount_texture;
     /* Textures replacing albedo and roughness: 1 + an index into the scene's textures, 0 for
      * none (so a zero-initialised Material has none). A roughness texture gives the mean of
      * its channels; a rough plastic cannot take one (its coat table depends on roughness). */

@@ -204,6 +204,7 @@ void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
     d->ior = type == CST_MATERIAL_GLASS || type == CST_MATERIAL_DIELECTRIC || type == CST_MATERIAL_PLASTIC ||
              type == CST_MATERIAL_COATED_DIFFUSE || type == CST_MATERIAL_COATED_CONDUCTOR ? 1.5f : 1.0f;
     d->two_sided = 1;
+    d->amount = 0.5f;     /* pbrt-v4's mix default */
     d->thickness = 0.01f; /* pbrt-v4's coated materials' defaults */
     d->max_depth = 10;
     d->nsamples = 1;
@@ -216,7 +217,7 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         [MATERIAL_GLASS] = CST_MATERIAL_GLASS, [MATERIAL_CONDUCTOR] = CST_MATERIAL_CONDUCTOR,
         [MATERIAL_DIELECTRIC] = CST_MATERIAL_DIELECTRIC, [MATERIAL_PLASTIC] = CST_MATERIAL_PLASTIC,
         [MATERIAL_COATED_DIFFUSE] = CST_MATERIAL_COATED_DIFFUSE,
-        [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR};
+        [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR, [MATERIAL_MIX] = CST_MATERIAL_MIX};
     cst_material_desc_init(d, types[m->type]);
     for (int k = 0; k < 3; k++) {
         d->albedo[k] = color_channel(m->albedo, k);
@@ -235,6 +236,12 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         d->g = m->g;
         d->max_depth = m->max_depth;
         d->nsamples = m->nsamples;
+    }
+    if (m->type == MATERIAL_MIX) {
+        d->mix_materials[0] = m->mix[0];
+        d->mix_materials[1] = m->mix[1];
+        d->amount = m->amount;
+        d->amount_texture = m->amount_texture;
     }
 }
 
@@ -295,14 +302,14 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     static const char fn[] = "cst_scene_add_material";
     static const MaterialType types[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
-                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR};
+                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX};
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
-    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_COATED_CONDUCTOR)
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_MIX)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
-                        "to CST_MATERIAL_COATED_CONDUCTOR (cst_material_desc_init sets it)", fn, (int)d->type);
+                        "to CST_MATERIAL_MIX (cst_material_desc_init sets it)", fn, (int)d->type);
     Material m = {0};
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
@@ -331,6 +338,21 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     if ((d->type == CST_MATERIAL_COATED_DIFFUSE || d->type == CST_MATERIAL_COATED_CONDUCTOR) &&
         (st = build_layer(d, &m, err)) != CST_OK)
         return st;
+    if (d->type == CST_MATERIAL_MIX) {
+        for (int i = 0; i < 2; i++)
+            if (d->mix_materials[i] < 0 || d->mix_materials[i] >= scene->num_materials)
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mix_materials[%d] = %d is not a material of this "
+                                "scene; expected 0 to %d (materials added before the mix)", fn, i,
+                                d->mix_materials[i], scene->num_materials - 1);
+        if (!(d->amount >= 0.0f && d->amount <= 1.0f))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: amount %g is outside [0, 1]; expected the "
+                            "probability of the second material", fn, (double)d->amount);
+        if ((st = check_texture_id(scene, d->amount_texture, 1, fn, "amount_texture", err)) != CST_OK) return st;
+        m.mix[0] = d->mix_materials[0];
+        m.mix[1] = d->mix_materials[1];
+        m.amount = d->amount;
+        m.amount_texture = d->amount_texture;
+    }
     return scene_add_material(scene, &m, out_id, err);
 }
 
