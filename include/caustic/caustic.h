@@ -198,7 +198,13 @@ typedef enum CstMaterialType {
     CST_MATERIAL_COATED_CONDUCTOR,
     /* pbrt-v4's mix: at each hit one of two materials (mix_materials), the second with
      * probability amount (chosen by a hash of the hit) */
-    CST_MATERIAL_MIX
+    CST_MATERIAL_MIX,
+    /* pbrt-v4's diffusetransmission: Lambertian reflection (albedo, default 0.25) and
+     * Lambertian transmission (transmittance, default 0.25) */
+    CST_MATERIAL_DIFFUSE_TRANSMISSION,
+    /* pbrt-v4's thindielectric: a thin slab of ior (default 1.5): mirror reflection and
+     * undeviated transmission; albedo tints both */
+    CST_MATERIAL_THIN_DIELECTRIC
 } CstMaterialType;
 
 /* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
@@ -227,6 +233,7 @@ typedef struct CstMaterialDesc {
     float amount;           /* the probability of the second, in [0, 1] (default 0.5) */
     int amount_texture;     /* a texture id replacing amount (its channels' mean, clamped to
                              * [0, 1]), or 0 */
+    float transmittance[3]; /* diffuse transmission: the transmitted share in [0, 1] per channel */
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

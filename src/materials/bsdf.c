@@ -24,6 +24,8 @@ Color bsdf_albedo(const Bsdf *b)
     case MATERIAL_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.conductor.eta, b->lobe.conductor.k);
     case MATERIAL_COATED_DIFFUSE: return b->lobe.layered.reflectance;
     case MATERIAL_COATED_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.layered.eta, b->lobe.layered.k);
+    case MATERIAL_DIFFUSE_TRANSMISSION: return b->lobe.difftrans.reflectance;
+    case MATERIAL_THIN_DIELECTRIC: return b->lobe.dielectric.tint;
     case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
@@ -329,6 +331,75 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
     return true;
 }
 
+/* ------------------------------------------------------------------ diffuse transmission
+ * pbrt-v4 DiffuseTransmissionBxDF: f = R / pi for wi on wo's side, T / pi on the other;
+ * the side picked with probability max(R) : max(T), then cosine-weighted. Reciprocal,
+ * and without a radiance scaling (no refraction). */
+
+static void difftrans_probs(const Bsdf *b, float *pr, float *pt)
+{
+    *pr = color_max(b->lobe.difftrans.reflectance);
+    *pt = color_max(b->lobe.difftrans.transmittance);
+}
+
+static Color difftrans_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    if (wo.z == 0.0f || wi.z == 0.0f) return color_s(0.0f);
+    Color c = wo.z * wi.z > 0.0f ? b->lobe.difftrans.reflectance : b->lobe.difftrans.transmittance;
+    return color_scale(c, CST_INV_PI * fabsf(wi.z));
+}
+
+static float difftrans_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    float pr, pt;
+    difftrans_probs(b, &pr, &pt);
+    if (wo.z == 0.0f || wi.z == 0.0f || !(pr + pt > 0.0f)) return 0.0f;
+    return (wo.z * wi.z > 0.0f ? pr : pt) / (pr + pt) * fabsf(wi.z) * CST_INV_PI;
+}
+
+static bool difftrans_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out)
+{
+    float pr, pt;
+    difftrans_probs(b, &pr, &pt);
+    if (!(pr + pt > 0.0f)) return false;
+    Vec3 wi = warp_cosine_hemisphere(u);
+    const bool reflect = uc < pr / (pr + pt);
+    if ((wo.z > 0.0f) != reflect) wi.z = -wi.z; /* reflection: wo's side; else the other */
+    float p = (reflect ? pr : pt) / (pr + pt);
+    out->wi = wi;
+    out->pdf_w = p * fabsf(wi.z) * CST_INV_PI;
+    out->pmf = 0.0f;
+    out->weight = color_scale(reflect ? b->lobe.difftrans.reflectance : b->lobe.difftrans.transmittance, 1.0f / p);
+    out->delta = false;
+    return wi.z != 0.0f;
+}
+
+/* ------------------------------------------------------------------ thin dielectric
+ * pbrt-v4 ThinDielectricBxDF: a slab thin enough that light leaves where it entered. Per
+ * interface R0 = F(|cos|, eta), T0 = 1 - R0; the internal reflections sum to
+ * R = R0 + T0^2 R0 / (1 - R0^2), T = 1 - R (pbrt-v4 book eq. 14.4). Reflection is the
+ * mirror direction, transmission -wo (undeviated, no radiance scaling: the two
+ * refractions cancel). Both lobes are delta lobes. */
+static bool thin_dielectric_sample(const Bsdf *b, Vec3 wo, float uc, BsdfSample *out)
+{
+    float R = fresnel_dielectric(fabsf(wo.z), b->lobe.dielectric.eta), T = 1.0f - R;
+    if (R < 1.0f) {
+        R += T * T * R / (1.0f - R * R);
+        T = 1.0f - R;
+    }
+    out->delta = true;
+    out->pdf_w = 0.0f;
+    out->weight = b->lobe.dielectric.tint; /* (R / |cos|) |cos| / R, and the same for T */
+    if (uc < R) {
+        out->wi = mirror_z(wo);
+        out->pmf = R;
+    } else {
+        out->wi = v3_neg(wo);
+        out->pmf = T;
+    }
+    return true;
+}
+
 /* ------------------------------------------------------------------ coated (layered.c) */
 
 /* A walk's sample as a BsdfSample. Its weight is the walk's own f |cos| / pdf, an unbiased
@@ -404,8 +475,10 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
     case MATERIAL_COATED_CONDUCTOR:
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return layered_eval(&b->lobe.layered, wo, wi, mode == BSDF_IMPORTANCE);
+    case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_eval(b, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
+    case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
@@ -440,8 +513,10 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
     case MATERIAL_COATED_CONDUCTOR:
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return 0.0f;
         return layered_pdf(&b->lobe.layered, wo, wi);
+    case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_pdf(b, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
+    case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_MIX: break;
     }
     return 0.0f;
@@ -526,6 +601,12 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
         if (flipped) wo.z = -wo.z;
         ok = layered_bsdf_sample(b, wo, uc, u, mode, out);
+        break;
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        ok = difftrans_sample(b, wo, uc, u, out);
+        break;
+    case MATERIAL_THIN_DIELECTRIC:
+        ok = thin_dielectric_sample(b, wo, uc, out);
         break;
     case MATERIAL_MIX: return false;
     }

@@ -32,6 +32,9 @@ typedef struct DielectricLobe { /* MATERIAL_GLASS (alpha 0) and MATERIAL_DIELECT
     float eta;                  /* inside over outside IOR */
     float alpha;
 } DielectricLobe;
+typedef struct DiffuseTransmissionLobe { /* MATERIAL_DIFFUSE_TRANSMISSION */
+    Color reflectance, transmittance;     /* each lobe's hemispherical share */
+} DiffuseTransmissionLobe;
 typedef struct PlasticLobe {    /* MATERIAL_PLASTIC: a dielectric coat over Lambert */
     Color albedo;               /* the base's */
     float eta;                  /* the coat's inside over outside IOR */
@@ -58,6 +61,7 @@ typedef struct Bsdf {
         DielectricLobe dielectric; /* glass and dielectric */
         PlasticLobe plastic;
         LayeredLobe layered; /* coated diffuse and coated conductor */
+        DiffuseTransmissionLobe difftrans;
     } lobe;
 } Bsdf;
 
@@ -109,6 +113,7 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
     case MATERIAL_MIRROR: b->lobe.diffuse.albedo = m->albedo; break;
     case MATERIAL_GLASS:
     case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC:
         b->lobe.dielectric.tint = m->albedo;
         b->lobe.dielectric.eta = m->ior;
         b->lobe.dielectric.alpha = 0.0f;
@@ -127,6 +132,10 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
         break;
     case MATERIAL_COATED_DIFFUSE:
     case MATERIAL_COATED_CONDUCTOR: layered_init(&b->lobe.layered, m); break;
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        b->lobe.difftrans.reflectance = m->albedo;
+        b->lobe.difftrans.transmittance = m->transmittance;
+        break;
     case MATERIAL_MIX: /* resolved by scene_bsdf; black if it ever gets here */
         b->type = MATERIAL_DIFFUSE;
         b->lobe.diffuse.albedo = color_s(0.0f);
@@ -147,7 +156,8 @@ static inline bool bsdf_is_delta(const Bsdf *b)
 {
     switch (b->type) {
     case MATERIAL_MIRROR:
-    case MATERIAL_GLASS: return true;
+    case MATERIAL_GLASS:
+    case MATERIAL_THIN_DIELECTRIC: return true;
     case MATERIAL_CONDUCTOR: return b->lobe.conductor.alpha == 0.0f;
     case MATERIAL_DIELECTRIC: return b->lobe.dielectric.alpha == 0.0f;
     case MATERIAL_COATED_DIFFUSE:
@@ -166,7 +176,8 @@ static inline bool bsdf_has_delta(const Bsdf *b)
 /* True when some lobe transmits (light crosses to the other side of the surface). */
 static inline bool bsdf_has_transmission(const Bsdf *b)
 {
-    return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC;
+    return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC || b->type == MATERIAL_THIN_DIELECTRIC ||
+           b->type == MATERIAL_DIFFUSE_TRANSMISSION;
 }
 /* Texture overrides (scene_bsdf): the reflectance or tint of the lobes that have one (a
  * conductor's colour is its complex IOR: unchanged), and GGX's alpha of the rough-capable
@@ -177,7 +188,9 @@ static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
     case MATERIAL_DIFFUSE:
     case MATERIAL_MIRROR: b->lobe.diffuse.albedo = albedo; break;
     case MATERIAL_GLASS:
-    case MATERIAL_DIELECTRIC: b->lobe.dielectric.tint = albedo; break;
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC: b->lobe.dielectric.tint = albedo; break;
+    case MATERIAL_DIFFUSE_TRANSMISSION: b->lobe.difftrans.reflectance = albedo; break;
     case MATERIAL_PLASTIC: b->lobe.plastic.albedo = albedo; break;
     case MATERIAL_COATED_DIFFUSE: b->lobe.layered.reflectance = albedo; break;
     case MATERIAL_CONDUCTOR:

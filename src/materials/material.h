@@ -25,7 +25,13 @@ typedef enum MaterialType {
     MATERIAL_COATED_CONDUCTOR,
     /* pbrt-v4's mix: at each hit one of two materials, the second with probability amount
      * (scene_bsdf chooses; a Bsdf is never of this type). */
-    MATERIAL_MIX
+    MATERIAL_MIX,
+    /* pbrt-v4's diffusetransmission: Lambertian reflection (albedo) on wo's side and
+     * Lambertian transmission (transmittance) to the other */
+    MATERIAL_DIFFUSE_TRANSMISSION,
+    /* pbrt-v4's thindielectric: a thin slab of ior; mirror reflection and undeviated
+     * transmission, the slab's internal reflections summed in closed form */
+    MATERIAL_THIN_DIELECTRIC
 } MaterialType;
 
 static inline bool material_is_layered(MaterialType t)
@@ -59,6 +65,7 @@ typedef struct Material {
     int mix[2];
     float amount;
     int amount_texture;
+    Color transmittance; /* diffuse transmission: the transmitted lobe's hemispherical share */
     /* Textures replacing albedo and roughness: 1 + an index into the scene's textures, 0 for
      * none (so a zero-initialised Material has none). A roughness texture gives the mean of
      * its channels; a rough plastic cannot take one (its coat table depends on roughness). */

@@ -199,10 +199,13 @@ void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
     memset(d, 0, sizeof *d);
     d->type = type;
     float a = type == CST_MATERIAL_DIFFUSE || type == CST_MATERIAL_PLASTIC || type == CST_MATERIAL_COATED_DIFFUSE
-                  ? 0.5f : 1.0f;
+                  ? 0.5f : type == CST_MATERIAL_DIFFUSE_TRANSMISSION ? 0.25f : 1.0f;
     d->albedo[0] = d->albedo[1] = d->albedo[2] = a;
+    if (type == CST_MATERIAL_DIFFUSE_TRANSMISSION) /* pbrt-v4's defaults */
+        d->transmittance[0] = d->transmittance[1] = d->transmittance[2] = 0.25f;
     d->ior = type == CST_MATERIAL_GLASS || type == CST_MATERIAL_DIELECTRIC || type == CST_MATERIAL_PLASTIC ||
-             type == CST_MATERIAL_COATED_DIFFUSE || type == CST_MATERIAL_COATED_CONDUCTOR ? 1.5f : 1.0f;
+             type == CST_MATERIAL_COATED_DIFFUSE || type == CST_MATERIAL_COATED_CONDUCTOR ||
+             type == CST_MATERIAL_THIN_DIELECTRIC ? 1.5f : 1.0f;
     d->two_sided = 1;
     d->amount = 0.5f;     /* pbrt-v4's mix default */
     d->thickness = 0.01f; /* pbrt-v4's coated materials' defaults */
@@ -217,7 +220,9 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         [MATERIAL_GLASS] = CST_MATERIAL_GLASS, [MATERIAL_CONDUCTOR] = CST_MATERIAL_CONDUCTOR,
         [MATERIAL_DIELECTRIC] = CST_MATERIAL_DIELECTRIC, [MATERIAL_PLASTIC] = CST_MATERIAL_PLASTIC,
         [MATERIAL_COATED_DIFFUSE] = CST_MATERIAL_COATED_DIFFUSE,
-        [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR, [MATERIAL_MIX] = CST_MATERIAL_MIX};
+        [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR, [MATERIAL_MIX] = CST_MATERIAL_MIX,
+        [MATERIAL_DIFFUSE_TRANSMISSION] = CST_MATERIAL_DIFFUSE_TRANSMISSION,
+        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC};
     cst_material_desc_init(d, types[m->type]);
     for (int k = 0; k < 3; k++) {
         d->albedo[k] = color_channel(m->albedo, k);
@@ -237,6 +242,7 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         d->max_depth = m->max_depth;
         d->nsamples = m->nsamples;
     }
+    for (int k = 0; k < 3; k++) d->transmittance[k] = color_channel(m->transmittance, k);
     if (m->type == MATERIAL_MIX) {
         d->mix_materials[0] = m->mix[0];
         d->mix_materials[1] = m->mix[1];
@@ -302,14 +308,15 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     static const char fn[] = "cst_scene_add_material";
     static const MaterialType types[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
-                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX};
+                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
-    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_MIX)
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_THIN_DIELECTRIC)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
-                        "to CST_MATERIAL_MIX (cst_material_desc_init sets it)", fn, (int)d->type);
+                        "to CST_MATERIAL_THIN_DIELECTRIC (cst_material_desc_init sets it)", fn, (int)d->type);
     Material m = {0};
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
@@ -337,6 +344,9 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         return st;
     if ((d->type == CST_MATERIAL_COATED_DIFFUSE || d->type == CST_MATERIAL_COATED_CONDUCTOR) &&
         (st = build_layer(d, &m, err)) != CST_OK)
+        return st;
+    if (d->type == CST_MATERIAL_DIFFUSE_TRANSMISSION &&
+        (st = read_rgb(d->transmittance, 1, fn, "transmittance", &m.transmittance, err)) != CST_OK)
         return st;
     if (d->type == CST_MATERIAL_MIX) {
         for (int i = 0; i < 2; i++)

@@ -139,7 +139,7 @@ static void test_sample_matches_eval(void **state)
                 int t = (int)(bs.wi.z * NT), p = (int)((atan2f(bs.wi.y, bs.wi.x) + (float)PI_D) / (2.0f * (float)PI_D) * NP);
                 t = t >= NT ? NT - 1 : t;
                 p = p < 0 ? 0 : p >= NP ? NP - 1 : p;
-                double w = color_channel(bs.weight, 0);
+                double w = (double)color_channel(bs.weight, 0);
                 s1[t * NP + p] += w;
                 s2[t * NP + p] += w * w;
             }

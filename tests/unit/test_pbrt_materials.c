@@ -86,7 +86,7 @@ static void test_materials(void **state)
     assert_int_equal(s->materials[m[7]->mix[1]].type, MATERIAL_GLASS);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight") < 0);
     assert_true(m[8]->type == MATERIAL_GLASS && m[8]->ior == 1.0f);
-    assert_int_equal(m[9]->type, MATERIAL_GLASS);
+    assert_true(m[9]->type == MATERIAL_THIN_DIELECTRIC && m[9]->ior == 1.5f);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "material \"hair\" is not supported") >= 0);
     assert_true(m[11]->albedo.c[0] == 1.0f && m[11]->albedo.c[2] == 0.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "clamped") >= 0);

@@ -1100,6 +1100,24 @@ static void test_coated_materials(void **state)
                  CST_ERR_INVALID_ARG, "0}}", 0, "materials.white.max_depth");
 }
 
+/* diffuse_transmission (pbrt-v4's defaults 0.25 and 0.25) and thin_dielectric. */
+static void test_transmitter_materials(void **state)
+{
+    (void)state;
+    CstScene *s = expect_ok(SCENE3(CAM,
+        "\"materials\": {\"white\": {\"type\": \"diffuse_transmission\", \"transmittance\": [0.5, 0.6, 0.7]}, "
+        "\"t\": {\"type\": \"thin_dielectric\", \"ior\": 1.33}, \"d\": {\"type\": \"diffuse_transmission\"}}",
+        SHAPES));
+    assert_int_equal(s->materials[0].type, MATERIAL_DIFFUSE_TRANSMISSION);
+    assert_true(s->materials[0].albedo.c[0] == 0.25f && s->materials[0].transmittance.c[2] == 0.7f);
+    assert_true(s->materials[1].type == MATERIAL_THIN_DIELECTRIC && s->materials[1].ior == 1.33f);
+    assert_true(s->materials[2].transmittance.c[1] == 0.25f);
+    cst_scene_destroy(s);
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"diffuse_transmission\", \"transmittance\": "
+                             "[2, 0, 0]}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "2, 0, 0]}", 0, "materials.white.transmittance[0]: red 2 is outside [0, 1]");
+}
+
 /* The mix material: names resolved among the materials above it, amount, and errors. */
 static void test_mix_material(void **state)
 {
@@ -1156,6 +1174,7 @@ int main(void)
         cmocka_unit_test(test_new_materials),
         cmocka_unit_test(test_coated_materials),
         cmocka_unit_test(test_mix_material),
+        cmocka_unit_test(test_transmitter_materials),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

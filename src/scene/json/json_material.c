@@ -12,11 +12,12 @@
 #include "scene/json/json_texture.h"
 
 enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COATED_DIFFUSE,
-       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_COUNT };
+       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_COUNT };
 
 /* A material's "type", in MAT_* order (json_material.h). */
 const char *const json_material_types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric",
-                                           "plastic", "coated_diffuse", "coated_conductor", "mix", NULL};
+                                           "plastic", "coated_diffuse", "coated_conductor", "mix", "diffuse_transmission",
+                                           "thin_dielectric", NULL};
 
 /* "roughness": perceptual, in [0, 1] (material.h: alpha = roughness^2). */
 static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
@@ -125,7 +126,8 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     const char *const *types = json_material_types;
     static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
-                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX};
+                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
     /* The keys each type accepts, "type" first. */
     static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
     static const char *const keys_glass[] = {"type", "albedo", "ior"};
@@ -138,19 +140,29 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
                                                         "base_roughness", "two_sided", "thickness",
                                                         "layer_albedo", "g", "max_depth", "nsamples"};
     static const char *const keys_mix[] = {"type", "materials", "amount"};
+    static const char *const keys_difftrans[] = {"type", "albedo", "transmittance"};
     static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass, keys_conductor,
                                               keys_dielectric, keys_plastic, keys_coated_diffuse,
-                                              keys_coated_conductor, keys_mix};
-    static const int nkeys[] = {3, 3, 3, 6, 4, 5, 10, 13, 3};
+                                              keys_coated_conductor, keys_mix, keys_difftrans, keys_glass};
+    static const int nkeys[] = {3, 3, 3, 6, 4, 5, 10, 13, 3, 3, 3};
     int type = 0;
     json_t *v;
     LOADER_TRY(json_expect_object(ld, obj, "a material object"));
     LOADER_TRY(json_read_type(ld, obj, "material type", types, MAT_COUNT, -1, &type));
     LOADER_TRY(json_check_keys(ld, obj, keys[type], nkeys[type]));
     m->type = mtype[type];
-    m->albedo = type == MAT_DIFFUSE || type == MAT_PLASTIC || type == MAT_COATED_DIFFUSE ? color_s(0.5f) : color_s(1.0f);
+    m->albedo = type == MAT_DIFFUSE || type == MAT_PLASTIC || type == MAT_COATED_DIFFUSE ? color_s(0.5f)
+                : type == MAT_DIFFUSE_TRANSMISSION ? color_s(0.25f) : color_s(1.0f);
     m->ior = type == MAT_GLASS || type == MAT_DIELECTRIC || type == MAT_PLASTIC || type == MAT_COATED_DIFFUSE ||
-             type == MAT_COATED_CONDUCTOR ? 1.5f : 1.0f;
+             type == MAT_COATED_CONDUCTOR || type == MAT_THIN_DIELECTRIC ? 1.5f : 1.0f;
+    if (type == MAT_DIFFUSE_TRANSMISSION) {
+        m->transmittance = color_s(0.25f); /* pbrt-v4's default */
+        if ((v = json_object_get(obj, "transmittance"))) {
+            json_path_push_key(ld, "transmittance");
+            LOADER_TRY(json_read_rgb(ld, v, 1, &m->transmittance));
+            json_path_pop(ld);
+        }
+    }
     if (type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR) LOADER_TRY(read_layer(ld, obj, m));
     if (type == MAT_MIX) return read_mix(ld, obj, m);
     m->roughness = 0.0f;

@@ -265,9 +265,24 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
         TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "diffusetransmission") == 0) {
+        /* pbrt-v4 DiffuseTransmissionMaterial: reflectance and transmittance (0.25 each)
+         * times scale, each clamped to [0, 1]. */
+        m->type = MATERIAL_DIFFUSE_TRANSMISSION;
+        m->albedo = color_s(0.25f);
+        m->transmittance = color_s(0.25f);
+        float scale = 1.0f;
         TRY(get_albedo(ld, ps, d, "reflectance", m));
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its reflectance "
-                     "(transmission is dropped)", d);
+        TRY(pbrt_get_spectrum(ld, ps, d, "transmittance", SPEC_REFLECTANCE, 1, &m->transmittance, NULL));
+        TRY(pbrt_get_float_tex(ld, ps, d, "scale", 1.0f, &scale, NULL));
+        if (scale != 1.0f) {
+            if (m->albedo_texture)
+                pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: \"scale\" %g is not applied to the "
+                             "reflectance texture", d, (double)scale);
+            for (int c = 0; c < 3; c++) {
+                m->albedo.c[c] = clampf(m->albedo.c[c] * scale, 0.0f, 1.0f);
+                m->transmittance.c[c] = clampf(m->transmittance.c[c] * scale, 0.0f, 1.0f);
+            }
+        }
     } else if (strcmp(type, "plastic") == 0 || strcmp(type, "substrate") == 0 ||
                strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 ||
                strcmp(type, "disney") == 0) { /* pbrt-v3 */
@@ -301,24 +316,23 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->type = MATERIAL_MIRROR;
         m->albedo = color_s(0.9f);
         TRY(get_albedo(ld, ps, d, "Kr", m));
-    } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0 ||
-               strcmp(type, "thindielectric") == 0) {
+    } else if (strcmp(type, "thindielectric") == 0) {
+        m->type = MATERIAL_THIN_DIELECTRIC;
+        m->albedo = color_s(1.0f);
+        m->ior = 1.5f;
+        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
+    } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0) {
         m->type = MATERIAL_GLASS;
         m->albedo = color_s(1.0f);
         m->ior = 1.5f;
         TRY(dielectric_eta(ld, ps, d, strcmp(type, "glass") == 0 && pbrt_find_param(ps, "index") ? "index" : "eta",
                            &m->ior));
-        if (strcmp(type, "thindielectric") == 0) {
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as a solid dielectric (glass) "
-                         "of the same eta: rays refract at its surface instead of passing straight through", d);
-        } else {
-            /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
-             * DielectricBxDF; below alpha 1e-3 both are smooth. */
-            TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
-            if (m->roughness_texture || material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA)
-                m->type = MATERIAL_DIELECTRIC;
-            else m->roughness = 0.0f;
-        }
+        /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
+         * DielectricBxDF; below alpha 1e-3 both are smooth. */
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
+        if (m->roughness_texture || material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA)
+            m->type = MATERIAL_DIELECTRIC;
+        else m->roughness = 0.0f;
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 || strcmp(type, "none") == 0) {
         m->type = MATERIAL_GLASS;
         m->albedo = color_s(1.0f);
