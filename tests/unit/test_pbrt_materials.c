@@ -25,7 +25,7 @@ static void test_materials(void **state)
         "MakeNamedMaterial \"g\" \"string type\" \"dielectric\"\n"
         "MakeNamedMaterial \"m2\" \"string type\" \"mix\" \"string materials\" [\"a\" \"g\"] \"float amount\" 0.75\n"
         "NamedMaterial \"m2\"\n" TRI                                                           /* 7 */
-        "Material \"interface\"\n" TRI                                                         /* 8 */
+        "Material \"diffuse\" \"rgb reflectance\" [.125 .125 .125]\n" TRI                          /* 8 */
         "Material \"thindielectric\"\n" TRI                                                    /* 9 */
         "Material \"hair\"\n" TRI                                                              /* 10 */
         "Material \"diffuse\" \"rgb reflectance\" [2 0.5 -1]\n" TRI                            /* 11 */
@@ -85,7 +85,7 @@ static void test_materials(void **state)
     assert_int_equal(s->materials[m[7]->mix[0]].type, MATERIAL_DIFFUSE);
     assert_int_equal(s->materials[m[7]->mix[1]].type, MATERIAL_GLASS);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight") < 0);
-    assert_true(m[8]->type == MATERIAL_GLASS && m[8]->ior == 1.0f);
+    assert_true(m[8]->type == MATERIAL_DIFFUSE && m[8]->albedo.c[0] == 0.125f); /* interface: below */
     assert_true(m[9]->type == MATERIAL_THIN_DIELECTRIC && m[9]->ior == 1.5f);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "material \"hair\" is not supported") >= 0);
     assert_true(m[11]->albedo.c[0] == 1.0f && m[11]->albedo.c[2] == 0.0f);
@@ -643,10 +643,32 @@ static void test_texture_orientation(void **state)
     cst_scene_destroy(s);
 }
 
+/* Shapes with material "interface" bound media only: left out of the scene (invisible to
+ * every ray, shadow rays included), with one warning; an emitting one stays (glass of eta 1),
+ * and so do the shapes around it. */
+static void test_interface_shapes(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD("Material \"interface\"\n" TRI TRI
+                               "MakeNamedMaterial \"i\" \"string type\" \"interface\"\n"
+                               "NamedMaterial \"i\"\n" TRI
+                               "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n" TRI "AttributeEnd\n"
+                               "Material \"diffuse\"\n" TRI),
+                         &w);
+    assert_int_equal(s->num_triangles, 2); /* the emitting interface and the diffuse one */
+    assert_int_equal(s->materials[s->tri_info[0].material].type, MATERIAL_GLASS);
+    assert_int_equal(s->materials[s->tri_info[1].material].type, MATERIAL_DIFFUSE);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "are left out") >= 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "emitting shape with material \"interface\"") >= 0);
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_materials),
+        cmocka_unit_test(test_interface_shapes),
         cmocka_unit_test(test_lights),
         cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_equal_area_map),

@@ -53,6 +53,7 @@ CstStatus pbrt_add_mat_entry(Loader *ld, const char *name, const Material *m, in
     if (name && !(e->name = pbrt_dup_str(name))) return pbrt_oom(ld);
     e->m = *m;
     e->scene_id = -1;
+    e->interface = 0;
     *out = ld->num_mats++;
     return CST_OK;
 }
@@ -337,8 +338,8 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->type = MATERIAL_GLASS;
         m->albedo = color_s(1.0f);
         m->ior = 1.0f;
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (a medium boundary) approximated as glass of "
-                     "eta 1: paths pass straight through, shadow rays are blocked", d);
+        /* Shapes with it are left out (pbrt_shape.c); this glass of eta 1 stands in only
+         * for an emitting one, which must stay to emit. */
     } else if (strcmp(type, "mix") == 0) {
         Param *p;
         TRY(pbrt_lookup(ld, ps, d, "materials", PT_MASK(PT_STRING), "string", &p));
@@ -432,6 +433,7 @@ CstStatus pbrt_material_directive(Loader *ld, NamedCall *call)
     TRY(make_material(ld, mt, ps, loc, &m));
     int id = 0;
     TRY(pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id));
+    ld->mats[id].interface = strcmp(mt, "interface") == 0 || strcmp(mt, "") == 0 || strcmp(mt, "none") == 0;
     if (dname[2] != 'k') ld->gs.material = id;
     return CST_OK;
 }
