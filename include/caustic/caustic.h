@@ -256,7 +256,21 @@ typedef enum CstMaterialType {
     CST_MATERIAL_GLASS,       /* smooth dielectric: exact Fresnel; albedo tints both lobes */
     CST_MATERIAL_CONDUCTOR,   /* metal: complex IOR (eta + i k, or a named metal), GGX if rough */
     CST_MATERIAL_DIELECTRIC,  /* glass that may be rough (GGX reflection + transmission) */
-    CST_MATERIAL_PLASTIC      /* dielectric coat (smooth or GGX) over Lambert */
+    CST_MATERIAL_PLASTIC,     /* dielectric coat (smooth or GGX) over Lambert */
+    /* pbrt-v4's layered materials, by its stochastic random walk: a dielectric interface
+     * (ior, roughness) over Lambert (albedo) or a conductor (metal or eta and k;
+     * base_roughness), with a scattering layer between */
+    CST_MATERIAL_COATED_DIFFUSE,
+    CST_MATERIAL_COATED_CONDUCTOR,
+    /* pbrt-v4's mix: at each hit one of two materials (mix_materials), the second with
+     * probability amount (chosen by a hash of the hit) */
+    CST_MATERIAL_MIX,
+    /* pbrt-v4's diffusetransmission: Lambertian reflection (albedo, default 0.25) and
+     * Lambertian transmission (transmittance, default 0.25) */
+    CST_MATERIAL_DIFFUSE_TRANSMISSION,
+    /* pbrt-v4's thindielectric: a thin slab of ior (default 1.5): mirror reflection and
+     * undeviated transmission; albedo tints both */
+    CST_MATERIAL_THIN_DIELECTRIC
 } CstMaterialType;
 
 /* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
@@ -275,6 +289,19 @@ typedef struct CstMaterialDesc {
                              * sides, 0 leaves the back black; dielectrics ignore it */
     int displacement_texture; /* a texture id: bump mapping by its channel mean (scene units), or 0 */
     int normal_map_texture;   /* a texture id: a tangent-space normal map, (2 rgb - 1), or 0 */
+    /* Coated materials (defaults: pbrt-v4's) */
+    float base_roughness;   /* coated conductor: the conductor's perceptual roughness in [0, 1] */
+    float thickness;        /* the layer's optical thickness, >= 0 (default 0.01) */
+    float layer_albedo[3];  /* the layer's single-scattering albedo in [0, 1] (default 0) */
+    float g;                /* the layer's Henyey-Greenstein asymmetry in (-1, 1) (default 0) */
+    int max_depth;          /* random-walk steps per estimate, >= 1 (default 10) */
+    int nsamples;           /* walks averaged per estimate, >= 1 (default 1) */
+    /* Mix */
+    int mix_materials[2];   /* two material ids of this scene (added before the mix) */
+    float amount;           /* the probability of the second, in [0, 1] (default 0.5) */
+    int amount_texture;     /* a texture id replacing amount (its channels' mean, clamped to
+                             * [0, 1]), or 0 */
+    float transmittance[3]; /* diffuse transmission: the transmitted share in [0, 1] per channel */
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

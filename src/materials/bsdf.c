@@ -1,5 +1,6 @@
 /* BSDF lobes: Lambert, perfect mirror, smooth and rough conductor, smooth and rough
- * dielectric, plastic (a dielectric coat over Lambert). Everything below works in the local
+ * dielectric, plastic (a dielectric coat over Lambert); the coated materials' random walk
+ * is layered.c's. Everything below works in the local
  * shading frame (normal +z); the public wrappers at the end convert and reject degenerate
  * samples in one place. Microfacet lobes use GGX with height-correlated Smith G2 and
  * visible-normal sampling (microfacet.h). */
@@ -21,6 +22,11 @@ Color bsdf_albedo(const Bsdf *b)
     case MATERIAL_DIELECTRIC: return b->lobe.dielectric.tint;
     case MATERIAL_PLASTIC: return b->lobe.plastic.albedo;
     case MATERIAL_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.conductor.eta, b->lobe.conductor.k);
+    case MATERIAL_COATED_DIFFUSE: return b->lobe.layered.reflectance;
+    case MATERIAL_COATED_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.layered.eta, b->lobe.layered.k);
+    case MATERIAL_DIFFUSE_TRANSMISSION: return b->lobe.difftrans.reflectance;
+    case MATERIAL_THIN_DIELECTRIC: return b->lobe.dielectric.tint;
+    case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
 }
@@ -325,12 +331,100 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
     return true;
 }
 
+/* ------------------------------------------------------------------ diffuse transmission
+ * pbrt-v4 DiffuseTransmissionBxDF: f = R / pi for wi on wo's side, T / pi on the other;
+ * the side picked with probability max(R) : max(T), then cosine-weighted. Reciprocal,
+ * and without a radiance scaling (no refraction). */
+
+static void difftrans_probs(const Bsdf *b, float *pr, float *pt)
+{
+    *pr = color_max(b->lobe.difftrans.reflectance);
+    *pt = color_max(b->lobe.difftrans.transmittance);
+}
+
+static Color difftrans_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    if (wo.z == 0.0f || wi.z == 0.0f) return color_s(0.0f);
+    Color c = wo.z * wi.z > 0.0f ? b->lobe.difftrans.reflectance : b->lobe.difftrans.transmittance;
+    return color_scale(c, CST_INV_PI * fabsf(wi.z));
+}
+
+static float difftrans_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
+{
+    float pr, pt;
+    difftrans_probs(b, &pr, &pt);
+    if (wo.z == 0.0f || wi.z == 0.0f || !(pr + pt > 0.0f)) return 0.0f;
+    return (wo.z * wi.z > 0.0f ? pr : pt) / (pr + pt) * fabsf(wi.z) * CST_INV_PI;
+}
+
+static bool difftrans_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample *out)
+{
+    float pr, pt;
+    difftrans_probs(b, &pr, &pt);
+    if (!(pr + pt > 0.0f)) return false;
+    Vec3 wi = warp_cosine_hemisphere(u);
+    const bool reflect = uc < pr / (pr + pt);
+    if ((wo.z > 0.0f) != reflect) wi.z = -wi.z; /* reflection: wo's side; else the other */
+    float p = (reflect ? pr : pt) / (pr + pt);
+    out->wi = wi;
+    out->pdf_w = p * fabsf(wi.z) * CST_INV_PI;
+    out->pmf = 0.0f;
+    out->weight = color_scale(reflect ? b->lobe.difftrans.reflectance : b->lobe.difftrans.transmittance, 1.0f / p);
+    out->delta = false;
+    return wi.z != 0.0f;
+}
+
+/* ------------------------------------------------------------------ thin dielectric
+ * pbrt-v4 ThinDielectricBxDF: a slab thin enough that light leaves where it entered. Per
+ * interface R0 = F(|cos|, eta), T0 = 1 - R0; the internal reflections sum to
+ * R = R0 + T0^2 R0 / (1 - R0^2), T = 1 - R (pbrt-v4 book eq. 14.4). Reflection is the
+ * mirror direction, transmission -wo (undeviated, no radiance scaling: the two
+ * refractions cancel). Both lobes are delta lobes. */
+static bool thin_dielectric_sample(const Bsdf *b, Vec3 wo, float uc, BsdfSample *out)
+{
+    float R = fresnel_dielectric(fabsf(wo.z), b->lobe.dielectric.eta), T = 1.0f - R;
+    if (R < 1.0f) {
+        R += T * T * R / (1.0f - R * R);
+        T = 1.0f - R;
+    }
+    out->delta = true;
+    out->pdf_w = 0.0f;
+    out->weight = b->lobe.dielectric.tint; /* (R / |cos|) |cos| / R, and the same for T */
+    if (uc < R) {
+        out->wi = mirror_z(wo);
+        out->pmf = R;
+    } else {
+        out->wi = v3_neg(wo);
+        out->pmf = T;
+    }
+    return true;
+}
+
+/* ------------------------------------------------------------------ coated (layered.c) */
+
+/* A walk's sample as a BsdfSample. Its weight is the walk's own f |cos| / pdf, an unbiased
+ * estimate; the density a non-delta sample reports is layered_pdf's estimate instead of
+ * the walk's (as pbrt-v4's integrators use BSDF::PDF when pdfIsProportional), so that MIS
+ * weights computed from the sample and from bsdf_pdf at the same hit agree exactly. */
+static bool layered_bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTransport mode, BsdfSample *out)
+{
+    LayeredSample ls;
+    if (!layered_sample(&b->lobe.layered, wo, uc, u, mode == BSDF_IMPORTANCE, &ls)) return false;
+    out->wi = ls.wi;
+    out->weight = ls.weight;
+    out->delta = ls.delta;
+    out->pmf = ls.delta ? ls.pdf : 0.0f;
+    out->pdf_w = ls.delta ? 0.0f : layered_pdf(&b->lobe.layered, wo, ls.wi);
+    return true;
+}
+
 float bsdf_delta_probability(const Bsdf *b, Vec3 wo_world)
 {
     if (bsdf_is_delta(b)) return 1.0f;
     if (!bsdf_has_delta(b)) return 0.0f;
     Vec3 wo = frame_to_local(&b->frame, wo_world);
     if (!reflect_side(b, &wo, NULL)) return 0.0f;
+    if (material_is_layered(b->type)) return layered_delta_probability(&b->lobe.layered, wo.z);
     return plastic_coat_prob(b, wo.z);
 }
 
@@ -377,8 +471,15 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
     case MATERIAL_PLASTIC:
         if (!reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return plastic_eval(b, wo, wi);
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
+        return layered_eval(&b->lobe.layered, wo, wi, mode == BSDF_IMPORTANCE);
+    case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_eval(b, wo, wi);
     case MATERIAL_MIRROR:
-    case MATERIAL_GLASS: break;
+    case MATERIAL_GLASS:
+    case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
 }
@@ -408,8 +509,15 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
     case MATERIAL_PLASTIC:
         if (!reflect_side(b, &wo, &wi)) return 0.0f;
         return plastic_pdf(b, wo, wi);
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return 0.0f;
+        return layered_pdf(&b->lobe.layered, wo, wi);
+    case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_pdf(b, wo, wi);
     case MATERIAL_MIRROR:
-    case MATERIAL_GLASS: break;
+    case MATERIAL_GLASS:
+    case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_MIX: break;
     }
     return 0.0f;
 }
@@ -488,6 +596,19 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         if (flipped) wo.z = -wo.z;
         ok = plastic_sample(b, wo, uc, u, out);
         break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
+        if (flipped) wo.z = -wo.z;
+        ok = layered_bsdf_sample(b, wo, uc, u, mode, out);
+        break;
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        ok = difftrans_sample(b, wo, uc, u, out);
+        break;
+    case MATERIAL_THIN_DIELECTRIC:
+        ok = thin_dielectric_sample(b, wo, uc, out);
+        break;
+    case MATERIAL_MIX: return false;
     }
     /* The one place degenerate samples are rejected: no pdf, or a weight that is not a
      * number (e.g. a direction exactly in the tangent plane). */

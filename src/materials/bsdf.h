@@ -12,6 +12,7 @@
 #include <stddef.h>
 
 #include "materials/fresnel.h"
+#include "materials/layered.h"
 #include "materials/material.h"
 #include "math/frame.h"
 #include "math/color.h"
@@ -31,6 +32,9 @@ typedef struct DielectricLobe { /* MATERIAL_GLASS (alpha 0) and MATERIAL_DIELECT
     float eta;                  /* inside over outside IOR */
     float alpha;
 } DielectricLobe;
+typedef struct DiffuseTransmissionLobe { /* MATERIAL_DIFFUSE_TRANSMISSION */
+    Color reflectance, transmittance;     /* each lobe's hemispherical share */
+} DiffuseTransmissionLobe;
 typedef struct PlasticLobe {    /* MATERIAL_PLASTIC: a dielectric coat over Lambert */
     Color albedo;               /* the base's */
     float eta;                  /* the coat's inside over outside IOR */
@@ -56,6 +60,8 @@ typedef struct Bsdf {
         ConductorLobe conductor;
         DielectricLobe dielectric; /* glass and dielectric */
         PlasticLobe plastic;
+        LayeredLobe layered; /* coated diffuse and coated conductor */
+        DiffuseTransmissionLobe difftrans;
     } lobe;
 } Bsdf;
 
@@ -107,6 +113,7 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
     case MATERIAL_MIRROR: b->lobe.diffuse.albedo = m->albedo; break;
     case MATERIAL_GLASS:
     case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC:
         b->lobe.dielectric.tint = m->albedo;
         b->lobe.dielectric.eta = m->ior;
         b->lobe.dielectric.alpha = 0.0f;
@@ -123,12 +130,23 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
         b->lobe.plastic.coat_e = NULL;
         b->lobe.plastic.coat_e_avg = 0.0f;
         break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR: layered_init(&b->lobe.layered, m); break;
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        b->lobe.difftrans.reflectance = m->albedo;
+        b->lobe.difftrans.transmittance = m->transmittance;
+        break;
+    case MATERIAL_MIX: /* resolved by scene_bsdf; black if it ever gets here */
+        b->type = MATERIAL_DIFFUSE;
+        b->lobe.diffuse.albedo = color_s(0.0f);
+        break;
     }
 }
 /* Inline for those materials: every hit of every path builds one. */
 static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
-    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC)
+    if (m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_DIELECTRIC || m->type == MATERIAL_PLASTIC ||
+        material_is_layered(m->type))
         bsdf_init_shading_general(b, m, ns, ng);
     else
         bsdf_init_smooth(b, m, ns, ng);
@@ -138,22 +156,28 @@ static inline bool bsdf_is_delta(const Bsdf *b)
 {
     switch (b->type) {
     case MATERIAL_MIRROR:
-    case MATERIAL_GLASS: return true;
+    case MATERIAL_GLASS:
+    case MATERIAL_THIN_DIELECTRIC: return true;
     case MATERIAL_CONDUCTOR: return b->lobe.conductor.alpha == 0.0f;
     case MATERIAL_DIELECTRIC: return b->lobe.dielectric.alpha == 0.0f;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR: return layered_is_delta(&b->lobe.layered);
     default: return false;
     }
 }
 /* True when some lobe is a delta lobe (all-delta BSDFs, and the smooth-coat plastic, which
- * mixes a delta coat reflection with a diffuse base). */
+ * mixes a delta coat reflection with a diffuse base; so do the coated materials with a
+ * smooth interface). */
 static inline bool bsdf_has_delta(const Bsdf *b)
 {
-    return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->lobe.plastic.alpha == 0.0f);
+    return bsdf_is_delta(b) || (b->type == MATERIAL_PLASTIC && b->lobe.plastic.alpha == 0.0f) ||
+           (material_is_layered(b->type) && b->lobe.layered.top_alpha == 0.0f);
 }
 /* True when some lobe transmits (light crosses to the other side of the surface). */
 static inline bool bsdf_has_transmission(const Bsdf *b)
 {
-    return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC;
+    return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC || b->type == MATERIAL_THIN_DIELECTRIC ||
+           b->type == MATERIAL_DIFFUSE_TRANSMISSION;
 }
 /* Texture overrides (scene_bsdf): the reflectance or tint of the lobes that have one (a
  * conductor's colour is its complex IOR: unchanged), and GGX's alpha of the rough-capable
@@ -164,9 +188,14 @@ static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
     case MATERIAL_DIFFUSE:
     case MATERIAL_MIRROR: b->lobe.diffuse.albedo = albedo; break;
     case MATERIAL_GLASS:
-    case MATERIAL_DIELECTRIC: b->lobe.dielectric.tint = albedo; break;
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC: b->lobe.dielectric.tint = albedo; break;
+    case MATERIAL_DIFFUSE_TRANSMISSION: b->lobe.difftrans.reflectance = albedo; break;
     case MATERIAL_PLASTIC: b->lobe.plastic.albedo = albedo; break;
-    case MATERIAL_CONDUCTOR: break;
+    case MATERIAL_COATED_DIFFUSE: b->lobe.layered.reflectance = albedo; break;
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_COATED_CONDUCTOR:
+    case MATERIAL_MIX: break;
     }
 }
 static inline void bsdf_set_alpha(Bsdf *b, float alpha)
@@ -175,6 +204,8 @@ static inline void bsdf_set_alpha(Bsdf *b, float alpha)
     case MATERIAL_CONDUCTOR: b->lobe.conductor.alpha = alpha; break;
     case MATERIAL_DIELECTRIC: b->lobe.dielectric.alpha = alpha; break;
     case MATERIAL_PLASTIC: b->lobe.plastic.alpha = alpha; break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR: b->lobe.layered.top_alpha = alpha; break; /* the interface's */
     default: break;
     }
 }

@@ -14,6 +14,21 @@ void bsdf_at_wavelengths(Bsdf *b, const Wavelengths *wl)
         b->lobe.conductor.k = spectrum_unbounded(b->lobe.conductor.k, wl);
         break;
     case MATERIAL_PLASTIC: b->lobe.plastic.albedo = spectrum_albedo(b->lobe.plastic.albedo, wl); break;
+    case MATERIAL_THIN_DIELECTRIC: b->lobe.dielectric.tint = spectrum_albedo(b->lobe.dielectric.tint, wl); break;
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        b->lobe.difftrans.reflectance = spectrum_albedo(b->lobe.difftrans.reflectance, wl);
+        b->lobe.difftrans.transmittance = spectrum_albedo(b->lobe.difftrans.transmittance, wl);
+        break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        /* The conductor base's eta and k arrive divided by the layer's (scalar) eta: the
+         * upsampled ratio is the ratio of the upsampled values, the scalar commuting. */
+        b->lobe.layered.reflectance = spectrum_albedo(b->lobe.layered.reflectance, wl);
+        b->lobe.layered.eta = spectrum_unbounded(b->lobe.layered.eta, wl);
+        b->lobe.layered.k = spectrum_unbounded(b->lobe.layered.k, wl);
+        b->lobe.layered.albedo = spectrum_albedo(b->lobe.layered.albedo, wl);
+        break;
+    case MATERIAL_MIX: break; /* never a Bsdf's type: scene_bsdf resolves a mix first */
     }
 }
 

@@ -17,8 +17,27 @@ typedef enum MaterialType {
     MATERIAL_GLASS,      /* smooth dielectric: exact Fresnel, reflect or refract; albedo tints both */
     MATERIAL_CONDUCTOR,  /* metal: complex-IOR Fresnel, GGX when rough, mirror when smooth */
     MATERIAL_DIELECTRIC, /* glass that may be rough: GGX reflection + transmission (Walter 2007) */
-    MATERIAL_PLASTIC     /* dielectric coat (smooth or GGX) over Lambert; see bsdf.c */
+    MATERIAL_PLASTIC,    /* dielectric coat (smooth or GGX) over Lambert; see bsdf.c */
+    /* pbrt-v4's layered materials (layered.c): a dielectric interface (ior, roughness) over
+     * Lambert (albedo) or a conductor (eta, k, base_roughness) with a scattering slab between,
+     * evaluated by a stochastic random walk. */
+    MATERIAL_COATED_DIFFUSE,
+    MATERIAL_COATED_CONDUCTOR,
+    /* pbrt-v4's mix: at each hit one of two materials, the second with probability amount
+     * (scene_bsdf chooses; a Bsdf is never of this type). */
+    MATERIAL_MIX,
+    /* pbrt-v4's diffusetransmission: Lambertian reflection (albedo) on wo's side and
+     * Lambertian transmission (transmittance) to the other */
+    MATERIAL_DIFFUSE_TRANSMISSION,
+    /* pbrt-v4's thindielectric: a thin slab of ior; mirror reflection and undeviated
+     * transmission, the slab's internal reflections summed in closed form */
+    MATERIAL_THIN_DIELECTRIC
 } MaterialType;
+
+static inline bool material_is_layered(MaterialType t)
+{
+    return t == MATERIAL_COATED_DIFFUSE || t == MATERIAL_COATED_CONDUCTOR;
+}
 
 /* GGX alpha below this is treated as perfectly smooth (pbrt-v4 uses the same cut). */
 #define MATERIAL_SMOOTH_ALPHA 1e-3f
@@ -32,6 +51,21 @@ typedef struct Material {
     float ior;       /* glass, dielectric, plastic coat: interior over exterior IOR, > 0 */
     float roughness; /* conductor, dielectric, plastic: perceptual roughness in [0, 1] */
     Color eta, k;      /* conductor: complex IOR eta + i k per RGB channel (material_metal) */
+    /* Coated (layered) materials: the conductor base's perceptual roughness (coated
+     * conductor; roughness is the interface's), the slab's optical thickness, its
+     * single-scattering albedo and Henyey-Greenstein g, and the random walk's steps and
+     * walks per estimate (pbrt-v4's maxdepth, nsamples; > 0). */
+    float base_roughness;
+    float thickness, g;
+    Color layer_albedo;
+    int max_depth, nsamples;
+    /* Mix: the two materials (indices into the scene's materials, both added before this
+     * one, so chains of mixes end), the probability of the second, and a texture replacing
+     * it (1 + index, 0 for none; its mean over channels, clamped to [0, 1]). */
+    int mix[2];
+    float amount;
+    int amount_texture;
+    Color transmittance; /* diffuse transmission: the transmitted lobe's hemispherical share */
     /* Textures replacing albedo and roughness: 1 + an index into the scene's textures, 0 for
      * none (so a zero-initialised Material has none). A roughness texture gives the mean of
      * its channels; a rough plastic cannot take one (its coat table depends on roughness). */

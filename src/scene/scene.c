@@ -103,6 +103,12 @@ CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError 
     if (m->type == MATERIAL_PLASTIC && m->roughness_texture)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "a plastic's roughness cannot be a texture "
                         "(its coat albedo table is computed for one roughness); expected a number");
+    /* A mix refers to materials added before it, so a chain of mixes always ends. */
+    if (m->type == MATERIAL_MIX &&
+        (m->mix[0] < 0 || m->mix[0] >= s->num_materials || m->mix[1] < 0 || m->mix[1] >= s->num_materials ||
+         m->amount_texture < 0 || m->amount_texture > s->num_textures))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "mix material: materials %d and %d (or its amount texture) "
+                        "out of range; expected materials added before it", m->mix[0], m->mix[1]);
     if (!GROW(s->materials, s->cap_materials, s->num_materials + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a material");
     s->materials[s->num_materials] = *m;

@@ -10,6 +10,7 @@
 
 #include "accel/accel.h"
 #include "accel/instances.h"
+#include "core/rng.h"
 #include "camera/camera.h"
 #include "caustic/caustic.h"
 #include "geometry/sphere.h"
@@ -352,6 +353,32 @@ static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHi
     return v3_dot(nb, n) < 0.0f ? v3_neg(nb) : nb;
 }
 
+/* A 64-bit hash of a hit (its position's bits and its primitive): the stochastic choices
+ * made per hit (a mix's material, a coated material's random numbers) are functions of it,
+ * so every query at the same hit sees the same surface. */
+static inline uint64_t scene_hit_hash(const SurfaceHit *sh)
+{
+    union { float f[3]; uint32_t u[3]; } b = {{sh->p.x, sh->p.y, sh->p.z}};
+    uint64_t h = mix64(((uint64_t)b.u[0] << 32 | b.u[1]) + 0x9e3779b97f4a7c15ULL);
+    return mix64(h ^ ((uint64_t)b.u[2] << 32 | sh->prim));
+}
+
+/* A mix material's choice at a hit (pbrt-v4 MixMaterial::ChooseMaterial): the second
+ * material with probability amount, from a hash of the hit (pbrt-v4 hashes the point, wo
+ * and the two materials; the hit alone suffices here, since every path reaching it
+ * builds its BSDF through this function). Mixes of mixes choose again with another hash. */
+static inline const Material *scene_mix_choose(const Scene *s, const Material *m, const SurfaceHit *sh)
+{
+    uint64_t h = scene_hit_hash(sh);
+    while (m->type == MATERIAL_MIX) {
+        float amt = m->amount_texture ? texture_eval_scalar(s->textures, m->amount_texture - 1, sh->uv) : m->amount;
+        h = mix64(h + 0xd1b54a32d192ed03ULL);
+        float u = (float)(h >> 40) * 0x1p-24f;
+        m = &s->materials[m->mix[u < amt ? 1 : 0]];
+    }
+    return m;
+}
+
 /* The BSDF at a hit: the one place where a hit's material, normals and texture
  * coordinates become a Bsdf, so every integrator sees the same surface. Spectral mode
  * (wl: the path's wavelengths; NULL in RGB mode): built in RGB, then its colours taken
@@ -359,14 +386,20 @@ static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHi
 static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavelengths *wl, Bsdf *b)
 {
     const Material *m = &s->materials[sh->material];
+    if (m->type == MATERIAL_MIX) m = scene_mix_choose(s, m, sh);
     if (m->displacement_texture | m->normal_map_texture) {
         bsdf_init_shading(b, m, scene_bump(s, m, sh), sh->ng);
     } else {
         bsdf_init_shading(b, m, sh->ns, sh->ng);
     }
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh, b);
+    /* The coated materials' stochastic estimates draw their random numbers from a hash of
+     * the hit (here) and of the directions (layered.c): the same query at the same hit
+     * always gets the same number, different hits independent ones. */
+    if (material_is_layered(m->type)) b->lobe.layered.seed = scene_hit_hash(sh);
     if (wl) {
-        if (!m->albedo_texture && s->material_spectra) bsdf_at_wavelengths_prepared(b, &s->material_spectra[sh->material], wl);
+        const int mi = (int)(m - s->materials);
+        if (!m->albedo_texture && s->material_spectra) bsdf_at_wavelengths_prepared(b, &s->material_spectra[mi], wl);
         else bsdf_at_wavelengths(b, wl);
     }
 }

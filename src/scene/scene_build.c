@@ -380,10 +380,19 @@ void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
 {
     memset(d, 0, sizeof *d);
     d->type = type;
-    float a = type == CST_MATERIAL_DIFFUSE || type == CST_MATERIAL_PLASTIC ? 0.5f : 1.0f;
+    float a = type == CST_MATERIAL_DIFFUSE || type == CST_MATERIAL_PLASTIC || type == CST_MATERIAL_COATED_DIFFUSE
+                  ? 0.5f : type == CST_MATERIAL_DIFFUSE_TRANSMISSION ? 0.25f : 1.0f;
     d->albedo[0] = d->albedo[1] = d->albedo[2] = a;
-    d->ior = type == CST_MATERIAL_GLASS || type == CST_MATERIAL_DIELECTRIC || type == CST_MATERIAL_PLASTIC ? 1.5f : 1.0f;
+    if (type == CST_MATERIAL_DIFFUSE_TRANSMISSION) /* pbrt-v4's defaults */
+        d->transmittance[0] = d->transmittance[1] = d->transmittance[2] = 0.25f;
+    d->ior = type == CST_MATERIAL_GLASS || type == CST_MATERIAL_DIELECTRIC || type == CST_MATERIAL_PLASTIC ||
+             type == CST_MATERIAL_COATED_DIFFUSE || type == CST_MATERIAL_COATED_CONDUCTOR ||
+             type == CST_MATERIAL_THIN_DIELECTRIC ? 1.5f : 1.0f;
     d->two_sided = 1;
+    d->amount = 0.5f;     /* pbrt-v4's mix default */
+    d->thickness = 0.01f; /* pbrt-v4's coated materials' defaults */
+    d->max_depth = 10;
+    d->nsamples = 1;
 }
 
 void scene_material_desc(const Material *m, CstMaterialDesc *d)
@@ -391,7 +400,11 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
     static const CstMaterialType types[] = {
         [MATERIAL_DIFFUSE] = CST_MATERIAL_DIFFUSE, [MATERIAL_MIRROR] = CST_MATERIAL_MIRROR,
         [MATERIAL_GLASS] = CST_MATERIAL_GLASS, [MATERIAL_CONDUCTOR] = CST_MATERIAL_CONDUCTOR,
-        [MATERIAL_DIELECTRIC] = CST_MATERIAL_DIELECTRIC, [MATERIAL_PLASTIC] = CST_MATERIAL_PLASTIC};
+        [MATERIAL_DIELECTRIC] = CST_MATERIAL_DIELECTRIC, [MATERIAL_PLASTIC] = CST_MATERIAL_PLASTIC,
+        [MATERIAL_COATED_DIFFUSE] = CST_MATERIAL_COATED_DIFFUSE,
+        [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR, [MATERIAL_MIX] = CST_MATERIAL_MIX,
+        [MATERIAL_DIFFUSE_TRANSMISSION] = CST_MATERIAL_DIFFUSE_TRANSMISSION,
+        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC};
     cst_material_desc_init(d, types[m->type]);
     for (int k = 0; k < 3; k++) {
         d->albedo[k] = color_channel(m->albedo, k);
@@ -405,6 +418,47 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
     d->two_sided = !m->one_sided;
     d->displacement_texture = m->displacement_texture;
     d->normal_map_texture = m->normal_map_texture;
+    if (material_is_layered(m->type)) {
+        d->base_roughness = m->base_roughness;
+        d->thickness = m->thickness;
+        for (int k = 0; k < 3; k++) d->layer_albedo[k] = color_channel(m->layer_albedo, k);
+        d->g = m->g;
+        d->max_depth = m->max_depth;
+        d->nsamples = m->nsamples;
+    }
+    for (int k = 0; k < 3; k++) d->transmittance[k] = color_channel(m->transmittance, k);
+    if (m->type == MATERIAL_MIX) {
+        d->mix_materials[0] = m->mix[0];
+        d->mix_materials[1] = m->mix[1];
+        d->amount = m->amount;
+        d->amount_texture = m->amount_texture;
+    }
+}
+
+/* The coated materials' layer (cst_scene_add_material). */
+static CstStatus build_layer(const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    if (!(d->base_roughness >= 0.0f && d->base_roughness <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: base_roughness %g is outside [0, 1]; expected 0 "
+                        "(smooth) to 1 (roughest)", fn, (double)d->base_roughness);
+    if (!(d->thickness >= 0.0f && d->thickness <= FLT_MAX))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: thickness %g; expected a layer thickness >= 0",
+                        fn, (double)d->thickness);
+    if (!(d->g > -1.0f && d->g < 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: g %g is outside (-1, 1); expected a Henyey-Greenstein "
+                        "asymmetry (0 isotropic)", fn, (double)d->g);
+    if (d->max_depth < 1 || d->max_depth > 100000 || d->nsamples < 1 || d->nsamples > 10000)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: max_depth %d, nsamples %d; expected max_depth in "
+                        "[1, 100000] and nsamples in [1, 10000]", fn, d->max_depth, d->nsamples);
+    CstStatus st = read_rgb(d->layer_albedo, 1, fn, "layer_albedo", &m->layer_albedo, err);
+    if (st != CST_OK) return st;
+    m->base_roughness = d->base_roughness;
+    m->thickness = d->thickness;
+    m->g = d->g;
+    m->max_depth = d->max_depth;
+    m->nsamples = d->nsamples;
+    return CST_OK;
 }
 
 /* A texture standing for a reflectance or a roughness: its values must stay within 1. */
@@ -437,14 +491,16 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
 {
     static const char fn[] = "cst_scene_add_material";
     static const MaterialType types[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
-                                         MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC};
+                                         MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
+                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
-    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_PLASTIC)
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_THIN_DIELECTRIC)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
-                        "to CST_MATERIAL_PLASTIC (cst_material_desc_init sets it)", fn, (int)d->type);
+                        "to CST_MATERIAL_THIN_DIELECTRIC (cst_material_desc_init sets it)", fn, (int)d->type);
     Material m = {0};
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
@@ -472,7 +528,30 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     if (d->two_sided != 0 && d->two_sided != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: two_sided %d; expected 0 or 1", fn, d->two_sided);
     m.one_sided = !d->two_sided;
-    if (d->type == CST_MATERIAL_CONDUCTOR && (st = build_conductor(d, &m, err)) != CST_OK) return st;
+    if ((d->type == CST_MATERIAL_CONDUCTOR || d->type == CST_MATERIAL_COATED_CONDUCTOR) &&
+        (st = build_conductor(d, &m, err)) != CST_OK)
+        return st;
+    if ((d->type == CST_MATERIAL_COATED_DIFFUSE || d->type == CST_MATERIAL_COATED_CONDUCTOR) &&
+        (st = build_layer(d, &m, err)) != CST_OK)
+        return st;
+    if (d->type == CST_MATERIAL_DIFFUSE_TRANSMISSION &&
+        (st = read_rgb(d->transmittance, 1, fn, "transmittance", &m.transmittance, err)) != CST_OK)
+        return st;
+    if (d->type == CST_MATERIAL_MIX) {
+        for (int i = 0; i < 2; i++)
+            if (d->mix_materials[i] < 0 || d->mix_materials[i] >= scene->num_materials)
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mix_materials[%d] = %d is not a material of this "
+                                "scene; expected 0 to %d (materials added before the mix)", fn, i,
+                                d->mix_materials[i], scene->num_materials - 1);
+        if (!(d->amount >= 0.0f && d->amount <= 1.0f))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: amount %g is outside [0, 1]; expected the "
+                            "probability of the second material", fn, (double)d->amount);
+        if ((st = check_texture_id(scene, d->amount_texture, 1, fn, "amount_texture", err)) != CST_OK) return st;
+        m.mix[0] = d->mix_materials[0];
+        m.mix[1] = d->mix_materials[1];
+        m.amount = d->amount;
+        m.amount_texture = d->amount_texture;
+    }
     return scene_add_material(scene, &m, out_id, err);
 }
 

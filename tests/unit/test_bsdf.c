@@ -94,6 +94,16 @@ static int build_cases(Case *out)
                 snprintf(c->name, sizeof c->name, "dielectric r=%.2f ior=%.2f cos_o=%.2f %s", (double)ROUGHNESS[r],
                          (double)IORS[i], (double)c->cos_o, c->mode == BSDF_RADIANCE ? "radiance" : "importance");
             }
+    /* diffuse transmission: both sides of the surface, unequal colours and shares */
+    for (int a = 0; a < NELEM(COS_LAMBERT); a++) {
+        Case *c = &out[n++];
+        c->mat = make_material(MATERIAL_DIFFUSE_TRANSMISSION, 0.0f, 1.0f);
+        c->mat.albedo = color_rgb(0.6f, 0.3f, 0.1f);
+        c->mat.transmittance = color_rgb(0.2f, 0.5f, 0.3f);
+        c->cos_o = COS_LAMBERT[a];
+        c->mode = BSDF_RADIANCE;
+        snprintf(c->name, sizeof c->name, "diffuse transmission cos_o=%.2f", (double)c->cos_o);
+    }
     for (int r = 0; r < NELEM(PLASTIC_ROUGHNESS); r++)
         for (int a = 0; a < NELEM(COS_PLASTIC); a++) {
             Case *c = &out[n++];
@@ -192,10 +202,11 @@ static Hist make_hist(const Bsdf *b, Vec3 wo, MaterialType type)
     float etap;
     if (type == MATERIAL_DIELECTRIC && refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->lobe.dielectric.eta, &wt, &etap))
         p1 = v3_normalize(wt);
-    if (type == MATERIAL_DIFFUSE) p0 = v3(0.0f, 0.0f, sgn);
+    if (type == MATERIAL_DIFFUSE || type == MATERIAL_DIFFUSE_TRANSMISSION) p0 = v3(0.0f, 0.0f, sgn);
     h.pole[0] = frame_from_normal(p0);
     h.pole[1] = frame_from_normal(p1);
-    h.theta0 = type == MATERIAL_DIFFUSE ? 100.0f : fmaxf(0.5f * lobe_alpha(b), 1e-3f);
+    h.theta0 = type == MATERIAL_DIFFUSE || type == MATERIAL_DIFFUSE_TRANSMISSION ? 100.0f
+                                                                                : fmaxf(0.5f * lobe_alpha(b), 1e-3f);
     if (type == MATERIAL_PLASTIC && lobe_alpha(b) == 0.0f) h.theta0 = 100.0f;
     h.L = logf(1.0f + CST_PI / h.theta0);
     return h;
@@ -500,6 +511,39 @@ static void test_white_furnace(void **state)
                   worst_excess_z);
 }
 
+/* Diffuse transmission with R + T = 1 and the thin dielectric (R + T = 1 by construction)
+ * reflect and transmit all the light, on both sides, in both transports: every sample
+ * weighs exactly 1. The thin dielectric's reflectance at normal incidence is the slab's,
+ * 2 R0 / (1 + R0) (the sum over internal reflections). */
+static void test_transmitters_furnace(void **state)
+{
+    (void)state;
+    const int n = FURNACE_SAMPLES;
+    for (int a = 0; a < NELEM(FURNACE_COS); a++)
+        for (int side = 0; side < 2; side++)
+            for (int t = 0; t < 2; t++) {
+                float c = side ? -FURNACE_COS[a] : FURNACE_COS[a];
+                Material m = {.type = MATERIAL_DIFFUSE_TRANSMISSION, .albedo = color_s(0.7f), .ior = 1.0f};
+                m.transmittance = color_s(0.3f);
+                if (t) m = (Material){.type = MATERIAL_THIN_DIELECTRIC, .albedo = color_s(1.0f), .ior = 1.5f};
+                BsdfTransport mode = a & 1 ? BSDF_IMPORTANCE : BSDF_RADIANCE;
+                Albedo al = directional_albedo(&m, c, mode, n, 40u + (uint64_t)a);
+                if (!(fabs(al.mean[0] - 1.0) < 1e-6))
+                    fail_msg("%s cos_o %.2f: albedo %.7f, expected 1", t ? "thin dielectric" : "diffuse transmission",
+                             (double)c, al.mean[0]);
+            }
+    Material thin = {.type = MATERIAL_THIN_DIELECTRIC, .albedo = color_s(1.0f), .ior = 1.5f};
+    Bsdf b;
+    bsdf_init(&b, &thin, test_normal());
+    BsdfSample s;
+    assert_true(bsdf_sample(&b, v3(0.0f, 0.0f, 1.0f), 0.0f, v2(0.5f, 0.5f), &s));
+    float r0 = 0.04f, want = 2.0f * r0 / (1.0f + r0);
+    assert_true(s.delta && s.wi.z > 0.0f && fabsf(s.pmf - want) < 1e-6f);
+    assert_true(bsdf_sample(&b, v3(0.6f, 0.0f, 0.8f), 0.999f, v2(0.5f, 0.5f), &s));
+    assert_true(s.delta && s.wi.x == -0.6f && s.wi.z == -0.8f); /* undeviated */
+    assert_true(bsdf_is_delta(&b) && bsdf_has_transmission(&b));
+}
+
 /* The rough dielectric in flux (importance mode, so refraction's 1/eta^2 does not enter):
  * reflection + transmission lose what single scattering cannot return (rays that the
  * microsurface would scatter again). Measured per roughness as the worst loss over
@@ -561,6 +605,10 @@ static int non_delta_materials(Material *mats)
         mats[nm++] = make_material(MATERIAL_DIELECTRIC, ROUGHNESS[r], 1.5f);
     }
     for (int r = 0; r < NELEM(PLASTIC_ROUGHNESS); r++) mats[nm++] = make_material(MATERIAL_PLASTIC, PLASTIC_ROUGHNESS[r], 1.5f);
+    Material dt = make_material(MATERIAL_DIFFUSE_TRANSMISSION, 0.0f, 1.0f);
+    dt.albedo = color_rgb(0.6f, 0.3f, 0.1f);
+    dt.transmittance = color_rgb(0.2f, 0.5f, 0.3f);
+    mats[nm++] = dt;
     assert_true(nm < 24);
     return nm;
 }
@@ -780,6 +828,7 @@ int main(void)
         cmocka_unit_test(test_fresnel_conductor_complex),
         cmocka_unit_test(test_fresnel_diffuse_reflectance),
         cmocka_unit_test(test_white_furnace),
+        cmocka_unit_test(test_transmitters_furnace),
         cmocka_unit_test(test_rough_dielectric_energy_loss),
         cmocka_unit_test(test_reciprocity),
         cmocka_unit_test(test_eval_pdfs_matches_calls),

@@ -26,7 +26,7 @@ static void test_materials(void **state)
         "MakeNamedMaterial \"g\" \"string type\" \"dielectric\"\n"
         "MakeNamedMaterial \"m2\" \"string type\" \"mix\" \"string materials\" [\"a\" \"g\"] \"float amount\" 0.75\n"
         "NamedMaterial \"m2\"\n" TRI                                                           /* 7 */
-        "Material \"interface\"\n" TRI                                                         /* 8 */
+        "Material \"diffuse\" \"rgb reflectance\" [.125 .125 .125]\n" TRI                          /* 8 */
         "Material \"thindielectric\"\n" TRI                                                    /* 9 */
         "Material \"hair\"\n" TRI                                                              /* 10 */
         "Material \"diffuse\" \"rgb reflectance\" [2 0.5 -1]\n" TRI                            /* 11 */
@@ -71,17 +71,23 @@ static void test_materials(void **state)
     assert_int_equal(m[3]->type, MATERIAL_GLASS);
     assert_true(m[3]->ior == 1.33f);
     assert_true(m[4]->ior == 1.5168f);
-    /* coateddiffuse -> plastic: reflectance, eta, roughness (remapped as above) */
-    assert_int_equal(m[5]->type, MATERIAL_PLASTIC);
+    /* coateddiffuse -> the layered random walk: reflectance, eta, roughness (remapped as
+     * above), pbrt-v4's layer defaults; nothing approximated */
+    assert_int_equal(m[5]->type, MATERIAL_COATED_DIFFUSE);
     assert_true(m[5]->albedo.c[0] == 0.3f && m[5]->albedo.c[1] == 0.4f && m[5]->albedo.c[2] == 0.5f);
     assert_true(m[5]->ior == 1.4f && m[5]->roughness == 0.5f);
-    assert_true(m[5]->prepared); /* scene_add_material prepared the rough coat's table */
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coateddiffuse\" approximated by caustic's plastic") >= 0);
+    assert_true(m[5]->thickness == 0.01f && m[5]->g == 0.0f && color_max(m[5]->layer_albedo) == 0.0f);
+    assert_true(m[5]->max_depth == 10 && m[5]->nsamples == 1);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coateddiffuse\"") < 0);
     assert_true(fabsf(m[6]->albedo.c[0] - 0.3f) < 1e-6f); /* exact blend of two diffuse */
-    assert_int_equal(m[7]->type, MATERIAL_GLASS);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight, \"g\"") >= 0);
-    assert_true(m[8]->type == MATERIAL_GLASS && m[8]->ior == 1.0f);
-    assert_int_equal(m[9]->type, MATERIAL_GLASS);
+    /* a diffuse and a dielectric: pbrt-v4's per-hit choice (scene_mix_choose) */
+    assert_int_equal(m[7]->type, MATERIAL_MIX);
+    assert_true(m[7]->amount == 0.75f && m[7]->amount_texture == 0);
+    assert_int_equal(s->materials[m[7]->mix[0]].type, MATERIAL_DIFFUSE);
+    assert_int_equal(s->materials[m[7]->mix[1]].type, MATERIAL_GLASS);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight") < 0);
+    assert_true(m[8]->type == MATERIAL_DIFFUSE && m[8]->albedo.c[0] == 0.125f); /* interface: below */
+    assert_true(m[9]->type == MATERIAL_THIN_DIELECTRIC && m[9]->ior == 1.5f);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "material \"hair\" is not supported") >= 0);
     assert_true(m[11]->albedo.c[0] == 1.0f && m[11]->albedo.c[2] == 0.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "clamped") >= 0);
@@ -93,24 +99,28 @@ static void test_materials(void **state)
     /* anisotropic alphas 0.25 and 0.0625: geometric mean 0.125 */
     assert_true(m[14]->roughness == sqrtf(0.125f));
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "geometric mean, alpha 0.125") >= 0);
-    /* coatedconductor: its conductor, the coat dropped; a non-default thickness reported */
-    assert_int_equal(m[15]->type, MATERIAL_CONDUCTOR);
+    /* coatedconductor: the conductor (its roughness the base's), the interface's roughness
+     * and the layer's thickness */
+    assert_int_equal(m[15]->type, MATERIAL_COATED_CONDUCTOR);
     assert_true(material_metal("silver", &eta, &k));
     assert_memory_equal(&m[15]->eta, &eta, sizeof eta);
-    assert_true(m[15]->roughness == 0.5f);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coatedconductor\" approximated as its conductor") >= 0);
-    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"thickness\" 0.1") >= 0);
+    assert_true(m[15]->base_roughness == 0.5f);
+    assert_true(fabsf(m[15]->roughness - powf(0.2f, 0.25f)) < 1e-6f && m[15]->ior == 1.5f);
+    assert_true(m[15]->thickness == 0.1f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coatedconductor\"") < 0);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"thickness\"") < 0);
     assert_int_equal(m[16]->type, MATERIAL_CONDUCTOR);
     assert_true(m[16]->eta.c[0] == 0.444f && m[16]->k.c[2] == 1.829f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-CuZn-eta\" taken as the RGB") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-Au-eta\"") < 0); /* a preset */
-    assert_true(m[17]->type == MATERIAL_PLASTIC && m[17]->albedo.c[1] == 0.5f && m[17]->ior == 1.5f &&
+    assert_true(m[17]->type == MATERIAL_COATED_DIFFUSE && m[17]->albedo.c[1] == 0.5f && m[17]->ior == 1.5f &&
                 m[17]->roughness == 0.0f);
     assert_true(m[18]->roughness == 1.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "GGX alpha 4 is beyond") >= 0);
-    /* two conductors are not blended: the larger weight, c1 */
-    assert_true(m[19]->type == MATERIAL_CONDUCTOR && m[19]->eta.c[1] == m[1]->eta.c[1]);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight, \"c1\"") >= 0);
+    /* two conductors are not one conductor: a mix of the two, amount 0.3 */
+    assert_true(m[19]->type == MATERIAL_MIX && m[19]->amount == 0.3f);
+    assert_true(s->materials[m[19]->mix[0]].eta.c[1] == m[1]->eta.c[1]);
+    assert_true(s->materials[m[19]->mix[1]].eta.c[1] == 1.0f); /* c2: from its reflectance */
     /* pbrt's reflective materials reflect on both sides: caustic's two-sided default */
     for (int i = 0; i < N; i++) assert_false(m[i]->one_sided);
     for (int i = 0; i < 13; i++)
@@ -641,12 +651,9 @@ static void test_texture_materials(void **state)
     assert_int_equal(m->type, MATERIAL_DIELECTRIC);
     assert_int_not_equal(m->roughness_texture, 0);
     m = tri_material(s, 3);
-    assert_int_equal(m->type, MATERIAL_PLASTIC);
-    assert_int_equal(m->roughness_texture, 0);
-    assert_true(fabsf(m->roughness - powf(0.15625f, 0.25f)) < 1e-6f); /* the average's */
+    assert_int_equal(m->type, MATERIAL_COATED_DIFFUSE); /* the interface's roughness textured */
+    assert_int_equal(m->roughness_texture, tri_material(s, 0)->roughness_texture);
     assert_int_equal(albedo_tex(s, 3)->type, TEXTURE_CHECKERBOARD);
-    assert_warning_at(&w, CST_WARN_APPROXIMATED, "\"texture roughness\" cannot be textured", text,
-                      "Material \"coateddiffuse\"", 0);
     /* pbrt clamps reflectances to 1 */
     const Texture *hot = albedo_tex(s, 4);
     assert_rgb(s->textures[hot->checker.even].value, 1, 0.5f, 0, 0);
@@ -655,10 +662,13 @@ static void test_texture_materials(void **state)
     /* anisotropic: averages */
     assert_int_equal(tri_material(s, 5)->roughness_texture, 0);
     assert_int_equal(albedo_tex(s, 6)->type, TEXTURE_CHECKERBOARD);
-    /* coatedconductor's conductor roughness */
-    assert_int_not_equal(tri_material(s, 7)->roughness_texture, 0);
-    /* derived textures are made once per texture and shared */
-    assert_int_equal(tri_material(s, 7)->roughness_texture, tri_material(s, 0)->roughness_texture);
+    /* coatedconductor's conductor roughness: the texture's average (only the interface's
+     * roughness takes a texture) */
+    m = tri_material(s, 7);
+    assert_int_equal(m->roughness_texture, 0);
+    assert_true(fabsf(m->base_roughness - (0.5f + 0.70710678f) / 2.0f) < 1e-5f);
+    assert_warning_at(&w, CST_WARN_APPROXIMATED, "conductor's roughness texture", text,
+                      "Material \"coatedconductor\"", 0);
     assert_int_equal(tri_material(s, 8)->albedo_texture, tri_material(s, 4)->albedo_texture);
     cst_scene_destroy(s);
     /* pbrt-v4 looks float and spectrum textures up apart and stops at a missing one */
@@ -779,10 +789,32 @@ static void test_texture_orientation(void **state)
     cst_scene_destroy(s);
 }
 
+/* Shapes with material "interface" bound media only: left out of the scene (invisible to
+ * every ray, shadow rays included), with one warning; an emitting one stays (glass of eta 1),
+ * and so do the shapes around it. */
+static void test_interface_shapes(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD("Material \"interface\"\n" TRI TRI
+                               "MakeNamedMaterial \"i\" \"string type\" \"interface\"\n"
+                               "NamedMaterial \"i\"\n" TRI
+                               "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n" TRI "AttributeEnd\n"
+                               "Material \"diffuse\"\n" TRI),
+                         &w);
+    assert_int_equal(s->num_triangles, 2); /* the emitting interface and the diffuse one */
+    assert_int_equal(s->materials[s->tri_info[0].material].type, MATERIAL_GLASS);
+    assert_int_equal(s->materials[s->tri_info[1].material].type, MATERIAL_DIFFUSE);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "are left out") >= 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "emitting shape with material \"interface\"") >= 0);
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_materials),
+        cmocka_unit_test(test_interface_shapes),
         cmocka_unit_test(test_lights),
         cmocka_unit_test(test_area_power_per_shape),
         cmocka_unit_test(test_goniometric_light),

@@ -1067,6 +1067,81 @@ static void test_new_materials(void **state)
                  "unknown key \"roughness\"; expected one of: type, albedo, ior");
 }
 
+/* The coated materials (pbrt-v4's coateddiffuse and coatedconductor): their keys, pbrt-v4's
+ * layer defaults, and the layer's errors. */
+static void test_coated_materials(void **state)
+{
+    (void)state;
+    CstScene *s = expect_ok(SCENE3(CAM,
+        "\"materials\": {\"white\": {\"type\": \"coated_diffuse\", \"albedo\": [0.8, 0.1, 0.1], \"roughness\": 0.3}, "
+        "\"c\": {\"type\": \"coated_conductor\", \"metal\": \"gold\", \"base_roughness\": 0.4, \"ior\": 1.3, "
+        "\"thickness\": 0.2, \"layer_albedo\": [0.5, 0.5, 0.5], \"g\": -0.3, \"max_depth\": 20, \"nsamples\": 2}}",
+        SHAPES));
+    assert_int_equal(s->num_materials, 2);
+    const Material *m = &s->materials[0];
+    assert_int_equal(m->type, MATERIAL_COATED_DIFFUSE);
+    assert_true(m->roughness == 0.3f && m->ior == 1.5f && m->albedo.c[1] == 0.1f);
+    assert_true(m->thickness == 0.01f && m->max_depth == 10 && m->nsamples == 1 && m->g == 0.0f);
+    m = &s->materials[1];
+    assert_int_equal(m->type, MATERIAL_COATED_CONDUCTOR);
+    assert_true(m->base_roughness == 0.4f && m->ior == 1.3f && m->k.c[0] > 3.0f);
+    assert_true(m->thickness == 0.2f && m->layer_albedo.c[2] == 0.5f && m->g == -0.3f);
+    assert_true(m->max_depth == 20 && m->nsamples == 2);
+    cst_scene_destroy(s);
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"coated_diffuse\", \"g\": 1}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "1}", 0, "materials.white.g: g 1 is outside (-1, 1)");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"coated_diffuse\", \"thickness\": -1}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "-1}", 0, "materials.white.thickness: thickness -1 is negative");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"coated_diffuse\", \"metal\": \"gold\"}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "\"metal\"", 0, "unknown key \"metal\"");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"coated_conductor\"}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "{\"type\": \"coated_conductor\"", 0, "missing key \"metal\"");
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"coated_diffuse\", \"max_depth\": 0}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "0}}", 0, "materials.white.max_depth");
+}
+
+/* diffuse_transmission (pbrt-v4's defaults 0.25 and 0.25) and thin_dielectric. */
+static void test_transmitter_materials(void **state)
+{
+    (void)state;
+    CstScene *s = expect_ok(SCENE3(CAM,
+        "\"materials\": {\"white\": {\"type\": \"diffuse_transmission\", \"transmittance\": [0.5, 0.6, 0.7]}, "
+        "\"t\": {\"type\": \"thin_dielectric\", \"ior\": 1.33}, \"d\": {\"type\": \"diffuse_transmission\"}}",
+        SHAPES));
+    assert_int_equal(s->materials[0].type, MATERIAL_DIFFUSE_TRANSMISSION);
+    assert_true(s->materials[0].albedo.c[0] == 0.25f && s->materials[0].transmittance.c[2] == 0.7f);
+    assert_true(s->materials[1].type == MATERIAL_THIN_DIELECTRIC && s->materials[1].ior == 1.33f);
+    assert_true(s->materials[2].transmittance.c[1] == 0.25f);
+    cst_scene_destroy(s);
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"diffuse_transmission\", \"transmittance\": "
+                             "[2, 0, 0]}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "2, 0, 0]}", 0, "materials.white.transmittance[0]: red 2 is outside [0, 1]");
+}
+
+/* The mix material: names resolved among the materials above it, amount, and errors. */
+static void test_mix_material(void **state)
+{
+    (void)state;
+    CstScene *s = expect_ok(SCENE3(CAM,
+        "\"materials\": {\"a\": {\"type\": \"diffuse\"}, \"b\": {\"type\": \"glass\"}, "
+        "\"white\": {\"type\": \"mix\", \"materials\": [\"a\", \"b\"], \"amount\": 0.25}}",
+        SHAPES));
+    assert_int_equal(s->num_materials, 3);
+    const Material *m = &s->materials[2];
+    assert_int_equal(m->type, MATERIAL_MIX);
+    assert_true(m->mix[0] == 0 && m->mix[1] == 1 && m->amount == 0.25f);
+    cst_scene_destroy(s);
+    expect_error(SCENE3(CAM, "\"materials\": {\"white\": {\"type\": \"mix\", \"materials\": [\"white\", \"x\"]}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "\"white\", \"x\"", 0,
+                 "materials.white.materials[0]: material \"white\" is not defined before the mix");
+    expect_error(SCENE3(CAM, "\"materials\": {\"a\": {\"type\": \"diffuse\"}, \"white\": {\"type\": \"mix\", "
+                             "\"materials\": [\"a\"]}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "[\"a\"]", 0, "materials.white.materials: expected an array of the names of two");
+    expect_error(SCENE3(CAM, "\"materials\": {\"a\": {\"type\": \"diffuse\"}, \"white\": {\"type\": \"mix\", "
+                             "\"materials\": [\"a\", \"a\"], \"amount\": 2}}", SHAPES),
+                 CST_ERR_INVALID_ARG, "2}}", 0, "materials.white.amount: amount 2 is outside [0, 1]");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1097,6 +1172,9 @@ int main(void)
         cmocka_unit_test(test_cornell_spheres_file),
         cmocka_unit_test(test_mutations),
         cmocka_unit_test(test_new_materials),
+        cmocka_unit_test(test_coated_materials),
+        cmocka_unit_test(test_mix_material),
+        cmocka_unit_test(test_transmitter_materials),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -11,11 +11,13 @@
 
 #include "scene/json/json_texture.h"
 
-enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COUNT };
+enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COATED_DIFFUSE,
+       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_COUNT };
 
 /* A material's "type", in MAT_* order (json_material.h). */
 const char *const json_material_types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric",
-                                           "plastic", NULL};
+                                           "plastic", "coated_diffuse", "coated_conductor", "mix", "diffuse_transmission",
+                                           "thin_dielectric", NULL};
 
 /* "roughness": perceptual, in [0, 1] (material.h: alpha = roughness^2). */
 static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
@@ -29,28 +31,140 @@ static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
     return CST_OK;
 }
 
+/* The coated materials' layer: "thickness" (>= 0, default 0.01), "layer_albedo" (RGB in
+ * [0, 1], default 0), "g" (in (-1, 1), default 0), "max_depth" (default 10), "nsamples"
+ * (default 1): pbrt-v4's parameters and defaults. */
+static CstStatus read_layer(Loader *ld, const json_t *obj, Material *m)
+{
+    json_t *v;
+    json_int_t n;
+    m->thickness = 0.01f;
+    m->max_depth = 10;
+    m->nsamples = 1;
+    if ((v = json_object_get(obj, "base_roughness"))) {
+        LOADER_TRY(read_roughness(ld, v, &m->base_roughness));
+    }
+    if ((v = json_object_get(obj, "thickness"))) {
+        json_path_push_key(ld, "thickness");
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &m->thickness));
+        if (!(m->thickness >= 0.0f))
+            return json_fail_here(ld, "thickness %g is negative; expected the layer's thickness >= 0",
+                                  (double)m->thickness);
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "layer_albedo"))) {
+        json_path_push_key(ld, "layer_albedo");
+        LOADER_TRY(json_read_rgb(ld, v, 1, &m->layer_albedo));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "g"))) {
+        json_path_push_key(ld, "g");
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &m->g));
+        if (!(m->g > -1.0f && m->g < 1.0f))
+            return json_fail_here(ld, "g %g is outside (-1, 1); expected a Henyey-Greenstein asymmetry "
+                                      "(0 isotropic)", (double)m->g);
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "max_depth"))) {
+        json_path_push_key(ld, "max_depth");
+        LOADER_TRY(json_read_int(ld, v, 1, 100000, &n));
+        m->max_depth = (int)n;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "nsamples"))) {
+        json_path_push_key(ld, "nsamples");
+        LOADER_TRY(json_read_int(ld, v, 1, 10000, &n));
+        m->nsamples = (int)n;
+        json_path_pop(ld);
+    }
+    return CST_OK;
+}
+
+/* A mix: "materials", the names of two materials defined before it, and "amount" (the
+ * probability of the second, in [0, 1], default 0.5, or a texture name). */
+static CstStatus read_mix(Loader *ld, const json_t *obj, Material *m)
+{
+    json_t *v;
+    m->amount = 0.5f;
+    LOADER_TRY(json_member_required(ld, obj, "materials", "the names of two materials defined before the mix", &v));
+    json_path_push_key(ld, "materials");
+    if (!json_is_array(v) || json_array_size(v) != 2)
+        return json_fail_here(ld, "expected an array of the names of two materials defined before the mix");
+    for (size_t i = 0; i < 2; i++) {
+        const char *name = NULL;
+        json_path_push_index(ld, i);
+        LOADER_TRY(json_read_string(ld, json_array_get(v, i), &name));
+        int found = -1;
+        for (int j = 0; j < ld->num_materials; j++)
+            if (strcmp(ld->mat_names[j], name) == 0) found = ld->mat_ids[j];
+        if (found < 0) {
+            char clipped[72];
+            return json_fail_here(ld, "material \"%s\" is not defined before the mix; expected the name of "
+                                      "a material listed above it", json_clip_name(name, clipped));
+        }
+        m->mix[i] = found;
+        json_path_pop(ld);
+    }
+    json_path_pop(ld);
+    if ((v = json_object_get(obj, "amount"))) {
+        json_path_push_key(ld, "amount");
+        if (json_is_string(v)) {
+            LOADER_TRY(json_read_param_texture(ld, v, "an amount", &m->amount_texture));
+        } else {
+            LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &m->amount));
+            if (!(m->amount >= 0.0f && m->amount <= 1.0f))
+                return json_fail_here(ld, "amount %g is outside [0, 1]; expected the probability of the "
+                                          "second material", (double)m->amount);
+        }
+        json_path_pop(ld);
+    }
+    return CST_OK;
+}
+
 static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
 {
     const char *const *types = json_material_types;
     static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
-                                         MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC};
+                                         MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
+                                         MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
     /* The keys each type accepts, "type" first. */
     static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
     static const char *const keys_glass[] = {"type", "albedo", "ior"};
     static const char *const keys_conductor[] = {"type", "metal", "eta", "k", "roughness", "two_sided"};
     static const char *const keys_dielectric[] = {"type", "albedo", "ior", "roughness"};
     static const char *const keys_plastic[] = {"type", "albedo", "ior", "roughness", "two_sided"};
-    static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass,
-                                              keys_conductor, keys_dielectric, keys_plastic};
-    static const int nkeys[] = {3, 3, 3, 6, 4, 5};
+    static const char *const keys_coated_diffuse[] = {"type", "albedo", "ior", "roughness", "two_sided",
+                                                      "thickness", "layer_albedo", "g", "max_depth", "nsamples"};
+    static const char *const keys_coated_conductor[] = {"type", "metal", "eta", "k", "ior", "roughness",
+                                                        "base_roughness", "two_sided", "thickness",
+                                                        "layer_albedo", "g", "max_depth", "nsamples"};
+    static const char *const keys_mix[] = {"type", "materials", "amount"};
+    static const char *const keys_difftrans[] = {"type", "albedo", "transmittance"};
+    static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass, keys_conductor,
+                                              keys_dielectric, keys_plastic, keys_coated_diffuse,
+                                              keys_coated_conductor, keys_mix, keys_difftrans, keys_glass};
+    static const int nkeys[] = {3, 3, 3, 6, 4, 5, 10, 13, 3, 3, 3};
     int type = 0;
     json_t *v;
     LOADER_TRY(json_expect_object(ld, obj, "a material object"));
     LOADER_TRY(json_read_type(ld, obj, "material type", types, MAT_COUNT, -1, &type));
     LOADER_TRY(json_check_keys(ld, obj, keys[type], nkeys[type]));
     m->type = mtype[type];
-    m->albedo = type == MAT_DIFFUSE ? color_s(0.5f) : type == MAT_PLASTIC ? color_s(0.5f) : color_s(1.0f);
-    m->ior = type == MAT_GLASS || type == MAT_DIELECTRIC || type == MAT_PLASTIC ? 1.5f : 1.0f;
+    m->albedo = type == MAT_DIFFUSE || type == MAT_PLASTIC || type == MAT_COATED_DIFFUSE ? color_s(0.5f)
+                : type == MAT_DIFFUSE_TRANSMISSION ? color_s(0.25f) : color_s(1.0f);
+    m->ior = type == MAT_GLASS || type == MAT_DIELECTRIC || type == MAT_PLASTIC || type == MAT_COATED_DIFFUSE ||
+             type == MAT_COATED_CONDUCTOR || type == MAT_THIN_DIELECTRIC ? 1.5f : 1.0f;
+    if (type == MAT_DIFFUSE_TRANSMISSION) {
+        m->transmittance = color_s(0.25f); /* pbrt-v4's default */
+        if ((v = json_object_get(obj, "transmittance"))) {
+            json_path_push_key(ld, "transmittance");
+            LOADER_TRY(json_read_rgb(ld, v, 1, &m->transmittance));
+            json_path_pop(ld);
+        }
+    }
+    if (type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR) LOADER_TRY(read_layer(ld, obj, m));
+    if (type == MAT_MIX) return read_mix(ld, obj, m);
     m->roughness = 0.0f;
     if ((v = json_object_get(obj, "albedo"))) {
         /* A reflectance above 1 would make any of these create energy. */
@@ -94,7 +208,7 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
         m->one_sided = !two;
         json_path_pop(ld);
     }
-    if (type == MAT_CONDUCTOR) {
+    if (type == MAT_CONDUCTOR || type == MAT_COATED_CONDUCTOR) {
         json_t *metal = json_object_get(obj, "metal"), *eta = json_object_get(obj, "eta"),
                *k = json_object_get(obj, "k");
         char list[128];

@@ -90,6 +90,10 @@ typedef struct MatEntry {
     char *name; /* NULL for anonymous Material directives */
     Material m;
     int scene_id; /* added to the scene on first use, -1 before */
+    /* pbrt-v4's "interface" (also v3's "" and "none"): a medium boundary that does not
+     * scatter. Shapes with it are left out of the scene (invisible to every ray), unless
+     * they emit; then m stands in for it. */
+    int interface;
 } MatEntry;
 
 typedef struct TexEntry {
@@ -222,6 +226,7 @@ typedef struct Loader {
     int env_w, env_h;
     float env_k[3], env_const[3];
     int num_instances_expanded; /* instances whose spheres were copied */
+    int num_interface_shapes;   /* shapes with material "interface", left out */
     int num_triangles, num_spheres; /* added to the scene so far (for its limits) */
     Loc end; /* end of the main file, for errors about the whole scene */
 } Loader;

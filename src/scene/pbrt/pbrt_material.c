@@ -2,6 +2,7 @@
  * conductors, coated layers), named materials, and the Material directives. */
 #include "scene/pbrt/pbrt_material.h"
 
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -52,6 +53,7 @@ CstStatus pbrt_add_mat_entry(Loader *ld, const char *name, const Material *m, in
     if (name && !(e->name = pbrt_dup_str(name))) return pbrt_oom(ld);
     e->m = *m;
     e->scene_id = -1;
+    e->interface = 0;
     *out = ld->num_mats++;
     return CST_OK;
 }
@@ -187,31 +189,34 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
     return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_texture);
 }
 
-/* Layer parameters of pbrt-v4's coated materials that caustic's closed-form coat does not
- * have: a warning for each given with other than pbrt's default (a non-absorbing layer of
- * any thickness, isotropic phase); the random walk's maxdepth and nsamples are read
- * silently. */
-static CstStatus coat_layer_params(Loader *ld, Params *ps, const char *d)
+/* The layer of pbrt-v4's coated materials (CoatedDiffuseMaterial, CoatedConductorMaterial):
+ * thickness (0.01), albedo (0), g (0), maxdepth (10), nsamples (1), pbrt-v4's defaults,
+ * for caustic's random walk (layered.c). Textured ones take their averages (pbrt_get_*). */
+static CstStatus coat_layer_params(Loader *ld, Params *ps, const char *d, Material *m)
 {
-    static const struct { const char *name; float def; } skip[] = {{"thickness", 0.01f}, {"g", 0.0f}};
-    for (size_t i = 0; i < sizeof skip / sizeof skip[0]; i++) {
-        float v = skip[i].def;
-        int found = 0;
-        TRY(pbrt_get_float_tex(ld, ps, d, skip[i].name, skip[i].def, &v, &found));
-        if (found && v != skip[i].def)
-            pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pbrt_find_param(ps, skip[i].name)->loc,
-                    "%s: \"%s\" %g is not supported (caustic's coat is an interface without a "
-                         "scattering layer); ignored", d, skip[i].name, (double)v);
-    }
-    Color albedo = color_s(0.0f);
-    int found = 0;
-    TRY(pbrt_get_spectrum(ld, ps, d, "albedo", SPEC_REFLECTANCE, 1, &albedo, &found));
-    if (found && color_max(albedo) > 0.0f)
-        pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pbrt_find_param(ps, "albedo")->loc,
-                     "%s: a scattering layer (\"albedo\" > 0) is not supported; ignored", d);
-    int n = 0;
-    TRY(pbrt_get_int(ld, ps, d, "maxdepth", 10, &n));
-    TRY(pbrt_get_int(ld, ps, d, "nsamples", 1, &n));
+    m->thickness = 0.01f;
+    m->g = 0.0f;
+    m->layer_albedo = color_s(0.0f);
+    m->max_depth = 10;
+    m->nsamples = 1;
+    TRY(pbrt_get_float_tex(ld, ps, d, "thickness", 0.01f, &m->thickness, NULL));
+    TRY(pbrt_get_float_tex(ld, ps, d, "g", 0.0f, &m->g, NULL));
+    TRY(pbrt_get_spectrum(ld, ps, d, "albedo", SPEC_REFLECTANCE, 1, &m->layer_albedo, NULL));
+    TRY(pbrt_get_int(ld, ps, d, "maxdepth", 10, &m->max_depth));
+    TRY(pbrt_get_int(ld, ps, d, "nsamples", 1, &m->nsamples));
+    Param *p;
+    if (!(m->thickness >= 0.0f && m->thickness <= FLT_MAX))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, (p = pbrt_find_param(ps, "thickness")) ? p->loc : ld->end,
+                            "%s: thickness %g; expected a layer thickness >= 0", d, (double)m->thickness);
+    if (!(m->g > -1.0f && m->g < 1.0f))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, (p = pbrt_find_param(ps, "g")) ? p->loc : ld->end,
+                            "%s: g %g is outside (-1, 1); expected a Henyey-Greenstein asymmetry", d, (double)m->g);
+    if (m->max_depth < 1 || m->max_depth > 100000)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, (p = pbrt_find_param(ps, "maxdepth")) ? p->loc : ld->end,
+                            "%s: maxdepth %d; expected 1 to 100000", d, m->max_depth);
+    if (m->nsamples < 1 || m->nsamples > 10000)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, (p = pbrt_find_param(ps, "nsamples")) ? p->loc : ld->end,
+                            "%s: nsamples %d; expected 1 to 10000", d, m->nsamples);
     return CST_OK;
 }
 
@@ -253,28 +258,32 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
     } else if (strcmp(type, "matte") == 0) { /* pbrt-v3 */
         TRY(get_albedo(ld, ps, d, "Kd", m));
     } else if (strcmp(type, "coateddiffuse") == 0) {
-        /* caustic's plastic: the same interface over a Lambertian base, with the light
-         * between them in closed form (bsdf.c) instead of pbrt's random walk. */
-        m->type = MATERIAL_PLASTIC;
+        /* pbrt-v4's LayeredBxDF by the same random walk (layered.c). */
+        m->type = MATERIAL_COATED_DIFFUSE;
         m->ior = 1.5f;
         TRY(get_albedo(ld, ps, d, "reflectance", m));
         TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
-        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, NULL)); /* no plastic roughness textures */
-        TRY(coat_layer_params(ld, ps, d));
-        if (m->ior < 1.0f) {
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: coat eta %g below 1 rendered as 1 (no coat)",
-                         d, (double)m->ior);
-            m->ior = 1.0f;
-        }
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated by caustic's plastic (reflectance "
-                "%g %g %g, eta %g, roughness %g): the light between coat and base is modelled in "
-                     "closed form (Kelemen & Szirmay-Kalos 2001), not by pbrt's random walk", d,
-                     (double)m->albedo.c[0], (double)m->albedo.c[1], (double)m->albedo.c[2], (double)m->ior,
-                     (double)m->roughness);
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
+        TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "diffusetransmission") == 0) {
+        /* pbrt-v4 DiffuseTransmissionMaterial: reflectance and transmittance (0.25 each)
+         * times scale, each clamped to [0, 1]. */
+        m->type = MATERIAL_DIFFUSE_TRANSMISSION;
+        m->albedo = color_s(0.25f);
+        m->transmittance = color_s(0.25f);
+        float scale = 1.0f;
         TRY(get_albedo(ld, ps, d, "reflectance", m));
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as diffuse with its reflectance "
-                     "(transmission is dropped)", d);
+        TRY(pbrt_get_spectrum(ld, ps, d, "transmittance", SPEC_REFLECTANCE, 1, &m->transmittance, NULL));
+        TRY(pbrt_get_float_tex(ld, ps, d, "scale", 1.0f, &scale, NULL));
+        if (scale != 1.0f) {
+            if (m->albedo_texture)
+                pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: \"scale\" %g is not applied to the "
+                             "reflectance texture", d, (double)scale);
+            for (int c = 0; c < 3; c++) {
+                m->albedo.c[c] = clampf(m->albedo.c[c] * scale, 0.0f, 1.0f);
+                m->transmittance.c[c] = clampf(m->transmittance.c[c] * scale, 0.0f, 1.0f);
+            }
+        }
     } else if (strcmp(type, "plastic") == 0 || strcmp(type, "substrate") == 0 ||
                strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 ||
                strcmp(type, "disney") == 0) { /* pbrt-v3 */
@@ -285,42 +294,52 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
     } else if (strcmp(type, "conductor") == 0 || strcmp(type, "metal") == 0) {
         TRY(conductor(ld, ps, d, "", loc, m));
     } else if (strcmp(type, "coatedconductor") == 0) {
+        /* The conductor (its roughness becomes base_roughness), the interface over it and
+         * the layer between, by pbrt-v4's random walk (layered.c). A conductor roughness
+         * texture takes its average (only the interface's roughness can be a texture). */
         TRY(conductor(ld, ps, d, "conductor.", loc, m));
-        /* The coat's parameters are read so that only the layer's unsupported ones warn. */
-        float coat_rough = 0.0f, coat_eta = 1.5f;
-        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &coat_rough, NULL));
-        TRY(dielectric_eta(ld, ps, d, "interface.eta", &coat_eta));
-        TRY(coat_layer_params(ld, ps, d));
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as its conductor (the "
-                     "dielectric coating, eta %g, is dropped)", d, (double)coat_eta);
+        m->type = MATERIAL_COATED_CONDUCTOR;
+        m->base_roughness = m->roughness;
+        if (m->roughness_texture) {
+            CstTextureInfo t;
+            TRY(pbrt_texture_info(ld, m->roughness_texture - 1, &t));
+            m->base_roughness = minf(t.average[0], 1.0f);
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the conductor's roughness texture is "
+                         "rendered with its average, perceptual roughness %g", d, (double)m->base_roughness);
+        }
+        m->roughness = 0.0f;
+        m->roughness_texture = 0;
+        m->ior = 1.5f;
+        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &m->roughness, &m->roughness_texture));
+        TRY(dielectric_eta(ld, ps, d, "interface.eta", &m->ior));
+        TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
         m->type = MATERIAL_MIRROR;
         m->albedo = color_s(0.9f);
         TRY(get_albedo(ld, ps, d, "Kr", m));
-    } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0 ||
-               strcmp(type, "thindielectric") == 0) {
+    } else if (strcmp(type, "thindielectric") == 0) {
+        m->type = MATERIAL_THIN_DIELECTRIC;
+        m->albedo = color_s(1.0f);
+        m->ior = 1.5f;
+        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
+    } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0) {
         m->type = MATERIAL_GLASS;
         m->albedo = color_s(1.0f);
         m->ior = 1.5f;
         TRY(dielectric_eta(ld, ps, d, strcmp(type, "glass") == 0 && pbrt_find_param(ps, "index") ? "index" : "eta",
                            &m->ior));
-        if (strcmp(type, "thindielectric") == 0) {
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s approximated as a solid dielectric (glass) "
-                         "of the same eta: rays refract at its surface instead of passing straight through", d);
-        } else {
-            /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
-             * DielectricBxDF; below alpha 1e-3 both are smooth. */
-            TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
-            if (m->roughness_texture || material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA)
-                m->type = MATERIAL_DIELECTRIC;
-            else m->roughness = 0.0f;
-        }
+        /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
+         * DielectricBxDF; below alpha 1e-3 both are smooth. */
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
+        if (m->roughness_texture || material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA)
+            m->type = MATERIAL_DIELECTRIC;
+        else m->roughness = 0.0f;
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 || strcmp(type, "none") == 0) {
         m->type = MATERIAL_GLASS;
         m->albedo = color_s(1.0f);
         m->ior = 1.0f;
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (a medium boundary) approximated as glass of "
-                     "eta 1: paths pass straight through, shadow rays are blocked", d);
+        /* Shapes with it are left out (pbrt_shape.c); this glass of eta 1 stands in only
+         * for an emitting one, which must stay to emit. */
     } else if (strcmp(type, "mix") == 0) {
         Param *p;
         TRY(pbrt_lookup(ld, ps, d, "materials", PT_MASK(PT_STRING), "string", &p));
@@ -332,11 +351,20 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc,
                            "%s: material \"%s\" is not defined; expected names given to "
                                 "MakeNamedMaterial before", d, pbrt_clip(p->strs[a < 0 ? 0 : 1], nm));
+        /* amount: a constant, or a float texture kept as the mix's amount texture */
+        int amount_tex = 0, e = 0;
         float amount = 0.5f;
-        TRY(pbrt_get_float_tex(ld, ps, d, "amount", 0.5f, &amount, NULL));
+        Param *pa = pbrt_find_param(ps, "amount");
+        if (pa && pa->type == PT_TEXTURE) {
+            Color amount_c = color_s(0.5f);
+            TRY(pbrt_tex_param(ld, ps, d, "amount", 1, &amount_tex, &amount_c, &e));
+            amount = amount_c.c[0];
+        } else {
+            TRY(pbrt_get_float_tex(ld, ps, d, "amount", 0.5f, &amount, NULL));
+        }
         amount = clampf(amount, 0.0f, 1.0f);
         Material ma = ld->mats[a].m, mb = ld->mats[b].m;
-        if (ma.type == mb.type && (ma.type == MATERIAL_DIFFUSE || ma.type == MATERIAL_MIRROR) &&
+        if (!amount_tex && ma.type == mb.type && (ma.type == MATERIAL_DIFFUSE || ma.type == MATERIAL_MIRROR) &&
             ma.one_sided == mb.one_sided && !ma.albedo_texture && !mb.albedo_texture) {
             /* Choosing one of two Lambertian (or two mirror) lobes with probability amount
              * is the same lobe with the blended albedo: exact. (Conductors, plastics and
@@ -344,10 +372,12 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             *m = ma;
             m->albedo = color_add(color_scale(ma.albedo, 1.0f - amount), color_scale(mb.albedo, amount));
         } else {
-            *m = amount < 0.5f ? ma : mb;
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s of materials that do not blend into one "
-                    "(two untextured diffuse or two mirrors would) approximated by the one with the larger "
-                         "weight, \"%s\"", d, pbrt_clip(p->strs[amount < 0.5f ? 0 : 1], nm));
+            /* pbrt-v4's MixMaterial: one of the two per hit (scene_mix_choose). */
+            m->type = MATERIAL_MIX;
+            TRY(pbrt_material_scene_id(ld, a, &m->mix[0]));
+            TRY(pbrt_material_scene_id(ld, b, &m->mix[1]));
+            m->amount = amount;
+            m->amount_texture = amount_tex;
         }
     } else if (strcmp(type, "measured") == 0 || strcmp(type, "hair") == 0 ||
                strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
@@ -404,6 +434,7 @@ CstStatus pbrt_material_directive(Loader *ld, NamedCall *call)
     TRY(pbrt_material_normal_textures(ld, ps, d, &m));
     int id = 0;
     TRY(pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id));
+    ld->mats[id].interface = strcmp(mt, "interface") == 0 || strcmp(mt, "") == 0 || strcmp(mt, "none") == 0;
     if (dname[2] != 'k') ld->gs.material = id;
     return CST_OK;
 }

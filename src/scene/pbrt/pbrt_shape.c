@@ -501,7 +501,18 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
     }
     if (st || skip) goto done;
     pbrt_params_warn_unused(ld, &ps, d);
-    if (ld->cur_obj >= 0) {
+    if (ld->mats[ld->gs.material].interface && !(ld->cur_obj < 0 && ld->gs.area.active)) {
+        /* An "interface" shape only bounds a medium (which caustic does not render): it
+         * scatters nothing, so leaving it out is exact for every ray, shadow rays included.
+         * An emitting one stays, as glass of eta 1 (it would block shadow rays). */
+        if (ld->num_interface_shapes++ == 0)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: shapes with material \"interface\" (medium "
+                         "boundaries) are left out: participating media are not supported", d);
+    } else if (ld->gs.area.active && ld->mats[ld->gs.material].interface && ld->cur_obj < 0) {
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: an emitting shape with material \"interface\" "
+                     "is kept as glass of eta 1: paths pass through it, shadow rays are blocked", d);
+        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, loc, d);
+    } else if (ld->cur_obj >= 0) {
         Object *o = &ld->objs[ld->cur_obj];
         if (ld->gs.area.active)
             pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: area lights inside ObjectBegin are not "
