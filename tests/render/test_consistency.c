@@ -194,6 +194,12 @@ static void test_light_through_glass(void **state)
 int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
+    /* --only NAME / --skip NAME (cmocka's filters): tests/CMakeLists.txt runs the spectral
+     * light tracer's max_depth-2 comparison on its own, as a known failure (see there). */
+    for (int i = 1; i + 1 < argc; i++) {
+        if (strcmp(argv[i], "--only") == 0) cmocka_set_test_filter(argv[i + 1]);
+        if (strcmp(argv[i], "--skip") == 0) cmocka_set_skip_filter(argv[i + 1]);
+    }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_variants_agree),
         cmocka_unit_test(test_cornell_light_tent),

@@ -164,6 +164,25 @@ static float group_area(const Vec3 *p, const int *idx, int t, int n)
 
 int pbrt_coords_ok(Vec3 p) { return v3_is_finite(p) && (double)v3_max_abs(p) <= PBRT_MAX_LENGTH; }
 
+/* The world-space triangles' indices in idx, wound as pbrt's orientation rule says: swapped
+ * when `swap` (ReverseOrientation against a mirroring transform), or, with vertex normals
+ * n, so that the geometric normal agrees with their sum. */
+static void orient_triangles(const ShapeGeom *g, const Vec3 *p, const Vec3 *n, int swap, int *idx)
+{
+    for (int t = 0; t < g->nt; t++) {
+        int a = g->idx[3 * t], b = g->idx[3 * t + 1], c = g->idx[3 * t + 2];
+        int sw = swap;
+        if (n) {
+            Vec3 ng = v3_cross(v3_sub(p[b], p[a]), v3_sub(p[c], p[a]));
+            Vec3 ns = v3_add(v3_add(n[a], n[b]), n[c]);
+            sw = v3_dot(ng, ns) < 0.0f;
+        }
+        idx[3 * t] = a;
+        idx[3 * t + 1] = sw ? c : b;
+        idx[3 * t + 2] = sw ? b : c;
+    }
+}
+
 /* Places an object-space shape with xf into the scene with the given material and area
  * light. Winding follows pbrt's orientation rule: the geometric normal (v1-v0) x (v2-v0)
  * is flipped when ReverseOrientation differs from whether xf mirrors, or, for meshes
@@ -244,18 +263,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             if (reverse) n[i] = v3_neg(n[i]);
         }
     }
-    for (int t = 0; t < g->nt; t++) {
-        int a = g->idx[3 * t], b = g->idx[3 * t + 1], c = g->idx[3 * t + 2];
-        int sw = swap;
-        if (n) {
-            Vec3 ng = v3_cross(v3_sub(p[b], p[a]), v3_sub(p[c], p[a]));
-            Vec3 ns = v3_add(v3_add(n[a], n[b]), n[c]);
-            sw = v3_dot(ng, ns) < 0.0f;
-        }
-        idx[3 * t] = a;
-        idx[3 * t + 1] = sw ? c : b;
-        idx[3 * t + 2] = sw ? b : c;
-    }
+    orient_triangles(g, p, n, swap, idx);
     /* Normals come from transform_normal: unit, or zero where it degenerates. The indices
      * are non-negative ints, read by the builder as uint32_t (the same bytes). */
     CstMeshDesc sm = {0};
