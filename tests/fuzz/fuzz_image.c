@@ -62,7 +62,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     CstStatus st = texture_image_load(&tex, path, size & 1, TEXTURE_WRAP_REPEAT, &err);
     if (st == CST_OK) {
         if (tex.type != TEXTURE_IMAGE) abort();
-        check_read(st, tex.image.rgb, tex.image.width, tex.image.height, &err);
+        /* Compact storage (texture.h TexImage): level 0's texels in the file's own format. */
+        const TexImage *im = tex.image.im;
+        if (!im || im->num_levels < 1) abort();
+        check_read(st, im->level[0].texels, tex.image.width, tex.image.height, &err);
         texture_free(&tex);
     } else {
         check_read(st, NULL, 0, 0, &err);
