@@ -113,25 +113,6 @@ static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
 
 /* ------------------------------------------------------------------ rough dielectric */
 
-/* The generalised half vector of Walter et al. 2007 (eq. 16): for reflection
- * m ~ wo + wi, for transmission m ~ -(eta_o wo + eta_i wi), i.e. wo + etap wi with
- * etap = eta_i / eta_o the IOR of wi's side over wo's; oriented to +z. Returns false
- * for configurations no microfacet produces (either direction on the back of m).
- * eta here is the inside (-z) over the outside (+z). */
-static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *m, float *etap, bool *reflect)
-{
-    float co = wo.z, ci = wi.z;
-    if (co == 0.0f || ci == 0.0f) return false;
-    *reflect = co * ci > 0.0f;
-    *etap = *reflect ? 1.0f : (co > 0.0f ? eta : 1.0f / eta);
-    Vec3 h = v3_add(wo, v3_scale(wi, *etap));
-    if (v3_length2(h) == 0.0f) return false;
-    h = v3_normalize(h);
-    if (h.z < 0.0f) h = v3_neg(h);
-    if (v3_dot(h, wo) * co <= 0.0f || v3_dot(h, wi) * ci <= 0.0f) return false;
-    *m = h;
-    return true;
-}
 
 /* F at the microfacet. For refraction, from the outside direction's cosine: F(cos_o, eta)
  * and F(cos_t, 1/eta) are equal in exact arithmetic, but the inside cosine is near the
@@ -153,7 +134,7 @@ static float dielectric_eval(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode
     Vec3 m;
     float etap;
     bool reflect;
-    if (!dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
+    if (!bsdf_dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
     float dm = ggx_d(m, b->lobe.dielectric.alpha) * ggx_g2(wo, wi, b->lobe.dielectric.alpha);
     float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * dm / (4.0f * fabsf(wo.z));
@@ -170,7 +151,7 @@ static float dielectric_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
     Vec3 m;
     float etap;
     bool reflect;
-    if (!dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
+    if (!bsdf_dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
     float pm = ggx_visible_pdf(wo, m, b->lobe.dielectric.alpha);
     float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * pm / (4.0f * fabsf(v3_dot(wo, m)));

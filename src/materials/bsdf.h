@@ -151,6 +151,26 @@ static inline void bsdf_init_shading(Bsdf *b, const Material *m, Vec3 ns, Vec3 n
     else
         bsdf_init_smooth(b, m, ns, ng);
 }
+/* The generalised half vector of Walter et al. 2007 (eq. 16): for reflection
+ * m ~ wo + wi, for transmission m ~ -(eta_o wo + eta_i wi), i.e. wo + etap wi with
+ * etap = eta_i / eta_o the IOR of wi's side over wo's; oriented to +z. Returns false
+ * for configurations no microfacet produces (either direction on the back of m).
+ * eta here is the inside (-z) over the outside (+z). */
+static inline bool bsdf_dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *m, float *etap, bool *reflect)
+{
+    float co = wo.z, ci = wi.z;
+    if (co == 0.0f || ci == 0.0f) return false;
+    *reflect = co * ci > 0.0f;
+    *etap = *reflect ? 1.0f : (co > 0.0f ? eta : 1.0f / eta);
+    Vec3 h = v3_add(wo, v3_scale(wi, *etap));
+    if (v3_length2(h) == 0.0f) return false;
+    h = v3_normalize(h);
+    if (h.z < 0.0f) h = v3_neg(h);
+    if (v3_dot(h, wo) * co <= 0.0f || v3_dot(h, wi) * ci <= 0.0f) return false;
+    *m = h;
+    return true;
+}
+
 /* True when every lobe is a delta lobe: eval and pdf are zero everywhere, NEE is useless. */
 static inline bool bsdf_is_delta(const Bsdf *b)
 {

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/rng.h"
+#include "materials/bsdf.h"
 #include "materials/fresnel.h"
 #include "materials/microfacet.h"
 #include "math/frame.h"
@@ -54,17 +55,7 @@ static inline bool base_specular(const LayeredLobe *l) { return l->conductor && 
  * is on the back of it (no microfacet scatters the pair). Same as bsdf.c's. */
 static bool top_half(const LayeredLobe *l, Vec3 wo, Vec3 wi, Vec3 *m, float *etap, bool *reflect)
 {
-    float co = wo.z, ci = wi.z;
-    if (co == 0.0f || ci == 0.0f) return false;
-    *reflect = co * ci > 0.0f;
-    *etap = *reflect ? 1.0f : (co > 0.0f ? l->top_eta : 1.0f / l->top_eta);
-    Vec3 h = v3_add(wo, v3_scale(wi, *etap));
-    if (v3_length2(h) == 0.0f) return false;
-    h = v3_normalize(h);
-    if (h.z < 0.0f) h = v3_neg(h);
-    if (v3_dot(h, wo) * co <= 0.0f || v3_dot(h, wi) * ci <= 0.0f) return false;
-    *m = h;
-    return true;
+    return bsdf_dielectric_half(wo, wi, l->top_eta, m, etap, reflect);
 }
 
 /* F at the microfacet, from the outside direction for refraction (bsdf.c's reason). */
