@@ -6,61 +6,12 @@
 # Prints one PASS/FAIL line per check and ends with "N passed, M failed".
 set -u
 
-if [ $# -ne 2 ]; then
-    echo "usage: bash cli_tests.sh <path-to-caustic-binary> <source-dir>" >&2
-    exit 2
-fi
-BIN=$(realpath "$1")
-SRC=$(realpath "$2")
-if [ ! -x "$BIN" ]; then
-    echo "cli_tests: not an executable: $BIN" >&2
-    exit 2
-fi
+. "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
+harness_init cli_tests "$@"
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-cli-tests.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
-
-passed=0
-failed=0
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() {
-    echo "FAIL: $1"
-    shift
-    for line in "$@"; do echo "      $line"; done
-    if [ -s "$OUT" ]; then echo "      stdout: $(head -c 600 "$OUT")"; fi
-    if [ -s "$ERR" ]; then echo "      stderr: $(head -c 1200 "$ERR")"; fi
-    failed=$((failed + 1))
-}
-
-# run DIR ARGS...: runs caustic in DIR with stdin closed-ish; sets RC, OUT, ERR.
-# The timeout guards against an option silently accepted and a full render started.
-OUT=$TMP/.stdout
-ERR=$TMP/.stderr
-run() {
-    local dir=$1
-    shift
-    mkdir -p "$dir"
-    (cd "$dir" && timeout 300 "$BIN" "$@" >"$OUT" 2>"$ERR" </dev/null)
-    RC=$?
-}
-
-# expect NAME RC [ERE ...]: exit code RC and every ERE found in stderr.
-expect() {
-    local name=$1 want=$2
-    shift 2
-    if [ "$RC" -ne "$want" ]; then
-        fail "$name" "exit code $RC, expected $want"
-        return 1
-    fi
-    local re
-    for re in "$@"; do
-        if ! grep -Eq -- "$re" "$ERR"; then
-            fail "$name" "stderr does not match /$re/"
-            return 1
-        fi
-    done
-    pass "$name"
-}
+# run DIR ARGS...: runs caustic in DIR; sets RC, OUT, ERR. The timeout guards against an
+# option silently accepted and a full render started.
+run() { local dir=$1; shift; harness_run "$dir" 300 "$@"; }
 
 # no_images DIR: true when DIR holds no image (nor a temporary left by a writer).
 no_images() {
@@ -591,5 +542,4 @@ PY
         || fail "bench rays table: a vs robust column and embree-robust rows"; }
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+harness_finish

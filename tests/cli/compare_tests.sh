@@ -9,15 +9,9 @@
 # Prints one PASS/FAIL line per check and ends with "N passed, M failed".
 set -u
 
-if [ $# -ne 2 ]; then
-    echo "usage: bash compare_tests.sh <path-to-caustic-binary> <source-dir>" >&2
-    exit 2
-fi
-BIN=$(realpath "$1")
-if [ ! -x "$BIN" ]; then
-    echo "compare_tests: not an executable: $BIN" >&2
-    exit 2
-fi
+. "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
+harness_init compare_tests "$@"
+HARNESS_EXPECT_STDOUT=1
 
 if ! command -v python3 >/dev/null; then
     echo "compare_tests: python3 is needed to read the JSON reports; skipped"
@@ -25,44 +19,7 @@ if ! command -v python3 >/dev/null; then
     exit 0
 fi
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-compare-tests.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
-
-passed=0
-failed=0
-OUT=$TMP/.stdout
-ERR=$TMP/.stderr
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() {
-    echo "FAIL: $1"
-    shift
-    for line in "$@"; do echo "      $line"; done
-    if [ -s "$ERR" ]; then echo "      stderr: $(head -c 1200 "$ERR")"; fi
-    failed=$((failed + 1))
-}
-
-run() {
-    (cd "$TMP" && timeout 300 "$BIN" "$@" >"$OUT" 2>"$ERR" </dev/null)
-    RC=$?
-}
-
-# expect NAME RC [ERE ...]: exit code RC and every ERE found in stdout or stderr.
-expect() {
-    local name=$1 want=$2
-    shift 2
-    if [ "$RC" -ne "$want" ]; then
-        fail "$name" "exit code $RC, expected $want"
-        return 1
-    fi
-    local re
-    for re in "$@"; do
-        if ! cat "$OUT" "$ERR" | grep -Eq -- "$re"; then
-            fail "$name" "output does not match /$re/" "stdout: $(head -c 600 "$OUT")"
-            return 1
-        fi
-    done
-    pass "$name"
-}
+run() { harness_run "$TMP" 300 "$@"; }
 
 # json_get EXPR: evaluates a Python expression over the JSON on stdout (j).
 json_get() {
@@ -203,5 +160,4 @@ else
     echo "SKIP: pbrt-corpus.sh end to end: no pbrt-v4 at $PBRT"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+harness_finish

@@ -9,49 +9,12 @@
 # Prints one PASS/FAIL line per check and ends with "N passed, M failed".
 set -u
 
-if [ $# -ne 2 ]; then
-    echo "usage: bash friction_tests.sh <path-to-caustic-binary> <source-dir>" >&2
-    exit 2
-fi
-BIN=$(realpath "$1")
-SRC=$(realpath "$2")
-if [ ! -x "$BIN" ]; then
-    echo "friction_tests: not an executable: $BIN" >&2
-    exit 2
-fi
+. "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
+harness_init friction_tests "$@"
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-friction-tests.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
-
-passed=0
-failed=0
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() {
-    echo "FAIL: $1"
-    shift
-    for line in "$@"; do echo "      $line"; done
-    if [ -s "$OUT" ]; then echo "      stdout: $(head -c 600 "$OUT")"; fi
-    if [ -s "$ERR" ]; then echo "      stderr: $(head -c 1200 "$ERR")"; fi
-    failed=$((failed + 1))
-}
-# check NAME CONDITION...: PASS when the command succeeds.
-check() {
-    local name=$1
-    shift
-    if "$@"; then pass "$name"; else fail "$name"; fi
-}
-
-OUT=$TMP/.stdout
-ERR=$TMP/.stderr
 # run DIR ARGS...: runs caustic in DIR; sets RC, OUT, ERR. The timeout guards against a
 # render that does not stop.
-run() {
-    local dir=$1
-    shift
-    mkdir -p "$dir"
-    (cd "$dir" && timeout 120 "$BIN" "$@" >"$OUT" 2>"$ERR" </dev/null)
-    RC=$?
-}
+run() { local dir=$1; shift; harness_run "$dir" 120 "$@"; }
 # The spp of the "caustic: wrote ..." summary line.
 wrote_spp() { sed -nE 's/^caustic: wrote [^:]*: [0-9]+x[0-9]+, ([0-9]+) spp.*/\1/p' "$ERR"; }
 
@@ -235,5 +198,4 @@ fi
 run "$dir" render --width 8 --height 8 --spp 1 -o small.png --force -q
 check "--force on a render that fits: exit 0" test "$RC" -eq 0 -a -s "$dir/small.png"
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+harness_finish

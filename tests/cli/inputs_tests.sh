@@ -8,63 +8,13 @@
 # Prints one PASS/FAIL line per check and ends with "N passed, M failed".
 set -u
 
-if [ $# -ne 2 ]; then
-    echo "usage: bash inputs_tests.sh <path-to-caustic-binary> <source-dir>" >&2
-    exit 2
-fi
-BIN=$(realpath "$1")
-SRC=$(realpath "$2")
-if [ ! -x "$BIN" ]; then
-    echo "inputs_tests: not an executable: $BIN" >&2
-    exit 2
-fi
-
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-inputs-tests.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
+. "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
+harness_init inputs_tests "$@"
 cd "$TMP" || exit 2
 
-passed=0
-failed=0
-OUT=$TMP/.stdout
-ERR=$TMP/.stderr
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() {
-    echo "FAIL: $1"
-    shift
-    for line in "$@"; do echo "      $line"; done
-    if [ -s "$ERR" ]; then echo "      stderr: $(head -c 600 "$ERR" | od -c | head -8)"; fi
-    failed=$((failed + 1))
-}
-
-# run SECONDS ARGS...: caustic with a time limit, so a read that never ends fails the test
-# (exit 124) instead of hanging it; sets RC.
-run() {
-    local limit=$1
-    shift
-    timeout -k 5 "$limit" "$BIN" "$@" >"$OUT" 2>"$ERR" </dev/null
-    RC=$?
-}
-
-# expect NAME RC [ERE ...]: exit code RC and every ERE found in stderr.
-expect() {
-    local name=$1 want=$2
-    shift 2
-    if [ "$RC" -ne "$want" ]; then
-        local why=""
-        [ "$RC" -eq 124 ] && why=" (timed out: a read without end?)"
-        [ "$RC" -ge 128 ] && why=" (killed by signal $((RC - 128)))"
-        fail "$name" "exit code $RC$why, expected $want"
-        return 1
-    fi
-    local re
-    for re in "$@"; do
-        if ! grep -Eq -- "$re" "$ERR"; then
-            fail "$name" "stderr does not match /$re/"
-            return 1
-        fi
-    done
-    pass "$name"
-}
+# run SECONDS ARGS...: caustic in $TMP with a time limit, so a read that never ends fails
+# the test (exit 124) instead of hanging it; sets RC.
+run() { local limit=$1; shift; harness_run "$TMP" "$limit" "$@"; }
 
 # clean_stderr NAME: stderr holds no control byte but newlines, no DEL, and valid UTF-8.
 clean_stderr() {
@@ -354,5 +304,4 @@ printf '\xfe\xff\0W' >utf16.pbrt
 run 10 info utf16.pbrt
 expect "pbrt: UTF-16 is named as such" 2 'utf16\.pbrt:1:1: the file is UTF-16'
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+harness_finish

@@ -9,61 +9,16 @@
 # Prints one PASS/FAIL line per check and ends with "N passed, M failed".
 set -u
 
-if [ $# -ne 2 ]; then
-    echo "usage: bash numeric_tests.sh <path-to-caustic-binary> <source-dir>" >&2
-    exit 2
-fi
-BIN=$(realpath "$1")
-SRC=$(realpath "$2")
-if [ ! -x "$BIN" ]; then
-    echo "numeric_tests: not an executable: $BIN" >&2
-    exit 2
-fi
+. "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
+harness_init numeric_tests "$@"
 if ! command -v python3 >/dev/null; then
     echo "numeric_tests: python3 is needed to write the test scenes; skipped"
     echo "0 passed, 0 failed"
     exit 0
 fi
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-numeric-tests.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
-
-passed=0
-failed=0
-OUT=$TMP/.stdout
-ERR=$TMP/.stderr
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() {
-    echo "FAIL: $1"
-    shift
-    for line in "$@"; do echo "      $line"; done
-    if [ -s "$ERR" ]; then echo "      stderr: $(head -c 1200 "$ERR")"; fi
-    failed=$((failed + 1))
-}
-
 # run ARGS...: caustic in $TMP; sets RC, OUT, ERR.
-run() {
-    (cd "$TMP" && timeout 300 "$BIN" "$@" >"$OUT" 2>"$ERR" </dev/null)
-    RC=$?
-}
-
-# expect NAME RC [ERE ...]: exit code RC and every ERE found in stderr.
-expect() {
-    local name=$1 want=$2
-    shift 2
-    if [ "$RC" -ne "$want" ]; then
-        fail "$name" "exit code $RC, expected $want"
-        return 1
-    fi
-    local re
-    for re in "$@"; do
-        if ! grep -Eq -- "$re" "$ERR"; then
-            fail "$name" "stderr does not match /$re/"
-            return 1
-        fi
-    done
-    pass "$name"
-}
+run() { harness_run "$TMP" 300 "$@"; }
 
 # The scenes: scenes/cornell-spheres.json at 32x32, 8 spp, with one change each.
 python3 - "$SRC/scenes/cornell-spheres.json" "$TMP" <<'PY'
@@ -188,5 +143,4 @@ if [ "$RC" -eq 0 ] && grep -q "materials: *1000" "$OUT" && awk -v t="$cpu" 'BEGI
     pass "info on 1,000 distinct rough plastics: ${cpu} s of CPU (< 6)"
 else fail "info on 1,000 distinct rough plastics in < 6 s of CPU" "exit $RC, ${cpu} s"; fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+harness_finish

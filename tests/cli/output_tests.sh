@@ -14,41 +14,13 @@ if [ $# -lt 2 ] || [ $# -gt 3 ]; then
     echo "usage: bash output_tests.sh <path-to-caustic-binary> <source-dir> [<slow-fsync-shim.so>]" >&2
     exit 2
 fi
-BIN=$(realpath "$1")
-SRC=$(realpath "$2")
+. "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
+harness_init output_tests "$@"
 SHIM=${3:+$(realpath "$3")}
-if [ ! -x "$BIN" ]; then
-    echo "output_tests: not an executable: $BIN" >&2
-    exit 2
-fi
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-output-tests.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
-
-passed=0
-failed=0
-skipped=0
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-skip() { echo "SKIP: $1"; skipped=$((skipped + 1)); }
-fail() {
-    echo "FAIL: $1"
-    shift
-    for line in "$@"; do echo "      $line"; done
-    if [ -s "$ERR" ]; then echo "      stderr: $(head -c 1200 "$ERR")"; fi
-    failed=$((failed + 1))
-}
-
-OUT=$TMP/.stdout
-ERR=$TMP/.stderr
 SMALL=(--width 16 --height 16 --spp 1 --threads 1)
 # run DIR ARGS...: caustic in DIR; sets RC; stdout/stderr in OUT/ERR.
-run() {
-    local dir=$1
-    shift
-    mkdir -p "$dir"
-    (cd "$dir" && timeout 300 "$BIN" "$@" >"$OUT" 2>"$ERR" </dev/null)
-    RC=$?
-}
+run() { local dir=$1; shift; harness_run "$dir" 300 "$@"; }
 # temps DIR: the temporary files of a writer left in DIR (both name forms).
 temps() { find "$1" -maxdepth 1 -name '*.tmp.*' -printf '%f\n'; }
 rendered() { grep -q "^caustic: rendering" "$ERR"; }
@@ -183,5 +155,4 @@ else
     done
 fi
 
-echo "$passed passed, $failed failed, $skipped skipped"
-[ "$failed" -eq 0 ]
+harness_finish
