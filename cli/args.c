@@ -20,36 +20,45 @@ typedef enum ArgsOpt {
     ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB
 } ArgsOpt;
 
+/* How an option takes its value. */
+typedef enum ArgsValueKind {
+    ARGS_FLAG,          /* none: --name, -x */
+    ARGS_VALUE,         /* required: --name VALUE, --name=VALUE, -x VALUE, -xVALUE */
+    ARGS_OPTIONAL_VALUE /* only as --name=VALUE (--json=FILE) */
+} ArgsValueKind;
+
+/* One option of one command's table (render, bench rays, verify, compare share the type
+ * and args_read_option). */
 typedef struct ArgsOptSpec {
     const char *long_name; /* without the leading "--" */
     char short_name;       /* 0 = none */
-    bool takes_value;
-    ArgsOpt id;
+    ArgsValueKind value;
+    int id;                /* an ArgsOpt in render's table; the others dispatch by name */
 } ArgsOptSpec;
 
 static const ArgsOptSpec ARGS_OPTS[] = {
-    {"output",     'o', true,  ARGS_OPT_OUTPUT},
-    {"spp",        0,   true,  ARGS_OPT_SPP},
-    {"time",       0,   true,  ARGS_OPT_TIME},
-    {"threads",    0,   true,  ARGS_OPT_THREADS},
-    {"seed",       0,   true,  ARGS_OPT_SEED},
-    {"integrator", 0,   true,  ARGS_OPT_INTEGRATOR},
-    {"filter",     0,   true,  ARGS_OPT_FILTER},
-    {"width",      0,   true,  ARGS_OPT_WIDTH},
-    {"height",     0,   true,  ARGS_OPT_HEIGHT},
-    {"accel",      0,   true,  ARGS_OPT_ACCEL},
-    {"sampler",    0,   true,  ARGS_OPT_SAMPLER},
-    {"exposure",   0,   true,  ARGS_OPT_EXPOSURE},
-    {"png-linear", 0,   false, ARGS_OPT_PNG_LINEAR},
-    {"spectral",   0,   false, ARGS_OPT_SPECTRAL},
-    {"rgb",        0,   false, ARGS_OPT_RGB},
-    {"aov",        0,   true,  ARGS_OPT_AOV},
-    {"crop",       0,   true,  ARGS_OPT_CROP},
-    {"max-depth",  0,   true,  ARGS_OPT_MAX_DEPTH},
-    {"json",       0,   false, ARGS_OPT_JSON},  /* --json or --json=FILE */
-    {"force",      0,   false, ARGS_OPT_FORCE},
-    {"quiet",      'q', false, ARGS_OPT_QUIET},
-    {"help",       'h', false, ARGS_OPT_HELP},
+    {"output",     'o', ARGS_VALUE,  ARGS_OPT_OUTPUT},
+    {"spp",        0,   ARGS_VALUE,  ARGS_OPT_SPP},
+    {"time",       0,   ARGS_VALUE,  ARGS_OPT_TIME},
+    {"threads",    0,   ARGS_VALUE,  ARGS_OPT_THREADS},
+    {"seed",       0,   ARGS_VALUE,  ARGS_OPT_SEED},
+    {"integrator", 0,   ARGS_VALUE,  ARGS_OPT_INTEGRATOR},
+    {"filter",     0,   ARGS_VALUE,  ARGS_OPT_FILTER},
+    {"width",      0,   ARGS_VALUE,  ARGS_OPT_WIDTH},
+    {"height",     0,   ARGS_VALUE,  ARGS_OPT_HEIGHT},
+    {"accel",      0,   ARGS_VALUE,  ARGS_OPT_ACCEL},
+    {"sampler",    0,   ARGS_VALUE,  ARGS_OPT_SAMPLER},
+    {"exposure",   0,   ARGS_VALUE,  ARGS_OPT_EXPOSURE},
+    {"png-linear", 0,   ARGS_FLAG,  ARGS_OPT_PNG_LINEAR},
+    {"spectral",   0,   ARGS_FLAG,  ARGS_OPT_SPECTRAL},
+    {"rgb",        0,   ARGS_FLAG,  ARGS_OPT_RGB},
+    {"aov",        0,   ARGS_VALUE,  ARGS_OPT_AOV},
+    {"crop",       0,   ARGS_VALUE,  ARGS_OPT_CROP},
+    {"max-depth",  0,   ARGS_VALUE,  ARGS_OPT_MAX_DEPTH},
+    {"json",       0,   ARGS_OPTIONAL_VALUE, ARGS_OPT_JSON},  /* --json or --json=FILE */
+    {"force",      0,   ARGS_FLAG,  ARGS_OPT_FORCE},
+    {"quiet",      'q', ARGS_FLAG,  ARGS_OPT_QUIET},
+    {"help",       'h', ARGS_FLAG,  ARGS_OPT_HELP},
 };
 #define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
 
@@ -179,29 +188,72 @@ static size_t args_edit_distance(const char *a, size_t na, const char *b)
     return row[nb];
 }
 
-/* The long option closest to name[0..len), or NULL if none is plausibly meant. */
-static const char *args_suggest_option(const char *name, size_t len)
+/* The long option of table[0..n) closest to name[0..len), or NULL if none is plausibly
+ * meant (within two edits, and fewer edits than the option's length). */
+static const char *args_suggest_option(const ArgsOptSpec *table, size_t n, const char *name, size_t len)
 {
     const char *best = NULL;
-    size_t best_d = 3; /* suggest only within two edits */
-    for (size_t i = 0; i < ARGS_NUM_OPTS; i++) {
-        size_t d = args_edit_distance(name, len, ARGS_OPTS[i].long_name);
-        if (d < best_d && d < strlen(ARGS_OPTS[i].long_name)) {
+    size_t best_d = 3;
+    for (size_t i = 0; i < n; i++) {
+        size_t d = args_edit_distance(name, len, table[i].long_name);
+        if (d < best_d && d < strlen(table[i].long_name)) {
             best_d = d;
-            best = ARGS_OPTS[i].long_name;
+            best = table[i].long_name;
         }
     }
     return best;
 }
 
-static void args_fail_unknown_option(ArgsError *err, const char *arg, const char *name,
-                                     size_t len)
+/* Reads the option argv[*i] (--name, --name=VALUE, --name VALUE, -x, -xVALUE) against
+ * table[0..n): sets *o and *value (NULL for a flag or an absent optional value) and
+ * consumes argv[*i + 1] for a required value, even one starting with '-' ("--seed -1"
+ * then fails clearly in the value's check). An unknown option suggests the closest long
+ * name; cmd names the command in the messages ("" for render, whose messages name none). */
+static bool args_read_option(const ArgsOptSpec *table, size_t n, const char *cmd, int argc, char **argv,
+                             int *i, const ArgsOptSpec **o, const char **value, ArgsError *err)
 {
-    const char *s = args_suggest_option(name, len);
-    if (s)
-        args_fail(err, true, "unknown option '%s' (did you mean --%s?)", arg, s);
-    else
-        args_fail(err, true, "unknown option '%s'", arg);
+    const char *arg = argv[*i];
+    char for_cmd[32] = "";
+    if (cmd[0]) snprintf(for_cmd, sizeof for_cmd, " for '%s'", cmd);
+    *o = NULL;
+    *value = NULL;
+    if (arg[1] == '-') {
+        const char *name = arg + 2, *eq = strchr(name, '=');
+        size_t len = eq ? (size_t)(eq - name) : strlen(name);
+        for (size_t k = 0; k < n; k++)
+            if (strlen(table[k].long_name) == len && strncmp(table[k].long_name, name, len) == 0)
+                *o = &table[k];
+        if (!*o) {
+            const char *s = args_suggest_option(table, n, name, len);
+            if (s)
+                args_fail(err, true, "unknown option '%s'%s (did you mean --%s?)", arg, for_cmd, s);
+            else
+                args_fail(err, true, "unknown option '%s'%s", arg, for_cmd);
+            return false;
+        }
+        if (eq && (*o)->value == ARGS_FLAG) {
+            args_fail(err, true, "--%s does not take a value (got '%s')", (*o)->long_name, arg);
+            return false;
+        }
+        *value = eq ? eq + 1 : NULL;
+    } else {
+        for (size_t k = 0; k < n; k++)
+            if (table[k].short_name != 0 && table[k].short_name == arg[1])
+                *o = &table[k];
+        if (!*o || ((*o)->value != ARGS_VALUE && arg[2] != '\0')) {
+            args_fail(err, true, "unknown option '%s'%s", arg, for_cmd);
+            return false;
+        }
+        *value = arg[2] != '\0' ? arg + 2 : NULL;
+    }
+    if ((*o)->value == ARGS_VALUE && !*value) {
+        if (*i + 1 >= argc) {
+            args_fail(err, true, "--%s: missing value", (*o)->long_name);
+            return false;
+        }
+        *value = argv[++*i];
+    }
+    return true;
 }
 
 /* ------------------------------------------------------------ option values */
@@ -236,7 +288,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
 {
     CstRenderSettings *s = &out->settings;
     long v;
-    switch (o->id) {
+    switch ((ArgsOpt)o->id) {
     case ARGS_OPT_OUTPUT:
         if (value[0] == '\0') {
             args_fail(err, false, "--output: expected a file name, got ''");
@@ -397,45 +449,12 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
             only_positional = true;
             continue;
         }
-        if (arg[1] == '-') { /* --name, --name=value, --name value */
-            const char *name = arg + 2;
-            const char *eq = strchr(name, '=');
-            size_t len = eq ? (size_t)(eq - name) : strlen(name);
-            for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
-                if (strlen(ARGS_OPTS[k].long_name) == len &&
-                    strncmp(ARGS_OPTS[k].long_name, name, len) == 0)
-                    o = &ARGS_OPTS[k];
-            if (!o) {
-                if (len == 7 && strncmp(name, "version", 7) == 0) {
-                    args_fail(err, true, "--version is not an option of 'render'");
-                    return false;
-                }
-                args_fail_unknown_option(err, arg, name, len);
-                return false;
-            }
-            if (eq && !o->takes_value && o->id != ARGS_OPT_JSON) { /* --json=FILE: optional */
-                args_fail(err, true, "--%s does not take a value (got '%s')", o->long_name,
-                          arg);
-                return false;
-            }
-            value = eq ? eq + 1 : NULL;
-        } else { /* -o OUT, -oOUT, -q, -h */
-            for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
-                if (ARGS_OPTS[k].short_name == arg[1])
-                    o = &ARGS_OPTS[k];
-            if (!o || (!o->takes_value && arg[2] != '\0')) {
-                args_fail(err, true, "unknown option '%s'", arg);
-                return false;
-            }
-            value = arg[2] != '\0' ? arg + 2 : NULL;
+        if (strncmp(arg, "--version", 9) == 0 && (arg[9] == '\0' || arg[9] == '=')) {
+            args_fail(err, true, "--version is not an option of 'render'");
+            return false;
         }
-        if (o->takes_value && !value) {
-            if (i + 1 >= argc) {
-                args_fail(err, true, "--%s: missing value", o->long_name);
-                return false;
-            }
-            value = argv[++i]; /* taken even if it starts with '-': "--seed -1" fails clearly */
-        }
+        if (!args_read_option(ARGS_OPTS, ARGS_NUM_OPTS, "", argc, argv, &i, &o, &value, err))
+            return false;
         if (!args_apply(o, value, out, err))
             return false;
     }
@@ -449,14 +468,9 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
 
 /* ------------------------------------------------------------ caustic bench rays */
 
-typedef struct ArgsBenchOpt {
-    const char *long_name;
-    bool takes_value;
-} ArgsBenchOpt;
-
-static const ArgsBenchOpt ARGS_BENCH_OPTS[] = {
-    {"cornell", false}, {"stadium", false}, {"accel", true},
-    {"threads", true},  {"json", false},    {"help", false},
+static const ArgsOptSpec ARGS_BENCH_OPTS[] = {
+    {"cornell", 0, ARGS_FLAG, 0},  {"stadium", 0, ARGS_FLAG, 0}, {"accel", 0, ARGS_VALUE, 0},
+    {"threads", 0, ARGS_VALUE, 0}, {"json", 0, ARGS_FLAG, 0},    {"help", 'h', ARGS_FLAG, 0},
 };
 #define ARGS_NUM_BENCH_OPTS (sizeof ARGS_BENCH_OPTS / sizeof ARGS_BENCH_OPTS[0])
 
@@ -512,47 +526,10 @@ static bool args_parse_bench_rays(int argc, char **argv, int first, CliArgs *out
             only_positional = true;
             continue;
         }
-        if (strcmp(arg, "-h") == 0) {
-            out->command = ARGS_CMD_HELP;
-            out->help_for = ARGS_CMD_BENCH_RAYS;
-            continue;
-        }
-        const char *name = arg + 2, *eq = strchr(name, '=');
-        size_t len = eq ? (size_t)(eq - name) : strlen(name);
-        const ArgsBenchOpt *o = NULL;
-        if (arg[1] == '-')
-            for (size_t k = 0; k < ARGS_NUM_BENCH_OPTS; k++)
-                if (strlen(ARGS_BENCH_OPTS[k].long_name) == len &&
-                    strncmp(ARGS_BENCH_OPTS[k].long_name, name, len) == 0)
-                    o = &ARGS_BENCH_OPTS[k];
-        if (!o) {
-            const char *best = NULL;
-            size_t best_d = 3;
-            for (size_t k = 0; arg[1] == '-' && k < ARGS_NUM_BENCH_OPTS; k++) {
-                size_t d = args_edit_distance(name, len, ARGS_BENCH_OPTS[k].long_name);
-                if (d < best_d && d < strlen(ARGS_BENCH_OPTS[k].long_name)) {
-                    best_d = d;
-                    best = ARGS_BENCH_OPTS[k].long_name;
-                }
-            }
-            if (best)
-                args_fail(err, true, "unknown option '%s' for 'bench rays' (did you mean --%s?)", arg, best);
-            else
-                args_fail(err, true, "unknown option '%s' for 'bench rays'", arg);
+        const ArgsOptSpec *o;
+        const char *value;
+        if (!args_read_option(ARGS_BENCH_OPTS, ARGS_NUM_BENCH_OPTS, "bench rays", argc, argv, &i, &o, &value, err))
             return false;
-        }
-        if (eq && !o->takes_value) {
-            args_fail(err, true, "--%s does not take a value (got '%s')", o->long_name, arg);
-            return false;
-        }
-        const char *value = eq ? eq + 1 : NULL;
-        if (o->takes_value && !value) {
-            if (i + 1 >= argc) {
-                args_fail(err, true, "--%s: missing value", o->long_name);
-                return false;
-            }
-            value = argv[++i];
-        }
         long v;
         if (strcmp(o->long_name, "cornell") == 0) {
             b->cornell = true;
@@ -604,19 +581,14 @@ static bool args_parse_bench(int argc, char **argv, CliArgs *out, ArgsError *err
 
 /* ------------------------------------------------------------ caustic verify */
 
-typedef struct ArgsVerifyOpt {
-    const char *long_name;
-    char short_name;
-    bool takes_value;
-} ArgsVerifyOpt;
-
 /* spp, time, threads, seed, width, height and quiet mean what they mean for render and go
  * through args_apply, so their checks and messages are the same. */
-static const ArgsVerifyOpt ARGS_VERIFY_OPTS[] = {
-    {"integrators", 0, true}, {"spp", 0, true},     {"time", 0, true},   {"threads", 0, true},
-    {"seed", 0, true},        {"alpha", 0, true},   {"block", 0, true},  {"map", 0, true},
-    {"json", 0, false},       {"width", 0, true},   {"height", 0, true}, {"quiet", 'q', false},
-    {"help", 'h', false},     {"convergence", 0, true},
+static const ArgsOptSpec ARGS_VERIFY_OPTS[] = {
+    {"integrators", 0, ARGS_VALUE, 0}, {"spp", 0, ARGS_VALUE, 0},    {"time", 0, ARGS_VALUE, 0},
+    {"threads", 0, ARGS_VALUE, 0},     {"seed", 0, ARGS_VALUE, 0},   {"alpha", 0, ARGS_VALUE, 0},
+    {"block", 0, ARGS_VALUE, 0},       {"map", 0, ARGS_VALUE, 0},    {"json", 0, ARGS_FLAG, 0},
+    {"width", 0, ARGS_VALUE, 0},       {"height", 0, ARGS_VALUE, 0}, {"quiet", 'q', ARGS_FLAG, 0},
+    {"help", 'h', ARGS_FLAG, 0},       {"convergence", 0, ARGS_VALUE, 0},
 };
 #define ARGS_NUM_VERIFY_OPTS (sizeof ARGS_VERIFY_OPTS / sizeof ARGS_VERIFY_OPTS[0])
 
@@ -678,7 +650,7 @@ static bool args_parse_verify_integrators(const char *value, VerifyArgs *v, Args
     return true;
 }
 
-static bool args_apply_verify(const ArgsVerifyOpt *o, const char *value, CliArgs *out,
+static bool args_apply_verify(const ArgsOptSpec *o, const char *value, CliArgs *out,
                               ArgsError *err)
 {
     VerifyArgs *v = &out->verify;
@@ -756,52 +728,10 @@ static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, Ar
             only_positional = true;
             continue;
         }
-        const ArgsVerifyOpt *o = NULL;
-        const char *value = NULL;
-        if (arg[1] == '-') { /* --name, --name=value, --name value */
-            const char *name = arg + 2, *eq = strchr(name, '=');
-            size_t len = eq ? (size_t)(eq - name) : strlen(name);
-            for (size_t k = 0; k < ARGS_NUM_VERIFY_OPTS; k++)
-                if (strlen(ARGS_VERIFY_OPTS[k].long_name) == len &&
-                    strncmp(ARGS_VERIFY_OPTS[k].long_name, name, len) == 0)
-                    o = &ARGS_VERIFY_OPTS[k];
-            if (!o) {
-                const char *best = NULL;
-                size_t best_d = 3;
-                for (size_t k = 0; k < ARGS_NUM_VERIFY_OPTS; k++) {
-                    size_t d = args_edit_distance(name, len, ARGS_VERIFY_OPTS[k].long_name);
-                    if (d < best_d && d < strlen(ARGS_VERIFY_OPTS[k].long_name)) {
-                        best_d = d;
-                        best = ARGS_VERIFY_OPTS[k].long_name;
-                    }
-                }
-                if (best)
-                    args_fail(err, true, "unknown option '%s' for 'verify' (did you mean --%s?)", arg, best);
-                else
-                    args_fail(err, true, "unknown option '%s' for 'verify'", arg);
-                return false;
-            }
-            if (eq && !o->takes_value) {
-                args_fail(err, true, "--%s does not take a value (got '%s')", o->long_name, arg);
-                return false;
-            }
-            value = eq ? eq + 1 : NULL;
-        } else { /* -q, -h */
-            for (size_t k = 0; k < ARGS_NUM_VERIFY_OPTS; k++)
-                if (ARGS_VERIFY_OPTS[k].short_name == arg[1] && arg[2] == '\0')
-                    o = &ARGS_VERIFY_OPTS[k];
-            if (!o) {
-                args_fail(err, true, "unknown option '%s' for 'verify'", arg);
-                return false;
-            }
-        }
-        if (o->takes_value && !value) {
-            if (i + 1 >= argc) {
-                args_fail(err, true, "--%s: missing value", o->long_name);
-                return false;
-            }
-            value = argv[++i]; /* taken even if it starts with '-', as for render */
-        }
+        const ArgsOptSpec *o;
+        const char *value;
+        if (!args_read_option(ARGS_VERIFY_OPTS, ARGS_NUM_VERIFY_OPTS, "verify", argc, argv, &i, &o, &value, err))
+            return false;
         if (!args_apply_verify(o, value, out, err))
             return false;
     }
@@ -814,8 +744,12 @@ static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, Ar
 
 /* ------------------------------------------------------------ caustic compare */
 
-static const char *const ARGS_COMPARE_OPTS[] = {"map", "json", "variance-a", "variance-b", "block", "flip",
-                                                "ppd", "help", NULL};
+static const ArgsOptSpec ARGS_COMPARE_OPTS[] = {
+    {"map", 0, ARGS_VALUE, 0},        {"json", 0, ARGS_FLAG, 0},     {"variance-a", 0, ARGS_VALUE, 0},
+    {"variance-b", 0, ARGS_VALUE, 0}, {"block", 0, ARGS_VALUE, 0},   {"flip", 0, ARGS_VALUE, 0},
+    {"ppd", 0, ARGS_VALUE, 0},        {"help", 'h', ARGS_FLAG, 0},
+};
+#define ARGS_NUM_COMPARE_OPTS (sizeof ARGS_COMPARE_OPTS / sizeof ARGS_COMPARE_OPTS[0])
 
 static bool args_apply_compare(const char *name, const char *value, CliArgs *out, ArgsError *err)
 {
@@ -880,43 +814,11 @@ static bool args_parse_compare(int argc, char **argv, int first, CliArgs *out, A
             only_positional = true;
             continue;
         }
-        const char *name = arg[1] == '-' ? arg + 2 : strcmp(arg, "-h") == 0 ? "help" : "";
-        const char *eq = strchr(name, '=');
-        size_t len = eq ? (size_t)(eq - name) : strlen(name);
-        const char *opt = NULL;
-        for (int k = 0; ARGS_COMPARE_OPTS[k]; k++)
-            if (strlen(ARGS_COMPARE_OPTS[k]) == len && strncmp(ARGS_COMPARE_OPTS[k], name, len) == 0)
-                opt = ARGS_COMPARE_OPTS[k];
-        if (!opt) {
-            const char *best = NULL;
-            size_t best_d = 3;
-            for (int k = 0; ARGS_COMPARE_OPTS[k]; k++) {
-                size_t d = args_edit_distance(name, len, ARGS_COMPARE_OPTS[k]);
-                if (d < best_d && d < strlen(ARGS_COMPARE_OPTS[k])) {
-                    best_d = d;
-                    best = ARGS_COMPARE_OPTS[k];
-                }
-            }
-            if (best)
-                args_fail(err, true, "unknown option '%s' for 'compare' (did you mean --%s?)", arg, best);
-            else
-                args_fail(err, true, "unknown option '%s' for 'compare'", arg);
+        const ArgsOptSpec *o;
+        const char *value;
+        if (!args_read_option(ARGS_COMPARE_OPTS, ARGS_NUM_COMPARE_OPTS, "compare", argc, argv, &i, &o, &value, err))
             return false;
-        }
-        bool flag = strcmp(opt, "json") == 0 || strcmp(opt, "help") == 0;
-        const char *value = eq ? eq + 1 : NULL;
-        if (flag && value) {
-            args_fail(err, true, "--%s does not take a value (got '%s')", opt, arg);
-            return false;
-        }
-        if (!flag && !value) {
-            if (i + 1 >= argc) {
-                args_fail(err, true, "--%s: missing value", opt);
-                return false;
-            }
-            value = argv[++i];
-        }
-        if (!args_apply_compare(opt, value ? value : "", out, err)) return false;
+        if (!args_apply_compare(o->long_name, value ? value : "", out, err)) return false;
     }
     if (out->command == ARGS_CMD_COMPARE && !c->b) {
         args_fail(err, true, "compare: expected two images, A and the reference B (got %s)",
