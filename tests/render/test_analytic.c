@@ -41,20 +41,31 @@ static double point_form_factor(double a, double b, double h, double x, double z
 
 static const float RHO = 0.8f, LE = 3.0f;
 
+/* A scene holding the plane y = 0 (albedo RHO, normal +y) of half side `half`, centred on
+ * the origin; with light_mat, also a black material for an emitter (*light_mat). */
+static Scene *plane_scene(float half, int *light_mat)
+{
+    CstError err;
+    Scene *s = scene_create();
+    int plane_mat;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
+    if (light_mat) {
+        m.albedo = color_s(0.0f);
+        assert_int_equal(scene_add_material(s, &m, light_mat, &err), CST_OK);
+    }
+    Vec3 plane[4] = {{-half, 0, -half}, {-half, 0, half}, {half, 0, half}, {half, 0, -half}};
+    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    return s;
+}
+
 /* The plane y = 0 (albedo RHO, normal +y) and an a x b emitter (LE, facing down) at
  * height h, centred above the origin. */
 static Scene *plane_under_light(double a, double b, double h)
 {
     CstError err;
-    Scene *s = scene_create();
-    int plane_mat, light_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
-    m.albedo = color_s(0.0f);
-    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
-    /* Plane y = 0 with normal +y; emitter at y = h, normal -y (winding gives the side). */
-    Vec3 plane[4] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
-    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    int light_mat;
+    Scene *s = plane_scene(50.0f, &light_mat); /* the emitter at y = h faces -y (its winding) */
     float ha = (float)(a / 2), hb = (float)(b / 2), fh = (float)h;
     Vec3 light[4] = {{-ha, fh, -hb}, {ha, fh, -hb}, {ha, fh, hb}, {-ha, fh, hb}};
     Emission em = {{{LE, LE, LE}}, 0, 0};
@@ -337,12 +348,7 @@ static void test_rectangle_irradiance_bidir(void **state)
 static void run_delta_case(CstIntegrator integ, int kind, int spp, uint64_t seed)
 {
     CstError err;
-    Scene *s = scene_create();
-    int plane_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
-    Vec3 plane[4] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
-    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    Scene *s = plane_scene(50.0f, NULL);
     const double h = 2.0, I = 5.0, E = 1.5, pi = 3.14159265358979323846;
     DeltaLight l;
     memset(&l, 0, sizeof l);
@@ -409,12 +415,7 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
 {
     enum { W = 64, H = 32 };
     CstError err;
-    Scene *s = scene_create();
-    int plane_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
-    Vec3 plane[4] = {{-500, 0, -500}, {-500, 0, 500}, {500, 0, 500}, {500, 0, -500}};
-    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    Scene *s = plane_scene(500.0f, NULL);
     float *rgb = malloc(W * H * 3 * sizeof *rgb);
     assert_non_null(rgb);
     double expected[3] = {0, 0, 0};
@@ -459,14 +460,8 @@ static void run_env_case(CstIntegrator integ, int spp, uint64_t seed)
 static void run_sphere_case(CstIntegrator integ, double dx, double h, double r, int spp, uint64_t seed)
 {
     CstError err;
-    Scene *s = scene_create();
-    int plane_mat, light_mat;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{RHO, RHO, RHO}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &plane_mat, &err), CST_OK);
-    m.albedo = color_s(0.0f);
-    assert_int_equal(scene_add_material(s, &m, &light_mat, &err), CST_OK);
-    Vec3 plane[4] = {{-500, 0, -500}, {-500, 0, 500}, {500, 0, 500}, {500, 0, -500}};
-    assert_int_equal(scene_add_quad(s, plane, plane_mat, NULL, &err), CST_OK);
+    int light_mat;
+    Scene *s = plane_scene(500.0f, &light_mat);
     Emission em = {{{LE, LE, LE}}, 0, 0};
     assert_int_equal(scene_add_sphere(s, v3((float)dx, (float)h, 0), (float)r, light_mat, &em, &err), CST_OK);
     CameraDesc cam = {{0, 0.05f, 0}, {0, 0, 0}, {0, 0, 1}, 1e-3f, 0.0f, 1.0f, 0.0f};
