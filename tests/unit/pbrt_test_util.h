@@ -51,6 +51,25 @@ static inline int find_warning(const Warnings *w, CstWarningCode code, const cha
     return -1;
 }
 
+/* Writes n bytes to path (the test fails if it cannot). */
+static inline void write_file(const char *path, const void *data, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(data, 1, n, f), n);
+    assert_int_equal(fclose(f), 0);
+}
+
+static inline void write_text(const char *path, const char *text) { write_file(path, text, strlen(text)); }
+
+/* Loads text as the file `path` (Include, Import and shape files resolve against its
+ * directory), with file access; warnings go to *w unless w is NULL. */
+static inline CstStatus load_at(const char *text, const char *path, CstScene **out, CstError *err, Warnings *w)
+{
+    CstLoadOptions opt = {collect, w, 0};
+    return cst_scene_load_pbrt_string(text, strlen(text), path, w ? &opt : NULL, out, err);
+}
+
 static inline CstStatus load_w(const char *text, CstScene **out, CstError *err, Warnings *w)
 {
     CstLoadOptions opt = {0};

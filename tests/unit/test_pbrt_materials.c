@@ -265,8 +265,7 @@ static Scene *load_file_scene(const char *text, Warnings *w)
 {
     CstScene *s = NULL;
     CstError err;
-    CstLoadOptions opt = {collect, w, 0};
-    if (cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err) != CST_OK)
+    if (load_at(text, CST_BINARY_DIR "/t.pbrt", &s, &err, w) != CST_OK)
         fail_msg("%s", err.msg);
     return s;
 }
@@ -439,9 +438,8 @@ static void test_goniometric_light(void **state)
     write_sides_image(CST_BINARY_DIR "/pbrt_gonio_ll.pfm", 32, 16);
     s = NULL;
     CstError err;
-    CstLoadOptions opt = {collect, &w, 0};
     const char *bad = WORLD("LightSource \"goniometric\" \"string filename\" \"pbrt_gonio_ll.pfm\"\n" TRI);
-    assert_int_equal(cst_scene_load_pbrt_string(bad, strlen(bad), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err),
+    assert_int_equal(load_at(bad, CST_BINARY_DIR "/t.pbrt", &s, &err, &w),
                      CST_ERR_INVALID_ARG);
     assert_non_null(strstr(err.msg, "expected a square"));
 }
@@ -745,7 +743,7 @@ static void test_imagemap_params(void **state)
     /* a missing image: an I/O error at its file name */
     text = WORLD("Texture \"i\" \"spectrum\" \"imagemap\"\n  \"string filename\" \"no-such-image.png\"\n" TRI);
     CstScene *cs = NULL;
-    CstStatus st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", NULL, &cs, &err);
+    CstStatus st = load_at(text, CST_BINARY_DIR "/t.pbrt", &cs, &err, NULL);
     assert_int_equal(st, CST_ERR_IO);
     assert_null(cs);
     if (!strstr(err.msg, "/t.pbrt:5:3: Texture \"i\" \"imagemap\": ") || !strstr(err.msg, "no-such-image.png"))

@@ -186,13 +186,13 @@ static void test_missing_files(void **state)
     const char *text = WORLD("Shape \"plymesh\" \"string filename\" \"no-such-mesh.ply\"\n");
     CstScene *s = NULL;
     CstError err;
-    CstStatus st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", NULL, &s, &err);
+    CstStatus st = load_at(text, CST_BINARY_DIR "/t.pbrt", &s, &err, NULL);
     assert_int_equal(st, CST_ERR_IO);
     assert_null(s);
     if (!strstr(err.msg, "/t.pbrt:4:17: Shape \"plymesh\": ") || !strstr(err.msg, "no-such-mesh.ply"))
         fail_msg("%s", err.msg);
     text = WORLD("Include \"no-such-file.pbrt\"\n");
-    st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", NULL, &s, &err);
+    st = load_at(text, CST_BINARY_DIR "/t.pbrt", &s, &err, NULL);
     assert_int_equal(st, CST_ERR_IO);
     if (!strstr(err.msg, "/t.pbrt:4:9: Include: ") || !strstr(err.msg, "cannot open"))
         fail_msg("%s", err.msg);
@@ -276,21 +276,14 @@ static void test_include(void **state)
     (void)state;
     const char *dir = CST_BINARY_DIR "/pbrt_include";
     mkdir(dir, 0755);
-    FILE *f = fopen(CST_BINARY_DIR "/pbrt_include/geometry.pbrt", "w");
-    assert_non_null(f);
-    fputs("# included\nTranslate 0 0 1\n" TRI "Shape \"sphere\" \"float radiu\" 1\n", f);
-    fclose(f);
-    f = fopen(CST_BINARY_DIR "/pbrt_include/bad.pbrt", "w");
-    assert_non_null(f);
-    fputs("\n  Shape \"sphere\" \"float radius\" [1\n", f);
-    fclose(f);
+    write_text(CST_BINARY_DIR "/pbrt_include/geometry.pbrt",
+               "# included\nTranslate 0 0 1\n" TRI "Shape \"sphere\" \"float radiu\" 1\n");
+    write_text(CST_BINARY_DIR "/pbrt_include/bad.pbrt", "\n  Shape \"sphere\" \"float radius\" [1\n");
     const char *text = WORLD("Include \"geometry.pbrt\"\nImport \"geometry.pbrt\"\n");
     CstScene *s = NULL;
     CstError err;
     Warnings w = {0};
-    CstLoadOptions opt = {collect, &w, 0};
-    CstStatus st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/pbrt_include/main.pbrt",
-                                              &opt, &s, &err);
+    CstStatus st = load_at(text, CST_BINARY_DIR "/pbrt_include/main.pbrt", &s, &err, &w);
     if (st != CST_OK) fail_msg("%s", err.msg);
     assert_int_equal(s->num_triangles, 2);
     assert_int_equal(s->num_spheres, 2);
@@ -300,8 +293,7 @@ static void test_include(void **state)
                                                            "parameter \"float radiu\"") >= 0);
     cst_scene_destroy(s);
     text = WORLD("Include \"bad.pbrt\"\n");
-    st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/pbrt_include/main.pbrt",
-                                    NULL, &s, &err);
+    st = load_at(text, CST_BINARY_DIR "/pbrt_include/main.pbrt", &s, &err, NULL);
     /* the list left open by bad.pbrt goes on in main.pbrt (pbrt-v4 splices the tokens), so
      * the missing ']' shows at main.pbrt's end, naming the '[' in bad.pbrt */
     assert_int_equal(st, CST_ERR_PARSE);
@@ -317,25 +309,19 @@ static void test_include_splices_tokens(void **state)
     (void)state;
     const char *dir = CST_BINARY_DIR "/pbrt_include2";
     mkdir(dir, 0755);
-    FILE *f = fopen(CST_BINARY_DIR "/pbrt_include2/open.pbrt", "w");
-    assert_non_null(f);
-    fputs("Shape \"sphere\"\n", f);
-    fclose(f);
+    write_text(CST_BINARY_DIR "/pbrt_include2/open.pbrt", "Shape \"sphere\"\n");
     const char *text = WORLD("Include \"open.pbrt\"\n  \"float radius\" 3\n");
     CstScene *s = NULL;
     CstError err;
     Warnings w = {0};
-    CstLoadOptions opt = {collect, &w, 0};
-    CstStatus st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/pbrt_include2/main.pbrt",
-                                              &opt, &s, &err);
+    CstStatus st = load_at(text, CST_BINARY_DIR "/pbrt_include2/main.pbrt", &s, &err, &w);
     if (st != CST_OK) fail_msg("%s", err.msg);
     assert_int_equal(s->num_spheres, 1);
     assert_true(s->spheres[0].radius == 3.0f);
     cst_scene_destroy(s);
     /* Import: the list does not go on; the string is a parse error in main.pbrt */
     text = WORLD("Import \"open.pbrt\"\n  \"float radius\" 3\n");
-    st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/pbrt_include2/main.pbrt",
-                                    NULL, &s, &err);
+    st = load_at(text, CST_BINARY_DIR "/pbrt_include2/main.pbrt", &s, &err, NULL);
     assert_int_equal(st, CST_ERR_PARSE);
     if (!strstr(err.msg, "main.pbrt:5:3: ")) fail_msg("%s", err.msg);
     /* gzip-compressed include: "Shape sphere radius 2" */
@@ -344,14 +330,10 @@ static void test_include_splices_tokens(void **state)
         0x55, 0x50, 0x2a, 0x2e, 0xc8, 0x48, 0x2d, 0x4a, 0x55, 0x52, 0x50, 0x4a, 0xcb, 0xc9, 0x4f,
         0x2c, 0x51, 0x28, 0x4a, 0x4c, 0xc9, 0x2c, 0x2d, 0x56, 0x52, 0x30, 0xe2, 0x02, 0x00, 0xf9,
         0x8e, 0x0c, 0x40, 0x20, 0x00, 0x00, 0x00};
-    f = fopen(CST_BINARY_DIR "/pbrt_include2/geo.pbrt.gz", "wb");
-    assert_non_null(f);
-    fwrite(gz, 1, sizeof gz, f);
-    fclose(f);
+    write_file(CST_BINARY_DIR "/pbrt_include2/geo.pbrt.gz", gz, sizeof gz);
     for (int imp = 0; imp < 2; imp++) {
         text = imp ? WORLD("Import \"geo.pbrt.gz\"\n") : WORLD("Include \"geo.pbrt.gz\"\n");
-        st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/pbrt_include2/main.pbrt",
-                                        NULL, &s, &err);
+        st = load_at(text, CST_BINARY_DIR "/pbrt_include2/main.pbrt", &s, &err, NULL);
         if (st != CST_OK) fail_msg("%s", err.msg);
         assert_int_equal(s->num_spheres, 1);
         assert_true(s->spheres[0].radius == 2.0f);
@@ -361,13 +343,9 @@ static void test_include_splices_tokens(void **state)
     unsigned char bad[sizeof gz];
     memcpy(bad, gz, sizeof gz);
     bad[12] ^= 0xff;
-    f = fopen(CST_BINARY_DIR "/pbrt_include2/bad.pbrt.gz", "wb");
-    assert_non_null(f);
-    fwrite(bad, 1, sizeof bad, f);
-    fclose(f);
+    write_file(CST_BINARY_DIR "/pbrt_include2/bad.pbrt.gz", bad, sizeof bad);
     text = WORLD("Include \"bad.pbrt.gz\"\n");
-    st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/pbrt_include2/main.pbrt",
-                                    NULL, &s, &err);
+    st = load_at(text, CST_BINARY_DIR "/pbrt_include2/main.pbrt", &s, &err, NULL);
     assert_int_equal(st, CST_ERR_PARSE);
     if (!strstr(err.msg, "main.pbrt:4:9: ") || !strstr(err.msg, "bad.pbrt.gz") || !strstr(err.msg, "gzip"))
         fail_msg("%s", err.msg);
@@ -711,10 +689,7 @@ static void test_env_sphere_pbrt_equals_json(void **state)
         "Scale -1 1 1\nLookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n"
         "WorldBegin\nLightSource \"infinite\" \"rgb L\" [0.8 0.9 1.0]\n"
         "Material \"diffuse\" \"rgb reflectance\" [0.5 0.6 0.7]\nShape \"sphere\" \"float radius\" 1\n";
-    FILE *f = fopen(CST_BINARY_DIR "/pbrt_env_sphere.json", "w");
-    assert_non_null(f);
-    fputs(json_text, f);
-    fclose(f);
+    write_text(CST_BINARY_DIR "/pbrt_env_sphere.json", json_text);
     CstScene *json = NULL, *pbrt = NULL;
     CstError err;
     Warnings w = {0};

@@ -44,16 +44,14 @@ static void test_shapes(void **state)
 static void test_plymesh(void **state)
 {
     (void)state;
-    FILE *f = fopen(CST_BINARY_DIR "/pbrt_quad.ply", "w");
-    assert_non_null(f);
-    fputs("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
-          "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
-          "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n", f);
-    fclose(f);
+    write_text(CST_BINARY_DIR "/pbrt_quad.ply",
+               "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+               "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+               "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n");
     const char *text = WORLD("Translate 0 0 7\nShape \"plymesh\" \"string filename\" \"pbrt_quad.ply\"\n");
     CstScene *s = NULL;
     CstError err;
-    CstStatus st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", NULL, &s, &err);
+    CstStatus st = load_at(text, CST_BINARY_DIR "/t.pbrt", &s, &err, NULL);
     if (st != CST_OK) fail_msg("%s", err.msg);
     assert_int_equal(s->num_triangles, 2);
     assert_vec(tri_vertex(s, 1, 2), 0, 1, 7, 0);
@@ -70,8 +68,7 @@ static void test_plymesh(void **state)
     assert_int_equal(pclose(gz), 0);
     text = WORLD("Translate 0 0 7\nShape \"plymesh\" \"string filename\" \"pbrt_quad.ply.gz\"\n");
     Warnings w = {0};
-    CstLoadOptions opt = {collect, &w, 0};
-    st = cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err);
+    st = load_at(text, CST_BINARY_DIR "/t.pbrt", &s, &err, &w);
     if (st != CST_OK) fail_msg("%s", err.msg);
     assert_int_equal(s->num_triangles, 2);
     assert_vec(tri_vertex(s, 0, 2), 1, 1, 7, 0);
@@ -136,8 +133,7 @@ static void test_imagemap_and_binary_ply(void **state)
                              "Shape \"plymesh\" \"string filename\" \"pbrt_bin.ply\"\n");
     CstScene *s = NULL;
     Warnings w = {0};
-    CstLoadOptions opt = {collect, &w, 0};
-    if (cst_scene_load_pbrt_string(text, strlen(text), CST_BINARY_DIR "/t.pbrt", &opt, &s, &err) != CST_OK)
+    if (load_at(text, CST_BINARY_DIR "/t.pbrt", &s, &err, &w) != CST_OK)
         fail_msg("%s", err.msg);
     Color a = s->materials[s->tri_info[0].material].albedo;
     assert_true(fabsf(a.c[0] - 0.5f) < 1e-6f && fabsf(a.c[1] - 0.5f) < 1e-6f && fabsf(a.c[2] - 0.5f) < 1e-6f);
