@@ -165,20 +165,28 @@ static void test_cornell_kdtree(void **state) { check_fixture(*state, ACCEL_KDTR
 static void test_cornell_grid(void **state) { check_fixture(*state, ACCEL_GRID, false, true); }
 static void test_cornell_embree(void **state) { check_fixture(*state, ACCEL_EMBREE, true, true); }
 
-/* 1 thread and 3 threads: identical per-ray results and checksums. */
-static void test_thread_independence(void **state)
+/* The fixture's secondary rays traced (closest hit) through a BVH of its scene with
+ * `threads` threads: the results (malloc'ed, for the caller to free) and *st. */
+static RaysetResult *trace_secondary_bvh(const Fixture *f, int threads, RaysetStats *st)
 {
-    const Fixture *f = *state;
     CstError err = {0};
     Accel a;
     AccelGeometry g = rayset_scene_geometry(&f->scene);
     assert_int_equal(accel_build(&a, ACCEL_BVH, &g, &err), CST_OK);
+    RaysetResult *r = malloc(f->num_secondary * sizeof *r);
+    assert_non_null(r);
+    assert_int_equal(rayset_trace(&a, f->secondary, f->num_secondary, RAYSET_CLOSEST, threads, r, st, &err), CST_OK);
+    accel_free(&a);
+    return r;
+}
+
+/* 1 thread and 3 threads: identical per-ray results and checksums. */
+static void test_thread_independence(void **state)
+{
+    const Fixture *f = *state;
     size_t n = f->num_secondary;
-    RaysetResult *r1 = malloc(n * sizeof *r1), *r3 = malloc(n * sizeof *r3);
-    assert_true(r1 && r3);
     RaysetStats s1, s3;
-    assert_int_equal(rayset_trace(&a, f->secondary, n, RAYSET_CLOSEST, 1, r1, &s1, &err), CST_OK);
-    assert_int_equal(rayset_trace(&a, f->secondary, n, RAYSET_CLOSEST, 3, r3, &s3, &err), CST_OK);
+    RaysetResult *r1 = trace_secondary_bvh(f, 1, &s1), *r3 = trace_secondary_bvh(f, 3, &s3);
     assert_memory_equal(r1, r3, n * sizeof *r1);
     assert_int_equal(s1.hits, s3.hits);
     assert_true(s1.sum_t == s3.sum_t);
@@ -189,7 +197,6 @@ static void test_thread_independence(void **state)
     assert_true(dt == 0.0);
     free(r1);
     free(r3);
-    accel_free(&a);
 }
 
 /* ------------------------------------------------------------------ grazing ties */
@@ -266,16 +273,10 @@ static void test_leak_is_no_tie(void **state)
 static void test_wrong_t_still_fails(void **state)
 {
     const Fixture *f = *state;
-    CstError err = {0};
-    Accel a;
-    AccelGeometry g = rayset_scene_geometry(&f->scene);
-    assert_int_equal(accel_build(&a, ACCEL_BVH, &g, &err), CST_OK);
     size_t n = f->num_secondary;
-    RaysetResult *good = malloc(n * sizeof *good), *bad = malloc(n * sizeof *bad);
-    assert_true(good && bad);
     RaysetStats st;
-    assert_int_equal(rayset_trace(&a, f->secondary, n, RAYSET_CLOSEST, 2, good, &st, &err), CST_OK);
-    accel_free(&a);
+    RaysetResult *good = trace_secondary_bvh(f, 2, &st), *bad = malloc(n * sizeof *bad);
+    assert_non_null(bad);
 
     size_t ties;
     double dt;
