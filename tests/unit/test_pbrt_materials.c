@@ -288,6 +288,54 @@ static void check_sides(const EnvMap *env, const int map[3][2], float k)
     }
 }
 
+/* pbrt-v4 looks an environment image up by nearest pixel, per ray. caustic's copy in its
+ * own layout must show the same pixel: at 200 random directions at least 3 degrees from any
+ * pixel edge of an 8 x 8 equal-area map with a different value in every pixel, under a
+ * rotation about a skew axis, the environment equals the source pixel pbrt-v4 would pick.
+ * (The copy used to have 2N x N pixels, 16 x 8 here, and showed neighbouring pixels: this
+ * test failed on it.) */
+static void test_infinite_light_nearest_pixel(void **state)
+{
+    (void)state;
+    enum { N = 8 };
+    float px[3 * N * N];
+    for (int i = 0; i < N * N; i++) {
+        px[3 * i] = (float)(i + 1);
+        px[3 * i + 1] = (float)(2 * i + 1);
+        px[3 * i + 2] = 0.5f;
+    }
+    CstError err;
+    if (image_write(CST_BINARY_DIR "/pbrt_env_px.pfm", px, N, N, &err) != CST_OK) fail_msg("%s", err.msg);
+    Scene *s = load_file_scene(WORLD("AttributeBegin\nRotate 37 1 2 3\nLightSource \"infinite\" "
+                                     "\"string filename\" \"pbrt_env_px.pfm\"\nAttributeEnd\n" TRI), NULL);
+    /* light-from-world of Rotate 37 about (1 2 3), in double */
+    const double deg = 37.0 * 3.14159265358979323846 / 180.0, c = cos(deg), sn = sin(deg);
+    double ax[3] = {1.0, 2.0, 3.0}, len = sqrt(14.0);
+    for (int k = 0; k < 3; k++) ax[k] /= len;
+    Pcg32 rng;
+    pcg32_seed(&rng, 11u, 2u);
+    int checked = 0;
+    while (checked < 200) {
+        Vec3 wv = warp_uniform_sphere(pcg32_v2(&rng));
+        double w[3] = {wv.x, wv.y, wv.z}, d[3], uv[2];
+        /* Rodrigues with -37 degrees: world to light */
+        double dot = ax[0] * w[0] + ax[1] * w[1] + ax[2] * w[2];
+        double cr[3] = {ax[1] * w[2] - ax[2] * w[1], ax[2] * w[0] - ax[0] * w[2], ax[0] * w[1] - ax[1] * w[0]};
+        for (int k = 0; k < 3; k++) d[k] = w[k] * c - cr[k] * sn + ax[k] * dot * (1.0 - c);
+        pbrt_equal_area_sphere_to_square(d, uv);
+        double fx = uv[0] * N, fy = uv[1] * N;
+        double edge = fmin(fmin(fx - floor(fx), ceil(fx) - fx), fmin(fy - floor(fy), ceil(fy) - fy));
+        if (edge < 3.0 / 360.0 * N * 2.0) continue; /* about 3 degrees of an 8-pixel side */
+        int i = (int)fy * N + (int)fx;
+        Color got = envmap_eval(s->env, wv);
+        if (got.c[0] != px[3 * i] || got.c[1] != px[3 * i + 1])
+            fail_msg("direction (%g, %g, %g): pixel %g, expected pixel %d (%g)", (double)wv.x, (double)wv.y,
+                     (double)wv.z, (double)got.c[0] - 1.0, i, (double)px[3 * i]);
+        checked++;
+    }
+    cst_scene_destroy(s);
+}
+
 /* LightSource "infinite": constant (L, scale, illuminance), images through the light's
  * transform, one environment only, malformed variants. */
 static void test_infinite_lights(void **state)
@@ -314,8 +362,8 @@ static void test_infinite_lights(void **state)
     s = load_file_scene(WORLD("AttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" "
                               "\"string filename\" \"pbrt_env_sq.pfm\" \"float scale\" 2\nAttributeEnd\n" TRI), &w);
     assert_non_null(s->env->rgb);
-    assert_int_equal(s->env->width, 128);
-    assert_int_equal(s->env->height, 64);
+    assert_int_equal(s->env->width, 2048); /* 2N x N, refined to at least 1024 rows */
+    assert_int_equal(s->env->height, 1024);
     assert_int_equal(w.n, 0);
     static const int rot[3][2] = {{0, 1}, {2, -1}, {1, 1}};
     check_sides(s->env, rot, 2.0f);
@@ -335,15 +383,15 @@ static void test_infinite_lights(void **state)
     write_sides_image(CST_BINARY_DIR "/pbrt_env_ll.pfm", 32, 16);
     memset(&w, 0, sizeof w);
     s = load_file_scene(WORLD("LightSource \"infinite\" \"string filename\" \"pbrt_env_ll.pfm\"\n" TRI), &w);
-    assert_int_equal(s->env->width, 32);
-    assert_int_equal(s->env->height, 16);
+    assert_int_equal(s->env->width, 2048);
+    assert_int_equal(s->env->height, 1024);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "is 32 x 16, not square") >= 0);
     check_sides(s->env, ident, 1.0f);
     cst_scene_destroy(s);
 
     /* several infinite lights: pbrt-v4 sums them. Two images (the square one becomes 128 x
-     * 64, the other is 32 x 16, which that grid refines) and a constant: the sum on the
-     * larger grid equals the three looked up apart, in every direction. */
+     * 64, the other is 32 x 16, both copied at 2048 x 1024) and a constant: the sum on
+     * that grid equals the three looked up apart, in every direction. */
     const char *parts[3] = {"LightSource \"infinite\" \"string filename\" \"pbrt_env_ll.pfm\" \"float scale\" 3\n",
                             "LightSource \"infinite\" \"rgb L\" [0.5 0.25 0.125]\n",
                             ("AttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" "
@@ -364,8 +412,8 @@ static void test_infinite_lights(void **state)
     snprintf(body, sizeof body, WORLD("%s"), all);
     memset(&w, 0, sizeof w);
     s = load_file_scene(body, &w);
-    assert_int_equal(s->env->width, 128);
-    assert_int_equal(s->env->height, 64);
+    assert_int_equal(s->env->width, 2048);
+    assert_int_equal(s->env->height, 1024);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "another infinite light") >= 0);
     Pcg32 rng;
     pcg32_seed(&rng, 3u, 1u);
@@ -819,6 +867,7 @@ int main(void)
         cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_equal_area_map),
         cmocka_unit_test(test_infinite_lights),
+        cmocka_unit_test(test_infinite_light_nearest_pixel),
         cmocka_unit_test(test_texture_classes),
         cmocka_unit_test(test_texture_materials),
         cmocka_unit_test(test_imagemap_params),
