@@ -617,6 +617,10 @@ typedef struct CstRenderSettings {
      * fraction over the whole render. */
     CstPhaseFn progress_phase;
     CstColorMode color_mode;  /* CST_COLOR_DEFAULT = unset */
+    /* > 0: every camera sample's colour (and every light-path splat's) is scaled down, hue
+     * kept, so that its largest CIE XYZ component times 2^exposure is at most this: pbrt-v4's
+     * RGBFilm "maxcomponentvalue" (a biased clamp against fireflies). 0 = none (the default) */
+    double max_component;
 } CstRenderSettings;
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit

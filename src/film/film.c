@@ -230,7 +230,7 @@ void splat_list_free(SplatList *l)
 
 SplatFrame splat_frame(int width, int height, CstFilter filter)
 {
-    SplatFrame fr = {width, height, filter, 0, 1, height};
+    SplatFrame fr = {width, height, filter, 0, 1, height, 0.0f};
     /* A power of two of rows, so binning shifts instead of dividing. */
     while ((2 << fr.band_shift) * width <= FILM_SPLAT_BAND) fr.band_shift++;
     fr.band_rows = 1 << fr.band_shift;
@@ -274,6 +274,7 @@ void film_splat(SplatList *l, const SplatFrame *fr, float x, float y, Color c)
         l->nonfinite++;
         return;
     }
+    if (fr->clamp > 0.0f) c = color_clamp_xyz_max(c, fr->clamp);
     int x0, x1, y0, y1;
     /* (also drops positions so far off that the integer conversion would overflow) */
     if (!(fabsf(x) < 1e9f && fabsf(y) < 1e9f) || !splat_footprint(fr, x, y, &x0, &x1, &y0, &y1)) return;

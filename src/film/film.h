@@ -66,6 +66,7 @@ typedef struct SplatFrame {
     int band_shift; /* rows per band of splat_list_bin: 1 << band_shift */
     int band_rows;
     int bands;      /* ceil(height / band_rows) */
+    float clamp;    /* > 0: each splat through color_clamp_xyz_max with this limit; 0 = none */
 } SplatFrame;
 
 /* Bands of about 16384 pixels: the part of a double RGB image a band's merge writes (384

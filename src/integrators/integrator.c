@@ -129,6 +129,8 @@ static void camera_tile(void *ctx, int tile, int worker)
                     /* Counted and dropped as a zero sample: one NaN must not erase a pixel. */
                     w->nonfinite++;
                     L = color_s(0.0f);
+                } else if (it->clamp > 0.0f) {
+                    L = color_clamp_xyz_max(L, it->clamp);
                 }
                 if (fw != 1.0f) L = color_scale(L, fw);
                 if (it->kind == INTEGRATOR_BIDIR) {
@@ -362,6 +364,7 @@ static CstStatus light_prepare(Integrator *it, const CstRenderSettings *st, CstE
     L->light_paths = (int)pixels;
     L->num_chunks = (L->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
     L->params.frame = L->vcm_params.frame = splat_frame(st->width, st->height, st->filter);
+    L->params.frame.clamp = L->vcm_params.frame.clamp = it->clamp;
     if (!light_alloc(it))
         return cst_fail(err, CST_ERR_OOM, "out of memory for light-tracing buffers (%dx%d)", st->width, st->height);
     return CST_OK;
@@ -509,6 +512,9 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp);
     it->aov_hit = (st->aovs & FILM_AOV_FIRST_HIT) != 0;
     it->spectral = st->color_mode == CST_COLOR_SPECTRAL;
+    /* max_component bounds what the written image shows (after 2^exposure, which holds the
+     * pbrt sensor's iso / 100), as pbrt-v4 bounds its sensor values after that ratio. */
+    it->clamp = st->max_component > 0.0 ? (float)(st->max_component / exp2(st->exposure)) : 0.0f;
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));

@@ -109,6 +109,8 @@ typedef struct Integrator {
                                   * (0 = not known: a time limit) and the strata, set once */
     bool aov_hit;                /* albedo, normal or depth AOVs: trace the first hit for them */
     bool spectral;               /* spectral mode (math/spectrum.h): paths carry 4 wavelengths */
+    float clamp;                 /* > 0: camera samples and splats through color_clamp_xyz_max
+                                  * (the settings' max_component over 2^exposure); 0 = none */
     int tiles_x, num_tiles;
     int crop_x0, crop_x1, crop_y0, crop_y1;
     /* The pass in progress: samples (iterations) [pass_first, pass_first + pass_count);

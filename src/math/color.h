@@ -94,6 +94,20 @@ static inline bool color_is_black(Color a)
         if (a.c[i] != 0.0f) return false;
     return true;
 }
+/* a scaled by min(1, limit / m), m the largest component of a's CIE XYZ (a in linear sRGB,
+ * IEC 61966-2-1's matrix): pbrt-v4's RGBFilm clamp of a sample's sensor values (its
+ * "maxcomponentvalue"; the cie1931 sensor's values are XYZ), which keeps the hue. */
+static inline Color color_clamp_xyz_max(Color a, float limit)
+{
+    float x = 0.4124f * a.c[0] + 0.3576f * a.c[1] + 0.1805f * a.c[2];
+    float y = 0.2126f * a.c[0] + 0.7152f * a.c[1] + 0.0722f * a.c[2];
+    float z = 0.0193f * a.c[0] + 0.1192f * a.c[1] + 0.9505f * a.c[2];
+    float m = x > y ? x : y;
+    m = m > z ? m : z;
+    if (!(m > limit)) return a;
+    return color_scale(a, limit / m);
+}
+
 static inline bool color_is_finite(Color a)
 {
     for (int i = 0; i < COLOR_LANES; i++)

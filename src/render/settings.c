@@ -10,7 +10,7 @@ void cst_render_settings_init(CstRenderSettings *s)
     memset(s, 0, sizeof *s); /* enums *_DEFAULT, seed_set = exposure_set = 0, no callback */
     s->width = s->height = s->spp = s->threads = CST_UNSET;
     s->max_depth = s->rr_depth = s->photons = CST_UNSET;
-    s->time_limit = s->photon_radius = s->exposure = CST_UNSET;
+    s->time_limit = s->photon_radius = s->exposure = s->max_component = CST_UNSET;
     s->png_linear = s->aovs = CST_UNSET;
     for (int k = 0; k < 4; k++) s->crop[k] = CST_UNSET;
 }
@@ -44,6 +44,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_DBL(photon_radius, 1, 0.0);          /* 0 stays: automatic */
     PICK_INT(sampler, 1, CST_SAMPLER_INDEPENDENT);
     PICK_INT(color_mode, 1, CST_COLOR_RGB);
+    PICK_DBL(max_component, 1, 0.0);          /* 0 = no clamp */
     /* The photon integrator builds its maps once per render, so no per-pass wavelengths
      * can be shared by photons and camera paths: it transports RGB in either mode (the
      * settings, and so the output's metadata, say so). */

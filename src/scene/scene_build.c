@@ -811,6 +811,9 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: photon_radius %g; expected a radius > 0", fn, r->photon_radius);
     if (r->exposure_set && !isfinite(r->exposure))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: exposure %g; expected a finite number of stops", fn, r->exposure);
+    if (setting_set(r->max_component, 1) && !(r->max_component > 0.0 && r->max_component <= (double)FLT_MAX))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: max_component %g; expected a number > 0 (0 = no clamp)", fn,
+                        r->max_component);
     if ((int)r->integrator < CST_INTEGRATOR_DEFAULT || r->integrator > CST_INTEGRATOR_VCM ||
         (int)r->filter < CST_FILTER_DEFAULT || r->filter > CST_FILTER_MITCHELL ||
         (int)r->sampler < CST_SAMPLER_DEFAULT || r->sampler > CST_SAMPLER_SOBOL)
@@ -857,6 +860,7 @@ CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings
     SETTING_MERGE(color_mode, 1);
     SETTING_MERGE(png_linear, 0);
     SETTING_MERGE(aovs, 0);
+    SETTING_MERGE(max_component, 1);
     if (r->seed_set) { sc->seed = r->seed; sc->seed_set = 1; }
     if (r->exposure_set) { sc->exposure = r->exposure; sc->exposure_set = 1; }
     if (r->crop[0] != CST_UNSET) memcpy(sc->crop, r->crop, sizeof sc->crop);

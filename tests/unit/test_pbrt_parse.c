@@ -529,6 +529,14 @@ static void test_camera_and_options(void **state)
     assert_false(s->camera_mirror);
     assert_int_equal(s->settings.filter, CST_FILTER_GAUSSIAN); /* pbrt's default filter */
     cst_scene_destroy(s);
+    /* RGBFilm's maxcomponentvalue: the film's clamp, without a warning; <= 0 is an error */
+    memset(&w, 0, sizeof w);
+    s = expect_ok("Film \"rgb\" \"float maxcomponentvalue\" 10\nWorldBegin\n" TRI, &w);
+    assert_true(s->settings.max_component == 10.0);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "maxcomponentvalue") < 0);
+    cst_scene_destroy(s);
+    expect_error("Film \"rgb\" \"float maxcomponentvalue\" 0\nWorldBegin\n" TRI, CST_ERR_INVALID_ARG, "Film", 0,
+                 "maxcomponentvalue 0; expected a positive number");
     /* filters: Mitchell with pbrt's defaults is exact; other parameters, sinc: approximated */
     memset(&w, 0, sizeof w);
     s = expect_ok("PixelFilter \"mitchell\" \"float B\" 0.33333333 \"float xradius\" 2\nWorldBegin\n" TRI, &w);

@@ -772,7 +772,7 @@ static void test_exact_positions(void **state)
                    "}",
                    CST_ERR_INVALID_ARG,
                    NAME ":2:25: film: unknown key \"hieght\"; expected one of: width, height, filter, output, exposure, "
-                   "png_encoding, aovs, crop");
+                   "png_encoding, aovs, crop, max_component");
     /* columns count code points: é (2 bytes), € (3), 😀 (4) are one column each */
     expect_message("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
                    "\t\"materials\": {\"\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\": {\"type\": \"diffuse\", "

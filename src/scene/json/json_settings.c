@@ -15,11 +15,11 @@
 CstStatus json_parse_film(Loader *ld, const json_t *film)
 {
     static const char *const keys[] = {"width", "height", "filter", "output", "exposure", "png_encoding",
-                                       "aovs", "crop"};
+                                       "aovs", "crop", "max_component"};
     CstRenderSettings *rs = &ld->settings;
-    LOADER_TRY(json_expect_object(ld, film,
-                                  "an object with width, height, filter, output, exposure, png_encoding, aovs, crop"));
-    LOADER_TRY(json_check_keys(ld, film, keys, 8));
+    LOADER_TRY(json_expect_object(ld, film, "an object with width, height, filter, output, exposure, png_encoding, "
+                                            "aovs, crop, max_component"));
+    LOADER_TRY(json_check_keys(ld, film, keys, 9));
     json_t *v;
     json_int_t i = 0;
     if ((v = json_object_get(film, "width"))) {
@@ -70,6 +70,16 @@ CstStatus json_parse_film(Loader *ld, const json_t *film)
         LOADER_TRY(json_read_float(ld, v, 64.0, &ev));
         rs->exposure = (double)ev;
         rs->exposure_set = 1;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(film, "max_component"))) {
+        float m = 0.0f;
+        json_path_push_key(ld, "max_component");
+        LOADER_TRY(json_read_float(ld, v, FLT_MAX, &m));
+        if (!(m > 0.0f))
+            return json_fail_here(ld, "%g; expected a number > 0 (the largest XYZ component a sample may "
+                                      "add; leave the key out for no clamp)", (double)m);
+        rs->max_component = (double)m;
         json_path_pop(ld);
     }
     if ((v = json_object_get(film, "png_encoding"))) {

@@ -87,6 +87,16 @@ CstStatus pbrt_film_directive(Loader *ld, NamedCall *call)
         rs->exposure = (rs->exposure_set ? rs->exposure : 0.0) + log2((double)iso / 100.0);
         rs->exposure_set = 1;
     }
+    /* RGBFilm's clamp of each sample's sensor values (after the imaging ratio above). */
+    float maxcv = 0.0f;
+    int has_maxcv = 0;
+    TRY(pbrt_get_float(ld, ps, d, "maxcomponentvalue", 0.0f, &maxcv, &has_maxcv));
+    if (has_maxcv) {
+        if (!(maxcv > 0.0f))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: maxcomponentvalue %g; expected a positive "
+                                "number", d, (double)maxcv);
+        if (isfinite(maxcv)) rs->max_component = (double)maxcv;
+    }
     const char *sensor = NULL;
     Loc sl = loc;
     TRY(pbrt_get_string(ld, ps, d, "sensor", &sensor, &sl));
