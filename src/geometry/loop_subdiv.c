@@ -47,10 +47,8 @@ static CstStatus topo_build(const int *idx, int nt, Topo *t, CstError *err)
     HalfKey *keys = malloc((nh ? nh : 1) * sizeof *keys);
     int *run_of_first = malloc((nh ? nh : 1) * sizeof *run_of_first); /* run + 1 at a run's first half-edge */
     t->edge_of = malloc((nh ? nh : 1) * sizeof *t->edge_of);
-    t->edge_v = malloc(2 * (nh ? nh : 1) * sizeof *t->edge_v);
-    t->edge_he = malloc(2 * (nh ? nh : 1) * sizeof *t->edge_he);
     CstStatus st = CST_OK;
-    if (!keys || !run_of_first || !t->edge_of || !t->edge_v || !t->edge_he) {
+    if (!keys || !run_of_first || !t->edge_of) {
         st = cst_fail(err, CST_ERR_OOM, "out of memory for the edges of %d triangles", nt);
         goto done;
     }
@@ -67,7 +65,7 @@ static CstStatus topo_build(const int *idx, int nt, Topo *t, CstError *err)
     qsort(keys, nh, sizeof *keys, half_key_cmp);
     /* runs of equal (lo, hi): one edge each, its first half-edge the run's smallest */
     memset(run_of_first, 0, nh * sizeof *run_of_first);
-    int runs = 0;
+    size_t runs = 0;
     for (size_t i = 0; i < nh;) {
         size_t j = i + 1;
         while (j < nh && keys[j].lo == keys[i].lo && keys[j].hi == keys[i].hi) j++;
@@ -80,6 +78,12 @@ static CstStatus topo_build(const int *idx, int nt, Topo *t, CstError *err)
         run_of_first[keys[i].he] = (int)i + 1; /* the run's start in keys, + 1 */
         runs++;
         i = j;
+    }
+    t->edge_v = malloc(2 * (runs ? runs : 1) * sizeof *t->edge_v);
+    t->edge_he = malloc(2 * (runs ? runs : 1) * sizeof *t->edge_he);
+    if (!t->edge_v || !t->edge_he) {
+        st = cst_fail(err, CST_ERR_OOM, "out of memory for the %zu edges of %d triangles", runs, nt);
+        goto done;
     }
     t->ne = 0;
     for (size_t h = 0; h < nh; h++) {
@@ -94,7 +98,6 @@ static CstStatus topo_build(const int *idx, int nt, Topo *t, CstError *err)
         t->edge_of[keys[i].he] = e;
         if (two) t->edge_of[keys[i + 1].he] = e;
     }
-    (void)runs;
 done:
     free(keys);
     free(run_of_first);
@@ -183,57 +186,61 @@ static void refine(const Vec3 *p, int nv, const int *idx, int nt, const Topo *t,
     }
 }
 
-/* The one-ring of v in order around it: the walk from face to face across the edges at v.
- * corners[first..last) are the half-edges 3 f + k with idx[3 f + k] = v. On the boundary
- * the ring starts and ends at the two boundary neighbours (valence = faces + 1), inside
- * it closes (valence = faces). Returns the ring's length, or -1 when the walk does not
- * reach every face at v (more than one fan). ring has room for faces + 1 entries. */
+/* The vertex of face f that is neither v nor x. */
+static int other_vertex(const int *idx, int f, int v, int x)
+{
+    for (int k = 0; k < 2; k++)
+        if (idx[3 * f + k] != v && idx[3 * f + k] != x) return idx[3 * f + k];
+    return idx[3 * f + 2];
+}
+
+/* The face across the edge (v, y) of face f, or -1 where that edge is on the boundary. */
+static int face_across(const int *idx, const Topo *t, int f, int v, int y)
+{
+    int e = 0;
+    for (int k = 0; k < 3; k++) {
+        int p0 = idx[3 * f + k], p1 = idx[3 * f + next3(k)];
+        if ((p0 == v && p1 == y) || (p1 == v && p0 == y)) e = t->edge_of[3 * f + k];
+    }
+    int h0 = t->edge_he[2 * e], h1 = t->edge_he[2 * e + 1];
+    return h1 < 0 ? -1 : (h0 / 3 == f ? h1 / 3 : h0 / 3);
+}
+
+/* The one-ring of v in order around it: the walk from face to face across the edges at v
+ * (entering a face through one ring vertex x, leaving through the other, y), which needs
+ * no consistent orientation. corners[first..last) are the half-edges 3 f + k with
+ * idx[3 f + k] = v. On the boundary the ring starts and ends at the two boundary
+ * neighbours (valence = faces + 1), inside it closes (valence = faces). Returns the ring's
+ * length, or -1 when the walk does not reach every face at v (more than one fan). ring has
+ * room for faces + 1 entries. */
 static int ordered_ring(const int *idx, const Topo *t, const int *corners, int first, int last, int v,
                         int *ring)
 {
-    int m = last - first;
-    /* the other vertex of face f at v than x, and the face across the edge (v, y) from f */
-    #define OTHER(f, x) (idx[3 * (f)] != v && idx[3 * (f)] != (x) ? idx[3 * (f)] : \
-                         (idx[3 * (f) + 1] != v && idx[3 * (f) + 1] != (x) ? idx[3 * (f) + 1] : idx[3 * (f) + 2]))
-    int f0 = corners[first] / 3;
-    int a0 = idx[3 * f0 + next3(corners[first] % 3)];
-    /* walk back across (v, a0) to a boundary face, if there is one */
-    int f = f0, x = OTHER(f0, a0), steps = 0; /* entering f through x: leaving through y */
-    int start_f = f0, start_x = a0, boundary = 0;
-    for (;;) {
-        int y = OTHER(f, x);
-        int e = -1;
-        for (int k = 0; k < 3; k++) {
-            int p0 = idx[3 * f + k], p1 = idx[3 * f + next3(k)];
-            if ((p0 == v && p1 == y) || (p1 == v && p0 == y)) e = t->edge_of[3 * f + k];
-        }
-        int h0 = t->edge_he[2 * e], h1 = t->edge_he[2 * e + 1];
-        int g = h1 < 0 ? -1 : (h0 / 3 == f ? h1 / 3 : h0 / 3);
-        if (g < 0) { /* f is the end face: the ring starts at y, leaving through x */
+    const int m = last - first;
+    const int f0 = corners[first] / 3;
+    const int a0 = idx[3 * f0 + next3(corners[first] % 3)];
+    /* backwards from f0 (leaving through a0) to a boundary face, if there is one */
+    int f = f0, x = other_vertex(idx, f0, v, a0), start_f = f0, start_x = a0, boundary = 0;
+    for (int steps = 0; steps <= m; steps++) {
+        int y = other_vertex(idx, f, v, x), g = face_across(idx, t, f, v, y);
+        if (g < 0) { /* f is an end face: the ring starts at y */
             start_f = f;
             start_x = y;
             boundary = 1;
             break;
         }
-        if (g == f0 || ++steps > m) break; /* closed (interior) */
+        if (g == f0) break; /* closed: an interior vertex */
         f = g;
         x = y;
     }
-    /* forward from start_f through start_x */
+    /* forwards from start_f, entering through start_x */
     int len = 0, visited = 0;
     f = start_f;
     x = start_x;
     ring[len++] = x;
     for (;;) {
-        int y = OTHER(f, x);
+        int y = other_vertex(idx, f, v, x), g = face_across(idx, t, f, v, y);
         visited++;
-        int e = -1;
-        for (int k = 0; k < 3; k++) {
-            int p0 = idx[3 * f + k], p1 = idx[3 * f + next3(k)];
-            if ((p0 == v && p1 == y) || (p1 == v && p0 == y)) e = t->edge_of[3 * f + k];
-        }
-        int h0 = t->edge_he[2 * e], h1 = t->edge_he[2 * e + 1];
-        int g = h1 < 0 ? -1 : (h0 / 3 == f ? h1 / 3 : h0 / 3);
         if (g < 0) {
             ring[len++] = y;
             break;
@@ -243,7 +250,6 @@ static int ordered_ring(const int *idx, const Topo *t, const int *corners, int f
         f = g;
         x = y;
     }
-    #undef OTHER
     if (visited != m || (!boundary && len != m)) return -1;
     return len;
 }

@@ -64,6 +64,15 @@ static void test_loopsubdiv(void **state)
         assert_true(v3_dot(s->tri_normals[t], s->normals[s->tri_indices[3 * t]]) > 0.0f);
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"N\" and \"uv\" are ignored") >= 0);
     cst_scene_destroy(s);
+    /* levels 0 (or negative, as pbrt-v4's loop that never runs): the control mesh pushed
+     * to the limit */
+    Warnings w0 = {0};
+    snprintf(text, sizeof text, WORLD("Shape \"loopsubdiv\" \"integer levels\" -2 %s\n"), octa);
+    s = expect_ok(text, &w0);
+    assert_int_equal(s->num_triangles, 8);
+    assert_vec(s->positions[2], 0.0f, 0.5f, 0.0f, 1e-6f);
+    assert_int_equal(w0.n, 0);
+    cst_scene_destroy(s);
     /* three faces on one edge */
     Warnings w2 = {0};
     const char *fin = WORLD("Shape \"loopsubdiv\" \"point3 P\" [0 0 0 1 0 0 0 1 0 0 -1 0 0 0 1] "

@@ -22,6 +22,9 @@
 
 #define PBRT_SPHERE_RINGS 32
 
+/* The most triangles one loopsubdiv shape is refined to (2^24). */
+#define PBRT_LOOP_MAX_TRIANGLES (1 << 24)
+
 void pbrt_geom_free(ShapeGeom *g)
 {
     free(g->p);
@@ -445,13 +448,16 @@ static CstStatus loop_shape(Loader *ld, Params *ps, const char *d, Loc loc, Shap
     if (ctl.n || ctl.uv)
         pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, loc, "%s: \"N\" and \"uv\" are ignored: the limit "
                      "surface has its own normals and, as in pbrt-v4, no uvs", d);
+    /* Each level multiplies the triangles by 4: a large "levels" (a typo, or fuzzed input)
+     * would ask for gigabytes, so the refinement stops at PBRT_LOOP_MAX_TRIANGLES per shape
+     * (16.8 M; about 2 GB at the peak of the last level) and within the scene's limit. */
     int lv = levels < 0 ? 0 : levels;
-    while (lv > 0 && (loop_triangle_count(ctl.nt, lv) < 0 ||
-                      loop_triangle_count(ctl.nt, lv) > (int64_t)PBRT_MAX_TRIANGLES - ld->num_triangles))
-        lv--;
+    int64_t cap = (int64_t)PBRT_MAX_TRIANGLES - ld->num_triangles;
+    if (cap > PBRT_LOOP_MAX_TRIANGLES) cap = PBRT_LOOP_MAX_TRIANGLES;
+    while (lv > 0 && (loop_triangle_count(ctl.nt, lv) < 0 || loop_triangle_count(ctl.nt, lv) > cap)) lv--;
     if (lv < levels)
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: %d levels would exceed %d triangles; refined "
-                     "%d times", d, levels, PBRT_MAX_TRIANGLES, lv);
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: %d levels would make more than %lld triangles; "
+                     "refined %d times", d, levels, (long long)cap, lv);
     LoopMesh m;
     CstError sub;
     st = loop_subdivide(ctl.p, ctl.nv, ctl.idx, ctl.nt, lv, &m, &sub);
