@@ -30,6 +30,7 @@ int cli_exit_code(CstStatus status, CliStage stage);
 /* "caustic: error: <message>" on stderr. */
 void cli_print_error(const CstError *err, CstStatus status);
 bool cli_has_suffix(const char *s, const char *suffix);
+bool cli_is_pbrt_path(const char *s);
 /* Whether `path` (named `origin` in messages) can take an image: a known extension and a
  * writable directory; prints the error and returns false if not. */
 bool cli_check_output(const char *path, const char *origin);

@@ -55,6 +55,12 @@ bool cli_has_suffix(const char *s, const char *suffix)
     return n >= m && strcasecmp(s + n - m, suffix) == 0;
 }
 
+/* A pbrt-v4 scene: "x.pbrt", or "x.pbrt.gz" (the library inflates it, as pbrt-v4 does). */
+bool cli_is_pbrt_path(const char *s)
+{
+    return cli_has_suffix(s, ".pbrt") || cli_has_suffix(s, ".pbrt.gz");
+}
+
 static bool cli_output_format_ok(const char *path)
 {
     return cst_image_path_writable(path);
@@ -122,11 +128,10 @@ bool cli_check_output(const char *path, const char *origin)
 /* The scene argument's format, checkable before anything is loaded. */
 bool cli_check_scene_path(const CliArgs *a)
 {
-    if (a->scene_path && !cli_has_suffix(a->scene_path, ".json") &&
-        !cli_has_suffix(a->scene_path, ".pbrt")) {
+    if (a->scene_path && !cli_has_suffix(a->scene_path, ".json") && !cli_is_pbrt_path(a->scene_path)) {
         fprintf(stderr, "caustic: error: '%s': unsupported scene format (supported: .json, "
-                "a caustic JSON scene; .pbrt, a pbrt-v4 scene; omit SCENE for the built-in "
-                "Cornell box)\n",
+                "a caustic JSON scene; .pbrt or .pbrt.gz, a pbrt-v4 scene, gzip-compressed or "
+                "not; omit SCENE for the built-in Cornell box)\n",
                 a->scene_path);
         return false;
     }
@@ -171,7 +176,7 @@ int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds)
         CstLoadOptions opt = {0};
         opt.warning = cli_print_warning;
         opt.warning_user = &warnings;
-        if (cli_has_suffix(a->scene_path, ".pbrt"))
+        if (cli_is_pbrt_path(a->scene_path))
             status = cst_scene_load_pbrt(a->scene_path, &opt, &scene, &err);
         else
             status = cst_scene_load_json_opt(a->scene_path, &opt, &scene, &err);

@@ -25,8 +25,8 @@ static const char HELP_USAGE_ALL[] =
 static const char HELP_RENDER[] =
 "Render: caustic render [SCENE] [options]\n"
 "Renders SCENE, a caustic JSON scene file (*.json, see docs/scene-format.md) or a\n"
-"pbrt-v4 scene (*.pbrt, see docs/pbrt-compat.md), or the built-in Cornell box when SCENE\n"
-"is omitted, and writes one image.\n"
+"pbrt-v4 scene (*.pbrt or gzip-compressed *.pbrt.gz, see docs/pbrt-compat.md), or the\n"
+"built-in Cornell box when SCENE is omitted, and writes one image.\n"
 "\n"
 "Options (both --opt VALUE and --opt=VALUE are accepted; a later option wins):\n"
 "  -o, --output OUT     output image; the format follows the extension: .png (8-bit\n"

@@ -19,9 +19,11 @@ static bool cli_default_output(const char *scene_path, char *buf, size_t size)
     const char *base = strrchr(scene_path, '/');
     base = base ? base + 1 : scene_path;
     size_t stem = strlen(base);
-    const char *dot = strrchr(base, '.');
-    if (dot)
-        stem = (size_t)(dot - base);
+    if (cli_has_suffix(base, ".gz")) stem -= 3; /* x.pbrt.gz: x.png */
+    size_t dot = stem;
+    while (dot > 0 && base[dot - 1] != '.') dot--;
+    if (dot > 0)
+        stem = dot - 1;
     int n = stem ? snprintf(buf, size, "%.*s.png", (int)stem, base)
                  : snprintf(buf, size, "scene.png");
     return n > 0 && (size_t)n < size;

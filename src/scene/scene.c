@@ -387,6 +387,8 @@ CstStatus scene_commit(Scene *s, CstError *err)
         /* directional lights are sampled over the bounds of everything they can light */
         if (s->instances->num_nodes > 0) bounds = bbox_union(bounds, s->instances->nodes[0].box);
     }
+    /* An empty scene: a point at the origin, not the empty box (its centre would be NaN). */
+    if (!(bounds.min.x <= bounds.max.x)) bounds.min = bounds.max = v3s(0.0f);
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, s->delta_lights,
                               s->num_delta_lights, s->env, bounds.min, bounds.max, err);
     if (st != CST_OK) return st;

@@ -228,6 +228,26 @@ run "$dir" render --spp 1 -q -o cb.png "$SRC/scenes/cornell-box.pbrt"
 expect "scenes/cornell-box.pbrt renders without warnings" 0
 if [ -s "$ERR" ]; then fail "scenes/cornell-box.pbrt: no warnings" "stderr: $(cat "$ERR")"
 else pass "scenes/cornell-box.pbrt: no warnings"; fi
+# A gzip-compressed main file (x.pbrt.gz), which pbrt-v4 reads: render, info and verify
+# accept it; the image equals the uncompressed file's; the default output is x.png.
+gzip -c "$dir/tiny.pbrt" >"$dir/tinygz.pbrt.gz"
+run "$dir" render --spp 1 tinygz.pbrt.gz
+if expect "pbrt.gz scene renders: exit 0, warning located in it" 0 \
+    '^caustic: warning: tinygz\.pbrt\.gz:5:1: LightSource "projection" is not supported'; then
+    [ -s "$dir/tinygz.png" ] && pass "pbrt.gz scene default output <stem>.png (x.pbrt.gz: x.png)" \
+        || fail "pbrt.gz scene default output <stem>.png (x.pbrt.gz: x.png)" "found: $(ls "$dir")"
+fi
+run "$dir" render --spp 2 -q -o plain.pfm tiny.pbrt
+run "$dir" render --spp 2 -q -o gz.pfm tinygz.pbrt.gz
+if [ "$RC" -eq 0 ] && cmp -s "$dir/plain.pfm" "$dir/gz.pfm"; then pass "pbrt.gz renders as the uncompressed file"
+else fail "pbrt.gz renders as the uncompressed file" "exit $RC"; fi
+run "$dir" info tinygz.pbrt.gz
+expect "info reads a .pbrt.gz scene" 0
+run "$dir" verify --integrators path,path-nee --spp 4 --width 16 --height 16 --block 8 --threads 2 tinygz.pbrt.gz
+expect "verify reads a .pbrt.gz scene" 0
+printf 'not gzip' >"$dir/bad.pbrt.gz"
+run "$dir" render --spp 1 bad.pbrt.gz
+expect "corrupt .pbrt.gz: exit 2, named" 2 "bad\.pbrt\.gz"
 
 # --max-depth: 2 is the scene's own limit; 0 overrides it with "unbounded".
 sed 's/"max_depth": 0/"max_depth": 2/' "$SRC/scenes/cornell-spheres.json" >"$dir/depth2.json"

@@ -37,7 +37,52 @@ static void test_shapes(void **state)
     /* the bilinear patch: two triangles facing +z */
     int bl = first_disk + 128;
     assert_true(s->tri_normals[bl].z > 0.999f && s->tri_normals[bl + 1].z > 0.999f);
-    assert_int_equal(s->num_triangles, bl + 2 + 1 + 1);
+    /* the loopsubdiv triangle refined twice: 16 triangles (its limit surface: test_loop_subdiv) */
+    assert_int_equal(s->num_triangles, bl + 2 + 16 + 1);
+    cst_scene_destroy(s);
+}
+
+/* loopsubdiv: the limit surface with limit normals (geometry/loop_subdiv.c; the values are
+ * test_loop_subdiv's), normals facing the way pbrt-v4's do (the octahedron's inward, against
+ * its outward winding, and the triangles turned to face them); N and uv ignored with a
+ * warning; a non-manifold control mesh renders as itself with a located warning. */
+static void test_loopsubdiv(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    const char *octa = "\"point3 P\" [1 0 0 -1 0 0 0 1 0 0 -1 0 0 0 1 0 0 -1] \"integer indices\" "
+                       "[0 2 4 2 1 4 1 3 4 3 0 4 2 0 5 1 2 5 3 1 5 0 3 5]";
+    char text[1024];
+    snprintf(text, sizeof text, WORLD("Shape \"loopsubdiv\" \"integer levels\" 3 %s \"point2 uv\" [0 0 1 0 0 1 1 1 0 0 1 0]\n"), octa);
+    Scene *s = expect_ok(text, &w);
+    assert_int_equal(s->num_triangles, 8 * 64);
+    assert_non_null(s->normals);
+    /* the control vertices' limit points: +-1/2 on the axes, normal pointing to the centre */
+    assert_vec(s->positions[0], 0.5f, 0.0f, 0.0f, 1e-6f);
+    assert_vec(s->normals[0], -1.0f, 0.0f, 0.0f, 1e-5f);
+    for (int t = 0; t < s->num_triangles; t++) /* every triangle faces its vertex normals */
+        assert_true(v3_dot(s->tri_normals[t], s->normals[s->tri_indices[3 * t]]) > 0.0f);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"N\" and \"uv\" are ignored") >= 0);
+    cst_scene_destroy(s);
+    /* levels 0 (or negative, as pbrt-v4's loop that never runs): the control mesh pushed
+     * to the limit */
+    Warnings w0 = {0};
+    snprintf(text, sizeof text, WORLD("Shape \"loopsubdiv\" \"integer levels\" -2 %s\n"), octa);
+    s = expect_ok(text, &w0);
+    assert_int_equal(s->num_triangles, 8);
+    assert_vec(s->positions[2], 0.0f, 0.5f, 0.0f, 1e-6f);
+    assert_int_equal(w0.n, 0);
+    cst_scene_destroy(s);
+    /* three faces on one edge */
+    Warnings w2 = {0};
+    const char *fin = WORLD("Shape \"loopsubdiv\" \"point3 P\" [0 0 0 1 0 0 0 1 0 0 -1 0 0 0 1] "
+                            "\"integer indices\" [0 1 2 1 0 3 0 1 4]\n");
+    s = expect_ok(fin, &w2);
+    assert_int_equal(s->num_triangles, 3);
+    int i = find_warning(&w2, CST_WARN_GEOMETRY, "Shape \"loopsubdiv\": edge (0, 1) is shared by 3 faces");
+    if (i < 0) fail_msg("%d warnings, first: %s", w2.n, w2.msg[0]);
+    if (strncmp(w2.msg[i], "t.pbrt:4:1: ", 12) != 0) fail_msg("%s", w2.msg[i]);
+    assert_true(strstr(w2.msg[i], "rendered as its control mesh") != NULL);
     cst_scene_destroy(s);
 }
 
@@ -312,6 +357,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_shapes),
+        cmocka_unit_test(test_loopsubdiv),
         cmocka_unit_test(test_plymesh),
         cmocka_unit_test(test_other_directives),
         cmocka_unit_test(test_imagemap_and_binary_ply),

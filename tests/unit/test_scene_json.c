@@ -453,7 +453,7 @@ static void test_missing_keys(void **state)
     expect_error("{" MATS ", " SHAPES "}", CST_ERR_INVALID_ARG, "{", 0,
                  "missing key \"camera\"; expected a camera object");
     expect_error("{" CAM ", " MATS "}", CST_ERR_INVALID_ARG, "{", 0,
-                 "missing key \"shapes\"; expected an array of at least one shape");
+                 "missing key \"shapes\"; expected an array of shapes");
     expect_error(WITH_CAM("{\"position\": [0, 0, 5], \"look_at\": [0, 0, 0]}"), CST_ERR_INVALID_ARG,
                  "{\"position\"", 0, "camera: missing key \"fov\"");
     expect_error(WITH_CAM("{\"look_at\": [0, 0, 0], \"fov\": 40}"), CST_ERR_INVALID_ARG, "{\"look_at\"", 0,
@@ -499,7 +499,7 @@ static void test_wrong_types(void **state)
     expect_error(WITH_SHAPE("5"), CST_ERR_INVALID_ARG, "5]}", 1,
                  "shapes[0]: got an integer; expected a shape object");
     expect_error(SCENE3(CAM, MATS, "\"shapes\": {\"a\": 1}"), CST_ERR_INVALID_ARG, "{\"a\"", 0,
-                 "shapes: got an object; expected an array of at least one shape");
+                 "shapes: got an object; expected an array of shapes");
     expect_error(SCENE3(CAM, "\"materials\": [1]", SHAPES), CST_ERR_INVALID_ARG, "[1]", 0,
                  "materials: got an array of 1 element; expected an object mapping material names");
     expect_error(WITH_SHAPE("{\"type\": \"quad\", \"material\": \"white\", \"vertices\": " QUAD_V
@@ -677,8 +677,9 @@ static void test_sampler_and_output_keys(void **state)
 static void test_shapes(void **state)
 {
     (void)state;
-    expect_error(SCENE3(CAM, MATS, "\"shapes\": []"), CST_ERR_INVALID_ARG, "[]", 0,
-                 "shapes: got an array of 0 elements; expected an array of at least one shape");
+    /* "shapes": [] is an empty world (test_empty_world); a non-array is an error */
+    expect_error(SCENE3(CAM, MATS, "\"shapes\": \"none\""), CST_ERR_INVALID_ARG, "\"none\"", 0,
+                 "shapes: got a string; expected an array of shapes");
     expect_error(WITH_SHAPE("{\"type\": \"quad\", \"material\": \"white\", \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0]]}"),
                  CST_ERR_INVALID_ARG, "[[0", 0,
                  "shapes[0].vertices: got an array of 3 elements; expected 4 vertices");

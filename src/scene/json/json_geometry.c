@@ -634,9 +634,15 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
 CstStatus json_parse_shapes(Loader *ld, const json_t *shapes)
 {
     char kind[48];
-    if (!json_is_array(shapes) || json_array_size(shapes) == 0)
-        return json_fail_here(ld, "got %s; expected an array of at least one shape",
-                              json_describe(shapes, kind));
+    if (!json_is_array(shapes))
+        return json_fail_here(ld, "got %s; expected an array of shapes", json_describe(shapes, kind));
+    /* An empty world renders, as in pbrt-v4: every ray misses (the environment, or black). */
+    if (json_array_size(shapes) == 0 && ld->opt && ld->opt->warning) {
+        char msg[300];
+        snprintf(msg, sizeof msg, "%.200s: \"shapes\" is empty: the world has no shapes (every ray "
+                 "misses)", ld->name);
+        ld->opt->warning(ld->opt->warning_user, CST_WARN_GEOMETRY, msg);
+    }
     size_t i;
     json_t *shape;
     json_array_foreach(shapes, i, shape) {

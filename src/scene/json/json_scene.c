@@ -69,7 +69,7 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
         LOADER_TRY(json_parse_materials(ld, v));
         json_path_pop(ld);
     }
-    LOADER_TRY(json_member_required(ld, root, "shapes", "an array of at least one shape", &v));
+    LOADER_TRY(json_member_required(ld, root, "shapes", "an array of shapes", &v));
     json_path_push_key(ld, "shapes");
     LOADER_TRY(json_parse_shapes(ld, v));
     json_path_pop(ld);

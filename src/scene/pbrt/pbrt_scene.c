@@ -251,11 +251,11 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
         pbrt_warn_at(&ld, CST_WARN_GEOMETRY, ld.end, "the file has no WorldBegin");
     CstSceneInfo info;
     cst_scene_info(ld.scene, &info);
-    if (info.triangles == 0 && info.spheres == 0 && info.instances == 0) {
-        st = pbrt_fail_at(&ld, CST_ERR_INVALID_ARG, ld.end, "the scene has no shapes caustic can render; "
-                          "expected at least one supported Shape in the world block");
-        goto done;
-    }
+    /* pbrt-v4 renders an empty (or media-only) world: every ray misses, so the image shows
+     * the infinite lights, or is black. */
+    if (info.triangles == 0 && info.spheres == 0 && info.instances == 0)
+        pbrt_warn_at(&ld, CST_WARN_GEOMETRY, ld.end, "the world has no shapes caustic can render; "
+                     "every ray misses (infinite lights are seen, or the image is black)");
     if ((st = pbrt_camera_finish(&ld))) goto done;
     st = cst_scene_set_render_settings(ld.scene, &ld.settings, err);
     if (!st) st = cst_scene_commit(ld.scene, err);

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/loop_subdiv.h"
 #include "geometry/triangle.h"
 #include "scene/mesh_import.h"
 #include "scene/pbrt/pbrt_material.h"
@@ -20,6 +21,9 @@
 #define PBRT_SPHERE_SEGMENTS 64
 
 #define PBRT_SPHERE_RINGS 32
+
+/* The most triangles one loopsubdiv shape is refined to (2^24). */
+#define PBRT_LOOP_MAX_TRIANGLES (1 << 24)
 
 void pbrt_geom_free(ShapeGeom *g)
 {
@@ -427,6 +431,60 @@ static CstStatus plymesh(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGe
     return st;
 }
 
+/* pbrt-v4's "loopsubdiv": "point3 P" and "integer indices" refined "integer levels" (3)
+ * times and pushed to the limit surface, with the limit normals and no uvs, as pbrt-v4
+ * (geometry/loop_subdiv.c). A control mesh that is not manifold, which pbrt-v4 does not
+ * handle, renders as itself with a warning naming the first problem. */
+static CstStatus loop_shape(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGeom *g)
+{
+    int levels = 3;
+    ShapeGeom ctl = {0};
+    TRY(pbrt_get_int(ld, ps, d, "levels", 3, &levels));
+    CstStatus st = read_mesh_params(ld, ps, d, loc, 3, &ctl);
+    if (st) {
+        pbrt_geom_free(&ctl);
+        return st;
+    }
+    if (ctl.n || ctl.uv)
+        pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, loc, "%s: \"N\" and \"uv\" are ignored: the limit "
+                     "surface has its own normals and, as in pbrt-v4, no uvs", d);
+    /* Each level multiplies the triangles by 4: a large "levels" (a typo, or fuzzed input)
+     * would ask for gigabytes, so the refinement stops at PBRT_LOOP_MAX_TRIANGLES per shape
+     * (16.8 M; about 2 GB at the peak of the last level) and within the scene's limit. */
+    int lv = levels < 0 ? 0 : levels;
+    int64_t cap = (int64_t)PBRT_MAX_TRIANGLES - ld->num_triangles;
+    if (cap > PBRT_LOOP_MAX_TRIANGLES) cap = PBRT_LOOP_MAX_TRIANGLES;
+    while (lv > 0 && (loop_triangle_count(ctl.nt, lv) < 0 || loop_triangle_count(ctl.nt, lv) > cap)) lv--;
+    if (lv < levels)
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: %d levels would make more than %lld triangles; "
+                     "refined %d times", d, levels, (long long)cap, lv);
+    LoopMesh m;
+    CstError sub;
+    st = loop_subdivide(ctl.p, ctl.nv, ctl.idx, ctl.nt, lv, &m, &sub);
+    if (st == CST_ERR_OOM) {
+        pbrt_geom_free(&ctl);
+        return pbrt_oom(ld);
+    }
+    if (st) {
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: %s; rendered as its control mesh, without "
+                     "subdivision", d, sub.msg);
+        free(ctl.n);
+        free(ctl.uv);
+        ctl.n = NULL;
+        ctl.uv = NULL;
+        *g = ctl;
+        return CST_OK;
+    }
+    pbrt_geom_free(&ctl);
+    memset(g, 0, sizeof *g);
+    g->p = m.p;
+    g->n = m.n;
+    g->nv = m.nv;
+    g->idx = m.idx;
+    g->nt = m.nt;
+    return CST_OK;
+}
+
 CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     (void)dname;
@@ -452,12 +510,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two "
                          "triangles (exact for planar patches)", d);
     } else if (strcmp(type, "loopsubdiv") == 0) {
-        int levels = 3;
-        st = pbrt_get_int(ld, &ps, d, "levels", 3, &levels);
-        if (!st) st = read_mesh_params(ld, &ps, d, loc, 3, &g);
-        if (!st)
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the control mesh is rendered without "
-                         "subdivision", d);
+        st = loop_shape(ld, &ps, d, loc, &g);
     } else if (strcmp(type, "plymesh") == 0) {
         st = plymesh(ld, &ps, d, loc, &g);
     } else if (strcmp(type, "sphere") == 0) {
