@@ -104,6 +104,14 @@ CST_API const char *cst_scene_output_path(const CstScene *scene);
  * Before cst_scene_commit: chooses the one commit builds. */
 CST_API CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
 
+/* How next-event estimation picks a light (pbrt-v4's Integrator "lightsampler"): "power"
+ * (by each light's power), "bvh" (a light BVH over the lights' bounds, power and
+ * orientation: Conty Estevez & Kulla 2018, pbrt-v4's default) or "uniform". Scenes that name
+ * none use the BVH when they have more than 64 lights with a position, power otherwise.
+ * Light paths always start by power. Before cst_scene_commit: chooses what commit builds;
+ * after: rebuilds it (not during a render). On failure the choice stays. */
+CST_API CstStatus cst_scene_set_light_sampler(CstScene *scene, const char *name, CstError *err);
+
 typedef struct CstSceneInfo {
     int triangles, spheres, emitters, materials;
     const char *accel;          /* name of the acceleration structure in use */
@@ -117,6 +125,8 @@ typedef struct CstSceneInfo {
     int lights;                 /* every light source: emitting shapes, point, spot and
                                  * directional lights, the environment; 0 = the render is
                                  * black (callers warn) */
+    const char *light_sampler;  /* next-event estimation's choice of light: "power", "bvh" or
+                                 * "uniform" (after commit; static storage) */
 } CstSceneInfo;
 /* Also before cst_scene_commit: the counts so far (the accel fields then describe no
  * structure yet). */

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "geometry/triangle.h"
+#include "lights/light_bvh.h"
 #include "math/frame.h"
 #include "sampling/warp.h"
 
@@ -161,6 +162,8 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
 
 void emitter_sampler_free(EmitterSampler *s)
 {
+    light_bvh_free(s->bvh);
+    free(s->bvh);
     distrib1d_free(&s->by_power);
     free(s->pdf_a);
     free(s->light);
@@ -228,14 +231,22 @@ static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, 
     *n = frame_to_world(&f, v3(-sin_a * cosf(phi), -sin_a * sinf(phi), -cos_a));
 }
 
-float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l)
+/* light_area_pdf_w for emitter e picked with probability pmf (pdf_a = pmf / area: with
+ * the power's pmf the same float as s->pdf_a[e]). */
+static float area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, float pmf, Vec3 x, float dist,
+                        float cos_l)
 {
     const Emitter *em = &s->light[e].u.area;
     float omc, sin2;
     if ((int)em->prim >= g->num_triangles &&
         sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
-        return s->by_power.pmf[e] / (2.0f * CST_PI * omc);
-    return cos_l > 0.0f ? s->pdf_a[e] * dist * dist / cos_l : 0.0f;
+        return pmf / (2.0f * CST_PI * omc);
+    return cos_l > 0.0f ? pmf / em->area * dist * dist / cos_l : 0.0f;
+}
+
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l)
+{
+    return area_pdf_w(s, g, e, s->by_power.pmf[e], x, dist, cos_l);
 }
 
 /* The emission direction density at a delta light (per unit solid angle). */
@@ -250,9 +261,10 @@ static float delta_emit_pdf_w(const Light *l)
     }
 }
 
-static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec3 x, Vec2 u,
+static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const EmitterGeometry *g, Vec3 x, Vec2 u,
                            LightLi *out)
 {
+    const float pdf_a = pmf / s->light[i].u.area.area; /* == s->pdf_a[i] for the power's pmf */
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
     float omc = 0.0f, sin2 = 0.0f;
@@ -277,10 +289,10 @@ static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry
      * the density the bidirectional MIS weights use for NEE (direct_pdf) even when the
      * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
      * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
-    const float area_pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
-    out->pdf_w = cone ? s->by_power.pmf[i] / (2.0f * CST_PI * omc) : area_pdf_w;
+    const float area_pdf_w = pdf_a * dist2 / out->cos_light;
+    out->pdf_w = cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
     out->finite = true;
-    out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
+    out->emit_pdf = pdf_a * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
     out->direct_pdf = area_pdf_w;
     return true;
 }
@@ -344,17 +356,14 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     return falloff > 0.0f;
 }
 
-bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
-                     LightLi *out)
+/* The sample of light i, picked with probability pmf. */
+static bool sample_light(const EmitterSampler *s, const EmitterGeometry *g, int i, float pmf, Vec3 x, Vec2 u,
+                         LightLi *out)
 {
-    memset(out, 0, sizeof *out);
-    if (s->lights == 0) return false;
-    int i = distrib1d_sample(&s->by_power, u_sel);
-    float pmf = s->by_power.pmf[i];
     out->light = i;
     const Light *l = &s->light[i];
     switch (l->type) {
-    case LIGHT_AREA: return area_sample_li(s, i, g, x, u, out);
+    case LIGHT_AREA: return area_sample_li(s, i, pmf, g, x, u, out);
     case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
     case LIGHT_POINT:
     case LIGHT_SPOT:
@@ -362,6 +371,81 @@ bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, 
     case LIGHT_DIRECTIONAL: return delta_sample_li(s, l, pmf, x, out);
     }
     return false;
+}
+
+bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
+                     LightLi *out)
+{
+    memset(out, 0, sizeof *out);
+    if (s->lights == 0) return false;
+    int i = distrib1d_sample(&s->by_power, u_sel);
+    return sample_light(s, g, i, s->by_power.pmf[i], x, u, out);
+}
+
+bool light_sample_nee(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 n, float u_sel, Vec2 u,
+                      LightLi *out)
+{
+    if (s->nee == LIGHT_SELECT_POWER) return light_sample_li(s, g, x, u_sel, u, out);
+    memset(out, 0, sizeof *out);
+    if (s->lights == 0) return false;
+    int i;
+    float pmf;
+    if (s->nee == LIGHT_SELECT_BVH) {
+        i = light_bvh_sample(s->bvh, x, n, u_sel, &pmf);
+        if (i < 0) return false;
+    } else {
+        i = (int)(u_sel * (float)s->lights);
+        i = i >= s->lights ? s->lights - 1 : i;
+        pmf = 1.0f / (float)s->lights;
+    }
+    return sample_light(s, g, i, pmf, x, u, out);
+}
+
+float light_nee_pmf(const EmitterSampler *s, Vec3 x, Vec3 n, int i)
+{
+    switch (s->nee) {
+    case LIGHT_SELECT_BVH: return light_bvh_pmf(s->bvh, x, n, i);
+    case LIGHT_SELECT_UNIFORM: return 1.0f / (float)s->lights;
+    case LIGHT_SELECT_POWER: break;
+    }
+    return s->by_power.pmf[i];
+}
+
+float light_area_nee_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 n, float dist,
+                           float cos_l)
+{
+    if (s->nee == LIGHT_SELECT_POWER) return light_area_pdf_w(s, g, e, x, dist, cos_l);
+    return area_pdf_w(s, g, e, light_nee_pmf(s, x, n, e), x, dist, cos_l);
+}
+
+float light_env_nee_pdf(const EmitterSampler *s, Vec3 x, Vec3 n, Vec3 w)
+{
+    if (s->nee == LIGHT_SELECT_POWER) return light_env_pdf(s, w);
+    return s->env ? light_nee_pmf(s, x, n, light_env_index(s)) * envmap_pdf(s->env, w) : 0.0f;
+}
+
+LightSelect emitter_sampler_auto_nee(const EmitterSampler *s)
+{
+    int bounded = 0;
+    for (int i = 0; i < s->count + s->num_delta; i++) bounded += s->light[i].type != LIGHT_DIRECTIONAL;
+    return bounded > LIGHT_SELECT_BVH_ABOVE ? LIGHT_SELECT_BVH : LIGHT_SELECT_POWER;
+}
+
+CstStatus emitter_sampler_set_nee(EmitterSampler *s, const EmitterGeometry *g, LightSelect sel, CstError *err)
+{
+    if (sel == LIGHT_SELECT_BVH && !s->bvh && s->lights > 0) {
+        LightBvh *bvh = malloc(sizeof *bvh);
+        if (!bvh) return cst_fail(err, CST_ERR_OOM, "out of memory for the light BVH");
+        CstStatus st = light_bvh_build(bvh, s, g, err);
+        if (st != CST_OK) {
+            free(bvh);
+            return st;
+        }
+        s->bvh = bvh;
+    }
+    /* no lights: nothing to pick, and power selection's checks come first everywhere */
+    s->nee = s->lights > 0 ? sel : LIGHT_SELECT_POWER;
+    return CST_OK;
 }
 
 static void area_sample_emission(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec2 u_pos,

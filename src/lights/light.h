@@ -96,6 +96,20 @@ typedef struct Light {
     } u;
 } Light;
 
+/* How next-event estimation picks a light: by power (one distribution for every shading
+ * point, also the light paths' choice), by the light BVH (light_bvh.h: by each light's
+ * estimated contribution at the shading point, pbrt-v4's default "bvh"), or uniformly
+ * (pbrt-v4 "uniform"). Light paths (emitter_sample_emission) and the bidirectional
+ * integrators' connections (light_sample_li) always pick by power. */
+typedef enum LightSelect { LIGHT_SELECT_POWER, LIGHT_SELECT_BVH, LIGHT_SELECT_UNIFORM } LightSelect;
+
+/* The rule for a scene that names no light sampler: the BVH once it has more than this
+ * many lights with a position (area emitters, point, spot and goniometric lights), power
+ * below, where one distribution does as well and keeps today's images bit for bit. */
+#define LIGHT_SELECT_BVH_ABOVE 64
+
+struct LightBvh;
+
 /* The scene's lights in one array, with light selection: one distribution over
  * light[0, lights), proportional to each light's power (luminance of its flux), so bright
  * lights get the samples. The area emitters come first, in the scene's emitter order (so
@@ -112,6 +126,8 @@ typedef struct EmitterSampler {
     const EnvMap *env;       /* borrowed from the scene, or NULL; light index count + num_delta */
     Vec3 center;     /* the scene's bounding sphere: directional lights cover its disk */
     float radius;
+    LightSelect nee;       /* NEE's choice (emitter_sampler_set_nee); POWER after init */
+    struct LightBvh *bvh;  /* with nee == LIGHT_SELECT_BVH, else NULL; owned */
 } EmitterSampler;
 
 /* The geometry NEE needs, borrowed from the scene (scene_emitter_geometry() fills it). */
@@ -130,6 +146,11 @@ typedef struct EmitterGeometry {
 CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, const DeltaLight *delta,
                                int num_delta, const EnvMap *env, Vec3 bounds_lo, Vec3 bounds_hi, CstError *err);
 void emitter_sampler_free(EmitterSampler *s);
+/* Sets how NEE (light_sample_nee) picks lights, building the light BVH for
+ * LIGHT_SELECT_BVH. On failure (OOM) the previous choice stays. */
+CstStatus emitter_sampler_set_nee(EmitterSampler *s, const EmitterGeometry *g, LightSelect sel, CstError *err);
+/* The rule for scenes that name none (LIGHT_SELECT_BVH_ABOVE). */
+LightSelect emitter_sampler_auto_nee(const EmitterSampler *s);
 
 /* Radiance leaving the emitter at a point with geometric normal ng and texture
  * coordinates uv toward direction w (unit, pointing away from the surface). One-sided
@@ -197,6 +218,21 @@ typedef struct LightLi {
  * cone); li is then black. */
 bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
                      LightLi *out);
+
+/* Next-event estimation at x with unit normal n (the shading normal; 0 in a medium): the
+ * light picked by the NEE sampler (s->nee; with power selection exactly light_sample_li),
+ * then a point or direction on it as light_sample_li samples one. pdf_w and pmf include
+ * the selection; emit_pdf and direct_pdf are the power selection's (bidirectional MIS
+ * uses light_sample_li). */
+bool light_sample_nee(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 n, float u_sel, Vec2 u,
+                      LightLi *out);
+/* The probability that light_sample_nee picks light i at x, n. */
+float light_nee_pmf(const EmitterSampler *s, Vec3 x, Vec3 n, int i);
+/* light_area_pdf_w and light_env_pdf for light_sample_nee's selection at x, n: the
+ * densities a BSDF-sampled ray's MIS weight needs (with power selection, the same). */
+float light_area_nee_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 n, float dist,
+                           float cos_l);
+float light_env_nee_pdf(const EmitterSampler *s, Vec3 x, Vec3 n, Vec3 w);
 
 typedef struct EmitterSample {
     Vec3 p, n; /* point and unit geometric normal */

@@ -344,3 +344,23 @@ CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError 
     return scene_set_output_path(scene, path, err);
 }
 
+
+/* ------------------------------------------------------------------ light sampler */
+
+CstStatus cst_scene_set_light_sampler(CstScene *scene, const char *name, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_light_sampler";
+    if (!scene || !name) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is NULL", fn, scene ? "name" : "scene");
+    LightSelect sel;
+    if (strcmp(name, "power") == 0) sel = LIGHT_SELECT_POWER;
+    else if (strcmp(name, "bvh") == 0) sel = LIGHT_SELECT_BVH;
+    else if (strcmp(name, "uniform") == 0) sel = LIGHT_SELECT_UNIFORM;
+    else return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light sampler '%s'; expected power, bvh or uniform", fn, name);
+    if (scene->committed) {
+        EmitterGeometry g = scene_emitter_geometry(scene);
+        CstStatus st = emitter_sampler_set_nee(&scene->emitter_sampler, &g, sel, err);
+        if (st != CST_OK) return st;
+    }
+    scene->light_select = 1 + (int)sel;
+    return CST_OK;
+}
