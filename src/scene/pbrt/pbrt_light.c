@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "io/image_io.h"
 #include "scene/pbrt/pbrt_params.h"
@@ -446,6 +447,40 @@ CstStatus pbrt_light_source_directive(Loader *ld, NamedCall *call)
     return light_source(ld, call->type, &call->ps, call->loc, call->d);
 }
 
+/* pbrt-v4's DiffuseAreaLight "filename": radiance scale x the image's RGB at the shape's
+ * (u, v), looked up bilinearly with clamping and v flipped as pbrt-v4's imagemap (the
+ * texture's own convention), decoded as pbrt-v4 reads images (sRGB for PNG, linear for the
+ * rest). The image's mean luminance is kept for "power" (pbrt-v4 divides the power by it:
+ * DiffuseAreaLight::Create's k_e). */
+static CstStatus area_light_image(Loader *ld, const char *file, Loc fl, const char *d, AreaLight *al)
+{
+    char nm[72];
+    if (image_format_from_path(file) == IMAGE_FILE_NONE)
+        return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR "
+                            "or PFM; expected an image file", d, pbrt_clip(file, nm));
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    size_t n = strlen(file);
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_IMAGE;
+    t.path = path;
+    t.encoding = n >= 4 && strcasecmp(file + n - 4, ".png") == 0 ? CST_TEXTURE_ENCODING_SRGB
+                                                                 : CST_TEXTURE_ENCODING_LINEAR;
+    t.wrap = CST_TEXTURE_WRAP_CLAMP;
+    t.filter = CST_TEXTURE_FILTER_BILINEAR;
+    int id = 0;
+    CstStatus st = cst_scene_add_texture(ld->scene, &t, &id, ld->err);
+    free(path);
+    if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    CstTextureInfo info;
+    if ((st = cst_scene_texture_info(ld->scene, id, &info, ld->err))) return pbrt_fail_wrap(ld, st, fl, d);
+    al->texture = id;
+    al->L = color_s(1.0f);
+    al->image_lum = color_luminance(color_rgb(info.average[0], info.average[1], info.average[2]));
+    return CST_OK;
+}
+
 CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call)
 {
     Params *ps = &call->ps;
@@ -459,11 +494,16 @@ CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call)
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
         ld->gs.area.active = 0;
     } else {
-        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0};
-        Param *pl;
-        TRY(pbrt_lookup(ld, ps, d, "filename", PT_MASK(PT_STRING), "string", &pl));
-        if (pl) pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, pl->loc, "%s: image emission is not supported; \"L\" is used", d);
-        TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, NULL));
+        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0, 0, 1.0f};
+        const char *file = NULL;
+        Loc fl = loc;
+        int has_l = 0;
+        TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+        TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, &has_l));
+        if (file && has_l)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: both \"L\" and \"filename\"; expected one "
+                                "of them (pbrt-v4 refuses both)", d);
+        if (file) TRY(area_light_image(ld, file, fl, d, &al));
         TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &al.scale, NULL));
         TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &al.power, NULL));
         TRY(pbrt_get_bool(ld, ps, d, "twosided", 0, &al.two_sided));
