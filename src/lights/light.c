@@ -54,6 +54,37 @@ static float gonio_factor(const GonioImage *g, Vec3 w)
     return g->factor[(size_t)py * (size_t)g->n + (size_t)px];
 }
 
+Color proj_factor(const ProjImage *g, Vec3 w, float *pdf_w)
+{
+    if (pdf_w) *pdf_w = 0.0f;
+    const float *m = g->light_from_world;
+    Vec3 d = v3(m[0] * w.x + m[1] * w.y + m[2] * w.z, m[3] * w.x + m[4] * w.y + m[5] * w.z,
+                m[6] * w.x + m[7] * w.y + m[8] * w.z);
+    if (!(d.z > 0.0f)) return color_s(0.0f);
+    /* pbrt-v4 ProjectionLight::I: the point on the screen (its Perspective(fov) transform) */
+    float x = d.x / (d.z * g->tan_half), y = d.y / (d.z * g->tan_half);
+    if (!(fabsf(x) <= g->sx && fabsf(y) <= g->sy)) return color_s(0.0f);
+    int px = (int)((x + g->sx) / (2.0f * g->sx) * (float)g->w), py = (int)((y + g->sy) / (2.0f * g->sy) * (float)g->h);
+    px = px < 0 ? 0 : px >= g->w ? g->w - 1 : px;
+    py = py < 0 ? 0 : py >= g->h ? g->h - 1 : py;
+    const float *c = &g->rgb[3 * ((size_t)py * (size_t)g->w + (size_t)px)];
+    if (pdf_w) {
+        /* uniform over the window's area A on the plane z = 1, and dA = d omega / cos^3 */
+        float cz = d.z / v3_length(d);
+        *pdf_w = 1.0f / (g->area * cz * cz * cz);
+    }
+    return color_rgb(c[0], c[1], c[2]);
+}
+
+/* A direction uniform over a projection light's window (u), in world space. */
+static Vec3 proj_sample_dir(const ProjImage *g, Vec2 u)
+{
+    Vec3 d = v3_normalize(v3((2.0f * u.x - 1.0f) * g->sx * g->tan_half, (2.0f * u.y - 1.0f) * g->sy * g->tan_half, 1.0f));
+    const float *m = g->light_from_world; /* a rotation: its transpose maps back */
+    return v3(m[0] * d.x + m[3] * d.y + m[6] * d.z, m[1] * d.x + m[4] * d.y + m[7] * d.z,
+              m[2] * d.x + m[5] * d.y + m[8] * d.z);
+}
+
 /* A Lambertian emitter of radiance L and area A emits pi A L per side; a textured one is
  * weighted by its texture's average, which only shifts samples between lights (the point
  * density on an emitter stays uniform by area, so NEE's pdf is unchanged). 4 pi I for a
@@ -77,6 +108,8 @@ float light_power(const Light *l, float scene_radius)
     case LIGHT_ENVIRONMENT: return CST_PI * scene_radius * scene_radius * l->u.env->power;
     /* pbrt-v4 GoniometricLight::Phi: 4 pi I times the image's mean (equal-area pixels). */
     case LIGHT_GONIO: return 4.0f * CST_PI * color_luminance(l->u.gonio.intensity) * l->u.gonio.image.mean;
+    /* pbrt-v4 ProjectionLight::Phi: I times the image integrated over its solid angle. */
+    case LIGHT_PROJECTION: return color_luminance(color_mul(l->u.proj.intensity, l->u.proj.image.integral));
     }
     return 0.0f;
 }
@@ -109,6 +142,12 @@ static Light light_from_delta(const DeltaLight *d)
         l.u.gonio.p = d->p;
         l.u.gonio.intensity = d->intensity;
         l.u.gonio.image = d->gonio;
+        break;
+    case DELTA_PROJECTION:
+        l.type = LIGHT_PROJECTION;
+        l.u.proj.p = d->p;
+        l.u.proj.intensity = d->intensity;
+        l.u.proj.image = d->proj;
         break;
     }
     return l;
@@ -249,10 +288,12 @@ float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e,
     return area_pdf_w(s, g, e, s->by_power.pmf[e], x, dist, cos_l);
 }
 
-/* The emission direction density at a delta light (per unit solid angle). */
-static float delta_emit_pdf_w(const Light *l)
+/* The emission direction density at a delta light (per unit solid angle) of direction w. */
+static float delta_emit_pdf_w(const Light *l, Vec3 w)
 {
+    float pdf = 0.0f;
     switch (l->type) {
+    case LIGHT_PROJECTION: (void)proj_factor(&l->u.proj.image, w, &pdf); return pdf;
     case LIGHT_POINT:
     case LIGHT_GONIO: return CST_INV_4PI;
     case LIGHT_SPOT: return warp_uniform_cone_pdf(l->u.spot.cos_outer);
@@ -321,7 +362,6 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     out->delta = true;
     out->pmf = pmf;
     out->cos_light = 1.0f;
-    out->emit_pdf = pmf * delta_emit_pdf_w(l);
     if (l->type == LIGHT_DIRECTIONAL) {
         /* From outside the scene's bounding sphere, so every occluder is on the segment;
          * the direct_pdf of an infinitely distant light has no distance factor, and a
@@ -336,7 +376,10 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
         out->direct_pdf = pmf;
         return true;
     }
-    const Vec3 lp = l->type == LIGHT_SPOT ? l->u.spot.p : l->type == LIGHT_GONIO ? l->u.gonio.p : l->u.point.p;
+    const Vec3 lp = l->type == LIGHT_SPOT         ? l->u.spot.p
+                    : l->type == LIGHT_GONIO      ? l->u.gonio.p
+                    : l->type == LIGHT_PROJECTION ? l->u.proj.p
+                                                  : l->u.point.p;
     Vec3 to = v3_sub(lp, x);
     float dist2 = v3_length2(to);
     if (!(dist2 > 0.0f)) return false;
@@ -345,6 +388,13 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     out->wi = v3_scale(to, 1.0f / out->dist);
     out->n = v3_neg(out->wi);
     out->finite = true;
+    out->emit_pdf = pmf * delta_emit_pdf_w(l, v3_neg(out->wi));
+    if (l->type == LIGHT_PROJECTION) {
+        Color f = proj_factor(&l->u.proj.image, v3_neg(out->wi), NULL);
+        out->li = color_scale(color_mul(l->u.proj.intensity, f), 1.0f / dist2);
+        out->direct_pdf = pmf * dist2;
+        return !color_is_black(f);
+    }
     float falloff = l->type == LIGHT_SPOT    ? spot_falloff(&l->u.spot, v3_dot(l->u.spot.dir, v3_neg(out->wi)))
                     : l->type == LIGHT_GONIO ? gonio_factor(&l->u.gonio.image, v3_neg(out->wi))
                                              : 1.0f;
@@ -368,6 +418,7 @@ static bool sample_light(const EmitterSampler *s, const EmitterGeometry *g, int 
     case LIGHT_POINT:
     case LIGHT_SPOT:
     case LIGHT_GONIO:
+    case LIGHT_PROJECTION:
     case LIGHT_DIRECTIONAL: return delta_sample_li(s, l, pmf, x, out);
     }
     return false;
@@ -523,6 +574,18 @@ static void delta_sample_emission(const EmitterSampler *s, const Light *l, float
         out->beta = color_scale(l->u.gonio.intensity, gonio_factor(&l->u.gonio.image, out->w) / (pmf * out->pdf_w));
         out->finite = true;
         break;
+    case LIGHT_PROJECTION: {
+        /* uniform over the window (pbrt-v4 samples the image's distribution: the same
+         * expectation, more noise where the image is uneven) */
+        const ProjectionLight *pl = &l->u.proj;
+        out->p = pl->p;
+        out->w = proj_sample_dir(&pl->image, u_dir);
+        out->pdf_a = pmf;
+        Color f = proj_factor(&pl->image, out->w, &out->pdf_w);
+        if (out->pdf_w > 0.0f) out->beta = color_scale(color_mul(pl->intensity, f), 1.0f / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
+    }
     case LIGHT_SPOT: {
         const SpotLight *sp = &l->u.spot;
         Frame f = frame_from_normal(sp->dir);
@@ -571,6 +634,7 @@ void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, 
     case LIGHT_POINT:
     case LIGHT_SPOT:
     case LIGHT_GONIO:
+    case LIGHT_PROJECTION:
     case LIGHT_DIRECTIONAL: delta_sample_emission(s, l, pmf, u_pos, u_dir, out); return;
     }
 }

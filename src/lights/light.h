@@ -30,7 +30,8 @@ typedef enum DeltaLightType {
     DELTA_POINT,       /* isotropic point: intensity I in every direction */
     DELTA_SPOT,        /* point with a cone: I on the axis, smoothstep falloff to 0 at cos_outer */
     DELTA_DIRECTIONAL, /* parallel light from infinitely far: irradiance E on a surface facing it */
-    DELTA_GONIO        /* point whose intensity I times an image over the sphere (goniometric) */
+    DELTA_GONIO,       /* point whose intensity I times an image over the sphere (goniometric) */
+    DELTA_PROJECTION   /* point projecting an image through a frustum (pbrt-v4 ProjectionLight) */
 } DeltaLightType;
 
 /* A goniometric light's angular distribution (pbrt-v4 GoniometricLight): an n x n image of
@@ -43,6 +44,23 @@ typedef struct GonioImage {
     float mean;              /* the factors' mean: the light emits 4 pi I mean */
 } GonioImage;
 
+/* A projection light's image (pbrt-v4 ProjectionLight): light space has the axis along +z;
+ * a light-space direction d (d.z > 0) meets the plane z = 1 at screen point (d.x, d.y) /
+ * (d.z tan_half), which must lie in the window [-sx, sx] x [-sy, sy] (the image's aspect on
+ * the longer side, 1 on the shorter: fov spans the shorter side); u = (x + sx) / 2 sx,
+ * v = (y + sy) / 2 sy pick the nearest pixel, row v h counted from row 0 as pbrt-v4's
+ * LookupNearest does (no flip). Outside the window the light is dark. */
+typedef struct ProjImage {
+    const float *rgb;          /* w * h * 3 linear values >= 0, owned by the scene */
+    int w, h;
+    float light_from_world[9]; /* row-major rotation */
+    float tan_half;            /* tan(fov / 2) */
+    float sx, sy;
+    Color integral;            /* the integral of the image over its solid angle, per channel
+                                * (sr): the flux per unit intensity */
+    float area;                /* the window's area on the plane z = 1: 4 sx sy tan_half^2 */
+} ProjImage;
+
 /* A point, spot or directional light as a scene is built (scene_add_delta_light);
  * emitter_sampler_init turns each into its Light. */
 typedef struct DeltaLight {
@@ -52,6 +70,7 @@ typedef struct DeltaLight {
     Color intensity; /* point, spot: radiant intensity (W/sr) on the axis; directional: irradiance */
     float cos_inner, cos_outer; /* spot: full intensity within cos_inner, none beyond cos_outer */
     GonioImage gonio;           /* goniometric */
+    ProjImage proj;             /* projection: intensity x the image's RGB */
 } DeltaLight;
 
 /* The kinds of light, one tag of the Light union. */
@@ -61,7 +80,8 @@ typedef enum LightType {
     LIGHT_SPOT,        /* point with a cone and smoothstep falloff */
     LIGHT_DIRECTIONAL, /* parallel light from infinitely far */
     LIGHT_ENVIRONMENT, /* radiance from every direction at infinity (EnvMap) */
-    LIGHT_GONIO        /* point with an image of its intensity over the sphere */
+    LIGHT_GONIO,       /* point with an image of its intensity over the sphere */
+    LIGHT_PROJECTION   /* point projecting an image through a frustum */
 } LightType;
 
 typedef struct PointLight {
@@ -78,6 +98,11 @@ typedef struct GonioLight {
     Color intensity; /* times the image's factor in each direction, W/sr */
     GonioImage image;
 } GonioLight;
+typedef struct ProjectionLight {
+    Vec3 p;
+    Color intensity; /* times the image's RGB in each direction, W/sr */
+    ProjImage image;
+} ProjectionLight;
 typedef struct DirectionalLight {
     Vec3 dir;         /* unit direction the light travels */
     Color irradiance; /* E on a surface facing it, W/m^2 */
@@ -92,6 +117,7 @@ typedef struct Light {
         SpotLight spot;
         DirectionalLight directional;
         GonioLight gonio;
+        ProjectionLight proj;
         const EnvMap *env; /* borrowed from the scene */
     } u;
 } Light;
@@ -266,6 +292,11 @@ void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, 
                              Vec2 u_dir, EmissionSample *out);
 /* pdf_w of emitter_sample_emission for direction w at a point with normal n. */
 float emitter_emission_pdf_w(const Emitter *e, Vec3 n, Vec3 w);
+
+/* A projection light's image factor (RGB) toward world direction w (unit, away from the
+ * light), black outside its window; *pdf_w (may be NULL) gets the density with which
+ * emission sampling (uniform over the window) picks w, 1 / (area cos^3 theta), per solid angle. */
+Color proj_factor(const ProjImage *g, Vec3 w, float *pdf_w);
 
 /* Emitted power (luminance of the flux) of each kind of light: the selection weights. */
 /* The luminance of a light's flux, its selection weight; infinitely distant lights (and

@@ -92,6 +92,17 @@ LightBounds light_bounds_of(const Light *l, const EmitterGeometry *g, float phi)
         b.cos_e = cos_half_pi;
         break;
     }
+    case LIGHT_PROJECTION: {
+        /* pbrt-v4 ProjectionLight::Bounds: the cone through the window's corners, no spread */
+        const ProjImage *im = &l->u.proj.image;
+        const float *m = im->light_from_world;
+        b.lo = b.hi = l->u.proj.p;
+        b.w = v3(m[6], m[7], m[8]); /* light +z in world space: the rotation's third row */
+        float r2 = (im->sx * im->sx + im->sy * im->sy) * im->tan_half * im->tan_half;
+        b.cos_o = 1.0f / sqrtf(1.0f + r2);
+        b.cos_e = 1.0f;
+        break;
+    }
     case LIGHT_SPOT:
         /* pbrt-v4 SpotLight::Bounds: the cone of full intensity and the falloff's width */
         b.lo = b.hi = l->u.spot.p;
@@ -140,7 +151,9 @@ float light_bounds_importance(const LightBounds *b, Vec3 x, Vec3 n)
     float cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, b->cos_o);
     float sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, b->cos_o);
     float cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-    if (cos_p <= b->cos_e) return 0.0f;
+    /* Beyond theta_e nothing arrives. Strict, unlike pbrt-v4's <=: a hard-edged spot or a
+     * projection light has theta_e = 0, and inside its cone cos theta' is exactly 1. */
+    if (cos_p < b->cos_e) return 0.0f;
     float imp = b->phi * cos_p / d2;
     if (n.x != 0.0f || n.y != 0.0f || n.z != 0.0f) {
         /* the receiver's |cos theta_i|, bounded the same way by theta_b */

@@ -57,6 +57,7 @@ void scene_destroy(Scene *s)
     free(s->emitters);
     for (int i = 0; i < s->num_delta_lights; i++)
         if (s->delta_lights[i].type == DELTA_GONIO) free((void *)(uintptr_t)s->delta_lights[i].gonio.factor);
+        else if (s->delta_lights[i].type == DELTA_PROJECTION) free((void *)(uintptr_t)s->delta_lights[i].proj.rgb);
     free(s->material_spectra);
     free(s->emitter_spectra);
     free(s->delta_lights);

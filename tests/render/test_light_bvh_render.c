@@ -1,11 +1,13 @@
 /* The light BVH renders the same image as power selection: a floor and a wall under 200
- * small one-sided quad lights and 20 small emitting spheres of random colours, rendered by
+ * small one-sided quad lights, 20 small emitting spheres of random colours and a projection
+ * light, rendered by
  * the path tracer (MIS and NEE only) and the Whitted integrator with each light sampler;
  * every 8 x 6 block's mean agrees within Z_LIMIT standard errors. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include <cmocka.h>
 
 #include "core/rng.h"
@@ -49,6 +51,22 @@ static Scene *many_lights(void)
         Emission e = {{{10.0f, 8.0f, 6.0f}}, 0, 0};
         assert_int_equal(scene_add_sphere(s, c, 0.05f + 0.1f * pcg32_float(&rng), black, &e, &err), CST_OK);
     }
+    {
+        /* a projection light (a frustum of a 2 x 1 image) looking down and to the side */
+        static const float img[2 * 1 * 3] = {4.0f, 2.0f, 1.0f, 1.0f, 2.0f, 4.0f};
+        CstLightDesc pl;
+        memset(&pl, 0, sizeof pl);
+        pl.type = CST_LIGHT_PROJECTION;
+        pl.position[0] = 2.0f, pl.position[1] = 5.0f, pl.position[2] = 1.0f;
+        pl.intensity[0] = pl.intensity[1] = pl.intensity[2] = 3.0f;
+        pl.image = img;
+        pl.image_width = 2;
+        pl.image_height = 1;
+        pl.fov = 35.0f;
+        const float lfw[9] = {1, 0, 0, 0, 0.8f, 0.6f, 0, -0.6f, 0.8f}; /* axis (0, -0.6, 0.8) */
+        memcpy(pl.light_from_world, lfw, sizeof lfw);
+        assert_int_equal(cst_scene_add_light(s, &pl, &err), CST_OK);
+    }
     CameraDesc cam = {{0, 6, -14}, {0, 1, 2}, {0, 1, 0}, 55.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
@@ -82,7 +100,7 @@ static void render_blocks(Scene *s, const char *sampler, CstIntegrator integ, in
 static void compare(CstIntegrator integ, int spp)
 {
     Scene *s = many_lights();
-    assert_int_equal(s->emitter_sampler.nee, LIGHT_SELECT_BVH); /* 420 lights: the rule's choice */
+    assert_int_equal(s->emitter_sampler.nee, LIGHT_SELECT_BVH); /* 421 lights: the rule's choice */
     enum { R = (W / BX) * (H / BY) + 1 };
     RegionStat a[R], b[R];
     render_blocks(s, "bvh", integ, spp, a);
@@ -104,9 +122,12 @@ static void compare(CstIntegrator integ, int spp)
     scene_destroy(s);
 }
 
-static void test_path_mis(void **state) { (void)state; compare(CST_INTEGRATOR_PATH, 512); }
-static void test_path_nee(void **state) { (void)state; compare(CST_INTEGRATOR_PATH_NEE, 512); }
-static void test_whitted(void **state) { (void)state; compare(CST_INTEGRATOR_WHITTED, 256); }
+/* 2048 spp: with power selection over 421 small lights the per-pixel variance estimates
+ * of a few hundred samples miss the rare bright samples (at 512 spp one path-nee block gave
+ * z = 4.3, the same block at 8192 spp |z| < 2.3: heavy tails, not a bias). */
+static void test_path_mis(void **state) { (void)state; compare(CST_INTEGRATOR_PATH, 2048); }
+static void test_path_nee(void **state) { (void)state; compare(CST_INTEGRATOR_PATH_NEE, 2048); }
+static void test_whitted(void **state) { (void)state; compare(CST_INTEGRATOR_WHITTED, 2048); }
 
 int main(void)
 {

@@ -55,7 +55,23 @@ static Scene *many_lights_scene(uint64_t seed)
         d.cos_outer = 0.8f;
         assert_int_equal(scene_add_delta_light(s, &d, &err), CST_OK);
     }
-    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {{0.5f, 0.5f, 0.5f}}, 0, 0, {0}};
+    {
+        /* a projection light (a frustum of a 2 x 1 image) looking down and to the side */
+        static const float img[2 * 1 * 3] = {4.0f, 2.0f, 1.0f, 1.0f, 2.0f, 4.0f};
+        CstLightDesc pl;
+        memset(&pl, 0, sizeof pl);
+        pl.type = CST_LIGHT_PROJECTION;
+        pl.position[0] = 2.0f, pl.position[1] = 5.0f, pl.position[2] = 1.0f;
+        pl.intensity[0] = pl.intensity[1] = pl.intensity[2] = 3.0f;
+        pl.image = img;
+        pl.image_width = 2;
+        pl.image_height = 1;
+        pl.fov = 35.0f;
+        const float lfw[9] = {1, 0, 0, 0, 0.8f, 0.6f, 0, -0.6f, 0.8f}; /* axis (0, -0.6, 0.8) */
+        memcpy(pl.light_from_world, lfw, sizeof lfw);
+        assert_int_equal(cst_scene_add_light(s, &pl, &err), CST_OK);
+    }
+    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {{0.5f, 0.5f, 0.5f}}, 0, 0, {0}, {0}};
     assert_int_equal(scene_add_delta_light(s, &dl, &err), CST_OK);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     EmitterGeometry g = scene_emitter_geometry(s);
