@@ -209,12 +209,50 @@ static void test_pbrt_projection(void **state)
     cst_scene_destroy(sc);
 }
 
+/* The JSON scene's "projection" light: its frame from position, look_at and up, the image
+ * from "file", and located errors. */
+static void test_json_projection(void **state)
+{
+    (void)state;
+    float px[3 * 2 * 3];
+    for (int i = 0; i < 18; i++) px[i] = 0.5f;
+    char p[512], name[512], text[1024];
+    CstError err;
+    tpath(p, sizeof p, "j.pfm");
+    assert_int_equal(image_write(p, px, 3, 2, &err), CST_OK);
+    tpath(name, sizeof name, "t.json");
+    const char *fmt = "{\"camera\": {\"position\": [0, 2, -5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+                      " \"materials\": {\"m\": {\"type\": \"diffuse\", \"albedo\": [0.5, 0.5, 0.5]}},\n"
+                      " \"shapes\": [{\"type\": \"sphere\", \"material\": \"m\", \"center\": [0, 0, 0], "
+                      "\"radius\": 1}],\n"
+                      " \"lights\": [{\"type\": \"projection\", \"position\": [0, 4, 0], \"look_at\": [0, 0, 0], "
+                      "%s \"file\": \"j.pfm\", \"fov\": 50, \"intensity\": [3, 3, 3]}]}";
+    snprintf(text, sizeof text, fmt, "\"up\": [0, 0, 1],");
+    CstScene *sc = NULL;
+    if (cst_scene_load_json_string(text, strlen(text), name, &sc, &err) != CST_OK) fail_msg("%s", err.msg);
+    const Scene *s = (const Scene *)sc;
+    assert_int_equal(s->num_delta_lights, 1);
+    const ProjImage *g = &s->delta_lights[0].proj;
+    assert_int_equal(g->w, 3);
+    assert_int_equal(g->h, 2);
+    const float expect[9] = {1, 0, 0, 0, 0, 1, 0, -1, 0}; /* x = y cross z, y = up, z = down */
+    for (int k = 0; k < 9; k++) assert_true(fabsf(g->light_from_world[k] - expect[k]) <= 1e-6f);
+    assert_true(fabsf(g->tan_half - tanf(25.0f * CST_PI / 180.0f)) <= 1e-6f);
+    cst_scene_destroy(sc);
+    snprintf(text, sizeof text, fmt, "\"up\": [0, 1, 0],");
+    assert_int_not_equal(cst_scene_load_json_string(text, strlen(text), name, &sc, &err), CST_OK);
+    print_message("  %s\n", err.msg);
+    assert_non_null(strstr(err.msg, "t.json:4:87:"));
+    assert_non_null(strstr(err.msg, "up is parallel"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_constant_image_closed_form),
         cmocka_unit_test(test_integrators_agree),
         cmocka_unit_test(test_pbrt_projection),
+        cmocka_unit_test(test_json_projection),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
