@@ -104,6 +104,14 @@ CST_API const char *cst_scene_output_path(const CstScene *scene);
  * Before cst_scene_commit: chooses the one commit builds. */
 CST_API CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err);
 
+/* How next-event estimation picks a light (pbrt-v4's Integrator "lightsampler"): "power"
+ * (by each light's power), "bvh" (a light BVH over the lights' bounds, power and
+ * orientation: Conty Estevez & Kulla 2018, pbrt-v4's default) or "uniform". Scenes that name
+ * none use the BVH when they have more than 64 lights with a position, power otherwise.
+ * Light paths always start by power. Before cst_scene_commit: chooses what commit builds;
+ * after: rebuilds it (not during a render). On failure the choice stays. */
+CST_API CstStatus cst_scene_set_light_sampler(CstScene *scene, const char *name, CstError *err);
+
 typedef struct CstSceneInfo {
     int triangles, spheres, emitters, materials;
     const char *accel;          /* name of the acceleration structure in use */
@@ -117,6 +125,8 @@ typedef struct CstSceneInfo {
     int lights;                 /* every light source: emitting shapes, point, spot and
                                  * directional lights, the environment; 0 = the render is
                                  * black (callers warn) */
+    const char *light_sampler;  /* next-event estimation's choice of light: "power", "bvh" or
+                                 * "uniform" (after commit; static storage) */
 } CstSceneInfo;
 /* Also before cst_scene_commit: the counts so far (the accel fields then describe no
  * structure yet). */
@@ -368,8 +378,10 @@ typedef enum CstLightType {
     CST_LIGHT_POINT = 1,  /* isotropic: intensity (W/sr) in every direction */
     CST_LIGHT_SPOT,       /* a point with a cone: intensity on the axis, smooth falloff */
     CST_LIGHT_DIRECTIONAL, /* parallel light from infinitely far: irradiance (W/m^2) */
-    CST_LIGHT_GONIOMETRIC  /* a point whose intensity is scaled per direction by an image
+    CST_LIGHT_GONIOMETRIC, /* a point whose intensity is scaled per direction by an image
                             * (pbrt-v4's "goniometric" light) */
+    CST_LIGHT_PROJECTION   /* a point projecting an RGB image through a frustum (pbrt-v4's
+                            * "projection" light) */
 } CstLightType;
 
 /* Zero-initialise, then set. */
@@ -390,6 +402,16 @@ typedef struct CstLightDesc {
     const float *image;
     int image_size;
     float light_from_world[9];
+    /* projection: image is image_width x image_height RGB triples (linear, finite, >= 0;
+     * copied), row 0 first; light space (light_from_world, its rows made orthonormal from
+     * the third, all zeros: the identity) looks down +z; fov (degrees, (0, 180)) spans the
+     * image's shorter side, the longer one in proportion; a light-space direction d lands
+     * on screen point (d.x, d.y) / (d.z tan(fov / 2)) and takes the nearest pixel at
+     * u = (x + sx) / 2 sx, v = (y + sy) / 2 sy of the window [-sx, sx] x [-sy, sy] (the
+     * aspect on the longer side, 1 on the other), row v x height counted from row 0 as
+     * pbrt-v4 does; intensity (W/sr) multiplies the pixel's RGB. */
+    int image_width, image_height;
+    float fov;
 } CstLightDesc;
 
 CST_API CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *desc, CstError *err);

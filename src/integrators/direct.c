@@ -7,7 +7,7 @@ static Color sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3
     if (s->emitter_sampler.lights == 0) return color_s(0.0f);
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
-    if (!light_sample_li(&s->emitter_sampler, &g, sh->p, u_sel, u, &ls)) return color_s(0.0f);
+    if (!light_sample_nee(&s->emitter_sampler, &g, sh->p, sh->ns, u_sel, u, &ls)) return color_s(0.0f);
     Color f = bsdf_eval(bsdf, wo, ls.wi);
     if (color_is_black(f)) return color_s(0.0f);
     ++*rays;

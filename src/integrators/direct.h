@@ -15,8 +15,9 @@ static inline float power_heuristic(float pdf_a, float pdf_b)
     return a / (a + b);
 }
 
-/* f(wo, wi) L_i / pdf for one light picked by power (area point or delta light) with
- * u_sel, the point on it with u, and a shadow ray; black when the scene has no lights.
+/* f(wo, wi) L_i / pdf for one light picked by the scene's NEE sampler (light_sample_nee:
+ * power, BVH or uniform; area point or delta light) with u_sel, the point on it with u,
+ * and a shadow ray; black when the scene has no lights.
  * The caller draws the numbers (from its Sampler). wl: the path's wavelengths (spectral
  * mode) or NULL. */
 Color direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel, Vec2 u,

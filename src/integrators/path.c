@@ -12,6 +12,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
     bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
     float prev_pdf = 0.0f;
     Vec3 prev_p = ray.o; /* the previous vertex: NEE's reference point there */
+    Vec3 prev_n = v3s(0.0f); /* and its shading normal, for the light BVH's pmf */
     bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
     for (int depth = 0;; depth++) {
         SurfaceHit sh;
@@ -23,7 +24,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
             if (!color_is_black(le)) {
                 if (specular || pp->mode == PATH_BSDF) L = color_madd(L, beta, le);
                 else if (pp->mode == PATH_MIS)
-                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, light_env_pdf(&s->emitter_sampler, ray.d))));
+                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, light_env_nee_pdf(&s->emitter_sampler, prev_p, prev_n, ray.d))));
             }
             break;
         }
@@ -37,7 +38,8 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
                 } else if (pp->mode == PATH_MIS) {
                     float cos_l = fabsf(v3_dot(sh.ng, wo));
                     EmitterGeometry g = scene_emitter_geometry(s);
-                    float pdf_light = light_area_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, sh.t, cos_l);
+                    float pdf_light =
+                        light_area_nee_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, prev_n, sh.t, cos_l);
                     L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, pdf_light)));
                 }
                 /* PATH_NEE: this emitter was already counted by the previous vertex's NEE. */
@@ -63,6 +65,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         specular = bs.delta;
         prev_pdf = bs.delta ? bs.pmf : bs.pdf_w;
         prev_p = sh.p;
+        prev_n = sh.ns;
 
         /* Russian roulette (roulette.h): beta is the path's scatter. */
         float rr = roulette(smp, depth + 1, pp->rr_depth, beta);

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "geometry/triangle.h"
+#include "lights/light_bvh.h"
 #include "math/frame.h"
 #include "sampling/warp.h"
 
@@ -53,6 +54,37 @@ static float gonio_factor(const GonioImage *g, Vec3 w)
     return g->factor[(size_t)py * (size_t)g->n + (size_t)px];
 }
 
+Color proj_factor(const ProjImage *g, Vec3 w, float *pdf_w)
+{
+    if (pdf_w) *pdf_w = 0.0f;
+    const float *m = g->light_from_world;
+    Vec3 d = v3(m[0] * w.x + m[1] * w.y + m[2] * w.z, m[3] * w.x + m[4] * w.y + m[5] * w.z,
+                m[6] * w.x + m[7] * w.y + m[8] * w.z);
+    if (!(d.z > 0.0f)) return color_s(0.0f);
+    /* pbrt-v4 ProjectionLight::I: the point on the screen (its Perspective(fov) transform) */
+    float x = d.x / (d.z * g->tan_half), y = d.y / (d.z * g->tan_half);
+    if (!(fabsf(x) <= g->sx && fabsf(y) <= g->sy)) return color_s(0.0f);
+    int px = (int)((x + g->sx) / (2.0f * g->sx) * (float)g->w), py = (int)((y + g->sy) / (2.0f * g->sy) * (float)g->h);
+    px = px < 0 ? 0 : px >= g->w ? g->w - 1 : px;
+    py = py < 0 ? 0 : py >= g->h ? g->h - 1 : py;
+    const float *c = &g->rgb[3 * ((size_t)py * (size_t)g->w + (size_t)px)];
+    if (pdf_w) {
+        /* uniform over the window's area A on the plane z = 1, and dA = d omega / cos^3 */
+        float cz = d.z / v3_length(d);
+        *pdf_w = 1.0f / (g->area * cz * cz * cz);
+    }
+    return color_rgb(c[0], c[1], c[2]);
+}
+
+/* A direction uniform over a projection light's window (u), in world space. */
+static Vec3 proj_sample_dir(const ProjImage *g, Vec2 u)
+{
+    Vec3 d = v3_normalize(v3((2.0f * u.x - 1.0f) * g->sx * g->tan_half, (2.0f * u.y - 1.0f) * g->sy * g->tan_half, 1.0f));
+    const float *m = g->light_from_world; /* a rotation: its transpose maps back */
+    return v3(m[0] * d.x + m[3] * d.y + m[6] * d.z, m[1] * d.x + m[4] * d.y + m[7] * d.z,
+              m[2] * d.x + m[5] * d.y + m[8] * d.z);
+}
+
 /* A Lambertian emitter of radiance L and area A emits pi A L per side; a textured one is
  * weighted by its texture's average, which only shifts samples between lights (the point
  * density on an emitter stays uniform by area, so NEE's pdf is unchanged). 4 pi I for a
@@ -76,6 +108,8 @@ float light_power(const Light *l, float scene_radius)
     case LIGHT_ENVIRONMENT: return CST_PI * scene_radius * scene_radius * l->u.env->power;
     /* pbrt-v4 GoniometricLight::Phi: 4 pi I times the image's mean (equal-area pixels). */
     case LIGHT_GONIO: return 4.0f * CST_PI * color_luminance(l->u.gonio.intensity) * l->u.gonio.image.mean;
+    /* pbrt-v4 ProjectionLight::Phi: I times the image integrated over its solid angle. */
+    case LIGHT_PROJECTION: return color_luminance(color_mul(l->u.proj.intensity, l->u.proj.image.integral));
     }
     return 0.0f;
 }
@@ -108,6 +142,12 @@ static Light light_from_delta(const DeltaLight *d)
         l.u.gonio.p = d->p;
         l.u.gonio.intensity = d->intensity;
         l.u.gonio.image = d->gonio;
+        break;
+    case DELTA_PROJECTION:
+        l.type = LIGHT_PROJECTION;
+        l.u.proj.p = d->p;
+        l.u.proj.intensity = d->intensity;
+        l.u.proj.image = d->proj;
         break;
     }
     return l;
@@ -161,6 +201,8 @@ CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n
 
 void emitter_sampler_free(EmitterSampler *s)
 {
+    light_bvh_free(s->bvh);
+    free(s->bvh);
     distrib1d_free(&s->by_power);
     free(s->pdf_a);
     free(s->light);
@@ -228,20 +270,30 @@ static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, 
     *n = frame_to_world(&f, v3(-sin_a * cosf(phi), -sin_a * sinf(phi), -cos_a));
 }
 
-float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l)
+/* light_area_pdf_w for emitter e picked with probability pmf (pdf_a = pmf / area: with
+ * the power's pmf the same float as s->pdf_a[e]). */
+static float area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, float pmf, Vec3 x, float dist,
+                        float cos_l)
 {
     const Emitter *em = &s->light[e].u.area;
     float omc, sin2;
     if ((int)em->prim >= g->num_triangles &&
         sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
-        return s->by_power.pmf[e] / (2.0f * CST_PI * omc);
-    return cos_l > 0.0f ? s->pdf_a[e] * dist * dist / cos_l : 0.0f;
+        return pmf / (2.0f * CST_PI * omc);
+    return cos_l > 0.0f ? pmf / em->area * dist * dist / cos_l : 0.0f;
 }
 
-/* The emission direction density at a delta light (per unit solid angle). */
-static float delta_emit_pdf_w(const Light *l)
+float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l)
 {
+    return area_pdf_w(s, g, e, s->by_power.pmf[e], x, dist, cos_l);
+}
+
+/* The emission direction density at a delta light (per unit solid angle) of direction w. */
+static float delta_emit_pdf_w(const Light *l, Vec3 w)
+{
+    float pdf = 0.0f;
     switch (l->type) {
+    case LIGHT_PROJECTION: (void)proj_factor(&l->u.proj.image, w, &pdf); return pdf;
     case LIGHT_POINT:
     case LIGHT_GONIO: return CST_INV_4PI;
     case LIGHT_SPOT: return warp_uniform_cone_pdf(l->u.spot.cos_outer);
@@ -250,9 +302,10 @@ static float delta_emit_pdf_w(const Light *l)
     }
 }
 
-static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec3 x, Vec2 u,
+static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const EmitterGeometry *g, Vec3 x, Vec2 u,
                            LightLi *out)
 {
+    const float pdf_a = pmf / s->light[i].u.area.area; /* == s->pdf_a[i] for the power's pmf */
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
     float omc = 0.0f, sin2 = 0.0f;
@@ -277,10 +330,10 @@ static bool area_sample_li(const EmitterSampler *s, int i, const EmitterGeometry
      * the density the bidirectional MIS weights use for NEE (direct_pdf) even when the
      * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
      * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
-    const float area_pdf_w = s->pdf_a[i] * dist2 / out->cos_light;
-    out->pdf_w = cone ? s->by_power.pmf[i] / (2.0f * CST_PI * omc) : area_pdf_w;
+    const float area_pdf_w = pdf_a * dist2 / out->cos_light;
+    out->pdf_w = cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
     out->finite = true;
-    out->emit_pdf = s->pdf_a[i] * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
+    out->emit_pdf = pdf_a * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
     out->direct_pdf = area_pdf_w;
     return true;
 }
@@ -309,7 +362,6 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     out->delta = true;
     out->pmf = pmf;
     out->cos_light = 1.0f;
-    out->emit_pdf = pmf * delta_emit_pdf_w(l);
     if (l->type == LIGHT_DIRECTIONAL) {
         /* From outside the scene's bounding sphere, so every occluder is on the segment;
          * the direct_pdf of an infinitely distant light has no distance factor, and a
@@ -324,7 +376,10 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
         out->direct_pdf = pmf;
         return true;
     }
-    const Vec3 lp = l->type == LIGHT_SPOT ? l->u.spot.p : l->type == LIGHT_GONIO ? l->u.gonio.p : l->u.point.p;
+    const Vec3 lp = l->type == LIGHT_SPOT         ? l->u.spot.p
+                    : l->type == LIGHT_GONIO      ? l->u.gonio.p
+                    : l->type == LIGHT_PROJECTION ? l->u.proj.p
+                                                  : l->u.point.p;
     Vec3 to = v3_sub(lp, x);
     float dist2 = v3_length2(to);
     if (!(dist2 > 0.0f)) return false;
@@ -333,6 +388,13 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     out->wi = v3_scale(to, 1.0f / out->dist);
     out->n = v3_neg(out->wi);
     out->finite = true;
+    out->emit_pdf = pmf * delta_emit_pdf_w(l, v3_neg(out->wi));
+    if (l->type == LIGHT_PROJECTION) {
+        Color f = proj_factor(&l->u.proj.image, v3_neg(out->wi), NULL);
+        out->li = color_scale(color_mul(l->u.proj.intensity, f), 1.0f / dist2);
+        out->direct_pdf = pmf * dist2;
+        return !color_is_black(f);
+    }
     float falloff = l->type == LIGHT_SPOT    ? spot_falloff(&l->u.spot, v3_dot(l->u.spot.dir, v3_neg(out->wi)))
                     : l->type == LIGHT_GONIO ? gonio_factor(&l->u.gonio.image, v3_neg(out->wi))
                                              : 1.0f;
@@ -344,24 +406,97 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
     return falloff > 0.0f;
 }
 
+/* The sample of light i, picked with probability pmf. */
+static bool sample_light(const EmitterSampler *s, const EmitterGeometry *g, int i, float pmf, Vec3 x, Vec2 u,
+                         LightLi *out)
+{
+    out->light = i;
+    const Light *l = &s->light[i];
+    switch (l->type) {
+    case LIGHT_AREA: return area_sample_li(s, i, pmf, g, x, u, out);
+    case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
+    case LIGHT_POINT:
+    case LIGHT_SPOT:
+    case LIGHT_GONIO:
+    case LIGHT_PROJECTION:
+    case LIGHT_DIRECTIONAL: return delta_sample_li(s, l, pmf, x, out);
+    }
+    return false;
+}
+
 bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
                      LightLi *out)
 {
     memset(out, 0, sizeof *out);
     if (s->lights == 0) return false;
     int i = distrib1d_sample(&s->by_power, u_sel);
-    float pmf = s->by_power.pmf[i];
-    out->light = i;
-    const Light *l = &s->light[i];
-    switch (l->type) {
-    case LIGHT_AREA: return area_sample_li(s, i, g, x, u, out);
-    case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
-    case LIGHT_POINT:
-    case LIGHT_SPOT:
-    case LIGHT_GONIO:
-    case LIGHT_DIRECTIONAL: return delta_sample_li(s, l, pmf, x, out);
+    return sample_light(s, g, i, s->by_power.pmf[i], x, u, out);
+}
+
+bool light_sample_nee(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 n, float u_sel, Vec2 u,
+                      LightLi *out)
+{
+    if (s->nee == LIGHT_SELECT_POWER) return light_sample_li(s, g, x, u_sel, u, out);
+    memset(out, 0, sizeof *out);
+    if (s->lights == 0) return false;
+    int i;
+    float pmf;
+    if (s->nee == LIGHT_SELECT_BVH) {
+        i = light_bvh_sample(s->bvh, x, n, u_sel, &pmf);
+        if (i < 0) return false;
+    } else {
+        i = (int)(u_sel * (float)s->lights);
+        i = i >= s->lights ? s->lights - 1 : i;
+        pmf = 1.0f / (float)s->lights;
     }
-    return false;
+    return sample_light(s, g, i, pmf, x, u, out);
+}
+
+float light_nee_pmf(const EmitterSampler *s, Vec3 x, Vec3 n, int i)
+{
+    switch (s->nee) {
+    case LIGHT_SELECT_BVH: return light_bvh_pmf(s->bvh, x, n, i);
+    case LIGHT_SELECT_UNIFORM: return 1.0f / (float)s->lights;
+    case LIGHT_SELECT_POWER: break;
+    }
+    return s->by_power.pmf[i];
+}
+
+float light_area_nee_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 n, float dist,
+                           float cos_l)
+{
+    if (s->nee == LIGHT_SELECT_POWER) return light_area_pdf_w(s, g, e, x, dist, cos_l);
+    return area_pdf_w(s, g, e, light_nee_pmf(s, x, n, e), x, dist, cos_l);
+}
+
+float light_env_nee_pdf(const EmitterSampler *s, Vec3 x, Vec3 n, Vec3 w)
+{
+    if (s->nee == LIGHT_SELECT_POWER) return light_env_pdf(s, w);
+    return s->env ? light_nee_pmf(s, x, n, light_env_index(s)) * envmap_pdf(s->env, w) : 0.0f;
+}
+
+LightSelect emitter_sampler_auto_nee(const EmitterSampler *s)
+{
+    int bounded = 0;
+    for (int i = 0; i < s->count + s->num_delta; i++) bounded += s->light[i].type != LIGHT_DIRECTIONAL;
+    return bounded > LIGHT_SELECT_BVH_ABOVE ? LIGHT_SELECT_BVH : LIGHT_SELECT_POWER;
+}
+
+CstStatus emitter_sampler_set_nee(EmitterSampler *s, const EmitterGeometry *g, LightSelect sel, CstError *err)
+{
+    if (sel == LIGHT_SELECT_BVH && !s->bvh && s->lights > 0) {
+        LightBvh *bvh = malloc(sizeof *bvh);
+        if (!bvh) return cst_fail(err, CST_ERR_OOM, "out of memory for the light BVH");
+        CstStatus st = light_bvh_build(bvh, s, g, err);
+        if (st != CST_OK) {
+            free(bvh);
+            return st;
+        }
+        s->bvh = bvh;
+    }
+    /* no lights: nothing to pick, and power selection's checks come first everywhere */
+    s->nee = s->lights > 0 ? sel : LIGHT_SELECT_POWER;
+    return CST_OK;
 }
 
 static void area_sample_emission(const EmitterSampler *s, int i, const EmitterGeometry *g, Vec2 u_pos,
@@ -439,6 +574,18 @@ static void delta_sample_emission(const EmitterSampler *s, const Light *l, float
         out->beta = color_scale(l->u.gonio.intensity, gonio_factor(&l->u.gonio.image, out->w) / (pmf * out->pdf_w));
         out->finite = true;
         break;
+    case LIGHT_PROJECTION: {
+        /* uniform over the window (pbrt-v4 samples the image's distribution: the same
+         * expectation, more noise where the image is uneven) */
+        const ProjectionLight *pl = &l->u.proj;
+        out->p = pl->p;
+        out->w = proj_sample_dir(&pl->image, u_dir);
+        out->pdf_a = pmf;
+        Color f = proj_factor(&pl->image, out->w, &out->pdf_w);
+        if (out->pdf_w > 0.0f) out->beta = color_scale(color_mul(pl->intensity, f), 1.0f / (pmf * out->pdf_w));
+        out->finite = true;
+        break;
+    }
     case LIGHT_SPOT: {
         const SpotLight *sp = &l->u.spot;
         Frame f = frame_from_normal(sp->dir);
@@ -487,6 +634,7 @@ void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, 
     case LIGHT_POINT:
     case LIGHT_SPOT:
     case LIGHT_GONIO:
+    case LIGHT_PROJECTION:
     case LIGHT_DIRECTIONAL: delta_sample_emission(s, l, pmf, u_pos, u_dir, out); return;
     }
 }

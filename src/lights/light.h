@@ -30,7 +30,8 @@ typedef enum DeltaLightType {
     DELTA_POINT,       /* isotropic point: intensity I in every direction */
     DELTA_SPOT,        /* point with a cone: I on the axis, smoothstep falloff to 0 at cos_outer */
     DELTA_DIRECTIONAL, /* parallel light from infinitely far: irradiance E on a surface facing it */
-    DELTA_GONIO        /* point whose intensity I times an image over the sphere (goniometric) */
+    DELTA_GONIO,       /* point whose intensity I times an image over the sphere (goniometric) */
+    DELTA_PROJECTION   /* point projecting an image through a frustum (pbrt-v4 ProjectionLight) */
 } DeltaLightType;
 
 /* A goniometric light's angular distribution (pbrt-v4 GoniometricLight): an n x n image of
@@ -43,6 +44,23 @@ typedef struct GonioImage {
     float mean;              /* the factors' mean: the light emits 4 pi I mean */
 } GonioImage;
 
+/* A projection light's image (pbrt-v4 ProjectionLight): light space has the axis along +z;
+ * a light-space direction d (d.z > 0) meets the plane z = 1 at screen point (d.x, d.y) /
+ * (d.z tan_half), which must lie in the window [-sx, sx] x [-sy, sy] (the image's aspect on
+ * the longer side, 1 on the shorter: fov spans the shorter side); u = (x + sx) / 2 sx,
+ * v = (y + sy) / 2 sy pick the nearest pixel, row v h counted from row 0 as pbrt-v4's
+ * LookupNearest does (no flip). Outside the window the light is dark. */
+typedef struct ProjImage {
+    const float *rgb;          /* w * h * 3 linear values >= 0, owned by the scene */
+    int w, h;
+    float light_from_world[9]; /* row-major rotation */
+    float tan_half;            /* tan(fov / 2) */
+    float sx, sy;
+    Color integral;            /* the integral of the image over its solid angle, per channel
+                                * (sr): the flux per unit intensity */
+    float area;                /* the window's area on the plane z = 1: 4 sx sy tan_half^2 */
+} ProjImage;
+
 /* A point, spot or directional light as a scene is built (scene_add_delta_light);
  * emitter_sampler_init turns each into its Light. */
 typedef struct DeltaLight {
@@ -52,6 +70,7 @@ typedef struct DeltaLight {
     Color intensity; /* point, spot: radiant intensity (W/sr) on the axis; directional: irradiance */
     float cos_inner, cos_outer; /* spot: full intensity within cos_inner, none beyond cos_outer */
     GonioImage gonio;           /* goniometric */
+    ProjImage proj;             /* projection: intensity x the image's RGB */
 } DeltaLight;
 
 /* The kinds of light, one tag of the Light union. */
@@ -61,7 +80,8 @@ typedef enum LightType {
     LIGHT_SPOT,        /* point with a cone and smoothstep falloff */
     LIGHT_DIRECTIONAL, /* parallel light from infinitely far */
     LIGHT_ENVIRONMENT, /* radiance from every direction at infinity (EnvMap) */
-    LIGHT_GONIO        /* point with an image of its intensity over the sphere */
+    LIGHT_GONIO,       /* point with an image of its intensity over the sphere */
+    LIGHT_PROJECTION   /* point projecting an image through a frustum */
 } LightType;
 
 typedef struct PointLight {
@@ -78,6 +98,11 @@ typedef struct GonioLight {
     Color intensity; /* times the image's factor in each direction, W/sr */
     GonioImage image;
 } GonioLight;
+typedef struct ProjectionLight {
+    Vec3 p;
+    Color intensity; /* times the image's RGB in each direction, W/sr */
+    ProjImage image;
+} ProjectionLight;
 typedef struct DirectionalLight {
     Vec3 dir;         /* unit direction the light travels */
     Color irradiance; /* E on a surface facing it, W/m^2 */
@@ -92,9 +117,24 @@ typedef struct Light {
         SpotLight spot;
         DirectionalLight directional;
         GonioLight gonio;
+        ProjectionLight proj;
         const EnvMap *env; /* borrowed from the scene */
     } u;
 } Light;
+
+/* How next-event estimation picks a light: by power (one distribution for every shading
+ * point, also the light paths' choice), by the light BVH (light_bvh.h: by each light's
+ * estimated contribution at the shading point, pbrt-v4's default "bvh"), or uniformly
+ * (pbrt-v4 "uniform"). Light paths (emitter_sample_emission) and the bidirectional
+ * integrators' connections (light_sample_li) always pick by power. */
+typedef enum LightSelect { LIGHT_SELECT_POWER, LIGHT_SELECT_BVH, LIGHT_SELECT_UNIFORM } LightSelect;
+
+/* The rule for a scene that names no light sampler: the BVH once it has more than this
+ * many lights with a position (area emitters, point, spot and goniometric lights), power
+ * below, where one distribution does as well and keeps today's images bit for bit. */
+#define LIGHT_SELECT_BVH_ABOVE 64
+
+struct LightBvh;
 
 /* The scene's lights in one array, with light selection: one distribution over
  * light[0, lights), proportional to each light's power (luminance of its flux), so bright
@@ -112,6 +152,8 @@ typedef struct EmitterSampler {
     const EnvMap *env;       /* borrowed from the scene, or NULL; light index count + num_delta */
     Vec3 center;     /* the scene's bounding sphere: directional lights cover its disk */
     float radius;
+    LightSelect nee;       /* NEE's choice (emitter_sampler_set_nee); POWER after init */
+    struct LightBvh *bvh;  /* with nee == LIGHT_SELECT_BVH, else NULL; owned */
 } EmitterSampler;
 
 /* The geometry NEE needs, borrowed from the scene (scene_emitter_geometry() fills it). */
@@ -130,6 +172,11 @@ typedef struct EmitterGeometry {
 CstStatus emitter_sampler_init(EmitterSampler *s, const Emitter *emitters, int n, const DeltaLight *delta,
                                int num_delta, const EnvMap *env, Vec3 bounds_lo, Vec3 bounds_hi, CstError *err);
 void emitter_sampler_free(EmitterSampler *s);
+/* Sets how NEE (light_sample_nee) picks lights, building the light BVH for
+ * LIGHT_SELECT_BVH. On failure (OOM) the previous choice stays. */
+CstStatus emitter_sampler_set_nee(EmitterSampler *s, const EmitterGeometry *g, LightSelect sel, CstError *err);
+/* The rule for scenes that name none (LIGHT_SELECT_BVH_ABOVE). */
+LightSelect emitter_sampler_auto_nee(const EmitterSampler *s);
 
 /* Radiance leaving the emitter at a point with geometric normal ng and texture
  * coordinates uv toward direction w (unit, pointing away from the surface). One-sided
@@ -198,6 +245,21 @@ typedef struct LightLi {
 bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, float u_sel, Vec2 u,
                      LightLi *out);
 
+/* Next-event estimation at x with unit normal n (the shading normal; 0 in a medium): the
+ * light picked by the NEE sampler (s->nee; with power selection exactly light_sample_li),
+ * then a point or direction on it as light_sample_li samples one. pdf_w and pmf include
+ * the selection; emit_pdf and direct_pdf are the power selection's (bidirectional MIS
+ * uses light_sample_li). */
+bool light_sample_nee(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 n, float u_sel, Vec2 u,
+                      LightLi *out);
+/* The probability that light_sample_nee picks light i at x, n. */
+float light_nee_pmf(const EmitterSampler *s, Vec3 x, Vec3 n, int i);
+/* light_area_pdf_w and light_env_pdf for light_sample_nee's selection at x, n: the
+ * densities a BSDF-sampled ray's MIS weight needs (with power selection, the same). */
+float light_area_nee_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 n, float dist,
+                           float cos_l);
+float light_env_nee_pdf(const EmitterSampler *s, Vec3 x, Vec3 n, Vec3 w);
+
 typedef struct EmitterSample {
     Vec3 p, n; /* point and unit geometric normal */
     int emitter;
@@ -230,6 +292,11 @@ void emitter_sample_emission(const EmitterSampler *s, const EmitterGeometry *g, 
                              Vec2 u_dir, EmissionSample *out);
 /* pdf_w of emitter_sample_emission for direction w at a point with normal n. */
 float emitter_emission_pdf_w(const Emitter *e, Vec3 n, Vec3 w);
+
+/* A projection light's image factor (RGB) toward world direction w (unit, away from the
+ * light), black outside its window; *pdf_w (may be NULL) gets the density with which
+ * emission sampling (uniform over the window) picks w, 1 / (area cos^3 theta), per solid angle. */
+Color proj_factor(const ProjImage *g, Vec3 w, float *pdf_w);
 
 /* Emitted power (luminance of the flux) of each kind of light: the selection weights. */
 /* The luminance of a light's flux, its selection weight; infinitely distant lights (and

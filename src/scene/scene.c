@@ -57,6 +57,7 @@ void scene_destroy(Scene *s)
     free(s->emitters);
     for (int i = 0; i < s->num_delta_lights; i++)
         if (s->delta_lights[i].type == DELTA_GONIO) free((void *)(uintptr_t)s->delta_lights[i].gonio.factor);
+        else if (s->delta_lights[i].type == DELTA_PROJECTION) free((void *)(uintptr_t)s->delta_lights[i].proj.rgb);
     free(s->material_spectra);
     free(s->emitter_spectra);
     free(s->delta_lights);
@@ -392,6 +393,12 @@ CstStatus scene_commit(Scene *s, CstError *err)
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, s->delta_lights,
                               s->num_delta_lights, s->env, bounds.min, bounds.max, err);
     if (st != CST_OK) return st;
+    {
+        EmitterGeometry g = scene_emitter_geometry(s);
+        LightSelect sel = s->light_select > 0 ? (LightSelect)(s->light_select - 1)
+                                              : emitter_sampler_auto_nee(&s->emitter_sampler);
+        if ((st = emitter_sampler_set_nee(&s->emitter_sampler, &g, sel, err)) != CST_OK) return st;
+    }
     /* The spectral mode's table lookups of constant colours, once (scene.h); optional:
      * without them each use converts. Emitters are in emitter_sampler order (area lights
      * first, an emitter's index is its light index). */
@@ -462,6 +469,9 @@ void cst_scene_info(const CstScene *s, CstSceneInfo *info)
     info->emitters = s->num_emitters;
     info->materials = s->num_materials;
     info->lights = s->emitter_sampler.lights; /* set by commit */
+    info->light_sampler = s->emitter_sampler.nee == LIGHT_SELECT_BVH       ? "bvh"
+                          : s->emitter_sampler.nee == LIGHT_SELECT_UNIFORM ? "uniform"
+                                                                           : "power";
     info->accel = accel_type_name(s->accel.type);
     info->accel_build_seconds = s->accel.build_seconds;
     info->accel_bytes = accel_memory_bytes(&s->accel);

@@ -70,6 +70,7 @@ struct CstScene {
      * two-level structure queried after `accel`. Instances do not emit. */
     InstanceSet *instances;
     EmitterSampler emitter_sampler;
+    int light_select; /* NEE's light sampler: 1 + LightSelect, 0 = by the rule (light.h) */
     /* Spectral mode's lookups done once by commit (math/spectrum.h): per material, its
      * colours; per area emitter, its radiance (NULL before commit or on OOM: converted at
      * each use instead). */

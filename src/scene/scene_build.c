@@ -901,6 +901,10 @@ static CstStatus check_light_powers(const Scene *s, CstError *err)
             power = 4.0 * (double)CST_PI * color_peak(l->u.gonio.intensity) * (double)l->u.gonio.image.mean;
             what = "a goniometric light's power 4 pi x intensity x the image's mean";
             break;
+        case LIGHT_PROJECTION:
+            power = color_peak(color_mul(l->u.proj.intensity, l->u.proj.image.integral));
+            what = "a projection light's power intensity x the image over its solid angle";
+            break;
         case LIGHT_DIRECTIONAL:
             power = disk * color_peak(l->u.directional.irradiance);
             what = "a directional light's power pi R^2 x irradiance (R the scene's bounding radius)";

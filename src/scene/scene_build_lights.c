@@ -62,6 +62,76 @@ static CstStatus read_gonio(const CstLightDesc *d, const char *fn, GonioImage *g
     return CST_OK;
 }
 
+/* A projection light's image, copied, and its frame made a rotation: rows orthonormalised
+ * from the third (the axis) by Gram-Schmidt, the second's sign kept. The window and the
+ * image's integral over its solid angle (pixel centres, d omega = cos^3 theta dA on the
+ * plane z = 1: pbrt-v4 ProjectionLight::Phi). */
+#define PROJ_MAX_SIDE 65536
+static CstStatus read_proj(const CstLightDesc *d, const char *fn, ProjImage *g, CstError *err)
+{
+    const int w = d->image_width, h = d->image_height;
+    if (!d->image || !(w >= 1 && w <= PROJ_MAX_SIDE && h >= 1 && h <= PROJ_MAX_SIDE))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: projection image %s of %d x %d; expected 1 to %d pixels "
+                        "each way", fn, d->image ? "given" : "NULL", w, h, PROJ_MAX_SIDE);
+    if (!(d->fov > 0.0f && d->fov < 180.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: fov %g; expected degrees in (0, 180)", fn, (double)d->fov);
+    bool zero = true;
+    for (int k = 0; k < 9; k++) {
+        if (!isfinite(d->light_from_world[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: light_from_world[%d] is not finite", fn, k);
+        zero &= d->light_from_world[k] == 0.0f;
+    }
+    Vec3 r[3];
+    for (int k = 0; k < 3; k++)
+        r[k] = zero ? v3(k == 0 ? 1.0f : 0.0f, k == 1 ? 1.0f : 0.0f, k == 2 ? 1.0f : 0.0f)
+                    : v3(d->light_from_world[3 * k], d->light_from_world[3 * k + 1], d->light_from_world[3 * k + 2]);
+    Vec3 z = r[2], y = v3_sub(r[1], v3_scale(r[2], v3_dot(r[1], r[2]) / v3_length2(r[2])));
+    if (!(v3_length2(z) > 0.0f) || !(v3_length2(y) > 0.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: light_from_world is singular; expected an invertible map", fn);
+    z = v3_normalize(z);
+    y = v3_normalize(y);
+    Vec3 x = v3_cross(y, z);
+    if (v3_dot(x, r[0]) < 0.0f) x = v3_neg(x); /* keep a mirror's handedness */
+    const Vec3 rows[3] = {x, y, z};
+    for (int k = 0; k < 3; k++) {
+        g->light_from_world[3 * k] = rows[k].x;
+        g->light_from_world[3 * k + 1] = rows[k].y;
+        g->light_from_world[3 * k + 2] = rows[k].z;
+    }
+    const float aspect = (float)w / (float)h;
+    g->w = w;
+    g->h = h;
+    g->tan_half = tanf(0.5f * d->fov * (CST_PI / 180.0f));
+    g->sx = aspect > 1.0f ? aspect : 1.0f;
+    g->sy = aspect > 1.0f ? 1.0f : 1.0f / aspect;
+    g->area = 4.0f * g->sx * g->sy * g->tan_half * g->tan_half;
+    size_t count = (size_t)w * (size_t)h * 3;
+    float *px = malloc(count * sizeof *px);
+    if (!px) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d projection image", fn, w, h);
+    double sum[3] = {0.0, 0.0, 0.0};
+    for (int j = 0; j < h; j++)
+        for (int i = 0; i < w; i++) {
+            double sx = ((2.0 * i + 1.0) / w - 1.0) * (double)(g->sx * g->tan_half);
+            double sy = ((2.0 * j + 1.0) / h - 1.0) * (double)(g->sy * g->tan_half);
+            double c = 1.0 / sqrt(1.0 + sx * sx + sy * sy);
+            for (int k = 0; k < 3; k++) {
+                size_t at = 3 * ((size_t)j * (size_t)w + (size_t)i) + (size_t)k;
+                float v = d->image[at];
+                if (!(v >= 0.0f) || !isfinite(v)) {
+                    free(px);
+                    return cst_fail(err, CST_ERR_INVALID_ARG, "%s: projection image pixel (%d, %d) channel %d is "
+                                    "%g; expected a finite value >= 0", fn, i, j, k, (double)v);
+                }
+                px[at] = v;
+                sum[k] += (double)v * c * c * c;
+            }
+        }
+    const double da = (double)g->area / ((double)w * (double)h);
+    g->integral = color_rgb((float)(sum[0] * da), (float)(sum[1] * da), (float)(sum[2] * da));
+    g->rgb = px;
+    return CST_OK;
+}
+
 CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *err)
 {
     static const char fn[] = "cst_scene_add_light";
@@ -99,9 +169,14 @@ CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *
         if ((st = read_vec3(d->position, fn, "position", &l.p, err)) != CST_OK) return st;
         if ((st = read_gonio(d, fn, &l.gonio, err)) != CST_OK) return st;
         break;
+    case CST_LIGHT_PROJECTION:
+        l.type = DELTA_PROJECTION;
+        if ((st = read_vec3(d->position, fn, "position", &l.p, err)) != CST_OK) return st;
+        if ((st = read_proj(d, fn, &l.proj, err)) != CST_OK) return st;
+        break;
     default:
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light type %d; expected CST_LIGHT_POINT, _SPOT, "
-                        "_DIRECTIONAL or _GONIOMETRIC", fn, (int)d->type);
+                        "_DIRECTIONAL, _GONIOMETRIC or _PROJECTION", fn, (int)d->type);
     }
     /* A directional light's power depends on the scene's size: cst_scene_commit checks it. */
     if (d->type != CST_LIGHT_DIRECTIONAL)
@@ -110,6 +185,8 @@ CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *
     if (st == CST_OK) st = scene_add_delta_light(scene, &l, err);
     if (st != CST_OK && l.type == DELTA_GONIO)
         free((void *)(uintptr_t)l.gonio.factor);
+    if (st != CST_OK && l.type == DELTA_PROJECTION)
+        free((void *)(uintptr_t)l.proj.rgb);
     return st;
 }
 
@@ -344,3 +421,23 @@ CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError 
     return scene_set_output_path(scene, path, err);
 }
 
+
+/* ------------------------------------------------------------------ light sampler */
+
+CstStatus cst_scene_set_light_sampler(CstScene *scene, const char *name, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_light_sampler";
+    if (!scene || !name) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is NULL", fn, scene ? "name" : "scene");
+    LightSelect sel;
+    if (strcmp(name, "power") == 0) sel = LIGHT_SELECT_POWER;
+    else if (strcmp(name, "bvh") == 0) sel = LIGHT_SELECT_BVH;
+    else if (strcmp(name, "uniform") == 0) sel = LIGHT_SELECT_UNIFORM;
+    else return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light sampler '%s'; expected power, bvh or uniform", fn, name);
+    if (scene->committed) {
+        EmitterGeometry g = scene_emitter_geometry(scene);
+        CstStatus st = emitter_sampler_set_nee(&scene->emitter_sampler, &g, sel, err);
+        if (st != CST_OK) return st;
+    }
+    scene->light_select = 1 + (int)sel;
+    return CST_OK;
+}

@@ -211,7 +211,7 @@ Film "rgb" "integer xresolution" 16 "integer yresolution" 16
 LookAt 0 0 -5  0 0 0  0 1 0
 Camera "perspective" "float fov" 40
 WorldBegin
-LightSource "projection" "rgb I" [1 1 1]
+LightSource "sky" "rgb I" [1 1 1]
 AttributeBegin
   AreaLightSource "diffuse" "rgb L" [10 10 10]
   Shape "trianglemesh" "point3 P" [-1 3 -1  1 3 -1  0 3 1] "integer indices" [0 2 1]
@@ -220,7 +220,7 @@ Shape "sphere" "float radius" 1
 PBRT
 run "$dir" render --spp 1 tiny.pbrt
 if expect "pbrt scene renders: exit 0, located warning" 0 \
-    '^caustic: warning: tiny\.pbrt:5:1: LightSource "projection" is not supported'; then
+    '^caustic: warning: tiny\.pbrt:5:1: LightSource "sky" is not supported'; then
     [ -s "$dir/tiny.png" ] && pass "pbrt scene default output <stem>.png" \
         || fail "pbrt scene default output <stem>.png" "found: $(ls "$dir")"
 fi

@@ -32,9 +32,9 @@ static Scene *scene_with_lights(double power[6])
     assert_int_equal(scene_add_quad(s, q1, mat, &e1, &err), CST_OK);
     assert_int_equal(scene_add_quad(s, q2, mat, &e2, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(5, 5, 5), 0.25f, mat, &e3, &err), CST_OK);
-    DeltaLight pt = {DELTA_POINT, {1, 1, 1}, {0, 0, 0}, {{2, 2, 2}}, 0, 0, {0}};
-    DeltaLight sp = {DELTA_SPOT, {2, 1, 1}, {0, -1, 0}, {{8, 4, 2}}, 0.9f, 0.8f, {0}};
-    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {{0.01f, 0.01f, 0.01f}}, 0, 0, {0}};
+    DeltaLight pt = {DELTA_POINT, {1, 1, 1}, {0, 0, 0}, {{2, 2, 2}}, 0, 0, {0}, {0}};
+    DeltaLight sp = {DELTA_SPOT, {2, 1, 1}, {0, -1, 0}, {{8, 4, 2}}, 0.9f, 0.8f, {0}, {0}};
+    DeltaLight dl = {DELTA_DIRECTIONAL, {0, 0, 0}, {0, -1, 0}, {{0.01f, 0.01f, 0.01f}}, 0, 0, {0}, {0}};
     assert_int_equal(scene_add_delta_light(s, &pt, &err), CST_OK);
     assert_int_equal(scene_add_delta_light(s, &sp, &err), CST_OK);
     assert_int_equal(scene_add_delta_light(s, &dl, &err), CST_OK);

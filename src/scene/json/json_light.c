@@ -1,4 +1,4 @@
-/* The "lights" (point, spot, directional) and "environment" sections. */
+/* The "lights" (point, spot, directional, projection) and "environment" sections. */
 #include "scene/json/json_light.h"
 
 #include <float.h>
@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/image_io.h"
 #include "io/path.h"
 
 /* A direction that must not be zero, as read (the builder normalises it). */
@@ -39,9 +40,79 @@ static CstStatus read_angle(Loader *ld, const json_t *obj, const char *key, floa
 }
 
 /* A light's "type" (json_light.h). */
-const char *const json_light_types[] = {"point", "spot", "directional", NULL};
+const char *const json_light_types[] = {"point", "spot", "directional", "projection", NULL};
 
-/* "lights": point, spot and directional lights (area lights are shapes with "emission"). */
+/* A projection light: "position", "look_at" (the axis), "up" (default +y), "file" (an
+ * image, relative to the scene file), "fov" (degrees across the image's shorter side,
+ * default 90) and "intensity" (W/sr per unit pixel value, default [1, 1, 1]). Light space:
+ * z along the axis, y toward "up", x = y cross z. */
+static CstStatus parse_projection(Loader *ld, const json_t *obj)
+{
+    static const char *const keys[] = {"type", "position", "look_at", "up", "file", "fov", "intensity"};
+    CstLightDesc l = {0};
+    json_t *v;
+    Vec3 p, at, up = v3(0.0f, 1.0f, 0.0f);
+    Color c = color_s(1.0f);
+    LOADER_TRY(json_check_keys(ld, obj, keys, 7));
+    l.type = CST_LIGHT_PROJECTION;
+    LOADER_TRY(json_member_required(ld, obj, "position", "the light's position, 3 numbers", &v));
+    json_path_push_key(ld, "position");
+    LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &p));
+    json_path_pop(ld);
+    LOADER_TRY(json_member_required(ld, obj, "look_at", "the point the light's axis goes through", &v));
+    json_path_push_key(ld, "look_at");
+    LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &at));
+    Vec3 z = v3_sub(at, p);
+    if (!(v3_length(z) > 0.0f) || !isfinite(v3_length(z)))
+        return json_fail_here(ld, "look_at equals position; expected a point away from the light");
+    json_path_pop(ld);
+    if ((v = json_object_get(obj, "up"))) {
+        json_path_push_key(ld, "up");
+        LOADER_TRY(read_direction(ld, v, l.direction));
+        up = v3(l.direction[0], l.direction[1], l.direction[2]);
+        memset(l.direction, 0, sizeof l.direction);
+        if (!(v3_length(v3_cross(up, v3_normalize(z))) > 1e-6f * v3_length(up)))
+            return json_fail_here(ld, "up is parallel to the axis (look_at - position); expected another direction");
+        json_path_pop(ld);
+    }
+    z = v3_normalize(z);
+    Vec3 y = v3_sub(up, v3_scale(z, v3_dot(up, z)));
+    if (!(v3_length(y) > 1e-6f * v3_length(up)))
+        return json_fail_here(ld, "the default up [0, 1, 0] is parallel to the axis (look_at - position); "
+                              "expected \"up\", another direction");
+    y = v3_normalize(y);
+    Vec3 x = v3_cross(y, z);
+    const Vec3 rows[3] = {x, y, z};
+    for (int k = 0; k < 3; k++) json_vec3_floats(rows[k], &l.light_from_world[3 * k]);
+    json_vec3_floats(p, l.position);
+    if ((v = json_object_get(obj, "intensity"))) {
+        json_path_push_key(ld, "intensity");
+        LOADER_TRY(json_read_rgb(ld, v, 0, &c));
+        json_path_pop(ld);
+    }
+    json_color_floats(c, l.intensity);
+    LOADER_TRY(read_angle(ld, obj, "fov", 90.0f, 0.001f, 179.0f, &l.fov));
+    const char *name = NULL;
+    LOADER_TRY(json_member_required(ld, obj, "file", "the image to project, a file name", &v));
+    json_path_push_key(ld, "file");
+    LOADER_TRY(json_read_string(ld, v, &name));
+    if (!name[0]) return json_fail_here(ld, "the file name is empty; expected the path of an image");
+    char *path = path_resolve(ld->name, name);
+    if (!path) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+    float *px = NULL;
+    CstStatus st = image_read_radiance(path, &px, &l.image_width, &l.image_height, ld->err);
+    free(path);
+    if (st != CST_OK) return json_fail_builder(ld, st);
+    l.image = px;
+    st = cst_scene_add_light(ld->scene, &l, ld->err);
+    free(px);
+    if (st != CST_OK) return json_fail_builder(ld, st);
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+/* "lights": point, spot, directional and projection lights (area lights are shapes with
+ * "emission"). */
 static CstStatus parse_light(Loader *ld, const json_t *obj)
 {
     const char *const *types = json_light_types;
@@ -55,7 +126,8 @@ static CstStatus parse_light(Loader *ld, const json_t *obj)
     Color c;
     Vec3 p;
     LOADER_TRY(json_expect_object(ld, obj, "a light object"));
-    LOADER_TRY(json_read_type(ld, obj, "light type", types, 3, -1, &type));
+    LOADER_TRY(json_read_type(ld, obj, "light type", types, 4, -1, &type));
+    if (type == 3) return parse_projection(ld, obj);
     if (type == 2) {
         LOADER_TRY(json_check_keys(ld, obj, dir_keys, 3));
         l.type = CST_LIGHT_DIRECTIONAL;

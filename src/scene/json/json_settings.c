@@ -247,12 +247,27 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
 
 CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 {
-    static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius", "color"};
+    static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius", "color",
+                                       "light_sampler"};
     CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
-    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius, color"));
-    LOADER_TRY(json_check_keys(ld, integ, keys, 6));
+    LOADER_TRY(json_expect_object(ld, integ,
+                                  "an object with type, max_depth, rr_depth, photons, radius, color, light_sampler"));
+    LOADER_TRY(json_check_keys(ld, integ, keys, 7));
+    if ((v = json_object_get(integ, "light_sampler"))) {
+        /* NEE's choice of light: "power", "bvh" or "uniform" (docs/scene-format.md) */
+        const char *s = NULL;
+        json_path_push_key(ld, "light_sampler");
+        LOADER_TRY(json_read_string(ld, v, &s));
+        if (strcmp(s, "power") != 0 && strcmp(s, "bvh") != 0 && strcmp(s, "uniform") != 0) {
+            char name[72];
+            return json_fail_here(ld, "unknown light sampler \"%s\"; expected \"power\", \"bvh\" or \"uniform\"",
+                                  json_clip_name(s, name));
+        }
+        LOADER_TRY(cst_scene_set_light_sampler(ld->scene, s, ld->err));
+        json_path_pop(ld);
+    }
     if ((v = json_object_get(integ, "color"))) {
         /* "rgb" (the default) or "spectral" (docs/scene-format.md). */
         const char *s = NULL;

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "io/image_io.h"
 #include "scene/pbrt/pbrt_params.h"
@@ -358,6 +359,79 @@ static CstStatus gonio_light(Loader *ld, Params *ps, Loc loc, const char *d)
     return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
 }
 
+/* LightSource "projection" (pbrt-v4 ProjectionLight::Create): a point at the CTM's origin
+ * projecting an RGB image down the CTM's +z, "fov" (default 90) across the image's shorter
+ * side; "scale" multiplies and "power" > 0 scales the flux to it, dividing by the image's
+ * luminance over its solid angle (pbrt-v4's k_e: pixel centres, cos^3 theta dA on the
+ * plane z = 1). The light's frame is the CTM's rotation (a shear or non-uniform scale is
+ * made orthonormal by the builder). */
+static CstStatus projection_light(Loader *ld, Params *ps, Loc loc, const char *d)
+{
+    float scale = 1.0f, power = 0.0f, fov = 90.0f;
+    const char *file = NULL;
+    Loc fl = loc, fovl = loc;
+    Param *fp = NULL;
+    TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &power, NULL));
+    TRY(pbrt_lookup(ld, ps, d, "fov", PT_MASK(PT_FLOAT), "float", &fp));
+    if (fp) fovl = fp->loc;
+    TRY(pbrt_get_float(ld, ps, d, "fov", 90.0f, &fov, NULL));
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    if (!(fov > 0.0f && fov < 180.0f))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fovl, "%s: fov %g; expected degrees in (0, 180)", d, (double)fov);
+    if (!file || !file[0])
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the image "
+                            "to project (pbrt-v4 requires one)", d);
+    if (!ld->gs.ctm.inv_ok)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; expected an "
+                            "invertible transform", d);
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    float *px = NULL;
+    int w = 0, h = 0;
+    CstStatus st = image_read_radiance(path, &px, &w, &h, ld->err); /* NaN, Inf, < 0: errors */
+    free(path);
+    if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    double k = (double)scale;
+    if (power > 0.0f) {
+        const double aspect = (double)w / (double)h, t = tan(0.5 * (double)fov * PBRT_PI / 180.0);
+        const double sx = aspect > 1.0 ? aspect : 1.0, sy = aspect > 1.0 ? 1.0 : 1.0 / aspect;
+        double k_e = 0.0;
+        for (int j = 0; j < h; j++)
+            for (int i = 0; i < w; i++) {
+                double x = ((2.0 * i + 1.0) / w - 1.0) * sx * t, y = ((2.0 * j + 1.0) / h - 1.0) * sy * t;
+                double c = 1.0 / sqrt(1.0 + x * x + y * y);
+                const float *q = &px[3 * ((size_t)j * (size_t)w + (size_t)i)];
+                k_e += (double)color_luminance(color_rgb(q[0], q[1], q[2])) * c * c * c;
+            }
+        k_e *= 4.0 * sx * sy * t * t / ((double)w * (double)h);
+        if (k_e > 0.0) k *= (double)power / k_e;
+    }
+    CstLightDesc l;
+    memset(&l, 0, sizeof l);
+    l.type = CST_LIGHT_PROJECTION;
+    Vec3 p = transform_point(&ld->gs.ctm.m, v3s(0.0f));
+    pbrt_vec3_floats(p, l.position);
+    for (int c = 0; c < 3; c++) l.intensity[c] = (float)k;
+    l.image = px;
+    l.image_width = w;
+    l.image_height = h;
+    l.fov = fov;
+    for (int r = 0; r < 3; r++)
+        for (int col = 0; col < 3; col++) l.light_from_world[3 * r + col] = ld->gs.ctm.inv.m[r][col];
+    if (!(k >= 0.0) || !isfinite((float)k)) {
+        free(px);
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative or "
+                            "not finite", d, (double)scale);
+    }
+    st = pbrt_coords_ok(p) ? cst_scene_add_light(ld->scene, &l, ld->err) : CST_ERR_INVALID_ARG;
+    free(px);
+    if (st == CST_ERR_INVALID_ARG && !pbrt_coords_ok(p))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's position is beyond the scene limit", d);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
 /* LightSource: point, spot and distant as caustic's delta lights, placed by the CTM, with
  * pbrt-v4's scale and power (phi / 4 pi for a point; phi / (2 pi (1 - (cos_start +
  * cos_end) / 2)) for a spot) and illuminance for a distant light; as for area lights an
@@ -370,10 +444,11 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
         distant = strcmp(type, "distant") == 0;
     if (strcmp(type, "infinite") == 0) return infinite_light(ld, ps, loc, d);
     if (strcmp(type, "goniometric") == 0) return gonio_light(ld, ps, loc, d);
+    if (strcmp(type, "projection") == 0) return projection_light(ld, ps, loc, d);
     if (!point && !spot && !distant) {
         pbrt_params_mark_all_used(ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported (caustic has area, point, "
-                     "spot, goniometric, distant and infinite lights); skipped", d);
+                     "spot, goniometric, projection, distant and infinite lights); skipped", d);
         return CST_OK;
     }
     CstLightDesc l;
@@ -452,6 +527,40 @@ CstStatus pbrt_light_source_directive(Loader *ld, NamedCall *call)
     return light_source(ld, call->type, &call->ps, call->loc, call->d);
 }
 
+/* pbrt-v4's DiffuseAreaLight "filename": radiance scale x the image's RGB at the shape's
+ * (u, v), looked up bilinearly with clamping and v flipped as pbrt-v4's imagemap (the
+ * texture's own convention), decoded as pbrt-v4 reads images (sRGB for PNG, linear for the
+ * rest). The image's mean luminance is kept for "power" (pbrt-v4 divides the power by it:
+ * DiffuseAreaLight::Create's k_e). */
+static CstStatus area_light_image(Loader *ld, const char *file, Loc fl, const char *d, AreaLight *al)
+{
+    char nm[72];
+    if (image_format_from_path(file) == IMAGE_FILE_NONE)
+        return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, fl, "%s: image \"%s\" is not PNG, JPEG, BMP, TGA, HDR, EXR "
+                            "or PFM; expected an image file", d, pbrt_clip(file, nm));
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    size_t n = strlen(file);
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_IMAGE;
+    t.path = path;
+    t.encoding = n >= 4 && strcasecmp(file + n - 4, ".png") == 0 ? CST_TEXTURE_ENCODING_SRGB
+                                                                 : CST_TEXTURE_ENCODING_LINEAR;
+    t.wrap = CST_TEXTURE_WRAP_CLAMP;
+    t.filter = CST_TEXTURE_FILTER_BILINEAR;
+    int id = 0;
+    CstStatus st = cst_scene_add_texture(ld->scene, &t, &id, ld->err);
+    free(path);
+    if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    CstTextureInfo info;
+    if ((st = cst_scene_texture_info(ld->scene, id, &info, ld->err))) return pbrt_fail_wrap(ld, st, fl, d);
+    al->texture = id;
+    al->L = color_s(1.0f);
+    al->image_lum = color_luminance(color_rgb(info.average[0], info.average[1], info.average[2]));
+    return CST_OK;
+}
+
 CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call)
 {
     Params *ps = &call->ps;
@@ -465,11 +574,16 @@ CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call)
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
         ld->gs.area.active = 0;
     } else {
-        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0};
-        Param *pl;
-        TRY(pbrt_lookup(ld, ps, d, "filename", PT_MASK(PT_STRING), "string", &pl));
-        if (pl) pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, pl->loc, "%s: image emission is not supported; \"L\" is used", d);
-        TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, NULL));
+        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0, 0, 1.0f};
+        const char *file = NULL;
+        Loc fl = loc;
+        int has_l = 0;
+        TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+        TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, &has_l));
+        if (file && has_l)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: both \"L\" and \"filename\"; expected one "
+                                "of them (pbrt-v4 refuses both)", d);
+        if (file) TRY(area_light_image(ld, file, fl, d, &al));
         TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &al.scale, NULL));
         TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &al.power, NULL));
         TRY(pbrt_get_bool(ld, ps, d, "twosided", 0, &al.two_sided));

@@ -72,6 +72,8 @@ typedef struct AreaLight {
     float scale;
     float power; /* > 0: radiant power per primitive, as pbrt-v4 normalises it */
     int two_sided;
+    int texture;     /* "filename": the image's texture id (public, >= 1), L = scale x image; 0 = none */
+    float image_lum; /* with texture: the image's mean luminance, power's k_e (pbrt-v4) */
 } AreaLight;
 
 typedef struct GState {

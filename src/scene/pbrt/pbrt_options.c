@@ -183,6 +183,21 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
                           pbrt_clip(type, nm));
     }
     rs->integrator = map[k].ours;
+    /* pbrt-v4's "lightsampler" (default "bvh"; here, when absent, the rule of
+     * cst_scene_set_light_sampler). "exhaustive" (every light per vertex) is not one. */
+    const char *lsamp = NULL;
+    Loc lsloc = loc;
+    TRY(pbrt_get_string(ld, ps, d, "lightsampler", &lsamp, &lsloc));
+    if (lsamp) {
+        if (strcmp(lsamp, "exhaustive") == 0) {
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, lsloc, "%s: lightsampler \"exhaustive\" rendered with \"bvh\"", d);
+            lsamp = "bvh";
+        }
+        if (strcmp(lsamp, "power") != 0 && strcmp(lsamp, "bvh") != 0 && strcmp(lsamp, "uniform") != 0)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, lsloc, "%s: unknown lightsampler \"%s\"; expected bvh, "
+                                "power, uniform or exhaustive", d, pbrt_clip(lsamp, nm));
+        TRY(cst_scene_set_light_sampler(ld->scene, lsamp, ld->err));
+    }
     int depth = 5;
     TRY(pbrt_get_int(ld, ps, d, "maxdepth", 5, &depth));
     if (strcmp(type, "directlighting") == 0) depth = 1;

@@ -208,8 +208,10 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
         if (al && al->active) {
             em.radiance = color_scale(al->L, al->scale);
             em.two_sided = al->two_sided;
+            em.texture = al->texture;
             if (al->power > 0.0f) {
-                double k_e = (al->two_sided ? 2.0 : 1.0) * 4.0 * PBRT_PI * (double)r * (double)r * PBRT_PI;
+                double k_e = (al->two_sided ? 2.0 : 1.0) * 4.0 * PBRT_PI * (double)r * (double)r * PBRT_PI *
+                             (al->texture ? (double)al->image_lum : 1.0);
                 em.radiance = color_scale(em.radiance, (float)((double)al->power / k_e));
             }
             if (reverse && !al->two_sided)
@@ -288,6 +290,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     if (al && al->active) {
         em.radiance = color_scale(al->L, al->scale);
         em.two_sided = al->two_sided;
+        em.texture = al->texture;
     }
     sm.emission = emission_desc(&em);
     int dropped = 0;
@@ -305,7 +308,8 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             ShapeEmission et = em;
             if (area > 0.0f)
                 et.radiance = color_scale(em.radiance, (float)((double)al->power /
-                                       (PBRT_PI * (double)area * (al->two_sided ? 2.0 : 1.0))));
+                                       (PBRT_PI * (double)area * (al->two_sided ? 2.0 : 1.0) *
+                                        (al->texture ? (double)al->image_lum : 1.0))));
             CstMeshDesc one = sm;
             one.indices = &idx[3 * t];
             one.num_triangles = 1;
