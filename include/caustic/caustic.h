@@ -302,9 +302,22 @@ typedef struct CstMaterialDesc {
     int amount_texture;     /* a texture id replacing amount (its channels' mean, clamped to
                              * [0, 1]), or 0 */
     float transmittance[3]; /* diffuse transmission: the transmitted share in [0, 1] per channel */
+    /* Spectra (cst_scene_add_spectrum ids, 0 for none) replacing eta, k and ior: a
+     * conductor's (or a coated conductor's base) eta and k, and the ior of glass,
+     * dielectric, thin dielectric and the coated materials' interface. In spectral mode
+     * they are evaluated at the path's wavelengths; an ior varying with wavelength
+     * disperses (the path keeps its first wavelength after such a surface). RGB mode uses
+     * their reductions: eta and k to RGB under D65, ior to its mean weighted by y-bar. */
+    int eta_spectrum, k_spectrum, ior_spectrum;
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);
+/* A spectrum sampled at n >= 1 wavelengths (nm, finite, > 0, strictly increasing) with
+ * finite values, linear between them and 0 outside them (pbrt-v4's piecewise-linear
+ * spectrum; one sample is a constant); the scene keeps it at 1 nm over 360-830 nm.
+ * *out_id (>= 1) names it in a CstMaterialDesc. */
+CST_API CstStatus cst_scene_add_spectrum(CstScene *scene, const float *lambda_nm, const float *values, int n,
+                                         int *out_id, CstError *err);
 CST_API CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *desc, int *out_id,
                                  CstError *err);
 

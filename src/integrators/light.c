@@ -79,6 +79,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
      * path carries. Russian roulette looks at the product of the BSDF weights (and 1/q),
      * which is what the path tracer's beta is: beta's flux scale would keep every path
      * alive (roulette.h). */
-    const LightWalk w = {lp->max_depth, lp->rr_depth, NULL, true, c.wl, connect_to_camera, &c};
+    const LightWalk w = {lp->max_depth, lp->rr_depth, NULL, true, c.wl, connect_to_camera, &c,
+                         lp->spectral ? &wl : NULL};
     subpath_walk_light(s, &w, &es, subpath_start(es.beta), rng, rays);
 }

@@ -120,7 +120,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
     sp.d_vm = sp.d_vc * it->mis_vc;
 
     LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, rays};
-    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c};
+    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c, NULL};
     subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
 

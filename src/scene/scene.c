@@ -52,6 +52,7 @@ void scene_destroy(Scene *s)
     free(s->spheres);
     free(s->sphere_info);
     free(s->materials);
+    free(s->spectra);
     for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
     free(s->textures);
     free(s->emitters);
@@ -94,12 +95,24 @@ CstStatus scene_add_texture(Scene *s, const Texture *t, int *out_id, CstError *e
     return CST_OK;
 }
 
+CstStatus scene_add_spectrum(Scene *s, const SampledSpectrum *sp, int *out_id, CstError *err)
+{
+    if (!GROW(s->spectra, s->cap_spectra, s->num_spectra + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a spectrum");
+    s->spectra[s->num_spectra] = *sp;
+    *out_id = s->num_spectra++;
+    return CST_OK;
+}
+
 CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError *err)
 {
     if (m->albedo_texture < 0 || m->albedo_texture > s->num_textures || m->roughness_texture < 0 ||
         m->roughness_texture > s->num_textures)
         return cst_fail(err, CST_ERR_INVALID_ARG, "material texture index out of range");
     /* The rough plastic's coat albedo table (material_prepare) is made for one roughness. */
+    if (m->eta_spectrum < 0 || m->eta_spectrum > s->num_spectra || m->k_spectrum < 0 ||
+        m->k_spectrum > s->num_spectra || m->ior_spectrum < 0 || m->ior_spectrum > s->num_spectra)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material spectrum index out of range");
     if (m->type == MATERIAL_PLASTIC && m->roughness_texture)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "a plastic's roughness cannot be a texture "
                         "(its coat albedo table is computed for one roughness); expected a number");
