@@ -617,6 +617,11 @@ typedef struct CstRenderSettings {
     int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0: sRGB (the
                                * default). EXR and PFM are always linear. */
     int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = none (the default) */
+    double white_balance;     /* kelvin: adapt the white of the CIE daylight illuminant of this
+                               * temperature (a blackbody below 4000 K) to the output's D65 by
+                               * von Kries in Bradford cone space (pbrt-v4's Film "whitebalance"
+                               * for the cie1931 sensor); 0 = none (the default). The variance
+                               * AOV stays that of the unbalanced mean */
     /* Crop: only the pixels [crop[0], crop[1]) x [crop[2], crop[3]) of the width x height
      * image (x0, x1, y0, y1; y = 0 the top row) are rendered, and the film holds just them.
      * Each holds exactly the value it has in a whole render with the same seed. All zero =

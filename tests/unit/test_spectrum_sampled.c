@@ -13,7 +13,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "film/sensor.h"
 #include "io/spd.h"
+#include "math/cie_data.h"
 #include "math/spectrum_sampled.h"
 #include "scene/scene.h"
 
@@ -223,6 +225,37 @@ static void test_scene_spectra(void **state)
     cst_scene_destroy(cs);
 }
 
+/* White balance (film/sensor.h): the daylight locus at D50 and D65, the identity at D65's
+ * temperature, and the illuminant's own white mapped to (1, 1, 1) on both branches. */
+static void test_white_balance(void **state)
+{
+    (void)state;
+    double xy[2], m[3][3];
+    sensor_illuminant_xy(5000.0, xy); /* D50: (0.3457, 0.3585) */
+    assert_true(fabs(xy[0] - 0.3457) < 3e-4 && fabs(xy[1] - 0.3585) < 3e-4);
+    sensor_illuminant_xy(6500.0, xy); /* D65: (0.3127, 0.3290) */
+    assert_true(fabs(xy[0] - 0.3127) < 3e-4 && fabs(xy[1] - 0.3290) < 3e-4);
+    sensor_illuminant_xy(2000.0, xy); /* a 2000 K blackbody: (0.5267, 0.4133) */
+    assert_true(fabs(xy[0] - 0.5267) < 2e-3 && fabs(xy[1] - 0.4133) < 2e-3);
+    sensor_white_balance(6500.0, m);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) assert_true(fabs(m[i][j] - (i == j ? 1.0 : 0.0)) < 3e-3);
+    sensor_white_balance(0.0, m);
+    assert_true(m[0][0] == 1.0 && m[0][1] == 0.0 && m[2][2] == 1.0);
+    static const double K[] = {2500.0, 3500.0, 5000.0, 9000.0, 20000.0};
+    for (size_t k = 0; k < sizeof K / sizeof K[0]; k++) {
+        sensor_illuminant_xy(K[k], xy);
+        double X = xy[0] / xy[1], Z = (1.0 - xy[0] - xy[1]) / xy[1], rgb[3];
+        for (int i = 0; i < 3; i++)
+            rgb[i] = (double)cie_xyz_to_srgb[i][0] * X + (double)cie_xyz_to_srgb[i][1] + (double)cie_xyz_to_srgb[i][2] * Z;
+        sensor_white_balance(K[k], m);
+        for (int i = 0; i < 3; i++) {
+            double o = m[i][0] * rgb[0] + m[i][1] * rgb[1] + m[i][2] * rgb[2];
+            if (!(fabs(o - 1.0) < 1e-4)) fail_msg("%g K: channel %d of the white is %g", K[k], i, o);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -230,6 +263,7 @@ int main(void)
         cmocka_unit_test(test_named),
         cmocka_unit_test(test_spd),
         cmocka_unit_test(test_scene_spectra),
+        cmocka_unit_test(test_white_balance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
