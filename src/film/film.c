@@ -215,7 +215,7 @@ CstStatus cst_film_write_opt(const CstFilm *f, const char *path, const CstImageW
     if (f->white_balanced)
         for (size_t i = 0; i < pixels; i++) {
             const double (*m)[3] = f->white_balance;
-            double r = rgb[3 * i], g = rgb[3 * i + 1], b = rgb[3 * i + 2];
+            double r = (double)rgb[3 * i], g = (double)rgb[3 * i + 1], b = (double)rgb[3 * i + 2];
             for (int c = 0; c < 3; c++) rgb[3 * i + c] = (float)(m[c][0] * r + m[c][1] * g + m[c][2] * b);
         }
     for (size_t i = 0; extra > 0 && i < pixels; i++) film_aov_pixel(f, i, aux + i * (size_t)extra);

@@ -98,7 +98,7 @@ CstStatus pbrt_film_directive(Loader *ld, NamedCall *call)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: whitebalance %g; expected a colour temperature in "
                             "kelvin > 0, or 0 for none", d, (double)wb);
     /* pbrt-v4's cie1931 sensor: von Kries from the illuminant's white to D65 (film/sensor.h). */
-    if (has_wb) rs->white_balance = wb;
+    if (has_wb) rs->white_balance = (double)wb;
     if (strcmp(type, "rgb") != 0 && strcmp(type, "image") != 0)
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered as an RGB film", d);
     return CST_OK;
