@@ -326,6 +326,9 @@ typedef struct CstEmission {
     float radiance[3];  /* linear RGB radiance, >= 0 (times the texture's value, if any) */
     int texture;        /* a texture id, or 0 */
     int two_sided;      /* 0: emits only on the side the geometric normal points to */
+    int spectrum;       /* spectral mode: a spectrum id (cst_scene_add_spectrum) giving the emitted
+                         * light's shape, at the luminance of radiance (times the texture);
+                         * 0: radiance upsampled as an illuminant (RGB x D65). RGB mode ignores it */
 } CstEmission;
 
 /* A triangle mesh read from the caller's arrays, Embree-style: each attribute is a pointer

@@ -95,6 +95,13 @@ Color sampled_spectrum_rgb_illuminant(const SampledSpectrum *s)
     return color_rgb(c[0], c[1], c[2]);
 }
 
+double sampled_spectrum_y(const SampledSpectrum *s)
+{
+    double xyz[3];
+    integrate_xyz(s, false, xyz);
+    return xyz[1];
+}
+
 float sampled_spectrum_mean_y(const SampledSpectrum *s)
 {
     if (s->constant) return s->v[0];

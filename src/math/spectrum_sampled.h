@@ -19,6 +19,9 @@ enum { SAMPLED_SPECTRUM_N = SPECTRUM_LAMBDA_MAX - SPECTRUM_LAMBDA_MIN + 1 }; /* 
 typedef struct SampledSpectrum {
     float v[SAMPLED_SPECTRUM_N]; /* v[i]: the value at 360 + i nm */
     bool constant;               /* the same value at every node: no dispersion */
+    /* 1 / (integral of v times y-bar, per nm), 0 when that is not positive: scales an
+     * emitted spectrum to luminance 1 (set by the scene, scene_add_spectrum). */
+    float inv_y;
 } SampledSpectrum;
 
 static inline float sampled_spectrum_at(const SampledSpectrum *s, float lambda)
@@ -57,6 +60,8 @@ void sampled_spectrum_constant(float c, SampledSpectrum *out);
 Color sampled_spectrum_rgb_unbounded(const SampledSpectrum *s);
 Color sampled_spectrum_rgb_illuminant(const SampledSpectrum *s);
 float sampled_spectrum_mean_y(const SampledSpectrum *s);
+/* The integral of s times y-bar over 360-830 nm (1 nm steps), nm. */
+double sampled_spectrum_y(const SampledSpectrum *s);
 
 /* pbrt-v4's named spectra (spectrum_data.c): "metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k}",
  * "glass-{BK7,BAF10,FK51A,LASF9,F5,F10,F11,SF5,SF10,SF11}", "stdillum-A", "stdillum-D65".

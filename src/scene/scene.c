@@ -53,6 +53,7 @@ void scene_destroy(Scene *s)
     free(s->sphere_info);
     free(s->materials);
     free(s->spectra);
+    free(s->emitter_spectrum);
     for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
     free(s->textures);
     free(s->emitters);
@@ -100,7 +101,22 @@ CstStatus scene_add_spectrum(Scene *s, const SampledSpectrum *sp, int *out_id, C
     if (!GROW(s->spectra, s->cap_spectra, s->num_spectra + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a spectrum");
     s->spectra[s->num_spectra] = *sp;
+    double y = sampled_spectrum_y(sp);
+    s->spectra[s->num_spectra].inv_y = y > 0.0 ? (float)(1.0 / y) : 0.0f;
     *out_id = s->num_spectra++;
+    return CST_OK;
+}
+
+CstStatus scene_set_emitter_spectrum(Scene *s, int first, int spectrum, CstError *err)
+{
+    if (spectrum < 0 || spectrum > s->num_spectra || first < 0 || first > s->num_emitters)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "emitter spectrum %d (emitters from %d) out of range", spectrum, first);
+    if (!spectrum && !s->emitter_spectrum) return CST_OK; /* none so far, none here */
+    if (!GROW(s->emitter_spectrum, s->cap_emitter_spectrum, s->num_emitters + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding an emitter's spectrum");
+    for (int i = s->num_emitter_spectrum; i < first; i++) s->emitter_spectrum[i] = 0;
+    for (int i = first; i < s->num_emitters; i++) s->emitter_spectrum[i] = spectrum;
+    s->num_emitter_spectrum = s->num_emitters;
     return CST_OK;
 }
 

@@ -21,6 +21,7 @@
 #include "materials/material.h"
 #include "math/color.h"
 #include "math/spectrum.h"
+#include "math/cie_data.h"
 #include "math/spectrum_sampled.h"
 #include "math/vec3.h"
 #include "scene/footprint.h"
@@ -62,6 +63,9 @@ struct CstScene {
     Texture *textures; int num_textures; size_t cap_textures; /* referenced by index */
     Material *materials; int num_materials; size_t cap_materials;
     SampledSpectrum *spectra; int num_spectra; size_t cap_spectra; /* Material.*_spectrum */
+    /* Per area emitter (emitter_sampler order), 1 + the index of its emitted spectrum or 0;
+     * NULL when none has one; entries past num_emitter_spectrum are 0. */
+    int *emitter_spectrum; int num_emitter_spectrum; size_t cap_emitter_spectrum;
     Emitter *emitters; int num_emitters; size_t cap_emitters;
     DeltaLight *delta_lights; int num_delta_lights; size_t cap_delta_lights; /* point, spot, directional */
     EnvMap *env; /* the environment, or NULL */
@@ -106,6 +110,8 @@ CstStatus scene_add_texture(Scene *scene, const Texture *t, int *out_id, CstErro
 CstStatus scene_add_material(Scene *scene, const Material *m, int *out_id, CstError *err);
 /* Adds a copy of *sp; *out_id is its index (Material.*_spectrum = index + 1). */
 CstStatus scene_add_spectrum(Scene *scene, const SampledSpectrum *sp, int *out_id, CstError *err);
+/* Emitters first..num_emitters-1 (just added) emit spectrum (1 + index, 0 none) in spectral mode. */
+CstStatus scene_set_emitter_spectrum(Scene *scene, int first, int spectrum, CstError *err);
 /* Indices are 3 per triangle into positions; all must be in range and the triangles
  * non-degenerate (callers that know file locations check first for better messages).
  * emission may be NULL. */
@@ -473,6 +479,28 @@ static inline Color scene_light_color(Color rgb, const Wavelengths *wl)
     return wl ? spectrum_illuminant(rgb, wl) : rgb;
 }
 
+/* Spectral mode: area emitter `emitter`'s light at wl if it has a spectrum of its own
+ * (CstEmission.spectrum): that spectrum at the luminance of rgb (Y of linear sRGB; rgb is
+ * its RGB value times any scalar), true; false otherwise. */
+static inline bool scene_emitter_spectral(const Scene *s, int emitter, Color rgb, const Wavelengths *wl, Color *out)
+{
+    if (!s->emitter_spectrum || emitter < 0 || emitter >= s->num_emitter_spectrum || !s->emitter_spectrum[emitter])
+        return false;
+    const SampledSpectrum *sp = &s->spectra[s->emitter_spectrum[emitter] - 1];
+    float y = cie_srgb_to_xyz[1][0] * rgb.c[0] + cie_srgb_to_xyz[1][1] * rgb.c[1] + cie_srgb_to_xyz[1][2] * rgb.c[2];
+    *out = color_scale(sampled_spectrum_eval(sp, wl), y * sp->inv_y);
+    return true;
+}
+
+/* An emitted quantity of light `emitter` (an area emitter's index, or a delta light's
+ * count + index) at wl: scene_emitter_spectral, else scene_light_color. */
+static inline Color scene_emitter_color(const Scene *s, int emitter, Color rgb, const Wavelengths *wl)
+{
+    Color o;
+    if (wl && scene_emitter_spectral(s, emitter, rgb, wl, &o)) return o;
+    return scene_light_color(rgb, wl);
+}
+
 /* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be
  * on an emitter (sh->emitter >= 0). */
 static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w, const Wavelengths *wl)
@@ -480,6 +508,8 @@ static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w,
     const Emitter *e = &s->emitter_sampler.light[sh->emitter].u.area;
     Color le = emitter_radiance(e, s->textures, sh->ng, sh->uv, w);
     if (!wl) return le;
+    Color o;
+    if (scene_emitter_spectral(s, sh->emitter, le, wl, &o)) return o;
     if (!e->texture && s->emitter_spectra && !color_is_black(le))
         return spectrum_rgb_eval_illuminant(&s->emitter_spectra[sh->emitter], wl);
     return spectrum_illuminant(le, wl);
@@ -490,6 +520,8 @@ static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w,
 static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wavelengths *wl)
 {
     if (!wl) return ls->li;
+    Color o;
+    if (ls->light < s->emitter_sampler.count && scene_emitter_spectral(s, ls->light, ls->li, wl, &o)) return o;
     if (ls->light < s->emitter_sampler.count && s->emitter_spectra &&
         !s->emitter_sampler.light[ls->light].u.area.texture && !color_is_black(ls->li))
         return spectrum_rgb_eval_illuminant(&s->emitter_spectra[ls->light], wl);

@@ -577,6 +577,9 @@ static CstStatus read_emission(const Scene *s, const CstEmission *e, const char 
     memset(out, 0, sizeof *out);
     *peak = 0.0;
     if (!e) return CST_OK;
+    if (e->spectrum < 0 || e->spectrum > s->num_spectra)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: emission spectrum %d is not a spectrum of this scene; "
+                        "expected 0 (none) or 1 to %d (cst_scene_add_spectrum)", fn, e->spectrum, s->num_spectra);
     CstStatus st = read_rgb(e->radiance, 0, fn, "emission radiance", &out->radiance, err);
     if (st == CST_OK) st = check_texture_id(s, e->texture, 1, fn, "emission texture", err);
     if (st != CST_OK) return st;
@@ -759,7 +762,9 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
         sm.tri_material = d->triangle_materials;
         sm.emission = &em;
         sm.skip_degenerate = d->skip_degenerate;
+        const int first = scene->num_emitters;
         st = scene_add_mesh_ex(scene, &sm, num_dropped, err);
+        if (st == CST_OK && peak > 0.0) st = scene_set_emitter_spectrum(scene, first, d->emission.spectrum, err);
     }
     mesh_arrays_free(&a);
     return st;
@@ -857,7 +862,9 @@ CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float rad
                                               peak * (em.two_sided ? 2.0 : 1.0),
                                           "a smaller radiance (or scale) or radius", err)) != CST_OK)
         return st;
-    return scene_add_sphere(scene, c, radius, material, &em, err);
+    const int first = scene->num_emitters;
+    if ((st = scene_add_sphere(scene, c, radius, material, &em, err)) != CST_OK) return st;
+    return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
 }
 
 /* ------------------------------------------------------------------ render settings */

@@ -229,6 +229,58 @@ static void test_dispersive_glass_furnace(void **state)
     scene_destroy(s);
 }
 
+/* An emitter with a spectrum of its own (CstEmission.spectrum): a black enclosure emitting
+ * a 3000 K blackbody at twice its luminance-1 RGB. Seen directly, every pixel's expected
+ * value is that RGB in both modes (spectral: the spectrum at luminance Y(rgb), through the
+ * CIE curves, is the RGB its reduction gave), so this checks the normalisation of emitted
+ * spectra in the path tracer (emission and NEE) and the light tracer (light-path starts). */
+static void test_emitter_spectrum_furnace(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    int black, sp;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
+    SampledSpectrum *bb = malloc(sizeof *bb);
+    assert_non_null(bb);
+    sampled_spectrum_blackbody(3000.0f, bb);
+    Color rgb = color_scale(sampled_spectrum_rgb_illuminant(bb), 2.0f);
+    assert_int_equal(scene_add_spectrum(s, bb, &sp, &err), CST_OK);
+    free(bb);
+    Emission em = {rgb, 1, 0};
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 10.0f, black, &em, &err), CST_OK);
+    assert_int_equal(scene_set_emitter_spectrum(s, 0, sp + 1, &err), CST_OK);
+    CameraDesc cam = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 4.0f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstFilm *f = render(s, CST_INTEGRATOR_PATH, 32, 64, 500);
+    RegionStat r = region_stat(f, 0, 0, 32, 32);
+    for (int c = 0; c < 3; c++) {
+        double z = (r.mean[c] - (double)rgb.c[c]) / r.se[c];
+        if (!(fabs(z) <= Z_LIMIT) && !(fabs(r.mean[c] - (double)rgb.c[c]) <= 1e-5 * (double)rgb.c[c]))
+            fail_msg("path: channel %d: mean %.6f, expected %.6f (z = %.2f)", c, r.mean[c], (double)rgb.c[c], z);
+    }
+    print_message("emitter spectrum, path: (%.5f, %.5f, %.5f), expected (%.5f, %.5f, %.5f)\n", r.mean[0], r.mean[1],
+                  r.mean[2], (double)rgb.c[0], (double)rgb.c[1], (double)rgb.c[2]);
+    cst_film_destroy(f);
+    CstRenderSettings st = {0};
+    st.width = st.height = 16;
+    st.integrator = CST_INTEGRATOR_LIGHT;
+    st.color_mode = g_color_mode;
+    const int rect[1][4] = {{0, 0, 16, 16}};
+    RegionStat reg;
+    if (region_stats_by_render(s, &st, 1024, 600, 1, rect, &reg, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
+    for (int c = 0; c < 3; c++) {
+        double z = (reg.mean[c] - (double)rgb.c[c]) / reg.se[c];
+        if (!(fabs(z) <= Z_LIMIT))
+            fail_msg("light: channel %d: mean %.6f, expected %.6f (z = %.2f)", c, reg.mean[c], (double)rgb.c[c], z);
+    }
+    print_message("emitter spectrum, light: (%.5f, %.5f, %.5f) se %.1e\n", reg.mean[0], reg.mean[1], reg.mean[2],
+                  reg.se[0]);
+    scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
@@ -237,6 +289,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_furnace_emitting_sphere),
         cmocka_unit_test(test_light_furnace_emitting_sphere),
         cmocka_unit_test(test_dispersive_glass_furnace),
+        cmocka_unit_test(test_emitter_spectrum_furnace),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

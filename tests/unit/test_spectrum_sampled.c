@@ -206,6 +206,43 @@ static void test_scene_spectra(void **state)
         assert_true(b.lobe.dielectric.eta == m->ior);
         cst_scene_destroy(s);
     }
+    /* an emitter with its own spectrum (CstEmission.spectrum): the blackbody's shape at the
+     * luminance of its radiance, in emission (scene_emission) and NEE (scene_light_li) */
+    {
+        CstScene *cs = NULL;
+        assert_int_equal(cst_scene_create(&cs, &err), CST_OK);
+        static SampledSpectrum bb;
+        sampled_spectrum_blackbody(4000.0f, &bb);
+        float l[SAMPLED_SPECTRUM_N];
+        for (int i = 0; i < SAMPLED_SPECTRUM_N; i++) l[i] = (float)(SPECTRUM_LAMBDA_MIN + i);
+        CstEmission em = {{3.0f, 2.0f, 1.0f}, 0, 1, 0};
+        assert_int_equal(cst_scene_add_spectrum(cs, l, bb.v, SAMPLED_SPECTRUM_N, &em.spectrum, &err), CST_OK);
+        cst_material_desc_init(&d, CST_MATERIAL_DIFFUSE);
+        int mat = 0;
+        assert_int_equal(cst_scene_add_material(cs, &d, &mat, &err), CST_OK);
+        const float c[3] = {0.0f, 0.0f, 0.0f};
+        assert_int_equal(cst_scene_add_sphere(cs, c, 1.0f, mat, &em, &err), CST_OK);
+        em.spectrum = 7;
+        assert_int_equal(cst_scene_add_sphere(cs, c, 2.0f, mat, &em, &err), CST_ERR_INVALID_ARG);
+        assert_int_equal(cst_scene_commit(cs, &err), CST_OK);
+        s = cs;
+        Ray r = {v3(0.0f, 0.0f, 5.0f), 0.0f, v3(0.0f, 0.0f, -1.0f), 1e30f};
+        assert_true(scene_intersect(s, &r, &sh));
+        Wavelengths w = wavelengths_sample(0.45f);
+        Color le = scene_emission(s, &sh, v3(0.0f, 0.0f, 1.0f), &w);
+        double y = 0.0;
+        for (int i = 0; i < SAMPLED_SPECTRUM_N; i++) {
+            float xyz[3];
+            spectrum_cie_xyz((float)(SPECTRUM_LAMBDA_MIN + i), xyz);
+            y += (double)bb.v[i] * (double)xyz[1];
+        }
+        float lum = 0.2126729f * 3.0f + 0.7151522f * 2.0f + 0.0721750f * 1.0f;
+        for (int i = 0; i < COLOR_LANES; i++) {
+            float want = spectrum_blackbody(w.lambda[i], 4000.0f) * lum / (float)y;
+            assert_true(fabsf(le.c[i] - want) < 2e-3f * want + 1e-7f);
+        }
+        cst_scene_destroy(cs);
+    }
     /* bad spectra and ids are refused */
     CstScene *cs = NULL;
     assert_int_equal(cst_scene_create(&cs, &err), CST_OK);

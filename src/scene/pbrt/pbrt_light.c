@@ -459,11 +459,11 @@ CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call)
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
         ld->gs.area.active = 0;
     } else {
-        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0};
+        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0, 0};
         Param *pl;
         TRY(pbrt_lookup(ld, ps, d, "filename", PT_MASK(PT_STRING), "string", &pl));
         if (pl) pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, pl->loc, "%s: image emission is not supported; \"L\" is used", d);
-        TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, NULL));
+        TRY(pbrt_get_spectrum_id(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, NULL, &al.spectrum));
         TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &al.scale, NULL));
         TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &al.power, NULL));
         TRY(pbrt_get_bool(ld, ps, d, "twosided", 0, &al.two_sided));

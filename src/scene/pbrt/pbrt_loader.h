@@ -72,6 +72,7 @@ typedef struct AreaLight {
     float scale;
     float power; /* > 0: radiant power per primitive, as pbrt-v4 normalises it */
     int two_sided;
+    int spectrum;  /* "L" kept as a spectrum (blackbody, named, pairs, .spd): its id, or 0 */
 } AreaLight;
 
 typedef struct GState {

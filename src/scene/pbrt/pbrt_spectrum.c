@@ -254,6 +254,15 @@ CstStatus pbrt_get_spectrum_id(Loader *ld, Params *ps, const char *d, const char
     case PT_BLACKBODY:
         c = pbrt_blackbody_rgb(p->nums[0]);
         if (p->num_nums == 2) c = color_scale(c, (float)p->nums[1]);
+        if (spectrum_id && p->nums[0] > 0.0 && p->nums[0] < 1e6) {
+            /* pbrt-v4's BlackbodySpectrum (peak 1); the RGB above sets the luminance. */
+            SampledSpectrum *sp = malloc(sizeof *sp);
+            if (!sp) return pbrt_oom(ld);
+            sampled_spectrum_blackbody((float)p->nums[0], sp);
+            CstStatus st = add_sampled(ld, sp, spectrum_id);
+            free(sp);
+            TRY(st);
+        }
         break;
     case PT_SPECTRUM:
         if (p->num_strs) {
