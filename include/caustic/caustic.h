@@ -312,9 +312,22 @@ typedef struct CstMaterialDesc {
     int amount_texture;     /* a texture id replacing amount (its channels' mean, clamped to
                              * [0, 1]), or 0 */
     float transmittance[3]; /* diffuse transmission: the transmitted share in [0, 1] per channel */
+    /* Spectra (cst_scene_add_spectrum ids, 0 for none) replacing eta, k and ior: a
+     * conductor's (or a coated conductor's base) eta and k, and the ior of glass,
+     * dielectric, thin dielectric and the coated materials' interface. In spectral mode
+     * they are evaluated at the path's wavelengths; an ior varying with wavelength
+     * disperses (the path keeps its first wavelength after such a surface). RGB mode uses
+     * their reductions: eta and k to RGB under D65, ior to its mean weighted by y-bar. */
+    int eta_spectrum, k_spectrum, ior_spectrum;
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);
+/* A spectrum sampled at n >= 1 wavelengths (nm, finite, > 0, strictly increasing) with
+ * finite values, linear between them and 0 outside them (pbrt-v4's piecewise-linear
+ * spectrum; one sample is a constant); the scene keeps it at 1 nm over 360-830 nm.
+ * *out_id (>= 1) names it in a CstMaterialDesc. */
+CST_API CstStatus cst_scene_add_spectrum(CstScene *scene, const float *lambda_nm, const float *values, int n,
+                                         int *out_id, CstError *err);
 CST_API CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *desc, int *out_id,
                                  CstError *err);
 
@@ -323,6 +336,9 @@ typedef struct CstEmission {
     float radiance[3];  /* linear RGB radiance, >= 0 (times the texture's value, if any) */
     int texture;        /* a texture id, or 0 */
     int two_sided;      /* 0: emits only on the side the geometric normal points to */
+    int spectrum;       /* spectral mode: a spectrum id (cst_scene_add_spectrum) giving the emitted
+                         * light's shape, at the luminance of radiance (times the texture);
+                         * 0: radiance upsampled as an illuminant (RGB x D65). RGB mode ignores it */
 } CstEmission;
 
 /* A triangle mesh read from the caller's arrays, Embree-style: each attribute is a pointer
@@ -626,6 +642,11 @@ typedef struct CstRenderSettings {
     int png_linear;           /* 1: PNG stores linear values (no sRGB curve); 0: sRGB (the
                                * default). EXR and PFM are always linear. */
     int aovs;                 /* CST_AOV_* bits: extra EXR channels; 0 = none (the default) */
+    double white_balance;     /* kelvin: adapt the white of the CIE daylight illuminant of this
+                               * temperature (a blackbody below 4000 K) to the output's D65 by
+                               * von Kries in Bradford cone space (pbrt-v4's Film "whitebalance"
+                               * for the cie1931 sensor); 0 = none (the default). The variance
+                               * AOV stays that of the unbalanced mean */
     /* Crop: only the pixels [crop[0], crop[1]) x [crop[2], crop[3]) of the width x height
      * image (x0, x1, y0, y1; y = 0 the top row) are rendered, and the film holds just them.
      * Each holds exactly the value it has in a whole render with the same seed. All zero =

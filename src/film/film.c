@@ -8,6 +8,7 @@
 #include "core/array.h"
 #include "core/error.h"
 #include "film/filter.h"
+#include "film/sensor.h"
 #include "io/image_io.h"
 
 Film *film_create(int width, int height)
@@ -22,6 +23,12 @@ Film *film_create(int width, int height)
     f->height = height;
     f->exposure_scale = 1.0;
     return f;
+}
+
+void film_set_white_balance(Film *f, double kelvin)
+{
+    f->white_balanced = kelvin > 0.0 && isfinite(kelvin);
+    sensor_white_balance(kelvin, f->white_balance);
 }
 
 int film_set_output(Film *f, int aovs, double exposure, int png_linear)
@@ -44,6 +51,8 @@ Film *film_crop(const Film *f, int x0, int y0, int w, int h)
     c->aovs = f->aovs;
     c->exposure_scale = f->exposure_scale;
     c->png_linear = f->png_linear;
+    c->white_balanced = f->white_balanced;
+    memcpy(c->white_balance, f->white_balance, sizeof c->white_balance);
     if (f->aov) {
         c->aov = malloc((size_t)w * (size_t)h * FILM_AOV_STRIDE * sizeof *c->aov);
         if (!c->aov) { film_destroy(c); return NULL; }
@@ -203,6 +212,12 @@ CstStatus cst_film_write_opt(const CstFilm *f, const char *path, const CstImageW
     film_resolve(f, rgb);
     if (f->exposure_scale != 1.0)
         for (size_t i = 0; i < 3 * pixels; i++) rgb[i] = (float)((double)rgb[i] * f->exposure_scale);
+    if (f->white_balanced)
+        for (size_t i = 0; i < pixels; i++) {
+            const double (*m)[3] = f->white_balance;
+            double r = (double)rgb[3 * i], g = (double)rgb[3 * i + 1], b = (double)rgb[3 * i + 2];
+            for (int c = 0; c < 3; c++) rgb[3 * i + c] = (float)(m[c][0] * r + m[c][1] * g + m[c][2] * b);
+        }
     for (size_t i = 0; extra > 0 && i < pixels; i++) film_aov_pixel(f, i, aux + i * (size_t)extra);
     ImageWriteOptions opt = {f->png_linear != 0, extra, names, aux, options};
     CstStatus st = image_write_opt(path, rgb, f->width, f->height, &opt, err);

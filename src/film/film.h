@@ -24,6 +24,8 @@ struct CstFilm {
     double *aov;            /* FILM_AOV_STRIDE per pixel when aovs & FILM_AOV_FIRST_HIT, else NULL */
     double exposure_scale;  /* 2^exposure */
     int png_linear;
+    int white_balanced;        /* white_balance applies (sensor.h) */
+    double white_balance[3][3]; /* rgb_out = M rgb, after the exposure */
 };
 typedef struct CstFilm Film;
 
@@ -32,6 +34,9 @@ Film *film_create(int width, int height);
 /* Sets the output settings (caustic.h) and allocates the AOV sums if needed. Returns 0 on
  * OOM. */
 int film_set_output(Film *film, int aovs, double exposure, int png_linear);
+/* The sensor's white balance for an illuminant at kelvin (sensor.h; <= 0: none), applied
+ * by cst_film_write with the exposure. */
+void film_set_white_balance(Film *film, double kelvin);
 void film_destroy(Film *film);
 /* A new film holding the w x h pixels of f from (x0, y0) (sums, AOV sums, spp and output
  * settings); NULL on OOM. */

@@ -70,7 +70,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
     Vec2 u_lens = sampler_2d(rng);
     if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, c.margin, &cs)) {
         const Emitter *e = &s->emitter_sampler.light[es.emitter].u.area;
-        Color le = scene_light_color(emitter_radiance(e, s->textures, es.n, es.uv, cs.wi), c.wl);
+        Color le = scene_emitter_color(s, es.emitter, emitter_radiance(e, s->textures, es.n, es.uv, cs.wi), c.wl);
         splat_if_visible(&c, es.p, es.n, &cs, color_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a));
     }
     if (!(es.pdf_w > 0.0f)) return;
@@ -79,6 +79,7 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
      * path carries. Russian roulette looks at the product of the BSDF weights (and 1/q),
      * which is what the path tracer's beta is: beta's flux scale would keep every path
      * alive (roulette.h). */
-    const LightWalk w = {lp->max_depth, lp->rr_depth, NULL, true, c.wl, connect_to_camera, &c};
+    const LightWalk w = {lp->max_depth, lp->rr_depth, NULL, true, c.wl, connect_to_camera, &c,
+                         lp->spectral ? &wl : NULL};
     subpath_walk_light(s, &w, &es, subpath_start(es.beta), rng, rays);
 }

@@ -48,7 +48,9 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
 
         Bsdf bsdf;
-        scene_bsdf(s, &sh, wl, &bsdf);
+        /* A dispersive dielectric terminates wl's secondary wavelengths here (the rest of
+         * the path and the film's conversion then follow the hero alone). */
+        scene_bsdf_disperse(s, &sh, wl, &bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             float u_sel = sampler_1d(smp);
             Vec2 u_light = sampler_2d(smp);

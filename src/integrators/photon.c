@@ -71,7 +71,7 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
      * (Russian roulette by the BSDF weights, not Jensen 2001 sec. 5.4's absorption
      * probability: unbiased, the power scaled by 1/q). */
     PhotonWalkCtx c = {visit, ctx};
-    const LightWalk w = {pw->max_depth, pw->rr_depth, NULL, false, pw->wl, photon_at_vertex, &c};
+    const LightWalk w = {pw->max_depth, pw->rr_depth, NULL, false, pw->wl, photon_at_vertex, &c, NULL};
     return subpath_walk_light(s, &w, &es, subpath_start(color_scale(es.beta, pw->scale)), &rng, rays);
 }
 

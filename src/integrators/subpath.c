@@ -47,7 +47,7 @@ void subpath_emit(const Scene *s, Sampler *rng, const Wavelengths *wl, EmissionS
     Vec2 u_dir = sampler_2d(rng);
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, es);
-    es->beta = scene_light_color(es->beta, wl);
+    es->beta = scene_emitter_color(s, es->emitter, es->beta, wl);
 }
 
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
@@ -120,7 +120,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
     sp.d_vm = sp.d_vc * it->mis_vc;
 
     LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, rays};
-    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c};
+    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c, NULL};
     subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
 

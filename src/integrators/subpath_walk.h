@@ -46,6 +46,11 @@ typedef struct LightWalk {
     const Wavelengths *wl; /* spectral mode: the path's wavelengths; NULL in RGB mode */
     LightVisit visit;
     void *ctx;
+    /* Light tracing, spectral mode: wl itself, writable, so that a dispersive dielectric
+     * terminates its secondary wavelengths (scene_bsdf_disperse) for the rest of the path
+     * and its splats; NULL for the estimators that share wavelengths between paths
+     * (photons, BDPT, VCM), which take such an ior as the constant of RGB mode. */
+    Wavelengths *disperse;
 } LightWalk;
 
 /* The emission sample that starts every light subpath: a light by power, a point and a
@@ -140,7 +145,8 @@ subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es,
             mis_arrive(&sp, bounces > 1 || es->finite ? sh.t : 1.0f, cos_in);
         }
         Bsdf bsdf;
-        scene_bsdf(s, &sh, w->wl, &bsdf);
+        if (w->disperse) scene_bsdf_disperse(s, &sh, w->disperse, &bsdf);
+        else scene_bsdf(s, &sh, w->wl, &bsdf);
         /* Delta lobes can neither be connected to (f is a Dirac in the direction of the
          * other vertex) nor hold photons (no density estimate can find their direction). */
         const bool visit = !bsdf_is_delta(&bsdf);

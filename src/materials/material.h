@@ -66,6 +66,12 @@ typedef struct Material {
     float amount;
     int amount_texture;
     Color transmittance; /* diffuse transmission: the transmitted lobe's hemispherical share */
+    /* Spectra replacing eta, k (conductors, the coated conductor's base) and ior (glass,
+     * dielectric, thin dielectric, the coated interface) in spectral mode: 1 + an index
+     * into the scene's spectra, 0 for none (scene_bsdf applies them). eta, k and ior hold
+     * their RGB-mode reductions. ior_dispersive: the ior spectrum is not constant. */
+    int eta_spectrum, k_spectrum, ior_spectrum;
+    bool ior_dispersive;
     /* Textures replacing albedo and roughness: 1 + an index into the scene's textures, 0 for
      * none (so a zero-initialised Material has none). A roughness texture gives the mean of
      * its channels; a rough plastic cannot take one (its coat table depends on roughness). */

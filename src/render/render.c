@@ -217,6 +217,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "(the variance AOV works with every integrator)",
                         cst_integrator_name(st.integrator));
     Film *film = film_create(st.width, st.height);
+    if (film) film_set_white_balance(film, st.white_balance);
     if (film && !film_set_output(film, st.aovs, st.exposure, st.png_linear)) {
         film_destroy(film);
         film = NULL;

@@ -12,6 +12,7 @@ void cst_render_settings_init(CstRenderSettings *s)
     s->max_depth = s->rr_depth = s->photons = CST_UNSET;
     s->time_limit = s->photon_radius = s->exposure = s->max_component = CST_UNSET;
     s->png_linear = s->aovs = CST_UNSET;
+    s->white_balance = CST_UNSET;
     for (int k = 0; k < 4; k++) s->crop[k] = CST_UNSET;
 }
 
@@ -51,6 +52,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     if (out->integrator == CST_INTEGRATOR_PHOTON) out->color_mode = CST_COLOR_RGB;
     PICK_INT(png_linear, 0, 0);
     PICK_INT(aovs, 0, 0);
+    PICK_DBL(white_balance, 1, 0.0);          /* 0 = none */
     /* A time limit alone means "as many samples as fit"; otherwise the default count.
      * CST_SPP_UNLIMITED says so over a scene's spp (cst_render refuses it without a time
      * limit). */

@@ -52,6 +52,8 @@ void scene_destroy(Scene *s)
     free(s->spheres);
     free(s->sphere_info);
     free(s->materials);
+    free(s->spectra);
+    free(s->emitter_spectrum);
     for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
     free(s->textures);
     free(s->emitters);
@@ -95,12 +97,39 @@ CstStatus scene_add_texture(Scene *s, const Texture *t, int *out_id, CstError *e
     return CST_OK;
 }
 
+CstStatus scene_add_spectrum(Scene *s, const SampledSpectrum *sp, int *out_id, CstError *err)
+{
+    if (!GROW(s->spectra, s->cap_spectra, s->num_spectra + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a spectrum");
+    s->spectra[s->num_spectra] = *sp;
+    double y = sampled_spectrum_y(sp);
+    s->spectra[s->num_spectra].inv_y = y > 0.0 ? (float)(1.0 / y) : 0.0f;
+    *out_id = s->num_spectra++;
+    return CST_OK;
+}
+
+CstStatus scene_set_emitter_spectrum(Scene *s, int first, int spectrum, CstError *err)
+{
+    if (spectrum < 0 || spectrum > s->num_spectra || first < 0 || first > s->num_emitters)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "emitter spectrum %d (emitters from %d) out of range", spectrum, first);
+    if (!spectrum && !s->emitter_spectrum) return CST_OK; /* none so far, none here */
+    if (!GROW(s->emitter_spectrum, s->cap_emitter_spectrum, s->num_emitters + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding an emitter's spectrum");
+    for (int i = s->num_emitter_spectrum; i < first; i++) s->emitter_spectrum[i] = 0;
+    for (int i = first; i < s->num_emitters; i++) s->emitter_spectrum[i] = spectrum;
+    s->num_emitter_spectrum = s->num_emitters;
+    return CST_OK;
+}
+
 CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError *err)
 {
     if (m->albedo_texture < 0 || m->albedo_texture > s->num_textures || m->roughness_texture < 0 ||
         m->roughness_texture > s->num_textures)
         return cst_fail(err, CST_ERR_INVALID_ARG, "material texture index out of range");
     /* The rough plastic's coat albedo table (material_prepare) is made for one roughness. */
+    if (m->eta_spectrum < 0 || m->eta_spectrum > s->num_spectra || m->k_spectrum < 0 ||
+        m->k_spectrum > s->num_spectra || m->ior_spectrum < 0 || m->ior_spectrum > s->num_spectra)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material spectrum index out of range");
     if (m->type == MATERIAL_PLASTIC && m->roughness_texture)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "a plastic's roughness cannot be a texture "
                         "(its coat albedo table is computed for one roughness); expected a number");

@@ -21,6 +21,8 @@
 #include "materials/material.h"
 #include "math/color.h"
 #include "math/spectrum.h"
+#include "math/cie_data.h"
+#include "math/spectrum_sampled.h"
 #include "math/vec3.h"
 #include "scene/footprint.h"
 #include "scene/scene_build.h"
@@ -60,6 +62,10 @@ struct CstScene {
     /* appearance */
     Texture *textures; int num_textures; size_t cap_textures; /* referenced by index */
     Material *materials; int num_materials; size_t cap_materials;
+    SampledSpectrum *spectra; int num_spectra; size_t cap_spectra; /* Material.*_spectrum */
+    /* Per area emitter (emitter_sampler order), 1 + the index of its emitted spectrum or 0;
+     * NULL when none has one; entries past num_emitter_spectrum are 0. */
+    int *emitter_spectrum; int num_emitter_spectrum; size_t cap_emitter_spectrum;
     Emitter *emitters; int num_emitters; size_t cap_emitters;
     DeltaLight *delta_lights; int num_delta_lights; size_t cap_delta_lights; /* point, spot, directional */
     EnvMap *env; /* the environment, or NULL */
@@ -103,6 +109,10 @@ void scene_destroy(Scene *scene);
 CstStatus scene_add_texture(Scene *scene, const Texture *t, int *out_id, CstError *err);
 /* The material's textures must already be in the scene. */
 CstStatus scene_add_material(Scene *scene, const Material *m, int *out_id, CstError *err);
+/* Adds a copy of *sp; *out_id is its index (Material.*_spectrum = index + 1). */
+CstStatus scene_add_spectrum(Scene *scene, const SampledSpectrum *sp, int *out_id, CstError *err);
+/* Emitters first..num_emitters-1 (just added) emit spectrum (1 + index, 0 none) in spectral mode. */
+CstStatus scene_set_emitter_spectrum(Scene *scene, int first, int spectrum, CstError *err);
 /* Indices are 3 per triangle into positions; all must be in range and the triangles
  * non-degenerate (callers that know file locations check first for better messages).
  * emission may be NULL. */
@@ -380,11 +390,46 @@ static inline const Material *scene_mix_choose(const Scene *s, const Material *m
     return m;
 }
 
+/* Spectral mode: a material's spectra at wl over the values upsampled from its RGB-mode
+ * reductions: a conductor's eta and k (a coated conductor's divided by the interface's
+ * eta, as layered_init does), and with disperse the ior of a dispersive dielectric at the
+ * hero wavelength wl->lambda[0] (pbrt-v4 DielectricMaterial: eta(lambda[0]), the other
+ * wavelengths then terminated by the caller). */
+static inline void scene_bsdf_spectra(const Scene *s, const Material *m, const Wavelengths *wl, bool disperse,
+                                      Bsdf *b)
+{
+    if (disperse && m->ior_dispersive) {
+        float eta = sampled_spectrum_at(&s->spectra[m->ior_spectrum - 1], wl->lambda[0]);
+        if (material_is_layered(m->type)) {
+            float old = b->lobe.layered.top_eta;
+            b->lobe.layered.top_eta = eta;
+            if (m->type == MATERIAL_COATED_CONDUCTOR && !(m->eta_spectrum | m->k_spectrum)) {
+                b->lobe.layered.eta = color_scale(b->lobe.layered.eta, old / eta);
+                b->lobe.layered.k = color_scale(b->lobe.layered.k, old / eta);
+            }
+        } else {
+            b->lobe.dielectric.eta = eta;
+        }
+    }
+    if (m->type == MATERIAL_CONDUCTOR) {
+        if (m->eta_spectrum) b->lobe.conductor.eta = sampled_spectrum_eval(&s->spectra[m->eta_spectrum - 1], wl);
+        if (m->k_spectrum) b->lobe.conductor.k = sampled_spectrum_eval(&s->spectra[m->k_spectrum - 1], wl);
+    } else if (m->type == MATERIAL_COATED_CONDUCTOR) {
+        float inv = 1.0f / b->lobe.layered.top_eta;
+        if (m->eta_spectrum)
+            b->lobe.layered.eta = color_scale(sampled_spectrum_eval(&s->spectra[m->eta_spectrum - 1], wl), inv);
+        if (m->k_spectrum)
+            b->lobe.layered.k = color_scale(sampled_spectrum_eval(&s->spectra[m->k_spectrum - 1], wl), inv);
+    }
+}
+
 /* The BSDF at a hit: the one place where a hit's material, normals and texture
  * coordinates become a Bsdf, so every integrator sees the same surface. Spectral mode
  * (wl: the path's wavelengths; NULL in RGB mode): built in RGB, then its colours taken
- * at wl (bsdf_at_wavelengths). */
-static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavelengths *wl, Bsdf *b)
+ * at wl (bsdf_at_wavelengths) and its spectra applied (scene_bsdf_spectra). Returns the
+ * material the BSDF was made from (a mix resolved). */
+static inline const Material *scene_bsdf_material(const Scene *s, const SurfaceHit *sh, const Wavelengths *wl,
+                                                  bool disperse, Bsdf *b)
 {
     const Material *m = &s->materials[sh->material];
     if (m->type == MATERIAL_MIX) m = scene_mix_choose(s, m, sh);
@@ -402,7 +447,28 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavele
         const int mi = (int)(m - s->materials);
         if (!m->albedo_texture && s->material_spectra) bsdf_at_wavelengths_prepared(b, &s->material_spectra[mi], wl);
         else bsdf_at_wavelengths(b, wl);
+        if (m->eta_spectrum | m->k_spectrum | (disperse && m->ior_dispersive)) scene_bsdf_spectra(s, m, wl, disperse, b);
     }
+    return m;
+}
+
+/* The BSDF at a hit for integrators that do not follow single wavelengths: a dispersive
+ * dielectric takes its RGB-mode ior (the y-bar-weighted mean) at every wavelength. */
+static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavelengths *wl, Bsdf *b)
+{
+    (void)scene_bsdf_material(s, sh, wl, false, b);
+}
+
+/* The BSDF at a hit for the integrators that disperse (path, light): a dielectric whose
+ * ior varies with wavelength refracts the hero wavelength wl->lambda[0] with its own ior
+ * and terminates the other three (pbrt-v4 SampledWavelengths::TerminateSecondary: their
+ * pdfs 0, the hero's divided by 4), at reflection and refraction alike, as pbrt-v4 does
+ * when it builds such a BSDF. The path keeps wl for the rest of its vertices and its
+ * film conversion. Identical to scene_bsdf in RGB mode (wl NULL). */
+static inline void scene_bsdf_disperse(const Scene *s, const SurfaceHit *sh, Wavelengths *wl, Bsdf *b)
+{
+    const Material *m = scene_bsdf_material(s, sh, wl, wl != NULL, b);
+    if (wl && m->ior_dispersive) wavelengths_terminate_secondary(wl);
 }
 
 /* Every emitted quantity (radiance, intensity, irradiance, a light path's flux) is an RGB
@@ -414,6 +480,28 @@ static inline Color scene_light_color(Color rgb, const Wavelengths *wl)
     return wl ? spectrum_illuminant(rgb, wl) : rgb;
 }
 
+/* Spectral mode: area emitter `emitter`'s light at wl if it has a spectrum of its own
+ * (CstEmission.spectrum): that spectrum at the luminance of rgb (Y of linear sRGB; rgb is
+ * its RGB value times any scalar), true; false otherwise. */
+static inline bool scene_emitter_spectral(const Scene *s, int emitter, Color rgb, const Wavelengths *wl, Color *out)
+{
+    if (!s->emitter_spectrum || emitter < 0 || emitter >= s->num_emitter_spectrum || !s->emitter_spectrum[emitter])
+        return false;
+    const SampledSpectrum *sp = &s->spectra[s->emitter_spectrum[emitter] - 1];
+    float y = cie_srgb_to_xyz[1][0] * rgb.c[0] + cie_srgb_to_xyz[1][1] * rgb.c[1] + cie_srgb_to_xyz[1][2] * rgb.c[2];
+    *out = color_scale(sampled_spectrum_eval(sp, wl), y * sp->inv_y);
+    return true;
+}
+
+/* An emitted quantity of light `emitter` (an area emitter's index, or a delta light's
+ * count + index) at wl: scene_emitter_spectral, else scene_light_color. */
+static inline Color scene_emitter_color(const Scene *s, int emitter, Color rgb, const Wavelengths *wl)
+{
+    Color o;
+    if (wl && scene_emitter_spectral(s, emitter, rgb, wl, &o)) return o;
+    return scene_light_color(rgb, wl);
+}
+
 /* Radiance the hit's emitter sends toward w (unit, away from the surface); the hit must be
  * on an emitter (sh->emitter >= 0). */
 static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w, const Wavelengths *wl)
@@ -421,6 +509,8 @@ static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w,
     const Emitter *e = &s->emitter_sampler.light[sh->emitter].u.area;
     Color le = emitter_radiance(e, s->textures, sh->ng, sh->uv, w);
     if (!wl) return le;
+    Color o;
+    if (scene_emitter_spectral(s, sh->emitter, le, wl, &o)) return o;
     if (!e->texture && s->emitter_spectra && !color_is_black(le))
         return spectrum_rgb_eval_illuminant(&s->emitter_spectra[sh->emitter], wl);
     return spectrum_illuminant(le, wl);
@@ -431,6 +521,8 @@ static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w,
 static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wavelengths *wl)
 {
     if (!wl) return ls->li;
+    Color o;
+    if (ls->light < s->emitter_sampler.count && scene_emitter_spectral(s, ls->light, ls->li, wl, &o)) return o;
     if (ls->light < s->emitter_sampler.count && s->emitter_spectra &&
         !s->emitter_sampler.light[ls->light].u.area.texture && !color_is_black(ls->li))
         return spectrum_rgb_eval_illuminant(&s->emitter_spectra[ls->light], wl);

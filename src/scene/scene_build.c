@@ -365,12 +365,57 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         d->nsamples = m->nsamples;
     }
     for (int k = 0; k < 3; k++) d->transmittance[k] = color_channel(m->transmittance, k);
+    d->eta_spectrum = m->eta_spectrum;
+    d->k_spectrum = m->k_spectrum;
+    d->ior_spectrum = m->ior_spectrum;
     if (m->type == MATERIAL_MIX) {
         d->mix_materials[0] = m->mix[0];
         d->mix_materials[1] = m->mix[1];
         d->amount = m->amount;
         d->amount_texture = m->amount_texture;
     }
+}
+
+/* A material's spectra (cst_scene_add_material): checked ids, and the RGB-mode reductions
+ * they replace (math/spectrum_sampled.h). */
+static CstStatus build_spectra(const Scene *s, const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    const int ids[3] = {d->eta_spectrum, d->k_spectrum, d->ior_spectrum};
+    static const char *const names[3] = {"eta_spectrum", "k_spectrum", "ior_spectrum"};
+    for (int i = 0; i < 3; i++)
+        if (ids[i] < 0 || ids[i] > s->num_spectra)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s %d is not a spectrum of this scene; expected 0 "
+                            "(none) or 1 to %d (cst_scene_add_spectrum)", fn, names[i], ids[i], s->num_spectra);
+    bool conductor = m->type == MATERIAL_CONDUCTOR || m->type == MATERIAL_COATED_CONDUCTOR;
+    bool dielectric = m->type == MATERIAL_GLASS || m->type == MATERIAL_DIELECTRIC ||
+                      m->type == MATERIAL_THIN_DIELECTRIC || material_is_layered(m->type);
+    if (conductor) {
+        for (int i = 0; i < 2; i++) {
+            if (!ids[i]) continue;
+            const SampledSpectrum *sp = &s->spectra[ids[i] - 1];
+            for (int j = 0; j < SAMPLED_SPECTRUM_N; j++)
+                if (!(sp->v[j] >= 0.0f))
+                    return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s %d is %g at %d nm; expected a complex IOR "
+                                    "part >= 0", fn, names[i], ids[i], (double)sp->v[j], SPECTRUM_LAMBDA_MIN + j);
+            Color rgb = sampled_spectrum_rgb_unbounded(sp);
+            if (i == 0) m->eta = rgb;
+            else m->k = rgb;
+        }
+        m->eta_spectrum = ids[0];
+        m->k_spectrum = ids[1];
+    }
+    if (dielectric && ids[2]) {
+        const SampledSpectrum *sp = &s->spectra[ids[2] - 1];
+        for (int j = 0; j < SAMPLED_SPECTRUM_N; j++)
+            if (!(sp->v[j] > 0.0f))
+                return cst_fail(err, CST_ERR_INVALID_ARG, "%s: ior_spectrum %d is %g at %d nm; expected an index "
+                                "of refraction > 0 over 360-830 nm", fn, ids[2], (double)sp->v[j], SPECTRUM_LAMBDA_MIN + j);
+        m->ior = sampled_spectrum_mean_y(sp);
+        m->ior_spectrum = ids[2];
+        m->ior_dispersive = !sp->constant;
+    }
+    return CST_OK;
 }
 
 /* The coated materials' layer (cst_scene_add_material). */
@@ -490,7 +535,36 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         m.amount = d->amount;
         m.amount_texture = d->amount_texture;
     }
+    if ((st = build_spectra(scene, d, &m, err)) != CST_OK) return st;
     return scene_add_material(scene, &m, out_id, err);
+}
+
+CstStatus cst_scene_add_spectrum(CstScene *scene, const float *lambda, const float *values, int n, int *out_id,
+                                 CstError *err)
+{
+    static const char fn[] = "cst_scene_add_spectrum";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!lambda || !values || !out_id)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: lambda_nm, values and out_id must not be NULL", fn);
+    if (n < 1) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: n = %d; expected at least one sample", fn, n);
+    for (int i = 0; i < n; i++) {
+        if (!(isfinite(lambda[i]) && lambda[i] > 0.0f) || !isfinite(values[i]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: sample %d (%g nm, %g); expected a finite wavelength "
+                            "> 0 and a finite value", fn, i, (double)lambda[i], (double)values[i]);
+        if (i > 0 && !(lambda[i] > lambda[i - 1]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: wavelength %g nm (sample %d) does not increase; "
+                            "expected strictly increasing wavelengths", fn, (double)lambda[i], i);
+    }
+    SampledSpectrum *sp = malloc(sizeof *sp);
+    if (!sp) return cst_fail(err, CST_ERR_OOM, "%s: out of memory", fn);
+    sampled_spectrum_from_pairs(lambda, values, n, sp);
+    int id = 0;
+    st = scene_add_spectrum(scene, sp, &id, err);
+    free(sp);
+    if (st == CST_OK) *out_id = id + 1;
+    return st;
 }
 
 /* ------------------------------------------------------------------ shapes */
@@ -503,6 +577,9 @@ static CstStatus read_emission(const Scene *s, const CstEmission *e, const char 
     memset(out, 0, sizeof *out);
     *peak = 0.0;
     if (!e) return CST_OK;
+    if (e->spectrum < 0 || e->spectrum > s->num_spectra)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: emission spectrum %d is not a spectrum of this scene; "
+                        "expected 0 (none) or 1 to %d (cst_scene_add_spectrum)", fn, e->spectrum, s->num_spectra);
     CstStatus st = read_rgb(e->radiance, 0, fn, "emission radiance", &out->radiance, err);
     if (st == CST_OK) st = check_texture_id(s, e->texture, 1, fn, "emission texture", err);
     if (st != CST_OK) return st;
@@ -685,7 +762,9 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
         sm.tri_material = d->triangle_materials;
         sm.emission = &em;
         sm.skip_degenerate = d->skip_degenerate;
+        const int first = scene->num_emitters;
         st = scene_add_mesh_ex(scene, &sm, num_dropped, err);
+        if (st == CST_OK && peak > 0.0) st = scene_set_emitter_spectrum(scene, first, d->emission.spectrum, err);
     }
     mesh_arrays_free(&a);
     return st;
@@ -783,7 +862,9 @@ CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float rad
                                               peak * (em.two_sided ? 2.0 : 1.0),
                                           "a smaller radiance (or scale) or radius", err)) != CST_OK)
         return st;
-    return scene_add_sphere(scene, c, radius, material, &em, err);
+    const int first = scene->num_emitters;
+    if ((st = scene_add_sphere(scene, c, radius, material, &em, err)) != CST_OK) return st;
+    return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
 }
 
 /* ------------------------------------------------------------------ render settings */
@@ -823,6 +904,9 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
     if ((int)r->color_mode < CST_COLOR_DEFAULT || r->color_mode > CST_COLOR_SPECTRAL)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: color_mode %d is not a CstColorMode value", fn,
                         (int)r->color_mode);
+    if (setting_set(r->white_balance, 1) && !(r->white_balance > 0.0 && r->white_balance <= 1e6))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: white_balance %g; expected a colour temperature in kelvin "
+                        "in (0, 1e6], or 0 for none", fn, r->white_balance);
     if (setting_set(r->png_linear, 0) && r->png_linear != 0 && r->png_linear != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: png_linear %d; expected 0 or 1", fn, r->png_linear);
     if (setting_set(r->aovs, 0) && (r->aovs & ~(CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH | CST_AOV_VARIANCE)))
@@ -861,6 +945,7 @@ CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings
     SETTING_MERGE(png_linear, 0);
     SETTING_MERGE(aovs, 0);
     SETTING_MERGE(max_component, 1);
+    SETTING_MERGE(white_balance, 1);
     if (r->seed_set) { sc->seed = r->seed; sc->seed_set = 1; }
     if (r->exposure_set) { sc->exposure = r->exposure; sc->exposure_set = 1; }
     if (r->crop[0] != CST_UNSET) memcpy(sc->crop, r->crop, sizeof sc->crop);

@@ -120,7 +120,7 @@ static CstScene *build_api_scene(void)
     ok(cst_scene_add_mesh(s, &mesh, NULL, &e), &e);
     ok(cst_scene_add_sphere(s, (const float[3]){-0.8f, 0.5f, 0}, 0.5f, glass, NULL, &e), &e);
     ok(cst_scene_add_sphere(s, (const float[3]){0.8f, 0.5f, 0}, 0.5f, gold, NULL, &e), &e);
-    CstEmission em = {{4, 4, 3}, 0, 0};
+    CstEmission em = {{4, 4, 3}, 0, 0, 0};
     ok(cst_scene_add_sphere(s, (const float[3]){0, 1.5f, -1}, 0.4f, plastic, &em, &e), &e);
     CstLightDesc point = {CST_LIGHT_POINT, {0, 3, 2}, {0, 0, 0}, {5, 5, 5}, 0, 0, NULL, 0, {0}, 0, 0, 0.0f};
     CstLightDesc spot = {CST_LIGHT_SPOT, {2, 3, 2}, {-2, -3, -2}, {10, 10, 10}, 25, 5, NULL, 0, {0}, 0, 0, 0.0f};

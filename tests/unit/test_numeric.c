@@ -47,9 +47,9 @@ static void test_light_products(void **state)
     CstTextureDesc t = {.type = CST_TEXTURE_CONSTANT, .value = {1e30f, 1e30f, 1e30f}};
     int tex = 0;
     assert_int_equal(cst_scene_add_texture(s, &t, &tex, &err), CST_OK);
-    CstEmission e = {{1e30f, 1e30f, 1e30f}, tex, 0};
+    CstEmission e = {{1e30f, 1e30f, 1e30f}, tex, 0, 0};
     expect_overflow(cst_scene_add_sphere(s, (const float[3]){0, 0, 0}, 1.0f, 0, &e, &err), &err, "texture");
-    CstEmission big = {{1e37f, 1e37f, 1e37f}, 0, 0};
+    CstEmission big = {{1e37f, 1e37f, 1e37f}, 0, 0, 0};
     expect_overflow(cst_scene_add_sphere(s, (const float[3]){0, 0, 0}, 100.0f, 0, &big, &err), &err, "power");
     assert_int_equal(cst_scene_add_sphere(s, (const float[3]){0, 0, 0}, 1e-3f, 0, &big, &err), CST_OK);
     cst_scene_destroy(s);

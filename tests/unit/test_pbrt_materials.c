@@ -49,11 +49,14 @@ static void test_materials(void **state)
     const Material *m[N];
     for (int i = 0; i < N; i++) m[i] = &s->materials[s->tri_info[i].material];
     Color eta, k;
-    /* named spectra of the four preset metals are caustic's presets, exactly */
+    /* named spectra stay spectra (spectral mode); eta and k hold their RGB reductions, and
+     * gold's normal-incidence reflectance is gold: red > green > blue */
     assert_int_equal(m[0]->type, MATERIAL_CONDUCTOR);
-    assert_true(material_metal("gold", &eta, &k));
-    assert_memory_equal(&m[0]->eta, &eta, sizeof eta);
-    assert_memory_equal(&m[0]->k, &k, sizeof k);
+    assert_true(m[0]->eta_spectrum > 0 && m[0]->k_spectrum > 0 && m[0]->ior_spectrum == 0);
+    Color rgb_eta = sampled_spectrum_rgb_unbounded(&s->spectra[m[0]->eta_spectrum - 1]);
+    assert_memory_equal(&m[0]->eta, &rgb_eta, sizeof rgb_eta);
+    Color gold_r0 = pbrt_conductor_r0(m[0]->eta, m[0]->k);
+    assert_true(gold_r0.c[0] > 0.9f && gold_r0.c[0] > gold_r0.c[1] + 0.1f && gold_r0.c[1] > gold_r0.c[2] + 0.2f);
     assert_true(m[0]->roughness == 0.0f);
     /* remapped roughness 0.0625: pbrt alpha = sqrt(0.0625) = 0.25, ours r = sqrt(alpha) = 0.5 */
     assert_int_equal(m[1]->type, MATERIAL_CONDUCTOR);
@@ -70,7 +73,10 @@ static void test_materials(void **state)
     assert_true(fabsf(r0.c[0] - 0.9f) < 1e-6f && fabsf(r0.c[1] - 0.6f) < 1e-6f && fabsf(r0.c[2] - 0.3f) < 1e-6f);
     assert_int_equal(m[3]->type, MATERIAL_GLASS);
     assert_true(m[3]->ior == 1.33f);
-    assert_true(m[4]->ior == 1.5168f);
+    /* glass-BK7: SCHOTT's Sellmeier dispersion, its y-bar mean for RGB mode (n_d 1.5168 at
+     * 587.6 nm, n = 1.5187 at 546 nm) */
+    assert_true(m[4]->ior_spectrum > 0 && m[4]->ior_dispersive);
+    assert_true(fabsf(m[4]->ior - 1.5175f) < 0.002f);
     /* coateddiffuse -> the layered random walk: reflectance, eta, roughness (remapped as
      * above), pbrt-v4's layer defaults; nothing approximated */
     assert_int_equal(m[5]->type, MATERIAL_COATED_DIFFUSE);
@@ -102,17 +108,20 @@ static void test_materials(void **state)
     /* coatedconductor: the conductor (its roughness the base's), the interface's roughness
      * and the layer's thickness */
     assert_int_equal(m[15]->type, MATERIAL_COATED_CONDUCTOR);
-    assert_true(material_metal("silver", &eta, &k));
-    assert_memory_equal(&m[15]->eta, &eta, sizeof eta);
+    assert_true(m[15]->eta_spectrum > 0 && m[15]->k_spectrum > 0);
+    rgb_eta = sampled_spectrum_rgb_unbounded(&s->spectra[m[15]->eta_spectrum - 1]);
+    assert_memory_equal(&m[15]->eta, &rgb_eta, sizeof rgb_eta);
     assert_true(m[15]->base_roughness == 0.5f);
     assert_true(fabsf(m[15]->roughness - powf(0.2f, 0.25f)) < 1e-6f && m[15]->ior == 1.5f);
     assert_true(m[15]->thickness == 0.1f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "material \"coatedconductor\"") < 0);
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "\"thickness\"") < 0);
     assert_int_equal(m[16]->type, MATERIAL_CONDUCTOR);
-    assert_true(m[16]->eta.c[0] == 0.444f && m[16]->k.c[2] == 1.829f);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-CuZn-eta\" taken as the RGB") >= 0);
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-Au-eta\"") < 0); /* a preset */
+    assert_true(m[16]->eta_spectrum > 0 && m[16]->k_spectrum > 0);
+    /* brass (Querry 1985): eta about 0.44 in the red, 1.1-1.3 in the blue */
+    assert_true(fabsf(m[16]->eta.c[0] - 0.45f) < 0.05f && m[16]->eta.c[2] > 0.9f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-CuZn-eta\"") < 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"metal-Au-eta\"") < 0);
     assert_true(m[17]->type == MATERIAL_COATED_DIFFUSE && m[17]->albedo.c[1] == 0.5f && m[17]->ior == 1.5f &&
                 m[17]->roughness == 0.0f);
     assert_true(m[18]->roughness == 1.0f);

@@ -507,7 +507,7 @@ static void test_camera_and_options(void **state)
     cst_scene_destroy(s);
     /* The sensor's imaging ratio (shutterclose - shutteropen) iso / 100, as exposure stops:
      * 0.5 * 400 / 100 = 2 is one stop, whichever of Film and Camera comes first; another
-     * sensor is a located approximation, white balance a located warning. */
+     * sensor is a located approximation; white balance a render setting (film/sensor.h). */
     Warnings w2 = {0};
     s = expect_ok("Film \"rgb\" \"float iso\" 400 \"string sensor\" \"nikon_d850\" \"float whitebalance\" 5000\n"
                   "LookAt 0 0 -5  0 0 0  0 1 0\n"
@@ -515,8 +515,11 @@ static void test_camera_and_options(void **state)
                   "WorldBegin\n" TRI, &w2);
     assert_true(s->settings.exposure_set && fabs(s->settings.exposure - 1.0) < 1e-6);
     assert_true(find_warning(&w2, CST_WARN_APPROXIMATED, "approximated by cie1931") >= 0);
-    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "whitebalance") >= 0);
+    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "whitebalance") < 0);
+    assert_true(s->settings.white_balance == 5000.0);
     cst_scene_destroy(s);
+    expect_error("Film \"rgb\" \"float whitebalance\" -5\nWorldBegin\n" TRI, CST_ERR_INVALID_ARG, "Film \"rgb\"", 0,
+                 "whitebalance -5; expected a colour temperature");
     s = expect_ok("LookAt 0 0 -5  0 0 0  0 1 0\n"
                   "Camera \"perspective\" \"float shutterclose\" 0.5\n"
                   "Film \"rgb\" \"float iso\" 400\n"

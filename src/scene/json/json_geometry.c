@@ -37,7 +37,7 @@ static int triangle_ok(Vec3 a, Vec3 b, Vec3 c)
 
 static CstEmission emission_desc(const Emission *em)
 {
-    CstEmission e = {{0.0f, 0.0f, 0.0f}, 0, 0};
+    CstEmission e = {{0.0f, 0.0f, 0.0f}, 0, 0, 0};
     json_color_floats(em->radiance, e.radiance);
     e.texture = em->texture;
     e.two_sided = em->two_sided;

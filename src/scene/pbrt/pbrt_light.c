@@ -574,12 +574,12 @@ CstStatus pbrt_area_light_source_directive(Loader *ld, NamedCall *call)
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, tl, "%s is not supported; the shapes that follow do not emit", d);
         ld->gs.area.active = 0;
     } else {
-        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0, 0, 1.0f};
+        AreaLight al = {1, color_s(1.0f), 1.0f, 0.0f, 0, 0, 1.0f, 0};
         const char *file = NULL;
         Loc fl = loc;
         int has_l = 0;
         TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
-        TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, &has_l));
+        TRY(pbrt_get_spectrum_id(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &al.L, &has_l, &al.spectrum));
         if (file && has_l)
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: both \"L\" and \"filename\"; expected one "
                                 "of them (pbrt-v4 refuses both)", d);

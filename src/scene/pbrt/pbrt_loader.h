@@ -74,6 +74,7 @@ typedef struct AreaLight {
     int two_sided;
     int texture;     /* "filename": the image's texture id (public, >= 1), L = scale x image; 0 = none */
     float image_lum; /* with texture: the image's mean luminance, power's k_e (pbrt-v4) */
+    int spectrum;  /* "L" kept as a spectrum (blackbody, named, pairs, .spd): its id, or 0 */
 } AreaLight;
 
 typedef struct GState {

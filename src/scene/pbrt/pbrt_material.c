@@ -159,7 +159,7 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pr->loc, "%s: \"reflectance\" given with \"%s\"; "
                             "expected either reflectance or eta and k (as pbrt-v4)", d,
                             pbrt_clip(pe ? pe->decl : pk->decl, nm));
-    int has_refl = 0;
+    int has_refl = 0, eta_sp = 0, k_sp = 0;
     if (pe && pe->type == PT_FLOAT) { /* pbrt-v4 also takes a plain float eta */
         float eta_f = 1.0f;
         TRY(pbrt_get_float(ld, ps, d, n_eta, 1.0f, &eta_f, NULL));
@@ -168,9 +168,9 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
                                 "the real part of a conductor's index of refraction, >= 0", d, (double)eta_f);
         eta = color_s(eta_f);
     } else {
-        TRY(pbrt_get_spectrum(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, NULL));
+        TRY(pbrt_get_spectrum_id(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, NULL, &eta_sp));
     }
-    TRY(pbrt_get_spectrum(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL));
+    TRY(pbrt_get_spectrum_id(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL, &k_sp));
     TRY(pbrt_get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &refl, &has_refl));
     if (has_refl) {
         float r[3] = {refl.c[0], refl.c[1], refl.c[2]}, kk[3];
@@ -186,6 +186,10 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
     m->ior = 1.0f;
     m->eta = eta;
     m->k = k;
+    /* Spectra (named, pairs, .spd) stay spectra in spectral mode; cst_scene_add_material
+     * replaces eta and k by their RGB reductions. */
+    m->eta_spectrum = has_refl ? 0 : eta_sp;
+    m->k_spectrum = has_refl ? 0 : k_sp;
     return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_texture);
 }
 
@@ -220,16 +224,18 @@ static CstStatus coat_layer_params(Loader *ld, Params *ps, const char *d, Materi
     return CST_OK;
 }
 
-static CstStatus dielectric_eta(Loader *ld, Params *ps, const char *d, const char *name, float *eta)
+/* A dielectric's eta: a float (or float texture, its average), or a spectrum (named,
+ * pairs, .spd) kept as *ior_spectrum for spectral mode, where it disperses; *eta its
+ * y-bar-weighted mean for RGB mode (cst_scene_add_material sets the same). */
+static CstStatus dielectric_eta(Loader *ld, Params *ps, const char *d, const char *name, float *eta,
+                                int *ior_spectrum)
 {
     Param *p = pbrt_find_param(ps, name);
+    *ior_spectrum = 0;
     if (p && p->type == PT_SPECTRUM) {
         Color c = color_s(1.5f);
-        TRY(pbrt_get_spectrum(ld, ps, d, name, SPEC_UNBOUNDED, 0, &c, NULL));
+        TRY(pbrt_get_spectrum_id(ld, ps, d, name, SPEC_UNBOUNDED, 0, &c, NULL, ior_spectrum));
         *eta = c.c[1];
-        if (p->num_strs == 0)
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: spectral eta taken as %g (no dispersion)",
-                         d, (double)*eta);
     } else {
         TRY(pbrt_get_float_tex(ld, ps, d, name, *eta, eta, NULL));
     }
@@ -262,7 +268,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->type = MATERIAL_COATED_DIFFUSE;
         m->ior = 1.5f;
         TRY(get_albedo(ld, ps, d, "reflectance", m));
-        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
+        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior, &m->ior_spectrum));
         TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
         TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "diffusetransmission") == 0) {
@@ -311,7 +317,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->roughness_texture = 0;
         m->ior = 1.5f;
         TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &m->roughness, &m->roughness_texture));
-        TRY(dielectric_eta(ld, ps, d, "interface.eta", &m->ior));
+        TRY(dielectric_eta(ld, ps, d, "interface.eta", &m->ior, &m->ior_spectrum));
         TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
         m->type = MATERIAL_MIRROR;
@@ -321,13 +327,13 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->type = MATERIAL_THIN_DIELECTRIC;
         m->albedo = color_s(1.0f);
         m->ior = 1.5f;
-        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior));
+        TRY(dielectric_eta(ld, ps, d, "eta", &m->ior, &m->ior_spectrum));
     } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "glass") == 0) {
         m->type = MATERIAL_GLASS;
         m->albedo = color_s(1.0f);
         m->ior = 1.5f;
         TRY(dielectric_eta(ld, ps, d, strcmp(type, "glass") == 0 && pbrt_find_param(ps, "index") ? "index" : "eta",
-                           &m->ior));
+                           &m->ior, &m->ior_spectrum));
         /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
          * DielectricBxDF; below alpha 1e-3 both are smooth. */
         TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));

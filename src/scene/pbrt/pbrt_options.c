@@ -104,9 +104,11 @@ CstStatus pbrt_film_directive(Loader *ld, NamedCall *call)
     if (sensor && strcmp(sensor, "cie1931") != 0)
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, sl, "%s: sensor \"%s\" approximated by cie1931 (the CIE 1931 "
                      "matching functions; no camera curves)", d, pbrt_clip(sensor, nm));
-    if (has_wb && wb != 0.0f)
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: whitebalance %g ignored (no white balancing)", d,
-                     (double)wb);
+    if (has_wb && !(wb >= 0.0f && isfinite(wb)))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: whitebalance %g; expected a colour temperature in "
+                            "kelvin > 0, or 0 for none", d, (double)wb);
+    /* pbrt-v4's cie1931 sensor: von Kries from the illuminant's white to D65 (film/sensor.h). */
+    if (has_wb) rs->white_balance = (double)wb;
     if (strcmp(type, "rgb") != 0 && strcmp(type, "image") != 0)
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s rendered as an RGB film", d);
     return CST_OK;

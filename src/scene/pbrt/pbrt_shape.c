@@ -40,12 +40,13 @@ typedef struct ShapeEmission {
     Color radiance;
     int two_sided;
     int texture;
+    int spectrum; /* the area light's spectrum id (cst_scene_add_spectrum), or 0 */
 } ShapeEmission;
 
 /* The loader's emission as the public builder's (exact: three floats per colour). */
 static CstEmission emission_desc(const ShapeEmission *em)
 {
-    CstEmission e = {{0.0f, 0.0f, 0.0f}, em->texture, em->two_sided};
+    CstEmission e = {{0.0f, 0.0f, 0.0f}, em->texture, em->two_sided, em->spectrum};
     for (int k = 0; k < 3; k++) e.radiance[k] = color_channel(em->radiance, k);
     return e;
 }
@@ -204,11 +205,12 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: sphere at (%g, %g, %g) radius %g is "
                                 "beyond the scene limits (coordinates within 1e18, radius above 1e-18)",
                                 d, (double)c.x, (double)c.y, (double)c.z, (double)r);
-        ShapeEmission em = {color_s(0.0f), 0, 0};
+        ShapeEmission em = {color_s(0.0f), 0, 0, 0};
         if (al && al->active) {
             em.radiance = color_scale(al->L, al->scale);
             em.two_sided = al->two_sided;
             em.texture = al->texture;
+            em.spectrum = al->spectrum;
             if (al->power > 0.0f) {
                 double k_e = (al->two_sided ? 2.0 : 1.0) * 4.0 * PBRT_PI * (double)r * (double)r * PBRT_PI *
                              (al->texture ? (double)al->image_lum : 1.0);
@@ -286,11 +288,12 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     sm.num_triangles = g->nt;
     sm.material = mat;
     sm.skip_degenerate = 1;
-    ShapeEmission em = {color_s(0.0f), 0, 0};
+    ShapeEmission em = {color_s(0.0f), 0, 0, 0};
     if (al && al->active) {
         em.radiance = color_scale(al->L, al->scale);
         em.two_sided = al->two_sided;
         em.texture = al->texture;
+        em.spectrum = al->spectrum;
     }
     sm.emission = emission_desc(&em);
     int dropped = 0;

@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/spd.h"
+#include "math/spectrum_sampled.h"
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_texture.h"
 
@@ -177,14 +179,62 @@ static int named_glass(const char *name, float *eta)
     return 0;
 }
 
-/* A spectrum-valued parameter as linear sRGB: rgb, blackbody, spectrum (pairs or a named
- * spectrum), xyz (pbrt-v3), or with allow_tex a spectrum texture (its constant or average).
- * *found says whether the file gave it; out keeps its default otherwise. */
+/* A sampled spectrum handed to the scene (cst_scene_add_spectrum) at its 1 nm nodes. */
+static CstStatus add_sampled(Loader *ld, const SampledSpectrum *sp, int *id)
+{
+    float l[SAMPLED_SPECTRUM_N];
+    for (int i = 0; i < SAMPLED_SPECTRUM_N; i++) l[i] = (float)(SPECTRUM_LAMBDA_MIN + i);
+    return cst_scene_add_spectrum(ld->scene, l, sp->v, SAMPLED_SPECTRUM_N, id, ld->err);
+}
+
+/* The RGB a sampled spectrum stands for as a parameter of this kind. */
+static Color sampled_rgb(const SampledSpectrum *sp, SpecKind kind)
+{
+    return kind == SPEC_ILLUMINANT ? sampled_spectrum_rgb_illuminant(sp) : sampled_spectrum_rgb_unbounded(sp);
+}
+
+/* A .spd file named by a "spectrum" parameter (pbrt-v4 reads a string that is not a named
+ * spectrum as a file): its RGB as this kind, and with spectrum_id the scene's spectrum. */
+static CstStatus spd_param(Loader *ld, const Param *p, const char *d, SpecKind kind, Color *c, int *spectrum_id)
+{
+    char nm[72];
+    TRY(pbrt_check_file_access(ld, p->loc, d));
+    char *path = pbrt_resolve_path(ld, p->strs[0]);
+    if (!path) return pbrt_oom(ld);
+    float *l = NULL, *v = NULL;
+    int n = 0;
+    CstError e;
+    e.status = CST_OK, e.msg[0] = '\0';
+    CstStatus st = spd_read_file(path, &l, &v, &n, &e);
+    free(path);
+    if (st != CST_OK)
+        return pbrt_fail_at(ld, st, p->loc, "%s: \"%s\": %s (expected a named spectrum or a .spd file of "
+                            "wavelength-value pairs)", d, pbrt_clip(p->decl, nm), e.msg);
+    SampledSpectrum *sp = malloc(sizeof *sp);
+    if (!sp) {
+        free(l), free(v);
+        return pbrt_oom(ld);
+    }
+    sampled_spectrum_from_pairs(l, v, n, sp);
+    free(l), free(v);
+    *c = sampled_rgb(sp, kind);
+    st = spectrum_id ? add_sampled(ld, sp, spectrum_id) : CST_OK;
+    free(sp);
+    return st;
+}
+
 CstStatus pbrt_get_spectrum(Loader *ld, Params *ps, const char *d, const char *name,
                             SpecKind kind, int allow_tex, Color *out, int *found)
 {
+    return pbrt_get_spectrum_id(ld, ps, d, name, kind, allow_tex, out, found, NULL);
+}
+
+CstStatus pbrt_get_spectrum_id(Loader *ld, Params *ps, const char *d, const char *name, SpecKind kind,
+                               int allow_tex, Color *out, int *found, int *spectrum_id)
+{
     Param *p;
     char nm[72];
+    if (spectrum_id) *spectrum_id = 0;
     unsigned allowed = PT_MASK(PT_RGB) | PT_MASK(PT_SPECTRUM) | PT_MASK(PT_BLACKBODY) | PT_MASK(PT_XYZ) |
                        (allow_tex ? PT_MASK(PT_TEXTURE) : 0u);
     if (found) *found = 0;
@@ -204,13 +254,39 @@ CstStatus pbrt_get_spectrum(Loader *ld, Params *ps, const char *d, const char *n
     case PT_BLACKBODY:
         c = pbrt_blackbody_rgb(p->nums[0]);
         if (p->num_nums == 2) c = color_scale(c, (float)p->nums[1]);
+        if (spectrum_id && p->nums[0] > 0.0 && p->nums[0] < 1e6) {
+            /* pbrt-v4's BlackbodySpectrum (peak 1); the RGB above sets the luminance. */
+            SampledSpectrum *sp = malloc(sizeof *sp);
+            if (!sp) return pbrt_oom(ld);
+            sampled_spectrum_blackbody((float)p->nums[0], sp);
+            CstStatus st = add_sampled(ld, sp, spectrum_id);
+            free(sp);
+            TRY(st);
+        }
         break;
     case PT_SPECTRUM:
         if (p->num_strs) {
             const char *s = p->strs[0];
             float eta = 0.0f;
             int is_k = 0, mi = named_metal_index(s, &is_k);
-            if (mi >= 0) {
+            SampledSpectrum *sp = spectrum_id ? malloc(sizeof *sp) : NULL;
+            bool approx = false;
+            if (spectrum_id && !sp) return pbrt_oom(ld);
+            bool named = sp && spectrum_named(s, sp, &approx);
+            if (named) {
+                /* Kept as a spectrum for spectral mode; its RGB for RGB mode. */
+                CstStatus st = add_sampled(ld, sp, spectrum_id);
+                c = strncmp(s, "glass-", 6) == 0 ? color_s(sampled_spectrum_mean_y(sp)) : sampled_rgb(sp, kind);
+                free(sp);
+                TRY(st);
+                if (approx)
+                    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: \"%s\" taken as the constant %g (n_d): "
+                                 "no dispersion data", d, pbrt_clip(s, nm), (double)c.c[1]);
+            }
+            free(named ? NULL : sp);
+            if (named) {
+                /* kept above */
+            } else if (mi >= 0) {
                 pbrt_named_metal(s, &c);
                 if (!PBRT_METALS[mi].preset)
                     pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc,
@@ -230,10 +306,7 @@ CstStatus pbrt_get_spectrum(Loader *ld, Params *ps, const char *d, const char *n
                 pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: illuminant \"%s\" taken as white (D65)",
                              d, pbrt_clip(s, nm));
             } else {
-                pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, p->loc,
-                        "%s: spectrum \"%s\" for \"%s\" is not known (spectrum files are not read); "
-                             "the default is used", d, pbrt_clip(s, nm), pbrt_clip(p->decl, nm));
-                return CST_OK;
+                TRY(spd_param(ld, p, d, kind, &c, spectrum_id));
             }
         } else {
             for (int i = 1; i < p->num_nums / 2; i++)
@@ -243,6 +316,19 @@ CstStatus pbrt_get_spectrum(Loader *ld, Params *ps, const char *d, const char *n
                                         "(wavelength, value) pairs in increasing wavelength", d,
                                         pbrt_clip(p->decl, nm), p->nums[2 * i]);
             c = pbrt_spectrum_rgb(p->nums, p->num_nums / 2, kind == SPEC_ILLUMINANT);
+            if (spectrum_id) {
+                int np = p->num_nums / 2;
+                float *l = malloc((size_t)(np > 0 ? np : 1) * 2 * sizeof *l);
+                if (!l) return pbrt_oom(ld);
+                for (int i = 0; i < np; i++) l[i] = (float)p->nums[2 * i], l[np + i] = (float)p->nums[2 * i + 1];
+                CstStatus st = np > 0 ? cst_scene_add_spectrum(ld->scene, l, l + np, np, spectrum_id, ld->err) : CST_OK;
+                free(l);
+                if (st != CST_OK) {
+                    char msg[sizeof ld->err->msg];
+                    snprintf(msg, sizeof msg, "%s", ld->err->msg);
+                    return pbrt_fail_at(ld, st, p->loc, "%s: \"%s\": %s", d, pbrt_clip(p->decl, nm), msg);
+                }
+            }
         }
         break;
     default: break;

@@ -15,6 +15,15 @@ typedef enum SpecKind { SPEC_REFLECTANCE, SPEC_UNBOUNDED, SPEC_ILLUMINANT } Spec
 CstStatus pbrt_get_spectrum(Loader *ld, Params *ps, const char *d, const char *name,
                             SpecKind kind, int allow_tex, Color *out, int *found);
 
+/* The same, and with spectrum_id (may be NULL) a spectrum kept for spectral mode: a named
+ * spectrum (math/spectrum_sampled.h), (wavelength, value) pairs or a .spd file become a
+ * scene spectrum (cst_scene_add_spectrum) and *spectrum_id its id; 0 for rgb, blackbody,
+ * xyz, textures and the approximated illuminants. A string that is not a named spectrum
+ * is read as a .spd file relative to the scene (pbrt-v4's rule): a missing or malformed
+ * file is a located error. */
+CstStatus pbrt_get_spectrum_id(Loader *ld, Params *ps, const char *d, const char *name, SpecKind kind,
+                               int allow_tex, Color *out, int *found, int *spectrum_id);
+
 /* Linear sRGB of a blackbody at kelvin, scaled to luminance Y = 1 (pbrt-v4 normalises
  * blackbody emitters to 1 nit before "scale"). */
 Color pbrt_blackbody_rgb(double kelvin);
