@@ -315,6 +315,18 @@ typedef struct CstEmission {
     int two_sided;      /* 0: emits only on the side the geometric normal points to */
 } CstEmission;
 
+/* An alpha cut-out (pbrt-v4's Shape "alpha"; leaves drawn on quads): where a shape's alpha
+ * is 0 its surface does not exist (rays, shadow rays and light paths pass, an emitter does
+ * not emit there), where it is 1 it is opaque, and in between a ray keeps the hit with
+ * probability alpha (pbrt-v4's stochastic test, deterministic per ray). Zero-initialised:
+ * opaque. */
+typedef struct CstAlpha {
+    int enabled;  /* 0: opaque (the rest ignored); 1: value or texture gives the alpha */
+    float value;  /* in [0, 1], when texture is 0 */
+    int texture;  /* a texture id whose scalar value (the mean of its channels; a pbrt float
+                   * image texture holds its first channel in all three) is the alpha, or 0 */
+} CstAlpha;
+
 /* A triangle mesh read from the caller's arrays, Embree-style: each attribute is a pointer
  * to its first element and a stride in bytes between consecutive elements (0 = tightly
  * packed), so positions, normals and uvs may sit inside one interleaved vertex struct.
@@ -340,6 +352,7 @@ typedef struct CstMeshDesc {
     int normals_unit;        /* 1: normals are already unit length, or zero where a vertex has
                               * none (its triangles shade with the geometric normal); stored
                               * as given instead of normalised */
+    CstAlpha alpha;          /* an alpha cut-out over the mesh's uvs; zero: opaque */
 } CstMeshDesc;
 
 /* num_dropped may be NULL. */
@@ -363,6 +376,11 @@ CST_API CstStatus cst_scene_add_instance(CstScene *scene, int object,
 /* emission may be NULL. */
 CST_API CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius,
                                int material, const CstEmission *emission, CstError *err);
+/* cst_scene_add_sphere with an alpha cut-out over the sphere's uvs (alpha may be NULL:
+ * opaque). */
+CST_API CstStatus cst_scene_add_sphere_alpha(CstScene *scene, const float center[3], float radius,
+                                             int material, const CstEmission *emission,
+                                             const CstAlpha *alpha, CstError *err);
 
 typedef enum CstLightType {
     CST_LIGHT_POINT = 1,  /* isotropic: intensity (W/sr) in every direction */

@@ -36,7 +36,16 @@ typedef struct Emission {
 typedef struct PrimInfo {
     int32_t material; /* index into materials */
     int32_t emitter;  /* index into emitters, or -1 */
+    int32_t alpha;    /* 1 + index into Scene.alphas; 0: opaque (no cut-out) */
 } PrimInfo;
+
+/* An alpha cut-out (pbrt-v4's Shape "alpha"): where the alpha a at a hit is 0 the surface
+ * does not exist, where it is 1 it is opaque, and in between a ray keeps the hit with
+ * probability a (a stochastic test, deterministic per ray: scene_alpha_cut()). */
+typedef struct AlphaMask {
+    float value; /* the alpha, when texture is 0 */
+    int texture; /* 1 + index into the scene's textures (its scalar value), or 0 */
+} AlphaMask;
 
 typedef struct CstScene Scene;
 struct CstScene {
@@ -61,6 +70,9 @@ struct CstScene {
     Texture *textures; int num_textures; size_t cap_textures; /* referenced by index */
     Material *materials; int num_materials; size_t cap_materials;
     Emitter *emitters; int num_emitters; size_t cap_emitters;
+    /* Alpha cut-outs, referred to by PrimInfo.alpha; num_alphas == 0 (every scene without
+     * one) keeps the ray queries on their opaque path behind a single branch. */
+    AlphaMask *alphas; int num_alphas; size_t cap_alphas;
     DeltaLight *delta_lights; int num_delta_lights; size_t cap_delta_lights; /* point, spot, directional */
     EnvMap *env; /* the environment, or NULL */
     /* after commit */
@@ -120,6 +132,7 @@ typedef struct SceneMesh {
     int material;            /* scene material id of every triangle, */
     const int *tri_material; /* unless this per-triangle array of ids is given */
     const Emission *emission; /* or NULL */
+    int alpha;           /* 1 + index into Scene.alphas (scene_add_alpha), or 0: opaque */
     int skip_degenerate; /* drop zero-area triangles instead of failing (mesh files) */
 } SceneMesh;
 /* scene_add_mesh with vertex attributes, per-triangle materials and optional skipping of
@@ -131,6 +144,10 @@ CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err);
+/* An alpha cut-out for shapes added after it (SceneMesh.alpha, the last sphere's
+ * sphere_info[].alpha): *out_id = 1 + its index. value in [0, 1]; texture 1 + a texture
+ * index already in the scene, or 0. */
+CstStatus scene_add_alpha(Scene *scene, float value, int texture, int *out_id, CstError *err);
 /* Sets the environment (replacing one set before); the scene takes ownership of *env's
  * buffers (the struct is copied). */
 CstStatus scene_set_environment(Scene *scene, const EnvMap *env, CstError *err);
@@ -217,7 +234,8 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     return true;
 }
 
-static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *sh)
+/* The closest hit in (t_min, t_max), alpha cut-outs not applied: scene_intersect(). */
+static inline bool scene_intersect_first(const Scene *s, const Ray *ray, SurfaceHit *sh)
 {
     Hit h;
     if (s->instances) {
@@ -253,6 +271,21 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     sh->material = pi->material;
     sh->emitter = pi->emitter;
     return true;
+}
+
+/* scene_intersect's and scene_occluded's continuation in scenes with alpha cut-outs
+ * (scene.c): hits on cut-away surface skipped, the ray continued beyond them. */
+bool scene_intersect_alpha(const Scene *s, const Ray *ray, SurfaceHit *sh);
+bool scene_occluded_alpha(const Scene *s, const Ray *ray);
+
+/* The closest hit in (t_min, t_max) of a surface that exists there: every ray query of
+ * every integrator goes through it and scene_occluded(), so alpha cut-outs hold for
+ * camera, shadow and light paths and every accel back end alike. A scene without cut-outs
+ * pays one branch. */
+static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *sh)
+{
+    if (s->num_alphas) return scene_intersect_alpha(s, ray, sh);
+    return scene_intersect_first(s, ray, sh);
 }
 
 /* The partial derivatives of the surface position with respect to the texture coordinates
@@ -427,8 +460,17 @@ static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w,
 
 /* NEE's light value ls->li at wl (scene_light_color, from the emitter's prepared spectrum
  * when it is an untextured area light: li is then its radiance). */
+/* Whether point p, sampled on area emitter `emitter` (an index < emitter_sampler.count),
+ * lies on its shape's cut-away surface (scene.c): NEE and light-path starts then carry
+ * no emission. Only called in scenes with cut-outs. */
+bool scene_emitter_cut(const Scene *s, int emitter, Vec3 p);
+
 static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wavelengths *wl)
 {
+    /* A light point on cut-away surface emits nothing (pbrt-v4 DiffuseAreaLight::
+     * AlphaMasked): NEE samples the emitter's whole area, the cut part giving zero. */
+    if (s->num_alphas && ls->light < s->emitter_sampler.count && scene_emitter_cut(s, ls->light, ls->p))
+        return color_s(0.0f);
     if (!wl) return ls->li;
     if (ls->light < s->emitter_sampler.count && s->emitter_spectra &&
         !s->emitter_sampler.light[ls->light].u.area.texture && !color_is_black(ls->li))
@@ -450,9 +492,10 @@ static inline EmitterGeometry scene_emitter_geometry(const Scene *s)
     return g;
 }
 
-/* Any hit in (r->t_min, r->t_max), instances included. */
+/* Any hit in (r->t_min, r->t_max), instances included, alpha cut-outs applied. */
 static inline bool scene_occluded(const Scene *s, const Ray *r)
 {
+    if (s->num_alphas) return scene_occluded_alpha(s, r);
     return accel_occluded(&s->accel, r) || (s->instances && instances_occluded(s->instances, r));
 }
 

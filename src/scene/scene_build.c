@@ -521,6 +521,22 @@ static CstStatus read_emission(const Scene *s, const CstEmission *e, const char 
 }
 
 
+/* A public alpha cut-out as the id scene_add_alpha gives (0: opaque, also for a constant
+ * alpha of 1, which then costs nothing). */
+static CstStatus read_alpha(Scene *s, const CstAlpha *a, const char *fn, int *out, CstError *err)
+{
+    *out = 0;
+    if (!a || !a->enabled) return CST_OK;
+    if (a->enabled != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha.enabled %d; expected 0 or 1", fn, a->enabled);
+    CstStatus st = check_texture_id(s, a->texture, 1, fn, "alpha texture", err);
+    if (st != CST_OK) return st;
+    if (!a->texture && !(a->value >= 0.0f && a->value <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha %g; expected a value from 0 to 1", fn, (double)a->value);
+    if (!a->texture && a->value == 1.0f) return CST_OK;
+    return scene_add_alpha(s, a->texture ? 1.0f : a->value, a->texture, out, err);
+}
+
 /* n floats at element i of a strided array (memcpy: the caller's struct may not align them). */
 static void fetch(const void *base, size_t stride, int i, int n, float *out)
 {
@@ -672,8 +688,11 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
                            "a smaller radiance (or scale) or smaller triangles", err);
     }
     if (st == CST_OK) st = check_degenerate(d, &a, fn, err);
+    int alpha = 0;
+    if (st == CST_OK) st = read_alpha(scene, &d->alpha, fn, &alpha, err);
     if (st == CST_OK) {
         SceneMesh sm = {0};
+        sm.alpha = alpha;
         sm.positions = a.pos;
         sm.num_vertices = d->num_vertices;
         sm.normals = a.nrm;
@@ -709,6 +728,9 @@ CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *d, int *out_i
     if (d->uvs)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has uvs; instances carry no texture "
                         "coordinates (expected uvs NULL)", fn);
+    if (d->alpha.enabled)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has an alpha cut-out; instances are "
+                        "opaque (expected alpha.enabled 0; add cut-out shapes with cst_scene_add_mesh)", fn);
     MeshArrays a = {0};
     int *mat = malloc((size_t)d->num_triangles * sizeof *mat);
     st = mat ? gather_mesh(d, fn, &a, err)
@@ -759,10 +781,9 @@ CstStatus cst_scene_add_instance(CstScene *scene, int object, const float m[12],
     return scene_add_instance(scene, object, &xf, err);
 }
 
-CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,
-                               const CstEmission *emission, CstError *err)
+static CstStatus add_sphere(CstScene *scene, const float center[3], float radius, int material,
+                            const CstEmission *emission, const CstAlpha *alpha, const char *fn, CstError *err)
 {
-    static const char fn[] = "cst_scene_add_sphere";
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
@@ -783,7 +804,23 @@ CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float rad
                                               peak * (em.two_sided ? 2.0 : 1.0),
                                           "a smaller radiance (or scale) or radius", err)) != CST_OK)
         return st;
-    return scene_add_sphere(scene, c, radius, material, &em, err);
+    int alpha_id = 0;
+    if ((st = read_alpha(scene, alpha, fn, &alpha_id, err)) != CST_OK) return st;
+    if ((st = scene_add_sphere(scene, c, radius, material, &em, err)) != CST_OK) return st;
+    scene->sphere_info[scene->num_spheres - 1].alpha = alpha_id;
+    return CST_OK;
+}
+
+CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,
+                               const CstEmission *emission, CstError *err)
+{
+    return add_sphere(scene, center, radius, material, emission, NULL, "cst_scene_add_sphere", err);
+}
+
+CstStatus cst_scene_add_sphere_alpha(CstScene *scene, const float center[3], float radius, int material,
+                                     const CstEmission *emission, const CstAlpha *alpha, CstError *err)
+{
+    return add_sphere(scene, center, radius, material, emission, alpha, "cst_scene_add_sphere_alpha", err);
 }
 
 /* ------------------------------------------------------------------ render settings */
