@@ -194,6 +194,15 @@ typedef struct CstTextureOp {
 
 /* Zero-initialise, then set the type and its fields. Images: v = 0 is the bottom row,
  * u = 0 the left column (OBJ and glTF meshes' convention). */
+/* Where a 2D texture's (s, t) come from (pbrt-v4's TextureMapping2D). */
+typedef enum CstTextureMapping {
+    CST_TEXTURE_MAPPING_UV = 0,    /* the surface's (u, v), through uv_scale and uv_offset */
+    CST_TEXTURE_MAPPING_SPHERICAL, /* p' = mapping_from_world p: s = theta / pi (from +z),
+                                    * t = phi / 2pi, phi = atan2(y, x) in [0, 2pi) */
+    CST_TEXTURE_MAPPING_CYLINDRICAL, /* s = (pi + atan2(y', x')) / 2pi, t = z' */
+    CST_TEXTURE_MAPPING_PLANAR     /* s = uv_offset[0] + p'.planar_v1, t = uv_offset[1] + p'.planar_v2 */
+} CstTextureMapping;
+
 typedef struct CstTextureDesc {
     CstTextureType type;
     float value[3];       /* constant: linear RGB, >= 0 */
@@ -226,6 +235,12 @@ typedef struct CstTextureDesc {
     /* Every type: evaluate at (uv_scale u + uv_offset[0], uv_scale v + uv_offset[1]);
      * uv_scale {0, 0} = {1, 1}. */
     float uv_scale[2], uv_offset[2];
+    /* Images, checkerboards, bilerp and dots: how (s, t) are made (0 = uv); the other
+     * mappings take the hit point through mapping_from_world (row-major 3 x 4; all 0 =
+     * identity; pbrt-v4: the inverse of the CTM where the texture is defined). */
+    CstTextureMapping mapping;
+    float mapping_from_world[12];
+    float planar_v1[3], planar_v2[3]; /* planar: both all 0 = (1, 0, 0) and (0, 1, 0) */
 } CstTextureDesc;
 
 /* *out_id (>= 1) names the texture in later descriptions. */

@@ -185,6 +185,29 @@ static CstStatus procedural_texture(Scene *s, const CstTextureDesc *d, Texture *
     return CST_OK;
 }
 
+/* The description's mapping onto t (after its uv transform: planar replaces it). */
+static CstStatus texture_mapping(const CstTextureDesc *d, const char *fn, Texture *t, CstError *err)
+{
+    if (d->mapping == CST_TEXTURE_MAPPING_UV) {
+        t->mapping = TEXTURE_MAP_UV;
+        return CST_OK;
+    }
+    if ((unsigned)d->mapping > CST_TEXTURE_MAPPING_PLANAR)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mapping %d; expected CST_TEXTURE_MAPPING_UV, _SPHERICAL, "
+                        "_CYLINDRICAL or _PLANAR", fn, (int)d->mapping);
+    for (int i = 0; i < 12; i++)
+        if (!isfinite(d->mapping_from_world[i]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mapping_from_world[%d] is not finite", fn, i);
+    Vec3 vs = v3(d->planar_v1[0], d->planar_v1[1], d->planar_v1[2]);
+    Vec3 vt = v3(d->planar_v2[0], d->planar_v2[1], d->planar_v2[2]);
+    if (!v3_is_finite(vs) || !v3_is_finite(vt))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: planar_v1 or planar_v2 is not finite", fn);
+    if (v3_length2(vs) == 0.0f && v3_length2(vt) == 0.0f) vs = v3(1.0f, 0.0f, 0.0f), vt = v3(0.0f, 1.0f, 0.0f);
+    texture_set_mapping(t, (TextureMapping)d->mapping, d->mapping_from_world, vs, vt,
+                        v2(d->uv_offset[0], d->uv_offset[1]));
+    return CST_OK;
+}
+
 CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *out_id, CstError *err)
 {
     static const char fn[] = "cst_scene_add_texture";
@@ -230,6 +253,10 @@ CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *o
     }
     if (su != 1.0f || sv != 1.0f || d->uv_offset[0] != 0.0f || d->uv_offset[1] != 0.0f)
         texture_set_uv_transform(&t, v2(su, sv), v2(d->uv_offset[0], d->uv_offset[1]));
+    if ((st = texture_mapping(d, fn, &t, err)) != CST_OK) {
+        texture_free(&t);
+        return st;
+    }
     int id = 0;
     if ((st = scene_add_texture(scene, &t, &id, err)) != CST_OK) return st;
     *out_id = id + 1;
@@ -307,6 +334,12 @@ CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *
     }
     d->uv_scale[0] = t->uv_scale.x, d->uv_scale[1] = t->uv_scale.y;
     d->uv_offset[0] = t->uv_offset.x, d->uv_offset[1] = t->uv_offset.y;
+    d->mapping = (CstTextureMapping)t->mapping; /* the enums agree */
+    if (t->mapping != TEXTURE_MAP_UV) {
+        memcpy(d->mapping_from_world, t->map_xf, sizeof d->mapping_from_world);
+        d->planar_v1[0] = t->map_vs.x, d->planar_v1[1] = t->map_vs.y, d->planar_v1[2] = t->map_vs.z;
+        d->planar_v2[0] = t->map_vt.x, d->planar_v2[1] = t->map_vt.y, d->planar_v2[2] = t->map_vt.z;
+    }
     color_floats(t->average, info->average);
     color_floats(t->max, info->max);
     return CST_OK;
