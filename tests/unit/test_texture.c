@@ -982,6 +982,48 @@ static void test_json_textures(void **state)
 }
 
 /* The example scene loads (its image texture found next to it) with its textures in use. */
+/* An image's "filter" and "max_anisotropy" in JSON: pbrt-v4's filters with a MIP map (and
+ * the footprint machinery on), the default none without one; errors at their values. */
+static void test_json_texture_filter(void **state)
+{
+    (void)state;
+    char png[512], body[3072];
+    tpath(png, sizeof png, "jf.png");
+    float px[48];
+    for (int i = 0; i < 48; i++) px[i] = (float)(i % 7) / 7.0f;
+    CstError err;
+    assert_int_equal(image_write(png, px, 4, 4, &err), CST_OK);
+    snprintf(body, sizeof body,
+             "\"textures\": {\"e\": {\"type\": \"image\", \"file\": \"%s\", \"filter\": \"ewa\", \"max_anisotropy\": 4},\n"
+             " \"t\": {\"type\": \"image\", \"file\": \"%s\", \"filter\": \"trilinear\"},\n"
+             " \"p\": {\"type\": \"image\", \"file\": \"%s\", \"filter\": \"point\"},\n"
+             " \"n\": {\"type\": \"image\", \"file\": \"%s\"}},\n"
+             "\"materials\": {\"a\": {\"type\": \"diffuse\", \"albedo\": \"e\"}},\n"
+             "\"shapes\": [{\"type\": \"sphere\", \"material\": \"a\", \"center\": [0,0,-3], \"radius\": 1}]}",
+             png, png, png, png);
+    CstScene *s = load_json(body, CST_OK, NULL, 0, NULL);
+    assert_int_equal(s->num_textures, 4);
+    const TextureFilter want[4] = {TEXTURE_FILTER_EWA, TEXTURE_FILTER_TRILINEAR, TEXTURE_FILTER_POINT, TEXTURE_FILTER_NONE};
+    for (int i = 0; i < 4; i++) {
+        /* the four share one file but are read separately, in the order listed */
+        const Texture *t = &s->textures[i];
+        assert_int_equal(t->type, TEXTURE_IMAGE);
+        assert_int_equal(t->image.filter, want[i]);
+        assert_int_equal(t->image.im->num_levels, want[i] == TEXTURE_FILTER_NONE ? 1 : 3); /* 4x4, 2x2, 1x1 */
+    }
+    assert_true(s->textures[0].image.max_aniso == 4.0f);
+    assert_true(s->textures[1].image.max_aniso == 8.0f); /* pbrt-v4's default */
+    assert_true(s->footprint.enabled); /* hits get screen-space footprints */
+    cst_scene_destroy(s);
+    load_json("\"textures\": {\"t\": {\"type\": \"image\", \"file\": \"x.png\", \"filter\": \"gaussian\"}},\n\"shapes\": []}",
+              CST_ERR_INVALID_ARG, "\"gaussian\"", 0, "expected one of: none, point, bilinear, trilinear, ewa");
+    load_json("\"textures\": {\"t\": {\"type\": \"image\", \"file\": \"x.png\", \"max_anisotropy\": 4}},\n\"shapes\": []}",
+              CST_ERR_INVALID_ARG, "4}}", 0, "max_anisotropy is for the \"ewa\" filter only");
+    load_json("\"textures\": {\"t\": {\"type\": \"image\", \"file\": \"x.png\", \"filter\": \"ewa\", "
+              "\"max_anisotropy\": 0.5}},\n\"shapes\": []}",
+              CST_ERR_INVALID_ARG, "0.5}}", 0, "expected a number >= 1");
+}
+
 static void test_example_scene(void **state)
 {
     (void)state;
@@ -1022,6 +1064,7 @@ int main(void)
         cmocka_unit_test(test_checkerboard),
         cmocka_unit_test(test_uv_transform),
         cmocka_unit_test(test_texture_mappings),
+        cmocka_unit_test(test_json_texture_filter),
         cmocka_unit_test(test_uv_at_hits),
         cmocka_unit_test(test_emitter_sample_uv),
         cmocka_unit_test(test_json_textures),
