@@ -363,7 +363,8 @@ static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHi
             dv_dir = v3_madd(dv_dir, dpdv, d0 / r);
         }
     } else {
-        Color rgb = texture_eval(s->textures, m->normal_map_texture - 1, sh->uv);
+        TexCtx cn = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
+        Color rgb = texture_eval_ctx(s->textures, m->normal_map_texture - 1, &cn);
         Vec3 t = v3(2.0f * rgb.c[0] - 1.0f, 2.0f * rgb.c[1] - 1.0f, 2.0f * rgb.c[2] - 1.0f);
         float tl = v3_length(t);
         Vec3 x = v3_sub(dpdu, v3_scale(n, v3_dot(n, dpdu)));
@@ -404,7 +405,9 @@ static inline const Material *scene_mix_choose(const Scene *s, const Material *m
 {
     uint64_t h = scene_hit_hash(sh);
     while (m->type == MATERIAL_MIX) {
-        float amt = m->amount_texture ? texture_eval_scalar(s->textures, m->amount_texture - 1, sh->uv) : m->amount;
+        /* with p and n: solid textures and non-uv mappings (texture_map_st) need them */
+        TexCtx c = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
+        float amt = m->amount_texture ? texture_eval_scalar_ctx(s->textures, m->amount_texture - 1, &c) : m->amount;
         h = mix64(h + 0xd1b54a32d192ed03ULL);
         float u = (float)(h >> 40) * 0x1p-24f;
         m = &s->materials[m->mix[u < amt ? 1 : 0]];
