@@ -248,16 +248,18 @@ static void test_alpha_estimators_agree(void **state)
     CstRenderSettings rs = {0};
     rs.width = rs.height = CSIZE;
     rs.filter = CST_FILTER_BOX;
-    Regions rp = regions(CSIZE, CBLOCK), rn = rp, rb = rp, rl = rp, rd = rp;
+    Regions rp = regions(CSIZE, CBLOCK), rn = rp, rb = rp, rl = rp, rd = rp, rv = rp;
     camera_regions(s, &rs, CST_INTEGRATOR_PATH, 512, 21, &rp);
     camera_regions(s, &rs, CST_INTEGRATOR_PATH_NEE, 512, 22, &rn);
     camera_regions(s, &rs, CST_INTEGRATOR_PATH_BSDF, 1024, 23, &rb);
     split_regions(s, &rs, CST_INTEGRATOR_LIGHT, 128, 24000, &rl);
     split_regions(s, &rs, CST_INTEGRATOR_BDPT, 48, 25000, &rd);
+    split_regions(s, &rs, CST_INTEGRATOR_VCM, 48, 26000, &rv);
     compare(&rp, &rn, "path", "path-nee");
     compare(&rp, &rb, "path", "path-bsdf");
     compare(&rp, &rl, "path", "light");
     compare(&rp, &rd, "path", "bdpt");
+    compare(&rp, &rv, "path", "vcm");
     scene_destroy(s);
 }
 
