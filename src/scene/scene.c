@@ -355,10 +355,11 @@ static uint64_t hash_vec3(Vec3 v, uint64_t seed)
 }
 
 /* Whether the hit sh of ray is on cut-away surface. The stochastic test's number is a
- * hash of the ray's origin and direction (as pbrt-v4's HashFloat(r.o, r.d)) and of the
- * primitive: the same ray always makes the same choice, and, since the ray is continued
- * with the same origin, surfaces further along it choose independently. Instances carry
- * no cut-outs. */
+ * hash of the ray's origin and direction (as pbrt-v4's HashFloat(r.o, r.d)), of the
+ * primitive and of the hit's distance: the same ray always makes the same choice, and,
+ * since the ray is continued with the same origin, every surface further along it chooses
+ * independently, the far side of a sphere too (pbrt-v4 spawns a new ray at each cut hit,
+ * whose new origin gives it a new number). Instances carry no cut-outs. */
 static bool hit_cut(const Scene *s, const Ray *ray, const SurfaceHit *sh)
 {
     if (sh->prim == UINT32_MAX) return false;
@@ -367,7 +368,8 @@ static bool hit_cut(const Scene *s, const Ray *ray, const SurfaceHit *sh)
     const AlphaMask *am = &s->alphas[a - 1];
     float v = alpha_value(s, am, sh->uv, sh->p, sh->ng);
     if (v >= 1.0f || !(v > 0.0f)) return alpha_cut(v, 0);
-    return alpha_cut(v, hash_vec3(ray->d, hash_vec3(ray->o, sh->prim)));
+    union { float f; uint32_t u; } t = {sh->t};
+    return alpha_cut(v, hash_vec3(ray->d, hash_vec3(ray->o, (uint64_t)t.u << 32 | sh->prim)));
 }
 
 /* A closest-hit filter: a hit on cut-away surface moves t_min to it and the query runs
