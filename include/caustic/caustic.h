@@ -204,6 +204,15 @@ typedef struct CstTextureOp {
 
 /* Zero-initialise, then set the type and its fields. Images: v = 0 is the bottom row,
  * u = 0 the left column (OBJ and glTF meshes' convention). */
+/* Where a 2D texture's (s, t) come from (pbrt-v4's TextureMapping2D). */
+typedef enum CstTextureMapping {
+    CST_TEXTURE_MAPPING_UV = 0,    /* the surface's (u, v), through uv_scale and uv_offset */
+    CST_TEXTURE_MAPPING_SPHERICAL, /* p' = mapping_from_world p: s = theta / pi (from +z),
+                                    * t = phi / 2pi, phi = atan2(y, x) in [0, 2pi) */
+    CST_TEXTURE_MAPPING_CYLINDRICAL, /* s = (pi + atan2(y', x')) / 2pi, t = z' */
+    CST_TEXTURE_MAPPING_PLANAR     /* s = uv_offset[0] + p'.planar_v1, t = uv_offset[1] + p'.planar_v2 */
+} CstTextureMapping;
+
 typedef struct CstTextureDesc {
     CstTextureType type;
     float value[3];       /* constant: linear RGB, >= 0 */
@@ -236,6 +245,12 @@ typedef struct CstTextureDesc {
     /* Every type: evaluate at (uv_scale u + uv_offset[0], uv_scale v + uv_offset[1]);
      * uv_scale {0, 0} = {1, 1}. */
     float uv_scale[2], uv_offset[2];
+    /* Images, checkerboards, bilerp and dots: how (s, t) are made (0 = uv); the other
+     * mappings take the hit point through mapping_from_world (row-major 3 x 4; all 0 =
+     * identity; pbrt-v4: the inverse of the CTM where the texture is defined). */
+    CstTextureMapping mapping;
+    float mapping_from_world[12];
+    float planar_v1[3], planar_v2[3]; /* planar: both all 0 = (1, 0, 0) and (0, 1, 0) */
 } CstTextureDesc;
 
 /* *out_id (>= 1) names the texture in later descriptions. */
@@ -341,6 +356,18 @@ typedef struct CstEmission {
                          * 0: radiance upsampled as an illuminant (RGB x D65). RGB mode ignores it */
 } CstEmission;
 
+/* An alpha cut-out (pbrt-v4's Shape "alpha"; leaves drawn on quads): where a shape's alpha
+ * is 0 its surface does not exist (rays, shadow rays and light paths pass, an emitter does
+ * not emit there), where it is 1 it is opaque, and in between a ray keeps the hit with
+ * probability alpha (pbrt-v4's stochastic test, deterministic per ray). Zero-initialised:
+ * opaque. */
+typedef struct CstAlpha {
+    int enabled;  /* 0: opaque (the rest ignored); 1: value or texture gives the alpha */
+    float value;  /* in [0, 1], when texture is 0 */
+    int texture;  /* a texture id whose scalar value (the mean of its channels; a pbrt float
+                   * image texture holds its first channel in all three) is the alpha, or 0 */
+} CstAlpha;
+
 /* A triangle mesh read from the caller's arrays, Embree-style: each attribute is a pointer
  * to its first element and a stride in bytes between consecutive elements (0 = tightly
  * packed), so positions, normals and uvs may sit inside one interleaved vertex struct.
@@ -366,6 +393,7 @@ typedef struct CstMeshDesc {
     int normals_unit;        /* 1: normals are already unit length, or zero where a vertex has
                               * none (its triangles shade with the geometric normal); stored
                               * as given instead of normalised */
+    CstAlpha alpha;          /* an alpha cut-out over the mesh's uvs; zero: opaque */
 } CstMeshDesc;
 
 /* num_dropped may be NULL. */
@@ -389,6 +417,11 @@ CST_API CstStatus cst_scene_add_instance(CstScene *scene, int object,
 /* emission may be NULL. */
 CST_API CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius,
                                int material, const CstEmission *emission, CstError *err);
+/* cst_scene_add_sphere with an alpha cut-out over the sphere's uvs (alpha may be NULL:
+ * opaque). */
+CST_API CstStatus cst_scene_add_sphere_alpha(CstScene *scene, const float center[3], float radius,
+                                             int material, const CstEmission *emission,
+                                             const CstAlpha *alpha, CstError *err);
 
 typedef enum CstLightType {
     CST_LIGHT_POINT = 1,  /* isotropic: intensity (W/sr) in every direction */

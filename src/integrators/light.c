@@ -68,7 +68,9 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
      * reach). */
     CameraWiSample cs;
     Vec2 u_lens = sampler_2d(rng);
-    if (!es.delta && es.finite && camera_sample_wi(cam, es.p, u_lens, c.margin, &cs)) {
+    /* (not from an emitter's alpha-cut-away surface: subpath_emit zeroed that start's flux) */
+    bool cut = s->num_alphas && !es.delta && es.finite && scene_emitter_cut(s, es.emitter, es.p);
+    if (!es.delta && es.finite && !cut && camera_sample_wi(cam, es.p, u_lens, c.margin, &cs)) {
         const Emitter *e = &s->emitter_sampler.light[es.emitter].u.area;
         Color le = scene_emitter_color(s, es.emitter, emitter_radiance(e, s->textures, es.n, es.uv, cs.wi), c.wl);
         splat_if_visible(&c, es.p, es.n, &cs, color_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a));

@@ -47,6 +47,10 @@ void subpath_emit(const Scene *s, Sampler *rng, const Wavelengths *wl, EmissionS
     Vec2 u_dir = sampler_2d(rng);
     EmitterGeometry g = scene_emitter_geometry(s);
     emitter_sample_emission(&s->emitter_sampler, &g, u_sel, u_pos, u_dir, es);
+    /* A start on an emitter's cut-away surface (alpha cut-out) carries no flux. */
+    if (s->num_alphas && !es->delta && es->emitter < s->emitter_sampler.count &&
+        scene_emitter_cut(s, es->emitter, es->p))
+        es->beta = color_s(0.0f);
     es->beta = scene_emitter_color(s, es->emitter, es->beta, wl);
 }
 

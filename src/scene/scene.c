@@ -57,6 +57,7 @@ void scene_destroy(Scene *s)
     for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
     free(s->textures);
     free(s->emitters);
+    free(s->alphas);
     for (int i = 0; i < s->num_delta_lights; i++)
         if (s->delta_lights[i].type == DELTA_GONIO) free((void *)(uintptr_t)s->delta_lights[i].gonio.factor);
         else if (s->delta_lights[i].type == DELTA_PROJECTION) free((void *)(uintptr_t)s->delta_lights[i].proj.rgb);
@@ -276,6 +277,7 @@ CstStatus scene_add_mesh_ex(Scene *s, const SceneMesh *m, int *num_dropped, CstE
         }
         for (int k = 0; k < 3; k++) s->tri_indices[3 * id + k] = base + indices[3 * t + k];
         s->tri_info[id].material = m->tri_material ? m->tri_material[t] : m->material;
+        s->tri_info[id].alpha = m->alpha;
         if (s->tri_has_uv) s->tri_has_uv[id] = m->uvs != NULL;
         CstStatus st = add_emitter(s, (uint32_t)id, m->emission, area, &s->tri_info[id].emitter, err);
         if (st != CST_OK) return st;
@@ -329,6 +331,7 @@ CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,
     s->spheres[i].center = center;
     s->spheres[i].radius = radius;
     s->sphere_info[i].material = material;
+    s->sphere_info[i].alpha = 0;
     s->num_spheres = i + 1;
     /* Sphere prim ids follow all triangles, so they are only known at commit: until
      * then the emitter holds the sphere index, flagged by is_sphere. */
@@ -336,6 +339,118 @@ CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,
                                &s->sphere_info[i].emitter, err);
     if (st == CST_OK && s->sphere_info[i].emitter >= 0) s->emitters[s->sphere_info[i].emitter].is_sphere = 1;
     return st;
+}
+
+CstStatus scene_add_alpha(Scene *s, float value, int texture, int *out_id, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (!(value >= 0.0f && value <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "alpha %g; expected a value in [0, 1]", (double)value);
+    if (texture < 0 || texture > s->num_textures)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "alpha texture %d out of range", texture);
+    if (!GROW(s->alphas, s->cap_alphas, s->num_alphas + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding an alpha cut-out");
+    s->alphas[s->num_alphas] = (AlphaMask){value, texture};
+    *out_id = ++s->num_alphas;
+    return CST_OK;
+}
+
+/* ------------------------------------------------------------------ alpha cut-outs */
+
+/* The alpha at a surface point with texture coordinates uv: the texture's scalar value
+ * without a footprint (pbrt-v4 evaluates alpha in GeometricPrimitive::Intersect, before
+ * the hit has its screen-space differentials: the finest MIP level). */
+static float alpha_value(const Scene *s, const AlphaMask *am, Vec2 uv, Vec3 p, Vec3 n)
+{
+    if (!am->texture) return am->value;
+    TexCtx c = {.uv = uv, .p = p, .n = n};
+    return texture_eval_scalar_ctx(s->textures, am->texture - 1, &c);
+}
+
+/* pbrt-v4's test (GeometricPrimitive::Intersect): a >= 1 keeps the surface, a <= 0 (or
+ * NaN) cuts it, else it is cut when a uniform number u from hash h exceeds a, so it is
+ * present with probability a. */
+static bool alpha_cut(float a, uint64_t h)
+{
+    if (a >= 1.0f) return false;
+    if (!(a > 0.0f)) return true;
+    return (float)(h >> 40) * 0x1p-24f > a;
+}
+
+static uint64_t hash_vec3(Vec3 v, uint64_t seed)
+{
+    union { float f[3]; uint32_t u[3]; } b = {{v.x, v.y, v.z}};
+    uint64_t h = mix64(seed ^ ((uint64_t)b.u[0] << 32 | b.u[1]));
+    return mix64(h + ((uint64_t)b.u[2] << 17) + 0x9e3779b97f4a7c15ULL);
+}
+
+/* Whether the hit sh of ray is on cut-away surface. The stochastic test's number is a
+ * hash of the ray's origin and direction (as pbrt-v4's HashFloat(r.o, r.d)), of the
+ * primitive and of the hit's distance: the same ray always makes the same choice, and,
+ * since the ray is continued with the same origin, every surface further along it chooses
+ * independently, the far side of a sphere too (pbrt-v4 spawns a new ray at each cut hit,
+ * whose new origin gives it a new number). Instances carry no cut-outs. */
+static bool hit_cut(const Scene *s, const Ray *ray, const SurfaceHit *sh)
+{
+    if (sh->prim == UINT32_MAX) return false;
+    int a = scene_prim_info(s, sh->prim)->alpha;
+    if (!a) return false;
+    const AlphaMask *am = &s->alphas[a - 1];
+    float v = alpha_value(s, am, sh->uv, sh->p, sh->ng);
+    if (v >= 1.0f || !(v > 0.0f)) return alpha_cut(v, 0);
+    union { float f; uint32_t u; } t = {sh->t};
+    return alpha_cut(v, hash_vec3(ray->d, hash_vec3(ray->o, (uint64_t)t.u << 32 | sh->prim)));
+}
+
+/* A closest-hit filter: a hit on cut-away surface moves t_min to it and the query runs
+ * again (every back end's interval is open at t_min, so the same surface is not found
+ * twice and each step makes progress). Costs one query per cut surface crossed. */
+bool scene_intersect_alpha(const Scene *s, const Ray *ray, SurfaceHit *sh)
+{
+    Ray r = *ray;
+    while (scene_intersect_first(s, &r, sh)) {
+        if (!hit_cut(s, ray, sh)) return true;
+        r.t_min = sh->t;
+    }
+    return false;
+}
+
+/* Any-hit with cut-outs: the plain occlusion query first (a free segment stays free),
+ * then the filtered closest-hit walk decides. */
+bool scene_occluded_alpha(const Scene *s, const Ray *ray)
+{
+    if (!accel_occluded(&s->accel, ray) && !(s->instances && instances_occluded(s->instances, ray))) return false;
+    SurfaceHit sh;
+    return scene_intersect_alpha(s, ray, &sh);
+}
+
+/* Whether point p, sampled on area emitter `emitter`, is on cut-away surface (pbrt-v4
+ * DiffuseAreaLight::AlphaMasked: the test's number hashes the point). Triangles find p's
+ * barycentrics from the two edge vectors (least squares in the triangle's plane). */
+bool scene_emitter_cut(const Scene *s, int emitter, Vec3 p)
+{
+    const Emitter *e = &s->emitter_sampler.light[emitter].u.area;
+    int a = scene_prim_info(s, e->prim)->alpha;
+    if (!a) return false;
+    const AlphaMask *am = &s->alphas[a - 1];
+    Vec2 uv = v2(0.0f, 0.0f);
+    Vec3 n;
+    if ((int)e->prim < s->num_triangles) {
+        const int32_t *t = &s->tri_indices[3 * e->prim];
+        Vec3 p0 = s->positions[t[0]];
+        Vec3 e1 = v3_sub(s->positions[t[1]], p0), e2 = v3_sub(s->positions[t[2]], p0), q = v3_sub(p, p0);
+        float d11 = v3_dot(e1, e1), d12 = v3_dot(e1, e2), d22 = v3_dot(e2, e2);
+        float q1 = v3_dot(q, e1), q2 = v3_dot(q, e2), det = d11 * d22 - d12 * d12;
+        float u = det != 0.0f ? (d22 * q1 - d12 * q2) / det : 0.0f;
+        float v = det != 0.0f ? (d11 * q2 - d12 * q1) / det : 0.0f;
+        n = s->tri_normals[e->prim];
+        if (am->texture) uv = triangle_uv(s->uvs, s->tri_has_uv, s->tri_indices, e->prim, u, v);
+    } else {
+        const Sphere *sp = &s->spheres[(int)e->prim - s->num_triangles];
+        n = v3_normalize(v3_sub(p, sp->center));
+        uv = sphere_uv(n);
+    }
+    return alpha_cut(alpha_value(s, am, uv, p, n), hash_vec3(p, 0x5bd1e995u));
 }
 
 void scene_set_camera(Scene *s, const CameraDesc *camera)

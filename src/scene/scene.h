@@ -38,7 +38,16 @@ typedef struct Emission {
 typedef struct PrimInfo {
     int32_t material; /* index into materials */
     int32_t emitter;  /* index into emitters, or -1 */
+    int32_t alpha;    /* 1 + index into Scene.alphas; 0: opaque (no cut-out) */
 } PrimInfo;
+
+/* An alpha cut-out (pbrt-v4's Shape "alpha"): where the alpha a at a hit is 0 the surface
+ * does not exist, where it is 1 it is opaque, and in between a ray keeps the hit with
+ * probability a (a stochastic test, deterministic per ray: scene_alpha_cut()). */
+typedef struct AlphaMask {
+    float value; /* the alpha, when texture is 0 */
+    int texture; /* 1 + index into the scene's textures (its scalar value), or 0 */
+} AlphaMask;
 
 typedef struct CstScene Scene;
 struct CstScene {
@@ -67,6 +76,9 @@ struct CstScene {
      * NULL when none has one; entries past num_emitter_spectrum are 0. */
     int *emitter_spectrum; int num_emitter_spectrum; size_t cap_emitter_spectrum;
     Emitter *emitters; int num_emitters; size_t cap_emitters;
+    /* Alpha cut-outs, referred to by PrimInfo.alpha; num_alphas == 0 (every scene without
+     * one) keeps the ray queries on their opaque path behind a single branch. */
+    AlphaMask *alphas; int num_alphas; size_t cap_alphas;
     DeltaLight *delta_lights; int num_delta_lights; size_t cap_delta_lights; /* point, spot, directional */
     EnvMap *env; /* the environment, or NULL */
     /* after commit */
@@ -131,6 +143,7 @@ typedef struct SceneMesh {
     int material;            /* scene material id of every triangle, */
     const int *tri_material; /* unless this per-triangle array of ids is given */
     const Emission *emission; /* or NULL */
+    int alpha;           /* 1 + index into Scene.alphas (scene_add_alpha), or 0: opaque */
     int skip_degenerate; /* drop zero-area triangles instead of failing (mesh files) */
 } SceneMesh;
 /* scene_add_mesh with vertex attributes, per-triangle materials and optional skipping of
@@ -142,6 +155,10 @@ CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err);
+/* An alpha cut-out for shapes added after it (SceneMesh.alpha, the last sphere's
+ * sphere_info[].alpha): *out_id = 1 + its index. value in [0, 1]; texture 1 + a texture
+ * index already in the scene, or 0. */
+CstStatus scene_add_alpha(Scene *scene, float value, int texture, int *out_id, CstError *err);
 /* Sets the environment (replacing one set before); the scene takes ownership of *env's
  * buffers (the struct is copied). */
 CstStatus scene_set_environment(Scene *scene, const EnvMap *env, CstError *err);
@@ -228,7 +245,8 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     return true;
 }
 
-static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *sh)
+/* The closest hit in (t_min, t_max), alpha cut-outs not applied: scene_intersect(). */
+static inline bool scene_intersect_first(const Scene *s, const Ray *ray, SurfaceHit *sh)
 {
     Hit h;
     if (s->instances) {
@@ -264,6 +282,21 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     sh->material = pi->material;
     sh->emitter = pi->emitter;
     return true;
+}
+
+/* scene_intersect's and scene_occluded's continuation in scenes with alpha cut-outs
+ * (scene.c): hits on cut-away surface skipped, the ray continued beyond them. */
+bool scene_intersect_alpha(const Scene *s, const Ray *ray, SurfaceHit *sh);
+bool scene_occluded_alpha(const Scene *s, const Ray *ray);
+
+/* The closest hit in (t_min, t_max) of a surface that exists there: every ray query of
+ * every integrator goes through it and scene_occluded(), so alpha cut-outs hold for
+ * camera, shadow and light paths and every accel back end alike. A scene without cut-outs
+ * pays one branch. */
+static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *sh)
+{
+    if (s->num_alphas) return scene_intersect_alpha(s, ray, sh);
+    return scene_intersect_first(s, ray, sh);
 }
 
 /* The partial derivatives of the surface position with respect to the texture coordinates
@@ -341,7 +374,8 @@ static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHi
             dv_dir = v3_madd(dv_dir, dpdv, d0 / r);
         }
     } else {
-        Color rgb = texture_eval(s->textures, m->normal_map_texture - 1, sh->uv);
+        TexCtx cn = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
+        Color rgb = texture_eval_ctx(s->textures, m->normal_map_texture - 1, &cn);
         Vec3 t = v3(2.0f * rgb.c[0] - 1.0f, 2.0f * rgb.c[1] - 1.0f, 2.0f * rgb.c[2] - 1.0f);
         float tl = v3_length(t);
         Vec3 x = v3_sub(dpdu, v3_scale(n, v3_dot(n, dpdu)));
@@ -382,7 +416,9 @@ static inline const Material *scene_mix_choose(const Scene *s, const Material *m
 {
     uint64_t h = scene_hit_hash(sh);
     while (m->type == MATERIAL_MIX) {
-        float amt = m->amount_texture ? texture_eval_scalar(s->textures, m->amount_texture - 1, sh->uv) : m->amount;
+        /* with p and n: solid textures and non-uv mappings (texture_map_st) need them */
+        TexCtx c = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
+        float amt = m->amount_texture ? texture_eval_scalar_ctx(s->textures, m->amount_texture - 1, &c) : m->amount;
         h = mix64(h + 0xd1b54a32d192ed03ULL);
         float u = (float)(h >> 40) * 0x1p-24f;
         m = &s->materials[m->mix[u < amt ? 1 : 0]];
@@ -518,8 +554,17 @@ static inline Color scene_emission(const Scene *s, const SurfaceHit *sh, Vec3 w,
 
 /* NEE's light value ls->li at wl (scene_light_color, from the emitter's prepared spectrum
  * when it is an untextured area light: li is then its radiance). */
+/* Whether point p, sampled on area emitter `emitter` (an index < emitter_sampler.count),
+ * lies on its shape's cut-away surface (scene.c): NEE and light-path starts then carry
+ * no emission. Only called in scenes with cut-outs. */
+bool scene_emitter_cut(const Scene *s, int emitter, Vec3 p);
+
 static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wavelengths *wl)
 {
+    /* A light point on cut-away surface emits nothing (pbrt-v4 DiffuseAreaLight::
+     * AlphaMasked): NEE samples the emitter's whole area, the cut part giving zero. */
+    if (s->num_alphas && ls->light < s->emitter_sampler.count && scene_emitter_cut(s, ls->light, ls->p))
+        return color_s(0.0f);
     if (!wl) return ls->li;
     Color o;
     if (ls->light < s->emitter_sampler.count && scene_emitter_spectral(s, ls->light, ls->li, wl, &o)) return o;
@@ -543,9 +588,10 @@ static inline EmitterGeometry scene_emitter_geometry(const Scene *s)
     return g;
 }
 
-/* Any hit in (r->t_min, r->t_max), instances included. */
+/* Any hit in (r->t_min, r->t_max), instances included, alpha cut-outs applied. */
 static inline bool scene_occluded(const Scene *s, const Ray *r)
 {
+    if (s->num_alphas) return scene_occluded_alpha(s, r);
     return accel_occluded(&s->accel, r) || (s->instances && instances_occluded(s->instances, r));
 }
 

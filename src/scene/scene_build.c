@@ -185,6 +185,29 @@ static CstStatus procedural_texture(Scene *s, const CstTextureDesc *d, Texture *
     return CST_OK;
 }
 
+/* The description's mapping onto t (after its uv transform: planar replaces it). */
+static CstStatus texture_mapping(const CstTextureDesc *d, const char *fn, Texture *t, CstError *err)
+{
+    if (d->mapping == CST_TEXTURE_MAPPING_UV) {
+        t->mapping = TEXTURE_MAP_UV;
+        return CST_OK;
+    }
+    if ((unsigned)d->mapping > CST_TEXTURE_MAPPING_PLANAR)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mapping %d; expected CST_TEXTURE_MAPPING_UV, _SPHERICAL, "
+                        "_CYLINDRICAL or _PLANAR", fn, (int)d->mapping);
+    for (int i = 0; i < 12; i++)
+        if (!isfinite(d->mapping_from_world[i]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mapping_from_world[%d] is not finite", fn, i);
+    Vec3 vs = v3(d->planar_v1[0], d->planar_v1[1], d->planar_v1[2]);
+    Vec3 vt = v3(d->planar_v2[0], d->planar_v2[1], d->planar_v2[2]);
+    if (!v3_is_finite(vs) || !v3_is_finite(vt))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: planar_v1 or planar_v2 is not finite", fn);
+    if (v3_length2(vs) == 0.0f && v3_length2(vt) == 0.0f) vs = v3(1.0f, 0.0f, 0.0f), vt = v3(0.0f, 1.0f, 0.0f);
+    texture_set_mapping(t, (TextureMapping)d->mapping, d->mapping_from_world, vs, vt,
+                        v2(d->uv_offset[0], d->uv_offset[1]));
+    return CST_OK;
+}
+
 CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *out_id, CstError *err)
 {
     static const char fn[] = "cst_scene_add_texture";
@@ -230,6 +253,10 @@ CstStatus cst_scene_add_texture(CstScene *scene, const CstTextureDesc *d, int *o
     }
     if (su != 1.0f || sv != 1.0f || d->uv_offset[0] != 0.0f || d->uv_offset[1] != 0.0f)
         texture_set_uv_transform(&t, v2(su, sv), v2(d->uv_offset[0], d->uv_offset[1]));
+    if ((st = texture_mapping(d, fn, &t, err)) != CST_OK) {
+        texture_free(&t);
+        return st;
+    }
     int id = 0;
     if ((st = scene_add_texture(scene, &t, &id, err)) != CST_OK) return st;
     *out_id = id + 1;
@@ -307,6 +334,12 @@ CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *
     }
     d->uv_scale[0] = t->uv_scale.x, d->uv_scale[1] = t->uv_scale.y;
     d->uv_offset[0] = t->uv_offset.x, d->uv_offset[1] = t->uv_offset.y;
+    d->mapping = (CstTextureMapping)t->mapping; /* the enums agree */
+    if (t->mapping != TEXTURE_MAP_UV) {
+        memcpy(d->mapping_from_world, t->map_xf, sizeof d->mapping_from_world);
+        d->planar_v1[0] = t->map_vs.x, d->planar_v1[1] = t->map_vs.y, d->planar_v1[2] = t->map_vs.z;
+        d->planar_v2[0] = t->map_vt.x, d->planar_v2[1] = t->map_vt.y, d->planar_v2[2] = t->map_vt.z;
+    }
     color_floats(t->average, info->average);
     color_floats(t->max, info->max);
     return CST_OK;
@@ -598,6 +631,22 @@ static CstStatus read_emission(const Scene *s, const CstEmission *e, const char 
 }
 
 
+/* A public alpha cut-out as the id scene_add_alpha gives (0: opaque, also for a constant
+ * alpha of 1, which then costs nothing). */
+static CstStatus read_alpha(Scene *s, const CstAlpha *a, const char *fn, int *out, CstError *err)
+{
+    *out = 0;
+    if (!a || !a->enabled) return CST_OK;
+    if (a->enabled != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha.enabled %d; expected 0 or 1", fn, a->enabled);
+    CstStatus st = check_texture_id(s, a->texture, 1, fn, "alpha texture", err);
+    if (st != CST_OK) return st;
+    if (!a->texture && !(a->value >= 0.0f && a->value <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha %g; expected a value from 0 to 1", fn, (double)a->value);
+    if (!a->texture && a->value == 1.0f) return CST_OK;
+    return scene_add_alpha(s, a->texture ? 1.0f : a->value, a->texture, out, err);
+}
+
 /* n floats at element i of a strided array (memcpy: the caller's struct may not align them). */
 static void fetch(const void *base, size_t stride, int i, int n, float *out)
 {
@@ -749,8 +798,11 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
                            "a smaller radiance (or scale) or smaller triangles", err);
     }
     if (st == CST_OK) st = check_degenerate(d, &a, fn, err);
+    int alpha = 0;
+    if (st == CST_OK) st = read_alpha(scene, &d->alpha, fn, &alpha, err);
     if (st == CST_OK) {
         SceneMesh sm = {0};
+        sm.alpha = alpha;
         sm.positions = a.pos;
         sm.num_vertices = d->num_vertices;
         sm.normals = a.nrm;
@@ -788,6 +840,9 @@ CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *d, int *out_i
     if (d->uvs)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has uvs; instances carry no texture "
                         "coordinates (expected uvs NULL)", fn);
+    if (d->alpha.enabled)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has an alpha cut-out; instances are "
+                        "opaque (expected alpha.enabled 0; add cut-out shapes with cst_scene_add_mesh)", fn);
     MeshArrays a = {0};
     int *mat = malloc((size_t)d->num_triangles * sizeof *mat);
     st = mat ? gather_mesh(d, fn, &a, err)
@@ -838,10 +893,9 @@ CstStatus cst_scene_add_instance(CstScene *scene, int object, const float m[12],
     return scene_add_instance(scene, object, &xf, err);
 }
 
-CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,
-                               const CstEmission *emission, CstError *err)
+static CstStatus add_sphere(CstScene *scene, const float center[3], float radius, int material,
+                            const CstEmission *emission, const CstAlpha *alpha, const char *fn, CstError *err)
 {
-    static const char fn[] = "cst_scene_add_sphere";
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
@@ -863,8 +917,23 @@ CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float rad
                                           "a smaller radiance (or scale) or radius", err)) != CST_OK)
         return st;
     const int first = scene->num_emitters;
+    int alpha_id = 0;
+    if ((st = read_alpha(scene, alpha, fn, &alpha_id, err)) != CST_OK) return st;
     if ((st = scene_add_sphere(scene, c, radius, material, &em, err)) != CST_OK) return st;
+    scene->sphere_info[scene->num_spheres - 1].alpha = alpha_id;
     return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
+}
+
+CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,
+                               const CstEmission *emission, CstError *err)
+{
+    return add_sphere(scene, center, radius, material, emission, NULL, "cst_scene_add_sphere", err);
+}
+
+CstStatus cst_scene_add_sphere_alpha(CstScene *scene, const float center[3], float radius, int material,
+                                     const CstEmission *emission, const CstAlpha *alpha, CstError *err)
+{
+    return add_sphere(scene, center, radius, material, emission, alpha, "cst_scene_add_sphere_alpha", err);
 }
 
 /* ------------------------------------------------------------------ render settings */

@@ -292,6 +292,19 @@ void texture_set_uv_transform(Texture *t, Vec2 scale, Vec2 offset)
     t->uv_offset = offset;
 }
 
+void texture_set_mapping(Texture *t, TextureMapping m, const float *xf, Vec3 vs, Vec3 vt, Vec2 offset)
+{
+    t->mapping = m;
+    memset(t->map_xf, 0, sizeof t->map_xf);
+    bool zero = true;
+    for (int i = 0; xf && i < 12; i++) zero &= xf[i] == 0.0f;
+    if (zero) t->map_xf[0] = t->map_xf[5] = t->map_xf[10] = 1.0f;
+    else memcpy(t->map_xf, xf, sizeof t->map_xf);
+    t->map_vs = vs;
+    t->map_vt = vt;
+    if (m == TEXTURE_MAP_PLANAR) t->uv_offset = offset, t->uv_scale = v2(1.0f, 1.0f);
+}
+
 Color texture_texel(const Texture *t, int level, int x, int y)
 {
     return mipmap_texel(t->image.im, level, x, y, t->image.wrap);
@@ -370,16 +383,6 @@ bool texture_procedural(Texture *t, TextureType type, const TextureProc *pr, con
     return t->depth <= TEXTURE_MAX_DEPTH;
 }
 
-/* An image texture at st (already mapped), its footprint scaled by the uv map. */
-static Color texture_image_eval(const Texture *t, Vec2 st, const TexCtx *c)
-{
-    const TextureImage *ti = &t->image;
-    if (ti->filter == TEXTURE_FILTER_NONE) return mipmap_bilerp(ti->im, 0, ti->wrap, st);
-    Vec2 dst0 = v2(t->uv_scale.x * c->dudx, t->uv_scale.y * c->dvdx);
-    Vec2 dst1 = v2(t->uv_scale.x * c->dudy, t->uv_scale.y * c->dvdy);
-    return mipmap_filter(ti->im, ti->wrap, ti->filter, ti->max_aniso, st, dst0, dst1);
-}
-
 /* p through a solid texture's texture_from_world (points), and a vector (no translation). */
 static inline Vec3 xf_point(const float *m, Vec3 p)
 {
@@ -390,6 +393,61 @@ static inline Vec3 xf_vector(const float *m, Vec3 v)
 {
     return v3(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
               m[8] * v.x + m[9] * v.y + m[10] * v.z);
+}
+
+/* The mappings of pbrt-v4's TextureMapping2D::Map. The derivatives are the gradients of
+ * (s, t) with respect to the texture-space point, dotted with the point's screen
+ * derivatives (PBR 4th ed. eqs. 10.9-10.11): spherical ds/dp = (-y, x, 0) / (2 pi (x^2 +
+ * y^2)) for phi, and dt/dp = (x z / r, y z / r, -r) / (pi |p|^2), r = sqrt(x^2 + y^2), for
+ * theta, which pbrt-v4 assigns to s and t the other way round (its s is theta / pi, its
+ * derivatives' s is phi's): kept as pbrt-v4 has it, so footprints match its MIP levels. */
+Vec2 texture_map_st(const Texture *t, const TexCtx *c, Vec2 *d0, Vec2 *d1)
+{
+    if (t->mapping == TEXTURE_MAP_UV) {
+        *d0 = v2(t->uv_scale.x * c->dudx, t->uv_scale.y * c->dvdx);
+        *d1 = v2(t->uv_scale.x * c->dudy, t->uv_scale.y * c->dvdy);
+        return v2(c->uv.x * t->uv_scale.x + t->uv_offset.x, c->uv.y * t->uv_scale.y + t->uv_offset.y);
+    }
+    Vec3 p = xf_point(t->map_xf, c->p);
+    Vec3 dx = xf_vector(t->map_xf, c->dpdx), dy = xf_vector(t->map_xf, c->dpdy);
+    Vec3 dsdp, dtdp;
+    Vec2 st;
+    const float inv_2pi = 1.0f / (2.0f * CST_PI);
+    float x2y2 = p.x * p.x + p.y * p.y;
+    switch (t->mapping) {
+    case TEXTURE_MAP_SPHERICAL: {
+        float r = sqrtf(x2y2), l2 = x2y2 + p.z * p.z;
+        dsdp = x2y2 > 0.0f ? v3_scale(v3(-p.y, p.x, 0.0f), inv_2pi / x2y2) : v3s(0.0f);
+        dtdp = r > 0.0f ? v3_scale(v3(p.x * p.z / r, p.y * p.z / r, -r), 1.0f / (CST_PI * l2)) : v3s(0.0f);
+        float len = sqrtf(l2);
+        float cz = len > 0.0f ? clampf(p.z / len, -1.0f, 1.0f) : 1.0f;
+        float phi = atan2f(p.y, p.x);
+        if (phi < 0.0f) phi += 2.0f * CST_PI;
+        st = v2(acosf(cz) * (1.0f / CST_PI), phi * inv_2pi);
+        break;
+    }
+    case TEXTURE_MAP_CYLINDRICAL:
+        dsdp = x2y2 > 0.0f ? v3_scale(v3(-p.y, p.x, 0.0f), inv_2pi / x2y2) : v3s(0.0f);
+        dtdp = v3(0.0f, 0.0f, 1.0f);
+        st = v2((CST_PI + atan2f(p.y, p.x)) * inv_2pi, p.z);
+        break;
+    default: /* planar */
+        dsdp = t->map_vs;
+        dtdp = t->map_vt;
+        st = v2(t->uv_offset.x + v3_dot(p, t->map_vs), t->uv_offset.y + v3_dot(p, t->map_vt));
+        break;
+    }
+    *d0 = v2(v3_dot(dsdp, dx), v3_dot(dtdp, dx));
+    *d1 = v2(v3_dot(dsdp, dy), v3_dot(dtdp, dy));
+    return st;
+}
+
+/* An image texture at st (already mapped) with its footprint d0, d1. */
+static Color texture_image_eval(const Texture *t, Vec2 st, Vec2 d0, Vec2 d1)
+{
+    const TextureImage *ti = &t->image;
+    if (ti->filter == TEXTURE_FILTER_NONE) return mipmap_bilerp(ti->im, 0, ti->wrap, st);
+    return mipmap_filter(ti->im, ti->wrap, ti->filter, ti->max_aniso, st, d0, d1);
 }
 
 static inline Color lerp_color(float t, Color a, Color b) { return color_add(color_scale(a, 1.0f - t), color_scale(b, t)); }
@@ -489,10 +547,16 @@ static Color eval_rec(const Texture *textures, int id, const TexCtx *c)
         const Texture *t = &textures[id];
         /* Exact for the identity (x * 1 + 0 == x), so untransformed textures are unchanged. */
         Vec2 st = v2(uv.x * t->uv_scale.x + t->uv_offset.x, uv.y * t->uv_scale.y + t->uv_offset.y);
+        Vec2 d0 = v2(0.0f, 0.0f), d1 = d0;
+        if (t->mapping != TEXTURE_MAP_UV) st = texture_map_st(t, c, &d0, &d1);
         switch (t->type) {
         case TEXTURE_CONSTANT: return t->value; /* its maps are folded in */
         case TEXTURE_IMAGE: {
-            Color v = texture_image_eval(t, st, c);
+            if (t->mapping == TEXTURE_MAP_UV) {
+                d0 = v2(t->uv_scale.x * c->dudx, t->uv_scale.y * c->dvdx);
+                d1 = v2(t->uv_scale.x * c->dudy, t->uv_scale.y * c->dvdy);
+            }
+            Color v = texture_image_eval(t, st, d0, d1);
             return t->num_ops ? texture_apply_ops(t, v) : v;
         }
         case TEXTURE_CHECKERBOARD: {

@@ -131,11 +131,27 @@ typedef struct TextureOp {
     Color a, b;
 } TextureOp;
 
+/* Where a 2D texture's (s, t) come from (pbrt-v4's TextureMapping2D, PBR 4th ed. sec.
+ * 10.2.1-10.2.4): the surface's (u, v) scaled and offset, or the hit point p taken to
+ * texture space by map_xf (pbrt-v4: the inverse of the CTM at the texture's definition)
+ * and projected: spherical s = theta / pi, t = phi / 2pi (theta from +z, phi = atan2(y, x)
+ * in [0, 2pi)); cylindrical s = (pi + atan2(y, x)) / 2pi, t = z; planar s = du + p.vs,
+ * t = dv + p.vt. */
+typedef enum TextureMapping {
+    TEXTURE_MAP_UV = 0,
+    TEXTURE_MAP_SPHERICAL,
+    TEXTURE_MAP_CYLINDRICAL,
+    TEXTURE_MAP_PLANAR
+} TextureMapping;
+
 typedef struct Texture {
     TextureType type;
     Color average; /* mean over the uv plane (images: over their texels): light selection */
     Color max;     /* largest value of each channel: validation (an albedo must stay <= 1) */
     Vec2 uv_scale, uv_offset; /* (1, 1) and (0, 0) unless texture_set_uv_transform */
+    TextureMapping mapping;   /* TEXTURE_MAP_UV unless texture_set_mapping */
+    float map_xf[12];         /* other mappings: texture_from_world, row-major 3 x 4 */
+    Vec3 map_vs, map_vt;      /* planar: the s and t axes; (du, dv) is uv_offset */
     int num_ops; /* value maps (images and constants; never on checkerboards) */
     int depth;   /* 1 + the deepest child's depth; at most TEXTURE_MAX_DEPTH */
     TextureOp ops[TEXTURE_MAX_OPS];
@@ -189,6 +205,13 @@ size_t texture_image_bytes(const Texture *t);
 void texture_free(Texture *t);
 /* After construction: evaluate t at (scale.x u + offset.x, scale.y v + offset.y). */
 void texture_set_uv_transform(Texture *t, Vec2 scale, Vec2 offset);
+/* After construction: a spherical, cylindrical or planar mapping with texture_from_world
+ * xf (row-major 3 x 4; NULL or all zero: the identity), planar axes vs, vt and offset
+ * (du, dv) in uv_offset (planar only). TEXTURE_MAP_UV restores the uv mapping. */
+void texture_set_mapping(Texture *t, TextureMapping m, const float *xf, Vec3 vs, Vec3 vt, Vec2 offset);
+/* (s, t) of texture t at c, and their screen derivatives ds/dx, dt/dx (*d0) and ds/dy,
+ * dt/dy (*d1) as pbrt-v4's mappings compute them (zero when c has none). */
+Vec2 texture_map_st(const Texture *t, const TexCtx *c, Vec2 *d0, Vec2 *d1);
 
 /* The raw (decoded, unmapped) texel (x, y) of level `level` of an image texture, y = 0 the
  * top row; indices wrap as the texture does. */

@@ -810,6 +810,39 @@ static void test_imagemap_params(void **state)
         fail_msg("%s", err.msg);
 }
 
+/* Texture "mapping": spherical, cylindrical and planar take the inverse of the CTM at the
+ * definition; planar its v1, v2, udelta, vdelta; an unknown mapping is a located error. */
+static void test_texture_mappings(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD(
+        "AttributeBegin\nTranslate 1 2 3\n"
+        "Texture \"sph\" \"spectrum\" \"checkerboard\" \"string mapping\" \"spherical\" \"rgb tex1\" [0.1 0.2 0.3]\n"
+        "AttributeEnd\n"
+        "Texture \"cyl\" \"spectrum\" \"checkerboard\" \"string mapping\" \"cylindrical\" \"rgb tex1\" [0.1 0.2 0.3]\n"
+        "Texture \"pla\" \"spectrum\" \"checkerboard\" \"string mapping\" \"planar\" \"vector3 v1\" [0 0 1] "
+        "\"vector3 v2\" [0 2 0] \"float udelta\" 0.5 \"float vdelta\" -1 \"rgb tex1\" [0.1 0.2 0.3]\n"
+        "Material \"diffuse\" \"texture reflectance\" \"sph\"\n" TRI
+        "Material \"diffuse\" \"texture reflectance\" \"cyl\"\n" TRI
+        "Material \"diffuse\" \"texture reflectance\" \"pla\"\n" TRI), &w);
+    const Texture *sph = albedo_tex(s, 0), *cyl = albedo_tex(s, 1), *pla = albedo_tex(s, 2);
+    assert_int_equal(sph->mapping, TEXTURE_MAP_SPHERICAL);
+    assert_true(sph->map_xf[3] == -1.0f && sph->map_xf[7] == -2.0f && sph->map_xf[11] == -3.0f);
+    assert_int_equal(cyl->mapping, TEXTURE_MAP_CYLINDRICAL);
+    assert_true(cyl->map_xf[0] == 1.0f && cyl->map_xf[3] == 0.0f);
+    assert_int_equal(pla->mapping, TEXTURE_MAP_PLANAR);
+    assert_true(pla->map_vs.z == 1.0f && pla->map_vt.y == 2.0f && pla->uv_offset.x == 0.5f && pla->uv_offset.y == -1.0f);
+    TexCtx c = {.p = v3(4.0f, 0.25f, 9.0f)};
+    Vec2 d0, d1, st = texture_map_st(pla, &c, &d0, &d1);
+    assert_true(st.x == 9.5f && st.y == -0.5f);
+    for (int i = 0; i < w.n && i < 64; i++)
+        if (strstr(w.msg[i], "mapping")) fail_msg("unexpected warning: %s", w.msg[i]);
+    cst_scene_destroy(s);
+    expect_error(WORLD("Texture \"x\" \"spectrum\" \"checkerboard\" \"string mapping\" \"cubic\"\n" TRI),
+                 CST_ERR_INVALID_ARG, "\"string mapping\"", 0, "unknown mapping \"cubic\"; expected one of: uv, spherical");
+}
+
 /* A quad with uvs (0,0) at the bottom left to (1,1) at the top right and a 2x2 image,
  * seen through a 2x2 orthographic camera from -z: pbrt-v4 looks images up at (u, 1 - v)
  * with row 0 at the top, and its LookAt images are mirrored (left-handed), so each pixel
@@ -883,6 +916,7 @@ int main(void)
         cmocka_unit_test(test_texture_classes),
         cmocka_unit_test(test_texture_materials),
         cmocka_unit_test(test_imagemap_params),
+        cmocka_unit_test(test_texture_mappings),
         cmocka_unit_test(test_texture_orientation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -86,6 +86,43 @@ static void test_loopsubdiv(void **state)
     cst_scene_destroy(s);
 }
 
+/* Shape "alpha": a constant below 1, a float texture, a constant 0 (the shape left out),
+ * 1 (opaque, no cut-out), and inside ObjectBegin (a warning, opaque). */
+static void test_shape_alpha(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD(
+        "Texture \"mask\" \"float\" \"checkerboard\" \"float uscale\" 4 \"float vscale\" 4 "
+        "\"float tex1\" 0 \"float tex2\" 1\n"
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"integer indices\" [0 1 2] \"float alpha\" 0.5\n"
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 1  1 0 1  0 1 1] \"integer indices\" [0 1 2] \"texture alpha\" \"mask\"\n"
+        "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [7 7 7]\n"
+        "Shape \"bilinearmesh\" \"point3 P\" [0 0 2 1 0 2 0 1 2 1 1 2] \"float alpha\" [ 0 ]\nAttributeEnd\n"
+        "Shape \"sphere\" \"float alpha\" 1\n"
+        "Shape \"sphere\" \"float alpha\" 0.25\n"), &w);
+    assert_int_equal(s->num_triangles, 2); /* the alpha-0 light left out */
+    assert_int_equal(s->num_emitters, 0);
+    assert_int_equal(s->num_alphas, 3);
+    assert_int_equal(s->tri_info[0].alpha, 1);
+    assert_true(s->alphas[0].value == 0.5f && s->alphas[0].texture == 0);
+    assert_int_equal(s->tri_info[1].alpha, 2);
+    assert_true(s->alphas[1].texture > 0);
+    assert_int_equal(s->num_spheres, 2);
+    assert_int_equal(s->sphere_info[0].alpha, 0);
+    assert_int_equal(s->sphere_info[1].alpha, 3);
+    assert_true(s->alphas[2].value == 0.25f);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "alpha") < 0);
+    cst_scene_destroy(s);
+    Warnings w2 = {0};
+    s = expect_ok(WORLD("ObjectBegin \"leaf\"\n"
+                        "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"integer indices\" [0 1 2] "
+                        "\"float alpha\" 0.5\nObjectEnd\nObjectInstance \"leaf\"\n"), &w2);
+    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "alpha cut-outs of shapes inside ObjectBegin") >= 0);
+    assert_int_equal(s->num_alphas, 0);
+    cst_scene_destroy(s);
+}
+
 static void test_plymesh(void **state)
 {
     (void)state;
@@ -358,6 +395,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_loopsubdiv),
+        cmocka_unit_test(test_shape_alpha),
         cmocka_unit_test(test_plymesh),
         cmocka_unit_test(test_other_directives),
         cmocka_unit_test(test_imagemap_and_binary_ply),

@@ -677,6 +677,80 @@ static void assert_uv(Vec2 got, double u, double v)
         fail_msg("uv (%.7f, %.7f), expected (%.7f, %.7f)", (double)got.x, (double)got.y, u, v);
 }
 
+/* pbrt-v4's spherical, cylindrical and planar mappings (TextureMapping2D) against closed
+ * forms of (s, t), their derivatives against finite differences, a texture_from_world, and
+ * a checkerboard evaluated through a planar mapping. */
+static Vec2 map_at(const Texture *t, Vec3 p, Vec3 dpdx, Vec2 *d0)
+{
+    TexCtx c = {.p = p, .dpdx = dpdx};
+    Vec2 d1;
+    return texture_map_st(t, &c, d0, &d1);
+}
+
+static void expect_st(const Texture *t, Vec3 p, float s, float tt)
+{
+    Vec2 d0, st = map_at(t, p, v3s(0.0f), &d0);
+    if (!(fabsf(st.x - s) < 1e-6f && fabsf(st.y - tt) < 1e-6f))
+        fail_msg("mapping %d at (%g, %g, %g): (%.7f, %.7f), closed form (%.7f, %.7f)", (int)t->mapping,
+                 (double)p.x, (double)p.y, (double)p.z, (double)st.x, (double)st.y, (double)s, (double)tt);
+    assert_true(d0.x == 0.0f && d0.y == 0.0f); /* no footprint: none */
+}
+
+/* d0 against central differences of (s, t) along dpdx (h = 1e-3 of it). */
+static void expect_derivs(const Texture *t, Vec3 p, Vec3 dpdx, int swap)
+{
+    Vec2 d0, unused;
+    map_at(t, p, dpdx, &d0);
+    const float h = 1e-3f;
+    Vec2 a = map_at(t, v3_madd(p, dpdx, h), v3s(0.0f), &unused), b = map_at(t, v3_madd(p, dpdx, -h), v3s(0.0f), &unused);
+    Vec2 fd = v2((a.x - b.x) / (2.0f * h), (a.y - b.y) / (2.0f * h));
+    if (swap) fd = v2(fd.y, fd.x); /* pbrt-v4's spherical mapping: see texture_map_st */
+    if (!(fabsf(d0.x - fd.x) < 2e-3f * (1.0f + fabsf(fd.x)) && fabsf(d0.y - fd.y) < 2e-3f * (1.0f + fabsf(fd.y))))
+        fail_msg("mapping %d: derivatives (%.6f, %.6f), differences (%.6f, %.6f)", (int)t->mapping, (double)d0.x,
+                 (double)d0.y, (double)fd.x, (double)fd.y);
+}
+
+static void test_texture_mappings(void **state)
+{
+    (void)state;
+    Texture t;
+    texture_constant(&t, color_s(1.0f));
+    texture_set_mapping(&t, TEXTURE_MAP_SPHERICAL, NULL, v3s(0.0f), v3s(0.0f), v2(0.0f, 0.0f));
+    expect_st(&t, v3(0, 0, 2), 0.0f, 0.0f);         /* theta 0 */
+    expect_st(&t, v3(3, 0, 0), 0.5f, 0.0f);         /* theta pi/2, phi 0 */
+    expect_st(&t, v3(0, 1, 0), 0.5f, 0.25f);        /* phi pi/2 */
+    expect_st(&t, v3(0, -1, 0), 0.5f, 0.75f);       /* phi 3pi/2: [0, 2pi) */
+    expect_st(&t, v3(-1, 0, -1), 0.75f, 0.5f);      /* theta 3pi/4, phi pi */
+    expect_derivs(&t, v3(0.3f, 0.5f, 0.4f), v3(0.02f, -0.01f, 0.03f), 1);
+    /* texture_from_world: a translation by (-1, 0, 0) centres the sphere at x = 1 */
+    const float xf[12] = {1, 0, 0, -1, 0, 1, 0, 0, 0, 0, 1, 0};
+    texture_set_mapping(&t, TEXTURE_MAP_SPHERICAL, xf, v3s(0.0f), v3s(0.0f), v2(0.0f, 0.0f));
+    expect_st(&t, v3(1, 1, 0), 0.5f, 0.25f);
+    texture_set_mapping(&t, TEXTURE_MAP_CYLINDRICAL, NULL, v3s(0.0f), v3s(0.0f), v2(0.0f, 0.0f));
+    expect_st(&t, v3(1, 0, 3), 0.5f, 3.0f);         /* (pi + 0) / 2pi */
+    expect_st(&t, v3(0, 2, -2), 0.75f, -2.0f);      /* (pi + pi/2) / 2pi */
+    expect_st(&t, v3(-1, -1e-7f, 0), 0.0f, 0.0f);   /* atan2 -> -pi: s = 0 */
+    expect_derivs(&t, v3(0.7f, -0.4f, 1.0f), v3(0.01f, 0.02f, -0.05f), 0);
+    /* planar: s = 0.1 + p.v1, t = 0.2 + p.v2 */
+    texture_set_mapping(&t, TEXTURE_MAP_PLANAR, NULL, v3(1, 0, 0), v3(0, 0.5f, 1), v2(0.1f, 0.2f));
+    expect_st(&t, v3(2, 5, 3), 2.1f, 5.7f);
+    expect_derivs(&t, v3(2, 5, 3), v3(0.25f, -0.5f, 1.0f), 0);
+    Vec2 d0, st = map_at(&t, v3(0, 0, 0), v3(0.25f, -0.5f, 1.0f), &d0);
+    assert_true(st.x == 0.1f && st.y == 0.2f && d0.x == 0.25f && d0.y == 0.75f);
+    /* a checkerboard (scale 1) through the planar mapping: parity of floor(s) + floor(t) */
+    Texture tex[3];
+    texture_constant(&tex[0], color_s(0.25f));
+    texture_constant(&tex[1], color_s(0.75f));
+    texture_checkerboard(&tex[2], tex, 0, 1, 1.0f);
+    texture_set_mapping(&tex[2], TEXTURE_MAP_PLANAR, NULL, v3(1, 0, 0), v3(0, 0, 1), v2(0.0f, 0.0f));
+    TexCtx c = {.uv = v2(0.9f, 0.9f), .p = v3(0.5f, 7.0f, 0.5f)};
+    assert_true(texture_eval_ctx(tex, 2, &c).c[0] == 0.25f); /* (0, 0): even; the uv would be too */
+    c.p = v3(1.5f, 7.0f, 0.5f);
+    assert_true(texture_eval_ctx(tex, 2, &c).c[0] == 0.75f); /* (1, 0): odd, whatever the uv */
+    c.p = v3(1.5f, -3.0f, -0.5f);
+    assert_true(texture_eval_ctx(tex, 2, &c).c[0] == 0.25f); /* (1, -1): even */
+}
+
 static void test_uv_at_hits(void **state)
 {
     (void)state;
@@ -908,6 +982,48 @@ static void test_json_textures(void **state)
 }
 
 /* The example scene loads (its image texture found next to it) with its textures in use. */
+/* An image's "filter" and "max_anisotropy" in JSON: pbrt-v4's filters with a MIP map (and
+ * the footprint machinery on), the default none without one; errors at their values. */
+static void test_json_texture_filter(void **state)
+{
+    (void)state;
+    char png[512], body[3072];
+    tpath(png, sizeof png, "jf.png");
+    float px[48];
+    for (int i = 0; i < 48; i++) px[i] = (float)(i % 7) / 7.0f;
+    CstError err;
+    assert_int_equal(image_write(png, px, 4, 4, &err), CST_OK);
+    snprintf(body, sizeof body,
+             "\"textures\": {\"e\": {\"type\": \"image\", \"file\": \"%s\", \"filter\": \"ewa\", \"max_anisotropy\": 4},\n"
+             " \"t\": {\"type\": \"image\", \"file\": \"%s\", \"filter\": \"trilinear\"},\n"
+             " \"p\": {\"type\": \"image\", \"file\": \"%s\", \"filter\": \"point\"},\n"
+             " \"n\": {\"type\": \"image\", \"file\": \"%s\"}},\n"
+             "\"materials\": {\"a\": {\"type\": \"diffuse\", \"albedo\": \"e\"}},\n"
+             "\"shapes\": [{\"type\": \"sphere\", \"material\": \"a\", \"center\": [0,0,-3], \"radius\": 1}]}",
+             png, png, png, png);
+    CstScene *s = load_json(body, CST_OK, NULL, 0, NULL);
+    assert_int_equal(s->num_textures, 4);
+    const TextureFilter want[4] = {TEXTURE_FILTER_EWA, TEXTURE_FILTER_TRILINEAR, TEXTURE_FILTER_POINT, TEXTURE_FILTER_NONE};
+    for (int i = 0; i < 4; i++) {
+        /* the four share one file but are read separately, in the order listed */
+        const Texture *t = &s->textures[i];
+        assert_int_equal(t->type, TEXTURE_IMAGE);
+        assert_int_equal(t->image.filter, want[i]);
+        assert_int_equal(t->image.im->num_levels, want[i] == TEXTURE_FILTER_NONE ? 1 : 3); /* 4x4, 2x2, 1x1 */
+    }
+    assert_true(s->textures[0].image.max_aniso == 4.0f);
+    assert_true(s->textures[1].image.max_aniso == 8.0f); /* pbrt-v4's default */
+    assert_true(s->footprint.enabled); /* hits get screen-space footprints */
+    cst_scene_destroy(s);
+    load_json("\"textures\": {\"t\": {\"type\": \"image\", \"file\": \"x.png\", \"filter\": \"gaussian\"}},\n\"shapes\": []}",
+              CST_ERR_INVALID_ARG, "\"gaussian\"", 0, "expected one of: none, point, bilinear, trilinear, ewa");
+    load_json("\"textures\": {\"t\": {\"type\": \"image\", \"file\": \"x.png\", \"max_anisotropy\": 4}},\n\"shapes\": []}",
+              CST_ERR_INVALID_ARG, "4}}", 0, "max_anisotropy is for the \"ewa\" filter only");
+    load_json("\"textures\": {\"t\": {\"type\": \"image\", \"file\": \"x.png\", \"filter\": \"ewa\", "
+              "\"max_anisotropy\": 0.5}},\n\"shapes\": []}",
+              CST_ERR_INVALID_ARG, "0.5}}", 0, "expected a number >= 1");
+}
+
 static void test_example_scene(void **state)
 {
     (void)state;
@@ -947,6 +1063,8 @@ int main(void)
         cmocka_unit_test(test_bump_and_normal_map),
         cmocka_unit_test(test_checkerboard),
         cmocka_unit_test(test_uv_transform),
+        cmocka_unit_test(test_texture_mappings),
+        cmocka_unit_test(test_json_texture_filter),
         cmocka_unit_test(test_uv_at_hits),
         cmocka_unit_test(test_emitter_sample_uv),
         cmocka_unit_test(test_json_textures),

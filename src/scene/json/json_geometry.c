@@ -12,6 +12,7 @@
 #include "io/path.h"
 #include "math/transform.h"
 #include "scene/json/json_material.h"
+#include "scene/json/json_texture.h"
 #include "scene/mesh_import.h"
 
 /* parse_mesh hands its Vec3/Vec2/int arrays to cst_scene_add_mesh as packed floats and
@@ -44,7 +45,8 @@ static CstEmission emission_desc(const Emission *em)
     return e;
 }
 
-static CstStatus parse_quad(Loader *ld, const json_t *shape, int material, const Emission *em)
+static CstStatus parse_quad(Loader *ld, const json_t *shape, int material, const Emission *em,
+                             const CstAlpha *alpha)
 {
     json_t *arr;
     Vec3 v[4] = {{0}};
@@ -107,6 +109,7 @@ static CstStatus parse_quad(Loader *ld, const json_t *shape, int material, const
     mesh.num_triangles = 2;
     mesh.material = material;
     mesh.emission = emission_desc(em);
+    mesh.alpha = *alpha;
     CstStatus st = cst_scene_add_mesh(ld->scene, &mesh, NULL, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
@@ -194,7 +197,8 @@ static CstStatus read_shading(Loader *ld, const json_t *shape, bool *flat)
     return CST_OK;
 }
 
-static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const Emission *em)
+static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const Emission *em,
+                             const CstAlpha *alpha)
 {
     json_t *varr, *iarr;
     char kind[48];
@@ -289,6 +293,7 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
     mesh.num_triangles = (int)nt;
     mesh.material = material;
     mesh.emission = emission_desc(em);
+    mesh.alpha = *alpha;
     st = cst_scene_add_mesh(ld->scene, &mesh, NULL, ld->err);
     if (st != CST_OK)
         st = json_fail_builder(ld, st);
@@ -300,7 +305,8 @@ done:
     return st;
 }
 
-static CstStatus parse_sphere(Loader *ld, const json_t *shape, int material, const Emission *em)
+static CstStatus parse_sphere(Loader *ld, const json_t *shape, int material, const Emission *em,
+                               const CstAlpha *alpha)
 {
     json_t *v;
     Vec3 center = {0};
@@ -322,7 +328,7 @@ static CstStatus parse_sphere(Loader *ld, const json_t *shape, int material, con
     float c[3];
     json_vec3_floats(center, c);
     CstEmission e = emission_desc(em);
-    CstStatus st = cst_scene_add_sphere(ld->scene, c, radius, material, &e, ld->err);
+    CstStatus st = cst_scene_add_sphere_alpha(ld->scene, c, radius, material, &e, alpha, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 
@@ -499,7 +505,8 @@ static CstStatus file_materials(Loader *ld, const ImportedMesh *im, int *tri_ids
     return st;
 }
 
-static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, const Emission *em)
+static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, const Emission *em,
+                                 const CstAlpha *alpha)
 {
     json_t *fv, *v;
     const char *file = NULL;
@@ -579,6 +586,7 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
     mesh.material = material;
     mesh.triangle_materials = tri_ids;
     mesh.emission = emission_desc(em);
+    mesh.alpha = *alpha;
     mesh.skip_degenerate = 1; /* scanned meshes have some; documented in scene-format.md */
     int dropped = 0;
     st = cst_scene_add_mesh(ld->scene, &mesh, &dropped, ld->err);
@@ -600,34 +608,60 @@ done:
 
 enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE };
 
+/* A shape's "alpha" (pbrt-v4's Shape "alpha"): a number from 0 to 1 or the name of a
+ * texture with values at most 1, whose scalar (mean of the channels) is the alpha at the
+ * shape's uvs. Absent: opaque. */
+static CstStatus read_alpha(Loader *ld, const json_t *shape, CstAlpha *out)
+{
+    json_t *v = json_object_get(shape, "alpha");
+    char kind[48];
+    memset(out, 0, sizeof *out);
+    if (!v) return CST_OK;
+    json_path_push_key(ld, "alpha");
+    if (json_is_string(v)) {
+        LOADER_TRY(json_read_param_texture(ld, v, "an alpha", &out->texture));
+    } else if (json_is_number(v)) {
+        LOADER_TRY(json_read_float(ld, v, 1.0, &out->value));
+        if (!(out->value >= 0.0f))
+            return json_fail_here(ld, "alpha %g is negative; expected a number from 0 to 1", (double)out->value);
+    } else {
+        return json_fail_here(ld, "got %s; expected a number from 0 to 1 or a texture name", json_describe(v, kind));
+    }
+    out->enabled = 1;
+    json_path_pop(ld);
+    return CST_OK;
+}
+
 static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
     static const char *const types[] = {"quad", "mesh", "sphere", "meshfile"};
-    static const char *const quad_keys[] = {"type", "vertices", "material", "emission"};
+    static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
-                                            "normals", "shading"};
-    static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission"};
+                                            "normals", "shading", "alpha"};
+    static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission", "alpha"};
     static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
-                                                "transform", "shading"};
+                                                "transform", "shading", "alpha"};
     int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(json_expect_object(ld, shape, "a shape object"));
     LOADER_TRY(json_read_type(ld, shape, "shape type", types, 4, -1, &type));
     switch (type) {
-    case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 4)); break;
-    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 8)); break;
-    case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 6)); break;
-    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 5)); break;
+    case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 5)); break;
+    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 9)); break;
+    case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 7)); break;
+    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 6)); break;
     }
     /* A mesh file may bring its own materials: then "material" is optional (-1 = none). */
     if (type != SHAPE_MESHFILE || json_object_get(shape, "material"))
         LOADER_TRY(json_read_material_ref(ld, shape, &material));
     LOADER_TRY(json_read_emission(ld, shape, &em));
+    CstAlpha alpha = {0};
+    LOADER_TRY(read_alpha(ld, shape, &alpha));
     switch (type) {
-    case SHAPE_QUAD: return parse_quad(ld, shape, material, &em);
-    case SHAPE_MESH: return parse_mesh(ld, shape, material, &em);
-    case SHAPE_MESHFILE: return parse_meshfile(ld, shape, material, &em);
-    default: return parse_sphere(ld, shape, material, &em);
+    case SHAPE_QUAD: return parse_quad(ld, shape, material, &em, &alpha);
+    case SHAPE_MESH: return parse_mesh(ld, shape, material, &em, &alpha);
+    case SHAPE_MESHFILE: return parse_meshfile(ld, shape, material, &em, &alpha);
+    default: return parse_sphere(ld, shape, material, &em, &alpha);
     }
 }
 

@@ -42,13 +42,47 @@ static CstStatus read_texture_operand(Loader *ld, const json_t *obj, const char 
     return CST_OK;
 }
 
+/* An image's "filter" (pbrt-v4's image filters; "none", the default, is bilinear on the
+ * full image without a MIP map) and "max_anisotropy" (EWA's longest ellipse axis over the
+ * shortest, > 0; pbrt-v4's 8 when absent; only with "ewa"). */
+static CstStatus read_image_filter(Loader *ld, const json_t *obj, CstTextureDesc *t)
+{
+    static const char *const filters[] = {"none", "point", "bilinear", "trilinear", "ewa"};
+    json_t *v;
+    if ((v = json_object_get(obj, "filter"))) {
+        const char *f = NULL;
+        json_path_push_key(ld, "filter");
+        LOADER_TRY(json_read_string(ld, v, &f));
+        int k = 0;
+        while (k < 5 && strcmp(f, filters[k]) != 0) k++;
+        if (k == 5) {
+            char name[72];
+            return json_fail_here(ld, "unknown filter \"%s\"; expected one of: none, point, bilinear, trilinear, ewa",
+                                  json_clip_name(f, name));
+        }
+        t->filter = (CstTextureFilter)k; /* the names are in the enum's order */
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(obj, "max_anisotropy"))) {
+        json_path_push_key(ld, "max_anisotropy");
+        if (t->filter != CST_TEXTURE_FILTER_EWA)
+            return json_fail_here(ld, "max_anisotropy is for the \"ewa\" filter only; expected \"filter\": \"ewa\" "
+                                      "or no max_anisotropy");
+        LOADER_TRY(json_read_float(ld, v, 1e6, &t->max_anisotropy));
+        if (!(t->max_anisotropy >= 1.0f))
+            return json_fail_here(ld, "max_anisotropy %g; expected a number >= 1", (double)t->max_anisotropy);
+        json_path_pop(ld);
+    }
+    return CST_OK;
+}
+
 /* The texture object at the current path (textures.<name>). */
 static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
 {
     static const char *const types[] = {"constant", "checkerboard", "image"};
     static const char *const keys_constant[] = {"type", "value"};
     static const char *const keys_checker[] = {"type", "even", "odd", "scale"};
-    static const char *const keys_image[] = {"type", "file", "linear", "wrap"};
+    static const char *const keys_image[] = {"type", "file", "linear", "wrap", "filter", "max_anisotropy"};
     int type = 0;
     json_t *v;
     CstTextureDesc t = {0};
@@ -86,7 +120,8 @@ static CstStatus parse_texture(Loader *ld, const json_t *obj, int *out)
         const char *file = NULL;
         int linear = 0;
         CstTextureWrap wrap = CST_TEXTURE_WRAP_REPEAT;
-        LOADER_TRY(json_check_keys(ld, obj, keys_image, 4));
+        LOADER_TRY(json_check_keys(ld, obj, keys_image, 6));
+        LOADER_TRY(read_image_filter(ld, obj, &t));
         if ((v = json_object_get(obj, "linear"))) {
             json_path_push_key(ld, "linear");
             LOADER_TRY(json_read_bool(ld, v, &linear));

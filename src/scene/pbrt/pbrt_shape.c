@@ -13,6 +13,7 @@
 #include "scene/mesh_import.h"
 #include "scene/pbrt/pbrt_material.h"
 #include "scene/pbrt/pbrt_params.h"
+#include "scene/pbrt/pbrt_texture.h"
 #include "scene/pbrt/pbrt_transform.h"
 
 /* Segments of a tessellated disk and rings/segments of a tessellated sphere. */
@@ -193,7 +194,7 @@ static void orient_triangles(const ShapeGeom *g, const Vec3 *p, const Vec3 *n, i
  * is flipped when ReverseOrientation differs from whether xf mirrors, or, for meshes
  * with normals, made to face the (possibly reversed) shading normals. */
 static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int reverse,
-                            int material, const AreaLight *al, Loc loc, const char *d)
+                            int material, const AreaLight *al, const CstAlpha *alpha, Loc loc, const char *d)
 {
     int mat = 0;
     float s = 1.0f;
@@ -224,7 +225,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
             return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, loc, "%s: too many spheres", d);
         float cf[3] = {c.x, c.y, c.z};
         CstEmission e = emission_desc(&em);
-        CstStatus st = cst_scene_add_sphere(ld->scene, cf, r, mat, &e, ld->err);
+        CstStatus st = cst_scene_add_sphere_alpha(ld->scene, cf, r, mat, &e, alpha, ld->err);
         if (st) return pbrt_fail_wrap(ld, st, loc, d);
         ld->num_spheres++;
         return CST_OK;
@@ -288,6 +289,7 @@ static CstStatus emit_shape(Loader *ld, const ShapeGeom *g, const Xf *xf, int re
     sm.num_triangles = g->nt;
     sm.material = mat;
     sm.skip_degenerate = 1;
+    if (alpha) sm.alpha = *alpha;
     ShapeEmission em = {color_s(0.0f), 0, 0, 0};
     if (al && al->active) {
         em.radiance = color_scale(al->L, al->scale);
@@ -492,6 +494,33 @@ static CstStatus loop_shape(Loader *ld, Params *ps, const char *d, Loc loc, Shap
     return CST_OK;
 }
 
+/* pbrt-v4's Shape "alpha" (every shape takes it): "float alpha" or "texture alpha" naming a
+ * float texture; a constant 1 (the default) leaves the shape opaque. */
+static CstStatus shape_alpha(Loader *ld, Params *ps, const char *d, CstAlpha *out)
+{
+    int tex = 0, found = 0;
+    Color val = color_s(1.0f);
+    float a = 1.0f;
+    memset(out, 0, sizeof *out);
+    TRY(pbrt_tex_param(ld, ps, d, "alpha", 1, &tex, &val, NULL));
+    if (tex) {
+        out->enabled = 1;
+        out->texture = tex;
+        return CST_OK;
+    }
+    Param *p = pbrt_find_param(ps, "alpha");
+    if (p && p->type == PT_TEXTURE) {
+        a = color_channel(val, 0); /* a constant texture */
+        found = 1;
+    } else {
+        TRY(pbrt_get_float(ld, ps, d, "alpha", 1.0f, &a, &found));
+    }
+    if (!found || a >= 1.0f) return CST_OK;
+    out->enabled = 1;
+    out->value = a > 0.0f ? a : 0.0f;
+    return CST_OK;
+}
+
 CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     (void)dname;
@@ -568,6 +597,8 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
                           "unsupported cylinder, cone, paraboloid, hyperboloid, curve)", pbrt_clip(type, nm));
     }
     if (st || skip) goto done;
+    CstAlpha alpha = {0};
+    if ((st = shape_alpha(ld, &ps, d, &alpha)) != CST_OK) goto done;
     pbrt_params_warn_unused(ld, &ps, d);
     if (ld->mats[ld->gs.material].interface && !(ld->cur_obj < 0 && ld->gs.area.active)) {
         /* An "interface" shape only bounds a medium (which caustic does not render): it
@@ -579,8 +610,11 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
     } else if (ld->gs.area.active && ld->mats[ld->gs.material].interface && ld->cur_obj < 0) {
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: an emitting shape with material \"interface\" "
                      "is kept as glass of eta 1: paths pass through it, shadow rays are blocked", d);
-        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, loc, d);
+        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
     } else if (ld->cur_obj >= 0) {
+        if (alpha.enabled)
+            pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: alpha cut-outs of shapes inside ObjectBegin "
+                         "are not supported; the instanced shape is opaque", d);
         Object *o = &ld->objs[ld->cur_obj];
         if (ld->gs.area.active)
             pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: area lights inside ObjectBegin are not "
@@ -593,8 +627,12 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         os->material = ld->gs.material;
         os->loc = loc;
         memset(&g, 0, sizeof g);
+    } else if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) {
+        /* A constant alpha of 0 (sportscar's hidden area lights): no ray ever meets the
+         * shape and it emits nowhere, so leaving it out renders exactly what pbrt-v4 does,
+         * without the light sampler picking a light that gives nothing. */
     } else {
-        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, loc, d);
+        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
     }
 done:
     pbrt_geom_free(&g);
@@ -747,7 +785,7 @@ CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const c
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: spheres in instanced objects are placed "
                          "as copies (only triangles are instanced)", d);
         Xf xf = pbrt_xf_compose(&ld->gs.ctm, &os->xf);
-        st = emit_shape(ld, &os->g, &xf, os->reverse, os->material, NULL, loc, d);
+        st = emit_shape(ld, &os->g, &xf, os->reverse, os->material, NULL, NULL, loc, d);
     }
     return st;
 }

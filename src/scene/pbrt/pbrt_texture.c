@@ -226,17 +226,60 @@ CstStatus pbrt_tex_param(Loader *ld, Params *ps, const char *d, const char *name
     return CST_OK;
 }
 
-/* pbrt's UVMapping ("uscale", "vscale", "udelta", "vdelta"): (s, t) = (su u + du, sv v + dv). */
-static CstStatus tex_uv_mapping(Loader *ld, Params *ps, const char *d, Vec2 *scale, Vec2 *offset)
+/* A 2D texture's mapping as pbrt-v4 reads it (TextureMapping2D::Create): "uv" with
+ * "uscale", "vscale", "udelta", "vdelta" ((s, t) = (su u + du, sv v + dv)); "spherical" and
+ * "cylindrical" through the inverse of the CTM at the definition; "planar" through it too,
+ * with the axes "v1", "v2" and offsets "udelta", "vdelta". */
+typedef struct TexMapping {
+    CstTextureMapping type;
+    Vec2 scale, offset;
+    float xf[12]; /* texture_from_world; all 0 = identity */
+    Vec3 v1, v2;
+} TexMapping;
+
+static CstStatus tex_vector3(Loader *ld, Params *ps, const char *d, const char *name, Vec3 def, Vec3 *out)
+{
+    Param *p;
+    *out = def;
+    TRY(pbrt_lookup(ld, ps, d, name, PT_MASK(PT_VECTOR3), "vector3", &p));
+    if (!p) return CST_OK;
+    if (p->num_nums != 3)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" has %d values; expected 3", d, name,
+                            p->num_nums);
+    *out = v3((float)p->nums[0], (float)p->nums[1], (float)p->nums[2]);
+    if (!v3_is_finite(*out))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p->loc, "%s: \"%s\" is not finite", d, name);
+    return CST_OK;
+}
+
+static CstStatus tex_uv_mapping(Loader *ld, Params *ps, const char *d, TexMapping *m)
 {
     const char *mapping = NULL;
     Loc ml;
     char nm[72];
     float su = 1.0f, sv = 1.0f, du = 0.0f, dv = 0.0f;
+    memset(m, 0, sizeof *m);
     TRY(pbrt_get_string(ld, ps, d, "mapping", &mapping, &ml));
-    if (mapping && strcmp(mapping, "uv") != 0)
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, ml, "%s: mapping \"%s\" is not supported; the surface's "
-                     "(u, v) are used (\"uv\")", d, pbrt_clip(mapping, nm));
+    if (mapping && strcmp(mapping, "uv") != 0) {
+        if (strcmp(mapping, "spherical") == 0) m->type = CST_TEXTURE_MAPPING_SPHERICAL;
+        else if (strcmp(mapping, "cylindrical") == 0) m->type = CST_TEXTURE_MAPPING_CYLINDRICAL;
+        else if (strcmp(mapping, "planar") == 0) m->type = CST_TEXTURE_MAPPING_PLANAR;
+        else
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, ml, "%s: unknown mapping \"%s\"; expected one of: uv, "
+                                "spherical, cylindrical, planar", d, pbrt_clip(mapping, nm));
+        if (ld->gs.ctm.inv_ok)
+            for (int r = 0; r < 3; r++)
+                for (int c = 0; c < 4; c++) m->xf[4 * r + c] = ld->gs.ctm.inv.m[r][c];
+        if (m->type == CST_TEXTURE_MAPPING_PLANAR) {
+            TRY(tex_vector3(ld, ps, d, "v1", v3(1.0f, 0.0f, 0.0f), &m->v1));
+            TRY(tex_vector3(ld, ps, d, "v2", v3(0.0f, 1.0f, 0.0f), &m->v2));
+            TRY(pbrt_get_float(ld, ps, d, "udelta", 0.0f, &du, NULL));
+            TRY(pbrt_get_float(ld, ps, d, "vdelta", 0.0f, &dv, NULL));
+        }
+        m->scale = v2(1.0f, 1.0f);
+        m->offset = v2(du, dv);
+        return CST_OK;
+    }
     TRY(pbrt_get_float(ld, ps, d, "uscale", 1.0f, &su, NULL));
     TRY(pbrt_get_float(ld, ps, d, "vscale", 1.0f, &sv, NULL));
     TRY(pbrt_get_float(ld, ps, d, "udelta", 0.0f, &du, NULL));
@@ -247,15 +290,20 @@ static CstStatus tex_uv_mapping(Loader *ld, Params *ps, const char *d, Vec2 *sca
                      "point) are read as 1", d);
         su = sv = 1.0f;
     }
-    *scale = v2(su, sv);
-    *offset = v2(du, dv);
+    m->scale = v2(su, sv);
+    m->offset = v2(du, dv);
     return CST_OK;
 }
 
-static void desc_uv(CstTextureDesc *t, Vec2 scale, Vec2 offset)
+static void desc_uv(CstTextureDesc *t, const TexMapping *m)
 {
-    t->uv_scale[0] = scale.x, t->uv_scale[1] = scale.y;
-    t->uv_offset[0] = offset.x, t->uv_offset[1] = offset.y;
+    t->uv_scale[0] = m->scale.x, t->uv_scale[1] = m->scale.y;
+    t->uv_offset[0] = m->offset.x, t->uv_offset[1] = m->offset.y;
+    t->mapping = m->type;
+    if (m->type == CST_TEXTURE_MAPPING_UV) return;
+    memcpy(t->mapping_from_world, m->xf, sizeof m->xf);
+    t->planar_v1[0] = m->v1.x, t->planar_v1[1] = m->v1.y, t->planar_v1[2] = m->v1.z;
+    t->planar_v2[0] = m->v2.x, t->planar_v2[1] = m->v2.y, t->planar_v2[2] = m->v2.z;
 }
 
 /* A texture-valued parameter of a Texture: another non-constant texture (*id >= 0), or a
@@ -292,7 +340,7 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     float scale = 1.0f, aniso = 8.0f, gamma = 0.0f;
     int invert = 0;
     char nm[72];
-    Vec2 uvs, uvo;
+    TexMapping map;
     TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
     TRY(pbrt_get_string(ld, ps, d, "filter", &filter, &il));
     TRY(pbrt_get_string(ld, ps, d, "wrap", &wrap, &wl));
@@ -300,7 +348,7 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
     TRY(pbrt_get_float(ld, ps, d, "maxanisotropy", 8.0f, &aniso, NULL)); /* for EWA only */
     TRY(pbrt_get_bool(ld, ps, d, "invert", 0, &invert));
-    TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+    TRY(tex_uv_mapping(ld, ps, d, &map));
     *id = -1;
     if (!file)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the image file", d);
@@ -365,7 +413,7 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     t.wrap = tw;
     t.filter = tf;
     t.max_anisotropy = aniso >= 1.0f && aniso <= 1e6f ? aniso : 8.0f;
-    desc_uv(&t, uvs, uvo);
+    desc_uv(&t, &map);
     CstStatus st = CST_OK;
     if (is_float) st = desc_append_op(ld, &t, TEXOP_RED, color_s(0.0f), color_s(0.0f), loc, d);
     if (!st && (scale != 1.0f || invert))
@@ -382,10 +430,10 @@ static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc,
 {
     int a = -1, b = -1;
     Color va, vb;
-    Vec2 uvs, uvo;
+    TexMapping map;
     TRY(tex_operand(ld, ps, d, "tex1", is_float, 1.0f, &a, &va));
     TRY(tex_operand(ld, ps, d, "tex2", is_float, 0.0f, &b, &vb));
-    TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+    TRY(tex_uv_mapping(ld, ps, d, &map));
     if (a < 0) TRY(tex_const(ld, va, loc, d, &a));
     if (b < 0) TRY(tex_const(ld, vb, loc, d, &b));
     CstTextureDesc t = {0};
@@ -393,7 +441,7 @@ static CstStatus texture_checker(Loader *ld, Params *ps, const char *d, Loc loc,
     t.even = a + 1;
     t.odd = b + 1;
     t.scale = 1.0f;
-    desc_uv(&t, uvs, uvo);
+    desc_uv(&t, &map);
     return tex_add(ld, &t, loc, d, id);
 }
 
@@ -435,7 +483,7 @@ static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d,
                                           int is_float, int *id)
 {
     CstTextureDesc t = {0};
-    Vec2 uvs = v2(1.0f, 1.0f), uvo = v2(0.0f, 0.0f);
+    TexMapping map = {.scale = {1.0f, 1.0f}};
     int a = -1, b = -1;
     if (strcmp(cls, "mix") == 0 || strcmp(cls, "directionmix") == 0) {
         TRY(tex_operand_id(ld, ps, d, "tex1", is_float, 0.0f, loc, &a));
@@ -472,7 +520,7 @@ static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d,
     } else if (strcmp(cls, "dots") == 0) {
         TRY(tex_operand_id(ld, ps, d, "inside", is_float, 1.0f, loc, &a));
         TRY(tex_operand_id(ld, ps, d, "outside", is_float, 0.0f, loc, &b));
-        TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+        TRY(tex_uv_mapping(ld, ps, d, &map));
         t.type = CST_TEXTURE_DOTS;
         /* pbrt-v4 (DotsTexture::Create) hands "inside" to the constructor's outsideDot and
          * "outside" to its insideDot, so its dots show "outside": rendered as pbrt does. */
@@ -491,7 +539,7 @@ static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d,
             }
             pbrt_color_floats(c, t.corners[i]);
         }
-        TRY(tex_uv_mapping(ld, ps, d, &uvs, &uvo));
+        TRY(tex_uv_mapping(ld, ps, d, &map));
         t.type = CST_TEXTURE_BILERP;
     } else { /* fbm, wrinkled, windy, marble */
         float rough = 0.5f, sc = 1.0f, var = 0.2f;
@@ -514,7 +562,7 @@ static CstStatus texture_procedural_class(Loader *ld, Params *ps, const char *d,
         t.octaves = oct, t.roughness = rough, t.noise_scale = sc, t.variation = var;
         desc_solid_xf(ld, &t);
     }
-    desc_uv(&t, uvs, uvo);
+    desc_uv(&t, &map);
     return tex_add(ld, &t, loc, d, id);
 }
 
