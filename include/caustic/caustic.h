@@ -302,6 +302,14 @@ typedef struct CstMaterialDesc {
     int amount_texture;     /* a texture id replacing amount (its channels' mean, clamped to
                              * [0, 1]), or 0 */
     float transmittance[3]; /* diffuse transmission: the transmitted share in [0, 1] per channel */
+    /* Anisotropic roughness (conductor, dielectric, coated diffuse and coated conductor;
+     * pbrt-v4's uroughness and vroughness): with anisotropic = 1, roughness and
+     * base_roughness are the perceptual roughness along the surface's dp/du (its texture
+     * u direction) and roughness_v and base_roughness_v, in [0, 1], the one along the other
+     * tangent (with a roughness_texture, which sets both widths, roughness_v must equal
+     * roughness). 0 (default): isotropic, the _v fields unused. */
+    int anisotropic;
+    float roughness_v, base_roughness_v;
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

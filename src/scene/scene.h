@@ -393,6 +393,12 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavele
         bsdf_init_shading(b, m, sh->ns, sh->ng);
     }
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh, b);
+    /* Anisotropic roughness lies along dp/du (pbrt-v4's BSDF frame); hits without one
+     * (instances, degenerate uvs, a sphere's poles) keep frame_from_normal's tangent. */
+    if (m->anisotropic && material_is_anisotropic(m)) {
+        Vec3 dpdu, dpdv;
+        if (scene_dpduv(s, sh, &dpdu, &dpdv)) bsdf_set_tangent(b, dpdu);
+    }
     /* The coated materials' stochastic estimates draw their random numbers from a hash of
      * the hit (here) and of the directions (layered.c): the same query at the same hit
      * always gets the same number, different hits independent ones. */

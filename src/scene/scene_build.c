@@ -353,6 +353,11 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
     d->ior = m->ior;
     d->roughness = m->roughness;
     d->roughness_texture = m->roughness_texture;
+    if (m->anisotropic) {
+        d->anisotropic = 1;
+        d->roughness_v = m->roughness_v;
+        d->base_roughness_v = m->base_roughness_v;
+    }
     d->two_sided = !m->one_sided;
     d->displacement_texture = m->displacement_texture;
     d->normal_map_texture = m->normal_map_texture;
@@ -396,6 +401,30 @@ static CstStatus build_layer(const CstMaterialDesc *d, Material *m, CstError *er
     m->g = d->g;
     m->max_depth = d->max_depth;
     m->nsamples = d->nsamples;
+    return CST_OK;
+}
+
+/* Anisotropic roughness (cst_scene_add_material): the types that have it, no texture. */
+static CstStatus build_anisotropic(const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    if (d->anisotropic == 0) return CST_OK;
+    if (d->anisotropic != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic %d; expected 0 or 1", fn, d->anisotropic);
+    if (d->type != CST_MATERIAL_CONDUCTOR && d->type != CST_MATERIAL_DIELECTRIC &&
+        d->type != CST_MATERIAL_COATED_DIFFUSE && d->type != CST_MATERIAL_COATED_CONDUCTOR)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic roughness on a material of type %d; expected "
+                        "a conductor, dielectric, coated diffuse or coated conductor", fn, (int)d->type);
+    if (d->roughness_texture && d->roughness_v != d->roughness) /* the texture sets both widths */
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness_v %g with a roughness_texture; expected an "
+                        "isotropic textured roughness (roughness_v = roughness) or no texture", fn,
+                        (double)d->roughness_v);
+    if (!(d->roughness_v >= 0.0f && d->roughness_v <= 1.0f) || !(d->base_roughness_v >= 0.0f && d->base_roughness_v <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness_v %g, base_roughness_v %g; expected 0 (smooth) "
+                        "to 1 (roughest)", fn, (double)d->roughness_v, (double)d->base_roughness_v);
+    m->anisotropic = true;
+    m->roughness_v = d->roughness_v;
+    m->base_roughness_v = d->type == CST_MATERIAL_COATED_CONDUCTOR ? d->base_roughness_v : 0.0f;
     return CST_OK;
 }
 
@@ -463,6 +492,7 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness %g is outside [0, 1]; expected 0 (smooth) "
                         "to 1 (roughest)", fn, (double)d->roughness);
     m.roughness = d->roughness;
+    if ((st = build_anisotropic(d, &m, err)) != CST_OK) return st;
     if (d->two_sided != 0 && d->two_sided != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: two_sided %d; expected 0 or 1", fn, d->two_sided);
     m.one_sided = !d->two_sided;
