@@ -10,6 +10,9 @@
 #include "core/error.h"
 #include "core/file.h"
 #include "io/tensor.h"
+#include "materials/microfacet.h"
+#include "math/cie_data.h"
+#include "math/spectrum.h"
 
 /* A field of the given type and dimension count (ndim < 0: any), or a located error. */
 static CstStatus need(const char *name, const TensorFile *t, const char *field, TensorDtype dtype, int ndim,
@@ -179,4 +182,180 @@ void measured_free(MeasuredData *m)
     free(m->spectra);
     free(m->rgb);
     memset(m, 0, sizeof *m);
+}
+
+/* ------------------------------------------------------------------ the tabulated BRDF */
+
+/* pbrt-v4's unit-square coordinates of spherical angles (Dupuy & Jakob 2018 sec. 4.3: the
+ * square root puts more nodes near the pole). */
+static inline float theta2u(float theta) { return sqrtf(theta * (2.0f / CST_PI)); }
+static inline float phi2u(float phi) { return (phi + CST_PI) * (0.5f * CST_INV_PI); }
+static inline float u2theta(float u) { return sqrf(u) * (0.5f * CST_PI); }
+static inline float u2phi(float u) { return (2.0f * u - 1.0f) * CST_PI; }
+
+static inline float sph_theta(Vec3 w) { return acosf(clampf(w.z, -1.0f, 1.0f)); }
+
+/* A spectral reflectance table as linear sRGB: per (incident angle, node), R(lambda)
+ * piecewise linear between the file's wavelengths (constant beyond), against the CIE 1931
+ * matching functions under D65 at 1 nm from 360 to 830 nm, normalised so that R = 1 is
+ * white (Y = 1), then XYZ to sRGB (math/cie_data.c). */
+static CstStatus spectra_to_rgb(const MeasuredData *m, float **out, CstError *err)
+{
+    const size_t plane = (size_t)m->res * (size_t)m->res, slices = (size_t)m->n_phi * (size_t)m->n_theta;
+    const int nl = m->n_lambda;
+    /* Each wavelength's weight (the hat functions of the file's nodes) in X, Y, Z. */
+    double *w = calloc((size_t)nl * 3, sizeof *w);
+    float *rgb = malloc(slices * 3 * plane * sizeof *rgb);
+    if (!w || !rgb) {
+        free(w);
+        free(rgb);
+        return cst_fail(err, CST_ERR_OOM, "measured: out of memory converting spectra to RGB");
+    }
+    double ysum = 0.0;
+    for (int l = 360; l <= 830; l++) {
+        float xyz[3], lam = (float)l, d65 = spectrum_d65(lam);
+        spectrum_cie_xyz(lam, xyz);
+        ysum += (double)(xyz[1] * d65);
+        int k = 0;
+        while (k + 1 < nl && m->wavelengths[k + 1] <= lam) k++;
+        float t = k + 1 < nl && lam > m->wavelengths[k] ? (lam - m->wavelengths[k]) / (m->wavelengths[k + 1] - m->wavelengths[k]) : 0.0f;
+        for (int c = 0; c < 3; c++) {
+            w[k * 3 + c] += (double)((1.0f - t) * xyz[c] * d65);
+            if (t > 0.0f) w[(k + 1) * 3 + c] += (double)(t * xyz[c] * d65);
+        }
+    }
+    for (size_t s = 0; s < slices; s++)
+        for (size_t i = 0; i < plane; i++) {
+            double xyz[3] = {0, 0, 0};
+            for (int l = 0; l < nl; l++)
+                for (int c = 0; c < 3; c++) xyz[c] += w[l * 3 + c] * (double)m->spectra[(s * (size_t)nl + (size_t)l) * plane + i];
+            for (int c = 0; c < 3; c++) {
+                double v = 0.0;
+                for (int k = 0; k < 3; k++) v += (double)cie_xyz_to_srgb[c][k] * xyz[k] / ysum;
+                rgb[(s * 3 + (size_t)c) * plane + i] = (float)v;
+            }
+        }
+    free(w);
+    *out = rgb;
+    return CST_OK;
+}
+
+CstStatus measured_bsdf_init(MeasuredBsdf *b, const MeasuredData *m, bool rgb, CstError *err)
+{
+    memset(b, 0, sizeof *b);
+    b->isotropic = m->isotropic;
+    const int inc[2] = {m->n_phi, m->n_theta};
+    const float *inc_v[2] = {m->phi_i, m->theta_i};
+    static const float channels[3] = {0.0f, 1.0f, 2.0f};
+    float *table = m->rgb;
+    bool converted = false;
+    CstStatus st = CST_OK;
+    b->spectral = m->n_lambda > 0 && !rgb;
+    if (m->n_lambda > 0 && rgb) {
+        if ((st = spectra_to_rgb(m, &table, err)) != CST_OK) return st;
+        converted = true;
+    }
+    const int refl_n[3] = {m->n_phi, m->n_theta, b->spectral ? m->n_lambda : 3};
+    const float *refl_v[3] = {m->phi_i, m->theta_i, b->spectral ? m->wavelengths : channels};
+    if ((st = pl2d_init(&b->ndf, m->ndf, m->ndf_w, m->ndf_h, 0, NULL, NULL, false, err)) != CST_OK ||
+        (st = pl2d_init(&b->sigma, m->sigma, m->sigma_w, m->sigma_h, 0, NULL, NULL, false, err)) != CST_OK ||
+        (st = pl2d_init(&b->vndf, m->vndf, m->res, m->res, 2, inc, inc_v, true, err)) != CST_OK ||
+        (st = pl2d_init(&b->luminance, m->luminance, m->res, m->res, 2, inc, inc_v, true, err)) != CST_OK ||
+        (st = pl2d_init(&b->refl, b->spectral ? m->spectra : table, m->res, m->res, 3, refl_n, refl_v, false, err)) != CST_OK)
+        measured_bsdf_free(b);
+    if (converted) free(table);
+    return st;
+}
+
+void measured_bsdf_free(MeasuredBsdf *b)
+{
+    if (!b) return;
+    pl2d_free(&b->ndf);
+    pl2d_free(&b->sigma);
+    pl2d_free(&b->vndf);
+    pl2d_free(&b->luminance);
+    pl2d_free(&b->refl);
+}
+
+/* R at the warp's sample s for incident params, per channel or at the 4 wavelengths. */
+static Color refl_at(const MeasuredBsdf *b, Vec2 s, float phi_o, float theta_o, const float *lambda)
+{
+    float v[4];
+    for (int c = 0; c < 4; c++) {
+        float p[3] = {phi_o, theta_o, 0.0f};
+        if (lambda && b->spectral) p[2] = lambda[c];
+        else p[2] = (float)(c < 3 ? c : 1); /* lane 3 copies green in RGB mode */
+        v[c] = maxf(pl2d_eval(&b->refl, s, p), 0.0f); /* pbrt-v4 clamps negative lookups */
+    }
+    if (lambda && !b->spectral) v[0] = v[1] = v[2] = v[3] = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
+    Color c;
+    for (int k = 0; k < 4; k++) c.c[k] = v[k];
+    return c;
+}
+
+/* The half vector's unit-square coordinates, relative to wo's azimuth when isotropic. */
+static Vec2 half_coords(const MeasuredBsdf *b, Vec3 wm, float phi_o)
+{
+    float phi_m = atan2f(wm.y, wm.x);
+    float uy = phi2u(b->isotropic ? phi_m - phi_o : phi_m);
+    return v2(theta2u(sph_theta(wm)), uy - floorf(uy));
+}
+
+/* The solid-angle Jacobian of u_m -> wm (d omega = 2 pi^2 u sin theta du, pbrt-v4's floor
+ * of 1e-6) times the reflection's 4 (wo.wm). */
+static inline float half_jacobian(Vec3 wo, Vec3 wm, float ux)
+{
+    float sin_m = sqrtf(wm.x * wm.x + wm.y * wm.y);
+    return 4.0f * v3_dot(wo, wm) * maxf(2.0f * CST_PI * CST_PI * ux * sin_m, 1e-6f);
+}
+
+Color measured_eval(const MeasuredBsdf *b, Vec3 wo, Vec3 wi, const float *lambda)
+{
+    if (!(wo.z > 0.0f) || !(wi.z > 0.0f)) return color_s(0.0f);
+    Vec3 h = v3_add(wo, wi);
+    if (v3_length2(h) == 0.0f) return color_s(0.0f);
+    Vec3 wm = v3_normalize(h);
+    float theta_o = sph_theta(wo), phi_o = atan2f(wo.y, wo.x);
+    float params[2] = {phi_o, theta_o};
+    Vec2 um = half_coords(b, wm, phi_o);
+    float vpdf;
+    Vec2 s = pl2d_invert(&b->vndf, um, params, &vpdf);
+    float uo_y = phi2u(phi_o);
+    float scale = pl2d_eval(&b->ndf, um, NULL) / (4.0f * pl2d_eval(&b->sigma, v2(theta2u(theta_o), uo_y - floorf(uo_y)), NULL));
+    if (!(scale > 0.0f) || !isfinite(scale)) return color_s(0.0f);
+    return color_scale(refl_at(b, s, phi_o, theta_o, lambda), scale);
+}
+
+float measured_pdf(const MeasuredBsdf *b, Vec3 wo, Vec3 wi)
+{
+    if (!(wo.z > 0.0f) || !(wi.z > 0.0f)) return 0.0f;
+    Vec3 h = v3_add(wo, wi);
+    if (v3_length2(h) == 0.0f) return 0.0f;
+    Vec3 wm = v3_normalize(h);
+    float params[2] = {atan2f(wo.y, wo.x), sph_theta(wo)};
+    Vec2 um = half_coords(b, wm, params[0]);
+    float vpdf;
+    Vec2 s = pl2d_invert(&b->vndf, um, params, &vpdf);
+    return vpdf * pl2d_eval(&b->luminance, s, params) / half_jacobian(wo, wm, um.x);
+}
+
+bool measured_sample(const MeasuredBsdf *b, Vec3 wo, Vec2 u, const float *lambda, Vec3 *wi, Color *weight, float *pdf)
+{
+    if (!(wo.z > 0.0f)) return false;
+    float theta_o = sph_theta(wo), phi_o = atan2f(wo.y, wo.x);
+    float params[2] = {phi_o, theta_o}, lpdf, vpdf;
+    Vec2 s = pl2d_sample(&b->luminance, v2(u.y, u.x), params, &lpdf);
+    Vec2 um = pl2d_sample(&b->vndf, s, params, &vpdf);
+    float phi_m = u2phi(um.y) + (b->isotropic ? phi_o : 0.0f), theta_m = u2theta(um.x);
+    Vec3 wm = v3(sinf(theta_m) * cosf(phi_m), sinf(theta_m) * sinf(phi_m), cosf(theta_m));
+    Vec3 w = reflect_about(wo, wm);
+    if (!(w.z > 0.0f)) return false;
+    /* The density and value as measured_pdf and measured_eval compute them from (wo, w),
+     * so that a sample and a later query of the same pair agree. */
+    *wi = w;
+    *pdf = measured_pdf(b, wo, w);
+    Color f = measured_eval(b, wo, w, lambda);
+    if (!(*pdf > 0.0f)) return false;
+    *weight = color_scale(f, 1.0f / *pdf);
+    return true;
 }

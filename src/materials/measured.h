@@ -2,8 +2,9 @@
  * Adaptive Parameterization for Efficient Material Acquisition and Rendering"), read from
  * its .bsdf tensor file (io/tensor.h) and validated field by field the way pbrt-v4's
  * MeasuredBRDF::Create checks the structure, plus the values (finite, non-negative
- * densities, increasing grids). The evaluation and sampling (piecewise-linear 2D warps)
- * are not implemented yet: this module loads and checks the tables. */
+ * densities, increasing grids); and the BRDF they tabulate (MeasuredBsdf): evaluation,
+ * density and sampling through piecewise-bilinear warps (sampling/plinear2d.h). Not yet a
+ * material type of the scene (see docs/pbrt-compat.md). */
 #ifndef CST_MATERIALS_MEASURED_H
 #define CST_MATERIALS_MEASURED_H
 
@@ -11,6 +12,8 @@
 #include <stddef.h>
 
 #include "caustic/caustic.h"
+#include "math/color.h"
+#include "sampling/plinear2d.h"
 
 typedef struct MeasuredData {
     int n_phi, n_theta;   /* the incident directions' grid: phi_i, theta_i (radians, increasing) */
@@ -38,5 +41,36 @@ CstStatus measured_read(const char *name, const void *data, size_t len, Measured
 /* measured_read of a file (through the input-file gate, core/file.h). */
 CstStatus measured_read_file(const char *path, MeasuredData *out, CstError *err);
 void measured_free(MeasuredData *m);
+
+/* The tabulated BRDF (Dupuy & Jakob 2018 eq. 19): with wo the table's incident direction,
+ *   f(wo, wi) = R(s) D(u_m) / (4 sigma(wo) cos theta_i),  s = vndf^-1(u_m | wo),
+ * where u_m are the unit-square coordinates of the half vector (theta2u = sqrt(2 theta /
+ * pi), phi2u = (phi + pi) / (2 pi); isotropic tables use phi_m - phi_o), D the tabulated
+ * NDF, sigma the projected area, R the reflectance tabulated over the VNDF warp's sample
+ * space, all interpolated (bilinearly, and linearly between incident angles and
+ * wavelengths). Sampling draws s from the luminance table, then u_m from the VNDF warp
+ * (pbrt-v4 MeasuredBxDF::Sample_f). pbrt-v4's f() takes wi as the table's incident
+ * direction and its Sample_f wo; here wo is in all three, so that eval, pdf and sample
+ * describe one function and one density. Local frame, reflection only, wo.z > 0. */
+typedef struct MeasuredBsdf {
+    PLinear2D ndf, sigma;       /* raw tables */
+    PLinear2D vndf, luminance;  /* densities over their unit squares, params (phi_i, theta_i) */
+    PLinear2D refl;             /* R: params (phi_i, theta_i, wavelength) or (.., channel) */
+    bool isotropic;
+    bool spectral;              /* refl over wavelengths (nm) rather than RGB channels 0, 1, 2 */
+} MeasuredBsdf;
+
+/* The BRDF of loaded tables. rgb: convert a spectral table to linear sRGB reflectances at
+ * load (CIE 1931 under D65, as a reflectance's colour), for RGB rendering; else keep the
+ * spectra for evaluation at a path's wavelengths (an RGB file stays RGB either way). */
+CstStatus measured_bsdf_init(MeasuredBsdf *b, const MeasuredData *m, bool rgb, CstError *err);
+void measured_bsdf_free(MeasuredBsdf *b);
+/* f(wo, wi) |cos theta_i| per channel: RGB, or with lambda (4 wavelengths, nm) the values
+ * there (a spectral table; an RGB table gives its channels' mean). 0 for wi below. */
+Color measured_eval(const MeasuredBsdf *b, Vec3 wo, Vec3 wi, const float *lambda);
+/* The density of measured_sample's directions, per unit solid angle. */
+float measured_pdf(const MeasuredBsdf *b, Vec3 wo, Vec3 wi);
+/* wi from u; *weight = f |cos_i| / pdf, *pdf. False for a direction below the surface. */
+bool measured_sample(const MeasuredBsdf *b, Vec3 wo, Vec2 u, const float *lambda, Vec3 *wi, Color *weight, float *pdf);
 
 #endif
