@@ -270,7 +270,9 @@ typedef enum CstMaterialType {
     CST_MATERIAL_DIFFUSE_TRANSMISSION,
     /* pbrt-v4's thindielectric: a thin slab of ior (default 1.5): mirror reflection and
      * undeviated transmission; albedo tints both */
-    CST_MATERIAL_THIN_DIELECTRIC
+    CST_MATERIAL_THIN_DIELECTRIC,
+    /* pbrt-v4's measured: a tabulated BRDF from an RGL .bsdf file (measured_file) */
+    CST_MATERIAL_MEASURED
 } CstMaterialType;
 
 /* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
@@ -310,6 +312,9 @@ typedef struct CstMaterialDesc {
      * roughness). 0 (default): isotropic, the _v fields unused. */
     int anisotropic;
     float roughness_v, base_roughness_v;
+    /* Measured: the .bsdf file's path (read when the material is added, once per path;
+     * a malformed file fails with CST_ERR_PARSE, "FILE: byte N: ...") */
+    const char *measured_file;
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

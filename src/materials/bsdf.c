@@ -8,6 +8,7 @@
 
 #include <stddef.h>
 
+#include "materials/measured.h"
 #include "materials/microfacet.h"
 #include "sampling/warp.h"
 
@@ -26,6 +27,7 @@ Color bsdf_albedo(const Bsdf *b)
     case MATERIAL_COATED_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.layered.eta, b->lobe.layered.k);
     case MATERIAL_DIFFUSE_TRANSMISSION: return b->lobe.difftrans.reflectance;
     case MATERIAL_THIN_DIELECTRIC: return b->lobe.dielectric.tint;
+    case MATERIAL_MEASURED: return b->lobe.measured.table->albedo;
     case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
@@ -472,6 +474,9 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return layered_eval(&b->lobe.layered, wo, wi, mode == BSDF_IMPORTANCE);
     case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_eval(b, wo, wi);
+    case MATERIAL_MEASURED:
+        if (!reflect_side(b, &wo, &wi)) return color_s(0.0f);
+        return measured_eval(b->lobe.measured.table, wo, wi, b->lobe.measured.spectral ? b->lobe.measured.lambda : NULL);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
     case MATERIAL_THIN_DIELECTRIC:
@@ -510,6 +515,9 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return 0.0f;
         return layered_pdf(&b->lobe.layered, wo, wi);
     case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_pdf(b, wo, wi);
+    case MATERIAL_MEASURED:
+        if (!reflect_side(b, &wo, &wi)) return 0.0f;
+        return measured_pdf(b->lobe.measured.table, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
     case MATERIAL_THIN_DIELECTRIC:
@@ -603,6 +611,14 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         break;
     case MATERIAL_THIN_DIELECTRIC:
         ok = thin_dielectric_sample(b, wo, uc, out);
+        break;
+    case MATERIAL_MEASURED:
+        if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
+        if (flipped) wo.z = -wo.z;
+        out->pmf = 0.0f;
+        out->delta = false;
+        ok = measured_sample(b->lobe.measured.table, wo, u, b->lobe.measured.spectral ? b->lobe.measured.lambda : NULL,
+                             &out->wi, &out->weight, &out->pdf_w);
         break;
     case MATERIAL_MIX: return false;
     }

@@ -37,6 +37,11 @@ typedef struct DielectricLobe { /* MATERIAL_GLASS (alpha 0) and MATERIAL_DIELECT
 typedef struct DiffuseTransmissionLobe { /* MATERIAL_DIFFUSE_TRANSMISSION */
     Color reflectance, transmittance;     /* each lobe's hemispherical share */
 } DiffuseTransmissionLobe;
+typedef struct MeasuredLobe {   /* MATERIAL_MEASURED */
+    const struct MeasuredBsdf *table; /* the scene's */
+    bool spectral;              /* evaluate at lambda (bsdf_at_wavelengths), else in RGB */
+    float lambda[COLOR_LANES];  /* the path's wavelengths, nm */
+} MeasuredLobe;
 typedef struct PlasticLobe {    /* MATERIAL_PLASTIC: a dielectric coat over Lambert */
     Color albedo;               /* the base's */
     float eta;                  /* the coat's inside over outside IOR */
@@ -64,6 +69,7 @@ typedef struct Bsdf {
         PlasticLobe plastic;
         LayeredLobe layered; /* coated diffuse and coated conductor */
         DiffuseTransmissionLobe difftrans;
+        MeasuredLobe measured;
     } lobe;
 } Bsdf;
 
@@ -139,6 +145,14 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
     case MATERIAL_DIFFUSE_TRANSMISSION:
         b->lobe.difftrans.reflectance = m->albedo;
         b->lobe.difftrans.transmittance = m->transmittance;
+        break;
+    case MATERIAL_MEASURED:
+        b->lobe.measured.table = m->measured;
+        b->lobe.measured.spectral = false;
+        if (!m->measured) { /* no tables (a Material never added to a scene): black */
+            b->type = MATERIAL_DIFFUSE;
+            b->lobe.diffuse.albedo = color_s(0.0f);
+        }
         break;
     case MATERIAL_MIX: /* resolved by scene_bsdf; black if it ever gets here */
         b->type = MATERIAL_DIFFUSE;
@@ -219,6 +233,7 @@ static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
     case MATERIAL_COATED_DIFFUSE: b->lobe.layered.reflectance = albedo; break;
     case MATERIAL_CONDUCTOR:
     case MATERIAL_COATED_CONDUCTOR:
+    case MATERIAL_MEASURED:
     case MATERIAL_MIX: break;
     }
 }

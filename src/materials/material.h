@@ -31,7 +31,9 @@ typedef enum MaterialType {
     MATERIAL_DIFFUSE_TRANSMISSION,
     /* pbrt-v4's thindielectric: a thin slab of ior; mirror reflection and undeviated
      * transmission, the slab's internal reflections summed in closed form */
-    MATERIAL_THIN_DIELECTRIC
+    MATERIAL_THIN_DIELECTRIC,
+    /* pbrt-v4's measured: a tabulated BRDF read from an RGL .bsdf file (measured.h) */
+    MATERIAL_MEASURED
 } MaterialType;
 
 static inline bool material_is_layered(MaterialType t)
@@ -87,6 +89,10 @@ typedef struct Material {
      * behaviour; the scene file's key is "two_sided". Dielectrics have an inside and
      * ignore it. */
     bool one_sided;
+    /* Measured: the tables (owned by the scene, which keeps them until scene_destroy) and,
+     * between a loader and cst_scene_add_material only, the file to read them from. */
+    const struct MeasuredBsdf *measured;
+    const char *measured_file;
     /* Derived by material_prepare() (scene_add_material calls it): the rough plastic's
      * coat albedo table and its cosine-weighted average. */
     bool prepared;

@@ -240,7 +240,7 @@ static CstStatus spectra_to_rgb(const MeasuredData *m, float **out, CstError *er
     return CST_OK;
 }
 
-CstStatus measured_bsdf_init(MeasuredBsdf *b, const MeasuredData *m, bool rgb, CstError *err)
+CstStatus measured_bsdf_init(MeasuredBsdf *b, const MeasuredData *m, CstError *err)
 {
     memset(b, 0, sizeof *b);
     b->isotropic = m->isotropic;
@@ -248,23 +248,49 @@ CstStatus measured_bsdf_init(MeasuredBsdf *b, const MeasuredData *m, bool rgb, C
     const float *inc_v[2] = {m->phi_i, m->theta_i};
     static const float channels[3] = {0.0f, 1.0f, 2.0f};
     float *table = m->rgb;
-    bool converted = false;
     CstStatus st = CST_OK;
-    b->spectral = m->n_lambda > 0 && !rgb;
-    if (m->n_lambda > 0 && rgb) {
-        if ((st = spectra_to_rgb(m, &table, err)) != CST_OK) return st;
-        converted = true;
-    }
-    const int refl_n[3] = {m->n_phi, m->n_theta, b->spectral ? m->n_lambda : 3};
-    const float *refl_v[3] = {m->phi_i, m->theta_i, b->spectral ? m->wavelengths : channels};
+    b->spectral = m->n_lambda > 0;
+    if (b->spectral && (st = spectra_to_rgb(m, &table, err)) != CST_OK) return st;
+    const int rgb_n[3] = {m->n_phi, m->n_theta, 3}, spec_n[3] = {m->n_phi, m->n_theta, m->n_lambda};
+    const float *rgb_v[3] = {m->phi_i, m->theta_i, channels}, *spec_v[3] = {m->phi_i, m->theta_i, m->wavelengths};
     if ((st = pl2d_init(&b->ndf, m->ndf, m->ndf_w, m->ndf_h, 0, NULL, NULL, false, err)) != CST_OK ||
         (st = pl2d_init(&b->sigma, m->sigma, m->sigma_w, m->sigma_h, 0, NULL, NULL, false, err)) != CST_OK ||
         (st = pl2d_init(&b->vndf, m->vndf, m->res, m->res, 2, inc, inc_v, true, err)) != CST_OK ||
         (st = pl2d_init(&b->luminance, m->luminance, m->res, m->res, 2, inc, inc_v, true, err)) != CST_OK ||
-        (st = pl2d_init(&b->refl, b->spectral ? m->spectra : table, m->res, m->res, 3, refl_n, refl_v, false, err)) != CST_OK)
+        (st = pl2d_init(&b->refl_rgb, table, m->res, m->res, 3, rgb_n, rgb_v, false, err)) != CST_OK ||
+        (b->spectral && (st = pl2d_init(&b->refl_spec, m->spectra, m->res, m->res, 3, spec_n, spec_v, false, err)) != CST_OK))
         measured_bsdf_free(b);
-    if (converted) free(table);
-    return st;
+    if (table != m->rgb) free(table);
+    if (st != CST_OK) return st;
+    /* The albedo AOV: the directional albedo at normal incidence, 16 x 16 stratified. */
+    Color sum = color_s(0.0f);
+    for (int i = 0; i < 256; i++) {
+        Vec3 wi;
+        Color w;
+        float pdf;
+        Vec2 u = v2(((float)(i % 16) + 0.5f) / 16.0f, ((float)(i / 16) + 0.5f) / 16.0f);
+        if (measured_sample(b, v3(0.0f, 0.0f, 1.0f), u, NULL, &wi, &w, &pdf) && color_is_finite(w)) sum = color_add(sum, w);
+    }
+    b->albedo = color_scale(sum, 1.0f / 256.0f);
+    return CST_OK;
+}
+
+CstStatus measured_bsdf_read_file(MeasuredBsdf *b, const char *path, CstError *err)
+{
+    memset(b, 0, sizeof *b);
+    MeasuredData m;
+    CstStatus st = measured_read_file(path, &m, err);
+    if (st != CST_OK) return st;
+    st = measured_bsdf_init(b, &m, err);
+    measured_free(&m);
+    if (st != CST_OK) return st;
+    size_t n = strlen(path) + 1;
+    if (!(b->path = malloc(n))) {
+        measured_bsdf_free(b);
+        return cst_fail(err, CST_ERR_OOM, "%s: out of memory", path);
+    }
+    memcpy(b->path, path, n);
+    return CST_OK;
 }
 
 void measured_bsdf_free(MeasuredBsdf *b)
@@ -274,19 +300,22 @@ void measured_bsdf_free(MeasuredBsdf *b)
     pl2d_free(&b->sigma);
     pl2d_free(&b->vndf);
     pl2d_free(&b->luminance);
-    pl2d_free(&b->refl);
+    pl2d_free(&b->refl_rgb);
+    pl2d_free(&b->refl_spec);
+    free(b->path);
+    b->path = NULL;
 }
 
 /* R at the warp's sample s for incident params, per channel or at the 4 wavelengths. */
 static Color refl_at(const MeasuredBsdf *b, Vec2 s, float phi_o, float theta_o, const float *lambda)
 {
     float v[4];
+    const bool spec = lambda && b->spectral;
     for (int c = 0; c < 4; c++) {
-        float p[3] = {phi_o, theta_o, 0.0f};
-        if (lambda && b->spectral) p[2] = lambda[c];
-        else p[2] = (float)(c < 3 ? c : 1); /* lane 3 copies green in RGB mode */
-        v[c] = maxf(pl2d_eval(&b->refl, s, p), 0.0f); /* pbrt-v4 clamps negative lookups */
+        float p[3] = {phi_o, theta_o, spec ? lambda[c] : (float)(c < 3 ? c : 1)}; /* lane 3: green */
+        v[c] = maxf(pl2d_eval(spec ? &b->refl_spec : &b->refl_rgb, s, p), 0.0f); /* pbrt-v4 clamps at 0 */
     }
+    /* an RGB file in spectral mode: the channels' mean (grey), a rough stand-in */
     if (lambda && !b->spectral) v[0] = v[1] = v[2] = v[3] = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
     Color c;
     for (int k = 0; k < 4; k++) c.c[k] = v[k];

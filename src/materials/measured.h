@@ -55,15 +55,20 @@ void measured_free(MeasuredData *m);
 typedef struct MeasuredBsdf {
     PLinear2D ndf, sigma;       /* raw tables */
     PLinear2D vndf, luminance;  /* densities over their unit squares, params (phi_i, theta_i) */
-    PLinear2D refl;             /* R: params (phi_i, theta_i, wavelength) or (.., channel) */
+    PLinear2D refl_rgb;         /* R: params (phi_i, theta_i, channel 0, 1, 2), linear sRGB */
+    PLinear2D refl_spec;        /* R: params (phi_i, theta_i, wavelength in nm); spectral files */
     bool isotropic;
-    bool spectral;              /* refl over wavelengths (nm) rather than RGB channels 0, 1, 2 */
+    bool spectral;              /* refl_spec is there */
+    Color albedo;               /* directional albedo at normal incidence (the albedo AOV) */
+    char *path;                 /* the file's path (measured_bsdf_read_file), or NULL */
 } MeasuredBsdf;
 
-/* The BRDF of loaded tables. rgb: convert a spectral table to linear sRGB reflectances at
- * load (CIE 1931 under D65, as a reflectance's colour), for RGB rendering; else keep the
- * spectra for evaluation at a path's wavelengths (an RGB file stays RGB either way). */
-CstStatus measured_bsdf_init(MeasuredBsdf *b, const MeasuredData *m, bool rgb, CstError *err);
+/* The BRDF of loaded tables: R as RGB for RGB rendering (a spectral table converted at load
+ * against the CIE 1931 matching functions under D65, as a reflectance's colour) and, for a
+ * spectral file, also as spectra for evaluation at a path's wavelengths. */
+CstStatus measured_bsdf_init(MeasuredBsdf *b, const MeasuredData *m, CstError *err);
+/* measured_read_file then measured_bsdf_init; b->path is a copy of path. */
+CstStatus measured_bsdf_read_file(MeasuredBsdf *b, const char *path, CstError *err);
 void measured_bsdf_free(MeasuredBsdf *b);
 /* f(wo, wi) |cos theta_i| per channel: RGB, or with lambda (4 wavelengths, nm) the values
  * there (a spectral table; an RGB table gives its channels' mean). 0 for wi below. */

@@ -60,6 +60,8 @@ struct CstScene {
     /* appearance */
     Texture *textures; int num_textures; size_t cap_textures; /* referenced by index */
     Material *materials; int num_materials; size_t cap_materials;
+    /* measured materials' tables, one per file, each allocated apart (materials point at them) */
+    struct MeasuredBsdf **measured; int num_measured; size_t cap_measured;
     Emitter *emitters; int num_emitters; size_t cap_emitters;
     DeltaLight *delta_lights; int num_delta_lights; size_t cap_delta_lights; /* point, spot, directional */
     EnvMap *env; /* the environment, or NULL */

@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "io/image_io.h"
+#include "materials/measured.h"
 #include "scene/scene.h"
 #include "scene/scene_build.h"
 #include "scene/scene_build_check.h"
@@ -342,7 +343,7 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         [MATERIAL_COATED_DIFFUSE] = CST_MATERIAL_COATED_DIFFUSE,
         [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR, [MATERIAL_MIX] = CST_MATERIAL_MIX,
         [MATERIAL_DIFFUSE_TRANSMISSION] = CST_MATERIAL_DIFFUSE_TRANSMISSION,
-        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC};
+        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC, [MATERIAL_MEASURED] = CST_MATERIAL_MEASURED};
     cst_material_desc_init(d, types[m->type]);
     for (int k = 0; k < 3; k++) {
         d->albedo[k] = color_channel(m->albedo, k);
@@ -350,6 +351,7 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         d->k[k] = color_channel(m->k, k);
     }
     d->albedo_texture = m->albedo_texture;
+    if (m->type == MATERIAL_MEASURED) d->measured_file = m->measured ? m->measured->path : m->measured_file;
     d->ior = m->ior;
     d->roughness = m->roughness;
     d->roughness_texture = m->roughness_texture;
@@ -460,14 +462,14 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     static const MaterialType types[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
-                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED};
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
-    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_THIN_DIELECTRIC)
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_MEASURED)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
-                        "to CST_MATERIAL_THIN_DIELECTRIC (cst_material_desc_init sets it)", fn, (int)d->type);
+                        "to CST_MATERIAL_MEASURED (cst_material_desc_init sets it)", fn, (int)d->type);
     Material m = {0};
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
@@ -519,6 +521,12 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         m.mix[1] = d->mix_materials[1];
         m.amount = d->amount;
         m.amount_texture = d->amount_texture;
+    }
+    if (d->type == CST_MATERIAL_MEASURED) {
+        if (!d->measured_file || !d->measured_file[0])
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: a measured material without measured_file; expected "
+                            "the path of a .bsdf file", fn);
+        m.measured_file = d->measured_file; /* read by scene_add_material */
     }
     return scene_add_material(scene, &m, out_id, err);
 }

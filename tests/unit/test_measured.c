@@ -23,7 +23,9 @@
 #include "materials/fresnel.h"
 #include "materials/material.h"
 #include "materials/microfacet.h"
+#include "scene/scene.h"
 #include "unit/chi2.h"
+#include "unit/scratch_dir.h"
 
 #define NELEM(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
@@ -251,9 +253,9 @@ static GgxTables *ggx_tables(void)
     return &t;
 }
 
-/* The tables as a loaded MeasuredBsdf: RGB (the rgb field) or spectral (the channels
+/* The tables as a .bsdf file's bytes: RGB (the rgb field) or spectral (the channels
  * reversed onto 450, 550, 650 nm). */
-static void ggx_bsdf(bool spectral, MeasuredBsdf *out)
+static uint8_t *ggx_file(bool spectral, size_t *len)
 {
     GgxTables *t = ggx_tables();
     static float spec[2][GT][3][GR][GR];
@@ -271,12 +273,18 @@ static void ggx_bsdf(bool spectral, MeasuredBsdf *out)
                   spectral ? (WField){"spectra", TENSOR_F32, 5, {2, GT, 3, GR, GR}, spec}
                            : (WField){"rgb", TENSOR_F32, 5, {2, GT, 3, GR, GR}, t->refl},
                   {"wavelengths", TENSOR_F32, 1, {3}, t->wl}};
+    return write_tensor(f, spectral ? 10 : 9, len);
+}
+
+/* The same read back as a MeasuredBsdf. */
+static void ggx_bsdf(bool spectral, MeasuredBsdf *out)
+{
     size_t len;
-    uint8_t *buf = write_tensor(f, spectral ? 10 : 9, &len);
+    uint8_t *buf = ggx_file(spectral, &len);
     MeasuredData m;
     CstError err = {0};
     if (measured_read("ggx.bsdf", buf, len, &m, &err) != CST_OK) fail_msg("%s", err.msg);
-    if (measured_bsdf_init(out, &m, !spectral, &err) != CST_OK) fail_msg("%s", err.msg);
+    if (measured_bsdf_init(out, &m, &err) != CST_OK) fail_msg("%s", err.msg);
     measured_free(&m);
     free(buf);
 }
@@ -436,17 +444,111 @@ static void test_measured_spectral(void **state)
     CstError err = {0};
     assert_int_equal(measured_read("t.bsdf", buf, len, &m, &err), CST_OK);
     MeasuredBsdf g;
-    assert_int_equal(measured_bsdf_init(&g, &m, true, &err), CST_OK);
+    assert_int_equal(measured_bsdf_init(&g, &m, &err), CST_OK);
     float p[3] = {0.0f, 0.3f, 0.0f};
     for (int c = 0; c < 3; c++) {
         p[2] = (float)c;
-        float v = pl2d_eval(&g.refl, v2(0.4f, 0.6f), p);
+        float v = pl2d_eval(&g.refl_rgb, v2(0.4f, 0.6f), p);
         print_message("grey 0.5 spectrum -> channel %d: %.5f\n", c, (double)v);
         assert_true(fabsf(v - 0.5f) < 5e-3f);
     }
     measured_bsdf_free(&g);
     measured_free(&m);
     free(buf);
+}
+
+/* ------------------------------------------------------------------ the material */
+
+static int g_warnings;
+static void count_warning(void *user, CstWarningCode code, const char *msg)
+{
+    (void)user;
+    (void)msg;
+    if (code == CST_WARN_MISSING_FILE) g_warnings++;
+}
+
+static void write_file(const char *path, const uint8_t *buf, size_t len)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(buf, 1, len, f), len);
+    fclose(f);
+}
+
+/* The measured material through the loaders: the JSON "measured" type and pbrt-v4's
+ * "measured" (one table per file however many materials name it; a missing file warned
+ * about and replaced by diffuse; a malformed one a located CST_ERR_PARSE); scene_bsdf's
+ * BSDF is measured_eval's function, in RGB and at a path's wavelengths. */
+static void test_material(void **state)
+{
+    (void)state;
+    assert_int_equal(scratch_dir_make("/tmp/caustic-measured-XXXXXX"), 0);
+    char good[300], bad[300], scene_path[300];
+    tpath(good, sizeof good, "ggx.bsdf");
+    tpath(bad, sizeof bad, "bad.bsdf");
+    tpath(scene_path, sizeof scene_path, "s.pbrt");
+    size_t len;
+    uint8_t *buf = ggx_file(true, &len);
+    write_file(good, buf, len);
+    write_file(bad, buf, len - 7); /* the last field's data cut short */
+    free(buf);
+    /* JSON, the file relative to the scene */
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40}, "
+             "\"materials\": {\"m\": {\"type\": \"measured\", \"file\": \"ggx.bsdf\"}}, "
+             "\"shapes\": [{\"type\": \"quad\", \"material\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]}]}");
+    char json_name[300];
+    tpath(json_name, sizeof json_name, "s.json");
+    CstScene *s = NULL;
+    CstError err = {0};
+    if (cst_scene_load_json_string(text, strlen(text), json_name, &s, &err) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(s->num_measured, 1);
+    assert_true(s->materials[0].type == MATERIAL_MEASURED && s->materials[0].measured == s->measured[0]);
+    SurfaceHit sh = {0};
+    sh.p = v3(0.5f, 0.5f, 0.0f);
+    sh.ng = sh.ns = v3(0.0f, 0.0f, 1.0f);
+    sh.material = 0;
+    Bsdf b;
+    scene_bsdf(s, &sh, NULL, &b);
+    Vec3 wo = wo_at(0.6f, 0.4f), wi = wo_at(0.8f, 2.9f);
+    Color f = bsdf_eval(&b, wo, wi), want = measured_eval(s->measured[0], wo, wi, NULL);
+    assert_true(f.c[0] > 0.0f && memcmp(&f, &want, sizeof f) == 0);
+    assert_true(fabsf(bsdf_pdf(&b, wo, wi) - measured_pdf(s->measured[0], wo, wi)) == 0.0f);
+    Wavelengths wl = {{450.0f, 500.0f, 600.0f, 700.0f}, {1, 1, 1, 1}};
+    scene_bsdf(s, &sh, &wl, &b);
+    f = bsdf_eval(&b, wo, wi), want = measured_eval(s->measured[0], wo, wi, wl.lambda);
+    assert_true(f.c[3] > 0.0f && memcmp(&f, &want, sizeof f) == 0);
+    cst_scene_destroy(s);
+    /* pbrt: two materials, one file; a missing file; a malformed one */
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nWorldBegin\n"
+             "MakeNamedMaterial \"a\" \"string type\" \"measured\" \"string filename\" \"ggx.bsdf\"\n"
+             "Material \"measured\" \"string filename\" \"%s\"\n"
+             "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"
+             "NamedMaterial \"a\"\n"
+             "Shape \"trianglemesh\" \"point3 P\" [0 0 1 1 0 1 0 1 1] \"integer indices\" [0 1 2]\n"
+             "Material \"measured\" \"string filename\" \"missing.bsdf\"\n"
+             "Shape \"trianglemesh\" \"point3 P\" [0 0 2 1 0 2 0 1 2] \"integer indices\" [0 1 2]\n", good);
+    CstLoadOptions opt = {.warning = count_warning};
+    g_warnings = 0;
+    if (cst_scene_load_pbrt_string(text, strlen(text), scene_path, &opt, &s, &err) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(s->num_measured, 1);
+    assert_int_equal(g_warnings, 1);
+    assert_int_equal(s->materials[s->tri_info[0].material].type, MATERIAL_MEASURED);
+    assert_int_equal(s->materials[s->tri_info[1].material].type, MATERIAL_MEASURED);
+    assert_int_equal(s->materials[s->tri_info[2].material].type, MATERIAL_DIFFUSE);
+    cst_scene_destroy(s);
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nWorldBegin\nMaterial \"measured\" \"string filename\" \"bad.bsdf\"\n"
+             "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n");
+    s = NULL;
+    assert_int_equal(cst_scene_load_pbrt_string(text, strlen(text), scene_path, NULL, &s, &err), CST_ERR_PARSE);
+    assert_null(s);
+    print_message("malformed .bsdf: %s\n", err.msg);
+    assert_non_null(strstr(err.msg, "bad.bsdf: byte "));
+    assert_non_null(strstr(err.msg, "runs past the end of the file"));
+    scratch_dir_remove();
 }
 
 /* ------------------------------------------------------------------ file tests */
@@ -641,6 +743,7 @@ int main(void)
         cmocka_unit_test(test_measured_chi2),
         cmocka_unit_test(test_measured_albedo),
         cmocka_unit_test(test_measured_spectral),
+        cmocka_unit_test(test_material),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

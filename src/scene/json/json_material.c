@@ -9,15 +9,16 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/path.h"
 #include "scene/json/json_texture.h"
 
 enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COATED_DIFFUSE,
-       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_COUNT };
+       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_MEASURED, MAT_COUNT };
 
 /* A material's "type", in MAT_* order (json_material.h). */
 const char *const json_material_types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric",
                                            "plastic", "coated_diffuse", "coated_conductor", "mix", "diffuse_transmission",
-                                           "thin_dielectric", NULL};
+                                           "thin_dielectric", "measured", NULL};
 
 /* "roughness" (or another roughness key): perceptual, in [0, 1] (material.h: alpha =
  * roughness^2). */
@@ -169,7 +170,7 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
-                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED};
     /* The keys each type accepts, "type" first. */
     static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
     static const char *const keys_glass[] = {"type", "albedo", "ior"};
@@ -188,10 +189,12 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
                                                         "base_uroughness", "base_vroughness"};
     static const char *const keys_mix[] = {"type", "materials", "amount"};
     static const char *const keys_difftrans[] = {"type", "albedo", "transmittance"};
+    static const char *const keys_measured[] = {"type", "file", "two_sided"};
     static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass, keys_conductor,
                                               keys_dielectric, keys_plastic, keys_coated_diffuse,
-                                              keys_coated_conductor, keys_mix, keys_difftrans, keys_glass};
-    static const int nkeys[] = {3, 3, 3, 9, 7, 5, 13, 18, 3, 3, 3};
+                                              keys_coated_conductor, keys_mix, keys_difftrans, keys_glass,
+                                              keys_measured};
+    static const int nkeys[] = {3, 3, 3, 9, 7, 5, 13, 18, 3, 3, 3, 3};
     int type = 0;
     json_t *v;
     LOADER_TRY(json_expect_object(ld, obj, "a material object"));
@@ -212,6 +215,13 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     }
     if (type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR) LOADER_TRY(read_layer(ld, obj, m));
     if (type == MAT_MIX) return read_mix(ld, obj, m);
+    if (type == MAT_MEASURED) { /* "file": an RGL .bsdf, relative to the scene (json_add_material) */
+        LOADER_TRY(json_member_required(ld, obj, "file", "the path of a .bsdf file", &v));
+        json_path_push_key(ld, "file");
+        LOADER_TRY(json_read_string(ld, v, &m->measured_file));
+        if (!m->measured_file[0]) return json_fail_here(ld, "the file name is empty; expected the path of a .bsdf file");
+        json_path_pop(ld);
+    }
     m->roughness = 0.0f;
     if ((v = json_object_get(obj, "albedo"))) {
         /* A reflectance above 1 would make any of these create energy. */
@@ -298,7 +308,13 @@ CstStatus json_add_material(Loader *ld, const Material *m, int *out_id)
 {
     CstMaterialDesc d;
     scene_material_desc(m, &d);
+    char *path = NULL; /* a measured material's file, relative to the scene file */
+    if (m->type == MATERIAL_MEASURED && m->measured_file && !m->measured) {
+        if (!(path = path_resolve(ld->name, m->measured_file))) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+        d.measured_file = path;
+    }
     CstStatus st = cst_scene_add_material(ld->scene, &d, out_id, ld->err);
+    free(path);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 

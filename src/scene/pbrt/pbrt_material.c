@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
@@ -239,6 +240,38 @@ static CstStatus dielectric_eta(Loader *ld, Params *ps, const char *d, const cha
     return CST_OK;
 }
 
+/* pbrt-v4's measured material: "string filename", an RGL .bsdf read when the material is
+ * first used (cst_scene_add_material; a malformed file is an error there, located by
+ * byte). A file that does not exist (the corpus's are not distributed) is reported and
+ * replaced by diffuse reflectance 0.5, as an unsupported material is. The resolved path
+ * is the loader's (MatEntry) until then. */
+static CstStatus measured_material(Loader *ld, Params *ps, const char *d, Loc loc, Material *m)
+{
+    memset(m, 0, sizeof *m); /* make_material's defaults: the stand-in's */
+    m->type = MATERIAL_DIFFUSE;
+    m->albedo = color_s(0.5f);
+    m->ior = 1.0f;
+    const char *file = NULL;
+    Loc fl = loc;
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    if (!file || !file[0])
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the "
+                            "path of a .bsdf file", d);
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    if (access(path, F_OK) != 0) {
+        char nm[72];
+        pbrt_warn_at(ld, CST_WARN_MISSING_FILE, fl, "%s: file \"%s\" not found; diffuse reflectance 0.5 is used "
+                     "instead", d, pbrt_clip(file, nm));
+        free(path);
+        return CST_OK;
+    }
+    m->type = MATERIAL_MEASURED;
+    m->measured_file = path;
+    return CST_OK;
+}
+
 /* pbrt material `type` with its parameters as our nearest Material (docs/pbrt-compat.md). */
 static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc, Material *m)
 {
@@ -377,7 +410,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             m->amount = amount;
             m->amount_texture = amount_tex;
         }
-    } else if (strcmp(type, "measured") == 0 || strcmp(type, "hair") == 0 ||
+    } else if (strcmp(type, "hair") == 0 ||
                strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
                strcmp(type, "fourier") == 0) {
         pbrt_params_mark_all_used(ps);
@@ -428,12 +461,22 @@ CstStatus pbrt_material_directive(Loader *ld, NamedCall *call)
                               "material type, as in \"string type\" \"diffuse\"", d);
         }
     }
-    TRY(make_material(ld, mt, ps, loc, &m));
+    if (strcmp(mt, "measured") == 0) {
+        char dm[96], nm2[72];
+        snprintf(dm, sizeof dm, "material \"%s\"", pbrt_clip(mt, nm2));
+        TRY(measured_material(ld, ps, dm, loc, &m));
+    } else {
+        TRY(make_material(ld, mt, ps, loc, &m));
+    }
     /* pbrt_roughness gave equal widths unless uroughness and vroughness differ */
     m.anisotropic = m.roughness != m.roughness_v || m.base_roughness != m.base_roughness_v;
-    TRY(pbrt_material_normal_textures(ld, ps, d, &m));
     int id = 0;
-    TRY(pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id));
+    CstStatus st = pbrt_material_normal_textures(ld, ps, d, &m);
+    if (st == CST_OK) st = pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id);
+    if (st != CST_OK) {
+        free((char *)(uintptr_t)m.measured_file); /* the entry would have owned it */
+        return st;
+    }
     ld->mats[id].interface = strcmp(mt, "interface") == 0 || strcmp(mt, "") == 0 || strcmp(mt, "none") == 0;
     if (dname[2] != 'k') ld->gs.material = id;
     return CST_OK;
