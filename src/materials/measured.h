@@ -3,8 +3,8 @@
  * its .bsdf tensor file (io/tensor.h) and validated field by field the way pbrt-v4's
  * MeasuredBRDF::Create checks the structure, plus the values (finite, non-negative
  * densities, increasing grids); and the BRDF they tabulate (MeasuredBsdf): evaluation,
- * density and sampling through piecewise-bilinear warps (sampling/plinear2d.h). Not yet a
- * material type of the scene (see docs/pbrt-compat.md). */
+ * density and sampling through piecewise-bilinear warps (sampling/plinear2d.h), which
+ * bsdf.c's MATERIAL_MEASURED lobe calls; the scene owns one per file. */
 #ifndef CST_MATERIALS_MEASURED_H
 #define CST_MATERIALS_MEASURED_H
 
