@@ -520,6 +520,18 @@ static void test_material(void **state)
     f = bsdf_eval(&b, wo, wi), want = measured_eval(s->measured[0], wo, wi, wl.lambda);
     assert_true(f.c[3] > 0.0f && memcmp(&f, &want, sizeof f) == 0);
     cst_scene_destroy(s);
+    /* JSON errors: no "file", a malformed file (located at "file" by the loader) */
+    const char *no_file = "{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40}, "
+                          "\"materials\": {\"m\": {\"type\": \"measured\"}}, \"shapes\": []}";
+    s = NULL;
+    assert_int_equal(cst_scene_load_json_string(no_file, strlen(no_file), json_name, &s, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "missing key \"file\""));
+    snprintf(text, sizeof text,
+             "{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40}, "
+             "\"materials\": {\"m\": {\"type\": \"measured\", \"file\": \"bad.bsdf\"}}, \"shapes\": []}");
+    assert_int_equal(cst_scene_load_json_string(text, strlen(text), json_name, &s, &err), CST_ERR_PARSE);
+    print_message("malformed .bsdf from JSON: %s\n", err.msg);
+    assert_non_null(strstr(err.msg, "bad.bsdf: byte "));
     /* pbrt: two materials, one file; a missing file; a malformed one */
     snprintf(text, sizeof text,
              "Camera \"perspective\"\nWorldBegin\n"
