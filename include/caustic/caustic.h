@@ -295,7 +295,9 @@ typedef enum CstMaterialType {
     CST_MATERIAL_DIFFUSE_TRANSMISSION,
     /* pbrt-v4's thindielectric: a thin slab of ior (default 1.5): mirror reflection and
      * undeviated transmission; albedo tints both */
-    CST_MATERIAL_THIN_DIELECTRIC
+    CST_MATERIAL_THIN_DIELECTRIC,
+    /* pbrt-v4's measured: a tabulated BRDF from an RGL .bsdf file (measured_file) */
+    CST_MATERIAL_MEASURED
 } CstMaterialType;
 
 /* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
@@ -334,6 +336,17 @@ typedef struct CstMaterialDesc {
      * disperses (the path keeps its first wavelength after such a surface). RGB mode uses
      * their reductions: eta and k to RGB under D65, ior to its mean weighted by y-bar. */
     int eta_spectrum, k_spectrum, ior_spectrum;
+    /* Anisotropic roughness (conductor, dielectric, coated diffuse and coated conductor;
+     * pbrt-v4's uroughness and vroughness): with anisotropic = 1, roughness and
+     * base_roughness are the perceptual roughness along the surface's dp/du (its texture
+     * u direction) and roughness_v and base_roughness_v, in [0, 1], the one along the other
+     * tangent (with a roughness_texture, which sets both widths, roughness_v must equal
+     * roughness). 0 (default): isotropic, the _v fields unused. */
+    int anisotropic;
+    float roughness_v, base_roughness_v;
+    /* Measured: the .bsdf file's path (read when the material is added, once per path;
+     * a malformed file fails with CST_ERR_PARSE, "FILE: byte N: ...") */
+    const char *measured_file;
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

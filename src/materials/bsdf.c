@@ -8,6 +8,7 @@
 
 #include <stddef.h>
 
+#include "materials/measured.h"
 #include "materials/microfacet.h"
 #include "sampling/warp.h"
 
@@ -26,6 +27,7 @@ Color bsdf_albedo(const Bsdf *b)
     case MATERIAL_COATED_CONDUCTOR: return fresnel_conductor_rgb(1.0f, b->lobe.layered.eta, b->lobe.layered.k);
     case MATERIAL_DIFFUSE_TRANSMISSION: return b->lobe.difftrans.reflectance;
     case MATERIAL_THIN_DIELECTRIC: return b->lobe.dielectric.tint;
+    case MATERIAL_MEASURED: return b->lobe.measured.table->albedo;
     case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
@@ -34,7 +36,17 @@ Color bsdf_albedo(const Bsdf *b)
 void bsdf_init_shading_general(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng)
 {
     bsdf_init_smooth(b, m, ns, ng);
-    bsdf_set_alpha(b, material_bsdf_alpha(m->roughness));
+    float ax, ay; /* layered_init has set the coated materials' widths */
+    material_bsdf_alpha2(m->roughness, m->anisotropic ? m->roughness_v : m->roughness, &ax, &ay);
+    if (m->type == MATERIAL_CONDUCTOR) {
+        b->lobe.conductor.alpha = ax;
+        b->lobe.conductor.alpha_y = ay;
+    } else if (m->type == MATERIAL_DIELECTRIC) {
+        b->lobe.dielectric.alpha = ax;
+        b->lobe.dielectric.alpha_y = ay;
+    } else if (m->type == MATERIAL_PLASTIC) {
+        b->lobe.plastic.alpha = ax; /* isotropic: its coat table is made for one roughness */
+    }
     if (m->type == MATERIAL_PLASTIC) {
         PlasticLobe *pl = &b->lobe.plastic;
         if (pl->alpha > 0.0f && m->prepared) {
@@ -73,19 +85,20 @@ static Color conductor_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
     Vec3 h = v3_add(wo, wi);
     if (v3_length2(h) == 0.0f) return color_s(0.0f);
     Vec3 m = v3_normalize(h);
-    float s = ggx_d(m, b->lobe.conductor.alpha) * ggx_g2(wo, wi, b->lobe.conductor.alpha) / (4.0f * wo.z);
+    const float ax = b->lobe.conductor.alpha, ay = b->lobe.conductor.alpha_y;
+    float s = ggx_d(m, ax, ay) * ggx_g2(wo, wi, ax, ay) / (4.0f * wo.z);
     return color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->lobe.conductor.eta, b->lobe.conductor.k), s);
 }
 
 /* Visible-normal sampling then reflection: pdf = D_wo(m) / (4 wo.m) (the reflection
  * Jacobian, Walter 2007 eq. 14) = G1(wo) D(m) / (4 cos_o). */
-static float microfacet_reflect_pdf(Vec3 wo, Vec3 wi, float alpha)
+static float microfacet_reflect_pdf(Vec3 wo, Vec3 wi, float ax, float ay)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
     Vec3 h = v3_add(wo, wi);
     if (v3_length2(h) == 0.0f) return 0.0f;
     Vec3 m = v3_normalize(h);
-    return ggx_g1(wo, alpha) * ggx_d(m, alpha) / (4.0f * wo.z);
+    return ggx_g1(wo, ax, ay) * ggx_d(m, ax, ay) / (4.0f * wo.z);
 }
 
 static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
@@ -98,14 +111,15 @@ static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
         out->delta = true;
         return true;
     }
-    Vec3 m = ggx_sample_visible(wo, b->lobe.conductor.alpha, u);
+    Vec3 m = ggx_sample_visible(wo, b->lobe.conductor.alpha, b->lobe.conductor.alpha_y, u);
     Vec3 wi = reflect_about(wo, m);
     if (wi.z <= 0.0f) return false; /* reflected into the surface: lost (single scattering) */
     out->wi = wi;
-    out->pdf_w = microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha);
+    out->pdf_w = microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha, b->lobe.conductor.alpha_y);
     out->pmf = 0.0f;
     /* f cos_i / pdf = F G2 / G1(wo): D and the Jacobian cancel. */
-    float g = ggx_g2(wo, wi, b->lobe.conductor.alpha) / ggx_g1(wo, b->lobe.conductor.alpha);
+    const float ax = b->lobe.conductor.alpha, ay = b->lobe.conductor.alpha_y;
+    float g = ggx_g2(wo, wi, ax, ay) / ggx_g1(wo, ax, ay);
     out->weight = color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->lobe.conductor.eta, b->lobe.conductor.k), g);
     out->delta = false;
     return true;
@@ -135,7 +149,8 @@ static float dielectric_eval(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode
     float etap;
     bool reflect;
     if (!bsdf_dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
-    float dm = ggx_d(m, b->lobe.dielectric.alpha) * ggx_g2(wo, wi, b->lobe.dielectric.alpha);
+    const float ax = b->lobe.dielectric.alpha, ay = b->lobe.dielectric.alpha_y;
+    float dm = ggx_d(m, ax, ay) * ggx_g2(wo, wi, ax, ay);
     float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * dm / (4.0f * fabsf(wo.z));
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
@@ -152,7 +167,7 @@ static float dielectric_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
     float etap;
     bool reflect;
     if (!bsdf_dielectric_half(wo, wi, b->lobe.dielectric.eta, &m, &etap, &reflect)) return 0.0f;
-    float pm = ggx_visible_pdf(wo, m, b->lobe.dielectric.alpha);
+    float pm = ggx_visible_pdf(wo, m, b->lobe.dielectric.alpha, b->lobe.dielectric.alpha_y);
     float F = dielectric_fresnel(b, wo, wi, m, reflect);
     if (reflect) return F * pm / (4.0f * fabsf(v3_dot(wo, m)));
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
@@ -189,7 +204,7 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
 {
     if (b->lobe.dielectric.alpha == 0.0f) return dielectric_smooth_sample(b, wo, uc, mode, out);
     /* Visible normals of the side wo is on (the distribution is symmetric under z -> -z). */
-    Vec3 m = ggx_sample_visible(wo.z > 0.0f ? wo : v3_neg(wo), b->lobe.dielectric.alpha, u);
+    Vec3 m = ggx_sample_visible(wo.z > 0.0f ? wo : v3_neg(wo), b->lobe.dielectric.alpha, b->lobe.dielectric.alpha_y, u);
     float F = fresnel_dielectric(v3_dot(wo, m), b->lobe.dielectric.eta);
     Vec3 wi;
     float extra = 1.0f;
@@ -209,7 +224,8 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
     out->delta = false;
     /* f |cos_i| / pdf = G2 / G1(wo) for both lobes (D, F and the Jacobians cancel), times
      * 1 / etap^2 for radiance through refraction. */
-    float g = ggx_g2(wo, wi, b->lobe.dielectric.alpha) / ggx_g1(wo, b->lobe.dielectric.alpha);
+    const float ax = b->lobe.dielectric.alpha, ay = b->lobe.dielectric.alpha_y;
+    float g = ggx_g2(wo, wi, ax, ay) / ggx_g1(wo, ax, ay);
     out->weight = color_scale(b->lobe.dielectric.tint, g * extra);
     return true;
 }
@@ -261,7 +277,8 @@ static float plastic_coat_eval(const Bsdf *b, Vec3 wo, Vec3 wi)
     Vec3 h = v3_add(wo, wi);
     if (v3_length2(h) == 0.0f) return 0.0f;
     Vec3 m = v3_normalize(h);
-    return fresnel_dielectric(v3_dot(wo, m), b->lobe.plastic.eta) * ggx_d(m, b->lobe.plastic.alpha) * ggx_g2(wo, wi, b->lobe.plastic.alpha) /
+    return fresnel_dielectric(v3_dot(wo, m), b->lobe.plastic.eta) * ggx_d(m, b->lobe.plastic.alpha, b->lobe.plastic.alpha) *
+           ggx_g2(wo, wi, b->lobe.plastic.alpha, b->lobe.plastic.alpha) /
            (4.0f * wo.z);
 }
 
@@ -279,7 +296,7 @@ static float plastic_pdf(const Bsdf *b, Vec3 wo, Vec3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
     float pc = plastic_coat_prob(b, wo.z);
     float p = (1.0f - pc) * wi.z * CST_INV_PI;
-    if (b->lobe.plastic.alpha > 0.0f) p += pc * microfacet_reflect_pdf(wo, wi, b->lobe.plastic.alpha);
+    if (b->lobe.plastic.alpha > 0.0f) p += pc * microfacet_reflect_pdf(wo, wi, b->lobe.plastic.alpha, b->lobe.plastic.alpha);
     return p;
 }
 
@@ -296,7 +313,7 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
             out->delta = true;
             return true;
         }
-        wi = reflect_about(wo, ggx_sample_visible(wo, b->lobe.plastic.alpha, u));
+        wi = reflect_about(wo, ggx_sample_visible(wo, b->lobe.plastic.alpha, b->lobe.plastic.alpha, u));
         if (wi.z <= 0.0f) return false;
     } else {
         wi = warp_cosine_hemisphere(u);
@@ -457,6 +474,9 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return layered_eval(&b->lobe.layered, wo, wi, mode == BSDF_IMPORTANCE);
     case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_eval(b, wo, wi);
+    case MATERIAL_MEASURED:
+        if (!reflect_side(b, &wo, &wi)) return color_s(0.0f);
+        return measured_eval(b->lobe.measured.table, wo, wi, b->lobe.measured.spectral ? b->lobe.measured.lambda : NULL);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
     case MATERIAL_THIN_DIELECTRIC:
@@ -483,7 +503,7 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
         return wi.z * CST_INV_PI;
     case MATERIAL_CONDUCTOR:
         if (b->lobe.conductor.alpha == 0.0f || !reflect_side(b, &wo, &wi)) return 0.0f;
-        return microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha);
+        return microfacet_reflect_pdf(wo, wi, b->lobe.conductor.alpha, b->lobe.conductor.alpha_y);
     case MATERIAL_DIELECTRIC:
         if (b->lobe.dielectric.alpha == 0.0f) return 0.0f;
         return dielectric_pdf(b, wo, wi);
@@ -495,6 +515,9 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
         if (bsdf_is_delta(b) || !reflect_side(b, &wo, &wi)) return 0.0f;
         return layered_pdf(&b->lobe.layered, wo, wi);
     case MATERIAL_DIFFUSE_TRANSMISSION: return difftrans_pdf(b, wo, wi);
+    case MATERIAL_MEASURED:
+        if (!reflect_side(b, &wo, &wi)) return 0.0f;
+        return measured_pdf(b->lobe.measured.table, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
     case MATERIAL_THIN_DIELECTRIC:
@@ -588,6 +611,14 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         break;
     case MATERIAL_THIN_DIELECTRIC:
         ok = thin_dielectric_sample(b, wo, uc, out);
+        break;
+    case MATERIAL_MEASURED:
+        if ((flipped = wo.z < 0.0f) && b->one_sided) return false;
+        if (flipped) wo.z = -wo.z;
+        out->pmf = 0.0f;
+        out->delta = false;
+        ok = measured_sample(b->lobe.measured.table, wo, u, b->lobe.measured.spectral ? b->lobe.measured.lambda : NULL,
+                             &out->wi, &out->weight, &out->pdf_w);
         break;
     case MATERIAL_MIX: return false;
     }

@@ -19,22 +19,29 @@
 #include "sampling/warp.h"
 
 /* The lobes' parameters, one struct per material type; Bsdf.type says which member of
- * Bsdf.lobe is live. Roughness is GGX's alpha, 0 for the smooth (delta) lobes. */
+ * Bsdf.lobe is live. Roughness is GGX's alpha, 0 for the smooth (delta) lobes; alpha is
+ * the width along the frame's s axis, alpha_y along t (equal unless the material is
+ * anisotropic, whose frame's s is the tangent dp/du: bsdf_set_tangent). */
 typedef struct DiffuseLobe {   /* MATERIAL_DIFFUSE (Lambert) and MATERIAL_MIRROR (its tint) */
     Color albedo;
 } DiffuseLobe;
 typedef struct ConductorLobe { /* MATERIAL_CONDUCTOR */
     Color eta, k;              /* complex IOR, per channel */
-    float alpha;
+    float alpha, alpha_y;
 } ConductorLobe;
 typedef struct DielectricLobe { /* MATERIAL_GLASS (alpha 0) and MATERIAL_DIELECTRIC */
     Color tint;                 /* scales reflection and transmission alike */
     float eta;                  /* inside over outside IOR */
-    float alpha;
+    float alpha, alpha_y;
 } DielectricLobe;
 typedef struct DiffuseTransmissionLobe { /* MATERIAL_DIFFUSE_TRANSMISSION */
     Color reflectance, transmittance;     /* each lobe's hemispherical share */
 } DiffuseTransmissionLobe;
+typedef struct MeasuredLobe {   /* MATERIAL_MEASURED */
+    const struct MeasuredBsdf *table; /* the scene's */
+    bool spectral;              /* evaluate at lambda (bsdf_at_wavelengths), else in RGB */
+    float lambda[COLOR_LANES];  /* the path's wavelengths, nm */
+} MeasuredLobe;
 typedef struct PlasticLobe {    /* MATERIAL_PLASTIC: a dielectric coat over Lambert */
     Color albedo;               /* the base's */
     float eta;                  /* the coat's inside over outside IOR */
@@ -62,6 +69,7 @@ typedef struct Bsdf {
         PlasticLobe plastic;
         LayeredLobe layered; /* coated diffuse and coated conductor */
         DiffuseTransmissionLobe difftrans;
+        MeasuredLobe measured;
     } lobe;
 } Bsdf;
 
@@ -117,11 +125,13 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
         b->lobe.dielectric.tint = m->albedo;
         b->lobe.dielectric.eta = m->ior;
         b->lobe.dielectric.alpha = 0.0f;
+        b->lobe.dielectric.alpha_y = 0.0f;
         break;
     case MATERIAL_CONDUCTOR:
         b->lobe.conductor.eta = m->eta;
         b->lobe.conductor.k = m->k;
         b->lobe.conductor.alpha = 0.0f;
+        b->lobe.conductor.alpha_y = 0.0f;
         break;
     case MATERIAL_PLASTIC:
         b->lobe.plastic.albedo = m->albedo;
@@ -135,6 +145,14 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
     case MATERIAL_DIFFUSE_TRANSMISSION:
         b->lobe.difftrans.reflectance = m->albedo;
         b->lobe.difftrans.transmittance = m->transmittance;
+        break;
+    case MATERIAL_MEASURED:
+        b->lobe.measured.table = m->measured;
+        b->lobe.measured.spectral = false;
+        if (!m->measured) { /* no tables (a Material never added to a scene): black */
+            b->type = MATERIAL_DIFFUSE;
+            b->lobe.diffuse.albedo = color_s(0.0f);
+        }
         break;
     case MATERIAL_MIX: /* resolved by scene_bsdf; black if it ever gets here */
         b->type = MATERIAL_DIFFUSE;
@@ -215,19 +233,38 @@ static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
     case MATERIAL_COATED_DIFFUSE: b->lobe.layered.reflectance = albedo; break;
     case MATERIAL_CONDUCTOR:
     case MATERIAL_COATED_CONDUCTOR:
+    case MATERIAL_MEASURED:
     case MATERIAL_MIX: break;
     }
 }
 static inline void bsdf_set_alpha(Bsdf *b, float alpha)
 {
     switch (b->type) {
-    case MATERIAL_CONDUCTOR: b->lobe.conductor.alpha = alpha; break;
-    case MATERIAL_DIELECTRIC: b->lobe.dielectric.alpha = alpha; break;
+    case MATERIAL_CONDUCTOR: b->lobe.conductor.alpha = b->lobe.conductor.alpha_y = alpha; break;
+    case MATERIAL_DIELECTRIC: b->lobe.dielectric.alpha = b->lobe.dielectric.alpha_y = alpha; break;
     case MATERIAL_PLASTIC: b->lobe.plastic.alpha = alpha; break;
     case MATERIAL_COATED_DIFFUSE:
-    case MATERIAL_COATED_CONDUCTOR: b->lobe.layered.top_alpha = alpha; break; /* the interface's */
+    case MATERIAL_COATED_CONDUCTOR: /* the interface's */
+        b->lobe.layered.top_alpha = b->lobe.layered.top_alpha_y = alpha;
+        break;
     default: break;
     }
+}
+/* An anisotropic BSDF's frame: s along the tangent dpdu (world space, any length) made
+ * orthogonal to the shading normal (Gram-Schmidt), t = n x s, as pbrt-v4's BSDF frame
+ * Frame::FromXZ(shading dpdu, ns); the lobes' alpha lies along s, alpha_y along t.
+ * Unchanged when dpdu is (nearly) parallel to the normal or not finite. Isotropic lobes
+ * do not depend on the frame's rotation; scene_bsdf calls this for anisotropic ones only,
+ * so the others keep frame_from_normal's frame, and their values, bit for bit. */
+static inline void bsdf_set_tangent(Bsdf *b, Vec3 dpdu)
+{
+    Vec3 n = b->frame.n;
+    Vec3 s = v3_sub(dpdu, v3_scale(n, v3_dot(n, dpdu)));
+    float l2 = v3_length2(s), d2 = v3_length2(dpdu);
+    if (!(l2 > 1e-12f * d2) || !isfinite(l2)) return;
+    s = v3_scale(s, 1.0f / sqrtf(l2));
+    b->frame.s = s;
+    b->frame.t = v3_cross(n, s);
 }
 /* The surface's colour for the albedo AOV: the reflectance or tint; for a conductor, its
  * Fresnel reflectance at normal incidence. */

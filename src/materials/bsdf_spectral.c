@@ -28,6 +28,10 @@ void bsdf_at_wavelengths(Bsdf *b, const Wavelengths *wl)
         b->lobe.layered.k = spectrum_unbounded(b->lobe.layered.k, wl);
         b->lobe.layered.albedo = spectrum_albedo(b->lobe.layered.albedo, wl);
         break;
+    case MATERIAL_MEASURED: /* its tables are evaluated at the wavelengths themselves */
+        b->lobe.measured.spectral = true;
+        for (int i = 0; i < COLOR_LANES; i++) b->lobe.measured.lambda[i] = wl->lambda[i];
+        break;
     case MATERIAL_MIX: break; /* never a Bsdf's type: scene_bsdf resolves a mix first */
     }
 }

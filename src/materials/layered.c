@@ -27,8 +27,11 @@ void layered_init(LayeredLobe *l, const Material *m)
     l->k = cond ? color_scale(m->k, 1.0f / eta) : color_s(0.0f);
     l->albedo = m->layer_albedo;
     l->top_eta = eta;
-    l->top_alpha = material_bsdf_alpha(m->roughness);
-    l->base_alpha = cond ? material_bsdf_alpha(m->base_roughness) : 0.0f;
+    material_bsdf_alpha2(m->roughness, m->anisotropic ? m->roughness_v : m->roughness, &l->top_alpha, &l->top_alpha_y);
+    l->base_alpha = l->base_alpha_y = 0.0f;
+    if (cond)
+        material_bsdf_alpha2(m->base_roughness, m->anisotropic ? m->base_roughness_v : m->base_roughness,
+                             &l->base_alpha, &l->base_alpha_y);
     l->thickness = m->thickness;
     l->g = clampf(m->g, -0.99f, 0.99f);
     l->max_depth = m->max_depth;
@@ -72,7 +75,7 @@ static float top_f(const LayeredLobe *l, Vec3 wo, Vec3 wi, bool importance)
     float etap;
     bool reflect;
     if (top_specular(l) || !top_half(l, wo, wi, &m, &etap, &reflect)) return 0.0f;
-    float dg = ggx_d(m, l->top_alpha) * ggx_g2(wo, wi, l->top_alpha);
+    float dg = ggx_d(m, l->top_alpha, l->top_alpha_y) * ggx_g2(wo, wi, l->top_alpha, l->top_alpha_y);
     float F = top_fresnel(l, wo, wi, m, reflect), cc = fabsf(wo.z * wi.z);
     if (reflect) return F * dg / (4.0f * cc);
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
@@ -91,7 +94,7 @@ static float top_pdf(const LayeredLobe *l, Vec3 wo, Vec3 wi, int sides)
     float F = top_fresnel(l, wo, wi, m, reflect);
     float R = (sides & SIDE_REFLECT) ? F : 0.0f, T = (sides & SIDE_TRANSMIT) ? 1.0f - F : 0.0f;
     if (!(R + T > 0.0f)) return 0.0f;
-    float pm = ggx_visible_pdf(wo, m, l->top_alpha);
+    float pm = ggx_visible_pdf(wo, m, l->top_alpha, l->top_alpha_y);
     if (reflect) return pm / (4.0f * fabsf(v3_dot(wo, m))) * R / (R + T);
     float denom = sqrf(v3_dot(wi, m) + v3_dot(wo, m) / etap);
     return pm * fabsf(v3_dot(wi, m)) / denom * T / (R + T);
@@ -123,7 +126,7 @@ static bool top_sample(const LayeredLobe *l, Vec3 wo, float uc, Vec2 u, bool imp
         s->transmit = true;
         return true;
     }
-    Vec3 m = ggx_sample_visible(wo.z > 0.0f ? wo : v3_neg(wo), l->top_alpha, u);
+    Vec3 m = ggx_sample_visible(wo.z > 0.0f ? wo : v3_neg(wo), l->top_alpha, l->top_alpha_y, u);
     float F = fresnel_dielectric(v3_dot(wo, m), l->top_eta);
     float R = (sides & SIDE_REFLECT) ? F : 0.0f, T = (sides & SIDE_TRANSMIT) ? 1.0f - F : 0.0f;
     if (!(R + T > 0.0f)) return false;
@@ -156,7 +159,7 @@ static Color base_f(const LayeredLobe *l, Vec3 wo, Vec3 wi)
     Vec3 h = v3_add(wo, wi);
     if (v3_length2(h) == 0.0f) return color_s(0.0f);
     Vec3 m = v3_normalize(h);
-    float s = ggx_d(m, l->base_alpha) * ggx_g2(wo, wi, l->base_alpha) / (4.0f * wo.z * wi.z);
+    float s = ggx_d(m, l->base_alpha, l->base_alpha_y) * ggx_g2(wo, wi, l->base_alpha, l->base_alpha_y) / (4.0f * wo.z * wi.z);
     return color_scale(fresnel_conductor_rgb(v3_dot(wo, m), l->eta, l->k), s);
 }
 
@@ -169,7 +172,7 @@ static float base_pdf(const LayeredLobe *l, Vec3 wo, Vec3 wi)
     Vec3 h = v3_add(wo, wi);
     if (v3_length2(h) == 0.0f) return 0.0f;
     Vec3 m = v3_normalize(h);
-    return ggx_visible_pdf(wo, m, l->base_alpha) / (4.0f * v3_dot(wo, m));
+    return ggx_visible_pdf(wo, m, l->base_alpha, l->base_alpha_y) / (4.0f * v3_dot(wo, m));
 }
 
 static bool base_sample(const LayeredLobe *l, Vec3 wo, Vec2 u, IfaceSample *s)
@@ -185,7 +188,7 @@ static bool base_sample(const LayeredLobe *l, Vec3 wo, Vec2 u, IfaceSample *s)
         s->specular = true;
     } else {
         if (l->conductor) {
-            wi = reflect_about(w, ggx_sample_visible(w, l->base_alpha, u));
+            wi = reflect_about(w, ggx_sample_visible(w, l->base_alpha, l->base_alpha_y, u));
             if (wi.z <= 0.0f) return false; /* lost: single scattering */
         } else {
             wi = warp_cosine_hemisphere(u);

@@ -21,6 +21,8 @@ typedef struct LayeredLobe {
     float top_eta;     /* interface: inside over outside IOR */
     float top_alpha;   /* interface GGX alpha; 0 = smooth (delta) */
     float base_alpha;  /* conductor base GGX alpha; 0 = smooth (delta) */
+    float top_alpha_y, base_alpha_y; /* their widths along the frame's t (= the above unless
+                                      * anisotropic; the above are along s) */
     float thickness;   /* optical thickness along the normal (sigma_t = 1 per unit) */
     float g;           /* Henyey-Greenstein asymmetry in (-1, 1) */
     int max_depth;     /* random-walk steps per estimate */

@@ -149,7 +149,7 @@ static float coat_albedo_quadrature(const CoatGrid *g, float mu, float alpha, fl
     const int n = COAT_N;
     Vec3 wo = v3(safe_sqrtf(1.0f - mu * mu), 0.0f, mu);
     double sum = 0.0;
-    float g1 = ggx_g1(wo, alpha), lambda_o = ggx_lambda(wo, alpha);
+    float g1 = ggx_g1(wo, alpha, alpha), lambda_o = ggx_lambda(wo, alpha, alpha);
     /* ggx_sample_visible's quantities that depend on wo alone. */
     Vec3 vh = v3_normalize(v3(alpha * wo.x, alpha * wo.y, wo.z));
     float len2 = vh.x * vh.x + vh.y * vh.y;

@@ -31,7 +31,9 @@ typedef enum MaterialType {
     MATERIAL_DIFFUSE_TRANSMISSION,
     /* pbrt-v4's thindielectric: a thin slab of ior; mirror reflection and undeviated
      * transmission, the slab's internal reflections summed in closed form */
-    MATERIAL_THIN_DIELECTRIC
+    MATERIAL_THIN_DIELECTRIC,
+    /* pbrt-v4's measured: a tabulated BRDF read from an RGL .bsdf file (measured.h) */
+    MATERIAL_MEASURED
 } MaterialType;
 
 static inline bool material_is_layered(MaterialType t)
@@ -50,6 +52,13 @@ typedef struct Material {
     Color albedo;      /* diffuse, mirror, plastic base; dielectric tint */
     float ior;       /* glass, dielectric, plastic coat: interior over exterior IOR, > 0 */
     float roughness; /* conductor, dielectric, plastic: perceptual roughness in [0, 1] */
+    /* Anisotropic roughness (conductor, dielectric and the coated materials' interface and
+     * conductor base; pbrt-v4's uroughness, vroughness): when set, roughness and
+     * base_roughness are the perceptual roughness along the surface's dp/du and
+     * roughness_v and base_roughness_v along the other tangent; when clear (a zero-
+     * initialised Material) the lobes are isotropic and the _v fields unused. */
+    bool anisotropic;
+    float roughness_v, base_roughness_v;
     Color eta, k;      /* conductor: complex IOR eta + i k per RGB channel (material_metal) */
     /* Coated (layered) materials: the conductor base's perceptual roughness (coated
      * conductor; roughness is the interface's), the slab's optical thickness, its
@@ -86,6 +95,10 @@ typedef struct Material {
      * behaviour; the scene file's key is "two_sided". Dielectrics have an inside and
      * ignore it. */
     bool one_sided;
+    /* Measured: the tables (owned by the scene, which keeps them until scene_destroy) and,
+     * between a loader and cst_scene_add_material only, the file to read them from. */
+    const struct MeasuredBsdf *measured;
+    const char *measured_file;
     /* Derived by material_prepare() (scene_add_material calls it): the rough plastic's
      * coat albedo table and its cosine-weighted average. */
     bool prepared;
@@ -100,6 +113,36 @@ static inline float material_bsdf_alpha(float roughness)
 {
     float a = material_alpha(roughness);
     return a < MATERIAL_SMOOTH_ALPHA ? 0.0f : a;
+}
+
+/* GGX widths (ax along the tangent, ay along the bitangent) of a perceptual roughness pair
+ * as a BSDF uses them: both 0 (the smooth, delta lobes) when the larger is below
+ * MATERIAL_SMOOTH_ALPHA (pbrt-v4 TrowbridgeReitzDistribution::EffectivelySmooth), else
+ * each at least 1e-4 (as pbrt-v4 clamps them) so that D stays finite. With ru = rv this
+ * is material_bsdf_alpha twice, bit for bit. */
+static inline void material_bsdf_alpha2(float ru, float rv, float *ax, float *ay)
+{
+    float a = material_alpha(ru), b = material_alpha(rv);
+    if (a < MATERIAL_SMOOTH_ALPHA && b < MATERIAL_SMOOTH_ALPHA) {
+        *ax = *ay = 0.0f;
+    } else if (ru == rv) {
+        *ax = *ay = a;
+    } else {
+        *ax = a < 1e-4f ? 1e-4f : a;
+        *ay = b < 1e-4f ? 1e-4f : b;
+    }
+}
+/* True when the material's lobes are anisotropic (its BSDF needs the tangent dp/du). */
+static inline bool material_is_anisotropic(const Material *m)
+{
+    if (!m->anisotropic) return false;
+    switch (m->type) {
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_COATED_DIFFUSE: return m->roughness != m->roughness_v;
+    case MATERIAL_COATED_CONDUCTOR: return m->roughness != m->roughness_v || m->base_roughness != m->base_roughness_v;
+    default: return false;
+    }
 }
 
 /* Fills the derived fields (about 1 ms of SIMD quadrature for a rough plastic, nothing

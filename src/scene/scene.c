@@ -7,6 +7,7 @@
 
 #include "core/array.h"
 #include "core/error.h"
+#include "materials/measured.h"
 
 /* Room for `need` elements of `size` bytes in the array at *arr (core/array.h's rule).
  * Counts are int: `need`, computed by the caller in 64 bits, above INT_MAX fails like an
@@ -54,6 +55,11 @@ void scene_destroy(Scene *s)
     free(s->materials);
     free(s->spectra);
     free(s->emitter_spectrum);
+    for (int i = 0; i < s->num_measured; i++) {
+        measured_bsdf_free(s->measured[i]);
+        free(s->measured[i]);
+    }
+    free(s->measured);
     for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
     free(s->textures);
     free(s->emitters);
@@ -122,6 +128,30 @@ CstStatus scene_set_emitter_spectrum(Scene *s, int first, int spectrum, CstError
     return CST_OK;
 }
 
+/* A measured material's tables from path, read once per file (pbrt-v4 caches them by
+ * name too) and kept by the scene. */
+static CstStatus scene_measured_load(Scene *s, const char *path, const MeasuredBsdf **out, CstError *err)
+{
+    if (!path) return cst_fail(err, CST_ERR_INVALID_ARG, "measured material without a file; expected a .bsdf file");
+    for (int i = 0; i < s->num_measured; i++)
+        if (strcmp(s->measured[i]->path, path) == 0) {
+            *out = s->measured[i];
+            return CST_OK;
+        }
+    if (!GROW(s->measured, s->cap_measured, s->num_measured + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a measured material");
+    MeasuredBsdf *b = malloc(sizeof *b);
+    if (!b) return cst_fail(err, CST_ERR_OOM, "out of memory adding a measured material");
+    CstStatus st = measured_bsdf_read_file(b, path, err);
+    if (st != CST_OK) {
+        free(b);
+        return st;
+    }
+    s->measured[s->num_measured++] = b;
+    *out = b;
+    return CST_OK;
+}
+
 CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError *err)
 {
     if (m->albedo_texture < 0 || m->albedo_texture > s->num_textures || m->roughness_texture < 0 ||
@@ -140,9 +170,16 @@ CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError 
          m->amount_texture < 0 || m->amount_texture > s->num_textures))
         return cst_fail(err, CST_ERR_INVALID_ARG, "mix material: materials %d and %d (or its amount texture) "
                         "out of range; expected materials added before it", m->mix[0], m->mix[1]);
+    const MeasuredBsdf *table = m->measured;
+    if (m->type == MATERIAL_MEASURED && !table) {
+        CstStatus st = scene_measured_load(s, m->measured_file, &table, err);
+        if (st != CST_OK) return st;
+    }
     if (!GROW(s->materials, s->cap_materials, s->num_materials + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a material");
     s->materials[s->num_materials] = *m;
+    s->materials[s->num_materials].measured = table;
+    s->materials[s->num_materials].measured_file = NULL; /* the caller's string */
     /* Derived data (the rough plastic's coat table) is computed once here, not per hit. */
     material_prepare(&s->materials[s->num_materials]);
     *out_id = s->num_materials++;

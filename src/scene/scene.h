@@ -75,6 +75,8 @@ struct CstScene {
     /* Per area emitter (emitter_sampler order), 1 + the index of its emitted spectrum or 0;
      * NULL when none has one; entries past num_emitter_spectrum are 0. */
     int *emitter_spectrum; int num_emitter_spectrum; size_t cap_emitter_spectrum;
+    /* measured materials' tables, one per file, each allocated apart (materials point at them) */
+    struct MeasuredBsdf **measured; int num_measured; size_t cap_measured;
     Emitter *emitters; int num_emitters; size_t cap_emitters;
     /* Alpha cut-outs, referred to by PrimInfo.alpha; num_alphas == 0 (every scene without
      * one) keeps the ray queries on their opaque path behind a single branch. */
@@ -475,6 +477,12 @@ static inline const Material *scene_bsdf_material(const Scene *s, const SurfaceH
         bsdf_init_shading(b, m, sh->ns, sh->ng);
     }
     if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh, b);
+    /* Anisotropic roughness lies along dp/du (pbrt-v4's BSDF frame); hits without one
+     * (instances, degenerate uvs, a sphere's poles) keep frame_from_normal's tangent. */
+    if (m->anisotropic && material_is_anisotropic(m)) {
+        Vec3 dpdu, dpdv;
+        if (scene_dpduv(s, sh, &dpdu, &dpdv)) bsdf_set_tangent(b, dpdu);
+    }
     /* The coated materials' stochastic estimates draw their random numbers from a hash of
      * the hit (here) and of the directions (layered.c): the same query at the same hit
      * always gets the same number, different hits independent ones. */

@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "io/image_io.h"
+#include "materials/measured.h"
 #include "scene/scene.h"
 #include "scene/scene_build.h"
 #include "scene/scene_build_check.h"
@@ -375,7 +376,7 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         [MATERIAL_COATED_DIFFUSE] = CST_MATERIAL_COATED_DIFFUSE,
         [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR, [MATERIAL_MIX] = CST_MATERIAL_MIX,
         [MATERIAL_DIFFUSE_TRANSMISSION] = CST_MATERIAL_DIFFUSE_TRANSMISSION,
-        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC};
+        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC, [MATERIAL_MEASURED] = CST_MATERIAL_MEASURED};
     cst_material_desc_init(d, types[m->type]);
     for (int k = 0; k < 3; k++) {
         d->albedo[k] = color_channel(m->albedo, k);
@@ -383,9 +384,15 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         d->k[k] = color_channel(m->k, k);
     }
     d->albedo_texture = m->albedo_texture;
+    if (m->type == MATERIAL_MEASURED) d->measured_file = m->measured ? m->measured->path : m->measured_file;
     d->ior = m->ior;
     d->roughness = m->roughness;
     d->roughness_texture = m->roughness_texture;
+    if (m->anisotropic) {
+        d->anisotropic = 1;
+        d->roughness_v = m->roughness_v;
+        d->base_roughness_v = m->base_roughness_v;
+    }
     d->two_sided = !m->one_sided;
     d->displacement_texture = m->displacement_texture;
     d->normal_map_texture = m->normal_map_texture;
@@ -477,6 +484,30 @@ static CstStatus build_layer(const CstMaterialDesc *d, Material *m, CstError *er
     return CST_OK;
 }
 
+/* Anisotropic roughness (cst_scene_add_material): the types that have it, no texture. */
+static CstStatus build_anisotropic(const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    if (d->anisotropic == 0) return CST_OK;
+    if (d->anisotropic != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic %d; expected 0 or 1", fn, d->anisotropic);
+    if (d->type != CST_MATERIAL_CONDUCTOR && d->type != CST_MATERIAL_DIELECTRIC &&
+        d->type != CST_MATERIAL_COATED_DIFFUSE && d->type != CST_MATERIAL_COATED_CONDUCTOR)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic roughness on a material of type %d; expected "
+                        "a conductor, dielectric, coated diffuse or coated conductor", fn, (int)d->type);
+    if (d->roughness_texture && d->roughness_v != d->roughness) /* the texture sets both widths */
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness_v %g with a roughness_texture; expected an "
+                        "isotropic textured roughness (roughness_v = roughness) or no texture", fn,
+                        (double)d->roughness_v);
+    if (!(d->roughness_v >= 0.0f && d->roughness_v <= 1.0f) || !(d->base_roughness_v >= 0.0f && d->base_roughness_v <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness_v %g, base_roughness_v %g; expected 0 (smooth) "
+                        "to 1 (roughest)", fn, (double)d->roughness_v, (double)d->base_roughness_v);
+    m->anisotropic = true;
+    m->roughness_v = d->roughness_v;
+    m->base_roughness_v = d->type == CST_MATERIAL_COATED_CONDUCTOR ? d->base_roughness_v : 0.0f;
+    return CST_OK;
+}
+
 /* A texture standing for a reflectance or a roughness: its values must stay within 1. */
 static CstStatus check_unit_texture(const Scene *s, int id, const char *what, CstError *err)
 {
@@ -509,14 +540,14 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     static const MaterialType types[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
-                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED};
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
-    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_THIN_DIELECTRIC)
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_MEASURED)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
-                        "to CST_MATERIAL_THIN_DIELECTRIC (cst_material_desc_init sets it)", fn, (int)d->type);
+                        "to CST_MATERIAL_MEASURED (cst_material_desc_init sets it)", fn, (int)d->type);
     Material m = {0};
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
@@ -541,6 +572,7 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness %g is outside [0, 1]; expected 0 (smooth) "
                         "to 1 (roughest)", fn, (double)d->roughness);
     m.roughness = d->roughness;
+    if ((st = build_anisotropic(d, &m, err)) != CST_OK) return st;
     if (d->two_sided != 0 && d->two_sided != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: two_sided %d; expected 0 or 1", fn, d->two_sided);
     m.one_sided = !d->two_sided;
@@ -569,6 +601,12 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         m.amount_texture = d->amount_texture;
     }
     if ((st = build_spectra(scene, d, &m, err)) != CST_OK) return st;
+    if (d->type == CST_MATERIAL_MEASURED) {
+        if (!d->measured_file || !d->measured_file[0])
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: a measured material without measured_file; expected "
+                            "the path of a .bsdf file", fn);
+        m.measured_file = d->measured_file; /* read by scene_add_material */
+    }
     return scene_add_material(scene, &m, out_id, err);
 }
 

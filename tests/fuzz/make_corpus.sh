@@ -8,7 +8,7 @@ cd "$(dirname "$0")/../.."
 caustic=$(realpath "${1:?usage: tests/fuzz/make_corpus.sh CAUSTIC_BINARY}")
 out=tests/fuzz/corpus
 rm -rf "$out"
-mkdir -p "$out"/{fuzz_scene_json,fuzz_pbrt,fuzz_mesh,fuzz_image,fuzz_ply}
+mkdir -p "$out"/{fuzz_scene_json,fuzz_pbrt,fuzz_mesh,fuzz_image,fuzz_ply,fuzz_bsdf}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -147,4 +147,50 @@ int main(int argc, char **argv)
 C
 cc -o "$tmp/jpg" "$tmp/jpg.c" -lm
 "$tmp/jpg" "$out/fuzz_image/jpeg-rgb"
+# Measured BSDFs (fuzz_bsdf): RGL tensor files (.bsdf) of a few nodes each, spectral and
+# RGB, isotropic (2 phi_i) and anisotropic (3 phi_i spanning 2 pi), a GGX NDF and its
+# projected area, constant vndf, luminance and reflectance.
+python3 - "$out/fuzz_bsdf" <<'PY'
+import sys, os, struct, math
+d = sys.argv[1]
+def tensor(fields):
+    # fields: (name, dtype code, shape, bytes); header, then the data in field order
+    head = 18 + sum(2 + len(n) + 2 + 1 + 8 + 8 * len(s) for n, _, s, _ in fields)
+    out = bytearray(b"tensor_file\0" + bytes([1, 0]) + struct.pack("<I", len(fields)))
+    off = head
+    for n, t, s, b in fields:
+        out += struct.pack("<H", len(n)) + n.encode() + struct.pack("<HBQ", len(s), t, off)
+        out += b"".join(struct.pack("<Q", x) for x in s)
+        off += len(b)
+    for _, _, _, b in fields:
+        out += b
+    return bytes(out)
+def f32(v): return b"".join(struct.pack("<f", x) for x in v)
+def seed(rgb, nt, nphi, res, nl):
+    th = [ (i / (nt - 1)) ** 2 * math.pi / 2 for i in range(nt)]
+    ph = [-math.pi + 2 * math.pi * i / (nphi - 1) for i in range(nphi)]
+    a = 0.3
+    ndf = []
+    for y in range(4):
+        for x in range(4):
+            t = (x / 3) ** 2 * math.pi / 2
+            c = math.cos(t)
+            ndf.append(a * a / (math.pi * (1 - c * c + a * a * c * c) ** 2))
+    sig = [0.5 * (math.cos((x / 3) ** 2 * math.pi / 2) + math.sqrt(math.cos((x / 3) ** 2 * math.pi / 2) ** 2 +
+           a * a * math.sin((x / 3) ** 2 * math.pi / 2) ** 2)) for y in range(4) for x in range(4)]
+    g = nphi * nt * res * res
+    f = [("theta_i", 10, [nt], f32(th)), ("phi_i", 10, [nphi], f32(ph)), ("ndf", 10, [4, 4], f32(ndf)),
+         ("sigma", 10, [4, 4], f32(sig)), ("vndf", 10, [nphi, nt, res, res], f32([1.0] * g)),
+         ("luminance", 10, [nphi, nt, res, res], f32([1.0] * g)), ("description", 1, [4], b"seed"),
+         ("jacobian", 1, [1], b"\1")]
+    if rgb:
+        f.append(("rgb", 10, [nphi, nt, 3, res, res], f32([0.5] * g * 3)))
+    else:
+        f.append(("spectra", 10, [nphi, nt, nl, res, res], f32([0.5] * g * nl)))
+        f.append(("wavelengths", 10, [nl], f32([400 + 300 * i / max(nl - 1, 1) for i in range(nl)])))
+    return tensor(f)
+open(os.path.join(d, "iso-spectral"), "wb").write(seed(False, 3, 2, 3, 2))
+open(os.path.join(d, "iso-rgb"), "wb").write(seed(True, 2, 2, 2, 0))
+open(os.path.join(d, "aniso-spectral"), "wb").write(seed(False, 2, 3, 2, 3))
+PY
 du -sh "$out"; ls "$out"/*

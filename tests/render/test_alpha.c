@@ -82,7 +82,7 @@ static Scene *coverage_scene(int checker, float a0, float a1)
     const float occ[4][3] = {{-0.5f, 0, -0.5f}, {-0.5f, 0, 0.5f}, {0.5f, 0, 0.5f}, {0.5f, 0, -0.5f}};
     const float lit[4][3] = {{-1, -1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, -1, -1}}; /* normal +y */
     CstAlpha alpha = {1, a0, checker ? add_checker(s, a0, a1, 4.0f) : 0};
-    CstEmission em = {{1.0f, 1.0f, 1.0f}, 0, 0};
+    CstEmission em = {{1.0f, 1.0f, 1.0f}, 0, 0, 0};
     add_quad(s, lit, black, NULL, &em);
     add_quad(s, occ, black, &alpha, NULL);
     CameraDesc cam = {{0, 0.5f, 0}, {0, 0, 0}, {0, 0, 1}, 0.0f, 0.0f, 1.0f, 1.0f};
@@ -143,7 +143,7 @@ static void test_sphere_coverage(void **state)
     Scene *s = scene_create();
     int black = add_diffuse(s, color_s(0.0f));
     const float lit[4][3] = {{-1, -1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, -1, -1}}; /* normal +y */
-    CstEmission em = {{1.0f, 1.0f, 1.0f}, 0, 0};
+    CstEmission em = {{1.0f, 1.0f, 1.0f}, 0, 0, 0};
     add_quad(s, lit, black, NULL, &em);
     CstAlpha a = {1, 0.3f, 0};
     const float c[3] = {0.0f, 1.5f, 0.0f};
@@ -191,13 +191,13 @@ static Scene *hole_scene(int blocker)
     const float light_q[4][3] = {{-0.5f, 2, -0.5f}, {0.5f, 2, -0.5f}, {0.5f, 2, 0.5f}, {-0.5f, 2, 0.5f}};
     const float occ_q[4][3] = {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}};
     const float dead_q[4][3] = {{1, 1.5f, -1}, {1.5f, 1.5f, -1}, {1.5f, 1.5f, -0.5f}, {1, 1.5f, -0.5f}};
-    CstEmission em = {{4.0f, 4.0f, 4.0f}, 0, 0};
+    CstEmission em = {{4.0f, 4.0f, 4.0f}, 0, 0, 0};
     add_quad(s, floor_q, white, NULL, NULL);
     add_quad(s, light_q, white, NULL, &em);
     if (blocker) {
         CstAlpha cut = {1, 0.0f, 0};
         add_quad(s, occ_q, white, &cut, NULL);
-        CstEmission em2 = {{9.0f, 9.0f, 9.0f}, 0, 1};
+        CstEmission em2 = {{9.0f, 9.0f, 9.0f}, 0, 1, 0};
         add_quad(s, dead_q, white, &cut, &em2);
     }
     CameraDesc cam = {{0, 3.0f, -4.0f}, {0, 0.5f, 0}, {0, 1, 0}, 50.0f, 0.0f, 1.0f, 0.0f};
@@ -262,12 +262,12 @@ static Scene *alpha_scene(void)
     CstAlpha leaf_a = {1, 0.0f, add_checker(s, 0.0f, 1.0f, 3.0f)};
     add_quad(s, leaf_q, leaf_m, &leaf_a, NULL);
     CstAlpha light_a = {1, 0.0f, add_checker(s, 0.0f, 0.6f, 2.0f)};
-    CstEmission em = {{5.0f, 5.0f, 5.0f}, 0, 0};
+    CstEmission em = {{5.0f, 5.0f, 5.0f}, 0, 0, 0};
     add_quad(s, light_q, black, &light_a, &em);
     CstAlpha half = {1, 0.5f, 0};
     const float c[3] = {0.7f, 0.45f, 0.2f}, c2[3] = {-0.9f, 0.6f, 0.6f};
     assert_int_equal(cst_scene_add_sphere_alpha(s, c, 0.4f, ball_m, NULL, &half, &err), CST_OK);
-    CstEmission em2 = {{3.0f, 2.0f, 1.0f}, 0, 0};
+    CstEmission em2 = {{3.0f, 2.0f, 1.0f}, 0, 0, 0};
     assert_int_equal(cst_scene_add_sphere(s, c2, 0.15f, black, &em2, &err), CST_OK);
     CameraDesc cam = {{0, 1.4f, -3.4f}, {0, 0.5f, 0}, {0, 1, 0}, 55.0f, 0.0f, 1.0f, 0.0f};
     scene_set_camera(s, &cam);

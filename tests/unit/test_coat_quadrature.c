@@ -17,14 +17,14 @@ static float reference_quadrature(float mu, float alpha, float eta, int n)
 {
     Vec3 wo = v3(safe_sqrtf(1.0f - mu * mu), 0.0f, mu);
     double sum = 0.0;
-    float g1 = ggx_g1(wo, alpha);
+    float g1 = ggx_g1(wo, alpha, alpha);
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
             Vec2 u = v2(((float)i + 0.5f) / (float)n, ((float)j + 0.5f) / (float)n);
-            Vec3 m = ggx_sample_visible(wo, alpha, u);
+            Vec3 m = ggx_sample_visible(wo, alpha, alpha, u);
             Vec3 wi = reflect_about(wo, m);
             if (wi.z <= 0.0f) continue;
-            sum += (double)(fresnel_dielectric(v3_dot(wo, m), eta) * ggx_g2(wo, wi, alpha) / g1);
+            sum += (double)(fresnel_dielectric(v3_dot(wo, m), eta) * ggx_g2(wo, wi, alpha, alpha) / g1);
         }
     return (float)(sum / ((double)n * (double)n));
 }

@@ -103,6 +103,16 @@ static int build_cases(LCase *c)
     c[n++] = (LCase){"coated conductor rough 0.4/rough 0.3", coated(MATERIAL_COATED_CONDUCTOR, 0.4f, 0.3f, 0.0f, 0.01f)};
     c[n++] = (LCase){"coated conductor rough 0.4/smooth, scattering 0.5",
                      coated(MATERIAL_COATED_CONDUCTOR, 0.4f, 0.0f, 0.5f, 0.2f)};
+    /* anisotropic GGX: the interface of alpha (0.05, 0.5) over Lambert; over a conductor of
+     * alpha (0.5, 0.05) under an interface of (0.3, 0.1) (perceptual roughness sqrt(alpha)) */
+    c[n] = (LCase){"coated diffuse anisotropic (0.05, 0.5)", coated(MATERIAL_COATED_DIFFUSE, sqrtf(0.05f), 0.0f, 0.0f, 0.01f)};
+    c[n].m.anisotropic = true;
+    c[n++].m.roughness_v = sqrtf(0.5f);
+    c[n] = (LCase){"coated conductor anisotropic (0.3, 0.1)/(0.5, 0.05)",
+                   coated(MATERIAL_COATED_CONDUCTOR, sqrtf(0.3f), sqrtf(0.5f), 0.0f, 0.01f)};
+    c[n].m.anisotropic = true;
+    c[n].m.roughness_v = sqrtf(0.1f);
+    c[n++].m.base_roughness_v = sqrtf(0.05f);
     return n;
 }
 

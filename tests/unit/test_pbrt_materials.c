@@ -102,9 +102,13 @@ static void test_materials(void **state)
     assert_int_equal(m[13]->type, MATERIAL_DIELECTRIC);
     assert_true(m[13]->roughness == sqrtf(sqrtf(0.01f)) && m[13]->ior == 1.5f);
     assert_true(m[13]->albedo.c[0] == 1.0f && m[13]->albedo.c[2] == 1.0f);
-    /* anisotropic alphas 0.25 and 0.0625: geometric mean 0.125 */
-    assert_true(m[14]->roughness == sqrtf(0.125f));
-    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "geometric mean, alpha 0.125") >= 0);
+    /* anisotropic alphas 0.25 (along u) and 0.0625 (along v), unremapped: caustic's
+     * perceptual roughness sqrt(alpha) each, nothing approximated */
+    assert_true(m[14]->anisotropic && material_is_anisotropic(m[14]));
+    assert_true(m[14]->roughness == 0.5f && m[14]->roughness_v == 0.25f);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "anisotropic") < 0);
+    /* isotropic ones stay so */
+    assert_true(!material_is_anisotropic(m[1]) && !material_is_anisotropic(m[13]) && !material_is_anisotropic(m[15]));
     /* coatedconductor: the conductor (its roughness the base's), the interface's roughness
      * and the layer's thickness */
     assert_int_equal(m[15]->type, MATERIAL_COATED_CONDUCTOR);
@@ -717,8 +721,11 @@ static void test_texture_materials(void **state)
     assert_rgb(s->textures[hot->checker.even].value, 1, 0.5f, 0, 0);
     assert_rgb(hot->max, 1, 0.5f, 1, 0);
     assert_warning_at(&w, CST_WARN_APPROXIMATED, "values up to 2", text, "\"texture reflectance\" \"hot\"", 0);
-    /* anisotropic: averages */
+    /* anisotropic textured: the texture's average r = 0.15625, anisotropic: u is
+     * 0.15625^(1/4) (remapped), v 0.0625^(1/4) = 0.5 */
     assert_int_equal(tri_material(s, 5)->roughness_texture, 0);
+    assert_true(tri_material(s, 5)->anisotropic && tri_material(s, 5)->roughness_v == 0.5f);
+    assert_true(fabsf(tri_material(s, 5)->roughness - powf(0.15625f, 0.25f)) < 1e-6f);
     assert_int_equal(albedo_tex(s, 6)->type, TEXTURE_CHECKERBOARD);
     /* coatedconductor's conductor roughness: the texture's average (only the interface's
      * roughness takes a texture) */

@@ -9,25 +9,68 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/path.h"
 #include "scene/json/json_texture.h"
 
 enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COATED_DIFFUSE,
-       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_COUNT };
+       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_MEASURED, MAT_COUNT };
 
 /* A material's "type", in MAT_* order (json_material.h). */
 const char *const json_material_types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric",
                                            "plastic", "coated_diffuse", "coated_conductor", "mix", "diffuse_transmission",
-                                           "thin_dielectric", NULL};
+                                           "thin_dielectric", "measured", NULL};
 
-/* "roughness": perceptual, in [0, 1] (material.h: alpha = roughness^2). */
-static CstStatus read_roughness(Loader *ld, const json_t *v, float *out)
+/* "roughness" (or another roughness key): perceptual, in [0, 1] (material.h: alpha =
+ * roughness^2). */
+static CstStatus read_roughness_key(Loader *ld, const json_t *v, const char *key, float *out)
 {
-    json_path_push_key(ld, "roughness");
+    json_path_push_key(ld, key);
     LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, out));
     if (!(*out >= 0.0f && *out <= 1.0f))
         return json_fail_here(ld, "roughness %g is outside [0, 1]; expected 0 (smooth) to 1 (roughest)",
                               (double)*out);
     json_path_pop(ld);
+    return CST_OK;
+}
+static CstStatus read_roughness(Loader *ld, const json_t *v, float *out) { return read_roughness_key(ld, v, "roughness", out); }
+
+/* Anisotropic roughness and pbrt-v4's remapping switch: "uroughness" and "vroughness"
+ * (along the surface's dp/du and across it; default "roughness"), for a coated conductor
+ * also "base_uroughness" and "base_vroughness" (default "base_roughness"); all perceptual
+ * in [0, 1] unless "remaproughness" is false, when every roughness number of the material
+ * is GGX's alpha itself, in [0, 1] (stored as its square root, the perceptual roughness of
+ * that alpha). Not with a roughness texture. */
+static CstStatus read_anisotropy(Loader *ld, const json_t *obj, Material *m)
+{
+    json_t *v;
+    int remap = 1;
+    if ((v = json_object_get(obj, "remaproughness"))) {
+        json_path_push_key(ld, "remaproughness");
+        LOADER_TRY(json_read_bool(ld, v, &remap));
+        if (!remap && m->roughness_texture)
+            return json_fail_here(ld, "remaproughness false with a roughness texture; expected a texture of "
+                                      "perceptual roughness (remaproughness true)");
+        json_path_pop(ld);
+    }
+    const bool coated_cond = m->type == MATERIAL_COATED_CONDUCTOR;
+    static const char *const keys[4] = {"uroughness", "vroughness", "base_uroughness", "base_vroughness"};
+    float r[4] = {m->roughness, m->roughness, m->base_roughness, m->base_roughness};
+    for (int i = 0; i < (coated_cond ? 4 : 2); i++) {
+        if (!(v = json_object_get(obj, keys[i]))) continue;
+        if (i < 2 && m->roughness_texture) {
+            json_path_push_key(ld, keys[i]);
+            return json_fail_here(ld, "%s with a roughness texture; expected either a textured (isotropic) "
+                                      "\"roughness\" or numbers", keys[i]);
+        }
+        LOADER_TRY(read_roughness_key(ld, v, keys[i], &r[i]));
+    }
+    if (!remap)
+        for (int i = 0; i < 4; i++) r[i] = sqrtf(r[i]);
+    m->roughness = r[0];
+    m->roughness_v = r[1];
+    m->base_roughness = r[2];
+    m->base_roughness_v = r[3];
+    m->anisotropic = r[0] != r[1] || r[2] != r[3];
     return CST_OK;
 }
 
@@ -42,7 +85,7 @@ static CstStatus read_layer(Loader *ld, const json_t *obj, Material *m)
     m->max_depth = 10;
     m->nsamples = 1;
     if ((v = json_object_get(obj, "base_roughness"))) {
-        LOADER_TRY(read_roughness(ld, v, &m->base_roughness));
+        LOADER_TRY(read_roughness_key(ld, v, "base_roughness", &m->base_roughness));
     }
     if ((v = json_object_get(obj, "thickness"))) {
         json_path_push_key(ld, "thickness");
@@ -127,24 +170,31 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
-                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC};
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED};
     /* The keys each type accepts, "type" first. */
     static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
     static const char *const keys_glass[] = {"type", "albedo", "ior"};
-    static const char *const keys_conductor[] = {"type", "metal", "eta", "k", "roughness", "two_sided"};
-    static const char *const keys_dielectric[] = {"type", "albedo", "ior", "roughness"};
+    static const char *const keys_conductor[] = {"type", "metal", "eta", "k", "roughness", "two_sided",
+                                                 "uroughness", "vroughness", "remaproughness"};
+    static const char *const keys_dielectric[] = {"type", "albedo", "ior", "roughness", "uroughness", "vroughness",
+                                                  "remaproughness"};
     static const char *const keys_plastic[] = {"type", "albedo", "ior", "roughness", "two_sided"};
     static const char *const keys_coated_diffuse[] = {"type", "albedo", "ior", "roughness", "two_sided",
-                                                      "thickness", "layer_albedo", "g", "max_depth", "nsamples"};
+                                                      "thickness", "layer_albedo", "g", "max_depth", "nsamples",
+                                                      "uroughness", "vroughness", "remaproughness"};
     static const char *const keys_coated_conductor[] = {"type", "metal", "eta", "k", "ior", "roughness",
                                                         "base_roughness", "two_sided", "thickness",
-                                                        "layer_albedo", "g", "max_depth", "nsamples"};
+                                                        "layer_albedo", "g", "max_depth", "nsamples",
+                                                        "uroughness", "vroughness", "remaproughness",
+                                                        "base_uroughness", "base_vroughness"};
     static const char *const keys_mix[] = {"type", "materials", "amount"};
     static const char *const keys_difftrans[] = {"type", "albedo", "transmittance"};
+    static const char *const keys_measured[] = {"type", "file", "two_sided"};
     static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass, keys_conductor,
                                               keys_dielectric, keys_plastic, keys_coated_diffuse,
-                                              keys_coated_conductor, keys_mix, keys_difftrans, keys_glass};
-    static const int nkeys[] = {3, 3, 3, 6, 4, 5, 10, 13, 3, 3, 3};
+                                              keys_coated_conductor, keys_mix, keys_difftrans, keys_glass,
+                                              keys_measured};
+    static const int nkeys[] = {3, 3, 3, 9, 7, 5, 13, 18, 3, 3, 3, 3};
     int type = 0;
     json_t *v;
     LOADER_TRY(json_expect_object(ld, obj, "a material object"));
@@ -165,6 +215,13 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     }
     if (type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR) LOADER_TRY(read_layer(ld, obj, m));
     if (type == MAT_MIX) return read_mix(ld, obj, m);
+    if (type == MAT_MEASURED) { /* "file": an RGL .bsdf, relative to the scene (json_add_material) */
+        LOADER_TRY(json_member_required(ld, obj, "file", "the path of a .bsdf file", &v));
+        json_path_push_key(ld, "file");
+        LOADER_TRY(json_read_string(ld, v, &m->measured_file));
+        if (!m->measured_file[0]) return json_fail_here(ld, "the file name is empty; expected the path of a .bsdf file");
+        json_path_pop(ld);
+    }
     m->roughness = 0.0f;
     if ((v = json_object_get(obj, "albedo"))) {
         /* A reflectance above 1 would make any of these create energy. */
@@ -208,6 +265,8 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
         m->one_sided = !two;
         json_path_pop(ld);
     }
+    if (type == MAT_CONDUCTOR || type == MAT_DIELECTRIC || type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR)
+        LOADER_TRY(read_anisotropy(ld, obj, m));
     if (type == MAT_CONDUCTOR || type == MAT_COATED_CONDUCTOR) {
         json_t *metal = json_object_get(obj, "metal"), *eta = json_object_get(obj, "eta"),
                *k = json_object_get(obj, "k");
@@ -249,7 +308,13 @@ CstStatus json_add_material(Loader *ld, const Material *m, int *out_id)
 {
     CstMaterialDesc d;
     scene_material_desc(m, &d);
+    char *path = NULL; /* a measured material's file, relative to the scene file */
+    if (m->type == MATERIAL_MEASURED && m->measured_file && !m->measured) {
+        if (!(path = path_resolve(ld->name, m->measured_file))) return json_fail_at(ld, CST_ERR_OOM, "out of memory");
+        d.measured_file = path;
+    }
     CstStatus st = cst_scene_add_material(ld->scene, &d, out_id, ld->err);
+    free(path);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 

@@ -221,7 +221,10 @@ void pbrt_loader_free(Loader *ld)
     for (int i = 0; i < ld->num_files; i++) free(ld->files[i]);
     free(ld->files);
     free(ld->stack);
-    for (int i = 0; i < ld->num_mats; i++) free(ld->mats[i].name);
+    for (int i = 0; i < ld->num_mats; i++) {
+        free(ld->mats[i].name);
+        free((char *)(uintptr_t)ld->mats[i].m.measured_file); /* pbrt_material.c's path */
+    }
     free(ld->mats);
     for (int i = 0; i < ld->num_texs; i++) free(ld->texs[i].name);
     free(ld->texs);

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
@@ -69,11 +70,12 @@ static int find_named_material(Loader *ld, const char *name)
  * caustic's perceptual roughness. pbrt-v4's GGX width is alpha = sqrt(roughness) when
  * remaproughness is true, its default (TrowbridgeReitzDistribution::RoughnessToAlpha),
  * else alpha = roughness; caustic's is alpha = r^2 (material.h), so r = sqrt(alpha), and
- * below alpha 1e-3 both render the smooth delta lobes. Anisotropic widths become their
- * geometric mean sqrt(alpha_u alpha_v): GGX's density of normals along the macro normal is
- * 1 / (pi alpha_u alpha_v), so the isotropic lobe keeps that peak and the lobe's solid angle. */
+ * below alpha 1e-3 (both widths) both render the smooth delta lobes. uroughness and
+ * vroughness give the widths along dp/du and dp/dv (pbrt-v4's anisotropic
+ * TrowbridgeReitzDistribution): *out is the one along u, *out_v the one along v (equal
+ * when isotropic; the caller sets Material.anisotropic when they differ). */
 static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc,
-                                float *out, int *tex_out)
+                                float *out, float *out_v, int *tex_out)
 {
     char n_r[64], n_u[64], n_v[64];
     snprintf(n_r, sizeof n_r, "%sroughness", prefix);
@@ -106,7 +108,7 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
                 CstTextureInfo t;
                 TRY(pbrt_texture_info(ld, *id, &t));
                 *tex_out = *id + 1;
-                *out = minf(t.average[0], 1.0f);
+                *out = *out_v = minf(t.average[0], 1.0f);
                 if (t.max[0] > 1.0f)
                     pbrt_warn_at(ld, CST_WARN_APPROXIMATED, eu->loc, "%s: roughness texture values up to "
                                  "GGX alpha %g are beyond caustic's roughest (alpha 1); rendered with alpha 1",
@@ -125,18 +127,15 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
                             "expected a roughness >= 0", d, (double)(!(ur >= 0.0f) ? ur : vr));
     }
     float au = remap ? sqrtf(ur) : ur, av = remap ? sqrtf(vr) : vr;
-    float alpha = au;
-    if (au != av) {
-        alpha = sqrtf(au * av);
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: anisotropic roughness (alpha %g along u, %g "
-                     "along v) approximated as isotropic with their geometric mean, alpha %g", d,
-                     (double)au, (double)av, (double)alpha);
-    }
-    *out = sqrtf(alpha);
-    if (*out > 1.0f) {
-        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: GGX alpha %g is beyond caustic's roughest "
-                     "(alpha 1); rendered with alpha 1", d, (double)alpha);
-        *out = 1.0f;
+    float *dst[2] = {out, out_v}, alpha[2] = {au, av};
+    for (int i = 0; i < 2; i++) {
+        *dst[i] = sqrtf(alpha[i]);
+        if (*dst[i] > 1.0f) {
+            if (i == 0 || au != av)
+                pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: GGX alpha %g is beyond caustic's roughest "
+                             "(alpha 1); rendered with alpha 1", d, (double)alpha[i]);
+            *dst[i] = 1.0f;
+        }
     }
     return CST_OK;
 }
@@ -190,7 +189,7 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
      * replaces eta and k by their RGB reductions. */
     m->eta_spectrum = has_refl ? 0 : eta_sp;
     m->k_spectrum = has_refl ? 0 : k_sp;
-    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_texture);
+    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_v, &m->roughness_texture);
 }
 
 /* The layer of pbrt-v4's coated materials (CoatedDiffuseMaterial, CoatedConductorMaterial):
@@ -247,6 +246,38 @@ static CstStatus dielectric_eta(Loader *ld, Params *ps, const char *d, const cha
     return CST_OK;
 }
 
+/* pbrt-v4's measured material: "string filename", an RGL .bsdf read when the material is
+ * first used (cst_scene_add_material; a malformed file is an error there, located by
+ * byte). A file that does not exist (the corpus's are not distributed) is reported and
+ * replaced by diffuse reflectance 0.5, as an unsupported material is. The resolved path
+ * is the loader's (MatEntry) until then. */
+static CstStatus measured_material(Loader *ld, Params *ps, const char *d, Loc loc, Material *m)
+{
+    memset(m, 0, sizeof *m); /* make_material's defaults: the stand-in's */
+    m->type = MATERIAL_DIFFUSE;
+    m->albedo = color_s(0.5f);
+    m->ior = 1.0f;
+    const char *file = NULL;
+    Loc fl = loc;
+    TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
+    if (!file || !file[0])
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"string filename\"; expected the "
+                            "path of a .bsdf file", d);
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    if (access(path, F_OK) != 0) {
+        char nm[72];
+        pbrt_warn_at(ld, CST_WARN_MISSING_FILE, fl, "%s: file \"%s\" not found; diffuse reflectance 0.5 is used "
+                     "instead", d, pbrt_clip(file, nm));
+        free(path);
+        return CST_OK;
+    }
+    m->type = MATERIAL_MEASURED;
+    m->measured_file = path;
+    return CST_OK;
+}
+
 /* pbrt material `type` with its parameters as our nearest Material (docs/pbrt-compat.md). */
 static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc, Material *m)
 {
@@ -269,7 +300,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->ior = 1.5f;
         TRY(get_albedo(ld, ps, d, "reflectance", m));
         TRY(dielectric_eta(ld, ps, d, "eta", &m->ior, &m->ior_spectrum));
-        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
         TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "diffusetransmission") == 0) {
         /* pbrt-v4 DiffuseTransmissionMaterial: reflectance and transmittance (0.25 each)
@@ -306,17 +337,17 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         TRY(conductor(ld, ps, d, "conductor.", loc, m));
         m->type = MATERIAL_COATED_CONDUCTOR;
         m->base_roughness = m->roughness;
+        m->base_roughness_v = m->roughness_v;
         if (m->roughness_texture) {
             CstTextureInfo t;
             TRY(pbrt_texture_info(ld, m->roughness_texture - 1, &t));
-            m->base_roughness = minf(t.average[0], 1.0f);
+            m->base_roughness = m->base_roughness_v = minf(t.average[0], 1.0f);
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the conductor's roughness texture is "
                          "rendered with its average, perceptual roughness %g", d, (double)m->base_roughness);
         }
-        m->roughness = 0.0f;
-        m->roughness_texture = 0;
+        m->roughness_texture = 0; /* pbrt_roughness sets roughness and roughness_v */
         m->ior = 1.5f;
-        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &m->roughness, &m->roughness_texture));
+        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
         TRY(dielectric_eta(ld, ps, d, "interface.eta", &m->ior, &m->ior_spectrum));
         TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
@@ -336,10 +367,10 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
                            &m->ior, &m->ior_spectrum));
         /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
          * DielectricBxDF; below alpha 1e-3 both are smooth. */
-        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_texture));
-        if (m->roughness_texture || material_alpha(m->roughness) >= MATERIAL_SMOOTH_ALPHA)
+        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
+        if (m->roughness_texture || material_alpha(maxf(m->roughness, m->roughness_v)) >= MATERIAL_SMOOTH_ALPHA)
             m->type = MATERIAL_DIELECTRIC;
-        else m->roughness = 0.0f;
+        else m->roughness = m->roughness_v = 0.0f;
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 || strcmp(type, "none") == 0) {
         m->type = MATERIAL_GLASS;
         m->albedo = color_s(1.0f);
@@ -385,7 +416,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             m->amount = amount;
             m->amount_texture = amount_tex;
         }
-    } else if (strcmp(type, "measured") == 0 || strcmp(type, "hair") == 0 ||
+    } else if (strcmp(type, "hair") == 0 ||
                strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
                strcmp(type, "fourier") == 0) {
         pbrt_params_mark_all_used(ps);
@@ -436,10 +467,22 @@ CstStatus pbrt_material_directive(Loader *ld, NamedCall *call)
                               "material type, as in \"string type\" \"diffuse\"", d);
         }
     }
-    TRY(make_material(ld, mt, ps, loc, &m));
-    TRY(pbrt_material_normal_textures(ld, ps, d, &m));
+    if (strcmp(mt, "measured") == 0) {
+        char dm[96], nm2[72];
+        snprintf(dm, sizeof dm, "material \"%s\"", pbrt_clip(mt, nm2));
+        TRY(measured_material(ld, ps, dm, loc, &m));
+    } else {
+        TRY(make_material(ld, mt, ps, loc, &m));
+    }
+    /* pbrt_roughness gave equal widths unless uroughness and vroughness differ */
+    m.anisotropic = m.roughness != m.roughness_v || m.base_roughness != m.base_roughness_v;
     int id = 0;
-    TRY(pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id));
+    CstStatus st = pbrt_material_normal_textures(ld, ps, d, &m);
+    if (st == CST_OK) st = pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id);
+    if (st != CST_OK) {
+        free((char *)(uintptr_t)m.measured_file); /* the entry would have owned it */
+        return st;
+    }
     ld->mats[id].interface = strcmp(mt, "interface") == 0 || strcmp(mt, "") == 0 || strcmp(mt, "none") == 0;
     if (dname[2] != 'k') ld->gs.material = id;
     return CST_OK;
