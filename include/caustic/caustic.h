@@ -710,6 +710,11 @@ typedef struct CstRenderSettings {
      * kept, so that its largest CIE XYZ component times 2^exposure is at most this: pbrt-v4's
      * RGBFilm "maxcomponentvalue" (a biased clamp against fireflies). 0 = none (the default) */
     double max_component;
+    /* 1: the path tracers (path, path-nee, path-bsdf) regularize every BSDF met after the
+     * path's first non-delta bounce, as pbrt-v4's "regularize" does: each GGX width below 0.3
+     * becomes 2 alpha clamped to [0.1, 0.3], smooth conductors and dielectrics included.
+     * Biased (caustics through glass and mirrors blur), fewer fireflies. 0 = off (the default) */
+    int regularize;
 } CstRenderSettings;
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit

@@ -530,6 +530,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                       : st->integrator == CST_INTEGRATOR_PATH_BSDF ? PATH_BSDF : PATH_MIS;
         it->path.max_depth = st->max_depth;
         it->path.rr_depth = st->rr_depth;
+        it->path.regularize = st->regularize == 1;
         return CST_OK;
     case INTEGRATOR_WHITTED:
         it->whitted.max_depth = st->max_depth;

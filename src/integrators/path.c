@@ -14,6 +14,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
     Vec3 prev_p = ray.o; /* the previous vertex: NEE's reference point there */
     Vec3 prev_n = v3s(0.0f); /* and its shading normal, for the light BVH's pmf */
     bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
+    bool any_non_delta = false; /* a non-delta bounce so far: regularize from then on */
     for (int depth = 0;; depth++) {
         SurfaceHit sh;
         ++*rays;
@@ -51,6 +52,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         /* A dispersive dielectric terminates wl's secondary wavelengths here (the rest of
          * the path and the film's conversion then follow the hero alone). */
         scene_bsdf_disperse(s, &sh, wl, &bsdf);
+        if (pp->regularize && any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             float u_sel = sampler_1d(smp);
             Vec2 u_light = sampler_2d(smp);
@@ -65,6 +67,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         beta = color_mul(beta, bs.weight);
         if (color_is_black(beta)) break;
         specular = bs.delta;
+        any_non_delta |= !bs.delta;
         prev_pdf = bs.delta ? bs.pmf : bs.pdf_w;
         prev_p = sh.p;
         prev_n = sh.ns;

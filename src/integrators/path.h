@@ -14,6 +14,7 @@ typedef struct PathParams {
     PathMode mode;
     int max_depth; /* bounces after the camera vertex; 0 = unbounded (Russian roulette only) */
     int rr_depth;  /* first depth at which Russian roulette may stop a path */
+    bool regularize; /* bsdf_regularize after the first non-delta bounce (pbrt-v4's option) */
 } PathParams;
 
 /* Radiance arriving along `ray` (toward its origin). Adds the number of rays traced to

@@ -250,6 +250,40 @@ static inline void bsdf_set_alpha(Bsdf *b, float alpha)
     default: break;
     }
 }
+/* pbrt-v4's regularization of a GGX width (TrowbridgeReitzDistribution::Regularize, after
+ * Kaplanyan & Dachsbacher 2013, "Path space regularization for holistic and robust light
+ * transport"): below 0.3, twice the width clamped to [0.1, 0.3]; a smooth lobe (0) so
+ * becomes 0.1. */
+static inline float bsdf_regularized_alpha(float a) { return a < 0.3f ? fminf(fmaxf(2.0f * a, 0.1f), 0.3f) : a; }
+/* pbrt-v4's BSDF::Regularize: the microfacet lobes of conductors, dielectrics (smooth glass
+ * becomes a rough dielectric) and the coated materials' interface and conductor base get
+ * bsdf_regularized_alpha on both widths; other lobes (Lambert, mirror, thin dielectric,
+ * plastic, measured) are left as they are, as pbrt-v4 leaves its own. */
+static inline void bsdf_regularize(Bsdf *b)
+{
+    switch (b->type) {
+    case MATERIAL_GLASS:
+        b->type = MATERIAL_DIELECTRIC; /* the same lobe, made rough below */
+        /* fall through */
+    case MATERIAL_DIELECTRIC:
+        b->lobe.dielectric.alpha = bsdf_regularized_alpha(b->lobe.dielectric.alpha);
+        b->lobe.dielectric.alpha_y = bsdf_regularized_alpha(b->lobe.dielectric.alpha_y);
+        break;
+    case MATERIAL_CONDUCTOR:
+        b->lobe.conductor.alpha = bsdf_regularized_alpha(b->lobe.conductor.alpha);
+        b->lobe.conductor.alpha_y = bsdf_regularized_alpha(b->lobe.conductor.alpha_y);
+        break;
+    case MATERIAL_COATED_CONDUCTOR:
+        b->lobe.layered.base_alpha = bsdf_regularized_alpha(b->lobe.layered.base_alpha);
+        b->lobe.layered.base_alpha_y = bsdf_regularized_alpha(b->lobe.layered.base_alpha_y);
+        /* fall through */
+    case MATERIAL_COATED_DIFFUSE:
+        b->lobe.layered.top_alpha = bsdf_regularized_alpha(b->lobe.layered.top_alpha);
+        b->lobe.layered.top_alpha_y = bsdf_regularized_alpha(b->lobe.layered.top_alpha_y);
+        break;
+    default: break;
+    }
+}
 /* An anisotropic BSDF's frame: s along the tangent dpdu (world space, any length) made
  * orthogonal to the shading normal (Gram-Schmidt), t = n x s, as pbrt-v4's BSDF frame
  * Frame::FromXZ(shading dpdu, ns); the lobes' alpha lies along s, alpha_y along t.

@@ -11,7 +11,7 @@ void cst_render_settings_init(CstRenderSettings *s)
     s->width = s->height = s->spp = s->threads = CST_UNSET;
     s->max_depth = s->rr_depth = s->photons = CST_UNSET;
     s->time_limit = s->photon_radius = s->exposure = s->max_component = CST_UNSET;
-    s->png_linear = s->aovs = CST_UNSET;
+    s->png_linear = s->aovs = s->regularize = CST_UNSET;
     s->white_balance = CST_UNSET;
     for (int k = 0; k < 4; k++) s->crop[k] = CST_UNSET;
 }
@@ -46,6 +46,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(sampler, 1, CST_SAMPLER_INDEPENDENT);
     PICK_INT(color_mode, 1, CST_COLOR_RGB);
     PICK_DBL(max_component, 1, 0.0);          /* 0 = no clamp */
+    PICK_INT(regularize, 0, 0);
     /* The photon integrator builds its maps once per render, so no per-pass wavelengths
      * can be shared by photons and camera paths: it transports RGB in either mode (the
      * settings, and so the output's metadata, say so). */

@@ -1014,6 +1014,8 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
     if (setting_set(r->white_balance, 1) && !(r->white_balance > 0.0 && r->white_balance <= 1e6))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: white_balance %g; expected a colour temperature in kelvin "
                         "in (0, 1e6], or 0 for none", fn, r->white_balance);
+    if (setting_set(r->regularize, 0) && r->regularize != 0 && r->regularize != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: regularize %d; expected 0 or 1", fn, r->regularize);
     if (setting_set(r->png_linear, 0) && r->png_linear != 0 && r->png_linear != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: png_linear %d; expected 0 or 1", fn, r->png_linear);
     if (setting_set(r->aovs, 0) && (r->aovs & ~(CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH | CST_AOV_VARIANCE)))
@@ -1052,6 +1054,7 @@ CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings
     SETTING_MERGE(png_linear, 0);
     SETTING_MERGE(aovs, 0);
     SETTING_MERGE(max_component, 1);
+    SETTING_MERGE(regularize, 0);
     SETTING_MERGE(white_balance, 1);
     if (r->seed_set) { sc->seed = r->seed; sc->seed_set = 1; }
     if (r->exposure_set) { sc->exposure = r->exposure; sc->exposure_set = 1; }

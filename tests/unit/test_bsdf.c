@@ -991,6 +991,70 @@ static void test_plastic_coat_table(void **state)
     print_message("plastic coat table vs Monte Carlo: worst |error| beyond 4 se: %.2g\n", worst);
 }
 
+/* pbrt-v4's regularization (bsdf_regularize): GGX widths below 0.3 double into [0.1, 0.3],
+ * smooth glass becomes a rough dielectric of width 0.1 and stops being delta, wide lobes
+ * and lobes without a microfacet distribution are left alone; the regularized lobes' samples
+ * report the density bsdf_pdf gives (the chi-square tests cover GGX lobes of these widths)
+ * and their albedo stays within 1 (furnace). */
+static void test_regularize(void **state)
+{
+    (void)state;
+    assert_true(bsdf_regularized_alpha(0.0f) == 0.1f);
+    assert_true(bsdf_regularized_alpha(0.02f) == 0.1f);
+    assert_true(bsdf_regularized_alpha(0.1f) == 0.2f);
+    assert_true(bsdf_regularized_alpha(0.2f) == 0.3f);
+    assert_true(bsdf_regularized_alpha(0.3f) == 0.3f);
+    assert_true(bsdf_regularized_alpha(0.7f) == 0.7f);
+    const Vec3 n = v3(0.0f, 0.0f, 1.0f);
+    Material glass = make_material(MATERIAL_GLASS, 0.0f, 1.5f);
+    Bsdf b;
+    bsdf_init(&b, &glass, n);
+    assert_true(bsdf_is_delta(&b));
+    bsdf_regularize(&b);
+    assert_int_equal(b.type, MATERIAL_DIELECTRIC);
+    assert_false(bsdf_is_delta(&b));
+    assert_true(b.lobe.dielectric.alpha == 0.1f && b.lobe.dielectric.alpha_y == 0.1f);
+    Material metal = make_aniso(MATERIAL_CONDUCTOR, 0.05f, 0.6f, 1.0f);
+    bsdf_init(&b, &metal, n);
+    bsdf_regularize(&b);
+    assert_true(b.lobe.conductor.alpha == 0.1f && b.lobe.conductor.alpha_y == 0.6f);
+    Material diffuse = make_material(MATERIAL_DIFFUSE, 0.0f, 1.0f);
+    Bsdf d0, d1;
+    bsdf_init(&d0, &diffuse, n);
+    d1 = d0;
+    bsdf_regularize(&d1);
+    assert_memory_equal(&d0, &d1, sizeof d0);
+    /* the regularized smooth glass and mirror-smooth conductor: sampling against pdf, energy */
+    Material smooth_metal = make_material(MATERIAL_CONDUCTOR, 0.0f, 1.0f);
+    const Material *ms[2] = {&glass, &smooth_metal};
+    for (int k = 0; k < 2; k++) {
+        Bsdf r;
+        bsdf_init(&r, ms[k], n);
+        bsdf_regularize(&r);
+        Pcg32 rng;
+        pcg32_seed(&rng, 77u, (uint64_t)k);
+        for (int j = 0; j < 3; j++) {
+            float ct = 0.9f - 0.35f * (float)j;
+            Vec3 wo = v3(sqrtf(1.0f - ct * ct), 0.0f, ct);
+            double sum = 0.0;
+            const int N = 200000;
+            for (int i = 0; i < N; i++) {
+                BsdfSample bs;
+                float uc = pcg32_float(&rng);
+                Vec2 u = pcg32_v2(&rng);
+                if (!bsdf_sample(&r, wo, uc, u, &bs)) continue;
+                assert_false(bs.delta);
+                float pdf = bsdf_pdf(&r, wo, bs.wi);
+                if (!(fabsf(pdf - bs.pdf_w) <= 2e-3f * bs.pdf_w + 1e-6f))
+                    fail_msg("material %d: sample pdf %g, bsdf_pdf %g", k, (double)bs.pdf_w, (double)pdf);
+                sum += (double)color_luminance(bs.weight);
+            }
+            double albedo = sum / N;
+            if (!(albedo <= 1.0 + 4.0 * 0.01)) fail_msg("material %d, cos %g: albedo %g above 1", k, (double)ct, albedo);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1009,6 +1073,7 @@ int main(void)
         cmocka_unit_test(test_ggx_anisotropic_normalisation),
         cmocka_unit_test(test_anisotropic_tangent),
         cmocka_unit_test(test_anisotropic_furnace),
+        cmocka_unit_test(test_regularize),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

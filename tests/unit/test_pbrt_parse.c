@@ -543,6 +543,16 @@ static void test_camera_and_options(void **state)
     cst_scene_destroy(s);
     expect_error("Film \"rgb\" \"float maxcomponentvalue\" 0\nWorldBegin\n" TRI, CST_ERR_INVALID_ARG, "Film", 0,
                  "maxcomponentvalue 0; expected a positive number");
+    /* pbrt-v4's "regularize": the path tracers' option, approximated (off) for the others */
+    memset(&w, 0, sizeof w);
+    s = expect_ok("Integrator \"volpath\" \"bool regularize\" true\nWorldBegin\n" TRI, &w);
+    assert_int_equal(s->settings.regularize, 1);
+    assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "regularize") < 0);
+    cst_scene_destroy(s);
+    memset(&w, 0, sizeof w);
+    s = expect_ok("Integrator \"bdpt\" \"bool regularize\" true\nWorldBegin\n" TRI, &w);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "\"regularize\" is done by caustic's path tracers only") >= 0);
+    cst_scene_destroy(s);
     /* filters: Mitchell with pbrt's defaults is exact; other parameters, sinc: approximated */
     memset(&w, 0, sizeof w);
     s = expect_ok("PixelFilter \"mitchell\" \"float B\" 0.33333333 \"float xradius\" 2\nWorldBegin\n" TRI, &w);

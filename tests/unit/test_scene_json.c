@@ -873,6 +873,11 @@ static void test_defaults(void **state)
     s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"light\"}"));
     assert_int_equal(s->settings.integrator, CST_INTEGRATOR_LIGHT);
     cst_scene_destroy(s);
+    /* regularize (pbrt-v4's option) and the film's max_component clamp */
+    s = expect_ok(WITH_SECTION("\"integrator\": {\"regularize\": true}, \"film\": {\"max_component\": 7.5}"));
+    assert_int_equal(s->settings.regularize, 1);
+    assert_true(s->settings.max_component == 7.5);
+    cst_scene_destroy(s);
     s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"lighttracing\"}"));
     assert_int_equal(s->settings.integrator, CST_INTEGRATOR_LIGHT);
     cst_scene_destroy(s);

@@ -248,13 +248,20 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
 CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 {
     static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius", "color",
-                                       "light_sampler"};
+                                       "light_sampler", "regularize"};
     CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
-    LOADER_TRY(json_expect_object(ld, integ,
-                                  "an object with type, max_depth, rr_depth, photons, radius, color, light_sampler"));
-    LOADER_TRY(json_check_keys(ld, integ, keys, 7));
+    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius, color, "
+                                             "light_sampler, regularize"));
+    LOADER_TRY(json_check_keys(ld, integ, keys, 8));
+    if ((v = json_object_get(integ, "regularize"))) {
+        int reg = 0;
+        json_path_push_key(ld, "regularize");
+        LOADER_TRY(json_read_bool(ld, v, &reg));
+        rs->regularize = reg ? 1 : 0;
+        json_path_pop(ld);
+    }
     if ((v = json_object_get(integ, "light_sampler"))) {
         /* NEE's choice of light: "power", "bvh" or "uniform" (docs/scene-format.md) */
         const char *s = NULL;

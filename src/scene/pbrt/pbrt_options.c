@@ -200,6 +200,14 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
                                 "power, uniform or exhaustive", d, pbrt_clip(lsamp, nm));
         TRY(cst_scene_set_light_sampler(ld->scene, lsamp, ld->err));
     }
+    /* pbrt-v4's "regularize" (path, volpath, bdpt): caustic's path tracers do it */
+    int reg = 0;
+    TRY(pbrt_get_bool(ld, ps, d, "regularize", 0, &reg));
+    if (reg && map[k].ours != CST_INTEGRATOR_PATH && map[k].ours != CST_INTEGRATOR_PATH_NEE &&
+        map[k].ours != CST_INTEGRATOR_PATH_BSDF)
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: \"regularize\" is done by caustic's path tracers only; "
+                     "this integrator renders without it", d);
+    rs->regularize = reg ? 1 : 0;
     int depth = 5;
     TRY(pbrt_get_int(ld, ps, d, "maxdepth", 5, &depth));
     if (strcmp(type, "directlighting") == 0) depth = 1;
