@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Image textures decoded by stb_image (docs/fuzzing.md, fixed findings 2, 3 and 4): the
-# reproducers of tests/fuzz/crashes/fuzz_image/ must each end with a clear error (exit 2)
-# within a second, never an overflow, a multi-second load of zeros or a texture in an
-# undocumented format; the seed images of every documented format must still load. Run by
-# CTest:  bash stb_tests.sh <path-to-caustic-binary> <source-dir>
+# Image textures decoded by stb_image and, for JPEG, libjpeg-turbo (docs/fuzzing.md, fixed
+# findings 2, 3, 4 and 8): the reproducers of tests/fuzz/crashes/fuzz_image/ must each end
+# with a clear error (exit 2) within a second, never an overflow, a multi-second load of
+# zeros or a texture in an undocumented format; the seed images of every documented format
+# must still load. Run by CTest:
+#   bash stb_tests.sh <path-to-caustic-binary> <source-dir>
 # Prints one PASS/FAIL line per check and ends with "N passed, M failed".
 set -u
 
@@ -74,6 +75,16 @@ check "JPEG DHT of 257 codes after the scan" "$CRASHES/jpeg-dht-after-scan" jpg 
 # under the fuzzer; on main the error message changes with MALLOC_PERTURB_).
 check "JPEG scan with an undefined Huffman table" "$CRASHES/jpeg-undefined-huffman-table" jpg 2 \
     "t\\.jpg: corrupt JPEG: the scan at byte 542 decodes with AC Huffman table 0, which no DHT segment before it defines"
+# Found by fuzz_image: a corrupt scan on which stb 2.27's bit reader shifted by 33 bits
+# (UBSan, stb_image.h:2065; main loaded it with wrong texels, exit 0). JPEG goes through
+# libjpeg-turbo now (src/io/jpeg.c), whose corrupt-data warnings are errors.
+libjpeg="t\\.jpg: cannot decode the JPEG \\(libjpeg-turbo stopped at byte [0-9]+\\): "
+check "JPEG whose scan stb's bit reader over-shifted on" "$CRASHES/jpeg-stb-code-bits" jpg 2 \
+    "${libjpeg}Corrupt JPEG data: 14 extraneous bytes before marker 0xdb"
+# A JPEG cut inside its scan: libjpeg's "premature end" warning (it would fill the rest with
+# grey, as stb filled it with zeros) is an error.
+head -c 620 "$SEEDS/jpeg-rgb" >cut.jpg
+check "JPEG cut inside its scan" cut.jpg jpg 2 "${libjpeg}Premature end of JPEG file"
 # Bytes inside a segment are not markers: an APP1 holding FF C4 and a "table" of 16 x 255
 # codes is skipped as stb skips it, and the image loads.
 seed=$SEEDS/jpeg-rgb
