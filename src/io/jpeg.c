@@ -21,7 +21,7 @@ typedef struct JpegFail {
     struct jpeg_error_mgr pub; /* first: libjpeg passes &pub as cinfo->err */
     jmp_buf back;
     char msg[JMSG_LENGTH_MAX];
-    size_t at; /* bytes of the file consumed when it failed */
+    size_t at; /* the failure is at or after this byte (jpeg_offset) */
 } JpegFail;
 
 /* A JpegFail, the decoder and the bytes it reads: one decode's state. */
@@ -33,8 +33,10 @@ typedef struct JpegRead {
     size_t size;
 } JpegRead;
 
-/* How far into the file libjpeg has read: jpeg_mem_src points into our bytes until they run
- * out, then at a fake EOI of its own (so only equality with our buffer is tested). */
+/* How far into the file libjpeg's source stands: jpeg_mem_src points into our bytes until
+ * they run out, then at a fake EOI of its own (so only equality with our buffer is tested).
+ * The entropy decoder reads ahead on a copy and writes its position back after each MCU, so
+ * inside a scan the fault is at or after this byte (the file's size at its end). */
 static size_t jpeg_offset(const JpegRead *r)
 {
     const struct jpeg_source_mgr *src = r->cinfo.src;
@@ -102,7 +104,7 @@ static void jpeg_begin(JpegRead *r, const unsigned char *data, size_t size)
 static CstStatus jpeg_failed(JpegRead *r, const char *path, CstError *err)
 {
     jpeg_destroy_decompress(&r->cinfo);
-    return cst_fail(err, CST_ERR_PARSE, "%s: cannot decode the JPEG (libjpeg-turbo stopped at byte %zu): %s", path,
+    return cst_fail(err, CST_ERR_PARSE, "%s: cannot decode the JPEG (libjpeg-turbo, at or after byte %zu): %s", path,
                     r->fail.at, r->fail.msg);
 }
 

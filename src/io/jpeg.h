@@ -13,8 +13,9 @@
 #define JPEG_MAX_SCANS 500
 
 /* The frame header's width and height (jpeg_read_header; nothing is decoded). Fails with
- * CST_ERR_PARSE, the message "path: cannot decode the JPEG (libjpeg-turbo stopped at byte N):
- * <libjpeg's reason>". */
+ * CST_ERR_PARSE, the message "path: cannot decode the JPEG (libjpeg-turbo, at or after
+ * byte N): <libjpeg's reason>", N being where libjpeg's reader stood (inside a scan, the
+ * start of the MCU it was decoding). */
 CstStatus jpeg_info(const char *path, const unsigned char *data, size_t size, int *width, int *height,
                     CstError *err);
 

@@ -78,7 +78,7 @@ check "JPEG scan with an undefined Huffman table" "$CRASHES/jpeg-undefined-huffm
 # Found by fuzz_image: a corrupt scan on which stb 2.27's bit reader shifted by 33 bits
 # (UBSan, stb_image.h:2065; main loaded it with wrong texels, exit 0). JPEG goes through
 # libjpeg-turbo now (src/io/jpeg.c), whose corrupt-data warnings are errors.
-libjpeg="t\\.jpg: cannot decode the JPEG \\(libjpeg-turbo stopped at byte [0-9]+\\): "
+libjpeg="t\\.jpg: cannot decode the JPEG \\(libjpeg-turbo, at or after byte [0-9]+\\): "
 check "JPEG whose scan stb's bit reader over-shifted on" "$CRASHES/jpeg-stb-code-bits" jpg 2 \
     "${libjpeg}Corrupt JPEG data: 14 extraneous bytes before marker 0xdb"
 # A JPEG cut inside its scan: libjpeg's "premature end" warning (it would fill the rest with
