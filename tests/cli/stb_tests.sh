@@ -121,7 +121,7 @@ printf 'hello' >text.txt
 check "unknown content refused" text.txt png 2 "t\\.png: not a PNG, JPEG, BMP, TGA, Radiance HDR, OpenEXR or PFM file"
 
 # The documented formats still load (the fuzzer's seeds: 3 x 2 pixels each).
-for s in png-rgb8 png-rgba16 png-gray1 png-palette jpeg-rgb bmp-rgb24 tga-rgb tga-rle hdr-flat exr-rgb pfm-rgb; do
+for s in png-rgb8 png-rgba16 png-gray1 png-palette jpeg-rgb jpeg-progressive jpeg-grey-restart jpeg-cmyk jpeg-arithmetic bmp-rgb24 tga-rgb tga-rle hdr-flat exr-rgb pfm-rgb; do
     check "seed $s loads" "$SEEDS/$s" img 0
 done
 
