@@ -111,6 +111,11 @@ check "PNG chunk longer than the file" "$CRASHES/png-chunk-2gb" png 2 \
     "t\\.png: truncated or corrupt PNG: the chunk at byte 103 declares 1073741882 bytes of data, the file has 111"
 check "PNG of 16384 x 16384 in 69 bytes: past deflate's 1032:1" "$CRASHES/png-16384-tiny" png 2 \
     "t\\.png: truncated or corrupt PNG: 16384 x 16384 pixels"
+# Found by fuzz_image: a 285-byte EXR declaring 100728835 x 2 pixels in one ZIP chunk of 72
+# bytes; main allocated its 2.4 GB of floats before decoding (the fuzzer's out-of-memory;
+# under this test's 1 GB limit, main's "out of memory" message).
+check "EXR chunk too small for its pixels" "$CRASHES/exr-zip-chunk-2gb" exr 2 \
+    "t\\.exr: truncated or corrupt OpenEXR: the chunk at line 0 stores 72 bytes for 2417492040 bytes of pixels"
 
 # Finding 4: formats stb reads but caustic does not document.
 formats="texture images must be PNG, JPEG, BMP, TGA, Radiance HDR, OpenEXR or PFM files"
