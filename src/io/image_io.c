@@ -8,6 +8,7 @@
 #include "io/path.h"
 #include "core/file.h"
 #include "io/image_precheck.h"
+#include "io/exr_chunks.h"
 #include "io/image_stb.h"
 
 #include <errno.h>
@@ -684,38 +685,10 @@ static CstStatus image_write_exr(FILE *fp, const char *path, const float *rgb, i
                     io.msg[0] ? io.msg : exr_get_default_error_message(rv));
 }
 
-/* The most a chunk's pixels can expand from its stored bytes in each compression, a bound
- * no valid file exceeds; 0 where none is known (PIZ, DWAA, DWAB). RLE: runs of at most 128
- * bytes in 2; ZIP(S): deflate's 1032:1; PXR24: deflate of at least 3 bytes for every 4
- * (floats cut to 24 bits); B44(A): at least 3 bytes for a 4 x 4 block of 32. */
-static uint64_t image_exr_max_ratio(exr_compression_t c)
-{
-    switch (c) {
-    case EXR_COMPRESSION_NONE: return 1;
-    case EXR_COMPRESSION_RLE: return 64;
-    case EXR_COMPRESSION_ZIPS:
-    case EXR_COMPRESSION_ZIP: return 1032;
-    case EXR_COMPRESSION_PXR24: return 1376;
-    case EXR_COMPRESSION_B44:
-    case EXR_COMPRESSION_B44A: return 11;
-    default: return 0;
-    }
-}
-
-/* A chunk whose stored bytes cannot hold its pixels (image_exr_decode's check pass). */
-typedef struct ExrShortChunk {
-    int64_t y;                 /* its first line in the data window */
-    uint64_t packed, unpacked; /* stored bytes; bytes of its pixels */
-} ExrShortChunk;
-
 /* Decodes part 0 of an open context into rgb (w x h, interleaved), chunk by chunk:
- * scanline blocks, or level-0 tiles of a tiled file. With rgb NULL it only reads every
- * chunk's header and checks it against the window and against max_ratio (packed bytes
- * times the ratio must reach the chunk's unpacked size; *short_chunk says which did not),
- * so that a small file declaring a large window fails before the image is allocated. */
+ * scanline blocks, or level-0 tiles of a tiled file. */
 static exr_result_t image_exr_decode(exr_context_t ctx, bool tiled, bool grey,
-                                     const exr_attr_box2i_t *dw, float *rgb, int w, int h,
-                                     uint64_t max_ratio, ExrShortChunk *short_chunk)
+                                     const exr_attr_box2i_t *dw, float *rgb, int w, int h)
 {
     exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
     bool live = false;
@@ -753,14 +726,6 @@ static exr_result_t image_exr_decode(exr_context_t ctx, bool tiled, bool grey,
                 y0 + ci.height > h) {
                 rv = EXR_ERR_CORRUPT_CHUNK;
                 break;
-            }
-            if (!rgb) { /* the check pass */
-                if (max_ratio && ci.packed_size * max_ratio < ci.unpacked_size) {
-                    *short_chunk = (ExrShortChunk){y0, ci.packed_size, ci.unpacked_size};
-                    rv = EXR_ERR_CORRUPT_CHUNK;
-                    break;
-                }
-                continue;
             }
             rv = live ? exr_decoding_update(ctx, 0, &ci, &dec) : exr_decoding_initialize(ctx, 0, &ci, &dec);
             if (rv != EXR_ERR_SUCCESS) break;
@@ -841,24 +806,10 @@ static CstStatus image_read_exr(FILE *fp, const char *path, float **out, int *wo
                       path, (long long)w, (long long)h);
         goto done;
     }
-    /* Every chunk's header before the allocation: a 285-byte file declaring 100728835 x 2
-     * pixels in one ZIP chunk of 70 bytes made the fuzzer's build allocate 2.4 GB
-     * (docs/fuzzing.md, fixed finding 9). */
-    exr_compression_t comp = EXR_COMPRESSION_NONE;
-    ExrShortChunk sc = {0, 0, 0};
-    rv = exr_get_compression(ctx, 0, &comp);
-    if (rv == EXR_ERR_SUCCESS)
-        rv = image_exr_decode(ctx, storage == EXR_STORAGE_TILED, grey, &dw, NULL, (int)w, (int)h,
-                              image_exr_max_ratio(comp), &sc);
-    if (rv != EXR_ERR_SUCCESS && sc.unpacked) {
-        st = cst_fail(err, CST_ERR_PARSE,
-                      "%s: truncated or corrupt OpenEXR: the chunk at line %lld stores %llu bytes for %llu "
-                      "bytes of pixels, more than its compression can expand", path, (long long)sc.y,
-                      (unsigned long long)sc.packed, (unsigned long long)sc.unpacked);
-        goto done;
-    }
+    bool short_chunk = false; /* every chunk's header before the allocation (io/exr_chunks.h) */
+    rv = exr_chunks_check(ctx, path, storage == EXR_STORAGE_TILED, &dw, (int)w, (int)h, &short_chunk, err);
     if (rv != EXR_ERR_SUCCESS) {
-        st = image_exr_status(err, path, &io, rv, "decoding OpenEXR pixels");
+        st = short_chunk ? CST_ERR_PARSE : image_exr_status(err, path, &io, rv, "decoding OpenEXR pixels");
         goto done;
     }
     /* calloc: regions a lenient decoder skips read as black, not as heap garbage */
@@ -868,7 +819,7 @@ static CstStatus image_read_exr(FILE *fp, const char *path, float **out, int *wo
                       (long long)w, (long long)h);
         goto done;
     }
-    rv = image_exr_decode(ctx, storage == EXR_STORAGE_TILED, grey, &dw, rgb, (int)w, (int)h, 0, NULL);
+    rv = image_exr_decode(ctx, storage == EXR_STORAGE_TILED, grey, &dw, rgb, (int)w, (int)h);
     if (rv != EXR_ERR_SUCCESS) {
         st = image_exr_status(err, path, &io, rv, "decoding OpenEXR pixels");
         goto done;
