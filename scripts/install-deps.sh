@@ -10,7 +10,8 @@ PKGS=(
   libjansson-dev      # JSON scenes with line/column errors
   libpng-dev          # PNG output
   libopenexr-dev      # OpenEXR C API (openexr.h) for EXR output
-  libstb-dev          # stb_image for texture loading
+  libstb-dev          # stb_image for PNG, BMP, TGA and HDR textures
+  libjpeg62-turbo-dev # libjpeg-turbo for JPEG textures (src/io/jpeg.c)
   libassimp-dev       # mesh import (OBJ/glTF)
   zlib1g-dev          # gzip-compressed PLY meshes and pbrt includes
   libembree-dev       # optional comparison back end

@@ -8,6 +8,7 @@
 #include "io/path.h"
 #include "core/file.h"
 #include "io/image_precheck.h"
+#include "io/exr_chunks.h"
 #include "io/image_stb.h"
 
 #include <errno.h>
@@ -803,6 +804,12 @@ static CstStatus image_read_exr(FILE *fp, const char *path, float **out, int *wo
     if (w <= 0 || h <= 0 || !image_size_ok((uint64_t)w, (uint64_t)h)) {
         st = cst_fail(err, CST_ERR_PARSE, "%s: OpenEXR data window %lld x %lld is empty or too large",
                       path, (long long)w, (long long)h);
+        goto done;
+    }
+    bool short_chunk = false; /* every chunk's header before the allocation (io/exr_chunks.h) */
+    rv = exr_chunks_check(ctx, path, storage == EXR_STORAGE_TILED, &dw, (int)w, (int)h, &short_chunk, err);
+    if (rv != EXR_ERR_SUCCESS) {
+        st = short_chunk ? CST_ERR_PARSE : image_exr_status(err, path, &io, rv, "decoding OpenEXR pixels");
         goto done;
     }
     /* calloc: regions a lenient decoder skips read as black, not as heap garbage */

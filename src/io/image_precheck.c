@@ -1,6 +1,7 @@
-/* Checks of an image file's bytes before stb_image decodes them: the format as stb tells
- * it, JPEG Huffman tables stb 2.27 overflows on, and declared sizes the pixel limit or
- * the file's length refuses, scans using undefined tables (docs/fuzzing.md, "Fixed findings"). */
+/* Checks of an image file's bytes before stb_image or libjpeg decodes them: the format as
+ * stb tells it, JPEG Huffman tables stb 2.27 overflowed on and scans using undefined tables
+ * (kept for libjpeg), declared sizes the pixel limit or the file's length refuses
+ * (docs/fuzzing.md, "Fixed findings"). */
 #include "io/image_precheck.h"
 
 #include <limits.h>
@@ -11,6 +12,7 @@
 #include "core/error.h"
 #include "io/image_io.h"
 #include "io/image_stb.h"
+#include "io/jpeg.h"
 
 #define PRECHECK_FORMATS "PNG, JPEG, BMP, TGA, Radiance HDR, OpenEXR or PFM"
 
@@ -317,6 +319,12 @@ CstStatus image_precheck_stb(const char *path, const unsigned char *data, size_t
     if (f == IMAGE_STB_TGA) { /* read here: stbi_info refuses some headers stbi_load takes */
         w = le16(data + 12);
         h = le16(data + 14);
+    } else if (f == IMAGE_STB_JPEG) { /* the decoder's own header reader (io/jpeg.h) */
+        int iw = 0, ih = 0;
+        CstStatus st = jpeg_info(path, data, size, &iw, &ih, err);
+        if (st != CST_OK) return st;
+        w = (uint64_t)iw;
+        h = (uint64_t)ih;
     } else {
         int iw = 0, ih = 0;
         if (!image_stb_info(data, (int)size, &iw, &ih) || iw <= 0 || ih <= 0)

@@ -1,5 +1,6 @@
 /* stb_image (Debian's libstb-dev header), built into the library with only the formats
- * caustic documents: PNG, JPEG, BMP, TGA and Radiance HDR, decoded from memory. */
+ * caustic documents and reads through it: PNG, BMP, TGA and Radiance HDR, decoded from
+ * memory (JPEG goes through libjpeg-turbo, io/jpeg.h). */
 #ifndef CST_IO_IMAGE_STB_H
 #define CST_IO_IMAGE_STB_H
 

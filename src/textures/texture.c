@@ -15,6 +15,7 @@
 #include "io/image_io.h"
 #include "io/image_precheck.h"
 #include "io/image_stb.h"
+#include "io/jpeg.h"
 #include "textures/mipmap.h"
 #include "textures/noise.h"
 
@@ -128,9 +129,9 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
     return CST_OK;
 }
 
-/* PNG, JPEG, BMP, TGA or Radiance HDR bytes through stb_image (io/image_stb.h), after the
- * checks stb lacks (io/image_precheck.h): a TexImage in the file's own storage (8-bit,
- * 16-bit or float; grey files one channel). */
+/* PNG, BMP, TGA or Radiance HDR bytes through stb_image (io/image_stb.h), JPEG through
+ * libjpeg-turbo (io/jpeg.h), after the checks stb lacks (io/image_precheck.h): a TexImage
+ * in the file's own storage (8-bit, 16-bit or float; grey files one channel). */
 static CstStatus texture_decode_stb(const char *path, const unsigned char *data, size_t size, TexelEncoding enc,
                                     float gamma, TexImage **out, CstError *err)
 {
@@ -141,7 +142,14 @@ static CstStatus texture_decode_stb(const char *path, const unsigned char *data,
     int w = 0, h = 0, ch = 3;
     void *px = NULL;
     TexelFormat format = TEXEL_F32;
-    if (image_stb_is_hdr(data, len)) {
+    if (image_precheck_format(data, size) == IMAGE_STB_JPEG) {
+        /* libjpeg-turbo (io/jpeg.h): 8-bit, grey files one channel, its located errors. */
+        unsigned char *bytes = NULL;
+        st = jpeg_decode(path, data, size, &bytes, &w, &h, &ch, err);
+        if (st != CST_OK) return st;
+        px = bytes;
+        format = TEXEL_U8;
+    } else if (image_stb_is_hdr(data, len)) {
         /* Radiance HDR: linear floats, taken as they are (stbi_loadf would gamma-decode
          * an 8-bit image with its own 2.2 curve, so it is used for HDR files only). stb's
          * buffer is malloc'd (io/image_stb.c), so it is kept. */
@@ -163,7 +171,7 @@ static CstStatus texture_decode_stb(const char *path, const unsigned char *data,
         return cst_fail(err, CST_ERR_PARSE,
                         "%s: cannot decode the image (%s); expected a PNG, JPEG, BMP, TGA, HDR, EXR or PFM file",
                         path, image_stb_failure_reason());
-    if (w != dw || h != dh) { /* the header read twice by stb: cannot differ */
+    if (w != dw || h != dh) { /* the header read twice by the same decoder: cannot differ */
         free(px);
         return cst_fail(err, CST_ERR_INTERNAL, "%s: decoded %d x %d pixels, the header declares %d x %d", path,
                         w, h, dw, dh);

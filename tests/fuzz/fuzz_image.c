@@ -1,7 +1,8 @@
 /* libFuzzer target for the image readers: libpng (image_read on .png), OpenEXR's C API and
- * our PFM parser (image_read on .exr/.pfm, reached through the texture loader), and stb_image
- * for JPEG, HDR, BMP, TGA and PNG after our pre-check (texture_image_load; stb is compiled
- * into the library, so it is instrumented like the rest). Any bytes must give pixels of the
+ * our PFM parser (image_read on .exr/.pfm, reached through the texture loader), stb_image
+ * for HDR, BMP, TGA and PNG and libjpeg-turbo for JPEG (src/io/jpeg.c) after our pre-check
+ * (texture_image_load; stb is compiled into the library, so it is instrumented like the
+ * rest; libjpeg is the system's, so only our code around it is). Any bytes must give pixels of the
  * stated size or an explained error, never a crash or a leak. The file's extension follows
  * its magic bytes, as a real file's would. Built by -DCST_FUZZ=ON (tests/fuzz/CMakeLists.txt);
  * run with scripts/fuzz.sh, see docs/fuzzing.md. */
@@ -42,7 +43,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         (uint64_t)iw * (uint64_t)ih > FUZZ_MAX_PIXELS)
         return 0; /* speed only, see FUZZ_MAX_PIXELS */
     static const uint8_t png_magic[4] = {0x89, 'P', 'N', 'G'}, exr_magic[4] = {0x76, 0x2f, 0x31, 0x01};
-    const char *ext = ".jpg"; /* stb_image goes by content, whatever the name */
+    const char *ext = ".jpg"; /* the texture loader goes by content, whatever the name */
     if (size >= 4 && memcmp(data, png_magic, 4) == 0) ext = ".png";
     else if (size >= 4 && memcmp(data, exr_magic, 4) == 0) ext = ".exr";
     else if (size >= 2 && data[0] == 'P' && (data[1] == 'F' || data[1] == 'f')) ext = ".pfm";

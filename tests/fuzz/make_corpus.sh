@@ -2,7 +2,8 @@
 # Rebuilds the committed seed corpora of tests/fuzz/corpus/<target>/ from the repository's
 # scenes and tiny generated images (a few pixels each, so the fuzzer's mutations stay
 # cheap). Usage: tests/fuzz/make_corpus.sh CAUSTIC_BINARY (any build; it writes the EXR
-# seeds). Needs python3 and a C compiler with stb_image_write.h (libstb-dev) for JPEG.
+# seeds). Needs python3 and a C compiler with stb_image_write.h (libstb-dev) and libjpeg
+# (libjpeg62-turbo-dev) for JPEG.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 caustic=$(realpath "${1:?usage: tests/fuzz/make_corpus.sh CAUSTIC_BINARY}")
@@ -134,7 +135,7 @@ PY
 "$caustic" render --width 2 --height 2 --spp 1 -q --aov albedo,depth -o "$tmp/b.exr"
 cp "$tmp/a.exr" "$out/fuzz_image/exr-rgb"
 cp "$tmp/b.exr" "$out/fuzz_image/exr-aov"
-# JPEG (baseline and progressive would need libjpeg; stb writes baseline).
+# JPEG: a baseline file from stb_image_write.
 cat > "$tmp/jpg.c" <<'C'
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
@@ -193,4 +194,46 @@ open(os.path.join(d, "iso-spectral"), "wb").write(seed(False, 3, 2, 3, 2))
 open(os.path.join(d, "iso-rgb"), "wb").write(seed(True, 2, 2, 2, 0))
 open(os.path.join(d, "aniso-spectral"), "wb").write(seed(False, 2, 3, 2, 3))
 PY
+# JPEG through libjpeg's compressor (the decoder's paths stb's writer does not reach):
+# progressive 4:2:0, grey with a restart interval, Adobe CMYK, arithmetic coding; 8 x 8.
+cat > "$tmp/ljpg.c" <<'C'
+#include <stdio.h>
+#include <jpeglib.h>
+int main(int argc, char **argv)
+{
+    static const char *const kinds[4] = {"progressive", "grey-restart", "cmyk", "arithmetic"};
+    for (int k = 0; k < 4; k++) {
+        char name[512];
+        snprintf(name, sizeof name, "%s/jpeg-%s", argv[1], kinds[k]);
+        FILE *f = fopen(name, "wb");
+        if (!f) return 1;
+        struct jpeg_compress_struct c;
+        struct jpeg_error_mgr e;
+        c.err = jpeg_std_error(&e);
+        jpeg_create_compress(&c);
+        jpeg_stdio_dest(&c, f);
+        c.image_width = c.image_height = 8;
+        c.input_components = k == 1 ? 1 : k == 2 ? 4 : 3;
+        c.in_color_space = k == 1 ? JCS_GRAYSCALE : k == 2 ? JCS_CMYK : JCS_RGB;
+        jpeg_set_defaults(&c);
+        jpeg_set_quality(&c, 50, TRUE);
+        if (k == 0) jpeg_simple_progression(&c);
+        if (k == 1) c.restart_interval = 1;
+        if (k == 3) c.arith_code = TRUE;
+        jpeg_start_compress(&c, TRUE);
+        unsigned char row[8 * 4];
+        while (c.next_scanline < 8) {
+            for (int i = 0; i < 32; i++) row[i] = (unsigned char)(i * 7 + c.next_scanline * 20);
+            JSAMPROW r = row;
+            jpeg_write_scanlines(&c, &r, 1);
+        }
+        jpeg_finish_compress(&c);
+        jpeg_destroy_compress(&c);
+        fclose(f);
+    }
+    return 0;
+}
+C
+cc -o "$tmp/ljpg" "$tmp/ljpg.c" -ljpeg
+"$tmp/ljpg" "$out/fuzz_image"
 du -sh "$out"; ls "$out"/*
