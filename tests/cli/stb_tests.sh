@@ -8,27 +8,11 @@
 # Prints one PASS/FAIL line per check and ends with "N passed, M failed".
 set -u
 
-if [ $# -ne 2 ]; then
-    echo "usage: bash stb_tests.sh <path-to-caustic-binary> <source-dir>" >&2
-    exit 2
-fi
-BIN=$(realpath "$1")
-SRC=$(realpath "$2")
+. "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
+harness_init stb_tests "$@"
 CRASHES=$SRC/tests/fuzz/crashes/fuzz_image
 SEEDS=$SRC/tests/fuzz/corpus/fuzz_image
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/caustic-stb-tests.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
 cd "$TMP" || exit 2
-
-passed=0
-failed=0
-ERR=$TMP/.stderr
-pass() { echo "PASS: $1"; passed=$((passed + 1)); }
-fail() {
-    echo "FAIL: $1: $2"
-    [ -s "$ERR" ] && echo "      stderr: $(head -c 400 "$ERR")"
-    failed=$((failed + 1))
-}
 
 # AddressSanitizer reserves terabytes of address space for its shadow memory at start-up,
 # so under an ASan build (.ci/run's second pass) the 1 GB limit would abort every run: there
@@ -39,7 +23,7 @@ else
     VLIMIT=1048576
 fi
 
-# check NAME FILE EXT RC [ERE]: `caustic info` on a scene whose emission texture is FILE
+# check NAME FILE EXT RC [ERE] (this script's own, in place of the harness's): `caustic info` on a scene whose emission texture is FILE
 # (copied as t.EXT) exits RC within 3 s (a refusal must not decode anything; 1 GB of
 # address space is far more than these 8 x 8 scenes need), stderr matching ERE.
 check() {
@@ -130,5 +114,4 @@ for s in png-rgb8 png-rgba16 png-gray1 png-palette jpeg-rgb jpeg-progressive jpe
     check "seed $s loads" "$SEEDS/$s" img 0
 done
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+harness_finish
