@@ -32,3 +32,5 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     measured_free(&m);
     return 0;
 }
+
+#include "fuzz_replay.h"

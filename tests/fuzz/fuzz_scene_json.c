@@ -33,26 +33,4 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     return 0;
 }
 
-#ifdef FUZZ_STANDALONE
-int main(int argc, char **argv)
-{
-    for (int i = 1; i < argc; i++) {
-        FILE *f = fopen(argv[i], "rb");
-        if (!f) {
-            perror(argv[i]);
-            return 1;
-        }
-        size_t cap = (size_t)1 << 20; /* inputs are small; longer files are truncated */
-        uint8_t *buf = malloc(cap);
-        if (!buf) {
-            fclose(f);
-            return 1;
-        }
-        size_t len = fread(buf, 1, cap, f);
-        fclose(f);
-        LLVMFuzzerTestOneInput(buf, len);
-        free(buf);
-    }
-    return 0;
-}
-#endif
+#include "fuzz_replay.h"
