@@ -54,9 +54,10 @@ CstStatus spd_read(const char *name, const char *text, size_t len, float **lambd
                           "value) pairs", name, line, col, shown, text + i, tl > 24 ? "..." : "");
             goto fail;
         }
-        if (count % 2 == 0 && !(v > 0.0)) {
-            st = cst_fail(err, CST_ERR_PARSE, "%s:%d:%d: wavelength %g is not positive; expected (wavelength in "
-                          "nm, value) pairs", name, line, col, v);
+        /* Kept as floats: a wavelength must stay positive as one (6e-62 rounds to 0). */
+        if (count % 2 == 0 && !((float)v > 0.0f)) {
+            st = cst_fail(err, CST_ERR_PARSE, "%s:%d:%d: wavelength %g is not positive%s; expected (wavelength in "
+                          "nm, value) pairs", name, line, col, v, v > 0.0 ? " as a 32-bit float" : "");
             goto fail;
         }
         if (count % 2 == 0 && count >= 2 && !((float)v > nums[count - 2])) {

@@ -110,6 +110,8 @@ static void test_spd(void **state)
         {"300 1.5\n  300 2\n", "t.spd:2:3: wavelength 300 does not increase"},
         {"# nothing\n", "t.spd:2:1: no (wavelength, value) pairs"},
         {"-5 1\n", "t.spd:1:1: wavelength -5 is not positive"},
+        /* found by fuzz_spd: positive as a double, 0 as the float it is kept as */
+        {"6e-62\t1\n82\n6", "t.spd:1:1: wavelength 6e-62 is not positive as a 32-bit float"},
         {"300 nan\n", "t.spd:1:5: \"nan\" is not a number"},
         {"300 1e99\n", "t.spd:1:5: \"1e99\" is not a number"},
     };
