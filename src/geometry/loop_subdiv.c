@@ -422,8 +422,8 @@ CstStatus loop_subdivide(const Vec3 *p0, int nv0, const int *idx0, int nt0, int 
     Topo t = {0};
     CstStatus st = CST_OK;
     if (!p || !idx) { st = cst_fail(err, CST_ERR_OOM, "out of memory for a subdivision mesh"); goto fail; }
-    memcpy(p, p0, (size_t)nv0 * sizeof *p);
-    memcpy(idx, idx0, 3 * (size_t)nt0 * sizeof *idx);
+    if (nv0 > 0) memcpy(p, p0, (size_t)nv0 * sizeof *p); /* an empty mesh may pass NULLs */
+    if (nt0 > 0) memcpy(idx, idx0, 3 * (size_t)nt0 * sizeof *idx);
     int nv = nv0, nt = nt0;
     if ((st = topo_build(idx, nt, &t, err))) goto fail;
     if ((st = check_fans(idx, nv, nt, &t, err))) goto fail;
