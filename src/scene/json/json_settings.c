@@ -75,7 +75,7 @@ CstStatus json_parse_film(Loader *ld, const json_t *film)
     if ((v = json_object_get(film, "max_component"))) {
         float m = 0.0f;
         json_path_push_key(ld, "max_component");
-        LOADER_TRY(json_read_float(ld, v, FLT_MAX, &m));
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &m));
         if (!(m > 0.0f))
             return json_fail_here(ld, "%g; expected a number > 0 (the largest XYZ component a sample may "
                                       "add; leave the key out for no clamp)", (double)m);
