@@ -85,6 +85,18 @@ static size_t env_source_pixel(const double d[3], int w, int h)
     return (size_t)y * (size_t)w + (size_t)x;
 }
 
+/* A light's image ("filename" at fl): file access checked, resolved against the scene's
+ * directory, read as radiance (NaN, Inf and negative pixels are errors naming the pixel). */
+static CstStatus light_image_read(Loader *ld, const char *d, const char *file, Loc fl, float **px, int *w, int *h)
+{
+    TRY(pbrt_check_file_access(ld, fl, d));
+    char *path = pbrt_resolve_path(ld, file);
+    if (!path) return pbrt_oom(ld);
+    CstStatus st = image_read_radiance(path, px, w, h, ld->err);
+    free(path);
+    return st ? pbrt_fail_wrap(ld, st, fl, d) : CST_OK;
+}
+
 /* pbrt-v4's "illuminance" normaliser of an image light: over the pixels whose direction has
  * light-space z > 0, the sum of luminance times cos theta, times 2 pi / (number of pixels)
  * (lights.cpp, Light::Create). A pixel covers 4 pi / (number of pixels) sr, so this is half
@@ -228,14 +240,9 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         if (!ld->gs.ctm.inv_ok)
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; "
                                 "expected an invertible transform", d);
-        TRY(pbrt_check_file_access(ld, fl, d));
-        char *path = pbrt_resolve_path(ld, file);
-        if (!path) return pbrt_oom(ld);
         float *src = NULL;
         int w = 0, h = 0;
-        st = image_read_radiance(path, &src, &w, &h, ld->err); /* NaN, Inf, < 0: errors */
-        free(path);
-        if (st) return pbrt_fail_wrap(ld, st, fl, d);
+        TRY(light_image_read(ld, d, file, fl, &src, &w, &h));
         if (w != h)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, fl, "%s: \"%s\" is %d x %d, not square: pbrt-v4 "
                     "expects an equal-area (square) image; read as an equirectangular map in "
@@ -314,12 +321,7 @@ static CstStatus gonio_light(Loader *ld, Params *ps, Loc loc, const char *d)
         if (!(px = malloc(3 * sizeof *px))) return pbrt_oom(ld);
         px[0] = px[1] = px[2] = 1.0f;
     } else {
-        TRY(pbrt_check_file_access(ld, fl, d));
-        char *path = pbrt_resolve_path(ld, file);
-        if (!path) return pbrt_oom(ld);
-        CstStatus st = image_read_radiance(path, &px, &w, &h, ld->err); /* NaN, Inf, < 0: errors */
-        free(path);
-        if (st) return pbrt_fail_wrap(ld, st, fl, d);
+        TRY(light_image_read(ld, d, file, fl, &px, &w, &h));
         if (w != h) {
             free(px);
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: \"%s\" is %d x %d; expected a square "
@@ -385,14 +387,9 @@ static CstStatus projection_light(Loader *ld, Params *ps, Loc loc, const char *d
     if (!ld->gs.ctm.inv_ok)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; expected an "
                             "invertible transform", d);
-    TRY(pbrt_check_file_access(ld, fl, d));
-    char *path = pbrt_resolve_path(ld, file);
-    if (!path) return pbrt_oom(ld);
     float *px = NULL;
     int w = 0, h = 0;
-    CstStatus st = image_read_radiance(path, &px, &w, &h, ld->err); /* NaN, Inf, < 0: errors */
-    free(path);
-    if (st) return pbrt_fail_wrap(ld, st, fl, d);
+    TRY(light_image_read(ld, d, file, fl, &px, &w, &h));
     double k = (double)scale;
     if (power > 0.0f) {
         const double aspect = (double)w / (double)h, t = tan(0.5 * (double)fov * PBRT_PI / 180.0);
@@ -425,7 +422,7 @@ static CstStatus projection_light(Loader *ld, Params *ps, Loc loc, const char *d
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: scale %g gives an intensity that is negative or "
                             "not finite", d, (double)scale);
     }
-    st = pbrt_coords_ok(p) ? cst_scene_add_light(ld->scene, &l, ld->err) : CST_ERR_INVALID_ARG;
+    CstStatus st = pbrt_coords_ok(p) ? cst_scene_add_light(ld->scene, &l, ld->err) : CST_ERR_INVALID_ARG;
     free(px);
     if (st == CST_ERR_INVALID_ARG && !pbrt_coords_ok(p))
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's position is beyond the scene limit", d);
