@@ -69,7 +69,8 @@ static void cli_print_info(const CliArgs *a, const CstScene *scene, double read_
     printf("load:        %.2f ms (parsing and mesh import)\n", read_seconds * 1e3);
     printf("triangles:   %d\n", in.triangles);
     printf("spheres:     %d\n", in.spheres);
-    printf("emitters:    %d\n", in.emitters);
+    printf("emitters:    %d (emitting shapes)\n", in.emitters);
+    printf("lights:      %d (the emitting shapes and every other light)\n", in.lights);
     printf("materials:   %d\n", in.materials);
     printf("accel:       %s\n", in.accel);
     printf("build:       %.2f ms\n", in.accel_build_seconds * 1e3);

@@ -138,6 +138,17 @@ for n in $(cat "$OUT"); do
     [ "$RC" -eq 0 ] || { ok=0; fail "list accels: '$n' builds" "exit $RC"; }
 done
 [ $ok -eq 1 ] && pass "list accels: every back end builds"
+# `info` counts the lights of every kind: an environment-lit scene has no emitting shape
+# but is lit (it printed only "emitters: 0" before).
+cat >"$dir/env.json" <<'JSON'
+{"camera": {"type": "pinhole", "position": [0, 0, 5], "look_at": [0, 0, 0], "fov": 40},
+ "materials": {"w": {"type": "diffuse"}},
+ "environment": {"radiance": [1, 1, 1]},
+ "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "w"}]}
+JSON
+run "$dir" info env.json
+check "info: an environment-only scene has 0 emitters and 1 light" \
+    eval 'test "$RC" -eq 0 && grep -q "^emitters: *0 " "$OUT" && grep -q "^lights: *1 " "$OUT"'
 run "$dir" list formats
 ok=1
 for n in $(cat "$OUT"); do
