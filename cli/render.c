@@ -3,6 +3,7 @@
  * acceleration structure's build time and memory. */
 #include <errno.h>
 #include <inttypes.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -100,6 +101,92 @@ static void cli_print_summary(const char *output, const CstRenderStats *st)
     fprintf(stderr, "%s\n", line);
 }
 
+/* ------------------------------------------------------------ checkpoints and stops */
+
+/* --checkpoint-every's default: a state every 5 minutes costs nothing measurable (a 512x512
+ * state is 12 MiB, written in tens of milliseconds: docs/benchmarks.md) and loses at most
+ * 5 minutes of work to a kill -9. */
+#define CLI_CHECKPOINT_EVERY 300.0
+
+/* What the pass callback needs: where and how often to write the state, the stop request,
+ * and what it did, for the summary. */
+typedef struct CliPasses {
+    const CstScene *scene;
+    const CstRenderSettings *settings;
+    const char *scene_id;
+    const char *checkpoint;  /* NULL: no state files */
+    double every, last_write; /* seconds; the render's elapsed time of the last write */
+    int passes;               /* completed */
+    int written_spp;          /* samples in the last state written, -1 = none */
+    int writes;
+    double write_seconds;     /* all writes together */
+    CstStatus failed;         /* a write failed: the render stops */
+    CstError err;
+    CliProgress *progress;    /* NULL: quiet */
+} CliPasses;
+
+static int cli_pass_done(void *user, const CstFilm *film, const CstPassInfo *info)
+{
+    CliPasses *c = user;
+    c->passes++;
+    const int stop = cli_signals_stop_requested() != 0;
+    if (c->checkpoint && (info->last || stop || info->elapsed_seconds - c->last_write >= c->every)) {
+        double t0 = cli_clock_seconds();
+        CstImageWriteOptions wo = {NULL, 0, cli_signals_temp_file, NULL};
+        CstStatus st = cst_film_state_write(c->checkpoint, film, c->scene, c->settings, c->scene_id, &wo, &c->err);
+        c->write_seconds += cli_clock_seconds() - t0;
+        c->last_write = info->elapsed_seconds;
+        if (st != CST_OK) {
+            c->failed = st;
+            return 1;
+        }
+        c->writes++;
+        c->written_spp = info->samples_done;
+    }
+    return stop;
+}
+
+/* The progress callback of every render: the display (unless quiet), and a stop request
+ * that comes before any pass is complete cancels at once: there is nothing to keep. */
+static int cli_render_progress(void *user, double fraction, double elapsed)
+{
+    CliPasses *c = user;
+    if (cli_signals_stop_requested() && c->passes == 0) return 1;
+    return c->progress ? cli_progress_report(c->progress, fraction, elapsed) : 0;
+}
+
+static void cli_render_phase(void *user, const char *phase)
+{
+    CliPasses *c = user;
+    if (c->progress) cli_progress_phase(c->progress, phase);
+}
+
+/* The checks of --checkpoint and --resume, and the resumed film (*resume, NULL without
+ * --resume). Returns an exit code. */
+static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const CstRenderSettings *settings,
+                              const char *scene_id, CstFilm **resume)
+{
+    *resume = NULL;
+    if (!a->checkpoint_path && !a->resume_path) return CLI_EXIT_OK;
+    CstRenderSettings rs;
+    cst_render_settings_resolve(scene, settings, &rs);
+    if (!cst_integrator_resumable(rs.integrator)) {
+        fprintf(stderr, "caustic: error: --%s: the %s integrator cannot be checkpointed or resumed yet (its state "
+                        "is more than the film's sums); expected path, path-nee, path-bsdf, whitted, photon, light, "
+                        "bdpt or vcm, or no --checkpoint/--resume\n",
+                a->checkpoint_path ? "checkpoint" : "resume", cst_integrator_name(rs.integrator));
+        return CLI_EXIT_USAGE;
+    }
+    if (!a->resume_path) return CLI_EXIT_OK;
+    CstError err = {0};
+    CstStatus st = cst_film_state_read(a->resume_path, scene, settings, scene_id, resume, &err);
+    if (st != CST_OK) {
+        cli_print_error(&err, st);
+        return cli_exit_code(st, CLI_STAGE_LOAD);
+    }
+    return CLI_EXIT_OK;
+}
+
 /* ------------------------------------------------------------ commands */
 
 /* The output path: -o, else the scene's "output", else the scene's name with .png (the
@@ -139,6 +226,8 @@ int cli_render(const CliArgs *a)
     CliProgress progress = {.tty = isatty(STDERR_FILENO) == 1};
     CstRenderSettings settings = a->settings;
     CstRenderStats stats = {0};
+    CstFilm *resume = NULL;
+    CliPasses passes = {0};
     CliMetadata meta = {0};
     CliSummary summary = {.scene = a->scene_path};
     FILE *json = NULL;
@@ -188,15 +277,52 @@ int cli_render(const CliArgs *a)
         code = CLI_EXIT_USAGE;
         goto done;
     }
+    cli_metadata_begin(&meta, a->scene_path);
+    /* What a state file is keyed to: the scene file's bytes (files it includes are not
+     * hashed; the scene's counts are in the key too: docs/state-format.md). */
+    char scene_id[96];
+    if (!a->scene_path) snprintf(scene_id, sizeof scene_id, "builtin:cornell-box");
+    else if (meta.sha256[0]) snprintf(scene_id, sizeof scene_id, "sha256:%s", meta.sha256);
+    else snprintf(scene_id, sizeof scene_id, "unhashed");
+    if ((code = cli_prepare_resume(a, scene, &settings, scene_id, &resume)) != CLI_EXIT_OK)
+        goto done;
+    code = CLI_EXIT_INTERNAL;
+    passes.scene = scene;
+    passes.settings = &settings;
+    passes.scene_id = scene_id;
+    passes.checkpoint = a->checkpoint_path;
+    passes.every = a->checkpoint_every > 0.0 ? a->checkpoint_every : CLI_CHECKPOINT_EVERY;
+    passes.written_spp = -1;
+    passes.progress = a->quiet ? NULL : &progress;
+    settings.resume = resume;
+    settings.pass_done = cli_pass_done;
+    settings.pass_user = &passes;
+    settings.progress = cli_render_progress;
+    settings.progress_phase = cli_render_phase;
+    settings.progress_user = &passes;
     if (!a->quiet) {
-        settings.progress = cli_progress_report;
-        settings.progress_phase = cli_progress_phase;
-        settings.progress_user = &progress;
         cli_print_job(a, scene, &settings, output);
+        if (resume)
+            fprintf(stderr, "caustic: resuming from %s: %d spp done\n", a->resume_path, cst_film_spp(resume));
     }
 
-    cli_metadata_begin(&meta, a->scene_path);
+    /* From here the first SIGINT or SIGTERM stops the render after its pass, and the image
+     * of the passes done (and the state, with --checkpoint) is written. */
+    cli_signals_stop_arm();
     status = cst_render(scene, &settings, &film, &stats, &err);
+    const int stop_signal = cli_signals_stop_requested();
+    if (status == CST_ERR_CANCELLED && stop_signal) {
+        if (!a->quiet) cli_progress_abort(&progress);
+        fprintf(stderr, "caustic: interrupted before the first pass was complete: nothing written\n");
+        code = 128 + stop_signal;
+        goto done;
+    }
+    if (status == CST_OK && passes.failed != CST_OK) {
+        if (!a->quiet) cli_progress_abort(&progress);
+        cli_print_error(&passes.err, passes.failed);
+        fprintf(stderr, "caustic: the render stopped because its checkpoint could not be written; the image of "
+                        "the %d spp done is written next\n", stats.spp);
+    }
     /* Too many NaN/Inf samples: the film is still written, for inspection, then exit 1. */
     CstStatus render_status = status;
     CstError render_err = err;
@@ -219,7 +345,6 @@ int cli_render(const CliArgs *a)
         cst_render_settings_resolve(scene, &settings, &used);
         cli_metadata_finish(&meta, &used, &stats);
         CstImageWriteOptions wo = {meta.entry, meta.count, cli_signals_temp_file, NULL};
-        cli_signals_install();
         status = cst_film_write_opt(film, output, &wo, &err);
     }
     if (status != CST_OK) {
@@ -230,6 +355,23 @@ int cli_render(const CliArgs *a)
     summary.write_seconds = cli_clock_seconds() - t_write;
     if (!a->quiet)
         cli_print_summary(output, &stats);
+    if (passes.writes > 0 && !a->quiet)
+        fprintf(stderr, "caustic: wrote the state %s: %d spp (%d write%s, %.1f ms each, %.2f%% of the render)\n",
+                a->checkpoint_path, passes.written_spp, passes.writes, passes.writes == 1 ? "" : "s",
+                1e3 * passes.write_seconds / passes.writes,
+                stats.seconds > 0.0 ? 100.0 * passes.write_seconds / stats.seconds : 0.0);
+    if (passes.failed != CST_OK) {
+        code = cli_exit_code(passes.failed, CLI_STAGE_WRITE);
+        goto done;
+    }
+    if (stats.stopped) {
+        fprintf(stderr, "caustic: interrupted (%s) after %d spp: wrote %s%s%s%s\n",
+                stop_signal == SIGINT ? "SIGINT" : "SIGTERM", stats.spp, output, a->checkpoint_path ? " and " : "",
+                a->checkpoint_path ? a->checkpoint_path : "",
+                a->checkpoint_path ? "; continue with --resume and the same settings" : "");
+        code = 128 + stop_signal;
+        goto done;
+    }
     if (render_status != CST_OK) {
         cli_print_error(&render_err, render_status);
         fprintf(stderr, "caustic: %s was written for inspection only: the render failed\n", output);
@@ -254,6 +396,7 @@ int cli_render(const CliArgs *a)
     }
 
 done:
+    cst_film_destroy(resume);
     cli_metadata_free(&meta);
     if (json && json != stdout)
         fclose(json);
