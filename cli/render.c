@@ -306,10 +306,12 @@ int cli_render(const CliArgs *a)
             fprintf(stderr, "caustic: resuming from %s: %d spp done\n", a->resume_path, cst_film_spp(resume));
     }
 
-    /* From here the first SIGINT or SIGTERM stops the render after its pass, and the image
-     * of the passes done (and the state, with --checkpoint) is written. */
+    /* During the render the first SIGINT or SIGTERM stops it after its pass, and the image
+     * of the passes done (and the state, with --checkpoint) is written; during that write,
+     * as during any image write, a signal ends the process and leaves no partial file. */
     cli_signals_stop_arm();
     status = cst_render(scene, &settings, &film, &stats, &err);
+    cli_signals_stop_disarm();
     const int stop_signal = cli_signals_stop_requested();
     if (status == CST_ERR_CANCELLED && stop_signal) {
         if (!a->quiet) cli_progress_abort(&progress);

@@ -87,6 +87,11 @@ void cli_signals_stop_arm(void)
     cli_stop_armed = 1;
 }
 
+void cli_signals_stop_disarm(void)
+{
+    cli_stop_armed = 0;
+}
+
 int cli_signals_stop_requested(void)
 {
     return cli_stop_signal;

@@ -20,6 +20,9 @@ void cli_signals_temp_file(void *user, const char *temp_path);
  * SIGTERM is remembered (and said on stderr) instead of ending the process; a second one,
  * or SIGHUP, removes the announced temporary and ends it. */
 void cli_signals_stop_arm(void);
+/* Back to ending the process at the first signal (the image write after a render: an
+ * interrupted write leaves no file, and any earlier output stays as it was). */
+void cli_signals_stop_disarm(void);
 /* The signal number of the stop request, 0 when none came. */
 int cli_signals_stop_requested(void);
 

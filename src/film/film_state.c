@@ -208,10 +208,12 @@ static CstStatus read_key(StateIn *in, StateKey *e, int index, CstError *err)
 static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int *nkeys, CstError *err)
 {
     CstStatus st;
-    if ((st = in_need(in, 16, "the header", err)) != CST_OK) return st;
-    if (memcmp(in->p, FILM_STATE_MAGIC, 8) != 0)
+    /* A file that does not start as a state is named as such, a short one that does as
+     * truncated. */
+    if (memcmp(in->p, FILM_STATE_MAGIC, in->len < 8 ? in->len : 8) != 0)
         return cst_fail(err, CST_ERR_PARSE, "%s: not a caustic state file (expected the bytes \"%s\" at its start)",
                         in->path, FILM_STATE_MAGIC);
+    if ((st = in_need(in, 16, "the header", err)) != CST_OK) return st;
     in->off = 8;
     uint64_t version = in_u64(in, 4);
     if (version != FILM_STATE_VERSION)
