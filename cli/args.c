@@ -289,6 +289,22 @@ static bool args_parse_crop(const char *value, CstRenderSettings *s, ArgsError *
     return true;
 }
 
+/* --checkpoint FILE, --resume FILE, --checkpoint-every SECONDS. */
+static bool args_apply_checkpoint(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
+{
+    if (o->id == ARGS_OPT_CHECKPOINT_EVERY) {
+        if (args_parse_seconds(value, &out->checkpoint_every)) return true;
+        args_fail(err, false, "--checkpoint-every: expected a positive number of seconds, got '%s'", value);
+        return false;
+    }
+    if (value[0] == '\0') {
+        args_fail(err, false, "--%s: expected a file name, got ''", o->long_name);
+        return false;
+    }
+    *(o->id == ARGS_OPT_CHECKPOINT ? &out->checkpoint_path : &out->resume_path) = value;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -429,20 +445,8 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     case ARGS_OPT_FORCE:
         out->force = true;
         return true;
-    case ARGS_OPT_CHECKPOINT:
-    case ARGS_OPT_RESUME:
-        if (value[0] == '\0') {
-            args_fail(err, false, "--%s: expected a file name, got ''", o->long_name);
-            return false;
-        }
-        *(o->id == ARGS_OPT_CHECKPOINT ? &out->checkpoint_path : &out->resume_path) = value;
-        return true;
-    case ARGS_OPT_CHECKPOINT_EVERY:
-        if (!args_parse_seconds(value, &out->checkpoint_every)) {
-            args_fail(err, false, "--checkpoint-every: expected a positive number of seconds, got '%s'", value);
-            return false;
-        }
-        return true;
+    case ARGS_OPT_CHECKPOINT: case ARGS_OPT_RESUME: case ARGS_OPT_CHECKPOINT_EVERY:
+        return args_apply_checkpoint(o, value, out, err);
     case ARGS_OPT_HELP:
         if (out->command != ARGS_CMD_HELP) out->help_for = out->command;
         out->command = ARGS_CMD_HELP;

@@ -113,7 +113,7 @@ static void cli_print_summary(const char *output, const CstRenderStats *st)
 typedef struct CliPasses {
     const CstScene *scene;
     const CstRenderSettings *settings;
-    const char *scene_id;
+    char scene_id[96];        /* what a state file is keyed to (cli_passes_setup) */
     const char *checkpoint;  /* NULL: no state files */
     double every, last_write; /* seconds; the render's elapsed time of the last write */
     int passes;               /* completed */
@@ -185,6 +185,71 @@ static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const Cst
         return cli_exit_code(st, CLI_STAGE_LOAD);
     }
     return CLI_EXIT_OK;
+}
+
+/* Before the render: the scene's id, the resumed state (*resume), the pass callback and the
+ * progress callbacks in `settings`. Returns an exit code. */
+static int cli_passes_setup(const CliArgs *a, const CstScene *scene, const CliMetadata *meta, CliPasses *passes,
+                            CliProgress *progress, CstRenderSettings *settings, CstFilm **resume)
+{
+    /* The scene file's bytes (files it includes are not hashed; the scene's counts are in
+     * the key too: docs/state-format.md). */
+    if (!a->scene_path) snprintf(passes->scene_id, sizeof passes->scene_id, "builtin:cornell-box");
+    else if (meta->sha256[0]) snprintf(passes->scene_id, sizeof passes->scene_id, "sha256:%s", meta->sha256);
+    else snprintf(passes->scene_id, sizeof passes->scene_id, "unhashed");
+    int code = cli_prepare_resume(a, scene, settings, passes->scene_id, resume);
+    if (code != CLI_EXIT_OK) return code;
+    passes->scene = scene;
+    passes->settings = settings;
+    passes->checkpoint = a->checkpoint_path;
+    passes->every = a->checkpoint_every > 0.0 ? a->checkpoint_every : CLI_CHECKPOINT_EVERY;
+    passes->written_spp = -1;
+    passes->progress = a->quiet ? NULL : progress;
+    settings->resume = *resume;
+    settings->pass_done = cli_pass_done;
+    settings->pass_user = passes;
+    settings->progress = cli_render_progress;
+    settings->progress_phase = cli_render_phase;
+    settings->progress_user = passes;
+    return CLI_EXIT_OK;
+}
+
+/* Right after the render: a stop before any pass (nothing to write) or a failed state
+ * write. Returns an exit code to end with, or -1 to go on. */
+static int cli_after_render(const CliArgs *a, CstStatus status, const CliPasses *passes, CliProgress *progress,
+                            int stop_signal, int spp)
+{
+    if (status == CST_ERR_CANCELLED && stop_signal) {
+        if (!a->quiet) cli_progress_abort(progress);
+        fprintf(stderr, "caustic: interrupted before the first pass was complete: nothing written\n");
+        return 128 + stop_signal;
+    }
+    if (status == CST_OK && passes->failed != CST_OK) {
+        if (!a->quiet) cli_progress_abort(progress);
+        cli_print_error(&passes->err, passes->failed);
+        fprintf(stderr, "caustic: the render stopped because its checkpoint could not be written; the image of "
+                        "the %d spp done is written next\n", spp);
+    }
+    return -1;
+}
+
+/* After the image is written: the states written, and the exit code of a failed state write
+ * or a stop (or -1 to go on). */
+static int cli_report_passes(const CliArgs *a, const CliPasses *passes, const CstRenderStats *stats,
+                             const char *output, int stop_signal)
+{
+    if (passes->writes > 0 && !a->quiet)
+        fprintf(stderr, "caustic: wrote the state %s: %d spp (%d write%s, %.1f ms each, %.2f%% of the render)\n",
+                a->checkpoint_path, passes->written_spp, passes->writes, passes->writes == 1 ? "" : "s",
+                1e3 * passes->write_seconds / passes->writes,
+                stats->seconds > 0.0 ? 100.0 * passes->write_seconds / stats->seconds : 0.0);
+    if (passes->failed != CST_OK) return cli_exit_code(passes->failed, CLI_STAGE_WRITE);
+    if (!stats->stopped) return -1;
+    fprintf(stderr, "caustic: interrupted (%s) after %d spp: wrote %s%s%s%s\n",
+            stop_signal == SIGINT ? "SIGINT" : "SIGTERM", stats->spp, output, a->checkpoint_path ? " and " : "",
+            a->checkpoint_path ? a->checkpoint_path : "",
+            a->checkpoint_path ? "; continue with --resume and the same settings" : "");
+    return 128 + stop_signal;
 }
 
 /* ------------------------------------------------------------ commands */
@@ -278,28 +343,9 @@ int cli_render(const CliArgs *a)
         goto done;
     }
     cli_metadata_begin(&meta, a->scene_path);
-    /* What a state file is keyed to: the scene file's bytes (files it includes are not
-     * hashed; the scene's counts are in the key too: docs/state-format.md). */
-    char scene_id[96];
-    if (!a->scene_path) snprintf(scene_id, sizeof scene_id, "builtin:cornell-box");
-    else if (meta.sha256[0]) snprintf(scene_id, sizeof scene_id, "sha256:%s", meta.sha256);
-    else snprintf(scene_id, sizeof scene_id, "unhashed");
-    if ((code = cli_prepare_resume(a, scene, &settings, scene_id, &resume)) != CLI_EXIT_OK)
+    if ((code = cli_passes_setup(a, scene, &meta, &passes, &progress, &settings, &resume)) != CLI_EXIT_OK)
         goto done;
     code = CLI_EXIT_INTERNAL;
-    passes.scene = scene;
-    passes.settings = &settings;
-    passes.scene_id = scene_id;
-    passes.checkpoint = a->checkpoint_path;
-    passes.every = a->checkpoint_every > 0.0 ? a->checkpoint_every : CLI_CHECKPOINT_EVERY;
-    passes.written_spp = -1;
-    passes.progress = a->quiet ? NULL : &progress;
-    settings.resume = resume;
-    settings.pass_done = cli_pass_done;
-    settings.pass_user = &passes;
-    settings.progress = cli_render_progress;
-    settings.progress_phase = cli_render_phase;
-    settings.progress_user = &passes;
     if (!a->quiet) {
         cli_print_job(a, scene, &settings, output);
         if (resume)
@@ -313,18 +359,9 @@ int cli_render(const CliArgs *a)
     status = cst_render(scene, &settings, &film, &stats, &err);
     cli_signals_stop_disarm();
     const int stop_signal = cli_signals_stop_requested();
-    if (status == CST_ERR_CANCELLED && stop_signal) {
-        if (!a->quiet) cli_progress_abort(&progress);
-        fprintf(stderr, "caustic: interrupted before the first pass was complete: nothing written\n");
-        code = 128 + stop_signal;
+    if ((code = cli_after_render(a, status, &passes, &progress, stop_signal, stats.spp)) >= 0)
         goto done;
-    }
-    if (status == CST_OK && passes.failed != CST_OK) {
-        if (!a->quiet) cli_progress_abort(&progress);
-        cli_print_error(&passes.err, passes.failed);
-        fprintf(stderr, "caustic: the render stopped because its checkpoint could not be written; the image of "
-                        "the %d spp done is written next\n", stats.spp);
-    }
+    code = CLI_EXIT_INTERNAL;
     /* Too many NaN/Inf samples: the film is still written, for inspection, then exit 1. */
     CstStatus render_status = status;
     CstError render_err = err;
@@ -357,23 +394,9 @@ int cli_render(const CliArgs *a)
     summary.write_seconds = cli_clock_seconds() - t_write;
     if (!a->quiet)
         cli_print_summary(output, &stats);
-    if (passes.writes > 0 && !a->quiet)
-        fprintf(stderr, "caustic: wrote the state %s: %d spp (%d write%s, %.1f ms each, %.2f%% of the render)\n",
-                a->checkpoint_path, passes.written_spp, passes.writes, passes.writes == 1 ? "" : "s",
-                1e3 * passes.write_seconds / passes.writes,
-                stats.seconds > 0.0 ? 100.0 * passes.write_seconds / stats.seconds : 0.0);
-    if (passes.failed != CST_OK) {
-        code = cli_exit_code(passes.failed, CLI_STAGE_WRITE);
+    if ((code = cli_report_passes(a, &passes, &stats, output, stop_signal)) >= 0)
         goto done;
-    }
-    if (stats.stopped) {
-        fprintf(stderr, "caustic: interrupted (%s) after %d spp: wrote %s%s%s%s\n",
-                stop_signal == SIGINT ? "SIGINT" : "SIGTERM", stats.spp, output, a->checkpoint_path ? " and " : "",
-                a->checkpoint_path ? a->checkpoint_path : "",
-                a->checkpoint_path ? "; continue with --resume and the same settings" : "");
-        code = 128 + stop_signal;
-        goto done;
-    }
+    code = CLI_EXIT_INTERNAL;
     if (render_status != CST_OK) {
         cli_print_error(&render_err, render_status);
         fprintf(stderr, "caustic: %s was written for inspection only: the render failed\n", output);
