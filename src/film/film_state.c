@@ -269,6 +269,17 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     return CST_OK;
 }
 
+CstStatus film_state_read_mem(const char *name, const void *bytes, size_t len, Film **film_out, StateKey *keys,
+                              int *nkeys, CstError *err)
+{
+    *film_out = NULL;
+    *nkeys = 0;
+    StateIn in = {bytes, len, 0, name};
+    CstStatus st = state_decode(&in, film_out, keys, nkeys, err);
+    if (st != CST_OK) *nkeys = 0;
+    return st;
+}
+
 CstStatus film_state_read(const char *path, Film **film_out, StateKey *keys, int *nkeys, CstError *err)
 {
     *film_out = NULL;
@@ -277,8 +288,7 @@ CstStatus film_state_read(const char *path, Film **film_out, StateKey *keys, int
     size_t len = 0;
     CstStatus st = file_read_all(path, &bytes, &len, err);
     if (st != CST_OK) return st;
-    StateIn in = {(const unsigned char *)bytes, len, 0, path};
-    st = state_decode(&in, film_out, keys, nkeys, err);
+    st = film_state_read_mem(path, bytes, len, film_out, keys, nkeys, err);
     free(bytes);
     return st;
 }

@@ -39,5 +39,8 @@ CstStatus film_state_write(const char *path, const Film *film, const StateKey *k
  * film_destroy) holds the sums and spp, with no output settings, and keys[0..*nkeys) the key
  * (keys: room for STATE_KEYS_MAX). */
 CstStatus film_state_read(const char *path, Film **film_out, StateKey *keys, int *nkeys, CstError *err);
+/* The same from len bytes in memory (name: for messages), for the fuzz target. */
+CstStatus film_state_read_mem(const char *name, const void *bytes, size_t len, Film **film_out, StateKey *keys,
+                              int *nkeys, CstError *err);
 
 #endif
