@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -161,6 +162,28 @@ static void cli_render_phase(void *user, const char *phase)
     if (c->progress) cli_progress_phase(c->progress, phase);
 }
 
+/* Whether --checkpoint's file can be written, checked before rendering rather than at the
+ * first write: not a directory, in an existing writable directory. Prints the error. */
+static bool cli_check_state_path(const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        fprintf(stderr, "caustic: error: --checkpoint '%s' is a directory; expected a file name\n", path);
+        return false;
+    }
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    if (!slash) snprintf(dir, sizeof dir, ".");
+    else if (slash == path) snprintf(dir, sizeof dir, "/");
+    else snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    if (access(dir, W_OK | X_OK) != 0) {
+        fprintf(stderr, "caustic: error: --checkpoint '%s': directory '%s' is not writable: %s\n", path, dir,
+                strerror(errno));
+        return false;
+    }
+    return true;
+}
+
 /* The checks of --checkpoint and --resume, and the resumed film (*resume, NULL without
  * --resume). Returns an exit code. */
 static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const CstRenderSettings *settings,
@@ -177,6 +200,7 @@ static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const Cst
                 a->checkpoint_path ? "checkpoint" : "resume", cst_integrator_name(rs.integrator));
         return CLI_EXIT_USAGE;
     }
+    if (a->checkpoint_path && !cli_check_state_path(a->checkpoint_path)) return CLI_EXIT_USAGE;
     if (!a->resume_path) return CLI_EXIT_OK;
     CstError err = {0};
     CstStatus st = cst_film_state_read(a->resume_path, scene, settings, scene_id, resume, &err);

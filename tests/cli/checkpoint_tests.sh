@@ -51,6 +51,9 @@ d=$TMP/refuse
 harness_run "$d" 60 render "${SMALL[@]}" --spp 4 -o ref.pfm --checkpoint ok.state
 harness_run "$d" 60 render "${SMALL[@]}" --integrator sppm --spp 2 -o x.pfm --checkpoint x.state
 expect "sppm --checkpoint refused" 2 "sppm integrator cannot be checkpointed" && check "sppm: no state" test ! -e "$d/x.state"
+harness_run "$d" 60 render "${SMALL[@]}" --spp 2 -o x.pfm --checkpoint no/such/dir/s.state
+expect "a checkpoint in a missing directory: refused before rendering" 2 "directory 'no/such/dir' is not writable" &&
+    check "no image for a refused checkpoint" test ! -e "$d/x.pfm"
 harness_run "$d" 60 render "${SMALL[@]}" --checkpoint-every 5 -o x.pfm
 expect "--checkpoint-every without --checkpoint" 2 "needs --checkpoint"
 harness_run "$d" 60 render "${SMALL[@]}" --spp 8 --seed 3 -o x.pfm --resume ok.state
