@@ -17,7 +17,8 @@ typedef enum ArgsOpt {
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
     ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
-    ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER
+    ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER,
+    ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -58,6 +59,9 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"max-depth",  0,   ARGS_VALUE,  ARGS_OPT_MAX_DEPTH},
     {"json",       0,   ARGS_OPTIONAL_VALUE, ARGS_OPT_JSON},  /* --json or --json=FILE */
     {"force",      0,   ARGS_FLAG,  ARGS_OPT_FORCE},
+    {"checkpoint", 0,   ARGS_VALUE, ARGS_OPT_CHECKPOINT},
+    {"checkpoint-every", 0, ARGS_VALUE, ARGS_OPT_CHECKPOINT_EVERY},
+    {"resume",     0,   ARGS_VALUE, ARGS_OPT_RESUME},
     {"quiet",      'q', ARGS_FLAG,  ARGS_OPT_QUIET},
     {"help",       'h', ARGS_FLAG,  ARGS_OPT_HELP},
 };
@@ -285,6 +289,22 @@ static bool args_parse_crop(const char *value, CstRenderSettings *s, ArgsError *
     return true;
 }
 
+/* --checkpoint FILE, --resume FILE, --checkpoint-every SECONDS. */
+static bool args_apply_checkpoint(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
+{
+    if (o->id == ARGS_OPT_CHECKPOINT_EVERY) {
+        if (args_parse_seconds(value, &out->checkpoint_every)) return true;
+        args_fail(err, false, "--checkpoint-every: expected a positive number of seconds, got '%s'", value);
+        return false;
+    }
+    if (value[0] == '\0') {
+        args_fail(err, false, "--%s: expected a file name, got ''", o->long_name);
+        return false;
+    }
+    *(o->id == ARGS_OPT_CHECKPOINT ? &out->checkpoint_path : &out->resume_path) = value;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -425,6 +445,8 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     case ARGS_OPT_FORCE:
         out->force = true;
         return true;
+    case ARGS_OPT_CHECKPOINT: case ARGS_OPT_RESUME: case ARGS_OPT_CHECKPOINT_EVERY:
+        return args_apply_checkpoint(o, value, out, err);
     case ARGS_OPT_HELP:
         if (out->command != ARGS_CMD_HELP) out->help_for = out->command;
         out->command = ARGS_CMD_HELP;
@@ -465,6 +487,14 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
             return false;
         if (!args_apply(o, value, out, err))
             return false;
+    }
+    if (out->checkpoint_every > 0.0 && !out->checkpoint_path) {
+        args_fail(err, true, "--checkpoint-every needs --checkpoint FILE (where to write the state)");
+        return false;
+    }
+    if (out->command == ARGS_CMD_INFO && (out->checkpoint_path || out->resume_path)) {
+        args_fail(err, true, "--checkpoint and --resume are options of 'render', not of 'info'");
+        return false;
     }
     /* --time without --spp: as many samples as fit, whatever spp the scene file sets
      * (the README's promise); with both, whichever comes first. */

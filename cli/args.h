@@ -96,6 +96,11 @@ typedef struct CliArgs {
     bool json;
     const char *json_path;
     bool force;
+    /* render: --checkpoint FILE (state written between passes, every checkpoint_every
+     * seconds, 0 = CLI_CHECKPOINT_EVERY, and at the end), --resume FILE; NULL = none */
+    const char *checkpoint_path;
+    double checkpoint_every;
+    const char *resume_path;
     ArgsCommand help_for; /* ARGS_CMD_HELP: the command whose help (ARGS_CMD_HELP: all) */
     const char *list_kind; /* ARGS_CMD_LIST: NULL = every kind; points into argv */
     BenchArgs bench;   /* ARGS_CMD_BENCH_RAYS only */

@@ -93,6 +93,13 @@ static const char HELP_RENDER[] =
 "                       memory, output path) on stdout, or in FILE\n"
 "      --force          render even when the images' estimated memory exceeds the\n"
 "                       memory available (otherwise refused before rendering, exit 2)\n"
+"      --checkpoint FILE  write the render's state (film sums, samples done, what\n"
+"                       they are valid for) to FILE between passes, every\n"
+"                       --checkpoint-every seconds (default 300) and at the end; not\n"
+"                       for sppm (docs/state-format.md)\n"
+"      --resume FILE    continue the render a state file holds: same scene and\n"
+"                       settings, --spp at least its samples; the image is the one an\n"
+"                       uninterrupted render makes, byte for byte (a mismatch: exit 2)\n"
 "  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
 "  -h, --help           show this help and exit\n"
 "\n"
@@ -223,14 +230,20 @@ static const char HELP_EXIT[] =
 "     or a consistent integrator is not shown to converge\n"
 "  2  bad input or usage: unknown command or option, invalid value, unsupported scene\n"
 "     or output format, a scene file that is missing, unreadable or invalid, an output\n"
-"     directory that does not exist or is not writable (checked before rendering)\n"
+"     directory that does not exist or is not writable (checked before rendering),\n"
+"     a --resume state that is truncated, corrupted or made for another render\n"
+"  130, 143  render: stopped by SIGINT (Ctrl-C) or SIGTERM after the current pass,\n"
+"     the image of the passes done (and --checkpoint's state) written; a second\n"
+"     signal ends caustic at once, writing nothing\n"
 "\n";
 
 static const char HELP_EXAMPLES_RENDER[] =
 "  caustic render --spp 64 -o box.png\n"
 "  caustic render scenes/cornell-box.json --time 60 --threads 8 -o box.exr\n"
 "  caustic render scene.json --width=1920 --height=1080 --integrator=path-nee\n"
-"  caustic render --spp 4 --json=summary.json -o box.png\n";
+"  caustic render --spp 4 --json=summary.json -o box.png\n"
+"  caustic render scene.json --spp 4096 --checkpoint scene.state -o scene.exr\n"
+"  caustic render scene.json --spp 4096 --resume scene.state --checkpoint scene.state -o scene.exr\n";
 static const char HELP_EXAMPLES_BENCH[] =
 "  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n";
 static const char HELP_EXAMPLES_VERIFY[] =

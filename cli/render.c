@@ -3,9 +3,11 @@
  * acceleration structure's build time and memory. */
 #include <errno.h>
 #include <inttypes.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -101,6 +103,180 @@ static void cli_print_summary(const char *output, const CstRenderStats *st)
     fprintf(stderr, "%s\n", line);
 }
 
+/* ------------------------------------------------------------ checkpoints and stops */
+
+/* --checkpoint-every's default: a state every 5 minutes costs nothing measurable (a 512x512
+ * state is 12 MiB, written in tens of milliseconds: docs/benchmarks.md) and loses at most
+ * 5 minutes of work to a kill -9. */
+#define CLI_CHECKPOINT_EVERY 300.0
+
+/* What the pass callback needs: where and how often to write the state, the stop request,
+ * and what it did, for the summary. */
+typedef struct CliPasses {
+    const CstScene *scene;
+    const CstRenderSettings *settings;
+    char scene_id[96];        /* what a state file is keyed to (cli_passes_setup) */
+    const char *checkpoint;  /* NULL: no state files */
+    double every, last_write; /* seconds; the render's elapsed time of the last write */
+    int passes;               /* completed */
+    int written_spp;          /* samples in the last state written, -1 = none */
+    int writes;
+    double write_seconds;     /* all writes together */
+    CstStatus failed;         /* a write failed: the render stops */
+    CstError err;
+    CliProgress *progress;    /* NULL: quiet */
+} CliPasses;
+
+static int cli_pass_done(void *user, const CstFilm *film, const CstPassInfo *info)
+{
+    CliPasses *c = user;
+    c->passes++;
+    const int stop = cli_signals_stop_requested() != 0;
+    if (c->checkpoint && (info->last || stop || info->elapsed_seconds - c->last_write >= c->every)) {
+        double t0 = cli_clock_seconds();
+        CstImageWriteOptions wo = {NULL, 0, cli_signals_temp_file, NULL};
+        CstStatus st = cst_film_state_write(c->checkpoint, film, c->scene, c->settings, c->scene_id, &wo, &c->err);
+        c->write_seconds += cli_clock_seconds() - t0;
+        c->last_write = info->elapsed_seconds;
+        if (st != CST_OK) {
+            c->failed = st;
+            return 1;
+        }
+        c->writes++;
+        c->written_spp = info->samples_done;
+    }
+    return stop;
+}
+
+/* The progress callback of every render: the display (unless quiet), and a stop request
+ * that comes before any pass is complete cancels at once: there is nothing to keep. */
+static int cli_render_progress(void *user, double fraction, double elapsed)
+{
+    CliPasses *c = user;
+    if (cli_signals_stop_requested() && c->passes == 0) return 1;
+    return c->progress ? cli_progress_report(c->progress, fraction, elapsed) : 0;
+}
+
+static void cli_render_phase(void *user, const char *phase)
+{
+    CliPasses *c = user;
+    if (c->progress) cli_progress_phase(c->progress, phase);
+}
+
+/* Whether --checkpoint's file can be written, checked before rendering rather than at the
+ * first write: not a directory, in an existing writable directory. Prints the error. */
+static bool cli_check_state_path(const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        fprintf(stderr, "caustic: error: --checkpoint '%s' is a directory; expected a file name\n", path);
+        return false;
+    }
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    if (!slash) snprintf(dir, sizeof dir, ".");
+    else if (slash == path) snprintf(dir, sizeof dir, "/");
+    else snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    if (access(dir, W_OK | X_OK) != 0) {
+        fprintf(stderr, "caustic: error: --checkpoint '%s': directory '%s' is not writable: %s\n", path, dir,
+                strerror(errno));
+        return false;
+    }
+    return true;
+}
+
+/* The checks of --checkpoint and --resume, and the resumed film (*resume, NULL without
+ * --resume). Returns an exit code. */
+static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const CstRenderSettings *settings,
+                              const char *scene_id, CstFilm **resume)
+{
+    *resume = NULL;
+    if (!a->checkpoint_path && !a->resume_path) return CLI_EXIT_OK;
+    CstRenderSettings rs;
+    cst_render_settings_resolve(scene, settings, &rs);
+    if (!cst_integrator_resumable(rs.integrator)) {
+        fprintf(stderr, "caustic: error: --%s: the %s integrator cannot be checkpointed or resumed yet (its state "
+                        "is more than the film's sums); expected path, path-nee, path-bsdf, whitted, photon, light, "
+                        "bdpt or vcm, or no --checkpoint/--resume\n",
+                a->checkpoint_path ? "checkpoint" : "resume", cst_integrator_name(rs.integrator));
+        return CLI_EXIT_USAGE;
+    }
+    if (a->checkpoint_path && !cli_check_state_path(a->checkpoint_path)) return CLI_EXIT_USAGE;
+    if (!a->resume_path) return CLI_EXIT_OK;
+    CstError err = {0};
+    CstStatus st = cst_film_state_read(a->resume_path, scene, settings, scene_id, resume, &err);
+    if (st != CST_OK) {
+        cli_print_error(&err, st);
+        return cli_exit_code(st, CLI_STAGE_LOAD);
+    }
+    return CLI_EXIT_OK;
+}
+
+/* Before the render: the scene's id, the resumed state (*resume), the pass callback and the
+ * progress callbacks in `settings`. Returns an exit code. */
+static int cli_passes_setup(const CliArgs *a, const CstScene *scene, const CliMetadata *meta, CliPasses *passes,
+                            CliProgress *progress, CstRenderSettings *settings, CstFilm **resume)
+{
+    /* The scene file's bytes (files it includes are not hashed; the scene's counts are in
+     * the key too: docs/state-format.md). */
+    if (!a->scene_path) snprintf(passes->scene_id, sizeof passes->scene_id, "builtin:cornell-box");
+    else if (meta->sha256[0]) snprintf(passes->scene_id, sizeof passes->scene_id, "sha256:%s", meta->sha256);
+    else snprintf(passes->scene_id, sizeof passes->scene_id, "unhashed");
+    int code = cli_prepare_resume(a, scene, settings, passes->scene_id, resume);
+    if (code != CLI_EXIT_OK) return code;
+    passes->scene = scene;
+    passes->settings = settings;
+    passes->checkpoint = a->checkpoint_path;
+    passes->every = a->checkpoint_every > 0.0 ? a->checkpoint_every : CLI_CHECKPOINT_EVERY;
+    passes->written_spp = -1;
+    passes->progress = a->quiet ? NULL : progress;
+    settings->resume = *resume;
+    settings->pass_done = cli_pass_done;
+    settings->pass_user = passes;
+    settings->progress = cli_render_progress;
+    settings->progress_phase = cli_render_phase;
+    settings->progress_user = passes;
+    return CLI_EXIT_OK;
+}
+
+/* Right after the render: a stop before any pass (nothing to write) or a failed state
+ * write. Returns an exit code to end with, or -1 to go on. */
+static int cli_after_render(const CliArgs *a, CstStatus status, const CliPasses *passes, CliProgress *progress,
+                            int stop_signal, int spp)
+{
+    if (status == CST_ERR_CANCELLED && stop_signal) {
+        if (!a->quiet) cli_progress_abort(progress);
+        fprintf(stderr, "caustic: interrupted before the first pass was complete: nothing written\n");
+        return 128 + stop_signal;
+    }
+    if (status == CST_OK && passes->failed != CST_OK) {
+        if (!a->quiet) cli_progress_abort(progress);
+        cli_print_error(&passes->err, passes->failed);
+        fprintf(stderr, "caustic: the render stopped because its checkpoint could not be written; the image of "
+                        "the %d spp done is written next\n", spp);
+    }
+    return -1;
+}
+
+/* After the image is written: the states written, and the exit code of a failed state write
+ * or a stop (or -1 to go on). */
+static int cli_report_passes(const CliArgs *a, const CliPasses *passes, const CstRenderStats *stats,
+                             const char *output, int stop_signal)
+{
+    if (passes->writes > 0 && !a->quiet)
+        fprintf(stderr, "caustic: wrote the state %s: %d spp (%d write%s, %.1f ms each, %.2f%% of the render)\n",
+                a->checkpoint_path, passes->written_spp, passes->writes, passes->writes == 1 ? "" : "s",
+                1e3 * passes->write_seconds / passes->writes,
+                stats->seconds > 0.0 ? 100.0 * passes->write_seconds / stats->seconds : 0.0);
+    if (passes->failed != CST_OK) return cli_exit_code(passes->failed, CLI_STAGE_WRITE);
+    if (!stats->stopped) return -1;
+    fprintf(stderr, "caustic: interrupted (%s) after %d spp: wrote %s%s%s%s\n",
+            stop_signal == SIGINT ? "SIGINT" : "SIGTERM", stats->spp, output, a->checkpoint_path ? " and " : "",
+            a->checkpoint_path ? a->checkpoint_path : "",
+            a->checkpoint_path ? "; continue with --resume and the same settings" : "");
+    return 128 + stop_signal;
+}
+
 /* ------------------------------------------------------------ commands */
 
 /* The output path: -o, else the scene's "output", else the scene's name with .png (the
@@ -140,6 +316,8 @@ int cli_render(const CliArgs *a)
     CliProgress progress = {.tty = isatty(STDERR_FILENO) == 1};
     CstRenderSettings settings = a->settings;
     CstRenderStats stats = {0};
+    CstFilm *resume = NULL;
+    CliPasses passes = {0};
     CliMetadata meta = {0};
     CliSummary summary = {.scene = a->scene_path};
     FILE *json = NULL;
@@ -189,15 +367,26 @@ int cli_render(const CliArgs *a)
         code = CLI_EXIT_USAGE;
         goto done;
     }
+    cli_metadata_begin(&meta, a->scene_path);
+    if ((code = cli_passes_setup(a, scene, &meta, &passes, &progress, &settings, &resume)) != CLI_EXIT_OK)
+        goto done;
+    code = CLI_EXIT_INTERNAL;
     if (!a->quiet) {
-        settings.progress = cli_progress_report;
-        settings.progress_phase = cli_progress_phase;
-        settings.progress_user = &progress;
         cli_print_job(a, scene, &settings, output);
+        if (resume)
+            fprintf(stderr, "caustic: resuming from %s: %d spp done\n", a->resume_path, cst_film_spp(resume));
     }
 
-    cli_metadata_begin(&meta, a->scene_path);
+    /* During the render the first SIGINT or SIGTERM stops it after its pass, and the image
+     * of the passes done (and the state, with --checkpoint) is written; during that write,
+     * as during any image write, a signal ends the process and leaves no partial file. */
+    cli_signals_stop_arm();
     status = cst_render(scene, &settings, &film, &stats, &err);
+    cli_signals_stop_disarm();
+    const int stop_signal = cli_signals_stop_requested();
+    if ((code = cli_after_render(a, status, &passes, &progress, stop_signal, stats.spp)) >= 0)
+        goto done;
+    code = CLI_EXIT_INTERNAL;
     /* Too many NaN/Inf samples: the film is still written, for inspection, then exit 1. */
     CstStatus render_status = status;
     CstError render_err = err;
@@ -220,7 +409,6 @@ int cli_render(const CliArgs *a)
         cst_render_settings_resolve(scene, &settings, &used);
         cli_metadata_finish(&meta, &used, &stats);
         CstImageWriteOptions wo = {meta.entry, meta.count, cli_signals_temp_file, NULL};
-        cli_signals_install();
         status = cst_film_write_opt(film, output, &wo, &err);
     }
     if (status != CST_OK) {
@@ -231,6 +419,9 @@ int cli_render(const CliArgs *a)
     summary.write_seconds = cli_clock_seconds() - t_write;
     if (!a->quiet)
         cli_print_summary(output, &stats);
+    if ((code = cli_report_passes(a, &passes, &stats, output, stop_signal)) >= 0)
+        goto done;
+    code = CLI_EXIT_INTERNAL;
     if (render_status != CST_OK) {
         cli_print_error(&render_err, render_status);
         fprintf(stderr, "caustic: %s was written for inspection only: the render failed\n", output);
@@ -255,6 +446,7 @@ int cli_render(const CliArgs *a)
     }
 
 done:
+    cst_film_destroy(resume);
     cli_metadata_free(&meta);
     if (json && json != stdout)
         fclose(json);

@@ -1,5 +1,6 @@
-/* Signal handlers that leave no temporary image file behind (cli/signals.h). Handlers
- * call only async-signal-safe functions (POSIX.1-2017 2.4.3): unlink, sigaction, raise. */
+/* Signal handlers that leave no temporary image file behind, and the render's stop request
+ * (cli/signals.h). Handlers call only async-signal-safe functions (POSIX.1-2017 2.4.3):
+ * unlink, sigaction, raise, write. */
 #define _POSIX_C_SOURCE 200809L
 
 #include "signals.h"
@@ -14,11 +15,22 @@
 static char cli_temp_path[4096 + 64];
 static volatile sig_atomic_t cli_temp_set;
 static bool cli_signals_installed;
+/* cli_signals_stop_arm: the first SIGINT or SIGTERM only asks the render to stop
+ * (cli_stop_signal); the next one, or SIGHUP, ends the process as before. */
+static volatile sig_atomic_t cli_stop_armed, cli_stop_signal;
 
 static const int cli_fatal_signals[] = {SIGINT, SIGTERM, SIGHUP};
 
 static void cli_signal_handler(int sig)
 {
+    if (cli_stop_armed && !cli_stop_signal && (sig == SIGINT || sig == SIGTERM)) {
+        cli_stop_signal = sig;
+        static const char msg[] = "\ncaustic: interrupted: stopping after the current pass to write what is "
+                                  "done (interrupt again to abort at once, writing nothing)\n";
+        ssize_t w = write(STDERR_FILENO, msg, sizeof msg - 1);
+        (void)w;
+        return;
+    }
     if (cli_temp_set) unlink(cli_temp_path);
     /* Die of the signal itself, so the shell sees 128 + sig: the default action, raised
      * again; it is delivered when the handler returns (sig is blocked until then). */
@@ -67,4 +79,20 @@ void cli_signals_temp_file(void *user, const char *temp_path)
         cli_temp_set = 1;
     }
     pthread_sigmask(SIG_SETMASK, &old, NULL);
+}
+
+void cli_signals_stop_arm(void)
+{
+    cli_signals_install();
+    cli_stop_armed = 1;
+}
+
+void cli_signals_stop_disarm(void)
+{
+    cli_stop_armed = 0;
+}
+
+int cli_signals_stop_requested(void)
+{
+    return cli_stop_signal;
 }

@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_json fuzz_pbrt fuzz_mesh fuzz_image fuzz_ply fuzz_spd fuzz_bsdf)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_json fuzz_pbrt fuzz_mesh fuzz_image fuzz_ply fuzz_spd fuzz_bsdf fuzz_state)
 jobs=${FUZZ_JOBS:-2}
 build=${FUZZ_BUILD_DIR:-build-fuzz}
 
@@ -22,7 +22,7 @@ CC=clang cmake -S . -B "$build" -DCST_FUZZ=ON -DCST_BUILD_TESTS=OFF -DCST_EMBREE
 cmake --build "$build" -j2 --target "${targets[@]}"
 
 # Per target: the longest input worth mutating, and its dictionary (if any).
-declare -A max_len=([fuzz_scene_json]=8192 [fuzz_pbrt]=8192 [fuzz_mesh]=16384 [fuzz_image]=4096 [fuzz_ply]=16384 [fuzz_spd]=4096
+declare -A max_len=([fuzz_scene_json]=8192 [fuzz_pbrt]=8192 [fuzz_mesh]=16384 [fuzz_image]=4096 [fuzz_ply]=16384 [fuzz_spd]=4096 [fuzz_state]=4096
                     [fuzz_bsdf]=8192)
 declare -A dict=([fuzz_scene_json]=tests/fuzz/scene_json.dict [fuzz_pbrt]=tests/fuzz/pbrt.dict
                  [fuzz_mesh]=tests/fuzz/mesh.dict [fuzz_image]=tests/fuzz/image.dict

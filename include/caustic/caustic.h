@@ -643,6 +643,25 @@ typedef int (*CstProgressFn)(void *user, double fraction_done, double elapsed_se
 #define CST_PHASE_RENDER  "render"
 typedef void (*CstPhaseFn)(void *user, const char *phase);
 
+struct CstFilm; /* typedef'd as CstFilm below, with the films' calls */
+
+/* What CstRenderSettings.pass_done is told after each completed pass of samples. */
+typedef struct CstPassInfo {
+    int samples_done; /* every pixel holds samples [0, samples_done) (light, bdpt, vcm, sppm:
+                       * iterations), a resumed state's included */
+    int last;         /* 1: no pass follows (the sample count or the time limit is reached) */
+    double elapsed_seconds;
+} CstPassInfo;
+/* Called from the calling thread between passes, with the render's film as it is then: the
+ * whole width x height image (a crop's pixels outside it stay 0), cst_film_spp() =
+ * samples_done, to be written with cst_film_state_write (SPPM's film holds its estimate
+ * only at the end). Returns 0 to go on; nonzero stops the render here: cst_render then
+ * finishes with the samples done as if they had been asked for, returns CST_OK and sets
+ * CstRenderStats.stopped. With pass_done set, passes last about a second at most
+ * (docs/cli.md, "Checkpoints"), whatever the sample count, so a stop comes soon; the image
+ * does not depend on how the samples are cut into passes. */
+typedef int (*CstPassFn)(void *user, const struct CstFilm *film, const CstPassInfo *info);
+
 /* The value cst_render_settings_init gives every int and double field of
  * CstRenderSettings: "not set here: the scene's value, else the default". Compare with
  * == CST_UNSET (doubles hold it exactly). */
@@ -715,6 +734,16 @@ typedef struct CstRenderSettings {
      * becomes 2 alpha clamped to [0.1, 0.3], smooth conductors and dielectrics included.
      * Biased (caustics through glass and mirrors blur), fewer fireflies. 0 = off (the default) */
     int regularize;
+    /* Checkpoint and resume (docs/state-format.md). resume: NULL, or a film read by
+     * cst_film_state_read for this scene and these settings: the render continues with
+     * sample cst_film_spp(resume) of every pixel (iteration, for light, bdpt and vcm), and
+     * its film is bit for bit the one an uninterrupted render would have made. Not for sppm
+     * (CST_ERR_UNSUPPORTED: cst_integrator_resumable). The caller keeps it; cst_render only
+     * reads it. pass_done, pass_user: see CstPassFn; NULL = no call. Neither belongs to a
+     * scene (cst_scene_set_render_settings refuses them). */
+    const struct CstFilm *resume;
+    CstPassFn pass_done;
+    void *pass_user;
 } CstRenderSettings;
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit
@@ -751,6 +780,9 @@ typedef struct CstRenderStats {
     int spp, threads, width, height;
     CstIntegrator integrator;
     CstFilter filter;
+    int first_spp;            /* samples (iterations) the render resumed from; 0 = a fresh one.
+                               * spp counts them, samples and rays only this render's work */
+    int stopped;              /* 1: CstRenderSettings.pass_done stopped it before its end */
 } CstRenderStats;
 
 typedef struct CstFilm CstFilm;
@@ -834,6 +866,36 @@ typedef struct CstImageWriteOptions {
  * `path` left behind by processes that no longer exist (docs/cli.md). */
 CST_API CstStatus cst_film_write_opt(const CstFilm *film, const char *path,
                                      const CstImageWriteOptions *options, CstError *err);
+
+/* ---------------------------------------------------------------- film state files
+ * A render's film with what it is valid for (docs/state-format.md): per-pixel sums, sums of
+ * squares, sample counts and AOV sums, the samples covered, and a key of every value that
+ * changes the sums (library version, scene, size, crop, integrator, seed, sampler, depths,
+ * photons and radius, colour mode, clamp, light sampler, acceleration structure, AOVs).
+ * The sample count asked for is not in the key (a resume may extend it), except with the
+ * stratified sampler, whose strata depend on it. scene_id: the caller's name for the
+ * scene's content (the CLI: SHA-256 of the scene file), stored and compared as text; the
+ * scene's counts (triangles, spheres, emitters, materials, lights) are added to the key. */
+
+/* 1 when a render with this integrator can be checkpointed and resumed (every one but
+ * sppm, whose per-pixel radii and photon statistics are not film sums), else 0. */
+CST_API int cst_integrator_resumable(CstIntegrator integrator);
+/* Writes film (the one CstPassFn is given, or a render's uncropped film) as a state file
+ * for `scene` rendered with `settings` (resolved as cst_render resolves them), atomically
+ * (temporary file renamed into place; options: only temp_file is used, may be NULL), so
+ * an interrupted write leaves any previous state intact. CST_ERR_UNSUPPORTED for sppm,
+ * CST_ERR_INVALID_ARG when the film is not the settings' width x height, CST_ERR_IO. */
+CST_API CstStatus cst_film_state_write(const char *path, const CstFilm *film, const CstScene *scene,
+                                       const CstRenderSettings *settings, const char *scene_id,
+                                       const CstImageWriteOptions *options, CstError *err);
+/* Reads a state file and checks it against `scene`, `settings` and scene_id as
+ * cst_film_state_write would key them: a truncated, corrupted or foreign file is
+ * CST_ERR_PARSE ("PATH: truncated ...", "... CRC-32 ..."), a state made for something else
+ * CST_ERR_INVALID_ARG naming each value that differs ("seed: 7 in the state, 8 here"),
+ * and one holding more samples than settings' spp asks for too. On success *out is the
+ * film to pass as CstRenderSettings.resume (caller: cst_film_destroy). */
+CST_API CstStatus cst_film_state_read(const char *path, const CstScene *scene, const CstRenderSettings *settings,
+                                      const char *scene_id, CstFilm **out, CstError *err);
 
 /* ---------------------------------------------------------------- images */
 /* Reads a PNG (sRGB decoded to linear), EXR, PFM or Radiance HDR as linear RGB floats: *rgb (width x

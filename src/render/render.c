@@ -7,6 +7,7 @@
 
 #include <limits.h>
 #include <inttypes.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -28,7 +29,26 @@ typedef struct Driver {
     const CstRenderSettings *st;
     double t0;            /* the render's start */
     double last_progress; /* when progress was last reported: light iterations can be short */
+    bool stopped;         /* pass_done asked to stop */
 } Driver;
+
+/* With a pass_done callback, the longest a pass is planned to take: a stop (Ctrl-C in the
+ * CLI) waits for the pass in progress, and a checkpoint can only be written between
+ * passes. Per-pass costs (a pool dispatch, the callback) are microseconds against it. */
+#define RENDER_PASS_SECONDS 1.0
+
+/* After a pass: tells pass_done, if any, that samples [0, done) are complete. Returns
+ * true when it asked to stop. */
+static bool pass_finished(Driver *d, int done, bool last)
+{
+    const CstRenderSettings *st = d->st;
+    if (!st->pass_done) return false;
+    if (d->it->kind != INTEGRATOR_SPPM) d->it->film->spp = done;
+    CstPassInfo info = {done, last, clock_seconds() - d->t0};
+    if (st->pass_done(st->pass_user, d->it->film, &info) == 0) return false;
+    d->stopped = !last;
+    return true;
+}
 
 /* Runs one step on the pool while the calling thread reports progress, f of the render
  * being done_before + fraction * (the step's share of its pass). Returns
@@ -75,23 +95,27 @@ static CstStatus run_pass(Driver *d, int first, int count, double done_before, d
     }
 }
 
-/* Every pass of the render; *done: the samples completed. */
+/* Every pass of the render, from sample *done (a resumed film's count, else 0); *done:
+ * the samples completed. Every pixel always holds the same number of samples, each
+ * pixel's in sample order, so how the samples are cut into passes never changes the
+ * image (light, bdpt and vcm: iterations, each a function of its index alone). */
 static CstStatus run_passes(Driver *d, int *done, CstError *err)
 {
     const CstRenderSettings *st = d->st;
-    *done = 0;
+    const int start = *done;
     /* Fixed sample count: one pass. With camera tiles too few to show progress (a small
      * image or crop at high spp), up to RENDER_SPLIT_PASSES passes of consecutive
-     * samples: each pixel still gets its samples in order, so the image is the same bit
-     * for bit. */
-    if (st->time_limit <= 0.0) {
+     * samples. */
+    if (st->time_limit <= 0.0 && !st->pass_done) {
         const IntegratorKind kind = d->it->kind;
-        int passes = 1;
+        const int todo = st->spp - start;
+        int passes = todo > 0 ? 1 : 0;
         if ((kind == INTEGRATOR_PATH || kind == INTEGRATOR_WHITTED || kind == INTEGRATOR_PHOTON) &&
             d->it->num_tiles < 8 * st->threads)
-            passes = st->spp < RENDER_SPLIT_PASSES ? st->spp : RENDER_SPLIT_PASSES;
+            passes = todo < RENDER_SPLIT_PASSES ? todo : RENDER_SPLIT_PASSES;
         for (int k = 0; k < passes; k++) {
-            int first = (int)((int64_t)st->spp * k / passes), last = (int)((int64_t)st->spp * (k + 1) / passes);
+            int first = start + (int)((int64_t)todo * k / passes);
+            int last = start + (int)((int64_t)todo * (k + 1) / passes);
             CstStatus status = run_pass(d, first, last - first, (double)first / st->spp,
                                         (double)(last - first) / st->spp, err);
             if (status != CST_OK) return status;
@@ -99,27 +123,33 @@ static CstStatus run_passes(Driver *d, int *done, CstError *err)
         }
         return CST_OK;
     }
-    /* Time budget: passes of growing size until the next one would not fit (or the
-     * sample cap is reached; without one, INT_MAX). Every pixel always holds the same
-     * number of samples. */
+    /* Passes of growing size until the sample cap is reached (without one, INT_MAX) or, with
+     * a time budget, the next one would not fit; with pass_done, none planned longer than
+     * RENDER_PASS_SECONDS. */
     const int cap = st->spp > 0 ? st->spp : INT_MAX;
+    const double budget = st->time_limit > 0.0 ? st->time_limit : (double)INFINITY;
     int pass = 1;
     for (;;) {
         if (pass > cap - *done) pass = cap - *done;
-        if (pass <= 0) return CST_OK;
+        if (pass <= 0) {
+            pass_finished(d, *done, true); /* a resume with nothing left to render */
+            return CST_OK;
+        }
         double pass_t0 = clock_seconds();
         double frac = st->spp > 0 ? (double)*done / st->spp : 0.0;
         CstStatus status = run_pass(d, *done, pass, frac, st->spp > 0 ? (double)pass / st->spp : 0.0, err);
         if (status != CST_OK) return status;
         *done += pass;
         double now = clock_seconds(), pass_time = now - pass_t0;
-        double left = st->time_limit - (now - d->t0);
-        if (left <= 0.0) return CST_OK;
+        double left = budget - (now - d->t0);
         /* Next pass: the largest of 2x, x, x/2, ... that is predicted to fit in the time left. */
         double per_spp = pass_time / pass;
         int next = pass <= INT_MAX / 2 ? pass * 2 : pass;
         while (next > 1 && per_spp * next > left) next /= 2;
-        if (per_spp * next > left) return CST_OK;
+        if (st->pass_done)
+            while (next > 1 && per_spp * next > RENDER_PASS_SECONDS) next /= 2;
+        bool last = *done >= cap || left <= 0.0 || per_spp * next > left;
+        if (pass_finished(d, *done, last) || last) return CST_OK;
         pass = next;
     }
 }
@@ -156,7 +186,7 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
 }
 
 static void fill_stats(CstRenderStats *stats, const CstRenderSettings *st, const Integrator *it,
-                       const IntegratorWorker *workers, int samples, uint64_t rays, double seconds)
+                       const IntegratorWorker *workers, int first, int samples, uint64_t rays, double seconds)
 {
     const int cw = st->crop[1] - st->crop[0], ch = st->crop[3] - st->crop[2];
     memset(stats, 0, sizeof *stats);
@@ -173,7 +203,8 @@ static void fill_stats(CstRenderStats *stats, const CstRenderSettings *st, const
      * points); camera passes cover the crop. */
     bool whole = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR || it->kind == INTEGRATOR_SPPM;
     uint64_t per_spp = whole ? (uint64_t)st->width * (uint64_t)st->height : (uint64_t)cw * (uint64_t)ch;
-    stats->samples = (uint64_t)stats->spp * per_spp;
+    stats->samples = (uint64_t)(samples - first) * per_spp;
+    stats->first_spp = first;
     stats->rays = rays;
     integrator_counters(it, &stats->rays, &stats->nonfinite);
     for (int i = 0; i < st->threads; i++) {
@@ -216,6 +247,18 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "does not trace; expected path, path-nee, path-bsdf, whitted, photon, bdpt or vcm "
                         "(the variance AOV works with every integrator)",
                         cst_integrator_name(st.integrator));
+    const Film *resume = st.resume;
+    if (resume && !cst_integrator_resumable(st.integrator))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator cannot resume from a state file yet",
+                        cst_integrator_name(st.integrator));
+    if (resume && (resume->width != st.width || resume->height != st.height ||
+                   (!resume->aov) != !(st.aovs & FILM_AOV_FIRST_HIT) || resume->spp < 0 ||
+                   (st.spp > 0 && resume->spp > st.spp)))
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "resume: a %dx%d film%s of %d samples for a %dx%d render%s of %d: expected the same "
+                        "size and AOVs, and no more samples (cst_film_state_read checks a state file)",
+                        resume->width, resume->height, resume->aov ? " with AOV sums" : "", resume->spp, st.width,
+                        st.height, (st.aovs & FILM_AOV_FIRST_HIT) ? " with AOV sums" : "", st.spp);
     Film *film = film_create(st.width, st.height);
     if (film) film_set_white_balance(film, st.white_balance);
     if (film && !film_set_output(film, st.aovs, st.exposure, st.png_linear)) {
@@ -224,10 +267,19 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     }
     IntegratorWorker *workers = calloc((size_t)st.threads, sizeof *workers);
     Integrator *it = calloc(1, sizeof *it);
-    Driver d = {NULL, it, &st, clock_seconds(), 0.0};
+    Driver d = {NULL, it, &st, clock_seconds(), 0.0, false};
     CstStatus status = CST_OK;
     uint64_t rays = 0;
-    int samples = 0;
+    int samples = 0, first = 0;
+    if (film && resume) {
+        /* The sums as the interrupted render left them: the passes add to them in the
+         * order an uninterrupted render would have. */
+        const size_t n = 3 * (size_t)st.width * (size_t)st.height;
+        memcpy(film->sum, resume->sum, n * sizeof *film->sum);
+        memcpy(film->sum_sq, resume->sum_sq, n * sizeof *film->sum_sq);
+        if (film->aov) memcpy(film->aov, resume->aov, n / 3 * FILM_AOV_STRIDE * sizeof *film->aov);
+        film->spp = samples = first = resume->spp;
+    }
     if (!film || !workers || !it)
         status = cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d film", st.width, st.height);
     else if ((status = threadpool_create(st.threads, &d.pool)) != CST_OK)
@@ -258,7 +310,8 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     if (status == CST_OK) {
         if (st.progress) st.progress(st.progress_user, 1.0, seconds);
         CstRenderStats done;
-        fill_stats(&done, &st, it, workers, samples, rays, seconds);
+        fill_stats(&done, &st, it, workers, first, samples, rays, seconds);
+        done.stopped = d.stopped;
         if (stats) *stats = done;
         *out = film;
         /* Issue 25: a render that lost many samples to NaN/Inf fails, film kept (caustic.h). */

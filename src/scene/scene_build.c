@@ -986,6 +986,9 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
     if (setting_set(r->threads, 0) || r->progress || r->progress_user)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: threads, progress and progress_user belong to a render, "
                         "not to a scene; expected them unset (cst_render_settings_init)", fn);
+    if (r->resume || r->pass_done || r->pass_user)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: resume, pass_done and pass_user belong to a render, "
+                        "not to a scene; expected them NULL (cst_render_settings_init)", fn);
     const int ints[] = {r->width, r->height, r->spp, r->rr_depth, r->photons};
     static const char *const names[] = {"width", "height", "spp", "rr_depth", "photons"};
     for (int k = 0; k < 5; k++)
