@@ -5,6 +5,7 @@
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "geometry/sphere.h"
@@ -154,6 +155,11 @@ typedef struct EmitterSampler {
     float radius;
     LightSelect nee;       /* NEE's choice (emitter_sampler_set_nee); POWER after init */
     struct LightBvh *bvh;  /* with nee == LIGHT_SELECT_BVH, else NULL; owned */
+    /* NEE (light_sample_nee and its densities) samples a triangle emitter by the solid
+     * angle it subtends (sampling/spherical.h) where pbrt-v4 does; false: by area, as
+     * light paths and the bidirectional connections always do. The environment's portal
+     * (EnvMap.portal), when it has one, likewise serves NEE only. */
+    bool solid_angle;
 } EmitterSampler;
 
 /* The geometry NEE needs, borrowed from the scene (scene_emitter_geometry() fills it). */
