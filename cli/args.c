@@ -17,7 +17,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
     ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
-    ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER
+    ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -49,6 +49,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"accel",      0,   ARGS_VALUE,  ARGS_OPT_ACCEL},
     {"sampler",    0,   ARGS_VALUE,  ARGS_OPT_SAMPLER},
     {"light-sampler", 0, ARGS_VALUE, ARGS_OPT_LIGHT_SAMPLER},
+    {"light-sampling", 0, ARGS_VALUE, ARGS_OPT_LIGHT_SAMPLING},
     {"exposure",   0,   ARGS_VALUE,  ARGS_OPT_EXPOSURE},
     {"png-linear", 0,   ARGS_FLAG,  ARGS_OPT_PNG_LINEAR},
     {"spectral",   0,   ARGS_FLAG,  ARGS_OPT_SPECTRAL},
@@ -369,6 +370,13 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
             return false;
         }
         out->light_sampler = value;
+        return true;
+    case ARGS_OPT_LIGHT_SAMPLING:
+        if (strcmp(value, "area") && strcmp(value, "solid_angle")) {
+            args_fail(err, false, "--light-sampling: unknown light sampling '%s' (valid: area, solid_angle)", value);
+            return false;
+        }
+        out->light_sampling = value;
         return true;
     case ARGS_OPT_SAMPLER:
         s->sampler = cst_sampler_from_name(value);
