@@ -286,6 +286,25 @@ static bool args_parse_crop(const char *value, CstRenderSettings *s, ArgsError *
     return true;
 }
 
+/* --light-sampler and --light-sampling: names checked here, applied to the scene later */
+static bool args_apply_light(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
+{
+    if (o->id == ARGS_OPT_LIGHT_SAMPLER) {
+        if (strcmp(value, "power") && strcmp(value, "bvh") && strcmp(value, "uniform")) {
+            args_fail(err, false, "--light-sampler: unknown light sampler '%s' (valid: power, bvh, uniform)", value);
+            return false;
+        }
+        out->light_sampler = value;
+        return true;
+    }
+    if (strcmp(value, "area") && strcmp(value, "solid_angle")) {
+        args_fail(err, false, "--light-sampling: unknown light sampling '%s' (valid: area, solid_angle)", value);
+        return false;
+    }
+    out->light_sampling = value;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -365,19 +384,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         out->accel = value;
         return true;
     case ARGS_OPT_LIGHT_SAMPLER:
-        if (strcmp(value, "power") && strcmp(value, "bvh") && strcmp(value, "uniform")) {
-            args_fail(err, false, "--light-sampler: unknown light sampler '%s' (valid: power, bvh, uniform)", value);
-            return false;
-        }
-        out->light_sampler = value;
-        return true;
-    case ARGS_OPT_LIGHT_SAMPLING:
-        if (strcmp(value, "area") && strcmp(value, "solid_angle")) {
-            args_fail(err, false, "--light-sampling: unknown light sampling '%s' (valid: area, solid_angle)", value);
-            return false;
-        }
-        out->light_sampling = value;
-        return true;
+    case ARGS_OPT_LIGHT_SAMPLING: return args_apply_light(o, value, out, err);
     case ARGS_OPT_SAMPLER:
         s->sampler = cst_sampler_from_name(value);
         if (s->sampler == CST_SAMPLER_DEFAULT) {
