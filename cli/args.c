@@ -17,7 +17,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_INTEGRATOR, ARGS_OPT_FILTER, ARGS_OPT_WIDTH, ARGS_OPT_HEIGHT,
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
     ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
-    ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER,
+    ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING,
     ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME
 } ArgsOpt;
 
@@ -50,6 +50,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"accel",      0,   ARGS_VALUE,  ARGS_OPT_ACCEL},
     {"sampler",    0,   ARGS_VALUE,  ARGS_OPT_SAMPLER},
     {"light-sampler", 0, ARGS_VALUE, ARGS_OPT_LIGHT_SAMPLER},
+    {"light-sampling", 0, ARGS_VALUE, ARGS_OPT_LIGHT_SAMPLING},
     {"exposure",   0,   ARGS_VALUE,  ARGS_OPT_EXPOSURE},
     {"png-linear", 0,   ARGS_FLAG,  ARGS_OPT_PNG_LINEAR},
     {"spectral",   0,   ARGS_FLAG,  ARGS_OPT_SPECTRAL},
@@ -305,6 +306,25 @@ static bool args_apply_checkpoint(const ArgsOptSpec *o, const char *value, CliAr
     return true;
 }
 
+/* --light-sampler and --light-sampling: names checked here, applied to the scene later */
+static bool args_apply_light(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
+{
+    if (o->id == ARGS_OPT_LIGHT_SAMPLER) {
+        if (strcmp(value, "power") && strcmp(value, "bvh") && strcmp(value, "uniform")) {
+            args_fail(err, false, "--light-sampler: unknown light sampler '%s' (valid: power, bvh, uniform)", value);
+            return false;
+        }
+        out->light_sampler = value;
+        return true;
+    }
+    if (strcmp(value, "area") && strcmp(value, "solid_angle")) {
+        args_fail(err, false, "--light-sampling: unknown light sampling '%s' (valid: area, solid_angle)", value);
+        return false;
+    }
+    out->light_sampling = value;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -384,12 +404,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         out->accel = value;
         return true;
     case ARGS_OPT_LIGHT_SAMPLER:
-        if (strcmp(value, "power") && strcmp(value, "bvh") && strcmp(value, "uniform")) {
-            args_fail(err, false, "--light-sampler: unknown light sampler '%s' (valid: power, bvh, uniform)", value);
-            return false;
-        }
-        out->light_sampler = value;
-        return true;
+    case ARGS_OPT_LIGHT_SAMPLING: return args_apply_light(o, value, out, err);
     case ARGS_OPT_SAMPLER:
         s->sampler = cst_sampler_from_name(value);
         if (s->sampler == CST_SAMPLER_DEFAULT) {

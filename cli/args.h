@@ -87,6 +87,7 @@ typedef struct CliArgs {
     const char *output_path; /* NULL = the scene's "output", else the default name */
     const char *accel;       /* NULL = the scene's choice (default bvh); points into argv */
     const char *light_sampler; /* NULL = the scene's choice (cst_scene_set_light_sampler) */
+    const char *light_sampling; /* NULL = the scene's choice (cst_scene_set_light_sampling) */
     /* Only what the command line set; zero fields defer to the scene, then the library
      * default. progress and progress_user are left for main.c. */
     CstRenderSettings settings;

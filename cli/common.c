@@ -216,6 +216,14 @@ int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds)
             return cli_exit_code(status, CLI_STAGE_LOAD);
         }
     }
+    if (a->light_sampling) {
+        status = cst_scene_set_light_sampling(scene, a->light_sampling, &err);
+        if (status != CST_OK) {
+            cli_print_error(&err, status);
+            cst_scene_destroy(scene);
+            return cli_exit_code(status, CLI_STAGE_LOAD);
+        }
+    }
     *out = scene;
     return CLI_EXIT_OK;
 }

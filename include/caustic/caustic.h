@@ -112,6 +112,13 @@ CST_API CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstErro
  * after: rebuilds it (not during a render). On failure the choice stays. */
 CST_API CstStatus cst_scene_set_light_sampler(CstScene *scene, const char *name, CstError *err);
 
+/* How next-event estimation samples a point on an emitting triangle: "area" (uniform by
+ * area, the default) or "solid_angle" (uniform over the solid angle it subtends, Arvo
+ * 1995, where that is between 3e-4 and 6.22 sr, by area otherwise: pbrt-v4's
+ * Triangle::Sample; less noise from large, close lights). pbrt scenes use "solid_angle".
+ * Before or after cst_scene_commit (not during a render). */
+CST_API CstStatus cst_scene_set_light_sampling(CstScene *scene, const char *name, CstError *err);
+
 typedef struct CstSceneInfo {
     int triangles, spheres, emitters, materials;
     const char *accel;          /* name of the acceleration structure in use */
@@ -493,6 +500,15 @@ CST_API CstStatus cst_scene_set_environment_image(CstScene *scene, const char *p
  * or a 3 x 3 row-major invertible linear map that turns the map's directions into world
  * directions (a rotation, typically); the image is then resampled once, by nearest
  * lookup, into a map of the same size in world space. */
+/* A portal for the environment (pbrt-v4's infinite light "portal"): the four corners of a
+ * rectangle, in order, xyz each, through which the environment lights the scene (a window).
+ * Next-event estimation then samples only directions through it (by the environment's
+ * radiance; Bitterli et al. 2015): less noise indoors; the radiance is unchanged, so a BSDF-
+ * sampled ray still sees the environment in every direction. The environment seen from
+ * behind the window (ax x ay side, ax = p3 - p0, ay = p1 - p0) is what it samples. Applied
+ * at cst_scene_commit to the environment then set; CST_ERR_INVALID_ARG if the points are
+ * not a rectangle. */
+CST_API CstStatus cst_scene_set_environment_portal(CstScene *scene, const float corners[12], CstError *err);
 CST_API CstStatus cst_scene_set_environment_pixels(CstScene *scene, const float *rgb, int width,
                                                    int height, size_t pixel_stride,
                                                    size_t row_stride, const float scale[3],

@@ -9,6 +9,7 @@
 #include "geometry/triangle.h"
 #include "lights/light_bvh.h"
 #include "math/frame.h"
+#include "sampling/spherical.h"
 #include "sampling/warp.h"
 
 /* pbrt-v4's spotlight falloff (SpotLight::I): smoothstep between the cone's cosines. */
@@ -270,13 +271,28 @@ static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, 
     *n = frame_to_world(&f, v3(-sin_a * cosf(phi), -sin_a * sinf(phi), -cos_a));
 }
 
+/* NEE by the solid angle a triangle subtends (s->solid_angle; pbrt-v4 Triangle::Sample(ctx,
+ * u)): when triangle emitter em's solid angle from x lies in [SPH_MIN_SOLID_ANGLE,
+ * SPH_MAX_SOLID_ANGLE], *omega gets it and the direction is drawn uniformly over it (density
+ * 1 / omega per unit solid angle); outside that range, by area. Sampling and the MIS density
+ * both decide here, from the same floats, so they always agree. pbrt-v4's extra bilinear
+ * warp by |cos theta| at the vertices is not applied. */
+static bool tri_solid_angle(const EmitterSampler *s, const EmitterGeometry *g, const Emitter *em, Vec3 x, float *omega)
+{
+    if (!s->solid_angle || (int)em->prim >= g->num_triangles) return false;
+    const int32_t *t = &g->tri_indices[3 * em->prim];
+    *omega = sph_triangle_solid_angle(x, g->positions[t[0]], g->positions[t[1]], g->positions[t[2]]);
+    return *omega >= SPH_MIN_SOLID_ANGLE && *omega <= SPH_MAX_SOLID_ANGLE;
+}
+
 /* light_area_pdf_w for emitter e picked with probability pmf (pdf_a = pmf / area: with
  * the power's pmf the same float as s->pdf_a[e]). */
 static float area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, float pmf, Vec3 x, float dist,
-                        float cos_l)
+                        float cos_l, bool nee)
 {
     const Emitter *em = &s->light[e].u.area;
-    float omc, sin2;
+    float omc, sin2, omega;
+    if (nee && tri_solid_angle(s, g, em, x, &omega)) return pmf / omega;
     if ((int)em->prim >= g->num_triangles &&
         sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
         return pmf / (2.0f * CST_PI * omc);
@@ -285,7 +301,7 @@ static float area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e
 
 float light_area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, float dist, float cos_l)
 {
-    return area_pdf_w(s, g, e, s->by_power.pmf[e], x, dist, cos_l);
+    return area_pdf_w(s, g, e, s->by_power.pmf[e], x, dist, cos_l, false);
 }
 
 /* The emission direction density at a delta light (per unit solid angle) of direction w. */
@@ -302,16 +318,46 @@ static float delta_emit_pdf_w(const Light *l, Vec3 w)
     }
 }
 
+/* A point on triangle emitter e from a direction uniform in its solid angle from x
+ * (tri_solid_angle): where the ray x + t w meets the triangle's plane, with its
+ * texture coordinates. False when the direction misses the plane (rounding at an edge seen
+ * edge-on). */
+static bool tri_sample_solid_angle(const Emitter *e, const EmitterGeometry *g, Vec3 x, Vec2 u, Vec3 *p, Vec2 *uv)
+{
+    const int32_t *t = &g->tri_indices[3 * e->prim];
+    Vec3 a = g->positions[t[0]], b = g->positions[t[1]], c = g->positions[t[2]];
+    Vec3 w;
+    if (!sph_triangle_sample(x, a, b, c, u, &w)) return false;
+    float wn = v3_dot(w, e->n);
+    float tt = v3_dot(v3_sub(a, x), e->n) / wn;
+    if (!(tt > 0.0f) || !isfinite(tt)) return false;
+    *p = v3_madd(x, w, tt);
+    *uv = v2(0.0f, 0.0f);
+    if (e->texture) {
+        /* barycentrics of p by the Gram system of the edges */
+        Vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a), d = v3_sub(*p, a);
+        float d11 = v3_dot(e1, e1), d12 = v3_dot(e1, e2), d22 = v3_dot(e2, e2);
+        float r1 = v3_dot(d, e1), r2 = v3_dot(d, e2), det = d11 * d22 - d12 * d12;
+        float b1 = det != 0.0f ? (d22 * r1 - d12 * r2) / det : 0.0f, b2 = det != 0.0f ? (d11 * r2 - d12 * r1) / det : 0.0f;
+        *uv = triangle_uv(g->uvs, g->tri_has_uv, g->tri_indices, e->prim, b1, b2);
+    }
+    return true;
+}
+
 static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const EmitterGeometry *g, Vec3 x, Vec2 u,
-                           LightLi *out)
+                           bool nee, LightLi *out)
 {
     const float pdf_a = pmf / s->light[i].u.area.area; /* == s->pdf_a[i] for the power's pmf */
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
-    float omc = 0.0f, sin2 = 0.0f;
+    float omc = 0.0f, sin2 = 0.0f, omega = 0.0f;
     const Sphere *sp = (int)e->prim >= g->num_triangles ? &g->spheres[(int)e->prim - g->num_triangles] : NULL;
     const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
-    if (cone) {
+    const bool solid = nee && tri_solid_angle(s, g, e, x, &omega);
+    if (solid) {
+        if (!tri_sample_solid_angle(e, g, x, u, &out->p, &uv)) return false;
+        out->n = e->n;
+    } else if (cone) {
         sphere_sample_cone(sp, x, u, omc, sin2, &out->n);
         out->p = v3_madd(sp->center, out->n, sp->radius);
         uv = e->texture ? sphere_uv(out->n) : v2(0.0f, 0.0f);
@@ -331,7 +377,7 @@ static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const Emit
      * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
      * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
     const float area_pdf_w = pdf_a * dist2 / out->cos_light;
-    out->pdf_w = cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
+    out->pdf_w = solid ? pmf / omega : cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
     out->finite = true;
     out->emit_pdf = pdf_a * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
     out->direct_pdf = area_pdf_w;
@@ -340,10 +386,15 @@ static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const Emit
 
 /* From beyond the bounding sphere like a directional light, but a direction from the
  * environment's distribution: not a delta, so MIS applies. */
-static bool env_sample_li(const EmitterSampler *s, float pmf, Vec3 x, Vec2 u, LightLi *out)
+static bool env_sample_li(const EmitterSampler *s, float pmf, Vec3 x, Vec2 u, bool nee, LightLi *out)
 {
     float pdf_w;
-    out->wi = envmap_sample(s->env, u, &pdf_w);
+    if (nee && s->env->portal) {
+        /* through the portal only (envmap.h EnvPortal): from behind it, nothing */
+        if (!envmap_portal_sample(s->env, x, u, &out->wi, &pdf_w)) return false;
+    } else {
+        out->wi = envmap_sample(s->env, u, &pdf_w);
+    }
     if (!(pdf_w > 0.0f)) return false;
     out->pdf_w = pmf * pdf_w;
     out->dist = 2.0f * s->radius + v3_length(v3_sub(x, s->center));
@@ -408,13 +459,13 @@ static bool delta_sample_li(const EmitterSampler *s, const Light *l, float pmf, 
 
 /* The sample of light i, picked with probability pmf. */
 static bool sample_light(const EmitterSampler *s, const EmitterGeometry *g, int i, float pmf, Vec3 x, Vec2 u,
-                         LightLi *out)
+                         bool nee, LightLi *out)
 {
     out->light = i;
     const Light *l = &s->light[i];
     switch (l->type) {
-    case LIGHT_AREA: return area_sample_li(s, i, pmf, g, x, u, out);
-    case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, out);
+    case LIGHT_AREA: return area_sample_li(s, i, pmf, g, x, u, nee, out);
+    case LIGHT_ENVIRONMENT: return env_sample_li(s, pmf, x, u, nee, out);
     case LIGHT_POINT:
     case LIGHT_SPOT:
     case LIGHT_GONIO:
@@ -430,18 +481,20 @@ bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, 
     memset(out, 0, sizeof *out);
     if (s->lights == 0) return false;
     int i = distrib1d_sample(&s->by_power, u_sel);
-    return sample_light(s, g, i, s->by_power.pmf[i], x, u, out);
+    return sample_light(s, g, i, s->by_power.pmf[i], x, u, false, out);
 }
 
 bool light_sample_nee(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 n, float u_sel, Vec2 u,
                       LightLi *out)
 {
-    if (s->nee == LIGHT_SELECT_POWER) return light_sample_li(s, g, x, u_sel, u, out);
     memset(out, 0, sizeof *out);
     if (s->lights == 0) return false;
     int i;
     float pmf;
-    if (s->nee == LIGHT_SELECT_BVH) {
+    if (s->nee == LIGHT_SELECT_POWER) {
+        i = distrib1d_sample(&s->by_power, u_sel);
+        pmf = s->by_power.pmf[i];
+    } else if (s->nee == LIGHT_SELECT_BVH) {
         i = light_bvh_sample(s->bvh, x, n, u_sel, &pmf);
         if (i < 0) return false;
     } else {
@@ -449,7 +502,7 @@ bool light_sample_nee(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x,
         i = i >= s->lights ? s->lights - 1 : i;
         pmf = 1.0f / (float)s->lights;
     }
-    return sample_light(s, g, i, pmf, x, u, out);
+    return sample_light(s, g, i, pmf, x, u, true, out);
 }
 
 float light_nee_pmf(const EmitterSampler *s, Vec3 x, Vec3 n, int i)
@@ -465,14 +518,16 @@ float light_nee_pmf(const EmitterSampler *s, Vec3 x, Vec3 n, int i)
 float light_area_nee_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e, Vec3 x, Vec3 n, float dist,
                            float cos_l)
 {
-    if (s->nee == LIGHT_SELECT_POWER) return light_area_pdf_w(s, g, e, x, dist, cos_l);
-    return area_pdf_w(s, g, e, light_nee_pmf(s, x, n, e), x, dist, cos_l);
+    if (s->nee == LIGHT_SELECT_POWER) return area_pdf_w(s, g, e, s->by_power.pmf[e], x, dist, cos_l, true);
+    return area_pdf_w(s, g, e, light_nee_pmf(s, x, n, e), x, dist, cos_l, true);
 }
 
 float light_env_nee_pdf(const EmitterSampler *s, Vec3 x, Vec3 n, Vec3 w)
 {
+    if (!s->env) return 0.0f;
+    if (s->env->portal) return light_nee_pmf(s, x, n, light_env_index(s)) * envmap_portal_pdf(s->env, x, w);
     if (s->nee == LIGHT_SELECT_POWER) return light_env_pdf(s, w);
-    return s->env ? light_nee_pmf(s, x, n, light_env_index(s)) * envmap_pdf(s->env, w) : 0.0f;
+    return light_nee_pmf(s, x, n, light_env_index(s)) * envmap_pdf(s->env, w);
 }
 
 LightSelect emitter_sampler_auto_nee(const EmitterSampler *s)

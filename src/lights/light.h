@@ -1,10 +1,12 @@
 /* Lights: area emitters (any primitive with emission) and delta lights (point, spot,
  * directional). NEE picks a light with probability proportional to its power and, on an
- * area emitter, a point: uniform by area on triangles, by the subtended cone on spheres;
- * light paths start from a uniform point and add a direction. */
+ * area emitter, a point: uniform by area on triangles (or by their solid angle,
+ * EmitterSampler.solid_angle), by the subtended cone on spheres; light paths start from a
+ * uniform point and add a direction. */
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "geometry/sphere.h"
@@ -154,6 +156,11 @@ typedef struct EmitterSampler {
     float radius;
     LightSelect nee;       /* NEE's choice (emitter_sampler_set_nee); POWER after init */
     struct LightBvh *bvh;  /* with nee == LIGHT_SELECT_BVH, else NULL; owned */
+    /* NEE (light_sample_nee and its densities) samples a triangle emitter by the solid
+     * angle it subtends (sampling/spherical.h) where pbrt-v4 does; false: by area, as
+     * light paths and the bidirectional connections always do. The environment's portal
+     * (EnvMap.portal), when it has one, likewise serves NEE only. */
+    bool solid_angle;
 } EmitterSampler;
 
 /* The geometry NEE needs, borrowed from the scene (scene_emitter_geometry() fills it). */
@@ -246,10 +253,12 @@ bool light_sample_li(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, 
                      LightLi *out);
 
 /* Next-event estimation at x with unit normal n (the shading normal; 0 in a medium): the
- * light picked by the NEE sampler (s->nee; with power selection exactly light_sample_li),
- * then a point or direction on it as light_sample_li samples one. pdf_w and pmf include
- * the selection; emit_pdf and direct_pdf are the power selection's (bidirectional MIS
- * uses light_sample_li). */
+ * light picked by the NEE sampler (s->nee; with power selection the light_sample_li
+ * picks), then a point or direction on it as light_sample_li samples one, except that
+ * with s->solid_angle a triangle is sampled by its solid angle from x and an environment
+ * with a portal through the portal (light_area_nee_pdf_w and light_env_nee_pdf give these
+ * densities). pdf_w and pmf include the selection; emit_pdf and direct_pdf are the power
+ * selection's (bidirectional MIS uses light_sample_li). */
 bool light_sample_nee(const EmitterSampler *s, const EmitterGeometry *g, Vec3 x, Vec3 n, float u_sel, Vec2 u,
                       LightLi *out);
 /* The probability that light_sample_nee picks light i at x, n. */

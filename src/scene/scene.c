@@ -571,9 +571,11 @@ CstStatus scene_commit(Scene *s, CstError *err)
     }
     /* An empty scene: a point at the origin, not the empty box (its centre would be NaN). */
     if (!(bounds.min.x <= bounds.max.x)) bounds.min = bounds.max = v3s(0.0f);
+    if (s->env && s->has_env_portal && (st = envmap_set_portal(s->env, s->env_portal, err)) != CST_OK) return st;
     st = emitter_sampler_init(&s->emitter_sampler, s->emitters, s->num_emitters, s->delta_lights,
                               s->num_delta_lights, s->env, bounds.min, bounds.max, err);
     if (st != CST_OK) return st;
+    s->emitter_sampler.solid_angle = s->light_solid_angle != 0;
     {
         EmitterGeometry g = scene_emitter_geometry(s);
         LightSelect sel = s->light_select > 0 ? (LightSelect)(s->light_select - 1)

@@ -91,6 +91,9 @@ struct CstScene {
     InstanceSet *instances;
     EmitterSampler emitter_sampler;
     int light_select; /* NEE's light sampler: 1 + LightSelect, 0 = by the rule (light.h) */
+    int light_solid_angle; /* NEE samples triangles by solid angle (EmitterSampler.solid_angle) */
+    int has_env_portal;    /* env_portal holds a portal's corners (applied by commit) */
+    Vec3 env_portal[4];
     /* Spectral mode's lookups done once by commit (math/spectrum.h): per material, its
      * colours; per area emitter, its radiance (NULL before commit or on OOM: converted at
      * each use instead). */

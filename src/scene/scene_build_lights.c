@@ -424,6 +424,37 @@ CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError 
 
 /* ------------------------------------------------------------------ light sampler */
 
+CstStatus cst_scene_set_light_sampling(CstScene *scene, const char *name, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_light_sampling";
+    if (!scene || !name) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is NULL", fn, scene ? "name" : "scene");
+    int solid;
+    if (strcmp(name, "area") == 0) solid = 0;
+    else if (strcmp(name, "solid_angle") == 0) solid = 1;
+    else return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown light sampling '%s'; expected area or solid_angle", fn, name);
+    scene->light_solid_angle = solid;
+    if (scene->committed) scene->emitter_sampler.solid_angle = solid != 0;
+    return CST_OK;
+}
+
+CstStatus cst_scene_set_environment_portal(CstScene *scene, const float corners[12], CstError *err)
+{
+    static const char fn[] = "cst_scene_set_environment_portal";
+    if (!scene || !corners) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is NULL", fn, scene ? "corners" : "scene");
+    if (scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: scene already committed", fn);
+    for (int i = 0; i < 12; i++)
+        if (!isfinite(corners[i])) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: corner %d is not finite", fn, i / 3);
+    for (int i = 0; i < 4; i++) scene->env_portal[i] = v3(corners[3 * i], corners[3 * i + 1], corners[3 * i + 2]);
+    /* the rectangle check now, with a dummy map, so the caller hears of it here */
+    EnvMap probe;
+    CstStatus st = envmap_init_constant(&probe, color_s(1.0f), err);
+    if (st == CST_OK) st = envmap_set_portal(&probe, scene->env_portal, err);
+    envmap_free(&probe);
+    if (st != CST_OK) return st;
+    scene->has_env_portal = 1;
+    return CST_OK;
+}
+
 CstStatus cst_scene_set_light_sampler(CstScene *scene, const char *name, CstError *err)
 {
     static const char fn[] = "cst_scene_set_light_sampler";

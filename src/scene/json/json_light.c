@@ -193,10 +193,30 @@ CstStatus json_parse_lights(Loader *ld, const json_t *lights)
  * relative to the scene file) times a scale. */
 CstStatus json_parse_environment(Loader *ld, const json_t *obj)
 {
-    static const char *const keys[] = {"radiance", "file", "scale"};
+    static const char *const keys[] = {"radiance", "file", "scale", "portal"};
     json_t *v;
-    LOADER_TRY(json_expect_object(ld, obj, "an object with radiance, or file and scale"));
-    LOADER_TRY(json_check_keys(ld, obj, keys, 3));
+    LOADER_TRY(json_expect_object(ld, obj, "an object with radiance, or file and scale, and optionally portal"));
+    LOADER_TRY(json_check_keys(ld, obj, keys, 4));
+    if ((v = json_object_get(obj, "portal"))) {
+        /* four corners of a window rectangle: NEE samples the environment through it */
+        char kind[48];
+        float c[12];
+        json_path_push_key(ld, "portal");
+        if (!json_is_array(v) || json_array_size(v) != 4)
+            return json_fail_here(ld, "got %s; expected 4 corners, each an array of 3 numbers", json_describe(v, kind));
+        for (size_t k = 0; k < 4; k++) {
+            Vec3 p;
+            json_path_push_index(ld, k);
+            LOADER_TRY(json_read_vec3(ld, json_array_get(v, k), LOADER_MAX_LENGTH, &p));
+            json_path_pop(ld);
+            c[3 * k] = p.x;
+            c[3 * k + 1] = p.y;
+            c[3 * k + 2] = p.z;
+        }
+        CstStatus pst = cst_scene_set_environment_portal(ld->scene, c, ld->err);
+        if (pst != CST_OK) return json_fail_builder(ld, pst);
+        json_path_pop(ld);
+    }
     json_t *rad = json_object_get(obj, "radiance"), *file = json_object_get(obj, "file");
     if (!rad == !file)
         return json_fail_here(ld, "expected exactly one of radiance (a constant environment) and file "

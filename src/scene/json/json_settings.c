@@ -248,13 +248,13 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
 CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 {
     static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius", "color",
-                                       "light_sampler", "regularize"};
+                                       "light_sampler", "regularize", "light_sampling"};
     CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
-    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius, color, "
+    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius, color, light_sampling, "
                                              "light_sampler, regularize"));
-    LOADER_TRY(json_check_keys(ld, integ, keys, 8));
+    LOADER_TRY(json_check_keys(ld, integ, keys, 9));
     if ((v = json_object_get(integ, "regularize"))) {
         int reg = 0;
         json_path_push_key(ld, "regularize");
@@ -273,6 +273,19 @@ CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
                                   json_clip_name(s, name));
         }
         LOADER_TRY(cst_scene_set_light_sampler(ld->scene, s, ld->err));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "light_sampling"))) {
+        /* NEE's point on an emitting triangle: "area" (default) or "solid_angle" */
+        const char *s = NULL;
+        json_path_push_key(ld, "light_sampling");
+        LOADER_TRY(json_read_string(ld, v, &s));
+        if (strcmp(s, "area") != 0 && strcmp(s, "solid_angle") != 0) {
+            char name[72];
+            return json_fail_here(ld, "unknown light sampling \"%s\"; expected \"area\" or \"solid_angle\"",
+                                  json_clip_name(s, name));
+        }
+        LOADER_TRY(cst_scene_set_light_sampling(ld->scene, s, ld->err));
         json_path_pop(ld);
     }
     if ((v = json_object_get(integ, "color"))) {

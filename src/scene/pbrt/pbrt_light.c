@@ -218,9 +218,24 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
     TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
     if (file && !file[0]) file = NULL; /* pbrt: an empty name is no image */
     TRY(pbrt_lookup(ld, ps, d, "portal", PT_MASK(PT_POINT3), "point3", &pp));
-    if (pp)
-        pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pp->loc, "%s: \"portal\" is not supported; the "
-                     "environment lights the scene from every direction", d);
+    if (pp) {
+        /* pbrt-v4 PortalImageInfiniteLight: four corners of a rectangle, in the light's
+         * space (through the CTM, as the image's directions are); NEE then samples through
+         * it (envmap.h EnvPortal) */
+        if (pp->num_nums != 12)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pp->loc, "%s: \"portal\" has %d values; expected 4 "
+                                "points (12 values)", d, pp->num_nums);
+        float corners[12];
+        for (int i = 0; i < 4; i++) {
+            Vec3 q = transform_point(&ld->gs.ctm.m, v3((float)pp->nums[3 * i], (float)pp->nums[3 * i + 1],
+                                                        (float)pp->nums[3 * i + 2]));
+            corners[3 * i] = q.x;
+            corners[3 * i + 1] = q.y;
+            corners[3 * i + 2] = q.z;
+        }
+        CstStatus pst = cst_scene_set_environment_portal(ld->scene, corners, ld->err);
+        if (pst) return pbrt_fail_wrap(ld, pst, pp->loc, d);
+    }
     if (file && has_l)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, fl, "%s: both \"L\" and \"filename\"; expected one "
                             "of them (as pbrt-v4)", d);

@@ -223,6 +223,8 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     }
     memcpy(ld.base_dir, name, dl);
     ld.base_dir[dl] = '\0';
+    /* pbrt-v4 samples a triangle light by the solid angle it subtends (Triangle::Sample) */
+    if ((st = cst_scene_set_light_sampling(ld.scene, "solid_angle", ld.err)) != CST_OK) goto done;
     /* pbrt's defaults where they differ from caustic's: a 1280 x 720 film, the volumetric
      * path tracer with at most 5 bounces (as "path"), the Gaussian filter (sigma 0.5, radius
      * 1.5: caustic's). */

@@ -1,0 +1,153 @@
+/* Spherical triangle and rectangle sampling (spherical.h): Arvo 1995, Urena et al. 2013. */
+#include "sampling/spherical.h"
+
+#include <math.h>
+
+static const double SPH_PI = 3.14159265358979323846;
+
+typedef struct D3 { double x, y, z; } D3;
+
+static inline D3 d3(double x, double y, double z) { D3 r = {x, y, z}; return r; }
+static inline D3 d3_of(Vec3 v) { return d3((double)v.x, (double)v.y, (double)v.z); }
+static inline D3 d3_sub(D3 a, D3 b) { return d3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline D3 d3_scale(D3 a, double s) { return d3(a.x * s, a.y * s, a.z * s); }
+static inline D3 d3_madd(D3 a, D3 b, double s) { return d3(a.x + b.x * s, a.y + b.y * s, a.z + b.z * s); }
+static inline double d3_dot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline D3 d3_cross(D3 a, D3 b) { return d3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x); }
+static inline double d3_len(D3 a) { return sqrt(d3_dot(a, a)); }
+static inline double clampd(double v, double lo, double hi) { return v < lo ? lo : v > hi ? hi : v; }
+static inline double safe_sqrt(double v) { return sqrt(v > 0.0 ? v : 0.0); }
+/* The unit vector along a, or false for a zero (or non-finite) one. */
+static inline bool d3_unit(D3 a, D3 *out)
+{
+    double l = d3_len(a);
+    if (!(l > 0.0) || !isfinite(l)) return false;
+    *out = d3_scale(a, 1.0 / l);
+    return true;
+}
+/* The angle between unit vectors a and b, accurate near 0 and pi (pbrt-v4 AngleBetween's
+ * form: 2 asin(|a - b| / 2) rather than acos of the dot product). */
+static inline double angle_between(D3 a, D3 b)
+{
+    if (d3_dot(a, b) < 0.0) return SPH_PI - 2.0 * asin(clampd(0.5 * d3_len(d3(a.x + b.x, a.y + b.y, a.z + b.z)), 0.0, 1.0));
+    return 2.0 * asin(clampd(0.5 * d3_len(d3_sub(b, a)), 0.0, 1.0));
+}
+
+float sph_triangle_solid_angle(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2)
+{
+    D3 o = d3_of(x), a, b, c;
+    if (!d3_unit(d3_sub(d3_of(p0), o), &a) || !d3_unit(d3_sub(d3_of(p1), o), &b) ||
+        !d3_unit(d3_sub(d3_of(p2), o), &c))
+        return 0.0f;
+    double num = fabs(d3_dot(a, d3_cross(b, c)));
+    double den = 1.0 + d3_dot(a, b) + d3_dot(b, c) + d3_dot(c, a);
+    return (float)fabs(2.0 * atan2(num, den));
+}
+
+bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w)
+{
+    D3 o = d3_of(x), a, b, c;
+    if (!d3_unit(d3_sub(d3_of(p0), o), &a) || !d3_unit(d3_sub(d3_of(p1), o), &b) ||
+        !d3_unit(d3_sub(d3_of(p2), o), &c))
+        return false;
+    /* The great circles' normals and the triangle's inner angles alpha (at a), beta, gamma. */
+    D3 n_ab, n_bc, n_ca;
+    if (!d3_unit(d3_cross(a, b), &n_ab) || !d3_unit(d3_cross(b, c), &n_bc) || !d3_unit(d3_cross(c, a), &n_ca))
+        return false;
+    double alpha = angle_between(n_ab, d3_scale(n_ca, -1.0));
+    double beta = angle_between(n_bc, d3_scale(n_ab, -1.0));
+    double gamma = angle_between(n_ca, d3_scale(n_bc, -1.0));
+    /* Girard: the area is the angle excess. A_hat, the sub-triangle's area, is u.x of it
+     * (Arvo eq. 4); carried as A_hat + pi, the angle s + alpha of the paper. */
+    double area_pi = alpha + beta + gamma;
+    if (!(area_pi > SPH_PI)) return false;
+    double ap_pi = SPH_PI + (double)u.x * (area_pi - SPH_PI);
+    double cos_alpha = cos(alpha), sin_alpha = sin(alpha);
+    /* phi = A_hat - alpha + pi ... Arvo's s and t through the sum formulas */
+    double sin_phi = sin(ap_pi) * cos_alpha - cos(ap_pi) * sin_alpha;
+    double cos_phi = cos(ap_pi) * cos_alpha + sin(ap_pi) * sin_alpha;
+    double k1 = cos_phi + cos_alpha;
+    double k2 = sin_phi - sin_alpha * d3_dot(a, b); /* a . b = cos of the side c */
+    /* the cosine of the arc from a to the new vertex c_hat on the side a c (Arvo's q) */
+    double den = (k2 * sin_phi + k1 * cos_phi) * sin_alpha;
+    double cos_bp = den != 0.0 ? (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha) / den : 1.0;
+    cos_bp = clampd(cos_bp, -1.0, 1.0);
+    double sin_bp = safe_sqrt(1.0 - cos_bp * cos_bp);
+    D3 c_perp;
+    if (!d3_unit(d3_madd(c, a, -d3_dot(c, a)), &c_perp)) return false;
+    D3 cp = d3_madd(d3_scale(a, cos_bp), c_perp, sin_bp);
+    /* then a point on the arc from b to c_hat, cos theta uniform in [cos(b, c_hat), 1] */
+    double cos_t = 1.0 - (double)u.y * (1.0 - d3_dot(cp, b));
+    double sin_t = safe_sqrt(1.0 - cos_t * cos_t);
+    D3 cp_perp;
+    if (!d3_unit(d3_madd(cp, b, -d3_dot(cp, b)), &cp_perp)) {
+        /* c_hat = b (u.x = 0): the sub-triangle is the vertex b */
+        *w = v3((float)b.x, (float)b.y, (float)b.z);
+        return true;
+    }
+    D3 r = d3_madd(d3_scale(b, cos_t), cp_perp, sin_t);
+    if (!d3_unit(r, &r)) return false;
+    *w = v3((float)r.x, (float)r.y, (float)r.z);
+    return true;
+}
+
+bool sph_rect_init(SphRect *r, Vec3 x, Vec3 s, Vec3 ex, Vec3 ey)
+{
+    D3 dx = d3_of(ex), dy = d3_of(ey), ax, ay, az;
+    double exl = d3_len(dx), eyl = d3_len(dy);
+    if (!d3_unit(dx, &ax) || !d3_unit(dy, &ay) || !d3_unit(d3_cross(ax, ay), &az)) return false;
+    D3 d = d3_sub(d3_of(s), d3_of(x));
+    double z0 = d3_dot(d, az);
+    /* z away from the rectangle, so that z0 < 0 (Urena et al. Algorithm 1) */
+    if (z0 > 0.0) {
+        az = d3_scale(az, -1.0);
+        z0 = -z0;
+    }
+    if (!(z0 < 0.0)) return false;
+    r->x0 = d3_dot(d, ax);
+    r->y0 = d3_dot(d, ay);
+    r->x1 = r->x0 + exl;
+    r->y1 = r->y0 + eyl;
+    r->z0 = z0;
+    /* the normals of the four planes through x and each edge, and the inner angles */
+    D3 v00 = d3(r->x0, r->y0, z0), v01 = d3(r->x0, r->y1, z0), v10 = d3(r->x1, r->y0, z0), v11 = d3(r->x1, r->y1, z0);
+    D3 n0, n1, n2, n3;
+    if (!d3_unit(d3_cross(v00, v10), &n0) || !d3_unit(d3_cross(v10, v11), &n1) ||
+        !d3_unit(d3_cross(v11, v01), &n2) || !d3_unit(d3_cross(v01, v00), &n3))
+        return false;
+    double g0 = acos(clampd(-d3_dot(n0, n1), -1.0, 1.0)), g1 = acos(clampd(-d3_dot(n1, n2), -1.0, 1.0));
+    double g2 = acos(clampd(-d3_dot(n2, n3), -1.0, 1.0)), g3 = acos(clampd(-d3_dot(n3, n0), -1.0, 1.0));
+    r->b0 = n0.z;
+    r->b1 = n2.z;
+    r->k = 2.0 * SPH_PI - g2 - g3;
+    r->solid_angle = g0 + g1 - r->k; /* the quadrilateral's angle excess */
+    r->ax = v3((float)ax.x, (float)ax.y, (float)ax.z);
+    r->ay = v3((float)ay.x, (float)ay.y, (float)ay.z);
+    r->az = v3((float)az.x, (float)az.y, (float)az.z);
+    r->o = x;
+    return r->solid_angle > 0.0;
+}
+
+Vec3 sph_rect_sample(const SphRect *r, Vec2 u, Vec3 *p)
+{
+    /* the x coordinate: the sub-rectangle [x0, xu] has solid angle u.x S (Urena eqs. 8-9) */
+    double au = (double)u.x * r->solid_angle + r->k;
+    double fu = (cos(au) * r->b0 - r->b1) / sin(au);
+    double cu = (fu > 0.0 ? 1.0 : -1.0) / sqrt(fu * fu + r->b0 * r->b0);
+    cu = clampd(cu, -1.0, 1.0);
+    double xu = -(cu * r->z0) / safe_sqrt(1.0 - cu * cu);
+    xu = clampd(xu, r->x0, r->x1);
+    /* then y uniform in h = cos of the angle to the y axis (Urena eq. 10) */
+    double dd = sqrt(xu * xu + r->z0 * r->z0);
+    double h0 = r->y0 / sqrt(dd * dd + r->y0 * r->y0), h1 = r->y1 / sqrt(dd * dd + r->y1 * r->y1);
+    double hv = h0 + (double)u.y * (h1 - h0), hv2 = hv * hv;
+    double yv = hv2 < 1.0 - 1e-12 ? hv * dd / sqrt(1.0 - hv2) : r->y1;
+    yv = clampd(yv, r->y0, r->y1);
+    D3 ax = d3_of(r->ax), ay = d3_of(r->ay), az = d3_of(r->az);
+    D3 loc = d3_madd(d3_madd(d3_scale(ax, xu), ay, yv), az, r->z0);
+    D3 o = d3_of(r->o);
+    *p = v3((float)(o.x + loc.x), (float)(o.y + loc.y), (float)(o.z + loc.z));
+    D3 w;
+    if (!d3_unit(loc, &w)) w = d3_scale(az, -1.0);
+    return v3((float)w.x, (float)w.y, (float)w.z);
+}
