@@ -511,7 +511,7 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavele
     (void)scene_bsdf_material(s, sh, wl, false, b);
 }
 
-/* The BSDF at a hit for the integrators that disperse (path, light): a dielectric whose
+/* The BSDF at a hit for the integrators that disperse (path, light, bdpt, vcm): a dielectric whose
  * ior varies with wavelength refracts the hero wavelength wl->lambda[0] with its own ior
  * and terminates the other three (pbrt-v4 SampledWavelengths::TerminateSecondary: their
  * pdfs 0, the hero's divided by 4), at reflection and refraction alike, as pbrt-v4 does
