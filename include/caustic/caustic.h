@@ -481,12 +481,22 @@ typedef struct CstLightDesc {
      * pbrt-v4 does; intensity (W/sr) multiplies the pixel's RGB. */
     int image_width, image_height;
     float fov;
+    /* spectral mode: a spectrum id (cst_scene_add_spectrum) giving the emitted light's
+     * shape at the luminance of intensity (pbrt-v4 "I" or "L" given as a blackbody, named
+     * or sampled spectrum); 0: intensity upsampled as an illuminant (RGB x D65). RGB mode
+     * ignores it */
+    int spectrum;
 } CstLightDesc;
 
 CST_API CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *desc, CstError *err);
 /* A constant environment: radiance from every direction (replaces one set before). */
 CST_API CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radiance[3],
                                              CstError *err);
+/* Spectral mode: the environment's radiance in direction w becomes spectrum (an id of
+ * cst_scene_add_spectrum) scaled to the luminance of its RGB radiance in w; 0 (the
+ * default): the RGB upsampled as an illuminant. Kept when the environment is replaced;
+ * RGB mode ignores it. */
+CST_API CstStatus cst_scene_set_environment_spectrum(CstScene *scene, int spectrum, CstError *err);
 /* An equirectangular environment image (EXR, PFM, PNG...) times scale (NULL = 1), sampled
  * by importance (replaces one set before). */
 CST_API CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path,

@@ -91,6 +91,8 @@ typedef struct LightSubpathCtx {
     SubpathVertexList *verts;
     SplatList *splats;
     const Wavelengths *wl;
+    const Wavelengths *walk_wl; /* spectral mode: the walk's copy of wl, terminated by a
+                                 * dispersive refraction (LightWalk.disperse); NULL in RGB */
     uint64_t *rays;
 } LightSubpathCtx;
 
@@ -99,10 +101,13 @@ static bool store_and_connect(void *ctx, const LightVertex *lv)
     const LightSubpathCtx *c = ctx;
     const SurfaceHit *sh = lv->sh;
     const SubPath *sp = &lv->sp;
+    const int dispersed = c->walk_wl && wavelengths_secondary_terminated(c->walk_wl);
     SubpathVertex v = {sh->p, sh->ng, sh->ns, lv->w_prev, sp->beta, sp->d_vcm, sp->d_vc, sp->d_vm,
-                   sh->material, lv->bounces, sh->uv};
+                   sh->material, lv->bounces, sh->uv, dispersed};
     push_vertex(c->verts, &v);
-    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, c->wl, c->splats, c->rays);
+    /* The t = 1 splat uses this light subpath alone: its own (terminated) wavelengths. */
+    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, dispersed ? c->walk_wl : c->wl,
+                      c->splats, c->rays);
     return true; /* OOM is the list's flag, checked after the step */
 }
 
@@ -123,8 +128,12 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
     sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
 
-    LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, rays};
-    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c, NULL};
+    /* Spectral mode: a dispersive dielectric terminates the secondary wavelengths of this
+     * walk's copy (the camera subpath keeps wl and masks per contribution). */
+    Wavelengths walk_wl;
+    if (wl) walk_wl = *wl;
+    LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, wl ? &walk_wl : NULL, rays};
+    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c, wl ? &walk_wl : NULL};
     subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
 
@@ -172,7 +181,12 @@ static inline const Bsdf *light_bsdf(const Scene *s, LightBsdfs *c, int j, const
     Bsdf *b = j < LIGHT_BSDF_CACHE ? &c->b[j] : tmp;
     if (j < LIGHT_BSDF_CACHE && (c->built >> j & 1u)) return b;
     SurfaceHit yh = {.p = y->p, .ng = y->ng, .ns = y->ns, .material = y->material, .emitter = -1, .uv = y->uv};
-    scene_bsdf(s, &yh, wl, b);
+    if (y->dispersed && wl) { /* as the light subpath built it: a dispersive ior at the hero */
+        Wavelengths t = *wl;
+        scene_bsdf_disperse(s, &yh, &t, b);
+    } else {
+        scene_bsdf(s, &yh, wl, b);
+    }
     if (j < LIGHT_BSDF_CACHE) c->built |= 1u << j;
     return b;
 }
@@ -230,6 +244,14 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
     const bool has_lights = s->emitter_sampler.lights > 0;
     LightBsdfs light_bsdfs;
     light_bsdfs.built = 0;
+    /* Spectral mode: wc is wl until the camera subpath refracts through a dispersive
+     * dielectric (scene_bsdf_disperse terminates it); from then on, and for connections
+     * and merges with dispersed light vertices, contributions go to H, whose lane 0 alone
+     * counts (hero_only at the end). */
+    Wavelengths wc;
+    if (wl) wc = *wl;
+    bool cam_dispersed = false;
+    Color H = color_s(0.0f);
     for (int t = 1;; t++) {
         SurfaceHit sh;
         ++*rays;
@@ -245,7 +267,8 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
                     float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
                     w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
                 }
-                L = color_madd(L, sp.beta, color_scale(le, w));
+                if (cam_dispersed) H = color_madd(H, sp.beta, color_scale(le, w));
+                else L = color_madd(L, sp.beta, color_scale(le, w));
             }
             break;
         }
@@ -266,32 +289,55 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
                     float emission_pdf = pdf_a * emitter_emission_pdf_w(e, sh.ng, wo);
                     w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
                 }
-                L = color_madd(L, sp.beta, color_scale(le, w));
+                if (cam_dispersed) H = color_madd(H, sp.beta, color_scale(le, w));
+                else L = color_madd(L, sp.beta, color_scale(le, w));
             }
         }
         /* The camera path's vertices so far are t bounces once this one scatters. */
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
 
         Bsdf bsdf;
-        scene_bsdf(s, &sh, wl, &bsdf);
+        if (wl) {
+            scene_bsdf_disperse(s, &sh, &wc, &bsdf);
+            cam_dispersed = wavelengths_secondary_terminated(&wc);
+        } else {
+            scene_bsdf(s, &sh, wl, &bsdf);
+        }
         if (!bsdf_is_delta(&bsdf)) {
             const bool merging = merge && it->cells > 0;
             MergeQuery mq;
             if (merging) merge->plan(it, sh.p, &mq);
-            if (has_lights)
-                L = color_madd(L, sp.beta, connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, wl, rays));
+            if (has_lights) {
+                Color nee = connect_to_light(s, it, &sp, &bsdf, &sh, wo, rng, wl, rays);
+                if (cam_dispersed) H = color_madd(H, sp.beta, nee);
+                else L = color_madd(L, sp.beta, nee);
+            }
             if (merging) merge->fetch(it, &mq);
-            Color c = color_s(0.0f);
+            Color c = color_s(0.0f), ch = color_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
-                c = color_add(c, connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, wl, rays));
+                Color cj = connect_vertices(s, it, &sp, &bsdf, &sh, wo, &lv[j], j, &light_bsdfs, wl, rays);
+                if (cam_dispersed || lv[j].dispersed) ch = color_add(ch, cj);
+                else c = color_add(c, cj);
             }
             L = color_madd(L, sp.beta, c);
-            if (merging) L = color_madd(L, sp.beta, merge->merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t));
+            if (wl) H = color_madd(H, sp.beta, ch);
+            if (merging) {
+                Color mh = color_s(0.0f), m = merge->merge(vp, it, &mq, &sp, &bsdf, &sh, wo, t, &mh);
+                if (cam_dispersed) m = color_add(m, mh), mh = color_s(0.0f);
+                if (cam_dispersed) H = color_madd(H, sp.beta, m);
+                else L = color_madd(L, sp.beta, m);
+                if (wl) H = color_madd(H, sp.beta, mh);
+            }
         }
 
         if (!subpath_scatter(s, &sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
     }
-    return L;
+    if (!wl) return L;
+    /* The hero alone, as a terminated wl would count it through spectrum_to_rgb: lane 0 /
+     * (pdf_0 / 4) where the caller divides by pdf_0. */
+    Color hero = color_s(0.0f);
+    hero.c[0] = H.c[0] * (float)COLOR_LANES;
+    return color_add(L, hero);
 }
 

@@ -36,6 +36,11 @@ typedef struct SubpathVertex {
     int32_t material;
     int32_t bounces; /* 1 for the first hit after the emitter */
     Vec2 uv;         /* texture coordinates (the BSDF is rebuilt from material, ns, ng, uv) */
+    /* Spectral mode: 1 if the light subpath met a dispersive dielectric at or before this
+     * vertex (its BSDFs from there on refract the hero wavelength: only beta's lane 0 is
+     * right, and every contribution through this vertex keeps the hero alone, as pbrt-v4's
+     * TerminateSecondary); 0 otherwise and in RGB mode. */
+    int32_t dispersed;
 } SubpathVertex;
 
 /* The part of a SubpathVertex that merging reads (48 bytes of its 88): about nine in ten
@@ -47,6 +52,7 @@ typedef struct MergeVertex {
     Color beta;
     float d_vcm, d_vm;
     int32_t bounces;
+    int32_t dispersed; /* SubpathVertex.dispersed */
 } MergeVertex;
 
 /* A growable list of light vertices; one per work unit, reused by every iteration. */
@@ -112,14 +118,19 @@ typedef struct MergeQuery {
 typedef struct SubpathMerge {
     void (*plan)(const SubpathIteration *it, Vec3 p, MergeQuery *q);
     void (*fetch)(const SubpathIteration *it, MergeQuery *q);
+    /* Returns the merges with undispersed light vertices; those with dispersed ones (only
+     * their lane 0 is right) go to *hero. */
     Color (*merge)(const SubpathParams *vp, const SubpathIteration *it, const MergeQuery *q, const SubPath *sp,
-                   const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces);
+                   const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces, Color *hero);
 } SubpathMerge;
 
 /* One camera subpath for the pixel whose light path is `path`: emission hits (s = 0),
  * NEE (s = 1), connections to the light path's vertices, and with `merge` (NULL: none;
  * used only when the iteration has a grid), merges with every light vertex within the
- * radius; all MIS-weighted. Returns the pixel sample. */
+ * radius; all MIS-weighted. Returns the pixel sample. Spectral mode: both subpaths carry
+ * wl; a contribution through a dispersive refraction on either subpath keeps the hero
+ * wavelength alone (lane 0 times 4, the others 0: what wl's termination would give through
+ * spectrum_to_rgb), the others all four, so the caller converts the sum with wl as is. */
 Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                            Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays, const SubpathMerge *merge);
 

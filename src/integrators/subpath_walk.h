@@ -46,10 +46,11 @@ typedef struct LightWalk {
     const Wavelengths *wl; /* spectral mode: the path's wavelengths; NULL in RGB mode */
     LightVisit visit;
     void *ctx;
-    /* Light tracing, spectral mode: wl itself, writable, so that a dispersive dielectric
+    /* Spectral mode, light tracing: wl itself, writable, so that a dispersive dielectric
      * terminates its secondary wavelengths (scene_bsdf_disperse) for the rest of the path
-     * and its splats; NULL for the estimators that share wavelengths between paths
-     * (photons, BDPT, VCM), which take such an ior as the constant of RGB mode. */
+     * and its splats; BDPT and VCM: a copy of wl, whose termination marks the light
+     * vertices after it (SubpathVertex.dispersed). NULL for photons (photon maps, SPPM),
+     * which take such an ior as the constant of RGB mode. */
     Wavelengths *disperse;
 } LightWalk;
 

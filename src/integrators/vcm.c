@@ -112,7 +112,8 @@ void vcm_grid_fill(const SubpathIteration *it, const uint32_t *cell_of, size_t n
         if (c - c0 >= width) continue;
         const SubpathVertex *v = &it->vertices[i];
         cell_vertices[cell_start[c + 1]++] = (MergeVertex){
-            .p = v->p, .w_prev = v->w_prev, .beta = v->beta, .d_vcm = v->d_vcm, .d_vm = v->d_vm, .bounces = v->bounces};
+            .p = v->p, .w_prev = v->w_prev, .beta = v->beta, .d_vcm = v->d_vcm, .d_vm = v->d_vm, .bounces = v->bounces,
+            .dispersed = v->dispersed};
     }
 }
 
@@ -174,10 +175,10 @@ static void merge_fetch(const SubpathIteration *it, MergeQuery *q)
 /* Step 3, merging at camera vertex x: the density estimate over every light vertex within
  * the radius, each MIS-weighted (tech. rep. eqs. 42-43), scaled by 1 / (pi r^2 N). */
 static Color merge(const SubpathParams *vp, const SubpathIteration *it, const MergeQuery *q, const SubPath *sp,
-                 const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces)
+                 const Bsdf *bx, const SurfaceHit *x, Vec3 wo, int bounces, Color *hero)
 {
     const float r = it->radius, r2 = r * r;
-    Color acc = color_s(0.0f);
+    Color acc = color_s(0.0f), acc_hero = color_s(0.0f);
     for (int b = 0; b < q->nb; b++)
         for (uint32_t k = q->first[b]; k < q->last[b]; k++) {
             const MergeVertex *y = &it->cell_vertices[k];
@@ -195,8 +196,10 @@ static Color merge(const SubpathParams *vp, const SubpathIteration *it, const Me
             float w_light = y->d_vcm * it->mis_vc + y->d_vm * mis(x_fwd);
             float w_camera = sp->d_vcm * it->mis_vc + sp->d_vm * mis(x_rev);
             float weight = 1.0f / (w_light + 1.0f + w_camera);
-            acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
+            if (y->dispersed) acc_hero = color_add(acc_hero, color_scale(color_mul(f, y->beta), weight));
+            else acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
         }
+    *hero = color_scale(acc_hero, it->vm_norm);
     return color_scale(acc, it->vm_norm);
 }
 

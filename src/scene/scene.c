@@ -55,6 +55,7 @@ void scene_destroy(Scene *s)
     free(s->materials);
     free(s->spectra);
     free(s->emitter_spectrum);
+    free(s->delta_spectrum);
     for (int i = 0; i < s->num_measured; i++) {
         measured_bsdf_free(s->measured[i]);
         free(s->measured[i]);
@@ -125,6 +126,19 @@ CstStatus scene_set_emitter_spectrum(Scene *s, int first, int spectrum, CstError
     for (int i = s->num_emitter_spectrum; i < first; i++) s->emitter_spectrum[i] = 0;
     for (int i = first; i < s->num_emitters; i++) s->emitter_spectrum[i] = spectrum;
     s->num_emitter_spectrum = s->num_emitters;
+    return CST_OK;
+}
+
+CstStatus scene_set_delta_spectrum(Scene *s, int spectrum, CstError *err)
+{
+    if (spectrum < 0 || spectrum > s->num_spectra || s->num_delta_lights < 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "delta light spectrum %d out of range", spectrum);
+    if (!spectrum && !s->delta_spectrum) return CST_OK; /* none so far, none here */
+    if (!GROW(s->delta_spectrum, s->cap_delta_spectrum, (long long)s->num_delta_lights))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a light's spectrum");
+    for (int i = s->num_delta_spectrum; i < s->num_delta_lights - 1; i++) s->delta_spectrum[i] = 0;
+    s->delta_spectrum[s->num_delta_lights - 1] = spectrum;
+    s->num_delta_spectrum = s->num_delta_lights;
     return CST_OK;
 }
 

@@ -82,7 +82,13 @@ struct CstScene {
      * one) keeps the ray queries on their opaque path behind a single branch. */
     AlphaMask *alphas; int num_alphas; size_t cap_alphas;
     DeltaLight *delta_lights; int num_delta_lights; size_t cap_delta_lights; /* point, spot, directional */
+    /* Per delta light, 1 + the index of its emitted spectrum or 0 (CstLightDesc.spectrum);
+     * NULL when none has one; entries past num_delta_spectrum are 0. */
+    int *delta_spectrum; int num_delta_spectrum; size_t cap_delta_spectrum;
     EnvMap *env; /* the environment, or NULL */
+    /* Spectral mode: 1 + the index of the spectrum giving the environment's radiance its
+     * shape (at the luminance of its RGB), 0: the RGB upsampled (cst_scene_set_environment_spectrum) */
+    int env_spectrum;
     /* after commit */
     AccelType accel_type; /* what scene_commit builds; ACCEL_BVH unless set */
     Accel accel;
@@ -130,6 +136,8 @@ CstStatus scene_add_material(Scene *scene, const Material *m, int *out_id, CstEr
 CstStatus scene_add_spectrum(Scene *scene, const SampledSpectrum *sp, int *out_id, CstError *err);
 /* Emitters first..num_emitters-1 (just added) emit spectrum (1 + index, 0 none) in spectral mode. */
 CstStatus scene_set_emitter_spectrum(Scene *scene, int first, int spectrum, CstError *err);
+/* The delta light just added emits spectrum (1 + index, 0 none) in spectral mode. */
+CstStatus scene_set_delta_spectrum(Scene *scene, int spectrum, CstError *err);
 /* Indices are 3 per triangle into positions; all must be in range and the triangles
  * non-degenerate (callers that know file locations check first for better messages).
  * emission may be NULL. */
@@ -506,7 +514,7 @@ static inline void scene_bsdf(const Scene *s, const SurfaceHit *sh, const Wavele
     (void)scene_bsdf_material(s, sh, wl, false, b);
 }
 
-/* The BSDF at a hit for the integrators that disperse (path, light): a dielectric whose
+/* The BSDF at a hit for the integrators that disperse (path, light, bdpt, vcm): a dielectric whose
  * ior varies with wavelength refracts the hero wavelength wl->lambda[0] with its own ior
  * and terminates the other three (pbrt-v4 SampledWavelengths::TerminateSecondary: their
  * pdfs 0, the hero's divided by 4), at reflection and refraction alike, as pbrt-v4 does
@@ -527,16 +535,37 @@ static inline Color scene_light_color(Color rgb, const Wavelengths *wl)
     return wl ? spectrum_illuminant(rgb, wl) : rgb;
 }
 
-/* Spectral mode: area emitter `emitter`'s light at wl if it has a spectrum of its own
- * (CstEmission.spectrum): that spectrum at the luminance of rgb (Y of linear sRGB; rgb is
- * its RGB value times any scalar), true; false otherwise. */
+/* The spectrum (1 + index into spectra, 0 none) light `light` emits in spectral mode: an
+ * area emitter's (CstEmission.spectrum), a delta light's (CstLightDesc.spectrum) or the
+ * environment's (cst_scene_set_environment_spectrum), by the light index of light.h. */
+static inline int scene_light_spectrum(const Scene *s, int light)
+{
+    const int n = s->emitter_sampler.count;
+    if (light < 0) return 0;
+    if (light < n) return s->emitter_spectrum && light < s->num_emitter_spectrum ? s->emitter_spectrum[light] : 0;
+    if (light - n < s->emitter_sampler.num_delta)
+        return light - n < s->num_delta_spectrum ? s->delta_spectrum[light - n] : 0;
+    return light == light_env_index(&s->emitter_sampler) ? s->env_spectrum : 0;
+}
+
+/* Spectrum `spectrum` (1 + index) at wl scaled to the luminance of rgb (Y of linear sRGB):
+ * pbrt-v4 divides every light's spectrum by its photometric value (SpectrumToPhotometric),
+ * and the loaders' RGB of that light already carries the luminance and its scalars. */
+static inline Color scene_spectrum_at_luminance(const Scene *s, int spectrum, Color rgb, const Wavelengths *wl)
+{
+    const SampledSpectrum *sp = &s->spectra[spectrum - 1];
+    float y = cie_srgb_to_xyz[1][0] * rgb.c[0] + cie_srgb_to_xyz[1][1] * rgb.c[1] + cie_srgb_to_xyz[1][2] * rgb.c[2];
+    return color_scale(sampled_spectrum_eval(sp, wl), y * sp->inv_y);
+}
+
+/* Spectral mode: light `emitter`'s value at wl if it has a spectrum of its own
+ * (scene_light_spectrum): that spectrum at the luminance of rgb (its RGB value times any
+ * scalar), true; false otherwise. */
 static inline bool scene_emitter_spectral(const Scene *s, int emitter, Color rgb, const Wavelengths *wl, Color *out)
 {
-    if (!s->emitter_spectrum || emitter < 0 || emitter >= s->num_emitter_spectrum || !s->emitter_spectrum[emitter])
-        return false;
-    const SampledSpectrum *sp = &s->spectra[s->emitter_spectrum[emitter] - 1];
-    float y = cie_srgb_to_xyz[1][0] * rgb.c[0] + cie_srgb_to_xyz[1][1] * rgb.c[1] + cie_srgb_to_xyz[1][2] * rgb.c[2];
-    *out = color_scale(sampled_spectrum_eval(sp, wl), y * sp->inv_y);
+    int id = scene_light_spectrum(s, emitter);
+    if (!id) return false;
+    *out = scene_spectrum_at_luminance(s, id, rgb, wl);
     return true;
 }
 
@@ -578,7 +607,7 @@ static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wave
         return color_s(0.0f);
     if (!wl) return ls->li;
     Color o;
-    if (ls->light < s->emitter_sampler.count && scene_emitter_spectral(s, ls->light, ls->li, wl, &o)) return o;
+    if (scene_emitter_spectral(s, ls->light, ls->li, wl, &o)) return o;
     if (ls->light < s->emitter_sampler.count && s->emitter_spectra &&
         !s->emitter_sampler.light[ls->light].u.area.texture && !color_is_black(ls->li))
         return spectrum_rgb_eval_illuminant(&s->emitter_spectra[ls->light], wl);
@@ -588,7 +617,10 @@ static inline Color scene_light_li(const Scene *s, const LightLi *ls, const Wave
 /* The environment's radiance arriving from direction w (black without one). */
 static inline Color scene_env_radiance(const Scene *s, Vec3 w, const Wavelengths *wl)
 {
-    return s->emitter_sampler.env ? scene_light_color(light_env_radiance(&s->emitter_sampler, w), wl) : color_s(0.0f);
+    if (!s->emitter_sampler.env) return color_s(0.0f);
+    Color le = light_env_radiance(&s->emitter_sampler, w);
+    if (wl && s->env_spectrum) return scene_spectrum_at_luminance(s, s->env_spectrum, le, wl);
+    return scene_light_color(le, wl);
 }
 
 /* What NEE and light-path starts need of the scene's geometry and textures. */

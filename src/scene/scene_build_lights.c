@@ -182,7 +182,11 @@ CstStatus cst_scene_add_light(CstScene *scene, const CstLightDesc *d, CstError *
     if (d->type != CST_LIGHT_DIRECTIONAL)
         st = check_product(fn, "the power 4 pi x intensity", 4.0 * (double)CST_PI * color_peak(l.intensity),
                            "a smaller intensity", err);
+    if (st == CST_OK && (d->spectrum < 0 || d->spectrum > scene->num_spectra))
+        st = cst_fail(err, CST_ERR_INVALID_ARG, "%s: spectrum %d; expected 0 or a cst_scene_add_spectrum id "
+                      "(1 to %d)", fn, d->spectrum, scene->num_spectra);
     if (st == CST_OK) st = scene_add_delta_light(scene, &l, err);
+    if (st == CST_OK) return scene_set_delta_spectrum(scene, d->spectrum, err); /* the light is the scene's now */
     if (st != CST_OK && l.type == DELTA_GONIO)
         free((void *)(uintptr_t)l.gonio.factor);
     if (st != CST_OK && l.type == DELTA_PROJECTION)
@@ -205,6 +209,19 @@ CstStatus cst_scene_set_environment_constant(CstScene *scene, const float radian
         return st;
     if ((st = envmap_init_constant(&env, L, err)) != CST_OK) return st;
     return scene_set_environment(scene, &env, err);
+}
+
+CstStatus cst_scene_set_environment_spectrum(CstScene *scene, int spectrum, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_environment_spectrum";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (spectrum < 0 || spectrum > scene->num_spectra)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: spectrum %d; expected 0 or a cst_scene_add_spectrum id "
+                        "(1 to %d)", fn, spectrum, scene->num_spectra);
+    scene->env_spectrum = spectrum;
+    return CST_OK;
 }
 
 CstStatus cst_scene_set_environment_image(CstScene *scene, const char *path, const float scale[3], CstError *err)

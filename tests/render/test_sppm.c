@@ -11,7 +11,10 @@
  * -0.0040 +- 0.0005 at 128, z = -6.7 against the path tracer), since r falls only as
  * k^(-1/6). At 10 mm the bias is below the noise already at 32 iterations, so "shrinks"
  * would compare noise. Measured at 20 mm (red): -0.0017 +- 0.0005 at 32, -0.0009 +-
- * 0.0002 at 128, z = -2.6. */
+ * 0.0002 at 128, z = -2.6.
+ * `test_sppm --spectral`: the same in spectral mode, both estimators at the path's
+ * wavelengths (SPPM: one set per iteration shared by its photons and camera points,
+ * stratified over the iterations; the path tracer: one set per camera sample). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -24,6 +27,8 @@
 enum { SIZE = 32, RENDERS = 48, ITER = 32, PATH_SPP = 4096 };
 #define RADIUS0 20.0 /* mm: see the file comment */
 
+static CstColorMode g_color_mode = CST_COLOR_RGB;
+
 static RegionStat sppm_mean(const CstScene *s, int iterations, uint64_t seed)
 {
     CstRenderSettings st = {0};
@@ -31,6 +36,7 @@ static RegionStat sppm_mean(const CstScene *s, int iterations, uint64_t seed)
     st.spp = iterations;
     st.integrator = CST_INTEGRATOR_SPPM;
     st.photon_radius = RADIUS0;
+    st.color_mode = g_color_mode;
     const int whole[1][4] = {{0, 0, SIZE, SIZE}};
     RegionStat r;
     CstError err;
@@ -48,6 +54,7 @@ static void test_sppm_converges_to_path(void **state)
     st.width = st.height = SIZE;
     st.spp = PATH_SPP;
     st.integrator = CST_INTEGRATOR_PATH;
+    st.color_mode = g_color_mode;
     st.seed = 1;
     st.seed_set = 1;
     CstFilm *f = NULL;
@@ -72,8 +79,9 @@ static void test_sppm_converges_to_path(void **state)
     cst_scene_destroy(s);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sppm_converges_to_path),
     };

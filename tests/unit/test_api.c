@@ -122,9 +122,9 @@ static CstScene *build_api_scene(void)
     ok(cst_scene_add_sphere(s, (const float[3]){0.8f, 0.5f, 0}, 0.5f, gold, NULL, &e), &e);
     CstEmission em = {{4, 4, 3}, 0, 0, 0};
     ok(cst_scene_add_sphere(s, (const float[3]){0, 1.5f, -1}, 0.4f, plastic, &em, &e), &e);
-    CstLightDesc point = {CST_LIGHT_POINT, {0, 3, 2}, {0, 0, 0}, {5, 5, 5}, 0, 0, NULL, 0, {0}, 0, 0, 0.0f};
-    CstLightDesc spot = {CST_LIGHT_SPOT, {2, 3, 2}, {-2, -3, -2}, {10, 10, 10}, 25, 5, NULL, 0, {0}, 0, 0, 0.0f};
-    CstLightDesc dir = {CST_LIGHT_DIRECTIONAL, {0, 0, 0}, {-1, -2, -1}, {0.5f, 0.5f, 0.5f}, 0, 0, NULL, 0, {0}, 0, 0, 0.0f};
+    CstLightDesc point = {CST_LIGHT_POINT, {0, 3, 2}, {0, 0, 0}, {5, 5, 5}, 0, 0, NULL, 0, {0}, 0, 0, 0.0f, 0};
+    CstLightDesc spot = {CST_LIGHT_SPOT, {2, 3, 2}, {-2, -3, -2}, {10, 10, 10}, 25, 5, NULL, 0, {0}, 0, 0, 0.0f, 0};
+    CstLightDesc dir = {CST_LIGHT_DIRECTIONAL, {0, 0, 0}, {-1, -2, -1}, {0.5f, 0.5f, 0.5f}, 0, 0, NULL, 0, {0}, 0, 0, 0.0f, 0};
     ok(cst_scene_add_light(s, &point, &e), &e);
     ok(cst_scene_add_light(s, &spot, &e), &e);
     ok(cst_scene_add_light(s, &dir, &e), &e);
@@ -407,7 +407,7 @@ static void test_rejects_other_input(void **state)
     expect_invalid(&f, cst_scene_add_texture(f.s, &td, &id, &e), &e, "exactly one of path and pixels");
     assert_int_equal(f.s->num_textures, 1);
 
-    CstLightDesc l = {CST_LIGHT_SPOT, {0, 1, 0}, {0, -1, 0}, {1, 1, 1}, 95, 5, NULL, 0, {0}, 0, 0, 0.0f};
+    CstLightDesc l = {CST_LIGHT_SPOT, {0, 1, 0}, {0, -1, 0}, {1, 1, 1}, 95, 5, NULL, 0, {0}, 0, 0, 0.0f, 0};
     expect_invalid(&f, cst_scene_add_light(f.s, &l, &e), &e, "cone_angle 95");
     l.cone_angle = 30, l.cone_delta = 40;
     expect_invalid(&f, cst_scene_add_light(f.s, &l, &e), &e, "cone_delta 40");

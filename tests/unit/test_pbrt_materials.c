@@ -505,6 +505,50 @@ static void test_goniometric_light(void **state)
     assert_non_null(strstr(err.msg, "expected a square"));
 }
 
+/* The spectra of non-area lights (pbrt-v4 lights.cpp: I or L divided by its photometric
+ * value, then scale and power): point, spot, goniometric and distant lights and a lone
+ * uniform infinite light keep a blackbody, named or sampled spectrum for spectral mode
+ * (the scene's spectrum of the light), their RGB at luminance 1 x scale; RGB stays
+ * upsampled (no spectrum); a sum of infinite lights is one RGB map (no spectrum, a warning). */
+static void test_light_spectra(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD(
+        "LightSource \"point\" \"spectrum I\" \"stdillum-F11\" \"float scale\" 3\n"
+        "LightSource \"spot\" \"blackbody I\" [2700] \"point3 from\" [0 5 0] \"point3 to\" [0 0 0]\n"
+        "LightSource \"distant\" \"spectrum L\" [400 1 500 2 600 0.5 700 0.25]\n"
+        "LightSource \"point\" \"rgb I\" [1 0.5 0.25]\n"
+        "LightSource \"goniometric\" \"spectrum I\" \"illum-acesD60\"\n"
+        "LightSource \"infinite\" \"spectrum L\" \"stdillum-D50\" \"float scale\" 0.5\n" TRI), &w);
+    assert_int_equal(s->num_delta_lights, 5);
+    assert_non_null(s->delta_spectrum);
+    assert_true(s->num_delta_spectrum >= 4);
+    static SampledSpectrum f11;
+    bool approx = false;
+    assert_true(spectrum_named("stdillum-F11", &f11, &approx));
+    int id = s->delta_spectrum[0];
+    assert_true(id > 0);
+    assert_memory_equal(s->spectra[id - 1].v, f11.v, sizeof f11.v);
+    /* RGB: the spectrum at luminance 1, times scale */
+    assert_true(fabsf(color_luminance(s->delta_lights[0].intensity) - 3.0f) < 0.02f);
+    assert_true(s->delta_spectrum[1] > 0 && s->delta_spectrum[2] > 0 && s->delta_spectrum[1] != s->delta_spectrum[2]);
+    assert_true(fabsf(color_luminance(s->delta_lights[1].intensity) - 1.0f) < 0.03f);
+    assert_true(fabsf(color_luminance(s->delta_lights[2].intensity) - 1.0f) < 0.02f);
+    assert_true(s->num_delta_spectrum < 4 || s->delta_spectrum[3] == 0); /* rgb: upsampled */
+    assert_true(s->num_delta_spectrum == 5 && s->delta_spectrum[4] > 0);
+    assert_true(s->env_spectrum > 0);
+    Color env = light_env_radiance(&s->emitter_sampler, v3(0.0f, 1.0f, 0.0f));
+    assert_true(fabsf(color_luminance(env) - 0.5f) < 0.01f);
+    cst_scene_destroy(s);
+    /* two uniform infinite lights: their sum, upsampled */
+    s = expect_ok(WORLD("LightSource \"infinite\" \"spectrum L\" \"stdillum-D50\"\n"
+                        "LightSource \"infinite\" \"blackbody L\" [3000]\n" TRI), &w);
+    assert_int_equal(s->env_spectrum, 0);
+    assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "upsampled from RGB") >= 0);
+    cst_scene_destroy(s);
+}
+
 /* point, spot and distant lights as delta lights, placed by the CTM, with pbrt's power and
  * illuminance normalisation. */
 static void test_delta_lights(void **state)
@@ -917,6 +961,7 @@ int main(void)
         cmocka_unit_test(test_area_power_per_shape),
         cmocka_unit_test(test_goniometric_light),
         cmocka_unit_test(test_delta_lights),
+        cmocka_unit_test(test_light_spectra),
         cmocka_unit_test(test_equal_area_map),
         cmocka_unit_test(test_infinite_lights),
         cmocka_unit_test(test_infinite_light_nearest_pixel),

@@ -88,6 +88,139 @@ static void test_named(void **state)
     assert_true(fabsf(sampled_spectrum_at(&s, 579.6f) - 1.0f) < 1e-4f);
 }
 
+/* The named illuminants integrate to the chromaticities their standards state: CIE 15:2004
+ * table T.8 (F1-F12, D50: x, y to 4 decimals) and SMPTE ST 2065-1 (the ACES white, 0.32168,
+ * 0.33767). XYZ is summed at the 5 nm nodes of the CIE 1931 table, the CIE's own method
+ * (CIE 15:2004 sec. 7.1), which the 1 nm storage reproduces exactly at those nodes. A
+ * tolerance of 6e-5: half a unit of the 4th decimal of the stated value, plus float error. */
+static void test_named_illuminants(void **state)
+{
+    (void)state;
+    static const struct { const char *name; double x, y; } T[] = {
+        {"stdillum-F1", 0.3131, 0.3371}, {"stdillum-F2", 0.3721, 0.3751}, {"stdillum-F3", 0.4091, 0.3941},
+        {"stdillum-F4", 0.4402, 0.4031}, {"stdillum-F5", 0.3138, 0.3452}, {"stdillum-F6", 0.3779, 0.3882},
+        {"stdillum-F7", 0.3129, 0.3292}, {"stdillum-F8", 0.3458, 0.3586}, {"stdillum-F9", 0.3741, 0.3727},
+        {"stdillum-F10", 0.3458, 0.3588}, {"stdillum-F11", 0.3805, 0.3769}, {"stdillum-F12", 0.4370, 0.4042},
+        {"stdillum-D50", 0.3457, 0.3585}, {"illum-acesD60", 0.32168, 0.33767}, {"stdillum-D65", 0.3127, 0.3290},
+    };
+    static SampledSpectrum s;
+    bool approx = true;
+    for (size_t t = 0; t < sizeof T / sizeof T[0]; t++) {
+        assert_true(spectrum_named(T[t].name, &s, &approx));
+        assert_false(approx || s.constant);
+        double xyz[3] = {0.0, 0.0, 0.0};
+        for (int i = 0; i < CIE_SAMPLES; i++) {
+            double v = (double)sampled_spectrum_at(&s, (float)(CIE_LAMBDA_MIN + CIE_STEP * i));
+            xyz[0] += v * (double)cie_x[i], xyz[1] += v * (double)cie_y[i], xyz[2] += v * (double)cie_z[i];
+        }
+        double sum = xyz[0] + xyz[1] + xyz[2], x = xyz[0] / sum, y = xyz[1] / sum;
+        if (fabs(x - T[t].x) > 6e-5 || fabs(y - T[t].y) > 6e-5)
+            fail_msg("%s: (x, y) = (%.5f, %.5f); expected (%.4f, %.4f)", T[t].name, x, y, T[t].x, T[t].y);
+    }
+    /* the F series is 0 outside its table (380-780 nm), D50 is 100 at 560 nm */
+    assert_true(spectrum_named("stdillum-F11", &s, &approx));
+    assert_true(sampled_spectrum_at(&s, 379.0f) == 0.0f && sampled_spectrum_at(&s, 781.0f) == 0.0f);
+    assert_true(fabsf(sampled_spectrum_at(&s, 610.0f) - 55.27f) < 1e-3f); /* the table at 610 nm */
+    assert_true(spectrum_named("stdillum-D50", &s, &approx));
+    assert_true(fabsf(sampled_spectrum_at(&s, 560.0f) - 100.0f) < 1e-3f);
+    assert_false(spectrum_named("stdillum-F0", &s, &approx));
+    assert_false(spectrum_named("stdillum-F13", &s, &approx));
+    assert_false(spectrum_named("stdillum-F1x", &s, &approx));
+    assert_false(spectrum_named("stdillum-F", &s, &approx));
+}
+
+/* Delta lights and the environment with spectra of their own (CstLightDesc.spectrum,
+ * cst_scene_set_environment_spectrum): in spectral mode NEE (scene_light_li), light-path
+ * starts (scene_emitter_color) and escaped rays (scene_env_radiance) see the spectrum's
+ * shape at the luminance of the RGB value; lights without one stay upsampled (RGB x D65). */
+static void test_light_spectra(void **state)
+{
+    (void)state;
+    CstError err;
+    CstScene *cs = NULL;
+    assert_int_equal(cst_scene_create(&cs, &err), CST_OK);
+    static SampledSpectrum f11, bb;
+    bool approx = false;
+    assert_true(spectrum_named("stdillum-F11", &f11, &approx));
+    sampled_spectrum_blackbody(3000.0f, &bb);
+    float l[SAMPLED_SPECTRUM_N];
+    for (int i = 0; i < SAMPLED_SPECTRUM_N; i++) l[i] = (float)(SPECTRUM_LAMBDA_MIN + i);
+    int id_f11 = 0, id_bb = 0;
+    assert_int_equal(cst_scene_add_spectrum(cs, l, f11.v, SAMPLED_SPECTRUM_N, &id_f11, &err), CST_OK);
+    assert_int_equal(cst_scene_add_spectrum(cs, l, bb.v, SAMPLED_SPECTRUM_N, &id_bb, &err), CST_OK);
+    CstMaterialDesc d;
+    cst_material_desc_init(&d, CST_MATERIAL_DIFFUSE);
+    int mat = 0;
+    assert_int_equal(cst_scene_add_material(cs, &d, &mat, &err), CST_OK);
+    CstEmission em = {{1.0f, 1.0f, 1.0f}, 0, 0, 0}; /* an area emitter first: light index 0, no spectrum */
+    assert_int_equal(cst_scene_add_sphere(cs, (const float[3]){0, 0, 0}, 1.0f, mat, &em, &err), CST_OK);
+    CstLightDesc pt = {0}, dl = {0}, plain = {0};
+    pt.type = CST_LIGHT_POINT;
+    pt.position[1] = 3.0f;
+    pt.intensity[0] = 4.0f, pt.intensity[1] = 3.0f, pt.intensity[2] = 2.0f;
+    pt.spectrum = id_f11;
+    plain = pt;
+    plain.spectrum = 0;
+    dl.type = CST_LIGHT_DIRECTIONAL;
+    dl.direction[1] = -1.0f;
+    dl.intensity[0] = dl.intensity[1] = dl.intensity[2] = 0.5f;
+    dl.spectrum = id_bb;
+    assert_int_equal(cst_scene_add_light(cs, &pt, &err), CST_OK);    /* light 1 */
+    assert_int_equal(cst_scene_add_light(cs, &plain, &err), CST_OK); /* light 2 */
+    assert_int_equal(cst_scene_add_light(cs, &dl, &err), CST_OK);    /* light 3 */
+    pt.spectrum = 9;
+    assert_int_equal(cst_scene_add_light(cs, &pt, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "spectrum 9"));
+    const float env[3] = {0.2f, 0.3f, 0.4f};
+    assert_int_equal(cst_scene_set_environment_constant(cs, env, &err), CST_OK);
+    assert_int_equal(cst_scene_set_environment_spectrum(cs, 5, &err), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_scene_set_environment_spectrum(cs, id_bb, &err), CST_OK);
+    assert_int_equal(cst_scene_commit(cs, &err), CST_OK);
+    const Scene *s = cs;
+    assert_int_equal(s->emitter_sampler.count, 1);
+    assert_int_equal(light_env_index(&s->emitter_sampler), 4);
+    Wavelengths w = wavelengths_sample(0.3f);
+    const SampledSpectrum *sp[5] = {NULL, &f11, NULL, &bb, &bb};
+    const Color rgb[5] = {color_s(1.0f), color_rgb(4.0f, 3.0f, 2.0f), color_rgb(4.0f, 3.0f, 2.0f), color_s(0.5f),
+                          color_rgb(0.2f, 0.3f, 0.4f)};
+    for (int light = 0; light < 5; light++) {
+        LightLi ls;
+        memset(&ls, 0, sizeof ls);
+        ls.light = light;
+        ls.li = rgb[light];
+        Color got = scene_light_li(s, &ls, &w), path = scene_emitter_color(s, light, rgb[light], &w);
+        Color want = spectrum_illuminant(rgb[light], &w);
+        if (sp[light]) {
+            double y = 0.0;
+            for (int i = 0; i < SAMPLED_SPECTRUM_N; i++) {
+                float xyz[3];
+                spectrum_cie_xyz((float)(SPECTRUM_LAMBDA_MIN + i), xyz);
+                y += (double)sp[light]->v[i] * (double)xyz[1];
+            }
+            float lum = 0.2126729f * rgb[light].c[0] + 0.7151522f * rgb[light].c[1] + 0.0721750f * rgb[light].c[2];
+            for (int i = 0; i < COLOR_LANES; i++) want.c[i] = sampled_spectrum_at(sp[light], w.lambda[i]) * lum / (float)y;
+        }
+        for (int i = 0; i < COLOR_LANES; i++) {
+            if (fabsf(got.c[i] - want.c[i]) > 2e-3f * want.c[i] + 1e-6f ||
+                fabsf(path.c[i] - want.c[i]) > 2e-3f * want.c[i] + 1e-6f)
+                fail_msg("light %d lane %d (%g nm): NEE %g, light path %g; expected %g", light, i,
+                         (double)w.lambda[i], (double)got.c[i], (double)path.c[i], (double)want.c[i]);
+        }
+    }
+    Color e = scene_env_radiance(s, v3(0.0f, 1.0f, 0.0f), &w);
+    for (int i = 0; i < COLOR_LANES; i++) {
+        LightLi ls;
+        memset(&ls, 0, sizeof ls);
+        ls.light = 4;
+        ls.li = rgb[4];
+        assert_true(fabsf(e.c[i] - scene_light_li(s, &ls, &w).c[i]) <= 1e-6f * e.c[i]);
+    }
+    /* RGB mode ignores the spectra */
+    Color rgb_env = scene_env_radiance(s, v3(0.0f, 1.0f, 0.0f), NULL);
+    assert_true(rgb_env.c[0] == 0.2f && rgb_env.c[1] == 0.3f && rgb_env.c[2] == 0.4f);
+    cst_scene_destroy(cs);
+}
+
 static CstStatus spd(const char *text, int *n, float **l, float **v, CstError *err)
 {
     err->msg[0] = '\0';
@@ -300,6 +433,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pairs),
         cmocka_unit_test(test_named),
+        cmocka_unit_test(test_named_illuminants),
+        cmocka_unit_test(test_light_spectra),
         cmocka_unit_test(test_spd),
         cmocka_unit_test(test_scene_spectra),
         cmocka_unit_test(test_white_balance),

@@ -212,7 +212,8 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
     const char *file = NULL;
     Loc fl = loc;
     Param *pp;
-    TRY(pbrt_get_spectrum(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &c, &has_l));
+    int spectrum = 0;
+    TRY(pbrt_get_spectrum_id(ld, ps, d, "L", SPEC_ILLUMINANT, 0, &c, &has_l, &spectrum));
     TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
     TRY(pbrt_get_float(ld, ps, d, "illuminance", 0.0f, &illum, NULL));
     TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
@@ -250,7 +251,15 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the radiance is not finite", d);
         float lf[3], one[3] = {1.0f, 1.0f, 1.0f};
         pbrt_color_floats(L, lf);
+        int first = !ld->env_set;
         st = env_accumulate(ld, NULL, 0, 0, one, lf, loc, d);
+        /* Spectral mode: a lone uniform light keeps its spectrum's shape (pbrt-v4
+         * UniformInfiniteLight, L / SpectrumToPhotometric(L) x scale: the RGB above holds
+         * the luminance); a sum of lights is one RGB map, upsampled. */
+        if (!st && !first && spectrum)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: \"L\" added to another infinite light: "
+                         "in spectral mode their sum is upsampled from RGB, not kept as a spectrum", d);
+        if (!st) st = cst_scene_set_environment_spectrum(ld->scene, first ? spectrum : 0, ld->err);
     } else {
         if (!ld->gs.ctm.inv_ok)
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the light's transform is singular; "
@@ -305,6 +314,7 @@ static CstStatus infinite_light(Loader *ld, Params *ps, Loc loc, const char *d)
         /* Already in world space: no world_from_map. The builder copies the pixels. */
         float kf[3] = {(float)k, (float)k, (float)k}, zero[3] = {0.0f, 0.0f, 0.0f};
         st = env_accumulate(ld, out, ow, oh, kf, zero, loc, d); /* takes out */
+        if (!st) st = cst_scene_set_environment_spectrum(ld->scene, 0, ld->err); /* an image: RGB */
     }
     if (st) return pbrt_fail_wrap(ld, st, loc, d);
     return CST_OK;
@@ -322,7 +332,8 @@ static CstStatus gonio_light(Loader *ld, Params *ps, Loc loc, const char *d)
     float scale = 1.0f, power = 0.0f;
     const char *file = NULL;
     Loc fl = loc;
-    TRY(pbrt_get_spectrum(ld, ps, d, "I", SPEC_ILLUMINANT, 0, &c, NULL));
+    int spectrum = 0;
+    TRY(pbrt_get_spectrum_id(ld, ps, d, "I", SPEC_ILLUMINANT, 0, &c, NULL, &spectrum));
     TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
     TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &power, NULL));
     TRY(pbrt_get_string(ld, ps, d, "filename", &file, &fl));
@@ -360,6 +371,7 @@ static CstStatus gonio_light(Loader *ld, Params *ps, Loc loc, const char *d)
     CstLightDesc l;
     memset(&l, 0, sizeof l);
     l.type = CST_LIGHT_GONIOMETRIC;
+    l.spectrum = spectrum;
     Vec3 p = transform_point(&ld->gs.ctm.m, v3s(0.0f));
     pbrt_vec3_floats(p, l.position);
     pbrt_color_floats(intensity, l.intensity);
@@ -467,7 +479,7 @@ static CstStatus light_source(Loader *ld, const char *type, Params *ps, Loc loc,
     memset(&l, 0, sizeof l);
     Color c = color_s(1.0f);
     float scale = 1.0f, power = 0.0f, illum = 0.0f;
-    TRY(pbrt_get_spectrum(ld, ps, d, distant ? "L" : "I", SPEC_ILLUMINANT, 0, &c, NULL));
+    TRY(pbrt_get_spectrum_id(ld, ps, d, distant ? "L" : "I", SPEC_ILLUMINANT, 0, &c, NULL, &l.spectrum));
     TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
     if (distant) TRY(pbrt_get_float(ld, ps, d, "illuminance", 0.0f, &illum, NULL));
     else TRY(pbrt_get_float(ld, ps, d, "power", 0.0f, &power, NULL));
