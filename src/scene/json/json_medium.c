@@ -60,11 +60,13 @@ CstStatus json_parse_media(Loader *ld, const json_t *media)
         LOADER_TRY(read_coeff(ld, v, "Le", d.le));
         LOADER_TRY(read_scalar(ld, v, "scale", 1e30, &d.scale));
         LOADER_TRY(read_scalar(ld, v, "Lescale", 1e30, &d.le_scale));
-        LOADER_TRY(read_scalar(ld, v, "g", 1.0, &d.g));
+        LOADER_TRY(read_scalar(ld, v, "g", 1e30, &d.g));
+        if (!(d.g > -1.0f && d.g < 1.0f)) {
+            json_path_push_key(ld, "g");
+            return json_fail_here(ld, "%g; expected a number in (-1, 1) (Henyey–Greenstein asymmetry)", (double)d.g);
+        }
         if (!(d.scale >= 0.0f && d.le_scale >= 0.0f))
             return json_fail_here(ld, "a negative scale or Lescale; expected numbers >= 0");
-        if (!(d.g > -1.0f && d.g < 1.0f))
-            return json_fail_here(ld, "g = %g; expected a number in (-1, 1)", (double)d.g);
         int id;
         if (cst_scene_add_medium(ld->scene, &d, &id, ld->err) != CST_OK)
             return json_fail_builder(ld, ld->err->status);
