@@ -92,7 +92,7 @@ static Scene *furnace(Color sigma_a, Color sigma_s, Color le, float g, bool in_m
 
 static void run_furnace(Scene *s, const Color L, int spp, uint64_t seed, int variants, const char *what)
 {
-    const double expect[3] = {L.c[0], L.c[1], L.c[2]};
+    const double expect[3] = {(double)L.c[0], (double)L.c[1], (double)L.c[2]};
     for (int i = 0; i < variants; i++) {
         char name[128];
         snprintf(name, sizeof name, "%s, %s", what, cst_integrator_name(VARIANTS[i]));
