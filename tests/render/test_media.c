@@ -184,11 +184,12 @@ static void test_fog_variants_agree(void **state)
 }
 
 /* The fog-filled Cornell box of tests/render/media/cornell-fog.pbrt against pbrt-v4's
- * volpath (spectral, maxdepth 5): the whole-image means of two pbrt-v4 renders of 128 x
- * 128 pixels at 1024 spp (seeds 0 and 1; tests/render/media/README.md), and caustic's at a
+ * volpath (spectral, maxdepth 5): the whole-image means of a pbrt-v4 render of 128 x
+ * 128 pixels at 1024 spp (tests/render/media/README.md), and caustic's at a
  * fraction of the paths (the whole-image mean does not depend on the resolution with the
  * box filter). Passes when each channel is within 1% of pbrt-v4's mean plus 4 standard
- * errors of caustic's (the reference's own error, about 0.4% in blue, is inside the 1%).
+ * errors of caustic's (the reference's own standard error, at most 0.55% in blue, is
+ * inside the 1%).
  * Spectral mode only: pbrt-v4 is spectral. */
 static void test_pbrt_fog_cornell(void **state)
 {
