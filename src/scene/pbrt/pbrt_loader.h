@@ -95,8 +95,9 @@ typedef struct MatEntry {
     Material m;
     int scene_id; /* added to the scene on first use, -1 before */
     /* pbrt-v4's "interface" (also v3's "" and "none"): a medium boundary that does not
-     * scatter. Shapes with it are left out of the scene (invisible to every ray), unless
-     * they emit; then m stands in for it. */
+     * scatter. Between two different media shapes with it become pure boundaries
+     * (pbrt_medium.h); otherwise they are left out of the scene (invisible to every ray),
+     * unless they emit; then m stands in for it. */
     int interface;
 } MatEntry;
 

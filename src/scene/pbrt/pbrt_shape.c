@@ -607,12 +607,13 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         if ((st = pbrt_medium_apply(ld, 1, loc, d)) == CST_OK)
             st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
     } else if (ld->mats[ld->gs.material].interface && !(ld->cur_obj < 0 && ld->gs.area.active)) {
-        /* An "interface" shape only bounds a medium (which caustic does not render): it
-         * scatters nothing, so leaving it out is exact for every ray, shadow rays included.
-         * An emitting one stays, as glass of eta 1 (it would block shadow rays). */
+        /* An "interface" shape that separates no two media caustic renders (equal sides,
+         * or a medium type read as vacuum) scatters nothing and changes no medium, so
+         * leaving it out is exact for every ray, shadow rays included. An emitting one
+         * stays, as glass of eta 1 (it would block shadow rays). */
         if (ld->num_interface_shapes++ == 0)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: shapes with material \"interface\" (medium "
-                         "boundaries) are left out: participating media are not supported", d);
+                         "boundaries) that separate no two rendered media are left out", d);
     } else if (ld->gs.area.active && ld->mats[ld->gs.material].interface && ld->cur_obj < 0) {
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: an emitting shape with material \"interface\" "
                      "is kept as glass of eta 1: paths pass through it, shadow rays are blocked", d);
