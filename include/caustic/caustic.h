@@ -553,6 +553,32 @@ CST_API CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *des
 /* The file the scene asks its render to be written to (cst_scene_output_path reads it
  * back); a non-empty path, copied; replaces one set before. */
 CST_API CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err);
+/* A homogeneous participating medium (pbrt-v4's "homogeneous"): coefficients per unit
+ * length of the scene, linear RGB (spectral mode upsamples sigma_a and sigma_s as
+ * unbounded spectra, le as an illuminant). Initialise with cst_medium_desc_init (pbrt-v4's
+ * defaults: sigma_a = sigma_s = 1, scale = 1, g = 0, no emission, le_scale = 1). */
+typedef struct CstMediumDesc {
+    float sigma_a[3], sigma_s[3]; /* absorption and scattering, finite, >= 0 */
+    float scale;                  /* multiplies both, >= 0 */
+    float g;                      /* Henyey–Greenstein asymmetry, in (-1, 1); > 0 forward */
+    float le[3];                  /* emitted radiance (the medium adds sigma_a le per unit length) */
+    float le_scale;               /* multiplies le, >= 0 */
+} CstMediumDesc;
+
+CST_API void cst_medium_desc_init(CstMediumDesc *desc);
+/* *out_id (>= 0) names the medium. Only the path integrators (path, path-nee,
+ * path-bsdf) render scenes with media; the others fail with CST_ERR_UNSUPPORTED. */
+CST_API CstStatus cst_scene_add_medium(CstScene *scene, const CstMediumDesc *desc, int *out_id, CstError *err);
+/* The medium interface of every shape added after this call (pbrt-v4's MediumInterface):
+ * inside (behind the shape's geometric normal) and outside medium ids, -1 = vacuum.
+ * boundary = 1 makes those shapes pure medium boundaries (pbrt's "interface" material):
+ * rays cross them without scattering, shadow rays pass them; their material is not used.
+ * inside == outside with boundary 0 (the initial state) means no transition: rays keep
+ * their medium. */
+CST_API CstStatus cst_scene_set_medium_interface(CstScene *scene, int inside, int outside, int boundary,
+                                                 CstError *err);
+/* The medium the camera is in (pbrt-v4's CameraMedium), -1 = vacuum (the default). */
+CST_API CstStatus cst_scene_set_camera_medium(CstScene *scene, int medium, CstError *err);
 /* Builds the acceleration structure and the light distribution; after it the scene can
  * be rendered and accepts no more additions. */
 CST_API CstStatus cst_scene_commit(CstScene *scene, CstError *err);

@@ -518,6 +518,9 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
+    if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
+                        "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

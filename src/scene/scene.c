@@ -37,6 +37,7 @@ Scene *scene_create(void)
     s->settings.rr_depth = s->settings.photons = 0;
     s->settings.photon_radius = 0.0;
     s->settings.aovs = 0;
+    s->camera_medium = -1;
     return s;
 }
 
@@ -65,6 +66,8 @@ void scene_destroy(Scene *s)
     free(s->textures);
     free(s->emitters);
     free(s->alphas);
+    free(s->media);
+    free(s->medium_ifaces);
     for (int i = 0; i < s->num_delta_lights; i++)
         if (s->delta_lights[i].type == DELTA_GONIO) free((void *)(uintptr_t)s->delta_lights[i].gonio.factor);
         else if (s->delta_lights[i].type == DELTA_PROJECTION) free((void *)(uintptr_t)s->delta_lights[i].proj.rgb);
@@ -329,6 +332,7 @@ CstStatus scene_add_mesh_ex(Scene *s, const SceneMesh *m, int *num_dropped, CstE
         for (int k = 0; k < 3; k++) s->tri_indices[3 * id + k] = base + indices[3 * t + k];
         s->tri_info[id].material = m->tri_material ? m->tri_material[t] : m->material;
         s->tri_info[id].alpha = m->alpha;
+        s->tri_info[id].medium = s->cur_medium_iface;
         if (s->tri_has_uv) s->tri_has_uv[id] = m->uvs != NULL;
         CstStatus st = add_emitter(s, (uint32_t)id, m->emission, area, &s->tri_info[id].emitter, err);
         if (st != CST_OK) return st;
@@ -383,6 +387,7 @@ CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,
     s->spheres[i].radius = radius;
     s->sphere_info[i].material = material;
     s->sphere_info[i].alpha = 0;
+    s->sphere_info[i].medium = s->cur_medium_iface;
     s->num_spheres = i + 1;
     /* Sphere prim ids follow all triangles, so they are only known at commit: until
      * then the emitter holds the sphere index, flagged by is_sphere. */
@@ -404,6 +409,95 @@ CstStatus scene_add_alpha(Scene *s, float value, int texture, int *out_id, CstEr
     s->alphas[s->num_alphas] = (AlphaMask){value, texture};
     *out_id = ++s->num_alphas;
     return CST_OK;
+}
+
+/* ------------------------------------------------------------------ media */
+
+static bool coeff_ok(Color c)
+{
+    for (int i = 0; i < COLOR_LANES; i++)
+        if (!(c.c[i] >= 0.0f) || !isfinite(c.c[i])) return false;
+    return true;
+}
+
+CstStatus scene_add_medium(Scene *s, const Medium *m, int *out_id, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (m->type != MEDIUM_HOMOGENEOUS)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "medium type %d; expected homogeneous", (int)m->type);
+    if (!coeff_ok(m->u.homog.sigma_a) || !coeff_ok(m->u.homog.sigma_s) || !coeff_ok(m->u.homog.le))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "medium: sigma_a, sigma_s and Le must be finite and >= 0");
+    if (!(fabsf(m->g) < 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "medium: g = %g; expected a value in (-1, 1)", (double)m->g);
+    if (!GROW(s->media, s->cap_media, s->num_media + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a medium");
+    s->media[s->num_media] = *m;
+    *out_id = s->num_media++;
+    return CST_OK;
+}
+
+CstStatus scene_set_medium_interface(Scene *s, int inside, int outside, int boundary, CstError *err)
+{
+    if (inside < -1 || inside >= s->num_media || outside < -1 || outside >= s->num_media)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "medium interface (%d, %d): expected media indices "
+                        "from -1 (vacuum) to %d", inside, outside, s->num_media - 1);
+    if (inside == outside && !boundary) {
+        s->cur_medium_iface = 0;
+        return CST_OK;
+    }
+    /* Shapes added in a row usually share one interface: reuse the last. */
+    if (s->num_medium_ifaces) {
+        const MediumInterface *l = &s->medium_ifaces[s->num_medium_ifaces - 1];
+        if (l->inside == inside && l->outside == outside && l->boundary == (boundary != 0)) {
+            s->cur_medium_iface = s->num_medium_ifaces;
+            return CST_OK;
+        }
+    }
+    if (!GROW(s->medium_ifaces, s->cap_medium_ifaces, s->num_medium_ifaces + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a medium interface");
+    s->medium_ifaces[s->num_medium_ifaces] = (MediumInterface){inside, outside, boundary != 0};
+    s->cur_medium_iface = ++s->num_medium_ifaces;
+    return CST_OK;
+}
+
+CstStatus scene_set_camera_medium(Scene *s, int medium, CstError *err)
+{
+    if (medium < -1 || medium >= s->num_media)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "camera medium %d: expected a medium index from -1 (vacuum) "
+                        "to %d", medium, s->num_media - 1);
+    s->camera_medium = medium;
+    return CST_OK;
+}
+
+Color scene_transmittance(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, int medium, const Wavelengths *wl,
+                          uint64_t *rays)
+{
+    Vec3 d = v3_sub(q, p);
+    Vec3 o = scene_offset(s, p, n_p, d); /* a zero normal leaves the point where it is */
+    const Vec3 end = scene_offset(s, q, n_q, v3_neg(d));
+    Color tr = color_s(1.0f);
+    /* Each step crosses one boundary; a bound on them keeps a degenerate stack of
+     * coincident boundaries from looping (then the light counts as blocked). */
+    for (int step = 0; step < 256; step++) {
+        Vec3 od = v3_sub(end, o);
+        float len = v3_length(od);
+        if (!(len > 0.0f)) return tr;
+        Vec3 dir = v3_scale(od, 1.0f / len);
+        Ray r = ray_make(o, dir, 0.0f, len * (1.0f - 1e-5f));
+        SurfaceHit sh;
+        ++*rays;
+        bool hit = scene_intersect(s, &r, &sh);
+        if (medium >= 0) {
+            MediumCoeffs mc = medium_coeffs(&s->media[medium], wl);
+            tr = color_mul(tr, medium_transmittance(&mc, hit ? sh.t : len));
+        }
+        if (!hit) return tr;
+        const MediumInterface *mi = scene_hit_medium_iface(s, &sh);
+        if (!mi || !mi->boundary || color_is_black(tr)) return color_s(0.0f);
+        medium = v3_dot(dir, sh.ng) < 0.0f ? mi->inside : mi->outside;
+        o = scene_offset(s, sh.p, sh.ng, dir);
+    }
+    return color_s(0.0f);
 }
 
 /* ------------------------------------------------------------------ alpha cut-outs */

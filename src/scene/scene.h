@@ -24,6 +24,7 @@
 #include "math/cie_data.h"
 #include "math/spectrum_sampled.h"
 #include "math/vec3.h"
+#include "media/medium.h"
 #include "scene/footprint.h"
 #include "scene/scene_build.h"
 #include "textures/texture.h"
@@ -39,6 +40,8 @@ typedef struct PrimInfo {
     int32_t material; /* index into materials */
     int32_t emitter;  /* index into emitters, or -1 */
     int32_t alpha;    /* 1 + index into Scene.alphas; 0: opaque (no cut-out) */
+    int32_t medium;   /* 1 + index into Scene.medium_ifaces; 0: no medium transition (a
+                       * ray crossing it stays in its medium, as in pbrt-v4) */
 } PrimInfo;
 
 /* An alpha cut-out (pbrt-v4's Shape "alpha"): where the alpha a at a hit is 0 the surface
@@ -85,6 +88,14 @@ struct CstScene {
     /* Per delta light, 1 + the index of its emitted spectrum or 0 (CstLightDesc.spectrum);
      * NULL when none has one; entries past num_delta_spectrum are 0. */
     int *delta_spectrum; int num_delta_spectrum; size_t cap_delta_spectrum;
+    /* Participating media (media/medium.h) and the interfaces shapes carry (PrimInfo.medium);
+     * num_media == 0 (every scene without media) keeps the path tracer on its surface-only
+     * loop behind a single branch. cur_medium_iface: 1 + the interface given to shapes added
+     * from now on (scene_set_medium_interface), 0 none. camera_medium: -1 vacuum. */
+    Medium *media; int num_media; size_t cap_media;
+    MediumInterface *medium_ifaces; int num_medium_ifaces; size_t cap_medium_ifaces;
+    int cur_medium_iface;
+    int camera_medium;
     EnvMap *env; /* the environment, or NULL */
     /* Spectral mode: 1 + the index of the spectrum giving the environment's radiance its
      * shape (at the luminance of its RGB), 0: the RGB upsampled (cst_scene_set_environment_spectrum) */
@@ -172,6 +183,14 @@ CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material
  * sphere_info[].alpha): *out_id = 1 + its index. value in [0, 1]; texture 1 + a texture
  * index already in the scene, or 0. */
 CstStatus scene_add_alpha(Scene *scene, float value, int texture, int *out_id, CstError *err);
+/* A medium (its coefficients checked: finite, >= 0; |g| < 1); *out_id its index. */
+CstStatus scene_add_medium(Scene *scene, const Medium *m, int *out_id, CstError *err);
+/* The medium interface of shapes added from now on: inside and outside media indices
+ * (-1 vacuum), boundary as MediumInterface.boundary. inside == outside and no boundary
+ * means none (no transition). */
+CstStatus scene_set_medium_interface(Scene *scene, int inside, int outside, int boundary, CstError *err);
+/* The medium the camera sits in (-1 vacuum). */
+CstStatus scene_set_camera_medium(Scene *scene, int medium, CstError *err);
 /* Sets the environment (replacing one set before); the scene takes ownership of *env's
  * buffers (the struct is copied). */
 CstStatus scene_set_environment(Scene *scene, const EnvMap *env, CstError *err);
@@ -673,6 +692,33 @@ static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
     Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
     return !scene_occluded(s, &r);
 }
+
+/* The medium interface of a hit's primitive, or NULL when it has none (no transition;
+ * instances carry none). */
+static inline const MediumInterface *scene_hit_medium_iface(const Scene *s, const SurfaceHit *sh)
+{
+    if (sh->prim == UINT32_MAX) return NULL;
+    int m = scene_prim_info(s, sh->prim)->medium;
+    return m ? &s->medium_ifaces[m - 1] : NULL;
+}
+
+/* The medium a ray enters when it leaves hit sh in direction d, coming from medium cur:
+ * the interface's inside behind ng, its outside in front; cur when there is no transition. */
+static inline int scene_medium_after(const Scene *s, const SurfaceHit *sh, Vec3 d, int cur)
+{
+    const MediumInterface *mi = scene_hit_medium_iface(s, sh);
+    if (!mi) return cur;
+    return v3_dot(d, sh->ng) < 0.0f ? mi->inside : mi->outside;
+}
+
+/* Scenes with media: the transmittance from p to q, p and q surface points with normals
+ * n_p, n_q (pushed off as in scene_visible), or points in a medium (zero normal).
+ * medium: the medium at p toward q (-1 vacuum). The shadow ray passes boundary shapes
+ * (MediumInterface.boundary), changing medium at each and multiplying the transmittance
+ * of every segment (Beer–Lambert per medium); any other surface between gives black.
+ * wl: the path's wavelengths (NULL in RGB mode). Adds the rays traced to *rays. */
+Color scene_transmittance(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, int medium, const Wavelengths *wl,
+                          uint64_t *rays);
 
 /* Defaults applied by the renderer to zero fields. */
 #define CST_DEFAULT_WIDTH 512

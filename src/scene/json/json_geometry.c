@@ -12,6 +12,7 @@
 #include "io/path.h"
 #include "math/transform.h"
 #include "scene/json/json_material.h"
+#include "scene/json/json_medium.h"
 #include "scene/json/json_texture.h"
 #include "scene/mesh_import.h"
 
@@ -635,25 +636,30 @@ static CstStatus read_alpha(Loader *ld, const json_t *shape, CstAlpha *out)
 static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
     static const char *const types[] = {"quad", "mesh", "sphere", "meshfile"};
-    static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha"};
+    static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha", "medium"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
-                                            "normals", "shading", "alpha"};
-    static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission", "alpha"};
+                                            "normals", "shading", "alpha", "medium"};
+    static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission", "alpha",
+                                              "medium"};
     static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
-                                                "transform", "shading", "alpha"};
+                                                "transform", "shading", "alpha", "medium"};
     int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(json_expect_object(ld, shape, "a shape object"));
     LOADER_TRY(json_read_type(ld, shape, "shape type", types, 4, -1, &type));
     switch (type) {
-    case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 5)); break;
-    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 9)); break;
-    case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 7)); break;
-    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 6)); break;
+    case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 6)); break;
+    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 10)); break;
+    case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 8)); break;
+    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 7)); break;
     }
-    /* A mesh file may bring its own materials: then "material" is optional (-1 = none). */
-    if (type != SHAPE_MESHFILE || json_object_get(shape, "material"))
+    int boundary = 0;
+    LOADER_TRY(json_read_shape_medium(ld, shape, &boundary));
+    /* A mesh file may bring its own materials: then "material" is optional (-1 = none);
+     * so may a pure medium boundary, which has no surface. */
+    if ((type != SHAPE_MESHFILE && !boundary) || json_object_get(shape, "material"))
         LOADER_TRY(json_read_material_ref(ld, shape, &material));
+    if (boundary && material < 0) LOADER_TRY(json_boundary_material(ld, &material));
     LOADER_TRY(json_read_emission(ld, shape, &em));
     CstAlpha alpha = {0};
     LOADER_TRY(read_alpha(ld, shape, &alpha));

@@ -55,6 +55,12 @@ typedef struct Loader {
     int *tex_state, *tex_ids;
     int *tex_sorted; /* indices into tex_names in strcmp order: lookups by binary search */
     int num_textures;
+    /* Medium names (keys owned by the jansson root), in file order: a medium's scene id is
+     * its index. boundary_material: the material given to boundary shapes without one
+     * (made on first use), or -1. */
+    const char **med_names;
+    int num_media;
+    int boundary_material;
     /* What the film, integrator and sampler sections ask for, handed to the scene with
      * cst_scene_set_render_settings before commit. Starts as a new scene's settings: unset,
      * with 0 for the fields where 0 reads as unset (and aovs, which sections OR into). */

@@ -13,6 +13,7 @@
 #include "scene/json/json_light.h"
 #include "scene/json/json_locate.h"
 #include "scene/json/json_material.h"
+#include "scene/json/json_medium.h"
 #include "scene/json/json_reader.h"
 #include "scene/json/json_settings.h"
 #include "scene/json/json_texture.h"
@@ -22,10 +23,11 @@
 static CstStatus parse_root(Loader *ld, const json_t *root)
 {
     static const char *const keys[] = {"film", "camera", "integrator", "sampler", "materials",
-                                       "shapes", "lights", "environment", "accel", "textures"};
+                                       "shapes", "lights", "environment", "accel", "textures",
+                                       "media", "camera_medium"};
     json_t *v;
     LOADER_TRY(json_expect_object(ld, root, "an object with the scene sections"));
-    LOADER_TRY(json_check_keys(ld, root, keys, 10));
+    LOADER_TRY(json_check_keys(ld, root, keys, 12));
     if ((v = json_object_get(root, "accel"))) {
         json_path_push_key(ld, "accel");
         const char *name = NULL;
@@ -67,6 +69,16 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
     if ((v = json_object_get(root, "materials"))) {
         json_path_push_key(ld, "materials");
         LOADER_TRY(json_parse_materials(ld, v));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(root, "media"))) {
+        json_path_push_key(ld, "media");
+        LOADER_TRY(json_parse_media(ld, v));
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(root, "camera_medium"))) {
+        json_path_push_key(ld, "camera_medium");
+        LOADER_TRY(json_parse_camera_medium(ld, v));
         json_path_pop(ld);
     }
     LOADER_TRY(json_member_required(ld, root, "shapes", "an array of shapes", &v));
@@ -142,6 +154,7 @@ static CstStatus load_json_string(const char *text, size_t len, const char *name
     }
 
     Loader ld = {0};
+    ld.boundary_material = -1;
     ld.text = text ? text : "";
     ld.len = len;
     ld.name = name;
@@ -171,6 +184,7 @@ static CstStatus load_json_string(const char *text, size_t len, const char *name
     }
     free(ld.mat_names);
     free(ld.mat_ids);
+    free(ld.med_names);
     free(ld.tex_names);
     free(ld.tex_state);
     free(ld.tex_ids);

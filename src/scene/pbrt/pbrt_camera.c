@@ -43,6 +43,7 @@ CstStatus pbrt_camera_directive(Loader *ld, Lexer *lx, Loc loc, const char *dnam
     c->ctm = ld->gs.ctm;
     c->loc = loc;
     c->ortho = ortho;
+    c->medium = ld->gs.med_out; /* pbrt-v4's CameraMedium: the outside medium here */
     c->fov = 90.0f;
     Param *p;
     if (!ortho && (st = pbrt_get_float(ld, &ps, d, "fov", 90.0f, &c->fov, NULL))) goto done;
@@ -187,5 +188,6 @@ CstStatus pbrt_camera_finish(Loader *ld)
                          "on lengths; focused at %g", (double)c.focal_distance, PBRT_MAX_LENGTH);
     }
     CstStatus st = cst_scene_set_camera(ld->scene, &desc, ld->err);
+    if (!st && c.medium) st = cst_scene_set_camera_medium(ld->scene, c.medium - 1, ld->err);
     return st ? pbrt_fail_wrap(ld, st, c.loc, "Camera") : CST_OK;
 }

@@ -226,6 +226,9 @@ void pbrt_loader_free(Loader *ld)
         free((char *)(uintptr_t)ld->mats[i].m.measured_file); /* pbrt_material.c's path */
     }
     free(ld->mats);
+    for (int i = 0; i < ld->num_meds; i++) free(ld->med_names[i]);
+    free(ld->med_names);
+    free(ld->med_ids);
     for (int i = 0; i < ld->num_texs; i++) free(ld->texs[i].name);
     free(ld->texs);
     for (int i = 0; i < ld->num_coords; i++) free(ld->coords[i].name);

@@ -86,6 +86,7 @@ typedef struct GState {
     int active_end;     /* ActiveTransform includes EndTime (for the motion warning); both
                            are attributes, restored by AttributeEnd, as in pbrt-v4 */
     int transform_only; /* pushed by TransformBegin (pbrt-v3): pops only the CTM */
+    int med_in, med_out; /* MediumInterface: 1 + the scene's medium id, 0 = vacuum */
     Loc loc;            /* of the Begin, for messages */
 } GState;
 
@@ -94,8 +95,9 @@ typedef struct MatEntry {
     Material m;
     int scene_id; /* added to the scene on first use, -1 before */
     /* pbrt-v4's "interface" (also v3's "" and "none"): a medium boundary that does not
-     * scatter. Shapes with it are left out of the scene (invisible to every ray), unless
-     * they emit; then m stands in for it. */
+     * scatter. Between two different media shapes with it become pure boundaries
+     * (pbrt_medium.h); otherwise they are left out of the scene (invisible to every ray),
+     * unless they emit; then m stands in for it. */
     int interface;
 } MatEntry;
 
@@ -159,6 +161,7 @@ typedef struct CamRec {
     int has_frame;
     float lens_radius, focal_distance;
     int ortho; /* Camera "orthographic" */
+    int medium; /* 1 + the camera's medium id (the outside medium at Camera), 0 vacuum */
     Loc loc;
 } CamRec;
 
@@ -230,6 +233,11 @@ typedef struct Loader {
     float env_k[3], env_const[3];
     int num_instances_expanded; /* instances whose spheres were copied */
     int num_interface_shapes;   /* shapes with material "interface", left out */
+    /* MakeNamedMedium names and their scene media (-1: a type caustic does not render,
+     * warned about, read as vacuum). */
+    char **med_names;
+    int *med_ids;
+    int num_meds, cap_meds, cap_med_ids;
     int num_triangles, num_spheres; /* added to the scene so far (for its limits) */
     Loc end; /* end of the main file, for errors about the whole scene */
 } Loader;

@@ -168,7 +168,7 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
     char nm[72];
     CstRenderSettings *rs = &ld->settings;
     static const struct { const char *pbrt; CstIntegrator ours; int exact; } map[] = {
-        {"path", CST_INTEGRATOR_PATH, 1}, {"volpath", CST_INTEGRATOR_PATH, 0},
+        {"path", CST_INTEGRATOR_PATH, 1}, {"volpath", CST_INTEGRATOR_PATH, 1},
         {"simplepath", CST_INTEGRATOR_PATH_NEE, 0}, {"randomwalk", CST_INTEGRATOR_PATH_BSDF, 0},
         {"lightpath", CST_INTEGRATOR_LIGHT, 1}, {"sppm", CST_INTEGRATOR_SPPM, 1},
         {"whitted", CST_INTEGRATOR_WHITTED, 1}, {"bdpt", CST_INTEGRATOR_BDPT, 1},
@@ -324,29 +324,9 @@ static CstStatus ignore_directive(Loader *ld, NamedCall *call, const char *what)
     return CST_OK;
 }
 
-CstStatus pbrt_make_named_medium_directive(Loader *ld, NamedCall *call)
-{
-    return ignore_directive(ld, call, "participating media");
-}
-
 CstStatus pbrt_attribute_directive(Loader *ld, NamedCall *call)
 {
     return ignore_directive(ld, call, "default parameters by Attribute");
-}
-
-CstStatus pbrt_medium_interface_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
-{
-    char *s = NULL;
-    TRY(pbrt_expect_string(ld, lx, dname, "the inside medium's name", &s, NULL));
-    free(s);
-    PbrtToken n2;
-    TRY(pbrt_lex_peek(ld, lx, &n2));
-    if (n2.kind == PBRT_TOK_STRING) {
-        TRY(pbrt_expect_string(ld, lx, dname, "the outside medium's name", &s, NULL));
-        free(s);
-    }
-    pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "MediumInterface: participating media are not supported; ignored");
-    return CST_OK;
 }
 
 /* Option "type name" value: a single parameter, no type name before it */

@@ -21,11 +21,7 @@ CstStatus pbrt_accelerator_directive(Loader *ld, NamedCall *call);
 
 CstStatus pbrt_color_space_directive(Loader *ld, NamedCall *call);
 
-CstStatus pbrt_make_named_medium_directive(Loader *ld, NamedCall *call);
-
 CstStatus pbrt_attribute_directive(Loader *ld, NamedCall *call);
-
-CstStatus pbrt_medium_interface_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
 
 /* Option "type name" value: a single parameter, no type name before it */
 CstStatus pbrt_option_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);

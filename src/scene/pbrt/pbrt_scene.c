@@ -16,6 +16,7 @@
 #include "scene/pbrt/pbrt_light.h"
 #include "scene/pbrt/pbrt_loader.h"
 #include "scene/pbrt/pbrt_material.h"
+#include "scene/pbrt/pbrt_medium.h"
 #include "scene/pbrt/pbrt_options.h"
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_shape.h"

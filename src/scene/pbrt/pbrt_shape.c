@@ -12,6 +12,7 @@
 #include "geometry/triangle.h"
 #include "scene/mesh_import.h"
 #include "scene/pbrt/pbrt_material.h"
+#include "scene/pbrt/pbrt_medium.h"
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_texture.h"
 #include "scene/pbrt/pbrt_transform.h"
@@ -600,17 +601,24 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
     CstAlpha alpha = {0};
     if ((st = shape_alpha(ld, &ps, d, &alpha)) != CST_OK) goto done;
     pbrt_params_warn_unused(ld, &ps, d);
-    if (ld->mats[ld->gs.material].interface && !(ld->cur_obj < 0 && ld->gs.area.active)) {
-        /* An "interface" shape only bounds a medium (which caustic does not render): it
-         * scatters nothing, so leaving it out is exact for every ray, shadow rays included.
-         * An emitting one stays, as glass of eta 1 (it would block shadow rays). */
+    if (ld->mats[ld->gs.material].interface && ld->cur_obj < 0 && !ld->gs.area.active &&
+        pbrt_medium_transition(ld)) {
+        /* A boundary between two media: kept, invisible but for the change of medium. */
+        if ((st = pbrt_medium_apply(ld, 1, loc, d)) == CST_OK)
+            st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
+    } else if (ld->mats[ld->gs.material].interface && !(ld->cur_obj < 0 && ld->gs.area.active)) {
+        /* An "interface" shape that separates no two media caustic renders (equal sides,
+         * or a medium type read as vacuum) scatters nothing and changes no medium, so
+         * leaving it out is exact for every ray, shadow rays included. An emitting one
+         * stays, as glass of eta 1 (it would block shadow rays). */
         if (ld->num_interface_shapes++ == 0)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: shapes with material \"interface\" (medium "
-                         "boundaries) are left out: participating media are not supported", d);
+                         "boundaries) that separate no two rendered media are left out", d);
     } else if (ld->gs.area.active && ld->mats[ld->gs.material].interface && ld->cur_obj < 0) {
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: an emitting shape with material \"interface\" "
                      "is kept as glass of eta 1: paths pass through it, shadow rays are blocked", d);
-        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
+        if ((st = pbrt_medium_apply(ld, 0, loc, d)) == CST_OK)
+            st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
     } else if (ld->cur_obj >= 0) {
         if (alpha.enabled)
             pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: alpha cut-outs of shapes inside ObjectBegin "
@@ -631,7 +639,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         /* A constant alpha of 0 (sportscar's hidden area lights): no ray ever meets the
          * shape and it emits nowhere, so leaving it out renders exactly what pbrt-v4 does,
          * without the light sampler picking a light that gives nothing. */
-    } else {
+    } else if ((st = pbrt_medium_apply(ld, 0, loc, d)) == CST_OK) {
         st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
     }
 done:

@@ -1,0 +1,173 @@
+/* The path tracer in scenes with participating media (path_li hands them here): free-flight
+ * distance sampling in the ray's medium, Henyey–Greenstein scattering, next-event
+ * estimation at surface and medium vertices with transmittance through media and medium
+ * boundaries, MIS against BSDF / phase sampling (Veach eq. 9.13), emission from media.
+ * The volume rendering equation as in pbrt-v4 ch. 14 for homogeneous media; the distance
+ * pdf over colour channels is medium.h's (balance heuristic over channels). */
+#include "integrators/volpath.h"
+
+#include "integrators/direct.h"
+#include "integrators/roulette.h"
+#include "materials/bsdf.h"
+#include "media/phase.h"
+
+/* Crossings of boundary shapes in a row before the path gives up (a stack of coincident
+ * boundaries would otherwise never end). */
+enum { VOLPATH_MAX_CROSSINGS = 256 };
+
+/* A scattering vertex for next-event estimation: on a surface (bsdf, normals) or in a
+ * medium (bsdf NULL, zero normals, phase g). */
+typedef struct VolVertex {
+    Vec3 p, ns, ng, wo;
+    const Bsdf *bsdf;
+    const SurfaceHit *sh; /* the surface hit, or NULL in a medium */
+    float g;
+    int medium; /* the medium at p (for a surface: on the ray's side) */
+} VolVertex;
+
+/* One light sample from vertex v: f x Tr x L_e / pdf, MIS-weighted against the
+ * scattering density when mis (power heuristic; delta lights unweighted). */
+static Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *smp, const Wavelengths *wl,
+                         uint64_t *rays)
+{
+    float u_sel = sampler_1d(smp);
+    Vec2 u = sampler_2d(smp);
+    LightLi ls;
+    EmitterGeometry g = scene_emitter_geometry(s);
+    if (!light_sample_nee(&s->emitter_sampler, &g, v->p, v->ns, u_sel, u, &ls)) return color_s(0.0f);
+    Color f;
+    float scatter_pdf;
+    if (v->bsdf) {
+        f = bsdf_eval(v->bsdf, v->wo, ls.wi);
+        scatter_pdf = mis && !ls.delta ? bsdf_pdf(v->bsdf, v->wo, ls.wi) : 0.0f;
+    } else {
+        scatter_pdf = phase_hg_eval(v->wo, ls.wi, v->g);
+        f = color_s(scatter_pdf);
+    }
+    if (color_is_black(f)) return color_s(0.0f);
+    /* The shadow ray starts in the medium on the light's side of the surface. */
+    int medium = v->sh ? scene_medium_after(s, v->sh, ls.wi, v->medium) : v->medium;
+    Color tr = scene_transmittance(s, v->p, v->ng, ls.p, ls.n, medium, wl, rays);
+    if (color_is_black(tr)) return color_s(0.0f);
+    float w = mis && !ls.delta ? power_heuristic(ls.pdf_w, scatter_pdf) : 1.0f;
+    return color_scale(color_mul(color_mul(f, tr), scene_light_li(s, &ls, wl)), w / (ls.delta ? ls.pmf : ls.pdf_w));
+}
+
+Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays)
+{
+    Color L = color_s(0.0f), beta = color_s(1.0f);
+    bool specular = true; /* the camera vertex: nothing to MIS with */
+    float prev_pdf = 0.0f;
+    Vec3 prev_p = ray.o, prev_n = v3s(0.0f);
+    const bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
+    bool any_non_delta = false;
+    int medium = s->camera_medium, coeffs_of = -1;
+    MediumCoeffs mc = {0};
+    int crossings = 0;
+    for (int depth = 0;;) {
+        SurfaceHit sh;
+        ++*rays;
+        const bool hit = scene_intersect(s, &ray, &sh);
+        if (medium >= 0) {
+            if (coeffs_of != medium) { /* converted once per medium entered */
+                mc = medium_coeffs(&s->media[medium], wl);
+                coeffs_of = medium;
+            }
+            float u_ch = sampler_1d(smp), u_t = sampler_1d(smp);
+            MediumSample ms;
+            medium_sample_distance(&mc, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
+            if (ms.scattered) {
+                /* Emission of the segment: sigma_a Le Tr / pdf(t) (pbrt-v4 adds it below
+                 * the depth limit only). */
+                const bool last = pp->max_depth > 0 && depth >= pp->max_depth;
+                if (mc.emissive && !last) L = color_madd(L, beta, color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
+                beta = color_mul(beta, ms.weight);
+                if (last || color_is_black(beta)) break;
+                Vec3 p = ray_at(&ray, ms.t), wo = v3_neg(ray.d);
+                if (use_nee) {
+                    VolVertex v = {p, v3s(0.0f), v3s(0.0f), wo, NULL, NULL, mc.g, medium};
+                    L = color_madd(L, beta, volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+                }
+                Vec2 u = sampler_2d(smp);
+                float pdf;
+                Vec3 wi = phase_hg_sample(wo, mc.g, u.x, u.y, &pdf);
+                /* f / pdf = 1: HG is sampled exactly. */
+                specular = false;
+                any_non_delta = true;
+                prev_pdf = pdf;
+                prev_p = p;
+                prev_n = v3s(0.0f);
+                depth++;
+                float rr = roulette(smp, depth, pp->rr_depth, beta);
+                if (rr == 0.0f) break;
+                beta = color_scale(beta, rr);
+                ray = ray_make(p, wi, 0.0f, INFINITY);
+                crossings = 0;
+                continue;
+            }
+            beta = color_mul(beta, ms.weight);
+            if (color_is_black(beta)) break;
+        }
+        if (!hit) {
+            Color le = scene_env_radiance(s, ray.d, wl);
+            if (!color_is_black(le)) {
+                if (specular || pp->mode == PATH_BSDF) L = color_madd(L, beta, le);
+                else if (pp->mode == PATH_MIS)
+                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, light_env_nee_pdf(&s->emitter_sampler, prev_p, prev_n, ray.d))));
+            }
+            break;
+        }
+        const MediumInterface *mi = scene_hit_medium_iface(s, &sh);
+        if (mi && mi->boundary) {
+            /* Only a boundary: cross it into the next medium, not a path vertex. */
+            if (++crossings > VOLPATH_MAX_CROSSINGS) break;
+            medium = v3_dot(ray.d, sh.ng) < 0.0f ? mi->inside : mi->outside;
+            ray = ray_make(scene_offset(s, sh.p, sh.ng, ray.d), ray.d, 0.0f, INFINITY);
+            continue;
+        }
+        Vec3 wo = v3_neg(ray.d);
+        if (sh.emitter >= 0) {
+            Color le = scene_emission(s, &sh, wo, wl);
+            if (!color_is_black(le)) {
+                if (specular || pp->mode == PATH_BSDF) {
+                    L = color_madd(L, beta, le);
+                } else if (pp->mode == PATH_MIS) {
+                    float cos_l = fabsf(v3_dot(sh.ng, wo));
+                    EmitterGeometry g = scene_emitter_geometry(s);
+                    /* From the previous vertex, across any boundaries crossed since. */
+                    float dist = v3_length(v3_sub(sh.p, prev_p));
+                    float pdf_light = light_area_nee_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, prev_n, dist, cos_l);
+                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, pdf_light)));
+                }
+            }
+        }
+        if (pp->max_depth > 0 && depth >= pp->max_depth) break;
+
+        Bsdf bsdf;
+        scene_bsdf_disperse(s, &sh, wl, &bsdf);
+        if (pp->regularize && any_non_delta) bsdf_regularize(&bsdf);
+        if (use_nee && !bsdf_is_delta(&bsdf)) {
+            VolVertex v = {sh.p, sh.ns, sh.ng, wo, &bsdf, &sh, 0.0f, medium};
+            L = color_madd(L, beta, volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+        }
+        BsdfSample bs;
+        float uc = sampler_1d(smp);
+        Vec2 u = sampler_2d(smp);
+        if (!bsdf_sample(&bsdf, wo, uc, u, &bs)) break;
+        beta = color_mul(beta, bs.weight);
+        if (color_is_black(beta)) break;
+        specular = bs.delta;
+        any_non_delta |= !bs.delta;
+        prev_pdf = bs.delta ? bs.pmf : bs.pdf_w;
+        prev_p = sh.p;
+        prev_n = sh.ns;
+        depth++;
+        float rr = roulette(smp, depth, pp->rr_depth, beta);
+        if (rr == 0.0f) break;
+        beta = color_scale(beta, rr);
+        medium = scene_medium_after(s, &sh, bs.wi, medium);
+        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        crossings = 0;
+    }
+    return L;
+}

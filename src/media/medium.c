@@ -1,0 +1,69 @@
+/* Homogeneous media: coefficients at the path's wavelengths, transmittance, distance
+ * sampling with the balance heuristic over colour channels (medium.h states the pdfs). */
+#include "media/medium.h"
+
+#include <math.h>
+
+MediumCoeffs medium_coeffs(const Medium *m, const Wavelengths *wl)
+{
+    MediumCoeffs c;
+    const HomogeneousMedium *h = &m->u.homog;
+    c.sigma_a = wl ? spectrum_unbounded(h->sigma_a, wl) : h->sigma_a;
+    c.sigma_s = wl ? spectrum_unbounded(h->sigma_s, wl) : h->sigma_s;
+    c.sigma_t = color_add(c.sigma_a, c.sigma_s);
+    c.emissive = !color_is_black(h->le);
+    c.le = c.emissive ? (wl ? spectrum_illuminant(h->le, wl) : h->le) : color_s(0.0f);
+    c.g = m->g;
+    return c;
+}
+
+Color medium_transmittance(const MediumCoeffs *m, float d)
+{
+    Color tr;
+    for (int i = 0; i < COLOR_LANES; i++) {
+        /* d may be infinite: exp(-0 * inf) is a NaN that means "no attenuation". */
+        float x = m->sigma_t.c[i] * d;
+        tr.c[i] = m->sigma_t.c[i] > 0.0f ? expf(-x) : 1.0f;
+    }
+    return tr;
+}
+
+float medium_distance_pdf(const MediumCoeffs *m, float t)
+{
+    Color tr = medium_transmittance(m, t);
+    float p = 0.0f;
+    for (int i = 0; i < COLOR_LANES; i++) p += m->sigma_t.c[i] * tr.c[i];
+    return p * (1.0f / (float)COLOR_LANES);
+}
+
+float medium_pass_prob(const MediumCoeffs *m, float t_max)
+{
+    Color tr = medium_transmittance(m, t_max);
+    float p = 0.0f;
+    for (int i = 0; i < COLOR_LANES; i++) p += tr.c[i];
+    return p * (1.0f / (float)COLOR_LANES);
+}
+
+void medium_sample_distance(const MediumCoeffs *m, float t_max, float u_ch, float u, MediumSample *out)
+{
+    int c = (int)(u_ch * (float)COLOR_LANES);
+    if (c > COLOR_LANES - 1) c = COLOR_LANES - 1;
+    float st = m->sigma_t.c[c];
+    /* -log(1 - u) / sigma_t: 1 - u in (0, 1], so t is finite and >= 0. */
+    float t = st > 0.0f ? -log1pf(-u) / st : INFINITY;
+    if (t < t_max) {
+        Color tr = medium_transmittance(m, t);
+        float pdf = medium_distance_pdf(m, t);
+        out->t = t;
+        out->scattered = true;
+        out->tr_pdf = pdf > 0.0f ? color_scale(tr, 1.0f / pdf) : color_s(0.0f);
+        out->weight = color_mul(out->tr_pdf, m->sigma_s);
+        return;
+    }
+    Color tr = medium_transmittance(m, t_max);
+    float p = medium_pass_prob(m, t_max);
+    out->t = t_max;
+    out->scattered = false;
+    out->tr_pdf = color_s(0.0f);
+    out->weight = p > 0.0f ? color_scale(tr, 1.0f / p) : color_s(0.0f);
+}

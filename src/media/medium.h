@@ -1,0 +1,78 @@
+/* Participating media: the scene's Medium (a tagged union; homogeneous for now), the
+ * interfaces that shapes put between two media, and the two queries a path tracer asks
+ * of a medium: transmittance along a segment and a sampled free-flight distance. */
+#ifndef CST_MEDIA_MEDIUM_H
+#define CST_MEDIA_MEDIUM_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "math/color.h"
+#include "math/spectrum.h"
+
+typedef enum MediumType { MEDIUM_HOMOGENEOUS } MediumType;
+
+/* Coefficients per unit length of the scene (1/m when the scene is in metres), already
+ * multiplied by pbrt's "scale"; linear RGB (sRGB primaries), upsampled in spectral mode. */
+typedef struct HomogeneousMedium {
+    Color sigma_a, sigma_s; /* absorption and scattering, >= 0 */
+    Color le;               /* emitted radiance (pbrt-v4's Le x Lescale); the medium adds
+                             * sigma_a Le per unit length (the emission term of the RTE) */
+} HomogeneousMedium;
+
+typedef struct Medium {
+    MediumType type;
+    float g; /* Henyey–Greenstein asymmetry in (-1, 1) (media/phase.h) */
+    union { HomogeneousMedium homog; } u;
+} Medium;
+
+/* What a shape separates (pbrt-v4 MediumInterface): the medium on the side opposite its
+ * geometric normal (inside) and on the normal's side (outside); -1 = vacuum. boundary:
+ * the shape is nothing but that boundary (pbrt's "interface" material): rays cross it
+ * without scattering and shadow rays pass it. */
+typedef struct MediumInterface {
+    int32_t inside, outside;
+    int32_t boundary;
+} MediumInterface;
+
+/* A medium's coefficients at a path's wavelengths (or in RGB), made once when a path
+ * enters the medium: the queries below then do no conversion. */
+typedef struct MediumCoeffs {
+    Color sigma_a, sigma_s, sigma_t; /* per unit length */
+    Color le;                        /* radiance; black when the medium does not emit */
+    float g;
+    bool emissive;
+} MediumCoeffs;
+
+/* m's coefficients in RGB mode (wl NULL) or at wl: sigma_a and sigma_s as unbounded
+ * spectra, Le as an illuminant, the conversions materials and lights use. */
+MediumCoeffs medium_coeffs(const Medium *m, const Wavelengths *wl);
+
+/* Transmittance exp(-sigma_t d) per lane along a segment of length d (Beer–Lambert). */
+Color medium_transmittance(const MediumCoeffs *m, float d);
+
+/* A free-flight sample along a ray with its surface at t_max (INFINITY for none). */
+typedef struct MediumSample {
+    float t;        /* the scattering distance, or t_max when the ray reaches its surface */
+    bool scattered; /* t < t_max: a real scattering event in the medium */
+    Color weight;   /* the estimator's factor: scattered: Tr(t) sigma_s / pdf(t);
+                     * else Tr(t_max) / P(t >= t_max) */
+    Color tr_pdf;   /* scattered: Tr(t) / pdf(t), the factor of the emission term
+                     * (times sigma_a Le); else unset */
+} MediumSample;
+
+/* Distance sampling for the path tracer: one lane c picked uniformly from the four (u_ch;
+ * in RGB mode lane 3 repeats green) and t ~ sigma_t[c] exp(-sigma_t[c] t). The density
+ * used is the mixture over lanes, pdf(t) = 1/4 sum_c sigma_t[c] exp(-sigma_t[c] t) per
+ * unit length, with P(t >= t_max) = 1/4 sum_c exp(-sigma_t[c] t_max): the balance
+ * heuristic over channels (one-sample MIS, Veach eq. 9.15; Mitsuba's and PBRT-v3's
+ * HomogeneousMedium::Sample), unbiased for every lane, also where another lane's
+ * sigma_t is 0. u in [0,1). */
+void medium_sample_distance(const MediumCoeffs *m, float t_max, float u_ch, float u, MediumSample *out);
+
+/* The density medium_sample_distance gives t < t_max (per unit length), and the
+ * probability that it passes t_max. */
+float medium_distance_pdf(const MediumCoeffs *m, float t);
+float medium_pass_prob(const MediumCoeffs *m, float t_max);
+
+#endif
