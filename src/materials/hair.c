@@ -102,7 +102,7 @@ float hair_mp(float cos_i, float cos_o, float sin_i, float sin_o, float v)
     } else {
         lg = logf(bessel_i0(a)) - b - 1.0f / v;
     }
-    return expf(lg + 0.6931472f + logf(1.0f / (2.0f * v)));
+    return expf(lg + 0.69314718f + logf(1.0f / (2.0f * v))); /* ln 2 (pbrt-v4: 0.6931) */
 }
 
 /* ------------------------------------------------------------------ Np */
