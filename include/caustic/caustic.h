@@ -304,8 +304,20 @@ typedef enum CstMaterialType {
      * undeviated transmission; albedo tints both */
     CST_MATERIAL_THIN_DIELECTRIC,
     /* pbrt-v4's measured: a tabulated BRDF from an RGL .bsdf file (measured_file) */
-    CST_MATERIAL_MEASURED
+    CST_MATERIAL_MEASURED,
+    /* pbrt-v4's hair: the fibre BSDF of Chiang et al. 2016 (ior: the fibre's, default
+     * 1.55; beta_m, beta_n, hair_alpha; absorption by hair_absorption). The fibre runs
+     * along the surface's dp/du and the offset across it is h = -1 + 2 v of the hit's uv */
+    CST_MATERIAL_HAIR
 } CstMaterialType;
+
+/* Where a hair's absorption comes from (CstMaterialDesc.hair_absorption). */
+typedef enum CstHairAbsorption {
+    CST_HAIR_MELANIN = 0, /* eumelanin, pheomelanin concentrations (default 1.3, 0) */
+    CST_HAIR_SIGMA_A,     /* sigma_a, per fibre radius, >= 0 */
+    CST_HAIR_COLOR        /* albedo (or albedo_texture): the colour the fibre is to have;
+                           * sigma_a follows from it and beta_n (Chiang et al. eq. 9) */
+} CstHairAbsorption;
 
 /* Fill with cst_material_desc_init (the JSON format's defaults), then set what you want. */
 typedef struct CstMaterialDesc {
@@ -354,6 +366,12 @@ typedef struct CstMaterialDesc {
     /* Measured: the .bsdf file's path (read when the material is added, once per path;
      * a malformed file fails with CST_ERR_PARSE, "FILE: byte N: ...") */
     const char *measured_file;
+    /* Hair (defaults: pbrt-v4's): longitudinal and azimuthal roughness in (0, 1] (0.3),
+     * the cuticle scales' tilt in degrees, in [-90, 90] (2), and the absorption */
+    float beta_m, beta_n, hair_alpha;
+    int hair_absorption;          /* a CstHairAbsorption */
+    float sigma_a[3];             /* CST_HAIR_SIGMA_A */
+    float eumelanin, pheomelanin; /* CST_HAIR_MELANIN, >= 0 */
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

@@ -28,6 +28,12 @@ Color bsdf_albedo(const Bsdf *b)
     case MATERIAL_DIFFUSE_TRANSMISSION: return b->lobe.difftrans.reflectance;
     case MATERIAL_THIN_DIELECTRIC: return b->lobe.dielectric.tint;
     case MATERIAL_MEASURED: return b->lobe.measured.table->albedo;
+    case MATERIAL_HAIR: { /* its colour, or the transmittance across one diameter */
+        if (b->lobe.hair.from_color) return b->lobe.hair.source;
+        Color t;
+        for (int i = 0; i < COLOR_LANES; i++) t.c[i] = expf(-2.0f * b->lobe.hair.sigma_a.c[i]);
+        return t;
+    }
     case MATERIAL_MIX: break;
     }
     return color_s(0.0f);
@@ -477,6 +483,8 @@ static Color eval_local(const Bsdf *b, Vec3 wo, Vec3 wi, BsdfTransport mode)
     case MATERIAL_MEASURED:
         if (!reflect_side(b, &wo, &wi)) return color_s(0.0f);
         return measured_eval(b->lobe.measured.table, wo, wi, b->lobe.measured.spectral ? b->lobe.measured.lambda : NULL);
+    case MATERIAL_HAIR:
+        return mode == BSDF_RADIANCE ? hair_eval(&b->lobe.hair, wo, wi) : hair_eval_adjoint(&b->lobe.hair, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
     case MATERIAL_THIN_DIELECTRIC:
@@ -518,6 +526,7 @@ static float pdf_local(const Bsdf *b, Vec3 wo, Vec3 wi)
     case MATERIAL_MEASURED:
         if (!reflect_side(b, &wo, &wi)) return 0.0f;
         return measured_pdf(b->lobe.measured.table, wo, wi);
+    case MATERIAL_HAIR: return hair_pdf(&b->lobe.hair, wo, wi);
     case MATERIAL_MIRROR:
     case MATERIAL_GLASS:
     case MATERIAL_THIN_DIELECTRIC:
@@ -619,6 +628,18 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         out->delta = false;
         ok = measured_sample(b->lobe.measured.table, wo, u, b->lobe.measured.spectral ? b->lobe.measured.lambda : NULL,
                              &out->wi, &out->weight, &out->pdf_w);
+        break;
+    case MATERIAL_HAIR:
+        /* Both sides, transmission included; the weight from eval over the sample's pdf
+         * (the lobes' mixture density, so one-sample MIS over them). */
+        out->pmf = 0.0f;
+        out->delta = false;
+        ok = hair_sample(&b->lobe.hair, wo, uc, u, &out->wi, &out->pdf_w);
+        if (ok) {
+            Color f = mode == BSDF_RADIANCE ? hair_eval(&b->lobe.hair, wo, out->wi)
+                                            : hair_eval_adjoint(&b->lobe.hair, wo, out->wi);
+            out->weight = color_scale(f, 1.0f / out->pdf_w);
+        }
         break;
     case MATERIAL_MIX: return false;
     }

@@ -12,6 +12,7 @@
 #include <stddef.h>
 
 #include "materials/fresnel.h"
+#include "materials/hair.h"
 #include "materials/layered.h"
 #include "materials/material.h"
 #include "math/frame.h"
@@ -70,6 +71,7 @@ typedef struct Bsdf {
         LayeredLobe layered; /* coated diffuse and coated conductor */
         DiffuseTransmissionLobe difftrans;
         MeasuredLobe measured;
+        HairLobe hair;
     } lobe;
 } Bsdf;
 
@@ -154,6 +156,7 @@ static inline void bsdf_init_smooth(Bsdf *b, const Material *m, Vec3 ns, Vec3 ng
             b->lobe.diffuse.albedo = color_s(0.0f);
         }
         break;
+    case MATERIAL_HAIR: hair_init(&b->lobe.hair, m); break; /* h by scene_bsdf (hair_set_offset) */
     case MATERIAL_MIX: /* resolved by scene_bsdf; black if it ever gets here */
         b->type = MATERIAL_DIFFUSE;
         b->lobe.diffuse.albedo = color_s(0.0f);
@@ -215,7 +218,7 @@ static inline bool bsdf_has_delta(const Bsdf *b)
 static inline bool bsdf_has_transmission(const Bsdf *b)
 {
     return b->type == MATERIAL_GLASS || b->type == MATERIAL_DIELECTRIC || b->type == MATERIAL_THIN_DIELECTRIC ||
-           b->type == MATERIAL_DIFFUSE_TRANSMISSION;
+           b->type == MATERIAL_DIFFUSE_TRANSMISSION || b->type == MATERIAL_HAIR;
 }
 /* Texture overrides (scene_bsdf): the reflectance or tint of the lobes that have one (a
  * conductor's colour is its complex IOR: unchanged), and GGX's alpha of the rough-capable
@@ -231,6 +234,12 @@ static inline void bsdf_set_albedo(Bsdf *b, Color albedo)
     case MATERIAL_DIFFUSE_TRANSMISSION: b->lobe.difftrans.reflectance = albedo; break;
     case MATERIAL_PLASTIC: b->lobe.plastic.albedo = albedo; break;
     case MATERIAL_COATED_DIFFUSE: b->lobe.layered.reflectance = albedo; break;
+    case MATERIAL_HAIR: /* a textured colour (the fibre's absorption comes from it) */
+        if (b->lobe.hair.from_color) {
+            b->lobe.hair.source = albedo;
+            b->lobe.hair.sigma_a = hair_sigma_a_from_color(albedo, b->lobe.hair.beta_n);
+        }
+        break;
     case MATERIAL_CONDUCTOR:
     case MATERIAL_COATED_CONDUCTOR:
     case MATERIAL_MEASURED:

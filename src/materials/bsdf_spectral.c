@@ -32,6 +32,12 @@ void bsdf_at_wavelengths(Bsdf *b, const Wavelengths *wl)
         b->lobe.measured.spectral = true;
         for (int i = 0; i < COLOR_LANES; i++) b->lobe.measured.lambda[i] = wl->lambda[i];
         break;
+    case MATERIAL_HAIR: { /* sigma_a per wavelength, as pbrt-v4's HairMaterial */
+        HairLobe *h = &b->lobe.hair;
+        h->sigma_a = h->from_color ? hair_sigma_a_from_color(spectrum_albedo(h->source, wl), h->beta_n)
+                                   : spectrum_unbounded(h->source, wl);
+        break;
+    }
     case MATERIAL_MIX: break; /* never a Bsdf's type: scene_bsdf resolves a mix first */
     }
 }

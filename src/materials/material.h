@@ -33,7 +33,9 @@ typedef enum MaterialType {
      * transmission, the slab's internal reflections summed in closed form */
     MATERIAL_THIN_DIELECTRIC,
     /* pbrt-v4's measured: a tabulated BRDF read from an RGL .bsdf file (measured.h) */
-    MATERIAL_MEASURED
+    MATERIAL_MEASURED,
+    /* pbrt-v4's hair: the fibre BSDF of Chiang et al. 2016 (hair.h) */
+    MATERIAL_HAIR
 } MaterialType;
 
 static inline bool material_is_layered(MaterialType t)
@@ -99,6 +101,13 @@ typedef struct Material {
      * between a loader and cst_scene_add_material only, the file to read them from. */
     const struct MeasuredBsdf *measured;
     const char *measured_file;
+    /* Hair (hair.h; ior is the fibre's eta): longitudinal and azimuthal roughness beta_m,
+     * beta_n in (0, 1], the cuticle tilt hair_alpha in degrees, and the absorption: sigma_a
+     * per fibre radius (linear RGB, >= 0), or with hair_color set the colour in albedo
+     * from which the BSDF derives it (Chiang et al. eq. 9). */
+    float beta_m, beta_n, hair_alpha;
+    Color sigma_a;
+    bool hair_color;
     /* Derived by material_prepare() (scene_add_material calls it): the rough plastic's
      * coat albedo table and its cosine-weighted average. */
     bool prepared;

@@ -199,6 +199,7 @@ CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError 
     s->materials[s->num_materials].measured_file = NULL; /* the caller's string */
     /* Derived data (the rough plastic's coat table) is computed once here, not per hit. */
     material_prepare(&s->materials[s->num_materials]);
+    if (m->type == MATERIAL_HAIR) s->needs_uv = true;
     *out_id = s->num_materials++;
     return CST_OK;
 }

@@ -73,6 +73,7 @@ struct CstScene {
     PrimInfo *sphere_info; /* num_spheres entries */
     /* appearance */
     Texture *textures; int num_textures; size_t cap_textures; /* referenced by index */
+    bool needs_uv; /* hits need uvs without textures too (a hair material: its offset h) */
     Material *materials; int num_materials; size_t cap_materials;
     SampledSpectrum *spectra; int num_spectra; size_t cap_spectra; /* Material.*_spectrum */
     /* Per area emitter (emitter_sampler order), 1 + the index of its emitted spectrum or 0;
@@ -299,7 +300,7 @@ static inline bool scene_intersect_first(const Scene *s, const Ray *ray, Surface
         /* From barycentrics, not o + t d: accurate to a few ulps of the vertices,
          * which ray_offset_origin relies on (the ray form errs by ulps of |o| + t). */
         sh->p = v3_add(v3_add(v3_scale(a, 1.0f - h.u - h.v), v3_scale(b, h.u)), v3_scale(c, h.v));
-        sh->uv = s->num_textures ? triangle_uv(s->uvs, s->tri_has_uv, s->tri_indices, h.prim, h.u, h.v)
+        sh->uv = (s->num_textures || s->needs_uv) ? triangle_uv(s->uvs, s->tri_has_uv, s->tri_indices, h.prim, h.u, h.v)
                                  : v2(0.0f, 0.0f);
         /* Only scenes with vertex normals pay for the interpolation. */
         sh->ns = s->normals ? scene_shading_normal(s->normals, t, h.u, h.v, sh->ng) : sh->ng;
@@ -307,7 +308,7 @@ static inline bool scene_intersect_first(const Scene *s, const Ray *ray, Surface
         const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];
         sh->ng = v3_normalize(v3_sub(ray_at(ray, h.t), sp->center));
         sh->p = v3_madd(sp->center, sh->ng, sp->radius); /* reprojected onto the surface */
-        sh->uv = s->num_textures ? sphere_uv(sh->ng) : v2(0.0f, 0.0f);
+        sh->uv = (s->num_textures || s->needs_uv) ? sphere_uv(sh->ng) : v2(0.0f, 0.0f);
         sh->ns = sh->ng;
     }
     const PrimInfo *pi = scene_prim_info(s, h.prim);
@@ -517,6 +518,13 @@ static inline const Material *scene_bsdf_material(const Scene *s, const SurfaceH
      * the hit (here) and of the directions (layered.c): the same query at the same hit
      * always gets the same number, different hits independent ones. */
     if (material_is_layered(m->type)) b->lobe.layered.seed = scene_hit_hash(sh);
+    /* Hair: the fibre runs along dp/du (pbrt-v4's BSDF frame), and the offset across it
+     * is h = -1 + 2 v (pbrt-v4's curves; other shapes take the same rule). */
+    if (m->type == MATERIAL_HAIR) {
+        Vec3 dpdu, dpdv;
+        if (scene_dpduv(s, sh, &dpdu, &dpdv)) bsdf_set_tangent(b, dpdu);
+        hair_set_offset(&b->lobe.hair, sh->uv.y);
+    }
     if (wl) {
         const int mi = (int)(m - s->materials);
         if (!m->albedo_texture && s->material_spectra) bsdf_at_wavelengths_prepared(b, &s->material_spectra[mi], wl);

@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "io/image_io.h"
+#include "materials/hair.h"
 #include "materials/measured.h"
 #include "scene/scene.h"
 #include "scene/scene_build.h"
@@ -361,6 +362,13 @@ void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
              type == CST_MATERIAL_COATED_DIFFUSE || type == CST_MATERIAL_COATED_CONDUCTOR ||
              type == CST_MATERIAL_THIN_DIELECTRIC ? 1.5f : 1.0f;
     d->two_sided = 1;
+    if (type == CST_MATERIAL_HAIR) { /* pbrt-v4's HairMaterial defaults */
+        d->ior = 1.55f;
+        d->beta_m = d->beta_n = 0.3f;
+        d->hair_alpha = 2.0f;
+        d->hair_absorption = CST_HAIR_MELANIN;
+        d->eumelanin = 1.3f;
+    }
     d->amount = 0.5f;     /* pbrt-v4's mix default */
     d->thickness = 0.01f; /* pbrt-v4's coated materials' defaults */
     d->max_depth = 10;
@@ -376,8 +384,16 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         [MATERIAL_COATED_DIFFUSE] = CST_MATERIAL_COATED_DIFFUSE,
         [MATERIAL_COATED_CONDUCTOR] = CST_MATERIAL_COATED_CONDUCTOR, [MATERIAL_MIX] = CST_MATERIAL_MIX,
         [MATERIAL_DIFFUSE_TRANSMISSION] = CST_MATERIAL_DIFFUSE_TRANSMISSION,
-        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC, [MATERIAL_MEASURED] = CST_MATERIAL_MEASURED};
+        [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC, [MATERIAL_MEASURED] = CST_MATERIAL_MEASURED,
+        [MATERIAL_HAIR] = CST_MATERIAL_HAIR};
     cst_material_desc_init(d, types[m->type]);
+    if (m->type == MATERIAL_HAIR) { /* melanin was turned into sigma_a when it was added */
+        d->beta_m = m->beta_m;
+        d->beta_n = m->beta_n;
+        d->hair_alpha = m->hair_alpha;
+        d->hair_absorption = m->hair_color ? CST_HAIR_COLOR : CST_HAIR_SIGMA_A;
+        for (int k = 0; k < 3; k++) d->sigma_a[k] = color_channel(m->sigma_a, k);
+    }
     for (int k = 0; k < 3; k++) {
         d->albedo[k] = color_channel(m->albedo, k);
         d->eta[k] = color_channel(m->eta, k);
@@ -459,6 +475,38 @@ static CstStatus build_spectra(const Scene *s, const CstMaterialDesc *d, Materia
 }
 
 /* The coated materials' layer (cst_scene_add_material). */
+/* A hair's parameters (hair.h), its melanin turned into sigma_a as pbrt-v4 does (an RGB
+ * absorption, upsampled as an unbounded spectrum in spectral mode). */
+static CstStatus build_hair(const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    if (!(d->beta_m > 0.0f && d->beta_m <= 1.0f) || !(d->beta_n > 0.0f && d->beta_n <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: hair beta_m %g, beta_n %g; expected roughnesses in (0, 1] "
+                        "(pbrt's default 0.3)", fn, (double)d->beta_m, (double)d->beta_n);
+    if (!(d->hair_alpha >= -90.0f && d->hair_alpha <= 90.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: hair_alpha %g; expected the cuticle tilt in degrees, "
+                        "in [-90, 90] (pbrt's default 2)", fn, (double)d->hair_alpha);
+    m->beta_m = d->beta_m;
+    m->beta_n = d->beta_n;
+    m->hair_alpha = d->hair_alpha;
+    switch (d->hair_absorption) {
+    case CST_HAIR_MELANIN:
+        if (!(d->eumelanin >= 0.0f && d->eumelanin <= FLT_MAX) || !(d->pheomelanin >= 0.0f && d->pheomelanin <= FLT_MAX))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: eumelanin %g, pheomelanin %g; expected finite "
+                            "concentrations >= 0", fn, (double)d->eumelanin, (double)d->pheomelanin);
+        m->sigma_a = hair_sigma_a_from_melanin(d->eumelanin, d->pheomelanin);
+        if (!color_is_finite(m->sigma_a))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: eumelanin %g, pheomelanin %g overflow sigma_a; expected "
+                            "smaller concentrations", fn, (double)d->eumelanin, (double)d->pheomelanin);
+        return CST_OK;
+    case CST_HAIR_SIGMA_A: return read_rgb(d->sigma_a, 0, fn, "sigma_a", &m->sigma_a, err);
+    case CST_HAIR_COLOR: m->hair_color = true; return CST_OK; /* albedo, read and checked above */
+    default:
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: hair_absorption %d; expected CST_HAIR_MELANIN, "
+                        "CST_HAIR_SIGMA_A or CST_HAIR_COLOR", fn, d->hair_absorption);
+    }
+}
+
 static CstStatus build_layer(const CstMaterialDesc *d, Material *m, CstError *err)
 {
     static const char fn[] = "cst_scene_add_material";
@@ -540,14 +588,15 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     static const MaterialType types[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
-                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED};
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED,
+                                         MATERIAL_HAIR};
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
-    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_MEASURED)
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_HAIR)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
-                        "to CST_MATERIAL_MEASURED (cst_material_desc_init sets it)", fn, (int)d->type);
+                        "to CST_MATERIAL_HAIR (cst_material_desc_init sets it)", fn, (int)d->type);
     Material m = {0};
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
@@ -600,6 +649,7 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         m.amount = d->amount;
         m.amount_texture = d->amount_texture;
     }
+    if (d->type == CST_MATERIAL_HAIR && (st = build_hair(d, &m, err)) != CST_OK) return st;
     if ((st = build_spectra(scene, d, &m, err)) != CST_OK) return st;
     if (d->type == CST_MATERIAL_MEASURED) {
         if (!d->measured_file || !d->measured_file[0])

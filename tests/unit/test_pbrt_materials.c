@@ -94,7 +94,9 @@ static void test_materials(void **state)
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "larger weight") < 0);
     assert_true(m[8]->type == MATERIAL_DIFFUSE && m[8]->albedo.c[0] == 0.125f); /* interface: below */
     assert_true(m[9]->type == MATERIAL_THIN_DIELECTRIC && m[9]->ior == 1.5f);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "material \"hair\" is not supported") >= 0);
+    /* hair: pbrt-v4's defaults, eumelanin 1.3 as sigma_a (more in test_hair) */
+    assert_true(m[10]->type == MATERIAL_HAIR && m[10]->ior == 1.55f && m[10]->beta_m == 0.3f &&
+                fabsf(m[10]->sigma_a.c[2] - 1.3f * 1.37f) < 1e-6f && !m[10]->hair_color);
     assert_true(m[11]->albedo.c[0] == 1.0f && m[11]->albedo.c[2] == 0.0f);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "clamped") >= 0);
     assert_true(m[12]->albedo.c[1] == 0.1f);

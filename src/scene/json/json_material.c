@@ -10,15 +10,17 @@
 #include <string.h>
 
 #include "io/path.h"
+#include "materials/hair.h"
 #include "scene/json/json_texture.h"
 
 enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COATED_DIFFUSE,
-       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_MEASURED, MAT_COUNT };
+       MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_MEASURED, MAT_HAIR,
+       MAT_COUNT };
 
 /* A material's "type", in MAT_* order (json_material.h). */
 const char *const json_material_types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric",
                                            "plastic", "coated_diffuse", "coated_conductor", "mix", "diffuse_transmission",
-                                           "thin_dielectric", "measured", NULL};
+                                           "thin_dielectric", "measured", "hair", NULL};
 
 /* "roughness" (or another roughness key): perceptual, in [0, 1] (material.h: alpha =
  * roughness^2). */
@@ -164,13 +166,78 @@ static CstStatus read_mix(Loader *ld, const json_t *obj, Material *m)
     return CST_OK;
 }
 
+/* A float key in [lo, hi] into *out, if present. */
+static CstStatus read_float_range(Loader *ld, const json_t *obj, const char *key, float lo, float hi,
+                                  const char *expected, float *out)
+{
+    json_t *v = json_object_get(obj, key);
+    if (!v) return CST_OK;
+    json_path_push_key(ld, key);
+    LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, out));
+    if (!(*out >= lo && *out <= hi)) return json_fail_here(ld, "%s %g; expected %s", key, (double)*out, expected);
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+/* A hair (pbrt-v4's, hair.h): "ior" (default 1.55), "beta_m" and "beta_n" in (0, 1]
+ * (0.3), "alpha" the cuticle tilt in degrees (2), and one way of giving the absorption:
+ * "sigma_a" (RGB per fibre radius, >= 0), "color" (RGB in [0, 1] or a texture name: the
+ * fibre's colour, Chiang et al. eq. 9) or "eumelanin" and "pheomelanin" (>= 0; the
+ * default, 1.3 and 0). */
+static CstStatus read_hair(Loader *ld, const json_t *obj, Material *m)
+{
+    json_t *v;
+    m->ior = 1.55f;
+    m->beta_m = m->beta_n = 0.3f;
+    m->hair_alpha = 2.0f;
+    if ((v = json_object_get(obj, "ior"))) {
+        json_path_push_key(ld, "ior");
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &m->ior));
+        if (!(m->ior > 0.0f))
+            return json_fail_here(ld, "ior %g is not positive; expected the fibre's index of refraction > 0 "
+                                      "(hair is about 1.55)", (double)m->ior);
+        json_path_pop(ld);
+    }
+    LOADER_TRY(read_float_range(ld, obj, "beta_m", 1e-30f, 1.0f, "a longitudinal roughness in (0, 1]", &m->beta_m));
+    LOADER_TRY(read_float_range(ld, obj, "beta_n", 1e-30f, 1.0f, "an azimuthal roughness in (0, 1]", &m->beta_n));
+    LOADER_TRY(read_float_range(ld, obj, "alpha", -90.0f, 90.0f, "the cuticle tilt in degrees, in [-90, 90]",
+                                &m->hair_alpha));
+    json_t *sig = json_object_get(obj, "sigma_a"), *col = json_object_get(obj, "color");
+    const bool mel = json_object_get(obj, "eumelanin") || json_object_get(obj, "pheomelanin");
+    if ((sig != NULL) + (col != NULL) + mel > 1) {
+        json_path_push_key(ld, sig ? "sigma_a" : "color");
+        return json_fail_here(ld, "more than one of \"sigma_a\", \"color\" and \"eumelanin\"/\"pheomelanin\"; "
+                                  "expected one way of giving the fibre's absorption");
+    }
+    if (sig) {
+        json_path_push_key(ld, "sigma_a");
+        LOADER_TRY(json_read_rgb(ld, sig, 0, &m->sigma_a));
+        json_path_pop(ld);
+    } else if (col) {
+        m->hair_color = true;
+        json_path_push_key(ld, "color");
+        if (json_is_string(col))
+            LOADER_TRY(json_read_param_texture(ld, col, "a colour", &m->albedo_texture));
+        else
+            LOADER_TRY(json_read_rgb(ld, col, 1, &m->albedo));
+        json_path_pop(ld);
+    } else {
+        float eu = mel ? 0.0f : 1.3f, ph = 0.0f;
+        LOADER_TRY(read_float_range(ld, obj, "eumelanin", 0.0f, 1e6f, "a concentration >= 0 (and at most 1e6)", &eu));
+        LOADER_TRY(read_float_range(ld, obj, "pheomelanin", 0.0f, 1e6f, "a concentration >= 0 (and at most 1e6)", &ph));
+        m->sigma_a = hair_sigma_a_from_melanin(eu, ph);
+    }
+    return CST_OK;
+}
+
 static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
 {
     const char *const *types = json_material_types;
     static const MaterialType mtype[] = {MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_GLASS,
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
-                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED};
+                                         MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED,
+                                         MATERIAL_HAIR};
     /* The keys each type accepts, "type" first. */
     static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
     static const char *const keys_glass[] = {"type", "albedo", "ior"};
@@ -190,11 +257,13 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     static const char *const keys_mix[] = {"type", "materials", "amount"};
     static const char *const keys_difftrans[] = {"type", "albedo", "transmittance"};
     static const char *const keys_measured[] = {"type", "file", "two_sided"};
+    static const char *const keys_hair[] = {"type", "ior", "beta_m", "beta_n", "alpha", "sigma_a", "color",
+                                            "eumelanin", "pheomelanin"};
     static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass, keys_conductor,
                                               keys_dielectric, keys_plastic, keys_coated_diffuse,
                                               keys_coated_conductor, keys_mix, keys_difftrans, keys_glass,
-                                              keys_measured};
-    static const int nkeys[] = {3, 3, 3, 9, 7, 5, 13, 18, 3, 3, 3, 3};
+                                              keys_measured, keys_hair};
+    static const int nkeys[] = {3, 3, 3, 9, 7, 5, 13, 18, 3, 3, 3, 3, 9};
     int type = 0;
     json_t *v;
     LOADER_TRY(json_expect_object(ld, obj, "a material object"));
@@ -215,6 +284,7 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     }
     if (type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR) LOADER_TRY(read_layer(ld, obj, m));
     if (type == MAT_MIX) return read_mix(ld, obj, m);
+    if (type == MAT_HAIR) return read_hair(ld, obj, m);
     if (type == MAT_MEASURED) { /* "file": an RGL .bsdf, relative to the scene (json_add_material) */
         LOADER_TRY(json_member_required(ld, obj, "file", "the path of a .bsdf file", &v));
         json_path_push_key(ld, "file");

@@ -10,6 +10,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "materials/hair.h"
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
 #include "scene/pbrt/pbrt_texture.h"
@@ -278,6 +279,51 @@ static CstStatus measured_material(Loader *ld, Params *ps, const char *d, Loc lo
     return CST_OK;
 }
 
+/* pbrt-v4's hair (pbrt-v3's too): the fibre BSDF (materials/hair.h) with pbrt-v4's
+ * HairMaterial defaults and precedence: sigma_a, else "reflectance" (pbrt-v3 "color"),
+ * else eumelanin and pheomelanin, else eumelanin 1.3. Textured parameters take their
+ * average (pbrt_get_float_tex's warning), except a reflectance texture, kept as such. */
+static CstStatus hair_material(Loader *ld, Params *ps, const char *d, Loc loc, Material *m)
+{
+    m->type = MATERIAL_HAIR;
+    m->albedo = color_s(1.0f);
+    TRY(pbrt_get_float_tex(ld, ps, d, "eta", 1.55f, &m->ior, NULL));
+    TRY(pbrt_get_float_tex(ld, ps, d, "beta_m", 0.3f, &m->beta_m, NULL));
+    TRY(pbrt_get_float_tex(ld, ps, d, "beta_n", 0.3f, &m->beta_n, NULL));
+    TRY(pbrt_get_float_tex(ld, ps, d, "alpha", 2.0f, &m->hair_alpha, NULL));
+    if (!(m->ior > 0.0f && m->ior <= FLT_MAX))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: eta %g; expected the fibre's index of refraction "
+                            "> 0 (1.55)", d, (double)m->ior);
+    if (!(m->beta_m > 0.0f && m->beta_m <= 1.0f) || !(m->beta_n > 0.0f && m->beta_n <= 1.0f))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: beta_m %g, beta_n %g; expected roughnesses in "
+                            "(0, 1]", d, (double)m->beta_m, (double)m->beta_n);
+    if (!(m->hair_alpha >= -90.0f && m->hair_alpha <= 90.0f))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: alpha %g; expected the cuticle tilt in degrees, "
+                            "in [-90, 90]", d, (double)m->hair_alpha);
+    /* Parameters of the sources not taken stay unread: the loader's unused-parameter
+     * warning names them (pbrt-v4 warns that it ignores them). */
+    int has_sigma = 0;
+    TRY(pbrt_get_spectrum(ld, ps, d, "sigma_a", SPEC_UNBOUNDED, 1, &m->sigma_a, &has_sigma));
+    const char *refl = pbrt_find_param(ps, "reflectance") ? "reflectance"
+                       : pbrt_find_param(ps, "color") ? "color" : NULL;
+    if (has_sigma) return CST_OK;
+    if (refl) {
+        TRY(get_albedo(ld, ps, d, refl, m));
+        m->hair_color = true;
+        return CST_OK;
+    }
+    /* pbrt-v4: eumelanin 1.3 when neither concentration is given, else an absent one is 0 */
+    const bool given = pbrt_find_param(ps, "eumelanin") || pbrt_find_param(ps, "pheomelanin");
+    float eu = 0.0f, ph = 0.0f;
+    TRY(pbrt_get_float_tex(ld, ps, d, "eumelanin", given ? 0.0f : 1.3f, &eu, NULL));
+    TRY(pbrt_get_float_tex(ld, ps, d, "pheomelanin", 0.0f, &ph, NULL));
+    if (!(eu >= 0.0f && eu <= 1e6f) || !(ph >= 0.0f && ph <= 1e6f))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: eumelanin %g, pheomelanin %g; expected "
+                            "concentrations >= 0 (and at most 1e6)", d, (double)eu, (double)ph);
+    m->sigma_a = hair_sigma_a_from_melanin(eu, ph);
+    return CST_OK;
+}
+
 /* pbrt material `type` with its parameters as our nearest Material (docs/pbrt-compat.md). */
 static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc, Material *m)
 {
@@ -416,9 +462,9 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             m->amount = amount;
             m->amount_texture = amount_tex;
         }
-    } else if (strcmp(type, "hair") == 0 ||
-               strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
-               strcmp(type, "fourier") == 0) {
+    } else if (strcmp(type, "hair") == 0) {
+        TRY(hair_material(ld, ps, d, loc, m));
+    } else if (strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 || strcmp(type, "fourier") == 0) {
         pbrt_params_mark_all_used(ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported; diffuse reflectance 0.5 is used instead", d);
     } else {
