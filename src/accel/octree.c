@@ -206,10 +206,13 @@ static void build_node(OctBuilder *b, uint32_t node, const uint32_t *codes, size
     uint32_t first = (uint32_t)t->num_nodes;
     t->num_nodes += 8;
     t->nodes[node] = (OctNode){first, (uint32_t)OCTREE_INNER, 0u};
+    uint32_t occupied = 0u;
     for (int c = 0; c < 8 && !b->oom; c++) {
         t->nodes[first + (uint32_t)c] = (OctNode){0u, 0u, 0u};
         build_node(b, first + (uint32_t)c, child + (size_t)c * n, count[c], clo[c], depth + 1);
+        if (count[c] > 0) occupied |= 1u << c;
     }
+    t->nodes[node].num_spheres = occupied;
     free(child);
 }
 
@@ -397,8 +400,7 @@ static inline void push_children(const Octree *t, const OctRay *q, const OctNode
     }
     for (int k = 7; k >= 0; k--) {
         unsigned c = (unsigned)k ^ q->flip;
-        const OctNode *ch = &t->nodes[nd->first + c];
-        if (ch->num_tris == 0u && ch->num_spheres == 0u) continue; /* empty leaf */
+        if (!((nd->num_spheres >> c) & 1u)) continue; /* an empty leaf */
         double enter = t_lo, exit = t_hi;
         for (int a = 0; a < 3; a++) {
             bool far = (k >> a) & 1;

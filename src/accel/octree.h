@@ -23,7 +23,8 @@ enum {
 };
 
 /* 12 bytes. Inner node (num_tris == OCTREE_INNER): its 8 children are nodes[first + c],
- * c = octant (bit a set: the upper half on axis a). Leaf: its primitives are
+ * c = octant (bit a set: the upper half on axis a), and bit c of num_spheres says child c
+ * is not an empty leaf (the traversal skips empty ones without loading them). Leaf: its primitives are
  * Octree.slots[first ..], num_tris triangle slots then num_spheres sphere slots; an empty
  * leaf has both 0. One count per primitive kind, so a kind can be added beside them. */
 typedef struct OctNode {
