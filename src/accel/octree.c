@@ -138,6 +138,27 @@ static bool code_overlaps(const Octree *t, uint32_t code, const double lo[3], co
     return sphere_box_overlap(c, fabs((double)sp->radius), glo, ghi);
 }
 
+/* The box of a primitive, in double. */
+static void code_bounds(const Octree *t, uint32_t code, double lo[3], double hi[3])
+{
+    if (code < (uint32_t)t->num_tris) {
+        const OctTri *tr = &t->tris[code];
+        const Vec3 v[3] = {tr->v0, tr->v1, tr->v2};
+        for (int a = 0; a < 3; a++) {
+            double x0 = (double)v3_get(v[0], a), x1 = (double)v3_get(v[1], a), x2 = (double)v3_get(v[2], a);
+            lo[a] = min3d(x0, x1, x2);
+            hi[a] = max3d(x0, x1, x2);
+        }
+        return;
+    }
+    const OctSphere *sp = &t->spheres[code - (uint32_t)t->num_tris];
+    double r = fabs((double)sp->radius);
+    for (int a = 0; a < 3; a++) {
+        lo[a] = (double)v3_get(sp->center, a) - r;
+        hi[a] = (double)v3_get(sp->center, a) + r;
+    }
+}
+
 static void make_leaf(OctBuilder *b, uint32_t node, const uint32_t *codes, size_t n)
 {
     Octree *t = b->t;
@@ -178,19 +199,34 @@ static void build_node(OctBuilder *b, uint32_t node, const uint32_t *codes, size
     }
     uint32_t *child = malloc(8 * n * sizeof *child);
     if (!child) { b->oom = true; return; }
-    size_t count[8], total = 0;
-    double clo[8][3];
-    for (int c = 0; c < 8; c++) {
-        double chi[3];
+    size_t count[8] = {0}, total = 0;
+    double clo[8][3], chi[8][3];
+    for (int c = 0; c < 8; c++)
         for (int a = 0; a < 3; a++) {
             clo[c][a] = (c >> a) & 1 ? lo[a] + hs[a] : lo[a];
-            chi[a] = clo[c][a] + hs[a];
+            chi[c][a] = clo[c][a] + hs[a];
         }
-        count[c] = 0;
-        for (size_t i = 0; i < n; i++)
-            if (code_overlaps(t, codes[i], clo[c], chi)) child[c * n + count[c]++] = codes[i];
-        total += count[c];
+    /* The octants whose grown boxes a primitive's box meets, per axis the lower half, the
+     * upper or both; the exact test runs only when that leaves several. With one left, the
+     * primitive's part near the cell (it comes within the margin of the cell) lies in its
+     * box and so in that octant's grown box: the exact test would say yes. */
+    static const unsigned UPPER[3] = {0xaau, 0xccu, 0xf0u}; /* octants with bit a set */
+    const double m = (double)t->margin;
+    for (size_t i = 0; i < n; i++) {
+        double blo[3], bhi[3];
+        code_bounds(t, codes[i], blo, bhi);
+        unsigned cand = 0xffu;
+        for (int a = 0; a < 3; a++) {
+            double mid = lo[a] + hs[a];
+            cand &= (blo[a] <= mid + m ? ~UPPER[a] & 0xffu : 0u) | (bhi[a] >= mid - m ? UPPER[a] : 0u);
+        }
+        bool one = (cand & (cand - 1u)) == 0u;
+        for (unsigned bits = cand; bits; bits &= bits - 1u) {
+            int c = __builtin_ctz(bits);
+            if (one || code_overlaps(t, codes[i], clo[c], chi[c])) child[(size_t)c * n + count[c]++] = codes[i];
+        }
     }
+    for (int c = 0; c < 8; c++) total += count[c];
     if (total > (size_t)OCT_MAX_DUP * n) {
         free(child);
         make_leaf(b, node, codes, n);
