@@ -396,7 +396,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         return true;
     case ARGS_OPT_ACCEL:
         if (strcmp(value, "bvh") && strcmp(value, "kdtree") && strcmp(value, "grid") &&
-            strcmp(value, "list") && strcmp(value, "embree")) {
+            strcmp(value, "list") && strcmp(value, "embree") && strcmp(value, "octree")) {
             args_fail(err, false, "--accel: unknown acceleration structure '%s' (valid: %s)", value,
                       ARGS_ACCEL_NAMES);
             return false;
@@ -527,7 +527,7 @@ static const ArgsOptSpec ARGS_BENCH_OPTS[] = {
 };
 #define ARGS_NUM_BENCH_OPTS (sizeof ARGS_BENCH_OPTS / sizeof ARGS_BENCH_OPTS[0])
 
-static const char *const ARGS_BENCH_ACCELS[] = {"bvh", "kdtree", "grid", "list", "embree", ARGS_EMBREE_ROBUST};
+static const char *const ARGS_BENCH_ACCELS[] = {"bvh", "kdtree", "grid", "list", "embree", ARGS_EMBREE_ROBUST, "octree"};
 _Static_assert(sizeof ARGS_BENCH_ACCELS / sizeof ARGS_BENCH_ACCELS[0] == ARGS_BENCH_MAX_ACCELS, "one slot per name");
 
 /* --accel bvh,embree: each name known, none empty, none twice. */

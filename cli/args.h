@@ -12,7 +12,7 @@
 /* Valid values, shared by the help text and the error messages. */
 #define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm, bdpt, vcm"
 #define ARGS_FILTER_NAMES     "box, tent, gaussian, mitchell"
-#define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree"
+#define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree, octree"
 /* bench rays also takes Embree in its robust mode as a back end of its own. */
 #define ARGS_EMBREE_ROBUST     "embree-robust"
 #define ARGS_BENCH_ACCEL_NAMES ARGS_ACCEL_NAMES ", " ARGS_EMBREE_ROBUST
@@ -34,7 +34,7 @@ typedef enum ArgsCommand {
     ARGS_CMD_COMPARE      /* caustic compare A B [--map OUT] [--json] [--variance-a VA] ... */
 } ArgsCommand;
 
-#define ARGS_BENCH_MAX_ACCELS 6 /* each back end at most once */
+#define ARGS_BENCH_MAX_ACCELS 7 /* each back end at most once */
 
 /* `caustic bench rays`: what to trace and with what. */
 typedef struct BenchArgs {

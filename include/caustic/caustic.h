@@ -1135,7 +1135,7 @@ CST_API CstStatus cst_image_read_layer(const char *path, const char *layer, floa
                                        int *height, CstError *err);
 
 /* ---------------------------------------------------------------- ray benchmark */
-#define CST_BENCH_MAX_ACCELS 6
+#define CST_BENCH_MAX_ACCELS 7
 
 /* `caustic bench rays` (docs/cli.md): zero-initialise, then set. */
 typedef struct CstBenchRaysOptions {

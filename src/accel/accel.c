@@ -6,7 +6,7 @@
 #include "core/clock.h"
 #include "core/error.h"
 
-static const char *const ACCEL_NAMES[ACCEL_TYPE_COUNT] = {"bvh", "kdtree", "grid", "list", "embree"};
+static const char *const ACCEL_NAMES[ACCEL_TYPE_COUNT] = {"bvh", "kdtree", "grid", "list", "embree", "octree"};
 
 const char *accel_type_name(AccelType type)
 {
@@ -48,6 +48,7 @@ static CstStatus accel_build_mode(Accel *a, AccelType type, const AccelGeometry 
     case ACCEL_GRID: st = grid_build(&a->grid, geom, err); break;
     case ACCEL_LIST: st = list_build(&a->list, geom, err); break;
     case ACCEL_EMBREE: st = embree_build(&a->embree, geom, mode, err); break;
+    case ACCEL_OCTREE: st = octree_build(&a->octree, geom, err); break;
     default: return cst_fail(err, CST_ERR_INVALID_ARG, "unknown acceleration structure %d", (int)type);
     }
     if (st != CST_OK) {
@@ -84,6 +85,7 @@ void accel_free(Accel *a)
     case ACCEL_GRID: grid_free(&a->grid); break;
     case ACCEL_LIST: list_free(&a->list); break;
     case ACCEL_EMBREE: embree_free(a->embree); break;
+    case ACCEL_OCTREE: octree_free(&a->octree); break;
     }
     memset(a, 0, sizeof *a);
 }
@@ -96,6 +98,7 @@ size_t accel_memory_bytes(const Accel *a)
     case ACCEL_GRID: return grid_memory_bytes(&a->grid);
     case ACCEL_LIST: return list_memory_bytes(&a->list);
     case ACCEL_EMBREE: return embree_memory_bytes(a->embree);
+    case ACCEL_OCTREE: return octree_memory_bytes(&a->octree);
     }
     return 0;
 }

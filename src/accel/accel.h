@@ -13,6 +13,7 @@
 #include "accel/grid.h"
 #include "accel/kdtree.h"
 #include "accel/list.h"
+#include "accel/octree.h"
 #include "caustic/caustic.h"
 #include "geometry/hit.h"
 #include "geometry/ray.h"
@@ -23,9 +24,10 @@ typedef enum AccelType {
     ACCEL_KDTREE,
     ACCEL_GRID,
     ACCEL_LIST,    /* brute force: the correctness oracle */
-    ACCEL_EMBREE   /* Intel Embree 3, when built with it: the speed anchor */
+    ACCEL_EMBREE,  /* Intel Embree 3, when built with it: the speed anchor */
+    ACCEL_OCTREE
 } AccelType;
-enum { ACCEL_TYPE_COUNT = 5 };
+enum { ACCEL_TYPE_COUNT = 6 };
 
 typedef struct Accel {
     AccelType type;
@@ -35,6 +37,7 @@ typedef struct Accel {
         Grid grid;
         ListAccel list;
         EmbreeAccel *embree;
+        Octree octree;
     };
     BBox bounds;          /* of all primitives */
     double build_seconds; /* wall time of accel_build */
@@ -69,6 +72,7 @@ static inline bool accel_intersect(const Accel *a, const Ray *r, Hit *hit)
     case ACCEL_GRID: return grid_intersect(&a->grid, r, hit);
     case ACCEL_LIST: return list_intersect(&a->list, r, hit);
     case ACCEL_EMBREE: return embree_intersect(a->embree, r, hit);
+    case ACCEL_OCTREE: return octree_intersect(&a->octree, r, hit);
     }
     return false;
 }
@@ -81,6 +85,7 @@ static inline bool accel_occluded(const Accel *a, const Ray *r)
     case ACCEL_GRID: return grid_occluded(&a->grid, r);
     case ACCEL_LIST: return list_occluded(&a->list, r);
     case ACCEL_EMBREE: return embree_occluded(a->embree, r);
+    case ACCEL_OCTREE: return octree_occluded(&a->octree, r);
     }
     return false;
 }

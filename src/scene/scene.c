@@ -747,7 +747,7 @@ CstStatus cst_scene_set_accel(CstScene *scene, const char *name, CstError *err)
     AccelType type;
     if (!accel_type_from_name(name, &type))
         return cst_fail(err, CST_ERR_INVALID_ARG,
-                        "unknown acceleration structure '%s'; expected bvh, kdtree, grid, list or embree", name);
+                        "unknown acceleration structure '%s'; expected bvh, kdtree, grid, list, embree or octree", name);
     if (!accel_type_available(type))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "acceleration structure '%s' is not available in this build", name);
     return scene_set_accel(scene, type, err);

@@ -481,7 +481,7 @@ fi
 # the same with every back end, with the loader's time, the build time and bytes per
 # primitive; an unknown back end exits 2.
 dir=$TMP/info
-for accel in bvh kdtree grid list; do
+for accel in bvh kdtree grid list octree; do
     run "$dir" info "$SRC/scenes/mesh-example.json" --accel "$accel"
     if expect "info --accel $accel exits 0" 0; then
         grep -Eq "^accel: +$accel\$" "$OUT" && grep -Eq "^load: +[0-9.]+ ms" "$OUT" \
@@ -491,13 +491,13 @@ for accel in bvh kdtree grid list; do
             || fail "info --accel $accel prints load, 676 triangles, build and bytes per primitive"
     fi
 done
-run "$dir" info --accel octree
-expect "info: unknown back end exits 2" 2 "unknown acceleration structure 'octree'"
+run "$dir" info --accel bih
+expect "info: unknown back end exits 2" 2 "unknown acceleration structure 'bih'"
 
 # bench rays: back-end names, and the ratio columns (the built-in Cornell box, no ../shared).
 dir=$TMP/bench
-run "$dir" bench rays --cornell --accel bvh,octree
-expect "bench rays: unknown back end exits 2 and lists the valid ones" 2 "unknown acceleration structure 'octree'" "embree, embree-robust\)"
+run "$dir" bench rays --cornell --accel bvh,bih
+expect "bench rays: unknown back end exits 2 and lists the valid ones" 2 "unknown acceleration structure 'bih'" "embree, octree, embree-robust\)"
 run "$dir" bench rays --cornell --accel bvh,bvh
 expect "bench rays: a back end listed twice exits 2" 2 "'bvh' listed twice"
 run "$dir" bench rays --cornell --accel bvh,kdtree --threads 2 --json

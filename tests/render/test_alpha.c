@@ -94,7 +94,7 @@ static Scene *coverage_scene(int checker, float a0, float a1)
 static void check_coverage(const Scene *s, const char *what, int checker, float a0, float a1, uint64_t seed)
 {
     enum { SIZE = 32, SQUARE = 8 };
-    static const char *const names[ACCEL_TYPE_COUNT] = {"bvh", "kdtree", "grid", "list", "embree"};
+    static const char *const names[ACCEL_TYPE_COUNT] = {"bvh", "kdtree", "grid", "list", "embree", "octree"};
     CstError err;
     for (int a = 0; a < ACCEL_TYPE_COUNT; a++) {
         if (!accel_type_available((AccelType)a)) continue; /* embree not built in */

@@ -188,8 +188,8 @@ static void test_accel_backends_identical_images(void **state)
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     Film *ref = render(s, 2, CST_FILTER_BOX, 11);
-    const char *names[] = {"kdtree", "grid", "list", "embree"};
-    for (int i = 0; i < 4; i++) {
+    const char *names[] = {"kdtree", "grid", "list", "embree", "octree"};
+    for (int i = 0; i < 5; i++) {
         CstStatus st = cst_scene_set_accel(s, names[i], &err);
         if (st == CST_ERR_UNSUPPORTED) {
             print_message("%s: not in this build, skipped\n", names[i]);

@@ -1,5 +1,5 @@
 /* One conformance suite for every acceleration back end behind accel/accel.h: bvh, kdtree,
- * grid, list and, when the build has it, embree (accel_build: our own watertight test as
+ * grid, octree, list and, when the build has it, embree (accel_build: our own watertight test as
  * Embree user geometry, so its hits are ours bit for bit). On every ray each back end must
  * return brute force's closest hit and occlusion over the same primitive tests: random
  * soups (slivers, needles), mixed triangles and spheres, empty scenes and non-finite rays,
@@ -142,8 +142,8 @@ static double dist_to_prim(const Soup *s, int id, const double p[3])
  *   skipped when it lies outside the box by more than 4 ulps of its coordinates;
  * - the kd-tree's cells hold only the part of a triangle inside them (perfect splits):
  *   when the point lies off the primitive by more than 4 ulps;
- * - the grid puts a primitive in every cell it comes within its margin of: when the point
- *   lies farther than half the margin from the primitive;
+ * - the grid and the octree put a primitive in every cell it comes within their margin of:
+ *   when the point lies farther than half the margin from the primitive;
  * - list tests everything and may skip nothing. */
 static bool hit_skippable(const Accel *a, const Soup *s, int id, const Ray *r, float t)
 {
@@ -163,6 +163,7 @@ static bool hit_skippable(const Accel *a, const Soup *s, int id, const Ray *r, f
     }
     case ACCEL_KDTREE: return dist_to_prim(s, id, p) > ulps4;
     case ACCEL_GRID: return dist_to_prim(s, id, p) > 0.5 * (double)a->grid.margin;
+    case ACCEL_OCTREE: return dist_to_prim(s, id, p) > 0.5 * (double)a->octree.margin;
     case ACCEL_LIST: return false;
     }
     return false;
@@ -864,6 +865,58 @@ static void test_accel_degenerate_and_flat(void **state)
     }
 }
 
+/* Everything at (almost) one point: 300 triangles whose three vertices are one point
+ * (never hit: zero area), 300 within 1e-4 of it (far inside the build margins of the grid
+ * and the octree, so cells there cannot separate them), 2000 small ones in a 0.01 box
+ * around it (an octree subdivides toward its depth limit there), spheres of radius 0 and
+ * 1e-4 at the point, and two large triangles 10 units away that set the scene's scale.
+ * Rays aimed at the point and random ones. The octree's own bounds are checked too: its
+ * depth within OCTREE_MAX_DEPTH and its references a small multiple of the primitives. */
+static void test_accel_one_point(void **state)
+{
+    (void)state;
+    Pcg32 rng;
+    pcg32_seed(&rng, 4100u, 3u);
+    Soup s = {0};
+    const Vec3 p = v3(1.0f, 2.0f, 3.0f);
+    soup_reserve(&s, 2602, 3 * 2602, 2);
+    for (int i = 0; i < 300; i++) soup_add_tri(&s, p, p, p);
+    for (int i = 0; i < 300; i++)
+        soup_add_tri(&s, v3_madd(p, rnd_v3(&rng, -1.0, 1.0), 1e-4f), v3_madd(p, rnd_v3(&rng, -1.0, 1.0), 1e-4f),
+                     v3_madd(p, rnd_v3(&rng, -1.0, 1.0), 1e-4f));
+    for (int i = 0; i < 2000; i++) {
+        Vec3 c = v3_madd(p, rnd_v3(&rng, -1.0, 1.0), 0.005f);
+        soup_add_tri(&s, v3_madd(c, rnd_v3(&rng, -1.0, 1.0), 1e-3f), v3_madd(c, rnd_v3(&rng, -1.0, 1.0), 1e-3f),
+                     v3_madd(c, rnd_v3(&rng, -1.0, 1.0), 1e-3f));
+    }
+    soup_add_tri(&s, v3(-9.0f, -8.0f, 13.0f), v3(11.0f, -8.0f, 13.0f), v3(1.0f, 12.0f, 13.0f));
+    soup_add_tri(&s, v3(-9.0f, -8.0f, -7.0f), v3(1.0f, 12.0f, -7.0f), v3(11.0f, -8.0f, -7.0f));
+    soup_add_sphere(&s, p, 0.0f);
+    soup_add_sphere(&s, p, 1e-4f);
+    Suite b;
+    suite_build(&b, &s);
+    for (int k = 0; k < b.count; k++) {
+        if (b.a[k].type != ACCEL_OCTREE) continue;
+        const Octree *o = &b.a[k].octree;
+        print_message("  octree: nodes %d leaves %d refs %zu depth %d\n", o->num_nodes, o->num_leaves, o->num_refs,
+                      o->depth);
+        assert_true(o->depth <= OCTREE_MAX_DEPTH);
+        assert_true(o->num_refs <= (size_t)16 * (size_t)(s.num_tris + s.num_spheres));
+    }
+    check_random_rays(&b, &rng, 4000, "one point, random");
+    for (int i = 0; i < 6000; i++) {
+        Vec3 d = rnd_dir(&rng);
+        float jitter = i % 3 == 0 ? 0.0f : (i % 3 == 1 ? 1e-4f : 5e-3f);
+        Vec3 target = v3_madd(p, rnd_v3(&rng, -1.0, 1.0), jitter);
+        Ray r = ray_make(v3_madd(target, d, -(float)rnd(&rng, 0.5, 20.0)), d, 0.0f, INFINITY);
+        check_ray(&b, &r, "at the point", i);
+    }
+    suite_report(&b, "one point");
+    suite_assert_hits(&b, 1, 20);
+    suite_free(&b);
+    soup_free(&s);
+}
+
 /* Teapot in a stadium (soup_teapot_in_stadium): rays from the stadium at the teapot, from
  * the teapot outward, and random ones. */
 static void test_accel_teapot_in_stadium(void **state)
@@ -1081,6 +1134,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_accel_rays_in_cell_planes),
         cmocka_unit_test(test_accel_zero_area),
         cmocka_unit_test(test_accel_degenerate_and_flat),
+        cmocka_unit_test(test_accel_one_point),
         cmocka_unit_test(test_accel_teapot_in_stadium),
         cmocka_unit_test(test_accel_occlusion_segments),
         cmocka_unit_test(test_accel_closed_meshes_match_brute_force),

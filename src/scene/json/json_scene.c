@@ -35,10 +35,10 @@ static CstStatus parse_root(Loader *ld, const json_t *root)
         LOADER_TRY(json_read_string(ld, v, &name));
         if (!accel_type_from_name(name, &type))
             return json_fail_here(ld, "unknown acceleration structure \"%s\"; expected one of: bvh, "
-                                      "kdtree, grid, list, embree", name);
+                                      "kdtree, grid, list, embree, octree", name);
         if (!accel_type_available(type))
             return json_fail_here(ld, "acceleration structure \"%s\" is not available in this build; "
-                                      "expected one of: bvh, kdtree, grid, list", name);
+                                      "expected one of: bvh, kdtree, grid, list, octree", name);
         LOADER_TRY(cst_scene_set_accel(ld->scene, name, ld->err)); /* before commit: its choice */
         json_path_pop(ld);
     }
