@@ -180,7 +180,7 @@ CstStatus scene_commit(Scene *scene, CstError *err);
 CstStatus scene_set_accel(Scene *scene, AccelType type, CstError *err);
 static inline AccelGeometry scene_accel_geometry(const Scene *s)
 {
-    AccelGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres, s->num_spheres};
+    AccelGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres, s->num_spheres, NULL, 0};
     return g;
 }
 
