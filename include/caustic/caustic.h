@@ -127,6 +127,7 @@ typedef struct CstSceneInfo {
                                  * black (callers warn) */
     const char *light_sampler;  /* next-event estimation's choice of light: "power", "bvh" or
                                  * "uniform" (after commit; static storage) */
+    int shapes;                 /* analytic shapes (cst_scene_add_shape) */
 } CstSceneInfo;
 /* Also before cst_scene_commit: the counts so far (the accel fields then describe no
  * structure yet). */

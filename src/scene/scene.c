@@ -669,6 +669,7 @@ void cst_scene_info(const CstScene *s, CstSceneInfo *info)
     memset(info, 0, sizeof *info);
     info->triangles = s->num_triangles;
     info->spheres = s->num_spheres;
+    info->shapes = s->num_shapes;
     info->emitters = s->num_emitters;
     info->materials = s->num_materials;
     info->lights = s->emitter_sampler.lights; /* set by commit */

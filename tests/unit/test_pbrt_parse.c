@@ -179,6 +179,11 @@ static void test_semantic_errors(void **state)
     assert_int_equal(w.code[1], CST_WARN_GEOMETRY);
     if (strncmp(w.msg[1], "t.pbrt:5:1: the world has no shapes", 35) != 0) fail_msg("%s", w.msg[1]);
     cst_scene_destroy(s);
+    /* a cylinder alone is a world with a shape: no warning at all */
+    w.n = 0;
+    if (load_w(WORLD("Shape \"cylinder\"\n"), &s, &err, &w) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(w.n, 0);
+    cst_scene_destroy(s);
 }
 
 /* Errors without file access disabled: a missing PLY (I/O, located at its file name)

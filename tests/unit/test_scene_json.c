@@ -415,36 +415,6 @@ static void test_syntax_errors(void **state)
 
 /* ------------------------------------------------------------------ semantic errors */
 
-/* "cylinder", "disk" and a "sphere" with "z_min"/"z_max"/"phi_max" are analytic shapes;
- * an emitting one is a located error (not supported yet), as is an unknown key. */
-static void test_analytic_shapes(void **state)
-{
-    (void)state;
-    const char *text = WITH_SHAPE(
-        "{\"type\": \"cylinder\", \"material\": \"white\", \"radius\": 0.5, \"z_min\": 0, \"z_max\": 2, "
-        "\"phi_max\": 270, \"transform\": {\"translate\": [1, 0, 0]}}, "
-        "{\"type\": \"disk\", \"material\": \"white\", \"radius\": 2, \"inner_radius\": 0.5, \"height\": 1, "
-        "\"reverse_orientation\": true}, "
-        "{\"type\": \"sphere\", \"material\": \"white\", \"center\": [0, 3, 0], \"radius\": 1, \"z_max\": 0.5}");
-    CstScene *scene = NULL;
-    CstError err = {0};
-    if (load(text, &scene, &err) != CST_OK) fail_msg("%s", err.msg);
-    const Scene *s = scene;
-    assert_int_equal(s->num_shapes, 3);
-    assert_int_equal(s->shapes[0].p.type, SHAPE_TAG_CYLINDER);
-    assert_true(s->shapes[0].p.z_max == 2.0f && s->shapes[0].bounds.min.x > 0.4f);
-    assert_int_equal(s->shapes[1].p.type, SHAPE_TAG_DISK);
-    assert_true(s->shapes[1].p.inner_radius == 0.5f && s->shapes[1].flip_normal);
-    assert_int_equal(s->shapes[2].p.type, SHAPE_TAG_SPHERE);
-    assert_true(s->shapes[2].p.z_min == -1.0f && s->shapes[2].p.z_max == 0.5f && s->shapes[2].bounds.min.y > 1.9f);
-    cst_scene_destroy(scene);
-    expect_error(WITH_SHAPE("{\"type\": \"disk\", \"material\": \"white\", \"radius\": 1, "
-                            "\"emission\": {\"radiance\": [1, 1, 1]}}"),
-                 CST_ERR_INVALID_ARG, "{\"radiance\"", 0, "not supported yet");
-    expect_error(WITH_SHAPE("{\"type\": \"cylinder\", \"material\": \"white\", \"radius\": 1, \"height\": 1}"),
-                 CST_ERR_INVALID_ARG, "\"height\"", 0, NULL);
-}
-
 static void test_unknown_keys(void **state)
 {
     (void)state;
@@ -1191,7 +1161,6 @@ int main(void)
         cmocka_unit_test(test_locate_matches_jansson),
         cmocka_unit_test(test_offset_location),
         cmocka_unit_test(test_syntax_errors),
-        cmocka_unit_test(test_analytic_shapes),
         cmocka_unit_test(test_unknown_keys),
         cmocka_unit_test(test_missing_keys),
         cmocka_unit_test(test_wrong_types),

@@ -2,7 +2,8 @@
  * cylinder, the disk with a hole and the partial sphere; clipping in z and phi; transforms
  * (scale, mirror, reverse orientation); dp/du and dp/dv against finite differences of the
  * parameterisation; spawned rays never re-hit their shape near the start; area sampling
- * uniform by area (the disk's annulus split in two by area, within 4 standard errors). */
+ * uniform by area (the disk's annulus split in two by area, within 4 standard errors); the
+ * JSON loader's "cylinder", "disk" and partial spheres. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -12,7 +13,11 @@
 
 #include <math.h>
 
+#include <string.h>
+
+#include "caustic/caustic.h"
 #include "core/rng.h"
+#include "scene/scene.h"
 #include "geometry/shape.h"
 #include "math/transform.h"
 
@@ -215,6 +220,51 @@ static void test_random_transforms(void **state)
     assert_int_equal(rehits, 0);
 }
 
+/* The JSON loader: "cylinder", "disk" and a "sphere" with "z_min"/"z_max"/"phi_max" are
+ * analytic shapes; an emitting one is a located error (not supported yet), as is a key of
+ * the other kind. */
+#define JSON_SCENE(shapes) "{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40}, " \
+    "\"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": [0.5, 0.5, 0.5]}}, \"shapes\": [" shapes "]}"
+static CstStatus load_json(const char *text, CstScene **out, CstError *err)
+{
+    return cst_scene_load_json_string(text, strlen(text), "t.json", out, err);
+}
+
+static void test_json_shapes(void **state)
+{
+    (void)state;
+    CstScene *scene = NULL;
+    CstError err = {0};
+    if (load_json(JSON_SCENE(
+            "{\"type\": \"cylinder\", \"material\": \"white\", \"radius\": 0.5, \"z_min\": 0, \"z_max\": 2, "
+            "\"phi_max\": 270, \"transform\": {\"translate\": [1, 0, 0]}}, "
+            "{\"type\": \"disk\", \"material\": \"white\", \"radius\": 2, \"inner_radius\": 0.5, \"height\": 1, "
+            "\"reverse_orientation\": true}, "
+            "{\"type\": \"sphere\", \"material\": \"white\", \"center\": [0, 3, 0], \"radius\": 1, \"z_max\": 0.5}"),
+                  &scene, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    const Scene *s = scene;
+    assert_int_equal(s->num_shapes, 3);
+    assert_int_equal(s->shapes[0].p.type, SHAPE_TAG_CYLINDER);
+    assert_true(s->shapes[0].p.z_max == 2.0f && s->shapes[0].bounds.min.x > 0.4f);
+    assert_int_equal(s->shapes[1].p.type, SHAPE_TAG_DISK);
+    assert_true(s->shapes[1].p.inner_radius == 0.5f && s->shapes[1].flip_normal);
+    assert_int_equal(s->shapes[2].p.type, SHAPE_TAG_SPHERE);
+    assert_true(s->shapes[2].p.z_min == -1.0f && s->shapes[2].p.z_max == 0.5f && s->shapes[2].bounds.min.y > 1.9f);
+    CstSceneInfo info;
+    cst_scene_info(scene, &info);
+    assert_int_equal(info.shapes, 3);
+    cst_scene_destroy(scene);
+    scene = NULL;
+    assert_int_equal(load_json(JSON_SCENE("{\"type\": \"disk\", \"material\": \"white\", \"radius\": 1, "
+                                          "\"emission\": {\"radiance\": [1, 1, 1]}}"), &scene, &err), CST_ERR_INVALID_ARG);
+    assert_null(scene);
+    if (!strstr(err.msg, "t.json:1:") || !strstr(err.msg, "not supported yet")) fail_msg("%s", err.msg);
+    assert_int_equal(load_json(JSON_SCENE("{\"type\": \"cylinder\", \"material\": \"white\", \"radius\": 1, "
+                                          "\"height\": 1}"), &scene, &err), CST_ERR_INVALID_ARG);
+    if (!strstr(err.msg, "\"height\"")) fail_msg("%s", err.msg);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -222,6 +272,7 @@ int main(void)
         cmocka_unit_test(test_disk),
         cmocka_unit_test(test_partial_sphere),
         cmocka_unit_test(test_random_transforms),
+        cmocka_unit_test(test_json_shapes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
