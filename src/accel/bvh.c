@@ -217,10 +217,10 @@ static inline bool leaf_spheres(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
 
 static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRayBlock *q, const Ray *r)
 {
-    if (ref & BVH_SHAPES)
-        return shape_leaf_occluded(bvh->shapes, bvh->shape_base, &bvh->shape_ids[bvh_ref_index(ref) & BVH_SHAPE_INDEX_MAX],
-                                   bvh_ref_count(ref), r);
-    if (ref & BVH_SPHERES) {
+    if (ref & BVH_SPHERES) { /* triangle leaves test nothing more than before shapes came */
+        if (ref & BVH_SHAPES)
+            return shape_leaf_occluded(bvh->shapes, bvh->shape_base,
+                                       &bvh->shape_ids[bvh_ref_index(ref) & BVH_SHAPE_INDEX_MAX], bvh_ref_count(ref), r);
         const BvhSphere *sp = &bvh->spheres[bvh_ref_index(ref)];
         for (uint32_t si = bvh_ref_count(ref); si > 0; si--, sp++) {
             float t;

@@ -31,7 +31,7 @@ static inline V3d map_normal(const double n3[3][3], V3d v)
              n3[2][0] * v.x + n3[2][1] * v.y + n3[2][2] * v.z};
     return r;
 }
-static inline V3d d3(Vec3 v) { V3d r = {v.x, v.y, v.z}; return r; }
+static inline V3d d3(Vec3 v) { V3d r = {(double)v.x, (double)v.y, (double)v.z}; return r; }
 static inline V3d d3v(double x, double y, double z) { V3d r = {x, y, z}; return r; }
 static inline Vec3 f3(V3d v) { return v3((float)v.x, (float)v.y, (float)v.z); }
 static inline double d3_len(V3d v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
@@ -39,10 +39,6 @@ static inline Vec3 f3_unit(V3d v)
 {
     double l = d3_len(v);
     return l > 0.0 ? v3((float)(v.x / l), (float)(v.y / l), (float)(v.z / l)) : v3s(0.0f);
-}
-static inline V3d d3_cross(V3d a, V3d b)
-{
-    return d3v(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
 
 /* ------------------------------------------------------------ construction */
@@ -83,12 +79,12 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
         break;
     }
     }
-    s->r = s->p.radius; s->z_min = s->p.z_min; s->z_max = s->p.z_max; s->height = s->p.height;
-    s->r_inner = s->p.inner_radius; s->phi_max = s->p.phi_max;
+    s->r = (double)s->p.radius; s->z_min = (double)s->p.z_min; s->z_max = (double)s->p.z_max;
+    s->height = (double)s->p.height; s->r_inner = (double)s->p.inner_radius; s->phi_max = (double)s->p.phi_max;
     double m[3][3], det;
     for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 3; j++) m[i][j] = s->o2w[i][j] = o2w->m[i][j];
-        s->o2w[i][3] = o2w->m[i][3];
+        for (int j = 0; j < 3; j++) m[i][j] = s->o2w[i][j] = (double)o2w->m[i][j];
+        s->o2w[i][3] = (double)o2w->m[i][3];
     }
     det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
@@ -110,8 +106,8 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
     BBox ob = object_bounds(&s->p), wb = bbox_empty();
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     for (int c = 0; c < 8; c++) {
-        V3d q = map_point(s->o2w, d3v((c & 1) ? ob.max.x : ob.min.x, (c & 2) ? ob.max.y : ob.min.y,
-                                      (c & 4) ? ob.max.z : ob.min.z));
+        V3d q = map_point(s->o2w, d3(v3((c & 1) ? ob.max.x : ob.min.x, (c & 2) ? ob.max.y : ob.min.y,
+                                        (c & 4) ? ob.max.z : ob.min.z)));
         double w[3] = {q.x, q.y, q.z};
         for (int k = 0; k < 3; k++) { lo[k] = fmin(lo[k], w[k]); hi[k] = fmax(hi[k], w[k]); }
     }
@@ -185,7 +181,7 @@ static bool clip_and_uv(const AnalyticShape *s, V3d o, V3d d, double t, float *u
 bool shape_intersect(const AnalyticShape *s, const Ray *r, float *t_out, float *u, float *v)
 {
     V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
-    const double tmin = r->t_min, tmax = r->t_max;
+    const double tmin = (double)r->t_min, tmax = (double)r->t_max;
     const ShapeParams *p = &s->p;
     (void)p;
     double t0, t1;
