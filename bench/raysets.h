@@ -53,7 +53,7 @@ void rayset_scene_free(RaysetScene *s);
 
 static inline AccelGeometry rayset_scene_geometry(const RaysetScene *s)
 {
-    AccelGeometry g = {s->positions, s->tri_indices, s->num_tris, NULL, 0};
+    AccelGeometry g = {s->positions, s->tri_indices, s->num_tris, NULL, 0, NULL, 0};
     return g;
 }
 

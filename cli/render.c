@@ -71,13 +71,17 @@ static void cli_print_info(const CliArgs *a, const CstScene *scene, double read_
     printf("load:        %.2f ms (parsing and mesh import)\n", read_seconds * 1e3);
     printf("triangles:   %d\n", in.triangles);
     printf("spheres:     %d\n", in.spheres);
-    printf("emitters:    %d (emitting shapes)\n", in.emitters);
-    printf("lights:      %d (the emitting shapes and every other light)\n", in.lights);
+    if (in.shapes > 0) printf("shapes:      %d (cylinders, disks, partial spheres)
+", in.shapes);
+    printf("emitters:    %d (emitting shapes)
+", in.emitters);
+    printf("lights:      %d (the emitting shapes and every other light)
+", in.lights);
     printf("materials:   %d\n", in.materials);
     printf("accel:       %s\n", in.accel);
     printf("build:       %.2f ms\n", in.accel_build_seconds * 1e3);
     printf("memory:      %zu bytes", in.accel_bytes);
-    int prims = in.triangles + in.spheres;
+    int prims = in.triangles + in.spheres + in.shapes;
     if (prims > 0) printf(" (%.1f bytes per primitive)", (double)in.accel_bytes / prims);
     printf("\n");
     if (in.instances > 0)

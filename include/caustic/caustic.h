@@ -134,6 +134,7 @@ typedef struct CstSceneInfo {
                                  * black (callers warn) */
     const char *light_sampler;  /* next-event estimation's choice of light: "power", "bvh" or
                                  * "uniform" (after commit; static storage) */
+    int shapes;                 /* analytic shapes (cst_scene_add_shape) */
 } CstSceneInfo;
 /* Also before cst_scene_commit: the counts so far (the accel fields then describe no
  * structure yet). */
@@ -460,6 +461,30 @@ CST_API CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], f
 CST_API CstStatus cst_scene_add_sphere_alpha(CstScene *scene, const float center[3], float radius,
                                              int material, const CstEmission *emission,
                                              const CstAlpha *alpha, CstError *err);
+
+/* Analytic shapes (pbrt-v4's quadrics), intersected exactly rather than tessellated. */
+typedef enum CstShapeType {
+    CST_SHAPE_CYLINDER = 0, /* about the object's z axis, z_min <= z <= z_max */
+    CST_SHAPE_DISK,         /* in the plane z = height, inner_radius <= distance to the axis <= radius */
+    CST_SHAPE_SPHERE        /* centred at the object's origin, cut to z_min <= z <= z_max */
+} CstShapeType;
+typedef struct CstShapeDesc {
+    CstShapeType type;
+    float radius;
+    float z_min, z_max;      /* cylinder (z_min < z_max); sphere (clamped to [-r, r]; both 0: whole) */
+    float height;            /* disk */
+    float inner_radius;      /* disk: 0 <= inner_radius < radius */
+    float phi_max_degrees;   /* the swept angle about z from +x toward +y, (0, 360]; 0: 360 */
+    int reverse_orientation; /* flips the normal (pbrt's ReverseOrientation) */
+    float world_from_object[12]; /* 3 x 4 row-major affine, as cst_scene_add_instance; all 0: identity */
+    int material;
+    CstEmission emission;    /* must be zero: emitting analytic shapes are not supported yet */
+    CstAlpha alpha;          /* over the shape's uvs; zero: opaque */
+} CstShapeDesc;
+/* u = phi / phi_max; v along z (cylinder, sphere) or from the rim inward (disk), as pbrt-v4.
+ * The normal points away from the axis (cylinder), outward (sphere), along +z (disk),
+ * flipped by reverse_orientation and by a mirroring world_from_object, as pbrt-v4 does. */
+CST_API CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *desc, CstError *err);
 
 typedef enum CstLightType {
     CST_LIGHT_POINT = 1,  /* isotropic: intensity (W/sr) in every direction */

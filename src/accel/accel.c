@@ -33,6 +33,7 @@ static BBox geometry_bounds(const AccelGeometry *g)
         Vec3 r = v3s(g->spheres[i].radius);
         b = bbox_add(bbox_add(b, v3_sub(g->spheres[i].center, r)), v3_add(g->spheres[i].center, r));
     }
+    for (int i = 0; i < g->num_shapes; i++) b = bbox_union(b, g->shapes[i].bounds);
     return b;
 }
 

@@ -18,6 +18,8 @@
 #include "accel/accel_geometry.h"
 
 #define BVH_WIDTH 8
+/* Beyond this depth the build splits at the median: traversal stacks stay bounded. */
+#define BVH_MAX_DEPTH 60
 
 /* An 8-wide node: the boxes of its children in structure-of-arrays form so one AVX slab
  * test checks all eight. Rows are [2 * axis + side] (side 0: min plane, 1: max plane).
@@ -32,7 +34,7 @@ typedef struct BvhNode {
  * multiple of BVH_UNIT, so the low five bits are zero and the node's address is one add
  * away). Leaf (BVH_LEAF set): count - 1 in three bits, and above bit 5 either the unit
  * (Bvh.units) of a run of 1 to 8 triangle blocks or, with BVH_SPHERES set, the index of
- * a run of 1 to 8 spheres; leaves hold one kind only, so the reference says everything
+ * a run of 1 to 8 spheres (or, with BVH_SHAPES too, analytic shapes); leaves hold one kind only, so the reference says everything
  * traversal needs without another memory access. */
 #define BVH_LEAF 0x1u
 #define BVH_SPHERES 0x2u
@@ -40,6 +42,11 @@ typedef struct BvhNode {
 #define BVH_INDEX_SHIFT 5
 #define BVH_INDEX_MAX 0x07ffffffu /* largest index a leaf can hold */
 #define BVH_EMPTY 0xffffffffu
+/* A sphere reference with its top bit set names a run of analytic shapes instead: its
+ * index (below the bit) is into Bvh.shape_ids. Sphere and shape indices thus have 26 bits;
+ * triangle leaves, which never carry BVH_SPHERES, keep their 27. */
+#define BVH_SHAPES 0x80000000u
+#define BVH_SHAPE_INDEX_MAX 0x03ffffffu
 static inline bool bvh_ref_is_leaf(uint32_t ref) { return (ref & BVH_LEAF) != 0u; }
 static inline uint32_t bvh_ref_index(uint32_t ref) { return ref >> BVH_INDEX_SHIFT; }
 static inline uint32_t bvh_ref_count(uint32_t ref) { return ((ref >> BVH_COUNT_SHIFT) & 7u) + 1u; }
@@ -64,6 +71,10 @@ typedef struct Bvh {
     int num_blocks;
     BvhSphere *spheres;
     int num_spheres;
+    const AnalyticShape *shapes; /* borrowed from the AccelGeometry */
+    uint32_t *shape_ids;         /* the shape leaves' scene primitive ids, leaf by leaf */
+    int num_shape_ids;
+    uint32_t shape_base;         /* shape k has id shape_base + k */
     int num_leaves;
     int num_prims;
     BBox bounds;

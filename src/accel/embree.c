@@ -41,7 +41,7 @@ size_t embree_memory_bytes(const EmbreeAccel *a) { (void)a; return 0; }
 #include "math/bbox.h"
 
 /* Fixed geometry ids, so a hit's geomID tells which primitive range primID is in. */
-enum { EMBREE_GEOM_TRIANGLES = 0, EMBREE_GEOM_SPHERES = 1 };
+enum { EMBREE_GEOM_TRIANGLES = 0, EMBREE_GEOM_SPHERES = 1, EMBREE_GEOM_SHAPES = 2 };
 
 struct EmbreeAccel {
     RTCDevice device;
@@ -50,6 +50,8 @@ struct EmbreeAccel {
     const Vec3 *positions; /* borrowed too, for the watertight triangle callbacks */
     const int32_t *tri_indices;
     uint32_t num_tris;     /* sphere j has scene primitive id num_tris + j */
+    const AnalyticShape *shapes; /* borrowed too: shape k has id shape_base + k */
+    uint32_t shape_base;
     /* Added to the user geometries' boxes, as the BVH widens its node boxes (bvh.c,
      * widen): a ray lying exactly in a box's face plane with a zero direction component
      * (an axis ray along a mesh's edge at coordinate 0, where two ulps are a denormal)
@@ -181,6 +183,54 @@ static void embree_sphere_intersect(const struct RTCIntersectFunctionNArguments 
         *embree_rayn_u(hitn, n, HITN_PRIM, i) = args->primID;
         *embree_rayn_u(hitn, n, HITN_GEOM, i) = args->geomID;
         *embree_rayn_u(hitn, n, HITN_INST, i) = args->context->instID[0];
+    }
+}
+
+/* ------------------------------------------------------------ analytic shapes, the same way */
+
+static void embree_shape_bounds(const struct RTCBoundsFunctionArguments *args)
+{
+    const EmbreeAccel *a = args->geometryUserPtr;
+    const BBox sb = a->shapes[args->primID].bounds; /* padded (shape_init) */
+    struct RTCBounds *b = args->bounds_o;
+    b->lower_x = sb.min.x - a->margin; b->lower_y = sb.min.y - a->margin; b->lower_z = sb.min.z - a->margin;
+    b->upper_x = sb.max.x + a->margin; b->upper_y = sb.max.y + a->margin; b->upper_z = sb.max.z + a->margin;
+}
+
+static void embree_shape_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    const EmbreeAccel *a = args->geometryUserPtr;
+    const AnalyticShape *s = &a->shapes[args->primID];
+    unsigned n = args->N;
+    void *rayn = args->rayhit;
+    void *hitn = (float *)args->rayhit + RAYN_FIELDS * n;
+    for (unsigned i = 0; i < n; i++) {
+        if (!args->valid[i]) continue;
+        Ray r = embree_rayn_load(rayn, n, i);
+        float t, u, v;
+        if (!shape_intersect(s, &r, &t, &u, &v)) continue;
+        *embree_rayn_f(rayn, n, RAYN_TFAR, i) = t;
+        *embree_rayn_f(hitn, n, HITN_NG_X, i) = 0.0f; /* unused: the scene rebuilds the surface */
+        *embree_rayn_f(hitn, n, HITN_NG_Y, i) = 0.0f;
+        *embree_rayn_f(hitn, n, HITN_NG_Z, i) = 1.0f;
+        *embree_rayn_f(hitn, n, HITN_U, i) = u;
+        *embree_rayn_f(hitn, n, HITN_V, i) = v;
+        *embree_rayn_u(hitn, n, HITN_PRIM, i) = args->primID;
+        *embree_rayn_u(hitn, n, HITN_GEOM, i) = args->geomID;
+        *embree_rayn_u(hitn, n, HITN_INST, i) = args->context->instID[0];
+    }
+}
+
+static void embree_shape_occluded(const struct RTCOccludedFunctionNArguments *args)
+{
+    const EmbreeAccel *a = args->geometryUserPtr;
+    const AnalyticShape *s = &a->shapes[args->primID];
+    unsigned n = args->N;
+    for (unsigned i = 0; i < n; i++) {
+        if (!args->valid[i]) continue;
+        Ray r = embree_rayn_load(args->ray, n, i);
+        float t, u, v;
+        if (shape_intersect(s, &r, &t, &u, &v)) *embree_rayn_f(args->ray, n, RAYN_TFAR, i) = -INFINITY;
     }
 }
 
@@ -328,6 +378,21 @@ static CstStatus embree_add_spheres(EmbreeAccel *a, const AccelGeometry *g, CstE
     return embree_check(a, "adding the spheres", err);
 }
 
+static CstStatus embree_add_shapes(EmbreeAccel *a, const AccelGeometry *g, CstError *err)
+{
+    RTCGeometry geom = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
+    if (!geom) return embree_check(a, "creating the shape geometry", err);
+    rtcSetGeometryUserPrimitiveCount(geom, (unsigned)g->num_shapes);
+    rtcSetGeometryUserData(geom, a);
+    rtcSetGeometryBoundsFunction(geom, embree_shape_bounds, NULL);
+    rtcSetGeometryIntersectFunction(geom, embree_shape_intersect);
+    rtcSetGeometryOccludedFunction(geom, embree_shape_occluded);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(a->scene, geom, EMBREE_GEOM_SHAPES);
+    rtcReleaseGeometry(geom);
+    return embree_check(a, "adding the shapes", err);
+}
+
 CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode mode, CstError *err)
 {
     const bool native_triangles = mode != EMBREE_EXACT;
@@ -339,6 +404,8 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode 
     a->positions = geom->positions;
     a->tri_indices = geom->tri_indices;
     a->num_tris = (uint32_t)geom->num_tris;
+    a->shapes = geom->shapes;
+    a->shape_base = accel_shape_base(geom);
     /* The BVH's margin: a hair (1e-7) of the largest finite coordinate. */
     float extent = 0.0f;
     for (int i = 0; i < 3 * geom->num_tris; i++) {
@@ -352,6 +419,11 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode 
         const float c[3] = {fabsf(p.x), fabsf(p.y), fabsf(p.z)}, r = fabsf(geom->spheres[i].radius);
         for (int k = 0; k < 3; k++)
             if (isfinite(c[k] + r) && c[k] + r > extent) extent = c[k] + r;
+    }
+    for (int i = 0; i < geom->num_shapes; i++) {
+        const BBox sb = geom->shapes[i].bounds;
+        const float c = fmaxf(v3_max_abs(sb.min), v3_max_abs(sb.max));
+        if (isfinite(c) && c > extent) extent = c;
     }
     /* Capped: boxes grown past Embree's range (FLT_LARGE, 1.8e18) lose hits near them. */
     a->margin = 1e-7f * fminf(extent, 1e18f) + 1e-30f;
@@ -381,6 +453,7 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode 
         (st = native_triangles ? embree_add_triangles(a, geom, err) : embree_add_exact_triangles(a, geom, err)) != CST_OK)
         goto fail;
     if (geom->num_spheres > 0 && (st = embree_add_spheres(a, geom, err)) != CST_OK) goto fail;
+    if (geom->num_shapes > 0 && (st = embree_add_shapes(a, geom, err)) != CST_OK) goto fail;
     rtcCommitScene(a->scene);
     if ((st = embree_check(a, "building the BVH", err)) != CST_OK) goto fail;
 
@@ -435,7 +508,9 @@ bool embree_intersect(const EmbreeAccel *a, const Ray *r, Hit *hit)
     hit->t = rh.ray.tfar;
     hit->u = rh.hit.u; /* Embree's u, v weight v1 and v2: our convention */
     hit->v = rh.hit.v;
-    hit->prim = rh.hit.geomID == EMBREE_GEOM_SPHERES ? a->num_tris + rh.hit.primID : rh.hit.primID;
+    hit->prim = rh.hit.geomID == EMBREE_GEOM_SPHERES ? a->num_tris + rh.hit.primID
+              : rh.hit.geomID == EMBREE_GEOM_SHAPES  ? a->shape_base + rh.hit.primID
+                                                     : rh.hit.primID;
     return true;
 }
 

@@ -168,6 +168,10 @@ static bool prim_bounds(const AccelGeometry *geom, int id, BBox *box)
         *box = bbox_add(bbox_add(bbox_add(bbox_empty(), a), b), c);
         return v3_is_finite(a) && v3_is_finite(b) && v3_is_finite(c);
     }
+    if (id >= geom->num_tris + geom->num_spheres) {
+        *box = geom->shapes[id - geom->num_tris - geom->num_spheres].bounds; /* padded (shape_init) */
+        return v3_is_finite(box->min) && v3_is_finite(box->max);
+    }
     const Sphere *s = &geom->spheres[id - geom->num_tris];
     Vec3 r = v3s(fabsf(s->radius)); /* sphere_intersect only uses radius^2 */
     box->min = v3_sub(s->center, r);
@@ -199,12 +203,13 @@ static size_t grid_insert(const Grid *g, const AccelGeometry *geom, int id, uint
     bool exact = spanning >= 2;
     double tv[3][3], sc[3] = {0.0, 0.0, 0.0}, sr = 0.0;
     bool is_tri = id < geom->num_tris;
+    if (id >= geom->num_tris + geom->num_spheres) exact = false; /* shapes: every cell of the box */
     if (is_tri) {
         for (int i = 0; i < 3; i++) {
             Vec3 p = geom->positions[geom->tri_indices[3 * id + i]];
             tv[i][0] = (double)p.x; tv[i][1] = (double)p.y; tv[i][2] = (double)p.z;
         }
-    } else {
+    } else if (exact) {
         const Sphere *s = &geom->spheres[id - geom->num_tris];
         sc[0] = (double)s->center.x; sc[1] = (double)s->center.y; sc[2] = (double)s->center.z;
         sr = fabs((double)s->radius);
@@ -307,7 +312,7 @@ static int cmp_u64(const void *a, const void *b)
  * order[i] = scene id of local index i. */
 static bool grid_order(const AccelGeometry *geom, BBox raw, uint32_t *order)
 {
-    size_t n = (size_t)geom->num_tris + (size_t)geom->num_spheres;
+    size_t n = (size_t)geom->num_tris + (size_t)geom->num_spheres + (size_t)geom->num_shapes;
     uint64_t *key = malloc(n * sizeof *key);
     if (!key) return false;
     Vec3 ext = v3_sub(raw.max, raw.min);
@@ -322,8 +327,8 @@ static bool grid_order(const AccelGeometry *geom, BBox raw, uint32_t *order)
                    (morton_spread((uint32_t)clampf(c.y * sy, 0.0f, 1023.0f)) << 1) |
                    (morton_spread((uint32_t)clampf(c.z * sz, 0.0f, 1023.0f)) << 2);
         }
-        uint64_t sphere = i >= (size_t)geom->num_tris;
-        key[i] = (sphere << 62) | (code << 32) | (uint64_t)i;
+        uint64_t kind = (uint64_t)(i >= (size_t)geom->num_tris) + (uint64_t)(i >= accel_shape_base(geom));
+        key[i] = (kind << 62) | (code << 32) | (uint64_t)i;
     }
     qsort(key, n, sizeof *key, cmp_u64);
     for (size_t i = 0; i < n; i++) order[i] = (uint32_t)key[i];
@@ -336,10 +341,12 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
     memset(g, 0, sizeof *g);
     g->bounds = bbox_empty();
     int nt = geom->num_tris > 0 ? geom->num_tris : 0, ns = geom->num_spheres > 0 ? geom->num_spheres : 0;
+    int nsh = geom->num_shapes > 0 ? geom->num_shapes : 0;
     AccelGeometry gm = *geom;
     gm.num_tris = nt;
     gm.num_spheres = ns;
-    size_t n = (size_t)nt + (size_t)ns;
+    gm.num_shapes = nsh;
+    size_t n = (size_t)nt + (size_t)ns + (size_t)nsh;
     if (n == 0) return CST_OK;
     if (n >= (size_t)INT32_MAX)
         return cst_fail(err, CST_ERR_INVALID_ARG, "grid: %zu primitives exceed the 32-bit id range", n);
@@ -360,8 +367,13 @@ CstStatus grid_build(Grid *g, const AccelGeometry *geom, CstError *err)
     if (!order || !grid_order(&gm, raw, order)) goto oom;
     if (nt > 0 && !(g->tris = malloc((size_t)nt * sizeof *g->tris))) goto oom;
     if (ns > 0 && !(g->spheres = malloc((size_t)ns * sizeof *g->spheres))) goto oom;
+    if (nsh > 0 && !(g->shape_ids = malloc((size_t)nsh * sizeof *g->shape_ids))) goto oom;
     g->num_tris = nt;
     g->num_spheres = ns;
+    g->num_shapes = nsh;
+    g->shapes = geom->shapes;
+    g->shape_base = (uint32_t)(nt + ns);
+    for (int j = 0; j < nsh; j++) g->shape_ids[j] = order[nt + ns + j];
     for (int i = 0; i < nt; i++) {
         const int32_t *k = &geom->tri_indices[3 * order[i]];
         Vec3 a = geom->positions[k[0]];
@@ -471,16 +483,19 @@ void grid_free(Grid *g)
     free(g->slots);
     free(g->tris);
     free(g->spheres);
+    free(g->shape_ids);
     memset(g, 0, sizeof *g);
 }
 
 size_t grid_memory_bytes(const Grid *g)
 {
-    if (g->num_cells == 0) return (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres;
+    if (g->num_cells == 0) return (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres +
+           (size_t)g->num_shapes * sizeof *g->shape_ids;
     return (size_t)g->num_cells / 64 * (sizeof *g->cell_bits + sizeof *g->brick_info) +
            ((size_t)g->num_occupied + 1) * sizeof *g->list_start +
            g->num_refs * sizeof *g->slots +
-           (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres;
+           (size_t)g->num_tris * sizeof *g->tris + (size_t)g->num_spheres * sizeof *g->spheres +
+           (size_t)g->num_shapes * sizeof *g->shape_ids;
 }
 
 /* ------------------------------------------------------------------ traversal */
@@ -863,6 +878,10 @@ static inline bool cell_intersect(const Grid *g, uint32_t k, uint32_t end, Mailb
         uint32_t slot = g->slots[k];
         if (slot < (uint32_t)g->num_tris || mailbox_seen(mb, slot)) continue;
         GRID_COUNT_PRIM_TEST(slot);
+        if (slot >= g->shape_base) {
+            found |= shape_leaf_intersect(g->shapes, g->shape_base, &g->shape_ids[slot - g->shape_base], 1u, r, hit);
+            continue;
+        }
         const GridSphere *sp = &g->spheres[slot - (uint32_t)g->num_tris];
         float t;
         if (sphere_intersect(sp->center, sp->radius, r, &t)) {
@@ -895,6 +914,10 @@ static inline bool cell_occluded(const Grid *g, uint32_t k, uint32_t end, Mailbo
         uint32_t slot = g->slots[k];
         if (slot < (uint32_t)g->num_tris || mailbox_seen(mb, slot)) continue;
         GRID_COUNT_PRIM_TEST(slot);
+        if (slot >= g->shape_base) {
+            if (shape_leaf_occluded(g->shapes, g->shape_base, &g->shape_ids[slot - g->shape_base], 1u, r)) return true;
+            continue;
+        }
         const GridSphere *sp = &g->spheres[slot - (uint32_t)g->num_tris];
         float t;
         if (sphere_intersect(sp->center, sp->radius, r, &t)) return true;

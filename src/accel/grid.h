@@ -52,7 +52,8 @@ typedef struct GridSphere {
  * with ~97% of cells empty on a surface mesh, offsets for occupied cells alone are a
  * thirtieth of the size of one offset per cell, and stay in cache. A slot holds a
  * grid-local index: below num_tris it is tris[slot],
- * otherwise spheres[slot - num_tris]. The grid keeps its own copies of the primitives,
+ * below num_tris + num_spheres spheres[slot - num_tris], otherwise the analytic shape
+ * shapes[shape_ids[slot - num_tris - num_spheres] - shape_base]. The grid keeps its own copies of the primitives,
  * in Morton order of their box centres, so the primitives of one cell sit together in
  * memory. The cell geometry is kept in double so the traversal's cell boundaries are
  * exact to far below the build margin (see grid.c). */
@@ -81,6 +82,10 @@ typedef struct Grid {
     int num_tris;
     GridSphere *spheres;
     int num_spheres;
+    const AnalyticShape *shapes; /* borrowed from the AccelGeometry */
+    uint32_t *shape_ids;         /* scene ids of the shapes, in grid-local order */
+    int num_shapes;
+    uint32_t shape_base;         /* shape k has id shape_base + k */
 } Grid;
 
 /* Zero primitives is valid (every ray misses). Copies what it needs from geom; returns

@@ -142,7 +142,7 @@ CstStatus instances_build(InstanceSet *set, CstError *err)
             Vec3 a = p->positions[v[0]];
             p->tri_normals[t] = v3_normalize(v3_cross(v3_sub(p->positions[v[1]], a), v3_sub(p->positions[v[2]], a)));
         }
-        AccelGeometry g = {p->positions, p->tri_indices, p->num_triangles, NULL, 0};
+        AccelGeometry g = {p->positions, p->tri_indices, p->num_triangles, NULL, 0, NULL, 0};
         CstStatus st = accel_build(&p->accel, ACCEL_BVH, &g, err);
         if (st != CST_OK) return st;
     }

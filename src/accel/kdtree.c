@@ -423,22 +423,27 @@ static int build_node(Builder *b, EventLists *E, int num_prims, BBox cell, int d
 static bool store_leaves(KdTree *t, const Builder *b)
 {
     const AccelGeometry *g = b->g;
-    uint32_t num_tris = (uint32_t)g->num_tris;
-    size_t blocks = 0, spheres = 0, sphere_leaves = 0;
+    uint32_t num_tris = (uint32_t)g->num_tris, shape_base = accel_shape_base(g);
+    size_t blocks = 0, spheres = 0, sphere_leaves = 0, shapes = 0;
     for (int i = 0; i < t->num_nodes; i++) {
         const KdNode *nd = &t->nodes[i];
         if ((nd->flags & 3u) != KD_LEAF) continue;
-        uint32_t count = nd->flags >> 2, nt = 0;
+        uint32_t count = nd->flags >> 2, nt = 0, ns = 0;
         const uint32_t *ids = &b->ids[nd->first];
         while (nt < count && ids[nt] < num_tris) nt++; /* ascending: triangles first */
+        while (nt + ns < count && ids[nt + ns] < shape_base) ns++; /* then spheres, then shapes */
         blocks += (nt + TRI_BLOCK_WIDTH - 1) / TRI_BLOCK_WIDTH;
-        spheres += count - nt;
+        spheres += ns;
+        shapes += count - nt - ns;
         sphere_leaves += count > nt;
     }
     t->blocks = malloc((blocks > 0 ? blocks : 1) * sizeof *t->blocks);
     t->spheres = malloc((spheres > 0 ? spheres : 1) * sizeof *t->spheres);
     t->sphere_leaves = malloc((sphere_leaves > 0 ? sphere_leaves : 1) * sizeof *t->sphere_leaves);
-    if (!t->blocks || !t->spheres || !t->sphere_leaves) return false;
+    t->shape_ids = malloc((shapes > 0 ? shapes : 1) * sizeof *t->shape_ids);
+    t->shapes = g->shapes;
+    t->shape_base = shape_base;
+    if (!t->blocks || !t->spheres || !t->sphere_leaves || !t->shape_ids) return false;
     for (int i = 0; i < t->num_nodes; i++) {
         KdNode *nd = &t->nodes[i];
         if ((nd->flags & 3u) != KD_LEAF) continue;
@@ -476,11 +481,14 @@ static bool store_leaves(KdTree *t, const Builder *b)
         sl->first_block = first_block;
         sl->num_blocks = num_blocks;
         sl->first_sphere = (uint32_t)t->num_spheres;
-        sl->num_spheres = count - nt;
+        sl->first_shape = (uint32_t)t->num_shape_ids;
         for (uint32_t j = nt; j < count; j++) {
+            if (ids[j] >= shape_base) { t->shape_ids[t->num_shape_ids++] = ids[j]; continue; }
             const Sphere *sp = &g->spheres[ids[j] - num_tris];
             t->spheres[t->num_spheres++] = (KdSphere){sp->center, sp->radius, ids[j]};
         }
+        sl->num_spheres = (uint32_t)t->num_spheres - sl->first_sphere;
+        sl->num_shapes = (uint32_t)t->num_shape_ids - sl->first_shape;
         nd->first = (uint32_t)t->num_sphere_leaves++;
         nd->flags = KD_LEAF | KD_LEAF_SPHERES;
     }
@@ -539,8 +547,8 @@ CstStatus kdtree_build(KdTree *t, const AccelGeometry *geom, CstError *err)
 {
     memset(t, 0, sizeof *t);
     t->bounds = bbox_empty();
-    int nt = geom->num_tris, ns = geom->num_spheres;
-    int n = nt + ns;
+    int nt = geom->num_tris, ns = geom->num_spheres, nsh = geom->num_shapes;
+    int n = nt + ns + nsh;
     if (n == 0) return CST_OK;
     BBox *prim_box = malloc((size_t)n * sizeof *prim_box);
     uint8_t *side = malloc((size_t)n);
@@ -574,6 +582,14 @@ CstStatus kdtree_build(KdTree *t, const AccelGeometry *geom, CstError *err)
         if (!vec_finite(box.min) || !vec_finite(box.max)) continue;
         prim_box[nt + j] = box;
         push_events(ev, cnt, (uint32_t)(nt + j), box);
+        t->bounds = bbox_union(t->bounds, box);
+        used_spheres++;
+    }
+    for (int j = 0; j < nsh; j++) { /* shapes by their padded boxes (shape_init) */
+        BBox box = geom->shapes[j].bounds;
+        if (!vec_finite(box.min) || !vec_finite(box.max)) continue;
+        prim_box[nt + ns + j] = box;
+        push_events(ev, cnt, (uint32_t)(nt + ns + j), box);
         t->bounds = bbox_union(t->bounds, box);
         used_spheres++;
     }
@@ -632,13 +648,15 @@ void kdtree_free(KdTree *t)
     free(t->blocks);
     free(t->spheres);
     free(t->sphere_leaves);
+    free(t->shape_ids);
     memset(t, 0, sizeof *t);
 }
 
 size_t kdtree_memory_bytes(const KdTree *t)
 {
     return (size_t)t->num_nodes * sizeof(KdNode) + (size_t)t->num_blocks * sizeof(TriangleBlock) +
-           (size_t)t->num_spheres * sizeof(KdSphere) + (size_t)t->num_sphere_leaves * sizeof(KdSphereLeaf);
+           (size_t)t->num_spheres * sizeof(KdSphere) + (size_t)t->num_sphere_leaves * sizeof(KdSphereLeaf) +
+           (size_t)t->num_shape_ids * sizeof(uint32_t);
 }
 
 /* ------------------------------------------------------------------ traversal */
@@ -704,6 +722,8 @@ static inline bool leaf_intersect(const KdTree *t, const KdNode *n, const Triang
         hit->t = tt; hit->u = 0.0f; hit->v = 0.0f; hit->prim = sp->id;
         found = true;
     }
+    if (l->num_shapes)
+        found |= shape_leaf_intersect(t->shapes, t->shape_base, &t->shape_ids[l->first_shape], l->num_shapes, r, hit);
     return found;
 }
 
@@ -717,7 +737,7 @@ static inline bool leaf_occluded(const KdTree *t, const KdNode *n, const Triangl
         float tt;
         if (sphere_intersect(sp->center, sp->radius, r, &tt)) return true;
     }
-    return false;
+    return l->num_shapes && shape_leaf_occluded(t->shapes, t->shape_base, &t->shape_ids[l->first_shape], l->num_shapes, r);
 }
 
 /* Descends from `node` with the ray interval [*t0, *t1] to the first non-empty leaf in

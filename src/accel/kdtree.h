@@ -50,6 +50,7 @@ typedef struct KdSphere {
 typedef struct KdSphereLeaf {
     uint32_t first_block, num_blocks;
     uint32_t first_sphere, num_spheres;
+    uint32_t first_shape, num_shapes; /* in KdTree.shape_ids, after the spheres in id order */
 } KdSphereLeaf;
 
 /* Each leaf holds copies of its primitives in ascending order of scene id (the order exact
@@ -64,8 +65,12 @@ typedef struct KdTree {
     int num_blocks;
     KdSphere *spheres;  /* by leaf, in node order */
     int num_spheres;
-    KdSphereLeaf *sphere_leaves;
+    KdSphereLeaf *sphere_leaves; /* also the leaves holding analytic shapes */
     int num_sphere_leaves;
+    const AnalyticShape *shapes; /* borrowed from the AccelGeometry */
+    uint32_t *shape_ids;         /* by leaf, in node order: scene primitive ids */
+    int num_shape_ids;
+    uint32_t shape_base;         /* shape k has id shape_base + k */
     BBox bounds;        /* of the primitives in the tree */
     float max_abs;      /* largest |coordinate| of bounds: scales the traversal's plane margin */
     int max_depth;      /* the depth limit the build used */

@@ -53,6 +53,8 @@ void scene_destroy(Scene *s)
     free(s->tri_normals);
     free(s->spheres);
     free(s->sphere_info);
+    free(s->shapes);
+    free(s->shape_info);
     free(s->materials);
     free(s->spectra);
     free(s->emitter_spectrum);
@@ -368,6 +370,24 @@ CstStatus scene_add_quad(Scene *s, const Vec3 v[4], int material, const Emission
     m.material = material;
     m.emission = emission;
     return scene_add_mesh_ex(s, &m, NULL, err);
+}
+
+CstStatus scene_add_shape(Scene *s, const ShapeParams *p, const Transform *object_to_world, int material,
+                          int alpha, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (material < 0 || material >= s->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    if (!GROW(s->shapes, s->cap_shapes, s->num_shapes + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a shape");
+    PrimInfo *info = realloc(s->shape_info, (size_t)(s->num_shapes + 1) * sizeof *info);
+    if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding a shape");
+    s->shape_info = info;
+    if (!shape_init(&s->shapes[s->num_shapes], p, object_to_world))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "shape parameters out of range or a singular transform");
+    s->shape_info[s->num_shapes] = (PrimInfo){material, -1, alpha, s->cur_medium_iface};
+    s->num_shapes++;
+    return CST_OK;
 }
 
 CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,
@@ -707,6 +727,8 @@ CstStatus scene_commit(Scene *s, CstError *err)
     for (int i = 0; i < s->num_positions; i++) extent = maxf(extent, v3_max_abs(s->positions[i]));
     for (int i = 0; i < s->num_spheres; i++)
         extent = maxf(extent, v3_max_abs(s->spheres[i].center) + s->spheres[i].radius);
+    for (int i = 0; i < s->num_shapes; i++)
+        extent = maxf(extent, maxf(v3_max_abs(s->shapes[i].bounds.min), v3_max_abs(s->shapes[i].bounds.max)));
     if (s->instances && s->instances->num_nodes > 0)
         extent = maxf(extent, maxf(v3_max_abs(s->instances->nodes[0].box.min),
                                    v3_max_abs(s->instances->nodes[0].box.max)));
@@ -758,6 +780,7 @@ void cst_scene_info(const CstScene *s, CstSceneInfo *info)
     memset(info, 0, sizeof *info);
     info->triangles = s->num_triangles;
     info->spheres = s->num_spheres;
+    info->shapes = s->num_shapes;
     info->emitters = s->num_emitters;
     info->materials = s->num_materials;
     info->lights = s->emitter_sampler.lights; /* set by commit */

@@ -13,6 +13,7 @@
 #include "core/rng.h"
 #include "camera/camera.h"
 #include "caustic/caustic.h"
+#include "geometry/shape.h"
 #include "geometry/sphere.h"
 #include "geometry/triangle.h"
 #include "lights/light.h"
@@ -71,6 +72,9 @@ struct CstScene {
     PrimInfo *tri_info;    /* num_triangles entries */
     Vec3 *tri_normals;     /* unit geometric normals, (v1-v0) x (v2-v0); made by commit */
     PrimInfo *sphere_info; /* num_spheres entries */
+    /* Analytic shapes (geometry/shape.h): primitive ids after the spheres'. */
+    AnalyticShape *shapes; int num_shapes; size_t cap_shapes;
+    PrimInfo *shape_info;  /* num_shapes entries */
     /* appearance */
     Texture *textures; int num_textures; size_t cap_textures; /* referenced by index */
     bool needs_uv; /* hits need uvs without textures too (a hair material: its offset h) */
@@ -178,6 +182,9 @@ CstStatus scene_add_mesh_ex(Scene *scene, const SceneMesh *mesh, int *num_droppe
  * texture coordinates (0,0), (1,0), (1,1), (0,1) at v0..v3. */
 CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);
+/* A non-emitting analytic shape (shape_init's parameters and transform). */
+CstStatus scene_add_shape(Scene *scene, const ShapeParams *p, const Transform *object_to_world, int material,
+                          int alpha, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err);
 /* An alpha cut-out for shapes added after it (SceneMesh.alpha, the last sphere's
@@ -211,13 +218,15 @@ CstStatus scene_commit(Scene *scene, CstError *err);
 CstStatus scene_set_accel(Scene *scene, AccelType type, CstError *err);
 static inline AccelGeometry scene_accel_geometry(const Scene *s)
 {
-    AccelGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres, s->num_spheres};
+    AccelGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres, s->num_spheres, s->shapes, s->num_shapes};
     return g;
 }
 
 static inline const PrimInfo *scene_prim_info(const Scene *s, uint32_t prim)
 {
-    return (int)prim < s->num_triangles ? &s->tri_info[prim] : &s->sphere_info[(int)prim - s->num_triangles];
+    if ((int)prim < s->num_triangles) return &s->tri_info[prim];
+    if ((int)prim < s->num_triangles + s->num_spheres) return &s->sphere_info[(int)prim - s->num_triangles];
+    return &s->shape_info[(int)prim - s->num_triangles - s->num_spheres];
 }
 
 /* A surface point found by a closest-hit query. */
@@ -304,6 +313,14 @@ static inline bool scene_intersect_first(const Scene *s, const Ray *ray, Surface
                                  : v2(0.0f, 0.0f);
         /* Only scenes with vertex normals pay for the interpolation. */
         sh->ns = s->normals ? scene_shading_normal(s->normals, t, h.u, h.v, sh->ng) : sh->ng;
+    } else if ((int)h.prim >= s->num_triangles + s->num_spheres) {
+        /* Reprojected onto the shape in double (shape_surface): off it by the rounding only. */
+        ShapeSurface sf;
+        shape_surface(&s->shapes[(int)h.prim - s->num_triangles - s->num_spheres], ray, h.t, &sf);
+        sh->p = sf.p;
+        sh->ng = sf.n;
+        sh->ns = sf.n;
+        sh->uv = sf.uv;
     } else {
         const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];
         sh->ng = v3_normalize(v3_sub(ray_at(ray, h.t), sp->center));
@@ -351,6 +368,13 @@ static inline bool scene_dpduv(const Scene *s, const SurfaceHit *sh, Vec3 *dpdu,
         *dpdu = v3_scale(v3_sub(v3_scale(dp02, d12.y), v3_scale(dp12, d02.y)), inv);
         *dpdv = v3_scale(v3_sub(v3_scale(dp12, d02.x), v3_scale(dp02, d12.x)), inv);
         return true;
+    }
+    if ((int)sh->prim >= s->num_triangles + s->num_spheres) { /* pbrt-v4's dp/du, dp/dv at the hit's uv */
+        ShapeSurface sf;
+        shape_surface_at(&s->shapes[(int)sh->prim - s->num_triangles - s->num_spheres], sh->uv, &sf);
+        *dpdu = sf.dpdu;
+        *dpdv = sf.dpdv;
+        return v3_length2(sf.dpdu) > 0.0f && v3_length2(sf.dpdv) > 0.0f;
     }
     /* sphere_uv: u = phi / 2pi, phi = atan2(d.x, d.z); v = theta / pi, theta = acos(-d.y). */
     const Sphere *sp = &s->spheres[(int)sh->prim - s->num_triangles];
@@ -401,7 +425,8 @@ static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHi
         float d_u = texture_eval_scalar_ctx(s->textures, id, &cu), d_v = texture_eval_scalar_ctx(s->textures, id, &cv);
         du_dir = v3_madd(dpdu, n, (d_u - d0) / du);
         dv_dir = v3_madd(dpdv, n, (d_v - d0) / dv);
-        if ((int)sh->prim >= s->num_triangles) { /* a sphere: dn/du = dp/du / r */
+        if ((int)sh->prim >= s->num_triangles && (int)sh->prim < s->num_triangles + s->num_spheres) {
+            /* a sphere: dn/du = dp/du / r (analytic shapes leave dn/du out, as triangles) */
             float r = s->spheres[(int)sh->prim - s->num_triangles].radius;
             du_dir = v3_madd(du_dir, dpdu, d0 / r);
             dv_dir = v3_madd(dv_dir, dpdv, d0 / r);

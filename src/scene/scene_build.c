@@ -1012,6 +1012,57 @@ static CstStatus add_sphere(CstScene *scene, const float center[3], float radius
     return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
 }
 
+CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_shape";
+    cst_error_clear(err);
+    CstStatus st = check_scene(scene, fn, err);
+    if (st != CST_OK) return st;
+    if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
+    if ((int)d->type < CST_SHAPE_CYLINDER || d->type > CST_SHAPE_SPHERE)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: type %d is not a CstShapeType value", fn, (int)d->type);
+    if (d->material < 0 || d->material >= scene->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
+                        fn, d->material, scene->num_materials - 1);
+    const CstEmission zero = {0};
+    if (memcmp(&d->emission, &zero, sizeof zero) != 0)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: emitting analytic shapes are not supported yet; expected a "
+                        "zero emission (tessellate an emitting shape into a mesh instead)", fn);
+    const float vals[5] = {d->radius, d->z_min, d->z_max, d->height, d->inner_radius};
+    for (int k = 0; k < 5; k++)
+        if (!(fabsf(vals[k]) <= BUILD_MAX_LENGTH))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: radius, z_min, z_max, height or inner_radius %g; expected "
+                            "finite lengths within 1e18", fn, (double)vals[k]);
+    if (!(d->radius >= BUILD_MIN_RADIUS) || !(d->phi_max_degrees >= 0.0f && d->phi_max_degrees <= 360.0f) ||
+        (d->type == CST_SHAPE_CYLINDER && !(d->z_min < d->z_max)) ||
+        (d->type == CST_SHAPE_DISK && !(d->inner_radius >= 0.0f && d->inner_radius < d->radius)))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: radius %g, z %g..%g, inner_radius %g, phi_max_degrees %g; "
+                        "expected radius >= 1e-18, z_min < z_max (cylinder), 0 <= inner_radius < radius (disk), "
+                        "phi_max_degrees in [0, 360]", fn, (double)d->radius, (double)d->z_min, (double)d->z_max,
+                        (double)d->inner_radius, (double)d->phi_max_degrees);
+    float rows[16] = {0};
+    int all_zero = 1;
+    for (int k = 0; k < 12; k++) {
+        if (!isfinite(d->world_from_object[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers", fn,
+                            k, (double)d->world_from_object[k]);
+        rows[k] = d->world_from_object[k];
+        all_zero &= rows[k] == 0.0f;
+    }
+    rows[15] = 1.0f;
+    Transform xf = all_zero ? transform_identity() : transform_from_rows(rows), inv;
+    if (!transform_invert(&xf, &inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
+                        "finite); expected an invertible affine transform", fn);
+    ShapeParams p = {(ShapeTag)d->type, d->radius, d->z_min, d->z_max, d->height, d->inner_radius,
+                     (d->phi_max_degrees > 0.0f ? d->phi_max_degrees : 360.0f) * (CST_PI / 180.0f),
+                     d->reverse_orientation != 0};
+    if (d->type == CST_SHAPE_SPHERE && !(d->z_min < d->z_max)) p.z_min = -d->radius, p.z_max = d->radius;
+    int alpha_id = 0;
+    if ((st = read_alpha(scene, &d->alpha, fn, &alpha_id, err)) != CST_OK) return st;
+    return scene_add_shape(scene, &p, &xf, d->material, alpha_id, err);
+}
+
 CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,
                                const CstEmission *emission, CstError *err)
 {

@@ -14,7 +14,9 @@
 
 #include "accel/accel_geometry.h"
 #include "core/rng.h"
+#include "geometry/shape.h"
 #include "geometry/sphere.h"
+#include "math/transform.h"
 #include "math/vec3.h"
 
 typedef struct Soup {
@@ -23,13 +25,18 @@ typedef struct Soup {
     int num_tris, num_verts;
     Sphere *spheres;
     int num_spheres;
+    AnalyticShape *shapes; /* ids after the spheres' */
+    int num_shapes;
 } Soup;
+
+static inline int soup_num_prims(const Soup *s) { return s->num_tris + s->num_spheres + s->num_shapes; }
 
 static inline void soup_free(Soup *s)
 {
     free(s->pos);
     free(s->idx);
     free(s->spheres);
+    free(s->shapes);
     memset(s, 0, sizeof *s);
 }
 
@@ -109,8 +116,42 @@ static inline void soup_random_spheres(Soup *s, Pcg32 *rng, int n)
 
 static inline AccelGeometry soup_geometry(const Soup *s)
 {
-    AccelGeometry g = {s->pos, s->idx, s->num_tris, s->spheres, s->num_spheres};
+    AccelGeometry g = {s->pos, s->idx, s->num_tris, s->spheres, s->num_spheres, s->shapes, s->num_shapes};
     return g;
+}
+
+/* Random analytic shapes (cylinders, disks with and without a hole, partial spheres, each
+ * clipped in phi half the time) of log-uniform radius in [0.01, 3] around centres in
+ * [-10, 10]^3, randomly rotated, a quarter of them scaled non-uniformly, a quarter
+ * mirrored, a fifth with reversed orientation. */
+static inline void soup_random_shapes(Soup *s, Pcg32 *rng, int n)
+{
+    s->shapes = realloc(s->shapes, (size_t)(s->num_shapes + n > 0 ? s->num_shapes + n : 1) * sizeof *s->shapes);
+    assert_non_null(s->shapes);
+    for (int i = 0; i < n; i++) {
+        ShapeParams p = {0};
+        p.type = (ShapeTag)(pcg32_next(rng) % 3u);
+        p.radius = (float)exp(rnd(rng, log(0.01), log(3.0)));
+        float z0 = (float)rnd(rng, -1.5, 1.0) * p.radius, z1 = (float)rnd(rng, 0.1, 1.5) * p.radius;
+        p.z_min = z0; p.z_max = z0 + z1;
+        p.height = (float)rnd(rng, -1.0, 1.0) * p.radius;
+        p.inner_radius = pcg32_next(rng) % 2u ? (float)rnd(rng, 0.0, 0.9) * p.radius : 0.0f;
+        p.phi_max = pcg32_next(rng) % 2u ? (float)rnd(rng, 0.2, 6.28) : 2.0f * CST_PI;
+        p.reverse_orientation = pcg32_next(rng) % 5u == 0u;
+        Vec3 axis = rnd_dir(rng);
+        float angle = (float)rnd(rng, 0.0, 6.28);
+        Transform m = transform_rotate(axis, angle);
+        uint32_t kind = pcg32_next(rng) % 4u;
+        if (kind == 0u) m = transform_compose(m, transform_scale(rnd_v3(rng, 0.3, 2.0)));
+        if (kind == 1u) m = transform_compose(m, transform_scale(v3(-1.0f, 1.0f, 1.0f)));
+        m = transform_compose(transform_translate(rnd_v3(rng, -10.0, 10.0)), m);
+        if (p.type == SHAPE_TAG_SPHERE) { /* a non-empty zone of the sphere */
+            p.z_min = clampf(p.z_min, -p.radius, 0.8f * p.radius);
+            p.z_max = maxf(p.z_max, p.z_min + 0.2f * p.radius);
+        }
+        assert_true(shape_init(&s->shapes[s->num_shapes], &p, &m));
+        s->num_shapes++;
+    }
 }
 
 

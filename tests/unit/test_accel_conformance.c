@@ -37,6 +37,7 @@ static bool prim_hit_tr(const Soup *s, int id, const TriangleRay *tr, const Ray 
         Vec3 a = s->pos[s->idx[3 * id]], b = s->pos[s->idx[3 * id + 1]], c = s->pos[s->idx[3 * id + 2]];
         return triangle_intersect_watertight(tr, r, a, b, c, t, u, v);
     }
+    if (id >= s->num_tris + s->num_spheres) return shape_intersect(&s->shapes[id - s->num_tris - s->num_spheres], r, t, u, v);
     const Sphere *sp = &s->spheres[id - s->num_tris];
     *u = *v = 0.0f;
     return sphere_intersect(sp->center, sp->radius, r, t);
@@ -55,7 +56,7 @@ static bool brute_intersect(const Soup *s, const Ray *ray, Hit *hit)
     Ray r = *ray;
     TriangleRay tr = triangle_ray_setup(r.d);
     bool found = false;
-    for (int id = 0; id < s->num_tris + s->num_spheres; id++) {
+    for (int id = 0; id < soup_num_prims(s); id++) {
         float t, u, v;
         if (prim_hit_tr(s, id, &tr, &r, &t, &u, &v)) {
             r.t_max = t;
@@ -81,6 +82,7 @@ static BBox prim_box(const Soup *s, int id)
         for (int k = 0; k < 3; k++) pb = bbox_add(pb, s->pos[s->idx[3 * id + k]]);
         return pb;
     }
+    if (id >= s->num_tris + s->num_spheres) return s->shapes[id - s->num_tris - s->num_spheres].bounds;
     const Sphere *sp = &s->spheres[id - s->num_tris];
     float r = fabsf(sp->radius);
     BBox pb = {v3_sub(sp->center, v3s(r)), v3_add(sp->center, v3s(r))};
@@ -106,6 +108,9 @@ static double dist_segment(const double p[3], const double a[3], const double b[
  * edges outside; only the edges for a degenerate one) or to the sphere's surface. */
 static double dist_to_prim(const Soup *s, int id, const double p[3])
 {
+    /* A shape's hit is found in double on the shape itself; the back ends hold a shape
+     * wherever its (padded) box is, so only the box can leave it out. */
+    if (id >= s->num_tris + s->num_spheres) return 0.0;
     if (id >= s->num_tris) {
         const Sphere *sp = &s->spheres[id - s->num_tris];
         double c[3] = {(double)sp->center.x, (double)sp->center.y, (double)sp->center.z}, d2 = 0.0;
@@ -174,7 +179,7 @@ static bool brute_intersect_kept(const Accel *a, const Soup *s, const Ray *ray, 
 {
     Ray r = *ray;
     bool found = false;
-    for (int id = 0; id < s->num_tris + s->num_spheres; id++) {
+    for (int id = 0; id < soup_num_prims(s); id++) {
         float t, u, v;
         if (prim_hit(s, id, &r, &t, &u, &v) && !hit_skippable(a, s, id, &r, t)) {
             r.t_max = t;
@@ -328,7 +333,7 @@ static bool embree_takes(const Ray *r)
  * time: its two queries cost twice brute force's one). */
 static void check_ray(Suite *b, const Ray *r, const char *what, long i)
 {
-    bool big = b->s->num_tris + b->s->num_spheres > 1000, list_turn = !big || b->calls % 4 == 0;
+    bool big = soup_num_prims(b->s) > 1000, list_turn = !big || b->calls % 4 == 0;
     b->calls++;
     const Soup *done[ACCEL_TYPE_COUNT];
     Hit hf[ACCEL_TYPE_COUNT];
@@ -353,7 +358,7 @@ static void check_ray(Suite *b, const Ray *r, const char *what, long i)
 static BBox finite_bounds(const Soup *s)
 {
     BBox b = bbox_empty();
-    for (int id = 0; id < s->num_tris + s->num_spheres; id++) {
+    for (int id = 0; id < soup_num_prims(s); id++) {
         BBox pb = prim_box(s, id);
         if (v3_is_finite(pb.min) && v3_is_finite(pb.max)) b = bbox_union(b, pb);
     }
@@ -373,7 +378,7 @@ static void check_random_rays(Suite *b, Pcg32 *rng, int count, const char *what)
     Vec3 ext = v3_sub(bb.max, bb.min);
     float diag = v3_length(ext);
     if (!(diag > 0.0f)) diag = 1.0f;
-    int n = s->num_tris + s->num_spheres;
+    int n = soup_num_prims(s);
     for (int i = 0; i < count; i++) {
         float fx = (float)rnd(rng, -0.5, 1.5), fy = (float)rnd(rng, -0.5, 1.5), fz = (float)rnd(rng, -0.5, 1.5);
         Vec3 o = v3(bb.min.x + ext.x * fx, bb.min.y + ext.y * fy, bb.min.z + ext.z * fz);
@@ -402,9 +407,14 @@ static void check_random_rays(Suite *b, Pcg32 *rng, int count, const char *what)
                 float bu = pcg32_float(rng), bv = pcg32_float(rng);
                 if (bu + bv > 1.0f) { bu = 1.0f - bu; bv = 1.0f - bv; }
                 target = v3_add(p0, v3_add(v3_scale(v3_sub(p1, p0), bu), v3_scale(v3_sub(p2, p0), bv)));
-            } else {
+            } else if (id < s->num_tris + s->num_spheres) {
                 const Sphere *sp = &s->spheres[id - s->num_tris];
                 target = v3_madd(sp->center, rnd_dir(rng), 0.9f * sp->radius);
+            } else { /* a point of the shape itself: rays through rims and seams too */
+                ShapeSurface sf;
+                float su = pcg32_float(rng), sv = pcg32_float(rng);
+                shape_surface_at(&s->shapes[id - s->num_tris - s->num_spheres], v2(su, sv), &sf);
+                target = sf.p;
             }
             o = v3_madd(target, d, -(float)rnd(rng, 0.0, 1.0) * diag);
         }
@@ -524,6 +534,42 @@ static void test_accel_mixed_triangles_spheres(void **state)
             suite_free(&b);
             soup_free(&s);
         }
+}
+
+/* Analytic shapes (cylinders, disks, partial spheres; rotated, scaled, mirrored) alone and
+ * with triangles and spheres; then rays leaving shape points by the renderer's spawn
+ * offset, to either side (bounces and shadow rays from a quadric). */
+static void test_accel_shapes(void **state)
+{
+    (void)state;
+    const int tris[] = {0, 0, 300, 2000}, spheres[] = {0, 0, 40, 200}, shapes[] = {1, 40, 300, 500};
+    for (int k = 0; k < 4; k++) {
+        Soup s = {0};
+        Pcg32 rng;
+        pcg32_seed(&rng, 2800u + (uint64_t)k, 7u);
+        soup_random_tris(&s, &rng, tris[k]);
+        soup_random_spheres(&s, &rng, spheres[k]);
+        soup_random_shapes(&s, &rng, shapes[k]);
+        Suite b;
+        suite_build(&b, &s);
+        char what[64];
+        snprintf(what, sizeof what, "%d tris + %d spheres + %d shapes", tris[k], spheres[k], shapes[k]);
+        check_random_rays(&b, &rng, 10000, what);
+        for (int i = 0; i < 3000; i++) {
+            const AnalyticShape *sh = &s.shapes[pcg32_next(&rng) % (uint32_t)s.num_shapes];
+            ShapeSurface sf;
+            float su = pcg32_float(&rng), sv = pcg32_float(&rng);
+            shape_surface_at(sh, v2(su, sv), &sf);
+            Vec3 d = rnd_dir(&rng);
+            Vec3 n = v3_dot(d, sf.n) >= 0.0f ? sf.n : v3_neg(sf.n);
+            Ray r = ray_make(ray_offset_origin(sf.p, n, RAY_OFFSET_NEAR_MIN), d, 0.0f, INFINITY);
+            check_ray(&b, &r, "leaving a shape", i);
+        }
+        suite_report(&b, what);
+        suite_assert_hits(&b, 1, 100);
+        suite_free(&b);
+        soup_free(&s);
+    }
 }
 
 /* 1000 copies of one triangle: no split separates them, hits on the copies tie exactly and
@@ -1128,6 +1174,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_accel_nonfinite_rays),
         cmocka_unit_test(test_accel_random_soups),
         cmocka_unit_test(test_accel_mixed_triangles_spheres),
+        cmocka_unit_test(test_accel_shapes),
         cmocka_unit_test(test_accel_coincident),
         cmocka_unit_test(test_accel_deep),
         cmocka_unit_test(test_accel_rays_in_mesh_planes),

@@ -241,7 +241,7 @@ static void test_grid_empty(void **state)
     (void)state;
     Accel a;
     CstError err = {0};
-    AccelGeometry none = {NULL, NULL, 0, NULL, 0};
+    AccelGeometry none = {NULL, NULL, 0, NULL, 0, NULL, 0};
     assert_int_equal(accel_build(&a, ACCEL_GRID, &none, &err), CST_OK);
     assert_int_equal(a.grid.num_cells, 0);
     assert_int_equal(accel_memory_bytes(&a), 0);

@@ -174,10 +174,15 @@ static void test_semantic_errors(void **state)
     CstScene *s = NULL;
     CstError err;
     Warnings w = {0};
-    if (load_w(WORLD("Shape \"cylinder\"\n"), &s, &err, &w) != CST_OK) fail_msg("%s", err.msg);
-    assert_int_equal(w.n, 2); /* the skipped cylinder, then the empty world */
+    if (load_w(WORLD("Shape \"cone\"\n"), &s, &err, &w) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(w.n, 2); /* the skipped cone, then the empty world */
     assert_int_equal(w.code[1], CST_WARN_GEOMETRY);
     if (strncmp(w.msg[1], "t.pbrt:5:1: the world has no shapes", 35) != 0) fail_msg("%s", w.msg[1]);
+    cst_scene_destroy(s);
+    /* a cylinder alone is a world with a shape: no warning at all */
+    w.n = 0;
+    if (load_w(WORLD("Shape \"cylinder\"\n"), &s, &err, &w) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(w.n, 0);
     cst_scene_destroy(s);
 }
 
@@ -369,7 +374,8 @@ static void test_duplicate_parameter(void **state)
     /* not adjacent: still the last */
     w.n = 0;
     s = expect_ok(WORLD("Shape \"sphere\" \"float radius\" 1 \"float zmin\" -1 \"float radius\" 4\n"), &w);
-    assert_true(s->spheres[0].radius == 4.0f);
+    assert_int_equal(s->num_shapes, 1); /* zmin -1 > -4: a partial sphere, analytic */
+    assert_true(s->shapes[0].p.radius == 4.0f && s->shapes[0].p.z_min == -1.0f);
     cst_scene_destroy(s);
 }
 

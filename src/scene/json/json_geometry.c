@@ -607,7 +607,70 @@ done:
     return st;
 }
 
-enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE };
+enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE, SHAPE_CYLINDER, SHAPE_DISK };
+
+/* An optional number under `key` (default `def`, magnitude at most 1e18). */
+static CstStatus read_opt_float(Loader *ld, const json_t *shape, const char *key, float def, float *out)
+{
+    json_t *v = json_object_get(shape, key);
+    *out = def;
+    if (!v) return CST_OK;
+    json_path_push_key(ld, key);
+    LOADER_TRY(json_read_float(ld, v, LOADER_MAX_LENGTH, out));
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+/* "cylinder", "disk", and a "sphere" with "z_min", "z_max" or "phi_max": analytic shapes
+ * (cst_scene_add_shape), in object space placed by "transform" (a sphere: moved to its
+ * "center"). Not emitting yet. */
+static CstStatus parse_analytic(Loader *ld, const json_t *shape, int type, int material, const Emission *em,
+                                const CstAlpha *alpha)
+{
+    if (em->radiance.c[0] > 0.0f || em->radiance.c[1] > 0.0f || em->radiance.c[2] > 0.0f) {
+        json_path_push_key(ld, "emission");
+        return json_fail_here(ld, "emitting cylinders, disks and partial spheres are not supported yet; expected "
+                                  "no \"emission\" (a \"mesh\" can emit)");
+    }
+    CstShapeDesc sd = {0};
+    sd.type = type == SHAPE_CYLINDER ? CST_SHAPE_CYLINDER : type == SHAPE_DISK ? CST_SHAPE_DISK : CST_SHAPE_SPHERE;
+    json_t *v;
+    LOADER_TRY(json_member_required(ld, shape, "radius", "a number > 0", &v));
+    LOADER_TRY(read_opt_float(ld, shape, "radius", 0.0f, &sd.radius));
+    float zdef = type == SHAPE_SPHERE ? sd.radius : 1.0f;
+    LOADER_TRY(read_opt_float(ld, shape, "z_min", -zdef, &sd.z_min));
+    LOADER_TRY(read_opt_float(ld, shape, "z_max", zdef, &sd.z_max));
+    LOADER_TRY(read_opt_float(ld, shape, "height", 0.0f, &sd.height));
+    LOADER_TRY(read_opt_float(ld, shape, "inner_radius", 0.0f, &sd.inner_radius));
+    LOADER_TRY(read_opt_float(ld, shape, "phi_max", 360.0f, &sd.phi_max_degrees));
+    json_t *ro = json_object_get(shape, "reverse_orientation");
+    if (ro && !json_is_boolean(ro)) {
+        json_path_push_key(ld, "reverse_orientation");
+        return json_fail_here(ld, "expected true or false");
+    }
+    sd.reverse_orientation = ro && json_is_true(ro);
+    Transform xf = transform_identity();
+    if ((v = json_object_get(shape, "transform"))) {
+        json_path_push_key(ld, "transform");
+        LOADER_TRY(parse_transform(ld, v, &xf));
+        json_path_pop(ld);
+    }
+    if (type == SHAPE_SPHERE) {
+        Vec3 c = {0};
+        LOADER_TRY(json_member_required(ld, shape, "center", "an array of 3 numbers", &v));
+        json_path_push_key(ld, "center");
+        LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &c));
+        json_path_pop(ld);
+        xf = transform_compose(transform_translate(c), xf);
+    }
+    for (int r = 0; r < 3; r++)
+        for (int k = 0; k < 4; k++) sd.world_from_object[4 * r + k] = xf.m[r][k];
+    if (transform_is_identity(&xf)) memset(sd.world_from_object, 0, sizeof sd.world_from_object);
+    sd.material = material;
+    sd.alpha = *alpha;
+    CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
+    return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
+}
 
 /* A shape's "alpha" (pbrt-v4's Shape "alpha"): a number from 0 to 1 or the name of a
  * texture with values at most 1, whose scalar (mean of the channels) is the alpha at the
@@ -635,23 +698,30 @@ static CstStatus read_alpha(Loader *ld, const json_t *shape, CstAlpha *out)
 
 static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
-    static const char *const types[] = {"quad", "mesh", "sphere", "meshfile"};
+    static const char *const types[] = {"quad", "mesh", "sphere", "meshfile", "cylinder", "disk"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha", "medium"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
                                             "normals", "shading", "alpha", "medium"};
     static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission", "alpha",
+                                              "z_min", "z_max", "phi_max", "transform", "reverse_orientation",
                                               "medium"};
+    static const char *const cylinder_keys[] = {"type", "radius", "z_min", "z_max", "phi_max", "transform",
+                                                "reverse_orientation", "material", "emission", "alpha", "medium"};
+    static const char *const disk_keys[] = {"type", "radius", "height", "inner_radius", "phi_max", "transform",
+                                            "reverse_orientation", "material", "emission", "alpha", "medium"};
     static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
                                                 "transform", "shading", "alpha", "medium"};
     int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(json_expect_object(ld, shape, "a shape object"));
-    LOADER_TRY(json_read_type(ld, shape, "shape type", types, 4, -1, &type));
+    LOADER_TRY(json_read_type(ld, shape, "shape type", types, 6, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 6)); break;
     case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 10)); break;
     case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 8)); break;
-    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 7)); break;
+    case SHAPE_CYLINDER: LOADER_TRY(json_check_keys(ld, shape, cylinder_keys, 11)); break;
+    case SHAPE_DISK: LOADER_TRY(json_check_keys(ld, shape, disk_keys, 11)); break;
+    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 12)); break;
     }
     int boundary = 0;
     LOADER_TRY(json_read_shape_medium(ld, shape, &boundary));
@@ -667,7 +737,13 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     case SHAPE_QUAD: return parse_quad(ld, shape, material, &em, &alpha);
     case SHAPE_MESH: return parse_mesh(ld, shape, material, &em, &alpha);
     case SHAPE_MESHFILE: return parse_meshfile(ld, shape, material, &em, &alpha);
-    default: return parse_sphere(ld, shape, material, &em, &alpha);
+    case SHAPE_CYLINDER:
+    case SHAPE_DISK: return parse_analytic(ld, shape, type, material, &em, &alpha);
+    default:
+        if (json_object_get(shape, "z_min") || json_object_get(shape, "z_max") || json_object_get(shape, "phi_max") ||
+            json_object_get(shape, "transform") || json_object_get(shape, "reverse_orientation"))
+            return parse_analytic(ld, shape, type, material, &em, &alpha);
+        return parse_sphere(ld, shape, material, &em, &alpha);
     }
 }
 

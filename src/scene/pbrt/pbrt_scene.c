@@ -256,7 +256,7 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     cst_scene_info(ld.scene, &info);
     /* pbrt-v4 renders an empty (or media-only) world: every ray misses, so the image shows
      * the infinite lights, or is black. */
-    if (info.triangles == 0 && info.spheres == 0 && info.instances == 0)
+    if (info.triangles == 0 && info.spheres == 0 && info.shapes == 0 && info.instances == 0)
         pbrt_warn_at(&ld, CST_WARN_GEOMETRY, ld.end, "the world has no shapes caustic can render; "
                      "every ray misses (infinite lights are seen, or the image is black)");
     if ((st = pbrt_camera_finish(&ld))) goto done;

@@ -522,6 +522,53 @@ static CstStatus shape_alpha(Loader *ld, Params *ps, const char *d, CstAlpha *ou
     return CST_OK;
 }
 
+/* Whether a quadric can be an analytic shape here: not emitting (area sampling of analytic
+ * shapes is not done yet), not inside an object (instances hold triangles), not a medium
+ * boundary (left out as every "interface" shape). Otherwise the caller falls back to the
+ * tessellation (disk, sphere) or the skip (cylinder). */
+static int analytic_ok(const Loader *ld)
+{
+    return ld->cur_obj < 0 && !ld->gs.area.active && !ld->mats[ld->gs.material].interface;
+}
+
+/* A cylinder, disk or partial sphere placed by the CTM as an analytic shape (pbrt-v4's
+ * quadrics: exact hits, uv and dp/du, normals flipped by ReverseOrientation and by a
+ * mirroring CTM as pbrt does). */
+static CstStatus add_analytic(Loader *ld, Params *ps, const char *d, Loc loc, CstShapeDesc *sd)
+{
+    CstAlpha alpha = {0};
+    TRY(shape_alpha(ld, ps, d, &alpha));
+    pbrt_params_warn_unused(ld, ps, d);
+    if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
+    TRY(pbrt_material_scene_id(ld, ld->gs.material, &sd->material));
+    const Transform *m = &ld->gs.ctm.m;
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) sd->world_from_object[4 * r + c] = m->m[r][c];
+    if (transform_is_identity(m)) memset(sd->world_from_object, 0, sizeof sd->world_from_object);
+    sd->reverse_orientation = ld->gs.reverse != 0;
+    sd->alpha = alpha;
+    CstStatus st = cst_scene_add_shape(ld->scene, sd, ld->err);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
+/* pbrt-v4's Cylinder: radius 1, z from -1 to 1 (either order), phimax 360. */
+static CstStatus cylinder_shape(Loader *ld, Params *ps, const char *d, Loc loc)
+{
+    float r = 1.0f, zmin = -1.0f, zmax = 1.0f, phimax = 360.0f;
+    TRY(pbrt_get_float(ld, ps, d, "radius", 1.0f, &r, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "zmin", -1.0f, &zmin, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "zmax", 1.0f, &zmax, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "phimax", 360.0f, &phimax, NULL));
+    float z0 = minf(zmin, zmax), z1 = maxf(zmin, zmax);
+    if (!(r > 0.0f) || !(z0 < z1) || !(phimax > 0.0f) || !pbrt_coords_ok(v3(r, z0, z1)))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: radius %g, zmin %g, zmax %g, phimax %g; expected "
+                            "radius > 0, zmin != zmax and phimax > 0", d, (double)r, (double)zmin, (double)zmax,
+                            (double)phimax);
+    CstShapeDesc sd = {.type = CST_SHAPE_CYLINDER, .radius = r, .z_min = z0, .z_max = z1,
+                       .phi_max_degrees = clampf(phimax, 0.0f, 360.0f)};
+    return add_analytic(ld, ps, d, loc, &sd);
+}
+
 CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     (void)dname;
@@ -562,9 +609,21 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
             st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: radius %g; expected a radius > 0", d, (double)r);
             goto done;
         }
-        if ((hz0 && zmin > -r) || (hz1 && zmax < r) || (hp && phimax < 360.0f))
+        int partial = (hz0 && zmin > -r) || (hz1 && zmax < r) || (hp && phimax < 360.0f);
+        if (partial && analytic_ok(ld)) {
+            if (!(zmin < zmax) || !(phimax > 0.0f)) {
+                st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: zmin %g, zmax %g, phimax %g; expected "
+                                  "zmin < zmax and phimax > 0", d, (double)zmin, (double)zmax, (double)phimax);
+                goto done;
+            }
+            CstShapeDesc sd = {.type = CST_SHAPE_SPHERE, .radius = r, .z_min = zmin, .z_max = zmax,
+                               .phi_max_degrees = clampf(phimax, 0.0f, 360.0f)};
+            st = add_analytic(ld, &ps, d, loc, &sd);
+            goto done;
+        }
+        if (partial)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: partial sphere (zmin, zmax, phimax) "
-                         "rendered as the full sphere", d);
+                         "rendered as the full sphere (emitting or in an object)", d);
         g.is_sphere = 1;
         g.radius = r;
     } else if (strcmp(type, "disk") == 0) {
@@ -580,18 +639,28 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
                               (double)ri, (double)phimax);
             goto done;
         }
+        if (analytic_ok(ld)) {
+            CstShapeDesc sd = {.type = CST_SHAPE_DISK, .radius = r, .height = h, .inner_radius = ri,
+                               .phi_max_degrees = clampf(phimax, 0.0f, 360.0f)};
+            st = add_analytic(ld, &ps, d, loc, &sd);
+            goto done;
+        }
         st = disk_mesh(ld, h, r, ri, phimax, &g);
         g.power_group = g.nt; /* one disk: its power over all its triangles */
         if (!st)
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s tessellated into %d triangles of the same "
-                         "total area", d, g.nt);
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (emitting or in an object) tessellated into %d "
+                         "triangles of the same total area", d, g.nt);
+    } else if (strcmp(type, "cylinder") == 0 && analytic_ok(ld)) {
+        st = cylinder_shape(ld, &ps, d, loc);
+        goto done;
     } else if (strcmp(type, "cylinder") == 0 || strcmp(type, "cone") == 0 ||
                strcmp(type, "paraboloid") == 0 || strcmp(type, "hyperboloid") == 0 ||
                strcmp(type, "curve") == 0 || strcmp(type, "nurbs") == 0 ||
                strcmp(type, "heightfield") == 0) {
         skip = 1;
         pbrt_params_mark_all_used(&ps);
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported; skipped", d);
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported%s; skipped", d,
+                     strcmp(type, "cylinder") == 0 ? " (emitting, in an object, or an interface)" : "");
     } else {
         st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown shape \"%s\"; expected one of: "
                      "trianglemesh, plymesh, bilinearmesh, loopsubdiv, sphere, disk (or the "

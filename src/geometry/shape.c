@@ -1,0 +1,399 @@
+/* The analytic shapes' intersection, surface reconstruction, bounds and area sampling:
+ * pbrt-v4 (Pharr, Jakob, Humphreys, 4th ed.) §6.2 spheres, §6.3 cylinders, §6.4 disks. */
+#include "geometry/shape.h"
+
+#include <float.h>
+
+#define TWO_PI_D 6.28318530717958647692
+
+/* ------------------------------------------------------------ affine maps in double */
+
+typedef struct V3d { double x, y, z; } V3d;
+
+static inline V3d map_point(const double m[3][4], V3d p)
+{
+    V3d r = {m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
+             m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
+             m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3]};
+    return r;
+}
+static inline V3d map_vector(const double m[3][4], V3d v)
+{
+    V3d r = {m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z,
+             m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
+             m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z};
+    return r;
+}
+static inline V3d map_normal(const double n3[3][3], V3d v)
+{
+    V3d r = {n3[0][0] * v.x + n3[0][1] * v.y + n3[0][2] * v.z,
+             n3[1][0] * v.x + n3[1][1] * v.y + n3[1][2] * v.z,
+             n3[2][0] * v.x + n3[2][1] * v.y + n3[2][2] * v.z};
+    return r;
+}
+static inline V3d d3(Vec3 v) { V3d r = {(double)v.x, (double)v.y, (double)v.z}; return r; }
+static inline V3d d3v(double x, double y, double z) { V3d r = {x, y, z}; return r; }
+static inline Vec3 f3(V3d v) { return v3((float)v.x, (float)v.y, (float)v.z); }
+static inline double d3_len(V3d v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+static inline Vec3 f3_unit(V3d v)
+{
+    double l = d3_len(v);
+    return l > 0.0 ? v3((float)(v.x / l), (float)(v.y / l), (float)(v.z / l)) : v3s(0.0f);
+}
+
+/* ------------------------------------------------------------ construction */
+
+static BBox object_bounds(const ShapeParams *p)
+{
+    float r = p->radius;
+    BBox b;
+    switch (p->type) {
+    case SHAPE_TAG_DISK: b.min = v3(-r, -r, p->height); b.max = v3(r, r, p->height); break;
+    default: b.min = v3(-r, -r, p->z_min); b.max = v3(r, r, p->z_max); break;
+    }
+    return b;
+}
+
+bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
+{
+    if (!(p->radius > 0.0f) || !isfinite(p->radius) || !(p->phi_max > 0.0f) ||
+        !((double)p->phi_max <= TWO_PI_D + 1e-6) || (unsigned)p->type >= SHAPE_TAG_COUNT)
+        return false;
+    *s = (AnalyticShape){0};
+    s->p = *p;
+    if (s->p.phi_max > 2.0f * CST_PI) s->p.phi_max = 2.0f * CST_PI;
+    switch (p->type) {
+    case SHAPE_TAG_CYLINDER:
+        if (!(p->z_min < p->z_max) || !isfinite(p->z_min) || !isfinite(p->z_max)) return false;
+        break;
+    case SHAPE_TAG_DISK:
+        if (!(p->inner_radius >= 0.0f && p->inner_radius < p->radius) || !isfinite(p->height)) return false;
+        break;
+    case SHAPE_TAG_SPHERE: {
+        /* pbrt-v4 Sphere: z range clamped to the sphere, in either order. */
+        float r = p->radius, lo = clampf(minf(p->z_min, p->z_max), -r, r), hi = clampf(maxf(p->z_min, p->z_max), -r, r);
+        if (!(lo < hi)) return false;
+        s->p.z_min = lo; s->p.z_max = hi;
+        s->theta_z_min = acos(fmax(-1.0, fmin(1.0, (double)lo / (double)r)));
+        s->theta_z_max = acos(fmax(-1.0, fmin(1.0, (double)hi / (double)r)));
+        break;
+    }
+    }
+    s->r = (double)s->p.radius; s->z_min = (double)s->p.z_min; s->z_max = (double)s->p.z_max;
+    s->height = (double)s->p.height; s->r_inner = (double)s->p.inner_radius; s->phi_max = (double)s->p.phi_max;
+    double m[3][3], det;
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) m[i][j] = s->o2w[i][j] = (double)o2w->m[i][j];
+        s->o2w[i][3] = (double)o2w->m[i][3];
+    }
+    det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+          m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (!(fabs(det) > 1e-30) || !isfinite(det)) return false;
+    double inv[3][3] = {
+        {(m[1][1] * m[2][2] - m[1][2] * m[2][1]) / det, (m[0][2] * m[2][1] - m[0][1] * m[2][2]) / det, (m[0][1] * m[1][2] - m[0][2] * m[1][1]) / det},
+        {(m[1][2] * m[2][0] - m[1][0] * m[2][2]) / det, (m[0][0] * m[2][2] - m[0][2] * m[2][0]) / det, (m[0][2] * m[1][0] - m[0][0] * m[1][2]) / det},
+        {(m[1][0] * m[2][1] - m[1][1] * m[2][0]) / det, (m[0][1] * m[2][0] - m[0][0] * m[2][1]) / det, (m[0][0] * m[1][1] - m[0][1] * m[1][0]) / det}};
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) { s->w2o[i][j] = inv[i][j]; s->nrm[i][j] = inv[j][i]; }
+        s->w2o[i][3] = -(inv[i][0] * s->o2w[0][3] + inv[i][1] * s->o2w[1][3] + inv[i][2] * s->o2w[2][3]);
+    }
+    /* pbrt-v4 flips the normal for ReverseOrientation and for a handedness-swapping
+     * transform, so n stays cross(dp/du, dp/dv) of the world surface up to the former. */
+    s->flip_normal = p->reverse_orientation != (det < 0.0);
+    /* World bounds: the eight corners of the object box in double, then widened by a
+     * relative 2^-20 (and an absolute floor) so that rounding the corners to float cannot
+     * cut off a point the double-precision test reports. */
+    BBox ob = object_bounds(&s->p), wb = bbox_empty();
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    for (int c = 0; c < 8; c++) {
+        V3d q = map_point(s->o2w, d3(v3((c & 1) ? ob.max.x : ob.min.x, (c & 2) ? ob.max.y : ob.min.y,
+                                        (c & 4) ? ob.max.z : ob.min.z)));
+        double w[3] = {q.x, q.y, q.z};
+        for (int k = 0; k < 3; k++) { lo[k] = fmin(lo[k], w[k]); hi[k] = fmax(hi[k], w[k]); }
+    }
+    double ext = 0.0;
+    for (int k = 0; k < 3; k++) ext = fmax(ext, fmax(fabs(lo[k]), fabs(hi[k])));
+    double pad = ext * 0x1p-20 + 1e-30;
+    wb.min = v3((float)(lo[0] - pad), (float)(lo[1] - pad), (float)(lo[2] - pad));
+    wb.max = v3((float)(hi[0] + pad), (float)(hi[1] + pad), (float)(hi[2] + pad));
+    s->bounds = wb;
+    return v3_is_finite(wb.min) && v3_is_finite(wb.max);
+}
+
+/* ------------------------------------------------------------ intersection */
+
+/* Roots of a t^2 + b t + c with discriminant disc >= 0 given (so callers can compute it
+ * in the cancellation-free form), in the stable form q = -(b + sign(b) sqrt(disc)) / 2
+ * (pbrt-v4 Quadratic()). Returns t0 <= t1. */
+static inline void quadratic_roots(double a, double b, double c, double disc, double *t0, double *t1)
+{
+    double q = -0.5 * (b + copysign(sqrt(disc), b));
+    double r0 = q / a, r1 = q != 0.0 ? c / q : r0;
+    if (r0 > r1) { double tmp = r0; r0 = r1; r1 = tmp; }
+    *t0 = r0; *t1 = r1;
+}
+
+static inline double phi_of(double x, double y)
+{
+    double phi = atan2(y, x);
+    return phi < 0.0 ? phi + TWO_PI_D : phi;
+}
+
+/* Whether the object-space point at t lies on the clipped shape; its (u, v) if so. */
+static bool clip_and_uv(const AnalyticShape *s, V3d o, V3d d, double t, float *u, float *v)
+{
+    const ShapeParams *p = &s->p;
+    (void)p;
+    V3d h = d3v(o.x + t * d.x, o.y + t * d.y, o.z + t * d.z);
+    switch (p->type) {
+    case SHAPE_TAG_CYLINDER: {
+        if (h.z < s->z_min || h.z > s->z_max) return false;
+        double phi = phi_of(h.x, h.y);
+        if (phi > s->phi_max) return false;
+        *u = (float)(phi / s->phi_max);
+        *v = (float)((h.z - s->z_min) / (s->z_max - s->z_min));
+        return true;
+    }
+    case SHAPE_TAG_DISK: {
+        double rho2 = h.x * h.x + h.y * h.y;
+        if (rho2 > s->r * s->r || rho2 < s->r_inner * s->r_inner) return false;
+        double phi = phi_of(h.x, h.y);
+        if (phi > s->phi_max) return false;
+        *u = (float)(phi / s->phi_max);
+        *v = (float)((s->r - sqrt(rho2)) / (s->r - s->r_inner));
+        return true;
+    }
+    case SHAPE_TAG_SPHERE: {
+        if (h.z < s->z_min || h.z > s->z_max) return false;
+        /* pbrt-v4: a hit at a pole has phi 0 (x nudged off zero). */
+        double x = (h.x == 0.0 && h.y == 0.0) ? 1e-5 * s->r : h.x;
+        double phi = phi_of(x, h.y);
+        if (phi > s->phi_max) return false;
+        double theta = acos(fmax(-1.0, fmin(1.0, h.z / s->r)));
+        *u = (float)(phi / s->phi_max);
+        *v = (float)((theta - s->theta_z_min) / (s->theta_z_max - s->theta_z_min));
+        return true;
+    }
+    }
+    return false;
+}
+
+bool shape_intersect(const AnalyticShape *s, const Ray *r, float *t_out, float *u, float *v)
+{
+    V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
+    const double tmin = (double)r->t_min, tmax = (double)r->t_max;
+    const ShapeParams *p = &s->p;
+    (void)p;
+    double t0, t1;
+    if (p->type == SHAPE_TAG_DISK) {
+        if (d.z == 0.0) return false;
+        t0 = (s->height - o.z) / d.z;
+        if (!(t0 > tmin && t0 < tmax)) return false;
+        if (!clip_and_uv(s, o, d, t0, u, v)) return false;
+        *t_out = (float)t0;
+        return *t_out > r->t_min && *t_out < r->t_max;
+    }
+    /* The discriminant as 4 a (r^2 - |f - (f.d / a) d|^2) over the coordinates that count
+     * (x, y for cylinders): no cancellation of b^2 against 4ac for shapes small against
+     * their distance (Haines et al., Ray Tracing Gems ch. 7, eq. 7.5; pbrt-v4 §6.2.2). */
+    const bool cyl = p->type == SHAPE_TAG_CYLINDER;
+    const double dz = cyl ? 0.0 : d.z, oz = cyl ? 0.0 : o.z;
+    const double a = d.x * d.x + d.y * d.y + dz * dz;
+    if (a == 0.0) return false;
+    const double b = 2.0 * (d.x * o.x + d.y * o.y + dz * oz);
+    const double r2 = s->r * s->r;
+    const double c = o.x * o.x + o.y * o.y + oz * oz - r2;
+    const double k = b / (2.0 * a);
+    const double fx = o.x - k * d.x, fy = o.y - k * d.y, fz = oz - k * dz;
+    const double disc = 4.0 * a * (r2 - (fx * fx + fy * fy + fz * fz));
+    if (disc < 0.0) return false;
+    quadratic_roots(a, b, c, disc, &t0, &t1);
+    /* The float t must itself lie in the open interval: every back end compares it so. */
+    const double roots[2] = {t0, t1};
+    for (int i = 0; i < 2; i++) {
+        float tf = (float)roots[i];
+        if (!(tf > r->t_min && tf < r->t_max)) continue;
+        if (!clip_and_uv(s, o, d, roots[i], u, v)) continue;
+        *t_out = tf;
+        return true;
+    }
+    return false;
+}
+
+/* ------------------------------------------------------------ surface */
+
+/* Object-space point, dp/du, dp/dv and unit normal at phi and q: the cylinder's z, the
+ * disk's radius or the sphere's z. */
+static void surface_object(const AnalyticShape *s, double phi, double q, V3d *pt, V3d *dpdu, V3d *dpdv, V3d *n)
+{
+    const ShapeParams *p = &s->p;
+    (void)p;
+    const double pm = s->phi_max, cp = cos(phi), sp = sin(phi);
+    switch (p->type) {
+    case SHAPE_TAG_CYLINDER:
+        *pt = d3v(s->r * cp, s->r * sp, q);
+        *dpdu = d3v(-pm * pt->y, pm * pt->x, 0.0);
+        *dpdv = d3v(0.0, 0.0, s->z_max - s->z_min);
+        *n = d3v(cp, sp, 0.0);
+        return;
+    case SHAPE_TAG_DISK:
+        *pt = d3v(q * cp, q * sp, s->height);
+        *dpdu = d3v(-pm * pt->y, pm * pt->x, 0.0);
+        *dpdv = d3v((s->r_inner - s->r) * cp, (s->r_inner - s->r) * sp, 0.0);
+        *n = d3v(0.0, 0.0, 1.0);
+        return;
+    case SHAPE_TAG_SPHERE: {
+        double r = s->r, z = fmax(-r, fmin(r, q)), rho = sqrt(fmax(0.0, r * r - z * z));
+        double theta = acos(z / r), sin_t = sin(theta);
+        *pt = d3v(rho * cp, rho * sp, z);
+        *dpdu = d3v(-pm * pt->y, pm * pt->x, 0.0);
+        double dt = s->theta_z_max - s->theta_z_min;
+        *dpdv = d3v(dt * z * cp, dt * z * sp, -dt * r * sin_t);
+        *n = d3v(pt->x / r, pt->y / r, pt->z / r);
+        return;
+    }
+    }
+}
+
+static void surface_world(const AnalyticShape *s, V3d pt, V3d dpdu, V3d dpdv, V3d n, Vec2 uv, ShapeSurface *out)
+{
+    out->p = f3(map_point(s->o2w, pt));
+    out->dpdu = f3(map_vector(s->o2w, dpdu));
+    out->dpdv = f3(map_vector(s->o2w, dpdv));
+    Vec3 nw = f3_unit(map_normal(s->nrm, n));
+    out->n = s->flip_normal ? v3_neg(nw) : nw;
+    out->uv = uv;
+}
+
+void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *out)
+{
+    V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
+    V3d h = d3v(o.x + (double)t * d.x, o.y + (double)t * d.y, o.z + (double)t * d.z);
+    const ShapeParams *p = &s->p;
+    (void)p;
+    double phi, q;
+    Vec2 uv;
+    /* Reprojection onto the surface (pbrt-v4 §6.8.5): only the phi and the height (or the
+     * disk's radius) of the float hit are kept, the point is rebuilt on the surface. */
+    switch (p->type) {
+    case SHAPE_TAG_CYLINDER:
+        phi = phi_of(h.x, h.y);
+        q = fmax(s->z_min, fmin(s->z_max, h.z));
+        uv = v2((float)(phi / s->phi_max), (float)((q - s->z_min) / (s->z_max - s->z_min)));
+        break;
+    case SHAPE_TAG_DISK:
+        phi = phi_of(h.x, h.y);
+        q = fmax(s->r_inner, fmin(s->r, sqrt(h.x * h.x + h.y * h.y)));
+        uv = v2((float)(phi / s->phi_max), (float)((s->r - q) / (s->r - s->r_inner)));
+        break;
+    default: {
+        /* Scaled onto the sphere along the hit's own direction from the centre (pbrt-v4
+         * §6.2.2), so the point is as accurate as that direction. */
+        const double r0 = s->r, len = d3_len(h), pm = s->phi_max;
+        V3d pt = len > 0.0 ? d3v(h.x * r0 / len, h.y * r0 / len, h.z * r0 / len) : d3v(0.0, 0.0, r0);
+        phi = (pt.x == 0.0 && pt.y == 0.0) ? 0.0 : phi_of(pt.x, pt.y);
+        double z = fmax(s->z_min, fmin(s->z_max, pt.z));
+        double theta = acos(fmax(-1.0, fmin(1.0, z / r0)));
+        uv = v2((float)(phi / pm), (float)((theta - s->theta_z_min) / (s->theta_z_max - s->theta_z_min)));
+        double rho = sqrt(pt.x * pt.x + pt.y * pt.y), cp = rho > 0.0 ? pt.x / rho : 1.0, sp = rho > 0.0 ? pt.y / rho : 0.0;
+        double dt = s->theta_z_max - s->theta_z_min;
+        V3d dpdu = d3v(-pm * pt.y, pm * pt.x, 0.0), dpdv = d3v(dt * pt.z * cp, dt * pt.z * sp, -dt * r0 * sin(theta));
+        surface_world(s, pt, dpdu, dpdv, d3v(pt.x / r0, pt.y / r0, pt.z / r0), uv, out);
+        return;
+    }
+    }
+    V3d pt, dpdu, dpdv, n;
+    surface_object(s, phi, q, &pt, &dpdu, &dpdv, &n);
+    surface_world(s, pt, dpdu, dpdv, n, uv, out);
+}
+
+void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out)
+{
+    const ShapeParams *p = &s->p;
+    (void)p;
+    double phi = (double)uv.x * s->phi_max, q;
+    switch (p->type) {
+    case SHAPE_TAG_CYLINDER: q = s->z_min + (double)uv.y * (s->z_max - s->z_min); break;
+    case SHAPE_TAG_DISK: q = s->r - (double)uv.y * (s->r - s->r_inner); break;
+    default: q = s->r * cos(s->theta_z_min + (double)uv.y * (s->theta_z_max - s->theta_z_min)); break;
+    }
+    V3d pt, dpdu, dpdv, n;
+    surface_object(s, phi, q, &pt, &dpdu, &dpdv, &n);
+    surface_world(s, pt, dpdu, dpdv, n, uv, out);
+}
+
+/* ------------------------------------------------------------ area and sampling */
+
+static double object_area(const AnalyticShape *s)
+{
+    const ShapeParams *p = &s->p;
+    (void)p;
+    switch (p->type) {
+    case SHAPE_TAG_CYLINDER: return s->phi_max * s->r * (s->z_max - s->z_min);
+    case SHAPE_TAG_DISK:
+        return 0.5 * s->phi_max * (s->r * s->r - s->r_inner * s->r_inner);
+    default: return s->phi_max * s->r * (s->z_max - s->z_min);
+    }
+}
+
+/* dA_world / dA_object at a point with object normal n: |det M| |M^-T n| (the area
+ * element of a linear map). Constant for similarity transforms. */
+static double area_factor(const AnalyticShape *s, V3d n)
+{
+    const double (*m)[4] = s->o2w;
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    return fabs(det) * d3_len(map_normal(s->nrm, n));
+}
+
+float shape_area(const AnalyticShape *s)
+{
+    /* The factor at the middle of the parameter domain: exact for similarity transforms. */
+    const ShapeParams *p = &s->p;
+    (void)p;
+    double phi = 0.5 * s->phi_max, z = 0.5 * (s->z_min + s->z_max);
+    V3d n = p->type == SHAPE_TAG_DISK ? d3v(0.0, 0.0, 1.0) : d3v(cos(phi), sin(phi), 0.0);
+    if (p->type == SHAPE_TAG_SPHERE) {
+        double rho = sqrt(fmax(0.0, s->r * s->r - z * z));
+        n = d3v(rho * cos(phi) / s->r, rho * sin(phi) / s->r, z / s->r);
+    }
+    return (float)(object_area(s) * area_factor(s, n));
+}
+
+void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float *pdf_a)
+{
+    const ShapeParams *p = &s->p;
+    (void)p;
+    Vec2 uv;
+    switch (p->type) {
+    case SHAPE_TAG_DISK: {
+        /* Uniform in the annulus: rho^2 uniform in [ri^2, r^2] (pbrt-v4 samples the full
+         * disk and ignores innerradius; this keeps the points on the surface). */
+        double ri2 = s->r_inner * s->r_inner, r2 = s->r * s->r;
+        double rho = sqrt(ri2 + (double)u.y * (r2 - ri2));
+        uv = v2(u.x, (float)((s->r - rho) / (s->r - s->r_inner)));
+        break;
+    }
+    case SHAPE_TAG_SPHERE: {
+        /* z uniform in [z_min, z_max] is uniform in area (Archimedes); v is theta's. */
+        double z = s->z_min + (double)u.y * (s->z_max - s->z_min);
+        double theta = acos(fmax(-1.0, fmin(1.0, z / s->r)));
+        uv = v2(u.x, (float)((theta - s->theta_z_min) / (s->theta_z_max - s->theta_z_min)));
+        break;
+    }
+    default: uv = u; break;
+    }
+    shape_surface_at(s, uv, out);
+    *pdf_a = shape_pdf_area(s, out);
+}
+
+float shape_pdf_area(const AnalyticShape *s, const ShapeSurface *sf)
+{
+    /* The object normal at the point, back through the inverse map (n_obj ∝ M^T n_world). */
+    V3d nw = d3(sf->n), n = d3v(s->o2w[0][0] * nw.x + s->o2w[1][0] * nw.y + s->o2w[2][0] * nw.z,
+                                s->o2w[0][1] * nw.x + s->o2w[1][1] * nw.y + s->o2w[2][1] * nw.z,
+                                s->o2w[0][2] * nw.x + s->o2w[1][2] * nw.y + s->o2w[2][2] * nw.z);
+    double l = d3_len(n);
+    if (l > 0.0) n = d3v(n.x / l, n.y / l, n.z / l);
+    return (float)(1.0 / (object_area(s) * area_factor(s, n)));
+}

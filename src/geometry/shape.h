@@ -1,0 +1,114 @@
+/* Analytic shapes, the accels' third primitive kind: one tagged struct per primitive
+ * (pbrt-v4's quadrics: cylinder, disk, partial sphere) with its transforms and bounds,
+ * and shape_intersect(), a switch on the tag that every back end calls. */
+#ifndef CST_GEOMETRY_SHAPE_H
+#define CST_GEOMETRY_SHAPE_H
+
+#include <stdbool.h>
+
+#include "geometry/hit.h"
+#include "geometry/ray.h"
+#include "math/bbox.h"
+#include "math/transform.h"
+
+/* Further kinds (curves, bilinear patches, implicit surfaces) are further tags: a case in
+ * shape_intersect(), shape_surface(), shape_object_bounds() and, if they emit, in
+ * shape_area()/shape_sample_area(). Nothing outside this module switches on the tag. */
+typedef enum ShapeTag {
+    SHAPE_TAG_CYLINDER = 0, /* about +z, radius r, z in [z_min, z_max], phi in [0, phi_max] */
+    SHAPE_TAG_DISK,         /* in the plane z = height, inner_radius <= rho <= r, phi in [0, phi_max] */
+    SHAPE_TAG_SPHERE        /* centred at the origin, clipped to [z_min, z_max] and [0, phi_max] */
+} ShapeTag;
+enum { SHAPE_TAG_COUNT = 3 };
+
+/* The parameters in object space, as pbrt-v4 takes them (lengths in the object's units,
+ * phi_max in radians). */
+typedef struct ShapeParams {
+    ShapeTag type;
+    float radius;
+    float z_min, z_max;   /* cylinder, sphere (clamped to [-r, r] for the sphere) */
+    float height;         /* disk */
+    float inner_radius;   /* disk */
+    float phi_max;        /* (0, 2 pi] */
+    bool reverse_orientation;
+} ShapeParams;
+
+/* One primitive: parameters, object-to-world and its inverse in double (the intersection
+ * runs in object space in double, so every back end, given the same ray, finds the same
+ * t to the bit), the world bounds. */
+typedef struct AnalyticShape {
+    ShapeParams p;
+    double r, z_min, z_max, height, r_inner, phi_max; /* p's, in double for the arithmetic */
+    double theta_z_min, theta_z_max; /* sphere: acos(z_min / r), acos(z_max / r) */
+    bool flip_normal;               /* reverse_orientation XOR the transform mirrors */
+    double o2w[3][4], w2o[3][4];    /* affine rows: linear part | translation */
+    double nrm[3][3];               /* normal matrix: the inverse transpose of o2w's linear part */
+    BBox bounds;                    /* world, padded outward to contain every reported hit */
+} AnalyticShape;
+
+/* Builds a shape from its parameters and object-to-world transform. False when the
+ * parameters are out of range (radius <= 0, z_min >= z_max for cylinders, phi_max
+ * outside (0, 2 pi], inner_radius outside [0, r)) or the transform is singular. */
+bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *object_to_world);
+
+/* Nearest hit in (r->t_min, r->t_max): *t and the shape's (u, v) parameters (pbrt-v4:
+ * u = phi / phi_max, v along z for cylinders and spheres, from the rim inward for disks).
+ * The ray's t is world t (the object-space direction is not renormalised). */
+bool shape_intersect(const AnalyticShape *s, const Ray *r, float *t, float *u, float *v);
+
+/* The surface at a hit shape_intersect reported at t: the point reprojected onto the
+ * shape in double (so it is off the surface by the final rounding to float only, which
+ * the fixed-ulp spawn offset of ray_offset_origin covers: pbrt-v4 §6.8 bounds it by
+ * gamma(n) |p| per coordinate for these reprojected quadric points), the unit geometric
+ * normal (outward for cylinders and spheres, +z for disks, flipped by flip_normal as
+ * pbrt-v4's SurfaceInteraction does), and dp/du, dp/dv in world space. */
+typedef struct ShapeSurface {
+    Vec3 p, n, dpdu, dpdv;
+    Vec2 uv;
+} ShapeSurface;
+void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *out);
+
+/* The surface at parameters (u, v) in [0,1]^2 (the same conventions): for area sampling. */
+void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out);
+
+/* World-space area: exact for a similarity transform (uniform scale), pbrt-v4's Area()
+ * scaled by the area factor of the transform otherwise (the sampled density is then not
+ * uniform; shape_sample_area reports the true pdf of what it draws). */
+float shape_area(const AnalyticShape *s);
+
+/* A point by area (pbrt-v4 Cylinder/Disk/Sphere::Sample(u)): cylinders uniform in (phi, z),
+ * disks by the concentric map restricted to the annulus (uniform in area), spheres
+ * uniform in (phi, z) (Archimedes: uniform in area). *pdf_a per world area at the point,
+ * 1 / world area for similarity transforms. */
+void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float *pdf_a);
+/* The density shape_sample_area draws a point with, per world area, at surface sf. */
+float shape_pdf_area(const AnalyticShape *s, const ShapeSurface *sf);
+
+/* The leaf test of every back end: shapes ids[0..count) (scene primitive ids; shape k has
+ * id base + k), closest hit in r's interval, r->t_max shrunk to it. Ids in the order the
+ * back end stores them; ties keep the first, as the triangle and sphere leaves do. */
+static inline bool shape_leaf_intersect(const AnalyticShape *shapes, uint32_t base, const uint32_t *ids,
+                                        uint32_t count, Ray *r, Hit *hit)
+{
+    bool found = false;
+    for (uint32_t i = 0; i < count; i++) {
+        float t, u, v;
+        if (shape_intersect(&shapes[ids[i] - base], r, &t, &u, &v)) {
+            r->t_max = t;
+            hit->t = t; hit->u = u; hit->v = v; hit->prim = ids[i];
+            found = true;
+        }
+    }
+    return found;
+}
+static inline bool shape_leaf_occluded(const AnalyticShape *shapes, uint32_t base, const uint32_t *ids,
+                                       uint32_t count, const Ray *r)
+{
+    for (uint32_t i = 0; i < count; i++) {
+        float t, u, v;
+        if (shape_intersect(&shapes[ids[i] - base], r, &t, &u, &v)) return true;
+    }
+    return false;
+}
+
+#endif
