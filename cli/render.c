@@ -71,12 +71,9 @@ static void cli_print_info(const CliArgs *a, const CstScene *scene, double read_
     printf("load:        %.2f ms (parsing and mesh import)\n", read_seconds * 1e3);
     printf("triangles:   %d\n", in.triangles);
     printf("spheres:     %d\n", in.spheres);
-    if (in.shapes > 0) printf("shapes:      %d (cylinders, disks, partial spheres)
-", in.shapes);
-    printf("emitters:    %d (emitting shapes)
-", in.emitters);
-    printf("lights:      %d (the emitting shapes and every other light)
-", in.lights);
+    if (in.shapes > 0) printf("shapes:      %d (cylinders, disks, partial spheres)\n", in.shapes);
+    printf("emitters:    %d (emitting shapes)\n", in.emitters);
+    printf("lights:      %d (the emitting shapes and every other light)\n", in.lights);
     printf("materials:   %d\n", in.materials);
     printf("accel:       %s\n", in.accel);
     printf("build:       %.2f ms\n", in.accel_build_seconds * 1e3);
