@@ -108,17 +108,27 @@ static bool sphere_box_overlap(const double c[3], double radius, const double lo
 
 /* ------------------------------------------------------------------ build: the tree */
 
-/* During the build a primitive is a code: i < num_tris is tris[i], otherwise
- * spheres[i - num_tris]; lists are ascending, so a cell's triangles come first. */
+/* During the build a primitive is a code: i < num_tris is tris[i], then spheres[i -
+ * num_tris], then the shape of placed_shapes[i - num_tris - num_spheres]; lists are
+ * ascending, so a cell's triangles come first, then its spheres, then its shapes. */
 typedef struct OctBuilder {
     Octree *t;
     size_t cap_nodes, cap_slots;
     size_t budget;
+    const uint32_t *placed_shapes; /* scene primitive ids of the shapes with finite bounds */
     bool oom;
 } OctBuilder;
 
-static bool code_overlaps(const Octree *t, uint32_t code, const double lo[3], const double hi[3])
+static const BBox *code_shape_bounds(const OctBuilder *b, uint32_t code)
 {
+    const Octree *t = b->t;
+    uint32_t id = b->placed_shapes[code - (uint32_t)t->num_tris - (uint32_t)t->num_spheres];
+    return &t->shapes[id - t->shape_base].bounds;
+}
+
+static bool code_overlaps(const OctBuilder *b, uint32_t code, const double lo[3], const double hi[3])
+{
+    const Octree *t = b->t;
     double m = (double)t->margin;
     double glo[3] = {lo[0] - m, lo[1] - m, lo[2] - m}, ghi[3] = {hi[0] + m, hi[1] + m, hi[2] + m};
     if (code < (uint32_t)t->num_tris) {
@@ -133,14 +143,29 @@ static bool code_overlaps(const Octree *t, uint32_t code, const double lo[3], co
         }
         return tri_box_overlap(tv, c, h);
     }
+    if (code >= (uint32_t)t->num_tris + (uint32_t)t->num_spheres) { /* a shape: its bounds */
+        const BBox *bb = code_shape_bounds(b, code);
+        for (int a = 0; a < 3; a++)
+            if ((double)v3_get(bb->min, a) > ghi[a] || (double)v3_get(bb->max, a) < glo[a]) return false;
+        return true;
+    }
     const OctSphere *sp = &t->spheres[code - (uint32_t)t->num_tris];
     const double c[3] = {(double)sp->center.x, (double)sp->center.y, (double)sp->center.z};
     return sphere_box_overlap(c, fabs((double)sp->radius), glo, ghi);
 }
 
 /* The box of a primitive, in double. */
-static void code_bounds(const Octree *t, uint32_t code, double lo[3], double hi[3])
+static void code_bounds(const OctBuilder *b, uint32_t code, double lo[3], double hi[3])
 {
+    const Octree *t = b->t;
+    if (code >= (uint32_t)t->num_tris + (uint32_t)t->num_spheres) {
+        const BBox *bb = code_shape_bounds(b, code);
+        for (int a = 0; a < 3; a++) {
+            lo[a] = (double)v3_get(bb->min, a);
+            hi[a] = (double)v3_get(bb->max, a);
+        }
+        return;
+    }
     if (code < (uint32_t)t->num_tris) {
         const OctTri *tr = &t->tris[code];
         const Vec3 v[3] = {tr->v0, tr->v1, tr->v2};
@@ -169,14 +194,20 @@ static void make_leaf(OctBuilder *b, uint32_t node, const uint32_t *codes, size_
         t->slots = s;
         b->cap_slots = cap;
     }
-    uint32_t nt = 0;
+    const uint32_t shape0 = (uint32_t)t->num_tris + (uint32_t)t->num_spheres;
+    uint32_t nt = 0, nts = 0;
     while (nt < n && codes[nt] < (uint32_t)t->num_tris) nt++;
+    nts = nt;
+    while (nts < n && codes[nts] < shape0) nts++;
     OctNode *nd = &t->nodes[node];
     nd->first = (uint32_t)t->num_refs;
     nd->num_tris = nt;
-    nd->num_spheres = (uint32_t)n - nt;
+    nd->num_spheres = nts - nt;
+    nd->num_shapes = (uint32_t)n - nts;
     for (size_t i = 0; i < n; i++)
-        t->slots[t->num_refs++] = i < nt ? codes[i] : codes[i] - (uint32_t)t->num_tris;
+        t->slots[t->num_refs++] = i < nt ? codes[i]
+                                  : i < nts ? codes[i] - (uint32_t)t->num_tris
+                                            : b->placed_shapes[codes[i] - shape0];
     if (n > 0) t->num_leaves++;
 }
 
@@ -214,7 +245,7 @@ static void build_node(OctBuilder *b, uint32_t node, const uint32_t *codes, size
     const double m = (double)t->margin;
     for (size_t i = 0; i < n; i++) {
         double blo[3], bhi[3];
-        code_bounds(t, codes[i], blo, bhi);
+        code_bounds(b, codes[i], blo, bhi);
         unsigned cand = 0xffu;
         for (int a = 0; a < 3; a++) {
             double mid = lo[a] + hs[a];
@@ -223,7 +254,7 @@ static void build_node(OctBuilder *b, uint32_t node, const uint32_t *codes, size
         bool one = (cand & (cand - 1u)) == 0u;
         for (unsigned bits = cand; bits; bits &= bits - 1u) {
             int c = __builtin_ctz(bits);
-            if (one || code_overlaps(t, codes[i], clo[c], chi[c])) child[(size_t)c * n + count[c]++] = codes[i];
+            if (one || code_overlaps(b, codes[i], clo[c], chi[c])) child[(size_t)c * n + count[c]++] = codes[i];
         }
     }
     for (int c = 0; c < 8; c++) total += count[c];
@@ -241,10 +272,10 @@ static void build_node(OctBuilder *b, uint32_t node, const uint32_t *codes, size
     }
     uint32_t first = (uint32_t)t->num_nodes;
     t->num_nodes += 8;
-    t->nodes[node] = (OctNode){first, (uint32_t)OCTREE_INNER, 0u};
+    t->nodes[node] = (OctNode){first, (uint32_t)OCTREE_INNER, 0u, 0u};
     uint32_t occupied = 0u;
     for (int c = 0; c < 8 && !b->oom; c++) {
-        t->nodes[first + (uint32_t)c] = (OctNode){0u, 0u, 0u};
+        t->nodes[first + (uint32_t)c] = (OctNode){0u, 0u, 0u, 0u};
         build_node(b, first + (uint32_t)c, child + (size_t)c * n, count[c], clo[c], depth + 1);
         if (count[c] > 0) occupied |= 1u << c;
     }
@@ -257,12 +288,13 @@ CstStatus octree_build(Octree *t, const AccelGeometry *geom, CstError *err)
     memset(t, 0, sizeof *t);
     t->bounds = bbox_empty();
     int nt = geom->num_tris > 0 ? geom->num_tris : 0, ns = geom->num_spheres > 0 ? geom->num_spheres : 0;
-    size_t n = (size_t)nt + (size_t)ns;
+    int nsh = geom->num_shapes > 0 && geom->shapes ? geom->num_shapes : 0;
+    size_t n = (size_t)nt + (size_t)ns + (size_t)nsh;
     if (n == 0) return CST_OK;
     if (n >= (size_t)INT32_MAX)
         return cst_fail(err, CST_ERR_INVALID_ARG, "octree: %zu primitives exceed the 32-bit id range", n);
-    uint32_t *codes = NULL;
-    OctBuilder b = {t, 0, 0, 0, false};
+    uint32_t *codes = NULL, *placed_shapes = NULL;
+    OctBuilder b = {t, 0, 0, 0, NULL, false};
 
     /* The octree's own copies of the finite primitives (a non-finite one fails every
      * comparison of its test, so the list back end never reports it either). */
@@ -284,8 +316,27 @@ CstStatus octree_build(Octree *t, const AccelGeometry *geom, CstError *err)
         t->spheres[t->num_spheres++] = (OctSphere){s->center, s->radius, (uint32_t)(nt + j)};
         raw = bbox_add(bbox_add(raw, lo), hi);
     }
-    size_t placed = (size_t)t->num_tris + (size_t)t->num_spheres;
+    /* Shapes: the whole array copied (the leaf test indexes it by id - base), those with
+     * finite bounds placed. */
+    size_t placed_sh = 0;
+    if (nsh > 0) {
+        t->shape_base = accel_shape_base(geom);
+        if (!(t->shapes = malloc((size_t)nsh * sizeof *t->shapes)) ||
+            !(placed_shapes = malloc((size_t)nsh * sizeof *placed_shapes)))
+            goto oom;
+        memcpy(t->shapes, geom->shapes, (size_t)nsh * sizeof *t->shapes);
+        t->num_shapes = nsh;
+        for (int k = 0; k < nsh; k++) {
+            const BBox *bb = &t->shapes[k].bounds;
+            if (!v3_is_finite(bb->min) || !v3_is_finite(bb->max)) continue;
+            placed_shapes[placed_sh++] = t->shape_base + (uint32_t)k;
+            raw = bbox_union(raw, *bb);
+        }
+    }
+    b.placed_shapes = placed_shapes;
+    size_t placed = (size_t)t->num_tris + (size_t)t->num_spheres + placed_sh;
     if (placed == 0) {
+        free(placed_shapes);
         octree_free(t);
         return CST_OK; /* nothing can be hit: no nodes, every ray misses */
     }
@@ -322,10 +373,12 @@ CstStatus octree_build(Octree *t, const AccelGeometry *geom, CstError *err)
     if (!t->nodes || !t->slots || !codes) goto oom;
     for (size_t i = 0; i < placed; i++) codes[i] = (uint32_t)i;
     t->num_nodes = 1;
-    t->nodes[0] = (OctNode){0u, 0u, 0u};
+    t->nodes[0] = (OctNode){0u, 0u, 0u, 0u};
     build_node(&b, 0u, codes, placed, t->org, 0);
     free(codes);
     codes = NULL;
+    free(placed_shapes);
+    placed_shapes = NULL;
     if (b.oom) goto oom;
     /* Give back the spare capacity (a failed shrink leaves the array as it was). */
     OctNode *nodes = realloc(t->nodes, (size_t)t->num_nodes * sizeof *nodes);
@@ -337,6 +390,7 @@ CstStatus octree_build(Octree *t, const AccelGeometry *geom, CstError *err)
     return CST_OK;
 oom:
     free(codes);
+    free(placed_shapes);
     octree_free(t);
     return cst_fail(err, CST_ERR_OOM, "out of memory building the octree over %zu primitives", n);
 }
@@ -348,13 +402,15 @@ void octree_free(Octree *t)
     free(t->slots);
     free(t->tris);
     free(t->spheres);
+    free(t->shapes);
     memset(t, 0, sizeof *t);
 }
 
 size_t octree_memory_bytes(const Octree *t)
 {
     return (size_t)t->num_nodes * sizeof *t->nodes + t->num_refs * sizeof *t->slots +
-           (size_t)t->num_tris * sizeof *t->tris + (size_t)t->num_spheres * sizeof *t->spheres;
+           (size_t)t->num_tris * sizeof *t->tris + (size_t)t->num_spheres * sizeof *t->spheres +
+           (size_t)t->num_shapes * sizeof *t->shapes;
 }
 
 /* ------------------------------------------------------------------ traversal */
@@ -624,6 +680,11 @@ bool octree_intersect(const Octree *t, const Ray *ray, Hit *hit)
         }
         if (nd->num_tris) found |= leaf_tris_intersect(t, nd, &mb, &qt, &r, hit);
         if (nd->num_spheres) found |= leaf_spheres_intersect(t, nd, &mb, &r, hit);
+        /* Shapes unmailboxed: a shape tested again by a later cell of this ray gives the
+         * same hit, which the open interval (t_min, t_max = that hit) then rejects. */
+        if (nd->num_shapes)
+            found |= shape_leaf_intersect(t->shapes, t->shape_base, &t->slots[nd->first + nd->num_tris + nd->num_spheres],
+                                          nd->num_shapes, &r, hit);
     }
     return found;
 }
@@ -648,6 +709,10 @@ bool octree_occluded(const Octree *t, const Ray *ray)
         }
         if (nd->num_tris && leaf_tris_occluded(t, nd, &mb, &qt, ray)) return true;
         if (nd->num_spheres && leaf_spheres_occluded(t, nd, &mb, ray)) return true;
+        if (nd->num_shapes &&
+            shape_leaf_occluded(t->shapes, t->shape_base, &t->slots[nd->first + nd->num_tris + nd->num_spheres],
+                                nd->num_shapes, ray))
+            return true;
     }
     return false;
 }

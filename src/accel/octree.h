@@ -1,7 +1,7 @@
-/* Adaptive octree over triangles and spheres: a cell splits into its 8 octants while it
+/* Adaptive octree over triangles, spheres and analytic shapes: a cell splits into its 8 octants while it
  * holds more than OCTREE_LEAF_PRIMS primitives (and is shallower than OCTREE_MAX_DEPTH),
  * primitives referenced in every octant they overlap (exact triangle-box and sphere-box
- * tests), front-to-back traversal of the octants in the ray's octant order, per-ray hashed
+ * tests; a shape by its world bounds), front-to-back traversal of the octants in the ray's octant order, per-ray hashed
  * mailboxing and SIMD triangle tests. Hits are bit-identical to the list back end's. */
 #ifndef CST_ACCEL_OCTREE_H
 #define CST_ACCEL_OCTREE_H
@@ -22,15 +22,17 @@ enum {
     OCTREE_INNER = -1       /* OctNode.num_tris of an inner node (as a uint32_t) */
 };
 
-/* 12 bytes. Inner node (num_tris == OCTREE_INNER): its 8 children are nodes[first + c],
+/* 16 bytes. Inner node (num_tris == OCTREE_INNER): its 8 children are nodes[first + c],
  * c = octant (bit a set: the upper half on axis a), and bit c of num_spheres says child c
  * is not an empty leaf (the traversal skips empty ones without loading them). Leaf: its primitives are
- * Octree.slots[first ..], num_tris triangle slots then num_spheres sphere slots; an empty
- * leaf has both 0. One count per primitive kind, so a kind can be added beside them. */
+ * Octree.slots[first ..], num_tris triangle slots, num_spheres sphere slots, then
+ * num_shapes shape slots (those hold scene primitive ids, as geometry/shape.h's leaf test
+ * takes them); an empty leaf has all 0. One count per primitive kind. */
 typedef struct OctNode {
     uint32_t first;
     uint32_t num_tris;
     uint32_t num_spheres;
+    uint32_t num_shapes;
 } OctNode;
 
 /* A triangle's own vertices, the floats the list back end tests (bit-identical hits). */
@@ -58,6 +60,9 @@ typedef struct Octree {
     int num_tris;
     OctSphere *spheres;
     int num_spheres;
+    AnalyticShape *shapes; /* a copy of every shape of geom (shape k has id shape_base + k) */
+    int num_shapes;
+    uint32_t shape_base;
     double org[3];        /* root cell: minimum corner and size, per axis */
     double size[3];
     double cell[OCTREE_MAX_DEPTH + 1][3]; /* cell size at each depth: size / 2^depth, exact */
