@@ -112,7 +112,7 @@ static double v3_norm(double a[3])
  * distance. */
 static double view_frame(const CstCameraDesc *c, double f[3], double r[3], double u[3])
 {
-    double up[3] = {c->up[0], c->up[1], c->up[2]};
+    double up[3] = {(double)c->up[0], (double)c->up[1], (double)c->up[2]};
     if (up[0] == 0.0 && up[1] == 0.0 && up[2] == 0.0) up[1] = 1.0;
     for (int k = 0; k < 3; k++) f[k] = (double)c->look_at[k] - (double)c->position[k];
     double dist = v3_norm(f);
@@ -135,7 +135,7 @@ static void v3_rotate(double v[3], const double a[3], double t)
 static void view_orbit(View *v, double dx, double dy)
 {
     CstCameraDesc *c = &v->cam;
-    double f[3], r[3], u[3], up[3] = {c->up[0], c->up[1], c->up[2]};
+    double f[3], r[3], u[3], up[3] = {(double)c->up[0], (double)c->up[1], (double)c->up[2]};
     view_frame(c, f, r, u);
     if (up[0] == 0.0 && up[1] == 0.0 && up[2] == 0.0) up[1] = 1.0;
     v3_norm(up);
@@ -661,7 +661,7 @@ static void view_step(View *v)
             double f[3], r[3], u[3];
             view_frame(&v->cam, f, r, u);
             for (size_t i = 0; i < (size_t)v->lw * (size_t)v->lh; i++) {
-                double n[3] = {nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]};
+                double n[3] = {(double)nrm[3 * i], (double)nrm[3 * i + 1], (double)nrm[3 * i + 2]};
                 float k = (float)fabs(v3_dot(n, f));
                 for (int c = 0; c < 3; c++) v->low[3 * i + (size_t)c] = alb[3 * i + (size_t)c] * k;
             }
@@ -688,7 +688,6 @@ static void view_loop(View *v)
             /* Nothing to refine: sleep until an event (the script runs between waits). */
             SDL_Event e;
             if (SDL_WaitEventTimeout(&e, 50)) view_event(v, &e);
-            if (v->script.next >= v->script.count && !v->script.count) continue;
             continue;
         }
         view_step(v);

@@ -31,7 +31,11 @@ view() {
     local dir=$1 limit=$2
     shift 2
     mkdir -p "$dir"
-    (cd "$dir" && timeout -k 5 "$limit" "${RUNNER[@]}" "$BIN" view "$@" >"$OUT" 2>"$ERR" </dev/null)
+    # Under CI's sanitizer pass: the window system's libraries' own lifetime allocations are
+    # not ours (view_lsan.supp); their frames need the slow unwinder to be seen.
+    (cd "$dir" && LSAN_OPTIONS=suppressions=$SRC/tests/cli/view_lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS} \
+        ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}fast_unwind_on_malloc=0 \
+        timeout -k 5 "$limit" "${RUNNER[@]}" "$BIN" view "$@" >"$OUT" 2>"$ERR" </dev/null)
     RC=$?
 }
 

@@ -170,7 +170,7 @@ static void test_film_aov_pixels(void **state)
     int hits = 0;
     for (int i = 0; i < W * H; i++) {
         for (int c = 0; c < 3; c++) assert_true(alb[3 * i + c] >= 0.0f && alb[3 * i + c] <= 1.0f);
-        double nx = nrm[3 * i], ny = nrm[3 * i + 1], nz = nrm[3 * i + 2];
+        double nx = (double)nrm[3 * i], ny = (double)nrm[3 * i + 1], nz = (double)nrm[3 * i + 2];
         double len = sqrt(nx * nx + ny * ny + nz * nz);
         if (!isfinite(dep[i])) { /* no sample hit: no normal either */
             assert_true(len == 0.0);
