@@ -119,6 +119,7 @@ key c
 dolly 2
 key ]
 status
+key s
 quit
 EOF
 view "$dir" 300 "${SIZE[@]}" --script "$TMP/orbit.txt"
@@ -127,6 +128,8 @@ check "view: an orbit restarts the accumulation (spp 0, then the first pass)" ev
     "grep '^view: mode' '$OUT' | sed -n 1,2p | tr '\n' '|' | grep -Eq '^view: mode path spp 0 .*\|view: mode path spp 1 '"
 check "view: a dolly and a field-of-view change restart too" eval \
     "grep '^view: mode' '$OUT' | sed -n 3p | grep -q 'spp 0 '"
+check "view: s saves caustic-view-000.exr and .png in the current directory" \
+    test -s "$dir/caustic-view-000.exr" -a -s "$dir/caustic-view-000.png"
 check "view: the orbited image differs" eval "! '$BIN' compare '$dir/before.exr' '$dir/after.exr' --json | grep -q '\"rmse\":0.0,'"
 check "view: c prints the camera as JSON, and the orbit moved it" eval \
     "test \$(grep -c '^\"camera\": {\"type\": \"pinhole\", \"position\": \[' '$OUT') -eq 2 && \
