@@ -114,42 +114,37 @@ static bool script_parse_line(char *line, const char *path, int lineno, ViewScri
     return true;
 }
 
-bool view_script_load(const char *path, ViewScript *out, char *msg, size_t size)
+bool view_script_parse(const char *text, size_t len, const char *path, ViewScript *out, char *msg, size_t size)
 {
     memset(out, 0, sizeof *out);
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        snprintf(msg, size, "%s: cannot open the script: %s", path, strerror(errno));
-        return false;
-    }
-    char line[SCRIPT_MAX_LINE + 2];
+    if (len > SCRIPT_MAX_BYTES) return script_fail(msg, size, path, 1, 1, "the script is over %d bytes", SCRIPT_MAX_BYTES);
+    char line[SCRIPT_MAX_LINE + 1];
     int lineno = 0;
-    long bytes = 0;
     bool ok = true;
-    while (ok && fgets(line, sizeof line, f)) {
+    for (size_t pos = 0; ok && pos < len;) {
         lineno++;
-        size_t len = strlen(line);
-        bytes += (long)len;
-        if (bytes > SCRIPT_MAX_BYTES) {
-            ok = script_fail(msg, size, path, lineno, 1, "the script is over %d bytes", SCRIPT_MAX_BYTES);
-            break;
-        }
-        if (len > SCRIPT_MAX_LINE) {
-            ok = script_fail(msg, size, path, lineno, SCRIPT_MAX_LINE, "line longer than %d bytes",
+        size_t end = pos;
+        while (end < len && text[end] != '\n') end++;
+        size_t n = end - pos;
+        if (n > SCRIPT_MAX_LINE) {
+            ok = script_fail(msg, size, path, lineno, SCRIPT_MAX_LINE + 1, "line longer than %d bytes",
                              SCRIPT_MAX_LINE);
             break;
         }
-        line[strcspn(line, "#\r\n")] = '\0';
-        char *p = line;
-        while (*p == ' ' || *p == '\t') p++;
-        if (!*p) continue;
-        for (char *c = line; *c; c++)
-            if (!isprint((unsigned char)*c) && *c != '\t') {
-                ok = script_fail(msg, size, path, lineno, (int)(c - line) + 1, "byte 0x%02x; expected "
-                                 "printable ASCII", (unsigned)(unsigned char)*c);
+        memcpy(line, text + pos, n);
+        line[n] = '\0';
+        pos = end + 1;
+        for (size_t c = 0; c < n && line[c] != '#'; c++)
+            if (!isprint((unsigned char)line[c]) && line[c] != '\t' && line[c] != '\r') {
+                ok = script_fail(msg, size, path, lineno, (int)c + 1, "byte 0x%02x; expected printable ASCII",
+                                 (unsigned)(unsigned char)line[c]);
                 break;
             }
         if (!ok) break;
+        line[strcspn(line, "#\r")] = '\0';
+        char *p = line;
+        while (*p == ' ' || *p == '\t') p++;
+        if (!*p) continue;
         ViewScriptCmd cmd;
         if (!(ok = script_parse_line(line, path, lineno, &cmd, msg, size))) break;
         if (out->count == out->cap) {
@@ -165,12 +160,25 @@ bool view_script_load(const char *path, ViewScript *out, char *msg, size_t size)
         }
         out->cmds[out->count++] = cmd;
     }
-    if (ok && ferror(f)) {
-        snprintf(msg, size, "%s: reading the script: %s", path, strerror(errno));
-        ok = false;
-    }
-    fclose(f);
     if (!ok) view_script_free(out);
+    return ok;
+}
+
+bool view_script_load(const char *path, ViewScript *out, char *msg, size_t size)
+{
+    memset(out, 0, sizeof *out);
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        snprintf(msg, size, "%s: cannot open the script: %s", path, strerror(errno));
+        return false;
+    }
+    char *text = malloc(SCRIPT_MAX_BYTES + 1);
+    size_t len = text ? fread(text, 1, SCRIPT_MAX_BYTES + 1, f) : 0;
+    bool ok = text && !ferror(f);
+    if (!ok) snprintf(msg, size, "%s: reading the script: %s", path, text ? strerror(errno) : "out of memory");
+    fclose(f);
+    if (ok) ok = view_script_parse(text, len, path, out, msg, size);
+    free(text);
     return ok;
 }
 

@@ -38,6 +38,9 @@ typedef struct ViewScript {
 /* Reads and checks the whole script. False with msg "FILE:LINE:COL: what was expected"
  * (or "FILE: reason" when it cannot be read); *out is then empty. */
 bool view_script_load(const char *path, ViewScript *out, char *msg, size_t size);
+/* The same from memory (text need not end in NUL; a NUL byte is an error); path names it in
+ * messages. The fuzz target tests/fuzz/fuzz_view_script.c drives it. */
+bool view_script_parse(const char *text, size_t len, const char *path, ViewScript *out, char *msg, size_t size);
 void view_script_free(ViewScript *s);
 
 #endif
