@@ -31,10 +31,13 @@ view() {
     local dir=$1 limit=$2
     shift 2
     mkdir -p "$dir"
-    # Under CI's sanitizer pass: the window system's libraries' own lifetime allocations are
-    # not ours (view_lsan.supp); their frames need the slow unwinder to be seen.
+    # Under CI's sanitizer pass, no leak check for the window: SDL_Quit dlcloses the X11
+    # libraries it loaded, so LSan sees their lifetime allocations from "<unknown module>"
+    # and no suppression (view_lsan.supp, for those it can name) can match them (measured:
+    # 240 bytes in 3 allocations at exit). ASan's and UBSan's other checks stay on. The slow
+    # unwinder (fast_unwind_on_malloc=0) deadlocks in libgcc's unwinder here: not used.
     (cd "$dir" && LSAN_OPTIONS=suppressions=$SRC/tests/cli/view_lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS} \
-        ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}fast_unwind_on_malloc=0 \
+        ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0 \
         timeout -k 5 "$limit" "${RUNNER[@]}" "$BIN" view "$@" >"$OUT" 2>"$ERR" </dev/null)
     RC=$?
 }
