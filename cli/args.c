@@ -18,7 +18,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
     ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
     ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING,
-    ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME
+    ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -65,6 +65,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"resume",     0,   ARGS_VALUE, ARGS_OPT_RESUME},
     {"quiet",      'q', ARGS_FLAG,  ARGS_OPT_QUIET},
     {"help",       'h', ARGS_FLAG,  ARGS_OPT_HELP},
+    {"script",     0,   ARGS_VALUE,  ARGS_OPT_SCRIPT}, /* view only */
 };
 #define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
 
@@ -325,11 +326,28 @@ static bool args_apply_light(const ArgsOptSpec *o, const char *value, CliArgs *o
     return true;
 }
 
+/* view's --script FILE (the render table holds it, so view takes every render option). */
+static bool args_apply_script(const char *value, CliArgs *out, ArgsError *err)
+{
+    if (out->command != ARGS_CMD_VIEW) {
+        args_fail(err, true, "--script is an option of 'view' (caustic view [SCENE] --script FILE)");
+        return false;
+    }
+    if (value[0] == '\0') {
+        args_fail(err, false, "--script: expected a file name, got ''");
+        return false;
+    }
+    out->script_path = value;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
     long v;
     switch ((ArgsOpt)o->id) {
+    case ARGS_OPT_SCRIPT:
+        return args_apply_script(value, out, err);
     case ARGS_OPT_OUTPUT:
         if (value[0] == '\0') {
             args_fail(err, false, "--output: expected a file name, got ''");
@@ -886,6 +904,7 @@ static bool args_parse_compare(int argc, char **argv, int first, CliArgs *out, A
 static const struct { const char *name; ArgsCommand command; } ARGS_COMMANDS[] = {
     {"render", ARGS_CMD_RENDER}, {"info", ARGS_CMD_INFO},     {"bench", ARGS_CMD_BENCH_RAYS},
     {"verify", ARGS_CMD_VERIFY}, {"list", ARGS_CMD_LIST},     {"compare", ARGS_CMD_COMPARE},
+    {"view", ARGS_CMD_VIEW},
 };
 
 static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *err)
@@ -896,7 +915,7 @@ static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *er
             out->help_for = ARGS_COMMANDS[k].command;
             return true;
         }
-    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list, compare)",
+    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list, compare, view)",
               topic);
     return false;
 }
@@ -956,6 +975,9 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
     } else if (strcmp(cmd, "info") == 0) {
         out->command = ARGS_CMD_INFO;
         return args_parse_render(argc, argv, 2, out, err);
+    } else if (strcmp(cmd, "view") == 0) {
+        out->command = ARGS_CMD_VIEW;
+        return args_parse_render(argc, argv, 2, out, err);
     } else if (strcmp(cmd, "bench") == 0) {
         return args_parse_bench(argc, argv, out, err);
     } else if (strcmp(cmd, "verify") == 0) {
@@ -988,7 +1010,7 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         else if (args_edit_distance(cmd, strlen(cmd), "compare") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'compare'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list, compare)",
+            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list, compare, view)",
                       cmd);
         return false;
     }

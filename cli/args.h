@@ -31,7 +31,8 @@ typedef enum ArgsCommand {
     ARGS_CMD_BENCH_RAYS,  /* caustic bench rays [MESH | --cornell] [--stadium] [--accel LIST] ... */
     ARGS_CMD_VERIFY,      /* caustic verify [SCENE] --integrators NAME,NAME[,...] ... */
     ARGS_CMD_LIST,        /* caustic list [KIND] */
-    ARGS_CMD_COMPARE      /* caustic compare A B [--map OUT] [--json] [--variance-a VA] ... */
+    ARGS_CMD_COMPARE,     /* caustic compare A B [--map OUT] [--json] [--variance-a VA] ... */
+    ARGS_CMD_VIEW         /* caustic view [SCENE] [render options] [--script FILE] */
 } ArgsCommand;
 
 #define ARGS_BENCH_MAX_ACCELS 7 /* each back end at most once */
@@ -107,6 +108,7 @@ typedef struct CliArgs {
     BenchArgs bench;   /* ARGS_CMD_BENCH_RAYS only */
     VerifyArgs verify; /* ARGS_CMD_VERIFY only */
     CompareArgs compare; /* ARGS_CMD_COMPARE only */
+    const char *script_path; /* view: --script FILE (NULL: $CAUSTIC_VIEW_SCRIPT, else none) */
 } CliArgs;
 
 typedef struct ArgsError {

@@ -79,5 +79,9 @@ int cli_compare(const CliArgs *a);
 /* caustic list [KIND] and caustic --version (list.c), on stdout. */
 int cli_list(const CliArgs *a);
 int cli_version(void);
+/* caustic view [SCENE] (view.c): the interactive window; without SDL2 in the build, a
+ * message and CLI_EXIT_USAGE. cli_view_available: whether this build has it. */
+int cli_view(const CliArgs *a);
+bool cli_view_available(void);
 
 #endif

@@ -15,6 +15,7 @@ static const char HELP_USAGE_ALL[] =
 "                 [--threads N] [--seed S] [--alpha A] [--block N] [--map OUT.png]\n"
 "                 [--convergence K] [--json] [--width W] [--height H] [--quiet]\n"
 "  caustic list [KIND]\n"
+"  caustic view [SCENE] [render options] [--script FILE]\n"
 "  caustic compare A B [--map OUT.png] [--json] [--variance-a VA] [--variance-b VB]\n"
 "                  [--block N] [--flip ldr|hdr|auto] [--ppd P]\n"
 "  caustic COMMAND --help | caustic help COMMAND   (one command's options)\n"
@@ -121,6 +122,24 @@ static const char HELP_INFO[] =
 "      --accel NAME     bvh (default), kdtree, grid, list, embree or octree (see caustic\n"
 "                       list)\n"
 "  -h, --help           show this help and exit\n"
+"\n";
+
+static const char HELP_VIEW[] =
+"Interactive viewer: caustic view [SCENE] [render options] [--script FILE]\n"
+"Opens a window (SDL2) and renders SCENE (or the built-in Cornell box) progressively:\n"
+"a low-resolution preview first, then one sample (light, bdpt, vcm: one iteration) per\n"
+"pass, the image after N passes being the one `caustic render --spp N` computes; sppm\n"
+"re-renders 1, 2, 4, ... iterations. Render options (--integrator: the first mode,\n"
+"--spp: stop refining there, --width, --height, --seed, --threads, ...) as for render.\n"
+"Keys: 1 preview (again, p or Tab: eye light, normals, albedo, depth), 2 whitted,\n"
+"3 path, 4 light, 5 photon, 6 sppm, 7 bdpt, 8 vcm, 9 relative error (toggle);\n"
+"+/- display exposure; [ ] field of view; s save caustic-view-NNN.exr and .png;\n"
+"c print the camera as JSON; q or Esc quit. Mouse: left drag orbits, middle or\n"
+"shift-left drag pans, the wheel dollies. Any change of mode or camera restarts.\n"
+"      --script FILE    run FILE's commands (also $CAUSTIC_VIEW_SCRIPT): key K,\n"
+"                       wait-spp N, save PATH, orbit DX DY, pan DX DY, dolly N,\n"
+"                       status, quit; one per line, # comments (docs/cli.md)\n"
+"Without a display: xvfb-run -a caustic view ... A build without SDL2 says so (exit 2).\n"
 "\n";
 
 static const char HELP_BENCH[] =
@@ -269,6 +288,10 @@ void args_print_help(FILE *f, ArgsCommand command)
         fputs(HELP_INFO, f);
         fputs(HELP_EXIT, f);
         break;
+    case ARGS_CMD_VIEW:
+        fputs(HELP_VIEW, f);
+        fputs(HELP_EXIT, f);
+        break;
     case ARGS_CMD_BENCH_RAYS:
         fputs(HELP_BENCH, f);
         fputs(HELP_EXIT, f);
@@ -295,6 +318,7 @@ void args_print_help(FILE *f, ArgsCommand command)
         fputs(HELP_VERIFY, f);
         fputs(HELP_LIST, f);
         fputs(HELP_COMPARE, f);
+        fputs(HELP_VIEW, f);
         fputs("      --version        print the version and the build (compiler, ISA, Embree,\n"
               "                       MPI, SDL2, build type) and exit\n\n", f);
         fputs(HELP_EXIT, f);

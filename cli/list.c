@@ -48,7 +48,8 @@ int cli_version(void)
     printf("isa:        %s (the library's vector code)\n", b.isa);
     printf("embree:     %s\n", b.embree ? "yes" : "no");
     printf("mpi:        %s\n", b.mpi ? "yes" : "no");
-    printf("sdl2:       %s\n", b.sdl2 ? "yes" : "no");
+    /* SDL2 is the CLI's (caustic view), never the library's. */
+    printf("sdl2:       %s\n", b.sdl2 || cli_view_available() ? "yes (caustic view)" : "no");
     if (b.sanitizers) printf("sanitizers: address, undefined\n");
     return CLI_EXIT_OK;
 }

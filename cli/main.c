@@ -89,6 +89,11 @@ int main(int argc, char **argv)
         if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
             code = CLI_EXIT_INTERNAL;
         break;
+    case ARGS_CMD_VIEW:
+        code = cli_view(&args);
+        if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
+            code = CLI_EXIT_INTERNAL;
+        break;
     case ARGS_CMD_COMPARE:
         code = cli_compare(&args);
         if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)

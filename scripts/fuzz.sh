@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_json fuzz_pbrt fuzz_mesh fuzz_image fuzz_ply fuzz_spd fuzz_bsdf fuzz_state)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_json fuzz_pbrt fuzz_mesh fuzz_image fuzz_ply fuzz_spd fuzz_bsdf fuzz_state fuzz_view_script)
 jobs=${FUZZ_JOBS:-2}
 build=${FUZZ_BUILD_DIR:-build-fuzz}
 

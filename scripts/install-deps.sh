@@ -17,6 +17,8 @@ PKGS=(
   libembree-dev       # optional comparison back end
   libcmocka-dev       # unit test framework, driven by CTest
   python3             # scripts/check-layout.sh (the CTest test "layout")
+  libsdl2-dev         # optional: the window of `caustic view` (cli/view.c)
+  xvfb                # the view tests' X server (xvfb-run), tests/cli/view_tests.sh
 )
 
 missing=()

@@ -593,6 +593,14 @@ typedef struct CstCameraDesc {
 } CstCameraDesc;
 
 CST_API CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *desc, CstError *err);
+/* cst_scene_set_camera may also be called after cst_scene_commit (an interactive viewer
+ * moving the view: `caustic view`), never during a render of the scene; the next render
+ * uses the new camera. Texture footprints (MIP-filtered image textures) keep the view the
+ * scene was committed with. */
+/* The scene's camera as a description that cst_scene_set_camera accepts again: position,
+ * look_at (the view axis's point at focus_distance when the scene gave none), up, fov,
+ * lens (focus_distance as the render uses it), orthographic height, mirror. */
+CST_API void cst_scene_camera(const CstScene *scene, CstCameraDesc *out);
 /* The file the scene asks its render to be written to (cst_scene_output_path reads it
  * back); a non-empty path, copied; replaces one set before. */
 CST_API CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err);
@@ -839,6 +847,15 @@ typedef struct CstRenderSettings {
     const struct CstFilm *resume;
     CstPassFn pass_done;
     void *pass_user;
+    /* The index of the first sample (iteration) the render takes: it renders samples
+     * [first_sample, first_sample + spp) of every pixel, each exactly as a render from 0
+     * computes it (same seeds; light, BDPT and VCM iterations by their index, VCM's merge
+     * radius included), so films of consecutive ranges add up, sum by sum, to one render of
+     * the whole range: how `caustic view` refines its image pass by pass. >= 0; default 0
+     * (unset reads 0). The stratified sampler's strata follow this render's spp. SPPM
+     * carries state from iteration to iteration and refuses a first_sample > 0
+     * (CST_ERR_UNSUPPORTED). Not a scene setting. */
+    int first_sample;
 } CstRenderSettings;
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit
@@ -919,6 +936,12 @@ CST_API void cst_film_pixel_variance(const CstFilm *film, int x, int y, double v
 CST_API void cst_film_pixels(const CstFilm *film, float *rgb_out);
 /* The same layout for cst_film_pixel_variance's variances of the means. */
 CST_API void cst_film_variances(const CstFilm *film, float *var_out);
+/* One first-hit AOV of a film rendered with it (CstRenderSettings.aovs), every pixel, rows
+ * from the top, as the EXR channels hold it: CST_AOV_ALBEDO 3 floats per pixel (mean
+ * albedo), CST_AOV_NORMAL 3 (the mean normal renormalised; 0 where nothing was hit),
+ * CST_AOV_DEPTH 1 (mean distance along the view axis over the samples that hit; INFINITY
+ * where none did). CST_ERR_INVALID_ARG for another aov or one the film does not hold. */
+CST_API CstStatus cst_film_aov_pixels(const CstFilm *film, int aov, float *out, CstError *err);
 /* Writes the film; the format follows the extension: .png (8-bit sRGB, or linear when
  * the render's png_linear was set), .exr (float, linear), .pfm (float, linear), scaled
  * by the render's 2^exposure. A film rendered with AOVs writes them as extra EXR channels

@@ -118,6 +118,27 @@ void cst_film_variances(const CstFilm *f, float *var_out)
         }
 }
 
+CstStatus cst_film_aov_pixels(const CstFilm *f, int aov, float *out, CstError *err)
+{
+    if ((aov != CST_AOV_ALBEDO && aov != CST_AOV_NORMAL && aov != CST_AOV_DEPTH) || !(f->aovs & aov) || !f->aov)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_aov_pixels: aov %d; expected one of CST_AOV_ALBEDO, "
+                        "CST_AOV_NORMAL, CST_AOV_DEPTH that the film was rendered with (aovs %d)", aov, f->aovs);
+    size_t pixels = (size_t)f->width * (size_t)f->height;
+    double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
+    for (size_t i = 0; i < pixels; i++) {
+        const double *a = &f->aov[FILM_AOV_STRIDE * i];
+        if (aov == CST_AOV_ALBEDO) {
+            for (int c = 0; c < 3; c++) out[3 * i + (size_t)c] = (float)(a[c] * inv);
+        } else if (aov == CST_AOV_NORMAL) { /* renormalised as the EXR's N channels */
+            double len = sqrt(a[3] * a[3] + a[4] * a[4] + a[5] * a[5]);
+            for (int c = 0; c < 3; c++) out[3 * i + (size_t)c] = len > 0.0 ? (float)(a[3 + c] / len) : 0.0f;
+        } else {
+            out[i] = a[7] > 0.0 ? (float)(a[6] / a[7]) : INFINITY;
+        }
+    }
+    return CST_OK;
+}
+
 CstStatus cst_image_read(const char *path, float **rgb, int *width, int *height, CstError *err)
 {
     return image_read(path, rgb, width, height, err);

@@ -116,17 +116,18 @@ static CstStatus run_passes(Driver *d, int *done, CstError *err)
         for (int k = 0; k < passes; k++) {
             int first = start + (int)((int64_t)todo * k / passes);
             int last = start + (int)((int64_t)todo * (k + 1) / passes);
-            CstStatus status = run_pass(d, first, last - first, (double)first / st->spp,
+            CstStatus status = run_pass(d, st->first_sample + first, last - first, (double)first / st->spp,
                                         (double)(last - first) / st->spp, err);
             if (status != CST_OK) return status;
             *done = last;
         }
         return CST_OK;
     }
-    /* Passes of growing size until the sample cap is reached (without one, INT_MAX) or, with
-     * a time budget, the next one would not fit; with pass_done, none planned longer than
-     * RENDER_PASS_SECONDS. */
-    const int cap = st->spp > 0 ? st->spp : INT_MAX;
+    /* Passes of growing size until the sample cap is reached (without one, INT_MAX, less
+     * first_sample) or, with a time budget, the next one would not fit; with pass_done,
+     * none planned longer than RENDER_PASS_SECONDS. Every pixel always holds the same
+     * number of samples. */
+    const int cap = st->spp > 0 ? st->spp : INT_MAX - st->first_sample;
     const double budget = st->time_limit > 0.0 ? st->time_limit : (double)INFINITY;
     int pass = 1;
     for (;;) {
@@ -137,7 +138,7 @@ static CstStatus run_passes(Driver *d, int *done, CstError *err)
         }
         double pass_t0 = clock_seconds();
         double frac = st->spp > 0 ? (double)*done / st->spp : 0.0;
-        CstStatus status = run_pass(d, *done, pass, frac, st->spp > 0 ? (double)pass / st->spp : 0.0, err);
+        CstStatus status = run_pass(d, st->first_sample + *done, pass, frac, st->spp > 0 ? (double)pass / st->spp : 0.0, err);
         if (status != CST_OK) return status;
         *done += pass;
         double now = clock_seconds(), pass_time = now - pass_t0;
@@ -228,6 +229,12 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp CST_SPP_UNLIMITED without a time limit would never end; "
                         "expected a time limit, or a sample count");
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
+    if (st.first_sample < 0 || st.first_sample > INT_MAX - (st.spp > 0 ? st.spp : INT_MAX / 2))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "first_sample %d: expected >= 0, with first_sample + spp "
+                        "within an int", st.first_sample);
+    if (st.first_sample > 0 && st.integrator == CST_INTEGRATOR_SPPM)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "first_sample %d: SPPM's iterations depend on every one "
+                        "before them (radii, flux); expected first_sample 0 for sppm", st.first_sample);
     if (!(0 <= st.crop[0] && st.crop[0] < st.crop[1] && st.crop[1] <= st.width && 0 <= st.crop[2] &&
           st.crop[2] < st.crop[3] && st.crop[3] <= st.height))
         return cst_fail(err, CST_ERR_INVALID_ARG,

@@ -365,8 +365,9 @@ CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *d, CstError
 {
     static const char fn[] = "cst_scene_set_camera";
     cst_error_clear(err);
-    CstStatus st = check_scene(scene, fn, err);
-    if (st != CST_OK) return st;
+    /* Also after commit (caustic.h): the camera is the view, not the scene's contents. */
+    CstStatus st = CST_OK;
+    if (!scene) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: scene is NULL", fn);
     if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
     if (d->type != CST_CAMERA_PERSPECTIVE && d->type != CST_CAMERA_ORTHOGRAPHIC)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown camera type %d; expected CST_CAMERA_PERSPECTIVE "
@@ -426,6 +427,24 @@ CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *d, CstError
     scene_set_camera(scene, &c);
     scene->camera_mirror = d->mirror;
     return CST_OK;
+}
+
+void cst_scene_camera(const CstScene *scene, CstCameraDesc *out)
+{
+    const CameraDesc *c = &scene->camera;
+    memset(out, 0, sizeof *out);
+    out->type = c->ortho_height > 0.0f ? CST_CAMERA_ORTHOGRAPHIC : CST_CAMERA_PERSPECTIVE;
+    const float p[3] = {c->position.x, c->position.y, c->position.z};
+    const float l[3] = {c->look_at.x, c->look_at.y, c->look_at.z};
+    const float u[3] = {c->up.x, c->up.y, c->up.z};
+    memcpy(out->position, p, sizeof p);
+    memcpy(out->look_at, l, sizeof l);
+    memcpy(out->up, u, sizeof u);
+    out->fov = c->vfov_deg;
+    out->aperture_radius = c->aperture_radius;
+    out->focus_distance = c->focus_distance;
+    out->height = c->ortho_height;
+    out->mirror = scene->camera_mirror;
 }
 
 CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err)

@@ -1,0 +1,810 @@
+/* caustic view (issue 30): a window (SDL2) that renders a scene progressively through the
+ * public API, in the display modes of the tutorial (preview, Whitted, path, light, photon,
+ * SPPM, BDPT, VCM, relative error), with an orbit camera and a script for headless tests.
+ * The only file of caustic that talks to SDL; the library stays window-free. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+
+#ifndef CLI_HAVE_SDL2
+
+bool cli_view_available(void) { return false; }
+
+int cli_view(const CliArgs *a)
+{
+    (void)a;
+    fprintf(stderr, "caustic: error: view: this caustic was built without a window system (SDL2); "
+                    "install libsdl2-dev and rebuild (cmake -DCST_VIEWER=ON)\n");
+    return CLI_EXIT_USAGE;
+}
+
+#else
+
+#include <SDL.h>
+
+#include "view_script.h"
+
+#define VIEW_PI 3.14159265358979323846
+
+bool cli_view_available(void) { return true; }
+
+/* The display modes, numbered as their keys. */
+typedef enum ViewMode {
+    VIEW_PREVIEW = 1, VIEW_WHITTED, VIEW_PATH, VIEW_LIGHT, VIEW_PHOTON, VIEW_SPPM, VIEW_BDPT, VIEW_VCM
+} ViewMode;
+static const char *const VIEW_MODE_NAMES[] = {"", "preview", "whitted", "path", "light", "photon",
+                                              "sppm", "bdpt", "vcm"};
+static const CstIntegrator VIEW_MODE_INTEGRATORS[] = {
+    CST_INTEGRATOR_DEFAULT, CST_INTEGRATOR_PATH, CST_INTEGRATOR_WHITTED, CST_INTEGRATOR_PATH,
+    CST_INTEGRATOR_LIGHT,   CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_BDPT,
+    CST_INTEGRATOR_VCM};
+
+/* What the preview mode shows, from the first-hit AOVs (key 1 again, p or Tab cycles). */
+typedef enum ViewPreview { VIEW_EYE_LIGHT, VIEW_NORMALS, VIEW_ALBEDO, VIEW_DEPTH, VIEW_PREVIEW_KINDS } ViewPreview;
+static const char *const VIEW_PREVIEW_NAMES[] = {"eye light", "normals", "albedo", "depth"};
+
+/* The first image after any change: the preview at this fraction of the resolution per
+ * axis (1/16 of the pixels), shown until the mode's first full pass lands. */
+#define VIEW_LOW_DIV 4
+#define VIEW_AOV_STRIDE 8 /* per pixel: albedo sum (3), normal sum (3), depth sum, depth hits */
+
+typedef struct View {
+    const CliArgs *args;
+    CstScene *scene;
+    CstRenderSettings base; /* the command line's settings, unresolved */
+    int w, h;
+    double out_exposure;    /* the render's 2^exposure, applied to saved linear images */
+    CstCameraDesc cam;
+    ViewMode mode;
+    ViewPreview preview;
+    bool error_view;
+    double exposure;        /* display exposure in stops (keys + and -) */
+    int max_spp;            /* --spp: stop refining there; 0 = never */
+    /* The accumulation of the current mode and camera: the per-pass films' sums, so the
+     * mean after N passes is the one a render of N samples holds (cst_render's
+     * first_sample). SPPM instead re-renders 1, 2, 4, ... iterations and keeps the last. */
+    int spp;
+    double *sum, *sum_sq, *aov;
+    double samples, seconds; /* of the passes accumulated: samples/s */
+    bool dirty, quit, failed;
+    char fail_msg[256];
+    float *low;              /* the low-resolution preview, w/VIEW_LOW_DIV x h/VIEW_LOW_DIV x 3 */
+    int lw, lh;
+    bool low_pending, low_ready;
+    /* display */
+    SDL_Window *win;
+    SDL_Renderer *ren;
+    SDL_Texture *tex;
+    uint32_t *argb;
+    float *linear;           /* the shown image before tone mapping, w x h x 3 */
+    uint8_t srgb_lut[4096];
+    bool shown_dirty;
+    double last_title;
+    /* input */
+    ViewScript script;
+    int saves;
+    double t_loaded, t_window, first_image_ms; /* clock: scene loaded, window open, first image (ms after load) */
+    int exit_code;
+} View;
+
+/* ------------------------------------------------------------ small vector math */
+
+static void v3_set(float o[3], double x, double y, double z) { o[0] = (float)x; o[1] = (float)y; o[2] = (float)z; }
+static double v3_dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void v3_cross(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+static double v3_norm(double a[3])
+{
+    double l = sqrt(v3_dot(a, a));
+    if (l > 0.0) for (int k = 0; k < 3; k++) a[k] /= l;
+    return l;
+}
+
+/* The camera's frame: forward (unit, towards look_at), right, up (units), the target
+ * distance. */
+static double view_frame(const CstCameraDesc *c, double f[3], double r[3], double u[3])
+{
+    double up[3] = {(double)c->up[0], (double)c->up[1], (double)c->up[2]};
+    if (up[0] == 0.0 && up[1] == 0.0 && up[2] == 0.0) up[1] = 1.0;
+    for (int k = 0; k < 3; k++) f[k] = (double)c->look_at[k] - (double)c->position[k];
+    double dist = v3_norm(f);
+    v3_cross(f, up, r);
+    v3_norm(r);
+    v3_cross(r, f, u);
+    return dist;
+}
+
+/* Rotates v about the unit axis a by angle t (Rodrigues). */
+static void v3_rotate(double v[3], const double a[3], double t)
+{
+    double c = cos(t), s = sin(t), axv[3], d = v3_dot(a, v);
+    v3_cross(a, v, axv);
+    for (int k = 0; k < 3; k++) v[k] = v[k] * c + axv[k] * s + a[k] * d * (1.0 - c);
+}
+
+/* Left drag: orbit about look_at, dx pixels turning about the up hint, dy about right;
+ * the pitch stops 1 degree short of the up hint so the frame stays defined. */
+static void view_orbit(View *v, double dx, double dy)
+{
+    CstCameraDesc *c = &v->cam;
+    double f[3], r[3], u[3], up[3] = {(double)c->up[0], (double)c->up[1], (double)c->up[2]};
+    view_frame(c, f, r, u);
+    if (up[0] == 0.0 && up[1] == 0.0 && up[2] == 0.0) up[1] = 1.0;
+    v3_norm(up);
+    double off[3];
+    for (int k = 0; k < 3; k++) off[k] = (double)c->position[k] - (double)c->look_at[k];
+    const double per_pixel = VIEW_PI / (double)v->h; /* a drag across the window's height: half a turn */
+    v3_rotate(off, up, -dx * per_pixel);
+    v3_rotate(r, up, -dx * per_pixel);
+    double dist = sqrt(v3_dot(off, off)), pitch = asin(fmax(-1.0, fmin(1.0, v3_dot(off, up) / dist)));
+    double lim = VIEW_PI / 2.0 - VIEW_PI / 180.0, t = -dy * per_pixel;
+    if (pitch + t > lim) t = lim - pitch;
+    if (pitch + t < -lim) t = -lim - pitch;
+    v3_rotate(off, r, -t);
+    v3_set(c->position, (double)c->look_at[0] + off[0], (double)c->look_at[1] + off[1], (double)c->look_at[2] + off[2]);
+    v->dirty = true;
+}
+
+/* Middle (or shift-left) drag: the view slides with the image, both position and look_at,
+ * by the pixel size at the target's distance. */
+static void view_pan(View *v, double dx, double dy)
+{
+    CstCameraDesc *c = &v->cam;
+    double f[3], r[3], u[3];
+    double dist = view_frame(c, f, r, u);
+    double px = c->type == CST_CAMERA_ORTHOGRAPHIC ? (double)c->height / v->h
+                                                   : 2.0 * dist * tan((double)c->fov * VIEW_PI / 360.0) / v->h;
+    double sx = c->mirror ? -1.0 : 1.0;
+    for (int k = 0; k < 3; k++) {
+        double d = (-dx * sx * r[k] + dy * u[k]) * px;
+        c->position[k] = (float)((double)c->position[k] + d);
+        c->look_at[k] = (float)((double)c->look_at[k] + d);
+    }
+    v->dirty = true;
+}
+
+/* Wheel: dolly towards (steps > 0) or away from look_at, 10% of the distance a step. */
+static void view_dolly(View *v, double steps)
+{
+    CstCameraDesc *c = &v->cam;
+    double k = pow(0.9, steps);
+    if (c->type == CST_CAMERA_ORTHOGRAPHIC) {
+        c->height = (float)((double)c->height * k);
+    } else {
+        double p[3], off[3];
+        for (int i = 0; i < 3; i++) {
+            off[i] = ((double)c->position[i] - (double)c->look_at[i]) * k;
+            p[i] = (double)c->look_at[i] + off[i];
+        }
+        if (sqrt(v3_dot(off, off)) < 1e-6) return;
+        v3_set(c->position, p[0], p[1], p[2]);
+        if (c->focus_distance > 0.0f && c->aperture_radius == 0.0f) c->focus_distance = 0.0f;
+    }
+    v->dirty = true;
+}
+
+/* ------------------------------------------------------------ accumulation */
+
+static void view_restart(View *v)
+{
+    CstError err = {0};
+    if (cst_scene_set_camera(v->scene, &v->cam, &err) != CST_OK) {
+        /* Only reachable through a degenerate drag: undo it. */
+        fprintf(stderr, "caustic: view: %s\n", err.msg);
+        cst_scene_camera(v->scene, &v->cam);
+    }
+    v->spp = 0;
+    v->samples = v->seconds = 0.0;
+    v->failed = false;
+    v->dirty = false;
+    v->low_pending = true;
+    v->low_ready = false;
+    v->shown_dirty = true;
+}
+
+static int view_progress(void *user, double fraction, double elapsed);
+
+/* The settings of the mode's next pass (or of the low-resolution preview). */
+static CstRenderSettings view_pass_settings(const View *v, bool low)
+{
+    CstRenderSettings s = v->base;
+    s.width = low ? (v->w + VIEW_LOW_DIV - 1) / VIEW_LOW_DIV : v->w;
+    s.height = low ? (v->h + VIEW_LOW_DIV - 1) / VIEW_LOW_DIV : v->h;
+    s.time_limit = 0.0;
+    for (int k = 0; k < 4; k++) s.crop[k] = 0; /* the whole image */
+    s.aovs = 0;
+    s.progress = view_progress;
+    s.progress_user = (void *)v;
+    s.progress_phase = NULL;
+    ViewMode mode = low ? VIEW_PREVIEW : v->mode;
+    s.integrator = VIEW_MODE_INTEGRATORS[mode];
+    if (mode == VIEW_PREVIEW) {
+        /* The first hit's AOVs are the preview; one bounce of path tracing is the
+         * cheapest integrator that records them. */
+        s.max_depth = 1;
+        s.aovs = CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH;
+    }
+    if (mode == VIEW_SPPM) {
+        s.spp = v->spp ? 2 * v->spp : 1;
+        s.first_sample = 0;
+    } else {
+        s.spp = 1;
+        s.first_sample = low ? 0 : v->spp;
+    }
+    return s;
+}
+
+/* Adds one pass's film to the sums (or, for SPPM, replaces them). */
+static bool view_accumulate(View *v, const CstFilm *film, const CstRenderStats *st)
+{
+    const size_t n = (size_t)v->w * (size_t)v->h;
+    const bool replace = v->mode == VIEW_SPPM;
+    if (v->spp == 0) { /* the first pass since a restart */
+        memset(v->sum, 0, 3 * n * sizeof *v->sum);
+        memset(v->sum_sq, 0, 3 * n * sizeof *v->sum_sq);
+    }
+    for (int y = 0; y < v->h; y++)
+        for (int x = 0; x < v->w; x++) {
+            size_t i = 3 * ((size_t)y * (size_t)v->w + (size_t)x);
+            double rgb[3];
+            cst_film_pixel(film, x, y, rgb);
+            for (int c = 0; c < 3; c++) {
+                if (replace) v->sum[i + c] = rgb[c], v->sum_sq[i + c] = 0.0;
+                else v->sum[i + c] += rgb[c], v->sum_sq[i + c] += rgb[c] * rgb[c];
+            }
+        }
+    if (v->mode == VIEW_PREVIEW) {
+        float *tmp = malloc(n * 3 * sizeof *tmp);
+        CstError err = {0};
+        if (!tmp) return false;
+        if (v->spp == 0) memset(v->aov, 0, n * VIEW_AOV_STRIDE * sizeof *v->aov);
+        const int aovs[3] = {CST_AOV_ALBEDO, CST_AOV_NORMAL, CST_AOV_DEPTH};
+        for (int a = 0; a < 3; a++) {
+            if (cst_film_aov_pixels(film, aovs[a], tmp, &err) != CST_OK) {
+                free(tmp);
+                return false;
+            }
+            for (size_t p = 0; p < n; p++) {
+                double *o = &v->aov[VIEW_AOV_STRIDE * p];
+                if (a < 2)
+                    for (int c = 0; c < 3; c++) o[3 * a + c] += (double)tmp[3 * p + (size_t)c];
+                else if (isfinite(tmp[p]))
+                    o[6] += (double)tmp[p], o[7] += 1.0;
+            }
+        }
+        free(tmp);
+    }
+    v->spp = replace ? st->spp : v->spp + 1;
+    if (replace) v->samples = (double)st->samples, v->seconds = st->seconds;
+    else v->samples += (double)st->samples, v->seconds += st->seconds;
+    v->shown_dirty = true;
+    return true;
+}
+
+/* ------------------------------------------------------------ the shown image */
+
+/* The mean of pixel i (3 channels) as cst_film_pixel computes it for a render of spp
+ * samples: the sum times 1 / spp, then scaled as cst_film_write scales. */
+static void view_mean(const View *v, size_t i, double out_scale, float rgb[3])
+{
+    double inv = v->mode == VIEW_SPPM ? 1.0 : v->spp > 0 ? 1.0 / v->spp : 0.0;
+    for (int c = 0; c < 3; c++) {
+        rgb[c] = (float)(v->sum[3 * i + (size_t)c] * inv);
+        if (out_scale != 1.0) rgb[c] = (float)((double)rgb[c] * out_scale);
+    }
+}
+
+/* A false-colour ramp over t in [0, 1]: black, blue, cyan, green, yellow, red. */
+static void view_ramp(double t, float rgb[3])
+{
+    static const float STOPS[6][3] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}};
+    t = fmin(fmax(t, 0.0), 1.0) * 5.0;
+    int k = t >= 5.0 ? 4 : (int)t;
+    float a = (float)(t - k);
+    for (int c = 0; c < 3; c++) rgb[c] = STOPS[k][c] * (1.0f - a) + STOPS[k + 1][c] * a;
+}
+
+/* The relative error of pixel i's mean: the standard error of its luminance over the
+ * luminance (floored at 1e-3 so black pixels do not dominate), from the passes' sums of
+ * squares; shown on a log scale from 0.1% (black) to 100% (red). */
+static void view_error_pixel(const View *v, size_t i, float rgb[3])
+{
+    static const double Y[3] = {0.2126, 0.7152, 0.0722}; /* Rec. 709 luminance */
+    double n = v->spp, mean = 0.0, var = 0.0;
+    if (v->mode == VIEW_SPPM || n < 2.0) {
+        rgb[0] = rgb[1] = rgb[2] = 0.0f;
+        return;
+    }
+    for (int c = 0; c < 3; c++) {
+        double m = v->sum[3 * i + (size_t)c] / n;
+        double s2 = (v->sum_sq[3 * i + (size_t)c] - n * m * m) / (n - 1.0);
+        mean += Y[c] * m;
+        var += Y[c] * Y[c] * (s2 > 0.0 ? s2 : 0.0) / n; /* channels taken as independent */
+    }
+    double rel = sqrt(var) / fmax(mean, 1e-3);
+    view_ramp(rel > 0.0 ? (log10(rel) + 3.0) / 3.0 : 0.0, rgb);
+}
+
+/* The preview of pixel i from the AOV sums: eye light is albedo times |cos| between the
+ * normal and the eye ray (a headlight at the camera), depth is 1 / (1 + d / d_target). */
+static void view_preview_pixel(const View *v, int x, int y, float rgb[3])
+{
+    const double *a = &v->aov[VIEW_AOV_STRIDE * ((size_t)y * (size_t)v->w + (size_t)x)];
+    double inv = v->spp > 0 ? 1.0 / v->spp : 0.0, n[3] = {a[3], a[4], a[5]};
+    double nl = v3_norm(n);
+    switch (v->preview) {
+    case VIEW_NORMALS:
+        for (int c = 0; c < 3; c++) rgb[c] = nl > 0.0 ? (float)(0.5 * n[c] + 0.5) : 0.0f;
+        return;
+    case VIEW_ALBEDO:
+        for (int c = 0; c < 3; c++) rgb[c] = (float)(a[c] * inv);
+        return;
+    case VIEW_DEPTH: {
+        double f[3], r[3], u[3], dist = view_frame(&v->cam, f, r, u);
+        float d = a[7] > 0.0 ? (float)(1.0 / (1.0 + a[6] / a[7] / dist)) : 0.0f;
+        rgb[0] = rgb[1] = rgb[2] = d;
+        return;
+    }
+    default: break;
+    }
+    /* The eye ray through the pixel centre (pinhole; orthographic: the view axis). */
+    double f[3], r[3], u[3], d[3];
+    view_frame(&v->cam, f, r, u);
+    double t = tan((double)v->cam.fov * VIEW_PI / 360.0), aspect = (double)v->w / v->h;
+    double sx = (2.0 * (x + 0.5) / v->w - 1.0) * t * aspect * (v->cam.mirror ? -1.0 : 1.0);
+    double sy = (1.0 - 2.0 * (y + 0.5) / v->h) * t;
+    for (int k = 0; k < 3; k++)
+        d[k] = v->cam.type == CST_CAMERA_ORTHOGRAPHIC ? f[k] : f[k] + sx * r[k] + sy * u[k];
+    v3_norm(d);
+    double cosv = nl > 0.0 ? fabs(v3_dot(n, d)) : 0.0;
+    for (int c = 0; c < 3; c++) rgb[c] = (float)(a[c] * inv * cosv);
+}
+
+/* Fills v->linear with what the mode shows (before the display exposure). */
+static void view_compose(View *v)
+{
+    for (int y = 0; y < v->h; y++)
+        for (int x = 0; x < v->w; x++) {
+            size_t i = (size_t)y * (size_t)v->w + (size_t)x;
+            float *o = &v->linear[3 * i];
+            if (v->spp == 0) { /* the low-resolution first image, or black */
+                if (!v->low_ready) { o[0] = o[1] = o[2] = 0.0f; continue; }
+                int lx = x / VIEW_LOW_DIV, ly = y / VIEW_LOW_DIV;
+                memcpy(o, &v->low[3 * ((size_t)ly * (size_t)v->lw + (size_t)lx)], 3 * sizeof *o);
+            } else if (v->error_view) {
+                view_error_pixel(v, i, o);
+            } else if (v->mode == VIEW_PREVIEW) {
+                view_preview_pixel(v, x, y, o);
+            } else {
+                view_mean(v, i, 1.0, o);
+            }
+        }
+}
+
+static void view_title(View *v)
+{
+    char title[256], what[64];
+    if (v->mode == VIEW_PREVIEW) snprintf(what, sizeof what, "preview (%s)", VIEW_PREVIEW_NAMES[v->preview]);
+    else snprintf(what, sizeof what, "%s", VIEW_MODE_NAMES[v->mode]);
+    double rate = v->seconds > 0.0 ? v->samples / v->seconds / 1e6 : 0.0;
+    if (v->failed)
+        snprintf(title, sizeof title, "caustic view - %s - %.160s", what, v->fail_msg);
+    else
+        snprintf(title, sizeof title, "caustic view - %s%s - %d %s - %.2f M samples/s - exposure %+.1f",
+                 what, v->error_view ? " relative error" : "", v->spp, v->mode == VIEW_SPPM ? "iterations" : "spp",
+                 rate, v->exposure);
+    SDL_SetWindowTitle(v->win, title);
+}
+
+/* Tone maps (exposure, clamp, the sRGB curve through a 4096-entry table) and shows. */
+static void view_present(View *v)
+{
+    if (!v->shown_dirty) return;
+    v->shown_dirty = false;
+    view_compose(v);
+    const float scale = (float)(v->error_view ? 1.0 : exp2(v->exposure));
+    size_t n = (size_t)v->w * (size_t)v->h;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t px = 0xff000000u;
+        for (int c = 0; c < 3; c++) {
+            float x = v->linear[3 * i + (size_t)c] * scale;
+            int k = x > 0.0f ? (x >= 1.0f ? 4095 : (int)(x * 4095.0f + 0.5f)) : 0;
+            px |= (uint32_t)v->srgb_lut[k] << (16 - 8 * c);
+        }
+        v->argb[i] = px;
+    }
+    SDL_UpdateTexture(v->tex, NULL, v->argb, v->w * 4);
+    SDL_RenderClear(v->ren);
+    SDL_RenderCopy(v->ren, v->tex, NULL, NULL);
+    SDL_RenderPresent(v->ren);
+    view_title(v);
+    if (v->first_image_ms < 0.0 && v->low_ready) {
+        double now = cli_clock_seconds();
+        v->first_image_ms = (now - v->t_loaded) * 1e3;
+        if (!v->args->quiet)
+            fprintf(stderr, "caustic: view: first image %.0f ms after loading the scene (%.0f ms after the "
+                    "window opened)\n", v->first_image_ms, (now - v->t_window) * 1e3);
+    }
+}
+
+/* ------------------------------------------------------------ saving, camera JSON */
+
+/* The shown image to path: EXR and PFM linear (the mode's means times the render's
+ * exposure, as `caustic render` writes them; the preview and error views as shown), PNG
+ * as displayed (display exposure, sRGB). Atomic, through cst_image_write. */
+static bool view_save(View *v, const char *path)
+{
+    CstError err = {0};
+    if (!cst_image_path_writable(path)) {
+        fprintf(stderr, "caustic: error: view: save '%s': expected a name ending in .png, .exr or .pfm\n", path);
+        return false;
+    }
+    size_t n = (size_t)v->w * (size_t)v->h;
+    float *img = malloc(n * 3 * sizeof *img);
+    if (!img) return false;
+    view_compose(v);
+    bool linear = cst_image_path_is_exr(path) || !cli_has_suffix(path, ".png");
+    bool raw = v->spp > 0 && !v->error_view && v->mode != VIEW_PREVIEW;
+    double scale = linear ? (raw ? v->out_exposure : 1.0) : (v->error_view ? 1.0 : exp2(v->exposure));
+    for (size_t i = 0; i < n; i++) {
+        if (raw) view_mean(v, i, scale, &img[3 * i]);
+        else for (int c = 0; c < 3; c++) img[3 * i + (size_t)c] = (float)((double)v->linear[3 * i + (size_t)c] * scale);
+    }
+    CstStatus st = cst_image_write(path, img, v->w, v->h, &err);
+    free(img);
+    if (st != CST_OK) {
+        cli_print_error(&err, st);
+        return false;
+    }
+    printf("view: saved %s (%s, %d %s)\n", path, VIEW_MODE_NAMES[v->mode], v->spp,
+           v->mode == VIEW_SPPM ? "iterations" : "spp");
+    fflush(stdout);
+    return true;
+}
+
+/* The camera as the JSON scene format's "camera" section (docs/scene-format.md). */
+static void view_print_camera(const View *v)
+{
+    const CstCameraDesc *c = &v->cam;
+    const char *type = c->type == CST_CAMERA_ORTHOGRAPHIC ? "orthographic"
+                       : c->aperture_radius > 0.0f      ? "thinlens" : "pinhole";
+    printf("\"camera\": {\"type\": \"%s\", \"position\": [%.9g, %.9g, %.9g], \"look_at\": [%.9g, %.9g, %.9g], "
+           "\"up\": [%.9g, %.9g, %.9g]", type, (double)c->position[0], (double)c->position[1],
+           (double)c->position[2], (double)c->look_at[0], (double)c->look_at[1], (double)c->look_at[2],
+           (double)c->up[0], (double)c->up[1], (double)c->up[2]);
+    if (c->type == CST_CAMERA_ORTHOGRAPHIC) printf(", \"height\": %.9g", (double)c->height);
+    else printf(", \"fov\": %.9g", (double)c->fov);
+    if (c->aperture_radius > 0.0f)
+        printf(", \"aperture_radius\": %.9g, \"focus_distance\": %.9g", (double)c->aperture_radius,
+               (double)c->focus_distance);
+    printf("}\n");
+    fflush(stdout);
+}
+
+static void view_status(const View *v)
+{
+    printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f\n", VIEW_MODE_NAMES[v->mode],
+           v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms);
+    fflush(stdout);
+}
+
+/* ------------------------------------------------------------ input */
+
+static void view_key(View *v, SDL_Keycode key)
+{
+    if (key >= '1' && key <= '8') {
+        ViewMode m = (ViewMode)(key - '0');
+        if (m == VIEW_PREVIEW && v->mode == VIEW_PREVIEW && !v->error_view) {
+            v->preview = (v->preview + 1) % VIEW_PREVIEW_KINDS;
+            v->shown_dirty = true;
+        } else if (m != v->mode) {
+            v->mode = m;
+            v->dirty = true;
+        }
+        v->error_view = false;
+        v->shown_dirty = true;
+        return;
+    }
+    switch (key) {
+    case '9': v->error_view = !v->error_view; v->shown_dirty = true; break;
+    case 'p': case '\t':
+        if (v->mode == VIEW_PREVIEW) v->preview = (v->preview + 1) % VIEW_PREVIEW_KINDS;
+        v->shown_dirty = true;
+        break;
+    case '+': case '=': case SDLK_KP_PLUS: v->exposure += 0.5; v->shown_dirty = true; break;
+    case '-': case SDLK_KP_MINUS: v->exposure -= 0.5; v->shown_dirty = true; break;
+    case '[': case ']':
+        if (v->cam.type != CST_CAMERA_ORTHOGRAPHIC) {
+            float fov = v->cam.fov + (key == '[' ? -5.0f : 5.0f);
+            v->cam.fov = fov < 5.0f ? 5.0f : fov > 170.0f ? 170.0f : fov;
+            v->dirty = true;
+        }
+        break;
+    case 's': {
+        char name[64];
+        snprintf(name, sizeof name, "caustic-view-%03d.exr", v->saves);
+        bool ok = view_save(v, name);
+        snprintf(name, sizeof name, "caustic-view-%03d.png", v->saves++);
+        if (ok) view_save(v, name);
+        break;
+    }
+    case 'c': view_print_camera(v); break;
+    case 'q': case SDLK_ESCAPE: v->quit = true; break;
+    default: break;
+    }
+}
+
+static void view_event(View *v, const SDL_Event *e)
+{
+    switch (e->type) {
+    case SDL_QUIT: v->quit = true; break;
+    case SDL_KEYDOWN: {
+        SDL_Keycode k = e->key.keysym.sym;
+        if (k == SDLK_EQUALS && (e->key.keysym.mod & KMOD_SHIFT)) k = '+';
+        view_key(v, k);
+        break;
+    }
+    case SDL_MOUSEMOTION: {
+        uint32_t b = e->motion.state;
+        bool shift = (SDL_GetModState() & KMOD_SHIFT) != 0;
+        if ((b & SDL_BUTTON_MMASK) || ((b & SDL_BUTTON_LMASK) && shift)) view_pan(v, e->motion.xrel, e->motion.yrel);
+        else if (b & SDL_BUTTON_LMASK) view_orbit(v, e->motion.xrel, e->motion.yrel);
+        break;
+    }
+    case SDL_MOUSEWHEEL: view_dolly(v, e->wheel.y); break;
+    case SDL_WINDOWEVENT: v->shown_dirty = true; break;
+    default: break;
+    }
+}
+
+/* Runs the script's commands up to the first that must wait (wait-spp not yet reached). */
+static void view_script_step(View *v)
+{
+    ViewScript *s = &v->script;
+    while (s->next < s->count && !v->quit) {
+        const ViewScriptCmd *c = &s->cmds[s->next];
+        if (c->op == VIEW_SCRIPT_WAIT_SPP) {
+            if (v->failed) {
+                fprintf(stderr, "caustic: error: view: script line %d: wait-spp %g in mode %s, which failed: %s\n",
+                        c->line, c->a, VIEW_MODE_NAMES[v->mode], v->fail_msg);
+                v->exit_code = CLI_EXIT_INTERNAL;
+                v->quit = true;
+                return;
+            }
+            if (v->dirty || v->spp < (int)c->a) return;
+            s->next++;
+            continue;
+        }
+        s->next++;
+        switch (c->op) {
+        case VIEW_SCRIPT_KEY: view_key(v, c->key == VIEW_KEY_ESCAPE ? SDLK_ESCAPE : c->key); break;
+        case VIEW_SCRIPT_SAVE:
+            if (!view_save(v, c->path)) {
+                v->exit_code = CLI_EXIT_INTERNAL;
+                v->quit = true;
+            }
+            break;
+        case VIEW_SCRIPT_ORBIT: view_orbit(v, c->a, c->b); break;
+        case VIEW_SCRIPT_PAN: view_pan(v, c->a, c->b); break;
+        case VIEW_SCRIPT_DOLLY: view_dolly(v, c->a); break;
+        case VIEW_SCRIPT_STATUS: view_status(v); break;
+        case VIEW_SCRIPT_QUIT: v->quit = true; break;
+        case VIEW_SCRIPT_WAIT_SPP: break;
+        }
+        if (v->dirty) return; /* the restart comes before the next command: `status` sees it */
+    }
+}
+
+/* Events and script; then the window, at most 10 times a second from inside a pass. */
+static void view_poll(View *v)
+{
+    SDL_Event e;
+    while (SDL_PollEvent(&e)) view_event(v, &e);
+    if (!v->dirty) view_script_step(v);
+    view_present(v);
+}
+
+/* The passes' progress callback: the window stays live during a pass, and any change
+ * cancels it (CST_ERR_CANCELLED) so the next pass starts from the new state. */
+static int view_progress(void *user, double fraction, double elapsed)
+{
+    (void)fraction;
+    (void)elapsed;
+    View *v = user;
+    view_poll(v);
+    return v->dirty || v->quit;
+}
+
+/* ------------------------------------------------------------ the loop */
+
+/* One render: the low-resolution preview or the mode's next pass. */
+static void view_step(View *v)
+{
+    bool low = v->low_pending;
+    CstRenderSettings s = view_pass_settings(v, low);
+    CstFilm *film = NULL;
+    CstRenderStats stats = {0};
+    CstError err = {0};
+    CstStatus st = cst_render(v->scene, &s, &film, &stats, &err);
+    if (st == CST_ERR_NONFINITE) st = CST_OK; /* a pass's few NaNs: shown, counted in the render's stats */
+    if (st == CST_ERR_CANCELLED) {
+        cst_film_destroy(film);
+        return;
+    }
+    if (st != CST_OK) {
+        cst_film_destroy(film);
+        if (low) { /* no preview (no AOVs for this scene?): go straight to the mode */
+            v->low_pending = false;
+            return;
+        }
+        snprintf(v->fail_msg, sizeof v->fail_msg, "%.200s", err.msg);
+        fprintf(stderr, "caustic: error: view: %s: %s\n", VIEW_MODE_NAMES[v->mode], err.msg);
+        v->failed = true;
+        v->shown_dirty = true;
+        return;
+    }
+    if (low) {
+        v->low_pending = false;
+        float *alb = malloc((size_t)v->lw * (size_t)v->lh * 3 * sizeof *alb);
+        float *nrm = malloc((size_t)v->lw * (size_t)v->lh * 3 * sizeof *nrm);
+        if (alb && nrm && cst_film_aov_pixels(film, CST_AOV_ALBEDO, alb, &err) == CST_OK &&
+            cst_film_aov_pixels(film, CST_AOV_NORMAL, nrm, &err) == CST_OK) {
+            /* Eye light at the view axis: enough for a first look. */
+            double f[3], r[3], u[3];
+            view_frame(&v->cam, f, r, u);
+            for (size_t i = 0; i < (size_t)v->lw * (size_t)v->lh; i++) {
+                double n[3] = {(double)nrm[3 * i], (double)nrm[3 * i + 1], (double)nrm[3 * i + 2]};
+                float k = (float)fabs(v3_dot(n, f));
+                for (int c = 0; c < 3; c++) v->low[3 * i + (size_t)c] = alb[3 * i + (size_t)c] * k;
+            }
+            v->low_ready = true;
+            v->shown_dirty = true;
+        }
+        free(alb);
+        free(nrm);
+    } else if (!view_accumulate(v, film, &stats)) {
+        snprintf(v->fail_msg, sizeof v->fail_msg, "out of memory");
+        v->failed = true;
+    }
+    cst_film_destroy(film);
+}
+
+static void view_loop(View *v)
+{
+    while (!v->quit) {
+        view_poll(v);
+        if (v->dirty) view_restart(v);
+        if (v->quit) break;
+        bool done = v->failed || (v->max_spp > 0 && v->spp >= v->max_spp && !v->low_pending);
+        if (done) {
+            /* Nothing to refine: sleep until an event (the script runs between waits). */
+            SDL_Event e;
+            if (SDL_WaitEventTimeout(&e, 50)) view_event(v, &e);
+            continue;
+        }
+        view_step(v);
+    }
+}
+
+/* ------------------------------------------------------------ setup */
+
+static int view_open(View *v)
+{
+    if (SDL_Init(SDL_INIT_VIDEO) != 0) {
+        fprintf(stderr, "caustic: error: view: cannot open a window: %s (is DISPLAY set? headless: "
+                        "xvfb-run caustic view ...)\n", SDL_GetError());
+        return CLI_EXIT_USAGE;
+    }
+    int ww = v->w, wh = v->h;
+    while (ww > 1600 || wh > 1000) ww /= 2, wh /= 2; /* a big film shown scaled */
+    v->win = SDL_CreateWindow("caustic view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, ww > 0 ? ww : 1,
+                              wh > 0 ? wh : 1, SDL_WINDOW_RESIZABLE);
+    if (v->win) v->ren = SDL_CreateRenderer(v->win, -1, 0);
+    if (v->win && !v->ren) v->ren = SDL_CreateRenderer(v->win, -1, SDL_RENDERER_SOFTWARE);
+    if (v->ren) v->tex = SDL_CreateTexture(v->ren, SDL_PIXELFORMAT_ARGB8888, SDL_TEXTUREACCESS_STREAMING, v->w, v->h);
+    if (!v->tex) {
+        fprintf(stderr, "caustic: error: view: cannot open a window: %s\n", SDL_GetError());
+        return CLI_EXIT_INTERNAL;
+    }
+    return CLI_EXIT_OK;
+}
+
+static void view_close(View *v)
+{
+    if (v->tex) SDL_DestroyTexture(v->tex);
+    if (v->ren) SDL_DestroyRenderer(v->ren);
+    if (v->win) SDL_DestroyWindow(v->win);
+    SDL_Quit();
+    free(v->sum);
+    free(v->sum_sq);
+    free(v->aov);
+    free(v->low);
+    free(v->argb);
+    free(v->linear);
+    view_script_free(&v->script);
+}
+
+/* The first mode: --integrator's, else the scene's, else path. */
+static ViewMode view_initial_mode(const CstRenderSettings *resolved)
+{
+    for (int m = VIEW_WHITTED; m <= VIEW_VCM; m++)
+        if (VIEW_MODE_INTEGRATORS[m] == resolved->integrator) return (ViewMode)m;
+    return VIEW_PATH; /* path-nee and path-bsdf: the path mode (MIS) */
+}
+
+static int view_init(View *v, const CliArgs *a)
+{
+    CstRenderSettings r;
+    cst_render_settings_resolve(v->scene, &a->settings, &r);
+    v->args = a;
+    v->base = a->settings;
+    v->w = r.width;
+    v->h = r.height;
+    v->out_exposure = r.exposure != 0.0 ? exp2(r.exposure) : 1.0;
+    v->exposure = r.exposure;
+    v->max_spp = a->settings.spp > 0 ? a->settings.spp : 0;
+    v->base.spp = CST_UNSET;
+    v->mode = view_initial_mode(&r);
+    v->first_image_ms = -1.0;
+    cst_scene_camera(v->scene, &v->cam);
+    const size_t n = (size_t)v->w * (size_t)v->h;
+    v->lw = (v->w + VIEW_LOW_DIV - 1) / VIEW_LOW_DIV;
+    v->lh = (v->h + VIEW_LOW_DIV - 1) / VIEW_LOW_DIV;
+    v->sum = calloc(3 * n, sizeof *v->sum);
+    v->sum_sq = calloc(3 * n, sizeof *v->sum_sq);
+    v->aov = calloc(VIEW_AOV_STRIDE * n, sizeof *v->aov);
+    v->low = calloc(3 * (size_t)v->lw * (size_t)v->lh, sizeof *v->low);
+    v->argb = calloc(n, sizeof *v->argb);
+    v->linear = calloc(3 * n, sizeof *v->linear);
+    if (!v->sum || !v->sum_sq || !v->aov || !v->low || !v->argb || !v->linear) {
+        fprintf(stderr, "caustic: error: view: out of memory for a %dx%d image\n", v->w, v->h);
+        return CLI_EXIT_INTERNAL;
+    }
+    for (int k = 0; k < 4096; k++) { /* the sRGB transfer function (IEC 61966-2-1) */
+        double x = k / 4095.0, s = x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1.0 / 2.4) - 0.055;
+        v->srgb_lut[k] = (uint8_t)(s * 255.0 + 0.5);
+    }
+    v->dirty = true;
+    return CLI_EXIT_OK;
+}
+
+int cli_view(const CliArgs *a)
+{
+    View v;
+    memset(&v, 0, sizeof v);
+    char msg[1024];
+    const char *script = a->script_path ? a->script_path : getenv("CAUSTIC_VIEW_SCRIPT");
+    if (script && script[0] && !view_script_load(script, &v.script, msg, sizeof msg)) {
+        fprintf(stderr, "caustic: error: view: %s\n", msg);
+        return CLI_EXIT_USAGE;
+    }
+    if (!cli_check_scene_path(a)) {
+        view_script_free(&v.script);
+        return CLI_EXIT_USAGE;
+    }
+    double read_seconds = 0.0;
+    int code = cli_load_scene(a, &v.scene, &read_seconds);
+    if (code != CLI_EXIT_OK) {
+        view_script_free(&v.script);
+        return code;
+    }
+    v.t_loaded = cli_clock_seconds();
+    if ((code = view_init(&v, a)) == CLI_EXIT_OK && (code = view_open(&v)) == CLI_EXIT_OK) {
+        v.t_window = cli_clock_seconds();
+        view_loop(&v);
+        code = v.exit_code;
+    }
+    view_close(&v);
+    cst_scene_destroy(v.scene);
+    return code;
+}
+
+#endif
