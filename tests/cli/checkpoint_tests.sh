@@ -135,11 +135,15 @@ d=$TMP/twice
 mkdir -p "$d"
 echo previous >"$d/out.pfm"
 echo previous >"$d/s.state"
-(cd "$d" && exec "${launch[@]}" render --width 512 --height 512 --threads 2 --spp 100000 -o out.pfm \
+(cd "$d" && exec "${launch[@]}" render --width 1024 --height 1024 --threads 2 --spp 100000 -o out.pfm \
     --checkpoint s.state --checkpoint-every 1000 --quiet >"$OUT" 2>"$ERR" </dev/null) &
 pid=$!
 sleep 1
-kill -INT "$pid"; kill -INT "$pid"
+# Two signals sent back to back can coalesce into one pending SIGINT when the process is
+# not scheduled in between (a loaded machine): send the second once the first is seen.
+kill -INT "$pid"
+for _ in $(seq 200); do grep -q "interrupted: stopping" "$ERR" 2>/dev/null && break; sleep 0.02; done
+kill -INT "$pid"
 { wait "$pid"; } 2>/dev/null
 RC=$?
 if [ "$RC" -eq 130 ] && [ "$(cat "$d/out.pfm")" = previous ] && [ "$(cat "$d/s.state")" = previous ] &&
