@@ -1,0 +1,187 @@
+/* The second half of caustic's public API, included by caustic/caustic.h (include that, not
+ * this): comparing renders and images (`caustic verify`, `caustic compare`) and the ray
+ * benchmark (`caustic bench rays`). Kept apart only to keep each header readable. */
+#ifndef CAUSTIC_CAUSTIC_COMPARE_H
+#define CAUSTIC_CAUSTIC_COMPARE_H
+
+#ifndef CAUSTIC_CAUSTIC_H
+#error "include caustic/caustic.h, which includes this header"
+#endif
+
+/* ---------------------------------------------------------------- comparing renders
+ * The statistics of `caustic verify` (docs/cli.md): two independent films of the same
+ * scene agree when every z-score of their difference, of the image mean and of every
+ * block of block x block pixels, per channel, is within a Sidak-corrected critical
+ * value; consistent (biased) estimators are judged by whether their mean squared block
+ * bias against an unbiased reference shrinks as their work grows 4x per level. */
+
+/* The standard normal quantile Phi^-1(p), p in (0, 1). */
+CST_API double cst_compare_normal_quantile(double p);
+/* The per-test level 1 - (1 - alpha)^(1/m) of m tests at family-wise level alpha. */
+CST_API double cst_compare_sidak_alpha(double alpha, double m);
+/* The two-sided critical |z| of m tests at family-wise level alpha. */
+CST_API double cst_compare_z_critical(double alpha, double m);
+/* Blocks across and down a width x height image (the last ones may be partial). */
+CST_API int cst_compare_blocks_x(int width, int block);
+CST_API int cst_compare_blocks_y(int height, int block);
+/* The tests cst_film_compare makes: 3 channels x (1 image mean + the blocks). */
+CST_API int64_t cst_compare_tests_per_pair(int width, int height, int block);
+
+typedef struct CstFilmComparison {
+    /* z = (mean_a - mean_b) / sqrt(var_a + var_b) of the image mean, per channel; +-INFINITY
+     * when both variances are zero and the means differ (an outright disagreement). */
+    double z_mean[3];
+    double max_abs_block_z;  /* largest |z| over blocks and channels (INFINITY as above) */
+    double worst_z;          /* that z with its sign: > 0 where a is brighter */
+    int worst_bx, worst_by;  /* the block where it was found (block column, row) */
+    int worst_channel;       /* 0 r, 1 g, 2 b */
+    int blocks;              /* blocks tested */
+    int blocks_failing;      /* blocks with |z| > z_crit (or NaN) in any channel */
+    int zero_variance_disagreements; /* tests (image or block, per channel) with zero variance
+                                      * in both films and different means */
+    int pass;                /* every image-mean and block |z| <= z_crit */
+} CstFilmComparison;
+
+/* Compares two films of the same size; block_abs_z (NULL, or one per block, row-major)
+ * receives each block's largest |z| over the channels. */
+CST_API CstStatus cst_film_compare(const CstFilm *a, const CstFilm *b, int block, double z_crit,
+                           CstFilmComparison *out, double *block_abs_z, CstError *err);
+
+typedef struct CstConvergenceLevel {
+    double d2;           /* D = mean of t_b over blocks: the mean squared block bias (radiance^2) */
+    double d2_se;        /* its standard error */
+    double mean_diff[3]; /* image mean of (x1 + x2) / 2 minus the reference's */
+    double mean_z[3];    /* mean_diff over its standard error */
+    int blocks;
+} CstConvergenceLevel;
+
+/* One level of the convergence check: two independent films x1, x2 of the estimator at
+ * that level against the reference; terms (one per block) keeps each block's t_b for
+ * cst_compare_convergence_step. */
+CST_API CstStatus cst_compare_convergence_level(const CstFilm *ref, const CstFilm *x1, const CstFilm *x2,
+                                        int block, double *terms, CstConvergenceLevel *out,
+                                        CstError *err);
+/* The change of D between two levels' terms, and its standard error (paired by block). */
+CST_API void cst_compare_convergence_step(const double *terms_a, const double *terms_b, int blocks,
+                                  double *diff, double *se);
+
+typedef enum CstConvergenceVerdict {
+    CST_CONVERGENCE_WITHIN_NOISE, /* D at the last level is not significantly above 0 */
+    CST_CONVERGENCE_SHRINKS,      /* D falls significantly at every step */
+    CST_CONVERGENCE_FAILS         /* neither: a bias remains and it is not shown to shrink */
+} CstConvergenceVerdict;
+
+/* The verdict from `levels` levels and their levels - 1 steps; z: the one-sided critical
+ * value of the steps and of D, z_mean: the two-sided one of the image means. */
+CST_API CstConvergenceVerdict cst_compare_convergence_judge(const CstConvergenceLevel *lv,
+                                                    const double *step_diff,
+                                                    const double *step_se, int levels,
+                                                    double z, double z_mean);
+/* A map of block_abs_z (one per block) as width x height x 3 linear floats, one flat cell
+ * per block: black at 0 ramping to blue at z_crit/2, to yellow at z_crit, red above. */
+CST_API void cst_compare_map_image(const double *block_abs_z, int width, int height, int block,
+                           double z_crit, float *rgb);
+
+/* ---------------------------------------------------------------- comparing images
+ * The numbers of `caustic compare A B` (docs/cli.md): B is the reference. Means, their
+ * difference, RMSE and relMSE per channel; with per-pixel variances of A and/or B (the
+ * variance AOV, cst_image_read_layer(..., "variance", ...)), z-scores of the block means;
+ * and FLIP (cst_image_flip). */
+
+/* relMSE = mean over pixels of (a - b)^2 / (b^2 + CST_RELMSE_EPS), the relative MSE of
+ * Rousselle, Knaus and Zwicker 2011; the epsilon (our choice of value) keeps black
+ * reference pixels from dominating. */
+#define CST_RELMSE_EPS 0.01
+/* A block "stands out" when |z| exceeds this (frac_above in CstImageComparison). */
+#define CST_COMPARE_Z_OUTLIER 4.0
+
+typedef struct CstImageComparison {
+    double mean_a[3], mean_b[3]; /* per channel, over the pixels where both are finite */
+    double diff[3];              /* mean_a - mean_b */
+    double rel_diff[3];          /* diff / |mean_b|; NaN where mean_b is 0 */
+    double rmse[3], rmse_all;    /* root mean square of a - b; _all over the 3 channels */
+    double relmse[3], relmse_all;
+    int64_t nonfinite;           /* values (pixel x channel) NaN or infinite in a or b: left out */
+    /* With variances (var_a and/or var_b given; a missing one counts as exact): */
+    int has_z;
+    double z_mean[3];            /* the image mean's z per channel */
+    int blocks;                  /* blocks tested (each in 3 channels) */
+    double max_abs_z;            /* largest block |z| over blocks and channels */
+    double worst_z;              /* that z with its sign: > 0 where a is brighter */
+    int worst_bx, worst_by, worst_channel;
+    int above;                   /* block tests (block x channel) with |z| > CST_COMPARE_Z_OUTLIER */
+    double frac_above;           /* above / (3 blocks) */
+} CstImageComparison;
+
+/* Compares a with the reference b (width x height x 3 linear floats each, row 0 = top);
+ * var_a, var_b: the variances of the pixel values (same layout) or NULL; block: the z
+ * blocks' side in pixels (>= 1); block_abs_z (NULL, or one per block, row-major) receives
+ * each block's largest |z| over the channels when variances are given. */
+CST_API CstStatus cst_image_compare(const float *a, const float *b, int width, int height, const float *var_a,
+                                    const float *var_b, int block, CstImageComparison *out,
+                                    double *block_abs_z, CstError *err);
+
+typedef enum CstFlipKind {
+    CST_FLIP_LDR = 1, /* LDR-FLIP (HPG 2020) of the images clamped to [0, 1] */
+    CST_FLIP_HDR = 2  /* HDR-FLIP (EG 2021): the maximum of LDR-FLIP over tone-mapped exposures */
+} CstFlipKind;
+
+/* Zero-initialised: HDR-FLIP at the papers' 67.02 pixels per degree, exposures automatic. */
+typedef struct CstFlipOptions {
+    CstFlipKind kind;           /* 0: HDR */
+    double pixels_per_degree;   /* 0: the papers' default (0.7 m wide 4K monitor at 0.7 m) */
+    int exposures;              /* HDR: 0 = the paper's automatic range; else start..stop */
+    double start_exposure, stop_exposure;
+} CstFlipOptions;
+
+typedef struct CstFlipResult {
+    CstFlipKind kind;
+    double pixels_per_degree;
+    double mean, max;           /* of the per-pixel FLIP error, in [0, 1] */
+    double start_exposure, stop_exposure; /* HDR: the bracket used (stops) */
+    int exposures;              /* HDR: how many; LDR: 0 */
+} CstFlipResult;
+
+/* FLIP of `test` against `reference` (width x height x 3 linear floats each); map (NULL,
+ * or width x height floats) receives the per-pixel error. HDR-FLIP's automatic exposures
+ * come from the reference. CST_ERR_OOM, CST_ERR_INVALID_ARG. */
+CST_API CstStatus cst_image_flip(const float *test, const float *reference, int width, int height,
+                                 const CstFlipOptions *options, float *map, CstFlipResult *out, CstError *err);
+
+/* Reads the EXR channels "<layer>.R", "<layer>.G", "<layer>.B" (e.g. layer "variance":
+ * the variance AOV of caustic render --aov variance) as an RGB image like cst_image_read.
+ * CST_ERR_UNSUPPORTED when the file is not an EXR or has no such channels. */
+CST_API CstStatus cst_image_read_layer(const char *path, const char *layer, float **rgb, int *width,
+                                       int *height, CstError *err);
+
+/* ---------------------------------------------------------------- ray benchmark */
+#define CST_BENCH_MAX_ACCELS 7
+
+/* `caustic bench rays` (docs/cli.md): zero-initialise, then set. */
+typedef struct CstBenchRaysOptions {
+    const char *mesh_path; /* a mesh file, or NULL: the built-in Cornell box (with stadium
+                            * alone: the built-in dense ball) */
+    int cornell;           /* the Cornell box even with stadium */
+    int stadium;           /* the scene inside a huge sparse box */
+    int json;              /* one JSON object per row instead of the table */
+    int threads;           /* the second thread count; 0 = one per core */
+    const char *accels[CST_BENCH_MAX_ACCELS]; /* back-end names ("bvh", ..., "embree",
+                                               * "embree-robust") in order; none = all */
+    int num_accels;
+    FILE *out;             /* the table or the JSON lines */
+    FILE *log;             /* notes (back ends skipped, built, tracing), or NULL */
+    int verbose;           /* with log: also the build and tracing notes */
+} CstBenchRaysOptions;
+
+typedef struct CstBenchRaysResult {
+    int checks;      /* rows checked */
+    int mismatches;  /* rows whose hits or sum of t do not match */
+    int input_error; /* on failure: 1 when the options or the mesh file were at fault */
+} CstBenchRaysResult;
+
+/* Runs the benchmark, writing to options->out. CST_OK also with mismatches (counted in
+ * result); a failure leaves err's message and says in result->input_error whose it was. */
+CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRaysResult *result,
+                         CstError *err);
+
+#endif
