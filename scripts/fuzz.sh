@@ -54,6 +54,9 @@ finish() { # finish PID STATUS: report the target that ran under it
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$build/$t.log" | tail -n1)
   if [ $rc -eq 0 ]; then
     echo "fuzz: $t: ${runs:-?} executions, no finding"
+  elif [ $rc -eq 72 ]; then # libFuzzer's -interrupted_exitcode: SIGINT/SIGTERM, not a finding
+    status=1
+    echo "fuzz: $t: interrupted after ${runs:-?} executions (no finding; the run did not complete)" >&2
   else
     status=1
     echo "fuzz: $t: FINDING (exit $rc) after ${runs:-?} executions; log $build/$t.log:" >&2
