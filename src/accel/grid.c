@@ -768,41 +768,6 @@ static inline void cell_list_in(const Grid *g, int brick, uint64_t bits, int loc
     *end = g->list_start[k + 1];
 }
 
-/* Fills the unused lanes of a batch: NaN vertices fail every comparison of the test. */
-static const GridTri GRID_NAN_TRI = {{NAN, NAN, NAN}, {NAN, NAN, NAN}, {NAN, NAN, NAN}, 0u};
-
-/* triangle_block_intersect() on up to TRI_BLOCK_WIDTH triangles of a cell's list: they
- * are gathered four at a time and transposed in registers (a vertex is 12 bytes, so each
- * load takes the three coordinates and one float of whatever follows inside the GridTri);
- * groups of four past the n triangles collected are NaN, which fails every comparison.
- * Lanes with an edge function of exactly zero need the scalar's recomputation in double:
- * they come back in *scalar_lanes for the caller to run through the scalar test. Returns
- * the mask of the other lanes that hit within (t_min, t_max). */
-static inline int tri_batch_intersect(const GridTri *const tri[TRI_BLOCK_WIDTH], int n, const TriangleRayBlock *q,
-                                      TriLanes t_min, TriLanes t_max, TriLanes *t_out, TriLanes *u_out,
-                                      TriLanes *v_out, int *scalar_lanes)
-{
-    _Alignas(32) float vtx[3][3][TRI_BLOCK_WIDTH]; /* [vertex][axis][lane] */
-    for (int g = 0; g < TRI_BLOCK_WIDTH; g += 4) {
-        if (g >= n) {
-            const __m128 nan = _mm_set1_ps(NAN);
-            for (int k = 0; k < 3; k++)
-                for (int a = 0; a < 3; a++) _mm_store_ps(&vtx[k][a][g], nan);
-            continue;
-        }
-        for (int k = 0; k < 3; k++) {
-            __m128 r0 = _mm_loadu_ps(&tri[g]->v0.x + 3 * k), r1 = _mm_loadu_ps(&tri[g + 1]->v0.x + 3 * k);
-            __m128 r2 = _mm_loadu_ps(&tri[g + 2]->v0.x + 3 * k), r3 = _mm_loadu_ps(&tri[g + 3]->v0.x + 3 * k);
-            _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-            _mm_store_ps(&vtx[k][0][g], r0);
-            _mm_store_ps(&vtx[k][1][g], r1);
-            _mm_store_ps(&vtx[k][2][g], r2);
-        }
-    }
-    return triangle_block_intersect((const float(*)[3][TRI_BLOCK_WIDTH])vtx, q, t_min, t_max, t_out, u_out, v_out,
-                                    scalar_lanes);
-}
-
 /* Hashed mailboxing (after Benthin, "Realtime Ray Tracing on Current CPU Architectures",
  * PhD thesis, 2006): the primitives this ray has tested, in a small direct-mapped table
  * on the stack. Nothing is written to the shared grid, so any number of threads can
@@ -839,7 +804,7 @@ static inline int cell_next_tris(const Grid *g, uint32_t *k, uint32_t end, Mailb
         GRID_COUNT_PRIM_TEST(slot);
         tri[n++] = &g->tris[slot];
     }
-    for (int i = n; i < TRI_BLOCK_WIDTH; i++) tri[i] = &GRID_NAN_TRI;
+    for (int i = n; i < TRI_BLOCK_WIDTH; i++) tri[i] = &TRI_VERTS_NAN;
     return n;
 }
 

@@ -18,14 +18,12 @@
 #include "caustic/caustic.h"
 #include "geometry/hit.h"
 #include "geometry/ray.h"
+#include "geometry/triangle_block.h"
 #include "math/bbox.h"
 
 /* A triangle's own vertices, as triangle_intersect_watertight() takes them (the same
  * floats the list back end tests, so hits are bit-identical). */
-typedef struct GridTri {
-    Vec3 v0, v1, v2;
-    uint32_t id; /* scene primitive id */
-} GridTri;
+typedef TriVerts GridTri; /* geometry/triangle_block.h: the vertices and the scene primitive id */
 
 typedef struct GridSphere {
     Vec3 center;

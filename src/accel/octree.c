@@ -527,9 +527,6 @@ static inline bool mailbox_seen(OctMailbox *mb, uint32_t key)
     return false;
 }
 
-/* Fills the unused lanes of a batch: NaN vertices fail every comparison of the test. */
-static const OctTri OCT_NAN_TRI = {{NAN, NAN, NAN}, {NAN, NAN, NAN}, {NAN, NAN, NAN}, 0u};
-
 /* Collects the next (up to) TRI_BLOCK_WIDTH triangles of slots[*k .. end) the ray has not
  * tested yet, in slot order, NaN-padded. Returns how many. */
 static inline int next_tris(const Octree *t, uint32_t *k, uint32_t end, OctMailbox *mb,
@@ -540,29 +537,8 @@ static inline int next_tris(const Octree *t, uint32_t *k, uint32_t end, OctMailb
         uint32_t slot = t->slots[*k];
         if (!mailbox_seen(mb, slot)) tri[n++] = &t->tris[slot];
     }
-    for (int i = n; i < TRI_BLOCK_WIDTH; i++) tri[i] = &OCT_NAN_TRI;
+    for (int i = n; i < TRI_BLOCK_WIDTH; i++) tri[i] = &TRI_VERTS_NAN;
     return n;
-}
-
-/* triangle_block_intersect() on a gathered batch: groups of four triangles transposed in
- * registers into the block layout v[vertex][axis][lane] (a vertex is 12 bytes, so each
- * load takes its three coordinates and one float of what follows inside the OctTri). */
-static inline int tri_batch_intersect(const OctTri *const tri[TRI_BLOCK_WIDTH], const TriangleRayBlock *q,
-                                      TriLanes t_min, TriLanes t_max, TriLanes *t_out, TriLanes *u_out,
-                                      TriLanes *v_out, int *scalar_lanes)
-{
-    _Alignas(32) float vtx[3][3][TRI_BLOCK_WIDTH];
-    for (int g = 0; g < TRI_BLOCK_WIDTH; g += 4)
-        for (int k = 0; k < 3; k++) {
-            __m128 r0 = _mm_loadu_ps(&tri[g]->v0.x + 3 * k), r1 = _mm_loadu_ps(&tri[g + 1]->v0.x + 3 * k);
-            __m128 r2 = _mm_loadu_ps(&tri[g + 2]->v0.x + 3 * k), r3 = _mm_loadu_ps(&tri[g + 3]->v0.x + 3 * k);
-            _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-            _mm_store_ps(&vtx[k][0][g], r0);
-            _mm_store_ps(&vtx[k][1][g], r1);
-            _mm_store_ps(&vtx[k][2][g], r2);
-        }
-    return triangle_block_intersect((const float(*)[3][TRI_BLOCK_WIDTH])vtx, q, t_min, t_max, t_out, u_out, v_out,
-                                    scalar_lanes);
 }
 
 /* The closest hit among a leaf's untested triangles, batch lanes in slot order with a
@@ -578,7 +554,7 @@ static inline bool leaf_tris_intersect(const Octree *t, const OctNode *nd, OctMa
     while ((n = next_tris(t, &k, end, mb, tri)) > 0) {
         TriLanes tl, ul, vl;
         int scalar_lanes;
-        int mask = tri_batch_intersect(tri, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
+        int mask = tri_batch_intersect(tri, n, q, t_min, lanes_set1(r->t_max), &tl, &ul, &vl, &scalar_lanes);
         if (!((mask | scalar_lanes) & ((1 << n) - 1))) continue;
         float tt[TRI_BLOCK_WIDTH], uu[TRI_BLOCK_WIDTH], vv[TRI_BLOCK_WIDTH];
         lanes_store(tt, tl); lanes_store(uu, ul); lanes_store(vv, vl);
@@ -610,7 +586,7 @@ static inline bool leaf_tris_occluded(const Octree *t, const OctNode *nd, OctMai
     while ((n = next_tris(t, &k, end, mb, tri)) > 0) {
         TriLanes tl, ul, vl;
         int scalar_lanes;
-        if (tri_batch_intersect(tri, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes) & ((1 << n) - 1)) return true;
+        if (tri_batch_intersect(tri, n, q, t_min, t_max, &tl, &ul, &vl, &scalar_lanes) & ((1 << n) - 1)) return true;
         for (int i = 0; i < n; i++) {
             float ts, us, vs;
             if ((scalar_lanes & (1 << i)) &&

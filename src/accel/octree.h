@@ -14,6 +14,7 @@
 #include "caustic/caustic.h"
 #include "geometry/hit.h"
 #include "geometry/ray.h"
+#include "geometry/triangle_block.h"
 #include "math/bbox.h"
 
 enum {
@@ -36,10 +37,7 @@ typedef struct OctNode {
 } OctNode;
 
 /* A triangle's own vertices, the floats the list back end tests (bit-identical hits). */
-typedef struct OctTri {
-    Vec3 v0, v1, v2;
-    uint32_t id; /* scene primitive id */
-} OctTri;
+typedef TriVerts OctTri; /* geometry/triangle_block.h: the vertices and the scene primitive id */
 
 typedef struct OctSphere {
     Vec3 center;
