@@ -934,6 +934,10 @@ CST_API void cst_film_pixel_variance(const CstFilm *film, int x, int y, double v
  * width * height * 3 floats, rows from the top, R, G, B per pixel: cst_film_pixel's means
  * rounded to float (the stored means; exposure applies only when the film is written). */
 CST_API void cst_film_pixels(const CstFilm *film, float *rgb_out);
+/* The same layout, as cst_film_write writes them to a float image (EXR, PFM): the means
+ * scaled by the render's 2^exposure and white balanced, so a stream of the film (caustic
+ * render --display tev) holds bit for bit the floats of the written EXR. */
+CST_API void cst_film_output_pixels(const CstFilm *film, float *rgb_out);
 /* The same layout for cst_film_pixel_variance's variances of the means. */
 CST_API void cst_film_variances(const CstFilm *film, float *var_out);
 /* One first-hit AOV of a film rendered with it (CstRenderSettings.aovs), every pixel, rows
