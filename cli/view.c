@@ -97,6 +97,13 @@ typedef struct View {
     int cameras;             /* camera files written by the c key */
     CliTev *tev;             /* --display: the stream, NULL = none */
     float *tev_rgb;
+    /* photon mode: the maps, built once for the scene and kept across passes and camera
+     * moves (CstRenderSettings.photon_cache); their positions for the points (key o) */
+    CstPhotonCache *photons;
+    bool show_photons;
+    float *photon_xyz[2];    /* global, caustic: x y z per photon */
+    size_t photon_n[2];
+    int photon_fetched;      /* cst_photon_cache_builds when photon_xyz was filled */
 } View;
 
 /* ------------------------------------------------------------ small vector math */
@@ -234,6 +241,7 @@ static CstRenderSettings view_pass_settings(const View *v, bool low)
     s.progress_phase = NULL;
     ViewMode mode = low ? VIEW_PREVIEW : v->mode;
     s.integrator = VIEW_MODE_INTEGRATORS[mode];
+    s.photon_cache = v->photons; /* photon mode: its maps built once, not every pass */
     if (mode == VIEW_PREVIEW) {
         /* The first hit's AOVs are the preview; one bounce of path tracing is the
          * cheapest integrator that records them. */
@@ -376,6 +384,57 @@ static void view_preview_pixel(const View *v, int x, int y, float rgb[3])
     for (int c = 0; c < 3; c++) rgb[c] = (float)(a[c] * inv * cosv);
 }
 
+/* The photon positions from the cache, again after each (re)build. */
+static void view_photons_fetch(View *v)
+{
+    int builds = cst_photon_cache_builds(v->photons);
+    if (builds == v->photon_fetched) return;
+    for (int m = 0; m < 2; m++) {
+        size_t n = cst_photon_cache_positions(v->photons, m, NULL, 0);
+        float *xyz = n ? malloc(3 * n * sizeof *xyz) : NULL;
+        free(v->photon_xyz[m]);
+        v->photon_xyz[m] = xyz;
+        v->photon_n[m] = xyz ? cst_photon_cache_positions(v->photons, m, xyz, n) : 0;
+    }
+    v->photon_fetched = builds;
+}
+
+/* Key o in the photon mode: the photons as points over img (w x h x 3), projected through
+ * the camera (the pinhole of a thin lens; the pixel whose centre ray is nearest), the
+ * global map's in orange, the caustic map's over them in cyan, each colour times k (so
+ * that it shows as that colour after the display exposure). At most one global photon
+ * in VIEW_PHOTON_EVERY pixels' worth is drawn (a stride through the map) so the image
+ * stays visible under 200,000 of them; every caustic photon is. */
+#define VIEW_PHOTON_EVERY 4
+static void view_photon_points(View *v, float *img, float k)
+{
+    static const float COLOURS[2][3] = {{1.0f, 0.55f, 0.1f}, {0.2f, 0.8f, 1.0f}};
+    if (!v->show_photons || v->mode != VIEW_PHOTON || v->error_view || v->spp == 0) return;
+    view_photons_fetch(v);
+    double f[3], r[3], u[3];
+    view_frame(&v->cam, f, r, u);
+    const bool ortho = v->cam.type == CST_CAMERA_ORTHOGRAPHIC;
+    const double aspect = (double)v->w / v->h, sx = v->cam.mirror ? -1.0 : 1.0;
+    const double half_h = ortho ? 0.5 * (double)v->cam.height : tan((double)v->cam.fov * VIEW_PI / 360.0);
+    for (int m = 0; m < 2; m++) {
+        size_t n = v->photon_n[m], cap = (size_t)v->w * (size_t)v->h / VIEW_PHOTON_EVERY + 1;
+        size_t stride = m == 0 && n > cap ? n / cap : 1;
+        for (size_t i = 0; i < n; i += stride) {
+            const float *p = &v->photon_xyz[m][3 * i];
+            double d[3] = {(double)p[0] - (double)v->cam.position[0], (double)p[1] - (double)v->cam.position[1],
+                           (double)p[2] - (double)v->cam.position[2]};
+            double z = v3_dot(d, f);
+            if (!(z > 0.0)) continue; /* behind the camera */
+            double a = v3_dot(d, r) / (ortho ? 1.0 : z), b = v3_dot(d, u) / (ortho ? 1.0 : z);
+            /* The inverse of the pixel centre ray of view_preview_pixel. */
+            double x = (a * sx / (half_h * aspect) + 1.0) * 0.5 * v->w, y = (1.0 - b / half_h) * 0.5 * v->h;
+            if (!(x >= 0.0 && x < v->w && y >= 0.0 && y < v->h)) continue;
+            float *o = &img[3 * ((size_t)y * (size_t)v->w + (size_t)x)];
+            for (int c = 0; c < 3; c++) o[c] = COLOURS[m][c] * k;
+        }
+    }
+}
+
 /* Fills v->linear with what the mode shows (before the display exposure). */
 static void view_compose(View *v)
 {
@@ -419,6 +478,7 @@ static void view_present(View *v)
     v->shown_dirty = false;
     view_compose(v);
     const float scale = (float)(v->error_view ? 1.0 : exp2(v->exposure));
+    view_photon_points(v, v->linear, 1.0f / scale);
     size_t n = (size_t)v->w * (size_t)v->h;
     for (size_t i = 0; i < n; i++) {
         uint32_t px = 0xff000000u;
@@ -551,7 +611,9 @@ static bool view_save(View *v, const char *path)
     size_t n = (size_t)v->w * (size_t)v->h;
     float *img = malloc(n * 3 * sizeof *img);
     if (!img) return false;
-    view_image(v, img, cst_image_path_is_exr(path) || !cli_has_suffix(path, ".png"));
+    bool linear = cst_image_path_is_exr(path) || !cli_has_suffix(path, ".png");
+    view_image(v, img, linear);
+    if (!linear) view_photon_points(v, img, 1.0f); /* a PNG is what the window shows */
     CstStatus st = cst_image_write(path, img, v->w, v->h, &err);
     free(img);
     if (st != CST_OK) {
@@ -622,8 +684,9 @@ static void view_print_camera(View *v)
 
 static void view_status(const View *v)
 {
-    printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f\n", VIEW_MODE_NAMES[v->mode],
-           v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms);
+    printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f photon_maps_built %d\n", VIEW_MODE_NAMES[v->mode],
+           v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms,
+           cst_photon_cache_builds(v->photons));
     fflush(stdout);
 }
 
@@ -668,6 +731,7 @@ static void view_key(View *v, SDL_Keycode key)
         break;
     }
     case 'c': view_print_camera(v); break;
+    case 'o': v->show_photons = !v->show_photons; v->shown_dirty = true; break;
     case 'q': case SDLK_ESCAPE: v->quit = true; break;
     default: break;
     }
@@ -886,6 +950,9 @@ static void view_close(View *v)
     free(v->linear);
     free(v->tev_rgb);
     cli_tev_destroy(v->tev);
+    free(v->photon_xyz[0]);
+    free(v->photon_xyz[1]);
+    cst_photon_cache_destroy(v->photons); /* before the scene (cli_view) */
     view_script_free(&v->script);
 }
 
@@ -921,7 +988,8 @@ static int view_init(View *v, const CliArgs *a)
     v->low = calloc(3 * (size_t)v->lw * (size_t)v->lh, sizeof *v->low);
     v->argb = calloc(n, sizeof *v->argb);
     v->linear = calloc(3 * n, sizeof *v->linear);
-    if (!v->sum || !v->sum_sq || !v->aov || !v->low || !v->argb || !v->linear) {
+    v->photons = cst_photon_cache_create();
+    if (!v->sum || !v->sum_sq || !v->aov || !v->low || !v->argb || !v->linear || !v->photons) {
         fprintf(stderr, "caustic: error: view: out of memory for a %dx%d image\n", v->w, v->h);
         return CLI_EXIT_INTERNAL;
     }

@@ -194,6 +194,50 @@ else
     fail "view: the written camera is a thinlens camera section with the clicked focus" "$(cat "$dir/cam.json")"
 fi
 
+# ------------------------------------------------------------ photon mode: maps kept, points
+# The maps are built once (status: photon_maps_built 1) and reused by every pass and after
+# an orbit, each image still equal to a render's bit for bit (the orbit's: its automatic
+# radius from the new camera); key o draws the photons over the shown image (PNG), not
+# into the linear EXR.
+dir=$TMP/photon
+cat >"$TMP/photon.txt" <<'EOF2'
+wait-spp 2
+status
+save p2.exr
+save nopoints.png
+key o
+save points.png
+save points.exr
+orbit 20 -4
+wait-spp 2
+status
+save orbit.exr
+camera cam.json
+quit
+EOF2
+view "$dir" 300 "$SRC/scenes/cornell-box.json" "${SIZE[@]}" --integrator photon --script "$TMP/photon.txt"
+HARNESS_EXPECT_STDOUT=1 expect "view: the photon script runs" 0 "saved orbit.exr"
+check "view: photon maps built once for two passes, an orbit and two more" eval \
+    "test \$(grep -c '^view: mode photon spp 2 .* photon_maps_built 1\$' '$OUT') -eq 2"
+check "view: key o draws the photons (the PNG changes)" eval \
+    "! '$BIN' compare '$dir/nopoints.png' '$dir/points.png' --json | grep -q '\"rmse\":0.0,'"
+same "view: the photons are not drawn into the linear EXR" "$dir/p2.exr" "$dir/points.exr"
+harness_run "$dir" 300 render "$SRC/scenes/cornell-box.json" "${SIZE[@]}" --integrator photon --spp 2 -q -o ref2.exr
+same "view: photon with kept maps equals render --spp 2 bit for bit" "$dir/p2.exr" "$dir/ref2.exr"
+if python3 - "$SRC/scenes/cornell-box.json" "$dir/cam.json" "$dir/scene.json" <<'EOF2'
+import json, sys
+scene = json.load(open(sys.argv[1]))
+scene["camera"] = json.load(open(sys.argv[2]))["camera"]
+json.dump(scene, open(sys.argv[3], "w"))
+EOF2
+then
+    harness_run "$dir" 300 render scene.json "${SIZE[@]}" --integrator photon --spp 2 -q -o ref-orbit.exr
+    same "view: photon after an orbit (maps kept, radius from the new camera) equals render bit for bit" \
+        "$dir/orbit.exr" "$dir/ref-orbit.exr"
+else
+    fail "view: the photon run's camera file" "$(cat "$dir/cam.json")"
+fi
+
 # ------------------------------------------------------------ --spp stops refining
 dir=$TMP/limit
 printf 'wait-spp 2\nstatus\nquit\n' >"$TMP/limit.txt"
