@@ -3,7 +3,8 @@
 # reassembles into the EXR the same render writes, bit for bit as float (tiles, exposure,
 # several passes, SPPM's one image); a refused and a broken connection are one warning and
 # the render goes on; bad --display values are located usage errors; caustic view streams
-# what it saves. Usage: tev_tests.sh CAUSTIC SOURCE-DIR TEV_SERVER
+# what it saves; the server refuses malformed streams (its size checks). Usage:
+# tev_tests.sh CAUSTIC SOURCE-DIR TEV_SERVER
 . "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
 harness_init tev_tests "$@"
 SERVER=$(realpath "$3")
@@ -96,6 +97,50 @@ for bad in "tv" "tev:" "tev:host" "tev::14158" "tev:host:0" "tev:host:65536" "te
 done
 harness_run "$TMP/bad" 20 info --display tev
 expect "info --display: an option of render and view only, exit 2" 2 "--display is an option of 'render' and 'view'"
+
+# The server itself refuses what does not fit: each malformed stream is a protocol error
+# (exit 3) with the reason, never a read past a packet or an image.
+malformed() {
+    local name=$1 want=$2
+    serve "bad-$name" "$TMP/none.exr"
+    python3 - "$PORT" "$name" <<'EOF2'
+import socket, struct, sys
+def pkt(t, body): return struct.pack('<I', 5 + len(body)) + bytes([t]) + body
+names = b'R\x00G\x00B\x00'
+create = pkt(4, b'\x01img\x00' + struct.pack('<iii', 4, 4, 3) + names)
+def update(x, y, w, h, offs, strides, floats):
+    return pkt(6, b'\x00img\x00' + struct.pack('<i', 3) + names + struct.pack('<iiii', x, y, w, h)
+               + struct.pack('<qqq', *offs) + struct.pack('<qqq', *strides) + b'\x00' * (4 * floats))
+streams = {
+    'type': pkt(9, b''),
+    'length': struct.pack('<I', 0x7fffffff) + b'\x04',
+    'truncated': create[:-3],
+    'outside': create + update(3, 3, 2, 2, (0, 1, 2), (3, 3, 3), 12),
+    'stride': create + update(0, 0, 2, 2, (0, 1, 2), (3, 3, 1 << 62), 12),
+    'short': create + update(0, 0, 2, 2, (0, 1, 2), (3, 3, 3), 11),
+    'noimage': update(0, 0, 1, 1, (0, 1, 2), (3, 3, 3), 3),
+    'size': pkt(4, b'\x01img\x00' + struct.pack('<iii', 1 << 20, 1 << 20, 3) + names),
+}
+s = socket.create_connection(('127.0.0.1', int(sys.argv[1])))
+s.sendall(streams[sys.argv[2]])
+s.close()
+EOF2
+    local src=0
+    wait "$SPID" || src=$?
+    if [ "$src" -eq 3 ] && grep -Eq -- "protocol error: .*$want" "$TMP/bad-$name.server.err"; then
+        pass "tev_server refuses a stream with $name ($want)"
+    else
+        fail "tev_server refuses a stream with $name" "exit $src" "$(cat "$TMP/bad-$name.server.err")"
+    fi
+}
+malformed type "a packet type"
+malformed length "packet length out of range"
+malformed truncated "ends inside"
+malformed outside "not inside the image"
+malformed stride "reach past the pixel data"
+malformed short "reach past the pixel data"
+malformed noimage "no image of that name"
+malformed size "width or height out of range"
 
 # caustic view streams the image it shows: after its last pass the stream equals its save.
 if "$BIN" --version | grep -Eq '^sdl2: +yes'; then
