@@ -1,6 +1,7 @@
 /* Command-line parsing for the caustic tool: the option tables and strict number parsing
  * (whole string consumed, range checked); the help texts are in help.c. */
 #include "args.h"
+#include "tev.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -18,7 +19,8 @@ typedef enum ArgsOpt {
     ARGS_OPT_QUIET, ARGS_OPT_HELP, ARGS_OPT_ACCEL, ARGS_OPT_SAMPLER, ARGS_OPT_EXPOSURE,
     ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
     ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING,
-    ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT
+    ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT,
+    ARGS_OPT_DISPLAY
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -66,6 +68,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"quiet",      'q', ARGS_FLAG,  ARGS_OPT_QUIET},
     {"help",       'h', ARGS_FLAG,  ARGS_OPT_HELP},
     {"script",     0,   ARGS_VALUE,  ARGS_OPT_SCRIPT}, /* view only */
+    {"display",    0,   ARGS_VALUE,  ARGS_OPT_DISPLAY}, /* render and view */
 };
 #define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
 
@@ -341,6 +344,22 @@ static bool args_apply_script(const char *value, CliArgs *out, ArgsError *err)
     return true;
 }
 
+/* render's and view's --display tev[:HOST:PORT] (the stream to tev, cli/tev.c). */
+static bool args_apply_display(const char *value, CliArgs *out, ArgsError *err)
+{
+    if (out->command != ARGS_CMD_RENDER && out->command != ARGS_CMD_VIEW) {
+        args_fail(err, true, "--display is an option of 'render' and 'view'");
+        return false;
+    }
+    if (!cli_tev_parse(value, out->display_host, sizeof out->display_host, &out->display_port, err->msg,
+                       sizeof err->msg)) {
+        err->hint = false;
+        return false;
+    }
+    out->display = value;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -348,6 +367,8 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     switch ((ArgsOpt)o->id) {
     case ARGS_OPT_SCRIPT:
         return args_apply_script(value, out, err);
+    case ARGS_OPT_DISPLAY:
+        return args_apply_display(value, out, err);
     case ARGS_OPT_OUTPUT:
         if (value[0] == '\0') {
             args_fail(err, false, "--output: expected a file name, got ''");

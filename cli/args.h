@@ -109,6 +109,10 @@ typedef struct CliArgs {
     VerifyArgs verify; /* ARGS_CMD_VERIFY only */
     CompareArgs compare; /* ARGS_CMD_COMPARE only */
     const char *script_path; /* view: --script FILE (NULL: $CAUSTIC_VIEW_SCRIPT, else none) */
+    /* render, view: --display tev[:HOST:PORT] (cli/tev.h); display NULL = none */
+    const char *display;
+    char display_host[256];
+    int display_port;
 } CliArgs;
 
 typedef struct ArgsError {

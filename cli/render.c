@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "tev.h"
 #include "metadata.h"
 #include "signals.h"
 
@@ -126,13 +127,28 @@ typedef struct CliPasses {
     CstStatus failed;         /* a write failed: the render stops */
     CstError err;
     CliProgress *progress;    /* NULL: quiet */
+    CliTev *tev;              /* --display: the stream, NULL = none */
+    bool tev_passes;          /* stream after every pass (SPPM's film is whole only at the end) */
+    float *tev_rgb;           /* the film as written, streamed (cli_tev_stream) */
 } CliPasses;
+
+/* --display: the film as cst_film_write writes it (exposure, white balance) to tev, so the
+ * stream ends on the same floats as the EXR. */
+static void cli_tev_stream(CliPasses *c, const CstFilm *film)
+{
+    if (!cli_tev_connected(c->tev)) return;
+    int w = cst_film_width(film), h = cst_film_height(film);
+    if (!c->tev_rgb && !(c->tev_rgb = malloc((size_t)w * (size_t)h * 3 * sizeof *c->tev_rgb))) return;
+    cst_film_output_pixels(film, c->tev_rgb);
+    cli_tev_send(c->tev, c->tev_rgb, w, h);
+}
 
 static int cli_pass_done(void *user, const CstFilm *film, const CstPassInfo *info)
 {
     CliPasses *c = user;
     c->passes++;
     const int stop = cli_signals_stop_requested() != 0;
+    if (c->tev_passes && !info->last) cli_tev_stream(c, film); /* the last: after the render */
     if (c->checkpoint && (info->last || stop || info->elapsed_seconds - c->last_write >= c->every)) {
         double t0 = cli_clock_seconds();
         CstImageWriteOptions wo = {NULL, 0, cli_signals_temp_file, NULL};
@@ -213,10 +229,11 @@ static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const Cst
     return CLI_EXIT_OK;
 }
 
-/* Before the render: the scene's id, the resumed state (*resume), the pass callback and the
- * progress callbacks in `settings`. Returns an exit code. */
-static int cli_passes_setup(const CliArgs *a, const CstScene *scene, const CliMetadata *meta, CliPasses *passes,
-                            CliProgress *progress, CstRenderSettings *settings, CstFilm **resume)
+/* Before the render: the scene's id, the resumed state (*resume), the tev stream
+ * (--display, images named `output`), the pass callback and the progress callbacks in
+ * `settings`. Returns an exit code. */
+static int cli_passes_setup(const CliArgs *a, const CstScene *scene, const CliMetadata *meta, const char *output,
+                            CliPasses *passes, CliProgress *progress, CstRenderSettings *settings, CstFilm **resume)
 {
     /* The scene file's bytes (files it includes are not hashed; the scene's counts are in
      * the key too: docs/state-format.md). */
@@ -231,6 +248,16 @@ static int cli_passes_setup(const CliArgs *a, const CstScene *scene, const CliMe
     passes->every = a->checkpoint_every > 0.0 ? a->checkpoint_every : CLI_CHECKPOINT_EVERY;
     passes->written_spp = -1;
     passes->progress = a->quiet ? NULL : progress;
+    if (a->display) {
+        CstRenderSettings rs;
+        cst_render_settings_resolve(scene, settings, &rs);
+        passes->tev_passes = rs.integrator != CST_INTEGRATOR_SPPM;
+        /* Connected before the render; a refused connection is a warning only. */
+        if (!(passes->tev = cli_tev_create(a->display_host, a->display_port, output))) {
+            fprintf(stderr, "caustic: error: out of memory for --display\n");
+            return CLI_EXIT_INTERNAL;
+        }
+    }
     settings->resume = *resume;
     settings->pass_done = cli_pass_done;
     settings->pass_user = passes;
@@ -238,6 +265,16 @@ static int cli_passes_setup(const CliArgs *a, const CstScene *scene, const CliMe
     settings->progress_phase = cli_render_phase;
     settings->progress_user = passes;
     return CLI_EXIT_OK;
+}
+
+/* After everything (cli_render's end, whatever the outcome): the stream's last image (the
+ * film as written, or as far as it got), the stream and the resumed film released. */
+static void cli_passes_end(CliPasses *passes, const CstFilm *film, CstFilm *resume)
+{
+    if (film) cli_tev_stream(passes, film);
+    cli_tev_destroy(passes->tev);
+    free(passes->tev_rgb);
+    cst_film_destroy(resume);
 }
 
 /* Right after the render: a stop before any pass (nothing to write) or a failed state
@@ -369,7 +406,7 @@ int cli_render(const CliArgs *a)
         goto done;
     }
     cli_metadata_begin(&meta, a->scene_path);
-    if ((code = cli_passes_setup(a, scene, &meta, &passes, &progress, &settings, &resume)) != CLI_EXIT_OK)
+    if ((code = cli_passes_setup(a, scene, &meta, output, &passes, &progress, &settings, &resume)) != CLI_EXIT_OK)
         goto done;
     code = CLI_EXIT_INTERNAL;
     if (!a->quiet) {
@@ -447,7 +484,7 @@ int cli_render(const CliArgs *a)
     }
 
 done:
-    cst_film_destroy(resume);
+    cli_passes_end(&passes, film, resume);
     cli_metadata_free(&meta);
     if (json && json != stdout)
         fclose(json);

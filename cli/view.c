@@ -26,6 +26,7 @@ int cli_view(const CliArgs *a)
 
 #include <SDL.h>
 
+#include "tev.h"
 #include "view_script.h"
 
 #define VIEW_PI 3.14159265358979323846
@@ -89,6 +90,20 @@ typedef struct View {
     int saves;
     double t_loaded, t_window, first_image_ms; /* clock: scene loaded, window open, first image (ms after load) */
     int exit_code;
+    /* click focus: a left press not (yet) a drag; a pick waiting for the render to stop */
+    bool press, press_moved;
+    bool focus_pending;
+    int focus_x, focus_y;    /* film pixel of the pending pick */
+    int cameras;             /* camera files written by the c key */
+    CliTev *tev;             /* --display: the stream, NULL = none */
+    float *tev_rgb;
+    /* photon mode: the maps, built once for the scene and kept across passes and camera
+     * moves (CstRenderSettings.photon_cache); their positions for the points (key o) */
+    CstPhotonCache *photons;
+    bool show_photons;
+    float *photon_xyz[2];    /* global, caustic: x y z per photon */
+    size_t photon_n[2];
+    int photon_fetched;      /* cst_photon_cache_builds when photon_xyz was filled */
 } View;
 
 /* ------------------------------------------------------------ small vector math */
@@ -226,6 +241,7 @@ static CstRenderSettings view_pass_settings(const View *v, bool low)
     s.progress_phase = NULL;
     ViewMode mode = low ? VIEW_PREVIEW : v->mode;
     s.integrator = VIEW_MODE_INTEGRATORS[mode];
+    s.photon_cache = v->photons; /* photon mode: its maps built once, not every pass */
     if (mode == VIEW_PREVIEW) {
         /* The first hit's AOVs are the preview; one bounce of path tracing is the
          * cheapest integrator that records them. */
@@ -368,6 +384,57 @@ static void view_preview_pixel(const View *v, int x, int y, float rgb[3])
     for (int c = 0; c < 3; c++) rgb[c] = (float)(a[c] * inv * cosv);
 }
 
+/* The photon positions from the cache, again after each (re)build. */
+static void view_photons_fetch(View *v)
+{
+    int builds = cst_photon_cache_builds(v->photons);
+    if (builds == v->photon_fetched) return;
+    for (int m = 0; m < 2; m++) {
+        size_t n = cst_photon_cache_positions(v->photons, m, NULL, 0);
+        float *xyz = n ? malloc(3 * n * sizeof *xyz) : NULL;
+        free(v->photon_xyz[m]);
+        v->photon_xyz[m] = xyz;
+        v->photon_n[m] = xyz ? cst_photon_cache_positions(v->photons, m, xyz, n) : 0;
+    }
+    v->photon_fetched = builds;
+}
+
+/* Key o in the photon mode: the photons as points over img (w x h x 3), projected through
+ * the camera (the pinhole of a thin lens; the pixel whose centre ray is nearest), the
+ * global map's in orange, the caustic map's over them in cyan, each colour times k (so
+ * that it shows as that colour after the display exposure). At most one global photon
+ * in VIEW_PHOTON_EVERY pixels' worth is drawn (a stride through the map) so the image
+ * stays visible under 200,000 of them; every caustic photon is. */
+#define VIEW_PHOTON_EVERY 4
+static void view_photon_points(View *v, float *img, float k)
+{
+    static const float COLOURS[2][3] = {{1.0f, 0.55f, 0.1f}, {0.2f, 0.8f, 1.0f}};
+    if (!v->show_photons || v->mode != VIEW_PHOTON || v->error_view || v->spp == 0) return;
+    view_photons_fetch(v);
+    double f[3], r[3], u[3];
+    view_frame(&v->cam, f, r, u);
+    const bool ortho = v->cam.type == CST_CAMERA_ORTHOGRAPHIC;
+    const double aspect = (double)v->w / v->h, sx = v->cam.mirror ? -1.0 : 1.0;
+    const double half_h = ortho ? 0.5 * (double)v->cam.height : tan((double)v->cam.fov * VIEW_PI / 360.0);
+    for (int m = 0; m < 2; m++) {
+        size_t n = v->photon_n[m], cap = (size_t)v->w * (size_t)v->h / VIEW_PHOTON_EVERY + 1;
+        size_t stride = m == 0 && n > cap ? n / cap : 1;
+        for (size_t i = 0; i < n; i += stride) {
+            const float *p = &v->photon_xyz[m][3 * i];
+            double d[3] = {(double)p[0] - (double)v->cam.position[0], (double)p[1] - (double)v->cam.position[1],
+                           (double)p[2] - (double)v->cam.position[2]};
+            double z = v3_dot(d, f);
+            if (!(z > 0.0)) continue; /* behind the camera */
+            double a = v3_dot(d, r) / (ortho ? 1.0 : z), b = v3_dot(d, u) / (ortho ? 1.0 : z);
+            /* The inverse of the pixel centre ray of view_preview_pixel. */
+            double x = (a * sx / (half_h * aspect) + 1.0) * 0.5 * v->w, y = (1.0 - b / half_h) * 0.5 * v->h;
+            if (!(x >= 0.0 && x < v->w && y >= 0.0 && y < v->h)) continue;
+            float *o = &img[3 * ((size_t)y * (size_t)v->w + (size_t)x)];
+            for (int c = 0; c < 3; c++) o[c] = COLOURS[m][c] * k;
+        }
+    }
+}
+
 /* Fills v->linear with what the mode shows (before the display exposure). */
 static void view_compose(View *v)
 {
@@ -411,6 +478,7 @@ static void view_present(View *v)
     v->shown_dirty = false;
     view_compose(v);
     const float scale = (float)(v->error_view ? 1.0 : exp2(v->exposure));
+    view_photon_points(v, v->linear, 1.0f / scale);
     size_t n = (size_t)v->w * (size_t)v->h;
     for (size_t i = 0; i < n; i++) {
         uint32_t px = 0xff000000u;
@@ -435,7 +503,100 @@ static void view_present(View *v)
     }
 }
 
+/* ------------------------------------------------------------ click focus */
+
+static CstStatus view_pick_crop_error(CstError *err)
+{
+    snprintf(err->msg, sizeof err->msg, "the pick's film is not the one pixel cropped");
+    return CST_ERR_INVALID_ARG;
+}
+
+/* A click at film pixel (x, y): asks for a pick, made by view_focus_pick once no pass is
+ * running (the current one is cancelled: the scene's camera cannot change during a render). */
+static void view_click(View *v, int x, int y)
+{
+    if (x < 0 || y < 0 || x >= v->w || y >= v->h) return;
+    v->focus_pending = true;
+    v->focus_x = x;
+    v->focus_y = y;
+    v->dirty = true;
+}
+
+/* The thin lens's plane of focus through what pixel (x, y) sees: the first hit's depth
+ * along the view axis (the plane of focus is perpendicular to it: camera.c), from the depth
+ * AOV of a one-pixel crop rendered through the pinhole of the same camera (the pixel's
+ * rays, not the lens's: 4 samples, their hits' mean depth). Nothing hit, or an orthographic
+ * camera: the focus stays, with a message. Always followed by view_restart. */
+static void view_focus_pick(View *v)
+{
+    const int x = v->focus_x, y = v->focus_y;
+    v->focus_pending = false;
+    if (v->cam.type == CST_CAMERA_ORTHOGRAPHIC) {
+        printf("view: click (%d, %d): an orthographic camera has no focus\n", x, y);
+        fflush(stdout);
+        return;
+    }
+    CstCameraDesc pin = v->cam;
+    pin.aperture_radius = 0.0f;
+    pin.focus_distance = 0.0f;
+    CstError err = {0};
+    CstRenderSettings s = view_pass_settings(v, false);
+    s.integrator = CST_INTEGRATOR_PATH;
+    s.max_depth = 1;
+    s.aovs = CST_AOV_DEPTH;
+    s.spp = 4;
+    s.first_sample = 0;
+    s.crop[0] = x, s.crop[1] = x + 1, s.crop[2] = y, s.crop[3] = y + 1;
+    s.progress = NULL;
+    s.progress_user = NULL;
+    CstFilm *film = NULL;
+    CstRenderStats st = {0};
+    float d = 0.0f; /* the film holds the crop only: its one pixel */
+    CstStatus status = cst_scene_set_camera(v->scene, &pin, &err);
+    if (status == CST_OK) status = cst_render(v->scene, &s, &film, &st, &err);
+    if (status == CST_ERR_NONFINITE) status = CST_OK;
+    if (status == CST_OK && (cst_film_width(film) != 1 || cst_film_height(film) != 1))
+        status = view_pick_crop_error(&err);
+    if (status == CST_OK) status = cst_film_aov_pixels(film, CST_AOV_DEPTH, &d, &err);
+    cst_film_destroy(film);
+    if (status != CST_OK) {
+        fprintf(stderr, "caustic: view: click (%d, %d): %s\n", x, y, err.msg);
+    } else if (!(isfinite(d) && d > 0.0f)) {
+        printf("view: click (%d, %d): nothing there; the focus stays\n", x, y);
+    } else {
+        v->cam.focus_distance = d;
+        printf("view: focus distance %.9g (click at %d, %d)%s\n", (double)d, x, y,
+               v->cam.aperture_radius > 0.0f ? "" : " (a pinhole: sharp at every distance)");
+    }
+    fflush(stdout);
+    v->dirty = true; /* view_restart sets the camera back (with its new focus) */
+}
+
 /* ------------------------------------------------------------ saving, camera JSON */
+
+/* The shown image, w x h x 3 floats: linear (for EXR, PFM and the tev stream) the mode's
+ * means times the render's 2^exposure (the preview and error views as shown), else times
+ * the display exposure (what the window shows before the sRGB curve). */
+static void view_image(View *v, float *img, bool linear)
+{
+    size_t n = (size_t)v->w * (size_t)v->h;
+    view_compose(v);
+    bool raw = v->spp > 0 && !v->error_view && v->mode != VIEW_PREVIEW;
+    double scale = linear ? (raw ? v->out_exposure : 1.0) : (v->error_view ? 1.0 : exp2(v->exposure));
+    for (size_t i = 0; i < n; i++) {
+        if (raw) view_mean(v, i, scale, &img[3 * i]);
+        else for (int c = 0; c < 3; c++) img[3 * i + (size_t)c] = (float)((double)v->linear[3 * i + (size_t)c] * scale);
+    }
+}
+
+/* --display: the linear image to tev after each pass (what `save x.exr` would write). */
+static void view_stream(View *v)
+{
+    if (!cli_tev_connected(v->tev)) return;
+    if (!v->tev_rgb && !(v->tev_rgb = malloc((size_t)v->w * (size_t)v->h * 3 * sizeof *v->tev_rgb))) return;
+    view_image(v, v->tev_rgb, true);
+    cli_tev_send(v->tev, v->tev_rgb, v->w, v->h);
+}
 
 /* The shown image to path: EXR and PFM linear (the mode's means times the render's
  * exposure, as `caustic render` writes them; the preview and error views as shown), PNG
@@ -450,14 +611,9 @@ static bool view_save(View *v, const char *path)
     size_t n = (size_t)v->w * (size_t)v->h;
     float *img = malloc(n * 3 * sizeof *img);
     if (!img) return false;
-    view_compose(v);
     bool linear = cst_image_path_is_exr(path) || !cli_has_suffix(path, ".png");
-    bool raw = v->spp > 0 && !v->error_view && v->mode != VIEW_PREVIEW;
-    double scale = linear ? (raw ? v->out_exposure : 1.0) : (v->error_view ? 1.0 : exp2(v->exposure));
-    for (size_t i = 0; i < n; i++) {
-        if (raw) view_mean(v, i, scale, &img[3 * i]);
-        else for (int c = 0; c < 3; c++) img[3 * i + (size_t)c] = (float)((double)v->linear[3 * i + (size_t)c] * scale);
-    }
+    view_image(v, img, linear);
+    if (!linear) view_photon_points(v, img, 1.0f); /* a PNG is what the window shows */
     CstStatus st = cst_image_write(path, img, v->w, v->h, &err);
     free(img);
     if (st != CST_OK) {
@@ -470,29 +626,67 @@ static bool view_save(View *v, const char *path)
     return true;
 }
 
-/* The camera as the JSON scene format's "camera" section (docs/scene-format.md). */
-static void view_print_camera(const View *v)
+/* The camera as the JSON scene format's "camera" section (docs/scene-format.md), on f.
+ * %.9g: every float reads back as the same float. */
+static void view_write_camera(const View *v, FILE *f)
 {
     const CstCameraDesc *c = &v->cam;
     const char *type = c->type == CST_CAMERA_ORTHOGRAPHIC ? "orthographic"
                        : c->aperture_radius > 0.0f      ? "thinlens" : "pinhole";
-    printf("\"camera\": {\"type\": \"%s\", \"position\": [%.9g, %.9g, %.9g], \"look_at\": [%.9g, %.9g, %.9g], "
+    fprintf(f, "\"camera\": {\"type\": \"%s\", \"position\": [%.9g, %.9g, %.9g], \"look_at\": [%.9g, %.9g, %.9g], "
            "\"up\": [%.9g, %.9g, %.9g]", type, (double)c->position[0], (double)c->position[1],
            (double)c->position[2], (double)c->look_at[0], (double)c->look_at[1], (double)c->look_at[2],
            (double)c->up[0], (double)c->up[1], (double)c->up[2]);
-    if (c->type == CST_CAMERA_ORTHOGRAPHIC) printf(", \"height\": %.9g", (double)c->height);
-    else printf(", \"fov\": %.9g", (double)c->fov);
+    if (c->type == CST_CAMERA_ORTHOGRAPHIC) fprintf(f, ", \"height\": %.9g", (double)c->height);
+    else fprintf(f, ", \"fov\": %.9g", (double)c->fov);
     if (c->aperture_radius > 0.0f)
-        printf(", \"aperture_radius\": %.9g, \"focus_distance\": %.9g", (double)c->aperture_radius,
-               (double)c->focus_distance);
-    printf("}\n");
+        fprintf(f, ", \"aperture_radius\": %.9g, \"focus_distance\": %.9g", (double)c->aperture_radius,
+                (double)c->focus_distance);
+    fprintf(f, "}");
+}
+
+/* The camera to path as a JSON object {"camera": {...}}: a scene file's camera section,
+ * to paste into the scene (or merge with a script). Written to path.tmp, then renamed. */
+static bool view_save_camera(const View *v, const char *path)
+{
+    char tmp[4096];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "w");
+    bool ok = f != NULL;
+    if (ok) {
+        fprintf(f, "{");
+        view_write_camera(v, f);
+        fprintf(f, "}\n");
+        ok = !ferror(f);
+        ok = fclose(f) == 0 && ok;
+        ok = ok && rename(tmp, path) == 0;
+        if (!ok) remove(tmp);
+    }
+    if (!ok) {
+        fprintf(stderr, "caustic: error: view: writing the camera to '%s': %s\n", path, strerror(errno));
+        return false;
+    }
+    printf("view: camera saved %s\n", path);
     fflush(stdout);
+    return true;
+}
+
+/* The c key: the camera on stdout, and to caustic-view-camera-NNN.json. */
+static void view_print_camera(View *v)
+{
+    view_write_camera(v, stdout);
+    printf("\n");
+    fflush(stdout);
+    char name[64];
+    snprintf(name, sizeof name, "caustic-view-camera-%03d.json", v->cameras++);
+    view_save_camera(v, name);
 }
 
 static void view_status(const View *v)
 {
-    printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f\n", VIEW_MODE_NAMES[v->mode],
-           v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms);
+    printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f photon_maps_built %d\n", VIEW_MODE_NAMES[v->mode],
+           v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms,
+           cst_photon_cache_builds(v->photons));
     fflush(stdout);
 }
 
@@ -537,6 +731,7 @@ static void view_key(View *v, SDL_Keycode key)
         break;
     }
     case 'c': view_print_camera(v); break;
+    case 'o': v->show_photons = !v->show_photons; v->shown_dirty = true; break;
     case 'q': case SDLK_ESCAPE: v->quit = true; break;
     default: break;
     }
@@ -552,9 +747,23 @@ static void view_event(View *v, const SDL_Event *e)
         view_key(v, k);
         break;
     }
+    case SDL_MOUSEBUTTONDOWN:
+        if (e->button.button == SDL_BUTTON_LEFT) v->press = true, v->press_moved = false;
+        break;
+    case SDL_MOUSEBUTTONUP:
+        /* A left click without a drag: the focus there (the window may show the film scaled). */
+        if (e->button.button == SDL_BUTTON_LEFT && v->press && !v->press_moved) {
+            int ww = 1, wh = 1;
+            SDL_GetWindowSize(v->win, &ww, &wh);
+            view_click(v, (int)((double)e->button.x * v->w / (ww > 0 ? ww : 1)),
+                       (int)((double)e->button.y * v->h / (wh > 0 ? wh : 1)));
+        }
+        if (e->button.button == SDL_BUTTON_LEFT) v->press = false;
+        break;
     case SDL_MOUSEMOTION: {
         uint32_t b = e->motion.state;
         bool shift = (SDL_GetModState() & KMOD_SHIFT) != 0;
+        if (b & SDL_BUTTON_LMASK) v->press_moved = true;
         if ((b & SDL_BUTTON_MMASK) || ((b & SDL_BUTTON_LMASK) && shift)) view_pan(v, e->motion.xrel, e->motion.yrel);
         else if (b & SDL_BUTTON_LMASK) view_orbit(v, e->motion.xrel, e->motion.yrel);
         break;
@@ -597,6 +806,13 @@ static void view_script_step(View *v)
         case VIEW_SCRIPT_DOLLY: view_dolly(v, c->a); break;
         case VIEW_SCRIPT_STATUS: view_status(v); break;
         case VIEW_SCRIPT_QUIT: v->quit = true; break;
+        case VIEW_SCRIPT_CLICK: view_click(v, (int)c->a, (int)c->b); break;
+        case VIEW_SCRIPT_CAMERA:
+            if (!view_save_camera(v, c->path)) {
+                v->exit_code = CLI_EXIT_INTERNAL;
+                v->quit = true;
+            }
+            break;
         case VIEW_SCRIPT_WAIT_SPP: break;
         }
         if (v->dirty) return; /* the restart comes before the next command: `status` sees it */
@@ -673,6 +889,8 @@ static void view_step(View *v)
     } else if (!view_accumulate(v, film, &stats)) {
         snprintf(v->fail_msg, sizeof v->fail_msg, "out of memory");
         v->failed = true;
+    } else {
+        view_stream(v);
     }
     cst_film_destroy(film);
 }
@@ -681,6 +899,7 @@ static void view_loop(View *v)
 {
     while (!v->quit) {
         view_poll(v);
+        if (v->focus_pending && !v->quit) view_focus_pick(v);
         if (v->dirty) view_restart(v);
         if (v->quit) break;
         bool done = v->failed || (v->max_spp > 0 && v->spp >= v->max_spp && !v->low_pending);
@@ -729,6 +948,11 @@ static void view_close(View *v)
     free(v->low);
     free(v->argb);
     free(v->linear);
+    free(v->tev_rgb);
+    cli_tev_destroy(v->tev);
+    free(v->photon_xyz[0]);
+    free(v->photon_xyz[1]);
+    cst_photon_cache_destroy(v->photons); /* before the scene (cli_view) */
     view_script_free(&v->script);
 }
 
@@ -764,7 +988,8 @@ static int view_init(View *v, const CliArgs *a)
     v->low = calloc(3 * (size_t)v->lw * (size_t)v->lh, sizeof *v->low);
     v->argb = calloc(n, sizeof *v->argb);
     v->linear = calloc(3 * n, sizeof *v->linear);
-    if (!v->sum || !v->sum_sq || !v->aov || !v->low || !v->argb || !v->linear) {
+    v->photons = cst_photon_cache_create();
+    if (!v->sum || !v->sum_sq || !v->aov || !v->low || !v->argb || !v->linear || !v->photons) {
         fprintf(stderr, "caustic: error: view: out of memory for a %dx%d image\n", v->w, v->h);
         return CLI_EXIT_INTERNAL;
     }
@@ -773,6 +998,10 @@ static int view_init(View *v, const CliArgs *a)
         v->srgb_lut[k] = (uint8_t)(s * 255.0 + 0.5);
     }
     v->dirty = true;
+    if (a->display && !(v->tev = cli_tev_create(a->display_host, a->display_port, "caustic view"))) {
+        fprintf(stderr, "caustic: error: view: out of memory for --display\n");
+        return CLI_EXIT_INTERNAL;
+    }
     return CLI_EXIT_OK;
 }
 

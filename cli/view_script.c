@@ -18,9 +18,10 @@ static const struct { const char *name; ViewScriptOp op; int args; } SCRIPT_OPS[
     {"save", VIEW_SCRIPT_SAVE, 1},     {"orbit", VIEW_SCRIPT_ORBIT, 2},
     {"pan", VIEW_SCRIPT_PAN, 2},       {"dolly", VIEW_SCRIPT_DOLLY, 1},
     {"status", VIEW_SCRIPT_STATUS, 0}, {"quit", VIEW_SCRIPT_QUIT, 0},
+    {"click", VIEW_SCRIPT_CLICK, 2},   {"camera", VIEW_SCRIPT_CAMERA, 1},
 };
 #define SCRIPT_NUM_OPS (sizeof SCRIPT_OPS / sizeof SCRIPT_OPS[0])
-#define SCRIPT_OP_NAMES "key, wait-spp, save, orbit, pan, dolly, status, quit"
+#define SCRIPT_OP_NAMES "key, wait-spp, save, orbit, pan, dolly, status, quit, click, camera"
 
 static bool script_fail(char *msg, size_t size, const char *path, int line, int col, const char *fmt, ...)
 {
@@ -96,6 +97,7 @@ static bool script_parse_line(char *line, const char *path, int lineno, ViewScri
                                "samples per pixel, 1 to 1e9", tok[1]);
         return true;
     case VIEW_SCRIPT_SAVE:
+    case VIEW_SCRIPT_CAMERA:
         if (!(cmd->path = strdup(tok[1])))
             return script_fail(msg, size, path, lineno, col[1], "out of memory");
         return true;
@@ -106,6 +108,13 @@ static bool script_parse_line(char *line, const char *path, int lineno, ViewScri
             if (!script_number(tok[i], i == 1 ? &cmd->a : &cmd->b) || fabs(i == 1 ? cmd->a : cmd->b) > 1e6)
                 return script_fail(msg, size, path, lineno, col[i], "%s '%s': expected a number of pixels "
                                    "(wheel steps for dolly) within 1e6", tok[0], tok[i]);
+        return true;
+    case VIEW_SCRIPT_CLICK:
+        for (int i = 1; i < n; i++)
+            if (!script_number(tok[i], i == 1 ? &cmd->a : &cmd->b) || (i == 1 ? cmd->a : cmd->b) < 0.0 ||
+                (i == 1 ? cmd->a : cmd->b) > 65536.0 || (i == 1 ? cmd->a : cmd->b) != floor(i == 1 ? cmd->a : cmd->b))
+                return script_fail(msg, size, path, lineno, col[i], "click '%s': expected a pixel coordinate, "
+                                   "a whole number from 0 (left or top)", tok[i]);
         return true;
     case VIEW_SCRIPT_STATUS:
     case VIEW_SCRIPT_QUIT:

@@ -856,11 +856,33 @@ typedef struct CstRenderSettings {
      * carries state from iteration to iteration and refuses a first_sample > 0
      * (CST_ERR_UNSUPPORTED). Not a scene setting. */
     int first_sample;
+    /* The photon integrator's maps kept from one render to the next (cst_photon_cache_create):
+     * NULL = built for every render (the default). With a cache, a render of the same scene
+     * with the same photons, max_depth, rr_depth and seed reuses the maps the cache holds
+     * (the automatic radius is still chosen from this render's camera), so the image is bit
+     * for bit the one without a cache: how `caustic view` refines its photon mode pass by
+     * pass and across camera moves without tracing the photons again. Another scene or
+     * other settings rebuild them. One render at a time per cache. Not a scene setting. */
+    struct CstPhotonCache *photon_cache;
 } CstRenderSettings;
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit
  * (required), as many samples (iterations, passes) as fit in it. Resolves to spp 0. */
 #define CST_SPP_UNLIMITED (-1)
+
+/* Photon maps between renders (CstRenderSettings.photon_cache). A new, empty cache, or NULL
+ * on OOM; cst_photon_cache_destroy frees it (and accepts NULL). Destroy it before the scene
+ * its maps were built from (it remembers that scene by its address). */
+typedef struct CstPhotonCache CstPhotonCache;
+CST_API CstPhotonCache *cst_photon_cache_create(void);
+CST_API void cst_photon_cache_destroy(CstPhotonCache *cache);
+/* The positions (world space, x y z per photon) of the global map's photons (caustic 0:
+ * every stored photon, paths L (S|D)* D) or the caustic map's (caustic 1: paths L S+ D),
+ * at most max of them into xyz (may be NULL with max 0). Returns how many the map holds
+ * (0 for an empty cache). */
+CST_API size_t cst_photon_cache_positions(const CstPhotonCache *cache, int caustic, float *xyz, size_t max);
+/* How many times the cache's maps were built (a render that reused them does not count). */
+CST_API int cst_photon_cache_builds(const CstPhotonCache *cache);
 
 /* Photon paths the photon integrator emits when the settings leave photons unset. */
 #define CST_DEFAULT_PHOTONS 200000
@@ -934,6 +956,10 @@ CST_API void cst_film_pixel_variance(const CstFilm *film, int x, int y, double v
  * width * height * 3 floats, rows from the top, R, G, B per pixel: cst_film_pixel's means
  * rounded to float (the stored means; exposure applies only when the film is written). */
 CST_API void cst_film_pixels(const CstFilm *film, float *rgb_out);
+/* The same layout, as cst_film_write writes them to a float image (EXR, PFM): the means
+ * scaled by the render's 2^exposure and white balanced, so a stream of the film (caustic
+ * render --display tev) holds bit for bit the floats of the written EXR. */
+CST_API void cst_film_output_pixels(const CstFilm *film, float *rgb_out);
 /* The same layout for cst_film_pixel_variance's variances of the means. */
 CST_API void cst_film_variances(const CstFilm *film, float *var_out);
 /* One first-hit AOV of a film rendered with it (CstRenderSettings.aovs), every pixel, rows

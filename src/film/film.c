@@ -213,6 +213,20 @@ CstStatus cst_film_write(const CstFilm *f, const char *path, CstError *err)
     return cst_film_write_opt(f, path, NULL, err);
 }
 
+void cst_film_output_pixels(const CstFilm *f, float *rgb_out)
+{
+    size_t pixels = (size_t)f->width * (size_t)f->height;
+    film_resolve(f, rgb_out);
+    if (f->exposure_scale != 1.0)
+        for (size_t i = 0; i < 3 * pixels; i++) rgb_out[i] = (float)((double)rgb_out[i] * f->exposure_scale);
+    if (f->white_balanced)
+        for (size_t i = 0; i < pixels; i++) {
+            const double (*m)[3] = f->white_balance;
+            double r = (double)rgb_out[3 * i], g = (double)rgb_out[3 * i + 1], b = (double)rgb_out[3 * i + 2];
+            for (int c = 0; c < 3; c++) rgb_out[3 * i + c] = (float)(m[c][0] * r + m[c][1] * g + m[c][2] * b);
+        }
+}
+
 CstStatus cst_film_write_opt(const CstFilm *f, const char *path, const CstImageWriteOptions *options,
                              CstError *err)
 {
@@ -230,15 +244,7 @@ CstStatus cst_film_write_opt(const CstFilm *f, const char *path, const CstImageW
         free(aux);
         return cst_fail(err, CST_ERR_OOM, "out of memory resolving the film");
     }
-    film_resolve(f, rgb);
-    if (f->exposure_scale != 1.0)
-        for (size_t i = 0; i < 3 * pixels; i++) rgb[i] = (float)((double)rgb[i] * f->exposure_scale);
-    if (f->white_balanced)
-        for (size_t i = 0; i < pixels; i++) {
-            const double (*m)[3] = f->white_balance;
-            double r = (double)rgb[3 * i], g = (double)rgb[3 * i + 1], b = (double)rgb[3 * i + 2];
-            for (int c = 0; c < 3; c++) rgb[3 * i + c] = (float)(m[c][0] * r + m[c][1] * g + m[c][2] * b);
-        }
+    cst_film_output_pixels(f, rgb);
     for (size_t i = 0; extra > 0 && i < pixels; i++) film_aov_pixel(f, i, aux + i * (size_t)extra);
     ImageWriteOptions opt = {f->png_linear != 0, extra, names, aux, options};
     CstStatus st = image_write_opt(path, rgb, f->width, f->height, &opt, err);

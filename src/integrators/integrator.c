@@ -548,7 +548,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         if (rs != CST_OK) return rs;
         PhotonParams pp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->seed,
                            progress, progress_user};
-        return photon_maps_build(scene, &it->camera, &pp, &it->photon, rays, err);
+        return photon_maps_build_cached(st->photon_cache, scene, &it->camera, &pp, &it->photon,
+                                        &it->photon_borrowed, rays, err);
     }
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_BIDIR: return light_prepare(it, st, err);
@@ -583,7 +584,9 @@ void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfini
 void integrator_destroy(Integrator *it)
 {
     switch (it->kind) {
-    case INTEGRATOR_PHOTON: photon_maps_free(&it->photon); break;
+    case INTEGRATOR_PHOTON:
+        if (!it->photon_borrowed) photon_maps_free(&it->photon);
+        break;
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_BIDIR: light_free(&it->light); break;
     case INTEGRATOR_SPPM: sppm_destroy(it->sppm); it->sppm = NULL; break;

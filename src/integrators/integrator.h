@@ -118,10 +118,11 @@ typedef struct Integrator {
     int pass_first, pass_count, iteration, step;
     /* camera tiles: the samples [tile_first, tile_first + tile_spp) of every pixel */
     int tile_first, tile_spp;
+    bool photon_borrowed; /* photon: the maps are CstRenderSettings.photon_cache's */
     union {
         PathParams path;
         WhittedParams whitted;
-        PhotonMaps photon;    /* built once by prepare */
+        PhotonMaps photon;    /* built once by prepare (or borrowed: photon_borrowed) */
         LightIterations light; /* INTEGRATOR_LIGHT and INTEGRATOR_BIDIR */
         Sppm *sppm;
     };

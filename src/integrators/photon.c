@@ -302,3 +302,65 @@ done:
     if (st != CST_OK) photon_maps_free(out);
     return st;
 }
+
+/* ------------------------------------------------------------ the cache between renders */
+
+/* The cache: the maps of one build and what they were built from. */
+struct CstPhotonCache {
+    bool valid;
+    const Scene *scene;
+    int photons, max_depth, rr_depth;
+    uint64_t seed;
+    int builds;
+    PhotonMaps maps; /* radius: the build's, not used (each render chooses its own) */
+};
+
+CstPhotonCache *cst_photon_cache_create(void) { return calloc(1, sizeof(CstPhotonCache)); }
+
+void cst_photon_cache_destroy(CstPhotonCache *c)
+{
+    if (!c) return;
+    photon_maps_free(&c->maps);
+    free(c);
+}
+
+size_t cst_photon_cache_positions(const CstPhotonCache *c, int caustic, float *xyz, size_t max)
+{
+    if (!c || !c->valid) return 0;
+    const PhotonMap *m = caustic ? &c->maps.caustic : &c->maps.global;
+    for (size_t i = 0; i < m->count && i < max; i++) {
+        xyz[3 * i] = m->photons[i].pos.x;
+        xyz[3 * i + 1] = m->photons[i].pos.y;
+        xyz[3 * i + 2] = m->photons[i].pos.z;
+    }
+    return m->count;
+}
+
+int cst_photon_cache_builds(const CstPhotonCache *c) { return c ? c->builds : 0; }
+
+CstStatus photon_maps_build_cached(CstPhotonCache *c, const Scene *s, const Camera *cam, const PhotonParams *pp,
+                                   PhotonMaps *out, bool *borrowed, uint64_t *rays, CstError *err)
+{
+    *borrowed = false;
+    if (!c) return photon_maps_build(s, cam, pp, out, rays, err);
+    const bool same = c->valid && c->scene == s && c->photons == pp->photons && c->max_depth == pp->max_depth &&
+                      c->rr_depth == pp->rr_depth && c->seed == pp->seed;
+    if (!same) {
+        photon_maps_free(&c->maps);
+        c->valid = false;
+        CstStatus st = photon_maps_build(s, cam, pp, &c->maps, rays, err);
+        if (st != CST_OK) return st;
+        c->valid = true;
+        c->scene = s;
+        c->photons = pp->photons;
+        c->max_depth = pp->max_depth;
+        c->rr_depth = pp->rr_depth;
+        c->seed = pp->seed;
+        c->builds++;
+    }
+    *out = c->maps;
+    *borrowed = true;
+    /* The radius as photon_maps_build picks it, from this render's camera. */
+    out->radius = pp->radius > 0.0f ? pp->radius : auto_radius(s, cam, pp, &out->global, rays);
+    return CST_OK;
+}

@@ -70,6 +70,15 @@ CstStatus photon_maps_build(const Scene *scene, const Camera *cam, const PhotonP
 /* Accepts NULL and a zeroed struct. */
 void photon_maps_free(PhotonMaps *maps);
 
+/* photon_maps_build through a cache (CstRenderSettings.photon_cache; NULL: a plain build,
+ * *borrowed false). With one, *out borrows the cache's maps (*borrowed true: not for
+ * photon_maps_free) and only the radius is this render's: the given one, or the automatic
+ * one from cam, exactly as photon_maps_build chooses it. The maps are rebuilt when scene,
+ * photons, max_depth, rr_depth or seed differ from the cached build's. */
+CstStatus photon_maps_build_cached(struct CstPhotonCache *cache, const Scene *scene, const Camera *cam,
+                                   const PhotonParams *pp, PhotonMaps *out, bool *borrowed, uint64_t *rays,
+                                   CstError *err);
+
 /* Radiance arriving along `ray` (toward its origin): emission seen directly or through
  * delta bounces, NEE, the caustic map and one final-gather ray at the first non-delta hit.
  * No allocation; safe from many threads on one committed scene and built maps. */

@@ -762,8 +762,8 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
     if (setting_set(r->threads, 0) || r->progress || r->progress_user || setting_set(r->first_sample, 1))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: threads, progress, progress_user and first_sample belong "
                         "to a render, not to a scene; expected them unset (cst_render_settings_init)", fn);
-    if (r->resume || r->pass_done || r->pass_user)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: resume, pass_done and pass_user belong to a render, "
+    if (r->resume || r->pass_done || r->pass_user || r->photon_cache)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: resume, pass_done, pass_user and photon_cache belong to a render, "
                         "not to a scene; expected them NULL (cst_render_settings_init)", fn);
     const int ints[] = {r->width, r->height, r->spp, r->rr_depth, r->photons};
     static const char *const names[] = {"width", "height", "spp", "rr_depth", "photons"};

@@ -146,6 +146,98 @@ assert cam["type"] == "pinhole" and len(cam["position"]) == 3 and cam["fov"] > 0
 EOF
 then pass "view: the printed camera is valid JSON"; else fail "view: the printed camera is valid JSON"; fi
 
+# ------------------------------------------------------------ click focus, camera JSON
+# A thin lens (cornell-spheres.json: aperture 8, focus 1000): a click on the back wall moves
+# the plane of focus there, restarts the accumulation and changes the image; the camera
+# written after it, merged into the scene, renders the view's image bit for bit.
+dir=$TMP/focus
+cat >"$TMP/focus.txt" <<'EOF2'
+orbit 12 -6
+wait-spp 2
+save before.exr
+click 48 30
+status
+wait-spp 2
+status
+save after.exr
+camera cam.json
+key c
+click 0 95
+status
+quit
+EOF2
+view "$dir" 300 "$SRC/scenes/cornell-spheres.json" "${SIZE[@]}" --integrator path --script "$TMP/focus.txt"
+HARNESS_EXPECT_STDOUT=1 expect "view: the click script runs" 0 "view: focus distance [0-9.e+]+ \(click at 48, 30\)" \
+    "view: camera saved cam.json" "view: camera saved caustic-view-camera-000.json"
+check "view: a click restarts the accumulation (spp 0, then 2)" eval \
+    "grep '^view: mode' '$OUT' | sed -n 1,2p | tr '\n' '|' | grep -Eq '^view: mode path spp 0 .*\|view: mode path spp 2 '"
+check "view: the click changes the image" eval "! '$BIN' compare '$dir/before.exr' '$dir/after.exr' --json | grep -q '\"rmse\":0.0,'"
+check "view: the focus is the back wall's depth (about 800 + 559 along the axis, within the box)" python3 - "$OUT" <<'EOF2'
+import re, sys
+d = float(re.search(r"focus distance ([0-9.e+]+)", open(sys.argv[1]).read()).group(1))
+sys.exit(0 if 900.0 < d < 1500.0 else 1)
+EOF2
+check "view: c writes the same camera as the camera command" cmp "$dir/cam.json" "$dir/caustic-view-camera-000.json"
+if python3 - "$SRC/scenes/cornell-spheres.json" "$dir/cam.json" "$dir/scene.json" <<'EOF2'
+import json, sys
+scene = json.load(open(sys.argv[1]))
+cam = json.load(open(sys.argv[2]))["camera"]
+assert cam["type"] == "thinlens" and cam["focus_distance"] != 1000
+scene["camera"] = cam
+json.dump(scene, open(sys.argv[3], "w"))
+EOF2
+then
+    harness_run "$dir" 300 render scene.json "${SIZE[@]}" --integrator path --spp 2 -q -o ref.exr
+    if [ "$RC" -eq 0 ]; then same "view: the written camera renders the view's image bit for bit" "$dir/after.exr" "$dir/ref.exr"
+    else fail "view: render of the written camera"; fi
+else
+    fail "view: the written camera is a thinlens camera section with the clicked focus" "$(cat "$dir/cam.json")"
+fi
+
+# ------------------------------------------------------------ photon mode: maps kept, points
+# The maps are built once (status: photon_maps_built 1) and reused by every pass and after
+# an orbit, each image still equal to a render's bit for bit (the orbit's: its automatic
+# radius from the new camera); key o draws the photons over the shown image (PNG), not
+# into the linear EXR.
+dir=$TMP/photon
+cat >"$TMP/photon.txt" <<'EOF2'
+wait-spp 2
+status
+save p2.exr
+save nopoints.png
+key o
+save points.png
+save points.exr
+orbit 20 -4
+wait-spp 2
+status
+save orbit.exr
+camera cam.json
+quit
+EOF2
+view "$dir" 300 "$SRC/scenes/cornell-box.json" "${SIZE[@]}" --integrator photon --script "$TMP/photon.txt"
+HARNESS_EXPECT_STDOUT=1 expect "view: the photon script runs" 0 "saved orbit.exr"
+check "view: photon maps built once for two passes, an orbit and two more" eval \
+    "test \$(grep -c '^view: mode photon spp 2 .* photon_maps_built 1\$' '$OUT') -eq 2"
+check "view: key o draws the photons (the PNG changes)" eval \
+    "! '$BIN' compare '$dir/nopoints.png' '$dir/points.png' --json | grep -q '\"rmse\":0.0,'"
+same "view: the photons are not drawn into the linear EXR" "$dir/p2.exr" "$dir/points.exr"
+harness_run "$dir" 300 render "$SRC/scenes/cornell-box.json" "${SIZE[@]}" --integrator photon --spp 2 -q -o ref2.exr
+same "view: photon with kept maps equals render --spp 2 bit for bit" "$dir/p2.exr" "$dir/ref2.exr"
+if python3 - "$SRC/scenes/cornell-box.json" "$dir/cam.json" "$dir/scene.json" <<'EOF2'
+import json, sys
+scene = json.load(open(sys.argv[1]))
+scene["camera"] = json.load(open(sys.argv[2]))["camera"]
+json.dump(scene, open(sys.argv[3], "w"))
+EOF2
+then
+    harness_run "$dir" 300 render scene.json "${SIZE[@]}" --integrator photon --spp 2 -q -o ref-orbit.exr
+    same "view: photon after an orbit (maps kept, radius from the new camera) equals render bit for bit" \
+        "$dir/orbit.exr" "$dir/ref-orbit.exr"
+else
+    fail "view: the photon run's camera file" "$(cat "$dir/cam.json")"
+fi
+
 # ------------------------------------------------------------ --spp stops refining
 dir=$TMP/limit
 printf 'wait-spp 2\nstatus\nquit\n' >"$TMP/limit.txt"

@@ -2,7 +2,8 @@
  * [first_sample, first_sample + spp) (CstRenderSettings.first_sample), one-sample renders
  * of consecutive ranges summing bit for bit to the render of the whole range for every
  * integrator that allows it; the camera read back (cst_scene_camera) and moved after
- * commit; the first-hit AOVs read from a film (cst_film_aov_pixels). */
+ * commit; the first-hit AOVs read from a film (cst_film_aov_pixels); the photon maps kept
+ * between renders (CstRenderSettings.photon_cache). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -193,6 +194,84 @@ static void test_film_aov_pixels(void **state)
     cst_scene_destroy(s);
 }
 
+/* The photon cache: renders through it equal renders without it bit for bit (the first,
+ * which builds the maps, a later pass reusing them, and one after a camera move, whose
+ * automatic radius follows the new camera); one build for all of them, another for a new
+ * seed; the positions read back; a scene refuses it as a setting. */
+static CstFilm *render_cached(const CstScene *s, CstPhotonCache *cache, int first, uint64_t seed)
+{
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = W, st.height = H, st.threads = 2, st.spp = 1, st.first_sample = first;
+    st.integrator = CST_INTEGRATOR_PHOTON;
+    st.photons = 20000;
+    st.seed = seed, st.seed_set = 1;
+    st.photon_cache = cache;
+    CstFilm *film = NULL;
+    CstError e = {0};
+    ok(cst_render(s, &st, &film, NULL, &e), &e);
+    return film;
+}
+
+static void assert_same_film(const CstFilm *a, const CstFilm *b)
+{
+    float *pa = malloc(3 * W * H * sizeof *pa), *pb = malloc(3 * W * H * sizeof *pb);
+    assert_non_null(pa);
+    assert_non_null(pb);
+    cst_film_pixels(a, pa);
+    cst_film_pixels(b, pb);
+    assert_memory_equal(pa, pb, 3 * W * H * sizeof *pa);
+    free(pa);
+    free(pb);
+}
+
+static void test_photon_cache(void **state)
+{
+    (void)state;
+    CstScene *s = cornell();
+    CstPhotonCache *cache = cst_photon_cache_create();
+    assert_non_null(cache);
+    assert_int_equal(cst_photon_cache_builds(cache), 0);
+    assert_int_equal(cst_photon_cache_positions(cache, 0, NULL, 0), 0);
+    for (int first = 0; first < 2; first++) {
+        CstFilm *a = render_cached(s, cache, first, 7), *b = render_cached(s, NULL, first, 7);
+        assert_same_film(a, b);
+        cst_film_destroy(a);
+        cst_film_destroy(b);
+    }
+    assert_int_equal(cst_photon_cache_builds(cache), 1);
+    CstCameraDesc cam;
+    cst_scene_camera(s, &cam);
+    cam.position[0] += 60.0f;
+    CstError e = {0};
+    ok(cst_scene_set_camera(s, &cam, &e), &e);
+    CstFilm *a = render_cached(s, cache, 0, 7), *b = render_cached(s, NULL, 0, 7);
+    assert_same_film(a, b);
+    cst_film_destroy(a);
+    cst_film_destroy(b);
+    assert_int_equal(cst_photon_cache_builds(cache), 1);
+    cst_film_destroy(render_cached(s, cache, 0, 8)); /* another seed: other photons */
+    assert_int_equal(cst_photon_cache_builds(cache), 2);
+    size_t n = cst_photon_cache_positions(cache, 0, NULL, 0), nc = cst_photon_cache_positions(cache, 1, NULL, 0);
+    assert_true(n > 10000 && nc <= n); /* the caustic map: a subset (empty in the diffuse box) */
+    float *xyz = malloc(3 * n * sizeof *xyz);
+    assert_non_null(xyz);
+    assert_int_equal(cst_photon_cache_positions(cache, 0, xyz, n), n);
+    for (size_t i = 0; i < 3 * n; i++) assert_true(isfinite(xyz[i]));
+    free(xyz);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.photon_cache = cache;
+    CstScene *fresh = NULL;
+    ok(cst_scene_create(&fresh, &e), &e);
+    assert_int_equal(cst_scene_set_render_settings(fresh, &st, &e), CST_ERR_INVALID_ARG);
+    if (!strstr(e.msg, "photon_cache")) fail_msg("%s", e.msg);
+    cst_scene_destroy(fresh);
+    cst_photon_cache_destroy(cache);
+    cst_photon_cache_destroy(NULL);
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -200,6 +279,7 @@ int main(void)
         cmocka_unit_test(test_first_sample_rejected),
         cmocka_unit_test(test_camera_after_commit),
         cmocka_unit_test(test_film_aov_pixels),
+        cmocka_unit_test(test_photon_cache),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
