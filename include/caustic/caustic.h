@@ -861,7 +861,7 @@ typedef struct CstRenderSettings {
     int first_sample;
     /* Metropolis light transport (pssmlt; docs/integrators.md). spp is the mutations per
      * pixel. mlt_large_step: the probability of a large step (a fresh path), in [0, 1];
-     * default 0.3. mlt_sigma: the width of a small step in primary sample space, in
+     * default 0.3 (0 is a value: a zero-initialised struct asks for small steps only). mlt_sigma: the width of a small step in primary sample space, in
      * (0, 1]; default 0.01. mlt_bootstrap: the paths that estimate the normalisation b and
      * seed the chains, > 0; default 100000. mlt_chains: independent Markov chains, > 0;
      * default 1000 (fewer than the pixels: as many as the pixels). */
