@@ -87,7 +87,8 @@ static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ra
         return bdpt_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
                                  &cont, wl, &w->rays);
     case INTEGRATOR_LIGHT:
-    case INTEGRATOR_SPPM: break;
+    case INTEGRATOR_SPPM:
+    case INTEGRATOR_PSSMLT: break;
     }
     return color_s(0.0f);
 }
@@ -262,7 +263,8 @@ static void light_merge_band(void *ctx, int unit, int worker)
     LightIterations *L = &it->light;
     const SplatFrame *fr = &L->params.frame;
     const size_t pixels = (size_t)fr->width * (size_t)fr->height;
-    const double scale = (double)pixels / (double)L->light_paths;
+    const double scale = it->kind == INTEGRATOR_PSSMLT ? mlt_splat_scale(it->mlt)
+                                                       : (double)pixels / (double)L->light_paths;
     size_t lo = (size_t)unit * (size_t)fr->band_rows * (size_t)fr->width;
     size_t hi = lo + (size_t)fr->band_rows * (size_t)fr->width;
     if (hi > pixels) hi = pixels;
@@ -277,7 +279,7 @@ static void light_merge_band(void *ctx, int unit, int worker)
 /* Per-render buffers of the light iterations: a splat list per chunk, sized for a few
  * connections per path (they grow if a scene needs more, then stay), the iteration image,
  * and for BDPT/VCM the per-path vertex counts. Returns 0 on OOM. */
-static int light_alloc(Integrator *it)
+static int light_alloc(Integrator *it, size_t splat_cap)
 {
     LightIterations *L = &it->light;
     size_t pixels = (size_t)it->film->width * (size_t)it->film->height;
@@ -287,7 +289,7 @@ static int light_alloc(Integrator *it)
     if (!L->iteration_rgb || !L->chunks) return 0;
     memset(L->chunks, 0, (size_t)L->num_chunks * sizeof *L->chunks);
     for (int c = 0; c < L->num_chunks; c++)
-        if (!splat_list_init(&L->chunks[c].splats, 4 * (size_t)LIGHT_CHUNK)) return 0;
+        if (!splat_list_init(&L->chunks[c].splats, splat_cap)) return 0;
     if (it->kind == INTEGRATOR_BIDIR) {
         L->path_count = calloc(pixels, sizeof *L->path_count);
         L->path_start = calloc(pixels + 1, sizeof *L->path_start);
@@ -365,9 +367,75 @@ static CstStatus light_prepare(Integrator *it, const CstRenderSettings *st, CstE
     L->num_chunks = (L->light_paths + LIGHT_CHUNK - 1) / LIGHT_CHUNK;
     L->params.frame = L->vcm_params.frame = splat_frame(st->width, st->height, st->filter);
     L->params.frame.clamp = L->vcm_params.frame.clamp = it->clamp;
-    if (!light_alloc(it))
+    if (!light_alloc(it, 4 * (size_t)LIGHT_CHUNK))
         return cst_fail(err, CST_ERR_OOM, "out of memory for light-tracing buffers (%dx%d)", st->width, st->height);
     return CST_OK;
+}
+
+/* Metropolis light transport (mlt.h) on the light tracer's splat machinery: one chunk per
+ * chain, so the splats are merged in chain order, whatever thread ran which chain. */
+static CstStatus mlt_prepare(Integrator *it, const CstRenderSettings *st, CstError *err)
+{
+    LightIterations *L = &it->light;
+    if (!(st->mlt_large_step >= 0.0 && st->mlt_large_step <= 1.0) || !(st->mlt_sigma > 0.0 && st->mlt_sigma <= 1.0) ||
+        st->mlt_bootstrap < 1 || st->mlt_chains < 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "MLT settings: large step probability %g (expected [0, 1]), sigma %g "
+                        "(expected (0, 1]), bootstrap %d and chains %d (expected > 0)", st->mlt_large_step,
+                        st->mlt_sigma, st->mlt_bootstrap, st->mlt_chains);
+    size_t pixels = (size_t)st->width * (size_t)st->height;
+    if (pixels > (size_t)INT32_MAX)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "image size %dx%d: too many pixels for MLT", st->width, st->height);
+    MltParams p = {0};
+    p.path.mode = PATH_MIS;
+    p.path.max_depth = st->max_depth;
+    p.path.rr_depth = st->rr_depth;
+    p.path.regularize = st->regularize == 1;
+    p.width = st->width;
+    p.height = st->height;
+    p.margin = filter_radius(st->filter) - 0.5f;
+    p.large_step_prob = (float)st->mlt_large_step;
+    p.sigma = st->mlt_sigma;
+    p.bootstrap = st->mlt_bootstrap;
+    /* At least one mutation per chain per iteration. */
+    p.chains = (size_t)st->mlt_chains < pixels ? st->mlt_chains : (int)pixels;
+    p.seed = st->seed;
+    p.spectral = it->spectral;
+    if (!(it->mlt = mlt_create(&p)))
+        return cst_fail(err, CST_ERR_OOM, "out of memory for %d MLT chains and %d bootstrap paths", p.chains,
+                        p.bootstrap);
+    L->light_paths = (int)pixels;
+    L->num_chunks = p.chains;
+    L->params.frame = splat_frame(st->width, st->height, st->filter);
+    L->params.frame.clamp = it->clamp;
+    /* A proposal and a current-state splat per mutation. */
+    if (!light_alloc(it, 2 * (size_t)mlt_chain_mutations(it->mlt, 0) + 16))
+        return cst_fail(err, CST_ERR_OOM, "out of memory for MLT buffers (%dx%d)", st->width, st->height);
+    return CST_OK;
+}
+
+static void mlt_boot_step(void *ctx, int item, int worker)
+{
+    Integrator *it = ctx;
+    IntegratorWorker *w = &it->workers[worker];
+    mlt_bootstrap_item(it->mlt, it->scene, &it->camera, item, &w->rays, &w->nonfinite);
+}
+
+static void mlt_start_step(void *ctx, int chain, int worker)
+{
+    Integrator *it = ctx;
+    IntegratorWorker *w = &it->workers[worker];
+    mlt_chain_start(it->mlt, it->scene, &it->camera, chain, &w->rays, &w->nonfinite);
+}
+
+static void mlt_chain_step(void *ctx, int chain, int worker)
+{
+    Integrator *it = ctx;
+    IntegratorWorker *w = &it->workers[worker];
+    SplatList *out = &it->light.chunks[chain].splats;
+    out->n = 0;
+    mlt_chain_run(it->mlt, it->scene, &it->camera, chain, mlt_chain_mutations(it->mlt, chain), out,
+                  &it->light.params.frame, &w->rays, &w->nonfinite);
+    splat_list_bin(out, &it->light.params.frame); /* sets out->oom on failure, checked after the step */
 }
 
 /* ------------------------------------------------------------------------ steps */
@@ -445,6 +513,30 @@ static CstStatus iteration_step(Integrator *it, IntegratorStep *step, double lo,
             default: return CST_OK;
             }
         }
+    case INTEGRATOR_PSSMLT:
+        for (;;) {
+            switch (it->step++) {
+            case 0: /* once per render, before the first iteration: the bootstrap */
+                if (it->mlt->ready) continue;
+                set_step(step, (it->mlt->p.bootstrap + MLT_BOOTSTRAP_CHUNK - 1) / MLT_BOOTSTRAP_CHUNK, mlt_boot_step,
+                         it, lo, lo, true);
+                return CST_OK;
+            case 1: /* and the chains' starts */
+                if (it->mlt->ready) continue;
+                mlt_bootstrap_finish(it->mlt);
+                it->mlt->ready = true;
+                set_step(step, it->mlt->p.chains, mlt_start_step, it, lo, lo, true);
+                return CST_OK;
+            case 2:
+                set_step(step, it->mlt->p.chains, mlt_chain_step, it, lo, hi, true);
+                return CST_OK;
+            case 3:
+                if ((st = splats_lost(it, err)) != CST_OK) return st;
+                set_step(step, L->params.frame.bands, light_merge_band, it, hi, hi, true);
+                return CST_OK;
+            default: return CST_OK;
+            }
+        }
     case INTEGRATOR_SPPM:
         while (it->step < SPPM_PHASES) {
             int p = it->step++;
@@ -495,6 +587,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     case CST_INTEGRATOR_BDPT:
     case CST_INTEGRATOR_VCM: it->kind = INTEGRATOR_BIDIR; break;
     case CST_INTEGRATOR_SPPM: it->kind = INTEGRATOR_SPPM; break;
+    case CST_INTEGRATOR_PSSMLT: it->kind = INTEGRATOR_PSSMLT; break;
     case CST_INTEGRATOR_PATH:
     case CST_INTEGRATOR_PATH_NEE:
     case CST_INTEGRATOR_PATH_BSDF:
@@ -518,7 +611,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
-    if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH)
+    /* MLT's target is path_li's estimate, media included (volpath_li reads the same Sampler). */
+    if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH && it->kind != INTEGRATOR_PSSMLT)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
                         "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
@@ -553,6 +647,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     }
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_BIDIR: return light_prepare(it, st, err);
+    case INTEGRATOR_PSSMLT: return mlt_prepare(it, st, err);
     case INTEGRATOR_SPPM: {
         /* spp is the iteration count; photons reach each visible point in photon order
          * whatever the thread count (sppm.c). */
@@ -577,7 +672,8 @@ void integrator_finish(Integrator *it, int samples)
 void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfinite)
 {
     if (it->kind == INTEGRATOR_SPPM && it->sppm) sppm_counters(it->sppm, rays, nonfinite);
-    if ((it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR) && it->light.chunks)
+    if ((it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR || it->kind == INTEGRATOR_PSSMLT) &&
+        it->light.chunks)
         for (int c = 0; c < it->light.num_chunks; c++) *nonfinite += it->light.chunks[c].splats.nonfinite;
 }
 
@@ -590,6 +686,11 @@ void integrator_destroy(Integrator *it)
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_BIDIR: light_free(&it->light); break;
     case INTEGRATOR_SPPM: sppm_destroy(it->sppm); it->sppm = NULL; break;
+    case INTEGRATOR_PSSMLT:
+        light_free(&it->light);
+        mlt_destroy(it->mlt);
+        it->mlt = NULL;
+        break;
     case INTEGRATOR_PATH:
     case INTEGRATOR_WHITTED: break;
     }
@@ -604,7 +705,7 @@ static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] =
     {"light", CST_INTEGRATOR_LIGHT},     {"lighttracing", CST_INTEGRATOR_LIGHT},
     {"whitted", CST_INTEGRATOR_WHITTED}, {"photon", CST_INTEGRATOR_PHOTON},
     {"sppm", CST_INTEGRATOR_SPPM},       {"bdpt", CST_INTEGRATOR_BDPT},
-    {"vcm", CST_INTEGRATOR_VCM},
+    {"vcm", CST_INTEGRATOR_VCM},         {"pssmlt", CST_INTEGRATOR_PSSMLT},
 };
 
 CstIntegrator cst_integrator_from_name(const char *name)
@@ -626,6 +727,7 @@ const char *cst_integrator_name(CstIntegrator integrator)
     case CST_INTEGRATOR_SPPM: return "sppm";
     case CST_INTEGRATOR_BDPT: return "bdpt";
     case CST_INTEGRATOR_VCM: return "vcm";
+    case CST_INTEGRATOR_PSSMLT: return "pssmlt";
     case CST_INTEGRATOR_DEFAULT: break;
     }
     return "default";

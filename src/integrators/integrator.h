@@ -14,6 +14,7 @@
 #include "film/filter.h"
 #include "integrators/bdpt.h"
 #include "integrators/light.h"
+#include "integrators/mlt.h"
 #include "integrators/path.h"
 #include "integrators/photon.h"
 #include "integrators/sppm.h"
@@ -31,7 +32,10 @@ typedef enum IntegratorKind {
     INTEGRATOR_LIGHT,   /* iterations: light-path chunks, then the splat merge */
     INTEGRATOR_BIDIR,   /* BDPT and VCM iterations: light chunks, vertex gather (and the
                          * merging grid), camera tiles, merge */
-    INTEGRATOR_SPPM     /* iterations of sppm.c's phases; the film written by finish */
+    INTEGRATOR_SPPM,    /* iterations of sppm.c's phases; the film written by finish */
+    INTEGRATOR_PSSMLT   /* MLT (mlt.h): the bootstrap and the chains' starts once, then
+                         * iterations of chain steps (width x height mutations in all) and
+                         * the splat merge of the light tracer, chains for chunks */
 } IntegratorKind;
 
 /* Per pool worker: integer counters, summed in any order. The padding keeps neighbouring
@@ -119,11 +123,12 @@ typedef struct Integrator {
     /* camera tiles: the samples [tile_first, tile_first + tile_spp) of every pixel */
     int tile_first, tile_spp;
     bool photon_borrowed; /* photon: the maps are CstRenderSettings.photon_cache's */
+    Mlt *mlt;             /* INTEGRATOR_PSSMLT (its splats in `light`'s chunks) */
     union {
         PathParams path;
         WhittedParams whitted;
         PhotonMaps photon;    /* built once by prepare (or borrowed: photon_borrowed) */
-        LightIterations light; /* INTEGRATOR_LIGHT and INTEGRATOR_BIDIR */
+        LightIterations light; /* INTEGRATOR_LIGHT, INTEGRATOR_BIDIR and INTEGRATOR_PSSMLT */
         Sppm *sppm;
     };
 } Integrator;

@@ -15,8 +15,9 @@
 
 int cst_integrator_resumable(CstIntegrator integrator)
 {
-    /* SPPM's state is its visible points' radii, photon counts and flux, not film sums. */
-    return integrator != CST_INTEGRATOR_SPPM;
+    /* SPPM's state is its visible points' radii, photon counts and flux, MLT's its chains,
+     * not film sums. */
+    return integrator != CST_INTEGRATOR_SPPM && integrator != CST_INTEGRATOR_PSSMLT;
 }
 
 typedef struct KeyBuilder {

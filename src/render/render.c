@@ -179,7 +179,7 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     uint64_t per_pixel = 6 * sizeof(double); /* film_create: sum and sum of squares */
     if (st.aovs & FILM_AOV_FIRST_HIT) per_pixel += FILM_AOV_STRIDE * sizeof(double);
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
-        st.integrator == CST_INTEGRATOR_VCM)
+        st.integrator == CST_INTEGRATOR_VCM || st.integrator == CST_INTEGRATOR_PSSMLT)
         per_pixel += 3 * sizeof(double); /* the iteration's image */
     uint64_t bytes = pixels * per_pixel;
     if (crop != pixels) bytes += crop * (6 + ((st.aovs & FILM_AOV_FIRST_HIT) ? FILM_AOV_STRIDE : 0)) * sizeof(double);
@@ -202,7 +202,8 @@ static void fill_stats(CstRenderStats *stats, const CstRenderSettings *st, const
     /* Light tracing traces width x height light paths per iteration, whatever the crop
      * (and BDPT/VCM as many light paths as there are pixels, SPPM as many visible
      * points); camera passes cover the crop. */
-    bool whole = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR || it->kind == INTEGRATOR_SPPM;
+    bool whole = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR || it->kind == INTEGRATOR_SPPM ||
+                 it->kind == INTEGRATOR_PSSMLT;
     uint64_t per_spp = whole ? (uint64_t)st->width * (uint64_t)st->height : (uint64_t)cw * (uint64_t)ch;
     stats->samples = (uint64_t)(samples - first) * per_spp;
     stats->first_spp = first;
@@ -235,6 +236,9 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     if (st.first_sample > 0 && st.integrator == CST_INTEGRATOR_SPPM)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "first_sample %d: SPPM's iterations depend on every one "
                         "before them (radii, flux); expected first_sample 0 for sppm", st.first_sample);
+    if (st.first_sample > 0 && st.integrator == CST_INTEGRATOR_PSSMLT)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "first_sample %d: MLT's mutations continue its chains from "
+                        "every one before them; expected first_sample 0 for pssmlt", st.first_sample);
     if (!(0 <= st.crop[0] && st.crop[0] < st.crop[1] && st.crop[1] <= st.width && 0 <= st.crop[2] &&
           st.crop[2] < st.crop[3] && st.crop[3] <= st.height))
         return cst_fail(err, CST_ERR_INVALID_ARG,
@@ -248,7 +252,8 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "parallel, so no light path can connect to it); expected a pinhole or thin-lens "
                         "camera, or another integrator");
     if ((st.aovs & FILM_AOV_FIRST_HIT) &&
-        (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_SPPM))
+        (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_SPPM ||
+         st.integrator == CST_INTEGRATOR_PSSMLT))
         return cst_fail(err, CST_ERR_UNSUPPORTED,
                         "the albedo, normal and depth AOVs come from camera rays, which the %s integrator "
                         "does not trace; expected path, path-nee, path-bsdf, whitted, photon, bdpt or vcm "

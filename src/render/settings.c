@@ -15,6 +15,8 @@ void cst_render_settings_init(CstRenderSettings *s)
     s->white_balance = CST_UNSET;
     for (int k = 0; k < 4; k++) s->crop[k] = CST_UNSET;
     s->first_sample = CST_UNSET;
+    s->mlt_large_step = s->mlt_sigma = CST_UNSET;
+    s->mlt_bootstrap = s->mlt_chains = CST_UNSET;
 }
 
 /* Whether a field holds a value. Fields where 0 means nothing (sizes, counts, radii, the
@@ -48,6 +50,10 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(color_mode, 1, CST_COLOR_RGB);
     PICK_DBL(max_component, 1, 0.0);          /* 0 = no clamp */
     PICK_INT(regularize, 0, 0);
+    PICK_DBL(mlt_large_step, 0, 0.3);         /* pbrt-v4's MLT defaults */
+    PICK_DBL(mlt_sigma, 1, 0.01);
+    PICK_INT(mlt_bootstrap, 1, 100000);
+    PICK_INT(mlt_chains, 1, 1000);
     /* The photon integrator builds its maps once per render, so no per-pass wavelengths
      * can be shared by photons and camera paths: it transports RGB in either mode (the
      * settings, and so the output's metadata, say so). */

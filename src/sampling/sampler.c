@@ -141,9 +141,10 @@ void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t i
     s->key = mix64(mix64(u->seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
 }
 
-/* Stratified or Sobol' only: sampler_1d/2d (sampler.h) draw the independent ones inline. */
+/* Stratified, Sobol' or PSS only: sampler_1d/2d (sampler.h) draw the independent ones inline. */
 float sampler_1d_ld(Sampler *s)
 {
+    if (s->type == SAMPLER_PSS) return pss_next(s->pss);
     uint64_t h = dim_key(s);
     s->dim++;
     if (s->type == CST_SAMPLER_STRATIFIED) {
@@ -159,6 +160,11 @@ float sampler_1d_ld(Sampler *s)
 
 Vec2 sampler_2d_ld(Sampler *s)
 {
+    if (s->type == SAMPLER_PSS) { /* x first, then y: two coordinates of the chain's stream */
+        float x = pss_next(s->pss);
+        float y = pss_next(s->pss);
+        return v2(x, y);
+    }
     uint64_t h = dim_key(s);
     s->dim += 2;
     if (s->type == CST_SAMPLER_STRATIFIED) {

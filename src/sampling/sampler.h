@@ -10,6 +10,11 @@
 #include "caustic/caustic.h"
 #include "core/rng.h"
 #include "math/vec3.h"
+#include "sampling/pss_sampler.h"
+
+/* The type of a Sampler that reads a Metropolis chain's primary sample space (pss, below):
+ * not a CstSampler a user can pick, so outside that enum's values. */
+#define SAMPLER_PSS ((CstSampler)0x100)
 
 typedef struct Sampler {
     /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index) for every type.
@@ -23,6 +28,7 @@ typedef struct Sampler {
     uint32_t spp;      /* stratified: the sample count the strata divide; 0 = unknown */
     uint32_t nx;       /* stratified: 2D strata are nx x (spp / nx) */
     uint64_t key;      /* hash of (seed, pixel): seeds every per-dimension scramble */
+    PssSampler *pss;   /* SAMPLER_PSS: the chain's state every draw reads (MLT) */
 } Sampler;
 
 /* What every camera sample of a render shares: the sampler type, the seed and the sample
@@ -58,10 +64,18 @@ static inline void sampler_start_stream(Sampler *s, uint64_t seed, uint64_t a, u
  * stream, whatever the sampler (their strategies are not stratified). */
 static inline Sampler sampler_continue(Pcg32 rng)
 {
-    Sampler s = {rng, CST_SAMPLER_INDEPENDENT, 0, 0, 0, 1, 0};
+    Sampler s = {rng, CST_SAMPLER_INDEPENDENT, 0, 0, 0, 1, 0, NULL};
     return s;
 }
-/* The stratified and Sobol' draws (sampler.c); sampler_1d/2d call them. */
+/* A sampler whose every draw is the next value of the chain's current stream: how the
+ * path tracer's estimate runs over MLT's primary sample space (integrators/mlt.c). Draws
+ * take the slow branch of sampler_1d/2d, so the other samplers' inline path is unchanged. */
+static inline Sampler sampler_pss(PssSampler *pss)
+{
+    Sampler s = {{0, 1}, SAMPLER_PSS, 0, 0, 0, 1, 0, pss};
+    return s;
+}
+/* The stratified, Sobol' and primary-sample-space draws (sampler.c); sampler_1d/2d call them. */
 float sampler_1d_ld(Sampler *s);
 Vec2 sampler_2d_ld(Sampler *s);
 

@@ -781,7 +781,7 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
     if (setting_set(r->max_component, 1) && !(r->max_component > 0.0 && r->max_component <= (double)FLT_MAX))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: max_component %g; expected a number > 0 (0 = no clamp)", fn,
                         r->max_component);
-    if ((int)r->integrator < CST_INTEGRATOR_DEFAULT || r->integrator > CST_INTEGRATOR_VCM ||
+    if ((int)r->integrator < CST_INTEGRATOR_DEFAULT || r->integrator > CST_INTEGRATOR_PSSMLT ||
         (int)r->filter < CST_FILTER_DEFAULT || r->filter > CST_FILTER_MITCHELL ||
         (int)r->sampler < CST_SAMPLER_DEFAULT || r->sampler > CST_SAMPLER_SOBOL)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: integrator %d, filter %d or sampler %d is not one of the "
@@ -795,6 +795,14 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
                         "in (0, 1e6], or 0 for none", fn, r->white_balance);
     if (setting_set(r->regularize, 0) && r->regularize != 0 && r->regularize != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: regularize %d; expected 0 or 1", fn, r->regularize);
+    if (setting_set(r->mlt_large_step, 0) && !(r->mlt_large_step >= 0.0 && r->mlt_large_step <= 1.0))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mlt_large_step %g; expected a probability in [0, 1]", fn,
+                        r->mlt_large_step);
+    if (setting_set(r->mlt_sigma, 1) && !(r->mlt_sigma > 0.0 && r->mlt_sigma <= 1.0))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mlt_sigma %g; expected a width in (0, 1]", fn, r->mlt_sigma);
+    if ((setting_set(r->mlt_bootstrap, 1) && r->mlt_bootstrap < 1) || (setting_set(r->mlt_chains, 1) && r->mlt_chains < 1))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: mlt_bootstrap %d, mlt_chains %d; expected counts > 0", fn,
+                        r->mlt_bootstrap, r->mlt_chains);
     if (setting_set(r->png_linear, 0) && r->png_linear != 0 && r->png_linear != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: png_linear %d; expected 0 or 1", fn, r->png_linear);
     if (setting_set(r->aovs, 0) && (r->aovs & ~(CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH | CST_AOV_VARIANCE)))
@@ -835,6 +843,10 @@ CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings
     SETTING_MERGE(max_component, 1);
     SETTING_MERGE(regularize, 0);
     SETTING_MERGE(white_balance, 1);
+    SETTING_MERGE(mlt_large_step, 0);
+    SETTING_MERGE(mlt_sigma, 1);
+    SETTING_MERGE(mlt_bootstrap, 1);
+    SETTING_MERGE(mlt_chains, 1);
     if (r->seed_set) { sc->seed = r->seed; sc->seed_set = 1; }
     if (r->exposure_set) { sc->exposure = r->exposure; sc->exposure_set = 1; }
     if (r->crop[0] != CST_UNSET) memcpy(sc->crop, r->crop, sizeof sc->crop);

@@ -245,16 +245,65 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
     return set_camera(ld, &desc, CST_CAMERA_PERSPECTIVE);
 }
 
+/* Metropolis light transport's parameters (pssmlt; ignored by the other integrators, but
+ * mutations_per_pixel, which sets spp, only with an MLT type). */
+static CstStatus parse_mlt(Loader *ld, const json_t *integ)
+{
+    CstRenderSettings *rs = &ld->settings;
+    json_t *v;
+    json_int_t i = 0;
+    if ((v = json_object_get(integ, "mutations_per_pixel"))) {
+        json_path_push_key(ld, "mutations_per_pixel");
+        if (rs->integrator != CST_INTEGRATOR_PSSMLT)
+            return json_fail_here(ld, "mutations_per_pixel is the sample count of MLT; expected it with type "
+                                      "\"pssmlt\" (use the film's spp otherwise)");
+        LOADER_TRY(json_read_int(ld, v, 1, INT_MAX, &i));
+        rs->spp = (int)i;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "large_step_probability"))) {
+        float f = 0.0f;
+        json_path_push_key(ld, "large_step_probability");
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &f));
+        if (!(f >= 0.0f && f <= 1.0f)) return json_fail_here(ld, "large_step_probability %g; expected a probability in [0, 1]", (double)f);
+        rs->mlt_large_step = (double)f;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "sigma"))) {
+        float f = 0.0f;
+        json_path_push_key(ld, "sigma");
+        LOADER_TRY(json_read_float(ld, v, (double)FLT_MAX, &f));
+        if (!(f > 0.0f && f <= 1.0f)) return json_fail_here(ld, "sigma %g; expected a small-step width in (0, 1]", (double)f);
+        rs->mlt_sigma = (double)f;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "bootstrap_samples"))) {
+        json_path_push_key(ld, "bootstrap_samples");
+        LOADER_TRY(json_read_int(ld, v, 1, 1 << 28, &i));
+        rs->mlt_bootstrap = (int)i;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "chains"))) {
+        json_path_push_key(ld, "chains");
+        LOADER_TRY(json_read_int(ld, v, 1, 1 << 24, &i));
+        rs->mlt_chains = (int)i;
+        json_path_pop(ld);
+    }
+    return CST_OK;
+}
+
 CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 {
     static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius", "color",
-                                       "light_sampler", "regularize", "light_sampling"};
+                                       "light_sampler", "regularize", "light_sampling", "mutations_per_pixel",
+                                       "large_step_probability", "sigma", "bootstrap_samples", "chains"};
     CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
     LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius, color, light_sampling, "
-                                             "light_sampler, regularize"));
-    LOADER_TRY(json_check_keys(ld, integ, keys, 9));
+                                             "light_sampler, regularize, mutations_per_pixel, large_step_probability, "
+                                             "sigma, bootstrap_samples, chains"));
+    LOADER_TRY(json_check_keys(ld, integ, keys, 14));
     if ((v = json_object_get(integ, "regularize"))) {
         int reg = 0;
         json_path_push_key(ld, "regularize");
@@ -310,12 +359,13 @@ CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
         if (t == CST_INTEGRATOR_DEFAULT) {
             char name[72];
             return json_fail_here(ld, "unknown integrator \"%s\"; expected one of: path, path-nee, "
-                                      "path-bsdf, light, whitted, photon, sppm, bdpt, vcm",
+                                      "path-bsdf, light, whitted, photon, sppm, bdpt, vcm, pssmlt",
                                   json_clip_name(s, name));
         }
         rs->integrator = t;
         json_path_pop(ld);
     }
+    LOADER_TRY(parse_mlt(ld, integ));
     if ((v = json_object_get(integ, "max_depth"))) {
         json_path_push_key(ld, "max_depth");
         LOADER_TRY(json_read_int(ld, v, 0, INT_MAX, &i)); /* 0 = unbounded */

@@ -172,7 +172,7 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
         {"simplepath", CST_INTEGRATOR_PATH_NEE, 0}, {"randomwalk", CST_INTEGRATOR_PATH_BSDF, 0},
         {"lightpath", CST_INTEGRATOR_LIGHT, 1}, {"sppm", CST_INTEGRATOR_SPPM, 1},
         {"whitted", CST_INTEGRATOR_WHITTED, 1}, {"bdpt", CST_INTEGRATOR_BDPT, 1},
-        {"mlt", CST_INTEGRATOR_PATH, 0}, {"simplevolpath", CST_INTEGRATOR_PATH, 0},
+        {"mlt", CST_INTEGRATOR_PSSMLT, 0}, {"simplevolpath", CST_INTEGRATOR_PATH, 0},
         {"directlighting", CST_INTEGRATOR_PATH, 0}, {"ambientocclusion", CST_INTEGRATOR_PATH, 0},
         {"aov", CST_INTEGRATOR_PATH, 0}};
     int k = -1;
@@ -231,6 +231,28 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
         int iters = 0;
         TRY(pbrt_get_int(ld, ps, d, "iterations", 0, &iters));
         if (iters > 0) rs->spp = iters;
+    }
+    if (map[k].ours == CST_INTEGRATOR_PSSMLT) {
+        /* pbrt-v4's MLTIntegrator parameters, its defaults; mutationsperpixel, when given, is
+         * the sample count (else the Sampler's pixelsamples, whichever directive comes first) */
+        int mpp = -1, boot = 100000, chains = 1000;
+        float lsp = 0.3f, sigma = 0.01f;
+        TRY(pbrt_get_int(ld, ps, d, "mutationsperpixel", -1, &mpp));
+        TRY(pbrt_get_int(ld, ps, d, "bootstrapsamples", 100000, &boot));
+        TRY(pbrt_get_int(ld, ps, d, "chains", 1000, &chains));
+        TRY(pbrt_get_float(ld, ps, d, "largestepprobability", 0.3f, &lsp, NULL));
+        TRY(pbrt_get_float(ld, ps, d, "sigma", 0.01f, &sigma, NULL));
+        if ((mpp < 1 && mpp != -1) || boot < 1 || chains < 1 || boot > (1 << 28) || chains > (1 << 24) || !(lsp >= 0.0f && lsp <= 1.0f) ||
+            !(sigma > 0.0f && sigma <= 1.0f))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: mutationsperpixel %d, bootstrapsamples %d, chains %d, "
+                                "largestepprobability %g, sigma %g; expected counts >= 1 (bootstrapsamples at most "
+                                "2^28, chains 2^24), a probability in [0, 1] and a sigma in (0, 1]",
+                                d, mpp, boot, chains, (double)lsp, (double)sigma);
+        if (mpp > 0) rs->spp = mpp;
+        rs->mlt_bootstrap = boot;
+        rs->mlt_chains = chains;
+        rs->mlt_large_step = (double)lsp;
+        rs->mlt_sigma = (double)sigma;
     }
     if (strcmp(type, "ambientocclusion") == 0 || strcmp(type, "aov") == 0) {
         pbrt_params_mark_all_used(ps);
