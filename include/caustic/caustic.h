@@ -478,7 +478,8 @@ typedef struct CstShapeDesc {
     int reverse_orientation; /* flips the normal (pbrt's ReverseOrientation) */
     float world_from_object[12]; /* 3 x 4 row-major affine, as cst_scene_add_instance; all 0: identity */
     int material;
-    CstEmission emission;    /* must be zero: emitting analytic shapes are not supported yet */
+    CstEmission emission;    /* zero: none; else an area light sampled by area, which needs a
+                              * similarity world_from_object (CST_ERR_UNSUPPORTED otherwise) */
     CstAlpha alpha;          /* over the shape's uvs; zero: opaque */
 } CstShapeDesc;
 /* u = phi / phi_max; v along z (cylinder, sphere) or from the rim inward (disk), as pbrt-v4.

@@ -360,6 +360,21 @@ float shape_area(const AnalyticShape *s)
     return (float)(object_area(s) * area_factor(s, n));
 }
 
+bool shape_uniform_area(const AnalyticShape *s)
+{
+    /* M^T M = k^2 I for a similarity: the columns orthogonal and of one length. */
+    double g[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            g[i][j] = s->o2w[0][i] * s->o2w[0][j] + s->o2w[1][i] * s->o2w[1][j] + s->o2w[2][i] * s->o2w[2][j];
+    double k2 = (g[0][0] + g[1][1] + g[2][2]) / 3.0;
+    if (!(k2 > 0.0) || !isfinite(k2)) return false;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (fabs(g[i][j] - (i == j ? k2 : 0.0)) > 1e-5 * k2) return false;
+    return true;
+}
+
 void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float *pdf_a)
 {
     const ShapeParams *p = &s->p;

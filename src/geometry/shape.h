@@ -76,6 +76,11 @@ void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out);
  * uniform; shape_sample_area reports the true pdf of what it draws). */
 float shape_area(const AnalyticShape *s);
 
+/* Whether the object-to-world map is a similarity (rotation, mirror, uniform scale, to a
+ * relative 1e-5): then shape_sample_area is uniform by world area, its pdf_a the constant
+ * 1 / shape_area, which area lights need (emitting shapes must pass this). */
+bool shape_uniform_area(const AnalyticShape *s);
+
 /* A point by area (pbrt-v4 Cylinder/Disk/Sphere::Sample(u)): cylinders uniform in (phi, z),
  * disks by the concentric map restricted to the annulus (uniform in area), spheres
  * uniform in (phi, z) (Archimedes: uniform in area). *pdf_a per world area at the point,

@@ -182,9 +182,11 @@ CstStatus scene_add_mesh_ex(Scene *scene, const SceneMesh *mesh, int *num_droppe
  * texture coordinates (0,0), (1,0), (1,1), (0,1) at v0..v3. */
 CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);
-/* A non-emitting analytic shape (shape_init's parameters and transform). */
+/* An analytic shape (shape_init's parameters and transform); emission NULL or black for
+ * none. An emitting one is an area light sampled uniformly by area and needs a similarity
+ * transform (shape_uniform_area; CST_ERR_UNSUPPORTED otherwise). */
 CstStatus scene_add_shape(Scene *scene, const ShapeParams *p, const Transform *object_to_world, int material,
-                          int alpha, CstError *err);
+                          const Emission *emission, int alpha, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err);
 /* An alpha cut-out for shapes added after it (SceneMesh.alpha, the last sphere's
@@ -679,7 +681,7 @@ static inline Color scene_env_radiance(const Scene *s, Vec3 w, const Wavelengths
 static inline EmitterGeometry scene_emitter_geometry(const Scene *s)
 {
     EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres,
-                         s->uvs, s->tri_has_uv, s->textures};
+                         s->uvs, s->tri_has_uv, s->textures, s->num_spheres, s->shapes};
     return g;
 }
 

@@ -699,10 +699,9 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     if (d->material < 0 || d->material >= scene->num_materials)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
                         fn, d->material, scene->num_materials - 1);
-    const CstEmission zero = {0};
-    if (memcmp(&d->emission, &zero, sizeof zero) != 0)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: emitting analytic shapes are not supported yet; expected a "
-                        "zero emission (tessellate an emitting shape into a mesh instead)", fn);
+    Emission em;
+    double peak = 0.0;
+    if ((st = read_emission(scene, &d->emission, fn, &em, &peak, err)) != CST_OK) return st;
     const float vals[5] = {d->radius, d->z_min, d->z_max, d->height, d->inner_radius};
     for (int k = 0; k < 5; k++)
         if (!(fabsf(vals[k]) <= BUILD_MAX_LENGTH))
@@ -735,7 +734,18 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     if (d->type == CST_SHAPE_SPHERE && !(d->z_min < d->z_max)) p.z_min = -d->radius, p.z_max = d->radius;
     int alpha_id = 0;
     if ((st = read_alpha(scene, &d->alpha, fn, &alpha_id, err)) != CST_OK) return st;
-    return scene_add_shape(scene, &p, &xf, d->material, alpha_id, err);
+    if (peak > 0.0) {
+        /* The power check as for spheres, from the world area (shape_init again: cheap). */
+        AnalyticShape tmp;
+        if (shape_init(&tmp, &p, &xf) &&
+            (st = check_product(fn, "the emitted power pi x area x radiance",
+                                (double)CST_PI * (double)shape_area(&tmp) * peak * (em.two_sided ? 2.0 : 1.0),
+                                "a smaller radiance (or scale) or shape", err)) != CST_OK)
+            return st;
+    }
+    const int first = scene->num_emitters;
+    if ((st = scene_add_shape(scene, &p, &xf, d->material, &em, alpha_id, err)) != CST_OK) return st;
+    return peak > 0.0 ? scene_set_emitter_spectrum(scene, first, d->emission.spectrum, err) : CST_OK;
 }
 
 CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,

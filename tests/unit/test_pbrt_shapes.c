@@ -43,20 +43,40 @@ static void test_shapes(void **state)
     cst_scene_destroy(s);
 }
 
-/* An emitting disk, an emitting cylinder and a disk inside an object are not analytic
- * shapes yet (no area sampling of them): the disk is tessellated as before, the cylinder
- * skipped with a warning that says why. */
-static void test_quadric_fallbacks(void **state)
+/* An emitting disk, cylinder and partial sphere are analytic area lights (their "power"
+ * normalised by the world area, pbrt-v4's DiffuseAreaLight::Create); under a non-uniform
+ * scale an emitting disk falls back to its tessellation and an emitting cylinder is
+ * skipped, with a warning that says why. */
+static void test_quadric_emitters(void **state)
 {
     (void)state;
     Warnings w = {0};
     Scene *s = expect_ok(WORLD("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
-                               "Shape \"disk\"\nShape \"cylinder\"\nAttributeEnd\n"
+                               "Shape \"disk\" \"float radius\" 2 \"float innerradius\" 1\nShape \"cylinder\"\n"
+                               "AttributeEnd\n"
+                               "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"float power\" 10\n"
+                               "Translate 0 0 5 Scale 2 2 2\n"
+                               "Shape \"sphere\" \"float zmin\" 0 \"float phimax\" 180\nAttributeEnd\n"
                                "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"),
                          &w);
+    assert_int_equal(s->num_shapes, 3);
+    assert_int_equal(s->num_triangles, 1);
+    assert_int_equal(s->num_emitters, 3);
+    const float pi = 3.14159265f;
+    assert_float_equal(s->emitters[0].area, 3.0f * pi, 1e-5f); /* pi (2^2 - 1^2) */
+    assert_float_equal(s->emitters[1].area, 4.0f * pi, 1e-5f); /* 2 pi r h, r 1, h 2 */
+    /* half of the upper hemisphere of radius 2: pi r^2 = 4 pi; L = power / (pi A) */
+    assert_float_equal(s->emitters[2].area, 4.0f * pi, 1e-5f);
+    assert_float_equal(s->emitters[2].radiance.c[0], 10.0f / (pi * 4.0f * pi), 1e-5f);
+    cst_scene_destroy(s);
+    Warnings w2 = {0};
+    s = expect_ok(WORLD("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nScale 1 2 1\n"
+                        "Shape \"disk\"\nShape \"cylinder\"\nAttributeEnd\n"
+                        "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"),
+                  &w2);
     assert_int_equal(s->num_shapes, 0);
     assert_int_equal(s->num_triangles, 128 + 1);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "cylinder\" is not supported (emitting") >= 0);
+    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "emitting under a non-uniform scale") >= 0);
     cst_scene_destroy(s);
 }
 
@@ -415,7 +435,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_shapes),
-        cmocka_unit_test(test_quadric_fallbacks),
+        cmocka_unit_test(test_quadric_emitters),
         cmocka_unit_test(test_loopsubdiv),
         cmocka_unit_test(test_shape_alpha),
         cmocka_unit_test(test_plymesh),
