@@ -400,6 +400,22 @@ CstStatus scene_add_shape(Scene *s, const ShapeParams *p, const Transform *objec
     return st;
 }
 
+CstStatus scene_add_patch(Scene *s, const AnalyticShape *patch, int material, int alpha, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (material < 0 || material >= s->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    if (!GROW(s->shapes, s->cap_shapes, s->num_shapes + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a bilinear patch");
+    PrimInfo *info = realloc(s->shape_info, (size_t)(s->num_shapes + 1) * sizeof *info);
+    if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding a bilinear patch");
+    s->shape_info = info;
+    s->shapes[s->num_shapes] = *patch;
+    s->shape_info[s->num_shapes] = (PrimInfo){material, -1, alpha, s->cur_medium_iface};
+    s->num_shapes++;
+    return CST_OK;
+}
+
 CstStatus scene_add_sphere(Scene *s, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err)
 {

@@ -187,6 +187,8 @@ CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
  * transform (shape_uniform_area; CST_ERR_UNSUPPORTED otherwise). */
 CstStatus scene_add_shape(Scene *scene, const ShapeParams *p, const Transform *object_to_world, int material,
                           const Emission *emission, int alpha, CstError *err);
+/* A bilinear patch built by shape_init_bilinear (copied; it does not emit). */
+CstStatus scene_add_patch(Scene *scene, const AnalyticShape *patch, int material, int alpha, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err);
 /* An alpha cut-out for shapes added after it (SceneMesh.alpha, the last sphere's
@@ -321,7 +323,7 @@ static inline bool scene_intersect_first(const Scene *s, const Ray *ray, Surface
         shape_surface(&s->shapes[(int)h.prim - s->num_triangles - s->num_spheres], ray, h.t, &sf);
         sh->p = sf.p;
         sh->ng = sf.n;
-        sh->ns = sf.n;
+        sh->ns = sf.ns;
         sh->uv = sf.uv;
     } else {
         const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];

@@ -25,21 +25,23 @@ static void test_shapes(void **state)
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "partial sphere") < 0);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "cylinder") < 0);
     assert_true(find_warning(&w, CST_WARN_GEOMETRY, "1 of 2 triangles are degenerate") >= 0);
-    /* analytic shapes: the partial sphere, the disk (area pi r^2 at z = 1), the cylinder */
-    assert_int_equal(s->num_shapes, 3);
+    /* analytic shapes: the partial sphere, the disk (area pi r^2 at z = 1), the bilinear
+     * patch, the cylinder */
+    assert_int_equal(s->num_shapes, 4);
     assert_int_equal(s->shapes[0].p.type, SHAPE_TAG_SPHERE);
     assert_true(s->shapes[0].p.z_max == 0.5f && s->shapes[0].p.z_min == -1.0f);
     assert_int_equal(s->shapes[1].p.type, SHAPE_TAG_DISK);
     assert_true(s->shapes[1].p.height == 1.0f && s->shapes[1].p.radius == 2.0f);
     assert_true(fabs((double)shape_area(&s->shapes[1]) - 4.0 * 3.14159265358979) < 1e-4);
-    assert_int_equal(s->shapes[2].p.type, SHAPE_TAG_CYLINDER);
-    assert_true(s->shapes[2].p.z_min == -1.0f && s->shapes[2].p.z_max == 1.0f && s->shapes[2].p.radius == 1.0f);
-    int first_disk = 2 * 64 * 31; /* after the tessellated sphere: the disk has no triangles */
-    /* the bilinear patch: two triangles facing +z */
-    int bl = first_disk;
-    assert_true(s->tri_normals[bl].z > 0.999f && s->tri_normals[bl + 1].z > 0.999f);
+    assert_int_equal(s->shapes[2].p.type, SHAPE_TAG_BILINEAR);
+    ShapeSurface sf; /* facing +z, as pbrt's dp/du x dp/dv */
+    shape_surface_at(&s->shapes[2], v2(0.5f, 0.5f), &sf);
+    assert_true(sf.n.z > 0.999f);
+    assert_int_equal(s->shapes[3].p.type, SHAPE_TAG_CYLINDER);
+    assert_true(s->shapes[3].p.z_min == -1.0f && s->shapes[3].p.z_max == 1.0f && s->shapes[3].p.radius == 1.0f);
+    int first_disk = 2 * 64 * 31; /* after the tessellated sphere: the disk and the patch have no triangles */
     /* the loopsubdiv triangle refined twice: 16 triangles (its limit surface: test_loop_subdiv) */
-    assert_int_equal(s->num_triangles, bl + 2 + 16 + 1);
+    assert_int_equal(s->num_triangles, first_disk + 16 + 1);
     cst_scene_destroy(s);
 }
 

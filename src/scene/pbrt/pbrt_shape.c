@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "geometry/loop_subdiv.h"
+#include "geometry/shape.h"
 #include "geometry/triangle.h"
 #include "scene/mesh_import.h"
 #include "scene/pbrt/pbrt_material.h"
@@ -585,6 +586,50 @@ static CstStatus add_analytic(Loader *ld, Params *ps, const char *d, Loc loc, Cs
     return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
 }
 
+/* A "bilinearmesh" as exact bilinear patches (pbrt-v4's BilinearPatch: Reshetov 2019), one
+ * analytic shape per patch, placed by the CTM; the patches g holds as triangle pairs
+ * (read_mesh_params: (p00, p10, p11), (p00, p11, p01)). Patches without area (corners on
+ * one line) are left out with a warning, as degenerate triangles are. */
+static CstStatus bilinear_patches(Loader *ld, Params *ps, const char *d, Loc loc, const ShapeGeom *g)
+{
+    CstAlpha alpha = {0};
+    TRY(shape_alpha(ld, ps, d, &alpha));
+    pbrt_params_warn_unused(ld, ps, d);
+    if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
+    CstShapeDesc sd = {0};
+    sd.type = CST_SHAPE_BILINEAR;
+    TRY(pbrt_material_scene_id(ld, ld->gs.material, &sd.material));
+    const Transform *m = &ld->gs.ctm.m;
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) sd.world_from_object[4 * r + c] = m->m[r][c];
+    if (transform_is_identity(m)) memset(sd.world_from_object, 0, sizeof sd.world_from_object);
+    sd.reverse_orientation = ld->gs.reverse != 0;
+    sd.alpha = alpha;
+    sd.patch_has_normals = g->n != NULL;
+    sd.patch_has_uvs = g->uv != NULL;
+    int skipped = 0;
+    for (int f = 0; 2 * f < g->nt; f++) {
+        const int *t = &g->idx[6 * f];
+        const int v[4] = {t[0], t[1], t[5], t[2]}; /* p00, p10, p01, p11 */
+        Vec3 corner[4];
+        for (int k = 0; k < 4; k++) {
+            corner[k] = g->p[v[k]];
+            for (int c = 0; c < 3; c++) sd.patch[k][c] = v3_get(corner[k], c);
+            if (g->n)
+                for (int c = 0; c < 3; c++) sd.patch_normals[k][c] = v3_get(g->n[v[k]], c);
+            if (g->uv) { sd.patch_uvs[k][0] = g->uv[v[k]].x; sd.patch_uvs[k][1] = g->uv[v[k]].y; }
+        }
+        AnalyticShape probe; /* area is kept by the invertible CTM: test in object space */
+        if (!shape_init_bilinear(&probe, corner, NULL, NULL, false)) { skipped++; continue; }
+        CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
+        if (st) return pbrt_fail_wrap(ld, st, loc, d);
+    }
+    if (skipped)
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: %d bilinear patch%s without area left out", d, skipped,
+                     skipped > 1 ? "es" : "");
+    return CST_OK;
+}
+
 /* pbrt-v4's Cylinder: radius 1, z from -1 to 1 (either order), phimax 360. */
 static CstStatus cylinder_shape(Loader *ld, Params *ps, const char *d, Loc loc)
 {
@@ -623,10 +668,14 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         st = read_mesh_params(ld, &ps, d, loc, 3, &g);
     } else if (strcmp(type, "bilinearmesh") == 0) {
         st = read_mesh_params(ld, &ps, d, loc, 4, &g);
+        if (!st && analytic_ok(ld) && !ld->gs.area.active && transform_is_affine(&ld->gs.ctm.m)) {
+            st = bilinear_patches(ld, &ps, d, loc, &g);
+            goto done;
+        }
         g.power_group = 2;
         if (!st)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two "
-                         "triangles (exact for planar patches)", d);
+                         "triangles, exact for planar patches (emitting, in an object, or an interface)", d);
     } else if (strcmp(type, "loopsubdiv") == 0) {
         st = loop_shape(ld, &ps, d, loc, &g);
     } else if (strcmp(type, "plymesh") == 0) {
