@@ -630,6 +630,21 @@ static CstStatus bilinear_patches(Loader *ld, Params *ps, const char *d, Loc loc
     return CST_OK;
 }
 
+/* "bilinearmesh": exact patches (*exact set: added) where analytic_ok and not emitting,
+ * else g as two triangles per patch (power_group 2), with a warning. */
+static CstStatus bilinear_mesh(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGeom *g, int *exact)
+{
+    TRY(read_mesh_params(ld, ps, d, loc, 4, g));
+    if (analytic_ok(ld) && !ld->gs.area.active && transform_is_affine(&ld->gs.ctm.m)) {
+        *exact = 1;
+        return bilinear_patches(ld, ps, d, loc, g);
+    }
+    g->power_group = 2;
+    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two triangles, exact for "
+                 "planar patches (emitting, in an object, or an interface)", d);
+    return CST_OK;
+}
+
 /* pbrt-v4's Cylinder: radius 1, z from -1 to 1 (either order), phimax 360. */
 static CstStatus cylinder_shape(Loader *ld, Params *ps, const char *d, Loc loc)
 {
@@ -667,15 +682,9 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
     if (strcmp(type, "trianglemesh") == 0) {
         st = read_mesh_params(ld, &ps, d, loc, 3, &g);
     } else if (strcmp(type, "bilinearmesh") == 0) {
-        st = read_mesh_params(ld, &ps, d, loc, 4, &g);
-        if (!st && analytic_ok(ld) && !ld->gs.area.active && transform_is_affine(&ld->gs.ctm.m)) {
-            st = bilinear_patches(ld, &ps, d, loc, &g);
-            goto done;
-        }
-        g.power_group = 2;
-        if (!st)
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two "
-                         "triangles, exact for planar patches (emitting, in an object, or an interface)", d);
+        int exact = 0;
+        st = bilinear_mesh(ld, &ps, d, loc, &g, &exact);
+        if (exact) goto done;
     } else if (strcmp(type, "loopsubdiv") == 0) {
         st = loop_shape(ld, &ps, d, loc, &g);
     } else if (strcmp(type, "plymesh") == 0) {
