@@ -466,7 +466,9 @@ CST_API CstStatus cst_scene_add_sphere_alpha(CstScene *scene, const float center
 typedef enum CstShapeType {
     CST_SHAPE_CYLINDER = 0, /* about the object's z axis, z_min <= z <= z_max */
     CST_SHAPE_DISK,         /* in the plane z = height, inner_radius <= distance to the axis <= radius */
-    CST_SHAPE_SPHERE        /* centred at the object's origin, cut to z_min <= z <= z_max */
+    CST_SHAPE_SPHERE,       /* centred at the object's origin, cut to z_min <= z <= z_max */
+    CST_SHAPE_BILINEAR      /* pbrt-v4's bilinear patch through patch[0..3] (p00, p10, p01, p11),
+                             * world space (world_from_object applied); not emitting */
 } CstShapeType;
 typedef struct CstShapeDesc {
     CstShapeType type;
@@ -478,8 +480,17 @@ typedef struct CstShapeDesc {
     int reverse_orientation; /* flips the normal (pbrt's ReverseOrientation) */
     float world_from_object[12]; /* 3 x 4 row-major affine, as cst_scene_add_instance; all 0: identity */
     int material;
-    CstEmission emission;    /* must be zero: emitting analytic shapes are not supported yet */
+    CstEmission emission;    /* zero: none; else an area light sampled by area, which needs a
+                              * similarity world_from_object (CST_ERR_UNSUPPORTED otherwise) */
     CstAlpha alpha;          /* over the shape's uvs; zero: opaque */
+    /* CST_SHAPE_BILINEAR: p(u, v) = (1-u)(1-v) p00 + u(1-v) p10 + (1-u)v p01 + uv p11; optional
+     * per-corner normals (the shading normal, interpolated; the geometric normal faces it)
+     * and texture coordinates (interpolated; default (u, v)). The normal is dp/du x dp/dv,
+     * flipped by reverse_orientation and a mirroring world_from_object when no normals. */
+    float patch[4][3];
+    int patch_has_normals, patch_has_uvs;
+    float patch_normals[4][3];
+    float patch_uvs[4][2];
 } CstShapeDesc;
 /* u = phi / phi_max; v along z (cylinder, sphere) or from the rim inward (disk), as pbrt-v4.
  * The normal points away from the axis (cylinder), outward (sphere), along +z (disk),

@@ -1,5 +1,6 @@
 /* The analytic shapes' intersection, surface reconstruction, bounds and area sampling:
- * pbrt-v4 (Pharr, Jakob, Humphreys, 4th ed.) §6.2 spheres, §6.3 cylinders, §6.4 disks. */
+ * pbrt-v4 (Pharr, Jakob, Humphreys, 4th ed.) §6.2 spheres, §6.3 cylinders, §6.4 disks,
+ * §6.6 bilinear patches (Reshetov, "Cool Patches", Ray Tracing Gems, 2019, ch. 8). */
 #include "geometry/shape.h"
 
 #include <float.h>
@@ -41,6 +42,168 @@ static inline Vec3 f3_unit(V3d v)
     return l > 0.0 ? v3((float)(v.x / l), (float)(v.y / l), (float)(v.z / l)) : v3s(0.0f);
 }
 
+static inline V3d d3_sub(V3d a, V3d b) { return d3v(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline V3d d3_lerp(double t, V3d a, V3d b)
+{
+    return d3v(a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.z + t * (b.z - a.z));
+}
+static inline double d3_dot(V3d a, V3d b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline V3d d3_cross(V3d a, V3d b)
+{
+    return d3v(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+/* ------------------------------------------------------------ bilinear patches */
+
+static inline V3d bl_corner(const AnalyticShape *s, int i) { return d3v(s->bl.q[i][0], s->bl.q[i][1], s->bl.q[i][2]); }
+
+bool shape_init_bilinear(AnalyticShape *s, const Vec3 p[4], const Vec3 *n, const Vec2 *uv, bool flip)
+{
+    *s = (AnalyticShape){0};
+    s->p.type = SHAPE_TAG_BILINEAR;
+    s->p.reverse_orientation = flip;
+    s->flip_normal = flip;
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, ext = 0.0;
+    for (int i = 0; i < 4; i++) {
+        if (!v3_is_finite(p[i]) || (n && !v3_is_finite(n[i]))) return false;
+        const double c[3] = {(double)p[i].x, (double)p[i].y, (double)p[i].z};
+        for (int k = 0; k < 3; k++) {
+            s->bl.q[i][k] = c[k];
+            lo[k] = fmin(lo[k], c[k]);
+            hi[k] = fmax(hi[k], c[k]);
+            ext = fmax(ext, fabs(c[k]));
+        }
+        if (n) { s->bl.n[i][0] = n[i].x; s->bl.n[i][1] = n[i].y; s->bl.n[i][2] = n[i].z; }
+        if (uv) { s->bl.uv[i][0] = uv[i].x; s->bl.uv[i][1] = uv[i].y; }
+    }
+    s->bl.has_n = n != NULL;
+    s->bl.has_uv = uv != NULL;
+    /* No area: the corners on one line (or one point), |dp/du x dp/dv| = 0 at all four. */
+    V3d c00 = bl_corner(s, 0), c10 = bl_corner(s, 1), c01 = bl_corner(s, 2), c11 = bl_corner(s, 3);
+    double a0 = d3_len(d3_cross(d3_sub(c10, c00), d3_sub(c01, c00)));
+    double a1 = d3_len(d3_cross(d3_sub(c11, c01), d3_sub(c11, c10)));
+    double a2 = d3_len(d3_cross(d3_sub(c10, c00), d3_sub(c11, c10)));
+    double a3 = d3_len(d3_cross(d3_sub(c11, c01), d3_sub(c01, c00)));
+    if (!(fmax(fmax(a0, a1), fmax(a2, a3)) > 0.0)) return false;
+    /* The patch lies in the convex hull of its corners: their box, padded as the quadrics'. */
+    double pad = ext * 0x1p-20 + 1e-30;
+    s->bounds.min = v3((float)(lo[0] - pad), (float)(lo[1] - pad), (float)(lo[2] - pad));
+    s->bounds.max = v3((float)(hi[0] + pad), (float)(hi[1] + pad), (float)(hi[2] + pad));
+    return v3_is_finite(s->bounds.min) && v3_is_finite(s->bounds.max);
+}
+
+/* Ray against patch (Reshetov 2019; pbrt-v4 IntersectBilinearPatch), in double. The ray
+ * meets the segment L(u) from p(u, 0) to p(u, 1) where o, d and L(u) are coplanar:
+ * (p(u,0) - o) . (d x (p(u,1) - p(u,0))) = 0, a quadratic a u^2 + b u + c = 0 with
+ * c its value at u = 0, a + b + c at u = 1, a = ((p10 - p00) x (p01 - p11)) . d. For each
+ * root u in [0, 1], v and t by Cramer's rule on o + t d = p(u,0) + v (p(u,1) - p(u,0)),
+ * with perp = d x ud as the third column: t = det(p(u,0) - o, ud, perp) / |perp|^2,
+ * v = det(p(u,0) - o, d, perp) / |perp|^2. The nearer valid root wins. */
+static bool bilinear_intersect(const AnalyticShape *s, const Ray *r, float *t_out, float *u_out, float *v_out)
+{
+    const V3d o = d3(r->o), d = d3(r->d);
+    const V3d p00 = bl_corner(s, 0), p10 = bl_corner(s, 1), p01 = bl_corner(s, 2), p11 = bl_corner(s, 3);
+    const double a = d3_dot(d3_cross(d3_sub(p10, p00), d3_sub(p01, p11)), d);
+    const double c = d3_dot(d3_cross(d3_sub(p00, o), d), d3_sub(p01, p00));
+    const double b = d3_dot(d3_cross(d3_sub(p10, o), d), d3_sub(p11, p10)) - (a + c);
+    double roots[2];
+    int nroots;
+    if (a == 0.0) { /* linear in u (a planar patch seen so, or a parallelogram) */
+        if (b == 0.0) return false;
+        roots[0] = -c / b;
+        nroots = 1;
+    } else {
+        const double disc = b * b - 4.0 * a * c;
+        if (disc < 0.0) return false;
+        const double q = -0.5 * (b + copysign(sqrt(disc), b));
+        roots[0] = q / a;
+        roots[1] = q != 0.0 ? c / q : roots[0];
+        nroots = 2;
+    }
+    bool found = false;
+    float best_t = r->t_max;
+    for (int i = 0; i < nroots; i++) {
+        const double u = roots[i];
+        if (!(u >= 0.0 && u <= 1.0)) continue;
+        const V3d uo = d3_lerp(u, p00, p10), ud = d3_sub(d3_lerp(u, p01, p11), uo);
+        const V3d delta = d3_sub(uo, o), perp = d3_cross(d, ud);
+        const double p2 = d3_dot(perp, perp);
+        if (!(p2 > 0.0)) continue;
+        const double v1 = d3_dot(delta, d3_cross(d, perp)), t1 = d3_dot(delta, d3_cross(ud, perp));
+        if (!(v1 >= 0.0 && v1 <= p2)) continue;
+        const float tf = (float)(t1 / p2);
+        /* The float t must itself lie in the open interval: every back end compares it so. */
+        if (!(tf > r->t_min && tf < best_t)) continue;
+        best_t = tf;
+        *t_out = tf;
+        *u_out = (float)u;
+        *v_out = (float)(v1 / p2);
+        found = true;
+    }
+    return found;
+}
+
+/* The surface at patch parameters (u, v) in double: point, dp/du, dp/dv (pbrt-v4: along
+ * the patch's own parameters), geometric normal dp/du x dp/dv turned to the interpolated
+ * shading normal when the patch has normals, else flipped by flip_normal; uv interpolated. */
+static void bilinear_surface(const AnalyticShape *s, double u, double v, ShapeSurface *out)
+{
+    const V3d p00 = bl_corner(s, 0), p10 = bl_corner(s, 1), p01 = bl_corner(s, 2), p11 = bl_corner(s, 3);
+    const V3d p = d3_lerp(v, d3_lerp(u, p00, p10), d3_lerp(u, p01, p11));
+    const V3d dpdu = d3_lerp(v, d3_sub(p10, p00), d3_sub(p11, p01));
+    const V3d dpdv = d3_lerp(u, d3_sub(p01, p00), d3_sub(p11, p10));
+    V3d n = d3_cross(dpdu, dpdv);
+    if (d3_dot(n, n) == 0.0) /* a degenerate corner: the normal of the opposite triangle */
+        n = d3_cross(d3_sub(p11, p10), d3_sub(p11, p01));
+    out->p = f3(p);
+    out->dpdu = f3(dpdu);
+    out->dpdv = f3(dpdv);
+    Vec3 ng = f3_unit(n);
+    const double w[4] = {(1.0 - u) * (1.0 - v), u * (1.0 - v), (1.0 - u) * v, u * v};
+    if (s->bl.has_n) {
+        V3d ns = d3v(0.0, 0.0, 0.0);
+        for (int i = 0; i < 4; i++)
+            ns = d3v(ns.x + w[i] * (double)s->bl.n[i][0], ns.y + w[i] * (double)s->bl.n[i][1],
+                     ns.z + w[i] * (double)s->bl.n[i][2]);
+        out->ns = d3_dot(ns, ns) > 0.0 ? f3_unit(ns) : ng;
+        if (v3_dot(ng, out->ns) < 0.0f) ng = v3_neg(ng);
+        if (!(d3_dot(ns, ns) > 0.0)) out->ns = ng;
+    } else {
+        if (s->flip_normal) ng = v3_neg(ng);
+        out->ns = ng;
+    }
+    out->n = ng;
+    if (s->bl.has_uv) {
+        double tu = 0.0, tv = 0.0;
+        for (int i = 0; i < 4; i++) tu += w[i] * (double)s->bl.uv[i][0], tv += w[i] * (double)s->bl.uv[i][1];
+        out->uv = v2((float)tu, (float)tv);
+    } else {
+        out->uv = v2((float)u, (float)v);
+    }
+}
+
+/* |dp/du x dp/dv| at (u, v): the area element of the patch's parameterisation. */
+static double bilinear_jacobian(const AnalyticShape *s, double u, double v)
+{
+    const V3d p00 = bl_corner(s, 0), p10 = bl_corner(s, 1), p01 = bl_corner(s, 2), p11 = bl_corner(s, 3);
+    return d3_len(d3_cross(d3_lerp(v, d3_sub(p10, p00), d3_sub(p11, p01)), d3_lerp(u, d3_sub(p01, p00), d3_sub(p11, p10))));
+}
+
+static double bilinear_area(const AnalyticShape *s)
+{
+    /* composite Simpson, 64 intervals per parameter (weights 1 4 2 4 ... 4 1) / 3 */
+    enum { N = 64 };
+    double sum = 0.0;
+    for (int i = 0; i <= N; i++) {
+        double wi = (i == 0 || i == N) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+        for (int j = 0; j <= N; j++) {
+            double wj = (j == 0 || j == N) ? 1.0 : (j % 2 ? 4.0 : 2.0);
+            sum += wi * wj * bilinear_jacobian(s, (double)i / N, (double)j / N);
+        }
+    }
+    return sum / (9.0 * N * N);
+}
+
 /* ------------------------------------------------------------ construction */
 
 static BBox object_bounds(const ShapeParams *p)
@@ -57,12 +220,14 @@ static BBox object_bounds(const ShapeParams *p)
 bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
 {
     if (!(p->radius > 0.0f) || !isfinite(p->radius) || !(p->phi_max > 0.0f) ||
-        !((double)p->phi_max <= TWO_PI_D + 1e-6) || (unsigned)p->type >= SHAPE_TAG_COUNT)
+        !((double)p->phi_max <= TWO_PI_D + 1e-6) || (unsigned)p->type >= SHAPE_TAG_COUNT ||
+        p->type == SHAPE_TAG_BILINEAR) /* shape_init_bilinear */
         return false;
     *s = (AnalyticShape){0};
     s->p = *p;
     if (s->p.phi_max > 2.0f * CST_PI) s->p.phi_max = 2.0f * CST_PI;
     switch (p->type) {
+    case SHAPE_TAG_BILINEAR: return false; /* not a quadric: handled before */
     case SHAPE_TAG_CYLINDER:
         if (!(p->z_min < p->z_max) || !isfinite(p->z_min) || !isfinite(p->z_max)) return false;
         break;
@@ -146,6 +311,7 @@ static bool clip_and_uv(const AnalyticShape *s, V3d o, V3d d, double t, float *u
     (void)p;
     V3d h = d3v(o.x + t * d.x, o.y + t * d.y, o.z + t * d.z);
     switch (p->type) {
+    case SHAPE_TAG_BILINEAR: return false; /* not a quadric: handled before */
     case SHAPE_TAG_CYLINDER: {
         if (h.z < s->z_min || h.z > s->z_max) return false;
         double phi = phi_of(h.x, h.y);
@@ -180,6 +346,7 @@ static bool clip_and_uv(const AnalyticShape *s, V3d o, V3d d, double t, float *u
 
 bool shape_intersect(const AnalyticShape *s, const Ray *r, float *t_out, float *u, float *v)
 {
+    if (s->p.type == SHAPE_TAG_BILINEAR) return bilinear_intersect(s, r, t_out, u, v);
     V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
     const double tmin = (double)r->t_min, tmax = (double)r->t_max;
     const ShapeParams *p = &s->p;
@@ -230,6 +397,7 @@ static void surface_object(const AnalyticShape *s, double phi, double q, V3d *pt
     (void)p;
     const double pm = s->phi_max, cp = cos(phi), sp = sin(phi);
     switch (p->type) {
+    case SHAPE_TAG_BILINEAR: return; /* not a quadric: bilinear_surface */
     case SHAPE_TAG_CYLINDER:
         *pt = d3v(s->r * cp, s->r * sp, q);
         *dpdu = d3v(-pm * pt->y, pm * pt->x, 0.0);
@@ -262,11 +430,24 @@ static void surface_world(const AnalyticShape *s, V3d pt, V3d dpdu, V3d dpdv, V3
     out->dpdv = f3(map_vector(s->o2w, dpdv));
     Vec3 nw = f3_unit(map_normal(s->nrm, n));
     out->n = s->flip_normal ? v3_neg(nw) : nw;
+    out->ns = out->n;
     out->uv = uv;
 }
 
 void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *out)
 {
+    if (s->p.type == SHAPE_TAG_BILINEAR) {
+        /* The patch parameters of the hit at t: the same test on the interval holding only
+         * the float t (bit-identical arithmetic, so the same root); pbrt-v4 likewise builds
+         * the surface from the hit's (u, v). */
+        Ray rr = *r;
+        rr.t_min = nextafterf(t, -INFINITY);
+        rr.t_max = nextafterf(t, INFINITY);
+        float tt, u = 0.5f, v = 0.5f;
+        (void)bilinear_intersect(s, &rr, &tt, &u, &v);
+        bilinear_surface(s, (double)u, (double)v, out);
+        return;
+    }
     V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
     V3d h = d3v(o.x + (double)t * d.x, o.y + (double)t * d.y, o.z + (double)t * d.z);
     const ShapeParams *p = &s->p;
@@ -309,6 +490,10 @@ void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *
 
 void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out)
 {
+    if (s->p.type == SHAPE_TAG_BILINEAR) {
+        bilinear_surface(s, (double)uv.x, (double)uv.y, out);
+        return;
+    }
     const ShapeParams *p = &s->p;
     (void)p;
     double phi = (double)uv.x * s->phi_max, q;
@@ -348,6 +533,7 @@ static double area_factor(const AnalyticShape *s, V3d n)
 
 float shape_area(const AnalyticShape *s)
 {
+    if (s->p.type == SHAPE_TAG_BILINEAR) return (float)bilinear_area(s);
     /* The factor at the middle of the parameter domain: exact for similarity transforms. */
     const ShapeParams *p = &s->p;
     (void)p;
@@ -360,12 +546,33 @@ float shape_area(const AnalyticShape *s)
     return (float)(object_area(s) * area_factor(s, n));
 }
 
+bool shape_uniform_area(const AnalyticShape *s)
+{
+    if (s->p.type == SHAPE_TAG_BILINEAR) return false;
+    /* M^T M = k^2 I for a similarity: the columns orthogonal and of one length. */
+    double g[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            g[i][j] = s->o2w[0][i] * s->o2w[0][j] + s->o2w[1][i] * s->o2w[1][j] + s->o2w[2][i] * s->o2w[2][j];
+    double k2 = (g[0][0] + g[1][1] + g[2][2]) / 3.0;
+    if (!(k2 > 0.0) || !isfinite(k2)) return false;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (fabs(g[i][j] - (i == j ? k2 : 0.0)) > 1e-5 * k2) return false;
+    return true;
+}
+
 void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float *pdf_a)
 {
     const ShapeParams *p = &s->p;
     (void)p;
     Vec2 uv;
     switch (p->type) {
+    case SHAPE_TAG_BILINEAR:
+        /* uniform in (u, v): density 1 / |dp/du x dp/dv| per area (shape_pdf_area) */
+        bilinear_surface(s, (double)u.x, (double)u.y, out);
+        *pdf_a = shape_pdf_area(s, out);
+        return;
     case SHAPE_TAG_DISK: {
         /* Uniform in the annulus: rho^2 uniform in [ri^2, r^2] (pbrt-v4 samples the full
          * disk and ignores innerradius; this keeps the points on the surface). */
@@ -389,6 +596,10 @@ void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float 
 
 float shape_pdf_area(const AnalyticShape *s, const ShapeSurface *sf)
 {
+    if (s->p.type == SHAPE_TAG_BILINEAR) {
+        float j = v3_length(v3_cross(sf->dpdu, sf->dpdv));
+        return j > 0.0f ? 1.0f / j : 0.0f;
+    }
     /* The object normal at the point, back through the inverse map (n_obj ∝ M^T n_world). */
     V3d nw = d3(sf->n), n = d3v(s->o2w[0][0] * nw.x + s->o2w[1][0] * nw.y + s->o2w[2][0] * nw.z,
                                 s->o2w[0][1] * nw.x + s->o2w[1][1] * nw.y + s->o2w[2][1] * nw.z,

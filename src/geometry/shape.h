@@ -17,9 +17,21 @@
 typedef enum ShapeTag {
     SHAPE_TAG_CYLINDER = 0, /* about +z, radius r, z in [z_min, z_max], phi in [0, phi_max] */
     SHAPE_TAG_DISK,         /* in the plane z = height, inner_radius <= rho <= r, phi in [0, phi_max] */
-    SHAPE_TAG_SPHERE        /* centred at the origin, clipped to [z_min, z_max] and [0, phi_max] */
+    SHAPE_TAG_SPHERE,       /* centred at the origin, clipped to [z_min, z_max] and [0, phi_max] */
+    SHAPE_TAG_BILINEAR      /* pbrt-v4's bilinear patch: four world-space corners (shape_init_bilinear) */
 } ShapeTag;
-enum { SHAPE_TAG_COUNT = 3 };
+enum { SHAPE_TAG_COUNT = 4 };
+
+/* A bilinear patch p(u, v) = (1-u)(1-v) p00 + u(1-v) p10 + (1-u)v p01 + uv p11 (pbrt-v4
+ * §6.6; corners in pbrt's order p00, p10, p01, p11), in world space, in double; optional
+ * per-corner normals (the shading normal interpolated bilinearly, the geometric normal
+ * turned to face it, as pbrt-v4) and texture coordinates (interpolated bilinearly). */
+typedef struct BilinearPatch {
+    double q[4][3];
+    float uv[4][2];
+    float n[4][3];
+    bool has_uv, has_n;
+} BilinearPatch;
 
 /* The parameters in object space, as pbrt-v4 takes them (lengths in the object's units,
  * phi_max in radians). */
@@ -41,8 +53,13 @@ typedef struct AnalyticShape {
     double r, z_min, z_max, height, r_inner, phi_max; /* p's, in double for the arithmetic */
     double theta_z_min, theta_z_max; /* sphere: acos(z_min / r), acos(z_max / r) */
     bool flip_normal;               /* reverse_orientation XOR the transform mirrors */
-    double o2w[3][4], w2o[3][4];    /* affine rows: linear part | translation */
-    double nrm[3][3];               /* normal matrix: the inverse transpose of o2w's linear part */
+    union {
+        struct {                        /* the quadrics */
+            double o2w[3][4], w2o[3][4]; /* affine rows: linear part | translation */
+            double nrm[3][3];            /* normal matrix: the inverse transpose of o2w's linear part */
+        };
+        BilinearPatch bl;               /* SHAPE_TAG_BILINEAR */
+    };
     BBox bounds;                    /* world, padded outward to contain every reported hit */
 } AnalyticShape;
 
@@ -50,6 +67,12 @@ typedef struct AnalyticShape {
  * parameters are out of range (radius <= 0, z_min >= z_max for cylinders, phi_max
  * outside (0, 2 pi], inner_radius outside [0, r)) or the transform is singular. */
 bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *object_to_world);
+
+/* A bilinear patch from its corners p[4] (p00, p10, p01, p11, world space), optional
+ * normals n[4] and uvs uv[4] (NULL: none); flip: pbrt-v4's ReverseOrientation XOR a
+ * handedness-swapping transform (used without normals). False for non-finite corners or
+ * a patch without area (every corner on one line). */
+bool shape_init_bilinear(AnalyticShape *s, const Vec3 p[4], const Vec3 *n, const Vec2 *uv, bool flip);
 
 /* Nearest hit in (r->t_min, r->t_max): *t and the shape's (u, v) parameters (pbrt-v4:
  * u = phi / phi_max, v along z for cylinders and spheres, from the rim inward for disks).
@@ -65,16 +88,25 @@ bool shape_intersect(const AnalyticShape *s, const Ray *r, float *t, float *u, f
 typedef struct ShapeSurface {
     Vec3 p, n, dpdu, dpdv;
     Vec2 uv;
+    Vec3 ns; /* shading normal: n, or a bilinear patch's interpolated normals */
 } ShapeSurface;
 void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *out);
 
-/* The surface at parameters (u, v) in [0,1]^2 (the same conventions): for area sampling. */
+/* The surface at parameters (u, v) in [0,1]^2 (the same conventions): for area sampling.
+ * For bilinear patches (u, v) are the patch parameters (out->uv the texture coordinates). */
 void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out);
 
-/* World-space area: exact for a similarity transform (uniform scale), pbrt-v4's Area()
+/* World-space area (bilinear patches: composite Simpson over 64 x 64 cells of |dp/du x
+ * dp/dv|, exact for parallelograms): exact for a similarity transform (uniform scale), pbrt-v4's Area()
  * scaled by the area factor of the transform otherwise (the sampled density is then not
  * uniform; shape_sample_area reports the true pdf of what it draws). */
 float shape_area(const AnalyticShape *s);
+
+/* Whether the object-to-world map is a similarity (rotation, mirror, uniform scale, to a
+ * relative 1e-5): then shape_sample_area is uniform by world area, its pdf_a the constant
+ * 1 / shape_area, which area lights need (emitting shapes must pass this). False for
+ * bilinear patches (sampled uniformly in (u, v), density 1 / |dp/du x dp/dv| per area). */
+bool shape_uniform_area(const AnalyticShape *s);
 
 /* A point by area (pbrt-v4 Cylinder/Disk/Sphere::Sample(u)): cylinders uniform in (phi, z),
  * disks by the concentric map restricted to the annulus (uniform in area), spheres

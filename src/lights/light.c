@@ -210,9 +210,33 @@ void emitter_sampler_free(EmitterSampler *s)
     memset(s, 0, sizeof *s);
 }
 
+/* The sphere or analytic shape an area emitter is, or NULL (a triangle, or the other kind).
+ * Prim ids: triangles, then spheres, then analytic shapes (scene.h scene_prim_info). */
+static inline const Sphere *emitter_sphere(const Emitter *e, const EmitterGeometry *g)
+{
+    int k = (int)e->prim - g->num_triangles;
+    return k >= 0 && k < g->num_spheres ? &g->spheres[k] : NULL;
+}
+static inline const AnalyticShape *emitter_shape(const Emitter *e, const EmitterGeometry *g)
+{
+    int k = (int)e->prim - g->num_triangles - g->num_spheres;
+    return k >= 0 && g->shapes ? &g->shapes[k] : NULL;
+}
+
 void emitter_sample_point(const Emitter *e, const EmitterGeometry *g, Vec2 u, Vec3 *p, Vec3 *n, Vec2 *uv)
 {
-    if ((int)e->prim < g->num_triangles) {
+    const AnalyticShape *shape = emitter_shape(e, g);
+    if (shape) {
+        /* Uniform by area (pbrt-v4 Cylinder/Disk/Sphere::Sample(u)); emitting shapes have a
+         * similarity transform (scene_add_shape), so the density is 1 / e->area, the one
+         * EmitterSampler.pdf_a assumes. */
+        ShapeSurface sf;
+        float pdf_a;
+        shape_sample_area(shape, u, &sf, &pdf_a);
+        *p = sf.p;
+        *n = sf.n;
+        *uv = sf.uv;
+    } else if ((int)e->prim < g->num_triangles) {
         const int32_t *t = &g->tri_indices[3 * e->prim];
         Vec3 a = g->positions[t[0]], b = g->positions[t[1]], c = g->positions[t[2]];
         Vec2 bc = warp_uniform_triangle(u);
@@ -293,9 +317,9 @@ static float area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e
     const Emitter *em = &s->light[e].u.area;
     float omc, sin2, omega;
     if (nee && tri_solid_angle(s, g, em, x, &omega)) return pmf / omega;
-    if ((int)em->prim >= g->num_triangles &&
-        sphere_cone(&g->spheres[(int)em->prim - g->num_triangles], x, &omc, &sin2))
-        return pmf / (2.0f * CST_PI * omc);
+    const Sphere *sp = emitter_sphere(em, g);
+    if (sp && sphere_cone(sp, x, &omc, &sin2)) return pmf / (2.0f * CST_PI * omc);
+    /* triangles, analytic shapes, spheres from inside: by area, pdf_w = pdf_a dist^2 / |cos| */
     return cos_l > 0.0f ? pmf / em->area * dist * dist / cos_l : 0.0f;
 }
 
@@ -351,7 +375,7 @@ static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const Emit
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
     float omc = 0.0f, sin2 = 0.0f, omega = 0.0f;
-    const Sphere *sp = (int)e->prim >= g->num_triangles ? &g->spheres[(int)e->prim - g->num_triangles] : NULL;
+    const Sphere *sp = emitter_sphere(e, g);
     const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
     const bool solid = nee && tri_solid_angle(s, g, e, x, &omega);
     if (solid) {

@@ -1,14 +1,16 @@
 /* Lights: area emitters (any primitive with emission) and delta lights (point, spot,
  * directional). NEE picks a light with probability proportional to its power and, on an
  * area emitter, a point: uniform by area on triangles (or by their solid angle,
- * EmitterSampler.solid_angle), by the subtended cone on spheres; light paths start from a
- * uniform point and add a direction. */
+ * EmitterSampler.solid_angle), by the subtended cone on spheres, uniform by area on analytic
+ * shapes (cylinders, disks, partial spheres: pbrt-v4 samples these by area too); light
+ * paths start from a uniform point and add a direction. */
 #ifndef CST_LIGHTS_LIGHT_H
 #define CST_LIGHTS_LIGHT_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "geometry/shape.h"
 #include "geometry/sphere.h"
 #include "lights/envmap.h"
 #include "math/color.h"
@@ -24,6 +26,7 @@ typedef struct Emitter {
     float area;
     Vec3 n;        /* triangles: unit geometric normal (set by scene_commit) */
     int is_sphere; /* scene construction only: prim is still a sphere index */
+    int is_shape;  /* scene construction only: prim is still an analytic shape index */
 } Emitter;
 
 /* Lights whose position or direction is a Dirac delta: no surface, never hit by a ray,
@@ -173,6 +176,9 @@ typedef struct EmitterGeometry {
     const Vec2 *uvs;
     const unsigned char *tri_has_uv;
     const Texture *textures;
+    /* analytic shapes (geometry/shape.h): prim ids num_triangles + num_spheres + k */
+    int num_spheres;
+    const AnalyticShape *shapes;
 } EmitterGeometry;
 
 /* bounds_lo/hi: the scene's geometry bounds (directional lights' power and emission disk). */

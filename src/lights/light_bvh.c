@@ -74,11 +74,26 @@ LightBounds light_bounds_of(const Light *l, const EmitterGeometry *g, float phi)
             }
             b.w = e->n; /* a triangle's normals: one direction */
             b.cos_o = 1.0f;
-        } else {
+        } else if ((int)e->prim < g->num_triangles + g->num_spheres) {
             const Sphere *sp = &g->spheres[(int)e->prim - g->num_triangles];
             b.lo = v3_sub(sp->center, v3s(sp->radius));
             b.hi = v3_add(sp->center, v3s(sp->radius));
             b.cos_o = -1.0f; /* every direction */
+        } else {
+            /* An analytic shape: its world box; a disk's normals are one direction (its
+             * plane's), a cylinder's or a partial sphere's are bounded by every direction
+             * (pbrt-v4 bounds these shapes' normals so too: DirectionCone::EntireSphere). */
+            const AnalyticShape *sh = &g->shapes[(int)e->prim - g->num_triangles - g->num_spheres];
+            b.lo = sh->bounds.min;
+            b.hi = sh->bounds.max;
+            if (sh->p.type == SHAPE_TAG_DISK) {
+                ShapeSurface sf;
+                shape_surface_at(sh, v2(0.0f, 0.0f), &sf);
+                b.w = sf.n;
+                b.cos_o = 1.0f;
+            } else {
+                b.cos_o = -1.0f;
+            }
         }
         b.cos_e = cos_half_pi;
         b.two_sided = e->two_sided;

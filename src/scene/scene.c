@@ -244,6 +244,7 @@ static CstStatus add_emitter(Scene *s, uint32_t prim, const Emission *em, float 
     e->two_sided = em->two_sided;
     e->area = area;
     e->is_sphere = 0;
+    e->is_shape = 0;
     *out = s->num_emitters++;
     return CST_OK;
 }
@@ -373,7 +374,7 @@ CstStatus scene_add_quad(Scene *s, const Vec3 v[4], int material, const Emission
 }
 
 CstStatus scene_add_shape(Scene *s, const ShapeParams *p, const Transform *object_to_world, int material,
-                          int alpha, CstError *err)
+                          const Emission *emission, int alpha, CstError *err)
 {
     if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
     if (material < 0 || material >= s->num_materials)
@@ -385,6 +386,31 @@ CstStatus scene_add_shape(Scene *s, const ShapeParams *p, const Transform *objec
     s->shape_info = info;
     if (!shape_init(&s->shapes[s->num_shapes], p, object_to_world))
         return cst_fail(err, CST_ERR_INVALID_ARG, "shape parameters out of range or a singular transform");
+    const AnalyticShape *sh = &s->shapes[s->num_shapes];
+    const bool emits = emission && !color_is_black(emission->radiance);
+    if (emits && !shape_uniform_area(sh))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "an emitting analytic shape needs a similarity transform "
+                        "(rotation, mirror, uniform scale) so that it is sampled uniformly by area");
+    s->shape_info[s->num_shapes] = (PrimInfo){material, -1, alpha, s->cur_medium_iface};
+    /* Shape prim ids follow the triangles and spheres, known at commit: until then the
+     * emitter holds the shape index, flagged by is_shape (as spheres do). */
+    int i = s->num_shapes++;
+    CstStatus st = add_emitter(s, (uint32_t)i, emission, shape_area(sh), &s->shape_info[i].emitter, err);
+    if (st == CST_OK && s->shape_info[i].emitter >= 0) s->emitters[s->shape_info[i].emitter].is_shape = 1;
+    return st;
+}
+
+CstStatus scene_add_patch(Scene *s, const AnalyticShape *patch, int material, int alpha, CstError *err)
+{
+    if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
+    if (material < 0 || material >= s->num_materials)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    if (!GROW(s->shapes, s->cap_shapes, s->num_shapes + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a bilinear patch");
+    PrimInfo *info = realloc(s->shape_info, (size_t)(s->num_shapes + 1) * sizeof *info);
+    if (!info) return cst_fail(err, CST_ERR_OOM, "out of memory adding a bilinear patch");
+    s->shape_info = info;
+    s->shapes[s->num_shapes] = *patch;
     s->shape_info[s->num_shapes] = (PrimInfo){material, -1, alpha, s->cur_medium_iface};
     s->num_shapes++;
     return CST_OK;
@@ -611,10 +637,17 @@ bool scene_emitter_cut(const Scene *s, int emitter, Vec3 p)
         float v = det != 0.0f ? (d11 * q2 - d12 * q1) / det : 0.0f;
         n = s->tri_normals[e->prim];
         if (am->texture) uv = triangle_uv(s->uvs, s->tri_has_uv, s->tri_indices, e->prim, u, v);
-    } else {
+    } else if ((int)e->prim < s->num_triangles + s->num_spheres) {
         const Sphere *sp = &s->spheres[(int)e->prim - s->num_triangles];
         n = v3_normalize(v3_sub(p, sp->center));
         uv = sphere_uv(n);
+    } else {
+        /* shape_surface reprojects o + t d: with d = 0 and t = 0, the point p itself */
+        const Ray r = {.o = p, .t_min = 0.0f, .d = v3s(0.0f), .t_max = 0.0f};
+        ShapeSurface sf;
+        shape_surface(&s->shapes[(int)e->prim - s->num_triangles - s->num_spheres], &r, 0.0f, &sf);
+        n = sf.n;
+        uv = sf.uv;
     }
     return alpha_cut(alpha_value(s, am, uv, p, n), hash_vec3(p, 0x5bd1e995u));
 }
@@ -679,6 +712,9 @@ CstStatus scene_commit(Scene *s, CstError *err)
         if (s->emitters[i].is_sphere) {
             s->emitters[i].prim += (uint32_t)s->num_triangles;
             s->emitters[i].is_sphere = 0;
+        } else if (s->emitters[i].is_shape) {
+            s->emitters[i].prim += (uint32_t)(s->num_triangles + s->num_spheres);
+            s->emitters[i].is_shape = 0;
         }
     s->tri_normals = malloc((size_t)(s->num_triangles > 0 ? s->num_triangles : 1) * sizeof *s->tri_normals);
     if (!s->tri_normals) return cst_fail(err, CST_ERR_OOM, "out of memory for %d normals", s->num_triangles);

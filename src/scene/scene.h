@@ -182,9 +182,13 @@ CstStatus scene_add_mesh_ex(Scene *scene, const SceneMesh *mesh, int *num_droppe
  * texture coordinates (0,0), (1,0), (1,1), (0,1) at v0..v3. */
 CstStatus scene_add_quad(Scene *scene, const Vec3 v[4], int material,
                          const Emission *emission, CstError *err);
-/* A non-emitting analytic shape (shape_init's parameters and transform). */
+/* An analytic shape (shape_init's parameters and transform); emission NULL or black for
+ * none. An emitting one is an area light sampled uniformly by area and needs a similarity
+ * transform (shape_uniform_area; CST_ERR_UNSUPPORTED otherwise). */
 CstStatus scene_add_shape(Scene *scene, const ShapeParams *p, const Transform *object_to_world, int material,
-                          int alpha, CstError *err);
+                          const Emission *emission, int alpha, CstError *err);
+/* A bilinear patch built by shape_init_bilinear (copied; it does not emit). */
+CstStatus scene_add_patch(Scene *scene, const AnalyticShape *patch, int material, int alpha, CstError *err);
 CstStatus scene_add_sphere(Scene *scene, Vec3 center, float radius, int material,
                            const Emission *emission, CstError *err);
 /* An alpha cut-out for shapes added after it (SceneMesh.alpha, the last sphere's
@@ -319,7 +323,7 @@ static inline bool scene_intersect_first(const Scene *s, const Ray *ray, Surface
         shape_surface(&s->shapes[(int)h.prim - s->num_triangles - s->num_spheres], ray, h.t, &sf);
         sh->p = sf.p;
         sh->ng = sf.n;
-        sh->ns = sf.n;
+        sh->ns = sf.ns;
         sh->uv = sf.uv;
     } else {
         const Sphere *sp = &s->spheres[(int)h.prim - s->num_triangles];
@@ -679,7 +683,7 @@ static inline Color scene_env_radiance(const Scene *s, Vec3 w, const Wavelengths
 static inline EmitterGeometry scene_emitter_geometry(const Scene *s)
 {
     EmitterGeometry g = {s->positions, s->tri_indices, s->num_triangles, s->spheres,
-                         s->uvs, s->tri_has_uv, s->textures};
+                         s->uvs, s->tri_has_uv, s->textures, s->num_spheres, s->shapes};
     return g;
 }
 

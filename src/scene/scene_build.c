@@ -687,6 +687,56 @@ static CstStatus add_sphere(CstScene *scene, const float center[3], float radius
     return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
 }
 
+/* cst_scene_add_shape's bilinear patch: corners through world_from_object (all zero:
+ * identity), normals through its normal matrix, then shape_init_bilinear. */
+static CstStatus add_patch(CstScene *scene, const CstShapeDesc *d, double peak, const char *fn, CstError *err)
+{
+    if (peak > 0.0)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: emitting bilinear patches are not supported; expected a zero "
+                        "emission (split an emitting patch into two triangles)", fn);
+    if (d->patch_has_normals != 0 && d->patch_has_normals != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch_has_normals %d; expected 0 or 1", fn, d->patch_has_normals);
+    if (d->patch_has_uvs != 0 && d->patch_has_uvs != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch_has_uvs %d; expected 0 or 1", fn, d->patch_has_uvs);
+    float rows[16] = {0};
+    int all_zero = 1;
+    for (int k = 0; k < 12; k++) {
+        if (!isfinite(d->world_from_object[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers", fn,
+                            k, (double)d->world_from_object[k]);
+        rows[k] = d->world_from_object[k];
+        all_zero &= rows[k] == 0.0f;
+    }
+    rows[15] = 1.0f;
+    Transform xf = all_zero ? transform_identity() : transform_from_rows(rows), inv, nm = transform_identity();
+    if (!transform_invert(&xf, &inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
+                        "finite); expected an invertible affine transform", fn);
+    transform_normal_matrix(&xf, &nm);
+    Vec3 p[4], n[4];
+    Vec2 uv[4];
+    for (int i = 0; i < 4; i++) {
+        Vec3 q = v3(d->patch[i][0], d->patch[i][1], d->patch[i][2]);
+        p[i] = transform_point(&xf, q);
+        if (!(v3_max_abs(p[i]) <= BUILD_MAX_LENGTH))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch corner %d is (%g, %g, %g) in world space; expected "
+                            "finite coordinates within 1e18", fn, i, (double)p[i].x, (double)p[i].y, (double)p[i].z);
+        n[i] = transform_normal(&nm, v3(d->patch_normals[i][0], d->patch_normals[i][1], d->patch_normals[i][2]));
+        if (d->reverse_orientation) n[i] = v3_neg(n[i]);
+        uv[i] = v2(d->patch_uvs[i][0], d->patch_uvs[i][1]);
+        if (!isfinite(uv[i].x) || !isfinite(uv[i].y))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch_uvs[%d] is not finite", fn, i);
+    }
+    AnalyticShape sh;
+    bool flip = (d->reverse_orientation != 0) != (transform_det(&xf) < 0.0);
+    if (!shape_init_bilinear(&sh, p, d->patch_has_normals ? n : NULL, d->patch_has_uvs ? uv : NULL, flip))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: the bilinear patch has no area (its corners lie on one line) "
+                        "or a normal is not finite; expected a patch with area", fn);
+    int alpha_id = 0;
+    CstStatus st = read_alpha(scene, &d->alpha, fn, &alpha_id, err);
+    return st != CST_OK ? st : scene_add_patch(scene, &sh, d->material, alpha_id, err);
+}
+
 CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *err)
 {
     static const char fn[] = "cst_scene_add_shape";
@@ -694,15 +744,15 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
-    if ((int)d->type < CST_SHAPE_CYLINDER || d->type > CST_SHAPE_SPHERE)
+    if ((int)d->type < CST_SHAPE_CYLINDER || d->type > CST_SHAPE_BILINEAR)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: type %d is not a CstShapeType value", fn, (int)d->type);
     if (d->material < 0 || d->material >= scene->num_materials)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
                         fn, d->material, scene->num_materials - 1);
-    const CstEmission zero = {0};
-    if (memcmp(&d->emission, &zero, sizeof zero) != 0)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: emitting analytic shapes are not supported yet; expected a "
-                        "zero emission (tessellate an emitting shape into a mesh instead)", fn);
+    Emission em;
+    double peak = 0.0;
+    if ((st = read_emission(scene, &d->emission, fn, &em, &peak, err)) != CST_OK) return st;
+    if (d->type == CST_SHAPE_BILINEAR) return add_patch(scene, d, peak, fn, err);
     const float vals[5] = {d->radius, d->z_min, d->z_max, d->height, d->inner_radius};
     for (int k = 0; k < 5; k++)
         if (!(fabsf(vals[k]) <= BUILD_MAX_LENGTH))
@@ -735,7 +785,18 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     if (d->type == CST_SHAPE_SPHERE && !(d->z_min < d->z_max)) p.z_min = -d->radius, p.z_max = d->radius;
     int alpha_id = 0;
     if ((st = read_alpha(scene, &d->alpha, fn, &alpha_id, err)) != CST_OK) return st;
-    return scene_add_shape(scene, &p, &xf, d->material, alpha_id, err);
+    if (peak > 0.0) {
+        /* The power check as for spheres, from the world area (shape_init again: cheap). */
+        AnalyticShape tmp;
+        if (shape_init(&tmp, &p, &xf) &&
+            (st = check_product(fn, "the emitted power pi x area x radiance",
+                                (double)CST_PI * (double)shape_area(&tmp) * peak * (em.two_sided ? 2.0 : 1.0),
+                                "a smaller radiance (or scale) or shape", err)) != CST_OK)
+            return st;
+    }
+    const int first = scene->num_emitters;
+    if ((st = scene_add_shape(scene, &p, &xf, d->material, &em, alpha_id, err)) != CST_OK) return st;
+    return peak > 0.0 ? scene_set_emitter_spectrum(scene, first, d->emission.spectrum, err) : CST_OK;
 }
 
 CstStatus cst_scene_add_sphere(CstScene *scene, const float center[3], float radius, int material,

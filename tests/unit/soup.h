@@ -76,6 +76,24 @@ static inline Vec3 rnd_dir(Pcg32 *rng)
         if (l > 0.05f && l <= 1.0f) return v3_scale(d, 1.0f / l);
     }
 }
+/* Random bilinear patches appended to the shapes: centres in [-10, 10]^3, log-uniform
+ * size in [0.01, 4], corners displaced at random (curved, twisted), one in four planar
+ * (p11 = p10 + p01 - p00: a parallelogram), one in ten reverse-oriented. */
+static inline void soup_random_patches(Soup *s, Pcg32 *rng, int n)
+{
+    s->shapes = realloc(s->shapes, (size_t)(s->num_shapes + n > 0 ? s->num_shapes + n : 1) * sizeof *s->shapes);
+    assert_non_null(s->shapes);
+    for (int i = 0; i < n; i++) {
+        Vec3 c = rnd_v3(rng, -10.0, 10.0);
+        float size = (float)exp(rnd(rng, log(0.01), log(4.0)));
+        Vec3 p[4];
+        for (int k = 0; k < 4; k++) p[k] = v3_add(c, v3_scale(rnd_v3(rng, -1.0, 1.0), size));
+        if (pcg32_next(rng) % 4u == 0u) p[3] = v3_sub(v3_add(p[1], p[2]), p[0]);
+        bool flip = pcg32_next(rng) % 10u == 0u;
+        assert_true(shape_init_bilinear(&s->shapes[s->num_shapes], p, NULL, NULL, flip));
+        s->num_shapes++;
+    }
+}
 
 /* Random triangles of log-uniform size in [0.01, 5] around centres in [-10, 10]^3, a
  * third of them slivers (the third vertex within 1e-4 of the size off the first edge). */

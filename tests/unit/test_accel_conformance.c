@@ -536,13 +536,15 @@ static void test_accel_mixed_triangles_spheres(void **state)
         }
 }
 
-/* Analytic shapes (cylinders, disks, partial spheres; rotated, scaled, mirrored) alone and
- * with triangles and spheres; then rays leaving shape points by the renderer's spawn
- * offset, to either side (bounces and shadow rays from a quadric). */
+/* Analytic shapes (cylinders, disks, partial spheres; rotated, scaled, mirrored; and
+ * bilinear patches, curved and planar) alone and with triangles and spheres; then rays
+ * leaving shape points by the renderer's spawn offset, to either side (bounces and shadow
+ * rays from a quadric or a patch). */
 static void test_accel_shapes(void **state)
 {
     (void)state;
     const int tris[] = {0, 0, 300, 2000}, spheres[] = {0, 0, 40, 200}, shapes[] = {1, 40, 300, 500};
+    const int patches[] = {0, 30, 200, 300};
     for (int k = 0; k < 4; k++) {
         Soup s = {0};
         Pcg32 rng;
@@ -550,10 +552,12 @@ static void test_accel_shapes(void **state)
         soup_random_tris(&s, &rng, tris[k]);
         soup_random_spheres(&s, &rng, spheres[k]);
         soup_random_shapes(&s, &rng, shapes[k]);
+        soup_random_patches(&s, &rng, patches[k]);
         Suite b;
         suite_build(&b, &s);
-        char what[64];
-        snprintf(what, sizeof what, "%d tris + %d spheres + %d shapes", tris[k], spheres[k], shapes[k]);
+        char what[96];
+        snprintf(what, sizeof what, "%d tris + %d spheres + %d shapes + %d patches", tris[k], spheres[k], shapes[k],
+                 patches[k]);
         check_random_rays(&b, &rng, 10000, what);
         for (int i = 0; i < 3000; i++) {
             const AnalyticShape *sh = &s.shapes[pcg32_next(&rng) % (uint32_t)s.num_shapes];

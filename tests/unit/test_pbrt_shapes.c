@@ -25,38 +25,60 @@ static void test_shapes(void **state)
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "partial sphere") < 0);
     assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "cylinder") < 0);
     assert_true(find_warning(&w, CST_WARN_GEOMETRY, "1 of 2 triangles are degenerate") >= 0);
-    /* analytic shapes: the partial sphere, the disk (area pi r^2 at z = 1), the cylinder */
-    assert_int_equal(s->num_shapes, 3);
+    /* analytic shapes: the partial sphere, the disk (area pi r^2 at z = 1), the bilinear
+     * patch, the cylinder */
+    assert_int_equal(s->num_shapes, 4);
     assert_int_equal(s->shapes[0].p.type, SHAPE_TAG_SPHERE);
     assert_true(s->shapes[0].p.z_max == 0.5f && s->shapes[0].p.z_min == -1.0f);
     assert_int_equal(s->shapes[1].p.type, SHAPE_TAG_DISK);
     assert_true(s->shapes[1].p.height == 1.0f && s->shapes[1].p.radius == 2.0f);
     assert_true(fabs((double)shape_area(&s->shapes[1]) - 4.0 * 3.14159265358979) < 1e-4);
-    assert_int_equal(s->shapes[2].p.type, SHAPE_TAG_CYLINDER);
-    assert_true(s->shapes[2].p.z_min == -1.0f && s->shapes[2].p.z_max == 1.0f && s->shapes[2].p.radius == 1.0f);
-    int first_disk = 2 * 64 * 31; /* after the tessellated sphere: the disk has no triangles */
-    /* the bilinear patch: two triangles facing +z */
-    int bl = first_disk;
-    assert_true(s->tri_normals[bl].z > 0.999f && s->tri_normals[bl + 1].z > 0.999f);
+    assert_int_equal(s->shapes[2].p.type, SHAPE_TAG_BILINEAR);
+    ShapeSurface sf; /* facing +z, as pbrt's dp/du x dp/dv */
+    shape_surface_at(&s->shapes[2], v2(0.5f, 0.5f), &sf);
+    assert_true(sf.n.z > 0.999f);
+    assert_int_equal(s->shapes[3].p.type, SHAPE_TAG_CYLINDER);
+    assert_true(s->shapes[3].p.z_min == -1.0f && s->shapes[3].p.z_max == 1.0f && s->shapes[3].p.radius == 1.0f);
+    int first_disk = 2 * 64 * 31; /* after the tessellated sphere: the disk and the patch have no triangles */
     /* the loopsubdiv triangle refined twice: 16 triangles (its limit surface: test_loop_subdiv) */
-    assert_int_equal(s->num_triangles, bl + 2 + 16 + 1);
+    assert_int_equal(s->num_triangles, first_disk + 16 + 1);
     cst_scene_destroy(s);
 }
 
-/* An emitting disk, an emitting cylinder and a disk inside an object are not analytic
- * shapes yet (no area sampling of them): the disk is tessellated as before, the cylinder
- * skipped with a warning that says why. */
-static void test_quadric_fallbacks(void **state)
+/* An emitting disk, cylinder and partial sphere are analytic area lights (their "power"
+ * normalised by the world area, pbrt-v4's DiffuseAreaLight::Create); under a non-uniform
+ * scale an emitting disk falls back to its tessellation and an emitting cylinder is
+ * skipped, with a warning that says why. */
+static void test_quadric_emitters(void **state)
 {
     (void)state;
     Warnings w = {0};
     Scene *s = expect_ok(WORLD("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
-                               "Shape \"disk\"\nShape \"cylinder\"\nAttributeEnd\n"
+                               "Shape \"disk\" \"float radius\" 2 \"float innerradius\" 1\nShape \"cylinder\"\n"
+                               "AttributeEnd\n"
+                               "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"float power\" 10\n"
+                               "Translate 0 0 5 Scale 2 2 2\n"
+                               "Shape \"sphere\" \"float zmin\" 0 \"float phimax\" 180\nAttributeEnd\n"
                                "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"),
                          &w);
+    assert_int_equal(s->num_shapes, 3);
+    assert_int_equal(s->num_triangles, 1);
+    assert_int_equal(s->num_emitters, 3);
+    const float pi = 3.14159265f;
+    assert_float_equal(s->emitters[0].area, 3.0f * pi, 1e-5f); /* pi (2^2 - 1^2) */
+    assert_float_equal(s->emitters[1].area, 4.0f * pi, 1e-5f); /* 2 pi r h, r 1, h 2 */
+    /* half of the upper hemisphere of radius 2: pi r^2 = 4 pi; L = power / (pi A) */
+    assert_float_equal(s->emitters[2].area, 4.0f * pi, 1e-5f);
+    assert_float_equal(s->emitters[2].radiance.c[0], 10.0f / (pi * 4.0f * pi), 1e-5f);
+    cst_scene_destroy(s);
+    Warnings w2 = {0};
+    s = expect_ok(WORLD("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nScale 1 2 1\n"
+                        "Shape \"disk\"\nShape \"cylinder\"\nAttributeEnd\n"
+                        "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"),
+                  &w2);
     assert_int_equal(s->num_shapes, 0);
     assert_int_equal(s->num_triangles, 128 + 1);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "cylinder\" is not supported (emitting") >= 0);
+    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "emitting under a non-uniform scale") >= 0);
     cst_scene_destroy(s);
 }
 
@@ -415,7 +437,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_shapes),
-        cmocka_unit_test(test_quadric_fallbacks),
+        cmocka_unit_test(test_quadric_emitters),
         cmocka_unit_test(test_loopsubdiv),
         cmocka_unit_test(test_shape_alpha),
         cmocka_unit_test(test_plymesh),

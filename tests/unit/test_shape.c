@@ -256,10 +256,19 @@ static void test_json_shapes(void **state)
     assert_int_equal(info.shapes, 3);
     cst_scene_destroy(scene);
     scene = NULL;
+    /* an emitting disk is an area light of its own area; a non-uniform scale is refused */
+    if (load_json(JSON_SCENE("{\"type\": \"disk\", \"material\": \"white\", \"radius\": 1, "
+                             "\"emission\": {\"radiance\": [1, 1, 1]}}"), &scene, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    assert_int_equal(((const Scene *)scene)->num_emitters, 1);
+    assert_float_equal(((const Scene *)scene)->emitters[0].area, CST_PI, 1e-6f);
+    cst_scene_destroy(scene);
+    scene = NULL;
     assert_int_equal(load_json(JSON_SCENE("{\"type\": \"disk\", \"material\": \"white\", \"radius\": 1, "
-                                          "\"emission\": {\"radiance\": [1, 1, 1]}}"), &scene, &err), CST_ERR_INVALID_ARG);
+                                          "\"transform\": {\"scale\": [1, 2, 1]}, "
+                                          "\"emission\": {\"radiance\": [1, 1, 1]}}"), &scene, &err), CST_ERR_UNSUPPORTED);
     assert_null(scene);
-    if (!strstr(err.msg, "t.json:1:") || !strstr(err.msg, "not supported yet")) fail_msg("%s", err.msg);
+    if (!strstr(err.msg, "t.json:1:") || !strstr(err.msg, "similarity")) fail_msg("%s", err.msg);
     assert_int_equal(load_json(JSON_SCENE("{\"type\": \"cylinder\", \"material\": \"white\", \"radius\": 1, "
                                           "\"height\": 1}"), &scene, &err), CST_ERR_INVALID_ARG);
     if (!strstr(err.msg, "\"height\"")) fail_msg("%s", err.msg);

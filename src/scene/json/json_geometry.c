@@ -623,16 +623,12 @@ static CstStatus read_opt_float(Loader *ld, const json_t *shape, const char *key
 
 /* "cylinder", "disk", and a "sphere" with "z_min", "z_max" or "phi_max": analytic shapes
  * (cst_scene_add_shape), in object space placed by "transform" (a sphere: moved to its
- * "center"). Not emitting yet. */
+ * "center"); an "emission" makes it an area light. */
 static CstStatus parse_analytic(Loader *ld, const json_t *shape, int type, int material, const Emission *em,
                                 const CstAlpha *alpha)
 {
-    if (em->radiance.c[0] > 0.0f || em->radiance.c[1] > 0.0f || em->radiance.c[2] > 0.0f) {
-        json_path_push_key(ld, "emission");
-        return json_fail_here(ld, "emitting cylinders, disks and partial spheres are not supported yet; expected "
-                                  "no \"emission\" (a \"mesh\" can emit)");
-    }
     CstShapeDesc sd = {0};
+    sd.emission = emission_desc(em); /* an area light sampled by area; needs a similarity "transform" */
     sd.type = type == SHAPE_CYLINDER ? CST_SHAPE_CYLINDER : type == SHAPE_DISK ? CST_SHAPE_DISK : CST_SHAPE_SPHERE;
     json_t *v;
     LOADER_TRY(json_member_required(ld, shape, "radius", "a number > 0", &v));

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "geometry/loop_subdiv.h"
+#include "geometry/shape.h"
 #include "geometry/triangle.h"
 #include "scene/mesh_import.h"
 #include "scene/pbrt/pbrt_material.h"
@@ -522,13 +523,46 @@ static CstStatus shape_alpha(Loader *ld, Params *ps, const char *d, CstAlpha *ou
     return CST_OK;
 }
 
-/* Whether a quadric can be an analytic shape here: not emitting (area sampling of analytic
- * shapes is not done yet), not inside an object (instances hold triangles), not a medium
- * boundary (left out as every "interface" shape). Otherwise the caller falls back to the
+/* Whether a quadric can be an analytic shape here: not inside an object (instances hold
+ * triangles), not a medium boundary (left out as every "interface" shape), and, when it
+ * emits, placed by a similarity (area lights sample analytic shapes uniformly by area,
+ * which a non-uniform scale would skew). Otherwise the caller falls back to the
  * tessellation (disk, sphere) or the skip (cylinder). */
 static int analytic_ok(const Loader *ld)
 {
-    return ld->cur_obj < 0 && !ld->gs.area.active && !ld->mats[ld->gs.material].interface;
+    float scale;
+    if (ld->cur_obj >= 0 || ld->mats[ld->gs.material].interface) return 0;
+    return !ld->gs.area.active || (transform_is_affine(&ld->gs.ctm.m) && is_similarity(&ld->gs.ctm.m, &scale));
+}
+
+/* pbrt-v4's Area() of a quadric in object space (Cylinder, Disk, Sphere::Area). */
+static double quadric_object_area(const CstShapeDesc *sd)
+{
+    const double phi = (double)sd->phi_max_degrees * (PBRT_PI / 180.0), r = (double)sd->radius;
+    switch (sd->type) {
+    case CST_SHAPE_CYLINDER: return phi * r * ((double)sd->z_max - (double)sd->z_min);
+    case CST_SHAPE_DISK: return 0.5 * phi * (r * r - (double)sd->inner_radius * (double)sd->inner_radius);
+    default: return phi * r * (fmin((double)sd->z_max, r) - fmax((double)sd->z_min, -r));
+    }
+}
+
+/* The area light of the graphics state on an analytic shape: L x scale, or normalised to
+ * `power` by the shape's world area as pbrt-v4's DiffuseAreaLight::Create does (pbrt-v4
+ * takes the quadric's object-space Area(); the world area is used here, as for spheres,
+ * the same under the rigid transforms of the scenes). */
+static void analytic_emission(const Loader *ld, CstShapeDesc *sd)
+{
+    const AreaLight *al = &ld->gs.area;
+    if (!al->active) return;
+    ShapeEmission em = {color_scale(al->L, al->scale), al->two_sided, al->texture, al->spectrum};
+    if (al->power > 0.0f) {
+        float scale = 1.0f;
+        (void)is_similarity(&ld->gs.ctm.m, &scale); /* analytic_ok held */
+        double area = quadric_object_area(sd) * (double)scale * (double)scale;
+        double k_e = (al->two_sided ? 2.0 : 1.0) * area * PBRT_PI * (al->texture ? (double)al->image_lum : 1.0);
+        if (k_e > 0.0) em.radiance = color_scale(em.radiance, (float)((double)al->power / k_e));
+    }
+    sd->emission = emission_desc(&em);
 }
 
 /* A cylinder, disk or partial sphere placed by the CTM as an analytic shape (pbrt-v4's
@@ -547,8 +581,68 @@ static CstStatus add_analytic(Loader *ld, Params *ps, const char *d, Loc loc, Cs
     if (transform_is_identity(m)) memset(sd->world_from_object, 0, sizeof sd->world_from_object);
     sd->reverse_orientation = ld->gs.reverse != 0;
     sd->alpha = alpha;
+    analytic_emission(ld, sd);
     CstStatus st = cst_scene_add_shape(ld->scene, sd, ld->err);
     return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
+/* A "bilinearmesh" as exact bilinear patches (pbrt-v4's BilinearPatch: Reshetov 2019), one
+ * analytic shape per patch, placed by the CTM; the patches g holds as triangle pairs
+ * (read_mesh_params: (p00, p10, p11), (p00, p11, p01)). Patches without area (corners on
+ * one line) are left out with a warning, as degenerate triangles are. */
+static CstStatus bilinear_patches(Loader *ld, Params *ps, const char *d, Loc loc, const ShapeGeom *g)
+{
+    CstAlpha alpha = {0};
+    TRY(shape_alpha(ld, ps, d, &alpha));
+    pbrt_params_warn_unused(ld, ps, d);
+    if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
+    CstShapeDesc sd = {0};
+    sd.type = CST_SHAPE_BILINEAR;
+    TRY(pbrt_material_scene_id(ld, ld->gs.material, &sd.material));
+    const Transform *m = &ld->gs.ctm.m;
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) sd.world_from_object[4 * r + c] = m->m[r][c];
+    if (transform_is_identity(m)) memset(sd.world_from_object, 0, sizeof sd.world_from_object);
+    sd.reverse_orientation = ld->gs.reverse != 0;
+    sd.alpha = alpha;
+    sd.patch_has_normals = g->n != NULL;
+    sd.patch_has_uvs = g->uv != NULL;
+    int skipped = 0;
+    for (int f = 0; 2 * f < g->nt; f++) {
+        const int *t = &g->idx[6 * f];
+        const int v[4] = {t[0], t[1], t[5], t[2]}; /* p00, p10, p01, p11 */
+        Vec3 corner[4];
+        for (int k = 0; k < 4; k++) {
+            corner[k] = g->p[v[k]];
+            for (int c = 0; c < 3; c++) sd.patch[k][c] = v3_get(corner[k], c);
+            if (g->n)
+                for (int c = 0; c < 3; c++) sd.patch_normals[k][c] = v3_get(g->n[v[k]], c);
+            if (g->uv) { sd.patch_uvs[k][0] = g->uv[v[k]].x; sd.patch_uvs[k][1] = g->uv[v[k]].y; }
+        }
+        AnalyticShape probe; /* area is kept by the invertible CTM: test in object space */
+        if (!shape_init_bilinear(&probe, corner, NULL, NULL, false)) { skipped++; continue; }
+        CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
+        if (st) return pbrt_fail_wrap(ld, st, loc, d);
+    }
+    if (skipped)
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: %d bilinear patch%s without area left out", d, skipped,
+                     skipped > 1 ? "es" : "");
+    return CST_OK;
+}
+
+/* "bilinearmesh": exact patches (*exact set: added) where analytic_ok and not emitting,
+ * else g as two triangles per patch (power_group 2), with a warning. */
+static CstStatus bilinear_mesh(Loader *ld, Params *ps, const char *d, Loc loc, ShapeGeom *g, int *exact)
+{
+    TRY(read_mesh_params(ld, ps, d, loc, 4, g));
+    if (analytic_ok(ld) && !ld->gs.area.active && transform_is_affine(&ld->gs.ctm.m)) {
+        *exact = 1;
+        return bilinear_patches(ld, ps, d, loc, g);
+    }
+    g->power_group = 2;
+    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two triangles, exact for "
+                 "planar patches (emitting, in an object, or an interface)", d);
+    return CST_OK;
 }
 
 /* pbrt-v4's Cylinder: radius 1, z from -1 to 1 (either order), phimax 360. */
@@ -588,11 +682,9 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
     if (strcmp(type, "trianglemesh") == 0) {
         st = read_mesh_params(ld, &ps, d, loc, 3, &g);
     } else if (strcmp(type, "bilinearmesh") == 0) {
-        st = read_mesh_params(ld, &ps, d, loc, 4, &g);
-        g.power_group = 2;
-        if (!st)
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: each bilinear patch split into two "
-                         "triangles (exact for planar patches)", d);
+        int exact = 0;
+        st = bilinear_mesh(ld, &ps, d, loc, &g, &exact);
+        if (exact) goto done;
     } else if (strcmp(type, "loopsubdiv") == 0) {
         st = loop_shape(ld, &ps, d, loc, &g);
     } else if (strcmp(type, "plymesh") == 0) {
@@ -623,7 +715,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         }
         if (partial)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: partial sphere (zmin, zmax, phimax) "
-                         "rendered as the full sphere (emitting or in an object)", d);
+                         "rendered as the full sphere (in an object, or emitting under a non-uniform scale)", d);
         g.is_sphere = 1;
         g.radius = r;
     } else if (strcmp(type, "disk") == 0) {
@@ -648,7 +740,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         st = disk_mesh(ld, h, r, ri, phimax, &g);
         g.power_group = g.nt; /* one disk: its power over all its triangles */
         if (!st)
-            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (emitting or in an object) tessellated into %d "
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (in an object, or emitting under a non-uniform scale) tessellated into %d "
                          "triangles of the same total area", d, g.nt);
     } else if (strcmp(type, "cylinder") == 0 && analytic_ok(ld)) {
         st = cylinder_shape(ld, &ps, d, loc);
@@ -660,7 +752,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         skip = 1;
         pbrt_params_mark_all_used(&ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported%s; skipped", d,
-                     strcmp(type, "cylinder") == 0 ? " (emitting, in an object, or an interface)" : "");
+                     strcmp(type, "cylinder") == 0 ? " (in an object, an interface, or emitting under a non-uniform scale)" : "");
     } else {
         st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown shape \"%s\"; expected one of: "
                      "trianglemesh, plymesh, bilinearmesh, loopsubdiv, sphere, disk (or the "
