@@ -3,7 +3,9 @@
  * estimation at surface and medium vertices with transmittance through media and medium
  * boundaries, MIS against BSDF / phase sampling (Veach eq. 9.13), emission from media.
  * The volume rendering equation as in pbrt-v4 ch. 14 for homogeneous media; the distance
- * pdf over colour channels is medium.h's (balance heuristic over channels). */
+ * pdf over colour channels is medium.h's (balance heuristic over channels). Heterogeneous
+ * media (grids, the cloud) are delta-tracked per segment (hetero_sample_distance: null
+ * collisions, the same balance heuristic over the lanes' collision densities). */
 #include "integrators/volpath.h"
 
 #include "integrators/direct.h"
@@ -75,12 +77,22 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
             }
             float u_ch = sampler_1d(smp), u_t = sampler_1d(smp);
             MediumSample ms;
-            medium_sample_distance(&mc, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
+            const Medium *med = &s->media[medium];
+            const bool het = medium_is_hetero(med);
+            if (het) {
+                /* Delta tracking; its emission estimate covers the whole segment, also
+                 * when the path passes through (below the depth limit only, as pbrt-v4). */
+                hetero_sample_distance(&med->u.het, &mc, ray.o, ray.d, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
+                if (mc.emissive && !(pp->max_depth > 0 && depth >= pp->max_depth)) L = color_madd(L, beta, ms.le);
+            } else {
+                medium_sample_distance(&mc, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
+            }
             if (ms.scattered) {
                 /* Emission of the segment: sigma_a Le Tr / pdf(t) (pbrt-v4 adds it below
                  * the depth limit only). */
                 const bool last = pp->max_depth > 0 && depth >= pp->max_depth;
-                if (mc.emissive && !last) L = color_madd(L, beta, color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
+                if (mc.emissive && !last && !het)
+                    L = color_madd(L, beta, color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
                 beta = color_mul(beta, ms.weight);
                 if (last || color_is_black(beta)) break;
                 Vec3 p = ray_at(&ray, ms.t), wo = v3_neg(ray.d);

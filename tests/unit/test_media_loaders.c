@@ -49,7 +49,7 @@ static void test_json_media_errors(void **state)
                " \"media\": {\"fog\": {\"g\": 1.5}}, \"shapes\": []}",
                "bad.json:2:25: media.fog.g: 1.5; expected a number in (-1, 1)");
     json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
-               " \"media\": {\"fog\": {\"type\": \"cloud\"}}, \"shapes\": []}",
+               " \"media\": {\"fog\": {\"type\": \"nanovdb\"}}, \"shapes\": []}",
                "bad.json:2:");
     json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
                " \"media\": {\"fog\": {}}, \"shapes\": [\n"
