@@ -184,42 +184,42 @@ static void lane_logs(const Color *sigma_t, const double log_st[COLOR_LANES], in
         la[c] = (n > 0 ? (double)n * log_st[c] : 0.0) - (double)sigma_t->c[c] * tau;
 }
 
-/* x_c exp(la[c]) / (1/4 sum_c' exp(lb[c'])) per lane, computed relative to the largest
- * lb so that neither overflows; lanes with x_c = 0 give 0. */
-static Color lane_ratio(Color x, const double la[COLOR_LANES], const double lb[COLOR_LANES])
-{
-    double m = -HUGE_VAL;
-    for (int c = 0; c < COLOR_LANES; c++) m = lb[c] > m ? lb[c] : m;
-    Color out = color_s(0.0f);
-    if (!(m > -HUGE_VAL)) return out;
-    double den = 0.0;
-    for (int c = 0; c < COLOR_LANES; c++) den += exp(lb[c] - m);
-    den *= 1.0 / (double)COLOR_LANES;
-    for (int c = 0; c < COLOR_LANES; c++)
-        out.c[c] = x.c[c] != 0.0f ? (float)((double)x.c[c] * exp(la[c] - m) / den) : 0.0f;
-    return out;
-}
-
-/* One sigma_t factor more in the denominator: the density of a tentative collision. */
+/* One sigma_t factor more: ln(sigma_t[c] A_c), the lane's density of a tentative collision. */
 static void add_log_sigma(const double log_st[COLOR_LANES], const double la[COLOR_LANES], double lb[COLOR_LANES])
 {
     for (int c = 0; c < COLOR_LANES; c++) lb[c] = la[c] + log_st[c];
 }
 
-void hetero_sample_distance(const HeteroMedium *h, const MediumCoeffs *mc, Vec3 o, Vec3 d, float t_max, float u_ch,
-                            float u, MediumSample *out)
+/* exp(a - b) for lane ratios, its exponent capped at 80 (e^80 < FLT_MAX) so that a hero
+ * lane far less likely than another gives large but finite factors, never inf / inf. */
+static inline float exp_ratio(double a, double b)
+{
+    double x = a - b;
+    return x > -HUGE_VAL ? (float)exp(x < 80.0 ? x : 80.0) : 0.0f;
+}
+
+/* 1 / mean_c(r_path[c] r_seg[c]): the balance heuristic's normalisation over the lanes
+ * for the path so far (r_path) and the segment's part (r_seg), both relative to the hero. */
+static inline float mis_norm(Color r_path, Color r_seg)
+{
+    float m = 0.0f;
+    for (int c = 0; c < COLOR_LANES; c++) m += r_path.c[c] * r_seg.c[c];
+    return m > 0.0f ? (float)COLOR_LANES / m : 0.0f;
+}
+
+void hetero_sample_distance(const HeteroMedium *h, const MediumCoeffs *mc, Vec3 o, Vec3 d, float t_max, int hero,
+                            Color r_path, float u, MediumSample *out)
 {
     out->t = t_max;
     out->scattered = false;
     out->weight = color_s(1.0f);
+    out->r = color_s(1.0f);
     out->tr_pdf = color_s(0.0f);
     out->le = color_s(0.0f);
     Vec3 om, dm, og, dg;
     float ta, tb;
     /* Missing the box: no collision in any lane, f = p = 1. */
     if (!to_grid(h, o, d, t_max, &om, &dm, &og, &dg, &ta, &tb)) return;
-    int hero = (int)(u_ch * (float)COLOR_LANES);
-    if (hero > COLOR_LANES - 1) hero = COLOR_LANES - 1;
     const float sig_h = mc->sigma_t.c[hero];
     const float seed_in[7] = {u, o.x, o.y, o.z, d.x, d.y, d.z};
     Pcg32 rng;
@@ -251,32 +251,40 @@ void hetero_sample_distance(const HeteroMedium *h, const MediumCoeffs *mc, Vec3 
             const float dens = hetero_density(h, pm);
             lane_logs(&mc->sigma_t, log_st, n, tau, la);
             add_log_sigma(log_st, la, lb);
+            /* Lane c's density of the collisions so far relative to the hero's: sigma_t[c]
+             * A_c / (sigma_t[h] A_h). */
+            Color r_seg;
+            for (int c = 0; c < COLOR_LANES; c++) r_seg.c[c] = exp_ratio(lb[c], lb[hero]);
             if (mc->emissive && dens > 0.0f) {
-                /* Emission at a tentative collision: sigma_a(x) Le(x) / majorant, each lane
-                 * weighted by the balance heuristic over the lanes' collision densities
-                 * (pbrt-v4's volpath adds beta sigma_a Le / sigma_maj the same way). */
+                /* Emission at a tentative collision: sigma_a(x) Le(x) / majorant per lane,
+                 * f / p_hero = A_c sigma_a Le dens / (sigma_t[h] A_h M), divided by the
+                 * lanes' mean density ratio over the whole path (pbrt-v4's volpath adds
+                 * beta sigma_a Le / sigma_maj with r_u the same way). */
                 float k = dens * le_scale_at(h, pm) / seg.maj;
                 if (k > 0.0f) {
-                    Color x = color_scale(color_mul(mc->sigma_a, mc->le), k);
-                    out->le = color_add(out->le, lane_ratio(x, la, lb));
+                    Color x = color_scale(color_mul(mc->sigma_a, mc->le), k * mis_norm(r_path, r_seg));
+                    for (int c = 0; c < COLOR_LANES; c++) x.c[c] *= exp_ratio(la[c], lb[hero]);
+                    out->le = color_add(out->le, x);
                 }
             }
             /* Real with probability density / bound, the same in every lane. */
             if (pcg32_float(&rng) * seg.maj < dens) {
                 out->t = t;
                 out->scattered = true;
-                /* f_c / mean p: sigma_s[c] A_c / mean(sigma_t A); the albedo in the hero
-                 * lane of a grey medium. */
-                out->weight = lane_ratio(mc->sigma_s, la, lb);
+                /* f_c / p_hero = sigma_s[c] A_c / (sigma_t[h] A_h): the albedo in the hero
+                 * lane. */
+                for (int c = 0; c < COLOR_LANES; c++)
+                    out->weight.c[c] = mc->sigma_s.c[c] > 0.0f ? mc->sigma_s.c[c] * exp_ratio(la[c], lb[hero]) : 0.0f;
+                out->r = r_seg;
                 return;
             }
             n++;
             e = -log1pf(-pcg32_float(&rng));
         }
     }
-    /* Passed: f_c = p_c = A_c times the common factors. */
+    /* Passed: f_c = p_c = A_c times the common factors, so f / p_hero = r. */
     lane_logs(&mc->sigma_t, log_st, n, tau, la);
-    out->weight = lane_ratio(color_s(1.0f), la, la);
+    for (int c = 0; c < COLOR_LANES; c++) out->weight.c[c] = out->r.c[c] = exp_ratio(la[c], la[hero]);
 }
 
 Color hetero_transmittance(const HeteroMedium *h, const MediumCoeffs *mc, Vec3 o, Vec3 d, float t_max, uint64_t seed)

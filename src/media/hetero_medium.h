@@ -54,16 +54,18 @@ struct MediumCoeffs;
 struct MediumSample;
 
 /* Delta tracking along o + t d (world space, d unit length) over [0, t_max] (t_max may be
- * INFINITY): tentative collisions at rate sigma_t[c] x majorant in the lane c picked by
- * u_ch, real with probability density / majorant (the same in every lane, since sigma_t =
- * density x a constant colour), and weights with the balance heuristic over the lanes'
- * densities of the whole collision sequence (one-sample MIS over channels, Veach eq. 9.15,
- * as medium_sample_distance, extended to null collisions as in Miller, Georgiev & Jarosz
- * 2019, "A null-scattering path integral formulation of light transport", sec. 5.2).
- * Emission sigma_a Le is gathered at every tentative collision (out->le, to be multiplied
- * by the path throughput). u seeds the rest of the random numbers. */
+ * INFINITY): tentative collisions at rate sigma_t[hero] x majorant, real with probability
+ * density / majorant (the same in every lane, since sigma_t = density x a constant colour).
+ * Spectral MIS over the lanes as pbrt-v4's volpath (Miller, Georgiev & Jarosz 2019, "A
+ * null-scattering path integral formulation of light transport", sec. 5.2): out->weight
+ * is f_c / p_hero per lane and out->r = p_c / p_hero, the lanes' densities of the
+ * collision sequence relative to the hero's; the path multiplies its throughput by weight
+ * and its ratios by r, and divides every contribution by the mean ratio (the balance
+ * heuristic over lanes for the whole path). Emission sigma_a Le is gathered at every
+ * tentative collision (out->le: already divided by the mean of r_path x the segment's
+ * ratios; to be multiplied by the throughput). u seeds the rest of the random numbers. */
 void hetero_sample_distance(const HeteroMedium *h, const struct MediumCoeffs *mc, Vec3 o, Vec3 d, float t_max,
-                            float u_ch, float u, struct MediumSample *out);
+                            int hero, Color r_path, float u, struct MediumSample *out);
 
 /* Ratio tracking of the transmittance along o + t d over [0, t_max] (finite), with one
  * majorant for every lane (the largest lane's sigma_t x the cell bound), so each lane's

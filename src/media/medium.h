@@ -65,6 +65,7 @@ typedef struct MediumSample {
                      * (times sigma_a Le); else unset */
     Color le;       /* heterogeneous media only: the segment's emission estimate (times the
                      * path throughput), gathered whether or not it scattered */
+    Color r;        /* heterogeneous media only: p_c / p_hero of the segment (hetero_medium.h) */
 } MediumSample;
 
 /* Distance sampling for the path tracer: one lane c picked uniformly from the four (u_ch;

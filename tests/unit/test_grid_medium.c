@@ -198,10 +198,12 @@ static void check_tracking(float (*f)(Vec3), int n, uint64_t seed, const char *w
         uint64_t s64 = ((uint64_t)pcg32_next(&r) << 32) | pcg32_next(&r);
         stat_add(&rt, hetero_transmittance(&m.u.het, &mc, SEG_O, dir, len, s64));
         MediumSample ms;
-        float u_ch = pcg32_float(&r), u = pcg32_float(&r);
-        hetero_sample_distance(&m.u.het, &mc, SEG_O, dir, len, u_ch, u, &ms);
-        stat_add(&pass, ms.scattered ? color_s(0.0f) : ms.weight);
-        stat_add(&sc, ms.scattered ? ms.weight : color_s(0.0f));
+        int hero = (int)(pcg32_float(&r) * (float)COLOR_LANES);
+        hetero_sample_distance(&m.u.het, &mc, SEG_O, dir, len, hero, color_s(1.0f), pcg32_float(&r), &ms);
+        /* A one-segment path: f / p_hero / mean(p_c / p_hero), the balance heuristic. */
+        Color w = color_scale(ms.weight, (float)COLOR_LANES / (ms.r.c[0] + ms.r.c[1] + ms.r.c[2] + ms.r.c[3]));
+        stat_add(&pass, ms.scattered ? color_s(0.0f) : w);
+        stat_add(&sc, ms.scattered ? w : color_s(0.0f));
         stat_add(&em, ms.le);
     }
     char name[96];
@@ -277,7 +279,8 @@ static void test_delta_tracking_chi2(void **state)
     pcg32_seed_sample(&r, 21, 0, 0);
     for (int i = 0; i < N; i++) {
         MediumSample ms;
-        hetero_sample_distance(&m.u.het, &mc, SEG_O, dir, len, pcg32_float(&r), pcg32_float(&r), &ms);
+        hetero_sample_distance(&m.u.het, &mc, SEG_O, dir, len, (int)(pcg32_float(&r) * 4.0f), color_s(1.0f),
+                               pcg32_float(&r), &ms);
         if (ms.scattered) {
             int b = (int)(ms.t / len * BINS);
             obs[b < BINS ? b : BINS - 1] += 1.0;
@@ -302,7 +305,7 @@ static void test_miss_and_empty(void **state)
     Medium m = grid_medium(4, constant_density, color_s(1.0f), color_s(1.0f), color_s(0.0f));
     MediumCoeffs mc = medium_coeffs(&m, NULL);
     MediumSample ms;
-    hetero_sample_distance(&m.u.het, &mc, v3(0, 5, 0), v3(1, 0, 0), INFINITY, 0.3f, 0.5f, &ms);
+    hetero_sample_distance(&m.u.het, &mc, v3(0, 5, 0), v3(1, 0, 0), INFINITY, 1, color_s(1.0f), 0.5f, &ms);
     assert_false(ms.scattered);
     assert_true(ms.weight.c[0] == 1.0f && ms.weight.c[3] == 1.0f);
     Color tr = hetero_transmittance(&m.u.het, &mc, v3(0, 5, 0), v3(1, 0, 0), 10.0f, 1);
