@@ -20,6 +20,12 @@
 
 static CstColorMode g_color_mode = CST_COLOR_RGB;
 
+/* pbrt-v4's whole-image means of tests/render/media/cornell-grid.pbrt (see
+ * test_pbrt_grid_cornell). */
+#define PBRT_GRID_R 0.201369
+#define PBRT_GRID_G 0.128219
+#define PBRT_GRID_B 0.0362208
+
 static const CstIntegrator VARIANTS[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_BSDF, CST_INTEGRATOR_PATH_NEE};
 
 /* Every block's mean within Z_LIMIT standard errors of expect[c]. */
@@ -232,6 +238,43 @@ static void test_constant_grid_is_homogeneous(void **state)
     scene_destroy(g);
 }
 
+
+/* tests/render/media/cornell-grid.pbrt (a uniformgrid and a cloud in the Cornell box)
+ * against pbrt-v4's volpath (spectral, maxdepth 5): its whole-image means at 64 x 64,
+ * 1024 spp (tests/render/media/README.md), and caustic's at 32 x 32 (the box filter's
+ * whole-image mean does not depend on the resolution). Each channel within 1% of pbrt-v4
+ * plus 4 standard errors of caustic's. Spectral mode only: pbrt-v4 is spectral. */
+static void test_pbrt_grid_cornell(void **state)
+{
+    (void)state;
+    if (g_color_mode != CST_COLOR_SPECTRAL) {
+        print_message("spectral mode only (run as test_grid_media --spectral)\n");
+        return;
+    }
+    static const double PBRT_MEAN[3] = {PBRT_GRID_R, PBRT_GRID_G, PBRT_GRID_B};
+    CstScene *s = NULL;
+    CstError err;
+    CstLoadOptions opt = {0};
+    if (cst_scene_load_pbrt(CST_SOURCE_DIR "/tests/render/media/cornell-grid.pbrt", &opt, &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = st.height = 32;
+    st.color_mode = CST_COLOR_SPECTRAL;
+    CstFilm *f = render_film(s, &st, CST_INTEGRATOR_PATH, 512, 80);
+    RegionStat r = region_stat(f, 0, 0, 32, 32);
+    for (int c = 0; c < 3; c++) {
+        double rel = (r.mean[c] - PBRT_MEAN[c]) / PBRT_MEAN[c];
+        print_message("grid Cornell channel %d: caustic %.6f (se %.1e), pbrt-v4 %.6f: %+.2f%%\n", c, r.mean[c],
+                      r.se[c], PBRT_MEAN[c], 100.0 * rel);
+        if (!(fabs(r.mean[c] - PBRT_MEAN[c]) <= 0.01 * PBRT_MEAN[c] + Z_LIMIT * r.se[c]))
+            fail_msg("channel %d: caustic %.6f vs pbrt-v4 %.6f (%+.2f%%, se %.1e)", c, r.mean[c], PBRT_MEAN[c],
+                     100.0 * rel, r.se[c]);
+    }
+    cst_film_destroy(f);
+    cst_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
@@ -241,6 +284,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_grid_furnace_camera_medium),
         cmocka_unit_test(test_cloud_furnace),
         cmocka_unit_test(test_constant_grid_is_homogeneous),
+        cmocka_unit_test(test_pbrt_grid_cornell),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
