@@ -63,7 +63,8 @@ static inline Color mis_beta(Color beta, int hero, Color r_u)
     if (hero < 0) return beta;
     float m = 0.0f;
     for (int c = 0; c < COLOR_LANES; c++) m += r_u.c[c];
-    return m > 0.0f ? color_scale(beta, (float)COLOR_LANES / m) : color_s(0.0f);
+    /* m overflows only on absurdly unlikely hero paths: dropped rather than inf x 0. */
+    return m > 0.0f && isfinite(m) ? color_scale(beta, (float)COLOR_LANES / m) : color_s(0.0f);
 }
 
 Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays)

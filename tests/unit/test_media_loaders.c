@@ -171,6 +171,10 @@ static void test_json_grid_errors(void **state)
     json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
                " \"media\": {\"s\": {\"type\": \"cloud\", \"nx\": 2}}, \"shapes\": []}",
                "bad.json:2:");
+    /* Only a grid's Lescale may be an array. */
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"Lescale\": [1, 2]}}, \"shapes\": []}",
+               "media.s.Lescale");
 }
 
 /* Grid and cloud media, presets: pbrt. */

@@ -164,7 +164,8 @@ CstStatus json_parse_media(Loader *ld, const json_t *media)
         LOADER_TRY(read_coeff(ld, v, "Le", d.le));
         LOADER_TRY(read_scalar(ld, v, "scale", 1e30, &d.scale));
         json_t *lv = json_object_get(v, "Lescale");
-        if (!(lv && json_is_array(lv))) LOADER_TRY(read_scalar(ld, v, "Lescale", 1e30, &d.le_scale));
+        /* A grid's Lescale may be a grid too (read_hetero); elsewhere one number. */
+        if (!(type == 1 && lv && json_is_array(lv))) LOADER_TRY(read_scalar(ld, v, "Lescale", 1e30, &d.le_scale));
         LOADER_TRY(read_scalar(ld, v, "g", 1e30, &d.g));
         json_t *pv = json_object_get(v, "preset");
         if (pv) {
