@@ -615,16 +615,41 @@ CST_API void cst_scene_camera(const CstScene *scene, CstCameraDesc *out);
 /* The file the scene asks its render to be written to (cst_scene_output_path reads it
  * back); a non-empty path, copied; replaces one set before. */
 CST_API CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err);
-/* A homogeneous participating medium (pbrt-v4's "homogeneous"): coefficients per unit
+/* A participating medium (pbrt-v4's "homogeneous", "uniformgrid", "cloud"): coefficients per unit
  * length of the scene, linear RGB (spectral mode upsamples sigma_a and sigma_s as
  * unbounded spectra, le as an illuminant). Initialise with cst_medium_desc_init (pbrt-v4's
  * defaults: sigma_a = sigma_s = 1, scale = 1, g = 0, no emission, le_scale = 1). */
+typedef enum CstMediumType {
+    CST_MEDIUM_HOMOGENEOUS = 0, /* pbrt-v4's "homogeneous" */
+    CST_MEDIUM_UNIFORMGRID,     /* pbrt-v4's "uniformgrid": a density grid over a box */
+    CST_MEDIUM_CLOUD            /* pbrt-v4's "cloud": procedural noise density over a box */
+} CstMediumType;
+
 typedef struct CstMediumDesc {
     float sigma_a[3], sigma_s[3]; /* absorption and scattering, finite, >= 0 */
     float scale;                  /* multiplies both, >= 0 */
     float g;                      /* Henyey–Greenstein asymmetry, in (-1, 1); > 0 forward */
     float le[3];                  /* emitted radiance (the medium adds sigma_a le per unit length) */
     float le_scale;               /* multiplies le, >= 0 */
+    /* Added with heterogeneous media (cst_medium_desc_init sets every field below). */
+    const char *preset;           /* a measured preset's name (pbrt-v4's "preset": "Skimmilk",
+                                   * "Wholemilk", "Ketchup", ...) replacing sigma_a and sigma_s
+                                   * (scale still applies); NULL for none; unknown: an error */
+    CstMediumType type;           /* CST_MEDIUM_HOMOGENEOUS */
+    /* Heterogeneous media: sigma(p) = density(p) x (sigma_a, sigma_s) x scale inside the
+     * box p0 .. p1 of the medium's space, 0 outside; the box is placed by
+     * world_from_medium (3 x 4 row-major affine, identity; pbrt's CTM at MakeNamedMedium). */
+    float world_from_medium[12];
+    float p0[3], p1[3];           /* (0, 0, 0), (1, 1, 1) */
+    /* CST_MEDIUM_UNIFORMGRID: nx x ny x nz density samples >= 0 (x fastest), copied, looked
+     * up trilinearly between cell centres as pbrt-v4's SampledGrid (falling to 0 within
+     * half a sample spacing of the box's faces). Emission le x le_scale, or le times the
+     * optional le_scale_grid (same shape) where given. */
+    int nx, ny, nz;               /* 1, 1, 1 */
+    const float *density;         /* NULL: required for a grid */
+    const float *le_scale_grid;   /* NULL */
+    /* CST_MEDIUM_CLOUD: pbrt-v4's parameters (density 1, wispiness 1, frequency 5). */
+    float cloud_density, wispiness, frequency;
 } CstMediumDesc;
 
 CST_API void cst_medium_desc_init(CstMediumDesc *desc);

@@ -3,7 +3,9 @@
  * estimation at surface and medium vertices with transmittance through media and medium
  * boundaries, MIS against BSDF / phase sampling (Veach eq. 9.13), emission from media.
  * The volume rendering equation as in pbrt-v4 ch. 14 for homogeneous media; the distance
- * pdf over colour channels is medium.h's (balance heuristic over channels). */
+ * pdf over colour channels is medium.h's (balance heuristic over channels). Heterogeneous
+ * media (grids, the cloud) are delta-tracked per segment (hetero_sample_distance: null
+ * collisions, the same balance heuristic over the lanes' collision densities). */
 #include "integrators/volpath.h"
 
 #include "integrators/direct.h"
@@ -53,6 +55,18 @@ static Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *
     return color_scale(color_mul(color_mul(f, tr), scene_light_li(s, &ls, wl)), w / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
+/* The throughput a contribution is weighted by: beta / mean(r_u), the balance heuristic
+ * over lanes of the path's grid segments; beta itself (same operations as before grid
+ * media) on paths that met none. */
+static inline Color mis_beta(Color beta, int hero, Color r_u)
+{
+    if (hero < 0) return beta;
+    float m = 0.0f;
+    for (int c = 0; c < COLOR_LANES; c++) m += r_u.c[c];
+    /* m overflows only on absurdly unlikely hero paths: dropped rather than inf x 0. */
+    return m > 0.0f && isfinite(m) ? color_scale(beta, (float)COLOR_LANES / m) : color_s(0.0f);
+}
+
 Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays)
 {
     Color L = color_s(0.0f), beta = color_s(1.0f);
@@ -64,6 +78,11 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
     int medium = s->camera_medium, coeffs_of = -1;
     MediumCoeffs mc = {0};
     int crossings = 0;
+    /* Spectral MIS over the lanes for grid media (hetero_medium.h): the hero lane of the
+     * path's delta tracking (-1 until its first grid segment; paths without one never
+     * touch r_u) and p_c / p_hero over its grid segments. */
+    int hero = -1;
+    Color r_u = color_s(1.0f);
     for (int depth = 0;;) {
         SurfaceHit sh;
         ++*rays;
@@ -75,18 +94,31 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
             }
             float u_ch = sampler_1d(smp), u_t = sampler_1d(smp);
             MediumSample ms;
-            medium_sample_distance(&mc, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
+            const Medium *med = &s->media[medium];
+            const bool het = medium_is_hetero(med);
+            if (het) {
+                /* Delta tracking with the path's hero lane (picked at its first grid
+                 * segment); its emission estimate covers the whole segment, also when
+                 * the path passes through (below the depth limit only, as pbrt-v4). */
+                if (hero < 0) hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
+                hetero_sample_distance(&med->u.het, &mc, ray.o, ray.d, hit ? sh.t : INFINITY, hero, r_u, u_t, &ms);
+                if (mc.emissive && !(pp->max_depth > 0 && depth >= pp->max_depth)) L = color_madd(L, beta, ms.le);
+                r_u = color_mul(r_u, ms.r);
+            } else {
+                medium_sample_distance(&mc, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
+            }
             if (ms.scattered) {
                 /* Emission of the segment: sigma_a Le Tr / pdf(t) (pbrt-v4 adds it below
                  * the depth limit only). */
                 const bool last = pp->max_depth > 0 && depth >= pp->max_depth;
-                if (mc.emissive && !last) L = color_madd(L, beta, color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
+                if (mc.emissive && !last && !het)
+                    L = color_madd(L, mis_beta(beta, hero, r_u), color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
                 beta = color_mul(beta, ms.weight);
                 if (last || color_is_black(beta)) break;
                 Vec3 p = ray_at(&ray, ms.t), wo = v3_neg(ray.d);
                 if (use_nee) {
                     VolVertex v = {p, v3s(0.0f), v3s(0.0f), wo, NULL, NULL, mc.g, medium};
-                    L = color_madd(L, beta, volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+                    L = color_madd(L, mis_beta(beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
                 }
                 Vec2 u = sampler_2d(smp);
                 float pdf;
@@ -98,7 +130,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
                 prev_p = p;
                 prev_n = v3s(0.0f);
                 depth++;
-                float rr = roulette(smp, depth, pp->rr_depth, beta);
+                float rr = roulette(smp, depth, pp->rr_depth, mis_beta(beta, hero, r_u));
                 if (rr == 0.0f) break;
                 beta = color_scale(beta, rr);
                 ray = ray_make(p, wi, 0.0f, INFINITY);
@@ -111,9 +143,9 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
         if (!hit) {
             Color le = scene_env_radiance(s, ray.d, wl);
             if (!color_is_black(le)) {
-                if (specular || pp->mode == PATH_BSDF) L = color_madd(L, beta, le);
+                if (specular || pp->mode == PATH_BSDF) L = color_madd(L, mis_beta(beta, hero, r_u), le);
                 else if (pp->mode == PATH_MIS)
-                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, light_env_nee_pdf(&s->emitter_sampler, prev_p, prev_n, ray.d))));
+                    L = color_madd(L, mis_beta(beta, hero, r_u), color_scale(le, power_heuristic(prev_pdf, light_env_nee_pdf(&s->emitter_sampler, prev_p, prev_n, ray.d))));
             }
             break;
         }
@@ -130,14 +162,14 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
             Color le = scene_emission(s, &sh, wo, wl);
             if (!color_is_black(le)) {
                 if (specular || pp->mode == PATH_BSDF) {
-                    L = color_madd(L, beta, le);
+                    L = color_madd(L, mis_beta(beta, hero, r_u), le);
                 } else if (pp->mode == PATH_MIS) {
                     float cos_l = fabsf(v3_dot(sh.ng, wo));
                     EmitterGeometry g = scene_emitter_geometry(s);
                     /* From the previous vertex, across any boundaries crossed since. */
                     float dist = v3_length(v3_sub(sh.p, prev_p));
                     float pdf_light = light_area_nee_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, prev_n, dist, cos_l);
-                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, pdf_light)));
+                    L = color_madd(L, mis_beta(beta, hero, r_u), color_scale(le, power_heuristic(prev_pdf, pdf_light)));
                 }
             }
         }
@@ -148,7 +180,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
         if (pp->regularize && any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             VolVertex v = {sh.p, sh.ns, sh.ng, wo, &bsdf, &sh, 0.0f, medium};
-            L = color_madd(L, beta, volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+            L = color_madd(L, mis_beta(beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
         }
         BsdfSample bs;
         float uc = sampler_1d(smp);
@@ -162,7 +194,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
         prev_p = sh.p;
         prev_n = sh.ns;
         depth++;
-        float rr = roulette(smp, depth, pp->rr_depth, beta);
+        float rr = roulette(smp, depth, pp->rr_depth, mis_beta(beta, hero, r_u));
         if (rr == 0.0f) break;
         beta = color_scale(beta, rr);
         medium = scene_medium_after(s, &sh, bs.wi, medium);

@@ -1,5 +1,7 @@
 /* Homogeneous media: coefficients at the path's wavelengths, transmittance, distance
- * sampling with the balance heuristic over colour channels (medium.h states the pdfs). */
+ * sampling with the balance heuristic over colour channels (medium.h states the pdfs).
+ * Heterogeneous media share the coefficients (at density 1); their tracking is in
+ * hetero_medium.c. */
 #include "media/medium.h"
 
 #include <math.h>
@@ -7,12 +9,14 @@
 MediumCoeffs medium_coeffs(const Medium *m, const Wavelengths *wl)
 {
     MediumCoeffs c;
-    const HomogeneousMedium *h = &m->u.homog;
-    c.sigma_a = wl ? spectrum_unbounded(h->sigma_a, wl) : h->sigma_a;
-    c.sigma_s = wl ? spectrum_unbounded(h->sigma_s, wl) : h->sigma_s;
+    const bool het = medium_is_hetero(m);
+    const Color sa = het ? m->u.het.sigma_a : m->u.homog.sigma_a, ss = het ? m->u.het.sigma_s : m->u.homog.sigma_s;
+    const Color le = het ? m->u.het.le : m->u.homog.le;
+    c.sigma_a = wl ? spectrum_unbounded(sa, wl) : sa;
+    c.sigma_s = wl ? spectrum_unbounded(ss, wl) : ss;
     c.sigma_t = color_add(c.sigma_a, c.sigma_s);
-    c.emissive = !color_is_black(h->le);
-    c.le = c.emissive ? (wl ? spectrum_illuminant(h->le, wl) : h->le) : color_s(0.0f);
+    c.emissive = !color_is_black(le);
+    c.le = c.emissive ? (wl ? spectrum_illuminant(le, wl) : le) : color_s(0.0f);
     c.g = m->g;
     return c;
 }
@@ -66,4 +70,9 @@ void medium_sample_distance(const MediumCoeffs *m, float t_max, float u_ch, floa
     out->scattered = false;
     out->tr_pdf = color_s(0.0f);
     out->weight = p > 0.0f ? color_scale(tr, 1.0f / p) : color_s(0.0f);
+}
+
+void medium_release(Medium *m)
+{
+    if (m && medium_is_hetero(m)) hetero_medium_release(&m->u.het);
 }

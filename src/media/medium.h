@@ -1,6 +1,7 @@
-/* Participating media: the scene's Medium (a tagged union; homogeneous for now), the
- * interfaces that shapes put between two media, and the two queries a path tracer asks
- * of a medium: transmittance along a segment and a sampled free-flight distance. */
+/* Participating media: the scene's Medium (a tagged union: homogeneous, or heterogeneous in
+ * media/hetero_medium.h), the interfaces that shapes put between two media, and the two
+ * queries a path tracer asks of a medium: transmittance along a segment and a sampled
+ * free-flight distance. */
 #ifndef CST_MEDIA_MEDIUM_H
 #define CST_MEDIA_MEDIUM_H
 
@@ -9,8 +10,10 @@
 
 #include "math/color.h"
 #include "math/spectrum.h"
+#include "media/hetero_medium.h"
 
-typedef enum MediumType { MEDIUM_HOMOGENEOUS } MediumType;
+/* MEDIUM_GRID and MEDIUM_CLOUD: u.het (HeteroMedium.cloud tells them apart too). */
+typedef enum MediumType { MEDIUM_HOMOGENEOUS, MEDIUM_GRID, MEDIUM_CLOUD } MediumType;
 
 /* Coefficients per unit length of the scene (1/m when the scene is in metres), already
  * multiplied by pbrt's "scale"; linear RGB (sRGB primaries), upsampled in spectral mode. */
@@ -23,7 +26,7 @@ typedef struct HomogeneousMedium {
 typedef struct Medium {
     MediumType type;
     float g; /* Henyey–Greenstein asymmetry in (-1, 1) (media/phase.h) */
-    union { HomogeneousMedium homog; } u;
+    union { HomogeneousMedium homog; HeteroMedium het; } u;
 } Medium;
 
 /* What a shape separates (pbrt-v4 MediumInterface): the medium on the side opposite its
@@ -36,7 +39,8 @@ typedef struct MediumInterface {
 } MediumInterface;
 
 /* A medium's coefficients at a path's wavelengths (or in RGB), made once when a path
- * enters the medium: the queries below then do no conversion. */
+ * enters the medium: the queries below then do no conversion. Heterogeneous media: the
+ * coefficients at density 1. */
 typedef struct MediumCoeffs {
     Color sigma_a, sigma_s, sigma_t; /* per unit length */
     Color le;                        /* radiance; black when the medium does not emit */
@@ -59,6 +63,9 @@ typedef struct MediumSample {
                      * else Tr(t_max) / P(t >= t_max) */
     Color tr_pdf;   /* scattered: Tr(t) / pdf(t), the factor of the emission term
                      * (times sigma_a Le); else unset */
+    Color le;       /* heterogeneous media only: the segment's emission estimate (times the
+                     * path throughput), gathered whether or not it scattered */
+    Color r;        /* heterogeneous media only: p_c / p_hero of the segment (hetero_medium.h) */
 } MediumSample;
 
 /* Distance sampling for the path tracer: one lane c picked uniformly from the four (u_ch;
@@ -74,5 +81,12 @@ void medium_sample_distance(const MediumCoeffs *m, float t_max, float u_ch, floa
  * probability that it passes t_max. */
 float medium_distance_pdf(const MediumCoeffs *m, float t);
 float medium_pass_prob(const MediumCoeffs *m, float t_max);
+
+/* True for the media tracked by hetero_sample_distance and hetero_transmittance
+ * (u.het); homogeneous ones use the closed forms above. */
+static inline bool medium_is_hetero(const Medium *m) { return m->type != MEDIUM_HOMOGENEOUS; }
+
+/* Frees what a medium owns (heterogeneous grids); m may be zeroed. */
+void medium_release(Medium *m);
 
 #endif

@@ -68,6 +68,7 @@ void scene_destroy(Scene *s)
     free(s->textures);
     free(s->emitters);
     free(s->alphas);
+    for (int i = 0; i < s->num_media; i++) medium_release(&s->media[i]);
     free(s->media);
     free(s->medium_ifaces);
     for (int i = 0; i < s->num_delta_lights; i++)
@@ -470,15 +471,23 @@ static bool coeff_ok(Color c)
 CstStatus scene_add_medium(Scene *s, const Medium *m, int *out_id, CstError *err)
 {
     if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
-    if (m->type != MEDIUM_HOMOGENEOUS)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "medium type %d; expected homogeneous", (int)m->type);
-    if (!coeff_ok(m->u.homog.sigma_a) || !coeff_ok(m->u.homog.sigma_s) || !coeff_ok(m->u.homog.le))
+    if (m->type != MEDIUM_HOMOGENEOUS && m->type != MEDIUM_GRID && m->type != MEDIUM_CLOUD)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "medium type %d; expected homogeneous, grid or cloud", (int)m->type);
+    if (medium_is_hetero(m)) {
+        const char *why = hetero_medium_invalid(&m->u.het);
+        if (why) return cst_fail(err, CST_ERR_INVALID_ARG, "medium: %s", why);
+        if ((m->type == MEDIUM_CLOUD) != m->u.het.cloud)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "medium: type and HeteroMedium.cloud disagree");
+    } else if (!coeff_ok(m->u.homog.sigma_a) || !coeff_ok(m->u.homog.sigma_s) || !coeff_ok(m->u.homog.le))
         return cst_fail(err, CST_ERR_INVALID_ARG, "medium: sigma_a, sigma_s and Le must be finite and >= 0");
     if (!(fabsf(m->g) < 1.0f))
         return cst_fail(err, CST_ERR_INVALID_ARG, "medium: g = %g; expected a value in (-1, 1)", (double)m->g);
     if (!GROW(s->media, s->cap_media, s->num_media + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a medium");
     s->media[s->num_media] = *m;
+    /* The scene keeps its own copies of a grid's arrays, and builds its majorants. */
+    if (medium_is_hetero(m) && !hetero_medium_clone(&s->media[s->num_media].u.het, &m->u.het))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a grid medium");
     *out_id = s->num_media++;
     return CST_OK;
 }
@@ -535,8 +544,21 @@ Color scene_transmittance(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, in
         ++*rays;
         bool hit = scene_intersect(s, &r, &sh);
         if (medium >= 0) {
-            MediumCoeffs mc = medium_coeffs(&s->media[medium], wl);
-            tr = color_mul(tr, medium_transmittance(&mc, hit ? sh.t : len));
+            const Medium *m = &s->media[medium];
+            MediumCoeffs mc = medium_coeffs(m, wl);
+            if (medium_is_hetero(m)) {
+                /* Ratio tracking, its random stream a hash of the segment (the shadow ray's
+                 * end points are themselves random; no sampler dimension is spent). */
+                const float seg[6] = {o.x, o.y, o.z, end.x, end.y, end.z};
+                uint64_t seed = 0x8f1bbcdcca62c1d6ULL + (uint64_t)step;
+                for (int i = 0; i < 6; i++) {
+                    union { float f; uint32_t u; } b = {seg[i]};
+                    seed = mix64(seed ^ b.u);
+                }
+                tr = color_mul(tr, hetero_transmittance(&m->u.het, &mc, o, dir, hit ? sh.t : len, seed));
+            } else {
+                tr = color_mul(tr, medium_transmittance(&mc, hit ? sh.t : len));
+            }
         }
         if (!hit) return tr;
         const MediumInterface *mi = scene_hit_medium_iface(s, &sh);

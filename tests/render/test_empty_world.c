@@ -137,7 +137,7 @@ static void on_warning(void *user, CstWarningCode kind, const char *msg)
 }
 
 /* pbrt: a media-only world (as clouds.pbrt: a medium bounded by an "interface" sphere;
- * here a grid medium, which caustic reads as vacuum, so it leaves the sphere out) under an
+ * here a NanoVDB medium, which caustic reads as vacuum, so it leaves the sphere out) under an
  * infinite light loads with a located warning and renders the light's radiance. */
 static void test_pbrt_media_only_world(void **state)
 {
@@ -147,7 +147,7 @@ static void test_pbrt_media_only_world(void **state)
         "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
         "WorldBegin\n"
         "LightSource \"infinite\" \"rgb L\" [0.25 0.5 1]\n"
-        "MakeNamedMedium \"m\" \"string type\" \"uniformgrid\"\n"
+        "MakeNamedMedium \"m\" \"string type\" \"nanovdb\"\n"
         "AttributeBegin\n  MediumInterface \"m\" \"\"\n  Material \"interface\"\n  Shape \"sphere\"\nAttributeEnd\n";
     Warnings w = {0};
     CstLoadOptions opt = {0};

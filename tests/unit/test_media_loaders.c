@@ -49,7 +49,7 @@ static void test_json_media_errors(void **state)
                " \"media\": {\"fog\": {\"g\": 1.5}}, \"shapes\": []}",
                "bad.json:2:25: media.fog.g: 1.5; expected a number in (-1, 1)");
     json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
-               " \"media\": {\"fog\": {\"type\": \"cloud\"}}, \"shapes\": []}",
+               " \"media\": {\"fog\": {\"type\": \"nanovdb\"}}, \"shapes\": []}",
                "bad.json:2:");
     json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
                " \"media\": {\"fog\": {}}, \"shapes\": [\n"
@@ -118,6 +118,123 @@ static void test_pbrt_media_errors(void **state)
     if (!strstr(err.msg, "t.pbrt:1:")) fail_msg("%s", err.msg);
 }
 
+
+/* Grid and cloud media, presets: JSON. */
+static const char *JSON_GRID =
+    "{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+    " \"media\": {\"smoke\": {\"type\": \"uniformgrid\", \"nx\": 2, \"density\": [0.5, 1], \"p0\": [1, -1, -1],\n"
+    "                     \"p1\": [-1, 1, 1], \"sigma_s\": 2, \"Le\": [1, 1, 1], \"Lescale\": [1, 2]},\n"
+    "           \"milk\": {\"preset\": \"Wholemilk\", \"scale\": 0.5},\n"
+    "           \"puff\": {\"type\": \"cloud\", \"density\": 2, \"p1\": [2, 2, 2]}},\n"
+    " \"shapes\": [\n"
+    "  {\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1, \"medium\": {\"inside\": \"smoke\", \"boundary\": true}}]}\n";
+
+static void test_json_grid_media(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_json_string(JSON_GRID, strlen(JSON_GRID), "g.json", &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    assert_int_equal(s->num_media, 3);
+    const Medium *g = &s->media[0];
+    assert_int_equal(g->type, MEDIUM_GRID);
+    assert_true(g->u.het.n[0] == 2 && g->u.het.n[1] == 1 && g->u.het.density[1] == 1.0f);
+    assert_true(g->u.het.p0.x == -1.0f && g->u.het.p1.x == 1.0f); /* the box's corners, sorted */
+    assert_true(g->u.het.le_scale && g->u.het.le_scale[1] == 2.0f && g->u.het.sigma_s.c[0] == 2.0f);
+    assert_true(g->u.het.maj.max && g->u.het.maj.max[0] == 0.5f && g->u.het.maj.max[15] == 1.0f);
+    const HomogeneousMedium *m = &s->media[1].u.homog;
+    assert_true(fabsf(m->sigma_s.c[0] - 0.5f * 2.55f) < 1e-6f && fabsf(m->sigma_a.c[2] - 0.5f * 0.014f) < 1e-7f);
+    assert_int_equal(s->media[2].type, MEDIUM_CLOUD);
+    assert_true(s->media[2].u.het.cloud_density == 2.0f && s->media[2].u.het.frequency == 5.0f);
+    cst_scene_destroy(s);
+}
+
+static void test_json_grid_errors(void **state)
+{
+    (void)state;
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"type\": \"uniformgrid\", \"nx\": 2, \"density\": [1, 2, 3]}}, \"shapes\": []}",
+               "bad.json:2:61: media.s.density: 3 values; expected nx*ny*nz = 2");
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"type\": \"uniformgrid\", \"nx\": 2, \"density\": [1, -1]}}, \"shapes\": []}",
+               "media.s.density[1]: -1; expected a number >= 0");
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"type\": \"uniformgrid\", \"nx\": 2}}, \"shapes\": []}",
+               "density");
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"type\": \"uniformgrid\", \"nx\": 0, \"density\": []}}, \"shapes\": []}",
+               "media.s.nx");
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"preset\": \"Milk\"}}, \"shapes\": []}",
+               "media.s.preset: no scattering preset is called \"Milk\"");
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"type\": \"cloud\", \"nx\": 2}}, \"shapes\": []}",
+               "bad.json:2:");
+    /* Only a grid's Lescale may be an array. */
+    json_error("{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+               " \"media\": {\"s\": {\"Lescale\": [1, 2]}}, \"shapes\": []}",
+               "media.s.Lescale");
+}
+
+/* Grid and cloud media, presets: pbrt. */
+static void test_pbrt_grid_media(void **state)
+{
+    (void)state;
+    const char *t =
+        "Translate 0 0 -2\n"
+        "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"float density\" [0.5 1]\n"
+        "    \"point3 p0\" [-1 -1 -1] \"float Lescale\" [3 4] \"rgb Le\" [1 0 0]\n"
+        "Identity\n"
+        "MakeNamedMedium \"k\" \"string type\" \"homogeneous\" \"string preset\" \"Ketchup\"\n"
+        "MakeNamedMedium \"x\" \"string type\" \"homogeneous\" \"string preset\" \"Tomato\"\n"
+        "MakeNamedMedium \"c\" \"string type\" \"cloud\" \"float wispiness\" 0\n"
+        "LookAt 0 0 5 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+        "AttributeBegin\n  MediumInterface \"g\" \"\"\n  Material \"interface\"\n  Shape \"sphere\"\nAttributeEnd\n";
+    CstScene *s = NULL;
+    CstError err;
+    Warnings w = {0};
+    if (load_w(t, &s, &err, &w) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(s->num_media, 4);
+    const HeteroMedium *g = &s->media[0].u.het;
+    assert_int_equal(s->media[0].type, MEDIUM_GRID);
+    assert_true(g->p0.x == -1.0f && g->p1.x == 1.0f && g->le_scale && g->le_scale[1] == 4.0f);
+    /* medium_from_world undoes the CTM's translation. */
+    Vec3 pm = transform_point(&g->medium_from_world, v3(0, 0, -2));
+    assert_true(fabsf(pm.z) < 1e-6f);
+    assert_true(fabsf(s->media[1].u.homog.sigma_a.c[1] - 0.97f) < 1e-6f);
+    assert_true(s->media[2].u.homog.sigma_s.c[0] == 1.0f); /* unknown preset: the defaults */
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "no scattering preset is called \"Tomato\"") >= 0);
+    assert_int_equal(s->media[3].type, MEDIUM_CLOUD);
+    assert_true(s->media[3].u.het.wispiness == 0.0f);
+    cst_scene_destroy(s);
+}
+
+static void test_pbrt_grid_errors(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    const char *t = "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"float density\" [1 2 3]\n";
+    assert_int_equal(load_w(t, &s, &err, NULL), CST_ERR_INVALID_ARG);
+    if (!strstr(err.msg, "t.pbrt:1:") || !strstr(err.msg, "has 3 values; expected nx*ny*nz = 2")) fail_msg("%s", err.msg);
+    t = "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"float density\" [1 -2]\n";
+    assert_int_equal(load_w(t, &s, &err, NULL), CST_ERR_INVALID_ARG);
+    if (!strstr(err.msg, "t.pbrt:1:") || !strstr(err.msg, "value 2 is -2")) fail_msg("%s", err.msg);
+    t = "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"float density\" [1 nan]\n";
+    assert_int_not_equal(load_w(t, &s, &err, NULL), CST_OK);
+    if (!strstr(err.msg, "t.pbrt:1:")) fail_msg("%s", err.msg);
+    t = "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\"\n";
+    assert_int_equal(load_w(t, &s, &err, NULL), CST_ERR_INVALID_ARG);
+    if (!strstr(err.msg, "no \"float density\"")) fail_msg("%s", err.msg);
+    t = "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"float density\" [1] \"point3 p1\" [0 1 1]\n";
+    assert_int_equal(load_w(t, &s, &err, NULL), CST_ERR_INVALID_ARG);
+    if (!strstr(err.msg, "p0 and p1 are equal")) fail_msg("%s", err.msg);
+    t = "MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" -3 \"float density\" [1]\n";
+    assert_int_equal(load_w(t, &s, &err, NULL), CST_ERR_INVALID_ARG);
+    if (!strstr(err.msg, "expected each in 1 .. 4096")) fail_msg("%s", err.msg);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -125,6 +242,10 @@ int main(void)
         cmocka_unit_test(test_json_media_errors),
         cmocka_unit_test(test_pbrt_media),
         cmocka_unit_test(test_pbrt_media_errors),
+        cmocka_unit_test(test_json_grid_media),
+        cmocka_unit_test(test_json_grid_errors),
+        cmocka_unit_test(test_pbrt_grid_media),
+        cmocka_unit_test(test_pbrt_grid_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
