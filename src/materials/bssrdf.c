@@ -89,7 +89,7 @@ float bssrdf_beam_ss(float sigma_s, float sigma_a, float g, float eta, float r)
         double ti = tc - log(1.0 - u) / st;
         double d = sqrt(rr * rr + ti * ti), cos_o = ti / d;
         double ft = 1.0 - (double)fresnel_dielectric((float)-cos_o, eta); /* leaving from inside */
-        ess += rho * exp(-st * (d + tc)) / (d * d) * phase_hg(cos_o, g) * ft * fabs(cos_o);
+        ess += rho * exp(-st * (d + tc)) / (d * d) * phase_hg(cos_o, (double)g) * ft * fabs(cos_o);
     }
     return (float)(ess / BEAM_SAMPLES);
 }
