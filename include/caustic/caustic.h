@@ -309,7 +309,11 @@ typedef enum CstMaterialType {
     /* pbrt-v4's hair: the fibre BSDF of Chiang et al. 2016 (ior: the fibre's, default
      * 1.55; beta_m, beta_n, hair_alpha; absorption by hair_absorption). The fibre runs
      * along the surface's dp/du and the offset across it is h = -1 + 2 v of the hit's uv */
-    CST_MATERIAL_HAIR
+    CST_MATERIAL_HAIR,
+    /* pbrt-v4's subsurface: a dielectric boundary (ior, default 1.33; roughness) over a
+     * homogeneous scattering medium, by the tabulated photon-beam-diffusion BSSRDF (sss_*
+     * fields; the path integrator only) */
+    CST_MATERIAL_SUBSURFACE
 } CstMaterialType;
 
 /* Where a hair's absorption comes from (CstMaterialDesc.hair_absorption). */
@@ -373,6 +377,13 @@ typedef struct CstMaterialDesc {
     int hair_absorption;          /* a CstHairAbsorption */
     float sigma_a[3];             /* CST_HAIR_SIGMA_A */
     float eumelanin, pheomelanin; /* CST_HAIR_MELANIN, >= 0 */
+    /* Subsurface: the medium under the surface by sss_sigma_a and sss_sigma_s per unit
+     * length of the scene (>= 0; defaults pbrt-v4's (.0011, .0024, .014) and (2.55, 3.21,
+     * 3.77)), or, with sss_from_reflectance = 1, the medium whose diffuse reflectance is
+     * albedo (or albedo_texture) at mean free path sss_mfp (> 0; default 1); g its
+     * Henyey-Greenstein asymmetry in (-1, 1) (default 0) */
+    int sss_from_reflectance;
+    float sss_sigma_a[3], sss_sigma_s[3], sss_mfp[3];
 } CstMaterialDesc;
 
 CST_API void cst_material_desc_init(CstMaterialDesc *desc, CstMaterialType type);

@@ -615,6 +615,12 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH && it->kind != INTEGRATOR_PSSMLT)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
                         "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));
+    if (scene->num_subsurface && it->kind != INTEGRATOR_PATH)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
+                        "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));
+    if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
+                        "not rendered yet; expected one or the other");
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

@@ -4,6 +4,7 @@
 
 #include "integrators/direct.h"
 #include "integrators/roulette.h"
+#include "integrators/path_sss.h"
 #include "integrators/volpath.h"
 #include "materials/bsdf.h"
 
@@ -11,6 +12,8 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
 {
     /* Participating media: the volumetric loop (volpath.c); one branch for other scenes. */
     if (s->num_media | s->num_medium_ifaces) return volpath_li(s, pp, ray, smp, wl, rays);
+    /* Subsurface materials: the loop with the BSSRDF step (path_sss.c). */
+    if (s->num_subsurface) return path_sss_li(s, pp, ray, smp, wl, rays);
     Color L = color_s(0.0f), beta = color_s(1.0f);
     bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
     float prev_pdf = 0.0f;

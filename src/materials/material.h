@@ -108,6 +108,17 @@ typedef struct Material {
     float beta_m, beta_n, hair_alpha;
     Color sigma_a;
     bool hair_color;
+    /* Subsurface (pbrt-v4's subsurface material; materials/bssrdf.h): a MATERIAL_DIELECTRIC
+     * (ior = eta, roughness; albedo 1) over a homogeneous medium of phase asymmetry g,
+     * rendered by the path tracer's BSSRDF step. The medium: sss_sigma_a, sss_sigma_s per
+     * unit length (linear RGB, >= 0, pbrt's scale applied), or with sss_from_reflectance
+     * the one of diffuse reflectance sss_reflectance (or 1 + texture index
+     * sss_reflectance_texture, 0 none) and mean free path sss_mfp (scale applied). The
+     * profile table (for this g and eta) is the scene's, made by scene_add_material. */
+    bool subsurface, sss_from_reflectance;
+    Color sss_sigma_a, sss_sigma_s, sss_mfp, sss_reflectance;
+    int sss_reflectance_texture;
+    const struct BssrdfTable *bssrdf;
     /* Derived by material_prepare() (scene_add_material calls it): the rough plastic's
      * coat albedo table and its cosine-weighted average. */
     bool prepared;

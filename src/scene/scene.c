@@ -7,6 +7,7 @@
 
 #include "core/array.h"
 #include "core/error.h"
+#include "materials/bssrdf.h"
 #include "materials/measured.h"
 
 /* Room for `need` elements of `size` bytes in the array at *arr (core/array.h's rule).
@@ -64,6 +65,8 @@ void scene_destroy(Scene *s)
         free(s->measured[i]);
     }
     free(s->measured);
+    for (int i = 0; i < s->num_bssrdf_tables; i++) free(s->bssrdf_tables[i]);
+    free(s->bssrdf_tables);
     for (int i = 0; i < s->num_textures; i++) texture_free(&s->textures[i]);
     free(s->textures);
     free(s->emitters);
@@ -172,6 +175,24 @@ static CstStatus scene_measured_load(Scene *s, const char *path, const MeasuredB
     return CST_OK;
 }
 
+/* A subsurface material's profile table for (g, eta), made once per pair (about 40 ms). */
+static CstStatus scene_bssrdf_table(Scene *s, float g, float eta, const BssrdfTable **out, CstError *err)
+{
+    for (int i = 0; i < s->num_bssrdf_tables; i++)
+        if (s->bssrdf_tables[i]->g == g && s->bssrdf_tables[i]->eta == eta) {
+            *out = s->bssrdf_tables[i];
+            return CST_OK;
+        }
+    if (!GROW(s->bssrdf_tables, s->cap_bssrdf_tables, s->num_bssrdf_tables + 1LL))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a subsurface material");
+    BssrdfTable *t = malloc(sizeof *t);
+    if (!t) return cst_fail(err, CST_ERR_OOM, "out of memory adding a subsurface material");
+    bssrdf_table_build(t, g, eta);
+    s->bssrdf_tables[s->num_bssrdf_tables++] = t;
+    *out = t;
+    return CST_OK;
+}
+
 CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError *err)
 {
     if (m->albedo_texture < 0 || m->albedo_texture > s->num_textures || m->roughness_texture < 0 ||
@@ -195,9 +216,20 @@ CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError 
         CstStatus st = scene_measured_load(s, m->measured_file, &table, err);
         if (st != CST_OK) return st;
     }
+    const BssrdfTable *bt = m->bssrdf;
+    if (m->subsurface && (m->type != MATERIAL_DIELECTRIC || m->sss_reflectance_texture < 0 ||
+                          m->sss_reflectance_texture > s->num_textures))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "subsurface material: not a dielectric surface, or its "
+                        "reflectance texture out of range");
+    if (m->subsurface && !bt) {
+        CstStatus st = scene_bssrdf_table(s, m->g, m->ior, &bt, err);
+        if (st != CST_OK) return st;
+    }
     if (!GROW(s->materials, s->cap_materials, s->num_materials + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a material");
     s->materials[s->num_materials] = *m;
+    s->materials[s->num_materials].bssrdf = m->subsurface ? bt : NULL;
+    if (m->subsurface) s->num_subsurface++;
     s->materials[s->num_materials].measured = table;
     s->materials[s->num_materials].measured_file = NULL; /* the caller's string */
     /* Derived data (the rough plastic's coat table) is computed once here, not per hit. */

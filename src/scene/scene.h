@@ -85,6 +85,11 @@ struct CstScene {
     int *emitter_spectrum; int num_emitter_spectrum; size_t cap_emitter_spectrum;
     /* measured materials' tables, one per file, each allocated apart (materials point at them) */
     struct MeasuredBsdf **measured; int num_measured; size_t cap_measured;
+    /* subsurface materials' BSSRDF profile tables, one per (g, eta), each allocated apart
+     * (materials point at them); num_subsurface counts the subsurface materials, which
+     * send path_li to path_sss_li (integrators/path_sss.c) */
+    struct BssrdfTable **bssrdf_tables; int num_bssrdf_tables; size_t cap_bssrdf_tables;
+    int num_subsurface;
     Emitter *emitters; int num_emitters; size_t cap_emitters;
     /* Alpha cut-outs, referred to by PrimInfo.alpha; num_alphas == 0 (every scene without
      * one) keeps the ray queries on their opaque path behind a single branch. */

@@ -44,6 +44,15 @@ void cst_material_desc_init(CstMaterialDesc *d, CstMaterialType type)
         d->hair_absorption = CST_HAIR_MELANIN;
         d->eumelanin = 1.3f;
     }
+    if (type == CST_MATERIAL_SUBSURFACE) { /* pbrt-v4's SubsurfaceMaterial defaults */
+        static const float sa[3] = {0.0011f, 0.0024f, 0.014f}, ss[3] = {2.55f, 3.21f, 3.77f};
+        d->ior = 1.33f;
+        for (int k = 0; k < 3; k++) {
+            d->sss_sigma_a[k] = sa[k];
+            d->sss_sigma_s[k] = ss[k];
+            d->sss_mfp[k] = 1.0f;
+        }
+    }
     d->amount = 0.5f;     /* pbrt-v4's mix default */
     d->thickness = 0.01f; /* pbrt-v4's coated materials' defaults */
     d->max_depth = 10;
@@ -61,7 +70,7 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
         [MATERIAL_DIFFUSE_TRANSMISSION] = CST_MATERIAL_DIFFUSE_TRANSMISSION,
         [MATERIAL_THIN_DIELECTRIC] = CST_MATERIAL_THIN_DIELECTRIC, [MATERIAL_MEASURED] = CST_MATERIAL_MEASURED,
         [MATERIAL_HAIR] = CST_MATERIAL_HAIR};
-    cst_material_desc_init(d, types[m->type]);
+    cst_material_desc_init(d, m->subsurface ? CST_MATERIAL_SUBSURFACE : types[m->type]);
     if (m->type == MATERIAL_HAIR) { /* melanin was turned into sigma_a when it was added */
         d->beta_m = m->beta_m;
         d->beta_n = m->beta_n;
@@ -99,6 +108,17 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
     d->eta_spectrum = m->eta_spectrum;
     d->k_spectrum = m->k_spectrum;
     d->ior_spectrum = m->ior_spectrum;
+    if (m->subsurface) { /* the reflectance travels in albedo (the surface's tint is 1) */
+        d->sss_from_reflectance = m->sss_from_reflectance;
+        d->g = m->g;
+        for (int k = 0; k < 3; k++) {
+            d->albedo[k] = color_channel(m->sss_reflectance, k);
+            d->sss_sigma_a[k] = color_channel(m->sss_sigma_a, k);
+            d->sss_sigma_s[k] = color_channel(m->sss_sigma_s, k);
+            d->sss_mfp[k] = color_channel(m->sss_mfp, k);
+        }
+        d->albedo_texture = m->sss_reflectance_texture;
+    }
     if (m->type == MATERIAL_MIX) {
         d->mix_materials[0] = m->mix[0];
         d->mix_materials[1] = m->mix[1];
@@ -207,6 +227,36 @@ static CstStatus build_layer(const CstMaterialDesc *d, Material *m, CstError *er
     return CST_OK;
 }
 
+/* Subsurface (cst_scene_add_material): a dielectric surface over the medium, whose
+ * reflectance (from_reflectance) moves from albedo to sss_reflectance. */
+static CstStatus build_subsurface(const Scene *s, const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    CstStatus st;
+    if (d->sss_from_reflectance != 0 && d->sss_from_reflectance != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: sss_from_reflectance %d; expected 0 or 1", fn,
+                        d->sss_from_reflectance);
+    if (!(d->g > -1.0f && d->g < 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: g %g is outside (-1, 1); expected a Henyey-Greenstein "
+                        "asymmetry (0 isotropic)", fn, (double)d->g);
+    if ((st = read_rgb(d->sss_sigma_a, 0, fn, "sss_sigma_a", &m->sss_sigma_a, err)) != CST_OK ||
+        (st = read_rgb(d->sss_sigma_s, 0, fn, "sss_sigma_s", &m->sss_sigma_s, err)) != CST_OK ||
+        (st = read_rgb(d->sss_mfp, 0, fn, "sss_mfp", &m->sss_mfp, err)) != CST_OK)
+        return st;
+    if (d->sss_from_reflectance && !(d->sss_mfp[0] > 0.0f && d->sss_mfp[1] > 0.0f && d->sss_mfp[2] > 0.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: sss_mfp (%g, %g, %g); expected mean free paths > 0", fn,
+                        (double)d->sss_mfp[0], (double)d->sss_mfp[1], (double)d->sss_mfp[2]);
+    (void)s;
+    m->subsurface = true;
+    m->sss_from_reflectance = d->sss_from_reflectance != 0;
+    m->g = d->g;
+    m->sss_reflectance = m->albedo;
+    m->sss_reflectance_texture = m->albedo_texture;
+    m->albedo = color_s(1.0f);
+    m->albedo_texture = 0;
+    return CST_OK;
+}
+
 /* Anisotropic roughness (cst_scene_add_material): the types that have it, no texture. */
 static CstStatus build_anisotropic(const CstMaterialDesc *d, Material *m, CstError *err)
 {
@@ -215,7 +265,8 @@ static CstStatus build_anisotropic(const CstMaterialDesc *d, Material *m, CstErr
     if (d->anisotropic != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic %d; expected 0 or 1", fn, d->anisotropic);
     if (d->type != CST_MATERIAL_CONDUCTOR && d->type != CST_MATERIAL_DIELECTRIC &&
-        d->type != CST_MATERIAL_COATED_DIFFUSE && d->type != CST_MATERIAL_COATED_CONDUCTOR)
+        d->type != CST_MATERIAL_COATED_DIFFUSE && d->type != CST_MATERIAL_COATED_CONDUCTOR &&
+        d->type != CST_MATERIAL_SUBSURFACE)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic roughness on a material of type %d; expected "
                         "a conductor, dielectric, coated diffuse or coated conductor", fn, (int)d->type);
     if (d->roughness_texture && d->roughness_v != d->roughness) /* the texture sets both widths */
@@ -264,14 +315,14 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
                                          MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED,
-                                         MATERIAL_HAIR};
+                                         MATERIAL_HAIR, MATERIAL_DIELECTRIC /* subsurface */};
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d || !out_id) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc and out_id must not be NULL", fn);
-    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_HAIR)
+    if (d->type < CST_MATERIAL_DIFFUSE || d->type > CST_MATERIAL_SUBSURFACE)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: unknown material type %d; expected CST_MATERIAL_DIFFUSE "
-                        "to CST_MATERIAL_HAIR (cst_material_desc_init sets it)", fn, (int)d->type);
+                        "to CST_MATERIAL_SUBSURFACE (cst_material_desc_init sets it)", fn, (int)d->type);
     Material m = {0};
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
@@ -325,6 +376,7 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
         m.amount_texture = d->amount_texture;
     }
     if (d->type == CST_MATERIAL_HAIR && (st = build_hair(d, &m, err)) != CST_OK) return st;
+    if (d->type == CST_MATERIAL_SUBSURFACE && (st = build_subsurface(scene, d, &m, err)) != CST_OK) return st;
     if ((st = build_spectra(scene, d, &m, err)) != CST_OK) return st;
     if (d->type == CST_MATERIAL_MEASURED) {
         if (!d->measured_file || !d->measured_file[0])

@@ -10,17 +10,18 @@
 #include <string.h>
 
 #include "io/path.h"
+#include "materials/bssrdf.h"
 #include "materials/hair.h"
 #include "scene/json/json_texture.h"
 
 enum { MAT_DIFFUSE, MAT_MIRROR, MAT_GLASS, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_PLASTIC, MAT_COATED_DIFFUSE,
        MAT_COATED_CONDUCTOR, MAT_MIX, MAT_DIFFUSE_TRANSMISSION, MAT_THIN_DIELECTRIC, MAT_MEASURED, MAT_HAIR,
-       MAT_COUNT };
+       MAT_SUBSURFACE, MAT_COUNT };
 
 /* A material's "type", in MAT_* order (json_material.h). */
 const char *const json_material_types[] = {"diffuse", "mirror", "glass", "conductor", "dielectric",
                                            "plastic", "coated_diffuse", "coated_conductor", "mix", "diffuse_transmission",
-                                           "thin_dielectric", "measured", "hair", NULL};
+                                           "thin_dielectric", "measured", "hair", "subsurface", NULL};
 
 /* "roughness" (or another roughness key): perceptual, in [0, 1] (material.h: alpha =
  * roughness^2). */
@@ -230,6 +231,83 @@ static CstStatus read_hair(Loader *ld, const json_t *obj, Material *m)
     return CST_OK;
 }
 
+/* A subsurface material (pbrt-v4's): the medium by "name" (a measured one, g = 0),
+ * "sigma_a" with "sigma_s" (per unit length), or "reflectance" (RGB or a texture) with
+ * "mfp" (default 1), else pbrt-v4's defaults; "scale" multiplies the coefficients or the
+ * mean free path; "g" the phase asymmetry. The surface (ior, roughness) is read by the
+ * caller as a dielectric's. */
+static CstStatus read_subsurface(Loader *ld, const json_t *obj, Material *m)
+{
+    float scale = 1.0f;
+    json_t *name = json_object_get(obj, "name"), *sa = json_object_get(obj, "sigma_a"),
+           *ss = json_object_get(obj, "sigma_s"), *refl = json_object_get(obj, "reflectance"),
+           *mfp = json_object_get(obj, "mfp");
+    m->subsurface = true;
+    m->sss_mfp = color_s(1.0f);
+    LOADER_TRY(read_float_range(ld, obj, "scale", 0.0f, 1e30f, "a scale >= 0", &scale));
+    LOADER_TRY(read_float_range(ld, obj, "g", -0.999f, 0.999f, "a Henyey-Greenstein asymmetry in (-1, 1)", &m->g));
+    if ((name != NULL) + (sa != NULL || ss != NULL) + (refl != NULL) > 1) {
+        json_path_push_key(ld, name ? "name" : "sigma_a");
+        return json_fail_here(ld, "more than one of \"name\", \"sigma_a\"/\"sigma_s\" and \"reflectance\"; "
+                                  "expected one way of giving the medium");
+    }
+    if (mfp && !refl) {
+        json_path_push_key(ld, "mfp");
+        return json_fail_here(ld, "\"mfp\" without \"reflectance\"; expected both (or sigma_a and sigma_s)");
+    }
+    if (name) {
+        const char *s = NULL;
+        json_path_push_key(ld, "name");
+        LOADER_TRY(json_read_string(ld, name, &s));
+        if (!bssrdf_measured(s, &m->sss_sigma_a, &m->sss_sigma_s)) {
+            char clipped[72];
+            return json_fail_here(ld, "unknown named medium \"%s\"; expected one of %s", json_clip_name(s, clipped),
+                                  BSSRDF_MEASURED_LIST);
+        }
+        if (m->g != 0.0f)
+            return json_fail_here(ld, "a named medium with g %g; expected g 0 (its coefficients are reduced "
+                                      "scattering)", (double)m->g);
+        json_path_pop(ld);
+    } else if (sa || ss) {
+        if (!sa || !ss) {
+            json_path_push_key(ld, sa ? "sigma_a" : "sigma_s");
+            return json_fail_here(ld, "\"%s\" without \"%s\"; expected both", sa ? "sigma_a" : "sigma_s",
+                                  sa ? "sigma_s" : "sigma_a");
+        }
+        json_path_push_key(ld, "sigma_a");
+        LOADER_TRY(json_read_rgb(ld, sa, 0, &m->sss_sigma_a));
+        json_path_pop(ld);
+        json_path_push_key(ld, "sigma_s");
+        LOADER_TRY(json_read_rgb(ld, ss, 0, &m->sss_sigma_s));
+        json_path_pop(ld);
+    } else if (refl) {
+        m->sss_from_reflectance = true;
+        json_path_push_key(ld, "reflectance");
+        if (json_is_string(refl))
+            LOADER_TRY(json_read_param_texture(ld, refl, "a reflectance", &m->sss_reflectance_texture));
+        else
+            LOADER_TRY(json_read_rgb(ld, refl, 1, &m->sss_reflectance));
+        json_path_pop(ld);
+        if (mfp) {
+            json_path_push_key(ld, "mfp");
+            LOADER_TRY(json_read_rgb(ld, mfp, 0, &m->sss_mfp));
+            if (!(m->sss_mfp.c[0] > 0.0f && m->sss_mfp.c[1] > 0.0f && m->sss_mfp.c[2] > 0.0f))
+                return json_fail_here(ld, "a mean free path of 0; expected values > 0");
+            json_path_pop(ld);
+        }
+        m->sss_mfp = color_scale(m->sss_mfp, scale);
+        if (!(m->sss_mfp.c[0] > 0.0f && m->sss_mfp.c[1] > 0.0f && m->sss_mfp.c[2] > 0.0f))
+            return json_fail_here(ld, "\"scale\" 0 with \"mfp\"; expected a scale > 0");
+        return CST_OK;
+    } else {
+        m->sss_sigma_a = color_rgb(0.0011f, 0.0024f, 0.014f);
+        m->sss_sigma_s = color_rgb(2.55f, 3.21f, 3.77f);
+    }
+    m->sss_sigma_a = color_scale(m->sss_sigma_a, scale);
+    m->sss_sigma_s = color_scale(m->sss_sigma_s, scale);
+    return CST_OK;
+}
+
 static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
 {
     const char *const *types = json_material_types;
@@ -237,7 +315,7 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
                                          MATERIAL_CONDUCTOR, MATERIAL_DIELECTRIC, MATERIAL_PLASTIC,
                                          MATERIAL_COATED_DIFFUSE, MATERIAL_COATED_CONDUCTOR, MATERIAL_MIX,
                                          MATERIAL_DIFFUSE_TRANSMISSION, MATERIAL_THIN_DIELECTRIC, MATERIAL_MEASURED,
-                                         MATERIAL_HAIR};
+                                         MATERIAL_HAIR, MATERIAL_DIELECTRIC /* subsurface */};
     /* The keys each type accepts, "type" first. */
     static const char *const keys_diffuse[] = {"type", "albedo", "two_sided"};
     static const char *const keys_glass[] = {"type", "albedo", "ior"};
@@ -259,11 +337,14 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     static const char *const keys_measured[] = {"type", "file", "two_sided"};
     static const char *const keys_hair[] = {"type", "ior", "beta_m", "beta_n", "alpha", "sigma_a", "color",
                                             "eumelanin", "pheomelanin"};
+    static const char *const keys_subsurface[] = {"type", "ior", "roughness", "uroughness", "vroughness",
+                                                  "remaproughness", "g", "scale", "name", "sigma_a", "sigma_s",
+                                                  "reflectance", "mfp"};
     static const char *const *const keys[] = {keys_diffuse, keys_diffuse, keys_glass, keys_conductor,
                                               keys_dielectric, keys_plastic, keys_coated_diffuse,
                                               keys_coated_conductor, keys_mix, keys_difftrans, keys_glass,
-                                              keys_measured, keys_hair};
-    static const int nkeys[] = {3, 3, 3, 9, 7, 5, 13, 18, 3, 3, 3, 3, 9};
+                                              keys_measured, keys_hair, keys_subsurface};
+    static const int nkeys[] = {3, 3, 3, 9, 7, 5, 13, 18, 3, 3, 3, 3, 9, 13};
     int type = 0;
     json_t *v;
     LOADER_TRY(json_expect_object(ld, obj, "a material object"));
@@ -273,7 +354,8 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
     m->albedo = type == MAT_DIFFUSE || type == MAT_PLASTIC || type == MAT_COATED_DIFFUSE ? color_s(0.5f)
                 : type == MAT_DIFFUSE_TRANSMISSION ? color_s(0.25f) : color_s(1.0f);
     m->ior = type == MAT_GLASS || type == MAT_DIELECTRIC || type == MAT_PLASTIC || type == MAT_COATED_DIFFUSE ||
-             type == MAT_COATED_CONDUCTOR || type == MAT_THIN_DIELECTRIC ? 1.5f : 1.0f;
+             type == MAT_COATED_CONDUCTOR || type == MAT_THIN_DIELECTRIC ? 1.5f
+             : type == MAT_SUBSURFACE ? 1.33f : 1.0f; /* pbrt-v4's subsurface default eta */
     if (type == MAT_DIFFUSE_TRANSMISSION) {
         m->transmittance = color_s(0.25f); /* pbrt-v4's default */
         if ((v = json_object_get(obj, "transmittance"))) {
@@ -335,8 +417,10 @@ static CstStatus parse_material(Loader *ld, const json_t *obj, Material *m)
         m->one_sided = !two;
         json_path_pop(ld);
     }
-    if (type == MAT_CONDUCTOR || type == MAT_DIELECTRIC || type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR)
+    if (type == MAT_CONDUCTOR || type == MAT_DIELECTRIC || type == MAT_COATED_DIFFUSE || type == MAT_COATED_CONDUCTOR ||
+        type == MAT_SUBSURFACE)
         LOADER_TRY(read_anisotropy(ld, obj, m));
+    if (type == MAT_SUBSURFACE) LOADER_TRY(read_subsurface(ld, obj, m));
     if (type == MAT_CONDUCTOR || type == MAT_COATED_CONDUCTOR) {
         json_t *metal = json_object_get(obj, "metal"), *eta = json_object_get(obj, "eta"),
                *k = json_object_get(obj, "k");

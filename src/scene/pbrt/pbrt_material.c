@@ -10,6 +10,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "materials/bssrdf.h"
 #include "materials/hair.h"
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
@@ -247,6 +248,102 @@ static CstStatus dielectric_eta(Loader *ld, Params *ps, const char *d, const cha
     return CST_OK;
 }
 
+/* pbrt-v4's subsurface material (SubsurfaceMaterial::Create): a dielectric surface (eta,
+ * default 1.33; roughness as the dielectric's) over a medium given, in pbrt's order of
+ * precedence, by "name" (measured, g forced to 0), "sigma_a" with "sigma_s", or
+ * "reflectance" with "mfp" (default 1), else pbrt-v4's default coefficients; "scale"
+ * multiplies the coefficients or the mean free path. Constant coefficients only (a
+ * coefficient texture is an error); the reflectance may be a texture. */
+static CstStatus subsurface_material(Loader *ld, Params *ps, const char *d, Loc loc, Material *m)
+{
+    char nm[72];
+    m->type = MATERIAL_DIELECTRIC;
+    m->albedo = color_s(1.0f);
+    m->ior = 1.33f;
+    m->subsurface = true;
+    float eta = 1.33f, g = 0.0f, scale = 1.0f;
+    int found_g = 0;
+    TRY(pbrt_get_float(ld, ps, d, "eta", 1.33f, &eta, NULL));
+    if (!(eta > 0.0f) || !(eta < 1e6f)) {
+        Param *p = pbrt_find_param(ps, "eta");
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc, "%s: eta %g; expected an index of "
+                            "refraction > 0 (skin is about 1.33)", d, (double)eta);
+    }
+    m->ior = eta;
+    TRY(pbrt_get_float(ld, ps, d, "g", 0.0f, &g, &found_g));
+    if (!(g > -1.0f && g < 1.0f)) {
+        Param *p = pbrt_find_param(ps, "g");
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc, "%s: g %g is outside (-1, 1); expected "
+                            "a Henyey-Greenstein asymmetry", d, (double)g);
+    }
+    TRY(pbrt_get_float(ld, ps, d, "scale", 1.0f, &scale, NULL));
+    if (!(scale >= 0.0f) || !(scale < 1e30f)) {
+        Param *p = pbrt_find_param(ps, "scale");
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc, "%s: scale %g; expected a finite "
+                            "scale >= 0", d, (double)scale);
+    }
+    TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
+    const char *name = NULL;
+    Loc nloc = loc;
+    TRY(pbrt_get_string(ld, ps, d, "name", &name, &nloc));
+    Param *pa = pbrt_find_param(ps, "sigma_a"), *pss = pbrt_find_param(ps, "sigma_s");
+    if (name && name[0]) {
+        Color sa, ss;
+        if (!bssrdf_measured(name, &sa, &ss))
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, nloc, "%s: unknown named medium \"%s\"; expected one "
+                                "of %s", d, pbrt_clip(name, nm), BSSRDF_MEASURED_LIST);
+        if (found_g && g != 0.0f)
+            pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: g %g is ignored with a named medium (its "
+                         "coefficients are reduced scattering: g = 0), as pbrt-v4 does", d, (double)g);
+        g = 0.0f;
+        if (pa) pa->used = 1;
+        if (pss) pss->used = 1;
+        m->sss_sigma_a = color_scale(sa, scale);
+        m->sss_sigma_s = color_scale(ss, scale);
+    } else if (pa || pss) {
+        if (!pa || !pss)
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, (pa ? pa : pss)->loc, "%s: \"%s\" without \"%s\"; "
+                                "expected both sigma_a and sigma_s", d, pa ? "sigma_a" : "sigma_s",
+                                pa ? "sigma_s" : "sigma_a");
+        Color sa = color_s(0.0f), ss = color_s(0.0f);
+        TRY(pbrt_get_spectrum(ld, ps, d, "sigma_a", SPEC_UNBOUNDED, 0, &sa, NULL));
+        TRY(pbrt_get_spectrum(ld, ps, d, "sigma_s", SPEC_UNBOUNDED, 0, &ss, NULL));
+        /* pbrt-v4 clamps the coefficients at 0 (ClampZero) */
+        for (int c = 0; c < COLOR_LANES; c++) {
+            sa.c[c] = maxf(sa.c[c], 0.0f);
+            ss.c[c] = maxf(ss.c[c], 0.0f);
+        }
+        m->sss_sigma_a = color_scale(sa, scale);
+        m->sss_sigma_s = color_scale(ss, scale);
+    } else if (pbrt_find_param(ps, "reflectance")) {
+        m->sss_from_reflectance = true;
+        Material r = *m;
+        r.albedo = color_s(1.0f);
+        r.albedo_texture = 0;
+        TRY(get_albedo(ld, ps, d, "reflectance", &r));
+        m->sss_reflectance = r.albedo;
+        m->sss_reflectance_texture = r.albedo_texture;
+        for (int c = 0; c < COLOR_LANES; c++) m->sss_reflectance.c[c] = clampf(m->sss_reflectance.c[c], 0.0f, 1.0f);
+        Color mfp = color_s(1.0f);
+        TRY(pbrt_get_spectrum(ld, ps, d, "mfp", SPEC_UNBOUNDED, 0, &mfp, NULL));
+        mfp = color_scale(mfp, scale);
+        if (!(mfp.c[0] > 0.0f && mfp.c[1] > 0.0f && mfp.c[2] > 0.0f)) {
+            Param *p = pbrt_find_param(ps, "mfp");
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc, "%s: mean free path (%g, %g, %g) "
+                                "(times scale); expected values > 0", d, (double)mfp.c[0], (double)mfp.c[1],
+                                (double)mfp.c[2]);
+        }
+        m->sss_mfp = mfp;
+    } else {
+        if (pbrt_find_param(ps, "mfp")) pbrt_find_param(ps, "mfp")->used = 1; /* pbrt ignores it too */
+        m->sss_sigma_a = color_scale(color_rgb(0.0011f, 0.0024f, 0.014f), scale);
+        m->sss_sigma_s = color_scale(color_rgb(2.55f, 3.21f, 3.77f), scale);
+    }
+    m->sss_mfp = m->sss_from_reflectance ? m->sss_mfp : color_s(1.0f);
+    m->g = g;
+    return CST_OK;
+}
+
 /* pbrt-v4's measured material: "string filename", an RGL .bsdf read when the material is
  * first used (cst_scene_add_material; a malformed file is an error there, located by
  * byte). A file that does not exist (the corpus's are not distributed) is reported and
@@ -462,9 +559,9 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
             m->amount = amount;
             m->amount_texture = amount_tex;
         }
-    } else if (strcmp(type, "hair") == 0) {
-        TRY(hair_material(ld, ps, d, loc, m));
-    } else if (strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 || strcmp(type, "fourier") == 0) {
+    } else if (strcmp(type, "hair") == 0 || strcmp(type, "subsurface") == 0) {
+        TRY(type[0] == 'h' ? hair_material(ld, ps, d, loc, m) : subsurface_material(ld, ps, d, loc, m));
+    } else if (strcmp(type, "kdsubsurface") == 0 || strcmp(type, "fourier") == 0) {
         pbrt_params_mark_all_used(ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported; diffuse reflectance 0.5 is used instead", d);
     } else {
