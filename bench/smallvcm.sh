@@ -21,8 +21,9 @@
 #
 # Pairs: pt/path, lt/light, bpt/bdpt, vcm/vcm, ppm/sppm; one SmallVCM iteration is one
 # caustic spp (sppm: one camera pass and 512 x 512 photons each). Printed per algorithm:
-# the minimum and maximum wall seconds of each renderer over the rounds and the ratio of
-# the minima (SmallVCM / caustic: > 1 means caustic is faster).
+# the minimum and maximum wall seconds and CPU seconds (user + sys, the steadier figure
+# on a shared machine) of each renderer over the rounds, and the ratios of the minima
+# (SmallVCM / caustic: > 1 means caustic is faster).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 svcm_dir=${SMALLVCM_DIR:-$root/../SmallVCM}
@@ -67,21 +68,16 @@ caustic_name() {
     case $1 in pt) echo path ;; lt) echo light ;; bpt) echo bdpt ;; vcm) echo vcm ;;
         ppm) echo sppm ;; *) echo "bench/smallvcm.sh: unknown algorithm '$1'" >&2; exit 2 ;; esac
 }
-now() { date +%s.%N; }
-run_svcm() { # algorithm -> seconds
-    local t0 t1
-    t0=$(now)
-    (cd "$tmp" && ./smallvcm -s 4 -a "$1" -i "$iterations" -o "$tmp/svcm-$1.hdr" >/dev/null)
-    t1=$(now)
-    awk -v a="$t0" -v b="$t1" 'BEGIN {printf "%.3f\n", b - a}'
+# "wall cpu" seconds of one whole process (cpu: user + sys of it and its children)
+timed() {
+    local TIMEFORMAT='%R %U %S' out
+    out=$( { time "$@" >/dev/null 2>&1; } 2>&1 ) || { echo "bench/smallvcm.sh: failed: $*" >&2; exit 2; }
+    awk '{printf "%.3f %.3f\n", $1, $2 + $3}' <<<"$out"
 }
+run_svcm() { (cd "$tmp" && timed ./smallvcm -s 4 -a "$1" -i "$iterations" -o "$tmp/svcm-$1.hdr"); }
 run_caustic() {
-    local t0 t1
-    t0=$(now)
-    "$caustic" render "$scene" --integrator "$(caustic_name "$1")" --spp "$iterations" \
-        --threads "$threads" -o "$tmp/caustic-$1.pfm" >/dev/null 2>&1
-    t1=$(now)
-    awk -v a="$t0" -v b="$t1" 'BEGIN {printf "%.3f\n", b - a}'
+    timed "$caustic" render "$scene" --integrator "$(caustic_name "$1")" --spp "$iterations" \
+        --threads "$threads" -o "$tmp/caustic-$1.pfm"
 }
 
 IFS=, read -r -a algs <<<"$algorithms"
@@ -94,16 +90,21 @@ for r in $(seq "$rounds"); do
     done
 done
 
-echo "scene $scene, $iterations iterations, $threads threads, $rounds rounds, wall seconds min-max"
+echo "scene $scene, $iterations iterations, $threads threads, $rounds rounds"
+echo "seconds min-max over the rounds; ratios SmallVCM / caustic of the minima (> 1: caustic faster)"
+# column 1 of a file: wall, column 2: cpu
+mm() { sort -g -k"$2" "$1" | awk -v k="$2" 'NR == 1 {lo = $k} {hi = $k} END {printf "%.2f %.2f", lo, hi}'; }
 for a in "${algs[@]}"; do
-    cmin=$(sort -g "$tmp/c-$a" | head -1); cmax=$(sort -g "$tmp/c-$a" | tail -1)
+    c=$(caustic_name "$a")
+    read -r cw0 cw1 <<<"$(mm "$tmp/c-$a" 1)"; read -r cc0 cc1 <<<"$(mm "$tmp/c-$a" 2)"
     if [ -n "$svcm" ]; then
-        smin=$(sort -g "$tmp/s-$a" | head -1); smax=$(sort -g "$tmp/s-$a" | tail -1)
-        awk -v a="$a" -v c="$(caustic_name "$a")" -v s0="$smin" -v s1="$smax" -v c0="$cmin" -v c1="$cmax" \
-            'BEGIN {printf "%-4s %8.3f-%-8.3f  %-6s %8.3f-%-8.3f  SmallVCM/caustic %.2fx (range %.2f-%.2f)\n",
-                    a, s0, s1, c, c0, c1, s0 / c0, s0 / c1, s1 / c0}'
+        read -r sw0 sw1 <<<"$(mm "$tmp/s-$a" 1)"; read -r sc0 sc1 <<<"$(mm "$tmp/s-$a" 2)"
+        awk -v a="$a" -v c="$c" -v sw0="$sw0" -v sw1="$sw1" -v sc0="$sc0" -v sc1="$sc1" \
+            -v cw0="$cw0" -v cw1="$cw1" -v cc0="$cc0" -v cc1="$cc1" 'BEGIN {
+            printf "%-3s/%-5s wall SmallVCM %7.2f-%-7.2f caustic %7.2f-%-7.2f ratio %5.2fx | cpu SmallVCM %7.2f-%-7.2f caustic %7.2f-%-7.2f ratio %5.2fx\n",
+                   a, c, sw0, sw1, cw0, cw1, sw0 / cw0, sc0, sc1, cc0, cc1, sc0 / cc0 }'
     else
-        printf '%-6s %8.3f-%-8.3f\n' "$(caustic_name "$a")" "$cmin" "$cmax"
+        printf '%-5s wall %7.2f-%-7.2f cpu %7.2f-%-7.2f\n' "$c" "$cw0" "$cw1" "$cc0" "$cc1"
     fi
 done
 if [ -n "$keep" ]; then mkdir -p "$keep"; cp "$tmp"/*.hdr "$tmp"/*.pfm "$keep/" 2>/dev/null || true; fi
