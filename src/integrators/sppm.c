@@ -16,13 +16,17 @@
  * photon, iteration), so what a thread computes does not depend on which thread it is. The
  * camera pass runs over rows in parallel (a pixel's visible point is its own). Photons are
  * traced in parallel in fixed chunks, each recording its non-delta hits in its own list;
- * then the pixels are split into ranges among the threads, and each thread reads every
- * chunk's hits that can reach its range (grouped by range after tracing) in chunk order,
- * hit order, adding the photons that fall in its own pixels' discs. So each pixel's phi
- * receives its photons in photon order, exactly the sums of a single-threaded loop over
- * photons, and the image does not depend on the thread count.
- * Visible points are found through a uniform hash grid rebuilt each iteration (pbrt-v3's
- * SPPMPixelListNode grid, as flat counting-sort arrays here). */
+ * the hits are then counting-sorted by grid bucket (serial; each bucket keeps photon
+ * order), and the pixels are split into ranges among the threads: each pixel gathers the
+ * hits of the buckets its disc overlaps, merged back into photon order. So each pixel's
+ * phi receives its photons in photon order, exactly the sums of a single-threaded loop
+ * over photons, and the image does not depend on the thread count.
+ * The grid is uniform and hashed (pbrt-v3's SPPMPixelListNode grid, its cells sized by the
+ * largest disc, as flat counting-sort arrays), rebuilt each iteration. It holds the photon
+ * hits, looked up from the pixels (as SmallVCM's PPM does), rather than the visible points
+ * looked up from each photon: pixels in image order query neighbouring cells, so the
+ * lookups stay in cache, where photons in photon order hit random cells (perf on
+ * scenes/smallvcm-box.json: the deposit's cache misses were a third of the render). */
 #include "integrators/sppm.h"
 
 #include <math.h>
@@ -77,17 +81,31 @@ typedef struct SppmDisc {
     float r2; /* r * r in float, as the test computed it before */
 } SppmDisc;
 
-/* Uniform grid over the visible points, hashed (Teschner et al. 2003) into `buckets`
- * slots; cell_start/entries is a counting sort of (bucket, pixel) pairs. A visible point
- * enters every cell its disc's bounding box overlaps (at most 8: the cell edge is twice
- * the largest radius). */
+/* A photon's arrival at a non-delta surface, kept until the deposit phase. */
+typedef struct SppmHit {
+    Vec3 p, wi, n;   /* n: geometric normal on wi's side */
+    Color power;       /* unnormalised flux (see the file comment) */
+    /* In a chunk's list: its grid bucket, SPPM_NO_BUCKET outside the box of every disc.
+     * In the grid's sorted copy: its place in photon order. */
+    uint32_t key;
+} SppmHit;
+
+#define SPPM_NO_BUCKET UINT32_MAX
+
+/* Uniform grid over the box of the visible points' discs, hashed (Teschner et al. 2003)
+ * into `buckets` slots; cell_start/hits is a counting sort of the iteration's photon hits
+ * by bucket, photon order kept within a bucket: whole copies, so that a pixel's gather
+ * reads them in sequence (fetching each deposited hit from its chunk's list was a cache
+ * miss per photon, a fifth of the render). A disc overlaps at most 8 cells (the cell
+ * edge is twice the largest radius). */
 typedef struct SppmGrid {
     Vec3 lo, hi;     /* the box of every disc */
     float inv_cell;
     int res[3];
     uint32_t buckets;      /* power of two */
     uint32_t *cell_start;  /* buckets + 1 */
-    uint32_t *entries;     /* 8 per pixel at most */
+    SppmHit *hits;         /* the hits inside the box, bucket by bucket */
+    size_t hits_cap;
     SppmDisc *discs;       /* per pixel, copied from the visible points at every build */
 } SppmGrid;
 
@@ -124,7 +142,8 @@ static int pixel_buckets(const SppmGrid *g, const SppmPixel *px, uint32_t out[8]
     return n;
 }
 
-/* Rebuilds the grid over the valid visible points; no allocation (arrays sized once). */
+/* Sets the grid's box and cells from the valid visible points and copies their discs; the
+ * hits are sorted in later (grid_sort_hits). No allocation (arrays sized once). */
 static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
 {
     Vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
@@ -135,7 +154,6 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
         hi = v3_max(hi, px[i].p);
         rmax = fmaxf(rmax, px[i].r);
     }
-    memset(g->cell_start, 0, ((size_t)g->buckets + 1u) * sizeof *g->cell_start);
     if (!(rmax > 0.0f)) { g->res[0] = 0; return; }
     Vec3 rv = v3(rmax, rmax, rmax);
     g->lo = v3_sub(lo, rv);
@@ -147,95 +165,52 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
     /* Cell counts are capped so the integer cell coordinates stay small; a capped grid is
      * only coarser (the clamp in grid_cell keeps every point inside). */
     for (int a = 0; a < 3; a++) g->res[a] = clampi((int)(e[a] * g->inv_cell) + 1, 1, 1 << 20);
-    uint32_t b[8];
-    for (size_t i = 0; i < count; i++) {
-        if (!px[i].valid) continue;
-        g->discs[i] = (SppmDisc){px[i].p, px[i].r * px[i].r};
-        int n = pixel_buckets(g, &px[i], b);
-        for (int k = 0; k < n; k++) g->cell_start[b[k] + 1]++;
-    }
-    for (uint32_t h = 0; h < g->buckets; h++) g->cell_start[h + 1] += g->cell_start[h];
-    /* Fill in pixel order using a running cursor per bucket: cell_start[h] is advanced and
-     * then restored by the shift below, the usual in-place counting sort. */
-    for (size_t i = 0; i < count; i++) {
-        if (!px[i].valid) continue;
-        int n = pixel_buckets(g, &px[i], b);
-        for (int k = 0; k < n; k++) g->entries[g->cell_start[b[k]]++] = (uint32_t)i;
-    }
-    for (uint32_t h = g->buckets; h > 0; h--) g->cell_start[h] = g->cell_start[h - 1];
-    g->cell_start[0] = 0;
+    for (size_t i = 0; i < count; i++)
+        if (px[i].valid) g->discs[i] = (SppmDisc){px[i].p, px[i].r * px[i].r};
 }
 
-/* A photon's arrival at a non-delta surface, kept until the deposit phase. */
-typedef struct SppmHit {
-    Vec3 p, wi, n;   /* n: geometric normal on wi's side */
-    Color power;       /* unnormalised flux (see the file comment) */
-    uint32_t first, last; /* its grid bucket's entries [first, last): the candidates */
-} SppmHit;
-
-/* The hits of one chunk of photon paths, in photon order then path order, and their
- * indices grouped by the pixel ranges their candidates fall in (hit order kept within a
- * group; a hit whose candidates span several ranges is in each). Reused by every
- * iteration, so the arrays stop growing after the first ones. */
+/* The hits of one chunk of photon paths, in photon order then path order. Reused by every
+ * iteration, so the array stops growing after the first ones. */
 typedef struct SppmHitList {
     SppmHit *v;
     size_t n, cap;
-    uint32_t *order;       /* hit indices, range by range */
-    size_t order_cap;
-    uint32_t *range_start; /* ranges + 1: range r's indices are order[range_start[r] ..] */
     bool oom;              /* a hit was lost for lack of memory: the render fails */
 } SppmHitList;
 
 static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Color power)
 {
-    if (!array_push(l, ((SppmHit){p, wi, n, power, 0, 0}))) l->oom = true;
+    if (!array_push(l, ((SppmHit){p, wi, n, power, SPPM_NO_BUCKET}))) l->oom = true;
 }
 
-/* The candidates of a photon at pos: the entries of its cell's bucket, or none outside
- * the box of every disc. */
-static void sppm_grid_candidates(const SppmGrid *g, Vec3 pos, uint32_t *first, uint32_t *last)
+/* The bucket of a photon at pos, or SPPM_NO_BUCKET outside the box of every disc (no disc
+ * can hold it). */
+static uint32_t sppm_grid_bucket(const SppmGrid *g, Vec3 pos)
 {
-    *first = *last = 0;
-    if (g->res[0] == 0) return;
-    if (!(pos.x >= g->lo.x && pos.y >= g->lo.y && pos.z >= g->lo.z)) return;
-    if (!(pos.x <= g->hi.x && pos.y <= g->hi.y && pos.z <= g->hi.z)) return;
+    if (g->res[0] == 0) return SPPM_NO_BUCKET;
+    if (!(pos.x >= g->lo.x && pos.y >= g->lo.y && pos.z >= g->lo.z)) return SPPM_NO_BUCKET;
+    if (!(pos.x <= g->hi.x && pos.y <= g->hi.y && pos.z <= g->hi.z)) return SPPM_NO_BUCKET;
     int c[3];
     sppm_grid_cell(g, pos, c);
-    uint32_t h = sppm_grid_hash(g, c[0], c[1], c[2]);
-    *first = g->cell_start[h];
-    *last = g->cell_start[h + 1];
+    return sppm_grid_hash(g, c[0], c[1], c[2]);
 }
 
-/* Adds a photon hit to every visible point with index in [lo, hi) whose disc holds it
- * (photon.c's density_visit rules). A bucket's entries are in ascending pixel order
- * (sppm_grid_build fills them so), so the range is a binary search and a prefix. */
-static void sppm_grid_deposit(const SppmGrid *g, SppmPixel *px, const SppmHit *hit, uint32_t lo, uint32_t hi)
+/* Adds a photon hit whose position is inside v's disc to v's phi (photon.c's
+ * density_visit rules). */
+static inline void sppm_deposit(SppmPixel *v, const SppmHit *hit)
 {
-    Vec3 pos = hit->p;
-    uint32_t a = hit->first, b = hit->last;
-    while (a < b) { /* first entry >= lo */
-        uint32_t mid = a + (b - a) / 2u;
-        if (g->entries[mid] < lo) a = mid + 1u;
-        else b = mid;
-    }
-    for (uint32_t k = a; k < hit->last && g->entries[k] < hi; k++) {
-        const SppmDisc *disc = &g->discs[g->entries[k]];
-        if (photon_dist2(pos, disc->p) > disc->r2) continue;
-        SppmPixel *v = &px[g->entries[k]];
-        /* A photon on the other side of a thin wall must not light this side, unless the
-         * visible point's surface transmits (rough glass). */
-        if (!(v3_dot(hit->n, v->n) > 0.0f) && !bsdf_has_transmission(&v->bsdf)) continue;
-        float cos_i = fabsf(v3_dot(v->n, hit->wi));
-        if (!(cos_i > 0.0f)) continue;
-        /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
-        Color f = color_scale(bsdf_eval(&v->bsdf, v->wo, hit->wi), 1.0f / cos_i);
-        Color d = color_mul(f, hit->power);
-        v->phi[0] += (double)d.c[0];
-        v->phi[1] += (double)d.c[1];
-        v->phi[2] += (double)d.c[2];
-        v->phi[3] += (double)d.c[3];
-        v->m++;
-    }
+    /* A photon on the other side of a thin wall must not light this side, unless the
+     * visible point's surface transmits (rough glass). */
+    if (!(v3_dot(hit->n, v->n) > 0.0f) && !bsdf_has_transmission(&v->bsdf)) return;
+    float cos_i = fabsf(v3_dot(v->n, hit->wi));
+    if (!(cos_i > 0.0f)) return;
+    /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
+    Color f = color_scale(bsdf_eval(&v->bsdf, v->wo, hit->wi), 1.0f / cos_i);
+    Color d = color_mul(f, hit->power);
+    v->phi[0] += (double)d.c[0];
+    v->phi[1] += (double)d.c[1];
+    v->phi[2] += (double)d.c[2];
+    v->phi[3] += (double)d.c[3];
+    v->m++;
 }
 
 /* SPPM's photon store: every non-delta hit but the first one from the light (depth 1 =
@@ -335,7 +310,7 @@ static void progressive_update(SppmPixel *v, const Wavelengths *wl, uint64_t *no
 }
 
 /* Photon paths per chunk: a chunk is the unit of work of the photon phase. Any size gives
- * the same image (the deposit phase reads the chunks in order, so photon order is kept);
+ * the same image (the hit sort reads the chunks in order, so photon order is kept);
  * this one balances threads on small images and amortises the bookkeeping. */
 enum { SPPM_PHOTON_CHUNK = 1024 };
 
@@ -375,57 +350,93 @@ static inline uint32_t range_lo(const SppmJob *job, int r)
     return (uint32_t)(job->count * (size_t)r / (size_t)job->ranges);
 }
 
-static int range_of(const SppmJob *job, uint32_t pixel)
+/* Photon chunk u: its paths traced, then every hit's grid bucket (here, in parallel, so
+ * that the serial sort only counts and copies). Out of line, as deposit_range, so that
+ * profiles tell the photon pass from the gather. */
+static __attribute__((noinline)) void photon_chunk(SppmJob *job, SppmWorker *w, int u)
 {
-    int r = (int)((size_t)pixel * (size_t)job->ranges / job->count);
-    while (r + 1 < job->ranges && pixel >= range_lo(job, r + 1)) r++;
-    while (r > 0 && pixel < range_lo(job, r)) r--;
-    return r;
+    SppmHitList *l = &job->hits[u];
+    l->n = 0;
+    int first = u * SPPM_PHOTON_CHUNK;
+    int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
+    for (int i = first; i < last; i++) trace_photon(job->s, &job->sp, l, (uint64_t)i, job->iter, &w->rays);
+    for (size_t i = 0; i < l->n; i++) l->v[i].key = sppm_grid_bucket(&job->g, l->v[i].p);
 }
 
-/* After tracing chunk l: every hit's candidates, then the hits grouped by range (a
- * counting sort in hit order), so that a range reads only the hits that can reach it. */
-static void chunk_group_by_range(const SppmJob *job, SppmHitList *l)
+/* Serial, after the photon pass: the hits of every chunk counting-sorted by bucket into
+ * g->hits, in chunk order and hit order, so that each bucket lists its hits in photon
+ * order; each copy's key becomes its place in that order. False on OOM. */
+static bool grid_sort_hits(SppmJob *job)
 {
-    const uint32_t *entries = job->g.entries;
-    const int R = job->ranges;
-    uint32_t *rs = l->range_start;
-    memset(rs, 0, ((size_t)R + 1u) * sizeof *rs);
-    for (size_t i = 0; i < l->n; i++) {
-        SppmHit *h = &l->v[i];
-        sppm_grid_candidates(&job->g, h->p, &h->first, &h->last);
-        if (h->first == h->last) continue;
-        /* Entries ascend, so the candidates' ranges are r0..r1. */
-        for (int r = range_of(job, entries[h->first]), r1 = range_of(job, entries[h->last - 1]); r <= r1; r++)
-            rs[r + 1]++;
-    }
-    for (int r = 0; r < R; r++) rs[r + 1] += rs[r];
-    if (!array_grow(&l->order, &l->order_cap, rs[R], sizeof *l->order)) {
-        l->oom = true;
-        l->n = 0;
-        return;
-    }
-    /* Fill with rs[r] as range r's cursor, then shift the starts back (as in the grid). */
-    for (size_t i = 0; i < l->n; i++) {
-        const SppmHit *h = &l->v[i];
-        if (h->first == h->last) continue;
-        for (int r = range_of(job, entries[h->first]), r1 = range_of(job, entries[h->last - 1]); r <= r1; r++)
-            l->order[rs[r]++] = (uint32_t)i;
-    }
-    for (int r = R; r > 0; r--) rs[r] = rs[r - 1];
-    rs[0] = 0;
-}
-
-/* Deposit unit `r`: the hits of every chunk that reach range r, in chunk order and hit
- * order, into the pixels of range r; then the progressive update of those pixels. */
-static void deposit_range(SppmJob *job, SppmWorker *w, int r)
-{
-    uint32_t lo = range_lo(job, r), hi = range_lo(job, r + 1);
+    SppmGrid *g = &job->g;
+    memset(g->cell_start, 0, ((size_t)g->buckets + 1u) * sizeof *g->cell_start);
+    size_t total = 0;
     for (int c = 0; c < job->chunks; c++) {
         const SppmHitList *l = &job->hits[c];
-        for (uint32_t k = l->range_start[r]; k < l->range_start[r + 1]; k++)
-            sppm_grid_deposit(&job->g, job->px, &l->v[l->order[k]], lo, hi);
+        for (size_t i = 0; i < l->n; i++)
+            if (l->v[i].key != SPPM_NO_BUCKET) {
+                g->cell_start[l->v[i].key + 1]++;
+                total++;
+            }
     }
+    if (total >= UINT32_MAX || !array_grow(&g->hits, &g->hits_cap, total, sizeof *g->hits)) return false;
+    for (uint32_t h = 0; h < g->buckets; h++) g->cell_start[h + 1] += g->cell_start[h];
+    /* Fill using cell_start[h] as bucket h's cursor, then shift the starts back: the usual
+     * in-place counting sort. */
+    uint32_t seq = 0;
+    for (int c = 0; c < job->chunks; c++) {
+        const SppmHitList *l = &job->hits[c];
+        for (size_t i = 0; i < l->n; i++) {
+            uint32_t b = l->v[i].key;
+            if (b == SPPM_NO_BUCKET) continue;
+            SppmHit *h = &g->hits[g->cell_start[b]++];
+            *h = l->v[i];
+            h->key = seq++;
+        }
+    }
+    for (uint32_t h = g->buckets; h > 0; h--) g->cell_start[h] = g->cell_start[h - 1];
+    g->cell_start[0] = 0;
+    return true;
+}
+
+/* Pixel i's gather: the hits of the (distinct) buckets its disc overlaps, each bucket in
+ * photon order, merged into photon order, those inside its disc deposited. */
+static void gather_pixel(SppmJob *job, uint32_t i)
+{
+    const SppmGrid *g = &job->g;
+    SppmPixel *v = &job->px[i];
+    const SppmDisc disc = g->discs[i];
+    uint32_t b[8], cur[8], end[8];
+    int n = pixel_buckets(g, v, b);
+    int live = 0;
+    for (int k = 0; k < n; k++) {
+        cur[live] = g->cell_start[b[k]];
+        end[live] = g->cell_start[b[k] + 1];
+        if (cur[live] < end[live]) live++;
+    }
+    while (live > 0) {
+        int k = 0;
+        for (int j = 1; j < live; j++)
+            if (g->hits[cur[j]].key < g->hits[cur[k]].key) k = j;
+        const SppmHit *hit = &g->hits[cur[k]];
+        if (++cur[k] == end[k]) { /* bucket k done: the last live one takes its place */
+            live--;
+            cur[k] = cur[live];
+            end[k] = end[live];
+        }
+        if (photon_dist2(hit->p, disc.p) > disc.r2) continue;
+        sppm_deposit(v, hit);
+    }
+}
+
+/* Deposit unit `r`: every valid pixel of range r gathers its photons, then the progressive
+ * update of those pixels. */
+static __attribute__((noinline)) void deposit_range(SppmJob *job, SppmWorker *w, int r)
+{
+    uint32_t lo = range_lo(job, r), hi = range_lo(job, r + 1);
+    if (job->g.res[0] != 0)
+        for (uint32_t i = lo; i < hi; i++)
+            if (job->px[i].valid) gather_pixel(job, i);
     Wavelengths wl;
     if (job->sp.spectral) wl = sppm_wavelengths(&job->sp, job->iter);
     for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], job->sp.spectral ? &wl : NULL, &w->nonfinite);
@@ -440,12 +451,7 @@ void sppm_item(void *ctx, int u, int worker)
     if (job->phase == SPPM_PHASE_CAMERA) {
         camera_row(job->s, job->cam, &job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
     } else if (job->phase == SPPM_PHASE_PHOTONS) {
-        SppmHitList *l = &job->hits[u];
-        l->n = 0;
-        int first = u * SPPM_PHOTON_CHUNK;
-        int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
-        for (int i = first; i < last; i++) trace_photon(job->s, &job->sp, l, (uint64_t)i, job->iter, &w->rays);
-        chunk_group_by_range(job, l);
+        photon_chunk(job, w, u);
     } else {
         deposit_range(job, w, u);
     }
@@ -493,8 +499,7 @@ CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, i
     filter_init(&job->filter, sp->filter);
     job->chunks = (int)(((int64_t)job->photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
     /* Several pixel ranges per thread, so a range crowded with photons does not hold the
-     * others up; a hit is read once per range its candidates reach (mostly one or two),
-     * and one thread needs one range. */
+     * others up; one thread needs one range. */
     const int ranges = threads == 1 ? 1 : 8 * threads;
     job->ranges = count < (size_t)ranges ? (int)count : ranges;
     job->num_workers = workers;
@@ -502,15 +507,9 @@ CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, i
     job->px = calloc(count, sizeof *job->px);
     job->hits = calloc((size_t)job->chunks, sizeof *job->hits);
     g->cell_start = malloc(((size_t)g->buckets + 1u) * sizeof *g->cell_start);
-    g->entries = malloc(8u * count * sizeof *g->entries);
     g->discs = malloc(count * sizeof *g->discs);
-    if (!job->workers || !job->px || !job->hits || !g->cell_start || !g->entries || !g->discs)
+    if (!job->workers || !job->px || !job->hits || !g->cell_start || !g->discs)
         return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
-    for (int c = 0; c < job->chunks; c++) {
-        job->hits[c].range_start = calloc((size_t)job->ranges + 1u, sizeof *job->hits[c].range_start);
-        if (!job->hits[c].range_start)
-            return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon chunks (%d)", job->chunks);
-    }
     for (size_t i = 0; i < count; i++) job->px[i].r = job->r0;
     return CST_OK;
 }
@@ -525,14 +524,13 @@ int sppm_phase_begin(Sppm *job, int iter, int phase)
         /* Serial, and cheap next to the passes: a counting sort over the pixels. */
         sppm_grid_build(&job->g, job->px, job->count);
         if (job->s->emitter_sampler.lights > 0) return job->chunks;
-        for (int c = 0; c < job->chunks; c++) {
-            job->hits[c].n = 0;
-            memset(job->hits[c].range_start, 0, ((size_t)job->ranges + 1u) * sizeof *job->hits[c].range_start);
-        }
+        for (int c = 0; c < job->chunks; c++) job->hits[c].n = 0;
         return 0;
     case SPPM_PHASE_DEPOSIT:
         for (int c = 0; c < job->chunks; c++)
             if (job->hits[c].oom) return -1;
+        /* Serial, like the grid build: a counting sort over the hits. */
+        if (!grid_sort_hits(job)) return -1;
         return job->ranges;
     }
     return 0;
@@ -566,16 +564,12 @@ void sppm_destroy(Sppm *job)
 {
     if (!job) return;
     if (job->hits)
-        for (int c = 0; c < job->chunks; c++) {
-            free(job->hits[c].v);
-            free(job->hits[c].order);
-            free(job->hits[c].range_start);
-        }
+        for (int c = 0; c < job->chunks; c++) free(job->hits[c].v);
     free(job->hits);
     free(job->workers);
     free(job->px);
     free(job->g.cell_start);
-    free(job->g.entries);
+    free(job->g.hits);
     free(job->g.discs);
     free(job);
 }
