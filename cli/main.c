@@ -94,6 +94,9 @@ int main(int argc, char **argv)
         if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
             code = CLI_EXIT_INTERNAL;
         break;
+    case ARGS_CMD_MERGE:
+        code = cli_merge(&args);
+        break;
     case ARGS_CMD_COMPARE:
         code = cli_compare(&args);
         if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
