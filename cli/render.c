@@ -12,6 +12,7 @@
 
 #include "cli.h"
 #include "metadata.h"
+#include "mpi.h"
 #include "signals.h"
 
 /* "<stem of the scene file>.png" in the current directory; "scene.png" if the stem is
@@ -381,9 +382,22 @@ int cli_render(const CliArgs *a)
     /* During the render the first SIGINT or SIGTERM stops it after its pass, and the image
      * of the passes done (and the state, with --checkpoint) is written; during that write,
      * as during any image write, a signal ends the process and leaves no partial file. */
-    cli_signals_stop_arm();
-    status = cst_render(scene, &settings, &film, &stats, &err);
-    cli_signals_stop_disarm();
+    /* Under mpirun a signal ends the job (no film is kept between blocks on every rank). */
+    if (!cli_mpi_active()) cli_signals_stop_arm();
+    if (cli_mpi_active() && a->checkpoint_path) {
+        err.msg[0] = '\0';
+        snprintf(err.msg, sizeof err.msg, "under mpirun: --checkpoint is not supported across ranks yet; expected "
+                 "no --checkpoint (or one process)");
+        status = CST_ERR_UNSUPPORTED;
+    } else {
+        status = cli_mpi_active() ? cli_mpi_render(scene, &settings, &film, &stats, &err)
+                                  : cst_render(scene, &settings, &film, &stats, &err);
+    }
+    if (!cli_mpi_active()) cli_signals_stop_disarm();
+    if (status == CST_OK && cli_mpi_active() && !film) { /* a rank other than 0: rank 0 writes */
+        code = CLI_EXIT_OK;
+        goto done;
+    }
     const int stop_signal = cli_signals_stop_requested();
     if ((code = cli_after_render(a, status, &passes, &progress, stop_signal, stats.spp)) >= 0)
         goto done;
