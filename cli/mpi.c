@@ -74,6 +74,7 @@ typedef struct Cluster {
     CstFilm **ready;           /* rank 0: blocks received or rendered, not yet added */
     CstFilm *total;
     int *stopped;              /* rank 0: the rank was told there is no more */
+    struct Incoming *incoming; /* rank 0: per rank, the result being received */
     uint64_t samples, rays, nonfinite;
     /* worker: blocks handed to it, and its last result's sends in flight */
     int64_t queue[QUEUE_CAP];
@@ -120,40 +121,58 @@ static CstStatus add_ready(Cluster *c, CstError *err)
     return CST_OK;
 }
 
-/* Rank 0: receives every result that has arrived (blocking on the first when wait), hands
- * its sender the next block, and adds what is next in order. */
-static CstStatus serve(Cluster *c, bool wait, CstError *err)
+/* Rank 0: a result being received from one rank (a rank sends its next only when this
+ * one is through: worker()'s wait_sends). */
+typedef struct Incoming {
+    CstFilm *film; /* NULL: none */
+    int64_t block;
+    MPI_Request req[3];
+} Incoming;
+
+/* Rank 0, never blocking: finishes the receptions that are through, starts one for every
+ * result announced (and hands its sender the next block at once), and adds what is next
+ * in order. The sums arrive by MPI_Irecv, tested here ~10 times a second, so rank 0 never
+ * spins in MPI while its render threads work. */
+static CstStatus serve(Cluster *c, CstError *err)
 {
+    for (int r = 1; r < c->size; r++) {
+        Incoming *in = &c->incoming[r];
+        int done = 0;
+        if (!in->film) continue;
+        MPI_Testall(3, in->req, &done, MPI_STATUSES_IGNORE);
+        if (!done) continue;
+        c->ready[in->block] = in->film;
+        in->film = NULL;
+    }
     for (;;) {
         int flag = 0;
         MPI_Status ms;
         MPI_Iprobe(MPI_ANY_SOURCE, TAG_HEADER, MPI_COMM_WORLD, &flag, &ms);
-        if (!flag) {
-            if (!wait) break;
-            /* The tail of the job: poll gently rather than spin in MPI_Probe. */
-            struct timespec ts = {0, 1000000};
-            nanosleep(&ts, NULL);
-            continue;
-        }
-        wait = false;
+        if (!flag) break;
         const int from = ms.MPI_SOURCE;
+        Incoming *in = &c->incoming[from];
         int64_t h[4];
         MPI_Recv(h, 4, MPI_INT64_T, from, TAG_HEADER, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (in->film) { /* the sender's previous result: through on its side, not yet seen here */
+            MPI_Waitall(3, in->req, MPI_STATUSES_IGNORE);
+            c->ready[in->block] = in->film;
+            in->film = NULL;
+        }
         if (h[0] < 0 || h[0] >= c->nb || c->ready[h[0]])
             return mpi_fail(err, CST_ERR_INTERNAL, "rank %d sent block %lld, which is not one it was given", from,
                             (long long)h[0]);
-        CstFilm *f = NULL;
-        CstStatus status = cst_film_create(c->scene, &c->st, &f, err);
+        CstStatus status = cst_film_create(c->scene, &c->st, &in->film, err);
         if (status != CST_OK) return status;
         CstFilmSums s;
-        cst_film_sums(f, &s);
-        MPI_Recv(s.sum, (int)(3 * s.pixels), MPI_DOUBLE, from, TAG_SUM, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-        MPI_Recv(s.sum_sq, (int)(3 * s.pixels), MPI_DOUBLE, from, TAG_SQ, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-        if (s.aov) MPI_Recv(s.aov, (int)(8 * s.pixels), MPI_DOUBLE, from, TAG_AOV, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        cst_film_sums(in->film, &s);
+        in->block = h[0];
+        MPI_Irecv(s.sum, (int)(3 * s.pixels), MPI_DOUBLE, from, TAG_SUM, MPI_COMM_WORLD, &in->req[0]);
+        MPI_Irecv(s.sum_sq, (int)(3 * s.pixels), MPI_DOUBLE, from, TAG_SQ, MPI_COMM_WORLD, &in->req[1]);
+        in->req[2] = MPI_REQUEST_NULL;
+        if (s.aov) MPI_Irecv(s.aov, (int)(8 * s.pixels), MPI_DOUBLE, from, TAG_AOV, MPI_COMM_WORLD, &in->req[2]);
         int s0, n;
         block_range(c, (int)h[0], &s0, &n);
         *s.spp = n;
-        c->ready[h[0]] = f;
         c->samples += (uint64_t)h[1];
         c->rays += (uint64_t)h[2];
         c->nonfinite += (uint64_t)h[3];
@@ -184,7 +203,7 @@ static int block_progress(void *user, double fraction, double elapsed)
     Cluster *c = user;
     if (c->rank == 0) {
         CstError e = {0};
-        CstStatus status = serve(c, false, &e);
+        CstStatus status = serve(c, &e);
         if (status != CST_OK) {
             fprintf(stderr, "caustic: error: %s\n", e.msg);
             MPI_Abort(MPI_COMM_WORLD, cli_exit_code(status, CLI_STAGE_RENDER));
@@ -267,9 +286,13 @@ static CstStatus leader(Cluster *c, CstError *err)
         c->samples += (uint64_t)c->header[1];
         c->rays += (uint64_t)c->header[2];
         c->nonfinite += (uint64_t)c->header[3];
-        status = serve(c, false, err);
+        status = serve(c, err);
     }
-    while (status == CST_OK && c->added < c->nb) status = serve(c, true, err);
+    /* The tail: the others' last blocks, polled gently rather than waited for in MPI. */
+    while (status == CST_OK && c->added < c->nb && (status = serve(c, err)) == CST_OK && c->added < c->nb) {
+        struct timespec ts = {0, 1000000};
+        nanosleep(&ts, NULL);
+    }
     for (int r = 1; r < c->size && status == CST_OK; r++) assign_next(c, r); /* no more */
     return status;
 }
@@ -311,7 +334,8 @@ CstStatus cli_mpi_render(const CstScene *scene, const CstRenderSettings *setting
     }
     c.ready = calloc((size_t)c.nb, sizeof *c.ready);
     c.stopped = calloc((size_t)c.size, sizeof *c.stopped);
-    if (!c.ready || !c.stopped) status = mpi_fail(err, CST_ERR_OOM, "out of memory for %d blocks", c.nb);
+    c.incoming = calloc((size_t)c.size, sizeof *c.incoming);
+    if (!c.ready || !c.stopped || !c.incoming) status = mpi_fail(err, CST_ERR_OOM, "out of memory for %d blocks", c.nb);
     else status = cst_film_create(scene, &c.st, &c.total, err);
     if (status == CST_OK) status = leader(&c, err);
     if (status != CST_OK) {
@@ -321,6 +345,7 @@ CstStatus cli_mpi_render(const CstScene *scene, const CstRenderSettings *setting
     for (int i = 0; i < c.nb; i++) cst_film_destroy(c.ready[i]);
     free(c.ready);
     free(c.stopped);
+    free(c.incoming);
     memset(stats, 0, sizeof *stats);
     stats->seconds = cli_clock_seconds() - t0;
     stats->samples = c.samples;

@@ -221,6 +221,7 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     const uint64_t crop = cw * (uint64_t)(st.crop[3] > st.crop[2] ? st.crop[3] - st.crop[2] : 0);
     uint64_t per_pixel = 6 * sizeof(double); /* film_create: sum and sum of squares */
     if (st.aovs & FILM_AOV_FIRST_HIT) per_pixel += FILM_AOV_STRIDE * sizeof(double);
+    if (st.sample_block > 1) per_pixel *= 2; /* run_blocks' block film: the sums and AOV sums again */
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
         st.integrator == CST_INTEGRATOR_VCM)
         per_pixel += 3 * sizeof(double); /* the iteration's image */
