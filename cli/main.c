@@ -10,7 +10,7 @@
 
 #include "caustic/caustic.h"
 #include "cli.h"
-#include "mpi.h"
+#include "cluster.h"
 
 /* ------------------------------------------------------------ caustic bench rays */
 
@@ -78,7 +78,7 @@ int main(int argc, char **argv)
         break;
     case ARGS_CMD_RENDER:
     case ARGS_CMD_INFO: {
-        /* Under mpirun (cli/mpi.c) rank 0 alone reports and writes. */
+        /* Under mpirun (cli/cluster.c) rank 0 alone reports and writes. */
         int rank = 0;
         if (args.command == ARGS_CMD_RENDER && cli_mpi_start(&rank) > 0 && rank != 0) {
             args.quiet = true;

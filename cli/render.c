@@ -12,7 +12,7 @@
 
 #include "cli.h"
 #include "metadata.h"
-#include "mpi.h"
+#include "cluster.h"
 #include "signals.h"
 
 /* "<stem of the scene file>.png" in the current directory; "scene.png" if the stem is

@@ -1,4 +1,4 @@
-# Distributed rendering under mpirun (issue 29, cli/mpi.c): -np 2 and -np 3 give images byte
+# Distributed rendering under mpirun (issue 29, cli/cluster.c): -np 2 and -np 3 give images byte
 # for byte those of -np 1 and of a one-process render with the same --sample-block, for
 # path, light, bdpt and vcm; what cannot be split is refused (exit 2); a rank killed with
 # SIGKILL fails the whole run within seconds, with mpirun's message. Skipped (with the

@@ -4,7 +4,7 @@
  * they arrive, so the image is bit for bit a one-process render's whatever the number of
  * ranks or their speed. Only the CLI knows MPI: the library renders each block as an
  * ordinary cst_render of samples [first_sample, first_sample + spp). */
-#include "mpi.h"
+#include "cluster.h"
 
 #include <stdarg.h>
 #include <stdint.h>

@@ -1,9 +1,9 @@
-/* Distributed rendering over MPI (cli/mpi.c, built when CMake finds MPI: CLI_HAVE_MPI):
+/* Distributed rendering over MPI (cli/cluster.c, built when CMake finds MPI: CLI_HAVE_MPI):
  * under mpirun, `caustic render` splits its samples into blocks that rank 0 hands out on
  * request, and rank 0 adds the blocks' sums in block order and writes the image. The
  * library knows nothing of MPI; without it these are no-ops. */
-#ifndef CST_CLI_MPI_H
-#define CST_CLI_MPI_H
+#ifndef CST_CLI_CLUSTER_H
+#define CST_CLI_CLUSTER_H
 
 #include <stdbool.h>
 
