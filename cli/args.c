@@ -20,7 +20,8 @@ typedef enum ArgsOpt {
     ARGS_OPT_PNG_LINEAR, ARGS_OPT_AOV, ARGS_OPT_CROP, ARGS_OPT_MAX_DEPTH, ARGS_OPT_JSON,
     ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING,
     ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT,
-    ARGS_OPT_DISPLAY
+    ARGS_OPT_DISPLAY,
+    ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -65,6 +66,8 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"checkpoint", 0,   ARGS_VALUE, ARGS_OPT_CHECKPOINT},
     {"checkpoint-every", 0, ARGS_VALUE, ARGS_OPT_CHECKPOINT_EVERY},
     {"resume",     0,   ARGS_VALUE, ARGS_OPT_RESUME},
+    {"first-sample", 0, ARGS_VALUE, ARGS_OPT_FIRST_SAMPLE},
+    {"sample-block", 0, ARGS_VALUE, ARGS_OPT_SAMPLE_BLOCK},
     {"quiet",      'q', ARGS_FLAG,  ARGS_OPT_QUIET},
     {"help",       'h', ARGS_FLAG,  ARGS_OPT_HELP},
     {"script",     0,   ARGS_VALUE,  ARGS_OPT_SCRIPT}, /* view only */
@@ -310,6 +313,20 @@ static bool args_apply_checkpoint(const ArgsOptSpec *o, const char *value, CliAr
     return true;
 }
 
+/* --first-sample N (>= 0) and --sample-block B (>= 1). */
+static bool args_apply_range(const ArgsOptSpec *o, const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    const bool first = o->id == ARGS_OPT_FIRST_SAMPLE;
+    long v;
+    if (!args_parse_long(value, first ? 0 : 1, INT_MAX / 2, &v)) {
+        args_fail(err, false, "--%s: expected an integer from %d to %d, got '%s'", o->long_name, first ? 0 : 1,
+                  INT_MAX / 2, value);
+        return false;
+    }
+    *(first ? &s->first_sample : &s->sample_block) = (int)v;
+    return true;
+}
+
 /* --light-sampler and --light-sampling: names checked here, applied to the scene later */
 static bool args_apply_light(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
@@ -501,6 +518,8 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         return true;
     case ARGS_OPT_CHECKPOINT: case ARGS_OPT_RESUME: case ARGS_OPT_CHECKPOINT_EVERY:
         return args_apply_checkpoint(o, value, out, err);
+    case ARGS_OPT_FIRST_SAMPLE:
+    case ARGS_OPT_SAMPLE_BLOCK: return args_apply_range(o, value, s, err);
     case ARGS_OPT_HELP:
         if (out->command != ARGS_CMD_HELP) out->help_for = out->command;
         out->command = ARGS_CMD_HELP;
@@ -920,12 +939,55 @@ static bool args_parse_compare(int argc, char **argv, int first, CliArgs *out, A
     return true;
 }
 
+/* ------------------------------------------------------------ caustic merge */
+
+/* caustic merge STATE... -o OUT [-q]: the states in argv order (cli/merge.c sorts them). */
+static bool args_parse_merge(int argc, char **argv, CliArgs *out, ArgsError *err)
+{
+    MergeArgs *m = &out->merge;
+    m->paths = (const char *const *)&argv[2];
+    bool only_positional = false;
+    for (int i = 2; i < argc; i++) {
+        const char *arg = argv[i];
+        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
+            argv[2 + m->count++] = argv[i]; /* packed in place: options are skipped */
+            continue;
+        }
+        if (strcmp(arg, "--") == 0) {
+            only_positional = true;
+        } else if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
+            out->command = ARGS_CMD_HELP;
+            out->help_for = ARGS_CMD_MERGE;
+            return true;
+        } else if (strcmp(arg, "-q") == 0 || strcmp(arg, "--quiet") == 0) {
+            out->quiet = true;
+        } else if (strcmp(arg, "-o") == 0 || strcmp(arg, "--output") == 0) {
+            if (i + 1 >= argc || argv[i + 1][0] == '\0') {
+                args_fail(err, true, "merge: %s needs a file name (the image to write)", arg);
+                return false;
+            }
+            out->output_path = argv[++i];
+        } else if (strncmp(arg, "--output=", 9) == 0 && arg[9]) {
+            out->output_path = arg + 9;
+        } else {
+            args_fail(err, true, "merge: unknown option '%s' (merge takes STATE... -o IMAGE [-q])", arg);
+            return false;
+        }
+    }
+    if (m->count == 0 || !out->output_path) {
+        args_fail(err, true, "merge: expected state files and -o IMAGE (got %d state%s%s)", m->count,
+                  m->count == 1 ? "" : "s", out->output_path ? "" : " and no -o");
+        return false;
+    }
+    return true;
+}
+
 /* ------------------------------------------------------------ caustic help, caustic list */
 
 static const struct { const char *name; ArgsCommand command; } ARGS_COMMANDS[] = {
     {"render", ARGS_CMD_RENDER}, {"info", ARGS_CMD_INFO},     {"bench", ARGS_CMD_BENCH_RAYS},
     {"verify", ARGS_CMD_VERIFY}, {"list", ARGS_CMD_LIST},     {"compare", ARGS_CMD_COMPARE},
-    {"view", ARGS_CMD_VIEW},
+    {"view", ARGS_CMD_VIEW},     {"merge", ARGS_CMD_MERGE},
 };
 
 static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *err)
@@ -936,7 +998,7 @@ static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *er
             out->help_for = ARGS_COMMANDS[k].command;
             return true;
         }
-    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list, compare, view)",
+    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list, compare, view, merge)",
               topic);
     return false;
 }
@@ -1007,6 +1069,9 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
     } else if (strcmp(cmd, "compare") == 0) {
         out->command = ARGS_CMD_COMPARE;
         return args_parse_compare(argc, argv, 2, out, err);
+    } else if (strcmp(cmd, "merge") == 0) {
+        out->command = ARGS_CMD_MERGE;
+        return args_parse_merge(argc, argv, out, err);
     } else if (cmd[0] == '-') {
         const char *name = cmd + strspn(cmd, "-");
         for (size_t k = 0; k < ARGS_NUM_OPTS; k++)
@@ -1031,7 +1096,7 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         else if (args_edit_distance(cmd, strlen(cmd), "compare") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'compare'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list, compare, view)",
+            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list, compare, view, merge)",
                       cmd);
         return false;
     }

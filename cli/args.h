@@ -32,7 +32,8 @@ typedef enum ArgsCommand {
     ARGS_CMD_VERIFY,      /* caustic verify [SCENE] --integrators NAME,NAME[,...] ... */
     ARGS_CMD_LIST,        /* caustic list [KIND] */
     ARGS_CMD_COMPARE,     /* caustic compare A B [--map OUT] [--json] [--variance-a VA] ... */
-    ARGS_CMD_VIEW         /* caustic view [SCENE] [render options] [--script FILE] */
+    ARGS_CMD_VIEW,        /* caustic view [SCENE] [render options] [--script FILE] */
+    ARGS_CMD_MERGE        /* caustic merge STATE... -o IMAGE */
 } ArgsCommand;
 
 #define ARGS_BENCH_MAX_ACCELS 7 /* each back end at most once */
@@ -82,6 +83,12 @@ typedef struct CompareArgs {
     double ppd;               /* --ppd: pixels per degree, 0 = FLIP's default */
 } CompareArgs;
 
+/* `caustic merge`: state files (pointers into argv) and -o, the CliArgs' output_path. */
+typedef struct MergeArgs {
+    const char *const *paths;
+    int count;
+} MergeArgs;
+
 typedef struct CliArgs {
     ArgsCommand command;
     const char *scene_path;  /* NULL = the built-in Cornell box; points into argv */
@@ -108,6 +115,7 @@ typedef struct CliArgs {
     BenchArgs bench;   /* ARGS_CMD_BENCH_RAYS only */
     VerifyArgs verify; /* ARGS_CMD_VERIFY only */
     CompareArgs compare; /* ARGS_CMD_COMPARE only */
+    MergeArgs merge;     /* ARGS_CMD_MERGE only */
     const char *script_path; /* view: --script FILE (NULL: $CAUSTIC_VIEW_SCRIPT, else none) */
     /* render, view: --display tev[:HOST:PORT] (cli/tev.h); display NULL = none */
     const char *display;

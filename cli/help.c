@@ -111,6 +111,11 @@ static const char HELP_RENDER[] =
 "      --display tev[:HOST:PORT]  stream the image as it converges to a running tev\n"
 "                       viewer (default 127.0.0.1:14158), tile by tile after each\n"
 "                       pass; no tev there: one warning, the render goes on\n"
+"      --first-sample N render samples (light, bdpt, vcm: iterations) [N, N + spp)\n"
+"                       of every pixel, each as a render from 0 computes it (default 0)\n"
+"      --sample-block B sum the film in blocks of B samples [kB, (k+1)B), each block's\n"
+"                       sums added in order (default 1: sample by sample), so that\n"
+"                       blocks rendered apart merge bit for bit (caustic merge, mpirun)\n"
 "  -q, --quiet          no job line, progress or summary; warnings and errors remain\n"
 "  -h, --help           show this help and exit\n"
 "\n"
@@ -127,6 +132,20 @@ static const char HELP_INFO[] =
 "build time and memory.\n"
 "      --accel NAME     bvh (default), kdtree, grid, list, embree or octree (see caustic\n"
 "                       list)\n"
+"  -h, --help           show this help and exit\n"
+"\n";
+
+static const char HELP_MERGE[] =
+"Merge states: caustic merge STATE... -o IMAGE [-q]\n"
+"Adds up state files (render --checkpoint) of one scene and one set of settings that\n"
+"hold disjoint sample ranges (--first-sample, --spp) and writes the image of their\n"
+"union: byte for byte the image of one render of the union with the same settings. The\n"
+"ranges must leave no gap; every state but the one that starts the union must be one\n"
+"block of --sample-block samples (render each part with --sample-block = its --spp).\n"
+"States of different renders, overlaps, gaps and corrupted files: exit 2, naming what\n"
+"differs. Under mpirun, render splits the blocks over the ranks itself (docs/cli.md).\n"
+"  -o, --output IMAGE   the image to write (.png, .exr, .pfm)\n"
+"  -q, --quiet          no summary line\n"
 "  -h, --help           show this help and exit\n"
 "\n";
 
@@ -320,6 +339,9 @@ void args_print_help(FILE *f, ArgsCommand command)
         fputs(HELP_COMPARE, f);
         fprintf(f, "Example:\n%s\n", HELP_EXAMPLES_COMPARE);
         break;
+    case ARGS_CMD_MERGE:
+        fputs(HELP_MERGE, f);
+        break;
     case ARGS_CMD_HELP:
     case ARGS_CMD_VERSION:
         fputs(HELP_USAGE_ALL, f);
@@ -330,6 +352,7 @@ void args_print_help(FILE *f, ArgsCommand command)
         fputs(HELP_LIST, f);
         fputs(HELP_COMPARE, f);
         fputs(HELP_VIEW, f);
+        fputs(HELP_MERGE, f);
         fputs("      --version        print the version and the build (compiler, ISA, Embree,\n"
               "                       MPI, SDL2, build type) and exit\n\n", f);
         fputs(HELP_EXIT, f);

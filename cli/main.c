@@ -10,6 +10,7 @@
 
 #include "caustic/caustic.h"
 #include "cli.h"
+#include "cluster.h"
 
 /* ------------------------------------------------------------ caustic bench rays */
 
@@ -76,9 +77,17 @@ int main(int argc, char **argv)
         code = cli_finish_stdout();
         break;
     case ARGS_CMD_RENDER:
-    case ARGS_CMD_INFO:
+    case ARGS_CMD_INFO: {
+        /* Under mpirun (cli/cluster.c) rank 0 alone reports and writes. */
+        int rank = 0;
+        if (args.command == ARGS_CMD_RENDER && cli_mpi_start(&rank) > 0 && rank != 0) {
+            args.quiet = true;
+            args.json = false;
+        }
         code = cli_render(&args);
+        cli_mpi_stop();
         break;
+    }
     case ARGS_CMD_BENCH_RAYS:
         code = cli_bench_rays(&args);
         if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
@@ -93,6 +102,9 @@ int main(int argc, char **argv)
         code = cli_view(&args);
         if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
             code = CLI_EXIT_INTERNAL;
+        break;
+    case ARGS_CMD_MERGE:
+        code = cli_merge(&args);
         break;
     case ARGS_CMD_COMPARE:
         code = cli_compare(&args);

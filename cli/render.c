@@ -13,6 +13,7 @@
 #include "cli.h"
 #include "tev.h"
 #include "metadata.h"
+#include "cluster.h"
 #include "signals.h"
 
 /* "<stem of the scene file>.png" in the current directory; "scene.png" if the stem is
@@ -341,6 +342,24 @@ static const char *cli_resolve_output(const CliArgs *a, CstScene *scene, char *b
     return cli_check_output(buf, "output") ? buf : NULL;
 }
 
+/* The render: cst_render, or under mpirun cli_mpi_render (film NULL on ranks other than 0). */
+static CstStatus cli_render_film(const CliArgs *a, const CstScene *scene, const CstRenderSettings *settings,
+                                 CstFilm **film, CstRenderStats *stats, CstError *err)
+{
+    if (!cli_mpi_active()) {
+        cli_signals_stop_arm();
+        CstStatus status = cst_render(scene, settings, film, stats, err);
+        cli_signals_stop_disarm();
+        return status;
+    }
+    /* Under mpirun a signal ends the job: no rank holds the film between blocks. */
+    if (a->checkpoint_path) {
+        snprintf(err->msg, sizeof err->msg, "under mpirun: --checkpoint is not supported across ranks yet; "
+                 "expected no --checkpoint (or one process)");
+        return CST_ERR_UNSUPPORTED;
+    }
+    return cli_mpi_render(scene, settings, film, stats, err);
+}
 
 int cli_render(const CliArgs *a)
 {
@@ -418,9 +437,9 @@ int cli_render(const CliArgs *a)
     /* During the render the first SIGINT or SIGTERM stops it after its pass, and the image
      * of the passes done (and the state, with --checkpoint) is written; during that write,
      * as during any image write, a signal ends the process and leaves no partial file. */
-    cli_signals_stop_arm();
-    status = cst_render(scene, &settings, &film, &stats, &err);
-    cli_signals_stop_disarm();
+    status = cli_render_film(a, scene, &settings, &film, &stats, &err);
+    code = CLI_EXIT_OK; /* under mpirun, a rank other than 0 (no film) is done: rank 0 writes */
+    if (status == CST_OK && cli_mpi_active() && !film) goto done;
     const int stop_signal = cli_signals_stop_requested();
     if ((code = cli_after_render(a, status, &passes, &progress, stop_signal, stats.spp)) >= 0)
         goto done;

@@ -922,6 +922,15 @@ typedef struct CstRenderSettings {
      * default 1000 (fewer than the pixels: as many as the pixels). */
     double mlt_large_step, mlt_sigma;
     int mlt_bootstrap, mlt_chains;
+    /* Samples (iterations) per block of the film's sums, > 0; unset or 1 = every sample
+     * added to the pixel's sums in order (what a render always did). B > 1: the sums of
+     * each block of samples [kB, (k+1)B) (k >= 0, cut at the render's range) are made
+     * from zero, then added to the film in block order, so that films of whole blocks
+     * rendered anywhere (other processes, other machines) add up bit for bit to one render
+     * of their union: cst_film_add, cst_film_state_merge, MPI (docs/cli.md). With B > 1
+     * the pass callback, the time limit and a stop act at block ends only. Not a scene
+     * setting. */
+    int sample_block;
 } CstRenderSettings;
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit
@@ -1098,6 +1107,40 @@ CST_API CstStatus cst_film_state_write(const char *path, const CstFilm *film, co
  * film to pass as CstRenderSettings.resume (caller: cst_film_destroy). */
 CST_API CstStatus cst_film_state_read(const char *path, const CstScene *scene, const CstRenderSettings *settings,
                                       const char *scene_id, CstFilm **out, CstError *err);
+
+/* ---------------------------------------------------------------- combining films
+ * Films of blocks of samples (CstRenderSettings.sample_block) rendered apart, combined bit
+ * for bit as one render of their union combines them (docs/cli.md, "Distributed
+ * rendering"): by `caustic merge` and by the CLI's MPI ranks. */
+
+/* An empty film (zero sums, spp 0) as cst_render makes it for `scene` and `settings`: the
+ * crop's size, AOV sums if the AOVs need them, the output settings. CST_ERR_OOM. */
+CST_API CstStatus cst_film_create(const CstScene *scene, const CstRenderSettings *settings, CstFilm **out,
+                                  CstError *err);
+/* Adds src's sums to dst's, value by value, and src's spp to dst's: a render with
+ * sample_block B adds each block's sums so. CST_ERR_INVALID_ARG when their sizes or AOV
+ * sums differ. */
+CST_API CstStatus cst_film_add(CstFilm *dst, const CstFilm *src, CstError *err);
+/* The film's own arrays, to carry sums between processes: sum and sum_sq (3 doubles per
+ * pixel, rows from the top), aov (8 per pixel, or NULL), and spp, all writable. */
+typedef struct CstFilmSums {
+    double *sum, *sum_sq, *aov;
+    size_t pixels;
+    int *spp;
+} CstFilmSums;
+CST_API void cst_film_sums(CstFilm *film, CstFilmSums *out);
+/* Combines the state files paths[0..count) (cst_film_state_write's, each of a sample range
+ * [first_sample, first_sample + spp)) into *out (caller: cst_film_destroy; the crop the
+ * states were rendered with, the default output settings) whose sums are bit for bit those
+ * of one render of the union of their ranges with the same settings, and *first_sample the
+ * union's first sample. The ranges, in any order of paths, must be disjoint and leave no
+ * gap; the state that starts the union may hold several blocks, every other one block
+ * (blocks of the key's sample_block: their sums combine in block order). Refused, naming
+ * what differs: CST_ERR_INVALID_ARG for states of different renders (any key entry but
+ * first_sample), overlaps, gaps, several blocks, the stratified sampler (its strata
+ * follow each render's spp); CST_ERR_PARSE and CST_ERR_IO as cst_film_state_read. */
+CST_API CstStatus cst_film_state_merge(const char *const *paths, int count, CstFilm **out, int *first_sample,
+                                       CstError *err);
 
 /* ---------------------------------------------------------------- images */
 /* Reads a PNG (sRGB decoded to linear), EXR, PFM or Radiance HDR as linear RGB floats: *rgb (width x

@@ -77,6 +77,35 @@ void film_destroy(Film *f)
     free(f);
 }
 
+void film_add(Film *dst, const Film *src)
+{
+    const size_t n = 3 * (size_t)dst->width * (size_t)dst->height;
+    for (size_t i = 0; i < n; i++) dst->sum[i] += src->sum[i];
+    for (size_t i = 0; i < n; i++) dst->sum_sq[i] += src->sum_sq[i];
+    if (dst->aov && src->aov)
+        for (size_t i = 0; i < n / 3 * FILM_AOV_STRIDE; i++) dst->aov[i] += src->aov[i];
+}
+
+CstStatus cst_film_add(CstFilm *dst, const CstFilm *src, CstError *err)
+{
+    if (dst->width != src->width || dst->height != src->height || (!dst->aov) != (!src->aov))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_add: a %dx%d film%s and a %dx%d film%s; expected the "
+                        "same size and AOV sums", dst->width, dst->height, dst->aov ? " with AOV sums" : "",
+                        src->width, src->height, src->aov ? " with AOV sums" : "");
+    film_add(dst, src);
+    dst->spp += src->spp;
+    return CST_OK;
+}
+
+void cst_film_sums(CstFilm *f, CstFilmSums *out)
+{
+    out->sum = f->sum;
+    out->sum_sq = f->sum_sq;
+    out->aov = f->aov;
+    out->pixels = (size_t)f->width * (size_t)f->height;
+    out->spp = &f->spp;
+}
+
 void cst_film_destroy(CstFilm *film) { film_destroy(film); }
 int cst_film_width(const CstFilm *f) { return f->width; }
 int cst_film_height(const CstFilm *f) { return f->height; }

@@ -42,6 +42,10 @@ void film_destroy(Film *film);
  * settings); NULL on OOM. */
 Film *film_crop(const Film *f, int x0, int y0, int w, int h);
 
+/* dst's sums plus src's, value by value (sums, sums of squares, AOV sums when both have
+ * them; not spp): how the sums of blocks of samples combine (render.c, cst_film_add). */
+void film_add(Film *dst, const Film *src);
+
 static inline void film_accumulate(Film *f, int pixel, double r, double g, double b)
 {
     double *s = &f->sum[3 * pixel], *q = &f->sum_sq[3 * pixel];

@@ -76,6 +76,9 @@ static int state_key(const CstScene *scene, const CstRenderSettings *st, const c
     key_real(&b, "clamp", st->max_component > 0.0 ? st->max_component / exp2(st->exposure) : 0.0);
     key_int(&b, "regularize", st->regularize == 1);
     key_int(&b, "aov_sums", (st->aovs & FILM_AOV_FIRST_HIT) != 0);
+    /* Written only when not the default, so that states of plain renders keep their key. */
+    if (st->first_sample > 0) key_int(&b, "first_sample", st->first_sample);
+    if (st->sample_block > 1) key_int(&b, "sample_block", st->sample_block);
     return b.n;
 }
 
@@ -192,4 +195,154 @@ CstStatus cst_film_state_read(const char *path, const CstScene *scene, const Cst
     }
     *out = film;
     return CST_OK;
+}
+
+/* ---------------------------------------------------------------- merging states */
+
+/* One state of a merge: its film and key, and the samples it holds. */
+typedef struct MergePart {
+    const char *path;
+    Film *film;
+    StateKey *keys;
+    int nkeys;
+    int64_t first, end;
+} MergePart;
+
+static const StateKey *key_find(const StateKey *k, int n, const char *name)
+{
+    for (int i = 0; i < n; i++)
+        if (strcmp(k[i].name, name) == 0) return &k[i];
+    return NULL;
+}
+
+static int64_t key_int_or(const StateKey *k, int n, const char *name, int64_t dflt)
+{
+    const StateKey *e = key_find(k, n, name);
+    return e && e->type == STATE_INT ? e->i : dflt;
+}
+
+/* Every entry of b's key but first_sample equals a's, and b has no other: else the list. */
+static CstStatus merge_compare(const MergePart *a, const MergePart *b, CstError *err)
+{
+    char diff[900] = "";
+    size_t used = 0;
+    int count = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        const MergePart *x = pass ? b : a, *y = pass ? a : b;
+        for (int i = 0; i < x->nkeys; i++) {
+            if (strcmp(x->keys[i].name, "first_sample") == 0) continue;
+            const StateKey *e = key_find(y->keys, y->nkeys, x->keys[i].name);
+            if (pass && e) continue; /* compared in the first pass */
+            if (e && key_equal(e, &x->keys[i])) continue;
+            char va[96] = "absent", vb[96] = "absent";
+            key_value(&x->keys[i], pass ? vb : va, 96);
+            if (e) key_value(e, pass ? va : vb, 96);
+            if (used < sizeof diff)
+                used += (size_t)snprintf(diff + used, sizeof diff - used, "%s%s: %s in %s, %s in %s", count ? "; " : "",
+                                         x->keys[i].name, va, a->path, vb, b->path);
+            count++;
+        }
+    }
+    if (!count) return CST_OK;
+    return cst_fail(err, CST_ERR_INVALID_ARG, "%s and %s were made for different renders (%d value%s differ%s: %s); "
+                    "expected states of one scene and one set of settings, over different samples",
+                    a->path, b->path, count, count == 1 ? "" : "s", count == 1 ? "s" : "", diff);
+}
+
+/* The checks of cst_film_state_merge on parts sorted by first sample. */
+static CstStatus merge_check(const MergePart *p, int count, CstError *err)
+{
+    for (int i = 1; i < count; i++) {
+        CstStatus status = merge_compare(&p[0], &p[i], err);
+        if (status != CST_OK) return status;
+    }
+    if (key_int_or(p[0].keys, p[0].nkeys, "sampler.spp", 0) != 0)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: the stratified sampler lays its strata out for each render's "
+                        "sample count, so renders of parts of a range are not parts of one render; expected "
+                        "another sampler", p[0].path);
+    const int64_t B = key_int_or(p[0].keys, p[0].nkeys, "sample_block", 1);
+    for (int i = 0; i < count; i++) {
+        if (p[i].end == p[i].first)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s holds no samples", p[i].path);
+        if (i > 0 && p[i].first < p[i - 1].end)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s holds samples [%lld, %lld) and %s [%lld, %lld): they overlap; "
+                            "expected disjoint sample ranges", p[i - 1].path, (long long)p[i - 1].first,
+                            (long long)p[i - 1].end, p[i].path, (long long)p[i].first, (long long)p[i].end);
+        if (i > 0 && p[i].first > p[i - 1].end)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "samples [%lld, %lld) are in none of the states (%s ends at %lld, "
+                            "%s starts at %lld); expected ranges that leave no gap", (long long)p[i - 1].end,
+                            (long long)p[i].first, p[i - 1].path, (long long)p[i - 1].end, p[i].path,
+                            (long long)p[i].first);
+        /* One render of the union adds block after block to its sums: a state that does not
+         * start the union must be one block, and only the last may end inside one. */
+        if (i > 0 && (p[i].first % B != 0 || p[i].end > (p[i].first / B + 1) * B))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s holds samples [%lld, %lld), more than one block of %lld "
+                            "(sample_block): a render of the union adds each block's sums to its film in turn, so "
+                            "only the state that starts the union may hold several; expected one block per state "
+                            "after the first (render each part with --sample-block at least its --spp)", p[i].path,
+                            (long long)p[i].first, (long long)p[i].end, (long long)B);
+        if (i + 1 < count && p[i].end % B != 0)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s ends at sample %lld, inside a block of %lld "
+                            "(sample_block); expected every state but the last to end at a block end", p[i].path,
+                            (long long)p[i].end, (long long)B);
+    }
+    return CST_OK;
+}
+
+CstStatus cst_film_state_merge(const char *const *paths, int count, CstFilm **out, int *first_sample, CstError *err)
+{
+    *out = NULL;
+    if (!paths || count < 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_state_merge: expected at least one state file");
+    MergePart *p = calloc((size_t)count, sizeof *p);
+    StateKey *keys = calloc((size_t)count * STATE_KEYS_MAX, sizeof *keys);
+    CstStatus status = p && keys ? CST_OK : cst_fail(err, CST_ERR_OOM, "out of memory for %d states", count);
+    for (int i = 0; i < count && status == CST_OK; i++) {
+        p[i].path = paths[i];
+        p[i].keys = keys + (size_t)i * STATE_KEYS_MAX;
+        status = film_state_read(paths[i], &p[i].film, p[i].keys, &p[i].nkeys, err);
+        if (status != CST_OK) break;
+        p[i].first = key_int_or(p[i].keys, p[i].nkeys, "first_sample", 0);
+        p[i].end = p[i].first + p[i].film->spp;
+    }
+    if (status == CST_OK) {
+        /* Insertion sort by first sample: the order of the command line does not matter. */
+        for (int i = 1; i < count; i++)
+            for (int j = i; j > 0 && p[j].first < p[j - 1].first; j--) {
+                MergePart t = p[j]; p[j] = p[j - 1]; p[j - 1] = t;
+            }
+        status = merge_check(p, count, err);
+    }
+    Film *total = NULL;
+    if (status == CST_OK) {
+        total = film_create(p[0].film->width, p[0].film->height);
+        if (!total || !film_set_output(total, p[0].film->aov ? FILM_AOV_FIRST_HIT : 0, 0.0, 0))
+            status = cst_fail(err, CST_ERR_OOM, "out of memory for the merged film");
+    }
+    if (status == CST_OK) {
+        /* From zero, in sample order: the additions one render of the union makes. */
+        for (int i = 0; i < count; i++) film_add(total, p[i].film);
+        total->spp = (int)(p[count - 1].end - p[0].first);
+        const StateKey *crop = key_find(p[0].keys, p[0].nkeys, "crop");
+        int c[4];
+        if (crop && crop->type == STATE_TEXT &&
+            sscanf(crop->text, "[%d, %d) x [%d, %d)", &c[0], &c[1], &c[2], &c[3]) == 4 && 0 <= c[0] && c[0] < c[1] &&
+            c[1] <= total->width && 0 <= c[2] && c[2] < c[3] && c[3] <= total->height &&
+            (c[1] - c[0] != total->width || c[3] - c[2] != total->height)) {
+            Film *cropped = film_crop(total, c[0], c[2], c[1] - c[0], c[3] - c[2]);
+            film_destroy(total);
+            total = cropped;
+            if (!total) status = cst_fail(err, CST_ERR_OOM, "out of memory for the merged crop");
+        }
+    }
+    if (status == CST_OK) {
+        *out = total;
+        if (first_sample) *first_sample = (int)p[0].first;
+    } else {
+        film_destroy(total);
+    }
+    for (int i = 0; p && i < count; i++) film_destroy(p[i].film);
+    free(p);
+    free(keys);
+    return status;
 }

@@ -155,6 +155,49 @@ static CstStatus run_passes(Driver *d, int *done, CstError *err)
     }
 }
 
+/* Every block of a render with sample_block B > 1, from sample *done (a resumed film's
+ * count, at a block end): each block's samples [kB, (k+1)B), cut at the render's range,
+ * are rendered into `block` (zeroed first), whose sums are then added to the film's, in
+ * block order. A film of whole blocks rendered elsewhere (an MPI rank, another machine)
+ * holds exactly the sums of `block` here, so they combine bit for bit (cst_film_add). The
+ * pass callback, the time limit and stops act at block ends: only there is the film the
+ * sum of whole blocks. */
+static CstStatus run_blocks(Driver *d, Film *block, int *done, CstError *err)
+{
+    const CstRenderSettings *st = d->st;
+    const int B = st->sample_block;
+    const int cap = st->spp > 0 ? st->spp : INT_MAX - st->first_sample;
+    const double budget = st->time_limit > 0.0 ? st->time_limit : (double)INFINITY;
+    Film *film = d->it->film;
+    const size_t n = 3 * (size_t)film->width * (size_t)film->height;
+    if (*done >= cap) {
+        pass_finished(d, *done, true); /* a resume with nothing left to render */
+        return CST_OK;
+    }
+    while (*done < cap) {
+        const int s0 = st->first_sample + *done;
+        const int64_t end = ((int64_t)s0 / B + 1) * B;
+        int count = (int)(end - s0);
+        if (count > cap - *done) count = cap - *done;
+        memset(block->sum, 0, n * sizeof *block->sum);
+        memset(block->sum_sq, 0, n * sizeof *block->sum_sq);
+        if (block->aov) memset(block->aov, 0, n / 3 * FILM_AOV_STRIDE * sizeof *block->aov);
+        const double t0 = clock_seconds();
+        d->it->film = block;
+        CstStatus status = run_pass(d, s0, count, st->spp > 0 ? (double)*done / st->spp : 0.0,
+                                    st->spp > 0 ? (double)count / st->spp : 0.0, err);
+        d->it->film = film;
+        if (status != CST_OK) return status;
+        film_add(film, block);
+        *done += count;
+        /* The next block is predicted to take as long as this one, per sample. */
+        const double now = clock_seconds(), per_spp = (now - t0) / count;
+        const bool last = *done >= cap || now - d->t0 + per_spp * B > budget;
+        if (pass_finished(d, *done, last) || last) return CST_OK;
+    }
+    return CST_OK;
+}
+
 /* The photon pass's progress (integrator_prepare), throttled like run_step's: the phase's
  * own fraction when the caller follows phases, else 0 (or the time limit's share). */
 static int prepare_progress(void *user, double fraction)
@@ -178,6 +221,7 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     const uint64_t crop = cw * (uint64_t)(st.crop[3] > st.crop[2] ? st.crop[3] - st.crop[2] : 0);
     uint64_t per_pixel = 6 * sizeof(double); /* film_create: sum and sum of squares */
     if (st.aovs & FILM_AOV_FIRST_HIT) per_pixel += FILM_AOV_STRIDE * sizeof(double);
+    if (st.sample_block > 1) per_pixel *= 2; /* run_blocks' block film: the sums and AOV sums again */
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
         st.integrator == CST_INTEGRATOR_VCM || st.integrator == CST_INTEGRATOR_PSSMLT)
         per_pixel += 3 * sizeof(double); /* the iteration's image */
@@ -213,6 +257,26 @@ static void fill_stats(CstRenderStats *stats, const CstRenderSettings *st, const
         stats->rays += workers[i].rays;
         stats->nonfinite += workers[i].nonfinite;
     }
+}
+
+CstStatus cst_film_create(const CstScene *scene, const CstRenderSettings *settings, CstFilm **out, CstError *err)
+{
+    CstRenderSettings st;
+    cst_render_settings_resolve(scene, settings, &st);
+    const int cw = st.crop[1] - st.crop[0], ch = st.crop[3] - st.crop[2];
+    *out = NULL;
+    if (cw <= 0 || ch <= 0 || cw > 65536 || ch > 65536)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_create: a %dx%d film; expected 1..65536 in each "
+                        "dimension", cw, ch);
+    Film *film = film_create(cw, ch);
+    if (film) film_set_white_balance(film, st.white_balance);
+    if (film && !film_set_output(film, st.aovs, st.exposure, st.png_linear)) {
+        film_destroy(film);
+        film = NULL;
+    }
+    if (!film) return cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d film", cw, ch);
+    *out = film;
+    return CST_OK;
 }
 
 CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, CstFilm **out,
@@ -259,6 +323,17 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "does not trace; expected path, path-nee, path-bsdf, whitted, photon, bdpt or vcm "
                         "(the variance AOV works with every integrator)",
                         cst_integrator_name(st.integrator));
+    if (st.sample_block < 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "sample_block %d: expected a number of samples >= 1",
+                        st.sample_block);
+    if (st.sample_block > 1 && st.integrator == CST_INTEGRATOR_SPPM)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "sample_block %d: SPPM's film is one estimate, not sums of "
+                        "samples; expected sample_block 1 for sppm", st.sample_block);
+    if (st.resume && st.sample_block > 1 && (st.first_sample + st.resume->spp) % st.sample_block != 0 &&
+        !(st.spp > 0 && st.resume->spp >= st.spp))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: the film ends at sample %d, inside a block of %d; "
+                        "expected a film of whole blocks (a state written at a block end)",
+                        st.first_sample + st.resume->spp, st.sample_block);
     const Film *resume = st.resume;
     if (resume && !cst_integrator_resumable(st.integrator))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator cannot resume from a state file yet",
@@ -305,8 +380,16 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                                     err);
         if (status == CST_OK && st.progress && st.progress_phase)
             st.progress_phase(st.progress_user, CST_PHASE_RENDER);
-        if (status == CST_OK && (status = run_passes(&d, &samples, err)) == CST_OK)
+        Film *block = NULL;
+        if (status == CST_OK && st.sample_block > 1) {
+            block = film_create(st.width, st.height);
+            if (!block || !film_set_output(block, st.aovs, 0.0, 0))
+                status = cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d block film", st.width, st.height);
+        }
+        if (status == CST_OK &&
+            (status = block ? run_blocks(&d, block, &samples, err) : run_passes(&d, &samples, err)) == CST_OK)
             integrator_finish(it, samples);
+        film_destroy(block);
     }
     double seconds = clock_seconds() - d.t0;
     threadpool_destroy(d.pool);

@@ -17,6 +17,7 @@ void cst_render_settings_init(CstRenderSettings *s)
     s->first_sample = CST_UNSET;
     s->mlt_large_step = s->mlt_sigma = CST_UNSET;
     s->mlt_bootstrap = s->mlt_chains = CST_UNSET;
+    s->sample_block = CST_UNSET;
 }
 
 /* Whether a field holds a value. Fields where 0 means nothing (sizes, counts, radii, the
@@ -72,6 +73,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
         out->crop[2] = 0; out->crop[3] = out->height;
     }
     if (out->first_sample == CST_UNSET) out->first_sample = 0; /* a render's, never the scene's */
+    if (out->sample_block == CST_UNSET || out->sample_block == 0) out->sample_block = 1;
     if (!in->seed_set) { out->seed = sc->seed_set ? sc->seed : 0; out->seed_set = 1; }
     if (!in->exposure_set) { out->exposure = sc->exposure_set ? sc->exposure : 0.0; out->exposure_set = 1; }
     if (out->threads <= 0) { /* 0 and CST_UNSET: one per core */
