@@ -600,9 +600,33 @@ static int image_exr_extra(const ImageWriteOptions *opt, const char *name)
     return -1;
 }
 
+/* The library's own compressor, which image_exr_compress wraps (a struct: a function pointer
+ * does not travel through encoding_user_data's void * in C17). */
+typedef struct ExrCompressor {
+    exr_result_t (*fn)(exr_encode_pipeline_t *);
+} ExrCompressor;
+
+/* OpenEXR 3.1.5's ZIP compressor (Debian 12) keeps the deflated bytes when they are exactly as
+ * many as the packed pixels, and every reader, OpenEXR's included, takes a chunk whose stored
+ * size equals its pixels' size for uncompressed: the chunk reads back as garbage (OpenEXR issue
+ * #2306, fixed upstream in 2026 by storing the packed bytes when deflate does not shrink
+ * them). A noisy 64 x 16 float chunk hits it about once in a few hundred. The same rule here:
+ * a chunk that did not shrink is stored as its packed bytes, which the compression buffer,
+ * at least as large as them, holds. */
+static exr_result_t image_exr_compress(exr_encode_pipeline_t *enc)
+{
+    const ExrCompressor *c = enc->encoding_user_data;
+    exr_result_t rv = c->fn(enc);
+    if (rv == EXR_ERR_SUCCESS && enc->compressed_buffer && enc->compressed_buffer != enc->packed_buffer &&
+        enc->compressed_bytes == enc->packed_bytes && enc->compressed_alloc_size >= enc->packed_bytes)
+        memcpy(enc->compressed_buffer, enc->packed_buffer, (size_t)enc->packed_bytes);
+    return rv;
+}
+
 static exr_result_t image_exr_encode(exr_context_t ctx, int part, const float *rgb, int w, int h,
                                      const ImageWriteOptions *opt)
 {
+    ExrCompressor library = {NULL};
     const int ne = opt->extra_channels;
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     bool live = false;
@@ -635,6 +659,11 @@ static exr_result_t image_exr_encode(exr_context_t ctx, int part, const float *r
             ch->user_data_type = EXR_PIXEL_FLOAT;
         }
         if (!enc.convert_and_pack_fn) rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+        if (rv == EXR_ERR_SUCCESS && enc.compress_fn && enc.compress_fn != image_exr_compress) {
+            library.fn = enc.compress_fn;
+            enc.compress_fn = image_exr_compress;
+            enc.encoding_user_data = &library;
+        }
         if (rv == EXR_ERR_SUCCESS) rv = exr_encoding_run(ctx, part, &enc);
     }
     if (live) exr_encoding_destroy(ctx, &enc);

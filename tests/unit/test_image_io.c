@@ -305,6 +305,51 @@ static void test_exr_roundtrip(void **state)
     free(rgb);
 }
 
+/* OpenEXR 3.1.5 stored a ZIP chunk's deflated bytes when they were exactly as many as its
+ * pixels' bytes, which readers take for an uncompressed chunk (image_io.c,
+ * image_exr_compress). Chunks of noise made a little compressible by zeroing a varying share
+ * of the values sweep the deflated size across the packed size (64 x 16 x 3 floats = 12,288
+ * bytes) in steps of a few bytes, so some land on it exactly; every one must read back bit
+ * for bit. Without the guard, image 267 is the first to read back as garbage. */
+static void test_exr_incompressible_chunks(void **state)
+{
+    (void)state;
+    enum { W = 64, H = 16, TRIALS = 600 };
+    float *rgb = malloc(sizeof(float) * W * H * 3);
+    assert_non_null(rgb);
+    uint64_t x = 0x9e3779b97f4a7c15ULL;
+    char p[512];
+    tpath(p, sizeof p, "noise.exr");
+    int raw_sized = 0;
+    for (int t = 0; t < TRIALS; t++) {
+        const uint32_t zero_below = (uint32_t)t * 7u; /* of 2^16: 0 to 6.4 % of the values zero */
+        for (int i = 0; i < W * H * 3; i++) {
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17; /* xorshift64 */
+            uint32_t u = (uint32_t)(x >> 32);
+            rgb[i] = (u & 0xffffu) < zero_below ? 0.0f : (float)(u >> 8) * 0x1p-24f;
+        }
+        CstError err = {0};
+        assert_int_equal(image_write(p, rgb, W, H, &err), CST_OK);
+        size_t n;
+        uint8_t *raw = slurp(p, &n);
+        /* the one chunk is the file's last bytes: y, size, data */
+        if (n > 12288 + 8) {
+            int32_t stored;
+            memcpy(&stored, raw + n - 12288 - 4, 4);
+            raw_sized += stored == 12288;
+        }
+        free(raw);
+        float *back = NULL;
+        int bw = 0, bh = 0;
+        assert_int_equal(image_read(p, &back, &bw, &bh, &err), CST_OK);
+        if (memcmp(back, rgb, sizeof(float) * W * H * 3) != 0)
+            fail_msg("image %d (%u of 65536 values zero) did not read back bit for bit", t, zero_below);
+        free(back);
+    }
+    print_message("exr: %d of %d noise chunks stored at their packed size, all read back\n", raw_sized, TRIALS);
+    free(rgb);
+}
+
 /* A minimal uncompressed scanline EXR built byte by byte (OpenEXR file layout document),
  * independent of the library's writer: checks half -> float, the B, G, R storage order
  * and channels the reader must skip. */
@@ -886,6 +931,7 @@ int main(void)
         cmocka_unit_test(test_pfm_read_variants),
         cmocka_unit_test(test_pfm_malformed),
         cmocka_unit_test(test_exr_roundtrip),
+        cmocka_unit_test(test_exr_incompressible_chunks),
         cmocka_unit_test(test_exr_read_handmade),
         cmocka_unit_test(test_exr_malformed),
         cmocka_unit_test(test_png_roundtrip),
