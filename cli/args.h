@@ -16,7 +16,7 @@
 /* bench rays also takes Embree in its robust mode as a back end of its own. */
 #define ARGS_EMBREE_ROBUST     "embree-robust"
 #define ARGS_BENCH_ACCEL_NAMES ARGS_ACCEL_NAMES ", " ARGS_EMBREE_ROBUST
-#define ARGS_SAMPLER_NAMES    "independent, stratified, sobol"
+#define ARGS_SAMPLER_NAMES    "independent, stratified, sobol, zsobol"
 #define ARGS_AOV_NAMES        "albedo, normal, depth, variance"
 #define ARGS_MAX_EXPOSURE     64
 #define ARGS_OUTPUT_FORMATS   ".png, .exr, .pfm"

@@ -723,7 +723,9 @@ typedef enum CstSampler {
     CST_SAMPLER_DEFAULT = 0,   /* the scene's choice, else CST_SAMPLER_INDEPENDENT */
     CST_SAMPLER_INDEPENDENT,   /* one PCG32 stream per pixel sample */
     CST_SAMPLER_STRATIFIED,    /* jittered strata of spp (1D) and nx x ny = spp (2D) cells */
-    CST_SAMPLER_SOBOL          /* Sobol' with hash-based Owen scrambling (Burley 2020) */
+    CST_SAMPLER_SOBOL,         /* Sobol' with hash-based Owen scrambling (Burley 2020) */
+    CST_SAMPLER_ZSOBOL         /* Sobol' over Morton-ordered (pixel, sample) indices (Ahmed &
+                                * Wonka 2020; pbrt-v4's ZSobolSampler) */
 } CstSampler;
 
 /* Extra EXR channels (bit mask); see cst_film_write. */
@@ -748,7 +750,7 @@ CST_API CstIntegrator cst_integrator_from_name(const char *name);
 CST_API const char *cst_integrator_name(CstIntegrator integrator);
 CST_API CstFilter cst_filter_from_name(const char *name);
 CST_API const char *cst_filter_name(CstFilter filter);
-/* "independent", "stratified", "sobol"; CST_SAMPLER_DEFAULT for an unknown name. */
+/* "independent", "stratified", "sobol", "zsobol"; CST_SAMPLER_DEFAULT for an unknown name. */
 CST_API CstSampler cst_sampler_from_name(const char *name);
 CST_API const char *cst_sampler_name(CstSampler sampler);
 /* "albedo", "normal", "depth", "variance" (one name) to its CST_AOV_ bit; 0 if unknown. */

@@ -602,7 +602,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (scene->camera_mirror) camera_mirror_x(&it->camera);
     filter_init(&it->pixel_filter, st->filter);
     /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
-    it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp);
+    it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp, st->width, st->height);
     it->aov_hit = (st->aovs & FILM_AOV_FIRST_HIT) != 0;
     it->spectral = st->color_mode == CST_COLOR_SPECTRAL;
     /* max_component bounds what the written image shows (after 2^exposure, which holds the

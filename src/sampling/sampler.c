@@ -1,4 +1,4 @@
-/* The three samplers behind sampler.h. Stratified and Sobol' are "padded" (Kollig & Keller
+/* The samplers behind sampler.h (zsobol's per-request draws are inline there). Stratified and Sobol' are "padded" (Kollig & Keller
  * 2002; Burley 2020 §4; pbrt-v4's PaddedSobolSampler): each 1D or 2D request is a
  * low-dimensional point set of its own, decorrelated from the other requests by a
  * permutation of the sample index seeded by (seed, pixel, dimension). So any number of
@@ -50,13 +50,7 @@ uint32_t sobol_sample(uint32_t index, int dim)
  * pbrt-v4's FastOwenScrambler uses. */
 uint32_t owen_scramble(uint32_t x, uint32_t seed)
 {
-    x = reverse_bits(x);
-    x ^= x * 0x3d20adeau;
-    x += seed;
-    x *= (seed >> 16) | 1u;
-    x ^= x * 0x05526c56u;
-    x ^= x * 0x53a22864u;
-    return reverse_bits(x);
+    return reverse_bits(owen_hash(reverse_bits(x), seed));
 }
 
 /* Kensler, "Correlated Multi-Jittered Sampling", Pixar TM 13-01 (2013), listing 3: a hash
@@ -123,11 +117,63 @@ static uint32_t strata_nx(uint32_t spp)
     return nx;
 }
 
-SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp)
+SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int width, int height)
 {
-    SamplerSetup u = {type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_INDEPENDENT : type, seed, spp, 1};
+    SamplerSetup u;
+    memset(&u, 0, sizeof u);
+    u.type = type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_INDEPENDENT : type;
+    u.seed = seed;
+    u.spp = spp;
+    u.nx = 1;
+    u.width = 1;
     if (u.type == CST_SAMPLER_STRATIFIED) u.nx = strata_nx(spp);
+    if (u.type == CST_SAMPLER_ZSOBOL) {
+        int side = width > height ? width : height, log2_side = 0;
+        while (log2_side < 16 && (1 << log2_side) < side) log2_side++;
+        u.width = width > 0 ? (uint32_t)width : 1u;
+        u.morton_bits = 2u * (uint32_t)log2_side;
+        uint64_t key = mix64(seed ^ 0x2d358dccaa6c78a5ULL);
+        const uint64_t DIGIT_HI = 0x5555555555555555ULL; /* reversed index: each digit's high bit */
+        for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
+            /* One 64-bit hash per dimension; the rest are cheap derivations of it. */
+            uint64_t h = mix64(key + (uint64_t)k * 0x9e3779b97f4a7c15ULL), h2 = mix64(h);
+            ZSobolDim *d = &u.zdims[k];
+            d->swap = h & DIGIT_HI;
+            d->shear = (h >> 1) & (h2 | ((h2 >> 1) & (h2 >> 3))) & DIGIT_HI; /* P = 1/2 * 5/8 */
+            d->add = h2;
+            d->mul = (h ^ (h2 << 17)) | 1u;
+            d->seed = (uint32_t)(h >> 32);
+            d->seed_y = (uint32_t)(h2 >> 32);
+        }
+    }
     return u;
+}
+
+/* Spreads the low 16 bits of v to the even bit positions (Morton order). */
+static inline uint32_t spread_bits(uint32_t v)
+{
+    v &= 0xffffu;
+    v = (v | (v << 8)) & 0x00ff00ffu;
+    v = (v | (v << 4)) & 0x0f0f0f0fu;
+    v = (v | (v << 2)) & 0x33333333u;
+    return (v | (v << 1)) & 0x55555555u;
+}
+
+static inline uint64_t reverse_bits64(uint64_t x)
+{
+    return ((uint64_t)reverse_bits((uint32_t)x) << 32) | reverse_bits((uint32_t)(x >> 32));
+}
+
+/* zsobol's index of (pixel, index): from the top, the sample's block (index / 256), the
+ * pixel's Morton code (x in the even bits, y in the odd ones), the index within the block;
+ * so every base-4 digit is one bit of x and one of y, or two bits of the index. At most
+ * 23 + 32 + 8 = 63 bits. */
+uint64_t zsobol_morton_index(const SamplerSetup *u, uint64_t pixel, uint32_t index)
+{
+    uint32_t p = (uint32_t)pixel, x = p % u->width, y = p / u->width; /* pixel < 65536^2 */
+    uint64_t code = spread_bits(x) | ((uint64_t)spread_bits(y) << 1);
+    const uint32_t m = ZSOBOL_LOG2_BLOCK;
+    return ((uint64_t)(index >> m) << (m + u->morton_bits)) | (code << m) | (index & ((1u << m) - 1u));
 }
 
 void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
@@ -138,7 +184,14 @@ void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t i
     s->index = index;
     s->spp = u->spp;
     s->nx = u->nx;
+    if (u->type == CST_SAMPLER_ZSOBOL) {
+        s->key = 0;
+        s->zrev = reverse_bits64(zsobol_morton_index(u, pixel, index));
+        for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) zsobol_point(s->zrev, &u->zdims[k], &s->zval[2 * k]);
+        return;
+    }
     s->key = mix64(mix64(u->seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
+    s->zrev = 0;
 }
 
 /* Stratified, Sobol' or PSS only: sampler_1d/2d (sampler.h) draw the independent ones inline. */
@@ -186,6 +239,7 @@ CstSampler cst_sampler_from_name(const char *name)
     if (strcmp(name, "independent") == 0) return CST_SAMPLER_INDEPENDENT;
     if (strcmp(name, "stratified") == 0) return CST_SAMPLER_STRATIFIED;
     if (strcmp(name, "sobol") == 0) return CST_SAMPLER_SOBOL;
+    if (strcmp(name, "zsobol") == 0) return CST_SAMPLER_ZSOBOL;
     return CST_SAMPLER_DEFAULT;
 }
 
@@ -195,6 +249,7 @@ const char *cst_sampler_name(CstSampler sampler)
     case CST_SAMPLER_INDEPENDENT: return "independent";
     case CST_SAMPLER_STRATIFIED: return "stratified";
     case CST_SAMPLER_SOBOL: return "sobol";
+    case CST_SAMPLER_ZSOBOL: return "zsobol";
     case CST_SAMPLER_DEFAULT: break;
     }
     return "default";

@@ -898,7 +898,7 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
                         r->max_component);
     if ((int)r->integrator < CST_INTEGRATOR_DEFAULT || r->integrator > CST_INTEGRATOR_PSSMLT ||
         (int)r->filter < CST_FILTER_DEFAULT || r->filter > CST_FILTER_MITCHELL ||
-        (int)r->sampler < CST_SAMPLER_DEFAULT || r->sampler > CST_SAMPLER_SOBOL)
+        (int)r->sampler < CST_SAMPLER_DEFAULT || r->sampler > CST_SAMPLER_ZSOBOL)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: integrator %d, filter %d or sampler %d is not one of the "
                         "CstIntegrator, CstFilter or CstSampler values", fn, (int)r->integrator, (int)r->filter,
                         (int)r->sampler);

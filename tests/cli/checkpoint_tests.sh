@@ -23,10 +23,11 @@ for integ in path path-nee path-bsdf whitted photon light bdpt vcm; do
     fi
 done
 
-# A crop, another filter, the Sobol' sampler and the spectral mode (AOV sums: test_checkpoint,
+# A crop, another filter, the Sobol' and ZSobol' samplers and the spectral mode (AOV sums: test_checkpoint,
 # as the EXR they need holds the command line in its metadata).
 d=$TMP/variants
-for v in "--crop 8,40,4,30" "--filter tent" "--sampler sobol" "--spectral --filter gaussian"; do
+for v in "--crop 8,40,4,30" "--filter tent" "--sampler sobol" "--sampler zsobol" "--spectral --filter gaussian" \
+         "--sampler zsobol --spectral"; do
     # shellcheck disable=SC2086
     harness_run "$d" 120 render "${SMALL[@]}" $v --spp 4 -o full.pfm
     # shellcheck disable=SC2086

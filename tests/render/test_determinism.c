@@ -84,8 +84,8 @@ static void test_sampler_thread_count_invariance(void **state)
     CstScene *s;
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
-    const CstSampler samplers[] = {CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL};
-    for (int k = 0; k < 2; k++) {
+    const CstSampler samplers[] = {CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL, CST_SAMPLER_ZSOBOL};
+    for (int k = 0; k < 3; k++) {
         Film *f[3];
         const int threads[3] = {1, 3, 3};
         for (int i = 0; i < 3; i++) {

@@ -511,6 +511,13 @@ static void test_camera_and_options(void **state)
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "Integrator \"mlt\"") >= 0);
     assert_true(find_warning(&w, CST_WARN_APPROXIMATED, "PixelFilter \"gaussian\"") < 0);
     cst_scene_destroy(s);
+    /* pbrt-v4's default sampler, zsobol, is caustic's zsobol (blocks of 256: a warning). */
+    Warnings wz = {0};
+    s = expect_ok("Sampler \"zsobol\" \"integer pixelsamples\" 64\nWorldBegin\n" TRI, &wz);
+    assert_int_equal(s->settings.sampler, CST_SAMPLER_ZSOBOL);
+    assert_int_equal(s->settings.spp, 64);
+    assert_true(find_warning(&wz, CST_WARN_APPROXIMATED, "Sampler \"zsobol\"") >= 0);
+    cst_scene_destroy(s);
     /* The sensor's imaging ratio (shutterclose - shutteropen) iso / 100, as exposure stops:
      * 0.5 * 400 / 100 = 2 is one stop, whichever of Film and Camera comes first; another
      * sensor is a located approximation; white balance a render setting (film/sensor.h). */

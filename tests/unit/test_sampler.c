@@ -1,6 +1,6 @@
 /* Samplers (sampling/sampler.c): the independent one is exactly the old PCG32 stream;
- * stratified and Sobol' put exactly one of N samples in each of N strata (1D) and cells
- * (2D); every sampler's 1D and 2D marginals, and pairs of different requests, are uniform
+ * stratified, Sobol' and ZSobol' put exactly one of N samples in each of N strata (1D) and
+ * cells (2D); ZSobol's 2x2 pixel blocks together are a net too (its Morton order); every sampler's 1D and 2D marginals, and pairs of different requests, are uniform
  * across pixels (chi-square at 0.01, Sidak-corrected). */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -13,13 +13,15 @@
 #include "sampling/sampler.h"
 #include "unit/chi2.h"
 
-static const CstSampler TYPES[] = {CST_SAMPLER_INDEPENDENT, CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL};
+static const CstSampler TYPES[] = {CST_SAMPLER_INDEPENDENT, CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL,
+                                   CST_SAMPLER_ZSOBOL};
+#define NUM_TYPES (sizeof TYPES / sizeof TYPES[0])
 
 /* One sample from a setup made for it alone (renders make one setup for all samples). */
 static void sampler_start_for_test(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index,
                                    uint32_t spp)
 {
-    SamplerSetup u = sampler_setup(type, seed, spp);
+    SamplerSetup u = sampler_setup(type, seed, spp, 128, 128); /* pixels < 16384 */
     sampler_start(s, &u, pixel, index);
 }
 
@@ -46,7 +48,7 @@ static void test_independent_is_pcg32(void **state)
 static void test_deterministic(void **state)
 {
     (void)state;
-    for (size_t t = 0; t < 3; t++) {
+    for (size_t t = 0; t < NUM_TYPES; t++) {
         Sampler a, b;
         sampler_start_for_test(&a, TYPES[t], 7, 1234, 5, 16);
         sampler_start_for_test(&b, TYPES[t], 7, 1234, 5, 16);
@@ -160,6 +162,109 @@ static void test_sobol_strata(void **state)
     check_strata(CST_SAMPLER_SOBOL, 1024, 1024);
 }
 
+/* ZSobol': the first 2^k <= 256 samples of a pixel are a (0, k, 2)-net in each request,
+ * also in the second block of 256 (indices 256..). The 6 requests are its 12 Sobol'
+ * dimensions (a 2D request after a 1D one skips a dimension). */
+static void test_zsobol_strata(void **state)
+{
+    (void)state;
+    check_strata(CST_SAMPLER_ZSOBOL, 4, 0);
+    check_strata(CST_SAMPLER_ZSOBOL, 16, 0);
+    check_strata(CST_SAMPLER_ZSOBOL, 64, 0);
+    check_strata(CST_SAMPLER_ZSOBOL, 256, 0);
+    check_strata(CST_SAMPLER_ZSOBOL, 64, 256);
+}
+
+/* Each cell of a 2^a x 2^(m-a) grid, for every a, holds one of the n = 2^m points. */
+static void assert_net(const Vec2 *u, uint32_t n)
+{
+    static unsigned char hit[4096];
+    int m = 0;
+    while ((1u << m) < n) m++;
+    for (int a = 0; a <= m; a++) {
+        memset(hit, 0, n);
+        uint32_t bx = 1u << a, by = 1u << (m - a);
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t cx = (uint32_t)(u[i].x * (float)bx), cy = (uint32_t)(u[i].y * (float)by);
+            assert_true(cx < bx && cy < by);
+            assert_false(hit[cy * bx + cx]);
+            hit[cy * bx + cx] = 1;
+        }
+    }
+}
+
+/* ZSobol's point (Ahmed & Wonka 2020): at 256 spp the samples of an aligned 2x2 block of
+ * pixels, and of a 4x4 block, are one (0, 10, 2)- or (0, 12, 2)-net in each 2D request
+ * (and each 1D request hits each of the 1024 or 4096 strata once): the neighbours' errors
+ * compensate. Blocks at several places of a 128 x 96 image; the block count of 256 is
+ * what ZSOBOL_LOG2_BLOCK fixes. */
+static void test_zsobol_pixel_blocks(void **state)
+{
+    (void)state;
+    static Vec2 u2[3][4096];
+    static float u1[3][4096];
+    static const int corner[][2] = {{0, 0}, {4, 0}, {0, 8}, {36, 52}, {124, 92}};
+    SamplerSetup su = sampler_setup(CST_SAMPLER_ZSOBOL, 21, 256, 128, 96);
+    for (int side = 2; side <= 4; side += 2) {
+        for (size_t c = 0; c < sizeof corner / sizeof corner[0]; c++) {
+            uint32_t n = 0;
+            for (int y = corner[c][1]; y < corner[c][1] + side; y++) {
+                for (int x = corner[c][0]; x < corner[c][0] + side; x++) {
+                    for (uint32_t i = 0; i < 256; i++, n++) {
+                        Sampler s;
+                        sampler_start(&s, &su, (uint64_t)(y * 128 + x), i);
+                        for (int r = 0; r < 3; r++) {
+                            u1[r][n] = sampler_1d(&s);
+                            u2[r][n] = sampler_2d(&s);
+                        }
+                    }
+                }
+            }
+            for (int r = 0; r < 3; r++) {
+                assert_net(u2[r], n);
+                static unsigned char hit[4096];
+                memset(hit, 0, n);
+                for (uint32_t i = 0; i < n; i++) {
+                    uint32_t k = (uint32_t)((double)u1[r][i] * n);
+                    assert_true(k < n);
+                    assert_false(hit[k]);
+                    hit[k] = 1;
+                }
+            }
+        }
+    }
+}
+
+/* The bit-parallel Sobol' dimension 1 (Pascal's matrix by a superset transform) and bit
+ * reversal against the matrix product of sobol_sample. */
+static void test_zsobol_bit_tricks(void **state)
+{
+    (void)state;
+    uint32_t i = 0;
+    for (uint32_t k = 0; k < 100000; k++, i = i * 2891336453u + 0x9e3779b9u) {
+        uint32_t j = k < 70000 ? k : i;
+        assert_int_equal(sampler_rev32(sobol1_reversed(j)), sobol_sample(j, 1));
+        assert_int_equal(sampler_rev32(j), sobol_sample(j, 0));
+    }
+}
+
+/* ZSobol's index: (block of 256 | Morton code of (x, y) | index mod 256). */
+static void test_zsobol_morton_index(void **state)
+{
+    (void)state;
+    SamplerSetup u = sampler_setup(CST_SAMPLER_ZSOBOL, 1, 0, 100, 40); /* 128 x 128: 14 bits */
+    assert_int_equal(u.morton_bits, 14);
+    assert_true(zsobol_morton_index(&u, 0, 5) == 5u);
+    assert_true(zsobol_morton_index(&u, 1, 0) == 1u << 8);             /* x = 1: bit 0 */
+    assert_true(zsobol_morton_index(&u, 100, 0) == 2u << 8);           /* y = 1: bit 1 */
+    assert_true(zsobol_morton_index(&u, 3 * 100 + 2, 7) == ((0xeu << 8) | 7u)); /* x 2, y 3 */
+    assert_true(zsobol_morton_index(&u, 0, 256 + 3) == ((1ULL << (8 + 14)) | 3u));
+    SamplerSetup big = sampler_setup(CST_SAMPLER_ZSOBOL, 1, 0, 65536, 65536);
+    assert_int_equal(big.morton_bits, 32);
+    assert_true(zsobol_morton_index(&big, 65536ull * 65536 - 1, 2147483647u) ==
+                (((uint64_t)(2147483647u >> 8) << 40) | (0xffffffffULL << 8) | 255u));
+}
+
 /* Chi-square of one histogram against the uniform expectation; returns the p-value. */
 static double uniform_p(const double *obs, int cells, double total)
 {
@@ -176,10 +281,10 @@ static double uniform_p(const double *obs, int cells, double total)
 static void test_uniform_across_pixels(void **state)
 {
     (void)state;
-    enum { PIXELS = 16384, SPP = 16, TESTS = 3 * 3 * 4 };
+    enum { PIXELS = 16384, SPP = 16, TESTS = 3 * 4 * (int)NUM_TYPES };
     const uint32_t indices[4] = {0, 1, 7, 15};
     const double alpha = 1.0 - pow(1.0 - 0.01, 1.0 / TESTS); /* Sidak */
-    for (size_t t = 0; t < 3; t++) {
+    for (size_t t = 0; t < NUM_TYPES; t++) {
         for (int k = 0; k < 4; k++) {
             static double h1[64], h2[256], hp[256];
             memset(h1, 0, sizeof h1);
@@ -211,12 +316,12 @@ static void test_setup_strata(void **state)
     static const uint32_t spp[][2] = {{0, 1}, {1, 1}, {16, 4}, {32, 4}, {36, 6}, {97, 1}, {1u << 30, 1u << 15},
                                       {2147483647u, 1}, {4294967295u, 65535}};
     for (size_t k = 0; k < sizeof spp / sizeof spp[0]; k++) {
-        SamplerSetup u = sampler_setup(CST_SAMPLER_STRATIFIED, 5, spp[k][0]);
+        SamplerSetup u = sampler_setup(CST_SAMPLER_STRATIFIED, 5, spp[k][0], 64, 64);
         assert_int_equal(u.nx, spp[k][1]);
         assert_int_equal(u.spp, spp[k][0]);
-        assert_int_equal(sampler_setup(CST_SAMPLER_SOBOL, 5, spp[k][0]).nx, 1);
+        assert_int_equal(sampler_setup(CST_SAMPLER_SOBOL, 5, spp[k][0], 64, 64).nx, 1);
     }
-    assert_int_equal(sampler_setup(CST_SAMPLER_DEFAULT, 5, 16).type, CST_SAMPLER_INDEPENDENT);
+    assert_int_equal(sampler_setup(CST_SAMPLER_DEFAULT, 5, 16, 64, 64).type, CST_SAMPLER_INDEPENDENT);
 }
 
 int main(void)
@@ -228,6 +333,10 @@ int main(void)
         cmocka_unit_test(test_sobol_directions),
         cmocka_unit_test(test_stratified_strata),
         cmocka_unit_test(test_sobol_strata),
+        cmocka_unit_test(test_zsobol_strata),
+        cmocka_unit_test(test_zsobol_pixel_blocks),
+        cmocka_unit_test(test_zsobol_bit_tricks),
+        cmocka_unit_test(test_zsobol_morton_index),
         cmocka_unit_test(test_uniform_across_pixels),
         cmocka_unit_test(test_setup_strata),
     };

@@ -645,6 +645,8 @@ static void test_sampler_and_output_keys(void **state)
                                          "\"film\": {\"exposure\": -1.5, \"png_encoding\": \"linear\", "
                                          "\"aovs\": [\"depth\", \"normal\"], \"output\": \"a.exr\"}"));
     assert_int_equal(s->settings.sampler, CST_SAMPLER_SOBOL);
+    assert_int_equal(cst_sampler_from_name("zsobol"), CST_SAMPLER_ZSOBOL);
+    assert_string_equal(cst_sampler_name(CST_SAMPLER_ZSOBOL), "zsobol");
     assert_true(s->settings.exposure == -1.5 && s->settings.exposure_set);
     assert_int_equal(s->settings.png_linear, 1);
     assert_int_equal(s->settings.aovs, CST_AOV_DEPTH | CST_AOV_NORMAL);

@@ -423,7 +423,7 @@ CstStatus json_parse_sampler(Loader *ld, const json_t *sampler)
         rs->sampler = cst_sampler_from_name(s);
         if (rs->sampler == CST_SAMPLER_DEFAULT) {
             char name[72];
-            return json_fail_here(ld, "unknown sampler \"%s\"; expected one of: independent, stratified, sobol",
+            return json_fail_here(ld, "unknown sampler \"%s\"; expected one of: independent, stratified, sobol, zsobol",
                                   json_clip_name(s, name));
         }
         json_path_pop(ld);

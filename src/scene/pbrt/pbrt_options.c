@@ -152,6 +152,10 @@ CstStatus pbrt_sampler_directive(Loader *ld, NamedCall *call)
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's stratified sampler (jittered, 2D strata "
                 "nx x ny = %d with nx the largest divisor up to its square root); same expectation, "
                      "different noise", d, spp);
+    } else if (strcmp(type, "zsobol") == 0) {
+        rs->sampler = CST_SAMPLER_ZSOBOL;
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's zsobol sampler (blocks of 256 samples per "
+                     "pixel, whatever pixelsamples); same expectation, different noise", d);
     } else {
         rs->sampler = CST_SAMPLER_SOBOL;
         pbrt_warn_at(ld, CST_WARN_APPROXIMATED, tl, "%s: caustic's Owen-scrambled Sobol' sampler; same "
