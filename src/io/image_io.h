@@ -7,9 +7,13 @@
 #include "caustic/caustic.h"
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 enum { IMAGE_MAX_EXTRA = 16 };
+
+/* Encoders and decoders address rows with int32 byte strides (OpenEXR), 12 bytes a pixel. */
+#define IMAGE_MAX_WIDTH (INT32_MAX / 12)
 
 /* Zero-initialised: plain RGB, PNG in sRGB. */
 typedef struct ImageWriteOptions {
@@ -64,6 +68,10 @@ bool image_path_is_exr(const char *path);
  * both sides positive, at most IMAGE_MAX_PIXELS pixels, and a width whose float rows
  * OpenEXR can address. */
 bool image_size_ok(uint64_t width, uint64_t height);
+
+/* strerror's text for errno e in buf (reentrant: checkpoints are written while render
+ * threads run), returned. */
+const char *image_strerror(int e, char *buf, size_t n);
 /* Reads a PNG (decoded to linear), EXR, PFM or Radiance HDR into a new malloc'd buffer in the same layout.
  * Caller frees *rgb. */
 CstStatus image_read(const char *path, float **rgb, int *width, int *height, CstError *err);
