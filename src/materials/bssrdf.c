@@ -4,7 +4,6 @@
 #include "materials/bssrdf.h"
 
 #include <math.h>
-#include <string.h>
 
 #include "materials/fresnel.h"
 
@@ -394,36 +393,4 @@ float bssrdf_sw(float eta, float cos_i)
     if (!(cos_i > 0.0f)) return 0.0f;
     float c = 1.0f - 2.0f * bssrdf_fresnel_moment1(1.0f / eta);
     return (1.0f - fresnel_dielectric(cos_i, eta)) / (c * CST_PI);
-}
-
-/* ------------------------------------------------------------------ named media */
-
-/* Measured scattering coefficients by name, sigma_s' (reduced scattering) and sigma_a in
- * 1/mm per RGB channel: Jensen, Marschner, Levoy & Hanrahan 2001, "A Practical Model for
- * Subsurface Light Transport", table 2 (the names pbrt-v4's GetMediumScatteringProperties
- * gives them). pbrt-v4 takes sigma_s' as sigma_s with g = 0. Published data (numbers only). */
-static const struct { const char *name; float sigma_s[3], sigma_a[3]; } measured[] = {
-    {"Apple", {2.29f, 2.39f, 1.97f}, {0.0030f, 0.0034f, 0.046f}},
-    {"Chicken1", {0.15f, 0.21f, 0.38f}, {0.015f, 0.077f, 0.19f}},
-    {"Chicken2", {0.19f, 0.25f, 0.32f}, {0.018f, 0.088f, 0.20f}},
-    {"Cream", {7.38f, 5.47f, 3.15f}, {0.0002f, 0.0028f, 0.0163f}},
-    {"Ketchup", {0.18f, 0.07f, 0.03f}, {0.061f, 0.97f, 1.45f}},
-    {"Marble", {2.19f, 2.62f, 3.00f}, {0.0021f, 0.0041f, 0.0071f}},
-    {"Potato", {0.68f, 0.70f, 0.55f}, {0.0024f, 0.0090f, 0.12f}},
-    {"Skimmilk", {0.70f, 1.22f, 1.90f}, {0.0014f, 0.0025f, 0.0142f}},
-    {"Skin1", {0.74f, 0.88f, 1.01f}, {0.032f, 0.17f, 0.48f}},
-    {"Skin2", {1.09f, 1.59f, 1.79f}, {0.013f, 0.070f, 0.145f}},
-    {"Spectralon", {11.6f, 20.4f, 14.9f}, {0.00f, 0.00f, 0.00f}},
-    {"Wholemilk", {2.55f, 3.21f, 3.77f}, {0.0011f, 0.0024f, 0.014f}},
-};
-
-bool bssrdf_measured(const char *name, Color *sigma_a, Color *sigma_s)
-{
-    for (int i = 0; i < (int)(sizeof measured / sizeof measured[0]); i++)
-        if (strcmp(measured[i].name, name) == 0) {
-            *sigma_a = color_rgb(measured[i].sigma_a[0], measured[i].sigma_a[1], measured[i].sigma_a[2]);
-            *sigma_s = color_rgb(measured[i].sigma_s[0], measured[i].sigma_s[1], measured[i].sigma_s[2]);
-            return true;
-        }
-    return false;
 }

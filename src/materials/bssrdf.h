@@ -82,10 +82,4 @@ float bssrdf_pdf_sp(const Bssrdf *b, Vec3 pi, Vec3 ni);
  * lobe of the exit point (pbrt NormalizedFresnelBxDF), cos_i > 0 on the outside. */
 float bssrdf_sw(float eta, float cos_i);
 
-/* A measured medium by name (Jensen et al. 2001, table 2, as pbrt-v4 names them): sigma_a
- * and sigma_s (reduced scattering, for g = 0) in 1/mm, linear RGB. False if unknown. */
-bool bssrdf_measured(const char *name, Color *sigma_a, Color *sigma_s);
-#define BSSRDF_MEASURED_LIST "Apple, Chicken1, Chicken2, Cream, Ketchup, Marble, Potato, Skimmilk, Skin1, " \
-                             "Skin2, Spectralon, Wholemilk"
-
 #endif

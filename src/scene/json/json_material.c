@@ -11,6 +11,7 @@
 
 #include "io/path.h"
 #include "materials/bssrdf.h"
+#include "media/medium_presets.h"
 #include "materials/hair.h"
 #include "scene/json/json_texture.h"
 
@@ -259,10 +260,10 @@ static CstStatus read_subsurface(Loader *ld, const json_t *obj, Material *m)
         const char *s = NULL;
         json_path_push_key(ld, "name");
         LOADER_TRY(json_read_string(ld, name, &s));
-        if (!bssrdf_measured(s, &m->sss_sigma_a, &m->sss_sigma_s)) {
+        if (!medium_preset(s, &m->sss_sigma_a, &m->sss_sigma_s)) {
             char clipped[72];
             return json_fail_here(ld, "unknown named medium \"%s\"; expected one of %s", json_clip_name(s, clipped),
-                                  BSSRDF_MEASURED_LIST);
+                                  MEDIUM_PRESET_EXAMPLES);
         }
         if (m->g != 0.0f)
             return json_fail_here(ld, "a named medium with g %g; expected g 0 (its coefficients are reduced "

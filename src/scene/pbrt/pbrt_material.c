@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "materials/bssrdf.h"
+#include "media/medium_presets.h"
 #include "materials/hair.h"
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
@@ -289,9 +290,9 @@ static CstStatus subsurface_material(Loader *ld, Params *ps, const char *d, Loc 
     Param *pa = pbrt_find_param(ps, "sigma_a"), *pss = pbrt_find_param(ps, "sigma_s");
     if (name && name[0]) {
         Color sa, ss;
-        if (!bssrdf_measured(name, &sa, &ss))
+        if (!medium_preset(name, &sa, &ss))
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, nloc, "%s: unknown named medium \"%s\"; expected one "
-                                "of %s", d, pbrt_clip(name, nm), BSSRDF_MEASURED_LIST);
+                                "of %s", d, pbrt_clip(name, nm), MEDIUM_PRESET_EXAMPLES);
         if (found_g && g != 0.0f)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: g %g is ignored with a named medium (its "
                          "coefficients are reduced scattering: g = 0), as pbrt-v4 does", d, (double)g);
