@@ -7,8 +7,8 @@
 
 #include "core/rng.h"
 #include "integrators/direct.h"
+#include "integrators/path_state.h"
 #include "integrators/roulette.h"
-#include "materials/bsdf.h"
 #include "materials/bssrdf.h"
 #include "sampling/warp.h"
 
@@ -85,63 +85,27 @@ static Color sss_nee(const Scene *s, const SurfaceHit *x, float eta, bool mis, S
 
 Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays)
 {
-    Color L = color_s(0.0f), beta = color_s(1.0f);
-    bool specular = true; /* the camera vertex acts like a delta lobe: nothing to MIS with */
-    float prev_pdf = 0.0f;
-    Vec3 prev_p = ray.o, prev_n = v3s(0.0f);
+    PathState ps = path_state_camera(ray.o); /* the camera vertex acts like a delta lobe */
     const bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
-    bool any_non_delta = false;
     for (int depth = 0;; depth++) {
         SurfaceHit sh;
         ++*rays;
         if (!scene_intersect(s, &ray, &sh)) {
-            Color le = scene_env_radiance(s, ray.d, wl);
-            if (!color_is_black(le)) {
-                if (specular || pp->mode == PATH_BSDF) L = color_madd(L, beta, le);
-                else if (pp->mode == PATH_MIS)
-                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, light_env_nee_pdf(&s->emitter_sampler, prev_p, prev_n, ray.d))));
-            }
+            path_add_env(s, pp, &ps, ps.beta, ray.d, wl);
             break;
         }
         Vec3 wo = v3_neg(ray.d);
-        if (sh.emitter >= 0) {
-            Color le = scene_emission(s, &sh, wo, wl);
-            if (!color_is_black(le)) {
-                if (specular || pp->mode == PATH_BSDF) {
-                    L = color_madd(L, beta, le);
-                } else if (pp->mode == PATH_MIS) {
-                    float cos_l = fabsf(v3_dot(sh.ng, wo));
-                    EmitterGeometry g = scene_emitter_geometry(s);
-                    /* from the previous vertex (the BSSRDF's exit point is one too) */
-                    float dist = v3_length(v3_sub(sh.p, prev_p));
-                    float pdf_light = light_area_nee_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, prev_n, dist, cos_l);
-                    L = color_madd(L, beta, color_scale(le, power_heuristic(prev_pdf, pdf_light)));
-                }
-            }
-        }
+        /* NEE's pdf from the previous vertex (the BSSRDF's exit point is one too) */
+        if (sh.emitter >= 0) path_add_emitted(s, pp, &ps, ps.beta, &sh, wo, v3_length(v3_sub(sh.p, ps.prev_p)), wl);
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
 
         Bsdf bsdf;
         const Material *m = scene_bsdf_material(s, &sh, wl, wl != NULL, &bsdf);
         if (wl && m->ior_dispersive) wavelengths_terminate_secondary(wl);
-        if (pp->regularize && any_non_delta) bsdf_regularize(&bsdf);
-        if (use_nee && !bsdf_is_delta(&bsdf)) {
-            float u_sel = sampler_1d(smp);
-            Vec2 u_light = sampler_2d(smp);
-            L = color_madd(L, beta, pp->mode == PATH_MIS ? direct_light_mis(s, &bsdf, &sh, wo, u_sel, u_light, wl, rays)
-                                                       : direct_light(s, &bsdf, &sh, wo, u_sel, u_light, wl, rays));
-        }
+        if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
+        if (use_nee && !bsdf_is_delta(&bsdf)) path_add_nee(s, pp, &ps, &bsdf, &sh, wo, smp, wl, rays);
         BsdfSample bs;
-        float uc = sampler_1d(smp);
-        Vec2 u = sampler_2d(smp);
-        if (!bsdf_sample(&bsdf, wo, uc, u, &bs)) break;
-        beta = color_mul(beta, bs.weight);
-        if (color_is_black(beta)) break;
-        specular = bs.delta;
-        any_non_delta |= !bs.delta;
-        prev_pdf = bs.delta ? bs.pmf : bs.pdf_w;
-        prev_p = sh.p;
-        prev_n = sh.ns;
+        if (!path_sample_bsdf(&ps, &bsdf, &sh, wo, smp, &bs)) break;
 
         const bool transmitted = (v3_dot(bs.wi, sh.ng) > 0.0f) != (v3_dot(wo, sh.ng) > 0.0f);
         if (m->subsurface && m->bssrdf && transmitted) {
@@ -160,10 +124,10 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             if (count == 0) break;
             float pdf = bssrdf_pdf_sp(&b, x.p, x.ng) / (float)count;
             if (!(pdf > 0.0f)) break;
-            beta = color_scale(color_mul(beta, bssrdf_sr(&b, v3_length(v3_sub(x.p, sh.p)))), 1.0f / pdf);
-            if (color_is_black(beta)) break;
+            ps.beta = color_scale(color_mul(ps.beta, bssrdf_sr(&b, v3_length(v3_sub(x.p, sh.p)))), 1.0f / pdf);
+            if (color_is_black(ps.beta)) break;
             const float eta = m->bssrdf->eta;
-            if (use_nee) L = color_madd(L, beta, sss_nee(s, &x, eta, pp->mode == PATH_MIS, smp, wl, rays));
+            if (use_nee) ps.L = color_madd(ps.L, ps.beta, sss_nee(s, &x, eta, pp->mode == PATH_MIS, smp, wl, rays));
             /* Sw by cosine sampling about the exit's shading normal (on ng's side):
              * weight Sw cos eta^2 / (cos / pi) */
             Vec2 uw = sampler_2d(smp);
@@ -171,24 +135,24 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             Frame f = frame_from_normal(x.ns);
             Vec3 wi = frame_to_world(&f, wl_local);
             if (!(v3_dot(wi, x.ng) > 0.0f) || !(wl_local.z > 0.0f)) break;
-            beta = color_scale(beta, bssrdf_sw(eta, wl_local.z) * eta * eta * CST_PI);
-            if (color_is_black(beta)) break;
-            specular = false;
-            any_non_delta = true;
-            prev_pdf = wl_local.z * CST_INV_PI;
-            prev_p = x.p;
-            prev_n = x.ns;
-            float rr = roulette(smp, depth + 1, pp->rr_depth, beta);
+            ps.beta = color_scale(ps.beta, bssrdf_sw(eta, wl_local.z) * eta * eta * CST_PI);
+            if (color_is_black(ps.beta)) break;
+            ps.specular = false;
+            ps.any_non_delta = true;
+            ps.prev_pdf = wl_local.z * CST_INV_PI;
+            ps.prev_p = x.p;
+            ps.prev_n = x.ns;
+            float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
             if (rr == 0.0f) break;
-            beta = color_scale(beta, rr);
+            ps.beta = color_scale(ps.beta, rr);
             ray = ray_make(scene_offset(s, x.p, x.ng, wi), wi, 0.0f, INFINITY);
             continue;
         }
 
-        float rr = roulette(smp, depth + 1, pp->rr_depth, beta);
+        float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
         if (rr == 0.0f) break;
-        beta = color_scale(beta, rr);
+        ps.beta = color_scale(ps.beta, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
     }
-    return L;
+    return ps.L;
 }

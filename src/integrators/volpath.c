@@ -8,9 +8,8 @@
  * collisions, the same balance heuristic over the lanes' collision densities). */
 #include "integrators/volpath.h"
 
-#include "integrators/direct.h"
+#include "integrators/path_state.h"
 #include "integrators/roulette.h"
-#include "materials/bsdf.h"
 #include "media/phase.h"
 
 /* Crossings of boundary shapes in a row before the path gives up (a stack of coincident
@@ -69,12 +68,8 @@ static inline Color mis_beta(Color beta, int hero, Color r_u)
 
 Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays)
 {
-    Color L = color_s(0.0f), beta = color_s(1.0f);
-    bool specular = true; /* the camera vertex: nothing to MIS with */
-    float prev_pdf = 0.0f;
-    Vec3 prev_p = ray.o, prev_n = v3s(0.0f);
+    PathState ps = path_state_camera(ray.o); /* the camera vertex: nothing to MIS with */
     const bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
-    bool any_non_delta = false;
     int medium = s->camera_medium, coeffs_of = -1;
     MediumCoeffs mc = {0};
     int crossings = 0;
@@ -102,7 +97,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
                  * the path passes through (below the depth limit only, as pbrt-v4). */
                 if (hero < 0) hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
                 hetero_sample_distance(&med->u.het, &mc, ray.o, ray.d, hit ? sh.t : INFINITY, hero, r_u, u_t, &ms);
-                if (mc.emissive && !(pp->max_depth > 0 && depth >= pp->max_depth)) L = color_madd(L, beta, ms.le);
+                if (mc.emissive && !(pp->max_depth > 0 && depth >= pp->max_depth)) ps.L = color_madd(ps.L, ps.beta, ms.le);
                 r_u = color_mul(r_u, ms.r);
             } else {
                 medium_sample_distance(&mc, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
@@ -112,41 +107,36 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
                  * the depth limit only). */
                 const bool last = pp->max_depth > 0 && depth >= pp->max_depth;
                 if (mc.emissive && !last && !het)
-                    L = color_madd(L, mis_beta(beta, hero, r_u), color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
-                beta = color_mul(beta, ms.weight);
-                if (last || color_is_black(beta)) break;
+                    ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
+                ps.beta = color_mul(ps.beta, ms.weight);
+                if (last || color_is_black(ps.beta)) break;
                 Vec3 p = ray_at(&ray, ms.t), wo = v3_neg(ray.d);
                 if (use_nee) {
                     VolVertex v = {p, v3s(0.0f), v3s(0.0f), wo, NULL, NULL, mc.g, medium};
-                    L = color_madd(L, mis_beta(beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+                    ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
                 }
                 Vec2 u = sampler_2d(smp);
                 float pdf;
                 Vec3 wi = phase_hg_sample(wo, mc.g, u.x, u.y, &pdf);
                 /* f / pdf = 1: HG is sampled exactly. */
-                specular = false;
-                any_non_delta = true;
-                prev_pdf = pdf;
-                prev_p = p;
-                prev_n = v3s(0.0f);
+                ps.specular = false;
+                ps.any_non_delta = true;
+                ps.prev_pdf = pdf;
+                ps.prev_p = p;
+                ps.prev_n = v3s(0.0f);
                 depth++;
-                float rr = roulette(smp, depth, pp->rr_depth, mis_beta(beta, hero, r_u));
+                float rr = roulette(smp, depth, pp->rr_depth, mis_beta(ps.beta, hero, r_u));
                 if (rr == 0.0f) break;
-                beta = color_scale(beta, rr);
+                ps.beta = color_scale(ps.beta, rr);
                 ray = ray_make(p, wi, 0.0f, INFINITY);
                 crossings = 0;
                 continue;
             }
-            beta = color_mul(beta, ms.weight);
-            if (color_is_black(beta)) break;
+            ps.beta = color_mul(ps.beta, ms.weight);
+            if (color_is_black(ps.beta)) break;
         }
         if (!hit) {
-            Color le = scene_env_radiance(s, ray.d, wl);
-            if (!color_is_black(le)) {
-                if (specular || pp->mode == PATH_BSDF) L = color_madd(L, mis_beta(beta, hero, r_u), le);
-                else if (pp->mode == PATH_MIS)
-                    L = color_madd(L, mis_beta(beta, hero, r_u), color_scale(le, power_heuristic(prev_pdf, light_env_nee_pdf(&s->emitter_sampler, prev_p, prev_n, ray.d))));
-            }
+            path_add_env(s, pp, &ps, mis_beta(ps.beta, hero, r_u), ray.d, wl);
             break;
         }
         const MediumInterface *mi = scene_hit_medium_iface(s, &sh);
@@ -158,48 +148,27 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
             continue;
         }
         Vec3 wo = v3_neg(ray.d);
-        if (sh.emitter >= 0) {
-            Color le = scene_emission(s, &sh, wo, wl);
-            if (!color_is_black(le)) {
-                if (specular || pp->mode == PATH_BSDF) {
-                    L = color_madd(L, mis_beta(beta, hero, r_u), le);
-                } else if (pp->mode == PATH_MIS) {
-                    float cos_l = fabsf(v3_dot(sh.ng, wo));
-                    EmitterGeometry g = scene_emitter_geometry(s);
-                    /* From the previous vertex, across any boundaries crossed since. */
-                    float dist = v3_length(v3_sub(sh.p, prev_p));
-                    float pdf_light = light_area_nee_pdf_w(&s->emitter_sampler, &g, sh.emitter, prev_p, prev_n, dist, cos_l);
-                    L = color_madd(L, mis_beta(beta, hero, r_u), color_scale(le, power_heuristic(prev_pdf, pdf_light)));
-                }
-            }
-        }
+        /* NEE's pdf from the previous vertex, across any boundaries crossed since. */
+        if (sh.emitter >= 0)
+            path_add_emitted(s, pp, &ps, mis_beta(ps.beta, hero, r_u), &sh, wo, v3_length(v3_sub(sh.p, ps.prev_p)), wl);
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
 
         Bsdf bsdf;
         scene_bsdf_disperse(s, &sh, wl, &bsdf);
-        if (pp->regularize && any_non_delta) bsdf_regularize(&bsdf);
+        if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             VolVertex v = {sh.p, sh.ns, sh.ng, wo, &bsdf, &sh, 0.0f, medium};
-            L = color_madd(L, mis_beta(beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+            ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
         }
         BsdfSample bs;
-        float uc = sampler_1d(smp);
-        Vec2 u = sampler_2d(smp);
-        if (!bsdf_sample(&bsdf, wo, uc, u, &bs)) break;
-        beta = color_mul(beta, bs.weight);
-        if (color_is_black(beta)) break;
-        specular = bs.delta;
-        any_non_delta |= !bs.delta;
-        prev_pdf = bs.delta ? bs.pmf : bs.pdf_w;
-        prev_p = sh.p;
-        prev_n = sh.ns;
+        if (!path_sample_bsdf(&ps, &bsdf, &sh, wo, smp, &bs)) break;
         depth++;
-        float rr = roulette(smp, depth, pp->rr_depth, mis_beta(beta, hero, r_u));
+        float rr = roulette(smp, depth, pp->rr_depth, mis_beta(ps.beta, hero, r_u));
         if (rr == 0.0f) break;
-        beta = color_scale(beta, rr);
+        ps.beta = color_scale(ps.beta, rr);
         medium = scene_medium_after(s, &sh, bs.wi, medium);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         crossings = 0;
     }
-    return L;
+    return ps.L;
 }
