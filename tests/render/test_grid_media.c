@@ -252,27 +252,7 @@ static void test_pbrt_grid_cornell(void **state)
         return;
     }
     static const double PBRT_MEAN[3] = {PBRT_GRID_R, PBRT_GRID_G, PBRT_GRID_B};
-    CstScene *s = NULL;
-    CstError err;
-    CstLoadOptions opt = {0};
-    if (cst_scene_load_pbrt(CST_SOURCE_DIR "/tests/render/media/cornell-grid.pbrt", &opt, &s, &err) != CST_OK)
-        fail_msg("%s", err.msg);
-    CstRenderSettings st;
-    cst_render_settings_init(&st);
-    st.width = st.height = 32;
-    st.color_mode = CST_COLOR_SPECTRAL;
-    CstFilm *f = render_film(s, &st, CST_INTEGRATOR_PATH, 512, 80);
-    RegionStat r = region_stat(f, 0, 0, 32, 32);
-    for (int c = 0; c < 3; c++) {
-        double rel = (r.mean[c] - PBRT_MEAN[c]) / PBRT_MEAN[c];
-        print_message("grid Cornell channel %d: caustic %.6f (se %.1e), pbrt-v4 %.6f: %+.2f%%\n", c, r.mean[c],
-                      r.se[c], PBRT_MEAN[c], 100.0 * rel);
-        if (!(fabs(r.mean[c] - PBRT_MEAN[c]) <= 0.01 * PBRT_MEAN[c] + Z_LIMIT * r.se[c]))
-            fail_msg("channel %d: caustic %.6f vs pbrt-v4 %.6f (%+.2f%%, se %.1e)", c, r.mean[c], PBRT_MEAN[c],
-                     100.0 * rel, r.se[c]);
-    }
-    cst_film_destroy(f);
-    cst_scene_destroy(s);
+    pbrt_mean_check(CST_SOURCE_DIR "/tests/render/media/cornell-grid.pbrt", PBRT_MEAN, 512, 80, "grid Cornell");
 }
 
 int main(int argc, char **argv)

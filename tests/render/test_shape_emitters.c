@@ -15,53 +15,9 @@
 
 #include "math/transform.h"
 #include "caustic/caustic.h"
+#include "render/blocks.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
-
-#define W 32
-#define H 24
-#define BX 8
-#define BY 6
-enum { R = (W / BX) * (H / BY) + 1 }; /* the blocks and the whole image */
-
-static void render_blocks(Scene *s, CstIntegrator integ, int spp, uint64_t seed, RegionStat *out)
-{
-    CstError err;
-    CstRenderSettings st = {0};
-    st.width = W;
-    st.height = H;
-    st.spp = spp;
-    st.integrator = integ;
-    st.max_depth = 3;
-    st.seed = seed;
-    st.seed_set = 1;
-    st.threads = 2;
-    CstFilm *f = NULL;
-    CstRenderStats stats;
-    assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
-    assert_int_equal(stats.nonfinite, 0);
-    int k = 0;
-    for (int by = 0; by < H; by += BY)
-        for (int bx = 0; bx < W; bx += BX) out[k++] = region_stat(f, bx, by, bx + BX, by + BY);
-    out[k] = region_stat(f, 0, 0, W, H);
-    cst_film_destroy(f);
-}
-
-static void compare(const char *what, const RegionStat *a, const RegionStat *b)
-{
-    double zmax = 0.0;
-    for (int i = 0; i < R; i++)
-        for (int c = 0; c < 3; c++) {
-            double z = z_score(a[i].mean[c], a[i].se[c], b[i].mean[c], b[i].se[c]);
-            zmax = fmax(zmax, fabs(z));
-            if (fabs(z) > Z_LIMIT)
-                print_message("  %s block %d channel %d: %.5f +- %.5f vs %.5f +- %.5f, z = %.2f\n", what, i, c,
-                              a[i].mean[c], a[i].se[c], b[i].mean[c], b[i].se[c], z);
-            assert_true(fabs(z) <= Z_LIMIT);
-        }
-    print_message("  %s: image mean %.5f +- %.5f vs %.5f +- %.5f (green), max |z| %.2f over %d comparisons\n", what,
-                  a[R - 1].mean[1], a[R - 1].se[1], b[R - 1].mean[1], b[R - 1].se[1], zmax, 3 * R);
-}
 
 enum { SH_DISK = 1, SH_CYLINDER = 2, SH_SPHERE = 4 };
 
@@ -133,11 +89,11 @@ static void run_strategies(int which, const char *name)
     render_blocks(s, CST_INTEGRATOR_PATH_BSDF, 1024, 503u, bsdf);
     char what[96];
     snprintf(what, sizeof what, "%s: path vs path-nee", name);
-    compare(what, mis, nee);
+    compare_blocks(what, mis, nee);
     snprintf(what, sizeof what, "%s: path vs path-bsdf", name);
-    compare(what, mis, bsdf);
+    compare_blocks(what, mis, bsdf);
     snprintf(what, sizeof what, "%s: path-nee vs path-bsdf", name);
-    compare(what, nee, bsdf);
+    compare_blocks(what, nee, bsdf);
     scene_destroy(s);
 }
 
@@ -156,7 +112,7 @@ static void test_bvh_vs_power(void **state)
     RegionStat ra[R], rb[R];
     render_blocks(a, CST_INTEGRATOR_PATH, 256, 601u, ra);
     render_blocks(b, CST_INTEGRATOR_PATH, 256, 602u, rb);
-    compare("three shapes: light BVH vs power", ra, rb);
+    compare_blocks("three shapes: light BVH vs power", ra, rb);
     scene_destroy(a);
     scene_destroy(b);
 }
