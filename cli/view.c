@@ -1,6 +1,6 @@
 /* caustic view (issue 30): a window (SDL2) that renders a scene progressively through the
  * public API, in the display modes of the tutorial (preview, Whitted, path, light, photon,
- * SPPM, BDPT, VCM, relative error), with an orbit camera and a script for headless tests.
+ * SPPM, BDPT, VCM, relative error, disagreement with a pinned mode), with an orbit camera and a script for headless tests.
  * The only file of caustic that talks to SDL; the library stays window-free. */
 #include <errno.h>
 #include <math.h>
@@ -104,7 +104,25 @@ typedef struct View {
     float *photon_xyz[2];    /* global, caustic: x y z per photon */
     size_t photon_n[2];
     int photon_fetched;      /* cst_photon_cache_builds when photon_xyz was filled */
+    /* The disagreement map (keys r and 0): a pinned reference, one mode's pixel means and
+     * the variances of those means for one camera, and the current mode's accumulation
+     * tested against it block by block as `caustic verify` tests two integrators. */
+    float *ref_mean, *ref_var, *cur_mean, *cur_var; /* w x h x 3 each */
+    double *block_z;         /* per VIEW_DIFF_BLOCK block: the largest |z| over the channels */
+    int ref_spp;             /* 0 = nothing pinned */
+    ViewMode ref_mode;
+    CstCameraDesc ref_cam;
+    bool diff_view;
+    bool diff_ok;            /* diff and diff_z_crit hold the last comparison */
+    CstImageComparison diff;
+    double diff_z_crit;
+    char diff_why[160];      /* when !diff_ok: why nothing was compared */
 } View;
+
+/* The disagreement map's blocks (pixels a side) and family-wise false-alarm rate, as
+ * `caustic verify`'s defaults. */
+#define VIEW_DIFF_BLOCK 16
+#define VIEW_DIFF_ALPHA 0.01
 
 /* ------------------------------------------------------------ small vector math */
 
@@ -409,7 +427,7 @@ static void view_photons_fetch(View *v)
 static void view_photon_points(View *v, float *img, float k)
 {
     static const float COLOURS[2][3] = {{1.0f, 0.55f, 0.1f}, {0.2f, 0.8f, 1.0f}};
-    if (!v->show_photons || v->mode != VIEW_PHOTON || v->error_view || v->spp == 0) return;
+    if (!v->show_photons || v->mode != VIEW_PHOTON || v->error_view || v->diff_view || v->spp == 0) return;
     view_photons_fetch(v);
     double f[3], r[3], u[3];
     view_frame(&v->cam, f, r, u);
@@ -435,6 +453,100 @@ static void view_photon_points(View *v, float *img, float k)
     }
 }
 
+/* ------------------------------------------------------------ the disagreement map */
+
+/* The current accumulation's pixel means and variances of the means (s^2 / n from the
+ * passes' sums of squares); false where it has none: the preview, SPPM (one film, not a
+ * sum of passes), fewer than 2 passes. */
+static bool view_moments(const View *v, float *mean, float *var)
+{
+    if (v->mode == VIEW_PREVIEW || v->mode == VIEW_SPPM || v->spp < 2) return false;
+    const double n = v->spp;
+    const size_t count = 3 * (size_t)v->w * (size_t)v->h;
+    for (size_t k = 0; k < count; k++) {
+        double m = v->sum[k] / n, s2 = (v->sum_sq[k] - n * m * m) / (n - 1.0);
+        mean[k] = (float)m;
+        var[k] = (float)((s2 > 0.0 ? s2 : 0.0) / n);
+    }
+    return true;
+}
+
+/* Key r: the current accumulation becomes the reference. */
+static void view_pin(View *v)
+{
+    const size_t n = 3 * (size_t)v->w * (size_t)v->h;
+    if (!v->ref_mean) {
+        v->ref_mean = malloc(n * sizeof *v->ref_mean);
+        v->ref_var = malloc(n * sizeof *v->ref_var);
+        v->cur_mean = malloc(n * sizeof *v->cur_mean);
+        v->cur_var = malloc(n * sizeof *v->cur_var);
+        v->block_z = malloc((size_t)cst_compare_blocks_x(v->w, VIEW_DIFF_BLOCK) *
+                            (size_t)cst_compare_blocks_y(v->h, VIEW_DIFF_BLOCK) * sizeof *v->block_z);
+        if (!v->ref_mean || !v->ref_var || !v->cur_mean || !v->cur_var || !v->block_z) {
+            printf("view: out of memory for the disagreement map\n");
+            fflush(stdout);
+            return;
+        }
+    }
+    if (!view_moments(v, v->ref_mean, v->ref_var)) {
+        printf("view: nothing to pin: %s has no per-pixel variance %s\n", VIEW_MODE_NAMES[v->mode],
+               v->mode == VIEW_PREVIEW || v->mode == VIEW_SPPM ? "(pin whitted, path, light, photon, bdpt or vcm)"
+                                                               : "before its second pass");
+        fflush(stdout);
+        return;
+    }
+    v->ref_spp = v->spp;
+    v->ref_mode = v->mode;
+    v->ref_cam = v->cam;
+    printf("view: reference pinned: %s, %d spp\n", VIEW_MODE_NAMES[v->mode], v->spp);
+    fflush(stdout);
+    v->shown_dirty = true;
+}
+
+/* Tests the current accumulation against the reference (v->diff, v->block_z) and fills
+ * v->linear with the map (compare_map_colour's colours: black to blue to yellow under
+ * z_crit, red above it), or black with the reason in v->diff_why. */
+static void view_diff_compose(View *v)
+{
+    CstError err = {0};
+    char *why = v->diff_why;
+    const size_t size = sizeof v->diff_why;
+    v->diff_ok = false;
+    why[0] = '\0';
+    if (v->ref_spp == 0) snprintf(why, size, "no reference pinned (key r)");
+    else if (memcmp(&v->ref_cam, &v->cam, sizeof v->cam) != 0)
+        snprintf(why, size, "the reference (%s) was pinned for another camera", VIEW_MODE_NAMES[v->ref_mode]);
+    else if (!view_moments(v, v->cur_mean, v->cur_var))
+        snprintf(why, size, "%s has no per-pixel variance%s", VIEW_MODE_NAMES[v->mode],
+                 v->mode == VIEW_PREVIEW || v->mode == VIEW_SPPM ? "" : " yet");
+    else if (cst_image_compare(v->cur_mean, v->ref_mean, v->w, v->h, v->cur_var, v->ref_var, VIEW_DIFF_BLOCK,
+                               &v->diff, v->block_z, &err) != CST_OK)
+        snprintf(why, size, "%.150s", err.msg);
+    if (why[0]) {
+        memset(v->linear, 0, 3 * (size_t)v->w * (size_t)v->h * sizeof *v->linear);
+        return;
+    }
+    /* Sidak-corrected over the pair's tests: 3 channels x (the image mean + each block). */
+    v->diff_z_crit = cst_compare_z_critical(VIEW_DIFF_ALPHA, (double)cst_compare_tests_per_pair(v->w, v->h, VIEW_DIFF_BLOCK));
+    cst_compare_map_image(v->block_z, v->w, v->h, VIEW_DIFF_BLOCK, v->diff_z_crit, v->linear);
+    v->diff_ok = true;
+}
+
+/* The comparison as one line (status and title): "bdpt vs path (64 spp): agree, ...". */
+static void view_diff_line(const View *v, char *out, size_t size)
+{
+    if (!v->diff_ok) {
+        snprintf(out, size, "disagreement map: %s", v->diff_why[0] ? v->diff_why : "nothing compared yet");
+        return;
+    }
+    double zi = 0.0;
+    for (int c = 0; c < 3; c++) zi = fmax(zi, fabs(v->diff.z_mean[c]));
+    snprintf(out, size, "%s vs %s (%d spp): %s, largest block |z| %.2f, image mean |z| %.2f, z_crit %.2f",
+             VIEW_MODE_NAMES[v->mode], VIEW_MODE_NAMES[v->ref_mode], v->ref_spp,
+             v->diff.max_abs_z > v->diff_z_crit || zi > v->diff_z_crit ? "DISAGREE" : "agree", v->diff.max_abs_z, zi,
+             v->diff_z_crit);
+}
+
 /* Fills v->linear with what the mode shows (before the display exposure). */
 static void view_compose(View *v)
 {
@@ -446,6 +558,8 @@ static void view_compose(View *v)
                 if (!v->low_ready) { o[0] = o[1] = o[2] = 0.0f; continue; }
                 int lx = x / VIEW_LOW_DIV, ly = y / VIEW_LOW_DIV;
                 memcpy(o, &v->low[3 * ((size_t)ly * (size_t)v->lw + (size_t)lx)], 3 * sizeof *o);
+            } else if (v->diff_view) {
+                continue; /* view_diff_compose below */
             } else if (v->error_view) {
                 view_error_pixel(v, i, o);
             } else if (v->mode == VIEW_PREVIEW) {
@@ -454,6 +568,7 @@ static void view_compose(View *v)
                 view_mean(v, i, 1.0, o);
             }
         }
+    if (v->diff_view && v->spp > 0) view_diff_compose(v);
 }
 
 static void view_title(View *v)
@@ -464,7 +579,11 @@ static void view_title(View *v)
     double rate = v->seconds > 0.0 ? v->samples / v->seconds / 1e6 : 0.0;
     if (v->failed)
         snprintf(title, sizeof title, "caustic view - %s - %.160s", what, v->fail_msg);
-    else
+    else if (v->diff_view) {
+        char line[200];
+        view_diff_line(v, line, sizeof line);
+        snprintf(title, sizeof title, "caustic view - %.200s", line);
+    } else
         snprintf(title, sizeof title, "caustic view - %s%s - %d %s - %.2f M samples/s - exposure %+.1f",
                  what, v->error_view ? " relative error" : "", v->spp, v->mode == VIEW_SPPM ? "iterations" : "spp",
                  rate, v->exposure);
@@ -477,7 +596,7 @@ static void view_present(View *v)
     if (!v->shown_dirty) return;
     v->shown_dirty = false;
     view_compose(v);
-    const float scale = (float)(v->error_view ? 1.0 : exp2(v->exposure));
+    const float scale = (float)(v->error_view || v->diff_view ? 1.0 : exp2(v->exposure));
     view_photon_points(v, v->linear, 1.0f / scale);
     size_t n = (size_t)v->w * (size_t)v->h;
     for (size_t i = 0; i < n; i++) {
@@ -581,8 +700,9 @@ static void view_image(View *v, float *img, bool linear)
 {
     size_t n = (size_t)v->w * (size_t)v->h;
     view_compose(v);
-    bool raw = v->spp > 0 && !v->error_view && v->mode != VIEW_PREVIEW;
-    double scale = linear ? (raw ? v->out_exposure : 1.0) : (v->error_view ? 1.0 : exp2(v->exposure));
+    const bool false_colour = v->error_view || v->diff_view;
+    bool raw = v->spp > 0 && !false_colour && v->mode != VIEW_PREVIEW;
+    double scale = linear ? (raw ? v->out_exposure : 1.0) : (false_colour ? 1.0 : exp2(v->exposure));
     for (size_t i = 0; i < n; i++) {
         if (raw) view_mean(v, i, scale, &img[3 * i]);
         else for (int c = 0; c < 3; c++) img[3 * i + (size_t)c] = (float)((double)v->linear[3 * i + (size_t)c] * scale);
@@ -682,11 +802,17 @@ static void view_print_camera(View *v)
     view_save_camera(v, name);
 }
 
-static void view_status(const View *v)
+static void view_status(View *v)
 {
     printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f photon_maps_built %d\n", VIEW_MODE_NAMES[v->mode],
            v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms,
            cst_photon_cache_builds(v->photons));
+    if (v->diff_view) { /* the comparison of the accumulation as it stands now */
+        char line[240];
+        if (v->spp > 0) view_diff_compose(v);
+        view_diff_line(v, line, sizeof line);
+        printf("view: %s\n", line);
+    }
     fflush(stdout);
 }
 
@@ -708,7 +834,9 @@ static void view_key(View *v, SDL_Keycode key)
         return;
     }
     switch (key) {
-    case '9': v->error_view = !v->error_view; v->shown_dirty = true; break;
+    case '9': v->error_view = !v->error_view, v->diff_view = false; v->shown_dirty = true; break;
+    case '0': v->diff_view = !v->diff_view, v->error_view = false; v->shown_dirty = true; break;
+    case 'r': view_pin(v); break;
     case 'p': case '\t':
         if (v->mode == VIEW_PREVIEW) v->preview = (v->preview + 1) % VIEW_PREVIEW_KINDS;
         v->shown_dirty = true;
@@ -952,6 +1080,11 @@ static void view_close(View *v)
     cli_tev_destroy(v->tev);
     free(v->photon_xyz[0]);
     free(v->photon_xyz[1]);
+    free(v->ref_mean);
+    free(v->ref_var);
+    free(v->cur_mean);
+    free(v->cur_var);
+    free(v->block_z);
     cst_photon_cache_destroy(v->photons); /* before the scene (cli_view) */
     view_script_free(&v->script);
 }

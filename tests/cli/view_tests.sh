@@ -194,6 +194,39 @@ else
     fail "view: the written camera is a thinlens camera section with the clicked focus" "$(cat "$dir/cam.json")"
 fi
 
+# ------------------------------------------------------------ the disagreement map
+# Key r pins the path tracer's accumulation; key 0 shows another mode's against it block by
+# block (verify's test: Sidak-corrected z over 16x16 blocks at alpha 0.01). BDPT agrees with
+# the path tracer; Whitted (no diffuse interreflection) does not; an orbit leaves the pinned
+# reference behind.
+dir=$TMP/diff
+cat >"$TMP/diff.txt" <<'EOF2'
+key 1
+key r
+key 3
+wait-spp 16
+key r
+key 7
+wait-spp 16
+key 0
+status
+save bdpt-vs-path.png
+key 2
+wait-spp 16
+status
+orbit 10 0
+wait-spp 2
+status
+quit
+EOF2
+view "$dir" 300 "${SIZE[@]}" --script "$TMP/diff.txt"
+HARNESS_EXPECT_STDOUT=1 expect "view: the disagreement script runs" 0 \
+    "view: nothing to pin: preview has no per-pixel variance" "view: reference pinned: path, 16 spp" \
+    "view: bdpt vs path \(16 spp\): agree, largest block \|z\| [0-9.]+" \
+    "view: whitted vs path \(16 spp\): DISAGREE" \
+    "view: disagreement map: the reference \(path\) was pinned for another camera"
+check "view: the disagreement map is saved" test -s "$dir/bdpt-vs-path.png"
+
 # ------------------------------------------------------------ photon mode: maps kept, points
 # The maps are built once (status: photon_maps_built 1) and reused by every pass and after
 # an orbit, each image still equal to a render's bit for bit (the orbit's: its automatic
