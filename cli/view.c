@@ -1,7 +1,8 @@
 /* caustic view (issue 30): a window (SDL2) that renders a scene progressively through the
  * public API, in the display modes of the tutorial (preview, Whitted, path, light, photon,
- * SPPM, BDPT, VCM, relative error, disagreement with a pinned mode), with an orbit camera and a script for headless tests.
- * The only file of caustic that talks to SDL; the library stays window-free. */
+ * SPPM, BDPT, VCM, relative error, disagreement with a pinned mode), with an orbit camera
+ * and a script for headless tests. The only file of caustic that talks to SDL; the library
+ * stays window-free. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
