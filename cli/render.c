@@ -215,7 +215,7 @@ static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const Cst
     if (!cst_integrator_resumable(rs.integrator)) {
         fprintf(stderr, "caustic: error: --%s: the %s integrator cannot be checkpointed or resumed yet (its state "
                         "is more than the film's sums); expected path, path-nee, path-bsdf, whitted, photon, light, "
-                        "bdpt or vcm, or no --checkpoint/--resume\n",
+                        "sppm, bdpt or vcm, or no --checkpoint/--resume\n",
                 a->checkpoint_path ? "checkpoint" : "resume", cst_integrator_name(rs.integrator));
         return CLI_EXIT_USAGE;
     }

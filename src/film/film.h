@@ -13,6 +13,8 @@
  * something. Albedo and normal are means over all the pixel's samples (a miss adds 0);
  * depth is the mean over the samples that hit (+inf when none did). */
 enum { FILM_AOV_FIRST_HIT = CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH, FILM_AOV_STRIDE = 8 };
+/* Values per pixel of Film.progressive (SPPM's Ld sums, tau, N, r: sppm.c). */
+enum { FILM_PROGRESSIVE_STRIDE = 8 };
 
 struct CstFilm {
     int width, height;
@@ -22,6 +24,9 @@ struct CstFilm {
     /* Output settings, applied by cst_film_write only */
     int aovs;               /* CST_AOV_* bits */
     double *aov;            /* FILM_AOV_STRIDE per pixel when aovs & FILM_AOV_FIRST_HIT, else NULL */
+    /* A progressive integrator's per-pixel state, whose sums the film does not hold (SPPM:
+     * FILM_PROGRESSIVE_STRIDE values per pixel, sppm_export), for checkpoints; else NULL. */
+    double *progressive;
     double exposure_scale;  /* 2^exposure */
     int png_linear;
     int white_balanced;        /* white_balance applies (sensor.h) */

@@ -6,6 +6,7 @@
 #include "film/film_state.h"
 
 #include <errno.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,7 +74,7 @@ static void out_doubles(StateOut *o, const double *v, size_t n)
 static void state_encode(StateOut *o, const Film *f, const StateKey *keys, int nkeys)
 {
     out_bytes(o, FILM_STATE_MAGIC, 8);
-    out_u64(o, FILM_STATE_VERSION, 4);
+    out_u64(o, f->progressive ? FILM_STATE_VERSION_PROGRESSIVE : FILM_STATE_VERSION, 4);
     out_u64(o, (uint64_t)nkeys, 4);
     for (int k = 0; k < nkeys; k++) {
         const StateKey *e = &keys[k];
@@ -95,9 +96,11 @@ static void state_encode(StateOut *o, const Film *f, const StateKey *keys, int n
     out_u64(o, (uint64_t)f->height, 4);
     out_u64(o, (uint64_t)f->spp, 4);
     out_u64(o, (uint64_t)stride, 4);
+    if (f->progressive) out_u64(o, FILM_PROGRESSIVE_STRIDE, 4);
     out_doubles(o, f->sum, 3 * pixels);
     out_doubles(o, f->sum_sq, 3 * pixels);
     if (stride) out_doubles(o, f->aov, (size_t)stride * pixels);
+    if (f->progressive) out_doubles(o, f->progressive, FILM_PROGRESSIVE_STRIDE * pixels);
     out_flush(o);
     uLong crc = o->crc;
     out_u64(o, (uint64_t)crc, 4);
@@ -226,9 +229,9 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     if ((st = in_need(in, 16, "the header", err)) != CST_OK) return st;
     in->off = 8;
     uint64_t version = in_u64(in, 4);
-    if (version != FILM_STATE_VERSION)
-        return cst_fail(err, CST_ERR_PARSE, "%s: state format version %llu; this caustic reads version %u",
-                        in->path, (unsigned long long)version, FILM_STATE_VERSION);
+    if (version != FILM_STATE_VERSION && version != FILM_STATE_VERSION_PROGRESSIVE)
+        return cst_fail(err, CST_ERR_PARSE, "%s: state format version %llu; this caustic reads versions %u and %u",
+                        in->path, (unsigned long long)version, FILM_STATE_VERSION, FILM_STATE_VERSION_PROGRESSIVE);
     uint64_t n = in_u64(in, 4);
     if (n > STATE_KEYS_MAX)
         return cst_fail(err, CST_ERR_PARSE, "%s: byte 12: %llu key entries, at most %d (a corrupted state file)",
@@ -236,9 +239,15 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     for (int k = 0; k < (int)n; k++)
         if ((st = read_key(in, &keys[k], k, err)) != CST_OK) return st;
     *nkeys = (int)n;
-    if ((st = in_need(in, 16, "the film header", err)) != CST_OK) return st;
+    const bool prog = version == FILM_STATE_VERSION_PROGRESSIVE;
+    if ((st = in_need(in, prog ? 20 : 16, "the film header", err)) != CST_OK) return st;
     const size_t at = in->off;
     uint64_t w = in_u64(in, 4), h = in_u64(in, 4), spp = in_u64(in, 4), stride = in_u64(in, 4);
+    uint64_t pstride = prog ? in_u64(in, 4) : 0;
+    if (prog && pstride != FILM_PROGRESSIVE_STRIDE)
+        return cst_fail(err, CST_ERR_PARSE, "%s: byte %zu: %llu progressive state values per pixel; expected %d (a "
+                        "corrupted state file)", in->path, at + 16, (unsigned long long)pstride,
+                        FILM_PROGRESSIVE_STRIDE);
     if (w < 1 || w > 65536 || h < 1 || h > 65536 || spp > INT32_MAX || (stride != 0 && stride != FILM_AOV_STRIDE))
         return cst_fail(err, CST_ERR_PARSE,
                         "%s: byte %zu: film %llux%llu, %llu samples, %llu AOV sums per pixel; expected 1..65536 "
@@ -246,7 +255,7 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
                         in->path, at, (unsigned long long)w, (unsigned long long)h, (unsigned long long)spp,
                         (unsigned long long)stride, FILM_AOV_STRIDE);
     const size_t pixels = (size_t)w * (size_t)h;
-    const size_t data = (6 + (size_t)stride) * pixels * sizeof(double);
+    const size_t data = (6 + (size_t)stride + (size_t)pstride) * pixels * sizeof(double);
     if ((st = in_need(in, data + 4, "the film's sums and the checksum", err)) != CST_OK) return st;
     if (in->len - in->off != data + 4)
         return cst_fail(err, CST_ERR_PARSE, "%s: %zu bytes after the end of the state (at byte %zu)", in->path,
@@ -266,7 +275,8 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
                         in->path, (unsigned long long)crc, (unsigned long long)stored);
     Film *f = film_create((int)w, (int)h);
     if (f && stride) f->aov = malloc(pixels * FILM_AOV_STRIDE * sizeof *f->aov);
-    if (!f || (stride && !f->aov)) {
+    if (f && pstride) f->progressive = malloc(pixels * FILM_PROGRESSIVE_STRIDE * sizeof *f->progressive);
+    if (!f || (stride && !f->aov) || (pstride && !f->progressive)) {
         film_destroy(f);
         return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %llux%llu film", in->path,
                         (unsigned long long)w, (unsigned long long)h);
@@ -275,6 +285,7 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     in_doubles(in, f->sum, 3 * pixels);
     in_doubles(in, f->sum_sq, 3 * pixels);
     if (stride) in_doubles(in, f->aov, FILM_AOV_STRIDE * pixels);
+    if (pstride) in_doubles(in, f->progressive, FILM_PROGRESSIVE_STRIDE * pixels);
     *film_out = f;
     return CST_OK;
 }

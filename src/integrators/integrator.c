@@ -675,6 +675,18 @@ void integrator_finish(Integrator *it, int samples)
     else it->film->spp = samples;
 }
 
+bool integrator_export_progressive(Integrator *it, int done)
+{
+    if (it->kind != INTEGRATOR_SPPM) return true;
+    it->film->spp = done;
+    return sppm_export(it->sppm, it->film);
+}
+
+bool integrator_import_progressive(Integrator *it, const Film *resume)
+{
+    return it->kind != INTEGRATOR_SPPM || sppm_import(it->sppm, resume);
+}
+
 void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfinite)
 {
     if (it->kind == INTEGRATOR_SPPM && it->sppm) sppm_counters(it->sppm, rays, nonfinite);

@@ -152,6 +152,12 @@ CstStatus integrator_next_step(Integrator *it, IntegratorStep *step, CstError *e
 /* After the last pass, `samples` done in all: the film's final contents (SPPM writes its
  * estimate, film->spp = 1) and film->spp. */
 void integrator_finish(Integrator *it, int samples);
+/* Checkpoints of integrators whose state is more than the film's sums (SPPM): after
+ * `done` iterations, the state into it->film (Film.progressive, film->spp = done; false on
+ * OOM); before the first pass of a resumed render, back from the state file's film (false
+ * when it holds none or a value no render makes). True and nothing done for the others. */
+bool integrator_export_progressive(Integrator *it, int done);
+bool integrator_import_progressive(Integrator *it, const Film *resume);
 /* Counters of the integrator's own state (SPPM's workers, dropped splats), added to the
  * stats. */
 void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfinite);

@@ -548,6 +548,44 @@ void sppm_finish(const Sppm *job, Film *film, int iter)
         film_accumulate(film, (int)i, L[0], L[1], L[2]);
     }
     film->spp = 1;
+    /* The image, no longer a state: a checkpoint of it would pair one sample with the
+     * state of `iter` iterations. */
+    free(film->progressive);
+    film->progressive = NULL;
+}
+
+/* Film.progressive per pixel: Ld sums (3), tau (3), N, r; every value exactly (r is a
+ * float, exact as a double), so a resumed render continues the same arithmetic. */
+bool sppm_export(const Sppm *job, Film *film)
+{
+    if (!film->progressive &&
+        !(film->progressive = malloc(job->count * FILM_PROGRESSIVE_STRIDE * sizeof *film->progressive)))
+        return false;
+    for (size_t i = 0; i < job->count; i++) {
+        const SppmPixel *v = &job->px[i];
+        double *o = &film->progressive[FILM_PROGRESSIVE_STRIDE * i];
+        for (int c = 0; c < 3; c++) o[c] = v->ld[c], o[3 + c] = v->tau[c];
+        o[6] = v->n_photons;
+        o[7] = (double)v->r;
+    }
+    return true;
+}
+
+bool sppm_import(Sppm *job, const Film *film)
+{
+    if (!film->progressive || (size_t)film->width * (size_t)film->height != job->count) return false;
+    for (size_t i = 0; i < job->count; i++) {
+        SppmPixel *v = &job->px[i];
+        const double *o = &film->progressive[FILM_PROGRESSIVE_STRIDE * i];
+        /* A radius must be what a float held, positive and finite: the file's checksum
+         * matched, but the values are checked before they are trusted anyway. */
+        if (!(o[7] > 0.0) || !isfinite(o[7]) || (double)(float)o[7] != o[7] || !(o[6] >= 0.0) || !isfinite(o[6]))
+            return false;
+        for (int c = 0; c < 3; c++) v->ld[c] = o[c], v->tau[c] = o[3 + c];
+        v->n_photons = o[6];
+        v->r = (float)o[7];
+    }
+    return true;
 }
 
 void sppm_counters(const Sppm *job, uint64_t *rays, uint64_t *nonfinite)

@@ -45,6 +45,13 @@ void sppm_item(void *sppm, int item, int worker);
  * SPPM's iterations are not independent samples of the pixel (each one's radius depends
  * on all before it). */
 void sppm_finish(const Sppm *sppm, Film *film, int iterations);
+/* Checkpoints: every pixel's progressive state to film->progressive (allocated here when
+ * NULL; false on OOM), and back from a state file's film (false, nothing trusted, when it
+ * has none, is of another size or holds a radius or photon count no render makes). With
+ * the iterations done (the film's spp), that is all an SPPM render carries from one
+ * iteration to the next: a resumed render is bit-identical to an uninterrupted one. */
+bool sppm_export(const Sppm *sppm, Film *film);
+bool sppm_import(Sppm *sppm, const Film *film);
 /* Adds the rays traced and the NaN/Inf contributions dropped. */
 void sppm_counters(const Sppm *sppm, uint64_t *rays, uint64_t *nonfinite);
 /* Accepts NULL. */

@@ -15,9 +15,9 @@
 
 int cst_integrator_resumable(CstIntegrator integrator)
 {
-    /* SPPM's state is its visible points' radii, photon counts and flux, MLT's its chains,
-     * not film sums. */
-    return integrator != CST_INTEGRATOR_SPPM && integrator != CST_INTEGRATOR_PSSMLT;
+    /* MLT's state is its chains, not film sums. (SPPM's visible points' radii, photon
+     * counts and flux go in the state as Film.progressive.) */
+    return integrator != CST_INTEGRATOR_PSSMLT;
 }
 
 typedef struct KeyBuilder {
@@ -145,8 +145,14 @@ CstStatus cst_film_state_write(const char *path, const CstFilm *film, const CstS
     if (!cst_integrator_resumable(st.integrator))
         return cst_fail(err, CST_ERR_UNSUPPORTED,
                         "%s: the %s integrator cannot be checkpointed yet (its state is more than the film's "
-                        "sums); expected path, path-nee, path-bsdf, whitted, photon, light, bdpt or vcm",
+                        "sums); expected path, path-nee, path-bsdf, whitted, photon, light, sppm, bdpt or vcm",
                         path, cst_integrator_name(st.integrator));
+    if ((st.integrator == CST_INTEGRATOR_SPPM) != (film->progressive != NULL))
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "%s: %s: an SPPM state is its per-pixel radii, photon counts and flux, which a film holds "
+                        "between its passes (CstRenderSettings.pass_done) and not once the render has made its image",
+                        path, film->progressive ? "a film with SPPM state for another integrator"
+                                                : "the film of an sppm render without its state");
     if (film->width != st.width || film->height != st.height || (!film->aov) != !(st.aovs & FILM_AOV_FIRST_HIT))
         return cst_fail(err, CST_ERR_INVALID_ARG,
                         "%s: the film is %dx%d%s, the render %dx%d%s: expected the film a render's pass_done "
@@ -304,6 +310,10 @@ CstStatus cst_film_state_merge(const char *const *paths, int count, CstFilm **ou
         if (status != CST_OK) break;
         p[i].first = key_int_or(p[i].keys, p[i].nkeys, "first_sample", 0);
         p[i].end = p[i].first + p[i].film->spp;
+        if (p[i].film->progressive)
+            status = cst_fail(err, CST_ERR_INVALID_ARG, "%s: an SPPM state (radii, photon counts, flux): SPPM's "
+                              "iterations each depend on all before them and do not merge; expected states of sums",
+                              paths[i]);
     }
     if (status == CST_OK) {
         /* Insertion sort by first sample: the order of the command line does not matter. */

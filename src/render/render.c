@@ -45,6 +45,12 @@ static bool pass_finished(Driver *d, int done, bool last)
     if (!st->pass_done) return false;
     if (d->it->kind != INTEGRATOR_SPPM) d->it->film->spp = done;
     CstPassInfo info = {done, last, clock_seconds() - d->t0};
+    /* SPPM: its state into the film, for a checkpoint the callback may write. Without the
+     * memory for it the state is left out: refused as a resume, never wrong. */
+    if (!integrator_export_progressive(d->it, done)) {
+        free(d->it->film->progressive);
+        d->it->film->progressive = NULL;
+    }
     if (st->pass_done(st->pass_user, d->it->film, &info) == 0) return false;
     d->stopped = !last;
     return true;
@@ -358,9 +364,12 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     CstStatus status = CST_OK;
     uint64_t rays = 0;
     int samples = 0, first = 0;
+    if (resume && st.integrator == CST_INTEGRATOR_SPPM && !resume->progressive)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: the film holds no SPPM state (per-pixel radii, photon "
+                        "counts and flux); expected a state written by a checkpoint of an sppm render");
     if (film && resume) {
         /* The sums as the interrupted render left them: the passes add to them in the
-         * order an uninterrupted render would have. */
+         * order an uninterrupted render would have. (SPPM's are 0 until its last pass.) */
         const size_t n = 3 * (size_t)st.width * (size_t)st.height;
         memcpy(film->sum, resume->sum, n * sizeof *film->sum);
         memcpy(film->sum_sq, resume->sum_sq, n * sizeof *film->sum_sq);
@@ -378,6 +387,9 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
             st.progress_phase(st.progress_user, CST_PHASE_PHOTONS);
         status = integrator_prepare(it, scene, &st, film, workers, &rays, st.progress ? prepare_progress : NULL, &d,
                                     err);
+        if (status == CST_OK && resume && !integrator_import_progressive(it, resume))
+            status = cst_fail(err, CST_ERR_INVALID_ARG, "resume: the state's SPPM values are not ones a render "
+                              "makes (a radius not positive and finite, or a negative photon count)");
         if (status == CST_OK && st.progress && st.progress_phase)
             st.progress_phase(st.progress_user, CST_PHASE_RENDER);
         Film *block = NULL;

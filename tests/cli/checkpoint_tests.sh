@@ -9,7 +9,7 @@ harness_init checkpoint_tests "$@"
 SMALL=(--width 64 --height 48 --threads 2 --quiet)
 
 # ------------------------------------------------------------ N in one go = N/2 + resume
-for integ in path path-nee path-bsdf whitted photon light bdpt vcm; do
+for integ in path path-nee path-bsdf whitted photon light sppm bdpt vcm; do
     d=$TMP/$integ
     harness_run "$d" 120 render --integrator "$integ" "${SMALL[@]}" --spp 6 -o full.pfm
     [ "$RC" -eq 0 ] || { fail "$integ: render in one go" "exit $RC"; continue; }
@@ -50,8 +50,14 @@ else fail "2 + 2 + 1 spp through two states = 5 spp" "exit $RC"; fi
 # ------------------------------------------------------------ refusals
 d=$TMP/refuse
 harness_run "$d" 60 render "${SMALL[@]}" --spp 4 -o ref.pfm --checkpoint ok.state
-harness_run "$d" 60 render "${SMALL[@]}" --integrator sppm --spp 2 -o x.pfm --checkpoint x.state
-expect "sppm --checkpoint refused" 2 "sppm integrator cannot be checkpointed" && check "sppm: no state" test ! -e "$d/x.state"
+harness_run "$d" 60 render "${SMALL[@]}" --integrator pssmlt --spp 2 -o x.pfm --checkpoint x.state
+expect "pssmlt --checkpoint refused" 2 "pssmlt integrator cannot be checkpointed" && check "pssmlt: no state" test ! -e "$d/x.state"
+# An SPPM state resumed by another integrator, and a path state by sppm: the key names it.
+harness_run "$d" 60 render "${SMALL[@]}" --integrator sppm --spp 2 -o y.pfm --checkpoint sppm.state
+harness_run "$d" 60 render "${SMALL[@]}" --integrator path --spp 4 -o y.pfm --resume sppm.state
+expect "an sppm state resumed by path: refused" 2 'integrator: "sppm" in the state, "path" here'
+harness_run "$d" 60 render "${SMALL[@]}" --integrator sppm --spp 4 -o y.pfm --resume ok.state
+expect "a path state resumed by sppm: refused" 2 'integrator: "path" in the state, "sppm" here'
 harness_run "$d" 60 render "${SMALL[@]}" --spp 2 -o x.pfm --checkpoint no/such/dir/s.state
 expect "a checkpoint in a missing directory: refused before rendering" 2 "directory 'no/such/dir' is not writable" &&
     check "no image for a refused checkpoint" test ! -e "$d/x.pfm"

@@ -131,6 +131,8 @@ static void test_resume_light(void **state) { (void)state; resume_matches(CST_IN
 static void test_resume_bdpt_aovs(void **state) { (void)state; resume_matches(CST_INTEGRATOR_BDPT, CST_AOV_ALBEDO, 0); }
 static void test_resume_vcm(void **state) { (void)state; resume_matches(CST_INTEGRATOR_VCM, 0, 0); }
 static void test_resume_photon(void **state) { (void)state; resume_matches(CST_INTEGRATOR_PHOTON, 0, 0); }
+/* SPPM: the state is its per-pixel radii, photon counts and flux (Film.progressive). */
+static void test_resume_sppm(void **state) { (void)state; resume_matches(CST_INTEGRATOR_SPPM, 0, 0); }
 
 /* pass_done's stop: CST_OK, stats.stopped, the film of the passes done = a render of that
  * many samples. */
@@ -169,15 +171,23 @@ static void test_refusals(void **state)
     settings_for(&s, CST_INTEGRATOR_PATH, 2);
     CstFilm *film = NULL, *out = NULL;
     ok(cst_render(g_scene, &s, &film, NULL, &err), &err);
-    assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_SPPM), 0);
+    assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_PSSMLT), 0);
+    assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_SPPM), 1);
     assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_VCM), 1);
     char path[512];
     tpath(path, sizeof path, "refuse.state");
     CstRenderSettings p = s;
-    p.integrator = CST_INTEGRATOR_SPPM;
+    p.integrator = CST_INTEGRATOR_PSSMLT;
     assert_int_equal(cst_film_state_write(path, film, g_scene, &p, "x", NULL, &err), CST_ERR_UNSUPPORTED);
     p.resume = film;
     assert_int_equal(cst_render(g_scene, &p, &out, NULL, &err), CST_ERR_UNSUPPORTED);
+    assert_null(out);
+    /* SPPM: a film of sums is not its state, neither to write nor to resume from. */
+    p.integrator = CST_INTEGRATOR_SPPM;
+    p.resume = NULL;
+    assert_int_equal(cst_film_state_write(path, film, g_scene, &p, "x", NULL, &err), CST_ERR_INVALID_ARG);
+    p.resume = film;
+    assert_int_equal(cst_render(g_scene, &p, &out, NULL, &err), CST_ERR_INVALID_ARG);
     assert_null(out);
     /* The film written must be the render's whole image. */
     CstRenderSettings wide = s;
@@ -196,16 +206,21 @@ static void test_refusals(void **state)
 }
 
 /* Every prefix of a state file is refused as truncated (or, too short to hold the magic,
- * as not a state), every one-byte change as corrupted: none is read. */
-static void test_truncated_and_corrupted(void **state)
+ * as not a state), every one-byte change as corrupted: none is read. With SPPM's
+ * progressive state (version 2) too. */
+static void truncated_and_corrupted(bool progressive)
 {
-    (void)state;
     CstError err = {0};
     Film *f = film_create(3, 2);
     assert_non_null(f);
     assert_int_equal(film_set_output(f, CST_AOV_ALBEDO, 0.0, 0), 1);
     for (int i = 0; i < 18; i++) { f->sum[i] = 0.5 * i; f->sum_sq[i] = 0.25 * i * i; }
     for (int i = 0; i < 6 * FILM_AOV_STRIDE; i++) f->aov[i] = -1.0 * i;
+    if (progressive) {
+        f->progressive = malloc(6 * FILM_PROGRESSIVE_STRIDE * sizeof *f->progressive);
+        assert_non_null(f->progressive);
+        for (int i = 0; i < 6 * FILM_PROGRESSIVE_STRIDE; i++) f->progressive[i] = 0.0625 * i;
+    }
     f->spp = 7;
     StateKey keys[3] = {{.name = "a", .type = STATE_INT, .i = -5},
                         {.name = "b", .type = STATE_REAL, .r = 0.125},
@@ -224,6 +239,9 @@ static void test_truncated_and_corrupted(void **state)
     assert_true(got[1].r == 0.125);
     assert_string_equal(got[2].text, "hello");
     assert_same_sums(f, back);
+    assert_true(!f->progressive == !back->progressive);
+    if (progressive)
+        assert_memory_equal(f->progressive, back->progressive, 6 * FILM_PROGRESSIVE_STRIDE * sizeof *f->progressive);
     film_destroy(back);
 
     FILE *fp = fopen(path, "rb");
@@ -253,13 +271,20 @@ static void test_truncated_and_corrupted(void **state)
     film_destroy(f);
 }
 
+static void test_truncated_and_corrupted(void **state)
+{
+    (void)state;
+    truncated_and_corrupted(false);
+    truncated_and_corrupted(true);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_resume_path_aovs), cmocka_unit_test(test_resume_path_crop),
         cmocka_unit_test(test_resume_whitted),   cmocka_unit_test(test_resume_light),
         cmocka_unit_test(test_resume_bdpt_aovs), cmocka_unit_test(test_resume_vcm),
-        cmocka_unit_test(test_resume_photon),    cmocka_unit_test(test_stop),
+        cmocka_unit_test(test_resume_photon),    cmocka_unit_test(test_resume_sppm), cmocka_unit_test(test_stop),
         cmocka_unit_test(test_refusals),         cmocka_unit_test(test_truncated_and_corrupted),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
