@@ -285,6 +285,27 @@ CstStatus cst_film_create(const CstScene *scene, const CstRenderSettings *settin
     return CST_OK;
 }
 
+/* A film to resume st from: an integrator that can resume, the same size and AOVs, no more
+ * samples than asked for, and for SPPM its state. */
+static CstStatus check_resume(const CstRenderSettings *st, const Film *resume, CstError *err)
+{
+    if (!cst_integrator_resumable(st->integrator))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator cannot resume from a state file yet",
+                        cst_integrator_name(st->integrator));
+    if (resume->width != st->width || resume->height != st->height ||
+        (!resume->aov) != !(st->aovs & FILM_AOV_FIRST_HIT) || resume->spp < 0 ||
+        (st->spp > 0 && resume->spp > st->spp))
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "resume: a %dx%d film%s of %d samples for a %dx%d render%s of %d: expected the same "
+                        "size and AOVs, and no more samples (cst_film_state_read checks a state file)",
+                        resume->width, resume->height, resume->aov ? " with AOV sums" : "", resume->spp, st->width,
+                        st->height, (st->aovs & FILM_AOV_FIRST_HIT) ? " with AOV sums" : "", st->spp);
+    if (st->integrator == CST_INTEGRATOR_SPPM && !resume->progressive)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: the film holds no SPPM state (per-pixel radii, photon "
+                        "counts and flux); expected a state written by a checkpoint of an sppm render");
+    return CST_OK;
+}
+
 CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, CstFilm **out,
                      CstRenderStats *stats, CstError *err)
 {
@@ -341,17 +362,8 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "expected a film of whole blocks (a state written at a block end)",
                         st.first_sample + st.resume->spp, st.sample_block);
     const Film *resume = st.resume;
-    if (resume && !cst_integrator_resumable(st.integrator))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator cannot resume from a state file yet",
-                        cst_integrator_name(st.integrator));
-    if (resume && (resume->width != st.width || resume->height != st.height ||
-                   (!resume->aov) != !(st.aovs & FILM_AOV_FIRST_HIT) || resume->spp < 0 ||
-                   (st.spp > 0 && resume->spp > st.spp)))
-        return cst_fail(err, CST_ERR_INVALID_ARG,
-                        "resume: a %dx%d film%s of %d samples for a %dx%d render%s of %d: expected the same "
-                        "size and AOVs, and no more samples (cst_film_state_read checks a state file)",
-                        resume->width, resume->height, resume->aov ? " with AOV sums" : "", resume->spp, st.width,
-                        st.height, (st.aovs & FILM_AOV_FIRST_HIT) ? " with AOV sums" : "", st.spp);
+    CstStatus rst = resume ? check_resume(&st, resume, err) : CST_OK;
+    if (rst != CST_OK) return rst;
     Film *film = film_create(st.width, st.height);
     if (film) film_set_white_balance(film, st.white_balance);
     if (film && !film_set_output(film, st.aovs, st.exposure, st.png_linear)) {
@@ -364,9 +376,6 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     CstStatus status = CST_OK;
     uint64_t rays = 0;
     int samples = 0, first = 0;
-    if (resume && st.integrator == CST_INTEGRATOR_SPPM && !resume->progressive)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: the film holds no SPPM state (per-pixel radii, photon "
-                        "counts and flux); expected a state written by a checkpoint of an sppm render");
     if (film && resume) {
         /* The sums as the interrupted render left them: the passes add to them in the
          * order an uninterrupted render would have. (SPPM's are 0 until its last pass.) */
