@@ -45,6 +45,34 @@ static void test_shapes(void **state)
     cst_scene_destroy(s);
 }
 
+/* A full sphere whose material reads uv or dp/du (here a texture) is the analytic sphere,
+ * for pbrt-v4's parametrization in the object frame: under Rotate 90 about x, (u, v) =
+ * (0.25, 0.5) is object +y, world +z, with dp/du along -x (2 pi long); (0.25, 0.75) is
+ * theta = pi/4 from object +z, world (0, -0.707, 0.707). Plain and emitting spheres stay
+ * caustic's own. */
+static void test_sphere_uv(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok(WORLD("Texture \"c\" \"spectrum\" \"checkerboard\"\n"
+                               "AttributeBegin\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\n"
+                               "Rotate 90 1 0 0\nShape \"sphere\"\n"
+                               "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nTranslate 0 0 9\nShape \"sphere\"\n"
+                               "AttributeEnd\nTranslate 0 0 -9\nShape \"sphere\"\n"),
+                         &w);
+    assert_int_equal(s->num_shapes, 1);
+    assert_int_equal(s->num_spheres, 2);
+    assert_int_equal(s->shapes[0].p.type, SHAPE_TAG_SPHERE);
+    ShapeSurface sf;
+    shape_surface_at(&s->shapes[0], v2(0.25f, 0.5f), &sf);
+    assert_vec(sf.p, 0.0f, 0.0f, 1.0f, 1e-5f);
+    assert_vec(sf.dpdu, -6.2831853f, 0.0f, 0.0f, 1e-4f);
+    assert_true(fabsf(sf.uv.x - 0.25f) < 1e-6f && fabsf(sf.uv.y - 0.5f) < 1e-6f);
+    shape_surface_at(&s->shapes[0], v2(0.25f, 0.75f), &sf);
+    assert_vec(sf.p, 0.0f, -0.70710678f, 0.70710678f, 1e-5f);
+    cst_scene_destroy(s);
+}
+
 /* An emitting disk, cylinder and partial sphere are analytic area lights (their "power"
  * normalised by the world area, pbrt-v4's DiffuseAreaLight::Create); under a non-uniform
  * scale an emitting disk falls back to its tessellation and an emitting cylinder is
@@ -438,6 +466,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_quadric_emitters),
+        cmocka_unit_test(test_sphere_uv),
         cmocka_unit_test(test_loopsubdiv),
         cmocka_unit_test(test_shape_alpha),
         cmocka_unit_test(test_plymesh),
