@@ -480,34 +480,26 @@ typedef enum CstShapeType {
     CST_SHAPE_SPHERE,       /* centred at the object's origin, cut to z_min <= z <= z_max */
     CST_SHAPE_BILINEAR,     /* pbrt-v4's bilinear patch through patch[0..3] (p00, p10, p01, p11),
                              * world space (world_from_object applied); not emitting */
-    CST_SHAPE_TORUS,        /* about the object's z axis: radius from the axis to the tube's centre,
-                             * minor_radius the tube's (0 < minor_radius < radius); a quartic solved
-                             * exactly; u = phi / 2 pi, v the angle about the tube / 2 pi; not emitting */
-    CST_SHAPE_SDF           /* a signed-distance CSG tree sdf_nodes[0..sdf_num_nodes), sphere-traced;
-                             * not emitting */
+    CST_SHAPE_TORUS,        /* about z: radius to the tube's centre, minor_radius (< radius) the tube's */
+    CST_SHAPE_SDF           /* a signed-distance CSG tree sdf_nodes[0..sdf_num_nodes), sphere-traced */
 } CstShapeType;
 
-/* The nodes of a CST_SHAPE_SDF tree. Primitives are centred at their node's origin. */
+/* A CST_SHAPE_SDF tree's nodes; primitives centred at the node's origin, params: sphere
+ * radius; box half extents xyz; round box those and a rounding radius (<= the smallest);
+ * torus about z major, minor (< major); capsule along z half length (>= 0), radius; capped
+ * cylinder about z radius, half height. Operators take nodes a, b (earlier ones; each node
+ * but the last, the root, an operand exactly once); difference is a minus b; smooth union
+ * blends over k > 0. parent_from_node: 3 x 4 row-major, the node in its parent; 0: identity. */
 typedef enum CstSdfKind {
-    CST_SDF_SPHERE = 0,   /* params[0] radius */
-    CST_SDF_BOX,          /* params[0..2] half extents */
-    CST_SDF_ROUND_BOX,    /* params[0..2] half extents, params[3] rounding radius (<= the smallest) */
-    CST_SDF_TORUS,        /* about z: params[0] major radius, params[1] minor radius (< major) */
-    CST_SDF_CAPSULE,      /* along z: segment z in [-params[0], params[0]] (>= 0), radius params[1] */
-    CST_SDF_CYLINDER,     /* capped, about z: radius params[0], z in [-params[1], params[1]] */
-    CST_SDF_UNION,        /* operands a, b */
-    CST_SDF_INTERSECTION,
-    CST_SDF_DIFFERENCE,   /* a minus b */
-    CST_SDF_SMOOTH_UNION  /* a, b blended over k (polynomial smooth minimum) */
+    CST_SDF_SPHERE = 0, CST_SDF_BOX, CST_SDF_ROUND_BOX, CST_SDF_TORUS, CST_SDF_CAPSULE, CST_SDF_CYLINDER,
+    CST_SDF_UNION, CST_SDF_INTERSECTION, CST_SDF_DIFFERENCE, CST_SDF_SMOOTH_UNION
 } CstSdfKind;
 typedef struct CstSdfNode {
     CstSdfKind kind;
     float params[4];
-    int a, b;                     /* operators: indices of earlier nodes; each node but the last
-                                   * (the root) is the operand of exactly one operator */
-    float k;                      /* CST_SDF_SMOOTH_UNION: blend radius > 0 */
-    float parent_from_node[12];   /* 3 x 4 row-major affine placing the node in its parent (the
-                                   * root: in the shape's object space); all 0: identity */
+    int a, b;
+    float k;
+    float parent_from_node[12];
 } CstSdfNode;
 typedef struct CstShapeDesc {
     CstShapeType type;
@@ -530,9 +522,8 @@ typedef struct CstShapeDesc {
     int patch_has_normals, patch_has_uvs;
     float patch_normals[4][3];
     float patch_uvs[4][2];
-    float minor_radius;          /* CST_SHAPE_TORUS */
-    /* CST_SHAPE_SDF: the tree (copied), sphere tracing's epsilon (world units; 0: 1e-5 of the
-     * shape's world size) and step limit (0: 1024); world_from_object places the root. */
+    float minor_radius;          /* CST_SHAPE_TORUS; tori and SDF shapes do not emit */
+    /* CST_SHAPE_SDF: the tree (copied), epsilon (world units; 0: 1e-5 of the size), step limit (0: 1024) */
     const CstSdfNode *sdf_nodes;
     int sdf_num_nodes;
     float sdf_epsilon;
