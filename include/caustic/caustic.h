@@ -478,9 +478,29 @@ typedef enum CstShapeType {
     CST_SHAPE_CYLINDER = 0, /* about the object's z axis, z_min <= z <= z_max */
     CST_SHAPE_DISK,         /* in the plane z = height, inner_radius <= distance to the axis <= radius */
     CST_SHAPE_SPHERE,       /* centred at the object's origin, cut to z_min <= z <= z_max */
-    CST_SHAPE_BILINEAR      /* pbrt-v4's bilinear patch through patch[0..3] (p00, p10, p01, p11),
+    CST_SHAPE_BILINEAR,     /* pbrt-v4's bilinear patch through patch[0..3] (p00, p10, p01, p11),
                              * world space (world_from_object applied); not emitting */
+    CST_SHAPE_TORUS,        /* about z: radius to the tube's centre, minor_radius (< radius) the tube's */
+    CST_SHAPE_SDF           /* a signed-distance CSG tree sdf_nodes[0..sdf_num_nodes), sphere-traced */
 } CstShapeType;
+
+/* A CST_SHAPE_SDF tree's nodes; primitives centred at the node's origin, params: sphere
+ * radius; box half extents xyz; round box those and a rounding radius (<= the smallest);
+ * torus about z major, minor (< major); capsule along z half length (>= 0), radius; capped
+ * cylinder about z radius, half height. Operators take nodes a, b (earlier ones; each node
+ * but the last, the root, an operand exactly once); difference is a minus b; smooth union
+ * blends over k > 0. parent_from_node: 3 x 4 row-major, the node in its parent; 0: identity. */
+typedef enum CstSdfKind {
+    CST_SDF_SPHERE = 0, CST_SDF_BOX, CST_SDF_ROUND_BOX, CST_SDF_TORUS, CST_SDF_CAPSULE, CST_SDF_CYLINDER,
+    CST_SDF_UNION, CST_SDF_INTERSECTION, CST_SDF_DIFFERENCE, CST_SDF_SMOOTH_UNION
+} CstSdfKind;
+typedef struct CstSdfNode {
+    CstSdfKind kind;
+    float params[4];
+    int a, b;
+    float k;
+    float parent_from_node[12];
+} CstSdfNode;
 typedef struct CstShapeDesc {
     CstShapeType type;
     float radius;
@@ -502,6 +522,12 @@ typedef struct CstShapeDesc {
     int patch_has_normals, patch_has_uvs;
     float patch_normals[4][3];
     float patch_uvs[4][2];
+    float minor_radius;          /* CST_SHAPE_TORUS; tori and SDF shapes do not emit */
+    /* CST_SHAPE_SDF: the tree (copied), epsilon (world units; 0: 1e-5 of the size), step limit (0: 1024) */
+    const CstSdfNode *sdf_nodes;
+    int sdf_num_nodes;
+    float sdf_epsilon;
+    int sdf_max_steps;
 } CstShapeDesc;
 /* u = phi / phi_max; v along z (cylinder, sphere) or from the rim inward (disk), as pbrt-v4.
  * The normal points away from the axis (cylinder), outward (sphere), along +z (disk),

@@ -5,6 +5,8 @@
 
 #include <float.h>
 
+#include "math/polynomial.h"
+
 #define TWO_PI_D 6.28318530717958647692
 
 /* ------------------------------------------------------------ affine maps in double */
@@ -212,6 +214,11 @@ static BBox object_bounds(const ShapeParams *p)
     BBox b;
     switch (p->type) {
     case SHAPE_TAG_DISK: b.min = v3(-r, -r, p->height); b.max = v3(r, r, p->height); break;
+    case SHAPE_TAG_TORUS: {
+        float e = r + p->minor_radius;
+        b.min = v3(-e, -e, -p->minor_radius); b.max = v3(e, e, p->minor_radius);
+        break;
+    }
     default: b.min = v3(-r, -r, p->z_min); b.max = v3(r, r, p->z_max); break;
     }
     return b;
@@ -221,13 +228,19 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
 {
     if (!(p->radius > 0.0f) || !isfinite(p->radius) || !(p->phi_max > 0.0f) ||
         !((double)p->phi_max <= TWO_PI_D + 1e-6) || (unsigned)p->type >= SHAPE_TAG_COUNT ||
-        p->type == SHAPE_TAG_BILINEAR) /* shape_init_bilinear */
+        p->type == SHAPE_TAG_BILINEAR || p->type == SHAPE_TAG_SDF) /* shape_init_bilinear, shape_init_sdf */
         return false;
     *s = (AnalyticShape){0};
     s->p = *p;
     if (s->p.phi_max > 2.0f * CST_PI) s->p.phi_max = 2.0f * CST_PI;
     switch (p->type) {
-    case SHAPE_TAG_BILINEAR: return false; /* not a quadric: handled before */
+    case SHAPE_TAG_BILINEAR:
+    case SHAPE_TAG_SDF: return false; /* not a quadric: handled before */
+    case SHAPE_TAG_TORUS:
+        if (!(p->minor_radius > 0.0f && p->minor_radius < p->radius)) return false;
+        s->p.phi_max = 2.0f * CST_PI;
+        s->r_minor = (double)p->minor_radius;
+        break;
     case SHAPE_TAG_CYLINDER:
         if (!(p->z_min < p->z_max) || !isfinite(p->z_min) || !isfinite(p->z_max)) return false;
         break;
@@ -311,7 +324,9 @@ static bool clip_and_uv(const AnalyticShape *s, V3d o, V3d d, double t, float *u
     (void)p;
     V3d h = d3v(o.x + t * d.x, o.y + t * d.y, o.z + t * d.z);
     switch (p->type) {
-    case SHAPE_TAG_BILINEAR: return false; /* not a quadric: handled before */
+    case SHAPE_TAG_BILINEAR:
+    case SHAPE_TAG_TORUS:
+    case SHAPE_TAG_SDF: return false; /* not a quadric: handled before */
     case SHAPE_TAG_CYLINDER: {
         if (h.z < s->z_min || h.z > s->z_max) return false;
         double phi = phi_of(h.x, h.y);
@@ -344,10 +359,60 @@ static bool clip_and_uv(const AnalyticShape *s, V3d o, V3d d, double t, float *u
     return false;
 }
 
+/* The torus (x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4 R^2 (x^2 + y^2) = 0 along the object-space
+ * ray: a quartic in t. The ray is first clipped to the torus' object box [t0, t1] (t0 from
+ * t_min and the box alone, never t_max, so every back end solves the same quartic) and the
+ * quartic written in s = t - t0 about the clipped start q = o + t0 d, which keeps its
+ * coefficients of the size of the torus however far the ray starts. With G(s) = |q + s d|^2
+ * + R^2 - r^2 = a s^2 + b s + c and H(s) = x^2 + y^2 = a' s^2 + b' s + c': G^2 - 4 R^2 H. */
+static bool torus_intersect(const AnalyticShape *s, V3d o, V3d d, const Ray *r, float *t_out, float *u, float *v)
+{
+    const double R = s->r, rm = s->r_minor, e[3] = {R + rm, R + rm, rm};
+    const double oo[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z};
+    double t0 = (double)r->t_min, t1 = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        if (dd[k] == 0.0) {
+            if (fabs(oo[k]) > e[k]) return false;
+            continue;
+        }
+        double ta = (-e[k] - oo[k]) / dd[k], tb = (e[k] - oo[k]) / dd[k];
+        if (ta > tb) { double tmp = ta; ta = tb; tb = tmp; }
+        t0 = fmax(t0, ta);
+        t1 = fmin(t1, tb);
+    }
+    if (!(t0 <= t1) || !isfinite(t1)) return false;
+    const V3d q = d3v(o.x + t0 * d.x, o.y + t0 * d.y, o.z + t0 * d.z);
+    const double a = d3_dot(d, d), b = 2.0 * d3_dot(q, d), c = d3_dot(q, q) + R * R - rm * rm;
+    const double axy = d.x * d.x + d.y * d.y, bxy = 2.0 * (q.x * d.x + q.y * d.y), cxy = q.x * q.x + q.y * q.y;
+    const double r4 = 4.0 * R * R;
+    const double coef[5] = {c * c - r4 * cxy, 2.0 * b * c - r4 * bxy, b * b + 2.0 * a * c - r4 * axy, 2.0 * a * b, a * a};
+    double roots[4];
+    const int n = poly_roots(coef, 4, 0.0, t1 - t0, roots);
+    for (int i = 0; i < n; i++) {
+        const double th = t0 + roots[i];
+        const float tf = (float)th;
+        /* The float t must itself lie in the open interval: every back end compares it so. */
+        if (!(tf > r->t_min && tf < r->t_max)) continue;
+        const V3d h = d3v(o.x + th * d.x, o.y + th * d.y, o.z + th * d.z);
+        double theta = atan2(h.z, sqrt(h.x * h.x + h.y * h.y) - R);
+        if (theta < 0.0) theta += TWO_PI_D;
+        *u = (float)(phi_of(h.x, h.y) / TWO_PI_D);
+        *v = (float)(theta / TWO_PI_D);
+        *t_out = tf;
+        return true;
+    }
+    return false;
+}
+
 bool shape_intersect(const AnalyticShape *s, const Ray *r, float *t_out, float *u, float *v)
 {
     if (s->p.type == SHAPE_TAG_BILINEAR) return bilinear_intersect(s, r, t_out, u, v);
+    if (s->p.type == SHAPE_TAG_SDF) {
+        *u = *v = 0.0f; /* shape_surface rebuilds everything from t */
+        return sdf_intersect(s->sdf, r, t_out);
+    }
     V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
+    if (s->p.type == SHAPE_TAG_TORUS) return torus_intersect(s, o, d, r, t_out, u, v);
     const double tmin = (double)r->t_min, tmax = (double)r->t_max;
     const ShapeParams *p = &s->p;
     (void)p;
@@ -397,7 +462,16 @@ static void surface_object(const AnalyticShape *s, double phi, double q, V3d *pt
     (void)p;
     const double pm = s->phi_max, cp = cos(phi), sp = sin(phi);
     switch (p->type) {
-    case SHAPE_TAG_BILINEAR: return; /* not a quadric: bilinear_surface */
+    case SHAPE_TAG_BILINEAR:
+    case SHAPE_TAG_SDF: return; /* not a quadric: bilinear_surface, sdf_surface */
+    case SHAPE_TAG_TORUS: { /* q: the angle theta about the tube, from the outer equator toward +z */
+        const double R = s->r, rm = s->r_minor, ct = cos(q), st = sin(q), rho = R + rm * ct;
+        *pt = d3v(rho * cp, rho * sp, rm * st);
+        *dpdu = d3v(-TWO_PI_D * pt->y, TWO_PI_D * pt->x, 0.0);
+        *dpdv = d3v(-TWO_PI_D * rm * st * cp, -TWO_PI_D * rm * st * sp, TWO_PI_D * rm * ct);
+        *n = d3v(ct * cp, ct * sp, st); /* = dp/du x dp/dv, normalised */
+        return;
+    }
     case SHAPE_TAG_CYLINDER:
         *pt = d3v(s->r * cp, s->r * sp, q);
         *dpdu = d3v(-pm * pt->y, pm * pt->x, 0.0);
@@ -436,6 +510,15 @@ static void surface_world(const AnalyticShape *s, V3d pt, V3d dpdu, V3d dpdv, V3
 
 void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *out)
 {
+    if (s->p.type == SHAPE_TAG_SDF) {
+        sdf_surface(s->sdf, r, t, &out->p, &out->n, &out->uv);
+        /* dp/du, dp/dv: a tangent frame about n (the field has no parameterisation) */
+        Vec3 a = fabsf(out->n.x) > 0.9f ? v3(0.0f, 1.0f, 0.0f) : v3(1.0f, 0.0f, 0.0f);
+        out->dpdu = v3_normalize(v3_cross(a, out->n));
+        out->dpdv = v3_cross(out->n, out->dpdu);
+        out->ns = out->n;
+        return;
+    }
     if (s->p.type == SHAPE_TAG_BILINEAR) {
         /* The patch parameters of the hit at t: the same test on the interval holding only
          * the float t (bit-identical arithmetic, so the same root); pbrt-v4 likewise builds
@@ -457,6 +540,12 @@ void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *
     /* Reprojection onto the surface (pbrt-v4 §6.8.5): only the phi and the height (or the
      * disk's radius) of the float hit are kept, the point is rebuilt on the surface. */
     switch (p->type) {
+    case SHAPE_TAG_TORUS: /* reprojected: the hit's phi and tube angle kept, the point rebuilt */
+        phi = phi_of(h.x, h.y);
+        q = atan2(h.z, sqrt(h.x * h.x + h.y * h.y) - s->r);
+        if (q < 0.0) q += TWO_PI_D;
+        uv = v2((float)(phi / TWO_PI_D), (float)(q / TWO_PI_D));
+        break;
     case SHAPE_TAG_CYLINDER:
         phi = phi_of(h.x, h.y);
         q = fmax(s->z_min, fmin(s->z_max, h.z));
@@ -494,12 +583,17 @@ void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out)
         bilinear_surface(s, (double)uv.x, (double)uv.y, out);
         return;
     }
+    if (s->p.type == SHAPE_TAG_SDF) { /* not parameterised: never sampled (not emitting) */
+        *out = (ShapeSurface){0};
+        return;
+    }
     const ShapeParams *p = &s->p;
     (void)p;
     double phi = (double)uv.x * s->phi_max, q;
     switch (p->type) {
     case SHAPE_TAG_CYLINDER: q = s->z_min + (double)uv.y * (s->z_max - s->z_min); break;
     case SHAPE_TAG_DISK: q = s->r - (double)uv.y * (s->r - s->r_inner); break;
+    case SHAPE_TAG_TORUS: q = (double)uv.y * TWO_PI_D; break;
     default: q = s->r * cos(s->theta_z_min + (double)uv.y * (s->theta_z_max - s->theta_z_min)); break;
     }
     V3d pt, dpdu, dpdv, n;
@@ -517,6 +611,7 @@ static double object_area(const AnalyticShape *s)
     case SHAPE_TAG_CYLINDER: return s->phi_max * s->r * (s->z_max - s->z_min);
     case SHAPE_TAG_DISK:
         return 0.5 * s->phi_max * (s->r * s->r - s->r_inner * s->r_inner);
+    case SHAPE_TAG_TORUS: return TWO_PI_D * TWO_PI_D * s->r * s->r_minor; /* Pappus: 2 pi R x 2 pi r */
     default: return s->phi_max * s->r * (s->z_max - s->z_min);
     }
 }
@@ -534,6 +629,7 @@ static double area_factor(const AnalyticShape *s, V3d n)
 float shape_area(const AnalyticShape *s)
 {
     if (s->p.type == SHAPE_TAG_BILINEAR) return (float)bilinear_area(s);
+    if (s->p.type == SHAPE_TAG_SDF) return 0.0f; /* not emitting: never needed */
     /* The factor at the middle of the parameter domain: exact for similarity transforms. */
     const ShapeParams *p = &s->p;
     (void)p;
@@ -548,7 +644,7 @@ float shape_area(const AnalyticShape *s)
 
 bool shape_uniform_area(const AnalyticShape *s)
 {
-    if (s->p.type == SHAPE_TAG_BILINEAR) return false;
+    if (s->p.type == SHAPE_TAG_BILINEAR || s->p.type == SHAPE_TAG_SDF) return false;
     /* M^T M = k^2 I for a similarity: the columns orthogonal and of one length. */
     double g[3][3];
     for (int i = 0; i < 3; i++)
@@ -568,6 +664,10 @@ void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float 
     (void)p;
     Vec2 uv;
     switch (p->type) {
+    case SHAPE_TAG_SDF: /* not emitting: never sampled */
+        *out = (ShapeSurface){0};
+        *pdf_a = 0.0f;
+        return;
     case SHAPE_TAG_BILINEAR:
         /* uniform in (u, v): density 1 / |dp/du x dp/dv| per area (shape_pdf_area) */
         bilinear_surface(s, (double)u.x, (double)u.y, out);
@@ -596,6 +696,7 @@ void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float 
 
 float shape_pdf_area(const AnalyticShape *s, const ShapeSurface *sf)
 {
+    if (s->p.type == SHAPE_TAG_SDF) return 0.0f;
     if (s->p.type == SHAPE_TAG_BILINEAR) {
         float j = v3_length(v3_cross(sf->dpdu, sf->dpdv));
         return j > 0.0f ? 1.0f / j : 0.0f;
@@ -607,4 +708,23 @@ float shape_pdf_area(const AnalyticShape *s, const ShapeSurface *sf)
     double l = d3_len(n);
     if (l > 0.0) n = d3v(n.x / l, n.y / l, n.z / l);
     return (float)(1.0 / (object_area(s) * area_factor(s, n)));
+}
+
+/* ------------------------------------------------------------ signed-distance shapes */
+
+void shape_init_sdf(AnalyticShape *s, SdfTree *tree)
+{
+    *s = (AnalyticShape){0};
+    s->p.type = SHAPE_TAG_SDF;
+    s->p.phi_max = 2.0f * CST_PI;
+    s->sdf = tree;
+    s->bounds = sdf_tree_bounds(tree);
+}
+
+void shape_release(AnalyticShape *s)
+{
+    if (s && s->p.type == SHAPE_TAG_SDF) {
+        sdf_tree_destroy(s->sdf);
+        s->sdf = NULL;
+    }
 }

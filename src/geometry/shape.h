@@ -8,6 +8,7 @@
 
 #include "geometry/hit.h"
 #include "geometry/ray.h"
+#include "geometry/sdf.h"
 #include "math/bbox.h"
 #include "math/transform.h"
 
@@ -18,9 +19,12 @@ typedef enum ShapeTag {
     SHAPE_TAG_CYLINDER = 0, /* about +z, radius r, z in [z_min, z_max], phi in [0, phi_max] */
     SHAPE_TAG_DISK,         /* in the plane z = height, inner_radius <= rho <= r, phi in [0, phi_max] */
     SHAPE_TAG_SPHERE,       /* centred at the origin, clipped to [z_min, z_max] and [0, phi_max] */
-    SHAPE_TAG_BILINEAR      /* pbrt-v4's bilinear patch: four world-space corners (shape_init_bilinear) */
+    SHAPE_TAG_BILINEAR,     /* pbrt-v4's bilinear patch: four world-space corners (shape_init_bilinear) */
+    SHAPE_TAG_TORUS,        /* about +z: radius (major) to the tube's centre, minor_radius the tube's;
+                             * the quartic solved in double (math/polynomial.h) */
+    SHAPE_TAG_SDF           /* a signed-distance CSG tree (geometry/sdf.h, shape_init_sdf), sphere-traced */
 } ShapeTag;
-enum { SHAPE_TAG_COUNT = 4 };
+enum { SHAPE_TAG_COUNT = 6 };
 
 /* A bilinear patch p(u, v) = (1-u)(1-v) p00 + u(1-v) p10 + (1-u)v p01 + uv p11 (pbrt-v4
  * §6.6; corners in pbrt's order p00, p10, p01, p11), in world space, in double; optional
@@ -41,8 +45,9 @@ typedef struct ShapeParams {
     float z_min, z_max;   /* cylinder, sphere (clamped to [-r, r] for the sphere) */
     float height;         /* disk */
     float inner_radius;   /* disk */
-    float phi_max;        /* (0, 2 pi] */
+    float phi_max;        /* (0, 2 pi] (the torus is always whole) */
     bool reverse_orientation;
+    float minor_radius;   /* torus: 0 < minor_radius < radius */
 } ShapeParams;
 
 /* One primitive: parameters, object-to-world and its inverse in double (the intersection
@@ -52,6 +57,7 @@ typedef struct AnalyticShape {
     ShapeParams p;
     double r, z_min, z_max, height, r_inner, phi_max; /* p's, in double for the arithmetic */
     double theta_z_min, theta_z_max; /* sphere: acos(z_min / r), acos(z_max / r) */
+    double r_minor;                 /* torus */
     bool flip_normal;               /* reverse_orientation XOR the transform mirrors */
     union {
         struct {                        /* the quadrics */
@@ -59,6 +65,7 @@ typedef struct AnalyticShape {
             double nrm[3][3];            /* normal matrix: the inverse transpose of o2w's linear part */
         };
         BilinearPatch bl;               /* SHAPE_TAG_BILINEAR */
+        SdfTree *sdf;                   /* SHAPE_TAG_SDF: owned (shape_release); copies borrow it */
     };
     BBox bounds;                    /* world, padded outward to contain every reported hit */
 } AnalyticShape;
@@ -73,6 +80,14 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *object_
  * handedness-swapping transform (used without normals). False for non-finite corners or
  * a patch without area (every corner on one line). */
 bool shape_init_bilinear(AnalyticShape *s, const Vec3 p[4], const Vec3 *n, const Vec2 *uv, bool flip);
+
+/* An SDF shape from its tree, whose ownership passes to the shape (freed by shape_release).
+ * Not emitting: shape_area is 0, no sampling. */
+void shape_init_sdf(AnalyticShape *s, SdfTree *tree);
+
+/* Frees what the shape owns (an SDF tree); the owner of the shape array calls it once per
+ * shape, copies (an octree's) never. NULL-safe. */
+void shape_release(AnalyticShape *s);
 
 /* Nearest hit in (r->t_min, r->t_max): *t and the shape's (u, v) parameters (pbrt-v4:
  * u = phi / phi_max, v along z for cylinders and spheres, from the rim inward for disks).

@@ -54,6 +54,7 @@ void scene_destroy(Scene *s)
     free(s->tri_normals);
     free(s->spheres);
     free(s->sphere_info);
+    for (int i = 0; i < s->num_shapes; i++) shape_release(&s->shapes[i]);
     free(s->shapes);
     free(s->shape_info);
     free(s->materials);

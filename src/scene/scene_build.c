@@ -789,6 +789,56 @@ static CstStatus add_patch(CstScene *scene, const CstShapeDesc *d, double peak, 
     return st != CST_OK ? st : scene_add_patch(scene, &sh, d->material, alpha_id, err);
 }
 
+/* cst_scene_add_shape's signed-distance tree: the nodes converted and checked by
+ * sdf_tree_create (the offending node named), the shape added without an emitter. */
+static CstStatus add_sdf(CstScene *scene, const CstShapeDesc *d, double peak, const char *fn, CstError *err)
+{
+    if (peak > 0.0)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: emitting SDF shapes are not supported; expected a zero emission", fn);
+    const int n = d->sdf_num_nodes;
+    if (!d->sdf_nodes || n < 1 || n > SDF_MAX_NODES)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: sdf_num_nodes %d (sdf_nodes %s); expected 1 to %d nodes", fn, n,
+                        d->sdf_nodes ? "given" : "NULL", SDF_MAX_NODES);
+    float rows[16] = {0};
+    int all_zero = 1;
+    for (int k = 0; k < 12; k++) {
+        if (!isfinite(d->world_from_object[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers", fn,
+                            k, (double)d->world_from_object[k]);
+        rows[k] = d->world_from_object[k];
+        all_zero &= rows[k] == 0.0f;
+    }
+    rows[15] = 1.0f;
+    const Transform xf = all_zero ? transform_identity() : transform_from_rows(rows);
+    SdfNodeDesc *nd = calloc((size_t)n, sizeof *nd);
+    if (!nd) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for an SDF tree", fn);
+    for (int i = 0; i < n; i++) {
+        const CstSdfNode *c = &d->sdf_nodes[i];
+        int zero = 1;
+        float nr[16] = {0};
+        for (int k = 0; k < 12; k++) nr[k] = c->parent_from_node[k], zero &= nr[k] == 0.0f;
+        nr[15] = 1.0f;
+        nd[i] = (SdfNodeDesc){(SdfKind)c->kind, {c->params[0], c->params[1], c->params[2], c->params[3]}, c->a, c->b,
+                              c->k, !zero, zero ? transform_identity() : transform_from_rows(nr)};
+    }
+    const SdfOptions opt = {(double)d->sdf_epsilon, d->sdf_max_steps};
+    SdfTree *tree = NULL;
+    int bad = -1;
+    const SdfError e = sdf_tree_create(nd, n, &xf, &opt, &tree, &bad);
+    free(nd);
+    if (e != SDF_OK) {
+        if (bad >= 0) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: sdf_nodes[%d]: %s", fn, bad, sdf_error_string(e));
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: SDF tree: %s", fn, sdf_error_string(e));
+    }
+    AnalyticShape sh;
+    shape_init_sdf(&sh, tree);
+    int alpha_id = 0;
+    CstStatus st = read_alpha(scene, &d->alpha, fn, &alpha_id, err);
+    if (st == CST_OK) st = scene_add_patch(scene, &sh, d->material, alpha_id, err);
+    if (st != CST_OK) sdf_tree_destroy(tree);
+    return st;
+}
+
 CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *err)
 {
     static const char fn[] = "cst_scene_add_shape";
@@ -796,7 +846,7 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
-    if ((int)d->type < CST_SHAPE_CYLINDER || d->type > CST_SHAPE_BILINEAR)
+    if ((int)d->type < CST_SHAPE_CYLINDER || d->type > CST_SHAPE_SDF)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: type %d is not a CstShapeType value", fn, (int)d->type);
     if (d->material < 0 || d->material >= scene->num_materials)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
@@ -805,6 +855,12 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     double peak = 0.0;
     if ((st = read_emission(scene, &d->emission, fn, &em, &peak, err)) != CST_OK) return st;
     if (d->type == CST_SHAPE_BILINEAR) return add_patch(scene, d, peak, fn, err);
+    if (d->type == CST_SHAPE_SDF) return add_sdf(scene, d, peak, fn, err);
+    if (d->type == CST_SHAPE_TORUS && peak > 0.0)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: emitting tori are not supported; expected a zero emission", fn);
+    if (d->type == CST_SHAPE_TORUS && !(d->minor_radius > 0.0f && d->minor_radius < d->radius))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: torus minor_radius %g, radius %g; expected 0 < minor_radius < "
+                        "radius", fn, (double)d->minor_radius, (double)d->radius);
     const float vals[5] = {d->radius, d->z_min, d->z_max, d->height, d->inner_radius};
     for (int k = 0; k < 5; k++)
         if (!(fabsf(vals[k]) <= BUILD_MAX_LENGTH))
@@ -833,7 +889,7 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
                         "finite); expected an invertible affine transform", fn);
     ShapeParams p = {(ShapeTag)d->type, d->radius, d->z_min, d->z_max, d->height, d->inner_radius,
                      (d->phi_max_degrees > 0.0f ? d->phi_max_degrees : 360.0f) * (CST_PI / 180.0f),
-                     d->reverse_orientation != 0};
+                     d->reverse_orientation != 0, d->minor_radius};
     if (d->type == CST_SHAPE_SPHERE && !(d->z_min < d->z_max)) p.z_min = -d->radius, p.z_max = d->radius;
     int alpha_id = 0;
     if ((st = read_alpha(scene, &d->alpha, fn, &alpha_id, err)) != CST_OK) return st;

@@ -24,7 +24,7 @@
 static AnalyticShape make(ShapeTag type, float r, float z0, float z1, float h, float ri, float phi_max, bool rev,
                           Transform m)
 {
-    ShapeParams p = {type, r, z0, z1, h, ri, phi_max, rev};
+    ShapeParams p = {type, r, z0, z1, h, ri, phi_max, rev, 0.0f};
     AnalyticShape s;
     assert_true(shape_init(&s, &p, &m));
     return s;
@@ -168,7 +168,7 @@ static void test_random_transforms(void **state)
         float phi_max = (k / 3) % 2 ? 2.0f * CST_PI : 1.0f + 4.0f * pcg32_float(&rng);
         float ri = type == SHAPE_TAG_DISK && (k / 6) % 2 ? 0.3f : 0.0f;
         AnalyticShape s;
-        ShapeParams p = {type, 1.0f, -0.6f, 0.7f, 0.2f, ri, phi_max, (k / 12) % 2 == 1};
+        ShapeParams p = {type, 1.0f, -0.6f, 0.7f, 0.2f, ri, phi_max, (k / 12) % 2 == 1, 0.0f};
         float ax = pcg32_float(&rng), ay = pcg32_float(&rng), az = pcg32_float(&rng), ang = 6.0f * pcg32_float(&rng);
         Transform m = transform_rotate(v3(ax - 0.5f, ay - 0.5f, az - 0.5f + 1e-3f), ang);
         if (k % 4 == 0) m = transform_compose(m, transform_scale(v3(0.5f, 2.0f, 1.5f)));

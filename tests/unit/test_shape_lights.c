@@ -34,7 +34,7 @@ static Transform placement(void)
 
 static AnalyticShape make(ShapeTag type, float r, float z0, float z1, float ri, float phi_max_deg)
 {
-    ShapeParams p = {type, r, z0, z1, 0.25f, ri, phi_max_deg * (CST_PI / 180.0f), false};
+    ShapeParams p = {type, r, z0, z1, 0.25f, ri, phi_max_deg * (CST_PI / 180.0f), false, 0.0f};
     AnalyticShape s;
     Transform m = placement();
     assert_true(shape_init(&s, &p, &m));
@@ -204,7 +204,7 @@ static void test_nee_pdf_w(void **state)
 static void test_uniform_area(void **state)
 {
     (void)state;
-    ShapeParams p = {SHAPE_TAG_DISK, 1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 2.0f * CST_PI, false};
+    ShapeParams p = {SHAPE_TAG_DISK, 1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 2.0f * CST_PI, false, 0.0f};
     AnalyticShape s;
     Transform m = transform_scale(v3(-2.0f, 2.0f, 2.0f)); /* a mirror: still a similarity */
     assert_true(shape_init(&s, &p, &m) && shape_uniform_area(&s));

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "io/path.h"
+#include "geometry/sdf.h"
 #include "math/transform.h"
 #include "scene/json/json_material.h"
 #include "scene/json/json_medium.h"
@@ -607,7 +608,7 @@ done:
     return st;
 }
 
-enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE, SHAPE_CYLINDER, SHAPE_DISK };
+enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE, SHAPE_CYLINDER, SHAPE_DISK, SHAPE_TORUS, SHAPE_SDF };
 
 /* An optional number under `key` (default `def`, magnitude at most 1e18). */
 static CstStatus read_opt_float(Loader *ld, const json_t *shape, const char *key, float def, float *out)
@@ -668,6 +669,202 @@ static CstStatus parse_analytic(Loader *ld, const json_t *shape, int type, int m
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 
+/* A shape's optional "transform" into the 3 x 4 rows of a Cst*Desc (all 0: identity). */
+static CstStatus read_rows(Loader *ld, const json_t *obj, float rows[12])
+{
+    json_t *v = json_object_get(obj, "transform");
+    memset(rows, 0, 12 * sizeof *rows);
+    if (!v) return CST_OK;
+    Transform xf = transform_identity();
+    json_path_push_key(ld, "transform");
+    LOADER_TRY(parse_transform(ld, v, &xf));
+    json_path_pop(ld);
+    if (!transform_is_identity(&xf))
+        for (int r = 0; r < 3; r++)
+            for (int k = 0; k < 4; k++) rows[4 * r + k] = xf.m[r][k];
+    return CST_OK;
+}
+
+/* A required number under `key`, > 0 (or >= 0 with zero_ok). */
+static CstStatus read_length(Loader *ld, const json_t *obj, const char *key, int zero_ok, float *out)
+{
+    json_t *v;
+    LOADER_TRY(json_member_required(ld, obj, key, zero_ok ? "a number >= 0" : "a number > 0", &v));
+    json_path_push_key(ld, key);
+    LOADER_TRY(json_read_float(ld, v, LOADER_MAX_LENGTH, out));
+    if (!(zero_ok ? *out >= 0.0f : *out > 0.0f))
+        return json_fail_here(ld, "%s %g; expected a number %s", key, (double)*out, zero_ok ? ">= 0" : "> 0");
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+/* "torus": the quartic torus about the object's z axis (cst_scene_add_shape). */
+static CstStatus parse_torus(Loader *ld, const json_t *shape, int material, const Emission *em, const CstAlpha *alpha)
+{
+    CstShapeDesc sd = {0};
+    sd.type = CST_SHAPE_TORUS;
+    sd.emission = emission_desc(em); /* refused by the builder: tori do not emit */
+    LOADER_TRY(read_length(ld, shape, "major_radius", 0, &sd.radius));
+    LOADER_TRY(read_length(ld, shape, "minor_radius", 0, &sd.minor_radius));
+    if (!(sd.minor_radius < sd.radius)) {
+        json_path_push_key(ld, "minor_radius");
+        return json_fail_here(ld, "minor_radius %g >= major_radius %g; expected a ring torus (minor < major)",
+                              (double)sd.minor_radius, (double)sd.radius);
+    }
+    LOADER_TRY(read_rows(ld, shape, sd.world_from_object));
+    sd.material = material;
+    sd.alpha = *alpha;
+    CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
+    return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
+}
+
+/* One node of an "sdf" tree and its subtree, appended to nodes[] in post-order (operands
+ * before their operator); *index the node's. An operator's "children" (at least 2) fold
+ * left: union [a, b, c] is union(union(a, b), c), difference [a, b, c] is (a - b) - c; its
+ * "transform" goes on the last fold. */
+static CstStatus parse_sdf_node(Loader *ld, const json_t *obj, CstSdfNode *nodes, int *count, int depth, int *index)
+{
+    static const char *const kinds[] = {"sphere", "box", "round_box", "torus", "capsule", "cylinder",
+                                        "union", "intersection", "difference", "smooth_union"};
+    static const char *const keys[][4] = {
+        {"radius"}, {"half_size"}, {"half_size", "radius"}, {"major_radius", "minor_radius"},
+        {"half_length", "radius"}, {"radius", "half_height"}, {"children"}, {"children"}, {"children"},
+        {"children", "k"}};
+    static const int nkeys[] = {1, 1, 2, 2, 2, 2, 1, 1, 1, 2};
+    if (depth > SDF_MAX_DEPTH) return json_fail_here(ld, "the SDF tree is deeper than %d levels", SDF_MAX_DEPTH);
+    LOADER_TRY(json_expect_object(ld, obj, "an SDF node object"));
+    int kind = 0;
+    LOADER_TRY(json_read_type(ld, obj, "SDF node type", kinds, 10, -1, &kind));
+    const char *allowed[6] = {"type", "transform"};
+    for (int k = 0; k < nkeys[kind]; k++) allowed[2 + k] = keys[kind][k];
+    LOADER_TRY(json_check_keys(ld, obj, allowed, 2 + nkeys[kind]));
+    CstSdfNode nd = {0};
+    nd.kind = (CstSdfKind)kind;
+    LOADER_TRY(read_rows(ld, obj, nd.parent_from_node));
+    if (kind < CST_SDF_UNION) {
+        float *c = nd.params;
+        switch (kind) {
+        case CST_SDF_SPHERE: LOADER_TRY(read_length(ld, obj, "radius", 0, &c[0])); break;
+        case CST_SDF_BOX:
+        case CST_SDF_ROUND_BOX: {
+            json_t *v;
+            Vec3 h;
+            LOADER_TRY(json_member_required(ld, obj, "half_size", "an array of 3 numbers > 0", &v));
+            json_path_push_key(ld, "half_size");
+            LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &h));
+            if (!(h.x > 0.0f && h.y > 0.0f && h.z > 0.0f))
+                return json_fail_here(ld, "half_size (%g, %g, %g); expected 3 numbers > 0", (double)h.x, (double)h.y, (double)h.z);
+            json_path_pop(ld);
+            c[0] = h.x, c[1] = h.y, c[2] = h.z;
+            if (kind == CST_SDF_ROUND_BOX) {
+                LOADER_TRY(read_length(ld, obj, "radius", 0, &c[3]));
+                if (!(c[3] <= minf(h.x, minf(h.y, h.z)))) {
+                    json_path_push_key(ld, "radius");
+                    return json_fail_here(ld, "radius %g exceeds the smallest half_size %g; expected a rounding "
+                                          "radius at most that", (double)c[3], (double)minf(h.x, minf(h.y, h.z)));
+                }
+            }
+            break;
+        }
+        case CST_SDF_TORUS:
+            LOADER_TRY(read_length(ld, obj, "major_radius", 0, &c[0]));
+            LOADER_TRY(read_length(ld, obj, "minor_radius", 0, &c[1]));
+            if (!(c[1] < c[0])) {
+                json_path_push_key(ld, "minor_radius");
+                return json_fail_here(ld, "minor_radius %g >= major_radius %g; expected minor < major", (double)c[1],
+                                      (double)c[0]);
+            }
+            break;
+        case CST_SDF_CAPSULE:
+            LOADER_TRY(read_length(ld, obj, "half_length", 1, &c[0]));
+            LOADER_TRY(read_length(ld, obj, "radius", 0, &c[1]));
+            break;
+        default:
+            LOADER_TRY(read_length(ld, obj, "radius", 0, &c[0]));
+            LOADER_TRY(read_length(ld, obj, "half_height", 0, &c[1]));
+            break;
+        }
+    } else {
+        char what[48];
+        json_t *ch;
+        LOADER_TRY(json_member_required(ld, obj, "children", "an array of at least 2 SDF nodes", &ch));
+        json_path_push_key(ld, "children");
+        if (!json_is_array(ch) || json_array_size(ch) < 2)
+            return json_fail_here(ld, "got %s; expected an array of at least 2 SDF nodes",
+                                  json_is_array(ch) ? "fewer than 2 nodes" : json_describe(ch, what));
+        if (kind == CST_SDF_SMOOTH_UNION) {
+            json_path_pop(ld);
+            LOADER_TRY(read_length(ld, obj, "k", 0, &nd.k));
+            json_path_push_key(ld, "children");
+        }
+        int acc = -1;
+        for (size_t i = 0; i < json_array_size(ch); i++) {
+            int child;
+            json_path_push_index(ld, i);
+            LOADER_TRY(parse_sdf_node(ld, json_array_get(ch, i), nodes, count, depth + 1, &child));
+            json_path_pop(ld);
+            if (acc < 0) { acc = child; continue; }
+            if (*count >= SDF_MAX_NODES)
+                return json_fail_here(ld, "the SDF tree has more than %d nodes", SDF_MAX_NODES);
+            CstSdfNode op = nd;
+            op.a = acc, op.b = child;
+            if (i + 1 < json_array_size(ch)) memset(op.parent_from_node, 0, sizeof op.parent_from_node);
+            nodes[*count] = op;
+            acc = (*count)++;
+        }
+        json_path_pop(ld);
+        *index = acc;
+        return CST_OK;
+    }
+    if (*count >= SDF_MAX_NODES) return json_fail_here(ld, "the SDF tree has more than %d nodes", SDF_MAX_NODES);
+    nodes[*count] = nd;
+    *index = (*count)++;
+    return CST_OK;
+}
+
+/* "sdf": a signed-distance CSG tree under "root", placed by "transform"; "epsilon" and
+ * "max_steps" tune the sphere tracing (cst_scene_add_shape, CST_SHAPE_SDF). */
+static CstStatus parse_sdf(Loader *ld, const json_t *shape, int material, const Emission *em, const CstAlpha *alpha)
+{
+    CstShapeDesc sd = {0};
+    sd.type = CST_SHAPE_SDF;
+    sd.emission = emission_desc(em); /* refused by the builder: SDF shapes do not emit */
+    LOADER_TRY(read_rows(ld, shape, sd.world_from_object));
+    json_t *v;
+    if ((v = json_object_get(shape, "epsilon"))) {
+        json_path_push_key(ld, "epsilon");
+        LOADER_TRY(json_read_float(ld, v, LOADER_MAX_LENGTH, &sd.sdf_epsilon));
+        if (!(sd.sdf_epsilon > 0.0f)) return json_fail_here(ld, "epsilon %g; expected a number > 0", (double)sd.sdf_epsilon);
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(shape, "max_steps"))) {
+        json_int_t n = 0;
+        json_path_push_key(ld, "max_steps");
+        LOADER_TRY(json_read_int(ld, v, 1, SDF_MAX_STEPS, &n));
+        json_path_pop(ld);
+        sd.sdf_max_steps = (int)n;
+    }
+    CstSdfNode *nodes = calloc(SDF_MAX_NODES, sizeof *nodes);
+    if (!nodes) return json_fail_here(ld, "out of memory for an SDF tree");
+    int count = 0, root = -1;
+    CstStatus st = json_member_required(ld, shape, "root", "an SDF node object", &v);
+    if (st == CST_OK) {
+        json_path_push_key(ld, "root");
+        st = parse_sdf_node(ld, v, nodes, &count, 1, &root);
+        if (st == CST_OK) json_path_pop(ld);
+    }
+    if (st == CST_OK) {
+        sd.sdf_nodes = nodes;
+        sd.sdf_num_nodes = count;
+        sd.material = material;
+        sd.alpha = *alpha;
+        st = cst_scene_add_shape(ld->scene, &sd, ld->err);
+        if (st != CST_OK) st = json_fail_builder(ld, st);
+    }
+    free(nodes);
+    return st;
+}
+
 /* A shape's "alpha" (pbrt-v4's Shape "alpha"): a number from 0 to 1 or the name of a
  * texture with values at most 1, whose scalar (mean of the channels) is the alpha at the
  * shape's uvs. Absent: opaque. */
@@ -694,7 +891,11 @@ static CstStatus read_alpha(Loader *ld, const json_t *shape, CstAlpha *out)
 
 static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
-    static const char *const types[] = {"quad", "mesh", "sphere", "meshfile", "cylinder", "disk"};
+    static const char *const types[] = {"quad", "mesh", "sphere", "meshfile", "cylinder", "disk", "torus", "sdf"};
+    static const char *const torus_keys[] = {"type", "major_radius", "minor_radius", "transform", "material",
+                                             "emission", "alpha", "medium"};
+    static const char *const sdf_keys[] = {"type", "root", "transform", "epsilon", "max_steps", "material",
+                                           "emission", "alpha", "medium"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha", "medium"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
                                             "normals", "shading", "alpha", "medium"};
@@ -710,13 +911,15 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(json_expect_object(ld, shape, "a shape object"));
-    LOADER_TRY(json_read_type(ld, shape, "shape type", types, 6, -1, &type));
+    LOADER_TRY(json_read_type(ld, shape, "shape type", types, 8, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 6)); break;
     case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 10)); break;
     case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 8)); break;
     case SHAPE_CYLINDER: LOADER_TRY(json_check_keys(ld, shape, cylinder_keys, 11)); break;
     case SHAPE_DISK: LOADER_TRY(json_check_keys(ld, shape, disk_keys, 11)); break;
+    case SHAPE_TORUS: LOADER_TRY(json_check_keys(ld, shape, torus_keys, 8)); break;
+    case SHAPE_SDF: LOADER_TRY(json_check_keys(ld, shape, sdf_keys, 9)); break;
     default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 12)); break;
     }
     int boundary = 0;
@@ -735,6 +938,8 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     case SHAPE_MESHFILE: return parse_meshfile(ld, shape, material, &em, &alpha);
     case SHAPE_CYLINDER:
     case SHAPE_DISK: return parse_analytic(ld, shape, type, material, &em, &alpha);
+    case SHAPE_TORUS: return parse_torus(ld, shape, material, &em, &alpha);
+    case SHAPE_SDF: return parse_sdf(ld, shape, material, &em, &alpha);
     default:
         if (json_object_get(shape, "z_min") || json_object_get(shape, "z_max") || json_object_get(shape, "phi_max") ||
             json_object_get(shape, "transform") || json_object_get(shape, "reverse_orientation"))

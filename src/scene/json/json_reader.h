@@ -13,9 +13,10 @@
 #include "scene/json/json_locate.h"
 #include "scene/scene.h"
 
-/* Deepest path the format has is 6 (shapes[i].transform.rotate[j].axis[k]); the rest is
- * headroom. */
-#define LOADER_MAX_DEPTH 8
+/* Deepest path the format has: an "sdf" shape's tree, shapes[i].root then 2 steps per level
+ * (children[j]) for up to SDF_MAX_DEPTH (24) levels, then a node's transform.rotate[j].axis[k]:
+ * 2 + 2 x 24 + 4 = 54; the rest is headroom. */
+#define LOADER_MAX_DEPTH 64
 
 /* Bound on scene-space coordinates and lengths. Intersection tests work with squared
  * distances in float; with every coordinate within 1e18 those stay finite,
