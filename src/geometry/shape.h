@@ -6,6 +6,7 @@
 
 #include <stdbool.h>
 
+#include "geometry/curve.h"
 #include "geometry/hit.h"
 #include "geometry/ray.h"
 #include "math/bbox.h"
@@ -18,9 +19,10 @@ typedef enum ShapeTag {
     SHAPE_TAG_CYLINDER = 0, /* about +z, radius r, z in [z_min, z_max], phi in [0, phi_max] */
     SHAPE_TAG_DISK,         /* in the plane z = height, inner_radius <= rho <= r, phi in [0, phi_max] */
     SHAPE_TAG_SPHERE,       /* centred at the origin, clipped to [z_min, z_max] and [0, phi_max] */
-    SHAPE_TAG_BILINEAR      /* pbrt-v4's bilinear patch: four world-space corners (shape_init_bilinear) */
+    SHAPE_TAG_BILINEAR,     /* pbrt-v4's bilinear patch: four world-space corners (shape_init_bilinear) */
+    SHAPE_TAG_CURVE         /* one segment of pbrt-v4's curve, world space (shape_init_curve, curve.h) */
 } ShapeTag;
-enum { SHAPE_TAG_COUNT = 4 };
+enum { SHAPE_TAG_COUNT = 5 };
 
 /* A bilinear patch p(u, v) = (1-u)(1-v) p00 + u(1-v) p10 + (1-u)v p01 + uv p11 (pbrt-v4
  * §6.6; corners in pbrt's order p00, p10, p01, p11), in world space, in double; optional
@@ -59,6 +61,7 @@ typedef struct AnalyticShape {
             double nrm[3][3];            /* normal matrix: the inverse transpose of o2w's linear part */
         };
         BilinearPatch bl;               /* SHAPE_TAG_BILINEAR */
+        Curve cv;                       /* SHAPE_TAG_CURVE */
     };
     BBox bounds;                    /* world, padded outward to contain every reported hit */
 } AnalyticShape;
@@ -73,6 +76,11 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *object_
  * handedness-swapping transform (used without normals). False for non-finite corners or
  * a patch without area (every corner on one line). */
 bool shape_init_bilinear(AnalyticShape *s, const Vec3 p[4], const Vec3 *n, const Vec2 *uv, bool flip);
+
+/* A curve segment (curve_init's arguments; the whole curve's control points, world
+ * space): false where curve_init is. Curves do not emit (shape_area is 0). */
+bool shape_init_curve(AnalyticShape *s, const Vec3 whole_cp[4], float u0, float u1, float w0, float w1,
+                      CurveType type, const Vec3 *n, bool flip);
 
 /* Nearest hit in (r->t_min, r->t_max): *t and the shape's (u, v) parameters (pbrt-v4:
  * u = phi / phi_max, v along z for cylinders and spheres, from the rim inward for disks).
