@@ -481,8 +481,12 @@ typedef enum CstShapeType {
     CST_SHAPE_BILINEAR,     /* pbrt-v4's bilinear patch through patch[0..3] (p00, p10, p01, p11),
                              * world space (world_from_object applied); not emitting */
     CST_SHAPE_TORUS,        /* about z: radius to the tube's centre, minor_radius (< radius) the tube's */
-    CST_SHAPE_SDF           /* a signed-distance CSG tree sdf_nodes[0..sdf_num_nodes), sphere-traced */
+    CST_SHAPE_SDF,          /* a signed-distance CSG tree sdf_nodes[0..sdf_num_nodes), sphere-traced */
+    CST_SHAPE_CURVE         /* pbrt-v4's curve: one cubic Bezier (curve_*), not emitting */
 } CstShapeType;
+/* pbrt-v4's curve types: a ribbon facing the ray; the same with its normal turned across
+ * the width like a tube's; a ribbon oriented by curve_normals. */
+typedef enum CstCurveType { CST_CURVE_FLAT = 0, CST_CURVE_CYLINDER, CST_CURVE_RIBBON } CstCurveType;
 
 /* A CST_SHAPE_SDF tree's nodes; primitives centred at the node's origin, params: sphere
  * radius; box half extents xyz; round box those and a rounding radius (<= the smallest);
@@ -528,6 +532,18 @@ typedef struct CstShapeDesc {
     int sdf_num_nodes;
     float sdf_epsilon;
     int sdf_max_steps;
+    /* CST_SHAPE_CURVE: the cubic Bezier through curve_p[0..3] (object space, world_from_object
+     * applied), widths curve_width[0..1] at its ends (object units, times the cube root of
+     * |det| of world_from_object: exact for uniform scales), curve_normals[0..1] at its ends
+     * (CST_CURVE_RIBBON only; nonzero), split into 2^curve_split_depth segments (0..10, pbrt's
+     * "splitdepth"), each a primitive of its own (pbrt-v4's Curve: about 0.43 KB with its
+     * AnalyticShape and PrimInfo). u runs along the curve, v across it (the hair material's
+     * offset h = -1 + 2 v). Width 0 at both ends, non-finite points: CST_ERR_INVALID_ARG. */
+    float curve_p[4][3];
+    float curve_width[2];
+    CstCurveType curve_type;
+    float curve_normals[2][3];
+    int curve_split_depth;
 } CstShapeDesc;
 /* u = phi / phi_max; v along z (cylinder, sphere) or from the rim inward (disk), as pbrt-v4.
  * The normal points away from the axis (cylinder), outward (sphere), along +z (disk),

@@ -1,6 +1,7 @@
 /* The analytic shapes' intersection, surface reconstruction, bounds and area sampling:
  * pbrt-v4 (Pharr, Jakob, Humphreys, 4th ed.) §6.2 spheres, §6.3 cylinders, §6.4 disks,
- * §6.6 bilinear patches (Reshetov, "Cool Patches", Ray Tracing Gems, 2019, ch. 8). */
+ * §6.6 bilinear patches (Reshetov, "Cool Patches", Ray Tracing Gems, 2019, ch. 8); curves
+ * (§6.7) are curve.c's, dispatched here. */
 #include "geometry/shape.h"
 
 #include <float.h>
@@ -228,7 +229,7 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
 {
     if (!(p->radius > 0.0f) || !isfinite(p->radius) || !(p->phi_max > 0.0f) ||
         !((double)p->phi_max <= TWO_PI_D + 1e-6) || (unsigned)p->type >= SHAPE_TAG_COUNT ||
-        p->type == SHAPE_TAG_BILINEAR || p->type == SHAPE_TAG_SDF) /* shape_init_bilinear, shape_init_sdf */
+        p->type == SHAPE_TAG_BILINEAR || p->type == SHAPE_TAG_SDF || p->type == SHAPE_TAG_CURVE) /* shape_init_bilinear, _sdf, _curve */
         return false;
     *s = (AnalyticShape){0};
     s->p = *p;
@@ -241,6 +242,7 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
         s->p.phi_max = 2.0f * CST_PI;
         s->r_minor = (double)p->minor_radius;
         break;
+    case SHAPE_TAG_CURVE: return false; /* not a quadric: handled before */
     case SHAPE_TAG_CYLINDER:
         if (!(p->z_min < p->z_max) || !isfinite(p->z_min) || !isfinite(p->z_max)) return false;
         break;
@@ -298,6 +300,20 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
     return v3_is_finite(wb.min) && v3_is_finite(wb.max);
 }
 
+/* ------------------------------------------------------------ curves */
+
+bool shape_init_curve(AnalyticShape *s, const Vec3 whole_cp[4], float u0, float u1, float w0, float w1,
+                      CurveType type, const Vec3 *n, bool flip)
+{
+    *s = (AnalyticShape){0};
+    s->p.type = SHAPE_TAG_CURVE;
+    s->p.reverse_orientation = flip;
+    s->flip_normal = flip;
+    if (!curve_init(&s->cv, whole_cp, u0, u1, w0, w1, type, n, flip)) return false;
+    s->bounds = curve_bounds(&s->cv);
+    return true;
+}
+
 /* ------------------------------------------------------------ intersection */
 
 /* Roots of a t^2 + b t + c with discriminant disc >= 0 given (so callers can compute it
@@ -326,7 +342,8 @@ static bool clip_and_uv(const AnalyticShape *s, V3d o, V3d d, double t, float *u
     switch (p->type) {
     case SHAPE_TAG_BILINEAR:
     case SHAPE_TAG_TORUS:
-    case SHAPE_TAG_SDF: return false; /* not a quadric: handled before */
+    case SHAPE_TAG_SDF:
+    case SHAPE_TAG_CURVE: return false; /* not a quadric: handled before */
     case SHAPE_TAG_CYLINDER: {
         if (h.z < s->z_min || h.z > s->z_max) return false;
         double phi = phi_of(h.x, h.y);
@@ -411,6 +428,7 @@ bool shape_intersect(const AnalyticShape *s, const Ray *r, float *t_out, float *
         *u = *v = 0.0f; /* shape_surface rebuilds everything from t */
         return sdf_intersect(s->sdf, r, t_out);
     }
+    if (s->p.type == SHAPE_TAG_CURVE) return curve_intersect(&s->cv, r, t_out, u, v);
     V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
     if (s->p.type == SHAPE_TAG_TORUS) return torus_intersect(s, o, d, r, t_out, u, v);
     const double tmin = (double)r->t_min, tmax = (double)r->t_max;
@@ -472,6 +490,7 @@ static void surface_object(const AnalyticShape *s, double phi, double q, V3d *pt
         *n = d3v(ct * cp, ct * sp, st); /* = dp/du x dp/dv, normalised */
         return;
     }
+    case SHAPE_TAG_CURVE: return; /* not a quadric: bilinear_surface, curve_surface */
     case SHAPE_TAG_CYLINDER:
         *pt = d3v(s->r * cp, s->r * sp, q);
         *dpdu = d3v(-pm * pt->y, pm * pt->x, 0.0);
@@ -531,6 +550,18 @@ void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *
         bilinear_surface(s, (double)u, (double)v, out);
         return;
     }
+    if (s->p.type == SHAPE_TAG_CURVE) {
+        /* (u, v) of the hit at t: the same test on an interval ending just past t (the
+         * same arithmetic, so the same closest hit), as for the patches above. */
+        Ray rr = *r;
+        rr.t_max = nextafterf(t, INFINITY);
+        float tt, u = 0.5f, v = 0.5f;
+        (void)curve_intersect(&s->cv, &rr, &tt, &u, &v);
+        curve_surface(&s->cv, r, t, u, v, &out->p, &out->n, &out->dpdu, &out->dpdv);
+        out->ns = out->n;
+        out->uv = v2(u, v);
+        return;
+    }
     V3d o = map_point(s->w2o, d3(r->o)), d = map_vector(s->w2o, d3(r->d));
     V3d h = d3v(o.x + (double)t * d.x, o.y + (double)t * d.y, o.z + (double)t * d.z);
     const ShapeParams *p = &s->p;
@@ -587,6 +618,15 @@ void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out)
         *out = (ShapeSurface){0};
         return;
     }
+    if (s->p.type == SHAPE_TAG_CURVE) { /* no ray: the centre line, its tangent, a width across */
+        const float u = clampf(uv.x, s->cv.u0, s->cv.u1), span = s->cv.u1 - s->cv.u0;
+        out->p = curve_eval(s->cv.cp, (u - s->cv.u0) / span, NULL);
+        curve_derivatives(&s->cv, u, &out->dpdu, &out->dpdv);
+        Vec3 n = v3_cross(out->dpdu, out->dpdv);
+        out->n = out->ns = v3_length2(n) > 0.0f ? v3_normalize(n) : v3(0.0f, 0.0f, 1.0f);
+        out->uv = uv;
+        return;
+    }
     const ShapeParams *p = &s->p;
     (void)p;
     double phi = (double)uv.x * s->phi_max, q;
@@ -630,6 +670,7 @@ float shape_area(const AnalyticShape *s)
 {
     if (s->p.type == SHAPE_TAG_BILINEAR) return (float)bilinear_area(s);
     if (s->p.type == SHAPE_TAG_SDF) return 0.0f; /* not emitting: never needed */
+    if (s->p.type == SHAPE_TAG_CURVE) return 0.0f; /* curves do not emit */
     /* The factor at the middle of the parameter domain: exact for similarity transforms. */
     const ShapeParams *p = &s->p;
     (void)p;
@@ -644,7 +685,7 @@ float shape_area(const AnalyticShape *s)
 
 bool shape_uniform_area(const AnalyticShape *s)
 {
-    if (s->p.type == SHAPE_TAG_BILINEAR || s->p.type == SHAPE_TAG_SDF) return false;
+    if (s->p.type == SHAPE_TAG_BILINEAR || s->p.type == SHAPE_TAG_SDF || s->p.type == SHAPE_TAG_CURVE) return false;
     /* M^T M = k^2 I for a similarity: the columns orthogonal and of one length. */
     double g[3][3];
     for (int i = 0; i < 3; i++)
@@ -673,6 +714,10 @@ void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float 
         bilinear_surface(s, (double)u.x, (double)u.y, out);
         *pdf_a = shape_pdf_area(s, out);
         return;
+    case SHAPE_TAG_CURVE: /* not sampled: curves do not emit */
+        shape_surface_at(s, u, out);
+        *pdf_a = 0.0f;
+        return;
     case SHAPE_TAG_DISK: {
         /* Uniform in the annulus: rho^2 uniform in [ri^2, r^2] (pbrt-v4 samples the full
          * disk and ignores innerradius; this keeps the points on the surface). */
@@ -697,6 +742,7 @@ void shape_sample_area(const AnalyticShape *s, Vec2 u, ShapeSurface *out, float 
 float shape_pdf_area(const AnalyticShape *s, const ShapeSurface *sf)
 {
     if (s->p.type == SHAPE_TAG_SDF) return 0.0f;
+    if (s->p.type == SHAPE_TAG_CURVE) return 0.0f;
     if (s->p.type == SHAPE_TAG_BILINEAR) {
         float j = v3_length(v3_cross(sf->dpdu, sf->dpdv));
         return j > 0.0f ? 1.0f / j : 0.0f;

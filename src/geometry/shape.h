@@ -6,6 +6,7 @@
 
 #include <stdbool.h>
 
+#include "geometry/curve.h"
 #include "geometry/hit.h"
 #include "geometry/ray.h"
 #include "geometry/sdf.h"
@@ -22,9 +23,10 @@ typedef enum ShapeTag {
     SHAPE_TAG_BILINEAR,     /* pbrt-v4's bilinear patch: four world-space corners (shape_init_bilinear) */
     SHAPE_TAG_TORUS,        /* about +z: radius (major) to the tube's centre, minor_radius the tube's;
                              * the quartic solved in double (math/polynomial.h) */
-    SHAPE_TAG_SDF           /* a signed-distance CSG tree (geometry/sdf.h, shape_init_sdf), sphere-traced */
+    SHAPE_TAG_SDF,          /* a signed-distance CSG tree (geometry/sdf.h, shape_init_sdf), sphere-traced */
+    SHAPE_TAG_CURVE         /* one segment of pbrt-v4's curve, world space (shape_init_curve, curve.h) */
 } ShapeTag;
-enum { SHAPE_TAG_COUNT = 6 };
+enum { SHAPE_TAG_COUNT = 7 };
 
 /* A bilinear patch p(u, v) = (1-u)(1-v) p00 + u(1-v) p10 + (1-u)v p01 + uv p11 (pbrt-v4
  * §6.6; corners in pbrt's order p00, p10, p01, p11), in world space, in double; optional
@@ -66,6 +68,7 @@ typedef struct AnalyticShape {
         };
         BilinearPatch bl;               /* SHAPE_TAG_BILINEAR */
         SdfTree *sdf;                   /* SHAPE_TAG_SDF: owned (shape_release); copies borrow it */
+        Curve cv;                       /* SHAPE_TAG_CURVE */
     };
     BBox bounds;                    /* world, padded outward to contain every reported hit */
 } AnalyticShape;
@@ -88,6 +91,11 @@ void shape_init_sdf(AnalyticShape *s, SdfTree *tree);
 /* Frees what the shape owns (an SDF tree); the owner of the shape array calls it once per
  * shape, copies (an octree's) never. NULL-safe. */
 void shape_release(AnalyticShape *s);
+
+/* A curve segment (curve_init's arguments; the whole curve's control points, world
+ * space): false where curve_init is. Curves do not emit (shape_area is 0). */
+bool shape_init_curve(AnalyticShape *s, const Vec3 whole_cp[4], float u0, float u1, float w0, float w1,
+                      CurveType type, const Vec3 *n, bool flip);
 
 /* Nearest hit in (r->t_min, r->t_max): *t and the shape's (u, v) parameters (pbrt-v4:
  * u = phi / phi_max, v along z for cylinders and spheres, from the rim inward for disks).

@@ -739,6 +739,24 @@ static CstStatus add_sphere(CstScene *scene, const float center[3], float radius
     return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
 }
 
+/* A shape desc's world_from_object (3 x 4 rows; all zero: the identity) into *xf;
+ * CST_ERR_INVALID_ARG naming a non-finite entry. */
+static CstStatus desc_transform(const CstShapeDesc *d, const char *fn, Transform *xf, CstError *err)
+{
+    float rows[16] = {0};
+    int all_zero = 1;
+    for (int k = 0; k < 12; k++) {
+        if (!isfinite(d->world_from_object[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers", fn,
+                            k, (double)d->world_from_object[k]);
+        rows[k] = d->world_from_object[k];
+        all_zero &= rows[k] == 0.0f;
+    }
+    rows[15] = 1.0f;
+    *xf = all_zero ? transform_identity() : transform_from_rows(rows);
+    return CST_OK;
+}
+
 /* cst_scene_add_shape's bilinear patch: corners through world_from_object (all zero:
  * identity), normals through its normal matrix, then shape_init_bilinear. */
 static CstStatus add_patch(CstScene *scene, const CstShapeDesc *d, double peak, const char *fn, CstError *err)
@@ -750,17 +768,9 @@ static CstStatus add_patch(CstScene *scene, const CstShapeDesc *d, double peak, 
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch_has_normals %d; expected 0 or 1", fn, d->patch_has_normals);
     if (d->patch_has_uvs != 0 && d->patch_has_uvs != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch_has_uvs %d; expected 0 or 1", fn, d->patch_has_uvs);
-    float rows[16] = {0};
-    int all_zero = 1;
-    for (int k = 0; k < 12; k++) {
-        if (!isfinite(d->world_from_object[k]))
-            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers", fn,
-                            k, (double)d->world_from_object[k]);
-        rows[k] = d->world_from_object[k];
-        all_zero &= rows[k] == 0.0f;
-    }
-    rows[15] = 1.0f;
-    Transform xf = all_zero ? transform_identity() : transform_from_rows(rows), inv, nm = transform_identity();
+    Transform xf, inv, nm = transform_identity();
+    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    if (st0 != CST_OK) return st0;
     if (!transform_invert(&xf, &inv))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
                         "finite); expected an invertible affine transform", fn);
@@ -799,17 +809,9 @@ static CstStatus add_sdf(CstScene *scene, const CstShapeDesc *d, double peak, co
     if (!d->sdf_nodes || n < 1 || n > SDF_MAX_NODES)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: sdf_num_nodes %d (sdf_nodes %s); expected 1 to %d nodes", fn, n,
                         d->sdf_nodes ? "given" : "NULL", SDF_MAX_NODES);
-    float rows[16] = {0};
-    int all_zero = 1;
-    for (int k = 0; k < 12; k++) {
-        if (!isfinite(d->world_from_object[k]))
-            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers", fn,
-                            k, (double)d->world_from_object[k]);
-        rows[k] = d->world_from_object[k];
-        all_zero &= rows[k] == 0.0f;
-    }
-    rows[15] = 1.0f;
-    const Transform xf = all_zero ? transform_identity() : transform_from_rows(rows);
+    Transform xf;
+    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    if (st0 != CST_OK) return st0;
     SdfNodeDesc *nd = calloc((size_t)n, sizeof *nd);
     if (!nd) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for an SDF tree", fn);
     for (int i = 0; i < n; i++) {
@@ -839,6 +841,54 @@ static CstStatus add_sdf(CstScene *scene, const CstShapeDesc *d, double peak, co
     return st;
 }
 
+/* cst_scene_add_shape's curve: control points through world_from_object, widths times the
+ * cube root of its |det|, ribbon normals through its normal matrix; 2^curve_split_depth
+ * segments, each an AnalyticShape (shape_init_curve) added as a patch is. */
+static CstStatus add_curve(CstScene *scene, const CstShapeDesc *d, double peak, const char *fn, CstError *err)
+{
+    if (peak > 0.0)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: emitting curves are not supported; expected a zero emission", fn);
+    if ((unsigned)d->curve_type > CST_CURVE_RIBBON)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve_type %d is not a CstCurveType value", fn, (int)d->curve_type);
+    if (d->curve_split_depth < 0 || d->curve_split_depth > 10)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve_split_depth %d; expected 0 to 10", fn, d->curve_split_depth);
+    Transform xf, inv, nm = transform_identity();
+    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    if (st0 != CST_OK) return st0;
+    if (!transform_invert(&xf, &inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
+                        "finite); expected an invertible affine transform", fn);
+    transform_normal_matrix(&xf, &nm);
+    const double det = (double)transform_det(&xf);
+    const float scale = (float)cbrt(fabs(det));
+    Vec3 cp[4], n[2];
+    for (int i = 0; i < 4; i++) {
+        cp[i] = transform_point(&xf, v3(d->curve_p[i][0], d->curve_p[i][1], d->curve_p[i][2]));
+        if (!(v3_max_abs(cp[i]) <= BUILD_MAX_LENGTH))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve point %d is (%g, %g, %g) in world space; expected "
+                            "finite coordinates within 1e18", fn, i, (double)cp[i].x, (double)cp[i].y, (double)cp[i].z);
+    }
+    for (int i = 0; i < 2; i++) n[i] = transform_normal(&nm, v3(d->curve_normals[i][0], d->curve_normals[i][1], d->curve_normals[i][2]));
+    const float w0 = d->curve_width[0] * scale, w1 = d->curve_width[1] * scale;
+    if (!(w0 >= 0.0f && w1 >= 0.0f && w0 + w1 > 0.0f && w0 <= BUILD_MAX_LENGTH && w1 <= BUILD_MAX_LENGTH))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve widths %g, %g; expected finite widths >= 0, not both 0",
+                        fn, (double)d->curve_width[0], (double)d->curve_width[1]);
+    int alpha_id = 0;
+    CstStatus st = read_alpha(scene, &d->alpha, fn, &alpha_id, err);
+    if (st != CST_OK) return st;
+    const bool flip = (d->reverse_orientation != 0) != (det < 0.0);
+    const int segs = 1 << d->curve_split_depth;
+    for (int i = 0; i < segs; i++) {
+        AnalyticShape sh;
+        if (!shape_init_curve(&sh, cp, (float)i / (float)segs, (float)(i + 1) / (float)segs, w0, w1,
+                              (CurveType)d->curve_type, d->curve_type == CST_CURVE_RIBBON ? n : NULL, flip))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve segment %d of %d: a ribbon normal is zero or not "
+                            "finite, or the segment's bounds overflow; expected nonzero normals", fn, i, segs);
+        if ((st = scene_add_patch(scene, &sh, d->material, alpha_id, err)) != CST_OK) return st;
+    }
+    return CST_OK;
+}
+
 CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *err)
 {
     static const char fn[] = "cst_scene_add_shape";
@@ -846,7 +896,7 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
     if (!d) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: desc is NULL", fn);
-    if ((int)d->type < CST_SHAPE_CYLINDER || d->type > CST_SHAPE_SDF)
+    if ((int)d->type < CST_SHAPE_CYLINDER || d->type > CST_SHAPE_CURVE)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: type %d is not a CstShapeType value", fn, (int)d->type);
     if (d->material < 0 || d->material >= scene->num_materials)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: material %d is not a material of this scene; expected 0 to %d",
@@ -861,6 +911,7 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
     if (d->type == CST_SHAPE_TORUS && !(d->minor_radius > 0.0f && d->minor_radius < d->radius))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: torus minor_radius %g, radius %g; expected 0 < minor_radius < "
                         "radius", fn, (double)d->minor_radius, (double)d->radius);
+    if (d->type == CST_SHAPE_CURVE) return add_curve(scene, d, peak, fn, err);
     const float vals[5] = {d->radius, d->z_min, d->z_max, d->height, d->inner_radius};
     for (int k = 0; k < 5; k++)
         if (!(fabsf(vals[k]) <= BUILD_MAX_LENGTH))
@@ -873,17 +924,9 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
                         "expected radius >= 1e-18, z_min < z_max (cylinder), 0 <= inner_radius < radius (disk), "
                         "phi_max_degrees in [0, 360]", fn, (double)d->radius, (double)d->z_min, (double)d->z_max,
                         (double)d->inner_radius, (double)d->phi_max_degrees);
-    float rows[16] = {0};
-    int all_zero = 1;
-    for (int k = 0; k < 12; k++) {
-        if (!isfinite(d->world_from_object[k]))
-            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers", fn,
-                            k, (double)d->world_from_object[k]);
-        rows[k] = d->world_from_object[k];
-        all_zero &= rows[k] == 0.0f;
-    }
-    rows[15] = 1.0f;
-    Transform xf = all_zero ? transform_identity() : transform_from_rows(rows), inv;
+    Transform xf, inv;
+    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    if (st0 != CST_OK) return st0;
     if (!transform_invert(&xf, &inv))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
                         "finite); expected an invertible affine transform", fn);

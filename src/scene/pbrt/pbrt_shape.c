@@ -678,6 +678,107 @@ static CstStatus cylinder_shape(Loader *ld, Params *ps, const char *d, Loc loc)
     return add_analytic(ld, ps, d, loc, &sd);
 }
 
+/* pbrt-v4's "curve" (CreateCurves): P as cubic or quadratic Bezier segments sharing their
+ * end points ("basis" "bezier", 3n + 1 or 2n + 1 points) or a uniform B-spline ("bspline",
+ * n + degree points), each converted to a cubic Bezier; "type" flat, cylinder or ribbon
+ * (with "N": one normal per segment end); widths interpolated over the segments from
+ * "width0" to "width1" (both "width", default 1); every segment split into 2^splitdepth
+ * primitives (default 3). Curves are analytic shapes (geometry/curve.c): in an object, as
+ * an interface or emitting they are skipped with a warning. */
+static CstStatus curve_shape(Loader *ld, Params *ps, const char *d, Loc loc)
+{
+    Param *pp, *pn;
+    const char *basis = NULL, *type = NULL;
+    Loc bl = loc, tl = loc;
+    int degree = 3, split = 3;
+    float width = 1.0f, w0 = 1.0f, w1 = 1.0f;
+    TRY(pbrt_lookup(ld, ps, d, "P", PT_MASK(PT_POINT3), "point3", &pp));
+    TRY(pbrt_lookup(ld, ps, d, "N", PT_MASK(PT_NORMAL), "normal", &pn));
+    TRY(pbrt_get_string(ld, ps, d, "basis", &basis, &bl));
+    TRY(pbrt_get_string(ld, ps, d, "type", &type, &tl));
+    TRY(pbrt_get_int(ld, ps, d, "degree", 3, &degree));
+    TRY(pbrt_get_int(ld, ps, d, "splitdepth", 3, &split));
+    TRY(pbrt_get_float(ld, ps, d, "width", 1.0f, &width, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "width0", width, &w0, NULL));
+    TRY(pbrt_get_float(ld, ps, d, "width1", width, &w1, NULL));
+    const bool bspline = basis && strcmp(basis, "bspline") == 0;
+    if (basis && !bspline && strcmp(basis, "bezier") != 0)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, bl, "%s: basis \"%s\"; expected \"bezier\" or \"bspline\"", d, basis);
+    CstCurveType ct = CST_CURVE_FLAT;
+    if (type && strcmp(type, "ribbon") == 0) ct = CST_CURVE_RIBBON;
+    else if (type && strcmp(type, "cylinder") == 0) ct = CST_CURVE_CYLINDER;
+    else if (type && strcmp(type, "flat") != 0)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "%s: type \"%s\"; expected \"flat\", \"cylinder\" or \"ribbon\"", d, type);
+    if (degree != 2 && degree != 3)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: degree %d; expected 2 or 3", d, degree);
+    if (split < 0 || split > 10)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: splitdepth %d; expected 0 to 10", d, split);
+    if (!(w0 >= 0.0f && w1 >= 0.0f && w0 + w1 > 0.0f) || !pbrt_coords_ok(v3(w0, w1, 0.0f)))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: widths %g and %g; expected widths >= 0, not both 0",
+                            d, (double)w0, (double)w1);
+    if (!pp)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"point3 P\"; expected the control points", d);
+    const int ncp = pp->num_nums / 3;
+    int nseg = bspline ? ncp - degree : (ncp - 1) / degree;
+    if (bspline ? ncp <= degree : (ncp < degree + 1 || (ncp - 1) % degree != 0))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pp->loc, "%s: %d control points; expected %s for the degree %d %s "
+                            "basis", d, ncp, bspline ? "more than the degree" : (degree == 3 ? "3n + 1" : "2n + 1"),
+                            degree, bspline ? "B-spline" : "Bezier");
+    if (ct == CST_CURVE_RIBBON && (!pn || pn->num_nums != 3 * (nseg + 1)))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pn ? pn->loc : loc, "%s: a ribbon with %d normals; expected "
+                            "\"normal N\" with one normal per segment end (%d)", d, pn ? pn->num_nums / 3 : 0, nseg + 1);
+    if (pn && ct != CST_CURVE_RIBBON)
+        pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pn->loc, "%s: \"N\" is used by ribbons only; ignored", d);
+    CstAlpha alpha = {0};
+    TRY(shape_alpha(ld, ps, d, &alpha));
+    pbrt_params_warn_unused(ld, ps, d);
+    if (ld->cur_obj >= 0 || ld->mats[ld->gs.material].interface || ld->gs.area.active ||
+        !transform_is_affine(&ld->gs.ctm.m)) {
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s in an object, as an interface, emitting or under a projective "
+                     "transform is not supported; skipped", d);
+        return CST_OK;
+    }
+    if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
+    Vec3 *cp = malloc((size_t)ncp * sizeof *cp);
+    if (!cp) return pbrt_fail_at(ld, CST_ERR_OOM, loc, "%s: out of memory for %d control points", d, ncp);
+    for (int i = 0; i < ncp; i++) {
+        cp[i] = v3((float)pp->nums[3 * i], (float)pp->nums[3 * i + 1], (float)pp->nums[3 * i + 2]);
+        if (!pbrt_coords_ok(cp[i])) {
+            free(cp);
+            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pp->loc, "%s: control point %d is beyond the scene limit; "
+                                "expected coordinates of magnitude at most %g", d, i, PBRT_MAX_LENGTH);
+        }
+    }
+    CstShapeDesc sd = {0};
+    sd.type = CST_SHAPE_CURVE;
+    sd.curve_type = ct;
+    sd.curve_split_depth = split;
+    sd.reverse_orientation = ld->gs.reverse != 0;
+    sd.alpha = alpha;
+    const Transform *m = &ld->gs.ctm.m;
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++) sd.world_from_object[4 * r + c] = m->m[r][c];
+    if (transform_is_identity(m)) memset(sd.world_from_object, 0, sizeof sd.world_from_object);
+    CstStatus st = pbrt_material_scene_id(ld, ld->gs.material, &sd.material);
+    for (int seg = 0; seg < nseg && st == CST_OK; seg++) {
+        Vec3 b[4];
+        curve_bezier_segment(cp, degree, bspline, seg, b);
+        for (int k = 0; k < 4; k++)
+            for (int c = 0; c < 3; c++) sd.curve_p[k][c] = v3_get(b[k], c);
+        /* pbrt-v4: the widths linear over the segments */
+        const float a0 = (float)seg / (float)nseg, a1 = (float)(seg + 1) / (float)nseg;
+        sd.curve_width[0] = w0 + a0 * (w1 - w0);
+        sd.curve_width[1] = w0 + a1 * (w1 - w0);
+        if (ct == CST_CURVE_RIBBON)
+            for (int k = 0; k < 2; k++)
+                for (int c = 0; c < 3; c++) sd.curve_normals[k][c] = (float)pn->nums[3 * (seg + k) + c];
+        st = cst_scene_add_shape(ld->scene, &sd, ld->err);
+        if (st) st = pbrt_fail_wrap(ld, st, loc, d);
+    }
+    free(cp);
+    return st;
+}
+
 CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     (void)dname;
@@ -757,12 +858,15 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         if (!st)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (in an object, or emitting under a non-uniform scale) tessellated into %d "
                          "triangles of the same total area", d, g.nt);
+    } else if (strcmp(type, "curve") == 0) {
+        st = curve_shape(ld, &ps, d, loc);
+        goto done;
     } else if (strcmp(type, "cylinder") == 0 && analytic_ok(ld)) {
         st = cylinder_shape(ld, &ps, d, loc);
         goto done;
     } else if (strcmp(type, "cylinder") == 0 || strcmp(type, "cone") == 0 ||
                strcmp(type, "paraboloid") == 0 || strcmp(type, "hyperboloid") == 0 ||
-               strcmp(type, "curve") == 0 || strcmp(type, "nurbs") == 0 ||
+               strcmp(type, "nurbs") == 0 ||
                strcmp(type, "heightfield") == 0) {
         skip = 1;
         pbrt_params_mark_all_used(&ps);
@@ -770,8 +874,8 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
                      strcmp(type, "cylinder") == 0 ? " (in an object, an interface, or emitting under a non-uniform scale)" : "");
     } else {
         st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown shape \"%s\"; expected one of: "
-                     "trianglemesh, plymesh, bilinearmesh, loopsubdiv, sphere, disk (or the "
-                          "unsupported cylinder, cone, paraboloid, hyperboloid, curve)", pbrt_clip(type, nm));
+                     "trianglemesh, plymesh, bilinearmesh, loopsubdiv, sphere, disk, curve (or the "
+                          "unsupported cylinder, cone, paraboloid, hyperboloid)", pbrt_clip(type, nm));
     }
     if (st || skip) goto done;
     CstAlpha alpha = {0};
