@@ -422,8 +422,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     switch ((ArgsOpt)o->id) {
     case ARGS_OPT_SCRIPT: return args_apply_script(value, out, err);
     case ARGS_OPT_DISPLAY: return args_apply_display(value, out, err);
-    case ARGS_OPT_PIXEL:
-    case ARGS_OPT_SAMPLE: return args_apply_explain(o, value, out, err);
+    case ARGS_OPT_PIXEL: case ARGS_OPT_SAMPLE: return args_apply_explain(o, value, out, err);
     case ARGS_OPT_OUTPUT:
         if (value[0] == '\0') {
             args_fail(err, false, "--output: expected a file name, got ''");
