@@ -128,6 +128,35 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
     }
 }
 
+/* Luminance (Rec. 709 weights) of a linear RGB triple: "how much" for the summary line. */
+static double luminance(const float c[3])
+{
+    return 0.2126 * (double)c[0] + 0.7152 * (double)c[1] + 0.0722 * (double)c[2];
+}
+
+/* The one line a student asks for first: which strategy at which vertex carries most of
+ * the camera sample (a firefly's cause), with its share of the sum's luminance. */
+static void print_largest(FILE *f, const CstExplain *x)
+{
+    int best = -1;
+    double total = 0.0, best_y = 0.0;
+    for (int i = 0; i < x->num_events; i++) {
+        const CstExplainEvent *e = &x->events[i];
+        if (!(e->flags & CST_EXPLAIN_ADDED)) continue;
+        double y = luminance(e->contribution);
+        total += y;
+        if (best < 0 || y > best_y) { best = i; best_y = y; }
+    }
+    if (best < 0 || !(total > 0.0)) {
+        fputs("nothing reached a light: the sample is black\n", f);
+        return;
+    }
+    const CstExplainEvent *e = &x->events[best];
+    fprintf(f, "largest contribution: %s at vertex %d", kind_name(e->kind), e->depth);
+    if (e->s >= 0) fprintf(f, " (s=%d, t=%d)", e->s, e->t);
+    fprintf(f, ", %.1f%% of the camera sample's luminance\n", 100.0 * best_y / total);
+}
+
 static void print_text(FILE *f, const CstExplain *x)
 {
     fprintf(f, "pixel (%d, %d), %s %d, integrator %s, %s\n", x->x, x->y, is_bdpt(x) ? "iteration" : "sample",
@@ -139,6 +168,7 @@ static void print_text(FILE *f, const CstExplain *x)
         else print_event(f, x, &x->events[i]);
     }
     if (x->truncated) fputs("(more events than explain keeps: the list is truncated and not checked)\n", f);
+    print_largest(f, x);
     print3(f, "sum of contributions x filter weight: ", x->sum);
     fprintf(f, "\n  filter weight %.9g\n", (double)x->filter_weight);
     fprintf(f, "camera sample the render computed: (%.9g, %.9g, %.9g): %s\n", x->camera_value[0],

@@ -124,7 +124,6 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     if (status != CST_OK) return status;
     /* One pixel, one sample, one thread, nothing but the film's sums. */
     st.threads = 1;
-    st.spp = 1;
     st.first_sample = sample;
     st.crop[0] = x; st.crop[1] = x + 1; st.crop[2] = y; st.crop[3] = y + 1;
     st.aovs = 0;

@@ -10,7 +10,7 @@ d=$TMP/run
 
 HARNESS_EXPECT_STDOUT=1
 harness_run "$d" 60 explain --pixel 12,10 --sample 3 "${SMALL[@]}"
-expect "path: text, sum equal bit for bit" 0 '^vertex 1: surface at' 'NEE: light [0-9]+' 'MIS w' \
+expect "path: text, sum equal bit for bit" 0 '^vertex 1: surface at' 'NEE: light [0-9]+' 'MIS w' 'largest contribution: ' \
     'equal, bit for bit'
 harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}" --json
 expect "bdpt: JSON, exact" 0 '"exact": true' '"kind": "connect"' '"w_light"' '"splat_value"'

@@ -134,6 +134,39 @@ static void test_bdpt(void **state)
     cst_scene_destroy(s);
 }
 
+/* Samplers whose numbers depend on the render's spp (strata): the four samples explain
+ * replays under --spp 4 add up, in order, to the pixel's sum in a 4-sample render. */
+static void test_strata(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    static const CstSampler SAMPLERS[] = {CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL, CST_SAMPLER_ZSOBOL};
+    for (size_t k = 0; k < sizeof SAMPLERS / sizeof SAMPLERS[0]; k++) {
+        CstRenderSettings st;
+        settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB);
+        st.sampler = SAMPLERS[k];
+        double sum[3] = {0.0, 0.0, 0.0};
+        for (int i = 0; i < st.spp; i++) {
+            CstExplain *ex = NULL;
+            assert_int_equal(cst_explain(s, &st, 9, 11, i, &ex, &err), CST_OK);
+            assert_true(ex->exact);
+            for (int c = 0; c < 3; c++) sum[c] += ex->camera_value[c];
+            cst_explain_destroy(ex);
+        }
+        CstRenderSettings one = st;
+        one.crop[0] = 9; one.crop[1] = 10; one.crop[2] = 11; one.crop[3] = 12;
+        CstFilm *f = NULL;
+        assert_int_equal(cst_render(s, &one, &f, NULL, &err), CST_OK);
+        double mean[3];
+        cst_film_pixel(f, 0, 0, mean);
+        for (int c = 0; c < 3; c++) assert_true(mean[c] * 4.0 == sum[c]); /* x4: exact */
+        cst_film_destroy(f);
+    }
+    cst_scene_destroy(s);
+}
+
 static void test_refused(void **state)
 {
     (void)state;
@@ -166,6 +199,7 @@ int main(void)
         cmocka_unit_test(test_path_cornell),
         cmocka_unit_test(test_path_specular),
         cmocka_unit_test(test_bdpt),
+        cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
