@@ -21,7 +21,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING,
     ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT,
     ARGS_OPT_DISPLAY,
-    ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK
+    ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK, ARGS_OPT_PIXEL, ARGS_OPT_SAMPLE
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -72,6 +72,8 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"help",       'h', ARGS_FLAG,  ARGS_OPT_HELP},
     {"script",     0,   ARGS_VALUE,  ARGS_OPT_SCRIPT}, /* view only */
     {"display",    0,   ARGS_VALUE,  ARGS_OPT_DISPLAY}, /* render and view */
+    {"pixel",      0,   ARGS_VALUE,  ARGS_OPT_PIXEL},   /* explain only */
+    {"sample",     0,   ARGS_VALUE,  ARGS_OPT_SAMPLE},  /* explain only */
 };
 #define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
 
@@ -377,6 +379,42 @@ static bool args_apply_display(const char *value, CliArgs *out, ArgsError *err)
     return true;
 }
 
+/* explain's --pixel X,Y and --sample I. */
+static bool args_apply_explain(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
+{
+    if (out->command != ARGS_CMD_EXPLAIN) {
+        args_fail(err, true, "--%s is an option of 'explain' (caustic explain [SCENE] --pixel X,Y [--sample I])",
+                  o->long_name);
+        return false;
+    }
+    long v;
+    if (o->id == ARGS_OPT_SAMPLE) {
+        if (!args_parse_long(value, 0, INT_MAX, &v)) {
+            args_fail(err, false, "--sample: expected an integer from 0 to %d, got '%s'", INT_MAX, value);
+            return false;
+        }
+        out->explain_sample = (int)v;
+        return true;
+    }
+    char buf[64];
+    const char *comma = strchr(value, ',');
+    long x, y;
+    if (!comma || (size_t)(comma - value) >= sizeof buf) goto bad;
+    memcpy(buf, value, (size_t)(comma - value));
+    buf[comma - value] = '\0';
+    if (!args_parse_long(buf, 0, ARGS_MAX_DIMENSION - 1, &x) ||
+        !args_parse_long(comma + 1, 0, ARGS_MAX_DIMENSION - 1, &y))
+        goto bad;
+    out->pixel_x = (int)x;
+    out->pixel_y = (int)y;
+    out->pixel_set = true;
+    return true;
+bad:
+    args_fail(err, false, "--pixel: expected X,Y, two integers from 0 to %d (0,0 the top left), got '%s'",
+              ARGS_MAX_DIMENSION - 1, value);
+    return false;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -384,6 +422,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     switch ((ArgsOpt)o->id) {
     case ARGS_OPT_SCRIPT: return args_apply_script(value, out, err);
     case ARGS_OPT_DISPLAY: return args_apply_display(value, out, err);
+    case ARGS_OPT_PIXEL: case ARGS_OPT_SAMPLE: return args_apply_explain(o, value, out, err);
     case ARGS_OPT_OUTPUT:
         if (value[0] == '\0') {
             args_fail(err, false, "--output: expected a file name, got ''");
@@ -561,6 +600,10 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
     }
     if (out->checkpoint_every > 0.0 && !out->checkpoint_path) {
         args_fail(err, true, "--checkpoint-every needs --checkpoint FILE (where to write the state)");
+        return false;
+    }
+    if (out->command == ARGS_CMD_EXPLAIN && !out->pixel_set) {
+        args_fail(err, true, "explain: expected --pixel X,Y (the pixel whose sample to explain)");
         return false;
     }
     if (out->command == ARGS_CMD_INFO && (out->checkpoint_path || out->resume_path)) {
@@ -985,7 +1028,7 @@ static bool args_parse_merge(int argc, char **argv, CliArgs *out, ArgsError *err
 static const struct { const char *name; ArgsCommand command; } ARGS_COMMANDS[] = {
     {"render", ARGS_CMD_RENDER}, {"info", ARGS_CMD_INFO},     {"bench", ARGS_CMD_BENCH_RAYS},
     {"verify", ARGS_CMD_VERIFY}, {"list", ARGS_CMD_LIST},     {"compare", ARGS_CMD_COMPARE},
-    {"view", ARGS_CMD_VIEW},     {"merge", ARGS_CMD_MERGE},
+    {"view", ARGS_CMD_VIEW},     {"merge", ARGS_CMD_MERGE},     {"explain", ARGS_CMD_EXPLAIN},
 };
 
 static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *err)
@@ -996,7 +1039,8 @@ static bool args_parse_help_topic(const char *topic, CliArgs *out, ArgsError *er
             out->help_for = ARGS_COMMANDS[k].command;
             return true;
         }
-    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list, compare, view, merge)",
+    args_fail(err, true, "help: unknown command '%s' (commands: render, info, bench, verify, list, compare, view, merge, "
+              "explain)",
               topic);
     return false;
 }
@@ -1059,6 +1103,9 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
     } else if (strcmp(cmd, "view") == 0) {
         out->command = ARGS_CMD_VIEW;
         return args_parse_render(argc, argv, 2, out, err);
+    } else if (strcmp(cmd, "explain") == 0) {
+        out->command = ARGS_CMD_EXPLAIN;
+        return args_parse_render(argc, argv, 2, out, err);
     } else if (strcmp(cmd, "bench") == 0) {
         return args_parse_bench(argc, argv, out, err);
     } else if (strcmp(cmd, "verify") == 0) {
@@ -1094,8 +1141,8 @@ bool args_parse(int argc, char **argv, CliArgs *out, ArgsError *err)
         else if (args_edit_distance(cmd, strlen(cmd), "compare") <= 2)
             args_fail(err, true, "unknown command '%s' (did you mean 'compare'?)", cmd);
         else
-            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list, compare, view, merge)",
-                      cmd);
+            args_fail(err, true, "unknown command '%s' (commands: render, info, bench, verify, list, compare, view, merge, "
+                      "explain)", cmd);
         return false;
     }
     if (argc > 2) {

@@ -33,7 +33,8 @@ typedef enum ArgsCommand {
     ARGS_CMD_LIST,        /* caustic list [KIND] */
     ARGS_CMD_COMPARE,     /* caustic compare A B [--map OUT] [--json] [--variance-a VA] ... */
     ARGS_CMD_VIEW,        /* caustic view [SCENE] [render options] [--script FILE] */
-    ARGS_CMD_MERGE        /* caustic merge STATE... -o IMAGE */
+    ARGS_CMD_MERGE,       /* caustic merge STATE... -o IMAGE */
+    ARGS_CMD_EXPLAIN      /* caustic explain [SCENE] --pixel X,Y [--sample I] [render options] */
 } ArgsCommand;
 
 #define ARGS_BENCH_MAX_ACCELS 7 /* each back end at most once */
@@ -121,6 +122,10 @@ typedef struct CliArgs {
     const char *display;
     char display_host[256];
     int display_port;
+    /* explain: --pixel X,Y (pixel_set when given) and --sample I (default 0) */
+    bool pixel_set;
+    int pixel_x, pixel_y;
+    int explain_sample;
 } CliArgs;
 
 typedef struct ArgsError {

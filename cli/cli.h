@@ -76,6 +76,8 @@ int cli_render(const CliArgs *a);
 int cli_verify(const CliArgs *a);
 /* caustic compare A B (compare.c): the numbers on stdout, the FLIP map to --map. */
 int cli_compare(const CliArgs *a);
+/* caustic explain (explain.c): one pixel sample's path, text or --json, on stdout. */
+int cli_explain(const CliArgs *a);
 /* caustic merge (merge.c) */
 int cli_merge(const CliArgs *a);
 /* caustic list [KIND] and caustic --version (list.c), on stdout. */

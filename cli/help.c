@@ -18,6 +18,8 @@ static const char HELP_USAGE_ALL[] =
 "  caustic view [SCENE] [render options] [--script FILE]\n"
 "  caustic compare A B [--map OUT.png] [--json] [--variance-a VA] [--variance-b VB]\n"
 "                  [--block N] [--flip ldr|hdr|auto] [--ppd P]\n"
+"  caustic explain [SCENE] --pixel X,Y [--sample I] [--integrator NAME] [--json]\n"
+"                  [render options]\n"
 "  caustic COMMAND --help | caustic help COMMAND   (one command's options)\n"
 "  caustic --help | -h\n"
 "  caustic --version\n"
@@ -149,6 +151,25 @@ static const char HELP_MERGE[] =
 "  -o, --output IMAGE   the image to write (.png, .exr, .pfm)\n"
 "  -q, --quiet          no summary line\n"
 "  -h, --help           show this help and exit\n"
+"\n";
+
+static const char HELP_EXPLAIN[] =
+"Explain a pixel: caustic explain [SCENE] --pixel X,Y [--sample I] [render options]\n"
+"Replays sample I (bdpt: iteration I) of pixel (X, Y) with the random numbers\n"
+"`caustic render` gives it under the same options (--seed, --integrator, --sampler,\n"
+"--spp for the stratified samplers' strata, --width, --height, --max-depth, ...) and\n"
+"prints its path: every vertex (position, normal, material), every decision (the light\n"
+"NEE chose, the BSDF lobe, Russian roulette's survival probability), the densities\n"
+"(pdf_w per solid angle, pdf_a per area) and MIS weight of every strategy and its\n"
+"contribution; then checks that the contributions sum, bit for bit, to the value the\n"
+"render's film accumulates for that sample (bdpt: the camera path's; the light paths'\n"
+"t = 1 splats near the pixel are listed and their total shown).\n"
+"Integrators: path, path-nee, path-bsdf (scenes without media or subsurface) and bdpt\n"
+"(RGB mode); any other: exit 2.\n"
+"  --pixel X,Y          the pixel, 0,0 the top left (required)\n"
+"  --sample I           the sample (iteration) index, >= 0 (default 0)\n"
+"  --json               one JSON object on stdout instead of text (--json=FILE: there)\n"
+"Exit: 0 explained and the sum matches; 1 the sum does not match (a bug); 2 bad input.\n"
 "\n";
 
 static const char HELP_VIEW[] =
@@ -304,6 +325,8 @@ static const char HELP_EXAMPLES_BENCH[] =
 "  caustic bench rays ../shared/meshes/bunny.ply --accel bvh,embree --json\n";
 static const char HELP_EXAMPLES_VERIFY[] =
 "  caustic verify --integrators path,path-nee,path-bsdf --spp 64 --map z.png\n";
+static const char HELP_EXAMPLES_EXPLAIN[] =
+"  caustic explain --pixel 256,300 --sample 3 --integrator bdpt --width 64 --height 64\n";
 static const char HELP_EXAMPLES_COMPARE[] =
 "  caustic compare new.exr reference.exr --map flip.png\n";
 
@@ -344,6 +367,10 @@ void args_print_help(FILE *f, ArgsCommand command)
     case ARGS_CMD_MERGE:
         fputs(HELP_MERGE, f);
         break;
+    case ARGS_CMD_EXPLAIN:
+        fputs(HELP_EXPLAIN, f);
+        fprintf(f, "Example:\n%s\n", HELP_EXAMPLES_EXPLAIN);
+        break;
     case ARGS_CMD_HELP:
     case ARGS_CMD_VERSION:
         fputs(HELP_USAGE_ALL, f);
@@ -355,6 +382,7 @@ void args_print_help(FILE *f, ArgsCommand command)
         fputs(HELP_COMPARE, f);
         fputs(HELP_VIEW, f);
         fputs(HELP_MERGE, f);
+        fputs(HELP_EXPLAIN, f);
         fputs("      --version        print the version and the build (compiler, ISA, Embree,\n"
               "                       MPI, SDL2, build type) and exit\n\n", f);
         fputs(HELP_EXIT, f);

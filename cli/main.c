@@ -106,6 +106,11 @@ int main(int argc, char **argv)
     case ARGS_CMD_MERGE:
         code = cli_merge(&args);
         break;
+    case ARGS_CMD_EXPLAIN:
+        code = cli_explain(&args);
+        if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)
+            code = CLI_EXIT_INTERNAL;
+        break;
     case ARGS_CMD_COMPARE:
         code = cli_compare(&args);
         if (code != CLI_EXIT_USAGE && cli_finish_stdout() != CLI_EXIT_OK)

@@ -1134,7 +1134,8 @@ CST_API CstStatus cst_image_write_check(const char *path, CstError *err);
 CST_API int cst_image_path_writable(const char *path);
 CST_API int cst_image_path_is_exr(const char *path);
 
-/* Comparing renders and images, the ray benchmark: caustic_compare.h (part of this API). */
+/* Comparing renders and images, the ray benchmark, explaining a pixel: caustic_compare.h
+ * (part of this API). */
 #include "caustic/caustic_compare.h"
 
 #ifdef __cplusplus

@@ -1,6 +1,7 @@
 /* The second half of caustic's public API, included by caustic/caustic.h (include that, not
- * this): comparing renders and images (`caustic verify`, `caustic compare`) and the ray
- * benchmark (`caustic bench rays`). Kept apart only to keep each header readable. */
+ * this): comparing renders and images (`caustic verify`, `caustic compare`), the ray
+ * benchmark (`caustic bench rays`) and explaining a pixel (`caustic explain`). Kept apart
+ * only to keep each header readable. */
 #ifndef CAUSTIC_CAUSTIC_COMPARE_H
 #define CAUSTIC_CAUSTIC_COMPARE_H
 
@@ -183,5 +184,82 @@ typedef struct CstBenchRaysResult {
  * result); a failure leaves err's message and says in result->input_error whose it was. */
 CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRaysResult *result,
                          CstError *err);
+
+/* ---------------------------------------------------------------- explain (issue 30) */
+/* One sample of one pixel replayed with the render's random numbers, and what its path
+ * did: every vertex, every sampling decision, every strategy's contribution with its MIS
+ * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (scenes
+ * without media or subsurface) and bdpt (RGB mode); CST_ERR_UNSUPPORTED for the rest. */
+typedef enum CstExplainKind {
+    CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material */
+    CST_EXPLAIN_ESCAPE,     /* the camera path left the scene (environment, if any, in value) */
+    CST_EXPLAIN_EMISSION,   /* an emitter reached by the camera path (bdpt: s = 0) */
+    CST_EXPLAIN_NEE,        /* a light sampled from a vertex (bdpt: s = 1) */
+    CST_EXPLAIN_CONNECT,    /* bdpt: camera vertex t joined to light vertex s - 1 (s >= 2) */
+    CST_EXPLAIN_SPLAT,      /* bdpt: a light path's t = 1 connection landing near the pixel */
+    CST_EXPLAIN_SCATTER,    /* the BSDF sample that continues the path */
+    CST_EXPLAIN_ROULETTE    /* Russian roulette: q the survival probability */
+} CstExplainKind;
+
+enum {
+    CST_EXPLAIN_DELTA = 1,    /* a delta lobe or delta light (pmf, not pdf_w) */
+    CST_EXPLAIN_OCCLUDED = 2, /* the connection's shadow ray was blocked (value 0) */
+    CST_EXPLAIN_SURVIVED = 4, /* roulette: the path went on */
+    CST_EXPLAIN_ADDED = 8     /* the event added contribution to the sample (value summed) */
+};
+
+typedef struct CstExplainEvent {
+    CstExplainKind kind;
+    int flags;        /* CST_EXPLAIN_* bits */
+    int depth;        /* the camera vertex the event belongs to: 1 = the first hit */
+    int s, t;         /* bdpt: the strategy (light and camera vertices); path: -1 */
+    int light;        /* the emitter or light chosen (emitter index), -1 none */
+    int material;     /* VERTEX: material index (scene order), -1 none */
+    const char *material_type; /* VERTEX: "diffuse", "glass", ... (a static string) */
+    float p[3], n[3], ng[3]; /* VERTEX: position, shading and geometric normal; SPLAT,
+                              * CONNECT: the light vertex's position in p */
+    float wi[3];      /* SCATTER, NEE: the sampled direction (unit, world) */
+    float pdf_w;      /* the technique's density per unit solid angle (SCATTER: the BSDF's;
+                       * NEE: the light sample's; EMISSION: the BSDF's that reached it) */
+    float pdf_a;      /* the same per unit area at the reached vertex, where meaningful */
+    float pdf_other_w; /* path MIS: the competing technique's pdf_w (NEE: the BSDF's,
+                        * EMISSION: NEE's); bdpt: w_light, the ratios' sum light-ward */
+    float pdf_other2;  /* bdpt: w_camera, the ratios' sum camera-ward; path: unused (0) */
+    float pmf;        /* light selection (NEE) or delta lobe probability (SCATTER) */
+    float mis_weight; /* the strategy's MIS weight; 1 when it has no partner; -1 n/a */
+    float q;          /* ROULETTE: survival probability */
+    float beta[3];    /* the path throughput the value is multiplied by */
+    float value[3];   /* the weighted estimate before beta (what the integrator adds
+                       * beta times); SCATTER: the BSDF weight f cos / pdf */
+    float contribution[3]; /* beta * value: this event's share of the sample (RGB, or the
+                            * first three wavelength lanes in spectral mode) */
+} CstExplainEvent;
+
+typedef struct CstExplain {
+    int x, y, sample;
+    CstIntegrator integrator;  /* resolved */
+    int spectral;               /* 1: spectral mode */
+    int num_events;
+    int truncated;             /* more events than were kept (very long paths) */
+    CstExplainEvent *events;
+    float sum[3];              /* the ADDED events' values summed in the integrator's order
+                                * (spectral: converted with the path's wavelengths), times
+                                * the pixel filter weight: the camera sample's film value */
+    float filter_weight;
+    double camera_value[3];    /* what the render's camera step produced for this sample */
+    double splat_value[3];     /* bdpt: what light paths' t = 1 splats added to the pixel */
+    double film_value[3];      /* what the film accumulated: camera_value + splat_value */
+    int exact;                 /* sum == camera_value, bit for bit */
+} CstExplain;
+
+/* Replays sample `sample` (for bdpt: iteration) of pixel (x, y) under `settings` (as for
+ * cst_render; spp, crop, threads and first_sample are ignored) and records its path.
+ * *out: a new record, cst_explain_destroy. CST_ERR_INVALID_ARG for a pixel off the image
+ * or a negative sample; CST_ERR_UNSUPPORTED for an integrator explain cannot follow. */
+CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
+                              CstExplain **out, CstError *err);
+CST_API void cst_explain_destroy(CstExplain *explain);
+/* "path, path-nee, path-bsdf, bdpt": the integrators cst_explain follows. */
+CST_API const char *cst_explain_integrators(void);
 
 #endif

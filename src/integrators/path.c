@@ -25,6 +25,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
             break;
         }
         Vec3 wo = v3_neg(ray.d);
+        if (pp->rec) recorder_vertex(pp->rec, s, &sh, depth + 1, wl);
         if (sh.emitter >= 0) path_add_emitted(s, pp, &ps, ps.beta, &sh, wo, sh.t, wl);
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
 
@@ -32,13 +33,15 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         /* A dispersive dielectric terminates wl's secondary wavelengths here (the rest of
          * the path and the film's conversion then follow the hero alone). */
         scene_bsdf_disperse(s, &sh, wl, &bsdf);
+        if (pp->rec) recorder_wavelengths(pp->rec, wl);
         if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) path_add_nee(s, pp, &ps, &bsdf, &sh, wo, smp, wl, rays);
 
         BsdfSample bs;
-        if (!path_sample_bsdf(&ps, &bsdf, &sh, wo, smp, &bs)) break;
+        if (!path_sample_bsdf(pp, &ps, &bsdf, &sh, wo, smp, &bs)) break;
         /* Russian roulette (roulette.h): beta is the path's scatter. */
         float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
+        if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
         if (rr == 0.0f) break;
         ps.beta = color_scale(ps.beta, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);

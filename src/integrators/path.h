@@ -15,6 +15,7 @@ typedef struct PathParams {
     int max_depth; /* bounces after the camera vertex; 0 = unbounded (Russian roulette only) */
     int rr_depth;  /* first depth at which Russian roulette may stop a path */
     bool regularize; /* bsdf_regularize after the first non-delta bounce (pbrt-v4's option) */
+    struct Recorder *rec; /* `caustic explain` (recorder.h): the path's events; NULL in renders */
 } PathParams;
 
 /* Radiance arriving along `ray` (toward its origin). Adds the number of rays traced to

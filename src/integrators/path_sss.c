@@ -105,7 +105,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
         if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) path_add_nee(s, pp, &ps, &bsdf, &sh, wo, smp, wl, rays);
         BsdfSample bs;
-        if (!path_sample_bsdf(&ps, &bsdf, &sh, wo, smp, &bs)) break;
+        if (!path_sample_bsdf(pp, &ps, &bsdf, &sh, wo, smp, &bs)) break;
 
         const bool transmitted = (v3_dot(bs.wi, sh.ng) > 0.0f) != (v3_dot(wo, sh.ng) > 0.0f);
         if (m->subsurface && m->bssrdf && transmitted) {

@@ -1,11 +1,14 @@
 /* The state a unidirectional camera path carries from bounce to bounce, and the steps the
  * three path loops share (path.c, path_sss.c, volpath.c): emitter and environment hits
- * MIS-weighted against next-event estimation, NEE at a surface, BSDF sampling. */
+ * MIS-weighted against next-event estimation, NEE at a surface, BSDF sampling. Each step
+ * also tells `caustic explain`'s recorder (pp->rec, NULL in renders: one branch) what it
+ * added. */
 #ifndef CST_INTEGRATORS_PATH_STATE_H
 #define CST_INTEGRATORS_PATH_STATE_H
 
 #include "integrators/direct.h"
 #include "integrators/path.h"
+#include "integrators/recorder.h"
 #include "materials/bsdf.h"
 
 typedef struct PathState {
@@ -32,11 +35,18 @@ static inline void path_add_env(const Scene *s, const PathParams *pp, PathState 
                                 const Wavelengths *wl)
 {
     Color le = scene_env_radiance(s, d, wl);
-    if (color_is_black(le)) return;
-    if (ps->specular || pp->mode == PATH_BSDF) ps->L = color_madd(ps->L, w, le);
-    else if (pp->mode == PATH_MIS)
-        ps->L = color_madd(ps->L, w, color_scale(le, power_heuristic(ps->prev_pdf, light_env_nee_pdf(&s->emitter_sampler, ps->prev_p, ps->prev_n, d))));
-    /* PATH_NEE: the environment was already counted by the previous vertex's NEE. */
+    if (!color_is_black(le) && (ps->specular || pp->mode == PATH_BSDF)) {
+        ps->L = color_madd(ps->L, w, le);
+        if (pp->rec) recorder_emission(pp->rec, NULL, d, w, le, 1.0f, ps->prev_pdf, 0.0f);
+    } else if (!color_is_black(le) && pp->mode == PATH_MIS) {
+        float pdf_light = light_env_nee_pdf(&s->emitter_sampler, ps->prev_p, ps->prev_n, d);
+        Color v = color_scale(le, power_heuristic(ps->prev_pdf, pdf_light));
+        ps->L = color_madd(ps->L, w, v);
+        if (pp->rec) recorder_emission(pp->rec, NULL, d, w, v, power_heuristic(ps->prev_pdf, pdf_light), ps->prev_pdf, pdf_light);
+    } else if (pp->rec) {
+        /* PATH_NEE: the environment was already counted by the previous vertex's NEE. */
+        recorder_push(pp->rec, CST_EXPLAIN_ESCAPE);
+    }
 }
 
 /* L += w x the emission of the emitter hit sh (sh->emitter >= 0) seen along wo, with the
@@ -48,11 +58,14 @@ static inline void path_add_emitted(const Scene *s, const PathParams *pp, PathSt
     if (color_is_black(le)) return;
     if (ps->specular || pp->mode == PATH_BSDF) {
         ps->L = color_madd(ps->L, w, le);
+        if (pp->rec) recorder_emission(pp->rec, sh, wo, w, le, 1.0f, ps->prev_pdf, 0.0f);
     } else if (pp->mode == PATH_MIS) {
         float cos_l = fabsf(v3_dot(sh->ng, wo));
         EmitterGeometry g = scene_emitter_geometry(s);
         float pdf_light = light_area_nee_pdf_w(&s->emitter_sampler, &g, sh->emitter, ps->prev_p, ps->prev_n, dist, cos_l);
-        ps->L = color_madd(ps->L, w, color_scale(le, power_heuristic(ps->prev_pdf, pdf_light)));
+        Color v = color_scale(le, power_heuristic(ps->prev_pdf, pdf_light));
+        ps->L = color_madd(ps->L, w, v);
+        if (pp->rec) recorder_emission(pp->rec, sh, wo, w, v, power_heuristic(ps->prev_pdf, pdf_light), ps->prev_pdf, pdf_light);
     }
     /* PATH_NEE: this emitter was already counted by the previous vertex's NEE. */
 }
@@ -64,18 +77,21 @@ static inline void path_add_nee(const Scene *s, const PathParams *pp, PathState 
 {
     float u_sel = sampler_1d(smp);
     Vec2 u_light = sampler_2d(smp);
-    ps->L = color_madd(ps->L, ps->beta, pp->mode == PATH_MIS ? direct_light_mis(s, bsdf, sh, wo, u_sel, u_light, wl, rays)
-                                                           : direct_light(s, bsdf, sh, wo, u_sel, u_light, wl, rays));
+    Color d = pp->mode == PATH_MIS ? direct_light_mis(s, bsdf, sh, wo, u_sel, u_light, wl, rays)
+                                   : direct_light(s, bsdf, sh, wo, u_sel, u_light, wl, rays);
+    ps->L = color_madd(ps->L, ps->beta, d);
+    if (pp->rec) recorder_nee(pp->rec, s, bsdf, sh, wo, u_sel, u_light, pp->mode == PATH_MIS, ps->beta, d);
 }
 
 /* Samples the direction leaving surface hit sh by the BSDF and makes sh the previous
  * vertex. False when the path ends: no sample, or a black throughput. */
-static inline bool path_sample_bsdf(PathState *ps, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, Sampler *smp,
-                                    BsdfSample *bs)
+static inline bool path_sample_bsdf(const PathParams *pp, PathState *ps, const Bsdf *bsdf, const SurfaceHit *sh,
+                                    Vec3 wo, Sampler *smp, BsdfSample *bs)
 {
     float uc = sampler_1d(smp);
     Vec2 u = sampler_2d(smp);
     if (!bsdf_sample(bsdf, wo, uc, u, bs)) return false;
+    if (pp->rec) recorder_scatter(pp->rec, bs, ps->beta);
     ps->beta = color_mul(ps->beta, bs->weight);
     if (color_is_black(ps->beta)) return false;
     ps->specular = bs->delta;

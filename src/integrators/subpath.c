@@ -15,6 +15,7 @@
 
 #include "core/array.h"
 #include "film/filter.h"
+#include "integrators/recorder.h"
 #include "integrators/subpath_walk.h"
 
 void subpath_vertex_list_free(SubpathVertexList *l)
@@ -79,6 +80,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const SubpathPa
     ++*rays;
     if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
     Color c = color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w);
+    if (it->rec) recorder_splat(it->rec, cs.raster.x, cs.raster.y, v->bounces + 1, v->p, c, weight, w_light, cam_pdf_a);
     film_splat(splats, &vp->frame, cs.raster.x, cs.raster.y, wl ? spectrum_to_rgb(c, wl) : c);
 }
 
@@ -159,6 +161,14 @@ static Color connect_to_light(const Scene *s, const SubpathIteration *it, const 
                      (it->mis_vm + sp->d_vcm + sp->d_vc * mis(bsdf_pdf_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
+    if (it->rec) {
+        const bool vis = scene_visible(s, sh->p, sh->ng, ls.p, ls.n);
+        Color v = vis ? color_scale(color_mul(f, scene_light_li(s, &ls, wl)), weight / (ls.delta ? ls.pmf : ls.pdf_w))
+                      : color_s(0.0f);
+        recorder_strategy(it->rec, CST_EXPLAIN_NEE, 1, ls.light, ls.p, sp->beta, v, weight, w_light, w_camera,
+                          ls.delta ? ls.pmf : ls.pdf_w, ls.direct_pdf, !vis);
+        return v;
+    }
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
     return color_scale(color_mul(f, scene_light_li(s, &ls, wl)), weight / (ls.delta ? ls.pmf : ls.pdf_w));
 }
@@ -222,6 +232,13 @@ static Color connect_vertices(const Scene *s, const SubpathIteration *it, const 
     float w_camera = mis(y_fwd_a) * (it->mis_vm + sp->d_vcm + sp->d_vc * mis(x_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
+    if (it->rec) {
+        const bool vis = scene_visible(s, x->p, x->ng, y->p, y->ng);
+        Color v = vis ? color_scale(color_mul(color_mul(fx, fy), y->beta), weight / dist2) : color_s(0.0f);
+        recorder_strategy(it->rec, CST_EXPLAIN_CONNECT, y->bounces + 1, -1, y->p, sp->beta, v, weight, w_light,
+                          w_camera, x_fwd, x_fwd_a, !vis);
+        return v;
+    }
     if (!scene_visible(s, x->p, x->ng, y->p, y->ng)) return color_s(0.0f);
     return color_scale(color_mul(color_mul(fx, fy), y->beta), weight / dist2);
 }
@@ -269,6 +286,8 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
                 }
                 if (cam_dispersed) H = color_madd(H, sp.beta, color_scale(le, w));
                 else L = color_madd(L, sp.beta, color_scale(le, w));
+                if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_ESCAPE, 0, -1, ray.d, sp.beta, color_scale(le, w), w,
+                                               1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
             }
             break;
         }
@@ -276,6 +295,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
         float cos_in = fabsf(v3_dot(sh.ng, wo));
         if (!(cos_in > 0.0f)) break;
         mis_arrive(&sp, sh.t, cos_in);
+        if (it->rec) recorder_vertex(it->rec, s, &sh, t, wl);
 
         /* s = 0: the camera subpath hits an emitter (tech. rep. eq. 39). Seen directly
          * there is no other strategy (light vertices on emitters are not splatted). */
@@ -291,6 +311,8 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
                 }
                 if (cam_dispersed) H = color_madd(H, sp.beta, color_scale(le, w));
                 else L = color_madd(L, sp.beta, color_scale(le, w));
+                if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_EMISSION, 0, sh.emitter, sh.p, sp.beta,
+                                               color_scale(le, w), w, 1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
             }
         }
         /* The camera path's vertices so far are t bounces once this one scatters. */

@@ -83,6 +83,8 @@ typedef struct SubpathIteration {
     uint32_t cells;
     Vec3 grid_lo;
     float inv_cell;
+    struct Recorder *rec; /* `caustic explain` (recorder.h): the camera path's strategies and
+                           * the splats near its pixel; NULL in renders */
 } SubpathIteration;
 
 /* The MIS exponent: the power heuristic (Veach eq. 9.13, beta = 2). Applied to every

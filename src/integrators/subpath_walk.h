@@ -7,6 +7,7 @@
 #ifndef CST_INTEGRATORS_SUBPATH_WALK_H
 #define CST_INTEGRATORS_SUBPATH_WALK_H
 
+#include "integrators/recorder.h"
 #include "integrators/roulette.h"
 #include "integrators/subpath.h"
 
@@ -113,6 +114,7 @@ static inline bool subpath_scatter(const Scene *s, SubPath *sp, const SubpathIte
     /* bsdf_sample_transport rejects samples without a density (bsdf.h): the MIS ratios
      * below may divide by it. */
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
+    if (it && it->rec && mode == BSDF_RADIANCE) recorder_scatter(it->rec, &bs, sp->beta);
     sp->specular_only = sp->specular_only && bs.delta;
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);

@@ -161,7 +161,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
             ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
         }
         BsdfSample bs;
-        if (!path_sample_bsdf(&ps, &bsdf, &sh, wo, smp, &bs)) break;
+        if (!path_sample_bsdf(pp, &ps, &bsdf, &sh, wo, smp, &bs)) break;
         depth++;
         float rr = roulette(smp, depth, pp->rr_depth, mis_beta(ps.beta, hero, r_u));
         if (rr == 0.0f) break;

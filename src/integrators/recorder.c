@@ -1,0 +1,177 @@
+/* The path recorder of `caustic explain` (recorder.h): events in a caller-owned array,
+ * the exact lanes of every addition kept beside them so that the sum can be replayed. */
+#include "integrators/recorder.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "integrators/direct.h"
+
+static void put3(float o[3], Vec3 v) { o[0] = v.x; o[1] = v.y; o[2] = v.z; }
+static void put_color(float o[3], Color c) { for (int i = 0; i < 3; i++) o[i] = c.c[i]; }
+
+/* The scene formats' names of the material types (docs/scene-format.md). */
+static const char *material_type_name(MaterialType t)
+{
+    switch (t) {
+    case MATERIAL_DIFFUSE: return "diffuse";
+    case MATERIAL_MIRROR: return "mirror";
+    case MATERIAL_GLASS: return "glass";
+    case MATERIAL_CONDUCTOR: return "conductor";
+    case MATERIAL_DIELECTRIC: return "dielectric";
+    case MATERIAL_PLASTIC: return "plastic";
+    case MATERIAL_COATED_DIFFUSE: return "coateddiffuse";
+    case MATERIAL_COATED_CONDUCTOR: return "coatedconductor";
+    case MATERIAL_MIX: return "mix";
+    case MATERIAL_DIFFUSE_TRANSMISSION: return "diffusetransmission";
+    case MATERIAL_THIN_DIELECTRIC: return "thindielectric";
+    case MATERIAL_MEASURED: return "measured";
+    case MATERIAL_HAIR: return "hair";
+    }
+    return "unknown";
+}
+
+CstExplainEvent *recorder_push(Recorder *r, CstExplainKind k)
+{
+    CstExplainEvent *e = &r->spare;
+    if (r->n < r->cap) e = &r->ev[r->n++];
+    else r->truncated = 1;
+    memset(e, 0, sizeof *e);
+    e->kind = k;
+    e->depth = r->depth;
+    e->s = e->t = e->light = -1;
+    e->material = -1;
+    e->mis_weight = -1.0f;
+    return e;
+}
+
+void recorder_added(Recorder *r, CstExplainEvent *e, Color beta, Color value)
+{
+    e->flags |= CST_EXPLAIN_ADDED;
+    put_color(e->beta, beta);
+    put_color(e->value, value);
+    put_color(e->contribution, color_mul(beta, value));
+    if (e == &r->spare) return;
+    r->beta[e - r->ev] = beta;
+    r->value[e - r->ev] = value;
+}
+
+void recorder_wavelengths(Recorder *r, const Wavelengths *wl)
+{
+    if (!wl) return;
+    r->wl = *wl;
+    r->has_wl = true;
+}
+
+void recorder_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int depth, const Wavelengths *wl)
+{
+    r->depth = depth;
+    recorder_wavelengths(r, wl);
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_VERTEX);
+    put3(e->p, sh->p);
+    put3(e->n, sh->ns);
+    put3(e->ng, sh->ng);
+    e->material = sh->material;
+    e->material_type = sh->material >= 0 ? material_type_name(s->materials[sh->material].type) : "none";
+    e->light = sh->emitter;
+}
+
+void recorder_emission(Recorder *r, const SurfaceHit *sh, Vec3 wo, Color beta, Color value, float w,
+                       float pdf_bsdf, float pdf_light)
+{
+    CstExplainEvent *e = recorder_push(r, sh ? CST_EXPLAIN_EMISSION : CST_EXPLAIN_ESCAPE);
+    e->mis_weight = w;
+    e->pdf_w = pdf_bsdf;
+    e->pdf_other_w = pdf_light;
+    if (sh) {
+        e->light = sh->emitter;
+        put3(e->p, sh->p);
+        /* The BSDF sample's density at the emitter point per unit area: pdf_w |cos| / d^2. */
+        float d2 = sh->t * sh->t;
+        e->pdf_a = d2 > 0.0f ? pdf_bsdf * fabsf(v3_dot(sh->ng, wo)) / d2 : 0.0f;
+    }
+    recorder_added(r, e, beta, value);
+}
+
+void recorder_nee(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
+                  Vec2 u, bool mis, Color beta, Color value)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_NEE);
+    recorder_added(r, e, beta, value);
+    LightLi ls;
+    EmitterGeometry g = scene_emitter_geometry(s);
+    if (!light_sample_nee(&s->emitter_sampler, &g, sh->p, sh->ns, u_sel, u, &ls)) return;
+    e->light = ls.light;
+    put3(e->p, ls.p);
+    put3(e->wi, ls.wi);
+    e->pdf_w = ls.pdf_w;
+    e->pmf = ls.delta ? ls.pmf : light_nee_pmf(&s->emitter_sampler, sh->p, sh->ns, ls.light);
+    /* The light point's density per unit area: pdf_w |cos_light| / dist^2. */
+    if (!ls.delta && ls.finite && ls.dist > 0.0f)
+        e->pdf_a = ls.pdf_w * fabsf(v3_dot(ls.n, ls.wi)) / (ls.dist * ls.dist);
+    if (ls.delta) e->flags |= CST_EXPLAIN_DELTA;
+    float pdf_bsdf = bsdf_pdf(bsdf, wo, ls.wi);
+    e->pdf_other_w = pdf_bsdf;
+    e->mis_weight = mis && !ls.delta ? power_heuristic(ls.pdf_w, pdf_bsdf) : 1.0f;
+    if (color_is_black(value) && !color_is_black(bsdf_eval(bsdf, wo, ls.wi)) &&
+        !scene_visible(s, sh->p, sh->ng, ls.p, ls.n))
+        e->flags |= CST_EXPLAIN_OCCLUDED;
+}
+
+void recorder_scatter(Recorder *r, const BsdfSample *bs, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
+    put3(e->wi, bs->wi);
+    e->pdf_w = bs->pdf_w;
+    e->pmf = bs->pmf;
+    if (bs->delta) e->flags |= CST_EXPLAIN_DELTA;
+    put_color(e->beta, beta);
+    put_color(e->value, bs->weight);
+    put_color(e->contribution, color_mul(beta, bs->weight));
+}
+
+void recorder_roulette(Recorder *r, float q, bool survived)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_ROULETTE);
+    e->q = q;
+    if (survived) e->flags |= CST_EXPLAIN_SURVIVED;
+}
+
+void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light, Vec3 p, Color beta, Color value,
+                       float w, float w_light, float w_camera, float pdf_w, float pdf_a, bool occluded)
+{
+    CstExplainEvent *e = recorder_push(r, kind);
+    e->s = s_light;
+    e->t = r->depth + 1; /* the camera subpath's vertices, the lens one included */
+    e->light = light;
+    put3(e->p, p);
+    e->mis_weight = w;
+    e->pdf_other_w = w_light;
+    e->pdf_other2 = w_camera;
+    e->pdf_w = pdf_w;
+    e->pdf_a = pdf_a;
+    if (occluded) e->flags |= CST_EXPLAIN_OCCLUDED;
+    recorder_added(r, e, beta, value);
+}
+
+void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color value, float w, float w_light,
+                    float pdf_a)
+{
+    if (!(fabsf(x - ((float)r->px + 0.5f)) < r->radius && fabsf(y - ((float)r->py + 0.5f)) < r->radius))
+        return;
+    const int depth = r->depth;
+    r->depth = 0;
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SPLAT);
+    r->depth = depth;
+    e->s = s_light;
+    e->t = 1;
+    put3(e->p, p);
+    e->wi[0] = x; /* the raster position, for the reader */
+    e->wi[1] = y;
+    e->mis_weight = w;
+    e->pdf_other_w = w_light;
+    e->pdf_a = pdf_a;
+    put_color(e->value, value);
+    put_color(e->contribution, value);
+    e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
+}

@@ -1,0 +1,206 @@
+/* caustic explain (issue 30): for the path tracer's three modes and BDPT, on the Cornell
+ * boxes and a few pixels and samples, the recorded contributions sum bit for bit to the
+ * camera sample the render computes, and that sample (plus BDPT's splats) is what a
+ * one-sample render of the pixel accumulates; the strategies' MIS weights lie in [0, 1];
+ * integrators explain cannot follow and bad pixels are refused. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "caustic/caustic.h"
+
+enum { W = 24, H = 20 };
+
+static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
+{
+    memset(st, 0, sizeof *st);
+    st->integrator = integ;
+    st->width = W;
+    st->height = H;
+    st->spp = 4;
+    st->threads = 1;
+    st->filter = filter;
+    st->color_mode = color;
+    st->seed = 7;
+    st->seed_set = 1;
+}
+
+/* The film value of sample `sample` of pixel (x, y) alone: a one-pixel crop rendered
+ * from first_sample = sample, one sample (its mean is its sum). */
+static void render_one(const CstScene *s, const CstRenderSettings *base, int x, int y, int sample, double rgb[3])
+{
+    CstRenderSettings st = *base;
+    st.spp = 1;
+    st.first_sample = sample;
+    st.crop[0] = x; st.crop[1] = x + 1; st.crop[2] = y; st.crop[3] = y + 1;
+    CstFilm *f = NULL;
+    CstError err;
+    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_OK);
+    cst_film_pixel(f, 0, 0, rgb);
+    cst_film_destroy(f);
+}
+
+static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter, CstColorMode color)
+{
+    static const int PIX[][2] = {{12, 10}, {3, 17}, {20, 2}, {12, 1}, {8, 14}};
+    int added = 0;
+    CstRenderSettings st;
+    settings(&st, integ, filter, color);
+    for (size_t p = 0; p < sizeof PIX / sizeof PIX[0]; p++) {
+        for (int sample = 0; sample < 4; sample += 3) {
+            const int x = PIX[p][0], y = PIX[p][1];
+            CstExplain *ex = NULL;
+            CstError err;
+            assert_int_equal(cst_explain(s, &st, x, y, sample, &ex, &err), CST_OK);
+            assert_false(ex->truncated);
+            if (!ex->exact)
+                fail_msg("%s pixel %d,%d sample %d: sum (%.9g %.9g %.9g) != camera (%.9g %.9g %.9g)",
+                         cst_integrator_name(integ), x, y, sample, (double)ex->sum[0], (double)ex->sum[1],
+                         (double)ex->sum[2], ex->camera_value[0], ex->camera_value[1], ex->camera_value[2]);
+            double film[3];
+            render_one(s, &st, x, y, sample, film);
+            for (int c = 0; c < 3; c++) {
+                /* bit for bit: the render's film holds what explain replayed */
+                assert_memory_equal(&film[c], &ex->film_value[c], sizeof film[c]);
+                if (integ != CST_INTEGRATOR_BDPT) assert_true(ex->splat_value[c] == 0.0);
+            }
+            for (int i = 0; i < ex->num_events; i++) {
+                const CstExplainEvent *e = &ex->events[i];
+                if (e->flags & CST_EXPLAIN_ADDED) added++;
+                if (e->mis_weight != -1.0f) assert_true(e->mis_weight >= 0.0f && e->mis_weight <= 1.0f);
+                if (integ == CST_INTEGRATOR_BDPT && e->kind != CST_EXPLAIN_VERTEX && e->kind != CST_EXPLAIN_SCATTER &&
+                    e->kind != CST_EXPLAIN_ROULETTE && e->mis_weight >= 0.0f) {
+                    /* Georgiev's recursive form: w = 1 / (w_light + 1 + w_camera). */
+                    float w = 1.0f / (e->pdf_other_w + 1.0f + e->pdf_other2);
+                    assert_true(fabsf(w - e->mis_weight) <= 1e-5f * e->mis_weight);
+                    assert_true(e->s >= 0 && e->t >= 1);
+                }
+            }
+            cst_explain_destroy(ex);
+        }
+    }
+    return added;
+}
+
+static CstScene *load(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/%s", CST_SOURCE_DIR, name);
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_json(path, &s, &err) != CST_OK) fail_msg("%s: %s", path, err.msg);
+    return s;
+}
+
+static void test_path_cornell(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH_NEE, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH_BSDF, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    /* A filter weight other than 1 and spectral mode's conversion. */
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH, CST_FILTER_MITCHELL, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+    cst_scene_destroy(s);
+}
+
+static void test_path_specular(void **state)
+{
+    (void)state;
+    CstScene *s = load("cornell-spheres.json");
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    cst_scene_destroy(s);
+}
+
+static void test_bdpt(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_TENT, CST_COLOR_RGB) > 0);
+    cst_scene_destroy(s);
+    s = load("cornell-spheres.json");
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    cst_scene_destroy(s);
+}
+
+/* Samplers whose numbers depend on the render's spp (strata): the four samples explain
+ * replays under --spp 4 add up, in order, to the pixel's sum in a 4-sample render. */
+static void test_strata(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    static const CstSampler SAMPLERS[] = {CST_SAMPLER_STRATIFIED, CST_SAMPLER_SOBOL, CST_SAMPLER_ZSOBOL};
+    for (size_t k = 0; k < sizeof SAMPLERS / sizeof SAMPLERS[0]; k++) {
+        CstRenderSettings st;
+        settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB);
+        st.sampler = SAMPLERS[k];
+        double sum[3] = {0.0, 0.0, 0.0};
+        for (int i = 0; i < st.spp; i++) {
+            CstExplain *ex = NULL;
+            assert_int_equal(cst_explain(s, &st, 9, 11, i, &ex, &err), CST_OK);
+            assert_true(ex->exact);
+            for (int c = 0; c < 3; c++) sum[c] += ex->camera_value[c];
+            cst_explain_destroy(ex);
+        }
+        CstRenderSettings one = st;
+        one.crop[0] = 9; one.crop[1] = 10; one.crop[2] = 11; one.crop[3] = 12;
+        CstFilm *f = NULL;
+        assert_int_equal(cst_render(s, &one, &f, NULL, &err), CST_OK);
+        double mean[3];
+        cst_film_pixel(f, 0, 0, mean);
+        for (int c = 0; c < 3; c++) assert_true(mean[c] * 4.0 == sum[c]); /* x4: exact */
+        cst_film_destroy(f);
+    }
+    cst_scene_destroy(s);
+}
+
+static void test_refused(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    CstRenderSettings st;
+    CstExplain *ex = NULL;
+    static const CstIntegrator NO[] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_WHITTED, CST_INTEGRATOR_PHOTON,
+                                       CST_INTEGRATOR_SPPM, CST_INTEGRATOR_VCM, CST_INTEGRATOR_PSSMLT};
+    for (size_t i = 0; i < sizeof NO / sizeof NO[0]; i++) {
+        settings(&st, NO[i], CST_FILTER_BOX, CST_COLOR_RGB);
+        assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
+        assert_null(ex);
+        assert_non_null(strstr(err.msg, "explain supports: path, path-nee, path-bsdf, bdpt"));
+    }
+    settings(&st, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_SPECTRAL);
+    assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
+    settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB);
+    assert_int_equal(cst_explain(s, &st, W, 0, 0, &ex, &err), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_explain(s, &st, 0, -1, 0, &ex, &err), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_explain(s, &st, 0, 0, -1, &ex, &err), CST_ERR_INVALID_ARG);
+    assert_null(ex);
+    cst_scene_destroy(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_path_cornell),
+        cmocka_unit_test(test_path_specular),
+        cmocka_unit_test(test_bdpt),
+        cmocka_unit_test(test_strata),
+        cmocka_unit_test(test_refused),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
