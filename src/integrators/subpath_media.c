@@ -9,13 +9,16 @@
  * medium a segment crosses). Those densities are medium.h's: the balance heuristic over
  * colour lanes, medium_distance_pdf() and medium_pass_prob(), per straight piece between
  * boundaries. Only the scenes with media come here; the others keep subpath.c and light.c
- * bit for bit. Grid media and emissive media are refused by integrator.c for these
- * estimators (their distance pdfs are stochastic; volume emission is not sampled here). */
+ * bit for bit. The light tracer (no MIS) also walks grid media by delta tracking and ratio
+ * tracking, with the hero-lane MIS of hetero_medium.h over the whole path. integrator.c
+ * refuses grids for BDPT (their distance pdfs are stochastic) and emissive media for both
+ * (volume emission is not sampled by light subpaths). */
 #include "integrators/subpath_media.h"
 
 #include <math.h>
 
 #include "core/array.h"
+#include "core/rng.h"
 #include "film/filter.h"
 #include "integrators/subpath_walk.h"
 #include "media/phase.h"
@@ -95,8 +98,22 @@ static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bo
         float piece = hit ? sh.t : len;
         MediumCoeffs mc = {0};
         if (medium >= 0) {
-            mc = medium_coeffs(&s->media[medium], wl);
-            tr = color_mul(tr, medium_transmittance(&mc, piece));
+            const Medium *m = &s->media[medium];
+            mc = medium_coeffs(m, wl);
+            if (medium_is_hetero(m)) {
+                /* Ratio tracking (the light tracer only: BDPT refuses grids, whose chain
+                 * densities below would not be these), its random stream a hash of the
+                 * piece as scene_transmittance's. */
+                const float seg[6] = {o.x, o.y, o.z, end.x, end.y, end.z};
+                uint64_t seed = 0x3c6ef372fe94f82bULL + (uint64_t)step;
+                for (int i = 0; i < 6; i++) {
+                    union { float f; uint32_t u; } b = {seg[i]};
+                    seed = mix64(seed ^ b.u);
+                }
+                tr = color_mul(tr, hetero_transmittance(&m->u.het, &mc, o, dir, piece, seed));
+            } else {
+                tr = color_mul(tr, medium_transmittance(&mc, piece));
+            }
         }
         chain_piece(&c, &mc, medium, piece);
         if (!hit) {
@@ -143,6 +160,46 @@ static int medium_at_emitter(const Scene *s, const Camera *cam, Vec3 p, Vec3 w, 
     return medium_at(s, cam, v3_add(p, v3_scale(w, 1e-4f * scale)), rays);
 }
 
+/* The spectral MIS of delta tracking over the lanes (hetero_medium.h), for the light
+ * tracer's walks through grid media: the hero lane (-1 until the first grid piece) and
+ * p_c / p_hero over the grid pieces so far. */
+typedef struct HeroMis {
+    int hero;
+    Color r_u;
+    bool homogeneous; /* homogeneous media too (the light tracer): see hero_sample_homogeneous */
+} HeroMis;
+
+/* Free-flight sampling in a homogeneous medium by the hero lane alone, t ~ sigma_t[h]
+ * exp(-sigma_t[h] t), with the lanes' densities relative to the hero's in out->r, as
+ * hetero_sample_distance does for grids: the light tracer's walks take the balance
+ * heuristic over lanes for the whole path (hero_beta) instead of per segment, whose
+ * product over many scattering events has a heavy tail where the lanes' sigma_t differ
+ * (spectral mode: the light tracer's furnace missed by 4x in one channel at 256 paths per
+ * pixel). False when the hero's density underflows. */
+static bool hero_sample_homogeneous(const MediumCoeffs *mc, float t_max, int h, float u, MediumSample *out)
+{
+    float st = mc->sigma_t.c[h];
+    float t = st > 0.0f ? -log1pf(-u) / st : INFINITY;
+    out->scattered = t < t_max;
+    out->t = out->scattered ? t : t_max;
+    Color tr = medium_transmittance(mc, out->t);
+    float p = out->scattered ? st * tr.c[h] : tr.c[h]; /* the hero's density of this outcome */
+    if (!(p > 0.0f)) return false;
+    out->weight = color_scale(out->scattered ? color_mul(tr, mc->sigma_s) : tr, 1.0f / p);
+    out->r = color_scale(out->scattered ? color_mul(tr, mc->sigma_t) : tr, 1.0f / p);
+    return true;
+}
+
+/* beta / mean(r_u): a contribution's throughput (volpath.c's mis_beta); beta itself on a
+ * walk that met no grid. */
+static inline Color hero_beta(const HeroMis *hm, Color beta)
+{
+    if (hm->hero < 0) return beta;
+    float m = 0.0f;
+    for (int c = 0; c < COLOR_LANES; c++) m += hm->r_u.c[c];
+    return m > 0.0f && isfinite(m) ? color_scale(beta, (float)COLOR_LANES / m) : color_s(0.0f);
+}
+
 /* What a walk's ray met after free-flight sampling through the pieces of its way. */
 typedef enum MediaHitKind { MEDIA_MISS, MEDIA_SURFACE, MEDIA_VOLUME } MediaHitKind;
 typedef struct MediaHit {
@@ -159,7 +216,7 @@ typedef struct MediaHit {
  * weight multiplied into sp's beta and scatter. False when the path ends (black weight or
  * a stack of boundaries); a miss is returned as MEDIA_MISS. */
 static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, int *medium, SubPath *sp,
-                       Sampler *rng, const Wavelengths *wl, MediaHit *out, uint64_t *rays)
+                       HeroMis *hm, Sampler *rng, const Wavelengths *wl, MediaHit *out, uint64_t *rays)
 {
     ChainPdf c = {0, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f};
     for (int step = 0; step < MEDIA_MAX_CROSSINGS; step++) {
@@ -167,10 +224,22 @@ static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, int 
         ++*rays;
         const bool hit = scene_intersect(s, &ray, sh);
         if (*medium >= 0) {
-            MediumCoeffs mc = medium_coeffs(&s->media[*medium], wl);
+            const Medium *med = &s->media[*medium];
+            MediumCoeffs mc = medium_coeffs(med, wl);
             float u_ch = sampler_1d(rng), u_t = sampler_1d(rng);
             MediumSample ms;
-            medium_sample_distance(&mc, hit ? sh->t : INFINITY, u_ch, u_t, &ms);
+            if (medium_is_hetero(med)) { /* delta tracking with the walk's hero lane (volpath.c) */
+                if (hm->hero < 0) hm->hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
+                hetero_sample_distance(&med->u.het, &mc, ray.o, ray.d, hit ? sh->t : INFINITY, hm->hero, hm->r_u, u_t,
+                                       &ms);
+                hm->r_u = color_mul(hm->r_u, ms.r);
+            } else if (hm->homogeneous) {
+                if (hm->hero < 0) hm->hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
+                if (!hero_sample_homogeneous(&mc, hit ? sh->t : INFINITY, hm->hero, u_t, &ms)) return false;
+                hm->r_u = color_mul(hm->r_u, ms.r);
+            } else {
+                medium_sample_distance(&mc, hit ? sh->t : INFINITY, u_ch, u_t, &ms);
+            }
             sp->beta = color_mul(sp->beta, ms.weight);
             sp->scatter = color_mul(sp->scatter, ms.weight);
             if (color_is_black(sp->scatter)) return false;
@@ -273,9 +342,11 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
     Ray ray = ray_make(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY);
     Vec3 x_prev = es->p;
     bool prev_med = false;
+    /* BDPT (it) keeps medium.h's per-segment mixture, whose densities its MIS uses. */
+    HeroMis hm = {-1, color_s(1.0f), it == NULL};
     for (int bounces = 1;; bounces++) {
         MediaHit h;
-        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, rng, w->wl, &h, rays)) return true;
+        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, &hm, rng, w->wl, &h, rays)) return true;
         if (h.kind == MEDIA_MISS) return true;
         Vec3 w_prev = v3_neg(ray.d);
         const bool vol = h.kind == MEDIA_VOLUME;
@@ -288,6 +359,7 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
         if (vol) {
             const float g = s->media[medium].g;
             MediaLightVertex v = {h.p, v3s(0.0f), NULL, NULL, g, medium, w_prev, sp, bounces, sampler_2d(rng)};
+            v.sp.beta = hero_beta(&hm, sp.beta);
             const bool more = !last && media_scatter_phase(&sp, it, h.p, w_prev, g, bounces, w->rr_depth, rng, &ray);
             if (!w->visit(w->ctx, &v)) return false;
             if (!more) return true;
@@ -300,6 +372,7 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
         else scene_bsdf(s, &h.sh, w->wl, &bsdf);
         const bool visit = !bsdf_is_delta(&bsdf);
         MediaLightVertex v = {h.p, h.sh.ng, &h.sh, &bsdf, 0.0f, medium, w_prev, sp, bounces, {0.0f, 0.0f}};
+        v.sp.beta = hero_beta(&hm, sp.beta);
         if (visit) v.u_lens = sampler_2d(rng);
         const bool more = !last && subpath_scatter(s, &sp, it, &bsdf, &h.sh, w_prev, BSDF_IMPORTANCE, bounces,
                                                    w->rr_depth, rng, &ray);
@@ -577,9 +650,10 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
     int medium = s->camera_medium;
     Vec3 x_prev = ray.o;
     bool prev_med = false;
+    HeroMis hm = {-1, color_s(1.0f), false}; /* stays unused: BDPT refuses grid media */
     for (int t = 1;; t++) {
         MediaHit h;
-        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, rng, wl, &h, rays)) break;
+        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, &hm, rng, wl, &h, rays)) break;
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
             Color le = scene_env_radiance(s, ray.d, wl);

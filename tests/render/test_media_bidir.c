@@ -1,7 +1,8 @@
 /* Participating media in the light tracer and BDPT (integrators/subpath_media.c): a furnace
  * (a scattering-only ball in a uniform emitter renders the emitter's radiance), the path
  * tracer, the light tracer and BDPT agreeing on a lit fog ball in an open box, and the
- * refusals (grid media, vcm). `test_media_bidir --spectral` runs the same in spectral mode.
+ * light tracer's delta tracking through a random grid (a furnace), the refusals (grid
+ * media in bdpt, vcm). `test_media_bidir --spectral` runs the same in spectral mode.
  * Fixed seeds; the light tracer's and BDPT's standard errors from independent renders
  * (their splats correlate pixels); 4 standard errors. */
 #include <setjmp.h>
@@ -13,6 +14,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "core/rng.h"
 #include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
@@ -84,7 +86,7 @@ static void test_furnace_ball(void **state)
 {
     (void)state;
     const Color L = color_rgb(1.0f, 0.5f, 0.25f);
-    Scene *s = furnace(color_rgb(1.0f, 2.0f, 0.5f), 0.6f, false, L);
+    Scene *s = furnace(color_rgb(0.5f, 1.0f, 0.25f), 0.6f, false, L);
     check_furnace(s, CST_INTEGRATOR_LIGHT, 32, 8, 100, L, "scattering ball");
     check_furnace(s, CST_INTEGRATOR_BDPT, 24, 2, 200, L, "scattering ball");
     scene_destroy(s);
@@ -100,6 +102,55 @@ static void test_furnace_camera_medium(void **state)
     const Color L = color_rgb(0.3f, 0.6f, 0.9f);
     Scene *s = furnace(color_rgb(0.2f, 0.3f, 0.1f), 0.8f, true, L);
     check_furnace(s, CST_INTEGRATOR_BDPT, 24, 2, 400, L, "camera in medium");
+    scene_destroy(s);
+}
+
+/* A random-density grid ball (densities uniform in [0, 3) on 8^3 samples over the box
+ * [-2, 2]^3, scattering only; test_grid_media.c's add_grid) in the emitting enclosure: the
+ * light tracer's delta tracking and ratio tracking render L; BDPT refuses the grid. */
+static void test_furnace_grid_light(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    const int n = 8;
+    Medium m = {.type = MEDIUM_GRID, .g = 0.3f};
+    HeteroMedium *hm = &m.u.het;
+    hm->sigma_s = color_rgb(0.5f, 1.0f, 0.25f);
+    hm->le_scale_1 = 1.0f;
+    hm->medium_from_world = transform_identity();
+    hm->p0 = v3s(-2.0f);
+    hm->p1 = v3s(2.0f);
+    hm->n[0] = hm->n[1] = hm->n[2] = n;
+    hm->density = malloc((size_t)(n * n * n) * sizeof(float));
+    assert_non_null(hm->density);
+    Pcg32 r;
+    pcg32_seed_sample(&r, 77, 0, 0);
+    for (int i = 0; i < n * n * n; i++) hm->density[i] = 3.0f * pcg32_float(&r);
+    int med;
+    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
+    free(hm->density);
+    int black;
+    Material mb = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &mb, &black, &err), CST_OK);
+    const Color L = color_rgb(0.8f, 0.4f, 0.6f);
+    Emission em = {L, 1, 0};
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
+    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.8f, black, NULL, &err), CST_OK);
+    CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    check_furnace(s, CST_INTEGRATOR_LIGHT, 32, 8, 500, L, "grid ball");
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = st.height = 8;
+    st.spp = 1;
+    st.integrator = CST_INTEGRATOR_BDPT;
+    CstFilm *f = NULL;
+    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "homogeneous"));
+    cst_film_destroy(f);
     scene_destroy(s);
 }
 
@@ -183,6 +234,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_furnace_ball),
         cmocka_unit_test(test_furnace_camera_medium),
+        cmocka_unit_test(test_furnace_grid_light),
         cmocka_unit_test(test_fog_agreement),
         cmocka_unit_test(test_vcm_refuses),
     };
