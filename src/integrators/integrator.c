@@ -611,10 +611,27 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
-    /* MLT's target is path_li's estimate, media included (volpath_li reads the same Sampler). */
-    if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH && it->kind != INTEGRATOR_PSSMLT)
+    /* MLT's target is path_li's estimate, media included (volpath_li reads the same Sampler).
+     * light and bdpt walk homogeneous media (subpath_media.c), light grids too; vcm does
+     * not merge in media. */
+    const bool bidir_media = it->kind == INTEGRATOR_LIGHT || st->integrator == CST_INTEGRATOR_BDPT;
+    if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH && it->kind != INTEGRATOR_PSSMLT &&
+        !bidir_media)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
-                        "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));
+                        "use path, path-nee, path-bsdf, light or bdpt", cst_integrator_name(st->integrator));
+    if (bidir_media) {
+        for (int i = 0; i < scene->num_media; i++) {
+            const Medium *m = &scene->media[i];
+            if (medium_is_hetero(m) && it->kind != INTEGRATOR_LIGHT)
+                return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s renders homogeneous participating media "
+                                "only (medium %d is a grid or cloud): use path, path-nee, path-bsdf or light",
+                                cst_integrator_name(st->integrator), i);
+            if (!color_is_black(medium_is_hetero(m) ? m->u.het.le : m->u.homog.le))
+                return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render emissive participating "
+                                "media yet (medium %d emits): use path, path-nee or path-bsdf",
+                                cst_integrator_name(st->integrator), i);
+        }
+    }
     if (scene->num_subsurface && it->kind != INTEGRATOR_PATH)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
                         "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));

@@ -8,6 +8,7 @@
 #include "integrators/light.h"
 
 #include "film/filter.h"
+#include "integrators/subpath_media.h"
 #include "integrators/subpath_walk.h"
 #include "materials/bsdf.h"
 
@@ -56,6 +57,11 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
                  SplatList *out, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
+    /* Participating media: the walk through media (subpath_media.c); one branch for the others. */
+    if (s->num_media | s->num_medium_ifaces) {
+        media_light_trace(s, cam, lp, rng, out, rays);
+        return;
+    }
     /* Spectral mode: the path's own wavelengths, from its first random number. */
     Wavelengths wl;
     if (lp->spectral) wl = wavelengths_sample(sampler_1d(rng));

@@ -16,6 +16,7 @@
 #include "core/array.h"
 #include "film/filter.h"
 #include "integrators/recorder.h"
+#include "integrators/subpath_media.h"
 #include "integrators/subpath_walk.h"
 
 void subpath_vertex_list_free(SubpathVertexList *l)
@@ -118,6 +119,10 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
                      uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
+    if (s->num_media | s->num_medium_ifaces) { /* participating media: subpath_media.c */
+        media_subpath_trace_light(s, cam, vp, it, rng, wl, verts, splats, rays);
+        return;
+    }
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
@@ -247,6 +252,8 @@ static Color connect_vertices(const Scene *s, const SubpathIteration *it, const 
 Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                            Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays, const SubpathMerge *merge)
 {
+    /* Participating media: subpath_media.c (without merging: integrator.c refuses vcm there). */
+    if (s->num_media | s->num_medium_ifaces) return media_subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays);
     Color L = color_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
