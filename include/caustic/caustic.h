@@ -704,9 +704,13 @@ typedef enum CstIntegrator {
     CST_INTEGRATOR_VCM,         /* vertex connection and merging (Georgiev et al. 2012):
                                  * BDPT plus photon merging with a shrinking radius
                                  * (photon_radius = the first iteration's); consistent */
-    CST_INTEGRATOR_PSSMLT       /* primary-sample-space Metropolis light transport (Kelemen
+    CST_INTEGRATOR_PSSMLT,      /* primary-sample-space Metropolis light transport (Kelemen
                                  * et al. 2002) over the path tracer: spp counts mutations per
                                  * pixel; the mlt_* settings; consistent (docs/integrators.md) */
+    CST_INTEGRATOR_MMLT         /* multiplexed MLT over BDPT (Hachisuka et al. 2014, pbrt-v4's
+                                 * "mlt"): chains per path length up to max_depth (0 = 5);
+                                 * spp counts mutations per pixel; the mlt_* settings
+                                 * (mlt_bootstrap per path length); consistent */
 } CstIntegrator;
 
 typedef enum CstFilter {
@@ -745,7 +749,7 @@ typedef enum CstColorMode {
 } CstColorMode;
 
 /* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",
- * "vcm", "pssmlt" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
+ * "vcm", "pssmlt", "mmlt" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CST_API CstIntegrator cst_integrator_from_name(const char *name);
 CST_API const char *cst_integrator_name(CstIntegrator integrator);
 CST_API CstFilter cst_filter_from_name(const char *name);

@@ -17,7 +17,8 @@ int cst_integrator_resumable(CstIntegrator integrator)
 {
     /* SPPM's state is its visible points' radii, photon counts and flux, MLT's its chains,
      * not film sums. */
-    return integrator != CST_INTEGRATOR_SPPM && integrator != CST_INTEGRATOR_PSSMLT;
+    return integrator != CST_INTEGRATOR_SPPM && integrator != CST_INTEGRATOR_PSSMLT &&
+           integrator != CST_INTEGRATOR_MMLT;
 }
 
 typedef struct KeyBuilder {
