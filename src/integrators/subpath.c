@@ -461,6 +461,7 @@ bool subpath_light_vertex(const Scene *s, const SubpathParams *vp, const Subpath
 Color subpath_connect_light(const Scene *s, const SubpathIteration *it, const SubpathCameraVertex *x, Sampler *rng,
                             const Wavelengths *wl, uint64_t *rays)
 {
+    if (s->emitter_sampler.lights == 0) return color_s(0.0f); /* as subpath_trace_camera */
     return color_mul(x->sp.beta, connect_to_light(s, it, &x->sp, &x->bsdf, &x->sh, x->wo, rng, wl, rays));
 }
 
