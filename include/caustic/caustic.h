@@ -920,11 +920,11 @@ typedef struct CstRenderSettings {
      * pass and across camera moves without tracing the photons again. Another scene or
      * other settings rebuild them. One render at a time per cache. Not a scene setting. */
     struct CstPhotonCache *photon_cache;
-    /* Metropolis light transport (pssmlt; docs/integrators.md). spp is the mutations per
+    /* Metropolis light transport (pssmlt and mmlt; docs/integrators.md). spp is the mutations per
      * pixel. mlt_large_step: the probability of a large step (a fresh path), in [0, 1];
      * default 0.3 (0 is a value: a zero-initialised struct asks for small steps only). mlt_sigma: the width of a small step in primary sample space, in
      * (0, 1]; default 0.01. mlt_bootstrap: the paths that estimate the normalisation b and
-     * seed the chains, > 0; default 100000. mlt_chains: independent Markov chains, > 0;
+     * seed the chains, > 0; default 100000 (mmlt: per path length, at most 2^28 in all). mlt_chains: independent Markov chains, > 0;
      * default 1000 (fewer than the pixels: as many as the pixels). */
     double mlt_large_step, mlt_sigma;
     int mlt_bootstrap, mlt_chains;
