@@ -10,7 +10,7 @@
 #include "caustic/caustic.h"
 
 /* Valid values, shared by the help text and the error messages. */
-#define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm, bdpt, vcm, pssmlt"
+#define ARGS_INTEGRATOR_NAMES "path, path-nee, path-bsdf, light, whitted, photon, sppm, bdpt, vcm, pssmlt, mmlt"
 #define ARGS_FILTER_NAMES     "box, tent, gaussian, mitchell"
 #define ARGS_ACCEL_NAMES      "bvh, kdtree, grid, list, embree, octree"
 /* bench rays also takes Embree in its robust mode as a back end of its own. */

@@ -34,6 +34,7 @@ static const struct { const char *name; VerifyJudge judge; } CLI_VERIFY_JUDGES[]
     {"bdpt", VERIFY_EXACT},
     {"vcm", VERIFY_CONVERGE_SPP}, /* --spp counts iterations; the merging radius shrinks over them */
     {"pssmlt", VERIFY_CONVERGE_SPP}, /* --spp counts mutations per pixel; start-up bias and b shrink with them */
+    {"mmlt", VERIFY_CONVERGE_SPP},   /* as pssmlt */
 };
 
 static VerifyJudge cli_verify_judge(CstIntegrator id)

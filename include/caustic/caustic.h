@@ -673,9 +673,13 @@ typedef enum CstIntegrator {
     CST_INTEGRATOR_VCM,         /* vertex connection and merging (Georgiev et al. 2012):
                                  * BDPT plus photon merging with a shrinking radius
                                  * (photon_radius = the first iteration's); consistent */
-    CST_INTEGRATOR_PSSMLT       /* primary-sample-space Metropolis light transport (Kelemen
+    CST_INTEGRATOR_PSSMLT,      /* primary-sample-space Metropolis light transport (Kelemen
                                  * et al. 2002) over the path tracer: spp counts mutations per
                                  * pixel; the mlt_* settings; consistent (docs/integrators.md) */
+    CST_INTEGRATOR_MMLT         /* multiplexed MLT over BDPT (Hachisuka et al. 2014, pbrt-v4's
+                                 * "mlt"): chains per path length up to max_depth (0 = 5);
+                                 * spp counts mutations per pixel; the mlt_* settings
+                                 * (mlt_bootstrap per path length); consistent */
 } CstIntegrator;
 
 typedef enum CstFilter {
@@ -714,7 +718,7 @@ typedef enum CstColorMode {
 } CstColorMode;
 
 /* Parses "path", "path-nee", "path-bsdf", "light", "whitted", "photon", "sppm", "bdpt",
- * "vcm", "pssmlt" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
+ * "vcm", "pssmlt", "mmlt" (aliases "mis", "nee", "bsdf", "lighttracing"). Returns CST_INTEGRATOR_DEFAULT for an unknown name. */
 CST_API CstIntegrator cst_integrator_from_name(const char *name);
 CST_API const char *cst_integrator_name(CstIntegrator integrator);
 CST_API CstFilter cst_filter_from_name(const char *name);
@@ -885,11 +889,11 @@ typedef struct CstRenderSettings {
      * pass and across camera moves without tracing the photons again. Another scene or
      * other settings rebuild them. One render at a time per cache. Not a scene setting. */
     struct CstPhotonCache *photon_cache;
-    /* Metropolis light transport (pssmlt; docs/integrators.md). spp is the mutations per
+    /* Metropolis light transport (pssmlt and mmlt; docs/integrators.md). spp is the mutations per
      * pixel. mlt_large_step: the probability of a large step (a fresh path), in [0, 1];
      * default 0.3 (0 is a value: a zero-initialised struct asks for small steps only). mlt_sigma: the width of a small step in primary sample space, in
      * (0, 1]; default 0.01. mlt_bootstrap: the paths that estimate the normalisation b and
-     * seed the chains, > 0; default 100000. mlt_chains: independent Markov chains, > 0;
+     * seed the chains, > 0; default 100000 (mmlt: per path length, at most 2^28 in all). mlt_chains: independent Markov chains, > 0;
      * default 1000 (fewer than the pixels: as many as the pixels). */
     double mlt_large_step, mlt_sigma;
     int mlt_bootstrap, mlt_chains;

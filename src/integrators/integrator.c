@@ -386,6 +386,21 @@ static CstStatus mlt_prepare(Integrator *it, const CstRenderSettings *st, CstErr
     if (pixels > (size_t)INT32_MAX)
         return cst_fail(err, CST_ERR_INVALID_ARG, "image size %dx%d: too many pixels for MLT", st->width, st->height);
     MltParams p = {0};
+    if (st->integrator == CST_INTEGRATOR_MMLT) {
+        /* Multiplexed MLT needs a finite path length: pbrt-v4's default maxdepth, 5, for 0
+         * (unbounded). Bootstrap paths: mlt_bootstrap per length, as pbrt-v4. */
+        const int depth = st->max_depth > 0 ? st->max_depth : MMLT_DEFAULT_DEPTH;
+        if (depth >= (1 << 16) || (int64_t)st->mlt_bootstrap * (depth + 1) > (int64_t)1 << 28)
+            return cst_fail(err, CST_ERR_INVALID_ARG, "mmlt: max_depth %d with %d bootstrap paths per path length: "
+                            "expected at most 2^28 bootstrap paths in all (bootstrap x (max_depth + 1))", depth,
+                            st->mlt_bootstrap);
+        p.depths = depth + 1;
+        p.sub.merge = false;
+        p.sub.max_depth = depth;
+        p.sub.rr_depth = st->rr_depth;
+        p.sub.frame = splat_frame(st->width, st->height, st->filter);
+        vcm_iteration_init(&p.it, &p.sub, &it->camera, (int)pixels, 0.0f, 0);
+    }
     p.path.mode = PATH_MIS;
     p.path.max_depth = st->max_depth;
     p.path.rr_depth = st->rr_depth;
@@ -395,7 +410,7 @@ static CstStatus mlt_prepare(Integrator *it, const CstRenderSettings *st, CstErr
     p.margin = filter_radius(st->filter) - 0.5f;
     p.large_step_prob = (float)st->mlt_large_step;
     p.sigma = st->mlt_sigma;
-    p.bootstrap = st->mlt_bootstrap;
+    p.bootstrap = st->mlt_bootstrap * (p.depths > 0 ? p.depths : 1);
     /* At least one mutation per chain per iteration. */
     p.chains = (size_t)st->mlt_chains < pixels ? st->mlt_chains : (int)pixels;
     p.seed = st->seed;
@@ -587,7 +602,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     case CST_INTEGRATOR_BDPT:
     case CST_INTEGRATOR_VCM: it->kind = INTEGRATOR_BIDIR; break;
     case CST_INTEGRATOR_SPPM: it->kind = INTEGRATOR_SPPM; break;
-    case CST_INTEGRATOR_PSSMLT: it->kind = INTEGRATOR_PSSMLT; break;
+    case CST_INTEGRATOR_PSSMLT:
+    case CST_INTEGRATOR_MMLT: it->kind = INTEGRATOR_PSSMLT; break;
     case CST_INTEGRATOR_PATH:
     case CST_INTEGRATOR_PATH_NEE:
     case CST_INTEGRATOR_PATH_BSDF:
@@ -611,12 +627,13 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
-    /* MLT's target is path_li's estimate, media included (volpath_li reads the same Sampler).
-     * light and bdpt walk homogeneous media (subpath_media.c), light grids too; vcm does
-     * not merge in media. */
+    /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
+     * Sampler); mmlt's is BDPT's strategies without media (its strategy-only connections do
+     * not cross media yet). light and bdpt walk homogeneous media (subpath_media.c), light
+     * grids too; vcm does not merge in media. */
     const bool bidir_media = it->kind == INTEGRATOR_LIGHT || st->integrator == CST_INTEGRATOR_BDPT;
-    if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH && it->kind != INTEGRATOR_PSSMLT &&
-        !bidir_media)
+    if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH &&
+        (it->kind != INTEGRATOR_PSSMLT || st->integrator == CST_INTEGRATOR_MMLT) && !bidir_media)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
                         "use path, path-nee, path-bsdf, light or bdpt", cst_integrator_name(st->integrator));
     if (bidir_media) {
@@ -741,6 +758,7 @@ static const struct { const char *name; CstIntegrator id; } INTEGRATOR_NAMES[] =
     {"whitted", CST_INTEGRATOR_WHITTED}, {"photon", CST_INTEGRATOR_PHOTON},
     {"sppm", CST_INTEGRATOR_SPPM},       {"bdpt", CST_INTEGRATOR_BDPT},
     {"vcm", CST_INTEGRATOR_VCM},         {"pssmlt", CST_INTEGRATOR_PSSMLT},
+    {"mmlt", CST_INTEGRATOR_MMLT},
 };
 
 CstIntegrator cst_integrator_from_name(const char *name)
@@ -763,6 +781,7 @@ const char *cst_integrator_name(CstIntegrator integrator)
     case CST_INTEGRATOR_BDPT: return "bdpt";
     case CST_INTEGRATOR_VCM: return "vcm";
     case CST_INTEGRATOR_PSSMLT: return "pssmlt";
+    case CST_INTEGRATOR_MMLT: return "mmlt";
     case CST_INTEGRATOR_DEFAULT: break;
     }
     return "default";

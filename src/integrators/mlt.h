@@ -2,7 +2,10 @@
  * tracer's estimate (pssmlt): Markov chains of PSS states (sampling/pss_sampler.h), the
  * normalisation b from an independent bootstrap, chains started from the bootstrap's
  * distribution, and splats of both the proposal and the current state weighted by the
- * acceptance probability (Veach's expected-value estimator, thesis sec. 11.3). */
+ * acceptance probability (Veach's expected-value estimator, thesis sec. 11.3). With depths > 0
+ * (mmlt), multiplexed MLT over BDPT instead (Hachisuka, Kaplanyan & Dachsbacher 2014, as
+ * pbrt-v4's MLTIntegrator): each chain keeps one path length and its state picks one BDPT
+ * strategy of that length (subpath.h's single strategies). */
 #ifndef CST_INTEGRATORS_MLT_H
 #define CST_INTEGRATORS_MLT_H
 
@@ -13,12 +16,15 @@
 #include "core/rng.h"
 #include "film/film.h"
 #include "integrators/path.h"
+#include "integrators/subpath.h"
 #include "sampling/pss_sampler.h"
 #include "scene/scene.h"
 
 /* Bootstrap paths per work item of the bootstrap step. Fixed: the items write their own
  * slots of one array, so this never changes the image. */
 enum { MLT_BOOTSTRAP_CHUNK = 1024 };
+/* mmlt's path length for max_depth 0 (unbounded): pbrt-v4's default maxdepth. */
+enum { MMLT_DEFAULT_DEPTH = 5 };
 
 typedef struct MltParams {
     PathParams path;       /* the path tracer whose radiance estimate is the target */
@@ -26,10 +32,17 @@ typedef struct MltParams {
     float margin;          /* pixels past each edge the filter reaches (filter radius - 1/2) */
     float large_step_prob; /* Kelemen's p_large */
     double sigma;          /* small-step width in primary sample space */
-    int bootstrap;         /* bootstrap paths */
+    int bootstrap;         /* bootstrap paths (mmlt: in all, depths per path length) */
     int chains;
     uint64_t seed;
     bool spectral;
+    /* mmlt: 0 for pssmlt; else path lengths 0 .. depths - 1 (bounces), a chain for one
+     * length, bootstrap path i of length i % depths. */
+    int depths;
+    SubpathParams sub;   /* mmlt: BDPT's (merge false, max_depth depths - 1) */
+    SubpathIteration it; /* mmlt: BDPT's MIS constants (vcm_iteration_init with one light
+                          * path per pixel and no merging: the weights of one light path
+                          * per camera sample over the whole film) */
 } MltParams;
 
 /* One Markov chain: its PSS state and the current sample's film position, radiance (RGB)
@@ -40,6 +53,7 @@ typedef struct MltChain {
     Vec2 fp;
     Color L;
     float I;
+    int depth; /* mmlt: the path length (bounces) the chain explores */
 } MltChain;
 
 typedef struct Mlt {

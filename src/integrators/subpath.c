@@ -370,3 +370,157 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
     return color_add(L, hero);
 }
 
+
+
+/* ---- Single strategies (subpath.h), for multiplexed MLT: the walks above cut at the one
+ * vertex a strategy needs, and the connections above applied to it alone. */
+
+bool subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
+                           Ray ray, int hits, bool emission, Sampler *rng, const Wavelengths *wl,
+                           SubpathCameraVertex *out, Color *emitted, uint64_t *rays)
+{
+    *emitted = color_s(0.0f);
+    float cos_theta = v3_dot(ray.d, cam->forward);
+    if (!(cos_theta > 0.0f)) return false;
+    /* As subpath_trace_camera: d_vcm = N_light / p_camera (tech. rep. eqs. 31-33). */
+    SubPath sp = {color_s(1.0f), color_s(1.0f),
+                  camera_is_orthographic(cam) ? 0.0f : mis((float)it->light_paths / camera_pdf_w(it, cos_theta)),
+                  0.0f, 0.0f, false};
+    Wavelengths wc;
+    if (wl) wc = *wl;
+    bool dispersed = false;
+    for (int t = 1;; t++) {
+        SurfaceHit sh;
+        ++*rays;
+        if (!scene_intersect(s, &ray, &sh)) {
+            if (!emission || t != hits) return false;
+            /* s = 0 with the environment, weighted as subpath_trace_camera does. */
+            Color le = scene_env_radiance(s, ray.d, wl);
+            if (color_is_black(le)) return false;
+            float w = 1.0f;
+            if (t > 1) {
+                float direct = light_env_pdf(&s->emitter_sampler, ray.d);
+                float emission_pdf = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
+                w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
+            }
+            *emitted = color_mul(sp.beta, color_scale(le, w));
+            if (dispersed) *emitted = subpath_hero_only(*emitted);
+            return false;
+        }
+        Vec3 wo = v3_neg(ray.d);
+        float cos_in = fabsf(v3_dot(sh.ng, wo));
+        if (!(cos_in > 0.0f)) return false;
+        mis_arrive(&sp, sh.t, cos_in);
+        if (emission && t == hits) {
+            /* s = 0 at an emitter (tech. rep. eq. 39), weighted as subpath_trace_camera does. */
+            if (sh.emitter < 0) return false;
+            const Emitter *e = &s->emitter_sampler.light[sh.emitter].u.area;
+            Color le = scene_emission(s, &sh, wo, wl);
+            if (color_is_black(le)) return false;
+            float w = 1.0f;
+            if (t > 1) {
+                float pdf_a = emitter_pdf_a(&s->emitter_sampler, sh.emitter);
+                float emission_pdf = pdf_a * emitter_emission_pdf_w(e, sh.ng, wo);
+                w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
+            }
+            *emitted = color_mul(sp.beta, color_scale(le, w));
+            if (dispersed) *emitted = subpath_hero_only(*emitted);
+            return false;
+        }
+        Bsdf bsdf;
+        if (wl) {
+            scene_bsdf_disperse(s, &sh, &wc, &bsdf);
+            dispersed = wavelengths_secondary_terminated(&wc);
+        } else {
+            scene_bsdf(s, &sh, wl, &bsdf);
+        }
+        if (t == hits) {
+            if (emission || bsdf_is_delta(&bsdf)) return false; /* no connection to a Dirac */
+            *out = (SubpathCameraVertex){sh, bsdf, wo, sp, dispersed};
+            return true;
+        }
+        if (!subpath_scatter(s, &sp, it, &bsdf, &sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) return false;
+    }
+}
+
+/* subpath_light_vertex's visitor: keeps the vertex `bounces` and stops the walk there. */
+typedef struct LightTargetCtx {
+    int bounces;
+    bool found;
+    SubpathVertex *out;
+    const Wavelengths *walk_wl;
+} LightTargetCtx;
+
+static bool keep_target(void *ctx, const LightVertex *lv)
+{
+    LightTargetCtx *c = ctx;
+    if (lv->bounces < c->bounces) return true;
+    if (lv->bounces > c->bounces) return false;
+    const SurfaceHit *sh = lv->sh;
+    const SubPath *sp = &lv->sp;
+    const int dispersed = c->walk_wl && wavelengths_secondary_terminated(c->walk_wl);
+    *c->out = (SubpathVertex){sh->p, sh->ng, sh->ns, lv->w_prev, sp->beta, sp->d_vcm, sp->d_vc, sp->d_vm,
+                              sh->material, lv->bounces, sh->uv, dispersed};
+    c->found = true;
+    return false;
+}
+
+bool subpath_light_vertex(const Scene *s, const SubpathParams *vp, const SubpathIteration *it, int bounces,
+                          Sampler *rng, const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl,
+                          uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return false;
+    EmissionSample es;
+    subpath_emit(s, rng, wl, &es);
+    if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return false;
+    /* The light subpath's first MIS quantities, as subpath_trace_light sets them. */
+    float emission_pdf = es.pdf_a * es.pdf_w;
+    SubPath sp = subpath_start(es.beta);
+    sp.d_vcm = mis(es.nee_pdf / emission_pdf);
+    sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
+    sp.d_vm = sp.d_vc * it->mis_vc;
+    if (wl) *walk_wl = *wl;
+    LightTargetCtx c = {bounces, false, out, wl ? walk_wl : NULL};
+    /* max_depth = bounces: the walk samples no continuation past the vertex it needs. */
+    const LightWalk w = {bounces, vp->rr_depth, it, false, wl, keep_target, &c, wl ? walk_wl : NULL};
+    subpath_walk_light(s, &w, &es, sp, rng, rays);
+    return c.found;
+}
+
+Color subpath_connect_light(const Scene *s, const SubpathIteration *it, const SubpathCameraVertex *x, Sampler *rng,
+                            const Wavelengths *wl, uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return color_s(0.0f); /* as subpath_trace_camera */
+    return color_mul(x->sp.beta, connect_to_light(s, it, &x->sp, &x->bsdf, &x->sh, x->wo, rng, wl, rays));
+}
+
+Color subpath_connect_pair(const Scene *s, const SubpathIteration *it, const SubpathCameraVertex *x,
+                           const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
+{
+    LightBsdfs cache;
+    cache.built = 0;
+    /* j = LIGHT_BSDF_CACHE: y's BSDF built on the stack, not cached (one connection). */
+    return color_mul(x->sp.beta,
+                     connect_vertices(s, it, &x->sp, &x->bsdf, &x->sh, x->wo, y, LIGHT_BSDF_CACHE, &cache, wl, rays));
+}
+
+bool subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
+                            const SubpathVertex *y, Vec2 u_lens, const Wavelengths *wl, const Wavelengths *walk_wl,
+                            Vec2 *raster, Color *rgb, uint64_t *rays)
+{
+    LightBsdfs cache;
+    cache.built = 0;
+    Bsdf tmp;
+    const Bsdf *b = light_bsdf(s, &cache, LIGHT_BSDF_CACHE, y, wl, &tmp);
+    /* connect_to_camera's one splat into a list of one on the stack (no allocation), with
+     * no clamp: the caller's estimate is clamped where it is splatted. */
+    FilmSplat one;
+    SplatList l = {.v = &one, .cap = 1};
+    SubpathParams vq = *vp;
+    vq.frame.clamp = 0.0f;
+    connect_to_camera(s, cam, &vq, it, y, b, u_lens, y->dispersed ? walk_wl : wl, &l, rays);
+    if (l.n == 0) return false;
+    *raster = v2(one.x, one.y);
+    *rgb = color_rgb(one.r, one.g, one.b);
+    return true;
+}

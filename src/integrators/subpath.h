@@ -136,4 +136,56 @@ typedef struct SubpathMerge {
 Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                            Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays, const SubpathMerge *merge);
 
+/* ---- Single strategies, for multiplexed MLT (mlt.c; Hachisuka, Kaplanyan & Dachsbacher
+ * 2014, as pbrt-v4's MLTIntegrator): one strategy (s, t) of one path length, its subpaths
+ * walked to exactly the vertices it needs, each from its own sampler stream, and its
+ * contribution with the same MIS weight as BDPT gives it (the walks and connections are
+ * the ones above). pbrt's counts: t camera vertices with the camera, s light vertices with
+ * the one on the emitter, s + t - 2 bounces. */
+
+/* The last vertex of a camera subpath, kept for its connection. */
+typedef struct SubpathCameraVertex {
+    SurfaceHit sh;
+    Bsdf bsdf;
+    Vec3 wo;        /* unit, back along the camera subpath */
+    SubPath sp;     /* on arrival (beta: the throughput reaching it) */
+    bool dispersed; /* spectral: a dispersive refraction on the way (hero wavelength only) */
+} SubpathCameraVertex;
+
+/* Walks the camera subpath of `ray` to its hit number `hits` (>= 1). emission (the s = 0
+ * strategy): returns false and sets *emitted to the MIS-weighted emission, times beta,
+ * that the path finds there (an emitter hit, or the environment if it escapes after hits - 1
+ * bounces). Otherwise true with *out that vertex when it exists and is not purely delta
+ * (false, *emitted 0, when it does not). Spectral: *emitted keeps the hero alone after a
+ * dispersive refraction (as subpath_trace_camera). */
+bool subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
+                           Ray ray, int hits, bool emission, Sampler *rng, const Wavelengths *wl,
+                           SubpathCameraVertex *out, Color *emitted, uint64_t *rays);
+/* Walks a light subpath to its vertex `bounces` (>= 1), as subpath_trace_light's walk does
+ * (no t = 1 splats). True with *out when that vertex exists and is not purely delta.
+ * Spectral: *walk_wl is the walk's copy of wl (terminated by a dispersive refraction). */
+bool subpath_light_vertex(const Scene *s, const SubpathParams *vp, const SubpathIteration *it, int bounces,
+                          Sampler *rng, const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl,
+                          uint64_t *rays);
+/* s = 1: NEE from x (1D + 2D of rng), MIS-weighted, times x's beta. */
+Color subpath_connect_light(const Scene *s, const SubpathIteration *it, const SubpathCameraVertex *x, Sampler *rng,
+                            const Wavelengths *wl, uint64_t *rays);
+/* s >= 2, t >= 2: x connected to light vertex y, MIS-weighted, times x's beta. */
+Color subpath_connect_pair(const Scene *s, const SubpathIteration *it, const SubpathCameraVertex *x,
+                           const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays);
+/* t = 1: y connected to a lens point (u_lens), MIS-weighted: true with the film position
+ * and the splat's RGB (per unit film, as subpath_trace_light splats it; walk_wl: y's walk's
+ * wavelengths, NULL in RGB mode). */
+bool subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
+                            const SubpathVertex *y, Vec2 u_lens, const Wavelengths *wl, const Wavelengths *walk_wl,
+                            Vec2 *raster, Color *rgb, uint64_t *rays);
+/* Spectral: a contribution through a dispersive refraction, the hero wavelength alone (lane
+ * 0 times 4, the others 0), as subpath_trace_camera counts it. */
+static inline Color subpath_hero_only(Color c)
+{
+    Color h = color_s(0.0f);
+    h.c[0] = c.c[0] * (float)COLOR_LANES;
+    return h;
+}
+
 #endif

@@ -17,7 +17,7 @@ int cst_integrator_resumable(CstIntegrator integrator)
 {
     /* MLT's state is its chains, not film sums. (SPPM's visible points' radii, photon
      * counts and flux go in the state as Film.progressive.) */
-    return integrator != CST_INTEGRATOR_PSSMLT;
+    return integrator != CST_INTEGRATOR_PSSMLT && integrator != CST_INTEGRATOR_MMLT;
 }
 
 typedef struct KeyBuilder {

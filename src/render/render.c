@@ -229,7 +229,8 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     if (st.aovs & FILM_AOV_FIRST_HIT) per_pixel += FILM_AOV_STRIDE * sizeof(double);
     if (st.sample_block > 1) per_pixel *= 2; /* run_blocks' block film: the sums and AOV sums again */
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
-        st.integrator == CST_INTEGRATOR_VCM || st.integrator == CST_INTEGRATOR_PSSMLT)
+        st.integrator == CST_INTEGRATOR_VCM || st.integrator == CST_INTEGRATOR_PSSMLT ||
+        st.integrator == CST_INTEGRATOR_MMLT)
         per_pixel += 3 * sizeof(double); /* the iteration's image */
     uint64_t bytes = pixels * per_pixel;
     if (crop != pixels) bytes += crop * (6 + ((st.aovs & FILM_AOV_FIRST_HIT) ? FILM_AOV_STRIDE : 0)) * sizeof(double);
@@ -327,9 +328,10 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     if (st.first_sample > 0 && st.integrator == CST_INTEGRATOR_SPPM)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "first_sample %d: SPPM's iterations depend on every one "
                         "before them (radii, flux); expected first_sample 0 for sppm", st.first_sample);
-    if (st.first_sample > 0 && st.integrator == CST_INTEGRATOR_PSSMLT)
+    if (st.first_sample > 0 && (st.integrator == CST_INTEGRATOR_PSSMLT || st.integrator == CST_INTEGRATOR_MMLT))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "first_sample %d: MLT's mutations continue its chains from "
-                        "every one before them; expected first_sample 0 for pssmlt", st.first_sample);
+                        "every one before them; expected first_sample 0 for %s", st.first_sample,
+                        cst_integrator_name(st.integrator));
     if (!(0 <= st.crop[0] && st.crop[0] < st.crop[1] && st.crop[1] <= st.width && 0 <= st.crop[2] &&
           st.crop[2] < st.crop[3] && st.crop[3] <= st.height))
         return cst_fail(err, CST_ERR_INVALID_ARG,
@@ -344,7 +346,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "camera, or another integrator");
     if ((st.aovs & FILM_AOV_FIRST_HIT) &&
         (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_SPPM ||
-         st.integrator == CST_INTEGRATOR_PSSMLT))
+         st.integrator == CST_INTEGRATOR_PSSMLT || st.integrator == CST_INTEGRATOR_MMLT))
         return cst_fail(err, CST_ERR_UNSUPPORTED,
                         "the albedo, normal and depth AOVs come from camera rays, which the %s integrator "
                         "does not trace; expected path, path-nee, path-bsdf, whitted, photon, bdpt or vcm "

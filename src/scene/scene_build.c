@@ -995,7 +995,7 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
     if (setting_set(r->max_component, 1) && !(r->max_component > 0.0 && r->max_component <= (double)FLT_MAX))
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: max_component %g; expected a number > 0 (0 = no clamp)", fn,
                         r->max_component);
-    if ((int)r->integrator < CST_INTEGRATOR_DEFAULT || r->integrator > CST_INTEGRATOR_PSSMLT ||
+    if ((int)r->integrator < CST_INTEGRATOR_DEFAULT || r->integrator > CST_INTEGRATOR_MMLT ||
         (int)r->filter < CST_FILTER_DEFAULT || r->filter > CST_FILTER_MITCHELL ||
         (int)r->sampler < CST_SAMPLER_DEFAULT || r->sampler > CST_SAMPLER_ZSOBOL)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: integrator %d, filter %d or sampler %d is not one of the "

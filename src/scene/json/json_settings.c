@@ -254,9 +254,9 @@ static CstStatus parse_mlt(Loader *ld, const json_t *integ)
     json_int_t i = 0;
     if ((v = json_object_get(integ, "mutations_per_pixel"))) {
         json_path_push_key(ld, "mutations_per_pixel");
-        if (rs->integrator != CST_INTEGRATOR_PSSMLT)
+        if (rs->integrator != CST_INTEGRATOR_PSSMLT && rs->integrator != CST_INTEGRATOR_MMLT)
             return json_fail_here(ld, "mutations_per_pixel is the sample count of MLT; expected it with type "
-                                      "\"pssmlt\" (use the film's spp otherwise)");
+                                      "\"pssmlt\" or \"mmlt\" (use the film's spp otherwise)");
         LOADER_TRY(json_read_int(ld, v, 1, INT_MAX, &i));
         rs->spp = (int)i;
         json_path_pop(ld);
@@ -359,7 +359,7 @@ CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
         if (t == CST_INTEGRATOR_DEFAULT) {
             char name[72];
             return json_fail_here(ld, "unknown integrator \"%s\"; expected one of: path, path-nee, "
-                                      "path-bsdf, light, whitted, photon, sppm, bdpt, vcm, pssmlt",
+                                      "path-bsdf, light, whitted, photon, sppm, bdpt, vcm, pssmlt, mmlt",
                                   json_clip_name(s, name));
         }
         rs->integrator = t;

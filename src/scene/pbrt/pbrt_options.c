@@ -176,7 +176,7 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
         {"simplepath", CST_INTEGRATOR_PATH_NEE, 0}, {"randomwalk", CST_INTEGRATOR_PATH_BSDF, 0},
         {"lightpath", CST_INTEGRATOR_LIGHT, 1}, {"sppm", CST_INTEGRATOR_SPPM, 1},
         {"whitted", CST_INTEGRATOR_WHITTED, 1}, {"bdpt", CST_INTEGRATOR_BDPT, 1},
-        {"mlt", CST_INTEGRATOR_PSSMLT, 0}, {"simplevolpath", CST_INTEGRATOR_PATH, 0},
+        {"mlt", CST_INTEGRATOR_MMLT, 1}, {"simplevolpath", CST_INTEGRATOR_PATH, 0},
         {"directlighting", CST_INTEGRATOR_PATH, 0}, {"ambientocclusion", CST_INTEGRATOR_PATH, 0},
         {"aov", CST_INTEGRATOR_PATH, 0}};
     int k = -1;
@@ -236,7 +236,7 @@ CstStatus pbrt_integrator_directive(Loader *ld, NamedCall *call)
         TRY(pbrt_get_int(ld, ps, d, "iterations", 0, &iters));
         if (iters > 0) rs->spp = iters;
     }
-    if (map[k].ours == CST_INTEGRATOR_PSSMLT) {
+    if (map[k].ours == CST_INTEGRATOR_MMLT) {
         /* pbrt-v4's MLTIntegrator parameters, its defaults; mutationsperpixel, when given, is
          * the sample count (else the Sampler's pixelsamples, whichever directive comes first) */
         int mpp = -1, boot = 100000, chains = 1000;
