@@ -13,6 +13,9 @@
 
 #define FILM_STATE_MAGIC   "CSTSTATE"
 #define FILM_STATE_VERSION 1u
+/* Version 2: version 1 and, after the AOV sums, every pixel's own sample count (a film
+ * with pixel_spp, adaptive sampling). Films without per-pixel counts are written as 1. */
+#define FILM_STATE_VERSION_PIXEL_SPP 2u
 
 typedef enum StateValueType { STATE_INT = 1, STATE_REAL = 2, STATE_TEXT = 3 } StateValueType;
 
@@ -27,7 +30,7 @@ typedef struct StateKey {
 } StateKey;
 
 /* Writes `film` (its sums, sums of squares, AOV sums, film->spp as the samples [0, spp) of
- * every pixel) and the nkeys entries of `keys` to `path` through a temporary file renamed
+ * every pixel, or with pixel_spp each pixel's [0, count)) and the nkeys entries of `keys` to `path` through a temporary file renamed
  * into place (io/path.h; `announce` as CstImageWriteOptions.temp_file, may be NULL), so
  * an interrupted write never replaces a previous state. CST_ERR_IO with the reason. */
 CstStatus film_state_write(const char *path, const Film *film, const StateKey *keys, int nkeys,

@@ -17,6 +17,7 @@
 #include "core/threadpool.h"
 #include "film/film.h"
 #include "integrators/integrator.h"
+#include "render/adaptive.h"
 #include "scene/scene.h"
 
 /* Passes a fixed-spp render of few camera tiles is cut into, for progress (run_passes). */
@@ -198,6 +199,66 @@ static CstStatus run_blocks(Driver *d, Film *block, int *done, CstError *err)
     return CST_OK;
 }
 
+/* The next round of run_adaptive: with per-pixel counts, runs[0..*n); else *more
+ * iterations of the whole image. Returns its pixel samples, 0 when the render is done. */
+static uint64_t plan_round(const Film *film, const AdaptiveGrid *g, const CstRenderSettings *st, int cap,
+                           IntegratorTileRun *runs, int *n, int *more)
+{
+    uint64_t samples = 0;
+    if (film->pixel_spp) {
+        *n = adaptive_plan(film, g, st->noise_target, cap, runs, &samples);
+        return samples;
+    }
+    *more = adaptive_plan_uniform(film, g, st->noise_target, cap);
+    return (uint64_t)*more * (uint64_t)(g->x1 - g->x0) * (uint64_t)(g->y1 - g->y0);
+}
+
+/* A render with a noise target (adaptive.h), from the film as it is (a resumed one's sums
+ * and counts): rounds until no block asks for more samples, the sample cap (per pixel)
+ * or the time limit. Camera integrators: each round renders only the blocks above the
+ * target, each its own next samples (film->pixel_spp); light, bdpt and vcm: a round of
+ * iterations of the whole image, as many as the worst block asks for. Each round is
+ * planned from the completed rounds' sums alone; the time limit and pass_done act
+ * between rounds (a round is not cut: its plan is not in a state file). *done: film->spp. */
+static CstStatus run_adaptive(Driver *d, int *done, CstError *err)
+{
+    const CstRenderSettings *st = d->st;
+    Integrator *it = d->it;
+    Film *film = it->film;
+    const int cap = st->spp > 0 ? st->spp : CST_NOISE_SPP_CAP;
+    const double budget = st->time_limit > 0.0 ? st->time_limit : (double)INFINITY;
+    const AdaptiveGrid g = adaptive_grid(st->crop);
+    const bool per_block = film->pixel_spp != NULL;
+    IntegratorTileRun *runs = per_block ? malloc((size_t)g.tiles * sizeof *runs) : NULL;
+    if (per_block && !runs) return cst_fail(err, CST_ERR_OOM, "out of memory for %d blocks", g.tiles);
+    CstStatus status = CST_OK;
+    int n = 0, more = 0; /* the round planned: runs[0..n), or `more` iterations of the whole image */
+    uint64_t samples = plan_round(film, &g, st, cap, runs, &n, &more);
+    if (samples == 0) pass_finished(d, film->spp, true); /* a resume with nothing left to render */
+    while (samples > 0) {
+        const double t0 = clock_seconds();
+        if (per_block) {
+            it->tile_runs = runs;
+            it->num_tile_runs = n;
+            status = run_pass(d, 0, 1, 0.0, 0.0, err);
+            it->tile_runs = NULL;
+            if (status == CST_OK) adaptive_commit(film, &g, runs, n);
+        } else {
+            status = run_pass(d, film->spp, more, 0.0, 0.0, err);
+            if (status == CST_OK) film->spp += more;
+        }
+        if (status != CST_OK) break;
+        /* The next round is predicted to cost what this one did per pixel sample. */
+        const double now = clock_seconds(), per_sample = (now - t0) / (double)samples;
+        samples = plan_round(film, &g, st, cap, runs, &n, &more);
+        const bool last = samples == 0 || now - d->t0 + per_sample * (double)samples > budget;
+        if (pass_finished(d, film->spp, last) || last) break;
+    }
+    *done = film->spp;
+    free(runs);
+    return status;
+}
+
 /* The photon pass's progress (integrator_prepare), throttled like run_step's: the phase's
  * own fraction when the caller follows phases, else 0 (or the time limit's share). */
 static int prepare_progress(void *user, double fraction)
@@ -228,6 +289,15 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     uint64_t bytes = pixels * per_pixel;
     if (crop != pixels) bytes += crop * (6 + ((st.aovs & FILM_AOV_FIRST_HIT) ? FILM_AOV_STRIDE : 0)) * sizeof(double);
     return bytes + crop * 3 * sizeof(float); /* cst_film_write's float image */
+}
+
+/* The pixel samples the crop's pixels hold. */
+static uint64_t crop_samples(const Film *f, const AdaptiveGrid *g)
+{
+    uint64_t total = 0;
+    for (int y = g->y0; y < g->y1; y++)
+        for (int x = g->x0; x < g->x1; x++) total += (uint64_t)film_pixel_spp(f, (size_t)y * (size_t)f->width + (size_t)x);
+    return total;
 }
 
 static void fill_stats(CstRenderStats *stats, const CstRenderSettings *st, const Integrator *it,
@@ -290,9 +360,23 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         st.width, st.height);
     if (st.spp < 0 || st.time_limit < 0.0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
-    if (st.spp == 0 && !(st.time_limit > 0.0))
+    if (!(st.noise_target >= 0.0 && st.noise_target < (double)INFINITY))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "noise target %g: expected a relative standard error > 0 (or 0: "
+                        "none)", st.noise_target);
+    const bool noise = st.noise_target > 0.0;
+    if (st.spp == 0 && !(st.time_limit > 0.0) && !noise)
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp CST_SPP_UNLIMITED without a time limit would never end; "
                         "expected a time limit, or a sample count");
+    if (noise && (st.integrator == CST_INTEGRATOR_SPPM || st.integrator == CST_INTEGRATOR_PSSMLT))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target: the %s integrator's pixels are not means of "
+                        "independent samples (%s), so their variances say nothing of the error; expected path, "
+                        "path-nee, path-bsdf, whitted, photon (per block), light, bdpt or vcm (whole image)",
+                        cst_integrator_name(st.integrator),
+                        st.integrator == CST_INTEGRATOR_SPPM ? "one progressive estimate" : "Markov chains");
+    if (noise && (st.first_sample > 0 || st.sample_block > 1))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target with first_sample %d and sample_block %d: adaptive "
+                        "rounds are planned from the whole film; expected first_sample 0 and sample_block 1",
+                        st.first_sample, st.sample_block);
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
     if (st.first_sample < 0 || st.first_sample > INT_MAX - (st.spp > 0 ? st.spp : INT_MAX / 2))
         return cst_fail(err, CST_ERR_INVALID_ARG, "first_sample %d: expected >= 0, with first_sample + spp "
@@ -335,6 +419,14 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "expected a film of whole blocks (a state written at a block end)",
                         st.first_sample + st.resume->spp, st.sample_block);
     const Film *resume = st.resume;
+    /* Camera integrators sample each block on its own under a noise target. */
+    const bool per_block = noise && (st.integrator == CST_INTEGRATOR_PATH || st.integrator == CST_INTEGRATOR_PATH_NEE ||
+                                     st.integrator == CST_INTEGRATOR_PATH_BSDF || st.integrator == CST_INTEGRATOR_WHITTED ||
+                                     st.integrator == CST_INTEGRATOR_PHOTON || st.integrator == CST_INTEGRATOR_DEFAULT);
+    if (resume && (!resume->pixel_spp) != !per_block)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: a film %s per-pixel sample counts for a render %s them "
+                        "(a noise target with a camera integrator keeps them)", resume->pixel_spp ? "with" : "without",
+                        per_block ? "with" : "without");
     if (resume && !cst_integrator_resumable(st.integrator))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator cannot resume from a state file yet",
                         cst_integrator_name(st.integrator));
@@ -366,7 +458,15 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         memcpy(film->sum_sq, resume->sum_sq, n * sizeof *film->sum_sq);
         if (film->aov) memcpy(film->aov, resume->aov, n / 3 * FILM_AOV_STRIDE * sizeof *film->aov);
         film->spp = samples = first = resume->spp;
+        if (resume->pixel_spp && film_enable_pixel_spp(film))
+            memcpy(film->pixel_spp, resume->pixel_spp, n / 3 * sizeof *film->pixel_spp);
     }
+    if (film && per_block && !film->pixel_spp && !film_enable_pixel_spp(film)) {
+        film_destroy(film);
+        film = NULL;
+    }
+    const AdaptiveGrid grid = adaptive_grid(st.crop);
+    const uint64_t pixel_samples0 = film && noise ? crop_samples(film, &grid) : 0;
     if (!film || !workers || !it)
         status = cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d film", st.width, st.height);
     else if ((status = threadpool_create(st.threads, &d.pool)) != CST_OK)
@@ -387,12 +487,18 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                 status = cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d block film", st.width, st.height);
         }
         if (status == CST_OK &&
-            (status = block ? run_blocks(&d, block, &samples, err) : run_passes(&d, &samples, err)) == CST_OK)
+            (status = noise ? run_adaptive(&d, &samples, err)
+                      : block ? run_blocks(&d, block, &samples, err) : run_passes(&d, &samples, err)) == CST_OK)
             integrator_finish(it, samples);
         film_destroy(block);
     }
     double seconds = clock_seconds() - d.t0;
     threadpool_destroy(d.pool);
+    CstRenderStats noise_stats = {0};
+    if (status == CST_OK && noise) {
+        adaptive_summary(film, &grid, st.noise_target, &noise_stats);
+        noise_stats.samples = crop_samples(film, &grid) - pixel_samples0;
+    }
     const int cw = st.crop[1] - st.crop[0], ch = st.crop[3] - st.crop[2];
     if (status == CST_OK && (cw != st.width || ch != st.height)) {
         /* Light paths were traced for the whole image (their splats land anywhere), camera
@@ -407,6 +513,17 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         CstRenderStats done;
         fill_stats(&done, &st, it, workers, first, samples, rays, seconds);
         done.stopped = d.stopped;
+        if (noise) {
+            done.noise_rms = noise_stats.noise_rms;
+            done.noise_rms_lo = noise_stats.noise_rms_lo;
+            done.noise_rms_hi = noise_stats.noise_rms_hi;
+            done.noise_max = noise_stats.noise_max;
+            done.noise_blocks = noise_stats.noise_blocks;
+            done.noise_blocks_over = noise_stats.noise_blocks_over;
+            done.spp_min = noise_stats.spp_min;
+            /* Camera integrators: the pixel samples taken (light paths: as fill_stats counts). */
+            if (per_block) done.samples = noise_stats.samples;
+        }
         if (stats) *stats = done;
         *out = film;
         /* Issue 25: a render that lost many samples to NaN/Inf fails, film kept (caustic.h). */
