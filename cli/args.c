@@ -378,6 +378,14 @@ static bool args_apply_display(const char *value, CliArgs *out, ArgsError *err)
     return true;
 }
 
+/* --noise TARGET: a positive finite number, the seconds parser's rule (no sign, NaN, inf). */
+static bool args_apply_noise(const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    if (args_parse_seconds(value, &s->noise_target)) return true;
+    args_fail(err, false, "--noise: expected a relative standard error > 0 (0.01: 1%%), got '%s'", value);
+    return false;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -406,13 +414,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
             return false;
         }
         return true;
-    case ARGS_OPT_NOISE:
-        /* A positive finite number: the seconds parser's rule (no sign, no NaN, no inf). */
-        if (!args_parse_seconds(value, &s->noise_target)) {
-            args_fail(err, false, "--noise: expected a relative standard error > 0 (0.01: 1%%), got '%s'", value);
-            return false;
-        }
-        return true;
+    case ARGS_OPT_NOISE: return args_apply_noise(value, s, err);
     case ARGS_OPT_THREADS:
         if (!args_parse_long(value, 0, ARGS_MAX_THREADS, &v)) {
             args_fail(err, false,

@@ -349,6 +349,75 @@ CstStatus cst_film_create(const CstScene *scene, const CstRenderSettings *settin
     return CST_OK;
 }
 
+/* The render's film (NULL on OOM): empty, or with a resumed film's sums and counts (the
+ * passes add to them in the order an uninterrupted render would have); per-pixel counts
+ * when per_block. */
+static Film *render_film(const CstRenderSettings *st, bool per_block)
+{
+    const Film *resume = st->resume;
+    Film *film = film_create(st->width, st->height);
+    if (film) film_set_white_balance(film, st->white_balance);
+    if (!film || !film_set_output(film, st->aovs, st->exposure, st->png_linear) ||
+        (per_block && !film_enable_pixel_spp(film))) {
+        film_destroy(film);
+        return NULL;
+    }
+    if (resume) {
+        const size_t n = (size_t)st->width * (size_t)st->height;
+        memcpy(film->sum, resume->sum, 3 * n * sizeof *film->sum);
+        memcpy(film->sum_sq, resume->sum_sq, 3 * n * sizeof *film->sum_sq);
+        if (film->aov) memcpy(film->aov, resume->aov, n * FILM_AOV_STRIDE * sizeof *film->aov);
+        if (film->pixel_spp) memcpy(film->pixel_spp, resume->pixel_spp, n * sizeof *film->pixel_spp);
+        film->spp = resume->spp;
+    }
+    return film;
+}
+
+/* The noise fields of a render's stats from adaptive_summary's; with per-block sampling
+ * also the pixel samples taken (light paths: as fill_stats counts them). */
+static void noise_stats_copy(CstRenderStats *done, const CstRenderStats *noise, bool per_block)
+{
+    done->noise_rms = noise->noise_rms;
+    done->noise_rms_lo = noise->noise_rms_lo;
+    done->noise_rms_hi = noise->noise_rms_hi;
+    done->noise_max = noise->noise_max;
+    done->noise_blocks = noise->noise_blocks;
+    done->noise_blocks_over = noise->noise_blocks_over;
+    done->spp_min = noise->spp_min;
+    if (per_block) done->samples = noise->samples;
+}
+
+/* The noise target's checks (and spp 0's without a time limit, which a target allows). */
+static CstStatus check_noise(const CstRenderSettings *st, bool *per_block, CstError *err)
+{
+    /* Camera integrators sample each block on its own under a noise target. */
+    const CstIntegrator i = st->integrator;
+    *per_block = st->noise_target > 0.0 && (i == CST_INTEGRATOR_PATH || i == CST_INTEGRATOR_PATH_NEE ||
+                                            i == CST_INTEGRATOR_PATH_BSDF || i == CST_INTEGRATOR_WHITTED ||
+                                            i == CST_INTEGRATOR_PHOTON || i == CST_INTEGRATOR_DEFAULT);
+    if (st->resume && (!st->resume->pixel_spp) != !*per_block)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: a film %s per-pixel sample counts for a render %s them "
+                        "(a noise target with a camera integrator keeps them)",
+                        st->resume->pixel_spp ? "with" : "without", *per_block ? "with" : "without");
+    if (!(st->noise_target >= 0.0 && st->noise_target < (double)INFINITY))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "noise target %g: expected a relative standard error > 0 (or 0: "
+                        "none)", st->noise_target);
+    if (st->spp == 0 && !(st->time_limit > 0.0) && !(st->noise_target > 0.0))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "spp CST_SPP_UNLIMITED without a time limit would never end; "
+                        "expected a time limit, or a sample count");
+    if (st->noise_target > 0.0 && (st->integrator == CST_INTEGRATOR_SPPM || st->integrator == CST_INTEGRATOR_PSSMLT))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target: the %s integrator's pixels are not means of "
+                        "independent samples (%s), so their variances say nothing of the error; expected path, "
+                        "path-nee, path-bsdf, whitted, photon (per block), light, bdpt or vcm (whole image)",
+                        cst_integrator_name(st->integrator),
+                        st->integrator == CST_INTEGRATOR_SPPM ? "one progressive estimate" : "Markov chains");
+    if (st->noise_target > 0.0 && (st->first_sample > 0 || st->sample_block > 1))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target with first_sample %d and sample_block %d: adaptive "
+                        "rounds are planned from the whole film; expected first_sample 0 and sample_block 1",
+                        st->first_sample, st->sample_block);
+    return CST_OK;
+}
+
 CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, CstFilm **out,
                      CstRenderStats *stats, CstError *err)
 {
@@ -360,23 +429,10 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         st.width, st.height);
     if (st.spp < 0 || st.time_limit < 0.0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
-    if (!(st.noise_target >= 0.0 && st.noise_target < (double)INFINITY))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "noise target %g: expected a relative standard error > 0 (or 0: "
-                        "none)", st.noise_target);
+    bool per_block;
+    const CstStatus noise_ok = check_noise(&st, &per_block, err);
+    if (noise_ok != CST_OK) return noise_ok;
     const bool noise = st.noise_target > 0.0;
-    if (st.spp == 0 && !(st.time_limit > 0.0) && !noise)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "spp CST_SPP_UNLIMITED without a time limit would never end; "
-                        "expected a time limit, or a sample count");
-    if (noise && (st.integrator == CST_INTEGRATOR_SPPM || st.integrator == CST_INTEGRATOR_PSSMLT))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target: the %s integrator's pixels are not means of "
-                        "independent samples (%s), so their variances say nothing of the error; expected path, "
-                        "path-nee, path-bsdf, whitted, photon (per block), light, bdpt or vcm (whole image)",
-                        cst_integrator_name(st.integrator),
-                        st.integrator == CST_INTEGRATOR_SPPM ? "one progressive estimate" : "Markov chains");
-    if (noise && (st.first_sample > 0 || st.sample_block > 1))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target with first_sample %d and sample_block %d: adaptive "
-                        "rounds are planned from the whole film; expected first_sample 0 and sample_block 1",
-                        st.first_sample, st.sample_block);
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
     if (st.first_sample < 0 || st.first_sample > INT_MAX - (st.spp > 0 ? st.spp : INT_MAX / 2))
         return cst_fail(err, CST_ERR_INVALID_ARG, "first_sample %d: expected >= 0, with first_sample + spp "
@@ -419,14 +475,6 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "expected a film of whole blocks (a state written at a block end)",
                         st.first_sample + st.resume->spp, st.sample_block);
     const Film *resume = st.resume;
-    /* Camera integrators sample each block on its own under a noise target. */
-    const bool per_block = noise && (st.integrator == CST_INTEGRATOR_PATH || st.integrator == CST_INTEGRATOR_PATH_NEE ||
-                                     st.integrator == CST_INTEGRATOR_PATH_BSDF || st.integrator == CST_INTEGRATOR_WHITTED ||
-                                     st.integrator == CST_INTEGRATOR_PHOTON || st.integrator == CST_INTEGRATOR_DEFAULT);
-    if (resume && (!resume->pixel_spp) != !per_block)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: a film %s per-pixel sample counts for a render %s them "
-                        "(a noise target with a camera integrator keeps them)", resume->pixel_spp ? "with" : "without",
-                        per_block ? "with" : "without");
     if (resume && !cst_integrator_resumable(st.integrator))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator cannot resume from a state file yet",
                         cst_integrator_name(st.integrator));
@@ -438,33 +486,13 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         "size and AOVs, and no more samples (cst_film_state_read checks a state file)",
                         resume->width, resume->height, resume->aov ? " with AOV sums" : "", resume->spp, st.width,
                         st.height, (st.aovs & FILM_AOV_FIRST_HIT) ? " with AOV sums" : "", st.spp);
-    Film *film = film_create(st.width, st.height);
-    if (film) film_set_white_balance(film, st.white_balance);
-    if (film && !film_set_output(film, st.aovs, st.exposure, st.png_linear)) {
-        film_destroy(film);
-        film = NULL;
-    }
+    Film *film = render_film(&st, per_block);
     IntegratorWorker *workers = calloc((size_t)st.threads, sizeof *workers);
     Integrator *it = calloc(1, sizeof *it);
     Driver d = {NULL, it, &st, clock_seconds(), 0.0, false};
     CstStatus status = CST_OK;
     uint64_t rays = 0;
-    int samples = 0, first = 0;
-    if (film && resume) {
-        /* The sums as the interrupted render left them: the passes add to them in the
-         * order an uninterrupted render would have. */
-        const size_t n = 3 * (size_t)st.width * (size_t)st.height;
-        memcpy(film->sum, resume->sum, n * sizeof *film->sum);
-        memcpy(film->sum_sq, resume->sum_sq, n * sizeof *film->sum_sq);
-        if (film->aov) memcpy(film->aov, resume->aov, n / 3 * FILM_AOV_STRIDE * sizeof *film->aov);
-        film->spp = samples = first = resume->spp;
-        if (resume->pixel_spp && film_enable_pixel_spp(film))
-            memcpy(film->pixel_spp, resume->pixel_spp, n / 3 * sizeof *film->pixel_spp);
-    }
-    if (film && per_block && !film->pixel_spp && !film_enable_pixel_spp(film)) {
-        film_destroy(film);
-        film = NULL;
-    }
+    int samples = resume ? resume->spp : 0, first = samples;
     const AdaptiveGrid grid = adaptive_grid(st.crop);
     const uint64_t pixel_samples0 = film && noise ? crop_samples(film, &grid) : 0;
     if (!film || !workers || !it)
@@ -513,17 +541,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         CstRenderStats done;
         fill_stats(&done, &st, it, workers, first, samples, rays, seconds);
         done.stopped = d.stopped;
-        if (noise) {
-            done.noise_rms = noise_stats.noise_rms;
-            done.noise_rms_lo = noise_stats.noise_rms_lo;
-            done.noise_rms_hi = noise_stats.noise_rms_hi;
-            done.noise_max = noise_stats.noise_max;
-            done.noise_blocks = noise_stats.noise_blocks;
-            done.noise_blocks_over = noise_stats.noise_blocks_over;
-            done.spp_min = noise_stats.spp_min;
-            /* Camera integrators: the pixel samples taken (light paths: as fill_stats counts). */
-            if (per_block) done.samples = noise_stats.samples;
-        }
+        if (noise) noise_stats_copy(&done, &noise_stats, per_block);
         if (stats) *stats = done;
         *out = film;
         /* Issue 25: a render that lost many samples to NaN/Inf fails, film kept (caustic.h). */
