@@ -240,7 +240,8 @@ static CstStatus run_adaptive(Driver *d, int *done, CstError *err)
         if (per_block) {
             it->tile_runs = runs;
             it->num_tile_runs = n;
-            status = run_pass(d, 0, 1, 0.0, 0.0, err);
+            /* Progress: the share of blocks already within the target. */
+            status = run_pass(d, 0, 1, 1.0 - (double)n / g.tiles, 0.0, err);
             it->tile_runs = NULL;
             if (status == CST_OK) adaptive_commit(film, &g, runs, n);
         } else {
@@ -283,6 +284,7 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     uint64_t per_pixel = 6 * sizeof(double); /* film_create: sum and sum of squares */
     if (st.aovs & FILM_AOV_FIRST_HIT) per_pixel += FILM_AOV_STRIDE * sizeof(double);
     if (st.sample_block > 1) per_pixel *= 2; /* run_blocks' block film: the sums and AOV sums again */
+    if (st.noise_target > 0.0) per_pixel += sizeof(int); /* Film.pixel_spp (adaptive.h) */
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
         st.integrator == CST_INTEGRATOR_VCM || st.integrator == CST_INTEGRATOR_PSSMLT)
         per_pixel += 3 * sizeof(double); /* the iteration's image */

@@ -8,10 +8,12 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
 
 #include "film/film.h"
+#include "film/film_state.h"
 #include "render/adaptive.h"
 #include "scene/scene.h"
 #include "unit/scratch_dir.h"
@@ -186,6 +188,41 @@ static void test_resume(void **state)
     film_destroy(whole);
 }
 
+/* A state of version 2 (per-pixel counts): every prefix, and a changed count, refused. */
+static void test_state_v2_checked(void **state)
+{
+    (void)state;
+    char path[300];
+    tpath(path, sizeof path, "v2.state");
+    CstRenderSettings st = settings(20, 18, 0.05, 0, 1, 6);
+    CstError err;
+    Film *f = render(&st, NULL);
+    assert_int_equal(cst_film_state_write(path, f, g_box, &st, "builtin:cornell-box", NULL, &err), CST_OK);
+    FILE *fp = fopen(path, "rb");
+    assert_non_null(fp);
+    static unsigned char bytes[1 << 16];
+    const size_t len = fread(bytes, 1, sizeof bytes, fp);
+    fclose(fp);
+    assert_true(len > 20 * 18 * 4 && len < sizeof bytes);
+    assert_int_equal(bytes[8], FILM_STATE_VERSION_PIXEL_SPP);
+    StateKey *keys = calloc(STATE_KEYS_MAX, sizeof *keys);
+    int nkeys;
+    Film *back = NULL;
+    assert_int_equal(film_state_read_mem("v2", bytes, len, &back, keys, &nkeys, &err), CST_OK);
+    assert_true(films_identical(f, back));
+    film_destroy(back);
+    for (size_t n = 0; n < len; n++) {
+        Film *g = NULL;
+        if (film_state_read_mem("v2", bytes, n, &g, keys, &nkeys, &err) != CST_ERR_PARSE) fail_msg("prefix %zu read", n);
+    }
+    bytes[len - 4 - 4 * 7] ^= 1; /* a pixel's count */
+    Film *g = NULL;
+    assert_int_equal(film_state_read_mem("v2", bytes, len, &g, keys, &nkeys, &err), CST_ERR_PARSE);
+    assert_non_null(strstr(err.msg, "CRC-32"));
+    free(keys);
+    film_destroy(f);
+}
+
 /* Light, bdpt, vcm: whole-image rounds, every pixel the same count. */
 static void test_whole_image(void **state)
 {
@@ -248,6 +285,7 @@ int main(void)
         cmocka_unit_test(test_loose_target_stops),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_resume),
+        cmocka_unit_test(test_state_v2_checked),
         cmocka_unit_test(test_whole_image),
         cmocka_unit_test(test_refused),
     };
