@@ -21,7 +21,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING,
     ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT,
     ARGS_OPT_DISPLAY,
-    ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK, ARGS_OPT_PIXEL, ARGS_OPT_SAMPLE
+    ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK, ARGS_OPT_PIXEL, ARGS_OPT_SAMPLE, ARGS_OPT_NOISE
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -68,6 +68,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"resume",     0,   ARGS_VALUE, ARGS_OPT_RESUME},
     {"first-sample", 0, ARGS_VALUE, ARGS_OPT_FIRST_SAMPLE},
     {"sample-block", 0, ARGS_VALUE, ARGS_OPT_SAMPLE_BLOCK},
+    {"noise",      0,   ARGS_VALUE, ARGS_OPT_NOISE},
     {"quiet",      'q', ARGS_FLAG,  ARGS_OPT_QUIET},
     {"help",       'h', ARGS_FLAG,  ARGS_OPT_HELP},
     {"script",     0,   ARGS_VALUE,  ARGS_OPT_SCRIPT}, /* view only */
@@ -415,6 +416,14 @@ bad:
     return false;
 }
 
+/* --noise TARGET: a positive finite number, the seconds parser's rule (no sign, NaN, inf). */
+static bool args_apply_noise(const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    if (args_parse_seconds(value, &s->noise_target)) return true;
+    args_fail(err, false, "--noise: expected a relative standard error > 0 (0.01: 1%%), got '%s'", value);
+    return false;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -444,6 +453,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
             return false;
         }
         return true;
+    case ARGS_OPT_NOISE: return args_apply_noise(value, s, err);
     case ARGS_OPT_THREADS:
         if (!args_parse_long(value, 0, ARGS_MAX_THREADS, &v)) {
             args_fail(err, false,
@@ -555,8 +565,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         return true;
     case ARGS_OPT_CHECKPOINT: case ARGS_OPT_RESUME: case ARGS_OPT_CHECKPOINT_EVERY:
         return args_apply_checkpoint(o, value, out, err);
-    case ARGS_OPT_FIRST_SAMPLE:
-    case ARGS_OPT_SAMPLE_BLOCK: return args_apply_range(o, value, s, err);
+    case ARGS_OPT_FIRST_SAMPLE: case ARGS_OPT_SAMPLE_BLOCK: return args_apply_range(o, value, s, err);
     case ARGS_OPT_HELP:
         if (out->command != ARGS_CMD_HELP) out->help_for = out->command;
         out->command = ARGS_CMD_HELP;
@@ -613,6 +622,10 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
     /* --time without --spp: as many samples as fit, whatever spp the scene file sets
      * (the README's promise); with both, whichever comes first. */
     if (out->command == ARGS_CMD_RENDER && out->settings.time_limit != CST_UNSET &&
+        out->settings.spp == CST_UNSET)
+        out->settings.spp = CST_SPP_UNLIMITED;
+    /* --noise without --spp: as many samples as the target needs, up to CST_NOISE_SPP_CAP. */
+    if (out->command == ARGS_CMD_RENDER && out->settings.noise_target != CST_UNSET &&
         out->settings.spp == CST_UNSET)
         out->settings.spp = CST_SPP_UNLIMITED;
     return true;

@@ -49,7 +49,13 @@ static void cli_print_job(const CliArgs *a, const CstScene *scene, const CstRend
     CstRenderSettings s;
     cst_render_settings_resolve(scene, settings, &s);
     char work[96];
-    if (s.spp && s.time_limit > 0.0)
+    if (s.noise_target > 0.0 && s.time_limit > 0.0)
+        snprintf(work, sizeof work, "noise target %g, at most %d spp and %g s", s.noise_target,
+                 s.spp > 0 ? s.spp : CST_NOISE_SPP_CAP, s.time_limit);
+    else if (s.noise_target > 0.0)
+        snprintf(work, sizeof work, "noise target %g, at most %d spp", s.noise_target,
+                 s.spp > 0 ? s.spp : CST_NOISE_SPP_CAP);
+    else if (s.spp && s.time_limit > 0.0)
         snprintf(work, sizeof work, "%d spp or %g s, whichever comes first", s.spp, s.time_limit);
     else if (s.time_limit > 0.0)
         snprintf(work, sizeof work, "time limit %g s", s.time_limit);
@@ -100,9 +106,15 @@ static void cli_print_summary(const char *output, const CstRenderStats *st)
         char samples[32], rays[32];
         cli_format_rate((double)st->samples, st->seconds, samples, sizeof samples);
         cli_format_rate((double)st->rays, st->seconds, rays, sizeof rays);
-        snprintf(line + n, sizeof line - (size_t)n, ", %s M samples/s, %s M rays/s", samples,
-                 rays);
+        n += snprintf(line + n, sizeof line - (size_t)n, ", %s M samples/s, %s M rays/s", samples,
+                      rays);
     }
+    /* --noise: the blocks' estimated relative error (render/adaptive.h) and its interval. */
+    if (n > 0 && (size_t)n < sizeof line && st->noise_blocks > 0)
+        snprintf(line + n, sizeof line - (size_t)n,
+                 "; noise %.4g rms over %d blocks (95%% CI %.4g-%.4g), max %.4g, %d above the target; "
+                 "%d-%d spp", st->noise_rms, st->noise_blocks, st->noise_rms_lo, st->noise_rms_hi,
+                 st->noise_max, st->noise_blocks_over, st->spp_min, st->spp);
     fprintf(stderr, "%s\n", line);
 }
 
@@ -351,6 +363,13 @@ static CstStatus cli_render_film(const CliArgs *a, const CstScene *scene, const 
         CstStatus status = cst_render(scene, settings, film, stats, err);
         cli_signals_stop_disarm();
         return status;
+    }
+    CstRenderSettings rs;
+    cst_render_settings_resolve(scene, settings, &rs);
+    if (rs.noise_target > 0.0) {
+        snprintf(err->msg, sizeof err->msg, "under mpirun: --noise plans each round from the whole film, which no "
+                 "rank holds; expected no --noise (or one process)");
+        return CST_ERR_UNSUPPORTED;
     }
     /* Under mpirun a signal ends the job: no rank holds the film between blocks. */
     if (a->checkpoint_path) {

@@ -96,6 +96,16 @@ bool cli_summary_write(FILE *f, const CliSummary *s)
     json_object_set_new(o, "samples_per_second", json_real((double)st->samples * rate));
     json_object_set_new(o, "rays_per_second", json_real((double)st->rays * rate));
     json_object_set_new(o, "nonfinite_discarded", json_integer((json_int_t)st->nonfinite));
+    if (st->noise_blocks > 0) { /* --noise: render/adaptive.h's estimate (caustic.h, CstRenderStats) */
+        json_t *z = json_object();
+        json_object_set_new(z, "rms", json_real(st->noise_rms));
+        json_object_set_new(z, "rms_ci95", json_pack("[ff]", st->noise_rms_lo, st->noise_rms_hi));
+        json_object_set_new(z, "max", json_real(st->noise_max));
+        json_object_set_new(z, "blocks", json_integer(st->noise_blocks));
+        json_object_set_new(z, "blocks_above_target", json_integer(st->noise_blocks_over));
+        json_object_set_new(z, "spp_min", json_integer(st->spp_min));
+        json_object_set_new(o, "noise", z);
+    }
     json_object_set_new(o, "image_memory_estimate_bytes", json_integer((json_int_t)s->memory_estimate));
     json_object_set_new(o, "peak_rss_bytes", json_integer((json_int_t)cli_peak_rss()));
     int rc = o ? json_dumpf(o, f, JSON_COMPACT | JSON_REAL_PRECISION(6)) : -1;

@@ -906,7 +906,21 @@ typedef struct CstRenderSettings {
      * the pass callback, the time limit and a stop act at block ends only. Not a scene
      * setting. */
     int sample_block;
+    /* Adaptive sampling by quality (--noise; docs/cli.md, "Stopping by noise"): > 0, render in
+     * rounds until every 16x16 block's estimated relative standard error (of the block's
+     * mean luminance, from the pixels' variances of the mean) is at most this. Camera
+     * integrators (path, path-nee, path-bsdf, whitted, photon) give more samples only to the
+     * blocks above it; light, bdpt and vcm add iterations to the whole image until every
+     * block is below it; sppm and pssmlt refuse it (CST_ERR_UNSUPPORTED). spp caps each
+     * pixel's samples (spp 0 = CST_NOISE_SPP_CAP), time_limit the render. Every decision
+     * depends on the completed rounds' sums alone: deterministic for any thread count, and
+     * resumable (the state holds the per-pixel counts). Needs first_sample 0 and
+     * sample_block 1. 0 or unset = off (the default). Not a scene setting. */
+    double noise_target;
 } CstRenderSettings;
+
+/* noise_target with spp 0 (unlimited): each pixel's samples are capped at this. */
+#define CST_NOISE_SPP_CAP 65536
 
 /* spp = CST_SPP_UNLIMITED: no sample cap, even over a scene's spp; with a time limit
  * (required), as many samples (iterations, passes) as fit in it. Resolves to spp 0. */
@@ -959,6 +973,14 @@ typedef struct CstRenderStats {
     int first_spp;            /* samples (iterations) the render resumed from; 0 = a fresh one.
                                * spp counts them, samples and rays only this render's work */
     int stopped;              /* 1: CstRenderSettings.pass_done stopped it before its end */
+    /* With noise_target (else all 0): the relative standard errors of the 16x16 blocks'
+     * mean luminances as the film ends (render/adaptive.h): their root mean square over the
+     * blocks with its 95% confidence interval (the variance estimates' chi-square spread,
+     * Satterthwaite's degrees of freedom), the largest, the number of blocks and of those
+     * still above the target (at the sample cap or the time limit), and the fewest samples
+     * any pixel of the crop holds (spp: the most). */
+    double noise_rms, noise_rms_lo, noise_rms_hi, noise_max;
+    int noise_blocks, noise_blocks_over, spp_min;
 } CstRenderStats;
 
 typedef struct CstFilm CstFilm;

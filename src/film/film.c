@@ -48,6 +48,10 @@ Film *film_crop(const Film *f, int x0, int y0, int w, int h)
     Film *c = film_create(w, h);
     if (!c) return NULL;
     c->spp = f->spp;
+    if (f->pixel_spp && !(c->pixel_spp = malloc((size_t)w * (size_t)h * sizeof *c->pixel_spp))) {
+        film_destroy(c);
+        return NULL;
+    }
     c->aovs = f->aovs;
     c->exposure_scale = f->exposure_scale;
     c->png_linear = f->png_linear;
@@ -61,6 +65,7 @@ Film *film_crop(const Film *f, int x0, int y0, int w, int h)
         size_t from = (size_t)(y0 + y) * (size_t)f->width + (size_t)x0, to = (size_t)y * (size_t)w;
         memcpy(&c->sum[3 * to], &f->sum[3 * from], 3 * (size_t)w * sizeof *c->sum);
         memcpy(&c->sum_sq[3 * to], &f->sum_sq[3 * from], 3 * (size_t)w * sizeof *c->sum_sq);
+        if (f->pixel_spp) memcpy(&c->pixel_spp[to], &f->pixel_spp[from], (size_t)w * sizeof *c->pixel_spp);
         if (f->aov)
             memcpy(&c->aov[FILM_AOV_STRIDE * to], &f->aov[FILM_AOV_STRIDE * from],
                    FILM_AOV_STRIDE * (size_t)w * sizeof *c->aov);
@@ -73,9 +78,18 @@ void film_destroy(Film *f)
     if (!f) return;
     free(f->sum);
     free(f->sum_sq);
+    free(f->pixel_spp);
     free(f->aov);
     free(f->progressive);
     free(f);
+}
+
+int film_enable_pixel_spp(Film *f)
+{
+    const size_t n = (size_t)f->width * (size_t)f->height;
+    if (!f->pixel_spp && !(f->pixel_spp = malloc(n * sizeof *f->pixel_spp))) return 0;
+    for (size_t i = 0; i < n; i++) f->pixel_spp[i] = f->spp;
+    return 1;
 }
 
 void film_add(Film *dst, const Film *src)
@@ -96,6 +110,9 @@ CstStatus cst_film_add(CstFilm *dst, const CstFilm *src, CstError *err)
         return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_add: a %dx%d film%s and a %dx%d film%s; expected the "
                         "same size and AOV sums", dst->width, dst->height, dst->aov ? " with AOV sums" : "",
                         src->width, src->height, src->aov ? " with AOV sums" : "");
+    if (dst->pixel_spp || src->pixel_spp)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "cst_film_add: a film of adaptive sampling (--noise: sample "
+                        "counts per block); expected films of the same samples in every pixel");
     film_add(dst, src);
     dst->spp += src->spp;
     return CST_OK;
@@ -117,17 +134,20 @@ int cst_film_spp(const CstFilm *f) { return f->spp; }
 
 void cst_film_pixel(const CstFilm *f, int x, int y, double rgb_out[3])
 {
-    const double *s = &f->sum[3 * ((size_t)y * (size_t)f->width + (size_t)x)];
-    double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
+    const size_t i = (size_t)y * (size_t)f->width + (size_t)x;
+    const double *s = &f->sum[3 * i];
+    const int spp = film_pixel_spp(f, i);
+    double inv = spp > 0 ? 1.0 / spp : 0.0;
     for (int c = 0; c < 3; c++) rgb_out[c] = s[c] * inv;
 }
 
 void cst_film_pixel_variance(const CstFilm *f, int x, int y, double var[3])
 {
-    size_t i = 3 * ((size_t)y * (size_t)f->width + (size_t)x);
-    double n = (double)f->spp;
+    const size_t p = (size_t)y * (size_t)f->width + (size_t)x, i = 3 * p;
+    const int spp = film_pixel_spp(f, p);
+    double n = (double)spp;
     for (int c = 0; c < 3; c++) {
-        if (f->spp < 2) { var[c] = 0.0; continue; }
+        if (spp < 2) { var[c] = 0.0; continue; }
         double mean = f->sum[i + c] / n;
         /* Unbiased sample variance, divided by n for the variance of the mean. */
         double v = (f->sum_sq[i + c] - n * mean * mean) / (n - 1.0);
@@ -157,9 +177,10 @@ CstStatus cst_film_aov_pixels(const CstFilm *f, int aov, float *out, CstError *e
         return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_aov_pixels: aov %d; expected one of CST_AOV_ALBEDO, "
                         "CST_AOV_NORMAL, CST_AOV_DEPTH that the film was rendered with (aovs %d)", aov, f->aovs);
     size_t pixels = (size_t)f->width * (size_t)f->height;
-    double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
     for (size_t i = 0; i < pixels; i++) {
         const double *a = &f->aov[FILM_AOV_STRIDE * i];
+        const int spp = film_pixel_spp(f, i);
+        const double inv = spp > 0 ? 1.0 / spp : 0.0;
         if (aov == CST_AOV_ALBEDO) {
             for (int c = 0; c < 3; c++) out[3 * i + (size_t)c] = (float)(a[c] * inv);
         } else if (aov == CST_AOV_NORMAL) { /* renormalised as the EXR's N channels */
@@ -196,8 +217,15 @@ int cst_image_path_is_exr(const char *path) { return image_path_is_exr(path); }
 
 void film_resolve(const Film *f, float *rgb_out)
 {
-    double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
     size_t n = (size_t)f->width * (size_t)f->height * 3u;
+    if (f->pixel_spp) {
+        for (size_t i = 0; i < n; i++) {
+            const int spp = f->pixel_spp[i / 3];
+            rgb_out[i] = (float)(f->sum[i] * (spp > 0 ? 1.0 / spp : 0.0));
+        }
+        return;
+    }
+    double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
     for (size_t i = 0; i < n; i++) rgb_out[i] = (float)(f->sum[i] * inv);
 }
 
@@ -224,7 +252,8 @@ static void film_aov_pixel(const Film *f, size_t i, float *out)
 {
     int n = 0;
     const double *a = f->aov ? &f->aov[FILM_AOV_STRIDE * i] : NULL;
-    double inv = f->spp > 0 ? 1.0 / f->spp : 0.0;
+    const int spp = film_pixel_spp(f, i);
+    double inv = spp > 0 ? 1.0 / spp : 0.0;
     if (f->aovs & CST_AOV_ALBEDO)
         for (int c = 0; c < 3; c++) out[n++] = (float)(a[c] * inv);
     if (f->aovs & CST_AOV_NORMAL) {

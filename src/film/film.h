@@ -18,9 +18,12 @@ enum { FILM_PROGRESSIVE_STRIDE = 8 };
 
 struct CstFilm {
     int width, height;
-    int spp;        /* samples accumulated in every pixel */
+    int spp;        /* samples accumulated in every pixel (with pixel_spp: the most any holds) */
     double *sum;    /* 3 per pixel */
     double *sum_sq; /* 3 per pixel */
+    /* NULL: every pixel holds spp samples. Else each pixel's own count (--noise's adaptive
+     * sampling, render/adaptive.h: pixels of one 16x16 block share a count). */
+    int *pixel_spp;
     /* Output settings, applied by cst_film_write only */
     int aovs;               /* CST_AOV_* bits */
     double *aov;            /* FILM_AOV_STRIDE per pixel when aovs & FILM_AOV_FIRST_HIT, else NULL */
@@ -46,6 +49,11 @@ void film_destroy(Film *film);
 /* A new film holding the w x h pixels of f from (x0, y0) (sums, AOV sums, spp and output
  * settings); NULL on OOM. */
 Film *film_crop(const Film *f, int x0, int y0, int w, int h);
+
+/* The samples pixel i (row-major index) holds. */
+static inline int film_pixel_spp(const Film *f, size_t i) { return f->pixel_spp ? f->pixel_spp[i] : f->spp; }
+/* Gives f per-pixel counts, all f->spp; returns 0 on OOM. */
+int film_enable_pixel_spp(Film *f);
 
 /* dst's sums plus src's, value by value (sums, sums of squares, AOV sums when both have
  * them; not spp): how the sums of blocks of samples combine (render.c, cst_film_add). */

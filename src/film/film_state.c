@@ -74,7 +74,10 @@ static void out_doubles(StateOut *o, const double *v, size_t n)
 static void state_encode(StateOut *o, const Film *f, const StateKey *keys, int nkeys)
 {
     out_bytes(o, FILM_STATE_MAGIC, 8);
-    out_u64(o, f->progressive ? FILM_STATE_VERSION_PROGRESSIVE : FILM_STATE_VERSION, 4);
+    /* The lowest version that holds the film: 1, 2 with per-pixel counts, 3 with a
+     * progressive integrator's state (never both: a noise target refuses SPPM). */
+    out_u64(o, f->progressive ? FILM_STATE_VERSION_PROGRESSIVE : f->pixel_spp ? FILM_STATE_VERSION_PIXEL_SPP
+                                                                             : FILM_STATE_VERSION, 4);
     out_u64(o, (uint64_t)nkeys, 4);
     for (int k = 0; k < nkeys; k++) {
         const StateKey *e = &keys[k];
@@ -101,6 +104,8 @@ static void state_encode(StateOut *o, const Film *f, const StateKey *keys, int n
     out_doubles(o, f->sum_sq, 3 * pixels);
     if (stride) out_doubles(o, f->aov, (size_t)stride * pixels);
     if (f->progressive) out_doubles(o, f->progressive, FILM_PROGRESSIVE_STRIDE * pixels);
+    if (f->pixel_spp)
+        for (size_t i = 0; i < pixels; i++) out_u64(o, (uint64_t)f->pixel_spp[i], 4);
     out_flush(o);
     uLong crc = o->crc;
     out_u64(o, (uint64_t)crc, 4);
@@ -229,9 +234,12 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     if ((st = in_need(in, 16, "the header", err)) != CST_OK) return st;
     in->off = 8;
     uint64_t version = in_u64(in, 4);
-    if (version != FILM_STATE_VERSION && version != FILM_STATE_VERSION_PROGRESSIVE)
-        return cst_fail(err, CST_ERR_PARSE, "%s: state format version %llu; this caustic reads versions %u and %u",
-                        in->path, (unsigned long long)version, FILM_STATE_VERSION, FILM_STATE_VERSION_PROGRESSIVE);
+    if (version != FILM_STATE_VERSION && version != FILM_STATE_VERSION_PIXEL_SPP &&
+        version != FILM_STATE_VERSION_PROGRESSIVE)
+        return cst_fail(err, CST_ERR_PARSE, "%s: state format version %llu; this caustic reads versions %u, %u and %u",
+                        in->path, (unsigned long long)version, FILM_STATE_VERSION, FILM_STATE_VERSION_PIXEL_SPP,
+                        FILM_STATE_VERSION_PROGRESSIVE);
+    const bool counts = version == FILM_STATE_VERSION_PIXEL_SPP;
     uint64_t n = in_u64(in, 4);
     if (n > STATE_KEYS_MAX)
         return cst_fail(err, CST_ERR_PARSE, "%s: byte 12: %llu key entries, at most %d (a corrupted state file)",
@@ -255,7 +263,7 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
                         in->path, at, (unsigned long long)w, (unsigned long long)h, (unsigned long long)spp,
                         (unsigned long long)stride, FILM_AOV_STRIDE);
     const size_t pixels = (size_t)w * (size_t)h;
-    const size_t data = (6 + (size_t)stride + (size_t)pstride) * pixels * sizeof(double);
+    const size_t data = (6 + (size_t)stride + (size_t)pstride) * pixels * sizeof(double) + (counts ? 4 * pixels : 0);
     if ((st = in_need(in, data + 4, "the film's sums and the checksum", err)) != CST_OK) return st;
     if (in->len - in->off != data + 4)
         return cst_fail(err, CST_ERR_PARSE, "%s: %zu bytes after the end of the state (at byte %zu)", in->path,
@@ -286,6 +294,24 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     in_doubles(in, f->sum_sq, 3 * pixels);
     if (stride) in_doubles(in, f->aov, FILM_AOV_STRIDE * pixels);
     if (pstride) in_doubles(in, f->progressive, FILM_PROGRESSIVE_STRIDE * pixels);
+    if (counts) {
+        if (!(f->pixel_spp = malloc(pixels * sizeof *f->pixel_spp))) {
+            film_destroy(f);
+            return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %llux%llu film", in->path,
+                            (unsigned long long)w, (unsigned long long)h);
+        }
+        for (size_t i = 0; i < pixels; i++) {
+            const size_t at_count = in->off;
+            uint64_t c = in_u64(in, 4);
+            if (c > spp) {
+                film_destroy(f);
+                return cst_fail(err, CST_ERR_PARSE, "%s: byte %zu: pixel %zu holds %llu samples, more than the "
+                                "film's %llu (a corrupted state file)", in->path, at_count, i,
+                                (unsigned long long)c, (unsigned long long)spp);
+            }
+            f->pixel_spp[i] = (int)c;
+        }
+    }
     *film_out = f;
     return CST_OK;
 }

@@ -12,10 +12,13 @@
 #include "film/film.h"
 
 #define FILM_STATE_MAGIC   "CSTSTATE"
-/* Version 2 adds a progressive integrator's per-pixel state (Film.progressive); a film
- * without one is written as version 1, byte for byte as before. */
+/* Version 3 adds a progressive integrator's per-pixel state (Film.progressive, SPPM). A
+ * film with neither is written as version 1, byte for byte as before. */
 #define FILM_STATE_VERSION 1u
-#define FILM_STATE_VERSION_PROGRESSIVE 2u
+/* Version 2: version 1 and, after the AOV sums, every pixel's own sample count (a film
+ * with pixel_spp, adaptive sampling). Films without per-pixel counts are written as 1. */
+#define FILM_STATE_VERSION_PIXEL_SPP 2u
+#define FILM_STATE_VERSION_PROGRESSIVE 3u
 
 typedef enum StateValueType { STATE_INT = 1, STATE_REAL = 2, STATE_TEXT = 3 } StateValueType;
 
@@ -29,8 +32,9 @@ typedef struct StateKey {
     char text[STATE_TEXT_MAX + 1];
 } StateKey;
 
-/* Writes `film` (its sums, sums of squares, AOV sums, progressive state, film->spp as the
- * samples [0, spp) of every pixel) and the nkeys entries of `keys` to `path` through a temporary file renamed
+/* Writes `film` (its sums, sums of squares, AOV sums, per-pixel counts or progressive
+ * state, film->spp as the samples [0, spp) of every pixel, or with pixel_spp each pixel's
+ * [0, count)) and the nkeys entries of `keys` to `path` through a temporary file renamed
  * into place (io/path.h; `announce` as CstImageWriteOptions.temp_file, may be NULL), so
  * an interrupted write never replaces a previous state. CST_ERR_IO with the reason. */
 CstStatus film_state_write(const char *path, const Film *film, const StateKey *keys, int nkeys,

@@ -97,6 +97,13 @@ static void camera_tile(void *ctx, int tile, int worker)
 {
     Integrator *it = ctx;
     IntegratorWorker *w = &it->workers[worker];
+    int first = it->tile_first, count = it->tile_spp;
+    if (it->tile_runs) {
+        const IntegratorTileRun *run = &it->tile_runs[tile];
+        tile = run->tile;
+        first = run->first;
+        count = run->count;
+    }
     /* Tiles cover the crop; pixels keep their whole-image index (seeds, film). */
     const int W = it->film->width;
     int x0 = it->crop_x0 + (tile % it->tiles_x) * INTEGRATOR_TILE;
@@ -106,7 +113,7 @@ static void camera_tile(void *ctx, int tile, int worker)
     for (int y = y0; y < y1; y++) {
         for (int x = x0; x < x1; x++) {
             int pixel = y * W + x;
-            for (int s = it->tile_first; s < it->tile_first + it->tile_spp; s++) {
+            for (int s = first; s < first + count; s++) {
                 Sampler smp;
                 sampler_start(&smp, &it->sampler, (uint64_t)pixel, (uint32_t)s);
                 Vec2 uf = sampler_2d(&smp);
@@ -487,7 +494,7 @@ static CstStatus iteration_step(Integrator *it, IntegratorStep *step, double lo,
         it->tile_first = it->pass_first;
         it->tile_spp = it->pass_count;
         it->iteration = it->pass_first + it->pass_count - 1;
-        set_step(step, it->num_tiles, camera_tile, it, 0.0, 1.0, false);
+        set_step(step, it->tile_runs ? it->num_tile_runs : it->num_tiles, camera_tile, it, 0.0, 1.0, false);
         return CST_OK;
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_BIDIR:

@@ -25,6 +25,12 @@
 /* Camera work items are square tiles of this many pixels a side over the crop. */
 enum { INTEGRATOR_TILE = 16 };
 
+/* One camera tile's share of a pass when the tiles' sample ranges differ (adaptive
+ * sampling, render/adaptive.h): tile `tile` renders samples [first, first + count). */
+typedef struct IntegratorTileRun {
+    int tile, first, count;
+} IntegratorTileRun;
+
 typedef enum IntegratorKind {
     INTEGRATOR_PATH,    /* path, path-nee, path-bsdf: camera tiles */
     INTEGRATOR_WHITTED, /* camera tiles */
@@ -122,6 +128,11 @@ typedef struct Integrator {
     int pass_first, pass_count, iteration, step;
     /* camera tiles: the samples [tile_first, tile_first + tile_spp) of every pixel */
     int tile_first, tile_spp;
+    /* Path, whitted, photon: NULL, or the pass's items are these num_tile_runs tiles, each
+     * with its own samples (tile_first/tile_spp unused); set by the caller of
+     * integrator_pass_begin. */
+    const IntegratorTileRun *tile_runs;
+    int num_tile_runs;
     bool photon_borrowed; /* photon: the maps are CstRenderSettings.photon_cache's */
     Mlt *mlt;             /* INTEGRATOR_PSSMLT (its splats in `light`'s chunks) */
     union {

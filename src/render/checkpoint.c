@@ -79,6 +79,8 @@ static int state_key(const CstScene *scene, const CstRenderSettings *st, const c
     /* Written only when not the default, so that states of plain renders keep their key. */
     if (st->first_sample > 0) key_int(&b, "first_sample", st->first_sample);
     if (st->sample_block > 1) key_int(&b, "sample_block", st->sample_block);
+    /* Adaptive rounds are planned from the target (render/adaptive.h). */
+    if (st->noise_target > 0.0) key_real(&b, "noise", st->noise_target);
     return b.n;
 }
 
@@ -266,6 +268,10 @@ static CstStatus merge_check(const MergePart *p, int count, CstError *err)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: the stratified sampler lays its strata out for each render's "
                         "sample count, so renders of parts of a range are not parts of one render; expected "
                         "another sampler", p[0].path);
+    if (key_find(p[0].keys, p[0].nkeys, "noise"))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: a render with a noise target plans its rounds from its whole "
+                        "film, so it is not a part of a range of samples; expected states rendered without --noise",
+                        p[0].path);
     const int64_t B = key_int_or(p[0].keys, p[0].nkeys, "sample_block", 1);
     for (int i = 0; i < count; i++) {
         if (p[i].end == p[i].first)

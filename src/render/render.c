@@ -17,6 +17,7 @@
 #include "core/threadpool.h"
 #include "film/film.h"
 #include "integrators/integrator.h"
+#include "render/adaptive.h"
 #include "scene/scene.h"
 
 /* Passes a fixed-spp render of few camera tiles is cut into, for progress (run_passes). */
@@ -204,6 +205,67 @@ static CstStatus run_blocks(Driver *d, Film *block, int *done, CstError *err)
     return CST_OK;
 }
 
+/* The next round of run_adaptive: with per-pixel counts, runs[0..*n); else *more
+ * iterations of the whole image. Returns its pixel samples, 0 when the render is done. */
+static uint64_t plan_round(const Film *film, const AdaptiveGrid *g, const CstRenderSettings *st, int cap,
+                           IntegratorTileRun *runs, int *n, int *more)
+{
+    uint64_t samples = 0;
+    if (film->pixel_spp) {
+        *n = adaptive_plan(film, g, st->noise_target, cap, runs, &samples);
+        return samples;
+    }
+    *more = adaptive_plan_uniform(film, g, st->noise_target, cap);
+    return (uint64_t)*more * (uint64_t)(g->x1 - g->x0) * (uint64_t)(g->y1 - g->y0);
+}
+
+/* A render with a noise target (adaptive.h), from the film as it is (a resumed one's sums
+ * and counts): rounds until no block asks for more samples, the sample cap (per pixel)
+ * or the time limit. Camera integrators: each round renders only the blocks above the
+ * target, each its own next samples (film->pixel_spp); light, bdpt and vcm: a round of
+ * iterations of the whole image, as many as the worst block asks for. Each round is
+ * planned from the completed rounds' sums alone; the time limit and pass_done act
+ * between rounds (a round is not cut: its plan is not in a state file). *done: film->spp. */
+static CstStatus run_adaptive(Driver *d, int *done, CstError *err)
+{
+    const CstRenderSettings *st = d->st;
+    Integrator *it = d->it;
+    Film *film = it->film;
+    const int cap = st->spp > 0 ? st->spp : CST_NOISE_SPP_CAP;
+    const double budget = st->time_limit > 0.0 ? st->time_limit : (double)INFINITY;
+    const AdaptiveGrid g = adaptive_grid(st->crop);
+    const bool per_block = film->pixel_spp != NULL;
+    IntegratorTileRun *runs = per_block ? malloc((size_t)g.tiles * sizeof *runs) : NULL;
+    if (per_block && !runs) return cst_fail(err, CST_ERR_OOM, "out of memory for %d blocks", g.tiles);
+    CstStatus status = CST_OK;
+    int n = 0, more = 0; /* the round planned: runs[0..n), or `more` iterations of the whole image */
+    uint64_t samples = plan_round(film, &g, st, cap, runs, &n, &more);
+    if (samples == 0) pass_finished(d, film->spp, true); /* a resume with nothing left to render */
+    while (samples > 0) {
+        const double t0 = clock_seconds();
+        if (per_block) {
+            it->tile_runs = runs;
+            it->num_tile_runs = n;
+            /* Progress: the share of blocks already within the target. */
+            status = run_pass(d, 0, 1, 1.0 - (double)n / g.tiles, 0.0, err);
+            it->tile_runs = NULL;
+            if (status == CST_OK) adaptive_commit(film, &g, runs, n);
+        } else {
+            status = run_pass(d, film->spp, more, 0.0, 0.0, err);
+            if (status == CST_OK) film->spp += more;
+        }
+        if (status != CST_OK) break;
+        /* The next round is predicted to cost what this one did per pixel sample. */
+        const double now = clock_seconds(), per_sample = (now - t0) / (double)samples;
+        samples = plan_round(film, &g, st, cap, runs, &n, &more);
+        const bool last = samples == 0 || now - d->t0 + per_sample * (double)samples > budget;
+        if (pass_finished(d, film->spp, last) || last) break;
+    }
+    *done = film->spp;
+    free(runs);
+    return status;
+}
+
 /* The photon pass's progress (integrator_prepare), throttled like run_step's: the phase's
  * own fraction when the caller follows phases, else 0 (or the time limit's share). */
 static int prepare_progress(void *user, double fraction)
@@ -228,6 +290,7 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     uint64_t per_pixel = 6 * sizeof(double); /* film_create: sum and sum of squares */
     if (st.aovs & FILM_AOV_FIRST_HIT) per_pixel += FILM_AOV_STRIDE * sizeof(double);
     if (st.sample_block > 1) per_pixel *= 2; /* run_blocks' block film: the sums and AOV sums again */
+    if (st.noise_target > 0.0) per_pixel += sizeof(int); /* Film.pixel_spp (adaptive.h) */
     if (st.integrator == CST_INTEGRATOR_LIGHT || st.integrator == CST_INTEGRATOR_BDPT ||
         st.integrator == CST_INTEGRATOR_VCM || st.integrator == CST_INTEGRATOR_PSSMLT ||
         st.integrator == CST_INTEGRATOR_MMLT)
@@ -235,6 +298,15 @@ uint64_t cst_render_memory_estimate(const CstScene *scene, const CstRenderSettin
     uint64_t bytes = pixels * per_pixel;
     if (crop != pixels) bytes += crop * (6 + ((st.aovs & FILM_AOV_FIRST_HIT) ? FILM_AOV_STRIDE : 0)) * sizeof(double);
     return bytes + crop * 3 * sizeof(float); /* cst_film_write's float image */
+}
+
+/* The pixel samples the crop's pixels hold. */
+static uint64_t crop_samples(const Film *f, const AdaptiveGrid *g)
+{
+    uint64_t total = 0;
+    for (int y = g->y0; y < g->y1; y++)
+        for (int x = g->x0; x < g->x1; x++) total += (uint64_t)film_pixel_spp(f, (size_t)y * (size_t)f->width + (size_t)x);
+    return total;
 }
 
 static void fill_stats(CstRenderStats *stats, const CstRenderSettings *st, const Integrator *it,
@@ -307,6 +379,75 @@ static CstStatus check_resume(const CstRenderSettings *st, const Film *resume, C
     return CST_OK;
 }
 
+/* The render's film (NULL on OOM): empty, or with a resumed film's sums and counts (the
+ * passes add to them in the order an uninterrupted render would have); per-pixel counts
+ * when per_block. */
+static Film *render_film(const CstRenderSettings *st, bool per_block)
+{
+    const Film *resume = st->resume;
+    Film *film = film_create(st->width, st->height);
+    if (film) film_set_white_balance(film, st->white_balance);
+    if (!film || !film_set_output(film, st->aovs, st->exposure, st->png_linear) ||
+        (per_block && !film_enable_pixel_spp(film))) {
+        film_destroy(film);
+        return NULL;
+    }
+    if (resume) {
+        const size_t n = (size_t)st->width * (size_t)st->height;
+        memcpy(film->sum, resume->sum, 3 * n * sizeof *film->sum);
+        memcpy(film->sum_sq, resume->sum_sq, 3 * n * sizeof *film->sum_sq);
+        if (film->aov) memcpy(film->aov, resume->aov, n * FILM_AOV_STRIDE * sizeof *film->aov);
+        if (film->pixel_spp) memcpy(film->pixel_spp, resume->pixel_spp, n * sizeof *film->pixel_spp);
+        film->spp = resume->spp;
+    }
+    return film;
+}
+
+/* The noise fields of a render's stats from adaptive_summary's; with per-block sampling
+ * also the pixel samples taken (light paths: as fill_stats counts them). */
+static void noise_stats_copy(CstRenderStats *done, const CstRenderStats *noise, bool per_block)
+{
+    done->noise_rms = noise->noise_rms;
+    done->noise_rms_lo = noise->noise_rms_lo;
+    done->noise_rms_hi = noise->noise_rms_hi;
+    done->noise_max = noise->noise_max;
+    done->noise_blocks = noise->noise_blocks;
+    done->noise_blocks_over = noise->noise_blocks_over;
+    done->spp_min = noise->spp_min;
+    if (per_block) done->samples = noise->samples;
+}
+
+/* The noise target's checks (and spp 0's without a time limit, which a target allows). */
+static CstStatus check_noise(const CstRenderSettings *st, bool *per_block, CstError *err)
+{
+    /* Camera integrators sample each block on its own under a noise target. */
+    const CstIntegrator i = st->integrator;
+    *per_block = st->noise_target > 0.0 && (i == CST_INTEGRATOR_PATH || i == CST_INTEGRATOR_PATH_NEE ||
+                                            i == CST_INTEGRATOR_PATH_BSDF || i == CST_INTEGRATOR_WHITTED ||
+                                            i == CST_INTEGRATOR_PHOTON || i == CST_INTEGRATOR_DEFAULT);
+    if (st->resume && (!st->resume->pixel_spp) != !*per_block)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: a film %s per-pixel sample counts for a render %s them "
+                        "(a noise target with a camera integrator keeps them)",
+                        st->resume->pixel_spp ? "with" : "without", *per_block ? "with" : "without");
+    if (!(st->noise_target >= 0.0 && st->noise_target < (double)INFINITY))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "noise target %g: expected a relative standard error > 0 (or 0: "
+                        "none)", st->noise_target);
+    if (st->spp == 0 && !(st->time_limit > 0.0) && !(st->noise_target > 0.0))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "spp CST_SPP_UNLIMITED without a time limit would never end; "
+                        "expected a time limit, or a sample count");
+    if (st->noise_target > 0.0 && (st->integrator == CST_INTEGRATOR_SPPM || st->integrator == CST_INTEGRATOR_PSSMLT))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target: the %s integrator's pixels are not means of "
+                        "independent samples (%s), so their variances say nothing of the error; expected path, "
+                        "path-nee, path-bsdf, whitted, photon (per block), light, bdpt or vcm (whole image)",
+                        cst_integrator_name(st->integrator),
+                        st->integrator == CST_INTEGRATOR_SPPM ? "one progressive estimate" : "Markov chains");
+    if (st->noise_target > 0.0 && (st->first_sample > 0 || st->sample_block > 1))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "noise target with first_sample %d and sample_block %d: adaptive "
+                        "rounds are planned from the whole film; expected first_sample 0 and sample_block 1",
+                        st->first_sample, st->sample_block);
+    return CST_OK;
+}
+
 CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, CstFilm **out,
                      CstRenderStats *stats, CstError *err)
 {
@@ -318,9 +459,10 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                         st.width, st.height);
     if (st.spp < 0 || st.time_limit < 0.0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "spp and time limit must be positive");
-    if (st.spp == 0 && !(st.time_limit > 0.0))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "spp CST_SPP_UNLIMITED without a time limit would never end; "
-                        "expected a time limit, or a sample count");
+    bool per_block;
+    const CstStatus noise_ok = check_noise(&st, &per_block, err);
+    if (noise_ok != CST_OK) return noise_ok;
+    const bool noise = st.noise_target > 0.0;
     if (!scene->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene not committed");
     if (st.first_sample < 0 || st.first_sample > INT_MAX - (st.spp > 0 ? st.spp : INT_MAX / 2))
         return cst_fail(err, CST_ERR_INVALID_ARG, "first_sample %d: expected >= 0, with first_sample + spp "
@@ -366,27 +508,15 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
     const Film *resume = st.resume;
     CstStatus rst = resume ? check_resume(&st, resume, err) : CST_OK;
     if (rst != CST_OK) return rst;
-    Film *film = film_create(st.width, st.height);
-    if (film) film_set_white_balance(film, st.white_balance);
-    if (film && !film_set_output(film, st.aovs, st.exposure, st.png_linear)) {
-        film_destroy(film);
-        film = NULL;
-    }
+    Film *film = render_film(&st, per_block);
     IntegratorWorker *workers = calloc((size_t)st.threads, sizeof *workers);
     Integrator *it = calloc(1, sizeof *it);
     Driver d = {NULL, it, &st, clock_seconds(), 0.0, false};
     CstStatus status = CST_OK;
     uint64_t rays = 0;
-    int samples = 0, first = 0;
-    if (film && resume) {
-        /* The sums as the interrupted render left them: the passes add to them in the
-         * order an uninterrupted render would have. (SPPM's are 0 until its last pass.) */
-        const size_t n = 3 * (size_t)st.width * (size_t)st.height;
-        memcpy(film->sum, resume->sum, n * sizeof *film->sum);
-        memcpy(film->sum_sq, resume->sum_sq, n * sizeof *film->sum_sq);
-        if (film->aov) memcpy(film->aov, resume->aov, n / 3 * FILM_AOV_STRIDE * sizeof *film->aov);
-        film->spp = samples = first = resume->spp;
-    }
+    int samples = resume ? resume->spp : 0, first = samples;
+    const AdaptiveGrid grid = adaptive_grid(st.crop);
+    const uint64_t pixel_samples0 = film && noise ? crop_samples(film, &grid) : 0;
     if (!film || !workers || !it)
         status = cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d film", st.width, st.height);
     else if ((status = threadpool_create(st.threads, &d.pool)) != CST_OK)
@@ -410,12 +540,18 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
                 status = cst_fail(err, CST_ERR_OOM, "out of memory for a %dx%d block film", st.width, st.height);
         }
         if (status == CST_OK &&
-            (status = block ? run_blocks(&d, block, &samples, err) : run_passes(&d, &samples, err)) == CST_OK)
+            (status = noise ? run_adaptive(&d, &samples, err)
+                      : block ? run_blocks(&d, block, &samples, err) : run_passes(&d, &samples, err)) == CST_OK)
             integrator_finish(it, samples);
         film_destroy(block);
     }
     double seconds = clock_seconds() - d.t0;
     threadpool_destroy(d.pool);
+    CstRenderStats noise_stats = {0};
+    if (status == CST_OK && noise) {
+        adaptive_summary(film, &grid, st.noise_target, &noise_stats);
+        noise_stats.samples = crop_samples(film, &grid) - pixel_samples0;
+    }
     const int cw = st.crop[1] - st.crop[0], ch = st.crop[3] - st.crop[2];
     if (status == CST_OK && (cw != st.width || ch != st.height)) {
         /* Light paths were traced for the whole image (their splats land anywhere), camera
@@ -430,6 +566,7 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         CstRenderStats done;
         fill_stats(&done, &st, it, workers, first, samples, rays, seconds);
         done.stopped = d.stopped;
+        if (noise) noise_stats_copy(&done, &noise_stats, per_block);
         if (stats) *stats = done;
         *out = film;
         /* Issue 25: a render that lost many samples to NaN/Inf fails, film kept (caustic.h). */

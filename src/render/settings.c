@@ -18,6 +18,7 @@ void cst_render_settings_init(CstRenderSettings *s)
     s->mlt_large_step = s->mlt_sigma = CST_UNSET;
     s->mlt_bootstrap = s->mlt_chains = CST_UNSET;
     s->sample_block = CST_UNSET;
+    s->noise_target = CST_UNSET;
 }
 
 /* Whether a field holds a value. Fields where 0 means nothing (sizes, counts, radii, the
@@ -45,6 +46,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(max_depth, 0, 0);                /* 0 = unbounded */
     PICK_INT(rr_depth, 1, CST_DEFAULT_RR_DEPTH);
     PICK_DBL(time_limit, 0, 0.0);             /* 0 = none */
+    if (out->noise_target == CST_UNSET) out->noise_target = 0.0; /* a render's, never the scene's */
     PICK_INT(photons, 1, 0);                  /* 0 stays: the photon integrator's default */
     PICK_DBL(photon_radius, 1, 0.0);          /* 0 stays: automatic */
     PICK_INT(sampler, 1, CST_SAMPLER_INDEPENDENT);
@@ -62,10 +64,11 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(png_linear, 0, 0);
     PICK_INT(aovs, 0, 0);
     PICK_DBL(white_balance, 1, 0.0);          /* 0 = none */
-    /* A time limit alone means "as many samples as fit"; otherwise the default count.
+    /* A time limit alone means "as many samples as fit", a noise target "as many as it
+     * needs" (up to CST_NOISE_SPP_CAP); otherwise the default count.
      * CST_SPP_UNLIMITED says so over a scene's spp (cst_render refuses it without a time
      * limit). */
-    PICK_INT(spp, 1, out->time_limit > 0.0 ? 0 : CST_DEFAULT_SPP);
+    PICK_INT(spp, 1, out->time_limit > 0.0 || out->noise_target > 0.0 ? 0 : CST_DEFAULT_SPP);
     if (in->spp == CST_SPP_UNLIMITED) out->spp = 0;
     if (in->crop[0] == CST_UNSET) memcpy(out->crop, sc->crop, sizeof out->crop);
     if (out->crop[0] == CST_UNSET || !(out->crop[0] | out->crop[1] | out->crop[2] | out->crop[3])) {

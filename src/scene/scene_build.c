@@ -972,9 +972,9 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
 {
     static const char fn[] = "cst_scene_set_render_settings";
     if (setting_set(r->threads, 0) || r->progress || r->progress_user || setting_set(r->first_sample, 1) ||
-        setting_set(r->sample_block, 1))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: threads, progress, progress_user, first_sample and "
-                        "sample_block belong to a render, not to a scene; expected them unset "
+        setting_set(r->sample_block, 1) || setting_set(r->noise_target, 1))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: threads, progress, progress_user, first_sample, "
+                        "sample_block and noise_target belong to a render, not to a scene; expected them unset "
                         "(cst_render_settings_init)", fn);
     if (r->resume || r->pass_done || r->pass_user || r->photon_cache)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: resume, pass_done, pass_user and photon_cache belong to a render, "
