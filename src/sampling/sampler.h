@@ -32,6 +32,8 @@ typedef struct ZSobolDim {
  * least from stratification (docs/benchmarks.md). A 2D request starts at an even
  * dimension (an odd one is skipped), so it is always one Sobol' point. */
 #define ZSOBOL_DIMS 12u
+/* Its ZSOBOL_DIMS / 2 points rounded up to a SIMD register of 32-bit lanes (AVX2: 8). */
+#define ZSOBOL_LANES 8u
 
 typedef struct Sampler {
     /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index) for every type.
@@ -63,6 +65,9 @@ typedef struct SamplerSetup {
     uint32_t width;    /* zsobol: the image width, to find (x, y) from the pixel index */
     uint32_t morton_bits; /* zsobol: 2 log2 of the image's larger side, rounded up */
     ZSobolDim zdims[ZSOBOL_DIMS / 2]; /* zsobol: per 2D point, from hashes of (seed, point) */
+    /* zsobol: the zdims' Owen seeds again, one array each, padded to ZSOBOL_LANES, so that
+     * sampler_start's scrambles run as SIMD lanes (sampler.c, zsobol_points) */
+    uint32_t zseed[ZSOBOL_LANES], zseed_y[ZSOBOL_LANES];
 } SamplerSetup;
 
 /* zsobol: the sample indices of a pixel form blocks of 2^ZSOBOL_LOG2_BLOCK in the Morton
