@@ -26,9 +26,9 @@ typedef struct ZSobolDim {
 
 /* zsobol draws its first ZSOBOL_DIMS dimensions (film, lens, wavelengths and the first
  * bounce of the path tracer) from Sobol', all at sampler_start, as ZSOBOL_DIMS / 2 2D
- * points: computed together they overlap in the pipeline (~60 integer operations each),
- * one at a time each request would wait ~50 cycles on its chain of multiplies where a PCG32
- * draw waits ~6. The rest come from the sample's PCG32 stream: the deeper dimensions gain
+ * points: computed together they overlap in the pipeline, and their 32-bit halves run as
+ * the lanes of one SIMD register (sampler.c, zsobol_points); one at a time each request
+ * would wait ~50 cycles on its chain of multiplies where a PCG32 draw waits ~6. The rest come from the sample's PCG32 stream: the deeper dimensions gain
  * least from stratification (docs/benchmarks.md). A 2D request starts at an even
  * dimension (an odd one is skipped), so it is always one Sobol' point. */
 #define ZSOBOL_DIMS 12u
