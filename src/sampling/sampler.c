@@ -10,6 +10,9 @@
 #include <string.h>
 
 #include <math.h>
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 /* Sobol' generator matrices, as columns for index bits 0..31. Dimension 0 is the van der
  * Corput sequence (bit reversal); dimension 1 comes from the first primitive polynomial,
@@ -144,6 +147,8 @@ SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int wid
             d->mul = (h ^ (h2 << 17)) | 1u;
             d->seed = (uint32_t)(h >> 32);
             d->seed_y = (uint32_t)(h2 >> 32);
+            u.zseed[k] = d->seed;
+            u.zseed_y[k] = d->seed_y;
         }
     }
     return u;
@@ -159,21 +164,112 @@ static inline uint32_t spread_bits(uint32_t v)
     return (v | (v << 1)) & 0x55555555u;
 }
 
+/* Bit reversal of a 64-bit word: a byte swap, then nibbles, pairs and bits (sampler_rev32
+ * on 64 bits: 13 operations where two reverse_bits take 30). */
 static inline uint64_t reverse_bits64(uint64_t x)
 {
-    return ((uint64_t)reverse_bits((uint32_t)x) << 32) | reverse_bits((uint32_t)(x >> 32));
+    x = __builtin_bswap64(x);
+    x = ((x >> 4) & 0x0f0f0f0f0f0f0f0fULL) | ((x & 0x0f0f0f0f0f0f0f0fULL) << 4);
+    x = ((x >> 2) & 0x3333333333333333ULL) | ((x & 0x3333333333333333ULL) << 2);
+    return ((x >> 1) & 0x5555555555555555ULL) | ((x & 0x5555555555555555ULL) << 1);
 }
 
 /* zsobol's index of (pixel, index): from the top, the sample's block (index / 256), the
  * pixel's Morton code (x in the even bits, y in the odd ones), the index within the block;
  * so every base-4 digit is one bit of x and one of y, or two bits of the index. At most
  * 23 + 32 + 8 = 63 bits. */
-uint64_t zsobol_morton_index(const SamplerSetup *u, uint64_t pixel, uint32_t index)
+static inline uint64_t morton_index(const SamplerSetup *u, uint64_t pixel, uint32_t index)
 {
     uint32_t p = (uint32_t)pixel, x = p % u->width, y = p / u->width; /* pixel < 65536^2 */
     uint64_t code = spread_bits(x) | ((uint64_t)spread_bits(y) << 1);
     const uint32_t m = ZSOBOL_LOG2_BLOCK;
     return ((uint64_t)(index >> m) << (m + u->morton_bits)) | (code << m) | (index & ((1u << m) - 1u));
+}
+
+uint64_t zsobol_morton_index(const SamplerSetup *u, uint64_t pixel, uint32_t index)
+{
+    return morton_index(u, pixel, index);
+}
+
+/* zsobol_point for all ZSOBOL_DIMS / 2 points of a sample, the same integers in another
+ * order: the 64-bit index permutations one by one (64-bit multiplies, scalar), then the
+ * 32-bit rest, Owen scrambles and bit reversals, as a loop over ZSOBOL_LANES independent
+ * lanes that GCC and clang vectorise (AVX2: bswap as a byte shuffle, vpmulld). One point
+ * at a time, that rest was ~80 scalar operations and three quarters of zsobol's cost over
+ * independent (perf, docs/benchmarks.md). test_sampler checks it against zsobol_point. */
+#if defined(__AVX2__)
+/* Bit reversal of 8 lanes: the byte swap and each byte's two nibbles reversed by table
+ * (3 shuffles, 7 instructions, where the shift-and-mask steps GCC vectorises take 16). */
+static inline __m256i rev32_x8(__m256i x)
+{
+    const __m256i bswap = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6,
+                                           5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+    const __m256i rev4 = _mm256_setr_epi8(0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7,
+                                          0xf, 0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb,
+                                          0x7, 0xf);
+    const __m256i nib = _mm256_set1_epi8(0x0f);
+    x = _mm256_shuffle_epi8(x, bswap);
+    __m256i lo = _mm256_shuffle_epi8(rev4, _mm256_and_si256(x, nib));
+    __m256i hi = _mm256_shuffle_epi8(rev4, _mm256_and_si256(_mm256_srli_epi16(x, 4), nib));
+    return _mm256_or_si256(_mm256_slli_epi16(lo, 4), hi); /* lo < 16: no carry across bytes */
+}
+
+/* owen_hash on 8 lanes. */
+static inline __m256i owen_hash_x8(__m256i x, __m256i seed)
+{
+    x = _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32(0x3d20adea)));
+    x = _mm256_add_epi32(x, seed);
+    x = _mm256_mullo_epi32(x, _mm256_or_si256(_mm256_srli_epi32(seed, 16), _mm256_set1_epi32(1)));
+    x = _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32(0x05526c56)));
+    return _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32(0x53a22864)));
+}
+
+/* sobol1_reversed on 8 lanes. */
+static inline __m256i sobol1_reversed_x8(__m256i i)
+{
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 1), _mm256_set1_epi32(0x55555555)));
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 2), _mm256_set1_epi32(0x33333333)));
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 4), _mm256_set1_epi32(0x0f0f0f0f)));
+    i = _mm256_xor_si256(i, _mm256_and_si256(_mm256_srli_epi32(i, 8), _mm256_set1_epi32(0x00ff00ff)));
+    return _mm256_xor_si256(i, _mm256_srli_epi32(i, 16));
+}
+
+/* sampler_u32_to_float on 8 lanes. */
+static inline __m256 u32_to_float_x8(__m256i x)
+{
+    return _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(x, 8)), _mm256_set1_ps(0x1p-24f));
+}
+#endif
+
+static inline void zsobol_points(uint64_t zrev, const SamplerSetup *u, float *out)
+{
+    uint32_t hi[ZSOBOL_LANES] = {0}, lo[ZSOBOL_LANES] = {0};
+    float x[ZSOBOL_LANES], y[ZSOBOL_LANES];
+    for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
+        uint64_t z = zsobol_permuted(zrev, &u->zdims[k]);
+        hi[k] = (uint32_t)(z >> 32);
+        lo[k] = (uint32_t)z;
+    }
+#if defined(__AVX2__)
+    __m256i vi = rev32_x8(_mm256_loadu_si256((const __m256i *)hi));
+    __m256i vlo = _mm256_loadu_si256((const __m256i *)lo);
+    __m256i sx = _mm256_xor_si256(_mm256_loadu_si256((const __m256i *)u->zseed),
+                                  _mm256_mullo_epi32(vlo, _mm256_set1_epi32((int)0x9e3779b9u)));
+    __m256i sy = _mm256_xor_si256(sx, _mm256_loadu_si256((const __m256i *)u->zseed_y));
+    _mm256_storeu_ps(x, u32_to_float_x8(rev32_x8(owen_hash_x8(vi, sx))));
+    _mm256_storeu_ps(y, u32_to_float_x8(rev32_x8(owen_hash_x8(sobol1_reversed_x8(vi), sy))));
+#else
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
+        uint32_t i = sampler_rev32(hi[k]);
+        uint32_t sx = u->zseed[k] ^ (lo[k] * 0x9e3779b9u);
+        x[k] = sampler_u32_to_float(sampler_rev32(owen_hash(i, sx)));
+        y[k] = sampler_u32_to_float(sampler_rev32(owen_hash(sobol1_reversed(i), sx ^ u->zseed_y[k])));
+    }
+#endif
+    for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
+        out[2 * k] = x[k];
+        out[2 * k + 1] = y[k];
+    }
 }
 
 void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
@@ -186,8 +282,8 @@ void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t i
     s->nx = u->nx;
     if (u->type == CST_SAMPLER_ZSOBOL) {
         s->key = 0;
-        s->zrev = reverse_bits64(zsobol_morton_index(u, pixel, index));
-        for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) zsobol_point(s->zrev, &u->zdims[k], &s->zval[2 * k]);
+        s->zrev = reverse_bits64(morton_index(u, pixel, index));
+        zsobol_points(s->zrev, u, s->zval);
         return;
     }
     s->key = mix64(mix64(u->seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);

@@ -26,12 +26,14 @@ typedef struct ZSobolDim {
 
 /* zsobol draws its first ZSOBOL_DIMS dimensions (film, lens, wavelengths and the first
  * bounce of the path tracer) from Sobol', all at sampler_start, as ZSOBOL_DIMS / 2 2D
- * points: computed together they overlap in the pipeline (~60 integer operations each),
- * one at a time each request would wait ~50 cycles on its chain of multiplies where a PCG32
- * draw waits ~6. The rest come from the sample's PCG32 stream: the deeper dimensions gain
+ * points: computed together they overlap in the pipeline, and their 32-bit halves run as
+ * the lanes of one SIMD register (sampler.c, zsobol_points); one at a time each request
+ * would wait ~50 cycles on its chain of multiplies where a PCG32 draw waits ~6. The rest come from the sample's PCG32 stream: the deeper dimensions gain
  * least from stratification (docs/benchmarks.md). A 2D request starts at an even
  * dimension (an odd one is skipped), so it is always one Sobol' point. */
 #define ZSOBOL_DIMS 12u
+/* Its ZSOBOL_DIMS / 2 points rounded up to a SIMD register of 32-bit lanes (AVX2: 8). */
+#define ZSOBOL_LANES 8u
 
 typedef struct Sampler {
     /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index) for every type.
@@ -63,6 +65,9 @@ typedef struct SamplerSetup {
     uint32_t width;    /* zsobol: the image width, to find (x, y) from the pixel index */
     uint32_t morton_bits; /* zsobol: 2 log2 of the image's larger side, rounded up */
     ZSobolDim zdims[ZSOBOL_DIMS / 2]; /* zsobol: per 2D point, from hashes of (seed, point) */
+    /* zsobol: the zdims' Owen seeds again, one array each, padded to ZSOBOL_LANES, so that
+     * sampler_start's scrambles run as SIMD lanes (sampler.c, zsobol_points) */
+    uint32_t zseed[ZSOBOL_LANES], zseed_y[ZSOBOL_LANES];
 } SamplerSetup;
 
 /* zsobol: the sample indices of a pixel form blocks of 2^ZSOBOL_LOG2_BLOCK in the Morton

@@ -101,7 +101,8 @@ static void test_through_glass(void **state)
 }
 
 /* A diffuse sphere of albedo rho emitting L_e on both sides, seen from inside: every
- * pixel sees L_e / (1 - rho) (the emitting furnace of test_furnace.c). Long paths,
+ * pixel sees L_e / (1 - rho) (the emitting furnace of test_furnace.c; spectral mode: the
+ * film's RGB of L_e's spectrum, test_emitting_sphere_expect_spectral). Long paths,
  * Russian roulette on both subpaths, two-sided emission. */
 static void test_emitting_furnace(void **state)
 {
@@ -109,6 +110,7 @@ static void test_emitting_furnace(void **state)
     const float rho = 0.5f;
     double expect[3];
     Scene *s = test_scene_emitting_sphere(rho, expect);
+    if (g_color_mode == CST_COLOR_SPECTRAL) test_emitting_sphere_expect_spectral(rho, expect);
     const CstIntegrator integ[2] = {CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM};
     for (int k = 0; k < 2; k++) {
         CstRenderSettings st = sized(32, CST_FILTER_BOX);

@@ -87,6 +87,7 @@ static void test_furnace_emitting_sphere(void **state)
     const float rho = 0.5f;
     double expect[3];
     Scene *s = test_scene_emitting_sphere(rho, expect);
+    if (g_color_mode == CST_COLOR_SPECTRAL) test_emitting_sphere_expect_spectral(rho, expect);
     for (size_t i = 0; i < 3; i++) {
         CstFilm *f = render(s, VARIANTS[i], 32, 128, 100 + i);
         /* per-channel expectation: check each channel against its own value */
@@ -118,6 +119,7 @@ static void test_light_furnace_emitting_sphere(void **state)
     const float rho = 0.5f;
     double expect[3];
     Scene *s = test_scene_emitting_sphere(rho, expect);
+    if (g_color_mode == CST_COLOR_SPECTRAL) test_emitting_sphere_expect_spectral(rho, expect);
     CstRenderSettings st = {0};
     st.width = st.height = 32;
     st.integrator = CST_INTEGRATOR_LIGHT;

@@ -265,6 +265,35 @@ static void test_zsobol_morton_index(void **state)
                 (((uint64_t)(2147483647u >> 8) << 40) | (0xffffffffULL << 8) | 255u));
 }
 
+/* sampler_start computes a sample's ZSOBOL_DIMS / 2 points side by side (SIMD lanes when
+ * the build has AVX2): the same floats as zsobol_point, one point at a time, on the
+ * bit-reversed Morton index, for pixels and indices of small and 65536-wide images. */
+static void test_zsobol_points_match_scalar(void **state)
+{
+    (void)state;
+    const int size[2][2] = {{100, 40}, {65536, 65536}};
+    for (int k = 0; k < 2; k++) {
+        SamplerSetup u = sampler_setup(CST_SAMPLER_ZSOBOL, 77 + (uint64_t)k, 0, size[k][0], size[k][1]);
+        uint64_t h = 12345;
+        for (int n = 0; n < 20000; n++) {
+            h = mix64(h + 1);
+            uint64_t npix = (uint64_t)size[k][0] * (uint64_t)size[k][1];
+            uint64_t pixel = h % npix;
+            uint32_t index = n < 10000 ? (uint32_t)(h >> 40) & 1023u : (uint32_t)(h >> 33);
+            Sampler s;
+            sampler_start(&s, &u, pixel, index);
+            uint64_t m = zsobol_morton_index(&u, pixel, index);
+            uint64_t rev = ((uint64_t)sampler_rev32((uint32_t)m) << 32) | sampler_rev32((uint32_t)(m >> 32));
+            assert_true(s.zrev == rev);
+            for (uint32_t d = 0; d < ZSOBOL_DIMS / 2; d++) {
+                float p[2];
+                zsobol_point(rev, &u.zdims[d], p);
+                assert_true(s.zval[2 * d] == p[0] && s.zval[2 * d + 1] == p[1]);
+            }
+        }
+    }
+}
+
 /* Chi-square of one histogram against the uniform expectation; returns the p-value. */
 static double uniform_p(const double *obs, int cells, double total)
 {
@@ -337,6 +366,7 @@ int main(void)
         cmocka_unit_test(test_zsobol_pixel_blocks),
         cmocka_unit_test(test_zsobol_bit_tricks),
         cmocka_unit_test(test_zsobol_morton_index),
+        cmocka_unit_test(test_zsobol_points_match_scalar),
         cmocka_unit_test(test_uniform_across_pixels),
         cmocka_unit_test(test_setup_strata),
     };
