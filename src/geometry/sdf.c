@@ -389,7 +389,7 @@ bool sdf_intersect(const SdfTree *t, const Ray *r, float *t_out)
     const double d[3] = {(double)r->d.x, (double)r->d.y, (double)r->d.z};
     const double dl = sqrt(dot3(d, d));
     if (!(dl > 0.0) || !isfinite(dl)) return false;
-    double t0 = (double)r->t_min, t1 = INFINITY;
+    double t0 = (double)r->t_min, t1 = HUGE_VAL;
     for (int k = 0; k < 3; k++) {
         if (d[k] == 0.0) {
             if (o[k] < t->lo[k] || o[k] > t->hi[k]) return false;

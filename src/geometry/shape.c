@@ -386,7 +386,7 @@ static bool torus_intersect(const AnalyticShape *s, V3d o, V3d d, const Ray *r, 
 {
     const double R = s->r, rm = s->r_minor, e[3] = {R + rm, R + rm, rm};
     const double oo[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z};
-    double t0 = (double)r->t_min, t1 = INFINITY;
+    double t0 = (double)r->t_min, t1 = HUGE_VAL;
     for (int k = 0; k < 3; k++) {
         if (dd[k] == 0.0) {
             if (fabs(oo[k]) > e[k]) return false;

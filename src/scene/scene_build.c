@@ -820,8 +820,9 @@ static CstStatus add_sdf(CstScene *scene, const CstShapeDesc *d, double peak, co
         float nr[16] = {0};
         for (int k = 0; k < 12; k++) nr[k] = c->parent_from_node[k], zero &= nr[k] == 0.0f;
         nr[15] = 1.0f;
-        nd[i] = (SdfNodeDesc){(SdfKind)c->kind, {c->params[0], c->params[1], c->params[2], c->params[3]}, c->a, c->b,
-                              c->k, !zero, zero ? transform_identity() : transform_from_rows(nr)};
+        nd[i] = (SdfNodeDesc){(SdfKind)c->kind,
+                              {(double)c->params[0], (double)c->params[1], (double)c->params[2], (double)c->params[3]},
+                              c->a, c->b, (double)c->k, !zero, zero ? transform_identity() : transform_from_rows(nr)};
     }
     const SdfOptions opt = {(double)d->sdf_epsilon, d->sdf_max_steps};
     SdfTree *tree = NULL;

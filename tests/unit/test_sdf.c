@@ -99,7 +99,7 @@ static void test_sphere_vs_analytic(void **state)
         ShapeParams p = {SHAPE_TAG_SPHERE, r, -r, r, 0.0f, 0.0f, 2.0f * CST_PI, false, 0.0f};
         AnalyticShape ana;
         assert_true(shape_init(&ana, &p, &xfs[x]));
-        SdfNodeDesc nd = {.kind = SDF_SPHERE, .prm = {r}};
+        SdfNodeDesc nd = {.kind = SDF_SPHERE, .prm = {(double)r}};
         AnalyticShape sdf = sdf_shape(tree1(nd, &xfs[x]));
         const Vec3 c = transform_point(&xfs[x], v3s(0.0f));
         const double rw = x ? 1.7 * (double)r : (double)r;
@@ -123,7 +123,7 @@ static void test_sphere_vs_analytic(void **state)
  * (R, r) about z in object space (identity transform): whether the ray grazes it. */
 static double torus_min_dist(const Ray *ray, double R, double rm)
 {
-    double best = INFINITY;
+    double best = HUGE_VAL;
     for (int i = 0; i <= 120000; i++) {
         double t = 12.0 * i / 120000.0;
         double x = (double)ray->o.x + t * (double)ray->d.x, y = (double)ray->o.y + t * (double)ray->d.y,
@@ -166,7 +166,7 @@ static void test_torus_vs_quartic(void **state)
     Ray hole = ray_make(v3(0.0f, 0.0f, 5.0f), v3(0.0f, 0.0f, -1.0f), 0.0f, INFINITY);
     assert_false(shape_intersect(&q, &hole, &t, &u, &v));
 
-    SdfNodeDesc nd = {.kind = SDF_TORUS, .prm = {R, rm}};
+    SdfNodeDesc nd = {.kind = SDF_TORUS, .prm = {(double)R, (double)rm}};
     AnalyticShape s = sdf_shape(tree1(nd, &id));
     Pcg32 rng;
     pcg32_seed(&rng, 5, 9);
@@ -178,7 +178,7 @@ static void test_torus_vs_quartic(void **state)
         if (ha != hb || (ha && !(fabs((double)ta - (double)tb) <= T_TOL * fmax(1.0, (double)ta)))) {
             /* only a ray passing within 1e-4 of the surface may disagree (a tangent crossing
              * that one side sees as two roots and the other as none) */
-            double md = torus_min_dist(&ray, R, rm);
+            double md = torus_min_dist(&ray, (double)R, (double)rm);
             if (!(md < 1e-4)) fail_msg("ray %d: hit %d (t %g) vs %d (t %g), closest %g", k, ha, (double)ta, hb,
                                        (double)tb, md);
             grazing++;
