@@ -90,6 +90,19 @@ static uint8_t refine_depth(const Vec3 cp[4], float w0, float w1)
     return (uint8_t)(r < 0 ? 0 : r > 10 ? 10 : r);
 }
 
+/* The squared distance from p to the segment [a, b], in double. */
+static double point_chord_dist2(Vec3 p, Vec3 a, Vec3 b)
+{
+    const double e[3] = {(double)b.x - (double)a.x, (double)b.y - (double)a.y, (double)b.z - (double)a.z};
+    const double w[3] = {(double)p.x - (double)a.x, (double)p.y - (double)a.y, (double)p.z - (double)a.z};
+    const double ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    double s = ee > 0.0 ? (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) / ee : 0.0;
+    s = fmin(1.0, fmax(0.0, s));
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) d2 += (w[k] - s * e[k]) * (w[k] - s * e[k]);
+    return d2;
+}
+
 bool curve_init(Curve *c, const Vec3 whole_cp[4], float u0, float u1, float w0, float w1, CurveType type,
                 const Vec3 *n, bool flip)
 {
@@ -119,6 +132,14 @@ bool curve_init(Curve *c, const Vec3 whole_cp[4], float u0, float u1, float w0, 
         c->inv_sin_angle = c->normal_angle > 0.0f ? 1.0f / sinf(c->normal_angle) : 0.0f;
     }
     c->depth = refine_depth(c->cp, w0, w1);
+    /* Every point of the segment is in the convex hull of its control points, so within
+     * max(dist(cp1, chord), dist(cp2, chord)) of the chord (a segment, convex); every hit
+     * within half a width more. Padded by 2^-16 of the extent for the float arithmetic. */
+    double reach = 0.0;
+    for (int i = 1; i <= 2; i++) reach = fmax(reach, sqrt((double)point_chord_dist2(c->cp[i], c->cp[0], c->cp[3])));
+    reach += 0.5 * (double)fmaxf(curve_width(c, u0), curve_width(c, u1));
+    reach += (double)fmaxf(v3_max_abs(c->cp[0]), v3_max_abs(c->cp[3])) * 0x1p-16 + (double)v3_length(v3_sub(c->cp[3], c->cp[0])) * 0x1p-16;
+    c->reach = (float)reach;
     BBox b = curve_bounds(c);
     return v3_is_finite(b.min) && v3_is_finite(b.max);
 }
@@ -240,8 +261,29 @@ static void ray_frame(Vec3 dir, Vec3 chord, Vec3 *ex, Vec3 *ey)
     *ey = v3_cross(dir, *ex);
 }
 
+/* Whether the ray's line passes within reach of the chord: the closest points of a
+ * line and a segment (the segment's parameter clamped, the line's free). Conservative:
+ * false only when the distance exceeds the reach by more than the rounding. */
+static inline bool near_chord(const Curve *c, const Ray *r)
+{
+    const Vec3 e = v3_sub(c->cp[3], c->cp[0]), w = v3_sub(r->o, c->cp[0]);
+    const float a = v3_dot(r->d, r->d), b = v3_dot(r->d, e), ce = v3_dot(e, e);
+    const float dw = v3_dot(r->d, w), ew = v3_dot(e, w);
+    const float denom = a * ce - b * b;
+    float s = denom > 1e-6f * a * ce ? clampf((a * ew - b * dw) / denom, 0.0f, 1.0f) : 0.0f;
+    if (!(s >= 0.0f)) s = 0.0f; /* NaN from a zero chord */
+    /* the line's closest point to cp0 + s e */
+    const Vec3 q = v3_madd(w, e, -s);            /* o - (cp0 + s e) */
+    const float t = -v3_dot(r->d, q) / a;
+    const Vec3 gap = v3_madd(q, r->d, t);
+    /* slack for the float rounding of q + t d, which cancels from |q| down to |gap| */
+    const float lim = c->reach + 1e-5f * v3_max_abs(q);
+    return v3_length2(gap) <= lim * lim;
+}
+
 bool curve_intersect(const Curve *c, const Ray *r, float *t, float *u, float *v)
 {
+    if (!near_chord(c, r)) return false;
     const float len = v3_length(r->d);
     if (!(len > 0.0f)) return false;
     CurveQuery q = {c, v3_scale(r->d, 1.0f / len), len, r->t_min, r->t_max, 0.0f, 0.0f};

@@ -16,7 +16,7 @@ typedef enum CurveType {
 } CurveType;
 
 /* One segment [u0, u1] of a whole curve (pbrt-v4 splits every curve into 2^splitdepth of
- * them, each a primitive of its own): 100 bytes, world space, float. The control points
+ * them, each a primitive of its own): 104 bytes, world space, float. The control points
  * are the segment's own (the whole curve's blossomed to [u0, u1]), so a test starts at
  * the segment; widths and normals are the whole curve's, interpolated in its u. */
 typedef struct Curve {
@@ -26,6 +26,8 @@ typedef struct Curve {
     Vec3 n0, n1;          /* ribbon: unit normals at u = 0 and u = 1 */
     float normal_angle;   /* ribbon: the angle between n0 and n1 (radians) */
     float inv_sin_angle;  /* ribbon: 1 / sin(normal_angle), for the slerp */
+    float reach;          /* a radius about the chord cp[0]-cp[3] holding every hit
+                           * (curve_init): the test's cheap first rejection */
     uint8_t type;         /* CurveType */
     uint8_t depth;        /* the subdivision depth of the test (curve_init) */
     bool flip;            /* pbrt-v4's ReverseOrientation XOR a mirroring transform */
