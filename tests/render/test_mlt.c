@@ -109,12 +109,14 @@ static void test_seeds_agree(void **state)
     cst_scene_destroy(s);
 }
 
-/* The emitting furnace: every pixel sees L_e / (1 - rho). */
+/* The emitting furnace: every pixel sees L_e / (1 - rho) (in spectral mode the film's RGB
+ * of L_e's spectrum, test_emitting_sphere_expect_spectral). */
 static void test_emitting_furnace(void **state)
 {
     (void)state;
     double expect[3];
     Scene *s = test_scene_emitting_sphere(0.5f, expect);
+    if (g_color_mode == CST_COLOR_SPECTRAL) test_emitting_sphere_expect_spectral(0.5f, expect);
     CstRenderSettings st = mlt_settings(32, 8);
     Regions r = regions(32, 8);
     split_regions(s, &st, CST_INTEGRATOR_PSSMLT, 48, 300, &r);
