@@ -739,9 +739,11 @@ static CstStatus add_sphere(CstScene *scene, const float center[3], float radius
     return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
 }
 
-/* A shape desc's world_from_object (3 x 4 rows; all zero: the identity) into *xf;
- * CST_ERR_INVALID_ARG naming a non-finite entry. */
-static CstStatus desc_transform(const CstShapeDesc *d, const char *fn, Transform *xf, CstError *err)
+/* A shape desc's world_from_object (3 x 4 rows; all zero: the identity) into *xf, and its
+ * normal matrix into *nm when nm is not NULL; CST_ERR_INVALID_ARG naming a non-finite
+ * entry, or for a singular transform when invertible is asked for. */
+static CstStatus desc_transform(const CstShapeDesc *d, const char *fn, bool invertible, Transform *xf, Transform *nm,
+                                CstError *err)
 {
     float rows[16] = {0};
     int all_zero = 1;
@@ -754,6 +756,14 @@ static CstStatus desc_transform(const CstShapeDesc *d, const char *fn, Transform
     }
     rows[15] = 1.0f;
     *xf = all_zero ? transform_identity() : transform_from_rows(rows);
+    Transform inv;
+    if (invertible && !transform_invert(xf, &inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
+                        "finite); expected an invertible affine transform", fn);
+    if (nm) {
+        *nm = transform_identity();
+        transform_normal_matrix(xf, nm);
+    }
     return CST_OK;
 }
 
@@ -768,13 +778,9 @@ static CstStatus add_patch(CstScene *scene, const CstShapeDesc *d, double peak, 
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch_has_normals %d; expected 0 or 1", fn, d->patch_has_normals);
     if (d->patch_has_uvs != 0 && d->patch_has_uvs != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: patch_has_uvs %d; expected 0 or 1", fn, d->patch_has_uvs);
-    Transform xf, inv, nm = transform_identity();
-    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    Transform xf, nm;
+    const CstStatus st0 = desc_transform(d, fn, true, &xf, &nm, err);
     if (st0 != CST_OK) return st0;
-    if (!transform_invert(&xf, &inv))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
-                        "finite); expected an invertible affine transform", fn);
-    transform_normal_matrix(&xf, &nm);
     Vec3 p[4], n[4];
     Vec2 uv[4];
     for (int i = 0; i < 4; i++) {
@@ -810,7 +816,7 @@ static CstStatus add_sdf(CstScene *scene, const CstShapeDesc *d, double peak, co
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: sdf_num_nodes %d (sdf_nodes %s); expected 1 to %d nodes", fn, n,
                         d->sdf_nodes ? "given" : "NULL", SDF_MAX_NODES);
     Transform xf;
-    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    const CstStatus st0 = desc_transform(d, fn, false, &xf, NULL, err);
     if (st0 != CST_OK) return st0;
     SdfNodeDesc *nd = calloc((size_t)n, sizeof *nd);
     if (!nd) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for an SDF tree", fn);
@@ -853,13 +859,9 @@ static CstStatus add_curve(CstScene *scene, const CstShapeDesc *d, double peak, 
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve_type %d is not a CstCurveType value", fn, (int)d->curve_type);
     if (d->curve_split_depth < 0 || d->curve_split_depth > 10)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve_split_depth %d; expected 0 to 10", fn, d->curve_split_depth);
-    Transform xf, inv, nm = transform_identity();
-    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    Transform xf, nm;
+    const CstStatus st0 = desc_transform(d, fn, true, &xf, &nm, err);
     if (st0 != CST_OK) return st0;
-    if (!transform_invert(&xf, &inv))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
-                        "finite); expected an invertible affine transform", fn);
-    transform_normal_matrix(&xf, &nm);
     const double det = (double)transform_det(&xf);
     const float scale = (float)cbrt(fabs(det));
     Vec3 cp[4], n[2];
@@ -925,12 +927,9 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
                         "expected radius >= 1e-18, z_min < z_max (cylinder), 0 <= inner_radius < radius (disk), "
                         "phi_max_degrees in [0, 360]", fn, (double)d->radius, (double)d->z_min, (double)d->z_max,
                         (double)d->inner_radius, (double)d->phi_max_degrees);
-    Transform xf, inv;
-    const CstStatus st0 = desc_transform(d, fn, &xf, err);
+    Transform xf;
+    const CstStatus st0 = desc_transform(d, fn, true, &xf, NULL, err);
     if (st0 != CST_OK) return st0;
-    if (!transform_invert(&xf, &inv))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
-                        "finite); expected an invertible affine transform", fn);
     ShapeParams p = {(ShapeTag)d->type, d->radius, d->z_min, d->z_max, d->height, d->inner_radius,
                      (d->phi_max_degrees > 0.0f ? d->phi_max_degrees : 360.0f) * (CST_PI / 180.0f),
                      d->reverse_orientation != 0, d->minor_radius};
