@@ -112,10 +112,10 @@ bool curve_init(Curve *c, const Vec3 whole_cp[4], float u0, float u1, float w0, 
     if ((unsigned)type > CURVE_RIBBON) return false;
     for (int i = 0; i < 4; i++)
         if (!v3_is_finite(whole_cp[i])) return false;
-    c->cp[0] = blossom(whole_cp, u0, u0, u0);
-    c->cp[1] = blossom(whole_cp, u0, u0, u1);
-    c->cp[2] = blossom(whole_cp, u0, u1, u1);
-    c->cp[3] = blossom(whole_cp, u1, u1, u1);
+    c->cp[0] = blossom(whole_cp, (double)u0, (double)u0, (double)u0);
+    c->cp[1] = blossom(whole_cp, (double)u0, (double)u0, (double)u1);
+    c->cp[2] = blossom(whole_cp, (double)u0, (double)u1, (double)u1);
+    c->cp[3] = blossom(whole_cp, (double)u1, (double)u1, (double)u1);
     c->u0 = u0; c->u1 = u1; c->w0 = w0; c->w1 = w1;
     c->type = (uint8_t)type;
     c->flip = flip;
