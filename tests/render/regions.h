@@ -113,6 +113,40 @@ static inline void split_regions(const CstScene *s, const CstRenderSettings *bas
         fail_msg("%s", err.msg);
 }
 
+/* Renders st (integrator, seed and size set by the caller) of scene s with 1 and with 2
+ * threads: the films must be equal bit for bit, and not black. */
+static inline void assert_threads_bit_identical(const CstScene *s, CstRenderSettings st)
+{
+    CstFilm *f[2] = {NULL, NULL};
+    CstError err;
+    for (int k = 0; k < 2; k++) {
+        st.threads = k + 1;
+        CstRenderStats stats;
+        if (cst_render(s, &st, &f[k], &stats, &err) != CST_OK) fail_msg("%s", err.msg);
+    }
+    double sum = 0.0;
+    for (int y = 0; y < st.height; y++)
+        for (int x = 0; x < st.width; x++) {
+            double a[3], b[3];
+            cst_film_pixel(f[0], x, y, a);
+            cst_film_pixel(f[1], x, y, b);
+            assert_memory_equal(a, b, sizeof a);
+            sum += a[0];
+        }
+    assert_true(sum > 0.0);
+    cst_film_destroy(f[0]);
+    cst_film_destroy(f[1]);
+}
+
+/* The start of a JSON scene (film, camera, one diffuse emitting sphere) to which a test
+ * appends its "integrator" section and the closing brace. */
+#define TEST_JSON_EMITTER_HEAD                                                                                \
+    "{\"film\": {\"width\": 8, \"height\": 8}, \"camera\": {\"type\": \"pinhole\", "                        \
+    "\"position\": [0, 0, 0], \"look_at\": [0, 0, -1], \"up\": [0, 1, 0], \"fov\": 45}, "                       \
+    "\"materials\": {\"w\": {\"type\": \"diffuse\", \"albedo\": [0.5, 0.5, 0.5]}}, "                        \
+    "\"shapes\": [{\"type\": \"sphere\", \"material\": \"w\", \"center\": [0, 0, -3], "                       \
+    "\"radius\": 1, \"emission\": {\"radiance\": [1, 1, 1]}}], "
+
 /* Fails at |z| > Z_LIMIT on any region and channel; prints the whole image's red means
  * and z, and the largest |z|. */
 static inline void compare(const Regions *a, const Regions *b, const char *na, const char *nb)

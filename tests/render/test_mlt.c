@@ -146,24 +146,7 @@ static void test_threads_deterministic(void **state)
     st.integrator = CST_INTEGRATOR_PSSMLT;
     st.seed = 7;
     st.seed_set = 1;
-    CstFilm *f[2] = {NULL, NULL};
-    for (int k = 0; k < 2; k++) {
-        st.threads = k + 1;
-        CstRenderStats stats;
-        if (cst_render(s, &st, &f[k], &stats, &err) != CST_OK) fail_msg("%s", err.msg);
-    }
-    double sum = 0.0;
-    for (int y = 0; y < 40; y++)
-        for (int x = 0; x < 40; x++) {
-            double a[3], b[3];
-            cst_film_pixel(f[0], x, y, a);
-            cst_film_pixel(f[1], x, y, b);
-            assert_memory_equal(a, b, sizeof a);
-            sum += a[0];
-        }
-    assert_true(sum > 0.0);
-    cst_film_destroy(f[0]);
-    cst_film_destroy(f[1]);
+    assert_threads_bit_identical(s, st);
     cst_scene_destroy(s);
 }
 
@@ -172,11 +155,7 @@ static void test_threads_deterministic(void **state)
 static void test_settings_and_refusals(void **state)
 {
     (void)state;
-    static const char head[] = "{\"film\": {\"width\": 8, \"height\": 8}, \"camera\": {\"type\": \"pinhole\", "
-                               "\"position\": [0, 0, 0], \"look_at\": [0, 0, -1], \"up\": [0, 1, 0], \"fov\": 45}, "
-                               "\"materials\": {\"w\": {\"type\": \"diffuse\", \"albedo\": [0.5, 0.5, 0.5]}}, "
-                               "\"shapes\": [{\"type\": \"sphere\", \"material\": \"w\", \"center\": [0, 0, -3], "
-                               "\"radius\": 1, \"emission\": {\"radiance\": [1, 1, 1]}}], ";
+    static const char head[] = TEST_JSON_EMITTER_HEAD;
     char text[1024];
     CstScene *s = NULL;
     CstError err;
