@@ -272,6 +272,39 @@ static bool args_read_option(const ArgsOptSpec *table, size_t n, const char *cmd
     return true;
 }
 
+/* One step of the argv walk every command shares: argv[*i] is positional (a word not
+ * starting with '-', a lone "-", anything after "--"), returned in *positional; or an option,
+ * read by args_read_option into *o and *value; or "--" itself, consumed, all three NULL. */
+static bool args_next(const ArgsOptSpec *table, size_t n, const char *cmd, int argc, char **argv, int *i,
+                      bool *only_positional, const char **positional, const ArgsOptSpec **o,
+                      const char **value, ArgsError *err)
+{
+    const char *arg = argv[*i];
+    *positional = NULL;
+    *o = NULL;
+    *value = NULL;
+    if (*only_positional || arg[0] != '-' || arg[1] == '\0') {
+        *positional = arg;
+        return true;
+    }
+    if (strcmp(arg, "--") == 0) {
+        *only_positional = true;
+        return true;
+    }
+    return args_read_option(table, n, cmd, argc, argv, i, o, value, err);
+}
+
+/* A command's single positional argument (`what`: "SCENE", "MESH"): a second one is an error. */
+static bool args_take_one(const char **slot, const char *arg, const char *what, ArgsError *err)
+{
+    if (*slot) {
+        args_fail(err, true, "unexpected argument '%s' (only one %s may be given)", arg, what);
+        return false;
+    }
+    *slot = arg;
+    return true;
+}
+
 /* ------------------------------------------------------------ option values */
 
 /* --crop X0,X1,Y0,Y1 into s->crop. */
@@ -581,30 +614,17 @@ static bool args_parse_render(int argc, char **argv, int first, CliArgs *out, Ar
 {
     bool only_positional = false; /* after "--" */
     for (int i = first; i < argc; i++) {
-        const char *arg = argv[i];
-        const ArgsOptSpec *o = NULL;
-        const char *value = NULL;
-
-        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
-            if (out->scene_path) {
-                args_fail(err, true, "unexpected argument '%s' (only one SCENE may be given)",
-                          arg);
-                return false;
-            }
-            out->scene_path = arg;
-            continue;
-        }
-        if (strcmp(arg, "--") == 0) {
-            only_positional = true;
-            continue;
-        }
-        if (strncmp(arg, "--version", 9) == 0 && (arg[9] == '\0' || arg[9] == '=')) {
+        const char *arg = argv[i], *positional, *value;
+        const ArgsOptSpec *o;
+        if (!only_positional && strncmp(arg, "--version", 9) == 0 && (arg[9] == '\0' || arg[9] == '=')) {
             args_fail(err, true, "--version is not an option of 'render'");
             return false;
         }
-        if (!args_read_option(ARGS_OPTS, ARGS_NUM_OPTS, "", argc, argv, &i, &o, &value, err))
+        if (!args_next(ARGS_OPTS, ARGS_NUM_OPTS, "", argc, argv, &i, &only_positional, &positional, &o,
+                       &value, err))
             return false;
-        if (!args_apply(o, value, out, err))
+        if (positional ? !args_take_one(&out->scene_path, positional, "SCENE", err)
+                       : o && !args_apply(o, value, out, err))
             return false;
     }
     if (out->checkpoint_every > 0.0 && !out->checkpoint_path) {
@@ -678,23 +698,13 @@ static bool args_parse_bench_rays(int argc, char **argv, int first, CliArgs *out
     BenchArgs *b = &out->bench;
     bool only_positional = false;
     for (int i = first; i < argc; i++) {
-        const char *arg = argv[i];
-        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
-            if (b->mesh_path) {
-                args_fail(err, true, "unexpected argument '%s' (only one MESH may be given)", arg);
-                return false;
-            }
-            b->mesh_path = arg;
-            continue;
-        }
-        if (strcmp(arg, "--") == 0) {
-            only_positional = true;
-            continue;
-        }
+        const char *positional, *value;
         const ArgsOptSpec *o;
-        const char *value;
-        if (!args_read_option(ARGS_BENCH_OPTS, ARGS_NUM_BENCH_OPTS, "bench rays", argc, argv, &i, &o, &value, err))
+        if (!args_next(ARGS_BENCH_OPTS, ARGS_NUM_BENCH_OPTS, "bench rays", argc, argv, &i, &only_positional,
+                       &positional, &o, &value, err))
             return false;
+        if (positional && !args_take_one(&b->mesh_path, positional, "MESH", err)) return false;
+        if (!o) continue;
         long v;
         if (strcmp(o->long_name, "cornell") == 0) {
             b->cornell = true;
@@ -880,23 +890,13 @@ static bool args_parse_verify(int argc, char **argv, int first, CliArgs *out, Ar
     v->levels = ARGS_VERIFY_DEFAULT_LEVELS;
     bool only_positional = false;
     for (int i = first; i < argc; i++) {
-        const char *arg = argv[i];
-        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
-            if (out->scene_path) {
-                args_fail(err, true, "unexpected argument '%s' (only one SCENE may be given)", arg);
-                return false;
-            }
-            out->scene_path = arg;
-            continue;
-        }
-        if (strcmp(arg, "--") == 0) {
-            only_positional = true;
-            continue;
-        }
+        const char *positional, *value;
         const ArgsOptSpec *o;
-        const char *value;
-        if (!args_read_option(ARGS_VERIFY_OPTS, ARGS_NUM_VERIFY_OPTS, "verify", argc, argv, &i, &o, &value, err))
+        if (!args_next(ARGS_VERIFY_OPTS, ARGS_NUM_VERIFY_OPTS, "verify", argc, argv, &i, &only_positional,
+                       &positional, &o, &value, err))
             return false;
+        if (positional && !args_take_one(&out->scene_path, positional, "SCENE", err)) return false;
+        if (!o) continue;
         if (!args_apply_verify(o, value, out, err))
             return false;
     }
@@ -966,23 +966,19 @@ static bool args_parse_compare(int argc, char **argv, int first, CliArgs *out, A
     c->block = ARGS_COMPARE_DEFAULT_BLOCK;
     bool only_positional = false;
     for (int i = first; i < argc; i++) {
-        const char *arg = argv[i];
-        if (only_positional || arg[0] != '-' || arg[1] == '\0') {
+        const char *positional, *value;
+        const ArgsOptSpec *o;
+        if (!args_next(ARGS_COMPARE_OPTS, ARGS_NUM_COMPARE_OPTS, "compare", argc, argv, &i, &only_positional,
+                       &positional, &o, &value, err))
+            return false;
+        if (positional) {
             if (c->a && c->b) {
-                args_fail(err, true, "compare: unexpected argument '%s' (give two images: A B)", arg);
+                args_fail(err, true, "compare: unexpected argument '%s' (give two images: A B)", positional);
                 return false;
             }
-            *(c->a ? &c->b : &c->a) = arg;
-            continue;
+            *(c->a ? &c->b : &c->a) = positional;
         }
-        if (strcmp(arg, "--") == 0) {
-            only_positional = true;
-            continue;
-        }
-        const ArgsOptSpec *o;
-        const char *value;
-        if (!args_read_option(ARGS_COMPARE_OPTS, ARGS_NUM_COMPARE_OPTS, "compare", argc, argv, &i, &o, &value, err))
-            return false;
+        if (!o) continue;
         if (!args_apply_compare(o->long_name, value ? value : "", out, err)) return false;
     }
     if (out->command == ARGS_CMD_COMPARE && !c->b) {
