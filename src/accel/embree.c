@@ -348,49 +348,27 @@ static CstStatus embree_add_triangles(EmbreeAccel *a, const AccelGeometry *g, Cs
     return embree_check(a, "adding the triangles", err);
 }
 
-static CstStatus embree_add_exact_triangles(EmbreeAccel *a, const AccelGeometry *g, CstError *err)
+/* Primitives Embree intersects through our callbacks (exact triangles, spheres, analytic
+ * shapes): one user geometry of `count` primitives under geometry id `id`; `what` names
+ * them in messages. */
+static CstStatus embree_add_user(EmbreeAccel *a, int count, RTCBoundsFunction bounds,
+                                 RTCIntersectFunctionN intersect, RTCOccludedFunctionN occluded,
+                                 unsigned id, const char *what, CstError *err)
 {
+    char msg[64];
     RTCGeometry geom = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
-    if (!geom) return embree_check(a, "creating the triangle geometry", err);
-    rtcSetGeometryUserPrimitiveCount(geom, (unsigned)g->num_tris);
+    snprintf(msg, sizeof msg, "creating the %s geometry", what);
+    if (!geom) return embree_check(a, msg, err);
+    rtcSetGeometryUserPrimitiveCount(geom, (unsigned)count);
     rtcSetGeometryUserData(geom, a);
-    rtcSetGeometryBoundsFunction(geom, embree_triangle_bounds, NULL);
-    rtcSetGeometryIntersectFunction(geom, embree_triangle_intersect);
-    rtcSetGeometryOccludedFunction(geom, embree_triangle_occluded);
+    rtcSetGeometryBoundsFunction(geom, bounds, NULL);
+    rtcSetGeometryIntersectFunction(geom, intersect);
+    rtcSetGeometryOccludedFunction(geom, occluded);
     rtcCommitGeometry(geom);
-    rtcAttachGeometryByID(a->scene, geom, EMBREE_GEOM_TRIANGLES);
-    rtcReleaseGeometry(geom);
-    return embree_check(a, "adding the triangles", err);
-}
-
-static CstStatus embree_add_spheres(EmbreeAccel *a, const AccelGeometry *g, CstError *err)
-{
-    RTCGeometry geom = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
-    if (!geom) return embree_check(a, "creating the sphere geometry", err);
-    rtcSetGeometryUserPrimitiveCount(geom, (unsigned)g->num_spheres);
-    rtcSetGeometryUserData(geom, a);
-    rtcSetGeometryBoundsFunction(geom, embree_sphere_bounds, NULL);
-    rtcSetGeometryIntersectFunction(geom, embree_sphere_intersect);
-    rtcSetGeometryOccludedFunction(geom, embree_sphere_occluded);
-    rtcCommitGeometry(geom);
-    rtcAttachGeometryByID(a->scene, geom, EMBREE_GEOM_SPHERES);
-    rtcReleaseGeometry(geom);
-    return embree_check(a, "adding the spheres", err);
-}
-
-static CstStatus embree_add_shapes(EmbreeAccel *a, const AccelGeometry *g, CstError *err)
-{
-    RTCGeometry geom = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
-    if (!geom) return embree_check(a, "creating the shape geometry", err);
-    rtcSetGeometryUserPrimitiveCount(geom, (unsigned)g->num_shapes);
-    rtcSetGeometryUserData(geom, a);
-    rtcSetGeometryBoundsFunction(geom, embree_shape_bounds, NULL);
-    rtcSetGeometryIntersectFunction(geom, embree_shape_intersect);
-    rtcSetGeometryOccludedFunction(geom, embree_shape_occluded);
-    rtcCommitGeometry(geom);
-    rtcAttachGeometryByID(a->scene, geom, EMBREE_GEOM_SHAPES);
-    rtcReleaseGeometry(geom);
-    return embree_check(a, "adding the shapes", err);
+    rtcAttachGeometryByID(a->scene, geom, id);
+    rtcReleaseGeometry(geom); /* the scene holds its own reference */
+    snprintf(msg, sizeof msg, "adding the %ss", what);
+    return embree_check(a, msg, err);
 }
 
 CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode mode, CstError *err)
@@ -427,7 +405,7 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode 
     }
     /* Capped: boxes grown past Embree's range (FLT_LARGE, 1.8e18) lose hits near them. */
     a->margin = 1e-7f * fminf(extent, 1e18f) + 1e-30f;
-    CstStatus st;
+    CstStatus st = CST_OK;
 
     /* Default configuration: all hardware threads build, best ISA the CPU supports. */
     a->device = rtcNewDevice(NULL);
@@ -449,11 +427,17 @@ CstStatus embree_build(EmbreeAccel **out, const AccelGeometry *geom, EmbreeMode 
     rtcSetSceneFlags(a->scene, mode == EMBREE_NATIVE ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(a->scene, RTC_BUILD_QUALITY_MEDIUM); /* Embree's default */
 
-    if (geom->num_tris > 0 &&
-        (st = native_triangles ? embree_add_triangles(a, geom, err) : embree_add_exact_triangles(a, geom, err)) != CST_OK)
-        goto fail;
-    if (geom->num_spheres > 0 && (st = embree_add_spheres(a, geom, err)) != CST_OK) goto fail;
-    if (geom->num_shapes > 0 && (st = embree_add_shapes(a, geom, err)) != CST_OK) goto fail;
+    if (geom->num_tris > 0 && native_triangles) st = embree_add_triangles(a, geom, err);
+    else if (geom->num_tris > 0)
+        st = embree_add_user(a, geom->num_tris, embree_triangle_bounds, embree_triangle_intersect,
+                             embree_triangle_occluded, EMBREE_GEOM_TRIANGLES, "triangle", err);
+    if (st == CST_OK && geom->num_spheres > 0)
+        st = embree_add_user(a, geom->num_spheres, embree_sphere_bounds, embree_sphere_intersect,
+                             embree_sphere_occluded, EMBREE_GEOM_SPHERES, "sphere", err);
+    if (st == CST_OK && geom->num_shapes > 0)
+        st = embree_add_user(a, geom->num_shapes, embree_shape_bounds, embree_shape_intersect,
+                             embree_shape_occluded, EMBREE_GEOM_SHAPES, "shape", err);
+    if (st != CST_OK) goto fail;
     rtcCommitScene(a->scene);
     if ((st = embree_check(a, "building the BVH", err)) != CST_OK) goto fail;
 
