@@ -86,4 +86,30 @@ typedef struct CstShapeDesc {
  * flipped by reverse_orientation and by a mirroring world_from_object, as pbrt-v4 does. */
 CST_API CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *desc, CstError *err);
 
+/* A whole pbrt-v4 curve (its CreateCurves): num_points control points (object space) that
+ * make cubic or quadratic Bezier segments sharing their end points (bspline 0:
+ * degree * n + 1 points) or a uniform B-spline (bspline 1: n + degree points), each segment
+ * converted to a cubic Bezier and added as a CST_SHAPE_CURVE of its own. Widths run
+ * linearly from width0 to width1 over the segments by index (as pbrt-v4); a ribbon takes
+ * normals[3 * (n + 1)], one per segment end. */
+typedef struct CstCurvesDesc {
+    const float *points;     /* 3 * num_points */
+    int num_points;
+    int degree;              /* 2 or 3 */
+    int bspline;
+    float width0, width1;    /* >= 0, not both 0 */
+    CstCurveType type;
+    const float *normals;    /* CST_CURVE_RIBBON: 3 * (segments + 1); otherwise unused */
+    int split_depth;         /* each segment split into 2^split_depth primitives, 0..10 */
+    float world_from_object[12]; /* as CstShapeDesc; all 0: identity */
+    int material;
+    CstAlpha alpha;
+    int reverse_orientation;
+} CstCurvesDesc;
+/* The number of segments desc's points make, or -1 (with err) if their count does not fit
+ * its degree and basis. */
+CST_API int cst_curves_segments(const CstCurvesDesc *desc, CstError *err);
+CST_API CstStatus cst_scene_add_curves(CstScene *scene, const CstCurvesDesc *desc, CstError *err);
+
+
 #endif

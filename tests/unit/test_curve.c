@@ -370,6 +370,67 @@ static void test_pbrt_curve(void **state)
     (void)s;
 }
 
+/* The JSON "curve" shape gives the same primitives as the pbrt loader's "curve" (both go
+ * through cst_scene_add_curves), and its errors are located. */
+static CstStatus load_json(const char *shapes, CstScene **out, CstError *err)
+{
+    char text[4096];
+    snprintf(text, sizeof text,
+             "{\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n"
+             " \"materials\": {\"h\": {\"type\": \"hair\"}},\n"
+             " \"shapes\": [\n%s]}\n", shapes);
+    return cst_scene_load_json_string(text, strlen(text), "c.json", out, err);
+}
+
+static void test_json_curve(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *p = load_pbrt(WORLD("Scale 2 2 2\nShape \"curve\" \"point3 P\" [-1 0 0 -0.3 0 0 0.3 0 0 1 0 0 1.5 0 0 2 0 0 2.5 0 0] "
+                               "\"float width0\" 0.1 \"float width1\" 0.05 \"integer splitdepth\" 1\n"
+                               "Shape \"curve\" \"string basis\" \"bspline\" \"string type\" \"ribbon\" "
+                               "\"point3 P\" [0 0 0 1 1 0 2 0 0 3 1 0 4 0 0] \"normal N\" [0 0 1 0 1 1 1 0 1] "
+                               "\"float width\" 0.1 \"integer degree\" 3\n"),
+                         CST_OK, &err);
+    CstScene *j = NULL;
+    if (load_json("{\"type\": \"curve\", \"material\": \"h\", \"transform\": {\"scale\": [2, 2, 2]}, \"split_depth\": 1,\n"
+                  "  \"points\": [[-1,0,0], [-0.3,0,0], [0.3,0,0], [1,0,0], [1.5,0,0], [2,0,0], [2.5,0,0]],\n"
+                  "  \"width0\": 0.1, \"width1\": 0.05},\n"
+                  " {\"type\": \"curve\", \"material\": \"h\", \"basis\": \"bspline\", \"curve_type\": \"ribbon\", \"width\": 0.1,\n"
+                  "  \"transform\": {\"scale\": [2, 2, 2]},\n"
+                  "  \"points\": [[0,0,0], [1,1,0], [2,0,0], [3,1,0], [4,0,0]], \"normals\": [[0,0,1], [0,1,1], [1,0,1]]}\n",
+                  &j, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    assert_int_equal(j->num_shapes, p->num_shapes);
+    assert_int_equal(j->num_shapes, 2 * 2 + 2 * 8);
+    assert_memory_equal(j->shapes, p->shapes, (size_t)p->num_shapes * sizeof *p->shapes);
+    cst_scene_destroy(j);
+    cst_scene_destroy(p);
+    /* errors, each located at its shape's line (the shapes start on line 4) */
+    static const struct { const char *shape, *what; } bad[] = {
+        {"{\"type\": \"curve\", \"material\": \"h\", \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0],[4,0,0]]}", "3n + 1"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"curve_type\": \"ribbon\", \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]]}", "normal"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"curve_type\": \"ribbon\", \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]], "
+         "\"normals\": [[0,0,1]]}", "1 normals; expected one per segment end (2)"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"basis\": \"nurbs\", \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]]}", "bspline"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"width\": 0, \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]]}", "not both 0"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"degree\": 4, \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]]}", "degree"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]], \"normals\": [[0,0,1],[0,0,1]]}",
+         "ribbon"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"emission\": [1,1,1], \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,0]]}",
+         "emission"},
+        {"{\"type\": \"curve\", \"material\": \"h\", \"points\": [[0,0,0],[1,0,0],[2,0,0],[3,0,\"x\"]]}", "points[3]"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        CstScene *s = NULL;
+        err.msg[0] = '\0';
+        if (load_json(bad[k].shape, &s, &err) == CST_OK) fail_msg("loaded: %s", bad[k].shape);
+        assert_null(s);
+        if (!strstr(err.msg, "c.json:4:") || !strstr(err.msg, bad[k].what))
+            fail_msg("case %zu: %s (expected c.json:4: and \"%s\")", k, err.msg, bad[k].what);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -379,6 +440,7 @@ int main(void)
         cmocka_unit_test(test_bases),
         cmocka_unit_test(test_backends_agree),
         cmocka_unit_test(test_pbrt_curve),
+        cmocka_unit_test(test_json_curve),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -608,7 +608,7 @@ done:
     return st;
 }
 
-enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE, SHAPE_CYLINDER, SHAPE_DISK, SHAPE_TORUS, SHAPE_SDF };
+enum { SHAPE_QUAD, SHAPE_MESH, SHAPE_SPHERE, SHAPE_MESHFILE, SHAPE_CYLINDER, SHAPE_DISK, SHAPE_TORUS, SHAPE_SDF, SHAPE_CURVE };
 
 /* An optional number under `key` (default `def`, magnitude at most 1e18). */
 static CstStatus read_opt_float(Loader *ld, const json_t *shape, const char *key, float def, float *out)
@@ -716,6 +716,135 @@ static CstStatus parse_torus(Loader *ld, const json_t *shape, int material, cons
     sd.alpha = *alpha;
     CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
+}
+
+/* An optional string under `key` that must be one of names[0..n): its index (default 0). */
+static CstStatus read_choice(Loader *ld, const json_t *obj, const char *key, const char *const *names, int n,
+                             int *out)
+{
+    json_t *v = json_object_get(obj, key);
+    const char *str;
+    *out = 0;
+    if (!v) return CST_OK;
+    json_path_push_key(ld, key);
+    LOADER_TRY(json_read_string(ld, v, &str));
+    for (int k = 0; k < n; k++)
+        if (strcmp(str, names[k]) == 0) {
+            *out = k;
+            json_path_pop(ld);
+            return CST_OK;
+        }
+    if (n == 2) return json_fail_here(ld, "\"%.60s\"; expected \"%s\" or \"%s\"", str, names[0], names[1]);
+    return json_fail_here(ld, "\"%.60s\"; expected \"%s\", \"%s\" or \"%s\"", str, names[0], names[1], names[2]);
+}
+
+/* An array of at least `min` points (or normals), each an array of 3 numbers, into a new
+ * array of 3 floats per point. */
+static CstStatus read_points(Loader *ld, const json_t *obj, const char *key, size_t min, float **out, int *count)
+{
+    char kind[48];
+    json_t *arr = json_object_get(obj, key);
+    *out = NULL;
+    *count = 0;
+    json_path_push_key(ld, key);
+    if (!json_is_array(arr) || json_array_size(arr) < min || json_array_size(arr) > 1u << 24)
+        return json_fail_here(ld, "got %s; expected an array of at least %zu points, each an array of 3 numbers",
+                              json_describe(arr, kind), min);
+    const size_t n = json_array_size(arr);
+    float *p = malloc(3 * n * sizeof *p);
+    if (!p) return json_fail_here(ld, "out of memory for %zu points", n);
+    for (size_t k = 0; k < n; k++) {
+        Vec3 v;
+        json_path_push_index(ld, k);
+        const CstStatus st = json_read_vec3(ld, json_array_get(arr, k), LOADER_MAX_LENGTH, &v);
+        if (st != CST_OK) {
+            free(p);
+            return st;
+        }
+        json_vec3_floats(v, p + 3 * k);
+        json_path_pop(ld);
+    }
+    json_path_pop(ld);
+    *out = p;
+    *count = (int)n;
+    return CST_OK;
+}
+
+/* "curve": pbrt-v4's curve (cst_scene_add_curves): "points" as Bezier segments sharing their
+ * end points or a uniform B-spline ("basis"), of "degree" 2 or 3, "curve_type" flat,
+ * cylinder or ribbon (with "normals", one per segment end), widths "width" or "width0" and
+ * "width1", each segment split into 2^"split_depth" primitives. */
+static CstStatus parse_curve(Loader *ld, const json_t *shape, int material, const CstAlpha *alpha)
+{
+    static const char *const bases[] = {"bezier", "bspline"};
+    static const char *const types[] = {"flat", "cylinder", "ribbon"};
+    CstCurvesDesc cd = {.material = material, .alpha = *alpha, .degree = 3, .split_depth = 3};
+    json_t *v;
+    json_int_t iv;
+    int ctype = 0, ro = 0;
+    float width = 1.0f;
+    LOADER_TRY(read_choice(ld, shape, "basis", bases, 2, &cd.bspline));
+    LOADER_TRY(read_choice(ld, shape, "curve_type", types, 3, &ctype));
+    cd.type = (CstCurveType)ctype;
+    if ((v = json_object_get(shape, "degree"))) {
+        json_path_push_key(ld, "degree");
+        LOADER_TRY(json_read_int(ld, v, 2, 3, &iv));
+        json_path_pop(ld);
+        cd.degree = (int)iv;
+    }
+    if ((v = json_object_get(shape, "split_depth"))) {
+        json_path_push_key(ld, "split_depth");
+        LOADER_TRY(json_read_int(ld, v, 0, 10, &iv));
+        json_path_pop(ld);
+        cd.split_depth = (int)iv;
+    }
+    if ((v = json_object_get(shape, "reverse_orientation"))) {
+        json_path_push_key(ld, "reverse_orientation");
+        LOADER_TRY(json_read_bool(ld, v, &ro));
+        json_path_pop(ld);
+        cd.reverse_orientation = ro;
+    }
+    LOADER_TRY(read_opt_float(ld, shape, "width", 1.0f, &width));
+    LOADER_TRY(read_opt_float(ld, shape, "width0", width, &cd.width0));
+    LOADER_TRY(read_opt_float(ld, shape, "width1", width, &cd.width1));
+    if (!(cd.width0 >= 0.0f && cd.width1 >= 0.0f && cd.width0 + cd.width1 > 0.0f)) {
+        json_path_push_key(ld, json_object_get(shape, "width1") ? "width1" : json_object_get(shape, "width0") ? "width0"
+                                                                                                             : "width");
+        return json_fail_here(ld, "widths %g and %g; expected widths >= 0, not both 0", (double)cd.width0,
+                              (double)cd.width1);
+    }
+    LOADER_TRY(read_rows(ld, shape, cd.world_from_object));
+    float *points = NULL, *normals = NULL;
+    int npoints = 0, nnormals = 0;
+    LOADER_TRY(json_member_required(ld, shape, "points", "an array of control points", &v));
+    LOADER_TRY(read_points(ld, shape, "points", 3, &points, &npoints));
+    cd.points = points;
+    cd.num_points = npoints;
+    CstError cerr;
+    const int nseg = cst_curves_segments(&cd, &cerr);
+    CstStatus st = CST_OK;
+    if (nseg < 0) {
+        json_path_push_key(ld, "points");
+        st = json_fail_here(ld, "%d control points; expected %s for the degree %d %s basis", npoints,
+                            cd.bspline ? "more than the degree" : (cd.degree == 3 ? "3n + 1" : "2n + 1"), cd.degree,
+                            cd.bspline ? "B-spline" : "Bezier");
+    } else if (cd.type == CST_CURVE_RIBBON) {
+        if (!json_object_get(shape, "normals")) {
+            st = json_fail_here(ld, "a ribbon curve without \"normals\"; expected one normal per segment end (%d)",
+                                nseg + 1);
+        } else if ((st = read_points(ld, shape, "normals", 1, &normals, &nnormals)) == CST_OK && nnormals != nseg + 1) {
+            json_path_push_key(ld, "normals");
+            st = json_fail_here(ld, "%d normals; expected one per segment end (%d)", nnormals, nseg + 1);
+        }
+        cd.normals = normals;
+    } else if (json_object_get(shape, "normals")) {
+        json_path_push_key(ld, "normals");
+        st = json_fail_here(ld, "normals are for \"curve_type\": \"ribbon\" only; expected no normals");
+    }
+    if (st == CST_OK && (st = cst_scene_add_curves(ld->scene, &cd, ld->err)) != CST_OK) st = json_fail_builder(ld, st);
+    free(points);
+    free(normals);
+    return st;
 }
 
 /* One node of an "sdf" tree and its subtree, appended to nodes[] in post-order (operands
@@ -891,11 +1020,15 @@ static CstStatus read_alpha(Loader *ld, const json_t *shape, CstAlpha *out)
 
 static CstStatus parse_shape(Loader *ld, const json_t *shape)
 {
-    static const char *const types[] = {"quad", "mesh", "sphere", "meshfile", "cylinder", "disk", "torus", "sdf"};
+    static const char *const types[] = {"quad", "mesh", "sphere", "meshfile", "cylinder", "disk", "torus", "sdf",
+                                        "curve"};
     static const char *const torus_keys[] = {"type", "major_radius", "minor_radius", "transform", "material",
                                              "emission", "alpha", "medium"};
     static const char *const sdf_keys[] = {"type", "root", "transform", "epsilon", "max_steps", "material",
                                            "emission", "alpha", "medium"};
+    static const char *const curve_keys[] = {"type", "points", "basis", "degree", "curve_type", "width", "width0",
+                                             "width1", "normals", "split_depth", "transform", "reverse_orientation",
+                                             "material", "alpha"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha", "medium"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
                                             "normals", "shading", "alpha", "medium"};
@@ -911,7 +1044,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(json_expect_object(ld, shape, "a shape object"));
-    LOADER_TRY(json_read_type(ld, shape, "shape type", types, 8, -1, &type));
+    LOADER_TRY(json_read_type(ld, shape, "shape type", types, 9, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 6)); break;
     case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 10)); break;
@@ -920,6 +1053,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     case SHAPE_DISK: LOADER_TRY(json_check_keys(ld, shape, disk_keys, 11)); break;
     case SHAPE_TORUS: LOADER_TRY(json_check_keys(ld, shape, torus_keys, 8)); break;
     case SHAPE_SDF: LOADER_TRY(json_check_keys(ld, shape, sdf_keys, 9)); break;
+    case SHAPE_CURVE: LOADER_TRY(json_check_keys(ld, shape, curve_keys, 14)); break;
     default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 12)); break;
     }
     int boundary = 0;
@@ -940,6 +1074,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     case SHAPE_DISK: return parse_analytic(ld, shape, type, material, &em, &alpha);
     case SHAPE_TORUS: return parse_torus(ld, shape, material, &em, &alpha);
     case SHAPE_SDF: return parse_sdf(ld, shape, material, &em, &alpha);
+    case SHAPE_CURVE: return parse_curve(ld, shape, material, &alpha);
     default:
         if (json_object_get(shape, "z_min") || json_object_get(shape, "z_max") || json_object_get(shape, "phi_max") ||
             json_object_get(shape, "transform") || json_object_get(shape, "reverse_orientation"))

@@ -739,42 +739,27 @@ static CstStatus curve_shape(Loader *ld, Params *ps, const char *d, Loc loc)
         return CST_OK;
     }
     if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
-    Vec3 *cp = malloc((size_t)ncp * sizeof *cp);
+    const int nnorm = ct == CST_CURVE_RIBBON ? nseg + 1 : 0;
+    float *cp = malloc((size_t)(ncp + nnorm) * 3 * sizeof *cp);
     if (!cp) return pbrt_fail_at(ld, CST_ERR_OOM, loc, "%s: out of memory for %d control points", d, ncp);
-    for (int i = 0; i < ncp; i++) {
-        cp[i] = v3((float)pp->nums[3 * i], (float)pp->nums[3 * i + 1], (float)pp->nums[3 * i + 2]);
-        if (!pbrt_coords_ok(cp[i])) {
+    for (int i = 0; i < 3 * ncp; i++) cp[i] = (float)pp->nums[i];
+    for (int i = 0; i < ncp; i++)
+        if (!pbrt_coords_ok(v3(cp[3 * i], cp[3 * i + 1], cp[3 * i + 2]))) {
             free(cp);
             return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pp->loc, "%s: control point %d is beyond the scene limit; "
                                 "expected coordinates of magnitude at most %g", d, i, PBRT_MAX_LENGTH);
         }
-    }
-    CstShapeDesc sd = {0};
-    sd.type = CST_SHAPE_CURVE;
-    sd.curve_type = ct;
-    sd.curve_split_depth = split;
-    sd.reverse_orientation = ld->gs.reverse != 0;
-    sd.alpha = alpha;
+    for (int i = 0; i < 3 * nnorm; i++) cp[3 * ncp + i] = (float)pn->nums[i];
+    CstCurvesDesc cd = {.points = cp, .num_points = ncp, .degree = degree, .bspline = bspline, .width0 = w0,
+                        .width1 = w1, .type = ct, .normals = nnorm ? cp + 3 * ncp : NULL, .split_depth = split,
+                        .reverse_orientation = ld->gs.reverse != 0, .alpha = alpha};
     const Transform *m = &ld->gs.ctm.m;
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 4; c++) sd.world_from_object[4 * r + c] = m->m[r][c];
-    if (transform_is_identity(m)) memset(sd.world_from_object, 0, sizeof sd.world_from_object);
-    CstStatus st = pbrt_material_scene_id(ld, ld->gs.material, &sd.material);
-    for (int seg = 0; seg < nseg && st == CST_OK; seg++) {
-        Vec3 b[4];
-        curve_bezier_segment(cp, degree, bspline, seg, b);
-        for (int k = 0; k < 4; k++)
-            for (int c = 0; c < 3; c++) sd.curve_p[k][c] = v3_get(b[k], c);
-        /* pbrt-v4: the widths linear over the segments */
-        const float a0 = (float)seg / (float)nseg, a1 = (float)(seg + 1) / (float)nseg;
-        sd.curve_width[0] = w0 + a0 * (w1 - w0);
-        sd.curve_width[1] = w0 + a1 * (w1 - w0);
-        if (ct == CST_CURVE_RIBBON)
-            for (int k = 0; k < 2; k++)
-                for (int c = 0; c < 3; c++) sd.curve_normals[k][c] = (float)pn->nums[3 * (seg + k) + c];
-        st = cst_scene_add_shape(ld->scene, &sd, ld->err);
-        if (st) st = pbrt_fail_wrap(ld, st, loc, d);
-    }
+    if (!transform_is_identity(m))
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 4; c++) cd.world_from_object[4 * r + c] = m->m[r][c];
+    CstStatus st = pbrt_material_scene_id(ld, ld->gs.material, &cd.material);
+    if (st == CST_OK && (st = cst_scene_add_curves(ld->scene, &cd, ld->err)) != CST_OK)
+        st = pbrt_fail_wrap(ld, st, loc, d);
     free(cp);
     return st;
 }
