@@ -468,7 +468,8 @@ static CstStatus sppm_job(Cluster *c, CstFilm **out, CstRenderStats *stats, CstE
         status = cst_render(c->scene, &s, out, stats, err);
     }
     /* Every tracer has sent every iteration only when the render ran to its end. */
-    g_unfinished = c->size > 1 && (status != CST_OK || (stats && stats->stopped));
+    const bool complete = (status == CST_OK && !stats->stopped) || (status == CST_ERR_NONFINITE && *out);
+    g_unfinished = c->size > 1 && !complete;
     for (int r = 0; in.buf && r < c->size; r++) free(in.buf[r]);
     for (int r = 0; in.off && r < c->size; r++) free(in.off[r]);
     free(in.iter);
