@@ -338,9 +338,23 @@ static CstStatus worker(Cluster *c, CstError *err)
  * r traces chunks [lo(r), lo(r + 1)) of every iteration (cst_sppm_trace_chunk) and sends
  * their hits to rank 0, whose render fetches them (CstPhotonSplit) and gathers every photon
  * in photon order: bit for bit a one-process render, whatever the number of ranks. A fixed
- * split (a photon's path does not depend on the iteration's state, so the workers run
- * ahead of rank 0, which never waits for work to be handed out). */
+ * split: a photon's path does not depend on the iteration's state, so a tracer traces
+ * iteration k + 1 while rank 0 gathers iteration k, and nothing is handed out. */
 enum { TAG_HITS_N = 16, TAG_HITS };
+
+/* Waits for requests by testing them every half millisecond: a blocking MPI call spins on
+ * the CPU in Open MPI (over shared memory), which a tracer waiting for rank 0 to post its
+ * receive, or rank 0 waiting for a tracer, would take from the ranks that work. */
+static void wait_gently(int n, MPI_Request *req)
+{
+    for (;;) {
+        int done = 0;
+        MPI_Testall(n, req, &done, MPI_STATUSES_IGNORE);
+        if (done) return;
+        struct timespec ts = {0, 500000};
+        nanosleep(&ts, NULL);
+    }
+}
 
 static int chunk_lo(int chunks, int r, int size) { return (int)((int64_t)chunks * r / size); }
 
@@ -366,7 +380,7 @@ static int inbox_receive(PhotonInbox *in, int r, int k)
         MPI_Iprobe(r, TAG_HITS_N, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
         if (flag) break;
         take_stops(in->c);
-        struct timespec ts = {0, 200000};
+        struct timespec ts = {0, 500000};
         nanosleep(&ts, NULL);
     }
     int64_t *off = in->off[r];
@@ -381,7 +395,9 @@ static int inbox_receive(PhotonInbox *in, int r, int k)
         in->buf[r] = b;
         in->cap[r] = (size_t)total;
     }
-    MPI_Recv(in->buf[r], (int)total, MPI_FLOAT, r, TAG_HITS, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    MPI_Request req;
+    MPI_Irecv(in->buf[r], (int)total, MPI_FLOAT, r, TAG_HITS, MPI_COMM_WORLD, &req);
+    wait_gently(1, &req);
     in->iter[r] = k;
     return 0;
 }
@@ -425,8 +441,10 @@ static CstStatus sppm_tracer(Cluster *c, int chunks, int first, int end, CstErro
             MPI_Send(&sig, 1, MPI_INT, 0, TAG_STOP, MPI_COMM_WORLD);
             c->stop_sent = 1;
         }
-        MPI_Send(counts, hi - lo, MPI_INT64_T, 0, TAG_HITS_N, MPI_COMM_WORLD);
-        MPI_Send(hits, (int)count, MPI_FLOAT, 0, TAG_HITS, MPI_COMM_WORLD);
+        MPI_Request req[2];
+        MPI_Isend(counts, hi - lo, MPI_INT64_T, 0, TAG_HITS_N, MPI_COMM_WORLD, &req[0]);
+        MPI_Isend(hits, (int)count, MPI_FLOAT, 0, TAG_HITS, MPI_COMM_WORLD, &req[1]);
+        wait_gently(2, req);
     }
     free(counts);
     free(hits);
