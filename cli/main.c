@@ -85,7 +85,7 @@ int main(int argc, char **argv)
             args.json = false;
         }
         code = cli_render(&args);
-        cli_mpi_stop();
+        cli_mpi_stop(code);
         break;
     }
     case ARGS_CMD_BENCH_RAYS:

@@ -371,13 +371,18 @@ static CstStatus cli_render_film(const CliArgs *a, const CstScene *scene, const 
                  "rank holds; expected no --noise (or one process)");
         return CST_ERR_UNSUPPORTED;
     }
-    /* Under mpirun a signal ends the job: no rank holds the film between blocks. */
-    if (a->checkpoint_path) {
-        snprintf(err->msg, sizeof err->msg, "under mpirun: --checkpoint is not supported across ranks yet; "
-                 "expected no --checkpoint (or one process)");
+    /* Rank 0's film between blocks is a one-process render's: checkpoints, resume and stops
+     * as without mpirun (cli/cluster.c), but of the crop only (sppm: rank 0 renders whole). */
+    const bool cropped = rs.crop[0] != 0 || rs.crop[1] != rs.width || rs.crop[2] != 0 || rs.crop[3] != rs.height;
+    if (cropped && (a->checkpoint_path || a->resume_path) && rs.integrator != CST_INTEGRATOR_SPPM) {
+        snprintf(err->msg, sizeof err->msg, "under mpirun: a state file holds the whole image, and the ranks render "
+                 "only the crop; expected no --crop with --checkpoint or --resume (or one process)");
         return CST_ERR_UNSUPPORTED;
     }
-    return cli_mpi_render(scene, settings, film, stats, err);
+    cli_signals_stop_arm();
+    CstStatus status = cli_mpi_render(scene, settings, film, stats, err);
+    cli_signals_stop_disarm();
+    return status;
 }
 
 int cli_render(const CliArgs *a)

@@ -917,7 +917,28 @@ typedef struct CstRenderSettings {
      * resumable (the state holds the per-pixel counts). Needs first_sample 0 and
      * sample_block 1. 0 or unset = off (the default). Not a scene setting. */
     double noise_target;
+    /* sppm: its photon pass split across processes (CstPhotonSplit). NULL = none. */
+    const struct CstPhotonSplit *photon_split;
 } CstRenderSettings;
+
+/* SPPM's photon pass split across processes (cli/cluster.c), bit for bit: an iteration's
+ * photon paths are cst_sppm_photon_chunks() chunks of 1024; this render traces chunks
+ * [chunk_lo, chunk_hi), and before each iteration's gather calls fetch (calling thread) for
+ * every other chunk in chunk order, for the `count` floats cst_sppm_trace_chunk made of it
+ * elsewhere, so photons are gathered in photon order as in one process. fetch: 0, or
+ * nonzero to end the render (CST_ERR_CANCELLED). */
+typedef struct CstPhotonSplit {
+    int chunk_lo, chunk_hi;
+    int (*fetch)(void *user, int iteration, int chunk, const float **hits, size_t *count);
+    void *user;
+} CstPhotonSplit;
+CST_API int cst_sppm_photon_chunks(const CstScene *scene, const CstRenderSettings *settings);
+/* Chunk `chunk` of iteration `iteration` traced on the calling thread as a render traces it,
+ * its hits' floats appended to (*hits)[*count ..] (realloc'd, *cap floats; the caller frees
+ * it); rays (or NULL) adds the rays traced. CST_ERR_OOM, CST_ERR_INVALID_ARG. */
+CST_API CstStatus cst_sppm_trace_chunk(const CstScene *scene, const CstRenderSettings *settings, int iteration,
+                                       int chunk, float **hits, size_t *count, size_t *cap, uint64_t *rays,
+                                       CstError *err);
 
 /* noise_target with spp 0 (unlimited): each pixel's samples are capped at this. */
 #define CST_NOISE_SPP_CAP 65536

@@ -563,6 +563,9 @@ static CstStatus iteration_step(Integrator *it, IntegratorStep *step, double lo,
         while (it->step < SPPM_PHASES) {
             int p = it->step++;
             int n = sppm_phase_begin(it->sppm, it->iteration, p);
+            if (n == -2)
+                return cst_fail(err, CST_ERR_CANCELLED, "SPPM iteration %d: the photon hits of another process "
+                                "did not arrive (CstPhotonSplit.fetch failed)", it->iteration);
             if (n < 0) return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM photon hits");
             if (n == 0) continue;
             set_step(step, n, sppm_item, it->sppm, lo + (hi - lo) * p / SPPM_PHASES,
@@ -702,7 +705,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "SPPM initial", err) : CST_OK;
         if (rs != CST_OK) return rs;
         SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
-                         st->threads, it->spectral};
+                         st->threads, it->spectral, st->photon_split};
         return sppm_create(scene, &it->camera, &sp, st->threads, &it->sppm, err);
     }
     }

@@ -309,10 +309,10 @@ static void progressive_update(SppmPixel *v, const Wavelengths *wl, uint64_t *no
     v->phi[0] = v->phi[1] = v->phi[2] = v->phi[3] = 0.0;
 }
 
-/* Photon paths per chunk: a chunk is the unit of work of the photon phase. Any size gives
- * the same image (the hit sort reads the chunks in order, so photon order is kept);
- * this one balances threads on small images and amortises the bookkeeping. */
-enum { SPPM_PHOTON_CHUNK = 1024 };
+/* SPPM_PHOTON_CHUNK (sppm.h), photon paths per chunk: a chunk is the unit of work of the
+ * photon phase. Any size gives the same image (the hit sort reads the chunks in order, so
+ * photon order is kept); this one balances threads on small images and amortises the
+ * bookkeeping. A split (SppmParams.split) hands whole chunks to other processes. */
 
 /* The three parallel phases of an iteration. */
 typedef enum SppmPhase { SPPM_PHASE_CAMERA, SPPM_PHASE_PHOTONS, SPPM_PHASE_DEPOSIT } SppmPhase;
@@ -451,7 +451,7 @@ void sppm_item(void *ctx, int u, int worker)
     if (job->phase == SPPM_PHASE_CAMERA) {
         camera_row(job->s, job->cam, &job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
     } else if (job->phase == SPPM_PHASE_PHOTONS) {
-        photon_chunk(job, w, u);
+        photon_chunk(job, w, u + (job->sp.split ? job->sp.split->chunk_lo : 0));
     } else {
         deposit_range(job, w, u);
     }
@@ -497,7 +497,12 @@ CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, i
     g->buckets = 1;
     while (g->buckets < count && g->buckets < (1u << 30)) g->buckets <<= 1;
     filter_init(&job->filter, sp->filter);
-    job->chunks = (int)(((int64_t)job->photons + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
+    job->chunks = sppm_photon_chunks(job->photons, count);
+    if (sp->split && !(0 <= sp->split->chunk_lo && sp->split->chunk_lo <= sp->split->chunk_hi &&
+                       sp->split->chunk_hi <= job->chunks && sp->split->fetch))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "photon split: chunks [%d, %d) of %d, fetch %s: expected a range "
+                        "of the iteration's chunks and a fetch function", sp->split->chunk_lo, sp->split->chunk_hi,
+                        job->chunks, sp->split->fetch ? "set" : "NULL");
     /* Several pixel ranges per thread, so a range crowded with photons does not hold the
      * others up; one thread needs one range. */
     const int ranges = threads == 1 ? 1 : 8 * threads;
@@ -514,6 +519,60 @@ CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, i
     return CST_OK;
 }
 
+/* A split's other chunks, in chunk order, from its fetch (serial, before the deposit):
+ * each hit unpacked as sppm_trace_chunk packed it and given its bucket as photon_chunk
+ * gives it, so the deposit sees the lists a one-process photon phase makes, bit for bit.
+ * 0, -1 on OOM, -2 when fetch fails. */
+static int fetch_chunks(SppmJob *job)
+{
+    const CstPhotonSplit *sp = job->sp.split;
+    for (int c = 0; c < job->chunks; c++) {
+        if (c >= sp->chunk_lo && c < sp->chunk_hi) continue;
+        SppmHitList *l = &job->hits[c];
+        const float *f = NULL;
+        size_t n = 0;
+        l->n = 0;
+        if (sp->fetch(sp->user, job->iter, c, &f, &n) != 0) return -2; /* n: floats */
+        if ((n > 0 && !f) || n % SPPM_HIT_FLOATS != 0) return -2;
+        for (size_t i = 0; i < n / SPPM_HIT_FLOATS; i++, f += SPPM_HIT_FLOATS) {
+            Color power;
+            for (int k = 0; k < COLOR_LANES; k++) power.c[k] = f[9 + k];
+            hit_list_push(l, v3(f[0], f[1], f[2]), v3(f[3], f[4], f[5]), v3(f[6], f[7], f[8]), power);
+            if (l->oom) return -1;
+            l->v[l->n - 1].key = sppm_grid_bucket(&job->g, l->v[l->n - 1].p);
+        }
+    }
+    return 0;
+}
+
+int sppm_photon_chunks(int photons, size_t pixels)
+{
+    const int64_t n = photons > 0 ? photons : (int64_t)(pixels < (size_t)1 << 30 ? pixels : (size_t)1 << 30);
+    return (int)((n + SPPM_PHOTON_CHUNK - 1) / SPPM_PHOTON_CHUNK);
+}
+
+bool sppm_trace_chunk(const Scene *s, const SppmParams *sp, int iter, int chunk, float **hits, size_t *count,
+                      size_t *cap, uint64_t *rays)
+{
+    SppmHitList l = {0};
+    const int first = chunk * SPPM_PHOTON_CHUNK;
+    const int last = first + SPPM_PHOTON_CHUNK < sp->photons ? first + SPPM_PHOTON_CHUNK : sp->photons;
+    if (s->emitter_sampler.lights > 0)
+        for (int i = first; i < last; i++) trace_photon(s, sp, &l, (uint64_t)i, iter, rays);
+    bool ok = !l.oom && array_grow(hits, cap, *count + l.n * SPPM_HIT_FLOATS, sizeof **hits);
+    for (size_t i = 0; ok && i < l.n; i++) {
+        const SppmHit *h = &l.v[i];
+        float *o = *hits + *count + i * SPPM_HIT_FLOATS;
+        o[0] = h->p.x, o[1] = h->p.y, o[2] = h->p.z;
+        o[3] = h->wi.x, o[4] = h->wi.y, o[5] = h->wi.z;
+        o[6] = h->n.x, o[7] = h->n.y, o[8] = h->n.z;
+        for (int k = 0; k < COLOR_LANES; k++) o[9 + k] = h->power.c[k];
+    }
+    if (ok) *count += l.n * SPPM_HIT_FLOATS;
+    free(l.v);
+    return ok;
+}
+
 int sppm_phase_begin(Sppm *job, int iter, int phase)
 {
     job->iter = iter;
@@ -523,10 +582,15 @@ int sppm_phase_begin(Sppm *job, int iter, int phase)
     case SPPM_PHASE_PHOTONS:
         /* Serial, and cheap next to the passes: a counting sort over the pixels. */
         sppm_grid_build(&job->g, job->px, job->count);
-        if (job->s->emitter_sampler.lights > 0) return job->chunks;
+        if (job->s->emitter_sampler.lights > 0)
+            return job->sp.split ? job->sp.split->chunk_hi - job->sp.split->chunk_lo : job->chunks;
         for (int c = 0; c < job->chunks; c++) job->hits[c].n = 0;
         return 0;
     case SPPM_PHASE_DEPOSIT:
+        if (job->sp.split) {
+            int f = fetch_chunks(job);
+            if (f < 0) return f;
+        }
         for (int c = 0; c < job->chunks; c++)
             if (job->hits[c].oom) return -1;
         /* Serial, like the grid build: a counting sort over the hits. */

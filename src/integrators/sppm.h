@@ -22,7 +22,16 @@ typedef struct SppmParams {
     int threads;         /* the render's thread count: it sizes the deposit's pixel ranges,
                           * which never changes the image */
     bool spectral;       /* spectral mode: each iteration's paths share one set of wavelengths */
+    /* NULL, or the photon pass split across processes (CstPhotonSplit, caustic.h): only
+     * chunks [chunk_lo, chunk_hi) are traced here, the others' hits fetched before the
+     * deposit, in chunk order. */
+    const CstPhotonSplit *split;
 } SppmParams;
+
+/* Photon paths per chunk, the unit of the photon phase and of a split (see sppm.c), and
+ * the floats of one hit as sppm_trace_chunk packs it: position, direction to the light,
+ * geometric normal (3 each), power (COLOR_LANES). */
+enum { SPPM_PHOTON_CHUNK = 1024, SPPM_HIT_FLOATS = 13 };
 
 /* The progressive state of one render. Its iterations are driven from outside
  * (integrator.c): for iteration k = 0, 1, ..., every phase p in [0, SPPM_PHASES) in order,
@@ -38,6 +47,7 @@ enum { SPPM_PHASES = 3 };
  * than 2^29 pixels; *out is then NULL or to be destroyed. */
 CstStatus sppm_create(const Scene *scene, const Camera *cam, const SppmParams *sp, int workers, Sppm **out,
                       CstError *err);
+/* -1: photon hits lost to OOM; -2: a split's fetch failed. */
 int sppm_phase_begin(Sppm *sppm, int iteration, int phase);
 void sppm_item(void *sppm, int item, int worker);
 /* After `iterations` iterations: the film receives the final estimate of every pixel as
@@ -52,6 +62,14 @@ void sppm_finish(const Sppm *sppm, Film *film, int iterations);
  * iteration to the next: a resumed render is bit-identical to an uninterrupted one. */
 bool sppm_export(const Sppm *sppm, Film *film);
 bool sppm_import(Sppm *sppm, const Film *film);
+/* The photon chunks of an iteration of sp->photons photons (0: `pixels`, as sppm_create). */
+int sppm_photon_chunks(int photons, size_t pixels);
+/* Chunk `chunk` of iteration `iteration` traced on the calling thread, exactly as the photon
+ * phase traces it (sp->photons: the iteration's photon count, resolved), its hits appended
+ * to hits[0 .. *count) (SPPM_HIT_FLOATS floats each, in photon order; *hits grown with
+ * realloc, *cap its floats). False on OOM (the buffer kept as it was). */
+bool sppm_trace_chunk(const Scene *scene, const SppmParams *sp, int iteration, int chunk, float **hits,
+                      size_t *count, size_t *cap, uint64_t *rays);
 /* Adds the rays traced and the NaN/Inf contributions dropped. */
 void sppm_counters(const Sppm *sppm, uint64_t *rays, uint64_t *nonfinite);
 /* Accepts NULL. */

@@ -976,8 +976,8 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: threads, progress, progress_user, first_sample, "
                         "sample_block and noise_target belong to a render, not to a scene; expected them unset "
                         "(cst_render_settings_init)", fn);
-    if (r->resume || r->pass_done || r->pass_user || r->photon_cache)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: resume, pass_done, pass_user and photon_cache belong to a render, "
+    if (r->resume || r->pass_done || r->pass_user || r->photon_cache || r->photon_split)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: resume, pass_done, pass_user, photon_cache and photon_split belong to a render, "
                         "not to a scene; expected them NULL (cst_render_settings_init)", fn);
     const int ints[] = {r->width, r->height, r->spp, r->rr_depth, r->photons};
     static const char *const names[] = {"width", "height", "spp", "rr_depth", "photons"};

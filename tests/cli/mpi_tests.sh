@@ -1,8 +1,10 @@
 # Distributed rendering under mpirun (issue 29, cli/cluster.c): -np 2 and -np 3 give images byte
 # for byte those of -np 1 and of a one-process render with the same --sample-block, for
-# path, light, bdpt and vcm; what cannot be split is refused (exit 2); a rank killed with
-# SIGKILL fails the whole run within seconds, with mpirun's message. Skipped (with the
-# reason) when mpirun or this caustic's MPI is missing.
+# path, light, bdpt and vcm, and sppm's those of one process; what cannot be split is
+# refused (exit 2); states written under mpirun are one process's byte for byte and resume
+# under another number of ranks; SIGINT to mpirun writes the image and the state; a rank
+# killed with SIGKILL fails the whole run within seconds, with mpirun's message. Skipped
+# (with the reason) when mpirun or this caustic's MPI is missing.
 # usage: bash mpi_tests.sh <caustic> <source-dir>
 . "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
 harness_init mpi_tests "$@"
@@ -63,13 +65,70 @@ fi
 
 # ------------------------------------------------------------ refusals
 d=$TMP/refuse
-mpi_run "$d" 60 2 render "${SMALL[@]}" --integrator sppm --spp 2 -o x.pfm
-expect "sppm under mpirun: refused" 2 "sppm cannot be split across ranks"
 mpi_run "$d" 60 2 render "${SMALL[@]}" --time 1 -o x.pfm
 expect "a time limit under mpirun: refused" 2 "a time limit cannot be split into fixed blocks"
-mpi_run "$d" 60 2 render "${SMALL[@]}" --spp 2 --checkpoint s.state -o x.pfm
-expect "--checkpoint under mpirun: refused" 2 "--checkpoint is not supported across ranks yet"
+mpi_run "$d" 60 2 render "${SMALL[@]}" --spp 2 --crop 0,8,0,8 --checkpoint s.state -o x.pfm
+expect "--checkpoint of a crop under mpirun: refused" 2 "expected no --crop with --checkpoint or --resume"
 check "no image from a refused run" test ! -e "$d/x.pfm"
+
+# ------------------------------------------------------------ checkpoints and resume
+# same_files A B [C D ...]: A = B, C = D, ... byte for byte.
+same_files() {
+    while [ $# -ge 2 ]; do cmp -s "$1" "$2" || return 1; shift 2; done
+}
+# Rank 0's state is byte for byte a one-process render's at the same sample count, and it
+# resumes under another number of ranks to the image of one uninterrupted render.
+d=$TMP/ckpt
+R=(render "${SMALL[@]}")
+harness_run "$d" 120 "${R[@]}" --spp 4 --checkpoint one4.state -o one4.pfm
+harness_run "$d" 120 "${R[@]}" --spp 8 -o one8.pfm
+mpi_run "$d" 180 2 "${R[@]}" --spp 4 --checkpoint np2.state -o np2-4.pfm
+check "path: -np 2's state and image = one process's, byte for byte" \
+    same_files "$d/one4.state" "$d/np2.state" "$d/one4.pfm" "$d/np2-4.pfm"
+mpi_run "$d" 180 3 "${R[@]}" --spp 8 --resume np2.state -o np3-8.pfm
+check "path: -np 2's state resumed by -np 3 = one uninterrupted process, byte for byte" \
+    cmp -s "$d/one8.pfm" "$d/np3-8.pfm"
+
+# sppm: rank 0 renders, the others trace their photon chunks, gathered in photon order, so
+# -np 2 = one process, image and state (SPPM's radii and flux), and the state resumes under
+# -np 3. 48 x 32 = 1536 photons per iteration: two chunks of 1024 (-np 3 leaves rank 0
+# none).
+d=$TMP/sppm
+P=(render --integrator sppm "${SMALL[@]}")
+harness_run "$d" 120 "${P[@]}" --spp 6 -o one.pfm
+harness_run "$d" 120 "${P[@]}" --spp 3 --checkpoint one3.state -o one3.pfm
+mpi_run "$d" 180 2 "${P[@]}" --spp 3 --checkpoint np2.state -o np2-3.pfm
+check "sppm: mpirun -np 2's image and state = one process's, byte for byte" \
+    same_files "$d/one3.pfm" "$d/np2-3.pfm" "$d/one3.state" "$d/np2.state"
+mpi_run "$d" 180 3 "${P[@]}" --spp 6 --resume np2.state -o np3-6.pfm
+check "sppm: -np 2's state resumed by -np 3 = one uninterrupted process, byte for byte" \
+    cmp -s "$d/one.pfm" "$d/np3-6.pfm"
+
+# ------------------------------------------------------------ SIGINT to mpirun
+# mpirun (Open MPI 4.1) answers SIGINT with SIGTERM to every rank a second later, SIGKILL a
+# second after that: rank 0 stops at once, writes the image and the state of the blocks
+# added and ends the job (MPI_Abort). Signalled once a first state is on disk; the state
+# resumes (one process, nothing left to render) to the same image, byte for byte.
+d=$TMP/sigint
+mkdir -p "$d"
+(cd "$d" && exec timeout -k 5 120 "${MPIRUN[@]}" 2 "$BIN" render "${SMALL[@]}" --spp 1000000 --checkpoint s.state \
+    --checkpoint-every 0.05 -o cut.pfm >"$OUT" 2>"$ERR" </dev/null) &
+runner=$!
+for _ in $(seq 300); do [ -e "$d/s.state" ] && break; sleep 0.05; done
+t0=$(date +%s%N)
+pkill -INT -P "$runner" -x mpirun
+{ wait "$runner"; } 2>/dev/null
+RC=$?
+ms=$((($(date +%s%N) - t0) / 1000000))
+n=$(sed -n 's/.*interrupted (SIG[A-Z]*) after \([0-9]*\) spp: wrote cut.pfm and s.state.*/\1/p' "$ERR" | head -n 1)
+if [ -n "$n" ] && [ "$RC" -ne 124 ] && [ "$ms" -lt 5000 ] && [ -s "$d/cut.pfm" ]; then
+    pass "SIGINT to mpirun: rank 0 wrote the image and the state of $n spp; mpirun exit $RC after $ms ms"
+    harness_run "$d" 120 render "${SMALL[@]}" --spp "$n" --resume s.state -o res.pfm
+    check "SIGINT to mpirun: the state holds the image's $n spp" cmp -s "$d/cut.pfm" "$d/res.pfm"
+else
+    fail "SIGINT to mpirun: rank 0 writes the image and the state within 5 s" \
+        "exit $RC after $ms ms; spp '$n'; files: $(ls -A "$d" | tr '\n' ' '); $(tail -n 3 "$ERR" | tr '\n' ' ')"
+fi
 
 # ------------------------------------------------------------ a rank killed
 d=$TMP/kill
@@ -99,9 +158,11 @@ else
     { wait "$runner"; } 2>/dev/null
     RC=$?
     ms=$((($(date +%s%N) - t0) / 1000000))
+    # mpirun ends the others with SIGTERM, which rank 0 takes as a stop: the image of the
+    # blocks it has added (and the state, with --checkpoint) is written, and says so.
     if [ "$RC" -ne 0 ] && [ "$RC" -ne 124 ] && [ "$ms" -lt 10000 ] && grep -q "exited on signal 9" "$ERR" &&
-        [ ! -e "$d/big.pfm" ]; then
-        pass "a rank killed by SIGKILL: the run fails in $ms ms (exit $RC) with mpirun's message, no image"
+        { [ ! -e "$d/big.pfm" ] || grep -Eq "interrupted \(SIGTERM\) after [0-9]+ spp: wrote big.pfm" "$ERR"; }; then
+        pass "a rank killed by SIGKILL: the run fails in $ms ms (exit $RC) with mpirun's message"
     else
         fail "a rank killed by SIGKILL: the run fails within 10 s with a message" "exit $RC after $ms ms"
     fi
