@@ -639,13 +639,13 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
      * Sampler); mmlt's is BDPT's strategies without media (its strategy-only connections do
-     * not cross media yet). light and bdpt walk homogeneous media (subpath_media.c), light
-     * grids too; vcm does not merge in media. */
-    const bool bidir_media = it->kind == INTEGRATOR_LIGHT || st->integrator == CST_INTEGRATOR_BDPT;
+     * not cross media yet). light, bdpt and vcm walk homogeneous media (subpath_media.c),
+     * light grids too; vcm merges volume vertices by UPBP's point-point 3D estimator. */
+    const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR;
     if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH &&
         (it->kind != INTEGRATOR_PSSMLT || st->integrator == CST_INTEGRATOR_MMLT) && !bidir_media)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
-                        "use path, path-nee, path-bsdf, light or bdpt", cst_integrator_name(st->integrator));
+                        "use path, path-nee, path-bsdf, light, bdpt or vcm", cst_integrator_name(st->integrator));
     if (bidir_media) {
         for (int i = 0; i < scene->num_media; i++) {
             const Medium *m = &scene->media[i];

@@ -252,8 +252,9 @@ static Color connect_vertices(const Scene *s, const SubpathIteration *it, const 
 Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it, int path,
                            Ray ray, Sampler *rng, const Wavelengths *wl, uint64_t *rays, const SubpathMerge *merge)
 {
-    /* Participating media: subpath_media.c (without merging: integrator.c refuses vcm there). */
-    if (s->num_media | s->num_medium_ifaces) return media_subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays);
+    /* Participating media: subpath_media.c (merging in media too: UPBP's point-point 3D). */
+    if (s->num_media | s->num_medium_ifaces)
+        return media_subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays, merge);
     Color L = color_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;

@@ -52,8 +52,10 @@ typedef struct MergeVertex {
     Color beta;
     float d_vcm, d_vm;
     int32_t bounces;
-    int32_t dispersed; /* SubpathVertex.dispersed */
+    int32_t dispersed; /* SubpathVertex.dispersed, | MERGE_VOLUME for a vertex in a medium
+                        * (ng = 0; only scenes with media have them) */
 } MergeVertex;
+enum { MERGE_VOLUME = 2 };
 
 /* A growable list of light vertices; one per work unit, reused by every iteration. */
 typedef struct SubpathVertexList {
@@ -70,6 +72,10 @@ typedef struct SubpathIteration {
     float radius;        /* merging radius of this iteration */
     float mis_vm, mis_vc; /* mis(eta_vcm), mis(1 / eta_vcm); 0 without merging */
     float vm_norm;       /* 1 / (pi r^2 light_paths) */
+    /* The same at a vertex in a participating medium (subpath_media.c): UPBP's point-point
+     * 3D estimator (Krivanek et al. 2014, sec. 5) accepts light vertices in a ball, so its
+     * eta is (4/3) pi r^3 light_paths; 0 without merging. */
+    float mis_vm_vol, mis_vc_vol, vm_norm_vol;
     float pixel_area;    /* one pixel's area on the image plane at distance 1 */
     /* All light vertices of the iteration, path by path, and where each path's start. */
     const SubpathVertex *vertices;

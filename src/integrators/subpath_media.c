@@ -12,7 +12,9 @@
  * bit for bit. The light tracer (no MIS) also walks grid media by delta tracking and ratio
  * tracking, with the hero-lane MIS of hetero_medium.h over the whole path. integrator.c
  * refuses grids for BDPT (their distance pdfs are stochastic) and emissive media for both
- * (volume emission is not sampled by light subpaths). */
+ * (volume emission is not sampled by light subpaths). VCM adds merging: surface light
+ * vertices as vcm.c, volume ones by UPBP's point-point 3D estimator (a ball of radius r,
+ * 1 / ((4/3) pi r^3 N), the eta of a volume vertex in every MIS weight; media_merge). */
 #include "integrators/subpath_media.h"
 
 #include <math.h>
@@ -286,6 +288,13 @@ static inline void mis_arrive_media(SubPath *sp, float dist, float cos_in, float
     sp->d_vm *= mis(rev) * inv;
 }
 
+/* mis(eta) of merging at a vertex (tech. rep. eq. 12's eta_vcm): a disk's at a surface,
+ * a ball's in a medium; 0 without merging (BDPT). */
+static inline float eta_vm(const SubpathIteration *it, bool vol)
+{
+    return vol ? it->mis_vm_vol : it->mis_vm;
+}
+
 /* A phase-function scattering at a volume vertex: HG sampled exactly (weight 1), Russian
  * roulette, the MIS quantities (tech. rep. eqs. 34-36 with no cosine; HG is symmetric,
  * so the reverse density is the forward one) and the next ray. */
@@ -299,8 +308,16 @@ static bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p,
     sp->specular_only = false;
     if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
     if (it) {
-        BsdfSample bs = {.wi = wi, .weight = color_s(1.0f), .pdf_w = pdf, .pmf = 0.0f, .delta = false};
-        mis_scatter(sp, it, &bs, 1.0f, pdf);
+        /* mis_scatter (subpath_walk.h) with cos_out = 1 and the eta of a volume vertex:
+         * merging here is the point-point 3D estimator. With two etas the merge
+         * strategies' densities no longer share one factor: d_vm keeps the sum of their
+         * ratios each times its own vertex's eta, divided by the surface eta throughout
+         * (so that subpath_scatter's recursion at surfaces holds unchanged: its "+ 1" is
+         * eta_surface / eta_surface), and media_merge divides by the merging vertex's eta. */
+        float gm = mis(1.0f / pdf);
+        sp->d_vc = gm * (sp->d_vc * mis(pdf) + sp->d_vcm + it->mis_vm_vol);
+        sp->d_vm = gm * (sp->d_vm * mis(pdf) + (sp->d_vcm + it->mis_vm_vol) * it->mis_vc);
+        sp->d_vcm = mis(1.0f / pdf);
     }
     *ray = ray_make(p, wi, 0.0f, INFINITY);
     return true;
@@ -433,7 +450,7 @@ static void media_connect_camera(const MediaCamCtx *c, const MediaLightVertex *v
         float cam_pdf_a = cos_cam * seg.rev /
                           (c->it->pixel_area * cos_theta * cos_theta * cos_theta * cs.dist * cs.dist);
         float w_light = mis(cam_pdf_a / (float)c->it->light_paths) *
-                        (c->it->mis_vm + v->sp.d_vcm + v->sp.d_vc * mis(pdf_rev));
+                        (eta_vm(c->it, !v->sh) + v->sp.d_vcm + v->sp.d_vc * mis(pdf_rev));
         weight = 1.0f / (1.0f + w_light);
     }
     Color col = color_scale(color_mul(color_mul(v->sp.beta, f), seg.tr), weight * cs.we / cs.pdf_w);
@@ -575,7 +592,7 @@ static Color media_connect_light(const Scene *s, const SubpathIteration *it, con
         return color_s(0.0f);
     float w_light = ls.delta ? 0.0f : mis(fwd * seg.fwd / ls.direct_pdf);
     float w_camera = mis(ls.emit_pdf * cos_x * seg.rev / (ls.direct_pdf * ls.cos_light)) *
-                     (it->mis_vm + sp->d_vcm + sp->d_vc * mis(rev));
+                     (eta_vm(it, !x->bsdf) + sp->d_vcm + sp->d_vc * mis(rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     Color c = color_mul(color_mul(f, seg.tr), scene_light_li(s, &ls, wl));
     return color_scale(c, weight / (ls.delta ? ls.pmf : ls.pdf_w));
@@ -623,16 +640,69 @@ static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, 
         return color_s(0.0f);
     float x_fwd_a = x_fwd * cos_y * seg.fwd / dist2; /* the camera subpath reaching y */
     float y_fwd_a = y_fwd * cos_x * seg.rev / dist2; /* the light subpath reaching x */
-    float w_light = mis(x_fwd_a) * (it->mis_vm + y->d_vcm + y->d_vc * mis(y_rev));
-    float w_camera = mis(y_fwd_a) * (it->mis_vm + sp->d_vcm + sp->d_vc * mis(x_rev));
+    float w_light = mis(x_fwd_a) * (eta_vm(it, y_vol) + y->d_vcm + y->d_vc * mis(y_rev));
+    float w_camera = mis(y_fwd_a) * (eta_vm(it, !x->bsdf) + sp->d_vcm + sp->d_vc * mis(x_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     return color_scale(color_mul(color_mul(color_mul(fx, fy), y->beta), seg.tr), weight / dist2);
 }
 
+/* VCM's merging at camera vertex x (vcm.c's merge, over the grid cells merge->plan and
+ * merge->fetch found) with the light vertices of x's kind. On a surface: a disk of radius
+ * r, f / |cos| at x, 1 / (pi r^2 N) (tech. rep. eqs. 42-43). In a medium: UPBP's point-
+ * point 3D estimator (Krivanek et al. 2014, sec. 5 and table 1), a ball of radius r,
+ * 1 / ((4/3) pi r^3 N), the phase function at x, and one 1 / sigma_s(x): both subpaths'
+ * throughputs end with the sigma_s of the free-flight sample that made their vertex, and
+ * the merged path scatters once there. The MIS weights are vcm.c's with the eta of x's
+ * kind. Merges with dispersed light vertices go to *hero (as vcm.c's). */
+static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathIteration *it, const MergeQuery *q,
+                         const SubPath *sp, const CamVertex *x, int bounces, const Wavelengths *wl, Color *hero)
+{
+    const bool vol = x->bsdf == NULL;
+    const float r2 = it->radius * it->radius;
+    const float mis_vc = vol ? it->mis_vc_vol : it->mis_vc;
+    /* d_vm is relative to the surface eta (media_scatter_phase): eta_surface / eta_x. */
+    const float vm_scale = vol ? it->mis_vm * it->mis_vc_vol : 1.0f;
+    Color acc = color_s(0.0f), acc_hero = color_s(0.0f);
+    for (int b = 0; b < q->nb; b++)
+        for (uint32_t k = q->first[b]; k < q->last[b]; k++) {
+            const MergeVertex *y = &it->cell_vertices[k];
+            if (((y->dispersed & MERGE_VOLUME) != 0) != vol) continue;
+            Vec3 dv = v3_sub(y->p, x->p);
+            if (v3_dot(dv, dv) > r2) continue;
+            if (vp->max_depth > 0 && bounces + y->bounces - 1 > vp->max_depth) continue;
+            float x_fwd, x_rev;
+            Color f;
+            if (vol) {
+                x_fwd = x_rev = phase_hg_eval(x->wo, y->w_prev, x->g);
+                f = color_s(x_fwd);
+            } else {
+                float cos_w = fabsf(v3_dot(x->ng, y->w_prev));
+                if (!(cos_w > 0.0f)) continue;
+                f = bsdf_eval_pdfs(x->bsdf, x->wo, y->w_prev, &x_fwd, &x_rev);
+                if (color_is_black(f)) continue;
+                f = color_scale(f, 1.0f / cos_w); /* merging wants f without the cosine */
+            }
+            float w_light = y->d_vcm * mis_vc + y->d_vm * mis(x_fwd) * vm_scale;
+            float w_camera = sp->d_vcm * mis_vc + sp->d_vm * mis(x_rev) * vm_scale;
+            float weight = 1.0f / (w_light + 1.0f + w_camera);
+            if (y->dispersed & 1) acc_hero = color_add(acc_hero, color_scale(color_mul(f, y->beta), weight));
+            else acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
+        }
+    Color norm = color_s(it->vm_norm);
+    if (vol) {
+        const MediumCoeffs mc = medium_coeffs(&s->media[x->medium], wl);
+        for (int c = 0; c < COLOR_LANES; c++)
+            norm.c[c] = mc.sigma_s.c[c] > 0.0f ? it->vm_norm_vol / mc.sigma_s.c[c] : 0.0f;
+    }
+    *hero = color_mul(acc_hero, norm);
+    return color_mul(acc, norm);
+}
+
 Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
                                  const SubpathIteration *it, int path, Ray ray, Sampler *rng, const Wavelengths *wl,
-                                 uint64_t *rays)
+                                 uint64_t *rays, const SubpathMerge *merge)
 {
+    const bool merging = merge && it->cells > 0;
     Color L = color_s(0.0f), H = color_s(0.0f);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
@@ -709,11 +779,14 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             x.bsdf = &bsdf;
         }
         if (vol || !bsdf_is_delta(&bsdf)) {
+            MergeQuery mq;
+            if (merging) merge->plan(it, h.p, &mq);
             if (has_lights) {
                 Color nee = media_connect_light(s, it, &sp, &x, rng, wl, rays);
                 if (cam_dispersed) H = color_madd(H, sp.beta, nee);
                 else L = color_madd(L, sp.beta, nee);
             }
+            if (merging) merge->fetch(it, &mq);
             Color c = color_s(0.0f), ch = color_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
@@ -723,6 +796,13 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             }
             L = color_madd(L, sp.beta, c);
             if (wl) H = color_madd(H, sp.beta, ch);
+            if (merging) { /* as subpath_trace_camera */
+                Color mh = color_s(0.0f), m = media_merge(s, vp, it, &mq, &sp, &x, t, wl, &mh);
+                if (cam_dispersed) m = color_add(m, mh), mh = color_s(0.0f);
+                if (cam_dispersed) H = color_madd(H, sp.beta, m);
+                else L = color_madd(L, sp.beta, m);
+                if (wl) H = color_madd(H, sp.beta, mh);
+            }
         }
         if (vol) {
             if (!media_scatter_phase(&sp, it, h.p, wo, x.g, t, vp->rr_depth, rng, &ray)) break;

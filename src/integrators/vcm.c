@@ -28,6 +28,11 @@ void vcm_iteration_init(SubpathIteration *it, const SubpathParams *vp, const Cam
     it->mis_vm = vp->merge ? mis(eta) : 0.0f;
     it->mis_vc = vp->merge ? mis(1.0f / eta) : 0.0f;
     it->vm_norm = 1.0f / eta;
+    /* Media: the ball's volume for the disk's area (UPBP's P-P3D estimator). */
+    float eta_vol = (4.0f / 3.0f) * CST_PI * it->radius * it->radius * it->radius * (float)light_paths;
+    it->mis_vm_vol = vp->merge ? mis(eta_vol) : 0.0f;
+    it->mis_vc_vol = vp->merge ? mis(1.0f / eta_vol) : 0.0f;
+    it->vm_norm_vol = 1.0f / eta_vol;
     float film_area = 4.0f * cam->tan_half_vfov * cam->tan_half_vfov * cam->aspect;
     it->pixel_area = film_area / ((float)cam->width * (float)cam->height);
 }
@@ -113,7 +118,7 @@ void vcm_grid_fill(const SubpathIteration *it, const uint32_t *cell_of, size_t n
         const SubpathVertex *v = &it->vertices[i];
         cell_vertices[cell_start[c + 1]++] = (MergeVertex){
             .p = v->p, .w_prev = v->w_prev, .beta = v->beta, .d_vcm = v->d_vcm, .d_vm = v->d_vm, .bounces = v->bounces,
-            .dispersed = v->dispersed};
+            .dispersed = v->dispersed | (v->ng.x == 0.0f && v->ng.y == 0.0f && v->ng.z == 0.0f ? MERGE_VOLUME : 0)};
     }
 }
 
