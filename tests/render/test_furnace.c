@@ -283,6 +283,55 @@ static void test_emitter_spectrum_furnace(void **state)
     scene_destroy(s);
 }
 
+/* Russian roulette from the first bounce (rr_depth 1, SmallVCM's rule, which
+ * scenes/smallvcm-box.json uses: issue 32): the emitting sphere of albedo 0.8, whose
+ * L_e / (1 - rho) = 5 L_e needs long paths, every one of them decided by roulette from its
+ * first scattering on. Unbiased in the path variants, the light tracer and BDPT (whose
+ * throughputs and MIS pdfs both go through roulette()), each at Z_LIMIT standard errors
+ * of the whole image and its four quadrants (light and bdpt: errors from independent
+ * renders, since their splats correlate pixels). */
+static void test_furnace_roulette_first_bounce(void **state)
+{
+    (void)state;
+    CstError err;
+    const float rho = 0.8f;
+    double expect[3];
+    Scene *s = test_scene_emitting_sphere(rho, expect);
+    if (g_color_mode == CST_COLOR_SPECTRAL) test_emitting_sphere_expect_spectral(rho, expect);
+    CstRenderSettings st = {.width = 16, .height = 16, .color_mode = g_color_mode, .rr_depth = 1};
+    int rect[5][4];
+    for (int b = -1; b < 4; b++) {
+        int *r = rect[b + 1];
+        r[0] = 0; r[1] = 0; r[2] = 16; r[3] = 16;
+        if (b >= 0) { r[0] = (b % 2) * 8; r[2] = r[0] + 8; r[1] = (b / 2) * 8; r[3] = r[1] + 8; }
+    }
+    const CstIntegrator integ[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_NEE, CST_INTEGRATOR_PATH_BSDF,
+                                   CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_BDPT};
+    for (size_t i = 0; i < sizeof integ / sizeof integ[0]; i++) {
+        RegionStat reg[5];
+        if (integ[i] == CST_INTEGRATOR_LIGHT || integ[i] == CST_INTEGRATOR_BDPT) {
+            st.integrator = integ[i];
+            if (region_stats_by_render(s, &st, integ[i] == CST_INTEGRATOR_BDPT ? 64 : 128, 700 + i, 5,
+                                       (const int (*)[4])rect, reg, NULL, &err) != CST_OK)
+                fail_msg("%s", err.msg);
+        } else {
+            CstFilm *f = render_film(s, &st, integ[i], 64, 700 + i);
+            for (int k = 0; k < 5; k++) reg[k] = region_stat(f, rect[k][0], rect[k][1], rect[k][2], rect[k][3]);
+            cst_film_destroy(f);
+        }
+        for (int k = 0; k < 5; k++)
+            for (int c = 0; c < 3; c++) {
+                double z = (reg[k].mean[c] - expect[c]) / reg[k].se[c];
+                if (!(fabs(z) <= Z_LIMIT))
+                    fail_msg("%s, rr_depth 1: region %d channel %d: mean %.6f, expected %.6f (z = %.2f)",
+                             cst_integrator_name(integ[i]), k - 1, c, reg[k].mean[c], expect[c], z);
+            }
+        print_message("%s, rr_depth 1: whole image %.5f (se %.1e), expected %.5f\n", cst_integrator_name(integ[i]),
+                      reg[0].mean[0], reg[0].se[0], expect[0]);
+    }
+    scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
@@ -292,6 +341,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_light_furnace_emitting_sphere),
         cmocka_unit_test(test_dispersive_glass_furnace),
         cmocka_unit_test(test_emitter_spectrum_furnace),
+        cmocka_unit_test(test_furnace_roulette_first_bounce),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
