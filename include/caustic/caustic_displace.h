@@ -54,8 +54,9 @@ typedef struct CstDisplacedMesh {
 
 /* Fails with CST_ERR_INVALID_ARG for a bad description (an edge_length <= 0 or NaN, an
  * index out of range, a position or displaced position that is not finite or beyond 1e18),
- * CST_ERR_UNSUPPORTED when the tessellation would exceed max_triangles (found before the
- * memory is spent), CST_ERR_OOM. The scene is only read (its textures). */
+ * CST_ERR_UNSUPPORTED when the tessellation would exceed max_triangles (at once when the
+ * mesh's area or edges alone need more, else on reaching the limit: memory stays bounded),
+ * CST_ERR_OOM. The scene is only read (its textures). */
 CST_API CstStatus cst_scene_displace_mesh(const CstScene *scene, const CstDisplaceDesc *desc,
                                           CstDisplacedMesh *out, CstError *err);
 /* Frees m's arrays and zeroes it; accepts NULL and a zeroed mesh. */

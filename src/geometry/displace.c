@@ -210,6 +210,29 @@ CstStatus displace_mesh(const DisplaceInput *in, DisplacedMesh *out, CstError *e
         memcpy(r.uv.v, in->uv, nv * sizeof *r.uv.v);
         r.uv.n = nv;
     }
+    /* A lower bound first, so that a far too small edge length fails at once instead of at
+     * the limit. Every output triangle has edges < len, so an area below the equilateral
+     * triangle's, sqrt(3)/4 len^2, while the pieces cover the measured area; and an input
+     * edge of length E ends in more than E / len pieces, each an edge of one of its
+     * triangle's pieces, which hold at most 3 such (the bound that catches slivers). */
+    double area = 0.0, perimeter = 0.0;
+    for (int t = 0; t < in->nt; t++) {
+        const int *v = &in->idx[3 * t];
+        Vec3 a = r.mp.v[v[0]], b = r.mp.v[v[1]], c = r.mp.v[v[2]];
+        double e1[3] = {(double)b.x - (double)a.x, (double)b.y - (double)a.y, (double)b.z - (double)a.z};
+        double e2[3] = {(double)c.x - (double)a.x, (double)c.y - (double)a.y, (double)c.z - (double)a.z};
+        double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2], z = e1[0] * e2[1] - e1[1] * e2[0];
+        area += 0.5 * sqrt(x * x + y * y + z * z);
+        perimeter += (double)dist(&r, v[0], v[1]) + (double)dist(&r, v[1], v[2]) + (double)dist(&r, v[2], v[0]);
+    }
+    double len = (double)r.len;
+    double least = fmax(area / (0.43301270189221932 * len * len), perimeter / (3.0 * len));
+    if (least > (double)in->max_triangles) {
+        st = cst_fail(err, CST_ERR_UNSUPPORTED, "displacement: the tessellation would exceed %lld triangles (edge "
+                      "length %g; the mesh's area and edge lengths alone need at least %.3g); expected a larger "
+                      "edge length", (long long)in->max_triangles, (double)r.len, least);
+        goto done;
+    }
     for (int t = 0; t < in->nt && st == CST_OK; t++) st = refine(&r, &stack, t, &in->idx[3 * t], in->max_triangles, err);
     if (st != CST_OK) goto done;
     /* Displace (the normals still interpolated), then the normals of the displaced surface. */

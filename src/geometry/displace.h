@@ -50,9 +50,12 @@ typedef struct DisplacedMesh {
  * p += fn(p, n, uv) n at every vertex and the normals are recomputed from the displaced
  * triangles (the normalised sum of their unit face normals, pbrt-v4's ComputeNormals).
  * Fails with CST_ERR_INVALID_ARG for a bad edge_length or a displaced position that is
- * not finite, CST_ERR_UNSUPPORTED before the tessellation exceeds max_triangles (memory
- * and time stay bounded: at most max_triangles triangles and as many new vertices are
- * made), CST_ERR_OOM. On success *out owns new arrays: displaced_mesh_free(). */
+ * not finite, CST_ERR_UNSUPPORTED when the tessellation would exceed max_triangles: at
+ * once when the measured area or edge lengths alone need more (each piece is smaller than
+ * the equilateral triangle of side edge_length; an edge of length E ends in more than
+ * E / edge_length pieces, at most 3 in each output triangle), else before the triangle
+ * that would exceed it (memory and time stay bounded: at most max_triangles triangles and
+ * as many new vertices are made), CST_ERR_OOM. On success *out owns new arrays: displaced_mesh_free(). */
 CstStatus displace_mesh(const DisplaceInput *in, DisplacedMesh *out, CstError *err);
 
 /* Frees m's arrays; accepts a zeroed mesh. */

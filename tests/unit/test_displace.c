@@ -208,7 +208,27 @@ static void test_limits_and_bad_lengths(void **state)
     CstDisplacedMesh m;
     assert_int_equal(cst_scene_displace_mesh(s, &d, &m, &err), CST_ERR_UNSUPPORTED);
     assert_non_null(strstr(err.msg, "exceed 1000 triangles"));
+    assert_non_null(strstr(err.msg, "alone need at least 9.24e+06")); /* 4 / (sqrt(3)/4 1e-6) */
     assert_null(m.positions);
+    /* the bounds pass (area: 103 triangles) but the bisection makes 256: stopped at 200 */
+    d = square_desc(0.3f);
+    d.max_triangles = 200;
+    assert_int_equal(cst_scene_displace_mesh(s, &d, &m, &err), CST_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "exceed 200 triangles"));
+    assert_null(strstr(err.msg, "alone need"));
+    d.max_triangles = 256;
+    if (cst_scene_displace_mesh(s, &d, &m, &err) != CST_OK) fail_msg("%s", err.msg);
+    assert_int_equal(m.num_triangles, 256); /* legs 2 / sqrt(2)^7: 2 x 2^7 right isosceles triangles */
+    cst_displaced_mesh_free(&m);
+    /* a sliver (area 5e-5, perimeter 20) caught at once by its edges, 20 / (3 x 1e-3) = 6667
+     * pieces, where its area alone asks for 115 */
+    static const float SLIVER[9] = {0, 0, 0, 10, 0, 0, 5, 1e-5f, 0};
+    static const int ONE[3] = {0, 1, 2};
+    d = square_desc(1e-3f);
+    d.positions = SLIVER, d.uvs = NULL, d.num_vertices = 3, d.indices = ONE, d.num_triangles = 1;
+    d.max_triangles = 5000;
+    assert_int_equal(cst_scene_displace_mesh(s, &d, &m, &err), CST_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "alone need at least 6.67e+03"));
     const float bad[3] = {0.0f, -1.0f, NAN};
     for (int i = 0; i < 3; i++) {
         d = square_desc(bad[i]);
