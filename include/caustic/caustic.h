@@ -449,6 +449,11 @@ typedef struct CstMeshDesc {
 /* num_dropped may be NULL. */
 CST_API CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *desc, int *num_dropped,
                              CstError *err);
+
+/* True displacement of meshes (cst_scene_displace_mesh): caustic_displace.h (part of this
+ * API). */
+#include "caustic/caustic_displace.h"
+
 /* Instancing (Embree's instances, pbrt's ObjectInstance): an object is a mesh in its own
  * space, stored once with its own BVH; each instance places it with an affine transform.
  * Instances do not emit and carry no texture coordinates, so the object's desc must leave

@@ -12,6 +12,7 @@
 #include "io/path.h"
 #include "geometry/sdf.h"
 #include "math/transform.h"
+#include "scene/json/json_displace.h"
 #include "scene/json/json_material.h"
 #include "scene/json/json_medium.h"
 #include "scene/json/json_texture.h"
@@ -280,6 +281,12 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
     json_t *narr = json_object_get(shape, "normals");
     if (narr && (st = read_mesh_normals(ld, narr, nv, &nrm)) != CST_OK)
         goto done;
+    /* "displacement": the arrays replaced by the displaced mesh's (world space) */
+    JsonMesh jm = {pos, nrm, uvs, idx, (int)nv, (int)nt, NULL};
+    st = json_read_displacement(ld, shape, NULL, &jm);
+    pos = jm.p, nrm = jm.n, uvs = jm.uv, idx = jm.idx, nv = (size_t)jm.nv, nt = (size_t)jm.nt;
+    if (st != CST_OK)
+        goto done;
     /* Vec3 and Vec2 are packed floats and the indices non-negative ints, which the
      * builder reads as uint32_t (the same bytes). */
     CstMeshDesc mesh = {0};
@@ -296,6 +303,7 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
     mesh.material = material;
     mesh.emission = emission_desc(em);
     mesh.alpha = *alpha;
+    mesh.skip_degenerate = json_object_get(shape, "displacement") != NULL; /* displacement may fold some */
     st = cst_scene_add_mesh(ld->scene, &mesh, NULL, ld->err);
     if (st != CST_OK)
         st = json_fail_builder(ld, st);
@@ -546,6 +554,18 @@ static CstStatus parse_meshfile(Loader *ld, const json_t *shape, int material, c
         snprintf(msg, sizeof msg, "%.400s: %d faces of other than 3 or 4 vertices skipped (the "
                  "first has %d)", path, im.num_skipped_primitives, im.skipped_face_size);
         ld->opt->warning(ld->opt->warning_user, CST_WARN_GEOMETRY, msg);
+    }
+    if (json_object_get(shape, "displacement")) {
+        /* in the file's space, before the transform: edges measured and textures read after it */
+        json_path_pop(ld);
+        JsonMesh jm = {im.positions, im.normals, im.uvs, im.indices, im.num_vertices, im.num_triangles,
+                       im.tri_material};
+        st = json_read_displacement(ld, shape, &xf, &jm);
+        im.positions = jm.p, im.normals = jm.n, im.uvs = jm.uv, im.indices = jm.idx;
+        im.num_vertices = jm.nv, im.num_triangles = jm.nt, im.tri_material = jm.tri_mat;
+        if (st != CST_OK)
+            goto done;
+        json_path_push_key(ld, "file");
     }
     if (!transform_is_identity(&xf))
         transform_mesh(&im, &xf);
@@ -1031,7 +1051,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
                                              "material", "alpha"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha", "medium"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
-                                            "normals", "shading", "alpha", "medium"};
+                                            "normals", "shading", "alpha", "medium", "displacement"};
     static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission", "alpha",
                                               "z_min", "z_max", "phi_max", "transform", "reverse_orientation",
                                               "medium"};
@@ -1040,15 +1060,15 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     static const char *const disk_keys[] = {"type", "radius", "height", "inner_radius", "phi_max", "transform",
                                             "reverse_orientation", "material", "emission", "alpha", "medium"};
     static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
-                                                "transform", "shading", "alpha", "medium"};
+                                                "transform", "shading", "alpha", "medium", "displacement"};
     int type = 0, material = -1;
     Emission em = {0};
     LOADER_TRY(json_expect_object(ld, shape, "a shape object"));
     LOADER_TRY(json_read_type(ld, shape, "shape type", types, 9, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 6)); break;
-    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 10)); break;
-    case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 8)); break;
+    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 11)); break;
+    case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 9)); break;
     case SHAPE_CYLINDER: LOADER_TRY(json_check_keys(ld, shape, cylinder_keys, 11)); break;
     case SHAPE_DISK: LOADER_TRY(json_check_keys(ld, shape, disk_keys, 11)); break;
     case SHAPE_TORUS: LOADER_TRY(json_check_keys(ld, shape, torus_keys, 8)); break;

@@ -12,6 +12,7 @@
 #include "geometry/shape.h"
 #include "geometry/triangle.h"
 #include "scene/mesh_import.h"
+#include "scene/pbrt/pbrt_displace.h"
 #include "scene/pbrt/pbrt_material.h"
 #include "scene/pbrt/pbrt_medium.h"
 #include "scene/pbrt/pbrt_params.h"
@@ -790,6 +791,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         st = loop_shape(ld, &ps, d, loc, &g);
     } else if (strcmp(type, "plymesh") == 0) {
         st = plymesh(ld, &ps, d, loc, &g);
+        if (!st) st = pbrt_displace_shape(ld, &ps, d, loc, &g);
     } else if (strcmp(type, "sphere") == 0) {
         float r = 1.0f, zmin = 0, zmax = 0, phimax = 360.0f;
         int hz0 = 0, hz1 = 0, hp = 0;
