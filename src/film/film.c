@@ -81,6 +81,7 @@ void film_destroy(Film *f)
     free(f->pixel_spp);
     free(f->aov);
     free(f->progressive);
+    free(f->chains);
     free(f);
 }
 
@@ -106,6 +107,9 @@ CstStatus cst_film_add(CstFilm *dst, const CstFilm *src, CstError *err)
     if (dst->progressive || src->progressive)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "cst_film_add: a film with a progressive integrator's state "
                         "(SPPM): its iterations are not sums of samples that add up; expected films of sums");
+    if (dst->chains || src->chains)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "cst_film_add: a film with MLT's chains: its iterations "
+                        "continue the same chains and do not add up; expected films of independent sums");
     if (dst->width != src->width || dst->height != src->height || (!dst->aov) != (!src->aov))
         return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_add: a %dx%d film%s and a %dx%d film%s; expected the "
                         "same size and AOV sums", dst->width, dst->height, dst->aov ? " with AOV sums" : "",

@@ -30,6 +30,10 @@ struct CstFilm {
     /* A progressive integrator's per-pixel state, whose sums the film does not hold (SPPM:
      * FILM_PROGRESSIVE_STRIDE values per pixel, sppm_export), for checkpoints; else NULL. */
     double *progressive;
+    /* An MLT render's chains (integrators/mlt.c's bytes, mlt_state_write), for checkpoints;
+     * else NULL. Opaque here: the film only stores and frees them. */
+    unsigned char *chains;
+    size_t chains_len;
     double exposure_scale;  /* 2^exposure */
     int png_linear;
     int white_balanced;        /* white_balance applies (sensor.h) */

@@ -75,9 +75,10 @@ static void state_encode(StateOut *o, const Film *f, const StateKey *keys, int n
 {
     out_bytes(o, FILM_STATE_MAGIC, 8);
     /* The lowest version that holds the film: 1, 2 with per-pixel counts, 3 with a
-     * progressive integrator's state (never both: a noise target refuses SPPM). */
-    out_u64(o, f->progressive ? FILM_STATE_VERSION_PROGRESSIVE : f->pixel_spp ? FILM_STATE_VERSION_PIXEL_SPP
-                                                                             : FILM_STATE_VERSION, 4);
+     * progressive integrator's state, 4 with MLT's chains (never two: a noise target
+     * refuses SPPM and MLT). */
+    out_u64(o, f->chains ? FILM_STATE_VERSION_CHAINS : f->progressive ? FILM_STATE_VERSION_PROGRESSIVE
+               : f->pixel_spp ? FILM_STATE_VERSION_PIXEL_SPP : FILM_STATE_VERSION, 4);
     out_u64(o, (uint64_t)nkeys, 4);
     for (int k = 0; k < nkeys; k++) {
         const StateKey *e = &keys[k];
@@ -100,10 +101,12 @@ static void state_encode(StateOut *o, const Film *f, const StateKey *keys, int n
     out_u64(o, (uint64_t)f->spp, 4);
     out_u64(o, (uint64_t)stride, 4);
     if (f->progressive) out_u64(o, FILM_PROGRESSIVE_STRIDE, 4);
+    if (f->chains) out_u64(o, (uint64_t)f->chains_len, 8);
     out_doubles(o, f->sum, 3 * pixels);
     out_doubles(o, f->sum_sq, 3 * pixels);
     if (stride) out_doubles(o, f->aov, (size_t)stride * pixels);
     if (f->progressive) out_doubles(o, f->progressive, FILM_PROGRESSIVE_STRIDE * pixels);
+    if (f->chains) out_bytes(o, f->chains, f->chains_len);
     if (f->pixel_spp)
         for (size_t i = 0; i < pixels; i++) out_u64(o, (uint64_t)f->pixel_spp[i], 4);
     out_flush(o);
@@ -235,10 +238,10 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     in->off = 8;
     uint64_t version = in_u64(in, 4);
     if (version != FILM_STATE_VERSION && version != FILM_STATE_VERSION_PIXEL_SPP &&
-        version != FILM_STATE_VERSION_PROGRESSIVE)
-        return cst_fail(err, CST_ERR_PARSE, "%s: state format version %llu; this caustic reads versions %u, %u and %u",
-                        in->path, (unsigned long long)version, FILM_STATE_VERSION, FILM_STATE_VERSION_PIXEL_SPP,
-                        FILM_STATE_VERSION_PROGRESSIVE);
+        version != FILM_STATE_VERSION_PROGRESSIVE && version != FILM_STATE_VERSION_CHAINS)
+        return cst_fail(err, CST_ERR_PARSE, "%s: state format version %llu; this caustic reads versions %u, %u, %u "
+                        "and %u", in->path, (unsigned long long)version, FILM_STATE_VERSION,
+                        FILM_STATE_VERSION_PIXEL_SPP, FILM_STATE_VERSION_PROGRESSIVE, FILM_STATE_VERSION_CHAINS);
     const bool counts = version == FILM_STATE_VERSION_PIXEL_SPP;
     uint64_t n = in_u64(in, 4);
     if (n > STATE_KEYS_MAX)
@@ -247,11 +250,16 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     for (int k = 0; k < (int)n; k++)
         if ((st = read_key(in, &keys[k], k, err)) != CST_OK) return st;
     *nkeys = (int)n;
-    const bool prog = version == FILM_STATE_VERSION_PROGRESSIVE;
-    if ((st = in_need(in, prog ? 20 : 16, "the film header", err)) != CST_OK) return st;
+    const bool prog = version == FILM_STATE_VERSION_PROGRESSIVE, chains = version == FILM_STATE_VERSION_CHAINS;
+    if ((st = in_need(in, prog ? 20 : chains ? 24 : 16, "the film header", err)) != CST_OK) return st;
     const size_t at = in->off;
     uint64_t w = in_u64(in, 4), h = in_u64(in, 4), spp = in_u64(in, 4), stride = in_u64(in, 4);
     uint64_t pstride = prog ? in_u64(in, 4) : 0;
+    uint64_t clen = chains ? in_u64(in, 8) : 0;
+    if (chains && (clen == 0 || clen > FILM_STATE_CHAINS_MAX || clen > in->len))
+        return cst_fail(err, CST_ERR_PARSE, "%s: byte %zu: a chain state of %llu bytes; expected 1 to %llu bytes "
+                        "within the file's %zu (a corrupted state file)", in->path, at + 16,
+                        (unsigned long long)clen, (unsigned long long)FILM_STATE_CHAINS_MAX, in->len);
     if (prog && pstride != FILM_PROGRESSIVE_STRIDE)
         return cst_fail(err, CST_ERR_PARSE, "%s: byte %zu: %llu progressive state values per pixel; expected %d (a "
                         "corrupted state file)", in->path, at + 16, (unsigned long long)pstride,
@@ -263,7 +271,8 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
                         in->path, at, (unsigned long long)w, (unsigned long long)h, (unsigned long long)spp,
                         (unsigned long long)stride, FILM_AOV_STRIDE);
     const size_t pixels = (size_t)w * (size_t)h;
-    const size_t data = (6 + (size_t)stride + (size_t)pstride) * pixels * sizeof(double) + (counts ? 4 * pixels : 0);
+    const size_t data = (6 + (size_t)stride + (size_t)pstride) * pixels * sizeof(double) + (counts ? 4 * pixels : 0) +
+                        (size_t)clen;
     if ((st = in_need(in, data + 4, "the film's sums and the checksum", err)) != CST_OK) return st;
     if (in->len - in->off != data + 4)
         return cst_fail(err, CST_ERR_PARSE, "%s: %zu bytes after the end of the state (at byte %zu)", in->path,
@@ -284,7 +293,8 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     Film *f = film_create((int)w, (int)h);
     if (f && stride) f->aov = malloc(pixels * FILM_AOV_STRIDE * sizeof *f->aov);
     if (f && pstride) f->progressive = malloc(pixels * FILM_PROGRESSIVE_STRIDE * sizeof *f->progressive);
-    if (!f || (stride && !f->aov) || (pstride && !f->progressive)) {
+    if (f && clen) f->chains = malloc((size_t)clen);
+    if (!f || (stride && !f->aov) || (pstride && !f->progressive) || (clen && !f->chains)) {
         film_destroy(f);
         return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %llux%llu film", in->path,
                         (unsigned long long)w, (unsigned long long)h);
@@ -294,6 +304,11 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
     in_doubles(in, f->sum_sq, 3 * pixels);
     if (stride) in_doubles(in, f->aov, FILM_AOV_STRIDE * pixels);
     if (pstride) in_doubles(in, f->progressive, FILM_PROGRESSIVE_STRIDE * pixels);
+    if (clen) {
+        memcpy(f->chains, in->p + in->off, (size_t)clen);
+        f->chains_len = (size_t)clen;
+        in->off += (size_t)clen;
+    }
     if (counts) {
         if (!(f->pixel_spp = malloc(pixels * sizeof *f->pixel_spp))) {
             film_destroy(f);

@@ -19,6 +19,12 @@
  * with pixel_spp, adaptive sampling). Films without per-pixel counts are written as 1. */
 #define FILM_STATE_VERSION_PIXEL_SPP 2u
 #define FILM_STATE_VERSION_PROGRESSIVE 3u
+/* Version 4: version 1 and an MLT render's chains (Film.chains, opaque bytes) after the
+ * AOV sums. */
+#define FILM_STATE_VERSION_CHAINS 4u
+/* The largest chain state a reader accepts (bytes): far above any render's (a chain is a
+ * few kB), far below what would overflow a size. */
+#define FILM_STATE_CHAINS_MAX ((uint64_t)1 << 40)
 
 typedef enum StateValueType { STATE_INT = 1, STATE_REAL = 2, STATE_TEXT = 3 } StateValueType;
 

@@ -638,14 +638,16 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
-     * Sampler); mmlt's is BDPT's strategies without media (its strategy-only connections do
-     * not cross media yet). light, bdpt and vcm walk homogeneous media (subpath_media.c),
+     * Sampler); mmlt's is BDPT's strategies, media included (subpath_media.c's single
+     * strategies). light, bdpt, vcm and mmlt walk homogeneous media (subpath_media.c),
      * light grids too; vcm merges volume vertices by UPBP's point-point 3D estimator. */
-    const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR;
+    const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
+                             st->integrator == CST_INTEGRATOR_MMLT;
     if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH &&
         (it->kind != INTEGRATOR_PSSMLT || st->integrator == CST_INTEGRATOR_MMLT) && !bidir_media)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
-                        "use path, path-nee, path-bsdf, light, bdpt or vcm", cst_integrator_name(st->integrator));
+                        "use path, path-nee, path-bsdf, light, bdpt, vcm, pssmlt or mmlt",
+                        cst_integrator_name(st->integrator));
     if (bidir_media) {
         for (int i = 0; i < scene->num_media; i++) {
             const Medium *m = &scene->media[i];
@@ -717,10 +719,31 @@ void integrator_finish(Integrator *it, int samples)
 {
     if (it->kind == INTEGRATOR_SPPM) sppm_finish(it->sppm, it->film, samples);
     else it->film->spp = samples;
+    if (it->kind == INTEGRATOR_PSSMLT) { /* the image is made: the chains are no state of it (as SPPM's) */
+        free(it->film->chains);
+        it->film->chains = NULL;
+        it->film->chains_len = 0;
+    }
 }
 
 bool integrator_export_progressive(Integrator *it, int done)
 {
+    if (it->kind == INTEGRATOR_PSSMLT) {
+        /* MLT: its chains as bytes (mlt.h), replacing the previous pass's. */
+        Film *f = it->film;
+        free(f->chains);
+        f->chains = NULL;
+        f->chains_len = 0;
+        const size_t n = mlt_state_size(it->mlt);
+        unsigned char *b = malloc(n);
+        if (!b || !mlt_state_write(it->mlt, b)) {
+            free(b);
+            return false;
+        }
+        f->chains = b;
+        f->chains_len = n;
+        return true;
+    }
     if (it->kind != INTEGRATOR_SPPM) return true;
     it->film->spp = done;
     return sppm_export(it->sppm, it->film);
@@ -728,6 +751,8 @@ bool integrator_export_progressive(Integrator *it, int done)
 
 bool integrator_import_progressive(Integrator *it, const Film *resume)
 {
+    if (it->kind == INTEGRATOR_PSSMLT)
+        return resume->chains && mlt_state_read(it->mlt, resume->chains, resume->chains_len);
     return it->kind != INTEGRATOR_SPPM || sppm_import(it->sppm, resume);
 }
 

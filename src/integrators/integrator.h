@@ -163,9 +163,9 @@ CstStatus integrator_next_step(Integrator *it, IntegratorStep *step, CstError *e
 /* After the last pass, `samples` done in all: the film's final contents (SPPM writes its
  * estimate, film->spp = 1) and film->spp. */
 void integrator_finish(Integrator *it, int samples);
-/* Checkpoints of integrators whose state is more than the film's sums (SPPM): after
- * `done` iterations, the state into it->film (Film.progressive, film->spp = done; false on
- * OOM); before the first pass of a resumed render, back from the state file's film (false
+/* Checkpoints of integrators whose state is more than the film's sums (SPPM, MLT): after
+ * `done` iterations, the state into it->film (Film.progressive, film->spp = done; MLT's
+ * chains into Film.chains; false on OOM, or for MLT a chain that ran out); before the first pass of a resumed render, back from the state file's film (false
  * when it holds none or a value no render makes). True and nothing done for the others. */
 bool integrator_export_progressive(Integrator *it, int done);
 bool integrator_import_progressive(Integrator *it, const Film *resume);

@@ -9,7 +9,11 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
+#include "core/array.h"
+
+#include "integrators/subpath_media.h"
 #include "sampling/sampler.h"
 
 /* Streams of the render seed, apart from every other integrator's. */
@@ -68,6 +72,51 @@ static Color path_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
     return L;
 }
 
+/* mmlt's strategy (below) in a scene with media: the same streams and weights through
+ * subpath_media.c's single strategies, which cross media and boundaries as BDPT's
+ * connections there do (transmittance on every connection, volume vertices on both
+ * subpaths). smp reads pss; sl, n_strategies and the film position as mmlt_eval drew them. */
+static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, PssSampler *pss, Sampler *smp,
+                             int depth, int sl, int n_strategies, Vec2 *fp, Vec2 ul, const Wavelengths *wlp,
+                             uint64_t *rays)
+{
+    const SubpathParams *vp = &m->p.sub;
+    const SubpathIteration *it = &m->p.it;
+    const int tc = depth + 2 - sl;
+    Color L = color_s(0.0f);
+    if (tc == 1) {
+        /* The lens point first (its own stream: the order of streams changes no value). */
+        pss_start_stream(pss, 2);
+        Vec2 u_lens = sampler_2d(smp);
+        pss_start_stream(pss, 1);
+        Color rgb;
+        if (!media_subpath_connect_camera(s, cam, vp, it, sl - 1, smp, u_lens, wlp, fp, &rgb, rays)) return L;
+        const double film = (double)m->p.width * (double)m->p.height;
+        return color_scale(rgb, (float)((double)n_strategies * film / ((double)domain_w(m) * (double)domain_h(m))));
+    }
+    Ray ray = camera_generate_ray(cam, fp->x, fp->y, ul);
+    MediaCameraVertex x;
+    Color emitted;
+    bool found = media_subpath_camera_vertex(s, cam, vp, it, ray, tc - 1, sl == 0, smp, wlp, &x, &emitted, rays);
+    if (sl == 0) {
+        L = emitted;
+    } else if (found && sl == 1) {
+        pss_start_stream(pss, 2);
+        L = media_subpath_connect_light(s, it, &x, smp, wlp, rays);
+        if (wlp && x.dispersed) L = subpath_hero_only(L);
+    } else if (found) {
+        pss_start_stream(pss, 1);
+        SubpathVertex y;
+        Wavelengths walk_wl;
+        if (media_subpath_light_vertex(s, cam, vp, it, sl - 1, smp, wlp, &y, &walk_wl, rays)) {
+            L = media_subpath_connect_pair(s, it, &x, &y, wlp, rays);
+            if (wlp && (x.dispersed || y.dispersed)) L = subpath_hero_only(L);
+        }
+    }
+    if (wlp) L = spectrum_to_rgb(L, wlp);
+    return color_scale(L, (float)n_strategies);
+}
+
 /* mmlt: the state's one BDPT strategy of path length `depth` (Hachisuka et al. 2014 sec. 4,
  * pbrt-v4's MLTIntegrator::L), from three streams of the PSS vector: the camera stream
  * (the strategy, film position, lens, wavelengths, then the camera subpath), the light
@@ -99,6 +148,8 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
     }
     const SubpathParams *vp = &m->p.sub;
     const SubpathIteration *it = &m->p.it;
+    if (s->num_media | s->num_medium_ifaces)
+        return mmlt_eval_media(m, s, cam, pss, &smp, depth, sl, n_strategies, fp, ul, wlp, rays);
     Color L = color_s(0.0f);
     SubpathVertex y;
     Wavelengths walk_wl;
@@ -266,4 +317,154 @@ void mlt_chain_run(Mlt *m, const Scene *s, const Camera *cam, int c, int mutatio
         }
     }
     if (ch->pss.oom) out->oom = 1;
+}
+
+/* ---- Checkpoints: the chains as bytes (docs/state-format.md, version 4), little-endian.
+ * Everything a chain carries from one iteration to the next: its PSS vector (every
+ * coordinate's value and date, and the backups pss_reject restores from), its mutation
+ * and acceptance streams, its current sample (film position, radiance, I) and path length;
+ * and b (mean_I). The bootstrap's arrays are not needed once the chains have started. */
+
+enum { MLT_STATE_HEAD = 16, MLT_STATE_CHAIN = 88, MLT_STATE_VALUE = 32 };
+
+static unsigned char *put_u64(unsigned char *o, uint64_t v, int bytes)
+{
+    for (int k = 0; k < bytes; k++) o[k] = (unsigned char)(v >> (8 * k));
+    return o + bytes;
+}
+static unsigned char *put_f64(unsigned char *o, double v)
+{
+    uint64_t b;
+    memcpy(&b, &v, sizeof b);
+    return put_u64(o, b, 8);
+}
+static unsigned char *put_f32(unsigned char *o, float v)
+{
+    uint32_t b;
+    memcpy(&b, &v, sizeof b);
+    return put_u64(o, b, 4);
+}
+static uint64_t get_u64(const unsigned char **p, int bytes)
+{
+    uint64_t v = 0;
+    for (int k = 0; k < bytes; k++) v |= (uint64_t)(*p)[k] << (8 * k);
+    *p += bytes;
+    return v;
+}
+static double get_f64(const unsigned char **p)
+{
+    uint64_t b = get_u64(p, 8);
+    double v;
+    memcpy(&v, &b, sizeof v);
+    return v;
+}
+static float get_f32(const unsigned char **p)
+{
+    uint32_t b = (uint32_t)get_u64(p, 4);
+    float v;
+    memcpy(&v, &b, sizeof v);
+    return v;
+}
+
+size_t mlt_state_size(const Mlt *m)
+{
+    size_t n = MLT_STATE_HEAD;
+    for (int c = 0; c < m->p.chains; c++) n += MLT_STATE_CHAIN + MLT_STATE_VALUE * m->chains[c].pss.n;
+    return n;
+}
+
+bool mlt_state_write(const Mlt *m, unsigned char *out)
+{
+    if (!m->ready) return false;
+    unsigned char *o = out;
+    o = put_u64(o, (uint64_t)m->p.chains, 4);
+    o = put_u64(o, (uint64_t)m->p.depths, 4);
+    o = put_f64(o, m->mean_I);
+    for (int c = 0; c < m->p.chains; c++) {
+        const MltChain *ch = &m->chains[c];
+        if (ch->pss.oom) return false; /* an invalid chain: no state rather than a wrong one */
+        o = put_u64(o, (uint64_t)ch->depth, 4);
+        o = put_u64(o, ch->accept_rng.state, 8);
+        o = put_u64(o, ch->accept_rng.inc, 8);
+        o = put_f32(o, ch->fp.x);
+        o = put_f32(o, ch->fp.y);
+        for (int k = 0; k < COLOR_LANES; k++) o = put_f32(o, ch->L.c[k]);
+        o = put_f32(o, ch->I);
+        o = put_u64(o, ch->pss.rng.state, 8);
+        o = put_u64(o, ch->pss.rng.inc, 8);
+        o = put_u64(o, (uint64_t)ch->pss.iteration, 8);
+        o = put_u64(o, (uint64_t)ch->pss.last_large, 8);
+        o = put_u64(o, (uint64_t)ch->pss.n, 8);
+        for (size_t i = 0; i < ch->pss.n; i++) {
+            const PssValue *v = &ch->pss.x[i];
+            o = put_f64(o, v->value);
+            o = put_f64(o, v->backup);
+            o = put_u64(o, (uint64_t)v->modified, 8);
+            o = put_u64(o, (uint64_t)v->modified_backup, 8);
+        }
+    }
+    return (size_t)(o - out) == mlt_state_size(m);
+}
+
+/* A coordinate a chain can hold: in [0, 1], dated no later than the chain's iteration. */
+static bool pss_value_ok(double v, int64_t modified, int64_t iteration)
+{
+    /* 1.0 itself: a small step's wrap (x - floor(x)) of a tiny negative x rounds to it. */
+    return v >= 0.0 && v <= 1.0 && modified >= -1 && modified <= iteration;
+}
+
+bool mlt_state_read(Mlt *m, const unsigned char *in, size_t len)
+{
+    const unsigned char *p = in, *end = in + len;
+    if (len < MLT_STATE_HEAD) return false;
+    if (get_u64(&p, 4) != (uint64_t)m->p.chains || get_u64(&p, 4) != (uint64_t)m->p.depths) return false;
+    const double mean_I = get_f64(&p);
+    if (!(mean_I >= 0.0) || !isfinite(mean_I)) return false;
+    const int lengths = m->p.depths > 0 ? m->p.depths : 1;
+    for (int c = 0; c < m->p.chains; c++) {
+        MltChain *ch = &m->chains[c];
+        pss_free(&ch->pss);
+        *ch = (MltChain){0};
+        if ((size_t)(end - p) < MLT_STATE_CHAIN) return false;
+        uint64_t depth = get_u64(&p, 4);
+        if (depth >= (uint64_t)lengths) return false;
+        ch->depth = (int)depth;
+        ch->accept_rng.state = get_u64(&p, 8);
+        ch->accept_rng.inc = get_u64(&p, 8);
+        ch->fp.x = get_f32(&p);
+        ch->fp.y = get_f32(&p);
+        for (int k = 0; k < COLOR_LANES; k++) ch->L.c[k] = get_f32(&p);
+        ch->I = get_f32(&p);
+        Pcg32 rng;
+        rng.state = get_u64(&p, 8);
+        rng.inc = get_u64(&p, 8);
+        pss_init(&ch->pss, rng, m->p.sigma, m->p.large_step_prob, stream_count(m));
+        ch->pss.iteration = (int64_t)get_u64(&p, 8);
+        ch->pss.last_large = (int64_t)get_u64(&p, 8);
+        uint64_t n = get_u64(&p, 8);
+        /* PCG's increments are odd (a chain with I = 0 never runs and has no mutation
+         * stream); the sample finite, I its importance (mlt_chain_run divides by it); n
+         * within what is left. */
+        if (!(ch->accept_rng.inc & 1) || (ch->I > 0.0f && !(rng.inc & 1)) || !isfinite(ch->fp.x) ||
+            !isfinite(ch->fp.y) || !color_is_finite(ch->L) || ch->I != mlt_importance(ch->L) || ch->pss.iteration < 0 ||
+            ch->pss.last_large < 0 || ch->pss.last_large > ch->pss.iteration ||
+            n > (uint64_t)(end - p) / MLT_STATE_VALUE)
+            return false;
+        if (n && !array_grow(&ch->pss.x, &ch->pss.cap, (size_t)n, sizeof *ch->pss.x)) return false;
+        for (size_t i = 0; i < (size_t)n; i++) {
+            PssValue *v = &ch->pss.x[i];
+            v->value = get_f64(&p);
+            v->backup = get_f64(&p);
+            v->modified = (int64_t)get_u64(&p, 8);
+            v->modified_backup = (int64_t)get_u64(&p, 8);
+            if (!pss_value_ok(v->value, v->modified, ch->pss.iteration) ||
+                !pss_value_ok(v->backup, v->modified_backup, ch->pss.iteration))
+                return false;
+        }
+        ch->pss.n = (size_t)n;
+    }
+    if (p != end) return false;
+    m->mean_I = mean_I;
+    m->ready = true;
+    return true;
 }

@@ -94,6 +94,15 @@ static inline int mlt_chain_mutations(const Mlt *m, int c)
 /* The factor from one iteration's splat sums to the film's pixel means (box filter: the
  * mean over the pixel of the path tracer's estimate): b / (width x height). */
 double mlt_splat_scale(const Mlt *m);
+/* Checkpoints (docs/state-format.md, version 4): the bytes of the chains and b once they
+ * have started (mlt_state_size of them; false, nothing valid written, before the chains
+ * start or when a chain ran out of memory), and a state read back into m, which must have
+ * been made with the same parameters: false when the bytes are not a state this m could
+ * have written (counts, ranges, lengths), m's chains then unusable. */
+size_t mlt_state_size(const Mlt *m);
+bool mlt_state_write(const Mlt *m, unsigned char *out);
+bool mlt_state_read(Mlt *m, const unsigned char *in, size_t len);
+
 /* The scalar contribution I of a radiance: luminance of the channels' magnitudes, positive
  * wherever the radiance is not zero, so the chains reach every path that contributes. */
 static inline float mlt_importance(Color L)

@@ -819,3 +819,200 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
     hero.c[0] = H.c[0] * (float)COLOR_LANES;
     return color_add(L, hero);
 }
+
+/* ------------------------------------------------------------------ single strategies */
+
+/* The visitor of a light walk cut at vertex `bounces`: stores that vertex (out) or
+ * connects it to the lens at u_lens (cam), then stops the walk. */
+typedef struct MediaTargetCtx {
+    int bounces;
+    bool found;
+    SubpathVertex *out;
+    const MediaCamCtx *cam;
+    Vec2 u_lens;
+    const Wavelengths *walk_wl;
+} MediaTargetCtx;
+
+static bool visit_target(void *ctx, const MediaLightVertex *v)
+{
+    MediaTargetCtx *c = ctx;
+    if (v->bounces < c->bounces) return true;
+    if (v->bounces > c->bounces) return false;
+    const int dispersed = c->walk_wl && wavelengths_secondary_terminated(c->walk_wl);
+    if (c->cam) {
+        /* The strategy's lens point comes from the connection stream, not the walk's. */
+        MediaLightVertex u = *v;
+        u.u_lens = c->u_lens;
+        media_connect_camera(c->cam, &u, dispersed ? c->cam->walk_wl : c->cam->wl);
+    } else if (v->sh) { /* stored as visit_store_connect stores it */
+        *c->out = (SubpathVertex){v->p, v->ng, v->sh->ns, v->w_prev, v->sp.beta, v->sp.d_vcm, v->sp.d_vc,
+                                  v->sp.d_vm, v->sh->material, v->bounces, v->sh->uv, dispersed};
+    } else {
+        *c->out = (SubpathVertex){v->p, v3s(0.0f), v3s(0.0f), v->w_prev, v->sp.beta, v->sp.d_vcm, v->sp.d_vc,
+                                  v->sp.d_vm, -1 - v->medium, v->bounces, {0.0f, 0.0f}, dispersed};
+    }
+    c->found = true;
+    return false;
+}
+
+/* media_subpath_trace_light's start and walk, with max_depth = the target's bounces (no
+ * continuation is sampled past it). */
+static bool media_walk_to(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
+                          Sampler *rng, const Wavelengths *wl, Wavelengths *walk_wl, MediaTargetCtx *tc,
+                          uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return false;
+    EmissionSample es;
+    subpath_emit(s, rng, wl, &es);
+    if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return false;
+    int medium = medium_at_emitter(s, cam, es.p, es.w, rays);
+    if (!es.finite && medium >= 0) return false;
+    float emission_pdf = es.pdf_a * es.pdf_w;
+    SubPath sp = subpath_start(es.beta);
+    sp.d_vcm = mis(es.nee_pdf / emission_pdf);
+    sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
+    sp.d_vm = sp.d_vc * it->mis_vc;
+    if (wl) *walk_wl = *wl;
+    tc->walk_wl = wl ? walk_wl : NULL;
+    const MediaWalk w = {tc->bounces, vp->rr_depth, it, wl, wl ? walk_wl : NULL, visit_target, tc};
+    media_walk_light(s, &w, &es, sp, medium, rng, rays);
+    return tc->found;
+}
+
+bool media_subpath_light_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp,
+                                const SubpathIteration *it, int bounces, Sampler *rng, const Wavelengths *wl,
+                                SubpathVertex *out, Wavelengths *walk_wl, uint64_t *rays)
+{
+    MediaTargetCtx tc = {bounces, false, out, NULL, {0.0f, 0.0f}, NULL};
+    return media_walk_to(s, cam, vp, it, rng, wl, walk_wl, &tc, rays);
+}
+
+bool media_subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
+                                  const SubpathIteration *it, int bounces, Sampler *rng, Vec2 u_lens,
+                                  const Wavelengths *wl, Vec2 *raster, Color *rgb, uint64_t *rays)
+{
+    /* One splat into a list of one on the stack, unclamped (subpath_connect_camera). */
+    FilmSplat one;
+    SplatList l = {.v = &one, .cap = 1};
+    SplatFrame frame = vp->frame;
+    frame.clamp = 0.0f;
+    Wavelengths walk_wl;
+    MediaCamCtx c = {s, cam, &frame, filter_radius(vp->frame.filter) - 0.5f, it, NULL, wl, wl ? &walk_wl : NULL,
+                     &l, rays};
+    MediaTargetCtx tc = {bounces, false, NULL, &c, u_lens, NULL};
+    media_walk_to(s, cam, vp, it, rng, wl, &walk_wl, &tc, rays);
+    if (l.n == 0) return false;
+    *raster = v2(one.x, one.y);
+    *rgb = color_rgb(one.r, one.g, one.b);
+    return true;
+}
+
+bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp,
+                                 const SubpathIteration *it, Ray ray, int hits, bool emission, Sampler *rng,
+                                 const Wavelengths *wl, MediaCameraVertex *out, Color *emitted, uint64_t *rays)
+{
+    *emitted = color_s(0.0f);
+    float cos_theta = v3_dot(ray.d, cam->forward);
+    if (!(cos_theta > 0.0f)) return false;
+    /* As media_subpath_trace_camera. */
+    SubPath sp = {color_s(1.0f), color_s(1.0f),
+                  camera_is_orthographic(cam)
+                      ? 0.0f
+                      : mis((float)it->light_paths * it->pixel_area * cos_theta * cos_theta * cos_theta),
+                  0.0f, 0.0f, false};
+    Wavelengths wc;
+    if (wl) wc = *wl;
+    bool dispersed = false;
+    int medium = s->camera_medium;
+    Vec3 x_prev = ray.o;
+    bool prev_med = false;
+    HeroMis hm = {-1, color_s(1.0f), false}; /* unused: grids are refused */
+    for (int t = 1;; t++) {
+        MediaHit h;
+        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, &hm, rng, wl, &h, rays)) return false;
+        Vec3 wo = v3_neg(ray.d);
+        if (h.kind == MEDIA_MISS) {
+            if (!emission || t != hits) return false;
+            Color le = scene_env_radiance(s, ray.d, wl);
+            if (color_is_black(le)) return false;
+            float w = 1.0f;
+            if (t > 1) {
+                mis_arrive_media(&sp, 1.0f, 1.0f, h.fwd, h.rev);
+                float direct = light_env_pdf(&s->emitter_sampler, ray.d);
+                float em = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
+                w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(em) * sp.d_vc);
+            }
+            *emitted = color_mul(sp.beta, color_scale(le, w));
+            if (dispersed) *emitted = subpath_hero_only(*emitted);
+            return false;
+        }
+        const bool vol = h.kind == MEDIA_VOLUME;
+        float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, wo));
+        if (!(cos_in > 0.0f)) return false;
+        mis_arrive_media(&sp, h.dist, cos_in, h.fwd, h.rev);
+        if (emission && t == hits) {
+            if (vol || h.sh.emitter < 0) return false;
+            const Emitter *e = &s->emitter_sampler.light[h.sh.emitter].u.area;
+            Color le = scene_emission(s, &h.sh, wo, wl);
+            if (color_is_black(le)) return false;
+            float w = 1.0f;
+            if (t > 1) {
+                float pdf_a = emitter_pdf_a(&s->emitter_sampler, h.sh.emitter);
+                float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h.sh.ng, wo);
+                w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
+            }
+            *emitted = color_mul(sp.beta, color_scale(le, w));
+            if (dispersed) *emitted = subpath_hero_only(*emitted);
+            return false;
+        }
+        if (vol) {
+            const float g = s->media[medium].g;
+            if (t == hits) {
+                *out = (MediaCameraVertex){.p = h.p, .wo = wo, .vol = true, .g = g, .medium = medium, .sp = sp,
+                                           .dispersed = dispersed};
+                return true;
+            }
+            if (!media_scatter_phase(&sp, it, h.p, wo, g, t, vp->rr_depth, rng, &ray)) return false;
+            prev_med = true;
+        } else {
+            Bsdf bsdf;
+            if (wl) {
+                scene_bsdf_disperse(s, &h.sh, &wc, &bsdf);
+                dispersed = wavelengths_secondary_terminated(&wc);
+            } else {
+                scene_bsdf(s, &h.sh, wl, &bsdf);
+            }
+            if (t == hits) {
+                if (bsdf_is_delta(&bsdf)) return false; /* no connection to a Dirac */
+                *out = (MediaCameraVertex){h.sh, bsdf, h.p, wo, false, 0.0f, medium, sp, dispersed};
+                return true;
+            }
+            if (!subpath_scatter(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) return false;
+            medium = scene_medium_after(s, &h.sh, ray.d, medium);
+            prev_med = false;
+        }
+        x_prev = h.p;
+    }
+}
+
+/* The CamVertex of a strategy's camera vertex (its pointers into *x). */
+static CamVertex cam_vertex_of(const MediaCameraVertex *x)
+{
+    if (x->vol) return (CamVertex){x->p, v3s(0.0f), x->wo, NULL, NULL, x->g, x->medium};
+    return (CamVertex){x->p, x->sh.ng, x->wo, &x->sh, &x->bsdf, 0.0f, x->medium};
+}
+
+Color media_subpath_connect_light(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
+                                  Sampler *rng, const Wavelengths *wl, uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return color_s(0.0f);
+    CamVertex cx = cam_vertex_of(x);
+    return color_mul(x->sp.beta, media_connect_light(s, it, &x->sp, &cx, rng, wl, rays));
+}
+
+Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
+                                 const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
+{
+    CamVertex cx = cam_vertex_of(x);
+    return color_mul(x->sp.beta, media_connect_vertices(s, it, &x->sp, &cx, y, wl, rays));
+}

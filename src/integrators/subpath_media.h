@@ -23,4 +23,43 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
                                  const SubpathIteration *it, int path, Ray ray, Sampler *rng, const Wavelengths *wl,
                                  uint64_t *rays, const SubpathMerge *merge);
 
+/* ---- Single strategies for multiplexed MLT (subpath.h's, mlt.c) in scenes with media:
+ * the walks above cut at the one vertex a strategy needs, and their connections applied
+ * to it alone, with the same MIS weights as media_subpath_trace_camera gives them. */
+
+/* The last vertex of a camera subpath: on a surface (vol false: sh, bsdf) or in a medium
+ * (vol true: HG asymmetry g). medium: the medium it is in, or on a surface the one arrived
+ * through. */
+typedef struct MediaCameraVertex {
+    SurfaceHit sh;
+    Bsdf bsdf;
+    Vec3 p, wo;
+    bool vol;
+    float g;
+    int medium;
+    SubPath sp;     /* on arrival */
+    bool dispersed; /* spectral: a dispersive refraction on the way */
+} MediaCameraVertex;
+
+/* subpath_camera_vertex() through media (its hit number `hits` counts volume vertices). */
+bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp,
+                                 const SubpathIteration *it, Ray ray, int hits, bool emission, Sampler *rng,
+                                 const Wavelengths *wl, MediaCameraVertex *out, Color *emitted, uint64_t *rays);
+/* subpath_light_vertex() through media (a vertex in a medium as media_subpath_trace_light
+ * stores it). */
+bool media_subpath_light_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp,
+                                const SubpathIteration *it, int bounces, Sampler *rng, const Wavelengths *wl,
+                                SubpathVertex *out, Wavelengths *walk_wl, uint64_t *rays);
+/* s = 1 and s >= 2, t >= 2: subpath_connect_light() and subpath_connect_pair() through media. */
+Color media_subpath_connect_light(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
+                                  Sampler *rng, const Wavelengths *wl, uint64_t *rays);
+Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
+                                 const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays);
+/* t = 1 through media: walks the light subpath to its vertex `bounces` (>= 1) and connects
+ * it to lens point u_lens, as subpath_light_vertex() then subpath_connect_camera() do (the
+ * walk's vertex keeps pointers into the walk, so the two are one call here). */
+bool media_subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
+                                  const SubpathIteration *it, int bounces, Sampler *rng, Vec2 u_lens,
+                                  const Wavelengths *wl, Vec2 *raster, Color *rgb, uint64_t *rays);
+
 #endif

@@ -15,9 +15,10 @@
 
 int cst_integrator_resumable(CstIntegrator integrator)
 {
-    /* MLT's state is its chains, not film sums. (SPPM's visible points' radii, photon
-     * counts and flux go in the state as Film.progressive.) */
-    return integrator != CST_INTEGRATOR_PSSMLT && integrator != CST_INTEGRATOR_MMLT;
+    /* Every one: SPPM's visible points' radii, photon counts and flux go in the state as
+     * Film.progressive, MLT's chains as Film.chains. */
+    (void)integrator;
+    return 1;
 }
 
 typedef struct KeyBuilder {
@@ -81,6 +82,13 @@ static int state_key(const CstScene *scene, const CstRenderSettings *st, const c
     if (st->sample_block > 1) key_int(&b, "sample_block", st->sample_block);
     /* Adaptive rounds are planned from the target (render/adaptive.h). */
     if (st->noise_target > 0.0) key_real(&b, "noise", st->noise_target);
+    /* MLT's parameters shape its chains (integrators/mlt.c); other states keep their key. */
+    if (st->integrator == CST_INTEGRATOR_PSSMLT || st->integrator == CST_INTEGRATOR_MMLT) {
+        key_real(&b, "mlt.large_step", st->mlt_large_step);
+        key_real(&b, "mlt.sigma", st->mlt_sigma);
+        key_int(&b, "mlt.bootstrap", st->mlt_bootstrap);
+        key_int(&b, "mlt.chains", st->mlt_chains);
+    }
     return b.n;
 }
 
@@ -149,6 +157,13 @@ CstStatus cst_film_state_write(const char *path, const CstFilm *film, const CstS
                         "%s: the %s integrator cannot be checkpointed yet (its state is more than the film's "
                         "sums); expected path, path-nee, path-bsdf, whitted, photon, light, sppm, bdpt or vcm",
                         path, cst_integrator_name(st.integrator));
+    const bool mlt = st.integrator == CST_INTEGRATOR_PSSMLT || st.integrator == CST_INTEGRATOR_MMLT;
+    if (mlt != (film->chains != NULL))
+        return cst_fail(err, CST_ERR_INVALID_ARG,
+                        "%s: %s: an MLT state is its chains, which a film holds between its passes "
+                        "(CstRenderSettings.pass_done) and not once the render has made its image",
+                        path, film->chains ? "a film with MLT chains for another integrator"
+                                           : "the film of an MLT render without its chains");
     if ((st.integrator == CST_INTEGRATOR_SPPM) != (film->progressive != NULL))
         return cst_fail(err, CST_ERR_INVALID_ARG,
                         "%s: %s: an SPPM state is its per-pixel radii, photon counts and flux, which a film holds "
@@ -320,6 +335,9 @@ CstStatus cst_film_state_merge(const char *const *paths, int count, CstFilm **ou
             status = cst_fail(err, CST_ERR_INVALID_ARG, "%s: an SPPM state (radii, photon counts, flux): SPPM's "
                               "iterations each depend on all before them and do not merge; expected states of sums",
                               paths[i]);
+        else if (p[i].film->chains)
+            status = cst_fail(err, CST_ERR_INVALID_ARG, "%s: an MLT state (chains): its iterations continue the "
+                              "same chains and do not merge; expected states of sums", paths[i]);
     }
     if (status == CST_OK) {
         /* Insertion sort by first sample: the order of the command line does not matter. */

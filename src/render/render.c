@@ -46,11 +46,14 @@ static bool pass_finished(Driver *d, int done, bool last)
     if (!st->pass_done) return false;
     if (d->it->kind != INTEGRATOR_SPPM) d->it->film->spp = done;
     CstPassInfo info = {done, last, clock_seconds() - d->t0};
-    /* SPPM: its state into the film, for a checkpoint the callback may write. Without the
-     * memory for it the state is left out: refused as a resume, never wrong. */
+    /* SPPM, MLT: its state into the film, for a checkpoint the callback may write. Without
+     * the memory for it the state is left out: refused as a resume, never wrong. */
     if (!integrator_export_progressive(d->it, done)) {
         free(d->it->film->progressive);
         d->it->film->progressive = NULL;
+        free(d->it->film->chains);
+        d->it->film->chains = NULL;
+        d->it->film->chains_len = 0;
     }
     if (st->pass_done(st->pass_user, d->it->film, &info) == 0) return false;
     d->stopped = !last;
@@ -373,6 +376,10 @@ static CstStatus check_resume(const CstRenderSettings *st, const Film *resume, C
                         "size and AOVs, and no more samples (cst_film_state_read checks a state file)",
                         resume->width, resume->height, resume->aov ? " with AOV sums" : "", resume->spp, st->width,
                         st->height, (st->aovs & FILM_AOV_FIRST_HIT) ? " with AOV sums" : "", st->spp);
+    const bool mlt = st->integrator == CST_INTEGRATOR_PSSMLT || st->integrator == CST_INTEGRATOR_MMLT;
+    if (mlt != (resume->chains != NULL))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "resume: %s", mlt ? "the film holds no MLT chains (the state of "
+                        "every chain and b, state version 4)" : "a film with MLT chains for another integrator");
     if (st->integrator == CST_INTEGRATOR_SPPM && !resume->progressive)
         return cst_fail(err, CST_ERR_INVALID_ARG, "resume: the film holds no SPPM state (per-pixel radii, photon "
                         "counts and flux); expected a state written by a checkpoint of an sppm render");
@@ -529,8 +536,12 @@ CstStatus cst_render(const CstScene *scene, const CstRenderSettings *settings, C
         status = integrator_prepare(it, scene, &st, film, workers, &rays, st.progress ? prepare_progress : NULL, &d,
                                     err);
         if (status == CST_OK && resume && !integrator_import_progressive(it, resume))
-            status = cst_fail(err, CST_ERR_INVALID_ARG, "resume: the state's SPPM values are not ones a render "
-                              "makes (a radius not positive and finite, or a negative photon count)");
+            status = resume->chains
+                         ? cst_fail(err, CST_ERR_INVALID_ARG, "resume: the state's MLT chains are not ones this "
+                                    "render makes (another chain count or path length, a value out of range, or "
+                                    "the wrong length)")
+                         : cst_fail(err, CST_ERR_INVALID_ARG, "resume: the state's SPPM values are not ones a render "
+                                    "makes (a radius not positive and finite, or a negative photon count)");
         if (status == CST_OK && st.progress && st.progress_phase)
             st.progress_phase(st.progress_user, CST_PHASE_RENDER);
         Film *block = NULL;

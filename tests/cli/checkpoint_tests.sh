@@ -1,5 +1,5 @@
-# Checkpoint and resume (issue 29): a render cut in two by a state file is byte-identical to
-# one in a single go, for every integrator that can be resumed; SIGINT/SIGTERM stop a render
+# Checkpoint and resume (issues 29, 31): a render cut in two by a state file is byte-identical to
+# one in a single go, for every integrator (MLT with its chains); SIGINT/SIGTERM stop a render
 # after its pass and write the image and the state; mismatched, truncated and corrupted
 # states are refused with exit 2 and a message naming what is wrong.
 # usage: bash checkpoint_tests.sh <caustic> <source-dir>
@@ -50,8 +50,27 @@ else fail "2 + 2 + 1 spp through two states = 5 spp" "exit $RC"; fi
 # ------------------------------------------------------------ refusals
 d=$TMP/refuse
 harness_run "$d" 60 render "${SMALL[@]}" --spp 4 -o ref.pfm --checkpoint ok.state
-harness_run "$d" 60 render "${SMALL[@]}" --integrator pssmlt --spp 2 -o x.pfm --checkpoint x.state
-expect "pssmlt --checkpoint refused" 2 "pssmlt integrator cannot be checkpointed" && check "pssmlt: no state" test ! -e "$d/x.state"
+# MLT (state version 4: the chains): 4 mutations per pixel in one go = 2 + state + resume, with a
+# small bootstrap and few chains from the scene file; a state of one MLT resumed by the other,
+# or by path, and a corrupted one are refused.
+sed 's/"integrator": {"type": "path"}/"integrator": {"type": "mmlt", "max_depth": 4, "bootstrap_samples": 512, "chains": 16}/' \
+    "$SRC/scenes/cornell-box.json" >"$d/mlt.json"
+for integ in pssmlt mmlt; do
+    harness_run "$d" 60 render mlt.json --integrator "$integ" "${SMALL[@]}" --spp 4 -o full.pfm
+    harness_run "$d" 60 render mlt.json --integrator "$integ" "${SMALL[@]}" --spp 2 -o half.pfm --checkpoint "$integ.state"
+    harness_run "$d" 60 render mlt.json --integrator "$integ" "${SMALL[@]}" --spp 4 -o resumed.pfm --resume "$integ.state"
+    if [ "$RC" -eq 0 ] && cmp -s "$d/full.pfm" "$d/resumed.pfm"; then pass "$integ: 4 = 2 + checkpoint + resume, byte for byte"
+    else fail "$integ: 4 = 2 + checkpoint + resume, byte for byte" "exit $RC"; fi
+done
+harness_run "$d" 60 render mlt.json --integrator pssmlt "${SMALL[@]}" --spp 4 -o x.pfm --resume mmlt.state
+expect "an mmlt state resumed by pssmlt: refused" 2 'integrator: "mmlt" in the state, "pssmlt" here'
+harness_run "$d" 60 render "${SMALL[@]}" --spp 8 -o x.pfm --resume mmlt.state
+expect "an mmlt state resumed by path: refused" 2 "the state was made for another render"
+cp "$d/mmlt.state" "$d/badmlt.state"
+printf '\x55' | dd of="$d/badmlt.state" bs=1 seek=$(($(wc -c <"$d/mmlt.state") - 100)) conv=notrunc 2>/dev/null
+harness_run "$d" 60 render mlt.json --integrator mmlt "${SMALL[@]}" --spp 4 -o x.pfm --resume badmlt.state
+expect "a corrupted mmlt state: refused" 2 "badmlt.state: corrupted state file"
+rm -f "$d/x.pfm"
 # An SPPM state resumed by another integrator, and a path state by sppm: the key names it.
 harness_run "$d" 60 render "${SMALL[@]}" --integrator sppm --spp 2 -o y.pfm --checkpoint sppm.state
 harness_run "$d" 60 render "${SMALL[@]}" --integrator path --spp 4 -o y.pfm --resume sppm.state

@@ -28,6 +28,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     }
     if (!film || n < 0 || n > STATE_KEYS_MAX || film->width < 1 || film->height < 1 || film->spp < 0) abort();
+    if (!film->chains != !film->chains_len) abort(); /* version 4: MLT's chains, 1 byte or more */
     for (int k = 0; k < n; k++)
         if (keys[k].type < STATE_INT || keys[k].type > STATE_TEXT || !keys[k].name[0] ||
             strlen(keys[k].name) > STATE_NAME_MAX || strlen(keys[k].text) > STATE_TEXT_MAX)

@@ -1,8 +1,9 @@
 /* Multiplexed MLT (mmlt, integrators/mlt.c over subpath.c's single strategies) against
  * BDPT: the same estimator in expectation (each strategy (d + 2) times its BDPT weight,
- * picked uniformly), so image means and block means agree within noise on the Cornell box
- * and on the spheres scene (mirror and glass: strategies through delta vertices); 1 and
- * 2 threads give the same image bit for bit; the settings and refusals. MLT's pixels are
+ * picked uniformly), so image means and block means agree within noise on the Cornell box,
+ * on the spheres scene (mirror and glass: strategies through delta vertices) and in the
+ * fog-filled box (participating media); 1 and 2 threads give the same image bit for bit;
+ * the settings and refusals. MLT's pixels are
  * correlated, so standard errors come from independent renders. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -74,6 +75,25 @@ static void test_cornell_spheres(void **state)
     cst_scene_destroy(s);
 }
 
+/* Participating media: the fog-filled Cornell box of test_media, whose strategies cross
+ * the fog (volume vertices on both subpaths, transmittance on every connection) through
+ * subpath_media.c's single strategies, against BDPT's walks there. */
+static void test_fog_cornell(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    CstLoadOptions opt = {0};
+    if (cst_scene_load_pbrt(CST_SOURCE_DIR "/tests/render/media/cornell-fog.pbrt", &opt, &s, &err) != CST_OK)
+        fail_msg("%s", err.msg);
+    /* 24 x 24 and a bootstrap of 1024 per length: the CI budget (the bootstrap changes
+     * only the noise of b, which the independent renders' spread includes). */
+    CstRenderSettings st = mmlt_settings(24, 8);
+    st.mlt_bootstrap = 1024;
+    bdpt_vs_mmlt(s, &st, 24, 12, 8, 24, 31, "fog");
+    cst_scene_destroy(s);
+}
+
 /* The image is a function of the seed and the settings: 1 and 2 threads, bit for bit. */
 static void test_threads_deterministic(void **state)
 {
@@ -89,8 +109,8 @@ static void test_threads_deterministic(void **state)
     cst_scene_destroy(s);
 }
 
-/* The JSON type and keys reach the settings; mmlt is not resumable; a bootstrap too large
- * for its path lengths is refused. */
+/* The JSON type and keys reach the settings; mmlt is resumable (test_checkpoint); a
+ * bootstrap too large for its path lengths is refused. */
 static void test_settings_and_refusals(void **state)
 {
     (void)state;
@@ -107,7 +127,7 @@ static void test_settings_and_refusals(void **state)
     assert_int_equal(r.spp, 5);
     assert_int_equal(r.mlt_bootstrap, 300);
     assert_int_equal(r.mlt_chains, 7);
-    assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_MMLT), 0);
+    assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_MMLT), 1);
     assert_int_equal(cst_integrator_from_name("mmlt"), CST_INTEGRATOR_MMLT);
     assert_string_equal(cst_integrator_name(CST_INTEGRATOR_MMLT), "mmlt");
     CstRenderSettings st = r;
@@ -140,6 +160,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_box),
         cmocka_unit_test(test_cornell_spheres),
+        cmocka_unit_test(test_fog_cornell),
         cmocka_unit_test(test_threads_deterministic),
         cmocka_unit_test(test_settings_and_refusals),
     };

@@ -50,6 +50,9 @@ static void settings_for(CstRenderSettings *s, CstIntegrator integ, int spp)
     s->seed = 11;
     s->seed_set = 1;
     s->integrator = integ;
+    /* MLT: few chains and a small bootstrap keep it cheap (they change the noise only). */
+    s->mlt_chains = 16;
+    s->mlt_bootstrap = 512;
 }
 
 /* The pass callback of a render whose state goes to `path` at its last pass, or that stops
@@ -133,6 +136,74 @@ static void test_resume_vcm(void **state) { (void)state; resume_matches(CST_INTE
 static void test_resume_photon(void **state) { (void)state; resume_matches(CST_INTEGRATOR_PHOTON, 0, 0); }
 /* SPPM: the state is its per-pixel radii, photon counts and flux (Film.progressive). */
 static void test_resume_sppm(void **state) { (void)state; resume_matches(CST_INTEGRATOR_SPPM, 0, 0); }
+/* MLT: the state is its chains and b (Film.chains, state version 4). */
+static void test_resume_pssmlt(void **state) { (void)state; resume_matches(CST_INTEGRATOR_PSSMLT, 0, 0); }
+static void test_resume_mmlt(void **state) { (void)state; resume_matches(CST_INTEGRATOR_MMLT, 0, 0); }
+
+/* An MLT state for another MLT render (its chain count) is refused by its key; one whose
+ * chains hold a value no render makes (behind a valid checksum: the bytes in memory) is
+ * refused before any chain runs; a film of sums is not an MLT state, nor an MLT state
+ * another integrator's. */
+static void test_mlt_refusals(void **state)
+{
+    (void)state;
+    CstError err = {0};
+    CstRenderSettings s;
+    settings_for(&s, CST_INTEGRATOR_MMLT, 2);
+    char path[512];
+    tpath(path, sizeof path, "mlt.state");
+    Writer w = {path, &s, 0, 0, CST_ERR_INTERNAL, {0}};
+    s.pass_done = write_state;
+    s.pass_user = &w;
+    CstFilm *film = NULL, *st = NULL, *out = NULL;
+    ok(cst_render(g_scene, &s, &film, NULL, &err), &err);
+    ok(w.status, &w.err);
+    s.pass_done = NULL;
+    /* The final film (no chains: the image is made) is no state. */
+    assert_int_equal(cst_film_state_write(path, film, g_scene, &s, "test", NULL, &err), CST_ERR_INVALID_ARG);
+    CstRenderSettings other = s;
+    other.mlt_chains = 17;
+    assert_int_equal(cst_film_state_read(path, g_scene, &other, "test", &st, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "mlt.chains: 16 in the state, 17 here"));
+    ok(cst_film_state_read(path, g_scene, &s, "test", &st, &err), &err);
+    assert_non_null(st->chains);
+    CstRenderSettings r = s;
+    r.spp = 4;
+    r.resume = st;
+    /* Another integrator with these chains. */
+    r.integrator = CST_INTEGRATOR_BDPT;
+    assert_int_equal(cst_render(g_scene, &r, &out, NULL, &err), CST_ERR_INVALID_ARG);
+    r.integrator = CST_INTEGRATOR_MMLT;
+    /* b (bytes 8..15 of the chains) negative; then the chain count; then one byte short. */
+    unsigned char saved = st->chains[15];
+    st->chains[15] = 0xbf;
+    assert_int_equal(cst_render(g_scene, &r, &out, NULL, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "MLT chains"));
+    st->chains[15] = saved;
+    st->chains[0] ^= 1;
+    assert_int_equal(cst_render(g_scene, &r, &out, NULL, &err), CST_ERR_INVALID_ARG);
+    st->chains[0] ^= 1;
+    st->chains_len--;
+    assert_int_equal(cst_render(g_scene, &r, &out, NULL, &err), CST_ERR_INVALID_ARG);
+    st->chains_len++;
+    assert_null(out);
+    /* Restored, it resumes. */
+    ok(cst_render(g_scene, &r, &out, NULL, &err), &err);
+    assert_int_equal(cst_film_spp(out), 4);
+    /* A film of sums for an MLT render. */
+    CstRenderSettings p;
+    settings_for(&p, CST_INTEGRATOR_PATH, 2);
+    CstFilm *sums = NULL;
+    ok(cst_render(g_scene, &p, &sums, NULL, &err), &err);
+    r.resume = sums;
+    CstFilm *none = NULL;
+    assert_int_equal(cst_render(g_scene, &r, &none, NULL, &err), CST_ERR_INVALID_ARG);
+    assert_null(none);
+    cst_film_destroy(sums);
+    cst_film_destroy(out);
+    cst_film_destroy(st);
+    cst_film_destroy(film);
+}
 
 /* pass_done's stop: CST_OK, stats.stopped, the film of the passes done = a render of that
  * many samples. */
@@ -171,16 +242,17 @@ static void test_refusals(void **state)
     settings_for(&s, CST_INTEGRATOR_PATH, 2);
     CstFilm *film = NULL, *out = NULL;
     ok(cst_render(g_scene, &s, &film, NULL, &err), &err);
-    assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_PSSMLT), 0);
+    assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_PSSMLT), 1);
     assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_SPPM), 1);
     assert_int_equal(cst_integrator_resumable(CST_INTEGRATOR_VCM), 1);
     char path[512];
     tpath(path, sizeof path, "refuse.state");
+    /* MLT: a film of sums is not its state (its chains), neither to write nor to resume. */
     CstRenderSettings p = s;
     p.integrator = CST_INTEGRATOR_PSSMLT;
-    assert_int_equal(cst_film_state_write(path, film, g_scene, &p, "x", NULL, &err), CST_ERR_UNSUPPORTED);
+    assert_int_equal(cst_film_state_write(path, film, g_scene, &p, "x", NULL, &err), CST_ERR_INVALID_ARG);
     p.resume = film;
-    assert_int_equal(cst_render(g_scene, &p, &out, NULL, &err), CST_ERR_UNSUPPORTED);
+    assert_int_equal(cst_render(g_scene, &p, &out, NULL, &err), CST_ERR_INVALID_ARG);
     assert_null(out);
     /* SPPM: a film of sums is not its state, neither to write nor to resume from. */
     p.integrator = CST_INTEGRATOR_SPPM;
@@ -208,7 +280,7 @@ static void test_refusals(void **state)
 /* Every prefix of a state file is refused as truncated (or, too short to hold the magic,
  * as not a state), every one-byte change as corrupted: none is read. With SPPM's
  * progressive state (version 2) too. */
-static void truncated_and_corrupted(bool progressive)
+static void truncated_and_corrupted(bool progressive, bool chains)
 {
     CstError err = {0};
     Film *f = film_create(3, 2);
@@ -220,6 +292,12 @@ static void truncated_and_corrupted(bool progressive)
         f->progressive = malloc(6 * FILM_PROGRESSIVE_STRIDE * sizeof *f->progressive);
         assert_non_null(f->progressive);
         for (int i = 0; i < 6 * FILM_PROGRESSIVE_STRIDE; i++) f->progressive[i] = 0.0625 * i;
+    }
+    if (chains) { /* version 4: opaque bytes to the film state */
+        f->chains_len = 37;
+        f->chains = malloc(f->chains_len);
+        assert_non_null(f->chains);
+        for (size_t i = 0; i < f->chains_len; i++) f->chains[i] = (unsigned char)(7 * i + 1);
     }
     f->spp = 7;
     StateKey keys[3] = {{.name = "a", .type = STATE_INT, .i = -5},
@@ -242,6 +320,11 @@ static void truncated_and_corrupted(bool progressive)
     assert_true(!f->progressive == !back->progressive);
     if (progressive)
         assert_memory_equal(f->progressive, back->progressive, 6 * FILM_PROGRESSIVE_STRIDE * sizeof *f->progressive);
+    assert_true(!f->chains == !back->chains);
+    if (chains) {
+        assert_int_equal(back->chains_len, f->chains_len);
+        assert_memory_equal(f->chains, back->chains, f->chains_len);
+    }
     film_destroy(back);
 
     FILE *fp = fopen(path, "rb");
@@ -274,8 +357,9 @@ static void truncated_and_corrupted(bool progressive)
 static void test_truncated_and_corrupted(void **state)
 {
     (void)state;
-    truncated_and_corrupted(false);
-    truncated_and_corrupted(true);
+    truncated_and_corrupted(false, false);
+    truncated_and_corrupted(true, false);
+    truncated_and_corrupted(false, true);
 }
 
 int main(void)
@@ -285,6 +369,8 @@ int main(void)
         cmocka_unit_test(test_resume_whitted),   cmocka_unit_test(test_resume_light),
         cmocka_unit_test(test_resume_bdpt_aovs), cmocka_unit_test(test_resume_vcm),
         cmocka_unit_test(test_resume_photon),    cmocka_unit_test(test_resume_sppm), cmocka_unit_test(test_stop),
+        cmocka_unit_test(test_resume_pssmlt),    cmocka_unit_test(test_resume_mmlt),
+        cmocka_unit_test(test_mlt_refusals),
         cmocka_unit_test(test_refusals),         cmocka_unit_test(test_truncated_and_corrupted),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
