@@ -32,9 +32,9 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
     double d2[BDPT_MIS_MAX];
     for (int i = 0; i < k; i++) {
         Vec3 e = v3_sub(p[i + 1], p[i]);
-        d2[i] = (double)v3_length2(e);
+        d2[i] = x->len[i] > 0.0f ? (double)x->len[i] * (double)x->len[i] : (double)v3_length2(e);
         if (!(d2[i] > 0.0)) return false;
-        d[i] = v3_scale(e, 1.0f / sqrtf(v3_length2(e)));
+        d[i] = x->len[i] > 0.0f ? x->dir[i] : v3_scale(e, 1.0f / sqrtf(v3_length2(e)));
     }
     Bsdf b[BDPT_MIS_MAX];
     for (int i = 1; i < k; i++) scene_bsdf(s, x->hit[i], NULL, &b[i]);

@@ -22,6 +22,11 @@ typedef struct BdptMisPath {
     const SurfaceHit *hit[BDPT_MIS_MAX]; /* hit[i] for 1 <= i < k */
     bool delta[BDPT_MIS_MAX];
     Vec3 lens;
+    /* Segment x_i x_{i+1} as the ray that sampled it saw it: unit direction dir[i] (x_i to
+     * x_{i+1}) and length len[i] from its offset origin, the geometry the subpaths' own
+     * densities use; len[i] 0 for the connection (the vertices' positions). */
+    Vec3 dir[BDPT_MIS_MAX];
+    float len[BDPT_MIS_MAX];
 } BdptMisPath;
 
 /* The power-heuristic weight (Veach eq. 9.13) of strategy s (light vertices x_0 .. x_{s-1},

@@ -77,6 +77,7 @@ void recorder_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int dept
     e->material = sh->material;
     if (depth >= 1 && depth <= RECORDER_PATH_MAX) {
         r->paths.cam[depth - 1] = *sh;
+        r->paths.cam_dir[depth - 1] = r->paths.next_dir;
         r->paths.cam_delta[depth - 1] = false;
         r->paths.ncam = depth;
     }
@@ -134,6 +135,7 @@ void recorder_scatter(Recorder *r, const BsdfSample *bs, Color beta)
     e->pmf = bs->pmf;
     if (bs->delta) e->flags |= CST_EXPLAIN_DELTA;
     if (r->depth >= 1 && r->depth <= RECORDER_PATH_MAX) r->paths.cam_delta[r->depth - 1] = bs->delta;
+    r->paths.next_dir = bs->wi;
     put_color(e->beta, beta);
     put_color(e->value, bs->weight);
     put_color(e->contribution, color_mul(beta, bs->weight));
@@ -185,9 +187,10 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color va
     e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
 }
 
-void recorder_camera(Recorder *r, Vec3 origin)
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir)
 {
     r->paths.camera_o = origin;
+    r->paths.next_dir = dir;
     r->paths.ncam = 0;
 }
 
@@ -206,12 +209,13 @@ void recorder_light_start(Recorder *r, const EmissionSample *es)
     p->nlight = 0;
 }
 
-void recorder_light_hit(Recorder *r, const SurfaceHit *sh)
+void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir)
 {
     RecorderPaths *p = &r->paths;
     if (!p->light_on) return;
     if (p->nlight < RECORDER_PATH_MAX) {
         p->light[p->nlight] = *sh;
+        p->light_dir[p->nlight] = dir;
         p->light_delta[p->nlight] = false;
     }
     p->nlight++;

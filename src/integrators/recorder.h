@@ -21,6 +21,8 @@ enum { RECORDER_PATH_MAX = 64 };
 typedef struct RecorderPaths {
     Vec3 camera_o;                        /* the camera ray's origin (the lens point) */
     SurfaceHit cam[RECORDER_PATH_MAX];    /* cam[d - 1]: the camera subpath's hit d */
+    Vec3 cam_dir[RECORDER_PATH_MAX];      /* the unit direction of the ray that reached it */
+    Vec3 next_dir;                        /* the last scatter's (or the camera ray's) */
     bool cam_delta[RECORDER_PATH_MAX];    /* a delta lobe continued the path there */
     int ncam;
     /* The light step starts subpaths 0, 1, ... in order on one thread in explain
@@ -29,6 +31,7 @@ typedef struct RecorderPaths {
     bool light_on, has_light;
     EmissionSample start;
     SurfaceHit light[RECORDER_PATH_MAX];  /* light[b - 1]: the hit after b - 1 bounces */
+    Vec3 light_dir[RECORDER_PATH_MAX];    /* the unit direction of the ray that reached it */
     bool light_delta[RECORDER_PATH_MAX];
     int nlight;
 } RecorderPaths;
@@ -109,13 +112,13 @@ void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value);
 void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth);
 
 /* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
-void recorder_camera(Recorder *r, Vec3 origin);
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir);
 /* The light point's normal of the NEE strategy just recorded (into its ng). */
 void recorder_nee_normal(Recorder *r, Vec3 n);
 /* A light subpath starts (subpath_trace_light, every path of the step, in order). */
 void recorder_light_start(Recorder *r, const EmissionSample *es);
 /* A hit of the light subpath walk, then the kind of the scatter that continues from it. */
-void recorder_light_hit(Recorder *r, const SurfaceHit *sh);
+void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir);
 void recorder_light_scatter(Recorder *r, bool delta);
 
 #endif

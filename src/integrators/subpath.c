@@ -257,7 +257,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
     /* Participating media: subpath_media.c (without merging: integrator.c refuses vcm there). */
     if (s->num_media | s->num_medium_ifaces) return media_subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays);
     Color L = color_s(0.0f);
-    if (it->rec) recorder_camera(it->rec, ray.o);
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
     /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic

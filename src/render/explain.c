@@ -249,6 +249,17 @@ static void check_mis(const Integrator *it, const Recorder *r, CstExplain *ex)
             if (s < path.k) path.delta[s] = false;
         }
         path.lens = rp->camera_o;
+        /* The rays' own segments: the light subpath's hits, then the camera subpath's (hit d
+         * ends segment x_{k-d} x_{k-d+1}, traversed toward x_{k-d}); the connection's 0. */
+        for (int q = 0; q < path.k; q++) path.len[q] = 0.0f;
+        for (int b = 1; b < s; b++) {
+            path.len[b - 1] = rp->light[b - 1].t;
+            path.dir[b - 1] = rp->light_dir[b - 1];
+        }
+        for (int d = 1; d <= tc; d++) {
+            path.len[path.k - d] = rp->cam[d - 1].t;
+            path.dir[path.k - d] = v3_neg(rp->cam_dir[d - 1]);
+        }
         double w, sum;
         int n;
         if (!bdpt_mis_weight(it->scene, &it->camera, &it->light.vcm_it, &path, s, &w, &sum, &n)) continue;
