@@ -21,7 +21,8 @@ typedef enum ArgsOpt {
     ARGS_OPT_FORCE, ARGS_OPT_SPECTRAL, ARGS_OPT_RGB, ARGS_OPT_LIGHT_SAMPLER, ARGS_OPT_LIGHT_SAMPLING,
     ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT,
     ARGS_OPT_DISPLAY,
-    ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK, ARGS_OPT_PIXEL, ARGS_OPT_SAMPLE, ARGS_OPT_NOISE
+    ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK, ARGS_OPT_PIXEL, ARGS_OPT_SAMPLE, ARGS_OPT_NOISE,
+    ARGS_OPT_WHY_DARK, ARGS_OPT_WHY_BRIGHT
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -75,6 +76,8 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"display",    0,   ARGS_VALUE,  ARGS_OPT_DISPLAY}, /* render and view */
     {"pixel",      0,   ARGS_VALUE,  ARGS_OPT_PIXEL},   /* explain only */
     {"sample",     0,   ARGS_VALUE,  ARGS_OPT_SAMPLE},  /* explain only */
+    {"why-dark",   0,   ARGS_FLAG,   ARGS_OPT_WHY_DARK},   /* explain only */
+    {"why-bright", 0,   ARGS_FLAG,   ARGS_OPT_WHY_BRIGHT}, /* explain only */
 };
 #define ARGS_NUM_OPTS (sizeof ARGS_OPTS / sizeof ARGS_OPTS[0])
 
@@ -422,6 +425,10 @@ static bool args_apply_explain(const ArgsOptSpec *o, const char *value, CliArgs 
         return false;
     }
     long v;
+    if (o->id == ARGS_OPT_WHY_DARK || o->id == ARGS_OPT_WHY_BRIGHT) {
+        out->explain_why = o->id == ARGS_OPT_WHY_DARK ? 1 : 2;
+        return true;
+    }
     if (o->id == ARGS_OPT_SAMPLE) {
         if (!args_parse_long(value, 0, INT_MAX, &v)) {
             args_fail(err, false, "--sample: expected an integer from 0 to %d, got '%s'", INT_MAX, value);
@@ -464,7 +471,7 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     switch ((ArgsOpt)o->id) {
     case ARGS_OPT_SCRIPT: return args_apply_script(value, out, err);
     case ARGS_OPT_DISPLAY: return args_apply_display(value, out, err);
-    case ARGS_OPT_PIXEL: case ARGS_OPT_SAMPLE: return args_apply_explain(o, value, out, err);
+    case ARGS_OPT_PIXEL: case ARGS_OPT_SAMPLE: case ARGS_OPT_WHY_DARK: case ARGS_OPT_WHY_BRIGHT: return args_apply_explain(o, value, out, err);
     case ARGS_OPT_OUTPUT:
         if (value[0] == '\0') {
             args_fail(err, false, "--output: expected a file name, got ''");

@@ -126,6 +126,7 @@ typedef struct CliArgs {
     bool pixel_set;
     int pixel_x, pixel_y;
     int explain_sample;
+    int explain_why;       /* explain: 1 --why-dark, 2 --why-bright (one summary line), 0 the full text */
 } CliArgs;
 
 typedef struct ArgsError {

@@ -78,6 +78,9 @@ int cli_verify(const CliArgs *a);
 int cli_compare(const CliArgs *a);
 /* caustic explain (explain.c): one pixel sample's path, text or --json, on stdout. */
 int cli_explain(const CliArgs *a);
+/* caustic view's click-to-explain: explain's text for pixel (x, y) at `sample` under s (the
+ * current mode's settings; mode its name, NULL for the preview, which has no paths) on stdout. */
+void cli_explain_view(const CstScene *scene, const CstRenderSettings *s, int x, int y, int sample, const char *mode);
 /* caustic merge (merge.c) */
 int cli_merge(const CliArgs *a);
 /* caustic list [KIND] and caustic --version (list.c), on stdout. */

@@ -20,11 +20,19 @@ static const char *kind_name(CstExplainKind k)
     case CST_EXPLAIN_SPLAT: return "splat";
     case CST_EXPLAIN_SCATTER: return "scatter";
     case CST_EXPLAIN_ROULETTE: return "roulette";
+    case CST_EXPLAIN_MERGE: return "merge";
+    case CST_EXPLAIN_DISTANCE: return "distance";
     }
     return "unknown";
 }
 
-static bool is_bdpt(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_BDPT; }
+/* bdpt and vcm: strategies (s, t), an iteration's light paths and their splats. */
+static bool is_bdpt(const CstExplain *x)
+{
+    return x->integrator == CST_INTEGRATOR_BDPT || x->integrator == CST_INTEGRATOR_VCM;
+}
+static bool is_light(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_LIGHT; }
+static bool is_whitted(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_WHITTED; }
 
 /* ------------------------------------------------------------------ text */
 
@@ -35,10 +43,13 @@ static void print3(FILE *f, const char *label, const float v[3])
 
 static void print_mis(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
-    if (is_bdpt(x))
+    if (is_bdpt(x)) {
         fprintf(f, "MIS w %.9g = 1/(w_light %.6g + 1 + w_camera %.6g)", (double)e->mis_weight,
                 (double)e->pdf_other_w, (double)e->pdf_other2);
-    else
+        if (e->mis_strategies > 0)
+            fprintf(f, "; explicitly %.9g of %d strategies (weights sum %.9g)", (double)e->mis_explicit,
+                    e->mis_strategies, (double)e->mis_sum);
+    } else
         fprintf(f, "MIS w %.9g", (double)e->mis_weight);
 }
 
@@ -53,8 +64,30 @@ static void print_value(FILE *f, const CstExplainEvent *e)
 
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
+    if (is_whitted(x) && (e->kind == CST_EXPLAIN_ESCAPE || e->kind == CST_EXPLAIN_EMISSION)) {
+        /* the ray tree: no densities, no MIS */
+        fprintf(f, "%*s%s at tree depth %d", 2 * e->depth, "", e->kind == CST_EXPLAIN_ESCAPE ? "environment"
+                : "emission", e->depth);
+        print_value(f, e);
+        return;
+    }
     switch (e->kind) {
+    case CST_EXPLAIN_DISTANCE:
+        fprintf(f, "  distance in medium %d: %s %.6g", e->medium,
+                (e->flags & CST_EXPLAIN_SCATTERED) ? "scatters after" : "passes the segment of", (double)e->distance);
+        if (e->pdf_w > 0.0f)
+            fprintf(f, " (%s %.6g, transmittance (%.6g, %.6g, %.6g))",
+                    (e->flags & CST_EXPLAIN_SCATTERED) ? "pdf per unit length" : "probability", (double)e->pdf_w,
+                    (double)e->transmittance[0], (double)e->transmittance[1], (double)e->transmittance[2]);
+        print3(f, ", weight ", e->value);
+        fputc('\n', f);
+        return;
     case CST_EXPLAIN_VERTEX:
+        if (e->medium >= 0) {
+            fprintf(f, "vertex %d: in medium %d at (%.6g, %.6g, %.6g)\n", e->depth, e->medium, (double)e->p[0],
+                    (double)e->p[1], (double)e->p[2]);
+            return;
+        }
         fprintf(f, "vertex %d: surface at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f), material #%d (%s)",
                 e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->n[0], (double)e->n[1],
                 (double)e->n[2], e->material, e->material_type ? e->material_type : "none");
@@ -80,6 +113,11 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         print_value(f, e);
         return;
     case CST_EXPLAIN_NEE:
+        if (is_whitted(x)) {
+            fprintf(f, "%*sdirect light (the mean of the shadow rays' estimates)", 2 * e->depth, "");
+            print_value(f, e);
+            return;
+        }
         fprintf(f, "  NEE");
         if (is_bdpt(x)) fprintf(f, " (s=1, t=%d)", e->t);
         fprintf(f, ": light %d at (%.6g, %.6g, %.6g), ", e->light, (double)e->p[0], (double)e->p[1],
@@ -104,7 +142,20 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         if (e->flags & CST_EXPLAIN_OCCLUDED) fputs(", occluded", f);
         print_value(f, e);
         return;
+    case CST_EXPLAIN_MERGE:
+        fprintf(f, "  merge (s=%d, t=%d) with the light vertex at (%.6g, %.6g, %.6g), density estimate's 1/(pi r^2 N) "
+                "%.6g; ", e->s, e->t, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->pmf);
+        print_mis(f, x, e);
+        print_value(f, e);
+        return;
     case CST_EXPLAIN_SPLAT:
+        if (is_light(x)) {
+            fprintf(f, "light path %d's connection to the camera at raster (%.4f, %.4f): ", e->path, (double)e->wi[0],
+                    (double)e->wi[1]);
+            print3(f, "value (per unit film) ", e->value);
+            fprintf(f, "\n      adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
+            return;
+        }
         fprintf(f, "splat (s=%d, t=1) from a light vertex at (%.6g, %.6g, %.6g) to raster (%.4f, %.4f): camera "
                 "pdf_a %.6g; MIS w %.9g = 1/(w_light %.6g + 1)\n      ", e->s, (double)e->p[0], (double)e->p[1],
                 (double)e->p[2], (double)e->wi[0], (double)e->wi[1], (double)e->pdf_a, (double)e->mis_weight,
@@ -113,6 +164,13 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         fputc('\n', f);
         return;
     case CST_EXPLAIN_SCATTER:
+        if (is_whitted(x)) {
+            fprintf(f, "%*sbranch: specular lobe of probability %.6g, wi (%.4f, %.4f, %.4f), ", 2 * e->depth, "",
+                    (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
+            print3(f, "weight ", e->value);
+            fputc('\n', f);
+            return;
+        }
         if (e->flags & CST_EXPLAIN_DELTA)
             fprintf(f, "  scatter: delta lobe, pmf %.6g", (double)e->pmf);
         else
@@ -152,13 +210,32 @@ static void print_largest(FILE *f, const CstExplain *x)
         return;
     }
     const CstExplainEvent *e = &x->events[best];
-    fprintf(f, "largest contribution: %s at vertex %d", kind_name(e->kind), e->depth);
+    if (e->path >= 0)
+        fprintf(f, "largest contribution: the splat of light path %d", e->path);
+    else
+        fprintf(f, "largest contribution: %s at vertex %d", kind_name(e->kind), e->depth);
     if (e->s >= 0) fprintf(f, " (s=%d, t=%d)", e->s, e->t);
-    fprintf(f, ", %.1f%% of the camera sample's luminance\n", 100.0 * best_y / total);
+    fprintf(f, ", %.1f%% of the %s's luminance\n", 100.0 * best_y / total, is_light(x) ? "pixel" : "camera sample");
+}
+
+/* The light tracer: no camera path, only the splats that reached the pixel. */
+static void print_text_light(FILE *f, const CstExplain *x)
+{
+    fprintf(f, "pixel (%d, %d), iteration %d, integrator light, %s: %d light path connection(s) reach the pixel\n",
+            x->x, x->y, x->sample, x->spectral ? "spectral" : "RGB", x->num_events);
+    for (int i = 0; i < x->num_events; i++) print_event(f, x, &x->events[i]);
+    if (x->truncated) fputs("(more splats than explain keeps: the list is truncated and not checked)\n", f);
+    print_largest(f, x);
+    fprintf(f, "the film's value for the iteration (%.9g, %.9g, %.9g): %s\n", x->film_value[0], x->film_value[1],
+            x->film_value[2], x->truncated ? "not checked" : x->exact ? "the splats sum to it, bit for bit" : "MISMATCH");
 }
 
 static void print_text(FILE *f, const CstExplain *x)
 {
+    if (is_light(x)) {
+        print_text_light(f, x);
+        return;
+    }
     fprintf(f, "pixel (%d, %d), %s %d, integrator %s, %s\n", x->x, x->y, is_bdpt(x) ? "iteration" : "sample",
             x->sample, cst_integrator_name(x->integrator), x->spectral ? "spectral" : "RGB");
     /* The camera path first; BDPT's light step ran before it, its splats follow. */
@@ -174,6 +251,9 @@ static void print_text(FILE *f, const CstExplain *x)
     fprintf(f, "camera sample the render computed: (%.9g, %.9g, %.9g): %s\n", x->camera_value[0],
             x->camera_value[1], x->camera_value[2],
             x->truncated ? "not checked" : x->exact ? "equal, bit for bit" : "MISMATCH");
+    if (x->mis_checked)
+        fprintf(f, "MIS check: %d strategies' weights computed again from every strategy's pdfs: largest relative "
+                "difference %.3g, largest |sum - 1| %.3g\n", x->mis_checked, x->mis_max_error, x->mis_max_sum_error);
     if (splats) fputs("light paths' t = 1 connections landing within the filter's reach of the pixel:\n", f);
     for (int i = 0; i < x->num_events; i++)
         if (x->events[i].kind == CST_EXPLAIN_SPLAT) {
@@ -184,6 +264,21 @@ static void print_text(FILE *f, const CstExplain *x)
         fprintf(f, "light paths' splats added (%.9g, %.9g, %.9g); the film's value for the iteration (%.9g, %.9g, "
                 "%.9g)\n", x->splat_value[0], x->splat_value[1], x->splat_value[2], x->film_value[0],
                 x->film_value[1], x->film_value[2]);
+}
+
+void cli_explain_view(const CstScene *scene, const CstRenderSettings *s, int x, int y, int sample, const char *mode)
+{
+    CstExplain *ex = NULL;
+    CstError err = {0};
+    CstStatus st = mode ? cst_explain(scene, s, x, y, sample, &ex, &err) : CST_ERR_UNSUPPORTED;
+    if (st != CST_OK)
+        printf("view: explain (%d, %d) in mode %s: %s\n", x, y, mode ? mode : "preview",
+               mode ? err.msg : "the preview has no paths (switch to whitted, path, light, bdpt or vcm)");
+    else
+        printf("view: explain (%d, %d), mode %s, sample %d:\n", x, y, mode, sample);
+    if (ex) print_text(stdout, ex);
+    cst_explain_destroy(ex);
+    fflush(stdout);
 }
 
 /* ------------------------------------------------------------------ JSON */
@@ -208,7 +303,16 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
     }
     if (e->light >= 0) json_object_set_new(o, "light", json_integer(e->light));
     switch (e->kind) {
+    case CST_EXPLAIN_DISTANCE:
+        json_object_set_new(o, "medium", json_integer(e->medium));
+        json_object_set_new(o, "distance", num((double)e->distance));
+        json_object_set_new(o, "scattered", json_boolean(e->flags & CST_EXPLAIN_SCATTERED));
+        json_object_set_new(o, "pdf", num((double)e->pdf_w));
+        json_object_set_new(o, "transmittance", arr3f(e->transmittance));
+        json_object_set_new(o, "weight", arr3f(e->value));
+        return o;
     case CST_EXPLAIN_VERTEX:
+        if (e->medium >= 0) json_object_set_new(o, "medium", json_integer(e->medium));
         json_object_set_new(o, "p", arr3f(e->p));
         json_object_set_new(o, "n", arr3f(e->n));
         json_object_set_new(o, "ng", arr3f(e->ng));
@@ -230,6 +334,10 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
     default: break;
     }
     if (e->kind != CST_EXPLAIN_ESCAPE) json_object_set_new(o, "p", arr3f(e->p));
+    if (e->path >= 0) {
+        json_object_set_new(o, "path", json_integer(e->path));
+        json_object_set_new(o, "share", arr3d(e->share));
+    }
     if (e->kind == CST_EXPLAIN_SPLAT) json_object_set_new(o, "raster", json_pack("[oo]", num((double)e->wi[0]),
                                                                                    num((double)e->wi[1])));
     json_object_set_new(o, "pdf_w", num((double)e->pdf_w));
@@ -242,6 +350,11 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         if (e->kind == CST_EXPLAIN_NEE) json_object_set_new(o, "pmf", num((double)e->pmf));
     }
     json_object_set_new(o, "mis_weight", num((double)e->mis_weight));
+    if (e->mis_strategies > 0) {
+        json_object_set_new(o, "mis_explicit", num((double)e->mis_explicit));
+        json_object_set_new(o, "mis_sum", num((double)e->mis_sum));
+        json_object_set_new(o, "mis_strategies", json_integer(e->mis_strategies));
+    }
     json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
     json_object_set_new(o, "occluded", json_boolean(e->flags & CST_EXPLAIN_OCCLUDED));
     json_object_set_new(o, "added", json_boolean(e->flags & CST_EXPLAIN_ADDED));
@@ -268,11 +381,117 @@ static bool print_json(FILE *f, const CstExplain *x)
     json_object_set_new(o, "splat_value", arr3d(x->splat_value));
     json_object_set_new(o, "film_value", arr3d(x->film_value));
     json_object_set_new(o, "exact", json_boolean(x->exact));
+    if (is_bdpt(x)) {
+        json_object_set_new(o, "mis_checked", json_integer(x->mis_checked));
+        json_object_set_new(o, "mis_max_error", num(x->mis_max_error));
+        json_object_set_new(o, "mis_max_sum_error", num(x->mis_max_sum_error));
+    }
     /* 17 significant digits: every float and double reads back to the same bits. */
     int rc = json_dumpf(o, f, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
     json_decref(o);
     fputc('\n', f);
     return rc == 0;
+}
+
+/* --why-bright / --why-dark: one line for a student. Bright: the event carrying most of the
+ * value, with what made it large (its density, MIS weight, and the path's least likely
+ * scatter before it: a firefly's cause). Dark: how the path ended and which light samples
+ * were blocked. */
+static int largest_event(const CstExplain *x, double *share)
+{
+    int best = -1;
+    double total = 0.0, best_y = 0.0;
+    for (int i = 0; i < x->num_events; i++) {
+        const CstExplainEvent *e = &x->events[i];
+        if (!(e->flags & CST_EXPLAIN_ADDED)) continue;
+        double y = luminance(e->contribution);
+        total += y;
+        if (best < 0 || y > best_y) { best = i; best_y = y; }
+    }
+    *share = total > 0.0 ? best_y / total : 0.0;
+    return total > 0.0 ? best : -1;
+}
+
+static void print_why_bright(FILE *f, const CstExplain *x)
+{
+    double share;
+    int b = largest_event(x, &share);
+    if (b < 0) {
+        fputs("why bright: it is not: nothing reached a light (try --why-dark)\n", f);
+        return;
+    }
+    const CstExplainEvent *e = &x->events[b];
+    if (e->path >= 0) {
+        fprintf(f, "why bright: light path %d's connection to the camera at raster (%.2f, %.2f) gives %.1f%% of the "
+                "pixel (luminance %.6g)\n", e->path, (double)e->wi[0], (double)e->wi[1], 100.0 * share,
+                luminance(e->contribution));
+        return;
+    }
+    fprintf(f, "why bright: %s at vertex %d", kind_name(e->kind), e->depth);
+    if (e->s >= 0) fprintf(f, " (s=%d, t=%d)", e->s, e->t);
+    fprintf(f, " gives %.1f%% of the sample (luminance %.6g = value %.6g x throughput %.6g)", 100.0 * share,
+            luminance(e->contribution), luminance(e->value), luminance(e->beta));
+    if (e->mis_weight >= 0.0f) fprintf(f, ", MIS w %.4g", (double)e->mis_weight);
+    if (e->pdf_w > 0.0f && !is_whitted(x)) fprintf(f, ", pdf_w %.4g", (double)e->pdf_w);
+    /* The least likely non-delta scatter before it: a small pdf makes a large throughput. */
+    int low = -1;
+    for (int i = 0; i < b; i++) {
+        const CstExplainEvent *c = &x->events[i];
+        if (c->kind == CST_EXPLAIN_SCATTER && !(c->flags & CST_EXPLAIN_DELTA) && c->pdf_w > 0.0f &&
+            (low < 0 || c->pdf_w < x->events[low].pdf_w))
+            low = i;
+    }
+    if (low >= 0)
+        fprintf(f, "; the least likely scatter before it: vertex %d, pdf_w %.4g, weight f cos/pdf %.4g", x->events[low].depth,
+                (double)x->events[low].pdf_w, luminance(x->events[low].value));
+    fputc('\n', f);
+}
+
+static void print_why_dark(FILE *f, const CstExplain *x)
+{
+    const double *v = x->integrator == CST_INTEGRATOR_LIGHT ? x->film_value : x->camera_value;
+    fprintf(f, "why dark: value (%.6g, %.6g, %.6g)", v[0], v[1], v[2]);
+    if (is_light(x)) {
+        fprintf(f, "; %d light path connection(s) reached the pixel this iteration\n", x->num_events);
+        return;
+    }
+    int vertices = 0, lights = 0, blocked = 0, zero = 0, last = -1;
+    char where[96] = "";
+    size_t wl = 0;
+    for (int i = 0; i < x->num_events; i++) {
+        const CstExplainEvent *e = &x->events[i];
+        if (e->kind == CST_EXPLAIN_VERTEX) vertices = e->depth > vertices ? e->depth : vertices;
+        if (e->kind == CST_EXPLAIN_NEE || e->kind == CST_EXPLAIN_CONNECT) {
+            lights++;
+            if (e->flags & CST_EXPLAIN_OCCLUDED) {
+                blocked++;
+                if (wl + 8 < sizeof where) wl += (size_t)snprintf(where + wl, sizeof where - wl, "%s%d", blocked > 1 ? ", " : "", e->depth);
+            } else if ((e->flags & CST_EXPLAIN_ADDED) && luminance(e->contribution) == 0.0) {
+                zero++;
+            }
+        }
+        if (e->kind != CST_EXPLAIN_SPLAT) last = i;
+    }
+    if (vertices == 0) fputs("; the camera ray hit nothing", f);
+    else fprintf(f, "; the path has %d vertices", vertices);
+    if (last >= 0) {
+        const CstExplainEvent *e = &x->events[last];
+        if (e->kind == CST_EXPLAIN_ROULETTE && !(e->flags & CST_EXPLAIN_SURVIVED))
+            fprintf(f, ", Russian roulette stopped it at vertex %d (survival %.3g)", e->depth, (double)e->q);
+        else if (e->kind == CST_EXPLAIN_ESCAPE)
+            fprintf(f, ", then it left the scene%s", luminance(e->contribution) > 0.0 ? "" : " (no light from there)");
+    }
+    if (lights) {
+        fprintf(f, "; %d of %d light connection(s) blocked", blocked, lights);
+        if (blocked) fprintf(f, " (at vertices %s)", where);
+        if (zero) fprintf(f, ", %d added nothing (the surface turns away from the light)", zero);
+    }
+    double share;
+    int b = largest_event(x, &share);
+    if (b >= 0) fprintf(f, "; most of what there is: %s at vertex %d (%.1f%%)", kind_name(x->events[b].kind),
+                        x->events[b].depth, 100.0 * share);
+    else fputs("; nothing reached a light", f);
+    fputc('\n', f);
 }
 
 int cli_explain(const CliArgs *a)
@@ -294,7 +513,9 @@ int cli_explain(const CliArgs *a)
         cst_explain_destroy(x);
         return CLI_EXIT_USAGE;
     }
-    bool ok = a->json ? print_json(f, x) : (print_text(f, x), true);
+    /* --why-*: the one line alone (the check still decides the exit code). */
+    bool ok = a->json ? print_json(f, x) : a->explain_why == 1 ? (print_why_dark(f, x), true)
+            : a->explain_why == 2 ? (print_why_bright(f, x), true) : (print_text(f, x), true);
     if (f != stdout && fclose(f) != 0) ok = false;
     if (!ok) fprintf(stderr, "caustic: error: writing the explanation failed\n");
     /* The check is the point of the command: a sum that is not the render's value is a bug. */

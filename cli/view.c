@@ -95,6 +95,7 @@ typedef struct View {
     bool press, press_moved;
     bool focus_pending;
     int focus_x, focus_y;    /* film pixel of the pending pick */
+    bool explain_pending; int explain_x, explain_y; /* a right click (script: explain X Y) */
     int cameras;             /* camera files written by the c key */
     CliTev *tev;             /* --display: the stream, NULL = none */
     float *tev_rgb;
@@ -692,6 +693,23 @@ static void view_focus_pick(View *v)
     v->dirty = true; /* view_restart sets the camera back (with its new focus) */
 }
 
+/* ------------------------------------------------------------ click to explain */
+
+/* A right click at film pixel (x, y): its explanation once no pass is running. */
+static void view_explain_click(View *v, int x, int y)
+{
+    if (x >= 0 && y >= 0 && x < v->w && y < v->h) v->explain_pending = true, v->explain_x = x, v->explain_y = y;
+}
+/* The explanation in the current mode and camera at the accumulation's last sample. */
+static void view_explain(View *v)
+{
+    v->explain_pending = false;
+    CstRenderSettings s = view_pass_settings(v, false);
+    s.progress = NULL, s.progress_user = NULL, s.photon_cache = NULL;
+    cli_explain_view(v->scene, &s, v->explain_x, v->explain_y, v->spp > 0 && v->mode != VIEW_SPPM ? v->spp - 1 : 0,
+                     v->mode == VIEW_PREVIEW ? NULL : VIEW_MODE_NAMES[v->mode]);
+}
+
 /* ------------------------------------------------------------ saving, camera JSON */
 
 /* The shown image, w x h x 3 floats: linear (for EXR, PFM and the tev stream) the mode's
@@ -887,6 +905,12 @@ static void view_event(View *v, const SDL_Event *e)
             view_click(v, (int)((double)e->button.x * v->w / (ww > 0 ? ww : 1)),
                        (int)((double)e->button.y * v->h / (wh > 0 ? wh : 1)));
         }
+        if (e->button.button == SDL_BUTTON_RIGHT) { /* the pixel's `caustic explain` */
+            int ww = 1, wh = 1;
+            SDL_GetWindowSize(v->win, &ww, &wh);
+            view_explain_click(v, (int)((double)e->button.x * v->w / (ww > 0 ? ww : 1)),
+                               (int)((double)e->button.y * v->h / (wh > 0 ? wh : 1)));
+        }
         if (e->button.button == SDL_BUTTON_LEFT) v->press = false;
         break;
     case SDL_MOUSEMOTION: {
@@ -936,6 +960,7 @@ static void view_script_step(View *v)
         case VIEW_SCRIPT_STATUS: view_status(v); break;
         case VIEW_SCRIPT_QUIT: v->quit = true; break;
         case VIEW_SCRIPT_CLICK: view_click(v, (int)c->a, (int)c->b); break;
+        case VIEW_SCRIPT_EXPLAIN: view_explain_click(v, (int)c->a, (int)c->b); break;
         case VIEW_SCRIPT_CAMERA:
             if (!view_save_camera(v, c->path)) {
                 v->exit_code = CLI_EXIT_INTERNAL;
@@ -944,7 +969,7 @@ static void view_script_step(View *v)
             break;
         case VIEW_SCRIPT_WAIT_SPP: break;
         }
-        if (v->dirty) return; /* the restart comes before the next command: `status` sees it */
+        if (v->dirty || v->explain_pending) return; /* the restart (explanation) comes before the next command */
     }
 }
 
@@ -953,7 +978,7 @@ static void view_poll(View *v)
 {
     SDL_Event e;
     while (SDL_PollEvent(&e)) view_event(v, &e);
-    if (!v->dirty) view_script_step(v);
+    if (!v->dirty && !v->explain_pending) view_script_step(v);
     view_present(v);
 }
 
@@ -1028,6 +1053,7 @@ static void view_loop(View *v)
 {
     while (!v->quit) {
         view_poll(v);
+        if (v->explain_pending && !v->quit) view_explain(v);
         if (v->focus_pending && !v->quit) view_focus_pick(v);
         if (v->dirty) view_restart(v);
         if (v->quit) break;

@@ -19,9 +19,10 @@ static const struct { const char *name; ViewScriptOp op; int args; } SCRIPT_OPS[
     {"pan", VIEW_SCRIPT_PAN, 2},       {"dolly", VIEW_SCRIPT_DOLLY, 1},
     {"status", VIEW_SCRIPT_STATUS, 0}, {"quit", VIEW_SCRIPT_QUIT, 0},
     {"click", VIEW_SCRIPT_CLICK, 2},   {"camera", VIEW_SCRIPT_CAMERA, 1},
+    {"explain", VIEW_SCRIPT_EXPLAIN, 2},
 };
 #define SCRIPT_NUM_OPS (sizeof SCRIPT_OPS / sizeof SCRIPT_OPS[0])
-#define SCRIPT_OP_NAMES "key, wait-spp, save, orbit, pan, dolly, status, quit, click, camera"
+#define SCRIPT_OP_NAMES "key, wait-spp, save, orbit, pan, dolly, status, quit, click, camera, explain"
 
 static bool script_fail(char *msg, size_t size, const char *path, int line, int col, const char *fmt, ...)
 {
@@ -110,11 +111,12 @@ static bool script_parse_line(char *line, const char *path, int lineno, ViewScri
                                    "(wheel steps for dolly) within 1e6", tok[0], tok[i]);
         return true;
     case VIEW_SCRIPT_CLICK:
+    case VIEW_SCRIPT_EXPLAIN:
         for (int i = 1; i < n; i++)
             if (!script_number(tok[i], i == 1 ? &cmd->a : &cmd->b) || (i == 1 ? cmd->a : cmd->b) < 0.0 ||
                 (i == 1 ? cmd->a : cmd->b) > 65536.0 || (i == 1 ? cmd->a : cmd->b) != floor(i == 1 ? cmd->a : cmd->b))
-                return script_fail(msg, size, path, lineno, col[i], "click '%s': expected a pixel coordinate, "
-                                   "a whole number from 0 (left or top)", tok[i]);
+                return script_fail(msg, size, path, lineno, col[i], "%s '%s': expected a pixel coordinate, "
+                                   "a whole number from 0 (left or top)", tok[0], tok[i]);
         return true;
     case VIEW_SCRIPT_STATUS:
     case VIEW_SCRIPT_QUIT:

@@ -20,14 +20,15 @@ typedef enum ViewScriptOp {
     VIEW_SCRIPT_STATUS,   /* status: one line "view: mode M spp N ..." on stdout */
     VIEW_SCRIPT_QUIT,     /* quit */
     VIEW_SCRIPT_CLICK,    /* click X Y: a left click (no drag) at film pixel X, Y: the focus there */
-    VIEW_SCRIPT_CAMERA    /* camera PATH: the camera as a JSON scene fragment to PATH */
+    VIEW_SCRIPT_CAMERA,   /* camera PATH: the camera as a JSON scene fragment to PATH */
+    VIEW_SCRIPT_EXPLAIN   /* explain X Y: a right click at film pixel X, Y: its explanation */
 } ViewScriptOp;
 
 typedef struct ViewScriptCmd {
     ViewScriptOp op;
     int line;    /* in the script file, for messages */
     int key;     /* KEY: a lower-case character, '\t', or VIEW_KEY_ESCAPE */
-    double a, b; /* WAIT_SPP: a; ORBIT, PAN, CLICK: a, b; DOLLY: a */
+    double a, b; /* WAIT_SPP: a; ORBIT, PAN, CLICK, EXPLAIN: a, b; DOLLY: a */
     char *path;  /* SAVE, CAMERA: owned */
 } ViewScriptCmd;
 

@@ -189,23 +189,29 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
 /* One sample of one pixel replayed with the render's random numbers, and what its path
  * did: every vertex, every sampling decision, every strategy's contribution with its MIS
  * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (scenes
- * without media or subsurface) and bdpt (RGB mode); CST_ERR_UNSUPPORTED for the rest. */
+ * without media or subsurface), whitted, light (the splats that reached the pixel), bdpt and
+ * vcm (RGB mode); CST_ERR_UNSUPPORTED for the rest. */
 typedef enum CstExplainKind {
     CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material */
     CST_EXPLAIN_ESCAPE,     /* the camera path left the scene (environment, if any, in value) */
     CST_EXPLAIN_EMISSION,   /* an emitter reached by the camera path (bdpt: s = 0) */
     CST_EXPLAIN_NEE,        /* a light sampled from a vertex (bdpt: s = 1) */
     CST_EXPLAIN_CONNECT,    /* bdpt: camera vertex t joined to light vertex s - 1 (s >= 2) */
-    CST_EXPLAIN_SPLAT,      /* bdpt: a light path's t = 1 connection landing near the pixel */
+    CST_EXPLAIN_SPLAT,      /* bdpt, light: a light path's t = 1 connection landing near the pixel */
     CST_EXPLAIN_SCATTER,    /* the BSDF sample that continues the path */
-    CST_EXPLAIN_ROULETTE    /* Russian roulette: q the survival probability */
+    CST_EXPLAIN_ROULETTE,   /* Russian roulette: q the survival probability */
+    CST_EXPLAIN_MERGE,      /* vcm: a light vertex merged at camera vertex t (value before the
+                             * 1 / (pi r^2 N) normalisation, which pmf holds) */
+    CST_EXPLAIN_DISTANCE    /* path in media: free-flight distance sampled in a medium (distance,
+                             * transmittance; flag SCATTERED when a medium vertex follows) */
 } CstExplainKind;
 
 enum {
     CST_EXPLAIN_DELTA = 1,    /* a delta lobe or delta light (pmf, not pdf_w) */
     CST_EXPLAIN_OCCLUDED = 2, /* the connection's shadow ray was blocked (value 0) */
     CST_EXPLAIN_SURVIVED = 4, /* roulette: the path went on */
-    CST_EXPLAIN_ADDED = 8     /* the event added contribution to the sample (value summed) */
+    CST_EXPLAIN_ADDED = 8,    /* the event added contribution to the sample (value summed) */
+    CST_EXPLAIN_SCATTERED = 16 /* DISTANCE: the sampled distance fell inside the segment */
 };
 
 typedef struct CstExplainEvent {
@@ -233,6 +239,16 @@ typedef struct CstExplainEvent {
                        * beta times); SCATTER: the BSDF weight f cos / pdf */
     float contribution[3]; /* beta * value: this event's share of the sample (RGB, or the
                             * first three wavelength lanes in spectral mode) */
+    /* bdpt (EMISSION, NEE, CONNECT at area lights): the strategy's MIS weight computed
+     * explicitly from the densities of every strategy of the same whole path, and those
+     * strategies' weights summed; -1 when not computed (mis_strategies 0). */
+    float mis_explicit, mis_sum;
+    int mis_strategies;
+    int path;         /* light: the light path (of the iteration) whose splat this is; -1 */
+    int medium;       /* VERTEX in a medium ("medium" material_type), DISTANCE: its index; -1 */
+    float distance;   /* DISTANCE: the sampled distance, or the segment's length if it passed */
+    float transmittance[3]; /* DISTANCE, homogeneous media: exp(-sigma_t distance) (RGB lanes) */
+    double share[3];  /* light: what the splat added to the pixel (filter weight included) */
 } CstExplainEvent;
 
 typedef struct CstExplain {
@@ -250,6 +266,11 @@ typedef struct CstExplain {
     double splat_value[3];     /* bdpt: what light paths' t = 1 splats added to the pixel */
     double film_value[3];      /* what the film accumulated: camera_value + splat_value */
     int exact;                 /* sum == camera_value, bit for bit */
+    /* bdpt: strategies whose weight was also computed explicitly (mis_explicit), the
+     * largest relative difference |mis_weight - mis_explicit| / mis_explicit among them and
+     * the largest |mis_sum - 1|. */
+    int mis_checked;
+    double mis_max_error, mis_max_sum_error;
 } CstExplain;
 
 /* Replays sample `sample` (for bdpt: iteration) of pixel (x, y) under `settings` (as for
@@ -259,7 +280,7 @@ typedef struct CstExplain {
 CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
-/* "path, path-nee, path-bsdf, bdpt": the integrators cst_explain follows. */
+/* "path, path-nee, path-bsdf, whitted, light, bdpt, vcm": the integrators cst_explain follows. */
 CST_API const char *cst_explain_integrators(void);
 
 #endif

@@ -465,6 +465,11 @@ static inline void splat_spread(const FilmSplat *s, const SplatFrame *fr, double
     }
 }
 
+void film_add_splat_rows(const FilmSplat *s, const SplatFrame *fr, double *rgb, double scale, int row_lo, int row_hi)
+{
+    splat_spread(s, fr, rgb, scale, row_lo, row_hi);
+}
+
 int splat_list_bin(SplatList *l, const SplatFrame *fr)
 {
     const int bands = fr->bands;

@@ -121,6 +121,9 @@ typedef struct SplatList {
 /* Reserves room for cap splats; returns 0 on OOM. Free with splat_list_free (accepts a
  * zeroed list). */
 int splat_list_init(SplatList *l, size_t cap);
+/* Adds scale times one entry, spread by the filter, to the pixels of rgb (width x height x
+ * 3) in rows [row_lo, row_hi), with film_add_splats_band's arithmetic (`caustic explain`). */
+void film_add_splat_rows(const FilmSplat *s, const SplatFrame *fr, double *rgb, double scale, int row_lo, int row_hi);
 void splat_list_free(SplatList *l);
 /* Records contribution c at film position (x, y), to be spread with the frame's filter so
  * that splats estimate the same pixel values as camera samples: box: all of c to the pixel

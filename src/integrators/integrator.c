@@ -194,6 +194,13 @@ static void light_chunk(void *ctx, int chunk, int worker)
     splat_list_bin(out, &L->params.frame); /* sets out->oom on failure, checked after the step */
 }
 
+void integrator_light_path(const Integrator *it, int iteration, int path, SplatList *out, uint64_t *rays)
+{
+    Sampler rng;
+    sampler_start_stream(&rng, it->seed, (uint64_t)path, (uint64_t)iteration); /* as light_chunk */
+    light_trace(it->scene, &it->camera, &it->light.params, &rng, out, rays);
+}
+
 /* Between the light and the camera step of a BDPT/VCM iteration: the chunks' vertex
  * lists are concatenated in chunk order (so path i's vertices are a run starting at
  * path_start[i]), and for VCM the merging grid is built over them. What is serial is

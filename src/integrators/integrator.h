@@ -174,5 +174,8 @@ bool integrator_import_progressive(Integrator *it, const Film *resume);
 void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfinite);
 /* Accepts a zeroed or failed integrator. */
 void integrator_destroy(Integrator *it);
+/* INTEGRATOR_LIGHT: light path `path` of iteration `iteration` traced again as its chunk
+ * traced it (the same random numbers), its splats appended to *out (`caustic explain`). */
+void integrator_light_path(const Integrator *it, int iteration, int path, SplatList *out, uint64_t *rays);
 
 #endif

@@ -42,6 +42,9 @@ CstExplainEvent *recorder_push(Recorder *r, CstExplainKind k)
     e->s = e->t = e->light = -1;
     e->material = -1;
     e->mis_weight = -1.0f;
+    e->mis_explicit = e->mis_sum = -1.0f;
+    e->path = -1;
+    e->medium = -1;
     return e;
 }
 
@@ -72,6 +75,12 @@ void recorder_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int dept
     put3(e->n, sh->ns);
     put3(e->ng, sh->ng);
     e->material = sh->material;
+    if (depth >= 1 && depth <= RECORDER_PATH_MAX) {
+        r->paths.cam[depth - 1] = *sh;
+        r->paths.cam_dir[depth - 1] = r->paths.next_dir;
+        r->paths.cam_delta[depth - 1] = false;
+        r->paths.ncam = depth;
+    }
     e->material_type = sh->material >= 0 ? material_type_name(s->materials[sh->material].type) : "none";
     e->light = sh->emitter;
 }
@@ -125,6 +134,8 @@ void recorder_scatter(Recorder *r, const BsdfSample *bs, Color beta)
     e->pdf_w = bs->pdf_w;
     e->pmf = bs->pmf;
     if (bs->delta) e->flags |= CST_EXPLAIN_DELTA;
+    if (r->depth >= 1 && r->depth <= RECORDER_PATH_MAX) r->paths.cam_delta[r->depth - 1] = bs->delta;
+    r->paths.next_dir = bs->wi;
     put_color(e->beta, beta);
     put_color(e->value, bs->weight);
     put_color(e->contribution, color_mul(beta, bs->weight));
@@ -174,4 +185,125 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color va
     put_color(e->value, value);
     put_color(e->contribution, value);
     e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
+}
+
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir)
+{
+    r->paths.camera_o = origin;
+    r->paths.next_dir = dir;
+    r->paths.ncam = 0;
+}
+
+void recorder_nee_normal(Recorder *r, Vec3 n)
+{
+    if (r->n > 0 && r->ev[r->n - 1].kind == CST_EXPLAIN_NEE) put3(r->ev[r->n - 1].ng, n);
+}
+
+void recorder_light_start(Recorder *r, const EmissionSample *es)
+{
+    RecorderPaths *p = &r->paths;
+    p->light_on = p->light_started++ == p->light_path;
+    if (!p->light_on) return;
+    p->has_light = true;
+    p->start = *es;
+    p->nlight = 0;
+}
+
+void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir)
+{
+    RecorderPaths *p = &r->paths;
+    if (!p->light_on) return;
+    if (p->nlight < RECORDER_PATH_MAX) {
+        p->light[p->nlight] = *sh;
+        p->light_dir[p->nlight] = dir;
+        p->light_delta[p->nlight] = false;
+    }
+    p->nlight++;
+}
+
+void recorder_light_scatter(Recorder *r, bool delta)
+{
+    RecorderPaths *p = &r->paths;
+    if (p->light_on && p->nlight >= 1 && p->nlight <= RECORDER_PATH_MAX) p->light_delta[p->nlight - 1] = delta;
+}
+
+/* The throughput of the whitted node at depth d: 1 at the camera's hit, else its branch's. */
+static Color tree_beta(const Recorder *r, int d)
+{
+    return d >= 2 && d <= RECORDER_PATH_MAX + 1 ? r->tree_beta[d] : color_s(1.0f);
+}
+
+void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value)
+{
+    r->depth = depth;
+    CstExplainEvent *e = recorder_push(r, kind);
+    e->mis_weight = 1.0f;
+    recorder_added(r, e, tree_beta(r, depth), value);
+}
+
+void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth)
+{
+    r->depth = depth;
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
+    put3(e->wi, bs->wi);
+    e->pmf = bs->pmf;
+    e->flags |= CST_EXPLAIN_DELTA;
+    Color beta = tree_beta(r, depth);
+    put_color(e->beta, beta);
+    put_color(e->value, w);
+    put_color(e->contribution, color_mul(beta, w));
+    if (e != &r->spare) r->value[e - r->ev] = w; /* the replay's branch weight */
+    if (depth + 1 <= RECORDER_PATH_MAX + 1) r->tree_beta[depth + 1] = color_mul(beta, w);
+}
+
+void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color value, float vm_norm, float w,
+                    float w_light, float w_camera)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_MERGE);
+    e->s = light_bounces + 1; /* the light vertices, the merged one included */
+    e->t = r->depth + 1;
+    put3(e->p, p);
+    e->mis_weight = w;
+    e->pdf_other_w = w_light;
+    e->pdf_other2 = w_camera;
+    e->pmf = vm_norm;
+    recorder_added(r, e, beta, value); /* exact lanes, unnormalised: the replay's */
+    Color shown = color_scale(value, vm_norm);
+    put_color(e->value, shown);
+    put_color(e->contribution, color_mul(beta, shown));
+}
+
+void recorder_distance(Recorder *r, int medium, const MediumCoeffs *mc, bool hetero, Ray ray, float t_max,
+                       const MediumSample *ms)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_DISTANCE);
+    e->medium = medium;
+    e->distance = ms->scattered ? ms->t : t_max;
+    put3(e->p, ray_at(&ray, ms->scattered ? ms->t : fminf(t_max, 3.0e38f)));
+    put3(e->wi, ray.d);
+    if (ms->scattered) e->flags |= CST_EXPLAIN_SCATTERED;
+    if (!hetero && isfinite(e->distance)) {
+        Color tr = medium_transmittance(mc, e->distance);
+        put_color(e->transmittance, tr);
+        /* The mixture over lanes (medium.h): pdf(t) = 1/4 sum_c sigma_t[c] Tr_c per unit
+         * length when it scattered, P(t >= t_max) = 1/4 sum_c Tr_c when it passed. */
+        float pdf = 0.0f;
+        for (int c = 0; c < COLOR_LANES; c++) pdf += (ms->scattered ? mc->sigma_t.c[c] : 1.0f) * tr.c[c];
+        e->pdf_w = pdf / (float)COLOR_LANES;
+    }
+    put_color(e->value, ms->weight);
+}
+
+void recorder_medium_vertex(Recorder *r, Vec3 p, int medium, int depth)
+{
+    r->depth = depth;
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_VERTEX);
+    put3(e->p, p);
+    e->medium = medium;
+    e->material_type = "medium";
+}
+
+void recorder_add(Recorder *r, CstExplainKind kind, Color beta, Color value)
+{
+    recorder_added(r, recorder_push(r, kind), beta, value);
 }

@@ -9,7 +9,32 @@
 #include "caustic/caustic.h"
 #include "materials/bsdf.h"
 #include "math/spectrum.h"
+#include "media/medium.h"
 #include "scene/scene.h"
+
+/* The hits of a path kept for bdpt's explicit MIS check (bdpt_mis.h); longer paths are
+ * not checked. */
+enum { RECORDER_PATH_MAX = 64 };
+
+/* BDPT: the camera subpath's and the pixel's light subpath's vertices, every one of them
+ * (delta ones too), from which the check rebuilds each recorded strategy's whole path. */
+typedef struct RecorderPaths {
+    Vec3 camera_o;                        /* the camera ray's origin (the lens point) */
+    SurfaceHit cam[RECORDER_PATH_MAX];    /* cam[d - 1]: the camera subpath's hit d */
+    Vec3 cam_dir[RECORDER_PATH_MAX];      /* the unit direction of the ray that reached it */
+    Vec3 next_dir;                        /* the last scatter's (or the camera ray's) */
+    bool cam_delta[RECORDER_PATH_MAX];    /* a delta lobe continued the path there */
+    int ncam;
+    /* The light step starts subpaths 0, 1, ... in order on one thread in explain
+     * (explain.c's run): the one numbered light_path (the pixel's) is kept. */
+    int light_started, light_path;
+    bool light_on, has_light;
+    EmissionSample start;
+    SurfaceHit light[RECORDER_PATH_MAX];  /* light[b - 1]: the hit after b - 1 bounces */
+    Vec3 light_dir[RECORDER_PATH_MAX];    /* the unit direction of the ray that reached it */
+    bool light_delta[RECORDER_PATH_MAX];
+    int nlight;
+} RecorderPaths;
 
 typedef struct Recorder {
     CstExplainEvent *ev; /* cap events, owned by the caller */
@@ -25,6 +50,8 @@ typedef struct Recorder {
     int px, py;
     float radius;
     CstExplainEvent spare; /* where events go once ev is full */
+    RecorderPaths paths;
+    Color tree_beta[RECORDER_PATH_MAX + 2]; /* whitted: a node's throughput by depth */
 } Recorder;
 
 /* A new event of kind k at the current depth (fields zero, s = t = light = -1,
@@ -56,9 +83,42 @@ void recorder_roulette(Recorder *r, float q, bool survived);
  * value the MIS-weighted estimate the walk adds beta times (0 when occluded). */
 void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light, Vec3 p, Color beta, Color value,
                        float w, float w_light, float w_camera, float pdf_w, float pdf_a, bool occluded);
+/* VCM (vcm.c): light vertex at p merged at the current camera vertex of throughput beta;
+ * value the MIS-weighted f beta_light the merge sums before its normalisation vm_norm. */
+void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color value, float vm_norm, float w,
+                    float w_light, float w_camera);
 /* A light path's t = 1 connection to the camera at raster position (x, y), kept when it
  * lands within the filter's reach of the recorded pixel; value already MIS-weighted. */
 void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color value, float w, float w_light,
                     float pdf_a);
+
+/* ---- The path tracer in media (volpath.c) */
+/* A free-flight distance sampled in medium `medium` (coefficients mc) along ray, up to
+ * t_max (INFINITY: no surface behind). */
+void recorder_distance(Recorder *r, int medium, const MediumCoeffs *mc, bool hetero, Ray ray, float t_max,
+                       const MediumSample *ms);
+/* A scattering vertex in a medium, the path's vertex `depth`. */
+void recorder_medium_vertex(Recorder *r, Vec3 p, int medium, int depth);
+/* An addition of beta * value of kind k (medium emission, NEE) with no more to say. */
+void recorder_add(Recorder *r, CstExplainKind kind, Color beta, Color value);
+
+/* ---- Whitted (whitted.c): a ray tree, its nodes' events in depth-first order; the
+ * throughput of a node is the product of its branches' weights (kept per depth). */
+/* An addition at the node of tree depth `depth` (1 = the camera ray's hit): kind EMISSION
+ * (L_e), NEE (the direct light's mean) or ESCAPE (the environment, at a miss). */
+void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value);
+/* A specular branch of weight w (the lobe's probability times its f cos / pdf) from the
+ * node at `depth` to a child at depth + 1. */
+void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth);
+
+/* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir);
+/* The light point's normal of the NEE strategy just recorded (into its ng). */
+void recorder_nee_normal(Recorder *r, Vec3 n);
+/* A light subpath starts (subpath_trace_light, every path of the step, in order). */
+void recorder_light_start(Recorder *r, const EmissionSample *es);
+/* A hit of the light subpath walk, then the kind of the scatter that continues from it. */
+void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir);
+void recorder_light_scatter(Recorder *r, bool delta);
 
 #endif

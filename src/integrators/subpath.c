@@ -125,6 +125,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
     }
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
+    if (it->rec) recorder_light_start(it->rec, &es);
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
 
@@ -172,6 +173,7 @@ static Color connect_to_light(const Scene *s, const SubpathIteration *it, const 
                       : color_s(0.0f);
         recorder_strategy(it->rec, CST_EXPLAIN_NEE, 1, ls.light, ls.p, sp->beta, v, weight, w_light, w_camera,
                           ls.delta ? ls.pmf : ls.pdf_w, ls.direct_pdf, !vis);
+        recorder_nee_normal(it->rec, ls.n);
         return v;
     }
     if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
@@ -256,6 +258,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
     if (s->num_media | s->num_medium_ifaces)
         return media_subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays, merge);
     Color L = color_s(0.0f);
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
     /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic

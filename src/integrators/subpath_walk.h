@@ -115,6 +115,7 @@ static inline bool subpath_scatter(const Scene *s, SubPath *sp, const SubpathIte
      * below may divide by it. */
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
     if (it && it->rec && mode == BSDF_RADIANCE) recorder_scatter(it->rec, &bs, sp->beta);
+    if (it && it->rec && mode == BSDF_IMPORTANCE) recorder_light_scatter(it->rec, bs.delta);
     sp->specular_only = sp->specular_only && bs.delta;
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);
@@ -146,6 +147,7 @@ subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es,
             /* From a directional light the first segment has no distance: its density is
              * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
             mis_arrive(&sp, bounces > 1 || es->finite ? sh.t : 1.0f, cos_in);
+            if (it->rec) recorder_light_hit(it->rec, &sh, ray.d); /* explain's MIS check (recorder.h) */
         }
         Bsdf bsdf;
         if (w->disperse) scene_bsdf_disperse(s, &sh, w->disperse, &bsdf);

@@ -8,6 +8,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "integrators/recorder.h"
+
 float vcm_default_radius(const Scene *s)
 {
     /* SmallVCM's default: 0.003 times the radius of the scene's bounding sphere. */
@@ -203,6 +205,8 @@ static Color merge(const SubpathParams *vp, const SubpathIteration *it, const Me
             float weight = 1.0f / (w_light + 1.0f + w_camera);
             if (y->dispersed) acc_hero = color_add(acc_hero, color_scale(color_mul(f, y->beta), weight));
             else acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
+            if (it->rec) recorder_merge(it->rec, y->p, y->bounces, sp->beta, color_scale(color_mul(f, y->beta), weight),
+                                        it->vm_norm, weight, w_light, w_camera);
         }
     *hero = color_scale(acc_hero, it->vm_norm);
     return color_scale(acc, it->vm_norm);

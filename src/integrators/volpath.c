@@ -78,6 +78,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
      * touch r_u) and p_c / p_hero over its grid segments. */
     int hero = -1;
     Color r_u = color_s(1.0f);
+    if (pp->rec) recorder_wavelengths(pp->rec, wl); /* a path of medium vertices alone has no surface hit */
     for (int depth = 0;;) {
         SurfaceHit sh;
         ++*rays;
@@ -98,22 +99,29 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
                 if (hero < 0) hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
                 hetero_sample_distance(&med->u.het, &mc, ray.o, ray.d, hit ? sh.t : INFINITY, hero, r_u, u_t, &ms);
                 if (mc.emissive && !(pp->max_depth > 0 && depth >= pp->max_depth)) ps.L = color_madd(ps.L, ps.beta, ms.le);
+                if (pp->rec && mc.emissive && !(pp->max_depth > 0 && depth >= pp->max_depth)) recorder_add(pp->rec, CST_EXPLAIN_EMISSION, ps.beta, ms.le);
                 r_u = color_mul(r_u, ms.r);
             } else {
                 medium_sample_distance(&mc, hit ? sh.t : INFINITY, u_ch, u_t, &ms);
             }
+            if (pp->rec) recorder_distance(pp->rec, medium, &mc, het, ray, hit ? sh.t : INFINITY, &ms);
             if (ms.scattered) {
                 /* Emission of the segment: sigma_a Le Tr / pdf(t) (pbrt-v4 adds it below
                  * the depth limit only). */
                 const bool last = pp->max_depth > 0 && depth >= pp->max_depth;
                 if (mc.emissive && !last && !het)
                     ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
+                if (pp->rec && mc.emissive && !last && !het)
+                    recorder_add(pp->rec, CST_EXPLAIN_EMISSION, mis_beta(ps.beta, hero, r_u), color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
                 ps.beta = color_mul(ps.beta, ms.weight);
                 if (last || color_is_black(ps.beta)) break;
                 Vec3 p = ray_at(&ray, ms.t), wo = v3_neg(ray.d);
+                if (pp->rec) recorder_medium_vertex(pp->rec, p, medium, depth + 1);
                 if (use_nee) {
                     VolVertex v = {p, v3s(0.0f), v3s(0.0f), wo, NULL, NULL, mc.g, medium};
-                    ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+                    Color d = volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays);
+                    ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), d);
+                    if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, mis_beta(ps.beta, hero, r_u), d);
                 }
                 Vec2 u = sampler_2d(smp);
                 float pdf;
@@ -148,6 +156,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
             continue;
         }
         Vec3 wo = v3_neg(ray.d);
+        if (pp->rec) recorder_vertex(pp->rec, s, &sh, depth + 1, wl);
         /* NEE's pdf from the previous vertex, across any boundaries crossed since. */
         if (sh.emitter >= 0)
             path_add_emitted(s, pp, &ps, mis_beta(ps.beta, hero, r_u), &sh, wo, v3_length(v3_sub(sh.p, ps.prev_p)), wl);
@@ -155,10 +164,13 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
 
         Bsdf bsdf;
         scene_bsdf_disperse(s, &sh, wl, &bsdf);
+        if (pp->rec) recorder_wavelengths(pp->rec, wl);
         if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             VolVertex v = {sh.p, sh.ns, sh.ng, wo, &bsdf, &sh, 0.0f, medium};
-            ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays));
+            Color d = volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays);
+            ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), d);
+            if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, mis_beta(ps.beta, hero, r_u), d);
         }
         BsdfSample bs;
         if (!path_sample_bsdf(pp, &ps, &bsdf, &sh, wo, smp, &bs)) break;

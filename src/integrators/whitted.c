@@ -7,6 +7,7 @@
 #include "integrators/whitted.h"
 
 #include "integrators/direct.h"
+#include "integrators/recorder.h"
 #include "materials/bsdf.h"
 
 /* Branches whose weight falls below this stop: adaptive tree depth control (Hall &
@@ -34,9 +35,15 @@ static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int
 {
     SurfaceHit sh;
     ++*rays;
-    if (!scene_intersect(s, &ray, &sh)) return scene_env_radiance(s, ray.d, wl);
+    if (!scene_intersect(s, &ray, &sh)) {
+        Color le = scene_env_radiance(s, ray.d, wl);
+        if (wp->rec) recorder_whitted(wp->rec, CST_EXPLAIN_ESCAPE, depth + 1, le);
+        return le;
+    }
     Vec3 wo = v3_neg(ray.d);
     Color L = sh.emitter >= 0 ? scene_emission(s, &sh, wo, wl) : color_s(0.0f);
+    if (wp->rec) recorder_vertex(wp->rec, s, &sh, depth + 1, wl);
+    if (wp->rec && sh.emitter >= 0) recorder_whitted(wp->rec, CST_EXPLAIN_EMISSION, depth + 1, L);
 
     Bsdf bsdf;
     scene_bsdf(s, &sh, wl, &bsdf);
@@ -44,7 +51,11 @@ static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int
      * plastic) get direct light only, Whitted's diffuse rule; a BSDF that also has delta
      * lobes (smooth-coat plastic) then branches into those below as well. */
     if (!bsdf_is_delta(&bsdf)) {
-        if (s->emitter_sampler.lights > 0) L = color_add(L, whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, smp, wl, rays));
+        if (s->emitter_sampler.lights > 0) {
+            Color d = whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, smp, wl, rays);
+            L = color_add(L, d);
+            if (wp->rec) recorder_whitted(wp->rec, CST_EXPLAIN_NEE, depth + 1, d);
+        }
         if (!bsdf_has_delta(&bsdf)) return L;
     }
     if (depth >= wp->max_depth) return L;
@@ -68,6 +79,7 @@ static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int
         float wmax = weight * color_max(w);
         if (!(wmax >= WHITTED_MIN_WEIGHT)) continue;
         Ray next = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        if (wp->rec) recorder_whitted_branch(wp->rec, &bs, w, depth + 1);
         L = color_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, smp, wl, rays));
     }
     return L;

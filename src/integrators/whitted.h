@@ -12,6 +12,7 @@
 typedef struct WhittedParams {
     int max_depth;     /* specular bounces after the camera vertex; 0 = WHITTED_DEFAULT_DEPTH */
     int light_samples; /* shadow rays per diffuse hit; 0 = 1 */
+    struct Recorder *rec; /* `caustic explain` (recorder.h): the ray tree's events; NULL in renders */
 } WhittedParams;
 
 enum { WHITTED_DEFAULT_DEPTH = 10 };

@@ -2,12 +2,14 @@
  * render's own steps (integrator.c) on a one-pixel crop, one thread, with a recorder
  * (integrators/recorder.h) that the path tracer and BDPT fill; then the recorded additions
  * are summed again in the integrator's order and checked against the film. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/error.h"
 #include "film/film.h"
 #include "film/filter.h"
+#include "integrators/bdpt_mis.h"
 #include "integrators/integrator.h"
 #include "integrators/recorder.h"
 #include "render/render.h"
@@ -17,7 +19,7 @@
  * with its connections; longer ones are reported truncated (and not checked). */
 enum { EXPLAIN_EVENTS = 8192 };
 
-const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, bdpt"; }
+const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, bdpt, vcm"; }
 
 void cst_explain_destroy(CstExplain *e)
 {
@@ -41,14 +43,18 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_PATH_NEE:
     case CST_INTEGRATOR_PATH_BSDF:
     case CST_INTEGRATOR_DEFAULT:
-        /* volpath_li and path_sss_li carry no recorder hooks (yet). */
-        if (scene->num_media | scene->num_medium_ifaces | scene->num_subsurface)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow paths through participating media "
-                            "or subsurface materials yet; expected a scene without them");
+        /* path_sss_li carries no recorder hooks (yet); volpath_li does. */
+        if (scene->num_subsurface)
+            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow paths through subsurface materials "
+                            "yet; expected a scene without them");
         return CST_OK;
+    case CST_INTEGRATOR_WHITTED:
+    case CST_INTEGRATOR_LIGHT: return CST_OK; /* (integrator_prepare refuses media for both) */
     case CST_INTEGRATOR_BDPT:
+    case CST_INTEGRATOR_VCM:
         if (st->color_mode == CST_COLOR_SPECTRAL)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain follows bdpt in RGB mode only; expected --rgb");
+            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain follows %s in RGB mode only; expected --rgb",
+                            cst_integrator_name(st->integrator));
         /* subpath_media.c's walks and connections carry no recorder hooks (yet). */
         if (scene->num_media | scene->num_medium_ifaces)
             return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow bdpt's paths through participating "
@@ -64,22 +70,49 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
  * (BDPT's connections of a vertex first among themselves), then as camera_tile turns the
  * path's value into the film's sample: spectral conversion, non-finite to 0, clamp, filter
  * weight. */
+/* Whitted's ray tree summed again as whitted_trace sums it, from the node whose VERTEX
+ * (or ESCAPE) event is at *i: its emission, plus its direct light, plus each branch's
+ * weight times its child's value. */
+static Color replay_whitted(const Recorder *r, int *i)
+{
+    if (*i >= r->n) return color_s(0.0f);
+    const int at = (*i)++, d = r->ev[at].depth;
+    if (r->ev[at].kind == CST_EXPLAIN_ESCAPE) return r->value[at];
+    Color L = color_s(0.0f);
+    if (*i < r->n && r->ev[*i].kind == CST_EXPLAIN_EMISSION && r->ev[*i].depth == d) L = r->value[(*i)++];
+    if (*i < r->n && r->ev[*i].kind == CST_EXPLAIN_NEE && r->ev[*i].depth == d) L = color_add(L, r->value[(*i)++]);
+    while (*i < r->n && r->ev[*i].kind == CST_EXPLAIN_SCATTER && r->ev[*i].depth == d) {
+        Color w = r->value[(*i)++];
+        Color child = replay_whitted(r, i);
+        L = color_madd(L, w, child);
+    }
+    return L;
+}
+
 static Color replay(const Integrator *it, const Recorder *r, int x, int y, int sample, float *fw)
 {
     Color L = color_s(0.0f), c = color_s(0.0f), beta_c = color_s(0.0f);
-    int c_depth = -1;
-    for (int i = 0; i <= r->n; i++) {
+    int c_depth = -1, c_kind = 0;
+    if (it->kind == INTEGRATOR_WHITTED) {
+        int i = 0;
+        L = replay_whitted(r, &i);
+    }
+    for (int i = 0; i <= r->n && it->kind != INTEGRATOR_WHITTED; i++) {
         const CstExplainEvent *e = i < r->n ? &r->ev[i] : NULL;
-        const bool connect = e && e->kind == CST_EXPLAIN_CONNECT && (e->flags & CST_EXPLAIN_ADDED);
-        if (c_depth >= 0 && (!connect || e->depth != c_depth)) {
-            L = color_madd(L, beta_c, c);
+        /* A run of connections (or of VCM's merges) at one camera vertex: summed, then added
+         * times the vertex's throughput (merges after their normalisation). */
+        const bool group = e && (e->kind == CST_EXPLAIN_CONNECT || e->kind == CST_EXPLAIN_MERGE) &&
+                           (e->flags & CST_EXPLAIN_ADDED);
+        if (c_depth >= 0 && (!group || e->depth != c_depth || (int)e->kind != c_kind)) {
+            L = color_madd(L, beta_c, c_kind == CST_EXPLAIN_MERGE ? color_scale(c, it->light.vcm_it.vm_norm) : c);
             c_depth = -1;
         }
         if (!e || !(e->flags & CST_EXPLAIN_ADDED) || e->kind == CST_EXPLAIN_SPLAT) continue;
-        if (connect) {
+        if (group) {
             if (c_depth < 0) {
                 c = color_s(0.0f);
                 c_depth = e->depth;
+                c_kind = (int)e->kind;
                 beta_c = r->beta[i];
             }
             c = color_add(c, r->value[i]);
@@ -117,6 +150,129 @@ static CstStatus run(Integrator *it, Recorder *rec, int pixel, int sample, doubl
     }
 }
 
+/* The light tracer: every light path of the iteration traced again (integrator.c), and
+ * each splat's share of pixel (x, y) added as light_merge_band adds it, path by path in
+ * the order the chunks made them; *sum gets the pixel's value. False on OOM. */
+static bool explain_light(const Integrator *it, Recorder *r, int x, int y, int iteration, double sum[3])
+{
+    const SplatFrame *fr = &it->light.params.frame;
+    const size_t pixels = (size_t)fr->width * (size_t)fr->height;
+    const double scale = (double)pixels / (double)it->light.light_paths;
+    double *row = calloc(3 * pixels, sizeof *row);
+    SplatList l;
+    if (!row || !splat_list_init(&l, 16)) {
+        free(row);
+        return false;
+    }
+    uint64_t rays = 0;
+    double *px = &row[3 * ((size_t)y * (size_t)fr->width + (size_t)x)];
+    sum[0] = sum[1] = sum[2] = 0.0;
+    r->depth = 0;
+    for (int i = 0; i < it->light.light_paths && !l.oom; i++) {
+        l.n = 0;
+        integrator_light_path(it, iteration, i, &l, &rays);
+        for (size_t k = 0; k < l.n; k++) {
+            const FilmSplat *sp = &l.v[k];
+            if (y < sp->row0 || y > sp->row1) continue;
+            film_add_splat_rows(sp, fr, row, scale, y, y + 1);
+            const double share[3] = {px[0], px[1], px[2]};
+            memset(&row[3 * (size_t)y * (size_t)fr->width], 0, 3 * (size_t)fr->width * sizeof *row);
+            if (share[0] == 0.0 && share[1] == 0.0 && share[2] == 0.0) continue; /* adds no bit */
+            for (int c = 0; c < 3; c++) sum[c] += share[c];
+            CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SPLAT);
+            e->flags |= CST_EXPLAIN_ADDED;
+            e->t = 1;
+            e->path = i;
+            e->wi[0] = sp->x;
+            e->wi[1] = sp->y;
+            e->value[0] = sp->r; e->value[1] = sp->g; e->value[2] = sp->b;
+            e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
+            for (int c = 0; c < 3; c++) {
+                e->share[c] = share[c];
+                e->contribution[c] = (float)share[c];
+            }
+        }
+    }
+    const bool ok = !l.oom;
+    splat_list_free(&l);
+    free(row);
+    return ok;
+}
+
+/* BDPT's check (bdpt_mis.h): each recorded strategy's whole path rebuilt from the camera
+ * subpath and the pixel's light subpath the recorder kept, and its weight computed again
+ * from the densities of every strategy of that path. */
+static void check_mis(const Integrator *it, const Recorder *r, CstExplain *ex)
+{
+    const RecorderPaths *rp = &r->paths;
+    for (int i = 0; i < r->n; i++) {
+        CstExplainEvent *e = &r->ev[i];
+        if (!(e->flags & CST_EXPLAIN_ADDED) || e->s < 0 || e->t < 1 || (e->flags & CST_EXPLAIN_DELTA)) continue;
+        if (e->kind != CST_EXPLAIN_EMISSION && e->kind != CST_EXPLAIN_NEE && e->kind != CST_EXPLAIN_CONNECT) continue;
+        const int tc = e->t - 1; /* camera hits */
+        const int s = e->s;
+        BdptMisPath path;
+        path.k = s + e->t - 1;
+        if (tc > rp->ncam || path.k >= BDPT_MIS_MAX || tc > RECORDER_PATH_MAX) continue;
+        int j = 0; /* the vertex being filled */
+        if (s == 0) {
+            if (tc < 1) continue;
+            const SurfaceHit *h = &rp->cam[tc - 1];
+            path.emitter = h->emitter;
+            path.p0 = h->p;
+            path.n0 = h->ng;
+        } else if (s == 1) {
+            path.emitter = e->light;
+            path.p0 = v3(e->p[0], e->p[1], e->p[2]);
+            path.n0 = v3(e->ng[0], e->ng[1], e->ng[2]);
+        } else {
+            if (!rp->has_light || rp->start.delta || !rp->start.finite || s - 1 > rp->nlight ||
+                s - 1 > RECORDER_PATH_MAX)
+                continue;
+            path.emitter = rp->start.emitter;
+            path.p0 = rp->start.p;
+            path.n0 = rp->start.n;
+            for (int b = 1; b < s; b++) {
+                path.hit[++j] = &rp->light[b - 1];
+                path.delta[j] = rp->light_delta[b - 1];
+            }
+        }
+        /* The camera hits from the far end: s = 0's first vertex is the emitter hit. */
+        for (int d = s == 0 ? tc - 1 : tc; d >= 1; d--) {
+            path.hit[++j] = &rp->cam[d - 1];
+            path.delta[j] = rp->cam_delta[d - 1];
+        }
+        if (j != path.k - 1) continue;
+        path.delta[0] = false;
+        if (s >= 1) { /* the connection's ends are evaluated, never delta */
+            path.delta[s - 1] = false;
+            if (s < path.k) path.delta[s] = false;
+        }
+        path.lens = rp->camera_o;
+        /* The rays' own segments: the light subpath's hits, then the camera subpath's (hit d
+         * ends segment x_{k-d} x_{k-d+1}, traversed toward x_{k-d}); the connection's 0. */
+        for (int q = 0; q < path.k; q++) path.len[q] = 0.0f;
+        for (int b = 1; b < s; b++) {
+            path.len[b - 1] = rp->light[b - 1].t;
+            path.dir[b - 1] = rp->light_dir[b - 1];
+        }
+        for (int d = 1; d <= tc; d++) {
+            path.len[path.k - d] = rp->cam[d - 1].t;
+            path.dir[path.k - d] = v3_neg(rp->cam_dir[d - 1]);
+        }
+        double w, sum;
+        int n;
+        if (!bdpt_mis_weight(it->scene, &it->camera, &it->light.vcm_it, &path, s, &w, &sum, &n)) continue;
+        e->mis_explicit = (float)w;
+        e->mis_sum = (float)sum;
+        e->mis_strategies = n;
+        double err = fabs((double)e->mis_weight - w) / w;
+        if (err > ex->mis_max_error) ex->mis_max_error = err;
+        if (fabs(sum - 1.0) > ex->mis_max_sum_error) ex->mis_max_sum_error = fabs(sum - 1.0);
+        ex->mis_checked++;
+    }
+}
+
 CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                       CstExplain **out, CstError *err)
 {
@@ -150,6 +306,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     rec.value = calloc(EXPLAIN_EVENTS, sizeof *rec.value);
     rec.px = x;
     rec.py = y;
+    rec.paths.light_path = y * st.width + x; /* BDPT: the light subpath of the pixel's index */
     uint64_t rays = 0;
     if (!ex || !film || !it || !rec.ev || !rec.beta || !rec.value) {
         status = cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st.width, st.height);
@@ -157,6 +314,8 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     }
     if ((status = integrator_prepare(it, scene, &st, film, &worker, &rays, NULL, NULL, err)) != CST_OK) goto done;
     if (it->kind == INTEGRATOR_PATH) it->path.rec = &rec;
+    else if (it->kind == INTEGRATOR_WHITTED) it->whitted.rec = &rec;
+    else if (it->kind == INTEGRATOR_LIGHT) rec.radius = 0.0f;
     else rec.radius = filter_radius(it->light.vcm_params.frame.filter);
     const int pixel = y * st.width + x;
     double camera[3] = {0.0, 0.0, 0.0};
@@ -180,6 +339,24 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
         double s = (double)ex->sum[c];
         if (memcmp(&s, &ex->camera_value[c], sizeof s) != 0) ex->exact = 0;
     }
+    if (it->kind == INTEGRATOR_LIGHT) {
+        /* No camera step: the film's value is the splats', summed again here. */
+        double light[3];
+        if (!explain_light(it, &rec, x, y, sample, light)) {
+            status = cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st.width, st.height);
+            goto done;
+        }
+        ex->truncated = rec.truncated;
+        ex->exact = !rec.truncated;
+        ex->filter_weight = 1.0f;
+        for (int c = 0; c < 3; c++) {
+            ex->sum[c] = (float)light[c];
+            ex->camera_value[c] = 0.0;
+            ex->splat_value[c] = ex->film_value[c];
+            if (memcmp(&light[c], &ex->film_value[c], sizeof light[c]) != 0) ex->exact = 0;
+        }
+    }
+    if (st.integrator == CST_INTEGRATOR_BDPT) check_mis(it, &rec, ex);
     ex->num_events = rec.n;
     ex->events = rec.ev;
     rec.ev = NULL;

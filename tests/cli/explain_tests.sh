@@ -14,6 +14,16 @@ expect "path: text, sum equal bit for bit" 0 '^vertex 1: surface at' 'NEE: light
     'equal, bit for bit'
 harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}" --json
 expect "bdpt: JSON, exact" 0 '"exact": true' '"kind": "connect"' '"w_light"' '"splat_value"'
+harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}"
+expect "bdpt: text, explicit MIS check" 0 'explicitly [0-9.e-]+ of [0-9]+ strategies' 'MIS check: [0-9]+ strategies'
+harness_run "$d" 60 explain --pixel 12,12 --integrator whitted "${SMALL[@]}"
+expect "whitted: text, exact" 0 'direct light' 'equal, bit for bit'
+harness_run "$d" 60 explain --pixel 12,10 --integrator light "${SMALL[@]}"
+expect "light: text, exact" 0 "light path [0-9]+'s connection" 'the splats sum to it, bit for bit'
+harness_run "$d" 60 explain --pixel 12,10 --sample 3 --why-bright "${SMALL[@]}"
+expect "--why-bright: one line" 0 '^why bright: [a-z]+ at vertex [0-9]+ gives [0-9.]+% of the sample'
+harness_run "$d" 60 explain --pixel 12,10 --sample 3 --why-dark "${SMALL[@]}"
+expect "--why-dark: one line" 0 '^why dark: value \(' 'the path has [0-9]+ vertices'
 harness_run "$d" 60 explain --pixel=3,4 --integrator path-bsdf "${SMALL[@]}" --json=out.json
 if [ "$RC" -eq 0 ] && grep -q '"exact": true' "$d/out.json"; then pass "--json=FILE"; else fail "--json=FILE" "exit $RC"; fi
 harness_run "$d" 60 explain --help
@@ -30,12 +40,14 @@ harness_run "$d" 30 explain --pixel 24,0 "${SMALL[@]}"
 expect "--pixel off the image" 2 'pixel 24,0: expected 0 <= x < 24'
 harness_run "$d" 30 explain --pixel 1,1 --sample x "${SMALL[@]}"
 expect "--sample not a number" 2 '--sample: expected an integer'
-harness_run "$d" 30 explain --pixel 1,1 --integrator vcm "${SMALL[@]}"
-expect "vcm refused" 2 'explain supports: path, path-nee, path-bsdf, bdpt; not vcm'
-harness_run "$d" 30 explain --pixel 1,1 --integrator light "${SMALL[@]}"
-expect "light refused" 2 'explain supports: '
+harness_run "$d" 30 explain --pixel 1,1 --integrator photon "${SMALL[@]}"
+expect "photon refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, bdpt, vcm; not photon'
+harness_run "$d" 30 explain --pixel 1,1 --integrator sppm "${SMALL[@]}"
+expect "sppm refused" 2 'explain supports: '
 harness_run "$d" 30 explain missing.json --pixel 1,1
 expect "missing scene" 2 'cannot open scene'
+harness_run "$d" 30 render --why-dark "${SMALL[@]}" -o x.png
+expect "--why-dark is explain's" 2 "--why-dark is an option of 'explain'"
 harness_run "$d" 30 render --pixel 1,1 "${SMALL[@]}" -o x.png
 expect "--pixel is explain's" 2 "--pixel is an option of 'explain'"
 

@@ -194,6 +194,30 @@ else
     fail "view: the written camera is a thinlens camera section with the clicked focus" "$(cat "$dir/cam.json")"
 fi
 
+# ------------------------------------------------------------ click to explain
+# A right click (script: explain X Y) prints `caustic explain` of that pixel at the mode's
+# last accumulated sample, the same text the explain command prints, and restarts nothing.
+dir=$TMP/explain
+cat >"$TMP/explain.txt" <<'EOF2'
+wait-spp 2
+explain 48 60
+status
+key 2
+wait-spp 1
+explain 30 20
+key 1
+explain 30 20
+quit
+EOF2
+view "$dir" 300 "${SIZE[@]}" --spp 2 --script "$TMP/explain.txt"
+HARNESS_EXPECT_STDOUT=1 expect "view: explain script runs" 0 "view: explain \(48, 60\), mode path, sample 1:" \
+    "view: explain \(30, 20\), mode whitted, sample 0:" "view: explain \(30, 20\) in mode preview: the preview has no paths"
+check "view: explaining restarts nothing (spp 2 after it)" grep -q '^view: mode path spp 2 ' "$OUT"
+cp "$OUT" "$dir/view.out"
+harness_run "$dir" 60 explain --pixel 48,60 --sample 1 "${SIZE[@]}"
+line=$(grep '^camera sample the render computed: .*equal, bit for bit' "$OUT" | head -1)
+check "view: the click's explanation is caustic explain's" eval '[ -n "$line" ] && grep -qF "$line" "$dir/view.out"'
+
 # ------------------------------------------------------------ the disagreement map
 # Key r pins the path tracer's accumulation; key 0 shows another mode's against it block by
 # block (verify's test: Sidak-corrected z over 16x16 blocks at alpha 0.01). BDPT agrees with

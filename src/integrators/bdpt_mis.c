@@ -1,0 +1,98 @@
+/* BDPT's MIS weights from whole paths (bdpt_mis.h): Veach's thesis sec. 10.2, the density
+ * p_s of a path sampled with s light vertices is the product of the light subpath's area
+ * densities of x_0 .. x_{s-1} and the camera subpath's of x_s .. x_k; w_s = p_s^2 / sum_j
+ * p_j^2 (eq. 9.13). Computed in double, vertex by vertex, independently of the recursive
+ * quantities of Georgiev's technical report that subpath.c uses. */
+#include "integrators/bdpt_mis.h"
+
+#include <math.h>
+
+/* |cos| at a vertex of normal n toward unit d. */
+static double cosabs(Vec3 n, Vec3 d) { return fabs((double)v3_dot(n, d)); }
+
+bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *it, const BdptMisPath *x,
+                     int strategy, double *weight, double *sum, int *strategies)
+{
+    const int k = x->k;
+    *weight = 0.0;
+    *sum = 0.0;
+    *strategies = 0;
+    if (k < 1 || k >= BDPT_MIS_MAX || x->emitter < 0 || x->emitter >= s->emitter_sampler.count) return false;
+    Vec3 p[BDPT_MIS_MAX + 1], n[BDPT_MIS_MAX + 1];
+    p[0] = x->p0;
+    n[0] = x->n0;
+    for (int i = 1; i < k; i++) {
+        p[i] = x->hit[i]->p;
+        n[i] = x->hit[i]->ng;
+    }
+    p[k] = x->lens;
+    n[k] = cam->forward;
+    /* d[i]: unit x_i -> x_{i+1}; d2[i]: its squared length. */
+    Vec3 d[BDPT_MIS_MAX];
+    double d2[BDPT_MIS_MAX];
+    for (int i = 0; i < k; i++) {
+        Vec3 e = v3_sub(p[i + 1], p[i]);
+        d2[i] = x->len[i] > 0.0f ? (double)x->len[i] * (double)x->len[i] : (double)v3_length2(e);
+        if (!(d2[i] > 0.0)) return false;
+        d[i] = x->len[i] > 0.0f ? x->dir[i] : v3_scale(e, 1.0f / sqrtf(v3_length2(e)));
+    }
+    Bsdf b[BDPT_MIS_MAX];
+    for (int i = 1; i < k; i++) scene_bsdf(s, x->hit[i], NULL, &b[i]);
+    /* pl[i]: the light subpath's density of x_i per unit area; pc[i]: the camera
+     * subpath's. A delta lobe's density is a Dirac that every strategy sampling the
+     * vertex shares (tech. rep. eqs. 53-55): 1 here, the cosine and distance kept. */
+    double pl[BDPT_MIS_MAX], pc[BDPT_MIS_MAX];
+    const Emitter *em = &s->emitter_sampler.light[x->emitter].u.area;
+    pl[0] = (double)emitter_pdf_a(&s->emitter_sampler, x->emitter);
+    for (int i = 1; i < k; i++) {
+        double pw = i == 1 ? (double)emitter_emission_pdf_w(em, n[0], d[0])
+                  : x->delta[i - 1] ? 1.0
+                  : (double)bsdf_pdf(&b[i - 1], v3_neg(d[i - 2]), d[i - 1]);
+        pl[i] = pw * cosabs(n[i], d[i - 1]) / d2[i - 1];
+    }
+    /* The camera's density of a direction at angle theta to its axis, per pixel sample:
+     * 1 / (pixel area cos^3 theta) (subpath.c's camera_pdf_w). */
+    double cos_theta = -(double)v3_dot(d[k - 1], cam->forward);
+    if (!(cos_theta > 0.0)) return false;
+    double cam_w = 1.0 / ((double)it->pixel_area * cos_theta * cos_theta * cos_theta);
+    pc[k - 1] = cam_w * cosabs(n[k - 1], d[k - 1]) / d2[k - 1];
+    for (int i = k - 2; i >= 0; i--) {
+        double pw = x->delta[i + 1] ? 1.0 : (double)bsdf_pdf(&b[i + 1], d[i + 1], v3_neg(d[i]));
+        pc[i] = pw * cosabs(n[i], d[i]) / d2[i];
+    }
+    const bool ortho = camera_is_orthographic(cam);
+    double ps[BDPT_MIS_MAX + 1];
+    for (int j = 0; j <= k; j++) {
+        /* Which strategies exist: the connection's two ends must not be delta vertices;
+         * s = 0 needs the emitter hit; t = 1 a camera that can be connected to, and a
+         * light vertex off the emitter (light points are not splatted); t = 0 none. */
+        bool valid = j < k + 1;
+        if (j >= 1) {
+            bool a = j - 1 == 0 ? false : x->delta[j - 1];
+            bool c = j == k ? ortho : x->delta[j];
+            valid = !a && !c && !(j == k && j == 1);
+        }
+        double pr = 0.0;
+        if (valid) {
+            pr = 1.0;
+            for (int i = 0; i < j; i++) pr *= pl[i];
+            for (int i = j; i < k; i++) pr *= pc[i];
+            if (j == k) pr *= (double)it->light_paths; /* N light paths per pixel sample */
+            (*strategies)++;
+        }
+        ps[j] = pr;
+    }
+    if (strategy < 0 || strategy > k || !(ps[strategy] > 0.0)) return false;
+    /* Weights relative to strategy's density, so that no square overflows. */
+    double total = 0.0;
+    for (int j = 0; j <= k; j++) {
+        double r = ps[j] / ps[strategy];
+        total += r * r;
+    }
+    *weight = 1.0 / total;
+    for (int j = 0; j <= k; j++) {
+        double r = ps[j] / ps[strategy];
+        *sum += r * r / total;
+    }
+    return true;
+}
