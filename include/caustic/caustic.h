@@ -368,6 +368,15 @@ typedef struct CstMaterialDesc {
      * roughness). 0 (default): isotropic, the _v fields unused. */
     int anisotropic;
     float roughness_v, base_roughness_v;
+    /* With anisotropic = 1 and a roughness_texture: a texture id giving the perceptual
+     * roughness along the other tangent (the roughness_texture then gives the one along
+     * dp/du; pbrt-v4's uroughness and vroughness as two textures), or 0 */
+    int roughness_v_texture;
+    /* Conductor and coated conductor (its base): texture ids replacing eta and k per hit
+     * (values >= 0; in spectral mode upsampled as unbounded spectra), or a reflectance
+     * texture (values in [0, 1]) replacing both as pbrt-v4's "reflectance" does (eta = 1,
+     * k = 2 sqrt(R) / sqrt(1 - R), per channel or per wavelength); 0 for none */
+    int eta_texture, k_texture, reflectance_texture;
     /* Measured: the .bsdf file's path (read when the material is added, once per path;
      * a malformed file fails with CST_ERR_PARSE, "FILE: byte N: ...") */
     const char *measured_file;

@@ -641,6 +641,37 @@ void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out)
     surface_world(s, pt, dpdu, dpdv, n, uv, out);
 }
 
+bool shape_dnduv(const AnalyticShape *s, Vec2 uv, Vec3 *dndu, Vec3 *dndv)
+{
+    *dndu = *dndv = v3s(0.0f);
+    double phi = (double)uv.x * s->phi_max, q, ir = 0.0, ir_v = 0.0;
+    switch (s->p.type) {
+    case SHAPE_TAG_CYLINDER: /* n = (cos phi, sin phi, 0): dn/du = dp/du / r, dn/dv = 0 */
+        q = s->z_min + (double)uv.y * (s->z_max - s->z_min), ir = 1.0 / s->r;
+        break;
+    case SHAPE_TAG_SPHERE: /* n = p / r: dn/du = dp/du / r, dn/dv = dp/dv / r */
+        q = s->r * cos(s->theta_z_min + (double)uv.y * (s->theta_z_max - s->theta_z_min));
+        ir = ir_v = 1.0 / s->r;
+        break;
+    case SHAPE_TAG_TORUS: { /* n = (cos t cos phi, cos t sin phi, sin t): dn/dv = dp/dv / r_minor */
+        q = (double)uv.y * TWO_PI_D;
+        V3d pt, dpdu, dpdv, n;
+        surface_object(s, phi, q, &pt, &dpdu, &dpdv, &n);
+        const double ct = cos(q), im = 1.0 / s->r_minor;
+        *dndu = f3(map_normal(s->nrm, d3v(-TWO_PI_D * ct * sin(phi), TWO_PI_D * ct * cos(phi), 0.0)));
+        *dndv = f3(map_normal(s->nrm, d3v(dpdv.x * im, dpdv.y * im, dpdv.z * im)));
+        return true;
+    }
+    case SHAPE_TAG_DISK: return true; /* flat */
+    default: return false;
+    }
+    V3d pt, dpdu, dpdv, n;
+    surface_object(s, phi, q, &pt, &dpdu, &dpdv, &n);
+    *dndu = f3(map_normal(s->nrm, d3v(dpdu.x * ir, dpdu.y * ir, dpdu.z * ir)));
+    *dndv = f3(map_normal(s->nrm, d3v(dpdv.x * ir_v, dpdv.y * ir_v, dpdv.z * ir_v)));
+    return true;
+}
+
 /* ------------------------------------------------------------ area and sampling */
 
 static double object_area(const AnalyticShape *s)

@@ -119,6 +119,13 @@ void shape_surface(const AnalyticShape *s, const Ray *r, float t, ShapeSurface *
  * For bilinear patches (u, v) are the patch parameters (out->uv the texture coordinates). */
 void shape_surface_at(const AnalyticShape *s, Vec2 uv, ShapeSurface *out);
 
+/* The derivatives of the outward unit normal at parameters (u, v) (the same conventions),
+ * in world space: what the Weingarten equations give (PBR 4th ed. eq. 6.5-6.7), here in
+ * closed form (the quadrics' and the torus's unit normal differentiated), mapped as
+ * normals are (pbrt-v4 transforms dndu by the inverse transpose and does not flip it
+ * with ReverseOrientation). False, with zeros, for bilinear patches, curves and SDFs. */
+bool shape_dnduv(const AnalyticShape *s, Vec2 uv, Vec3 *dndu, Vec3 *dndv);
+
 /* World-space area (bilinear patches: composite Simpson over 64 x 64 cells of |dp/du x
  * dp/dv|, exact for parallelograms): exact for a similarity transform (uniform scale), pbrt-v4's Area()
  * scaled by the area factor of the transform otherwise (the sampled density is then not

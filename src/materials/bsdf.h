@@ -259,6 +259,33 @@ static inline void bsdf_set_alpha(Bsdf *b, float alpha)
     default: break;
     }
 }
+/* A conductor's complex IOR per hit (a textured eta, k): a coated conductor's base takes it
+ * divided by the interface's eta, as layered_init does (pbrt-v4 CoatedConductorMaterial). */
+static inline void bsdf_set_conductor_ior(Bsdf *b, Color eta, Color k)
+{
+    if (b->type == MATERIAL_CONDUCTOR) {
+        b->lobe.conductor.eta = eta;
+        b->lobe.conductor.k = k;
+    } else if (b->type == MATERIAL_COATED_CONDUCTOR) {
+        float inv = 1.0f / b->lobe.layered.top_eta;
+        b->lobe.layered.eta = color_scale(eta, inv);
+        b->lobe.layered.k = color_scale(k, inv);
+    }
+}
+/* The two GGX widths of an anisotropic lobe (material_bsdf_alpha2's): ax along the
+ * tangent, ay along the bitangent; lobes without anisotropy take ax. */
+static inline void bsdf_set_alpha2(Bsdf *b, float ax, float ay)
+{
+    switch (b->type) {
+    case MATERIAL_CONDUCTOR: b->lobe.conductor.alpha = ax, b->lobe.conductor.alpha_y = ay; break;
+    case MATERIAL_DIELECTRIC: b->lobe.dielectric.alpha = ax, b->lobe.dielectric.alpha_y = ay; break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR: /* the interface's */
+        b->lobe.layered.top_alpha = ax, b->lobe.layered.top_alpha_y = ay;
+        break;
+    default: bsdf_set_alpha(b, ax); break;
+    }
+}
 /* pbrt-v4's regularization of a GGX width (TrowbridgeReitzDistribution::Regularize, after
  * Kaplanyan & Dachsbacher 2013, "Path space regularization for holistic and robust light
  * transport"): below 0.3, twice the width clamped to [0.1, 0.3]; a smooth lobe (0) so

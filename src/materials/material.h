@@ -87,6 +87,13 @@ typedef struct Material {
      * none (so a zero-initialised Material has none). A roughness texture gives the mean of
      * its channels; a rough plastic cannot take one (its coat table depends on roughness). */
     int albedo_texture, roughness_texture;
+    /* With anisotropic set: 1 + a texture index for the roughness along the other tangent
+     * (roughness_texture is then the one along dp/du), or 0 (roughness_texture sets both). */
+    int roughness_v_texture;
+    /* Conductor, coated conductor: 1 + texture indices replacing eta and k per hit, or a
+     * reflectance texture replacing both (pbrt-v4's "reflectance": eta 1, k = 2 sqrt(R) /
+     * sqrt(1 - R)); 0 for none (scene_bsdf_textures applies them). */
+    int eta_texture, k_texture, reflectance_texture;
     /* Shading-normal textures, 1 + a texture index or 0 (scene_bsdf applies them): a float
      * displacement for bump mapping and a tangent-space normal map (pbrt-v4 BumpMap and
      * NormalMap); the displacement wins when both are set, as in pbrt-v4. */
@@ -159,8 +166,9 @@ static inline bool material_is_anisotropic(const Material *m)
     switch (m->type) {
     case MATERIAL_CONDUCTOR:
     case MATERIAL_DIELECTRIC:
-    case MATERIAL_COATED_DIFFUSE: return m->roughness != m->roughness_v;
-    case MATERIAL_COATED_CONDUCTOR: return m->roughness != m->roughness_v || m->base_roughness != m->base_roughness_v;
+    case MATERIAL_COATED_DIFFUSE: return m->roughness != m->roughness_v || m->roughness_v_texture;
+    case MATERIAL_COATED_CONDUCTOR:
+        return m->roughness != m->roughness_v || m->base_roughness != m->base_roughness_v || m->roughness_v_texture;
     default: return false;
     }
 }

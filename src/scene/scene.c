@@ -197,7 +197,10 @@ static CstStatus scene_bssrdf_table(Scene *s, float g, float eta, const BssrdfTa
 CstStatus scene_add_material(Scene *s, const Material *m, int *out_id, CstError *err)
 {
     if (m->albedo_texture < 0 || m->albedo_texture > s->num_textures || m->roughness_texture < 0 ||
-        m->roughness_texture > s->num_textures)
+        m->roughness_texture > s->num_textures || m->roughness_v_texture < 0 ||
+        m->roughness_v_texture > s->num_textures || m->eta_texture < 0 || m->eta_texture > s->num_textures ||
+        m->k_texture < 0 || m->k_texture > s->num_textures || m->reflectance_texture < 0 ||
+        m->reflectance_texture > s->num_textures)
         return cst_fail(err, CST_ERR_INVALID_ARG, "material texture index out of range");
     /* The rough plastic's coat albedo table (material_prepare) is made for one roughness. */
     if (m->eta_spectrum < 0 || m->eta_spectrum > s->num_spectra || m->k_spectrum < 0 ||

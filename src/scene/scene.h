@@ -395,17 +395,52 @@ static inline bool scene_dpduv(const Scene *s, const SurfaceHit *sh, Vec3 *dpdu,
     return true;
 }
 
-/* A material's textures evaluated at the hit, over what bsdf_init took from the material's
- * constants; with a footprint when the scene's textures filter with one. */
-static inline void scene_bsdf_textures(const Scene *s, const Material *m, const SurfaceHit *sh, Bsdf *b)
+/* A conductor's k for normal-incidence reflectance R (pbrt-v4 ConductorMaterial with
+ * "reflectance": eta = 1, k = 2 sqrt(R) / sqrt(1 - R), R clamped to [0, 0.9999], whose
+ * Fresnel reflectance k^2 / (4 + k^2) at normal incidence is R), per channel or lane. */
+static inline Color scene_conductor_k_of_reflectance(Color r)
+{
+    Color k;
+    for (int i = 0; i < COLOR_LANES; i++) {
+        float c = clampf(r.c[i], 0.0f, 0.9999f);
+        k.c[i] = 2.0f * sqrtf(c) / sqrtf(1.0f - c);
+    }
+    return k;
+}
+
+/* The texture context at a hit: with a footprint when the scene's textures filter with one. */
+static inline TexCtx scene_tex_ctx(const Scene *s, const SurfaceHit *sh)
 {
     TexCtx c = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
     Vec3 dpdu, dpdv;
     if (s->footprint.enabled && scene_dpduv(s, sh, &dpdu, &dpdv))
         c = footprint_tex_ctx(&s->footprint, sh->p, sh->ng, sh->uv, dpdu, dpdv);
+    return c;
+}
+
+/* A material's textures evaluated at the hit, over what bsdf_init took from the material's
+ * constants; with a footprint when the scene's textures filter with one. */
+static inline void scene_bsdf_textures(const Scene *s, const Material *m, const SurfaceHit *sh, Bsdf *b)
+{
+    TexCtx c = scene_tex_ctx(s, sh);
     if (m->albedo_texture) bsdf_set_albedo(b, texture_eval_ctx(s->textures, m->albedo_texture - 1, &c));
-    if (m->roughness_texture)
+    if (m->roughness_v_texture) { /* anisotropic: a texture per width (pbrt-v4 uroughness, vroughness) */
+        float ax, ay;
+        material_bsdf_alpha2(clampf(texture_eval_scalar_ctx(s->textures, m->roughness_texture - 1, &c), 0.0f, 1.0f),
+                             clampf(texture_eval_scalar_ctx(s->textures, m->roughness_v_texture - 1, &c), 0.0f, 1.0f),
+                             &ax, &ay);
+        bsdf_set_alpha2(b, ax, ay);
+    } else if (m->roughness_texture) {
         bsdf_set_alpha(b, material_bsdf_alpha(clampf(texture_eval_scalar_ctx(s->textures, m->roughness_texture - 1, &c), 0.0f, 1.0f)));
+    }
+    if (m->reflectance_texture) { /* RGB mode's; spectral mode redoes k per wavelength */
+        Color r = texture_eval_ctx(s->textures, m->reflectance_texture - 1, &c);
+        bsdf_set_conductor_ior(b, color_s(1.0f), scene_conductor_k_of_reflectance(r));
+    } else if (m->eta_texture | m->k_texture) {
+        Color eta = m->eta_texture ? texture_eval_ctx(s->textures, m->eta_texture - 1, &c) : m->eta;
+        Color k = m->k_texture ? texture_eval_ctx(s->textures, m->k_texture - 1, &c) : m->k;
+        bsdf_set_conductor_ior(b, eta, k);
+    }
 }
 
 /* The shading normal bent by the material's displacement (pbrt-v4 BumpMap: forward
@@ -413,7 +448,8 @@ static inline void scene_bsdf_textures(const Scene *s, const Material *m, const 
  * dp/du by (d(u + du) - d(u)) / du n + d dn/du; PBR 4th ed. eq. 10.12) or normal map
  * (pbrt-v4 NormalMap: 2 rgb - 1 in the frame of dp/du and the shading normal), as
  * normalize(dp/du' x dp/dv') turned to the shading normal's side. dn/du is that of
- * spheres; triangles' vertex-normal derivatives are left out. The unbent normal where
+ * spheres and analytic shapes (shape_dnduv); triangles' vertex-normal derivatives are
+ * left out. The unbent normal where
  * the hit has no dp/du (instances) or the result is degenerate. */
 static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHit *sh)
 {
@@ -435,10 +471,17 @@ static inline Vec3 scene_bump(const Scene *s, const Material *m, const SurfaceHi
         du_dir = v3_madd(dpdu, n, (d_u - d0) / du);
         dv_dir = v3_madd(dpdv, n, (d_v - d0) / dv);
         if ((int)sh->prim >= s->num_triangles && (int)sh->prim < s->num_triangles + s->num_spheres) {
-            /* a sphere: dn/du = dp/du / r (analytic shapes leave dn/du out, as triangles) */
+            /* a sphere: dn/du = dp/du / r */
             float r = s->spheres[(int)sh->prim - s->num_triangles].radius;
             du_dir = v3_madd(du_dir, dpdu, d0 / r);
             dv_dir = v3_madd(dv_dir, dpdv, d0 / r);
+        } else if ((int)sh->prim >= s->num_triangles + s->num_spheres) {
+            /* analytic shapes: pbrt-v4's dn/du, dn/dv (quadrics and the torus; zero for
+             * the others, as for triangles) */
+            Vec3 dndu, dndv;
+            shape_dnduv(&s->shapes[(int)sh->prim - s->num_triangles - s->num_spheres], sh->uv, &dndu, &dndv);
+            du_dir = v3_madd(du_dir, dndu, d0);
+            dv_dir = v3_madd(dv_dir, dndv, d0);
         }
     } else {
         TexCtx cn = {.uv = sh->uv, .p = sh->p, .n = sh->ng};
@@ -541,7 +584,8 @@ static inline const Material *scene_bsdf_material(const Scene *s, const SurfaceH
     } else {
         bsdf_init_shading(b, m, sh->ns, sh->ng);
     }
-    if (m->albedo_texture | m->roughness_texture) scene_bsdf_textures(s, m, sh, b);
+    if (m->albedo_texture | m->roughness_texture | m->eta_texture | m->k_texture | m->reflectance_texture)
+        scene_bsdf_textures(s, m, sh, b);
     /* Anisotropic roughness lies along dp/du (pbrt-v4's BSDF frame); hits without one
      * (instances, degenerate uvs, a sphere's poles) keep frame_from_normal's tangent. */
     if (m->anisotropic && material_is_anisotropic(m)) {
@@ -561,8 +605,14 @@ static inline const Material *scene_bsdf_material(const Scene *s, const SurfaceH
     }
     if (wl) {
         const int mi = (int)(m - s->materials);
-        if (!m->albedo_texture && s->material_spectra) bsdf_at_wavelengths_prepared(b, &s->material_spectra[mi], wl);
+        if (!(m->albedo_texture | m->eta_texture | m->k_texture | m->reflectance_texture) && s->material_spectra)
+            bsdf_at_wavelengths_prepared(b, &s->material_spectra[mi], wl);
         else bsdf_at_wavelengths(b, wl);
+        if (m->reflectance_texture) { /* pbrt-v4: the reflectance as an albedo spectrum, k per wavelength */
+            TexCtx c = scene_tex_ctx(s, sh);
+            Color r = spectrum_albedo(texture_eval_ctx(s->textures, m->reflectance_texture - 1, &c), wl);
+            bsdf_set_conductor_ior(b, color_s(1.0f), scene_conductor_k_of_reflectance(r));
+        }
         if (m->eta_spectrum | m->k_spectrum | (disperse && m->ior_dispersive)) scene_bsdf_spectra(s, m, wl, disperse, b);
     }
     return m;

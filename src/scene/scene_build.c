@@ -88,6 +88,7 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
     d->ior = m->ior;
     d->roughness = m->roughness;
     d->roughness_texture = m->roughness_texture;
+    d->roughness_v_texture = m->roughness_v_texture;
     if (m->anisotropic) {
         d->anisotropic = 1;
         d->roughness_v = m->roughness_v;
@@ -108,6 +109,9 @@ void scene_material_desc(const Material *m, CstMaterialDesc *d)
     d->eta_spectrum = m->eta_spectrum;
     d->k_spectrum = m->k_spectrum;
     d->ior_spectrum = m->ior_spectrum;
+    d->eta_texture = m->eta_texture;
+    d->k_texture = m->k_texture;
+    d->reflectance_texture = m->reflectance_texture;
     if (m->subsurface) { /* the reflectance travels in albedo (the surface's tint is 1) */
         d->sss_from_reflectance = m->sss_from_reflectance;
         d->g = m->g;
@@ -257,10 +261,14 @@ static CstStatus build_subsurface(const Scene *s, const CstMaterialDesc *d, Mate
     return CST_OK;
 }
 
-/* Anisotropic roughness (cst_scene_add_material): the types that have it, no texture. */
+/* Anisotropic roughness (cst_scene_add_material): the types that have it; textured, a
+ * texture for each width. */
 static CstStatus build_anisotropic(const CstMaterialDesc *d, Material *m, CstError *err)
 {
     static const char fn[] = "cst_scene_add_material";
+    if (d->anisotropic == 0 && d->roughness_v_texture)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness_v_texture with anisotropic 0; expected "
+                        "anisotropic 1", fn);
     if (d->anisotropic == 0) return CST_OK;
     if (d->anisotropic != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic %d; expected 0 or 1", fn, d->anisotropic);
@@ -269,7 +277,10 @@ static CstStatus build_anisotropic(const CstMaterialDesc *d, Material *m, CstErr
         d->type != CST_MATERIAL_SUBSURFACE)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: anisotropic roughness on a material of type %d; expected "
                         "a conductor, dielectric, coated diffuse or coated conductor", fn, (int)d->type);
-    if (d->roughness_texture && d->roughness_v != d->roughness) /* the texture sets both widths */
+    if (d->roughness_v_texture && !d->roughness_texture)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness_v_texture without a roughness_texture; expected "
+                        "both (the widths along u and v) or neither", fn);
+    if (d->roughness_texture && !d->roughness_v_texture && d->roughness_v != d->roughness) /* the texture sets both widths */
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: roughness_v %g with a roughness_texture; expected an "
                         "isotropic textured roughness (roughness_v = roughness) or no texture", fn,
                         (double)d->roughness_v);
@@ -278,7 +289,29 @@ static CstStatus build_anisotropic(const CstMaterialDesc *d, Material *m, CstErr
                         "to 1 (roughest)", fn, (double)d->roughness_v, (double)d->base_roughness_v);
     m->anisotropic = true;
     m->roughness_v = d->roughness_v;
+    m->roughness_v_texture = d->roughness_v_texture;
     m->base_roughness_v = d->type == CST_MATERIAL_COATED_CONDUCTOR ? d->base_roughness_v : 0.0f;
+    return CST_OK;
+}
+
+/* A conductor's textured eta and k, or its reflectance texture (cst_scene_add_material). */
+static CstStatus build_conductor_textures(const Scene *s, const CstMaterialDesc *d, Material *m, CstError *err)
+{
+    static const char fn[] = "cst_scene_add_material";
+    if (!(d->eta_texture | d->k_texture | d->reflectance_texture)) return CST_OK;
+    if (d->type != CST_MATERIAL_CONDUCTOR && d->type != CST_MATERIAL_COATED_CONDUCTOR)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: eta_texture, k_texture or reflectance_texture on a material "
+                        "of type %d; expected a conductor or coated conductor", fn, (int)d->type);
+    if (d->reflectance_texture && (d->eta_texture | d->k_texture))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: reflectance_texture with eta_texture or k_texture; expected "
+                        "either a reflectance or eta and k (as pbrt-v4)", fn);
+    CstStatus st;
+    if ((st = check_texture_id(s, d->eta_texture, 1, fn, "eta_texture", err)) != CST_OK ||
+        (st = check_texture_id(s, d->k_texture, 1, fn, "k_texture", err)) != CST_OK)
+        return st;
+    m->eta_texture = d->eta_texture;
+    m->k_texture = d->k_texture;
+    m->reflectance_texture = d->reflectance_texture; /* checked by check_unit_texture */
     return CST_OK;
 }
 
@@ -327,7 +360,9 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
     m.type = types[d->type - CST_MATERIAL_DIFFUSE];
     if ((st = read_rgb(d->albedo, 1, fn, "albedo", &m.albedo, err)) != CST_OK) return st;
     if ((st = check_unit_texture(scene, d->albedo_texture, "albedo_texture", err)) != CST_OK ||
-        (st = check_unit_texture(scene, d->roughness_texture, "roughness_texture", err)) != CST_OK)
+        (st = check_unit_texture(scene, d->roughness_texture, "roughness_texture", err)) != CST_OK ||
+        (st = check_unit_texture(scene, d->roughness_v_texture, "roughness_v_texture", err)) != CST_OK ||
+        (st = check_unit_texture(scene, d->reflectance_texture, "reflectance_texture", err)) != CST_OK)
         return st;
     m.albedo_texture = d->albedo_texture;
     m.roughness_texture = d->roughness_texture;
@@ -348,6 +383,7 @@ CstStatus cst_scene_add_material(CstScene *scene, const CstMaterialDesc *d, int 
                         "to 1 (roughest)", fn, (double)d->roughness);
     m.roughness = d->roughness;
     if ((st = build_anisotropic(d, &m, err)) != CST_OK) return st;
+    if ((st = build_conductor_textures(scene, d, &m, err)) != CST_OK) return st;
     if (d->two_sided != 0 && d->two_sided != 1)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: two_sided %d; expected 0 or 1", fn, d->two_sided);
     m.one_sided = !d->two_sided;

@@ -148,12 +148,86 @@ static void test_tangent_frame(void **state)
     cst_scene_destroy(s);
 }
 
+/* Two roughness textures (pbrt-v4's uroughness and vroughness naming different textures):
+ * constant ones give the BSDF the widths (to float rounding: a texture's scalar is its
+ * channels' mean) and exactly the frame of the constant anisotropic material, for the
+ * conductor, the dielectric and the coated interface; the builder
+ * refuses a v texture without anisotropy or without a u texture. */
+static void test_textured_widths(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err = {0};
+    assert_int_equal(cst_scene_create(&s, &err), CST_OK);
+    int tu = 0, tv = 0;
+    CstTextureDesc t = {0};
+    t.type = CST_TEXTURE_CONSTANT;
+    t.value[0] = t.value[1] = t.value[2] = 0.2f;
+    assert_int_equal(cst_scene_add_texture(s, &t, &tu, &err), CST_OK);
+    t.value[0] = t.value[1] = t.value[2] = 0.6f;
+    assert_int_equal(cst_scene_add_texture(s, &t, &tv, &err), CST_OK);
+    const CstMaterialType types[3] = {CST_MATERIAL_CONDUCTOR, CST_MATERIAL_DIELECTRIC, CST_MATERIAL_COATED_DIFFUSE};
+    int ids[3][2];
+    for (int i = 0; i < 3; i++) {
+        assert_int_equal(add_desc(s, types[i], 0.2f, 0.6f, 1, &ids[i][0], &err), CST_OK);
+        CstMaterialDesc d;
+        cst_material_desc_init(&d, types[i]);
+        if (types[i] == CST_MATERIAL_CONDUCTOR) d.metal = "aluminium";
+        d.roughness = d.roughness_v = 0.9f; /* replaced by the textures */
+        d.anisotropic = 1;
+        d.roughness_texture = tu;
+        d.roughness_v_texture = tv;
+        assert_int_equal(cst_scene_add_material(s, &d, &ids[i][1], &err), CST_OK);
+    }
+    CstMaterialDesc d;
+    cst_material_desc_init(&d, CST_MATERIAL_CONDUCTOR);
+    d.roughness_texture = tu;
+    d.roughness_v_texture = tv;
+    int bad = -1;
+    assert_int_equal(cst_scene_add_material(s, &d, &bad, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "roughness_v_texture with anisotropic 0"));
+    d.anisotropic = 1;
+    d.roughness_texture = 0;
+    assert_int_equal(cst_scene_add_material(s, &d, &bad, &err), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.msg, "roughness_v_texture without a roughness_texture"));
+    /* p = u (1, 1, 0) + v (-1, 1, 0) at the vertices */
+    const float pos[] = {0, 0, 0, 1, 1, 0, -1, 1, 0}, uv[] = {0, 0, 1, 0, 0, 1};
+    const uint32_t idx[] = {0, 1, 2};
+    CstMeshDesc md = {.positions = pos, .num_vertices = 3, .uvs = uv, .indices = idx, .num_triangles = 1};
+    md.material = ids[0][0];
+    assert_int_equal(cst_scene_add_mesh(s, &md, NULL, &err), CST_OK);
+    assert_int_equal(cst_scene_commit(s, &err), CST_OK);
+    for (int i = 0; i < 3; i++) {
+        Bsdf b[2];
+        for (int k = 0; k < 2; k++) {
+            SurfaceHit sh = {0};
+            sh.prim = 0;
+            sh.p = v3(0.0f, 0.5f, 0.0f);
+            sh.ng = sh.ns = v3(0.0f, 0.0f, 1.0f);
+            sh.material = ids[i][k];
+            scene_bsdf(s, &sh, NULL, &b[k]);
+        }
+        assert_memory_equal(&b[0].frame, &b[1].frame, sizeof b[0].frame);
+        float w[2][2];
+        for (int k = 0; k < 2; k++) {
+            if (i == 0) w[k][0] = b[k].lobe.conductor.alpha, w[k][1] = b[k].lobe.conductor.alpha_y;
+            else if (i == 1) w[k][0] = b[k].lobe.dielectric.alpha, w[k][1] = b[k].lobe.dielectric.alpha_y;
+            else w[k][0] = b[k].lobe.layered.top_alpha, w[k][1] = b[k].lobe.layered.top_alpha_y;
+        }
+        if (!(fabsf(w[0][0] - w[1][0]) < 1e-6f && fabsf(w[0][1] - w[1][1]) < 1e-6f && fabsf(w[0][0] - 0.04f) < 1e-6f && fabsf(w[0][1] - 0.36f) < 1e-6f))
+            fail_msg("type %d: widths (%g, %g) textured, (%g, %g) constant", i, (double)w[1][0], (double)w[1][1],
+                     (double)w[0][0], (double)w[0][1]);
+    }
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_json_keys),
         cmocka_unit_test(test_builder_checks),
         cmocka_unit_test(test_tangent_frame),
+        cmocka_unit_test(test_textured_widths),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -743,7 +743,11 @@ static void test_texture_materials(void **state)
         "Material \"conductor\" \"texture uroughness\" \"r\" \"float vroughness\" 0.0625\n" TRI /* 5 */
         "Material \"diffusetransmission\" \"texture reflectance\" \"k\"\n" TRI                /* 6 */
         "Material \"coatedconductor\" \"texture conductor.roughness\" \"r\"\n" TRI            /* 7 */
-        "Material \"diffuse\" \"texture reflectance\" \"hot\"\n" TRI);                         /* 8 */
+        "Material \"diffuse\" \"texture reflectance\" \"hot\"\n" TRI                           /* 8 */
+        "Texture \"r2\" \"float\" \"checkerboard\" \"float tex1\" 0.0625 \"float tex2\" 1\n"
+        "Material \"conductor\" \"texture uroughness\" \"r\" \"texture vroughness\" \"r2\"\n" TRI  /* 9 */
+        "Material \"conductor\" \"texture eta\" \"k\" \"texture k\" \"hot\"\n" TRI            /* 10 */
+        "Material \"coatedconductor\" \"texture reflectance\" \"hot\"\n" TRI);                  /* 11 */
     Scene *s = expect_ok(text, &w);
     const Material *m = tri_material(s, 0);
     assert_int_equal(m->type, MATERIAL_CONDUCTOR);
@@ -781,6 +785,26 @@ static void test_texture_materials(void **state)
     assert_warning_at(&w, CST_WARN_APPROXIMATED, "conductor's roughness texture", text,
                       "Material \"coatedconductor\"", 0);
     assert_int_equal(tri_material(s, 8)->albedo_texture, tri_material(s, 4)->albedo_texture);
+    /* two textures: one per width, each remapped texel by texel (v: 0.0625^(1/4) = 0.5) */
+    m = tri_material(s, 9);
+    assert_true(m->anisotropic);
+    assert_int_equal(m->roughness_texture, tri_material(s, 0)->roughness_texture);
+    assert_int_not_equal(m->roughness_v_texture, 0);
+    t = &s->textures[m->roughness_v_texture - 1];
+    assert_rgb(s->textures[t->checker.even].value, 0.5f, 0.5f, 0.5f, 1e-6f);
+    assert_rgb(s->textures[t->checker.odd].value, 1, 1, 1, 1e-6f);
+    /* textured eta and k stay textures; a reflectance texture too, clamped to 1 */
+    m = tri_material(s, 10);
+    assert_int_equal(m->eta_texture, tri_material(s, 6)->albedo_texture);
+    assert_int_not_equal(m->k_texture, 0);
+    assert_int_equal(m->reflectance_texture, 0);
+    m = tri_material(s, 11);
+    assert_int_equal(m->type, MATERIAL_COATED_CONDUCTOR);
+    assert_int_equal(m->reflectance_texture, tri_material(s, 4)->albedo_texture);
+    assert_int_equal(m->eta_texture | m->k_texture | m->eta_spectrum | m->k_spectrum, 0);
+    for (int i = 0; i < w.n; i++)
+        if (strstr(w.msg[i], "cannot be textured") && !strstr(w.msg[i], "roughness"))
+            fail_msg("unexpected warning: %s", w.msg[i]);
     cst_scene_destroy(s);
     /* pbrt-v4 looks float and spectrum textures up apart and stops at a missing one */
     expect_error(WORLD("Texture \"r\" \"float\" \"constant\" \"float value\" 0.5\n"

@@ -77,8 +77,36 @@ static int find_named_material(Loader *ld, const char *name)
  * vroughness give the widths along dp/du and dp/dv (pbrt-v4's anisotropic
  * TrowbridgeReitzDistribution): *out is the one along u, *out_v the one along v (equal
  * when isotropic; the caller sets Material.anisotropic when they differ). */
+/* One roughness texture parameter as a texture of caustic's perceptual roughness (r^(1/4)
+ * remapped, else r^(1/2), texel by texel; made once per texture and remap): *id_out 1 +
+ * its index (0 when the parameter names no texture), *avg its average, clamped to 1. */
+static CstStatus pbrt_roughness_tex(Loader *ld, Params *ps, const char *d, Param *p, int remap, int *id_out,
+                                    float *avg)
+{
+    int tex = 0, e = 0;
+    Color a = color_s(0.0f);
+    *id_out = 0;
+    TRY(pbrt_tex_param(ld, ps, d, p->name, 1, &tex, &a, &e));
+    if (!tex) return CST_OK;
+    int *id = &ld->texs[e].rough[remap != 0];
+    if (*id < 0) {
+        int made = 0;
+        TRY(pbrt_tex_map(ld, tex - 1, TEXOP_POW, color_s(remap ? 0.25f : 0.5f), color_s(0.0f), p->loc, d, &made));
+        *id = made;
+    }
+    CstTextureInfo t;
+    TRY(pbrt_texture_info(ld, *id, &t));
+    *id_out = *id + 1;
+    *avg = minf(t.average[0], 1.0f);
+    if (t.max[0] > 1.0f)
+        pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: roughness texture values up to "
+                     "GGX alpha %g are beyond caustic's roughest (alpha 1); rendered with alpha 1",
+                     d, (double)(t.max[0] * t.max[0]));
+    return CST_OK;
+}
+
 static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc,
-                                float *out, float *out_v, int *tex_out)
+                                float *out, float *out_v, int *tex_out, int *tex_v_out)
 {
     char n_r[64], n_u[64], n_v[64];
     snprintf(n_r, sizeof n_r, "%sroughness", prefix);
@@ -87,13 +115,28 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
     float r = 0.0f, ur = 0.0f, vr = 0.0f;
     int remap = 1;
     TRY(pbrt_get_bool(ld, ps, d, "remaproughness", 1, &remap));
+    if (tex_v_out) *tex_v_out = 0;
     if (tex_out) {
         /* An isotropic roughness texture (u and v from the same one) becomes a roughness
          * texture of caustic's perceptual roughness, r^(1/4) (remapped) or r^(1/2) texel by
-         * texel, as the constant below; anisotropic or mixed ones take their averages. */
+         * texel, as the constant below; two different textures (with tex_v_out) become one
+         * per width; a texture mixed with a constant takes its average. */
         Param *pr = pbrt_find_param(ps, n_r), *pu = pbrt_find_param(ps, n_u), *pv = pbrt_find_param(ps, n_v);
         Param *eu = pu ? pu : pr, *ev = pv ? pv : pr;
         *tex_out = 0;
+        if (tex_v_out && eu && ev && eu->type == PT_TEXTURE && ev->type == PT_TEXTURE && eu->num_strs == 1 &&
+            ev->num_strs == 1 && strcmp(eu->strs[0], ev->strs[0]) != 0) {
+            int tu = 0, tv = 0;
+            float au = 0.0f, av = 0.0f;
+            TRY(pbrt_roughness_tex(ld, ps, d, eu, remap, &tu, &au));
+            TRY(pbrt_roughness_tex(ld, ps, d, ev, remap, &tv, &av));
+            if (tu && tv) {
+                if (pr) pr->used = 1; /* shadowed by uroughness and vroughness */
+                *tex_out = tu, *tex_v_out = tv;
+                *out = au, *out_v = av;
+                return CST_OK;
+            }
+        }
         if (eu && ev && eu->type == PT_TEXTURE && ev->type == PT_TEXTURE && eu->num_strs == 1 &&
             ev->num_strs == 1 && strcmp(eu->strs[0], ev->strs[0]) == 0) {
             int tex = 0, e = 0;
@@ -143,6 +186,13 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
     return CST_OK;
 }
 
+/* pbrt_roughness into a material's roughness fields and textures. */
+static CstStatus material_roughness(Loader *ld, Params *ps, const char *d, const char *prefix, Loc loc, Material *m)
+{
+    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_v, &m->roughness_texture,
+                          &m->roughness_v_texture);
+}
+
 /* A conductor (pbrt-v4 ConductorMaterial): complex IOR from eta and k (default copper), or
  * from "reflectance" as pbrt-v4 converts it: eta = 1, k = 2 sqrt(R) / sqrt(1 - R) with R
  * clamped to [0, 0.9999], whose normal-incidence Fresnel reflectance ((n-1)^2 + k^2) /
@@ -161,8 +211,13 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pr->loc, "%s: \"reflectance\" given with \"%s\"; "
                             "expected either reflectance or eta and k (as pbrt-v4)", d,
                             pbrt_clip(pe ? pe->decl : pk->decl, nm));
-    int has_refl = 0, eta_sp = 0, k_sp = 0;
-    if (pe && pe->type == PT_FLOAT) { /* pbrt-v4 also takes a plain float eta */
+    int has_refl = 0, eta_sp = 0, k_sp = 0, eta_tex = 0, k_tex = 0, refl_tex = 0, e = 0;
+    /* Textures (pbrt-v4's eta, k and reflectance are spectrum textures): kept as textures,
+     * evaluated per hit (scene_bsdf_textures); eta and k hold their averages. A constant
+     * texture is its value, as before. */
+    if (pe && pe->type == PT_TEXTURE) {
+        TRY(pbrt_tex_param(ld, ps, d, n_eta, 0, &eta_tex, &eta, &e));
+    } else if (pe && pe->type == PT_FLOAT) { /* pbrt-v4 also takes a plain float eta */
         float eta_f = 1.0f;
         TRY(pbrt_get_float(ld, ps, d, n_eta, 1.0f, &eta_f, NULL));
         if (!(eta_f >= 0.0f))
@@ -172,8 +227,15 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
     } else {
         TRY(pbrt_get_spectrum_id(ld, ps, d, n_eta, SPEC_UNBOUNDED, 1, &eta, NULL, &eta_sp));
     }
-    TRY(pbrt_get_spectrum_id(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL, &k_sp));
-    TRY(pbrt_get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &refl, &has_refl));
+    if (pk && pk->type == PT_TEXTURE) TRY(pbrt_tex_param(ld, ps, d, n_k, 0, &k_tex, &k, &e));
+    else TRY(pbrt_get_spectrum_id(ld, ps, d, n_k, SPEC_UNBOUNDED, 1, &k, NULL, &k_sp));
+    if (pr && pr->type == PT_TEXTURE) { /* clamped to 1 texel by texel as other reflectances */
+        Material tmp = {0};
+        TRY(get_albedo(ld, ps, d, "reflectance", &tmp));
+        refl = tmp.albedo, refl_tex = tmp.albedo_texture, has_refl = 1;
+    } else {
+        TRY(pbrt_get_spectrum(ld, ps, d, "reflectance", SPEC_REFLECTANCE, 1, &refl, &has_refl));
+    }
     if (has_refl) {
         float r[3] = {refl.c[0], refl.c[1], refl.c[2]}, kk[3];
         for (int i = 0; i < 3; i++) {
@@ -192,7 +254,10 @@ static CstStatus conductor(Loader *ld, Params *ps, const char *d, const char *pr
      * replaces eta and k by their RGB reductions. */
     m->eta_spectrum = has_refl ? 0 : eta_sp;
     m->k_spectrum = has_refl ? 0 : k_sp;
-    return pbrt_roughness(ld, ps, d, prefix, loc, &m->roughness, &m->roughness_v, &m->roughness_texture);
+    m->eta_texture = has_refl ? 0 : eta_tex;
+    m->k_texture = has_refl ? 0 : k_tex;
+    m->reflectance_texture = refl_tex;
+    return material_roughness(ld, ps, d, prefix, loc, m);
 }
 
 /* The layer of pbrt-v4's coated materials (CoatedDiffuseMaterial, CoatedConductorMaterial):
@@ -283,7 +348,7 @@ static CstStatus subsurface_material(Loader *ld, Params *ps, const char *d, Loc 
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, p ? p->loc : loc, "%s: scale %g; expected a finite "
                             "scale >= 0", d, (double)scale);
     }
-    TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
+    TRY(material_roughness(ld, ps, d, "", loc, m));
     const char *name = NULL;
     Loc nloc = loc;
     TRY(pbrt_get_string(ld, ps, d, "name", &name, &nloc));
@@ -444,7 +509,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
         m->ior = 1.5f;
         TRY(get_albedo(ld, ps, d, "reflectance", m));
         TRY(dielectric_eta(ld, ps, d, "eta", &m->ior, &m->ior_spectrum));
-        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
+        TRY(material_roughness(ld, ps, d, "", loc, m));
         TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "diffusetransmission") == 0) {
         /* pbrt-v4 DiffuseTransmissionMaterial: reflectance and transmittance (0.25 each)
@@ -480,18 +545,15 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
          * texture takes its average (only the interface's roughness can be a texture). */
         TRY(conductor(ld, ps, d, "conductor.", loc, m));
         m->type = MATERIAL_COATED_CONDUCTOR;
-        m->base_roughness = m->roughness;
+        m->base_roughness = m->roughness; /* a texture's average (pbrt_roughness), two textures' each */
         m->base_roughness_v = m->roughness_v;
         if (m->roughness_texture) {
-            CstTextureInfo t;
-            TRY(pbrt_texture_info(ld, m->roughness_texture - 1, &t));
-            m->base_roughness = m->base_roughness_v = minf(t.average[0], 1.0f);
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: the conductor's roughness texture is "
                          "rendered with its average, perceptual roughness %g", d, (double)m->base_roughness);
         }
-        m->roughness_texture = 0; /* pbrt_roughness sets roughness and roughness_v */
+        m->roughness_texture = m->roughness_v_texture = 0; /* pbrt_roughness sets roughness and roughness_v */
         m->ior = 1.5f;
-        TRY(pbrt_roughness(ld, ps, d, "interface.", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
+        TRY(material_roughness(ld, ps, d, "interface.", loc, m));
         TRY(dielectric_eta(ld, ps, d, "interface.eta", &m->ior, &m->ior_spectrum));
         TRY(coat_layer_params(ld, ps, d, m));
     } else if (strcmp(type, "mirror") == 0) { /* pbrt-v3 */
@@ -511,7 +573,7 @@ static CstStatus make_material(Loader *ld, const char *type, Params *ps, Loc loc
                            &m->ior, &m->ior_spectrum));
         /* Rough: GGX reflection and transmission (Walter et al. 2007), as pbrt-v4's
          * DielectricBxDF; below alpha 1e-3 both are smooth. */
-        TRY(pbrt_roughness(ld, ps, d, "", loc, &m->roughness, &m->roughness_v, &m->roughness_texture));
+        TRY(material_roughness(ld, ps, d, "", loc, m));
         if (m->roughness_texture || material_alpha(maxf(m->roughness, m->roughness_v)) >= MATERIAL_SMOOTH_ALPHA)
             m->type = MATERIAL_DIELECTRIC;
         else m->roughness = m->roughness_v = 0.0f;
@@ -619,7 +681,7 @@ CstStatus pbrt_material_directive(Loader *ld, NamedCall *call)
         TRY(make_material(ld, mt, ps, loc, &m));
     }
     /* pbrt_roughness gave equal widths unless uroughness and vroughness differ */
-    m.anisotropic = m.roughness != m.roughness_v || m.base_roughness != m.base_roughness_v;
+    m.anisotropic = m.roughness != m.roughness_v || m.base_roughness != m.base_roughness_v || m.roughness_v_texture;
     int id = 0;
     CstStatus st = pbrt_material_normal_textures(ld, ps, d, &m);
     if (st == CST_OK) st = pbrt_add_mat_entry(ld, dname[0] == 'M' && dname[2] == 'k' ? type : NULL, &m, &id);

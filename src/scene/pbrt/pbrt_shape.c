@@ -548,6 +548,7 @@ static int sphere_needs_uv(const Loader *ld, Params *ps)
     Param *a = pbrt_find_param(ps, "alpha");
     if (ld->gs.area.active) return 0;
     return m->albedo_texture || m->roughness_texture || m->displacement_texture || m->normal_map_texture ||
+           m->eta_texture || m->k_texture || m->reflectance_texture ||
            m->anisotropic || m->type == MATERIAL_HAIR || m->type == MATERIAL_MIX || (a && a->type == PT_TEXTURE);
 }
 
