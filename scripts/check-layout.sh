@@ -17,7 +17,7 @@ MAX_FILE, MAX_FUNC = 1200, 150
 LAYER = {"cli": 5, "render": 4, "integrators": 3, "scene": 2.5,
          "accel": 2, "materials": 2, "lights": 2, "camera": 2, "film": 2, "textures": 2, "media": 2,
          "geometry": 1, "sampling": 1, "io": 1, "math": 0, "core": 0}
-PUBLIC = ("caustic/caustic.h", "caustic/caustic_compare.h", "caustic/caustic_shapes.h", "caustic/caustic_displace.h")
+PUBLIC = ("caustic/caustic.h", "caustic/caustic_compare.h", "caustic/caustic_shapes.h", "caustic/caustic_displace.h", "caustic/caustic_textures.h")
 
 def sources(roots):
     for root in roots:
