@@ -667,13 +667,14 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
                         "not rendered yet; expected one or the other");
     /* Motion blur: the path tracers (surface loop) and Whitted carry the camera path's time
-     * to every ray; the other integrators' light paths do not draw one yet. */
+     * to every ray, the light tracer each light path's own; BDPT, VCM and the photon
+     * integrators do not draw one yet. */
     it->motion = scene_has_motion(scene);
-    if (it->motion && ((it->kind != INTEGRATOR_PATH && it->kind != INTEGRATOR_WHITTED) || scene->num_media ||
-                       scene->num_medium_ifaces || scene->num_subsurface))
+    const bool motion_ok = it->kind == INTEGRATOR_PATH || it->kind == INTEGRATOR_WHITTED || it->kind == INTEGRATOR_LIGHT;
+    if (it->motion && (!motion_ok || scene->num_media || scene->num_medium_ifaces || scene->num_subsurface))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
-                        "yet%s: use path, path-nee, path-bsdf or whitted", cst_integrator_name(st->integrator),
-                        it->kind == INTEGRATOR_PATH ? " with participating media or subsurface materials" : "");
+                        "yet%s: use path, path-nee, path-bsdf, whitted or light", cst_integrator_name(st->integrator),
+                        motion_ok ? " with participating media or subsurface materials" : "");
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

@@ -752,14 +752,20 @@ static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 
 /* Whether surface point p (normal ng) sees the point q in free space (a lens point: the
  * lens is not geometry, so only p's end is pushed off its surface, and the ray aims from
  * the pushed point). */
-static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+static inline bool scene_visible_point_at(const Scene *s, Vec3 p, Vec3 ng, Vec3 q, float time)
 {
     Vec3 o = scene_offset(s, p, ng, v3_sub(q, p));
     Vec3 d = v3_sub(q, o);
     float len = v3_length(d);
     if (!(len > 0.0f)) return true;
-    Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
+    Ray r = ray_make_at(o, v3_scale(d, 1.0f / len), 0.0f, len, time);
     return !scene_occluded(s, &r);
+}
+
+/* scene_visible_point_at at time 0 (scenes without motion). */
+static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+{
+    return scene_visible_point_at(s, p, ng, q, 0.0f);
 }
 
 /* The medium interface of a hit's primitive, or NULL when it has none (no transition;

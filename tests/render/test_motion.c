@@ -261,10 +261,10 @@ static void test_moving_square_coverage(void **state)
     check_columns(f, "whitted");
     cst_film_destroy(f);
     /* Integrators whose light paths do not carry a time yet refuse the scene. */
-    const CstIntegrator refused[] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM,
+    const CstIntegrator refused[] = {CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM,
                                      CST_INTEGRATOR_SPPM, CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_PSSMLT};
     cst_scene_destroy(s);
-    s = square_scene(NULL, 1, 1); /* the light tracer refuses orthographic cameras first */
+    s = square_scene(NULL, 1, 1); /* bdpt and vcm refuse orthographic cameras first */
     for (size_t i = 0; i < sizeof refused / sizeof *refused; i++) {
         f = render(s, refused[i], CST_ERR_UNSUPPORTED, &e);
         assert_non_null(strstr(e.msg, "motion blur"));
@@ -309,6 +309,106 @@ static void test_backends_agree(void **state)
     free(b);
     cst_film_destroy(ref);
     cst_scene_destroy(ref_scene);
+}
+
+/* ------------------------------------------------------------------ light vs path */
+
+/* A grey square (albedo 0.5) moving and turning in front of an emitting wall, lit by a point
+ * light beside the camera, seen through a pinhole: the light tracer (its own time per light
+ * path, the time carried to its camera connections) and the path tracer (the camera path's)
+ * estimate the same time-averaged image. */
+static CstScene *lit_scene(void)
+{
+    CstError e;
+    CstScene *s = NULL;
+    ok(cst_scene_create(&s, &e), &e);
+    CstMaterialDesc md;
+    cst_material_desc_init(&md, CST_MATERIAL_DIFFUSE);
+    int grey = -1, obj = -1;
+    ok(cst_scene_add_material(s, &md, &grey, &e), &e);
+    const float pos[4][3] = {{-0.6f, -0.6f, 0}, {0.6f, -0.6f, 0}, {0.6f, 0.6f, 0}, {-0.6f, 0.6f, 0}};
+    const uint32_t idx[2][3] = {{0, 1, 2}, {0, 2, 3}};
+    CstMeshDesc m = {0};
+    m.positions = pos;
+    m.num_vertices = 4;
+    m.indices = idx;
+    m.num_triangles = 2;
+    m.material = grey;
+    ok(cst_scene_add_object(s, &m, &obj, NULL, &e), &e);
+    const float t0[12] = {1, 0, 0, -1.2f, 0, 1, 0, 0, 0, 0, 1, 0};
+    const float t1[12] = {0, -1, 0, 1.2f, 1, 0, 0, 0.3f, 0, 0, 1, 0}; /* turned 90 degrees about z */
+    ok(cst_scene_add_instance_motion(s, obj, t0, t1, &e), &e);
+    const float wall[4][3] = {{-4, -3, -2}, {4, -3, -2}, {4, 3, -2}, {-4, 3, -2}};
+    CstMeshDesc w = m;
+    w.positions = wall;
+    w.emission.radiance[0] = w.emission.radiance[1] = w.emission.radiance[2] = 0.2f;
+    ok(cst_scene_add_mesh(s, &w, NULL, &e), &e);
+    CstLightDesc l = {0};
+    l.type = CST_LIGHT_POINT;
+    l.position[0] = 1.0f;
+    l.position[2] = 4.0f;
+    l.intensity[0] = l.intensity[1] = l.intensity[2] = 50.0f;
+    ok(cst_scene_add_light(s, &l, &e), &e);
+    CstCameraDesc cam = {0};
+    cam.type = CST_CAMERA_PERSPECTIVE;
+    cam.position[2] = 5.0f;
+    cam.fov = 40.0f;
+    ok(cst_scene_set_camera(s, &cam, &e), &e);
+    ok(cst_scene_commit(s, &e), &e);
+    return s;
+}
+
+enum { LW = 24, LH = 16, LSPP = 256, BLOCK = 4 };
+
+static CstFilm *render_lit(const CstScene *s, CstIntegrator integ)
+{
+    CstRenderSettings rs;
+    cst_render_settings_init(&rs);
+    rs.width = LW, rs.height = LH, rs.spp = LSPP, rs.threads = 2, rs.seed = 9, rs.seed_set = 1;
+    rs.filter = CST_FILTER_BOX;
+    rs.integrator = integ;
+    rs.color_mode = CST_COLOR_RGB;
+    CstFilm *f = NULL;
+    CstRenderStats stats;
+    CstError e;
+    ok(cst_render(s, &rs, &f, &stats, &e), &e);
+    return f;
+}
+
+static void test_light_agrees_with_path(void **state)
+{
+    (void)state;
+    CstScene *s = lit_scene();
+    CstFilm *a = render_lit(s, CST_INTEGRATOR_PATH), *b = render_lit(s, CST_INTEGRATOR_LIGHT);
+    /* Block means (BLOCK x BLOCK pixels: independent pixels, variances add) within 4
+     * standard errors of their difference. */
+    int blocks = 0;
+    for (int by = 0; by < LH; by += BLOCK)
+        for (int bx = 0; bx < LW; bx += BLOCK) {
+            double ma = 0.0, mb = 0.0, va = 0.0, vb = 0.0;
+            for (int y = by; y < by + BLOCK; y++)
+                for (int x = bx; x < bx + BLOCK; x++) {
+                    double m[3], v[3];
+                    cst_film_pixel(a, x, y, m);
+                    cst_film_pixel_variance(a, x, y, v);
+                    ma += m[1];
+                    va += v[1];
+                    cst_film_pixel(b, x, y, m);
+                    cst_film_pixel_variance(b, x, y, v);
+                    mb += m[1];
+                    vb += v[1];
+                }
+            const double n = BLOCK * BLOCK;
+            ma /= n, mb /= n, va /= n * n, vb /= n * n;
+            double se = sqrt(va + vb);
+            if (fabs(ma - mb) > 4.0 * se + 1e-6)
+                fail_msg("block (%d, %d): path %.5f, light %.5f (4 sigma = %.5f)", bx, by, ma, mb, 4.0 * se);
+            blocks++;
+        }
+    assert_int_equal(blocks, (LW / BLOCK) * (LH / BLOCK));
+    cst_film_destroy(a);
+    cst_film_destroy(b);
+    cst_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------------ JSON */
@@ -358,6 +458,7 @@ int main(void)
         cmocka_unit_test(test_moving_instance_hits),
         cmocka_unit_test(test_moving_square_coverage),
         cmocka_unit_test(test_backends_agree),
+        cmocka_unit_test(test_light_agrees_with_path),
         cmocka_unit_test(test_json_motion),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
