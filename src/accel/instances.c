@@ -1,6 +1,7 @@
 /* Two-level acceleration for instancing: per-prototype BVHs (bvh.c, via accel_build) and
  * a top-level binary BVH over instance bounds, split at the median centroid of the widest
- * axis. A ray enters an instance by the inverse transform; its direction is renormalised
+ * axis; a moving instance's bound covers its whole motion and a ray meets it placed at the
+ * ray's time. A ray enters an instance by the inverse transform; its direction is renormalised
  * there (the BVH and triangle tests expect unit directions) and t rescaled by that length
  * on the way in and out, so hits from different instances compare in world t. */
 #include "accel/instances.h"
@@ -64,10 +65,54 @@ CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from
         !transform_normal_matrix(world_from_obj, &in.normal_matrix))
         return cst_fail(err, CST_ERR_INVALID_ARG, "instance transform is singular or not affine");
     in.proto = proto;
+    in.motion = -1;
     if (!grow_one(&set->insts, &set->cap_insts, set->num_insts, sizeof *set->insts))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding an instance");
     set->insts[set->num_insts++] = in;
     return CST_OK;
+}
+
+CstStatus instances_add_moving(InstanceSet *set, int proto, const Transform *start, const Transform *end,
+                               CstError *err)
+{
+    CstStatus st = instances_add(set, proto, start, err);
+    if (st != CST_OK || memcmp(start->m, end->m, sizeof start->m) == 0) return st;
+    Transform inv;
+    MotionTransform mt;
+    if (!transform_is_affine(end) || !transform_invert(end, &inv) || !motion_init(&mt, start, end)) {
+        set->num_insts--;
+        return cst_fail(err, CST_ERR_INVALID_ARG, "instance end transform is singular or not affine");
+    }
+    if (!grow_one(&set->motions, &set->cap_motions, set->num_motions, sizeof *set->motions)) {
+        set->num_insts--;
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a moving instance");
+    }
+    set->motions[set->num_motions] = mt;
+    set->insts[set->num_insts - 1].motion = set->num_motions++;
+    return CST_OK;
+}
+
+/* The transforms of a moving instance at time: interpolated, then inverted and the normal
+ * matrix made, per ray (no per-time cache: rays of a path share a time, but instances are
+ * visited by rays of many paths). A singular interpolated transform (a stretch through
+ * zero) places nothing: false. */
+static bool placement_at(const InstanceSet *set, const Instance *in, float time, Transform *world_from_obj,
+                         Transform *obj_from_world, Transform *normal_matrix)
+{
+    *world_from_obj = motion_at(&set->motions[in->motion], time);
+    return transform_invert(world_from_obj, obj_from_world) &&
+           (!normal_matrix || transform_normal_matrix(world_from_obj, normal_matrix));
+}
+
+void instances_placement(const InstanceSet *set, int inst, float time, Transform *world_from_obj,
+                         Transform *normal_matrix)
+{
+    const Instance *in = &set->insts[inst];
+    Transform inv;
+    if (in->motion < 0 || !placement_at(set, in, time, world_from_obj, &inv, normal_matrix)) {
+        *world_from_obj = in->world_from_obj;
+        *normal_matrix = in->normal_matrix;
+    }
 }
 
 static float centroid(const InstanceSet *set, int32_t id, int axis)
@@ -149,9 +194,13 @@ CstStatus instances_build(InstanceSet *set, CstError *err)
     for (int i = 0; i < set->num_insts; i++) {
         Instance *in = &set->insts[i];
         BBox ob = set->protos[in->proto].accel.bounds, wb = bbox_empty();
-        for (int k = 0; k < 8; k++) {
-            Vec3 corner = v3(k & 1 ? ob.max.x : ob.min.x, k & 2 ? ob.max.y : ob.min.y, k & 4 ? ob.max.z : ob.min.z);
-            wb = bbox_add(wb, transform_point(&in->world_from_obj, corner));
+        if (in->motion >= 0) {
+            wb = motion_bounds(&set->motions[in->motion], ob);
+        } else {
+            for (int k = 0; k < 8; k++) {
+                Vec3 corner = v3(k & 1 ? ob.max.x : ob.min.x, k & 2 ? ob.max.y : ob.min.y, k & 4 ? ob.max.z : ob.min.z);
+                wb = bbox_add(wb, transform_point(&in->world_from_obj, corner));
+            }
         }
         /* Widened for the rounding of the transform (the boxes of the transformed triangles
          * are computed in double and rounded once; a relative 1e-5 is far above that). */
@@ -188,13 +237,14 @@ void instances_free(InstanceSet *set)
     free(set->insts);
     free(set->nodes);
     free(set->order);
+    free(set->motions);
     memset(set, 0, sizeof *set);
 }
 
 size_t instances_memory_bytes(const InstanceSet *set)
 {
     size_t b = (size_t)set->num_insts * sizeof *set->insts + (size_t)set->num_nodes * sizeof *set->nodes +
-               (size_t)set->num_insts * sizeof *set->order;
+               (size_t)set->num_insts * sizeof *set->order + (size_t)set->num_motions * sizeof *set->motions;
     for (int i = 0; i < set->num_protos; i++) {
         const InstProto *p = &set->protos[i];
         b += (size_t)p->num_positions * (sizeof *p->positions + (p->normals ? sizeof *p->normals : 0)) +
@@ -204,11 +254,21 @@ size_t instances_memory_bytes(const InstanceSet *set)
     return b;
 }
 
-/* The world ray in object space with a unit direction; *scale = object t per world t. */
-static Ray to_object(const Instance *in, const Ray *r, float *scale)
+/* The world ray in object space with a unit direction; *scale = object t per world t
+ * (0 when a moving instance has no placement at the ray's time: no hit). */
+static Ray to_object(const InstanceSet *set, const Instance *in, const Ray *r, float *scale)
 {
-    Vec3 o = transform_point(&in->obj_from_world, r->o);
-    Vec3 d = transform_vector(&in->obj_from_world, r->d);
+    const Transform *ofw = &in->obj_from_world;
+    Transform moved_wfo, moved_ofw;
+    if (in->motion >= 0) {
+        if (!placement_at(set, in, r->time, &moved_wfo, &moved_ofw, NULL)) {
+            *scale = 0.0f;
+            return *r;
+        }
+        ofw = &moved_ofw;
+    }
+    Vec3 o = transform_point(ofw, r->o);
+    Vec3 d = transform_vector(ofw, r->d);
     float len = v3_length(d);
     *scale = len;
     return ray_make(o, v3_scale(d, 1.0f / len), r->t_min * len, r->t_max * len);
@@ -248,7 +308,7 @@ bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit)
             float scale;
             Ray local = *ray;
             local.t_max = best;
-            Ray ro = to_object(in, &local, &scale);
+            Ray ro = to_object(set, in, &local, &scale);
             if (!(scale > 0.0f) || !isfinite(scale)) continue;
             Hit h;
             if (accel_intersect(&set->protos[in->proto].accel, &ro, &h)) {
@@ -286,7 +346,7 @@ bool instances_occluded(const InstanceSet *set, const Ray *ray)
         for (int i = 0; i < n->count; i++) {
             const Instance *in = &set->insts[set->order[n->first + i]];
             float scale;
-            Ray ro = to_object(in, ray, &scale);
+            Ray ro = to_object(set, in, ray, &scale);
             if (!(scale > 0.0f) || !isfinite(scale)) continue;
             if (accel_occluded(&set->protos[in->proto].accel, &ro)) return true;
         }

@@ -11,6 +11,7 @@
 
 #include "accel/accel.h"
 #include "caustic/caustic.h"
+#include "math/motion.h"
 #include "math/transform.h"
 
 typedef struct InstProto {
@@ -27,8 +28,10 @@ typedef struct InstProto {
 typedef struct Instance {
     Transform world_from_obj, obj_from_world;
     Transform normal_matrix; /* of world_from_obj: normals keep the object's outside */
-    BBox bounds;             /* world space */
+    BBox bounds;             /* world space; of a moving instance, over its whole motion */
     int32_t proto;
+    int32_t motion;          /* index into InstanceSet.motions, or -1: static (the three
+                              * transforms above hold at every time) */
 } Instance;
 
 /* Top-level node: an inner node's children are nodes[first] and nodes[first + 1]; a leaf
@@ -47,6 +50,10 @@ typedef struct InstanceSet {
     int num_nodes;
     int32_t *order;
     int built;
+    /* Moving instances' transforms (motion blur): world_from_obj at shutter open and
+     * close, placed at each ray's time (Ray.time). */
+    MotionTransform *motions;
+    int num_motions; size_t cap_motions;
 } InstanceSet;
 
 /* A hit inside an instance: t along the world ray, barycentrics and triangle of the
@@ -64,13 +71,22 @@ CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec
                               int num_triangles, int *out_id, CstError *err);
 /* world_from_obj must be affine and invertible. */
 CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from_obj, CstError *err);
+/* A moving instance: world_from_obj at shutter open (start) and close (end), each affine
+ * and invertible, interpolated by decomposition (math/motion.h). start == end adds a
+ * static instance. */
+CstStatus instances_add_moving(InstanceSet *set, int proto, const Transform *start, const Transform *end,
+                               CstError *err);
+/* Instance `inst`'s world_from_obj and normal matrix at time (static: its own). */
+void instances_placement(const InstanceSet *set, int inst, float time, Transform *world_from_obj,
+                         Transform *normal_matrix);
 /* Builds every prototype's BVH and the top-level tree; call once, after the last add. */
 CstStatus instances_build(InstanceSet *set, CstError *err);
 /* Accepts a zeroed set; frees what the set owns, not the set itself. */
 void instances_free(InstanceSet *set);
 /* Prototype geometry and BVHs, the instance records and the top-level tree. */
 size_t instances_memory_bytes(const InstanceSet *set);
-/* Closest hit in (ray->t_min, ray->t_max); ray->d unit length. */
+/* Closest hit in (ray->t_min, ray->t_max); ray->d unit length; moving instances placed at
+ * ray->time. */
 bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit);
 bool instances_occluded(const InstanceSet *set, const Ray *ray);
 

@@ -1,4 +1,5 @@
-/* Rays: origin, normalised direction and a parametric interval [t_min, t_max]. */
+/* Rays: origin, normalised direction, a parametric interval [t_min, t_max] and the time of
+ * the ray within the shutter interval (motion blur). */
 #ifndef CST_GEOMETRY_RAY_H
 #define CST_GEOMETRY_RAY_H
 
@@ -12,12 +13,25 @@ typedef struct Ray {
     float t_min;
     Vec3 d;
     float t_max;
+    /* The ray's time in [0, 1): 0 at shutter open, 1 at close. Every ray of a path carries
+     * its path's time (moving instances are placed at it, accel/instances.c); 0 in scenes
+     * without motion, which never read it. Last, so the 32 bytes the traversals read come
+     * first (sizeof(Ray) is 36). */
+    float time;
 } Ray;
 
 static inline Ray ray_make(Vec3 o, Vec3 d, float t_min, float t_max)
 {
     Ray r;
-    r.o = o; r.d = d; r.t_min = t_min; r.t_max = t_max;
+    r.o = o; r.d = d; r.t_min = t_min; r.t_max = t_max; r.time = 0.0f;
+    return r;
+}
+
+/* ray_make at a path's time. */
+static inline Ray ray_make_at(Vec3 o, Vec3 d, float t_min, float t_max, float time)
+{
+    Ray r = ray_make(o, d, t_min, t_max);
+    r.time = time;
     return r;
 }
 

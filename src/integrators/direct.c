@@ -11,7 +11,7 @@ static Color sample(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3
     Color f = bsdf_eval(bsdf, wo, ls.wi);
     if (color_is_black(f)) return color_s(0.0f);
     ++*rays;
-    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
+    if (!scene_visible_at(s, sh->p, sh->ng, ls.p, ls.n, sh->time)) return color_s(0.0f);
     float w = mis && !ls.delta ? power_heuristic(ls.pdf_w, bsdf_pdf(bsdf, wo, ls.wi)) : 1.0f;
     return color_scale(color_mul(f, scene_light_li(s, &ls, wl)), w / (ls.delta ? ls.pmf : ls.pdf_w));
 }

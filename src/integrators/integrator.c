@@ -121,6 +121,10 @@ static void camera_tile(void *ctx, int tile, int worker)
                 float fw;
                 Vec2 fp = filter_film_position(&it->pixel_filter, x, y, uf, &fw);
                 Ray ray = camera_generate_ray(&it->camera, fp.x, fp.y, ul);
+                /* Motion blur: the path's time, uniform over the shutter interval, from the
+                 * dimension after the film and lens ones; drawn only in scenes that move, so
+                 * static scenes keep their streams (and their images) bit for bit. */
+                if (it->motion) ray.time = sampler_1d(&smp);
                 if (it->aov_hit) camera_aov(it, w, pixel, ray);
                 /* Spectral mode: the path's wavelengths, from the dimension after the
                  * film and lens ones (BDPT/VCM: shared with light paths, above). */
@@ -674,6 +678,15 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
                         "not rendered yet; expected one or the other");
+    /* Motion blur: the path tracers (surface loop) and Whitted carry the camera path's time
+     * to every ray, the light tracer each light path's own; BDPT, VCM and the photon
+     * integrators do not draw one yet. */
+    it->motion = scene_has_motion(scene);
+    const bool motion_ok = it->kind == INTEGRATOR_PATH || it->kind == INTEGRATOR_WHITTED || it->kind == INTEGRATOR_LIGHT;
+    if (it->motion && (!motion_ok || scene->num_media || scene->num_medium_ifaces || scene->num_subsurface))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
+                        "yet%s: use path, path-nee, path-bsdf, whitted or light", cst_integrator_name(st->integrator),
+                        motion_ok ? " with participating media or subsurface materials" : "");
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

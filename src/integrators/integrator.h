@@ -118,6 +118,7 @@ typedef struct Integrator {
     SamplerSetup sampler;        /* camera paths': type, seed, the sample count strata divide
                                   * (0 = not known: a time limit) and the strata, set once */
     bool aov_hit;                /* albedo, normal or depth AOVs: trace the first hit for them */
+    bool motion;                 /* the scene moves: each camera path draws its time */
     bool spectral;               /* spectral mode (math/spectrum.h): paths carry 4 wavelengths */
     float clamp;                 /* > 0: camera samples and splats through color_clamp_xyz_max
                                   * (the settings' max_component over 2^exposure); 0 = none */

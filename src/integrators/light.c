@@ -21,6 +21,7 @@ typedef struct LightTraceCtx {
     SplatList *out;
     const Wavelengths *wl; /* spectral mode: the path's; NULL in RGB mode */
     uint64_t *rays;
+    float time;            /* the path's time (motion blur; 0 in static scenes) */
 } LightTraceCtx;
 
 /* Splats weight * W_e / pdf_w if the lens point is visible; weight already holds the
@@ -29,7 +30,7 @@ static void splat_if_visible(const LightTraceCtx *c, Vec3 p, Vec3 ng, const Came
 {
     if (color_is_black(weight)) return;
     ++*c->rays;
-    if (!scene_visible_point(c->s, p, ng, cs->p_lens)) return;
+    if (!scene_visible_point_at(c->s, p, ng, cs->p_lens, c->time)) return;
     Color v = color_scale(weight, cs->we / cs->pdf_w);
     film_splat(c->out, &c->lp->frame, cs->raster.x, cs->raster.y, c->wl ? spectrum_to_rgb(v, c->wl) : v);
 }
@@ -65,9 +66,14 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
     /* Spectral mode: the path's own wavelengths, from its first random number. */
     Wavelengths wl;
     if (lp->spectral) wl = wavelengths_sample(sampler_1d(rng));
-    LightTraceCtx c = {s, cam, lp, filter_radius(lp->frame.filter) - 0.5f, out, lp->spectral ? &wl : NULL, rays};
+    /* Motion blur: the light path's own time, uniform over the shutter (drawn only in
+     * scenes that move: static ones keep their streams). */
+    const float time = scene_has_motion(s) ? sampler_1d(rng) : 0.0f;
+    LightTraceCtx c = {s, cam, lp, filter_radius(lp->frame.filter) - 0.5f, out, lp->spectral ? &wl : NULL, rays,
+                       time};
     EmissionSample es;
     subpath_emit(s, rng, c.wl, &es);
+    es.time = time;
 
     /* y0 seen directly: the only way this estimator renders visible emitters (delta
      * lights are never seen, nor is the environment: it is no surface a connection could

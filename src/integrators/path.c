@@ -44,7 +44,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
         if (rr == 0.0f) break;
         ps.beta = color_scale(ps.beta, rr);
-        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make_at(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, sh.time);
     }
     return ps.L;
 }

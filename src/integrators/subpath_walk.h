@@ -122,7 +122,7 @@ static inline bool subpath_scatter(const Scene *s, SubPath *sp, const SubpathIte
     if (color_is_black(sp->scatter)) return false;
     if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
     if (it) mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo));
-    *ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
+    *ray = ray_make_at(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY, sh->time);
     return true;
 }
 
@@ -135,7 +135,7 @@ subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es,
                    uint64_t *rays)
 {
     const SubpathIteration *it = w->mis;
-    Ray ray = ray_make(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY);
+    Ray ray = ray_make_at(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY, es->time);
     for (int bounces = 1;; bounces++) {
         SurfaceHit sh;
         ++*rays;

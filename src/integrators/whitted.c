@@ -78,7 +78,7 @@ static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int
         Color w = color_scale(bs.weight, bs.pmf);
         float wmax = weight * color_max(w);
         if (!(wmax >= WHITTED_MIN_WEIGHT)) continue;
-        Ray next = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        Ray next = ray_make_at(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, sh.time);
         if (wp->rec) recorder_whitted_branch(wp->rec, &bs, w, depth + 1);
         L = color_madd(L, w, whitted_trace(s, wp, next, depth + 1, wmax, smp, wl, rays));
     }

@@ -300,6 +300,8 @@ typedef struct EmissionSample {
     float cos_l; /* |cos| between w and n: 1 for delta lights */
     float nee_pdf; /* the density with which NEE picks p: area: pdf_a; delta: the selection probability */
     bool delta;  /* a delta light: never hit, never connected to as a surface */
+    float time;  /* the light path's time in the shutter (motion blur): 0 from emitter_sample_emission,
+                  * set by the light tracer in a moving scene; the walk's rays carry it */
     bool finite; /* false for directional lights and the environment */
 } EmissionSample;
 

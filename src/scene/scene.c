@@ -763,6 +763,13 @@ CstStatus scene_add_instance(Scene *s, int proto, const Transform *world_from_ob
     return instances_add(s->instances, proto, world_from_obj, err);
 }
 
+CstStatus scene_add_instance_moving(Scene *s, int proto, const Transform *start, const Transform *end, CstError *err)
+{
+    CstStatus st = ensure_instances(s, err);
+    if (st != CST_OK) return st;
+    return instances_add_moving(s->instances, proto, start, end, err);
+}
+
 CstStatus scene_commit(Scene *s, CstError *err)
 {
     if (s->committed) return CST_OK;

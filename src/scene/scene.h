@@ -222,6 +222,9 @@ CstStatus scene_add_instance_proto(Scene *scene, const Vec3 *positions, const Ve
                                    int num_triangles, int *out_id, CstError *err);
 CstStatus scene_add_instance(Scene *scene, int proto, const Transform *world_from_obj,
                              CstError *err);
+/* A moving instance: world_from_obj at shutter open (start) and close (end). */
+CstStatus scene_add_instance_moving(Scene *scene, int proto, const Transform *start, const Transform *end,
+                                    CstError *err);
 CstStatus scene_commit(Scene *scene, CstError *err);
 /* Rebuilds a committed scene's acceleration structure as `type`. */
 CstStatus scene_set_accel(Scene *scene, AccelType type, CstError *err);
@@ -251,6 +254,9 @@ typedef struct SurfaceHit {
     /* Texture coordinates at p (triangle_uv(), sphere_uv()); computed only in scenes with
      * textures, the only readers, and (0, 0) elsewhere. */
     Vec2 uv;
+    /* The time of the ray that found the hit (Ray.time): rays leaving the hit carry it on,
+     * so a path sees one instant of a moving scene. */
+    float time;
 } SurfaceHit;
 
 /* The shading normal at barycentrics (u, v) of triangle t (3 indices into normals):
@@ -276,18 +282,25 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     if (!instances_intersect(s->instances, ray, &ih)) return false;
     const Instance *in = &s->instances->insts[ih.inst];
     const InstProto *pr = &s->instances->protos[in->proto];
+    Transform moved_wfo, moved_nm;
+    const Transform *wfo = &in->world_from_obj, *nm = &in->normal_matrix;
+    if (in->motion >= 0) { /* a moving instance, placed at the ray's time */
+        instances_placement(s->instances, ih.inst, ray->time, &moved_wfo, &moved_nm);
+        wfo = &moved_wfo;
+        nm = &moved_nm;
+    }
     const int32_t *t = &pr->tri_indices[3 * ih.prim];
     Vec3 a = pr->positions[t[0]], b = pr->positions[t[1]], c = pr->positions[t[2]];
     Vec3 p_obj = v3_add(v3_add(v3_scale(a, 1.0f - ih.u - ih.v), v3_scale(b, ih.u)), v3_scale(c, ih.v));
     sh->t = ih.t;
     sh->prim = UINT32_MAX; /* not a scene primitive */
-    sh->p = transform_point(&in->world_from_obj, p_obj);
+    sh->p = transform_point(wfo, p_obj);
     /* The normal matrix keeps the object's outside, also under mirroring transforms. */
-    sh->ng = transform_normal(&in->normal_matrix, pr->tri_normals[ih.prim]);
+    sh->ng = transform_normal(nm, pr->tri_normals[ih.prim]);
     sh->ns = sh->ng;
     if (pr->normals) { /* interpolated in object space, then carried like ng */
         Vec3 ns = scene_shading_normal(pr->normals, t, ih.u, ih.v, pr->tri_normals[ih.prim]);
-        ns = transform_normal(&in->normal_matrix, ns);
+        ns = transform_normal(nm, ns);
         if (v3_length2(ns) > 0.0f) sh->ns = v3_dot(ns, sh->ng) < 0.0f ? v3_neg(ns) : ns;
     }
     sh->material = pr->tri_material[ih.prim];
@@ -354,8 +367,16 @@ bool scene_occluded_alpha(const Scene *s, const Ray *ray);
  * pays one branch. */
 static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *sh)
 {
+    sh->time = ray->time;
     if (s->num_alphas) return scene_intersect_alpha(s, ray, sh);
     return scene_intersect_first(s, ray, sh);
+}
+
+/* Whether anything in the scene moves over the shutter interval: only then do camera
+ * paths draw a time (integrator.c), so static scenes keep their random-number streams. */
+static inline bool scene_has_motion(const Scene *s)
+{
+    return s->instances && s->instances->num_motions > 0;
 }
 
 /* The partial derivatives of the surface position with respect to the texture coordinates
@@ -760,7 +781,7 @@ static inline Vec3 scene_offset(const Scene *s, Vec3 p, Vec3 ng, Vec3 d)
  * ray aims from one pushed end to the other: aiming from the pushed origin along the
  * unpushed direction would run parallel to the true segment and clip the target's own
  * surface at grazing angles (a measurable darkening of NEE near large emitters). */
-static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q)
+static inline bool scene_visible_at(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, float time)
 {
     Vec3 d = v3_sub(q, p);
     Vec3 o = scene_offset(s, p, n_p, d);
@@ -768,21 +789,33 @@ static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 
     Vec3 od = v3_sub(t, o);
     float len = v3_length(od);
     if (!(len > 0.0f)) return true;
-    Ray r = ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-5f));
+    Ray r = ray_make_at(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-5f), time);
     return !scene_occluded(s, &r);
+}
+
+/* scene_visible_at at time 0 (scenes without motion). */
+static inline bool scene_visible(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q)
+{
+    return scene_visible_at(s, p, n_p, q, n_q, 0.0f);
 }
 
 /* Whether surface point p (normal ng) sees the point q in free space (a lens point: the
  * lens is not geometry, so only p's end is pushed off its surface, and the ray aims from
  * the pushed point). */
-static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+static inline bool scene_visible_point_at(const Scene *s, Vec3 p, Vec3 ng, Vec3 q, float time)
 {
     Vec3 o = scene_offset(s, p, ng, v3_sub(q, p));
     Vec3 d = v3_sub(q, o);
     float len = v3_length(d);
     if (!(len > 0.0f)) return true;
-    Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
+    Ray r = ray_make_at(o, v3_scale(d, 1.0f / len), 0.0f, len, time);
     return !scene_occluded(s, &r);
+}
+
+/* scene_visible_point_at at time 0 (scenes without motion). */
+static inline bool scene_visible_point(const Scene *s, Vec3 p, Vec3 ng, Vec3 q)
+{
+    return scene_visible_point_at(s, p, ng, q, 0.0f);
 }
 
 /* The medium interface of a hit's primitive, or NULL when it has none (no transition;

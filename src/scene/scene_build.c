@@ -717,9 +717,30 @@ CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *d, int *out_i
     return st;
 }
 
-CstStatus cst_scene_add_instance(CstScene *scene, int object, const float m[12], CstError *err)
+/* A 3 x 4 row-major world_from_object (named `what` in errors) as a checked Transform. */
+static CstStatus read_instance_matrix(const float m[12], const char *fn, const char *what, Transform *out,
+                                      CstError *err)
 {
-    static const char fn[] = "cst_scene_add_instance";
+    if (!m) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is NULL", fn, what);
+    float rows[16] = {0};
+    for (int k = 0; k < 12; k++) {
+        if (!isfinite(m[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s[%d] is %g; expected finite numbers",
+                            fn, what, k, (double)m[k]);
+        rows[k] = m[k];
+    }
+    rows[15] = 1.0f;
+    Transform xf = transform_from_rows(rows), inv;
+    if (!transform_invert(&xf, &inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is singular (or its inverse is not "
+                        "finite); expected an invertible affine transform", fn, what);
+    *out = xf;
+    return CST_OK;
+}
+
+static CstStatus add_instance(CstScene *scene, int object, const float m[12], const float m_end[12], const char *fn,
+                              CstError *err)
+{
     cst_error_clear(err);
     CstStatus st = check_scene(scene, fn, err);
     if (st != CST_OK) return st;
@@ -729,19 +750,25 @@ CstStatus cst_scene_add_instance(CstScene *scene, int object, const float m[12],
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: object %d is not an object of this scene; expected %s%d",
                         fn, object, objects ? "0 to " : "an id from cst_scene_add_object (there are none), ",
                         objects - 1);
-    float rows[16] = {0};
-    for (int k = 0; k < 12; k++) {
-        if (!isfinite(m[k]))
-            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object[%d] is %g; expected finite numbers",
-                            fn, k, (double)m[k]);
-        rows[k] = m[k];
+    Transform xf, xf_end;
+    if ((st = read_instance_matrix(m, fn, "world_from_object", &xf, err)) != CST_OK) return st;
+    if (m_end && (st = read_instance_matrix(m_end, fn, "world_from_object_end", &xf_end, err)) != CST_OK) return st;
+    return scene_add_instance_moving(scene, object, &xf, m_end ? &xf_end : &xf, err);
+}
+
+CstStatus cst_scene_add_instance(CstScene *scene, int object, const float m[12], CstError *err)
+{
+    return add_instance(scene, object, m, NULL, "cst_scene_add_instance", err);
+}
+
+CstStatus cst_scene_add_instance_motion(CstScene *scene, int object, const float start[12], const float end[12],
+                                        CstError *err)
+{
+    if (!end) {
+        cst_error_clear(err);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "cst_scene_add_instance_motion: world_from_object_end is NULL");
     }
-    rows[15] = 1.0f;
-    Transform xf = transform_from_rows(rows), inv;
-    if (!transform_invert(&xf, &inv))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_object is singular (or its inverse is not "
-                        "finite); expected an invertible affine transform", fn);
-    return scene_add_instance(scene, object, &xf, err);
+    return add_instance(scene, object, start, end, "cst_scene_add_instance_motion", err);
 }
 
 static CstStatus add_sphere(CstScene *scene, const float center[3], float radius, int material,

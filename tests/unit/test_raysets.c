@@ -208,7 +208,7 @@ static Ray ray_through(Vec3 o, Vec3 target, float *t)
            dz = (double)target.z - (double)o.z;
     double len = sqrt(dx * dx + dy * dy + dz * dz);
     *t = (float)len;
-    Ray r = {o, 0.0f, {(float)(dx / len), (float)(dy / len), (float)(dz / len)}, INFINITY};
+    Ray r = {o, 0.0f, {(float)(dx / len), (float)(dy / len), (float)(dz / len)}, INFINITY, 0.0f};
     return r;
 }
 

@@ -275,7 +275,7 @@ static Scene *one_sphere(const CstMaterialDesc *d, SurfaceHit *sh)
     assert_int_equal(cst_scene_add_sphere(cs, c, 1.0f, mat, NULL, &err), CST_OK);
     assert_int_equal(cst_scene_commit(cs, &err), CST_OK);
     Scene *s = cs;
-    Ray r = {v3(0.0f, 0.0f, 5.0f), 0.0f, v3(0.0f, 0.0f, -1.0f), 1e30f};
+    Ray r = {v3(0.0f, 0.0f, 5.0f), 0.0f, v3(0.0f, 0.0f, -1.0f), 1e30f, 0.0f};
     assert_true(scene_intersect(s, &r, sh));
     return s;
 }
@@ -318,7 +318,7 @@ static void test_scene_spectra(void **state)
         assert_int_equal(cst_scene_add_sphere(cs, c, 1.0f, mat, NULL, &err), CST_OK);
         assert_int_equal(cst_scene_commit(cs, &err), CST_OK);
         s = cs;
-        Ray r = {v3(0.0f, 0.0f, 5.0f), 0.0f, v3(0.0f, 0.0f, -1.0f), 1e30f};
+        Ray r = {v3(0.0f, 0.0f, 5.0f), 0.0f, v3(0.0f, 0.0f, -1.0f), 1e30f, 0.0f};
         assert_true(scene_intersect(s, &r, &sh));
         m = &s->materials[sh.material];
         assert_true(m->ior_dispersive == (dispersive != 0));
@@ -361,7 +361,7 @@ static void test_scene_spectra(void **state)
         assert_int_equal(cst_scene_add_sphere(cs, c, 2.0f, mat, &em, &err), CST_ERR_INVALID_ARG);
         assert_int_equal(cst_scene_commit(cs, &err), CST_OK);
         s = cs;
-        Ray r = {v3(0.0f, 0.0f, 5.0f), 0.0f, v3(0.0f, 0.0f, -1.0f), 1e30f};
+        Ray r = {v3(0.0f, 0.0f, 5.0f), 0.0f, v3(0.0f, 0.0f, -1.0f), 1e30f, 0.0f};
         assert_true(scene_intersect(s, &r, &sh));
         Wavelengths w = wavelengths_sample(0.45f);
         Color le = scene_emission(s, &sh, v3(0.0f, 0.0f, 1.0f), &w);

@@ -200,6 +200,50 @@ static CstStatus read_shading(Loader *ld, const json_t *shape, bool *flat)
     return CST_OK;
 }
 
+static CstStatus parse_transform(Loader *ld, const json_t *obj, Transform *out);
+
+/* A transform as the 3 x 4 rows of cst_scene_add_instance. */
+static void transform_rows(const Transform *t, float rows[12])
+{
+    for (int r = 0; r < 3; r++)
+        for (int k = 0; k < 4; k++) rows[4 * r + k] = t->m[r][k];
+}
+
+/* A mesh with "motion": {"transform": at shutter open (default identity), "transform_end":
+ * at shutter close}: its vertices are in object space and it becomes an object and one
+ * moving instance (cst_scene_add_instance_motion), so instances' limits hold: no emission,
+ * uvs, alpha or medium. */
+static CstStatus add_moving_mesh(Loader *ld, const json_t *motion, const CstMeshDesc *mesh, const json_t *shape)
+{
+    static const char *const keys[] = {"transform", "transform_end"};
+    const char *bad = mesh->uvs ? "uvs" : mesh->alpha.enabled ? "alpha" : json_object_get(shape, "medium") ? "medium"
+                    : json_object_get(shape, "emission") ? "emission" : NULL;
+    if (bad)
+        return json_fail_here(ld, "a moving mesh (\"motion\") cannot have \"%s\": it is placed as a moving instance, "
+                                  "and instances carry no emission, uvs, alpha or medium", bad);
+    LOADER_TRY(json_expect_object(ld, motion, "an object with \"transform_end\" (and optionally \"transform\")"));
+    LOADER_TRY(json_check_keys(ld, motion, keys, 2));
+    Transform t0 = transform_identity(), t1;
+    json_t *v = json_object_get(motion, "transform");
+    if (v) {
+        json_path_push_key(ld, "transform");
+        LOADER_TRY(parse_transform(ld, v, &t0));
+        json_path_pop(ld);
+    }
+    json_t *e;
+    LOADER_TRY(json_member_required(ld, motion, "transform_end", "the transform at shutter close", &e));
+    json_path_push_key(ld, "transform_end");
+    LOADER_TRY(parse_transform(ld, e, &t1));
+    json_path_pop(ld);
+    float r0[12], r1[12];
+    transform_rows(&t0, r0);
+    transform_rows(&t1, r1);
+    int obj = -1;
+    CstStatus st = cst_scene_add_object(ld->scene, mesh, &obj, NULL, ld->err);
+    if (st == CST_OK) st = cst_scene_add_instance_motion(ld->scene, obj, r0, r1, ld->err);
+    return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
+}
+
 static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const Emission *em,
                              const CstAlpha *alpha)
 {
@@ -304,6 +348,13 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
     mesh.emission = emission_desc(em);
     mesh.alpha = *alpha;
     mesh.skip_degenerate = json_object_get(shape, "displacement") != NULL; /* displacement may fold some */
+    json_t *motion = json_object_get(shape, "motion");
+    if (motion) {
+        json_path_push_key(ld, "motion");
+        st = add_moving_mesh(ld, motion, &mesh, shape);
+        if (st == CST_OK) json_path_pop(ld);
+        goto done;
+    }
     st = cst_scene_add_mesh(ld->scene, &mesh, NULL, ld->err);
     if (st != CST_OK)
         st = json_fail_builder(ld, st);
@@ -1051,7 +1102,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
                                              "material", "alpha"};
     static const char *const quad_keys[] = {"type", "vertices", "material", "emission", "alpha", "medium"};
     static const char *const mesh_keys[] = {"type", "vertices", "indices", "uvs", "material", "emission",
-                                            "normals", "shading", "alpha", "medium", "displacement"};
+                                            "normals", "shading", "alpha", "medium", "displacement", "motion"};
     static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission", "alpha",
                                               "z_min", "z_max", "phi_max", "transform", "reverse_orientation",
                                               "medium"};
@@ -1067,7 +1118,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     LOADER_TRY(json_read_type(ld, shape, "shape type", types, 9, -1, &type));
     switch (type) {
     case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 6)); break;
-    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 11)); break;
+    case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 12)); break;
     case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 9)); break;
     case SHAPE_CYLINDER: LOADER_TRY(json_check_keys(ld, shape, cylinder_keys, 11)); break;
     case SHAPE_DISK: LOADER_TRY(json_check_keys(ld, shape, disk_keys, 11)); break;
