@@ -21,6 +21,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         if (!scene_intersect(s, &ray, &sh)) {
             /* The environment: counted like an emitter hit, with the same MIS against
              * NEE's density of sampling this direction. */
+            if (pp->rec) recorder_wavelengths(pp->rec, wl); /* a camera ray may miss everything */
             path_add_env(s, pp, &ps, ps.beta, ray.d, wl);
             break;
         }

@@ -123,7 +123,7 @@ void recorder_nee(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHi
     e->pdf_other_w = pdf_bsdf;
     e->mis_weight = mis && !ls.delta ? power_heuristic(ls.pdf_w, pdf_bsdf) : 1.0f;
     if (color_is_black(value) && !color_is_black(bsdf_eval(bsdf, wo, ls.wi)) &&
-        !scene_visible(s, sh->p, sh->ng, ls.p, ls.n))
+        !scene_visible_at(s, sh->p, sh->ng, ls.p, ls.n, sh->time))
         e->flags |= CST_EXPLAIN_OCCLUDED;
 }
 

@@ -12,6 +12,10 @@ HARNESS_EXPECT_STDOUT=1
 harness_run "$d" 60 explain --pixel 12,10 --sample 3 "${SMALL[@]}"
 expect "path: text, sum equal bit for bit" 0 '^vertex 1: surface at' 'NEE: light [0-9]+' 'MIS w' 'largest contribution: ' \
     'equal, bit for bit'
+# A spectral camera ray that misses everything (the sky of an environment map): the recorder
+# must still get the path's wavelengths (it read MISMATCH before path.c recorded them there).
+harness_run "$d" 60 explain "$SRC/scenes/material-showcase.json" --pixel 2,2 --spectral --width 32 --height 18
+expect "path: spectral sky pixel, sum equal bit for bit" 0 'escape at vertex 0' 'equal, bit for bit'
 harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}" --json
 expect "bdpt: JSON, exact" 0 '"exact": true' '"kind": "connect"' '"w_light"' '"splat_value"'
 harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}"
