@@ -192,9 +192,9 @@ static double luminance(const float c[3])
     return 0.2126 * (double)c[0] + 0.7152 * (double)c[1] + 0.0722 * (double)c[2];
 }
 
-/* The one line a student asks for first: which strategy at which vertex carries most of
- * the camera sample (a firefly's cause), with its share of the sum's luminance. */
-static void print_largest(FILE *f, const CstExplain *x)
+/* The event carrying most of the sample's luminance, and its share; -1 if nothing added any.
+ * Shared by the summary line and --why-bright. */
+static int largest_event(const CstExplain *x, double *share)
 {
     int best = -1;
     double total = 0.0, best_y = 0.0;
@@ -205,7 +205,17 @@ static void print_largest(FILE *f, const CstExplain *x)
         total += y;
         if (best < 0 || y > best_y) { best = i; best_y = y; }
     }
-    if (best < 0 || !(total > 0.0)) {
+    *share = total > 0.0 ? best_y / total : 0.0;
+    return total > 0.0 ? best : -1;
+}
+
+/* The one line a student asks for first: which strategy at which vertex carries most of
+ * the camera sample (a firefly's cause), with its share of the sum's luminance. */
+static void print_largest(FILE *f, const CstExplain *x)
+{
+    double share;
+    const int best = largest_event(x, &share);
+    if (best < 0) {
         fputs("nothing reached a light: the sample is black\n", f);
         return;
     }
@@ -215,7 +225,7 @@ static void print_largest(FILE *f, const CstExplain *x)
     else
         fprintf(f, "largest contribution: %s at vertex %d", kind_name(e->kind), e->depth);
     if (e->s >= 0) fprintf(f, " (s=%d, t=%d)", e->s, e->t);
-    fprintf(f, ", %.1f%% of the %s's luminance\n", 100.0 * best_y / total, is_light(x) ? "pixel" : "camera sample");
+    fprintf(f, ", %.1f%% of the %s's luminance\n", 100.0 * share, is_light(x) ? "pixel" : "camera sample");
 }
 
 /* The light tracer: no camera path, only the splats that reached the pixel. */
@@ -397,21 +407,6 @@ static bool print_json(FILE *f, const CstExplain *x)
  * value, with what made it large (its density, MIS weight, and the path's least likely
  * scatter before it: a firefly's cause). Dark: how the path ended and which light samples
  * were blocked. */
-static int largest_event(const CstExplain *x, double *share)
-{
-    int best = -1;
-    double total = 0.0, best_y = 0.0;
-    for (int i = 0; i < x->num_events; i++) {
-        const CstExplainEvent *e = &x->events[i];
-        if (!(e->flags & CST_EXPLAIN_ADDED)) continue;
-        double y = luminance(e->contribution);
-        total += y;
-        if (best < 0 || y > best_y) { best = i; best_y = y; }
-    }
-    *share = total > 0.0 ? best_y / total : 0.0;
-    return total > 0.0 ? best : -1;
-}
-
 static void print_why_bright(FILE *f, const CstExplain *x)
 {
     double share;

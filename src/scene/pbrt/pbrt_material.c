@@ -139,26 +139,18 @@ static CstStatus pbrt_roughness(Loader *ld, Params *ps, const char *d, const cha
         }
         if (eu && ev && eu->type == PT_TEXTURE && ev->type == PT_TEXTURE && eu->num_strs == 1 &&
             ev->num_strs == 1 && strcmp(eu->strs[0], ev->strs[0]) == 0) {
-            int tex = 0, e = 0;
-            Color avg = color_s(0.0f);
-            TRY(pbrt_tex_param(ld, ps, d, eu->name, 1, &tex, &avg, &e));
-            if (ev != eu) TRY(pbrt_tex_param(ld, ps, d, ev->name, 1, &tex, &avg, &e));
-            if (tex) {
+            if (ev != eu) { /* the same texture: read only to mark the parameter used */
+                int tx = 0, ex = 0;
+                Color ax = color_s(0.0f);
+                TRY(pbrt_tex_param(ld, ps, d, ev->name, 1, &tx, &ax, &ex));
+            }
+            int t = 0;
+            float a = 0.0f;
+            TRY(pbrt_roughness_tex(ld, ps, d, eu, remap, &t, &a));
+            if (t) {
                 if (pr) pr->used = 1; /* shadowed by uroughness and vroughness */
-                int *id = &ld->texs[e].rough[remap != 0];
-                if (*id < 0) {
-                    int made = 0;
-                    TRY(pbrt_tex_map(ld, tex - 1, TEXOP_POW, color_s(remap ? 0.25f : 0.5f), color_s(0.0f), eu->loc, d, &made));
-                    *id = made;
-                }
-                CstTextureInfo t;
-                TRY(pbrt_texture_info(ld, *id, &t));
-                *tex_out = *id + 1;
-                *out = *out_v = minf(t.average[0], 1.0f);
-                if (t.max[0] > 1.0f)
-                    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, eu->loc, "%s: roughness texture values up to "
-                                 "GGX alpha %g are beyond caustic's roughest (alpha 1); rendered with alpha 1",
-                                 d, (double)(t.max[0] * t.max[0]));
+                *tex_out = t;
+                *out = *out_v = a;
                 return CST_OK;
             }
         }
