@@ -45,6 +45,9 @@ enum { TAG_ASSIGN = 1, TAG_HEADER, TAG_SUM, TAG_SQ, TAG_AOV, TAG_STOP };
 /* Blocks handed to a rank ahead of the one it renders, so it never waits for rank 0, which
  * answers only between its own steps (about ten times a second). */
 enum { CLUSTER_AHEAD = 2, QUEUE_CAP = 8 };
+/* The samples per pixel of a render under mpirun with --time and no --spp: the most it
+ * may reach (a one-process render has no such cap). */
+enum { CLUSTER_SPP_CAP = 1 << 20 };
 
 static int g_started;
 /* Rank 0 stopped before the last block (a signal, a failed checkpoint): the others may be
@@ -83,9 +86,11 @@ typedef struct Cluster {
     double t0;                /* the job's start, for CstPassInfo.elapsed_seconds */
     bool stop;                /* rank 0: stop after the blocks added (pass_done or a signal) */
     bool stop_told;           /* pass_done has returned nonzero: it has seen the stop */
+    bool last_told;           /* pass_done's last call said last */
     int stop_sent;            /* worker: its signal has been reported to rank 0 */
     int first, end, B, k0, nb; /* samples [first, end), blocks k0 .. k0 + nb - 1 */
     int next;                  /* rank 0: the next block to hand out (0 .. nb) */
+    double time_limit;         /* rank 0: seconds after t0 past which no block is handed out; 0: none */
     int added;                 /* rank 0: blocks added to total */
     CstFilm **ready;           /* rank 0: blocks received or rendered, not yet added */
     CstFilm *total;
@@ -115,10 +120,20 @@ static void assign(int to, int64_t block)
     MPI_Send(&block, 1, MPI_INT64_T, to, TAG_ASSIGN, MPI_COMM_WORLD);
 }
 
+/* Rank 0: with a time limit, once it has passed, the blocks handed out are the last: nb
+ * shrinks to them, and the job ends when they are added (a one-process render with that
+ * many samples and the same sample_block, bit for bit). The blocks already handed out are
+ * rendered: the job overruns the limit by at most CLUSTER_AHEAD + 1 blocks of a rank. */
+static bool time_up(Cluster *c)
+{
+    if (c->time_limit > 0.0 && c->next < c->nb && cli_clock_seconds() - c->t0 >= c->time_limit) c->nb = c->next;
+    return c->next >= c->nb;
+}
+
 /* Rank 0: the next block for rank `to`, or the word that there is none (once). */
 static void assign_next(Cluster *c, int to)
 {
-    if (c->next < c->nb) assign(to, c->next++);
+    if (!time_up(c)) assign(to, c->next++);
     else if (!c->stopped[to]) {
         assign(to, -1);
         c->stopped[to] = 1;
@@ -131,6 +146,7 @@ static void assign_next(Cluster *c, int to)
 static void report_pass(Cluster *c, bool last)
 {
     if (!c->user->pass_done || c->stop_told) return;
+    c->last_told = last;
     CstPassInfo info = {cst_film_spp(c->total), last, cli_clock_seconds() - c->t0};
     if (c->user->pass_done(c->user->pass_user, c->total, &info) != 0) c->stop = c->stop_told = true;
 }
@@ -505,7 +521,7 @@ static CstStatus leader(Cluster *c, CstError *err)
         for (int k = 0; k < CLUSTER_AHEAD && !c->stopped[r]; k++) assign_next(c, r);
     CstStatus status = CST_OK;
     if (c->nb == 0) report_pass(c, true); /* a resume with nothing left to render */
-    while (status == CST_OK && c->next < c->nb && !c->stop) {
+    while (status == CST_OK && !time_up(c) && !c->stop) {
         const int i = c->next++;
         CstFilm *film = NULL;
         if ((status = render_block(c, i, &film, err)) != CST_OK) {
@@ -531,6 +547,9 @@ static CstStatus leader(Cluster *c, CstError *err)
         g_unfinished = c->added < c->nb;
         return CST_OK;
     }
+    /* A time limit that shrank nb after the last block was added: pass_done has not been
+     * told that this film is the last. */
+    if (status == CST_OK && !c->last_told) report_pass(c, true);
     for (int r = 1; r < c->size && status == CST_OK; r++) assign_next(c, r); /* no more */
     return status;
 }
@@ -546,10 +565,23 @@ CstStatus cli_mpi_render(const CstScene *scene, const CstRenderSettings *setting
     c.scene = scene;
     c.user = settings;
     cst_render_settings_resolve(scene, settings, &c.st);
-    if (c.st.time_limit > 0.0 || c.st.spp <= 0)
-        return mpi_fail(err, CST_ERR_UNSUPPORTED, "under mpirun: a time limit cannot be split into fixed blocks; "
-                        "expected a sample count (--spp) without --time");
-    if (c.st.integrator == CST_INTEGRATOR_SPPM) return sppm_job(&c, out, stats, err);
+    if (c.st.integrator == CST_INTEGRATOR_SPPM) {
+        if (c.st.time_limit > 0.0 || c.st.spp <= 0)
+            return mpi_fail(err, CST_ERR_UNSUPPORTED, "sppm under mpirun: its photon chunks are split over the "
+                            "ranks for a fixed number of iterations; expected --spp without --time");
+        return sppm_job(&c, out, stats, err);
+    }
+    /* A time limit: blocks are handed out until it has passed (time_up), up to the sample
+     * count if one is given, else up to CLUSTER_SPP_CAP samples (the blocks' table is
+     * allocated for all of them). The blocks render without a limit of their own. */
+    c.time_limit = c.st.time_limit > 0.0 ? c.st.time_limit : 0.0;
+    if (c.st.spp <= 0) {
+        if (!(c.time_limit > 0.0))
+            return mpi_fail(err, CST_ERR_INVALID_ARG, "under mpirun: expected a sample count (--spp) or a time "
+                            "limit (--time)");
+        c.st.spp = CLUSTER_SPP_CAP - c.st.first_sample > 0 ? CLUSTER_SPP_CAP - c.st.first_sample : 1;
+    }
+    c.st.time_limit = 0.0;
     /* A resumed film's samples [first_sample, first_sample + done) are done: the blocks start
      * there, at a block end (a state is written only there), as cst_render's would. */
     const int done = settings->resume ? cst_film_spp(settings->resume) : 0;

@@ -65,11 +65,24 @@ fi
 
 # ------------------------------------------------------------ refusals
 d=$TMP/refuse
-mpi_run "$d" 60 2 render "${SMALL[@]}" --time 1 -o x.pfm
-expect "a time limit under mpirun: refused" 2 "a time limit cannot be split into fixed blocks"
+mpi_run "$d" 60 2 render "${SMALL[@]}" --integrator sppm --time 1 -o x.pfm
+expect "sppm with a time limit under mpirun: refused" 2 "expected --spp without --time"
 mpi_run "$d" 60 2 render "${SMALL[@]}" --spp 2 --crop 0,8,0,8 --checkpoint s.state -o x.pfm
 expect "--checkpoint of a crop under mpirun: refused" 2 "expected no --crop with --checkpoint or --resume"
 check "no image from a refused run" test ! -e "$d/x.pfm"
+
+# ------------------------------------------------------------ --time under mpirun
+# Blocks are handed out until the time has passed; the image is then a one-process render of
+# as many samples with the same --sample-block, byte for byte (whatever that count is).
+d=$TMP/time
+mpi_run "$d" 120 2 render "${SMALL[@]}" --time 1 --sample-block 2 --json=t.json -o np2.pfm
+n=$(sed -n 's/.*"spp": *\([0-9]*\).*/\1/p' "$d/t.json" | head -n1)
+if [ "$RC" -eq 0 ] && [ -n "$n" ] && [ "$n" -ge 2 ] && [ $((n % 2)) -eq 0 ]; then
+    harness_run "$d" 120 render "${SMALL[@]}" --spp "$n" --sample-block 2 -o one.pfm
+    check "--time 1 under -np 2: $n spp, byte for byte one process's --spp $n" cmp -s "$d/one.pfm" "$d/np2.pfm"
+else
+    fail "--time 1 under -np 2: a render of whole blocks" "exit $RC, spp '${n}'"
+fi
 
 # ------------------------------------------------------------ checkpoints and resume
 # same_files A B [C D ...]: A = B, C = D, ... byte for byte.
