@@ -222,15 +222,6 @@ static int cli_prepare_resume(const CliArgs *a, const CstScene *scene, const Cst
 {
     *resume = NULL;
     if (!a->checkpoint_path && !a->resume_path) return CLI_EXIT_OK;
-    CstRenderSettings rs;
-    cst_render_settings_resolve(scene, settings, &rs);
-    if (!cst_integrator_resumable(rs.integrator)) {
-        fprintf(stderr, "caustic: error: --%s: the %s integrator cannot be checkpointed or resumed yet (its state "
-                        "is more than the film's sums); expected path, path-nee, path-bsdf, whitted, photon, light, "
-                        "sppm, bdpt or vcm, or no --checkpoint/--resume\n",
-                a->checkpoint_path ? "checkpoint" : "resume", cst_integrator_name(rs.integrator));
-        return CLI_EXIT_USAGE;
-    }
     if (a->checkpoint_path && !cli_check_state_path(a->checkpoint_path)) return CLI_EXIT_USAGE;
     if (!a->resume_path) return CLI_EXIT_OK;
     CstError err = {0};

@@ -152,11 +152,6 @@ CstStatus cst_film_state_write(const char *path, const CstFilm *film, const CstS
         return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_state_write: a path, a film and a scene are required");
     CstRenderSettings st;
     cst_render_settings_resolve(scene, settings, &st);
-    if (!cst_integrator_resumable(st.integrator))
-        return cst_fail(err, CST_ERR_UNSUPPORTED,
-                        "%s: the %s integrator cannot be checkpointed yet (its state is more than the film's "
-                        "sums); expected path, path-nee, path-bsdf, whitted, photon, light, sppm, bdpt or vcm",
-                        path, cst_integrator_name(st.integrator));
     const bool mlt = st.integrator == CST_INTEGRATOR_PSSMLT || st.integrator == CST_INTEGRATOR_MMLT;
     if (mlt != (film->chains != NULL))
         return cst_fail(err, CST_ERR_INVALID_ARG,
