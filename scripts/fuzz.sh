@@ -17,8 +17,11 @@ jobs=${FUZZ_JOBS:-2}
 build=${FUZZ_BUILD_DIR:-build-fuzz}
 
 command -v clang >/dev/null || { echo "fuzz: clang (with libFuzzer) is needed" >&2; exit 2; }
+# FUZZ_SPECTRUM_TABLE: a spectrum table another tree solved, copied instead of solved
+# (CMakeLists.txt, CST_SPECTRUM_TABLE_FROM). -g1: line tables, all a report needs.
 CC=clang cmake -S . -B "$build" -DCST_FUZZ=ON -DCST_BUILD_TESTS=OFF -DCST_EMBREE=OFF \
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" >/dev/null
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" \
+  ${FUZZ_SPECTRUM_TABLE:+-DCST_SPECTRUM_TABLE_FROM="$FUZZ_SPECTRUM_TABLE"} >/dev/null
 cmake --build "$build" -j2 --target "${targets[@]}"
 
 # Per target: the longest input worth mutating, and its dictionary (if any).
