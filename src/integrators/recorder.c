@@ -165,9 +165,12 @@ void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light,
     recorder_added(r, e, beta, value);
 }
 
-void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color value, float w, float w_light,
-                    float pdf_a)
+void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
+                    float w_light, float pdf_a)
 {
+    RecorderPaths *rp = &r->paths;
+    if (rp->light_on && s_light >= 2 && s_light - 1 == rp->nlight && s_light - 2 < RECORDER_PATH_MAX)
+        rp->light_lens[s_light - 2] = lens;
     if (!(fabsf(x - ((float)r->px + 0.5f)) < r->radius && fabsf(y - ((float)r->py + 0.5f)) < r->radius))
         return;
     const int depth = r->depth;
@@ -176,6 +179,7 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color va
     r->depth = depth;
     e->s = s_light;
     e->t = 1;
+    e->path = rp->light_started - 1; /* the light step starts its paths in order (RecorderPaths) */
     put3(e->p, p);
     e->wi[0] = x; /* the raster position, for the reader */
     e->wi[1] = y;
