@@ -88,6 +88,16 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
                     (double)e->p[1], (double)e->p[2]);
             return;
         }
+        if (e->material_type && strcmp(e->material_type, "subsurface exit") == 0) {
+            /* path_sss.c's BSSRDF step: where the light leaves the material again. */
+            fprintf(f, "  subsurface exit at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f): one of %.0f probe hits, "
+                    "pdf_a %.6g (the pick's 1/%.0f included); ", (double)e->p[0], (double)e->p[1], (double)e->p[2],
+                    (double)e->n[0], (double)e->n[1], (double)e->n[2], e->pmf > 0.0f ? 1.0 / (double)e->pmf : 0.0,
+                    (double)e->pdf_a, e->pmf > 0.0f ? 1.0 / (double)e->pmf : 0.0);
+            print3(f, "throughput Sp/pdf ", e->beta);
+            fputc('\n', f);
+            return;
+        }
         fprintf(f, "vertex %d: surface at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f), material #%d (%s)",
                 e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->n[0], (double)e->n[1],
                 (double)e->n[2], e->material, e->material_type ? e->material_type : "none");
@@ -115,6 +125,12 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
     case CST_EXPLAIN_NEE:
         if (is_whitted(x)) {
             fprintf(f, "%*sdirect light (the mean of the shadow rays' estimates)", 2 * e->depth, "");
+            print_value(f, e);
+            return;
+        }
+        if (e->light < 0 && e->mis_weight < 0.0f) {
+            /* volpath.c's medium NEE and path_sss.c's at a subsurface exit: the sum alone. */
+            fprintf(f, "  NEE (light sample not itemised)");
             print_value(f, e);
             return;
         }

@@ -188,11 +188,13 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
 /* ---------------------------------------------------------------- explain (issue 30) */
 /* One sample of one pixel replayed with the render's random numbers, and what its path
  * did: every vertex, every sampling decision, every strategy's contribution with its MIS
- * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (scenes
- * without media or subsurface), whitted, light (the splats that reached the pixel), bdpt and
+ * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (media
+ * and subsurface materials too), whitted, light (the splats that reached the pixel), bdpt and
  * vcm (RGB mode); CST_ERR_UNSUPPORTED for the rest. */
 typedef enum CstExplainKind {
-    CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material */
+    CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material; or a
+                             * subsurface exit (material_type "subsurface exit": pdf_a, pmf
+                             * 1 / the probe's hits, beta Sp / pdf_a) */
     CST_EXPLAIN_ESCAPE,     /* the camera path left the scene (environment, if any, in value) */
     CST_EXPLAIN_EMISSION,   /* an emitter reached by the camera path (bdpt: s = 0) */
     CST_EXPLAIN_NEE,        /* a light sampled from a vertex (bdpt: s = 1) */

@@ -277,6 +277,29 @@ void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color va
     put_color(e->contribution, color_mul(beta, shown));
 }
 
+void recorder_sss_exit(Recorder *r, const SurfaceHit *x, float pdf_a, int count, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_VERTEX);
+    put3(e->p, x->p);
+    put3(e->n, x->ns);
+    put3(e->ng, x->ng);
+    e->material = x->material;
+    e->material_type = "subsurface exit";
+    e->pdf_a = pdf_a;
+    e->pmf = count > 0 ? 1.0f / (float)count : 0.0f;
+    put_color(e->beta, beta);
+}
+
+void recorder_sss_scatter(Recorder *r, Vec3 wi, float pdf_w, float w, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
+    put3(e->wi, wi);
+    e->pdf_w = pdf_w;
+    put_color(e->beta, beta);
+    put_color(e->value, color_s(w));
+    put_color(e->contribution, color_scale(beta, w));
+}
+
 void recorder_distance(Recorder *r, int medium, const MediumCoeffs *mc, bool hetero, Ray ray, float t_max,
                        const MediumSample *ms)
 {

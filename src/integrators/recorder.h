@@ -96,6 +96,15 @@ void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color va
 void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
                     float w_light, float pdf_a);
 
+/* ---- The path tracer's BSSRDF step (path_sss.c) */
+/* The probe's exit point x, picked among `count` hits of the material along the probe, with
+ * density pdf_a per unit area (the pick's 1 / count included); beta: the throughput after
+ * Sp / pdf_a. */
+void recorder_sss_exit(Recorder *r, const SurfaceHit *x, float pdf_a, int count, Color beta);
+/* The Sw lobe's cosine sample at the exit: direction wi, density pdf_w, weight w (Sw cos
+ * eta^2 / pdf_w), applied to beta. */
+void recorder_sss_scatter(Recorder *r, Vec3 wi, float pdf_w, float w, Color beta);
+
 /* ---- The path tracer in media (volpath.c) */
 /* A free-flight distance sampled in medium `medium` (coefficients mc) along ray, up to
  * t_max (INFINITY: no surface behind). */

@@ -42,12 +42,7 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_PATH:
     case CST_INTEGRATOR_PATH_NEE:
     case CST_INTEGRATOR_PATH_BSDF:
-    case CST_INTEGRATOR_DEFAULT:
-        /* path_sss_li carries no recorder hooks (yet); volpath_li does. */
-        if (scene->num_subsurface)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow paths through subsurface materials "
-                            "yet; expected a scene without them");
-        return CST_OK;
+    case CST_INTEGRATOR_DEFAULT: return CST_OK; /* path_li, volpath_li and path_sss_li are recorded */
     case CST_INTEGRATOR_WHITTED:
     case CST_INTEGRATOR_LIGHT: return CST_OK; /* (integrator_prepare refuses media for both) */
     case CST_INTEGRATOR_BDPT:

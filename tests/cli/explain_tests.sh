@@ -32,6 +32,9 @@ expect "vcm: text, explicit MIS check of merges and splats" 0 'equal, bit for bi
     'MIS check: [0-9]+ strategies' 'the camera sample and the splats sum to it, bit for bit'
 harness_run "$d" 60 explain "$TMP/vcm/spheres.json" --pixel 3,17 "${SMALL[@]}" --json
 expect "vcm: JSON, splats exact" 0 '"kind": "merge"' '"mis_explicit"' '"splats_exact": true'
+# A path through a subsurface material (path_sss.c): the BSSRDF's exit is printed.
+harness_run "$d" 60 explain "$SRC/tests/render/subsurface/sss-spheres.pbrt" --pixel 40,64 --width 128 --height 128
+expect "path: subsurface exit, sum equal bit for bit" 0 'subsurface exit at .* probe hits' 'equal, bit for bit'
 harness_run "$d" 60 explain --pixel 12,12 --integrator whitted "${SMALL[@]}"
 expect "whitted: text, exact" 0 'direct light' 'equal, bit for bit'
 harness_run "$d" 60 explain --pixel 12,10 --integrator light "${SMALL[@]}"

@@ -3,7 +3,8 @@
  * the camera sample the render computes, and that sample plus BDPT's/VCM's splats (re-added
  * one by one) is what a one-sample render of the pixel accumulates; the strategies' MIS
  * weights lie in [0, 1] and BDPT's and VCM's (connections, merges, splats) equal the ones
- * computed from every strategy's pdfs of the same path, which sum to 1; whitted's ray tree and the light tracer's splats sum to the film's value;
+ * computed from every strategy's pdfs of the same path, which sum to 1; paths through
+ * subsurface materials are recorded (the BSSRDF's exit); whitted's ray tree and the light tracer's splats sum to the film's value;
  * integrators explain cannot follow and bad pixels are refused. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -22,6 +23,7 @@ static int mis_checked; /* BDPT/VCM strategies whose weight explain computed exp
 static int merges;      /* VCM merges recorded */
 static int merges_checked, splats_checked; /* of them, and of the splats, checked explicitly */
 static double mis_error; /* the largest relative difference from the explicit weights */
+static int sss_exits;    /* subsurface exits recorded (path_sss.c) */
 static float radius;    /* photon_radius of the settings (0: the default) */
 
 static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
@@ -99,6 +101,8 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 if (e->mis_strategies > 0) assert_true(e->mis_strategies >= 1 && e->mis_explicit > 0.0f);
                 if (e->mis_weight != -1.0f) assert_true(e->mis_weight >= 0.0f && e->mis_weight <= 1.0f);
                 if (e->kind == CST_EXPLAIN_MERGE) merges++;
+                if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "subsurface exit"))
+                    sss_exits++;
                 if (e->kind == CST_EXPLAIN_MERGE && e->mis_strategies > 0) merges_checked++;
                 if (e->kind == CST_EXPLAIN_SPLAT && e->mis_strategies > 0) splats_checked++;
                 if ((integ == CST_INTEGRATOR_BDPT || integ == CST_INTEGRATOR_VCM) && e->kind != CST_EXPLAIN_VERTEX && e->kind != CST_EXPLAIN_SCATTER &&
@@ -172,6 +176,39 @@ static void test_path_media(void **state)
         cst_explain_destroy(ex);
         cst_scene_destroy(s);
     }
+}
+
+/* Subsurface materials (path_sss_li): the BSSRDF step's exit, its NEE and Sw scatter are
+ * recorded and the sum is the camera sample bit for bit, in RGB and spectral mode; pixels on
+ * the two spheres besides explain_all's. */
+static void test_path_subsurface(void **state)
+{
+    (void)state;
+    static const char *const SCENE = CST_SOURCE_DIR "/tests/render/subsurface/sss-spheres.pbrt";
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_pbrt(SCENE, NULL, &s, &err) != CST_OK) fail_msg("%s: %s", SCENE, err.msg);
+    sss_exits = 0;
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH_NEE, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+    static const int PIX[][2] = {{6, 10}, {17, 10}, {18, 8}, {5, 12}};
+    CstRenderSettings st;
+    settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_SPECTRAL);
+    for (size_t p = 0; p < sizeof PIX / sizeof PIX[0]; p++)
+        for (int sample = 0; sample < 4; sample++) {
+            CstExplain *ex = NULL;
+            assert_int_equal(cst_explain(s, &st, PIX[p][0], PIX[p][1], sample, &ex, &err), CST_OK);
+            assert_true(ex->exact && !ex->truncated);
+            for (int i = 0; i < ex->num_events; i++) {
+                const CstExplainEvent *e = &ex->events[i];
+                if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "subsurface exit"))
+                    sss_exits++;
+            }
+            cst_explain_destroy(ex);
+        }
+    print_message("subsurface: %d exits recorded\n", sss_exits);
+    assert_true(sss_exits > 0);
+    cst_scene_destroy(s);
 }
 
 static void test_bdpt(void **state)
@@ -296,6 +333,7 @@ int main(void)
         cmocka_unit_test(test_path_cornell),
         cmocka_unit_test(test_path_specular),
         cmocka_unit_test(test_path_media),
+        cmocka_unit_test(test_path_subsurface),
         cmocka_unit_test(test_bdpt),
         cmocka_unit_test(test_whitted_light),
         cmocka_unit_test(test_vcm),
