@@ -88,6 +88,16 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
                     (double)e->p[1], (double)e->p[2]);
             return;
         }
+        if (e->material_type && strcmp(e->material_type, "subsurface exit") == 0) {
+            /* path_sss.c's BSSRDF step: where the light leaves the material again. */
+            fprintf(f, "  subsurface exit at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f): one of %.0f probe hits, "
+                    "pdf_a %.6g (the pick's 1/%.0f included); ", (double)e->p[0], (double)e->p[1], (double)e->p[2],
+                    (double)e->n[0], (double)e->n[1], (double)e->n[2], e->pmf > 0.0f ? 1.0 / (double)e->pmf : 0.0,
+                    (double)e->pdf_a, e->pmf > 0.0f ? 1.0 / (double)e->pmf : 0.0);
+            print3(f, "throughput Sp/pdf ", e->beta);
+            fputc('\n', f);
+            return;
+        }
         fprintf(f, "vertex %d: surface at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f), material #%d (%s)",
                 e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->n[0], (double)e->n[1],
                 (double)e->n[2], e->material, e->material_type ? e->material_type : "none");
@@ -115,6 +125,12 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
     case CST_EXPLAIN_NEE:
         if (is_whitted(x)) {
             fprintf(f, "%*sdirect light (the mean of the shadow rays' estimates)", 2 * e->depth, "");
+            print_value(f, e);
+            return;
+        }
+        if (e->light < 0 && e->mis_weight < 0.0f) {
+            /* volpath.c's medium NEE and path_sss.c's at a subsurface exit: the sum alone. */
+            fprintf(f, "  NEE (light sample not itemised)");
             print_value(f, e);
             return;
         }
@@ -156,12 +172,15 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
             fprintf(f, "\n      adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
             return;
         }
-        fprintf(f, "splat (s=%d, t=1) from a light vertex at (%.6g, %.6g, %.6g) to raster (%.4f, %.4f): camera "
-                "pdf_a %.6g; MIS w %.9g = 1/(w_light %.6g + 1)\n      ", e->s, (double)e->p[0], (double)e->p[1],
-                (double)e->p[2], (double)e->wi[0], (double)e->wi[1], (double)e->pdf_a, (double)e->mis_weight,
-                (double)e->pdf_other_w);
-        print3(f, "value (per unit film, before the filter) ", e->value);
-        fputc('\n', f);
+        fprintf(f, "splat (s=%d, t=1) of light path %d from a light vertex at (%.6g, %.6g, %.6g) to raster (%.4f, "
+                "%.4f): camera pdf_a %.6g; MIS w %.9g = 1/(w_light %.6g + 1)", e->s, e->path, (double)e->p[0],
+                (double)e->p[1], (double)e->p[2], (double)e->wi[0], (double)e->wi[1], (double)e->pdf_a,
+                (double)e->mis_weight, (double)e->pdf_other_w);
+        if (e->mis_strategies > 0)
+            fprintf(f, "; explicitly %.9g of %d strategies (weights sum %.9g)", (double)e->mis_explicit,
+                    e->mis_strategies, (double)e->mis_sum);
+        print3(f, "\n      value (per unit film, before the filter) ", e->value);
+        fprintf(f, "; adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
         return;
     case CST_EXPLAIN_SCATTER:
         if (is_whitted(x)) {
@@ -272,8 +291,9 @@ static void print_text(FILE *f, const CstExplain *x)
         }
     if (is_bdpt(x))
         fprintf(f, "light paths' splats added (%.9g, %.9g, %.9g); the film's value for the iteration (%.9g, %.9g, "
-                "%.9g)\n", x->splat_value[0], x->splat_value[1], x->splat_value[2], x->film_value[0],
-                x->film_value[1], x->film_value[2]);
+                "%.9g): %s\n", x->splat_value[0], x->splat_value[1], x->splat_value[2], x->film_value[0],
+                x->film_value[1], x->film_value[2],
+                x->splats_exact ? "the camera sample and the splats sum to it, bit for bit" : "MISMATCH");
 }
 
 void cli_explain_view(const CstScene *scene, const CstRenderSettings *s, int x, int y, int sample, const char *mode)
@@ -395,6 +415,7 @@ static bool print_json(FILE *f, const CstExplain *x)
         json_object_set_new(o, "mis_checked", json_integer(x->mis_checked));
         json_object_set_new(o, "mis_max_error", num(x->mis_max_error));
         json_object_set_new(o, "mis_max_sum_error", num(x->mis_max_sum_error));
+        json_object_set_new(o, "splats_exact", json_boolean(x->splats_exact));
     }
     /* 17 significant digits: every float and double reads back to the same bits. */
     int rc = json_dumpf(o, f, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
@@ -516,7 +537,12 @@ int cli_explain(const CliArgs *a)
     /* The check is the point of the command: a sum that is not the render's value is a bug. */
     if (!x->exact && !x->truncated)
         fprintf(stderr, "caustic: explain: the contributions do not sum to the render's value (MISMATCH)\n");
-    code = !ok ? CLI_EXIT_INTERNAL : (!x->exact && !x->truncated) ? CLI_EXIT_MISMATCH : CLI_EXIT_OK;
+    /* bdpt, vcm: the camera sample plus the splats must be the film's value too. */
+    const bool splats_bad = is_bdpt(x) && !x->splats_exact && !x->truncated;
+    if (splats_bad)
+        fprintf(stderr, "caustic: explain: the camera sample and the splats do not sum to the film's value "
+                "(MISMATCH)\n");
+    code = !ok ? CLI_EXIT_INTERNAL : ((!x->exact && !x->truncated) || splats_bad) ? CLI_EXIT_MISMATCH : CLI_EXIT_OK;
     cst_explain_destroy(x);
     return code;
 }

@@ -188,11 +188,13 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
 /* ---------------------------------------------------------------- explain (issue 30) */
 /* One sample of one pixel replayed with the render's random numbers, and what its path
  * did: every vertex, every sampling decision, every strategy's contribution with its MIS
- * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (scenes
- * without media or subsurface), whitted, light (the splats that reached the pixel), bdpt and
+ * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (media
+ * and subsurface materials too), whitted, light (the splats that reached the pixel), bdpt and
  * vcm (RGB mode); CST_ERR_UNSUPPORTED for the rest. */
 typedef enum CstExplainKind {
-    CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material */
+    CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material; or a
+                             * subsurface exit (material_type "subsurface exit": pdf_a, pmf
+                             * 1 / the probe's hits, beta Sp / pdf_a) */
     CST_EXPLAIN_ESCAPE,     /* the camera path left the scene (environment, if any, in value) */
     CST_EXPLAIN_EMISSION,   /* an emitter reached by the camera path (bdpt: s = 0) */
     CST_EXPLAIN_NEE,        /* a light sampled from a vertex (bdpt: s = 1) */
@@ -239,16 +241,18 @@ typedef struct CstExplainEvent {
                        * beta times); SCATTER: the BSDF weight f cos / pdf */
     float contribution[3]; /* beta * value: this event's share of the sample (RGB, or the
                             * first three wavelength lanes in spectral mode) */
-    /* bdpt (EMISSION, NEE, CONNECT at area lights): the strategy's MIS weight computed
-     * explicitly from the densities of every strategy of the same whole path, and those
-     * strategies' weights summed; -1 when not computed (mis_strategies 0). */
+    /* bdpt, vcm (EMISSION, NEE, CONNECT, MERGE, SPLAT at area lights): the strategy's MIS
+     * weight computed explicitly from the densities of every strategy of the same whole
+     * path (vcm: merges included), and those strategies' weights summed; -1 when not
+     * computed (mis_strategies 0). */
     float mis_explicit, mis_sum;
     int mis_strategies;
-    int path;         /* light: the light path (of the iteration) whose splat this is; -1 */
+    int path;         /* light, bdpt, vcm: the light path (of the iteration) whose splat this is; -1 */
     int medium;       /* VERTEX in a medium ("medium" material_type), DISTANCE: its index; -1 */
     float distance;   /* DISTANCE: the sampled distance, or the segment's length if it passed */
     float transmittance[3]; /* DISTANCE, homogeneous media: exp(-sigma_t distance) (RGB lanes) */
-    double share[3];  /* light: what the splat added to the pixel (filter weight included) */
+    double share[3];  /* light, bdpt, vcm: what the splat added to the pixel (filter weight
+                       * included) */
 } CstExplainEvent;
 
 typedef struct CstExplain {
@@ -266,11 +270,15 @@ typedef struct CstExplain {
     double splat_value[3];     /* bdpt: what light paths' t = 1 splats added to the pixel */
     double film_value[3];      /* what the film accumulated: camera_value + splat_value */
     int exact;                 /* sum == camera_value, bit for bit */
-    /* bdpt: strategies whose weight was also computed explicitly (mis_explicit), the
+    /* bdpt, vcm: strategies whose weight was also computed explicitly (mis_explicit), the
      * largest relative difference |mis_weight - mis_explicit| / mis_explicit among them and
      * the largest |mis_sum - 1|. */
     int mis_checked;
     double mis_max_error, mis_max_sum_error;
+    /* bdpt, vcm: camera_value plus the iteration's splats on the pixel, re-added one by one
+     * in the film's order (their shares in the SPLAT events' share), equals film_value bit
+     * for bit. */
+    int splats_exact;
 } CstExplain;
 
 /* Replays sample `sample` (for bdpt: iteration) of pixel (x, y) under `settings` (as for

@@ -1,8 +1,11 @@
-/* BDPT's MIS weights from whole paths (bdpt_mis.h): Veach's thesis sec. 10.2, the density
- * p_s of a path sampled with s light vertices is the product of the light subpath's area
- * densities of x_0 .. x_{s-1} and the camera subpath's of x_s .. x_k; w_s = p_s^2 / sum_j
- * p_j^2 (eq. 9.13). Computed in double, vertex by vertex, independently of the recursive
- * quantities of Georgiev's technical report that subpath.c uses. */
+/* BDPT's and VCM's MIS weights from whole paths (bdpt_mis.h): Veach's thesis sec. 10.2, the
+ * density p_s of a path sampled with s light vertices is the product of the light subpath's
+ * area densities of x_0 .. x_{s-1} and the camera subpath's of x_s .. x_k; VCM's merge at
+ * x_i samples x_i by both subpaths, so its density is eta_VCM p_L(x_0..x_i) p_C(x_i..x_k)
+ * (Georgiev et al. 2012 eqs. 11-13: the connection's density times the acceptance pi r^2
+ * p_L(x_i), counted N_light times); w = p^2 / sum_j p_j^2 (eq. 9.13). Computed in double,
+ * vertex by vertex, independently of the recursive quantities (dVCM, dVC, dVM) of Georgiev's
+ * technical report that subpath.c and vcm.c use. */
 #include "integrators/bdpt_mis.h"
 
 #include <math.h>
@@ -11,7 +14,7 @@
 static double cosabs(Vec3 n, Vec3 d) { return fabs((double)v3_dot(n, d)); }
 
 bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *it, const BdptMisPath *x,
-                     int strategy, double *weight, double *sum, int *strategies)
+                     int strategy, bool merge, double *weight, double *sum, int *strategies)
 {
     const int k = x->k;
     *weight = 0.0;
@@ -27,6 +30,10 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
     }
     p[k] = x->lens;
     n[k] = cam->forward;
+    /* nl[i]: the normal the light subpath arrived at x_i with (y's at a merged vertex). */
+    Vec3 nl[BDPT_MIS_MAX + 1];
+    for (int i = 0; i <= k; i++) nl[i] = n[i];
+    if (x->merged > 0 && x->merged < k) nl[x->merged] = x->n_light;
     /* d[i]: unit x_i -> x_{i+1}; d2[i]: its squared length. */
     Vec3 d[BDPT_MIS_MAX];
     double d2[BDPT_MIS_MAX];
@@ -48,7 +55,7 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
         double pw = i == 1 ? (double)emitter_emission_pdf_w(em, n[0], d[0])
                   : x->delta[i - 1] ? 1.0
                   : (double)bsdf_pdf(&b[i - 1], v3_neg(d[i - 2]), d[i - 1]);
-        pl[i] = pw * cosabs(n[i], d[i - 1]) / d2[i - 1];
+        pl[i] = pw * cosabs(nl[i], d[i - 1]) / d2[i - 1];
     }
     /* The camera's density of a direction at angle theta to its axis, per pixel sample:
      * 1 / (pixel area cos^3 theta) (subpath.c's camera_pdf_w). */
@@ -61,7 +68,8 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
         pc[i] = pw * cosabs(n[i], d[i]) / d2[i];
     }
     const bool ortho = camera_is_orthographic(cam);
-    double ps[BDPT_MIS_MAX + 1];
+    /* ps[j]: connection strategy s = j; ps[k + 1 + i]: merging at x_i (0 when none). */
+    double ps[2 * BDPT_MIS_MAX + 1];
     for (int j = 0; j <= k; j++) {
         /* Which strategies exist: the connection's two ends must not be delta vertices;
          * s = 0 needs the emitter hit; t = 1 a camera that can be connected to, and a
@@ -82,16 +90,29 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
         }
         ps[j] = pr;
     }
-    if (strategy < 0 || strategy > k || !(ps[strategy] > 0.0)) return false;
-    /* Weights relative to strategy's density, so that no square overflows. */
+    /* Merges: at a non-delta vertex off the emitter and the lens (light vertices are stored
+     * from the first bounce on, camera vertices merge from the first hit on). */
+    for (int i = 0; i <= k; i++) {
+        double pr = 0.0;
+        if (x->eta > 0.0 && i >= 1 && i < k && !x->delta[i]) {
+            pr = x->eta;
+            for (int j = 0; j <= i; j++) pr *= pl[j];
+            for (int j = i; j < k; j++) pr *= pc[j];
+            (*strategies)++;
+        }
+        ps[k + 1 + i] = pr;
+    }
+    const int m = 2 * k + 2, own = merge ? k + 1 + strategy : strategy;
+    if (strategy < 0 || strategy > k || !(ps[own] > 0.0)) return false;
+    /* Weights relative to the strategy's density, so that no square overflows. */
     double total = 0.0;
-    for (int j = 0; j <= k; j++) {
-        double r = ps[j] / ps[strategy];
+    for (int j = 0; j < m; j++) {
+        double r = ps[j] / ps[own];
         total += r * r;
     }
     *weight = 1.0 / total;
-    for (int j = 0; j <= k; j++) {
-        double r = ps[j] / ps[strategy];
+    for (int j = 0; j < m; j++) {
+        double r = ps[j] / ps[own];
         *sum += r * r / total;
     }
     return true;

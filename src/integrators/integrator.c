@@ -159,6 +159,13 @@ static void camera_tile(void *ctx, int tile, int worker)
 
 /* --------------------------------------------------- light tracing, BDPT and VCM */
 
+/* BDPT/VCM's light subpath i of the iteration: a stream apart from the camera path of pixel
+ * i, which uses (seed, i, iteration). */
+static void bidir_light_stream(const Integrator *it, int iteration, int i, Sampler *rng)
+{
+    sampler_start_stream(rng, it->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)iteration);
+}
+
 static void light_chunk(void *ctx, int chunk, int worker)
 {
     Integrator *it = ctx;
@@ -173,8 +180,7 @@ static void light_chunk(void *ctx, int chunk, int worker)
         verts->n = 0;
         for (int i = first; i < last; i++) {
             Sampler rng;
-            /* A stream apart from the camera path of pixel i, which uses (seed, i, iteration). */
-            sampler_start_stream(&rng, it->seed ^ 0x6c8e9cf570932bd5ULL, (uint64_t)i, (uint64_t)it->iteration);
+            bidir_light_stream(it, it->iteration, i, &rng);
             size_t before = verts->n;
             Wavelengths wl;
             if (it->spectral) wl = bidir_wavelengths(it, (uint64_t)i, it->iteration);
@@ -203,6 +209,20 @@ void integrator_light_path(const Integrator *it, int iteration, int path, SplatL
     Sampler rng;
     sampler_start_stream(&rng, it->seed, (uint64_t)path, (uint64_t)iteration); /* as light_chunk */
     light_trace(it->scene, &it->camera, &it->light.params, &rng, out, rays);
+}
+
+void integrator_bidir_light_path(const Integrator *it, int iteration, int path, struct Recorder *rec,
+                                 SubpathVertexList *verts, SplatList *splats, uint64_t *rays)
+{
+    const LightIterations *L = &it->light;
+    SubpathIteration vi = L->vcm_it;
+    vi.rec = rec;
+    Sampler rng;
+    bidir_light_stream(it, iteration, path, &rng);
+    Wavelengths wl; /* as light_chunk */
+    if (it->spectral) wl = bidir_wavelengths(it, (uint64_t)path, iteration);
+    subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &vi, &rng, it->spectral ? &wl : NULL, verts, splats,
+                        rays);
 }
 
 /* Between the light and the camera step of a BDPT/VCM iteration: the chunks' vertex

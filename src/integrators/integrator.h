@@ -178,5 +178,11 @@ void integrator_destroy(Integrator *it);
 /* INTEGRATOR_LIGHT: light path `path` of iteration `iteration` traced again as its chunk
  * traced it (the same random numbers), its splats appended to *out (`caustic explain`). */
 void integrator_light_path(const Integrator *it, int iteration, int path, SplatList *out, uint64_t *rays);
+/* INTEGRATOR_BIDIR, after the light step of iteration `iteration`: its light subpath `path`
+ * traced again as its chunk traced it (the same random numbers), with recorder rec (its
+ * RecorderPaths set to keep this path), into scratch lists verts and splats (`caustic
+ * explain`'s MIS check). */
+void integrator_bidir_light_path(const Integrator *it, int iteration, int path, struct Recorder *rec,
+                                 SubpathVertexList *verts, SplatList *splats, uint64_t *rays);
 
 #endif

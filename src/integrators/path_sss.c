@@ -2,7 +2,8 @@
  * loop plus pbrt-v4's BSSRDF step (VolPathIntegrator, pbrt 4th ed. sec. 14.3.3 / 3rd ed.
  * sec. 15.4): a refraction into a subsurface material samples a probe segment
  * (materials/bssrdf.h), picks one of the material's intersections along it uniformly
- * (reservoir of one), and the path continues from there with the Sw lobe and NEE. */
+ * (reservoir of one), and the path continues from there with the Sw lobe and NEE. The
+ * recorder hooks of path_li (`caustic explain`; pp->rec NULL in renders) plus the exit. */
 #include "integrators/path_sss.h"
 
 #include "core/rng.h"
@@ -91,10 +92,12 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
         SurfaceHit sh;
         ++*rays;
         if (!scene_intersect(s, &ray, &sh)) {
+            if (pp->rec) recorder_wavelengths(pp->rec, wl); /* as path_li */
             path_add_env(s, pp, &ps, ps.beta, ray.d, wl);
             break;
         }
         Vec3 wo = v3_neg(ray.d);
+        if (pp->rec) recorder_vertex(pp->rec, s, &sh, depth + 1, wl);
         /* NEE's pdf from the previous vertex (the BSSRDF's exit point is one too) */
         if (sh.emitter >= 0) path_add_emitted(s, pp, &ps, ps.beta, &sh, wo, v3_length(v3_sub(sh.p, ps.prev_p)), wl);
         if (pp->max_depth > 0 && depth >= pp->max_depth) break;
@@ -102,6 +105,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
         Bsdf bsdf;
         const Material *m = scene_bsdf_material(s, &sh, wl, wl != NULL, &bsdf);
         if (wl && m->ior_dispersive) wavelengths_terminate_secondary(wl);
+        if (pp->rec) recorder_wavelengths(pp->rec, wl);
         if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) path_add_nee(s, pp, &ps, &bsdf, &sh, wo, smp, wl, rays);
         BsdfSample bs;
@@ -127,7 +131,12 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             ps.beta = color_scale(color_mul(ps.beta, bssrdf_sr(&b, v3_length(v3_sub(x.p, sh.p)))), 1.0f / pdf);
             if (color_is_black(ps.beta)) break;
             const float eta = m->bssrdf->eta;
-            if (use_nee) ps.L = color_madd(ps.L, ps.beta, sss_nee(s, &x, eta, pp->mode == PATH_MIS, smp, wl, rays));
+            if (pp->rec) recorder_sss_exit(pp->rec, &x, pdf, count, ps.beta);
+            if (use_nee) {
+                Color d = sss_nee(s, &x, eta, pp->mode == PATH_MIS, smp, wl, rays);
+                ps.L = color_madd(ps.L, ps.beta, d);
+                if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, ps.beta, d);
+            }
             /* Sw by cosine sampling about the exit's shading normal (on ng's side):
              * weight Sw cos eta^2 / (cos / pi) */
             Vec2 uw = sampler_2d(smp);
@@ -135,7 +144,9 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             Frame f = frame_from_normal(x.ns);
             Vec3 wi = frame_to_world(&f, wl_local);
             if (!(v3_dot(wi, x.ng) > 0.0f) || !(wl_local.z > 0.0f)) break;
-            ps.beta = color_scale(ps.beta, bssrdf_sw(eta, wl_local.z) * eta * eta * CST_PI);
+            const float sw = bssrdf_sw(eta, wl_local.z) * eta * eta * CST_PI;
+            if (pp->rec) recorder_sss_scatter(pp->rec, wi, wl_local.z * CST_INV_PI, sw, ps.beta);
+            ps.beta = color_scale(ps.beta, sw);
             if (color_is_black(ps.beta)) break;
             ps.specular = false;
             ps.any_non_delta = true;
@@ -143,6 +154,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             ps.prev_p = x.p;
             ps.prev_n = x.ns;
             float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
+            if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
             if (rr == 0.0f) break;
             ps.beta = color_scale(ps.beta, rr);
             ray = ray_make(scene_offset(s, x.p, x.ng, wi), wi, 0.0f, INFINITY);
@@ -150,6 +162,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
         }
 
         float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
+        if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
         if (rr == 0.0f) break;
         ps.beta = color_scale(ps.beta, rr);
         ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);

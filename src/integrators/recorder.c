@@ -165,9 +165,12 @@ void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light,
     recorder_added(r, e, beta, value);
 }
 
-void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color value, float w, float w_light,
-                    float pdf_a)
+void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
+                    float w_light, float pdf_a)
 {
+    RecorderPaths *rp = &r->paths;
+    if (rp->light_on && s_light >= 2 && s_light - 1 == rp->nlight && s_light - 2 < RECORDER_PATH_MAX)
+        rp->light_lens[s_light - 2] = lens;
     if (!(fabsf(x - ((float)r->px + 0.5f)) < r->radius && fabsf(y - ((float)r->py + 0.5f)) < r->radius))
         return;
     const int depth = r->depth;
@@ -176,6 +179,7 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color va
     r->depth = depth;
     e->s = s_light;
     e->t = 1;
+    e->path = rp->light_started - 1; /* the light step starts its paths in order (RecorderPaths) */
     put3(e->p, p);
     e->wi[0] = x; /* the raster position, for the reader */
     e->wi[1] = y;
@@ -271,6 +275,29 @@ void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color va
     Color shown = color_scale(value, vm_norm);
     put_color(e->value, shown);
     put_color(e->contribution, color_mul(beta, shown));
+}
+
+void recorder_sss_exit(Recorder *r, const SurfaceHit *x, float pdf_a, int count, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_VERTEX);
+    put3(e->p, x->p);
+    put3(e->n, x->ns);
+    put3(e->ng, x->ng);
+    e->material = x->material;
+    e->material_type = "subsurface exit";
+    e->pdf_a = pdf_a;
+    e->pmf = count > 0 ? 1.0f / (float)count : 0.0f;
+    put_color(e->beta, beta);
+}
+
+void recorder_sss_scatter(Recorder *r, Vec3 wi, float pdf_w, float w, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
+    put3(e->wi, wi);
+    e->pdf_w = pdf_w;
+    put_color(e->beta, beta);
+    put_color(e->value, color_s(w));
+    put_color(e->contribution, color_scale(beta, w));
 }
 
 void recorder_distance(Recorder *r, int medium, const MediumCoeffs *mc, bool hetero, Ray ray, float t_max,

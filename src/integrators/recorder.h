@@ -33,6 +33,8 @@ typedef struct RecorderPaths {
     SurfaceHit light[RECORDER_PATH_MAX];  /* light[b - 1]: the hit after b - 1 bounces */
     Vec3 light_dir[RECORDER_PATH_MAX];    /* the unit direction of the ray that reached it */
     bool light_delta[RECORDER_PATH_MAX];
+    /* The lens point of each kept light hit's t = 1 connection (a splat's path ends there). */
+    Vec3 light_lens[RECORDER_PATH_MAX];
     int nlight;
 } RecorderPaths;
 
@@ -87,10 +89,21 @@ void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light,
  * value the MIS-weighted f beta_light the merge sums before its normalisation vm_norm. */
 void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color value, float vm_norm, float w,
                     float w_light, float w_camera);
-/* A light path's t = 1 connection to the camera at raster position (x, y), kept when it
- * lands within the filter's reach of the recorded pixel; value already MIS-weighted. */
-void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Color value, float w, float w_light,
-                    float pdf_a);
+/* A light path's t = 1 connection from its light vertex p (s_light light vertices) to the
+ * lens point `lens`, at raster position (x, y), kept when it lands within the filter's reach
+ * of the recorded pixel (with the light path's index, for the MIS check); value already
+ * MIS-weighted. */
+void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
+                    float w_light, float pdf_a);
+
+/* ---- The path tracer's BSSRDF step (path_sss.c) */
+/* The probe's exit point x, picked among `count` hits of the material along the probe, with
+ * density pdf_a per unit area (the pick's 1 / count included); beta: the throughput after
+ * Sp / pdf_a. */
+void recorder_sss_exit(Recorder *r, const SurfaceHit *x, float pdf_a, int count, Color beta);
+/* The Sw lobe's cosine sample at the exit: direction wi, density pdf_w, weight w (Sw cos
+ * eta^2 / pdf_w), applied to beta. */
+void recorder_sss_scatter(Recorder *r, Vec3 wi, float pdf_w, float w, Color beta);
 
 /* ---- The path tracer in media (volpath.c) */
 /* A free-flight distance sampled in medium `medium` (coefficients mc) along ray, up to

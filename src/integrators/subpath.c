@@ -81,7 +81,8 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const SubpathPa
     ++*rays;
     if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
     Color c = color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w);
-    if (it->rec) recorder_splat(it->rec, cs.raster.x, cs.raster.y, v->bounces + 1, v->p, c, weight, w_light, cam_pdf_a);
+    if (it->rec) recorder_splat(it->rec, cs.raster.x, cs.raster.y, v->bounces + 1, v->p, cs.p_lens, c, weight, w_light,
+                                cam_pdf_a);
     film_splat(splats, &vp->frame, cs.raster.x, cs.raster.y, wl ? spectrum_to_rgb(c, wl) : c);
 }
 

@@ -9,9 +9,9 @@
 #include "core/error.h"
 #include "film/film.h"
 #include "film/filter.h"
-#include "integrators/bdpt_mis.h"
 #include "integrators/integrator.h"
 #include "integrators/recorder.h"
+#include "render/explain_mis.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -42,12 +42,7 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_PATH:
     case CST_INTEGRATOR_PATH_NEE:
     case CST_INTEGRATOR_PATH_BSDF:
-    case CST_INTEGRATOR_DEFAULT:
-        /* path_sss_li carries no recorder hooks (yet); volpath_li does. */
-        if (scene->num_subsurface)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow paths through subsurface materials "
-                            "yet; expected a scene without them");
-        return CST_OK;
+    case CST_INTEGRATOR_DEFAULT: return CST_OK; /* path_li, volpath_li and path_sss_li are recorded */
     case CST_INTEGRATOR_WHITTED:
     case CST_INTEGRATOR_LIGHT: return CST_OK; /* (integrator_prepare refuses media for both) */
     case CST_INTEGRATOR_BDPT:
@@ -199,78 +194,43 @@ static bool explain_light(const Integrator *it, Recorder *r, int x, int y, int i
     return ok;
 }
 
-/* BDPT's check (bdpt_mis.h): each recorded strategy's whole path rebuilt from the camera
- * subpath and the pixel's light subpath the recorder kept, and its weight computed again
- * from the densities of every strategy of that path. */
-static void check_mis(const Integrator *it, const Recorder *r, CstExplain *ex)
+/* BDPT/VCM: the iteration's t = 1 splats on pixel (x, y) added to the camera sample as
+ * light_merge_band adds them (chunk by chunk, each chunk's splats in the order they were
+ * made, which is the order of its band's bin), each one's share kept in its SPLAT event
+ * (matched by raster position: the recorder saw them in the same order); *film gets the
+ * pixel's value. False on OOM. */
+static bool explain_splats(const Integrator *it, Recorder *r, int x, int y, const double camera[3], double film[3])
 {
-    const RecorderPaths *rp = &r->paths;
-    for (int i = 0; i < r->n; i++) {
-        CstExplainEvent *e = &r->ev[i];
-        if (!(e->flags & CST_EXPLAIN_ADDED) || e->s < 0 || e->t < 1 || (e->flags & CST_EXPLAIN_DELTA)) continue;
-        if (e->kind != CST_EXPLAIN_EMISSION && e->kind != CST_EXPLAIN_NEE && e->kind != CST_EXPLAIN_CONNECT) continue;
-        const int tc = e->t - 1; /* camera hits */
-        const int s = e->s;
-        BdptMisPath path;
-        path.k = s + e->t - 1;
-        if (tc > rp->ncam || path.k >= BDPT_MIS_MAX || tc > RECORDER_PATH_MAX) continue;
-        int j = 0; /* the vertex being filled */
-        if (s == 0) {
-            if (tc < 1) continue;
-            const SurfaceHit *h = &rp->cam[tc - 1];
-            path.emitter = h->emitter;
-            path.p0 = h->p;
-            path.n0 = h->ng;
-        } else if (s == 1) {
-            path.emitter = e->light;
-            path.p0 = v3(e->p[0], e->p[1], e->p[2]);
-            path.n0 = v3(e->ng[0], e->ng[1], e->ng[2]);
-        } else {
-            if (!rp->has_light || rp->start.delta || !rp->start.finite || s - 1 > rp->nlight ||
-                s - 1 > RECORDER_PATH_MAX)
-                continue;
-            path.emitter = rp->start.emitter;
-            path.p0 = rp->start.p;
-            path.n0 = rp->start.n;
-            for (int b = 1; b < s; b++) {
-                path.hit[++j] = &rp->light[b - 1];
-                path.delta[j] = rp->light_delta[b - 1];
+    const LightIterations *L = &it->light;
+    const SplatFrame *fr = &L->params.frame;
+    const size_t pixels = (size_t)fr->width * (size_t)fr->height;
+    const double scale = (double)pixels / (double)L->light_paths;
+    double *row = calloc(3 * pixels, sizeof *row);
+    if (!row) return false;
+    double *px = &row[3 * ((size_t)y * (size_t)fr->width + (size_t)x)];
+    for (int c = 0; c < 3; c++) film[c] = camera[c];
+    int next = 0; /* the next SPLAT event to match */
+    for (int ch = 0; ch < L->num_chunks; ch++) {
+        const SplatList *l = &L->chunks[ch].splats;
+        for (size_t k = 0; k < l->n; k++) {
+            const FilmSplat *sp = &l->v[k];
+            if (y < sp->row0 || y > sp->row1) continue;
+            film_add_splat_rows(sp, fr, row, scale, y, y + 1);
+            const double share[3] = {px[0], px[1], px[2]};
+            memset(&row[3 * (size_t)y * (size_t)fr->width], 0, 3 * (size_t)fr->width * sizeof *row);
+            if (share[0] == 0.0 && share[1] == 0.0 && share[2] == 0.0) continue; /* adds no bit */
+            for (int c = 0; c < 3; c++) film[c] += share[c];
+            for (int i = next; i < r->n; i++) {
+                CstExplainEvent *e = &r->ev[i];
+                if (e->kind != CST_EXPLAIN_SPLAT || e->wi[0] != sp->x || e->wi[1] != sp->y) continue;
+                for (int c = 0; c < 3; c++) e->share[c] = share[c];
+                next = i + 1;
+                break;
             }
         }
-        /* The camera hits from the far end: s = 0's first vertex is the emitter hit. */
-        for (int d = s == 0 ? tc - 1 : tc; d >= 1; d--) {
-            path.hit[++j] = &rp->cam[d - 1];
-            path.delta[j] = rp->cam_delta[d - 1];
-        }
-        if (j != path.k - 1) continue;
-        path.delta[0] = false;
-        if (s >= 1) { /* the connection's ends are evaluated, never delta */
-            path.delta[s - 1] = false;
-            if (s < path.k) path.delta[s] = false;
-        }
-        path.lens = rp->camera_o;
-        /* The rays' own segments: the light subpath's hits, then the camera subpath's (hit d
-         * ends segment x_{k-d} x_{k-d+1}, traversed toward x_{k-d}); the connection's 0. */
-        for (int q = 0; q < path.k; q++) path.len[q] = 0.0f;
-        for (int b = 1; b < s; b++) {
-            path.len[b - 1] = rp->light[b - 1].t;
-            path.dir[b - 1] = rp->light_dir[b - 1];
-        }
-        for (int d = 1; d <= tc; d++) {
-            path.len[path.k - d] = rp->cam[d - 1].t;
-            path.dir[path.k - d] = v3_neg(rp->cam_dir[d - 1]);
-        }
-        double w, sum;
-        int n;
-        if (!bdpt_mis_weight(it->scene, &it->camera, &it->light.vcm_it, &path, s, &w, &sum, &n)) continue;
-        e->mis_explicit = (float)w;
-        e->mis_sum = (float)sum;
-        e->mis_strategies = n;
-        double err = fabs((double)e->mis_weight - w) / w;
-        if (err > ex->mis_max_error) ex->mis_max_error = err;
-        if (fabs(sum - 1.0) > ex->mis_max_sum_error) ex->mis_max_sum_error = fabs(sum - 1.0);
-        ex->mis_checked++;
     }
+    free(row);
+    return true;
 }
 
 CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
@@ -356,7 +316,14 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
             if (memcmp(&light[c], &ex->film_value[c], sizeof light[c]) != 0) ex->exact = 0;
         }
     }
-    if (st.integrator == CST_INTEGRATOR_BDPT) check_mis(it, &rec, ex);
+    if (it->kind == INTEGRATOR_BIDIR) {
+        double film_sum[3];
+        if (!explain_splats(it, &rec, x, y, ex->camera_value, film_sum) || !explain_mis_check(it, sample, &rec, ex)) {
+            status = cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st.width, st.height);
+            goto done;
+        }
+        ex->splats_exact = memcmp(film_sum, ex->film_value, sizeof film_sum) == 0;
+    }
     ex->num_events = rec.n;
     ex->events = rec.ev;
     rec.ev = NULL;

@@ -20,6 +20,21 @@ harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[
 expect "bdpt: JSON, exact" 0 '"exact": true' '"kind": "connect"' '"w_light"' '"splat_value"'
 harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}"
 expect "bdpt: text, explicit MIS check" 0 'explicitly [0-9.e-]+ of [0-9]+ strategies' 'MIS check: [0-9]+ strategies'
+# VCM with a radius large enough for this small image's light vertices to merge: every merge
+# and splat near the pixel checked against the weights computed from the whole path.
+mkdir -p "$TMP/vcm"
+sed 's/"integrator": {[^}]*}/"integrator": {"type": "vcm", "radius": 20}/' "$SRC/scenes/cornell-spheres.json" \
+    > "$TMP/vcm/spheres.json"
+harness_run "$d" 60 explain "$TMP/vcm/spheres.json" --pixel 3,17 "${SMALL[@]}"
+expect "vcm: text, explicit MIS check of merges and splats" 0 'equal, bit for bit' \
+    '  merge \(s=[0-9]+, t=[0-9]+\).*explicitly [0-9.e-]+ of [0-9]+ strategies' \
+    'splat \(s=[0-9]+, t=1\) of light path [0-9]+ .*explicitly [0-9.e-]+ of [0-9]+ strategies' \
+    'MIS check: [0-9]+ strategies' 'the camera sample and the splats sum to it, bit for bit'
+harness_run "$d" 60 explain "$TMP/vcm/spheres.json" --pixel 3,17 "${SMALL[@]}" --json
+expect "vcm: JSON, splats exact" 0 '"kind": "merge"' '"mis_explicit"' '"splats_exact": true'
+# A path through a subsurface material (path_sss.c): the BSSRDF's exit is printed.
+harness_run "$d" 60 explain "$SRC/tests/render/subsurface/sss-spheres.pbrt" --pixel 40,64 --width 128 --height 128
+expect "path: subsurface exit, sum equal bit for bit" 0 'subsurface exit at .* probe hits' 'equal, bit for bit'
 harness_run "$d" 60 explain --pixel 12,12 --integrator whitted "${SMALL[@]}"
 expect "whitted: text, exact" 0 'direct light' 'equal, bit for bit'
 harness_run "$d" 60 explain --pixel 12,10 --integrator light "${SMALL[@]}"

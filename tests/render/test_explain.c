@@ -1,9 +1,10 @@
-/* caustic explain (issue 30): for the path tracer's three modes and BDPT, on the Cornell
- * boxes and a few pixels and samples, the recorded contributions sum bit for bit to the
- * camera sample the render computes, and that sample (plus BDPT's splats) is what a
- * one-sample render of the pixel accumulates; the strategies' MIS weights lie in [0, 1]
- * and BDPT's equal the ones computed from every strategy's pdfs of the same path, which sum
- * to 1; whitted's ray tree and the light tracer's splats sum to the film's value;
+/* caustic explain (issue 30): for the path tracer's three modes, BDPT and VCM, on the
+ * Cornell boxes and a few pixels and samples, the recorded contributions sum bit for bit to
+ * the camera sample the render computes, and that sample plus BDPT's/VCM's splats (re-added
+ * one by one) is what a one-sample render of the pixel accumulates; the strategies' MIS
+ * weights lie in [0, 1] and BDPT's and VCM's (connections, merges, splats) equal the ones
+ * computed from every strategy's pdfs of the same path, which sum to 1; paths through
+ * subsurface materials are recorded (the BSSRDF's exit); whitted's ray tree and the light tracer's splats sum to the film's value;
  * integrators explain cannot follow and bad pixels are refused. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -18,8 +19,11 @@
 
 enum { W = 24, H = 20 };
 
-static int mis_checked; /* BDPT strategies whose weight explain computed explicitly */
+static int mis_checked; /* BDPT/VCM strategies whose weight explain computed explicitly */
 static int merges;      /* VCM merges recorded */
+static int merges_checked, splats_checked; /* of them, and of the splats, checked explicitly */
+static double mis_error; /* the largest relative difference from the explicit weights */
+static int sss_exits;    /* subsurface exits recorded (path_sss.c) */
 static float radius;    /* photon_radius of the settings (0: the default) */
 
 static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
@@ -77,12 +81,16 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 if (integ != CST_INTEGRATOR_BDPT && integ != CST_INTEGRATOR_VCM && integ != CST_INTEGRATOR_LIGHT)
                     assert_true(ex->splat_value[c] == 0.0);
             }
-            /* BDPT: every strategy's weight equals the one computed from all strategies' pdfs
-             * of the same path (on the rays' own segments), and those weights sum to 1.
-             * Measured: at most 4.4e-7 relative on the Cornell box's pixels (2.9e-4 when the
-             * explicit weights took the segments from the vertices' positions instead of the
-             * offset rays'); a t = 1 density off by 2x gives 0.1 to 2.4. */
+            /* BDPT, VCM: the camera sample plus the splats, re-added as the film adds them. */
+            if (integ == CST_INTEGRATOR_BDPT || integ == CST_INTEGRATOR_VCM) assert_true(ex->splats_exact);
+            /* BDPT, VCM: every strategy's weight (splats and merges too) equals the one
+             * computed from all strategies' pdfs of the same path (on the rays' own segments),
+             * and those weights sum to 1. Measured: at most 4.4e-7 relative on the Cornell
+             * box's pixels (2.9e-4 when the explicit weights took the segments from the
+             * vertices' positions instead of the offset rays'); a t = 1 density off by 2x
+             * gives 0.1 to 2.4. */
             mis_checked += ex->mis_checked;
+            if (ex->mis_max_error > mis_error) mis_error = ex->mis_max_error;
             if (ex->mis_max_error > 1e-4 || ex->mis_max_sum_error > 1e-6)
                 fail_msg("%s pixel %d,%d sample %d: MIS weight differs from the explicit one by %.3g (rel), sum "
                          "off 1 by %.3g", cst_integrator_name(integ), x, y, sample, ex->mis_max_error,
@@ -93,6 +101,10 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 if (e->mis_strategies > 0) assert_true(e->mis_strategies >= 1 && e->mis_explicit > 0.0f);
                 if (e->mis_weight != -1.0f) assert_true(e->mis_weight >= 0.0f && e->mis_weight <= 1.0f);
                 if (e->kind == CST_EXPLAIN_MERGE) merges++;
+                if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "subsurface exit"))
+                    sss_exits++;
+                if (e->kind == CST_EXPLAIN_MERGE && e->mis_strategies > 0) merges_checked++;
+                if (e->kind == CST_EXPLAIN_SPLAT && e->mis_strategies > 0) splats_checked++;
                 if ((integ == CST_INTEGRATOR_BDPT || integ == CST_INTEGRATOR_VCM) && e->kind != CST_EXPLAIN_VERTEX && e->kind != CST_EXPLAIN_SCATTER &&
                     e->kind != CST_EXPLAIN_ROULETTE && e->mis_weight >= 0.0f) {
                     /* Georgiev's recursive form: w = 1 / (w_light + 1 + w_camera). */
@@ -166,6 +178,39 @@ static void test_path_media(void **state)
     }
 }
 
+/* Subsurface materials (path_sss_li): the BSSRDF step's exit, its NEE and Sw scatter are
+ * recorded and the sum is the camera sample bit for bit, in RGB and spectral mode; pixels on
+ * the two spheres besides explain_all's. */
+static void test_path_subsurface(void **state)
+{
+    (void)state;
+    static const char *const SCENE = CST_SOURCE_DIR "/tests/render/subsurface/sss-spheres.pbrt";
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_pbrt(SCENE, NULL, &s, &err) != CST_OK) fail_msg("%s: %s", SCENE, err.msg);
+    sss_exits = 0;
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_PATH_NEE, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+    static const int PIX[][2] = {{6, 10}, {17, 10}, {18, 8}, {5, 12}};
+    CstRenderSettings st;
+    settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_SPECTRAL);
+    for (size_t p = 0; p < sizeof PIX / sizeof PIX[0]; p++)
+        for (int sample = 0; sample < 4; sample++) {
+            CstExplain *ex = NULL;
+            assert_int_equal(cst_explain(s, &st, PIX[p][0], PIX[p][1], sample, &ex, &err), CST_OK);
+            assert_true(ex->exact && !ex->truncated);
+            for (int i = 0; i < ex->num_events; i++) {
+                const CstExplainEvent *e = &ex->events[i];
+                if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "subsurface exit"))
+                    sss_exits++;
+            }
+            cst_explain_destroy(ex);
+        }
+    print_message("subsurface: %d exits recorded\n", sss_exits);
+    assert_true(sss_exits > 0);
+    cst_scene_destroy(s);
+}
+
 static void test_bdpt(void **state)
 {
     (void)state;
@@ -178,8 +223,9 @@ static void test_bdpt(void **state)
     s = load("cornell-spheres.json");
     assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
     cst_scene_destroy(s);
-    print_message("bdpt: %d strategies' MIS weights checked against the explicit ones\n", mis_checked);
-    assert_true(mis_checked >= 50);
+    print_message("bdpt: %d strategies' MIS weights checked against the explicit ones (%d splats), largest "
+                  "relative difference %.3g\n", mis_checked, splats_checked, mis_error);
+    assert_true(mis_checked >= 50 && splats_checked >= 20);
 }
 
 /* VCM: connections and merges (summed, normalised and added per camera vertex as the walk
@@ -189,13 +235,22 @@ static void test_vcm(void **state)
 {
     (void)state;
     CstScene *s = load("cornell-spheres.json");
-    merges = 0;
+    merges = merges_checked = splats_checked = mis_checked = 0;
+    mis_error = 0.0;
     radius = 20.0f; /* the box is 555 units wide */
     assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
-    radius = 0.0f;
-    print_message("vcm: %d merges recorded\n", merges);
-    assert_true(merges > 0);
     cst_scene_destroy(s);
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_TENT, CST_COLOR_RGB) > 0);
+    cst_scene_destroy(s);
+    radius = 0.0f;
+    /* Every merge and every splat near the pixel is checked (their light subpaths traced
+     * again), with the merging strategies in every weight (explain_all's thresholds). */
+    print_message("vcm: %d merges recorded, %d checked; %d splats checked; %d strategies in all, largest relative "
+                  "difference %.3g\n", merges, merges_checked, splats_checked, mis_checked, mis_error);
+    assert_true(merges > 0 && merges_checked == merges);
+    assert_true(splats_checked >= 50 && mis_checked >= 100);
 }
 
 /* Whitted's ray tree (mirror and glass branch in two) and the light tracer's splats: the
@@ -278,6 +333,7 @@ int main(void)
         cmocka_unit_test(test_path_cornell),
         cmocka_unit_test(test_path_specular),
         cmocka_unit_test(test_path_media),
+        cmocka_unit_test(test_path_subsurface),
         cmocka_unit_test(test_bdpt),
         cmocka_unit_test(test_whitted_light),
         cmocka_unit_test(test_vcm),
