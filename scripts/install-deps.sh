@@ -18,7 +18,7 @@ PKGS=(
   libcmocka-dev       # unit test framework, driven by CTest
   python3             # scripts/check-layout.sh (the CTest test "layout")
   libsdl2-dev         # optional: the window of `caustic view` (cli/view.c)
-  xvfb                # the view tests' X server (xvfb-run), tests/cli/view_tests.sh
+  xvfb                # the view tests' X server (Xvfb), tests/cli/view_tests.sh
   libopenmpi-dev      # optional: distributed rendering under mpirun (cli/cluster.c)
   openmpi-bin         # mpirun, for tests/cli/mpi_tests.sh
 )

@@ -33,6 +33,33 @@ harness_init() {
     skipped=0
 }
 
+# harness_display: sets RUNNER, the command prefix for a program that opens a window. One
+# Xvfb server for the whole script (Debian's xvfb, installed by scripts/install-deps.sh),
+# on a display it picks itself (-displayfd), stopped at exit: xvfb-run per window started a
+# server each time (1-3 s) and, on a loaded machine, could fail its own clean-up (exit 5)
+# after the program had ended well. Without Xvfb, SDL's dummy video driver runs the same
+# code without a display.
+harness_display() {
+    RUNNER=(env SDL_VIDEODRIVER=dummy)
+    command -v Xvfb >/dev/null 2>&1 || { echo "$HARNESS_NAME: no Xvfb: SDL's dummy video driver"; return 0; }
+    Xvfb -displayfd 3 -screen 0 1024x768x24 -nolisten tcp 3>"$TMP/.display" >"$TMP/.xvfb.log" 2>&1 &
+    HARNESS_XVFB=$!
+    trap 'kill "$HARNESS_XVFB" 2>/dev/null; wait "$HARNESS_XVFB" 2>/dev/null; rm -rf "$TMP"' EXIT
+    local i
+    for i in $(seq 300); do
+        [ -s "$TMP/.display" ] && break
+        kill -0 "$HARNESS_XVFB" 2>/dev/null || break
+        sleep 0.1
+    done
+    if [ ! -s "$TMP/.display" ]; then
+        echo "$HARNESS_NAME: Xvfb did not start ($(tail -n 1 "$TMP/.xvfb.log")): SDL's dummy video driver"
+        return 0
+    fi
+    local display=":$(head -n 1 "$TMP/.display")"
+    RUNNER=(env DISPLAY="$display")
+    echo "$HARNESS_NAME: under Xvfb, display $display"
+}
+
 pass() { echo "PASS: $1"; passed=$((passed + 1)); }
 skip() { echo "SKIP: $1"; skipped=$((skipped + 1)); }
 

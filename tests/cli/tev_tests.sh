@@ -144,8 +144,7 @@ malformed size "width or height out of range"
 
 # caustic view streams the image it shows: after its last pass the stream equals its save.
 if "$BIN" --version | grep -Eq '^sdl2: +yes'; then
-    if command -v xvfb-run >/dev/null 2>&1; then RUNNER=(xvfb-run -a -s "-screen 0 1024x768x24")
-    else RUNNER=(env SDL_VIDEODRIVER=dummy); fi
+    harness_display
     dir=$TMP/view
     mkdir -p "$dir"
     printf 'wait-spp 3\nsave view.exr\nquit\n' >"$dir/script.txt"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# caustic view (cli/view.c) driven by scripts under xvfb-run: modes switched by key, each
+# caustic view (cli/view.c) driven by scripts under Xvfb: modes switched by key, each
 # mode's screenshot after N passes equal to `caustic render --spp N` of the same camera
 # (bit for bit: the passes reproduce the render's samples through first_sample), an orbit
 # restarting the accumulation, the camera as JSON, script errors located; without SDL2 in
@@ -16,15 +16,7 @@ if ! "$BIN" --version | grep -Eq '^sdl2: +yes'; then
     exit $?
 fi
 
-# The X server: xvfb-run (Debian's xvfb, installed by scripts/install-deps.sh and CI); on a
-# machine without it, SDL's dummy video driver, which runs the same code without a display.
-if command -v xvfb-run >/dev/null 2>&1; then
-    RUNNER=(xvfb-run -a -s "-screen 0 1024x768x24")
-    echo "view_tests: under xvfb-run"
-else
-    RUNNER=(env SDL_VIDEODRIVER=dummy)
-    echo "view_tests: xvfb-run not found: SDL's dummy video driver instead"
-fi
+harness_display
 
 # view DIR SECONDS ARGS...: caustic view ARGS in DIR under the X server; sets RC, OUT, ERR.
 view() {
