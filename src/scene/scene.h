@@ -177,7 +177,8 @@ typedef struct SceneMesh {
     int material;            /* scene material id of every triangle, */
     const int *tri_material; /* unless this per-triangle array of ids is given */
     const Emission *emission; /* or NULL */
-    int alpha;           /* 1 + index into Scene.alphas (scene_add_alpha), or 0: opaque */
+    int alpha;           /* 1 + index into Scene.alphas (scene_add_alpha), or 0: opaque, */
+    const int *tri_alpha; /* unless this per-triangle array of such ids is given */
     int skip_degenerate; /* drop zero-area triangles instead of failing (mesh files) */
 } SceneMesh;
 /* scene_add_mesh with vertex attributes, per-triangle materials and optional skipping of
@@ -257,6 +258,10 @@ typedef struct SurfaceHit {
     /* The time of the ray that found the hit (Ray.time): rays leaving the hit carry it on,
      * so a path sees one instant of a moving scene. */
     float time;
+    /* A hit inside an instance (prim == UINT32_MAX) only, unset otherwise: the instance and
+     * the prototype's triangle (what the alpha cut-out test looks up). */
+    int32_t inst;
+    uint32_t inst_prim;
 } SurfaceHit;
 
 /* The shading normal at barycentrics (u, v) of triangle t (3 indices into normals):
@@ -305,7 +310,14 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     }
     sh->material = pr->tri_material[ih.prim];
     sh->emitter = -1;
-    sh->uv = v2(ih.u, ih.v); /* instanced objects carry no uvs: the triangle default */
+    sh->uv = v2(ih.u, ih.v); /* the triangle default (triangle_uv's), unless the object has uvs */
+    if (pr->uvs) {
+        Vec2 ua = pr->uvs[t[0]], ub = pr->uvs[t[1]], uc = pr->uvs[t[2]];
+        float w = 1.0f - ih.u - ih.v;
+        sh->uv = v2(w * ua.x + ih.u * ub.x + ih.v * uc.x, w * ua.y + ih.u * ub.y + ih.v * uc.y);
+    }
+    sh->inst = ih.inst;
+    sh->inst_prim = ih.prim;
     return true;
 }
 
