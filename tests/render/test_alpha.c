@@ -413,7 +413,8 @@ static void json_bad(const char *text, const char *needle, const char *what)
 #define JQUAD(alpha) "{" JHEAD "\"shapes\": [{\"type\": \"quad\", \"material\": \"white\", \"vertices\": " \
               "[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], \"alpha\": " alpha "}]}"
 
-/* A shape's "alpha": a number from 0 to 1 or a texture name; absent or 1 costs nothing. */
+/* A shape's "alpha": a number from 0 to 1 or a texture name; absent or 1 costs nothing; a
+ * moving mesh keeps it. */
 static void test_json_alpha(void **state)
 {
     (void)state;
@@ -431,6 +432,15 @@ static void test_json_alpha(void **state)
     assert_int_equal(s->num_alphas, 1);
     assert_true(s->alphas[0].texture > 0);
     assert_int_equal(s->sphere_info[0].alpha, 1);
+    scene_destroy(s);
+    /* a moving mesh is an instanced object: it keeps its uvs and its cut-out */
+    s = json_ok("{" JHEAD "\"shapes\": [{\"type\": \"mesh\", \"material\": \"white\", \"vertices\": "
+                "[[0, 0, 0], [1, 0, 0], [1, 1, 0]], \"indices\": [[0, 1, 2]], \"uvs\": [[0, 0], [1, 0], [1, 1]], "
+                "\"alpha\": 0.5, \"motion\": {\"transform_end\": {\"translate\": [1, 0, 0]}}}]}");
+    assert_non_null(s->instances);
+    assert_non_null(s->instances->protos[0].uvs);
+    assert_true(s->instances->protos[0].tri_alpha && s->instances->protos[0].tri_alpha[0] == 1);
+    assert_true(s->num_alphas == 1 && s->alphas[0].value == 0.5f);
     scene_destroy(s);
     json_bad(JQUAD("-0.5"), "-0.5", "alpha -0.5 is negative");
     json_bad(JQUAD("1.5"), "1.5", "shapes[0].alpha");
