@@ -641,8 +641,8 @@ static uint64_t hash_vec3(Vec3 v, uint64_t seed)
  * independently, the far side of a sphere too (pbrt-v4 spawns a new ray at each cut hit,
  * whose new origin gives it a new number). A hit inside an instance takes its cut-out
  * from the prototype's triangle and hashes that triangle's index in place of the
- * primitive's (with the world ray and world t: the same rule as for shapes placed
- * directly, and bit for bit the same choice for an object placed by the identity). */
+ * primitive's, with the world ray and world t: the same rule as for shapes placed
+ * directly (the choices differ only where the transform's rounding moves t by ulps). */
 static bool hit_cut(const Scene *s, const Ray *ray, const SurfaceHit *sh)
 {
     int a;
