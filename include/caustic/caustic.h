@@ -327,6 +327,9 @@ typedef struct CstMeshDesc {
                               * none (its triangles shade with the geometric normal); stored
                               * as given instead of normalised */
     CstAlpha alpha;          /* an alpha cut-out over the mesh's uvs; zero: opaque */
+    const CstAlpha *triangle_alphas; /* optional: num_triangles cut-outs, one per triangle, used
+                                      * instead of alpha (an object gathering opaque shapes
+                                      * and cut-out leaves) */
 } CstMeshDesc;
 
 /* num_dropped may be NULL. */
@@ -339,8 +342,8 @@ CST_API CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *desc, i
 
 /* Instancing (Embree's instances, pbrt's ObjectInstance): an object is a mesh in its own
  * space, stored once with its own BVH; each instance places it with an affine transform.
- * Instances do not emit and carry no texture coordinates, so the object's desc must leave
- * emission zero and uvs NULL (else CST_ERR_UNSUPPORTED); everything else is read and
+ * Instances do not emit, so the object's desc must leave emission zero (else
+ * CST_ERR_UNSUPPORTED); everything else, uvs and alpha cut-outs included, is read and
  * checked as by cst_scene_add_mesh (skip_degenerate drops zero-area triangles, counted in
  * *num_dropped, which may be NULL). *out_id (>= 0) names the object; an object whose
  * triangles were all dropped fails. */

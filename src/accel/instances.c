@@ -53,6 +53,31 @@ CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec
     return CST_OK;
 }
 
+CstStatus instances_proto_set_surface(InstanceSet *set, int proto, const Vec2 *uvs, const int *tri_alpha,
+                                      CstError *err)
+{
+    if (set->built) return cst_fail(err, CST_ERR_INVALID_ARG, "instances already built");
+    if (proto < 0 || proto >= set->num_protos)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "instanced object %d out of range", proto);
+    InstProto *p = &set->protos[proto];
+    int any_alpha = 0;
+    for (int t = 0; tri_alpha && t < p->num_triangles; t++) any_alpha |= tri_alpha[t] != 0;
+    Vec2 *uv = uvs ? malloc((size_t)p->num_positions * sizeof *uv) : NULL;
+    int32_t *al = any_alpha ? malloc((size_t)p->num_triangles * sizeof *al) : NULL;
+    if ((uvs && !uv) || (any_alpha && !al)) {
+        free(uv);
+        free(al);
+        return cst_fail(err, CST_ERR_OOM, "out of memory for an instanced object's uvs and cut-outs");
+    }
+    if (uv) memcpy(uv, uvs, (size_t)p->num_positions * sizeof *uv);
+    for (int t = 0; al && t < p->num_triangles; t++) al[t] = tri_alpha[t];
+    free(p->uvs);
+    free(p->tri_alpha);
+    p->uvs = uv;
+    p->tri_alpha = al;
+    return CST_OK;
+}
+
 CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from_obj, CstError *err)
 {
     if (set->built) return cst_fail(err, CST_ERR_INVALID_ARG, "instances already built");
@@ -230,6 +255,8 @@ void instances_free(InstanceSet *set)
         free(p->normals);
         free(p->tri_indices);
         free(p->tri_material);
+        free(p->uvs);
+        free(p->tri_alpha);
         free(p->tri_normals);
         accel_free(&p->accel);
     }
@@ -247,8 +274,10 @@ size_t instances_memory_bytes(const InstanceSet *set)
                (size_t)set->num_insts * sizeof *set->order + (size_t)set->num_motions * sizeof *set->motions;
     for (int i = 0; i < set->num_protos; i++) {
         const InstProto *p = &set->protos[i];
-        b += (size_t)p->num_positions * (sizeof *p->positions + (p->normals ? sizeof *p->normals : 0)) +
-             (size_t)p->num_triangles * (3 * sizeof *p->tri_indices + sizeof *p->tri_material + sizeof *p->tri_normals) +
+        b += (size_t)p->num_positions * (sizeof *p->positions + (p->normals ? sizeof *p->normals : 0) +
+                                         (p->uvs ? sizeof *p->uvs : 0)) +
+             (size_t)p->num_triangles * (3 * sizeof *p->tri_indices + sizeof *p->tri_material + sizeof *p->tri_normals +
+                                         (p->tri_alpha ? sizeof *p->tri_alpha : 0)) +
              accel_memory_bytes(&p->accel);
     }
     return b;
@@ -311,9 +340,16 @@ bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit)
             Ray ro = to_object(set, in, &local, &scale);
             if (!(scale > 0.0f) || !isfinite(scale)) continue;
             Hit h;
-            if (accel_intersect(&set->protos[in->proto].accel, &ro, &h)) {
+            while (accel_intersect(&set->protos[in->proto].accel, &ro, &h)) {
                 float t = h.t / scale;
-                if (t < best && t > ray->t_min) {
+                if (!(t > ray->t_min)) {
+                    /* Beyond t_min in object space but not, after rounding, in world t (a
+                     * query continued past a cut-away hit: t_min is that hit's world t):
+                     * look further along, or this instance's farther surfaces are lost. */
+                    ro.t_min = h.t;
+                    continue;
+                }
+                if (t < best) {
                     best = t;
                     hit->t = t;
                     hit->u = h.u;
@@ -322,6 +358,7 @@ bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit)
                     hit->inst = id;
                     found = true;
                 }
+                break;
             }
         }
     }

@@ -20,6 +20,12 @@ typedef struct InstProto {
     Vec3 *normals;        /* unit vertex normals, object space (zero = none), or NULL */
     int32_t *tri_indices; /* 3 per triangle */
     int32_t *tri_material; /* scene material id per triangle */
+    /* Texture coordinates per position (object space meshes keep theirs: textured leaves),
+     * or NULL: every triangle's barycentric default (triangle_uv). */
+    Vec2 *uvs;
+    /* Per triangle, the scene's alpha cut-out id (Scene.alphas, 1-based; 0 opaque), or
+     * NULL when no triangle has one: only then do hits inside instances pay the test. */
+    int32_t *tri_alpha;
     Vec3 *tri_normals;     /* unit, object space, (v1-v0) x (v2-v0); made by instances_build */
     int num_triangles;
     Accel accel;           /* BVH over the prototype's triangles, object space */
@@ -69,6 +75,10 @@ typedef struct InstHit {
 CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec3 *normals,
                               int num_positions, const int *indices, const int *tri_material,
                               int num_triangles, int *out_id, CstError *err);
+/* Gives prototype `proto` (not yet built) texture coordinates (num_positions of them, or
+ * NULL) and per-triangle alpha ids (num_triangles, or NULL; all zero keeps none). Copied. */
+CstStatus instances_proto_set_surface(InstanceSet *set, int proto, const Vec2 *uvs, const int *tri_alpha,
+                                      CstError *err);
 /* world_from_obj must be affine and invertible. */
 CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from_obj, CstError *err);
 /* A moving instance: world_from_obj at shutter open (start) and close (end), each affine

@@ -372,7 +372,7 @@ CstStatus scene_add_mesh_ex(Scene *s, const SceneMesh *m, int *num_dropped, CstE
         }
         for (int k = 0; k < 3; k++) s->tri_indices[3 * id + k] = base + indices[3 * t + k];
         s->tri_info[id].material = m->tri_material ? m->tri_material[t] : m->material;
-        s->tri_info[id].alpha = m->alpha;
+        s->tri_info[id].alpha = m->tri_alpha ? m->tri_alpha[t] : m->alpha;
         s->tri_info[id].medium = s->cur_medium_iface;
         if (s->tri_has_uv) s->tri_has_uv[id] = m->uvs != NULL;
         CstStatus st = add_emitter(s, (uint32_t)id, m->emission, area, &s->tri_info[id].emitter, err);
@@ -639,17 +639,28 @@ static uint64_t hash_vec3(Vec3 v, uint64_t seed)
  * primitive and of the hit's distance: the same ray always makes the same choice, and,
  * since the ray is continued with the same origin, every surface further along it chooses
  * independently, the far side of a sphere too (pbrt-v4 spawns a new ray at each cut hit,
- * whose new origin gives it a new number). Instances carry no cut-outs. */
+ * whose new origin gives it a new number). A hit inside an instance takes its cut-out
+ * from the prototype's triangle and hashes that triangle's index in place of the
+ * primitive's, with the world ray and world t: the same rule as for shapes placed
+ * directly (the choices differ only where the transform's rounding moves t by ulps). */
 static bool hit_cut(const Scene *s, const Ray *ray, const SurfaceHit *sh)
 {
-    if (sh->prim == UINT32_MAX) return false;
-    int a = scene_prim_info(s, sh->prim)->alpha;
+    int a;
+    uint32_t prim = sh->prim;
+    if (prim == UINT32_MAX) {
+        const InstProto *pr = &s->instances->protos[s->instances->insts[sh->inst].proto];
+        if (!pr->tri_alpha) return false;
+        a = pr->tri_alpha[sh->inst_prim];
+        prim = sh->inst_prim;
+    } else {
+        a = scene_prim_info(s, prim)->alpha;
+    }
     if (!a) return false;
     const AlphaMask *am = &s->alphas[a - 1];
     float v = alpha_value(s, am, sh->uv, sh->p, sh->ng);
     if (v >= 1.0f || !(v > 0.0f)) return alpha_cut(v, 0);
     union { float f; uint32_t u; } t = {sh->t};
-    return alpha_cut(v, hash_vec3(ray->d, hash_vec3(ray->o, (uint64_t)t.u << 32 | sh->prim)));
+    return alpha_cut(v, hash_vec3(ray->d, hash_vec3(ray->o, (uint64_t)t.u << 32 | prim)));
 }
 
 /* A closest-hit filter: a hit on cut-away surface moves t_min to it and the query runs

@@ -177,7 +177,8 @@ typedef struct SceneMesh {
     int material;            /* scene material id of every triangle, */
     const int *tri_material; /* unless this per-triangle array of ids is given */
     const Emission *emission; /* or NULL */
-    int alpha;           /* 1 + index into Scene.alphas (scene_add_alpha), or 0: opaque */
+    int alpha;           /* 1 + index into Scene.alphas (scene_add_alpha), or 0: opaque, */
+    const int *tri_alpha; /* unless this per-triangle array of such ids is given */
     int skip_degenerate; /* drop zero-area triangles instead of failing (mesh files) */
 } SceneMesh;
 /* scene_add_mesh with vertex attributes, per-triangle materials and optional skipping of
@@ -257,6 +258,10 @@ typedef struct SurfaceHit {
     /* The time of the ray that found the hit (Ray.time): rays leaving the hit carry it on,
      * so a path sees one instant of a moving scene. */
     float time;
+    /* A hit inside an instance (prim == UINT32_MAX) only, unset otherwise: the instance and
+     * the prototype's triangle (what the alpha cut-out test looks up). */
+    int32_t inst;
+    uint32_t inst_prim;
 } SurfaceHit;
 
 /* The shading normal at barycentrics (u, v) of triangle t (3 indices into normals):
@@ -305,7 +310,14 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
     }
     sh->material = pr->tri_material[ih.prim];
     sh->emitter = -1;
-    sh->uv = v2(ih.u, ih.v); /* instanced objects carry no uvs: the triangle default */
+    sh->uv = v2(ih.u, ih.v); /* the triangle default (triangle_uv's), unless the object has uvs */
+    if (pr->uvs) {
+        Vec2 ua = pr->uvs[t[0]], ub = pr->uvs[t[1]], uc = pr->uvs[t[2]];
+        float w = 1.0f - ih.u - ih.v;
+        sh->uv = v2(w * ua.x + ih.u * ub.x + ih.v * uc.x, w * ua.y + ih.u * ub.y + ih.v * uc.y);
+    }
+    sh->inst = ih.inst;
+    sh->inst_prim = ih.prim;
     return true;
 }
 
@@ -379,25 +391,53 @@ static inline bool scene_has_motion(const Scene *s)
     return s->instances && s->instances->num_motions > 0;
 }
 
+/* dp/du and dp/dv of the triangle p0 p1 p2 with texture coordinates uv0 uv1 uv2 (pbrt-v4
+ * Triangle::InteractionFromIntersection); false when the uvs are degenerate. */
+static inline bool scene_triangle_dpduv(Vec3 p0, Vec3 p1, Vec3 p2, Vec2 uv0, Vec2 uv1, Vec2 uv2, Vec3 *dpdu,
+                                        Vec3 *dpdv)
+{
+    Vec2 d02 = v2(uv0.x - uv2.x, uv0.y - uv2.y), d12 = v2(uv1.x - uv2.x, uv1.y - uv2.y);
+    Vec3 dp02 = v3_sub(p0, p2), dp12 = v3_sub(p1, p2);
+    float det = d02.x * d12.y - d02.y * d12.x;
+    if (!(fabsf(det) > 1e-9f)) return false; /* degenerate uvs: no footprint */
+    float inv = 1.0f / det;
+    *dpdu = v3_scale(v3_sub(v3_scale(dp02, d12.y), v3_scale(dp12, d02.y)), inv);
+    *dpdv = v3_scale(v3_sub(v3_scale(dp12, d02.x), v3_scale(dp02, d12.x)), inv);
+    return true;
+}
+
 /* The partial derivatives of the surface position with respect to the texture coordinates
- * at a hit (pbrt-v4 Triangle::InteractionFromIntersection, Sphere): false for instances,
- * which carry no uvs. */
+ * at a hit (pbrt-v4 Triangle::InteractionFromIntersection, Sphere); inside an instance,
+ * the prototype triangle's, in object space, carried to the world by the instance's
+ * transform (dp/du is a tangent vector), so textures on instances are filtered as on
+ * shapes placed directly. */
 static inline bool scene_dpduv(const Scene *s, const SurfaceHit *sh, Vec3 *dpdu, Vec3 *dpdv)
 {
-    if (sh->prim == UINT32_MAX) return false;
+    Vec2 uv0 = v2(0.0f, 0.0f), uv1 = v2(1.0f, 0.0f), uv2 = v2(0.0f, 1.0f); /* triangle_uv's default */
+    if (sh->prim == UINT32_MAX) {
+        const Instance *in = &s->instances->insts[sh->inst];
+        const InstProto *pr = &s->instances->protos[in->proto];
+        const int32_t *t = &pr->tri_indices[3 * sh->inst_prim];
+        if (pr->uvs) uv0 = pr->uvs[t[0]], uv1 = pr->uvs[t[1]], uv2 = pr->uvs[t[2]];
+        Vec3 du, dv;
+        if (!scene_triangle_dpduv(pr->positions[t[0]], pr->positions[t[1]], pr->positions[t[2]], uv0, uv1, uv2,
+                                  &du, &dv))
+            return false;
+        Transform moved_wfo, moved_nm;
+        const Transform *wfo = &in->world_from_obj;
+        if (in->motion >= 0) { /* placed at the hit's time, as the hit itself */
+            instances_placement(s->instances, sh->inst, sh->time, &moved_wfo, &moved_nm);
+            wfo = &moved_wfo;
+        }
+        *dpdu = transform_vector(wfo, du);
+        *dpdv = transform_vector(wfo, dv);
+        return true;
+    }
     if ((int)sh->prim < s->num_triangles) {
         const int32_t *t = &s->tri_indices[3 * sh->prim];
-        Vec3 p0 = s->positions[t[0]], p1 = s->positions[t[1]], p2 = s->positions[t[2]];
-        Vec2 uv0 = v2(0.0f, 0.0f), uv1 = v2(1.0f, 0.0f), uv2 = v2(0.0f, 1.0f); /* triangle_uv's default */
         if (s->tri_has_uv && s->tri_has_uv[sh->prim]) uv0 = s->uvs[t[0]], uv1 = s->uvs[t[1]], uv2 = s->uvs[t[2]];
-        Vec2 d02 = v2(uv0.x - uv2.x, uv0.y - uv2.y), d12 = v2(uv1.x - uv2.x, uv1.y - uv2.y);
-        Vec3 dp02 = v3_sub(p0, p2), dp12 = v3_sub(p1, p2);
-        float det = d02.x * d12.y - d02.y * d12.x;
-        if (!(fabsf(det) > 1e-9f)) return false; /* degenerate uvs: no footprint */
-        float inv = 1.0f / det;
-        *dpdu = v3_scale(v3_sub(v3_scale(dp02, d12.y), v3_scale(dp12, d02.y)), inv);
-        *dpdv = v3_scale(v3_sub(v3_scale(dp12, d02.x), v3_scale(dp02, d12.x)), inv);
-        return true;
+        return scene_triangle_dpduv(s->positions[t[0]], s->positions[t[1]], s->positions[t[2]], uv0, uv1, uv2, dpdu,
+                                    dpdv);
     }
     if ((int)sh->prim >= s->num_triangles + s->num_spheres) { /* pbrt-v4's dp/du, dp/dv at the hit's uv */
         ShapeSurface sf;

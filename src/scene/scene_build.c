@@ -482,21 +482,6 @@ static CstStatus read_emission(const Scene *s, const CstEmission *e, const char 
 }
 
 
-/* A public alpha cut-out as the id scene_add_alpha gives (0: opaque, also for a constant
- * alpha of 1, which then costs nothing). */
-static CstStatus read_alpha(Scene *s, const CstAlpha *a, const char *fn, int *out, CstError *err)
-{
-    *out = 0;
-    if (!a || !a->enabled) return CST_OK;
-    if (a->enabled != 1)
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha.enabled %d; expected 0 or 1", fn, a->enabled);
-    CstStatus st = check_texture_id(s, a->texture, 1, fn, "alpha texture", err);
-    if (st != CST_OK) return st;
-    if (!a->texture && !(a->value >= 0.0f && a->value <= 1.0f))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha %g; expected a value from 0 to 1", fn, (double)a->value);
-    if (!a->texture && a->value == 1.0f) return CST_OK;
-    return scene_add_alpha(s, a->texture ? 1.0f : a->value, a->texture, out, err);
-}
 
 /* n floats at element i of a strided array (memcpy: the caller's struct may not align them). */
 static void fetch(const void *base, size_t stride, int i, int n, float *out)
@@ -649,11 +634,13 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
                            "a smaller radiance (or scale) or smaller triangles", err);
     }
     if (st == CST_OK) st = check_degenerate(d, &a, fn, err);
-    int alpha = 0;
-    if (st == CST_OK) st = read_alpha(scene, &d->alpha, fn, &alpha, err);
+    int alpha = 0, *tri_alpha = NULL;
+    if (st == CST_OK) st = scene_build_alpha(scene, &d->alpha, fn, &alpha, err);
+    if (st == CST_OK) st = scene_build_triangle_alphas(scene, d, fn, &tri_alpha, err);
     if (st == CST_OK) {
         SceneMesh sm = {0};
         sm.alpha = alpha;
+        sm.tri_alpha = tri_alpha;
         sm.positions = a.pos;
         sm.num_vertices = d->num_vertices;
         sm.normals = a.nrm;
@@ -669,6 +656,7 @@ CstStatus cst_scene_add_mesh(CstScene *scene, const CstMeshDesc *d, int *num_dro
         st = scene_add_mesh_ex(scene, &sm, num_dropped, err);
         if (st == CST_OK && peak > 0.0) st = scene_set_emitter_spectrum(scene, first, d->emission.spectrum, err);
     }
+    free(tri_alpha);
     mesh_arrays_free(&a);
     return st;
 }
@@ -688,22 +676,22 @@ CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *d, int *out_i
     if (e->radiance[0] != 0.0f || e->radiance[1] != 0.0f || e->radiance[2] != 0.0f || e->texture || e->two_sided)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has an emission; instances do not emit "
                         "(expected a zero emission; add emitters with cst_scene_add_mesh)", fn);
-    if (d->uvs)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has uvs; instances carry no texture "
-                        "coordinates (expected uvs NULL)", fn);
-    if (d->alpha.enabled)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the object has an alpha cut-out; instances are "
-                        "opaque (expected alpha.enabled 0; add cut-out shapes with cst_scene_add_mesh)", fn);
     MeshArrays a = {0};
-    int *mat = malloc((size_t)d->num_triangles * sizeof *mat);
+    int *mat = malloc((size_t)d->num_triangles * sizeof *mat), *tri_alpha = NULL, alpha = 0;
     st = mat ? gather_mesh(d, fn, &a, err)
              : cst_fail(err, CST_ERR_OOM, "%s: out of memory for %d triangles", fn, d->num_triangles);
     if (st == CST_OK) st = check_degenerate(d, &a, fn, err);
+    for (int i = 0; st == CST_OK && a.uv && i < d->num_vertices; i++)
+        if (!isfinite(a.uv[i].x) || !isfinite(a.uv[i].y))
+            st = cst_fail(err, CST_ERR_INVALID_ARG, "%s: uv of vertex %d is not finite", fn, i);
+    if (st == CST_OK) st = scene_build_alpha(scene, &d->alpha, fn, &alpha, err);
+    if (st == CST_OK) st = scene_build_triangle_alphas(scene, d, fn, &tri_alpha, err);
     int kept = 0;
     for (int t = 0; st == CST_OK && t < d->num_triangles; t++) {
         const int *i = &a.idx[3 * t];
         if (!(triangle_area(a.pos[i[0]], a.pos[i[1]], a.pos[i[2]]) > 0.0f)) continue; /* skip_degenerate */
         memmove(&a.idx[3 * kept], i, 3 * sizeof *i);
+        if (tri_alpha) tri_alpha[kept] = tri_alpha[t];
         mat[kept++] = d->triangle_materials ? d->triangle_materials[t] : d->material;
     }
     if (st == CST_OK && kept == 0)
@@ -711,8 +699,14 @@ CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *d, int *out_i
                       "that is not degenerate", fn, d->num_triangles);
     if (st == CST_OK)
         st = scene_add_instance_proto(scene, a.pos, a.nrm, d->num_vertices, a.idx, mat, kept, out_id, err);
+    /* uvs and cut-outs (the mesh's one alpha as every triangle's) for the prototype */
+    for (int t = 0; st == CST_OK && alpha && !tri_alpha && t < kept; t++) mat[t] = alpha;
+    if (st == CST_OK && (a.uv || tri_alpha || alpha))
+        st = instances_proto_set_surface(scene->instances, *out_id, a.uv, tri_alpha ? tri_alpha : alpha ? mat : NULL,
+                                         err);
     if (st == CST_OK && num_dropped) *num_dropped = d->num_triangles - kept;
     mesh_arrays_free(&a);
+    free(tri_alpha);
     free(mat);
     return st;
 }
@@ -796,7 +790,7 @@ static CstStatus add_sphere(CstScene *scene, const float center[3], float radius
         return st;
     const int first = scene->num_emitters;
     int alpha_id = 0;
-    if ((st = read_alpha(scene, alpha, fn, &alpha_id, err)) != CST_OK) return st;
+    if ((st = scene_build_alpha(scene, alpha, fn, &alpha_id, err)) != CST_OK) return st;
     if ((st = scene_add_sphere(scene, c, radius, material, &em, err)) != CST_OK) return st;
     scene->sphere_info[scene->num_spheres - 1].alpha = alpha_id;
     return peak > 0.0 && emission ? scene_set_emitter_spectrum(scene, first, emission->spectrum, err) : CST_OK;
@@ -864,7 +858,7 @@ static CstStatus add_patch(CstScene *scene, const CstShapeDesc *d, double peak, 
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: the bilinear patch has no area (its corners lie on one line) "
                         "or a normal is not finite; expected a patch with area", fn);
     int alpha_id = 0;
-    CstStatus st = read_alpha(scene, &d->alpha, fn, &alpha_id, err);
+    CstStatus st = scene_build_alpha(scene, &d->alpha, fn, &alpha_id, err);
     return st != CST_OK ? st : scene_add_patch(scene, &sh, d->material, alpha_id, err);
 }
 
@@ -905,7 +899,7 @@ static CstStatus add_sdf(CstScene *scene, const CstShapeDesc *d, double peak, co
     AnalyticShape sh;
     shape_init_sdf(&sh, tree);
     int alpha_id = 0;
-    CstStatus st = read_alpha(scene, &d->alpha, fn, &alpha_id, err);
+    CstStatus st = scene_build_alpha(scene, &d->alpha, fn, &alpha_id, err);
     if (st == CST_OK) st = scene_add_patch(scene, &sh, d->material, alpha_id, err);
     if (st != CST_OK) sdf_tree_destroy(tree);
     return st;
@@ -940,7 +934,7 @@ static CstStatus add_curve(CstScene *scene, const CstShapeDesc *d, double peak, 
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: curve widths %g, %g; expected finite widths >= 0, not both 0",
                         fn, (double)d->curve_width[0], (double)d->curve_width[1]);
     int alpha_id = 0;
-    CstStatus st = read_alpha(scene, &d->alpha, fn, &alpha_id, err);
+    CstStatus st = scene_build_alpha(scene, &d->alpha, fn, &alpha_id, err);
     if (st != CST_OK) return st;
     const bool flip = (d->reverse_orientation != 0) != (det < 0.0);
     const int segs = 1 << d->curve_split_depth;
@@ -998,7 +992,7 @@ CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *d, CstError *
                      d->reverse_orientation != 0, d->minor_radius};
     if (d->type == CST_SHAPE_SPHERE && !(d->z_min < d->z_max)) p.z_min = -d->radius, p.z_max = d->radius;
     int alpha_id = 0;
-    if ((st = read_alpha(scene, &d->alpha, fn, &alpha_id, err)) != CST_OK) return st;
+    if ((st = scene_build_alpha(scene, &d->alpha, fn, &alpha_id, err)) != CST_OK) return st;
     if (peak > 0.0) {
         /* The power check as for spheres, from the world area (shape_init again: cheap). */
         AnalyticShape tmp;

@@ -84,4 +84,12 @@ static inline CstStatus check_stride(size_t *stride, size_t elem, const char *fn
     return CST_OK;
 }
 
+/* A public alpha cut-out as the id scene_add_alpha gives (0: opaque, also for a constant
+ * alpha of 1, which then costs nothing). scene_build_textures.c. */
+CstStatus scene_build_alpha(Scene *s, const CstAlpha *a, const char *fn, int *out, CstError *err);
+/* A mesh desc's cut-outs as one alpha id per triangle: d->triangle_alphas when given (runs
+ * of equal cut-outs share an id), else *out = NULL and the mesh's d->alpha applies. The
+ * caller frees *out. scene_build_textures.c. */
+CstStatus scene_build_triangle_alphas(Scene *s, const CstMeshDesc *d, const char *fn, int **out, CstError *err);
+
 #endif

@@ -2,6 +2,7 @@
  * validates a CstTextureDesc and converts it to the scene's Texture, or back for info. */
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -333,5 +334,44 @@ CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *
     }
     color_floats(t->average, info->average);
     color_floats(t->max, info->max);
+    return CST_OK;
+}
+
+CstStatus scene_build_alpha(Scene *s, const CstAlpha *a, const char *fn, int *out, CstError *err)
+{
+    *out = 0;
+    if (!a || !a->enabled) return CST_OK;
+    if (a->enabled != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha.enabled %d; expected 0 or 1", fn, a->enabled);
+    CstStatus st = check_texture_id(s, a->texture, 1, fn, "alpha texture", err);
+    if (st != CST_OK) return st;
+    if (!a->texture && !(a->value >= 0.0f && a->value <= 1.0f))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: alpha %g; expected a value from 0 to 1", fn, (double)a->value);
+    if (!a->texture && a->value == 1.0f) return CST_OK;
+    return scene_add_alpha(s, a->texture ? 1.0f : a->value, a->texture, out, err);
+}
+
+CstStatus scene_build_triangle_alphas(Scene *s, const CstMeshDesc *d, const char *fn, int **out, CstError *err)
+{
+    *out = NULL;
+    if (!d->triangle_alphas) return CST_OK;
+    int *ids = malloc((size_t)d->num_triangles * sizeof *ids);
+    if (!ids) return cst_fail(err, CST_ERR_OOM, "%s: out of memory for %d triangles' cut-outs", fn, d->num_triangles);
+    for (int t = 0; t < d->num_triangles; t++) {
+        const CstAlpha *a = &d->triangle_alphas[t], *prev = t > 0 ? &d->triangle_alphas[t - 1] : NULL;
+        if (prev && a->enabled == prev->enabled && a->texture == prev->texture &&
+            (a->value == prev->value || !a->enabled)) {
+            ids[t] = ids[t - 1]; /* one id per run: a leaf mesh's cut-out is stored once */
+            continue;
+        }
+        char what[96];
+        snprintf(what, sizeof what, "%s (triangle_alphas[%d])", fn, t);
+        CstStatus st = scene_build_alpha(s, a, what, &ids[t], err);
+        if (st != CST_OK) {
+            free(ids);
+            return st;
+        }
+    }
+    *out = ids;
     return CST_OK;
 }

@@ -210,9 +210,13 @@ static void test_object_and_instance_rejects(void **state)
     m.emission.radiance[0] = 1.0f;
     expect_fail(cst_scene_add_object(s, &m, &obj, NULL, &e), CST_ERR_UNSUPPORTED, &e, "emission");
     m = quad_desc(mat);
-    const float uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    const float uv[4][2] = {{0, 0}, {1, 0}, {1, NAN}, {0, 1}}; /* objects keep uvs: finite ones */
     m.uvs = uv;
-    expect_fail(cst_scene_add_object(s, &m, &obj, NULL, &e), CST_ERR_UNSUPPORTED, &e, "uvs");
+    expect_fail(cst_scene_add_object(s, &m, &obj, NULL, &e), CST_ERR_INVALID_ARG, &e, "uv of vertex 2");
+    m = quad_desc(mat);
+    const CstAlpha cut[2] = {{1, 0.5f, 0}, {1, 0.0f, 9}}; /* and per-triangle cut-outs: checked */
+    m.triangle_alphas = cut;
+    expect_fail(cst_scene_add_object(s, &m, &obj, NULL, &e), CST_ERR_INVALID_ARG, &e, "triangle_alphas[1]");
     m = quad_desc(mat);
     m.material = 4;
     expect_fail(cst_scene_add_object(s, &m, &obj, NULL, &e), CST_ERR_INVALID_ARG, &e, "material 4");

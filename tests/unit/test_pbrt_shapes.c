@@ -155,7 +155,7 @@ static void test_loopsubdiv(void **state)
 }
 
 /* Shape "alpha": a constant below 1, a float texture, a constant 0 (the shape left out),
- * 1 (opaque, no cut-out), and inside ObjectBegin (a warning, opaque). */
+ * 1 (opaque, no cut-out), and inside ObjectBegin (kept per triangle of the object). */
 static void test_shape_alpha(void **state)
 {
     (void)state;
@@ -182,12 +182,30 @@ static void test_shape_alpha(void **state)
     assert_true(s->alphas[2].value == 0.25f);
     assert_true(find_warning(&w, CST_WARN_PARAMETER_IGNORED, "alpha") < 0);
     cst_scene_destroy(s);
+    /* inside ObjectBegin: the cut-out per triangle of the object, its uvs kept; a shape
+     * without uvs beside one with them gets corners of its own with the default uvs */
     Warnings w2 = {0};
     s = expect_ok(WORLD("ObjectBegin \"leaf\"\n"
                         "Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"integer indices\" [0 1 2] "
-                        "\"float alpha\" 0.5\nObjectEnd\nObjectInstance \"leaf\"\n"), &w2);
-    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "alpha cut-outs of shapes inside ObjectBegin") >= 0);
-    assert_int_equal(s->num_alphas, 0);
+                        "\"point2 uv\" [0.5 0.5  1 0.5  0.5 1] \"float alpha\" 0.5\n"
+                        "Shape \"trianglemesh\" \"point3 P\" [0 0 1  1 0 1  0 1 1  1 1 1] "
+                        "\"integer indices\" [0 1 2  2 1 3]\n"
+                        "Shape \"trianglemesh\" \"point3 P\" [0 0 2  1 0 2  0 1 2] \"integer indices\" [0 1 2] "
+                        "\"float alpha\" 0\nObjectEnd\nObjectInstance \"leaf\"\n"), &w2);
+    assert_true(find_warning(&w2, CST_WARN_UNSUPPORTED, "alpha") < 0);
+    assert_int_equal(s->num_alphas, 1);
+    assert_true(s->alphas[0].value == 0.5f);
+    assert_non_null(s->instances);
+    const InstProto *pr = &s->instances->protos[0];
+    assert_int_equal(pr->num_triangles, 3); /* the alpha-0 shape left out */
+    assert_int_equal(pr->num_positions, 3 + 6);
+    assert_non_null(pr->tri_alpha);
+    assert_true(pr->tri_alpha[0] == 1 && pr->tri_alpha[1] == 0 && pr->tri_alpha[2] == 0);
+    assert_non_null(pr->uvs);
+    assert_true(pr->uvs[pr->tri_indices[1]].x == 1.0f && pr->uvs[pr->tri_indices[1]].y == 0.5f);
+    for (int t = 1; t < 3; t++) /* triangle_uv's default at the stored corners */
+        assert_true(pr->uvs[pr->tri_indices[3 * t]].x == 0.0f && pr->uvs[pr->tri_indices[3 * t]].y == 0.0f &&
+                    pr->uvs[pr->tri_indices[3 * t + 1]].x == 1.0f && pr->uvs[pr->tri_indices[3 * t + 2]].y == 1.0f);
     cst_scene_destroy(s);
 }
 

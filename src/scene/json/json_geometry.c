@@ -211,16 +211,15 @@ static void transform_rows(const Transform *t, float rows[12])
 
 /* A mesh with "motion": {"transform": at shutter open (default identity), "transform_end":
  * at shutter close}: its vertices are in object space and it becomes an object and one
- * moving instance (cst_scene_add_instance_motion), so instances' limits hold: no emission,
- * uvs, alpha or medium. */
+ * moving instance (cst_scene_add_instance_motion), so instances' limits hold: no emission
+ * or medium (uvs and alpha are kept). */
 static CstStatus add_moving_mesh(Loader *ld, const json_t *motion, const CstMeshDesc *mesh, const json_t *shape)
 {
     static const char *const keys[] = {"transform", "transform_end"};
-    const char *bad = mesh->uvs ? "uvs" : mesh->alpha.enabled ? "alpha" : json_object_get(shape, "medium") ? "medium"
-                    : json_object_get(shape, "emission") ? "emission" : NULL;
+    const char *bad = json_object_get(shape, "medium") ? "medium" : json_object_get(shape, "emission") ? "emission" : NULL;
     if (bad)
         return json_fail_here(ld, "a moving mesh (\"motion\") cannot have \"%s\": it is placed as a moving instance, "
-                                  "and instances carry no emission, uvs, alpha or medium", bad);
+                                  "and instances carry no emission or medium", bad);
     LOADER_TRY(json_expect_object(ld, motion, "an object with \"transform_end\" (and optionally \"transform\")"));
     LOADER_TRY(json_check_keys(ld, motion, keys, 2));
     Transform t0 = transform_identity(), t1;

@@ -140,6 +140,7 @@ typedef struct ObjShape {
     Xf xf;
     int reverse;
     int material;
+    CstAlpha alpha; /* the shape's "alpha" (zero: opaque) */
     Loc loc;
 } ObjShape;
 

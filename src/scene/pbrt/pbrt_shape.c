@@ -887,10 +887,9 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
                      "is kept as glass of eta 1: paths pass through it, shadow rays are blocked", d);
         if ((st = pbrt_medium_apply(ld, 0, loc, d)) == CST_OK)
             st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
+    } else if (ld->cur_obj >= 0 && alpha.enabled && !alpha.texture && alpha.value == 0.0f) {
+        /* a constant alpha of 0 in an object: left out, as below */
     } else if (ld->cur_obj >= 0) {
-        if (alpha.enabled)
-            pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: alpha cut-outs of shapes inside ObjectBegin "
-                         "are not supported; the instanced shape is opaque", d);
         Object *o = &ld->objs[ld->cur_obj];
         if (ld->gs.area.active)
             pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: area lights inside ObjectBegin are not "
@@ -901,6 +900,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         os->xf = ld->gs.ctm;
         os->reverse = ld->gs.reverse;
         os->material = ld->gs.material;
+        os->alpha = alpha;
         os->loc = loc;
         memset(&g, 0, sizeof g);
     } else if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) {
@@ -918,26 +918,39 @@ done:
 }
 
 /* The object's triangles, placed by their definition transforms with pbrt's orientation
- * rule (as emit_shape does), as one instanced object of the scene. Degenerate triangles
- * are dropped; an object without triangles gets no prototype. */
+ * rule (as emit_shape does), as one instanced object of the scene, with their uvs and
+ * each shape's alpha cut-out. Degenerate triangles are dropped; an object without
+ * triangles gets no prototype. When some shapes have uvs and others not, the latter's
+ * triangles get vertices of their own with the default uvs (0,0), (1,0), (0,1) of their
+ * corners (triangle_uv's, as the same shape outside an object). */
 static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
 {
-    int nv = 0, nt = 0;
-    for (int i = 0; i < obj->n; i++)
-        if (!obj->shapes[i].g.is_sphere) {
-            if (obj->shapes[i].g.nv > INT_MAX - nv || obj->shapes[i].g.nt > PBRT_MAX_TRIANGLES - nt)
-                return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, obj->loc, "%s: the object has too many triangles", d);
-            nv += obj->shapes[i].g.nv;
-            nt += obj->shapes[i].g.nt;
-        }
+    int nv = 0, nt = 0, any_n = 0, any_uv = 0, any_alpha = 0;
+    for (int i = 0; i < obj->n; i++) {
+        const ShapeGeom *g = &obj->shapes[i].g;
+        if (g->is_sphere) continue;
+        any_n |= g->n != NULL; /* vertex normals (N) on some shape: shading normals, zero where none */
+        any_uv |= g->uv != NULL;
+        any_alpha |= obj->shapes[i].alpha.enabled;
+    }
+    for (int i = 0; i < obj->n; i++) {
+        const ShapeGeom *g = &obj->shapes[i].g;
+        if (g->is_sphere) continue;
+        int gv = any_uv && !g->uv ? (g->nt > INT_MAX / 3 ? INT_MAX : 3 * g->nt) : g->nv;
+        if (gv > INT_MAX - nv || g->nt > PBRT_MAX_TRIANGLES - nt)
+            return pbrt_fail_at(ld, CST_ERR_UNSUPPORTED, obj->loc, "%s: the object has too many triangles", d);
+        nv += gv;
+        nt += g->nt;
+    }
     if (nt == 0) return CST_OK;
     CstStatus st = CST_OK;
-    int any_n = 0; /* vertex normals (N) on some shape: shading normals, zero where none */
-    for (int i = 0; i < obj->n; i++) any_n |= !obj->shapes[i].g.is_sphere && obj->shapes[i].g.n != NULL;
-    Vec3 *p = malloc((size_t)nv * sizeof *p), *n = any_n ? calloc((size_t)nv, sizeof *n) : NULL;
+    /* zeroed: the corners of dropped triangles stay defined */
+    Vec3 *p = calloc((size_t)nv, sizeof *p), *n = any_n ? calloc((size_t)nv, sizeof *n) : NULL;
+    Vec2 *uv = any_uv ? calloc((size_t)nv, sizeof *uv) : NULL;
+    CstAlpha *al = any_alpha ? malloc((size_t)nt * sizeof *al) : NULL;
     int *idx = malloc((size_t)nt * 3 * sizeof *idx), *mat = malloc((size_t)nt * sizeof *mat);
     int vbase = 0, t_out = 0, dropped = 0;
-    if (!p || !idx || !mat || (any_n && !n)) {
+    if (!p || !idx || !mat || (any_n && !n) || (any_uv && !uv) || (any_alpha && !al)) {
         st = pbrt_oom(ld);
         goto done;
     }
@@ -948,38 +961,52 @@ static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
         int m = 0;
         if ((st = pbrt_material_scene_id(ld, os->material, &m))) goto done;
         int swap = (transform_det(&os->xf.m) < 0.0) != (os->reverse != 0);
+        const int unshared = any_uv && !g->uv; /* vertices per triangle corner */
         Transform nm = transform_identity();
         transform_normal_matrix(&os->xf.m, &nm);
         for (int v = 0; v < g->nv; v++) {
-            p[vbase + v] = transform_point(&os->xf.m, g->p[v]);
-            if (g->n) n[vbase + v] = transform_normal(&nm, g->n[v]);
-            if (!pbrt_coords_ok(p[vbase + v])) {
+            Vec3 pv = transform_point(&os->xf.m, g->p[v]);
+            if (!pbrt_coords_ok(pv)) {
                 st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, os->loc, "%s: vertex %d of the object is beyond "
                                   "the scene limit", d, v);
                 goto done;
             }
+            if (unshared) continue;
+            p[vbase + v] = pv;
+            if (g->n) n[vbase + v] = transform_normal(&nm, g->n[v]);
+            if (g->uv) uv[vbase + v] = g->uv[v];
         }
         for (int t = 0; t < g->nt; t++) {
-            int a = g->idx[3 * t], b = g->idx[3 * t + 1], c = g->idx[3 * t + 2];
+            int c[3] = {g->idx[3 * t], g->idx[3 * t + 1], g->idx[3 * t + 2]};
+            Vec3 pc[3];
+            for (int k = 0; k < 3; k++) pc[k] = transform_point(&os->xf.m, g->p[c[k]]);
             int sw = swap;
             if (g->n) {
-                Vec3 na = transform_normal(&nm, g->n[a]), nb = transform_normal(&nm, g->n[b]),
-                     nc = transform_normal(&nm, g->n[c]);
-                Vec3 ns = v3_add(v3_add(na, nb), nc);
+                Vec3 ns = v3_add(v3_add(transform_normal(&nm, g->n[c[0]]), transform_normal(&nm, g->n[c[1]])),
+                                 transform_normal(&nm, g->n[c[2]]));
                 if (os->reverse) ns = v3_neg(ns);
-                Vec3 ng = v3_cross(v3_sub(p[vbase + b], p[vbase + a]), v3_sub(p[vbase + c], p[vbase + a]));
-                sw = v3_dot(ng, ns) < 0.0f;
+                sw = v3_dot(v3_cross(v3_sub(pc[1], pc[0]), v3_sub(pc[2], pc[0])), ns) < 0.0f;
             }
-            if (!(triangle_area(p[vbase + a], p[vbase + b], p[vbase + c]) > 0.0f)) {
+            if (!(triangle_area(pc[0], pc[1], pc[2]) > 0.0f)) {
                 dropped++;
                 continue;
             }
-            idx[3 * t_out] = vbase + a;
-            idx[3 * t_out + 1] = vbase + (sw ? c : b);
-            idx[3 * t_out + 2] = vbase + (sw ? b : c);
+            const int order[3] = {0, sw ? 2 : 1, sw ? 1 : 2};
+            for (int k = 0; k < 3; k++) {
+                int v = c[order[k]];
+                if (unshared) { /* corner k of the stored triangle: triangle_uv's default */
+                    int u = vbase + 3 * t + k;
+                    p[u] = pc[order[k]];
+                    if (g->n) n[u] = transform_normal(&nm, g->n[v]);
+                    uv[u] = v2(k == 1 ? 1.0f : 0.0f, k == 2 ? 1.0f : 0.0f);
+                    v = 3 * t + k;
+                }
+                idx[3 * t_out + k] = vbase + v;
+            }
+            if (al) al[t_out] = os->alpha;
             mat[t_out++] = m;
         }
-        vbase += g->nv;
+        vbase += unshared ? 3 * g->nt : g->nv;
     }
     if (dropped)
         pbrt_warn_at(ld, CST_WARN_GEOMETRY, obj->loc, "ObjectBegin \"%s\": %d degenerate triangles dropped",
@@ -993,16 +1020,21 @@ static CstStatus make_proto(Loader *ld, Object *obj, const char *d)
         od.normals = n;
         od.normal_stride = sizeof(Vec3);
         od.normals_unit = 1;
+        od.uvs = uv;
+        od.uv_stride = sizeof(Vec2);
         od.indices = idx;
         od.index_stride = 3 * sizeof *idx;
         od.num_triangles = t_out;
         od.triangle_materials = mat;
+        od.triangle_alphas = al;
         st = cst_scene_add_object(ld->scene, &od, &obj->proto, NULL, ld->err);
         if (st) st = pbrt_fail_wrap(ld, st, obj->loc, d);
     }
 done:
     free(p);
     free(n);
+    free(uv);
+    free(al);
     free(idx);
     free(mat);
     return st;
@@ -1061,7 +1093,7 @@ CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const c
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: spheres in instanced objects are placed "
                          "as copies (only triangles are instanced)", d);
         Xf xf = pbrt_xf_compose(&ld->gs.ctm, &os->xf);
-        st = emit_shape(ld, &os->g, &xf, os->reverse, os->material, NULL, NULL, loc, d);
+        st = emit_shape(ld, &os->g, &xf, os->reverse, os->material, NULL, &os->alpha, loc, d);
     }
     return st;
 }
