@@ -252,6 +252,10 @@ void mlt_bootstrap_finish(Mlt *m)
      * (pbrt-v4's MLTIntegrator). */
     m->mean_I = sum / (double)m->p.bootstrap;
     if (m->p.depths > 0) m->mean_I *= (double)m->p.depths;
+    /* Every mutation splats importance a + (1 - a) = 1 in all (mlt_chain_run), so with the
+     * box filter the image's mean luminance is this b / (W H) exactly: the render's overall
+     * brightness error is the bootstrap's alone (docs/integrators.md, mmlt); the chains
+     * only spread it over the pixels. */
 }
 
 double mlt_splat_scale(const Mlt *m)

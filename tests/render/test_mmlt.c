@@ -2,7 +2,8 @@
  * BDPT: the same estimator in expectation (each strategy (d + 2) times its BDPT weight,
  * picked uniformly), so image means and block means agree within noise on the Cornell box,
  * on the spheres scene (mirror and glass: strategies through delta vertices) and in the
- * fog-filled box (participating media); 1 and 2 threads give the same image bit for bit;
+ * fog-filled box (participating media), and through a door's gap, where the bootstrap
+ * finds light on few paths of each length; 1 and 2 threads give the same image bit for bit;
  * the settings and refusals. MLT's pixels are
  * correlated, so standard errors come from independent renders. */
 #include <setjmp.h>
@@ -94,6 +95,30 @@ static void test_fog_cornell(void **state)
     cst_scene_destroy(s);
 }
 
+/* Light through a door's gap (scenes/door.json), path lengths 0-3: none reaches the camera
+ * directly, and a bootstrap path of length 1, 2 or 3 carries light about once in 200, 130
+ * and 120 (issue 31: mmlt's door renders were dark). mmlt's image mean is b's bootstrap
+ * estimate exactly (each mutation splats a total importance a + (1 - a) = 1), b is the sum
+ * of the lengths' bootstrap means, and each length gets chains in proportion to its share:
+ * a length the bootstrap under- or over-weights, a length whose chains are dropped or get
+ * a share not in proportion to its b, or a strategy that loses light moves the whole
+ * image. 16,384 bootstrap paths per length (some 80 carrying light at length 1) make b's
+ * estimate close to normal, so 24 renders' spread is its standard error (about 2.5% of
+ * the difference: 4 standard errors are a 10% shift). */
+static void test_door_rare_lengths(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_json(CST_SOURCE_DIR "/scenes/door.json", &s, &err) != CST_OK) fail_msg("%s", err.msg);
+    CstRenderSettings st = mmlt_settings(16, 2);
+    st.max_depth = 3;
+    st.mlt_bootstrap = 16384;
+    st.mlt_chains = 32;
+    bdpt_vs_mmlt(s, &st, 16, 8, 32, 24, 41, "door");
+    cst_scene_destroy(s);
+}
+
 /* The image is a function of the seed and the settings: 1 and 2 threads, bit for bit. */
 static void test_threads_deterministic(void **state)
 {
@@ -161,6 +186,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_cornell_box),
         cmocka_unit_test(test_cornell_spheres),
         cmocka_unit_test(test_fog_cornell),
+        cmocka_unit_test(test_door_rare_lengths),
         cmocka_unit_test(test_threads_deterministic),
         cmocka_unit_test(test_settings_and_refusals),
     };
