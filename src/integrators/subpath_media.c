@@ -410,7 +410,10 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
     Ray ray = ray_make(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY);
     Vec3 x_prev = es->p;
     bool prev_med = false;
-    /* BDPT (it) keeps medium.h's per-segment mixture, whose densities its MIS uses. */
+    /* BDPT (it) keeps medium.h's per-segment mixture in homogeneous media, whose exact
+     * densities its MIS uses; grid pieces take the walk's hero lane whatever the
+     * integrator, each stored vertex's throughput divided by the walk's mean lane ratio so
+     * far (hero_beta), and their MIS densities are chain_piece's. */
     HeroMis hm = {-1, color_s(1.0f), it == NULL};
     for (int bounces = 1;; bounces++) {
         MediaHit h;
