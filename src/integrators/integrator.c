@@ -670,8 +670,9 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
      * Sampler); mmlt's is BDPT's strategies, media included (subpath_media.c's single
-     * strategies). light, bdpt, vcm and mmlt walk homogeneous media (subpath_media.c),
-     * light grids too; vcm merges volume vertices by UPBP's point-point 3D estimator. */
+     * strategies). light, bdpt, vcm and mmlt walk homogeneous, grid and cloud media
+     * (subpath_media.c); vcm merges volume vertices by UPBP's point-point 3D estimator.
+     * Emission of media is gathered by the camera walks of bdpt and vcm only. */
     const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
                              st->integrator == CST_INTEGRATOR_MMLT;
     if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH &&
@@ -679,16 +680,12 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
                         "use path, path-nee, path-bsdf, light, bdpt, vcm, pssmlt or mmlt",
                         cst_integrator_name(st->integrator));
-    if (bidir_media) {
+    if (bidir_media && it->kind != INTEGRATOR_BIDIR) {
         for (int i = 0; i < scene->num_media; i++) {
             const Medium *m = &scene->media[i];
-            if (medium_is_hetero(m) && it->kind != INTEGRATOR_LIGHT)
-                return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s renders homogeneous participating media "
-                                "only (medium %d is a grid or cloud): use path, path-nee, path-bsdf or light",
-                                cst_integrator_name(st->integrator), i);
             if (!color_is_black(medium_is_hetero(m) ? m->u.het.le : m->u.homog.le))
                 return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render emissive participating "
-                                "media yet (medium %d emits): use path, path-nee or path-bsdf",
+                                "media yet (medium %d emits): use path, path-nee, path-bsdf, bdpt or vcm",
                                 cst_integrator_name(st->integrator), i);
         }
     }

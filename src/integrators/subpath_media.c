@@ -1,4 +1,4 @@
-/* Light tracing and BDPT through homogeneous participating media (subpath_media.h): free-
+/* Light tracing, BDPT, VCM and MMLT through participating media (subpath_media.h): free-
  * flight sampling and Henyey–Greenstein scattering on both subpaths, medium tracking across
  * interface shapes, transmittance on every connection, and the recursive MIS of subpath.c
  * (Georgiev's tech. rep. "Implementing Vertex Connection and Merging", 2012) extended to
@@ -9,10 +9,13 @@
  * medium a segment crosses). Those densities are medium.h's: the balance heuristic over
  * colour lanes, medium_distance_pdf() and medium_pass_prob(), per straight piece between
  * boundaries. Only the scenes with media come here; the others keep subpath.c and light.c
- * bit for bit. The light tracer (no MIS) also walks grid media by delta tracking and ratio
- * tracking, with the hero-lane MIS of hetero_medium.h over the whole path. integrator.c
- * refuses grids for BDPT (their distance pdfs are stochastic) and emissive media for both
- * (volume emission is not sampled by light subpaths). VCM adds merging: surface light
+ * bit for bit. Grid and cloud media are walked by delta tracking and connected through by
+ * ratio tracking (both unbiased), with the hero-lane MIS of hetero_medium.h over each
+ * subpath; their MIS densities are chain_piece's majorant-based stand-ins for the
+ * stochastic true ones (any densities computed alike by every strategy keep the weights a
+ * partition of unity). Emissive media: the camera walks of BDPT and VCM gather their
+ * emission with weight 1 (media_subpath_trace_camera says why); integrator.c refuses them
+ * for the light tracer and MMLT, whose strategies do not gather it. VCM adds merging: surface light
  * vertices as vcm.c, volume ones by UPBP's point-point 3D estimator (a ball of radius r,
  * 1 / ((4/3) pi r^3 N), the eta of a volume vertex in every MIS weight; media_merge). */
 #include "integrators/subpath_media.h"
@@ -35,21 +38,23 @@ enum { MEDIA_MAX_CROSSINGS = 256 };
  * pass probability if b is a surface); rev the same from b back to a. Vacuum pieces count 1. */
 typedef struct ChainPdf {
     int pieces;
-    float first_pass, first_pdf; /* the piece at a */
-    float last_pass, last_pdf;   /* the piece at b */
+    float first_pass, first_pdf; /* the piece at a: pass probability, density at a */
+    float last_pass, last_pdf;   /* the piece at b: pass probability, density at b */
     float mid;                   /* pass probabilities of the pieces between */
 } ChainPdf;
 
-static inline void chain_add(ChainPdf *c, float pass, float pdf)
+/* A piece with its pass probability and its free-flight densities at its start (pdf_a,
+ * the density of a walk from its far end stopping there) and at its end (pdf_b); they
+ * differ in a grid medium only. */
+static inline void chain_add(ChainPdf *c, float pass, float pdf_a, float pdf_b)
 {
     if (c->pieces == 0) {
         c->first_pass = pass;
-        c->first_pdf = pdf;
-    } else {
-        if (c->pieces >= 2) c->mid *= c->last_pass;
-        c->last_pass = pass;
-        c->last_pdf = pdf;
+        c->first_pdf = pdf_a;
     }
+    if (c->pieces >= 2) c->mid *= c->last_pass;
+    c->last_pass = pass;
+    c->last_pdf = pdf_b;
     c->pieces++;
 }
 
@@ -57,7 +62,7 @@ static inline void chain_add(ChainPdf *c, float pass, float pdf)
 static inline void chain_pdfs(const ChainPdf *c, bool a_med, bool b_med, float *fwd, float *rev)
 {
     if (c->pieces <= 1) {
-        *fwd = c->pieces ? (b_med ? c->first_pdf : c->first_pass) : 1.0f;
+        *fwd = c->pieces ? (b_med ? c->last_pdf : c->first_pass) : 1.0f;
         *rev = c->pieces ? (a_med ? c->first_pdf : c->first_pass) : 1.0f;
         return;
     }
@@ -65,11 +70,45 @@ static inline void chain_pdfs(const ChainPdf *c, bool a_med, bool b_med, float *
     *rev = c->last_pass * c->mid * (a_med ? c->first_pdf : c->first_pass);
 }
 
-/* A piece of length len in medium m (-1 vacuum): its pass probability and density. */
-static inline void chain_piece(ChainPdf *c, const MediumCoeffs *mc, int m, float len)
+/* Optical depths above this (in the largest lane) count as this in the MIS densities of
+ * grid media: e^-20 keeps the recursion's squared ratios (subpath.h's mis) inside float. */
+#define MEDIA_GRID_MIS_DEPTH 20.0f
+
+/* A piece o + t dir, t in [0, len], in medium m (-1 vacuum): its pass probability and
+ * densities; a_vertex / b_vertex: its start / end is a volume vertex (else that density is
+ * not used). Homogeneous media: medium.h's exact densities (the balance heuristic over the
+ * lanes, as medium_sample_distance samples). Grid and cloud media: delta tracking's true
+ * density of stopping at x, sigma_t(x) Tr(0, x), is the expectation of a random process
+ * nobody can evaluate exactly; MIS needs only densities that every strategy computes the
+ * same way for the same path (the weights then still sum to 1 and each strategy's estimator
+ * stays unbiased, Veach's thesis sec. 9.2.2: any weights summing to 1 over the strategies
+ * that can make the path). So a grid piece uses the majorant's transmittance in place of
+ * Tr, mean_c exp(-sigma_t[c] tau_maj), with the real sigma_t(x) = density(x) sigma_t at a
+ * vertex: the densities pbrt-v4's volpath weighs NEE with, and Miller et al. 2019's
+ * null-scattering path pdf summed over no null vertex. tau_maj is deterministic and the
+ * same for the piece walked either way, so a walk, the reverse walk and a connection all
+ * see the same value. */
+static void chain_piece(ChainPdf *c, const Scene *s, const MediumCoeffs *mc, int m, Vec3 o, Vec3 dir, float len,
+                        bool a_vertex, bool b_vertex)
 {
-    if (m < 0) chain_add(c, 1.0f, 0.0f);
-    else chain_add(c, medium_pass_prob(mc, len), medium_distance_pdf(mc, len));
+    if (m < 0) {
+        chain_add(c, 1.0f, 0.0f, 0.0f);
+        return;
+    }
+    const Medium *med = &s->media[m];
+    if (!medium_is_hetero(med)) {
+        float pdf = medium_distance_pdf(mc, len);
+        chain_add(c, medium_pass_prob(mc, len), pdf, pdf);
+        return;
+    }
+    const HeteroMedium *h = &med->u.het;
+    float tau = hetero_majorant_depth(h, o, dir, len);
+    const float smax = color_max(mc->sigma_t);
+    if (smax * tau > MEDIA_GRID_MIS_DEPTH) tau = MEDIA_GRID_MIS_DEPTH / smax;
+    const float pd = medium_distance_pdf(mc, tau);
+    const float pdf_a = a_vertex ? hetero_density_world(h, o) * pd : 0.0f;
+    const float pdf_b = b_vertex ? hetero_density_world(h, v3_add(o, v3_scale(dir, len))) * pd : 0.0f;
+    chain_add(c, medium_pass_prob(mc, tau), pdf_a, pdf_b);
 }
 
 /* A connection from p (normal n_p; 0 in a medium) to q (n_q likewise; q_med: q is a
@@ -103,9 +142,9 @@ static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bo
             const Medium *m = &s->media[medium];
             mc = medium_coeffs(m, wl);
             if (medium_is_hetero(m)) {
-                /* Ratio tracking (the light tracer only: BDPT refuses grids, whose chain
-                 * densities below would not be these), its random stream a hash of the
-                 * piece as scene_transmittance's. */
+                /* Ratio tracking (unbiased per lane, Novak et al. 2014), its random
+                 * stream a hash of the piece as scene_transmittance's; the MIS densities
+                 * of the piece are chain_piece's majorant-based ones, not this estimate. */
                 const float seg[6] = {o.x, o.y, o.z, end.x, end.y, end.z};
                 uint64_t seed = 0x3c6ef372fe94f82bULL + (uint64_t)step;
                 for (int i = 0; i < 6; i++) {
@@ -117,7 +156,7 @@ static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bo
                 tr = color_mul(tr, medium_transmittance(&mc, piece));
             }
         }
-        chain_piece(&c, &mc, medium, piece);
+        chain_piece(&c, s, &mc, medium, o, dir, piece, step == 0 && v3_length2(n_p) == 0.0f, !hit && q_med);
         if (!hit) {
             out->tr = tr;
             chain_pdfs(&c, v3_length2(n_p) == 0.0f, q_med, &out->fwd, &out->rev);
@@ -210,17 +249,24 @@ typedef struct MediaHit {
     Vec3 p;        /* the vertex (surface or volume) */
     float dist;    /* |p - the previous vertex| */
     float fwd, rev; /* ChainPdf's: this vertex from the previous one, and back */
+    Color le;       /* with `emit`: the media's emission along the way, times the throughput
+                     * (hero-normalised), to be added as it is */
 } MediaHit;
 
 /* Follows ray (from vertex x_prev, a volume vertex when prev_med) through media and
  * boundaries, in *medium (updated at each boundary), to the next vertex: a free-flight
  * sample in each medium piece (two 1D numbers: the lane, the distance; medium.h), its
- * weight multiplied into sp's beta and scatter. False when the path ends (black weight or
- * a stack of boundaries); a miss is returned as MEDIA_MISS. */
-static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, int *medium, SubPath *sp,
+ * weight multiplied into sp's beta and scatter. Grid media are delta-tracked with the
+ * walk's hero lane (hm), homogeneous ones too when hm->homogeneous. With emit, the
+ * emission of every emissive piece is gathered into out->le (volpath.c's estimators:
+ * sigma_a Le Tr / pdf at a homogeneous scattering point, hetero_sample_distance's at every
+ * tentative collision of a grid). False when the path ends (black weight or a stack of
+ * boundaries); a miss is returned as MEDIA_MISS. */
+static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, bool emit, int *medium, SubPath *sp,
                        HeroMis *hm, Sampler *rng, const Wavelengths *wl, MediaHit *out, uint64_t *rays)
 {
     ChainPdf c = {0, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f};
+    out->le = color_s(0.0f);
     for (int step = 0; step < MEDIA_MAX_CROSSINGS; step++) {
         SurfaceHit *sh = &out->sh;
         ++*rays;
@@ -234,6 +280,9 @@ static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, int 
                 if (hm->hero < 0) hm->hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
                 hetero_sample_distance(&med->u.het, &mc, ray.o, ray.d, hit ? sh->t : INFINITY, hm->hero, hm->r_u, u_t,
                                        &ms);
+                /* ms.le is already divided by the lanes' mean ratio, the walk's so far
+                 * included (hetero_medium.h). */
+                if (emit && mc.emissive) out->le = color_madd(out->le, sp->beta, ms.le);
                 hm->r_u = color_mul(hm->r_u, ms.r);
             } else if (hm->homogeneous) {
                 if (hm->hero < 0) hm->hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
@@ -242,10 +291,12 @@ static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, int 
             } else {
                 medium_sample_distance(&mc, hit ? sh->t : INFINITY, u_ch, u_t, &ms);
             }
+            if (emit && mc.emissive && ms.scattered && !medium_is_hetero(med))
+                out->le = color_madd(out->le, hero_beta(hm, sp->beta), color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
             sp->beta = color_mul(sp->beta, ms.weight);
             sp->scatter = color_mul(sp->scatter, ms.weight);
             if (color_is_black(sp->scatter)) return false;
-            chain_piece(&c, &mc, *medium, ms.t);
+            chain_piece(&c, s, &mc, *medium, ray.o, ray.d, ms.t, step == 0 && prev_med, ms.scattered);
             if (ms.scattered) {
                 out->kind = MEDIA_VOLUME;
                 out->p = ray_at(&ray, ms.t);
@@ -254,7 +305,7 @@ static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, int 
                 return out->fwd > 0.0f;
             }
         } else {
-            chain_add(&c, 1.0f, 0.0f);
+            chain_add(&c, 1.0f, 0.0f, 0.0f);
         }
         if (!hit) {
             out->kind = MEDIA_MISS;
@@ -359,11 +410,14 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
     Ray ray = ray_make(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY);
     Vec3 x_prev = es->p;
     bool prev_med = false;
-    /* BDPT (it) keeps medium.h's per-segment mixture, whose densities its MIS uses. */
+    /* BDPT (it) keeps medium.h's per-segment mixture in homogeneous media, whose exact
+     * densities its MIS uses; grid pieces take the walk's hero lane whatever the
+     * integrator, each stored vertex's throughput divided by the walk's mean lane ratio so
+     * far (hero_beta), and their MIS densities are chain_piece's. */
     HeroMis hm = {-1, color_s(1.0f), it == NULL};
     for (int bounces = 1;; bounces++) {
         MediaHit h;
-        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, &hm, rng, w->wl, &h, rays)) return true;
+        if (!media_next(s, ray, x_prev, prev_med, false, &medium, &sp, &hm, rng, w->wl, &h, rays)) return true;
         if (h.kind == MEDIA_MISS) return true;
         Vec3 w_prev = v3_neg(ray.d);
         const bool vol = h.kind == MEDIA_VOLUME;
@@ -690,9 +744,15 @@ static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathI
         }
     Color norm = color_s(it->vm_norm);
     if (vol) {
-        const MediumCoeffs mc = medium_coeffs(&s->media[x->medium], wl);
-        for (int c = 0; c < COLOR_LANES; c++)
-            norm.c[c] = mc.sigma_s.c[c] > 0.0f ? it->vm_norm_vol / mc.sigma_s.c[c] : 0.0f;
+        /* sigma_s(x): in a grid, the density at x times the medium's sigma_s (delta
+         * tracking's weights hold sigma_s(y) / sigma_t(y) like the closed form's). */
+        const Medium *med = &s->media[x->medium];
+        const MediumCoeffs mc = medium_coeffs(med, wl);
+        const float dens = medium_is_hetero(med) ? hetero_density_world(&med->u.het, x->p) : 1.0f;
+        for (int c = 0; c < COLOR_LANES; c++) {
+            const float ss = mc.sigma_s.c[c] * dens;
+            norm.c[c] = ss > 0.0f ? it->vm_norm_vol / ss : 0.0f;
+        }
     }
     *hero = color_mul(acc_hero, norm);
     return color_mul(acc, norm);
@@ -720,10 +780,29 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
     int medium = s->camera_medium;
     Vec3 x_prev = ray.o;
     bool prev_med = false;
-    HeroMis hm = {-1, color_s(1.0f), false}; /* stays unused: BDPT refuses grid media */
+    /* Grid media: delta tracking with one hero lane for the whole camera subpath, every
+     * contribution weighted by hero_beta (the balance heuristic over the lanes of the
+     * subpath's grid pieces, as volpath.c's mis_beta; the light subpath's vertices carry
+     * their own). Each subpath is then an estimator for the mixture over hero lanes, a
+     * proper density, and the two are independent: their product stays unbiased. */
+    HeroMis hm = {-1, color_s(1.0f), false};
     for (int t = 1;; t++) {
         MediaHit h;
-        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, &hm, rng, wl, &h, rays)) break;
+        /* Emissive media: their emission is gathered by this walk alone, with MIS weight
+         * 1. No other strategy makes such a path: light subpaths start on the emitters of
+         * the light sampler only (never inside a medium), so connections and merges end
+         * on those, and the paths whose last vertex is a point of emitting medium have
+         * one strategy, s = 0, whose weight is 1 (Veach's thesis sec. 9.2.2: the weights
+         * need only sum to 1 over the strategies that can make a path). Below the depth
+         * limit only, as volpath.c and pbrt-v4. */
+        const bool emit = !(vp->max_depth > 0 && t - 1 >= vp->max_depth);
+        const bool go = media_next(s, ray, x_prev, prev_med, emit, &medium, &sp, &hm, rng, wl, &h, rays);
+        if (emit) {
+            if (cam_dispersed) H = color_add(H, h.le);
+            else L = color_add(L, h.le);
+        }
+        if (!go) break;
+        const Color beta = hero_beta(&hm, sp.beta); /* the throughput of this vertex's contributions */
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
             Color le = scene_env_radiance(s, ray.d, wl);
@@ -737,8 +816,8 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
                     float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
                     w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
                 }
-                if (cam_dispersed) H = color_madd(H, sp.beta, color_scale(le, w));
-                else L = color_madd(L, sp.beta, color_scale(le, w));
+                if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
+                else L = color_madd(L, beta, color_scale(le, w));
             }
             break;
         }
@@ -757,8 +836,8 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
                     float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h.sh.ng, wo);
                     w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
                 }
-                if (cam_dispersed) H = color_madd(H, sp.beta, color_scale(le, w));
-                else L = color_madd(L, sp.beta, color_scale(le, w));
+                if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
+                else L = color_madd(L, beta, color_scale(le, w));
             }
         }
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
@@ -783,8 +862,8 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             if (merging) merge->plan(it, h.p, &mq);
             if (has_lights) {
                 Color nee = media_connect_light(s, it, &sp, &x, rng, wl, rays);
-                if (cam_dispersed) H = color_madd(H, sp.beta, nee);
-                else L = color_madd(L, sp.beta, nee);
+                if (cam_dispersed) H = color_madd(H, beta, nee);
+                else L = color_madd(L, beta, nee);
             }
             if (merging) merge->fetch(it, &mq);
             Color c = color_s(0.0f), ch = color_s(0.0f);
@@ -794,14 +873,14 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
                 if (cam_dispersed || lv[j].dispersed) ch = color_add(ch, cj);
                 else c = color_add(c, cj);
             }
-            L = color_madd(L, sp.beta, c);
-            if (wl) H = color_madd(H, sp.beta, ch);
+            L = color_madd(L, beta, c);
+            if (wl) H = color_madd(H, beta, ch);
             if (merging) { /* as subpath_trace_camera */
                 Color mh = color_s(0.0f), m = media_merge(s, vp, it, &mq, &sp, &x, t, wl, &mh);
                 if (cam_dispersed) m = color_add(m, mh), mh = color_s(0.0f);
-                if (cam_dispersed) H = color_madd(H, sp.beta, m);
-                else L = color_madd(L, sp.beta, m);
-                if (wl) H = color_madd(H, sp.beta, mh);
+                if (cam_dispersed) H = color_madd(H, beta, m);
+                else L = color_madd(L, beta, m);
+                if (wl) H = color_madd(H, beta, mh);
             }
         }
         if (vol) {
@@ -926,10 +1005,10 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
     int medium = s->camera_medium;
     Vec3 x_prev = ray.o;
     bool prev_med = false;
-    HeroMis hm = {-1, color_s(1.0f), false}; /* unused: grids are refused */
+    HeroMis hm = {-1, color_s(1.0f), false}; /* grid media: the hero lane, as media_subpath_trace_camera */
     for (int t = 1;; t++) {
         MediaHit h;
-        if (!media_next(s, ray, x_prev, prev_med, &medium, &sp, &hm, rng, wl, &h, rays)) return false;
+        if (!media_next(s, ray, x_prev, prev_med, false, &medium, &sp, &hm, rng, wl, &h, rays)) return false;
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
             if (!emission || t != hits) return false;
@@ -942,7 +1021,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 float em = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
                 w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(em) * sp.d_vc);
             }
-            *emitted = color_mul(sp.beta, color_scale(le, w));
+            *emitted = color_mul(hero_beta(&hm, sp.beta), color_scale(le, w));
             if (dispersed) *emitted = subpath_hero_only(*emitted);
             return false;
         }
@@ -961,7 +1040,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h.sh.ng, wo);
                 w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
             }
-            *emitted = color_mul(sp.beta, color_scale(le, w));
+            *emitted = color_mul(hero_beta(&hm, sp.beta), color_scale(le, w));
             if (dispersed) *emitted = subpath_hero_only(*emitted);
             return false;
         }
@@ -970,6 +1049,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
             if (t == hits) {
                 *out = (MediaCameraVertex){.p = h.p, .wo = wo, .vol = true, .g = g, .medium = medium, .sp = sp,
                                            .dispersed = dispersed};
+                out->sp.beta = hero_beta(&hm, sp.beta);
                 return true;
             }
             if (!media_scatter_phase(&sp, it, h.p, wo, g, t, vp->rr_depth, rng, &ray)) return false;
@@ -985,6 +1065,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
             if (t == hits) {
                 if (bsdf_is_delta(&bsdf)) return false; /* no connection to a Dirac */
                 *out = (MediaCameraVertex){h.sh, bsdf, h.p, wo, false, 0.0f, medium, sp, dispersed};
+                out->sp.beta = hero_beta(&hm, sp.beta);
                 return true;
             }
             if (!subpath_scatter(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) return false;

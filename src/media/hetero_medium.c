@@ -321,6 +321,24 @@ Color hetero_transmittance(const HeteroMedium *h, const MediumCoeffs *mc, Vec3 o
     return tr;
 }
 
+float hetero_density_world(const HeteroMedium *h, Vec3 p_world)
+{
+    return hetero_density(h, transform_point(&h->medium_from_world, p_world));
+}
+
+float hetero_majorant_depth(const HeteroMedium *h, Vec3 o, Vec3 d, float t_max)
+{
+    Vec3 om, dm, og, dg;
+    float ta, tb;
+    if (!to_grid(h, o, d, t_max, &om, &dm, &og, &dg, &ta, &tb)) return 0.0f;
+    MajorantDda it;
+    majorant_dda_init(&it, &h->maj, og, dg, ta, tb);
+    MajorantSeg seg;
+    double tau = 0.0;
+    while (majorant_dda_next(&it, &seg)) tau += (double)seg.maj * (double)(seg.t1 - seg.t0);
+    return (float)tau;
+}
+
 /* ------------------------------------------------------------------ validation, copies */
 
 static bool finite_nonneg(Color c)

@@ -75,4 +75,14 @@ void hetero_sample_distance(const HeteroMedium *h, const struct MediumCoeffs *mc
 Color hetero_transmittance(const HeteroMedium *h, const struct MediumCoeffs *mc, Vec3 o, Vec3 d, float t_max,
                            uint64_t seed);
 
+/* The density at world point p (hetero_density after the medium's transform). */
+float hetero_density_world(const HeteroMedium *h, Vec3 p_world);
+
+/* The integral of the majorant grid's density bound along o + t d over [0, t_max] (world
+ * space, d unit length; t_max may be INFINITY): the optical depth of the majorant at
+ * density 1, to be multiplied by sigma_t. Deterministic (no random numbers) and, up to
+ * rounding, the same for the segment walked either way: the bidirectional integrators'
+ * MIS densities of grid media are made from it (subpath_media.c). */
+float hetero_majorant_depth(const HeteroMedium *h, Vec3 o, Vec3 d, float t_max);
+
 #endif

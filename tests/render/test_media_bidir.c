@@ -1,8 +1,10 @@
 /* Participating media in the light tracer, BDPT and VCM (integrators/subpath_media.c): a
  * furnace (a scattering-only ball in a uniform emitter renders the emitter's radiance), the
  * path tracer, the light tracer, BDPT and VCM agreeing on a lit fog ball in an open box, and
- * the light tracer's delta tracking through a random grid (a furnace), the refusals (grid
- * media in bdpt and vcm). VCM's furnaces use a large merging radius, so that the volume
+ * the light tracer's, BDPT's and VCM's delta and ratio tracking through a random grid (a
+ * furnace; BDPT's and VCM's with emitting media, homogeneous and grid, too), path, BDPT, VCM and MMLT agreeing on the fog box with a random grid in its ball,
+ * emitting or not (the camera walks gather the emission), and the refusals (emissive media
+ * in the light tracer and MMLT). VCM's furnaces use a large merging radius, so that the volume
  * merges (UPBP's point-point 3D estimator) carry most of the MIS weight: a constant
  * radiance field has no kernel bias away from the walls. `test_media_bidir --spectral` runs
  * the same in spectral mode.
@@ -116,31 +118,45 @@ static void test_furnace_camera_medium(void **state)
     scene_destroy(s);
 }
 
-/* A random-density grid ball (densities uniform in [0, 3) on 8^3 samples over the box
- * [-2, 2]^3, scattering only; test_grid_media.c's add_grid) in the emitting enclosure: the
- * light tracer's delta tracking and ratio tracking render L; BDPT refuses the grid. */
-static void test_furnace_grid_light(void **state)
+/* A grid medium of random densities (uniform in [0, dmax) on 8^3 samples over the box
+ * [lo, hi]; test_grid_media.c's add_grid), with sigma_a, sigma_s and emitted radiance le
+ * at density 1. */
+static int add_grid(Scene *s, Vec3 lo, Vec3 hi, float dmax, Color sigma_a, Color sigma_s, Color le, float g)
 {
-    (void)state;
     CstError err;
-    Scene *s = scene_create();
     const int n = 8;
-    Medium m = {.type = MEDIUM_GRID, .g = 0.3f};
+    Medium m = {.type = MEDIUM_GRID, .g = g};
     HeteroMedium *hm = &m.u.het;
-    hm->sigma_s = color_rgb(0.5f, 1.0f, 0.25f);
+    hm->sigma_a = sigma_a;
+    hm->sigma_s = sigma_s;
+    hm->le = le;
     hm->le_scale_1 = 1.0f;
     hm->medium_from_world = transform_identity();
-    hm->p0 = v3s(-2.0f);
-    hm->p1 = v3s(2.0f);
+    hm->p0 = lo;
+    hm->p1 = hi;
     hm->n[0] = hm->n[1] = hm->n[2] = n;
     hm->density = malloc((size_t)(n * n * n) * sizeof(float));
     assert_non_null(hm->density);
     Pcg32 r;
     pcg32_seed_sample(&r, 77, 0, 0);
-    for (int i = 0; i < n * n * n; i++) hm->density[i] = 3.0f * pcg32_float(&r);
+    for (int i = 0; i < n * n * n; i++) hm->density[i] = dmax * pcg32_float(&r);
     int med;
     assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
     free(hm->density);
+    return med;
+}
+
+/* A random-density grid ball (densities uniform in [0, 3) over the box [-2, 2]^3,
+ * scattering only) in the emitting enclosure: the light tracer's delta tracking and ratio
+ * tracking render L, and so do BDPT and VCM (delta tracking on both subpaths, ratio
+ * tracking on connections, the majorant-based MIS densities of subpath_media.c). */
+static void test_furnace_grid(void **state)
+{
+    (void)state;
+    CstError err;
+    Scene *s = scene_create();
+    int med = add_grid(s, v3s(-2.0f), v3s(2.0f), 3.0f, color_s(0.0f), color_rgb(0.5f, 1.0f, 0.25f), color_s(0.0f),
+                       0.3f);
     int black;
     Material mb = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
     assert_int_equal(scene_add_material(s, &mb, &black, &err), CST_OK);
@@ -153,27 +169,61 @@ static void test_furnace_grid_light(void **state)
     scene_set_camera(s, &cam);
     assert_int_equal(scene_commit(s, &err), CST_OK);
     check_furnace(s, CST_INTEGRATOR_LIGHT, 32, 8, 500, L, "grid ball");
-    CstRenderSettings st;
-    cst_render_settings_init(&st);
-    st.width = st.height = 8;
-    st.spp = 1;
-    st.integrator = CST_INTEGRATOR_BDPT;
-    CstFilm *f = NULL;
-    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
-    assert_non_null(strstr(err.msg, "homogeneous"));
-    cst_film_destroy(f);
-    f = NULL;
-    st.integrator = CST_INTEGRATOR_VCM;
-    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
-    assert_non_null(strstr(err.msg, "homogeneous"));
-    cst_film_destroy(f);
+    check_furnace(s, CST_INTEGRATOR_BDPT, 24, 2, 510, L, "grid ball");
+    g_radius = 0.25;
+    check_furnace(s, CST_INTEGRATOR_VCM, 24, 2, 520, L, "grid ball");
+    g_radius = 0.0;
     scene_destroy(s);
 }
+
+/* An absorbing, scattering and emitting ball (Le = L, so sigma_a Le gives back what
+ * sigma_a takes; a boundary sphere of radius 2) in the emitting enclosure of radiance L:
+ * L everywhere, the media's emission gathered by BDPT's and VCM's camera walks alone
+ * (weight 1). Homogeneous, then a random grid over the ball's box. */
+static void test_furnace_emissive(void **state)
+{
+    (void)state;
+    const Color L = color_rgb(0.6f, 0.9f, 0.3f);
+    const Color sa = color_rgb(0.4f, 0.2f, 0.6f), ss = color_rgb(0.5f, 1.0f, 0.25f);
+    for (int grid = 0; grid < 2; grid++) {
+        CstError err;
+        Scene *s = scene_create();
+        int black;
+        Material mb = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
+        assert_int_equal(scene_add_material(s, &mb, &black, &err), CST_OK);
+        int med;
+        if (grid) {
+            med = add_grid(s, v3s(-2.0f), v3s(2.0f), 2.0f, sa, ss, L, 0.4f);
+        } else {
+            Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.4f};
+            m.u.homog.sigma_a = sa;
+            m.u.homog.sigma_s = ss;
+            m.u.homog.le = L;
+            assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
+        }
+        Emission em = {L, 1, 0};
+        assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
+        assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
+        assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 2.0f, black, NULL, &err), CST_OK);
+        CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
+        scene_set_camera(s, &cam);
+        assert_int_equal(scene_commit(s, &err), CST_OK);
+        const char *what = grid ? "emissive grid ball" : "emissive ball";
+        check_furnace(s, CST_INTEGRATOR_BDPT, 24, 2, 530 + (uint64_t)grid, L, what);
+        g_radius = 0.25;
+        check_furnace(s, CST_INTEGRATOR_VCM, 24, 2, 540 + (uint64_t)grid, L, what);
+        g_radius = 0.0;
+        scene_destroy(s);
+    }
+}
+
+/* What fills fog_box's ball: homogeneous fog, a random grid, or that grid emitting. */
+typedef enum FogKind { FOG_HOMOGENEOUS, FOG_GRID, FOG_GRID_EMISSIVE } FogKind;
 
 /* test_media.c's fog box: an open box of diffuse walls lit by a small quad light, a ball of
  * forward-scattering, slightly absorbing fog (a boundary sphere) and a diffuse sphere half
  * inside it. */
-static Scene *fog_box(void)
+static Scene *fog_box(FogKind kind)
 {
     CstError err;
     Scene *s = scene_create();
@@ -193,7 +243,14 @@ static Scene *fog_box(void)
     const Vec3 light[4] = {{-0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, 0.3f}, {-0.3f, 0.99f, 0.3f}};
     Emission em = {color_rgb(8.0f, 8.0f, 6.0f), 0, 0};
     assert_int_equal(scene_add_quad(s, light, lightm, &em, &err), CST_OK);
-    int med = add_medium(s, color_s(0.2f), color_rgb(1.5f, 1.0f, 0.5f), 0.5f);
+    /* The grid: densities in [0, 3) over the ball's box, mean 1.5, so sigma_s means the
+     * homogeneous fog's in green; the emissive one glows sigma_a Le ~ 0.5 0.3 0.1 per unit
+     * length at mean density. */
+    const Vec3 lo = {-0.8f, -0.9f, -0.6f}, hi = {0.4f, 0.3f, 0.6f};
+    const Color le = kind == FOG_GRID_EMISSIVE ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f);
+    int med = kind == FOG_HOMOGENEOUS
+                  ? add_medium(s, color_s(0.2f), color_rgb(1.5f, 1.0f, 0.5f), 0.5f)
+                  : add_grid(s, lo, hi, 3.0f, color_rgb(0.3f, 0.35f, 0.4f), color_rgb(1.0f, 0.7f, 0.35f), le, 0.5f);
     assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
     assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
@@ -209,7 +266,7 @@ static Scene *fog_box(void)
 static void test_fog_agreement(void **state)
 {
     (void)state;
-    Scene *s = fog_box();
+    Scene *s = fog_box(FOG_HOMOGENEOUS);
     CstRenderSettings st;
     cst_render_settings_init(&st);
     st.width = st.height = 32;
@@ -229,14 +286,87 @@ static void test_fog_agreement(void **state)
     scene_destroy(s);
 }
 
+/* The fog box with the random grid in its ball: path (the reference), bdpt, vcm and mmlt
+ * agree on the whole image and its four 16 x 16 blocks (bdpt vs mmlt at 24 x 24, 12 x 12
+ * blocks, mmlt's own resolution budget). */
+static void test_grid_agreement(void **state)
+{
+    (void)state;
+    Scene *s = fog_box(FOG_GRID);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = st.height = 32;
+    st.color_mode = g_color_mode;
+    st.max_depth = 5;
+    Regions path = regions(32, 16), bdpt = regions(32, 16), vcm = regions(32, 16);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 64, 900, &path);
+    st.spp = 2;
+    split_regions(s, &st, CST_INTEGRATOR_BDPT, 24, 910, &bdpt);
+    compare(&path, &bdpt, "path", "bdpt (grid)");
+    split_regions(s, &st, CST_INTEGRATOR_VCM, 24, 920, &vcm);
+    compare(&path, &vcm, "path", "vcm (grid)");
+    compare(&bdpt, &vcm, "bdpt (grid)", "vcm (grid)");
+    /* mmlt against bdpt (test_mmlt.c's settings, a smaller image). */
+    CstRenderSettings sm = st;
+    sm.width = sm.height = 24;
+    sm.filter = CST_FILTER_BOX;
+    sm.max_depth = 4;
+    sm.spp = 8;
+    sm.mlt_chains = 64;
+    sm.mlt_bootstrap = 1024;
+    Regions rb = regions(24, 12), rm = regions(24, 12);
+    split_regions(s, &sm, CST_INTEGRATOR_BDPT, 24, 930, &rb);
+    split_regions(s, &sm, CST_INTEGRATOR_MMLT, 24, 940, &rm);
+    compare(&rb, &rm, "bdpt (grid, 24)", "mmlt (grid, 24)");
+    scene_destroy(s);
+}
+
+/* The grid emitting (Le, gathered by the camera walks alone with MIS weight 1): path, bdpt
+ * and vcm agree; the light tracer and mmlt refuse it. */
+static void test_grid_emissive(void **state)
+{
+    (void)state;
+    Scene *s = fog_box(FOG_GRID_EMISSIVE);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = st.height = 32;
+    st.color_mode = g_color_mode;
+    st.max_depth = 5;
+    Regions path = regions(32, 16), bdpt = regions(32, 16), vcm = regions(32, 16);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 64, 1000, &path);
+    st.spp = 2;
+    split_regions(s, &st, CST_INTEGRATOR_BDPT, 24, 1010, &bdpt);
+    compare(&path, &bdpt, "path", "bdpt (emissive grid)");
+    split_regions(s, &st, CST_INTEGRATOR_VCM, 24, 1020, &vcm);
+    compare(&path, &vcm, "path", "vcm (emissive grid)");
+    st.width = st.height = 8;
+    st.spp = 1;
+    const CstIntegrator refused[2] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_MMLT};
+    for (int i = 0; i < 2; i++) {
+        CstError err;
+        CstFilm *f = NULL;
+        st.integrator = refused[i];
+        assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
+        assert_non_null(strstr(err.msg, "emissive"));
+        cst_film_destroy(f);
+    }
+    scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "--spectral") == 0) g_color_mode = CST_COLOR_SPECTRAL;
+    /* --only NAME (cmocka's filter): one test alone, to time it. */
+    for (int i = 1; i + 1 < argc; i++)
+        if (strcmp(argv[i], "--only") == 0) cmocka_set_test_filter(argv[i + 1]);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_furnace_ball),
         cmocka_unit_test(test_furnace_camera_medium),
-        cmocka_unit_test(test_furnace_grid_light),
+        cmocka_unit_test(test_furnace_grid),
+        cmocka_unit_test(test_furnace_emissive),
         cmocka_unit_test(test_fog_agreement),
+        cmocka_unit_test(test_grid_agreement),
+        cmocka_unit_test(test_grid_emissive),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
