@@ -357,10 +357,10 @@ CST_API CstStatus cst_scene_add_instance(CstScene *scene, int object,
 /* A moving instance (motion blur): world_from_object at shutter open and
  * world_from_object_end at shutter close, both as for cst_scene_add_instance; in between
  * the placement is interpolated by decomposition (translation, rotation by quaternion
- * slerp, stretch; pbrt-v4's AnimatedTransform) at each camera path's time, uniform over
- * the shutter. Scenes with a moving instance render with path, path-nee, path-bsdf,
- * whitted and light only (the others fail with CST_ERR_UNSUPPORTED). Equal matrices add a static
- * instance. */
+ * slerp, stretch; pbrt-v4's AnimatedTransform) at each path's time, uniform over the
+ * shutter. Scenes with a moving instance render with every integrator but photon, and with
+ * participating media with path, path-nee, path-bsdf and pssmlt only (the others fail with
+ * CST_ERR_UNSUPPORTED; docs/integrators.md). Equal matrices add a static instance. */
 CST_API CstStatus cst_scene_add_instance_motion(CstScene *scene, int object, const float world_from_object[12],
                                                 const float world_from_object_end[12], CstError *err);
 

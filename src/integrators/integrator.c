@@ -19,6 +19,7 @@
 
 #include "core/array.h"
 #include "core/error.h"
+#include "math/motion.h"
 #include "materials/bsdf.h"
 
 /* Light paths per work item: small enough to balance threads on small films, large
@@ -64,6 +65,33 @@ static Wavelengths bidir_wavelengths(const Integrator *it, uint64_t path, int it
     }
     pcg32_seed_sample(&r, it->seed ^ 0x3c6ef372fe94f82bULL, path + 1, (uint64_t)iteration);
     return wavelengths_sample(pcg32_float(&r));
+}
+
+/* Motion blur, BDPT and VCM: the instant of light path `path` of iteration `iteration`,
+ * which the camera paths it is joined with must share (a connection or merge between
+ * subpaths at two instants would join two different scenes).
+ * BDPT joins light path i with the camera path of pixel i alone: the time is that camera
+ * sample's own time dimension (camera_tile's draw after film and lens, redrawn here from
+ * the same sampler state), so each path sample has one time, stratified as the sampler
+ * stratifies it. VCM merges every camera path with every light path of the iteration, so
+ * all paths of an iteration share one instant (path ignored), as its wavelengths are
+ * shared: each iteration is then an unbiased estimate of the image at a uniform instant
+ * (merging keeps its usual, vanishing, radius bias), so the average over iterations
+ * converges to the time-averaged image; pixels of one iteration are correlated (the blur
+ * shows as few sharp copies at low sample counts). The iterations' instants are spread
+ * over the shutter by motion_pass_time. */
+static float bidir_time(const Integrator *it, uint64_t path, int iteration)
+{
+    if (it->light.vcm_params.merge) {
+        Pcg32 r;
+        pcg32_seed_sample(&r, it->seed ^ 0x9e3779b97f4a7c15ULL, 0, 0);
+        return motion_pass_time((uint32_t)iteration, pcg32_float(&r));
+    }
+    Sampler smp;
+    sampler_start(&smp, &it->sampler, path, (uint32_t)iteration);
+    (void)sampler_2d(&smp); /* film */
+    (void)sampler_2d(&smp); /* lens */
+    return sampler_1d(&smp);
 }
 
 /* One camera sample's radiance, by the integrator's estimator (spectral mode: at wl's
@@ -123,8 +151,12 @@ static void camera_tile(void *ctx, int tile, int worker)
                 Ray ray = camera_generate_ray(&it->camera, fp.x, fp.y, ul);
                 /* Motion blur: the path's time, uniform over the shutter interval, from the
                  * dimension after the film and lens ones; drawn only in scenes that move, so
-                 * static scenes keep their streams (and their images) bit for bit. */
+                 * static scenes keep their streams (and their images) bit for bit. BDPT's
+                 * light pass redraws this dimension (bidir_time): keep the two in step. */
                 if (it->motion) ray.time = sampler_1d(&smp);
+                /* VCM: the iteration's one instant instead (bidir_time; BDPT's is the above). */
+                if (it->motion && it->kind == INTEGRATOR_BIDIR && it->light.vcm_params.merge)
+                    ray.time = bidir_time(it, (uint64_t)pixel, s);
                 if (it->aov_hit) camera_aov(it, w, pixel, ray);
                 /* Spectral mode: the path's wavelengths, from the dimension after the
                  * film and lens ones (BDPT/VCM: shared with light paths, above). */
@@ -184,8 +216,9 @@ static void light_chunk(void *ctx, int chunk, int worker)
             size_t before = verts->n;
             Wavelengths wl;
             if (it->spectral) wl = bidir_wavelengths(it, (uint64_t)i, it->iteration);
-            subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, it->spectral ? &wl : NULL,
-                                verts, out, &w->rays);
+            const float time = it->motion ? bidir_time(it, (uint64_t)i, it->iteration) : 0.0f;
+            subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, time,
+                                it->spectral ? &wl : NULL, verts, out, &w->rays);
             L->path_count[i] = (uint32_t)(verts->n - before);
         }
         /* The grid's corner, reduced over the chunks by bidir_prepare (min is exact in any
@@ -695,15 +728,21 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
                         "not rendered yet; expected one or the other");
-    /* Motion blur: the path tracers (surface loop) and Whitted carry the camera path's time
-     * to every ray, the light tracer each light path's own; BDPT, VCM and the photon
-     * integrators do not draw one yet. */
+    /* Motion blur: every path carries one time to all its rays (Ray.time). The path
+     * tracers (volpath and path_sss too), Whitted and pssmlt take the camera sample's; the
+     * light tracer each light path's own; BDPT and VCM share one between the subpaths they
+     * join (bidir_time); mmlt draws it in the camera stream for both subpaths; SPPM shares
+     * one per iteration (sppm.c). The photon integrator builds its maps once, before any
+     * camera path: they would hold one instant (no blur) or mix instants (biased where
+     * geometry moves). subpath_media.c's walks (light, bdpt, vcm and mmlt in media) do not
+     * carry the time yet. */
     it->motion = scene_has_motion(scene);
-    const bool motion_ok = it->kind == INTEGRATOR_PATH || it->kind == INTEGRATOR_WHITTED || it->kind == INTEGRATOR_LIGHT;
-    if (it->motion && (!motion_ok || scene->num_media || scene->num_medium_ifaces || scene->num_subsurface))
+    const bool media = scene->num_media || scene->num_medium_ifaces;
+    if (it->motion && (it->kind == INTEGRATOR_PHOTON || (media && bidir_media)))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
-                        "yet%s: use path, path-nee, path-bsdf, whitted or light", cst_integrator_name(st->integrator),
-                        motion_ok ? " with participating media or subsurface materials" : "");
+                        "yet%s: use %s", cst_integrator_name(st->integrator),
+                        media ? " with participating media" : " (its photon maps are built once, for all camera paths)",
+                        media ? "path, path-nee, path-bsdf or pssmlt" : "sppm, path, bdpt or vcm");
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

@@ -67,6 +67,9 @@ static Color path_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
         wl = wavelengths_sample(sampler_1d(&smp));
         wlp = &wl;
     }
+    /* Motion blur: the path's time, one more primary-sample dimension (mutated as the
+     * others); drawn only in scenes that move, so static ones keep their dimensions. */
+    if (scene_has_motion(s)) ray.time = sampler_1d(&smp);
     Color L = path_li(s, &m->p.path, ray, &smp, wlp, rays);
     if (wlp) L = spectrum_to_rgb(L, wlp);
     return L;
@@ -146,6 +149,10 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
         wl = wavelengths_sample(sampler_1d(&smp));
         wlp = &wl;
     }
+    /* Motion blur: the path's one time, a dimension of the camera stream (mutated as the
+     * others) that both subpaths and every connection carry, also for t = 1 where no
+     * camera ray is traced; drawn only in scenes that move. */
+    const float time = scene_has_motion(s) ? sampler_1d(&smp) : 0.0f;
     const SubpathParams *vp = &m->p.sub;
     const SubpathIteration *it = &m->p.it;
     if (s->num_media | s->num_medium_ifaces)
@@ -159,15 +166,17 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
          * subpath_trace_light's), the camera strategies' per unit of the chains' domain:
          * W H / domain area converts. */
         pss_start_stream(pss, 1);
-        if (!subpath_light_vertex(s, vp, it, sl - 1, &smp, wlp, &y, &walk_wl, rays)) return L;
+        if (!subpath_light_vertex(s, vp, it, sl - 1, &smp, time, wlp, &y, &walk_wl, rays)) return L;
         pss_start_stream(pss, 2);
         Vec2 u_lens = sampler_2d(&smp);
         Color rgb;
-        if (!subpath_connect_camera(s, cam, vp, it, &y, u_lens, wlp, wlp ? &walk_wl : NULL, fp, &rgb, rays)) return L;
+        if (!subpath_connect_camera(s, cam, vp, it, &y, u_lens, time, wlp, wlp ? &walk_wl : NULL, fp, &rgb, rays))
+            return L;
         const double film = (double)m->p.width * (double)m->p.height;
         return color_scale(rgb, (float)((double)n_strategies * film / ((double)domain_w(m) * (double)domain_h(m))));
     }
     Ray ray = camera_generate_ray(cam, fp->x, fp->y, ul);
+    ray.time = time;
     SubpathCameraVertex x;
     Color emitted;
     bool found = subpath_camera_vertex(s, cam, vp, it, ray, tc - 1, sl == 0, &smp, wlp, &x, &emitted, rays);
@@ -179,7 +188,7 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
         if (wlp && x.dispersed) L = subpath_hero_only(L);
     } else if (found) {
         pss_start_stream(pss, 1);
-        if (subpath_light_vertex(s, vp, it, sl - 1, &smp, wlp, &y, &walk_wl, rays)) {
+        if (subpath_light_vertex(s, vp, it, sl - 1, &smp, time, wlp, &y, &walk_wl, rays)) {
             L = subpath_connect_pair(s, it, &x, &y, wlp, rays);
             if (wlp && (x.dispersed || y.dispersed)) L = subpath_hero_only(L);
         }

@@ -43,7 +43,8 @@ static void sss_coeffs(const Scene *s, const Material *m, const SurfaceHit *sh, 
 /* The intersections of material `material` on the segment p0 -> p1, one kept uniformly
  * (weighted reservoir sampling with equal weights, its random numbers from u). Returns
  * their count. */
-static int sss_probe(const Scene *s, Vec3 p0, Vec3 p1, int material, float u, SurfaceHit *pick, uint64_t *rays)
+static int sss_probe(const Scene *s, Vec3 p0, Vec3 p1, int material, float u, float time, SurfaceHit *pick,
+                     uint64_t *rays)
 {
     Pcg32 rng;
     pcg32_seed(&rng, (uint64_t)(u * 4294967296.0f), 0x55u);
@@ -53,7 +54,7 @@ static int sss_probe(const Scene *s, Vec3 p0, Vec3 p1, int material, float u, Su
         Vec3 d = v3_sub(p1, o);
         float len = v3_length(d);
         if (!(len > 0.0f)) break;
-        Ray r = ray_make(o, v3_scale(d, 1.0f / len), 0.0f, len);
+        Ray r = ray_make_at(o, v3_scale(d, 1.0f / len), 0.0f, len, time);
         SurfaceHit h;
         ++*rays;
         if (!scene_intersect(s, &r, &h)) break;
@@ -79,7 +80,7 @@ static Color sss_nee(const Scene *s, const SurfaceHit *x, float eta, bool mis, S
     float f = bssrdf_sw(eta, cos_s) * eta * eta * cos_s;
     if (!(f > 0.0f)) return color_s(0.0f);
     ++*rays;
-    if (!scene_visible(s, x->p, x->ng, ls.p, ls.n)) return color_s(0.0f);
+    if (!scene_visible_at(s, x->p, x->ng, ls.p, ls.n, x->time)) return color_s(0.0f);
     float w = mis && !ls.delta ? power_heuristic(ls.pdf_w, cos_s * CST_INV_PI) : 1.0f;
     return color_scale(scene_light_li(s, &ls, wl), f * w / (ls.delta ? ls.pmf : ls.pdf_w));
 }
@@ -124,7 +125,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             Vec3 p0, p1;
             if (!bssrdf_sample_probe(&b, u1, u2, &p0, &p1)) break;
             SurfaceHit x;
-            int count = sss_probe(s, p0, p1, sh.material, u_pick, &x, rays);
+            int count = sss_probe(s, p0, p1, sh.material, u_pick, sh.time, &x, rays);
             if (count == 0) break;
             float pdf = bssrdf_pdf_sp(&b, x.p, x.ng) / (float)count;
             if (!(pdf > 0.0f)) break;
@@ -157,7 +158,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
             if (rr == 0.0f) break;
             ps.beta = color_scale(ps.beta, rr);
-            ray = ray_make(scene_offset(s, x.p, x.ng, wi), wi, 0.0f, INFINITY);
+            ray = ray_make_at(scene_offset(s, x.p, x.ng, wi), wi, 0.0f, INFINITY, x.time);
             continue;
         }
 
@@ -165,7 +166,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
         if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
         if (rr == 0.0f) break;
         ps.beta = color_scale(ps.beta, rr);
-        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make_at(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, sh.time);
     }
     return ps.L;
 }

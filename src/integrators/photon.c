@@ -62,6 +62,7 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
     sampler_start_stream(&rng, pw->seed, index, pw->stream);
     EmissionSample es;
     subpath_emit(s, &rng, pw->wl, &es);
+    es.time = pw->time;
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return true; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
@@ -129,7 +130,7 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, const Wavele
         if (!sampled) return false;
         *beta = color_mul(*beta, bs.weight);
         if (color_is_black(*beta)) return false;
-        ray = ray_make(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make_at(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY, sh->time);
     }
     /* Cut after PHOTON_MAX_SPECULAR delta bounces: a bias of at most the throughput left,
      * which for Fresnel-weighted glass chains is negligible. */
@@ -279,7 +280,7 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
     PhotonArray global = {0}, caustic = {0};
     CstStatus st = CST_OK;
     if (s->emitter_sampler.lights > 0) {
-        const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth, NULL};
+        const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth, NULL, 0.0f};
         PhotonStore store = {&global, &caustic};
         for (int i = 0; i < n; i++) {
             if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 && pp->progress(pp->progress_user, (double)i / n)) {

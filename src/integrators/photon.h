@@ -40,6 +40,8 @@ typedef struct PhotonWalk {
     float scale;
     int max_depth, rr_depth;
     const Wavelengths *wl; /* spectral mode (SPPM): the iteration's wavelengths; NULL: RGB */
+    float time;            /* motion blur (SPPM): the iteration's instant, which every ray of
+                            * the walk carries; 0 in static scenes and for photon maps */
 } PhotonWalk;
 
 /* Called at every non-delta hit of a photon path with the photon there, its depth (1:

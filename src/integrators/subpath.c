@@ -59,7 +59,7 @@ void subpath_emit(const Scene *s, Sampler *rng, const Wavelengths *wl, EmissionS
 /* The t = 1 strategy at light vertex v with BSDF b: connect to a lens point. */
 static void connect_to_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
                               const SubpathIteration *it, const SubpathVertex *v, const Bsdf *b,
-                              Vec2 u_lens, const Wavelengths *wl, SplatList *splats, uint64_t *rays)
+                              Vec2 u_lens, float time, const Wavelengths *wl, SplatList *splats, uint64_t *rays)
 {
     const float margin = filter_radius(vp->frame.filter) - 0.5f;
     CameraWiSample cs;
@@ -79,7 +79,7 @@ static void connect_to_camera(const Scene *s, const Camera *cam, const SubpathPa
                     (it->mis_vm + v->d_vcm + v->d_vc * mis(pdf_rev));
     float weight = 1.0f / (1.0f + w_light);
     ++*rays;
-    if (!scene_visible_point(s, v->p, v->ng, cs.p_lens)) return;
+    if (!scene_visible_point_at(s, v->p, v->ng, cs.p_lens, time)) return;
     Color c = color_scale(color_mul(v->beta, f), weight * cs.we / cs.pdf_w);
     if (it->rec) recorder_splat(it->rec, cs.raster.x, cs.raster.y, v->bounces + 1, v->p, cs.p_lens, c, weight, w_light,
                                 cam_pdf_a);
@@ -98,6 +98,7 @@ typedef struct LightSubpathCtx {
     const Wavelengths *walk_wl; /* spectral mode: the walk's copy of wl, terminated by a
                                  * dispersive refraction (LightWalk.disperse); NULL in RGB */
     uint64_t *rays;
+    float time; /* the light subpath's time (motion blur), which its t = 1 shadow rays carry */
 } LightSubpathCtx;
 
 static bool store_and_connect(void *ctx, const LightVertex *lv)
@@ -110,14 +111,14 @@ static bool store_and_connect(void *ctx, const LightVertex *lv)
                    sh->material, lv->bounces, sh->uv, dispersed};
     push_vertex(c->verts, &v);
     /* The t = 1 splat uses this light subpath alone: its own (terminated) wavelengths. */
-    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, dispersed ? c->walk_wl : c->wl,
-                      c->splats, c->rays);
+    connect_to_camera(c->s, c->cam, c->vp, c->it, &v, lv->bsdf, lv->u_lens, c->time,
+                      dispersed ? c->walk_wl : c->wl, c->splats, c->rays);
     return true; /* OOM is the list's flag, checked after the step */
 }
 
 void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                     Sampler *rng, const Wavelengths *wl, SubpathVertexList *verts, SplatList *splats,
-                     uint64_t *rays)
+                     Sampler *rng, float time, const Wavelengths *wl, SubpathVertexList *verts,
+                     SplatList *splats, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
     if (s->num_media | s->num_medium_ifaces) { /* participating media: subpath_media.c */
@@ -126,6 +127,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
     }
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
+    es.time = time; /* every ray of the walk carries it (emitters do not move: es is timeless) */
     if (it->rec) recorder_light_start(it->rec, &es);
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     float emission_pdf = es.pdf_a * es.pdf_w; /* point and direction */
@@ -141,7 +143,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
      * walk's copy (the camera subpath keeps wl and masks per contribution). */
     Wavelengths walk_wl;
     if (wl) walk_wl = *wl;
-    LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, wl ? &walk_wl : NULL, rays};
+    LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, wl ? &walk_wl : NULL, rays, time};
     const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c, wl ? &walk_wl : NULL};
     subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
@@ -169,7 +171,7 @@ static Color connect_to_light(const Scene *s, const SubpathIteration *it, const 
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
     if (it->rec) {
-        const bool vis = scene_visible(s, sh->p, sh->ng, ls.p, ls.n);
+        const bool vis = scene_visible_at(s, sh->p, sh->ng, ls.p, ls.n, sh->time);
         Color v = vis ? color_scale(color_mul(f, scene_light_li(s, &ls, wl)), weight / (ls.delta ? ls.pmf : ls.pdf_w))
                       : color_s(0.0f);
         recorder_strategy(it->rec, CST_EXPLAIN_NEE, 1, ls.light, ls.p, sp->beta, v, weight, w_light, w_camera,
@@ -177,7 +179,7 @@ static Color connect_to_light(const Scene *s, const SubpathIteration *it, const 
         recorder_nee_normal(it->rec, ls.n);
         return v;
     }
-    if (!scene_visible(s, sh->p, sh->ng, ls.p, ls.n)) return color_s(0.0f);
+    if (!scene_visible_at(s, sh->p, sh->ng, ls.p, ls.n, sh->time)) return color_s(0.0f);
     return color_scale(color_mul(f, scene_light_li(s, &ls, wl)), weight / (ls.delta ? ls.pmf : ls.pdf_w));
 }
 
@@ -241,13 +243,13 @@ static Color connect_vertices(const Scene *s, const SubpathIteration *it, const 
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     ++*rays;
     if (it->rec) {
-        const bool vis = scene_visible(s, x->p, x->ng, y->p, y->ng);
+        const bool vis = scene_visible_at(s, x->p, x->ng, y->p, y->ng, x->time);
         Color v = vis ? color_scale(color_mul(color_mul(fx, fy), y->beta), weight / dist2) : color_s(0.0f);
         recorder_strategy(it->rec, CST_EXPLAIN_CONNECT, y->bounces + 1, -1, y->p, sp->beta, v, weight, w_light,
                           w_camera, x_fwd, x_fwd_a, !vis);
         return v;
     }
-    if (!scene_visible(s, x->p, x->ng, y->p, y->ng)) return color_s(0.0f);
+    if (!scene_visible_at(s, x->p, x->ng, y->p, y->ng, x->time)) return color_s(0.0f);
     return color_scale(color_mul(color_mul(fx, fy), y->beta), weight / dist2);
 }
 
@@ -471,12 +473,13 @@ static bool keep_target(void *ctx, const LightVertex *lv)
 }
 
 bool subpath_light_vertex(const Scene *s, const SubpathParams *vp, const SubpathIteration *it, int bounces,
-                          Sampler *rng, const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl,
+                          Sampler *rng, float time, const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl,
                           uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return false;
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
+    es.time = time;
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return false;
     /* The light subpath's first MIS quantities, as subpath_trace_light sets them. */
     float emission_pdf = es.pdf_a * es.pdf_w;
@@ -510,8 +513,8 @@ Color subpath_connect_pair(const Scene *s, const SubpathIteration *it, const Sub
 }
 
 bool subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                            const SubpathVertex *y, Vec2 u_lens, const Wavelengths *wl, const Wavelengths *walk_wl,
-                            Vec2 *raster, Color *rgb, uint64_t *rays)
+                            const SubpathVertex *y, Vec2 u_lens, float time, const Wavelengths *wl,
+                            const Wavelengths *walk_wl, Vec2 *raster, Color *rgb, uint64_t *rays)
 {
     LightBsdfs cache;
     cache.built = 0;
@@ -523,7 +526,7 @@ bool subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathPara
     SplatList l = {.v = &one, .cap = 1};
     SubpathParams vq = *vp;
     vq.frame.clamp = 0.0f;
-    connect_to_camera(s, cam, &vq, it, y, b, u_lens, y->dispersed ? walk_wl : wl, &l, rays);
+    connect_to_camera(s, cam, &vq, it, y, b, u_lens, time, y->dispersed ? walk_wl : wl, &l, rays);
     if (l.n == 0) return false;
     *raster = v2(one.x, one.y);
     *rgb = color_rgb(one.r, one.g, one.b);

@@ -106,10 +106,13 @@ typedef struct SubPath {
 
 /* Traces one light subpath of BDPT/VCM (subpath_walk_light with MIS): appends its
  * non-delta vertices to *verts and splats its connections to the camera (the t = 1
- * strategies, MIS-weighted) to *splats, per unit film as light_trace() does. */
+ * strategies, MIS-weighted) to *splats, per unit film as light_trace() does. time: the
+ * subpath's instant in the shutter (motion blur; 0 in static scenes), carried by all its
+ * rays, the t = 1 shadow rays included: the camera subpaths it is joined with must be at
+ * the same instant (integrator.c draws both). Camera subpaths carry their ray's time. */
 void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                     Sampler *rng, const Wavelengths *wl, SubpathVertexList *verts, SplatList *splats,
-                     uint64_t *rays);
+                     Sampler *rng, float time, const Wavelengths *wl, SubpathVertexList *verts,
+                     SplatList *splats, uint64_t *rays);
 
 /* A merging query at one camera vertex (vcm.c), in three steps so that its two rounds of
  * cache misses overlap the vertex's NEE and connections instead of stalling the path:
@@ -168,10 +171,11 @@ bool subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParam
                            Ray ray, int hits, bool emission, Sampler *rng, const Wavelengths *wl,
                            SubpathCameraVertex *out, Color *emitted, uint64_t *rays);
 /* Walks a light subpath to its vertex `bounces` (>= 1), as subpath_trace_light's walk does
- * (no t = 1 splats). True with *out when that vertex exists and is not purely delta.
- * Spectral: *walk_wl is the walk's copy of wl (terminated by a dispersive refraction). */
+ * (no t = 1 splats), every ray at `time` (the path's: motion blur). True with *out when
+ * that vertex exists and is not purely delta. Spectral: *walk_wl is the walk's copy of wl
+ * (terminated by a dispersive refraction). */
 bool subpath_light_vertex(const Scene *s, const SubpathParams *vp, const SubpathIteration *it, int bounces,
-                          Sampler *rng, const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl,
+                          Sampler *rng, float time, const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl,
                           uint64_t *rays);
 /* s = 1: NEE from x (1D + 2D of rng), MIS-weighted, times x's beta. */
 Color subpath_connect_light(const Scene *s, const SubpathIteration *it, const SubpathCameraVertex *x, Sampler *rng,
@@ -181,10 +185,10 @@ Color subpath_connect_pair(const Scene *s, const SubpathIteration *it, const Sub
                            const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays);
 /* t = 1: y connected to a lens point (u_lens), MIS-weighted: true with the film position
  * and the splat's RGB (per unit film, as subpath_trace_light splats it; walk_wl: y's walk's
- * wavelengths, NULL in RGB mode). */
+ * wavelengths, NULL in RGB mode). time: y's subpath's (the shadow ray's instant). */
 bool subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                            const SubpathVertex *y, Vec2 u_lens, const Wavelengths *wl, const Wavelengths *walk_wl,
-                            Vec2 *raster, Color *rgb, uint64_t *rays);
+                            const SubpathVertex *y, Vec2 u_lens, float time, const Wavelengths *wl,
+                            const Wavelengths *walk_wl, Vec2 *raster, Color *rgb, uint64_t *rays);
 /* Spectral: a contribution through a dispersive refraction, the hero wavelength alone (lane
  * 0 times 4, the others 0), as subpath_trace_camera counts it. */
 static inline Color subpath_hero_only(Color c)

@@ -24,6 +24,7 @@ typedef struct VolVertex {
     const SurfaceHit *sh; /* the surface hit, or NULL in a medium */
     float g;
     int medium; /* the medium at p (for a surface: on the ray's side) */
+    float time; /* the path's time (motion blur): the shadow ray's instant */
 } VolVertex;
 
 /* One light sample from vertex v: f x Tr x L_e / pdf, MIS-weighted against the
@@ -48,7 +49,7 @@ static Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *
     if (color_is_black(f)) return color_s(0.0f);
     /* The shadow ray starts in the medium on the light's side of the surface. */
     int medium = v->sh ? scene_medium_after(s, v->sh, ls.wi, v->medium) : v->medium;
-    Color tr = scene_transmittance(s, v->p, v->ng, ls.p, ls.n, medium, wl, rays);
+    Color tr = scene_transmittance_at(s, v->p, v->ng, ls.p, ls.n, medium, v->time, wl, rays);
     if (color_is_black(tr)) return color_s(0.0f);
     float w = mis && !ls.delta ? power_heuristic(ls.pdf_w, scatter_pdf) : 1.0f;
     return color_scale(color_mul(color_mul(f, tr), scene_light_li(s, &ls, wl)), w / (ls.delta ? ls.pmf : ls.pdf_w));
@@ -69,6 +70,7 @@ static inline Color mis_beta(Color beta, int hero, Color r_u)
 Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavelengths *wl, uint64_t *rays)
 {
     PathState ps = path_state_camera(ray.o); /* the camera vertex: nothing to MIS with */
+    const float time = ray.time; /* motion blur: every ray of the path carries the camera ray's */
     const bool use_nee = pp->mode != PATH_BSDF && s->emitter_sampler.lights > 0;
     int medium = s->camera_medium, coeffs_of = -1;
     MediumCoeffs mc = {0};
@@ -118,7 +120,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
                 Vec3 p = ray_at(&ray, ms.t), wo = v3_neg(ray.d);
                 if (pp->rec) recorder_medium_vertex(pp->rec, p, medium, depth + 1);
                 if (use_nee) {
-                    VolVertex v = {p, v3s(0.0f), v3s(0.0f), wo, NULL, NULL, mc.g, medium};
+                    VolVertex v = {p, v3s(0.0f), v3s(0.0f), wo, NULL, NULL, mc.g, medium, time};
                     Color d = volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays);
                     ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), d);
                     if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, mis_beta(ps.beta, hero, r_u), d);
@@ -136,7 +138,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
                 float rr = roulette(smp, depth, pp->rr_depth, mis_beta(ps.beta, hero, r_u));
                 if (rr == 0.0f) break;
                 ps.beta = color_scale(ps.beta, rr);
-                ray = ray_make(p, wi, 0.0f, INFINITY);
+                ray = ray_make_at(p, wi, 0.0f, INFINITY, time);
                 crossings = 0;
                 continue;
             }
@@ -152,7 +154,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
             /* Only a boundary: cross it into the next medium, not a path vertex. */
             if (++crossings > VOLPATH_MAX_CROSSINGS) break;
             medium = v3_dot(ray.d, sh.ng) < 0.0f ? mi->inside : mi->outside;
-            ray = ray_make(scene_offset(s, sh.p, sh.ng, ray.d), ray.d, 0.0f, INFINITY);
+            ray = ray_make_at(scene_offset(s, sh.p, sh.ng, ray.d), ray.d, 0.0f, INFINITY, time);
             continue;
         }
         Vec3 wo = v3_neg(ray.d);
@@ -167,7 +169,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
         if (pp->rec) recorder_wavelengths(pp->rec, wl);
         if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
-            VolVertex v = {sh.p, sh.ns, sh.ng, wo, &bsdf, &sh, 0.0f, medium};
+            VolVertex v = {sh.p, sh.ns, sh.ng, wo, &bsdf, &sh, 0.0f, medium, time};
             Color d = volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays);
             ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), d);
             if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, mis_beta(ps.beta, hero, r_u), d);
@@ -179,7 +181,7 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
         if (rr == 0.0f) break;
         ps.beta = color_scale(ps.beta, rr);
         medium = scene_medium_after(s, &sh, bs.wi, medium);
-        ray = ray_make(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make_at(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, time);
         crossings = 0;
     }
     return ps.L;

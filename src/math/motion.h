@@ -4,6 +4,7 @@
 #define CST_MATH_MOTION_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "math/bbox.h"
 #include "math/transform.h"
@@ -36,5 +37,20 @@ Transform motion_at(const MotionTransform *mt, float t);
  * within the corners' boxes. */
 #define MOTION_BOUND_STEPS 64
 BBox motion_bounds(const MotionTransform *mt, BBox b);
+
+/* The shutter instant of pass `pass` of an estimator whose paths all share their pass's
+ * instant (VCM's and SPPM's iterations: a merge joins paths of one instant only), with
+ * `offset` a uniform number fixed per render: {offset + pass / golden ratio}, a Kronecker
+ * sequence. Each pass's instant is uniform in [0, 1) (the random offset), so each pass is
+ * an unbiased estimate at its instant, and any run of passes is spread evenly over the
+ * shutter (discrepancy O(log n / n)); its differences are irrational, so it does not line
+ * up with the wavelengths' radical-inverse sequence (wavelengths_pass_u) of the same
+ * passes, whose pairs then fill the square. */
+static inline float motion_pass_time(uint32_t pass, float offset)
+{
+    double u = (double)offset + 0.6180339887498949 * (double)pass;
+    float t = (float)(u - (double)(uint64_t)u);
+    return t < 1.0f ? t : 0x1.fffffep-1f;
+}
 
 #endif

@@ -561,8 +561,8 @@ CstStatus scene_set_camera_medium(Scene *s, int medium, CstError *err)
     return CST_OK;
 }
 
-Color scene_transmittance(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, int medium, const Wavelengths *wl,
-                          uint64_t *rays)
+Color scene_transmittance_at(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, int medium, float time,
+                             const Wavelengths *wl, uint64_t *rays)
 {
     Vec3 d = v3_sub(q, p);
     Vec3 o = scene_offset(s, p, n_p, d); /* a zero normal leaves the point where it is */
@@ -575,7 +575,7 @@ Color scene_transmittance(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, in
         float len = v3_length(od);
         if (!(len > 0.0f)) return tr;
         Vec3 dir = v3_scale(od, 1.0f / len);
-        Ray r = ray_make(o, dir, 0.0f, len * (1.0f - 1e-5f));
+        Ray r = ray_make_at(o, dir, 0.0f, len * (1.0f - 1e-5f), time);
         SurfaceHit sh;
         ++*rays;
         bool hit = scene_intersect(s, &r, &sh);

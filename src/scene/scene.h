@@ -881,9 +881,17 @@ static inline int scene_medium_after(const Scene *s, const SurfaceHit *sh, Vec3 
  * medium: the medium at p toward q (-1 vacuum). The shadow ray passes boundary shapes
  * (MediumInterface.boundary), changing medium at each and multiplying the transmittance
  * of every segment (Beer–Lambert per medium); any other surface between gives black.
- * wl: the path's wavelengths (NULL in RGB mode). Adds the rays traced to *rays. */
-Color scene_transmittance(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, int medium, const Wavelengths *wl,
-                          uint64_t *rays);
+ * wl: the path's wavelengths (NULL in RGB mode). time: the path's instant (Ray.time; moving
+ * instances are placed at it). Adds the rays traced to *rays. */
+Color scene_transmittance_at(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, int medium, float time,
+                             const Wavelengths *wl, uint64_t *rays);
+
+/* scene_transmittance_at at time 0 (scenes without motion). */
+static inline Color scene_transmittance(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, int medium,
+                                        const Wavelengths *wl, uint64_t *rays)
+{
+    return scene_transmittance_at(s, p, n_p, q, n_q, medium, 0.0f, wl, rays);
+}
 
 /* Defaults applied by the renderer to zero fields. */
 #define CST_DEFAULT_WIDTH 512
