@@ -254,8 +254,9 @@ void integrator_bidir_light_path(const Integrator *it, int iteration, int path, 
     bidir_light_stream(it, iteration, path, &rng);
     Wavelengths wl; /* as light_chunk */
     if (it->spectral) wl = bidir_wavelengths(it, (uint64_t)path, iteration);
-    subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &vi, &rng, it->spectral ? &wl : NULL, verts, splats,
-                        rays);
+    const float time = it->motion ? bidir_time(it, (uint64_t)path, iteration) : 0.0f;
+    subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &vi, &rng, time, it->spectral ? &wl : NULL, verts,
+                        splats, rays);
 }
 
 /* Between the light and the camera step of a BDPT/VCM iteration: the chunks' vertex
