@@ -30,7 +30,7 @@ enum { LIGHT_CHUNK = 1024 };
 
 /* The AOVs of one camera sample (film.h): its first hit, traced again here so that no
  * integrator has to report it. */
-static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
+static void camera_aov(Integrator *it, const Camera *cam, IntegratorWorker *w, int pixel, Ray ray)
 {
     SurfaceHit sh;
     ++w->rays;
@@ -38,7 +38,7 @@ static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
     Bsdf bsdf;
     scene_bsdf(it->scene, &sh, NULL, &bsdf);
     Vec3 n = v3_dot(sh.ng, ray.d) > 0.0f ? v3_neg(sh.ng) : sh.ng;
-    float z = v3_dot(v3_sub(sh.p, it->camera.origin), it->camera.forward);
+    float z = v3_dot(v3_sub(sh.p, cam->origin), cam->forward);
     double *a = &it->film->aov[FILM_AOV_STRIDE * (size_t)pixel];
     const Color albedo = bsdf_albedo(&bsdf);
     a[0] += (double)color_channel(albedo, 0);
@@ -120,12 +120,20 @@ static void camera_tile(void *ctx, int tile, int worker)
                 Vec2 ul = sampler_2d(&smp);
                 float fw;
                 Vec2 fp = filter_film_position(&it->pixel_filter, x, y, uf, &fw);
-                Ray ray = camera_generate_ray(&it->camera, fp.x, fp.y, ul);
                 /* Motion blur: the path's time, uniform over the shutter interval, from the
                  * dimension after the film and lens ones; drawn only in scenes that move, so
-                 * static scenes keep their streams (and their images) bit for bit. */
-                if (it->motion) ray.time = sampler_1d(&smp);
-                if (it->aov_hit) camera_aov(it, w, pixel, ray);
+                 * static scenes keep their streams (and their images) bit for bit. A moving
+                 * camera is placed at that time first. */
+                const float time = it->motion ? camera_time(&it->camera, sampler_1d(&smp)) : 0.0f;
+                Camera placed;
+                const Camera *cam = &it->camera;
+                if (cam->moving) {
+                    placed = camera_at(cam, time);
+                    cam = &placed;
+                }
+                Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
+                ray.time = time;
+                if (it->aov_hit) camera_aov(it, cam, w, pixel, ray);
                 /* Spectral mode: the path's wavelengths, from the dimension after the
                  * film and lens ones (BDPT/VCM: shared with light paths, above). */
                 Wavelengths wl, *wlp = NULL;
@@ -637,6 +645,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     it->seed = st->seed;
     camera_init(&it->camera, &scene->camera, st->width, st->height);
     if (scene->camera_mirror) camera_mirror_x(&it->camera);
+    camera_set_motion(&it->camera, scene->camera_placed ? &scene->camera_motion : NULL, scene->shutter[0],
+                      scene->shutter[1]);
     filter_init(&it->pixel_filter, st->filter);
     /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
     it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp, st->width, st->height);
@@ -684,8 +694,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     it->motion = scene_has_motion(scene);
     const bool motion_ok = it->kind == INTEGRATOR_PATH || it->kind == INTEGRATOR_WHITTED || it->kind == INTEGRATOR_LIGHT;
     if (it->motion && (!motion_ok || scene->num_media || scene->num_medium_ifaces || scene->num_subsurface))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
-                        "yet%s: use path, path-nee, path-bsdf, whitted or light", cst_integrator_name(st->integrator),
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances or a moving "
+                        "camera (motion blur) yet%s: use path, path-nee, path-bsdf, whitted or light", cst_integrator_name(st->integrator),
                         motion_ok ? " with participating media or subsurface materials" : "");
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
