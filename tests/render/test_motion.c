@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "accel/instances.h"
+#include "camera/camera.h"
 #include "caustic/caustic.h"
 #include "core/rng.h"
 #include "math/motion.h"
@@ -642,6 +643,38 @@ static void test_pbrt_active_transform(void **state)
     assert_int_equal(warnings, 1); /* the sphere */
     cst_scene_destroy(s);
     s = NULL;
+    /* A pbrt camera that moves, at its start time, sends the rays of the same camera
+     * without the motion (the camera-space view, the mirror of pbrt's left-handed frame and
+     * the placement agree); at its end time, those of the camera moved by the end's
+     * translation. */
+    static const char cam_static[] = "LookAt 1 2 3  0 0 0  0 1 0\nRotate -5 0 0 1\nCamera \"perspective\" \"float fov\" 40\n"
+                                     "WorldBegin\n";
+    static const char cam_moving[] = "LookAt 1 2 3  0 0 0  0 1 0\nRotate -5 0 0 1\nActiveTransform EndTime\n"
+                                     "Translate 0 0 0.5\nActiveTransform All\nCamera \"perspective\" \"float fov\" 40\n"
+                                     "WorldBegin\n";
+    CstScene *a = NULL, *b = NULL;
+    ok(cst_scene_load_pbrt_string(cam_static, strlen(cam_static), "t.pbrt", NULL, &a, &e), &e);
+    ok(cst_scene_load_pbrt_string(cam_moving, strlen(cam_moving), "t.pbrt", NULL, &b, &e), &e);
+    assert_true(!a->camera_placed && b->camera_placed && b->camera_motion.moving);
+    Camera ca, cb;
+    camera_init(&ca, &a->camera, 32, 24);
+    if (a->camera_mirror) camera_mirror_x(&ca);
+    camera_init(&cb, &b->camera, 32, 24);
+    if (b->camera_mirror) camera_mirror_x(&cb);
+    camera_set_motion(&cb, &b->camera_motion, 0.0f, 1.0f);
+    const Camera c0 = camera_at(&cb, 0.0f), c1 = camera_at(&cb, 1.0f);
+    for (int k = 0; k < 9; k++) {
+        const float fx = 4.0f * (float)(k % 3) * 4.0f, fy = 3.0f * (float)(k / 3) * 4.0f;
+        Ray ra = camera_generate_ray(&ca, fx, fy, v2(0.5f, 0.5f)), r0 = camera_generate_ray(&c0, fx, fy, v2(0.5f, 0.5f));
+        Ray r1 = camera_generate_ray(&c1, fx, fy, v2(0.5f, 0.5f));
+        assert_true(v3_length(v3_sub(ra.o, r0.o)) < 1e-5f && v3_length(v3_sub(ra.d, r0.d)) < 1e-5f);
+        /* Translate after LookAt in camera-from-world: the camera moves by -0.5 along
+         * world z, not turned. */
+        assert_true(v3_length(v3_sub(ra.d, r1.d)) < 1e-5f);
+        assert_true(v3_length(v3_sub(v3_sub(r1.o, ra.o), v3(0.0f, 0.0f, -0.5f))) < 1e-5f);
+    }
+    cst_scene_destroy(a);
+    cst_scene_destroy(b);
     const char *bad[][2] = {
         {"TransformTimes 1 1\nWorldBegin\n", "t.pbrt:1:1"},
         {"WorldBegin\nTransformTimes 0 1\n", "t.pbrt:2:1"},
