@@ -490,8 +490,23 @@ CST_API CstStatus cst_scene_set_camera(CstScene *scene, const CstCameraDesc *des
  * scene was committed with. */
 /* The scene's camera as a description that cst_scene_set_camera accepts again: position,
  * look_at (the view axis's point at focus_distance when the scene gave none), up, fov,
- * lens (focus_distance as the render uses it), orthographic height, mirror. */
+ * lens (focus_distance as the render uses it), orthographic height, mirror. With a camera
+ * motion (cst_scene_set_camera_motion) it is the camera in its own space. */
 CST_API void cst_scene_camera(const CstScene *scene, CstCameraDesc *out);
+/* Motion blur of the camera: the camera of cst_scene_set_camera, read as a camera in its
+ * own space, is placed in the world by world_from_camera (3 x 4 row-major affine, finite,
+ * invertible, as for cst_scene_add_instance) at time 0 and by world_from_camera_end at time
+ * 1; in between by decomposition as a moving instance (the view axis and up vector placed,
+ * then re-orthonormalised). Both mirror or neither. Both NULL: no placement (the camera is
+ * in the world again). Kept across cst_scene_set_camera. Scenes with a moving camera render
+ * with the integrators that render moving instances. */
+CST_API CstStatus cst_scene_set_camera_motion(CstScene *scene, const float world_from_camera[12],
+                                              const float world_from_camera_end[12], CstError *err);
+/* The shutter: each camera path (and light path) draws its time uniformly in [open, close],
+ * in the units where every motion (moving instances, the camera) has its start transform at
+ * 0 and its end transform at 1 (before 0 and after 1 things stay at their ends); finite,
+ * open <= close; [0, 1] by default. Only scenes that move draw a time. */
+CST_API CstStatus cst_scene_set_shutter(CstScene *scene, float open, float close, CstError *err);
 /* The file the scene asks its render to be written to (cst_scene_output_path reads it
  * back); a non-empty path, copied; replaces one set before. */
 CST_API CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err);

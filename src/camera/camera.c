@@ -23,9 +23,60 @@ void camera_init(Camera *cam, const CameraDesc *d, int width, int height)
     cam->inv_focus = cam->focus_distance > 0.0f ? 1.0f / cam->focus_distance : 0.0f;
     cam->lens_area = cam->aperture_radius > 0.0f ? CST_PI * cam->aperture_radius * cam->aperture_radius : 1.0f;
     cam->film_area = 4.0f * cam->tan_half_vfov * cam->tan_half_vfov * cam->aspect;
+    cam->mirrored = false;
+    cam->shutter_open = 0.0f;
+    cam->shutter_close = 1.0f;
+    cam->moving = false;
 }
 
-void camera_mirror_x(Camera *cam) { cam->right = v3_neg(cam->right); }
+void camera_mirror_x(Camera *cam)
+{
+    cam->right = v3_neg(cam->right);
+    cam->mirrored = !cam->mirrored;
+}
+
+void camera_set_motion(Camera *cam, const MotionTransform *world_from_camera, float shutter_open,
+                       float shutter_close)
+{
+    cam->shutter_open = shutter_open;
+    cam->shutter_close = shutter_close;
+    cam->moving = false;
+    if (!world_from_camera) return;
+    cam->motion = *world_from_camera;
+    cam->moving = true;
+    /* A placement that does not move is applied once: the camera is static again. */
+    if (!world_from_camera->moving) *cam = camera_at(cam, 0.0f);
+}
+
+Camera camera_at(const Camera *cam, float time)
+{
+    Camera c = *cam;
+    if (!cam->moving) return c;
+    c.moving = false;
+    /* pbrt-v4 places camera-space rays by the interpolated world-from-camera
+     * (CameraTransform, AnimatedTransform::Interpolate); for the rigid placements of real
+     * cameras this frame is exactly that. */
+    Transform w = motion_at(&cam->motion, time);
+    c.origin = transform_point(&w, cam->origin);
+    c.forward = v3_normalize(transform_vector(&w, cam->forward));
+    c.right = v3_normalize(v3_cross(c.forward, transform_vector(&w, cam->up))); /* up: unmirrored */
+    c.up = v3_cross(c.right, c.forward);
+    if (cam->mirrored) c.right = v3_neg(c.right);
+    return c;
+}
+
+Ray camera_generate_ray_at(const Camera *cam, float film_x, float film_y, Vec2 lens_u, float time)
+{
+    Ray r;
+    if (cam->moving) {
+        Camera c = camera_at(cam, time);
+        r = camera_generate_ray(&c, film_x, film_y, lens_u);
+    } else {
+        r = camera_generate_ray(cam, film_x, film_y, lens_u);
+    }
+    r.time = time;
+    return r;
+}
 
 Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens_u)
 {

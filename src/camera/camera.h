@@ -7,6 +7,7 @@
 #include <stdbool.h>
 
 #include "geometry/ray.h"
+#include "math/motion.h"
 #include "math/vec3.h"
 
 /* The projection. A thin-lens camera is a perspective one with aperture_radius > 0. */
@@ -35,6 +36,14 @@ typedef struct Camera {
      * 1 / (tan_half_vfov aspect), 1 / tan_half_vfov, 1 / focus_distance, the lens area
      * (1 for a pinhole) and the film area at distance 1. */
     float inv_tan_x, inv_tan_y, inv_focus, lens_area, film_area;
+    bool mirrored; /* camera_mirror_x was applied: camera_at flips every placed frame too */
+    /* Motion blur (camera_set_motion). A ray's time is uniform over [shutter_open,
+     * shutter_close] (camera_time), in the units where every motion has its start transform
+     * at 0 and its end transform at 1 ([0, 1] by default). A moving camera's frame above is
+     * the camera in its own space; camera_at places it by `motion` at a time. */
+    float shutter_open, shutter_close;
+    bool moving;
+    MotionTransform motion; /* world_from_camera over [0, 1]; read only when moving */
 } Camera;
 
 void camera_init(Camera *cam, const CameraDesc *desc, int width, int height);
@@ -44,6 +53,26 @@ void camera_init(Camera *cam, const CameraDesc *desc, int width, int height);
 void camera_mirror_x(Camera *cam);
 /* film_x in [0, width), film_y in [0, height), y = 0 the top row; lens_u in [0,1)^2. */
 Ray camera_generate_ray(const Camera *cam, float film_x, float film_y, Vec2 lens_u);
+
+/* Motion blur: the shutter interval and, when world_from_camera is not NULL, the camera's
+ * placement over [0, 1] (the frame camera_init and camera_mirror_x made is then read as the
+ * camera in its own space; call after them). A placement that does not move is applied at
+ * once and leaves a static camera. camera_init sets a static camera with the shutter [0, 1]. */
+void camera_set_motion(Camera *cam, const MotionTransform *world_from_camera, float shutter_open,
+                       float shutter_close);
+/* The time of a ray from u uniform in [0, 1): uniform over the shutter interval. With the
+ * default shutter [0, 1] it is u itself, bit for bit. */
+static inline float camera_time(const Camera *cam, float u)
+{
+    return cam->shutter_open + u * (cam->shutter_close - cam->shutter_open);
+}
+/* The camera at `time`: a static copy (moving false) whose frame is the moving camera's
+ * frame placed by its motion at that time (origin as a point, the view axis and the up
+ * hint as vectors, then re-orthonormalised as camera_init does, so a stretch in the
+ * transforms never shears the view). A static camera is returned as it is. */
+Camera camera_at(const Camera *cam, float time);
+/* camera_generate_ray of the camera at `time` (camera_at), the ray carrying that time. */
+Ray camera_generate_ray_at(const Camera *cam, float film_x, float film_y, Vec2 lens_u, float time);
 
 /* A scene point connected to the camera (pbrt-v4 PerspectiveCamera::SampleWi). A light
  * path vertex p with throughput beta adds beta * f * |cos theta_p| * we / pdf_w to the

@@ -31,7 +31,7 @@ enum { LIGHT_CHUNK = 1024 };
 
 /* The AOVs of one camera sample (film.h): its first hit, traced again here so that no
  * integrator has to report it. */
-static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
+static void camera_aov(Integrator *it, const Camera *cam, IntegratorWorker *w, int pixel, Ray ray)
 {
     SurfaceHit sh;
     ++w->rays;
@@ -39,7 +39,7 @@ static void camera_aov(Integrator *it, IntegratorWorker *w, int pixel, Ray ray)
     Bsdf bsdf;
     scene_bsdf(it->scene, &sh, NULL, &bsdf);
     Vec3 n = v3_dot(sh.ng, ray.d) > 0.0f ? v3_neg(sh.ng) : sh.ng;
-    float z = v3_dot(v3_sub(sh.p, it->camera.origin), it->camera.forward);
+    float z = v3_dot(v3_sub(sh.p, cam->origin), cam->forward);
     double *a = &it->film->aov[FILM_AOV_STRIDE * (size_t)pixel];
     const Color albedo = bsdf_albedo(&bsdf);
     a[0] += (double)color_channel(albedo, 0);
@@ -148,16 +148,27 @@ static void camera_tile(void *ctx, int tile, int worker)
                 Vec2 ul = sampler_2d(&smp);
                 float fw;
                 Vec2 fp = filter_film_position(&it->pixel_filter, x, y, uf, &fw);
-                Ray ray = camera_generate_ray(&it->camera, fp.x, fp.y, ul);
                 /* Motion blur: the path's time, uniform over the shutter interval, from the
                  * dimension after the film and lens ones; drawn only in scenes that move, so
                  * static scenes keep their streams (and their images) bit for bit. BDPT's
-                 * light pass redraws this dimension (bidir_time): keep the two in step. */
-                if (it->motion) ray.time = sampler_1d(&smp);
-                /* VCM: the iteration's one instant instead (bidir_time; BDPT's is the above). */
-                if (it->motion && it->kind == INTEGRATOR_BIDIR && it->light.vcm_params.merge)
-                    ray.time = bidir_time(it, (uint64_t)pixel, s);
-                if (it->aov_hit) camera_aov(it, w, pixel, ray);
+                 * light pass redraws this dimension (bidir_time): keep the two in step; VCM
+                 * takes the iteration's one instant instead. A moving camera is placed at
+                 * that time first (path, whitted and light only: integrator_create). */
+                float time = 0.0f;
+                if (it->motion) {
+                    time = camera_time(&it->camera, sampler_1d(&smp));
+                    if (it->kind == INTEGRATOR_BIDIR && it->light.vcm_params.merge)
+                        time = bidir_time(it, (uint64_t)pixel, s);
+                }
+                Camera placed;
+                const Camera *cam = &it->camera;
+                if (cam->moving) {
+                    placed = camera_at(cam, time);
+                    cam = &placed;
+                }
+                Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
+                ray.time = time;
+                if (it->aov_hit) camera_aov(it, cam, w, pixel, ray);
                 /* Spectral mode: the path's wavelengths, from the dimension after the
                  * film and lens ones (BDPT/VCM: shared with light paths, above). */
                 Wavelengths wl, *wlp = NULL;
@@ -691,6 +702,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     it->seed = st->seed;
     camera_init(&it->camera, &scene->camera, st->width, st->height);
     if (scene->camera_mirror) camera_mirror_x(&it->camera);
+    camera_set_motion(&it->camera, scene->camera_placed ? &scene->camera_motion : NULL, scene->shutter[0],
+                      scene->shutter[1]);
     filter_init(&it->pixel_filter, st->filter);
     /* A time limit without a sample cap: the count is not known, strata cannot be laid out. */
     it->sampler = sampler_setup(st->sampler, st->seed, (uint32_t)st->spp, st->width, st->height);
@@ -744,6 +757,17 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                         "yet%s: use %s", cst_integrator_name(st->integrator),
                         media ? " with participating media" : " (its photon maps are built once, for all camera paths)",
                         media ? "path, path-nee, path-bsdf or pssmlt" : "sppm, path, bdpt or vcm");
+    /* A moving camera, or a shutter other than [0, 1]: only the path tracers, Whitted and
+     * the light tracer place the camera at the path's time and map the time through the
+     * shutter (camera_time); BDPT, VCM, SPPM and MLT draw their times over [0, 1] with the
+     * camera where it stands. */
+    const bool camera_motion = it->camera.moving || it->camera.shutter_open != 0.0f || it->camera.shutter_close != 1.0f;
+    const bool camera_motion_ok = it->kind == INTEGRATOR_PATH || it->kind == INTEGRATOR_WHITTED ||
+                                  it->kind == INTEGRATOR_LIGHT;
+    if (it->motion && camera_motion && !camera_motion_ok)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render a moving camera or a shutter other "
+                        "than [0, 1] (motion blur) yet: use path, path-nee, path-bsdf, whitted or light",
+                        cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

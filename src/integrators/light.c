@@ -67,8 +67,14 @@ void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampl
     Wavelengths wl;
     if (lp->spectral) wl = wavelengths_sample(sampler_1d(rng));
     /* Motion blur: the light path's own time, uniform over the shutter (drawn only in
-     * scenes that move: static ones keep their streams). */
-    const float time = scene_has_motion(s) ? sampler_1d(rng) : 0.0f;
+     * scenes that move: static ones keep their streams); its connections reach the camera
+     * where that time places it. */
+    const float time = scene_has_motion(s) ? camera_time(cam, sampler_1d(rng)) : 0.0f;
+    Camera placed;
+    if (cam->moving) {
+        placed = camera_at(cam, time);
+        cam = &placed;
+    }
     LightTraceCtx c = {s, cam, lp, filter_radius(lp->frame.filter) - 0.5f, out, lp->spectral ? &wl : NULL, rays,
                        time};
     EmissionSample es;

@@ -39,6 +39,7 @@ Scene *scene_create(void)
     s->settings.photon_radius = 0.0;
     s->settings.aovs = 0;
     s->camera_medium = -1;
+    s->shutter[1] = 1.0f; /* [0, 1]: the whole motion of every moving thing */
     return s;
 }
 
@@ -850,7 +851,14 @@ CstStatus scene_commit(Scene *s, CstError *err)
     for (int i = 0; i < s->num_textures; i++)
         if (texture_needs_footprint(&s->textures[i])) {
             const CstRenderSettings *rs = &s->settings;
-            footprint_init(&s->footprint, &s->camera, s->camera_mirror != 0,
+            CameraDesc view = s->camera;
+            if (s->camera_placed) { /* a moving camera: its view in the middle of its motion */
+                Transform w = motion_at(&s->camera_motion, 0.5f);
+                view.position = transform_point(&w, view.position);
+                view.look_at = transform_point(&w, view.look_at);
+                view.up = transform_vector(&w, view.up);
+            }
+            footprint_init(&s->footprint, &view, s->camera_mirror != 0,
                            rs->width > 0 ? rs->width : CST_DEFAULT_WIDTH, rs->height > 0 ? rs->height : CST_DEFAULT_HEIGHT,
                            rs->spp > 0 ? rs->spp : CST_DEFAULT_SPP);
             s->footprint.enabled = true;

@@ -140,6 +140,13 @@ struct CstScene {
     CameraDesc camera;
     int camera_set;
     int camera_mirror; /* render with camera_mirror_x (pbrt's left-handed LookAt) */
+    /* Motion blur of the view (cst_scene_set_camera_motion, cst_scene_set_shutter): when
+     * camera_placed, the camera above is in its own space, placed in the world by
+     * camera_motion over [0, 1] (moving or not); the shutter interval of ray times ([0, 1]
+     * from scene_create). */
+    bool camera_placed;
+    MotionTransform camera_motion;
+    float shutter[2];
     CstRenderSettings settings; /* what the scene file asked for; unset (scene_create) = default */
     char *output_path;
 };
@@ -384,11 +391,12 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     return scene_intersect_first(s, ray, sh);
 }
 
-/* Whether anything in the scene moves over the shutter interval: only then do camera
- * paths draw a time (integrator.c), so static scenes keep their random-number streams. */
+/* Whether anything in the scene (a moving instance, or the camera) moves over the shutter
+ * interval: only then do camera paths draw a time (integrator.c), so static scenes keep their
+ * random-number streams. */
 static inline bool scene_has_motion(const Scene *s)
 {
-    return s->instances && s->instances->num_motions > 0;
+    return (s->instances && s->instances->num_motions > 0) || (s->camera_placed && s->camera_motion.moving);
 }
 
 /* dp/du and dp/dv of the triangle p0 p1 p2 with texture coordinates uv0 uv1 uv2 (pbrt-v4

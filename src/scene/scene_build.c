@@ -711,27 +711,6 @@ CstStatus cst_scene_add_object(CstScene *scene, const CstMeshDesc *d, int *out_i
     return st;
 }
 
-/* A 3 x 4 row-major world_from_object (named `what` in errors) as a checked Transform. */
-static CstStatus read_instance_matrix(const float m[12], const char *fn, const char *what, Transform *out,
-                                      CstError *err)
-{
-    if (!m) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is NULL", fn, what);
-    float rows[16] = {0};
-    for (int k = 0; k < 12; k++) {
-        if (!isfinite(m[k]))
-            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s[%d] is %g; expected finite numbers",
-                            fn, what, k, (double)m[k]);
-        rows[k] = m[k];
-    }
-    rows[15] = 1.0f;
-    Transform xf = transform_from_rows(rows), inv;
-    if (!transform_invert(&xf, &inv))
-        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is singular (or its inverse is not "
-                        "finite); expected an invertible affine transform", fn, what);
-    *out = xf;
-    return CST_OK;
-}
-
 static CstStatus add_instance(CstScene *scene, int object, const float m[12], const float m_end[12], const char *fn,
                               CstError *err)
 {

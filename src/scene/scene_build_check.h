@@ -35,6 +35,28 @@ static inline CstStatus read_vec3(const float v[3], const char *fn, const char *
     return CST_OK;
 }
 
+/* A 3 x 4 row-major affine transform (an instance's or the camera's placement, named `what`
+ * in errors) as a checked Transform: finite and invertible. */
+static inline CstStatus read_instance_matrix(const float m[12], const char *fn, const char *what, Transform *out,
+                                      CstError *err)
+{
+    if (!m) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is NULL", fn, what);
+    float rows[16] = {0};
+    for (int k = 0; k < 12; k++) {
+        if (!isfinite(m[k]))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s[%d] is %g; expected finite numbers",
+                            fn, what, k, (double)m[k]);
+        rows[k] = m[k];
+    }
+    rows[15] = 1.0f;
+    Transform xf = transform_from_rows(rows), inv;
+    if (!transform_invert(&xf, &inv))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s is singular (or its inverse is not "
+                        "finite); expected an invertible affine transform", fn, what);
+    *out = xf;
+    return CST_OK;
+}
+
 /* A colour: finite, >= 0 and, for reflectances (max_one), <= 1. */
 static inline CstStatus read_rgb(const float c[3], int max_one, const char *fn, const char *what, Color *out,
                           CstError *err)

@@ -447,6 +447,48 @@ void cst_scene_camera(const CstScene *scene, CstCameraDesc *out)
     out->mirror = scene->camera_mirror;
 }
 
+CstStatus cst_scene_set_camera_motion(CstScene *scene, const float start[12], const float end[12], CstError *err)
+{
+    static const char fn[] = "cst_scene_set_camera_motion";
+    cst_error_clear(err);
+    if (!scene) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: scene is NULL", fn);
+    if (!start && !end) {
+        scene->camera_placed = false;
+        return CST_OK;
+    }
+    Transform t0, t1;
+    CstStatus st = read_instance_matrix(start, fn, "world_from_camera", &t0, err);
+    if (st == CST_OK) st = read_instance_matrix(end, fn, "world_from_camera_end", &t1, err);
+    if (st != CST_OK) return st;
+    /* The camera's handedness (mirror) is one for the whole shutter: a placement that
+     * mirrors at one end only would pass through a singular one. */
+    double d0 = transform_det(&t0), d1 = transform_det(&t1);
+    if ((d0 < 0.0) != (d1 < 0.0))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: world_from_camera mirrors (determinant %g) and "
+                        "world_from_camera_end %s (%g); expected both or neither to mirror", fn, d0,
+                        d1 < 0.0 ? "does" : "does not", d1);
+    MotionTransform mt;
+    if (!motion_init(&mt, &t0, &t1))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: the transforms cannot be decomposed; expected "
+                        "invertible affine transforms", fn);
+    scene->camera_motion = mt;
+    scene->camera_placed = true;
+    return CST_OK;
+}
+
+CstStatus cst_scene_set_shutter(CstScene *scene, float open, float close, CstError *err)
+{
+    static const char fn[] = "cst_scene_set_shutter";
+    cst_error_clear(err);
+    if (!scene) return cst_fail(err, CST_ERR_INVALID_ARG, "%s: scene is NULL", fn);
+    if (!(fabsf(open) <= 1e6f) || !(fabsf(close) <= 1e6f) || !(open <= close))
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: shutter [%g, %g]; expected finite times (within 1e6) with "
+                        "open <= close", fn, (double)open, (double)close);
+    scene->shutter[0] = open;
+    scene->shutter[1] = close;
+    return CST_OK;
+}
+
 CstStatus cst_scene_set_output_path(CstScene *scene, const char *path, CstError *err)
 {
     static const char fn[] = "cst_scene_set_output_path";

@@ -16,10 +16,12 @@
 #include <cmocka.h>
 
 #include "accel/instances.h"
+#include "camera/camera.h"
 #include "caustic/caustic.h"
 #include "core/rng.h"
 #include "math/motion.h"
 #include "render/regions.h"
+#include "scene/scene.h"
 
 static void ok(CstStatus st, const CstError *e)
 {
@@ -149,11 +151,28 @@ static void test_moving_instance_hits(void **state)
 enum { W = 32, H = 4, SPP = 64 };
 static const float HALF = 0.5f, X0 = -1.5f, X1 = 1.5f;
 
+/* How square_scene moves: the square (from X0 to X1), or the camera (the square fixed at
+ * x = 0, the camera from -X0 to -X1: the same relative motion), over the shutter [open,
+ * close] (the default [0, 1] when open == close == -1). */
+typedef struct SquareMotion {
+    int square, camera, perspective;
+    float open, close;
+} SquareMotion;
+
+static CstScene *square_scene_m(const char *accel, SquareMotion sm);
+
 /* A black square (albedo 0) of half-width HALF, taller than the view, moving from x = X0 to
  * X1 over the shutter in front of a white sky, seen by an orthographic camera 8 units wide
  * (W pixels): only the sky contributes (1 per escaping camera ray). */
 static CstScene *square_scene(const char *accel, int moving, int perspective)
 {
+    SquareMotion sm = {moving, 0, perspective, -1.0f, -1.0f};
+    return square_scene_m(accel, sm);
+}
+
+static CstScene *square_scene_m(const char *accel, SquareMotion sm)
+{
+    const int moving = sm.square, perspective = sm.perspective;
     CstError e;
     CstScene *s = NULL;
     ok(cst_scene_create(&s, &e), &e);
@@ -171,7 +190,8 @@ static CstScene *square_scene(const char *accel, int moving, int perspective)
     m.num_triangles = 2;
     m.material = mat;
     ok(cst_scene_add_object(s, &m, &obj, NULL, &e), &e);
-    const float t0[12] = {1, 0, 0, X0, 0, 1, 0, 0, 0, 0, 1, 0};
+    const float x0 = sm.camera ? 0.0f : X0;
+    const float t0[12] = {1, 0, 0, x0, 0, 1, 0, 0, 0, 0, 1, 0};
     const float t1[12] = {1, 0, 0, X1, 0, 1, 0, 0, 0, 0, 1, 0};
     ok(cst_scene_add_instance_motion(s, obj, t0, moving ? t1 : t0, &e), &e);
     /* A static black quad out of view, so every flat back end has a tree to traverse. */
@@ -185,6 +205,12 @@ static CstScene *square_scene(const char *accel, int moving, int perspective)
     cam.position[2] = 5.0f;
     cam.height = 1.0f; /* W / H = 8: the view is 8 units wide, 1 high */
     ok(cst_scene_set_camera(s, &cam, &e), &e);
+    if (sm.camera) {
+        const float c0[12] = {1, 0, 0, -X0, 0, 1, 0, 0, 0, 0, 1, 0};
+        const float c1[12] = {1, 0, 0, -X1, 0, 1, 0, 0, 0, 0, 1, 0};
+        ok(cst_scene_set_camera_motion(s, c0, c1, &e), &e);
+    }
+    if (sm.open != -1.0f) ok(cst_scene_set_shutter(s, sm.open, sm.close, &e), &e);
     ok(cst_scene_set_environment_constant(s, (const float[3]){1, 1, 1}, &e), &e);
     if (accel) ok(cst_scene_set_accel(s, accel, &e), &e);
     ok(cst_scene_commit(s, &e), &e);
@@ -211,10 +237,10 @@ static CstFilm *render(const CstScene *s, CstIntegrator integ, CstStatus expect,
  * pixel's x range and the shutter. At x, the square covers it while |x - c(t)| < HALF with
  * c(t) = X0 + (X1 - X0) t: a t interval, clipped to [0, 1] (exact); its length is piecewise
  * linear in x, integrated by the midpoint rule on 4000 steps (error ~1e-8). */
-static double expected_sky(int px)
+static double expected_sky_from(int px, double x0, double v)
 {
-    const double a = -4.0 + 8.0 * px / W, b = -4.0 + 8.0 * (px + 1) / W, v = (double)(X1 - X0);
-    const double half = (double)HALF, x0 = (double)X0;
+    const double a = -4.0 + 8.0 * px / W, b = -4.0 + 8.0 * (px + 1) / W;
+    const double half = (double)HALF;
     double sum = 0.0;
     const int n = 4000;
     for (int i = 0; i < n; i++) {
@@ -227,9 +253,9 @@ static double expected_sky(int px)
     return 1.0 - sum / n;
 }
 
-/* Column means of the image (H rows, SPP samples each pixel) against expected_sky, within 4
+/* Column means of the image (H rows, SPP samples each pixel) against expected_sky_from, within 4
  * standard errors from the film's variances (a column's pixels are independent). */
-static void check_columns(const CstFilm *f, const char *what)
+static void check_columns_from(const CstFilm *f, const char *what, double x0, double speed, int min_blurred)
 {
     int blurred = 0;
     for (int x = 0; x < W; x++) {
@@ -241,7 +267,7 @@ static void check_columns(const CstFilm *f, const char *what)
             mean += m[0] / H;
             var += v[0] / (H * H);
         }
-        double want = expected_sky(x);
+        double want = expected_sky_from(x, x0, speed);
         /* The standard error of a column with no variance (all sky or all square) is 0: its
          * mean must be exact; a binomial floor keeps 4 sigma meaningful near 0 and 1. */
         double se = sqrt(var > 0.0 ? var : 0.0) + 1e-9;
@@ -249,7 +275,12 @@ static void check_columns(const CstFilm *f, const char *what)
         if (fabs(mean - want) > 4.0 * se + 1e-6)
             fail_msg("%s: column %d: sky %.5f, expected %.5f (4 sigma = %.5f)", what, x, mean, want, 4.0 * se);
     }
-    assert_true(blurred >= 8); /* the blur spans 16 columns, partly covered */
+    assert_true(blurred >= min_blurred); /* the blur spans 16 columns, partly covered */
+}
+
+static void check_columns(const CstFilm *f, const char *what)
+{
+    check_columns_from(f, what, (double)X0, (double)(X1 - X0), 8);
 }
 
 static void test_moving_square_coverage(void **state)
@@ -279,6 +310,62 @@ static void test_moving_square_coverage(void **state)
     cst_film_pixel(f, 16, 1, m); /* x in [0, 0.25]: sky */
     assert_true(m[0] == 1.0);
     cst_film_destroy(f);
+    cst_scene_destroy(s);
+}
+
+/* A camera moving sideways past a fixed square renders the closed-form time average of the
+ * same relative motion (path, whitted, and the light tracer's connections to the camera at
+ * each light path's time are checked against path in test_light_agrees_with_path); the
+ * shutter [0.25, 0.75] sees the middle half of the motion; a shutter of one instant renders
+ * the square sharp where that instant places it. */
+static void test_moving_camera_coverage(void **state)
+{
+    (void)state;
+    CstError e;
+    SquareMotion sm = {0, 1, 0, -1.0f, -1.0f};
+    CstScene *s = square_scene_m(NULL, sm);
+    CstFilm *f = render(s, CST_INTEGRATOR_PATH, CST_OK, &e);
+    check_columns(f, "path, moving camera");
+    cst_film_destroy(f);
+    f = render(s, CST_INTEGRATOR_WHITTED, CST_OK, &e);
+    check_columns(f, "whitted, moving camera");
+    cst_film_destroy(f);
+    cst_scene_destroy(s);
+    sm.perspective = 1; /* bdpt refuses orthographic cameras first */
+    s = square_scene_m(NULL, sm);
+    f = render(s, CST_INTEGRATOR_BDPT, CST_ERR_UNSUPPORTED, &e);
+    assert_non_null(strstr(e.msg, "moving camera"));
+    cst_film_destroy(f);
+    cst_scene_destroy(s);
+    /* The square moving over the shutter [0.25, 0.75]: from X0 + v / 4 to X0 + 3 v / 4. */
+    const double v = (double)(X1 - X0);
+    sm = (SquareMotion){1, 0, 0, 0.25f, 0.75f};
+    s = square_scene_m(NULL, sm);
+    f = render(s, CST_INTEGRATOR_PATH, CST_OK, &e);
+    check_columns_from(f, "path, shutter [0.25, 0.75]", (double)X0 + 0.25 * v, 0.5 * v, 4);
+    cst_film_destroy(f);
+    cst_scene_destroy(s);
+    /* The camera over the shutter [0.5, 0.5]: the square sharp at x = 0 (relative). */
+    sm = (SquareMotion){0, 1, 0, 0.5f, 0.5f};
+    s = square_scene_m(NULL, sm);
+    f = render(s, CST_INTEGRATOR_PATH, CST_OK, &e);
+    double m[3];
+    cst_film_pixel(f, 15, 1, m); /* x in [-0.25, 0]: the square */
+    assert_true(m[0] == 0.0);
+    cst_film_pixel(f, 19, 1, m); /* x in [0.75, 1]: sky */
+    assert_true(m[0] == 1.0);
+    cst_film_destroy(f);
+    cst_scene_destroy(s);
+    /* Bad calls. */
+    ok(cst_scene_create(&s, &e), &e);
+    assert_int_equal(cst_scene_set_shutter(s, 1.0f, 0.5f, &e), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_scene_set_shutter(s, 0.0f, INFINITY, &e), CST_ERR_INVALID_ARG);
+    const float id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}, flat[12] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0};
+    const float mirror[12] = {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    assert_int_equal(cst_scene_set_camera_motion(s, id, flat, &e), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_scene_set_camera_motion(s, id, NULL, &e), CST_ERR_INVALID_ARG);
+    assert_int_equal(cst_scene_set_camera_motion(s, id, mirror, &e), CST_ERR_INVALID_ARG);
+    assert_non_null(strstr(e.msg, "mirror"));
     cst_scene_destroy(s);
 }
 
@@ -317,9 +404,10 @@ static void test_backends_agree(void **state)
  * path, the time carried to its camera connections) and the path tracer (the camera path's)
  * estimate the same time-averaged image. extra: LIT_PLAIN; LIT_MEDIUM, the camera in a
  * medium of zero density (the path integrators then take volpath's loop, which must give
- * the same image); LIT_SSS, a subsurface quad far outside the view (path_sss's loop). */
+ * the same image); LIT_SSS, a subsurface quad far outside the view (path_sss's loop).
+ * camera_moves: the camera moves and turns over the shutter. */
 enum { LIT_PLAIN, LIT_MEDIUM, LIT_SSS };
-static CstScene *lit_scene_with(int extra)
+static CstScene *lit_scene_with(int extra, int camera_moves)
 {
     CstError e;
     CstScene *s = NULL;
@@ -396,11 +484,17 @@ static CstScene *lit_scene_with(int extra)
         q.material = sss;
         ok(cst_scene_add_mesh(s, &q, NULL, &e), &e);
     }
+    if (camera_moves) { /* moved by (1.5, 0.5, 1) and turned 15 degrees about y */
+        const float c0[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+        const float c = 0.965925826f, sn = 0.258819045f;
+        const float c1[12] = {c, 0, sn, 1.5f, 0, 1, 0, 0.5f, -sn, 0, c, 1.0f};
+        ok(cst_scene_set_camera_motion(s, c0, c1, &e), &e);
+    }
     ok(cst_scene_commit(s, &e), &e);
     return s;
 }
 
-static CstScene *lit_scene(void) { return lit_scene_with(LIT_PLAIN); }
+static CstScene *lit_scene(int camera_moves) { return lit_scene_with(LIT_PLAIN, camera_moves); }
 
 enum { LW = 24, LH = 16, LSPP = 256, BLOCK = 4 };
 
@@ -419,10 +513,9 @@ static CstFilm *render_lit(const CstScene *s, CstIntegrator integ)
     return f;
 }
 
-static void test_light_agrees_with_path(void **state)
+static void check_light_agrees_with_path(int camera_moves)
 {
-    (void)state;
-    CstScene *s = lit_scene();
+    CstScene *s = lit_scene(camera_moves);
     CstFilm *a = render_lit(s, CST_INTEGRATOR_PATH), *b = render_lit(s, CST_INTEGRATOR_LIGHT);
     /* Block means (BLOCK x BLOCK pixels: independent pixels, variances add) within 4
      * standard errors of their difference. */
@@ -446,13 +539,21 @@ static void test_light_agrees_with_path(void **state)
             ma /= n, mb /= n, va /= n * n, vb /= n * n;
             double se = sqrt(va + vb);
             if (fabs(ma - mb) > 4.0 * se + 1e-6)
-                fail_msg("block (%d, %d): path %.5f, light %.5f (4 sigma = %.5f)", bx, by, ma, mb, 4.0 * se);
+                fail_msg("%sblock (%d, %d): path %.5f, light %.5f (4 sigma = %.5f)",
+                         camera_moves ? "moving camera: " : "", bx, by, ma, mb, 4.0 * se);
             blocks++;
         }
     assert_int_equal(blocks, (LW / BLOCK) * (LH / BLOCK));
     cst_film_destroy(a);
     cst_film_destroy(b);
     cst_scene_destroy(s);
+}
+
+static void test_light_agrees_with_path(void **state)
+{
+    (void)state;
+    check_light_agrees_with_path(0);
+    check_light_agrees_with_path(1); /* the light tracer connects to the camera at its path's time */
 }
 
 /* ------------------------------------------------------- every integrator vs path */
@@ -485,7 +586,7 @@ static CstRenderSettings motion_settings(void)
 static void test_integrators_agree_with_path(void **state)
 {
     (void)state;
-    CstScene *s = lit_scene();
+    CstScene *s = lit_scene(0);
     CstRenderSettings st = motion_settings();
     Regions ref = regions(MS, MBLOCK);
     camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 3, &ref);
@@ -507,7 +608,7 @@ static void test_integrators_agree_with_path(void **state)
     /* path's media loop (volpath) and subsurface loop (path_sss) carry the time too. */
     const int extras[] = {LIT_MEDIUM, LIT_SSS};
     for (size_t i = 0; i < 2; i++) {
-        s = lit_scene_with(extras[i]);
+        s = lit_scene_with(extras[i], 0);
         Regions r = regions(MS, MBLOCK);
         camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 7 + i, &r);
         compare(&ref, &r, "path", extras[i] == LIT_MEDIUM ? "path (volpath)" : "path (path_sss)");
@@ -519,7 +620,7 @@ static void test_integrators_agree_with_path(void **state)
 static void test_motion_threads(void **state)
 {
     (void)state;
-    CstScene *s = lit_scene();
+    CstScene *s = lit_scene(0);
     CstRenderSettings st = motion_settings();
     st.width = st.height = 8;
     st.seed = 4;
@@ -573,6 +674,144 @@ static void test_json_motion(void **state)
     assert_null(s);
 }
 
+/* The camera's "shutter" and "motion" (which places the camera the other keys describe). */
+#define SHAPES "\"materials\": {\"m\": {\"type\": \"diffuse\"}}, \"shapes\": [{\"type\": \"mesh\", \"material\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"indices\": [[0, 1, 2]]}], "
+static void test_json_camera_motion(void **state)
+{
+    (void)state;
+    CstError e;
+    CstScene *s = NULL;
+    const char *good = "{" SHAPES "\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40,\n"
+                       " \"shutter\": [0.25, 0.5], \"motion\": {\"transform_end\": {\"translate\": [1, 0, 0]}}}}";
+    ok(cst_scene_load_json_string(good, strlen(good), "cam.json", &s, &e), &e);
+    assert_true(s->camera_placed && s->camera_motion.moving);
+    assert_true(s->shutter[0] == 0.25f && s->shutter[1] == 0.5f);
+    assert_true(s->camera_motion.start.m[0][3] == 0.0f && s->camera_motion.end.m[0][3] == 1.0f);
+    assert_true(scene_has_motion(s));
+    cst_scene_destroy(s);
+    s = NULL;
+    const char *bad[][2] = {
+        {"{" SHAPES "\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40,\n \"shutter\": [1, 0]}}",
+         "cam.json:2:"},
+        {"{" SHAPES "\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40,\n \"shutter\": 1}}",
+         "cam.json:2:"},
+        {"{" SHAPES "\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40,\n \"motion\": {}}}",
+         "transform_end"},
+        {"{" SHAPES "\"camera\": {\"position\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 40,\n"
+         " \"motion\": {\"transform_end\": {\"scale\": [-1, 1, 1]}}}}", "mirror"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        assert_int_not_equal(cst_scene_load_json_string(bad[i][0], strlen(bad[i][0]), "cam.json", &s, &e), CST_OK);
+        if (!strstr(e.msg, bad[i][1])) fail_msg("case %zu: \"%s\" lacks \"%s\"", i, e.msg, bad[i][1]);
+        assert_null(s);
+    }
+}
+
+/* ------------------------------------------------------------------ pbrt */
+
+static void count_warning(void *user, CstWarningCode code, const char *message)
+{
+    (void)code;
+    if (strstr(message, "rendered static at its start-time transform")) ++*(int *)user;
+}
+
+/* ActiveTransform and TransformTimes: the camera and a triangle mesh declared under
+ * transforms that differ between the start and end times move (both transforms recorded),
+ * the shutter is mapped to caustic's times, a moving sphere is warned about, and bad
+ * TransformTimes are located errors. */
+static void test_pbrt_active_transform(void **state)
+{
+    (void)state;
+    static const char scene[] =
+        "LookAt 0 0 5  0 0 0  0 1 0\n"
+        "ActiveTransform EndTime\n"
+        "Translate 1 0 0\n"
+        "ActiveTransform All\n"
+        "TransformTimes 0 2\n"
+        "Camera \"perspective\" \"float fov\" 40 \"float shutteropen\" 0.25 \"float shutterclose\" 0.75\n"
+        "WorldBegin\n"
+        "AttributeBegin\n"
+        "  Translate 0 0 -1\n"
+        "  ActiveTransform StartTime\n"
+        "  Translate -1 0 0\n"
+        "  ActiveTransform All\n"
+        "  Shape \"trianglemesh\" \"point3 P\" [-1 -1 0  1 -1 0  0 1 0] \"integer indices\" [0 1 2]\n"
+        "  ActiveTransform EndTime\n"
+        "  Translate 0 1 0\n"
+        "  Shape \"sphere\" \"float radius\" 0.5\n"
+        "AttributeEnd\n"
+        "Shape \"trianglemesh\" \"point3 P\" [-9 -9 -3  9 -9 -3  0 9 -3] \"integer indices\" [0 1 2]\n";
+    CstError e;
+    CstScene *s = NULL;
+    int warnings = 0;
+    CstLoadOptions opt = {0};
+    opt.warning = count_warning;
+    opt.warning_user = &warnings;
+    ok(cst_scene_load_pbrt_string(scene, strlen(scene), "t.pbrt", &opt, &s, &e), &e);
+    /* The camera: world-from-camera at the start puts it at (0, 0, 5); at the end, the
+     * camera-from-world LookAt x Translate(1, 0, 0) puts it at (-1, 0, 5). */
+    assert_true(s->camera_placed && s->camera_motion.moving);
+    assert_float_equal(s->camera_motion.start.m[0][3], 0.0f, 1e-6);
+    assert_float_equal(s->camera_motion.start.m[2][3], 5.0f, 1e-6);
+    assert_float_equal(s->camera_motion.end.m[0][3], -1.0f, 1e-6);
+    assert_float_equal(s->camera_motion.end.m[2][3], 5.0f, 1e-6);
+    /* shutteropen 0.25, shutterclose 0.75 over TransformTimes 0 2. */
+    assert_true(s->shutter[0] == 0.125f && s->shutter[1] == 0.375f);
+    /* The mesh: one moving instance from x = -1 to x = 0 (z = -1 at both ends); the last
+     * mesh, after AttributeEnd, is static again. */
+    assert_non_null(s->instances);
+    assert_int_equal(s->instances->num_motions, 1);
+    const MotionTransform *mt = &s->instances->motions[0];
+    assert_true(mt->start.m[0][3] == -1.0f && mt->end.m[0][3] == 0.0f);
+    assert_true(mt->start.m[2][3] == -1.0f && mt->end.m[2][3] == -1.0f);
+    assert_int_equal(warnings, 1); /* the sphere */
+    cst_scene_destroy(s);
+    s = NULL;
+    /* A pbrt camera that moves, at its start time, sends the rays of the same camera
+     * without the motion (the camera-space view, the mirror of pbrt's left-handed frame and
+     * the placement agree); at its end time, those of the camera moved by the end's
+     * translation. */
+    static const char cam_static[] = "LookAt 1 2 3  0 0 0  0 1 0\nRotate -5 0 0 1\nCamera \"perspective\" \"float fov\" 40\n"
+                                     "WorldBegin\n";
+    static const char cam_moving[] = "LookAt 1 2 3  0 0 0  0 1 0\nRotate -5 0 0 1\nActiveTransform EndTime\n"
+                                     "Translate 0 0 0.5\nActiveTransform All\nCamera \"perspective\" \"float fov\" 40\n"
+                                     "WorldBegin\n";
+    CstScene *a = NULL, *b = NULL;
+    ok(cst_scene_load_pbrt_string(cam_static, strlen(cam_static), "t.pbrt", NULL, &a, &e), &e);
+    ok(cst_scene_load_pbrt_string(cam_moving, strlen(cam_moving), "t.pbrt", NULL, &b, &e), &e);
+    assert_true(!a->camera_placed && b->camera_placed && b->camera_motion.moving);
+    Camera ca, cb;
+    camera_init(&ca, &a->camera, 32, 24);
+    if (a->camera_mirror) camera_mirror_x(&ca);
+    camera_init(&cb, &b->camera, 32, 24);
+    if (b->camera_mirror) camera_mirror_x(&cb);
+    camera_set_motion(&cb, &b->camera_motion, 0.0f, 1.0f);
+    const Camera c0 = camera_at(&cb, 0.0f), c1 = camera_at(&cb, 1.0f);
+    for (int k = 0; k < 9; k++) {
+        const float fx = 4.0f * (float)(k % 3) * 4.0f, fy = 3.0f * (float)(k / 3) * 4.0f;
+        Ray ra = camera_generate_ray(&ca, fx, fy, v2(0.5f, 0.5f)), r0 = camera_generate_ray(&c0, fx, fy, v2(0.5f, 0.5f));
+        Ray r1 = camera_generate_ray(&c1, fx, fy, v2(0.5f, 0.5f));
+        assert_true(v3_length(v3_sub(ra.o, r0.o)) < 1e-5f && v3_length(v3_sub(ra.d, r0.d)) < 1e-5f);
+        /* Translate after LookAt in camera-from-world: the camera moves by -0.5 along
+         * world z, not turned. */
+        assert_true(v3_length(v3_sub(ra.d, r1.d)) < 1e-5f);
+        assert_true(v3_length(v3_sub(v3_sub(r1.o, ra.o), v3(0.0f, 0.0f, -0.5f))) < 1e-5f);
+    }
+    cst_scene_destroy(a);
+    cst_scene_destroy(b);
+    const char *bad[][2] = {
+        {"TransformTimes 1 1\nWorldBegin\n", "t.pbrt:1:1"},
+        {"WorldBegin\nTransformTimes 0 1\n", "t.pbrt:2:1"},
+        {"WorldBegin\nActiveTransform Sometimes\n", "t.pbrt:2:17"},
+        {"ActiveTransform EndTime\nScale 0 0 0\nCamera \"perspective\"\nWorldBegin\n", "t.pbrt:3:1"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        assert_int_not_equal(cst_scene_load_pbrt_string(bad[i][0], strlen(bad[i][0]), "t.pbrt", NULL, &s, &e), CST_OK);
+        if (!strstr(e.msg, bad[i][1])) fail_msg("case %zu: \"%s\" lacks \"%s\"", i, e.msg, bad[i][1]);
+        assert_null(s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -580,11 +819,14 @@ int main(void)
         cmocka_unit_test(test_motion_bounds),
         cmocka_unit_test(test_moving_instance_hits),
         cmocka_unit_test(test_moving_square_coverage),
+        cmocka_unit_test(test_moving_camera_coverage),
         cmocka_unit_test(test_backends_agree),
         cmocka_unit_test(test_light_agrees_with_path),
         cmocka_unit_test(test_integrators_agree_with_path),
         cmocka_unit_test(test_motion_threads),
         cmocka_unit_test(test_json_motion),
+        cmocka_unit_test(test_json_camera_motion),
+        cmocka_unit_test(test_pbrt_active_transform),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

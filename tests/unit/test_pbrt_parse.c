@@ -224,6 +224,7 @@ static void test_transforms(void **state)
         "AttributeBegin\n Translate 1 1 1\n Identity\n" TRI "AttributeEnd\n"    /* tri 6 */
         TRI                                                                     /* tri 7 */
         "AttributeBegin\n Translate 4 0 0\n ActiveTransform EndTime\n Translate 100 0 0\n"
+        " ActiveTransform StartTime\n Translate 100 0 0\n" /* both CTMs moved alike: static */
         " ActiveTransform All\n" TRI "AttributeEnd\n"), NULL);                  /* tri 8 */
     assert_int_equal(s->num_triangles, 9);
     assert_vec(tri_vertex(s, 0, 1), 11, 0, 0, 0);
@@ -235,7 +236,7 @@ static void test_transforms(void **state)
     assert_vec(tri_vertex(s, 5, 0), 0, 1, 3, 0);
     assert_vec(tri_vertex(s, 6, 0), 0, 0, 0, 0);
     assert_vec(tri_vertex(s, 7, 1), 1, 0, 0, 0);
-    assert_vec(tri_vertex(s, 8, 0), 4, 0, 0, 0);
+    assert_vec(tri_vertex(s, 8, 0), 104, 0, 0, 0);
     cst_scene_destroy(s);
 }
 
@@ -380,19 +381,25 @@ static void test_duplicate_parameter(void **state)
 }
 
 /* Motion: a transform under ActiveTransform StartTime alone moves only the start (pbrt-v4
- * blurs between start and end): a located warning, not a silent difference. */
+ * blurs between start and end): the triangle becomes a moving instance, without warnings;
+ * a sphere that moves is rendered static, with a located warning; TransformTimes is an
+ * option (an error in the world block). test_motion renders and checks the rest. */
 static void test_motion_warnings(void **state)
 {
     (void)state;
     Warnings w = {0};
     Scene *s = expect_ok(WORLD("ActiveTransform StartTime\nTranslate 1 0 0\nActiveTransform All\n"
-                               "Translate 0 1 0\nTransformTimes 0 1\n" TRI), &w);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:5:1: Translate under ActiveTransform "
-                             "StartTime: motion blur is not supported") >= 0);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:8:1: TransformTimes") >= 0);
-    assert_int_equal(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:7:1:"), -1); /* All: no motion */
-    assert_vec(tri_vertex(s, 0, 0), 1.0f, 1.0f, 0.0f, 0.0f);
+                               "Translate 0 1 0\n" TRI "Shape \"sphere\"\n"), &w);
+    assert_int_equal(s->num_triangles, 0);
+    assert_non_null(s->instances);
+    assert_int_equal(s->instances->num_motions, 1);
+    const MotionTransform *mt = &s->instances->motions[0];
+    assert_true(mt->start.m[0][3] == 1.0f && mt->start.m[1][3] == 1.0f);
+    assert_true(mt->end.m[0][3] == 0.0f && mt->end.m[1][3] == 1.0f);
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:9:1: Shape \"sphere\" moves") >= 0);
+    assert_int_equal(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:8:1:"), -1); /* the moving triangle */
     cst_scene_destroy(s);
+    expect_error(WORLD("TransformTimes 0 1\n"), CST_ERR_INVALID_ARG, "TransformTimes", 0, "before WorldBegin");
 }
 
 /* A projective ConcatTransform (the sssdragon scenes have one): accepted with a warning;

@@ -209,31 +209,36 @@ static void transform_rows(const Transform *t, float rows[12])
         for (int k = 0; k < 4; k++) rows[4 * r + k] = t->m[r][k];
 }
 
-/* A mesh with "motion": {"transform": at shutter open (default identity), "transform_end":
- * at shutter close}: its vertices are in object space and it becomes an object and one
- * moving instance (cst_scene_add_instance_motion), so instances' limits hold: no emission
- * or medium (uvs and alpha are kept). */
-static CstStatus add_moving_mesh(Loader *ld, const json_t *motion, const CstMeshDesc *mesh, const json_t *shape)
+CstStatus json_parse_motion(Loader *ld, const json_t *motion, Transform *t0, Transform *t1)
 {
     static const char *const keys[] = {"transform", "transform_end"};
+    LOADER_TRY(json_expect_object(ld, motion, "an object with \"transform_end\" (and optionally \"transform\")"));
+    LOADER_TRY(json_check_keys(ld, motion, keys, 2));
+    *t0 = transform_identity();
+    json_t *v = json_object_get(motion, "transform");
+    if (v) {
+        json_path_push_key(ld, "transform");
+        LOADER_TRY(parse_transform(ld, v, t0));
+        json_path_pop(ld);
+    }
+    LOADER_TRY(json_member_required(ld, motion, "transform_end", "the transform at time 1 (shutter close)", &v));
+    json_path_push_key(ld, "transform_end");
+    LOADER_TRY(parse_transform(ld, v, t1));
+    json_path_pop(ld);
+    return CST_OK;
+}
+
+/* A mesh with "motion" (json_parse_motion): its vertices are in object space and it becomes
+ * an object and one moving instance (cst_scene_add_instance_motion), so instances' limits
+ * hold: no emission or medium (uvs and alpha are kept). */
+static CstStatus add_moving_mesh(Loader *ld, const json_t *motion, const CstMeshDesc *mesh, const json_t *shape)
+{
     const char *bad = json_object_get(shape, "medium") ? "medium" : json_object_get(shape, "emission") ? "emission" : NULL;
     if (bad)
         return json_fail_here(ld, "a moving mesh (\"motion\") cannot have \"%s\": it is placed as a moving instance, "
                                   "and instances carry no emission or medium", bad);
-    LOADER_TRY(json_expect_object(ld, motion, "an object with \"transform_end\" (and optionally \"transform\")"));
-    LOADER_TRY(json_check_keys(ld, motion, keys, 2));
-    Transform t0 = transform_identity(), t1;
-    json_t *v = json_object_get(motion, "transform");
-    if (v) {
-        json_path_push_key(ld, "transform");
-        LOADER_TRY(parse_transform(ld, v, &t0));
-        json_path_pop(ld);
-    }
-    json_t *e;
-    LOADER_TRY(json_member_required(ld, motion, "transform_end", "the transform at shutter close", &e));
-    json_path_push_key(ld, "transform_end");
-    LOADER_TRY(parse_transform(ld, e, &t1));
-    json_path_pop(ld);
+    Transform t0, t1;
+    LOADER_TRY(json_parse_motion(ld, motion, &t0, &t1));
     float r0[12], r1[12];
     transform_rows(&t0, r0);
     transform_rows(&t1, r1);

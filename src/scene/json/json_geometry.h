@@ -8,4 +8,8 @@
 /* The "shapes" array: every shape validated and added to the scene. */
 CstStatus json_parse_shapes(Loader *ld, const json_t *shapes);
 
+/* A "motion" object (a mesh's or the camera's): {"transform": the placement at time 0
+ * (default identity), "transform_end": at time 1 (required)}, each a transform as a shape's. */
+CstStatus json_parse_motion(Loader *ld, const json_t *motion, Transform *t0, Transform *t1);
+
 #endif

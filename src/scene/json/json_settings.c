@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "io/image_io.h"
+#include "scene/json/json_geometry.h"
 
 #define LOADER_MAX_FILM_SIZE 65536
 
@@ -153,19 +154,19 @@ static CstStatus set_camera(Loader *ld, const CameraDesc *c, CstCameraType type)
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 
-CstStatus json_parse_camera(Loader *ld, const json_t *cam)
+static CstStatus parse_camera_view(Loader *ld, const json_t *cam)
 {
     static const char *const types[] = {"pinhole", "thinlens", "orthographic"};
-    static const char *const keys[] = {"type", "position", "look_at", "up", "fov",
+    static const char *const keys[] = {"type", "position", "look_at", "up", "fov", "shutter", "motion",
                                        "aperture_radius", "focus_distance"};
-    static const char *const ortho_keys[] = {"type", "position", "look_at", "up", "height"};
+    static const char *const ortho_keys[] = {"type", "position", "look_at", "up", "height", "shutter", "motion"};
     int type = 0;
     json_t *v;
     LOADER_TRY(json_expect_object(ld, cam, "a camera object"));
     LOADER_TRY(json_read_type(ld, cam, "camera type", types, 3, CAMERA_PINHOLE, &type));
     /* The lens keys mean nothing to a pinhole: reject rather than ignore them. */
-    if (type == CAMERA_ORTHOGRAPHIC) LOADER_TRY(json_check_keys(ld, cam, ortho_keys, 5));
-    else LOADER_TRY(json_check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 7 : 5));
+    if (type == CAMERA_ORTHOGRAPHIC) LOADER_TRY(json_check_keys(ld, cam, ortho_keys, 7));
+    else LOADER_TRY(json_check_keys(ld, cam, keys, type == CAMERA_THINLENS ? 9 : 7));
 
     CameraDesc desc = {0}; /* read and checked here, then handed over as a CstCameraDesc */
     desc.up = v3(0.0f, 1.0f, 0.0f);
@@ -243,6 +244,47 @@ CstStatus json_parse_camera(Loader *ld, const json_t *cam)
         }
     }
     return set_camera(ld, &desc, CST_CAMERA_PERSPECTIVE);
+}
+
+/* Motion blur: "shutter": [open, close] (times where 0 and 1 are every motion's ends;
+ * default [0, 1]) and "motion" (json_parse_motion), which places the camera the other keys
+ * describe, as a moving mesh's transforms place its vertices. */
+CstStatus json_parse_camera(Loader *ld, const json_t *cam)
+{
+    LOADER_TRY(parse_camera_view(ld, cam));
+    json_t *v;
+    CstStatus st = CST_OK;
+    if ((v = json_object_get(cam, "shutter"))) {
+        char kind[48];
+        float t[2];
+        json_path_push_key(ld, "shutter");
+        if (!json_is_array(v) || json_array_size(v) != 2)
+            return json_fail_here(ld, "got %s; expected [open, close], two times", json_describe(v, kind));
+        for (size_t k = 0; k < 2; k++) {
+            json_path_push_index(ld, k);
+            LOADER_TRY(json_read_float(ld, json_array_get(v, k), 1e6, &t[k]));
+            json_path_pop(ld);
+        }
+        if (!(t[0] <= t[1]))
+            return json_fail_here(ld, "shutter [%g, %g] closes before it opens; expected open <= close",
+                                  (double)t[0], (double)t[1]);
+        if ((st = cst_scene_set_shutter(ld->scene, t[0], t[1], ld->err)) != CST_OK) return json_fail_builder(ld, st);
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(cam, "motion"))) {
+        Transform t0, t1;
+        json_path_push_key(ld, "motion");
+        LOADER_TRY(json_parse_motion(ld, v, &t0, &t1));
+        float r0[12], r1[12];
+        for (int r = 0; r < 3; r++)
+            for (int k = 0; k < 4; k++) {
+                r0[4 * r + k] = t0.m[r][k];
+                r1[4 * r + k] = t1.m[r][k];
+            }
+        if ((st = cst_scene_set_camera_motion(ld->scene, r0, r1, ld->err)) != CST_OK) return json_fail_builder(ld, st);
+        json_path_pop(ld);
+    }
+    return CST_OK;
 }
 
 /* Metropolis light transport's parameters (pssmlt; ignored by the other integrators, but

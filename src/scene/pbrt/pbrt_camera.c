@@ -32,15 +32,16 @@ CstStatus pbrt_camera_directive(Loader *ld, Lexer *lx, Loc loc, const char *dnam
                           "\"orthographic\" (caustic has pinhole, thin-lens and orthographic cameras)", d);
         goto done;
     }
-    if (!ld->gs.ctm.inv_ok) {
-        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the camera transform is singular; expected "
-                          "an invertible transform (as from LookAt)", d);
+    if (!ld->gs.ctm.inv_ok || !ld->gs.ctm_end.inv_ok) {
+        st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the camera transform%s is singular; expected "
+                          "an invertible transform (as from LookAt)", d, ld->gs.ctm.inv_ok ? " at the end time" : "");
         goto done;
     }
     CamRec *c = &ld->cam;
     memset(c, 0, sizeof *c);
     c->set = 1;
     c->ctm = ld->gs.ctm;
+    c->ctm_end = ld->gs.ctm_end;
     c->loc = loc;
     c->ortho = ortho;
     c->medium = ld->gs.med_out; /* pbrt-v4's CameraMedium: the outside medium here */
@@ -66,6 +67,8 @@ CstStatus pbrt_camera_directive(Loader *ld, Lexer *lx, Loc loc, const char *dnam
         ld->settings.exposure = (ld->settings.exposure_set ? ld->settings.exposure : 0.0) + log2((double)(t1 - t0));
         ld->settings.exposure_set = 1;
     }
+    c->shutter[0] = t0; /* the interval of ray times too (pbrt-v4 CameraBase::SampleTime) */
+    c->shutter[1] = t1;
     if ((st = pbrt_lookup(ld, &ps, d, "screenwindow", PT_MASK(PT_FLOAT), "float", &p))) goto done;
     if (p) {
         if (p->num_nums != 4) {
@@ -101,7 +104,7 @@ CstStatus pbrt_camera_directive(Loader *ld, Lexer *lx, Loc loc, const char *dnam
     }
     pbrt_params_warn_unused(ld, &ps, d);
     /* pbrt names the camera's space "camera": world-from-camera for CoordSysTransform. */
-    st = pbrt_set_named_xf(ld, "camera", pbrt_xf_swap(c->ctm));
+    st = pbrt_set_named_xf(ld, "camera", pbrt_xf_swap(c->ctm), pbrt_xf_swap(c->ctm_end));
 done:
     free(type);
     pbrt_params_free(&ps);
@@ -116,11 +119,13 @@ CstStatus pbrt_camera_finish(Loader *ld)
 {
     CamRec c = ld->cam;
     if (!c.set) { /* pbrt's default: at the origin looking down +z, fov 90 */
-        c.ctm = pbrt_xf_identity();
+        c.ctm = c.ctm_end = pbrt_xf_identity();
         c.fov = 90.0f;
         c.focal_distance = 1e6f;
+        c.shutter[1] = 1.0f;
         c.loc = ld->end;
     }
+    const int moving = memcmp(c.ctm.m.m, c.ctm_end.m.m, sizeof c.ctm.m.m) != 0;
     const Transform *w = &c.ctm.inv;
     CstCameraDesc desc = {0};
     Vec3 pos = transform_point(w, v3s(0.0f));
@@ -142,6 +147,15 @@ CstStatus pbrt_camera_finish(Loader *ld)
     pbrt_vec3_floats(v3_add(pos, v3_scale(f, s)), desc.look_at);
     pbrt_vec3_floats(u, desc.up);
     desc.mirror = v3_dot(x, v3_cross(f, u)) < 0.0f;
+    if (moving) {
+        /* A moving camera (CameraTransform with two transforms): the view in camera space
+         * (pbrt's: looking down +z, y up), placed by world-from-camera at the start and
+         * end times (cst_scene_set_camera_motion); mirror as the start placement sees it. */
+        static const float origin[3] = {0.0f, 0.0f, 0.0f}, ahead[3] = {0.0f, 0.0f, 1.0f}, y[3] = {0.0f, 1.0f, 0.0f};
+        memcpy(desc.position, origin, sizeof origin);
+        memcpy(desc.look_at, ahead, sizeof ahead);
+        memcpy(desc.up, y, sizeof y);
+    }
     int w_px = ld->settings.width, h_px = ld->settings.height;
     double aspect = (double)w_px / (double)h_px;
     double frame = c.has_frame ? (double)c.frame : aspect;
@@ -189,5 +203,17 @@ CstStatus pbrt_camera_finish(Loader *ld)
     }
     CstStatus st = cst_scene_set_camera(ld->scene, &desc, ld->err);
     if (!st && c.medium) st = cst_scene_set_camera_medium(ld->scene, c.medium - 1, ld->err);
+    if (!st && moving) {
+        float r0[12], r1[12];
+        for (int r = 0; r < 3; r++) {
+            memcpy(&r0[4 * r], c.ctm.inv.m[r], sizeof c.ctm.inv.m[r]);
+            memcpy(&r1[4 * r], c.ctm_end.inv.m[r], sizeof c.ctm_end.inv.m[r]);
+        }
+        st = cst_scene_set_camera_motion(ld->scene, r0, r1, ld->err);
+    }
+    /* The shutter in caustic's times: TransformTimes' start at 0, its end at 1. */
+    const double t0 = ld->transform_times[0], span = ld->transform_times[1] - t0;
+    const float open = (float)(((double)c.shutter[0] - t0) / span), close = (float)(((double)c.shutter[1] - t0) / span);
+    if (!st && (open != 0.0f || close != 1.0f)) st = cst_scene_set_shutter(ld->scene, open, close, ld->err);
     return st ? pbrt_fail_wrap(ld, st, c.loc, "Camera") : CST_OK;
 }

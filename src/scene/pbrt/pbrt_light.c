@@ -13,6 +13,7 @@
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_shape.h"
 #include "scene/pbrt/pbrt_spectrum.h"
+#include "scene/pbrt/pbrt_transform.h"
 
 static CstStatus get_point3(Loader *ld, Params *ps, const char *d, const char *name, Vec3 def, Vec3 *out)
 {
@@ -548,6 +549,7 @@ CstStatus pbrt_light_source_directive(Loader *ld, NamedCall *call)
 {
     if (!ld->in_world)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, call->loc, "LightSource before WorldBegin; expected it in the world block");
+    pbrt_warn_static(ld, call->loc, call->d, "lights do not move (as in pbrt-v4)");
     return light_source(ld, call->type, &call->ps, call->loc, call->d);
 }
 

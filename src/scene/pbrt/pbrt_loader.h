@@ -78,12 +78,15 @@ typedef struct AreaLight {
 } AreaLight;
 
 typedef struct GState {
-    Xf ctm;
+    /* pbrt-v4's pair of CTMs: ctm at the start time and ctm_end at the end time of
+     * TransformTimes. They differ only after ActiveTransform StartTime or EndTime; then
+     * what follows moves (pbrt_ctm_moving): the camera, triangle shapes and instances. */
+    Xf ctm, ctm_end;
     int reverse;
     int material; /* index into Loader.mats */
     AreaLight area;
-    int active_start;   /* ActiveTransform includes StartTime: transforms apply */
-    int active_end;     /* ActiveTransform includes EndTime (for the motion warning); both
+    int active_start;   /* ActiveTransform includes StartTime: transforms change ctm */
+    int active_end;     /* ActiveTransform includes EndTime: transforms change ctm_end; both
                            are attributes, restored by AttributeEnd, as in pbrt-v4 */
     int transform_only; /* pushed by TransformBegin (pbrt-v3): pops only the CTM */
     int med_in, med_out; /* MediumInterface: 1 + the scene's medium id, 0 = vacuum */
@@ -116,7 +119,7 @@ typedef struct TexEntry {
 
 typedef struct NamedXf {
     char *name;
-    Xf xf;
+    Xf xf, xf_end; /* both CTMs, as pbrt-v4 names a TransformSet */
 } NamedXf;
 
 /* Geometry in object space, with the transform that places it. Shapes inside
@@ -154,8 +157,9 @@ typedef struct Object {
 
 typedef struct CamRec {
     int set;
-    Xf ctm; /* camera-from-world */
+    Xf ctm, ctm_end; /* camera-from-world at the start and end times */
     float fov;
+    float shutter[2]; /* shutteropen, shutterclose (pbrt-v4's times, before TransformTimes maps them) */
     double screen[4];
     int has_screen;
     float frame;
@@ -224,6 +228,7 @@ typedef struct Loader {
     int num_objs, cap_objs;
     int cur_obj; /* -1 outside ObjectBegin/End */
     int in_world;
+    double transform_times[2]; /* TransformTimes: the times of ctm and ctm_end, 0 and 1 by default */
     CamRec cam;
     int env_set; /* an infinite light has made the scene's environment */
     /* The sum of the infinite lights so far (pbrt-v4 sums them; caustic has one

@@ -14,6 +14,7 @@
 
 #include "scene/pbrt/pbrt_params.h"
 #include "scene/pbrt/pbrt_spectrum.h"
+#include "scene/pbrt/pbrt_transform.h"
 
 static CstStatus add_name(Loader *ld, const char *name, int id)
 {
@@ -129,6 +130,7 @@ CstStatus pbrt_make_named_medium_directive(Loader *ld, NamedCall *call)
     Params *ps = &call->ps;
     const char *d = call->d, *name = call->type, *type = NULL;
     Loc tloc = call->loc;
+    pbrt_warn_static(ld, call->loc, d, "media do not move (as in pbrt-v4)");
     TRY(pbrt_get_string(ld, ps, d, "type", &type, &tloc));
     if (!type)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, call->loc, "%s: no \"string type\"; expected the medium's "

@@ -211,7 +211,8 @@ CstStatus cst_scene_load_pbrt_string(const char *text, size_t len, const char *n
     ld.cur_obj = -1;
     ld.gs.active_start = 1;
     ld.gs.active_end = 1;
-    ld.gs.ctm = pbrt_xf_identity();
+    ld.gs.ctm = ld.gs.ctm_end = pbrt_xf_identity();
+    ld.transform_times[1] = 1.0;
     ld.end = (Loc){name, 1, 1};
     CstStatus st = CST_OK;
     size_t dl = path_dir_len(name);

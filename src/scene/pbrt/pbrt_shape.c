@@ -532,7 +532,8 @@ static CstStatus shape_alpha(Loader *ld, Params *ps, const char *d, CstAlpha *ou
 static int analytic_ok(const Loader *ld)
 {
     float scale;
-    if (ld->cur_obj >= 0 || ld->mats[ld->gs.material].interface) return 0;
+    /* Moving shapes are triangles placed by a moving instance (emit_moving_shape). */
+    if (ld->cur_obj >= 0 || ld->mats[ld->gs.material].interface || pbrt_ctm_moving(ld)) return 0;
     return !ld->gs.area.active || (transform_is_affine(&ld->gs.ctm.m) && is_similarity(&ld->gs.ctm.m, &scale));
 }
 
@@ -740,6 +741,7 @@ static CstStatus curve_shape(Loader *ld, Params *ps, const char *d, Loc loc)
                      "transform is not supported; skipped", d);
         return CST_OK;
     }
+    pbrt_warn_static(ld, loc, d, "curves do not move in caustic (only triangle shapes do)");
     if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
     const int nnorm = ct == CST_CURVE_RIBBON ? nseg + 1 : 0;
     float *cp = malloc((size_t)(ncp + nnorm) * 3 * sizeof *cp);
@@ -764,6 +766,26 @@ static CstStatus curve_shape(Loader *ld, Params *ps, const char *d, Loc loc)
         st = pbrt_fail_wrap(ld, st, loc, d);
     free(cp);
     return st;
+}
+
+static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, Loc loc, const char *d);
+
+/* A shape of the world (not in an object, not an interface): a moving instance when the CTM
+ * moves and instances can hold it, else placed by the start CTM. */
+static CstStatus emit_world_shape(Loader *ld, const ShapeGeom *g, const CstAlpha *alpha, Loc loc, const char *d)
+{
+    if (pbrt_ctm_moving(ld) && !g->is_sphere && !ld->gs.area.active && !alpha->enabled && !pbrt_medium_transition(ld))
+        return emit_moving_shape(ld, g, loc, d);
+    /* A constant alpha of 0 (sportscar's hidden area lights): no ray ever meets the shape
+     * and it emits nowhere, so leaving it out renders exactly what pbrt-v4 does, without the
+     * light sampler picking a light that gives nothing. */
+    if (alpha->enabled && !alpha->texture && alpha->value == 0.0f) return CST_OK;
+    TRY(pbrt_medium_apply(ld, 0, loc, d));
+    pbrt_warn_static(ld, loc, d, g->is_sphere ? "caustic's spheres do not move (only triangle shapes do)"
+                                 : ld->gs.area.active ? "emitting shapes do not move in caustic (moving instances do not emit)"
+                                 : alpha->enabled ? "shapes with alpha do not move in caustic"
+                                 : "shapes between two media do not move in caustic");
+    return emit_shape(ld, g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, alpha, loc, d);
 }
 
 CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
@@ -859,7 +881,8 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         skip = 1;
         pbrt_params_mark_all_used(&ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported%s; skipped", d,
-                     strcmp(type, "cylinder") == 0 ? " (in an object, an interface, or emitting under a non-uniform scale)" : "");
+                     strcmp(type, "cylinder") == 0 ? " (in an object, an interface, moving, or emitting under a non-uniform "
+                                                     "scale)" : "");
     } else {
         st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown shape \"%s\"; expected one of: "
                      "trianglemesh, plymesh, bilinearmesh, loopsubdiv, sphere, disk, curve (or the "
@@ -894,6 +917,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         if (ld->gs.area.active)
             pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s: area lights inside ObjectBegin are not "
                          "supported (as in pbrt-v4); the shape does not emit", d);
+        pbrt_warn_static(ld, loc, d, "shapes inside ObjectBegin do not move in caustic (instances of them do)");
         if (!GROW(o->shapes, o->cap, o->n + 1)) { st = pbrt_oom(ld); goto done; }
         ObjShape *os = &o->shapes[o->n++];
         os->g = g;
@@ -903,12 +927,8 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         os->alpha = alpha;
         os->loc = loc;
         memset(&g, 0, sizeof g);
-    } else if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) {
-        /* A constant alpha of 0 (sportscar's hidden area lights): no ray ever meets the
-         * shape and it emits nowhere, so leaving it out renders exactly what pbrt-v4 does,
-         * without the light sampler picking a light that gives nothing. */
-    } else if ((st = pbrt_medium_apply(ld, 0, loc, d)) == CST_OK) {
-        st = emit_shape(ld, &g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, &alpha, loc, d);
+    } else {
+        st = emit_world_shape(ld, &g, &alpha, loc, d);
     }
 done:
     pbrt_geom_free(&g);
@@ -1040,6 +1060,40 @@ done:
     return st;
 }
 
+/* Object id `proto` placed by the moving CTM (ctm at time 0, ctm_end at 1): a moving
+ * instance, pbrt-v4's AnimatedPrimitive. Its affine parts, as static instances; a singular
+ * end is skipped with a warning, as a static instance's. */
+static CstStatus add_moving_instance(Loader *ld, int proto, Loc loc, const char *d)
+{
+    const Transform *m0 = &ld->gs.ctm.m, *m1 = &ld->gs.ctm_end.m;
+    Transform inv;
+    if (!transform_invert(m0, &inv) || !transform_invert(m1, &inv)) {
+        pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: the transform at the start or end time is singular; skipped", d);
+        return CST_OK;
+    }
+    float r0[12], r1[12];
+    for (int r = 0; r < 3; r++) {
+        memcpy(&r0[4 * r], m0->m[r], sizeof m0->m[r]);
+        memcpy(&r1[4 * r], m1->m[r], sizeof m1->m[r]);
+    }
+    CstStatus st = cst_scene_add_instance_motion(ld->scene, proto, r0, r1, ld->err);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
+/* A triangle shape under a moving CTM: its triangles in object space as an object of its
+ * own (make_proto's orientation rule), placed by a moving instance (as the JSON loader's
+ * moving meshes). pbrt-v4 makes the same: the shape in object space under an
+ * AnimatedPrimitive. Instances carry no uvs: a texture on it reads uv (0, 0). */
+static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, Loc loc, const char *d)
+{
+    ObjShape os = {.g = *g, .xf = pbrt_xf_identity(), .reverse = ld->gs.reverse, .material = ld->gs.material,
+                   .loc = loc};
+    char name[] = "(a moving shape)";
+    Object tmp = {.name = name, .shapes = &os, .n = 1, .cap = 1, .loc = loc, .proto = -1};
+    TRY(make_proto(ld, &tmp, d));
+    return tmp.proto >= 0 ? add_moving_instance(ld, tmp.proto, loc, d) : CST_OK;
+}
+
 CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     (void)dname;
@@ -1070,7 +1124,10 @@ CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const c
         st = make_proto(ld, obj, d);
         if (st) return st;
     }
-    if (obj->proto >= 0) {
+    if (obj->proto >= 0 && pbrt_ctm_moving(ld)) {
+        st = add_moving_instance(ld, obj->proto, loc, d);
+        if (st) return st;
+    } else if (obj->proto >= 0) {
         Xf xf = ld->gs.ctm;
         Transform inv;
         if (!transform_invert(&xf.m, &inv)) {
@@ -1092,6 +1149,7 @@ CstStatus pbrt_object_instance_directive(Loader *ld, Lexer *lx, Loc loc, const c
         if (ld->num_instances_expanded++ == 0)
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s: spheres in instanced objects are placed "
                          "as copies (only triangles are instanced)", d);
+        pbrt_warn_static(ld, loc, d, "its spheres are copies, which do not move");
         Xf xf = pbrt_xf_compose(&ld->gs.ctm, &os->xf);
         st = emit_shape(ld, &os->g, &xf, os->reverse, os->material, NULL, &os->alpha, loc, d);
     }

@@ -85,24 +85,34 @@ static int xf_finite(const Xf *x)
     return 1;
 }
 
-/* A transform while only StartTime is active changes the start transform alone: pbrt-v4
- * then blurs what follows between the start and end transforms; we render the start. */
-static void warn_start_only(Loader *ld, Loc loc, const char *d)
-{
-    if (ld->gs.active_start && !ld->gs.active_end)
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s under ActiveTransform StartTime: motion blur "
-                     "is not supported; what follows is rendered at its start-time transform "
-                     "(pbrt-v4 blurs it towards the end-time one)", d);
-}
-
+/* pbrt-v4's ForActiveTransforms: t applied (after the CTM) to the start CTM, the end CTM, or
+ * both, as ActiveTransform chose. */
 static CstStatus apply_ctm(Loader *ld, Xf t, Loc loc, const char *d)
 {
     if (!xf_finite(&t))
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the transform is not finite in 32-bit floats", d);
-    warn_start_only(ld, loc, d);
-    if (!ld->gs.active_start) return CST_OK; /* only the end time is affected: no motion blur */
-    ld->gs.ctm = pbrt_xf_compose(&ld->gs.ctm, &t);
+    if (ld->gs.active_start) ld->gs.ctm = pbrt_xf_compose(&ld->gs.ctm, &t);
+    if (ld->gs.active_end) ld->gs.ctm_end = pbrt_xf_compose(&ld->gs.ctm_end, &t);
     return CST_OK;
+}
+
+/* Transform and Identity: the active CTMs replaced by x. */
+static void set_ctm(Loader *ld, Xf x)
+{
+    if (ld->gs.active_start) ld->gs.ctm = x;
+    if (ld->gs.active_end) ld->gs.ctm_end = x;
+}
+
+int pbrt_ctm_moving(const Loader *ld)
+{
+    return memcmp(ld->gs.ctm.m.m, ld->gs.ctm_end.m.m, sizeof ld->gs.ctm.m.m) != 0;
+}
+
+void pbrt_warn_static(Loader *ld, Loc loc, const char *d, const char *why)
+{
+    if (pbrt_ctm_moving(ld))
+        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s moves (its transform differs between the start and end "
+                     "times) but %s: rendered static at its start-time transform", d, why);
 }
 
 static int find_named_xf(Loader *ld, const char *name)
@@ -112,7 +122,7 @@ static int find_named_xf(Loader *ld, const char *name)
     return -1;
 }
 
-CstStatus pbrt_set_named_xf(Loader *ld, const char *name, Xf xf)
+CstStatus pbrt_set_named_xf(Loader *ld, const char *name, Xf xf, Xf xf_end)
 {
     int i = find_named_xf(ld, name);
     if (i < 0) {
@@ -123,6 +133,7 @@ CstStatus pbrt_set_named_xf(Loader *ld, const char *name, Xf xf)
         ld->coords[i].name = n;
     }
     ld->coords[i].xf = xf;
+    ld->coords[i].xf_end = xf_end;
     return CST_OK;
 }
 
@@ -148,6 +159,7 @@ CstStatus pbrt_pop_state(Loader *ld, Loc loc, int transform_only, const char *d)
                             top->transform_only ? "TransformEnd" : "AttributeEnd");
     if (transform_only) {
         ld->gs.ctm = top->ctm;
+        ld->gs.ctm_end = top->ctm_end;
     } else {
         ld->gs = *top;
     }
@@ -228,9 +240,7 @@ CstStatus pbrt_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
     }
     Xf x = xf_from(m);
     if (d[0] == 'T') {
-        warn_start_only(ld, loc, d);
-        if (!ld->gs.active_start) return CST_OK;
-        ld->gs.ctm = x;
+        set_ctm(ld, x);
         return CST_OK;
     }
     return apply_ctm(ld, x, loc, d);
@@ -238,9 +248,8 @@ CstStatus pbrt_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *d
 
 CstStatus pbrt_identity_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
-    (void)lx;
-    warn_start_only(ld, loc, dname);
-    if (ld->gs.active_start) ld->gs.ctm = pbrt_xf_identity();
+    (void)lx, (void)loc, (void)dname;
+    set_ctm(ld, pbrt_xf_identity());
     return CST_OK;
 }
 
@@ -254,13 +263,16 @@ CstStatus pbrt_coordinate_system_directive(Loader *ld, Lexer *lx, Loc loc, const
     Loc nl;
     TRY(pbrt_expect_string(ld, lx, d, "a coordinate system name", &s, &nl));
     if (set) {
-        st = pbrt_set_named_xf(ld, s, ld->gs.ctm);
+        st = pbrt_set_named_xf(ld, s, ld->gs.ctm, ld->gs.ctm_end);
     } else {
         int i = find_named_xf(ld, s);
         if (i < 0) st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, nl, "CoordSysTransform: \"%s\" is not defined; "
                                      "expected a name given to CoordinateSystem (or \"camera\" after Camera)",
                                      pbrt_clip(s, nm));
-        else ld->gs.ctm = ld->coords[i].xf;
+        else {
+            ld->gs.ctm = ld->coords[i].xf; /* both, whatever is active (pbrt-v4) */
+            ld->gs.ctm_end = ld->coords[i].xf_end;
+        }
     }
     free(s);
     return st;
@@ -268,16 +280,12 @@ CstStatus pbrt_coordinate_system_directive(Loader *ld, Lexer *lx, Loc loc, const
 
 CstStatus pbrt_active_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
-    (void)dname;
+    (void)loc, (void)dname;
     PbrtToken w;
     TRY(pbrt_lex_next(ld, lx, &w));
     if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "StartTime")) { ld->gs.active_start = 1; ld->gs.active_end = 0; }
-    else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "EndTime")) {
-        ld->gs.active_start = 0;
-        ld->gs.active_end = 1;
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "ActiveTransform EndTime: motion blur is not "
-                     "supported; end-time transforms are ignored");
-    } else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "All")) { ld->gs.active_start = ld->gs.active_end = 1; }
+    else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "EndTime")) { ld->gs.active_start = 0; ld->gs.active_end = 1; }
+    else if (w.kind == PBRT_TOK_WORD && pbrt_tok_is(&w, "All")) { ld->gs.active_start = ld->gs.active_end = 1; }
     else {
         char got[96];
         pbrt_token_describe(&w, got, sizeof got);
@@ -287,11 +295,20 @@ CstStatus pbrt_active_transform_directive(Loader *ld, Lexer *lx, Loc loc, const 
     return CST_OK;
 }
 
+/* The times of the start and end CTMs (pbrt-v4: an option, before WorldBegin). Every
+ * motion and the shutter are mapped to caustic's times, where start is 0 and end is 1. */
 CstStatus pbrt_transform_times_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname)
 {
     double v[2];
     TRY(pbrt_expect_numbers(ld, lx, dname, 2, v));
-    pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "TransformTimes: motion blur is not supported; ignored");
+    if (ld->in_world)
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "TransformTimes after WorldBegin; expected it before "
+                            "WorldBegin (an option, as in pbrt-v4)");
+    if (!(v[0] < v[1]) || !isfinite(v[1] - v[0]))
+        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "TransformTimes %g %g; expected finite times with "
+                            "start < end", v[0], v[1]);
+    ld->transform_times[0] = v[0];
+    ld->transform_times[1] = v[1];
     return CST_OK;
 }
 
@@ -322,8 +339,10 @@ CstStatus pbrt_world_begin_directive(Loader *ld, Lexer *lx, Loc loc, const char 
     if (ld->in_world)
         return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "WorldBegin a second time; expected one world block");
     ld->in_world = 1;
-    ld->gs.ctm = pbrt_xf_identity();
-    return pbrt_set_named_xf(ld, "world", ld->gs.ctm);
+    /* pbrt-v4 resets both CTMs and makes both active again. */
+    ld->gs.ctm = ld->gs.ctm_end = pbrt_xf_identity();
+    ld->gs.active_start = ld->gs.active_end = 1;
+    return pbrt_set_named_xf(ld, "world", ld->gs.ctm, ld->gs.ctm_end);
 }
 
 /* pbrt-v3: the end of the file follows */

@@ -14,8 +14,16 @@ Xf pbrt_xf_compose(const Xf *a, const Xf *b);
 /* The inverse transform: matrix and inverse exchanged. */
 Xf pbrt_xf_swap(Xf x);
 
-/* Names xf (CoordinateSystem, "camera", "world"), replacing an earlier one of that name. */
-CstStatus pbrt_set_named_xf(Loader *ld, const char *name, Xf xf);
+/* Names xf and xf_end, the start and end CTMs (CoordinateSystem, "camera", "world"),
+ * replacing an earlier one of that name. */
+CstStatus pbrt_set_named_xf(Loader *ld, const char *name, Xf xf, Xf xf_end);
+
+/* Whether the start and end CTMs differ: what is declared now moves over the shutter. */
+int pbrt_ctm_moving(const Loader *ld);
+
+/* When the CTM moves: warns that d (a light, a medium, a sphere...) is rendered static at
+ * its start-time transform, because `why` (pbrt-v4 does the same for lights and media). */
+void pbrt_warn_static(Loader *ld, Loc loc, const char *d, const char *why);
 
 /* Pushes the graphics state (AttributeBegin, ObjectBegin) or, transform_only, just the CTM
  * (TransformBegin). */
@@ -45,6 +53,7 @@ CstStatus pbrt_coordinate_system_directive(Loader *ld, Lexer *lx, Loc loc, const
 
 CstStatus pbrt_active_transform_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
 
+/* TransformTimes: only before WorldBegin, start < end (located errors otherwise). */
 CstStatus pbrt_transform_times_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
 
 CstStatus pbrt_reverse_orientation_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname);
