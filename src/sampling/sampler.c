@@ -1,4 +1,4 @@
-/* The samplers behind sampler.h (zsobol's per-request draws are inline there). Stratified and Sobol' are "padded" (Kollig & Keller
+/* The samplers behind sampler.h (zsobol's per-request draws are inline there, its blocks here). Stratified and Sobol' are "padded" (Kollig & Keller
  * 2002; Burley 2020 §4; pbrt-v4's PaddedSobolSampler): each 1D or 2D request is a
  * low-dimensional point set of its own, decorrelated from the other requests by a
  * permutation of the sample index seeded by (seed, pixel, dimension). So any number of
@@ -120,11 +120,27 @@ static uint32_t strata_nx(uint32_t spp)
     return nx;
 }
 
+/* zsobol: point k's permutation and scrambles from one 64-bit hash of (seed, k) and one
+ * more mix of it; the rest are cheap derivations. */
+static ZSobolDim zsobol_dim_hashed(uint64_t key, uint32_t k)
+{
+    const uint64_t DIGIT_HI = 0x5555555555555555ULL; /* reversed index: each digit's high bit */
+    uint64_t h = mix64(key + (uint64_t)k * 0x9e3779b97f4a7c15ULL), h2 = mix64(h);
+    ZSobolDim d;
+    d.swap = h & DIGIT_HI;
+    d.shear = (h >> 1) & (h2 | ((h2 >> 1) & (h2 >> 3))) & DIGIT_HI; /* P = 1/2 * 5/8 */
+    d.add = h2;
+    d.mul = (h ^ (h2 << 17)) | 1u;
+    d.seed = (uint32_t)(h >> 32);
+    d.seed_y = (uint32_t)(h2 >> 32);
+    return d;
+}
+
 SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int width, int height)
 {
     SamplerSetup u;
     memset(&u, 0, sizeof u);
-    u.type = type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_INDEPENDENT : type;
+    u.type = type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_ZSOBOL : type;
     u.seed = seed;
     u.spp = spp;
     u.nx = 1;
@@ -135,23 +151,19 @@ SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int wid
         while (log2_side < 16 && (1 << log2_side) < side) log2_side++;
         u.width = width > 0 ? (uint32_t)width : 1u;
         u.morton_bits = 2u * (uint32_t)log2_side;
-        uint64_t key = mix64(seed ^ 0x2d358dccaa6c78a5ULL);
-        const uint64_t DIGIT_HI = 0x5555555555555555ULL; /* reversed index: each digit's high bit */
-        for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
-            /* One 64-bit hash per dimension; the rest are cheap derivations of it. */
-            uint64_t h = mix64(key + (uint64_t)k * 0x9e3779b97f4a7c15ULL), h2 = mix64(h);
-            ZSobolDim *d = &u.zdims[k];
-            d->swap = h & DIGIT_HI;
-            d->shear = (h >> 1) & (h2 | ((h2 >> 1) & (h2 >> 3))) & DIGIT_HI; /* P = 1/2 * 5/8 */
-            d->add = h2;
-            d->mul = (h ^ (h2 << 17)) | 1u;
-            d->seed = (uint32_t)(h >> 32);
-            d->seed_y = (uint32_t)(h2 >> 32);
-            u.zseed[k] = d->seed;
-            u.zseed_y[k] = d->seed_y;
+        u.zkey = mix64(seed ^ 0x2d358dccaa6c78a5ULL);
+        for (uint32_t k = 0; k < ZSOBOL_TABLE; k++) {
+            u.zdims[k] = zsobol_dim_hashed(u.zkey, k);
+            u.zseed[k] = u.zdims[k].seed;
+            u.zseed_y[k] = u.zdims[k].seed_y;
         }
     }
     return u;
+}
+
+ZSobolDim zsobol_dim(const SamplerSetup *u, uint32_t k)
+{
+    return k < ZSOBOL_TABLE ? u->zdims[k] : zsobol_dim_hashed(u->zkey, k);
 }
 
 /* Spreads the low 16 bits of v to the even bit positions (Morton order). */
@@ -191,12 +203,13 @@ uint64_t zsobol_morton_index(const SamplerSetup *u, uint64_t pixel, uint32_t ind
     return morton_index(u, pixel, index);
 }
 
-/* zsobol_point for all ZSOBOL_DIMS / 2 points of a sample, the same integers in another
- * order: the 64-bit index permutations one by one (64-bit multiplies, scalar), then the
- * 32-bit rest, Owen scrambles and bit reversals, as a loop over ZSOBOL_LANES independent
- * lanes that GCC and clang vectorise (AVX2: bswap as a byte shuffle, vpmulld). One point
- * at a time, that rest was ~80 scalar operations and three quarters of zsobol's cost over
- * independent (perf, docs/benchmarks.md). test_sampler checks it against zsobol_point. */
+/* zsobol_point for the ZSOBOL_LANES points of a block, the same integers in another order:
+ * the 64-bit index permutations one by one (64-bit multiplies, scalar), then the 32-bit
+ * rest, Owen scrambles and bit reversals, as ZSOBOL_LANES independent lanes of one SIMD
+ * register (AVX2: bswap as a byte shuffle, vpmulld; elsewhere a loop the compiler
+ * vectorises). One point at a time, that rest was ~80 scalar operations and three quarters
+ * of zsobol's cost over independent (perf, docs/benchmarks.md). test_sampler checks it
+ * against zsobol_point. */
 #if defined(__AVX2__)
 /* Bit reversal of 8 lanes: the byte swap and each byte's two nibbles reversed by table
  * (3 shuffles, 7 instructions, where the shift-and-mask steps GCC vectorises take 16). */
@@ -241,35 +254,57 @@ static inline __m256 u32_to_float_x8(__m256i x)
 }
 #endif
 
-static inline void zsobol_points(uint64_t zrev, const SamplerSetup *u, float *out)
+static inline void zsobol_block(uint64_t zrev, const ZSobolDim *dims, const uint32_t *zseed,
+                                const uint32_t *zseed_y, float *out)
 {
-    uint32_t hi[ZSOBOL_LANES] = {0}, lo[ZSOBOL_LANES] = {0};
+    uint32_t hi[ZSOBOL_LANES], lo[ZSOBOL_LANES];
     float x[ZSOBOL_LANES], y[ZSOBOL_LANES];
-    for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
-        uint64_t z = zsobol_permuted(zrev, &u->zdims[k]);
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
+        uint64_t z = zsobol_permuted(zrev, &dims[k]);
         hi[k] = (uint32_t)(z >> 32);
         lo[k] = (uint32_t)z;
     }
 #if defined(__AVX2__)
     __m256i vi = rev32_x8(_mm256_loadu_si256((const __m256i *)hi));
     __m256i vlo = _mm256_loadu_si256((const __m256i *)lo);
-    __m256i sx = _mm256_xor_si256(_mm256_loadu_si256((const __m256i *)u->zseed),
+    __m256i sx = _mm256_xor_si256(_mm256_loadu_si256((const __m256i *)zseed),
                                   _mm256_mullo_epi32(vlo, _mm256_set1_epi32((int)0x9e3779b9u)));
-    __m256i sy = _mm256_xor_si256(sx, _mm256_loadu_si256((const __m256i *)u->zseed_y));
+    __m256i sy = _mm256_xor_si256(sx, _mm256_loadu_si256((const __m256i *)zseed_y));
     _mm256_storeu_ps(x, u32_to_float_x8(rev32_x8(owen_hash_x8(vi, sx))));
     _mm256_storeu_ps(y, u32_to_float_x8(rev32_x8(owen_hash_x8(sobol1_reversed_x8(vi), sy))));
 #else
     for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
         uint32_t i = sampler_rev32(hi[k]);
-        uint32_t sx = u->zseed[k] ^ (lo[k] * 0x9e3779b9u);
+        uint32_t sx = zseed[k] ^ (lo[k] * 0x9e3779b9u);
         x[k] = sampler_u32_to_float(sampler_rev32(owen_hash(i, sx)));
-        y[k] = sampler_u32_to_float(sampler_rev32(owen_hash(sobol1_reversed(i), sx ^ u->zseed_y[k])));
+        y[k] = sampler_u32_to_float(sampler_rev32(owen_hash(sobol1_reversed(i), sx ^ zseed_y[k])));
     }
 #endif
-    for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
         out[2 * k] = x[k];
         out[2 * k + 1] = y[k];
     }
+}
+
+/* The block of dimensions that holds s->dim: from the setup's table, or past it (paths of
+ * more than 8 bounces) from hashes computed here. */
+void zsobol_fill(Sampler *s)
+{
+    const SamplerSetup *u = s->zsetup;
+    uint32_t first = s->dim / ZSOBOL_BLOCK * ZSOBOL_LANES; /* the block's first point */
+    s->zend = (first + ZSOBOL_LANES) * 2u;
+    if (first + ZSOBOL_LANES <= ZSOBOL_TABLE) {
+        zsobol_block(s->zrev, &u->zdims[first], &u->zseed[first], &u->zseed_y[first], s->zval);
+        return;
+    }
+    ZSobolDim dims[ZSOBOL_LANES];
+    uint32_t seed[ZSOBOL_LANES], seed_y[ZSOBOL_LANES];
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
+        dims[k] = zsobol_dim(u, first + k);
+        seed[k] = dims[k].seed;
+        seed_y[k] = dims[k].seed_y;
+    }
+    zsobol_block(s->zrev, dims, seed, seed_y, s->zval);
 }
 
 void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
@@ -283,11 +318,15 @@ void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t i
     if (u->type == CST_SAMPLER_ZSOBOL) {
         s->key = 0;
         s->zrev = reverse_bits64(morton_index(u, pixel, index));
-        zsobol_points(s->zrev, u, s->zval);
+        s->zsetup = u;
+        s->zend = ZSOBOL_BLOCK;
+        zsobol_block(s->zrev, u->zdims, u->zseed, u->zseed_y, s->zval);
         return;
     }
     s->key = mix64(mix64(u->seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
     s->zrev = 0;
+    s->zend = 0;
+    s->zsetup = NULL;
 }
 
 /* Stratified, Sobol' or PSS only: sampler_1d/2d (sampler.h) draw the independent ones inline. */
