@@ -136,6 +136,16 @@ static ZSobolDim zsobol_dim_hashed(uint64_t key, uint32_t k)
     return d;
 }
 
+static void zsobol_lanes_set(ZSobolLanes *b, uint32_t j, ZSobolDim d)
+{
+    b->swap[j] = d.swap;
+    b->shear[j] = d.shear;
+    b->add[j] = d.add;
+    b->mul[j] = d.mul;
+    b->seed[j] = d.seed;
+    b->seed_y[j] = d.seed_y;
+}
+
 SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int width, int height)
 {
     SamplerSetup u;
@@ -152,18 +162,19 @@ SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int wid
         u.width = width > 0 ? (uint32_t)width : 1u;
         u.morton_bits = 2u * (uint32_t)log2_side;
         u.zkey = mix64(seed ^ 0x2d358dccaa6c78a5ULL);
-        for (uint32_t k = 0; k < ZSOBOL_TABLE; k++) {
-            u.zdims[k] = zsobol_dim_hashed(u.zkey, k);
-            u.zseed[k] = u.zdims[k].seed;
-            u.zseed_y[k] = u.zdims[k].seed_y;
-        }
+        for (uint32_t k = 0; k < ZSOBOL_TABLE; k++)
+            zsobol_lanes_set(&u.zblocks[k / ZSOBOL_LANES], k % ZSOBOL_LANES, zsobol_dim_hashed(u.zkey, k));
     }
     return u;
 }
 
 ZSobolDim zsobol_dim(const SamplerSetup *u, uint32_t k)
 {
-    return k < ZSOBOL_TABLE ? u->zdims[k] : zsobol_dim_hashed(u->zkey, k);
+    if (k >= ZSOBOL_TABLE) return zsobol_dim_hashed(u->zkey, k);
+    const ZSobolLanes *b = &u->zblocks[k / ZSOBOL_LANES];
+    uint32_t j = k % ZSOBOL_LANES;
+    ZSobolDim d = {b->swap[j], b->shear[j], b->add[j], b->mul[j], b->seed[j], b->seed_y[j]};
+    return d;
 }
 
 /* Spreads the low 16 bits of v to the even bit positions (Morton order). */
@@ -254,13 +265,20 @@ static inline __m256 u32_to_float_x8(__m256i x)
 }
 #endif
 
-static inline void zsobol_block(uint64_t zrev, const ZSobolDim *dims, const uint32_t *zseed,
-                                const uint32_t *zseed_y, float *out)
+static inline void zsobol_block(uint64_t zrev, const ZSobolLanes *b, float *out)
 {
     uint32_t hi[ZSOBOL_LANES], lo[ZSOBOL_LANES];
-    float x[ZSOBOL_LANES], y[ZSOBOL_LANES];
+    const uint32_t *zseed = b->seed, *zseed_y = b->seed_y;
     for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
-        uint64_t z = zsobol_permuted(zrev, &dims[k]);
+        /* zsobol_permuted, on the struct of arrays (a vector load per field) */
+        uint64_t z = zrev;
+        uint64_t t = (z ^ (z >> 1)) & b->swap[k];
+        z ^= t | (t << 1);
+        z ^= (z >> 1) & b->shear[k];
+        z ^= z * 0x6c50b47cdb8a36d6ULL;
+        z += b->add[k];
+        z *= b->mul[k];
+        z ^= z * 0xb82f1e52c0a7e73cULL;
         hi[k] = (uint32_t)(z >> 32);
         lo[k] = (uint32_t)z;
     }
@@ -270,20 +288,26 @@ static inline void zsobol_block(uint64_t zrev, const ZSobolDim *dims, const uint
     __m256i sx = _mm256_xor_si256(_mm256_loadu_si256((const __m256i *)zseed),
                                   _mm256_mullo_epi32(vlo, _mm256_set1_epi32((int)0x9e3779b9u)));
     __m256i sy = _mm256_xor_si256(sx, _mm256_loadu_si256((const __m256i *)zseed_y));
-    _mm256_storeu_ps(x, u32_to_float_x8(rev32_x8(owen_hash_x8(vi, sx))));
-    _mm256_storeu_ps(y, u32_to_float_x8(rev32_x8(owen_hash_x8(sobol1_reversed_x8(vi), sy))));
+    __m256 vx = u32_to_float_x8(rev32_x8(owen_hash_x8(vi, sx)));
+    __m256 vy = u32_to_float_x8(rev32_x8(owen_hash_x8(sobol1_reversed_x8(vi), sy)));
+    /* Interleaved (x0 y0 x1 y1 ...): unpack gives x0 y0 x1 y1 | x4 y4 x5 y5 and
+     * x2 y2 x3 y3 | x6 y6 x7 y7; the 128-bit halves are then put in order. */
+    __m256 a = _mm256_unpacklo_ps(vx, vy), c = _mm256_unpackhi_ps(vx, vy);
+    _mm256_storeu_ps(out, _mm256_permute2f128_ps(a, c, 0x20));
+    _mm256_storeu_ps(out + 8, _mm256_permute2f128_ps(a, c, 0x31));
 #else
+    float x[ZSOBOL_LANES], y[ZSOBOL_LANES];
     for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
         uint32_t i = sampler_rev32(hi[k]);
         uint32_t sx = zseed[k] ^ (lo[k] * 0x9e3779b9u);
         x[k] = sampler_u32_to_float(sampler_rev32(owen_hash(i, sx)));
         y[k] = sampler_u32_to_float(sampler_rev32(owen_hash(sobol1_reversed(i), sx ^ zseed_y[k])));
     }
-#endif
     for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
         out[2 * k] = x[k];
         out[2 * k + 1] = y[k];
     }
+#endif
 }
 
 /* The block of dimensions that holds s->dim: from the setup's table, or past it (paths of
@@ -294,22 +318,16 @@ void zsobol_fill(Sampler *s)
     uint32_t first = s->dim / ZSOBOL_BLOCK * ZSOBOL_LANES; /* the block's first point */
     s->zend = (first + ZSOBOL_LANES) * 2u;
     if (first + ZSOBOL_LANES <= ZSOBOL_TABLE) {
-        zsobol_block(s->zrev, &u->zdims[first], &u->zseed[first], &u->zseed_y[first], s->zval);
+        zsobol_block(s->zrev, &u->zblocks[first / ZSOBOL_LANES], s->zval);
         return;
     }
-    ZSobolDim dims[ZSOBOL_LANES];
-    uint32_t seed[ZSOBOL_LANES], seed_y[ZSOBOL_LANES];
-    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
-        dims[k] = zsobol_dim(u, first + k);
-        seed[k] = dims[k].seed;
-        seed_y[k] = dims[k].seed_y;
-    }
-    zsobol_block(s->zrev, dims, seed, seed_y, s->zval);
+    ZSobolLanes b;
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) zsobol_lanes_set(&b, k, zsobol_dim_hashed(u->zkey, first + k));
+    zsobol_block(s->zrev, &b, s->zval);
 }
 
 void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
 {
-    pcg32_seed_sample(&s->rng, u->seed, pixel, index);
     s->type = u->type;
     s->dim = 0;
     s->index = index;
@@ -317,13 +335,17 @@ void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t i
     s->nx = u->nx;
     if (u->type == CST_SAMPLER_ZSOBOL) {
         s->key = 0;
+        s->rng.state = s->rng.inc = 0; /* unseeded: sampler_continue_sample seeds it */
+        s->pixel = pixel;
         s->zrev = reverse_bits64(morton_index(u, pixel, index));
         s->zsetup = u;
         s->zend = ZSOBOL_BLOCK;
-        zsobol_block(s->zrev, u->zdims, u->zseed, u->zseed_y, s->zval);
+        zsobol_block(s->zrev, &u->zblocks[0], s->zval);
         return;
     }
+    pcg32_seed_sample(&s->rng, u->seed, pixel, index);
     s->key = mix64(mix64(u->seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
+    s->pixel = pixel;
     s->zrev = 0;
     s->zend = 0;
     s->zsetup = NULL;

@@ -39,13 +39,22 @@ typedef struct ZSobolDim {
  * 8 bounces of the path tracer); deeper points derive theirs from the hash when drawn. */
 #define ZSOBOL_TABLE 32u
 
+/* zsobol: the ZSobolDims of a block's ZSOBOL_LANES points, one array per field, so that
+ * zsobol_block loads each field of all its points as one SIMD vector. */
+typedef struct ZSobolLanes {
+    uint64_t swap[ZSOBOL_LANES], shear[ZSOBOL_LANES], add[ZSOBOL_LANES], mul[ZSOBOL_LANES];
+    uint32_t seed[ZSOBOL_LANES], seed_y[ZSOBOL_LANES];
+} ZSobolLanes;
+
 struct SamplerSetup;
 
 typedef struct Sampler {
-    /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index) for every type.
+    /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index), for every type
+     * but zsobol, whose draws never need it (it is seeded only when sampler_continue_sample
+     * asks: four mix64 a sample saved, about 1% of a Cornell box render).
      * The independent sampler draws from it; the others leave it for code that still takes
      * a Pcg32 (the photon and BDPT/VCM camera paths continue from it after the film and
-     * lens dimensions). */
+     * lens dimensions: sampler_continue_sample). */
     Pcg32 rng;
     CstSampler type;   /* never CST_SAMPLER_DEFAULT */
     uint32_t dim;      /* the next dimension (stratified, sobol) */
@@ -56,6 +65,7 @@ typedef struct Sampler {
                         * (zsobol: of the seed alone, the pixel is in zrev) */
     uint64_t zrev;     /* zsobol: the sample's Morton index (sampler_start), bit-reversed */
     uint32_t zend;     /* zsobol: the end of the block of dimensions in zval */
+    uint64_t pixel;    /* zsobol: the sample's pixel (to seed rng when asked) */
     const struct SamplerSetup *zsetup; /* zsobol: the render's setup (the points' hashes) */
     float zval[ZSOBOL_BLOCK]; /* zsobol: dimensions zend - ZSOBOL_BLOCK .. zend - 1 */
     PssSampler *pss;   /* SAMPLER_PSS: the chain's state every draw reads (MLT) */
@@ -73,10 +83,8 @@ typedef struct SamplerSetup {
     uint32_t width;    /* zsobol: the image width, to find (x, y) from the pixel index */
     uint32_t morton_bits; /* zsobol: 2 log2 of the image's larger side, rounded up */
     uint64_t zkey;     /* zsobol: hash of the seed; point k's hash is mix64(zkey + k * phi) */
-    ZSobolDim zdims[ZSOBOL_TABLE]; /* zsobol: per 2D point, from hashes of (seed, point) */
-    /* zsobol: the zdims' Owen seeds again, one array each, so that a block's scrambles
-     * load as SIMD lanes (sampler.c, zsobol_block) */
-    uint32_t zseed[ZSOBOL_TABLE], zseed_y[ZSOBOL_TABLE];
+    /* zsobol: the first ZSOBOL_TABLE points' ZSobolDims, from hashes of (seed, point) */
+    ZSobolLanes zblocks[ZSOBOL_TABLE / ZSOBOL_LANES];
 } SamplerSetup;
 
 /* zsobol: the sample indices of a pixel form blocks of 2^ZSOBOL_LOG2_BLOCK in the Morton
@@ -114,6 +122,7 @@ static inline void sampler_start_stream(Sampler *s, uint64_t seed, uint64_t a, u
     s->key = 0;
     s->zrev = 0;
     s->zend = 0;
+    s->pixel = 0;
     s->zsetup = NULL;
 }
 /* An independent sampler continuing from `rng`: camera paths of the photon mapper and
@@ -123,6 +132,15 @@ static inline Sampler sampler_continue(Pcg32 rng)
 {
     Sampler s = {.rng = rng, .type = CST_SAMPLER_INDEPENDENT, .nx = 1};
     return s;
+}
+/* An independent sampler continuing from the PCG32 stream of pixel sample `s` (seeded here
+ * for zsobol, which leaves it unseeded): the camera paths of the photon mapper and BDPT/VCM
+ * past the film and lens dimensions. */
+static inline Sampler sampler_continue_sample(const Sampler *s)
+{
+    Pcg32 r = s->rng;
+    if (s->type == CST_SAMPLER_ZSOBOL) pcg32_seed_sample(&r, s->zsetup->seed, s->pixel, s->index);
+    return sampler_continue(r);
 }
 /* A sampler whose every draw is the next value of the chain's current stream: how the
  * path tracer's estimate runs over MLT's primary sample space (integrators/mlt.c). Draws
