@@ -608,7 +608,7 @@ typedef enum CstFilter {
 /* Where camera paths get their random numbers (docs/integrators.md, "Samplers"). Light
  * paths (light, photon, sppm, bdpt, vcm) always draw from independent PCG32 streams. */
 typedef enum CstSampler {
-    CST_SAMPLER_DEFAULT = 0,   /* the scene's choice, else CST_SAMPLER_INDEPENDENT */
+    CST_SAMPLER_DEFAULT = 0,   /* the scene's choice, else CST_SAMPLER_ZSOBOL */
     CST_SAMPLER_INDEPENDENT,   /* one PCG32 stream per pixel sample */
     CST_SAMPLER_STRATIFIED,    /* jittered strata of spp (1D) and nx x ny = spp (2D) cells */
     CST_SAMPLER_SOBOL,         /* Sobol' with hash-based Owen scrambling (Burley 2020) */
@@ -743,7 +743,7 @@ typedef struct CstRenderSettings {
     double photon_radius;     /* photon integrator: gather radius in scene units, > 0; default
                                * automatic (about 50 photons at a typical visible point) */
     CstSampler sampler;       /* camera-path sampler (CST_SAMPLER_DEFAULT = unset); default
-                               * independent */
+                               * zsobol */
     /* Output, applied when the film is written (cst_film_write), never to the stored means */
     double exposure;          /* used when exposure_set != 0: pixels times 2^exposure; default 0 */
     int exposure_set;

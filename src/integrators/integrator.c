@@ -105,10 +105,10 @@ static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ra
     case INTEGRATOR_WHITTED: return whitted_li(it->scene, &it->whitted, ray, smp, wl, &w->rays);
     case INTEGRATOR_PHOTON:
         /* Photon mapping and BDPT/VCM continue from the sample's PCG32 stream. */
-        cont = sampler_continue(smp->rng);
+        cont = sampler_continue_sample(smp);
         return photon_li(it->scene, &it->photon, ray, &cont, &w->rays);
     case INTEGRATOR_BIDIR:
-        cont = sampler_continue(smp->rng);
+        cont = sampler_continue_sample(smp);
         if (it->light.vcm_params.merge)
             return vcm_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
                                     &cont, wl, &w->rays);

@@ -49,7 +49,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     if (out->noise_target == CST_UNSET) out->noise_target = 0.0; /* a render's, never the scene's */
     PICK_INT(photons, 1, 0);                  /* 0 stays: the photon integrator's default */
     PICK_DBL(photon_radius, 1, 0.0);          /* 0 stays: automatic */
-    PICK_INT(sampler, 1, CST_SAMPLER_INDEPENDENT);
+    PICK_INT(sampler, 1, CST_SAMPLER_ZSOBOL);    /* pbrt-v4's default too */
     PICK_INT(color_mode, 1, CST_COLOR_RGB);
     PICK_DBL(max_component, 1, 0.0);          /* 0 = no clamp */
     PICK_INT(regularize, 0, 0);

@@ -1,4 +1,4 @@
-/* The samplers behind sampler.h (zsobol's per-request draws are inline there). Stratified and Sobol' are "padded" (Kollig & Keller
+/* The samplers behind sampler.h (zsobol's per-request draws are inline there, its blocks here). Stratified and Sobol' are "padded" (Kollig & Keller
  * 2002; Burley 2020 §4; pbrt-v4's PaddedSobolSampler): each 1D or 2D request is a
  * low-dimensional point set of its own, decorrelated from the other requests by a
  * permutation of the sample index seeded by (seed, pixel, dimension). So any number of
@@ -120,11 +120,37 @@ static uint32_t strata_nx(uint32_t spp)
     return nx;
 }
 
+/* zsobol: point k's permutation and scrambles from one 64-bit hash of (seed, k) and one
+ * more mix of it; the rest are cheap derivations. */
+static ZSobolDim zsobol_dim_hashed(uint64_t key, uint32_t k)
+{
+    const uint64_t DIGIT_HI = 0x5555555555555555ULL; /* reversed index: each digit's high bit */
+    uint64_t h = mix64(key + (uint64_t)k * 0x9e3779b97f4a7c15ULL), h2 = mix64(h);
+    ZSobolDim d;
+    d.swap = h & DIGIT_HI;
+    d.shear = (h >> 1) & (h2 | ((h2 >> 1) & (h2 >> 3))) & DIGIT_HI; /* P = 1/2 * 5/8 */
+    d.add = h2;
+    d.mul = (h ^ (h2 << 17)) | 1u;
+    d.seed = (uint32_t)(h >> 32);
+    d.seed_y = (uint32_t)(h2 >> 32);
+    return d;
+}
+
+static void zsobol_lanes_set(ZSobolLanes *b, uint32_t j, ZSobolDim d)
+{
+    b->swap[j] = d.swap;
+    b->shear[j] = d.shear;
+    b->add[j] = d.add;
+    b->mul[j] = d.mul;
+    b->seed[j] = d.seed;
+    b->seed_y[j] = d.seed_y;
+}
+
 SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int width, int height)
 {
     SamplerSetup u;
     memset(&u, 0, sizeof u);
-    u.type = type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_INDEPENDENT : type;
+    u.type = type == CST_SAMPLER_DEFAULT ? CST_SAMPLER_ZSOBOL : type;
     u.seed = seed;
     u.spp = spp;
     u.nx = 1;
@@ -135,23 +161,20 @@ SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int wid
         while (log2_side < 16 && (1 << log2_side) < side) log2_side++;
         u.width = width > 0 ? (uint32_t)width : 1u;
         u.morton_bits = 2u * (uint32_t)log2_side;
-        uint64_t key = mix64(seed ^ 0x2d358dccaa6c78a5ULL);
-        const uint64_t DIGIT_HI = 0x5555555555555555ULL; /* reversed index: each digit's high bit */
-        for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
-            /* One 64-bit hash per dimension; the rest are cheap derivations of it. */
-            uint64_t h = mix64(key + (uint64_t)k * 0x9e3779b97f4a7c15ULL), h2 = mix64(h);
-            ZSobolDim *d = &u.zdims[k];
-            d->swap = h & DIGIT_HI;
-            d->shear = (h >> 1) & (h2 | ((h2 >> 1) & (h2 >> 3))) & DIGIT_HI; /* P = 1/2 * 5/8 */
-            d->add = h2;
-            d->mul = (h ^ (h2 << 17)) | 1u;
-            d->seed = (uint32_t)(h >> 32);
-            d->seed_y = (uint32_t)(h2 >> 32);
-            u.zseed[k] = d->seed;
-            u.zseed_y[k] = d->seed_y;
-        }
+        u.zkey = mix64(seed ^ 0x2d358dccaa6c78a5ULL);
+        for (uint32_t k = 0; k < ZSOBOL_TABLE; k++)
+            zsobol_lanes_set(&u.zblocks[k / ZSOBOL_LANES], k % ZSOBOL_LANES, zsobol_dim_hashed(u.zkey, k));
     }
     return u;
+}
+
+ZSobolDim zsobol_dim(const SamplerSetup *u, uint32_t k)
+{
+    if (k >= ZSOBOL_TABLE) return zsobol_dim_hashed(u->zkey, k);
+    const ZSobolLanes *b = &u->zblocks[k / ZSOBOL_LANES];
+    uint32_t j = k % ZSOBOL_LANES;
+    ZSobolDim d = {b->swap[j], b->shear[j], b->add[j], b->mul[j], b->seed[j], b->seed_y[j]};
+    return d;
 }
 
 /* Spreads the low 16 bits of v to the even bit positions (Morton order). */
@@ -191,12 +214,13 @@ uint64_t zsobol_morton_index(const SamplerSetup *u, uint64_t pixel, uint32_t ind
     return morton_index(u, pixel, index);
 }
 
-/* zsobol_point for all ZSOBOL_DIMS / 2 points of a sample, the same integers in another
- * order: the 64-bit index permutations one by one (64-bit multiplies, scalar), then the
- * 32-bit rest, Owen scrambles and bit reversals, as a loop over ZSOBOL_LANES independent
- * lanes that GCC and clang vectorise (AVX2: bswap as a byte shuffle, vpmulld). One point
- * at a time, that rest was ~80 scalar operations and three quarters of zsobol's cost over
- * independent (perf, docs/benchmarks.md). test_sampler checks it against zsobol_point. */
+/* zsobol_point for the ZSOBOL_LANES points of a block, the same integers in another order:
+ * the 64-bit index permutations one by one (64-bit multiplies, scalar), then the 32-bit
+ * rest, Owen scrambles and bit reversals, as ZSOBOL_LANES independent lanes of one SIMD
+ * register (AVX2: bswap as a byte shuffle, vpmulld; elsewhere a loop the compiler
+ * vectorises). One point at a time, that rest was ~80 scalar operations and three quarters
+ * of zsobol's cost over independent (perf, docs/benchmarks.md). test_sampler checks it
+ * against zsobol_point. */
 #if defined(__AVX2__)
 /* Bit reversal of 8 lanes: the byte swap and each byte's two nibbles reversed by table
  * (3 shuffles, 7 instructions, where the shift-and-mask steps GCC vectorises take 16). */
@@ -241,40 +265,69 @@ static inline __m256 u32_to_float_x8(__m256i x)
 }
 #endif
 
-static inline void zsobol_points(uint64_t zrev, const SamplerSetup *u, float *out)
+static inline void zsobol_block(uint64_t zrev, const ZSobolLanes *b, float *out)
 {
-    uint32_t hi[ZSOBOL_LANES] = {0}, lo[ZSOBOL_LANES] = {0};
-    float x[ZSOBOL_LANES], y[ZSOBOL_LANES];
-    for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
-        uint64_t z = zsobol_permuted(zrev, &u->zdims[k]);
+    uint32_t hi[ZSOBOL_LANES], lo[ZSOBOL_LANES];
+    const uint32_t *zseed = b->seed, *zseed_y = b->seed_y;
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
+        /* zsobol_permuted, on the struct of arrays (a vector load per field) */
+        uint64_t z = zrev;
+        uint64_t t = (z ^ (z >> 1)) & b->swap[k];
+        z ^= t | (t << 1);
+        z ^= (z >> 1) & b->shear[k];
+        z ^= z * 0x6c50b47cdb8a36d6ULL;
+        z += b->add[k];
+        z *= b->mul[k];
+        z ^= z * 0xb82f1e52c0a7e73cULL;
         hi[k] = (uint32_t)(z >> 32);
         lo[k] = (uint32_t)z;
     }
 #if defined(__AVX2__)
     __m256i vi = rev32_x8(_mm256_loadu_si256((const __m256i *)hi));
     __m256i vlo = _mm256_loadu_si256((const __m256i *)lo);
-    __m256i sx = _mm256_xor_si256(_mm256_loadu_si256((const __m256i *)u->zseed),
+    __m256i sx = _mm256_xor_si256(_mm256_loadu_si256((const __m256i *)zseed),
                                   _mm256_mullo_epi32(vlo, _mm256_set1_epi32((int)0x9e3779b9u)));
-    __m256i sy = _mm256_xor_si256(sx, _mm256_loadu_si256((const __m256i *)u->zseed_y));
-    _mm256_storeu_ps(x, u32_to_float_x8(rev32_x8(owen_hash_x8(vi, sx))));
-    _mm256_storeu_ps(y, u32_to_float_x8(rev32_x8(owen_hash_x8(sobol1_reversed_x8(vi), sy))));
+    __m256i sy = _mm256_xor_si256(sx, _mm256_loadu_si256((const __m256i *)zseed_y));
+    __m256 vx = u32_to_float_x8(rev32_x8(owen_hash_x8(vi, sx)));
+    __m256 vy = u32_to_float_x8(rev32_x8(owen_hash_x8(sobol1_reversed_x8(vi), sy)));
+    /* Interleaved (x0 y0 x1 y1 ...): unpack gives x0 y0 x1 y1 | x4 y4 x5 y5 and
+     * x2 y2 x3 y3 | x6 y6 x7 y7; the 128-bit halves are then put in order. */
+    __m256 a = _mm256_unpacklo_ps(vx, vy), c = _mm256_unpackhi_ps(vx, vy);
+    _mm256_storeu_ps(out, _mm256_permute2f128_ps(a, c, 0x20));
+    _mm256_storeu_ps(out + 8, _mm256_permute2f128_ps(a, c, 0x31));
 #else
+    float x[ZSOBOL_LANES], y[ZSOBOL_LANES];
     for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
         uint32_t i = sampler_rev32(hi[k]);
-        uint32_t sx = u->zseed[k] ^ (lo[k] * 0x9e3779b9u);
+        uint32_t sx = zseed[k] ^ (lo[k] * 0x9e3779b9u);
         x[k] = sampler_u32_to_float(sampler_rev32(owen_hash(i, sx)));
-        y[k] = sampler_u32_to_float(sampler_rev32(owen_hash(sobol1_reversed(i), sx ^ u->zseed_y[k])));
+        y[k] = sampler_u32_to_float(sampler_rev32(owen_hash(sobol1_reversed(i), sx ^ zseed_y[k])));
     }
-#endif
-    for (uint32_t k = 0; k < ZSOBOL_DIMS / 2; k++) {
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) {
         out[2 * k] = x[k];
         out[2 * k + 1] = y[k];
     }
+#endif
+}
+
+/* The block of dimensions that holds s->dim: from the setup's table, or past it (paths of
+ * more than 8 bounces) from hashes computed here. */
+void zsobol_fill(Sampler *s)
+{
+    const SamplerSetup *u = s->zsetup;
+    uint32_t first = s->dim / ZSOBOL_BLOCK * ZSOBOL_LANES; /* the block's first point */
+    s->zend = (first + ZSOBOL_LANES) * 2u;
+    if (first + ZSOBOL_LANES <= ZSOBOL_TABLE) {
+        zsobol_block(s->zrev, &u->zblocks[first / ZSOBOL_LANES], s->zval);
+        return;
+    }
+    ZSobolLanes b;
+    for (uint32_t k = 0; k < ZSOBOL_LANES; k++) zsobol_lanes_set(&b, k, zsobol_dim_hashed(u->zkey, first + k));
+    zsobol_block(s->zrev, &b, s->zval);
 }
 
 void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
 {
-    pcg32_seed_sample(&s->rng, u->seed, pixel, index);
     s->type = u->type;
     s->dim = 0;
     s->index = index;
@@ -282,12 +335,20 @@ void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t i
     s->nx = u->nx;
     if (u->type == CST_SAMPLER_ZSOBOL) {
         s->key = 0;
+        s->rng.state = s->rng.inc = 0; /* unseeded: sampler_continue_sample seeds it */
+        s->pixel = pixel;
         s->zrev = reverse_bits64(morton_index(u, pixel, index));
-        zsobol_points(s->zrev, u, s->zval);
+        s->zsetup = u;
+        s->zend = ZSOBOL_BLOCK;
+        zsobol_block(s->zrev, &u->zblocks[0], s->zval);
         return;
     }
+    pcg32_seed_sample(&s->rng, u->seed, pixel, index);
     s->key = mix64(mix64(u->seed ^ 0x5851f42d4c957f2dULL) + pixel * 0xd1b54a32d192ed03ULL);
+    s->pixel = pixel;
     s->zrev = 0;
+    s->zend = 0;
+    s->zsetup = NULL;
 }
 
 /* Stratified, Sobol' or PSS only: sampler_1d/2d (sampler.h) draw the independent ones inline. */

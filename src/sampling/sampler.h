@@ -24,22 +24,37 @@ typedef struct ZSobolDim {
     uint32_t seed, seed_y; /* the Owen scrambles' seeds: x, and y's xor with x's */
 } ZSobolDim;
 
-/* zsobol draws its first ZSOBOL_DIMS dimensions (film, lens, wavelengths and the first
- * bounce of the path tracer) from Sobol', all at sampler_start, as ZSOBOL_DIMS / 2 2D
- * points: computed together they overlap in the pipeline, and their 32-bit halves run as
- * the lanes of one SIMD register (sampler.c, zsobol_points); one at a time each request
- * would wait ~50 cycles on its chain of multiplies where a PCG32 draw waits ~6. The rest come from the sample's PCG32 stream: the deeper dimensions gain
- * least from stratification (docs/benchmarks.md). A 2D request starts at an even
- * dimension (an odd one is skipped), so it is always one Sobol' point. */
-#define ZSOBOL_DIMS 12u
-/* Its ZSOBOL_DIMS / 2 points rounded up to a SIMD register of 32-bit lanes (AVX2: 8). */
-#define ZSOBOL_LANES 8u
+/* zsobol draws every dimension from Sobol' (as pbrt-v4's ZSobolSampler does), in blocks of
+ * ZSOBOL_BLOCK dimensions: ZSOBOL_BLOCK / 2 2D points computed together, the first block at
+ * sampler_start (film, lens, wavelengths, the first bounce and a half of the path tracer),
+ * the next when a request passes the end of the last. Computed together the points overlap
+ * in the pipeline, and their 32-bit halves run as the lanes of one SIMD register (sampler.c,
+ * zsobol_block); one at a time each request would wait ~50 cycles on its chain of
+ * multiplies where a PCG32 draw waits ~6. A 2D request starts at an even dimension (an odd
+ * one is skipped), so it is always one Sobol' point, never split across blocks. */
+#define ZSOBOL_BLOCK 16u
+/* A block's points: one SIMD register of 32-bit lanes (AVX2: 8). */
+#define ZSOBOL_LANES (ZSOBOL_BLOCK / 2u)
+/* The points whose permutation and scrambles sampler_setup keeps (the first 64 dimensions:
+ * 8 bounces of the path tracer); deeper points derive theirs from the hash when drawn. */
+#define ZSOBOL_TABLE 32u
+
+/* zsobol: the ZSobolDims of a block's ZSOBOL_LANES points, one array per field, so that
+ * zsobol_block loads each field of all its points as one SIMD vector. */
+typedef struct ZSobolLanes {
+    uint64_t swap[ZSOBOL_LANES], shear[ZSOBOL_LANES], add[ZSOBOL_LANES], mul[ZSOBOL_LANES];
+    uint32_t seed[ZSOBOL_LANES], seed_y[ZSOBOL_LANES];
+} ZSobolLanes;
+
+struct SamplerSetup;
 
 typedef struct Sampler {
-    /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index) for every type.
+    /* The PCG32 stream of the sample, pcg32_seed_sample(seed, pixel, index), for every type
+     * but zsobol, whose draws never need it (it is seeded only when sampler_continue_sample
+     * asks: four mix64 a sample saved, about 1% of a Cornell box render).
      * The independent sampler draws from it; the others leave it for code that still takes
      * a Pcg32 (the photon and BDPT/VCM camera paths continue from it after the film and
-     * lens dimensions). */
+     * lens dimensions: sampler_continue_sample). */
     Pcg32 rng;
     CstSampler type;   /* never CST_SAMPLER_DEFAULT */
     uint32_t dim;      /* the next dimension (stratified, sobol) */
@@ -49,7 +64,10 @@ typedef struct Sampler {
     uint64_t key;      /* hash of (seed, pixel): seeds every per-dimension scramble
                         * (zsobol: of the seed alone, the pixel is in zrev) */
     uint64_t zrev;     /* zsobol: the sample's Morton index (sampler_start), bit-reversed */
-    float zval[ZSOBOL_DIMS]; /* zsobol: the sample's first dimensions (sampler_start) */
+    uint32_t zend;     /* zsobol: the end of the block of dimensions in zval */
+    uint64_t pixel;    /* zsobol: the sample's pixel (to seed rng when asked) */
+    const struct SamplerSetup *zsetup; /* zsobol: the render's setup (the points' hashes) */
+    float zval[ZSOBOL_BLOCK]; /* zsobol: dimensions zend - ZSOBOL_BLOCK .. zend - 1 */
     PssSampler *pss;   /* SAMPLER_PSS: the chain's state every draw reads (MLT) */
 } Sampler;
 
@@ -64,10 +82,9 @@ typedef struct SamplerSetup {
     uint32_t nx;       /* stratified: 2D strata are nx x (spp / nx); 1 otherwise */
     uint32_t width;    /* zsobol: the image width, to find (x, y) from the pixel index */
     uint32_t morton_bits; /* zsobol: 2 log2 of the image's larger side, rounded up */
-    ZSobolDim zdims[ZSOBOL_DIMS / 2]; /* zsobol: per 2D point, from hashes of (seed, point) */
-    /* zsobol: the zdims' Owen seeds again, one array each, padded to ZSOBOL_LANES, so that
-     * sampler_start's scrambles run as SIMD lanes (sampler.c, zsobol_points) */
-    uint32_t zseed[ZSOBOL_LANES], zseed_y[ZSOBOL_LANES];
+    uint64_t zkey;     /* zsobol: hash of the seed; point k's hash is mix64(zkey + k * phi) */
+    /* zsobol: the first ZSOBOL_TABLE points' ZSobolDims, from hashes of (seed, point) */
+    ZSobolLanes zblocks[ZSOBOL_TABLE / ZSOBOL_LANES];
 } SamplerSetup;
 
 /* zsobol: the sample indices of a pixel form blocks of 2^ZSOBOL_LOG2_BLOCK in the Morton
@@ -82,12 +99,17 @@ typedef struct SamplerSetup {
 /* The setup of a render's camera samples: `spp` per pixel (the stratified sampler divides
  * [0,1) into that many strata; 0 = not known in advance, e.g. a render with only a time
  * limit, and then it jitters without strata) on a width x height image (zsobol orders its
- * pixels; 1..65536 each). type CST_SAMPLER_DEFAULT means independent. */
+ * pixels; 1..65536 each). type CST_SAMPLER_DEFAULT means zsobol, the library default. */
 SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int width, int height);
 /* Starts sample `index` of `pixel`; O(1) for every type. */
 void sampler_start(Sampler *s, const SamplerSetup *setup, uint64_t pixel, uint32_t index);
 /* zsobol: the Morton index of sample `index` of `pixel` (sampler.c), before reversal. */
 uint64_t zsobol_morton_index(const SamplerSetup *setup, uint64_t pixel, uint32_t index);
+/* zsobol: the permutation and scrambles of 2D point k (dimensions 2k, 2k + 1), from the
+ * setup's table or, past it, from the hash. */
+ZSobolDim zsobol_dim(const SamplerSetup *setup, uint32_t k);
+/* zsobol: computes the block of dimensions that holds s->dim into s->zval (sampler.c). */
+void zsobol_fill(Sampler *s);
 /* An independent sampler on the PCG32 stream (seed, a, b): the random numbers of every
  * path that is not a pixel sample (light subpaths, photons), so that every integrator
  * draws through one type. */
@@ -99,6 +121,9 @@ static inline void sampler_start_stream(Sampler *s, uint64_t seed, uint64_t a, u
     s->nx = 1;
     s->key = 0;
     s->zrev = 0;
+    s->zend = 0;
+    s->pixel = 0;
+    s->zsetup = NULL;
 }
 /* An independent sampler continuing from `rng`: camera paths of the photon mapper and
  * BDPT/VCM draw past the film and lens dimensions from their pixel sample's PCG32
@@ -107,6 +132,15 @@ static inline Sampler sampler_continue(Pcg32 rng)
 {
     Sampler s = {.rng = rng, .type = CST_SAMPLER_INDEPENDENT, .nx = 1};
     return s;
+}
+/* An independent sampler continuing from the PCG32 stream of pixel sample `s` (seeded here
+ * for zsobol, which leaves it unseeded): the camera paths of the photon mapper and BDPT/VCM
+ * past the film and lens dimensions. */
+static inline Sampler sampler_continue_sample(const Sampler *s)
+{
+    Pcg32 r = s->rng;
+    if (s->type == CST_SAMPLER_ZSOBOL) pcg32_seed_sample(&r, s->zsetup->seed, s->pixel, s->index);
+    return sampler_continue(r);
 }
 /* A sampler whose every draw is the next value of the chain's current stream: how the
  * path tracer's estimate runs over MLT's primary sample space (integrators/mlt.c). Draws
@@ -188,8 +222,7 @@ static inline uint64_t zsobol_permuted(uint64_t zrev, const ZSobolDim *d)
 /* 32-bit fraction to a float in [0, 1): 24 bits, so 1.0f is never returned. */
 static inline float sampler_u32_to_float(uint32_t x) { return (float)(x >> 8) * 0x1p-24f; }
 
-/* zsobol, one Sobol' 2D point of the sample (sampler_start computes ZSOBOL_DIMS / 2 of
- * them): dimensions 0 and 1 of the low 32 bits of the index permuted for this pair, each
+/* zsobol, one Sobol' 2D point of the sample (zsobol_fill computes ZSOBOL_LANES of them): dimensions 0 and 1 of the low 32 bits of the index permuted for this pair, each
  * Owen-scrambled by its own seed. For van der Corput (dimension 0) the point is the
  * reversed index, so its scramble is reverse(owen_hash(index)). The seeds also take the
  * permuted index's bits above 32, constant over aligned blocks of 2^32 indices, so that
@@ -205,20 +238,17 @@ static inline void zsobol_point(uint64_t zrev, const ZSobolDim *d, float *out)
 
 static inline float zsobol_1d(Sampler *s)
 {
-    if (s->dim >= ZSOBOL_DIMS) return pcg32_float(&s->rng);
-    return s->zval[s->dim++];
+    if (s->dim >= s->zend) zsobol_fill(s);
+    return s->zval[s->dim++ % ZSOBOL_BLOCK];
 }
 
 static inline Vec2 zsobol_2d(Sampler *s)
 {
     s->dim += s->dim & 1u;
-    if (s->dim >= ZSOBOL_DIMS) {
-        float y = pcg32_float(&s->rng);
-        return v2(pcg32_float(&s->rng), y);
-    }
-    Vec2 u = v2(s->zval[s->dim], s->zval[s->dim + 1]);
+    if (s->dim >= s->zend) zsobol_fill(s);
+    uint32_t k = s->dim % ZSOBOL_BLOCK;
     s->dim += 2;
-    return u;
+    return v2(s->zval[k], s->zval[k + 1]);
 }
 
 /* The next dimension, uniform in [0, 1). Inline for the default independent sampler, the

@@ -27,6 +27,10 @@ static void render_blocks(Scene *s, CstIntegrator integ, int spp, uint64_t seed,
     st.seed = seed;
     st.seed_set = 1;
     st.threads = 2;
+    /* The standard errors come from the film's per-pixel variances, which assume
+     * independent samples (and pixels): pinned to the independent sampler, not the default
+     * zsobol, whose stratified samples and blue-noise pixels those variances misjudge. */
+    st.sampler = CST_SAMPLER_INDEPENDENT;
     CstFilm *f = NULL;
     CstRenderStats stats;
     assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);

@@ -53,6 +53,10 @@ static inline CstFilm *render_film(const CstScene *s, const CstRenderSettings *b
     st.spp = spp;
     st.seed = seed;
     st.seed_set = 1;
+    /* The standard errors come from the film's per-pixel variances, which assume
+     * independent samples (and pixels): pinned to the independent sampler, not the default
+     * zsobol, whose stratified samples and blue-noise pixels those variances misjudge. */
+    if (st.sampler == CST_SAMPLER_DEFAULT) st.sampler = CST_SAMPLER_INDEPENDENT;
     CstFilm *f = NULL;
     CstRenderStats stats;
     CstError err;

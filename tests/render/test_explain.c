@@ -38,6 +38,11 @@ static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filte
     st->color_mode = color;
     st->seed = 7;
     st->seed_set = 1;
+    /* The pixels and samples below were chosen with the independent sampler (some paths
+     * must reach the light); the other samplers' replays are test_strata's. Under zsobol,
+     * whitted's pixel 12,1 sample 0 sums to -0 against the camera's 0 (explain's exact
+     * comparison of signed zeros: reported, not fixed here). */
+    st->sampler = CST_SAMPLER_INDEPENDENT;
     if (radius > 0.0f) st->photon_radius = radius;
 }
 

@@ -88,6 +88,7 @@ static void render_blocks(Scene *s, const char *sampler, CstIntegrator integ, in
     st.threads = 2;
     CstFilm *f = NULL;
     CstRenderStats stats;
+    st.sampler = CST_SAMPLER_INDEPENDENT; /* region_stat's per-pixel variances assume it */
     assert_int_equal(cst_render(s, &st, &f, &stats, &err), CST_OK);
     assert_int_equal(stats.nonfinite, 0);
     int k = 0;

@@ -225,6 +225,8 @@ static CstFilm *render(const CstScene *s, CstIntegrator integ, CstStatus expect,
     rs.filter = CST_FILTER_BOX;
     rs.integrator = integ;
     rs.color_mode = CST_COLOR_RGB;
+    rs.sampler = CST_SAMPLER_INDEPENDENT; /* the checks' errors are the film's per-pixel variances:
+                                           * independent samples and pixels, not zsobol's */
     CstFilm *f = NULL;
     CstRenderStats stats;
     CstStatus st = cst_render(s, &rs, &f, &stats, e);
@@ -506,6 +508,8 @@ static CstFilm *render_lit(const CstScene *s, CstIntegrator integ)
     rs.filter = CST_FILTER_BOX;
     rs.integrator = integ;
     rs.color_mode = CST_COLOR_RGB;
+    rs.sampler = CST_SAMPLER_INDEPENDENT; /* the checks' errors are the film's per-pixel variances:
+                                           * independent samples and pixels, not zsobol's */
     CstFilm *f = NULL;
     CstRenderStats stats;
     CstError e;

@@ -525,6 +525,14 @@ static void test_camera_and_options(void **state)
     assert_int_equal(s->settings.spp, 64);
     assert_true(find_warning(&wz, CST_WARN_APPROXIMATED, "Sampler \"zsobol\"") >= 0);
     cst_scene_destroy(s);
+    /* No Sampler directive: pbrt-v4's default, zsobol, which is caustic's default too. */
+    Warnings wn = {0};
+    s = expect_ok("WorldBegin\n" TRI, &wn);
+    assert_int_equal(s->settings.sampler, CST_SAMPLER_DEFAULT);
+    CstRenderSettings resolved;
+    cst_render_settings_resolve(s, NULL, &resolved);
+    assert_int_equal(resolved.sampler, CST_SAMPLER_ZSOBOL);
+    cst_scene_destroy(s);
     /* The sensor's imaging ratio (shutterclose - shutteropen) iso / 100, as exposure stops:
      * 0.5 * 400 / 100 = 2 is one stop, whichever of Film and Camera comes first; another
      * sensor is a located approximation; white balance a render setting (film/sensor.h). */
@@ -657,6 +665,7 @@ static Film *render_small(const CstScene *s, int w, int h, int spp)
     st.seed = 9;
     st.seed_set = 1;
     st.color_mode = CST_COLOR_RGB; /* pbrt scenes default to spectral: compare like with like */
+    st.sampler = CST_SAMPLER_ZSOBOL; /* and a pbrt Sampler directive against JSON's default */
     CstFilm *f = NULL;
     CstError err;
     if (cst_render(s, &st, &f, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
@@ -703,6 +712,8 @@ static void test_cornell_pbrt_equals_json(void **state)
     assert_int_equal(a.filter, b.filter);
     assert_int_equal(a.max_depth, b.max_depth);
     assert_int_equal(a.rr_depth, b.rr_depth);
+    assert_int_equal(a.sampler, CST_SAMPLER_ZSOBOL); /* JSON: the default; the pbrt file's own */
+    assert_int_equal(b.sampler, CST_SAMPLER_INDEPENDENT);
     assert_int_equal(a.color_mode, CST_COLOR_RGB); /* JSON: RGB by default, pbrt: spectral */
     assert_int_equal(b.color_mode, CST_COLOR_SPECTRAL);
     assert_string_equal(cst_scene_output_path(json), cst_scene_output_path(pbrt));

@@ -93,13 +93,13 @@ static void test_sobol_directions(void **state)
  * 2^-a x 2^-(m-a) (a (0, m, 2)-net), also for the second block of n indices. */
 static void check_strata(CstSampler type, uint32_t n, uint32_t first)
 {
-    enum { REQUESTS = 6 };
+    enum { REQUESTS = 24 }; /* zsobol: its first 48 dimensions, three blocks */
     uint32_t nx = 1;
     for (uint32_t d = 1; d <= n / d; d++)
         if (n % d == 0) nx = d;
     for (uint64_t pixel = 0; pixel < 40; pixel++) {
-        float u1[REQUESTS][1024];
-        Vec2 u2[REQUESTS][1024];
+        static float u1[REQUESTS][1024];
+        static Vec2 u2[REQUESTS][1024];
         for (uint32_t i = 0; i < n; i++) {
             Sampler s;
             sampler_start_for_test(&s, type, 3, pixel, first + i, type == CST_SAMPLER_STRATIFIED ? n : 0);
@@ -163,8 +163,8 @@ static void test_sobol_strata(void **state)
 }
 
 /* ZSobol': the first 2^k <= 256 samples of a pixel are a (0, k, 2)-net in each request,
- * also in the second block of 256 (indices 256..). The 6 requests are its 12 Sobol'
- * dimensions (a 2D request after a 1D one skips a dimension). */
+ * also in the second block of 256 (indices 256..). The 24 requests are its first 48 Sobol'
+ * dimensions, three blocks (a 2D request after a 1D one skips a dimension). */
 static void test_zsobol_strata(void **state)
 {
     (void)state;
@@ -265,9 +265,10 @@ static void test_zsobol_morton_index(void **state)
                 (((uint64_t)(2147483647u >> 8) << 40) | (0xffffffffULL << 8) | 255u));
 }
 
-/* sampler_start computes a sample's ZSOBOL_DIMS / 2 points side by side (SIMD lanes when
- * the build has AVX2): the same floats as zsobol_point, one point at a time, on the
- * bit-reversed Morton index, for pixels and indices of small and 65536-wide images. */
+/* zsobol computes its points a block at a time (SIMD lanes when the build has AVX2): the
+ * same floats as zsobol_point, one point at a time, on the bit-reversed Morton index, for
+ * pixels and indices of small and 65536-wide images, in every block of the first 96
+ * dimensions (past ZSOBOL_TABLE points the hashes are computed when drawn). */
 static void test_zsobol_points_match_scalar(void **state)
 {
     (void)state;
@@ -285,10 +286,18 @@ static void test_zsobol_points_match_scalar(void **state)
             uint64_t m = zsobol_morton_index(&u, pixel, index);
             uint64_t rev = ((uint64_t)sampler_rev32((uint32_t)m) << 32) | sampler_rev32((uint32_t)(m >> 32));
             assert_true(s.zrev == rev);
-            for (uint32_t d = 0; d < ZSOBOL_DIMS / 2; d++) {
+            for (uint32_t d = 0; d < 48; d++) {
                 float p[2];
-                zsobol_point(rev, &u.zdims[d], p);
-                assert_true(s.zval[2 * d] == p[0] && s.zval[2 * d + 1] == p[1]);
+                ZSobolDim zd = zsobol_dim(&u, d);
+                zsobol_point(rev, &zd, p);
+                /* Alternately a 2D request and two 1D ones: every dimension is drawn. */
+                if (d % 2 == 0) {
+                    Vec2 v = sampler_2d(&s);
+                    assert_true(v.x == p[0] && v.y == p[1]);
+                } else {
+                    float x = sampler_1d(&s), y = sampler_1d(&s);
+                    assert_true(x == p[0] && y == p[1]);
+                }
             }
         }
     }
@@ -322,6 +331,9 @@ static void test_uniform_across_pixels(void **state)
             for (uint64_t p = 0; p < PIXELS; p++) {
                 Sampler s;
                 sampler_start_for_test(&s, TYPES[t], 11, p, indices[k], SPP);
+                /* Sample index k odd: the requests after 70 dimensions (zsobol: past the
+                 * points whose hashes the setup keeps). */
+                for (int skip = 0; skip < 35 * (k & 1); skip++) (void)sampler_2d(&s);
                 float a = sampler_1d(&s);
                 Vec2 b = sampler_2d(&s);
                 float c = sampler_1d(&s);
@@ -350,7 +362,7 @@ static void test_setup_strata(void **state)
         assert_int_equal(u.spp, spp[k][0]);
         assert_int_equal(sampler_setup(CST_SAMPLER_SOBOL, 5, spp[k][0], 64, 64).nx, 1);
     }
-    assert_int_equal(sampler_setup(CST_SAMPLER_DEFAULT, 5, 16, 64, 64).type, CST_SAMPLER_INDEPENDENT);
+    assert_int_equal(sampler_setup(CST_SAMPLER_DEFAULT, 5, 16, 64, 64).type, CST_SAMPLER_ZSOBOL);
 }
 
 int main(void)

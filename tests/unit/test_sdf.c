@@ -437,6 +437,8 @@ static void render_mean(const char *shape, uint64_t seed, double mean[3], double
     cst_render_settings_init(&st);
     st.width = 24, st.height = 24, st.spp = 16, st.max_depth = 4, st.seed = seed, st.seed_set = 1, st.threads = 2;
     st.integrator = CST_INTEGRATOR_PATH;
+    st.sampler = CST_SAMPLER_INDEPENDENT; /* se2 sums per-pixel variances: independent samples
+                                           * and pixels, not the default zsobol's */
     CstFilm *f = NULL;
     assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_OK);
     float px[24 * 24 * 3], var[24 * 24 * 3];
