@@ -296,7 +296,8 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     }
     ex->exact = !rec.truncated;
     for (int c = 0; c < 3; c++) {
-        double s = (double)ex->sum[c];
+        /* Added to a zeroed sum, as the film adds it: a -0 contribution leaves +0 there. */
+        double s = 0.0 + (double)ex->sum[c];
         if (memcmp(&s, &ex->camera_value[c], sizeof s) != 0) ex->exact = 0;
     }
     if (it->kind == INTEGRATOR_LIGHT) {
