@@ -101,7 +101,8 @@ typedef struct SamplerSetup {
  * limit, and then it jitters without strata) on a width x height image (zsobol orders its
  * pixels; 1..65536 each). type CST_SAMPLER_DEFAULT means zsobol, the library default. */
 SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int width, int height);
-/* Starts sample `index` of `pixel`; O(1) for every type. */
+/* Starts sample `index` of `pixel`; O(1) for every type. A zsobol Sampler reads *setup
+ * until its last draw (the hashes of blocks past the first), so setup must outlive s. */
 void sampler_start(Sampler *s, const SamplerSetup *setup, uint64_t pixel, uint32_t index);
 /* zsobol: the Morton index of sample `index` of `pixel` (sampler.c), before reversal. */
 uint64_t zsobol_morton_index(const SamplerSetup *setup, uint64_t pixel, uint32_t index);

@@ -17,12 +17,14 @@ static const CstSampler TYPES[] = {CST_SAMPLER_INDEPENDENT, CST_SAMPLER_STRATIFI
                                    CST_SAMPLER_ZSOBOL};
 #define NUM_TYPES (sizeof TYPES / sizeof TYPES[0])
 
-/* One sample from a setup made for it alone (renders make one setup for all samples). */
-static void sampler_start_for_test(Sampler *s, CstSampler type, uint64_t seed, uint64_t pixel, uint32_t index,
-                                   uint32_t spp)
+/* One sample from a setup made for it alone, in *u (renders make one setup for all
+ * samples). A zsobol Sampler reads its setup until its last draw (deeper blocks' hashes),
+ * so *u must live as long as *s. */
+static void sampler_start_for_test(Sampler *s, SamplerSetup *u, CstSampler type, uint64_t seed, uint64_t pixel,
+                                   uint32_t index, uint32_t spp)
 {
-    SamplerSetup u = sampler_setup(type, seed, spp, 128, 128); /* pixels < 16384 */
-    sampler_start(s, &u, pixel, index);
+    *u = sampler_setup(type, seed, spp, 128, 128); /* pixels < 16384 */
+    sampler_start(s, u, pixel, index);
 }
 
 static void test_independent_is_pcg32(void **state)
@@ -31,8 +33,9 @@ static void test_independent_is_pcg32(void **state)
     for (uint64_t pixel = 0; pixel < 50; pixel++) {
         for (uint32_t i = 0; i < 4; i++) {
             Sampler s;
+            SamplerSetup su;
             Pcg32 r;
-            sampler_start_for_test(&s, CST_SAMPLER_INDEPENDENT, 42, pixel, i, 4);
+            sampler_start_for_test(&s, &su, CST_SAMPLER_INDEPENDENT, 42, pixel, i, 4);
             pcg32_seed_sample(&r, 42, pixel, i);
             for (int k = 0; k < 10; k++) {
                 /* The order the renderer drew in before the Sampler existed (sampler.c). */
@@ -50,8 +53,9 @@ static void test_deterministic(void **state)
     (void)state;
     for (size_t t = 0; t < NUM_TYPES; t++) {
         Sampler a, b;
-        sampler_start_for_test(&a, TYPES[t], 7, 1234, 5, 16);
-        sampler_start_for_test(&b, TYPES[t], 7, 1234, 5, 16);
+        SamplerSetup ua, ub;
+        sampler_start_for_test(&a, &ua, TYPES[t], 7, 1234, 5, 16);
+        sampler_start_for_test(&b, &ub, TYPES[t], 7, 1234, 5, 16);
         for (int k = 0; k < 20; k++) {
             assert_true(sampler_1d(&a) == sampler_1d(&b));
             Vec2 u = sampler_2d(&a), v = sampler_2d(&b);
@@ -102,7 +106,8 @@ static void check_strata(CstSampler type, uint32_t n, uint32_t first)
         static Vec2 u2[REQUESTS][1024];
         for (uint32_t i = 0; i < n; i++) {
             Sampler s;
-            sampler_start_for_test(&s, type, 3, pixel, first + i, type == CST_SAMPLER_STRATIFIED ? n : 0);
+            SamplerSetup su;
+            sampler_start_for_test(&s, &su, type, 3, pixel, first + i, type == CST_SAMPLER_STRATIFIED ? n : 0);
             for (int r = 0; r < REQUESTS; r++) {
                 if (r % 2) u2[r][i] = sampler_2d(&s);
                 else u1[r][i] = sampler_1d(&s);
@@ -330,7 +335,8 @@ static void test_uniform_across_pixels(void **state)
             memset(hp, 0, sizeof hp);
             for (uint64_t p = 0; p < PIXELS; p++) {
                 Sampler s;
-                sampler_start_for_test(&s, TYPES[t], 11, p, indices[k], SPP);
+                SamplerSetup su;
+                sampler_start_for_test(&s, &su, TYPES[t], 11, p, indices[k], SPP);
                 /* Sample index k odd: the requests after 70 dimensions (zsobol: past the
                  * points whose hashes the setup keeps). */
                 for (int skip = 0; skip < 35 * (k & 1); skip++) (void)sampler_2d(&s);
