@@ -289,23 +289,32 @@ static void test_fog_agreement(void **state)
 /* The fog box with the random grid in its ball: path (the reference), bdpt, vcm and mmlt
  * agree on the whole image and its four 16 x 16 blocks (bdpt vs mmlt at 24 x 24, 12 x 12
  * blocks, mmlt's own resolution budget). */
-static void test_grid_agreement(void **state)
+/* path (the reference), bdpt and vcm on a 32 x 32 fog box: the whole image and its four
+ * 16 x 16 blocks agree (seeds from `seed`); returns the settings for further renders. */
+static CstRenderSettings path_bdpt_vcm_agree(const Scene *s, uint64_t seed, const char *bdpt_name,
+                                             const char *vcm_name)
 {
-    (void)state;
-    Scene *s = fog_box(FOG_GRID);
     CstRenderSettings st;
     cst_render_settings_init(&st);
     st.width = st.height = 32;
     st.color_mode = g_color_mode;
     st.max_depth = 5;
     Regions path = regions(32, 16), bdpt = regions(32, 16), vcm = regions(32, 16);
-    camera_regions(s, &st, CST_INTEGRATOR_PATH, 64, 900, &path);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 64, seed, &path);
     st.spp = 2;
-    split_regions(s, &st, CST_INTEGRATOR_BDPT, 24, 910, &bdpt);
-    compare(&path, &bdpt, "path", "bdpt (grid)");
-    split_regions(s, &st, CST_INTEGRATOR_VCM, 24, 920, &vcm);
-    compare(&path, &vcm, "path", "vcm (grid)");
-    compare(&bdpt, &vcm, "bdpt (grid)", "vcm (grid)");
+    split_regions(s, &st, CST_INTEGRATOR_BDPT, 24, seed + 10, &bdpt);
+    compare(&path, &bdpt, "path", bdpt_name);
+    split_regions(s, &st, CST_INTEGRATOR_VCM, 24, seed + 20, &vcm);
+    compare(&path, &vcm, "path", vcm_name);
+    compare(&bdpt, &vcm, bdpt_name, vcm_name);
+    return st;
+}
+
+static void test_grid_agreement(void **state)
+{
+    (void)state;
+    Scene *s = fog_box(FOG_GRID);
+    CstRenderSettings st = path_bdpt_vcm_agree(s, 900, "bdpt (grid)", "vcm (grid)");
     /* mmlt against bdpt (test_mmlt.c's settings, a smaller image). */
     CstRenderSettings sm = st;
     sm.width = sm.height = 24;
@@ -327,18 +336,7 @@ static void test_grid_emissive(void **state)
 {
     (void)state;
     Scene *s = fog_box(FOG_GRID_EMISSIVE);
-    CstRenderSettings st;
-    cst_render_settings_init(&st);
-    st.width = st.height = 32;
-    st.color_mode = g_color_mode;
-    st.max_depth = 5;
-    Regions path = regions(32, 16), bdpt = regions(32, 16), vcm = regions(32, 16);
-    camera_regions(s, &st, CST_INTEGRATOR_PATH, 64, 1000, &path);
-    st.spp = 2;
-    split_regions(s, &st, CST_INTEGRATOR_BDPT, 24, 1010, &bdpt);
-    compare(&path, &bdpt, "path", "bdpt (emissive grid)");
-    split_regions(s, &st, CST_INTEGRATOR_VCM, 24, 1020, &vcm);
-    compare(&path, &vcm, "path", "vcm (emissive grid)");
+    CstRenderSettings st = path_bdpt_vcm_agree(s, 1000, "bdpt (emissive grid)", "vcm (emissive grid)");
     st.width = st.height = 8;
     st.spp = 1;
     const CstIntegrator refused[2] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_MMLT};
