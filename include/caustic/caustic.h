@@ -780,8 +780,8 @@ typedef struct CstRenderSettings {
     /* Checkpoint and resume (docs/state-format.md). resume: NULL, or a film read by
      * cst_film_state_read for this scene and these settings: the render continues with
      * sample cst_film_spp(resume) of every pixel (iteration, for light, bdpt and vcm), and
-     * its film is bit for bit the one an uninterrupted render would have made. Not for sppm
-     * (CST_ERR_UNSUPPORTED: cst_integrator_resumable). The caller keeps it; cst_render only
+     * its film is bit for bit the one an uninterrupted render would have made (every
+     * integrator: SPPM's and MLT's states travel in the film). The caller keeps it; cst_render only
      * reads it. pass_done, pass_user: see CstPassFn; NULL = no call. Neither belongs to a
      * scene (cst_scene_set_render_settings refuses them). */
     const struct CstFilm *resume;
@@ -1021,8 +1021,9 @@ CST_API CstStatus cst_film_write_opt(const CstFilm *film, const char *path,
  * scene's content (the CLI: SHA-256 of the scene file), stored and compared as text; the
  * scene's counts (triangles, spheres, emitters, materials, lights) are added to the key. */
 
-/* 1 when a render with this integrator can be checkpointed and resumed (every one but
- * sppm, whose per-pixel radii and photon statistics are not film sums), else 0. */
+/* 1 when a render with this integrator can be checkpointed and resumed, else 0: 1 for every
+ * integrator since SPPM's radii and photon statistics and MLT's chains went into the state
+ * (kept for callers written when some could not). */
 CST_API int cst_integrator_resumable(CstIntegrator integrator);
 /* Writes film (the one CstPassFn is given, or a render's uncropped film) as a state file
  * for `scene` rendered with `settings` (resolved as cst_render resolves them), atomically

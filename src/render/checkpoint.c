@@ -188,9 +188,6 @@ CstStatus cst_film_state_read(const char *path, const CstScene *scene, const Cst
         return cst_fail(err, CST_ERR_INVALID_ARG, "cst_film_state_read: a path and a scene are required");
     CstRenderSettings st;
     cst_render_settings_resolve(scene, settings, &st);
-    if (!cst_integrator_resumable(st.integrator))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "%s: the %s integrator cannot resume from a state file yet",
-                        path, cst_integrator_name(st.integrator));
     StateKey *h = calloc(2 * STATE_KEYS_MAX, sizeof *h);
     if (!h) return cst_fail(err, CST_ERR_OOM, "%s: out of memory", path);
     StateKey *w = h + STATE_KEYS_MAX;

@@ -361,13 +361,10 @@ CstStatus cst_film_create(const CstScene *scene, const CstRenderSettings *settin
     return CST_OK;
 }
 
-/* A film to resume st from: an integrator that can resume, the same size and AOVs, no more
- * samples than asked for, and for SPPM its state. */
+/* A film to resume st from (every integrator can: cst_integrator_resumable): the same size
+ * and AOVs, no more samples than asked for, and for SPPM its state. */
 static CstStatus check_resume(const CstRenderSettings *st, const Film *resume, CstError *err)
 {
-    if (!cst_integrator_resumable(st->integrator))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator cannot resume from a state file yet",
-                        cst_integrator_name(st->integrator));
     if (resume->width != st->width || resume->height != st->height ||
         (!resume->aov) != !(st->aovs & FILM_AOV_FIRST_HIT) || resume->spp < 0 ||
         (st->spp > 0 && resume->spp > st->spp))
