@@ -77,6 +77,10 @@ typedef struct CstLoadOptions {
     void *warning_user;
     int no_file_access;     /* 1: Include, Import, plymesh and image textures fail instead
                              * of opening files (untrusted text, fuzzing) */
+    size_t max_primitives;  /* 0: no limit. Else the pbrt loader fails, at the directive
+                             * that passes it, once the scene holds more primitives
+                             * (CstSceneInfo's triangles + spheres + shapes + instances;
+                             * curve segments are shapes): a bound on the work untrusted text can ask for */
 } CstLoadOptions;
 
 /* A scene in pbrt-v4 format (pbrt-v3 syntax where it is the same); what is supported,

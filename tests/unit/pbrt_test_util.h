@@ -66,7 +66,7 @@ static inline void write_text(const char *path, const char *text) { write_file(p
  * directory), with file access; warnings go to *w unless w is NULL. */
 static inline CstStatus load_at(const char *text, const char *path, CstScene **out, CstError *err, Warnings *w)
 {
-    CstLoadOptions opt = {collect, w, 0};
+    CstLoadOptions opt = {.warning = collect, .warning_user = w};
     return cst_scene_load_pbrt_string(text, strlen(text), path, w ? &opt : NULL, out, err);
 }
 

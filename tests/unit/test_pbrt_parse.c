@@ -280,6 +280,44 @@ static void test_attributes_scope(void **state)
     cst_scene_destroy(s);
 }
 
+/* CstLoadOptions.max_primitives: the load fails at the directive that passes the limit,
+ * counting instances and the sphere copies an instance of a sphere object places. */
+static void test_max_primitives(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "WorldBegin\n"
+        "ObjectBegin \"balls\"\n"
+        "Shape \"sphere\" \"float radius\" 0.5\n"
+        "Shape \"sphere\" \"float radius\" 0.25\n"
+        "ObjectEnd\n"
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"
+        "ObjectInstance \"balls\"\n"
+        "ObjectInstance \"balls\"\n";
+    for (size_t limit = 0; limit <= 6; limit++) {
+        CstLoadOptions opt = {0};
+        opt.no_file_access = 1;
+        opt.max_primitives = limit;
+        CstScene *scene = NULL;
+        CstError err = {0};
+        CstStatus st = cst_scene_load_pbrt_string(text, strlen(text), NAME, &opt, &scene, &err);
+        /* 1 triangle, then 2 sphere copies per instance: 3 after the first, 5 after the second */
+        if (limit == 0 || limit >= 5) {
+            if (st != CST_OK) fail_msg("limit %zu: %s", limit, err.msg);
+            cst_scene_destroy(scene);
+            continue;
+        }
+        assert_int_equal(st, CST_ERR_INVALID_ARG);
+        assert_null(scene);
+        int line, col;
+        pos_of(text, limit < 1 ? "Shape \"tri" : "ObjectInstance", limit < 1 ? 0 : limit < 3 ? 0 : 1, &line, &col);
+        char prefix[64];
+        snprintf(prefix, sizeof prefix, NAME ":%d:%d: ", line, col);
+        if (strncmp(err.msg, prefix, strlen(prefix)) != 0 || !strstr(err.msg, "max_primitives"))
+            fail_msg("limit %zu: \"%s\", expected it to start with \"%s\"", limit, err.msg, prefix);
+    }
+}
+
 static void test_include(void **state)
 {
     (void)state;
@@ -688,7 +726,7 @@ static void test_cornell_pbrt_equals_json(void **state)
     CstScene *json = NULL, *pbrt = NULL;
     CstError err;
     Warnings w = {0};
-    CstLoadOptions opt = {collect, &w, 0};
+    CstLoadOptions opt = {.warning = collect, .warning_user = &w};
     if (cst_scene_load_json(CST_SOURCE_DIR "/scenes/cornell-box.json", &json, &err) != CST_OK) fail_msg("%s", err.msg);
     if (cst_scene_load_pbrt(CST_SOURCE_DIR "/scenes/cornell-box.pbrt", &opt, &pbrt, &err) != CST_OK) fail_msg("%s", err.msg);
     if (w.n) fail_msg("unexpected warning: %s", w.msg[0]);
@@ -872,6 +910,7 @@ int main(void)
         cmocka_unit_test(test_colour_conversions),
         cmocka_unit_test(test_camera_and_options),
         cmocka_unit_test(test_orthographic_camera),
+        cmocka_unit_test(test_max_primitives),
         cmocka_unit_test(test_cornell_pbrt_equals_json),
         cmocka_unit_test(test_env_sphere_pbrt_equals_json),
         cmocka_unit_test(test_cornell_handedness),

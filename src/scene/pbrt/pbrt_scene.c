@@ -158,8 +158,20 @@ static CstStatus directive(Loader *ld, Lexer *lx, const PbrtToken *t)
     Loc loc = pbrt_tok_loc(lx, t);
     for (size_t i = 0; i < sizeof DIRECTIVES / sizeof DIRECTIVES[0]; i++) {
         const Directive *dir = &DIRECTIVES[i];
-        if (pbrt_tok_is(t, dir->name))
-            return dir->parse ? dir->parse(ld, lx, loc, dir->name) : named_call(ld, lx, loc, dir);
+        if (!pbrt_tok_is(t, dir->name)) continue;
+        CstStatus st = dir->parse ? dir->parse(ld, lx, loc, dir->name) : named_call(ld, lx, loc, dir);
+        if (st == CST_OK && ld->opt.max_primitives) {
+            /* Checked per directive: one directive adds a bounded amount (its own mesh, or an
+             * instance's sphere copies), so a file cannot pile up far beyond the limit. */
+            CstSceneInfo info;
+            cst_scene_info(ld->scene, &info);
+            size_t n = (size_t)info.triangles + (size_t)info.spheres + (size_t)info.shapes + (size_t)info.instances;
+            if (n > ld->opt.max_primitives)
+                st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: the scene holds %zu primitives after it; "
+                                  "expected at most %zu (CstLoadOptions.max_primitives)", dir->name, n,
+                                  ld->opt.max_primitives);
+        }
+        return st;
     }
     char got[96];
     pbrt_token_describe(t, got, sizeof got);
