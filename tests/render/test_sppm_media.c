@@ -1,13 +1,13 @@
 /* SPPM in participating media (sppm.c's visible points in media, volume photons and the
- * point-point 3D estimator; subpath_media.c's walks): a furnace (a scattering-only ball,
+ * point-point 3D estimator; subpath_media.c's walks): a furnace (a scattering-only medium,
  * homogeneous or a random grid, in a uniform emitter renders the emitter's radiance), SPPM
- * agreeing with the path tracer and VCM on test_media_bidir.c's fog box, and the refusal of
- * emitting media. Standard errors from independent renders (one render's pixels share its
- * photons); 4 standard errors, no bias allowance.
- * SPPM is consistent, not unbiased: the initial radius (FOG_R0, 1% of the box) and the
- * iterations are chosen so that its bias is far below the threshold; checked by rendering
- * ITER and 4 ITER iterations (`test_sppm_media --bias`), whose difference is the bias
- * still resolvable: see test_fog_agreement. `--spectral` runs it all in spectral mode. */
+ * agreeing with the path tracer and VCM on test_media_bidir.c's fog box, the same image for
+ * 1 and 2 threads, and the refusal of emitting media. Standard errors from independent
+ * renders (one render's pixels share its photons); 4 standard errors, no bias allowance.
+ * SPPM is consistent, not unbiased: the initial radii and the iterations are chosen so that
+ * its bias is far below the threshold, checked by rendering 4 x the iterations
+ * (`test_sppm_media --bias`), whose difference is the bias still resolvable: see FOG_R0.
+ * `--spectral` runs it all in spectral mode. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -236,6 +236,25 @@ static void test_grid_agreement(void **state)
     fog_agreement(FOG_GRID, 900, "grid");
 }
 
+/* The image through media is the same bit for bit for 1 and 2 threads (sppm.c's rule: every
+ * random number from a stream of its own, photon order kept in every sum). */
+static void test_threads(void **state)
+{
+    (void)state;
+    Scene *s = fog_box(FOG_GRID);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = st.height = 16;
+    st.spp = 4;
+    st.integrator = CST_INTEGRATOR_SPPM;
+    st.photon_radius = FOG_R0;
+    st.color_mode = g_color_mode;
+    st.seed = 5;
+    st.seed_set = 1;
+    assert_threads_bit_identical(s, st);
+    scene_destroy(s);
+}
+
 /* Emitting media: refused (SPPM's photons and NEE start on the light sampler's emitters,
  * so the emission would reach its visible points by no estimator). */
 static void test_emissive_refused(void **state)
@@ -266,6 +285,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_furnace),
         cmocka_unit_test(test_fog_agreement),
         cmocka_unit_test(test_grid_agreement),
+        cmocka_unit_test(test_threads),
         cmocka_unit_test(test_emissive_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
