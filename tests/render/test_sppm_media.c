@@ -250,6 +250,7 @@ static void test_threads(void **state)
     st.spp = 4;
     st.integrator = CST_INTEGRATOR_SPPM;
     st.photon_radius = FOG_R0;
+    st.photons = 4096; /* 4 chunks of 1024 photon paths: both threads trace photons */
     st.color_mode = g_color_mode;
     st.seed = 5;
     st.seed_set = 1;
