@@ -585,7 +585,8 @@ typedef enum CstIntegrator {
                                  * sample; consistent but biased (docs/integrators.md) */
     CST_INTEGRATOR_SPPM,        /* stochastic progressive photon mapping (Hachisuka & Jensen
                                  * 2009): spp counts iterations; photons = photon paths per
-                                 * iteration; single-threaded; consistent (docs/integrators.md) */
+                                 * iteration; consistent; renders participating media (not
+                                 * emitting ones) with volume photons (docs/integrators.md) */
     CST_INTEGRATOR_BDPT,        /* bidirectional path tracing, every connection strategy
                                  * combined by MIS; spp counts iterations of one light and
                                  * one camera path per pixel (docs/integrators.md) */

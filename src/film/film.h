@@ -13,8 +13,9 @@
  * something. Albedo and normal are means over all the pixel's samples (a miss adds 0);
  * depth is the mean over the samples that hit (+inf when none did). */
 enum { FILM_AOV_FIRST_HIT = CST_AOV_ALBEDO | CST_AOV_NORMAL | CST_AOV_DEPTH, FILM_AOV_STRIDE = 8 };
-/* Values per pixel of Film.progressive (SPPM's Ld sums, tau, N, r: sppm.c). */
-enum { FILM_PROGRESSIVE_STRIDE = 8 };
+/* Values per pixel of Film.progressive (SPPM's Ld sums, tau, N, r, and tau, N, r of its
+ * visible points in media: sppm.c). */
+enum { FILM_PROGRESSIVE_STRIDE = 13 };
 
 struct CstFilm {
     int width, height;

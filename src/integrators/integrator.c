@@ -717,15 +717,16 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
      * Sampler); mmlt's is BDPT's strategies, media included (subpath_media.c's single
-     * strategies). light, bdpt, vcm and mmlt walk homogeneous, grid and cloud media
-     * (subpath_media.c); vcm merges volume vertices by UPBP's point-point 3D estimator.
+     * strategies). light, bdpt, vcm, mmlt and sppm walk homogeneous, grid and cloud media
+     * (subpath_media.c); vcm merges volume vertices by UPBP's point-point 3D estimator,
+     * and sppm gathers volume photons at its visible points in media by the same (sppm.c).
      * Emission of media is gathered by the camera walks of bdpt and vcm only. */
     const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
-                             st->integrator == CST_INTEGRATOR_MMLT;
+                             st->integrator == CST_INTEGRATOR_MMLT || it->kind == INTEGRATOR_SPPM;
     if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH &&
         (it->kind != INTEGRATOR_PSSMLT || st->integrator == CST_INTEGRATOR_MMLT) && !bidir_media)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
-                        "use path, path-nee, path-bsdf, light, bdpt, vcm, pssmlt or mmlt",
+                        "use path, path-nee, path-bsdf, light, bdpt, vcm, pssmlt, mmlt or sppm",
                         cst_integrator_name(st->integrator));
     if (bidir_media && it->kind != INTEGRATOR_BIDIR) {
         for (int i = 0; i < scene->num_media; i++) {
@@ -808,7 +809,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "SPPM initial", err) : CST_OK;
         if (rs != CST_OK) return rs;
         SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
-                         st->threads, it->spectral, st->photon_split};
+                         st->threads, it->spectral, st->photon_split, &it->camera};
         return sppm_create(scene, &it->camera, &sp, st->threads, &it->sppm, err);
     }
     }

@@ -37,8 +37,11 @@
 #include "core/error.h"
 #include "film/filter.h"
 #include "integrators/photon.h"
+#include "integrators/subpath_media.h"
+#include "integrators/volpath.h"
 #include "materials/bsdf.h"
 #include "math/motion.h"
+#include "media/phase.h"
 #include "sampling/warp.h"
 
 /* Photon path i of iteration k draws from (seed, i, SPPM_STREAM + k): disjoint from the
@@ -61,10 +64,12 @@ static Wavelengths sppm_wavelengths(const SppmParams *sp, int iter)
 
 typedef struct SppmPixel {
     /* the visible point of the current iteration */
-    Vec3 p, wo, n;   /* n: geometric normal on wo's side */
-    Bsdf bsdf;
-    Color beta;        /* camera throughput to p */
+    Vec3 p, wo, n;   /* n: geometric normal on wo's side; 0 in a medium */
+    Bsdf bsdf;       /* on a surface */
+    Color beta;        /* camera throughput to p (in a medium: divided by sigma_s(p)) */
     bool valid;
+    bool vol;        /* in a medium (scenes with media): a ball of radius r_vol */
+    float g;         /* vol: HG asymmetry at p */
     /* progressive state */
     double ld[3];    /* sum over iterations of emission + NEE */
     double tau[3];   /* accumulated flux (unnormalised photon powers) */
@@ -72,7 +77,18 @@ typedef struct SppmPixel {
     double n_photons; /* N */
     long m;          /* M: photons found this iteration */
     float r;
+    /* the same for the visible points in media, a statistic of their own (see
+     * progressive_update): tau, N and the ball's radius */
+    double tau_vol[3];
+    double n_vol;
+    float r_vol;
 } SppmPixel;
+
+/* The radius of the pixel's current visible point: its disc's, or in a medium its ball's. */
+static inline float vp_radius(const SppmPixel *v) { return v->vol ? v->r_vol : v->r; }
+
+/* Scenes with participating media take sppm_media's walks (see the file comment). */
+static inline bool scene_has_media(const Scene *s) { return s->num_media || s->num_medium_ifaces; }
 
 /* What the deposit loop tests first, packed: most candidates fail the distance test, and
  * reading it from the 200-byte SppmPixel was a cache miss per candidate (perf: 40% of the
@@ -129,7 +145,8 @@ static inline void sppm_grid_cell(const SppmGrid *g, Vec3 p, int c[3])
 static int pixel_buckets(const SppmGrid *g, const SppmPixel *px, uint32_t out[8])
 {
     int a[3], b[3], n = 0;
-    Vec3 r = v3(px->r, px->r, px->r);
+    const float rad = vp_radius(px);
+    Vec3 r = v3(rad, rad, rad);
     sppm_grid_cell(g, v3_sub(px->p, r), a);
     sppm_grid_cell(g, v3_add(px->p, r), b);
     for (int z = a[2]; z <= b[2]; z++)
@@ -153,7 +170,7 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
         if (!px[i].valid) continue;
         lo = v3_min(lo, px[i].p);
         hi = v3_max(hi, px[i].p);
-        rmax = fmaxf(rmax, px[i].r);
+        rmax = fmaxf(rmax, vp_radius(&px[i]));
     }
     if (!(rmax > 0.0f)) { g->res[0] = 0; return; }
     Vec3 rv = v3(rmax, rmax, rmax);
@@ -167,7 +184,7 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
      * only coarser (the clamp in grid_cell keeps every point inside). */
     for (int a = 0; a < 3; a++) g->res[a] = clampi((int)(e[a] * g->inv_cell) + 1, 1, 1 << 20);
     for (size_t i = 0; i < count; i++)
-        if (px[i].valid) g->discs[i] = (SppmDisc){px[i].p, px[i].r * px[i].r};
+        if (px[i].valid) g->discs[i] = (SppmDisc){px[i].p, vp_radius(&px[i]) * vp_radius(&px[i])};
 }
 
 /* The hits of one chunk of photon paths, in photon order then path order. Reused by every
@@ -217,6 +234,18 @@ static float sppm_time(const Scene *s, const SppmParams *sp, int iter)
  * density_visit rules). */
 static inline void sppm_deposit(SppmPixel *v, const SppmHit *hit)
 {
+    /* A volume photon (n = 0) meets visible points in media only, and a surface photon
+     * surface points only: each estimate is a density of its own measure. */
+    const bool hit_vol = hit->n.x == 0.0f && hit->n.y == 0.0f && hit->n.z == 0.0f;
+    if (hit_vol != v->vol) return;
+    if (hit_vol) {
+        /* UPBP's point-point 3D estimator (Krivanek et al. 2014, table 1): the phase
+         * function at p; the 1 / sigma_s(p) is in v->beta (camera_row_media). */
+        const float f = phase_hg_eval(v->wo, hit->wi, v->g);
+        for (int c = 0; c < COLOR_LANES; c++) v->phi[c] += (double)(f * hit->power.c[c]);
+        v->m++;
+        return;
+    }
     /* A photon on the other side of a thin wall must not light this side, unless the
      * visible point's surface transmits (rough glass). */
     if (!(v3_dot(hit->n, v->n) > 0.0f) && !bsdf_has_transmission(&v->bsdf)) return;
@@ -241,8 +270,18 @@ static bool store_hit(void *ctx, const Photon *ph, int depth, bool specular_only
     return true;
 }
 
-/* Photon path `index` of iteration `iter`, by photon.c's walk, recording its hits in `out`
- * instead of a map; power unnormalised (see the file comment). */
+/* store_hit through media: surface and volume photons alike (a volume one with n = 0),
+ * but for the first vertex from the light, which NEE counts at the visible points
+ * (through media, with transmittance). */
+static bool store_media_hit(void *ctx, const MediaPhoton *ph)
+{
+    if (ph->bounces > 1) hit_list_push(ctx, ph->p, ph->wi, ph->n, ph->power);
+    return true;
+}
+
+/* Photon path `index` of iteration `iter`, by photon.c's walk (subpath_media.c's in scenes
+ * with media), recording its hits in `out` instead of a map; power unnormalised (see the
+ * file comment). */
 static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out, uint64_t index, int iter,
                          uint64_t *rays)
 {
@@ -251,7 +290,54 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     if (sp->spectral) wl = sppm_wavelengths(sp, iter);
     const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth,
                            sp->spectral ? &wl : NULL, sppm_time(s, sp, iter)};
-    photon_walk(s, &pw, index, store_hit, out, rays);
+    if (scene_has_media(s)) media_photon_walk(s, sp->cam, &pw, index, store_media_hit, out, rays);
+    else photon_walk(s, &pw, index, store_hit, out, rays);
+}
+
+/* A pixel's visible point in a scene with media, and the radiance its camera path
+ * estimates without photons (emission passed, NEE at the point). The point is the camera
+ * path's first non-delta vertex, on a surface or in a medium (media_visible_point): in a
+ * medium, SPPM's estimate becomes a volume density estimate, UPBP's point-point 3D
+ * estimator (Krivanek et al. 2014, table 1; Jensen & Christensen 1998 eq. 11's volume
+ * radiance estimate): (1 / sigma_s(p)) sum_j f_p(wo, wi_j) Phi_j / ((4/3) pi r^3), over
+ * the volume photons within a ball of radius r around p, each photon's flux holding the
+ * sigma_s of its own free-flight sample and the camera's beta the sigma_s at p, so one
+ * 1 / sigma_s(p) leaves the merged path with one scattering coefficient at p (as
+ * subpath_media.c's media_merge). The ball's radius shrinks by its own rule
+ * (progressive_update). */
+static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color beta, SppmPixel *v,
+                          uint64_t *rays)
+{
+    Color L = color_s(0.0f);
+    MediaVisiblePoint mv;
+    v->valid = media_visible_point(s, ray, rng, wl, beta, &L, &mv, rays);
+    if (!v->valid) return L;
+    v->p = mv.p;
+    v->wo = mv.wo;
+    v->vol = mv.vol;
+    VolVertex x = {mv.p, v3s(0.0f), v3s(0.0f), mv.wo, NULL, NULL, mv.g, mv.medium, 0.0f};
+    if (mv.vol) {
+        v->g = mv.g;
+        v->n = v3s(0.0f);
+    } else {
+        v->bsdf = mv.bsdf;
+        v->n = v3_dot(mv.sh.ng, mv.wo) >= 0.0f ? mv.sh.ng : v3_neg(mv.sh.ng);
+        x = (VolVertex){mv.sh.p, mv.sh.ns, mv.sh.ng, mv.wo, &mv.bsdf, &mv.sh, 0.0f, mv.medium, 0.0f};
+    }
+    if (s->emitter_sampler.lights > 0) L = color_madd(L, mv.beta, volpath_nee(s, &x, false, rng, wl, rays));
+    v->beta = mv.beta;
+    if (mv.vol) {
+        /* sigma_s(p): in a grid, the density at p times the medium's sigma_s. */
+        const Medium *med = &s->media[mv.medium];
+        const MediumCoeffs mc = medium_coeffs(med, wl);
+        const float dens = medium_is_hetero(med) ? hetero_density_world(&med->u.het, mv.p) : 1.0f;
+        for (int c = 0; c < COLOR_LANES; c++) {
+            const float ss = mc.sigma_s.c[c] * dens;
+            v->beta.c[c] = ss > 0.0f ? v->beta.c[c] / ss : 0.0f;
+        }
+    }
+    v->valid = color_is_finite(v->beta) && !color_is_black(v->beta);
+    return L;
 }
 
 /* The visible points of row y for iteration `iter`. */
@@ -277,8 +363,12 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         ray.time = time;
         Color L = color_s(0.0f), beta = color_s(fw);
         SurfaceHit sh;
-        v->valid = photon_trace_to_diffuse(s, ray, &rng, wlp, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
-        if (v->valid) {
+        if (scene_has_media(s)) {
+            L = camera_media(s, ray, &rng, wlp, beta, v, rays);
+        } else {
+            v->valid = photon_trace_to_diffuse(s, ray, &rng, wlp, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
+        }
+        if (v->valid && !scene_has_media(s)) {
             L = color_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, wlp, rays));
             v->p = sh.p;
             v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
@@ -313,15 +403,26 @@ static void progressive_update(SppmPixel *v, const Wavelengths *wl, uint64_t *no
                 b[c] = 1.0;
             }
         }
-        double n_new = v->n_photons + (double)SPPM_ALPHA * (double)v->m;
-        double r_new = (double)v->r * sqrt(n_new / (v->n_photons + (double)v->m));
-        double shrink = r_new * r_new / ((double)v->r * (double)v->r);
+        /* A visible point in a medium updates the volume statistic: the density estimate
+         * in 3D keeps its density when r'^3 / r^3 = N' / (N + M) (the 3D form of HJ 2009
+         * eq. 6, as progressive photon beams' and UPBP's point estimates shrink). */
+        double *tau = v->vol ? v->tau_vol : v->tau, *np = v->vol ? &v->n_vol : &v->n_photons;
+        float *r = v->vol ? &v->r_vol : &v->r;
+        double n_new = *np + (double)SPPM_ALPHA * (double)v->m;
+        double r_new, shrink;
+        if (v->vol) {
+            r_new = (double)*r * cbrt(n_new / (*np + (double)v->m));
+            shrink = r_new * r_new * r_new / ((double)*r * (double)*r * (double)*r);
+        } else {
+            r_new = (double)*r * sqrt(n_new / (*np + (double)v->m));
+            shrink = r_new * r_new / ((double)*r * (double)*r);
+        }
         bool ok = true;
         for (int c = 0; c < 3; c++) ok &= isfinite(v->phi[c] * b[c]);
         if (ok) {
-            for (int c = 0; c < 3; c++) v->tau[c] = (v->tau[c] + b[c] * v->phi[c]) * shrink;
-            v->n_photons = n_new;
-            v->r = (float)r_new;
+            for (int c = 0; c < 3; c++) tau[c] = (tau[c] + b[c] * v->phi[c]) * shrink;
+            *np = n_new;
+            *r = (float)r_new;
         } else {
             ++*nonfinite;
         }
@@ -509,6 +610,7 @@ CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, i
     job->s = s;
     job->cam = cam;
     job->sp = *sp;
+    job->sp.cam = cam;
     job->count = count;
     job->photons = sp->photons > 0 ? sp->photons : (int)(count < (size_t)1 << 30 ? count : (size_t)1 << 30);
     const int threads = sp->threads > 0 ? sp->threads : 1;
@@ -536,7 +638,7 @@ CstStatus sppm_create(const Scene *s, const Camera *cam, const SppmParams *sp, i
     g->discs = malloc(count * sizeof *g->discs);
     if (!job->workers || !job->px || !job->hits || !g->cell_start || !g->discs)
         return cst_fail(err, CST_ERR_OOM, "out of memory for SPPM state (%zu pixels)", count);
-    for (size_t i = 0; i < count; i++) job->px[i].r = job->r0;
+    for (size_t i = 0; i < count; i++) job->px[i].r = job->px[i].r_vol = job->r0;
     return CST_OK;
 }
 
@@ -630,6 +732,10 @@ void sppm_finish(const Sppm *job, Film *film, int iter)
         double area = (double)CST_PI * (double)v->r * (double)v->r;
         double L[3];
         for (int c = 0; c < 3; c++) L[c] = v->ld[c] / iter + (n_emitted > 0.0 ? v->tau[c] / (n_emitted * area) : 0.0);
+        if (scene_has_media(job->s) && n_emitted > 0.0) { /* the balls of the visible points in media */
+            double rv = (double)v->r_vol, volume = 4.0 / 3.0 * (double)CST_PI * rv * rv * rv;
+            for (int c = 0; c < 3; c++) L[c] += v->tau_vol[c] / (n_emitted * volume);
+        }
         film_accumulate(film, (int)i, L[0], L[1], L[2]);
     }
     film->spp = 1;
@@ -639,8 +745,9 @@ void sppm_finish(const Sppm *job, Film *film, int iter)
     film->progressive = NULL;
 }
 
-/* Film.progressive per pixel: Ld sums (3), tau (3), N, r; every value exactly (r is a
- * float, exact as a double), so a resumed render continues the same arithmetic. */
+/* Film.progressive per pixel: Ld sums (3), tau (3), N, r, then the volume statistic's tau
+ * (3), N, r; every value exactly (r is a float, exact as a double), so a resumed render
+ * continues the same arithmetic. */
 bool sppm_export(const Sppm *job, Film *film)
 {
     if (!film->progressive &&
@@ -652,6 +759,9 @@ bool sppm_export(const Sppm *job, Film *film)
         for (int c = 0; c < 3; c++) o[c] = v->ld[c], o[3 + c] = v->tau[c];
         o[6] = v->n_photons;
         o[7] = (double)v->r;
+        for (int c = 0; c < 3; c++) o[8 + c] = v->tau_vol[c];
+        o[11] = v->n_vol;
+        o[12] = (double)v->r_vol;
     }
     return true;
 }
@@ -664,11 +774,15 @@ bool sppm_import(Sppm *job, const Film *film)
         const double *o = &film->progressive[FILM_PROGRESSIVE_STRIDE * i];
         /* A radius must be what a float held, positive and finite: the file's checksum
          * matched, but the values are checked before they are trusted anyway. */
-        if (!(o[7] > 0.0) || !isfinite(o[7]) || (double)(float)o[7] != o[7] || !(o[6] >= 0.0) || !isfinite(o[6]))
-            return false;
-        for (int c = 0; c < 3; c++) v->ld[c] = o[c], v->tau[c] = o[3 + c];
+        for (int k = 6; k <= 11; k += 5)
+            if (!(o[k + 1] > 0.0) || !isfinite(o[k + 1]) || (double)(float)o[k + 1] != o[k + 1] || !(o[k] >= 0.0) ||
+                !isfinite(o[k]))
+                return false;
+        for (int c = 0; c < 3; c++) v->ld[c] = o[c], v->tau[c] = o[3 + c], v->tau_vol[c] = o[8 + c];
         v->n_photons = o[6];
         v->r = (float)o[7];
+        v->n_vol = o[11];
+        v->r_vol = (float)o[12];
     }
     return true;
 }

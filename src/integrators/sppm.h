@@ -26,6 +26,9 @@ typedef struct SppmParams {
      * chunks [chunk_lo, chunk_hi) are traced here, the others' hits fetched before the
      * deposit, in chunk order. */
     const CstPhotonSplit *split;
+    /* Scenes with media: the camera whose origin tells the medium a photon starts in
+     * (subpath_media.c's medium_at); sppm_create sets it to its own. */
+    const Camera *cam;
 } SppmParams;
 
 /* Photon paths per chunk, the unit of the photon phase and of a split (see sppm.c), and

@@ -1097,3 +1097,91 @@ Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, con
     CamVertex cx = cam_vertex_of(x);
     return color_mul(x->sp.beta, media_connect_vertices(s, it, &x->sp, &cx, y, wl, rays));
 }
+
+/* ------------------------------------------------------------------ SPPM (sppm.c) */
+
+typedef struct MediaPhotonCtx {
+    MediaPhotonVisit visit;
+    void *ctx;
+} MediaPhotonCtx;
+
+static bool visit_photon(void *ctx, const MediaLightVertex *v)
+{
+    const MediaPhotonCtx *c = ctx;
+    MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces};
+    if (v->sh) ph.n = v3_dot(v->ng, v->w_prev) >= 0.0f ? v->ng : v3_neg(v->ng);
+    return c->visit(c->ctx, &ph);
+}
+
+bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, uint64_t index, MediaPhotonVisit visit,
+                       void *ctx, uint64_t *rays)
+{
+    Sampler rng;
+    sampler_start_stream(&rng, pw->seed, index, pw->stream);
+    EmissionSample es;
+    subpath_emit(s, &rng, pw->wl, &es);
+    if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f) || color_is_black(es.beta)) return true; /* still one of the N */
+    int medium = medium_at_emitter(s, cam, es.p, es.w, rays);
+    if (!es.finite && medium >= 0) return true; /* as media_light_trace */
+    MediaPhotonCtx c = {visit, ctx};
+    /* No MIS (light tracing's walk): the hero lane's free-flight sampling in every medium,
+     * each vertex's flux divided by the walk's mean lane ratio (hero_beta). */
+    const MediaWalk w = {pw->max_depth, pw->rr_depth, NULL, pw->wl, NULL, visit_photon, &c};
+    return media_walk_light(s, &w, &es, subpath_start(color_scale(es.beta, pw->scale)), medium, &rng, rays);
+}
+
+bool media_visible_point(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color beta, Color *le,
+                         MediaVisiblePoint *out, uint64_t *rays)
+{
+    SubPath sp = subpath_start(beta);
+    sp.specular_only = false;
+    HeroMis hm = {-1, color_s(1.0f), false};
+    int medium = s->camera_medium;
+    Vec3 x_prev = ray.o;
+    for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
+        MediaHit h;
+        /* emit false: integrator.c refuses emitting media for SPPM (its photons and NEE
+         * start on the light sampler's emitters, so a medium's emission would reach the
+         * visible points by no estimator). */
+        if (!media_next(s, ray, x_prev, false, false, &medium, &sp, &hm, rng, wl, &h, rays)) return false;
+        Vec3 wo = v3_neg(ray.d);
+        if (h.kind == MEDIA_MISS) {
+            *le = color_madd(*le, hero_beta(&hm, sp.beta), scene_env_radiance(s, ray.d, wl));
+            return false;
+        }
+        out->p = h.p;
+        out->wo = wo;
+        out->medium = medium;
+        if (h.kind == MEDIA_VOLUME) {
+            out->vol = true;
+            out->g = s->media[medium].g;
+            out->beta = hero_beta(&hm, sp.beta);
+            return true;
+        }
+        out->vol = false;
+        out->sh = h.sh;
+        if (h.sh.emitter >= 0) *le = color_madd(*le, hero_beta(&hm, sp.beta), scene_emission(s, &h.sh, wo, wl));
+        scene_bsdf(s, &h.sh, wl, &out->bsdf);
+        /* photon_trace_to_diffuse's rule for BSDFs with delta and non-delta lobes. */
+        float p_delta = bsdf_delta_probability(&out->bsdf, wo);
+        out->beta = hero_beta(&hm, sp.beta);
+        if (!(p_delta > 0.0f)) return true;
+        BsdfSample bs;
+        bs.delta = false;
+        float uc = sampler_1d(rng);
+        Vec2 u = sampler_2d(rng);
+        bool sampled = bsdf_sample(&out->bsdf, wo, uc, u, &bs);
+        if (!bsdf_is_delta(&out->bsdf) && !bs.delta) {
+            out->beta = color_scale(out->beta, 1.0f / (1.0f - p_delta));
+            return color_is_finite(out->beta);
+        }
+        if (!sampled) return false;
+        sp.beta = color_mul(sp.beta, bs.weight);
+        sp.scatter = color_mul(sp.scatter, bs.weight);
+        if (color_is_black(sp.scatter)) return false;
+        medium = scene_medium_after(s, &h.sh, bs.wi, medium);
+        ray = ray_make(scene_offset(s, h.sh.p, h.sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        x_prev = h.p;
+    }
+    return false; /* photon_trace_to_diffuse's cut */
+}

@@ -5,6 +5,7 @@
 #define CST_INTEGRATORS_SUBPATH_MEDIA_H
 
 #include "integrators/light.h"
+#include "integrators/photon.h"
 #include "integrators/subpath.h"
 
 /* light_trace() for scenes with media (light.c hands them here). */
@@ -61,5 +62,42 @@ Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, con
 bool media_subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
                                   const SubpathIteration *it, int bounces, Sampler *rng, Vec2 u_lens,
                                   const Wavelengths *wl, Vec2 *raster, Color *rgb, uint64_t *rays);
+
+/* ---- SPPM through media (sppm.c). */
+
+/* A photon at a light-walk vertex: on a non-delta surface (n its geometric normal on wi's
+ * side) or in a medium (n = 0); power the flux arriving (a volume vertex's includes the
+ * sigma_s / sigma_t-type weight of the free-flight sample that made it); bounces 1 for the
+ * first vertex after the emitter. */
+typedef struct MediaPhoton {
+    Vec3 p, wi, n;
+    Color power;
+    int bounces;
+} MediaPhoton;
+typedef bool (*MediaPhotonVisit)(void *ctx, const MediaPhoton *ph);
+
+/* photon_walk() through media: the light tracer's walk (hero-lane free flights, HG
+ * scattering, roulette), starting in the medium the camera sees at the emitter (cam: its
+ * origin). Motion blur is not carried (pw->time ignored). False if visit stopped it. */
+bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, uint64_t index,
+                       MediaPhotonVisit visit, void *ctx, uint64_t *rays);
+
+/* SPPM's visible point through media: from the camera ray (in the camera's medium),
+ * free-flight sampling in media and delta lobes (photon_trace_to_diffuse's rules) to the
+ * first vertex that is a medium scattering point (vol) or a non-delta surface; emission
+ * passed on the way into *le (emitters and the environment; emitting media are refused).
+ * beta: the vertex's throughput from the camera, the hero lanes' balance included; at a
+ * volume vertex it includes sigma_s(p) / sigma_t-type weight of its free flight. */
+typedef struct MediaVisiblePoint {
+    SurfaceHit sh; /* !vol */
+    Bsdf bsdf;     /* !vol */
+    Vec3 p, wo;
+    bool vol;
+    float g;       /* vol: HG asymmetry */
+    int medium;    /* vol: the medium at p; else the medium arrived through */
+    Color beta;
+} MediaVisiblePoint;
+bool media_visible_point(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color beta, Color *le,
+                         MediaVisiblePoint *out, uint64_t *rays);
 
 #endif

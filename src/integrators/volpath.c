@@ -16,21 +16,7 @@
  * boundaries would otherwise never end). */
 enum { VOLPATH_MAX_CROSSINGS = 256 };
 
-/* A scattering vertex for next-event estimation: on a surface (bsdf, normals) or in a
- * medium (bsdf NULL, zero normals, phase g). */
-typedef struct VolVertex {
-    Vec3 p, ns, ng, wo;
-    const Bsdf *bsdf;
-    const SurfaceHit *sh; /* the surface hit, or NULL in a medium */
-    float g;
-    int medium; /* the medium at p (for a surface: on the ray's side) */
-    float time; /* the path's time (motion blur): the shadow ray's instant */
-} VolVertex;
-
-/* One light sample from vertex v: f x Tr x L_e / pdf, MIS-weighted against the
- * scattering density when mis (power heuristic; delta lights unweighted). */
-static Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *smp, const Wavelengths *wl,
-                         uint64_t *rays)
+Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *smp, const Wavelengths *wl, uint64_t *rays)
 {
     float u_sel = sampler_1d(smp);
     Vec2 u = sampler_2d(smp);

@@ -10,4 +10,20 @@
 Color volpath_li(const Scene *scene, const PathParams *params, Ray ray, Sampler *smp, Wavelengths *wl,
                  uint64_t *rays);
 
+/* A scattering vertex for next-event estimation: on a surface (bsdf, normals) or in a
+ * medium (bsdf NULL, zero normals, phase g). */
+typedef struct VolVertex {
+    Vec3 p, ns, ng, wo;
+    const Bsdf *bsdf;
+    const SurfaceHit *sh; /* the surface hit, or NULL in a medium */
+    float g;
+    int medium; /* the medium at p (for a surface: on the ray's side) */
+    float time; /* the path's time (motion blur): the shadow ray's instant */
+} VolVertex;
+
+/* One light sample from vertex v: f x Tr x L_e / pdf, MIS-weighted against the
+ * scattering density when mis (power heuristic; delta lights unweighted). Shared with
+ * SPPM's visible points in media (sppm.c, mis false). */
+Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *smp, const Wavelengths *wl, uint64_t *rays);
+
 #endif

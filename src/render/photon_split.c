@@ -12,7 +12,7 @@ static SppmParams split_params(const CstScene *scene, const CstRenderSettings *s
 {
     const size_t pixels = (size_t)st->width * (size_t)st->height;
     SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
-                     st->threads, st->color_mode == CST_COLOR_SPECTRAL, NULL};
+                     st->threads, st->color_mode == CST_COLOR_SPECTRAL, NULL, NULL};
     (void)scene;
     if (sp.photons <= 0) sp.photons = (int)(pixels < (size_t)1 << 30 ? pixels : (size_t)1 << 30);
     return sp;
@@ -38,7 +38,10 @@ CstStatus cst_sppm_trace_chunk(const CstScene *scene, const CstRenderSettings *s
     if (chunk < 0 || chunk >= chunks || iteration < 0)
         return cst_fail(err, CST_ERR_INVALID_ARG, "cst_sppm_trace_chunk: chunk %d of iteration %d: expected a chunk "
                         "in [0, %d) and an iteration >= 0", chunk, iteration, chunks);
-    const SppmParams sp = split_params(scene, &st);
+    SppmParams sp = split_params(scene, &st);
+    Camera cam; /* in scenes with media, its origin tells the medium each photon starts in */
+    camera_init(&cam, &scene->camera, st.width, st.height);
+    sp.cam = &cam;
     uint64_t traced = 0;
     if (!sppm_trace_chunk(scene, &sp, iteration, chunk, hits, count, cap, &traced))
         return cst_fail(err, CST_ERR_OOM, "out of memory for the photon hits of chunk %d", chunk);
