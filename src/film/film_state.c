@@ -261,8 +261,8 @@ static CstStatus state_decode(StateIn *in, Film **film_out, StateKey *keys, int 
                         "within the file's %zu (a corrupted state file)", in->path, at + 16,
                         (unsigned long long)clen, (unsigned long long)FILM_STATE_CHAINS_MAX, in->len);
     if (prog && pstride != FILM_PROGRESSIVE_STRIDE)
-        return cst_fail(err, CST_ERR_PARSE, "%s: byte %zu: %llu progressive state values per pixel; expected %d (a "
-                        "corrupted state file)", in->path, at + 16, (unsigned long long)pstride,
+        return cst_fail(err, CST_ERR_PARSE, "%s: byte %zu: %llu progressive state values per pixel; expected %d (8: an "
+                        "SPPM state from before SPPM rendered media; else a corrupted state file)", in->path, at + 16, (unsigned long long)pstride,
                         FILM_PROGRESSIVE_STRIDE);
     if (w < 1 || w > 65536 || h < 1 || h > 65536 || spp > INT32_MAX || (stride != 0 && stride != FILM_AOV_STRIDE))
         return cst_fail(err, CST_ERR_PARSE,
