@@ -1083,7 +1083,8 @@ static CstStatus add_moving_instance(Loader *ld, int proto, Loc loc, const char 
 /* A triangle shape under a moving CTM: its triangles in object space as an object of its
  * own (make_proto's orientation rule), placed by a moving instance (as the JSON loader's
  * moving meshes). pbrt-v4 makes the same: the shape in object space under an
- * AnimatedPrimitive. Instances carry no uvs: a texture on it reads uv (0, 0). */
+ * AnimatedPrimitive. The prototype keeps the shape's uvs and its alpha (constant or a
+ * texture) as every triangle's cut-out, tested at the ray's time like a static shape's. */
 static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, const CstAlpha *alpha, Loc loc, const char *d)
 {
     ObjShape os = {.g = *g, .xf = pbrt_xf_identity(), .reverse = ld->gs.reverse, .material = ld->gs.material,
