@@ -302,7 +302,8 @@ typedef struct CstAlpha {
     int enabled;  /* 0: opaque (the rest ignored); 1: value or texture gives the alpha */
     float value;  /* in [0, 1], when texture is 0 */
     int texture;  /* a texture id whose scalar value (the mean of its channels; a pbrt float
-                   * image texture holds its first channel in all three) is the alpha, or 0 */
+                   * image texture, CstTextureDesc.pbrt_float, holds its one value in all
+                   * three) is the alpha, or 0 */
 } CstAlpha;
 
 /* A triangle mesh read from the caller's arrays, Embree-style: each attribute is a pointer

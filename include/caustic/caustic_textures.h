@@ -113,6 +113,14 @@ typedef struct CstTextureDesc {
     CstTextureMapping mapping;
     float mapping_from_world[12];
     float planar_v1[3], planar_v2[3]; /* planar: both all 0 = (1, 0, 0) and (0, 1, 0) */
+    /* image: how a lookup becomes a value, before the ops. 0 = RGB (a grey image's value in
+     * all three channels; an image file's alpha is not read). 1 = pbrt-v4's float image
+     * texture, one value in all three channels (pbrt-v4 MIPMap::Filter<Float>): every
+     * interpolated lookup (filters none, bilinear, trilinear) gives a grey image's value,
+     * an RGB image's mean of R, G and B, an RGBA PNG's alpha (if not all 1; 8-bit alpha
+     * decoded by the encoding, as pbrt-v4 does); single-texel lookups (point, EWA, a
+     * footprint wider than the image) give the first channel (R) whatever the image. */
+    int pbrt_float;
 } CstTextureDesc;
 
 /* *out_id (>= 1) names the texture in later descriptions. */

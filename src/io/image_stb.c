@@ -64,6 +64,13 @@ void *image_stb_load_channels(const unsigned char *data, int len, int bits, int 
     return stbi_load_from_memory(data, len, width, height, &comp, want);
 }
 
+void *image_stb_load_n(const unsigned char *data, int len, int bits, int channels, int *width, int *height)
+{
+    int comp = 0;
+    if (bits == 16) return stbi_load_16_from_memory(data, len, width, height, &comp, channels);
+    return stbi_load_from_memory(data, len, width, height, &comp, channels);
+}
+
 const char *image_stb_failure_reason(void)
 {
     const char *why = stbi_failure_reason();

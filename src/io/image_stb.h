@@ -24,6 +24,9 @@ void *image_stb_load(const unsigned char *data, int len, int bits, int *width, i
  * grey and grey + alpha files (alpha dropped), else 3 (alpha dropped). */
 void *image_stb_load_channels(const unsigned char *data, int len, int bits, int *width, int *height,
                               int *channels);
+/* image_stb_load of an 8- or 16-bit image as `channels` (1 to 4) channels, stb's conversion
+ * (4: alpha kept, 255 / 65535 where the file has none). */
+void *image_stb_load_n(const unsigned char *data, int len, int bits, int channels, int *width, int *height);
 /* stb's reason for the last failure on this thread ("unknown reason" when it gave none). */
 const char *image_stb_failure_reason(void);
 

@@ -105,7 +105,10 @@ static CstStatus image_texture(Scene *s, const CstTextureDesc *d, Texture *t, Cs
                         (double)d->max_anisotropy);
     CstStatus st = check_ops(d, err);
     if (st != CST_OK) return st;
+    if (d->pbrt_float != 0 && d->pbrt_float != 1)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%s: pbrt_float %d; expected 0 or 1", fn, d->pbrt_float);
     if ((st = image_pixels(s, d, wrap, t, err)) != CST_OK) return st;
+    texture_set_scalar(t, d->pbrt_float != 0); /* before the ops, which map its values */
     add_ops(d, t);
     static const TextureFilter filters[] = {TEXTURE_FILTER_NONE, TEXTURE_FILTER_POINT, TEXTURE_FILTER_BILINEAR,
                                             TEXTURE_FILTER_TRILINEAR, TEXTURE_FILTER_EWA};
@@ -318,6 +321,7 @@ CstStatus cst_scene_texture_info(const CstScene *scene, int id, CstTextureInfo *
         d->source = id;
         d->filter = (CstTextureFilter)t->image.filter; /* the enums agree */
         d->max_anisotropy = t->image.max_aniso;
+        d->pbrt_float = t->image.scalar;
         info_ops(t, d);
         d->width = t->image.width;
         d->height = t->image.height;

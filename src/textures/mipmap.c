@@ -23,7 +23,17 @@ static inline float decode16(const TexImage *im, uint16_t w)
     return 0.0f;
 }
 
-/* Texel index i (already wrapped) of level lv, decoded. */
+/* Element k (texel * channels + channel) of level lv, decoded. */
+static inline float element_at(const TexImage *im, const TexLevel *lv, size_t k)
+{
+    switch (im->format) {
+    case TEXEL_U8: return im->lut[((const uint8_t *)lv->texels)[k]];
+    case TEXEL_U16: return decode16(im, ((const uint16_t *)lv->texels)[k]);
+    default: return ((const float *)lv->texels)[k];
+    }
+}
+
+/* Texel index i (already wrapped) of level lv, decoded: RGB (alpha, if kept, not read). */
 static inline Color texel_at(const TexImage *im, const TexLevel *lv, size_t i)
 {
     if (im->channels == 1) {
@@ -35,17 +45,18 @@ static inline Color texel_at(const TexImage *im, const TexLevel *lv, size_t i)
         }
         return color_s(v);
     }
+    const size_t o = (size_t)im->channels * i;
     switch (im->format) {
     case TEXEL_U8: {
-        const uint8_t *p = (const uint8_t *)lv->texels + 3 * i;
+        const uint8_t *p = (const uint8_t *)lv->texels + o;
         return color_rgb(im->lut[p[0]], im->lut[p[1]], im->lut[p[2]]);
     }
     case TEXEL_U16: {
-        const uint16_t *p = (const uint16_t *)lv->texels + 3 * i;
+        const uint16_t *p = (const uint16_t *)lv->texels + o;
         return color_rgb(decode16(im, p[0]), decode16(im, p[1]), decode16(im, p[2]));
     }
     default: {
-        const float *p = (const float *)lv->texels + 3 * i;
+        const float *p = (const float *)lv->texels + o;
         return color_rgb(p[0], p[1], p[2]);
     }
     }
@@ -91,9 +102,10 @@ static inline Vec2 reduce_st(Vec2 st, TextureWrap wrap)
     return v2(u, v);
 }
 
-Color mipmap_bilerp(const TexImage *im, int level, TextureWrap wrap, Vec2 st)
+/* The four texels around st on lv and their bilinear weights, in the order 00, 10, 01, 11
+ * (x then y, y = 0 the top row). */
+static inline void bilerp_taps(const TexLevel *lv, TextureWrap wrap, Vec2 st, size_t idx[4], float wt[4])
 {
-    const TexLevel *lv = &im->level[level];
     Vec2 r = reduce_st(st, wrap);
     float x = r.x * (float)lv->width - 0.5f, y = (1.0f - r.y) * (float)lv->height - 0.5f;
     float fx0 = floorf(x), fy0 = floorf(y);
@@ -102,15 +114,81 @@ Color mipmap_bilerp(const TexImage *im, int level, TextureWrap wrap, Vec2 st)
     size_t w = (size_t)lv->width;
     size_t xa = (size_t)wrap_near(x0, lv->width, wrap), xb = (size_t)wrap_near(x0 + 1, lv->width, wrap);
     size_t ya = (size_t)wrap_near(y0, lv->height, wrap), yb = (size_t)wrap_near(y0 + 1, lv->height, wrap);
-    Color p00 = texel_at(im, lv, ya * w + xa), p10 = texel_at(im, lv, ya * w + xb);
-    Color p01 = texel_at(im, lv, yb * w + xa), p11 = texel_at(im, lv, yb * w + xb);
-    float w00 = (1.0f - dx) * (1.0f - dy), w10 = dx * (1.0f - dy), w01 = (1.0f - dx) * dy, w11 = dx * dy;
-    return color_rgb(w00 * p00.c[0] + w10 * p10.c[0] + w01 * p01.c[0] + w11 * p11.c[0],
-                     w00 * p00.c[1] + w10 * p10.c[1] + w01 * p01.c[1] + w11 * p11.c[1],
-                     w00 * p00.c[2] + w10 * p10.c[2] + w01 * p01.c[2] + w11 * p11.c[2]);
+    idx[0] = ya * w + xa, idx[1] = ya * w + xb, idx[2] = yb * w + xa, idx[3] = yb * w + xb;
+    wt[0] = (1.0f - dx) * (1.0f - dy), wt[1] = dx * (1.0f - dy), wt[2] = (1.0f - dx) * dy, wt[3] = dx * dy;
+}
+
+Color mipmap_bilerp(const TexImage *im, int level, TextureWrap wrap, Vec2 st)
+{
+    const TexLevel *lv = &im->level[level];
+    size_t i[4];
+    float w[4];
+    bilerp_taps(lv, wrap, st, i, w);
+    Color p00 = texel_at(im, lv, i[0]), p10 = texel_at(im, lv, i[1]);
+    Color p01 = texel_at(im, lv, i[2]), p11 = texel_at(im, lv, i[3]);
+    return color_rgb(w[0] * p00.c[0] + w[1] * p10.c[0] + w[2] * p01.c[0] + w[3] * p11.c[0],
+                     w[0] * p00.c[1] + w[1] * p10.c[1] + w[2] * p01.c[1] + w[3] * p11.c[1],
+                     w[0] * p00.c[2] + w[1] * p10.c[2] + w[2] * p01.c[2] + w[3] * p11.c[2]);
+}
+
+/* Channel c of the texels i[0..3] of lv, weighted (pbrt-v4 Image::BilerpChannel). */
+static inline float bilerp_channel(const TexImage *im, const TexLevel *lv, const size_t i[4], const float w[4], int c)
+{
+    size_t n = (size_t)im->channels, k = (size_t)c;
+    return w[0] * element_at(im, lv, n * i[0] + k) + w[1] * element_at(im, lv, n * i[1] + k) +
+           w[2] * element_at(im, lv, n * i[2] + k) + w[3] * element_at(im, lv, n * i[3] + k);
+}
+
+float mipmap_bilerp_float(const TexImage *im, int level, TextureWrap wrap, Vec2 st)
+{
+    const TexLevel *lv = &im->level[level];
+    size_t i[4];
+    float w[4];
+    bilerp_taps(lv, wrap, st, i, w);
+    switch (im->channels) {
+    case 3: /* Image::Bilerp(...).Average(): each channel interpolated, then their mean */
+        return (bilerp_channel(im, lv, i, w, 0) + bilerp_channel(im, lv, i, w, 1) + bilerp_channel(im, lv, i, w, 2)) /
+               3.0f;
+    case 4: return bilerp_channel(im, lv, i, w, 3); /* alpha */
+    default: return bilerp_channel(im, lv, i, w, 0);
+    }
+}
+
+float mipmap_texel_float(const TexImage *im, int level, int x, int y, TextureWrap wrap)
+{
+    const TexLevel *lv = &im->level[level];
+    x = wrap_any(x, lv->width, wrap);
+    y = wrap_any(y, lv->height, wrap);
+    return element_at(im, lv, (size_t)im->channels * ((size_t)y * (size_t)lv->width + (size_t)x));
+}
+
+float mipmap_centre_float(const TexImage *im, int x, int y)
+{
+    const TexLevel *lv = &im->level[0];
+    size_t n = (size_t)im->channels, i = n * ((size_t)y * (size_t)lv->width + (size_t)x);
+    switch (im->channels) {
+    case 3: return (element_at(im, lv, i) + element_at(im, lv, i + 1) + element_at(im, lv, i + 2)) / 3.0f;
+    case 4: return element_at(im, lv, i + 3);
+    default: return element_at(im, lv, i);
+    }
 }
 
 /* ------------------------------------------------------------------ filters */
+
+/* The two lookups pbrt-v4's MIPMap::Filter<T> is made of, for T = RGB (scalar false) or
+ * T = Float (scalar true: the value in all three channels). pbrt-v4 reads one texel as
+ * Texel<Float>, channel 0 (R of an RGB image) whatever the channels, but interpolates as
+ * Bilerp<Float>, which depends on them (mipmap_bilerp_float): so a float texture's point,
+ * EWA and coarsest-level values use R, its bilinear and trilinear ones the mean or alpha. */
+static inline Color texel_t(const TexImage *im, int level, int x, int y, TextureWrap wrap, bool scalar)
+{
+    return scalar ? color_s(mipmap_texel_float(im, level, x, y, wrap)) : mipmap_texel(im, level, x, y, wrap);
+}
+
+static inline Color bilerp_t(const TexImage *im, int level, TextureWrap wrap, Vec2 st, bool scalar)
+{
+    return scalar ? color_s(mipmap_bilerp_float(im, level, wrap, st)) : mipmap_bilerp(im, level, wrap, st);
+}
 
 static inline Color color_lerp(float t, Color a, Color b)
 {
@@ -121,9 +199,9 @@ static inline Color color_lerp(float t, Color a, Color b)
  * texel inside it weighted by a Gaussian of its ellipse radius, exp(-2 r^2) - exp(-2),
  * which falls to 0 at the ellipse's edge. st and the derivatives have t pointing down
  * (row 0 at t = 0), as the texels are stored. */
-static Color ewa_level(const TexImage *im, int level, TextureWrap wrap, Vec2 st, Vec2 dst0, Vec2 dst1)
+static Color ewa_level(const TexImage *im, int level, TextureWrap wrap, Vec2 st, Vec2 dst0, Vec2 dst1, bool scalar)
 {
-    if (level >= im->num_levels) return mipmap_texel(im, im->num_levels - 1, 0, 0, wrap);
+    if (level >= im->num_levels) return texel_t(im, im->num_levels - 1, 0, 0, wrap, scalar);
     const TexLevel *lv = &im->level[level];
     float w = (float)lv->width, h = (float)lv->height;
     float s = st.x * w - 0.5f, t = st.y * h - 0.5f;
@@ -141,7 +219,7 @@ static Color ewa_level(const TexImage *im, int level, TextureWrap wrap, Vec2 st,
     float s0f = ceilf(s - 2.0f * inv_det * us), s1f = floorf(s + 2.0f * inv_det * us);
     float t0f = ceilf(t - 2.0f * inv_det * vs), t1f = floorf(t + 2.0f * inv_det * vs);
     if (!(s1f - s0f < 4096.0f && t1f - t0f < 4096.0f)) /* NaN or absurd: no footprint */
-        return mipmap_bilerp(im, level, wrap, v2(st.x, 1.0f - st.y));
+        return bilerp_t(im, level, wrap, v2(st.x, 1.0f - st.y), scalar);
     int s0 = (int)s0f, s1 = (int)s1f, t0 = (int)t0f, t1 = (int)t1f;
     const float e2 = expf(-2.0f);
     Color sum = color_s(0.0f);
@@ -153,19 +231,19 @@ static Color ewa_level(const TexImage *im, int level, TextureWrap wrap, Vec2 st,
             float r2 = a * ss * ss + b * ss * tt + c * tt * tt;
             if (r2 < 1.0f) {
                 float wt = expf(-2.0f * r2) - e2;
-                sum = color_add(sum, color_scale(mipmap_texel(im, level, is, it, wrap), wt));
+                sum = color_add(sum, color_scale(texel_t(im, level, is, it, wrap, scalar), wt));
                 wsum += wt;
             }
         }
     }
-    if (!(wsum > 0.0f)) return mipmap_bilerp(im, level, wrap, v2(st.x, 1.0f - st.y));
+    if (!(wsum > 0.0f)) return bilerp_t(im, level, wrap, v2(st.x, 1.0f - st.y), scalar);
     return color_scale(sum, 1.0f / wsum);
 }
 
 static inline float v2_len2(Vec2 a) { return a.x * a.x + a.y * a.y; }
 
-Color mipmap_filter(const TexImage *im, TextureWrap wrap, TextureFilter filter, float max_aniso, Vec2 st,
-                    Vec2 dst0, Vec2 dst1)
+static Color filter_t(const TexImage *im, TextureWrap wrap, TextureFilter filter, float max_aniso, Vec2 st,
+                      Vec2 dst0, Vec2 dst1, bool scalar)
 {
     int nl = im->num_levels;
     if (filter != TEXTURE_FILTER_EWA) {
@@ -173,18 +251,18 @@ Color mipmap_filter(const TexImage *im, TextureWrap wrap, TextureFilter filter, 
          * are that wide: level = nLevels - 1 + log2(width) (PBR 4th ed. eq. 10.15). */
         float width = 2.0f * maxf(maxf(fabsf(dst0.x), fabsf(dst0.y)), maxf(fabsf(dst1.x), fabsf(dst1.y)));
         float level = (float)(nl - 1) + log2f(maxf(width, 1e-8f));
-        if (!(level < (float)(nl - 1))) return mipmap_texel(im, nl - 1, 0, 0, wrap); /* NaN too */
+        if (!(level < (float)(nl - 1))) return texel_t(im, nl - 1, 0, 0, wrap, scalar); /* NaN too */
         int il = level > 0.0f ? (int)floorf(level) : 0;
         if (filter == TEXTURE_FILTER_POINT) {
             const TexLevel *lv = &im->level[il];
             Vec2 r = reduce_st(st, wrap);
             int x = (int)floorf(r.x * (float)lv->width - 0.5f + 0.5f);
             int y = (int)floorf((1.0f - r.y) * (float)lv->height - 0.5f + 0.5f);
-            return mipmap_texel(im, il, x, y, wrap);
+            return texel_t(im, il, x, y, wrap, scalar);
         }
-        if (filter == TEXTURE_FILTER_BILINEAR || il == 0) return mipmap_bilerp(im, il, wrap, st);
+        if (filter == TEXTURE_FILTER_BILINEAR || il == 0) return bilerp_t(im, il, wrap, st, scalar);
         float delta = level - (float)il; /* trilinear: il + 1 <= nl - 1 here */
-        return color_lerp(delta, mipmap_bilerp(im, il, wrap, st), mipmap_bilerp(im, il + 1, wrap, st));
+        return color_lerp(delta, bilerp_t(im, il, wrap, st, scalar), bilerp_t(im, il + 1, wrap, st, scalar));
     }
     /* EWA: t flipped to the stored orientation (row 0 at the top). */
     Vec2 r = reduce_st(st, wrap);
@@ -203,10 +281,23 @@ Color mipmap_filter(const TexImage *im, TextureWrap wrap, TextureFilter filter, 
         a1 = v2(a1.x * sc, a1.y * sc);
         shorter *= sc;
     }
-    if (!(shorter > 0.0f) || !isfinite(longer)) return mipmap_bilerp(im, 0, wrap, st);
+    if (!(shorter > 0.0f) || !isfinite(longer)) return bilerp_t(im, 0, wrap, st, scalar);
     float lod = maxf(0.0f, (float)(nl - 1) + log2f(shorter));
     int il = (int)floorf(lod);
-    return color_lerp(lod - (float)il, ewa_level(im, il, wrap, p, a0, a1), ewa_level(im, il + 1, wrap, p, a0, a1));
+    return color_lerp(lod - (float)il, ewa_level(im, il, wrap, p, a0, a1, scalar),
+                      ewa_level(im, il + 1, wrap, p, a0, a1, scalar));
+}
+
+Color mipmap_filter(const TexImage *im, TextureWrap wrap, TextureFilter filter, float max_aniso, Vec2 st,
+                    Vec2 dst0, Vec2 dst1)
+{
+    return filter_t(im, wrap, filter, max_aniso, st, dst0, dst1, false);
+}
+
+float mipmap_filter_float(const TexImage *im, TextureWrap wrap, TextureFilter filter, float max_aniso, Vec2 st,
+                          Vec2 dst0, Vec2 dst1)
+{
+    return filter_t(im, wrap, filter, max_aniso, st, dst0, dst1, true).c[0];
 }
 
 /* ------------------------------------------------------------------ pyramid */
@@ -279,11 +370,12 @@ CstStatus mipmap_build(TexImage *im, CstError *err)
             int ny = box_taps(y, h, h2, iy, wy);
             for (int x = 0; x < w2; x++) {
                 int nx = box_taps(x, w, w2, ix, wx);
-                double acc[3] = {0.0, 0.0, 0.0};
+                double acc[4] = {0.0, 0.0, 0.0, 0.0};
                 for (int a = 0; a < ny; a++)
                     for (int b = 0; b < nx; b++) {
-                        Color c = texel_at(im, src, (size_t)iy[a] * (size_t)w + (size_t)ix[b]);
-                        for (int k = 0; k < ch; k++) acc[k] += wy[a] * wx[b] * (double)c.c[k];
+                        size_t e = (size_t)ch * ((size_t)iy[a] * (size_t)w + (size_t)ix[b]);
+                        for (int k = 0; k < ch; k++)
+                            acc[k] += wy[a] * wx[b] * (double)element_at(im, src, e + (size_t)k);
                     }
                 size_t o = ((size_t)y * (size_t)w2 + (size_t)x) * (size_t)ch;
                 for (int k = 0; k < ch; k++) encode_value(im, (float)acc[k], lv->texels, o + (size_t)k);

@@ -82,8 +82,8 @@ static void texture_image_stats(Texture *t)
     double sum[3] = {0.0, 0.0, 0.0};
     Color mx = color_s(0.0f);
     for (size_t i = 0; i < n; i++) {
-        Color c = mipmap_texel(im, 0, (int)(i % (size_t)t->image.width), (int)(i / (size_t)t->image.width),
-                               TEXTURE_WRAP_CLAMP);
+        int x = (int)(i % (size_t)t->image.width), y = (int)(i / (size_t)t->image.width);
+        Color c = t->image.scalar ? color_s(mipmap_centre_float(im, x, y)) : mipmap_texel(im, 0, x, y, TEXTURE_WRAP_CLAMP);
         if (t->num_ops) c = texture_apply_ops(t, c);
         for (int k = 0; k < 3; k++) sum[k] += (double)c.c[k];
         mx = rgb_max3(mx, c);
@@ -129,6 +129,29 @@ CstStatus texture_image(Texture *t, float *rgb_data, int width, int height, Text
     return CST_OK;
 }
 
+/* A PNG whose header declares colour type 6, RGB with alpha (PNG spec. sec. 11.2.2, IHDR:
+ * the colour type is byte 25 of the file). */
+static bool png_is_rgba(const unsigned char *data, size_t size)
+{
+    return image_precheck_format(data, size) == IMAGE_STB_PNG && size > 25 && memcmp(data + 12, "IHDR", 4) == 0 &&
+           data[25] == 6;
+}
+
+/* Whether every alpha of n RGBA texels (bytes, or 16-bit codes) is the largest code, which
+ * every encoding decodes to exactly 1. If so, the texels are packed to RGB in place. */
+static bool alpha_all_one(void *px, size_t n, bool sixteen)
+{
+    for (size_t i = 0; i < n; i++)
+        if (sixteen ? ((const uint16_t *)px)[4 * i + 3] != 65535 : ((const uint8_t *)px)[4 * i + 3] != 255)
+            return false;
+    for (size_t i = 0; i < n; i++)
+        for (size_t k = 0; k < 3; k++) {
+            if (sixteen) ((uint16_t *)px)[3 * i + k] = ((const uint16_t *)px)[4 * i + k];
+            else ((uint8_t *)px)[3 * i + k] = ((const uint8_t *)px)[4 * i + k];
+        }
+    return true;
+}
+
 /* PNG, BMP, TGA or Radiance HDR bytes through stb_image (io/image_stb.h), JPEG through
  * libjpeg-turbo (io/jpeg.h), after the checks stb lacks (io/image_precheck.h): a TexImage
  * in the file's own storage (8-bit, 16-bit or float; grey files one channel). */
@@ -165,7 +188,20 @@ static CstStatus texture_decode_stb(const char *path, const unsigned char *data,
     } else {
         bool sixteen = image_stb_is_16_bit(data, len);
         format = sixteen ? TEXEL_U16 : TEXEL_U8;
-        px = image_stb_load_channels(data, len, sixteen ? 16 : 8, &w, &h, &ch);
+        if (png_is_rgba(data, size)) {
+            /* pbrt-v4 keeps the alpha of an RGBA PNG (colour type 6; not a palette's or a
+             * tRNS key's) when it is not all 1 (MIPMap::CreateFromFile), and its float
+             * textures read it (mipmap_bilerp_float); an opaque one is stored as RGB. */
+            ch = 4;
+            px = image_stb_load_n(data, len, sixteen ? 16 : 8, 4, &w, &h);
+            if (px && alpha_all_one(px, (size_t)w * (size_t)h, sixteen)) {
+                ch = 3;
+                void *packed = realloc(px, (size_t)w * (size_t)h * 3 * (sixteen ? 2 : 1));
+                if (packed) px = packed; /* a shrink: the larger block serves if it fails */
+            }
+        } else {
+            px = image_stb_load_channels(data, len, sixteen ? 16 : 8, &w, &h, &ch);
+        }
     }
     if (!px)
         return cst_fail(err, CST_ERR_PARSE,
@@ -272,6 +308,13 @@ CstStatus texture_set_filter(Texture *t, TextureFilter filter, float max_aniso, 
     t->image.filter = filter;
     t->image.max_aniso = max_aniso > 0.0f ? max_aniso : 8.0f;
     return CST_OK;
+}
+
+void texture_set_scalar(Texture *t, bool scalar)
+{
+    if (t->type != TEXTURE_IMAGE || t->image.scalar == scalar) return;
+    t->image.scalar = scalar;
+    texture_image_stats(t);
 }
 
 size_t texture_image_bytes(const Texture *t)
@@ -454,6 +497,10 @@ Vec2 texture_map_st(const Texture *t, const TexCtx *c, Vec2 *d0, Vec2 *d1)
 static Color texture_image_eval(const Texture *t, Vec2 st, Vec2 d0, Vec2 d1)
 {
     const TextureImage *ti = &t->image;
+    if (ti->scalar)
+        return color_s(ti->filter == TEXTURE_FILTER_NONE
+                           ? mipmap_bilerp_float(ti->im, 0, ti->wrap, st)
+                           : mipmap_filter_float(ti->im, ti->wrap, ti->filter, ti->max_aniso, st, d0, d1));
     if (ti->filter == TEXTURE_FILTER_NONE) return mipmap_bilerp(ti->im, 0, ti->wrap, st);
     return mipmap_filter(ti->im, ti->wrap, ti->filter, ti->max_aniso, st, d0, d1);
 }

@@ -3,7 +3,8 @@
  * checkerboards (of two other textures) and images. Textures live in the scene's array and
  * refer to each other by index; evaluation allocates nothing.
  * Images keep their file's storage (8-bit texels decoded through a 256-entry table at
- * lookup, 16-bit ones decoded at lookup, floats as floats; grey images one channel) and are
+ * lookup, 16-bit ones decoded at lookup, floats as floats; grey images one channel, RGBA
+ * PNGs with some alpha below 1 four) and are
  * shared, reference-counted, between the textures that derive from one file (a scaled copy
  * is a new Texture with one more value op, not a new image). They may carry a MIP pyramid
  * (textures/mipmap.h) filtered as pbrt-v4's MIPMap: point, bilinear, trilinear or EWA.
@@ -80,7 +81,8 @@ typedef struct TexLevel {
 typedef struct TexImage {
     int refs; /* textures holding it; freed by the last texture_free (scene build is single-threaded) */
     TexelFormat format;
-    int channels; /* 1 (grey: the value in all three channels of a lookup) or 3 */
+    int channels; /* 1 (grey: the value in all three channels of a lookup), 3 (RGB) or 4 (RGBA,
+                   * from an RGBA PNG whose alpha is not all 1; RGB lookups ignore alpha) */
     TexelEncoding encoding;
     float gamma;    /* TEXEL_GAMMA */
     float lut[256]; /* TEXEL_U8: the linear value of each code */
@@ -113,6 +115,8 @@ typedef struct TextureImage {
     TextureWrap wrap;
     TextureFilter filter;
     float max_aniso; /* EWA: the longest ellipse axis over the shortest (pbrt-v4's maxanisotropy) */
+    bool scalar;     /* pbrt-v4's float image texture: one value by its channel rule
+                      * (mipmap_filter_float), in all three channels */
 } TextureImage;
 
 /* A map applied to a texture's value after its lookup and filtering, in the order added
@@ -200,6 +204,10 @@ bool texture_add_op(Texture *t, TextureOpType type, Color a, Color b);
 /* Chooses an image texture's filter, building the MIP pyramid (shared by every texture of
  * the image) for the filters that need one. max_aniso <= 0 means pbrt-v4's 8. */
 CstStatus texture_set_filter(Texture *t, TextureFilter filter, float max_aniso, CstError *err);
+/* Makes an image texture a pbrt-v4 float texture (TextureImage.scalar) or an RGB one again,
+ * and recomputes its average and max; other types are left alone. Call before value maps
+ * are added, which apply after the lookup. */
+void texture_set_scalar(Texture *t, bool scalar);
 /* Bytes of texel storage of an image texture's pixels (all levels); 0 for other types. */
 size_t texture_image_bytes(const Texture *t);
 void texture_free(Texture *t);

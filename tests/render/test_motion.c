@@ -13,12 +13,14 @@
 #include <stdlib.h>
 #include <math.h>
 #include <string.h>
+#include <unistd.h>
 #include <cmocka.h>
 
 #include "accel/instances.h"
 #include "camera/camera.h"
 #include "caustic/caustic.h"
 #include "core/rng.h"
+#include "io/image_io.h"
 #include "math/motion.h"
 #include "render/regions.h"
 #include "scene/scene.h"
@@ -816,6 +818,102 @@ static void test_pbrt_active_transform(void **state)
     }
 }
 
+/* ------------------------------------------------------------------ pbrt: moving cut-outs */
+
+/* The sky's share of column px behind a square of half-width `half` whose centre moves from
+ * c0 to c0 + v over the shutter, seen through alpha a (a stochastic cut-out: the square
+ * stops a ray with probability a): 1 - a (coverage), coverage as in expected_sky_from. */
+static double expected_sky_cutout(int px, double c0, double v, double half, double a)
+{
+    const double lo_x = -4.0 + 8.0 * px / W, hi_x = -4.0 + 8.0 * (px + 1) / W;
+    double sum = 0.0;
+    const int n = 4000;
+    for (int i = 0; i < n; i++) {
+        double x = lo_x + (hi_x - lo_x) * (i + 0.5) / n;
+        double lo = (x - half - c0) / v, hi = (x + half - c0) / v;
+        lo = lo < 0.0 ? 0.0 : lo;
+        hi = hi > 1.0 ? 1.0 : hi;
+        sum += hi > lo ? hi - lo : 0.0;
+    }
+    return 1.0 - a * sum / n;
+}
+
+/* A pbrt triangle mesh with "alpha" under a moving CTM (ActiveTransform) becomes a moving
+ * instance carrying its cut-out (no "rendered static" warning): the black square of
+ * square_scene, from x = X0 to X1, with a constant alpha 0.5 (stochastic) and with a float
+ * image alpha, 0 on the square's left half and 1 on its right (point filter), which leaves
+ * a square of half-width HALF / 2 centred HALF / 2 right of the shape's centre. Each column
+ * of the path-traced image matches the time average within 4 standard errors; the sky is
+ * read from column 0, which nothing covers. */
+static void test_pbrt_moving_alpha(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/cst_motion_alpha.XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char png[300], name[300];
+    snprintf(png, sizeof png, "%s/half.png", dir);
+    snprintf(name, sizeof name, "%s/t.pbrt", dir);
+    CstError e;
+    const float px[6] = {0, 0, 0, 1, 1, 1}; /* left texel 0, right texel 1: any encoding */
+    ok(image_write(png, px, 2, 1, &e), &e);
+    const char *alphas[2] = {"\"float alpha\" 0.5",
+                             "\"texture alpha\" \"half\""};
+    for (int k = 0; k < 2; k++) {
+        char text[2048];
+        snprintf(text, sizeof text,
+                 "Scale -1 1 1\nLookAt 0 0 5  0 0 0  0 1 0\n"
+                 "Camera \"orthographic\" \"float screenwindow\" [-4 4 -0.5 0.5]\n"
+                 "WorldBegin\n"
+                 "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                 "Texture \"half\" \"float\" \"imagemap\" \"string filename\" \"half.png\" \"string filter\" \"point\"\n"
+                 "AttributeBegin\n"
+                 "  ActiveTransform StartTime\n  Translate %g 0 0\n"
+                 "  ActiveTransform EndTime\n  Translate %g 0 0\n  ActiveTransform All\n"
+                 "  Material \"diffuse\" \"rgb reflectance\" [0 0 0]\n"
+                 "  Shape \"trianglemesh\" \"point3 P\" [-%g -3 0  %g -3 0  %g 3 0  -%g 3 0]\n"
+                 "    \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1] %s\n"
+                 "AttributeEnd\n",
+                 (double)X0, (double)X1, (double)HALF, (double)HALF, (double)HALF, (double)HALF, alphas[k]);
+        CstScene *s = NULL;
+        int warnings = 0;
+        CstLoadOptions opt = {0};
+        opt.warning = count_warning;
+        opt.warning_user = &warnings;
+        ok(cst_scene_load_pbrt_string(text, strlen(text), name, &opt, &s, &e), &e);
+        assert_int_equal(warnings, 0);
+        assert_non_null(s->instances);
+        assert_int_equal(s->instances->num_motions, 1);
+        CstFilm *f = render(s, CST_INTEGRATOR_PATH, CST_OK, &e);
+        double sky[3], sky_var[3];
+        cst_film_pixel(f, 0, 0, sky);
+        cst_film_pixel_variance(f, 0, 0, sky_var);
+        assert_true(sky[0] > 0.0 && sky_var[0] == 0.0);
+        int blurred = 0;
+        for (int x = 0; x < W; x++) {
+            double mean = 0.0, var = 0.0;
+            for (int y = 0; y < H; y++) {
+                double m[3], v[3];
+                cst_film_pixel(f, x, y, m);
+                cst_film_pixel_variance(f, x, y, v);
+                mean += m[0] / (H * sky[0]);
+                var += v[0] / (H * H * sky[0] * sky[0]);
+            }
+            double want = k == 0 ? expected_sky_cutout(x, (double)X0, (double)(X1 - X0), (double)HALF, 0.5)
+                                 : expected_sky_cutout(x, (double)X0 + 0.5 * (double)HALF, (double)(X1 - X0),
+                                                       0.5 * (double)HALF, 1.0);
+            double se = sqrt(var > 0.0 ? var : 0.0) + 1e-9;
+            if (want > 0.05 && want < 0.95) blurred++;
+            if (fabs(mean - want) > 4.0 * se + 1e-6)
+                fail_msg("%s: column %d: sky %.5f, expected %.5f (4 sigma = %.5f)", alphas[k], x, mean, want, 4.0 * se);
+        }
+        assert_true(blurred >= 8);
+        cst_film_destroy(f);
+        cst_scene_destroy(s);
+    }
+    remove(png);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -831,6 +929,7 @@ int main(void)
         cmocka_unit_test(test_json_motion),
         cmocka_unit_test(test_json_camera_motion),
         cmocka_unit_test(test_pbrt_active_transform),
+        cmocka_unit_test(test_pbrt_moving_alpha),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

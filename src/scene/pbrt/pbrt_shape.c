@@ -768,22 +768,22 @@ static CstStatus curve_shape(Loader *ld, Params *ps, const char *d, Loc loc)
     return st;
 }
 
-static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, Loc loc, const char *d);
+static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, const CstAlpha *alpha, Loc loc, const char *d);
 
 /* A shape of the world (not in an object, not an interface): a moving instance when the CTM
- * moves and instances can hold it, else placed by the start CTM. */
+ * moves and instances can hold it (triangles, with their uvs and alpha: the prototype's
+ * per-triangle cut-out), else placed by the start CTM. */
 static CstStatus emit_world_shape(Loader *ld, const ShapeGeom *g, const CstAlpha *alpha, Loc loc, const char *d)
 {
-    if (pbrt_ctm_moving(ld) && !g->is_sphere && !ld->gs.area.active && !alpha->enabled && !pbrt_medium_transition(ld))
-        return emit_moving_shape(ld, g, loc, d);
     /* A constant alpha of 0 (sportscar's hidden area lights): no ray ever meets the shape
      * and it emits nowhere, so leaving it out renders exactly what pbrt-v4 does, without the
      * light sampler picking a light that gives nothing. */
     if (alpha->enabled && !alpha->texture && alpha->value == 0.0f) return CST_OK;
+    if (pbrt_ctm_moving(ld) && !g->is_sphere && !ld->gs.area.active && !pbrt_medium_transition(ld))
+        return emit_moving_shape(ld, g, alpha, loc, d);
     TRY(pbrt_medium_apply(ld, 0, loc, d));
     pbrt_warn_static(ld, loc, d, g->is_sphere ? "caustic's spheres do not move (only triangle shapes do)"
                                  : ld->gs.area.active ? "emitting shapes do not move in caustic (moving instances do not emit)"
-                                 : alpha->enabled ? "shapes with alpha do not move in caustic"
                                  : "shapes between two media do not move in caustic");
     return emit_shape(ld, g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, alpha, loc, d);
 }
@@ -1083,11 +1083,12 @@ static CstStatus add_moving_instance(Loader *ld, int proto, Loc loc, const char 
 /* A triangle shape under a moving CTM: its triangles in object space as an object of its
  * own (make_proto's orientation rule), placed by a moving instance (as the JSON loader's
  * moving meshes). pbrt-v4 makes the same: the shape in object space under an
- * AnimatedPrimitive. Instances carry no uvs: a texture on it reads uv (0, 0). */
-static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, Loc loc, const char *d)
+ * AnimatedPrimitive. The prototype keeps the shape's uvs and its alpha (constant or a
+ * texture) as every triangle's cut-out, tested at the ray's time like a static shape's. */
+static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, const CstAlpha *alpha, Loc loc, const char *d)
 {
     ObjShape os = {.g = *g, .xf = pbrt_xf_identity(), .reverse = ld->gs.reverse, .material = ld->gs.material,
-                   .loc = loc};
+                   .alpha = *alpha, .loc = loc};
     char name[] = "(a moving shape)";
     Object tmp = {.name = name, .shapes = &os, .n = 1, .cap = 1, .loc = loc, .proto = -1};
     TRY(make_proto(ld, &tmp, d));

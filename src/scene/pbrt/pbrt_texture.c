@@ -128,7 +128,6 @@ static Color texop_apply(TexOp op, Color a, Color b, Color v)
     case TEXOP_MIN1: return color_rgb(minf(v.c[0], 1.0f), minf(v.c[1], 1.0f), minf(v.c[2], 1.0f));
     case TEXOP_POW:
         return color_rgb(powf(maxf(v.c[0], 0.0f), a.c[0]), powf(maxf(v.c[1], 0.0f), a.c[0]), powf(maxf(v.c[2], 0.0f), a.c[0]));
-    case TEXOP_RED: return color_s(v.c[0]);
     }
     return v;
 }
@@ -140,7 +139,6 @@ static CstTextureOpType texop_type(TexOp op)
     case TEXOP_AFFINE: return CST_TEXTURE_OP_AFFINE;
     case TEXOP_MIN1: return CST_TEXTURE_OP_MIN1;
     case TEXOP_POW: return CST_TEXTURE_OP_POW;
-    case TEXOP_RED: return CST_TEXTURE_OP_RED;
     }
     return CST_TEXTURE_OP_AFFINE;
 }
@@ -402,8 +400,9 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     TRY(pbrt_check_file_access(ld, fl, d));
     char *path = pbrt_resolve_path(ld, file);
     if (!path) return pbrt_oom(ld);
-    /* The image in its file's storage; pbrt's order after the lookup and filtering: the
-     * first channel for a float texture, then scale, then invert (pbrt-v4 ImageTexture). */
+    /* The image in its file's storage; pbrt's order after the lookup and filtering: a float
+     * texture's value by pbrt-v4's channel rule (CstTextureDesc.pbrt_float: MIPMap::
+     * Filter<Float>), then scale, then invert (pbrt-v4 FloatImageTexture). */
     CstTextureDesc t = {0};
     t.type = CST_TEXTURE_IMAGE;
     t.path = path;
@@ -415,8 +414,8 @@ static CstStatus texture_imagemap(Loader *ld, Params *ps, const char *d, Loc loc
     t.max_anisotropy = aniso >= 1.0f && aniso <= 1e6f ? aniso : 8.0f;
     desc_uv(&t, &map);
     CstStatus st = CST_OK;
-    if (is_float) st = desc_append_op(ld, &t, TEXOP_RED, color_s(0.0f), color_s(0.0f), loc, d);
-    if (!st && (scale != 1.0f || invert))
+    t.pbrt_float = is_float;
+    if (scale != 1.0f || invert)
         st = desc_append_op(ld, &t, TEXOP_AFFINE, color_s(invert ? -scale : scale), color_s(invert ? 1.0f : 0.0f),
                             loc, d);
     if (!st) st = tex_add(ld, &t, fl, d, id);

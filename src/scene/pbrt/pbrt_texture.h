@@ -18,8 +18,7 @@ CstStatus pbrt_get_float_tex(Loader *ld, Params *ps, const char *d, const char *
 typedef enum TexOp {
     TEXOP_AFFINE, /* max(0, a v + b): pbrt's scale, invert and ScaleTexture */
     TEXOP_MIN1,   /* min(v, 1): the reflectance clamp of pbrt's materials */
-    TEXOP_POW,    /* max(v, 0)^a.r: gamma decoding, roughness to caustic's roughness */
-    TEXOP_RED     /* the first channel in all three: pbrt's float image textures */
+    TEXOP_POW     /* max(v, 0)^a.r: gamma decoding, roughness to caustic's roughness */
 } TexOp;
 
 /* A new scene texture: texture `id` with op applied to its values, or id itself when op
