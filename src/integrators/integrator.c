@@ -19,6 +19,7 @@
 
 #include "core/array.h"
 #include "core/error.h"
+#include "integrators/sss_walk.h"
 #include "math/motion.h"
 #include "materials/bsdf.h"
 
@@ -715,6 +716,24 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
+    /* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c); the
+     * light tracer, BDPT, VCM and MMLT random-walk the materials' media instead, in a view
+     * of the scene where they are medium interfaces (sss_walk.h), so that light and camera
+     * subpaths meet in the same media. The two differ by the BSSRDF's diffusion
+     * approximation. From here on `scene` is that view, media and all. */
+    if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
+                        "not rendered yet; expected one or the other");
+    const bool sss_walk = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
+                          st->integrator == CST_INTEGRATOR_MMLT;
+    if (scene->num_subsurface && it->kind != INTEGRATOR_PATH && !sss_walk)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
+                        "use path, path-nee, path-bsdf, light, bdpt, vcm or mmlt", cst_integrator_name(st->integrator));
+    if (scene->num_subsurface && sss_walk) {
+        CstStatus ss = sss_walk_view_create(scene, &it->sss_view, err);
+        if (ss != CST_OK) return ss;
+        it->scene = scene = it->sss_view;
+    }
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
      * Sampler); mmlt's is BDPT's strategies, media included (subpath_media.c's single
      * strategies). light, bdpt, vcm and mmlt walk homogeneous, grid and cloud media
@@ -736,12 +755,6 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                                 cst_integrator_name(st->integrator), i);
         }
     }
-    if (scene->num_subsurface && it->kind != INTEGRATOR_PATH)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
-                        "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));
-    if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
-                        "not rendered yet; expected one or the other");
     /* Motion blur: every path carries one time to all its rays (Ray.time). The path
      * tracers (volpath and path_sss too), Whitted and pssmlt take the camera sample's; the
      * light tracer each light path's own; BDPT and VCM share one between the subpaths they
@@ -867,6 +880,8 @@ void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfini
 
 void integrator_destroy(Integrator *it)
 {
+    sss_walk_view_destroy(it->sss_view);
+    it->sss_view = NULL;
     switch (it->kind) {
     case INTEGRATOR_PHOTON:
         if (!it->photon_borrowed) photon_maps_free(&it->photon);
