@@ -22,7 +22,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT,
     ARGS_OPT_DISPLAY,
     ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK, ARGS_OPT_PIXEL, ARGS_OPT_SAMPLE, ARGS_OPT_NOISE,
-    ARGS_OPT_WHY_DARK, ARGS_OPT_WHY_BRIGHT
+    ARGS_OPT_WHY_DARK, ARGS_OPT_WHY_BRIGHT, ARGS_OPT_SUBSURFACE
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -62,6 +62,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"aov",        0,   ARGS_VALUE,  ARGS_OPT_AOV},
     {"crop",       0,   ARGS_VALUE,  ARGS_OPT_CROP},
     {"max-depth",  0,   ARGS_VALUE,  ARGS_OPT_MAX_DEPTH},
+    {"subsurface", 0,   ARGS_VALUE,  ARGS_OPT_SUBSURFACE},
     {"json",       0,   ARGS_OPTIONAL_VALUE, ARGS_OPT_JSON},  /* --json or --json=FILE */
     {"force",      0,   ARGS_FLAG,  ARGS_OPT_FORCE},
     {"checkpoint", 0,   ARGS_VALUE, ARGS_OPT_CHECKPOINT},
@@ -589,6 +590,13 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
         }
         s->max_depth = (int)v; /* 0 is a value: unbounded, even over the scene's limit */
         return true;
+    case ARGS_OPT_SUBSURFACE:
+        if (strcmp(value, "walk") != 0 && strcmp(value, "bssrdf") != 0) {
+            args_fail(err, false, "--subsurface: expected walk or bssrdf, got '%s'", value);
+            return false;
+        }
+        s->subsurface_walk = strcmp(value, "walk") == 0;
+        return true;
     case ARGS_OPT_QUIET:
         out->quiet = true;
         return true;
@@ -771,6 +779,7 @@ static const ArgsOptSpec ARGS_VERIFY_OPTS[] = {
     {"block", 0, ARGS_VALUE, 0},       {"map", 0, ARGS_VALUE, 0},    {"json", 0, ARGS_FLAG, 0},
     {"width", 0, ARGS_VALUE, 0},       {"height", 0, ARGS_VALUE, 0}, {"quiet", 'q', ARGS_FLAG, 0},
     {"help", 'h', ARGS_FLAG, 0},       {"convergence", 0, ARGS_VALUE, 0},
+    {"subsurface", 0, ARGS_VALUE, 0},
 };
 #define ARGS_NUM_VERIFY_OPTS (sizeof ARGS_VERIFY_OPTS / sizeof ARGS_VERIFY_OPTS[0])
 

@@ -716,16 +716,18 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
-    /* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c); the
-     * light tracer, BDPT, VCM and MMLT random-walk the materials' media instead, in a view
-     * of the scene where they are medium interfaces (sss_walk.h), so that light and camera
-     * subpaths meet in the same media. The two differ by the BSSRDF's diffusion
-     * approximation. From here on `scene` is that view, media and all. */
+    /* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c) unless
+     * subsurface_walk; the light tracer, BDPT, VCM and MMLT (and then the path tracers,
+     * through volpath.c) random-walk the materials' media instead, in a view of the scene
+     * where they are medium interfaces (sss_walk.h), so that light and camera subpaths meet
+     * in the same media. The two differ by the BSSRDF's diffusion approximation. From here
+     * on `scene` is that view, media and all. */
     if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
         return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
                         "not rendered yet; expected one or the other");
     const bool sss_walk = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
-                          st->integrator == CST_INTEGRATOR_MMLT;
+                          st->integrator == CST_INTEGRATOR_MMLT ||
+                          (it->kind == INTEGRATOR_PATH && st->subsurface_walk == 1);
     if (scene->num_subsurface && it->kind != INTEGRATOR_PATH && !sss_walk)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
                         "use path, path-nee, path-bsdf, light, bdpt, vcm or mmlt", cst_integrator_name(st->integrator));

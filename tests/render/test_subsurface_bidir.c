@@ -86,7 +86,8 @@ static Scene *sss_box(bool explicit_medium)
 
 /* path on the explicit-medium box (the reference: independent pixels), light, bdpt and
  * vcm on the subsurface box: the whole image and its four 16 x 16 blocks within 4
- * standard errors. The light tracer and BDPT from 96 renders: in spectral mode their
+ * standard errors. (path with subsurface_walk on the subsurface box is the reference
+ * itself, pixel for pixel: test_sss_view_exact.) The light tracer and BDPT from 96 renders: in spectral mode their
  * medium walks' noise is heavy-tailed enough that 24 renders misjudged a block's standard
  * error (light vs bdpt z = -4.3 at 24 renders, 2.8 at 96 with the same first seeds: noise,
  * a bias would have doubled). */
@@ -110,6 +111,39 @@ static void test_sss_agreement(void **state)
     compare(&path, &vcm, "path (explicit medium)", "vcm (subsurface)");
     compare(&light, &bdpt, "light (subsurface)", "bdpt (subsurface)");
     compare(&bdpt, &vcm, "bdpt (subsurface)", "vcm (subsurface)");
+    scene_destroy(ref);
+    scene_destroy(s);
+}
+
+/* The view is the explicit medium: path (with subsurface_walk), light, bdpt and vcm
+ * render the subsurface box pixel for pixel as they render the explicit-medium box (the
+ * same random numbers meet the same media); path without subsurface_walk does not (the
+ * BSSRDF). 16 x 16, 2 samples. */
+static void test_sss_view_exact(void **state)
+{
+    (void)state;
+    Scene *ref = sss_box(true), *s = sss_box(false);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = st.height = 16;
+    st.color_mode = g_color_mode;
+    st.max_depth = 8;
+    st.subsurface_walk = 1;
+    const CstIntegrator integ[5] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_BDPT,
+                                    CST_INTEGRATOR_VCM, CST_INTEGRATOR_PATH};
+    float a[16 * 16 * 3], b[16 * 16 * 3];
+    for (int k = 0; k < 5; k++) {
+        if (k == 4) st.subsurface_walk = 0;
+        CstFilm *fa = render_film(s, &st, integ[k], 2, 900), *fb = render_film(ref, &st, integ[k], 2, 900);
+        cst_film_pixels(fa, a);
+        cst_film_pixels(fb, b);
+        const bool same = memcmp(a, b, sizeof a) == 0;
+        print_message("%s%s: subsurface box %s the explicit-medium box\n", cst_integrator_name(integ[k]),
+                      k == 4 ? " (bssrdf)" : "", same ? "renders as" : "differs from");
+        assert_true(same == (k < 4));
+        cst_film_destroy(fa);
+        cst_film_destroy(fb);
+    }
     scene_destroy(ref);
     scene_destroy(s);
 }
@@ -233,6 +267,7 @@ int main(int argc, char **argv)
         if (strcmp(argv[i], "--only") == 0) cmocka_set_test_filter(argv[i + 1]);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sss_agreement),
+        cmocka_unit_test(test_sss_view_exact),
         cmocka_unit_test(test_sss_mmlt),
         cmocka_unit_test(test_sss_furnace),
         cmocka_unit_test(test_sss_refusals),
