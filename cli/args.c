@@ -465,6 +465,28 @@ static bool args_apply_noise(const char *value, CstRenderSettings *s, ArgsError 
     return false;
 }
 
+static bool args_apply_max_depth(const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    long v;
+    if (!args_parse_long(value, 0, INT_MAX, &v)) {
+        args_fail(err, false, "--max-depth: expected an integer from 0 (unbounded) to %d, got '%s'", INT_MAX, value);
+        return false;
+    }
+    s->max_depth = (int)v; /* 0 is a value: unbounded, even over the scene's limit */
+    return true;
+}
+
+/* --subsurface walk|bssrdf: CstRenderSettings.subsurface_walk. */
+static bool args_apply_subsurface(const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    if (strcmp(value, "walk") != 0 && strcmp(value, "bssrdf") != 0) {
+        args_fail(err, false, "--subsurface: expected walk or bssrdf, got '%s'", value);
+        return false;
+    }
+    s->subsurface_walk = strcmp(value, "walk") == 0;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -582,21 +604,8 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     }
     case ARGS_OPT_CROP:
         return args_parse_crop(value, s, err);
-    case ARGS_OPT_MAX_DEPTH:
-        if (!args_parse_long(value, 0, INT_MAX, &v)) {
-            args_fail(err, false, "--max-depth: expected an integer from 0 (unbounded) to %d, got '%s'",
-                      INT_MAX, value);
-            return false;
-        }
-        s->max_depth = (int)v; /* 0 is a value: unbounded, even over the scene's limit */
-        return true;
-    case ARGS_OPT_SUBSURFACE:
-        if (strcmp(value, "walk") != 0 && strcmp(value, "bssrdf") != 0) {
-            args_fail(err, false, "--subsurface: expected walk or bssrdf, got '%s'", value);
-            return false;
-        }
-        s->subsurface_walk = strcmp(value, "walk") == 0;
-        return true;
+    case ARGS_OPT_MAX_DEPTH: return args_apply_max_depth(value, s, err);
+    case ARGS_OPT_SUBSURFACE: return args_apply_subsurface(value, s, err);
     case ARGS_OPT_QUIET:
         out->quiet = true;
         return true;

@@ -677,6 +677,31 @@ CstStatus integrator_next_step(Integrator *it, IntegratorStep *step, CstError *e
 
 /* ---------------------------------------------------------------------- lifetime */
 
+/* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c) unless
+ * subsurface_walk; the light tracer, BDPT, VCM and MMLT (and then the path tracers,
+ * through volpath.c) random-walk the materials' media instead, in a view of the scene
+ * where they are medium interfaces (sss_walk.h), so that light and camera subpaths meet in
+ * the same media. The two differ by the BSSRDF's diffusion approximation. On return
+ * *scene (and it->scene) is that view, media and all, when one is made. */
+static CstStatus prepare_subsurface(Integrator *it, const Scene **scene, const CstRenderSettings *st, CstError *err)
+{
+    const Scene *s = *scene;
+    if (!s->num_subsurface) return CST_OK;
+    if (s->num_media | s->num_medium_ifaces)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
+                        "not rendered yet; expected one or the other");
+    const bool walk = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
+                      st->integrator == CST_INTEGRATOR_MMLT || (it->kind == INTEGRATOR_PATH && st->subsurface_walk == 1);
+    if (it->kind != INTEGRATOR_PATH && !walk)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
+                        "use path, path-nee, path-bsdf, light, bdpt, vcm or mmlt", cst_integrator_name(st->integrator));
+    if (!walk) return CST_OK;
+    CstStatus ss = sss_walk_view_create(s, &it->sss_view, err);
+    if (ss != CST_OK) return ss;
+    it->scene = *scene = it->sss_view;
+    return CST_OK;
+}
+
 CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRenderSettings *st, Film *film,
                              IntegratorWorker *workers, uint64_t *rays, int (*progress)(void *, double),
                              void *progress_user, CstError *err)
@@ -716,26 +741,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
-    /* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c) unless
-     * subsurface_walk; the light tracer, BDPT, VCM and MMLT (and then the path tracers,
-     * through volpath.c) random-walk the materials' media instead, in a view of the scene
-     * where they are medium interfaces (sss_walk.h), so that light and camera subpaths meet
-     * in the same media. The two differ by the BSSRDF's diffusion approximation. From here
-     * on `scene` is that view, media and all. */
-    if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
-                        "not rendered yet; expected one or the other");
-    const bool sss_walk = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
-                          st->integrator == CST_INTEGRATOR_MMLT ||
-                          (it->kind == INTEGRATOR_PATH && st->subsurface_walk == 1);
-    if (scene->num_subsurface && it->kind != INTEGRATOR_PATH && !sss_walk)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
-                        "use path, path-nee, path-bsdf, light, bdpt, vcm or mmlt", cst_integrator_name(st->integrator));
-    if (scene->num_subsurface && sss_walk) {
-        CstStatus ss = sss_walk_view_create(scene, &it->sss_view, err);
-        if (ss != CST_OK) return ss;
-        it->scene = scene = it->sss_view;
-    }
+    CstStatus ss = prepare_subsurface(it, &scene, st, err);
+    if (ss != CST_OK) return ss;
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
      * Sampler); mmlt's is BDPT's strategies, media included (subpath_media.c's single
      * strategies). light, bdpt, vcm and mmlt walk homogeneous, grid and cloud media

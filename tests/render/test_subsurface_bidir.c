@@ -86,11 +86,11 @@ static Scene *sss_box(bool explicit_medium)
 
 /* path on the explicit-medium box (the reference: independent pixels), light, bdpt and
  * vcm on the subsurface box: the whole image and its four 16 x 16 blocks within 4
- * standard errors. (path with subsurface_walk on the subsurface box is the reference
- * itself, pixel for pixel: test_sss_view_exact.) The light tracer and BDPT from 96 renders: in spectral mode their
- * medium walks' noise is heavy-tailed enough that 24 renders misjudged a block's standard
- * error (light vs bdpt z = -4.3 at 24 renders, 2.8 at 96 with the same first seeds: noise,
- * a bias would have doubled). */
+ * standard errors (path with subsurface_walk on the subsurface box is this reference
+ * pixel for pixel: test_sss_view_exact). The light tracer and BDPT from 96 renders: in
+ * spectral mode their medium walks' noise is heavy-tailed enough that 24 renders misjudged
+ * a block's standard error (light vs bdpt z = -4.3 at 24 renders, 2.8 at 96 with the same
+ * first seeds: noise, a bias would have doubled). */
 static void test_sss_agreement(void **state)
 {
     (void)state;
