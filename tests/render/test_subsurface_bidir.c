@@ -51,9 +51,9 @@ static int add_sss(Scene *s, float roughness, Color sigma_a, Color sigma_s, bool
     return id;
 }
 
-/* An open box of diffuse walls lit by a small quad light, a subsurface sphere on a
- * diffuse floor (its surface rough, so that the light tracer's connections see it) and a
- * diffuse sphere beside it. */
+/* An open box of diffuse walls lit by a small quad light, a subsurface sphere and a
+ * subsurface cube (triangles) on a diffuse floor (their surface rough, so that the light
+ * tracer's connections see inside) and a diffuse sphere beside them. */
 static Scene *sss_box(bool explicit_medium)
 {
     CstError err;
@@ -76,6 +76,18 @@ static Scene *sss_box(bool explicit_medium)
     assert_int_equal(scene_add_quad(s, light, lightm, &em, &err), CST_OK);
     const int sss = add_sss(s, 0.3f, sss_sigma_a(), sss_sigma_s(), explicit_medium);
     assert_int_equal(scene_add_sphere(s, v3(-0.25f, -0.45f, 0.0f), 0.55f, sss, NULL, &err), CST_OK);
+    /* A subsurface cube of triangles too (faces wound so that ng points out: the medium
+     * lies behind ng), [0.4, 0.8] x [-0.99, -0.6] x [-0.6, -0.25]. */
+    const float x0 = 0.4f, x1 = 0.8f, y0 = -0.99f, y1 = -0.6f, z0 = -0.6f, z1 = -0.25f;
+    const Vec3 cube[6][4] = {
+        {{x0, y0, z0}, {x1, y0, z0}, {x1, y0, z1}, {x0, y0, z1}}, /* -y */
+        {{x0, y1, z0}, {x0, y1, z1}, {x1, y1, z1}, {x1, y1, z0}}, /* +y */
+        {{x0, y0, z0}, {x0, y1, z0}, {x1, y1, z0}, {x1, y0, z0}}, /* -z */
+        {{x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}}, /* +z */
+        {{x0, y0, z0}, {x0, y0, z1}, {x0, y1, z1}, {x0, y1, z0}}, /* -x */
+        {{x1, y0, z0}, {x1, y1, z0}, {x1, y1, z1}, {x1, y0, z1}}, /* +x */
+    };
+    for (int i = 0; i < 6; i++) assert_int_equal(scene_add_quad(s, cube[i], sss, NULL, &err), CST_OK);
     assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(0.55f, -0.7f, 0.3f), 0.3f, wall, NULL, &err), CST_OK);
     CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
