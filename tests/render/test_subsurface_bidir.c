@@ -227,7 +227,8 @@ static void test_sss_furnace(void **state)
 }
 
 /* Whitted, photon, sppm and pssmlt still refuse subsurface materials; light, bdpt, vcm
- * and mmlt refuse one whose reflectance is a texture (not a homogeneous medium). */
+ * and mmlt refuse one whose reflectance is a texture (not a homogeneous medium) or an
+ * instanced one. */
 static void test_sss_refusals(void **state)
 {
     (void)state;
@@ -269,6 +270,27 @@ static void test_sss_refusals(void **state)
     assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
     assert_non_null(strstr(err.msg, "texture"));
     cst_film_destroy(f);
+    scene_destroy(s);
+    /* An instanced triangle of a subsurface material: refused by the walk (instances carry
+     * no medium interface), rendered by path's BSSRDF. */
+    s = scene_create();
+    const int sss = add_sss(s, 0.3f, sss_sigma_a(), sss_sigma_s(), false);
+    const Vec3 tri[3] = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
+    const int idx[3] = {0, 1, 2}, mat[1] = {sss};
+    int proto;
+    assert_int_equal(scene_add_instance_proto(s, tri, NULL, 3, idx, mat, 1, &proto, &err), CST_OK);
+    const Transform ident = transform_identity();
+    assert_int_equal(scene_add_instance(s, proto, &ident, &err), CST_OK);
+    Emission em1 = {color_s(1.0f), 1, 0};
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, sss, &em1, &err), CST_OK);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    for (int k = 0; k < 2; k++) {
+        st.integrator = k ? CST_INTEGRATOR_PATH : CST_INTEGRATOR_VCM;
+        f = NULL;
+        assert_int_equal(cst_render(s, &st, &f, NULL, &err), k ? CST_OK : CST_ERR_UNSUPPORTED);
+        if (!k) assert_non_null(strstr(err.msg, "instance"));
+        cst_film_destroy(f);
+    }
     scene_destroy(s);
 }
 
