@@ -22,7 +22,7 @@ typedef enum ArgsOpt {
     ARGS_OPT_CHECKPOINT, ARGS_OPT_CHECKPOINT_EVERY, ARGS_OPT_RESUME, ARGS_OPT_SCRIPT,
     ARGS_OPT_DISPLAY,
     ARGS_OPT_FIRST_SAMPLE, ARGS_OPT_SAMPLE_BLOCK, ARGS_OPT_PIXEL, ARGS_OPT_SAMPLE, ARGS_OPT_NOISE,
-    ARGS_OPT_WHY_DARK, ARGS_OPT_WHY_BRIGHT
+    ARGS_OPT_WHY_DARK, ARGS_OPT_WHY_BRIGHT, ARGS_OPT_SUBSURFACE
 } ArgsOpt;
 
 /* How an option takes its value. */
@@ -62,6 +62,7 @@ static const ArgsOptSpec ARGS_OPTS[] = {
     {"aov",        0,   ARGS_VALUE,  ARGS_OPT_AOV},
     {"crop",       0,   ARGS_VALUE,  ARGS_OPT_CROP},
     {"max-depth",  0,   ARGS_VALUE,  ARGS_OPT_MAX_DEPTH},
+    {"subsurface", 0,   ARGS_VALUE,  ARGS_OPT_SUBSURFACE},
     {"json",       0,   ARGS_OPTIONAL_VALUE, ARGS_OPT_JSON},  /* --json or --json=FILE */
     {"force",      0,   ARGS_FLAG,  ARGS_OPT_FORCE},
     {"checkpoint", 0,   ARGS_VALUE, ARGS_OPT_CHECKPOINT},
@@ -464,6 +465,28 @@ static bool args_apply_noise(const char *value, CstRenderSettings *s, ArgsError 
     return false;
 }
 
+static bool args_apply_max_depth(const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    long v;
+    if (!args_parse_long(value, 0, INT_MAX, &v)) {
+        args_fail(err, false, "--max-depth: expected an integer from 0 (unbounded) to %d, got '%s'", INT_MAX, value);
+        return false;
+    }
+    s->max_depth = (int)v; /* 0 is a value: unbounded, even over the scene's limit */
+    return true;
+}
+
+/* --subsurface walk|bssrdf: CstRenderSettings.subsurface_walk. */
+static bool args_apply_subsurface(const char *value, CstRenderSettings *s, ArgsError *err)
+{
+    if (strcmp(value, "walk") != 0 && strcmp(value, "bssrdf") != 0) {
+        args_fail(err, false, "--subsurface: expected walk or bssrdf, got '%s'", value);
+        return false;
+    }
+    s->subsurface_walk = strcmp(value, "walk") == 0;
+    return true;
+}
+
 static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, ArgsError *err)
 {
     CstRenderSettings *s = &out->settings;
@@ -581,14 +604,8 @@ static bool args_apply(const ArgsOptSpec *o, const char *value, CliArgs *out, Ar
     }
     case ARGS_OPT_CROP:
         return args_parse_crop(value, s, err);
-    case ARGS_OPT_MAX_DEPTH:
-        if (!args_parse_long(value, 0, INT_MAX, &v)) {
-            args_fail(err, false, "--max-depth: expected an integer from 0 (unbounded) to %d, got '%s'",
-                      INT_MAX, value);
-            return false;
-        }
-        s->max_depth = (int)v; /* 0 is a value: unbounded, even over the scene's limit */
-        return true;
+    case ARGS_OPT_MAX_DEPTH: return args_apply_max_depth(value, s, err);
+    case ARGS_OPT_SUBSURFACE: return args_apply_subsurface(value, s, err);
     case ARGS_OPT_QUIET:
         out->quiet = true;
         return true;
@@ -771,6 +788,7 @@ static const ArgsOptSpec ARGS_VERIFY_OPTS[] = {
     {"block", 0, ARGS_VALUE, 0},       {"map", 0, ARGS_VALUE, 0},    {"json", 0, ARGS_FLAG, 0},
     {"width", 0, ARGS_VALUE, 0},       {"height", 0, ARGS_VALUE, 0}, {"quiet", 'q', ARGS_FLAG, 0},
     {"help", 'h', ARGS_FLAG, 0},       {"convergence", 0, ARGS_VALUE, 0},
+    {"subsurface", 0, ARGS_VALUE, 0},
 };
 #define ARGS_NUM_VERIFY_OPTS (sizeof ARGS_VERIFY_OPTS / sizeof ARGS_VERIFY_OPTS[0])
 

@@ -14,6 +14,7 @@ static const char HELP_USAGE_ALL[] =
 "  caustic verify [SCENE] --integrators NAME,NAME[,...] [--spp N | --time S]\n"
 "                 [--threads N] [--seed S] [--alpha A] [--block N] [--map OUT.png]\n"
 "                 [--convergence K] [--json] [--width W] [--height H] [--quiet]\n"
+"                 [--subsurface walk|bssrdf]\n"
 "  caustic list [KIND]\n"
 "  caustic view [SCENE] [render options] [--script FILE]\n"
 "  caustic compare A B [--map OUT.png] [--json] [--variance-a VA] [--variance-b VB]\n"
@@ -99,6 +100,9 @@ static const char HELP_RENDER[] =
 "                       and the built-in one); the last of --spectral/--rgb wins\n"
 "      --max-depth N    maximum bounces of a path, 0..2147483647; 0 = unbounded, also\n"
 "                       over a scene's own limit (default: the scene's, else unbounded)\n"
+"      --subsurface M   how path, path-nee and path-bsdf render subsurface materials:\n"
+"                       bssrdf (default; pbrt-v4's diffusion BSSRDF) or walk (a random\n"
+"                       walk of the medium, as light, bdpt, vcm and mmlt always do)\n"
 "      --exposure EV    scale the written image by 2^EV, -64..64 (default: the scene's,\n"
 "                       else 0); the film's stored means are not changed\n"
 "      --png-linear     write PNG values linearly (no sRGB curve; tagged gAMA 1.0)\n"
@@ -269,7 +273,9 @@ static const char HELP_VERIFY[] =
 "      --convergence K  levels of the convergence check, 2..6 (default: 3)\n"
 "      --json           one JSON object per pair (then per convergence check) on stdout\n"
 "                       instead of the report\n"
-"      --width W, --height H, --threads N, -q/--quiet: as for render\n"
+"      --width W, --height H, --threads N, --subsurface M, -q/--quiet: as for render\n"
+"                       (--subsurface walk: path, path-nee and path-bsdf render what light,\n"
+"                       bdpt, vcm and mmlt render of subsurface materials, so they compare)\n"
 "  -h, --help           show this help and exit\n"
 "\n";
 

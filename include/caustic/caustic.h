@@ -783,6 +783,11 @@ typedef struct CstRenderSettings {
      * becomes 2 alpha clamped to [0.1, 0.3], smooth conductors and dielectrics included.
      * Biased (caustics through glass and mirrors blur), fewer fireflies. 0 = off (the default) */
     int regularize;
+    /* 1: the path tracers (path, path-nee, path-bsdf) render subsurface materials by a
+     * random walk of each material's homogeneous medium under its dielectric surface, the
+     * estimand light, bdpt, vcm and mmlt always render (so that all agree); 0 (the default):
+     * by pbrt-v4's tabulated BSSRDF, a diffusion approximation. Others ignore it. */
+    int subsurface_walk;
     /* Checkpoint and resume (docs/state-format.md). resume: NULL, or a film read by
      * cst_film_state_read for this scene and these settings: the render continues with
      * sample cst_film_spp(resume) of every pixel (iteration, for light, bdpt and vcm), and

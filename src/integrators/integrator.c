@@ -19,6 +19,7 @@
 
 #include "core/array.h"
 #include "core/error.h"
+#include "integrators/sss_walk.h"
 #include "math/motion.h"
 #include "materials/bsdf.h"
 
@@ -676,6 +677,31 @@ CstStatus integrator_next_step(Integrator *it, IntegratorStep *step, CstError *e
 
 /* ---------------------------------------------------------------------- lifetime */
 
+/* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c) unless
+ * subsurface_walk; the light tracer, BDPT, VCM and MMLT (and then the path tracers,
+ * through volpath.c) random-walk the materials' media instead, in a view of the scene
+ * where they are medium interfaces (sss_walk.h), so that light and camera subpaths meet in
+ * the same media. The two differ by the BSSRDF's diffusion approximation. On return
+ * *scene (and it->scene) is that view, media and all, when one is made. */
+static CstStatus prepare_subsurface(Integrator *it, const Scene **scene, const CstRenderSettings *st, CstError *err)
+{
+    const Scene *s = *scene;
+    if (!s->num_subsurface) return CST_OK;
+    if (s->num_media | s->num_medium_ifaces)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
+                        "not rendered yet; expected one or the other");
+    const bool walk = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
+                      st->integrator == CST_INTEGRATOR_MMLT || (it->kind == INTEGRATOR_PATH && st->subsurface_walk == 1);
+    if (it->kind != INTEGRATOR_PATH && !walk)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
+                        "use path, path-nee, path-bsdf, light, bdpt, vcm or mmlt", cst_integrator_name(st->integrator));
+    if (!walk) return CST_OK;
+    CstStatus ss = sss_walk_view_create(s, &it->sss_view, err);
+    if (ss != CST_OK) return ss;
+    it->scene = *scene = it->sss_view;
+    return CST_OK;
+}
+
 CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRenderSettings *st, Film *film,
                              IntegratorWorker *workers, uint64_t *rays, int (*progress)(void *, double),
                              void *progress_user, CstError *err)
@@ -715,6 +741,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     if (it->spectral && it->kind == INTEGRATOR_PHOTON)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
                         "use --rgb or another integrator", cst_integrator_name(st->integrator));
+    CstStatus ss = prepare_subsurface(it, &scene, st, err);
+    if (ss != CST_OK) return ss;
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
      * Sampler); mmlt's is BDPT's strategies, media included (subpath_media.c's single
      * strategies). light, bdpt, vcm, mmlt and sppm walk homogeneous, grid and cloud media
@@ -737,12 +765,6 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                                 cst_integrator_name(st->integrator), i);
         }
     }
-    if (scene->num_subsurface && it->kind != INTEGRATOR_PATH)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
-                        "use path, path-nee or path-bsdf", cst_integrator_name(st->integrator));
-    if (scene->num_subsurface && (scene->num_media | scene->num_medium_ifaces))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
-                        "not rendered yet; expected one or the other");
     /* Motion blur: every path carries one time to all its rays (Ray.time). The path
      * tracers (volpath and path_sss too), Whitted and pssmlt take the camera sample's; the
      * light tracer each light path's own; BDPT and VCM share one between the subpaths they
@@ -868,6 +890,8 @@ void integrator_counters(const Integrator *it, uint64_t *rays, uint64_t *nonfini
 
 void integrator_destroy(Integrator *it)
 {
+    sss_walk_view_destroy(it->sss_view);
+    it->sss_view = NULL;
     switch (it->kind) {
     case INTEGRATOR_PHOTON:
         if (!it->photon_borrowed) photon_maps_free(&it->photon);

@@ -106,7 +106,10 @@ typedef struct LightIterations {
 
 typedef struct Integrator {
     IntegratorKind kind;
-    const Scene *scene;
+    const Scene *scene;          /* the render's scene, or sss_view */
+    const Scene *sss_view;       /* light, bdpt, vcm, mmlt (path with subsurface_walk): the
+                                  * scene's subsurface materials as media (sss_walk.h), owned;
+                                  * NULL without them */
     Film *film;
     Camera camera;
     uint64_t seed;

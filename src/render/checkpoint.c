@@ -80,6 +80,7 @@ static int state_key(const CstScene *scene, const CstRenderSettings *st, const c
     /* Written only when not the default, so that states of plain renders keep their key. */
     if (st->first_sample > 0) key_int(&b, "first_sample", st->first_sample);
     if (st->sample_block > 1) key_int(&b, "sample_block", st->sample_block);
+    if (st->subsurface_walk == 1) key_int(&b, "subsurface_walk", 1);
     /* Adaptive rounds are planned from the target (render/adaptive.h). */
     if (st->noise_target > 0.0) key_real(&b, "noise", st->noise_target);
     /* MLT's parameters shape its chains (integrators/mlt.c); other states keep their key. */

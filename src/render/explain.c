@@ -51,9 +51,9 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
             return cst_fail(err, CST_ERR_UNSUPPORTED, "explain follows %s in RGB mode only; expected --rgb",
                             cst_integrator_name(st->integrator));
         /* subpath_media.c's walks and connections carry no recorder hooks (yet). */
-        if (scene->num_media | scene->num_medium_ifaces)
+        if (scene->num_media | scene->num_medium_ifaces | scene->num_subsurface)
             return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow bdpt's paths through participating "
-                            "media yet; expected a scene without them");
+                            "media (or subsurface materials) yet; expected a scene without them");
         return CST_OK;
     default: break;
     }

@@ -11,7 +11,7 @@ void cst_render_settings_init(CstRenderSettings *s)
     s->width = s->height = s->spp = s->threads = CST_UNSET;
     s->max_depth = s->rr_depth = s->photons = CST_UNSET;
     s->time_limit = s->photon_radius = s->exposure = s->max_component = CST_UNSET;
-    s->png_linear = s->aovs = s->regularize = CST_UNSET;
+    s->png_linear = s->aovs = s->regularize = s->subsurface_walk = CST_UNSET;
     s->white_balance = CST_UNSET;
     for (int k = 0; k < 4; k++) s->crop[k] = CST_UNSET;
     s->first_sample = CST_UNSET;
@@ -53,6 +53,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(color_mode, 1, CST_COLOR_RGB);
     PICK_DBL(max_component, 1, 0.0);          /* 0 = no clamp */
     PICK_INT(regularize, 0, 0);
+    PICK_INT(subsurface_walk, 0, 0);
     PICK_DBL(mlt_large_step, 0, 0.3);         /* pbrt-v4's MLT defaults */
     PICK_DBL(mlt_sigma, 1, 0.01);
     PICK_INT(mlt_bootstrap, 1, 100000);

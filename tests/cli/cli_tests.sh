@@ -28,7 +28,7 @@ expect "--help exits 0" 0
 if [ -s "$ERR" ]; then fail "--help writes nothing to stderr"; else pass "--help writes nothing to stderr"; fi
 missing=""
 for opt in render SCENE -o --output --spp --time --threads --seed --integrator --filter \
-           --sampler --max-depth --exposure --png-linear --aov --crop --width --height --quiet --help --version \
+           --sampler --max-depth --subsurface --exposure --png-linear --aov --crop --width --height --quiet --help --version \
            path path-nee path-bsdf box tent .png .exr .pfm cornell-box.png "Exit status"; do
     grep -qF -- "$opt" "$OUT" || missing="$missing $opt"
 done
@@ -260,6 +260,14 @@ if cmp -s "$dir/d-scene.pfm" "$dir/d2.pfm" && ! cmp -s "$dir/d2.pfm" "$dir/d0.pf
 else fail "--max-depth 2 = the scene's limit; --max-depth 0 overrides it (unbounded)"; fi
 run "$dir" render --max-depth -1 -o x.png
 expect "--max-depth -1 is rejected" 2 "--max-depth: expected an integer from 0"
+# --subsurface walk|bssrdf (render and verify); a scene without subsurface renders the same.
+run "$dir" render --subsurface diffusion -o x.png
+expect "--subsurface diffusion is rejected" 2 "--subsurface: expected walk or bssrdf, got 'diffusion'"
+run "$dir" render --spp 1 --width 32 --height 32 -q --max-depth 2 --subsurface walk -o d2w.pfm depth2.json
+if cmp -s "$dir/d2.pfm" "$dir/d2w.pfm"; then pass "--subsurface walk: a scene without subsurface renders the same"
+else fail "--subsurface walk: a scene without subsurface renders the same"; fi
+run "$dir" verify --subsurface maybe --integrators path,bdpt
+expect "verify --subsurface maybe is rejected" 2 "--subsurface: expected walk or bssrdf"
 sed 's/"float fov" 40/"integer fov" 40/' "$dir/tiny.pbrt" >"$dir/badtype.pbrt"
 run "$dir" render --spp 1 badtype.pbrt
 expect "pbrt wrong parameter type: exit 2, file:line:col" 2 \

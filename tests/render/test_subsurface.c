@@ -156,7 +156,8 @@ static void test_subsurface_furnace_albedo1(void **state)
     run(&m, color_s(1.0f), 200, "slab of albedo 1");
 }
 
-/* Integrators other than path refuse subsurface materials (CST_ERR_UNSUPPORTED). */
+/* Whitted refuses subsurface materials (CST_ERR_UNSUPPORTED); light, bdpt, vcm and mmlt
+ * walk their media (test_subsurface_bidir.c). */
 static void test_subsurface_refused(void **state)
 {
     (void)state;
@@ -170,11 +171,11 @@ static void test_subsurface_refused(void **state)
     cst_render_settings_init(&st);
     st.width = st.height = 8;
     st.spp = 1;
-    st.integrator = CST_INTEGRATOR_BDPT;
+    st.integrator = CST_INTEGRATOR_WHITTED;
     CstFilm *f = NULL;
     CstError err;
     assert_int_equal(cst_render((const CstScene *)s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
-    print_message("bdpt: %s\n", err.msg);
+    print_message("whitted: %s\n", err.msg);
     cst_film_destroy(f);
     scene_destroy(s);
 }
