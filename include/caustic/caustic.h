@@ -783,10 +783,11 @@ typedef struct CstRenderSettings {
      * becomes 2 alpha clamped to [0.1, 0.3], smooth conductors and dielectrics included.
      * Biased (caustics through glass and mirrors blur), fewer fireflies. 0 = off (the default) */
     int regularize;
-    /* 1: the path tracers (path, path-nee, path-bsdf) render subsurface materials by a
-     * random walk of each material's homogeneous medium under its dielectric surface, the
-     * estimand light, bdpt, vcm and mmlt always render (so that all agree); 0 (the default):
-     * by pbrt-v4's tabulated BSSRDF, a diffusion approximation. Others ignore it. */
+    /* 1: subsurface materials are rendered by a random walk of each material's homogeneous
+     * medium under its dielectric surface, by the path tracers (path, path-nee, path-bsdf)
+     * and by light, bdpt, vcm and mmlt alike (so that all agree); 0 (the default): the path
+     * tracers use pbrt-v4's tabulated BSSRDF, a diffusion approximation, and light, bdpt,
+     * vcm and mmlt refuse scenes with subsurface materials. Others ignore it. */
     int subsurface_walk;
     /* Checkpoint and resume (docs/state-format.md). resume: NULL, or a film read by
      * cst_film_state_read for this scene and these settings: the render continues with

@@ -677,12 +677,15 @@ CstStatus integrator_next_step(Integrator *it, IntegratorStep *step, CstError *e
 
 /* ---------------------------------------------------------------------- lifetime */
 
-/* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c) unless
- * subsurface_walk; the light tracer, BDPT, VCM and MMLT (and then the path tracers,
- * through volpath.c) random-walk the materials' media instead, in a view of the scene
- * where they are medium interfaces (sss_walk.h), so that light and camera subpaths meet in
- * the same media. The two differ by the BSSRDF's diffusion approximation. On return
- * *scene (and it->scene) is that view, media and all, when one is made. */
+/* Subsurface materials: the path tracers take pbrt-v4's BSSRDF step (path_sss.c) by
+ * default. With subsurface_walk, the path tracers (through volpath.c), the light tracer,
+ * BDPT, VCM and MMLT random-walk the materials' media instead, in a view of the scene where
+ * they are medium interfaces (sss_walk.h), so that light and camera subpaths meet in the
+ * same media. The two estimands differ by the BSSRDF's diffusion approximation (about 10 %
+ * on tests/render/subsurface/sss-walk.pbrt), so the light-path integrators refuse the
+ * default rather than render another image than path does: every integrator a setting
+ * accepts converges to the same answer. On return *scene (and it->scene) is the view,
+ * media and all, when one is made. */
 static CstStatus prepare_subsurface(Integrator *it, const Scene **scene, const CstRenderSettings *st, CstError *err)
 {
     const Scene *s = *scene;
@@ -690,11 +693,18 @@ static CstStatus prepare_subsurface(Integrator *it, const Scene **scene, const C
     if (s->num_media | s->num_medium_ifaces)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "subsurface materials in a scene with participating media are "
                         "not rendered yet; expected one or the other");
-    const bool walk = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
-                      st->integrator == CST_INTEGRATOR_MMLT || (it->kind == INTEGRATOR_PATH && st->subsurface_walk == 1);
-    if (it->kind != INTEGRATOR_PATH && !walk)
+    const bool walker = it->kind == INTEGRATOR_PATH || it->kind == INTEGRATOR_LIGHT ||
+                        it->kind == INTEGRATOR_BIDIR || st->integrator == CST_INTEGRATOR_MMLT;
+    if (!walker)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render subsurface materials yet: "
-                        "use path, path-nee, path-bsdf, light, bdpt, vcm or mmlt", cst_integrator_name(st->integrator));
+                        "use path, path-nee, path-bsdf, or light, bdpt, vcm or mmlt with --subsurface walk",
+                        cst_integrator_name(st->integrator));
+    const bool walk = st->subsurface_walk == 1;
+    if (it->kind != INTEGRATOR_PATH && !walk)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s renders subsurface materials only as a random walk "
+                        "of their media (--subsurface walk, CstRenderSettings.subsurface_walk), which the path "
+                        "tracers then render too; without it the path tracers use pbrt-v4's BSSRDF, which has no "
+                        "light-path form", cst_integrator_name(st->integrator));
     if (!walk) return CST_OK;
     CstStatus ss = sss_walk_view_create(s, &it->sss_view, err);
     if (ss != CST_OK) return ss;

@@ -109,6 +109,7 @@ static void test_sss_agreement(void **state)
     Scene *ref = sss_box(true), *s = sss_box(false);
     CstRenderSettings st;
     cst_render_settings_init(&st);
+    st.subsurface_walk = 1; /* light, bdpt, vcm and mmlt refuse subsurface materials without it */
     st.width = st.height = 32;
     st.color_mode = g_color_mode;
     st.max_depth = 8;
@@ -137,6 +138,7 @@ static void test_sss_view_exact(void **state)
     Scene *ref = sss_box(true), *s = sss_box(false);
     CstRenderSettings st;
     cst_render_settings_init(&st);
+    st.subsurface_walk = 1; /* light, bdpt, vcm and mmlt refuse subsurface materials without it */
     st.width = st.height = 16;
     st.color_mode = g_color_mode;
     st.max_depth = 8;
@@ -167,6 +169,7 @@ static void test_sss_mmlt(void **state)
     Scene *s = sss_box(false);
     CstRenderSettings sm;
     cst_render_settings_init(&sm);
+    sm.subsurface_walk = 1;
     sm.color_mode = g_color_mode;
     sm.width = sm.height = 24;
     sm.filter = CST_FILTER_BOX;
@@ -205,6 +208,7 @@ static void test_sss_furnace(void **state)
     for (int k = 0; k < 2; k++) {
         CstRenderSettings st;
         cst_render_settings_init(&st);
+    st.subsurface_walk = 1; /* light, bdpt, vcm and mmlt refuse subsurface materials without it */
         st.width = st.height = 16;
         st.spp = 2;
         st.color_mode = g_color_mode;
@@ -235,6 +239,7 @@ static void test_sss_refusals(void **state)
     Scene *s = sss_box(false);
     CstRenderSettings st;
     cst_render_settings_init(&st);
+    st.subsurface_walk = 1; /* light, bdpt, vcm and mmlt refuse subsurface materials without it */
     st.width = st.height = 8;
     st.spp = 1;
     const CstIntegrator refused[4] = {CST_INTEGRATOR_WHITTED, CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM,
@@ -247,6 +252,20 @@ static void test_sss_refusals(void **state)
         assert_non_null(strstr(err.msg, "subsurface"));
         cst_film_destroy(f);
     }
+    /* Without subsurface_walk the path tracers take the BSSRDF, another estimand: the
+     * light-path integrators refuse rather than render another image. */
+    const CstIntegrator walkers[4] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_BDPT, CST_INTEGRATOR_VCM,
+                                      CST_INTEGRATOR_MMLT};
+    st.subsurface_walk = 0;
+    for (int i = 0; i < 4; i++) {
+        CstError err;
+        CstFilm *f = NULL;
+        st.integrator = walkers[i];
+        assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
+        assert_non_null(strstr(err.msg, "--subsurface walk"));
+        cst_film_destroy(f);
+    }
+    st.subsurface_walk = 1;
     scene_destroy(s);
     CstError err;
     s = scene_create();
@@ -286,6 +305,7 @@ static void test_sss_refusals(void **state)
     assert_int_equal(scene_commit(s, &err), CST_OK);
     for (int k = 0; k < 2; k++) {
         st.integrator = k ? CST_INTEGRATOR_PATH : CST_INTEGRATOR_VCM;
+        st.subsurface_walk = !k; /* path: its BSSRDF */
         f = NULL;
         assert_int_equal(cst_render(s, &st, &f, NULL, &err), k ? CST_OK : CST_ERR_UNSUPPORTED);
         if (!k) assert_non_null(strstr(err.msg, "instance"));
