@@ -59,6 +59,11 @@ static void print_value(FILE *f, const CstExplainEvent *e)
     print3(f, "value ", e->value);
     print3(f, " x beta ", e->beta);
     print3(f, " = contribution ", e->contribution);
+    /* Spectral bdpt/vcm: a dispersed subpath counts at the hero wavelength alone (the
+     * values are the four wavelengths', before spectrum_to_rgb). */
+    if (e->flags & (CST_EXPLAIN_HERO | CST_EXPLAIN_LIGHT_DISPERSED))
+        fprintf(f, "; hero wavelength alone (%s dispersed)",
+                (e->flags & CST_EXPLAIN_HERO) ? "the camera subpath" : "the light subpath");
     fputc('\n', f);
 }
 
@@ -388,6 +393,8 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
     json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
     json_object_set_new(o, "occluded", json_boolean(e->flags & CST_EXPLAIN_OCCLUDED));
     json_object_set_new(o, "added", json_boolean(e->flags & CST_EXPLAIN_ADDED));
+    if (e->flags & CST_EXPLAIN_HERO) json_object_set_new(o, "hero", json_true());
+    if (e->flags & CST_EXPLAIN_LIGHT_DISPERSED) json_object_set_new(o, "light_dispersed", json_true());
     json_object_set_new(o, "beta", arr3f(e->beta));
     json_object_set_new(o, "value", arr3f(e->value));
     json_object_set_new(o, "contribution", arr3f(e->contribution));

@@ -213,7 +213,13 @@ enum {
     CST_EXPLAIN_OCCLUDED = 2, /* the connection's shadow ray was blocked (value 0) */
     CST_EXPLAIN_SURVIVED = 4, /* roulette: the path went on */
     CST_EXPLAIN_ADDED = 8,    /* the event added contribution to the sample (value summed) */
-    CST_EXPLAIN_SCATTERED = 16 /* DISTANCE: the sampled distance fell inside the segment */
+    CST_EXPLAIN_SCATTERED = 16, /* DISTANCE: the sampled distance fell inside the segment */
+    /* spectral bdpt/vcm: the camera subpath had refracted through a dispersive dielectric,
+     * so the strategy's value counts at the hero wavelength alone (subpath_trace_camera's H) */
+    CST_EXPLAIN_HERO = 32,
+    /* spectral bdpt/vcm: a connection's or merge's light vertex lies on a dispersed light
+     * subpath (hero wavelength alone too) */
+    CST_EXPLAIN_LIGHT_DISPERSED = 64
 };
 
 typedef struct CstExplainEvent {

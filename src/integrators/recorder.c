@@ -162,6 +162,7 @@ void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light,
     e->pdf_w = pdf_w;
     e->pdf_a = pdf_a;
     if (occluded) e->flags |= CST_EXPLAIN_OCCLUDED;
+    if (r->cam_dispersed) e->flags |= CST_EXPLAIN_HERO;
     recorder_added(r, e, beta, value);
 }
 
@@ -191,11 +192,20 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 len
     e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
 }
 
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir)
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl)
 {
+    recorder_wavelengths(r, wl); /* a camera ray may miss everything */
+    r->cam_dispersed = false;
     r->paths.camera_o = origin;
     r->paths.next_dir = dir;
     r->paths.ncam = 0;
+}
+
+void recorder_cam_dispersed(Recorder *r, bool dispersed) { r->cam_dispersed = dispersed; }
+
+void recorder_light_dispersed(Recorder *r, bool dispersed)
+{
+    if (dispersed && r->n > 0) r->ev[r->n - 1].flags |= CST_EXPLAIN_LIGHT_DISPERSED;
 }
 
 void recorder_nee_normal(Recorder *r, Vec3 n)
@@ -261,9 +271,11 @@ void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int dep
 }
 
 void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color value, float vm_norm, float w,
-                    float w_light, float w_camera)
+                    float w_light, float w_camera, bool dispersed)
 {
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_MERGE);
+    if (r->cam_dispersed) e->flags |= CST_EXPLAIN_HERO;
+    if (dispersed) e->flags |= CST_EXPLAIN_LIGHT_DISPERSED;
     e->s = light_bounces + 1; /* the light vertices, the merged one included */
     e->t = r->depth + 1;
     put3(e->p, p);

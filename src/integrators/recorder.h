@@ -54,6 +54,8 @@ typedef struct Recorder {
     CstExplainEvent spare; /* where events go once ev is full */
     RecorderPaths paths;
     Color tree_beta[RECORDER_PATH_MAX + 2]; /* whitted: a node's throughput by depth */
+    bool cam_dispersed; /* spectral BDPT: the camera subpath's wavelengths are terminated
+                         * (its strategies get CST_EXPLAIN_HERO) */
 } Recorder;
 
 /* A new event of kind k at the current depth (fields zero, s = t = light = -1,
@@ -88,7 +90,7 @@ void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light,
 /* VCM (vcm.c): light vertex at p merged at the current camera vertex of throughput beta;
  * value the MIS-weighted f beta_light the merge sums before its normalisation vm_norm. */
 void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color value, float vm_norm, float w,
-                    float w_light, float w_camera);
+                    float w_light, float w_camera, bool dispersed);
 /* A light path's t = 1 connection from its light vertex p (s_light light vertices) to the
  * lens point `lens`, at raster position (x, y), kept when it lands within the filter's reach
  * of the recorded pixel (with the light path's index, for the MIS check); value already
@@ -125,7 +127,14 @@ void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value);
 void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth);
 
 /* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir);
+/* The camera subpath starts (ray origin and direction; wl its wavelengths in spectral mode,
+ * NULL in RGB). */
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl);
+/* Spectral BDPT: whether the camera subpath has been dispersed (its secondary wavelengths
+ * terminated) as of the vertex being recorded. */
+void recorder_cam_dispersed(Recorder *r, bool dispersed);
+/* The connection just recorded used a light vertex of a dispersed light subpath. */
+void recorder_light_dispersed(Recorder *r, bool dispersed);
 /* The light point's normal of the NEE strategy just recorded (into its ng). */
 void recorder_nee_normal(Recorder *r, Vec3 n);
 /* A light subpath starts (subpath_trace_light, every path of the step, in order). */
