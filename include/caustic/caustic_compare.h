@@ -204,8 +204,16 @@ typedef enum CstExplainKind {
     CST_EXPLAIN_ROULETTE,   /* Russian roulette: q the survival probability */
     CST_EXPLAIN_MERGE,      /* vcm: a light vertex merged at camera vertex t (value before the
                              * 1 / (pi r^2 N) normalisation, which pmf holds) */
-    CST_EXPLAIN_DISTANCE    /* path in media: free-flight distance sampled in a medium (distance,
+    CST_EXPLAIN_DISTANCE,   /* path in media: free-flight distance sampled in a medium (distance,
                              * transmittance; flag SCATTERED when a medium vertex follows) */
+    CST_EXPLAIN_PHOTON,     /* photon: a photon within the gather radius of the vertex (p its
+                             * position, wi its incoming direction, value its power, beta the
+                             * BSDF f without the cosine; contribution f * power) */
+    CST_EXPLAIN_ESTIMATE    /* photon: the density estimate over the photons listed before it
+                             * (flag CAUSTIC: the caustic map at the first diffuse vertex, else
+                             * the global map at the final gather's vertex): distance the
+                             * radius, pmf the box kernel 1 / (pi r^2), path the photons
+                             * counted, value the estimate, beta the gather's throughput */
 } CstExplainKind;
 
 enum {
@@ -219,7 +227,8 @@ enum {
     CST_EXPLAIN_HERO = 32,
     /* spectral bdpt/vcm: a connection's or merge's light vertex lies on a dispersed light
      * subpath (hero wavelength alone too) */
-    CST_EXPLAIN_LIGHT_DISPERSED = 64
+    CST_EXPLAIN_LIGHT_DISPERSED = 64,
+    CST_EXPLAIN_CAUSTIC = 128 /* ESTIMATE: over the caustic photon map */
 };
 
 typedef struct CstExplainEvent {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "integrators/direct.h"
+#include "integrators/photon_map.h"
 
 static void put3(float o[3], Vec3 v) { o[0] = v.x; o[1] = v.y; o[2] = v.z; }
 static void put_color(float o[3], Color c) { for (int i = 0; i < 3; i++) o[i] = c.c[i]; }
@@ -239,6 +240,43 @@ void recorder_light_scatter(Recorder *r, bool delta)
 {
     RecorderPaths *p = &r->paths;
     if (p->light_on && p->nlight >= 1 && p->nlight <= RECORDER_PATH_MAX) p->light_delta[p->nlight - 1] = delta;
+}
+
+void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L)
+{
+    r->depth = 0;
+    recorder_add(r, CST_EXPLAIN_EMISSION, color_s(1.0f), L);
+    if (!x) return;
+    recorder_vertex(r, s, x, 1, NULL);
+    CstExplainEvent *e = &r->ev[r->n - 1];
+    if (r->truncated) return;
+    put_color(e->beta, beta);
+    r->beta[r->n - 1] = beta; /* the replay's: photon_li's final beta * lx */
+}
+
+void recorder_photon(Recorder *r, const Photon *ph, Color f)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_PHOTON);
+    put3(e->p, ph->pos);
+    put3(e->wi, ph->wi);
+    put_color(e->beta, f);
+    put_color(e->value, ph->power);
+    put_color(e->contribution, color_mul(f, ph->power));
+    if (e == &r->spare) return;
+    r->beta[e - r->ev] = f;
+    r->value[e - r->ev] = ph->power;
+}
+
+void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est)
+{
+    int count = 0;
+    while (count < r->n && r->ev[r->n - 1 - count].kind == CST_EXPLAIN_PHOTON) count++;
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_ESTIMATE);
+    if (caustic) e->flags |= CST_EXPLAIN_CAUSTIC;
+    e->distance = radius;
+    e->pmf = 1.0f / (CST_PI * radius * radius);
+    e->path = count;
+    recorder_added(r, e, g, est);
 }
 
 /* The throughput of the whitted node at depth d: 1 at the camera's hit, else its branch's. */

@@ -18,6 +18,8 @@ enum { RECORDER_PATH_MAX = 64 };
 
 /* BDPT: the camera subpath's and the pixel's light subpath's vertices, every one of them
  * (delta ones too), from which the check rebuilds each recorded strategy's whole path. */
+struct Photon;
+
 typedef struct RecorderPaths {
     Vec3 camera_o;                        /* the camera ray's origin (the lens point) */
     SurfaceHit cam[RECORDER_PATH_MAX];    /* cam[d - 1]: the camera subpath's hit d */
@@ -125,6 +127,17 @@ void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value);
 /* A specular branch of weight w (the lobe's probability times its f cos / pdf) from the
  * node at `depth` to a child at depth + 1. */
 void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth);
+
+/* ---- photon mapping (photon.c's photon_li) */
+/* The camera ray's specular chain: what emission it met (value L, beta 1), and when it
+ * reached a diffuse vertex x (NULL: it did not), x with the chain's throughput beta. */
+void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L);
+/* A photon counted by a density estimate, with the BSDF value f (no cosine) it is weighted by. */
+void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
+/* The density estimate over the photons recorded just before it (their count is kept):
+ * radius, the gather throughput g it is multiplied by (1 at the caustic map's x), the
+ * estimate est. */
+void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est);
 
 /* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
 /* The camera subpath starts (ray origin and direction; wl its wavelengths in spectral mode,

@@ -19,7 +19,7 @@
  * with its connections; longer ones are reported truncated (and not checked). */
 enum { EXPLAIN_EVENTS = 8192 };
 
-const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, bdpt, vcm"; }
+const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm"; }
 
 void cst_explain_destroy(CstExplain *e)
 {
@@ -44,7 +44,8 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_PATH_BSDF:
     case CST_INTEGRATOR_DEFAULT: return CST_OK; /* path_li, volpath_li and path_sss_li are recorded */
     case CST_INTEGRATOR_WHITTED:
-    case CST_INTEGRATOR_LIGHT: return CST_OK; /* (integrator_prepare refuses media for both) */
+    case CST_INTEGRATOR_LIGHT:
+    case CST_INTEGRATOR_PHOTON: return CST_OK; /* (integrator_prepare refuses media for these) */
     case CST_INTEGRATOR_BDPT:
     case CST_INTEGRATOR_VCM:
         /* subpath_media.c's walks and connections carry no recorder hooks (yet). */
@@ -111,6 +112,36 @@ static void replay_flush(const Integrator *it, const ReplayGroup *g, Color *L, C
  * (BDPT's connections of a vertex first among themselves), then as camera_tile turns the
  * path's value into the film's sample: spectral conversion, non-finite to 0, clamp, filter
  * weight. */
+/* photon_li summed again: the specular chain's emission L, plus beta times (the direct
+ * light, plus the caustic map's estimate, plus the gather's throughput times the global
+ * map's), each estimate the photons' f * power summed in the order the map visited them,
+ * times the box kernel 1 / (pi r^2) (Jensen 2001 eq. 7.6). */
+static Color replay_photon(const Recorder *r)
+{
+    Color L = color_s(0.0f), lx = color_s(0.0f), beta = color_s(1.0f), sum = color_s(0.0f);
+    bool diffuse = false;
+    for (int i = 0; i < r->n; i++) {
+        const CstExplainEvent *e = &r->ev[i];
+        switch (e->kind) {
+        case CST_EXPLAIN_EMISSION: L = r->value[i]; break;
+        case CST_EXPLAIN_VERTEX:
+            if (e->depth == 1) beta = r->beta[i], diffuse = true;
+            break;
+        case CST_EXPLAIN_NEE: lx = r->value[i]; break;
+        case CST_EXPLAIN_PHOTON: sum = color_madd(sum, r->beta[i], r->value[i]); break;
+        case CST_EXPLAIN_ESTIMATE: {
+            const float rad = e->distance;
+            Color est = color_scale(sum, 1.0f / (CST_PI * rad * rad));
+            lx = color_add(lx, (e->flags & CST_EXPLAIN_CAUSTIC) ? est : color_mul(r->beta[i], est));
+            sum = color_s(0.0f);
+            break;
+        }
+        default: break;
+        }
+    }
+    return diffuse ? color_madd(L, beta, lx) : L;
+}
+
 static Color replay(const Integrator *it, const Recorder *r, int x, int y, int sample, float *fw)
 {
     /* L: the sample; H (spectral BDPT/VCM): what counts at the hero wavelength alone. */
@@ -120,7 +151,8 @@ static Color replay(const Integrator *it, const Recorder *r, int x, int y, int s
         int i = 0;
         L = replay_whitted(r, &i);
     }
-    for (int i = 0; i <= r->n && it->kind != INTEGRATOR_WHITTED; i++) {
+    if (it->kind == INTEGRATOR_PHOTON) L = replay_photon(r);
+    for (int i = 0; i <= r->n && it->kind != INTEGRATOR_WHITTED && it->kind != INTEGRATOR_PHOTON; i++) {
         const CstExplainEvent *e = i < r->n ? &r->ev[i] : NULL;
         const bool group = e && (e->kind == CST_EXPLAIN_CONNECT || e->kind == CST_EXPLAIN_MERGE) &&
                            (e->flags & CST_EXPLAIN_ADDED);
@@ -311,6 +343,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     if ((status = integrator_prepare(it, scene, &st, film, &worker, &rays, NULL, NULL, err)) != CST_OK) goto done;
     if (it->kind == INTEGRATOR_PATH) it->path.rec = &rec;
     else if (it->kind == INTEGRATOR_WHITTED) it->whitted.rec = &rec;
+    else if (it->kind == INTEGRATOR_PHOTON) it->photon.rec = &rec;
     else if (it->kind == INTEGRATOR_LIGHT) rec.radius = 0.0f;
     else rec.radius = filter_radius(it->light.vcm_params.frame.filter);
     const int pixel = y * st.width + x;

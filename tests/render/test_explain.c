@@ -27,6 +27,7 @@ static int sss_exits;    /* subsurface exits recorded (path_sss.c) */
 static float radius;    /* photon_radius of the settings (0: the default) */
 static int heroes;      /* spectral BDPT/VCM: additions at the hero wavelength alone */
 static int light_dispersed; /* of them, connections and merges with a dispersed light vertex */
+static int photons_gathered[2]; /* photon: photons listed by the caustic and the global estimates */
 /* The pixels explain_all explains (NULL: its own five). */
 static const int (*pixels)[2];
 static size_t num_pixels;
@@ -48,6 +49,7 @@ static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filte
      * test_whitted_light's signed zero, under zsobol). */
     st->sampler = CST_SAMPLER_INDEPENDENT;
     if (radius > 0.0f) st->photon_radius = radius;
+    st->photons = 20000; /* photon: a small map is built for every explained sample */
 }
 
 /* The film value of sample `sample` of pixel (x, y) alone: a one-pixel crop rendered
@@ -118,6 +120,8 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 if (e->mis_strategies > 0) assert_true(e->mis_strategies >= 1 && e->mis_explicit > 0.0f);
                 if (e->mis_weight != -1.0f) assert_true(e->mis_weight >= 0.0f && e->mis_weight <= 1.0f);
                 if (e->kind == CST_EXPLAIN_MERGE) merges++;
+                if (e->kind == CST_EXPLAIN_ESTIMATE && e->value[0] != 0.0f)
+                    photons_gathered[(e->flags & CST_EXPLAIN_CAUSTIC) ? 0 : 1] += e->path;
                 if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "subsurface exit"))
                     sss_exits++;
                 if (e->kind == CST_EXPLAIN_MERGE && e->mis_strategies > 0) merges_checked++;
@@ -314,6 +318,31 @@ static void test_bidir_spectral(void **state)
     cst_scene_destroy(s);
 }
 
+/* Photon mapping: the specular chain's emission, the direct light, the caustic map's and the
+ * final gather's global-map estimates, each photon's f * power re-summed in the map's order
+ * times the box kernel, give the camera sample and the film's value bit for bit; the
+ * spheres' glass puts photons in the caustic map. */
+static void test_photon(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    photons_gathered[0] = photons_gathered[1] = 0;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    cst_scene_destroy(s);
+    s = load("cornell-spheres.json");
+    static const int PIX[][2] = {{12, 10}, {3, 17}, {20, 2}, {8, 14}, {7, 15}, {16, 15}, {15, 16}};
+    pixels = PIX;
+    num_pixels = sizeof PIX / sizeof PIX[0];
+    assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_MITCHELL, CST_COLOR_RGB) > 0);
+    pixels = NULL;
+    cst_scene_destroy(s);
+    print_message("photon: %d caustic and %d global photons in nonzero estimates\n", photons_gathered[0],
+                  photons_gathered[1]);
+    assert_true(photons_gathered[0] > 0 && photons_gathered[1] > 100);
+}
+
 /* Whitted's ray tree (mirror and glass branch in two) and the light tracer's splats: the
  * replayed sum is the film's value bit for bit (explain_all). */
 static void test_whitted_light(void **state)
@@ -379,13 +408,12 @@ static void test_refused(void **state)
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     CstRenderSettings st;
     CstExplain *ex = NULL;
-    static const CstIntegrator NO[] = {CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_PSSMLT,
-                                       CST_INTEGRATOR_MMLT};
+    static const CstIntegrator NO[] = {CST_INTEGRATOR_SPPM, CST_INTEGRATOR_PSSMLT, CST_INTEGRATOR_MMLT};
     for (size_t i = 0; i < sizeof NO / sizeof NO[0]; i++) {
         settings(&st, NO[i], CST_FILTER_BOX, CST_COLOR_RGB);
         assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
         assert_null(ex);
-        assert_non_null(strstr(err.msg, "explain supports: path, path-nee, path-bsdf, whitted, light, bdpt, vcm"));
+        assert_non_null(strstr(err.msg, "explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm"));
     }
     settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB);
     assert_int_equal(cst_explain(s, &st, W, 0, 0, &ex, &err), CST_ERR_INVALID_ARG);
@@ -406,6 +434,7 @@ int main(void)
         cmocka_unit_test(test_whitted_light),
         cmocka_unit_test(test_vcm),
         cmocka_unit_test(test_bidir_spectral),
+        cmocka_unit_test(test_photon),
         cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),
     };
