@@ -303,7 +303,8 @@ typedef struct CstExplain {
 CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
-/* "path, path-nee, path-bsdf, whitted, light, bdpt, vcm": the integrators cst_explain follows. */
+/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm": the integrators cst_explain
+ * follows (bdpt and vcm in scenes without participating media). */
 CST_API const char *cst_explain_integrators(void);
 
 #endif

@@ -1,6 +1,6 @@
 /* The path recorder of `caustic explain` (issue 30): what one camera sample's path did,
- * event by event, filled by the path tracer and BDPT through a pointer that renders leave
- * NULL (one branch per hook, nothing else on the render path). */
+ * event by event, filled by the path tracers, Whitted, photon mapping, BDPT and VCM through
+ * a pointer that renders leave NULL (one branch per hook, nothing else on the render path). */
 #ifndef CST_INTEGRATORS_RECORDER_H
 #define CST_INTEGRATORS_RECORDER_H
 

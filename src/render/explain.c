@@ -1,7 +1,8 @@
 /* cst_explain (caustic.h, issue 30): one sample of one pixel replayed through the
  * render's own steps (integrator.c) on a one-pixel crop, one thread, with a recorder
- * (integrators/recorder.h) that the path tracer and BDPT fill; then the recorded additions
- * are summed again in the integrator's order and checked against the film. */
+ * (integrators/recorder.h) that the path tracers, Whitted, photon mapping and BDPT/VCM
+ * fill; then the recorded additions are summed again in the integrator's order and
+ * checked against the film. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
