@@ -22,6 +22,8 @@ static const char *kind_name(CstExplainKind k)
     case CST_EXPLAIN_ROULETTE: return "roulette";
     case CST_EXPLAIN_MERGE: return "merge";
     case CST_EXPLAIN_DISTANCE: return "distance";
+    case CST_EXPLAIN_PHOTON: return "photon";
+    case CST_EXPLAIN_ESTIMATE: return "estimate";
     }
     return "unknown";
 }
@@ -33,6 +35,7 @@ static bool is_bdpt(const CstExplain *x)
 }
 static bool is_light(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_LIGHT; }
 static bool is_whitted(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_WHITTED; }
+static bool is_photon(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_PHOTON; }
 
 /* ------------------------------------------------------------------ text */
 
@@ -59,7 +62,33 @@ static void print_value(FILE *f, const CstExplainEvent *e)
     print3(f, "value ", e->value);
     print3(f, " x beta ", e->beta);
     print3(f, " = contribution ", e->contribution);
+    /* Spectral bdpt/vcm: a dispersed subpath counts at the hero wavelength alone (the
+     * values are the four wavelengths', before spectrum_to_rgb). */
+    if (e->flags & (CST_EXPLAIN_HERO | CST_EXPLAIN_LIGHT_DISPERSED))
+        fprintf(f, "; hero wavelength alone (%s dispersed)",
+                (e->flags & CST_EXPLAIN_HERO) ? "the camera subpath" : "the light subpath");
     fputc('\n', f);
+}
+
+/* photon: the specular chain's emission, a gathered photon, a density estimate. */
+static void print_gather(FILE *f, const CstExplainEvent *e)
+{
+    if (e->kind == CST_EXPLAIN_PHOTON) {
+        fprintf(f, "    photon at (%.6g, %.6g, %.6g) from wi (%.4f, %.4f, %.4f): ", (double)e->p[0],
+                (double)e->p[1], (double)e->p[2], (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
+        print3(f, "power ", e->value);
+        print3(f, " x f ", e->beta);
+        print3(f, " = ", e->contribution);
+        fputc('\n', f);
+        return;
+    }
+    if (e->kind == CST_EXPLAIN_ESTIMATE)
+        fprintf(f, "  %s map's estimate over those %d photons: radius %.6g, box kernel 1/(pi r^2) %.6g",
+                (e->flags & CST_EXPLAIN_CAUSTIC) ? "caustic" : "global (final gather)", e->path,
+                (double)e->distance, (double)e->pmf);
+    else
+        fputs("emission met by the camera ray and its specular chain (no MIS)", f);
+    print_value(f, e);
 }
 
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
@@ -111,6 +140,10 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         }
         /* fall through */
     case CST_EXPLAIN_EMISSION:
+        if (is_photon(x)) {
+            print_gather(f, e);
+            return;
+        }
         fprintf(f, "  %s", e->kind == CST_EXPLAIN_ESCAPE ? "environment" : "emission");
         if (is_bdpt(x)) fprintf(f, " (s=0, t=%d)", e->t);
         if (e->light >= 0) fprintf(f, " of emitter %d", e->light);
@@ -202,6 +235,8 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         fprintf(f, "  roulette: survival probability %.6g, %s\n", (double)e->q,
                 (e->flags & CST_EXPLAIN_SURVIVED) ? "survived (beta / q)" : "stopped");
         return;
+    case CST_EXPLAIN_PHOTON:
+    case CST_EXPLAIN_ESTIMATE: print_gather(f, e); return;
     }
 }
 
@@ -353,6 +388,22 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "q", num((double)e->q));
         json_object_set_new(o, "survived", json_boolean(e->flags & CST_EXPLAIN_SURVIVED));
         return o;
+    case CST_EXPLAIN_PHOTON:
+        json_object_set_new(o, "p", arr3f(e->p));
+        json_object_set_new(o, "wi", arr3f(e->wi));
+        json_object_set_new(o, "power", arr3f(e->value));
+        json_object_set_new(o, "f", arr3f(e->beta));
+        json_object_set_new(o, "contribution", arr3f(e->contribution));
+        return o;
+    case CST_EXPLAIN_ESTIMATE:
+        json_object_set_new(o, "map", json_string((e->flags & CST_EXPLAIN_CAUSTIC) ? "caustic" : "global"));
+        json_object_set_new(o, "radius", num((double)e->distance));
+        json_object_set_new(o, "kernel", num((double)e->pmf));
+        json_object_set_new(o, "photons", json_integer(e->path));
+        json_object_set_new(o, "beta", arr3f(e->beta));
+        json_object_set_new(o, "value", arr3f(e->value));
+        json_object_set_new(o, "contribution", arr3f(e->contribution));
+        return o;
     case CST_EXPLAIN_SCATTER:
         json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
         json_object_set_new(o, "wi", arr3f(e->wi));
@@ -388,6 +439,8 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
     json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
     json_object_set_new(o, "occluded", json_boolean(e->flags & CST_EXPLAIN_OCCLUDED));
     json_object_set_new(o, "added", json_boolean(e->flags & CST_EXPLAIN_ADDED));
+    if (e->flags & CST_EXPLAIN_HERO) json_object_set_new(o, "hero", json_true());
+    if (e->flags & CST_EXPLAIN_LIGHT_DISPERSED) json_object_set_new(o, "light_dispersed", json_true());
     json_object_set_new(o, "beta", arr3f(e->beta));
     json_object_set_new(o, "value", arr3f(e->value));
     json_object_set_new(o, "contribution", arr3f(e->contribution));

@@ -204,8 +204,16 @@ typedef enum CstExplainKind {
     CST_EXPLAIN_ROULETTE,   /* Russian roulette: q the survival probability */
     CST_EXPLAIN_MERGE,      /* vcm: a light vertex merged at camera vertex t (value before the
                              * 1 / (pi r^2 N) normalisation, which pmf holds) */
-    CST_EXPLAIN_DISTANCE    /* path in media: free-flight distance sampled in a medium (distance,
+    CST_EXPLAIN_DISTANCE,   /* path in media: free-flight distance sampled in a medium (distance,
                              * transmittance; flag SCATTERED when a medium vertex follows) */
+    CST_EXPLAIN_PHOTON,     /* photon: a photon within the gather radius of the vertex (p its
+                             * position, wi its incoming direction, value its power, beta the
+                             * BSDF f without the cosine; contribution f * power) */
+    CST_EXPLAIN_ESTIMATE    /* photon: the density estimate over the photons listed before it
+                             * (flag CAUSTIC: the caustic map at the first diffuse vertex, else
+                             * the global map at the final gather's vertex): distance the
+                             * radius, pmf the box kernel 1 / (pi r^2), path the photons
+                             * counted, value the estimate, beta the gather's throughput */
 } CstExplainKind;
 
 enum {
@@ -213,7 +221,14 @@ enum {
     CST_EXPLAIN_OCCLUDED = 2, /* the connection's shadow ray was blocked (value 0) */
     CST_EXPLAIN_SURVIVED = 4, /* roulette: the path went on */
     CST_EXPLAIN_ADDED = 8,    /* the event added contribution to the sample (value summed) */
-    CST_EXPLAIN_SCATTERED = 16 /* DISTANCE: the sampled distance fell inside the segment */
+    CST_EXPLAIN_SCATTERED = 16, /* DISTANCE: the sampled distance fell inside the segment */
+    /* spectral bdpt/vcm: the camera subpath had refracted through a dispersive dielectric,
+     * so the strategy's value counts at the hero wavelength alone (subpath_trace_camera's H) */
+    CST_EXPLAIN_HERO = 32,
+    /* spectral bdpt/vcm: a connection's or merge's light vertex lies on a dispersed light
+     * subpath (hero wavelength alone too) */
+    CST_EXPLAIN_LIGHT_DISPERSED = 64,
+    CST_EXPLAIN_CAUSTIC = 128 /* ESTIMATE: over the caustic photon map */
 };
 
 typedef struct CstExplainEvent {
@@ -288,7 +303,8 @@ typedef struct CstExplain {
 CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
-/* "path, path-nee, path-bsdf, whitted, light, bdpt, vcm": the integrators cst_explain follows. */
+/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm": the integrators cst_explain
+ * follows (bdpt and vcm in scenes without participating media). */
 CST_API const char *cst_explain_integrators(void);
 
 #endif

@@ -23,6 +23,7 @@
 #include "core/array.h"
 #include "core/error.h"
 #include "integrators/direct.h"
+#include "integrators/recorder.h"
 #include "integrators/subpath_walk.h"
 #include "materials/bsdf.h"
 
@@ -141,6 +142,7 @@ typedef struct DensityCtx {
     const Bsdf *bsdf;
     Vec3 wo, n; /* n: x's geometric normal, on wo's side */
     Color sum;
+    struct Recorder *rec; /* explain (NULL in renders) */
 } DensityCtx;
 
 static void density_visit(void *ctx, const Photon *ph, float dist2)
@@ -155,14 +157,16 @@ static void density_visit(void *ctx, const Photon *ph, float dist2)
     /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
     Color f = color_scale(bsdf_eval(c->bsdf, c->wo, ph->wi), 1.0f / cos_i);
     c->sum = color_madd(c->sum, f, ph->power);
+    if (c->rec) recorder_photon(c->rec, ph, f);
 }
 
 /* Reflected radiance at sh toward wo: L = sum f(wo, wi_p) Phi_p / (pi r^2), the constant
  * (box) kernel density estimate of Jensen 2001 eq. 7.6. */
-static Color radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo)
+static Color radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo,
+                               struct Recorder *rec)
 {
     if (photon_map_count(map) == 0) return color_s(0.0f);
-    DensityCtx c = {bsdf, wo, v3_dot(sh->ng, wo) >= 0.0f ? sh->ng : v3_neg(sh->ng), color_s(0.0f)};
+    DensityCtx c = {bsdf, wo, v3_dot(sh->ng, wo) >= 0.0f ? sh->ng : v3_neg(sh->ng), color_s(0.0f), rec};
     photon_map_radius(map, sh->p, r, density_visit, &c);
     return color_scale(c.sum, 1.0f / (CST_PI * r * r));
 }
@@ -183,10 +187,15 @@ Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint
     SurfaceHit x;
     Bsdf bsdf_x;
     Vec3 wo;
-    if (!photon_trace_to_diffuse(s, ray, rng, NULL, &beta, &L, &x, &bsdf_x, &wo, rays)) return L;
+    const bool diffuse = photon_trace_to_diffuse(s, ray, rng, NULL, &beta, &L, &x, &bsdf_x, &wo, rays);
+    if (m->rec) recorder_photon_chain(m->rec, s, diffuse ? &x : NULL, beta, L);
+    if (!diffuse) return L;
 
     Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, NULL, rays);
-    lx = color_add(lx, radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo));
+    if (m->rec) recorder_add(m->rec, CST_EXPLAIN_NEE, beta, lx);
+    Color caustic = radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo, m->rec);
+    if (m->rec) recorder_estimate(m->rec, true, m->radius, color_s(1.0f), caustic);
+    lx = color_add(lx, caustic);
 
     /* Final gathering (Jensen 2001 sec. 9.3.3): the global map's blur is hidden behind one
      * more bounce; reading it at x directly would show its low-frequency noise. */
@@ -199,13 +208,18 @@ Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint
      * that of the non-delta part alone. */
     if (bsdf_sample(&bsdf_x, wo, uc, u, &bs) && !bs.delta) {
         Color g = bs.weight;
+        if (m->rec) recorder_scatter(m->rec, &bs, beta);
         SurfaceHit y;
         Bsdf bsdf_y;
         Vec3 wo_y;
         Ray gr = ray_make(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
-        if (photon_trace_to_diffuse(s, gr, rng, NULL, &g, NULL, &y, &bsdf_y, &wo_y, rays))
-            lx = color_add(lx, color_mul(g, radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y)));
+        if (photon_trace_to_diffuse(s, gr, rng, NULL, &g, NULL, &y, &bsdf_y, &wo_y, rays)) {
+            if (m->rec) recorder_vertex(m->rec, s, &y, 2, NULL);
+            Color global = radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
+            if (m->rec) recorder_estimate(m->rec, false, m->radius, g, global);
+            lx = color_add(lx, color_mul(g, global));
+        }
     }
     return color_madd(L, beta, lx);
 }

@@ -61,6 +61,7 @@ typedef struct PhotonMaps {
     PhotonMap caustic; /* the subset whose path is L S+ D */
     float radius;      /* resolved: the given one, or the automatic one */
     int emitted;       /* photon paths emitted (the power divisor) */
+    struct Recorder *rec; /* caustic explain's recorder (recorder.h); NULL in renders */
 } PhotonMaps;
 
 /* Emits and traces the photons single-threaded, in index order, photon i drawing from the

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "integrators/direct.h"
+#include "integrators/photon_map.h"
 
 static void put3(float o[3], Vec3 v) { o[0] = v.x; o[1] = v.y; o[2] = v.z; }
 static void put_color(float o[3], Color c) { for (int i = 0; i < 3; i++) o[i] = c.c[i]; }
@@ -162,6 +163,7 @@ void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light,
     e->pdf_w = pdf_w;
     e->pdf_a = pdf_a;
     if (occluded) e->flags |= CST_EXPLAIN_OCCLUDED;
+    if (r->cam_dispersed) e->flags |= CST_EXPLAIN_HERO;
     recorder_added(r, e, beta, value);
 }
 
@@ -191,11 +193,20 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 len
     e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
 }
 
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir)
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl)
 {
+    recorder_wavelengths(r, wl); /* a camera ray may miss everything */
+    r->cam_dispersed = false;
     r->paths.camera_o = origin;
     r->paths.next_dir = dir;
     r->paths.ncam = 0;
+}
+
+void recorder_cam_dispersed(Recorder *r, bool dispersed) { r->cam_dispersed = dispersed; }
+
+void recorder_light_dispersed(Recorder *r, bool dispersed)
+{
+    if (dispersed && r->n > 0) r->ev[r->n - 1].flags |= CST_EXPLAIN_LIGHT_DISPERSED;
 }
 
 void recorder_nee_normal(Recorder *r, Vec3 n)
@@ -231,6 +242,43 @@ void recorder_light_scatter(Recorder *r, bool delta)
     if (p->light_on && p->nlight >= 1 && p->nlight <= RECORDER_PATH_MAX) p->light_delta[p->nlight - 1] = delta;
 }
 
+void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L)
+{
+    r->depth = 0;
+    recorder_add(r, CST_EXPLAIN_EMISSION, color_s(1.0f), L);
+    if (!x) return;
+    recorder_vertex(r, s, x, 1, NULL);
+    CstExplainEvent *e = &r->ev[r->n - 1];
+    if (r->truncated) return;
+    put_color(e->beta, beta);
+    r->beta[r->n - 1] = beta; /* the replay's: photon_li's final beta * lx */
+}
+
+void recorder_photon(Recorder *r, const Photon *ph, Color f)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_PHOTON);
+    put3(e->p, ph->pos);
+    put3(e->wi, ph->wi);
+    put_color(e->beta, f);
+    put_color(e->value, ph->power);
+    put_color(e->contribution, color_mul(f, ph->power));
+    if (e == &r->spare) return;
+    r->beta[e - r->ev] = f;
+    r->value[e - r->ev] = ph->power;
+}
+
+void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est)
+{
+    int count = 0;
+    while (count < r->n && r->ev[r->n - 1 - count].kind == CST_EXPLAIN_PHOTON) count++;
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_ESTIMATE);
+    if (caustic) e->flags |= CST_EXPLAIN_CAUSTIC;
+    e->distance = radius;
+    e->pmf = 1.0f / (CST_PI * radius * radius);
+    e->path = count;
+    recorder_added(r, e, g, est);
+}
+
 /* The throughput of the whitted node at depth d: 1 at the camera's hit, else its branch's. */
 static Color tree_beta(const Recorder *r, int d)
 {
@@ -261,9 +309,11 @@ void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int dep
 }
 
 void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color value, float vm_norm, float w,
-                    float w_light, float w_camera)
+                    float w_light, float w_camera, bool dispersed)
 {
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_MERGE);
+    if (r->cam_dispersed) e->flags |= CST_EXPLAIN_HERO;
+    if (dispersed) e->flags |= CST_EXPLAIN_LIGHT_DISPERSED;
     e->s = light_bounces + 1; /* the light vertices, the merged one included */
     e->t = r->depth + 1;
     put3(e->p, p);

@@ -1,6 +1,6 @@
 /* The path recorder of `caustic explain` (issue 30): what one camera sample's path did,
- * event by event, filled by the path tracer and BDPT through a pointer that renders leave
- * NULL (one branch per hook, nothing else on the render path). */
+ * event by event, filled by the path tracers, Whitted, photon mapping, BDPT and VCM through
+ * a pointer that renders leave NULL (one branch per hook, nothing else on the render path). */
 #ifndef CST_INTEGRATORS_RECORDER_H
 #define CST_INTEGRATORS_RECORDER_H
 
@@ -18,6 +18,8 @@ enum { RECORDER_PATH_MAX = 64 };
 
 /* BDPT: the camera subpath's and the pixel's light subpath's vertices, every one of them
  * (delta ones too), from which the check rebuilds each recorded strategy's whole path. */
+struct Photon;
+
 typedef struct RecorderPaths {
     Vec3 camera_o;                        /* the camera ray's origin (the lens point) */
     SurfaceHit cam[RECORDER_PATH_MAX];    /* cam[d - 1]: the camera subpath's hit d */
@@ -54,6 +56,8 @@ typedef struct Recorder {
     CstExplainEvent spare; /* where events go once ev is full */
     RecorderPaths paths;
     Color tree_beta[RECORDER_PATH_MAX + 2]; /* whitted: a node's throughput by depth */
+    bool cam_dispersed; /* spectral BDPT: the camera subpath's wavelengths are terminated
+                         * (its strategies get CST_EXPLAIN_HERO) */
 } Recorder;
 
 /* A new event of kind k at the current depth (fields zero, s = t = light = -1,
@@ -88,7 +92,7 @@ void recorder_strategy(Recorder *r, CstExplainKind kind, int s_light, int light,
 /* VCM (vcm.c): light vertex at p merged at the current camera vertex of throughput beta;
  * value the MIS-weighted f beta_light the merge sums before its normalisation vm_norm. */
 void recorder_merge(Recorder *r, Vec3 p, int light_bounces, Color beta, Color value, float vm_norm, float w,
-                    float w_light, float w_camera);
+                    float w_light, float w_camera, bool dispersed);
 /* A light path's t = 1 connection from its light vertex p (s_light light vertices) to the
  * lens point `lens`, at raster position (x, y), kept when it lands within the filter's reach
  * of the recorded pixel (with the light path's index, for the MIS check); value already
@@ -124,8 +128,26 @@ void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value);
  * node at `depth` to a child at depth + 1. */
 void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth);
 
+/* ---- photon mapping (photon.c's photon_li) */
+/* The camera ray's specular chain: what emission it met (value L, beta 1), and when it
+ * reached a diffuse vertex x (NULL: it did not), x with the chain's throughput beta. */
+void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L);
+/* A photon counted by a density estimate, with the BSDF value f (no cosine) it is weighted by. */
+void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
+/* The density estimate over the photons recorded just before it (their count is kept):
+ * radius, the gather throughput g it is multiplied by (1 at the caustic map's x), the
+ * estimate est. */
+void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est);
+
 /* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir);
+/* The camera subpath starts (ray origin and direction; wl its wavelengths in spectral mode,
+ * NULL in RGB). */
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl);
+/* Spectral BDPT: whether the camera subpath has been dispersed (its secondary wavelengths
+ * terminated) as of the vertex being recorded. */
+void recorder_cam_dispersed(Recorder *r, bool dispersed);
+/* The connection just recorded used a light vertex of a dispersed light subpath. */
+void recorder_light_dispersed(Recorder *r, bool dispersed);
 /* The light point's normal of the NEE strategy just recorded (into its ng). */
 void recorder_nee_normal(Recorder *r, Vec3 n);
 /* A light subpath starts (subpath_trace_light, every path of the step, in order). */

@@ -247,6 +247,7 @@ static Color connect_vertices(const Scene *s, const SubpathIteration *it, const 
         Color v = vis ? color_scale(color_mul(color_mul(fx, fy), y->beta), weight / dist2) : color_s(0.0f);
         recorder_strategy(it->rec, CST_EXPLAIN_CONNECT, y->bounces + 1, -1, y->p, sp->beta, v, weight, w_light,
                           w_camera, x_fwd, x_fwd_a, !vis);
+        recorder_light_dispersed(it->rec, y->dispersed);
         return v;
     }
     if (!scene_visible_at(s, x->p, x->ng, y->p, y->ng, x->time)) return color_s(0.0f);
@@ -261,7 +262,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
     if (s->num_media | s->num_medium_ifaces)
         return media_subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays, merge);
     Color L = color_s(0.0f);
-    if (it->rec) recorder_camera(it->rec, ray.o, ray.d);
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d, wl);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
     /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic
@@ -336,6 +337,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
         if (wl) {
             scene_bsdf_disperse(s, &sh, &wc, &bsdf);
             cam_dispersed = wavelengths_secondary_terminated(&wc);
+            if (it->rec) recorder_cam_dispersed(it->rec, cam_dispersed);
         } else {
             scene_bsdf(s, &sh, wl, &bsdf);
         }

@@ -206,7 +206,7 @@ static Color merge(const SubpathParams *vp, const SubpathIteration *it, const Me
             if (y->dispersed) acc_hero = color_add(acc_hero, color_scale(color_mul(f, y->beta), weight));
             else acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
             if (it->rec) recorder_merge(it->rec, y->p, y->bounces, sp->beta, color_scale(color_mul(f, y->beta), weight),
-                                        it->vm_norm, weight, w_light, w_camera);
+                                        it->vm_norm, weight, w_light, w_camera, y->dispersed);
         }
     *hero = color_scale(acc_hero, it->vm_norm);
     return color_scale(acc, it->vm_norm);

@@ -1,7 +1,8 @@
 /* cst_explain (caustic.h, issue 30): one sample of one pixel replayed through the
  * render's own steps (integrator.c) on a one-pixel crop, one thread, with a recorder
- * (integrators/recorder.h) that the path tracer and BDPT fill; then the recorded additions
- * are summed again in the integrator's order and checked against the film. */
+ * (integrators/recorder.h) that the path tracers, Whitted, photon mapping and BDPT/VCM
+ * fill; then the recorded additions are summed again in the integrator's order and
+ * checked against the film. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,7 +20,7 @@
  * with its connections; longer ones are reported truncated (and not checked). */
 enum { EXPLAIN_EVENTS = 8192 };
 
-const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, bdpt, vcm"; }
+const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm"; }
 
 void cst_explain_destroy(CstExplain *e)
 {
@@ -44,12 +45,10 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_PATH_BSDF:
     case CST_INTEGRATOR_DEFAULT: return CST_OK; /* path_li, volpath_li and path_sss_li are recorded */
     case CST_INTEGRATOR_WHITTED:
-    case CST_INTEGRATOR_LIGHT: return CST_OK; /* (integrator_prepare refuses media for both) */
+    case CST_INTEGRATOR_LIGHT:
+    case CST_INTEGRATOR_PHOTON: return CST_OK; /* (integrator_prepare refuses media for these) */
     case CST_INTEGRATOR_BDPT:
     case CST_INTEGRATOR_VCM:
-        if (st->color_mode == CST_COLOR_SPECTRAL)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain follows %s in RGB mode only; expected --rgb",
-                            cst_integrator_name(st->integrator));
         /* subpath_media.c's walks and connections carry no recorder hooks (yet). */
         if (scene->num_media | scene->num_medium_ifaces | scene->num_subsurface)
             return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow bdpt's paths through participating "
@@ -61,10 +60,6 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
                     cst_integrator_name(st->integrator));
 }
 
-/* The recorded additions summed in the order path_li and subpath_trace_camera add them
- * (BDPT's connections of a vertex first among themselves), then as camera_tile turns the
- * path's value into the film's sample: spectral conversion, non-finite to 0, clamp, filter
- * weight. */
 /* Whitted's ray tree summed again as whitted_trace sums it, from the node whose VERTEX
  * (or ESCAPE) event is at *i: its emission, plus its direct light, plus each branch's
  * weight times its child's value. */
@@ -84,36 +79,110 @@ static Color replay_whitted(const Recorder *r, int *i)
     return L;
 }
 
+/* A run of BDPT connections (or of VCM's merges) at one camera vertex, summed before it is
+ * added times the vertex's throughput; spectral mode keeps the dispersed ones apart (H). */
+typedef struct ReplayGroup {
+    int depth, kind;
+    bool cam_dispersed; /* merges: the camera subpath's, which sends both sums to H */
+    Color beta, c, ch;
+} ReplayGroup;
+
+/* The group's sums added as subpath_trace_camera adds them (VCM: after merge()'s
+ * normalisation, the dispersed light vertices' apart). */
+static void replay_flush(const Integrator *it, const ReplayGroup *g, Color *L, Color *H)
+{
+    const bool spectral = it->spectral;
+    if (g->kind == CST_EXPLAIN_CONNECT) {
+        *L = color_madd(*L, g->beta, g->c);
+        if (spectral) *H = color_madd(*H, g->beta, g->ch);
+        return;
+    }
+    const float norm = it->light.vcm_it.vm_norm;
+    Color m = color_scale(g->c, norm), mh = color_scale(g->ch, norm);
+    if (spectral && g->cam_dispersed) {
+        m = color_add(m, mh);
+        mh = color_s(0.0f);
+        *H = color_madd(*H, g->beta, m);
+    } else {
+        *L = color_madd(*L, g->beta, m);
+    }
+    if (spectral) *H = color_madd(*H, g->beta, mh);
+}
+
+/* The recorded additions summed in the order path_li and subpath_trace_camera add them
+ * (BDPT's connections of a vertex first among themselves), then as camera_tile turns the
+ * path's value into the film's sample: spectral conversion, non-finite to 0, clamp, filter
+ * weight. */
+/* photon_li summed again: the specular chain's emission L, plus beta times (the direct
+ * light, plus the caustic map's estimate, plus the gather's throughput times the global
+ * map's), each estimate the photons' f * power summed in the order the map visited them,
+ * times the box kernel 1 / (pi r^2) (Jensen 2001 eq. 7.6). */
+static Color replay_photon(const Recorder *r)
+{
+    Color L = color_s(0.0f), lx = color_s(0.0f), beta = color_s(1.0f), sum = color_s(0.0f);
+    bool diffuse = false;
+    for (int i = 0; i < r->n; i++) {
+        const CstExplainEvent *e = &r->ev[i];
+        switch (e->kind) {
+        case CST_EXPLAIN_EMISSION: L = r->value[i]; break;
+        case CST_EXPLAIN_VERTEX:
+            if (e->depth == 1) beta = r->beta[i], diffuse = true;
+            break;
+        case CST_EXPLAIN_NEE: lx = r->value[i]; break;
+        case CST_EXPLAIN_PHOTON: sum = color_madd(sum, r->beta[i], r->value[i]); break;
+        case CST_EXPLAIN_ESTIMATE: {
+            const float rad = e->distance;
+            Color est = color_scale(sum, 1.0f / (CST_PI * rad * rad));
+            lx = color_add(lx, (e->flags & CST_EXPLAIN_CAUSTIC) ? est : color_mul(r->beta[i], est));
+            sum = color_s(0.0f);
+            break;
+        }
+        default: break;
+        }
+    }
+    return diffuse ? color_madd(L, beta, lx) : L;
+}
+
 static Color replay(const Integrator *it, const Recorder *r, int x, int y, int sample, float *fw)
 {
-    Color L = color_s(0.0f), c = color_s(0.0f), beta_c = color_s(0.0f);
-    int c_depth = -1, c_kind = 0;
+    /* L: the sample; H (spectral BDPT/VCM): what counts at the hero wavelength alone. */
+    Color L = color_s(0.0f), H = color_s(0.0f);
+    ReplayGroup g = {.depth = -1};
     if (it->kind == INTEGRATOR_WHITTED) {
         int i = 0;
         L = replay_whitted(r, &i);
     }
-    for (int i = 0; i <= r->n && it->kind != INTEGRATOR_WHITTED; i++) {
+    if (it->kind == INTEGRATOR_PHOTON) L = replay_photon(r);
+    for (int i = 0; i <= r->n && it->kind != INTEGRATOR_WHITTED && it->kind != INTEGRATOR_PHOTON; i++) {
         const CstExplainEvent *e = i < r->n ? &r->ev[i] : NULL;
-        /* A run of connections (or of VCM's merges) at one camera vertex: summed, then added
-         * times the vertex's throughput (merges after their normalisation). */
         const bool group = e && (e->kind == CST_EXPLAIN_CONNECT || e->kind == CST_EXPLAIN_MERGE) &&
                            (e->flags & CST_EXPLAIN_ADDED);
-        if (c_depth >= 0 && (!group || e->depth != c_depth || (int)e->kind != c_kind)) {
-            L = color_madd(L, beta_c, c_kind == CST_EXPLAIN_MERGE ? color_scale(c, it->light.vcm_it.vm_norm) : c);
-            c_depth = -1;
+        if (g.depth >= 0 && (!group || e->depth != g.depth || (int)e->kind != g.kind)) {
+            replay_flush(it, &g, &L, &H);
+            g.depth = -1;
         }
         if (!e || !(e->flags & CST_EXPLAIN_ADDED) || e->kind == CST_EXPLAIN_SPLAT) continue;
+        const bool hero = e->flags & CST_EXPLAIN_HERO;
         if (group) {
-            if (c_depth < 0) {
-                c = color_s(0.0f);
-                c_depth = e->depth;
-                c_kind = (int)e->kind;
-                beta_c = r->beta[i];
+            if (g.depth < 0) {
+                g = (ReplayGroup){e->depth, (int)e->kind, hero, r->beta[i], color_s(0.0f), color_s(0.0f)};
             }
-            c = color_add(c, r->value[i]);
+            /* A connection counts at the hero alone when either subpath is dispersed; a
+             * merge's sums are kept apart by the light vertex (replay_flush). */
+            const bool apart = (e->flags & CST_EXPLAIN_LIGHT_DISPERSED) || (e->kind == CST_EXPLAIN_CONNECT && hero);
+            if (apart) g.ch = color_add(g.ch, r->value[i]);
+            else g.c = color_add(g.c, r->value[i]);
             continue;
         }
-        L = color_madd(L, r->beta[i], r->value[i]);
+        if (hero) H = color_madd(H, r->beta[i], r->value[i]);
+        else L = color_madd(L, r->beta[i], r->value[i]);
+    }
+    if (it->kind == INTEGRATOR_BIDIR && it->spectral) {
+        /* subpath_trace_camera's end: H's hero lane times the lane count (the hero alone,
+         * as spectrum_to_rgb counts a terminated path). */
+        Color hero = color_s(0.0f);
+        hero.c[0] = H.c[0] * (float)COLOR_LANES;
+        L = color_add(L, hero);
     }
     if (it->spectral && r->has_wl) L = spectrum_to_rgb(L, &r->wl);
     if (!color_is_finite(L)) L = color_s(0.0f);
@@ -275,6 +344,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     if ((status = integrator_prepare(it, scene, &st, film, &worker, &rays, NULL, NULL, err)) != CST_OK) goto done;
     if (it->kind == INTEGRATOR_PATH) it->path.rec = &rec;
     else if (it->kind == INTEGRATOR_WHITTED) it->whitted.rec = &rec;
+    else if (it->kind == INTEGRATOR_PHOTON) it->photon.rec = &rec;
     else if (it->kind == INTEGRATOR_LIGHT) rec.radius = 0.0f;
     else rec.radius = filter_radius(it->light.vcm_params.frame.filter);
     const int pixel = y * st.width + x;

@@ -47,6 +47,9 @@ harness_run "$d" 60 explain --pixel=3,4 --integrator path-bsdf "${SMALL[@]}" --j
 if [ "$RC" -eq 0 ] && grep -q '"exact": true' "$d/out.json"; then pass "--json=FILE"; else fail "--json=FILE" "exit $RC"; fi
 harness_run "$d" 60 explain --help
 expect "explain --help" 0 'caustic explain \[SCENE\] --pixel X,Y'
+harness_run "$d" 30 explain --pixel 12,10 --integrator photon "${SMALL[@]}"
+expect "photon: estimates, sum equal bit for bit" 0 "global .final gather. map's estimate over those [0-9]+ photons" \
+    'equal, bit for bit'
 HARNESS_EXPECT_STDOUT=0
 
 harness_run "$d" 30 explain "${SMALL[@]}"
@@ -59,10 +62,8 @@ harness_run "$d" 30 explain --pixel 24,0 "${SMALL[@]}"
 expect "--pixel off the image" 2 'pixel 24,0: expected 0 <= x < 24'
 harness_run "$d" 30 explain --pixel 1,1 --sample x "${SMALL[@]}"
 expect "--sample not a number" 2 '--sample: expected an integer'
-harness_run "$d" 30 explain --pixel 1,1 --integrator photon "${SMALL[@]}"
-expect "photon refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, bdpt, vcm; not photon'
 harness_run "$d" 30 explain --pixel 1,1 --integrator sppm "${SMALL[@]}"
-expect "sppm refused" 2 'explain supports: '
+expect "sppm refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm; not sppm'
 harness_run "$d" 30 explain missing.json --pixel 1,1
 expect "missing scene" 2 'cannot open scene'
 harness_run "$d" 30 render --why-dark "${SMALL[@]}" -o x.png

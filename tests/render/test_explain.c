@@ -25,6 +25,12 @@ static int merges_checked, splats_checked; /* of them, and of the splats, checke
 static double mis_error; /* the largest relative difference from the explicit weights */
 static int sss_exits;    /* subsurface exits recorded (path_sss.c) */
 static float radius;    /* photon_radius of the settings (0: the default) */
+static int heroes;      /* spectral BDPT/VCM: additions at the hero wavelength alone */
+static int light_dispersed; /* of them, connections and merges with a dispersed light vertex */
+static int photons_gathered[2]; /* photon: photons listed by the caustic and the global estimates */
+/* The pixels explain_all explains (NULL: its own five). */
+static const int (*pixels)[2];
+static size_t num_pixels;
 
 static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
 {
@@ -43,6 +49,7 @@ static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filte
      * test_whitted_light's signed zero, under zsobol). */
     st->sampler = CST_SAMPLER_INDEPENDENT;
     if (radius > 0.0f) st->photon_radius = radius;
+    st->photons = 20000; /* photon: a small map is built for every explained sample */
 }
 
 /* The film value of sample `sample` of pixel (x, y) alone: a one-pixel crop rendered
@@ -63,12 +70,14 @@ static void render_one(const CstScene *s, const CstRenderSettings *base, int x, 
 static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter, CstColorMode color)
 {
     static const int PIX[][2] = {{12, 10}, {3, 17}, {20, 2}, {12, 1}, {8, 14}};
+    const int (*pix)[2] = pixels ? pixels : PIX;
+    const size_t npix = pixels ? num_pixels : sizeof PIX / sizeof PIX[0];
     int added = 0;
     CstRenderSettings st;
     settings(&st, integ, filter, color);
-    for (size_t p = 0; p < sizeof PIX / sizeof PIX[0]; p++) {
+    for (size_t p = 0; p < npix; p++) {
         for (int sample = 0; sample < 4; sample += 3) {
-            const int x = PIX[p][0], y = PIX[p][1];
+            const int x = pix[p][0], y = pix[p][1];
             CstExplain *ex = NULL;
             CstError err;
             assert_int_equal(cst_explain(s, &st, x, y, sample, &ex, &err), CST_OK);
@@ -102,9 +111,17 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
             for (int i = 0; i < ex->num_events; i++) {
                 const CstExplainEvent *e = &ex->events[i];
                 if (e->flags & CST_EXPLAIN_ADDED) added++;
+                if ((e->flags & CST_EXPLAIN_ADDED) && (e->flags & (CST_EXPLAIN_HERO | CST_EXPLAIN_LIGHT_DISPERSED)) &&
+                    e->contribution[0] != 0.0f)
+                    heroes++;
+                if ((e->flags & CST_EXPLAIN_ADDED) && (e->flags & CST_EXPLAIN_LIGHT_DISPERSED) &&
+                    e->contribution[0] != 0.0f)
+                    light_dispersed++;
                 if (e->mis_strategies > 0) assert_true(e->mis_strategies >= 1 && e->mis_explicit > 0.0f);
                 if (e->mis_weight != -1.0f) assert_true(e->mis_weight >= 0.0f && e->mis_weight <= 1.0f);
                 if (e->kind == CST_EXPLAIN_MERGE) merges++;
+                if (e->kind == CST_EXPLAIN_ESTIMATE && e->value[0] != 0.0f)
+                    photons_gathered[(e->flags & CST_EXPLAIN_CAUSTIC) ? 0 : 1] += e->path;
                 if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "subsurface exit"))
                     sss_exits++;
                 if (e->kind == CST_EXPLAIN_MERGE && e->mis_strategies > 0) merges_checked++;
@@ -226,6 +243,7 @@ static void test_bdpt(void **state)
     cst_scene_destroy(s);
     s = load("cornell-spheres.json");
     assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_MITCHELL, CST_COLOR_SPECTRAL) > 0);
     cst_scene_destroy(s);
     print_message("bdpt: %d strategies' MIS weights checked against the explicit ones (%d splats), largest "
                   "relative difference %.3g\n", mis_checked, splats_checked, mis_error);
@@ -247,6 +265,7 @@ static void test_vcm(void **state)
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_TENT, CST_COLOR_RGB) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
     cst_scene_destroy(s);
     radius = 0.0f;
     /* Every merge and every splat near the pixel is checked (their light subpaths traced
@@ -255,6 +274,73 @@ static void test_vcm(void **state)
                   "difference %.3g\n", merges, merges_checked, splats_checked, mis_checked, mis_error);
     assert_true(merges > 0 && merges_checked == merges);
     assert_true(splats_checked >= 50 && mis_checked >= 100);
+}
+
+/* Spectral BDPT and VCM through SF11 glass (scenes/prism.pbrt): camera subpaths and light
+ * subpaths whose secondary wavelengths a dispersive refraction terminated add at the hero
+ * wavelength alone (subpath_trace_camera's H, flags HERO and LIGHT_DISPERSED); the replay
+ * keeps them apart and the sums are the camera sample and the film's value bit for bit,
+ * with every MIS weight checked (explain_all). */
+static void test_bidir_spectral(void **state)
+{
+    (void)state;
+    static const char *const SCENE = CST_SOURCE_DIR "/scenes/prism.pbrt";
+    static const int PIX[][2] = {{9, 10}, {10, 10}, {12, 10}, {14, 12}, {10, 16}};
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_pbrt(SCENE, NULL, &s, &err) != CST_OK) fail_msg("%s: %s", SCENE, err.msg);
+    pixels = PIX;
+    num_pixels = sizeof PIX / sizeof PIX[0];
+    heroes = 0;
+    radius = 0.2f; /* the prism is 1.6 units wide */
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+    const int bdpt_heroes = heroes;
+    assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_TENT, CST_COLOR_SPECTRAL) > 0);
+    radius = 0.0f;
+    pixels = NULL;
+    print_message("prism: %d bdpt and %d vcm additions at the hero wavelength alone\n", bdpt_heroes,
+                  heroes - bdpt_heroes);
+    assert_true(bdpt_heroes > 0 && heroes > bdpt_heroes);
+    cst_scene_destroy(s);
+    /* Light subpaths dispersed by a glass sphere, connected to from the floor and the wall
+     * (pixels where the pixel's own light subpath went through the sphere). */
+    static const char *const CAUSTIC = CST_SOURCE_DIR "/tests/render/explain/dispersed-caustic.pbrt";
+    static const int PIX2[][2] = {{2, 0}, {16, 1}, {1, 4}, {23, 5}, {17, 16}, {3, 17}};
+    if (cst_scene_load_pbrt(CAUSTIC, NULL, &s, &err) != CST_OK) fail_msg("%s: %s", CAUSTIC, err.msg);
+    pixels = PIX2;
+    num_pixels = sizeof PIX2 / sizeof PIX2[0];
+    light_dispersed = 0;
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+    assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+    pixels = NULL;
+    print_message("dispersed caustic: %d connections and merges with dispersed light vertices\n", light_dispersed);
+    assert_true(light_dispersed >= 4);
+    cst_scene_destroy(s);
+}
+
+/* Photon mapping: the specular chain's emission, the direct light, the caustic map's and the
+ * final gather's global-map estimates, each photon's f * power re-summed in the map's order
+ * times the box kernel, give the camera sample and the film's value bit for bit; the
+ * spheres' glass puts photons in the caustic map. */
+static void test_photon(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    photons_gathered[0] = photons_gathered[1] = 0;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    cst_scene_destroy(s);
+    s = load("cornell-spheres.json");
+    static const int PIX[][2] = {{12, 10}, {3, 17}, {20, 2}, {8, 14}, {7, 15}, {16, 15}, {15, 16}};
+    pixels = PIX;
+    num_pixels = sizeof PIX / sizeof PIX[0];
+    assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_MITCHELL, CST_COLOR_RGB) > 0);
+    pixels = NULL;
+    cst_scene_destroy(s);
+    print_message("photon: %d caustic and %d global photons in nonzero estimates\n", photons_gathered[0],
+                  photons_gathered[1]);
+    assert_true(photons_gathered[0] > 0 && photons_gathered[1] > 100);
 }
 
 /* Whitted's ray tree (mirror and glass branch in two) and the light tracer's splats: the
@@ -322,18 +408,13 @@ static void test_refused(void **state)
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     CstRenderSettings st;
     CstExplain *ex = NULL;
-    static const CstIntegrator NO[] = {CST_INTEGRATOR_PHOTON, CST_INTEGRATOR_SPPM, CST_INTEGRATOR_PSSMLT,
-                                       CST_INTEGRATOR_MMLT};
+    static const CstIntegrator NO[] = {CST_INTEGRATOR_SPPM, CST_INTEGRATOR_PSSMLT, CST_INTEGRATOR_MMLT};
     for (size_t i = 0; i < sizeof NO / sizeof NO[0]; i++) {
         settings(&st, NO[i], CST_FILTER_BOX, CST_COLOR_RGB);
         assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
         assert_null(ex);
-        assert_non_null(strstr(err.msg, "explain supports: path, path-nee, path-bsdf, whitted, light, bdpt, vcm"));
+        assert_non_null(strstr(err.msg, "explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm"));
     }
-    settings(&st, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_SPECTRAL);
-    assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
-    settings(&st, CST_INTEGRATOR_VCM, CST_FILTER_BOX, CST_COLOR_SPECTRAL);
-    assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
     settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB);
     assert_int_equal(cst_explain(s, &st, W, 0, 0, &ex, &err), CST_ERR_INVALID_ARG);
     assert_int_equal(cst_explain(s, &st, 0, -1, 0, &ex, &err), CST_ERR_INVALID_ARG);
@@ -352,6 +433,8 @@ int main(void)
         cmocka_unit_test(test_bdpt),
         cmocka_unit_test(test_whitted_light),
         cmocka_unit_test(test_vcm),
+        cmocka_unit_test(test_bidir_spectral),
+        cmocka_unit_test(test_photon),
         cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),
     };
