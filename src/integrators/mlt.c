@@ -61,15 +61,16 @@ static Color path_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
     Vec2 uf = sampler_2d(&smp);
     Vec2 ul = sampler_2d(&smp);
     *fp = v2(uf.x * domain_w(m) - m->p.margin, uf.y * domain_h(m) - m->p.margin);
-    Ray ray = camera_generate_ray(cam, fp->x, fp->y, ul);
     Wavelengths wl, *wlp = NULL;
     if (m->p.spectral) {
         wl = wavelengths_sample(sampler_1d(&smp));
         wlp = &wl;
     }
     /* Motion blur: the path's time, one more primary-sample dimension (mutated as the
-     * others); drawn only in scenes that move, so static ones keep their dimensions. */
-    if (scene_has_motion(s)) ray.time = sampler_1d(&smp);
+     * others) mapped through the shutter, the camera placed there; drawn only in scenes
+     * that move, so static ones keep their dimensions. */
+    const float time = scene_has_motion(s) ? camera_time(cam, sampler_1d(&smp)) : 0.0f;
+    Ray ray = camera_generate_ray_at(cam, fp->x, fp->y, ul, time);
     Color L = path_li(s, &m->p.path, ray, &smp, wlp, rays);
     if (wlp) L = spectrum_to_rgb(L, wlp);
     return L;
@@ -150,9 +151,15 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
         wlp = &wl;
     }
     /* Motion blur: the path's one time, a dimension of the camera stream (mutated as the
-     * others) that both subpaths and every connection carry, also for t = 1 where no
-     * camera ray is traced; drawn only in scenes that move. */
-    const float time = scene_has_motion(s) ? sampler_1d(&smp) : 0.0f;
+     * others) mapped through the shutter, that both subpaths and every connection carry,
+     * also for t = 1 where no camera ray is traced but the lens point, W_e and its pdf are
+     * the camera's placed at that time; drawn only in scenes that move. */
+    const float time = scene_has_motion(s) ? camera_time(cam, sampler_1d(&smp)) : 0.0f;
+    Camera placed;
+    if (cam->moving) {
+        placed = camera_at(cam, time);
+        cam = &placed;
+    }
     const SubpathParams *vp = &m->p.sub;
     const SubpathIteration *it = &m->p.it;
     if (s->num_media | s->num_medium_ifaces)

@@ -316,8 +316,9 @@ static void test_moving_square_coverage(void **state)
 }
 
 /* A camera moving sideways past a fixed square renders the closed-form time average of the
- * same relative motion (path, whitted, and the light tracer's connections to the camera at
- * each light path's time are checked against path in test_light_agrees_with_path); the
+ * same relative motion (path, whitted; the light tracer's connections to the camera at
+ * each light path's time are checked against path in test_light_agrees_with_path, the
+ * other integrators' in test_integrators_agree_with_path); the
  * shutter [0.25, 0.75] sees the middle half of the motion; a shutter of one instant renders
  * the square sharp where that instant places it. */
 static void test_moving_camera_coverage(void **state)
@@ -333,12 +334,7 @@ static void test_moving_camera_coverage(void **state)
     check_columns(f, "whitted, moving camera");
     cst_film_destroy(f);
     cst_scene_destroy(s);
-    sm.perspective = 1; /* bdpt refuses orthographic cameras first */
-    s = square_scene_m(NULL, sm);
-    f = render(s, CST_INTEGRATOR_BDPT, CST_ERR_UNSUPPORTED, &e);
-    assert_non_null(strstr(e.msg, "moving camera"));
-    cst_film_destroy(f);
-    cst_scene_destroy(s);
+
     /* The square moving over the shutter [0.25, 0.75]: from X0 + v / 4 to X0 + 3 v / 4. */
     const double v = (double)(X1 - X0);
     sm = (SquareMotion){1, 0, 0, 0.25f, 0.75f};
@@ -407,7 +403,8 @@ static void test_backends_agree(void **state)
  * estimate the same time-averaged image. extra: LIT_PLAIN; LIT_MEDIUM, the camera in a
  * medium of zero density (the path integrators then take volpath's loop, which must give
  * the same image); LIT_SSS, a subsurface quad far outside the view (path_sss's loop).
- * camera_moves: the camera moves and turns over the shutter. */
+ * camera_moves: 1, the camera moves and turns over the shutter; 2, the same over the
+ * shutter [0.2, 0.7] (the middle of the same motion, of the square's too). */
 enum { LIT_PLAIN, LIT_MEDIUM, LIT_SSS };
 static CstScene *lit_scene_with(int extra, int camera_moves)
 {
@@ -491,6 +488,7 @@ static CstScene *lit_scene_with(int extra, int camera_moves)
         const float c = 0.965925826f, sn = 0.258819045f;
         const float c1[12] = {c, 0, sn, 1.5f, 0, 1, 0, 0.5f, -sn, 0, c, 1.0f};
         ok(cst_scene_set_camera_motion(s, c0, c1, &e), &e);
+        if (camera_moves == 2) ok(cst_scene_set_shutter(s, 0.2f, 0.7f, &e), &e);
     }
     ok(cst_scene_commit(s, &e), &e);
     return s;
@@ -558,6 +556,7 @@ static void test_light_agrees_with_path(void **state)
     (void)state;
     check_light_agrees_with_path(0);
     check_light_agrees_with_path(1); /* the light tracer connects to the camera at its path's time */
+    check_light_agrees_with_path(2); /* ... drawn over the shutter [0.2, 0.7] */
 }
 
 /* ------------------------------------------------------- every integrator vs path */
@@ -587,13 +586,12 @@ static CstRenderSettings motion_settings(void)
  * primary sample: the same time-averaged image. Splatting and merging estimators have
  * correlated pixels (and MLT correlated samples): their standard errors come from
  * independent renders. */
-static void test_integrators_agree_with_path(void **state)
+static void integrators_agree_with_path(int camera_moves)
 {
-    (void)state;
-    CstScene *s = lit_scene(0);
+    CstScene *s = lit_scene(camera_moves);
     CstRenderSettings st = motion_settings();
     Regions ref = regions(MS, MBLOCK);
-    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 3, &ref);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 3 + (uint64_t)camera_moves, &ref);
     const struct { CstIntegrator integ; int spp, renders; } cases[] = {
         {CST_INTEGRATOR_BDPT, 64, 16}, {CST_INTEGRATOR_VCM, 64, 16}, {CST_INTEGRATOR_PSSMLT, 32, 32},
         {CST_INTEGRATOR_MMLT, 32, 32}, {CST_INTEGRATOR_SPPM, 32, 16},
@@ -605,9 +603,30 @@ static void test_integrators_agree_with_path(void **state)
          * is wide enough for its bias at the floor-wall corner to show (measured: -5% of the
          * image at 16 iterations, z = 18 against path). */
         st.photon_radius = cases[i].integ == CST_INTEGRATOR_SPPM ? 0.1 : 0.0;
-        split_regions(s, &st, cases[i].integ, cases[i].renders, 100 + 10 * i, &r);
-        compare(&ref, &r, "path", cst_integrator_name(cases[i].integ));
+        split_regions(s, &st, cases[i].integ, cases[i].renders, 100 + 10 * i + 1000 * (uint64_t)camera_moves, &r);
+        char what[64];
+        snprintf(what, sizeof what, "%s%s", cst_integrator_name(cases[i].integ),
+                 camera_moves ? ", moving camera, shutter [0.2, 0.7]" : "");
+        compare(&ref, &r, "path", what);
     }
+    cst_scene_destroy(s);
+}
+
+static void test_integrators_agree_with_path(void **state)
+{
+    (void)state;
+    integrators_agree_with_path(0);
+    /* The camera moving and turning over the shutter [0.2, 0.7]: every path's time is
+     * drawn over the shutter and the camera placed there, for the camera ray and for the
+     * t = 1 connections of BDPT's, VCM's and mmlt's light subpaths (the spot-lit wall's
+     * pixels get most of their weight from those: a light subpath connecting to the camera
+     * at another instant lands on another pixel). */
+    integrators_agree_with_path(2);
+    CstScene *s;
+    CstRenderSettings st = motion_settings();
+    Regions ref = regions(MS, MBLOCK);
+    s = lit_scene(0);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 3, &ref);
     cst_scene_destroy(s);
     /* path's media loop (volpath) and subsurface loop (path_sss) carry the time too. */
     const int extras[] = {LIT_MEDIUM, LIT_SSS};
@@ -624,7 +643,7 @@ static void test_integrators_agree_with_path(void **state)
 static void test_motion_threads(void **state)
 {
     (void)state;
-    CstScene *s = lit_scene(0);
+    CstScene *s = lit_scene(2); /* the camera moving too, over the shutter [0.2, 0.7] */
     CstRenderSettings st = motion_settings();
     st.width = st.height = 8;
     st.seed = 4;
