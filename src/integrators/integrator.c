@@ -763,16 +763,12 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
      * photon integrator builds its maps once, before any camera path, at time 0: right while
      * only the camera moves, but they would hold one instant (no blur) or mix instants
      * (biased) where instances move. subpath_media.c's walks (light, bdpt, vcm and mmlt in
-     * media) do not carry the time yet. */
+     * media) carry the time as subpath.c's do. */
     it->motion = scene_has_motion(scene);
-    const bool media = scene->num_media || scene->num_medium_ifaces;
-    const bool instances_move = scene->instances && scene->instances->num_motions > 0;
-    if ((instances_move && it->kind == INTEGRATOR_PHOTON) || (it->motion && media && bidir_media))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render %s (motion blur) "
-                        "yet%s: use %s", cst_integrator_name(st->integrator),
-                        media ? "motion" : "moving instances",
-                        media ? " with participating media" : " (its photon maps are built once, for all camera paths)",
-                        media ? "path, path-nee, path-bsdf or pssmlt" : "sppm, path, bdpt or vcm");
+    if (it->kind == INTEGRATOR_PHOTON && scene->instances && scene->instances->num_motions > 0)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
+                        "yet (its photon maps are built once, for all camera paths): use sppm, path, bdpt or vcm",
+                        cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

@@ -81,8 +81,8 @@ static Color path_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
  * connections there do (transmittance on every connection, volume vertices on both
  * subpaths). smp reads pss; sl, n_strategies and the film position as mmlt_eval drew them. */
 static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, PssSampler *pss, Sampler *smp,
-                             int depth, int sl, int n_strategies, Vec2 *fp, Vec2 ul, const Wavelengths *wlp,
-                             uint64_t *rays)
+                             int depth, int sl, int n_strategies, Vec2 *fp, Vec2 ul, float time,
+                             const Wavelengths *wlp, uint64_t *rays)
 {
     const SubpathParams *vp = &m->p.sub;
     const SubpathIteration *it = &m->p.it;
@@ -94,11 +94,12 @@ static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, Ps
         Vec2 u_lens = sampler_2d(smp);
         pss_start_stream(pss, 1);
         Color rgb;
-        if (!media_subpath_connect_camera(s, cam, vp, it, sl - 1, smp, u_lens, wlp, fp, &rgb, rays)) return L;
+        if (!media_subpath_connect_camera(s, cam, vp, it, sl - 1, smp, time, u_lens, wlp, fp, &rgb, rays)) return L;
         const double film = (double)m->p.width * (double)m->p.height;
         return color_scale(rgb, (float)((double)n_strategies * film / ((double)domain_w(m) * (double)domain_h(m))));
     }
     Ray ray = camera_generate_ray(cam, fp->x, fp->y, ul);
+    ray.time = time;
     MediaCameraVertex x;
     Color emitted;
     bool found = media_subpath_camera_vertex(s, cam, vp, it, ray, tc - 1, sl == 0, smp, wlp, &x, &emitted, rays);
@@ -112,7 +113,7 @@ static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, Ps
         pss_start_stream(pss, 1);
         SubpathVertex y;
         Wavelengths walk_wl;
-        if (media_subpath_light_vertex(s, cam, vp, it, sl - 1, smp, wlp, &y, &walk_wl, rays)) {
+        if (media_subpath_light_vertex(s, cam, vp, it, sl - 1, smp, time, wlp, &y, &walk_wl, rays)) {
             L = media_subpath_connect_pair(s, it, &x, &y, wlp, rays);
             if (wlp && (x.dispersed || y.dispersed)) L = subpath_hero_only(L);
         }
@@ -163,7 +164,7 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
     const SubpathParams *vp = &m->p.sub;
     const SubpathIteration *it = &m->p.it;
     if (s->num_media | s->num_medium_ifaces)
-        return mmlt_eval_media(m, s, cam, pss, &smp, depth, sl, n_strategies, fp, ul, wlp, rays);
+        return mmlt_eval_media(m, s, cam, pss, &smp, depth, sl, n_strategies, fp, ul, time, wlp, rays);
     Color L = color_s(0.0f);
     SubpathVertex y;
     Wavelengths walk_wl;
