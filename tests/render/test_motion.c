@@ -3,8 +3,10 @@
  * placed at the same time, a square moving across the image against the closed-form time
  * average of its coverage, the same image from every acceleration back end, the light
  * tracer and every other integrator (bdpt, vcm, pssmlt, mmlt, sppm; path's media and
- * subsurface loops) against path on a lit moving scene, their images for 1 and 2 threads, the JSON "motion"
- * key and the integrators that refuse motion. */
+ * subsurface loops) against path on a lit moving scene (also with the camera moving over
+ * the shutter [0.2, 0.7], and in fog), and on a curtain sinking between the light and the
+ * camera (--curtain), their images for 1 and 2 threads, the JSON "motion" key and the
+ * integrators that refuse motion. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -695,7 +697,7 @@ static void test_fog_agrees_with_path(void **state)
  * connections between the two halves, mmlt's light vertices there, SPPM's photons there
  * all cross it). A strategy whose rays took another instant than the path's would see the
  * curtain up at 0 where it is up for more than half of the shutter. */
-static CstScene *curtain_scene(void)
+static CstScene *curtain_scene(int fog)
 {
     CstError e;
     CstScene *s = NULL;
@@ -755,31 +757,49 @@ static CstScene *curtain_scene(void)
     cam.up[1] = 1.0f;
     cam.fov = 60.0f;
     ok(cst_scene_set_camera(s, &cam, &e), &e);
+    if (fog) { /* thin fog everywhere (the camera's medium): subpath_media.c's walks */
+        CstMediumDesc med;
+        cst_medium_desc_init(&med);
+        med.sigma_a[0] = med.sigma_a[1] = med.sigma_a[2] = 0.05f;
+        med.sigma_s[0] = med.sigma_s[1] = med.sigma_s[2] = 0.6f;
+        med.scale = 1.0f;
+        int id = -1;
+        ok(cst_scene_add_medium(s, &med, &id, &e), &e);
+        ok(cst_scene_set_camera_medium(s, id, &e), &e);
+    }
     ok(cst_scene_commit(s, &e), &e);
     return s;
+}
+
+/* fog: the same in thin fog (no SPPM: it does not render media). */
+static void curtain_agrees_with_path(int fog)
+{
+    CstScene *s = curtain_scene(fog);
+    CstRenderSettings st = motion_settings();
+    Regions ref = regions(MS, MBLOCK);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 21 + (uint64_t)fog, &ref);
+    const struct { CstIntegrator integ; int spp, renders; } cases[] = {
+        {CST_INTEGRATOR_LIGHT, 64, 16}, {CST_INTEGRATOR_BDPT, 32, 16}, {CST_INTEGRATOR_VCM, 32, 16},
+        {CST_INTEGRATOR_MMLT, 32, 32}, {CST_INTEGRATOR_SPPM, 32, 16},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases - (fog ? 1 : 0); i++) {
+        Regions r = regions(MS, MBLOCK);
+        st.spp = cases[i].spp;
+        st.photon_radius = cases[i].integ == CST_INTEGRATOR_SPPM ? 0.1 : 0.0;
+        split_regions(s, &st, cases[i].integ, cases[i].renders, 500 + 10 * i + 100 * (uint64_t)fog, &r);
+        char what[64], ref_what[32];
+        snprintf(what, sizeof what, "%s (curtain%s)", cst_integrator_name(cases[i].integ), fog ? ", fog" : "");
+        snprintf(ref_what, sizeof ref_what, "path (curtain%s)", fog ? ", fog" : "");
+        compare(&ref, &r, ref_what, what);
+    }
+    cst_scene_destroy(s);
 }
 
 static void test_curtain_agrees_with_path(void **state)
 {
     (void)state;
-    CstScene *s = curtain_scene();
-    CstRenderSettings st = motion_settings();
-    Regions ref = regions(MS, MBLOCK);
-    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 21, &ref);
-    const struct { CstIntegrator integ; int spp, renders; } cases[] = {
-        {CST_INTEGRATOR_LIGHT, 64, 16}, {CST_INTEGRATOR_BDPT, 32, 16}, {CST_INTEGRATOR_VCM, 32, 16},
-        {CST_INTEGRATOR_MMLT, 32, 32}, {CST_INTEGRATOR_SPPM, 32, 16},
-    };
-    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
-        Regions r = regions(MS, MBLOCK);
-        st.spp = cases[i].spp;
-        st.photon_radius = cases[i].integ == CST_INTEGRATOR_SPPM ? 0.1 : 0.0;
-        split_regions(s, &st, cases[i].integ, cases[i].renders, 500 + 10 * i, &r);
-        char what[64];
-        snprintf(what, sizeof what, "%s (curtain)", cst_integrator_name(cases[i].integ));
-        compare(&ref, &r, "path (curtain)", what);
-    }
-    cst_scene_destroy(s);
+    curtain_agrees_with_path(0);
+    curtain_agrees_with_path(1);
 }
 
 /* The newly allowed integrators' moving images are the same for 1 and 2 threads. */
@@ -978,8 +998,12 @@ static void test_pbrt_active_transform(void **state)
     }
 }
 
-int main(void)
+/* --curtain: the curtain scenes alone, which CTest runs as an entry of their own
+ * (test_motion_curtain, so that -j2 spreads the two); without it, every other test. */
+int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--curtain") == 0) cmocka_set_test_filter("test_curtain*");
+    else cmocka_set_skip_filter("test_curtain*");
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_motion_interpolation),
         cmocka_unit_test(test_motion_bounds),
