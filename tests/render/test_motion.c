@@ -20,6 +20,7 @@
 #include "accel/instances.h"
 #include "camera/camera.h"
 #include "caustic/caustic.h"
+#include "caustic/caustic_compare.h"
 #include "core/rng.h"
 #include "math/motion.h"
 #include "render/regions.h"
@@ -818,6 +819,12 @@ static void test_motion_threads(void **state)
         st.spp = 4;
         assert_threads_bit_identical(s, st);
     }
+    /* explain checks bdpt's MIS weights with the camera unplaced: it refuses a moving one. */
+    st.integrator = CST_INTEGRATOR_BDPT;
+    CstExplain *ex = NULL;
+    CstError e;
+    assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &e), CST_ERR_UNSUPPORTED);
+    assert_non_null(strstr(e.msg, "moving camera"));
     cst_scene_destroy(s);
 }
 
