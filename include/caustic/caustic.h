@@ -363,9 +363,9 @@ CST_API CstStatus cst_scene_add_instance(CstScene *scene, int object,
  * world_from_object_end at shutter close, both as for cst_scene_add_instance; in between
  * the placement is interpolated by decomposition (translation, rotation by quaternion
  * slerp, stretch; pbrt-v4's AnimatedTransform) at each path's time, uniform over the
- * shutter. Scenes with a moving instance render with every integrator but photon, and with
- * participating media with path, path-nee, path-bsdf and pssmlt only (the others fail with
- * CST_ERR_UNSUPPORTED; docs/integrators.md). Equal matrices add a static instance. */
+ * shutter. Scenes with a moving instance render with every integrator but photon (it fails
+ * with CST_ERR_UNSUPPORTED; docs/integrators.md), with or without participating media.
+ * Equal matrices add a static instance. */
 CST_API CstStatus cst_scene_add_instance_motion(CstScene *scene, int object, const float world_from_object[12],
                                                 const float world_from_object_end[12], CstError *err);
 
@@ -504,7 +504,7 @@ CST_API void cst_scene_camera(const CstScene *scene, CstCameraDesc *out);
  * 1; in between by decomposition as a moving instance (the view axis and up vector placed,
  * then re-orthonormalised). Both mirror or neither. Both NULL: no placement (the camera is
  * in the world again). Kept across cst_scene_set_camera. Scenes with a moving camera render
- * with the integrators that render moving instances. */
+ * with every integrator (photon: while no instance moves). */
 CST_API CstStatus cst_scene_set_camera_motion(CstScene *scene, const float world_from_camera[12],
                                               const float world_from_camera_end[12], CstError *err);
 /* The shutter: each camera path (and light path) draws its time uniformly in [open, close],

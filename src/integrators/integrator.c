@@ -80,25 +80,36 @@ static Wavelengths bidir_wavelengths(const Integrator *it, uint64_t path, int it
  * (merging keeps its usual, vanishing, radius bias), so the average over iterations
  * converges to the time-averaged image; pixels of one iteration are correlated (the blur
  * shows as few sharp copies at low sample counts). The iterations' instants are spread
- * over the shutter by motion_pass_time. */
+ * over the shutter by motion_pass_time. Either is mapped through the shutter (camera_time:
+ * [0, 1] keeps u bit for bit). */
 static float bidir_time(const Integrator *it, uint64_t path, int iteration)
 {
     if (it->light.vcm_params.merge) {
         Pcg32 r;
         pcg32_seed_sample(&r, it->seed ^ 0x9e3779b97f4a7c15ULL, 0, 0);
-        return motion_pass_time((uint32_t)iteration, pcg32_float(&r));
+        return camera_time(&it->camera, motion_pass_time((uint32_t)iteration, pcg32_float(&r)));
     }
     Sampler smp;
     sampler_start(&smp, &it->sampler, path, (uint32_t)iteration);
     (void)sampler_2d(&smp); /* film */
     (void)sampler_2d(&smp); /* lens */
-    return sampler_1d(&smp);
+    return camera_time(&it->camera, sampler_1d(&smp));
+}
+
+/* The camera at a path's time: *buf placed there when the camera moves, else the camera
+ * itself (no copy). BDPT/VCM's light subpaths connect to it (t = 1: the lens point, W_e and
+ * its pdf) where their own instant places it, as the light tracer does (light.c). */
+static const Camera *camera_placed(const Camera *cam, float time, Camera *buf)
+{
+    if (!cam->moving) return cam;
+    *buf = camera_at(cam, time);
+    return buf;
 }
 
 /* One camera sample's radiance, by the integrator's estimator (spectral mode: at wl's
  * wavelengths; wl NULL in RGB mode). */
-static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ray ray, Sampler *smp,
-                              Wavelengths *wl)
+static inline Color camera_li(Integrator *it, const Camera *cam, IntegratorWorker *w, int pixel, Ray ray,
+                              Sampler *smp, Wavelengths *wl)
 {
     Sampler cont;
     switch (it->kind) {
@@ -111,9 +122,9 @@ static inline Color camera_li(Integrator *it, IntegratorWorker *w, int pixel, Ra
     case INTEGRATOR_BIDIR:
         cont = sampler_continue_sample(smp);
         if (it->light.vcm_params.merge)
-            return vcm_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
+            return vcm_trace_camera(it->scene, cam, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
                                     &cont, wl, &w->rays);
-        return bdpt_trace_camera(it->scene, &it->camera, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
+        return bdpt_trace_camera(it->scene, cam, &it->light.vcm_params, &it->light.vcm_it, pixel, ray,
                                  &cont, wl, &w->rays);
     case INTEGRATOR_LIGHT:
     case INTEGRATOR_SPPM:
@@ -154,7 +165,8 @@ static void camera_tile(void *ctx, int tile, int worker)
                  * static scenes keep their streams (and their images) bit for bit. BDPT's
                  * light pass redraws this dimension (bidir_time): keep the two in step; VCM
                  * takes the iteration's one instant instead. A moving camera is placed at
-                 * that time first (path, whitted and light only: integrator_create). */
+                 * that time first; the camera path's estimator sees it placed (BDPT/VCM's
+                 * camera pdf at the primary vertex). */
                 float time = 0.0f;
                 if (it->motion) {
                     time = camera_time(&it->camera, sampler_1d(&smp));
@@ -162,11 +174,7 @@ static void camera_tile(void *ctx, int tile, int worker)
                         time = bidir_time(it, (uint64_t)pixel, s);
                 }
                 Camera placed;
-                const Camera *cam = &it->camera;
-                if (cam->moving) {
-                    placed = camera_at(cam, time);
-                    cam = &placed;
-                }
+                const Camera *cam = camera_placed(&it->camera, time, &placed);
                 Ray ray = camera_generate_ray(cam, fp.x, fp.y, ul);
                 ray.time = time;
                 if (it->aov_hit) camera_aov(it, cam, w, pixel, ray);
@@ -178,7 +186,7 @@ static void camera_tile(void *ctx, int tile, int worker)
                                                       : wavelengths_sample(sampler_1d(&smp));
                     wlp = &wl;
                 }
-                Color L = camera_li(it, w, pixel, ray, &smp, wlp);
+                Color L = camera_li(it, cam, w, pixel, ray, &smp, wlp);
                 /* The film's sensor: the path's four spectral values to linear sRGB. */
                 if (wlp) L = spectrum_to_rgb(L, wlp);
                 if (!color_is_finite(L)) {
@@ -229,7 +237,9 @@ static void light_chunk(void *ctx, int chunk, int worker)
             Wavelengths wl;
             if (it->spectral) wl = bidir_wavelengths(it, (uint64_t)i, it->iteration);
             const float time = it->motion ? bidir_time(it, (uint64_t)i, it->iteration) : 0.0f;
-            subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &L->vcm_it, &rng, time,
+            Camera placed;
+            const Camera *cam = camera_placed(&it->camera, time, &placed);
+            subpath_trace_light(it->scene, cam, &L->vcm_params, &L->vcm_it, &rng, time,
                                 it->spectral ? &wl : NULL, verts, out, &w->rays);
             L->path_count[i] = (uint32_t)(verts->n - before);
         }
@@ -267,7 +277,9 @@ void integrator_bidir_light_path(const Integrator *it, int iteration, int path, 
     Wavelengths wl; /* as light_chunk */
     if (it->spectral) wl = bidir_wavelengths(it, (uint64_t)path, iteration);
     const float time = it->motion ? bidir_time(it, (uint64_t)path, iteration) : 0.0f;
-    subpath_trace_light(it->scene, &it->camera, &L->vcm_params, &vi, &rng, time, it->spectral ? &wl : NULL, verts,
+    Camera placed;
+    const Camera *cam = camera_placed(&it->camera, time, &placed);
+    subpath_trace_light(it->scene, cam, &L->vcm_params, &vi, &rng, time, it->spectral ? &wl : NULL, verts,
                         splats, rays);
 }
 
@@ -775,31 +787,25 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                                 cst_integrator_name(st->integrator), i);
         }
     }
-    /* Motion blur: every path carries one time to all its rays (Ray.time). The path
-     * tracers (volpath and path_sss too), Whitted and pssmlt take the camera sample's; the
-     * light tracer each light path's own; BDPT and VCM share one between the subpaths they
-     * join (bidir_time); mmlt draws it in the camera stream for both subpaths; SPPM shares
-     * one per iteration (sppm.c). The photon integrator builds its maps once, before any
-     * camera path: they would hold one instant (no blur) or mix instants (biased where
-     * geometry moves). subpath_media.c's walks (light, bdpt, vcm and mmlt in media) do not
-     * carry the time yet. */
+    /* Motion blur: every path carries one time to all its rays (Ray.time), drawn over the
+     * shutter (camera_time), with a moving camera placed at it (camera_at) for its camera
+     * ray and for every t = 1 connection to the lens. The path tracers (volpath and path_sss
+     * too), Whitted and pssmlt take the camera sample's; the light tracer each light path's
+     * own; BDPT and VCM share one between the subpaths they join (bidir_time); mmlt draws it
+     * in the camera stream for both subpaths; SPPM shares one per iteration (sppm.c). The
+     * photon integrator builds its maps once, before any camera path, at time 0: right while
+     * only the camera moves, but they would hold one instant (no blur) or mix instants
+     * (biased) where instances move. subpath_media.c's walks (light, bdpt, vcm and mmlt in
+     * media) carry the time as subpath.c's do. */
     it->motion = scene_has_motion(scene);
-    const bool media = scene->num_media || scene->num_medium_ifaces;
-    if (it->motion && (it->kind == INTEGRATOR_PHOTON || (media && bidir_media)))
+    /* SPPM's walks through media carry the iteration's time (media_photon_walk,
+     * media_visible_point) but no test compares them with path on a moving scene yet. */
+    if (it->kind == INTEGRATOR_SPPM && it->motion && (scene->num_media || scene->num_medium_ifaces))
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator sppm does not render motion blur in scenes with "
+                        "participating media yet: use path, light, bdpt, vcm or mmlt");
+    if (it->kind == INTEGRATOR_PHOTON && scene->instances && scene->instances->num_motions > 0)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
-                        "yet%s: use %s", cst_integrator_name(st->integrator),
-                        media ? " with participating media" : " (its photon maps are built once, for all camera paths)",
-                        media ? "path, path-nee, path-bsdf or pssmlt" : "sppm, path, bdpt or vcm");
-    /* A moving camera, or a shutter other than [0, 1]: only the path tracers, Whitted and
-     * the light tracer place the camera at the path's time and map the time through the
-     * shutter (camera_time); BDPT, VCM, SPPM and MLT draw their times over [0, 1] with the
-     * camera where it stands. */
-    const bool camera_motion = it->camera.moving || it->camera.shutter_open != 0.0f || it->camera.shutter_close != 1.0f;
-    const bool camera_motion_ok = it->kind == INTEGRATOR_PATH || it->kind == INTEGRATOR_WHITTED ||
-                                  it->kind == INTEGRATOR_LIGHT;
-    if (it->motion && camera_motion && !camera_motion_ok)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render a moving camera or a shutter other "
-                        "than [0, 1] (motion blur) yet: use path, path-nee, path-bsdf, whitted or light",
+                        "yet (its photon maps are built once, for all camera paths): use sppm, path, bdpt or vcm",
                         cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];

@@ -61,15 +61,16 @@ static Color path_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
     Vec2 uf = sampler_2d(&smp);
     Vec2 ul = sampler_2d(&smp);
     *fp = v2(uf.x * domain_w(m) - m->p.margin, uf.y * domain_h(m) - m->p.margin);
-    Ray ray = camera_generate_ray(cam, fp->x, fp->y, ul);
     Wavelengths wl, *wlp = NULL;
     if (m->p.spectral) {
         wl = wavelengths_sample(sampler_1d(&smp));
         wlp = &wl;
     }
     /* Motion blur: the path's time, one more primary-sample dimension (mutated as the
-     * others); drawn only in scenes that move, so static ones keep their dimensions. */
-    if (scene_has_motion(s)) ray.time = sampler_1d(&smp);
+     * others) mapped through the shutter, the camera placed there; drawn only in scenes
+     * that move, so static ones keep their dimensions. */
+    const float time = scene_has_motion(s) ? camera_time(cam, sampler_1d(&smp)) : 0.0f;
+    Ray ray = camera_generate_ray_at(cam, fp->x, fp->y, ul, time);
     Color L = path_li(s, &m->p.path, ray, &smp, wlp, rays);
     if (wlp) L = spectrum_to_rgb(L, wlp);
     return L;
@@ -80,8 +81,8 @@ static Color path_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
  * connections there do (transmittance on every connection, volume vertices on both
  * subpaths). smp reads pss; sl, n_strategies and the film position as mmlt_eval drew them. */
 static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, PssSampler *pss, Sampler *smp,
-                             int depth, int sl, int n_strategies, Vec2 *fp, Vec2 ul, const Wavelengths *wlp,
-                             uint64_t *rays)
+                             int depth, int sl, int n_strategies, Vec2 *fp, Vec2 ul, float time,
+                             const Wavelengths *wlp, uint64_t *rays)
 {
     const SubpathParams *vp = &m->p.sub;
     const SubpathIteration *it = &m->p.it;
@@ -93,11 +94,12 @@ static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, Ps
         Vec2 u_lens = sampler_2d(smp);
         pss_start_stream(pss, 1);
         Color rgb;
-        if (!media_subpath_connect_camera(s, cam, vp, it, sl - 1, smp, u_lens, wlp, fp, &rgb, rays)) return L;
+        if (!media_subpath_connect_camera(s, cam, vp, it, sl - 1, smp, time, u_lens, wlp, fp, &rgb, rays)) return L;
         const double film = (double)m->p.width * (double)m->p.height;
         return color_scale(rgb, (float)((double)n_strategies * film / ((double)domain_w(m) * (double)domain_h(m))));
     }
     Ray ray = camera_generate_ray(cam, fp->x, fp->y, ul);
+    ray.time = time;
     MediaCameraVertex x;
     Color emitted;
     bool found = media_subpath_camera_vertex(s, cam, vp, it, ray, tc - 1, sl == 0, smp, wlp, &x, &emitted, rays);
@@ -111,7 +113,7 @@ static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, Ps
         pss_start_stream(pss, 1);
         SubpathVertex y;
         Wavelengths walk_wl;
-        if (media_subpath_light_vertex(s, cam, vp, it, sl - 1, smp, wlp, &y, &walk_wl, rays)) {
+        if (media_subpath_light_vertex(s, cam, vp, it, sl - 1, smp, time, wlp, &y, &walk_wl, rays)) {
             L = media_subpath_connect_pair(s, it, &x, &y, wlp, rays);
             if (wlp && (x.dispersed || y.dispersed)) L = subpath_hero_only(L);
         }
@@ -150,13 +152,19 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
         wlp = &wl;
     }
     /* Motion blur: the path's one time, a dimension of the camera stream (mutated as the
-     * others) that both subpaths and every connection carry, also for t = 1 where no
-     * camera ray is traced; drawn only in scenes that move. */
-    const float time = scene_has_motion(s) ? sampler_1d(&smp) : 0.0f;
+     * others) mapped through the shutter, that both subpaths and every connection carry,
+     * also for t = 1 where no camera ray is traced but the lens point, W_e and its pdf are
+     * the camera's placed at that time; drawn only in scenes that move. */
+    const float time = scene_has_motion(s) ? camera_time(cam, sampler_1d(&smp)) : 0.0f;
+    Camera placed;
+    if (cam->moving) {
+        placed = camera_at(cam, time);
+        cam = &placed;
+    }
     const SubpathParams *vp = &m->p.sub;
     const SubpathIteration *it = &m->p.it;
     if (s->num_media | s->num_medium_ifaces)
-        return mmlt_eval_media(m, s, cam, pss, &smp, depth, sl, n_strategies, fp, ul, wlp, rays);
+        return mmlt_eval_media(m, s, cam, pss, &smp, depth, sl, n_strategies, fp, ul, time, wlp, rays);
     Color L = color_s(0.0f);
     SubpathVertex y;
     Wavelengths walk_wl;

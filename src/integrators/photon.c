@@ -252,10 +252,18 @@ static float knn_dist2(const PhotonMap *map, Vec3 p)
  * random camera rays, of the distance to the PHOTON_RADIUS_K-th nearest global photon,
  * so a typical visible point gathers about PHOTON_RADIUS_K photons (Jensen 2001 sec. 7.2
  * gathers a fixed count; a fixed radius keeps the estimate a plain box-kernel average).
- * When no camera ray finds a surface, the photons themselves are the probe points. */
-static float auto_radius(const Scene *s, const Camera *cam, const PhotonParams *pp, const PhotonMap *g,
+ * When no camera ray finds a surface, the photons themselves are the probe points. A
+ * moving camera probes from where it stands at shutter open (its frame alone is the camera
+ * in its own space, camera.h); the rays carry time 0, as the photons (a heuristic only). */
+static float auto_radius(const Scene *s, const Camera *moving, const PhotonParams *pp, const PhotonMap *g,
                          uint64_t *rays)
 {
+    Camera placed;
+    const Camera *cam = moving;
+    if (moving->moving) {
+        placed = camera_at(moving, moving->shutter_open);
+        cam = &placed;
+    }
     float d2[PHOTON_RADIUS_POINTS];
     int n = 0;
     size_t count = photon_map_count(g);

@@ -220,14 +220,17 @@ static uint32_t sppm_grid_bucket(const SppmGrid *g, Vec3 pos)
  * converges to the time-averaged image, as it converges over the pixel's area and the
  * lens (Hachisuka & Jensen 2009: the statistics of a pixel are shared by every sample of
  * its region). pbrt-v4's SPPM instead gives camera and photon paths times of their own
- * (a merge between instants: biased where the geometry moves, not only blurred). 0 in
- * static scenes, without a draw. */
+ * (a merge between instants: biased where the geometry moves, not only blurred). Mapped
+ * through the scene's shutter as camera_time maps a camera sample's (the scene's shutter
+ * is the camera's: integrator.c; [0, 1] keeps the instant bit for bit); camera_row places
+ * a moving camera there. 0 in static scenes, without a draw. */
 static float sppm_time(const Scene *s, const SppmParams *sp, int iter)
 {
     if (!scene_has_motion(s)) return 0.0f;
     Pcg32 r;
     pcg32_seed_sample(&r, sp->seed ^ 0x9e3779b97f4a7c15ULL, UINT64_MAX, 0);
-    return motion_pass_time((uint32_t)iter, pcg32_float(&r));
+    const float u = motion_pass_time((uint32_t)iter, pcg32_float(&r));
+    return s->shutter[0] + u * (s->shutter[1] - s->shutter[0]);
 }
 
 /* Adds a photon hit whose position is inside v's disc to v's phi (photon.c's
@@ -315,14 +318,14 @@ static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengt
     v->p = mv.p;
     v->wo = mv.wo;
     v->vol = mv.vol;
-    VolVertex x = {mv.p, v3s(0.0f), v3s(0.0f), mv.wo, NULL, NULL, mv.g, mv.medium, 0.0f};
+    VolVertex x = {mv.p, v3s(0.0f), v3s(0.0f), mv.wo, NULL, NULL, mv.g, mv.medium, ray.time};
     if (mv.vol) {
         v->g = mv.g;
         v->n = v3s(0.0f);
     } else {
         v->bsdf = mv.bsdf;
         v->n = v3_dot(mv.sh.ng, mv.wo) >= 0.0f ? mv.sh.ng : v3_neg(mv.sh.ng);
-        x = (VolVertex){mv.sh.p, mv.sh.ns, mv.sh.ng, mv.wo, &mv.bsdf, &mv.sh, 0.0f, mv.medium, 0.0f};
+        x = (VolVertex){mv.sh.p, mv.sh.ns, mv.sh.ng, mv.wo, &mv.bsdf, &mv.sh, 0.0f, mv.medium, ray.time};
     }
     if (s->emitter_sampler.lights > 0) L = color_madd(L, mv.beta, volpath_nee(s, &x, false, rng, wl, rays));
     v->beta = mv.beta;
@@ -348,6 +351,11 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
     if (sp->spectral) wl = sppm_wavelengths(sp, iter);
     const Wavelengths *wlp = sp->spectral ? &wl : NULL;
     const float time = sppm_time(s, sp, iter);
+    Camera placed;
+    if (cam->moving) {
+        placed = camera_at(cam, time);
+        cam = &placed;
+    }
     for (int x = 0; x < cam->width; x++) {
         int pixel = y * cam->width + x;
         SppmPixel *v = &px[pixel];

@@ -122,7 +122,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
 {
     if (s->emitter_sampler.lights == 0) return;
     if (s->num_media | s->num_medium_ifaces) { /* participating media: subpath_media.c */
-        media_subpath_trace_light(s, cam, vp, it, rng, wl, verts, splats, rays);
+        media_subpath_trace_light(s, cam, vp, it, rng, time, wl, verts, splats, rays);
         return;
     }
     EmissionSample es;

@@ -17,7 +17,11 @@
  * emission with weight 1 (media_subpath_trace_camera says why); integrator.c refuses them
  * for the light tracer and MMLT, whose strategies do not gather it. VCM adds merging: surface light
  * vertices as vcm.c, volume ones by UPBP's point-point 3D estimator (a ball of radius r,
- * 1 / ((4/3) pi r^3 N), the eta of a volume vertex in every MIS weight; media_merge). */
+ * 1 / ((4/3) pi r^3 N), the eta of a volume vertex in every MIS weight; media_merge).
+ * Motion blur: every ray of a walk and of a connection carries its path's time (the walks'
+ * rays keep the time of the ray they continue, EmissionSample.time on light subpaths; the
+ * connections take the camera vertex's or the light subpath's), so moving instances are
+ * met where that instant places them; media themselves do not move. */
 #include "integrators/subpath_media.h"
 
 #include <math.h>
@@ -119,8 +123,8 @@ typedef struct MediaSegment {
     float fwd, rev; /* ChainPdf's, for q made from p and p from q */
 } MediaSegment;
 
-static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bool q_med, int medium, const Wavelengths *wl,
-                          MediaSegment *out, uint64_t *rays)
+static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bool q_med, int medium, float time,
+                          const Wavelengths *wl, MediaSegment *out, uint64_t *rays)
 {
     Vec3 d = v3_sub(q, p);
     Vec3 o = scene_offset(s, p, n_p, d); /* a zero normal leaves the point where it is */
@@ -132,7 +136,7 @@ static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bo
         float len = v3_length(od);
         if (!(len > 0.0f)) break;
         Vec3 dir = v3_scale(od, 1.0f / len);
-        Ray r = ray_make(o, dir, 0.0f, len * (1.0f - 1e-5f));
+        Ray r = ray_make_at(o, dir, 0.0f, len * (1.0f - 1e-5f), time);
         SurfaceHit sh;
         ++*rays;
         bool hit = scene_intersect(s, &r, &sh);
@@ -172,8 +176,9 @@ static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bo
 
 /* The medium at point q as a ray from the camera's origin sees it: starting in the
  * camera's medium, switched at every interface shape on the way (as a camera path tracks
- * it). Light subpaths start from it: lights carry no medium of their own. */
-static int medium_at(const Scene *s, const Camera *cam, Vec3 q, uint64_t *rays)
+ * it). Light subpaths start from it: lights carry no medium of their own. cam: placed at
+ * the path's time, which the rays carry. */
+static int medium_at(const Scene *s, const Camera *cam, Vec3 q, float time, uint64_t *rays)
 {
     int medium = s->camera_medium;
     Vec3 o = cam->origin;
@@ -182,7 +187,7 @@ static int medium_at(const Scene *s, const Camera *cam, Vec3 q, uint64_t *rays)
         float len = v3_length(od);
         if (!(len > 0.0f)) return medium;
         Vec3 dir = v3_scale(od, 1.0f / len);
-        Ray r = ray_make(o, dir, 0.0f, len * (1.0f - 1e-5f));
+        Ray r = ray_make_at(o, dir, 0.0f, len * (1.0f - 1e-5f), time);
         SurfaceHit sh;
         ++*rays;
         if (!scene_intersect(s, &r, &sh)) return medium;
@@ -195,10 +200,10 @@ static int medium_at(const Scene *s, const Camera *cam, Vec3 q, uint64_t *rays)
 /* The medium on the side of emission sample point p toward direction w: just off the
  * surface (further than medium_at's end tolerance), so that an emitter that is itself an
  * interface is crossed when the camera sits on its other side. */
-static int medium_at_emitter(const Scene *s, const Camera *cam, Vec3 p, Vec3 w, uint64_t *rays)
+static int medium_at_emitter(const Scene *s, const Camera *cam, Vec3 p, Vec3 w, float time, uint64_t *rays)
 {
     float scale = fmaxf(1.0f, v3_length(v3_sub(p, cam->origin)));
-    return medium_at(s, cam, v3_add(p, v3_scale(w, 1e-4f * scale)), rays);
+    return medium_at(s, cam, v3_add(p, v3_scale(w, 1e-4f * scale)), time, rays);
 }
 
 /* The spectral MIS of delta tracking over the lanes (hetero_medium.h), for the light
@@ -315,7 +320,7 @@ static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, bool
         const MediumInterface *mi = scene_hit_medium_iface(s, sh);
         if (mi && mi->boundary) { /* only a boundary: cross it, not a vertex */
             *medium = v3_dot(ray.d, sh->ng) < 0.0f ? mi->inside : mi->outside;
-            ray = ray_make(scene_offset(s, sh->p, sh->ng, ray.d), ray.d, 0.0f, INFINITY);
+            ray = ray_make_at(scene_offset(s, sh->p, sh->ng, ray.d), ray.d, 0.0f, INFINITY, ray.time);
             continue;
         }
         out->kind = MEDIA_SURFACE;
@@ -348,7 +353,8 @@ static inline float eta_vm(const SubpathIteration *it, bool vol)
 
 /* A phase-function scattering at a volume vertex: HG sampled exactly (weight 1), Russian
  * roulette, the MIS quantities (tech. rep. eqs. 34-36 with no cosine; HG is symmetric,
- * so the reverse density is the forward one) and the next ray. */
+ * so the reverse density is the forward one) and the next ray, at *ray's time (the ray
+ * that reached p). */
 static bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p, Vec3 wo, float g, int depth,
                                 int rr_depth, Sampler *rng, Ray *ray)
 {
@@ -370,7 +376,7 @@ static bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p,
         sp->d_vm = gm * (sp->d_vm * mis(pdf) + (sp->d_vcm + it->mis_vm_vol) * it->mis_vc);
         sp->d_vcm = mis(1.0f / pdf);
     }
-    *ray = ray_make(p, wi, 0.0f, INFINITY);
+    *ray = ray_make_at(p, wi, 0.0f, INFINITY, ray->time);
     return true;
 }
 
@@ -407,7 +413,7 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
                              Sampler *rng, uint64_t *rays)
 {
     const SubpathIteration *it = w->mis;
-    Ray ray = ray_make(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY);
+    Ray ray = ray_make_at(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY, es->time);
     Vec3 x_prev = es->p;
     bool prev_med = false;
     /* BDPT (it) keeps medium.h's per-segment mixture in homogeneous media, whose exact
@@ -482,6 +488,7 @@ typedef struct MediaCamCtx {
     const Wavelengths *walk_wl; /* BDPT, spectral: the walk's copy (dispersion) */
     SplatList *out;
     uint64_t *rays;
+    float time; /* the light subpath's (motion blur); cam is placed at it */
 } MediaCamCtx;
 
 /* The t = 1 connection of v to the lens point drawn for it, with transmittance; with an
@@ -496,7 +503,7 @@ static void media_connect_camera(const MediaCamCtx *c, const MediaLightVertex *v
     if (color_is_black(f)) return;
     int m = v->sh ? scene_medium_after(c->s, v->sh, cs.wi, v->medium) : v->medium;
     MediaSegment seg;
-    if (!media_connect(c->s, v->p, v->ng, cs.p_lens, v3s(0.0f), false, m, wl, &seg, c->rays)) return;
+    if (!media_connect(c->s, v->p, v->ng, cs.p_lens, v3s(0.0f), false, m, c->time, wl, &seg, c->rays)) return;
     float weight = 1.0f;
     if (c->it) {
         float cos_cam = v->sh ? fabsf(v3_dot(v->ng, cs.wi)) : 1.0f;
@@ -525,9 +532,18 @@ void media_light_trace(const Scene *s, const Camera *cam, const LightParams *lp,
     Wavelengths wl;
     if (lp->spectral) wl = wavelengths_sample(sampler_1d(rng));
     const Wavelengths *wlp = lp->spectral ? &wl : NULL;
-    MediaCamCtx c = {s, cam, &lp->frame, filter_radius(lp->frame.filter) - 0.5f, NULL, NULL, wlp, NULL, out, rays};
+    /* Motion blur: the light path's own time and the camera placed there (light.c). */
+    const float time = scene_has_motion(s) ? camera_time(cam, sampler_1d(rng)) : 0.0f;
+    Camera placed;
+    if (cam->moving) {
+        placed = camera_at(cam, time);
+        cam = &placed;
+    }
+    MediaCamCtx c = {s, cam, &lp->frame, filter_radius(lp->frame.filter) - 0.5f, NULL, NULL, wlp, NULL, out, rays,
+                     time};
     EmissionSample es;
     subpath_emit(s, rng, wlp, &es);
+    es.time = time;
 
     /* y0 seen directly, through the media between it and the lens (light.c). */
     CameraWiSample cs;
@@ -539,14 +555,14 @@ void media_light_trace(const Scene *s, const Camera *cam, const LightParams *lp,
         le = color_scale(le, fabsf(v3_dot(es.n, cs.wi)) / es.pdf_a);
         MediaSegment seg;
         if (!color_is_black(le) &&
-            media_connect(s, es.p, es.n, cs.p_lens, v3s(0.0f), false, medium_at_emitter(s, cam, es.p, cs.wi, rays), wlp,
-                          &seg, rays)) {
+            media_connect(s, es.p, es.n, cs.p_lens, v3s(0.0f), false,
+                          medium_at_emitter(s, cam, es.p, cs.wi, time, rays), time, wlp, &seg, rays)) {
             Color v = color_scale(color_mul(le, seg.tr), cs.we / cs.pdf_w);
             film_splat(out, &lp->frame, cs.raster.x, cs.raster.y, wlp ? spectrum_to_rgb(v, wlp) : v);
         }
     }
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
-    int medium = medium_at_emitter(s, cam, es.p, es.w, rays);
+    int medium = medium_at_emitter(s, cam, es.p, es.w, time, rays);
     /* Light from infinitely far through a medium that reaches infinity arrives black (as
      * the path tracer's escaping rays see it). */
     if (!es.finite && medium >= 0) return;
@@ -574,14 +590,15 @@ static bool visit_store_connect(void *ctx, const MediaLightVertex *v)
 }
 
 void media_subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                               Sampler *rng, const Wavelengths *wl, SubpathVertexList *verts, SplatList *splats,
-                               uint64_t *rays)
+                               Sampler *rng, float time, const Wavelengths *wl, SubpathVertexList *verts,
+                               SplatList *splats, uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return;
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
+    es.time = time;
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
-    int medium = medium_at_emitter(s, cam, es.p, es.w, rays);
+    int medium = medium_at_emitter(s, cam, es.p, es.w, time, rays);
     if (!es.finite && medium >= 0) return; /* as media_light_trace */
     float emission_pdf = es.pdf_a * es.pdf_w;
     /* tech. rep. eqs. 31-33, as subpath_trace_light; the distance densities of the first
@@ -593,7 +610,7 @@ void media_subpath_trace_light(const Scene *s, const Camera *cam, const SubpathP
     Wavelengths walk_wl;
     if (wl) walk_wl = *wl;
     MediaCamCtx c = {s, cam, &vp->frame, filter_radius(vp->frame.filter) - 0.5f, it, verts, wl,
-                     wl ? &walk_wl : NULL, splats, rays};
+                     wl ? &walk_wl : NULL, splats, rays, time};
     const MediaWalk w = {vp->max_depth, vp->rr_depth, it, wl, wl ? &walk_wl : NULL, visit_store_connect, &c};
     media_walk_light(s, &w, &es, sp, medium, rng, rays);
 }
@@ -605,6 +622,7 @@ typedef struct CamVertex {
     const Bsdf *bsdf;
     float g;
     int medium; /* in a medium: its index; on a surface: the medium arrived through */
+    float time; /* the camera subpath's (motion blur): its connections' rays carry it */
 } CamVertex;
 
 /* f toward wi at camera vertex x (f |cos| for a surface, the phase function in a medium)
@@ -642,7 +660,7 @@ static Color media_connect_light(const Scene *s, const SubpathIteration *it, con
     Color f = cam_vertex_f(x, ls.wi, &fwd, &rev, &cos_x);
     if (!(cos_x > 0.0f) || color_is_black(f)) return color_s(0.0f);
     MediaSegment seg;
-    if (!media_connect(s, x->p, x->ng, ls.p, ls.n, false, cam_vertex_medium(s, x, ls.wi), wl, &seg, rays))
+    if (!media_connect(s, x->p, x->ng, ls.p, ls.n, false, cam_vertex_medium(s, x, ls.wi), x->time, wl, &seg, rays))
         return color_s(0.0f);
     float w_light = ls.delta ? 0.0f : mis(fwd * seg.fwd / ls.direct_pdf);
     float w_camera = mis(ls.emit_pdf * cos_x * seg.rev / (ls.direct_pdf * ls.cos_light)) *
@@ -690,7 +708,7 @@ static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, 
     }
     if (color_is_black(fy)) return color_s(0.0f);
     MediaSegment seg;
-    if (!media_connect(s, x->p, x->ng, y->p, y->ng, y_vol, cam_vertex_medium(s, x, d), wl, &seg, rays))
+    if (!media_connect(s, x->p, x->ng, y->p, y->ng, y_vol, cam_vertex_medium(s, x, d), x->time, wl, &seg, rays))
         return color_s(0.0f);
     float x_fwd_a = x_fwd * cos_y * seg.fwd / dist2; /* the camera subpath reaching y */
     float y_fwd_a = y_fwd * cos_x * seg.rev / dist2; /* the light subpath reaching x */
@@ -843,7 +861,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
 
         Bsdf bsdf;
-        CamVertex x = {h.p, v3s(0.0f), wo, NULL, NULL, 0.0f, medium};
+        CamVertex x = {h.p, v3s(0.0f), wo, NULL, NULL, 0.0f, medium, ray.time};
         if (vol) {
             x.g = s->media[medium].g;
         } else {
@@ -937,14 +955,15 @@ static bool visit_target(void *ctx, const MediaLightVertex *v)
 /* media_subpath_trace_light's start and walk, with max_depth = the target's bounces (no
  * continuation is sampled past it). */
 static bool media_walk_to(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                          Sampler *rng, const Wavelengths *wl, Wavelengths *walk_wl, MediaTargetCtx *tc,
+                          Sampler *rng, float time, const Wavelengths *wl, Wavelengths *walk_wl, MediaTargetCtx *tc,
                           uint64_t *rays)
 {
     if (s->emitter_sampler.lights == 0) return false;
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
+    es.time = time;
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return false;
-    int medium = medium_at_emitter(s, cam, es.p, es.w, rays);
+    int medium = medium_at_emitter(s, cam, es.p, es.w, time, rays);
     if (!es.finite && medium >= 0) return false;
     float emission_pdf = es.pdf_a * es.pdf_w;
     SubPath sp = subpath_start(es.beta);
@@ -959,15 +978,15 @@ static bool media_walk_to(const Scene *s, const Camera *cam, const SubpathParams
 }
 
 bool media_subpath_light_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp,
-                                const SubpathIteration *it, int bounces, Sampler *rng, const Wavelengths *wl,
-                                SubpathVertex *out, Wavelengths *walk_wl, uint64_t *rays)
+                                const SubpathIteration *it, int bounces, Sampler *rng, float time,
+                                const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl, uint64_t *rays)
 {
     MediaTargetCtx tc = {bounces, false, out, NULL, {0.0f, 0.0f}, NULL};
-    return media_walk_to(s, cam, vp, it, rng, wl, walk_wl, &tc, rays);
+    return media_walk_to(s, cam, vp, it, rng, time, wl, walk_wl, &tc, rays);
 }
 
 bool media_subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
-                                  const SubpathIteration *it, int bounces, Sampler *rng, Vec2 u_lens,
+                                  const SubpathIteration *it, int bounces, Sampler *rng, float time, Vec2 u_lens,
                                   const Wavelengths *wl, Vec2 *raster, Color *rgb, uint64_t *rays)
 {
     /* One splat into a list of one on the stack, unclamped (subpath_connect_camera). */
@@ -977,9 +996,9 @@ bool media_subpath_connect_camera(const Scene *s, const Camera *cam, const Subpa
     frame.clamp = 0.0f;
     Wavelengths walk_wl;
     MediaCamCtx c = {s, cam, &frame, filter_radius(vp->frame.filter) - 0.5f, it, NULL, wl, wl ? &walk_wl : NULL,
-                     &l, rays};
+                     &l, rays, time};
     MediaTargetCtx tc = {bounces, false, NULL, &c, u_lens, NULL};
-    media_walk_to(s, cam, vp, it, rng, wl, &walk_wl, &tc, rays);
+    media_walk_to(s, cam, vp, it, rng, time, wl, &walk_wl, &tc, rays);
     if (l.n == 0) return false;
     *raster = v2(one.x, one.y);
     *rgb = color_rgb(one.r, one.g, one.b);
@@ -1048,7 +1067,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
             const float g = s->media[medium].g;
             if (t == hits) {
                 *out = (MediaCameraVertex){.p = h.p, .wo = wo, .vol = true, .g = g, .medium = medium, .sp = sp,
-                                           .dispersed = dispersed};
+                                           .dispersed = dispersed, .time = ray.time};
                 out->sp.beta = hero_beta(&hm, sp.beta);
                 return true;
             }
@@ -1064,7 +1083,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
             }
             if (t == hits) {
                 if (bsdf_is_delta(&bsdf)) return false; /* no connection to a Dirac */
-                *out = (MediaCameraVertex){h.sh, bsdf, h.p, wo, false, 0.0f, medium, sp, dispersed};
+                *out = (MediaCameraVertex){h.sh, bsdf, h.p, wo, false, 0.0f, medium, sp, dispersed, ray.time};
                 out->sp.beta = hero_beta(&hm, sp.beta);
                 return true;
             }
@@ -1079,8 +1098,8 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
 /* The CamVertex of a strategy's camera vertex (its pointers into *x). */
 static CamVertex cam_vertex_of(const MediaCameraVertex *x)
 {
-    if (x->vol) return (CamVertex){x->p, v3s(0.0f), x->wo, NULL, NULL, x->g, x->medium};
-    return (CamVertex){x->p, x->sh.ng, x->wo, &x->sh, &x->bsdf, 0.0f, x->medium};
+    if (x->vol) return (CamVertex){x->p, v3s(0.0f), x->wo, NULL, NULL, x->g, x->medium, x->time};
+    return (CamVertex){x->p, x->sh.ng, x->wo, &x->sh, &x->bsdf, 0.0f, x->medium, x->time};
 }
 
 Color media_subpath_connect_light(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
@@ -1121,7 +1140,8 @@ bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, 
     EmissionSample es;
     subpath_emit(s, &rng, pw->wl, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f) || color_is_black(es.beta)) return true; /* still one of the N */
-    int medium = medium_at_emitter(s, cam, es.p, es.w, rays);
+    es.time = pw->time; /* the iteration's instant, as photon_walk's */
+    int medium = medium_at_emitter(s, cam, es.p, es.w, es.time, rays);
     if (!es.finite && medium >= 0) return true; /* as media_light_trace */
     MediaPhotonCtx c = {visit, ctx};
     /* No MIS (light tracing's walk): the hero lane's free-flight sampling in every medium,
@@ -1180,7 +1200,7 @@ bool media_visible_point(const Scene *s, Ray ray, Sampler *rng, const Wavelength
         sp.scatter = color_mul(sp.scatter, bs.weight);
         if (color_is_black(sp.scatter)) return false;
         medium = scene_medium_after(s, &h.sh, bs.wi, medium);
-        ray = ray_make(scene_offset(s, h.sh.p, h.sh.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        ray = ray_make_at(scene_offset(s, h.sh.p, h.sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, ray.time);
         x_prev = h.p;
     }
     return false; /* photon_trace_to_diffuse's cut */

@@ -16,10 +16,11 @@ void media_light_trace(const Scene *s, const Camera *cam, const LightParams *lp,
  * them here). A light vertex in a medium is stored with ng = ns = 0 and material = -1 - its
  * medium's index. With `merge` (VCM; NULL: BDPT) a camera vertex merges the light vertices
  * of its own kind: surface ones on a surface, volume ones in a medium (UPBP's point-point
- * 3D estimator). */
+ * 3D estimator). time: the light subpath's (motion blur), cam placed at it; camera
+ * subpaths carry their ray's time. */
 void media_subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams *vp, const SubpathIteration *it,
-                               Sampler *rng, const Wavelengths *wl, SubpathVertexList *verts, SplatList *splats,
-                               uint64_t *rays);
+                               Sampler *rng, float time, const Wavelengths *wl, SubpathVertexList *verts,
+                               SplatList *splats, uint64_t *rays);
 Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
                                  const SubpathIteration *it, int path, Ray ray, Sampler *rng, const Wavelengths *wl,
                                  uint64_t *rays, const SubpathMerge *merge);
@@ -40,6 +41,7 @@ typedef struct MediaCameraVertex {
     int medium;
     SubPath sp;     /* on arrival */
     bool dispersed; /* spectral: a dispersive refraction on the way */
+    float time;     /* the camera ray's (motion blur), which the connections carry */
 } MediaCameraVertex;
 
 /* subpath_camera_vertex() through media (its hit number `hits` counts volume vertices). */
@@ -49,8 +51,8 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
 /* subpath_light_vertex() through media (a vertex in a medium as media_subpath_trace_light
  * stores it). */
 bool media_subpath_light_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp,
-                                const SubpathIteration *it, int bounces, Sampler *rng, const Wavelengths *wl,
-                                SubpathVertex *out, Wavelengths *walk_wl, uint64_t *rays);
+                                const SubpathIteration *it, int bounces, Sampler *rng, float time,
+                                const Wavelengths *wl, SubpathVertex *out, Wavelengths *walk_wl, uint64_t *rays);
 /* s = 1 and s >= 2, t >= 2: subpath_connect_light() and subpath_connect_pair() through media. */
 Color media_subpath_connect_light(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
                                   Sampler *rng, const Wavelengths *wl, uint64_t *rays);
@@ -60,7 +62,7 @@ Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, con
  * it to lens point u_lens, as subpath_light_vertex() then subpath_connect_camera() do (the
  * walk's vertex keeps pointers into the walk, so the two are one call here). */
 bool media_subpath_connect_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
-                                  const SubpathIteration *it, int bounces, Sampler *rng, Vec2 u_lens,
+                                  const SubpathIteration *it, int bounces, Sampler *rng, float time, Vec2 u_lens,
                                   const Wavelengths *wl, Vec2 *raster, Color *rgb, uint64_t *rays);
 
 /* ---- SPPM through media (sppm.c). */
