@@ -283,6 +283,7 @@ static void test_backends_agree(void **state)
         Vec3 cp[4];
         float w0, w1;
         random_curve(&rng, cp, &w0, &w1);
+        if (c % 2) w0 *= 0.25f, w1 *= 0.25f; /* thin: the BVH bounds these by pieces */
         Vec3 off = rnd_v3(&rng, -3.0f, 3.0f);
         for (int i = 0; i < 4; i++) cp[i] = v3_add(cp[i], off);
         for (int s = 0; s < NS; s++)
@@ -342,6 +343,8 @@ static void test_piece_bounds(void **state)
         Vec3 cp[4];
         float w0, w1;
         random_curve(&rng, cp, &w0, &w1);
+        w0 *= 0.25f; /* hair-like: segments 10 to 40 widths long, cut into 2 to 8 pieces */
+        w1 *= 0.25f;
         const float u0 = (float)(c % 4) / 4.0f, u1 = u0 + 0.25f;
         AnalyticShape sh;
         assert_true(shape_init_curve(&sh, cp, u0, u1, w0, w1, (CurveType)(c % 3),
@@ -378,8 +381,8 @@ static void test_piece_bounds(void **state)
         }
     }
     print_message("  %d hits inside their pieces' boxes; %d of 120 segments cut\n", hits, cut);
-    assert_true(hits > 10000 && cut > 60);
-    /* a short segment (its length below 4 widths) is one piece */
+    assert_true(hits > 5000 && cut > 90);
+    /* a short segment (its length below 8 widths) is one piece */
     AnalyticShape sh;
     const Vec3 cp[4] = {v3(0, 0, 0), v3(0.1f, 0, 0), v3(0.2f, 0, 0), v3(0.3f, 0, 0)};
     assert_true(shape_init_curve(&sh, cp, 0.0f, 1.0f, 0.1f, 0.1f, CURVE_FLAT, NULL, false));
