@@ -5,6 +5,7 @@
 #include <assert.h>
 #include <immintrin.h>
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -480,6 +481,8 @@ typedef struct Emitter {
     uint32_t num_tris;
     const Sphere *spheres;
     uint32_t shape_base;
+    uint32_t num_ids;       /* ids from here on are further pieces of shapes: */
+    const uint32_t *owner;  /* owner[id - num_ids], that shape's id */
     float margin;
     const CollapseChoice *choice;
     Bvh *out;
@@ -514,8 +517,13 @@ static uint32_t emit_leaf(Emitter *e, int node)
     uint32_t first_id = e->idx[begin];
     if (first_id >= e->shape_base) { /* shapes: their ids, under BVH_SHAPES in a sphere reference */
         uint32_t first = (uint32_t)o->num_shape_ids;
-        for (int i = begin; i < end; i++) o->shape_ids[o->num_shape_ids++] = e->idx[i];
-        return BVH_LEAF | BVH_SPHERES | BVH_SHAPES | ((uint32_t)(end - begin - 1) << BVH_COUNT_SHIFT) |
+        for (int i = begin; i < end; i++) {
+            uint32_t id = e->idx[i] < e->num_ids ? e->idx[i] : e->owner[e->idx[i] - e->num_ids];
+            bool dup = false; /* two pieces of one curve in one leaf: test it once */
+            for (uint32_t k = first; k < (uint32_t)o->num_shape_ids; k++) dup |= o->shape_ids[k] == id;
+            if (!dup) o->shape_ids[o->num_shape_ids++] = id;
+        }
+        return BVH_LEAF | BVH_SPHERES | BVH_SHAPES | (((uint32_t)o->num_shape_ids - first - 1) << BVH_COUNT_SHIFT) |
                first << BVH_INDEX_SHIFT;
     }
     if (first_id >= e->num_tris) {
@@ -637,15 +645,27 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     bvh->bounds = bbox_empty();
     const int num_shapes = geom->num_shapes;
     const uint32_t shape_base = accel_shape_base(geom);
-    int n = num_tris + num_spheres + num_shapes;
-    if (n == 0) return CST_OK;
+    const int num_ids = num_tris + num_spheres + num_shapes;
+    if (num_ids == 0) return CST_OK;
     if ((uint32_t)num_spheres > BVH_SHAPE_INDEX_MAX || (uint32_t)num_shapes > BVH_SHAPE_INDEX_MAX)
         return cst_fail(err, CST_ERR_INVALID_ARG, "the BVH holds at most %u spheres and as many shapes", BVH_SHAPE_INDEX_MAX);
+    /* Curves enter as several pieces (curve_piece_bounds), each a build primitive of its
+     * own: a long thin segment's one box holds far more empty space than its pieces'.
+     * Piece 0 keeps the shape's id, the others take ids from num_ids on (owner[]). */
+    long long n_ll = num_ids;
+    for (int i = 0; i < num_shapes; i++) {
+        BBox pieces[CURVE_MAX_PIECES];
+        n_ll += shape_piece_bounds(&geom->shapes[i], pieces) - 1;
+    }
+    if (n_ll - num_tris - num_spheres > (long long)BVH_SHAPE_INDEX_MAX || n_ll > INT_MAX / 2)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "the BVH holds at most %u shapes and curve pieces", BVH_SHAPE_INDEX_MAX);
+    const int n = (int)n_ll;
     BuildPrim *bp = aligned_alloc(16, (size_t)n * sizeof *bp);
     uint32_t *idx = malloc((size_t)n * sizeof *idx);
+    uint32_t *owner = malloc((size_t)(n - num_ids + 1) * sizeof *owner);
     BinNode *nodes = malloc((size_t)2 * (size_t)n * sizeof *nodes);
     CollapseChoice *choice = malloc((size_t)2 * (size_t)n * sizeof *choice);
-    if (!bp || !idx || !nodes || !choice) goto oom;
+    if (!bp || !idx || !owner || !nodes || !choice) goto oom;
 
     for (int i = 0; i < num_tris; i++) {
         Vec3 a = positions[tri_indices[3 * i]], bb = positions[tri_indices[3 * i + 1]],
@@ -658,9 +678,15 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
         float r = fabsf(spheres[i].radius); /* sphere_intersect squares the radius: its sign is moot */
         bp[num_tris + i] = (BuildPrim){{c.x - r, c.y - r, c.z - r, 0.0f}, {c.x + r, c.y + r, c.z + r, 0.0f}};
     }
-    for (int i = 0; i < num_shapes; i++) {
-        BBox sb = geom->shapes[i].bounds;
-        bp[(int)shape_base + i] = (BuildPrim){{sb.min.x, sb.min.y, sb.min.z, 0.0f}, {sb.max.x, sb.max.y, sb.max.z, 0.0f}};
+    for (int i = 0, extra = num_ids; i < num_shapes; i++) {
+        BBox pieces[CURVE_MAX_PIECES];
+        const int k = shape_piece_bounds(&geom->shapes[i], pieces);
+        for (int j = 0; j < k; j++) {
+            const BBox sb = pieces[j];
+            const int at = j == 0 ? (int)shape_base + i : extra++;
+            if (j > 0) owner[at - num_ids] = shape_base + (uint32_t)i;
+            bp[at] = (BuildPrim){{sb.min.x, sb.min.y, sb.min.z, 0.0f}, {sb.max.x, sb.max.y, sb.max.z, 0.0f}};
+        }
     }
     for (int i = 0; i < n; i++) idx[i] = (uint32_t)i;
 
@@ -684,7 +710,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     /* Leaf references carry a unit index in 27 bits, inner ones a byte offset in 32 (4 GiB
      * of nodes and blocks either way). */
     if (wide * NODE_UNITS + blocks * BLOCK_UNITS > BVH_INDEX_MAX) {
-        free(bp); free(idx); free(nodes); free(choice);
+        free(bp); free(idx); free(owner); free(nodes); free(choice);
         return cst_fail(err, CST_ERR_INVALID_ARG,
                         "the BVH holds at most %u units of 32 bytes (%zu nodes and %zu triangle blocks need more)",
                         BVH_INDEX_MAX, wide, blocks);
@@ -692,13 +718,15 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     size_t units = wide * NODE_UNITS + blocks * BLOCK_UNITS;
     bvh->units = memory_alloc_large(units * BVH_UNIT);
     bvh->spheres = malloc((size_t)(num_spheres > 0 ? num_spheres : 1) * sizeof *bvh->spheres);
-    bvh->shape_ids = malloc((size_t)(num_shapes > 0 ? num_shapes : 1) * sizeof *bvh->shape_ids);
+    bvh->shape_ids = malloc((size_t)(n - num_tris - num_spheres > 0 ? n - num_tris - num_spheres : 1) *
+                            sizeof *bvh->shape_ids);
     if (!bvh->units || !bvh->spheres || !bvh->shape_ids) goto oom;
     bvh->shapes = geom->shapes;
     bvh->shape_base = shape_base;
 
     BBox root = nodes[0].box;
-    Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, shape_base, 0.0f, choice, bvh, NODE_UNITS};
+    Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, shape_base, (uint32_t)num_ids,
+                 owner, 0.0f, choice, bvh, NODE_UNITS};
     /* Not smaller: at 2^-30 of the extent the conformance test's unit icosphere (coordinates
      * around 0, where the relative widening vanishes) lost closest hits to the slab test's
      * rounding.
@@ -715,7 +743,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
         collapse(&e, 0, 0);
     }
     assert(e.cursor == units); /* count_wide() counted what collapse() wrote */
-    bvh->num_prims = n;
+    bvh->num_prims = num_ids;
     bvh->bounds = root;
     /* Every node's box lies in the root's widened one (widen() is monotonic). */
     const BBox outer = widen(root, e.margin);
@@ -723,13 +751,14 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     bvh->coord_max[3] = 0.0f;
     free(bp);
     free(idx);
+    free(owner);
     free(nodes);
     free(choice);
     return CST_OK;
 oom:
-    free(bp); free(idx); free(nodes); free(choice);
+    free(bp); free(idx); free(owner); free(nodes); free(choice);
     bvh_free(bvh);
-    return cst_fail(err, CST_ERR_OOM, "out of memory building the BVH over %d primitives", n);
+    return cst_fail(err, CST_ERR_OOM, "out of memory building the BVH over %d primitives", num_ids);
 }
 
 void bvh_free(Bvh *bvh)

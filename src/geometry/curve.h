@@ -20,17 +20,18 @@ typedef enum CurveType {
  * are the segment's own (the whole curve's blossomed to [u0, u1]), so a test starts at
  * the segment; widths and normals are the whole curve's, interpolated in its u. */
 typedef struct Curve {
+    /* the test's fields first, in the order it reads them (shape.h's layout note) */
     Vec3 cp[4];           /* the segment's cubic Bezier control points, world space */
-    float u0, u1;         /* the segment's range of the whole curve's parameter u */
-    float w0, w1;         /* the whole curve's widths (world units) at u = 0 and u = 1 */
-    Vec3 n0, n1;          /* ribbon: unit normals at u = 0 and u = 1 */
-    float normal_angle;   /* ribbon: the angle between n0 and n1 (radians) */
-    float inv_sin_angle;  /* ribbon: 1 / sin(normal_angle), for the slerp */
     float reach;          /* a radius about the chord cp[0]-cp[3] holding every hit
                            * (curve_init): the test's cheap first rejection */
+    float u0, u1;         /* the segment's range of the whole curve's parameter u */
+    float w0, w1;         /* the whole curve's widths (world units) at u = 0 and u = 1 */
     uint8_t type;         /* CurveType */
     uint8_t depth;        /* the subdivision depth of the test (curve_init) */
     bool flip;            /* pbrt-v4's ReverseOrientation XOR a mirroring transform */
+    Vec3 n0, n1;          /* ribbon: unit normals at u = 0 and u = 1 */
+    float normal_angle;   /* ribbon: the angle between n0 and n1 (radians) */
+    float inv_sin_angle;  /* ribbon: 1 / sin(normal_angle), for the slerp */
 } Curve;
 
 /* The segment [u0, u1] of the whole cubic Bezier whole_cp (world space), widths w0, w1 at
@@ -44,6 +45,15 @@ bool curve_init(Curve *c, const Vec3 whole_cp[4], float u0, float u1, float w0, 
  * convex hull property) widened by half the largest width over [u0, u1] and a relative
  * 2^-18 for the rounding of the float test. */
 BBox curve_bounds(const Curve *c);
+
+/* Tighter bounds for the accels: the segment cut into k pieces of equal u (k a power of
+ * two, 1 to CURVE_MAX_PIECES, more the longer the segment is than wide), each piece's box
+ * as curve_bounds makes it (its own control points, blossomed from cp in double, and
+ * half its largest width). Every hit curve_intersect reports lies in the piece holding
+ * its u: the point is the segment's curve at that u, moved less than half the width
+ * there. Returns k; boxes[0..k) the pieces' boxes. */
+enum { CURVE_MAX_PIECES = 8 };
+int curve_piece_bounds(const Curve *c, BBox boxes[CURVE_MAX_PIECES]);
 
 /* Nearest hit in (r->t_min, r->t_max): *t (world t, r->d need not be unit), u the whole
  * curve's parameter, v in [0, 1] across the width (pbrt-v4's, so the hair BSDF's offset is

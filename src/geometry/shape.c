@@ -28,11 +28,13 @@ static inline V3d map_vector(const double m[3][4], V3d v)
              m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z};
     return r;
 }
-static inline V3d map_normal(const double n3[3][3], V3d v)
+/* A normal to world space: by o2w's inverse transpose, which is w2o's linear part
+ * transposed (read by columns here rather than stored a second time). */
+static inline V3d map_normal(const double w2o[3][4], V3d v)
 {
-    V3d r = {n3[0][0] * v.x + n3[0][1] * v.y + n3[0][2] * v.z,
-             n3[1][0] * v.x + n3[1][1] * v.y + n3[1][2] * v.z,
-             n3[2][0] * v.x + n3[2][1] * v.y + n3[2][2] * v.z};
+    V3d r = {w2o[0][0] * v.x + w2o[1][0] * v.y + w2o[2][0] * v.z,
+             w2o[0][1] * v.x + w2o[1][1] * v.y + w2o[2][1] * v.z,
+             w2o[0][2] * v.x + w2o[1][2] * v.y + w2o[2][2] * v.z};
     return r;
 }
 static inline V3d d3(Vec3 v) { V3d r = {(double)v.x, (double)v.y, (double)v.z}; return r; }
@@ -274,7 +276,7 @@ bool shape_init(AnalyticShape *s, const ShapeParams *p, const Transform *o2w)
         {(m[1][2] * m[2][0] - m[1][0] * m[2][2]) / det, (m[0][0] * m[2][2] - m[0][2] * m[2][0]) / det, (m[0][2] * m[1][0] - m[0][0] * m[1][2]) / det},
         {(m[1][0] * m[2][1] - m[1][1] * m[2][0]) / det, (m[0][1] * m[2][0] - m[0][0] * m[2][1]) / det, (m[0][0] * m[1][1] - m[0][1] * m[1][0]) / det}};
     for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 3; j++) { s->w2o[i][j] = inv[i][j]; s->nrm[i][j] = inv[j][i]; }
+        for (int j = 0; j < 3; j++) s->w2o[i][j] = inv[i][j];
         s->w2o[i][3] = -(inv[i][0] * s->o2w[0][3] + inv[i][1] * s->o2w[1][3] + inv[i][2] * s->o2w[2][3]);
     }
     /* pbrt-v4 flips the normal for ReverseOrientation and for a handedness-swapping
@@ -521,7 +523,7 @@ static void surface_world(const AnalyticShape *s, V3d pt, V3d dpdu, V3d dpdv, V3
     out->p = f3(map_point(s->o2w, pt));
     out->dpdu = f3(map_vector(s->o2w, dpdu));
     out->dpdv = f3(map_vector(s->o2w, dpdv));
-    Vec3 nw = f3_unit(map_normal(s->nrm, n));
+    Vec3 nw = f3_unit(map_normal(s->w2o, n));
     out->n = s->flip_normal ? v3_neg(nw) : nw;
     out->ns = out->n;
     out->uv = uv;
@@ -658,8 +660,8 @@ bool shape_dnduv(const AnalyticShape *s, Vec2 uv, Vec3 *dndu, Vec3 *dndv)
         V3d pt, dpdu, dpdv, n;
         surface_object(s, phi, q, &pt, &dpdu, &dpdv, &n);
         const double ct = cos(q), im = 1.0 / s->r_minor;
-        *dndu = f3(map_normal(s->nrm, d3v(-TWO_PI_D * ct * sin(phi), TWO_PI_D * ct * cos(phi), 0.0)));
-        *dndv = f3(map_normal(s->nrm, d3v(dpdv.x * im, dpdv.y * im, dpdv.z * im)));
+        *dndu = f3(map_normal(s->w2o, d3v(-TWO_PI_D * ct * sin(phi), TWO_PI_D * ct * cos(phi), 0.0)));
+        *dndv = f3(map_normal(s->w2o, d3v(dpdv.x * im, dpdv.y * im, dpdv.z * im)));
         return true;
     }
     case SHAPE_TAG_DISK: return true; /* flat */
@@ -667,8 +669,8 @@ bool shape_dnduv(const AnalyticShape *s, Vec2 uv, Vec3 *dndu, Vec3 *dndv)
     }
     V3d pt, dpdu, dpdv, n;
     surface_object(s, phi, q, &pt, &dpdu, &dpdv, &n);
-    *dndu = f3(map_normal(s->nrm, d3v(dpdu.x * ir, dpdu.y * ir, dpdu.z * ir)));
-    *dndv = f3(map_normal(s->nrm, d3v(dpdv.x * ir_v, dpdv.y * ir_v, dpdv.z * ir_v)));
+    *dndu = f3(map_normal(s->w2o, d3v(dpdu.x * ir, dpdu.y * ir, dpdu.z * ir)));
+    *dndv = f3(map_normal(s->w2o, d3v(dpdv.x * ir_v, dpdv.y * ir_v, dpdv.z * ir_v)));
     return true;
 }
 
@@ -694,7 +696,7 @@ static double area_factor(const AnalyticShape *s, V3d n)
     const double (*m)[4] = s->o2w;
     double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
                  m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    return fabs(det) * d3_len(map_normal(s->nrm, n));
+    return fabs(det) * d3_len(map_normal(s->w2o, n));
 }
 
 float shape_area(const AnalyticShape *s)

@@ -54,24 +54,30 @@ typedef struct ShapeParams {
 
 /* One primitive: parameters, object-to-world and its inverse in double (the intersection
  * runs in object space in double, so every back end, given the same ray, finds the same
- * t to the bit), the world bounds. */
+ * t to the bit), the world bounds. Laid out for the leaf test, which reads the tag and
+ * then the union: the union follows the tag's ShapeParams, so a curve's test data (tag,
+ * control points, reach, widths, type, depth) is bytes 0-111, and the size is six cache
+ * lines (no normal matrix: w2o holds it). */
 typedef struct AnalyticShape {
-    ShapeParams p;
-    double r, z_min, z_max, height, r_inner, phi_max; /* p's, in double for the arithmetic */
-    double theta_z_min, theta_z_max; /* sphere: acos(z_min / r), acos(z_max / r) */
-    double r_minor;                 /* torus */
-    bool flip_normal;               /* reverse_orientation XOR the transform mirrors */
+    ShapeParams p;                  /* p.type first: the tag every test reads */
     union {
         struct {                        /* the quadrics */
-            double o2w[3][4], w2o[3][4]; /* affine rows: linear part | translation */
-            double nrm[3][3];            /* normal matrix: the inverse transpose of o2w's linear part */
+            double o2w[3][4], w2o[3][4]; /* affine rows: linear part | translation; the
+                                          * normal matrix (o2w's inverse transpose) is
+                                          * w2o's linear part transposed (shape.c) */
         };
         BilinearPatch bl;               /* SHAPE_TAG_BILINEAR */
         SdfTree *sdf;                   /* SHAPE_TAG_SDF: owned (shape_release); copies borrow it */
         Curve cv;                       /* SHAPE_TAG_CURVE */
     };
+    double r, z_min, z_max, height, r_inner, phi_max; /* p's, in double for the arithmetic */
+    double theta_z_min, theta_z_max; /* sphere: acos(z_min / r), acos(z_max / r) */
+    double r_minor;                 /* torus */
+    bool flip_normal;               /* reverse_orientation XOR the transform mirrors */
     BBox bounds;                    /* world, padded outward to contain every reported hit */
+    char pad_to_lines[48];          /* 336 -> 384 bytes: six whole cache lines */
 } AnalyticShape;
+_Static_assert(sizeof(AnalyticShape) % 64 == 0, "AnalyticShape: whole cache lines");
 
 /* Builds a shape from its parameters and object-to-world transform. False when the
  * parameters are out of range (radius <= 0, z_min >= z_max for cylinders, phi_max
@@ -96,6 +102,15 @@ void shape_release(AnalyticShape *s);
  * space): false where curve_init is. Curves do not emit (shape_area is 0). */
 bool shape_init_curve(AnalyticShape *s, const Vec3 whole_cp[4], float u0, float u1, float w0, float w1,
                       CurveType type, const Vec3 *n, bool flip);
+
+/* The boxes an accel may bound the shape by, their union holding every hit: a curve's
+ * pieces (curve_piece_bounds), else the one box s->bounds. Returns their count. */
+static inline int shape_piece_bounds(const AnalyticShape *s, BBox boxes[CURVE_MAX_PIECES])
+{
+    if (s->p.type == SHAPE_TAG_CURVE) return curve_piece_bounds(&s->cv, boxes);
+    boxes[0] = s->bounds;
+    return 1;
+}
 
 /* Nearest hit in (r->t_min, r->t_max): *t and the shape's (u, v) parameters (pbrt-v4:
  * u = phi / phi_max, v along z for cylinders and spheres, from the rim inward for disks).

@@ -283,6 +283,7 @@ static void test_backends_agree(void **state)
         Vec3 cp[4];
         float w0, w1;
         random_curve(&rng, cp, &w0, &w1);
+        if (c % 2) w0 *= 0.25f, w1 *= 0.25f; /* thin: the BVH bounds these by pieces */
         Vec3 off = rnd_v3(&rng, -3.0f, 3.0f);
         for (int i = 0; i < 4; i++) cp[i] = v3_add(cp[i], off);
         for (int s = 0; s < NS; s++)
@@ -322,6 +323,71 @@ static void test_backends_agree(void **state)
     assert_true(hits > 300);
     for (int k = 0; k < na; k++) accel_free(&a[k]);
     free(shapes);
+}
+
+/* curve_piece_bounds: long segments are cut (k > 1), short ones not; every hit of rays
+ * aimed at points of the fibre (within its width, from every side) lies in the box of
+ * the piece holding the hit's u, and the pieces lie in the segment's box. */
+static bool box_holds(BBox b, Vec3 p)
+{
+    return p.x >= b.min.x && p.y >= b.min.y && p.z >= b.min.z && p.x <= b.max.x && p.y <= b.max.y && p.z <= b.max.z;
+}
+
+static void test_piece_bounds(void **state)
+{
+    (void)state;
+    Pcg32 rng;
+    pcg32_seed(&rng, 28u, 7u);
+    int hits = 0, cut = 0;
+    for (int c = 0; c < 120; c++) {
+        Vec3 cp[4];
+        float w0, w1;
+        random_curve(&rng, cp, &w0, &w1);
+        w0 *= 0.25f; /* hair-like: segments 10 to 40 widths long, cut into 2 to 8 pieces */
+        w1 *= 0.25f;
+        const float u0 = (float)(c % 4) / 4.0f, u1 = u0 + 0.25f;
+        AnalyticShape sh;
+        assert_true(shape_init_curve(&sh, cp, u0, u1, w0, w1, (CurveType)(c % 3),
+                                     c % 3 == 2 ? (Vec3[2]){cp[1], cp[2]} : NULL, false));
+        BBox box[CURVE_MAX_PIECES];
+        const int k = shape_piece_bounds(&sh, box);
+        assert_true(k >= 1 && k <= CURVE_MAX_PIECES && (k & (k - 1)) == 0);
+        cut += k > 1;
+        for (int j = 0; j < k; j++)
+            for (int a = 0; a < 3; a++)
+                assert_true(v3_get(box[j].min, a) >= v3_get(sh.bounds.min, a) &&
+                            v3_get(box[j].max, a) <= v3_get(sh.bounds.max, a));
+        for (int i = 0; i < 400; i++) {
+            const float w = pcg32_float(&rng);
+            const Vec3 target = v3_add(curve_eval(sh.cv.cp, w, NULL), rnd_v3(&rng, -0.6f * w0, 0.6f * w0));
+            const Vec3 d = v3_normalize(rnd_v3(&rng, -1.0f, 1.0f));
+            const Ray r = ray_make(v3_madd(target, d, -4.0f), d, 0.0f, INFINITY);
+            float t, u, v;
+            if (!shape_intersect(&sh, &r, &t, &u, &v)) continue;
+            hits++;
+            int j = (int)((u - u0) / (u1 - u0) * (float)k);
+            j = j < 0 ? 0 : j >= k ? k - 1 : j;
+            const Vec3 p = ray_at(&r, t);
+            /* on a boundary between pieces u may round either way: either box will do */
+            bool in = false;
+            for (int jj = j - 1; jj <= j + 1; jj++) {
+                if (jj < 0 || jj >= k) continue;
+                const float uj0 = u0 + (u1 - u0) * (float)jj / (float)k, uj1 = u0 + (u1 - u0) * (float)(jj + 1) / (float)k;
+                if ((jj != j && fabsf(u - (jj < j ? uj1 : uj0)) > 1e-5f)) continue;
+                in |= box_holds(box[jj], p);
+            }
+            if (!in)
+                fail_msg("curve %d ray %d: hit at u %g outside piece %d of %d", c, i, (double)u, j, k);
+        }
+    }
+    print_message("  %d hits inside their pieces' boxes; %d of 120 segments cut\n", hits, cut);
+    assert_true(hits > 5000 && cut > 90);
+    /* a short segment (its length below 8 widths) is one piece */
+    AnalyticShape sh;
+    const Vec3 cp[4] = {v3(0, 0, 0), v3(0.1f, 0, 0), v3(0.2f, 0, 0), v3(0.3f, 0, 0)};
+    assert_true(shape_init_curve(&sh, cp, 0.0f, 1.0f, 0.1f, 0.1f, CURVE_FLAT, NULL, false));
+    BBox box[CURVE_MAX_PIECES];
+    assert_int_equal(shape_piece_bounds(&sh, box), 1);
 }
 
 static Scene *load_pbrt(const char *text, CstStatus want, CstError *err)
@@ -439,6 +505,7 @@ int main(void)
         cmocka_unit_test(test_surface),
         cmocka_unit_test(test_bases),
         cmocka_unit_test(test_backends_agree),
+        cmocka_unit_test(test_piece_bounds),
         cmocka_unit_test(test_pbrt_curve),
         cmocka_unit_test(test_json_curve),
     };
