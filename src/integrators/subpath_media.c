@@ -1,27 +1,18 @@
-/* Light tracing, BDPT, VCM and MMLT through participating media (subpath_media.h): free-
- * flight sampling and Henyey–Greenstein scattering on both subpaths, medium tracking across
- * interface shapes, transmittance on every connection, and the recursive MIS of subpath.c
- * (Georgiev's tech. rep. "Implementing Vertex Connection and Merging", 2012) extended to
- * volume vertices as in UPBP (Křivánek et al. 2014, sec. 4 and its supplement): a vertex in
- * a medium has no cosine (its measure is volume, so |cos| -> 1 in every area conversion),
- * and the density of a vertex includes the distance sampling that made it: sigma_t-type
- * density at a scattering point, the probability of passing for a surface (and for every
- * medium a segment crosses). Those densities are medium.h's: the balance heuristic over
- * colour lanes, medium_distance_pdf() and medium_pass_prob(), per straight piece between
- * boundaries. Only the scenes with media come here; the others keep subpath.c and light.c
- * bit for bit. Grid and cloud media are walked by delta tracking and connected through by
- * ratio tracking (both unbiased), with the hero-lane MIS of hetero_medium.h over each
- * subpath; their MIS densities are chain_piece's majorant-based stand-ins for the
- * stochastic true ones (any densities computed alike by every strategy keep the weights a
- * partition of unity). Emissive media: the camera walks of BDPT and VCM gather their
- * emission with weight 1 (media_subpath_trace_camera says why); integrator.c refuses them
- * for the light tracer and MMLT, whose strategies do not gather it. VCM adds merging: surface light
- * vertices as vcm.c, volume ones by UPBP's point-point 3D estimator (a ball of radius r,
- * 1 / ((4/3) pi r^3 N), the eta of a volume vertex in every MIS weight; media_merge).
- * Motion blur: every ray of a walk and of a connection carries its path's time (the walks'
- * rays keep the time of the ray they continue, EmissionSample.time on light subpaths; the
- * connections take the camera vertex's or the light subpath's), so moving instances are
- * met where that instant places them; media themselves do not move. */
+/* Light tracing, BDPT, VCM, MMLT and SPPM's photons through participating media
+ * (subpath_media.h): free flights and Henyey-Greenstein scattering on both subpaths, medium
+ * tracking across interface shapes, transmittance on every connection, and subpath.c's
+ * recursive MIS (Georgiev, "Implementing Vertex Connection and Merging", 2012) extended to
+ * volume vertices as in UPBP (Krivanek et al. 2014, sec. 4 and supplement): a volume vertex
+ * has no cosine, and a vertex's density includes the distance sampling that made it
+ * (medium.h's lane-balanced medium_distance_pdf() and medium_pass_prob(), per piece between
+ * boundaries). Scenes without media keep subpath.c and light.c bit for bit. Grids and clouds:
+ * delta tracking on walks, ratio tracking on connections, MIS densities from chain_piece's
+ * majorant stand-ins (computed alike by every strategy, so the weights still sum to 1).
+ * Emissive media: gathered by BDPT's and VCM's camera walks with weight 1 (see
+ * media_subpath_trace_camera); refused for the light tracer, MMLT and SPPM. VCM merges volume
+ * vertices by UPBP's point-point 3D estimator (1 / ((4/3) pi r^3 N); media_merge). Motion
+ * blur: every ray carries its path's time (walks keep the time of the ray they continue;
+ * connections take the camera vertex's or the light subpath's); media do not move. */
 #include "integrators/subpath_media.h"
 
 #include <math.h>
