@@ -345,7 +345,7 @@ CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
     LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, light_rr_depth, photons, radius, color, light_sampling, "
                                              "light_sampler, regularize, mutations_per_pixel, large_step_probability, "
                                              "sigma, bootstrap_samples, chains"));
-    LOADER_TRY(json_check_keys(ld, integ, keys, 14));
+    LOADER_TRY(json_check_keys(ld, integ, keys, (int)(sizeof keys / sizeof keys[0])));
     if ((v = json_object_get(integ, "regularize"))) {
         int reg = 0;
         json_path_push_key(ld, "regularize");
