@@ -11,7 +11,7 @@
 #   --rounds N      alternating rounds (default 3); each round runs SmallVCM then caustic
 #                   on every algorithm, the order of the two flipped every other round
 #   --keep DIR      keep the images (SmallVCM .hdr, caustic .pfm) of the last round in DIR
-#   --scene-roulette  run path and light at the scene's rr_depth (3) too, not at 1
+#   --scene-roulette  run path, light and bdpt at the scene's rr_depth (3) too (see below)
 #
 # SmallVCM is built from a copy of its tree in a temporary directory with its own Makefile
 # (g++ -O3 -std=c++0x -fopenmp). Two configuration lines of the copy are changed, nothing
@@ -30,8 +30,10 @@
 # probability = the hit's albedo); caustic's default starts at bounce 3. path and light run
 # here at rr_depth 1 (a copy of the scene with that key), where their equal-time relMSE on
 # this scene is lower than at 3 (path 6-10%, light 2-5%; docs/benchmarks-history.md,
-# issue 32); bdpt and vcm keep the scene's 3, since at 1 theirs is 30-70% higher.
-# --scene-roulette runs path and light at 3 as well.
+# issue 32); bdpt and vcm keep the scene's 3, since at 1 theirs is 30-70% higher. bdpt's
+# light subpaths alone play it from the first bounce (light_rr_depth 1), where its
+# equal-time relMSE is 5% lower than at 3 (history, 2026-12-07, branch bdpt-speed).
+# --scene-roulette runs path, light and bdpt at 3 for all subpaths.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 svcm_dir=${SMALLVCM_DIR:-$root/../SmallVCM}
@@ -47,7 +49,7 @@ while [ $# -gt 0 ]; do
         --algorithms) algorithms=$2; shift 2 ;;
         --keep) keep=$2; shift 2 ;;
         --scene-roulette) scene_rr=1; shift ;;
-        -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,37p' "$0"; exit 0 ;;
         *) echo "bench/smallvcm.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
     esac
 done
@@ -61,6 +63,8 @@ scene_rr1=$tmp/smallvcm-box-rr1.json
 sed 's/"max_depth": 9,/"max_depth": 9, "rr_depth": 1,/' "$scene" >"$scene_rr1"
 grep -q '"rr_depth": 1,' "$scene_rr1" ||
     { echo "bench/smallvcm.sh: $scene has no \"max_depth\": 9 to add rr_depth to" >&2; exit 2; }
+scene_lrr1=$tmp/smallvcm-box-lrr1.json
+sed 's/"max_depth": 9,/"max_depth": 9, "light_rr_depth": 1,/' "$scene" >"$scene_lrr1"
 
 svcm=
 if [ -f "$svcm_dir/src/smallvcm.cxx" ] && [ -f "$svcm_dir/Makefile" ]; then
@@ -92,7 +96,7 @@ timed() {
 run_svcm() { (cd "$tmp" && timed ./smallvcm -s 4 -a "$1" -i "$iterations" -o "$tmp/svcm-$1.hdr"); }
 run_caustic() {
     local sc=$scene
-    case $1 in pt|lt) [ "$scene_rr" = 1 ] || sc=$scene_rr1 ;; esac
+    case $1 in pt|lt) [ "$scene_rr" = 1 ] || sc=$scene_rr1 ;; bpt) [ "$scene_rr" = 1 ] || sc=$scene_lrr1 ;; esac
     timed "$caustic" render "$sc" --integrator "$(caustic_name "$1")" --spp "$iterations" \
         --threads "$threads" -o "$tmp/caustic-$1.pfm"
 }
@@ -109,7 +113,7 @@ done
 
 echo "scene $scene, $iterations iterations, $threads threads, $rounds rounds"
 [ "$scene_rr" = 1 ] && echo "Russian roulette: the scene's rr_depth for every algorithm" ||
-    echo "Russian roulette: path and light at rr_depth 1 (SmallVCM's), bdpt, vcm and sppm at the scene's"
+    echo "Russian roulette: path and light at rr_depth 1 (SmallVCM's), bdpt's light subpaths at 1 (light_rr_depth), vcm, sppm and bdpt's camera subpaths at the scene's"
 echo "seconds min-max over the rounds; ratios SmallVCM / caustic of the minima (> 1: caustic faster)"
 # column 1 of a file: wall, column 2: cpu
 mm() { sort -g -k"$2" "$1" | awk -v k="$2" 'NR == 1 {lo = $k} {hi = $k} END {printf "%.2f %.2f", lo, hi}'; }

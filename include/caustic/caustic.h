@@ -744,6 +744,8 @@ typedef struct CstRenderSettings {
     int max_depth;            /* maximum bounces (scattering vertices) of a path, light paths
                                * included; 0 = unbounded (the default) */
     int rr_depth;             /* Russian roulette starts at this depth, > 0; default 3 */
+    int light_rr_depth;       /* bdpt and vcm: the same for their light subpaths (bounces
+                               * from the emitter), > 0; default rr_depth */
     int photons;              /* photon integrator: photon paths emitted per render, > 0;
                                * default 200000 */
     double photon_radius;     /* photon integrator: gather radius in scene units, > 0; default

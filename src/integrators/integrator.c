@@ -443,6 +443,7 @@ static CstStatus light_prepare(Integrator *it, const CstRenderSettings *st, CstE
         L->vcm_params.merge = st->integrator == CST_INTEGRATOR_VCM;
         L->vcm_params.max_depth = st->max_depth;
         L->vcm_params.rr_depth = st->rr_depth;
+        L->vcm_params.light_rr_depth = st->light_rr_depth;
         L->vcm_radius = st->photon_radius > 0.0 ? (float)st->photon_radius : vcm_default_radius(it->scene);
         if (!(st->photon_radius >= 0.0) || !(L->vcm_radius > 0.0f) || !(L->vcm_radius < INFINITY))
             return cst_fail(err, CST_ERR_INVALID_ARG, "merging radius %g: expected a positive value (0 = automatic)",
@@ -494,6 +495,7 @@ static CstStatus mlt_prepare(Integrator *it, const CstRenderSettings *st, CstErr
         p.sub.merge = false;
         p.sub.max_depth = depth;
         p.sub.rr_depth = st->rr_depth;
+        p.sub.light_rr_depth = st->rr_depth; /* MMLT's light subpaths: rr_depth, as always */
         p.sub.frame = splat_frame(st->width, st->height, st->filter);
         vcm_iteration_init(&p.it, &p.sub, &it->camera, (int)pixels, 0.0f, 0);
     }

@@ -144,7 +144,7 @@ void subpath_trace_light(const Scene *s, const Camera *cam, const SubpathParams 
     Wavelengths walk_wl;
     if (wl) walk_wl = *wl;
     LightSubpathCtx c = {s, cam, vp, it, verts, splats, wl, wl ? &walk_wl : NULL, rays, time};
-    const LightWalk w = {vp->max_depth, vp->rr_depth, it, true, wl, store_and_connect, &c, wl ? &walk_wl : NULL};
+    const LightWalk w = {vp->max_depth, vp->light_rr_depth, it, true, wl, store_and_connect, &c, wl ? &walk_wl : NULL};
     subpath_walk_light(s, &w, &es, sp, rng, rays);
 }
 

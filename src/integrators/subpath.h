@@ -20,7 +20,8 @@
 typedef struct SubpathParams {
     bool merge;      /* false: BDPT (connections only); true: VCM */
     int max_depth;   /* bounces of a full path, as PathParams; 0 = unbounded */
-    int rr_depth;    /* first bounce at which Russian roulette may stop a subpath */
+    int rr_depth;    /* first bounce at which Russian roulette may stop a camera subpath */
+    int light_rr_depth; /* the same for a light subpath (bounces from the emitter) */
     SplatFrame frame; /* the film the t = 1 splats are for: its size and pixel filter */
 } SubpathParams;
 

@@ -602,7 +602,7 @@ void media_subpath_trace_light(const Scene *s, const Camera *cam, const SubpathP
     if (wl) walk_wl = *wl;
     MediaCamCtx c = {s, cam, &vp->frame, filter_radius(vp->frame.filter) - 0.5f, it, verts, wl,
                      wl ? &walk_wl : NULL, splats, rays, time};
-    const MediaWalk w = {vp->max_depth, vp->rr_depth, it, wl, wl ? &walk_wl : NULL, visit_store_connect, &c};
+    const MediaWalk w = {vp->max_depth, vp->light_rr_depth, it, wl, wl ? &walk_wl : NULL, visit_store_connect, &c};
     media_walk_light(s, &w, &es, sp, medium, rng, rays);
 }
 

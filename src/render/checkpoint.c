@@ -79,6 +79,7 @@ static int state_key(const CstScene *scene, const CstRenderSettings *st, const c
     key_int(&b, "aov_sums", (st->aovs & FILM_AOV_FIRST_HIT) != 0);
     /* Written only when not the default, so that states of plain renders keep their key. */
     if (st->first_sample > 0) key_int(&b, "first_sample", st->first_sample);
+    if (st->light_rr_depth != st->rr_depth) key_int(&b, "light_rr_depth", st->light_rr_depth);
     if (st->sample_block > 1) key_int(&b, "sample_block", st->sample_block);
     if (st->subsurface_walk == 1) key_int(&b, "subsurface_walk", 1);
     /* Adaptive rounds are planned from the target (render/adaptive.h). */

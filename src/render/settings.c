@@ -9,7 +9,7 @@ void cst_render_settings_init(CstRenderSettings *s)
 {
     memset(s, 0, sizeof *s); /* enums *_DEFAULT, seed_set = exposure_set = 0, no callback */
     s->width = s->height = s->spp = s->threads = CST_UNSET;
-    s->max_depth = s->rr_depth = s->photons = CST_UNSET;
+    s->max_depth = s->rr_depth = s->light_rr_depth = s->photons = CST_UNSET;
     s->time_limit = s->photon_radius = s->exposure = s->max_component = CST_UNSET;
     s->png_linear = s->aovs = s->regularize = s->subsurface_walk = CST_UNSET;
     s->white_balance = CST_UNSET;
@@ -45,6 +45,7 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_INT(filter, 1, CST_FILTER_BOX);
     PICK_INT(max_depth, 0, 0);                /* 0 = unbounded */
     PICK_INT(rr_depth, 1, CST_DEFAULT_RR_DEPTH);
+    PICK_INT(light_rr_depth, 1, out->rr_depth); /* after rr_depth: its default */
     PICK_DBL(time_limit, 0, 0.0);             /* 0 = none */
     if (out->noise_target == CST_UNSET) out->noise_target = 0.0; /* a render's, never the scene's */
     PICK_INT(photons, 1, 0);                  /* 0 stays: the photon integrator's default */

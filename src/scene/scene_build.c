@@ -1015,9 +1015,9 @@ static CstStatus check_settings(const CstRenderSettings *r, CstError *err)
     if (r->resume || r->pass_done || r->pass_user || r->photon_cache || r->photon_split)
         return cst_fail(err, CST_ERR_INVALID_ARG, "%s: resume, pass_done, pass_user, photon_cache and photon_split belong to a render, "
                         "not to a scene; expected them NULL (cst_render_settings_init)", fn);
-    const int ints[] = {r->width, r->height, r->spp, r->rr_depth, r->photons};
-    static const char *const names[] = {"width", "height", "spp", "rr_depth", "photons"};
-    for (int k = 0; k < 5; k++)
+    const int ints[] = {r->width, r->height, r->spp, r->rr_depth, r->light_rr_depth, r->photons};
+    static const char *const names[] = {"width", "height", "spp", "rr_depth", "light_rr_depth", "photons"};
+    for (int k = 0; k < 6; k++)
         if (setting_set(ints[k], 1) && ints[k] < 1)
             return cst_fail(err, CST_ERR_INVALID_ARG, "%s: %s %d; expected > 0", fn, names[k], ints[k]);
     if (setting_set(r->max_depth, 0) && r->max_depth < 0)
@@ -1084,6 +1084,7 @@ CstStatus cst_scene_set_render_settings(CstScene *scene, const CstRenderSettings
     SETTING_MERGE(filter, 1);
     SETTING_MERGE(max_depth, 0);
     SETTING_MERGE(rr_depth, 1);
+    SETTING_MERGE(light_rr_depth, 1);
     SETTING_MERGE(photons, 1);
     SETTING_MERGE(photon_radius, 1);
     SETTING_MERGE(sampler, 1);

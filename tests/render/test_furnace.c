@@ -289,7 +289,9 @@ static void test_emitter_spectrum_furnace(void **state)
  * first scattering on. Unbiased in the path variants, the light tracer and BDPT (whose
  * throughputs and MIS pdfs both go through roulette()), each at Z_LIMIT standard errors
  * of the whole image and its four quadrants (light and bdpt: errors from independent
- * renders, since their splats correlate pixels). */
+ * renders, since their splats correlate pixels). The last case, BDPT with roulette from
+ * the first bounce on its light subpaths alone (rr_depth 3, light_rr_depth 1: what
+ * bench/smallvcm.sh runs bdpt with), checks the light subpaths' roulette on its own. */
 static void test_furnace_roulette_first_bounce(void **state)
 {
     (void)state;
@@ -306,9 +308,12 @@ static void test_furnace_roulette_first_bounce(void **state)
         if (b >= 0) { r[0] = (b % 2) * 8; r[2] = r[0] + 8; r[1] = (b / 2) * 8; r[3] = r[1] + 8; }
     }
     const CstIntegrator integ[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_NEE, CST_INTEGRATOR_PATH_BSDF,
-                                   CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_BDPT};
+                                   CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_BDPT, CST_INTEGRATOR_BDPT};
+    const int rr[] = {1, 1, 1, 1, 1, 3}, light_rr[] = {0, 0, 0, 0, 0, 1}; /* 0: rr_depth's */
     for (size_t i = 0; i < sizeof integ / sizeof integ[0]; i++) {
         RegionStat reg[5];
+        st.rr_depth = rr[i];
+        st.light_rr_depth = light_rr[i];
         if (integ[i] == CST_INTEGRATOR_LIGHT || integ[i] == CST_INTEGRATOR_BDPT) {
             st.integrator = integ[i];
             if (region_stats_by_render(s, &st, integ[i] == CST_INTEGRATOR_BDPT ? 64 : 128, 700 + i, 5,
@@ -323,11 +328,12 @@ static void test_furnace_roulette_first_bounce(void **state)
             for (int c = 0; c < 3; c++) {
                 double z = (reg[k].mean[c] - expect[c]) / reg[k].se[c];
                 if (!(fabs(z) <= Z_LIMIT))
-                    fail_msg("%s, rr_depth 1: region %d channel %d: mean %.6f, expected %.6f (z = %.2f)",
-                             cst_integrator_name(integ[i]), k - 1, c, reg[k].mean[c], expect[c], z);
+                    fail_msg("%s, rr_depth %d, light_rr_depth %d: region %d channel %d: mean %.6f, expected %.6f "
+                             "(z = %.2f)", cst_integrator_name(integ[i]), rr[i], light_rr[i], k - 1, c, reg[k].mean[c],
+                             expect[c], z);
             }
-        print_message("%s, rr_depth 1: whole image %.5f (se %.1e), expected %.5f\n", cst_integrator_name(integ[i]),
-                      reg[0].mean[0], reg[0].se[0], expect[0]);
+        print_message("%s, rr_depth %d, light_rr_depth %d: whole image %.5f (se %.1e), expected %.5f\n",
+                      cst_integrator_name(integ[i]), rr[i], light_rr[i], reg[0].mean[0], reg[0].se[0], expect[0]);
     }
     scene_destroy(s);
 }

@@ -528,6 +528,8 @@ static void test_ranges(void **state)
                  "integrator.max_depth: -1 is out of range");
     expect_error(WITH_SECTION("\"integrator\": {\"rr_depth\": 0}"), CST_ERR_INVALID_ARG, "0}", 0,
                  "integrator.rr_depth: 0 is out of range");
+    expect_error(WITH_SECTION("\"integrator\": {\"light_rr_depth\": 0}"), CST_ERR_INVALID_ARG, "0}", 0,
+                 "integrator.light_rr_depth: 0 is out of range");
     expect_error(WITH_SECTION("\"integrator\": {\"photons\": 0}"), CST_ERR_INVALID_ARG, "0}", 0,
                  "integrator.photons: 0 is out of range");
     expect_error(WITH_SECTION("\"integrator\": {\"radius\": -2}"), CST_ERR_INVALID_ARG, "-2", 0,
@@ -871,6 +873,16 @@ static void test_defaults(void **state)
     assert_int_equal(s->settings.rr_depth, 1);
     assert_int_equal(s->settings.filter, CST_FILTER_TENT);
     assert_string_equal(cst_scene_output_path(s), "out/A.EXR");
+    /* light_rr_depth unset: a render resolves it to rr_depth */
+    CstRenderSettings rs;
+    cst_render_settings_resolve(s, NULL, &rs);
+    assert_int_equal(rs.rr_depth, 1);
+    assert_int_equal(rs.light_rr_depth, 1);
+    cst_scene_destroy(s);
+    s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"bdpt\", \"light_rr_depth\": 2}"));
+    cst_render_settings_resolve(s, NULL, &rs);
+    assert_int_equal(rs.rr_depth, 3);
+    assert_int_equal(rs.light_rr_depth, 2);
     cst_scene_destroy(s);
     s = expect_ok(WITH_SECTION("\"integrator\": {\"type\": \"light\"}"));
     assert_int_equal(s->settings.integrator, CST_INTEGRATOR_LIGHT);

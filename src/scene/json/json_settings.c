@@ -336,16 +336,16 @@ static CstStatus parse_mlt(Loader *ld, const json_t *integ)
 
 CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
 {
-    static const char *const keys[] = {"type", "max_depth", "rr_depth", "photons", "radius", "color",
+    static const char *const keys[] = {"type", "max_depth", "rr_depth", "light_rr_depth", "photons", "radius", "color",
                                        "light_sampler", "regularize", "light_sampling", "mutations_per_pixel",
                                        "large_step_probability", "sigma", "bootstrap_samples", "chains"};
     CstRenderSettings *rs = &ld->settings;
     json_t *v;
     json_int_t i = 0;
-    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, photons, radius, color, light_sampling, "
+    LOADER_TRY(json_expect_object(ld, integ, "an object with type, max_depth, rr_depth, light_rr_depth, photons, radius, color, light_sampling, "
                                              "light_sampler, regularize, mutations_per_pixel, large_step_probability, "
                                              "sigma, bootstrap_samples, chains"));
-    LOADER_TRY(json_check_keys(ld, integ, keys, 14));
+    LOADER_TRY(json_check_keys(ld, integ, keys, (int)(sizeof keys / sizeof keys[0])));
     if ((v = json_object_get(integ, "regularize"))) {
         int reg = 0;
         json_path_push_key(ld, "regularize");
@@ -419,6 +419,12 @@ CstStatus json_parse_integrator(Loader *ld, const json_t *integ)
         json_path_push_key(ld, "rr_depth");
         LOADER_TRY(json_read_int(ld, v, 1, INT_MAX, &i));
         rs->rr_depth = (int)i;
+        json_path_pop(ld);
+    }
+    if ((v = json_object_get(integ, "light_rr_depth"))) { /* bdpt and vcm; from 1 as rr_depth */
+        json_path_push_key(ld, "light_rr_depth");
+        LOADER_TRY(json_read_int(ld, v, 1, INT_MAX, &i));
+        rs->light_rr_depth = (int)i;
         json_path_pop(ld);
     }
     /* Photon mapping only (ignored by the other integrators). At most 2^28 photon paths:
