@@ -78,9 +78,11 @@ CstStatus sss_walk_view_create(const Scene *s, const Scene **out, CstError *err)
         w->ifaces[n] = (MediumInterface){.inside = n, .outside = -1, .boundary = 0};
         medium_of[i] = ++n;
     }
-    memcpy(w->info, s->tri_info, (size_t)s->num_triangles * sizeof *w->info);
-    memcpy(w->info + s->num_triangles, s->sphere_info, (size_t)s->num_spheres * sizeof *w->info);
-    memcpy(w->info + s->num_triangles + s->num_spheres, s->shape_info, (size_t)s->num_shapes * sizeof *w->info);
+    /* (each array is NULL when its count is 0: memcpy may not be given NULL even then) */
+    if (s->num_triangles) memcpy(w->info, s->tri_info, (size_t)s->num_triangles * sizeof *w->info);
+    if (s->num_spheres) memcpy(w->info + s->num_triangles, s->sphere_info, (size_t)s->num_spheres * sizeof *w->info);
+    if (s->num_shapes)
+        memcpy(w->info + s->num_triangles + s->num_spheres, s->shape_info, (size_t)s->num_shapes * sizeof *w->info);
     for (size_t p = 0; p < prims; p++) w->info[p].medium = medium_of[w->info[p].material];
     free(medium_of);
     /* The shared scene, its media and interfaces (none: integrator_prepare refuses scenes
