@@ -12,6 +12,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "render/box_scene.h"
 #include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
@@ -142,21 +143,7 @@ static Scene *fog_box(void)
     CstError err;
     Scene *s = scene_create();
     int wall, lightm;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.7f, 0.6f, 0.5f, 0.6f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &wall, &err), CST_OK);
-    m.albedo = color_s(0.0f);
-    assert_int_equal(scene_add_material(s, &m, &lightm, &err), CST_OK);
-    const Vec3 walls[5][4] = {
-        {{-1, -1, -1}, {1, -1, -1}, {1, -1, 1}, {-1, -1, 1}}, /* floor */
-        {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}},     /* ceiling */
-        {{-1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {1, -1, -1}}, /* back */
-        {{-1, -1, -1}, {-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}}, /* left */
-        {{1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}},     /* right */
-    };
-    for (int i = 0; i < 5; i++) assert_int_equal(scene_add_quad(s, walls[i], wall, NULL, &err), CST_OK);
-    const Vec3 light[4] = {{-0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, 0.3f}, {-0.3f, 0.99f, 0.3f}};
-    Emission em = {color_rgb(8.0f, 8.0f, 6.0f), 0, 0};
-    assert_int_equal(scene_add_quad(s, light, lightm, &em, &err), CST_OK);
+    open_box_add(s, &wall, &lightm);
     int med = add_medium(s, color_s(0.2f), color_rgb(1.5f, 1.0f, 0.5f), color_s(0.0f), 0.5f);
     assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);

@@ -20,6 +20,7 @@
 #include <cmocka.h>
 
 #include "core/rng.h"
+#include "render/box_scene.h"
 #include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
@@ -228,21 +229,7 @@ static Scene *fog_box(FogKind kind)
     CstError err;
     Scene *s = scene_create();
     int wall, lightm;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.7f, 0.6f, 0.5f, 0.6f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &wall, &err), CST_OK);
-    m.albedo = color_s(0.0f);
-    assert_int_equal(scene_add_material(s, &m, &lightm, &err), CST_OK);
-    const Vec3 walls[5][4] = {
-        {{-1, -1, -1}, {1, -1, -1}, {1, -1, 1}, {-1, -1, 1}}, /* floor */
-        {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}},     /* ceiling */
-        {{-1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {1, -1, -1}}, /* back */
-        {{-1, -1, -1}, {-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}}, /* left */
-        {{1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}},     /* right */
-    };
-    for (int i = 0; i < 5; i++) assert_int_equal(scene_add_quad(s, walls[i], wall, NULL, &err), CST_OK);
-    const Vec3 light[4] = {{-0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, 0.3f}, {-0.3f, 0.99f, 0.3f}};
-    Emission em = {color_rgb(8.0f, 8.0f, 6.0f), 0, 0};
-    assert_int_equal(scene_add_quad(s, light, lightm, &em, &err), CST_OK);
+    open_box_add(s, &wall, &lightm);
     /* The grid: densities in [0, 3) over the ball's box, mean 1.5, so sigma_s means the
      * homogeneous fog's in green; the emissive one glows sigma_a Le ~ 0.5 0.3 0.1 per unit
      * length at mean density. */

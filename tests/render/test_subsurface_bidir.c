@@ -15,6 +15,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "render/box_scene.h"
 #include "render/regions.h"
 #include "render/render_util.h"
 #include "scene/scene.h"
@@ -59,21 +60,7 @@ static Scene *sss_box(bool explicit_medium)
     CstError err;
     Scene *s = scene_create();
     int wall, lightm;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.7f, 0.6f, 0.5f, 0.6f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &wall, &err), CST_OK);
-    m.albedo = color_s(0.0f);
-    assert_int_equal(scene_add_material(s, &m, &lightm, &err), CST_OK);
-    const Vec3 walls[5][4] = {
-        {{-1, -1, -1}, {1, -1, -1}, {1, -1, 1}, {-1, -1, 1}}, /* floor */
-        {{-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}},     /* ceiling */
-        {{-1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {1, -1, -1}}, /* back */
-        {{-1, -1, -1}, {-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}}, /* left */
-        {{1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}},     /* right */
-    };
-    for (int i = 0; i < 5; i++) assert_int_equal(scene_add_quad(s, walls[i], wall, NULL, &err), CST_OK);
-    const Vec3 light[4] = {{-0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, -0.3f}, {0.3f, 0.99f, 0.3f}, {-0.3f, 0.99f, 0.3f}};
-    Emission em = {color_rgb(8.0f, 8.0f, 6.0f), 0, 0};
-    assert_int_equal(scene_add_quad(s, light, lightm, &em, &err), CST_OK);
+    open_box_add(s, &wall, &lightm);
     const int sss = add_sss(s, 0.3f, sss_sigma_a(), sss_sigma_s(), explicit_medium);
     assert_int_equal(scene_add_sphere(s, v3(-0.25f, -0.45f, 0.0f), 0.55f, sss, NULL, &err), CST_OK);
     /* A subsurface cube of triangles too (faces wound so that ng points out: the medium
