@@ -97,7 +97,7 @@ static _Thread_local const char *image_exr_layer;
 
 /* Interleaved slot (0 = R, 1 = G, 2 = B) of a channel, or -1. The file keeps channels
  * sorted by name (B, G, R), so slots go by name, never by position. When the file is
- * greyscale, "Y" lands in slot 0 and is replicated afterwards. */
+ * greyscale, "Y" lands in slot 0 (and the film's reader replicates it afterwards). */
 static int image_exr_slot(const char *name, bool grey)
 {
     if (!name) return -1;
@@ -251,11 +251,27 @@ CstStatus exr_write(FILE *fp, const char *path, const float *rgb, int w, int h, 
                     io.msg[0] ? io.msg : exr_get_default_error_message(rv));
 }
 
-/* Decodes part 0 of an open context into rgb (w x h, interleaved), chunk by chunk:
- * scanline blocks, or level-0 tiles of a tiled file. */
-static exr_result_t image_exr_decode(exr_context_t ctx, bool tiled, bool grey,
-                                     const exr_attr_box2i_t *dw, float *rgb, int w, int h)
+/* Where decoded pixels go: w x h texels of nch interleaved channels (R, G, B, or Y; A in
+ * slot 3 when nch is 4), as floats or as halves. */
+typedef struct ExrTarget {
+    void *px;
+    int nch;
+    bool half, grey;
+} ExrTarget;
+
+/* The target slot of a channel: image_exr_slot's, and A in slot 3 of a four-channel one. */
+static int image_exr_target_slot(const ExrTarget *t, const char *name)
 {
+    if (t->nch == 4 && name && strcmp(name, "A") == 0) return 3;
+    return image_exr_slot(name, t->grey);
+}
+
+/* Decodes part 0 of an open context into the target, chunk by chunk: scanline blocks, or
+ * level-0 tiles of a tiled file. */
+static exr_result_t image_exr_decode(exr_context_t ctx, bool tiled, const exr_attr_box2i_t *dw,
+                                     const ExrTarget *t, int w, int h)
+{
+    const int32_t esize = t->half ? 2 : (int32_t)sizeof(float);
     exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
     bool live = false;
     exr_result_t rv = EXR_ERR_SUCCESS;
@@ -296,19 +312,20 @@ static exr_result_t image_exr_decode(exr_context_t ctx, bool tiled, bool grey,
             rv = live ? exr_decoding_update(ctx, 0, &ci, &dec) : exr_decoding_initialize(ctx, 0, &ci, &dec);
             if (rv != EXR_ERR_SUCCESS) break;
             live = true;
-            float *first = rgb + ((size_t)y0 * (size_t)w + (size_t)x0) * 3;
+            uint8_t *first = (uint8_t *)t->px + ((size_t)y0 * (size_t)w + (size_t)x0) * (size_t)t->nch * (size_t)esize;
             for (int c = 0; c < dec.channel_count; ++c) {
                 exr_coding_channel_info_t *ch = &dec.channels[c];
-                int slot = image_exr_slot(ch->channel_name, grey);
+                int slot = image_exr_target_slot(t, ch->channel_name);
                 if (slot < 0 || ch->x_samples != 1 || ch->y_samples != 1) {
                     ch->decode_to_ptr = NULL; /* skipped: alpha, depth, subsampled, ... */
                     continue;
                 }
-                ch->decode_to_ptr = (uint8_t *)(first + slot);
-                ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
-                ch->user_line_stride = w * 3 * (int32_t)sizeof(float);
-                ch->user_bytes_per_element = (int16_t)sizeof(float);
-                ch->user_data_type = EXR_PIXEL_FLOAT; /* half and uint convert on unpack */
+                ch->decode_to_ptr = first + (size_t)slot * (size_t)esize;
+                ch->user_pixel_stride = t->nch * esize;
+                ch->user_line_stride = w * t->nch * esize;
+                ch->user_bytes_per_element = (int16_t)esize;
+                /* to float: half and uint convert on unpack; to half: only half channels */
+                ch->user_data_type = t->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
             }
             if (!dec.unpack_and_convert_fn) rv = exr_decoding_choose_default_routines(ctx, 0, &dec);
             if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_run(ctx, 0, &dec);
@@ -318,8 +335,9 @@ static exr_result_t image_exr_decode(exr_context_t ctx, bool tiled, bool grey,
     return rv;
 }
 
-/* The reading itself, for the layer image_exr_layer names. */
-static CstStatus exr_read_current(FILE *fp, const char *path, float **out, int *wout, int *hout, CstError *err)
+/* The reading itself, for the layer image_exr_layer names: the film's RGB floats (Y
+ * replicated), or (texels) the file's own channels and storage as exr.h says. */
+static CstStatus exr_read_current(FILE *fp, const char *path, bool texels, ExrImage *out, CstError *err)
 {
     ExrIo io = {fileno(fp), 0, {0}};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
@@ -332,7 +350,7 @@ static CstStatus exr_read_current(FILE *fp, const char *path, float **out, int *
     ExrIo *outer = image_exr_sink;
     image_exr_sink = &io;
     exr_context_t ctx = NULL;
-    float *rgb = NULL;
+    void *px = NULL;
     CstStatus st = CST_OK;
     exr_storage_t storage = EXR_STORAGE_SCANLINE;
     exr_attr_box2i_t dw;
@@ -351,13 +369,17 @@ static CstStatus exr_read_current(FILE *fp, const char *path, float **out, int *
         goto done;
     }
 
-    /* R, G and B at full resolution, or else a full-resolution Y for greyscale. */
-    int found = 0, found_y = 0;
+    /* R, G and B at full resolution, or else a full-resolution Y for greyscale; texels
+     * also keep a full-resolution A beside R, G, B, and stay halves if all they keep are. */
+    int found = 0, found_y = 0, found_a = 0, half_rgb = 0, half_y = 0, half_a = 0;
     for (int i = 0; i < chans->num_channels; ++i) {
         const exr_attr_chlist_entry_t *e = &chans->entries[i];
-        bool full = e->x_sampling == 1 && e->y_sampling == 1;
-        found += full && image_exr_slot(e->name.str, false) >= 0;
-        found_y += full && image_exr_slot(e->name.str, true) >= 0;
+        bool full = e->x_sampling == 1 && e->y_sampling == 1, half = e->pixel_type == EXR_PIXEL_HALF;
+        bool rgb = full && image_exr_slot(e->name.str, false) >= 0, y = full && image_exr_slot(e->name.str, true) >= 0;
+        bool a = full && !image_exr_layer && e->name.str && strcmp(e->name.str, "A") == 0;
+        found += rgb, half_rgb += rgb && half;
+        found_y += y, half_y += y && half;
+        found_a += a, half_a += a && half;
     }
     bool grey = found < 3 && found_y == 1;
     if (found < 3 && !grey) {
@@ -378,29 +400,37 @@ static CstStatus exr_read_current(FILE *fp, const char *path, float **out, int *
         st = short_chunk ? CST_ERR_PARSE : image_exr_status(err, path, &io, rv, "decoding OpenEXR pixels");
         goto done;
     }
+    ExrTarget t = {NULL, 3, false, grey};
+    if (texels) {
+        t.nch = grey ? 1 : found_a == 1 ? 4 : 3;
+        t.half = grey ? half_y == 1 : half_rgb == 3 && (t.nch == 3 || half_a == 1);
+    }
     /* calloc: regions a lenient decoder skips read as black, not as heap garbage */
-    rgb = calloc((size_t)(w * h) * 3, sizeof *rgb);
-    if (!rgb) {
+    px = t.px = calloc((size_t)(w * h) * (size_t)t.nch, t.half ? 2 : sizeof(float));
+    if (!px) {
         st = cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %lld x %lld image", path,
                       (long long)w, (long long)h);
         goto done;
     }
-    rv = image_exr_decode(ctx, storage == EXR_STORAGE_TILED, grey, &dw, rgb, (int)w, (int)h);
+    rv = image_exr_decode(ctx, storage == EXR_STORAGE_TILED, &dw, &t, (int)w, (int)h);
     if (rv != EXR_ERR_SUCCESS) {
         st = image_exr_status(err, path, &io, rv, "decoding OpenEXR pixels");
         goto done;
     }
-    if (grey) {
+    if (grey && !texels) {
+        float *rgb = px;
         for (size_t i = 0; i < (size_t)(w * h); ++i) rgb[3 * i + 1] = rgb[3 * i + 2] = rgb[3 * i];
     }
-    *out = rgb;
-    rgb = NULL;
-    *wout = (int)w;
-    *hout = (int)h;
+    out->px = px;
+    px = NULL;
+    out->width = (int)w;
+    out->height = (int)h;
+    out->channels = t.nch;
+    out->half = t.half;
 done:
     if (ctx) exr_finish(&ctx);
     image_exr_sink = outer;
-    free(rgb);
+    free(px);
     return st;
 }
 
@@ -408,7 +438,21 @@ CstStatus exr_read(FILE *fp, const char *path, const char *layer, float **out, i
 {
     const char *outer = image_exr_layer;
     image_exr_layer = layer && layer[0] ? layer : NULL;
-    CstStatus st = exr_read_current(fp, path, out, w, h, err);
+    ExrImage im = {NULL, 0, 0, 0, false};
+    CstStatus st = exr_read_current(fp, path, false, &im, err);
+    image_exr_layer = outer;
+    *out = im.px;
+    *w = im.width;
+    *h = im.height;
+    return st;
+}
+
+CstStatus exr_read_texels(FILE *fp, const char *path, ExrImage *out, CstError *err)
+{
+    const char *outer = image_exr_layer;
+    image_exr_layer = NULL;
+    memset(out, 0, sizeof *out);
+    CstStatus st = exr_read_current(fp, path, true, out, err);
     image_exr_layer = outer;
     return st;
 }

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "math/half.h"
 
 size_t tensor_dtype_size(int dtype)
 {
@@ -147,14 +148,6 @@ const TensorField *tensor_field(const TensorFile *t, const char *name)
     return NULL;
 }
 
-/* IEEE half to double (subnormals, infinities and NaN included). */
-static double half_to_double(uint16_t h)
-{
-    int e = (h >> 10) & 0x1f, m = h & 0x3ff;
-    double v = e == 0 ? ldexp((double)m, -24) : e == 31 ? (m ? (double)NAN : (double)INFINITY) : ldexp((double)(m | 0x400), e - 25);
-    return (h & 0x8000) ? -v : v;
-}
-
 double tensor_value(const TensorField *f, uint64_t i)
 {
     size_t n = tensor_dtype_size(f->dtype);
@@ -166,7 +159,7 @@ double tensor_value(const TensorField *f, uint64_t i)
     case TENSOR_I16: return (double)(int16_t)u;
     case TENSOR_I32: return (double)(int32_t)u;
     case TENSOR_I64: return (double)(int64_t)u;
-    case TENSOR_F16: return half_to_double((uint16_t)u);
+    case TENSOR_F16: return (double)half_to_float((uint16_t)u); /* exact */
     case TENSOR_F32: {
         uint32_t w = (uint32_t)u;
         float x;

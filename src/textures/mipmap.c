@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "io/image_io.h"
+#include "math/half.h"
 
 /* ------------------------------------------------------------------ texels */
 
@@ -29,6 +30,7 @@ static inline float element_at(const TexImage *im, const TexLevel *lv, size_t k)
     switch (im->format) {
     case TEXEL_U8: return im->lut[((const uint8_t *)lv->texels)[k]];
     case TEXEL_U16: return decode16(im, ((const uint16_t *)lv->texels)[k]);
+    case TEXEL_F16: return half_to_float(((const uint16_t *)lv->texels)[k]);
     default: return ((const float *)lv->texels)[k];
     }
 }
@@ -41,6 +43,7 @@ static inline Color texel_at(const TexImage *im, const TexLevel *lv, size_t i)
         switch (im->format) {
         case TEXEL_U8: v = im->lut[((const uint8_t *)lv->texels)[i]]; break;
         case TEXEL_U16: v = decode16(im, ((const uint16_t *)lv->texels)[i]); break;
+        case TEXEL_F16: v = half_to_float(((const uint16_t *)lv->texels)[i]); break;
         default: v = ((const float *)lv->texels)[i]; break;
         }
         return color_s(v);
@@ -54,6 +57,10 @@ static inline Color texel_at(const TexImage *im, const TexLevel *lv, size_t i)
     case TEXEL_U16: {
         const uint16_t *p = (const uint16_t *)lv->texels + o;
         return color_rgb(decode16(im, p[0]), decode16(im, p[1]), decode16(im, p[2]));
+    }
+    case TEXEL_F16: {
+        const uint16_t *p = (const uint16_t *)lv->texels + o;
+        return color_rgb(half_to_float(p[0]), half_to_float(p[1]), half_to_float(p[2]));
     }
     default: {
         const float *p = (const float *)lv->texels + o;
@@ -327,6 +334,7 @@ static void encode_value(const TexImage *im, float v, void *texels, size_t i)
         break;
     }
     case TEXEL_F32: ((float *)texels)[i] = v; break;
+    case TEXEL_F16: ((uint16_t *)texels)[i] = float_to_half(v); break;
     }
 }
 
@@ -350,7 +358,7 @@ CstStatus mipmap_build(TexImage *im, CstError *err)
 {
     if (im->num_levels > 1) return CST_OK;
     int ch = im->channels;
-    size_t esize = im->format == TEXEL_U8 ? 1 : im->format == TEXEL_U16 ? 2 : 4;
+    size_t esize = texel_format_size(im->format);
     TexLevel made[TEXTURE_MAX_LEVELS];
     made[0] = im->level[0];
     int nl = 1;

@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,10 +13,12 @@
 
 #include "core/error.h"
 #include "core/file.h"
+#include "io/exr.h"
 #include "io/image_io.h"
 #include "io/image_precheck.h"
 #include "io/image_stb.h"
 #include "io/jpeg.h"
+#include "math/half.h"
 #include "textures/mipmap.h"
 #include "textures/noise.h"
 
@@ -217,6 +220,51 @@ static CstStatus texture_decode_stb(const char *path, const unsigned char *data,
     return CST_OK;
 }
 
+/* Value k of n EXR texels as a float (halves widened exactly). */
+static inline float exr_value(const ExrImage *e, size_t k)
+{
+    return e->half ? half_to_float(((const uint16_t *)e->px)[k]) : ((const float *)e->px)[k];
+}
+
+/* An OpenEXR file in its own storage (io/exr.h: halves stay halves, as pbrt-v4's
+ * PixelFormat::Half), Y as one channel, R, G, B, and A when it is not all 1 (pbrt-v4
+ * MIPMap::CreateFromFile, as for PNGs above). Every value is checked as every image input
+ * is (finite, >= 0; image_check_radiance's message), alpha included. */
+static CstStatus texture_decode_exr(const char *path, TexImage **out, CstError *err)
+{
+    FILE *fp = NULL;
+    CstStatus st = file_open_input(path, &fp, NULL, err); /* regular files only, bounded */
+    if (st != CST_OK) return st;
+    ExrImage e;
+    st = exr_read_texels(fp, path, &e, err);
+    fclose(fp);
+    if (st != CST_OK) return st;
+    static const char names[4][4] = {"R", "G", "B", "A"};
+    const size_t n = (size_t)e.width * (size_t)e.height, ch = (size_t)e.channels;
+    bool opaque = ch == 4;
+    for (size_t k = 0; k < n * ch; k++) {
+        float v = exr_value(&e, k);
+        if (ch == 4 && k % 4 == 3 && v != 1.0f) opaque = false;
+        if (isfinite(v) && v >= 0.0f) continue;
+        size_t px = k / ch;
+        free(e.px);
+        return cst_fail(err, CST_ERR_INVALID_ARG, "%.300s: pixel (%zu, %zu) channel %s is %g; expected a finite "
+                        "value >= 0 (x from the left, y from the top row)", path, px % (size_t)e.width,
+                        px / (size_t)e.width, ch == 1 ? "Y" : names[k % ch], (double)v);
+    }
+    if (opaque) { /* RGB in place, as alpha_all_one packs a PNG's */
+        const size_t es = e.half ? 2 : 4;
+        for (size_t i = 0; i < n; i++) memmove((char *)e.px + 3 * es * i, (char *)e.px + 4 * es * i, 3 * es);
+        void *packed = realloc(e.px, n * 3 * es);
+        if (packed) e.px = packed; /* a shrink: the larger block serves if it fails */
+        e.channels = 3;
+    }
+    if (!(*out = teximage_new(e.px, e.width, e.height, e.half ? TEXEL_F16 : TEXEL_F32, e.channels, TEXEL_LINEAR,
+                              1.0f)))
+        return cst_fail(err, CST_ERR_OOM, "%s: out of memory for a %d x %d texture", path, e.width, e.height);
+    return CST_OK;
+}
+
 CstStatus texture_image_load_encoded(Texture *t, const char *path, TexelEncoding enc, float gamma,
                                      TextureWrap wrap, CstError *err)
 {
@@ -228,9 +276,16 @@ CstStatus texture_image_load_encoded(Texture *t, const char *path, TexelEncoding
     const unsigned char *magic = (const unsigned char *)bytes;
     bool exr = size >= 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
     bool pfm = size >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f');
-    if (exr || pfm) {
-        /* Float formats through the film's readers (OpenEXR's C API, our PFM parser),
-         * which return 32-bit floats (a half EXR is widened). */
+    if (exr) {
+        free(bytes);
+        TexImage *im = NULL;
+        st = texture_decode_exr(path, &im, err);
+        if (st != CST_OK) return st;
+        texture_over(t, im, wrap);
+        return CST_OK;
+    }
+    if (pfm) {
+        /* PFM through the film's reader (our parser): 32-bit floats. */
         float *px = NULL;
         int w = 0, h = 0;
         free(bytes);
@@ -321,7 +376,7 @@ size_t texture_image_bytes(const Texture *t)
 {
     if (t->type != TEXTURE_IMAGE) return 0;
     const TexImage *im = t->image.im;
-    size_t esize = im->format == TEXEL_U8 ? 1 : im->format == TEXEL_U16 ? 2 : 4, n = 0;
+    size_t esize = texel_format_size(im->format), n = 0;
     for (int l = 0; l < im->num_levels; l++)
         n += (size_t)im->level[l].width * (size_t)im->level[l].height * (size_t)im->channels * esize;
     return n;

@@ -67,8 +67,15 @@ typedef enum TexelEncoding {
 typedef enum TexelFormat {
     TEXEL_U8,  /* bytes, decoded through TexImage.lut */
     TEXEL_U16, /* 16-bit codes, decoded at lookup */
-    TEXEL_F32  /* linear floats */
+    TEXEL_F32, /* linear floats */
+    TEXEL_F16  /* linear IEEE halves (math/half.h): half-float EXR files, as pbrt-v4 keeps them */
 } TexelFormat;
+
+/* Bytes per stored value. */
+static inline size_t texel_format_size(TexelFormat f)
+{
+    return f == TEXEL_U8 ? 1 : f == TEXEL_U16 || f == TEXEL_F16 ? 2 : 4;
+}
 
 #define TEXTURE_MAX_LEVELS 32
 
@@ -82,7 +89,7 @@ typedef struct TexImage {
     int refs; /* textures holding it; freed by the last texture_free (scene build is single-threaded) */
     TexelFormat format;
     int channels; /* 1 (grey: the value in all three channels of a lookup), 3 (RGB) or 4 (RGBA,
-                   * from an RGBA PNG whose alpha is not all 1; RGB lookups ignore alpha) */
+                   * from an RGBA PNG or EXR whose alpha is not all 1; RGB lookups ignore alpha) */
     TexelEncoding encoding;
     float gamma;    /* TEXEL_GAMMA */
     float lut[256]; /* TEXEL_U8: the linear value of each code */
