@@ -8,6 +8,9 @@ A.pfm B.pfm, prints the mean of each third of two renders (columns) and their ra
   ../shared/tools/pbrt-v4/pbrt --spp 256 /tmp/ft/float-textures.pbrt --outfile /tmp/ft/pbrt.pfm
   python3 scripts/pbrt-float-textures.py --compare /tmp/ft/caustic.pfm /tmp/ft/pbrt.pfm
 
+With --exr DIR, the left quad's alpha comes from an RGBA OpenEXR of halves (the same values)
+instead of the PNG: pbrt-v4 keeps an EXR's A as it keeps a PNG's.
+
 Three quads in front of a grey wall under a white sky (docs/pbrt-compat.md, "Float image
 textures"): left, a white quad cut out by the alpha of an RGBA PNG (red 1 everywhere, alpha
 0, 0.5 and 1 in columns); middle and right, a mix of two greys whose amount is an RGB PNG
@@ -32,6 +35,32 @@ def write_png(path, w, h, channels, pixels):
         f.write(chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, ctype, 0, 0, 0)))
         f.write(chunk(b"IDAT", zlib.compress(rows)))
         f.write(chunk(b"IEND", b""))
+
+
+def write_exr_half_rgba(path, w, h, pixels):
+    """Uncompressed scanline OpenEXR, channels A, B, G, R as halves (OpenEXR file layout),
+    from a flat list of (r, g, b, a) values exactly representable as halves."""
+    def attr(name, kind, data):
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(data)) + data
+
+    chans = b"".join(c.encode() + b"\0" + struct.pack("<iBBBBii", 1, 0, 0, 0, 0, 1, 1) for c in "ABGR") + b"\0"
+    box = struct.pack("<iiii", 0, 0, w - 1, h - 1)
+    head = (struct.pack("<ii", 20000630, 2) + attr("channels", "chlist", chans) +
+            attr("compression", "compression", b"\0") + attr("dataWindow", "box2i", box) +
+            attr("displayWindow", "box2i", box) + attr("lineOrder", "lineOrder", b"\0") +
+            attr("pixelAspectRatio", "float", struct.pack("<f", 1.0)) +
+            attr("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0)) +
+            attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    line = 4 * 2 * w
+    first = len(head) + 8 * h
+    out = head + b"".join(struct.pack("<Q", first + y * (8 + line)) for y in range(h))
+    for y in range(h):
+        row = pixels[y * w:(y + 1) * w]
+        out += struct.pack("<ii", y, line)
+        for k in (3, 2, 1, 0):  # A, B, G, R: alphabetical
+            out += b"".join(struct.pack("<e", px[k]) for px in row)
+    with open(path, "wb") as f:
+        f.write(out)
 
 
 QUAD = ('Shape "trianglemesh" "point3 P" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] "integer indices" [0 1 2 0 2 3]\n'
@@ -70,7 +99,7 @@ AttributeEnd
 """
 
 
-def make(d):
+def make(d, exr=False):
     os.makedirs(d, exist_ok=True)
     n = 6
     rgba, rgb = [], []
@@ -80,8 +109,13 @@ def make(d):
             rgb += [0, 255, 255] if (x + y) % 2 == 0 else [0, 64, 0]
     write_png(os.path.join(d, "rgba.png"), n, n, 4, rgba)
     write_png(os.path.join(d, "rgb.png"), n, n, 3, rgb)
+    scene = SCENE.format(quad=QUAD)
+    if exr:
+        px = [(1.0, 1.0, 1.0, (0.0, 0.5, 1.0)[x % 3]) for y in range(n) for x in range(n)]
+        write_exr_half_rgba(os.path.join(d, "rgba.exr"), n, n, px)
+        scene = scene.replace('"rgba.png" "string encoding" "linear"', '"rgba.exr"')
     with open(os.path.join(d, "float-textures.pbrt"), "w") as f:
-        f.write(SCENE.format(quad=QUAD))
+        f.write(scene)
 
 
 def read_pfm(path):
@@ -112,5 +146,7 @@ if __name__ == "__main__":
             print(f"{name:18s} {x:.5f} {y:.5f} ratio {x / y:.4f}")
     elif len(sys.argv) == 2:
         make(sys.argv[1])
+    elif len(sys.argv) == 3 and sys.argv[1] == "--exr":
+        make(sys.argv[2], exr=True)
     else:
         sys.exit(__doc__)
