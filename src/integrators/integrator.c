@@ -788,8 +788,8 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
             const Medium *m = &scene->media[i];
             if (!color_is_black(medium_is_hetero(m) ? m->u.het.le : m->u.homog.le))
                 return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render emissive participating "
-                                "media yet (medium %d emits; its light paths start on surface and "
-                                "infinite lights only): use path, path-nee, path-bsdf, bdpt, vcm or mmlt",
+                                "media yet (medium %d emits; its light paths start on the scene's lights "
+                                "only): use path, path-nee, path-bsdf, bdpt, vcm or mmlt",
                                 cst_integrator_name(st->integrator), i);
         }
     }
