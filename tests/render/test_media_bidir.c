@@ -284,9 +284,6 @@ static void test_fog_agreement(void **state)
     scene_destroy(s);
 }
 
-/* The fog box with the random grid in its ball: path (the reference), bdpt, vcm and mmlt
- * agree on the whole image and its four 16 x 16 blocks (bdpt vs mmlt at 24 x 24, 12 x 12
- * blocks, mmlt's own resolution budget). */
 /* path (the reference), bdpt and vcm on a 32 x 32 fog box: the whole image and its four
  * 16 x 16 blocks agree (seeds from `seed`); returns the settings for further renders. */
 static CstRenderSettings path_bdpt_vcm_agree(const Scene *s, uint64_t seed, const char *bdpt_name,
@@ -325,6 +322,9 @@ static void bdpt_mmlt_agree(const Scene *s, CstRenderSettings sm, uint64_t seed,
     compare(&rb, &rm, bdpt_name, mmlt_name);
 }
 
+/* The fog box with the random grid in its ball: path (the reference), bdpt, vcm and mmlt
+ * agree on the whole image and its four 16 x 16 blocks (bdpt vs mmlt at 24 x 24, 12 x 12
+ * blocks, mmlt's own resolution budget). */
 static void test_grid_agreement(void **state)
 {
     (void)state;
