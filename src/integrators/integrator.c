@@ -772,7 +772,10 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
      * strategies). light, bdpt, vcm, mmlt and sppm walk homogeneous, grid and cloud media
      * (subpath_media.c); vcm merges volume vertices by UPBP's point-point 3D estimator,
      * and sppm gathers volume photons at its visible points in media by the same (sppm.c).
-     * Emission of media is gathered by the camera walks of bdpt and vcm only. */
+     * Emission of media is gathered by the camera walks of bdpt, vcm and mmlt (its s = 0
+     * strategy) only: light and sppm would need light subpaths / photons starting in the
+     * media (sppm's camera walk alone would miss the emission that reaches its visible
+     * points through a scattering), so they refuse it. */
     const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
                              st->integrator == CST_INTEGRATOR_MMLT || it->kind == INTEGRATOR_SPPM;
     if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH &&
@@ -780,12 +783,13 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
                         "use path, path-nee, path-bsdf, light, bdpt, vcm, pssmlt, mmlt or sppm",
                         cst_integrator_name(st->integrator));
-    if (bidir_media && it->kind != INTEGRATOR_BIDIR) {
+    if (bidir_media && it->kind != INTEGRATOR_BIDIR && st->integrator != CST_INTEGRATOR_MMLT) {
         for (int i = 0; i < scene->num_media; i++) {
             const Medium *m = &scene->media[i];
             if (!color_is_black(medium_is_hetero(m) ? m->u.het.le : m->u.homog.le))
                 return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render emissive participating "
-                                "media yet (medium %d emits): use path, path-nee, path-bsdf, bdpt or vcm",
+                                "media yet (medium %d emits; its light paths start on the scene's lights "
+                                "only): use path, path-nee, path-bsdf, bdpt, vcm or mmlt",
                                 cst_integrator_name(st->integrator), i);
         }
     }

@@ -8,8 +8,8 @@
  * boundaries). Scenes without media keep subpath.c and light.c bit for bit. Grids and clouds:
  * delta tracking on walks, ratio tracking on connections, MIS densities from chain_piece's
  * majorant stand-ins (computed alike by every strategy, so the weights still sum to 1).
- * Emissive media: gathered by BDPT's and VCM's camera walks with weight 1 (see
- * media_subpath_trace_camera); refused for the light tracer, MMLT and SPPM. VCM merges volume
+ * Emissive media: gathered by BDPT's, VCM's and MMLT's camera walks with weight 1 (see
+ * media_subpath_trace_camera); refused for the light tracer and SPPM. VCM merges volume
  * vertices by UPBP's point-point 3D estimator (1 / ((4/3) pi r^3 N); media_merge). Motion
  * blur: every ray carries its path's time (walks keep the time of the ray they continue;
  * connections take the camera vertex's or the light subpath's); media do not move. */
@@ -343,9 +343,8 @@ static inline float eta_vm(const SubpathIteration *it, bool vol)
 }
 
 /* A phase-function scattering at a volume vertex: HG sampled exactly (weight 1), Russian
- * roulette, the MIS quantities (tech. rep. eqs. 34-36 with no cosine; HG is symmetric,
- * so the reverse density is the forward one) and the next ray, at *ray's time (the ray
- * that reached p). */
+ * roulette, the MIS quantities (tech. rep. eqs. 34-36 with no cosine; HG is symmetric, so
+ * the reverse density is the forward one) and the next ray, at *ray's time (that reached p). */
 static bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p, Vec3 wo, float g, int depth,
                                 int rr_depth, Sampler *rng, Ray *ray)
 {
@@ -397,9 +396,8 @@ typedef struct MediaWalk {
     void *ctx;
 } MediaWalk;
 
-/* subpath_walk_light through media: the same random numbers per surface vertex (lens,
- * BSDF, roulette), two per medium piece crossed, a lens 2D, a phase 2D and roulette's per
- * volume vertex. */
+/* subpath_walk_light through media: the same random numbers per surface vertex (lens, BSDF,
+ * roulette), two per medium piece crossed, a lens 2D, a phase 2D and roulette's per volume vertex. */
 static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionSample *es, SubPath sp, int medium,
                              Sampler *rng, uint64_t *rays)
 {
@@ -1018,10 +1016,15 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
     HeroMis hm = {-1, color_s(1.0f), false}; /* grid media: the hero lane, as media_subpath_trace_camera */
     for (int t = 1;; t++) {
         MediaHit h;
-        if (!media_next(s, ray, x_prev, prev_med, false, &medium, &sp, &hm, rng, wl, &h, rays)) return false;
+        /* Emitting media on the last segment (s = 0): media_subpath_trace_camera's weight 1
+         * and depth limit, so that mmlt's strategies of a length sum to BDPT's estimate. */
+        const bool last = emission && t == hits, emit = last && !(vp->max_depth > 0 && t - 1 >= vp->max_depth);
+        const bool go = media_next(s, ray, x_prev, prev_med, emit, &medium, &sp, &hm, rng, wl, &h, rays);
+        if (emit) *emitted = dispersed ? subpath_hero_only(h.le) : h.le;
+        if (!go) return false;
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
-            if (!emission || t != hits) return false;
+            if (!last) return false;
             Color le = scene_env_radiance(s, ray.d, wl);
             if (color_is_black(le)) return false;
             float w = 1.0f;
@@ -1031,15 +1034,15 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 float em = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
                 w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(em) * sp.d_vc);
             }
-            *emitted = color_mul(hero_beta(&hm, sp.beta), color_scale(le, w));
-            if (dispersed) *emitted = subpath_hero_only(*emitted);
+            Color add = color_mul(hero_beta(&hm, sp.beta), color_scale(le, w));
+            *emitted = color_add(*emitted, dispersed ? subpath_hero_only(add) : add);
             return false;
         }
         const bool vol = h.kind == MEDIA_VOLUME;
         float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, wo));
         if (!(cos_in > 0.0f)) return false;
         mis_arrive_media(&sp, h.dist, cos_in, h.fwd, h.rev);
-        if (emission && t == hits) {
+        if (last) {
             if (vol || h.sh.emitter < 0) return false;
             const Emitter *e = &s->emitter_sampler.light[h.sh.emitter].u.area;
             Color le = scene_emission(s, &h.sh, wo, wl);
@@ -1050,8 +1053,8 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h.sh.ng, wo);
                 w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
             }
-            *emitted = color_mul(hero_beta(&hm, sp.beta), color_scale(le, w));
-            if (dispersed) *emitted = subpath_hero_only(*emitted);
+            Color add = color_mul(hero_beta(&hm, sp.beta), color_scale(le, w));
+            *emitted = color_add(*emitted, dispersed ? subpath_hero_only(add) : add);
             return false;
         }
         if (vol) {
@@ -1151,9 +1154,8 @@ bool media_visible_point(const Scene *s, Ray ray, Sampler *rng, const Wavelength
     Vec3 x_prev = ray.o;
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
         MediaHit h;
-        /* emit false: integrator.c refuses emitting media for SPPM (its photons and NEE
-         * start on the light sampler's emitters, so a medium's emission would reach the
-         * visible points by no estimator). */
+        /* emit false: integrator.c refuses emitting media for SPPM (its photons and NEE start
+         * on the light sampler's emitters: no estimator for what reaches x after a scattering). */
         if (!media_next(s, ray, x_prev, false, false, &medium, &sp, &hm, rng, wl, &h, rays)) return false;
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {

@@ -44,7 +44,9 @@ typedef struct MediaCameraVertex {
     float time;     /* the camera ray's (motion blur), which the connections carry */
 } MediaCameraVertex;
 
-/* subpath_camera_vertex() through media (its hit number `hits` counts volume vertices). */
+/* subpath_camera_vertex() through media (its hit number `hits` counts volume vertices).
+ * With emission, *emitted also holds the emission of emitting media on the walk's last
+ * segment (the one that reaches hit `hits`; below vp's depth limit), weight 1. */
 bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParams *vp,
                                  const SubpathIteration *it, Ray ray, int hits, bool emission, Sampler *rng,
                                  const Wavelengths *wl, MediaCameraVertex *out, Color *emitted, uint64_t *rays);

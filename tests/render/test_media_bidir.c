@@ -2,11 +2,13 @@
  * furnace (a scattering-only ball in a uniform emitter renders the emitter's radiance), the
  * path tracer, the light tracer, BDPT and VCM agreeing on a lit fog ball in an open box, and
  * the light tracer's, BDPT's and VCM's delta and ratio tracking through a random grid (a
- * furnace; BDPT's and VCM's with emitting media, homogeneous and grid, too), path, BDPT, VCM and MMLT agreeing on the fog box with a random grid in its ball,
- * emitting or not (the camera walks gather the emission), and the refusals (emissive media
- * in the light tracer and MMLT). VCM's furnaces use a large merging radius, so that the volume
- * merges (UPBP's point-point 3D estimator) carry most of the MIS weight: a constant
- * radiance field has no kernel bias away from the walls. `test_media_bidir --spectral` runs
+ * furnace; BDPT's and VCM's with emitting media, homogeneous and grid, too), path, BDPT,
+ * VCM and MMLT agreeing on the fog box with a random grid in its ball, emitting or not (the
+ * camera walks gather the emission, MMLT's by its s = 0 strategy), MMLT and BDPT on the box
+ * with its homogeneous fog emitting, and the refusals (emissive media in the light tracer and
+ * SPPM). VCM's furnaces use a large merging radius, so that the volume merges (UPBP's
+ * point-point 3D estimator) carry most of the MIS weight: a constant radiance field has no
+ * kernel bias away from the walls. `test_media_bidir --spectral` runs
  * the same in spectral mode.
  * Fixed seeds; the light tracer's and BDPT's standard errors from independent renders
  * (their splats correlate pixels); 4 standard errors. */
@@ -218,8 +220,9 @@ static void test_furnace_emissive(void **state)
     }
 }
 
-/* What fills fog_box's ball: homogeneous fog, a random grid, or that grid emitting. */
-typedef enum FogKind { FOG_HOMOGENEOUS, FOG_GRID, FOG_GRID_EMISSIVE } FogKind;
+/* What fills fog_box's ball: homogeneous fog, emitting or not, a random grid, or that grid
+ * emitting. */
+typedef enum FogKind { FOG_HOMOGENEOUS, FOG_HOMOGENEOUS_EMISSIVE, FOG_GRID, FOG_GRID_EMISSIVE } FogKind;
 
 /* test_media.c's fog box: an open box of diffuse walls lit by a small quad light, a ball of
  * forward-scattering, slightly absorbing fog (a boundary sphere) and a diffuse sphere half
@@ -234,10 +237,18 @@ static Scene *fog_box(FogKind kind)
      * homogeneous fog's in green; the emissive one glows sigma_a Le ~ 0.5 0.3 0.1 per unit
      * length at mean density. */
     const Vec3 lo = {-0.8f, -0.9f, -0.6f}, hi = {0.4f, 0.3f, 0.6f};
-    const Color le = kind == FOG_GRID_EMISSIVE ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f);
-    int med = kind == FOG_HOMOGENEOUS
-                  ? add_medium(s, color_s(0.2f), color_rgb(1.5f, 1.0f, 0.5f), 0.5f)
-                  : add_grid(s, lo, hi, 3.0f, color_rgb(0.3f, 0.35f, 0.4f), color_rgb(1.0f, 0.7f, 0.35f), le, 0.5f);
+    const bool emits = kind == FOG_GRID_EMISSIVE || kind == FOG_HOMOGENEOUS_EMISSIVE;
+    const Color le = emits ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f);
+    int med;
+    if (kind == FOG_HOMOGENEOUS || kind == FOG_HOMOGENEOUS_EMISSIVE) { /* sigma_a Le = 0.24 0.12 0.04 */
+        Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.5f};
+        m.u.homog.sigma_a = color_s(0.2f);
+        m.u.homog.sigma_s = color_rgb(1.5f, 1.0f, 0.5f);
+        m.u.homog.le = le;
+        assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
+    } else {
+        med = add_grid(s, lo, hi, 3.0f, color_rgb(0.3f, 0.35f, 0.4f), color_rgb(1.0f, 0.7f, 0.35f), le, 0.5f);
+    }
     assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
     assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
     assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
@@ -273,9 +284,6 @@ static void test_fog_agreement(void **state)
     scene_destroy(s);
 }
 
-/* The fog box with the random grid in its ball: path (the reference), bdpt, vcm and mmlt
- * agree on the whole image and its four 16 x 16 blocks (bdpt vs mmlt at 24 x 24, 12 x 12
- * blocks, mmlt's own resolution budget). */
 /* path (the reference), bdpt and vcm on a 32 x 32 fog box: the whole image and its four
  * 16 x 16 blocks agree (seeds from `seed`); returns the settings for further renders. */
 static CstRenderSettings path_bdpt_vcm_agree(const Scene *s, uint64_t seed, const char *bdpt_name,
@@ -297,13 +305,11 @@ static CstRenderSettings path_bdpt_vcm_agree(const Scene *s, uint64_t seed, cons
     return st;
 }
 
-static void test_grid_agreement(void **state)
+/* mmlt against bdpt on a 24 x 24 fog box (test_mmlt.c's settings, 12 x 12 blocks; seeds
+ * from `seed`). */
+static void bdpt_mmlt_agree(const Scene *s, CstRenderSettings sm, uint64_t seed, const char *bdpt_name,
+                            const char *mmlt_name)
 {
-    (void)state;
-    Scene *s = fog_box(FOG_GRID);
-    CstRenderSettings st = path_bdpt_vcm_agree(s, 900, "bdpt (grid)", "vcm (grid)");
-    /* mmlt against bdpt (test_mmlt.c's settings, a smaller image). */
-    CstRenderSettings sm = st;
     sm.width = sm.height = 24;
     sm.filter = CST_FILTER_BOX;
     sm.max_depth = 4;
@@ -311,22 +317,35 @@ static void test_grid_agreement(void **state)
     sm.mlt_chains = 64;
     sm.mlt_bootstrap = 1024;
     Regions rb = regions(24, 12), rm = regions(24, 12);
-    split_regions(s, &sm, CST_INTEGRATOR_BDPT, 24, 930, &rb);
-    split_regions(s, &sm, CST_INTEGRATOR_MMLT, 24, 940, &rm);
-    compare(&rb, &rm, "bdpt (grid, 24)", "mmlt (grid, 24)");
+    split_regions(s, &sm, CST_INTEGRATOR_BDPT, 24, seed, &rb);
+    split_regions(s, &sm, CST_INTEGRATOR_MMLT, 24, seed + 10, &rm);
+    compare(&rb, &rm, bdpt_name, mmlt_name);
+}
+
+/* The fog box with the random grid in its ball: path (the reference), bdpt, vcm and mmlt
+ * agree on the whole image and its four 16 x 16 blocks (bdpt vs mmlt at 24 x 24, 12 x 12
+ * blocks, mmlt's own resolution budget). */
+static void test_grid_agreement(void **state)
+{
+    (void)state;
+    Scene *s = fog_box(FOG_GRID);
+    CstRenderSettings st = path_bdpt_vcm_agree(s, 900, "bdpt (grid)", "vcm (grid)");
+    bdpt_mmlt_agree(s, st, 930, "bdpt (grid, 24)", "mmlt (grid, 24)");
     scene_destroy(s);
 }
 
-/* The grid emitting (Le, gathered by the camera walks alone with MIS weight 1): path, bdpt
- * and vcm agree; the light tracer and mmlt refuse it. */
+/* The grid emitting (Le, gathered by the camera walks alone with MIS weight 1; mmlt's by
+ * its s = 0 strategy): path, bdpt and vcm agree, mmlt and bdpt too; the light tracer and
+ * sppm refuse it (their light paths start on the light sampler's emitters only). */
 static void test_grid_emissive(void **state)
 {
     (void)state;
     Scene *s = fog_box(FOG_GRID_EMISSIVE);
     CstRenderSettings st = path_bdpt_vcm_agree(s, 1000, "bdpt (emissive grid)", "vcm (emissive grid)");
+    bdpt_mmlt_agree(s, st, 1030, "bdpt (emissive grid, 24)", "mmlt (emissive grid, 24)");
     st.width = st.height = 8;
     st.spp = 1;
-    const CstIntegrator refused[2] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_MMLT};
+    const CstIntegrator refused[2] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_SPPM};
     for (int i = 0; i < 2; i++) {
         CstError err;
         CstFilm *f = NULL;
@@ -335,6 +354,19 @@ static void test_grid_emissive(void **state)
         assert_non_null(strstr(err.msg, "emissive"));
         cst_film_destroy(f);
     }
+    scene_destroy(s);
+}
+
+/* The homogeneous fog emitting: mmlt (its s = 0 strategy gathers the emission, weight 1)
+ * and bdpt agree. */
+static void test_homogeneous_emissive_mmlt(void **state)
+{
+    (void)state;
+    Scene *s = fog_box(FOG_HOMOGENEOUS_EMISSIVE);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.color_mode = g_color_mode;
+    bdpt_mmlt_agree(s, st, 1100, "bdpt (emissive fog, 24)", "mmlt (emissive fog, 24)");
     scene_destroy(s);
 }
 
@@ -352,6 +384,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_fog_agreement),
         cmocka_unit_test(test_grid_agreement),
         cmocka_unit_test(test_grid_emissive),
+        cmocka_unit_test(test_homogeneous_emissive_mmlt),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
