@@ -153,10 +153,9 @@ static void camera_tile(void *ctx, int tile, int worker)
     for (int y = y0; y < y1; y++) {
         for (int x = x0; x < x1; x++) {
             int pixel = y * W + x;
-            uint64_t pixel_bits = sampler_pixel_bits(&it->sampler, (uint64_t)pixel);
             for (int s = first; s < first + count; s++) {
                 Sampler smp;
-                sampler_start_pixel(&smp, &it->sampler, (uint64_t)pixel, pixel_bits, (uint32_t)s);
+                sampler_start(&smp, &it->sampler, (uint64_t)pixel, (uint32_t)s);
                 Vec2 uf = sampler_2d(&smp);
                 Vec2 ul = sampler_2d(&smp);
                 float fw;

@@ -326,24 +326,7 @@ void zsobol_fill(Sampler *s)
     zsobol_block(s->zrev, &b, s->zval);
 }
 
-uint64_t sampler_pixel_bits(const SamplerSetup *u, uint64_t pixel)
-{
-    return u->type == CST_SAMPLER_ZSOBOL ? reverse_bits64(morton_index(u, pixel, 0)) : 0u;
-}
-
-/* zsobol: the bits of the reversed Morton index that the sample index fixes: reversal maps
- * disjoint bit fields to disjoint bit fields, so reverse(morton_index) is the pixel's bits
- * or these. One 32-bit reversal puts index bits j < 8 at 31 - j, to go to 63 - j, and bits
- * j >= 8 (the block, at j + morton_bits before reversal) at 31 - j, to go to
- * 63 - j - morton_bits. */
-static inline uint64_t zsobol_index_bits(const SamplerSetup *u, uint32_t index)
-{
-    const uint32_t low = ~0u << (32u - ZSOBOL_LOG2_BLOCK); /* the reversed index mod 256 */
-    uint32_t r = sampler_rev32(index);
-    return ((uint64_t)(r & low) << 32) | (((uint64_t)(r & ~low) << 32) >> u->morton_bits);
-}
-
-void sampler_start_pixel(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint64_t pixel_bits, uint32_t index)
+void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
 {
     s->type = u->type;
     s->dim = 0;
@@ -354,7 +337,7 @@ void sampler_start_pixel(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint
         s->key = 0;
         s->rng.state = s->rng.inc = 0; /* unseeded: sampler_continue_sample seeds it */
         s->pixel = pixel;
-        s->zrev = pixel_bits | zsobol_index_bits(u, index);
+        s->zrev = reverse_bits64(morton_index(u, pixel, index));
         s->zsetup = u;
         s->zend = ZSOBOL_BLOCK;
         zsobol_block(s->zrev, &u->zblocks[0], s->zval);
@@ -366,11 +349,6 @@ void sampler_start_pixel(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint
     s->zrev = 0;
     s->zend = 0;
     s->zsetup = NULL;
-}
-
-void sampler_start(Sampler *s, const SamplerSetup *u, uint64_t pixel, uint32_t index)
-{
-    sampler_start_pixel(s, u, pixel, sampler_pixel_bits(u, pixel), index);
 }
 
 /* Stratified, Sobol' or PSS only: sampler_1d/2d (sampler.h) draw the independent ones inline. */

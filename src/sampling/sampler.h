@@ -104,13 +104,6 @@ SamplerSetup sampler_setup(CstSampler type, uint64_t seed, uint32_t spp, int wid
 /* Starts sample `index` of `pixel`; O(1) for every type. A zsobol Sampler reads *setup
  * until its last draw (the hashes of blocks past the first), so setup must outlive s. */
 void sampler_start(Sampler *s, const SamplerSetup *setup, uint64_t pixel, uint32_t index);
-/* zsobol: the bits of a sample's reversed Morton index that its pixel fixes (its Morton
- * code, reversed: a division by the width and ~50 bit operations), computed once for a loop
- * over the pixel's samples; 0 for the other types. */
-uint64_t sampler_pixel_bits(const SamplerSetup *setup, uint64_t pixel);
-/* sampler_start with `pixel_bits` = sampler_pixel_bits(setup, pixel): the same Sampler. */
-void sampler_start_pixel(Sampler *s, const SamplerSetup *setup, uint64_t pixel, uint64_t pixel_bits,
-                         uint32_t index);
 /* zsobol: the Morton index of sample `index` of `pixel` (sampler.c), before reversal. */
 uint64_t zsobol_morton_index(const SamplerSetup *setup, uint64_t pixel, uint32_t index);
 /* zsobol: the permutation and scrambles of 2D point k (dimensions 2k, 2k + 1), from the

@@ -270,38 +270,6 @@ static void test_zsobol_morton_index(void **state)
                 (((uint64_t)(2147483647u >> 8) << 40) | (0xffffffffULL << 8) | 255u));
 }
 
-/* The render loop's start (the pixel's bits once, then each sample's: sampler_start_pixel)
- * is the reversed Morton index and the same first block as sampler_start, on images of
- * 1 x 1 (no Morton bits) to 65536 x 65536 (32), at indices in the first block of 256
- * and far past it. */
-static void test_zsobol_start_pixel(void **state)
-{
-    (void)state;
-    static const int SIZES[][2] = {{1, 1}, {3, 2}, {100, 40}, {128, 128}, {1000, 7}, {65536, 65536}};
-    static const uint32_t INDICES[] = {0, 1, 5, 255, 256, 257, 1000, 65535, 1u << 20, 2147483647u, 0xffffffffu};
-    for (size_t k = 0; k < sizeof SIZES / sizeof SIZES[0]; k++) {
-        int w = SIZES[k][0], h = SIZES[k][1];
-        SamplerSetup u = sampler_setup(CST_SAMPLER_ZSOBOL, 7, 0, w, h);
-        uint64_t pixels = (uint64_t)w * (uint64_t)h;
-        for (uint64_t q = 0; q < 5; q++) {
-            uint64_t pixel = (pixels - 1u) * q / 4u;
-            uint64_t bits = sampler_pixel_bits(&u, pixel);
-            for (size_t j = 0; j < sizeof INDICES / sizeof INDICES[0]; j++) {
-                Sampler a, b;
-                sampler_start(&a, &u, pixel, INDICES[j]);
-                sampler_start_pixel(&b, &u, pixel, bits, INDICES[j]);
-                uint64_t m = zsobol_morton_index(&u, pixel, INDICES[j]);
-                uint64_t rev = ((uint64_t)sampler_rev32((uint32_t)m) << 32) | sampler_rev32((uint32_t)(m >> 32));
-                assert_true(b.zrev == rev);
-                assert_true(a.zrev == rev);
-                assert_memory_equal(a.zval, b.zval, sizeof a.zval);
-            }
-        }
-    }
-    SamplerSetup ind = sampler_setup(CST_SAMPLER_INDEPENDENT, 7, 0, 8, 8);
-    assert_true(sampler_pixel_bits(&ind, 5) == 0u);
-}
-
 /* zsobol computes its points a block at a time (SIMD lanes when the build has AVX2): the
  * same floats as zsobol_point, one point at a time, on the bit-reversed Morton index, for
  * pixels and indices of small and 65536-wide images, in every block of the first 96
@@ -416,7 +384,6 @@ int main(void)
         cmocka_unit_test(test_zsobol_pixel_blocks),
         cmocka_unit_test(test_zsobol_bit_tricks),
         cmocka_unit_test(test_zsobol_morton_index),
-        cmocka_unit_test(test_zsobol_start_pixel),
         cmocka_unit_test(test_zsobol_points_match_scalar),
         cmocka_unit_test(test_uniform_across_pixels),
         cmocka_unit_test(test_setup_strata),
