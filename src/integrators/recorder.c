@@ -193,8 +193,9 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 len
     e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
 }
 
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl)
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, float time, const Wavelengths *wl)
 {
+    r->paths.camera_time = time;
     recorder_wavelengths(r, wl); /* a camera ray may miss everything */
     r->cam_dispersed = false;
     r->paths.camera_o = origin;

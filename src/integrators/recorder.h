@@ -22,6 +22,8 @@ struct Photon;
 
 typedef struct RecorderPaths {
     Vec3 camera_o;                        /* the camera ray's origin (the lens point) */
+    float camera_time;                    /* the camera ray's time (motion blur; where a
+                                           * moving camera stood for this path) */
     SurfaceHit cam[RECORDER_PATH_MAX];    /* cam[d - 1]: the camera subpath's hit d */
     Vec3 cam_dir[RECORDER_PATH_MAX];      /* the unit direction of the ray that reached it */
     Vec3 next_dir;                        /* the last scatter's (or the camera ray's) */
@@ -140,9 +142,9 @@ void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
 void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est);
 
 /* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
-/* The camera subpath starts (ray origin and direction; wl its wavelengths in spectral mode,
- * NULL in RGB). */
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl);
+/* The camera subpath starts (ray origin, direction and time; wl its wavelengths in spectral
+ * mode, NULL in RGB). */
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, float time, const Wavelengths *wl);
 /* Spectral BDPT: whether the camera subpath has been dispersed (its secondary wavelengths
  * terminated) as of the vertex being recorded. */
 void recorder_cam_dispersed(Recorder *r, bool dispersed);

@@ -53,11 +53,6 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
         if (scene->num_media | scene->num_medium_ifaces | scene->num_subsurface)
             return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow bdpt's paths through participating "
                             "media (or subsurface materials) yet; expected a scene without them");
-        /* explain_mis.c checks the MIS weights with the camera where it stands, not where a
-         * path's time places it. */
-        if (scene->camera_placed && scene->camera_motion.moving)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow %s with a moving camera yet; "
-                            "expected a static camera", cst_integrator_name(st->integrator));
         return CST_OK;
     default: break;
     }

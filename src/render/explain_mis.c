@@ -165,9 +165,18 @@ bool explain_mis_check(const Integrator *it, int iteration, Recorder *r, CstExpl
         bool merge;
         if (!rebuild(it, iteration, r, t, e, x, &strategy, &merge, &ok)) continue;
         x->eta = eta;
+        /* A moving camera stood where the path's time placed it (integrator.c's
+         * camera_placed): the camera subpath's time, or for a splat its light subpath's,
+         * whose t = 1 connection reached the lens there. */
+        const Camera *cam = &it->camera;
+        Camera placed;
+        if (cam->moving) {
+            placed = camera_at(cam, splat ? t->paths.start.time : r->paths.camera_time);
+            cam = &placed;
+        }
         double w, sum;
         int n;
-        if (!bdpt_mis_weight(it->scene, &it->camera, vi, x, strategy, merge, &w, &sum, &n)) continue;
+        if (!bdpt_mis_weight(it->scene, cam, vi, x, strategy, merge, &w, &sum, &n)) continue;
         e->mis_explicit = (float)w;
         e->mis_sum = (float)sum;
         e->mis_strategies = n;
