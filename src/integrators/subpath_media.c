@@ -20,6 +20,7 @@
 #include "core/array.h"
 #include "core/rng.h"
 #include "film/filter.h"
+#include "integrators/recorder.h"
 #include "integrators/subpath_media_step.h"
 #include "integrators/subpath_walk.h"
 #include "media/phase.h"
@@ -75,6 +76,7 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
             float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, w_prev));
             if (!(cos_in > 0.0f)) return true;
             mis_arrive_media(&sp, bounces > 1 || es->finite ? h.dist : 1.0f, cos_in, h.fwd, h.rev);
+            if (it->rec) recorder_media_light_hit(it->rec, vol ? NULL : &h.sh, h.p, medium, ray.d, h.dist, h.fwd, h.rev);
         }
         const bool last = w->max_depth > 0 && bounces >= w->max_depth;
         if (vol) {
@@ -148,17 +150,19 @@ static void media_connect_camera(const MediaCamCtx *c, const MediaLightVertex *v
     int m = v->sh ? scene_medium_after(c->s, v->sh, cs.wi, v->medium) : v->medium;
     MediaSegment seg;
     if (!media_connect(c->s, v->p, v->ng, cs.p_lens, v3s(0.0f), false, m, c->time, wl, &seg, c->rays)) return;
-    float weight = 1.0f;
+    float weight = 1.0f, w_light = 0.0f, cam_pdf_a = 0.0f;
     if (c->it) {
         float cos_cam = v->sh ? fabsf(v3_dot(v->ng, cs.wi)) : 1.0f;
         float cos_theta = v3_dot(v3_neg(cs.wi), c->cam->forward);
-        float cam_pdf_a = cos_cam * seg.rev /
-                          (c->it->pixel_area * cos_theta * cos_theta * cos_theta * cs.dist * cs.dist);
-        float w_light = mis(cam_pdf_a / (float)c->it->light_paths) *
-                        (eta_vm(c->it, !v->sh) + v->sp.d_vcm + v->sp.d_vc * mis(pdf_rev));
+        cam_pdf_a = cos_cam * seg.rev / (c->it->pixel_area * cos_theta * cos_theta * cos_theta * cs.dist * cs.dist);
+        w_light = mis(cam_pdf_a / (float)c->it->light_paths) *
+                  (eta_vm(c->it, !v->sh) + v->sp.d_vcm + v->sp.d_vc * mis(pdf_rev));
         weight = 1.0f / (1.0f + w_light);
     }
     Color col = color_scale(color_mul(color_mul(v->sp.beta, f), seg.tr), weight * cs.we / cs.pdf_w);
+    if (c->it && c->it->rec)
+        recorder_media_splat(c->it->rec, cs.raster.x, cs.raster.y, v->bounces + 1, v->p, cs.p_lens, col, weight,
+                             w_light, cam_pdf_a, seg.fwd, seg.rev);
     film_splat(c->out, c->frame, cs.raster.x, cs.raster.y, wl ? spectrum_to_rgb(col, wl) : col);
 }
 
@@ -241,6 +245,7 @@ void media_subpath_trace_light(const Scene *s, const Camera *cam, const SubpathP
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
     es.time = time;
+    if (it->rec) recorder_light_start(it->rec, &es); /* explain: every path, in order */
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     int medium = medium_at_emitter(s, cam, es.p, es.w, time, rays);
     if (!es.finite && medium >= 0) return; /* as media_light_trace */
@@ -293,7 +298,7 @@ static inline int cam_vertex_medium(const Scene *s, const CamVertex *x, Vec3 d)
  * camera's BSDF / phase density of the light point gaining the pass probability of the
  * way there and the light's density of x the distance sampling of x. */
 static Color media_connect_light(const Scene *s, const SubpathIteration *it, const SubPath *sp, const CamVertex *x,
-                                 Sampler *rng, const Wavelengths *wl, uint64_t *rays)
+                                 Color beta, Sampler *rng, const Wavelengths *wl, uint64_t *rays)
 {
     float u_sel = sampler_1d(rng);
     Vec2 u = sampler_2d(rng);
@@ -304,20 +309,28 @@ static Color media_connect_light(const Scene *s, const SubpathIteration *it, con
     Color f = cam_vertex_f(x, ls.wi, &fwd, &rev, &cos_x);
     if (!(cos_x > 0.0f) || color_is_black(f)) return color_s(0.0f);
     MediaSegment seg;
-    if (!media_connect(s, x->p, x->ng, ls.p, ls.n, false, cam_vertex_medium(s, x, ls.wi), x->time, wl, &seg, rays))
+    if (!media_connect(s, x->p, x->ng, ls.p, ls.n, false, cam_vertex_medium(s, x, ls.wi), x->time, wl, &seg, rays)) {
+        /* explain: an occluded (or fully absorbed) connection is listed, adding 0 */
+        if (it->rec) recorder_media_strategy(it->rec, CST_EXPLAIN_NEE, 1, ls.light, ls.p, ls.n, beta, color_s(0.0f),
+                                             -1.0f, 0.0f, 0.0f, 0.0f, 0.0f, NULL, 0.0f, 0.0f);
         return color_s(0.0f);
+    }
     float w_light = ls.delta ? 0.0f : mis(fwd * seg.fwd / ls.direct_pdf);
     float w_camera = mis(ls.emit_pdf * cos_x * seg.rev / (ls.direct_pdf * ls.cos_light)) *
                      (eta_vm(it, !x->bsdf) + sp->d_vcm + sp->d_vc * mis(rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     Color c = color_mul(color_mul(f, seg.tr), scene_light_li(s, &ls, wl));
-    return color_scale(c, weight / (ls.delta ? ls.pmf : ls.pdf_w));
+    c = color_scale(c, weight / (ls.delta ? ls.pmf : ls.pdf_w));
+    if (it->rec)
+        recorder_media_strategy(it->rec, CST_EXPLAIN_NEE, 1, ls.light, ls.p, ls.n, beta, c, weight, w_light, w_camera,
+                                ls.delta ? ls.pmf : ls.pdf_w, ls.direct_pdf, &seg.tr, seg.fwd, seg.rev);
+    return c;
 }
 
 /* A connection between camera vertex x and light vertex y (tech. rep. eqs. 40-41) through
  * media; y's BSDF rebuilt as subpath.c's light_bsdf does (not cached here). */
 static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, const SubPath *sp, const CamVertex *x,
-                                    const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
+                                    Color beta, const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
 {
     Vec3 to = v3_sub(y->p, x->p);
     float dist2 = v3_length2(to);
@@ -352,14 +365,26 @@ static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, 
     }
     if (color_is_black(fy)) return color_s(0.0f);
     MediaSegment seg;
-    if (!media_connect(s, x->p, x->ng, y->p, y->ng, y_vol, cam_vertex_medium(s, x, d), x->time, wl, &seg, rays))
+    if (!media_connect(s, x->p, x->ng, y->p, y->ng, y_vol, cam_vertex_medium(s, x, d), x->time, wl, &seg, rays)) {
+        if (it->rec) {
+            recorder_media_strategy(it->rec, CST_EXPLAIN_CONNECT, y->bounces + 1, -1, y->p, y->ng, beta,
+                                    color_s(0.0f), -1.0f, 0.0f, 0.0f, 0.0f, 0.0f, NULL, 0.0f, 0.0f);
+            recorder_light_dispersed(it->rec, y->dispersed);
+        }
         return color_s(0.0f);
+    }
     float x_fwd_a = x_fwd * cos_y * seg.fwd / dist2; /* the camera subpath reaching y */
     float y_fwd_a = y_fwd * cos_x * seg.rev / dist2; /* the light subpath reaching x */
     float w_light = mis(x_fwd_a) * (eta_vm(it, y_vol) + y->d_vcm + y->d_vc * mis(y_rev));
     float w_camera = mis(y_fwd_a) * (eta_vm(it, !x->bsdf) + sp->d_vcm + sp->d_vc * mis(x_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
-    return color_scale(color_mul(color_mul(color_mul(fx, fy), y->beta), seg.tr), weight / dist2);
+    Color c = color_scale(color_mul(color_mul(color_mul(fx, fy), y->beta), seg.tr), weight / dist2);
+    if (it->rec) {
+        recorder_media_strategy(it->rec, CST_EXPLAIN_CONNECT, y->bounces + 1, -1, y->p, y->ng, beta, c, weight,
+                                w_light, w_camera, x_fwd, x_fwd_a, &seg.tr, seg.fwd, seg.rev);
+        recorder_light_dispersed(it->rec, y->dispersed);
+    }
+    return c;
 }
 
 /* VCM's merging at camera vertex x (vcm.c's merge, over the grid cells merge->plan and
@@ -371,7 +396,8 @@ static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, 
  * the merged path scatters once there. The MIS weights are vcm.c's with the eta of x's
  * kind. Merges with dispersed light vertices go to *hero (as vcm.c's). */
 static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathIteration *it, const MergeQuery *q,
-                         const SubPath *sp, const CamVertex *x, int bounces, const Wavelengths *wl, Color *hero)
+                         const SubPath *sp, const CamVertex *x, Color beta, int bounces, const Wavelengths *wl,
+                         Color *hero)
 {
     const bool vol = x->bsdf == NULL;
     const float r2 = it->radius * it->radius;
@@ -403,6 +429,9 @@ static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathI
             float weight = 1.0f / (w_light + 1.0f + w_camera);
             if (y->dispersed & 1) acc_hero = color_add(acc_hero, color_scale(color_mul(f, y->beta), weight));
             else acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
+            if (it->rec)
+                recorder_merge(it->rec, y->p, y->bounces, beta, color_scale(color_mul(f, y->beta), weight),
+                               it->vm_norm, weight, w_light, w_camera, y->dispersed & 1);
         }
     Color norm = color_s(it->vm_norm);
     if (vol) {
@@ -416,6 +445,7 @@ static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathI
             norm.c[c] = ss > 0.0f ? it->vm_norm_vol / ss : 0.0f;
         }
     }
+    if (it->rec && vol) recorder_merge_norm(it->rec, norm);
     *hero = color_mul(acc_hero, norm);
     return color_mul(acc, norm);
 }
@@ -448,6 +478,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
      * their own). Each subpath is then an estimator for the mixture over hero lanes, a
      * proper density, and the two are independent: their product stays unbiased. */
     HeroMis hm = {-1, color_s(1.0f), false};
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d, ray.time, wl);
     for (int t = 1;; t++) {
         MediaHit h;
         /* Emissive media: their emission is gathered by this walk alone, with MIS weight
@@ -462,9 +493,12 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         if (emit) {
             if (cam_dispersed) H = color_add(H, h.le);
             else L = color_add(L, h.le);
+            if (it->rec && !color_is_black(h.le)) recorder_media_emission(it->rec, t, h.le);
         }
         if (!go) break;
         const Color beta = hero_beta(&hm, sp.beta); /* the throughput of this vertex's contributions */
+        if (it->rec && h.kind != MEDIA_MISS)
+            recorder_media_flight(it->rec, h.p, medium, h.kind == MEDIA_VOLUME, h.dist, h.fwd, h.rev, beta);
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
             Color le = scene_env_radiance(s, ray.d, wl);
@@ -480,6 +514,8 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
                 }
                 if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
                 else L = color_madd(L, beta, color_scale(le, w));
+                if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_ESCAPE, 0, -1, ray.d, beta, color_scale(le, w), w,
+                                               1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
             }
             break;
         }
@@ -487,6 +523,10 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, wo));
         if (!(cos_in > 0.0f)) break;
         mis_arrive_media(&sp, h.dist, cos_in, h.fwd, h.rev);
+        if (it->rec) {
+            if (vol) recorder_medium_vertex(it->rec, h.p, medium, t);
+            else recorder_vertex(it->rec, s, &h.sh, t, wl);
+        }
 
         if (!vol && h.sh.emitter >= 0) { /* s = 0, as subpath.c */
             const Emitter *e = &s->emitter_sampler.light[h.sh.emitter].u.area;
@@ -500,6 +540,8 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
                 }
                 if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
                 else L = color_madd(L, beta, color_scale(le, w));
+                if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_EMISSION, 0, h.sh.emitter, h.sh.p, beta,
+                                               color_scale(le, w), w, 1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
             }
         }
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
@@ -512,6 +554,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             if (wl) {
                 scene_bsdf_disperse(s, &h.sh, &wc, &bsdf);
                 cam_dispersed = wavelengths_secondary_terminated(&wc);
+                if (it->rec) recorder_cam_dispersed(it->rec, cam_dispersed);
             } else {
                 scene_bsdf(s, &h.sh, wl, &bsdf);
             }
@@ -523,7 +566,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             MergeQuery mq;
             if (merging) merge->plan(it, h.p, &mq);
             if (has_lights) {
-                Color nee = media_connect_light(s, it, &sp, &x, rng, wl, rays);
+                Color nee = media_connect_light(s, it, &sp, &x, beta, rng, wl, rays);
                 if (cam_dispersed) H = color_madd(H, beta, nee);
                 else L = color_madd(L, beta, nee);
             }
@@ -531,14 +574,14 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             Color c = color_s(0.0f), ch = color_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
-                Color cj = media_connect_vertices(s, it, &sp, &x, &lv[j], wl, rays);
+                Color cj = media_connect_vertices(s, it, &sp, &x, beta, &lv[j], wl, rays);
                 if (cam_dispersed || lv[j].dispersed) ch = color_add(ch, cj);
                 else c = color_add(c, cj);
             }
             L = color_madd(L, beta, c);
             if (wl) H = color_madd(H, beta, ch);
             if (merging) { /* as subpath_trace_camera */
-                Color mh = color_s(0.0f), m = media_merge(s, vp, it, &mq, &sp, &x, t, wl, &mh);
+                Color mh = color_s(0.0f), m = media_merge(s, vp, it, &mq, &sp, &x, beta, t, wl, &mh);
                 if (cam_dispersed) m = color_add(m, mh), mh = color_s(0.0f);
                 if (cam_dispersed) H = color_madd(H, beta, m);
                 else L = color_madd(L, beta, m);
@@ -547,6 +590,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         }
         if (vol) {
             if (!media_scatter_phase(&sp, it, h.p, wo, x.g, t, vp->rr_depth, rng, &ray)) break;
+            if (it->rec) recorder_phase(it->rec, ray.d, phase_hg_eval(wo, ray.d, x.g), sp.beta);
             prev_med = true;
         } else {
             if (!subpath_scatter(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
@@ -751,14 +795,14 @@ Color media_subpath_connect_light(const Scene *s, const SubpathIteration *it, co
 {
     if (s->emitter_sampler.lights == 0) return color_s(0.0f);
     CamVertex cx = cam_vertex_of(x);
-    return color_mul(x->sp.beta, media_connect_light(s, it, &x->sp, &cx, rng, wl, rays));
+    return color_mul(x->sp.beta, media_connect_light(s, it, &x->sp, &cx, x->sp.beta, rng, wl, rays));
 }
 
 Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
                                  const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
 {
     CamVertex cx = cam_vertex_of(x);
-    return color_mul(x->sp.beta, media_connect_vertices(s, it, &x->sp, &cx, y, wl, rays));
+    return color_mul(x->sp.beta, media_connect_vertices(s, it, &x->sp, &cx, x->sp.beta, y, wl, rays));
 }
 
 /* ------------------------------------------------------------------ SPPM (sppm.c) */
