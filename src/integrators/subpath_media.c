@@ -450,6 +450,35 @@ static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathI
     return color_mul(acc, norm);
 }
 
+/* The s = 0 strategy of camera vertex t: the environment after a miss (the pass
+ * probabilities of the way out joined to the camera's density: no distance, no cosine) or
+ * an area emitter hit, as in subpath.c; le times its MIS weight (black: nothing to add).
+ * beta: the vertex's throughput, for explain's recorder. */
+static Color media_emitted(const Scene *s, const SubpathIteration *it, SubPath *sp, const MediaHit *h, Vec3 dir, int t,
+                           Color beta, const Wavelengths *wl)
+{
+    const bool miss = h->kind == MEDIA_MISS;
+    Color le = miss ? scene_env_radiance(s, dir, wl) : scene_emission(s, &h->sh, v3_neg(dir), wl);
+    if (color_is_black(le)) return le;
+    float w = 1.0f;
+    if (t > 1 && miss) {
+        mis_arrive_media(sp, 1.0f, 1.0f, h->fwd, h->rev);
+        float direct = light_env_pdf(&s->emitter_sampler, dir);
+        float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
+        w = 1.0f / (1.0f + mis(direct) * sp->d_vcm + mis(emission) * sp->d_vc);
+    } else if (t > 1) {
+        const Emitter *e = &s->emitter_sampler.light[h->sh.emitter].u.area;
+        float pdf_a = emitter_pdf_a(&s->emitter_sampler, h->sh.emitter);
+        float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h->sh.ng, v3_neg(dir));
+        w = 1.0f / (1.0f + mis(pdf_a) * sp->d_vcm + mis(emission_pdf) * sp->d_vc);
+    }
+    Color c = color_scale(le, w);
+    if (it->rec)
+        recorder_strategy(it->rec, miss ? CST_EXPLAIN_ESCAPE : CST_EXPLAIN_EMISSION, 0, miss ? -1 : h->sh.emitter,
+                          miss ? dir : h->sh.p, beta, c, w, 1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
+    return c;
+}
+
 Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
                                  const SubpathIteration *it, int path, Ray ray, Sampler *rng, const Wavelengths *wl,
                                  uint64_t *rays, const SubpathMerge *merge)
@@ -501,21 +530,10 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             recorder_media_flight(it->rec, h.p, medium, h.kind == MEDIA_VOLUME, h.dist, h.fwd, h.rev, beta);
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
-            Color le = scene_env_radiance(s, ray.d, wl);
-            if (!color_is_black(le)) {
-                float w = 1.0f;
-                if (t > 1) {
-                    /* The environment as in subpath.c, the pass probabilities of the way
-                     * out joined to the camera's density (no distance, no cosine). */
-                    mis_arrive_media(&sp, 1.0f, 1.0f, h.fwd, h.rev);
-                    float direct = light_env_pdf(&s->emitter_sampler, ray.d);
-                    float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
-                    w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
-                }
-                if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
-                else L = color_madd(L, beta, color_scale(le, w));
-                if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_ESCAPE, 0, -1, ray.d, beta, color_scale(le, w), w,
-                                               1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
+            Color c = media_emitted(s, it, &sp, &h, ray.d, t, beta, wl);
+            if (!color_is_black(c)) {
+                if (cam_dispersed) H = color_madd(H, beta, c);
+                else L = color_madd(L, beta, c);
             }
             break;
         }
@@ -529,19 +547,10 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         }
 
         if (!vol && h.sh.emitter >= 0) { /* s = 0, as subpath.c */
-            const Emitter *e = &s->emitter_sampler.light[h.sh.emitter].u.area;
-            Color le = scene_emission(s, &h.sh, wo, wl);
-            if (!color_is_black(le)) {
-                float w = 1.0f;
-                if (t > 1) {
-                    float pdf_a = emitter_pdf_a(&s->emitter_sampler, h.sh.emitter);
-                    float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h.sh.ng, wo);
-                    w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
-                }
-                if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
-                else L = color_madd(L, beta, color_scale(le, w));
-                if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_EMISSION, 0, h.sh.emitter, h.sh.p, beta,
-                                               color_scale(le, w), w, 1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
+            Color c = media_emitted(s, it, &sp, &h, ray.d, t, beta, wl);
+            if (!color_is_black(c)) {
+                if (cam_dispersed) H = color_madd(H, beta, c);
+                else L = color_madd(L, beta, c);
             }
         }
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
