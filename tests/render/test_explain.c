@@ -534,7 +534,8 @@ static void test_bidir_subsurface(void **state)
 }
 
 /* A moving camera (cst_scene_set_camera_motion, shutter [0.2, 0.7]): each path's camera
- * placed at its time, for the sums and for the explicit MIS weights (explain_mis.c). */
+ * placed at its time, for the sums and for the explicit MIS weights (explain_mis.c). Left
+ * unplaced, the explicit weights differ (measured: see the report of issue 30's helper). */
 static void test_bidir_moving_camera(void **state)
 {
     (void)state;
@@ -542,7 +543,9 @@ static void test_bidir_moving_camera(void **state)
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     static const float c0[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
-    static const float c1[12] = {1, 0, 0, 60, 0, 1, 0, 25, 0, 0, 1, -40};
+    /* turned 10 degrees about the vertical and moved: the view axis changes with time, so
+     * the camera's density of a direction (camera_pdf_w) depends on where the path put it */
+    static const float c1[12] = {0.984808f, 0, 0.173648f, 60, 0, 1, 0, 25, -0.173648f, 0, 0.984808f, -40};
     assert_int_equal(cst_scene_set_camera_motion(s, c0, c1, &err), CST_OK);
     assert_int_equal(cst_scene_set_shutter(s, 0.2f, 0.7f, &err), CST_OK);
     mis_checked = splats_checked = merges = merges_checked = 0;
