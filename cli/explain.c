@@ -109,8 +109,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
                     (e->flags & CST_EXPLAIN_SCATTERED) ? "pdf per unit length" : "probability", (double)e->pdf_w,
                     (double)e->transmittance[0], (double)e->transmittance[1], (double)e->transmittance[2]);
         if (e->chain_fwd > 0.0f || e->chain_rev > 0.0f) /* bdpt, vcm (subpath_media.c) */
-            fprintf(f, " (distance-sampling density %.6g, of the reverse walk %.6g)", (double)e->chain_fwd,
-                    (double)e->chain_rev);
+            fprintf(f, " (sampling density %.6g, reverse %.6g)", (double)e->chain_fwd, (double)e->chain_rev);
         print3(f, is_bdpt(x) ? ", throughput " : ", weight ", is_bdpt(x) ? e->beta : e->value);
         fputc('\n', f);
         return;
