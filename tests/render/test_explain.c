@@ -4,7 +4,9 @@
  * one by one) is what a one-sample render of the pixel accumulates; the strategies' MIS
  * weights lie in [0, 1] and BDPT's and VCM's (connections, merges, splats) equal the ones
  * computed from every strategy's pdfs of the same path, which sum to 1; paths through
- * subsurface materials are recorded (the BSSRDF's exit); whitted's ray tree and the light tracer's splats sum to the film's value;
+ * subsurface materials are recorded (the BSSRDF's exit); BDPT and VCM through media (a fog
+ * box: homogeneous, grid, emitting grid), subsurface walks and a moving camera likewise, their
+ * weights checked explicitly too; whitted's ray tree and the light tracer's splats sum to the film's value;
  * integrators explain cannot follow and bad pixels are refused. */
 #include <setjmp.h>
 #include <stdarg.h>
