@@ -108,7 +108,9 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
             fprintf(f, " (%s %.6g, transmittance (%.6g, %.6g, %.6g))",
                     (e->flags & CST_EXPLAIN_SCATTERED) ? "pdf per unit length" : "probability", (double)e->pdf_w,
                     (double)e->transmittance[0], (double)e->transmittance[1], (double)e->transmittance[2]);
-        print3(f, ", weight ", e->value);
+        if (e->chain_fwd > 0.0f || e->chain_rev > 0.0f) /* bdpt, vcm (subpath_media.c) */
+            fprintf(f, " (sampling density %.6g, reverse %.6g)", (double)e->chain_fwd, (double)e->chain_rev);
+        print3(f, is_bdpt(x) ? ", throughput " : ", weight ", is_bdpt(x) ? e->beta : e->value);
         fputc('\n', f);
         return;
     case CST_EXPLAIN_VERTEX:
@@ -375,6 +377,11 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "pdf", num((double)e->pdf_w));
         json_object_set_new(o, "transmittance", arr3f(e->transmittance));
         json_object_set_new(o, "weight", arr3f(e->value));
+        if (is_bdpt(x)) {
+            json_object_set_new(o, "chain_fwd", num((double)e->chain_fwd));
+            json_object_set_new(o, "chain_rev", num((double)e->chain_rev));
+            json_object_set_new(o, "beta", arr3f(e->beta));
+        }
         return o;
     case CST_EXPLAIN_VERTEX:
         if (e->medium >= 0) json_object_set_new(o, "medium", json_integer(e->medium));
@@ -426,6 +433,11 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
     if (is_bdpt(x)) {
         json_object_set_new(o, "w_light", num((double)e->pdf_other_w));
         json_object_set_new(o, "w_camera", num((double)e->pdf_other2));
+        if (e->chain_fwd > 0.0f || e->chain_rev > 0.0f) { /* a connection through media */
+            json_object_set_new(o, "chain_fwd", num((double)e->chain_fwd));
+            json_object_set_new(o, "chain_rev", num((double)e->chain_rev));
+            if (e->kind != CST_EXPLAIN_SPLAT) json_object_set_new(o, "transmittance", arr3f(e->transmittance));
+        }
     } else {
         json_object_set_new(o, "pdf_other_w", num((double)e->pdf_other_w));
         if (e->kind == CST_EXPLAIN_NEE) json_object_set_new(o, "pmf", num((double)e->pmf));

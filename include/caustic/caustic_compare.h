@@ -268,6 +268,13 @@ typedef struct CstExplainEvent {
     float transmittance[3]; /* DISTANCE, homogeneous media: exp(-sigma_t distance) (RGB lanes) */
     double share[3];  /* light, bdpt, vcm: what the splat added to the pixel (filter weight
                        * included) */
+    /* bdpt, vcm through media: the distance-sampling densities of the segment (DISTANCE: the
+     * flight that made the next vertex; NEE, CONNECT, SPLAT: the connection's): chain_fwd
+     * the density with which a walk from the camera side's end (DISTANCE: the previous
+     * vertex; SPLAT: the light vertex) makes the other end, chain_rev the reverse walk's;
+     * per unit length at a medium vertex (majorant-based in grids), a pass probability at a
+     * surface; 1 in vacuum. 0 when not applicable. */
+    float chain_fwd, chain_rev;
 } CstExplainEvent;
 
 typedef struct CstExplain {

@@ -10,8 +10,21 @@
 
 #include <math.h>
 
+#include "media/phase.h"
+
 /* |cos| at a vertex of normal n toward unit d. */
 static double cosabs(Vec3 n, Vec3 d) { return fabs((double)v3_dot(n, d)); }
+
+/* Whether x_i is a medium vertex (no cosine, a phase function). */
+static bool is_vol(const BdptMisPath *x, int i) { return x->media && i >= 1 && i < x->k && x->medium[i] >= 0; }
+
+/* The density per unit solid angle of scattering toward wi from wo at x_i (both pointing
+ * away from x_i): its BSDF's, or in a medium Henyey-Greenstein's (symmetric). */
+static double dir_pdf(const Scene *s, const BdptMisPath *x, const Bsdf *b, int i, Vec3 wo, Vec3 wi)
+{
+    if (is_vol(x, i)) return (double)phase_hg_eval(wo, wi, s->media[x->medium[i]].g);
+    return (double)bsdf_pdf(b, wo, wi);
+}
 
 bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *it, const BdptMisPath *x,
                      int strategy, bool merge, double *weight, double *sum, int *strategies)
@@ -44,7 +57,15 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
         d[i] = x->len[i] > 0.0f ? x->dir[i] : v3_scale(e, 1.0f / sqrtf(v3_length2(e)));
     }
     Bsdf b[BDPT_MIS_MAX];
-    for (int i = 1; i < k; i++) scene_bsdf(s, x->hit[i], NULL, &b[i]);
+    for (int i = 1; i < k; i++)
+        if (!is_vol(x, i)) scene_bsdf(s, x->hit[i], NULL, &b[i]);
+    /* Through media: the cosine at x_i (1 at a medium vertex) and the distance sampling of
+     * segment i either way (UPBP: a vertex's density includes the free flight that made it). */
+    double cl[BDPT_MIS_MAX + 1], cc[BDPT_MIS_MAX + 1], cf[BDPT_MIS_MAX], cr[BDPT_MIS_MAX];
+    for (int i = 0; i < k; i++) {
+        cf[i] = x->media ? (double)x->chain_fwd[i] : 1.0;
+        cr[i] = x->media ? (double)x->chain_rev[i] : 1.0;
+    }
     /* pl[i]: the light subpath's density of x_i per unit area; pc[i]: the camera
      * subpath's. A delta lobe's density is a Dirac that every strategy sampling the
      * vertex shares (tech. rep. eqs. 53-55): 1 here, the cosine and distance kept. */
@@ -54,18 +75,20 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
     for (int i = 1; i < k; i++) {
         double pw = i == 1 ? (double)emitter_emission_pdf_w(em, n[0], d[0])
                   : x->delta[i - 1] ? 1.0
-                  : (double)bsdf_pdf(&b[i - 1], v3_neg(d[i - 2]), d[i - 1]);
-        pl[i] = pw * cosabs(nl[i], d[i - 1]) / d2[i - 1];
+                  : dir_pdf(s, x, &b[i - 1], i - 1, v3_neg(d[i - 2]), d[i - 1]);
+        cl[i] = is_vol(x, i) ? 1.0 : cosabs(nl[i], d[i - 1]);
+        pl[i] = pw * cl[i] * cf[i - 1] / d2[i - 1];
     }
     /* The camera's density of a direction at angle theta to its axis, per pixel sample:
      * 1 / (pixel area cos^3 theta) (subpath.c's camera_pdf_w). */
     double cos_theta = -(double)v3_dot(d[k - 1], cam->forward);
     if (!(cos_theta > 0.0)) return false;
     double cam_w = 1.0 / ((double)it->pixel_area * cos_theta * cos_theta * cos_theta);
-    pc[k - 1] = cam_w * cosabs(n[k - 1], d[k - 1]) / d2[k - 1];
+    for (int i = 0; i < k; i++) cc[i] = is_vol(x, i) ? 1.0 : cosabs(n[i], d[i]);
+    pc[k - 1] = cam_w * cc[k - 1] * cr[k - 1] / d2[k - 1];
     for (int i = k - 2; i >= 0; i--) {
-        double pw = x->delta[i + 1] ? 1.0 : (double)bsdf_pdf(&b[i + 1], d[i + 1], v3_neg(d[i]));
-        pc[i] = pw * cosabs(n[i], d[i]) / d2[i];
+        double pw = x->delta[i + 1] ? 1.0 : dir_pdf(s, x, &b[i + 1], i + 1, d[i + 1], v3_neg(d[i]));
+        pc[i] = pw * cc[i] * cr[i] / d2[i];
     }
     const bool ortho = camera_is_orthographic(cam);
     /* ps[j]: connection strategy s = j; ps[k + 1 + i]: merging at x_i (0 when none). */
@@ -95,7 +118,7 @@ bool bdpt_mis_weight(const Scene *s, const Camera *cam, const SubpathIteration *
     for (int i = 0; i <= k; i++) {
         double pr = 0.0;
         if (x->eta > 0.0 && i >= 1 && i < k && !x->delta[i]) {
-            pr = x->eta;
+            pr = is_vol(x, i) ? x->eta_vol : x->eta;
             for (int j = 0; j <= i; j++) pr *= pl[j];
             for (int j = i; j < k; j++) pr *= pc[j];
             (*strategies)++;

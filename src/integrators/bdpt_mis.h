@@ -36,6 +36,17 @@ typedef struct BdptMisPath {
     double eta;
     int merged;
     Vec3 n_light;
+    /* Through media (subpath_media.c; media false: no medium vertex, every chain factor 1):
+     * medium[i] >= 0 makes x_i a medium vertex of that medium (no cosine; the phase
+     * function's density, its HG asymmetry); chain_fwd[i] / chain_rev[i]: the distance-
+     * sampling densities (subpath_media_step.h's chain: pass probabilities, and the free-flight
+     * density at a medium vertex, majorant-based in grids) of segment x_i x_{i+1} made from
+     * x_i / from x_{i+1}; eta_vol: VCM's eta at a medium vertex, (4/3) pi r^3 N_light (UPBP's
+     * point-point 3D merge, Krivanek et al. 2014). */
+    bool media;
+    int medium[BDPT_MIS_MAX];
+    float chain_fwd[BDPT_MIS_MAX], chain_rev[BDPT_MIS_MAX];
+    double eta_vol;
 } BdptMisPath;
 
 /* The power-heuristic weight (Veach eq. 9.13) for path x of the connection strategy s

@@ -67,6 +67,20 @@ void recorder_wavelengths(Recorder *r, const Wavelengths *wl)
     r->has_wl = true;
 }
 
+/* The camera subpath's hit d just kept: the flight that reached it, through media. */
+static void keep_flight(Recorder *r, int d, int medium)
+{
+    RecorderPaths *rp = &r->paths;
+    if (d < 1 || d > RECORDER_PATH_MAX) return;
+    rp->cam_medium[d - 1] = medium;
+    rp->cam_fwd[d - 1] = rp->cam_rev[d - 1] = 1.0f;
+    if (!rp->next_flight) return;
+    rp->next_flight = false;
+    rp->cam[d - 1].t = rp->next_len;
+    rp->cam_fwd[d - 1] = rp->next_fwd;
+    rp->cam_rev[d - 1] = rp->next_rev;
+}
+
 void recorder_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int depth, const Wavelengths *wl)
 {
     r->depth = depth;
@@ -81,6 +95,7 @@ void recorder_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int dept
         r->paths.cam_dir[depth - 1] = r->paths.next_dir;
         r->paths.cam_delta[depth - 1] = false;
         r->paths.ncam = depth;
+        keep_flight(r, depth, -1);
     }
     e->material_type = sh->material >= 0 ? material_type_name(s->materials[sh->material].type) : "none";
     e->light = sh->emitter;
@@ -193,8 +208,9 @@ void recorder_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 len
     e->beta[0] = e->beta[1] = e->beta[2] = 1.0f;
 }
 
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl)
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, float time, const Wavelengths *wl)
 {
+    r->paths.camera_time = time;
     recorder_wavelengths(r, wl); /* a camera ray may miss everything */
     r->cam_dispersed = false;
     r->paths.camera_o = origin;
@@ -378,9 +394,114 @@ void recorder_medium_vertex(Recorder *r, Vec3 p, int medium, int depth)
     put3(e->p, p);
     e->medium = medium;
     e->material_type = "medium";
+    if (depth >= 1 && depth <= RECORDER_PATH_MAX) { /* for the MIS check (subpath_media.c) */
+        r->paths.cam[depth - 1] = (SurfaceHit){.p = p, .material = -1, .emitter = -1};
+        r->paths.cam_dir[depth - 1] = r->paths.next_dir;
+        r->paths.cam_delta[depth - 1] = false;
+        r->paths.ncam = depth;
+        keep_flight(r, depth, medium);
+    }
 }
 
 void recorder_add(Recorder *r, CstExplainKind kind, Color beta, Color value)
 {
     recorder_added(r, recorder_push(r, kind), beta, value);
+}
+
+void recorder_media_strategy(Recorder *r, CstExplainKind kind, int s_light, int light, Vec3 p, Vec3 n, Color beta,
+                             Color value, float w, float w_light, float w_camera, float pdf_w, float pdf_a,
+                             const Color *tr, float chain_fwd, float chain_rev)
+{
+    r->paths.media = true;
+    recorder_strategy(r, kind, s_light, light, p, beta, value, w, w_light, w_camera, pdf_w, pdf_a, tr == NULL);
+    CstExplainEvent *e = r->truncated ? &r->spare : &r->ev[r->n - 1];
+    put3(e->ng, n);
+    if (tr) put_color(e->transmittance, *tr);
+    e->chain_fwd = chain_fwd;
+    e->chain_rev = chain_rev;
+}
+
+void recorder_media_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 p, int medium, Vec3 dir, float dist, float fwd,
+                              float rev)
+{
+    RecorderPaths *rp = &r->paths;
+    if (!rp->light_on) return;
+    rp->media = true;
+    const int b = rp->nlight;
+    SurfaceHit at = {.p = p, .material = -1, .emitter = -1};
+    recorder_light_hit(r, sh ? sh : &at, dir);
+    if (b >= RECORDER_PATH_MAX) return;
+    rp->light[b].t = dist;
+    rp->light_medium[b] = sh ? -1 : medium;
+    rp->light_fwd[b] = fwd;
+    rp->light_rev[b] = rev;
+}
+
+void recorder_media_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
+                          float w_light, float pdf_a, float fwd, float rev)
+{
+    const int n = r->n;
+    recorder_splat(r, x, y, s_light, p, lens, value, w, w_light, pdf_a);
+    if (r->n == n || r->truncated) return;
+    r->ev[r->n - 1].chain_fwd = fwd;
+    r->ev[r->n - 1].chain_rev = rev;
+}
+
+void recorder_media_flight(Recorder *r, Vec3 p, int medium, bool volume, float dist, float fwd, float rev, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_DISTANCE);
+    e->medium = medium;
+    e->distance = dist;
+    put3(e->p, p);
+    if (volume) e->flags |= CST_EXPLAIN_SCATTERED;
+    e->chain_fwd = fwd;
+    e->chain_rev = rev;
+    put_color(e->beta, beta);
+    RecorderPaths *rp = &r->paths;
+    rp->media = true;
+    rp->next_flight = true;
+    rp->next_fwd = fwd;
+    rp->next_rev = rev;
+    rp->next_len = dist;
+}
+
+
+void recorder_media_emission(Recorder *r, int depth, Color value)
+{
+    const int d = r->depth;
+    r->depth = depth;
+    recorder_strategy(r, CST_EXPLAIN_EMISSION, 0, -1, v3s(0.0f), color_s(1.0f), value, 1.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+                      false);
+    r->depth = d;
+}
+
+void recorder_merge_norm(Recorder *r, Color norm)
+{
+    const int d = r->depth;
+    if (d < 0 || d > RECORDER_PATH_MAX + 1) {
+        r->truncated = 1; /* the replay could not normalise these merges */
+        return;
+    }
+    r->merge_norm[d] = norm;
+    r->merge_vol[d] = true;
+    for (int i = r->n - 1; i >= 0 && r->ev[i].depth == d; i--) {
+        CstExplainEvent *e = &r->ev[i];
+        if (e->kind != CST_EXPLAIN_MERGE) continue;
+        e->pmf = norm.c[0];
+        Color shown = color_mul(r->value[i], norm);
+        put_color(e->value, shown);
+        put_color(e->contribution, color_mul(r->beta[i], shown));
+    }
+}
+
+void recorder_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
+    put3(e->wi, wi);
+    e->pdf_w = pdf_w;
+    e->material_type = "phase";
+    r->paths.next_dir = wi;
+    put_color(e->beta, beta);
+    put_color(e->value, color_s(1.0f));
+    put_color(e->contribution, beta);
 }

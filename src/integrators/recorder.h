@@ -22,6 +22,8 @@ struct Photon;
 
 typedef struct RecorderPaths {
     Vec3 camera_o;                        /* the camera ray's origin (the lens point) */
+    float camera_time;                    /* the camera ray's time (motion blur; where a
+                                           * moving camera stood for this path) */
     SurfaceHit cam[RECORDER_PATH_MAX];    /* cam[d - 1]: the camera subpath's hit d */
     Vec3 cam_dir[RECORDER_PATH_MAX];      /* the unit direction of the ray that reached it */
     Vec3 next_dir;                        /* the last scatter's (or the camera ray's) */
@@ -38,6 +40,16 @@ typedef struct RecorderPaths {
     /* The lens point of each kept light hit's t = 1 connection (a splat's path ends there). */
     Vec3 light_lens[RECORDER_PATH_MAX];
     int nlight;
+    /* Through media (subpath_media.c): a vertex's medium (-1: a surface hit; a medium
+     * vertex is kept as a SurfaceHit with its point alone), the distance-sampling densities
+     * of the flight that reached it (fwd: from the previous vertex of its subpath; rev: back)
+     * and that flight's length from the previous vertex (in its SurfaceHit's t). */
+    bool media;
+    int cam_medium[RECORDER_PATH_MAX], light_medium[RECORDER_PATH_MAX];
+    float cam_fwd[RECORDER_PATH_MAX], cam_rev[RECORDER_PATH_MAX];
+    float light_fwd[RECORDER_PATH_MAX], light_rev[RECORDER_PATH_MAX];
+    float next_fwd, next_rev, next_len; /* the camera's flight, until its vertex is kept */
+    bool next_flight;
 } RecorderPaths;
 
 typedef struct Recorder {
@@ -58,6 +70,10 @@ typedef struct Recorder {
     Color tree_beta[RECORDER_PATH_MAX + 2]; /* whitted: a node's throughput by depth */
     bool cam_dispersed; /* spectral BDPT: the camera subpath's wavelengths are terminated
                          * (its strategies get CST_EXPLAIN_HERO) */
+    /* VCM in media: the per-lane normalisation of the merges at a volume camera vertex,
+     * by depth (merge_vol[d] false: the scalar vm_norm of a surface vertex). */
+    Color merge_norm[RECORDER_PATH_MAX + 2];
+    bool merge_vol[RECORDER_PATH_MAX + 2];
 } Recorder;
 
 /* A new event of kind k at the current depth (fields zero, s = t = light = -1,
@@ -119,6 +135,39 @@ void recorder_medium_vertex(Recorder *r, Vec3 p, int medium, int depth);
 /* An addition of beta * value of kind k (medium emission, NEE) with no more to say. */
 void recorder_add(Recorder *r, CstExplainKind kind, Color beta, Color value);
 
+/* ---- BDPT and VCM through media (subpath_media.c) */
+/* recorder_strategy for a strategy through media: n the light-side vertex's normal (0 in a
+ * medium; NEE's light point's, kept as recorder_nee_normal keeps it), tr the connection's
+ * transmittance (ratio tracking in grids) or NULL when media_connect found it blocked
+ * (value 0, w -1: no weight was computed). */
+void recorder_media_strategy(Recorder *r, CstExplainKind kind, int s_light, int light, Vec3 p, Vec3 n, Color beta,
+                             Color value, float w, float w_light, float w_camera, float pdf_w, float pdf_a,
+                             const Color *tr, float chain_fwd, float chain_rev);
+/* The free flight that made the camera subpath's next vertex at p (volume: in medium
+ * `medium`), dist from the previous vertex: fwd its chain density (per unit length at a
+ * volume vertex: the distance sampling's, majorant-based in grids; the pass probability at
+ * a surface), rev the reverse walk's; beta the throughput after it. */
+void recorder_media_flight(Recorder *r, Vec3 p, int medium, bool volume, float dist, float fwd, float rev, Color beta);
+/* The Henyey-Greenstein sample that continues the camera subpath from a volume vertex:
+ * direction wi, density pdf_w (weight 1: sampled exactly); beta the throughput after it. */
+void recorder_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta);
+/* A hit of the light subpath walk through media (sh NULL: a medium vertex at p in
+ * `medium`), reached along dir after a flight of length dist from the previous vertex
+ * with chain densities fwd and rev (recorder_media_flight's). */
+void recorder_media_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 p, int medium, Vec3 dir, float dist, float fwd,
+                              float rev);
+/* The t = 1 connection of a light vertex through media (recorder_splat), with the
+ * connection's chain densities fwd (light vertex to lens) and rev. */
+void recorder_media_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
+                          float w_light, float pdf_a, float fwd, float rev);
+/* Emission of media gathered along the flight before camera vertex `depth` (s = 0, weight 1,
+ * value already times the throughput). */
+void recorder_media_emission(Recorder *r, int depth, Color value);
+/* VCM's merges at a volume vertex: the per-lane normalisation 1 / ((4/3) pi r^3 N sigma_s)
+ * that media_merge applies to their sum (the replay's, in place of vm_norm), and each merge
+ * shown with it. */
+void recorder_merge_norm(Recorder *r, Color norm);
+
 /* ---- Whitted (whitted.c): a ray tree, its nodes' events in depth-first order; the
  * throughput of a node is the product of its branches' weights (kept per depth). */
 /* An addition at the node of tree depth `depth` (1 = the camera ray's hit): kind EMISSION
@@ -140,9 +189,9 @@ void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
 void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est);
 
 /* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
-/* The camera subpath starts (ray origin and direction; wl its wavelengths in spectral mode,
- * NULL in RGB). */
-void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, const Wavelengths *wl);
+/* The camera subpath starts (ray origin, direction and time; wl its wavelengths in spectral
+ * mode, NULL in RGB). */
+void recorder_camera(Recorder *r, Vec3 origin, Vec3 dir, float time, const Wavelengths *wl);
 /* Spectral BDPT: whether the camera subpath has been dispersed (its secondary wavelengths
  * terminated) as of the vertex being recorded. */
 void recorder_cam_dispersed(Recorder *r, bool dispersed);

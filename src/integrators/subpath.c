@@ -262,7 +262,7 @@ Color subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParam
     if (s->num_media | s->num_medium_ifaces)
         return media_subpath_trace_camera(s, cam, vp, it, path, ray, rng, wl, rays, merge);
     Color L = color_s(0.0f);
-    if (it->rec) recorder_camera(it->rec, ray.o, ray.d, wl);
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d, ray.time, wl);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return L;
     /* tech. rep. eqs. 31-33 for the camera: d_vcm = N_light / p_camera. An orthographic

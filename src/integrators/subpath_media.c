@@ -20,355 +20,10 @@
 #include "core/array.h"
 #include "core/rng.h"
 #include "film/filter.h"
+#include "integrators/recorder.h"
+#include "integrators/subpath_media_step.h"
 #include "integrators/subpath_walk.h"
 #include "media/phase.h"
-
-/* Boundary crossings in a row before a walk or a connection gives up (volpath.c's bound). */
-enum { MEDIA_MAX_CROSSINGS = 256 };
-
-/* The distance-sampling densities of a straight chain of pieces from a vertex a to a
- * vertex b (pieces split by boundary shapes, each in one medium or vacuum): fwd is the
- * density with which a walk from a makes b (the product of the pass probabilities of every
- * piece before b's, times b's piece's free-flight density at b if b is in a medium, or its
- * pass probability if b is a surface); rev the same from b back to a. Vacuum pieces count 1. */
-typedef struct ChainPdf {
-    int pieces;
-    float first_pass, first_pdf; /* the piece at a: pass probability, density at a */
-    float last_pass, last_pdf;   /* the piece at b: pass probability, density at b */
-    float mid;                   /* pass probabilities of the pieces between */
-} ChainPdf;
-
-/* A piece with its pass probability and its free-flight densities at its start (pdf_a,
- * the density of a walk from its far end stopping there) and at its end (pdf_b); they
- * differ in a grid medium only. */
-static inline void chain_add(ChainPdf *c, float pass, float pdf_a, float pdf_b)
-{
-    if (c->pieces == 0) {
-        c->first_pass = pass;
-        c->first_pdf = pdf_a;
-    }
-    if (c->pieces >= 2) c->mid *= c->last_pass;
-    c->last_pass = pass;
-    c->last_pdf = pdf_b;
-    c->pieces++;
-}
-
-/* fwd and rev of a finished chain; a_med / b_med: the end is a medium vertex. */
-static inline void chain_pdfs(const ChainPdf *c, bool a_med, bool b_med, float *fwd, float *rev)
-{
-    if (c->pieces <= 1) {
-        *fwd = c->pieces ? (b_med ? c->last_pdf : c->first_pass) : 1.0f;
-        *rev = c->pieces ? (a_med ? c->first_pdf : c->first_pass) : 1.0f;
-        return;
-    }
-    *fwd = c->first_pass * c->mid * (b_med ? c->last_pdf : c->last_pass);
-    *rev = c->last_pass * c->mid * (a_med ? c->first_pdf : c->first_pass);
-}
-
-/* Optical depths above this (in the largest lane) count as this in the MIS densities of
- * grid media: e^-20 keeps the recursion's squared ratios (subpath.h's mis) inside float. */
-#define MEDIA_GRID_MIS_DEPTH 20.0f
-
-/* A piece o + t dir, t in [0, len], in medium m (-1 vacuum): its pass probability and
- * densities; a_vertex / b_vertex: its start / end is a volume vertex (else that density is
- * not used). Homogeneous media: medium.h's exact densities (the balance heuristic over the
- * lanes, as medium_sample_distance samples). Grid and cloud media: delta tracking's true
- * density of stopping at x, sigma_t(x) Tr(0, x), is the expectation of a random process
- * nobody can evaluate exactly; MIS needs only densities that every strategy computes the
- * same way for the same path (the weights then still sum to 1 and each strategy's estimator
- * stays unbiased, Veach's thesis sec. 9.2.2: any weights summing to 1 over the strategies
- * that can make the path). So a grid piece uses the majorant's transmittance in place of
- * Tr, mean_c exp(-sigma_t[c] tau_maj), with the real sigma_t(x) = density(x) sigma_t at a
- * vertex: the densities pbrt-v4's volpath weighs NEE with, and Miller et al. 2019's
- * null-scattering path pdf summed over no null vertex. tau_maj is deterministic and the
- * same for the piece walked either way, so a walk, the reverse walk and a connection all
- * see the same value. */
-static void chain_piece(ChainPdf *c, const Scene *s, const MediumCoeffs *mc, int m, Vec3 o, Vec3 dir, float len,
-                        bool a_vertex, bool b_vertex)
-{
-    if (m < 0) {
-        chain_add(c, 1.0f, 0.0f, 0.0f);
-        return;
-    }
-    const Medium *med = &s->media[m];
-    if (!medium_is_hetero(med)) {
-        float pdf = medium_distance_pdf(mc, len);
-        chain_add(c, medium_pass_prob(mc, len), pdf, pdf);
-        return;
-    }
-    const HeteroMedium *h = &med->u.het;
-    float tau = hetero_majorant_depth(h, o, dir, len);
-    const float smax = color_max(mc->sigma_t);
-    if (smax * tau > MEDIA_GRID_MIS_DEPTH) tau = MEDIA_GRID_MIS_DEPTH / smax;
-    const float pd = medium_distance_pdf(mc, tau);
-    const float pdf_a = a_vertex ? hetero_density_world(h, o) * pd : 0.0f;
-    const float pdf_b = b_vertex ? hetero_density_world(h, v3_add(o, v3_scale(dir, len))) * pd : 0.0f;
-    chain_add(c, medium_pass_prob(mc, tau), pdf_a, pdf_b);
-}
-
-/* A connection from p (normal n_p; 0 in a medium) to q (n_q likewise; q_med: q is a
- * volume vertex, not a surface or the lens), leaving p in medium `medium`: its transmittance (black when a surface other than a boundary is in
- * the way) and its chain densities. */
-typedef struct MediaSegment {
-    Color tr;
-    float fwd, rev; /* ChainPdf's, for q made from p and p from q */
-} MediaSegment;
-
-static bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bool q_med, int medium, float time,
-                          const Wavelengths *wl, MediaSegment *out, uint64_t *rays)
-{
-    Vec3 d = v3_sub(q, p);
-    Vec3 o = scene_offset(s, p, n_p, d); /* a zero normal leaves the point where it is */
-    const Vec3 end = scene_offset(s, q, n_q, v3_neg(d));
-    ChainPdf c = {0, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f};
-    Color tr = color_s(1.0f);
-    for (int step = 0; step < MEDIA_MAX_CROSSINGS; step++) {
-        Vec3 od = v3_sub(end, o);
-        float len = v3_length(od);
-        if (!(len > 0.0f)) break;
-        Vec3 dir = v3_scale(od, 1.0f / len);
-        Ray r = ray_make_at(o, dir, 0.0f, len * (1.0f - 1e-5f), time);
-        SurfaceHit sh;
-        ++*rays;
-        bool hit = scene_intersect(s, &r, &sh);
-        float piece = hit ? sh.t : len;
-        MediumCoeffs mc = {0};
-        if (medium >= 0) {
-            const Medium *m = &s->media[medium];
-            mc = medium_coeffs(m, wl);
-            if (medium_is_hetero(m)) {
-                /* Ratio tracking (unbiased per lane, Novak et al. 2014), its random
-                 * stream a hash of the piece as scene_transmittance's; the MIS densities
-                 * of the piece are chain_piece's majorant-based ones, not this estimate. */
-                const float seg[6] = {o.x, o.y, o.z, end.x, end.y, end.z};
-                uint64_t seed = 0x3c6ef372fe94f82bULL + (uint64_t)step;
-                for (int i = 0; i < 6; i++) {
-                    union { float f; uint32_t u; } b = {seg[i]};
-                    seed = mix64(seed ^ b.u);
-                }
-                tr = color_mul(tr, hetero_transmittance(&m->u.het, &mc, o, dir, piece, seed));
-            } else {
-                tr = color_mul(tr, medium_transmittance(&mc, piece));
-            }
-        }
-        chain_piece(&c, s, &mc, medium, o, dir, piece, step == 0 && v3_length2(n_p) == 0.0f, !hit && q_med);
-        if (!hit) {
-            out->tr = tr;
-            chain_pdfs(&c, v3_length2(n_p) == 0.0f, q_med, &out->fwd, &out->rev);
-            return !color_is_black(tr);
-        }
-        const MediumInterface *mi = scene_hit_medium_iface(s, &sh);
-        if (!mi || !mi->boundary || color_is_black(tr)) return false;
-        medium = v3_dot(dir, sh.ng) < 0.0f ? mi->inside : mi->outside;
-        o = scene_offset(s, sh.p, sh.ng, dir);
-    }
-    return false;
-}
-
-/* The medium at point q as a ray from the camera's origin sees it: starting in the
- * camera's medium, switched at every interface shape on the way (as a camera path tracks
- * it). Light subpaths start from it: lights carry no medium of their own. cam: placed at
- * the path's time, which the rays carry. */
-static int medium_at(const Scene *s, const Camera *cam, Vec3 q, float time, uint64_t *rays)
-{
-    int medium = s->camera_medium;
-    Vec3 o = cam->origin;
-    for (int step = 0; step < MEDIA_MAX_CROSSINGS; step++) {
-        Vec3 od = v3_sub(q, o);
-        float len = v3_length(od);
-        if (!(len > 0.0f)) return medium;
-        Vec3 dir = v3_scale(od, 1.0f / len);
-        Ray r = ray_make_at(o, dir, 0.0f, len * (1.0f - 1e-5f), time);
-        SurfaceHit sh;
-        ++*rays;
-        if (!scene_intersect(s, &r, &sh)) return medium;
-        medium = scene_medium_after(s, &sh, dir, medium);
-        o = scene_offset(s, sh.p, sh.ng, dir);
-    }
-    return medium;
-}
-
-/* The medium on the side of emission sample point p toward direction w: just off the
- * surface (further than medium_at's end tolerance), so that an emitter that is itself an
- * interface is crossed when the camera sits on its other side. */
-static int medium_at_emitter(const Scene *s, const Camera *cam, Vec3 p, Vec3 w, float time, uint64_t *rays)
-{
-    float scale = fmaxf(1.0f, v3_length(v3_sub(p, cam->origin)));
-    return medium_at(s, cam, v3_add(p, v3_scale(w, 1e-4f * scale)), time, rays);
-}
-
-/* The spectral MIS of delta tracking over the lanes (hetero_medium.h), for the light
- * tracer's walks through grid media: the hero lane (-1 until the first grid piece) and
- * p_c / p_hero over the grid pieces so far. */
-typedef struct HeroMis {
-    int hero;
-    Color r_u;
-    bool homogeneous; /* homogeneous media too (the light tracer): see hero_sample_homogeneous */
-} HeroMis;
-
-/* Free-flight sampling in a homogeneous medium by the hero lane alone, t ~ sigma_t[h]
- * exp(-sigma_t[h] t), with the lanes' densities relative to the hero's in out->r, as
- * hetero_sample_distance does for grids: the light tracer's walks take the balance
- * heuristic over lanes for the whole path (hero_beta) instead of per segment, whose
- * product over many scattering events has a heavy tail where the lanes' sigma_t differ
- * (spectral mode: the light tracer's furnace missed by 4x in one channel at 256 paths per
- * pixel). False when the hero's density underflows. */
-static bool hero_sample_homogeneous(const MediumCoeffs *mc, float t_max, int h, float u, MediumSample *out)
-{
-    float st = mc->sigma_t.c[h];
-    float t = st > 0.0f ? -log1pf(-u) / st : INFINITY;
-    out->scattered = t < t_max;
-    out->t = out->scattered ? t : t_max;
-    Color tr = medium_transmittance(mc, out->t);
-    float p = out->scattered ? st * tr.c[h] : tr.c[h]; /* the hero's density of this outcome */
-    if (!(p > 0.0f)) return false;
-    out->weight = color_scale(out->scattered ? color_mul(tr, mc->sigma_s) : tr, 1.0f / p);
-    out->r = color_scale(out->scattered ? color_mul(tr, mc->sigma_t) : tr, 1.0f / p);
-    return true;
-}
-
-/* beta / mean(r_u): a contribution's throughput (volpath.c's mis_beta); beta itself on a
- * walk that met no grid. */
-static inline Color hero_beta(const HeroMis *hm, Color beta)
-{
-    if (hm->hero < 0) return beta;
-    float m = 0.0f;
-    for (int c = 0; c < COLOR_LANES; c++) m += hm->r_u.c[c];
-    return m > 0.0f && isfinite(m) ? color_scale(beta, (float)COLOR_LANES / m) : color_s(0.0f);
-}
-
-/* What a walk's ray met after free-flight sampling through the pieces of its way. */
-typedef enum MediaHitKind { MEDIA_MISS, MEDIA_SURFACE, MEDIA_VOLUME } MediaHitKind;
-typedef struct MediaHit {
-    MediaHitKind kind;
-    SurfaceHit sh; /* MEDIA_SURFACE */
-    Vec3 p;        /* the vertex (surface or volume) */
-    float dist;    /* |p - the previous vertex| */
-    float fwd, rev; /* ChainPdf's: this vertex from the previous one, and back */
-    Color le;       /* with `emit`: the media's emission along the way, times the throughput
-                     * (hero-normalised), to be added as it is */
-} MediaHit;
-
-/* Follows ray (from vertex x_prev, a volume vertex when prev_med) through media and
- * boundaries, in *medium (updated at each boundary), to the next vertex: a free-flight
- * sample in each medium piece (two 1D numbers: the lane, the distance; medium.h), its
- * weight multiplied into sp's beta and scatter. Grid media are delta-tracked with the
- * walk's hero lane (hm), homogeneous ones too when hm->homogeneous. With emit, the
- * emission of every emissive piece is gathered into out->le (volpath.c's estimators:
- * sigma_a Le Tr / pdf at a homogeneous scattering point, hetero_sample_distance's at every
- * tentative collision of a grid). False when the path ends (black weight or a stack of
- * boundaries); a miss is returned as MEDIA_MISS. */
-static bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, bool emit, int *medium, SubPath *sp,
-                       HeroMis *hm, Sampler *rng, const Wavelengths *wl, MediaHit *out, uint64_t *rays)
-{
-    ChainPdf c = {0, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f};
-    out->le = color_s(0.0f);
-    for (int step = 0; step < MEDIA_MAX_CROSSINGS; step++) {
-        SurfaceHit *sh = &out->sh;
-        ++*rays;
-        const bool hit = scene_intersect(s, &ray, sh);
-        if (*medium >= 0) {
-            const Medium *med = &s->media[*medium];
-            MediumCoeffs mc = medium_coeffs(med, wl);
-            float u_ch = sampler_1d(rng), u_t = sampler_1d(rng);
-            MediumSample ms;
-            if (medium_is_hetero(med)) { /* delta tracking with the walk's hero lane (volpath.c) */
-                if (hm->hero < 0) hm->hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
-                hetero_sample_distance(&med->u.het, &mc, ray.o, ray.d, hit ? sh->t : INFINITY, hm->hero, hm->r_u, u_t,
-                                       &ms);
-                /* ms.le is already divided by the lanes' mean ratio, the walk's so far
-                 * included (hetero_medium.h). */
-                if (emit && mc.emissive) out->le = color_madd(out->le, sp->beta, ms.le);
-                hm->r_u = color_mul(hm->r_u, ms.r);
-            } else if (hm->homogeneous) {
-                if (hm->hero < 0) hm->hero = (int)fminf(u_ch * (float)COLOR_LANES, (float)(COLOR_LANES - 1));
-                if (!hero_sample_homogeneous(&mc, hit ? sh->t : INFINITY, hm->hero, u_t, &ms)) return false;
-                hm->r_u = color_mul(hm->r_u, ms.r);
-            } else {
-                medium_sample_distance(&mc, hit ? sh->t : INFINITY, u_ch, u_t, &ms);
-            }
-            if (emit && mc.emissive && ms.scattered && !medium_is_hetero(med))
-                out->le = color_madd(out->le, hero_beta(hm, sp->beta), color_mul(ms.tr_pdf, color_mul(mc.sigma_a, mc.le)));
-            sp->beta = color_mul(sp->beta, ms.weight);
-            sp->scatter = color_mul(sp->scatter, ms.weight);
-            if (color_is_black(sp->scatter)) return false;
-            chain_piece(&c, s, &mc, *medium, ray.o, ray.d, ms.t, step == 0 && prev_med, ms.scattered);
-            if (ms.scattered) {
-                out->kind = MEDIA_VOLUME;
-                out->p = ray_at(&ray, ms.t);
-                out->dist = v3_length(v3_sub(out->p, x_prev));
-                chain_pdfs(&c, prev_med, true, &out->fwd, &out->rev);
-                return out->fwd > 0.0f;
-            }
-        } else {
-            chain_add(&c, 1.0f, 0.0f, 0.0f);
-        }
-        if (!hit) {
-            out->kind = MEDIA_MISS;
-            chain_pdfs(&c, prev_med, false, &out->fwd, &out->rev);
-            return true;
-        }
-        const MediumInterface *mi = scene_hit_medium_iface(s, sh);
-        if (mi && mi->boundary) { /* only a boundary: cross it, not a vertex */
-            *medium = v3_dot(ray.d, sh->ng) < 0.0f ? mi->inside : mi->outside;
-            ray = ray_make_at(scene_offset(s, sh->p, sh->ng, ray.d), ray.d, 0.0f, INFINITY, ray.time);
-            continue;
-        }
-        out->kind = MEDIA_SURFACE;
-        out->p = sh->p;
-        out->dist = v3_length(v3_sub(sh->p, x_prev));
-        chain_pdfs(&c, prev_med, false, &out->fwd, &out->rev);
-        return out->fwd > 0.0f;
-    }
-    return false;
-}
-
-/* mis_arrive (subpath_walk.h) at a vertex reached through media: the area (or volume)
- * density of this vertex gains the distance sampling density fwd, and the reverse
- * density of the previous vertex, which d_vc and d_vm carry, gains rev (UPBP's
- * extension of tech. rep. eqs. 31-33; cos_in = 1 at a volume vertex). */
-static inline void mis_arrive_media(SubPath *sp, float dist, float cos_in, float fwd, float rev)
-{
-    float inv = 1.0f / mis(cos_in * fwd);
-    sp->d_vcm *= mis(dist * dist) * inv;
-    sp->d_vc *= mis(rev) * inv;
-    sp->d_vm *= mis(rev) * inv;
-}
-
-/* mis(eta) of merging at a vertex (tech. rep. eq. 12's eta_vcm): a disk's at a surface,
- * a ball's in a medium; 0 without merging (BDPT). */
-static inline float eta_vm(const SubpathIteration *it, bool vol)
-{
-    return vol ? it->mis_vm_vol : it->mis_vm;
-}
-
-/* A phase-function scattering at a volume vertex: HG sampled exactly (weight 1), Russian
- * roulette, the MIS quantities (tech. rep. eqs. 34-36 with no cosine; HG is symmetric, so
- * the reverse density is the forward one) and the next ray, at *ray's time (that reached p). */
-static bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p, Vec3 wo, float g, int depth,
-                                int rr_depth, Sampler *rng, Ray *ray)
-{
-    Vec2 u = sampler_2d(rng);
-    float pdf;
-    Vec3 wi = phase_hg_sample(wo, g, u.x, u.y, &pdf);
-    if (!(pdf > 0.0f)) return false;
-    sp->specular_only = false;
-    if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
-    if (it) {
-        /* mis_scatter (subpath_walk.h) with cos_out = 1 and the eta of a volume vertex:
-         * merging here is the point-point 3D estimator. With two etas the merge
-         * strategies' densities no longer share one factor: d_vm keeps the sum of their
-         * ratios each times its own vertex's eta, divided by the surface eta throughout
-         * (so that subpath_scatter's recursion at surfaces holds unchanged: its "+ 1" is
-         * eta_surface / eta_surface), and media_merge divides by the merging vertex's eta. */
-        float gm = mis(1.0f / pdf);
-        sp->d_vc = gm * (sp->d_vc * mis(pdf) + sp->d_vcm + it->mis_vm_vol);
-        sp->d_vm = gm * (sp->d_vm * mis(pdf) + (sp->d_vcm + it->mis_vm_vol) * it->mis_vc);
-        sp->d_vcm = mis(1.0f / pdf);
-    }
-    *ray = ray_make_at(p, wi, 0.0f, INFINITY, ray->time);
-    return true;
-}
 
 /* ------------------------------------------------------------------ light subpaths */
 
@@ -420,6 +75,7 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
             float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, w_prev));
             if (!(cos_in > 0.0f)) return true;
             mis_arrive_media(&sp, bounces > 1 || es->finite ? h.dist : 1.0f, cos_in, h.fwd, h.rev);
+            if (it->rec) recorder_media_light_hit(it->rec, vol ? NULL : &h.sh, h.p, medium, ray.d, h.dist, h.fwd, h.rev);
         }
         const bool last = w->max_depth > 0 && bounces >= w->max_depth;
         if (vol) {
@@ -493,17 +149,19 @@ static void media_connect_camera(const MediaCamCtx *c, const MediaLightVertex *v
     int m = v->sh ? scene_medium_after(c->s, v->sh, cs.wi, v->medium) : v->medium;
     MediaSegment seg;
     if (!media_connect(c->s, v->p, v->ng, cs.p_lens, v3s(0.0f), false, m, c->time, wl, &seg, c->rays)) return;
-    float weight = 1.0f;
+    float weight = 1.0f, w_light = 0.0f, cam_pdf_a = 0.0f;
     if (c->it) {
         float cos_cam = v->sh ? fabsf(v3_dot(v->ng, cs.wi)) : 1.0f;
         float cos_theta = v3_dot(v3_neg(cs.wi), c->cam->forward);
-        float cam_pdf_a = cos_cam * seg.rev /
-                          (c->it->pixel_area * cos_theta * cos_theta * cos_theta * cs.dist * cs.dist);
-        float w_light = mis(cam_pdf_a / (float)c->it->light_paths) *
-                        (eta_vm(c->it, !v->sh) + v->sp.d_vcm + v->sp.d_vc * mis(pdf_rev));
+        cam_pdf_a = cos_cam * seg.rev / (c->it->pixel_area * cos_theta * cos_theta * cos_theta * cs.dist * cs.dist);
+        w_light = mis(cam_pdf_a / (float)c->it->light_paths) *
+                  (eta_vm(c->it, !v->sh) + v->sp.d_vcm + v->sp.d_vc * mis(pdf_rev));
         weight = 1.0f / (1.0f + w_light);
     }
     Color col = color_scale(color_mul(color_mul(v->sp.beta, f), seg.tr), weight * cs.we / cs.pdf_w);
+    if (c->it && c->it->rec)
+        recorder_media_splat(c->it->rec, cs.raster.x, cs.raster.y, v->bounces + 1, v->p, cs.p_lens, col, weight,
+                             w_light, cam_pdf_a, seg.fwd, seg.rev);
     film_splat(c->out, c->frame, cs.raster.x, cs.raster.y, wl ? spectrum_to_rgb(col, wl) : col);
 }
 
@@ -586,6 +244,7 @@ void media_subpath_trace_light(const Scene *s, const Camera *cam, const SubpathP
     EmissionSample es;
     subpath_emit(s, rng, wl, &es);
     es.time = time;
+    if (it->rec) recorder_light_start(it->rec, &es); /* explain: every path, in order */
     if (!(es.pdf_w > 0.0f) || color_is_black(es.beta)) return;
     int medium = medium_at_emitter(s, cam, es.p, es.w, time, rays);
     if (!es.finite && medium >= 0) return; /* as media_light_trace */
@@ -638,7 +297,7 @@ static inline int cam_vertex_medium(const Scene *s, const CamVertex *x, Vec3 d)
  * camera's BSDF / phase density of the light point gaining the pass probability of the
  * way there and the light's density of x the distance sampling of x. */
 static Color media_connect_light(const Scene *s, const SubpathIteration *it, const SubPath *sp, const CamVertex *x,
-                                 Sampler *rng, const Wavelengths *wl, uint64_t *rays)
+                                 Color beta, Sampler *rng, const Wavelengths *wl, uint64_t *rays)
 {
     float u_sel = sampler_1d(rng);
     Vec2 u = sampler_2d(rng);
@@ -649,20 +308,28 @@ static Color media_connect_light(const Scene *s, const SubpathIteration *it, con
     Color f = cam_vertex_f(x, ls.wi, &fwd, &rev, &cos_x);
     if (!(cos_x > 0.0f) || color_is_black(f)) return color_s(0.0f);
     MediaSegment seg;
-    if (!media_connect(s, x->p, x->ng, ls.p, ls.n, false, cam_vertex_medium(s, x, ls.wi), x->time, wl, &seg, rays))
+    if (!media_connect(s, x->p, x->ng, ls.p, ls.n, false, cam_vertex_medium(s, x, ls.wi), x->time, wl, &seg, rays)) {
+        /* explain: an occluded (or fully absorbed) connection is listed, adding 0 */
+        if (it->rec) recorder_media_strategy(it->rec, CST_EXPLAIN_NEE, 1, ls.light, ls.p, ls.n, beta, color_s(0.0f),
+                                             -1.0f, 0.0f, 0.0f, 0.0f, 0.0f, NULL, 0.0f, 0.0f);
         return color_s(0.0f);
+    }
     float w_light = ls.delta ? 0.0f : mis(fwd * seg.fwd / ls.direct_pdf);
     float w_camera = mis(ls.emit_pdf * cos_x * seg.rev / (ls.direct_pdf * ls.cos_light)) *
                      (eta_vm(it, !x->bsdf) + sp->d_vcm + sp->d_vc * mis(rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
     Color c = color_mul(color_mul(f, seg.tr), scene_light_li(s, &ls, wl));
-    return color_scale(c, weight / (ls.delta ? ls.pmf : ls.pdf_w));
+    c = color_scale(c, weight / (ls.delta ? ls.pmf : ls.pdf_w));
+    if (it->rec)
+        recorder_media_strategy(it->rec, CST_EXPLAIN_NEE, 1, ls.light, ls.p, ls.n, beta, c, weight, w_light, w_camera,
+                                ls.delta ? ls.pmf : ls.pdf_w, ls.direct_pdf, &seg.tr, seg.fwd, seg.rev);
+    return c;
 }
 
 /* A connection between camera vertex x and light vertex y (tech. rep. eqs. 40-41) through
  * media; y's BSDF rebuilt as subpath.c's light_bsdf does (not cached here). */
 static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, const SubPath *sp, const CamVertex *x,
-                                    const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
+                                    Color beta, const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
 {
     Vec3 to = v3_sub(y->p, x->p);
     float dist2 = v3_length2(to);
@@ -697,14 +364,26 @@ static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, 
     }
     if (color_is_black(fy)) return color_s(0.0f);
     MediaSegment seg;
-    if (!media_connect(s, x->p, x->ng, y->p, y->ng, y_vol, cam_vertex_medium(s, x, d), x->time, wl, &seg, rays))
+    if (!media_connect(s, x->p, x->ng, y->p, y->ng, y_vol, cam_vertex_medium(s, x, d), x->time, wl, &seg, rays)) {
+        if (it->rec) {
+            recorder_media_strategy(it->rec, CST_EXPLAIN_CONNECT, y->bounces + 1, -1, y->p, y->ng, beta,
+                                    color_s(0.0f), -1.0f, 0.0f, 0.0f, 0.0f, 0.0f, NULL, 0.0f, 0.0f);
+            recorder_light_dispersed(it->rec, y->dispersed);
+        }
         return color_s(0.0f);
+    }
     float x_fwd_a = x_fwd * cos_y * seg.fwd / dist2; /* the camera subpath reaching y */
     float y_fwd_a = y_fwd * cos_x * seg.rev / dist2; /* the light subpath reaching x */
     float w_light = mis(x_fwd_a) * (eta_vm(it, y_vol) + y->d_vcm + y->d_vc * mis(y_rev));
     float w_camera = mis(y_fwd_a) * (eta_vm(it, !x->bsdf) + sp->d_vcm + sp->d_vc * mis(x_rev));
     float weight = 1.0f / (w_light + 1.0f + w_camera);
-    return color_scale(color_mul(color_mul(color_mul(fx, fy), y->beta), seg.tr), weight / dist2);
+    Color c = color_scale(color_mul(color_mul(color_mul(fx, fy), y->beta), seg.tr), weight / dist2);
+    if (it->rec) {
+        recorder_media_strategy(it->rec, CST_EXPLAIN_CONNECT, y->bounces + 1, -1, y->p, y->ng, beta, c, weight,
+                                w_light, w_camera, x_fwd, x_fwd_a, &seg.tr, seg.fwd, seg.rev);
+        recorder_light_dispersed(it->rec, y->dispersed);
+    }
+    return c;
 }
 
 /* VCM's merging at camera vertex x (vcm.c's merge, over the grid cells merge->plan and
@@ -716,7 +395,8 @@ static Color media_connect_vertices(const Scene *s, const SubpathIteration *it, 
  * the merged path scatters once there. The MIS weights are vcm.c's with the eta of x's
  * kind. Merges with dispersed light vertices go to *hero (as vcm.c's). */
 static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathIteration *it, const MergeQuery *q,
-                         const SubPath *sp, const CamVertex *x, int bounces, const Wavelengths *wl, Color *hero)
+                         const SubPath *sp, const CamVertex *x, Color beta, int bounces, const Wavelengths *wl,
+                         Color *hero)
 {
     const bool vol = x->bsdf == NULL;
     const float r2 = it->radius * it->radius;
@@ -748,6 +428,9 @@ static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathI
             float weight = 1.0f / (w_light + 1.0f + w_camera);
             if (y->dispersed & 1) acc_hero = color_add(acc_hero, color_scale(color_mul(f, y->beta), weight));
             else acc = color_add(acc, color_scale(color_mul(f, y->beta), weight));
+            if (it->rec)
+                recorder_merge(it->rec, y->p, y->bounces, beta, color_scale(color_mul(f, y->beta), weight),
+                               it->vm_norm, weight, w_light, w_camera, y->dispersed & 1);
         }
     Color norm = color_s(it->vm_norm);
     if (vol) {
@@ -761,8 +444,38 @@ static Color media_merge(const Scene *s, const SubpathParams *vp, const SubpathI
             norm.c[c] = ss > 0.0f ? it->vm_norm_vol / ss : 0.0f;
         }
     }
+    if (it->rec && vol) recorder_merge_norm(it->rec, norm);
     *hero = color_mul(acc_hero, norm);
     return color_mul(acc, norm);
+}
+
+/* The s = 0 strategy of camera vertex t: the environment after a miss (the pass
+ * probabilities of the way out joined to the camera's density: no distance, no cosine) or
+ * an area emitter hit, as in subpath.c; le times its MIS weight (black: nothing to add).
+ * beta: the vertex's throughput, for explain's recorder. */
+static Color media_emitted(const Scene *s, const SubpathIteration *it, SubPath *sp, const MediaHit *h, Vec3 dir, int t,
+                           Color beta, const Wavelengths *wl)
+{
+    const bool miss = h->kind == MEDIA_MISS;
+    Color le = miss ? scene_env_radiance(s, dir, wl) : scene_emission(s, &h->sh, v3_neg(dir), wl);
+    if (color_is_black(le)) return le;
+    float w = 1.0f;
+    if (t > 1 && miss) {
+        mis_arrive_media(sp, 1.0f, 1.0f, h->fwd, h->rev);
+        float direct = light_env_pdf(&s->emitter_sampler, dir);
+        float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
+        w = 1.0f / (1.0f + mis(direct) * sp->d_vcm + mis(emission) * sp->d_vc);
+    } else if (t > 1) {
+        const Emitter *e = &s->emitter_sampler.light[h->sh.emitter].u.area;
+        float pdf_a = emitter_pdf_a(&s->emitter_sampler, h->sh.emitter);
+        float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h->sh.ng, v3_neg(dir));
+        w = 1.0f / (1.0f + mis(pdf_a) * sp->d_vcm + mis(emission_pdf) * sp->d_vc);
+    }
+    Color c = color_scale(le, w);
+    if (it->rec)
+        recorder_strategy(it->rec, miss ? CST_EXPLAIN_ESCAPE : CST_EXPLAIN_EMISSION, 0, miss ? -1 : h->sh.emitter,
+                          miss ? dir : h->sh.p, beta, c, w, 1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
+    return c;
 }
 
 Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const SubpathParams *vp,
@@ -793,6 +506,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
      * their own). Each subpath is then an estimator for the mixture over hero lanes, a
      * proper density, and the two are independent: their product stays unbiased. */
     HeroMis hm = {-1, color_s(1.0f), false};
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d, ray.time, wl);
     for (int t = 1;; t++) {
         MediaHit h;
         /* Emissive media: their emission is gathered by this walk alone, with MIS weight
@@ -807,24 +521,18 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         if (emit) {
             if (cam_dispersed) H = color_add(H, h.le);
             else L = color_add(L, h.le);
+            if (it->rec && !color_is_black(h.le)) recorder_media_emission(it->rec, t, h.le);
         }
         if (!go) break;
         const Color beta = hero_beta(&hm, sp.beta); /* the throughput of this vertex's contributions */
+        if (it->rec && h.kind != MEDIA_MISS)
+            recorder_media_flight(it->rec, h.p, medium, h.kind == MEDIA_VOLUME, h.dist, h.fwd, h.rev, beta);
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
-            Color le = scene_env_radiance(s, ray.d, wl);
-            if (!color_is_black(le)) {
-                float w = 1.0f;
-                if (t > 1) {
-                    /* The environment as in subpath.c, the pass probabilities of the way
-                     * out joined to the camera's density (no distance, no cosine). */
-                    mis_arrive_media(&sp, 1.0f, 1.0f, h.fwd, h.rev);
-                    float direct = light_env_pdf(&s->emitter_sampler, ray.d);
-                    float emission = direct / (CST_PI * s->emitter_sampler.radius * s->emitter_sampler.radius);
-                    w = 1.0f / (1.0f + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
-                }
-                if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
-                else L = color_madd(L, beta, color_scale(le, w));
+            Color c = media_emitted(s, it, &sp, &h, ray.d, t, beta, wl);
+            if (!color_is_black(c)) {
+                if (cam_dispersed) H = color_madd(H, beta, c);
+                else L = color_madd(L, beta, c);
             }
             break;
         }
@@ -832,19 +540,16 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, wo));
         if (!(cos_in > 0.0f)) break;
         mis_arrive_media(&sp, h.dist, cos_in, h.fwd, h.rev);
+        if (it->rec) {
+            if (vol) recorder_medium_vertex(it->rec, h.p, medium, t);
+            else recorder_vertex(it->rec, s, &h.sh, t, wl);
+        }
 
         if (!vol && h.sh.emitter >= 0) { /* s = 0, as subpath.c */
-            const Emitter *e = &s->emitter_sampler.light[h.sh.emitter].u.area;
-            Color le = scene_emission(s, &h.sh, wo, wl);
-            if (!color_is_black(le)) {
-                float w = 1.0f;
-                if (t > 1) {
-                    float pdf_a = emitter_pdf_a(&s->emitter_sampler, h.sh.emitter);
-                    float emission_pdf = pdf_a * emitter_emission_pdf_w(e, h.sh.ng, wo);
-                    w = 1.0f / (1.0f + mis(pdf_a) * sp.d_vcm + mis(emission_pdf) * sp.d_vc);
-                }
-                if (cam_dispersed) H = color_madd(H, beta, color_scale(le, w));
-                else L = color_madd(L, beta, color_scale(le, w));
+            Color c = media_emitted(s, it, &sp, &h, ray.d, t, beta, wl);
+            if (!color_is_black(c)) {
+                if (cam_dispersed) H = color_madd(H, beta, c);
+                else L = color_madd(L, beta, c);
             }
         }
         if (vp->max_depth > 0 && t - 1 >= vp->max_depth) break;
@@ -857,6 +562,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             if (wl) {
                 scene_bsdf_disperse(s, &h.sh, &wc, &bsdf);
                 cam_dispersed = wavelengths_secondary_terminated(&wc);
+                if (it->rec) recorder_cam_dispersed(it->rec, cam_dispersed);
             } else {
                 scene_bsdf(s, &h.sh, wl, &bsdf);
             }
@@ -868,7 +574,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             MergeQuery mq;
             if (merging) merge->plan(it, h.p, &mq);
             if (has_lights) {
-                Color nee = media_connect_light(s, it, &sp, &x, rng, wl, rays);
+                Color nee = media_connect_light(s, it, &sp, &x, beta, rng, wl, rays);
                 if (cam_dispersed) H = color_madd(H, beta, nee);
                 else L = color_madd(L, beta, nee);
             }
@@ -876,14 +582,14 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             Color c = color_s(0.0f), ch = color_s(0.0f);
             for (int j = 0; j < nlv; j++) {
                 if (vp->max_depth > 0 && t + lv[j].bounces > vp->max_depth) break;
-                Color cj = media_connect_vertices(s, it, &sp, &x, &lv[j], wl, rays);
+                Color cj = media_connect_vertices(s, it, &sp, &x, beta, &lv[j], wl, rays);
                 if (cam_dispersed || lv[j].dispersed) ch = color_add(ch, cj);
                 else c = color_add(c, cj);
             }
             L = color_madd(L, beta, c);
             if (wl) H = color_madd(H, beta, ch);
             if (merging) { /* as subpath_trace_camera */
-                Color mh = color_s(0.0f), m = media_merge(s, vp, it, &mq, &sp, &x, t, wl, &mh);
+                Color mh = color_s(0.0f), m = media_merge(s, vp, it, &mq, &sp, &x, beta, t, wl, &mh);
                 if (cam_dispersed) m = color_add(m, mh), mh = color_s(0.0f);
                 if (cam_dispersed) H = color_madd(H, beta, m);
                 else L = color_madd(L, beta, m);
@@ -892,6 +598,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
         }
         if (vol) {
             if (!media_scatter_phase(&sp, it, h.p, wo, x.g, t, vp->rr_depth, rng, &ray)) break;
+            if (it->rec) recorder_phase(it->rec, ray.d, phase_hg_eval(wo, ray.d, x.g), sp.beta);
             prev_med = true;
         } else {
             if (!subpath_scatter(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
@@ -1101,14 +808,14 @@ Color media_subpath_connect_light(const Scene *s, const SubpathIteration *it, co
 {
     if (s->emitter_sampler.lights == 0) return color_s(0.0f);
     CamVertex cx = cam_vertex_of(x);
-    return color_mul(x->sp.beta, media_connect_light(s, it, &x->sp, &cx, rng, wl, rays));
+    return color_mul(x->sp.beta, media_connect_light(s, it, &x->sp, &cx, x->sp.beta, rng, wl, rays));
 }
 
 Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, const MediaCameraVertex *x,
                                  const SubpathVertex *y, const Wavelengths *wl, uint64_t *rays)
 {
     CamVertex cx = cam_vertex_of(x);
-    return color_mul(x->sp.beta, media_connect_vertices(s, it, &x->sp, &cx, y, wl, rays));
+    return color_mul(x->sp.beta, media_connect_vertices(s, it, &x->sp, &cx, x->sp.beta, y, wl, rays));
 }
 
 /* ------------------------------------------------------------------ SPPM (sppm.c) */

@@ -48,17 +48,7 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_LIGHT:
     case CST_INTEGRATOR_PHOTON: return CST_OK; /* (integrator_prepare refuses media for these) */
     case CST_INTEGRATOR_BDPT:
-    case CST_INTEGRATOR_VCM:
-        /* subpath_media.c's walks and connections carry no recorder hooks (yet). */
-        if (scene->num_media | scene->num_medium_ifaces | scene->num_subsurface)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow bdpt's paths through participating "
-                            "media (or subsurface materials) yet; expected a scene without them");
-        /* explain_mis.c checks the MIS weights with the camera where it stands, not where a
-         * path's time places it. */
-        if (scene->camera_placed && scene->camera_motion.moving)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow %s with a moving camera yet; "
-                            "expected a static camera", cst_integrator_name(st->integrator));
-        return CST_OK;
+    case CST_INTEGRATOR_VCM: return CST_OK; /* subpath.c and subpath_media.c are recorded */
     default: break;
     }
     return cst_fail(err, CST_ERR_UNSUPPORTED, "explain supports: %s; not %s", cst_explain_integrators(),
@@ -94,7 +84,7 @@ typedef struct ReplayGroup {
 
 /* The group's sums added as subpath_trace_camera adds them (VCM: after merge()'s
  * normalisation, the dispersed light vertices' apart). */
-static void replay_flush(const Integrator *it, const ReplayGroup *g, Color *L, Color *H)
+static void replay_flush(const Integrator *it, const Recorder *r, const ReplayGroup *g, Color *L, Color *H)
 {
     const bool spectral = it->spectral;
     if (g->kind == CST_EXPLAIN_CONNECT) {
@@ -102,8 +92,10 @@ static void replay_flush(const Integrator *it, const ReplayGroup *g, Color *L, C
         if (spectral) *H = color_madd(*H, g->beta, g->ch);
         return;
     }
-    const float norm = it->light.vcm_it.vm_norm;
-    Color m = color_scale(g->c, norm), mh = color_scale(g->ch, norm);
+    /* A volume vertex's merges: media_merge's per-lane 1 / ((4/3) pi r^3 N sigma_s). */
+    const bool vol = g->depth >= 0 && g->depth <= RECORDER_PATH_MAX + 1 && r->merge_vol[g->depth];
+    const Color norm = vol ? r->merge_norm[g->depth] : color_s(it->light.vcm_it.vm_norm);
+    Color m = color_mul(g->c, norm), mh = color_mul(g->ch, norm);
     if (spectral && g->cam_dispersed) {
         m = color_add(m, mh);
         mh = color_s(0.0f);
@@ -163,7 +155,7 @@ static Color replay(const Integrator *it, const Recorder *r, int x, int y, int s
         const bool group = e && (e->kind == CST_EXPLAIN_CONNECT || e->kind == CST_EXPLAIN_MERGE) &&
                            (e->flags & CST_EXPLAIN_ADDED);
         if (g.depth >= 0 && (!group || e->depth != g.depth || (int)e->kind != g.kind)) {
-            replay_flush(it, &g, &L, &H);
+            replay_flush(it, r, &g, &L, &H);
             g.depth = -1;
         }
         if (!e || !(e->flags & CST_EXPLAIN_ADDED) || e->kind == CST_EXPLAIN_SPLAT) continue;

@@ -25,6 +25,10 @@ static bool put_light(BdptMisPath *x, const RecorderPaths *lp, int nl)
         x->delta[b] = lp->light_delta[b - 1];
         x->len[b - 1] = lp->light[b - 1].t;
         x->dir[b - 1] = lp->light_dir[b - 1];
+        /* through media: the light walk's flight made x_b from x_{b-1} */
+        x->medium[b] = lp->light_medium[b - 1];
+        x->chain_fwd[b - 1] = lp->light_fwd[b - 1];
+        x->chain_rev[b - 1] = lp->light_rev[b - 1];
     }
     return true;
 }
@@ -39,6 +43,10 @@ static bool put_camera(BdptMisPath *x, const RecorderPaths *rp, int tc)
         x->delta[x->k - d] = rp->cam_delta[d - 1];
         x->len[x->k - d] = rp->cam[d - 1].t;
         x->dir[x->k - d] = v3_neg(rp->cam_dir[d - 1]);
+        /* through media: the camera walk's flight made x_{k-d} from x_{k-d+1} */
+        x->medium[x->k - d] = rp->cam_medium[d - 1];
+        x->chain_fwd[x->k - d] = rp->cam_rev[d - 1];
+        x->chain_rev[x->k - d] = rp->cam_fwd[d - 1];
     }
     x->lens = rp->camera_o;
     return true;
@@ -89,6 +97,11 @@ static bool rebuild(const Integrator *it, int iteration, const Recorder *r, Reco
 {
     const RecorderPaths *rp = &r->paths;
     memset(x, 0, sizeof *x);
+    x->media = it->scene->num_media | it->scene->num_medium_ifaces;
+    for (int i = 0; i < BDPT_MIS_MAX; i++) {
+        x->medium[i] = -1;
+        x->chain_fwd[i] = x->chain_rev[i] = 1.0f;
+    }
     *merge = e->kind == CST_EXPLAIN_MERGE;
     const int tc = e->t - 1; /* camera hits */
     const int s = e->s;
@@ -108,6 +121,8 @@ static bool rebuild(const Integrator *it, int iteration, const Recorder *r, Reco
         if (e->kind == CST_EXPLAIN_SPLAT) {
             x->lens = lp->light_lens[b - 1];
             x->len[b] = 0.0f; /* the connection to the lens */
+            x->chain_fwd[b] = e->chain_fwd; /* media_connect from the light vertex */
+            x->chain_rev[b] = e->chain_rev;
         } else {
             if (tc < 1 || !put_camera(x, rp, tc)) return false;
             x->merged = b;
@@ -121,7 +136,8 @@ static bool rebuild(const Integrator *it, int iteration, const Recorder *r, Reco
     x->k = s + e->t - 1;
     if (x->k >= BDPT_MIS_MAX || x->k < 1) return false;
     if (s == 0) {
-        if (tc < 1 || tc > rp->ncam || tc > RECORDER_PATH_MAX) return false;
+        /* (media's emission, light -1, has no other strategy: weight 1, nothing to check) */
+        if (tc < 1 || tc > rp->ncam || tc > RECORDER_PATH_MAX || e->light < 0) return false;
         const SurfaceHit *h = &rp->cam[tc - 1];
         x->emitter = h->emitter;
         x->p0 = h->p;
@@ -138,6 +154,11 @@ static bool rebuild(const Integrator *it, int iteration, const Recorder *r, Reco
         x->delta[s - 1] = false;
         if (s < x->k) x->delta[s] = false;
         x->len[s - 1] = 0.0f;
+        /* through media: media_connect from the camera vertex x_s to x_{s-1} */
+        if (x->media && s < x->k) {
+            x->chain_fwd[s - 1] = e->chain_rev;
+            x->chain_rev[s - 1] = e->chain_fwd;
+        }
     }
     *strategy = s;
     return true;
@@ -158,6 +179,7 @@ bool explain_mis_check(const Integrator *it, int iteration, Recorder *r, CstExpl
         const bool splat = e->kind == CST_EXPLAIN_SPLAT;
         if (!(e->flags & CST_EXPLAIN_ADDED) && !splat) continue;
         if (e->s < 0 || e->t < 1 || (e->flags & CST_EXPLAIN_DELTA)) continue;
+        if (e->mis_weight < 0.0f) continue; /* blocked before a weight (subpath_media.c) */
         if (e->kind != CST_EXPLAIN_EMISSION && e->kind != CST_EXPLAIN_NEE && e->kind != CST_EXPLAIN_CONNECT &&
             e->kind != CST_EXPLAIN_MERGE && !splat)
             continue;
@@ -165,9 +187,20 @@ bool explain_mis_check(const Integrator *it, int iteration, Recorder *r, CstExpl
         bool merge;
         if (!rebuild(it, iteration, r, t, e, x, &strategy, &merge, &ok)) continue;
         x->eta = eta;
+        /* UPBP's ball: eta = (4/3) pi r^3 N_light at a medium vertex. */
+        x->eta_vol = eta > 0.0 ? eta * (4.0 / 3.0) * (double)vi->radius : 0.0;
+        /* A moving camera stood where the path's time placed it (integrator.c's
+         * camera_placed): the camera subpath's time, or for a splat its light subpath's,
+         * whose t = 1 connection reached the lens there. */
+        const Camera *cam = &it->camera;
+        Camera placed;
+        if (cam->moving) {
+            placed = camera_at(cam, splat ? t->paths.start.time : r->paths.camera_time);
+            cam = &placed;
+        }
         double w, sum;
         int n;
-        if (!bdpt_mis_weight(it->scene, &it->camera, vi, x, strategy, merge, &w, &sum, &n)) continue;
+        if (!bdpt_mis_weight(it->scene, cam, vi, x, strategy, merge, &w, &sum, &n)) continue;
         e->mis_explicit = (float)w;
         e->mis_sum = (float)sum;
         e->mis_strategies = n;

@@ -4,7 +4,9 @@
  * one by one) is what a one-sample render of the pixel accumulates; the strategies' MIS
  * weights lie in [0, 1] and BDPT's and VCM's (connections, merges, splats) equal the ones
  * computed from every strategy's pdfs of the same path, which sum to 1; paths through
- * subsurface materials are recorded (the BSSRDF's exit); whitted's ray tree and the light tracer's splats sum to the film's value;
+ * subsurface materials are recorded (the BSSRDF's exit); BDPT and VCM through media (a fog
+ * box: homogeneous, grid, emitting grid), subsurface walks and a moving camera likewise, their
+ * weights checked explicitly too; whitted's ray tree and the light tracer's splats sum to the film's value;
  * integrators explain cannot follow and bad pixels are refused. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -16,6 +18,8 @@
 #include <cmocka.h>
 
 #include "caustic/caustic.h"
+#include "core/rng.h"
+#include "render/box_scene.h"
 
 enum { W = 24, H = 20 };
 
@@ -31,6 +35,9 @@ static int photons_gathered[2]; /* photon: photons listed by the caustic and the
 /* The pixels explain_all explains (NULL: its own five). */
 static const int (*pixels)[2];
 static size_t num_pixels;
+static int subsurface_walk; /* subsurface_walk of the settings */
+static int medium_vertices, volume_merges, media_flights; /* BDPT/VCM through media: what was recorded */
+static int volume_merges_checked, media_emissions; /* of the volume merges, checked explicitly; media's Le */
 
 static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
 {
@@ -50,6 +57,7 @@ static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filte
     st->sampler = CST_SAMPLER_INDEPENDENT;
     if (radius > 0.0f) st->photon_radius = radius;
     st->photons = 20000; /* photon: a small map is built for every explained sample */
+    st->subsurface_walk = subsurface_walk;
 }
 
 /* The film value of sample `sample` of pixel (x, y) alone: a one-pixel crop rendered
@@ -108,8 +116,17 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 fail_msg("%s pixel %d,%d sample %d: MIS weight differs from the explicit one by %.3g (rel), sum "
                          "off 1 by %.3g", cst_integrator_name(integ), x, y, sample, ex->mis_max_error,
                          ex->mis_max_sum_error);
+            bool in_medium = false; /* the camera vertex the events belong to is a medium vertex */
             for (int i = 0; i < ex->num_events; i++) {
                 const CstExplainEvent *e = &ex->events[i];
+                if (e->kind == CST_EXPLAIN_VERTEX) {
+                    in_medium = e->material_type && !strcmp(e->material_type, "medium");
+                    medium_vertices += in_medium;
+                }
+                if (e->kind == CST_EXPLAIN_MERGE && in_medium) volume_merges++;
+                if (e->kind == CST_EXPLAIN_MERGE && in_medium && e->mis_strategies > 0) volume_merges_checked++;
+                if (e->kind == CST_EXPLAIN_EMISSION && e->light < 0 && e->contribution[0] != 0.0f) media_emissions++;
+                if (e->kind == CST_EXPLAIN_DISTANCE) media_flights++;
                 if (e->flags & CST_EXPLAIN_ADDED) added++;
                 if ((e->flags & CST_EXPLAIN_ADDED) && (e->flags & (CST_EXPLAIN_HERO | CST_EXPLAIN_LIGHT_DISPERSED)) &&
                     e->contribution[0] != 0.0f)
@@ -400,6 +417,151 @@ static void test_strata(void **state)
     cst_scene_destroy(s);
 }
 
+/* A grid medium of random densities (uniform in [0, 3) on 8^3 samples over the box [lo, hi],
+ * as test_media_bidir.c's). */
+static int add_grid(Scene *s, Vec3 lo, Vec3 hi, Color le)
+{
+    CstError err;
+    enum { N = 8 };
+    static float density[N * N * N];
+    Medium m = {.type = MEDIUM_GRID, .g = 0.5f};
+    HeteroMedium *hm = &m.u.het;
+    hm->sigma_a = color_rgb(0.3f, 0.35f, 0.4f);
+    hm->sigma_s = color_rgb(1.0f, 0.7f, 0.35f);
+    hm->le = le;
+    hm->le_scale_1 = 1.0f;
+    hm->medium_from_world = transform_identity();
+    hm->p0 = lo;
+    hm->p1 = hi;
+    hm->n[0] = hm->n[1] = hm->n[2] = N;
+    hm->density = density;
+    Pcg32 r;
+    pcg32_seed_sample(&r, 77, 0, 0);
+    for (int i = 0; i < N * N * N; i++) density[i] = 3.0f * pcg32_float(&r);
+    int med;
+    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
+    return med;
+}
+
+/* test_media_bidir.c's fog box, small: the open box (box_scene.h), a boundary ball of fog
+ * (homogeneous, or the random grid, emitting with emissive) and a diffuse sphere half
+ * inside it. */
+static CstScene *fog_box(bool grid, bool emissive)
+{
+    CstError err;
+    Scene *s = scene_create();
+    int wall, lightm;
+    open_box_add(s, &wall, &lightm);
+    int med;
+    if (grid) {
+        med = add_grid(s, v3(-0.8f, -0.9f, -0.6f), v3(0.4f, 0.3f, 0.6f),
+                       emissive ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f));
+    } else {
+        Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.5f};
+        m.u.homog.sigma_a = color_s(0.2f);
+        m.u.homog.sigma_s = color_rgb(1.5f, 1.0f, 0.5f);
+        assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
+    }
+    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
+    assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
+    assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
+    assert_int_equal(scene_add_sphere(s, v3(0.45f, -0.6f, 0.2f), 0.35f, wall, NULL, &err), CST_OK);
+    CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    return s;
+}
+
+/* BDPT and VCM through media (subpath_media.c): the fog box with homogeneous fog, with a
+ * random grid (delta tracking on the walks, ratio tracking on the connections, majorant-
+ * based densities) and with that grid emitting (gathered by the camera walk, weight 1), in
+ * RGB and spectral mode. Medium vertices, their free flights and VCM's merges at volume
+ * vertices (UPBP's point-point 3D, normalised per lane) are recorded; the sums are the
+ * camera sample and the film's value bit for bit, and every weight (volume merges, splats
+ * and connections through media included) equals the one computed from all strategies'
+ * densities of the path, phase functions and distance sampling included (explain_all). */
+static void test_bidir_media(void **state)
+{
+    (void)state;
+    static const int PIX[][2] = {{12, 10}, {10, 12}, {8, 9}, {14, 13}, {3, 17}};
+    pixels = PIX;
+    num_pixels = sizeof PIX / sizeof PIX[0];
+    medium_vertices = volume_merges = volume_merges_checked = media_flights = media_emissions = 0;
+    merges = merges_checked = splats_checked = mis_checked = 0;
+    mis_error = 0.0;
+    for (int kind = 0; kind < 3; kind++) { /* homogeneous, grid, emitting grid */
+        CstScene *s = fog_box(kind > 0, kind == 2);
+        assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, kind == 2 ? CST_COLOR_SPECTRAL : CST_COLOR_RGB) > 0);
+        radius = 0.15f; /* the box is 2 units wide */
+        assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_TENT, kind == 1 ? CST_COLOR_SPECTRAL : CST_COLOR_RGB) > 0);
+        radius = 0.0f;
+        cst_scene_destroy(s);
+    }
+    pixels = NULL;
+    print_message("media: %d medium vertices, %d flights, %d emissions, %d merges (%d at volume vertices, %d of them "
+                  "checked) recorded; %d strategies checked (%d splats), largest relative difference %.3g\n",
+                  medium_vertices, media_flights, media_emissions, merges, volume_merges, volume_merges_checked,
+                  mis_checked, splats_checked, mis_error);
+    assert_true(medium_vertices > 0 && media_flights > 0 && media_emissions > 0);
+    assert_true(volume_merges > 0 && volume_merges_checked == volume_merges && merges_checked == merges);
+    assert_true(mis_checked >= 100 && splats_checked >= 20);
+}
+
+/* Subsurface materials under --subsurface walk (sss_walk.h: their media walked by
+ * subpath_media.c): BDPT and VCM on the subsurface sphere. */
+static void test_bidir_subsurface(void **state)
+{
+    (void)state;
+    static const char *const SCENE = CST_SOURCE_DIR "/tests/render/subsurface/sss-walk.pbrt";
+    static const int PIX[][2] = {{12, 10}, {11, 11}, {13, 9}, {12, 14}};
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_pbrt(SCENE, NULL, &s, &err) != CST_OK) fail_msg("%s: %s", SCENE, err.msg);
+    pixels = PIX;
+    num_pixels = sizeof PIX / sizeof PIX[0];
+    subsurface_walk = 1;
+    medium_vertices = volume_merges = volume_merges_checked = merges = merges_checked = mis_checked = 0;
+    mis_error = 0.0;
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    radius = 0.1f;
+    assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    radius = 0.0f;
+    print_message("subsurface walk: %d medium vertices, %d merges (%d at volume vertices) recorded; %d strategies "
+                  "checked, largest relative difference %.3g\n", medium_vertices, merges, volume_merges, mis_checked,
+                  mis_error);
+    assert_true(medium_vertices > 0 && mis_checked >= 20 && merges_checked == merges);
+    subsurface_walk = 0;
+    pixels = NULL;
+    cst_scene_destroy(s);
+}
+
+/* A moving camera (cst_scene_set_camera_motion, shutter [0.2, 0.7]): each path's camera
+ * placed at its time, for the sums and for the explicit MIS weights (explain_mis.c). Left
+ * unplaced, the explicit weights differ (measured: see the report of issue 30's helper). */
+static void test_bidir_moving_camera(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    static const float c0[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    /* turned 10 degrees about the vertical and moved: the view axis changes with time, so
+     * the camera's density of a direction (camera_pdf_w) depends on where the path put it */
+    static const float c1[12] = {0.984808f, 0, 0.173648f, 60, 0, 1, 0, 25, -0.173648f, 0, 0.984808f, -40};
+    assert_int_equal(cst_scene_set_camera_motion(s, c0, c1, &err), CST_OK);
+    assert_int_equal(cst_scene_set_shutter(s, 0.2f, 0.7f, &err), CST_OK);
+    mis_checked = splats_checked = merges = merges_checked = 0;
+    mis_error = 0.0;
+    assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    radius = 20.0f; /* the box is 555 units wide */
+    assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_TENT, CST_COLOR_RGB) > 0);
+    radius = 0.0f;
+    print_message("moving camera: %d strategies checked (%d splats, %d of %d merges), largest relative difference "
+                  "%.3g\n", mis_checked, splats_checked, merges_checked, merges, mis_error);
+    assert_true(mis_checked >= 50 && splats_checked >= 10 && merges_checked == merges && merges > 0);
+    cst_scene_destroy(s);
+}
+
 static void test_refused(void **state)
 {
     (void)state;
@@ -434,6 +596,9 @@ int main(void)
         cmocka_unit_test(test_whitted_light),
         cmocka_unit_test(test_vcm),
         cmocka_unit_test(test_bidir_spectral),
+        cmocka_unit_test(test_bidir_media),
+        cmocka_unit_test(test_bidir_subsurface),
+        cmocka_unit_test(test_bidir_moving_camera),
         cmocka_unit_test(test_photon),
         cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),
