@@ -109,7 +109,7 @@ static const Camera *camera_placed(const Camera *cam, float time, Camera *buf)
 /* One camera sample's radiance, by the integrator's estimator (spectral mode: at wl's
  * wavelengths; wl NULL in RGB mode). */
 static inline Color camera_li(Integrator *it, const Camera *cam, IntegratorWorker *w, int pixel, Ray ray,
-                              Sampler *smp, Wavelengths *wl)
+                              Sampler *smp, Wavelengths *wl, int photon_set)
 {
     Sampler cont;
     switch (it->kind) {
@@ -118,7 +118,7 @@ static inline Color camera_li(Integrator *it, const Camera *cam, IntegratorWorke
     case INTEGRATOR_PHOTON:
         /* Photon mapping and BDPT/VCM continue from the sample's PCG32 stream. */
         cont = sampler_continue_sample(smp);
-        return photon_li(it->scene, &it->photon, ray, &cont, &w->rays);
+        return photon_li(it->scene, &it->photon, photon_set, ray, &cont, &w->rays);
     case INTEGRATOR_BIDIR:
         cont = sampler_continue_sample(smp);
         if (it->light.vcm_params.merge)
@@ -181,12 +181,17 @@ static void camera_tile(void *ctx, int tile, int worker)
                 /* Spectral mode: the path's wavelengths, from the dimension after the
                  * film and lens ones (BDPT/VCM: shared with light paths, above). */
                 Wavelengths wl, *wlp = NULL;
-                if (it->spectral) {
+                int photon_set = 0; /* photon: the photon set whose wavelengths the path takes */
+                if (it->spectral && it->kind == INTEGRATOR_PHOTON) {
+                    photon_set = photon_maps_pick(&it->photon, sampler_1d(&smp));
+                    wl = it->photon.sets[photon_set].wl;
+                    wlp = &wl;
+                } else if (it->spectral) {
                     wl = it->kind == INTEGRATOR_BIDIR ? bidir_wavelengths(it, (uint64_t)pixel, s)
                                                       : wavelengths_sample(sampler_1d(&smp));
                     wlp = &wl;
                 }
-                Color L = camera_li(it, cam, w, pixel, ray, &smp, wlp);
+                Color L = camera_li(it, cam, w, pixel, ray, &smp, wlp, photon_set);
                 /* The film's sensor: the path's four spectral values to linear sRGB. */
                 if (wlp) L = spectrum_to_rgb(L, wlp);
                 if (!color_is_finite(L)) {
@@ -762,9 +767,6 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
     /* max_component bounds what the written image shows (after 2^exposure, which holds the
      * pbrt sensor's iso / 100), as pbrt-v4 bounds its sensor values after that ratio. */
     it->clamp = st->max_component > 0.0 ? (float)(st->max_component / exp2(st->exposure)) : 0.0f;
-    if (it->spectral && it->kind == INTEGRATOR_PHOTON)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "the %s integrator renders in RGB mode only (not yet spectral): "
-                        "use --rgb or another integrator", cst_integrator_name(st->integrator));
     CstStatus ss = prepare_subsurface(it, &scene, st, err);
     if (ss != CST_OK) return ss;
     /* pssmlt's target is path_li's estimate, media included (volpath_li reads the same
@@ -777,11 +779,12 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
      * media (sppm's camera walk alone would miss the emission that reaches its visible
      * points through a scattering), so they refuse it. */
     const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
-                             st->integrator == CST_INTEGRATOR_MMLT || it->kind == INTEGRATOR_SPPM;
+                             st->integrator == CST_INTEGRATOR_MMLT || it->kind == INTEGRATOR_SPPM ||
+                             it->kind == INTEGRATOR_PHOTON; /* photon: a volume photon map (photon.c) */
     if ((scene->num_media | scene->num_medium_ifaces) && it->kind != INTEGRATOR_PATH &&
         (it->kind != INTEGRATOR_PSSMLT || st->integrator == CST_INTEGRATOR_MMLT) && !bidir_media)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
-                        "use path, path-nee, path-bsdf, light, bdpt, vcm, pssmlt, mmlt or sppm",
+                        "use path, path-nee, path-bsdf, light, photon, bdpt, vcm, pssmlt, mmlt or sppm",
                         cst_integrator_name(st->integrator));
     if (bidir_media && it->kind != INTEGRATOR_BIDIR && st->integrator != CST_INTEGRATOR_MMLT) {
         for (int i = 0; i < scene->num_media; i++) {
@@ -839,7 +842,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "photon gather", err) : CST_OK;
         if (rs != CST_OK) return rs;
         PhotonParams pp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->seed,
-                           progress, progress_user};
+                           progress, progress_user, it->spectral, false};
         return photon_maps_build_cached(st->photon_cache, scene, &it->camera, &pp, &it->photon,
                                         &it->photon_borrowed, rays, err);
     }

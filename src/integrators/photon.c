@@ -14,7 +14,10 @@
  *     one final-gather ray: BSDF-sampled from x, through delta bounces, to the first
  *     non-delta point y, weighted by the global map's estimate at y (... D S* x).
  *   A gather ray that reaches an emitter adds nothing: that light is NEE's or the
- *   caustic map's at x. */
+ *   caustic map's at x.
+ * Scenes with media add a volume map (Jensen & Christensen 1998; photon_li_media) and
+ * spectral mode splits the photons into sets at wavelengths of their own (set_wavelengths);
+ * docs/integrators.md has both schemes. */
 #include "integrators/photon.h"
 
 #include <stdlib.h>
@@ -24,13 +27,20 @@
 #include "core/error.h"
 #include "integrators/direct.h"
 #include "integrators/recorder.h"
+#include "integrators/subpath_media.h"
 #include "integrators/subpath_walk.h"
+#include "integrators/volpath.h"
 #include "materials/bsdf.h"
+#include "media/phase.h"
 
 /* Stream ids: the photon pass and the radius probes draw from (seed, index, id), disjoint
  * from the camera samples' (seed, pixel, sample) for any sample index below 2^62. */
 #define PHOTON_STREAM ((uint64_t)1 << 62)
 #define RADIUS_STREAM (((uint64_t)1 << 62) + 1u)
+/* Spectral mode: set k's photons draw from the stream PHOTON_STREAM + 2 + k. */
+#define PHOTON_SET_STREAM (((uint64_t)1 << 62) + 2u)
+
+static inline bool scene_has_media(const Scene *s) { return s->num_media || s->num_medium_ifaces; }
 
 typedef ARRAY(Photon) PhotonArray;
 
@@ -80,7 +90,7 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
 /* The photon maps' store: every non-delta hit to the global map, and L S+ D ones, past
  * the first hit, to the caustic map too. */
 typedef struct PhotonStore {
-    PhotonArray *global, *caustic;
+    PhotonArray *global, *caustic, *volume;
 } PhotonStore;
 
 static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_only)
@@ -89,6 +99,18 @@ static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_o
     if (!photon_array_push(st->global, ph)) return false;
     /* depth 1 is direct light (L D), which NEE handles at camera points. */
     return !(specular_only && depth > 1) || photon_array_push(st->caustic, ph);
+}
+
+/* store_photon through media (media_photon_walk): surface photons as above (a path with a
+ * medium vertex is not a caustic one); volume photons (n = 0) past the first vertex to the
+ * volume map: the first, L V, is NEE's at a medium vertex. */
+static bool store_media_photon(void *ctx, const MediaPhoton *mp)
+{
+    PhotonStore *st = ctx;
+    const Photon ph = {mp->p, mp->wi, mp->power, mp->n};
+    const bool vol = mp->n.x == 0.0f && mp->n.y == 0.0f && mp->n.z == 0.0f;
+    if (vol) return mp->bounces <= 1 || photon_array_push(st->volume, &ph);
+    return store_photon(ctx, &ph, mp->bounces, mp->specular_only);
 }
 
 /* Follows delta lobes from `ray` (sampling one lobe at each; weights into *beta) to the
@@ -181,19 +203,21 @@ Color photon_direct_light(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh
     return direct_light(s, bsdf, sh, wo, u_sel, u, wl, rays);
 }
 
-Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint64_t *rays)
+/* The surface integrator of scenes without media (the file comment's scheme). */
+static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const PhotonSet *set, Ray ray, Sampler *rng,
+                               const Wavelengths *wl, uint64_t *rays)
 {
     Color L = color_s(0.0f), beta = color_s(1.0f);
     SurfaceHit x;
     Bsdf bsdf_x;
     Vec3 wo;
-    const bool diffuse = photon_trace_to_diffuse(s, ray, rng, NULL, &beta, &L, &x, &bsdf_x, &wo, rays);
+    const bool diffuse = photon_trace_to_diffuse(s, ray, rng, wl, &beta, &L, &x, &bsdf_x, &wo, rays);
     if (m->rec) recorder_photon_chain(m->rec, s, diffuse ? &x : NULL, beta, L);
     if (!diffuse) return L;
 
-    Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, NULL, rays);
+    Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, wl, rays);
     if (m->rec) recorder_add(m->rec, CST_EXPLAIN_NEE, beta, lx);
-    Color caustic = radiance_estimate(&m->caustic, m->radius, &bsdf_x, &x, wo, m->rec);
+    Color caustic = radiance_estimate(&set->caustic, m->radius, &bsdf_x, &x, wo, m->rec);
     if (m->rec) recorder_estimate(m->rec, true, m->radius, color_s(1.0f), caustic);
     lx = color_add(lx, caustic);
 
@@ -214,9 +238,9 @@ Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint
         Vec3 wo_y;
         Ray gr = ray_make(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
-        if (photon_trace_to_diffuse(s, gr, rng, NULL, &g, NULL, &y, &bsdf_y, &wo_y, rays)) {
+        if (photon_trace_to_diffuse(s, gr, rng, wl, &g, NULL, &y, &bsdf_y, &wo_y, rays)) {
             if (m->rec) recorder_vertex(m->rec, s, &y, 2, NULL);
-            Color global = radiance_estimate(&m->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
+            Color global = radiance_estimate(&set->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
             if (m->rec) recorder_estimate(m->rec, false, m->radius, g, global);
             lx = color_add(lx, color_mul(g, global));
         }
@@ -224,11 +248,116 @@ Color photon_li(const Scene *s, const PhotonMaps *m, Ray ray, Sampler *rng, uint
     return color_madd(L, beta, lx);
 }
 
+/* ------------------------------------------------------------ participating media */
+
+typedef struct VolumeCtx {
+    Vec3 wo;
+    float g;
+    Color sum;
+} VolumeCtx;
+
+static void volume_visit(void *ctx, const Photon *ph, float dist2)
+{
+    (void)dist2;
+    VolumeCtx *c = ctx;
+    c->sum = color_madd(c->sum, color_s(phase_hg_eval(c->wo, ph->wi, c->g)), ph->power);
+}
+
+/* In-scattered radiance from the volume map at a medium vertex, times the vertex's
+ * throughput beta, which holds sigma_s(p) (its free-flight sample's weight): Jensen &
+ * Christensen 1998 eq. 11, L_i(p, wo) = (1 / sigma_s(p)) sum_j f_p(wo, wi_j) Phi_j /
+ * ((4/3) pi r^3) over the photons in the ball of radius r (each photon's flux holds the
+ * sigma_s of its own free-flight sample), so the 1 / sigma_s(p) here cancels beta's
+ * sigma_s(p), as SPPM's visible points in media (sppm.c, camera_media). */
+static Color volume_estimate(const Scene *s, const PhotonMap *map, float r, const MediaVisiblePoint *v,
+                             const Wavelengths *wl)
+{
+    if (photon_map_count(map) == 0) return color_s(0.0f);
+    VolumeCtx c = {v->wo, v->g, color_s(0.0f)};
+    photon_map_radius(map, v->p, r, volume_visit, &c);
+    const Medium *med = &s->media[v->medium];
+    const MediumCoeffs mc = medium_coeffs(med, wl);
+    const float dens = medium_is_hetero(med) ? hetero_density_world(&med->u.het, v->p) : 1.0f;
+    const float inv_vol = 1.0f / (4.0f / 3.0f * CST_PI * r * r * r);
+    Color out;
+    for (int k = 0; k < COLOR_LANES; k++) {
+        const float ss = mc.sigma_s.c[k] * dens;
+        out.c[k] = ss > 0.0f ? v->beta.c[k] * c.sum.c[k] * inv_vol / ss : 0.0f;
+    }
+    return out;
+}
+
+/* Direct light at a media vertex (volpath's NEE without MIS: transmittance by ratio
+ * tracking), times the vertex's throughput. */
+static Color media_direct(const Scene *s, const MediaVisiblePoint *v, float time, Sampler *rng,
+                          const Wavelengths *wl, uint64_t *rays)
+{
+    if (s->emitter_sampler.lights == 0) return color_s(0.0f);
+    VolVertex x = {v->p, v3s(0.0f), v3s(0.0f), v->wo, NULL, NULL, v->g, v->medium, time};
+    if (!v->vol) x = (VolVertex){v->sh.p, v->sh.ns, v->sh.ng, v->wo, &v->bsdf, &v->sh, 0.0f, v->medium, time};
+    return color_mul(v->beta, volpath_nee(s, &x, false, rng, wl, rays));
+}
+
+/* The scheme through media (Jensen & Christensen 1998, with the surface part as above):
+ * the camera ray walks media by free-flight sampling (delta tracking in grids, as volpath)
+ * and delta lobes to its first vertex x, in a medium or on a non-delta surface
+ * (media_visible_point). In a medium: NEE at x (L V) plus the volume map at x (every
+ * photon that scattered before reaching x: L (S|D|V)+ V). On a surface: NEE, the caustic
+ * map (L S+ D, no medium vertex between), and one final-gather ray, which walks media the
+ * same way to its first vertex y and takes y's estimate of every path with at least one
+ * vertex before y: the global map on a surface, NEE plus the volume map in a medium. Each
+ * light path is counted once: by where its last non-delta vertex before x lies. */
+static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSet *set, Ray ray, Sampler *rng,
+                             const Wavelengths *wl, uint64_t *rays)
+{
+    Color L = color_s(0.0f);
+    MediaVisiblePoint x;
+    if (!media_visible_point(s, ray, s->camera_medium, rng, wl, color_s(1.0f), &L, &x, rays)) return L;
+    L = color_add(L, media_direct(s, &x, ray.time, rng, wl, rays));
+    if (x.vol) return color_add(L, volume_estimate(s, &set->volume, m->vol_radius, &x, wl));
+    Color caustic = radiance_estimate(&set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, NULL);
+    L = color_madd(L, x.beta, caustic);
+    BsdfSample bs;
+    float uc = sampler_1d(rng);
+    Vec2 u = sampler_2d(rng);
+    if (!bsdf_sample(&x.bsdf, x.wo, uc, u, &bs) || bs.delta) return L;
+    Ray gr = ray_make_at(scene_offset(s, x.sh.p, x.sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, ray.time);
+    const int medium = scene_medium_after(s, &x.sh, bs.wi, x.medium);
+    Color ignored = color_s(0.0f); /* emission the gather meets: NEE's or the caustic map's */
+    MediaVisiblePoint y;
+    if (!media_visible_point(s, gr, medium, rng, wl, color_mul(x.beta, bs.weight), &ignored, &y, rays)) return L;
+    if (y.vol) {
+        L = color_add(L, media_direct(s, &y, ray.time, rng, wl, rays));
+        return color_add(L, volume_estimate(s, &set->volume, m->vol_radius, &y, wl));
+    }
+    return color_madd(L, y.beta, radiance_estimate(&set->global, m->radius, &y.bsdf, &y.sh, y.wo, NULL));
+}
+
+Color photon_li(const Scene *s, const PhotonMaps *m, int set, Ray ray, Sampler *rng, uint64_t *rays)
+{
+    if (m->num_sets == 0) return color_s(0.0f);
+    const PhotonSet *ps = &m->sets[set];
+    const Wavelengths *wl = m->spectral ? &ps->wl : NULL;
+    if (scene_has_media(s)) return photon_li_media(s, m, ps, ray, rng, wl, rays);
+    return photon_li_surface(s, m, ps, ray, rng, wl, rays);
+}
+
+int photon_maps_pick(const PhotonMaps *m, float u)
+{
+    if (m->num_sets <= 1) return 0;
+    int k = (int)(u * (float)m->num_sets);
+    return k < m->num_sets - 1 ? k : m->num_sets - 1;
+}
+
 void photon_maps_free(PhotonMaps *m)
 {
     if (!m) return;
-    photon_map_free(&m->global);
-    photon_map_free(&m->caustic);
+    for (int k = 0; k < m->num_sets; k++) {
+        photon_map_free(&m->sets[k].global);
+        photon_map_free(&m->sets[k].caustic);
+        photon_map_free(&m->sets[k].volume);
+    }
+    free(m->sets);
     memset(m, 0, sizeof *m);
 }
 
@@ -246,6 +375,23 @@ static float knn_dist2(const PhotonMap *map, Vec3 p)
     float d2[PHOTON_RADIUS_K];
     int n = photon_map_knn(map, p, PHOTON_RADIUS_K, INFINITY, found, d2);
     return n > 0 ? d2[n - 1] : 0.0f;
+}
+
+/* The median, over up to PHOTON_RADIUS_POINTS of the map's own photons, of the distance
+ * to the PHOTON_RADIUS_K-th nearest one; 1 for an empty map. */
+static float self_radius(const PhotonMap *g)
+{
+    float d2[PHOTON_RADIUS_POINTS];
+    int n = 0;
+    size_t count = photon_map_count(g);
+    size_t stride = count / PHOTON_RADIUS_POINTS + 1;
+    for (size_t i = 0; i < count && n < PHOTON_RADIUS_POINTS; i += stride) {
+        float v = knn_dist2(g, g->photons[i].pos);
+        if (v > 0.0f) d2[n++] = v;
+    }
+    if (n == 0) return 1.0f; /* no photons, or every photon at one point */
+    qsort(d2, (size_t)n, sizeof d2[0], cmp_float);
+    return sqrtf(d2[n / 2]);
 }
 
 /* The automatic radius: the median, over PHOTON_RADIUS_POINTS first non-delta hits of
@@ -282,48 +428,96 @@ static float auto_radius(const Scene *s, const Camera *moving, const PhotonParam
         float v = knn_dist2(g, sh.p);
         if (v > 0.0f) d2[n++] = v;
     }
-    if (n == 0) {
-        size_t stride = count / PHOTON_RADIUS_POINTS + 1;
-        for (size_t i = 0; i < count && n < PHOTON_RADIUS_POINTS; i += stride) {
-            float v = knn_dist2(g, g->photons[i].pos);
-            if (v > 0.0f) d2[n++] = v;
-        }
-    }
-    if (n == 0) return 1.0f; /* every photon at one point */
+    if (n == 0) return self_radius(g);
     qsort(d2, (size_t)n, sizeof d2[0], cmp_float);
     return sqrtf(d2[n / 2]);
 }
 
-CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParams *pp, PhotonMaps *out,
-                            uint64_t *rays, CstError *err)
+/* The radii of this render: the given one for both estimates, or the automatic ones, from
+ * set 0 (in spectral mode each set holds 1 / PHOTON_SPECTRAL_SETS of the photons, so the
+ * automatic radii are those of one set). The volume ball's automatic radius holds about
+ * PHOTON_RADIUS_K volume photons around a typical volume photon. */
+static void choose_radii(const Scene *s, const Camera *cam, const PhotonParams *pp, PhotonMaps *m, uint64_t *rays)
 {
-    memset(out, 0, sizeof *out);
-    int n = pp->photons > 0 ? pp->photons : PHOTON_DEFAULT_COUNT;
-    PhotonArray global = {0}, caustic = {0};
+    const PhotonSet *set = &m->sets[0];
+    m->radius = pp->radius > 0.0f ? pp->radius : auto_radius(s, cam, pp, &set->global, rays);
+    m->vol_radius = pp->radius > 0.0f ? pp->radius : self_radius(&set->volume);
+}
+
+/* One set's photon paths: n of them from stream `stream`, at wavelengths wl (NULL: RGB). */
+static CstStatus build_set(const Scene *s, const Camera *cam, const PhotonParams *pp, uint64_t stream, int n,
+                           const Wavelengths *wl, PhotonSet *out, double done, double part, uint64_t *rays,
+                           CstError *err)
+{
+    PhotonArray global = {0}, caustic = {0}, volume = {0};
     CstStatus st = CST_OK;
     if (s->emitter_sampler.lights > 0) {
-        const PhotonWalk pw = {pp->seed, PHOTON_STREAM, 1.0f / (float)n, pp->max_depth, pp->rr_depth, NULL, 0.0f};
-        PhotonStore store = {&global, &caustic};
+        const PhotonWalk pw = {pp->seed, stream, 1.0f / (float)n, pp->max_depth, pp->rr_depth, wl, 0.0f};
+        PhotonStore store = {&global, &caustic, &volume};
         for (int i = 0; i < n; i++) {
-            if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 && pp->progress(pp->progress_user, (double)i / n)) {
+            if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 &&
+                pp->progress(pp->progress_user, done + part * (double)i / n)) {
                 st = cst_fail(err, CST_ERR_CANCELLED, "render cancelled by the progress callback");
                 goto done;
             }
-            if (!photon_walk(s, &pw, (uint64_t)i, store_photon, &store, rays)) {
-                st = cst_fail(err, CST_ERR_OOM, "out of memory for %zu photons", global.n + caustic.n);
+            const bool ok = scene_has_media(s) && !pp->no_media
+                                ? media_photon_walk(s, cam, &pw, (uint64_t)i, store_media_photon, &store, rays)
+                                : photon_walk(s, &pw, (uint64_t)i, store_photon, &store, rays);
+            if (!ok) {
+                st = cst_fail(err, CST_ERR_OOM, "out of memory for %zu photons", global.n + caustic.n + volume.n);
                 goto done;
             }
         }
     }
     if ((st = photon_map_build(&out->global, global.v, global.n, err)) != CST_OK) goto done;
     if ((st = photon_map_build(&out->caustic, caustic.v, caustic.n, err)) != CST_OK) goto done;
-    out->emitted = n;
-    out->radius = pp->radius > 0.0f ? pp->radius : auto_radius(s, cam, pp, &out->global, rays);
+    st = photon_map_build(&out->volume, volume.v, volume.n, err);
 done:
     array_free(&global);
     array_free(&caustic);
-    if (st != CST_OK) photon_maps_free(out);
+    array_free(&volume);
     return st;
+}
+
+/* Spectral mode: set k's wavelengths, stratified over the sets as SPPM's over its
+ * iterations (wavelengths_pass_u, offset from a stream of its own). A camera sample picks
+ * a set uniformly, so each render is an unbiased estimate (in the limit r -> 0) of the
+ * spectral image; within one render the PHOTON_SPECTRAL_SETS x 4 wavelengths are shared by
+ * all pixels (a colour error correlated over the image, falling with the set count). */
+static Wavelengths set_wavelengths(uint64_t seed, int k)
+{
+    Pcg32 r;
+    pcg32_seed_sample(&r, seed ^ 0x85ebca6b27d4eb2fULL, 0, 0);
+    return wavelengths_sample(wavelengths_pass_u((uint32_t)k, pcg32_next(&r)));
+}
+
+CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParams *pp, PhotonMaps *out,
+                            uint64_t *rays, CstError *err)
+{
+    memset(out, 0, sizeof *out);
+    const int n = pp->photons > 0 ? pp->photons : PHOTON_DEFAULT_COUNT;
+    const int sets = pp->spectral ? PHOTON_SPECTRAL_SETS : 1;
+    /* Each set emits n / sets paths (at least one). */
+    const int per_set = n / sets > 0 ? n / sets : 1;
+    out->sets = calloc((size_t)sets, sizeof *out->sets);
+    if (!out->sets) return cst_fail(err, CST_ERR_OOM, "out of memory for %d photon sets", sets);
+    out->num_sets = sets;
+    out->spectral = pp->spectral;
+    for (int k = 0; k < sets; k++) {
+        PhotonSet *set = &out->sets[k];
+        /* RGB keeps the single map's stream (its images bit for bit). */
+        const uint64_t stream = pp->spectral ? PHOTON_SET_STREAM + (uint64_t)k : PHOTON_STREAM;
+        if (pp->spectral) set->wl = set_wavelengths(pp->seed, k);
+        CstStatus st = build_set(s, cam, pp, stream, per_set, pp->spectral ? &set->wl : NULL, set,
+                                 (double)k / sets, 1.0 / sets, rays, err);
+        if (st != CST_OK) {
+            photon_maps_free(out);
+            return st;
+        }
+    }
+    out->emitted = per_set;
+    choose_radii(s, cam, pp, out, rays);
+    return CST_OK;
 }
 
 /* ------------------------------------------------------------ the cache between renders */
@@ -334,6 +528,7 @@ struct CstPhotonCache {
     const Scene *scene;
     int photons, max_depth, rr_depth;
     uint64_t seed;
+    bool spectral;
     int builds;
     PhotonMaps maps; /* radius: the build's, not used (each render chooses its own) */
 };
@@ -349,8 +544,8 @@ void cst_photon_cache_destroy(CstPhotonCache *c)
 
 size_t cst_photon_cache_positions(const CstPhotonCache *c, int caustic, float *xyz, size_t max)
 {
-    if (!c || !c->valid) return 0;
-    const PhotonMap *m = caustic ? &c->maps.caustic : &c->maps.global;
+    if (!c || !c->valid || c->maps.num_sets == 0) return 0;
+    const PhotonMap *m = caustic ? &c->maps.sets[0].caustic : &c->maps.sets[0].global;
     for (size_t i = 0; i < m->count && i < max; i++) {
         xyz[3 * i] = m->photons[i].pos.x;
         xyz[3 * i + 1] = m->photons[i].pos.y;
@@ -367,7 +562,7 @@ CstStatus photon_maps_build_cached(CstPhotonCache *c, const Scene *s, const Came
     *borrowed = false;
     if (!c) return photon_maps_build(s, cam, pp, out, rays, err);
     const bool same = c->valid && c->scene == s && c->photons == pp->photons && c->max_depth == pp->max_depth &&
-                      c->rr_depth == pp->rr_depth && c->seed == pp->seed;
+                      c->rr_depth == pp->rr_depth && c->seed == pp->seed && c->spectral == pp->spectral;
     if (!same) {
         photon_maps_free(&c->maps);
         c->valid = false;
@@ -379,11 +574,12 @@ CstStatus photon_maps_build_cached(CstPhotonCache *c, const Scene *s, const Came
         c->max_depth = pp->max_depth;
         c->rr_depth = pp->rr_depth;
         c->seed = pp->seed;
+        c->spectral = pp->spectral;
         c->builds++;
     }
     *out = c->maps;
     *borrowed = true;
-    /* The radius as photon_maps_build picks it, from this render's camera. */
-    out->radius = pp->radius > 0.0f ? pp->radius : auto_radius(s, cam, pp, &out->global, rays);
+    /* The radii as photon_maps_build picks them, from this render's camera. */
+    choose_radii(s, cam, pp, out, rays);
     return CST_OK;
 }

@@ -17,7 +17,8 @@ enum {
     PHOTON_DEFAULT_COUNT = 200000, /* photons emitted when the settings say 0 */
     PHOTON_RADIUS_K = 50,          /* the automatic radius holds about this many photons */
     PHOTON_RADIUS_POINTS = 256,    /* camera hit points whose k-NN distance sets the radius */
-    PHOTON_MAX_SPECULAR = 64       /* delta bounces a camera or gather ray follows at most */
+    PHOTON_MAX_SPECULAR = 64,      /* delta bounces a camera or gather ray follows at most */
+    PHOTON_SPECTRAL_SETS = 16      /* spectral mode: photon sets, one set of wavelengths each */
 };
 
 typedef struct PhotonParams {
@@ -30,6 +31,9 @@ typedef struct PhotonParams {
      * pass done; nonzero return stops the pass (CST_ERR_CANCELLED). */
     int (*progress)(void *user, double fraction);
     void *progress_user;
+    bool spectral;   /* spectral mode: PHOTON_SPECTRAL_SETS sets of wavelengths (photon.c) */
+    bool no_media;   /* trace as if the scene had no media: SPPM's automatic initial radius,
+                      * which was chosen so before photon maps walked media (its images kept) */
 } PhotonParams;
 enum { PHOTON_PROGRESS_EVERY = 4096 };
 
@@ -55,14 +59,33 @@ typedef bool (*PhotonVisit)(void *ctx, const Photon *ph, int depth, bool specula
 bool photon_walk(const Scene *scene, const PhotonWalk *pw, uint64_t index, PhotonVisit visit, void *ctx,
                  uint64_t *rays);
 
-/* Both maps and the radius every estimate uses. A zeroed PhotonMaps is valid and empty. */
+/* The maps of one set of photon paths, all traced at the same wavelengths (spectral mode).
+ * In scenes without media the volume map is empty. */
+typedef struct PhotonSet {
+    PhotonMap global;  /* every photon hit on a non-delta surface: paths L (S|D|V)* D */
+    PhotonMap caustic; /* the subset whose path is L S+ D (no medium vertex) */
+    PhotonMap volume;  /* photons scattered in media past the first vertex: L (S|D|V)+ V */
+    Wavelengths wl;    /* spectral mode: the set's wavelengths; unused in RGB mode */
+} PhotonSet;
+
+/* The sets and the radii every estimate uses. RGB mode: one set of all the photons.
+ * Spectral mode: PHOTON_SPECTRAL_SETS sets of emitted / sets photon paths each, set k at
+ * wavelengths stratified over k (wavelengths_pass_u); a camera sample picks one set
+ * uniformly and traces at its wavelengths (photon_maps_pick). A zeroed PhotonMaps is
+ * valid and empty. */
 typedef struct PhotonMaps {
-    PhotonMap global;  /* every photon hit on a non-delta surface: paths L (S|D)* D */
-    PhotonMap caustic; /* the subset whose path is L S+ D */
+    PhotonSet *sets;
+    int num_sets;
+    bool spectral;
     float radius;      /* resolved: the given one, or the automatic one */
-    int emitted;       /* photon paths emitted (the power divisor) */
+    float vol_radius;  /* the volume estimate's ball: the given radius, or automatic */
+    int emitted;       /* photon paths emitted per set (the power divisor) */
     struct Recorder *rec; /* caustic explain's recorder (recorder.h); NULL in renders */
 } PhotonMaps;
+
+/* Spectral mode: the set a camera sample of uniform u traces with (its wavelengths in
+ * maps->sets[k].wl). 0 in RGB mode. */
+int photon_maps_pick(const PhotonMaps *maps, float u);
 
 /* Emits and traces the photons single-threaded, in index order, photon i drawing from the
  * stream (seed, i): the maps depend on the seed only, never on threads or timing. Then, if
@@ -83,9 +106,11 @@ CstStatus photon_maps_build_cached(struct CstPhotonCache *cache, const Scene *sc
                                    CstError *err);
 
 /* Radiance arriving along `ray` (toward its origin): emission seen directly or through
- * delta bounces, NEE, the caustic map and one final-gather ray at the first non-delta hit.
- * No allocation; safe from many threads on one committed scene and built maps. */
-Color photon_li(const Scene *scene, const PhotonMaps *maps, Ray ray, Sampler *rng, uint64_t *rays);
+ * delta bounces, NEE, the caustic map and one final-gather ray at the first non-delta hit;
+ * in scenes with media, the first vertex may be in a medium (NEE and the volume map).
+ * `set`: photon_maps_pick's; spectral mode traces at maps->sets[set].wl. No allocation;
+ * safe from many threads on one committed scene and built maps. */
+Color photon_li(const Scene *scene, const PhotonMaps *maps, int set, Ray ray, Sampler *rng, uint64_t *rays);
 
 /* Shared with sppm.c, which builds its visible points the same way. */
 struct Bsdf;

@@ -313,7 +313,7 @@ static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengt
 {
     Color L = color_s(0.0f);
     MediaVisiblePoint mv;
-    v->valid = media_visible_point(s, ray, rng, wl, beta, &L, &mv, rays);
+    v->valid = media_visible_point(s, ray, s->camera_medium, rng, wl, beta, &L, &mv, rays);
     if (!v->valid) return L;
     v->p = mv.p;
     v->wo = mv.wo;
@@ -594,7 +594,7 @@ static CstStatus initial_radius(const Scene *s, const Camera *cam, const SppmPar
                                 float *r, uint64_t *rays, CstError *err)
 {
     if (sp->radius > 0.0f) { *r = sp->radius; return CST_OK; }
-    PhotonParams pp = {photons, 0.0f, sp->max_depth, sp->rr_depth, sp->seed, NULL, NULL};
+    PhotonParams pp = {photons, 0.0f, sp->max_depth, sp->rr_depth, sp->seed, NULL, NULL, false, true};
     PhotonMaps maps;
     CstStatus st = photon_maps_build(s, cam, &pp, &maps, rays, err);
     if (st != CST_OK) return st;

@@ -828,7 +828,7 @@ typedef struct MediaPhotonCtx {
 static bool visit_photon(void *ctx, const MediaLightVertex *v)
 {
     const MediaPhotonCtx *c = ctx;
-    MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces};
+    MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces, v->sp.specular_only};
     if (v->sh) ph.n = v3_dot(v->ng, v->w_prev) >= 0.0f ? v->ng : v3_neg(v->ng);
     return c->visit(c->ctx, &ph);
 }
@@ -851,13 +851,12 @@ bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, 
     return media_walk_light(s, &w, &es, subpath_start(color_scale(es.beta, pw->scale)), medium, &rng, rays);
 }
 
-bool media_visible_point(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color beta, Color *le,
-                         MediaVisiblePoint *out, uint64_t *rays)
+bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
+                         Color *le, MediaVisiblePoint *out, uint64_t *rays)
 {
     SubPath sp = subpath_start(beta);
     sp.specular_only = false;
     HeroMis hm = {-1, color_s(1.0f), false};
-    int medium = s->camera_medium;
     Vec3 x_prev = ray.o;
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
         MediaHit h;

@@ -77,6 +77,7 @@ typedef struct MediaPhoton {
     Vec3 p, wi, n;
     Color power;
     int bounces;
+    bool specular_only; /* every vertex before it a delta surface bounce (photon.c's caustics) */
 } MediaPhoton;
 typedef bool (*MediaPhotonVisit)(void *ctx, const MediaPhoton *ph);
 
@@ -86,7 +87,8 @@ typedef bool (*MediaPhotonVisit)(void *ctx, const MediaPhoton *ph);
 bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, uint64_t index,
                        MediaPhotonVisit visit, void *ctx, uint64_t *rays);
 
-/* SPPM's visible point through media: from the camera ray (in the camera's medium),
+/* SPPM's visible point through media: from the camera ray (in `medium`: the camera's, or
+ * photon.c's final gather from a surface, the medium on its side),
  * free-flight sampling in media and delta lobes (photon_trace_to_diffuse's rules) to the
  * first vertex that is a medium scattering point (vol) or a non-delta surface; emission
  * passed on the way into *le (emitters and the environment; emitting media are refused).
@@ -101,7 +103,7 @@ typedef struct MediaVisiblePoint {
     int medium;    /* vol: the medium at p; else the medium arrived through */
     Color beta;
 } MediaVisiblePoint;
-bool media_visible_point(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color beta, Color *le,
-                         MediaVisiblePoint *out, uint64_t *rays);
+bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
+                         Color *le, MediaVisiblePoint *out, uint64_t *rays);
 
 #endif

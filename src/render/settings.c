@@ -59,10 +59,6 @@ void cst_render_settings_resolve(const CstScene *scene, const CstRenderSettings 
     PICK_DBL(mlt_sigma, 1, 0.01);
     PICK_INT(mlt_bootstrap, 1, 100000);
     PICK_INT(mlt_chains, 1, 1000);
-    /* The photon integrator builds its maps once per render, so no per-pass wavelengths
-     * can be shared by photons and camera paths: it transports RGB in either mode (the
-     * settings, and so the output's metadata, say so). */
-    if (out->integrator == CST_INTEGRATOR_PHOTON) out->color_mode = CST_COLOR_RGB;
     PICK_INT(png_linear, 0, 0);
     PICK_INT(aovs, 0, 0);
     PICK_DBL(white_balance, 1, 0.0);          /* 0 = none */
