@@ -50,8 +50,6 @@ expect "explain --help" 0 'caustic explain \[SCENE\] --pixel X,Y'
 harness_run "$d" 30 explain --pixel 12,10 --integrator photon "${SMALL[@]}"
 expect "photon: estimates, sum equal bit for bit" 0 "global .final gather. map's estimate over those [0-9]+ photons" \
     'equal, bit for bit'
-HARNESS_EXPECT_STDOUT=0
-
 # sppm: iteration 2 of the glass sphere's caustic, its photons and update, equal to the film of
 # a 3-iteration render bit for bit; --why-bright names the largest photon or the direct light.
 harness_run "$d" 60 explain "$SRC/scenes/cornell-spheres.json" --integrator sppm --pixel 21,24 --sample 2 \
@@ -63,6 +61,8 @@ harness_run "$d" 60 explain --integrator sppm --pixel 16,16 --sample 1 --width 3
 expect "sppm: JSON, exact" 0 '"exact": true' '"kind": "photon"' '"bounces"' '"sppm": \{' '"state_exact": true'
 harness_run "$d" 60 explain --integrator sppm --pixel 16,16 --sample 1 --width 32 --height 32 --why-bright
 expect "sppm: --why-bright" 0 '^why bright: (photon path [0-9]+|the direct light)'
+HARNESS_EXPECT_STDOUT=0
+
 harness_run "$d" 30 explain "${SMALL[@]}"
 expect "no --pixel" 2 'expected --pixel X,Y'
 harness_run "$d" 30 explain --pixel 12 "${SMALL[@]}"
