@@ -31,7 +31,7 @@ static void print_photon(FILE *f, const CstExplainEvent *e)
     p3f(f, "power ", e->value);
     p3f(f, " x f ", e->beta);
     p3f(f, " = ", e->contribution);
-    fprintf(f, "; kernel 1/(N_e pi r^2) %.6g; share of the pixel (%.6g, %.6g, %.6g)\n", (double)e->pmf, e->share[0],
+    fprintf(f, "; box kernel %.6g; share of the pixel (%.6g, %.6g, %.6g)\n", (double)e->pmf, e->share[0],
             e->share[1], e->share[2]);
 }
 
@@ -42,6 +42,11 @@ static void print_chain(FILE *f, const CstExplain *x)
         const CstExplainEvent *e = &x->events[i];
         switch (e->kind) {
         case CST_EXPLAIN_VERTEX:
+            if (e->medium >= 0) { /* a scene with media: the visible point alone */
+                fprintf(f, "visible point in medium %d at (%.6g, %.6g, %.6g) (the chain through media is not "
+                        "itemised)\n", e->medium, (double)e->p[0], (double)e->p[1], (double)e->p[2]);
+                break;
+            }
             fprintf(f, "vertex %d: surface at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f), material #%d (%s)%s\n",
                     e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->n[0], (double)e->n[1],
                     (double)e->n[2], e->material, e->material_type ? e->material_type : "none",
@@ -61,7 +66,9 @@ static void print_chain(FILE *f, const CstExplain *x)
         case CST_EXPLAIN_ESCAPE:
         case CST_EXPLAIN_NEE:
             if (!(e->flags & CST_EXPLAIN_ADDED)) break;
-            if (e->kind == CST_EXPLAIN_NEE)
+            if (e->kind == CST_EXPLAIN_NEE && e->light < 0)
+                fputs("  direct light (NEE through media, one light sample, not itemised)\n    ", f);
+            else if (e->kind == CST_EXPLAIN_NEE)
                 fprintf(f, "  direct light (NEE, no MIS): light %d at (%.6g, %.6g, %.6g), pmf %.6g, pdf_w %.6g%s\n    ",
                         e->light, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->pmf,
                         (double)e->pdf_w, (e->flags & CST_EXPLAIN_OCCLUDED) ? ", occluded" : "");
@@ -101,7 +108,8 @@ void cli_explain_sppm_text(FILE *f, const CstExplain *x)
     const CstExplainEvent **ph = malloc(((size_t)x->num_events + 1) * sizeof *ph);
     for (int i = 0; ph && i < x->num_events; i++)
         if (x->events[i].kind == CST_EXPLAIN_PHOTON) ph[n++] = &x->events[i];
-    fprintf(f, "photons gathered in the disc of radius %.9g: M = %lld\n", (double)s->r_before, s->m);
+    fprintf(f, "photons gathered in the %s of radius %.9g: M = %lld\n", s->volume ? "ball" : "disc",
+            (double)s->r_before, s->m);
     if (ph) {
         qsort(ph, (size_t)n, sizeof *ph, cmp_share);
         for (int i = 0; i < n && i < SPPM_TOP_PHOTONS; i++) print_photon(f, ph[i]);
@@ -115,8 +123,11 @@ void cli_explain_sppm_text(FILE *f, const CstExplain *x)
     p3d(f, "  tau ", s->tau_before);
     p3d(f, " -> ", s->tau_after);
     fprintf(f, "\n  state %s\n", s->state_exact ? "equal to the render's, bit for bit" : "MISMATCH with the render's");
-    fprintf(f, "pixel value after iteration %d: ld / %d + tau / (N_emitted %.17g pi r^2)\n", x->sample, x->sample + 1,
-            s->emitted);
+    fprintf(f, "pixel value after iteration %d: ld / %d + tau / (N_emitted %.17g pi r^2)%s\n", x->sample,
+            x->sample + 1, s->emitted, s->media ? " + tau_vol / (N_emitted 4/3 pi r_vol^3)" : "");
+    if (s->media)
+        fprintf(f, "  the %s's statistic, untouched: tau (%.9g, %.9g, %.9g), radius %.9g\n",
+                s->volume ? "disc" : "ball", s->tau_other[0], s->tau_other[1], s->tau_other[2], (double)s->r_other);
     p3d(f, "  = ", s->value);
     fprintf(f, "\nthe film of a render with --spp %d (iterations 0..%d): ", x->sample + 1, x->sample);
     p3d(f, "", x->film_value);
@@ -191,6 +202,10 @@ void cli_explain_sppm_json(json_t *o, const CstExplain *x)
     json_t *p = json_object();
     json_object_set_new(p, "iteration", json_integer(x->sample));
     json_object_set_new(p, "visible", json_boolean(s->visible));
+    json_object_set_new(p, "volume", json_boolean(s->volume));
+    json_object_set_new(p, "media", json_boolean(s->media));
+    json_object_set_new(p, "tau_other", a3d(s->tau_other));
+    json_object_set_new(p, "radius_other", num((double)s->r_other));
     json_object_set_new(p, "photons_per_iteration", json_integer(s->photons));
     json_object_set_new(p, "photons_emitted", num(s->emitted));
     json_object_set_new(p, "beta", a3f(s->beta));

@@ -190,8 +190,8 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
  * did: every vertex, every sampling decision, every strategy's contribution with its MIS
  * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (media
  * and subsurface materials too), whitted, light (the splats that reached the pixel), bdpt and
- * vcm (RGB mode), sppm (an iteration: its camera chain, photons and progressive update;
- * scenes without media); CST_ERR_UNSUPPORTED for the rest. */
+ * vcm (RGB mode), sppm (an iteration: its camera chain, photons and progressive update);
+ * CST_ERR_UNSUPPORTED for the rest. */
 typedef enum CstExplainKind {
     CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material; or a
                              * subsurface exit (material_type "subsurface exit": pdf_a, pmf
@@ -304,6 +304,9 @@ typedef struct CstExplain {
      * iterations holds it). */
     struct CstExplainSppm {
         int visible;              /* the camera chain reached a non-delta point */
+        int volume;               /* ... in a participating medium: its ball (radius r, volume
+                                   * 4/3 pi r^3) and statistic, the disc's untouched */
+        int media;                /* the scene has media: the value adds the balls' estimate */
         long long photons;        /* photon paths per iteration */
         double emitted;           /* N_emitted: photons * (sample + 1) */
         float beta[3];            /* the visible point's throughput (filter weight included) */
@@ -312,9 +315,12 @@ typedef struct CstExplain {
         long long m;              /* M: photons gathered */
         double phi[3];            /* their sum of f Phi (RGB; spectral: converted) */
         double n_before, n_after; /* N -> N + alpha M */
-        float r_before, r_after;  /* r -> r sqrt((N + alpha M) / (N + M)) */
-        double tau_before[3], tau_after[3]; /* (tau + beta phi) r'^2 / r^2 */
-        double value[3];          /* ld' / (sample + 1) + tau' / (N_emitted pi r'^2), recomputed */
+        float r_before, r_after;  /* r -> r sqrt((N + alpha M) / (N + M)) (a ball: cbrt) */
+        double tau_before[3], tau_after[3]; /* (tau + beta phi) r'^2 / r^2 (a ball: r'^3 / r^3) */
+        double tau_other[3];      /* media: the other statistic's tau and radius (the ball's */
+        float r_other;            /* for a surface point, the disc's for a point in a medium) */
+        double value[3];          /* ld' / (sample + 1) + tau' / (N_emitted pi r'^2) (media: +
+                                   * tau_vol / (N_emitted 4/3 pi r_vol^3)), recomputed */
         int state_exact;          /* the recomputed N', r', tau', ld' are the render's, bit for bit */
     } sppm;
 } CstExplain;
@@ -328,7 +334,7 @@ CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *se
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
 /* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm": the integrators
- * cst_explain follows (bdpt, vcm and sppm in scenes without participating media). */
+ * cst_explain follows (bdpt and vcm in scenes without participating media). */
 CST_API const char *cst_explain_integrators(void);
 
 #endif

@@ -328,12 +328,16 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
  * subpath_media.c's media_merge). The ball's radius shrinks by its own rule
  * (progressive_update). */
 static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color beta, SppmPixel *v,
-                          uint64_t *rays)
+                          Recorder *rec, uint64_t *rays)
 {
     Color L = color_s(0.0f);
     MediaVisiblePoint mv;
     v->valid = media_visible_point(s, ray, rng, wl, beta, &L, &mv, rays);
+    /* explain: the chain through media is not itemised; its emission is one addition. */
+    if (rec) recorder_add(rec, CST_EXPLAIN_EMISSION, color_s(1.0f), L);
     if (!v->valid) return L;
+    if (rec && mv.vol) recorder_medium_vertex(rec, mv.p, mv.medium, 1);
+    else if (rec) recorder_vertex(rec, s, &mv.sh, 1, wl);
     v->p = mv.p;
     v->wo = mv.wo;
     v->vol = mv.vol;
@@ -346,7 +350,11 @@ static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengt
         v->n = v3_dot(mv.sh.ng, mv.wo) >= 0.0f ? mv.sh.ng : v3_neg(mv.sh.ng);
         x = (VolVertex){mv.sh.p, mv.sh.ns, mv.sh.ng, mv.wo, &mv.bsdf, &mv.sh, 0.0f, mv.medium, ray.time};
     }
-    if (s->emitter_sampler.lights > 0) L = color_madd(L, mv.beta, volpath_nee(s, &x, false, rng, wl, rays));
+    if (s->emitter_sampler.lights > 0) {
+        const Color d = volpath_nee(s, &x, false, rng, wl, rays);
+        if (rec) recorder_add(rec, CST_EXPLAIN_NEE, mv.beta, d);
+        L = color_madd(L, mv.beta, d);
+    }
     v->beta = mv.beta;
     if (mv.vol) {
         /* sigma_s(p): in a grid, the density at p times the medium's sigma_s. */
@@ -410,7 +418,7 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
             rec->depth = 0;
         }
         if (scene_has_media(s)) {
-            L = camera_media(s, ray, &rng, wlp, beta, v, rays); /* (explain refuses media) */
+            L = camera_media(s, ray, &rng, wlp, beta, v, rec, rays);
         } else {
             v->valid = photon_trace_to_diffuse(s, ray, &rng, wlp, &beta, &L, &sh, &v->bsdf, &v->wo, rays, rec);
         }

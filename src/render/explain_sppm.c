@@ -39,12 +39,15 @@ static void replay(const Integrator *it, const Recorder *r, const SppmTrace *tr,
     }
     if (it->spectral) L = spectrum_to_rgb(L, &tr->wl);
     if (!color_is_finite(L)) L = color_s(0.0f);
+    /* The statistic the visible point updates: its disc's, or in a medium its ball's. */
     const SppmPixelState *b = &tr->before;
-    double tau[3], n = b->n_photons, ld[3];
-    float rad = b->r;
+    const bool vol = tr->valid && tr->vol;
+    const double *tau_b = vol ? b->tau_vol : b->tau, n_b = vol ? b->n_vol : b->n_photons;
+    double tau[3], n = n_b, ld[3];
+    float rad = vol ? b->r_vol : b->r;
     for (int c = 0; c < 3; c++) {
         ld[c] = b->ld[c] + (double)L.c[c];
-        tau[c] = b->tau[c];
+        tau[c] = tau_b[c];
     }
     double w[3] = {(double)tr->beta.c[0], (double)tr->beta.c[1], (double)tr->beta.c[2]};
     if (tr->valid && m > 0) {
@@ -54,9 +57,16 @@ static void replay(const Integrator *it, const Recorder *r, const SppmTrace *tr,
             const Color rgb = spectrum_to_rgb(bp, &tr->wl);
             for (int c = 0; c < 3; c++) phi[c] = (double)rgb.c[c], w[c] = 1.0;
         }
+        /* HJ 2009 eq. 6, in 3D for a ball (progressive_update) */
         const double n_new = n + (double)SPPM_ALPHA * (double)m;
-        const double r_new = (double)rad * sqrt(n_new / (n + (double)m));
-        const double shrink = r_new * r_new / ((double)rad * (double)rad);
+        double r_new, shrink;
+        if (vol) {
+            r_new = (double)rad * cbrt(n_new / (n + (double)m));
+            shrink = r_new * r_new * r_new / ((double)rad * (double)rad * (double)rad);
+        } else {
+            r_new = (double)rad * sqrt(n_new / (n + (double)m));
+            shrink = r_new * r_new / ((double)rad * (double)rad);
+        }
         bool ok = true;
         for (int c = 0; c < 3; c++) ok &= isfinite(phi[c] * w[c]);
         if (ok) {
@@ -65,29 +75,39 @@ static void replay(const Integrator *it, const Recorder *r, const SppmTrace *tr,
             rad = (float)r_new;
         }
     }
+    /* sppm_finish: the disc's estimate, and in scenes with media the ball's */
     const int iters = iteration + 1;
     o->emitted = (double)tr->photons * (double)iters;
-    const double area = (double)CST_PI * (double)rad * (double)rad;
+    o->media = it->scene->num_media || it->scene->num_medium_ifaces;
+    const double *tau_s = vol ? b->tau : tau, *tau_v = vol ? tau : b->tau_vol;
+    const float r_s = vol ? b->r : rad, r_v = vol ? rad : b->r_vol;
+    const double area = (double)CST_PI * (double)r_s * (double)r_s;
+    const double rv = (double)r_v, volume = 4.0 / 3.0 * (double)CST_PI * rv * rv * rv;
     for (int c = 0; c < 3; c++) {
-        o->value[c] = ld[c] / iters + (o->emitted > 0.0 ? tau[c] / (o->emitted * area) : 0.0);
+        o->value[c] = ld[c] / iters + (o->emitted > 0.0 ? tau_s[c] / (o->emitted * area) : 0.0);
+        if (o->media && o->emitted > 0.0) o->value[c] += tau_v[c] / (o->emitted * volume);
+        o->tau_other[c] = vol ? b->tau[c] : b->tau_vol[c];
         o->direct[c] = L.c[c];
         o->ld_before[c] = b->ld[c];
         o->ld_after[c] = ld[c];
         o->phi[c] = phi[c];
-        o->tau_before[c] = b->tau[c];
+        o->tau_before[c] = tau_b[c];
         o->tau_after[c] = tau[c];
         o->beta[c] = tr->beta.c[c];
     }
     o->visible = tr->valid;
+    o->volume = vol;
+    o->r_other = vol ? b->r : b->r_vol;
     o->photons = tr->photons;
     o->m = m;
-    o->n_before = b->n_photons;
+    o->n_before = n_b;
     o->n_after = n;
-    o->r_before = b->r;
+    o->r_before = vol ? b->r_vol : b->r;
     o->r_after = rad;
     const SppmPixelState *a = &tr->after;
-    o->state_exact = m == tr->m && memcmp(&n, &a->n_photons, sizeof n) == 0 && rad == a->r &&
-                     memcmp(tau, a->tau, sizeof tau) == 0 && memcmp(ld, a->ld, sizeof ld) == 0;
+    o->state_exact = m == tr->m && memcmp(&n, vol ? &a->n_vol : &a->n_photons, sizeof n) == 0 &&
+                     rad == (vol ? a->r_vol : a->r) && memcmp(tau, vol ? a->tau_vol : a->tau, sizeof tau) == 0 &&
+                     memcmp(ld, a->ld, sizeof ld) == 0;
 }
 
 /* Each event's share of the pixel's value: a photon's beta f Phi times the box kernel
@@ -96,9 +116,11 @@ static void replay(const Integrator *it, const Recorder *r, const SppmTrace *tr,
  * the direct sums are averaged over. Spectral: through the iteration's sensor conversion. */
 static void shares(const Integrator *it, const Recorder *r, const SppmTrace *tr, int iteration, CstExplain *ex)
 {
-    const double kernel = ex->sppm.emitted > 0.0
-                          ? 1.0 / (ex->sppm.emitted * (double)CST_PI * (double)tr->before.r * (double)tr->before.r)
-                          : 0.0;
+    /* box kernel of the disc 1 / (N_e pi r^2), or of the ball 1 / (N_e 4/3 pi r^3) */
+    const double rad = (double)ex->sppm.r_before;
+    const double kernel = !(ex->sppm.emitted > 0.0) ? 0.0
+                          : ex->sppm.volume ? 1.0 / (ex->sppm.emitted * (4.0 / 3.0 * (double)CST_PI * rad * rad * rad))
+                          : 1.0 / (ex->sppm.emitted * (double)CST_PI * rad * rad);
     for (int i = 0; i < r->n; i++) {
         CstExplainEvent *e = &r->ev[i];
         const bool photon = e->kind == CST_EXPLAIN_PHOTON;
@@ -115,9 +137,6 @@ CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *settings, in
                        CstExplain **out, CstError *err)
 {
     *out = NULL;
-    if (scene->num_media || scene->num_medium_ifaces)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow sppm's visible points and photons in "
-                        "participating media yet; expected a scene without media");
     CstRenderSettings st = *settings;
     /* The render of iteration + 1 iterations, whole, on one thread (the image does not
      * depend on the thread count, sppm.c). */
@@ -152,11 +171,6 @@ CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *settings, in
         goto done;
     }
     if ((status = integrator_prepare(it, scene, &st, film, &worker, &rays, NULL, NULL, err)) != CST_OK) goto done;
-    if (it->scene->num_media || it->scene->num_medium_ifaces) { /* subsurface materials walked as media */
-        status = cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow sppm through media yet; expected a "
-                          "scene without them");
-        goto done;
-    }
     const int pixel = y * st.width + x;
     SppmTrace tr;
     memset(&tr, 0, sizeof tr);

@@ -8,7 +8,7 @@
 
 /* cst_explain's sppm case: settings resolved and checked by the caller (pixel on the image,
  * iteration >= 0). Runs the render's iterations 0..iteration over the whole image on one
- * thread, recording pixel (x, y) in the last one. CST_ERR_UNSUPPORTED in scenes with media. */
+ * thread, recording pixel (x, y) in the last one (visible points and photons in media too). */
 CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *st, int x, int y, int iteration,
                        CstExplain **out, CstError *err);
 
