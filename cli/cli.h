@@ -78,6 +78,12 @@ int cli_verify(const CliArgs *a);
 int cli_compare(const CliArgs *a);
 /* caustic explain (explain.c): one pixel sample's path, text or --json, on stdout. */
 int cli_explain(const CliArgs *a);
+/* explain_sppm.c: sppm's iteration (chain, photons, update) as text, a --why-* line, or
+ * added to explain.c's JSON object o (a json_t). */
+struct json_t;
+void cli_explain_sppm_text(FILE *f, const CstExplain *x);
+void cli_explain_sppm_why(FILE *f, const CstExplain *x, bool bright);
+void cli_explain_sppm_json(struct json_t *o, const CstExplain *x);
 /* caustic view's click-to-explain: explain's text for pixel (x, y) at `sample` under s (the
  * current mode's settings; mode its name, NULL for the preview, which has no paths) on stdout. */
 void cli_explain_view(const CstScene *scene, const CstRenderSettings *s, int x, int y, int sample, const char *mode);

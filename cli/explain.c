@@ -298,6 +298,10 @@ static void print_text_light(FILE *f, const CstExplain *x)
 
 static void print_text(FILE *f, const CstExplain *x)
 {
+    if (x->integrator == CST_INTEGRATOR_SPPM) {
+        cli_explain_sppm_text(f, x);
+        return;
+    }
     if (is_light(x)) {
         print_text_light(f, x);
         return;
@@ -482,6 +486,7 @@ static bool print_json(FILE *f, const CstExplain *x)
         json_object_set_new(o, "mis_max_sum_error", num(x->mis_max_sum_error));
         json_object_set_new(o, "splats_exact", json_boolean(x->splats_exact));
     }
+    if (x->integrator == CST_INTEGRATOR_SPPM) cli_explain_sppm_json(o, x);
     /* 17 significant digits: every float and double reads back to the same bits. */
     int rc = json_dumpf(o, f, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
     json_decref(o);
@@ -595,7 +600,9 @@ int cli_explain(const CliArgs *a)
         return CLI_EXIT_USAGE;
     }
     /* --why-*: the one line alone (the check still decides the exit code). */
-    bool ok = a->json ? print_json(f, x) : a->explain_why == 1 ? (print_why_dark(f, x), true)
+    const bool sppm_why = x->integrator == CST_INTEGRATOR_SPPM && a->explain_why;
+    bool ok = a->json ? print_json(f, x) : sppm_why ? (cli_explain_sppm_why(f, x, a->explain_why == 2), true)
+            : a->explain_why == 1 ? (print_why_dark(f, x), true)
             : a->explain_why == 2 ? (print_why_bright(f, x), true) : (print_text(f, x), true);
     if (f != stdout && fclose(f) != 0) ok = false;
     if (!ok) fprintf(stderr, "caustic: error: writing the explanation failed\n");

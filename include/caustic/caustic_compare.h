@@ -190,7 +190,8 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
  * did: every vertex, every sampling decision, every strategy's contribution with its MIS
  * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (media
  * and subsurface materials too), whitted, light (the splats that reached the pixel), bdpt and
- * vcm (RGB mode); CST_ERR_UNSUPPORTED for the rest. */
+ * vcm (RGB mode), sppm (an iteration: its camera chain, photons and progressive update);
+ * CST_ERR_UNSUPPORTED for the rest. */
 typedef enum CstExplainKind {
     CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material; or a
                              * subsurface exit (material_type "subsurface exit": pdf_a, pmf
@@ -208,7 +209,11 @@ typedef enum CstExplainKind {
                              * transmittance; flag SCATTERED when a medium vertex follows) */
     CST_EXPLAIN_PHOTON,     /* photon: a photon within the gather radius of the vertex (p its
                              * position, wi its incoming direction, value its power, beta the
-                             * BSDF f without the cosine; contribution f * power) */
+                             * BSDF f without the cosine; contribution f * power); sppm: also
+                             * path the photon path (of the iteration), s its hit's bounces
+                             * from the light (2 = the first SPPM gathers), distance its
+                             * distance from the visible point, pmf the box kernel
+                             * 1 / (N_emitted pi r^2), share its part of the pixel's value */
     CST_EXPLAIN_ESTIMATE    /* photon: the density estimate over the photons listed before it
                              * (flag CAUSTIC: the caustic map at the first diffuse vertex, else
                              * the global map at the final gather's vertex): distance the
@@ -301,17 +306,42 @@ typedef struct CstExplain {
      * in the film's order (their shares in the SPLAT events' share), equals film_value bit
      * for bit. */
     int splats_exact;
+    /* sppm: `sample` is the iteration; the pixel's progressive update in it (Hachisuka &
+     * Jensen 2009 eqs. 6-7) and its value after it (film_value: a render of sample + 1
+     * iterations holds it). */
+    struct CstExplainSppm {
+        int visible;              /* the camera chain reached a non-delta point */
+        int volume;               /* ... in a participating medium: its ball (radius r, volume
+                                   * 4/3 pi r^3) and statistic, the disc's untouched */
+        int media;                /* the scene has media: the value adds the balls' estimate */
+        long long photons;        /* photon paths per iteration */
+        double emitted;           /* N_emitted: photons * (sample + 1) */
+        float beta[3];            /* the visible point's throughput (filter weight included) */
+        float direct[3];          /* this iteration's emission + NEE, added to ld (RGB) */
+        double ld_before[3], ld_after[3]; /* sums of `direct` over the iterations */
+        long long m;              /* M: photons gathered */
+        double phi[3];            /* their sum of f Phi (RGB; spectral: converted) */
+        double n_before, n_after; /* N -> N + alpha M */
+        float r_before, r_after;  /* r -> r sqrt((N + alpha M) / (N + M)) (a ball: cbrt) */
+        double tau_before[3], tau_after[3]; /* (tau + beta phi) r'^2 / r^2 (a ball: r'^3 / r^3) */
+        double tau_other[3];      /* media: the other statistic's tau and radius (the ball's */
+        float r_other;            /* for a surface point, the disc's for a point in a medium) */
+        double value[3];          /* ld' / (sample + 1) + tau' / (N_emitted pi r'^2) (media: +
+                                   * tau_vol / (N_emitted 4/3 pi r_vol^3)), recomputed */
+        int state_exact;          /* the recomputed N', r', tau', ld' are the render's, bit for bit */
+    } sppm;
 } CstExplain;
 
-/* Replays sample `sample` (for bdpt: iteration) of pixel (x, y) under `settings` (as for
+/* Replays sample `sample` (for bdpt and sppm: iteration; sppm replays iterations 0..sample
+ * of the whole image) of pixel (x, y) under `settings` (as for
  * cst_render; spp, crop, threads and first_sample are ignored) and records its path.
  * *out: a new record, cst_explain_destroy. CST_ERR_INVALID_ARG for a pixel off the image
  * or a negative sample; CST_ERR_UNSUPPORTED for an integrator explain cannot follow. */
 CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
-/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm": the integrators cst_explain
- * follows (bdpt and vcm in scenes without participating media). */
+/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm": the integrators
+ * cst_explain follows (bdpt and vcm in scenes without participating media). */
 CST_API const char *cst_explain_integrators(void);
 
 #endif

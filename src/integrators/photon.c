@@ -118,18 +118,26 @@ static bool store_media_photon(void *ctx, const MediaPhoton *mp)
  * hit's) to *le when le is not NULL. *wo_out is the direction back along the last segment.
  * Returns false if the ray leaves the scene or the chain stops. */
 bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color *beta, Color *le,
-                             SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays)
+                             SurfaceHit *sh, Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays, struct Recorder *rec)
 {
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
         ++*rays;
         if (!scene_intersect(s, &ray, sh)) {
             /* The environment seen from the camera, directly or through the chain. */
-            if (le) *le = color_madd(*le, *beta, scene_env_radiance(s, ray.d, wl));
+            if (le) {
+                const Color env = scene_env_radiance(s, ray.d, wl);
+                if (rec) recorder_add(rec, CST_EXPLAIN_ESCAPE, *beta, env);
+                *le = color_madd(*le, *beta, env);
+            }
             return false;
         }
         Vec3 wo = v3_neg(ray.d);
-        if (le && sh->emitter >= 0)
-            *le = color_madd(*le, *beta, scene_emission(s, sh, wo, wl));
+        if (rec) recorder_vertex(rec, s, sh, depth + 1, wl);
+        if (le && sh->emitter >= 0) {
+            const Color e = scene_emission(s, sh, wo, wl);
+            if (rec) recorder_add(rec, CST_EXPLAIN_EMISSION, *beta, e);
+            *le = color_madd(*le, *beta, e);
+        }
         scene_bsdf(s, sh, wl, bsdf);
         float p_delta = bsdf_delta_probability(bsdf, wo);
         if (!(p_delta > 0.0f)) {
@@ -146,11 +154,13 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, const Wavele
              * took the non-delta part with probability 1 - p_delta, so this is the point
              * whose non-delta part the caller estimates, weighted by 1 / (1 - p_delta); the
              * other branch follows the delta lobe below (its weight holds 1 / p_delta). */
+            if (rec) recorder_mixed(rec, 1.0f - p_delta, *beta);
             *beta = color_scale(*beta, 1.0f / (1.0f - p_delta));
             *wo_out = wo;
             return color_is_finite(*beta);
         }
         if (!sampled) return false;
+        if (rec) recorder_scatter(rec, &bs, *beta);
         *beta = color_mul(*beta, bs.weight);
         if (color_is_black(*beta)) return false;
         ray = ray_make_at(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY, sh->time);
@@ -211,7 +221,7 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
     SurfaceHit x;
     Bsdf bsdf_x;
     Vec3 wo;
-    const bool diffuse = photon_trace_to_diffuse(s, ray, rng, wl, &beta, &L, &x, &bsdf_x, &wo, rays);
+    const bool diffuse = photon_trace_to_diffuse(s, ray, rng, wl, &beta, &L, &x, &bsdf_x, &wo, rays, NULL);
     if (m->rec) recorder_photon_chain(m->rec, s, diffuse ? &x : NULL, beta, L);
     if (!diffuse) return L;
 
@@ -238,7 +248,7 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
         Vec3 wo_y;
         Ray gr = ray_make(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
-        if (photon_trace_to_diffuse(s, gr, rng, wl, &g, NULL, &y, &bsdf_y, &wo_y, rays)) {
+        if (photon_trace_to_diffuse(s, gr, rng, wl, &g, NULL, &y, &bsdf_y, &wo_y, rays, NULL)) {
             if (m->rec) recorder_vertex(m->rec, s, &y, 2, NULL);
             Color global = radiance_estimate(&set->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
             if (m->rec) recorder_estimate(m->rec, false, m->radius, g, global);
@@ -424,7 +434,7 @@ static float auto_radius(const Scene *s, const Camera *moving, const PhotonParam
         SurfaceHit sh;
         Bsdf b;
         Vec3 wo;
-        if (!photon_trace_to_diffuse(s, r, &rng, NULL, &beta, NULL, &sh, &b, &wo, rays)) continue;
+        if (!photon_trace_to_diffuse(s, r, &rng, NULL, &beta, NULL, &sh, &b, &wo, rays, NULL)) continue;
         float v = knn_dist2(g, sh.p);
         if (v > 0.0f) d2[n++] = v;
     }

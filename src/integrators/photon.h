@@ -119,9 +119,11 @@ struct Bsdf;
  * emission it passes to *le when le is not NULL. At a BSDF with both kinds of lobes it
  * stops with the probability of the non-delta ones (and *beta divided by it), and follows
  * a delta lobe otherwise: the caller then estimates only the non-delta part at *sh. False
- * if the ray leaves the scene, the chain dies or exceeds PHOTON_MAX_SPECULAR bounces. */
+ * if the ray leaves the scene, the chain dies or exceeds PHOTON_MAX_SPECULAR bounces.
+ * rec: NULL, or sppm's explain recorder (recorder.h), which gets every hit, delta scatter
+ * and emission added (photon_li records its chain in one event instead). */
 bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color *beta, Color *le,
-                             SurfaceHit *sh, struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays);
+                             SurfaceHit *sh, struct Bsdf *bsdf, Vec3 *wo_out, uint64_t *rays, struct Recorder *rec);
 /* Direct light at a non-delta point by one emitter sample, no MIS. */
 Color photon_direct_light(const Scene *s, const struct Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo,
                         Sampler *rng, const Wavelengths *wl, uint64_t *rays);

@@ -505,3 +505,30 @@ void recorder_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta)
     put_color(e->value, color_s(1.0f));
     put_color(e->contribution, beta);
 }
+
+void recorder_mixed(Recorder *r, float prob, Color beta)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
+    e->pmf = prob;
+    put_color(e->beta, beta);
+    const Color w = color_s(1.0f / prob);
+    put_color(e->value, w);
+    put_color(e->contribution, color_mul(beta, w));
+}
+
+void recorder_sppm_photon(Recorder *r, Vec3 p, Vec3 wi, Color power, Color f, Color d, int path, int depth,
+                          float dist)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_PHOTON);
+    put3(e->p, p);
+    put3(e->wi, wi);
+    e->path = path;
+    e->s = depth;
+    e->distance = dist;
+    put_color(e->beta, f);
+    put_color(e->value, power);
+    put_color(e->contribution, d);
+    if (e == &r->spare) return;
+    r->beta[e - r->ev] = f;
+    r->value[e - r->ev] = d; /* the replay sums d, the render's own product */
+}

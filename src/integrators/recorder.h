@@ -188,6 +188,16 @@ void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
  * estimate est. */
 void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est);
 
+/* ---- SPPM (sppm.c; its camera chain by photon_trace_to_diffuse) */
+/* At a BSDF with delta and non-delta lobes the chain stopped with the non-delta lobes'
+ * probability `prob`: a SCATTER event of pmf prob and weight 1 / prob, beta before it. */
+void recorder_mixed(Recorder *r, float prob, Color beta);
+/* A photon hit deposited at the visible point: photon path `path` of the iteration, its hit
+ * after `depth` bounces from the light, at distance `dist` from the point; f the BSDF (or
+ * phase function) value it is weighted by, d = f * power the addition to phi (all lanes). */
+void recorder_sppm_photon(Recorder *r, Vec3 p, Vec3 wi, Color power, Color f, Color d, int path, int depth,
+                          float dist);
+
 /* ---- BDPT's whole paths for the explicit MIS check (RecorderPaths) */
 /* The camera subpath starts (ray origin, direction and time; wl its wavelengths in spectral
  * mode, NULL in RGB). */

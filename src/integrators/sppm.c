@@ -37,6 +37,7 @@
 #include "core/error.h"
 #include "film/filter.h"
 #include "integrators/photon.h"
+#include "integrators/recorder.h"
 #include "integrators/subpath_media.h"
 #include "integrators/volpath.h"
 #include "materials/bsdf.h"
@@ -189,15 +190,25 @@ static void sppm_grid_build(SppmGrid *g, const SppmPixel *px, size_t count)
 
 /* The hits of one chunk of photon paths, in photon order then path order. Reused by every
  * iteration, so the array stops growing after the first ones. */
+/* Explain only (SppmTrace): which photon path and bounce made a hit. */
+typedef struct SppmHitOrigin {
+    uint32_t path, depth;
+} SppmHitOrigin;
+
 typedef struct SppmHitList {
     SppmHit *v;
     size_t n, cap;
     bool oom;              /* a hit was lost for lack of memory: the render fails */
+    /* Explain's iteration: origin[i] is hit i's (the render keeps track false). */
+    bool track;
+    uint32_t path;         /* the photon path being traced */
+    ARRAY(SppmHitOrigin) origin;
 } SppmHitList;
 
-static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Color power)
+static void hit_list_push(SppmHitList *l, Vec3 p, Vec3 wi, Vec3 n, Color power, int depth)
 {
     if (!array_push(l, ((SppmHit){p, wi, n, power, SPPM_NO_BUCKET}))) l->oom = true;
+    if (l->track && !array_push(&l->origin, ((SppmHitOrigin){l->path, (uint32_t)depth}))) l->oom = true;
 }
 
 /* The bucket of a photon at pos, or SPPM_NO_BUCKET outside the box of every disc (no disc
@@ -234,26 +245,31 @@ static float sppm_time(const Scene *s, const SppmParams *sp, int iter)
 }
 
 /* Adds a photon hit whose position is inside v's disc to v's phi (photon.c's
- * density_visit rules). */
-static inline void sppm_deposit(SppmPixel *v, const SppmHit *hit)
+ * density_visit rules); true if it counted. f_out: NULL, or (explain) the f it was
+ * weighted by (the phase function's value in a medium) and d_out the addition. */
+static inline bool sppm_deposit(SppmPixel *v, const SppmHit *hit, Color *f_out, Color *d_out)
 {
     /* A volume photon (n = 0) meets visible points in media only, and a surface photon
      * surface points only: each estimate is a density of its own measure. */
     const bool hit_vol = hit->n.x == 0.0f && hit->n.y == 0.0f && hit->n.z == 0.0f;
-    if (hit_vol != v->vol) return;
+    if (hit_vol != v->vol) return false;
     if (hit_vol) {
         /* UPBP's point-point 3D estimator (Krivanek et al. 2014, table 1): the phase
          * function at p; the 1 / sigma_s(p) is in v->beta (camera_row_media). */
         const float f = phase_hg_eval(v->wo, hit->wi, v->g);
         for (int c = 0; c < COLOR_LANES; c++) v->phi[c] += (double)(f * hit->power.c[c]);
         v->m++;
-        return;
+        if (f_out) {
+            *f_out = color_s(f);
+            for (int c = 0; c < COLOR_LANES; c++) d_out->c[c] = f * hit->power.c[c];
+        }
+        return true;
     }
     /* A photon on the other side of a thin wall must not light this side, unless the
      * visible point's surface transmits (rough glass). */
-    if (!(v3_dot(hit->n, v->n) > 0.0f) && !bsdf_has_transmission(&v->bsdf)) return;
+    if (!(v3_dot(hit->n, v->n) > 0.0f) && !bsdf_has_transmission(&v->bsdf)) return false;
     float cos_i = fabsf(v3_dot(v->n, hit->wi));
-    if (!(cos_i > 0.0f)) return;
+    if (!(cos_i > 0.0f)) return false;
     /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
     Color f = color_scale(bsdf_eval(&v->bsdf, v->wo, hit->wi), 1.0f / cos_i);
     Color d = color_mul(f, hit->power);
@@ -262,6 +278,8 @@ static inline void sppm_deposit(SppmPixel *v, const SppmHit *hit)
     v->phi[2] += (double)d.c[2];
     v->phi[3] += (double)d.c[3];
     v->m++;
+    if (f_out) *f_out = f, *d_out = d;
+    return true;
 }
 
 /* SPPM's photon store: every non-delta hit but the first one from the light (depth 1 =
@@ -269,7 +287,7 @@ static inline void sppm_deposit(SppmPixel *v, const SppmHit *hit)
 static bool store_hit(void *ctx, const Photon *ph, int depth, bool specular_only)
 {
     (void)specular_only;
-    if (depth > 1) hit_list_push(ctx, ph->pos, ph->wi, ph->n, ph->power); /* sets oom, checked after the phase */
+    if (depth > 1) hit_list_push(ctx, ph->pos, ph->wi, ph->n, ph->power, depth); /* sets oom, checked after the phase */
     return true;
 }
 
@@ -278,7 +296,7 @@ static bool store_hit(void *ctx, const Photon *ph, int depth, bool specular_only
  * (through media, with transmittance). */
 static bool store_media_hit(void *ctx, const MediaPhoton *ph)
 {
-    if (ph->bounces > 1) hit_list_push(ctx, ph->p, ph->wi, ph->n, ph->power);
+    if (ph->bounces > 1) hit_list_push(ctx, ph->p, ph->wi, ph->n, ph->power, ph->bounces);
     return true;
 }
 
@@ -289,6 +307,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
                          uint64_t *rays)
 {
     /* Powers unscaled: the estimate divides by the photons of all iterations. */
+    out->path = (uint32_t)index;
     Wavelengths wl;
     if (sp->spectral) wl = sppm_wavelengths(sp, iter);
     const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth,
@@ -309,12 +328,16 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
  * subpath_media.c's media_merge). The ball's radius shrinks by its own rule
  * (progressive_update). */
 static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengths *wl, Color beta, SppmPixel *v,
-                          uint64_t *rays)
+                          Recorder *rec, uint64_t *rays)
 {
     Color L = color_s(0.0f);
     MediaVisiblePoint mv;
     v->valid = media_visible_point(s, ray, s->camera_medium, rng, wl, beta, &L, &mv, rays);
+    /* explain: the chain through media is not itemised; its emission is one addition. */
+    if (rec) recorder_add(rec, CST_EXPLAIN_EMISSION, color_s(1.0f), L);
     if (!v->valid) return L;
+    if (rec && mv.vol) recorder_medium_vertex(rec, mv.p, mv.medium, 1);
+    else if (rec) recorder_vertex(rec, s, &mv.sh, 1, wl);
     v->p = mv.p;
     v->wo = mv.wo;
     v->vol = mv.vol;
@@ -327,7 +350,11 @@ static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengt
         v->n = v3_dot(mv.sh.ng, mv.wo) >= 0.0f ? mv.sh.ng : v3_neg(mv.sh.ng);
         x = (VolVertex){mv.sh.p, mv.sh.ns, mv.sh.ng, mv.wo, &mv.bsdf, &mv.sh, 0.0f, mv.medium, ray.time};
     }
-    if (s->emitter_sampler.lights > 0) L = color_madd(L, mv.beta, volpath_nee(s, &x, false, rng, wl, rays));
+    if (s->emitter_sampler.lights > 0) {
+        const Color d = volpath_nee(s, &x, false, rng, wl, rays);
+        if (rec) recorder_add(rec, CST_EXPLAIN_NEE, mv.beta, d);
+        L = color_madd(L, mv.beta, d);
+    }
     v->beta = mv.beta;
     if (mv.vol) {
         /* sigma_s(p): in a grid, the density at p times the medium's sigma_s. */
@@ -343,9 +370,21 @@ static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengt
     return L;
 }
 
-/* The visible points of row y for iteration `iter`. */
+static SppmPixelState pixel_state(const SppmPixel *v)
+{
+    SppmPixelState o;
+    for (int c = 0; c < 3; c++) o.ld[c] = v->ld[c], o.tau[c] = v->tau[c], o.tau_vol[c] = v->tau_vol[c];
+    o.n_photons = v->n_photons;
+    o.r = v->r;
+    o.n_vol = v->n_vol;
+    o.r_vol = v->r_vol;
+    return o;
+}
+
+/* The visible points of row y for iteration `iter`; tr: NULL, or explain's trace of this
+ * iteration (its pixel's camera chain recorded). */
 static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, const Filter *filter, SppmPixel *px,
-                       int y, int iter, uint64_t *nonfinite, uint64_t *rays)
+                       int y, int iter, SppmTrace *tr, uint64_t *nonfinite, uint64_t *rays)
 {
     Wavelengths wl;
     if (sp->spectral) wl = sppm_wavelengths(sp, iter);
@@ -371,13 +410,27 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         ray.time = time;
         Color L = color_s(0.0f), beta = color_s(fw);
         SurfaceHit sh;
+        Recorder *rec = tr && pixel == tr->pixel ? tr->rec : NULL;
+        if (rec) {
+            tr->before = pixel_state(v);
+            tr->fw = fw;
+            if (wlp) tr->wl = *wlp, recorder_wavelengths(rec, wlp);
+            rec->depth = 0;
+        }
         if (scene_has_media(s)) {
-            L = camera_media(s, ray, &rng, wlp, beta, v, rays);
+            L = camera_media(s, ray, &rng, wlp, beta, v, rec, rays);
         } else {
-            v->valid = photon_trace_to_diffuse(s, ray, &rng, wlp, &beta, &L, &sh, &v->bsdf, &v->wo, rays);
+            v->valid = photon_trace_to_diffuse(s, ray, &rng, wlp, &beta, &L, &sh, &v->bsdf, &v->wo, rays, rec);
         }
         if (v->valid && !scene_has_media(s)) {
-            L = color_madd(L, beta, photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, wlp, rays));
+            const Sampler peek = rng; /* explain: NEE's draws, read again by recorder_nee */
+            const Color d = photon_direct_light(s, &v->bsdf, &sh, v->wo, &rng, wlp, rays);
+            if (rec) {
+                Sampler u = peek;
+                const float u_sel = sampler_1d(&u);
+                recorder_nee(rec, s, &v->bsdf, &sh, v->wo, u_sel, sampler_2d(&u), false, beta, d);
+            }
+            L = color_madd(L, beta, d);
             v->p = sh.p;
             v->n = v3_dot(sh.ng, v->wo) >= 0.0f ? sh.ng : v3_neg(sh.ng);
             v->beta = beta;
@@ -391,6 +444,7 @@ static void camera_row(const Scene *s, const Camera *cam, const SppmParams *sp, 
         v->ld[0] += (double)L.c[0];
         v->ld[1] += (double)L.c[1];
         v->ld[2] += (double)L.c[2];
+        if (rec) tr->direct = L;
     }
 }
 
@@ -471,7 +525,15 @@ struct Sppm {
     int num_workers;
     float r0;             /* the initial radius */
     uint64_t prepare_rays; /* traced by the automatic radius */
+    SppmTrace *trace;     /* explain (sppm_trace); NULL in renders */
+    ARRAY(SppmHitOrigin) sorted_origin; /* explain: the origin of g.hits[k] by its key */
 };
+
+/* The trace, when iteration job->iter is the one explain records. */
+static inline SppmTrace *traced(const struct Sppm *job)
+{
+    return job->trace && job->trace->iteration == job->iter ? job->trace : NULL;
+}
 typedef struct Sppm SppmJob;
 
 /* Pixel range r of the deposit phase is [range_lo(r), range_lo(r + 1)). */
@@ -487,6 +549,8 @@ static __attribute__((noinline)) void photon_chunk(SppmJob *job, SppmWorker *w, 
 {
     SppmHitList *l = &job->hits[u];
     l->n = 0;
+    l->track = traced(job) != NULL;
+    l->origin.n = 0;
     int first = u * SPPM_PHOTON_CHUNK;
     int last = first + SPPM_PHOTON_CHUNK < job->photons ? first + SPPM_PHOTON_CHUNK : job->photons;
     for (int i = first; i < last; i++) trace_photon(job->s, &job->sp, l, (uint64_t)i, job->iter, &w->rays);
@@ -510,6 +574,7 @@ static bool grid_sort_hits(SppmJob *job)
             }
     }
     if (total >= UINT32_MAX || !array_grow(&g->hits, &g->hits_cap, total, sizeof *g->hits)) return false;
+    job->sorted_origin.n = 0;
     for (uint32_t h = 0; h < g->buckets; h++) g->cell_start[h + 1] += g->cell_start[h];
     /* Fill using cell_start[h] as bucket h's cursor, then shift the starts back: the usual
      * in-place counting sort. */
@@ -521,6 +586,9 @@ static bool grid_sort_hits(SppmJob *job)
             if (b == SPPM_NO_BUCKET) continue;
             SppmHit *h = &g->hits[g->cell_start[b]++];
             *h = l->v[i];
+            if (l->track) {
+                if (!array_push(&job->sorted_origin, l->origin.v[i])) return false;
+            }
             h->key = seq++;
         }
     }
@@ -536,6 +604,8 @@ static void gather_pixel(SppmJob *job, uint32_t i)
     const SppmGrid *g = &job->g;
     SppmPixel *v = &job->px[i];
     const SppmDisc disc = g->discs[i];
+    SppmTrace *tr = traced(job);
+    Recorder *rec = tr && tr->pixel == (int)i ? tr->rec : NULL;
     uint32_t b[8], cur[8], end[8];
     int n = pixel_buckets(g, v, b);
     int live = 0;
@@ -555,7 +625,15 @@ static void gather_pixel(SppmJob *job, uint32_t i)
             end[k] = end[live];
         }
         if (photon_dist2(hit->p, disc.p) > disc.r2) continue;
-        sppm_deposit(v, hit);
+        if (rec) {
+            Color f, d;
+            const SppmHitOrigin o = job->sorted_origin.v[hit->key];
+            if (sppm_deposit(v, hit, &f, &d))
+                recorder_sppm_photon(rec, hit->p, hit->wi, hit->power, f, d, (int)o.path, (int)o.depth,
+                                     sqrtf(photon_dist2(hit->p, disc.p)));
+        } else {
+            sppm_deposit(v, hit, NULL, NULL);
+        }
     }
 }
 
@@ -569,7 +647,24 @@ static __attribute__((noinline)) void deposit_range(SppmJob *job, SppmWorker *w,
             if (job->px[i].valid) gather_pixel(job, i);
     Wavelengths wl;
     if (job->sp.spectral) wl = sppm_wavelengths(&job->sp, job->iter);
-    for (uint32_t i = lo; i < hi; i++) progressive_update(&job->px[i], job->sp.spectral ? &wl : NULL, &w->nonfinite);
+    SppmTrace *tr = traced(job);
+    for (uint32_t i = lo; i < hi; i++) {
+        if (tr && tr->pixel == (int)i) {
+            const SppmPixel *v = &job->px[i];
+            tr->valid = v->valid;
+            tr->vol = v->vol;
+            tr->beta = v->beta;
+            tr->m = v->m;
+        }
+        progressive_update(&job->px[i], job->sp.spectral ? &wl : NULL, &w->nonfinite);
+        if (tr && tr->pixel == (int)i) tr->after = pixel_state(&job->px[i]);
+    }
+}
+
+void sppm_trace(Sppm *job, SppmTrace *trace)
+{
+    job->trace = trace;
+    if (trace) trace->photons = job->photons;
 }
 
 /* Unit u of the current phase (a row, a photon chunk, a pixel range) on pool worker
@@ -579,7 +674,8 @@ void sppm_item(void *ctx, int u, int worker)
     SppmJob *job = ctx;
     SppmWorker *w = &job->workers[worker];
     if (job->phase == SPPM_PHASE_CAMERA) {
-        camera_row(job->s, job->cam, &job->sp, &job->filter, job->px, u, job->iter, &w->nonfinite, &w->rays);
+        camera_row(job->s, job->cam, &job->sp, &job->filter, job->px, u, job->iter, traced(job), &w->nonfinite,
+                   &w->rays);
     } else if (job->phase == SPPM_PHASE_PHOTONS) {
         photon_chunk(job, w, u + (job->sp.split ? job->sp.split->chunk_lo : 0));
     } else {
@@ -668,7 +764,7 @@ static int fetch_chunks(SppmJob *job)
         for (size_t i = 0; i < n / SPPM_HIT_FLOATS; i++, f += SPPM_HIT_FLOATS) {
             Color power;
             for (int k = 0; k < COLOR_LANES; k++) power.c[k] = f[9 + k];
-            hit_list_push(l, v3(f[0], f[1], f[2]), v3(f[3], f[4], f[5]), v3(f[6], f[7], f[8]), power);
+            hit_list_push(l, v3(f[0], f[1], f[2]), v3(f[3], f[4], f[5]), v3(f[6], f[7], f[8]), power, 0);
             if (l->oom) return -1;
             l->v[l->n - 1].key = sppm_grid_bucket(&job->g, l->v[l->n - 1].p);
         }
@@ -809,7 +905,8 @@ void sppm_destroy(Sppm *job)
 {
     if (!job) return;
     if (job->hits)
-        for (int c = 0; c < job->chunks; c++) free(job->hits[c].v);
+        for (int c = 0; c < job->chunks; c++) free(job->hits[c].v), free(job->hits[c].origin.v);
+    free(job->sorted_origin.v);
     free(job->hits);
     free(job->workers);
     free(job->px);

@@ -8,6 +8,7 @@
 
 #include "camera/camera.h"
 #include "film/film.h"
+#include "math/spectrum.h"
 #include "scene/scene.h"
 
 #define SPPM_ALPHA (2.0f / 3.0f) /* fraction of new photons kept per iteration (HJ 2009 sec. 4) */
@@ -73,6 +74,33 @@ int sppm_photon_chunks(int photons, size_t pixels);
  * realloc, *cap its floats). False on OOM (the buffer kept as it was). */
 bool sppm_trace_chunk(const Scene *scene, const SppmParams *sp, int iteration, int chunk, float **hits,
                       size_t *count, size_t *cap, uint64_t *rays);
+/* caustic explain (issue 30, src/render/explain_sppm.c): one pixel's progressive state. */
+typedef struct SppmPixelState {
+    double ld[3], tau[3], n_photons;
+    float r;
+    double tau_vol[3], n_vol;
+    float r_vol;
+} SppmPixelState;
+
+/* What iteration `iteration` did at pixel `pixel`: its camera chain, NEE and every photon
+ * it gathered go to rec (in the order the render adds them), its state is copied before the
+ * camera pass, at the update and after it. Set by sppm_trace() before the render; the
+ * render itself is unchanged. */
+typedef struct SppmTrace {
+    struct Recorder *rec;
+    int pixel, iteration;
+    int photons;           /* photon paths per iteration (filled by sppm_trace) */
+    SppmPixelState before, after;
+    bool valid, vol;       /* the visible point, at the update */
+    Color beta;            /* its throughput (filter weight included) */
+    long m;                /* photons it gathered */
+    Color direct;          /* the camera pass's sample as added to ld */
+    float fw;              /* its filter weight (the chain's first throughput) */
+    Wavelengths wl;        /* spectral mode: the iteration's wavelengths */
+} SppmTrace;
+/* Starts tracing (NULL: stops); the trace must outlive the render's iterations. */
+void sppm_trace(Sppm *sppm, SppmTrace *trace);
+
 /* Adds the rays traced and the NaN/Inf contributions dropped. */
 void sppm_counters(const Sppm *sppm, uint64_t *rays, uint64_t *nonfinite);
 /* Accepts NULL. */

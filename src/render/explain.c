@@ -13,6 +13,7 @@
 #include "integrators/integrator.h"
 #include "integrators/recorder.h"
 #include "render/explain_mis.h"
+#include "render/explain_sppm.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -20,7 +21,7 @@
  * with its connections; longer ones are reported truncated (and not checked). */
 enum { EXPLAIN_EVENTS = 8192 };
 
-const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm"; }
+const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm"; }
 
 void cst_explain_destroy(CstExplain *e)
 {
@@ -55,6 +56,7 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
         return CST_OK;
     case CST_INTEGRATOR_BDPT:
     case CST_INTEGRATOR_VCM: return CST_OK; /* subpath.c and subpath_media.c are recorded */
+    case CST_INTEGRATOR_SPPM: return CST_OK; /* explain_sppm.c refuses what it cannot follow */
     default: break;
     }
     return cst_fail(err, CST_ERR_UNSUPPORTED, "explain supports: %s; not %s", cst_explain_integrators(),
@@ -314,6 +316,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     if (st.integrator == CST_INTEGRATOR_DEFAULT) st.integrator = CST_INTEGRATOR_PATH;
     CstStatus status = check(scene, &st, x, y, sample, err);
     if (status != CST_OK) return status;
+    if (st.integrator == CST_INTEGRATOR_SPPM) return explain_sppm(scene, &st, x, y, sample, out, err);
     /* One pixel, one sample, one thread, nothing but the film's sums. */
     st.threads = 1;
     st.first_sample = sample;

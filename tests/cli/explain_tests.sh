@@ -50,6 +50,17 @@ expect "explain --help" 0 'caustic explain \[SCENE\] --pixel X,Y'
 harness_run "$d" 30 explain --pixel 12,10 --integrator photon "${SMALL[@]}"
 expect "photon: estimates, sum equal bit for bit" 0 "global .final gather. map's estimate over those [0-9]+ photons" \
     'equal, bit for bit'
+# sppm: iteration 2 of the glass sphere's caustic, its photons and update, equal to the film of
+# a 3-iteration render bit for bit; --why-bright names the largest photon or the direct light.
+harness_run "$d" 60 explain "$SRC/scenes/cornell-spheres.json" --integrator sppm --pixel 21,24 --sample 2 \
+    --width 32 --height 32
+expect "sppm: text, value equal bit for bit" 0 '^pixel \(21, 24\), iteration 2 of sppm' 'delta lobe, pmf' \
+    'photons gathered in the disc of radius' 'progressive update .*: N [0-9.e+-]+ -> ' \
+    'state equal to the render.s, bit for bit' 'render with --spp 3 \(iterations 0..2\): .*: equal, bit for bit'
+harness_run "$d" 60 explain --integrator sppm --pixel 16,16 --sample 1 --width 32 --height 32 --json
+expect "sppm: JSON, exact" 0 '"exact": true' '"kind": "photon"' '"bounces"' '"sppm": \{' '"state_exact": true'
+harness_run "$d" 60 explain --integrator sppm --pixel 16,16 --sample 1 --width 32 --height 32 --why-bright
+expect "sppm: --why-bright" 0 '^why bright: (photon path [0-9]+|the direct light)'
 HARNESS_EXPECT_STDOUT=0
 
 harness_run "$d" 30 explain "${SMALL[@]}"
@@ -62,8 +73,8 @@ harness_run "$d" 30 explain --pixel 24,0 "${SMALL[@]}"
 expect "--pixel off the image" 2 'pixel 24,0: expected 0 <= x < 24'
 harness_run "$d" 30 explain --pixel 1,1 --sample x "${SMALL[@]}"
 expect "--sample not a number" 2 '--sample: expected an integer'
-harness_run "$d" 30 explain --pixel 1,1 --integrator sppm "${SMALL[@]}"
-expect "sppm refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm; not sppm'
+harness_run "$d" 30 explain --pixel 1,1 --integrator pssmlt "${SMALL[@]}"
+expect "pssmlt refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm; not pssmlt'
 harness_run "$d" 30 explain missing.json --pixel 1,1
 expect "missing scene" 2 'cannot open scene'
 harness_run "$d" 30 render --why-dark "${SMALL[@]}" -o x.png

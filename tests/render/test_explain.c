@@ -570,7 +570,7 @@ static void test_refused(void **state)
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     CstRenderSettings st;
     CstExplain *ex = NULL;
-    static const CstIntegrator NO[] = {CST_INTEGRATOR_SPPM, CST_INTEGRATOR_PSSMLT, CST_INTEGRATOR_MMLT};
+    static const CstIntegrator NO[] = {CST_INTEGRATOR_PSSMLT, CST_INTEGRATOR_MMLT};
     for (size_t i = 0; i < sizeof NO / sizeof NO[0]; i++) {
         settings(&st, NO[i], CST_FILTER_BOX, CST_COLOR_RGB);
         assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
