@@ -85,6 +85,14 @@ typedef struct CstShapeDesc {
  * The normal points away from the axis (cylinder), outward (sphere), along +z (disk),
  * flipped by reverse_orientation and by a mirroring world_from_object, as pbrt-v4 does. */
 CST_API CstStatus cst_scene_add_shape(CstScene *scene, const CstShapeDesc *desc, CstError *err);
+/* An analytic shape in an instanced object (pbrt-v4's AnimatedPrimitive over a sphere,
+ * cylinder, disk, ...: the object placed by cst_scene_add_instance_motion moves it). desc
+ * as for cst_scene_add_shape, its world_from_object placing the shape in the object's
+ * space; its emission must be zero (instances do not emit: CST_ERR_UNSUPPORTED). object:
+ * -1 makes a new object holding the shape, else an id from cst_scene_add_object or this
+ * call gets it added. *out_id (may be NULL) gets the object's id. */
+CST_API CstStatus cst_scene_add_object_shape(CstScene *scene, int object, const CstShapeDesc *desc, int *out_id,
+                                             CstError *err);
 
 /* A whole pbrt-v4 curve (its CreateCurves): num_points control points (object space) that
  * make cubic or quadratic Bezier segments sharing their end points (bspline 0:

@@ -43,8 +43,9 @@ CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec
         free(p->tri_material);
         return cst_fail(err, CST_ERR_OOM, "out of memory for an instanced object of %d triangles", num_triangles);
     }
-    memcpy(p->positions, positions, (size_t)num_positions * sizeof *positions);
-    if (normals) memcpy(p->normals, normals, (size_t)num_positions * sizeof *normals);
+    /* An object of analytic shapes only has no triangles (and NULL arrays: no memcpy). */
+    if (num_positions > 0) memcpy(p->positions, positions, (size_t)num_positions * sizeof *positions);
+    if (normals && num_positions > 0) memcpy(p->normals, normals, (size_t)num_positions * sizeof *normals);
     for (int i = 0; i < 3 * num_triangles; i++) p->tri_indices[i] = indices[i];
     for (int i = 0; i < num_triangles; i++) p->tri_material[i] = tri_material[i];
     p->num_positions = num_positions;
@@ -76,6 +77,51 @@ CstStatus instances_proto_set_surface(InstanceSet *set, int proto, const Vec2 *u
     p->uvs = uv;
     p->tri_alpha = al;
     return CST_OK;
+}
+
+CstStatus instances_proto_add_shape(InstanceSet *set, int proto, const AnalyticShape *shape, int material, int alpha,
+                                    CstError *err)
+{
+    if (set->built) return cst_fail(err, CST_ERR_INVALID_ARG, "instances already built");
+    if (proto < 0 || proto >= set->num_protos)
+        return cst_fail(err, CST_ERR_INVALID_ARG, "instanced object %d out of range", proto);
+    InstProto *p = &set->protos[proto];
+    size_t cap = p->cap_shapes;
+    if (p->num_shapes >= INT_MAX - p->num_triangles || !grow_one(&p->shapes, &cap, p->num_shapes, sizeof *p->shapes))
+        return cst_fail(err, CST_ERR_OOM, "out of memory adding a shape to an instanced object");
+    /* The per-shape ids grow with the shapes: their capacity is cap_shapes too. */
+    int32_t *m = realloc(p->shape_material, cap * sizeof *m), *a = m ? realloc(p->shape_alpha, cap * sizeof *a) : NULL;
+    if (m) p->shape_material = m;
+    if (a) p->shape_alpha = a;
+    if (!m || !a) return cst_fail(err, CST_ERR_OOM, "out of memory adding a shape to an instanced object");
+    p->cap_shapes = cap;
+    p->shapes[p->num_shapes] = *shape;
+    p->shape_material[p->num_shapes] = material;
+    p->shape_alpha[p->num_shapes] = alpha;
+    p->num_shapes++;
+    return CST_OK;
+}
+
+static void proto_free(InstProto *p)
+{
+    free(p->positions);
+    free(p->normals);
+    free(p->tri_indices);
+    free(p->tri_material);
+    free(p->uvs);
+    free(p->tri_alpha);
+    free(p->tri_normals);
+    for (int k = 0; k < p->num_shapes; k++) shape_release(&p->shapes[k]);
+    free(p->shapes);
+    free(p->shape_material);
+    free(p->shape_alpha);
+    accel_free(&p->accel);
+}
+
+void instances_pop_proto(InstanceSet *set)
+{
+    if (set->built || set->num_protos == 0) return;
+    proto_free(&set->protos[--set->num_protos]);
 }
 
 CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from_obj, CstError *err)
@@ -212,7 +258,7 @@ CstStatus instances_build(InstanceSet *set, CstError *err)
             Vec3 a = p->positions[v[0]];
             p->tri_normals[t] = v3_normalize(v3_cross(v3_sub(p->positions[v[1]], a), v3_sub(p->positions[v[2]], a)));
         }
-        AccelGeometry g = {p->positions, p->tri_indices, p->num_triangles, NULL, 0, NULL, 0};
+        AccelGeometry g = {p->positions, p->tri_indices, p->num_triangles, NULL, 0, p->shapes, p->num_shapes};
         CstStatus st = accel_build(&p->accel, ACCEL_BVH, &g, err);
         if (st != CST_OK) return st;
     }
@@ -249,17 +295,7 @@ CstStatus instances_build(InstanceSet *set, CstError *err)
 void instances_free(InstanceSet *set)
 {
     if (!set) return;
-    for (int i = 0; i < set->num_protos; i++) {
-        InstProto *p = &set->protos[i];
-        free(p->positions);
-        free(p->normals);
-        free(p->tri_indices);
-        free(p->tri_material);
-        free(p->uvs);
-        free(p->tri_alpha);
-        free(p->tri_normals);
-        accel_free(&p->accel);
-    }
+    for (int i = 0; i < set->num_protos; i++) proto_free(&set->protos[i]);
     free(set->protos);
     free(set->insts);
     free(set->nodes);
@@ -278,6 +314,7 @@ size_t instances_memory_bytes(const InstanceSet *set)
                                          (p->uvs ? sizeof *p->uvs : 0)) +
              (size_t)p->num_triangles * (3 * sizeof *p->tri_indices + sizeof *p->tri_material + sizeof *p->tri_normals +
                                          (p->tri_alpha ? sizeof *p->tri_alpha : 0)) +
+             (size_t)p->num_shapes * (sizeof *p->shapes + sizeof *p->shape_material + sizeof *p->shape_alpha) +
              accel_memory_bytes(&p->accel);
     }
     return b;
@@ -301,6 +338,11 @@ static Ray to_object(const InstanceSet *set, const Instance *in, const Ray *r, f
     float len = v3_length(d);
     *scale = len;
     return ray_make(o, v3_scale(d, 1.0f / len), r->t_min * len, r->t_max * len);
+}
+
+Ray instances_object_ray(const InstanceSet *set, int inst, const Ray *ray, float *scale)
+{
+    return to_object(set, &set->insts[inst], ray, scale);
 }
 
 bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit)
@@ -352,6 +394,7 @@ bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit)
                 if (t < best) {
                     best = t;
                     hit->t = t;
+                    hit->t_obj = h.t;
                     hit->u = h.u;
                     hit->v = h.v;
                     hit->prim = h.prim;

@@ -1,7 +1,8 @@
-/* Object instancing as a two-level acceleration structure: prototypes (triangle meshes,
- * each with its own BVH built once, in object space) placed by instances (an affine
- * transform and a prototype id) under a top-level BVH over the instances' world bounds.
- * Memory is one copy of each prototype plus a fixed record per instance. */
+/* Object instancing as a two-level acceleration structure: prototypes (triangle meshes and
+ * analytic shapes, each prototype with its own BVH built once, in object space) placed by
+ * instances (an affine transform, or two for a moving one, and a prototype id) under a
+ * top-level BVH over the instances' world bounds. Memory is one copy of each prototype plus
+ * a fixed record per instance. */
 #ifndef CST_ACCEL_INSTANCES_H
 #define CST_ACCEL_INSTANCES_H
 
@@ -11,6 +12,7 @@
 
 #include "accel/accel.h"
 #include "caustic/caustic.h"
+#include "geometry/shape.h"
 #include "math/motion.h"
 #include "math/transform.h"
 
@@ -28,6 +30,13 @@ typedef struct InstProto {
     int32_t *tri_alpha;
     Vec3 *tri_normals;     /* unit, object space, (v1-v0) x (v2-v0); made by instances_build */
     int num_triangles;
+    /* Analytic shapes (geometry/shape.h: spheres, cylinders, disks, tori, patches, curves,
+     * SDFs) in object space, prototype primitive ids num_triangles + k: pbrt-v4's
+     * AnimatedPrimitive over a Sphere is a moving instance of an object holding one. Per
+     * shape its scene material and alpha cut-out id (0 opaque). Owned: shape_release. */
+    AnalyticShape *shapes;
+    int32_t *shape_material, *shape_alpha;
+    int num_shapes; size_t cap_shapes;
     Accel accel;           /* BVH over the prototype's triangles, object space */
 } InstProto;
 
@@ -63,10 +72,11 @@ typedef struct InstanceSet {
 } InstanceSet;
 
 /* A hit inside an instance: t along the world ray, barycentrics and triangle of the
- * prototype. */
+ * prototype (or a shape's (u, v) and num_triangles + its index); t_obj the same hit's t
+ * along the object-space ray (instances_object_ray), which shape_surface takes. */
 typedef struct InstHit {
-    float t, u, v;
-    uint32_t prim; /* triangle of the prototype */
+    float t, u, v, t_obj;
+    uint32_t prim; /* triangle of the prototype, or num_triangles + shape */
     int32_t inst;
 } InstHit;
 
@@ -79,6 +89,12 @@ CstStatus instances_add_proto(InstanceSet *set, const Vec3 *positions, const Vec
  * NULL) and per-triangle alpha ids (num_triangles, or NULL; all zero keeps none). Copied. */
 CstStatus instances_proto_set_surface(InstanceSet *set, int proto, const Vec2 *uvs, const int *tri_alpha,
                                       CstError *err);
+/* Adds a copy of shape (in the prototype's object space; its SDF tree, if any, passes to the
+ * prototype) to prototype `proto`, not yet built, with scene material and alpha ids. */
+CstStatus instances_proto_add_shape(InstanceSet *set, int proto, const AnalyticShape *shape, int material, int alpha,
+                                    CstError *err);
+/* Removes the last prototype added (no instance may place it yet): a builder's undo. */
+void instances_pop_proto(InstanceSet *set);
 /* world_from_obj must be affine and invertible. */
 CstStatus instances_add(InstanceSet *set, int proto, const Transform *world_from_obj, CstError *err);
 /* A moving instance: world_from_obj at shutter open (start) and close (end), each affine
@@ -98,6 +114,9 @@ size_t instances_memory_bytes(const InstanceSet *set);
 /* Closest hit in (ray->t_min, ray->t_max); ray->d unit length; moving instances placed at
  * ray->time. */
 bool instances_intersect(const InstanceSet *set, const Ray *ray, InstHit *hit);
+/* The ray in instance `inst`'s object space (placed at ray->time), unit direction, as the
+ * traversal makes it; *scale = object t per world t (0: no placement at that time). */
+Ray instances_object_ray(const InstanceSet *set, int inst, const Ray *ray, float *scale);
 bool instances_occluded(const InstanceSet *set, const Ray *ray);
 
 #endif

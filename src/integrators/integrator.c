@@ -806,12 +806,9 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
      * only the camera moves, but they would hold one instant (no blur) or mix instants
      * (biased) where instances move. subpath_media.c's walks (light, bdpt, vcm and mmlt in
      * media) carry the time as subpath.c's do. */
+    /* SPPM's walks through media carry the iteration's time too (media_photon_walk,
+     * media_visible_point; test_motion_shapes compares them with path in fog). */
     it->motion = scene_has_motion(scene);
-    /* SPPM's walks through media carry the iteration's time (media_photon_walk,
-     * media_visible_point) but no test compares them with path on a moving scene yet. */
-    if (it->kind == INTEGRATOR_SPPM && it->motion && (scene->num_media || scene->num_medium_ifaces))
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator sppm does not render motion blur in scenes with "
-                        "participating media yet: use path, light, bdpt, vcm or mmlt");
     if (it->kind == INTEGRATOR_PHOTON && scene->instances && scene->instances->num_motions > 0)
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
                         "yet (its photon maps are built once, for all camera paths): use sppm, path, bdpt or vcm",

@@ -34,7 +34,7 @@ static Medium sss_medium(const Material *m)
     return med;
 }
 
-/* Whether an instance prototype's triangle uses a subsurface material. */
+/* Whether an instance prototype's triangle or shape uses a subsurface material. */
 static bool instances_use_subsurface(const Scene *s)
 {
     if (!s->instances) return false;
@@ -42,6 +42,8 @@ static bool instances_use_subsurface(const Scene *s)
         const InstProto *ip = &s->instances->protos[p];
         for (int t = 0; t < ip->num_triangles; t++)
             if (s->materials[ip->tri_material[t]].subsurface) return true;
+        for (int k = 0; k < ip->num_shapes; k++)
+            if (s->materials[ip->shape_material[k]].subsurface) return true;
     }
     return false;
 }

@@ -417,6 +417,12 @@ CstStatus scene_add_shape(Scene *s, const ShapeParams *p, const Transform *objec
     if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
     if (material < 0 || material >= s->num_materials)
         return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    if (s->shape_object) { /* into an instanced object (cst_scene_add_object_shape): it does not emit */
+        AnalyticShape sh;
+        if (!shape_init(&sh, p, object_to_world))
+            return cst_fail(err, CST_ERR_INVALID_ARG, "shape parameters out of range or a singular transform");
+        return instances_proto_add_shape(s->instances, s->shape_object - 1, &sh, material, alpha, err);
+    }
     if (!GROW(s->shapes, s->cap_shapes, s->num_shapes + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a shape");
     PrimInfo *info = realloc(s->shape_info, (size_t)(s->num_shapes + 1) * sizeof *info);
@@ -443,6 +449,7 @@ CstStatus scene_add_patch(Scene *s, const AnalyticShape *patch, int material, in
     if (s->committed) return cst_fail(err, CST_ERR_INVALID_ARG, "scene already committed");
     if (material < 0 || material >= s->num_materials)
         return cst_fail(err, CST_ERR_INVALID_ARG, "material index %d out of range", material);
+    if (s->shape_object) return instances_proto_add_shape(s->instances, s->shape_object - 1, patch, material, alpha, err);
     if (!GROW(s->shapes, s->cap_shapes, s->num_shapes + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a bilinear patch");
     PrimInfo *info = realloc(s->shape_info, (size_t)(s->num_shapes + 1) * sizeof *info);
@@ -650,8 +657,9 @@ static bool hit_cut(const Scene *s, const Ray *ray, const SurfaceHit *sh)
     uint32_t prim = sh->prim;
     if (prim == UINT32_MAX) {
         const InstProto *pr = &s->instances->protos[s->instances->insts[sh->inst].proto];
-        if (!pr->tri_alpha) return false;
-        a = pr->tri_alpha[sh->inst_prim];
+        if ((int)sh->inst_prim >= pr->num_triangles) a = pr->shape_alpha[(int)sh->inst_prim - pr->num_triangles];
+        else if (!pr->tri_alpha) return false;
+        else a = pr->tri_alpha[sh->inst_prim];
         prim = sh->inst_prim;
     } else {
         a = scene_prim_info(s, prim)->alpha;

@@ -116,6 +116,9 @@ struct CstScene {
     /* Instanced objects (pbrt ObjectInstance), NULL when there are none: a second,
      * two-level structure queried after `accel`. Instances do not emit. */
     InstanceSet *instances;
+    /* While cst_scene_add_object_shape runs: 1 + the instanced object scene_add_shape and
+     * scene_add_patch put their shape into (instead of the scene's arrays), 0 otherwise. */
+    int shape_object;
     EmitterSampler emitter_sampler;
     int light_select; /* NEE's light sampler: 1 + LightSelect, 0 = by the rule (light.h) */
     int light_solid_angle; /* NEE samples triangles by solid angle (EmitterSampler.solid_angle) */
@@ -301,11 +304,30 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
         wfo = &moved_wfo;
         nm = &moved_nm;
     }
+    sh->t = ih.t;
+    sh->prim = UINT32_MAX; /* not a scene primitive */
+    sh->inst = ih.inst;
+    sh->inst_prim = ih.prim;
+    if ((int)ih.prim >= pr->num_triangles) {
+        /* An analytic shape: its surface in object space at the object ray's t (reprojected
+         * onto the shape in double, shape_surface), carried to the world as a triangle's. */
+        const int k = (int)ih.prim - pr->num_triangles;
+        float scale;
+        Ray ro = instances_object_ray(s->instances, ih.inst, ray, &scale);
+        ShapeSurface sf;
+        shape_surface(&pr->shapes[k], &ro, ih.t_obj, &sf);
+        sh->p = transform_point(wfo, sf.p);
+        sh->ng = transform_normal(nm, sf.n);
+        Vec3 ns = transform_normal(nm, sf.ns);
+        sh->ns = v3_length2(ns) > 0.0f ? (v3_dot(ns, sh->ng) < 0.0f ? v3_neg(ns) : ns) : sh->ng;
+        sh->uv = sf.uv;
+        sh->material = pr->shape_material[k];
+        sh->emitter = -1;
+        return true;
+    }
     const int32_t *t = &pr->tri_indices[3 * ih.prim];
     Vec3 a = pr->positions[t[0]], b = pr->positions[t[1]], c = pr->positions[t[2]];
     Vec3 p_obj = v3_add(v3_add(v3_scale(a, 1.0f - ih.u - ih.v), v3_scale(b, ih.u)), v3_scale(c, ih.v));
-    sh->t = ih.t;
-    sh->prim = UINT32_MAX; /* not a scene primitive */
     sh->p = transform_point(wfo, p_obj);
     /* The normal matrix keeps the object's outside, also under mirroring transforms. */
     sh->ng = transform_normal(nm, pr->tri_normals[ih.prim]);
@@ -323,8 +345,6 @@ static inline bool scene_intersect_instances(const Scene *s, const Ray *ray, Sur
         float w = 1.0f - ih.u - ih.v;
         sh->uv = v2(w * ua.x + ih.u * ub.x + ih.v * uc.x, w * ua.y + ih.u * ub.y + ih.v * uc.y);
     }
-    sh->inst = ih.inst;
-    sh->inst_prim = ih.prim;
     return true;
 }
 
@@ -425,12 +445,20 @@ static inline bool scene_dpduv(const Scene *s, const SurfaceHit *sh, Vec3 *dpdu,
     if (sh->prim == UINT32_MAX) {
         const Instance *in = &s->instances->insts[sh->inst];
         const InstProto *pr = &s->instances->protos[in->proto];
-        const int32_t *t = &pr->tri_indices[3 * sh->inst_prim];
-        if (pr->uvs) uv0 = pr->uvs[t[0]], uv1 = pr->uvs[t[1]], uv2 = pr->uvs[t[2]];
         Vec3 du, dv;
-        if (!scene_triangle_dpduv(pr->positions[t[0]], pr->positions[t[1]], pr->positions[t[2]], uv0, uv1, uv2,
-                                  &du, &dv))
-            return false;
+        if ((int)sh->inst_prim >= pr->num_triangles) { /* a shape: pbrt-v4's dp/du, dp/dv at the hit's uv */
+            ShapeSurface sf;
+            shape_surface_at(&pr->shapes[(int)sh->inst_prim - pr->num_triangles], sh->uv, &sf);
+            if (!(v3_length2(sf.dpdu) > 0.0f && v3_length2(sf.dpdv) > 0.0f)) return false;
+            du = sf.dpdu;
+            dv = sf.dpdv;
+        } else {
+            const int32_t *t = &pr->tri_indices[3 * sh->inst_prim];
+            if (pr->uvs) uv0 = pr->uvs[t[0]], uv1 = pr->uvs[t[1]], uv2 = pr->uvs[t[2]];
+            if (!scene_triangle_dpduv(pr->positions[t[0]], pr->positions[t[1]], pr->positions[t[2]], uv0, uv1, uv2,
+                                      &du, &dv))
+                return false;
+        }
         Transform moved_wfo, moved_nm;
         const Transform *wfo = &in->world_from_obj;
         if (in->motion >= 0) { /* placed at the hit's time, as the hit itself */

@@ -419,22 +419,29 @@ static void test_duplicate_parameter(void **state)
 }
 
 /* Motion: a transform under ActiveTransform StartTime alone moves only the start (pbrt-v4
- * blurs between start and end): the triangle becomes a moving instance, without warnings;
- * a sphere that moves is rendered static, with a located warning; TransformTimes is an
- * option (an error in the world block). test_motion renders and checks the rest. */
+ * blurs between start and end): the triangle and the sphere become moving instances (the
+ * sphere an analytic shape in an object of its own), without warnings; an emitting sphere
+ * that moves is rendered static, with a located warning; TransformTimes is an option (an
+ * error in the world block). test_motion and test_motion_shapes render and check the rest. */
 static void test_motion_warnings(void **state)
 {
     (void)state;
     Warnings w = {0};
     Scene *s = expect_ok(WORLD("ActiveTransform StartTime\nTranslate 1 0 0\nActiveTransform All\n"
-                               "Translate 0 1 0\n" TRI "Shape \"sphere\"\n"), &w);
+                               "Translate 0 1 0\n" TRI "Shape \"sphere\"\n"
+                               "AreaLightSource \"diffuse\"\nShape \"sphere\"\n"), &w);
     assert_int_equal(s->num_triangles, 0);
     assert_non_null(s->instances);
-    assert_int_equal(s->instances->num_motions, 1);
-    const MotionTransform *mt = &s->instances->motions[0];
-    assert_true(mt->start.m[0][3] == 1.0f && mt->start.m[1][3] == 1.0f);
-    assert_true(mt->end.m[0][3] == 0.0f && mt->end.m[1][3] == 1.0f);
-    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:9:1: Shape \"sphere\" moves") >= 0);
+    assert_int_equal(s->instances->num_motions, 2);
+    for (int i = 0; i < 2; i++) {
+        const MotionTransform *mt = &s->instances->motions[i];
+        assert_true(mt->start.m[0][3] == 1.0f && mt->start.m[1][3] == 1.0f);
+        assert_true(mt->end.m[0][3] == 0.0f && mt->end.m[1][3] == 1.0f);
+    }
+    assert_int_equal(s->instances->protos[1].num_shapes, 1); /* the moving sphere */
+    assert_int_equal(s->num_spheres, 1);                       /* the emitting one, static */
+    assert_int_equal(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:9:1:"), -1); /* the moving sphere */
+    assert_true(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:11:1: Shape \"sphere\" moves") >= 0);
     assert_int_equal(find_warning(&w, CST_WARN_UNSUPPORTED, "t.pbrt:8:1:"), -1); /* the moving triangle */
     cst_scene_destroy(s);
     expect_error(WORLD("TransformTimes 0 1\n"), CST_ERR_INVALID_ARG, "TransformTimes", 0, "before WorldBegin");

@@ -1,6 +1,7 @@
 /* The "shapes" section: quads, triangle meshes, spheres and mesh files (through
  * mesh_import), with their transforms, validated and added to the scene. */
 #include "scene/json/json_geometry.h"
+#include "scene/json/json_motion.h"
 
 #include <float.h>
 #include <limits.h>
@@ -202,13 +203,6 @@ static CstStatus read_shading(Loader *ld, const json_t *shape, bool *flat)
 
 static CstStatus parse_transform(Loader *ld, const json_t *obj, Transform *out);
 
-/* A transform as the 3 x 4 rows of cst_scene_add_instance. */
-static void transform_rows(const Transform *t, float rows[12])
-{
-    for (int r = 0; r < 3; r++)
-        for (int k = 0; k < 4; k++) rows[4 * r + k] = t->m[r][k];
-}
-
 CstStatus json_parse_motion(Loader *ld, const json_t *motion, Transform *t0, Transform *t1)
 {
     static const char *const keys[] = {"transform", "transform_end"};
@@ -226,26 +220,6 @@ CstStatus json_parse_motion(Loader *ld, const json_t *motion, Transform *t0, Tra
     LOADER_TRY(parse_transform(ld, v, t1));
     json_path_pop(ld);
     return CST_OK;
-}
-
-/* A mesh with "motion" (json_parse_motion): its vertices are in object space and it becomes
- * an object and one moving instance (cst_scene_add_instance_motion), so instances' limits
- * hold: no emission or medium (uvs and alpha are kept). */
-static CstStatus add_moving_mesh(Loader *ld, const json_t *motion, const CstMeshDesc *mesh, const json_t *shape)
-{
-    const char *bad = json_object_get(shape, "medium") ? "medium" : json_object_get(shape, "emission") ? "emission" : NULL;
-    if (bad)
-        return json_fail_here(ld, "a moving mesh (\"motion\") cannot have \"%s\": it is placed as a moving instance, "
-                                  "and instances carry no emission or medium", bad);
-    Transform t0, t1;
-    LOADER_TRY(json_parse_motion(ld, motion, &t0, &t1));
-    float r0[12], r1[12];
-    transform_rows(&t0, r0);
-    transform_rows(&t1, r1);
-    int obj = -1;
-    CstStatus st = cst_scene_add_object(ld->scene, mesh, &obj, NULL, ld->err);
-    if (st == CST_OK) st = cst_scene_add_instance_motion(ld->scene, obj, r0, r1, ld->err);
-    return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
 
 static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const Emission *em,
@@ -355,7 +329,7 @@ static CstStatus parse_mesh(Loader *ld, const json_t *shape, int material, const
     json_t *motion = json_object_get(shape, "motion");
     if (motion) {
         json_path_push_key(ld, "motion");
-        st = add_moving_mesh(ld, motion, &mesh, shape);
+        st = json_add_moving_mesh(ld, motion, &mesh, shape);
         if (st == CST_OK) json_path_pop(ld);
         goto done;
     }
@@ -699,9 +673,10 @@ static CstStatus read_opt_float(Loader *ld, const json_t *shape, const char *key
 
 /* "cylinder", "disk", and a "sphere" with "z_min", "z_max" or "phi_max": analytic shapes
  * (cst_scene_add_shape), in object space placed by "transform" (a sphere: moved to its
- * "center"); an "emission" makes it an area light. */
+ * "center"); an "emission" makes it an area light. With "motion", an object placed by a
+ * moving instance (json_add_moving_shape); plain: a sphere with none of the analytic keys. */
 static CstStatus parse_analytic(Loader *ld, const json_t *shape, int type, int material, const Emission *em,
-                                const CstAlpha *alpha)
+                                const CstAlpha *alpha, int plain)
 {
     CstShapeDesc sd = {0};
     sd.emission = emission_desc(em); /* an area light sampled by area; needs a similarity "transform" */
@@ -727,12 +702,15 @@ static CstStatus parse_analytic(Loader *ld, const json_t *shape, int type, int m
         LOADER_TRY(parse_transform(ld, v, &xf));
         json_path_pop(ld);
     }
+    const json_t *motion = json_object_get(shape, "motion");
     if (type == SHAPE_SPHERE) {
         Vec3 c = {0};
         LOADER_TRY(json_member_required(ld, shape, "center", "an array of 3 numbers", &v));
         json_path_push_key(ld, "center");
         LOADER_TRY(json_read_vec3(ld, v, LOADER_MAX_LENGTH, &c));
         json_path_pop(ld);
+        if (motion && plain) /* a plain moving sphere keeps a static one's uvs: pole on +y, u from +z to +x */
+            xf = json_sphere_uv_frame();
         xf = transform_compose(transform_translate(c), xf);
     }
     for (int r = 0; r < 3; r++)
@@ -740,6 +718,7 @@ static CstStatus parse_analytic(Loader *ld, const json_t *shape, int type, int m
     if (transform_is_identity(&xf)) memset(sd.world_from_object, 0, sizeof sd.world_from_object);
     sd.material = material;
     sd.alpha = *alpha;
+    if (motion) return json_add_moving_shape(ld, motion, &sd, shape);
     CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
@@ -789,6 +768,8 @@ static CstStatus parse_torus(Loader *ld, const json_t *shape, int material, cons
     LOADER_TRY(read_rows(ld, shape, sd.world_from_object));
     sd.material = material;
     sd.alpha = *alpha;
+    const json_t *motion = json_object_get(shape, "motion");
+    if (motion) return json_add_moving_shape(ld, motion, &sd, shape);
     CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
     return st == CST_OK ? CST_OK : json_fail_builder(ld, st);
 }
@@ -1098,7 +1079,7 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     static const char *const types[] = {"quad", "mesh", "sphere", "meshfile", "cylinder", "disk", "torus", "sdf",
                                         "curve"};
     static const char *const torus_keys[] = {"type", "major_radius", "minor_radius", "transform", "material",
-                                             "emission", "alpha", "medium"};
+                                             "emission", "alpha", "medium", "motion"};
     static const char *const sdf_keys[] = {"type", "root", "transform", "epsilon", "max_steps", "material",
                                            "emission", "alpha", "medium"};
     static const char *const curve_keys[] = {"type", "points", "basis", "degree", "curve_type", "width", "width0",
@@ -1109,11 +1090,13 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
                                             "normals", "shading", "alpha", "medium", "displacement", "motion"};
     static const char *const sphere_keys[] = {"type", "center", "radius", "material", "emission", "alpha",
                                               "z_min", "z_max", "phi_max", "transform", "reverse_orientation",
-                                              "medium"};
+                                              "medium", "motion"};
     static const char *const cylinder_keys[] = {"type", "radius", "z_min", "z_max", "phi_max", "transform",
-                                                "reverse_orientation", "material", "emission", "alpha", "medium"};
+                                                "reverse_orientation", "material", "emission", "alpha", "medium",
+                                                "motion"};
     static const char *const disk_keys[] = {"type", "radius", "height", "inner_radius", "phi_max", "transform",
-                                            "reverse_orientation", "material", "emission", "alpha", "medium"};
+                                            "reverse_orientation", "material", "emission", "alpha", "medium",
+                                            "motion"};
     static const char *const meshfile_keys[] = {"type", "file", "material", "emission",
                                                 "transform", "shading", "alpha", "medium", "displacement"};
     int type = 0, material = -1;
@@ -1124,12 +1107,12 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     case SHAPE_QUAD: LOADER_TRY(json_check_keys(ld, shape, quad_keys, 6)); break;
     case SHAPE_MESH: LOADER_TRY(json_check_keys(ld, shape, mesh_keys, 12)); break;
     case SHAPE_MESHFILE: LOADER_TRY(json_check_keys(ld, shape, meshfile_keys, 9)); break;
-    case SHAPE_CYLINDER: LOADER_TRY(json_check_keys(ld, shape, cylinder_keys, 11)); break;
-    case SHAPE_DISK: LOADER_TRY(json_check_keys(ld, shape, disk_keys, 11)); break;
-    case SHAPE_TORUS: LOADER_TRY(json_check_keys(ld, shape, torus_keys, 8)); break;
+    case SHAPE_CYLINDER: LOADER_TRY(json_check_keys(ld, shape, cylinder_keys, 12)); break;
+    case SHAPE_DISK: LOADER_TRY(json_check_keys(ld, shape, disk_keys, 12)); break;
+    case SHAPE_TORUS: LOADER_TRY(json_check_keys(ld, shape, torus_keys, 9)); break;
     case SHAPE_SDF: LOADER_TRY(json_check_keys(ld, shape, sdf_keys, 9)); break;
     case SHAPE_CURVE: LOADER_TRY(json_check_keys(ld, shape, curve_keys, 14)); break;
-    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 12)); break;
+    default: LOADER_TRY(json_check_keys(ld, shape, sphere_keys, 13)); break;
     }
     int boundary = 0;
     LOADER_TRY(json_read_shape_medium(ld, shape, &boundary));
@@ -1146,14 +1129,15 @@ static CstStatus parse_shape(Loader *ld, const json_t *shape)
     case SHAPE_MESH: return parse_mesh(ld, shape, material, &em, &alpha);
     case SHAPE_MESHFILE: return parse_meshfile(ld, shape, material, &em, &alpha);
     case SHAPE_CYLINDER:
-    case SHAPE_DISK: return parse_analytic(ld, shape, type, material, &em, &alpha);
+    case SHAPE_DISK: return parse_analytic(ld, shape, type, material, &em, &alpha, 0);
     case SHAPE_TORUS: return parse_torus(ld, shape, material, &em, &alpha);
     case SHAPE_SDF: return parse_sdf(ld, shape, material, &em, &alpha);
     case SHAPE_CURVE: return parse_curve(ld, shape, material, &alpha);
     default:
         if (json_object_get(shape, "z_min") || json_object_get(shape, "z_max") || json_object_get(shape, "phi_max") ||
             json_object_get(shape, "transform") || json_object_get(shape, "reverse_orientation"))
-            return parse_analytic(ld, shape, type, material, &em, &alpha);
+            return parse_analytic(ld, shape, type, material, &em, &alpha, 0);
+        if (json_object_get(shape, "motion")) return parse_analytic(ld, shape, type, material, &em, &alpha, 1);
         return parse_sphere(ld, shape, material, &em, &alpha);
     }
 }

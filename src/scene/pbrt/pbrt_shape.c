@@ -12,6 +12,7 @@
 #include "geometry/shape.h"
 #include "geometry/triangle.h"
 #include "scene/mesh_import.h"
+#include "scene/pbrt/pbrt_curve.h"
 #include "scene/pbrt/pbrt_displace.h"
 #include "scene/pbrt/pbrt_material.h"
 #include "scene/pbrt/pbrt_medium.h"
@@ -499,7 +500,7 @@ static CstStatus loop_shape(Loader *ld, Params *ps, const char *d, Loc loc, Shap
 
 /* pbrt-v4's Shape "alpha" (every shape takes it): "float alpha" or "texture alpha" naming a
  * float texture; a constant 1 (the default) leaves the shape opaque. */
-static CstStatus shape_alpha(Loader *ld, Params *ps, const char *d, CstAlpha *out)
+CstStatus pbrt_shape_alpha(Loader *ld, Params *ps, const char *d, CstAlpha *out)
 {
     int tex = 0, found = 0;
     Color val = color_s(1.0f);
@@ -529,11 +530,16 @@ static CstStatus shape_alpha(Loader *ld, Params *ps, const char *d, CstAlpha *ou
  * emits, placed by a similarity (area lights sample analytic shapes uniformly by area,
  * which a non-uniform scale would skew). Otherwise the caller falls back to the
  * tessellation (disk, sphere) or the skip (cylinder). */
+static int moving_analytic(const Loader *ld)
+{
+    return pbrt_ctm_moving(ld) && !ld->gs.area.active && !pbrt_medium_transition(ld);
+}
+
 static int analytic_ok(const Loader *ld)
 {
     float scale;
-    /* Moving shapes are triangles placed by a moving instance (emit_moving_shape). */
-    if (ld->cur_obj >= 0 || ld->mats[ld->gs.material].interface || pbrt_ctm_moving(ld)) return 0;
+    if (ld->cur_obj >= 0 || ld->mats[ld->gs.material].interface) return 0;
+    if (moving_analytic(ld)) return 1; /* an object of its own under a moving instance (add_analytic) */
     return !ld->gs.area.active || (transform_is_affine(&ld->gs.ctm.m) && is_similarity(&ld->gs.ctm.m, &scale));
 }
 
@@ -583,16 +589,38 @@ static void analytic_emission(const Loader *ld, CstShapeDesc *sd)
     sd->emission = emission_desc(&em);
 }
 
+static CstStatus add_moving_instance(Loader *ld, int proto, Loc loc, const char *d);
+
+/* Under a moving CTM (moving_analytic): the shape sd, in object space (its
+ * world_from_object the identity), into object *obj (-1: a new one, its id returned), as
+ * pbrt-v4 makes an AnimatedPrimitive over the shape built with identity transforms. */
+static CstStatus add_object_shape(Loader *ld, CstShapeDesc *sd, int *obj, Loc loc, const char *d)
+{
+    memset(sd->world_from_object, 0, sizeof sd->world_from_object);
+    CstStatus st = cst_scene_add_object_shape(ld->scene, *obj, sd, obj, ld->err);
+    return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
+}
+
 /* A cylinder, disk or partial sphere placed by the CTM as an analytic shape (pbrt-v4's
  * quadrics: exact hits, uv and dp/du, normals flipped by ReverseOrientation and by a
- * mirroring CTM as pbrt does). */
+ * mirroring CTM as pbrt does); under a moving CTM, an object of its own placed by a moving
+ * instance (emitting shapes and shapes between two media: static, with a warning). */
 static CstStatus add_analytic(Loader *ld, Params *ps, const char *d, Loc loc, CstShapeDesc *sd)
 {
     CstAlpha alpha = {0};
-    TRY(shape_alpha(ld, ps, d, &alpha));
+    TRY(pbrt_shape_alpha(ld, ps, d, &alpha));
     pbrt_params_warn_unused(ld, ps, d);
     if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
     TRY(pbrt_material_scene_id(ld, ld->gs.material, &sd->material));
+    if (moving_analytic(ld)) {
+        int obj = -1;
+        sd->reverse_orientation = ld->gs.reverse != 0;
+        sd->alpha = alpha;
+        TRY(add_object_shape(ld, sd, &obj, loc, d));
+        return add_moving_instance(ld, obj, loc, d);
+    }
+    pbrt_warn_static(ld, loc, d, ld->gs.area.active ? "emitting shapes do not move in caustic (moving instances do "
+                     "not emit)" : "shapes between two media do not move in caustic");
     const Transform *m = &ld->gs.ctm.m;
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 4; c++) sd->world_from_object[4 * r + c] = m->m[r][c];
@@ -611,7 +639,7 @@ static CstStatus add_analytic(Loader *ld, Params *ps, const char *d, Loc loc, Cs
 static CstStatus bilinear_patches(Loader *ld, Params *ps, const char *d, Loc loc, const ShapeGeom *g)
 {
     CstAlpha alpha = {0};
-    TRY(shape_alpha(ld, ps, d, &alpha));
+    TRY(pbrt_shape_alpha(ld, ps, d, &alpha));
     pbrt_params_warn_unused(ld, ps, d);
     if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
     CstShapeDesc sd = {0};
@@ -625,7 +653,8 @@ static CstStatus bilinear_patches(Loader *ld, Params *ps, const char *d, Loc loc
     sd.alpha = alpha;
     sd.patch_has_normals = g->n != NULL;
     sd.patch_has_uvs = g->uv != NULL;
-    int skipped = 0;
+    int skipped = 0, obj = -1;
+    const int moving = moving_analytic(ld);
     for (int f = 0; 2 * f < g->nt; f++) {
         const int *t = &g->idx[6 * f];
         const int v[4] = {t[0], t[1], t[5], t[2]}; /* p00, p10, p01, p11 */
@@ -639,9 +668,14 @@ static CstStatus bilinear_patches(Loader *ld, Params *ps, const char *d, Loc loc
         }
         AnalyticShape probe; /* area is kept by the invertible CTM: test in object space */
         if (!shape_init_bilinear(&probe, corner, NULL, NULL, false)) { skipped++; continue; }
+        if (moving) { /* every patch in one object, placed by one moving instance */
+            TRY(add_object_shape(ld, &sd, &obj, loc, d));
+            continue;
+        }
         CstStatus st = cst_scene_add_shape(ld->scene, &sd, ld->err);
         if (st) return pbrt_fail_wrap(ld, st, loc, d);
     }
+    if (obj >= 0) TRY(add_moving_instance(ld, obj, loc, d));
     if (skipped)
         pbrt_warn_at(ld, CST_WARN_GEOMETRY, loc, "%s: %d bilinear patch%s without area left out", d, skipped,
                      skipped > 1 ? "es" : "");
@@ -681,93 +715,6 @@ static CstStatus cylinder_shape(Loader *ld, Params *ps, const char *d, Loc loc)
     return add_analytic(ld, ps, d, loc, &sd);
 }
 
-/* pbrt-v4's "curve" (CreateCurves): P as cubic or quadratic Bezier segments sharing their
- * end points ("basis" "bezier", 3n + 1 or 2n + 1 points) or a uniform B-spline ("bspline",
- * n + degree points), each converted to a cubic Bezier; "type" flat, cylinder or ribbon
- * (with "N": one normal per segment end); widths interpolated over the segments from
- * "width0" to "width1" (both "width", default 1); every segment split into 2^splitdepth
- * primitives (default 3). Curves are analytic shapes (geometry/curve.c): in an object, as
- * an interface or emitting they are skipped with a warning. */
-static CstStatus curve_shape(Loader *ld, Params *ps, const char *d, Loc loc)
-{
-    Param *pp, *pn;
-    const char *basis = NULL, *type = NULL;
-    Loc bl = loc, tl = loc;
-    int degree = 3, split = 3;
-    float width = 1.0f, w0 = 1.0f, w1 = 1.0f;
-    TRY(pbrt_lookup(ld, ps, d, "P", PT_MASK(PT_POINT3), "point3", &pp));
-    TRY(pbrt_lookup(ld, ps, d, "N", PT_MASK(PT_NORMAL), "normal", &pn));
-    TRY(pbrt_get_string(ld, ps, d, "basis", &basis, &bl));
-    TRY(pbrt_get_string(ld, ps, d, "type", &type, &tl));
-    TRY(pbrt_get_int(ld, ps, d, "degree", 3, &degree));
-    TRY(pbrt_get_int(ld, ps, d, "splitdepth", 3, &split));
-    TRY(pbrt_get_float(ld, ps, d, "width", 1.0f, &width, NULL));
-    TRY(pbrt_get_float(ld, ps, d, "width0", width, &w0, NULL));
-    TRY(pbrt_get_float(ld, ps, d, "width1", width, &w1, NULL));
-    const bool bspline = basis && strcmp(basis, "bspline") == 0;
-    if (basis && !bspline && strcmp(basis, "bezier") != 0)
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, bl, "%s: basis \"%s\"; expected \"bezier\" or \"bspline\"", d, basis);
-    CstCurveType ct = CST_CURVE_FLAT;
-    if (type && strcmp(type, "ribbon") == 0) ct = CST_CURVE_RIBBON;
-    else if (type && strcmp(type, "cylinder") == 0) ct = CST_CURVE_CYLINDER;
-    else if (type && strcmp(type, "flat") != 0)
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "%s: type \"%s\"; expected \"flat\", \"cylinder\" or \"ribbon\"", d, type);
-    if (degree != 2 && degree != 3)
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: degree %d; expected 2 or 3", d, degree);
-    if (split < 0 || split > 10)
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: splitdepth %d; expected 0 to 10", d, split);
-    if (!(w0 >= 0.0f && w1 >= 0.0f && w0 + w1 > 0.0f) || !pbrt_coords_ok(v3(w0, w1, 0.0f)))
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: widths %g and %g; expected widths >= 0, not both 0",
-                            d, (double)w0, (double)w1);
-    if (!pp)
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: missing \"point3 P\"; expected the control points", d);
-    const int ncp = pp->num_nums / 3;
-    int nseg = bspline ? ncp - degree : (ncp - 1) / degree;
-    if (bspline ? ncp <= degree : (ncp < degree + 1 || (ncp - 1) % degree != 0))
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pp->loc, "%s: %d control points; expected %s for the degree %d %s "
-                            "basis", d, ncp, bspline ? "more than the degree" : (degree == 3 ? "3n + 1" : "2n + 1"),
-                            degree, bspline ? "B-spline" : "Bezier");
-    if (ct == CST_CURVE_RIBBON && (!pn || pn->num_nums != 3 * (nseg + 1)))
-        return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pn ? pn->loc : loc, "%s: a ribbon with %d normals; expected "
-                            "\"normal N\" with one normal per segment end (%d)", d, pn ? pn->num_nums / 3 : 0, nseg + 1);
-    if (pn && ct != CST_CURVE_RIBBON)
-        pbrt_warn_at(ld, CST_WARN_PARAMETER_IGNORED, pn->loc, "%s: \"N\" is used by ribbons only; ignored", d);
-    CstAlpha alpha = {0};
-    TRY(shape_alpha(ld, ps, d, &alpha));
-    pbrt_params_warn_unused(ld, ps, d);
-    if (ld->cur_obj >= 0 || ld->mats[ld->gs.material].interface || ld->gs.area.active ||
-        !transform_is_affine(&ld->gs.ctm.m)) {
-        pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s in an object, as an interface, emitting or under a projective "
-                     "transform is not supported; skipped", d);
-        return CST_OK;
-    }
-    pbrt_warn_static(ld, loc, d, "curves do not move in caustic (only triangle shapes do)");
-    if (alpha.enabled && !alpha.texture && alpha.value == 0.0f) return CST_OK; /* as emit_shape's callers */
-    const int nnorm = ct == CST_CURVE_RIBBON ? nseg + 1 : 0;
-    float *cp = malloc((size_t)(ncp + nnorm) * 3 * sizeof *cp);
-    if (!cp) return pbrt_fail_at(ld, CST_ERR_OOM, loc, "%s: out of memory for %d control points", d, ncp);
-    for (int i = 0; i < 3 * ncp; i++) cp[i] = (float)pp->nums[i];
-    for (int i = 0; i < ncp; i++)
-        if (!pbrt_coords_ok(v3(cp[3 * i], cp[3 * i + 1], cp[3 * i + 2]))) {
-            free(cp);
-            return pbrt_fail_at(ld, CST_ERR_INVALID_ARG, pp->loc, "%s: control point %d is beyond the scene limit; "
-                                "expected coordinates of magnitude at most %g", d, i, PBRT_MAX_LENGTH);
-        }
-    for (int i = 0; i < 3 * nnorm; i++) cp[3 * ncp + i] = (float)pn->nums[i];
-    CstCurvesDesc cd = {.points = cp, .num_points = ncp, .degree = degree, .bspline = bspline, .width0 = w0,
-                        .width1 = w1, .type = ct, .normals = nnorm ? cp + 3 * ncp : NULL, .split_depth = split,
-                        .reverse_orientation = ld->gs.reverse != 0, .alpha = alpha};
-    const Transform *m = &ld->gs.ctm.m;
-    if (!transform_is_identity(m))
-        for (int r = 0; r < 3; r++)
-            for (int c = 0; c < 4; c++) cd.world_from_object[4 * r + c] = m->m[r][c];
-    CstStatus st = pbrt_material_scene_id(ld, ld->gs.material, &cd.material);
-    if (st == CST_OK && (st = cst_scene_add_curves(ld->scene, &cd, ld->err)) != CST_OK)
-        st = pbrt_fail_wrap(ld, st, loc, d);
-    free(cp);
-    return st;
-}
-
 static CstStatus emit_moving_shape(Loader *ld, const ShapeGeom *g, const CstAlpha *alpha, Loc loc, const char *d);
 
 /* A shape of the world (not in an object, not an interface): a moving instance when the CTM
@@ -782,8 +729,7 @@ static CstStatus emit_world_shape(Loader *ld, const ShapeGeom *g, const CstAlpha
     if (pbrt_ctm_moving(ld) && !g->is_sphere && !ld->gs.area.active && !pbrt_medium_transition(ld))
         return emit_moving_shape(ld, g, alpha, loc, d);
     TRY(pbrt_medium_apply(ld, 0, loc, d));
-    pbrt_warn_static(ld, loc, d, g->is_sphere ? "caustic's spheres do not move (only triangle shapes do)"
-                                 : ld->gs.area.active ? "emitting shapes do not move in caustic (moving instances do not emit)"
+    pbrt_warn_static(ld, loc, d, ld->gs.area.active ? "emitting shapes do not move in caustic (moving instances do not emit)"
                                  : "shapes between two media do not move in caustic");
     return emit_shape(ld, g, &ld->gs.ctm, ld->gs.reverse, ld->gs.material, &ld->gs.area, alpha, loc, d);
 }
@@ -828,7 +774,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
             goto done;
         }
         int partial = (hz0 && zmin > -r) || (hz1 && zmax < r) || (hp && phimax < 360.0f);
-        if ((partial || sphere_needs_uv(ld, &ps)) && analytic_ok(ld)) {
+        if ((partial || sphere_needs_uv(ld, &ps) || moving_analytic(ld)) && analytic_ok(ld)) {
             if (!(zmin < zmax) || !(phimax > 0.0f)) {
                 st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, loc, "%s: zmin %g, zmax %g, phimax %g; expected "
                                   "zmin < zmax and phimax > 0", d, (double)zmin, (double)zmax, (double)phimax);
@@ -869,7 +815,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
             pbrt_warn_at(ld, CST_WARN_APPROXIMATED, loc, "%s (in an object, or emitting under a non-uniform scale) tessellated into %d "
                          "triangles of the same total area", d, g.nt);
     } else if (strcmp(type, "curve") == 0) {
-        st = curve_shape(ld, &ps, d, loc);
+        st = pbrt_curve_shape(ld, &ps, d, loc);
         goto done;
     } else if (strcmp(type, "cylinder") == 0 && analytic_ok(ld)) {
         st = cylinder_shape(ld, &ps, d, loc);
@@ -881,7 +827,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
         skip = 1;
         pbrt_params_mark_all_used(&ps);
         pbrt_warn_at(ld, CST_WARN_UNSUPPORTED, loc, "%s is not supported%s; skipped", d,
-                     strcmp(type, "cylinder") == 0 ? " (in an object, an interface, moving, or emitting under a non-uniform "
+                     strcmp(type, "cylinder") == 0 ? " (in an object, an interface, or emitting under a non-uniform "
                                                      "scale)" : "");
     } else {
         st = pbrt_fail_at(ld, CST_ERR_INVALID_ARG, tl, "unknown shape \"%s\"; expected one of: "
@@ -890,7 +836,7 @@ CstStatus pbrt_shape_directive(Loader *ld, Lexer *lx, Loc loc, const char *dname
     }
     if (st || skip) goto done;
     CstAlpha alpha = {0};
-    if ((st = shape_alpha(ld, &ps, d, &alpha)) != CST_OK) goto done;
+    if ((st = pbrt_shape_alpha(ld, &ps, d, &alpha)) != CST_OK) goto done;
     pbrt_params_warn_unused(ld, &ps, d);
     if (ld->mats[ld->gs.material].interface && ld->cur_obj < 0 && !ld->gs.area.active &&
         pbrt_medium_transition(ld)) {
