@@ -190,7 +190,8 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
  * did: every vertex, every sampling decision, every strategy's contribution with its MIS
  * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (media
  * and subsurface materials too), whitted, light (the splats that reached the pixel), bdpt and
- * vcm (RGB mode); CST_ERR_UNSUPPORTED for the rest. */
+ * vcm (RGB mode), pssmlt and mmlt (the Metropolis steps whose splats reached the pixel in
+ * one iteration); CST_ERR_UNSUPPORTED for the rest. */
 typedef enum CstExplainKind {
     CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material; or a
                              * subsurface exit (material_type "subsurface exit": pdf_a, pmf
@@ -209,11 +210,17 @@ typedef enum CstExplainKind {
     CST_EXPLAIN_PHOTON,     /* photon: a photon within the gather radius of the vertex (p its
                              * position, wi its incoming direction, value its power, beta the
                              * BSDF f without the cosine; contribution f * power) */
-    CST_EXPLAIN_ESTIMATE    /* photon: the density estimate over the photons listed before it
+    CST_EXPLAIN_ESTIMATE,   /* photon: the density estimate over the photons listed before it
                              * (flag CAUSTIC: the caustic map at the first diffuse vertex, else
                              * the global map at the final gather's vertex): distance the
                              * radius, pmf the box kernel 1 / (pi r^2), path the photons
                              * counted, value the estimate, beta the gather's throughput */
+    CST_EXPLAIN_MUTATION    /* pssmlt, mmlt: a splat of a Metropolis step that reached the pixel
+                             * (chain, step, path_length, accept, importance, weight below;
+                             * flags PROPOSAL, LARGE_STEP, ACCEPTED): value the sample's radiance
+                             * L, beta the weight, contribution weight * L, wi[0..1] its film
+                             * position, share what it added to the pixel (the render's scale
+                             * b / (W H) and the filter included) */
 } CstExplainKind;
 
 enum {
@@ -228,7 +235,11 @@ enum {
     /* spectral bdpt/vcm: a connection's or merge's light vertex lies on a dispersed light
      * subpath (hero wavelength alone too) */
     CST_EXPLAIN_LIGHT_DISPERSED = 64,
-    CST_EXPLAIN_CAUSTIC = 128 /* ESTIMATE: over the caustic photon map */
+    CST_EXPLAIN_CAUSTIC = 128, /* ESTIMATE: over the caustic photon map */
+    CST_EXPLAIN_PROPOSAL = 256,   /* MUTATION: the proposal's splat (weight a / I), else the
+                                   * current state's (weight (1 - a) / I) */
+    CST_EXPLAIN_LARGE_STEP = 512, /* MUTATION: the step was a large step (fresh uniforms) */
+    CST_EXPLAIN_ACCEPTED = 1024   /* MUTATION: the chain moved to the proposal */
 };
 
 typedef struct CstExplainEvent {
@@ -266,8 +277,15 @@ typedef struct CstExplainEvent {
     int medium;       /* VERTEX in a medium ("medium" material_type), DISTANCE: its index; -1 */
     float distance;   /* DISTANCE: the sampled distance, or the segment's length if it passed */
     float transmittance[3]; /* DISTANCE, homogeneous media: exp(-sigma_t distance) (RGB lanes) */
-    double share[3];  /* light, bdpt, vcm: what the splat added to the pixel (filter weight
-                       * included) */
+    double share[3];  /* light, bdpt, vcm, MUTATION: what the splat added to the pixel (filter
+                       * weight included) */
+    /* MUTATION (pssmlt, mmlt): the chain, the step's index among the chain's mutations of the
+     * iteration, the chain's path length (mmlt: bounces; pssmlt: -1), the acceptance
+     * probability a = min(1, I(proposal) / I(current)), the splatted sample's scalar
+     * contribution I (luminance of |L|) and the splat's weight (a / I or (1 - a) / I);
+     * mmlt: s and t the sampled BDPT strategy of that length (s + t = path_length + 2). */
+    int chain, step, path_length;
+    float accept, importance, weight;
 } CstExplainEvent;
 
 typedef struct CstExplain {
@@ -294,17 +312,26 @@ typedef struct CstExplain {
      * in the film's order (their shares in the SPLAT events' share), equals film_value bit
      * for bit. */
     int splats_exact;
+    /* pssmlt, mmlt (`sample` is the iteration: W x H mutations over all chains): b, the
+     * bootstrap's normalisation (mean I times the chains' film domain), and the factor from
+     * a splat's weight * L to its share (b / (W H) before the filter); camera_value is then
+     * the film's sum over iterations 0 .. sample - 1, splat_value the iteration's splats on
+     * the pixel re-added in the film's order, film_value the film's sum after the
+     * iteration; splats_exact (= exact): the re-added splats equal the value the render
+     * merged for the iteration and camera_value + it = film_value, bit for bit. */
+    double mlt_b, mlt_scale;
+    int mlt_chains;
 } CstExplain;
 
-/* Replays sample `sample` (for bdpt: iteration) of pixel (x, y) under `settings` (as for
+/* Replays sample `sample` (for bdpt, pssmlt, mmlt: iteration) of pixel (x, y) under `settings` (as for
  * cst_render; spp, crop, threads and first_sample are ignored) and records its path.
  * *out: a new record, cst_explain_destroy. CST_ERR_INVALID_ARG for a pixel off the image
  * or a negative sample; CST_ERR_UNSUPPORTED for an integrator explain cannot follow. */
 CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
-/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm": the integrators cst_explain
- * follows (bdpt and vcm in scenes without participating media). */
+/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, pssmlt, mmlt": the integrators
+ * cst_explain follows (bdpt and vcm in scenes without participating media). */
 CST_API const char *cst_explain_integrators(void);
 
 #endif

@@ -13,6 +13,7 @@
 #include "integrators/integrator.h"
 #include "integrators/recorder.h"
 #include "render/explain_mis.h"
+#include "render/explain_mlt.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -20,7 +21,10 @@
  * with its connections; longer ones are reported truncated (and not checked). */
 enum { EXPLAIN_EVENTS = 8192 };
 
-const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm"; }
+const char *cst_explain_integrators(void)
+{
+    return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, pssmlt, mmlt";
+}
 
 void cst_explain_destroy(CstExplain *e)
 {
@@ -59,6 +63,8 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
             return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow %s with a moving camera yet; "
                             "expected a static camera", cst_integrator_name(st->integrator));
         return CST_OK;
+    case CST_INTEGRATOR_PSSMLT:
+    case CST_INTEGRATOR_MMLT: return CST_OK; /* the chains' splats (explain_mlt.c) */
     default: break;
     }
     return cst_fail(err, CST_ERR_UNSUPPORTED, "explain supports: %s; not %s", cst_explain_integrators(),
@@ -319,7 +325,11 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     /* One pixel, one sample, one thread, nothing but the film's sums. */
     st.threads = 1;
     st.first_sample = sample;
-    st.crop[0] = x; st.crop[1] = x + 1; st.crop[2] = y; st.crop[3] = y + 1;
+    /* (MLT: the chains roam the whole film, which the iteration's merge writes.) */
+    const bool mlt = st.integrator == CST_INTEGRATOR_PSSMLT || st.integrator == CST_INTEGRATOR_MMLT;
+    if (!mlt) {
+        st.crop[0] = x; st.crop[1] = x + 1; st.crop[2] = y; st.crop[3] = y + 1;
+    }
     st.aovs = 0;
     st.time_limit = 0.0;
     st.sample_block = 1;
@@ -354,6 +364,16 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     else rec.radius = filter_radius(it->light.vcm_params.frame.filter);
     const int pixel = y * st.width + x;
     double camera[3] = {0.0, 0.0, 0.0};
+    if (mlt) {
+        ex->x = x;
+        ex->y = y;
+        ex->sample = sample;
+        ex->integrator = st.integrator;
+        ex->spectral = it->spectral;
+        if ((status = explain_mlt(it, film, &rec, x, y, sample, ex, err)) != CST_OK) goto done;
+        ex->truncated = rec.truncated;
+        goto events;
+    }
     if ((status = run(it, &rec, pixel, sample, camera, err)) != CST_OK) goto done;
 
     ex->x = x;
@@ -400,6 +420,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
         }
         ex->splats_exact = memcmp(film_sum, ex->film_value, sizeof film_sum) == 0;
     }
+events:
     ex->num_events = rec.n;
     ex->events = rec.ev;
     rec.ev = NULL;

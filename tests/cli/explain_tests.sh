@@ -50,6 +50,20 @@ expect "explain --help" 0 'caustic explain \[SCENE\] --pixel X,Y'
 harness_run "$d" 30 explain --pixel 12,10 --integrator photon "${SMALL[@]}"
 expect "photon: estimates, sum equal bit for bit" 0 "global .final gather. map's estimate over those [0-9]+ photons" \
     'equal, bit for bit'
+# pssmlt and mmlt: the Metropolis steps whose splats reach the pixel in iteration 1, re-added
+# to the iteration's value (small bootstraps and chains keep it cheap).
+mkdir -p "$TMP/mlt"
+for integ in pssmlt mmlt; do
+    sed "s/\"integrator\": {[^}]*}/\"integrator\": {\"type\": \"$integ\", \"bootstrap_samples\": 2048, \"chains\": 16, \"max_depth\": 4}/" \
+        "$SRC/scenes/cornell-box.json" > "$TMP/mlt/$integ.json"
+done
+harness_run "$d" 60 explain "$TMP/mlt/pssmlt.json" --pixel 8,8 --sample 1 --width 16 --height 16
+expect "pssmlt: text, splats exact" 0 'integrator pssmlt' 'chain [0-9]+, step [0-9]+ \((large|small) step, a [0-9.e-]+' \
+    'b \(the bootstrap.s normalisation\)' 'the splats sum to the iteration.s value, bit for bit'
+harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,8 --width 16 --height 16 --json
+expect "mmlt: JSON, exact" 0 '"kind": "mutation"' '"path_length": [0-9]' '"mlt_b"' '"exact": true'
+harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,8 --width 16 --height 16 --why-bright
+expect "mmlt: --why-bright" 0 '^why bright: the (proposal|current state).s splat of chain [0-9]+'
 HARNESS_EXPECT_STDOUT=0
 
 harness_run "$d" 30 explain "${SMALL[@]}"
@@ -63,7 +77,7 @@ expect "--pixel off the image" 2 'pixel 24,0: expected 0 <= x < 24'
 harness_run "$d" 30 explain --pixel 1,1 --sample x "${SMALL[@]}"
 expect "--sample not a number" 2 '--sample: expected an integer'
 harness_run "$d" 30 explain --pixel 1,1 --integrator sppm "${SMALL[@]}"
-expect "sppm refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm; not sppm'
+expect "sppm refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, pssmlt, mmlt; not sppm'
 harness_run "$d" 30 explain missing.json --pixel 1,1
 expect "missing scene" 2 'cannot open scene'
 harness_run "$d" 30 render --why-dark "${SMALL[@]}" -o x.png
