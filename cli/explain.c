@@ -97,6 +97,21 @@ static void print_gather(FILE *f, const CstExplainEvent *e)
     print_value(f, e);
 }
 
+/* pssmlt, mmlt: one splat of a Metropolis step and what it added to the pixel. */
+static void print_mutation(FILE *f, const CstExplainEvent *e)
+{
+    fprintf(f, "chain %d", e->chain);
+    if (e->path_length >= 0) fprintf(f, " (path length %d)", e->path_length);
+    if (e->s >= 0) fprintf(f, " strategy (s=%d, t=%d)", e->s, e->t);
+    fprintf(f, ", step %d (%s step, a %.9g, %s): the %s at film (%.4f, %.4f), I %.9g, weight %s %.9g\n      ",
+            e->step, (e->flags & CST_EXPLAIN_LARGE_STEP) ? "large" : "small", (double)e->accept,
+            (e->flags & CST_EXPLAIN_ACCEPTED) ? "accepted" : "rejected",
+            (e->flags & CST_EXPLAIN_PROPOSAL) ? "proposal" : "current state", (double)e->wi[0], (double)e->wi[1],
+            (double)e->importance, (e->flags & CST_EXPLAIN_PROPOSAL) ? "a/I" : "(1-a)/I", (double)e->weight);
+    print3(f, "L ", e->value);
+    fprintf(f, "; adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
+}
+
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
     if (is_whitted(x) && (e->kind == CST_EXPLAIN_ESCAPE || e->kind == CST_EXPLAIN_EMISSION)) {
@@ -243,18 +258,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         return;
     case CST_EXPLAIN_PHOTON:
     case CST_EXPLAIN_ESTIMATE: print_gather(f, e); return;
-    case CST_EXPLAIN_MUTATION:
-        fprintf(f, "chain %d", e->chain);
-        if (e->path_length >= 0) fprintf(f, " (path length %d)", e->path_length);
-        if (e->s >= 0) fprintf(f, " strategy (s=%d, t=%d)", e->s, e->t);
-        fprintf(f, ", step %d (%s step, a %.9g, %s): the %s at film (%.4f, %.4f), I %.9g, weight %s %.9g\n      ",
-                e->step, (e->flags & CST_EXPLAIN_LARGE_STEP) ? "large" : "small", (double)e->accept,
-                (e->flags & CST_EXPLAIN_ACCEPTED) ? "accepted" : "rejected",
-                (e->flags & CST_EXPLAIN_PROPOSAL) ? "proposal" : "current state", (double)e->wi[0], (double)e->wi[1],
-                (double)e->importance, (e->flags & CST_EXPLAIN_PROPOSAL) ? "a/I" : "(1-a)/I", (double)e->weight);
-        print3(f, "L ", e->value);
-        fprintf(f, "; adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
-        return;
+    case CST_EXPLAIN_MUTATION: print_mutation(f, e); return;
     }
 }
 

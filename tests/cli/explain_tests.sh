@@ -57,12 +57,12 @@ for integ in pssmlt mmlt; do
     sed "s/\"integrator\": {[^}]*}/\"integrator\": {\"type\": \"$integ\", \"bootstrap_samples\": 2048, \"chains\": 16, \"max_depth\": 4}/" \
         "$SRC/scenes/cornell-box.json" > "$TMP/mlt/$integ.json"
 done
-harness_run "$d" 60 explain "$TMP/mlt/pssmlt.json" --pixel 8,8 --sample 1 --width 16 --height 16
+harness_run "$d" 60 explain "$TMP/mlt/pssmlt.json" --pixel 12,3 --sample 1 --width 16 --height 16
 expect "pssmlt: text, splats exact" 0 'integrator pssmlt' 'chain [0-9]+, step [0-9]+ \((large|small) step, a [0-9.e-]+' \
     'b \(the bootstrap.s normalisation\)' 'the splats sum to the iteration.s value, bit for bit'
-harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,8 --width 16 --height 16 --json
+harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,2 --width 16 --height 16 --json
 expect "mmlt: JSON, exact" 0 '"kind": "mutation"' '"path_length": [0-9]' '"mlt_b"' '"exact": true'
-harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,8 --width 16 --height 16 --why-bright
+harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,2 --width 16 --height 16 --why-bright
 expect "mmlt: --why-bright" 0 '^why bright: the (proposal|current state).s splat of chain [0-9]+'
 HARNESS_EXPECT_STDOUT=0
 

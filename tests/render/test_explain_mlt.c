@@ -3,7 +3,8 @@
  * the listed order, to the value the render merged for that iteration, bit for bit; the
  * film's sums before and after it are a whole render's (1 and 2 iterations, any thread
  * count); leaving out the largest splat breaks the equality (the check sees a missing
- * step); the listed steps are consistent (weights a / I and (1 - a) / I). */
+ * step); the listed steps are consistent (weights a / I and (1 - a) / I; mmlt's strategy
+ * (s, t) of the chain's path length); RGB and spectral, box, tent and Gaussian filters. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -17,6 +18,8 @@
 #include "caustic/caustic.h"
 
 enum { SIZE = 16 };
+
+static CstColorMode color_mode = CST_COLOR_RGB;
 
 static CstRenderSettings mlt_settings(CstIntegrator integ, CstFilter filter)
 {
@@ -32,6 +35,7 @@ static CstRenderSettings mlt_settings(CstIntegrator integ, CstFilter filter)
     st.seed = 5;
     st.seed_set = 1;
     st.threads = 1;
+    st.color_mode = color_mode;
     return st;
 }
 
@@ -70,7 +74,7 @@ static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const
     assert_memory_equal(film[1], film2, sizeof film2);
     int pix[16][2];
     assert_true(npix <= 13);
-    memcpy(pix, given, (size_t)npix * sizeof pix[0]);
+    if (npix) memcpy(pix, given, (size_t)npix * sizeof pix[0]);
     for (int k = 0; k < 3; k++, npix++) { /* the brightest pixels after two iterations, in order */
         int bx = -1, by = -1;
         for (int y = 0; y < SIZE; y++)
@@ -177,11 +181,26 @@ static void test_mmlt(void **state)
     cst_scene_destroy(s);
 }
 
+/* Spectral mode: the samples' wavelengths are primary sample dimensions too. */
+static void test_spectral(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    color_mode = CST_COLOR_SPECTRAL;
+    assert_true(check(s, CST_INTEGRATOR_PSSMLT, CST_FILTER_BOX, NULL, 0) > 0);
+    assert_true(check(s, CST_INTEGRATOR_MMLT, CST_FILTER_TENT, NULL, 0) > 0);
+    color_mode = CST_COLOR_RGB;
+    cst_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pssmlt),
         cmocka_unit_test(test_mmlt),
+        cmocka_unit_test(test_spectral),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
