@@ -24,6 +24,7 @@ static const char *kind_name(CstExplainKind k)
     case CST_EXPLAIN_DISTANCE: return "distance";
     case CST_EXPLAIN_PHOTON: return "photon";
     case CST_EXPLAIN_ESTIMATE: return "estimate";
+    case CST_EXPLAIN_MUTATION: return "mutation";
     }
     return "unknown";
 }
@@ -36,6 +37,11 @@ static bool is_bdpt(const CstExplain *x)
 static bool is_light(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_LIGHT; }
 static bool is_whitted(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_WHITTED; }
 static bool is_photon(const CstExplain *x) { return x->integrator == CST_INTEGRATOR_PHOTON; }
+/* pssmlt, mmlt: the Metropolis steps' splats of one iteration. */
+static bool is_mlt(const CstExplain *x)
+{
+    return x->integrator == CST_INTEGRATOR_PSSMLT || x->integrator == CST_INTEGRATOR_MMLT;
+}
 
 /* ------------------------------------------------------------------ text */
 
@@ -89,6 +95,21 @@ static void print_gather(FILE *f, const CstExplainEvent *e)
     else
         fputs("emission met by the camera ray and its specular chain (no MIS)", f);
     print_value(f, e);
+}
+
+/* pssmlt, mmlt: one splat of a Metropolis step and what it added to the pixel. */
+static void print_mutation(FILE *f, const CstExplainEvent *e)
+{
+    fprintf(f, "chain %d", e->chain);
+    if (e->path_length >= 0) fprintf(f, " (path length %d)", e->path_length);
+    if (e->s >= 0) fprintf(f, " strategy (s=%d, t=%d)", e->s, e->t);
+    fprintf(f, ", step %d (%s step, a %.9g, %s): the %s at film (%.4f, %.4f), I %.9g, weight %s %.9g\n      ",
+            e->step, (e->flags & CST_EXPLAIN_LARGE_STEP) ? "large" : "small", (double)e->accept,
+            (e->flags & CST_EXPLAIN_ACCEPTED) ? "accepted" : "rejected",
+            (e->flags & CST_EXPLAIN_PROPOSAL) ? "proposal" : "current state", (double)e->wi[0], (double)e->wi[1],
+            (double)e->importance, (e->flags & CST_EXPLAIN_PROPOSAL) ? "a/I" : "(1-a)/I", (double)e->weight);
+    print3(f, "L ", e->value);
+    fprintf(f, "; adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
 }
 
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
@@ -239,6 +260,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         return;
     case CST_EXPLAIN_PHOTON:
     case CST_EXPLAIN_ESTIMATE: print_gather(f, e); return;
+    case CST_EXPLAIN_MUTATION: print_mutation(f, e); return;
     }
 }
 
@@ -257,7 +279,9 @@ static int largest_event(const CstExplain *x, double *share)
     for (int i = 0; i < x->num_events; i++) {
         const CstExplainEvent *e = &x->events[i];
         if (!(e->flags & CST_EXPLAIN_ADDED)) continue;
-        double y = luminance(e->contribution);
+        /* MLT's splats: what each added to the pixel (the filter's weight differs). */
+        const float sh[3] = {(float)e->share[0], (float)e->share[1], (float)e->share[2]};
+        double y = luminance(e->kind == CST_EXPLAIN_MUTATION ? sh : e->contribution);
         total += y;
         if (best < 0 || y > best_y) { best = i; best_y = y; }
     }
@@ -276,12 +300,16 @@ static void print_largest(FILE *f, const CstExplain *x)
         return;
     }
     const CstExplainEvent *e = &x->events[best];
-    if (e->path >= 0)
+    if (e->kind == CST_EXPLAIN_MUTATION)
+        fprintf(f, "largest contribution: the %s's splat of chain %d, step %d",
+                (e->flags & CST_EXPLAIN_PROPOSAL) ? "proposal" : "current state", e->chain, e->step);
+    else if (e->path >= 0)
         fprintf(f, "largest contribution: the splat of light path %d", e->path);
     else
         fprintf(f, "largest contribution: %s at vertex %d", kind_name(e->kind), e->depth);
     if (e->s >= 0) fprintf(f, " (s=%d, t=%d)", e->s, e->t);
-    fprintf(f, ", %.1f%% of the %s's luminance\n", 100.0 * share, is_light(x) ? "pixel" : "camera sample");
+    fprintf(f, ", %.1f%% of the %s's luminance\n", 100.0 * share,
+            is_light(x) || is_mlt(x) ? "pixel" : "camera sample");
 }
 
 /* The light tracer: no camera path, only the splats that reached the pixel. */
@@ -296,6 +324,23 @@ static void print_text_light(FILE *f, const CstExplain *x)
             x->film_value[2], x->truncated ? "not checked" : x->exact ? "the splats sum to it, bit for bit" : "MISMATCH");
 }
 
+/* MLT: the steps of the iteration whose splats reached the pixel, in the film's order. */
+static void print_text_mlt(FILE *f, const CstExplain *x)
+{
+    fprintf(f, "pixel (%d, %d), iteration %d, integrator %s, %s: %d Metropolis splat(s) of %d chain(s) reach the "
+            "pixel\n", x->x, x->y, x->sample, cst_integrator_name(x->integrator), x->spectral ? "spectral" : "RGB",
+            x->num_events, x->mlt_chains);
+    fprintf(f, "b (the bootstrap's normalisation) %.9g; a splat adds b / (W H) = %.9g times weight x L (times the "
+            "filter)\n", x->mlt_b, x->mlt_scale);
+    for (int i = 0; i < x->num_events; i++) print_event(f, x, &x->events[i]);
+    if (x->truncated) fputs("(more splats than explain keeps: the list is truncated and not checked)\n", f);
+    print_largest(f, x);
+    fprintf(f, "the iteration's value (%.9g, %.9g, %.9g); the film's sum before it (%.9g, %.9g, %.9g) and after (%.9g, "
+            "%.9g, %.9g): %s\n", x->splat_value[0], x->splat_value[1], x->splat_value[2], x->camera_value[0],
+            x->camera_value[1], x->camera_value[2], x->film_value[0], x->film_value[1], x->film_value[2],
+            x->truncated ? "not checked" : x->exact ? "the splats sum to the iteration's value, bit for bit" : "MISMATCH");
+}
+
 static void print_text(FILE *f, const CstExplain *x)
 {
     if (x->integrator == CST_INTEGRATOR_SPPM) {
@@ -304,6 +349,10 @@ static void print_text(FILE *f, const CstExplain *x)
     }
     if (is_light(x)) {
         print_text_light(f, x);
+        return;
+    }
+    if (is_mlt(x)) {
+        print_text_mlt(f, x);
         return;
     }
     fprintf(f, "pixel (%d, %d), %s %d, integrator %s, %s\n", x->x, x->y, is_bdpt(x) ? "iteration" : "sample",
@@ -415,6 +464,21 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "value", arr3f(e->value));
         json_object_set_new(o, "contribution", arr3f(e->contribution));
         return o;
+    case CST_EXPLAIN_MUTATION:
+        json_object_set_new(o, "chain", json_integer(e->chain));
+        json_object_set_new(o, "step", json_integer(e->step));
+        if (e->path_length >= 0) json_object_set_new(o, "path_length", json_integer(e->path_length));
+        json_object_set_new(o, "proposal", json_boolean(e->flags & CST_EXPLAIN_PROPOSAL));
+        json_object_set_new(o, "large_step", json_boolean(e->flags & CST_EXPLAIN_LARGE_STEP));
+        json_object_set_new(o, "accepted", json_boolean(e->flags & CST_EXPLAIN_ACCEPTED));
+        json_object_set_new(o, "accept", num((double)e->accept));
+        json_object_set_new(o, "importance", num((double)e->importance));
+        json_object_set_new(o, "weight", num((double)e->weight));
+        json_object_set_new(o, "film", json_pack("[oo]", num((double)e->wi[0]), num((double)e->wi[1])));
+        json_object_set_new(o, "value", arr3f(e->value));
+        json_object_set_new(o, "contribution", arr3f(e->contribution));
+        json_object_set_new(o, "share", arr3d(e->share));
+        return o;
     case CST_EXPLAIN_SCATTER:
         json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
         json_object_set_new(o, "wi", arr3f(e->wi));
@@ -487,6 +551,11 @@ static bool print_json(FILE *f, const CstExplain *x)
         json_object_set_new(o, "splats_exact", json_boolean(x->splats_exact));
     }
     if (x->integrator == CST_INTEGRATOR_SPPM) cli_explain_sppm_json(o, x);
+    if (is_mlt(x)) {
+        json_object_set_new(o, "mlt_b", num(x->mlt_b));
+        json_object_set_new(o, "mlt_scale", num(x->mlt_scale));
+        json_object_set_new(o, "mlt_chains", json_integer(x->mlt_chains));
+    }
     /* 17 significant digits: every float and double reads back to the same bits. */
     int rc = json_dumpf(o, f, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
     json_decref(o);
@@ -507,6 +576,12 @@ static void print_why_bright(FILE *f, const CstExplain *x)
         return;
     }
     const CstExplainEvent *e = &x->events[b];
+    if (e->kind == CST_EXPLAIN_MUTATION) {
+        fprintf(f, "why bright: the %s's splat of chain %d, step %d (a %.4g, I %.6g, weight %.6g) gives %.1f%% of "
+                "the pixel's iteration value\n", (e->flags & CST_EXPLAIN_PROPOSAL) ? "proposal" : "current state",
+                e->chain, e->step, (double)e->accept, (double)e->importance, (double)e->weight, 100.0 * share);
+        return;
+    }
     if (e->path >= 0) {
         fprintf(f, "why bright: light path %d's connection to the camera at raster (%.2f, %.2f) gives %.1f%% of the "
                 "pixel (luminance %.6g)\n", e->path, (double)e->wi[0], (double)e->wi[1], 100.0 * share,
@@ -535,8 +610,14 @@ static void print_why_bright(FILE *f, const CstExplain *x)
 
 static void print_why_dark(FILE *f, const CstExplain *x)
 {
-    const double *v = x->integrator == CST_INTEGRATOR_LIGHT ? x->film_value : x->camera_value;
+    const double *v = x->integrator == CST_INTEGRATOR_LIGHT ? x->film_value : is_mlt(x) ? x->splat_value
+                                                                                        : x->camera_value;
     fprintf(f, "why dark: value (%.6g, %.6g, %.6g)", v[0], v[1], v[2]);
+    if (is_mlt(x)) {
+        fprintf(f, "; %d Metropolis splat(s) reached the pixel this iteration (the chains visit pixels in "
+                "proportion to their brightness)\n", x->num_events);
+        return;
+    }
     if (is_light(x)) {
         fprintf(f, "; %d light path connection(s) reached the pixel this iteration\n", x->num_events);
         return;

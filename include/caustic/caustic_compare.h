@@ -190,7 +190,8 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
  * did: every vertex, every sampling decision, every strategy's contribution with its MIS
  * weight (docs/cli.md, "caustic explain"). Supported: path, path-nee, path-bsdf (media
  * and subsurface materials too), whitted, light (the splats that reached the pixel), bdpt and
- * vcm (RGB mode), sppm (an iteration: its camera chain, photons and progressive update);
+ * vcm (RGB mode), sppm (an iteration: its camera chain, photons and progressive update),
+ * pssmlt and mmlt (the Metropolis steps whose splats reached the pixel in one iteration);
  * CST_ERR_UNSUPPORTED for the rest. */
 typedef enum CstExplainKind {
     CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material; or a
@@ -214,11 +215,17 @@ typedef enum CstExplainKind {
                              * from the light (2 = the first SPPM gathers), distance its
                              * distance from the visible point, pmf the box kernel
                              * 1 / (N_emitted pi r^2), share its part of the pixel's value */
-    CST_EXPLAIN_ESTIMATE    /* photon: the density estimate over the photons listed before it
+    CST_EXPLAIN_ESTIMATE,   /* photon: the density estimate over the photons listed before it
                              * (flag CAUSTIC: the caustic map at the first diffuse vertex, else
                              * the global map at the final gather's vertex): distance the
                              * radius, pmf the box kernel 1 / (pi r^2), path the photons
                              * counted, value the estimate, beta the gather's throughput */
+    CST_EXPLAIN_MUTATION    /* pssmlt, mmlt: a splat of a Metropolis step that reached the pixel
+                             * (chain, step, path_length, accept, importance, weight below;
+                             * flags PROPOSAL, LARGE_STEP, ACCEPTED): value the sample's radiance
+                             * L, beta the weight, contribution weight * L, wi[0..1] its film
+                             * position, share what it added to the pixel (the render's scale
+                             * b / (W H) and the filter included) */
 } CstExplainKind;
 
 enum {
@@ -233,7 +240,11 @@ enum {
     /* spectral bdpt/vcm: a connection's or merge's light vertex lies on a dispersed light
      * subpath (hero wavelength alone too) */
     CST_EXPLAIN_LIGHT_DISPERSED = 64,
-    CST_EXPLAIN_CAUSTIC = 128 /* ESTIMATE: over the caustic photon map */
+    CST_EXPLAIN_CAUSTIC = 128, /* ESTIMATE: over the caustic photon map */
+    CST_EXPLAIN_PROPOSAL = 256,   /* MUTATION: the proposal's splat (weight a / I), else the
+                                   * current state's (weight (1 - a) / I) */
+    CST_EXPLAIN_LARGE_STEP = 512, /* MUTATION: the step was a large step (fresh uniforms) */
+    CST_EXPLAIN_ACCEPTED = 1024   /* MUTATION: the chain moved to the proposal */
 };
 
 typedef struct CstExplainEvent {
@@ -271,8 +282,6 @@ typedef struct CstExplainEvent {
     int medium;       /* VERTEX in a medium ("medium" material_type), DISTANCE: its index; -1 */
     float distance;   /* DISTANCE: the sampled distance, or the segment's length if it passed */
     float transmittance[3]; /* DISTANCE, homogeneous media: exp(-sigma_t distance) (RGB lanes) */
-    double share[3];  /* light, bdpt, vcm: what the splat added to the pixel (filter weight
-                       * included) */
     /* bdpt, vcm through media: the distance-sampling densities of the segment (DISTANCE: the
      * flight that made the next vertex; NEE, CONNECT, SPLAT: the connection's): chain_fwd
      * the density with which a walk from the camera side's end (DISTANCE: the previous
@@ -280,6 +289,15 @@ typedef struct CstExplainEvent {
      * per unit length at a medium vertex (majorant-based in grids), a pass probability at a
      * surface; 1 in vacuum. 0 when not applicable. */
     float chain_fwd, chain_rev;
+    double share[3];  /* light, bdpt, vcm, MUTATION: what the splat added to the pixel (filter
+                       * weight included) */
+    /* MUTATION (pssmlt, mmlt): the chain, the step's index among the chain's mutations of the
+     * iteration, the chain's path length (mmlt: bounces; pssmlt: -1), the acceptance
+     * probability a = min(1, I(proposal) / I(current)), the splatted sample's scalar
+     * contribution I (luminance of |L|) and the splat's weight (a / I or (1 - a) / I);
+     * mmlt: s and t the sampled BDPT strategy of that length (s + t = path_length + 2). */
+    int chain, step, path_length;
+    float accept, importance, weight;
 } CstExplainEvent;
 
 typedef struct CstExplain {
@@ -330,17 +348,26 @@ typedef struct CstExplain {
                                    * tau_vol / (N_emitted 4/3 pi r_vol^3)), recomputed */
         int state_exact;          /* the recomputed N', r', tau', ld' are the render's, bit for bit */
     } sppm;
+    /* pssmlt, mmlt (`sample` is the iteration: W x H mutations over all chains): b, the
+     * bootstrap's normalisation (mean I times the chains' film domain), and the factor from
+     * a splat's weight * L to its share (b / (W H) before the filter); camera_value is then
+     * the film's sum over iterations 0 .. sample - 1, splat_value the iteration's splats on
+     * the pixel re-added in the film's order, film_value the film's sum after the
+     * iteration; splats_exact (= exact): the re-added splats equal the value the render
+     * merged for the iteration and camera_value + it = film_value, bit for bit. */
+    double mlt_b, mlt_scale;
+    int mlt_chains;
 } CstExplain;
 
-/* Replays sample `sample` (for bdpt and sppm: iteration; sppm replays iterations 0..sample
- * of the whole image) of pixel (x, y) under `settings` (as for
+/* Replays sample `sample` (for bdpt, sppm, pssmlt and mmlt: iteration; sppm, pssmlt and mmlt
+ * replay iterations 0..sample of the whole image) of pixel (x, y) under `settings` (as for
  * cst_render; spp, crop, threads and first_sample are ignored) and records its path.
  * *out: a new record, cst_explain_destroy. CST_ERR_INVALID_ARG for a pixel off the image
  * or a negative sample; CST_ERR_UNSUPPORTED for an integrator explain cannot follow. */
 CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
-/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm": the integrators
+/* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm, pssmlt, mmlt": the integrators
  * cst_explain follows (bdpt and vcm in scenes without participating media). */
 CST_API const char *cst_explain_integrators(void);
 

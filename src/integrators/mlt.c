@@ -13,6 +13,7 @@
 
 #include "core/array.h"
 
+#include "integrators/recorder.h"
 #include "integrators/subpath_media.h"
 #include "sampling/sampler.h"
 
@@ -132,7 +133,7 @@ static Color mmlt_eval_media(const Mlt *m, const Scene *s, const Camera *cam, Ps
  * expectation BDPT's estimate of the length. RGB (spectral: converted with the path's
  * wavelengths). */
 static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampler *pss, int depth, Vec2 *fp,
-                       uint64_t *rays)
+                       int *strategy, uint64_t *rays)
 {
     Sampler smp = sampler_pss(pss);
     pss_start_stream(pss, 0);
@@ -142,6 +143,7 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
         sl = (int)(sampler_1d(&smp) * (float)n_strategies);
         if (sl > n_strategies - 1) sl = n_strategies - 1;
     }
+    *strategy = sl;
     const int tc = depth + 2 - sl; /* pbrt's t: camera vertices, the camera included */
     Vec2 uf = sampler_2d(&smp);
     Vec2 ul = sampler_2d(&smp);
@@ -206,11 +208,14 @@ static Color mmlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampl
 }
 
 /* The state's estimate (pssmlt: the path tracer's; mmlt: one strategy of the chain's path
- * length) and its film position; a NaN/Inf estimate counts as a zero one. */
+ * length, its light vertices s in *strategy, -1 for pssmlt) and its film position; a
+ * NaN/Inf estimate counts as a zero one. */
 static Color mlt_eval(const Mlt *m, const Scene *s, const Camera *cam, PssSampler *pss, int depth, Vec2 *fp,
-                      uint64_t *rays, uint64_t *nonfinite)
+                      int *strategy, uint64_t *rays, uint64_t *nonfinite)
 {
-    Color L = m->p.depths > 0 ? mmlt_eval(m, s, cam, pss, depth, fp, rays) : path_eval(m, s, cam, pss, fp, rays);
+    *strategy = -1;
+    Color L = m->p.depths > 0 ? mmlt_eval(m, s, cam, pss, depth, fp, strategy, rays)
+                              : path_eval(m, s, cam, pss, fp, rays);
     if (!color_is_finite(L) || !isfinite(mlt_importance(L))) {
         ++*nonfinite;
         return color_s(0.0f);
@@ -250,7 +255,8 @@ void mlt_bootstrap_item(Mlt *m, const Scene *s, const Camera *cam, int item, uin
         pss_restart(&pss, boot_stream(m, i));
         pss_start_iteration(&pss);
         Vec2 fp;
-        Color L = mlt_eval(m, s, cam, &pss, boot_depth(m, i), &fp, rays, nonfinite);
+        int strategy;
+        Color L = mlt_eval(m, s, cam, &pss, boot_depth(m, i), &fp, &strategy, rays, nonfinite);
         m->boot_I[i] = pss.oom ? 0.0f : mlt_importance(L);
     }
     pss_free(&pss);
@@ -306,7 +312,7 @@ void mlt_chain_start(Mlt *m, const Scene *s, const Camera *cam, int c, uint64_t 
     pss_init(&ch->pss, boot_stream(m, lo), m->p.sigma, m->p.large_step_prob, stream_count(m));
     pss_start_iteration(&ch->pss);
     ch->pss.large_step = true;
-    ch->L = mlt_eval(m, s, cam, &ch->pss, ch->depth, &ch->fp, rays, nonfinite);
+    ch->L = mlt_eval(m, s, cam, &ch->pss, ch->depth, &ch->fp, &ch->strategy, rays, nonfinite);
     ch->I = mlt_importance(ch->L);
     pss_accept(&ch->pss);
     /* Its mutations from a stream of its own: two chains that picked the same bootstrap
@@ -322,17 +328,29 @@ void mlt_chain_run(Mlt *m, const Scene *s, const Camera *cam, int c, int mutatio
     for (int k = 0; k < mutations; k++) {
         pss_start_iteration(&ch->pss);
         Vec2 fp;
-        Color L = mlt_eval(m, s, cam, &ch->pss, ch->depth, &fp, rays, nonfinite);
+        int strategy;
+        Color L = mlt_eval(m, s, cam, &ch->pss, ch->depth, &fp, &strategy, rays, nonfinite);
         float I = mlt_importance(L);
         /* Metropolis acceptance with a symmetric proposal (Kelemen et al. eq. 7). */
         float a = I >= ch->I ? 1.0f : I / ch->I;
+        const size_t n0 = out->n;
         if (a > 0.0f) film_splat(out, fr, fp.x, fp.y, color_scale(L, a / I));
+        const size_t n1 = out->n;
         if (a < 1.0f) film_splat(out, fr, ch->fp.x, ch->fp.y, color_scale(ch->L, (1.0f - a) / ch->I));
-        if (pcg32_float(&ch->accept_rng) < a) {
+        const bool accept = pcg32_float(&ch->accept_rng) < a;
+        if (m->rec) {
+            /* Each splat with its index in `out` (-1: none was added), the film's order. */
+            const RecorderMltSplat sp[2] = {
+                {fp, L, I, a > 0.0f ? a / I : 0.0f, n1 > n0 ? (long)n0 : -1, strategy},
+                {ch->fp, ch->L, ch->I, (1.0f - a) / ch->I, out->n > n1 ? (long)n1 : -1, ch->strategy}};
+            recorder_mlt_step(m->rec, c, k, m->p.depths > 0 ? ch->depth : -1, ch->pss.large_step, accept, a, sp);
+        }
+        if (accept) {
             pss_accept(&ch->pss);
             ch->fp = fp;
             ch->L = L;
             ch->I = I;
+            ch->strategy = strategy;
         } else {
             pss_reject(&ch->pss);
         }
@@ -450,6 +468,7 @@ bool mlt_state_read(Mlt *m, const unsigned char *in, size_t len)
         uint64_t depth = get_u64(&p, 4);
         if (depth >= (uint64_t)lengths) return false;
         ch->depth = (int)depth;
+        ch->strategy = -1; /* not in the state: explain never resumes */
         ch->accept_rng.state = get_u64(&p, 8);
         ch->accept_rng.inc = get_u64(&p, 8);
         ch->fp.x = get_f32(&p);

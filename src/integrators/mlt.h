@@ -54,6 +54,8 @@ typedef struct MltChain {
     Color L;
     float I;
     int depth; /* mmlt: the path length (bounces) the chain explores */
+    int strategy; /* mmlt: the current sample's strategy (light vertices s); -1 for pssmlt
+                   * and after a checkpoint (for `caustic explain` only) */
 } MltChain;
 
 typedef struct Mlt {
@@ -63,6 +65,8 @@ typedef struct Mlt {
     double mean_I;       /* the bootstrap's mean contribution over the film domain: b / area */
     bool ready;          /* bootstrap done and chains started */
     MltChain *chains;
+    struct Recorder *rec; /* `caustic explain` (recorder.h): the steps' splats near a pixel;
+                           * NULL in renders (one branch per step) */
 } Mlt;
 
 /* A new MLT state for p, or NULL on OOM. Caller owns it: mlt_destroy (accepts NULL). */

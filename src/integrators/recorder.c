@@ -532,3 +532,33 @@ void recorder_sppm_photon(Recorder *r, Vec3 p, Vec3 wi, Color power, Color f, Co
     r->beta[e - r->ev] = f;
     r->value[e - r->ev] = d; /* the replay sums d, the render's own product */
 }
+
+void recorder_mlt_step(Recorder *r, int chain, int step, int length, bool large, bool accepted, float a,
+                       const RecorderMltSplat sp[2])
+{
+    for (int k = 0; k < 2; k++) {
+        const RecorderMltSplat *s = &sp[k];
+        if (s->index < 0) continue;
+        if (!(fabsf(s->fp.x - ((float)r->px + 0.5f)) < r->radius && fabsf(s->fp.y - ((float)r->py + 0.5f)) < r->radius))
+            continue;
+        CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_MUTATION);
+        e->flags = (k == 0 ? CST_EXPLAIN_PROPOSAL : 0) | (large ? CST_EXPLAIN_LARGE_STEP : 0) |
+                   (accepted ? CST_EXPLAIN_ACCEPTED : 0);
+        e->chain = chain;
+        e->step = step;
+        e->path_length = length;
+        if (s->s >= 0 && length >= 0) { /* mmlt: the BDPT strategy (s, t) of the path length */
+            e->s = s->s;
+            e->t = length + 2 - s->s;
+        }
+        e->path = (int)s->index;
+        e->accept = a;
+        e->importance = s->I;
+        e->weight = s->weight;
+        e->wi[0] = s->fp.x;
+        e->wi[1] = s->fp.y;
+        put_color(e->value, s->L);
+        e->beta[0] = e->beta[1] = e->beta[2] = s->weight;
+        put_color(e->contribution, color_scale(s->L, s->weight));
+    }
+}

@@ -215,4 +215,22 @@ void recorder_light_start(Recorder *r, const EmissionSample *es);
 void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir);
 void recorder_light_scatter(Recorder *r, bool delta);
 
+/* ---- Metropolis light transport (mlt.c's mlt_chain_run) */
+/* One splat of a step: the sample's film position, radiance, scalar contribution I, the
+ * splat's weight and (mmlt) strategy; index: its place in the chain's splat list of the iteration (-1 when
+ * no splat was made: weight 0, or off the film). */
+typedef struct RecorderMltSplat {
+    Vec2 fp;
+    Color L;
+    float I, weight;
+    long index;
+    int s; /* mmlt: the sample's strategy (light vertices); -1 for pssmlt or unknown */
+} RecorderMltSplat;
+/* Step `step` of chain `chain` (path length `length`, -1 for pssmlt): a large step or not,
+ * accepted or not, acceptance probability a; sp[0] the proposal's splat, sp[1] the current
+ * state's. Kept (a MUTATION event each, `path` its index in the list) when the splat lands
+ * within `radius` pixels of the recorded pixel's centre. */
+void recorder_mlt_step(Recorder *r, int chain, int step, int length, bool large, bool accepted, float a,
+                       const RecorderMltSplat sp[2]);
+
 #endif

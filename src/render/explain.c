@@ -14,6 +14,7 @@
 #include "integrators/recorder.h"
 #include "render/explain_mis.h"
 #include "render/explain_sppm.h"
+#include "render/explain_mlt.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -21,7 +22,10 @@
  * with its connections; longer ones are reported truncated (and not checked). */
 enum { EXPLAIN_EVENTS = 8192 };
 
-const char *cst_explain_integrators(void) { return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm"; }
+const char *cst_explain_integrators(void)
+{
+    return "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm, pssmlt, mmlt";
+}
 
 void cst_explain_destroy(CstExplain *e)
 {
@@ -57,6 +61,8 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_BDPT:
     case CST_INTEGRATOR_VCM: return CST_OK; /* subpath.c and subpath_media.c are recorded */
     case CST_INTEGRATOR_SPPM: return CST_OK; /* explain_sppm.c refuses what it cannot follow */
+    case CST_INTEGRATOR_PSSMLT:
+    case CST_INTEGRATOR_MMLT: return CST_OK; /* the chains' splats (explain_mlt.c) */
     default: break;
     }
     return cst_fail(err, CST_ERR_UNSUPPORTED, "explain supports: %s; not %s", cst_explain_integrators(),
@@ -320,7 +326,11 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     /* One pixel, one sample, one thread, nothing but the film's sums. */
     st.threads = 1;
     st.first_sample = sample;
-    st.crop[0] = x; st.crop[1] = x + 1; st.crop[2] = y; st.crop[3] = y + 1;
+    /* (MLT: the chains roam the whole film, which the iteration's merge writes.) */
+    const bool mlt = st.integrator == CST_INTEGRATOR_PSSMLT || st.integrator == CST_INTEGRATOR_MMLT;
+    if (!mlt) {
+        st.crop[0] = x; st.crop[1] = x + 1; st.crop[2] = y; st.crop[3] = y + 1;
+    }
     st.aovs = 0;
     st.time_limit = 0.0;
     st.sample_block = 1;
@@ -355,6 +365,16 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     else rec.radius = filter_radius(it->light.vcm_params.frame.filter);
     const int pixel = y * st.width + x;
     double camera[3] = {0.0, 0.0, 0.0};
+    if (mlt) {
+        ex->x = x;
+        ex->y = y;
+        ex->sample = sample;
+        ex->integrator = st.integrator;
+        ex->spectral = it->spectral;
+        if ((status = explain_mlt(it, film, &rec, x, y, sample, ex, err)) != CST_OK) goto done;
+        ex->truncated = rec.truncated;
+        goto events;
+    }
     if ((status = run(it, &rec, pixel, sample, camera, err)) != CST_OK) goto done;
 
     ex->x = x;
@@ -401,6 +421,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
         }
         ex->splats_exact = memcmp(film_sum, ex->film_value, sizeof film_sum) == 0;
     }
+events:
     ex->num_events = rec.n;
     ex->events = rec.ev;
     rec.ev = NULL;

@@ -61,6 +61,20 @@ harness_run "$d" 60 explain --integrator sppm --pixel 16,16 --sample 1 --width 3
 expect "sppm: JSON, exact" 0 '"exact": true' '"kind": "photon"' '"bounces"' '"sppm": \{' '"state_exact": true'
 harness_run "$d" 60 explain --integrator sppm --pixel 16,16 --sample 1 --width 32 --height 32 --why-bright
 expect "sppm: --why-bright" 0 '^why bright: (photon path [0-9]+|the direct light)'
+# pssmlt and mmlt: the Metropolis steps whose splats reach the pixel in iteration 1, re-added
+# to the iteration's value (small bootstraps and chains keep it cheap).
+mkdir -p "$TMP/mlt"
+for integ in pssmlt mmlt; do
+    sed "s/\"integrator\": {[^}]*}/\"integrator\": {\"type\": \"$integ\", \"bootstrap_samples\": 2048, \"chains\": 16, \"max_depth\": 4}/" \
+        "$SRC/scenes/cornell-box.json" > "$TMP/mlt/$integ.json"
+done
+harness_run "$d" 60 explain "$TMP/mlt/pssmlt.json" --pixel 12,3 --sample 1 --width 16 --height 16
+expect "pssmlt: text, splats exact" 0 'integrator pssmlt' 'chain [0-9]+, step [0-9]+ \((large|small) step, a [0-9.e-]+' \
+    'b \(the bootstrap.s normalisation\)' 'the splats sum to the iteration.s value, bit for bit'
+harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,2 --width 16 --height 16 --json
+expect "mmlt: JSON, exact" 0 '"kind": "mutation"' '"path_length": [0-9]' '"mlt_b"' '"exact": true'
+harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,2 --width 16 --height 16 --why-bright
+expect "mmlt: --why-bright" 0 '^why bright: the (proposal|current state).s splat of chain [0-9]+'
 HARNESS_EXPECT_STDOUT=0
 
 harness_run "$d" 30 explain "${SMALL[@]}"
@@ -73,8 +87,9 @@ harness_run "$d" 30 explain --pixel 24,0 "${SMALL[@]}"
 expect "--pixel off the image" 2 'pixel 24,0: expected 0 <= x < 24'
 harness_run "$d" 30 explain --pixel 1,1 --sample x "${SMALL[@]}"
 expect "--sample not a number" 2 '--sample: expected an integer'
-harness_run "$d" 30 explain --pixel 1,1 --integrator pssmlt "${SMALL[@]}"
-expect "pssmlt refused" 2 'explain supports: path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm; not pssmlt'
+# every integrator is explained; what one cannot follow is refused with a reason
+harness_run "$d" 30 explain --pixel 1,1 --integrator photon --spectral "${SMALL[@]}"
+expect "photon spectral refused" 2 "explain does not follow photon's paths through participating media or in spectral mode"
 harness_run "$d" 30 explain missing.json --pixel 1,1
 expect "missing scene" 2 'cannot open scene'
 harness_run "$d" 30 render --why-dark "${SMALL[@]}" -o x.png

@@ -1,0 +1,206 @@
+/* caustic explain for pssmlt and mmlt (issue 30): on a 16x16 Cornell box with few
+ * mutations, the Metropolis splats explain lists for a pixel and an iteration re-add, in
+ * the listed order, to the value the render merged for that iteration, bit for bit; the
+ * film's sums before and after it are a whole render's (1 and 2 iterations, any thread
+ * count); leaving out the largest splat breaks the equality (the check sees a missing
+ * step); the listed steps are consistent (weights a / I and (1 - a) / I; mmlt's strategy
+ * (s, t) of the chain's path length); RGB and spectral, box, tent and Gaussian filters. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "caustic/caustic.h"
+
+enum { SIZE = 16 };
+
+static CstColorMode color_mode = CST_COLOR_RGB;
+
+static CstRenderSettings mlt_settings(CstIntegrator integ, CstFilter filter)
+{
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.integrator = integ;
+    st.width = st.height = SIZE;
+    st.filter = filter;
+    st.spp = 2; /* iterations: mutations per pixel */
+    st.max_depth = 4;
+    st.mlt_chains = 24;
+    st.mlt_bootstrap = 2048;
+    st.seed = 5;
+    st.seed_set = 1;
+    st.threads = 1;
+    st.color_mode = color_mode;
+    return st;
+}
+
+static double lum(const double v[3]) { return 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]; }
+
+/* The film's sum at (x, y) after `iterations` iterations of a whole render with `threads`
+ * threads: the mean times the count (1 or 2: exact in binary). */
+static void film_sum(const CstScene *s, const CstRenderSettings *base, int iterations, int threads, double out[SIZE][SIZE][3])
+{
+    CstRenderSettings st = *base;
+    st.spp = iterations;
+    st.threads = threads;
+    CstFilm *f = NULL;
+    CstError err;
+    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_OK);
+    for (int y = 0; y < SIZE; y++)
+        for (int x = 0; x < SIZE; x++) {
+            cst_film_pixel(f, x, y, out[y][x]);
+            for (int c = 0; c < 3; c++) out[y][x][c] *= (double)iterations;
+        }
+    cst_film_destroy(f);
+}
+
+
+/* Explains the `npix` pixels and the three the chains splatted most onto (at one
+ * mutation per pixel and iteration most pixels get no splat) at iterations 0 and 1, and
+ * checks them against whole renders; returns the splats listed. */
+static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const int (*given)[2], int npix)
+{
+    static double film[2][SIZE][SIZE][3], film2[SIZE][SIZE][3];
+    const CstRenderSettings st = mlt_settings(integ, filter);
+    film_sum(s, &st, 1, 1, film[0]);
+    film_sum(s, &st, 2, 1, film[1]);
+    film_sum(s, &st, 2, 3, film2);
+    /* Determinism the replay relies on: the thread count changes no bit. */
+    assert_memory_equal(film[1], film2, sizeof film2);
+    int pix[16][2];
+    assert_true(npix <= 13);
+    if (npix) memcpy(pix, given, (size_t)npix * sizeof pix[0]);
+    for (int k = 0; k < 3; k++, npix++) { /* the brightest pixels after two iterations, in order */
+        int bx = -1, by = -1;
+        for (int y = 0; y < SIZE; y++)
+            for (int x = 0; x < SIZE; x++) {
+                bool taken = false;
+                for (int q = 0; q < npix; q++) taken |= pix[q][0] == x && pix[q][1] == y;
+                if (!taken && (bx < 0 || lum(film[1][y][x]) > lum(film[1][by][bx]))) bx = x, by = y;
+            }
+        pix[npix][0] = bx;
+        pix[npix][1] = by;
+    }
+    int listed = 0, proposals = 0, currents = 0, large = 0, broken = 0, lit = 0;
+    for (int p = 0; p < npix; p++)
+        for (int it = 0; it < 2; it++) {
+            const int x = pix[p][0], y = pix[p][1];
+            CstExplain *ex = NULL;
+            CstError err;
+            assert_int_equal(cst_explain(s, &st, x, y, it, &ex, &err), CST_OK);
+            assert_false(ex->truncated);
+            assert_int_equal(ex->integrator, integ);
+            if (!ex->exact || !ex->splats_exact)
+                fail_msg("%s pixel %d,%d iteration %d: splats (%.17g %.17g %.17g) != the render's", cst_integrator_name(integ),
+                         x, y, it, ex->splat_value[0], ex->splat_value[1], ex->splat_value[2]);
+            /* The film's sums before and after the iteration are the renders'. */
+            const double zero[3] = {0.0, 0.0, 0.0};
+            assert_memory_equal(ex->camera_value, it == 0 ? zero : film[0][y][x], sizeof zero);
+            assert_memory_equal(ex->film_value, film[it][y][x], sizeof zero);
+            assert_true(ex->mlt_b > 0.0 && ex->mlt_scale > 0.0);
+            /* The listed splats re-added here in their order: the iteration's value. */
+            double sum[3] = {0.0, 0.0, 0.0}, best = -1.0;
+            int bi = -1;
+            for (int i = 0; i < ex->num_events; i++) {
+                const CstExplainEvent *e = &ex->events[i];
+                assert_int_equal(e->kind, CST_EXPLAIN_MUTATION);
+                assert_true(e->flags & CST_EXPLAIN_ADDED);
+                assert_true(e->chain >= 0 && e->chain < ex->mlt_chains && e->step >= 0);
+                assert_true(e->accept >= 0.0f && e->accept <= 1.0f && e->importance > 0.0f);
+                const float w = (e->flags & CST_EXPLAIN_PROPOSAL) ? e->accept / e->importance
+                                                                  : (1.0f - e->accept) / e->importance;
+                assert_true(e->weight == w);
+                if (integ == CST_INTEGRATOR_MMLT)
+                    assert_true(e->path_length >= 0 && e->path_length <= st.max_depth && e->s >= 0 && e->t >= 1 &&
+                                e->s + e->t == e->path_length + 2);
+                else
+                    assert_true(e->path_length == -1 && e->s == -1);
+                if (i > 0) /* the film's order: chain by chain, step by step */
+                    assert_true(e->chain > ex->events[i - 1].chain ||
+                                (e->chain == ex->events[i - 1].chain && e->step >= ex->events[i - 1].step));
+                for (int c = 0; c < 3; c++) sum[c] += e->share[c];
+                if (lum(e->share) > best) best = lum(e->share), bi = i;
+                proposals += (e->flags & CST_EXPLAIN_PROPOSAL) != 0;
+                currents += !(e->flags & CST_EXPLAIN_PROPOSAL);
+                large += (e->flags & CST_EXPLAIN_LARGE_STEP) != 0;
+            }
+            assert_memory_equal(sum, ex->splat_value, sizeof sum);
+            for (int c = 0; c < 3; c++) {
+                const double after = ex->camera_value[c] + sum[c];
+                assert_memory_equal(&after, &ex->film_value[c], sizeof after);
+            }
+            /* A broken replay, one step missing: the sum is no longer the film's. */
+            if (bi >= 0) {
+                double part[3] = {0.0, 0.0, 0.0};
+                for (int i = 0; i < ex->num_events; i++)
+                    for (int c = 0; c < 3; c++)
+                        if (i != bi) part[c] += ex->events[i].share[c];
+                if (memcmp(part, ex->splat_value, sizeof part) != 0) broken++;
+                else fail_msg("pixel %d,%d: a sum without its largest splat equals the film's", x, y);
+            }
+            listed += ex->num_events;
+            lit += ex->num_events > 0;
+            cst_explain_destroy(ex);
+        }
+    /* Splats listed at several pixels and iterations: both kinds, and large steps. */
+    if (lit < 3 || !proposals || !currents || !large || broken < 3)
+        fail_msg("%s: %d pixel iterations with splats, %d proposals, %d current states, %d large steps",
+                 cst_integrator_name(integ), lit, proposals, currents, large);
+    print_message("%s: %d splats listed, at %d of %d pixel iterations (%d proposals, %d large steps)\n",
+                  cst_integrator_name(integ), listed, lit, 2 * npix, proposals, large);
+    return listed;
+}
+
+static void test_pssmlt(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    static const int PIX[][2] = {{8, 8}, {3, 12}, {12, 3}, {8, 1}};
+    assert_true(check(s, CST_INTEGRATOR_PSSMLT, CST_FILTER_BOX, PIX, 4) > 0);
+    /* The tent: splats shared between neighbouring pixels. */
+    assert_true(check(s, CST_INTEGRATOR_PSSMLT, CST_FILTER_TENT, PIX, 2) > 0);
+    cst_scene_destroy(s);
+}
+
+static void test_mmlt(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    static const int PIX[][2] = {{8, 8}, {2, 14}, {13, 5}, {7, 2}};
+    assert_true(check(s, CST_INTEGRATOR_MMLT, CST_FILTER_BOX, PIX, 4) > 0);
+    assert_true(check(s, CST_INTEGRATOR_MMLT, CST_FILTER_GAUSSIAN, PIX, 2) > 0);
+    cst_scene_destroy(s);
+}
+
+/* Spectral mode: the samples' wavelengths are primary sample dimensions too. */
+static void test_spectral(void **state)
+{
+    (void)state;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    color_mode = CST_COLOR_SPECTRAL;
+    assert_true(check(s, CST_INTEGRATOR_PSSMLT, CST_FILTER_BOX, NULL, 0) > 0);
+    assert_true(check(s, CST_INTEGRATOR_MMLT, CST_FILTER_TENT, NULL, 0) > 0);
+    color_mode = CST_COLOR_RGB;
+    cst_scene_destroy(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_pssmlt),
+        cmocka_unit_test(test_mmlt),
+        cmocka_unit_test(test_spectral),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
