@@ -167,7 +167,7 @@ static const char HELP_MERGE[] =
 
 static const char HELP_EXPLAIN[] =
 "Explain a pixel: caustic explain [SCENE] --pixel X,Y [--sample I] [render options]\n"
-"Replays sample I (bdpt, vcm, pssmlt, mmlt: iteration I) of pixel (X, Y) with the\n"
+"Replays sample I (bdpt, vcm, sppm, pssmlt, mmlt: iteration I) of pixel (X, Y) with the\n"
 "random numbers `caustic render` gives it under the same options (--seed,\n"
 "--integrator, --sampler, --spp for the stratified samplers' strata, --width,\n"
 "--height, --max-depth, ...) and prints its path: every vertex (position, normal,\n"
@@ -182,8 +182,9 @@ static const char HELP_EXPLAIN[] =
 "path's splat on the pixel in the iteration, summed to the film's value. pssmlt, mmlt:\n"
 "the Metropolis steps (chain, step, acceptance, splat weight) whose splats reached the\n"
 "pixel in iteration I (the render run from its start), summed to the iteration's value.\n"
-"Integrators: path, path-nee, path-bsdf, whitted, light, photon, bdpt and vcm (no\n"
-"media), pssmlt and mmlt; any other: exit 2.\n"
+"sppm: iteration I's visible point, the photons it gathered and its progressive update\n"
+"(iterations 0..I replayed), equal to the film of a --spp I+1 render. Every integrator is\n"
+"explained; what one cannot follow (photon in media or spectral mode) is refused, exit 2.\n"
 "  --pixel X,Y          the pixel, 0,0 the top left (required)\n"
 "  --sample I           the sample (iteration) index, >= 0 (default 0)\n"
 "  --why-bright         one line instead: the event carrying most of the value and what\n"
