@@ -112,6 +112,21 @@ static void print_mutation(FILE *f, const CstExplainEvent *e)
     fprintf(f, "; adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
 }
 
+/* A free flight in a medium: where it stopped, its densities, its weight. */
+static void print_distance(FILE *f, const CstExplain *x, const CstExplainEvent *e)
+{
+    fprintf(f, "  distance in medium %d: %s %.6g", e->medium,
+            (e->flags & CST_EXPLAIN_SCATTERED) ? "scatters after" : "passes the segment of", (double)e->distance);
+    if (e->pdf_w > 0.0f)
+        fprintf(f, " (%s %.6g, transmittance (%.6g, %.6g, %.6g))",
+                (e->flags & CST_EXPLAIN_SCATTERED) ? "pdf per unit length" : "probability", (double)e->pdf_w,
+                (double)e->transmittance[0], (double)e->transmittance[1], (double)e->transmittance[2]);
+    if (e->chain_fwd > 0.0f || e->chain_rev > 0.0f) /* bdpt, vcm (subpath_media.c) */
+        fprintf(f, " (sampling density %.6g, reverse %.6g)", (double)e->chain_fwd, (double)e->chain_rev);
+    print3(f, is_bdpt(x) ? ", throughput " : ", weight ", is_bdpt(x) ? e->beta : e->value);
+    fputc('\n', f);
+}
+
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
     if (is_whitted(x) && (e->kind == CST_EXPLAIN_ESCAPE || e->kind == CST_EXPLAIN_EMISSION)) {
@@ -122,18 +137,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         return;
     }
     switch (e->kind) {
-    case CST_EXPLAIN_DISTANCE:
-        fprintf(f, "  distance in medium %d: %s %.6g", e->medium,
-                (e->flags & CST_EXPLAIN_SCATTERED) ? "scatters after" : "passes the segment of", (double)e->distance);
-        if (e->pdf_w > 0.0f)
-            fprintf(f, " (%s %.6g, transmittance (%.6g, %.6g, %.6g))",
-                    (e->flags & CST_EXPLAIN_SCATTERED) ? "pdf per unit length" : "probability", (double)e->pdf_w,
-                    (double)e->transmittance[0], (double)e->transmittance[1], (double)e->transmittance[2]);
-        if (e->chain_fwd > 0.0f || e->chain_rev > 0.0f) /* bdpt, vcm (subpath_media.c) */
-            fprintf(f, " (sampling density %.6g, reverse %.6g)", (double)e->chain_fwd, (double)e->chain_rev);
-        print3(f, is_bdpt(x) ? ", throughput " : ", weight ", is_bdpt(x) ? e->beta : e->value);
-        fputc('\n', f);
-        return;
+    case CST_EXPLAIN_DISTANCE: print_distance(f, x, e); return;
     case CST_EXPLAIN_VERTEX:
         if (e->medium >= 0) {
             fprintf(f, "vertex %d: in medium %d at (%.6g, %.6g, %.6g)\n", e->depth, e->medium, (double)e->p[0],
