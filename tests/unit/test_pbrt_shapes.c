@@ -281,6 +281,36 @@ static void test_other_directives(void **state)
     cst_scene_destroy(s);
 }
 
+/* Analytic shapes take their own MediumInterface (pbrt_medium_apply), not the last one a
+ * triangle shape set: a disk and a cylinder declared without one after a fog-filled glass
+ * triangle are outside every medium. */
+static void test_analytic_medium_interface(void **state)
+{
+    (void)state;
+    Warnings w = {0};
+    Scene *s = expect_ok("WorldBegin\n"
+                         "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+                         "AttributeBegin\n"
+                         "MediumInterface \"fog\" \"\"\n"
+                         "Material \"dielectric\"\n"
+                         "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n"
+                         "AttributeEnd\n"
+                         "Shape \"disk\"\n"
+                         "Shape \"cylinder\"\n"
+                         "AttributeBegin\n"
+                         "MediumInterface \"fog\" \"\"\n"
+                         "Material \"dielectric\"\n"
+                         "Shape \"cylinder\"\n"
+                         "AttributeEnd\n", &w);
+    assert_int_equal(s->num_triangles, 1);
+    assert_int_equal(s->num_shapes, 3);
+    assert_true(s->tri_info[0].medium > 0);
+    assert_int_equal(s->shape_info[0].medium, 0); /* the disk */
+    assert_int_equal(s->shape_info[1].medium, 0); /* the first cylinder */
+    assert_int_equal(s->shape_info[2].medium, s->tri_info[0].medium); /* the fog-filled glass cylinder */
+    cst_scene_destroy(s);
+}
+
 /* imagemap as an image texture; binary PLY through assimp. */
 static void test_imagemap_and_binary_ply(void **state)
 {
@@ -493,6 +523,7 @@ int main(void)
         cmocka_unit_test(test_instances),
         cmocka_unit_test(test_instances_match_copies),
         cmocka_unit_test(test_instances_memory),
+        cmocka_unit_test(test_analytic_medium_interface),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

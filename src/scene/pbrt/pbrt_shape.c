@@ -628,6 +628,7 @@ static CstStatus add_analytic(Loader *ld, Params *ps, const char *d, Loc loc, Cs
     sd->reverse_orientation = ld->gs.reverse != 0;
     sd->alpha = alpha;
     analytic_emission(ld, sd);
+    TRY(pbrt_medium_apply(ld, 0, loc, d)); /* its own MediumInterface, as emit_world_shape's */
     CstStatus st = cst_scene_add_shape(ld->scene, sd, ld->err);
     return st ? pbrt_fail_wrap(ld, st, loc, d) : CST_OK;
 }
@@ -655,6 +656,7 @@ static CstStatus bilinear_patches(Loader *ld, Params *ps, const char *d, Loc loc
     sd.patch_has_uvs = g->uv != NULL;
     int skipped = 0, obj = -1;
     const int moving = moving_analytic(ld);
+    if (!moving) TRY(pbrt_medium_apply(ld, 0, loc, d)); /* its own MediumInterface */
     for (int f = 0; 2 * f < g->nt; f++) {
         const int *t = &g->idx[6 * f];
         const int v[4] = {t[0], t[1], t[5], t[2]}; /* p00, p10, p01, p11 */
