@@ -186,6 +186,17 @@ void instances_placement(const InstanceSet *set, int inst, float time, Transform
     }
 }
 
+bool instances_rest_frame(const InstanceSet *set, int inst, float time, Transform *rest_from_world,
+                          Transform *world_from_rest, Transform *normal_matrix)
+{
+    const Instance *in = &set->insts[inst];
+    if (in->motion < 0 || !set->motions[in->motion].moving) return false;
+    Transform w, w_inv;
+    if (!placement_at(set, in, time, &w, &w_inv, NULL)) return false;
+    *rest_from_world = transform_compose(motion_at(&set->motions[in->motion], 0.0f), w_inv);
+    return transform_invert(rest_from_world, world_from_rest) && transform_normal_matrix(rest_from_world, normal_matrix);
+}
+
 static float centroid(const InstanceSet *set, int32_t id, int axis)
 {
     return v3_get(bbox_center(set->insts[id].bounds), axis);

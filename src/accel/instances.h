@@ -105,6 +105,13 @@ CstStatus instances_add_moving(InstanceSet *set, int proto, const Transform *sta
 /* Instance `inst`'s world_from_obj and normal matrix at time (static: its own). */
 void instances_placement(const InstanceSet *set, int inst, float time, Transform *world_from_obj,
                          Transform *normal_matrix);
+/* A moving instance's rest frame (photon.c: photons on moving geometry are stored where
+ * they would be with the instance at its start placement, so that a point of the surface
+ * keeps its photons while the surface moves). False for a static instance (nothing set);
+ * else rest_from_world = W(0) W(time)^-1, its inverse and its normal matrix, W(t) the
+ * instance's world_from_obj at t. Also false when a placement is singular. */
+bool instances_rest_frame(const InstanceSet *set, int inst, float time, Transform *rest_from_world,
+                          Transform *world_from_rest, Transform *normal_matrix);
 /* Builds every prototype's BVH and the top-level tree; call once, after the last add. */
 CstStatus instances_build(InstanceSet *set, CstError *err);
 /* Accepts a zeroed set; frees what the set owns, not the set itself. */

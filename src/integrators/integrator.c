@@ -802,17 +802,14 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
      * too), Whitted and pssmlt take the camera sample's; the light tracer each light path's
      * own; BDPT and VCM share one between the subpaths they join (bidir_time); mmlt draws it
      * in the camera stream for both subpaths; SPPM shares one per iteration (sppm.c). The
-     * photon integrator builds its maps once, before any camera path, at time 0: right while
-     * only the camera moves, but they would hold one instant (no blur) or mix instants
-     * (biased) where instances move. subpath_media.c's walks (light, bdpt, vcm and mmlt in
+     * photon integrator builds its maps once, before any camera path: at time 0 while only
+     * the camera moves; where instances move, each photon path at a time of its own and
+     * every estimate over a time window around its camera path's (photon.c, TimeWindow).
+     * subpath_media.c's walks (light, bdpt, vcm and mmlt in
      * media) carry the time as subpath.c's do. */
     /* SPPM's walks through media carry the iteration's time too (media_photon_walk,
      * media_visible_point; test_motion_shapes compares them with path in fog). */
     it->motion = scene_has_motion(scene);
-    if (it->kind == INTEGRATOR_PHOTON && scene->instances && scene->instances->num_motions > 0)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render moving instances (motion blur) "
-                        "yet (its photon maps are built once, for all camera paths): use sppm, path, bdpt or vcm",
-                        cst_integrator_name(st->integrator));
     it->crop_x0 = st->crop[0]; it->crop_x1 = st->crop[1];
     it->crop_y0 = st->crop[2]; it->crop_y1 = st->crop[3];
     it->tiles_x = (st->crop[1] - st->crop[0] + INTEGRATOR_TILE - 1) / INTEGRATOR_TILE;

@@ -53,7 +53,25 @@ static int photon_array_push(PhotonArray *a, const Photon *ph)
 typedef struct PhotonWalkCtx {
     PhotonVisit visit;
     void *ctx;
+    float time;
+    const Scene *scene; /* photon maps of moving geometry (pw->shutter): photon_to_rest; else NULL
+                         * (SPPM's photons stay in world space, at the iteration's instant) */
 } PhotonWalkCtx;
+
+/* A photon that landed on a moving instance moves into the instance's rest frame (Photon.inst):
+ * the surface point keeps its photons wherever the surface is at their times. */
+static void photon_to_rest(const Scene *s, const SurfaceHit *sh, Photon *ph)
+{
+    ph->inst = -1;
+    Transform rest, back, nm;
+    if (sh->prim != UINT32_MAX || !scene_geometry_moves(s) ||
+        !instances_rest_frame(s->instances, sh->inst, ph->time, &rest, &back, &nm))
+        return;
+    ph->inst = sh->inst;
+    ph->pos = transform_point(&rest, ph->pos);
+    ph->wi = v3_normalize(transform_vector(&rest, ph->wi));
+    ph->n = transform_normal(&nm, ph->n);
+}
 
 static bool photon_at_vertex(void *ctx, const LightVertex *v)
 {
@@ -64,6 +82,9 @@ static bool photon_at_vertex(void *ctx, const LightVertex *v)
     ph.wi = v->w_prev;
     ph.power = v->sp.beta;
     ph.n = v3_dot(ng, v->w_prev) >= 0.0f ? ng : v3_neg(ng);
+    ph.time = c->time;
+    ph.inst = -1;
+    if (c->scene) photon_to_rest(c->scene, v->sh, &ph);
     return c->visit(c->ctx, &ph, v->bounces, v->sp.specular_only);
 }
 
@@ -71,9 +92,10 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
 {
     Sampler rng;
     sampler_start_stream(&rng, pw->seed, index, pw->stream);
+    const float time = photon_walk_time(pw, &rng);
     EmissionSample es;
     subpath_emit(s, &rng, pw->wl, &es);
-    es.time = pw->time;
+    es.time = time;
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f)) return true; /* still one of the N */
     /* es.beta = L_e |cos| / (pdf_a pdf_w) for an area emitter: cosine-weighted directions
      * (pdf_w = |cos| / pi, or half that per side when two-sided) make every photon of a
@@ -82,7 +104,7 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
      * is the light tracer's (subpath.h), so photons and light paths follow the same paths
      * (Russian roulette by the BSDF weights, not Jensen 2001 sec. 5.4's absorption
      * probability: unbiased, the power scaled by 1/q). */
-    PhotonWalkCtx c = {visit, ctx};
+    PhotonWalkCtx c = {visit, ctx, time, pw->shutter ? s : NULL};
     const LightWalk w = {pw->max_depth, pw->rr_depth, NULL, false, pw->wl, photon_at_vertex, &c, NULL};
     return subpath_walk_light(s, &w, &es, subpath_start(color_scale(es.beta, pw->scale)), &rng, rays);
 }
@@ -91,6 +113,7 @@ bool photon_walk(const Scene *s, const PhotonWalk *pw, uint64_t index, PhotonVis
  * the first hit, to the caustic map too. */
 typedef struct PhotonStore {
     PhotonArray *global, *caustic, *volume;
+    const Scene *scene;
 } PhotonStore;
 
 static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_only)
@@ -107,7 +130,8 @@ static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_o
 static bool store_media_photon(void *ctx, const MediaPhoton *mp)
 {
     PhotonStore *st = ctx;
-    const Photon ph = {mp->p, mp->wi, mp->power, mp->n};
+    Photon ph = {mp->p, mp->wi, mp->power, mp->n, mp->time, -1};
+    if (mp->sh) photon_to_rest(st->scene, mp->sh, &ph);
     const bool vol = mp->n.x == 0.0f && mp->n.y == 0.0f && mp->n.z == 0.0f;
     if (vol) return mp->bounces <= 1 || photon_array_push(st->volume, &ph);
     return store_photon(ctx, &ph, mp->bounces, mp->specular_only);
@@ -170,37 +194,84 @@ bool photon_trace_to_diffuse(const Scene *s, Ray ray, Sampler *rng, const Wavele
     return false;
 }
 
+/* Motion blur in scenes with moving instances (Cammarano & Jensen 2002, "Time Dependent
+ * Photon Mapping"): each photon path has its own time, uniform over the shutter, and an
+ * estimate at time t counts only the photons within a window [t - h, t + h] (clipped to
+ * the shutter), scaled by shutter length / window length: a box kernel in time, so the
+ * estimate is the flux density averaged over the window, consistent as h (and r) fall.
+ * A gather point on static geometry averages the window out over its own times exactly
+ * but at the shutter's ends; one on moving geometry sees the light blurred over 2h. The
+ * window is 1 / PHOTON_TIME_WINDOWS of the shutter, and the automatic radii widen so a
+ * gather still holds about PHOTON_RADIUS_K of the window's photons (choose_radii). */
+typedef struct TimeWindow {
+    float t, h;  /* centre and half-width; h = 0: every photon counts (no scaling) */
+} TimeWindow;
+
+static inline bool time_outside(TimeWindow w, const Photon *ph)
+{
+    return w.h > 0.0f && !(fabsf(ph->time - w.t) <= w.h);
+}
+
+/* The window of a camera sample at time t, and the factor its estimates take. */
+static TimeWindow time_window(const PhotonMaps *m, float t, float *scale)
+{
+    *scale = 1.0f;
+    if (!(m->time_h > 0.0f)) return (TimeWindow){t, 0.0f};
+    const float lo = fmaxf(t - m->time_h, m->shutter_open), hi = fminf(t + m->time_h, m->shutter_close);
+    *scale = hi > lo ? (m->shutter_close - m->shutter_open) / (hi - lo) : 0.0f;
+    return (TimeWindow){t, m->time_h};
+}
+
 typedef struct DensityCtx {
     const Bsdf *bsdf;
     Vec3 wo, n; /* n: x's geometric normal, on wo's side */
     Color sum;
     struct Recorder *rec; /* explain (NULL in renders) */
+    TimeWindow tw;
+    /* The photons' frame: inst -1 world; else x's moving instance, whose photons are in its
+     * rest frame: n_ph is n there, and world_from_rest takes their wi back to x's time. */
+    int32_t inst;
+    Vec3 n_ph;
+    Transform world_from_rest;
 } DensityCtx;
 
 static void density_visit(void *ctx, const Photon *ph, float dist2)
 {
     (void)dist2;
     DensityCtx *c = ctx;
+    if (ph->inst != c->inst || time_outside(c->tw, ph)) return;
     /* A photon on the other side of a thin wall must not light this side, unless this
      * surface transmits (rough glass is lit through itself). */
-    if (!(v3_dot(ph->n, c->n) > 0.0f) && !bsdf_has_transmission(c->bsdf)) return;
-    float cos_i = fabsf(v3_dot(c->n, ph->wi));
+    if (!(v3_dot(ph->n, c->n_ph) > 0.0f) && !bsdf_has_transmission(c->bsdf)) return;
+    const Vec3 wi = c->inst < 0 ? ph->wi : v3_normalize(transform_vector(&c->world_from_rest, ph->wi));
+    float cos_i = fabsf(v3_dot(c->n, wi));
     if (!(cos_i > 0.0f)) return;
     /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
-    Color f = color_scale(bsdf_eval(c->bsdf, c->wo, ph->wi), 1.0f / cos_i);
+    Color f = color_scale(bsdf_eval(c->bsdf, c->wo, wi), 1.0f / cos_i);
     c->sum = color_madd(c->sum, f, ph->power);
     if (c->rec) recorder_photon(c->rec, ph, f);
 }
 
 /* Reflected radiance at sh toward wo: L = sum f(wo, wi_p) Phi_p / (pi r^2), the constant
  * (box) kernel density estimate of Jensen 2001 eq. 7.6. */
-static Color radiance_estimate(const PhotonMap *map, float r, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo,
-                               struct Recorder *rec)
+static Color radiance_estimate(const Scene *s, const PhotonMaps *m, const PhotonMap *map, float r,
+                               const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, struct Recorder *rec)
 {
     if (photon_map_count(map) == 0) return color_s(0.0f);
-    DensityCtx c = {bsdf, wo, v3_dot(sh->ng, wo) >= 0.0f ? sh->ng : v3_neg(sh->ng), color_s(0.0f), rec};
-    photon_map_radius(map, sh->p, r, density_visit, &c);
-    return color_scale(c.sum, 1.0f / (CST_PI * r * r));
+    float scale;
+    const TimeWindow tw = time_window(m, sh->time, &scale);
+    const Vec3 n = v3_dot(sh->ng, wo) >= 0.0f ? sh->ng : v3_neg(sh->ng);
+    DensityCtx c = {bsdf, wo, n, color_s(0.0f), rec, tw, -1, n, transform_identity()};
+    Vec3 q = sh->p;
+    Transform rest, nm;
+    if (m->time_h > 0.0f && sh->prim == UINT32_MAX &&
+        instances_rest_frame(s->instances, sh->inst, sh->time, &rest, &c.world_from_rest, &nm)) {
+        c.inst = sh->inst;
+        c.n_ph = transform_normal(&nm, n);
+        q = transform_point(&rest, q);
+    }
+    photon_map_radius(map, q, r, density_visit, &c);
+    return color_scale(c.sum, scale / (CST_PI * r * r));
 }
 
 /* Direct light at a non-delta point by one emitter sample (path.c's NEE, without MIS:
@@ -227,7 +298,7 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
 
     Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, wl, rays);
     if (m->rec) recorder_add(m->rec, CST_EXPLAIN_NEE, beta, lx);
-    Color caustic = radiance_estimate(&set->caustic, m->radius, &bsdf_x, &x, wo, m->rec);
+    Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &bsdf_x, &x, wo, m->rec);
     if (m->rec) recorder_estimate(m->rec, true, m->radius, color_s(1.0f), caustic);
     lx = color_add(lx, caustic);
 
@@ -246,11 +317,11 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
         SurfaceHit y;
         Bsdf bsdf_y;
         Vec3 wo_y;
-        Ray gr = ray_make(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY);
+        Ray gr = ray_make_at(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY, ray.time);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
         if (photon_trace_to_diffuse(s, gr, rng, wl, &g, NULL, &y, &bsdf_y, &wo_y, rays, NULL)) {
             if (m->rec) recorder_vertex(m->rec, s, &y, 2, NULL);
-            Color global = radiance_estimate(&set->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
+            Color global = radiance_estimate(s, m, &set->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
             if (m->rec) recorder_estimate(m->rec, false, m->radius, g, global);
             lx = color_add(lx, color_mul(g, global));
         }
@@ -264,12 +335,14 @@ typedef struct VolumeCtx {
     Vec3 wo;
     float g;
     Color sum;
+    TimeWindow tw;
 } VolumeCtx;
 
 static void volume_visit(void *ctx, const Photon *ph, float dist2)
 {
     (void)dist2;
     VolumeCtx *c = ctx;
+    if (time_outside(c->tw, ph)) return;
     c->sum = color_madd(c->sum, color_s(phase_hg_eval(c->wo, ph->wi, c->g)), ph->power);
 }
 
@@ -279,16 +352,17 @@ static void volume_visit(void *ctx, const Photon *ph, float dist2)
  * ((4/3) pi r^3) over the photons in the ball of radius r (each photon's flux holds the
  * sigma_s of its own free-flight sample), so the 1 / sigma_s(p) here cancels beta's
  * sigma_s(p), as SPPM's visible points in media (sppm.c, camera_media). */
-static Color volume_estimate(const Scene *s, const PhotonMap *map, float r, const MediaVisiblePoint *v,
-                             const Wavelengths *wl)
+static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMap *map, float r,
+                             const MediaVisiblePoint *v, float time, const Wavelengths *wl)
 {
     if (photon_map_count(map) == 0) return color_s(0.0f);
-    VolumeCtx c = {v->wo, v->g, color_s(0.0f)};
+    float scale;
+    VolumeCtx c = {v->wo, v->g, color_s(0.0f), time_window(m, time, &scale)};
     photon_map_radius(map, v->p, r, volume_visit, &c);
     const Medium *med = &s->media[v->medium];
     const MediumCoeffs mc = medium_coeffs(med, wl);
     const float dens = medium_is_hetero(med) ? hetero_density_world(&med->u.het, v->p) : 1.0f;
-    const float inv_vol = 1.0f / (4.0f / 3.0f * CST_PI * r * r * r);
+    const float inv_vol = scale / (4.0f / 3.0f * CST_PI * r * r * r);
     Color out;
     for (int k = 0; k < COLOR_LANES; k++) {
         const float ss = mc.sigma_s.c[k] * dens;
@@ -324,8 +398,8 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
     MediaVisiblePoint x;
     if (!media_visible_point(s, ray, s->camera_medium, rng, wl, color_s(1.0f), &L, &x, rays)) return L;
     L = color_add(L, media_direct(s, &x, ray.time, rng, wl, rays));
-    if (x.vol) return color_add(L, volume_estimate(s, &set->volume, m->vol_radius, &x, wl));
-    Color caustic = radiance_estimate(&set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, NULL);
+    if (x.vol) return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &x, ray.time, wl));
+    Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, NULL);
     L = color_madd(L, x.beta, caustic);
     BsdfSample bs;
     float uc = sampler_1d(rng);
@@ -338,9 +412,9 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
     if (!media_visible_point(s, gr, medium, rng, wl, color_mul(x.beta, bs.weight), &ignored, &y, rays)) return L;
     if (y.vol) {
         L = color_add(L, media_direct(s, &y, ray.time, rng, wl, rays));
-        return color_add(L, volume_estimate(s, &set->volume, m->vol_radius, &y, wl));
+        return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &y, ray.time, wl));
     }
-    return color_madd(L, y.beta, radiance_estimate(&set->global, m->radius, &y.bsdf, &y.sh, y.wo, NULL));
+    return color_madd(L, y.beta, radiance_estimate(s, m, &set->global, m->radius, &y.bsdf, &y.sh, y.wo, NULL));
 }
 
 Color photon_li(const Scene *s, const PhotonMaps *m, int set, Ray ray, Sampler *rng, uint64_t *rays)
@@ -452,6 +526,12 @@ static void choose_radii(const Scene *s, const Camera *cam, const PhotonParams *
     const PhotonSet *set = &m->sets[0];
     m->radius = pp->radius > 0.0f ? pp->radius : auto_radius(s, cam, pp, &set->global, rays);
     m->vol_radius = pp->radius > 0.0f ? pp->radius : self_radius(&set->volume);
+    if (m->time_h > 0.0f && !(pp->radius > 0.0f)) {
+        /* A time window holds 1 / PHOTON_TIME_WINDOWS of the photons: the disc's area and
+         * the ball's volume grow by that factor so they keep about PHOTON_RADIUS_K. */
+        m->radius *= sqrtf((float)PHOTON_TIME_WINDOWS);
+        m->vol_radius *= cbrtf((float)PHOTON_TIME_WINDOWS);
+    }
 }
 
 /* One set's photon paths: n of them from stream `stream`, at wavelengths wl (NULL: RGB). */
@@ -462,8 +542,11 @@ static CstStatus build_set(const Scene *s, const Camera *cam, const PhotonParams
     PhotonArray global = {0}, caustic = {0}, volume = {0};
     CstStatus st = CST_OK;
     if (s->emitter_sampler.lights > 0) {
-        const PhotonWalk pw = {pp->seed, stream, 1.0f / (float)n, pp->max_depth, pp->rr_depth, wl, 0.0f};
-        PhotonStore store = {&global, &caustic, &volume};
+        /* Moving geometry: each path its own time over the shutter (the static scene's
+         * streams stay as they were: no time is drawn there). */
+        const PhotonWalk pw = {pp->seed, stream, 1.0f / (float)n, pp->max_depth, pp->rr_depth, wl, 0.0f,
+                               scene_geometry_moves(s) ? cam : NULL};
+        PhotonStore store = {&global, &caustic, &volume, s};
         for (int i = 0; i < n; i++) {
             if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 &&
                 pp->progress(pp->progress_user, done + part * (double)i / n)) {
@@ -526,6 +609,11 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
         }
     }
     out->emitted = per_set;
+    if (scene_geometry_moves(s)) {
+        out->shutter_open = cam->shutter_open;
+        out->shutter_close = cam->shutter_close;
+        out->time_h = (cam->shutter_close - cam->shutter_open) / (2.0f * PHOTON_TIME_WINDOWS);
+    }
     choose_radii(s, cam, pp, out, rays);
     return CST_OK;
 }

@@ -18,7 +18,8 @@ enum {
     PHOTON_RADIUS_K = 50,          /* the automatic radius holds about this many photons */
     PHOTON_RADIUS_POINTS = 256,    /* camera hit points whose k-NN distance sets the radius */
     PHOTON_MAX_SPECULAR = 64,      /* delta bounces a camera or gather ray follows at most */
-    PHOTON_SPECTRAL_SETS = 16      /* spectral mode: photon sets, one set of wavelengths each */
+    PHOTON_SPECTRAL_SETS = 16,     /* spectral mode: photon sets, one set of wavelengths each */
+    PHOTON_TIME_WINDOWS = 8        /* moving geometry: an estimate's time window is 1/8 of the shutter */
 };
 
 typedef struct PhotonParams {
@@ -45,8 +46,18 @@ typedef struct PhotonWalk {
     int max_depth, rr_depth;
     const Wavelengths *wl; /* spectral mode (SPPM): the iteration's wavelengths; NULL: RGB */
     float time;            /* motion blur (SPPM): the iteration's instant, which every ray of
-                            * the walk carries; 0 in static scenes and for photon maps */
+                            * the walk carries; 0 in static scenes */
+    /* Motion blur (photon maps of scenes with moving instances): when not NULL, each path
+     * draws its own time, uniform over this camera's shutter (camera_time), as the first
+     * number of its stream, and `time` is ignored. */
+    const Camera *shutter;
 } PhotonWalk;
+
+/* The time of a photon path: its own, drawn from its stream (pw->shutter), or pw->time. */
+static inline float photon_walk_time(const PhotonWalk *pw, Sampler *rng)
+{
+    return pw->shutter ? camera_time(pw->shutter, sampler_1d(rng)) : pw->time;
+}
 
 /* Called at every non-delta hit of a photon path with the photon there, its depth (1:
  * the first hit from the light) and whether every bounce before it was a delta lobe.
@@ -80,6 +91,10 @@ typedef struct PhotonMaps {
     float radius;      /* resolved: the given one, or the automatic one */
     float vol_radius;  /* the volume estimate's ball: the given radius, or automatic */
     int emitted;       /* photon paths emitted per set (the power divisor) */
+    /* Motion blur: the time window's half-width (scene time units; 0: no window, every
+     * photon counts at every instant) and the shutter the photons' times are uniform
+     * over. Set in scenes with moving instances (photon.c, TimeWindow). */
+    float time_h, shutter_open, shutter_close;
     struct Recorder *rec; /* caustic explain's recorder (recorder.h); NULL in renders */
 } PhotonMaps;
 

@@ -10,7 +10,7 @@
 #include "math/color.h"
 #include "math/vec3.h"
 
-/* 52 bytes: three float triples and one Color (four lanes), no padding, 4-byte aligned. Full floats rather than
+/* 60 bytes: three float triples, one Color (four lanes), a time and an instance, no padding, 4-byte aligned. Full floats rather than
  * Jensen's packed 20-byte record: the directions feed bsdf_eval() directly, and the tree
  * keeps its own copy of the positions (PhotonNode), so the record's size only costs
  * memory, not traversal bandwidth.
@@ -21,16 +21,23 @@
  *   n     unit geometric normal at pos, flipped to the side the photon arrived from
  *         (dot(n, wi) >= 0); the zero vector when unknown. A gather point whose normal
  *         faces its viewer rejects photons with dot(n, n_gather) <= 0: those landed on
- *         the other side of a thin wall. */
+ *         the other side of a thin wall.
+ *   time  the instant of the photon's path (motion blur: photon.c's time window in scenes
+ *         with moving instances); 0 where nothing moves.
+ *   inst  -1: pos, wi and n are in world space. Else the moving instance the photon landed
+ *         on, and pos, wi and n are in that instance's rest frame (instances_rest_frame):
+ *         only a query on the same instance, in its rest frame, finds it (photon.c). */
 typedef struct Photon {
     Vec3 pos;
     Vec3 wi;
     Color power;
     Vec3 n;
+    float time;
+    int32_t inst;
 } Photon;
 
 /* One tree node: the photon's position again, so the traversal streams 16-byte nodes
- * (four per cache line) and touches a 48-byte Photon only when it is within range.
+ * (four per cache line) and touches a 60-byte Photon only when it is within range.
  * meta = input index << 2 | split axis (0, 1, 2; PHOTON_MAP_NO_SPLIT for leaf photons). */
 typedef struct PhotonNode {
     float p[3];

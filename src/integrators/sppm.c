@@ -311,7 +311,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     Wavelengths wl;
     if (sp->spectral) wl = sppm_wavelengths(sp, iter);
     const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth,
-                           sp->spectral ? &wl : NULL, sppm_time(s, sp, iter)};
+                           sp->spectral ? &wl : NULL, sppm_time(s, sp, iter), NULL};
     if (scene_has_media(s)) media_photon_walk(s, sp->cam, &pw, index, store_media_hit, out, rays);
     else photon_walk(s, &pw, index, store_hit, out, rays);
 }

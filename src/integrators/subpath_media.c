@@ -823,12 +823,13 @@ Color media_subpath_connect_pair(const Scene *s, const SubpathIteration *it, con
 typedef struct MediaPhotonCtx {
     MediaPhotonVisit visit;
     void *ctx;
+    float time;
 } MediaPhotonCtx;
 
 static bool visit_photon(void *ctx, const MediaLightVertex *v)
 {
     const MediaPhotonCtx *c = ctx;
-    MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces, v->sp.specular_only};
+    MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces, v->sp.specular_only, c->time, v->sh};
     if (v->sh) ph.n = v3_dot(v->ng, v->w_prev) >= 0.0f ? v->ng : v3_neg(v->ng);
     return c->visit(c->ctx, &ph);
 }
@@ -838,13 +839,14 @@ bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, 
 {
     Sampler rng;
     sampler_start_stream(&rng, pw->seed, index, pw->stream);
+    const float time = photon_walk_time(pw, &rng); /* the path's instant, as photon_walk's */
     EmissionSample es;
     subpath_emit(s, &rng, pw->wl, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f) || color_is_black(es.beta)) return true; /* still one of the N */
-    es.time = pw->time; /* the iteration's instant, as photon_walk's */
+    es.time = time;
     int medium = medium_at_emitter(s, cam, es.p, es.w, es.time, rays);
     if (!es.finite && medium >= 0) return true; /* as media_light_trace */
-    MediaPhotonCtx c = {visit, ctx};
+    MediaPhotonCtx c = {visit, ctx, time};
     /* No MIS (light tracing's walk): the hero lane's free-flight sampling in every medium,
      * each vertex's flux divided by the walk's mean lane ratio (hero_beta). */
     const MediaWalk w = {pw->max_depth, pw->rr_depth, NULL, pw->wl, NULL, visit_photon, &c};

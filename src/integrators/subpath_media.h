@@ -78,12 +78,14 @@ typedef struct MediaPhoton {
     Color power;
     int bounces;
     bool specular_only; /* every vertex before it a delta surface bounce (photon.c's caustics) */
+    float time;         /* the path's instant (PhotonWalk: its own or the iteration's) */
+    const SurfaceHit *sh; /* the surface hit of a surface photon; NULL in a medium */
 } MediaPhoton;
 typedef bool (*MediaPhotonVisit)(void *ctx, const MediaPhoton *ph);
 
 /* photon_walk() through media: the light tracer's walk (hero-lane free flights, HG
  * scattering, roulette), starting in the medium the camera sees at the emitter (cam: its
- * origin). Motion blur is not carried (pw->time ignored). False if visit stopped it. */
+ * origin). Every ray carries the path's time (PhotonWalk). False if visit stopped it. */
 bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, uint64_t index,
                        MediaPhotonVisit visit, void *ctx, uint64_t *rays);
 

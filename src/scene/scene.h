@@ -411,12 +411,19 @@ static inline bool scene_intersect(const Scene *s, const Ray *ray, SurfaceHit *s
     return scene_intersect_first(s, ray, sh);
 }
 
+/* Whether any geometry moves over the shutter (a moving instance): the light a point
+ * receives then depends on the time (photon.c's time window). */
+static inline bool scene_geometry_moves(const Scene *s)
+{
+    return s->instances && s->instances->num_motions > 0;
+}
+
 /* Whether anything in the scene (a moving instance, or the camera) moves over the shutter
  * interval: only then do camera paths draw a time (integrator.c), so static scenes keep their
  * random-number streams. */
 static inline bool scene_has_motion(const Scene *s)
 {
-    return (s->instances && s->instances->num_motions > 0) || (s->camera_placed && s->camera_motion.moving);
+    return scene_geometry_moves(s) || (s->camera_placed && s->camera_motion.moving);
 }
 
 /* dp/du and dp/dv of the triangle p0 p1 p2 with texture coordinates uv0 uv1 uv2 (pbrt-v4

@@ -2,7 +2,7 @@
  * of a moving instance over the shutter, moving instances' hits against static instances
  * placed at the same time, a square moving across the image against the closed-form time
  * average of its coverage, the same image from every acceleration back end, the light
- * tracer and every other integrator (bdpt, vcm, pssmlt, mmlt, sppm; path's media and
+ * tracer and every other integrator (bdpt, vcm, pssmlt, mmlt, sppm, photon; path's media and
  * subsurface loops) against path on a lit moving scene (also with the camera moving over
  * the shutter [0.2, 0.7], and in fog), and on a curtain sinking between the light and the
  * camera (--curtain), their images for 1 and 2 threads, the JSON "motion" key and the
@@ -301,11 +301,10 @@ static void test_moving_square_coverage(void **state)
     f = render(s, CST_INTEGRATOR_WHITTED, CST_OK, &e);
     check_columns(f, "whitted");
     cst_film_destroy(f);
-    /* The photon integrator's maps are built once for all camera paths: it refuses. */
-    cst_scene_destroy(s);
-    s = square_scene(NULL, 1, 1);
-    f = render(s, CST_INTEGRATOR_PHOTON, CST_ERR_UNSUPPORTED, &e);
-    assert_non_null(strstr(e.msg, "motion blur"));
+    /* The photon integrator: its camera rays at their own times (the maps' time windows
+     * are checked against path on the lit scenes below). */
+    f = render(s, CST_INTEGRATOR_PHOTON, CST_OK, &e);
+    check_columns(f, "photon");
     cst_film_destroy(f);
     cst_scene_destroy(s);
     /* Equal ends: a static instance, no time drawn: the square sharp at X0. */
@@ -414,10 +413,12 @@ static void test_backends_agree(void **state)
  * medium of zero density (the path integrators then take volpath's loop, which must give
  * the same image); LIT_SSS, a subsurface quad far outside the view (path_sss's loop);
  * LIT_FOG, a ball of scattering fog (a boundary sphere) around the point light and most of
- * the square's sweep (subpath_media.c's walks and connections: light, bdpt, vcm, mmlt).
+ * the square's sweep (subpath_media.c's walks and connections: light, bdpt, vcm, mmlt);
+ * LIT_PLUNGE, the square moving back by 1.9 along its normal instead of turning, lit by a
+ * narrow spot alone (the wall dark), so the floor is lit by the square only.
  * camera_moves: 1, the camera moves and turns over the shutter; 2, the same over the
  * shutter [0.2, 0.7] (the middle of the same motion, of the square's too). */
-enum { LIT_PLAIN, LIT_MEDIUM, LIT_SSS, LIT_FOG };
+enum { LIT_PLAIN, LIT_MEDIUM, LIT_SSS, LIT_FOG, LIT_PLUNGE };
 static CstScene *lit_scene_with(int extra, int camera_moves)
 {
     CstError e;
@@ -438,11 +439,12 @@ static CstScene *lit_scene_with(int extra, int camera_moves)
     ok(cst_scene_add_object(s, &m, &obj, NULL, &e), &e);
     const float t0[12] = {1, 0, 0, -1.2f, 0, 1, 0, 0, 0, 0, 1, 0};
     const float t1[12] = {0, -1, 0, 1.2f, 1, 0, 0, 0.3f, 0, 0, 1, 0}; /* turned 90 degrees about z */
-    ok(cst_scene_add_instance_motion(s, obj, t0, t1, &e), &e);
+    const float t1_plunge[12] = {1, 0, 0, -0.6f, 0, 1, 0, 0, 0, 0, 1, -1.9f}; /* back, along its normal */
+    ok(cst_scene_add_instance_motion(s, obj, t0, extra == LIT_PLUNGE ? t1_plunge : t1, &e), &e);
     const float wall[4][3] = {{-4, -3, -2}, {4, -3, -2}, {4, 3, -2}, {-4, 3, -2}};
     CstMeshDesc w = m;
     w.positions = wall;
-    w.emission.radiance[0] = w.emission.radiance[1] = w.emission.radiance[2] = 0.2f;
+    w.emission.radiance[0] = w.emission.radiance[1] = w.emission.radiance[2] = extra == LIT_PLUNGE ? 0.0f : 0.2f;
     ok(cst_scene_add_mesh(s, &w, NULL, &e), &e);
     /* A grey floor: connections and bounces between it and the wall pass where the square
      * moves, so they see the square only at the path's own instant. */
@@ -458,7 +460,7 @@ static CstScene *lit_scene_with(int extra, int camera_moves)
     l.position[1] = 0.5f;
     l.position[2] = 1.0f;
     l.intensity[0] = l.intensity[1] = l.intensity[2] = 5.0f;
-    ok(cst_scene_add_light(s, &l, &e), &e);
+    if (extra != LIT_PLUNGE) ok(cst_scene_add_light(s, &l, &e), &e);
     /* A narrow spot through the square's sweep: its light subpaths, concentrated in the
      * cone, carry most of the weight of the wall's spot-lit pixels in BDPT and VCM (the
      * t = 1 strategy), so the square's moving shadow there is drawn by light subpaths. */
@@ -471,6 +473,14 @@ static CstScene *lit_scene_with(int extra, int camera_moves)
     spot.intensity[0] = spot.intensity[1] = spot.intensity[2] = 50.0f;
     spot.cone_angle = 12.0f;
     spot.cone_delta = 2.0f;
+    if (extra == LIT_PLUNGE) { /* the only light: onto the square, which lights the floor */
+        spot.position[0] = -0.9f;
+        spot.position[2] = 1.5f;
+        spot.direction[0] = 0.0f;
+        spot.direction[2] = -1.0f;
+        spot.cone_angle = 5.0f;
+        spot.cone_delta = 1.0f;
+    }
     ok(cst_scene_add_light(s, &spot, &e), &e);
     CstCameraDesc cam = {0};
     cam.type = CST_CAMERA_PERSPECTIVE;
@@ -589,6 +599,9 @@ static void test_light_agrees_with_path(void **state)
  * chains and bootstrap (noise, not expectation). */
 enum { MS = 16, MBLOCK = 8 };
 
+/* Photon paths of a photon render in the agreement tests. */
+enum { PHOTON_MOTION_COUNT = 40000 };
+
 static CstRenderSettings motion_settings(void)
 {
     CstRenderSettings st;
@@ -618,15 +631,18 @@ static void integrators_agree_with_path(int camera_moves)
     camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 3 + (uint64_t)camera_moves, &ref);
     const struct { CstIntegrator integ; int spp, renders; } cases[] = {
         {CST_INTEGRATOR_BDPT, 64, 16}, {CST_INTEGRATOR_VCM, 64, 16}, {CST_INTEGRATOR_PSSMLT, 32, 32},
-        {CST_INTEGRATOR_MMLT, 32, 32}, {CST_INTEGRATOR_SPPM, 32, 16},
+        {CST_INTEGRATOR_MMLT, 32, 32}, {CST_INTEGRATOR_SPPM, 32, 16}, {CST_INTEGRATOR_PHOTON, 8, 16},
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
         Regions r = regions(MS, MBLOCK);
         st.spp = cases[i].spp;
-        /* SPPM: a fixed initial radius (scene units; the wall is 8 wide): the automatic one
-         * is wide enough for its bias at the floor-wall corner to show (measured: -5% of the
-         * image at 16 iterations, z = 18 against path). */
-        st.photon_radius = cases[i].integ == CST_INTEGRATOR_SPPM ? 0.1 : 0.0;
+        /* SPPM and photon: a fixed (initial) radius (scene units; the wall is 8 wide): the
+         * automatic one is wide enough for its bias at the floor-wall corner to show
+         * (measured: -5% of the image at 16 iterations, z = 18 against path). Photon's maps
+         * hold photons of every instant; its estimates count those of their time window. */
+        const bool photons = cases[i].integ == CST_INTEGRATOR_SPPM || cases[i].integ == CST_INTEGRATOR_PHOTON;
+        st.photon_radius = photons ? 0.1 : 0.0;
+        st.photons = cases[i].integ == CST_INTEGRATOR_PHOTON ? PHOTON_MOTION_COUNT : 0;
         split_regions(s, &st, cases[i].integ, cases[i].renders, 100 + 10 * i + 1000 * (uint64_t)camera_moves, &r);
         char what[64];
         snprintf(what, sizeof what, "%s%s", cst_integrator_name(cases[i].integ),
@@ -667,6 +683,29 @@ static void test_integrators_agree_with_path(void **state)
  * mmlt's walks through media carry the path's time on every ray (free-flight pieces,
  * boundary crossings, the media connections' transmittance rays, the lens connections), so
  * they agree with path's (volpath's) time-averaged image. */
+/* The photon integrator on the square moving back along its own normal while a fixed spot
+ * lights it (LIT_PLUNGE): the light on the square moves across it, so an estimate that
+ * counted photons of every instant (no time window: block 3, 0.000044 against path's
+ * 0.000263, z = 5.0) or maps traced at one instant (z = 5.5) differ from path. The square's
+ * photons are kept in its rest frame (photon.c's photon_to_rest): in world space a point of
+ * it keeps them for 2 r / 1.9 of the shutter only (measured on this test's 943 gathers
+ * that reach the square: 10,687 photons found against 31,362, estimates 4x darker), but
+ * those gathers weigh too little in this image for its test to resolve it. */
+static void test_photon_plunge(void **state)
+{
+    (void)state;
+    CstScene *s = lit_scene_with(LIT_PLUNGE, 0);
+    CstRenderSettings st = motion_settings();
+    Regions ref = regions(MS, MBLOCK), r = regions(MS, MBLOCK);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 13, &ref);
+    st.spp = 8;
+    st.photon_radius = 0.05;
+    st.photons = PHOTON_MOTION_COUNT;
+    split_regions(s, &st, CST_INTEGRATOR_PHOTON, 16, 400, &r);
+    compare(&ref, &r, "path (square along its normal)", "photon (square along its normal)");
+    cst_scene_destroy(s);
+}
+
 static void test_fog_agrees_with_path(void **state)
 {
     (void)state;
@@ -774,7 +813,10 @@ static CstScene *curtain_scene(int fog)
     return s;
 }
 
-/* fog: the same in thin fog (no SPPM: it does not render media). */
+/* fog: the same in thin fog, for light, bdpt, vcm and mmlt. Not SPPM and photon: their walks
+ * through media carry the time as the others' do, but in this fog their images are too
+ * noisy at this cost to check it (photon: standard error 0.008 on a mean of 0.0055, 128 spp
+ * in 16 renders; also without motion). */
 static void curtain_agrees_with_path(int fog)
 {
     CstScene *s = curtain_scene(fog);
@@ -783,12 +825,14 @@ static void curtain_agrees_with_path(int fog)
     camera_regions(s, &st, CST_INTEGRATOR_PATH, 1024, 21 + (uint64_t)fog, &ref);
     const struct { CstIntegrator integ; int spp, renders; } cases[] = {
         {CST_INTEGRATOR_LIGHT, 64, 16}, {CST_INTEGRATOR_BDPT, 32, 16}, {CST_INTEGRATOR_VCM, 32, 16},
-        {CST_INTEGRATOR_MMLT, 32, 32}, {CST_INTEGRATOR_SPPM, 32, 16},
+        {CST_INTEGRATOR_MMLT, 32, 32}, {CST_INTEGRATOR_SPPM, 32, 16}, {CST_INTEGRATOR_PHOTON, 8, 16},
     };
-    for (size_t i = 0; i < sizeof cases / sizeof *cases - (fog ? 1 : 0); i++) {
+    for (size_t i = 0; i < sizeof cases / sizeof *cases - (fog ? 2 : 0); i++) {
         Regions r = regions(MS, MBLOCK);
         st.spp = cases[i].spp;
-        st.photon_radius = cases[i].integ == CST_INTEGRATOR_SPPM ? 0.1 : 0.0;
+        const bool photons = cases[i].integ == CST_INTEGRATOR_SPPM || cases[i].integ == CST_INTEGRATOR_PHOTON;
+        st.photon_radius = photons ? 0.1 : 0.0;
+        st.photons = cases[i].integ == CST_INTEGRATOR_PHOTON ? PHOTON_MOTION_COUNT : 0;
         split_regions(s, &st, cases[i].integ, cases[i].renders, 500 + 10 * i + 100 * (uint64_t)fog, &r);
         char what[64], ref_what[32];
         snprintf(what, sizeof what, "%s (curtain%s)", cst_integrator_name(cases[i].integ), fog ? ", fog" : "");
@@ -1120,6 +1164,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_light_agrees_with_path),
         cmocka_unit_test(test_integrators_agree_with_path),
         cmocka_unit_test(test_fog_agrees_with_path),
+        cmocka_unit_test(test_photon_plunge),
         cmocka_unit_test(test_curtain_agrees_with_path),
         cmocka_unit_test(test_motion_threads),
         cmocka_unit_test(test_json_motion),
