@@ -816,7 +816,8 @@ static CstScene *curtain_scene(int fog)
 /* fog: the same in thin fog, for light, bdpt, vcm and mmlt. Not SPPM and photon: their walks
  * through media carry the time as the others' do, but in this fog their images are too
  * noisy at this cost to check it (photon: standard error 0.008 on a mean of 0.0055, 128 spp
- * in 16 renders; also without motion). */
+ * in 16 renders; also without motion): the spots sit in the fog, where NEE from medium
+ * vertices near a light has infinite variance (path's fireflies there too). */
 static void curtain_agrees_with_path(int fog)
 {
     CstScene *s = curtain_scene(fog);
