@@ -462,7 +462,7 @@ static CstStatus build_set(const Scene *s, const Camera *cam, const PhotonParams
     PhotonArray global = {0}, caustic = {0}, volume = {0};
     CstStatus st = CST_OK;
     if (s->emitter_sampler.lights > 0) {
-        const PhotonWalk pw = {pp->seed, stream, 1.0f / (float)n, pp->max_depth, pp->rr_depth, wl, 0.0f};
+        const PhotonWalk pw = {pp->seed, stream, 1.0f / (float)n, pp->max_depth, pp->rr_depth, wl, 0.0f, NULL};
         PhotonStore store = {&global, &caustic, &volume};
         for (int i = 0; i < n; i++) {
             if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 &&

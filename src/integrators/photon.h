@@ -46,6 +46,8 @@ typedef struct PhotonWalk {
     const Wavelengths *wl; /* spectral mode (SPPM): the iteration's wavelengths; NULL: RGB */
     float time;            /* motion blur (SPPM): the iteration's instant, which every ray of
                             * the walk carries; 0 in static scenes and for photon maps */
+    const struct MediaLights *media_lights; /* SPPM: NULL, or photons also start in the
+                                             * scene's emitting media (media_photon_walk) */
 } PhotonWalk;
 
 /* Called at every non-delta hit of a photon path with the photon there, its depth (1:
