@@ -9,7 +9,8 @@
  * delta tracking on walks, ratio tracking on connections, MIS densities from chain_piece's
  * majorant stand-ins (computed alike by every strategy, so the weights still sum to 1).
  * Emissive media: gathered by BDPT's, VCM's and MMLT's camera walks with weight 1 (see
- * media_subpath_trace_camera); refused for the light tracer and SPPM. VCM merges volume
+ * media_subpath_trace_camera); the light tracer's paths and SPPM's photons start in them too
+ * (media_lights.h; media_light_trace_volume, media_photon_walk). VCM merges volume
  * vertices by UPBP's point-point 3D estimator (1 / ((4/3) pi r^3 N); media_merge). Motion
  * blur: every ray carries its path's time (walks keep the time of the ray they continue;
  * connections take the camera vertex's or the light subpath's); media do not move. */
