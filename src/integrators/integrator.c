@@ -19,6 +19,7 @@
 
 #include "core/array.h"
 #include "core/error.h"
+#include "integrators/media_lights.h"
 #include "integrators/sss_walk.h"
 #include "math/motion.h"
 #include "materials/bsdf.h"
@@ -775,9 +776,10 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
      * (subpath_media.c); vcm merges volume vertices by UPBP's point-point 3D estimator,
      * and sppm gathers volume photons at its visible points in media by the same (sppm.c).
      * Emission of media is gathered by the camera walks of bdpt, vcm and mmlt (its s = 0
-     * strategy) only: light and sppm would need light subpaths / photons starting in the
-     * media (sppm's camera walk alone would miss the emission that reaches its visible
-     * points through a scattering), so they refuse it. */
+     * strategy); light and sppm start light paths (photons) in the emitting media too
+     * (media_lights.h; sppm's camera walk gathers the emission on its way as well), which
+     * needs each such medium bounded (media_lights_create refuses the others); photon
+     * refuses them (its NEE and photons start on the emitters only). */
     const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
                              st->integrator == CST_INTEGRATOR_MMLT || it->kind == INTEGRATOR_SPPM ||
                              it->kind == INTEGRATOR_PHOTON; /* photon: a volume photon map (photon.c) */
@@ -786,15 +788,14 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
                         "use path, path-nee, path-bsdf, light, photon, bdpt, vcm, pssmlt, mmlt or sppm",
                         cst_integrator_name(st->integrator));
-    if (bidir_media && it->kind != INTEGRATOR_BIDIR && st->integrator != CST_INTEGRATOR_MMLT) {
-        for (int i = 0; i < scene->num_media; i++) {
-            const Medium *m = &scene->media[i];
-            if (!color_is_black(medium_is_hetero(m) ? m->u.het.le : m->u.homog.le))
-                return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render emissive participating "
-                                "media yet (medium %d emits; its light paths start on the scene's lights "
-                                "only): use path, path-nee, path-bsdf, bdpt, vcm or mmlt",
-                                cst_integrator_name(st->integrator), i);
-        }
+    if (it->kind == INTEGRATOR_PHOTON && media_lights_first_emissive(scene) >= 0)
+        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render emissive participating "
+                        "media yet (medium %d emits; its photons and NEE start on the scene's lights "
+                        "only): use path, path-nee, path-bsdf, light, bdpt, vcm, mmlt or sppm",
+                        cst_integrator_name(st->integrator), media_lights_first_emissive(scene));
+    if (it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_SPPM) {
+        CstStatus ms = media_lights_create(scene, cst_integrator_name(st->integrator), &it->media_lights, err);
+        if (ms != CST_OK) return ms;
     }
     /* Motion blur: every path carries one time to all its rays (Ray.time), drawn over the
      * shutter (camera_time), with a moving camera placed at it (camera_at) for its camera
@@ -841,7 +842,11 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
                                         &it->photon_borrowed, rays, err);
     }
     case INTEGRATOR_LIGHT:
-    case INTEGRATOR_BIDIR: return light_prepare(it, st, err);
+    case INTEGRATOR_BIDIR: {
+        CstStatus ls = light_prepare(it, st, err);
+        it->light.params.media_lights = it->media_lights; /* NULL but for light */
+        return ls;
+    }
     case INTEGRATOR_PSSMLT: return mlt_prepare(it, st, err);
     case INTEGRATOR_SPPM: {
         /* spp is the iteration count; photons reach each visible point in photon order
@@ -850,7 +855,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "SPPM initial", err) : CST_OK;
         if (rs != CST_OK) return rs;
         SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
-                         st->threads, it->spectral, st->photon_split, &it->camera};
+                         st->threads, it->spectral, st->photon_split, &it->camera, it->media_lights};
         return sppm_create(scene, &it->camera, &sp, st->threads, &it->sppm, err);
     }
     }
@@ -911,6 +916,8 @@ void integrator_destroy(Integrator *it)
 {
     sss_walk_view_destroy(it->sss_view);
     it->sss_view = NULL;
+    media_lights_destroy(it->media_lights);
+    it->media_lights = NULL;
     switch (it->kind) {
     case INTEGRATOR_PHOTON:
         if (!it->photon_borrowed) photon_maps_free(&it->photon);

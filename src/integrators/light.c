@@ -57,12 +57,13 @@ static bool connect_to_camera(void *ctx, const LightVertex *v)
 void light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampler *rng,
                  SplatList *out, uint64_t *rays)
 {
-    if (s->emitter_sampler.lights == 0) return;
-    /* Participating media: the walk through media (subpath_media.c); one branch for the others. */
+    /* Participating media: the walk through media (subpath_media.c; emitting media may be
+     * the only lights); one branch for the others. */
     if (s->num_media | s->num_medium_ifaces) {
         media_light_trace(s, cam, lp, rng, out, rays);
         return;
     }
+    if (s->emitter_sampler.lights == 0) return;
     /* Spectral mode: the path's own wavelengths, from its first random number. */
     Wavelengths wl;
     if (lp->spectral) wl = wavelengths_sample(sampler_1d(rng));

@@ -17,6 +17,9 @@ typedef struct LightParams {
     int rr_depth;    /* first bounce at which Russian roulette may stop a path */
     SplatFrame frame; /* the film the splats are for: its size and pixel filter */
     bool spectral;    /* spectral mode: each path draws its own wavelengths (math/spectrum.h) */
+    /* NULL, or the scene's emitting media as lights (media_lights.h; integrator.c owns
+     * them): light paths then also start inside those media. */
+    const struct MediaLights *media_lights;
 } LightParams;
 
 /* Traces one light path and splats each camera connection into *out, per unit film

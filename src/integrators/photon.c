@@ -545,7 +545,7 @@ static CstStatus build_set(const Scene *s, const Camera *cam, const PhotonParams
         /* Moving geometry: each path its own time over the shutter (the static scene's
          * streams stay as they were: no time is drawn there). */
         const PhotonWalk pw = {pp->seed, stream, 1.0f / (float)n, pp->max_depth, pp->rr_depth, wl, 0.0f,
-                               scene_geometry_moves(s) ? cam : NULL};
+                               scene_geometry_moves(s) ? cam : NULL, NULL};
         PhotonStore store = {&global, &caustic, &volume, s};
         for (int i = 0; i < n; i++) {
             if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 &&

@@ -51,6 +51,8 @@ typedef struct PhotonWalk {
      * draws its own time, uniform over this camera's shutter (camera_time), as the first
      * number of its stream, and `time` is ignored. */
     const Camera *shutter;
+    const struct MediaLights *media_lights; /* SPPM: NULL, or photons also start in the
+                                             * scene's emitting media (media_photon_walk) */
 } PhotonWalk;
 
 /* The time of a photon path: its own, drawn from its stream (pw->shutter), or pw->time. */

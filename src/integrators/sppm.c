@@ -292,11 +292,12 @@ static bool store_hit(void *ctx, const Photon *ph, int depth, bool specular_only
 }
 
 /* store_hit through media: surface and volume photons alike (a volume one with n = 0),
- * but for the first vertex from the light, which NEE counts at the visible points
- * (through media, with transmittance). */
+ * but for the first vertex from an emitter, which NEE counts at the visible points
+ * (through media, with transmittance). A path that starts in an emitting medium keeps its
+ * first vertex too: NEE never samples the media's emission. */
 static bool store_media_hit(void *ctx, const MediaPhoton *ph)
 {
-    if (ph->bounces > 1) hit_list_push(ctx, ph->p, ph->wi, ph->n, ph->power, ph->bounces);
+    if (ph->bounces > 1 || ph->medium_start) hit_list_push(ctx, ph->p, ph->wi, ph->n, ph->power, ph->bounces);
     return true;
 }
 
@@ -311,7 +312,7 @@ static void trace_photon(const Scene *s, const SppmParams *sp, SppmHitList *out,
     Wavelengths wl;
     if (sp->spectral) wl = sppm_wavelengths(sp, iter);
     const PhotonWalk pw = {sp->seed, SPPM_STREAM + (uint64_t)iter, 1.0f, sp->max_depth, sp->rr_depth,
-                           sp->spectral ? &wl : NULL, sppm_time(s, sp, iter), NULL};
+                           sp->spectral ? &wl : NULL, sppm_time(s, sp, iter), NULL, sp->media_lights};
     if (scene_has_media(s)) media_photon_walk(s, sp->cam, &pw, index, store_media_hit, out, rays);
     else photon_walk(s, &pw, index, store_hit, out, rays);
 }
@@ -784,7 +785,7 @@ bool sppm_trace_chunk(const Scene *s, const SppmParams *sp, int iter, int chunk,
     SppmHitList l = {0};
     const int first = chunk * SPPM_PHOTON_CHUNK;
     const int last = first + SPPM_PHOTON_CHUNK < sp->photons ? first + SPPM_PHOTON_CHUNK : sp->photons;
-    if (s->emitter_sampler.lights > 0)
+    if (s->emitter_sampler.lights > 0 || sp->media_lights)
         for (int i = first; i < last; i++) trace_photon(s, sp, &l, (uint64_t)i, iter, rays);
     bool ok = !l.oom && array_grow(hits, cap, *count + l.n * SPPM_HIT_FLOATS, sizeof **hits);
     for (size_t i = 0; ok && i < l.n; i++) {
@@ -809,7 +810,7 @@ int sppm_phase_begin(Sppm *job, int iter, int phase)
     case SPPM_PHASE_PHOTONS:
         /* Serial, and cheap next to the passes: a counting sort over the pixels. */
         sppm_grid_build(&job->g, job->px, job->count);
-        if (job->s->emitter_sampler.lights > 0)
+        if (job->s->emitter_sampler.lights > 0 || job->sp.media_lights)
             return job->sp.split ? job->sp.split->chunk_hi - job->sp.split->chunk_lo : job->chunks;
         for (int c = 0; c < job->chunks; c++) job->hits[c].n = 0;
         return 0;

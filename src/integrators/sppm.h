@@ -30,6 +30,9 @@ typedef struct SppmParams {
     /* Scenes with media: the camera whose origin tells the medium a photon starts in
      * (subpath_media.c's medium_at); sppm_create sets it to its own. */
     const Camera *cam;
+    /* NULL, or the scene's emitting media as lights (media_lights.h): photons also start in
+     * them. Borrowed (integrator.c, photon_split.c own them). */
+    const struct MediaLights *media_lights;
 } SppmParams;
 
 /* Photon paths per chunk, the unit of the photon phase and of a split (see sppm.c), and

@@ -9,7 +9,8 @@
  * delta tracking on walks, ratio tracking on connections, MIS densities from chain_piece's
  * majorant stand-ins (computed alike by every strategy, so the weights still sum to 1).
  * Emissive media: gathered by BDPT's, VCM's and MMLT's camera walks with weight 1 (see
- * media_subpath_trace_camera); refused for the light tracer and SPPM. VCM merges volume
+ * media_subpath_trace_camera); the light tracer's paths and SPPM's photons start in them too
+ * (media_lights.h; media_light_trace_volume, media_photon_walk). VCM merges volume
  * vertices by UPBP's point-point 3D estimator (1 / ((4/3) pi r^3 N); media_merge). Motion
  * blur: every ray carries its path's time (walks keep the time of the ray they continue;
  * connections take the camera vertex's or the light subpath's); media do not move. */
@@ -20,6 +21,7 @@
 #include "core/array.h"
 #include "core/rng.h"
 #include "film/filter.h"
+#include "integrators/media_lights.h"
 #include "integrators/recorder.h"
 #include "integrators/subpath_media_step.h"
 #include "integrators/subpath_walk.h"
@@ -49,6 +51,7 @@ typedef struct MediaWalk {
     Wavelengths *disperse; /* as LightWalk.disperse */
     MediaLightVisit visit;
     void *ctx;
+    bool from_volume; /* es->p is a point in a medium (media_lights.h), not on a surface */
 } MediaWalk;
 
 /* subpath_walk_light through media: the same random numbers per surface vertex (lens, BSDF,
@@ -57,9 +60,10 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
                              Sampler *rng, uint64_t *rays)
 {
     const SubpathIteration *it = w->mis;
-    Ray ray = ray_make_at(scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY, es->time);
+    Ray ray = ray_make_at(w->from_volume ? es->p : scene_offset(s, es->p, es->n, es->w), es->w, 0.0f, INFINITY,
+                          es->time);
     Vec3 x_prev = es->p;
-    bool prev_med = false;
+    bool prev_med = w->from_volume;
     /* BDPT (it) keeps medium.h's per-segment mixture in homogeneous media, whose exact
      * densities its MIS uses; grid pieces take the walk's hero lane whatever the
      * integrator, each stored vertex's throughput divided by the walk's mean lane ratio so
@@ -172,10 +176,55 @@ static bool visit_light_trace(void *ctx, const MediaLightVertex *v)
     return true;
 }
 
+/* The light tracer's and SPPM's walk depth after a start in a medium: a vertex j bounces
+ * after it closes a camera path that gathers the emission after j bounces, which volpath.c
+ * counts below max_depth only (a surface emitter's after j <= max_depth); -1: no walk. */
+static int medium_start_depth(int max_depth)
+{
+    return max_depth == 0 ? 0 : max_depth == 1 ? -1 : max_depth - 1;
+}
+
+/* The start on the light sampler's emitters when media emit too: picked with probability
+ * 1 - p_media (media_lights.h), so its flux and its density of the point carry it. */
+static void emit_on_emitters(const Scene *s, const MediaLights *ml, Sampler *rng, const Wavelengths *wl,
+                             EmissionSample *es)
+{
+    subpath_emit(s, rng, wl, es);
+    if (!ml) return;
+    const float q = 1.0f - ml->p_media;
+    es->beta = color_scale(es->beta, 1.0f / q);
+    es->pdf_a *= q;
+}
+
+/* A light path of the light tracer that starts in an emitting medium: the start connected
+ * to the lens (sigma_a Le / (p_sel p_V) Tr W_e / pdf_w: a volume vertex, no cosine), then
+ * the walk from it (isotropic first direction). */
+static void media_light_trace_volume(MediaCamCtx *c, const LightParams *lp, const MediaLights *ml,
+                                     Sampler *rng, const Wavelengths *wlp, Wavelengths *walk_wl)
+{
+    MediaEmission me;
+    const bool ok = media_lights_sample(ml, c->s, c->cam, c->time, wlp, rng, &me, c->rays);
+    const Vec2 u_lens = sampler_2d(rng);
+    if (!ok) return;
+    CameraWiSample cs;
+    MediaSegment seg;
+    if (camera_sample_wi(c->cam, me.p, u_lens, c->margin, &cs) &&
+        media_connect(c->s, me.p, v3s(0.0f), cs.p_lens, v3s(0.0f), false, me.medium, c->time, wlp, &seg, c->rays)) {
+        Color v = color_scale(color_mul(me.le, seg.tr), cs.we / cs.pdf_w);
+        film_splat(c->out, c->frame, cs.raster.x, cs.raster.y, wlp ? spectrum_to_rgb(v, wlp) : v);
+    }
+    const int depth = medium_start_depth(lp->max_depth);
+    if (depth < 0) return;
+    EmissionSample es = {.p = me.p, .w = me.w, .time = c->time, .finite = true, .pdf_w = CST_INV_4PI};
+    const MediaWalk w = {depth, lp->rr_depth, NULL, wlp, walk_wl, visit_light_trace, c, true};
+    media_walk_light(c->s, &w, &es, subpath_start(me.beta), me.medium, rng, c->rays);
+}
+
 void media_light_trace(const Scene *s, const Camera *cam, const LightParams *lp, Sampler *rng, SplatList *out,
                        uint64_t *rays)
 {
-    if (s->emitter_sampler.lights == 0) return;
+    const MediaLights *ml = lp->media_lights;
+    if (s->emitter_sampler.lights == 0 && !ml) return;
     Wavelengths wl;
     if (lp->spectral) wl = wavelengths_sample(sampler_1d(rng));
     const Wavelengths *wlp = lp->spectral ? &wl : NULL;
@@ -188,8 +237,14 @@ void media_light_trace(const Scene *s, const Camera *cam, const LightParams *lp,
     }
     MediaCamCtx c = {s, cam, &lp->frame, filter_radius(lp->frame.filter) - 0.5f, NULL, NULL, wlp, NULL, out, rays,
                      time};
+    /* Emitting media: a light path starts in one with probability p_media (one more
+     * random number; scenes without them keep their streams). */
+    if (ml && sampler_1d(rng) < ml->p_media) {
+        media_light_trace_volume(&c, lp, ml, rng, wlp, lp->spectral ? &wl : NULL);
+        return;
+    }
     EmissionSample es;
-    subpath_emit(s, rng, wlp, &es);
+    emit_on_emitters(s, ml, rng, wlp, &es);
     es.time = time;
 
     /* y0 seen directly, through the media between it and the lens (light.c). */
@@ -213,7 +268,8 @@ void media_light_trace(const Scene *s, const Camera *cam, const LightParams *lp,
     /* Light from infinitely far through a medium that reaches infinity arrives black (as
      * the path tracer's escaping rays see it). */
     if (!es.finite && medium >= 0) return;
-    const MediaWalk w = {lp->max_depth, lp->rr_depth, NULL, wlp, lp->spectral ? &wl : NULL, visit_light_trace, &c};
+    const MediaWalk w = {lp->max_depth, lp->rr_depth, NULL, wlp, lp->spectral ? &wl : NULL, visit_light_trace, &c,
+                         false};
     media_walk_light(s, &w, &es, subpath_start(es.beta), medium, rng, rays);
 }
 
@@ -259,7 +315,8 @@ void media_subpath_trace_light(const Scene *s, const Camera *cam, const SubpathP
     if (wl) walk_wl = *wl;
     MediaCamCtx c = {s, cam, &vp->frame, filter_radius(vp->frame.filter) - 0.5f, it, verts, wl,
                      wl ? &walk_wl : NULL, splats, rays, time};
-    const MediaWalk w = {vp->max_depth, vp->light_rr_depth, it, wl, wl ? &walk_wl : NULL, visit_store_connect, &c};
+    const MediaWalk w = {vp->max_depth, vp->light_rr_depth, it, wl, wl ? &walk_wl : NULL, visit_store_connect,
+                         &c, false};
     media_walk_light(s, &w, &es, sp, medium, rng, rays);
 }
 
@@ -668,7 +725,7 @@ static bool media_walk_to(const Scene *s, const Camera *cam, const SubpathParams
     sp.d_vm = sp.d_vc * it->mis_vc;
     if (wl) *walk_wl = *wl;
     tc->walk_wl = wl ? walk_wl : NULL;
-    const MediaWalk w = {tc->bounces, vp->rr_depth, it, wl, wl ? walk_wl : NULL, visit_target, tc};
+    const MediaWalk w = {tc->bounces, vp->rr_depth, it, wl, wl ? walk_wl : NULL, visit_target, tc, false};
     media_walk_light(s, &w, &es, sp, medium, rng, rays);
     return tc->found;
 }
@@ -824,12 +881,14 @@ typedef struct MediaPhotonCtx {
     MediaPhotonVisit visit;
     void *ctx;
     float time;
+    bool medium_start;
 } MediaPhotonCtx;
 
 static bool visit_photon(void *ctx, const MediaLightVertex *v)
 {
     const MediaPhotonCtx *c = ctx;
-    MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces, v->sp.specular_only, c->time, v->sh};
+    MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces, v->sp.specular_only, c->time, v->sh,
+                      c->medium_start};
     if (v->sh) ph.n = v3_dot(v->ng, v->w_prev) >= 0.0f ? v->ng : v3_neg(v->ng);
     return c->visit(c->ctx, &ph);
 }
@@ -840,16 +899,27 @@ bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, 
     Sampler rng;
     sampler_start_stream(&rng, pw->seed, index, pw->stream);
     const float time = photon_walk_time(pw, &rng); /* the path's instant, as photon_walk's */
+    const MediaLights *ml = pw->media_lights;
+    if (ml && sampler_1d(&rng) < ml->p_media) { /* a start in an emitting medium (media_light_trace) */
+        MediaEmission me;
+        if (!media_lights_sample(ml, s, cam, time, pw->wl, &rng, &me, rays)) return true;
+        const int depth = medium_start_depth(pw->max_depth);
+        if (depth < 0) return true;
+        EmissionSample es = {.p = me.p, .w = me.w, .time = time, .finite = true, .pdf_w = CST_INV_4PI};
+        MediaPhotonCtx c = {visit, ctx, time, true};
+        const MediaWalk w = {depth, pw->rr_depth, NULL, pw->wl, NULL, visit_photon, &c, true};
+        return media_walk_light(s, &w, &es, subpath_start(color_scale(me.beta, pw->scale)), me.medium, &rng, rays);
+    }
     EmissionSample es;
-    subpath_emit(s, &rng, pw->wl, &es);
+    emit_on_emitters(s, ml, &rng, pw->wl, &es);
     if (!(es.pdf_w > 0.0f) || !(es.pdf_a > 0.0f) || color_is_black(es.beta)) return true; /* still one of the N */
     es.time = time;
     int medium = medium_at_emitter(s, cam, es.p, es.w, es.time, rays);
     if (!es.finite && medium >= 0) return true; /* as media_light_trace */
-    MediaPhotonCtx c = {visit, ctx, time};
+    MediaPhotonCtx c = {visit, ctx, time, false};
     /* No MIS (light tracing's walk): the hero lane's free-flight sampling in every medium,
      * each vertex's flux divided by the walk's mean lane ratio (hero_beta). */
-    const MediaWalk w = {pw->max_depth, pw->rr_depth, NULL, pw->wl, NULL, visit_photon, &c};
+    const MediaWalk w = {pw->max_depth, pw->rr_depth, NULL, pw->wl, NULL, visit_photon, &c, false};
     return media_walk_light(s, &w, &es, subpath_start(color_scale(es.beta, pw->scale)), medium, &rng, rays);
 }
 
@@ -862,9 +932,12 @@ bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, cons
     Vec3 x_prev = ray.o;
     for (int depth = 0; depth <= PHOTON_MAX_SPECULAR; depth++) {
         MediaHit h;
-        /* emit false: integrator.c refuses emitting media for SPPM (its photons and NEE start
-         * on the light sampler's emitters: no estimator for what reaches x after a scattering). */
-        if (!media_next(s, ray, x_prev, false, false, &medium, &sp, &hm, rng, wl, &h, rays)) return false;
+        /* The emission of emitting media on the way (volpath.c's estimators, as BDPT's camera
+         * walk gathers it): what reaches x after a scattering, the photons that start in the
+         * media carry (media_photon_walk). Gathered also when the path ends on this segment. */
+        const bool go = media_next(s, ray, x_prev, false, true, &medium, &sp, &hm, rng, wl, &h, rays);
+        *le = color_add(*le, h.le);
+        if (!go) return false;
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
             *le = color_madd(*le, hero_beta(&hm, sp.beta), scene_env_radiance(s, ray.d, wl));

@@ -80,12 +80,16 @@ typedef struct MediaPhoton {
     bool specular_only; /* every vertex before it a delta surface bounce (photon.c's caustics) */
     float time;         /* the path's instant (PhotonWalk: its own or the iteration's) */
     const SurfaceHit *sh; /* the surface hit of a surface photon; NULL in a medium */
+    bool medium_start;  /* the path started in an emitting medium (PhotonWalk.media_lights) */
 } MediaPhoton;
 typedef bool (*MediaPhotonVisit)(void *ctx, const MediaPhoton *ph);
 
 /* photon_walk() through media: the light tracer's walk (hero-lane free flights, HG
  * scattering, roulette), starting in the medium the camera sees at the emitter (cam: its
- * origin). Every ray carries the path's time (PhotonWalk). False if visit stopped it. */
+ * origin). Every ray carries the path's time (PhotonWalk). With pw->media_lights, a path
+ * starts in an emitting medium with probability p_media (media_lights.h), its walk one bounce
+ * shorter (a volume vertex gathers the emission one bounce earlier than an emitter hit).
+ * False if visit stopped it. */
 bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, uint64_t index,
                        MediaPhotonVisit visit, void *ctx, uint64_t *rays);
 
@@ -93,7 +97,8 @@ bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, 
  * photon.c's final gather from a surface, the medium on its side),
  * free-flight sampling in media and delta lobes (photon_trace_to_diffuse's rules) to the
  * first vertex that is a medium scattering point (vol) or a non-delta surface; emission
- * passed on the way into *le (emitters and the environment; emitting media are refused).
+ * passed on the way into *le (emitters, the environment, and emitting media by volpath.c's
+ * estimators).
  * beta: the vertex's throughput from the camera, the hero lanes' balance included; at a
  * volume vertex it includes sigma_s(p) / sigma_t-type weight of its free flight. */
 typedef struct MediaVisiblePoint {

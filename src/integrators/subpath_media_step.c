@@ -165,6 +165,11 @@ static int medium_at(const Scene *s, const Camera *cam, Vec3 q, float time, uint
     return medium;
 }
 
+int medium_at_point(const Scene *s, const Camera *cam, Vec3 q, float time, uint64_t *rays)
+{
+    return medium_at(s, cam, q, time, rays);
+}
+
 /* The medium on the side of emission sample point p toward direction w: just off the
  * surface (further than medium_at's end tolerance), so that an emitter that is itself an
  * interface is crossed when the camera sits on its other side. */

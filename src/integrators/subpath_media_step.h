@@ -25,6 +25,10 @@ bool media_connect(const Scene *s, Vec3 p, Vec3 n_p, Vec3 q, Vec3 n_q, bool q_me
  * surface (further than medium_at's end tolerance), so that an emitter that is itself an
  * interface is crossed when the camera sits on its other side. */
 int medium_at_emitter(const Scene *s, const Camera *cam, Vec3 p, Vec3 w, float time, uint64_t *rays);
+/* The medium at point q (not on a surface) as a ray from the camera's origin sees it: the
+ * camera's medium, switched at every interface shape between (media_lights.c's test that
+ * a sampled point lies in the emitting medium). */
+int medium_at_point(const Scene *s, const Camera *cam, Vec3 q, float time, uint64_t *rays);
 
 /* The spectral MIS of delta tracking over the lanes (hetero_medium.h), for the light
  * tracer's walks through grid media: the hero lane (-1 until the first grid piece) and

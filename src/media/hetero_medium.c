@@ -326,6 +326,12 @@ float hetero_density_world(const HeteroMedium *h, Vec3 p_world)
     return hetero_density(h, transform_point(&h->medium_from_world, p_world));
 }
 
+float hetero_emission_world(const HeteroMedium *h, Vec3 p_world)
+{
+    const Vec3 p = transform_point(&h->medium_from_world, p_world);
+    return hetero_density(h, p) * le_scale_at(h, p);
+}
+
 float hetero_majorant_depth(const HeteroMedium *h, Vec3 o, Vec3 d, float t_max)
 {
     Vec3 om, dm, og, dg;

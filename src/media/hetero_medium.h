@@ -77,6 +77,9 @@ Color hetero_transmittance(const HeteroMedium *h, const struct MediumCoeffs *mc,
 
 /* The density at world point p (hetero_density after the medium's transform). */
 float hetero_density_world(const HeteroMedium *h, Vec3 p_world);
+/* The factor of the medium's sigma_a Le at world point p: the density there times the
+ * Lescale there (its grid's or the constant), as hetero_sample_distance gathers it. */
+float hetero_emission_world(const HeteroMedium *h, Vec3 p_world);
 
 /* The integral of the majorant grid's density bound along o + t d over [0, t_max] (world
  * space, d unit length; t_max may be INFINITY): the optical depth of the majorant at

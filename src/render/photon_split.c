@@ -3,6 +3,7 @@
 #include <stdlib.h>
 
 #include "core/error.h"
+#include "integrators/media_lights.h"
 #include "integrators/sppm.h"
 #include "scene/scene.h"
 
@@ -12,7 +13,7 @@ static SppmParams split_params(const CstScene *scene, const CstRenderSettings *s
 {
     const size_t pixels = (size_t)st->width * (size_t)st->height;
     SppmParams sp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->filter, st->seed,
-                     st->threads, st->color_mode == CST_COLOR_SPECTRAL, NULL, NULL};
+                     st->threads, st->color_mode == CST_COLOR_SPECTRAL, NULL, NULL, NULL};
     (void)scene;
     if (sp.photons <= 0) sp.photons = (int)(pixels < (size_t)1 << 30 ? pixels : (size_t)1 << 30);
     return sp;
@@ -42,9 +43,15 @@ CstStatus cst_sppm_trace_chunk(const CstScene *scene, const CstRenderSettings *s
     Camera cam; /* in scenes with media, its origin tells the medium each photon starts in */
     camera_init(&cam, &scene->camera, st.width, st.height);
     sp.cam = &cam;
+    /* Emitting media: their light sampler, built as the render's integrator builds it. */
+    MediaLights *ml = NULL;
+    CstStatus ms = media_lights_create(scene, cst_integrator_name(st.integrator), &ml, err);
+    if (ms != CST_OK) return ms;
+    sp.media_lights = ml;
     uint64_t traced = 0;
-    if (!sppm_trace_chunk(scene, &sp, iteration, chunk, hits, count, cap, &traced))
-        return cst_fail(err, CST_ERR_OOM, "out of memory for the photon hits of chunk %d", chunk);
+    const bool ok = sppm_trace_chunk(scene, &sp, iteration, chunk, hits, count, cap, &traced);
+    media_lights_destroy(ml);
+    if (!ok) return cst_fail(err, CST_ERR_OOM, "out of memory for the photon hits of chunk %d", chunk);
     if (rays) *rays += traced;
     return CST_OK;
 }

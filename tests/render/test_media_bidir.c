@@ -5,8 +5,9 @@
  * furnace; BDPT's and VCM's with emitting media, homogeneous and grid, too), path, BDPT,
  * VCM and MMLT agreeing on the fog box with a random grid in its ball, emitting or not (the
  * camera walks gather the emission, MMLT's by its s = 0 strategy), MMLT and BDPT on the box
- * with its homogeneous fog emitting, and the refusals (emissive media in the light tracer and
- * SPPM). VCM's furnaces use a large merging radius, so that the volume merges (UPBP's
+ * with its homogeneous fog emitting, the light tracer with emitting media (its paths start
+ * in them too: the emissive furnace, path against light on both emitting fog boxes), and the
+ * refusals (an unbounded emitting medium in light and SPPM, any in photon). VCM's furnaces use a large merging radius, so that the volume merges (UPBP's
  * point-point 3D estimator) carry most of the MIS weight: a constant radiance field has no
  * kernel bias away from the walls. `test_media_bidir --spectral` runs
  * the same in spectral mode.
@@ -213,6 +214,11 @@ static void test_furnace_emissive(void **state)
         assert_int_equal(scene_commit(s, &err), CST_OK);
         const char *what = grid ? "emissive grid ball" : "emissive ball";
         check_furnace(s, CST_INTEGRATOR_BDPT, 24, 2, 530 + (uint64_t)grid, L, what);
+        /* The light tracer, its paths starting in the ball too. Its green is heavy-tailed here
+         * (the standard error barely shrinks with more renders): at 1024 renders the
+         * homogeneous ball gives green 0.8951 +- 0.0042 (z = -1.2), at 32 one block misses
+         * by z = -4.2, so 64. */
+        check_furnace(s, CST_INTEGRATOR_LIGHT, 64, 8, 550 + (uint64_t)grid, L, what);
         g_radius = 0.25;
         check_furnace(s, CST_INTEGRATOR_VCM, 24, 2, 540 + (uint64_t)grid, L, what);
         g_radius = 0.0;
@@ -305,6 +311,22 @@ static CstRenderSettings path_bdpt_vcm_agree(const Scene *s, uint64_t seed, cons
     return st;
 }
 
+/* The light tracer against path on the 32 x 32 fog box with emitting fog: light paths start
+ * in the fog too (media_lights.h); whole image and four blocks. */
+static void path_light_agree(const Scene *s, int max_depth, uint64_t seed, const char *light_name)
+{
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.width = st.height = 32;
+    st.color_mode = g_color_mode;
+    st.max_depth = max_depth;
+    Regions path = regions(32, 16), light = regions(32, 16);
+    camera_regions(s, &st, CST_INTEGRATOR_PATH, 64, seed, &path);
+    st.spp = 2;
+    split_regions(s, &st, CST_INTEGRATOR_LIGHT, 24, seed + 10, &light);
+    compare(&path, &light, "path", light_name);
+}
+
 /* mmlt against bdpt on a 24 x 24 fog box (test_mmlt.c's settings, 12 x 12 blocks; seeds
  * from `seed`). */
 static void bdpt_mmlt_agree(const Scene *s, CstRenderSettings sm, uint64_t seed, const char *bdpt_name,
@@ -335,30 +357,21 @@ static void test_grid_agreement(void **state)
 }
 
 /* The grid emitting (Le, gathered by the camera walks alone with MIS weight 1; mmlt's by
- * its s = 0 strategy): path, bdpt and vcm agree, mmlt and bdpt too; the light tracer and
- * sppm refuse it (their light paths start on the light sampler's emitters only). */
+ * its s = 0 strategy): path, bdpt and vcm agree, mmlt and bdpt too, and the light tracer
+ * (its paths start in the grid too, a cell by its density bound). */
 static void test_grid_emissive(void **state)
 {
     (void)state;
     Scene *s = fog_box(FOG_GRID_EMISSIVE);
     CstRenderSettings st = path_bdpt_vcm_agree(s, 1000, "bdpt (emissive grid)", "vcm (emissive grid)");
     bdpt_mmlt_agree(s, st, 1030, "bdpt (emissive grid, 24)", "mmlt (emissive grid, 24)");
-    st.width = st.height = 8;
-    st.spp = 1;
-    const CstIntegrator refused[2] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_SPPM};
-    for (int i = 0; i < 2; i++) {
-        CstError err;
-        CstFilm *f = NULL;
-        st.integrator = refused[i];
-        assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
-        assert_non_null(strstr(err.msg, "emissive"));
-        cst_film_destroy(f);
-    }
+    path_light_agree(s, 5, 1060, "light (emissive grid)");
     scene_destroy(s);
 }
 
 /* The homogeneous fog emitting: mmlt (its s = 0 strategy gathers the emission, weight 1)
- * and bdpt agree. */
+ * and bdpt agree; path and the light tracer too. An emitting medium that no shape bounds
+ * (the camera's, filling space) is refused by light and sppm, and photon refuses any. */
 static void test_homogeneous_emissive_mmlt(void **state)
 {
     (void)state;
@@ -367,6 +380,37 @@ static void test_homogeneous_emissive_mmlt(void **state)
     cst_render_settings_init(&st);
     st.color_mode = g_color_mode;
     bdpt_mmlt_agree(s, st, 1100, "bdpt (emissive fog, 24)", "mmlt (emissive fog, 24)");
+    path_light_agree(s, 5, 1130, "light (emissive fog)");
+    /* Two bounces: a start in the fog walks one bounce fewer than one on an emitter
+     * (medium_start_depth), which a deep limit hides. */
+    path_light_agree(s, 2, 1160, "light (emissive fog, max_depth 2)");
+    st.width = st.height = 8;
+    st.spp = 1;
+    CstError err;
+    CstFilm *f = NULL;
+    st.integrator = CST_INTEGRATOR_PHOTON;
+    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "emissive"));
+    scene_destroy(s);
+    s = scene_create(); /* an emitting fog filling space, the camera in it, in an emitting sphere */
+    Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.0f};
+    m.u.homog.sigma_a = m.u.homog.le = color_s(0.1f);
+    int med, black;
+    Material mb = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &mb, &black, &err), CST_OK);
+    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
+    assert_int_equal(scene_set_camera_medium(s, med, &err), CST_OK);
+    Emission em = {color_s(1.0f), 1, 0};
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
+    CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    const CstIntegrator refused[2] = {CST_INTEGRATOR_LIGHT, CST_INTEGRATOR_SPPM};
+    for (int i = 0; i < 2; i++) {
+        st.integrator = refused[i];
+        assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
+        assert_non_null(strstr(err.msg, "not bounded"));
+    }
     scene_destroy(s);
 }
 
