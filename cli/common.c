@@ -196,8 +196,8 @@ int cli_load_scene(const CliArgs *a, CstScene **out, double *read_seconds)
     cst_scene_info(scene, &in);
     if (read_seconds)
         *read_seconds = cli_clock_seconds() - t0 - in.accel_build_seconds;
-    if (in.lights == 0)
-        fprintf(stderr, "caustic: warning: %s has no light: no emitting shape, no point, spot or "
+    if (in.lights == 0 && in.emitting_media == 0)
+        fprintf(stderr, "caustic: warning: %s has no light: no emitting shape or medium, no point, spot or "
                 "directional light and no environment, so every image of it is black\n",
                 a->scene_path ? a->scene_path : "the scene");
     if (a->accel) {

@@ -139,6 +139,8 @@ typedef struct CstSceneInfo {
     const char *light_sampler;  /* next-event estimation's choice of light: "power", "bvh" or
                                  * "uniform" (after commit; static storage) */
     int shapes;                 /* analytic shapes (cst_scene_add_shape) */
+    int emitting_media;         /* participating media with emission (Le): light sources too,
+                                 * though not counted in `lights` (no NEE samples them) */
 } CstSceneInfo;
 /* Also before cst_scene_commit: the counts so far (the accel fields then describe no
  * structure yet). */

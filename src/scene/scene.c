@@ -912,6 +912,10 @@ void cst_scene_info(const CstScene *s, CstSceneInfo *info)
     info->emitters = s->num_emitters;
     info->materials = s->num_materials;
     info->lights = s->emitter_sampler.lights; /* set by commit */
+    for (int i = 0; i < s->num_media; i++) {
+        const Medium *m = &s->media[i];
+        if (!color_is_black(medium_is_hetero(m) ? m->u.het.le : m->u.homog.le)) info->emitting_media++;
+    }
     info->light_sampler = s->emitter_sampler.nee == LIGHT_SELECT_BVH       ? "bvh"
                           : s->emitter_sampler.nee == LIGHT_SELECT_UNIFORM ? "uniform"
                                                                            : "power";

@@ -63,6 +63,18 @@ check "a scene without light: warned even with --quiet" grep -q "no light" "$ERR
 run "$dir" render --width 8 --height 8 --spp 1 -o box.png
 if grep -q "no light" "$ERR"; then fail "the built-in box (lit) draws no light warning"
 else pass "the built-in box (lit) draws no light warning"; fi
+# Lit by an emitting medium alone (the camera's): not "no light".
+cat >"$dir/glow.json" <<'JSON'
+{"film": {"width": 8, "height": 8}, "sampler": {"spp": 1},
+ "camera": {"type": "pinhole", "position": [0, 0, 5], "look_at": [0, 0, 0], "fov": 40},
+ "media": {"glow": {"type": "homogeneous", "sigma_a": 0.5, "sigma_s": 0.1, "Le": [1, 1, 1]}},
+ "camera_medium": "glow",
+ "materials": {"w": {"type": "diffuse"}},
+ "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "w"}]}
+JSON
+run "$dir" render glow.json -o g.png
+if [ "$RC" -eq 0 ] && ! grep -q "no light" "$ERR"; then pass "a scene lit by an emitting medium alone: no light warning"
+else fail "a scene lit by an emitting medium alone: no light warning (exit $RC)"; fi
 
 OBJ=$SRC/scenes/meshes/torus-on-plinth.obj
 if [ -f "$OBJ" ]; then
