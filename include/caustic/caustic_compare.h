@@ -216,8 +216,9 @@ typedef enum CstExplainKind {
                              * distance from the visible point, pmf the box kernel
                              * 1 / (N_emitted pi r^2), share its part of the pixel's value */
     CST_EXPLAIN_ESTIMATE,   /* photon: the density estimate over the photons listed before it
-                             * (flag CAUSTIC: the caustic map at the first diffuse vertex, else
-                             * the global map at the final gather's vertex): distance the
+                             * (flag CAUSTIC: the caustic map at the first diffuse vertex; flag
+                             * VOLUME: the volume map at a medium vertex; else the global map
+                             * at the final gather's vertex): distance the
                              * radius, pmf the box kernel 1 / (pi r^2), path the photons
                              * counted, value the estimate, beta the gather's throughput */
     CST_EXPLAIN_MUTATION    /* pssmlt, mmlt: a splat of a Metropolis step that reached the pixel

@@ -534,7 +534,7 @@ static void test_bidir_media(void **state)
  * vertex (global map or, in fog, NEE and the volume map) give the camera sample and the
  * film's value bit for bit; and spectral photon on the Cornell box (no media): the
  * sample's wavelengths and photon set named, the sum converted at them. */
-static void test_photon_media_spectral(void **state)
+static void test_photon_in_media_spectral(void **state)
 {
     (void)state;
     static const int PIX[][2] = {{12, 10}, {10, 12}, {8, 9}, {14, 13}, {3, 17}};
@@ -632,7 +632,7 @@ static void test_refused(void **state)
     CstRenderSettings st;
     CstExplain *ex = NULL;
     /* Every integrator is explained (photon through media and in spectral mode too:
-     * test_photon_media_spectral); bad pixels and samples are refused. */
+     * test_photon_in_media_spectral); bad pixels and samples are refused. */
     settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB);
     assert_int_equal(cst_explain(s, &st, W, 0, 0, &ex, &err), CST_ERR_INVALID_ARG);
     assert_int_equal(cst_explain(s, &st, 0, -1, 0, &ex, &err), CST_ERR_INVALID_ARG);
@@ -656,7 +656,7 @@ int main(void)
         cmocka_unit_test(test_bidir_subsurface),
         cmocka_unit_test(test_bidir_moving_camera),
         cmocka_unit_test(test_photon),
-        cmocka_unit_test(test_photon_media_spectral),
+        cmocka_unit_test(test_photon_in_media_spectral),
         cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),
     };
