@@ -88,10 +88,24 @@ static void print_gather(FILE *f, const CstExplainEvent *e)
         fputc('\n', f);
         return;
     }
+    if (e->kind == CST_EXPLAIN_ESTIMATE && (e->flags & CST_EXPLAIN_VOLUME)) {
+        /* photon.c's volume_estimate: (1 / sigma_s) sum f_HG Phi / ((4/3) pi r^3), times beta. */
+        fprintf(f, "  volume map's estimate over those %d photons: radius %.6g, ball kernel 1/((4/3) pi r^3) %.6g, ",
+                e->path, (double)e->distance, (double)e->pmf);
+        print3(f, "divided by sigma_s ", e->transmittance);
+        fputs("\n      ", f);
+        print3(f, "in-scattered radiance ", e->value);
+        print3(f, " x beta ", e->beta);
+        print3(f, " = contribution ", e->contribution);
+        fputc('\n', f);
+        return;
+    }
     if (e->kind == CST_EXPLAIN_ESTIMATE)
         fprintf(f, "  %s map's estimate over those %d photons: radius %.6g, box kernel 1/(pi r^2) %.6g",
                 (e->flags & CST_EXPLAIN_CAUSTIC) ? "caustic" : "global (final gather)", e->path,
                 (double)e->distance, (double)e->pmf);
+    else if (e->kind == CST_EXPLAIN_ESCAPE)
+        fputs("environment met by the camera ray through media and delta bounces (no MIS)", f);
     else
         fputs("emission met by the camera ray and its specular chain (no MIS)", f);
     print_value(f, e);
@@ -123,7 +137,9 @@ static void print_distance(FILE *f, const CstExplain *x, const CstExplainEvent *
                 (double)e->transmittance[0], (double)e->transmittance[1], (double)e->transmittance[2]);
     if (e->chain_fwd > 0.0f || e->chain_rev > 0.0f) /* bdpt, vcm (subpath_media.c) */
         fprintf(f, " (sampling density %.6g, reverse %.6g)", (double)e->chain_fwd, (double)e->chain_rev);
-    print3(f, is_bdpt(x) ? ", throughput " : ", weight ", is_bdpt(x) ? e->beta : e->value);
+    /* bdpt, vcm, photon (subpath_media.c's flights): the throughput after the flight. */
+    const bool thr = is_bdpt(x) || is_photon(x);
+    print3(f, thr ? ", throughput " : ", weight ", thr ? e->beta : e->value);
     fputc('\n', f);
 }
 
@@ -140,8 +156,14 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
     case CST_EXPLAIN_DISTANCE: print_distance(f, x, e); return;
     case CST_EXPLAIN_VERTEX:
         if (e->medium >= 0) {
-            fprintf(f, "vertex %d: in medium %d at (%.6g, %.6g, %.6g)\n", e->depth, e->medium, (double)e->p[0],
+            fprintf(f, "vertex %d: in medium %d at (%.6g, %.6g, %.6g)", e->depth, e->medium, (double)e->p[0],
                     (double)e->p[1], (double)e->p[2]);
+            /* photon: the walk stops at its first medium vertex; the volume map's estimate
+             * evaluates the phase function for each photon instead of sampling it. */
+            if (is_photon(x))
+                fprintf(f, ": the walk's first medium vertex, no phase sample (Henyey-Greenstein g %.4g, "
+                        "evaluated per photon)", (double)e->q);
+            fputc('\n', f);
             return;
         }
         if (e->material_type && strcmp(e->material_type, "subsurface exit") == 0) {
@@ -307,7 +329,7 @@ static void print_largest(FILE *f, const CstExplain *x)
     if (e->kind == CST_EXPLAIN_MUTATION)
         fprintf(f, "largest contribution: the %s's splat of chain %d, step %d",
                 (e->flags & CST_EXPLAIN_PROPOSAL) ? "proposal" : "current state", e->chain, e->step);
-    else if (e->path >= 0)
+    else if (e->path >= 0 && !is_photon(x)) /* (photon: path counts an estimate's photons) */
         fprintf(f, "largest contribution: the splat of light path %d", e->path);
     else
         fprintf(f, "largest contribution: %s at vertex %d", kind_name(e->kind), e->depth);
@@ -361,6 +383,13 @@ static void print_text(FILE *f, const CstExplain *x)
     }
     fprintf(f, "pixel (%d, %d), %s %d, integrator %s, %s\n", x->x, x->y, is_bdpt(x) ? "iteration" : "sample",
             x->sample, cst_integrator_name(x->integrator), x->spectral ? "spectral" : "RGB");
+    if (x->spectral && x->wavelengths[0] > 0.0f) {
+        fprintf(f, "wavelengths (%.6g, %.6g, %.6g, %.6g) nm", (double)x->wavelengths[0], (double)x->wavelengths[1],
+                (double)x->wavelengths[2], (double)x->wavelengths[3]);
+        if (x->photon_set >= 0) fprintf(f, ", photon set %d (its maps traced at them)", x->photon_set);
+        fputs(": every value, beta and contribution below is per wavelength (the first three); the sum is "
+              "converted to RGB\n", f);
+    }
     /* The camera path first; BDPT's light step ran before it, its splats follow. */
     int splats = 0;
     for (int i = 0; i < x->num_events; i++) {
@@ -434,7 +463,7 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "pdf", num((double)e->pdf_w));
         json_object_set_new(o, "transmittance", arr3f(e->transmittance));
         json_object_set_new(o, "weight", arr3f(e->value));
-        if (is_bdpt(x)) {
+        if (is_bdpt(x) || is_photon(x)) {
             json_object_set_new(o, "chain_fwd", num((double)e->chain_fwd));
             json_object_set_new(o, "chain_rev", num((double)e->chain_rev));
             json_object_set_new(o, "beta", arr3f(e->beta));
@@ -442,6 +471,7 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         return o;
     case CST_EXPLAIN_VERTEX:
         if (e->medium >= 0) json_object_set_new(o, "medium", json_integer(e->medium));
+        if (e->medium >= 0 && is_photon(x)) json_object_set_new(o, "g", num((double)e->q));
         json_object_set_new(o, "p", arr3f(e->p));
         json_object_set_new(o, "n", arr3f(e->n));
         json_object_set_new(o, "ng", arr3f(e->ng));
@@ -460,7 +490,10 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "contribution", arr3f(e->contribution));
         return o;
     case CST_EXPLAIN_ESTIMATE:
-        json_object_set_new(o, "map", json_string((e->flags & CST_EXPLAIN_CAUSTIC) ? "caustic" : "global"));
+        json_object_set_new(o, "map", json_string((e->flags & CST_EXPLAIN_VOLUME)    ? "volume"
+                                                  : (e->flags & CST_EXPLAIN_CAUSTIC) ? "caustic"
+                                                                                     : "global"));
+        if (e->flags & CST_EXPLAIN_VOLUME) json_object_set_new(o, "sigma_s", arr3f(e->transmittance));
         json_object_set_new(o, "radius", num((double)e->distance));
         json_object_set_new(o, "kernel", num((double)e->pmf));
         json_object_set_new(o, "photons", json_integer(e->path));
@@ -548,6 +581,11 @@ static bool print_json(FILE *f, const CstExplain *x)
     json_object_set_new(o, "splat_value", arr3d(x->splat_value));
     json_object_set_new(o, "film_value", arr3d(x->film_value));
     json_object_set_new(o, "exact", json_boolean(x->exact));
+    if (x->spectral && x->wavelengths[0] > 0.0f)
+        json_object_set_new(o, "wavelengths", json_pack("[oooo]", num((double)x->wavelengths[0]),
+                                                        num((double)x->wavelengths[1]), num((double)x->wavelengths[2]),
+                                                        num((double)x->wavelengths[3])));
+    if (x->photon_set >= 0) json_object_set_new(o, "photon_set", json_integer(x->photon_set));
     if (is_bdpt(x)) {
         json_object_set_new(o, "mis_checked", json_integer(x->mis_checked));
         json_object_set_new(o, "mis_max_error", num(x->mis_max_error));
@@ -586,7 +624,7 @@ static void print_why_bright(FILE *f, const CstExplain *x)
                 e->chain, e->step, (double)e->accept, (double)e->importance, (double)e->weight, 100.0 * share);
         return;
     }
-    if (e->path >= 0) {
+    if (e->path >= 0 && !is_photon(x)) {
         fprintf(f, "why bright: light path %d's connection to the camera at raster (%.2f, %.2f) gives %.1f%% of the "
                 "pixel (luminance %.6g)\n", e->path, (double)e->wi[0], (double)e->wi[1], 100.0 * share,
                 luminance(e->contribution));

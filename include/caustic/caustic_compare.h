@@ -216,8 +216,9 @@ typedef enum CstExplainKind {
                              * distance from the visible point, pmf the box kernel
                              * 1 / (N_emitted pi r^2), share its part of the pixel's value */
     CST_EXPLAIN_ESTIMATE,   /* photon: the density estimate over the photons listed before it
-                             * (flag CAUSTIC: the caustic map at the first diffuse vertex, else
-                             * the global map at the final gather's vertex): distance the
+                             * (flag CAUSTIC: the caustic map at the first diffuse vertex; flag
+                             * VOLUME: the volume map at a medium vertex; else the global map
+                             * at the final gather's vertex): distance the
                              * radius, pmf the box kernel 1 / (pi r^2), path the photons
                              * counted, value the estimate, beta the gather's throughput */
     CST_EXPLAIN_MUTATION    /* pssmlt, mmlt: a splat of a Metropolis step that reached the pixel
@@ -244,7 +245,11 @@ enum {
     CST_EXPLAIN_PROPOSAL = 256,   /* MUTATION: the proposal's splat (weight a / I), else the
                                    * current state's (weight (1 - a) / I) */
     CST_EXPLAIN_LARGE_STEP = 512, /* MUTATION: the step was a large step (fresh uniforms) */
-    CST_EXPLAIN_ACCEPTED = 1024   /* MUTATION: the chain moved to the proposal */
+    CST_EXPLAIN_ACCEPTED = 1024,  /* MUTATION: the chain moved to the proposal */
+    /* ESTIMATE (photon in media): the volume map's at a medium vertex: pmf the kernel
+     * 1 / ((4/3) pi r^3) (0: the map is empty), transmittance holds sigma_s there (the
+     * estimate divides by it), value the in-scattered radiance, contribution beta value */
+    CST_EXPLAIN_VOLUME = 2048
 };
 
 typedef struct CstExplainEvent {
@@ -357,6 +362,12 @@ typedef struct CstExplain {
      * merged for the iteration and camera_value + it = film_value, bit for bit. */
     double mlt_b, mlt_scale;
     int mlt_chains;
+    /* Spectral mode (not sppm, pssmlt, mmlt, light): the camera path's four wavelengths in
+     * nm as the recorder last saw them (lane order: every event's value, beta and
+     * contribution show lanes 0-2); 0 in RGB mode. photon_set: spectral photon, the set the
+     * sample picked (its maps were traced at these wavelengths); -1 otherwise (sppm: 0). */
+    float wavelengths[4];
+    int photon_set;
 } CstExplain;
 
 /* Replays sample `sample` (for bdpt, sppm, pssmlt and mmlt: iteration; sppm, pssmlt and mmlt

@@ -336,6 +336,7 @@ typedef struct VolumeCtx {
     float g;
     Color sum;
     TimeWindow tw;
+    struct Recorder *rec; /* explain (NULL in renders) */
 } VolumeCtx;
 
 static void volume_visit(void *ctx, const Photon *ph, float dist2)
@@ -343,7 +344,9 @@ static void volume_visit(void *ctx, const Photon *ph, float dist2)
     (void)dist2;
     VolumeCtx *c = ctx;
     if (time_outside(c->tw, ph)) return;
-    c->sum = color_madd(c->sum, color_s(phase_hg_eval(c->wo, ph->wi, c->g)), ph->power);
+    const Color f = color_s(phase_hg_eval(c->wo, ph->wi, c->g));
+    c->sum = color_madd(c->sum, f, ph->power);
+    if (c->rec) recorder_photon(c->rec, ph, f);
 }
 
 /* In-scattered radiance from the volume map at a medium vertex, times the vertex's
@@ -353,33 +356,41 @@ static void volume_visit(void *ctx, const Photon *ph, float dist2)
  * sigma_s of its own free-flight sample), so the 1 / sigma_s(p) here cancels beta's
  * sigma_s(p), as SPPM's visible points in media (sppm.c, camera_media). */
 static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMap *map, float r,
-                             const MediaVisiblePoint *v, float time, const Wavelengths *wl)
+                             const MediaVisiblePoint *v, float time, const Wavelengths *wl, struct Recorder *rec)
 {
-    if (photon_map_count(map) == 0) return color_s(0.0f);
+    if (photon_map_count(map) == 0) {
+        if (rec) recorder_volume_estimate(rec, r, 0.0f, v->beta, color_s(0.0f), color_s(0.0f), color_s(0.0f));
+        return color_s(0.0f);
+    }
     float scale;
-    VolumeCtx c = {v->wo, v->g, color_s(0.0f), time_window(m, time, &scale)};
+    VolumeCtx c = {v->wo, v->g, color_s(0.0f), time_window(m, time, &scale), rec};
     photon_map_radius(map, v->p, r, volume_visit, &c);
     const Medium *med = &s->media[v->medium];
     const MediumCoeffs mc = medium_coeffs(med, wl);
     const float dens = medium_is_hetero(med) ? hetero_density_world(&med->u.het, v->p) : 1.0f;
     const float inv_vol = scale / (4.0f / 3.0f * CST_PI * r * r * r);
-    Color out;
+    Color out, sigma_s, li;
     for (int k = 0; k < COLOR_LANES; k++) {
         const float ss = mc.sigma_s.c[k] * dens;
+        sigma_s.c[k] = ss;
         out.c[k] = ss > 0.0f ? v->beta.c[k] * c.sum.c[k] * inv_vol / ss : 0.0f;
+        li.c[k] = ss > 0.0f ? c.sum.c[k] * inv_vol / ss : 0.0f; /* explain's display only */
     }
+    if (rec) recorder_volume_estimate(rec, r, inv_vol, v->beta, sigma_s, li, out);
     return out;
 }
 
 /* Direct light at a media vertex (volpath's NEE without MIS: transmittance by ratio
  * tracking), times the vertex's throughput. */
 static Color media_direct(const Scene *s, const MediaVisiblePoint *v, float time, Sampler *rng,
-                          const Wavelengths *wl, uint64_t *rays)
+                          const Wavelengths *wl, uint64_t *rays, struct Recorder *rec)
 {
     if (s->emitter_sampler.lights == 0) return color_s(0.0f);
     VolVertex x = {v->p, v3s(0.0f), v3s(0.0f), v->wo, NULL, NULL, v->g, v->medium, time};
     if (!v->vol) x = (VolVertex){v->sh.p, v->sh.ns, v->sh.ng, v->wo, &v->bsdf, &v->sh, 0.0f, v->medium, time};
-    return color_mul(v->beta, volpath_nee(s, &x, false, rng, wl, rays));
+    const Color nee = volpath_nee(s, &x, false, rng, wl, rays);
+    if (rec) recorder_add(rec, CST_EXPLAIN_NEE, v->beta, nee); /* the light sample not itemised */
+    return color_mul(v->beta, nee);
 }
 
 /* The scheme through media (Jensen & Christensen 1998, with the surface part as above):
@@ -396,25 +407,34 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
 {
     Color L = color_s(0.0f);
     MediaVisiblePoint x;
-    if (!media_visible_point(s, ray, s->camera_medium, rng, wl, color_s(1.0f), &L, &x, rays)) return L;
-    L = color_add(L, media_direct(s, &x, ray.time, rng, wl, rays));
-    if (x.vol) return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &x, ray.time, wl));
-    Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, NULL);
+    /* explain (rec): the walks' flights, vertices and delta scatters, each addition with the
+     * throughput it is multiplied by; explain.c's replay_photon_media sums them again. */
+    struct Recorder *rec = m->rec;
+    if (rec) rec->depth = 0;
+    if (!media_visible_point_rec(s, ray, s->camera_medium, rng, wl, color_s(1.0f), &L, &x, rays, rec)) return L;
+    L = color_add(L, media_direct(s, &x, ray.time, rng, wl, rays, rec));
+    if (x.vol) return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &x, ray.time, wl, rec));
+    Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, rec);
+    if (rec) recorder_estimate(rec, true, m->radius, x.beta, caustic);
     L = color_madd(L, x.beta, caustic);
     BsdfSample bs;
     float uc = sampler_1d(rng);
     Vec2 u = sampler_2d(rng);
     if (!bsdf_sample(&x.bsdf, x.wo, uc, u, &bs) || bs.delta) return L;
+    if (rec) recorder_scatter(rec, &bs, x.beta);
     Ray gr = ray_make_at(scene_offset(s, x.sh.p, x.sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, ray.time);
     const int medium = scene_medium_after(s, &x.sh, bs.wi, x.medium);
-    Color ignored = color_s(0.0f); /* emission the gather meets: NEE's or the caustic map's */
+    /* le NULL: emission the gather meets is NEE's or the caustic map's, not added. */
     MediaVisiblePoint y;
-    if (!media_visible_point(s, gr, medium, rng, wl, color_mul(x.beta, bs.weight), &ignored, &y, rays)) return L;
+    if (!media_visible_point_rec(s, gr, medium, rng, wl, color_mul(x.beta, bs.weight), NULL, &y, rays, rec))
+        return L;
     if (y.vol) {
-        L = color_add(L, media_direct(s, &y, ray.time, rng, wl, rays));
-        return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &y, ray.time, wl));
+        L = color_add(L, media_direct(s, &y, ray.time, rng, wl, rays, rec));
+        return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &y, ray.time, wl, rec));
     }
-    return color_madd(L, y.beta, radiance_estimate(s, m, &set->global, m->radius, &y.bsdf, &y.sh, y.wo, NULL));
+    Color global = radiance_estimate(s, m, &set->global, m->radius, &y.bsdf, &y.sh, y.wo, rec);
+    if (rec) recorder_estimate(rec, false, m->radius, y.beta, global);
+    return color_madd(L, y.beta, global);
 }
 
 Color photon_li(const Scene *s, const PhotonMaps *m, int set, Ray ray, Sampler *rng, uint64_t *rays)
@@ -422,6 +442,7 @@ Color photon_li(const Scene *s, const PhotonMaps *m, int set, Ray ray, Sampler *
     if (m->num_sets == 0) return color_s(0.0f);
     const PhotonSet *ps = &m->sets[set];
     const Wavelengths *wl = m->spectral ? &ps->wl : NULL;
+    if (m->rec) recorder_wavelengths(m->rec, wl); /* explain: spectral mode's conversion */
     if (scene_has_media(s)) return photon_li_media(s, m, ps, ray, rng, wl, rays);
     return photon_li_surface(s, m, ps, ray, rng, wl, rays);
 }

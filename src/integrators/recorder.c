@@ -295,6 +295,25 @@ void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color e
     recorder_added(r, e, g, est);
 }
 
+void recorder_volume_estimate(Recorder *r, float radius, float kernel, Color beta, Color sigma_s, Color li,
+                              Color out)
+{
+    int count = 0;
+    while (count < r->n && r->ev[r->n - 1 - count].kind == CST_EXPLAIN_PHOTON) count++;
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_ESTIMATE);
+    e->flags |= CST_EXPLAIN_VOLUME | CST_EXPLAIN_ADDED;
+    e->distance = radius;
+    e->pmf = kernel;
+    e->path = count;
+    put_color(e->beta, beta);
+    put_color(e->value, li);
+    put_color(e->contribution, out);
+    put_color(e->transmittance, sigma_s); /* shown as sigma_s (its RGB lanes) */
+    if (e == &r->spare) return;
+    r->beta[e - r->ev] = beta;
+    r->value[e - r->ev] = sigma_s; /* the replay divides by it, lane by lane */
+}
+
 /* The throughput of the whitted node at depth d: 1 at the camera's hit, else its branch's. */
 static Color tree_beta(const Recorder *r, int d)
 {

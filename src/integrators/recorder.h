@@ -187,6 +187,13 @@ void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
  * radius, the gather throughput g it is multiplied by (1 at the caustic map's x), the
  * estimate est. */
 void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est);
+/* The volume map's estimate at a medium vertex (Jensen & Christensen 1998 eq. 11) over the
+ * photons recorded just before it: radius r, kernel 1 / ((4/3) pi r^3) (0: the map is empty,
+ * nothing added), the vertex's throughput beta, sigma_s at the vertex per lane (the
+ * replay's), the in-scattered radiance li (shown) and what was added, out = beta sum kernel /
+ * sigma_s per lane. */
+void recorder_volume_estimate(Recorder *r, float radius, float kernel, Color beta, Color sigma_s, Color li,
+                              Color out);
 
 /* ---- SPPM (sppm.c; its camera chain by photon_trace_to_diffuse) */
 /* At a BSDF with delta and non-delta lobes the chain stopped with the non-delta lobes'

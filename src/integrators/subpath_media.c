@@ -926,6 +926,29 @@ bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, 
 bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
                          Color *le, MediaVisiblePoint *out, uint64_t *rays)
 {
+    return media_visible_point_rec(s, ray, medium, rng, wl, beta, le, out, rays, NULL);
+}
+
+/* explain (rec not NULL): the flight that reached a vertex and the vertex, numbered on from
+ * rec->depth (a medium vertex or a surface hit). */
+static void record_visible_hit(Recorder *rec, const Scene *s, const MediaHit *h, int medium, Color beta,
+                               const Wavelengths *wl)
+{
+    const bool vol = h->kind == MEDIA_VOLUME;
+    /* A flight in vacuum (no medium crossed on the way) is no decision: not listed. */
+    if (vol || medium >= 0 || h->fwd != 1.0f) recorder_media_flight(rec, h->p, medium, vol, h->dist, h->fwd, h->rev, beta);
+    if (vol) {
+        recorder_medium_vertex(rec, h->p, medium, rec->depth + 1);
+        CstExplainEvent *e = rec->truncated ? &rec->spare : &rec->ev[rec->n - 1];
+        e->q = s->media[medium].g; /* the Henyey-Greenstein asymmetry the estimate evaluates */
+    } else {
+        recorder_vertex(rec, s, &h->sh, rec->depth + 1, wl);
+    }
+}
+
+bool media_visible_point_rec(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
+                             Color *le, MediaVisiblePoint *out, uint64_t *rays, Recorder *rec)
+{
     SubPath sp = subpath_start(beta);
     sp.specular_only = false;
     HeroMis hm = {-1, color_s(1.0f), false};
@@ -936,13 +959,18 @@ bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, cons
          * walk gathers it): what reaches x after a scattering, the photons that start in the
          * media carry (media_photon_walk). Gathered also when the path ends on this segment. */
         const bool go = media_next(s, ray, x_prev, false, true, &medium, &sp, &hm, rng, wl, &h, rays);
-        *le = color_add(*le, h.le);
+        /* (le NULL: photon's final gather, whose emission is NEE's or the caustic map's;
+         * photon refuses emitting media, so nothing is recorded for explain here) */
+        if (le) *le = color_add(*le, h.le);
         if (!go) return false;
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
-            *le = color_madd(*le, hero_beta(&hm, sp.beta), scene_env_radiance(s, ray.d, wl));
+            const Color env = scene_env_radiance(s, ray.d, wl);
+            if (le && rec) recorder_add(rec, CST_EXPLAIN_ESCAPE, hero_beta(&hm, sp.beta), env);
+            if (le) *le = color_madd(*le, hero_beta(&hm, sp.beta), env);
             return false;
         }
+        if (rec) record_visible_hit(rec, s, &h, medium, hero_beta(&hm, sp.beta), wl);
         out->p = h.p;
         out->wo = wo;
         out->medium = medium;
@@ -954,7 +982,11 @@ bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, cons
         }
         out->vol = false;
         out->sh = h.sh;
-        if (h.sh.emitter >= 0) *le = color_madd(*le, hero_beta(&hm, sp.beta), scene_emission(s, &h.sh, wo, wl));
+        if (h.sh.emitter >= 0 && le) {
+            const Color e = scene_emission(s, &h.sh, wo, wl);
+            if (rec) recorder_add(rec, CST_EXPLAIN_EMISSION, hero_beta(&hm, sp.beta), e);
+            *le = color_madd(*le, hero_beta(&hm, sp.beta), e);
+        }
         scene_bsdf(s, &h.sh, wl, &out->bsdf);
         /* photon_trace_to_diffuse's rule for BSDFs with delta and non-delta lobes. */
         float p_delta = bsdf_delta_probability(&out->bsdf, wo);
@@ -966,10 +998,12 @@ bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, cons
         Vec2 u = sampler_2d(rng);
         bool sampled = bsdf_sample(&out->bsdf, wo, uc, u, &bs);
         if (!bsdf_is_delta(&out->bsdf) && !bs.delta) {
+            if (rec) recorder_mixed(rec, 1.0f - p_delta, out->beta);
             out->beta = color_scale(out->beta, 1.0f / (1.0f - p_delta));
             return color_is_finite(out->beta);
         }
         if (!sampled) return false;
+        if (rec) recorder_scatter(rec, &bs, out->beta);
         sp.beta = color_mul(sp.beta, bs.weight);
         sp.scatter = color_mul(sp.scatter, bs.weight);
         if (color_is_black(sp.scatter)) return false;

@@ -112,5 +112,12 @@ typedef struct MediaVisiblePoint {
 } MediaVisiblePoint;
 bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
                          Color *le, MediaVisiblePoint *out, uint64_t *rays);
+/* The same, recorded for `caustic explain` (rec NULL: the render's, identical draws): each
+ * flight through a medium, each vertex (numbered on from rec->depth; a medium vertex's q the
+ * HG asymmetry g), delta scatters and the emission added. le may be NULL: the emission met is
+ * not wanted (photon.c's final gather), and not recorded. */
+struct Recorder;
+bool media_visible_point_rec(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
+                             Color *le, MediaVisiblePoint *out, uint64_t *rays, struct Recorder *rec);
 
 #endif

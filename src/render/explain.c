@@ -51,13 +51,7 @@ static CstStatus check(const Scene *scene, const CstRenderSettings *st, int x, i
     case CST_INTEGRATOR_DEFAULT: return CST_OK; /* path_li, volpath_li and path_sss_li are recorded */
     case CST_INTEGRATOR_WHITTED:
     case CST_INTEGRATOR_LIGHT: return CST_OK; /* (integrator_prepare refuses media for whitted) */
-    case CST_INTEGRATOR_PHOTON:
-        /* photon.c's walk through media and its spectral sets carry no recorder hooks (yet). */
-        if (scene->num_media | scene->num_medium_ifaces || st->color_mode == CST_COLOR_SPECTRAL)
-            return cst_fail(err, CST_ERR_UNSUPPORTED, "explain does not follow photon's paths through "
-                            "participating media or in spectral mode yet; expected an RGB render of a scene "
-                            "without media");
-        return CST_OK;
+    case CST_INTEGRATOR_PHOTON: return CST_OK; /* photon_li_surface and photon_li_media are recorded */
     case CST_INTEGRATOR_BDPT:
     case CST_INTEGRATOR_VCM: return CST_OK; /* subpath.c and subpath_media.c are recorded */
     case CST_INTEGRATOR_SPPM: return CST_OK; /* explain_sppm.c refuses what it cannot follow */
@@ -154,6 +148,47 @@ static Color replay_photon(const Recorder *r)
     return diffuse ? color_madd(L, beta, lx) : L;
 }
 
+/* photon_li_media summed again, addition by addition in its order: the emission (and
+ * environment) the camera walk met, each madd'ed with its throughput; NEE at a vertex in or
+ * beside media (beta times the light sample); the caustic and global maps' estimates at
+ * surface vertices, each times its vertex's throughput (the gather's included in y's); the
+ * volume map's at a medium vertex, beta sum kernel / sigma_s per lane (Jensen & Christensen
+ * 1998 eq. 11, photon.c's volume_estimate). */
+static Color replay_photon_media(const Recorder *r)
+{
+    Color L = color_s(0.0f), sum = color_s(0.0f);
+    for (int i = 0; i < r->n; i++) {
+        const CstExplainEvent *e = &r->ev[i];
+        if (e->kind == CST_EXPLAIN_PHOTON) {
+            sum = color_madd(sum, r->beta[i], r->value[i]);
+            continue;
+        }
+        if (!(e->flags & CST_EXPLAIN_ADDED)) continue;
+        if (e->kind == CST_EXPLAIN_EMISSION || e->kind == CST_EXPLAIN_ESCAPE) {
+            L = color_madd(L, r->beta[i], r->value[i]);
+        } else if (e->kind == CST_EXPLAIN_NEE) {
+            L = color_add(L, color_mul(r->beta[i], r->value[i]));
+        } else if (e->kind == CST_EXPLAIN_ESTIMATE && (e->flags & CST_EXPLAIN_VOLUME)) {
+            Color out = color_s(0.0f);
+            if (e->pmf > 0.0f) {
+                const float rad = e->distance;
+                const float inv_vol = 1.0f / (4.0f / 3.0f * CST_PI * rad * rad * rad);
+                for (int k = 0; k < COLOR_LANES; k++) {
+                    const float ss = r->value[i].c[k];
+                    out.c[k] = ss > 0.0f ? r->beta[i].c[k] * sum.c[k] * inv_vol / ss : 0.0f;
+                }
+            }
+            L = color_add(L, out);
+            sum = color_s(0.0f);
+        } else if (e->kind == CST_EXPLAIN_ESTIMATE) {
+            const float rad = e->distance;
+            L = color_madd(L, r->beta[i], color_scale(sum, 1.0f / (CST_PI * rad * rad)));
+            sum = color_s(0.0f);
+        }
+    }
+    return L;
+}
+
 static Color replay(const Integrator *it, const Recorder *r, int x, int y, int sample, float *fw)
 {
     /* L: the sample; H (spectral BDPT/VCM): what counts at the hero wavelength alone. */
@@ -163,7 +198,10 @@ static Color replay(const Integrator *it, const Recorder *r, int x, int y, int s
         int i = 0;
         L = replay_whitted(r, &i);
     }
-    if (it->kind == INTEGRATOR_PHOTON) L = replay_photon(r);
+    if (it->kind == INTEGRATOR_PHOTON) {
+        const Scene *sc = it->scene;
+        L = sc->num_media || sc->num_medium_ifaces ? replay_photon_media(r) : replay_photon(r);
+    }
     for (int i = 0; i <= r->n && it->kind != INTEGRATOR_WHITTED && it->kind != INTEGRATOR_PHOTON; i++) {
         const CstExplainEvent *e = i < r->n ? &r->ev[i] : NULL;
         const bool group = e && (e->kind == CST_EXPLAIN_CONNECT || e->kind == CST_EXPLAIN_MERGE) &&
@@ -358,6 +396,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
         goto done;
     }
     if ((status = integrator_prepare(it, scene, &st, film, &worker, &rays, NULL, NULL, err)) != CST_OK) goto done;
+    ex->photon_set = -1;
     if (it->kind == INTEGRATOR_PATH) it->path.rec = &rec;
     else if (it->kind == INTEGRATOR_WHITTED) it->whitted.rec = &rec;
     else if (it->kind == INTEGRATOR_PHOTON) it->photon.rec = &rec;
@@ -389,6 +428,14 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
         ex->film_value[c] = film->sum[3 * (size_t)pixel + (size_t)c];
         ex->camera_value[c] = it->kind == INTEGRATOR_BIDIR ? camera[c] : ex->film_value[c];
         ex->splat_value[c] = ex->film_value[c] - ex->camera_value[c];
+    }
+    if (it->spectral && rec.has_wl) {
+        for (int k = 0; k < 4 && k < COLOR_LANES; k++) ex->wavelengths[k] = rec.wl.lambda[k];
+    }
+    if (it->kind == INTEGRATOR_PHOTON && it->spectral && rec.has_wl) {
+        /* The set the sample picked (photon_maps_pick): the one whose wavelengths it took. */
+        for (int k = 0; k < it->photon.num_sets; k++)
+            if (memcmp(&it->photon.sets[k].wl, &rec.wl, sizeof rec.wl) == 0) ex->photon_set = k;
     }
     ex->exact = !rec.truncated;
     for (int c = 0; c < 3; c++) {

@@ -1,6 +1,5 @@
 # caustic explain (issue 30): the text and JSON of one pixel sample, with the sum checked
-# against the render's value (exit 0); bad arguments and integrators explain cannot follow
-# refused with exit 2 and a message.
+# against the render's value (exit 0); bad arguments refused with exit 2 and a message.
 # usage: bash explain_tests.sh <caustic> <source-dir>
 . "$(dirname "${BASH_SOURCE[0]}")/harness.sh"
 harness_init explain_tests "$@"
@@ -87,9 +86,16 @@ harness_run "$d" 30 explain --pixel 24,0 "${SMALL[@]}"
 expect "--pixel off the image" 2 'pixel 24,0: expected 0 <= x < 24'
 harness_run "$d" 30 explain --pixel 1,1 --sample x "${SMALL[@]}"
 expect "--sample not a number" 2 '--sample: expected an integer'
-# every integrator is explained; what one cannot follow is refused with a reason
-harness_run "$d" 30 explain --pixel 1,1 --integrator photon --spectral "${SMALL[@]}"
-expect "photon spectral refused" 2 "explain does not follow photon's paths through participating media or in spectral mode"
+# photon through fog (the pbrt scene is spectral): the flight to a medium vertex, its NEE, the
+# volume map's photons and estimate, the sample's wavelengths and photon set; sum exact
+HARNESS_EXPECT_STDOUT=1
+harness_run "$d" 60 explain "$SRC/tests/render/media/cornell-fog.pbrt" --pixel 20,20 --integrator photon \
+    --width 48 --height 48
+expect "photon in fog, spectral: volume estimate, sum equal bit for bit" 0 'photon set [0-9]+' \
+    '^wavelengths \([0-9.]+, ' 'distance in medium 0: scatters after' '^vertex 1: in medium 0 at' \
+    "volume map's estimate over those [0-9]+ photons" 'equal, bit for bit'
+HARNESS_EXPECT_STDOUT=0
+# bad pixels and samples are refused with a reason (every integrator is explained)
 harness_run "$d" 30 explain missing.json --pixel 1,1
 expect "missing scene" 2 'cannot open scene'
 harness_run "$d" 30 render --why-dark "${SMALL[@]}" -o x.png

@@ -38,6 +38,11 @@ static size_t num_pixels;
 static int subsurface_walk; /* subsurface_walk of the settings */
 static int medium_vertices, volume_merges, media_flights; /* BDPT/VCM through media: what was recorded */
 static int volume_merges_checked, media_emissions; /* of the volume merges, checked explicitly; media's Le */
+static int photon_count = 20000; /* photons of the settings: a small map is built for every explained sample */
+/* photon through media: volume estimates that gathered photons, and those photons; estimates
+ * of the surface maps at vertices reached through fog; explained spectral samples whose
+ * photon set was named. */
+static int volume_estimates, volume_photons, surface_estimates_in_fog, photon_sets_named;
 
 static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
 {
@@ -56,7 +61,7 @@ static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filte
      * test_whitted_light's signed zero, under zsobol). */
     st->sampler = CST_SAMPLER_INDEPENDENT;
     if (radius > 0.0f) st->photon_radius = radius;
-    st->photons = 20000; /* photon: a small map is built for every explained sample */
+    st->photons = photon_count;
     st->subsurface_walk = subsurface_walk;
 }
 
@@ -116,7 +121,14 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 fail_msg("%s pixel %d,%d sample %d: MIS weight differs from the explicit one by %.3g (rel), sum "
                          "off 1 by %.3g", cst_integrator_name(integ), x, y, sample, ex->mis_max_error,
                          ex->mis_max_sum_error);
+            if (integ == CST_INTEGRATOR_PHOTON && color == CST_COLOR_SPECTRAL) {
+                /* the sample's wavelengths and the photon set whose maps it read */
+                assert_true(ex->photon_set >= 0 && ex->photon_set < 16);
+                assert_true(ex->wavelengths[0] >= 360.0f && ex->wavelengths[3] <= 830.0f);
+                photon_sets_named++;
+            }
             bool in_medium = false; /* the camera vertex the events belong to is a medium vertex */
+            bool flown = false; /* photon: the camera walk has crossed a medium */
             for (int i = 0; i < ex->num_events; i++) {
                 const CstExplainEvent *e = &ex->events[i];
                 if (e->kind == CST_EXPLAIN_VERTEX) {
@@ -137,8 +149,15 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 if (e->mis_strategies > 0) assert_true(e->mis_strategies >= 1 && e->mis_explicit > 0.0f);
                 if (e->mis_weight != -1.0f) assert_true(e->mis_weight >= 0.0f && e->mis_weight <= 1.0f);
                 if (e->kind == CST_EXPLAIN_MERGE) merges++;
-                if (e->kind == CST_EXPLAIN_ESTIMATE && e->value[0] != 0.0f)
+                if (e->kind == CST_EXPLAIN_ESTIMATE && e->value[0] != 0.0f && !(e->flags & CST_EXPLAIN_VOLUME))
                     photons_gathered[(e->flags & CST_EXPLAIN_CAUSTIC) ? 0 : 1] += e->path;
+                if (e->kind == CST_EXPLAIN_ESTIMATE && (e->flags & CST_EXPLAIN_VOLUME) && e->path > 0) {
+                    volume_estimates++;
+                    volume_photons += e->path;
+                }
+                if (e->kind == CST_EXPLAIN_DISTANCE) flown = true;
+                if (e->kind == CST_EXPLAIN_ESTIMATE && !(e->flags & CST_EXPLAIN_VOLUME) && e->path > 0 && flown)
+                    surface_estimates_in_fog++;
                 if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "subsurface exit"))
                     sss_exits++;
                 if (e->kind == CST_EXPLAIN_MERGE && e->mis_strategies > 0) merges_checked++;
@@ -507,6 +526,48 @@ static void test_bidir_media(void **state)
     assert_true(mis_checked >= 100 && splats_checked >= 20);
 }
 
+/* Photon mapping through media (photon.c's photon_li_media) on the fog box, homogeneous fog
+ * and the random grid, RGB and spectral: the camera walk's flights and vertices (medium
+ * vertices, surfaces through fog), NEE at each, the volume map's estimate at a medium vertex
+ * (each photon's f_HG * power re-summed in the map's order, times the ball kernel, divided
+ * by sigma_s per lane, times beta), the caustic map's at a surface and the final gather's
+ * vertex (global map or, in fog, NEE and the volume map) give the camera sample and the
+ * film's value bit for bit; and spectral photon on the Cornell box (no media): the
+ * sample's wavelengths and photon set named, the sum converted at them. */
+static void test_photon_in_media_spectral(void **state)
+{
+    (void)state;
+    static const int PIX[][2] = {{12, 10}, {10, 12}, {8, 9}, {14, 13}, {3, 17}};
+    pixels = PIX;
+    num_pixels = sizeof PIX / sizeof PIX[0];
+    medium_vertices = media_flights = 0;
+    volume_estimates = volume_photons = surface_estimates_in_fog = photon_sets_named = 0;
+    photons_gathered[0] = photons_gathered[1] = 0;
+    photon_count = 3000; /* volume and surface maps of ~2000 and ~5000 photons: enough to gather */
+    radius = 0.2f;       /* the box is 2 units wide */
+    for (int kind = 0; kind < 2; kind++) { /* homogeneous, grid */
+        CstScene *s = fog_box(kind > 0, false);
+        assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+        if (kind == 0) assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_TENT, CST_COLOR_SPECTRAL) > 0);
+        cst_scene_destroy(s);
+    }
+    const int named_in_fog = photon_sets_named;
+    radius = 0.0f;
+    pixels = NULL;
+    CstScene *s = NULL;
+    CstError err;
+    assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+    cst_scene_destroy(s);
+    photon_count = 20000;
+    print_message("photon in media: %d medium vertices, %d flights, %d volume estimates over %d photons, %d surface "
+                  "estimates through fog; %d spectral samples named their photon set\n", medium_vertices,
+                  media_flights, volume_estimates, volume_photons, surface_estimates_in_fog, photon_sets_named);
+    assert_true(medium_vertices > 0 && media_flights > 0);
+    assert_true(volume_estimates >= 5 && volume_photons >= 20 && surface_estimates_in_fog > 0);
+    assert_true(named_in_fog == 10 && photon_sets_named == 20);
+}
+
 /* Subsurface materials under --subsurface walk (sss_walk.h: their media walked by
  * subpath_media.c): BDPT and VCM on the subsurface sphere. */
 static void test_bidir_subsurface(void **state)
@@ -570,11 +631,8 @@ static void test_refused(void **state)
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
     CstRenderSettings st;
     CstExplain *ex = NULL;
-    /* Every integrator is explained; what one cannot follow is refused with its reason. */
-    settings(&st, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_SPECTRAL);
-    assert_int_equal(cst_explain(s, &st, 1, 1, 0, &ex, &err), CST_ERR_UNSUPPORTED);
-    assert_null(ex);
-    assert_non_null(strstr(err.msg, "explain does not follow photon's paths"));
+    /* Every integrator is explained (photon through media and in spectral mode too:
+     * test_photon_in_media_spectral); bad pixels and samples are refused. */
     settings(&st, CST_INTEGRATOR_PATH, CST_FILTER_BOX, CST_COLOR_RGB);
     assert_int_equal(cst_explain(s, &st, W, 0, 0, &ex, &err), CST_ERR_INVALID_ARG);
     assert_int_equal(cst_explain(s, &st, 0, -1, 0, &ex, &err), CST_ERR_INVALID_ARG);
@@ -598,6 +656,7 @@ int main(void)
         cmocka_unit_test(test_bidir_subsurface),
         cmocka_unit_test(test_bidir_moving_camera),
         cmocka_unit_test(test_photon),
+        cmocka_unit_test(test_photon_in_media_spectral),
         cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),
     };
