@@ -314,8 +314,8 @@ static bool explain_splats(const Integrator *it, Recorder *r, int x, int y, cons
     return true;
 }
 
-CstStatus explain_begin(ExplainRun *xr, const Scene *scene, const CstRenderSettings *st, int x, int y, int cap,
-                        CstError *err)
+CstStatus explain_begin(ExplainRun *xr, const Scene *scene, const CstRenderSettings *st, int x, int y, int sample,
+                        int cap, CstError *err)
 {
     memset(xr, 0, sizeof *xr);
     xr->ex = calloc(1, sizeof *xr->ex);
@@ -329,7 +329,14 @@ CstStatus explain_begin(ExplainRun *xr, const Scene *scene, const CstRenderSetti
     xr->rec.py = y;
     if (!xr->ex || !xr->film || !xr->it || !xr->rec.ev || !xr->rec.beta || !xr->rec.value)
         return cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st->width, st->height);
-    return integrator_prepare(xr->it, scene, st, xr->film, &xr->worker, &xr->rays, NULL, NULL, err);
+    CstStatus status = integrator_prepare(xr->it, scene, st, xr->film, &xr->worker, &xr->rays, NULL, NULL, err);
+    if (status != CST_OK) return status;
+    xr->ex->x = x;
+    xr->ex->y = y;
+    xr->ex->sample = sample;
+    xr->ex->integrator = st->integrator;
+    xr->ex->spectral = xr->it->spectral;
+    return CST_OK;
 }
 
 CstStatus explain_finish(ExplainRun *xr, CstStatus status, CstExplain **out)
@@ -377,7 +384,7 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     st.progress = NULL;
 
     ExplainRun xr;
-    if ((status = explain_begin(&xr, scene, &st, x, y, EXPLAIN_EVENTS, err)) != CST_OK)
+    if ((status = explain_begin(&xr, scene, &st, x, y, sample, EXPLAIN_EVENTS, err)) != CST_OK)
         return explain_finish(&xr, status, out);
     CstExplain *ex = xr.ex;
     Film *film = xr.film;
@@ -392,22 +399,12 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     const int pixel = y * st.width + x;
     double camera[3] = {0.0, 0.0, 0.0};
     if (mlt) {
-        ex->x = x;
-        ex->y = y;
-        ex->sample = sample;
-        ex->integrator = st.integrator;
-        ex->spectral = it->spectral;
         if ((status = explain_mlt(it, film, rec, x, y, sample, ex, err)) != CST_OK) goto done;
         ex->truncated = rec->truncated;
         goto done;
     }
     if ((status = run(it, rec, pixel, sample, camera, err)) != CST_OK) goto done;
 
-    ex->x = x;
-    ex->y = y;
-    ex->sample = sample;
-    ex->integrator = st.integrator;
-    ex->spectral = it->spectral;
     ex->truncated = rec->truncated;
     Color sum = replay(it, rec, x, y, sample, &ex->filter_weight);
     for (int c = 0; c < 3; c++) {

@@ -19,11 +19,11 @@ typedef struct ExplainRun {
 } ExplainRun;
 
 /* Makes xr's explanation, film (st's size), integrator and a recorder of cap events for
- * pixel (x, y), then prepares the integrator for st. On an error (CST_ERR_OOM, or
- * integrator_prepare's) returns it with err set; explain_finish releases whatever was made,
- * in every case. */
-CstStatus explain_begin(ExplainRun *xr, const Scene *scene, const CstRenderSettings *st, int x, int y, int cap,
-                        CstError *err);
+ * pixel (x, y), prepares the integrator for st and fills the explanation's x, y, sample,
+ * integrator and spectral. On an error (CST_ERR_OOM, or integrator_prepare's) returns it
+ * with err set; explain_finish releases whatever was made, in every case. */
+CstStatus explain_begin(ExplainRun *xr, const Scene *scene, const CstRenderSettings *st, int x, int y, int sample,
+                        int cap, CstError *err);
 
 /* The end of every explanation: when status is CST_OK, hands xr's explanation with the
  * recorded events to *out (the caller owns it: cst_explain_destroy); then frees the

@@ -153,7 +153,7 @@ CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *settings, in
     st.photon_split = NULL;
 
     ExplainRun xr;
-    CstStatus status = explain_begin(&xr, scene, &st, x, y, EXPLAIN_SPPM_EVENTS, err);
+    CstStatus status = explain_begin(&xr, scene, &st, x, y, iteration, EXPLAIN_SPPM_EVENTS, err);
     if (status != CST_OK) return explain_finish(&xr, status, out);
     CstExplain *ex = xr.ex;
     Film *film = xr.film;
@@ -176,11 +176,6 @@ CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *settings, in
     integrator_finish(it, iteration + 1);
     sppm_trace(it->sppm, NULL);
 
-    ex->x = x;
-    ex->y = y;
-    ex->sample = iteration;
-    ex->integrator = st.integrator;
-    ex->spectral = it->spectral;
     ex->truncated = rec->truncated;
     ex->filter_weight = tr.fw;
     replay(it, rec, &tr, iteration, ex);
