@@ -12,6 +12,7 @@
 #include "film/filter.h"
 #include "integrators/integrator.h"
 #include "integrators/recorder.h"
+#include "render/explain.h"
 #include "render/explain_mis.h"
 #include "render/explain_sppm.h"
 #include "render/explain_mlt.h"
@@ -351,6 +352,50 @@ static bool explain_splats(const Integrator *it, Recorder *r, int x, int y, cons
     return true;
 }
 
+CstStatus explain_begin(ExplainRun *xr, const Scene *scene, const CstRenderSettings *st, int x, int y, int sample,
+                        int cap, CstError *err)
+{
+    memset(xr, 0, sizeof *xr);
+    xr->ex = calloc(1, sizeof *xr->ex);
+    xr->film = film_create(st->width, st->height);
+    xr->it = calloc(1, sizeof *xr->it);
+    xr->rec.cap = cap;
+    xr->rec.ev = calloc((size_t)cap, sizeof *xr->rec.ev);
+    xr->rec.beta = calloc((size_t)cap, sizeof *xr->rec.beta);
+    xr->rec.value = calloc((size_t)cap, sizeof *xr->rec.value);
+    xr->rec.px = x;
+    xr->rec.py = y;
+    if (!xr->ex || !xr->film || !xr->it || !xr->rec.ev || !xr->rec.beta || !xr->rec.value)
+        return cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st->width, st->height);
+    CstStatus status = integrator_prepare(xr->it, scene, st, xr->film, &xr->worker, &xr->rays, NULL, NULL, err);
+    if (status != CST_OK) return status;
+    xr->ex->x = x;
+    xr->ex->y = y;
+    xr->ex->sample = sample;
+    xr->ex->integrator = st->integrator;
+    xr->ex->spectral = xr->it->spectral;
+    return CST_OK;
+}
+
+CstStatus explain_finish(ExplainRun *xr, CstStatus status, CstExplain **out)
+{
+    if (status == CST_OK) {
+        xr->ex->num_events = xr->rec.n;
+        xr->ex->events = xr->rec.ev;
+        xr->rec.ev = NULL;
+        *out = xr->ex;
+        xr->ex = NULL;
+    }
+    if (xr->it) integrator_destroy(xr->it);
+    free(xr->it);
+    film_destroy(xr->film);
+    free(xr->rec.ev);
+    free(xr->rec.beta);
+    free(xr->rec.value);
+    cst_explain_destroy(xr->ex);
+    return status;
+}
+
 CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, int x, int y, int sample,
                       CstExplain **out, CstError *err)
 {
@@ -376,68 +421,46 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     st.pass_done = NULL;
     st.progress = NULL;
 
-    CstExplain *ex = calloc(1, sizeof *ex);
-    Film *film = film_create(st.width, st.height);
-    Integrator *it = calloc(1, sizeof *it);
-    IntegratorWorker worker;
-    memset(&worker, 0, sizeof worker);
-    Recorder rec;
-    memset(&rec, 0, sizeof rec);
-    rec.cap = EXPLAIN_EVENTS;
-    rec.ev = calloc(EXPLAIN_EVENTS, sizeof *rec.ev);
-    rec.beta = calloc(EXPLAIN_EVENTS, sizeof *rec.beta);
-    rec.value = calloc(EXPLAIN_EVENTS, sizeof *rec.value);
-    rec.px = x;
-    rec.py = y;
-    rec.paths.light_path = y * st.width + x; /* BDPT: the light subpath of the pixel's index */
-    uint64_t rays = 0;
-    if (!ex || !film || !it || !rec.ev || !rec.beta || !rec.value) {
-        status = cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st.width, st.height);
-        goto done;
-    }
-    if ((status = integrator_prepare(it, scene, &st, film, &worker, &rays, NULL, NULL, err)) != CST_OK) goto done;
+    ExplainRun xr;
+    if ((status = explain_begin(&xr, scene, &st, x, y, sample, EXPLAIN_EVENTS, err)) != CST_OK)
+        return explain_finish(&xr, status, out);
+    CstExplain *ex = xr.ex;
+    Film *film = xr.film;
+    Integrator *it = xr.it;
+    Recorder *rec = &xr.rec;
+    rec->paths.light_path = y * st.width + x; /* BDPT: the light subpath of the pixel's index */
     ex->photon_set = -1;
-    if (it->kind == INTEGRATOR_PATH) it->path.rec = &rec;
-    else if (it->kind == INTEGRATOR_WHITTED) it->whitted.rec = &rec;
-    else if (it->kind == INTEGRATOR_PHOTON) it->photon.rec = &rec;
-    else if (it->kind == INTEGRATOR_LIGHT) rec.radius = 0.0f;
-    else rec.radius = filter_radius(it->light.vcm_params.frame.filter);
+    if (it->kind == INTEGRATOR_PATH) it->path.rec = rec;
+    else if (it->kind == INTEGRATOR_WHITTED) it->whitted.rec = rec;
+    else if (it->kind == INTEGRATOR_PHOTON) it->photon.rec = rec;
+    else if (it->kind == INTEGRATOR_LIGHT) rec->radius = 0.0f;
+    else rec->radius = filter_radius(it->light.vcm_params.frame.filter);
     const int pixel = y * st.width + x;
     double camera[3] = {0.0, 0.0, 0.0};
     if (mlt) {
-        ex->x = x;
-        ex->y = y;
-        ex->sample = sample;
-        ex->integrator = st.integrator;
-        ex->spectral = it->spectral;
-        if ((status = explain_mlt(it, film, &rec, x, y, sample, ex, err)) != CST_OK) goto done;
-        ex->truncated = rec.truncated;
-        goto events;
+        if ((status = explain_mlt(it, film, rec, x, y, sample, ex, err)) != CST_OK) goto done;
+        ex->truncated = rec->truncated;
+        goto done;
     }
-    if ((status = run(it, &rec, pixel, sample, camera, err)) != CST_OK) goto done;
+    if ((status = run(it, rec, pixel, sample, camera, err)) != CST_OK) goto done;
 
-    ex->x = x;
-    ex->y = y;
-    ex->sample = sample;
-    ex->integrator = st.integrator;
-    ex->spectral = it->spectral;
-    ex->truncated = rec.truncated;
-    Color sum = replay(it, &rec, x, y, sample, &ex->filter_weight);
+    ex->truncated = rec->truncated;
+    Color sum = replay(it, rec, x, y, sample, &ex->filter_weight);
     for (int c = 0; c < 3; c++) {
         ex->sum[c] = sum.c[c];
         ex->film_value[c] = film->sum[3 * (size_t)pixel + (size_t)c];
         ex->camera_value[c] = it->kind == INTEGRATOR_BIDIR ? camera[c] : ex->film_value[c];
         ex->splat_value[c] = ex->film_value[c] - ex->camera_value[c];
     }
-    if (it->spectral && rec.has_wl) {
-        for (int k = 0; k < 4 && k < COLOR_LANES; k++) ex->wavelengths[k] = rec.wl.lambda[k];
+    if (it->spectral && rec->has_wl) {
+        for (int k = 0; k < 4 && k < COLOR_LANES; k++) ex->wavelengths[k] = rec->wl.lambda[k];
     }
-    if (it->kind == INTEGRATOR_PHOTON && it->spectral && rec.has_wl) {
+    if (it->kind == INTEGRATOR_PHOTON && it->spectral && rec->has_wl) {
         /* The set the sample picked (photon_maps_pick): the one whose wavelengths it took. */
         for (int k = 0; k < it->photon.num_sets; k++)
-            if (memcmp(&it->photon.sets[k].wl, &rec.wl, sizeof rec.wl) == 0) ex->photon_set = k;
+            if (memcmp(&it->photon.sets[k].wl, &rec->wl, sizeof rec->wl) == 0) ex->photon_set = k;
     }
-    ex->exact = !rec.truncated;
+    ex->exact = !rec->truncated;
     for (int c = 0; c < 3; c++) {
         /* Added to a zeroed sum, as the film adds it: a -0 contribution leaves +0 there. */
         double s = 0.0 + (double)ex->sum[c];
@@ -446,12 +469,12 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     if (it->kind == INTEGRATOR_LIGHT) {
         /* No camera step: the film's value is the splats', summed again here. */
         double light[3];
-        if (!explain_light(it, &rec, x, y, sample, light)) {
+        if (!explain_light(it, rec, x, y, sample, light)) {
             status = cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st.width, st.height);
             goto done;
         }
-        ex->truncated = rec.truncated;
-        ex->exact = !rec.truncated;
+        ex->truncated = rec->truncated;
+        ex->exact = !rec->truncated;
         ex->filter_weight = 1.0f;
         for (int c = 0; c < 3; c++) {
             ex->sum[c] = (float)light[c];
@@ -462,25 +485,12 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     }
     if (it->kind == INTEGRATOR_BIDIR) {
         double film_sum[3];
-        if (!explain_splats(it, &rec, x, y, ex->camera_value, film_sum) || !explain_mis_check(it, sample, &rec, ex)) {
+        if (!explain_splats(it, rec, x, y, ex->camera_value, film_sum) || !explain_mis_check(it, sample, rec, ex)) {
             status = cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st.width, st.height);
             goto done;
         }
         ex->splats_exact = memcmp(film_sum, ex->film_value, sizeof film_sum) == 0;
     }
-events:
-    ex->num_events = rec.n;
-    ex->events = rec.ev;
-    rec.ev = NULL;
-    *out = ex;
-    ex = NULL;
 done:
-    if (it) integrator_destroy(it);
-    free(it);
-    film_destroy(film);
-    free(rec.ev);
-    free(rec.beta);
-    free(rec.value);
-    cst_explain_destroy(ex);
-    return status;
+    return explain_finish(&xr, status, out);
 }

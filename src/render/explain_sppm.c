@@ -15,6 +15,7 @@
 #include "integrators/integrator.h"
 #include "integrators/recorder.h"
 #include "integrators/sppm.h"
+#include "render/explain.h"
 
 /* Events kept: the chain (at most PHOTON_MAX_SPECULAR vertices) and the photons of one
  * disc; a caustic's disc can hold more, then the record is truncated (and not checked). */
@@ -151,30 +152,17 @@ CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *settings, in
     st.progress = NULL;
     st.photon_split = NULL;
 
-    CstStatus status = CST_OK;
-    CstExplain *ex = calloc(1, sizeof *ex);
-    Film *film = film_create(st.width, st.height);
-    Integrator *it = calloc(1, sizeof *it);
-    IntegratorWorker worker;
-    memset(&worker, 0, sizeof worker);
-    Recorder rec;
-    memset(&rec, 0, sizeof rec);
-    rec.cap = EXPLAIN_SPPM_EVENTS;
-    rec.ev = calloc(EXPLAIN_SPPM_EVENTS, sizeof *rec.ev);
-    rec.beta = calloc(EXPLAIN_SPPM_EVENTS, sizeof *rec.beta);
-    rec.value = calloc(EXPLAIN_SPPM_EVENTS, sizeof *rec.value);
-    rec.px = x;
-    rec.py = y;
-    uint64_t rays = 0;
-    if (!ex || !film || !it || !rec.ev || !rec.beta || !rec.value) {
-        status = cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", st.width, st.height);
-        goto done;
-    }
-    if ((status = integrator_prepare(it, scene, &st, film, &worker, &rays, NULL, NULL, err)) != CST_OK) goto done;
+    ExplainRun xr;
+    CstStatus status = explain_begin(&xr, scene, &st, x, y, iteration, EXPLAIN_SPPM_EVENTS, err);
+    if (status != CST_OK) return explain_finish(&xr, status, out);
+    CstExplain *ex = xr.ex;
+    Film *film = xr.film;
+    Integrator *it = xr.it;
+    Recorder *rec = &xr.rec;
     const int pixel = y * st.width + x;
     SppmTrace tr;
     memset(&tr, 0, sizeof tr);
-    tr.rec = &rec;
+    tr.rec = rec;
     tr.pixel = pixel;
     tr.iteration = iteration;
     sppm_trace(it->sppm, &tr);
@@ -188,16 +176,11 @@ CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *settings, in
     integrator_finish(it, iteration + 1);
     sppm_trace(it->sppm, NULL);
 
-    ex->x = x;
-    ex->y = y;
-    ex->sample = iteration;
-    ex->integrator = st.integrator;
-    ex->spectral = it->spectral;
-    ex->truncated = rec.truncated;
+    ex->truncated = rec->truncated;
     ex->filter_weight = tr.fw;
-    replay(it, &rec, &tr, iteration, ex);
-    shares(it, &rec, &tr, iteration, ex);
-    ex->exact = !rec.truncated && ex->sppm.state_exact;
+    replay(it, rec, &tr, iteration, ex);
+    shares(it, rec, &tr, iteration, ex);
+    ex->exact = !rec->truncated && ex->sppm.state_exact;
     for (int c = 0; c < 3; c++) {
         ex->sum[c] = (float)ex->sppm.value[c];
         ex->camera_value[c] = ex->sppm.value[c];
@@ -206,18 +189,6 @@ CstStatus explain_sppm(const Scene *scene, const CstRenderSettings *settings, in
         const double v = 0.0 + ex->sppm.value[c];
         if (memcmp(&v, &ex->film_value[c], sizeof v) != 0) ex->exact = 0;
     }
-    ex->num_events = rec.n;
-    ex->events = rec.ev;
-    rec.ev = NULL;
-    *out = ex;
-    ex = NULL;
 done:
-    if (it) integrator_destroy(it);
-    free(it);
-    film_destroy(film);
-    free(rec.ev);
-    free(rec.beta);
-    free(rec.value);
-    cst_explain_destroy(ex);
-    return status;
+    return explain_finish(&xr, status, out);
 }

@@ -19,7 +19,7 @@
 
 #include "caustic/caustic.h"
 #include "core/rng.h"
-#include "render/box_scene.h"
+#include "render/media_scenes.h"
 
 enum { W = 24, H = 20 };
 
@@ -436,61 +436,6 @@ static void test_strata(void **state)
     cst_scene_destroy(s);
 }
 
-/* A grid medium of random densities (uniform in [0, 3) on 8^3 samples over the box [lo, hi],
- * as test_media_bidir.c's). */
-static int add_grid(Scene *s, Vec3 lo, Vec3 hi, Color le)
-{
-    CstError err;
-    enum { N = 8 };
-    static float density[N * N * N];
-    Medium m = {.type = MEDIUM_GRID, .g = 0.5f};
-    HeteroMedium *hm = &m.u.het;
-    hm->sigma_a = color_rgb(0.3f, 0.35f, 0.4f);
-    hm->sigma_s = color_rgb(1.0f, 0.7f, 0.35f);
-    hm->le = le;
-    hm->le_scale_1 = 1.0f;
-    hm->medium_from_world = transform_identity();
-    hm->p0 = lo;
-    hm->p1 = hi;
-    hm->n[0] = hm->n[1] = hm->n[2] = N;
-    hm->density = density;
-    Pcg32 r;
-    pcg32_seed_sample(&r, 77, 0, 0);
-    for (int i = 0; i < N * N * N; i++) density[i] = 3.0f * pcg32_float(&r);
-    int med;
-    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-    return med;
-}
-
-/* test_media_bidir.c's fog box, small: the open box (box_scene.h), a boundary ball of fog
- * (homogeneous, or the random grid, emitting with emissive) and a diffuse sphere half
- * inside it. */
-static CstScene *fog_box(bool grid, bool emissive)
-{
-    CstError err;
-    Scene *s = scene_create();
-    int wall, lightm;
-    open_box_add(s, &wall, &lightm);
-    int med;
-    if (grid) {
-        med = add_grid(s, v3(-0.8f, -0.9f, -0.6f), v3(0.4f, 0.3f, 0.6f),
-                       emissive ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f));
-    } else {
-        Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.5f};
-        m.u.homog.sigma_a = color_s(0.2f);
-        m.u.homog.sigma_s = color_rgb(1.5f, 1.0f, 0.5f);
-        assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-    }
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0.45f, -0.6f, 0.2f), 0.35f, wall, NULL, &err), CST_OK);
-    CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
-}
-
 /* BDPT and VCM through media (subpath_media.c): the fog box with homogeneous fog, with a
  * random grid (delta tracking on the walks, ratio tracking on the connections, majorant-
  * based densities) and with that grid emitting (gathered by the camera walk, weight 1), in
@@ -509,7 +454,7 @@ static void test_bidir_media(void **state)
     merges = merges_checked = splats_checked = mis_checked = 0;
     mis_error = 0.0;
     for (int kind = 0; kind < 3; kind++) { /* homogeneous, grid, emitting grid */
-        CstScene *s = fog_box(kind > 0, kind == 2);
+        CstScene *s = fog_box(kind == 0 ? FOG_HOMOGENEOUS : kind == 1 ? FOG_GRID : FOG_GRID_EMISSIVE);
         assert_true(explain_all(s, CST_INTEGRATOR_BDPT, CST_FILTER_BOX, kind == 2 ? CST_COLOR_SPECTRAL : CST_COLOR_RGB) > 0);
         radius = 0.15f; /* the box is 2 units wide */
         assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_TENT, kind == 1 ? CST_COLOR_SPECTRAL : CST_COLOR_RGB) > 0);
@@ -546,7 +491,7 @@ static void test_photon_in_media_spectral(void **state)
     photon_count = 3000; /* volume and surface maps of ~2000 and ~5000 photons: enough to gather */
     radius = 0.2f;       /* the box is 2 units wide */
     for (int kind = 0; kind < 2; kind++) { /* homogeneous, grid */
-        CstScene *s = fog_box(kind > 0, false);
+        CstScene *s = fog_box(kind > 0 ? FOG_GRID : FOG_HOMOGENEOUS);
         assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
         if (kind == 0) assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_TENT, CST_COLOR_SPECTRAL) > 0);
         cst_scene_destroy(s);

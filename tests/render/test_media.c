@@ -12,10 +12,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "render/box_scene.h"
-#include "render/regions.h"
-#include "render/render_util.h"
-#include "scene/scene.h"
+#include "render/media_scenes.h"
 
 static CstColorMode g_color_mode = CST_COLOR_RGB;
 
@@ -25,43 +22,6 @@ static CstColorMode g_color_mode = CST_COLOR_RGB;
 #define PBRT_FOG_G 0.0208463
 #define PBRT_FOG_B 0.00466914
 
-static const CstIntegrator VARIANTS[] = {CST_INTEGRATOR_PATH, CST_INTEGRATOR_PATH_BSDF, CST_INTEGRATOR_PATH_NEE};
-
-/* Every block's mean within Z_LIMIT standard errors of expect[c] (plus float rounding of
- * zero-variance estimates). */
-static void check_value(const CstFilm *f, const double expect[3], const char *what)
-{
-    Regions r = regions(cst_film_width(f), cst_film_width(f) / 4);
-    film_regions(f, &r);
-    for (int i = 0; i < r.count; i++)
-        for (int c = 0; c < 3; c++) {
-            double dev = fabs(r.stat[i].mean[c] - expect[c]);
-            if (!(dev <= Z_LIMIT * r.stat[i].se[c] + 1e-5 * expect[c]))
-                fail_msg("%s: block %d channel %d: %.6f, expected %.6f (z = %.2f)", what, i - 1, c,
-                         r.stat[i].mean[c], expect[c], (r.stat[i].mean[c] - expect[c]) / r.stat[i].se[c]);
-        }
-    print_message("%s: whole image %.5f %.5f %.5f (se %.1e), expected %.5f %.5f %.5f\n", what, r.stat[0].mean[0],
-                  r.stat[0].mean[1], r.stat[0].mean[2], r.stat[0].se[0], expect[0], expect[1], expect[2]);
-}
-
-static CstFilm *render(const Scene *s, CstIntegrator integ, int spp, uint64_t seed)
-{
-    CstRenderSettings st = {.width = 32, .height = 32, .color_mode = g_color_mode};
-    return render_film(s, &st, integ, spp, seed);
-}
-
-static int add_medium(Scene *s, Color sigma_a, Color sigma_s, Color le, float g)
-{
-    CstError err;
-    Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = g};
-    m.u.homog.sigma_a = sigma_a;
-    m.u.homog.sigma_s = sigma_s;
-    m.u.homog.le = le;
-    int id;
-    assert_int_equal(scene_add_medium(s, &m, &id, &err), CST_OK);
-    return id;
-}
-
 /* A black enclosure (radius 10) emitting L two-sided, and in it a ball of medium (radius
  * 2, a boundary sphere) with the given coefficients; camera outside the ball, or (in_medium)
  * the medium fills the enclosure, whose sphere is then its non-boundary interface, and the
@@ -69,39 +29,14 @@ static int add_medium(Scene *s, Color sigma_a, Color sigma_s, Color le, float g)
  * emits L where it absorbs. */
 static Scene *furnace(Color sigma_a, Color sigma_s, Color le, float g, bool in_medium, const Color L)
 {
-    CstError err;
     Scene *s = scene_create();
-    int black;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
-    int med = add_medium(s, sigma_a, sigma_s, le, g);
-    Emission em = {L, 1, 0};
-    if (in_medium) {
-        assert_int_equal(scene_set_medium_interface(s, med, -1, 0, &err), CST_OK);
-        assert_int_equal(scene_set_camera_medium(s, med, &err), CST_OK);
-    }
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 10.0f, black, &em, &err), CST_OK);
-    if (!in_medium) {
-        assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-        assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 2.0f, black, NULL, &err), CST_OK);
-    }
-    CameraDesc cam = {{0, 0.5f, 5}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 5.0f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
+    const int med = media_add_homogeneous(s, sigma_a, sigma_s, le, g);
+    return media_furnace(s, med, 10.0f, in_medium ? 0.0f : 2.0f, 5.0f, L);
 }
 
-static void run_furnace(Scene *s, const Color L, int spp, uint64_t seed, int variants, const char *what)
+static void run_furnace(Scene *s, Color L, int spp, uint64_t seed, int variants, const char *what)
 {
-    const double expect[3] = {(double)L.c[0], (double)L.c[1], (double)L.c[2]};
-    for (int i = 0; i < variants; i++) {
-        char name[128];
-        snprintf(name, sizeof name, "%s, %s", what, cst_integrator_name(VARIANTS[i]));
-        CstFilm *f = render(s, VARIANTS[i], spp, seed + (uint64_t)i);
-        check_value(f, expect, name);
-        cst_film_destroy(f);
-    }
-    scene_destroy(s);
+    media_path_furnace(s, L, spp, seed, variants, g_color_mode, what);
 }
 
 /* Scattering only (albedo 1, sigma_s different per channel, forward HG): radiance L. */
@@ -135,30 +70,13 @@ static void test_furnace_camera_medium(void **state)
     run_furnace(s, L, 64, 30, 2, "camera in medium");
 }
 
-/* An open box (diffuse walls) lit by a small quad light, a ball of fog (forward HG,
- * absorbing a little) and a diffuse sphere half inside it: MIS, NEE only and phase/BSDF
- * sampling only estimate the same image. */
-static Scene *fog_box(void)
-{
-    CstError err;
-    Scene *s = scene_create();
-    int wall, lightm;
-    open_box_add(s, &wall, &lightm);
-    int med = add_medium(s, color_s(0.2f), color_rgb(1.5f, 1.0f, 0.5f), color_s(0.0f), 0.5f);
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0.45f, -0.6f, 0.2f), 0.35f, wall, NULL, &err), CST_OK);
-    CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
-}
-
+/* The fog box (media_scenes.h: an open box lit by a small quad light, a ball of fog and a
+ * diffuse sphere half inside it): MIS, NEE only and phase/BSDF sampling only estimate the
+ * same image. */
 static void test_fog_variants_agree(void **state)
 {
     (void)state;
-    Scene *s = fog_box();
+    Scene *s = fog_box(FOG_HOMOGENEOUS);
     CstRenderSettings st = {.width = 32, .height = 32, .color_mode = g_color_mode};
     Regions mis = regions(32, 8), nee = regions(32, 8), bsdf = regions(32, 8);
     camera_regions(s, &st, CST_INTEGRATOR_PATH, 256, 40, &mis);
@@ -195,7 +113,7 @@ static void test_pbrt_fog_cornell(void **state)
 static void test_other_integrators_refuse(void **state)
 {
     (void)state;
-    Scene *s = fog_box();
+    Scene *s = fog_box(FOG_HOMOGENEOUS);
     const CstIntegrator others[] = {CST_INTEGRATOR_WHITTED};
     for (size_t i = 0; i < sizeof others / sizeof *others; i++) {
         CstRenderSettings st;

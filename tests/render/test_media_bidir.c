@@ -22,51 +22,19 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "core/rng.h"
-#include "render/box_scene.h"
-#include "render/regions.h"
-#include "render/render_util.h"
-#include "scene/scene.h"
+#include "render/media_scenes.h"
 
 static CstColorMode g_color_mode = CST_COLOR_RGB;
 static double g_radius; /* vcm's merging radius in check_furnace (0: the default) */
 
-static int add_medium(Scene *s, Color sigma_a, Color sigma_s, float g)
-{
-    CstError err;
-    Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = g};
-    m.u.homog.sigma_a = sigma_a;
-    m.u.homog.sigma_s = sigma_s;
-    int id;
-    assert_int_equal(scene_add_medium(s, &m, &id, &err), CST_OK);
-    return id;
-}
-
-/* test_media.c's furnace: a black two-sided emitting enclosure (radius 4, radiance L) and
- * a boundary ball of scattering-only medium (radius 2); or (in_medium) the medium fills the
- * enclosure and the camera sits in it. L everywhere. */
+/* test_media.c's furnace (media_scenes.h) at radius 4: a boundary ball of scattering-only
+ * medium (radius 2); or (in_medium) the medium fills the enclosure and the camera sits in
+ * it. L everywhere. */
 static Scene *furnace(Color sigma_s, float g, bool in_medium, Color L)
 {
-    CstError err;
     Scene *s = scene_create();
-    int black;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
-    int med = add_medium(s, color_s(0.0f), sigma_s, g);
-    Emission em = {L, 1, 0};
-    if (in_medium) {
-        assert_int_equal(scene_set_medium_interface(s, med, -1, 0, &err), CST_OK);
-        assert_int_equal(scene_set_camera_medium(s, med, &err), CST_OK);
-    }
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
-    if (!in_medium) {
-        assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-        assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 2.0f, black, NULL, &err), CST_OK);
-    }
-    CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
+    const int med = media_add_homogeneous(s, color_s(0.0f), sigma_s, color_s(0.0f), g);
+    return media_furnace(s, med, 4.0f, in_medium ? 0.0f : 2.0f, 3.5f, L);
 }
 
 static void check_furnace(Scene *s, CstIntegrator integ, int renders, int spp, uint64_t seed, Color L,
@@ -74,23 +42,10 @@ static void check_furnace(Scene *s, CstIntegrator integ, int renders, int spp, u
 {
     CstRenderSettings st;
     cst_render_settings_init(&st);
-    st.width = st.height = 16;
     st.spp = spp;
     st.color_mode = g_color_mode;
     st.photon_radius = g_radius;
-    Regions r = regions(16, 8);
-    split_regions(s, &st, integ, renders, seed, &r);
-    for (int i = 0; i < r.count; i++)
-        for (int c = 0; c < 3; c++) {
-            double dev = fabs(r.stat[i].mean[c] - (double)L.c[c]);
-            if (!(dev <= Z_LIMIT * r.stat[i].se[c] + 1e-5 * (double)L.c[c]))
-                fail_msg("%s, %s: block %d channel %d: %.6f, expected %.6f (z = %.2f)", what,
-                         cst_integrator_name(integ), i - 1, c, r.stat[i].mean[c], (double)L.c[c],
-                         (r.stat[i].mean[c] - (double)L.c[c]) / r.stat[i].se[c]);
-        }
-    print_message("%s, %s: whole image %.5f %.5f %.5f (se %.1e), expected %.5f %.5f %.5f\n", what,
-                  cst_integrator_name(integ), r.stat[0].mean[0], r.stat[0].mean[1], r.stat[0].mean[2], r.stat[0].se[0],
-                  (double)L.c[0], (double)L.c[1], (double)L.c[2]);
+    media_furnace_check(s, st, integ, renders, seed, L, 1e-5, what);
 }
 
 static void test_furnace_ball(void **state)
@@ -122,34 +77,6 @@ static void test_furnace_camera_medium(void **state)
     scene_destroy(s);
 }
 
-/* A grid medium of random densities (uniform in [0, dmax) on 8^3 samples over the box
- * [lo, hi]; test_grid_media.c's add_grid), with sigma_a, sigma_s and emitted radiance le
- * at density 1. */
-static int add_grid(Scene *s, Vec3 lo, Vec3 hi, float dmax, Color sigma_a, Color sigma_s, Color le, float g)
-{
-    CstError err;
-    const int n = 8;
-    Medium m = {.type = MEDIUM_GRID, .g = g};
-    HeteroMedium *hm = &m.u.het;
-    hm->sigma_a = sigma_a;
-    hm->sigma_s = sigma_s;
-    hm->le = le;
-    hm->le_scale_1 = 1.0f;
-    hm->medium_from_world = transform_identity();
-    hm->p0 = lo;
-    hm->p1 = hi;
-    hm->n[0] = hm->n[1] = hm->n[2] = n;
-    hm->density = malloc((size_t)(n * n * n) * sizeof(float));
-    assert_non_null(hm->density);
-    Pcg32 r;
-    pcg32_seed_sample(&r, 77, 0, 0);
-    for (int i = 0; i < n * n * n; i++) hm->density[i] = dmax * pcg32_float(&r);
-    int med;
-    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-    free(hm->density);
-    return med;
-}
-
 /* A random-density grid ball (densities uniform in [0, 3) over the box [-2, 2]^3,
  * scattering only) in the emitting enclosure: the light tracer's delta tracking and ratio
  * tracking render L, and so do BDPT and VCM (delta tracking on both subpaths, ratio
@@ -157,21 +84,11 @@ static int add_grid(Scene *s, Vec3 lo, Vec3 hi, float dmax, Color sigma_a, Color
 static void test_furnace_grid(void **state)
 {
     (void)state;
-    CstError err;
     Scene *s = scene_create();
-    int med = add_grid(s, v3s(-2.0f), v3s(2.0f), 3.0f, color_s(0.0f), color_rgb(0.5f, 1.0f, 0.25f), color_s(0.0f),
-                       0.3f);
-    int black;
-    Material mb = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &mb, &black, &err), CST_OK);
+    const int med = media_add_random_grid(s, v3s(-2.0f), v3s(2.0f), 3.0f, color_s(0.0f), color_rgb(0.5f, 1.0f, 0.25f),
+                                          color_s(0.0f), 0.3f);
     const Color L = color_rgb(0.8f, 0.4f, 0.6f);
-    Emission em = {L, 1, 0};
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.8f, black, NULL, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
+    media_furnace(s, med, 4.0f, 1.8f, 3.5f, L);
     check_furnace(s, CST_INTEGRATOR_LIGHT, 32, 8, 500, L, "grid ball");
     check_furnace(s, CST_INTEGRATOR_BDPT, 24, 2, 510, L, "grid ball");
     g_radius = 0.25;
@@ -190,28 +107,10 @@ static void test_furnace_emissive(void **state)
     const Color L = color_rgb(0.6f, 0.9f, 0.3f);
     const Color sa = color_rgb(0.4f, 0.2f, 0.6f), ss = color_rgb(0.5f, 1.0f, 0.25f);
     for (int grid = 0; grid < 2; grid++) {
-        CstError err;
         Scene *s = scene_create();
-        int black;
-        Material mb = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
-        assert_int_equal(scene_add_material(s, &mb, &black, &err), CST_OK);
-        int med;
-        if (grid) {
-            med = add_grid(s, v3s(-2.0f), v3s(2.0f), 2.0f, sa, ss, L, 0.4f);
-        } else {
-            Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.4f};
-            m.u.homog.sigma_a = sa;
-            m.u.homog.sigma_s = ss;
-            m.u.homog.le = L;
-            assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-        }
-        Emission em = {L, 1, 0};
-        assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
-        assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-        assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 2.0f, black, NULL, &err), CST_OK);
-        CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
-        scene_set_camera(s, &cam);
-        assert_int_equal(scene_commit(s, &err), CST_OK);
+        const int med = grid ? media_add_random_grid(s, v3s(-2.0f), v3s(2.0f), 2.0f, sa, ss, L, 0.4f)
+                             : media_add_homogeneous(s, sa, ss, L, 0.4f);
+        media_furnace(s, med, 4.0f, 2.0f, 3.5f, L);
         const char *what = grid ? "emissive grid ball" : "emissive ball";
         check_furnace(s, CST_INTEGRATOR_BDPT, 24, 2, 530 + (uint64_t)grid, L, what);
         /* The light tracer, its paths starting in the ball too. Its green is heavy-tailed here
@@ -224,45 +123,6 @@ static void test_furnace_emissive(void **state)
         g_radius = 0.0;
         scene_destroy(s);
     }
-}
-
-/* What fills fog_box's ball: homogeneous fog, emitting or not, a random grid, or that grid
- * emitting. */
-typedef enum FogKind { FOG_HOMOGENEOUS, FOG_HOMOGENEOUS_EMISSIVE, FOG_GRID, FOG_GRID_EMISSIVE } FogKind;
-
-/* test_media.c's fog box: an open box of diffuse walls lit by a small quad light, a ball of
- * forward-scattering, slightly absorbing fog (a boundary sphere) and a diffuse sphere half
- * inside it. */
-static Scene *fog_box(FogKind kind)
-{
-    CstError err;
-    Scene *s = scene_create();
-    int wall, lightm;
-    open_box_add(s, &wall, &lightm);
-    /* The grid: densities in [0, 3) over the ball's box, mean 1.5, so sigma_s means the
-     * homogeneous fog's in green; the emissive one glows sigma_a Le ~ 0.5 0.3 0.1 per unit
-     * length at mean density. */
-    const Vec3 lo = {-0.8f, -0.9f, -0.6f}, hi = {0.4f, 0.3f, 0.6f};
-    const bool emits = kind == FOG_GRID_EMISSIVE || kind == FOG_HOMOGENEOUS_EMISSIVE;
-    const Color le = emits ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f);
-    int med;
-    if (kind == FOG_HOMOGENEOUS || kind == FOG_HOMOGENEOUS_EMISSIVE) { /* sigma_a Le = 0.24 0.12 0.04 */
-        Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.5f};
-        m.u.homog.sigma_a = color_s(0.2f);
-        m.u.homog.sigma_s = color_rgb(1.5f, 1.0f, 0.5f);
-        m.u.homog.le = le;
-        assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-    } else {
-        med = add_grid(s, lo, hi, 3.0f, color_rgb(0.3f, 0.35f, 0.4f), color_rgb(1.0f, 0.7f, 0.35f), le, 0.5f);
-    }
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0.45f, -0.6f, 0.2f), 0.35f, wall, NULL, &err), CST_OK);
-    CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
 }
 
 /* path (the reference: independent pixels), light, bdpt and vcm on the fog box: the whole

@@ -15,8 +15,7 @@
 #include <cmocka.h>
 
 #include "caustic/caustic.h"
-#include "render/box_scene.h"
-#include "render/regions.h"
+#include "render/media_scenes.h"
 #include "scene/scene.h"
 
 static void ok(CstStatus st, const CstError *e)
@@ -268,25 +267,15 @@ static void test_lit_sphere_bdpt_agrees(void **state)
 
 /* ------------------------------------------------------------------ sppm in fog */
 
-/* test_sppm_media.c's fog box (an open box lit by a quad under the ceiling, a ball of
+/* The fog box of media_scenes.h (an open box lit by a quad under the ceiling, a ball of
  * homogeneous fog and a diffuse sphere), with a grey sphere moving between the light and
  * the fog: its shadow sweeps through the fog over the shutter, so photons traced at another
  * instant than the iteration's visible points would light the fog where it is not. */
 static Scene *fog_motion_box(void)
 {
     CstError err;
-    Scene *s = scene_create();
     int wall, lightm, obj = -1;
-    open_box_add(s, &wall, &lightm);
-    Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = 0.5f};
-    m.u.homog.sigma_a = color_s(0.2f);
-    m.u.homog.sigma_s = color_rgb(1.5f, 1.0f, 0.5f);
-    int med;
-    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0.45f, -0.6f, 0.2f), 0.35f, wall, NULL, &err), CST_OK);
+    Scene *s = fog_box_uncommitted(FOG_HOMOGENEOUS, &wall, &lightm);
     CstShapeDesc sd = {0};
     sd.type = CST_SHAPE_SPHERE;
     sd.radius = 0.3f;
@@ -296,9 +285,7 @@ static Scene *fog_motion_box(void)
     const float t0[12] = {1, 0, 0, 0.0f, 0, 1, 0, 0.65f, 0, 0, 1, 0};
     const float t1[12] = {1, 0, 0, 0.0f, 0, 1, 0, 0.65f, 0, 0, 1, 1.2f};
     ok(cst_scene_add_instance_motion(s, obj, t0, t1, &err), &err);
-    CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
+    fog_box_commit(s);
     return s;
 }
 

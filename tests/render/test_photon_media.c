@@ -1,7 +1,7 @@
 /* The photon integrator in participating media (photon.c's volume photon map, Jensen &
  * Christensen 1998): a furnace (a scattering-only medium, homogeneous or a random grid, in
  * a uniform emitter renders the emitter's radiance), photon against the path tracer on
- * test_sppm_media.c's fog box at two radii (the bias must be resolved at the large one and
+ * the fog box (media_scenes.h) at two radii (the bias must be resolved at the large one and
  * gone, within 4 standard errors, at the small one), the same image for 1 and 2 threads,
  * and the refusal of emitting media. Standard errors of photon images come from
  * independent renders (one render's pixels share its maps). `--spectral` runs it all in
@@ -15,72 +15,19 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "core/rng.h"
-#include "render/box_scene.h"
-#include "render/regions.h"
-#include "render/render_util.h"
-#include "scene/scene.h"
+#include "render/media_scenes.h"
 
 static CstColorMode g_color_mode = CST_COLOR_RGB;
-
-static int add_medium(Scene *s, Color sigma_a, Color sigma_s, float g)
-{
-    CstError err;
-    Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = g};
-    m.u.homog.sigma_a = sigma_a;
-    m.u.homog.sigma_s = sigma_s;
-    int id;
-    assert_int_equal(scene_add_medium(s, &m, &id, &err), CST_OK);
-    return id;
-}
-
-/* test_sppm_media.c's random grid: densities uniform in [0, dmax) on 8^3 samples over
- * [lo, hi]; sigma_a, sigma_s and le at density 1. */
-static int add_grid(Scene *s, Vec3 lo, Vec3 hi, float dmax, Color sigma_a, Color sigma_s, Color le, float g)
-{
-    CstError err;
-    const int n = 8;
-    Medium m = {.type = MEDIUM_GRID, .g = g};
-    HeteroMedium *hm = &m.u.het;
-    hm->sigma_a = sigma_a;
-    hm->sigma_s = sigma_s;
-    hm->le = le;
-    hm->le_scale_1 = 1.0f;
-    hm->medium_from_world = transform_identity();
-    hm->p0 = lo;
-    hm->p1 = hi;
-    hm->n[0] = hm->n[1] = hm->n[2] = n;
-    hm->density = malloc((size_t)(n * n * n) * sizeof(float));
-    assert_non_null(hm->density);
-    Pcg32 r;
-    pcg32_seed_sample(&r, 77, 0, 0);
-    for (int i = 0; i < n * n * n; i++) hm->density[i] = dmax * pcg32_float(&r);
-    int med;
-    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-    free(hm->density);
-    return med;
-}
 
 /* test_sppm_media.c's furnace: a black two-sided emitting sphere (radius 4, radiance L)
  * filled with a scattering-only medium, the camera inside: L everywhere. */
 static Scene *furnace(bool grid, Color L)
 {
-    CstError err;
     Scene *s = scene_create();
-    int black;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
     const Color ss = color_rgb(0.2f, 0.3f, 0.1f);
-    int med = grid ? add_grid(s, v3s(-4.0f), v3s(4.0f), 0.8f, color_s(0.0f), ss, color_s(0.0f), 0.3f)
-                   : add_medium(s, color_s(0.0f), ss, 0.6f);
-    Emission em = {L, 1, 0};
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_set_camera_medium(s, med, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
+    const int med = grid ? media_add_random_grid(s, v3s(-4.0f), v3s(4.0f), 0.8f, color_s(0.0f), ss, color_s(0.0f), 0.3f)
+                         : media_add_homogeneous(s, color_s(0.0f), ss, color_s(0.0f), 0.6f);
+    return media_furnace(s, med, 4.0f, 0.0f, 3.5f, L);
 }
 
 /* The furnace: every 8 x 8 block and the whole image within 4 standard errors of L. The
@@ -96,23 +43,11 @@ static void check_furnace(Scene *s, Color L, uint64_t seed, const char *what)
 {
     CstRenderSettings st;
     cst_render_settings_init(&st);
-    st.width = st.height = 16;
     st.spp = 4;
     st.photon_radius = FURNACE_R;
     st.photons = FURNACE_PHOTONS;
     st.color_mode = g_color_mode;
-    Regions r = regions(16, 8);
-    split_regions(s, &st, CST_INTEGRATOR_PHOTON, FURNACE_RENDERS, seed, &r);
-    for (int i = 0; i < r.count; i++)
-        for (int c = 0; c < 3; c++) {
-            double dev = fabs(r.stat[i].mean[c] - (double)L.c[c]);
-            if (!(dev <= Z_LIMIT * r.stat[i].se[c]))
-                fail_msg("%s: block %d channel %d: %.6f, expected %.6f (z = %.2f)", what, i - 1, c,
-                         r.stat[i].mean[c], (double)L.c[c], (r.stat[i].mean[c] - (double)L.c[c]) / r.stat[i].se[c]);
-        }
-    print_message("%s, photon: whole image %.5f %.5f %.5f (se %.1e), expected %.5f %.5f %.5f\n", what,
-                  r.stat[0].mean[0], r.stat[0].mean[1], r.stat[0].mean[2], r.stat[0].se[0], (double)L.c[0],
-                  (double)L.c[1], (double)L.c[2]);
+    media_furnace_check(s, st, CST_INTEGRATOR_PHOTON, FURNACE_RENDERS, seed, L, 0.0, what);
 }
 
 static void test_furnace(void **state)
@@ -125,32 +60,6 @@ static void test_furnace(void **state)
     s = furnace(true, L);
     check_furnace(s, L, 200, "grid ball");
     scene_destroy(s);
-}
-
-typedef enum FogKind { FOG_HOMOGENEOUS, FOG_GRID, FOG_GRID_EMISSIVE } FogKind;
-
-/* test_sppm_media.c's fog box: an open box of diffuse walls lit by a small quad light, a
- * ball of forward-scattering, slightly absorbing fog (a boundary sphere) and a diffuse
- * sphere half inside it. */
-static Scene *fog_box(FogKind kind)
-{
-    CstError err;
-    Scene *s = scene_create();
-    int wall, lightm;
-    open_box_add(s, &wall, &lightm);
-    const Vec3 lo = {-0.8f, -0.9f, -0.6f}, hi = {0.4f, 0.3f, 0.6f};
-    const Color le = kind == FOG_GRID_EMISSIVE ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f);
-    int med = kind == FOG_HOMOGENEOUS
-                  ? add_medium(s, color_s(0.2f), color_rgb(1.5f, 1.0f, 0.5f), 0.5f)
-                  : add_grid(s, lo, hi, 3.0f, color_rgb(0.3f, 0.35f, 0.4f), color_rgb(1.0f, 0.7f, 0.35f), le, 0.5f);
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0.45f, -0.6f, 0.2f), 0.35f, wall, NULL, &err), CST_OK);
-    CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
 }
 
 /* The fog box's settings. FOG_R_SMALL (2.5% of the box's width) holds a few volume photons

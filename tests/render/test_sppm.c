@@ -22,7 +22,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "render/render_util.h"
+#include "render/converge.h"
 
 enum { SIZE = 32, RENDERS = 48, ITER = 32, PATH_SPP = 4096 };
 #define RADIUS0 20.0 /* mm: see the file comment */
@@ -37,11 +37,7 @@ static RegionStat sppm_mean(const CstScene *s, int iterations, uint64_t seed)
     st.integrator = CST_INTEGRATOR_SPPM;
     st.photon_radius = RADIUS0;
     st.color_mode = g_color_mode;
-    const int whole[1][4] = {{0, 0, SIZE, SIZE}};
-    RegionStat r;
-    CstError err;
-    if (region_stats_by_render(s, &st, RENDERS, seed, 1, whole, &r, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
-    return r;
+    return converge_mean_by_render(s, &st, RENDERS, seed);
 }
 
 static void test_sppm_converges_to_path(void **state)
@@ -50,19 +46,7 @@ static void test_sppm_converges_to_path(void **state)
     CstScene *s = NULL;
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
-    CstRenderSettings st = {0};
-    st.width = st.height = SIZE;
-    st.spp = PATH_SPP;
-    st.integrator = CST_INTEGRATOR_PATH;
-    st.color_mode = g_color_mode;
-    st.seed = 1;
-    st.seed_set = 1;
-    CstFilm *f = NULL;
-    st.sampler = CST_SAMPLER_INDEPENDENT; /* region_stat's per-pixel variances assume it */
-    if (cst_render(s, &st, &f, NULL, &err) != CST_OK) fail_msg("%s", err.msg);
-    RegionStat ref = region_stat(f, 0, 0, SIZE, SIZE);
-    cst_film_destroy(f);
-
+    RegionStat ref = converge_path_reference(s, SIZE, PATH_SPP, g_color_mode);
     RegionStat coarse = sppm_mean(s, ITER, 1000);
     RegionStat fine = sppm_mean(s, 4 * ITER, 2000);
     for (int c = 0; c < 3; c++) {

@@ -1,7 +1,7 @@
 /* SPPM in participating media (sppm.c's visible points in media, volume photons and the
  * point-point 3D estimator; subpath_media.c's walks): a furnace (a scattering-only medium,
  * homogeneous or a random grid, in a uniform emitter renders the emitter's radiance), SPPM
- * agreeing with the path tracer and VCM on test_media_bidir.c's fog box, the same image for
+ * agreeing with the path tracer and VCM on the fog box (media_scenes.h), the same image for
  * 1 and 2 threads, and SPPM with emitting media (photons that start in them) against path. Standard errors from independent
  * renders (one render's pixels share its photons); 4 standard errors, no bias allowance.
  * SPPM is consistent, not unbiased: the initial radii and the iterations are chosen so that
@@ -17,52 +17,10 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "core/rng.h"
-#include "render/box_scene.h"
-#include "render/regions.h"
-#include "render/render_util.h"
-#include "scene/scene.h"
+#include "render/media_scenes.h"
 
 static CstColorMode g_color_mode = CST_COLOR_RGB;
 static bool g_bias; /* --bias: also render 4x the iterations and print the difference */
-
-static int add_medium(Scene *s, Color sigma_a, Color sigma_s, float g)
-{
-    CstError err;
-    Medium m = {.type = MEDIUM_HOMOGENEOUS, .g = g};
-    m.u.homog.sigma_a = sigma_a;
-    m.u.homog.sigma_s = sigma_s;
-    int id;
-    assert_int_equal(scene_add_medium(s, &m, &id, &err), CST_OK);
-    return id;
-}
-
-/* test_media_bidir.c's random grid: densities uniform in [0, dmax) on 8^3 samples over
- * [lo, hi], sigma_a, sigma_s and le at density 1. */
-static int add_grid(Scene *s, Vec3 lo, Vec3 hi, float dmax, Color sigma_a, Color sigma_s, Color le, float g)
-{
-    CstError err;
-    const int n = 8;
-    Medium m = {.type = MEDIUM_GRID, .g = g};
-    HeteroMedium *hm = &m.u.het;
-    hm->sigma_a = sigma_a;
-    hm->sigma_s = sigma_s;
-    hm->le = le;
-    hm->le_scale_1 = 1.0f;
-    hm->medium_from_world = transform_identity();
-    hm->p0 = lo;
-    hm->p1 = hi;
-    hm->n[0] = hm->n[1] = hm->n[2] = n;
-    hm->density = malloc((size_t)(n * n * n) * sizeof(float));
-    assert_non_null(hm->density);
-    Pcg32 r;
-    pcg32_seed_sample(&r, 77, 0, 0);
-    for (int i = 0; i < n * n * n; i++) hm->density[i] = dmax * pcg32_float(&r);
-    int med;
-    assert_int_equal(scene_add_medium(s, &m, &med, &err), CST_OK);
-    free(hm->density);
-    return med;
-}
 
 /* A black two-sided emitting enclosure (radius 4, radiance L) filled with a scattering-only
  * medium (homogeneous, or a random grid of densities in [0, 0.8) over the enclosure's
@@ -72,22 +30,11 @@ static int add_grid(Scene *s, Vec3 lo, Vec3 hi, float dmax, Color sigma_a, Color
  * the medium finds no photons there, the volume estimator's boundary bias. */
 static Scene *furnace(bool grid, Color L)
 {
-    CstError err;
     Scene *s = scene_create();
-    int black;
-    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
-    assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
     const Color ss = color_rgb(0.2f, 0.3f, 0.1f);
-    int med = grid ? add_grid(s, v3s(-4.0f), v3s(4.0f), 0.8f, color_s(0.0f), ss, color_s(0.0f), 0.3f)
-                   : add_medium(s, color_s(0.0f), ss, 0.6f);
-    Emission em = {L, 1, 0};
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_set_camera_medium(s, med, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
-    CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
+    const int med = grid ? media_add_random_grid(s, v3s(-4.0f), v3s(4.0f), 0.8f, color_s(0.0f), ss, color_s(0.0f), 0.3f)
+                         : media_add_homogeneous(s, color_s(0.0f), ss, color_s(0.0f), 0.6f);
+    return media_furnace(s, med, 4.0f, 0.0f, 3.5f, L);
 }
 
 /* SPPM's furnace: every 8 x 8 block and the whole image within 4 standard errors of L. The
@@ -103,23 +50,11 @@ static void check_furnace(Scene *s, Color L, uint64_t seed, const char *what)
 {
     CstRenderSettings st;
     cst_render_settings_init(&st);
-    st.width = st.height = 16;
     st.spp = 8; /* iterations */
     st.photon_radius = FURNACE_R0;
     st.photons = FURNACE_PHOTONS;
     st.color_mode = g_color_mode;
-    Regions r = regions(16, 8);
-    split_regions(s, &st, CST_INTEGRATOR_SPPM, 24, seed, &r);
-    for (int i = 0; i < r.count; i++)
-        for (int c = 0; c < 3; c++) {
-            double dev = fabs(r.stat[i].mean[c] - (double)L.c[c]);
-            if (!(dev <= Z_LIMIT * r.stat[i].se[c]))
-                fail_msg("%s: block %d channel %d: %.6f, expected %.6f (z = %.2f)", what, i - 1, c,
-                         r.stat[i].mean[c], (double)L.c[c], (r.stat[i].mean[c] - (double)L.c[c]) / r.stat[i].se[c]);
-        }
-    print_message("%s, sppm: whole image %.5f %.5f %.5f (se %.1e), expected %.5f %.5f %.5f\n", what,
-                  r.stat[0].mean[0], r.stat[0].mean[1], r.stat[0].mean[2], r.stat[0].se[0], (double)L.c[0],
-                  (double)L.c[1], (double)L.c[2]);
+    media_furnace_check(s, st, CST_INTEGRATOR_SPPM, 24, seed, L, 0.0, what);
 }
 
 static void test_furnace(void **state)
@@ -132,34 +67,6 @@ static void test_furnace(void **state)
     s = furnace(true, L);
     check_furnace(s, L, 200, "grid ball");
     scene_destroy(s);
-}
-
-/* What fills fog_box's ball. */
-typedef enum FogKind { FOG_HOMOGENEOUS, FOG_GRID, FOG_GRID_EMISSIVE, FOG_HOMOGENEOUS_EMISSIVE } FogKind;
-
-/* test_media_bidir.c's fog box: an open box of diffuse walls lit by a small quad light, a
- * ball of forward-scattering, slightly absorbing fog (a boundary sphere) and a diffuse
- * sphere half inside it. */
-static Scene *fog_box(FogKind kind)
-{
-    CstError err;
-    Scene *s = scene_create();
-    int wall, lightm;
-    open_box_add(s, &wall, &lightm);
-    const Vec3 lo = {-0.8f, -0.9f, -0.6f}, hi = {0.4f, 0.3f, 0.6f};
-    const Color le = kind == FOG_GRID_EMISSIVE ? color_rgb(1.2f, 0.6f, 0.2f) : color_s(0.0f);
-    int med = kind == FOG_HOMOGENEOUS || kind == FOG_HOMOGENEOUS_EMISSIVE
-                  ? add_medium(s, color_s(0.2f), color_rgb(1.5f, 1.0f, 0.5f), 0.5f)
-                  : add_grid(s, lo, hi, 3.0f, color_rgb(0.3f, 0.35f, 0.4f), color_rgb(1.0f, 0.7f, 0.35f), le, 0.5f);
-    if (kind == FOG_HOMOGENEOUS_EMISSIVE) s->media[med].u.homog.le = color_rgb(1.2f, 0.6f, 0.2f);
-    assert_int_equal(scene_set_medium_interface(s, med, -1, 1, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(-0.2f, -0.3f, 0.0f), 0.6f, lightm, NULL, &err), CST_OK);
-    assert_int_equal(scene_set_medium_interface(s, -1, -1, 0, &err), CST_OK);
-    assert_int_equal(scene_add_sphere(s, v3(0.45f, -0.6f, 0.2f), 0.35f, wall, NULL, &err), CST_OK);
-    CameraDesc cam = {{0, 0, 3.8f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0.0f, 3.8f, 0.0f};
-    scene_set_camera(s, &cam);
-    assert_int_equal(scene_commit(s, &err), CST_OK);
-    return s;
 }
 
 /* The fog box's settings. The initial radius, 2.5% of the box's width, is for the balls
