@@ -379,7 +379,7 @@ CST_API CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *se
                               CstExplain **out, CstError *err);
 CST_API void cst_explain_destroy(CstExplain *explain);
 /* "path, path-nee, path-bsdf, whitted, light, photon, bdpt, vcm, sppm, pssmlt, mmlt": the integrators
- * cst_explain follows (bdpt and vcm in scenes without participating media). */
+ * cst_explain follows (in participating media and spectral mode too). */
 CST_API const char *cst_explain_integrators(void);
 
 #endif
