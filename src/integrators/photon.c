@@ -235,21 +235,36 @@ typedef struct DensityCtx {
     Transform world_from_rest;
 } DensityCtx;
 
-static void density_visit(void *ctx, const Photon *ph, float dist2)
+/* One photon's share at x: wi its direction in world space (c->n_ph: x's normal in the
+ * photon's frame, for the side test). */
+static inline void density_add(DensityCtx *c, const Photon *ph, Vec3 wi)
 {
-    (void)dist2;
-    DensityCtx *c = ctx;
-    if (ph->inst != c->inst || time_outside(c->tw, ph)) return;
     /* A photon on the other side of a thin wall must not light this side, unless this
      * surface transmits (rough glass is lit through itself). */
     if (!(v3_dot(ph->n, c->n_ph) > 0.0f) && !bsdf_has_transmission(c->bsdf)) return;
-    const Vec3 wi = c->inst < 0 ? ph->wi : v3_normalize(transform_vector(&c->world_from_rest, ph->wi));
     float cos_i = fabsf(v3_dot(c->n, wi));
     if (!(cos_i > 0.0f)) return;
     /* bsdf_eval is f |cos theta_i|; the photon's flux already holds the projected area. */
     Color f = color_scale(bsdf_eval(c->bsdf, c->wo, wi), 1.0f / cos_i);
     c->sum = color_madd(c->sum, f, ph->power);
     if (c->rec) recorder_photon(c->rec, ph, f);
+}
+
+/* Maps without a time window (nothing moves): every photon is in world space. */
+static void density_visit(void *ctx, const Photon *ph, float dist2)
+{
+    (void)dist2;
+    density_add(ctx, ph, ph->wi);
+}
+
+/* Maps of moving geometry: the photons of x's frame (world, or x's instance's rest frame)
+ * and of its time window only; a rest-frame photon's direction back in world space. */
+static void density_visit_moving(void *ctx, const Photon *ph, float dist2)
+{
+    (void)dist2;
+    DensityCtx *c = ctx;
+    if (ph->inst != c->inst || time_outside(c->tw, ph)) return;
+    density_add(c, ph, c->inst < 0 ? ph->wi : v3_normalize(transform_vector(&c->world_from_rest, ph->wi)));
 }
 
 /* Reflected radiance at sh toward wo: L = sum f(wo, wi_p) Phi_p / (pi r^2), the constant
@@ -270,7 +285,7 @@ static Color radiance_estimate(const Scene *s, const PhotonMaps *m, const Photon
         c.n_ph = transform_normal(&nm, n);
         q = transform_point(&rest, q);
     }
-    photon_map_radius(map, q, r, density_visit, &c);
+    photon_map_radius(map, q, r, m->time_h > 0.0f ? density_visit_moving : density_visit, &c);
     return color_scale(c.sum, scale / (CST_PI * r * r));
 }
 
