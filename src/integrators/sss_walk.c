@@ -26,11 +26,13 @@ static Medium sss_medium(const Material *m)
     if (!m->sss_from_reflectance) {
         med.u.homog.sigma_a = m->sss_sigma_a;
         med.u.homog.sigma_s = m->sss_sigma_s;
+        medium_prepare_spectra(&med);
         return med;
     }
     Color r = m->sss_reflectance;
     for (int c = 0; c < COLOR_LANES; c++) r.c[c] = clampf(r.c[c], 0.0f, 1.0f);
     bssrdf_from_reflectance(m->bssrdf, r, m->sss_mfp, &med.u.homog.sigma_a, &med.u.homog.sigma_s);
+    medium_prepare_spectra(&med);
     return med;
 }
 

@@ -12,13 +12,28 @@ MediumCoeffs medium_coeffs(const Medium *m, const Wavelengths *wl)
     const bool het = medium_is_hetero(m);
     const Color sa = het ? m->u.het.sigma_a : m->u.homog.sigma_a, ss = het ? m->u.het.sigma_s : m->u.homog.sigma_s;
     const Color le = het ? m->u.het.le : m->u.homog.le;
-    c.sigma_a = wl ? spectrum_unbounded(sa, wl) : sa;
-    c.sigma_s = wl ? spectrum_unbounded(ss, wl) : ss;
-    c.sigma_t = color_add(c.sigma_a, c.sigma_s);
     c.emissive = !color_is_black(le);
-    c.le = c.emissive ? (wl ? spectrum_illuminant(le, wl) : le) : color_s(0.0f);
+    if (wl && m->spec.ready) { /* the same arithmetic as the conversions below, minus the lookup */
+        c.sigma_a = spectrum_rgb_eval(&m->spec.sigma_a, wl);
+        c.sigma_s = spectrum_rgb_eval(&m->spec.sigma_s, wl);
+        c.le = c.emissive ? spectrum_rgb_eval_illuminant(&m->spec.le, wl) : color_s(0.0f);
+    } else {
+        c.sigma_a = wl ? spectrum_unbounded(sa, wl) : sa;
+        c.sigma_s = wl ? spectrum_unbounded(ss, wl) : ss;
+        c.le = c.emissive ? (wl ? spectrum_illuminant(le, wl) : le) : color_s(0.0f);
+    }
+    c.sigma_t = color_add(c.sigma_a, c.sigma_s);
     c.g = m->g;
     return c;
+}
+
+void medium_prepare_spectra(Medium *m)
+{
+    const bool het = medium_is_hetero(m);
+    m->spec.sigma_a = spectrum_rgb_unbounded(het ? m->u.het.sigma_a : m->u.homog.sigma_a);
+    m->spec.sigma_s = spectrum_rgb_unbounded(het ? m->u.het.sigma_s : m->u.homog.sigma_s);
+    m->spec.le = spectrum_rgb_unbounded(het ? m->u.het.le : m->u.homog.le);
+    m->spec.ready = true;
 }
 
 Color medium_transmittance(const MediumCoeffs *m, float d)

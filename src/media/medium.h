@@ -23,11 +23,24 @@ typedef struct HomogeneousMedium {
                              * sigma_a Le per unit length (the emission term of the RTE) */
 } HomogeneousMedium;
 
+/* A medium's sigma_a, sigma_s (unbounded) and Le (illuminant) spectra, looked up once by
+ * medium_prepare_spectra: the RGB-to-spectrum table lookup is most of a conversion's cost,
+ * and spectral paths convert at every medium they enter and on every shadow ray through
+ * one (scene_transmittance_at). ready false: medium_coeffs converts from the RGB values. */
+typedef struct MediumSpectra {
+    SpectrumRgb sigma_a, sigma_s, le;
+    bool ready;
+} MediumSpectra;
+
 typedef struct Medium {
     MediumType type;
     float g; /* Henyey–Greenstein asymmetry in (-1, 1) (media/phase.h) */
     union { HomogeneousMedium homog; HeteroMedium het; } u;
+    MediumSpectra spec; /* medium_prepare_spectra; the scene fills it when the medium is added */
 } Medium;
+
+/* Fills m->spec from m's coefficients (call again after changing them). */
+void medium_prepare_spectra(Medium *m);
 
 /* What a shape separates (pbrt-v4 MediumInterface): the medium on the side opposite its
  * geometric normal (inside) and on the normal's side (outside); -1 = vacuum. boundary:

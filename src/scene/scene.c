@@ -529,6 +529,7 @@ CstStatus scene_add_medium(Scene *s, const Medium *m, int *out_id, CstError *err
     if (!GROW(s->media, s->cap_media, s->num_media + 1LL))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a medium");
     s->media[s->num_media] = *m;
+    medium_prepare_spectra(&s->media[s->num_media]);
     /* The scene keeps its own copies of a grid's arrays, and builds its majorants. */
     if (medium_is_hetero(m) && !hetero_medium_clone(&s->media[s->num_media].u.het, &m->u.het))
         return cst_fail(err, CST_ERR_OOM, "out of memory adding a grid medium");
