@@ -3,6 +3,7 @@
  * densities, MIS weights and contributions, and whether they add up to the film's value. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <jansson.h>
@@ -76,6 +77,15 @@ static void print_value(FILE *f, const CstExplainEvent *e)
     fputc('\n', f);
 }
 
+/* photon with moving instances: the photons' time window, whose factor s = shutter /
+ * window the kernel includes (Cammarano & Jensen 2002; photon.c's time_window). */
+static void print_window(FILE *f, const CstExplainEvent *e)
+{
+    if (e->time_window[1] > e->time_window[0] || e->time_scale != 1.0f)
+        fprintf(f, " (photons of times [%.6g, %.6g] only, s = shutter / window = %.6g)", (double)e->time_window[0],
+                (double)e->time_window[1], (double)e->time_scale);
+}
+
 /* photon: the specular chain's emission, a gathered photon, a density estimate. */
 static void print_gather(FILE *f, const CstExplainEvent *e)
 {
@@ -90,8 +100,10 @@ static void print_gather(FILE *f, const CstExplainEvent *e)
     }
     if (e->kind == CST_EXPLAIN_ESTIMATE && (e->flags & CST_EXPLAIN_VOLUME)) {
         /* photon.c's volume_estimate: (1 / sigma_s) sum f_HG Phi / ((4/3) pi r^3), times beta. */
-        fprintf(f, "  volume map's estimate over those %d photons: radius %.6g, ball kernel 1/((4/3) pi r^3) %.6g, ",
-                e->path, (double)e->distance, (double)e->pmf);
+        fprintf(f, "  volume map's estimate over those %d photons: radius %.6g, ball kernel %s %.6g", e->path,
+                (double)e->distance, e->time_scale != 1.0f ? "s/((4/3) pi r^3)" : "1/((4/3) pi r^3)", (double)e->pmf);
+        print_window(f, e);
+        fputs(", ", f);
         print3(f, "divided by sigma_s ", e->transmittance);
         fputs("\n      ", f);
         print3(f, "in-scattered radiance ", e->value);
@@ -100,11 +112,12 @@ static void print_gather(FILE *f, const CstExplainEvent *e)
         fputc('\n', f);
         return;
     }
-    if (e->kind == CST_EXPLAIN_ESTIMATE)
-        fprintf(f, "  %s map's estimate over those %d photons: radius %.6g, box kernel 1/(pi r^2) %.6g",
+    if (e->kind == CST_EXPLAIN_ESTIMATE) {
+        fprintf(f, "  %s map's estimate over those %d photons: radius %.6g, box kernel %s %.6g",
                 (e->flags & CST_EXPLAIN_CAUSTIC) ? "caustic" : "global (final gather)", e->path,
-                (double)e->distance, (double)e->pmf);
-    else if (e->kind == CST_EXPLAIN_ESCAPE)
+                (double)e->distance, e->time_scale != 1.0f ? "s/(pi r^2)" : "1/(pi r^2)", (double)e->pmf);
+        print_window(f, e);
+    } else if (e->kind == CST_EXPLAIN_ESCAPE)
         fputs("environment met by the camera ray through media and delta bounces (no MIS)", f);
     else
         fputs("emission met by the camera ray and its specular chain (no MIS)", f);
@@ -304,7 +317,8 @@ static int largest_event(const CstExplain *x, double *share)
     double total = 0.0, best_y = 0.0;
     for (int i = 0; i < x->num_events; i++) {
         const CstExplainEvent *e = &x->events[i];
-        if (!(e->flags & CST_EXPLAIN_ADDED)) continue;
+        /* (MLT: a splatted sample's own path is not a part of the sum; its splat is.) */
+        if (!(e->flags & CST_EXPLAIN_ADDED) || (e->flags & CST_EXPLAIN_IN_SPLAT)) continue;
         /* MLT's splats: what each added to the pixel (the filter's weight differs). */
         const float sh[3] = {(float)e->share[0], (float)e->share[1], (float)e->share[2]};
         double y = luminance(e->kind == CST_EXPLAIN_MUTATION ? sh : e->contribution);
@@ -350,15 +364,70 @@ static void print_text_light(FILE *f, const CstExplain *x)
             x->film_value[2], x->truncated ? "not checked" : x->exact ? "the splats sum to it, bit for bit" : "MISMATCH");
 }
 
+/* MLT: the splats that reached the pixel (the MUTATION events; the others are their
+ * samples' paths). */
+static int mlt_splats(const CstExplain *x)
+{
+    int n = 0;
+    for (int i = 0; i < x->num_events; i++) n += x->events[i].kind == CST_EXPLAIN_MUTATION;
+    return n;
+}
+
+/* A replayed sample's path (the events after its MUTATION event), printed as `path` (pssmlt)
+ * or `bdpt` (mmlt: one strategy) print theirs, indented under the splat. */
+static void print_mlt_path(FILE *f, const CstExplain *x, const CstExplainEvent *m, const CstExplainEvent *ev)
+{
+    CstExplain v = *x;
+    v.integrator = x->integrator == CST_INTEGRATOR_MMLT ? CST_INTEGRATOR_BDPT : CST_INTEGRATOR_PATH;
+    fprintf(f, "    its sample evaluated again from its primary sample vector: L (%.9g, %.9g, %.9g), %s\n",
+            (double)m->replay_value[0], (double)m->replay_value[1], (double)m->replay_value[2],
+            (m->flags & CST_EXPLAIN_REPLAY_EXACT) ? "the splatted L, bit for bit" : "NOT the splatted L (MISMATCH)");
+    for (int k = 0; k < m->path_events; k++) {
+        const CstExplainEvent *e = &ev[k];
+        fputs("    | ", f);
+        if (e->kind == CST_EXPLAIN_VERTEX && e->depth < 0) { /* mmlt: the light subpath's hits */
+            fprintf(f, "light vertex %d (bounces from the emitter): surface at (%.6g, %.6g, %.6g), normal (%.4f, "
+                    "%.4f, %.4f), material #%d (%s)\n", -e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2],
+                    (double)e->n[0], (double)e->n[1], (double)e->n[2], e->material,
+                    e->material_type ? e->material_type : "none");
+            continue;
+        }
+        /* Continuation lines of an event get the same bar. */
+        char *buf = NULL;
+        size_t len = 0;
+        FILE *m2 = open_memstream(&buf, &len);
+        if (!m2) {
+            print_event(f, &v, e);
+            continue;
+        }
+        print_event(m2, &v, e);
+        fclose(m2);
+        for (size_t i = 0; i < len; i++) {
+            fputc(buf[i], f);
+            if (buf[i] == '\n' && i + 1 < len) fputs("    | ", f);
+        }
+        free(buf);
+    }
+}
+
 /* MLT: the steps of the iteration whose splats reached the pixel, in the film's order. */
 static void print_text_mlt(FILE *f, const CstExplain *x)
 {
     fprintf(f, "pixel (%d, %d), iteration %d, integrator %s, %s: %d Metropolis splat(s) of %d chain(s) reach the "
             "pixel\n", x->x, x->y, x->sample, cst_integrator_name(x->integrator), x->spectral ? "spectral" : "RGB",
-            x->num_events, x->mlt_chains);
+            mlt_splats(x), x->mlt_chains);
     fprintf(f, "b (the bootstrap's normalisation) %.9g; a splat adds b / (W H) = %.9g times weight x L (times the "
             "filter)\n", x->mlt_b, x->mlt_scale);
-    for (int i = 0; i < x->num_events; i++) print_event(f, x, &x->events[i]);
+    if (x->mlt_replayed)
+        fprintf(f, "the first %d splat(s)' samples evaluated again with their paths (at most %d are): %d give the "
+                "splatted L bit for bit\n", x->mlt_replayed, (int)CST_EXPLAIN_MLT_PATHS, x->mlt_replay_exact);
+    for (int i = 0; i < x->num_events; i++) {
+        const CstExplainEvent *e = &x->events[i];
+        if (e->flags & CST_EXPLAIN_IN_SPLAT) continue;
+        print_event(f, x, e);
+        if (e->kind == CST_EXPLAIN_MUTATION && (e->flags & CST_EXPLAIN_REPLAYED))
+            print_mlt_path(f, x, e, &x->events[i + 1]);
+    }
     if (x->truncated) fputs("(more splats than explain keeps: the list is truncated and not checked)\n", f);
     print_largest(f, x);
     fprintf(f, "the iteration's value (%.9g, %.9g, %.9g); the film's sum before it (%.9g, %.9g, %.9g) and after (%.9g, "
@@ -496,6 +565,9 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         if (e->flags & CST_EXPLAIN_VOLUME) json_object_set_new(o, "sigma_s", arr3f(e->transmittance));
         json_object_set_new(o, "radius", num((double)e->distance));
         json_object_set_new(o, "kernel", num((double)e->pmf));
+        json_object_set_new(o, "time_window", json_pack("[oo]", num((double)e->time_window[0]),
+                                                        num((double)e->time_window[1])));
+        json_object_set_new(o, "time_scale", num((double)e->time_scale));
         json_object_set_new(o, "photons", json_integer(e->path));
         json_object_set_new(o, "beta", arr3f(e->beta));
         json_object_set_new(o, "value", arr3f(e->value));
@@ -515,6 +587,10 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "value", arr3f(e->value));
         json_object_set_new(o, "contribution", arr3f(e->contribution));
         json_object_set_new(o, "share", arr3d(e->share));
+        if (e->flags & CST_EXPLAIN_REPLAYED) { /* print_json adds its `path` */
+            json_object_set_new(o, "replay_value", arr3f(e->replay_value));
+            json_object_set_new(o, "replay_exact", json_boolean(e->flags & CST_EXPLAIN_REPLAY_EXACT));
+        }
         return o;
     case CST_EXPLAIN_SCATTER:
         json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
@@ -567,7 +643,21 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
 static bool print_json(FILE *f, const CstExplain *x)
 {
     json_t *events = json_array();
-    for (int i = 0; i < x->num_events; i++) json_array_append_new(events, event_json(x, &x->events[i]));
+    for (int i = 0; i < x->num_events; i++) {
+        const CstExplainEvent *e = &x->events[i];
+        json_t *ej = event_json(x, e);
+        if (e->kind == CST_EXPLAIN_MUTATION && (e->flags & CST_EXPLAIN_REPLAYED)) {
+            /* The sample's path, its events as `path` (pssmlt) or `bdpt` (mmlt) gives them. */
+            CstExplain v = *x;
+            v.integrator = x->integrator == CST_INTEGRATOR_MMLT ? CST_INTEGRATOR_BDPT : CST_INTEGRATOR_PATH;
+            json_t *path = json_array();
+            for (int k = 1; k <= e->path_events && i + k < x->num_events; k++)
+                json_array_append_new(path, event_json(&v, &x->events[i + k]));
+            json_object_set_new(ej, "path", path);
+            i += e->path_events;
+        }
+        json_array_append_new(events, ej);
+    }
     json_t *o = json_object();
     json_object_set_new(o, "pixel", json_pack("[ii]", x->x, x->y));
     json_object_set_new(o, "sample", json_integer(x->sample));
@@ -597,6 +687,8 @@ static bool print_json(FILE *f, const CstExplain *x)
         json_object_set_new(o, "mlt_b", num(x->mlt_b));
         json_object_set_new(o, "mlt_scale", num(x->mlt_scale));
         json_object_set_new(o, "mlt_chains", json_integer(x->mlt_chains));
+        json_object_set_new(o, "mlt_replayed", json_integer(x->mlt_replayed));
+        json_object_set_new(o, "mlt_replay_exact", json_integer(x->mlt_replay_exact));
     }
     /* 17 significant digits: every float and double reads back to the same bits. */
     int rc = json_dumpf(o, f, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
@@ -657,7 +749,7 @@ static void print_why_dark(FILE *f, const CstExplain *x)
     fprintf(f, "why dark: value (%.6g, %.6g, %.6g)", v[0], v[1], v[2]);
     if (is_mlt(x)) {
         fprintf(f, "; %d Metropolis splat(s) reached the pixel this iteration (the chains visit pixels in "
-                "proportion to their brightness)\n", x->num_events);
+                "proportion to their brightness)\n", mlt_splats(x));
         return;
     }
     if (is_light(x)) {

@@ -249,8 +249,23 @@ enum {
     /* ESTIMATE (photon in media): the volume map's at a medium vertex: pmf the kernel
      * 1 / ((4/3) pi r^3) (0: the map is empty), transmittance holds sigma_s there (the
      * estimate divides by it), value the in-scattered radiance, contribution beta value */
-    CST_EXPLAIN_VOLUME = 2048
+    CST_EXPLAIN_VOLUME = 2048,
+    /* MUTATION (pssmlt, mmlt): the splatted sample was evaluated again from its primary
+     * sample vector with the recorder on (the first CST_EXPLAIN_MLT_PATHS splats that
+     * reached the pixel); its path's events follow it (path_events of them, each flagged
+     * IN_SPLAT), and replay_value holds the radiance the evaluation gave */
+    CST_EXPLAIN_REPLAYED = 4096,
+    /* MUTATION: ... and that radiance is the splatted L, bit for bit (every lane) */
+    CST_EXPLAIN_REPLAY_EXACT = 8192,
+    /* An event of the path of the splatted sample of the MUTATION event before it (pssmlt:
+     * the path tracer's events; mmlt: the strategy's camera subpath, the light subpath's
+     * hits as VERTEX events of depth -bounces, and the one (s, t) connection with its MIS
+     * weight); not part of the pixel's sum (the MUTATION's share is) */
+    CST_EXPLAIN_IN_SPLAT = 16384
 };
+
+/* pssmlt, mmlt: the splats (in the film's order) whose sample's path explain prints. */
+enum { CST_EXPLAIN_MLT_PATHS = 16 };
 
 typedef struct CstExplainEvent {
     CstExplainKind kind;
@@ -303,6 +318,15 @@ typedef struct CstExplainEvent {
      * mmlt: s and t the sampled BDPT strategy of that length (s + t = path_length + 2). */
     int chain, step, path_length;
     float accept, importance, weight;
+    /* MUTATION with CST_EXPLAIN_REPLAYED: the events of its sample's path that follow it,
+     * and the radiance its evaluation again gave (first three lanes). */
+    int path_events;
+    float replay_value[3];
+    /* ESTIMATE (photon with moving instances, Cammarano & Jensen 2002): the time window
+     * [time_window[0], time_window[1]] of the photons counted (within the shutter) and the
+     * factor shutter / window the estimate took, which pmf (the kernel) includes; 0, 0 and
+     * 1 when nothing moves. */
+    float time_window[2], time_scale;
 } CstExplainEvent;
 
 typedef struct CstExplain {
@@ -362,6 +386,10 @@ typedef struct CstExplain {
      * merged for the iteration and camera_value + it = film_value, bit for bit. */
     double mlt_b, mlt_scale;
     int mlt_chains;
+    /* pssmlt, mmlt: the splats whose sample was evaluated again (CST_EXPLAIN_REPLAYED), and
+     * how many of them gave the splatted radiance bit for bit (REPLAY_EXACT; exact is 0
+     * when one did not). */
+    int mlt_replayed, mlt_replay_exact;
     /* Spectral mode (not sppm, pssmlt, mmlt, light): the camera path's four wavelengths in
      * nm as the recorder last saw them (lane order: every event's value, beta and
      * contribution show lanes 0-2); 0 in RGB mode. photon_set: spectral photon, the set the

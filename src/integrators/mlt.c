@@ -320,6 +320,24 @@ void mlt_chain_start(Mlt *m, const Scene *s, const Camera *cam, int c, uint64_t 
     ch->pss.rng = chain_stream(m, c, 2);
 }
 
+bool mlt_replay(const Mlt *m, const Scene *s, const Camera *cam, const double *v, size_t n, int depth,
+                struct Recorder *rec, Color *L, int *strategy)
+{
+    PssSampler pss;
+    if (!pss_replay_init(&pss, v, n, stream_count(m))) return false;
+    /* The same parameters with the recorder on: the path tracer's (pssmlt) or the BDPT
+     * strategies' (mmlt), whose hooks change no value. */
+    Mlt r = *m;
+    r.p.path.rec = rec;
+    r.p.it.rec = rec;
+    r.rec = NULL;
+    Vec2 fp;
+    uint64_t rays = 0, nonfinite = 0;
+    *L = mlt_eval(&r, s, cam, &pss, depth < 0 ? 0 : depth, &fp, strategy, &rays, &nonfinite);
+    pss_free(&pss);
+    return true;
+}
+
 void mlt_chain_run(Mlt *m, const Scene *s, const Camera *cam, int c, int mutations, SplatList *out,
                    const SplatFrame *fr, uint64_t *rays, uint64_t *nonfinite)
 {
@@ -343,7 +361,8 @@ void mlt_chain_run(Mlt *m, const Scene *s, const Camera *cam, int c, int mutatio
             const RecorderMltSplat sp[2] = {
                 {fp, L, I, a > 0.0f ? a / I : 0.0f, n1 > n0 ? (long)n0 : -1, strategy},
                 {ch->fp, ch->L, ch->I, (1.0f - a) / ch->I, out->n > n1 ? (long)n1 : -1, ch->strategy}};
-            recorder_mlt_step(m->rec, c, k, m->p.depths > 0 ? ch->depth : -1, ch->pss.large_step, accept, a, sp);
+            recorder_mlt_step(m->rec, c, k, m->p.depths > 0 ? ch->depth : -1, ch->pss.large_step, accept, a, sp,
+                              &ch->pss);
         }
         if (accept) {
             pss_accept(&ch->pss);

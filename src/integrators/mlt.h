@@ -89,6 +89,14 @@ void mlt_chain_start(Mlt *m, const Scene *s, const Camera *cam, int c, uint64_t 
  * mean_I * area / (mutations per iteration over all chains) times the splats' sum. */
 void mlt_chain_run(Mlt *m, const Scene *s, const Camera *cam, int c, int mutations, SplatList *out,
                    const SplatFrame *fr, uint64_t *rays, uint64_t *nonfinite);
+/* `caustic explain`: the estimate of the sample whose primary sample vector has the values
+ * v[0 .. n) (recorder.h's RecorderMltSample), evaluated again with the recorder rec on
+ * (pssmlt: path_li's events; mmlt: the strategy's walks and connection, of path length
+ * depth), into *L (a pure function of the vector: the splatted radiance, bit for bit) and
+ * *strategy. False on OOM. */
+struct Recorder;
+bool mlt_replay(const Mlt *m, const Scene *s, const Camera *cam, const double *v, size_t n, int depth,
+                struct Recorder *rec, Color *L, int *strategy);
 /* The mutations chain c makes in each iteration of width x height in all. */
 static inline int mlt_chain_mutations(const Mlt *m, int c)
 {

@@ -222,6 +222,18 @@ static TimeWindow time_window(const PhotonMaps *m, float t, float *scale)
     return (TimeWindow){t, m->time_h};
 }
 
+/* explain: the window of an estimate at time t as [lo, hi] (0, 0 when nothing moves) and
+ * its factor, for the recorder (the estimate's kernel is that factor / (pi r^2)). */
+static void estimate_window(const PhotonMaps *m, float t, float w[3])
+{
+    const TimeWindow tw = time_window(m, t, &w[2]);
+    w[0] = w[1] = 0.0f;
+    if (tw.h > 0.0f) {
+        w[0] = fmaxf(t - tw.h, m->shutter_open);
+        w[1] = fminf(t + tw.h, m->shutter_close);
+    }
+}
+
 typedef struct DensityCtx {
     const Bsdf *bsdf;
     Vec3 wo, n; /* n: x's geometric normal, on wo's side */
@@ -314,7 +326,9 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
     Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, wl, rays);
     if (m->rec) recorder_add(m->rec, CST_EXPLAIN_NEE, beta, lx);
     Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &bsdf_x, &x, wo, m->rec);
-    if (m->rec) recorder_estimate(m->rec, true, m->radius, color_s(1.0f), caustic);
+    float win[3] = {0.0f, 0.0f, 1.0f};
+    if (m->rec) estimate_window(m, x.time, win);
+    if (m->rec) recorder_estimate(m->rec, true, m->radius, color_s(1.0f), caustic, win);
     lx = color_add(lx, caustic);
 
     /* Final gathering (Jensen 2001 sec. 9.3.3): the global map's blur is hidden behind one
@@ -337,7 +351,8 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
         if (photon_trace_to_diffuse(s, gr, rng, wl, &g, NULL, &y, &bsdf_y, &wo_y, rays, NULL)) {
             if (m->rec) recorder_vertex(m->rec, s, &y, 2, NULL);
             Color global = radiance_estimate(s, m, &set->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
-            if (m->rec) recorder_estimate(m->rec, false, m->radius, g, global);
+            if (m->rec) estimate_window(m, y.time, win);
+            if (m->rec) recorder_estimate(m->rec, false, m->radius, g, global, win);
             lx = color_add(lx, color_mul(g, global));
         }
     }
@@ -374,7 +389,8 @@ static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMa
                              const MediaVisiblePoint *v, float time, const Wavelengths *wl, struct Recorder *rec)
 {
     if (photon_map_count(map) == 0) {
-        if (rec) recorder_volume_estimate(rec, r, 0.0f, v->beta, color_s(0.0f), color_s(0.0f), color_s(0.0f));
+        const float none[3] = {0.0f, 0.0f, 1.0f};
+        if (rec) recorder_volume_estimate(rec, r, 0.0f, v->beta, color_s(0.0f), color_s(0.0f), color_s(0.0f), none);
         return color_s(0.0f);
     }
     float scale;
@@ -391,7 +407,11 @@ static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMa
         out.c[k] = ss > 0.0f ? v->beta.c[k] * c.sum.c[k] * inv_vol / ss : 0.0f;
         li.c[k] = ss > 0.0f ? c.sum.c[k] * inv_vol / ss : 0.0f; /* explain's display only */
     }
-    if (rec) recorder_volume_estimate(rec, r, inv_vol, v->beta, sigma_s, li, out);
+    if (rec) {
+        float win[3];
+        estimate_window(m, time, win);
+        recorder_volume_estimate(rec, r, inv_vol, v->beta, sigma_s, li, out, win);
+    }
     return out;
 }
 
@@ -430,7 +450,9 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
     L = color_add(L, media_direct(s, &x, ray.time, rng, wl, rays, rec));
     if (x.vol) return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &x, ray.time, wl, rec));
     Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, rec);
-    if (rec) recorder_estimate(rec, true, m->radius, x.beta, caustic);
+    float win[3] = {0.0f, 0.0f, 1.0f};
+    if (rec) estimate_window(m, x.sh.time, win);
+    if (rec) recorder_estimate(rec, true, m->radius, x.beta, caustic, win);
     L = color_madd(L, x.beta, caustic);
     BsdfSample bs;
     float uc = sampler_1d(rng);
@@ -448,7 +470,8 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
         return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &y, ray.time, wl, rec));
     }
     Color global = radiance_estimate(s, m, &set->global, m->radius, &y.bsdf, &y.sh, y.wo, rec);
-    if (rec) recorder_estimate(rec, false, m->radius, y.beta, global);
+    if (rec) estimate_window(m, y.sh.time, win);
+    if (rec) recorder_estimate(rec, false, m->radius, y.beta, global, win);
     return color_madd(L, y.beta, global);
 }
 

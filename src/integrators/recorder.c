@@ -3,10 +3,14 @@
 #include "integrators/recorder.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
+
+#include "core/array.h"
 
 #include "integrators/direct.h"
 #include "integrators/photon_map.h"
+#include "sampling/pss_sampler.h"
 
 static void put3(float o[3], Vec3 v) { o[0] = v.x; o[1] = v.y; o[2] = v.z; }
 static void put_color(float o[3], Color c) { for (int i = 0; i < 3; i++) o[i] = c.c[i]; }
@@ -283,20 +287,29 @@ void recorder_photon(Recorder *r, const Photon *ph, Color f)
     r->value[e - r->ev] = ph->power;
 }
 
-void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est)
+/* An estimate's time window (recorder_estimate). */
+static void put_window(CstExplainEvent *e, const float window[3])
+{
+    e->time_window[0] = window[0];
+    e->time_window[1] = window[1];
+    e->time_scale = window[2];
+}
+
+void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est, const float window[3])
 {
     int count = 0;
     while (count < r->n && r->ev[r->n - 1 - count].kind == CST_EXPLAIN_PHOTON) count++;
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_ESTIMATE);
     if (caustic) e->flags |= CST_EXPLAIN_CAUSTIC;
     e->distance = radius;
-    e->pmf = 1.0f / (CST_PI * radius * radius);
+    e->pmf = window[2] / (CST_PI * radius * radius); /* the kernel the estimate used */
     e->path = count;
+    put_window(e, window);
     recorder_added(r, e, g, est);
 }
 
 void recorder_volume_estimate(Recorder *r, float radius, float kernel, Color beta, Color sigma_s, Color li,
-                              Color out)
+                              Color out, const float window[3])
 {
     int count = 0;
     while (count < r->n && r->ev[r->n - 1 - count].kind == CST_EXPLAIN_PHOTON) count++;
@@ -305,6 +318,7 @@ void recorder_volume_estimate(Recorder *r, float radius, float kernel, Color bet
     e->distance = radius;
     e->pmf = kernel;
     e->path = count;
+    put_window(e, window);
     put_color(e->beta, beta);
     put_color(e->value, li);
     put_color(e->contribution, out);
@@ -552,8 +566,45 @@ void recorder_sppm_photon(Recorder *r, Vec3 p, Vec3 wi, Color power, Color f, Co
     r->value[e - r->ev] = d; /* the replay sums d, the render's own product */
 }
 
+/* The sample of the MUTATION event just pushed (index r->n - 1): its vector's values. */
+static void keep_mlt_sample(Recorder *r, const PssSampler *pss, bool proposal, int depth, Color L)
+{
+    if (r->truncated || r->n == 0 || !pss) return;
+    if (!array_grow(&r->mlt, &r->mlt_cap, r->mlt_n + 1, sizeof *r->mlt) ||
+        !array_grow(&r->mlt_pool, &r->mlt_pool_cap, r->mlt_pool_n + pss->n, sizeof *r->mlt_pool)) {
+        r->mlt_oom = true;
+        return;
+    }
+    double *v = &r->mlt_pool[r->mlt_pool_n];
+    for (size_t i = 0; i < pss->n; i++) {
+        const PssValue *x = &pss->x[i];
+        /* pss_next dated what the proposal read with this iteration, its old value kept in
+         * backup (pss_reject restores it): the current state read the old values. */
+        v[i] = !proposal && x->modified == pss->iteration ? x->backup : x->value;
+    }
+    r->mlt[r->mlt_n++] = (RecorderMltSample){r->n - 1, depth, r->mlt_pool_n, pss->n, L};
+    r->mlt_pool_n += pss->n;
+}
+
+void recorder_mlt_free(Recorder *r)
+{
+    free(r->mlt);
+    free(r->mlt_pool);
+    r->mlt = NULL;
+    r->mlt_pool = NULL;
+    r->mlt_n = r->mlt_cap = r->mlt_pool_n = r->mlt_pool_cap = 0;
+}
+
+void recorder_light_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int bounces)
+{
+    if (!r->light_vertices) return;
+    const int depth = r->depth; /* the camera side's, which later strategies carry */
+    recorder_vertex(r, s, sh, -bounces, NULL);
+    r->depth = depth;
+}
+
 void recorder_mlt_step(Recorder *r, int chain, int step, int length, bool large, bool accepted, float a,
-                       const RecorderMltSplat sp[2])
+                       const RecorderMltSplat sp[2], const PssSampler *pss)
 {
     for (int k = 0; k < 2; k++) {
         const RecorderMltSplat *s = &sp[k];
@@ -579,5 +630,6 @@ void recorder_mlt_step(Recorder *r, int chain, int step, int length, bool large,
         put_color(e->value, s->L);
         e->beta[0] = e->beta[1] = e->beta[2] = s->weight;
         put_color(e->contribution, color_scale(s->L, s->weight));
+        keep_mlt_sample(r, pss, k == 0, length, s->L);
     }
 }

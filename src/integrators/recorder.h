@@ -52,6 +52,16 @@ typedef struct RecorderPaths {
     bool next_flight;
 } RecorderPaths;
 
+/* MLT: one recorded splat's sample, kept so that explain can evaluate it again (mlt.h's
+ * mlt_replay): its primary sample vector's values (off: their first in the recorder's pool,
+ * n of them), its chain's path length, its radiance as splatted and its MUTATION event. */
+typedef struct RecorderMltSample {
+    int event;
+    int depth;
+    size_t off, n;
+    Color L;
+} RecorderMltSample;
+
 typedef struct Recorder {
     CstExplainEvent *ev; /* cap events, owned by the caller */
     Color *beta, *value; /* per event: the exact (all-lane) throughput and value summed */
@@ -74,6 +84,15 @@ typedef struct Recorder {
      * by depth (merge_vol[d] false: the scalar vm_norm of a surface vertex). */
     Color merge_norm[RECORDER_PATH_MAX + 2];
     bool merge_vol[RECORDER_PATH_MAX + 2];
+    /* MLT (explain_mlt.c): the samples of the recorded splats (recorder_mlt_step), their
+     * vectors' values in one pool; malloc'd, recorder_mlt_free. oom: one was not kept. */
+    RecorderMltSample *mlt;
+    size_t mlt_n, mlt_cap;
+    double *mlt_pool;
+    size_t mlt_pool_n, mlt_pool_cap;
+    bool mlt_oom;
+    /* mmlt's replay: the light subpath's hits are VERTEX events too (recorder_light_vertex). */
+    bool light_vertices;
 } Recorder;
 
 /* A new event of kind k at the current depth (fields zero, s = t = light = -1,
@@ -185,15 +204,17 @@ void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Col
 void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
 /* The density estimate over the photons recorded just before it (their count is kept):
  * radius, the gather throughput g it is multiplied by (1 at the caustic map's x), the
- * estimate est. */
-void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est);
+ * estimate est; window: the photons' time window [window[0], window[1]] and its factor
+ * window[2] (shutter / window; 0, 0, 1 when nothing moves), which the kernel
+ * window[2] / (pi r^2) includes, as photon.c's radiance_estimate computes it. */
+void recorder_estimate(Recorder *r, bool caustic, float radius, Color g, Color est, const float window[3]);
 /* The volume map's estimate at a medium vertex (Jensen & Christensen 1998 eq. 11) over the
  * photons recorded just before it: radius r, kernel 1 / ((4/3) pi r^3) (0: the map is empty,
  * nothing added), the vertex's throughput beta, sigma_s at the vertex per lane (the
  * replay's), the in-scattered radiance li (shown) and what was added, out = beta sum kernel /
  * sigma_s per lane. */
 void recorder_volume_estimate(Recorder *r, float radius, float kernel, Color beta, Color sigma_s, Color li,
-                              Color out);
+                              Color out, const float window[3]);
 
 /* ---- SPPM (sppm.c; its camera chain by photon_trace_to_diffuse) */
 /* At a BSDF with delta and non-delta lobes the chain stopped with the non-delta lobes'
@@ -220,6 +241,9 @@ void recorder_nee_normal(Recorder *r, Vec3 n);
 void recorder_light_start(Recorder *r, const EmissionSample *es);
 /* A hit of the light subpath walk, then the kind of the scatter that continues from it. */
 void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir);
+/* mmlt's replay (light_vertices set): the light subpath's hit after `bounces` bounces as a
+ * VERTEX event of depth -bounces (the light side, counted from the emitter). */
+void recorder_light_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int bounces);
 void recorder_light_scatter(Recorder *r, bool delta);
 
 /* ---- Metropolis light transport (mlt.c's mlt_chain_run) */
@@ -236,8 +260,13 @@ typedef struct RecorderMltSplat {
 /* Step `step` of chain `chain` (path length `length`, -1 for pssmlt): a large step or not,
  * accepted or not, acceptance probability a; sp[0] the proposal's splat, sp[1] the current
  * state's. Kept (a MUTATION event each, `path` its index in the list) when the splat lands
- * within `radius` pixels of the recorded pixel's centre. */
+ * within `radius` pixels of the recorded pixel's centre, with its sample's vector from pss
+ * (before the step's accept or reject: the proposal's values are the vector's, the current
+ * state's the backups of the coordinates the proposal changed) in r->mlt. */
+struct PssSampler;
 void recorder_mlt_step(Recorder *r, int chain, int step, int length, bool large, bool accepted, float a,
-                       const RecorderMltSplat sp[2]);
+                       const RecorderMltSplat sp[2], const struct PssSampler *pss);
+/* Frees r's MLT samples (accepts none). */
+void recorder_mlt_free(Recorder *r);
 
 #endif

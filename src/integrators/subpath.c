@@ -389,6 +389,9 @@ bool subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParam
                            SubpathCameraVertex *out, Color *emitted, uint64_t *rays)
 {
     *emitted = color_s(0.0f);
+    /* explain (mmlt's replay of a splatted sample): the walk's vertices, scatters and the
+     * s = 0 strategy are recorded as subpath_trace_camera records them. */
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d, ray.time, wl);
     float cos_theta = v3_dot(ray.d, cam->forward);
     if (!(cos_theta > 0.0f)) return false;
     /* As subpath_trace_camera: d_vcm = N_light / p_camera (tech. rep. eqs. 31-33). */
@@ -414,12 +417,15 @@ bool subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParam
             }
             *emitted = color_mul(sp.beta, color_scale(le, w));
             if (dispersed) *emitted = subpath_hero_only(*emitted);
+            if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_ESCAPE, 0, -1, ray.d, sp.beta, color_scale(le, w), w,
+                                           1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
             return false;
         }
         Vec3 wo = v3_neg(ray.d);
         float cos_in = fabsf(v3_dot(sh.ng, wo));
         if (!(cos_in > 0.0f)) return false;
         mis_arrive(&sp, sh.t, cos_in);
+        if (it->rec) recorder_vertex(it->rec, s, &sh, t, wl);
         if (emission && t == hits) {
             /* s = 0 at an emitter (tech. rep. eq. 39), weighted as subpath_trace_camera does. */
             if (sh.emitter < 0) return false;
@@ -434,12 +440,15 @@ bool subpath_camera_vertex(const Scene *s, const Camera *cam, const SubpathParam
             }
             *emitted = color_mul(sp.beta, color_scale(le, w));
             if (dispersed) *emitted = subpath_hero_only(*emitted);
+            if (it->rec) recorder_strategy(it->rec, CST_EXPLAIN_EMISSION, 0, sh.emitter, sh.p, sp.beta,
+                                           color_scale(le, w), w, 1.0f / w - 1.0f, 0.0f, 0.0f, 0.0f, false);
             return false;
         }
         Bsdf bsdf;
         if (wl) {
             scene_bsdf_disperse(s, &sh, &wc, &bsdf);
             dispersed = wavelengths_secondary_terminated(&wc);
+            if (it->rec) recorder_cam_dispersed(it->rec, dispersed);
         } else {
             scene_bsdf(s, &sh, wl, &bsdf);
         }

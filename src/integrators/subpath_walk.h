@@ -147,7 +147,10 @@ subpath_walk_light(const Scene *s, const LightWalk *w, const EmissionSample *es,
             /* From a directional light the first segment has no distance: its density is
              * per unit area of the disk already (tech. rep. sec. 5.1, SmallVCM). */
             mis_arrive(&sp, bounces > 1 || es->finite ? sh.t : 1.0f, cos_in);
-            if (it->rec) recorder_light_hit(it->rec, &sh, ray.d); /* explain's MIS check (recorder.h) */
+            if (it->rec) { /* explain's MIS check, and mmlt's replay (recorder.h) */
+                recorder_light_hit(it->rec, &sh, ray.d);
+                recorder_light_vertex(it->rec, s, &sh, bounces);
+            }
         }
         Bsdf bsdf;
         if (w->disperse) scene_bsdf_disperse(s, &sh, w->disperse, &bsdf);

@@ -137,8 +137,8 @@ static Color replay_photon(const Recorder *r)
         case CST_EXPLAIN_NEE: lx = r->value[i]; break;
         case CST_EXPLAIN_PHOTON: sum = color_madd(sum, r->beta[i], r->value[i]); break;
         case CST_EXPLAIN_ESTIMATE: {
-            const float rad = e->distance;
-            Color est = color_scale(sum, 1.0f / (CST_PI * rad * rad));
+            /* pmf: the kernel the estimate used, its time window's factor included. */
+            Color est = color_scale(sum, e->pmf);
             lx = color_add(lx, (e->flags & CST_EXPLAIN_CAUSTIC) ? est : color_mul(r->beta[i], est));
             sum = color_s(0.0f);
             break;
@@ -172,8 +172,7 @@ static Color replay_photon_media(const Recorder *r)
         } else if (e->kind == CST_EXPLAIN_ESTIMATE && (e->flags & CST_EXPLAIN_VOLUME)) {
             Color out = color_s(0.0f);
             if (e->pmf > 0.0f) {
-                const float rad = e->distance;
-                const float inv_vol = 1.0f / (4.0f / 3.0f * CST_PI * rad * rad * rad);
+                const float inv_vol = e->pmf; /* the kernel, its time window's factor included */
                 for (int k = 0; k < COLOR_LANES; k++) {
                     const float ss = r->value[i].c[k];
                     out.c[k] = ss > 0.0f ? r->beta[i].c[k] * sum.c[k] * inv_vol / ss : 0.0f;
@@ -182,8 +181,7 @@ static Color replay_photon_media(const Recorder *r)
             L = color_add(L, out);
             sum = color_s(0.0f);
         } else if (e->kind == CST_EXPLAIN_ESTIMATE) {
-            const float rad = e->distance;
-            L = color_madd(L, r->beta[i], color_scale(sum, 1.0f / (CST_PI * rad * rad)));
+            L = color_madd(L, r->beta[i], color_scale(sum, e->pmf));
             sum = color_s(0.0f);
         }
     }
@@ -392,6 +390,7 @@ CstStatus explain_finish(ExplainRun *xr, CstStatus status, CstExplain **out)
     free(xr->rec.ev);
     free(xr->rec.beta);
     free(xr->rec.value);
+    recorder_mlt_free(&xr->rec);
     cst_explain_destroy(xr->ex);
     return status;
 }

@@ -1,14 +1,17 @@
 /* caustic explain for pssmlt and mmlt (explain_mlt.h): MLT's image is no sum of per-pixel
  * samples but of the chains' splats (mlt.c), so the pixel's value in one iteration is
  * explained by the Metropolis steps that splatted there, in the order the film added them
- * (integrator.c's light_merge_band: chain order, each chain's splats in the order made). */
+ * (integrator.c's light_merge_band: chain order, each chain's splats in the order made); the
+ * first CST_EXPLAIN_MLT_PATHS of them with their samples' paths, evaluated again. */
 #include "render/explain_mlt.h"
 
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/array.h"
 #include "core/error.h"
 #include "film/filter.h"
+#include "integrators/mlt.h"
 
 /* Pass `iteration` of the render, every step's items in order on worker 0 (the chains are
  * assigned to items deterministically, so one thread gives the render's values). */
@@ -67,6 +70,101 @@ static bool add_shares(const Integrator *it, Recorder *r, int x, int y, double s
     return true;
 }
 
+/* The events being rebuilt with the replayed paths in place (explain_mlt's r->ev, beta, value). */
+typedef struct EventList {
+    CstExplainEvent *ev;
+    Color *beta, *value;
+    size_t n, cap, cap_b, cap_v;
+} EventList;
+
+static bool event_append(EventList *l, const CstExplainEvent *e, Color beta, Color value)
+{
+    if (!array_grow(&l->ev, &l->cap, l->n + 1, sizeof *l->ev) ||
+        !array_grow(&l->beta, &l->cap_b, l->n + 1, sizeof *l->beta) ||
+        !array_grow(&l->value, &l->cap_v, l->n + 1, sizeof *l->value))
+        return false;
+    l->ev[l->n] = *e;
+    l->beta[l->n] = beta;
+    l->value[l->n] = value;
+    l->n++;
+    return true;
+}
+
+/* The first CST_EXPLAIN_MLT_PATHS splats that reached the pixel (r's MUTATION events, in the
+ * film's order) with a kept sample (r->mlt, event indices as after the drop): each sample
+ * evaluated again from its vector with a scratch recorder, its events inserted after its
+ * MUTATION event (flag IN_SPLAT), and the radiance compared with the splatted one. r's
+ * arrays are replaced by the longer ones. False on OOM. */
+static bool replay_paths(const Integrator *it, Recorder *r, CstExplain *ex)
+{
+    Recorder *sc = calloc(1, sizeof *sc);
+    EventList out = {0};
+    bool ok = sc != NULL;
+    if (ok) {
+        sc->cap = r->cap;
+        sc->ev = calloc((size_t)sc->cap, sizeof *sc->ev);
+        sc->beta = calloc((size_t)sc->cap, sizeof *sc->beta);
+        sc->value = calloc((size_t)sc->cap, sizeof *sc->value);
+        ok = sc->ev && sc->beta && sc->value;
+    }
+    size_t next = 0; /* the next kept sample */
+    for (int i = 0; ok && i < r->n; i++) {
+        CstExplainEvent e = r->ev[i];
+        while (next < r->mlt_n && r->mlt[next].event < i) next++;
+        const RecorderMltSample *smp = next < r->mlt_n && r->mlt[next].event == i ? &r->mlt[next] : NULL;
+        if (!smp || e.kind != CST_EXPLAIN_MUTATION || ex->mlt_replayed >= CST_EXPLAIN_MLT_PATHS) {
+            ok = event_append(&out, &e, r->beta[i], r->value[i]);
+            continue;
+        }
+        /* A fresh scratch recorder (its arrays kept) for the pixel: mmlt's t = 1 splat is
+         * recorded when it lands within the same reach as the MUTATION events. */
+        CstExplainEvent *ev = sc->ev;
+        Color *beta = sc->beta, *value = sc->value;
+        const int cap = sc->cap;
+        memset(sc, 0, sizeof *sc);
+        *sc = (Recorder){.ev = ev, .beta = beta, .value = value, .cap = cap, .px = r->px, .py = r->py,
+                         .radius = r->radius, .light_vertices = true};
+        Color L;
+        int strategy;
+        ok = mlt_replay(it->mlt, it->scene, &it->camera, &r->mlt_pool[smp->off], smp->n, smp->depth, sc, &L,
+                        &strategy);
+        if (!ok) break;
+        ex->mlt_replayed++;
+        e.flags |= CST_EXPLAIN_REPLAYED;
+        e.path_events = sc->n;
+        for (int c = 0; c < 3; c++) e.replay_value[c] = L.c[c];
+        if (!sc->truncated && memcmp(&L, &smp->L, sizeof L) == 0) {
+            e.flags |= CST_EXPLAIN_REPLAY_EXACT;
+            ex->mlt_replay_exact++;
+        }
+        ok = event_append(&out, &e, r->beta[i], r->value[i]);
+        for (int k = 0; ok && k < sc->n; k++) {
+            sc->ev[k].flags |= CST_EXPLAIN_IN_SPLAT;
+            ok = event_append(&out, &sc->ev[k], sc->beta[k], sc->value[k]);
+        }
+    }
+    if (sc) {
+        free(sc->ev);
+        free(sc->beta);
+        free(sc->value);
+        free(sc);
+    }
+    if (!ok || out.n > (size_t)INT32_MAX) {
+        free(out.ev);
+        free(out.beta);
+        free(out.value);
+        return false;
+    }
+    free(r->ev);
+    free(r->beta);
+    free(r->value);
+    r->ev = out.ev;
+    r->beta = out.beta;
+    r->value = out.value;
+    r->n = r->cap = (int)out.n;
+    return true;
+}
+
 CstStatus explain_mlt(Integrator *it, Film *film, Recorder *r, int x, int y, int sample, CstExplain *ex,
                       CstError *err)
 {
@@ -87,9 +185,25 @@ CstStatus explain_mlt(Integrator *it, Film *film, Recorder *r, int x, int y, int
         return cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", film->width, film->height);
     /* The events that added nothing (near the pixel, outside the filter's support) go. */
     int kept = 0;
-    for (int i = 0; i < r->n; i++)
-        if (r->ev[i].flags & CST_EXPLAIN_ADDED) r->ev[kept++] = r->ev[i];
+    size_t ks = 0; /* their samples follow, with the events' new indices */
+    for (size_t j = 0, i = 0; i < (size_t)r->n; i++) {
+        const bool keep = r->ev[i].flags & CST_EXPLAIN_ADDED;
+        for (; j < r->mlt_n && r->mlt[j].event == (int)i; j++)
+            if (keep) {
+                r->mlt[ks] = r->mlt[j];
+                r->mlt[ks++].event = kept;
+            }
+        if (keep) {
+            r->beta[kept] = r->beta[i];
+            r->value[kept] = r->value[i];
+            r->ev[kept++] = r->ev[i];
+        }
+    }
     r->n = kept;
+    r->mlt_n = ks;
+    /* The splatted samples' own paths, evaluated again (the ones reaching the pixel). */
+    if (!replay_paths(it, r, ex))
+        return cst_fail(err, CST_ERR_OOM, "out of memory for explaining a %dx%d render", film->width, film->height);
     const Mlt *m = it->mlt;
     ex->mlt_scale = mlt_splat_scale(m);
     ex->mlt_b = m->mean_I * ((double)m->p.width + 2.0 * (double)m->p.margin) *
@@ -108,5 +222,7 @@ CstStatus explain_mlt(Integrator *it, Film *film, Recorder *r, int x, int y, int
             ex->exact = 0;
     }
     ex->splats_exact = ex->exact;
+    /* And every replayed sample gave its splat's radiance again. */
+    if (ex->mlt_replay_exact != ex->mlt_replayed) ex->exact = 0;
     return CST_OK;
 }

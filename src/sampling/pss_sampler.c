@@ -110,6 +110,24 @@ void pss_reject(PssSampler *s)
     s->iteration--;
 }
 
+bool pss_replay_init(PssSampler *s, const double *v, size_t n, int stream_count)
+{
+    /* No large step and sigma 0: pss_next adds a normal draw times 0 (finite, so +-0) to
+     * each value and wraps it, which leaves a value in [0, 1) as it is; dated at the
+     * iteration and after the last large step, so no value is drawn afresh. A value of
+     * exactly 1 (a wrap's rounding) would wrap to 0: the double below 1 reads back as the
+     * same float (to_unit_float clamps both). */
+    pss_init(s, (Pcg32){0x853c49e6748fea9bULL, 0xda3e39cb94b95bdbULL}, 0.0, 0.0f, stream_count);
+    s->iteration = 1;
+    if (n && !array_grow(&s->x, &s->cap, n, sizeof *s->x)) return false;
+    for (size_t i = 0; i < n; i++) {
+        const double x = v[i] < 1.0 ? v[i] : 0x1.fffffffffffffp-1;
+        s->x[i] = (PssValue){x, x, 1, 1};
+    }
+    s->n = n;
+    return true;
+}
+
 double pss_small_step_pdf(double x, double y, double w)
 {
     /* The wrapped normal's images beyond 8 widths (and 2 periods) add nothing in double. */

@@ -58,6 +58,13 @@ float pss_next(PssSampler *s);
 void pss_accept(PssSampler *s);
 void pss_reject(PssSampler *s);
 
+/* `caustic explain` (MLT): a sampler whose reads give back a sample's own values, the
+ * coordinate values v[0 .. n) of a state's vector (one sample's: the proposal's or the
+ * current state's), so that its estimate can be evaluated again with the recorder on. It
+ * is a small step of width 0 on a vector dated now: pss_next returns to_unit_float(v[i])
+ * for coordinate i, as it did for that sample. Owns a copy (pss_free); false on OOM. */
+bool pss_replay_init(PssSampler *s, const double *v, size_t n, int stream_count);
+
 /* The small-step proposal density of one coordinate, a normal of width w = sigma
  * sqrt(steps) wrapped onto [0,1): q(x -> y) = sum_k phi((y - x + k) / w) / w. Symmetric,
  * so the Metropolis acceptance needs no proposal ratio. For tests. */

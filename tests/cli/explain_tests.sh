@@ -69,9 +69,19 @@ for integ in pssmlt mmlt; do
 done
 harness_run "$d" 60 explain "$TMP/mlt/pssmlt.json" --pixel 12,3 --sample 1 --width 16 --height 16
 expect "pssmlt: text, splats exact" 0 'integrator pssmlt' 'chain [0-9]+, step [0-9]+ \((large|small) step, a [0-9.e-]+' \
-    'b \(the bootstrap.s normalisation\)' 'the splats sum to the iteration.s value, bit for bit'
+    'b \(the bootstrap.s normalisation\)' 'the splats sum to the iteration.s value, bit for bit' \
+    'sample evaluated again from its primary sample vector: L .*the splatted L, bit for bit' '^    \| vertex 1: surface at' \
+    '^    \|   (NEE|emission)'
 harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,2 --width 16 --height 16 --json
-expect "mmlt: JSON, exact" 0 '"kind": "mutation"' '"path_length": [0-9]' '"mlt_b"' '"exact": true'
+expect "mmlt: JSON, exact" 0 '"kind": "mutation"' '"path_length": [0-9]' '"mlt_b"' '"exact": true' '"path": \[' \
+    '"replay_exact": true' '"mlt_replay_exact": [1-9]'
+harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,2 --width 16 --height 16
+expect "mmlt: text, the strategies' paths" 0 '^    \| +(emission \(s=0|NEE \(s=1|connect \(s=[0-9]+|splat \(s=[0-9]+, t=1\)).*MIS w' \
+    'the splatted L, bit for bit'
+# photon with a moving instance: the kernel printed is the time window's scaled one.
+harness_run "$d" 60 explain "$SRC/tests/render/explain/moving-box.json" --pixel 12,10
+expect "photon, moving box: the windowed kernel" 0 'box kernel s/\(pi r\^2\) [0-9.e-]+ \(photons of times \[[0-9.e-]+, [0-9.e-]+\] only, s = shutter / window = [0-9.]+\)' \
+    'equal, bit for bit'
 harness_run "$d" 60 explain "$TMP/mlt/mmlt.json" --pixel 8,2 --width 16 --height 16 --why-bright
 expect "mmlt: --why-bright" 0 '^why bright: the (proposal|current state).s splat of chain [0-9]+'
 HARNESS_EXPECT_STDOUT=0

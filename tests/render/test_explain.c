@@ -7,6 +7,7 @@
  * subsurface materials are recorded (the BSSRDF's exit); BDPT and VCM through media (a fog
  * box: homogeneous, grid, emitting grid), subsurface walks and a moving camera likewise, their
  * weights checked explicitly too; whitted's ray tree and the light tracer's splats sum to the film's value;
+ * photon mapping with a moving instance prints and sums with its time window's kernel;
  * integrators explain cannot follow and bad pixels are refused. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -43,6 +44,10 @@ static int photon_count = 20000; /* photons of the settings: a small map is buil
  * of the surface maps at vertices reached through fog; explained spectral samples whose
  * photon set was named. */
 static int volume_estimates, volume_photons, surface_estimates_in_fog, photon_sets_named;
+/* photon with moving instances: estimates whose kernel carries the time window's factor
+ * (time_scale >= 8: the window is at most 1/8 of the shutter), and their photons. */
+static int windowed_estimates, windowed_photons;
+static const double PI_D = 3.14159265358979323846;
 
 static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
 {
@@ -154,6 +159,20 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 if (e->kind == CST_EXPLAIN_ESTIMATE && (e->flags & CST_EXPLAIN_VOLUME) && e->path > 0) {
                     volume_estimates++;
                     volume_photons += e->path;
+                }
+                if (e->kind == CST_EXPLAIN_ESTIMATE && e->time_scale != 1.0f) {
+                    /* The kernel printed is the one the estimate used: the window's factor
+                     * s = shutter / window over pi r^2 (or (4/3) pi r^3), the window inside
+                     * the shutter and at most an eighth of it. */
+                    const double r = (double)e->distance;
+                    const double area = (e->flags & CST_EXPLAIN_VOLUME) ? 4.0 / 3.0 * PI_D * r * r * r : PI_D * r * r;
+                    const double shutter = 1.0, width = (double)e->time_window[1] - (double)e->time_window[0];
+                    assert_true(e->time_window[0] >= 0.0f && e->time_window[1] <= 1.0f && width > 0.0);
+                    assert_true(width <= shutter / 8.0 * 1.000001);
+                    assert_true(fabs((double)e->time_scale - shutter / width) <= 1e-5 * (double)e->time_scale);
+                    assert_true(fabs((double)e->pmf - (double)e->time_scale / area) <= 1e-5 * (double)e->pmf);
+                    windowed_estimates++;
+                    windowed_photons += e->path;
                 }
                 if (e->kind == CST_EXPLAIN_DISTANCE) flown = true;
                 if (e->kind == CST_EXPLAIN_ESTIMATE && !(e->flags & CST_EXPLAIN_VOLUME) && e->path > 0 && flown)
@@ -379,6 +398,23 @@ static void test_photon(void **state)
     assert_true(photons_gathered[0] > 0 && photons_gathered[1] > 100);
 }
 
+/* Photon mapping with a moving instance (Cammarano & Jensen's time windows, photon.c): every
+ * estimate counts the photons of a window of 1/8 of the shutter around the camera path's
+ * time, scaled by shutter / window; the kernel explain prints and re-sums with is that scaled
+ * one, so the sum is the film's bit for bit (with 1 / (pi r^2) it is 8 times too small). */
+static void test_photon_moving(void **state)
+{
+    (void)state;
+    CstScene *s = load("../tests/render/explain/moving-box.json");
+    windowed_estimates = windowed_photons = 0;
+    photon_count = 20000;
+    assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+    cst_scene_destroy(s);
+    print_message("photon, moving box: %d windowed estimates over %d photons\n", windowed_estimates,
+                  windowed_photons);
+    assert_true(windowed_estimates >= 10 && windowed_photons > 50);
+}
+
 /* Whitted's ray tree (mirror and glass branch in two) and the light tracer's splats: the
  * replayed sum is the film's value bit for bit (explain_all). */
 static void test_whitted_light(void **state)
@@ -601,6 +637,7 @@ int main(void)
         cmocka_unit_test(test_bidir_subsurface),
         cmocka_unit_test(test_bidir_moving_camera),
         cmocka_unit_test(test_photon),
+        cmocka_unit_test(test_photon_moving),
         cmocka_unit_test(test_photon_in_media_spectral),
         cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),

@@ -4,7 +4,11 @@
  * film's sums before and after it are a whole render's (1 and 2 iterations, any thread
  * count); leaving out the largest splat breaks the equality (the check sees a missing
  * step); the listed steps are consistent (weights a / I and (1 - a) / I; mmlt's strategy
- * (s, t) of the chain's path length); RGB and spectral, box, tent and Gaussian filters. */
+ * (s, t) of the chain's path length); the first CST_EXPLAIN_MLT_PATHS splats carry their
+ * sample's path, evaluated again from its primary sample vector: its radiance is the
+ * splatted L bit for bit and its vertices are its path's (pssmlt: 1, 2, ... in order; mmlt:
+ * t - 1 camera hits, s - 1 light hits and the one (s, t) connection with its MIS weight);
+ * RGB and spectral, box, tent and Gaussian filters. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -41,6 +45,63 @@ static CstRenderSettings mlt_settings(CstIntegrator integ, CstFilter filter)
 
 static double lum(const double v[3]) { return 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]; }
 
+/* Replayed samples' paths seen over the test, and of them those whose vertex counts were
+ * checked against the strategy (mmlt) or that reached a light (pssmlt). */
+static int replayed, replayed_light_side;
+
+/* The path of the splat m (its path_events events after it), evaluated again from the
+ * sample's primary sample vector: it gave the splatted L bit for bit, and its vertices are
+ * those of its path: pssmlt, the path tracer's vertices 1, 2, ... in order, at most
+ * max_depth + 1 of them, something added; mmlt, the camera subpath's t - 1 hits (t - 2 when
+ * the environment ends it) and the light subpath's s - 1, with one strategy event (s, t) of
+ * the chain's path length carrying an MIS weight in (0, 1] (hits + light point = length + 1). */
+static void check_path(CstIntegrator integ, const CstRenderSettings *st, const CstExplainEvent *m,
+                       const CstExplainEvent *ev, int n)
+{
+    if (!(m->flags & CST_EXPLAIN_REPLAY_EXACT))
+        fail_msg("%s chain %d step %d (%s): evaluated again L (%.9g %.9g %.9g), splatted (%.9g %.9g %.9g)",
+                 cst_integrator_name(integ), m->chain, m->step, (m->flags & CST_EXPLAIN_PROPOSAL) ? "proposal" : "current",
+                 (double)m->replay_value[0], (double)m->replay_value[1], (double)m->replay_value[2],
+                 (double)m->value[0], (double)m->value[1], (double)m->value[2]);
+    assert_memory_equal(m->replay_value, m->value, sizeof m->value);
+    assert_true(m->path_events > 0 && m->path_events <= n);
+    int cam = 0, light = 0, strategies = 0, added = 0;
+    for (int k = 0; k < m->path_events; k++) {
+        const CstExplainEvent *e = &ev[k];
+        assert_true(e->flags & CST_EXPLAIN_IN_SPLAT);
+        assert_int_not_equal(e->kind, CST_EXPLAIN_MUTATION);
+        added += (e->flags & CST_EXPLAIN_ADDED) != 0;
+        if (e->kind == CST_EXPLAIN_VERTEX && e->depth > 0) {
+            assert_int_equal(e->depth, ++cam); /* the camera side's, in order */
+        } else if (e->kind == CST_EXPLAIN_VERTEX) {
+            assert_int_equal(-e->depth, ++light); /* the light side's, from the emitter */
+        } else if (integ == CST_INTEGRATOR_MMLT && e->kind != CST_EXPLAIN_SCATTER && e->kind != CST_EXPLAIN_ROULETTE) {
+            strategies++;
+            assert_int_equal(e->s, m->s);
+            assert_int_equal(e->t, m->t);
+            assert_true(e->mis_weight > 0.0f && e->mis_weight <= 1.0f);
+            const CstExplainKind want = m->t == 1   ? CST_EXPLAIN_SPLAT
+                                        : m->s == 0 ? (e->kind == CST_EXPLAIN_ESCAPE ? CST_EXPLAIN_ESCAPE
+                                                                                      : CST_EXPLAIN_EMISSION)
+                                        : m->s == 1 ? CST_EXPLAIN_NEE
+                                                    : CST_EXPLAIN_CONNECT;
+            assert_int_equal(e->kind, want);
+            if (e->kind == CST_EXPLAIN_ESCAPE) cam++; /* the escaping ray counts as the emitter's vertex */
+        }
+    }
+    if (integ == CST_INTEGRATOR_MMLT) {
+        if (strategies != 1 || cam != m->t - 1 || light != (m->s > 1 ? m->s - 1 : 0))
+            fail_msg("mmlt chain %d step %d (s=%d, t=%d, length %d): %d strategy events, %d camera hits, %d light hits",
+                     m->chain, m->step, m->s, m->t, m->path_length, strategies, cam, light);
+        assert_int_equal(cam + light + (m->s >= 1 ? 1 : 0), m->path_length + 1);
+        replayed_light_side += light > 0;
+    } else {
+        assert_true(cam >= 1 && cam <= st->max_depth + 1 && light == 0 && added > 0);
+        replayed_light_side += added > 0;
+    }
+    replayed++;
+}
+
 /* The film's sum at (x, y) after `iterations` iterations of a whole render with `threads`
  * threads: the mean times the count (1 or 2: exact in binary). */
 static void film_sum(const CstScene *s, const CstRenderSettings *base, int iterations, int threads, double out[SIZE][SIZE][3])
@@ -67,6 +128,7 @@ static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const
 {
     static double film[2][SIZE][SIZE][3], film2[SIZE][SIZE][3];
     const CstRenderSettings st = mlt_settings(integ, filter);
+    replayed = replayed_light_side = 0;
     film_sum(s, &st, 1, 1, film[0]);
     film_sum(s, &st, 2, 1, film[1]);
     film_sum(s, &st, 2, 3, film2);
@@ -95,7 +157,7 @@ static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const
             assert_int_equal(cst_explain(s, &st, x, y, it, &ex, &err), CST_OK);
             assert_false(ex->truncated);
             assert_int_equal(ex->integrator, integ);
-            if (!ex->exact || !ex->splats_exact)
+            if (!ex->splats_exact)
                 fail_msg("%s pixel %d,%d iteration %d: splats (%.17g %.17g %.17g) != the render's", cst_integrator_name(integ),
                          x, y, it, ex->splat_value[0], ex->splat_value[1], ex->splat_value[2]);
             /* The film's sums before and after the iteration are the renders'. */
@@ -105,10 +167,20 @@ static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const
             assert_true(ex->mlt_b > 0.0 && ex->mlt_scale > 0.0);
             /* The listed splats re-added here in their order: the iteration's value. */
             double sum[3] = {0.0, 0.0, 0.0}, best = -1.0;
-            int bi = -1;
+            int bi = -1, splats = 0, with_path = 0;
+            const CstExplainEvent *prev = NULL;
             for (int i = 0; i < ex->num_events; i++) {
                 const CstExplainEvent *e = &ex->events[i];
+                if (e->flags & CST_EXPLAIN_IN_SPLAT) continue; /* checked with its splat */
                 assert_int_equal(e->kind, CST_EXPLAIN_MUTATION);
+                /* The first CST_EXPLAIN_MLT_PATHS splats carry their sample's path. */
+                if (splats++ < CST_EXPLAIN_MLT_PATHS) {
+                    assert_true(e->flags & CST_EXPLAIN_REPLAYED);
+                    check_path(integ, &st, e, e + 1, ex->num_events - i - 1);
+                    with_path++;
+                } else {
+                    assert_false(e->flags & CST_EXPLAIN_REPLAYED);
+                }
                 assert_true(e->flags & CST_EXPLAIN_ADDED);
                 assert_true(e->chain >= 0 && e->chain < ex->mlt_chains && e->step >= 0);
                 assert_true(e->accept >= 0.0f && e->accept <= 1.0f && e->importance > 0.0f);
@@ -120,9 +192,9 @@ static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const
                                 e->s + e->t == e->path_length + 2);
                 else
                     assert_true(e->path_length == -1 && e->s == -1);
-                if (i > 0) /* the film's order: chain by chain, step by step */
-                    assert_true(e->chain > ex->events[i - 1].chain ||
-                                (e->chain == ex->events[i - 1].chain && e->step >= ex->events[i - 1].step));
+                if (prev) /* the film's order: chain by chain, step by step */
+                    assert_true(e->chain > prev->chain || (e->chain == prev->chain && e->step >= prev->step));
+                prev = e;
                 for (int c = 0; c < 3; c++) sum[c] += e->share[c];
                 if (lum(e->share) > best) best = lum(e->share), bi = i;
                 proposals += (e->flags & CST_EXPLAIN_PROPOSAL) != 0;
@@ -130,6 +202,9 @@ static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const
                 large += (e->flags & CST_EXPLAIN_LARGE_STEP) != 0;
             }
             assert_memory_equal(sum, ex->splat_value, sizeof sum);
+            assert_int_equal(ex->mlt_replayed, with_path);
+            assert_int_equal(ex->mlt_replay_exact, with_path);
+            assert_true(ex->exact); /* the splats' sum and every evaluation again */
             for (int c = 0; c < 3; c++) {
                 const double after = ex->camera_value[c] + sum[c];
                 assert_memory_equal(&after, &ex->film_value[c], sizeof after);
@@ -139,20 +214,24 @@ static int check(const CstScene *s, CstIntegrator integ, CstFilter filter, const
                 double part[3] = {0.0, 0.0, 0.0};
                 for (int i = 0; i < ex->num_events; i++)
                     for (int c = 0; c < 3; c++)
-                        if (i != bi) part[c] += ex->events[i].share[c];
+                        if (i != bi && !(ex->events[i].flags & CST_EXPLAIN_IN_SPLAT)) part[c] += ex->events[i].share[c];
                 if (memcmp(part, ex->splat_value, sizeof part) != 0) broken++;
                 else fail_msg("pixel %d,%d: a sum without its largest splat equals the film's", x, y);
             }
-            listed += ex->num_events;
-            lit += ex->num_events > 0;
+            listed += splats;
+            lit += splats > 0;
             cst_explain_destroy(ex);
         }
     /* Splats listed at several pixels and iterations: both kinds, and large steps. */
+    /* Paths evaluated again, and among them (mmlt) strategies with light-subpath hits. */
+    if (replayed < 20 || (integ == CST_INTEGRATOR_PSSMLT && replayed_light_side < 5)) fail_msg("%s: %d paths evaluated again, %d of them with light "
+                                                          "hits", cst_integrator_name(integ), replayed, replayed_light_side);
     if (lit < 3 || !proposals || !currents || !large || broken < 3)
         fail_msg("%s: %d pixel iterations with splats, %d proposals, %d current states, %d large steps",
                  cst_integrator_name(integ), lit, proposals, currents, large);
-    print_message("%s: %d splats listed, at %d of %d pixel iterations (%d proposals, %d large steps)\n",
-                  cst_integrator_name(integ), listed, lit, 2 * npix, proposals, large);
+    print_message("%s: %d splats listed, at %d of %d pixel iterations (%d proposals, %d large steps); %d paths "
+                  "evaluated again, %d %s\n", cst_integrator_name(integ), listed, lit, 2 * npix, proposals, large,
+                  replayed, replayed_light_side, integ == CST_INTEGRATOR_MMLT ? "with light-subpath hits" : "lit");
     return listed;
 }
 
@@ -169,12 +248,40 @@ static void test_pssmlt(void **state)
     cst_scene_destroy(s);
 }
 
+/* mmlt's splats on the light's pixels are mostly of length 0 (s = 0, t = 2); below it, on
+ * the ceiling and walls, the chains of longer paths splat: pixels there are explained (iteration
+ * 1) until 5 replayed strategies with light-subpath hits (s >= 2, or t = 1) have been checked. */
+static void mmlt_light_side(const CstScene *s, CstColorMode mode)
+{
+    color_mode = mode;
+    const CstRenderSettings st = mlt_settings(CST_INTEGRATOR_MMLT, CST_FILTER_BOX);
+    replayed = replayed_light_side = 0;
+    int explained = 0;
+    for (int y = 3; y < SIZE && replayed_light_side < 5; y++)
+        for (int x = 0; x < SIZE && replayed_light_side < 5; x++) {
+            CstExplain *ex = NULL;
+            CstError err;
+            assert_int_equal(cst_explain(s, &st, x, y, 1, &ex, &err), CST_OK);
+            assert_true(ex->exact && !ex->truncated);
+            for (int i = 0; i < ex->num_events; i++)
+                if (ex->events[i].flags & CST_EXPLAIN_REPLAYED)
+                    check_path(CST_INTEGRATOR_MMLT, &st, &ex->events[i], &ex->events[i + 1], ex->num_events - i - 1);
+            explained++;
+            cst_explain_destroy(ex);
+        }
+    print_message("mmlt: %d paths evaluated again at %d pixels below the light, %d with light-subpath hits\n", replayed,
+                  explained, replayed_light_side);
+    assert_true(replayed_light_side >= 5);
+    color_mode = CST_COLOR_RGB;
+}
+
 static void test_mmlt(void **state)
 {
     (void)state;
     CstScene *s = NULL;
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    mmlt_light_side(s, CST_COLOR_RGB);
     static const int PIX[][2] = {{8, 8}, {2, 14}, {13, 5}, {7, 2}};
     assert_true(check(s, CST_INTEGRATOR_MMLT, CST_FILTER_BOX, PIX, 4) > 0);
     assert_true(check(s, CST_INTEGRATOR_MMLT, CST_FILTER_GAUSSIAN, PIX, 2) > 0);
@@ -188,6 +295,7 @@ static void test_spectral(void **state)
     CstScene *s = NULL;
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
+    mmlt_light_side(s, CST_COLOR_SPECTRAL);
     color_mode = CST_COLOR_SPECTRAL;
     assert_true(check(s, CST_INTEGRATOR_PSSMLT, CST_FILTER_BOX, NULL, 0) > 0);
     assert_true(check(s, CST_INTEGRATOR_MMLT, CST_FILTER_TENT, NULL, 0) > 0);

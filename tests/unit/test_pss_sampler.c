@@ -230,6 +230,61 @@ static void test_reject_restores(void **state)
     pss_free(&s);
 }
 
+/* explain's replay (pss_replay_init): a chain's proposal values and its current state's (the
+ * backups of what the proposal changed) read back as the chain read them, over three
+ * interleaved streams, with a value of exactly 1 (a wrap's rounding) read as the chain
+ * would (the float below 1). Broken (the values dated before the iteration, so that a small
+ * step of sigma 0.05 moves them; or a value of 1 wrapped to 0): differs. */
+static void test_replay(void **state)
+{
+    (void)state;
+    PssSampler s;
+    Pcg32 r;
+    pcg32_seed(&r, 11, 5);
+    pss_init(&s, r, 0.05, 0.3f, 3);
+    enum { N = 7, STEPS = 40 };
+    float cur[3][N];
+    for (int k = 0; k < STEPS; k++) {
+        pss_start_iteration(&s);
+        float got[3][N];
+        for (int st = 2; st >= 0; st--) { /* streams in any order */
+            pss_start_stream(&s, st);
+            for (int i = 0; i < N; i++) got[st][i] = pss_next(&s);
+        }
+        double prop[3 * N], old[3 * N];
+        for (size_t i = 0; i < s.n; i++) {
+            prop[i] = s.x[i].value;
+            old[i] = s.x[i].modified == s.iteration ? s.x[i].backup : s.x[i].value;
+        }
+        for (int which = 0; which < (k > 0 ? 2 : 1); which++) {
+            PssSampler q;
+            assert_true(pss_replay_init(&q, which ? old : prop, s.n, 3));
+            for (int st = 0; st < 3; st++) {
+                pss_start_stream(&q, st);
+                for (int i = 0; i < N; i++) {
+                    const float want = which ? cur[st][i] : got[st][i];
+                    assert_memory_equal(&(float){pss_next(&q)}, &want, sizeof want);
+                }
+            }
+            pss_free(&q);
+        }
+        if (k % 3 != 2) {
+            pss_accept(&s);
+            memcpy(cur, got, sizeof cur);
+        } else {
+            pss_reject(&s);
+        }
+    }
+    pss_free(&s);
+    /* A stored 1.0 reads as the largest float below 1, as to_unit_float gives it. */
+    const double edge[2] = {1.0, 0.25};
+    PssSampler q;
+    assert_true(pss_replay_init(&q, edge, 2, 1));
+    assert_true(pss_next(&q) == 0x1.fffffep-1f);
+    assert_true(pss_next(&q) == 0.25f);
+    pss_free(&q);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -238,6 +293,7 @@ int main(void)
         cmocka_unit_test(test_large_step_density),
         cmocka_unit_test(test_metropolis_stationary),
         cmocka_unit_test(test_reject_restores),
+        cmocka_unit_test(test_replay),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
