@@ -16,6 +16,8 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "integrators/volume_ball.h"
+#include "sampling/warp.h"
 #include "render/media_scenes.h"
 
 static CstColorMode g_color_mode = CST_COLOR_RGB;
@@ -60,6 +62,51 @@ static void test_furnace(void **state)
     scene_destroy(s);
     s = furnace(true, L);
     check_furnace(s, L, 200, "grid ball");
+    scene_destroy(s);
+}
+
+/* volume_ball_fraction() against the exact volume of the lens B(p, r) ∩ S(0, R) (two balls
+ * whose centres are c apart, R - r < c < R + r): V = pi (R + r - c)^2 (c^2 + 2 c r - 3 r^2
+ * + 2 c R + 6 r R - 3 R^2) / (12 c). The mean of the rotated quadrature over 512 points at
+ * each distance c from the centre (random directions, so random rotations) must agree
+ * within 4 standard errors (its spread estimated from the same points): it is unbiased. */
+static void test_ball_fraction(void **state)
+{
+    (void)state;
+    Scene *s = scene_create();
+    CstError err;
+    int black;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.0f, black, NULL, &err), CST_OK);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    const double R = 1.0, r = 0.25;
+    const double cs[] = {0.5, 0.8, 0.9, 0.97, 0.999};
+    Pcg32 rng;
+    pcg32_seed(&rng, 27, 1);
+    for (size_t k = 0; k < sizeof cs / sizeof cs[0]; k++) {
+        const double c = cs[k];
+        double exact = 1.0;
+        if (c > R - r) {
+            const double lens = (c * c + 2 * c * r - 3 * r * r + 2 * c * R + 6 * r * R - 3 * R * R);
+            const double v = (double)CST_PI * (R + r - c) * (R + r - c) * lens / (12.0 * c);
+            exact = v / (4.0 / 3.0 * (double)CST_PI * r * r * r);
+        }
+        const int n = 512;
+        double sum = 0.0, sum2 = 0.0;
+        uint64_t rays = 0;
+        for (int i = 0; i < n; i++) {
+            const Vec3 d = warp_uniform_sphere(pcg32_v2(&rng));
+            const double f = (double)volume_ball_fraction(s, v3_scale(d, (float)c), (float)r, 0.0f, &rays);
+            sum += f;
+            sum2 += f * f;
+        }
+        const double mean = sum / n, se = sqrt(fmax(sum2 / n - mean * mean, 0.0) / (n - 1));
+        const double z = se > 0.0 ? (mean - exact) / se : (fabs(mean - exact) < 1e-6 ? 0.0 : (double)INFINITY);
+        print_message("ball fraction at c = %.3f: %.5f +- %.5f, exact %.5f (z = %.2f)\n", c, mean, se, exact, z);
+        assert_int_equal(rays, (uint64_t)n * VOLUME_BALL_DIRS);
+        if (!(fabs(z) <= Z_LIMIT)) fail_msg("ball fraction at c = %.3f: %.5f, exact %.5f (z = %.2f)", c, mean, exact, z);
+    }
     scene_destroy(s);
 }
 
@@ -200,6 +247,7 @@ int main(int argc, char **argv)
     }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_furnace),
+        cmocka_unit_test(test_ball_fraction),
         cmocka_unit_test(test_edge_furnace),
         cmocka_unit_test(test_fog_agreement),
         cmocka_unit_test(test_grid_agreement),
