@@ -3,9 +3,10 @@
  * a uniform emitter renders the emitter's radiance), photon against the path tracer on
  * the fog box (media_scenes.h) at two radii (within 4 standard errors at both: the large
  * one's bias was resolved before the ball's boundary correction, issue 27), the edge of a
- * scattering ball in a furnace (that correction), the same image for 1 and 2 threads, and
- * the refusal of emitting media. Standard errors of photon images come from
- * independent renders (one render's pixels share its maps). `--spectral` runs it all in
+ * scattering ball in a furnace (that correction) and its ball fraction against the exact
+ * lens volume, the same image for 1 and 2 threads, and the refusal of emitting media.
+ * Standard errors of photon images come from independent renders (one render's pixels
+ * share its maps). `--spectral` runs it all in
  * spectral mode. */
 #include <setjmp.h>
 #include <stdarg.h>
