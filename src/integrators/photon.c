@@ -30,6 +30,7 @@
 #include "integrators/subpath_media.h"
 #include "integrators/subpath_walk.h"
 #include "integrators/volpath.h"
+#include "integrators/volume_ball.h"
 #include "materials/bsdf.h"
 #include "media/phase.h"
 
@@ -386,7 +387,8 @@ static void volume_visit(void *ctx, const Photon *ph, float dist2)
  * sigma_s of its own free-flight sample), so the 1 / sigma_s(p) here cancels beta's
  * sigma_s(p), as SPPM's visible points in media (sppm.c, camera_media). */
 static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMap *map, float r,
-                             const MediaVisiblePoint *v, float time, const Wavelengths *wl, struct Recorder *rec)
+                             const MediaVisiblePoint *v, float time, const Wavelengths *wl, struct Recorder *rec,
+                             uint64_t *rays)
 {
     if (photon_map_count(map) == 0) {
         const float none[3] = {0.0f, 0.0f, 1.0f};
@@ -395,7 +397,11 @@ static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMa
     }
     float scale;
     VolumeCtx c = {v->wo, v->g, color_s(0.0f), time_window(m, time, &scale), rec};
-    photon_map_radius(map, v->p, r, volume_visit, &c);
+    const size_t found = photon_map_radius(map, v->p, r, volume_visit, &c);
+    /* The kernel over the ball's part inside the medium (issue 27: photons exist only
+     * there; volume_ball.c), folded into beta (so explain's replay, beta sum kernel /
+     * sigma_s, sums it again bit for bit); its rays only when a photon was found. */
+    const Color beta = found ? color_scale(v->beta, 1.0f / volume_ball_fraction(s, v->p, r, time, rays)) : v->beta;
     const Medium *med = &s->media[v->medium];
     const MediumCoeffs mc = medium_coeffs(med, wl);
     const float dens = medium_is_hetero(med) ? hetero_density_world(&med->u.het, v->p) : 1.0f;
@@ -404,13 +410,13 @@ static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMa
     for (int k = 0; k < COLOR_LANES; k++) {
         const float ss = mc.sigma_s.c[k] * dens;
         sigma_s.c[k] = ss;
-        out.c[k] = ss > 0.0f ? v->beta.c[k] * c.sum.c[k] * inv_vol / ss : 0.0f;
+        out.c[k] = ss > 0.0f ? beta.c[k] * c.sum.c[k] * inv_vol / ss : 0.0f;
         li.c[k] = ss > 0.0f ? c.sum.c[k] * inv_vol / ss : 0.0f; /* explain's display only */
     }
     if (rec) {
         float win[3];
         estimate_window(m, time, win);
-        recorder_volume_estimate(rec, r, inv_vol, v->beta, sigma_s, li, out, win);
+        recorder_volume_estimate(rec, r, inv_vol, beta, sigma_s, li, out, win);
     }
     return out;
 }
@@ -448,7 +454,7 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
     if (rec) rec->depth = 0;
     if (!media_visible_point_rec(s, ray, s->camera_medium, rng, wl, color_s(1.0f), &L, &x, rays, rec)) return L;
     L = color_add(L, media_direct(s, &x, ray.time, rng, wl, rays, rec));
-    if (x.vol) return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &x, ray.time, wl, rec));
+    if (x.vol) return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &x, ray.time, wl, rec, rays));
     Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, rec);
     float win[3] = {0.0f, 0.0f, 1.0f};
     if (rec) estimate_window(m, x.sh.time, win);
@@ -467,7 +473,7 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
         return L;
     if (y.vol) {
         L = color_add(L, media_direct(s, &y, ray.time, rng, wl, rays, rec));
-        return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &y, ray.time, wl, rec));
+        return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &y, ray.time, wl, rec, rays));
     }
     Color global = radiance_estimate(s, m, &set->global, m->radius, &y.bsdf, &y.sh, y.wo, rec);
     if (rec) estimate_window(m, y.sh.time, win);

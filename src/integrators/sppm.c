@@ -40,6 +40,7 @@
 #include "integrators/recorder.h"
 #include "integrators/subpath_media.h"
 #include "integrators/volpath.h"
+#include "integrators/volume_ball.h"
 #include "materials/bsdf.h"
 #include "math/motion.h"
 #include "media/phase.h"
@@ -366,6 +367,10 @@ static Color camera_media(const Scene *s, Ray ray, Sampler *rng, const Wavelengt
             const float ss = mc.sigma_s.c[c] * dens;
             v->beta.c[c] = ss > 0.0f ? v->beta.c[c] / ss : 0.0f;
         }
+        /* The ball's kernel over its part inside the medium (issue 27: photons exist only
+         * there; volume_ball.c), at this iteration's radius, folded into beta like
+         * 1 / sigma_s(p): the gather's phi is then the density over that part. */
+        v->beta = color_scale(v->beta, 1.0f / volume_ball_fraction(s, mv.p, v->r_vol, ray.time, rays));
     }
     v->valid = color_is_finite(v->beta) && !color_is_black(v->beta);
     return L;

@@ -69,6 +69,31 @@ static void test_furnace(void **state)
     scene_destroy(s);
 }
 
+/* Issue 27, the ball estimate at a medium's boundary: test_photon_media's edge furnace (a
+ * scattering-only ball of radius 1, an interface sphere, optical radius 2, in vacuum inside
+ * the emitting sphere; L everywhere), by SPPM at initial radius EDGE_R0. Without
+ * volume_ball.c's correction the balls of the visible points near the ball's surface reach
+ * into the vacuum, which holds no photons, and the image is resolved low (measured in the
+ * commit that added this test, red, whole image). */
+#define EDGE_R0 0.25
+enum { EDGE_PHOTONS = 4000, EDGE_RENDERS = 16 };
+static void test_edge_furnace(void **state)
+{
+    (void)state;
+    const Color L = color_rgb(1.0f, 0.5f, 0.25f);
+    Scene *s = scene_create();
+    const int med = media_add_homogeneous(s, color_s(0.0f), color_s(2.0f), color_s(0.0f), 0.0f);
+    s = media_furnace(s, med, 4.0f, 1.0f, 3.5f, L);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.spp = 8; /* iterations */
+    st.photon_radius = EDGE_R0;
+    st.photons = EDGE_PHOTONS;
+    st.color_mode = g_color_mode;
+    media_furnace_check(s, st, CST_INTEGRATOR_SPPM, EDGE_RENDERS, 300, L, 0.0, "edge of a scattering ball");
+    scene_destroy(s);
+}
+
 /* The fog box's settings. The initial radius, 2.5% of the box's width, is for the balls
  * in the fog: at 1024 photons per iteration they hold a few photons per render; a smaller
  * one leaves them empty in most renders (a heavy-tailed estimate whose standard error
@@ -202,6 +227,7 @@ int main(int argc, char **argv)
     }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_furnace),
+        cmocka_unit_test(test_edge_furnace),
         cmocka_unit_test(test_fog_agreement),
         cmocka_unit_test(test_grid_agreement),
         cmocka_unit_test(test_threads),
