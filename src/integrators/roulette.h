@@ -11,8 +11,9 @@
  * keeps the estimate unbiased (Arvo & Kirk, "Particle Transport and Image Synthesis",
  * 1990; pbrt-v4 sec. 14.1). `scatter` is the product of the BSDF weights (and earlier
  * 1/q): the path tracer's beta, not a light path's flux, whose scale would keep every
- * light path alive. q follows it so dim paths stop early and is capped below 1 so even
- * an albedo-1 furnace ends. Draws one number, only when the rule applies. Returns the
+ * light path alive (walks that sample media by a hero lane pass it divided by the lanes'
+ * mean density ratio: subpath_roulette, hero_scale). q follows it so dim paths stop early
+ * and is capped below 1 so even an albedo-1 furnace ends. Draws one number, only when the rule applies. Returns the
  * factor to scale the throughputs by: 1 before rr_depth, 1 / q on survival, 0 when the
  * path stops (also for a NaN throughput). */
 static inline float roulette(Sampler *smp, int depth, int rr_depth, Color scatter)

@@ -86,7 +86,7 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
             const float g = s->media[medium].g;
             MediaLightVertex v = {h.p, v3s(0.0f), NULL, NULL, g, medium, w_prev, sp, bounces, sampler_2d(rng)};
             v.sp.beta = hero_beta(&hm, sp.beta);
-            const bool more = !last && media_scatter_phase(&sp, it, h.p, w_prev, g, bounces, w->rr_depth, rng, &ray);
+            const bool more = !last && media_scatter_phase(&sp, it, h.p, w_prev, g, bounces, w->rr_depth, hero_scale(&hm), rng, &ray);
             if (!w->visit(w->ctx, &v)) return false;
             if (!more) return true;
             x_prev = h.p;
@@ -100,8 +100,8 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
         MediaLightVertex v = {h.p, h.sh.ng, &h.sh, &bsdf, 0.0f, medium, w_prev, sp, bounces, {0.0f, 0.0f}};
         v.sp.beta = hero_beta(&hm, sp.beta);
         if (visit) v.u_lens = sampler_2d(rng);
-        const bool more = !last && subpath_scatter(s, &sp, it, &bsdf, &h.sh, w_prev, BSDF_IMPORTANCE, bounces,
-                                                   w->rr_depth, rng, &ray);
+        const bool more = !last && subpath_scatter_rr(s, &sp, it, &bsdf, &h.sh, w_prev, BSDF_IMPORTANCE, bounces,
+                                                      w->rr_depth, hero_scale(&hm), rng, &ray);
         if (visit && !w->visit(w->ctx, &v)) return false;
         if (!more) return true;
         medium = scene_medium_after(s, &h.sh, ray.d, medium);
@@ -654,11 +654,12 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             }
         }
         if (vol) {
-            if (!media_scatter_phase(&sp, it, h.p, wo, x.g, t, vp->rr_depth, rng, &ray)) break;
+            if (!media_scatter_phase(&sp, it, h.p, wo, x.g, t, vp->rr_depth, hero_scale(&hm), rng, &ray)) break;
             if (it->rec) recorder_phase(it->rec, ray.d, phase_hg_eval(wo, ray.d, x.g), sp.beta);
             prev_med = true;
         } else {
-            if (!subpath_scatter(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) break;
+            if (!subpath_scatter_rr(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, hero_scale(&hm), rng, &ray))
+                break;
             medium = scene_medium_after(s, &h.sh, ray.d, medium);
             prev_med = false;
         }
@@ -829,7 +830,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 out->sp.beta = hero_beta(&hm, sp.beta);
                 return true;
             }
-            if (!media_scatter_phase(&sp, it, h.p, wo, g, t, vp->rr_depth, rng, &ray)) return false;
+            if (!media_scatter_phase(&sp, it, h.p, wo, g, t, vp->rr_depth, hero_scale(&hm), rng, &ray)) return false;
             prev_med = true;
         } else {
             Bsdf bsdf;
@@ -845,7 +846,9 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 out->sp.beta = hero_beta(&hm, sp.beta);
                 return true;
             }
-            if (!subpath_scatter(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, rng, &ray)) return false;
+            if (!subpath_scatter_rr(s, &sp, it, &bsdf, &h.sh, wo, BSDF_RADIANCE, t, vp->rr_depth, hero_scale(&hm), rng,
+                                    &ray))
+                return false;
             medium = scene_medium_after(s, &h.sh, ray.d, medium);
             prev_med = false;
         }

@@ -49,6 +49,21 @@ static inline Color hero_beta(const HeroMis *hm, Color beta)
     return m > 0.0f && isfinite(m) ? color_scale(beta, (float)COLOR_LANES / m) : color_s(0.0f);
 }
 
+/* COLOR_LANES / sum(r_u), the factor hero_beta scales a throughput by (1 on a walk that met
+ * no hero-sampled piece, 0 where hero_beta drops the path): Russian roulette's scale
+ * (subpath_roulette), so that the survival probability follows the throughput the walk's
+ * contributions carry, as volpath.c's roulette on mis_beta and pbrt-v4's on beta / r_u
+ * (sec. 14.2). The raw per-lane scatter is T_c sigma_s,c / (T_h sigma_t,h) per flight
+ * (h the hero lane): it can sit far below the contribution (q then too small, its survivors
+ * up to COLOR_LANES times too heavy) or far above it (q at its cap on dim paths). */
+static inline float hero_scale(const HeroMis *hm)
+{
+    if (hm->hero < 0) return 1.0f;
+    float m = 0.0f;
+    for (int c = 0; c < COLOR_LANES; c++) m += hm->r_u.c[c];
+    return m > 0.0f && isfinite(m) ? (float)COLOR_LANES / m : 0.0f;
+}
+
 /* What a walk's ray met after free-flight sampling through the pieces of its way. */
 typedef enum MediaHitKind { MEDIA_MISS, MEDIA_SURFACE, MEDIA_VOLUME } MediaHitKind;
 typedef struct MediaHit {
@@ -93,11 +108,11 @@ static inline float eta_vm(const SubpathIteration *it, bool vol)
 }
 
 /* A phase-function scattering at a volume vertex: HG sampled exactly (weight 1), Russian
- * roulette, the MIS quantities (tech. rep. eqs. 34-36 with no cosine; HG is symmetric,
- * so the reverse density is the forward one) and the next ray, at *ray's time (the ray
- * that reached p). */
+ * roulette (on scatter x rr_scale: subpath_roulette, hero_scale), the MIS quantities (tech.
+ * rep. eqs. 34-36 with no cosine; HG is symmetric, so the reverse density is the forward
+ * one) and the next ray, at *ray's time (the ray that reached p). */
 bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p, Vec3 wo, float g, int depth,
-                         int rr_depth, Sampler *rng, Ray *ray);
+                         int rr_depth, float rr_scale, Sampler *rng, Ray *ray);
 
 
 #endif

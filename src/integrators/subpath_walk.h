@@ -90,10 +90,14 @@ static inline void mis_arrive(SubPath *sp, float dist, float cos_in)
     sp->d_vm *= inv;
 }
 
-/* Russian roulette (roulette.h) on a subpath's throughputs. False when the path stops. */
-static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, Sampler *rng)
+/* Russian roulette (roulette.h) on a subpath's throughputs, its survival probability
+ * following scatter x rr_scale: 1 on surfaces and in media sampled lane by lane per segment;
+ * the walk's hero normalisation (subpath_media_step.h's hero_scale) once a walk samples
+ * distances with a hero lane, whose raw per-lane scatter is not what its contributions
+ * carry (volpath.c's roulette on mis_beta, pbrt-v4 sec. 14.2). False when the path stops. */
+static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, float rr_scale, Sampler *rng)
 {
-    float rr = roulette(rng, depth, rr_depth, sp->scatter);
+    float rr = roulette(rng, depth, rr_depth, color_scale(sp->scatter, rr_scale));
     if (rr == 0.0f) return false;
     sp->beta = color_scale(sp->beta, rr);
     sp->scatter = color_scale(sp->scatter, rr);
@@ -101,12 +105,12 @@ static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, Sample
 }
 
 /* The continuation of a subpath at a vertex (wo: back along the subpath; mode: what it
- * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on, the MIS
- * quantities (with an iteration `it`; NULL: none) and the next ray. False when the
- * subpath ends here. */
-static inline bool subpath_scatter(const Scene *s, SubPath *sp, const SubpathIteration *it, const Bsdf *b,
-                                   const SurfaceHit *sh, Vec3 wo, BsdfTransport mode, int depth, int rr_depth,
-                                   Sampler *rng, Ray *ray)
+ * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on (on
+ * scatter x rr_scale: subpath_roulette), the MIS quantities (with an iteration `it`; NULL:
+ * none) and the next ray. False when the subpath ends here. */
+static inline bool subpath_scatter_rr(const Scene *s, SubPath *sp, const SubpathIteration *it, const Bsdf *b,
+                                      const SurfaceHit *sh, Vec3 wo, BsdfTransport mode, int depth, int rr_depth,
+                                      float rr_scale, Sampler *rng, Ray *ray)
 {
     BsdfSample bs;
     float uc = sampler_1d(rng);
@@ -120,10 +124,19 @@ static inline bool subpath_scatter(const Scene *s, SubPath *sp, const SubpathIte
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);
     if (color_is_black(sp->scatter)) return false;
-    if (!subpath_roulette(sp, depth, rr_depth, rng)) return false;
+    if (!subpath_roulette(sp, depth, rr_depth, rr_scale, rng)) return false;
     if (it) mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo));
     *ray = ray_make_at(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY, sh->time);
     return true;
+}
+
+/* subpath_scatter_rr with rr_scale 1: the walks without media (x 1 is exact, so their
+ * paths are unchanged bit for bit). */
+static inline bool subpath_scatter(const Scene *s, SubPath *sp, const SubpathIteration *it, const Bsdf *b,
+                                   const SurfaceHit *sh, Vec3 wo, BsdfTransport mode, int depth, int rr_depth,
+                                   Sampler *rng, Ray *ray)
+{
+    return subpath_scatter_rr(s, sp, it, b, sh, wo, mode, depth, rr_depth, 1.0f, rng, ray);
 }
 
 /* The one light subpath walk: from es with state sp, traces importance-mode BSDF samples
