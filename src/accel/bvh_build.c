@@ -635,6 +635,35 @@ static int build_threads(void)
     return n < 1 ? 1 : (n > BVH_MAX_BUILD_THREADS ? BVH_MAX_BUILD_THREADS : (int)n);
 }
 
+/* The compact curve records (bvh.h), when the scene has curves. A curve's segments are
+ * consecutive shapes with the same widths, which they share: an entry is reused while
+ * the widths repeat bit for bit. False when out of memory. */
+static bool build_curve_segs(Bvh *bvh, const AnalyticShape *shapes, int num_shapes)
+{
+    int curves = 0;
+    for (int i = 0; i < num_shapes; i++) curves += shape_curve(&shapes[i]) != NULL;
+    if (curves == 0) return true;
+    bvh->curve_segs = aligned_alloc(64, (size_t)num_shapes * sizeof(CurveSeg));
+    bvh->curve_widths = malloc((size_t)curves * sizeof(CurveWidths));
+    if (!bvh->curve_segs || !bvh->curve_widths) return false;
+    bvh->num_curve_segs = num_shapes;
+    uint32_t nw = 0;
+    for (int i = 0; i < num_shapes; i++) {
+        const Curve *c = shape_curve(&shapes[i]);
+        CurveSeg *s = &bvh->curve_segs[i];
+        const CurveWidths w = c ? (CurveWidths){c->w0, c->w1} : (CurveWidths){0.0f, 0.0f};
+        const bool same = nw > 0 && memcmp(&bvh->curve_widths[nw - 1], &w, sizeof w) == 0;
+        if (!c || !curve_seg_init(s, c, same ? nw - 1 : nw)) {
+            memset(s, 0, sizeof *s);
+            s->info = BVH_NO_CURVE_SEG;
+            continue;
+        }
+        if (!same) bvh->curve_widths[nw++] = w;
+    }
+    bvh->num_curve_widths = (int)nw;
+    return true;
+}
+
 CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
 {
     const Vec3 *positions = geom->positions;
@@ -723,6 +752,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     if (!bvh->units || !bvh->spheres || !bvh->shape_ids) goto oom;
     bvh->shapes = geom->shapes;
     bvh->shape_base = shape_base;
+    if (!build_curve_segs(bvh, geom->shapes, num_shapes)) goto oom;
 
     BBox root = nodes[0].box;
     Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, shape_base, (uint32_t)num_ids,
@@ -767,11 +797,14 @@ void bvh_free(Bvh *bvh)
     free(bvh->units);
     free(bvh->spheres);
     free(bvh->shape_ids);
+    free(bvh->curve_segs);
+    free(bvh->curve_widths);
     memset(bvh, 0, sizeof *bvh);
 }
 
 size_t bvh_memory_bytes(const Bvh *bvh)
 {
     return bvh_num_units(bvh) * BVH_UNIT + (size_t)bvh->num_spheres * sizeof(BvhSphere) +
-           (size_t)bvh->num_shape_ids * sizeof(uint32_t);
+           (size_t)bvh->num_shape_ids * sizeof(uint32_t) + (size_t)bvh->num_curve_segs * sizeof(CurveSeg) +
+           (size_t)bvh->num_curve_widths * sizeof(CurveWidths);
 }
