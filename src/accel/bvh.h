@@ -76,10 +76,11 @@ typedef struct Bvh {
     uint32_t *shape_ids;         /* the shape leaves' scene primitive ids, leaf by leaf */
     int num_shape_ids;
     uint32_t shape_base;         /* shape k has id shape_base + k */
-    /* When the scene has curves: shape k's compact record curve_segs[k] (curve.h; info
-     * BVH_NO_CURVE_SEG for other shapes and ribbons, tested on shapes[k]) and the widths
-     * its segments share, so a curve candidate costs one 64-byte line, not six. */
-    CurveSeg *curve_segs;        /* num_curve_segs = the shape count, 64-byte aligned */
+    /* When the scene has curves: the compact record (curve.h) of the shape in slot j of
+     * shape_ids is curve_segs[j] (info BVH_NO_CURVE_SEG for other shapes and ribbons,
+     * tested on their AnalyticShape), and the widths a curve's segments share: a curve
+     * candidate costs one 64-byte line, in its leaf's run, not six lines and an id. */
+    CurveSeg *curve_segs;        /* num_curve_segs = num_shape_ids, 64-byte aligned */
     CurveWidths *curve_widths;
     int num_curve_segs, num_curve_widths;
     int num_leaves;

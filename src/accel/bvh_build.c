@@ -635,32 +635,43 @@ static int build_threads(void)
     return n < 1 ? 1 : (n > BVH_MAX_BUILD_THREADS ? BVH_MAX_BUILD_THREADS : (int)n);
 }
 
-/* The compact curve records (bvh.h), when the scene has curves. A curve's segments are
- * consecutive shapes with the same widths, which they share: an entry is reused while
- * the widths repeat bit for bit. False when out of memory. */
+/* The compact curve records (bvh.h), when the scene has curves, one per shape_ids slot
+ * (a curve cut in pieces has one in each leaf holding one), in leaf order: a leaf's
+ * records are consecutive lines, reached without reading shape_ids. A curve's segments
+ * are consecutive shapes with the same widths, which they share: a widths entry is
+ * reused while they repeat bit for bit. False when out of memory. */
 static bool build_curve_segs(Bvh *bvh, const AnalyticShape *shapes, int num_shapes)
 {
     int curves = 0;
     for (int i = 0; i < num_shapes; i++) curves += shape_curve(&shapes[i]) != NULL;
     if (curves == 0) return true;
-    bvh->curve_segs = aligned_alloc(64, (size_t)num_shapes * sizeof(CurveSeg));
+    uint32_t *windex = malloc((size_t)num_shapes * sizeof *windex); /* shape -> its widths entry */
+    bvh->curve_segs = aligned_alloc(64, (size_t)(bvh->num_shape_ids > 0 ? bvh->num_shape_ids : 1) * sizeof(CurveSeg));
     bvh->curve_widths = malloc((size_t)curves * sizeof(CurveWidths));
-    if (!bvh->curve_segs || !bvh->curve_widths) return false;
-    bvh->num_curve_segs = num_shapes;
+    if (!windex || !bvh->curve_segs || !bvh->curve_widths) {
+        free(windex);
+        return false;
+    }
     uint32_t nw = 0;
     for (int i = 0; i < num_shapes; i++) {
         const Curve *c = shape_curve(&shapes[i]);
-        CurveSeg *s = &bvh->curve_segs[i];
-        const CurveWidths w = c ? (CurveWidths){c->w0, c->w1} : (CurveWidths){0.0f, 0.0f};
-        const bool same = nw > 0 && memcmp(&bvh->curve_widths[nw - 1], &w, sizeof w) == 0;
-        if (!c || !curve_seg_init(s, c, same ? nw - 1 : nw)) {
-            memset(s, 0, sizeof *s);
-            s->info = BVH_NO_CURVE_SEG;
-            continue;
-        }
-        if (!same) bvh->curve_widths[nw++] = w;
+        if (!c) continue;
+        const CurveWidths w = {c->w0, c->w1};
+        if (nw == 0 || memcmp(&bvh->curve_widths[nw - 1], &w, sizeof w) != 0) bvh->curve_widths[nw++] = w;
+        windex[i] = nw - 1;
     }
     bvh->num_curve_widths = (int)nw;
+    bvh->num_curve_segs = bvh->num_shape_ids;
+    for (int j = 0; j < bvh->num_shape_ids; j++) {
+        const uint32_t k = bvh->shape_ids[j] - bvh->shape_base;
+        const Curve *c = shape_curve(&shapes[k]);
+        CurveSeg *s = &bvh->curve_segs[j];
+        if (!c || !curve_seg_init(s, c, windex[k])) {
+            memset(s, 0, sizeof *s);
+            s->info = BVH_NO_CURVE_SEG;
+        }
+    }
+    free(windex);
     return true;
 }
 
@@ -752,7 +763,6 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
     if (!bvh->units || !bvh->spheres || !bvh->shape_ids) goto oom;
     bvh->shapes = geom->shapes;
     bvh->shape_base = shape_base;
-    if (!build_curve_segs(bvh, geom->shapes, num_shapes)) goto oom;
 
     BBox root = nodes[0].box;
     Emitter e = {nodes, idx, positions, tri_indices, (uint32_t)num_tris, spheres, shape_base, (uint32_t)num_ids,
@@ -773,6 +783,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
         collapse(&e, 0, 0);
     }
     assert(e.cursor == units); /* count_wide() counted what collapse() wrote */
+    if (!build_curve_segs(bvh, geom->shapes, num_shapes)) goto oom;
     bvh->num_prims = num_ids;
     bvh->bounds = root;
     /* Every node's box lies in the root's widened one (widen() is monotonic). */
