@@ -197,11 +197,52 @@ static inline unsigned node_hit8_fma(const BvhNode *n, const RayBox8 *q, F8 t_mi
 }
 #endif
 
+/* The shape in slot j of shape_ids: a curve's test on its compact record when it has one
+ * (bvh.h), which neither shape_ids nor the 384-byte AnalyticShape is read for; the same
+ * t, u, v either way. */
+static inline bool shape_hit(const Bvh *bvh, uint32_t j, const Ray *r, float *t, float *u, float *v)
+{
+    if (bvh->curve_segs && bvh->curve_segs[j].info != BVH_NO_CURVE_SEG)
+        return curve_seg_intersect(&bvh->curve_segs[j], bvh->curve_widths, r, t, u, v);
+    return shape_intersect(&bvh->shapes[bvh->shape_ids[j] - bvh->shape_base], r, t, u, v);
+}
+
+/* shape_leaf_intersect and _occluded through shape_hit: closest hit, ties keep the first.
+ * A leaf's records are consecutive lines, all requested first so their misses overlap. */
+static inline void shape_leaf_prefetch(const Bvh *bvh, uint32_t first, uint32_t count)
+{
+    if (!bvh->curve_segs || count < 2) return;
+    for (uint32_t i = 0; i < count; i++) _mm_prefetch((const char *)&bvh->curve_segs[first + i], _MM_HINT_T0);
+}
+static inline bool shape_leaf_hit(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
+{
+    const uint32_t first = bvh_ref_index(ref) & BVH_SHAPE_INDEX_MAX, count = bvh_ref_count(ref);
+    shape_leaf_prefetch(bvh, first, count);
+    bool found = false;
+    for (uint32_t j = first; j < first + count; j++) {
+        float t, u, v;
+        if (shape_hit(bvh, j, r, &t, &u, &v)) {
+            r->t_max = t;
+            hit->t = t; hit->u = u; hit->v = v; hit->prim = bvh->shape_ids[j];
+            found = true;
+        }
+    }
+    return found;
+}
+static inline bool shape_leaf_any(const Bvh *bvh, uint32_t ref, const Ray *r)
+{
+    const uint32_t first = bvh_ref_index(ref) & BVH_SHAPE_INDEX_MAX, count = bvh_ref_count(ref);
+    shape_leaf_prefetch(bvh, first, count);
+    for (uint32_t j = first; j < first + count; j++) {
+        float t, u, v;
+        if (shape_hit(bvh, j, r, &t, &u, &v)) return true;
+    }
+    return false;
+}
+
 static inline bool leaf_spheres(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
 {
-    if (ref & BVH_SHAPES)
-        return shape_leaf_intersect(bvh->shapes, bvh->shape_base, &bvh->shape_ids[bvh_ref_index(ref) & BVH_SHAPE_INDEX_MAX],
-                                    bvh_ref_count(ref), r, hit);
+    if (ref & BVH_SHAPES) return shape_leaf_hit(bvh, ref, r, hit);
     bool found = false;
     const BvhSphere *sp = &bvh->spheres[bvh_ref_index(ref)];
     for (uint32_t si = bvh_ref_count(ref); si > 0; si--, sp++) {
@@ -218,9 +259,7 @@ static inline bool leaf_spheres(const Bvh *bvh, uint32_t ref, Ray *r, Hit *hit)
 static inline bool leaf_occluded(const Bvh *bvh, uint32_t ref, const TriangleRayBlock *q, const Ray *r)
 {
     if (ref & BVH_SPHERES) { /* triangle leaves test nothing more than before shapes came */
-        if (ref & BVH_SHAPES)
-            return shape_leaf_occluded(bvh->shapes, bvh->shape_base,
-                                       &bvh->shape_ids[bvh_ref_index(ref) & BVH_SHAPE_INDEX_MAX], bvh_ref_count(ref), r);
+        if (ref & BVH_SHAPES) return shape_leaf_any(bvh, ref, r);
         const BvhSphere *sp = &bvh->spheres[bvh_ref_index(ref)];
         for (uint32_t si = bvh_ref_count(ref); si > 0; si--, sp++) {
             float t;

@@ -47,6 +47,7 @@ typedef struct BvhNode {
  * triangle leaves, which never carry BVH_SPHERES, keep their 27. */
 #define BVH_SHAPES 0x80000000u
 #define BVH_SHAPE_INDEX_MAX 0x03ffffffu
+#define BVH_NO_CURVE_SEG 0xffffffffu /* a CurveSeg.info no segment has (type 3) */
 static inline bool bvh_ref_is_leaf(uint32_t ref) { return (ref & BVH_LEAF) != 0u; }
 static inline uint32_t bvh_ref_index(uint32_t ref) { return ref >> BVH_INDEX_SHIFT; }
 static inline uint32_t bvh_ref_count(uint32_t ref) { return ((ref >> BVH_COUNT_SHIFT) & 7u) + 1u; }
@@ -75,6 +76,13 @@ typedef struct Bvh {
     uint32_t *shape_ids;         /* the shape leaves' scene primitive ids, leaf by leaf */
     int num_shape_ids;
     uint32_t shape_base;         /* shape k has id shape_base + k */
+    /* When the scene has curves: the compact record (curve.h) of the shape in slot j of
+     * shape_ids is curve_segs[j] (info BVH_NO_CURVE_SEG for other shapes and ribbons,
+     * tested on their AnalyticShape), and the widths a curve's segments share: a curve
+     * candidate costs one 64-byte line, in its leaf's run, not six lines and an id. */
+    CurveSeg *curve_segs;        /* num_curve_segs = num_shape_ids, 64-byte aligned */
+    CurveWidths *curve_widths;
+    int num_curve_segs, num_curve_widths;
     int num_leaves;
     int num_prims;
     BBox bounds;

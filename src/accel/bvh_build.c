@@ -635,6 +635,46 @@ static int build_threads(void)
     return n < 1 ? 1 : (n > BVH_MAX_BUILD_THREADS ? BVH_MAX_BUILD_THREADS : (int)n);
 }
 
+/* The compact curve records (bvh.h), when the scene has curves, one per shape_ids slot
+ * (a curve cut in pieces has one in each leaf holding one), in leaf order: a leaf's
+ * records are consecutive lines, reached without reading shape_ids. A curve's segments
+ * are consecutive shapes with the same widths, which they share: a widths entry is
+ * reused while they repeat bit for bit. False when out of memory. */
+static bool build_curve_segs(Bvh *bvh, const AnalyticShape *shapes, int num_shapes)
+{
+    int curves = 0;
+    for (int i = 0; i < num_shapes; i++) curves += shape_curve(&shapes[i]) != NULL;
+    if (curves == 0) return true;
+    uint32_t *windex = malloc((size_t)num_shapes * sizeof *windex); /* shape -> its widths entry */
+    bvh->curve_segs = aligned_alloc(64, (size_t)(bvh->num_shape_ids > 0 ? bvh->num_shape_ids : 1) * sizeof(CurveSeg));
+    bvh->curve_widths = malloc((size_t)curves * sizeof(CurveWidths));
+    if (!windex || !bvh->curve_segs || !bvh->curve_widths) {
+        free(windex);
+        return false;
+    }
+    uint32_t nw = 0;
+    for (int i = 0; i < num_shapes; i++) {
+        const Curve *c = shape_curve(&shapes[i]);
+        if (!c) continue;
+        const CurveWidths w = {c->w0, c->w1};
+        if (nw == 0 || memcmp(&bvh->curve_widths[nw - 1], &w, sizeof w) != 0) bvh->curve_widths[nw++] = w;
+        windex[i] = nw - 1;
+    }
+    bvh->num_curve_widths = (int)nw;
+    bvh->num_curve_segs = bvh->num_shape_ids;
+    for (int j = 0; j < bvh->num_shape_ids; j++) {
+        const uint32_t k = bvh->shape_ids[j] - bvh->shape_base;
+        const Curve *c = shape_curve(&shapes[k]);
+        CurveSeg *s = &bvh->curve_segs[j];
+        if (!c || !curve_seg_init(s, c, windex[k])) {
+            memset(s, 0, sizeof *s);
+            s->info = BVH_NO_CURVE_SEG;
+        }
+    }
+    free(windex);
+    return true;
+}
+
 CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
 {
     const Vec3 *positions = geom->positions;
@@ -743,6 +783,7 @@ CstStatus bvh_build(Bvh *bvh, const AccelGeometry *geom, CstError *err)
         collapse(&e, 0, 0);
     }
     assert(e.cursor == units); /* count_wide() counted what collapse() wrote */
+    if (!build_curve_segs(bvh, geom->shapes, num_shapes)) goto oom;
     bvh->num_prims = num_ids;
     bvh->bounds = root;
     /* Every node's box lies in the root's widened one (widen() is monotonic). */
@@ -767,11 +808,14 @@ void bvh_free(Bvh *bvh)
     free(bvh->units);
     free(bvh->spheres);
     free(bvh->shape_ids);
+    free(bvh->curve_segs);
+    free(bvh->curve_widths);
     memset(bvh, 0, sizeof *bvh);
 }
 
 size_t bvh_memory_bytes(const Bvh *bvh)
 {
     return bvh_num_units(bvh) * BVH_UNIT + (size_t)bvh->num_spheres * sizeof(BvhSphere) +
-           (size_t)bvh->num_shape_ids * sizeof(uint32_t);
+           (size_t)bvh->num_shape_ids * sizeof(uint32_t) + (size_t)bvh->num_curve_segs * sizeof(CurveSeg) +
+           (size_t)bvh->num_curve_widths * sizeof(CurveWidths);
 }

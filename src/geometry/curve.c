@@ -197,13 +197,18 @@ static Vec3 ribbon_normal(const Curve *c, float u)
 /* One query: the ray's unit direction (world) and the interval in ray-space z (distance
  * along the unit direction); z_best shrinks with every hit. */
 typedef struct CurveQuery {
-    const Curve *c;
+    const Curve *c;     /* ribbons: the normals (NULL on a CurveSeg, which is never a ribbon) */
+    float w0, w1;       /* the whole curve's widths */
+    int type;           /* CurveType */
     Vec3 dir;
     float len;          /* |r->d|: t = z / len */
     float t_min;
     float t_best;       /* the closest hit so far (or r->t_max) */
     float u, v;
 } CurveQuery;
+
+/* The width at the whole curve's u: curve_width's expression on the query's copies. */
+static inline float q_width(const CurveQuery *q, float u) { return (1.0f - u) * q->w0 + u * q->w1; }
 
 /* Whether the box of cp widened by half_w contains the ray's line x = y = 0 within
  * z in [0, z_max]. */
@@ -220,7 +225,6 @@ static inline bool box_meets_ray(const Vec3 cp[4], float half_w, float z_max)
  * parameter must be within half the width of the ray and inside the interval. */
 static bool leaf_hit(CurveQuery *q, const Vec3 cp[4], float ua, float ub)
 {
-    const Curve *c = q->c;
     /* (cp1 - cp0) . (0 - cp0) >= 0 and (cp2 - cp3) . (0 - cp3) >= 0 in xy */
     if ((cp[1].x - cp[0].x) * -cp[0].x + (cp[1].y - cp[0].y) * -cp[0].y < 0.0f) return false;
     if ((cp[2].x - cp[3].x) * -cp[3].x + (cp[2].y - cp[3].y) * -cp[3].y < 0.0f) return false;
@@ -228,9 +232,9 @@ static bool leaf_hit(CurveQuery *q, const Vec3 cp[4], float ua, float ub)
     if (!(denom > 0.0f)) return false;
     const float w = (-cp[0].x * sx - cp[0].y * sy) / denom;
     const float u = clampf(ua + w * (ub - ua), ua, ub);
-    const float width = curve_width(c, u);
+    const float width = q_width(q, u);
     float hit_w = width;
-    if (c->type == CURVE_RIBBON) hit_w *= fabsf(v3_dot(ribbon_normal(c, u), q->dir)); /* its projected width */
+    if (q->type == CURVE_RIBBON) hit_w *= fabsf(v3_dot(ribbon_normal(q->c, u), q->dir)); /* its projected width */
     if (!(hit_w > 0.0f)) return false;
     Vec3 dpc;
     const Vec3 pc = curve_eval(cp, clampf(w, 0.0f, 1.0f), &dpc);
@@ -269,7 +273,7 @@ static bool recurse(CurveQuery *q, const Vec3 cp[4], float ua, float ub, int dep
     const float us[3] = {ua, 0.5f * (ua + ub), ub};
     bool hit = false;
     for (int h = 0; h < 2; h++) {
-        const float half_w = 0.5f * maxf(curve_width(q->c, us[h]), curve_width(q->c, us[h + 1]));
+        const float half_w = 0.5f * maxf(q_width(q, us[h]), q_width(q, us[h + 1]));
         /* z bound from the closest hit so far, widened by 2^-20 for its rounding */
         if (!box_meets_ray(&cps[3 * h], half_w, q->t_best * q->len * (1.0f + 0x1p-20f))) continue;
         hit |= recurse(q, &cps[3 * h], us[h], us[h + 1], depth - 1);
@@ -292,9 +296,9 @@ static void ray_frame(Vec3 dir, Vec3 chord, Vec3 *ex, Vec3 *ey)
 /* Whether the ray's line passes within reach of the chord: the closest points of a
  * line and a segment (the segment's parameter clamped, the line's free). Conservative:
  * false only when the distance exceeds the reach by more than the rounding. */
-static inline bool near_chord(const Curve *c, const Ray *r)
+static inline bool near_chord(const Vec3 cpw[4], float reach, const Ray *r)
 {
-    const Vec3 e = v3_sub(c->cp[3], c->cp[0]), w = v3_sub(r->o, c->cp[0]);
+    const Vec3 e = v3_sub(cpw[3], cpw[0]), w = v3_sub(r->o, cpw[0]);
     const float a = v3_dot(r->d, r->d), b = v3_dot(r->d, e), ce = v3_dot(e, e);
     const float dw = v3_dot(r->d, w), ew = v3_dot(e, w);
     const float denom = a * ce - b * b;
@@ -305,30 +309,58 @@ static inline bool near_chord(const Curve *c, const Ray *r)
     const float t = -v3_dot(r->d, q) / a;
     const Vec3 gap = v3_madd(q, r->d, t);
     /* slack for the float rounding of q + t d, which cancels from |q| down to |gap| */
-    const float lim = c->reach + 1e-5f * v3_max_abs(q);
+    const float lim = reach + 1e-5f * v3_max_abs(q);
     return v3_length2(gap) <= lim * lim;
 }
 
-bool curve_intersect(const Curve *c, const Ray *r, float *t, float *u, float *v)
+/* The test past near_chord, on either record: the segment's control points cpw (world),
+ * its u range, the whole curve's widths, type and depth; c for a ribbon's normals. */
+static inline bool intersect_near(const Vec3 cpw[4], float u0, float u1, float w0, float w1, int type, int depth,
+                                  const Curve *c, const Ray *r, float *t, float *u, float *v)
 {
-    if (!near_chord(c, r)) return false;
     const float len = v3_length(r->d);
     if (!(len > 0.0f)) return false;
-    CurveQuery q = {c, v3_scale(r->d, 1.0f / len), len, r->t_min, r->t_max, 0.0f, 0.0f};
+    CurveQuery q = {c, w0, w1, type, v3_scale(r->d, 1.0f / len), len, r->t_min, r->t_max, 0.0f, 0.0f};
     Vec3 ex, ey;
-    ray_frame(q.dir, v3_sub(c->cp[3], c->cp[0]), &ex, &ey);
+    ray_frame(q.dir, v3_sub(cpw[3], cpw[0]), &ex, &ey);
     Vec3 cp[4];
     for (int i = 0; i < 4; i++) {
-        Vec3 d = v3_sub(c->cp[i], r->o);
+        Vec3 d = v3_sub(cpw[i], r->o);
         cp[i] = v3(v3_dot(d, ex), v3_dot(d, ey), v3_dot(d, q.dir));
     }
-    const float half_w = 0.5f * maxf(curve_width(c, c->u0), curve_width(c, c->u1));
+    const float half_w = 0.5f * maxf(q_width(&q, u0), q_width(&q, u1));
     if (!box_meets_ray(cp, half_w, q.t_best * len * (1.0f + 0x1p-20f))) return false;
-    if (!recurse(&q, cp, c->u0, c->u1, c->depth)) return false;
+    if (!recurse(&q, cp, u0, u1, depth)) return false;
     *t = q.t_best;
     *u = q.u;
     *v = q.v;
     return true;
+}
+
+bool curve_intersect(const Curve *c, const Ray *r, float *t, float *u, float *v)
+{
+    if (!near_chord(c->cp, c->reach, r)) return false;
+    return intersect_near(c->cp, c->u0, c->u1, c->w0, c->w1, c->type, c->depth, c, r, t, u, v);
+}
+
+bool curve_seg_init(CurveSeg *s, const Curve *c, uint32_t index)
+{
+    if (c->type == CURVE_RIBBON || index > CURVE_SEG_INDEX_MAX || c->depth > 15) return false;
+    for (int i = 0; i < 4; i++) s->cp[i] = c->cp[i];
+    s->reach = c->reach;
+    s->u0 = c->u0;
+    s->u1 = c->u1;
+    s->info = (uint32_t)c->depth << 28 | (uint32_t)c->type << 26 | index;
+    return true;
+}
+
+bool curve_seg_intersect(const CurveSeg *s, const CurveWidths *widths, const Ray *r, float *t, float *u, float *v)
+{
+    /* the widths' line is touched only by rays near the chord */
+    if (!near_chord(s->cp, s->reach, r)) return false;
+    const CurveWidths w = widths[s->info & CURVE_SEG_INDEX_MAX];
+    return intersect_near(s->cp, s->u0, s->u1, w.w0, w.w1, (int)(s->info >> 26 & 3u), (int)(s->info >> 28), NULL, r,
+                          t, u, v);
 }
 
 /* ------------------------------------------------------------ surface */

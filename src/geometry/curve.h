@@ -34,6 +34,30 @@ typedef struct Curve {
     float inv_sin_angle;  /* ribbon: 1 / sin(normal_angle), for the slerp */
 } Curve;
 
+/* A flat or cylinder segment's compact record for the accels' hot path (issue 28): what
+ * curve_intersect reads before the widths, in one 64-byte line (a Curve inside an
+ * AnalyticShape spans six), so 1M segments take 64 MB, not 384. The whole curve's widths,
+ * shared by its segments, are a CurveWidths entry of their own that the test reads only
+ * once the ray passes the chord's reach. Ribbons (their normals) have no compact record. */
+typedef struct CurveSeg {
+    Vec3 cp[4];     /* Curve.cp, bit for bit */
+    float reach;    /* Curve.reach */
+    float u0, u1;   /* Curve.u0, u1 */
+    uint32_t info;  /* depth << 28 | type << 26 | the CurveWidths entry's index */
+} CurveSeg;
+_Static_assert(sizeof(CurveSeg) == 64, "CurveSeg: one cache line");
+typedef struct CurveWidths { float w0, w1; } CurveWidths; /* Curve.w0, w1 */
+#define CURVE_SEG_INDEX_MAX 0x03ffffffu
+
+/* The compact record of c with its widths at widths[index] (which the caller fills with
+ * c->w0, c->w1). False for ribbons and an index above CURVE_SEG_INDEX_MAX: such a
+ * segment keeps curve_intersect on its Curve. */
+bool curve_seg_init(CurveSeg *s, const Curve *c, uint32_t index);
+
+/* curve_intersect on the compact record: the same arithmetic on the same values, so the
+ * same answer (t, u, v) to the bit. widths: the array curve_seg_init's index is into. */
+bool curve_seg_intersect(const CurveSeg *s, const CurveWidths *widths, const Ray *r, float *t, float *u, float *v);
+
 /* The segment [u0, u1] of the whole cubic Bezier whole_cp (world space), widths w0, w1 at
  * the whole curve's ends, ribbon normals n (two, world space, any length; NULL unless
  * type is CURVE_RIBBON). False for non-finite input, negative widths, both widths 0, a

@@ -103,6 +103,13 @@ void shape_release(AnalyticShape *s);
 bool shape_init_curve(AnalyticShape *s, const Vec3 whole_cp[4], float u0, float u1, float w0, float w1,
                       CurveType type, const Vec3 *n, bool flip);
 
+/* The shape's curve segment, NULL for other kinds: for an accel's compact curve records
+ * (curve_seg_init). */
+static inline const Curve *shape_curve(const AnalyticShape *s)
+{
+    return s->p.type == SHAPE_TAG_CURVE ? &s->cv : NULL;
+}
+
 /* The boxes an accel may bound the shape by, their union holding every hit: a curve's
  * pieces (curve_piece_bounds), else the one box s->bounds. Returns their count. */
 static inline int shape_piece_bounds(const AnalyticShape *s, BBox boxes[CURVE_MAX_PIECES])

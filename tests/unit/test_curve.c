@@ -270,15 +270,24 @@ static void test_bases(void **state)
 }
 
 /* Every back end over 600 curve segments (150 curves split in 4) returns the list's hits
- * bit for bit (t, u, v, primitive). */
+ * bit for bit (t, u, v, primitive). Spheres among them (first, and one between every
+ * tenth curve's segments) make the BVH mix its compact curve records (bvh.h) with
+ * shapes tested on their AnalyticShape, and ribbons (every third curve) have no record. */
 static void test_backends_agree(void **state)
 {
     (void)state;
-    enum { NC = 150, NS = 4 };
-    AnalyticShape *shapes = malloc(NC * NS * sizeof *shapes);
+    enum { NC = 150, NS = 4, NQ = 4 + NC / 10 };
+    AnalyticShape *shapes = malloc((NC * NS + NQ) * sizeof *shapes);
     assert_non_null(shapes);
     Pcg32 rng;
     pcg32_seed(&rng, 28u, 3u);
+    int n = 0;
+    const ShapeParams sphere = {.type = SHAPE_TAG_SPHERE, .radius = 0.4f, .z_min = -0.4f, .z_max = 0.4f,
+                                .phi_max = 2.0f * CST_PI};
+    for (int q = 0; q < 4; q++) { /* drawn from their own stream: the curves and rays stay as they were */
+        const Transform m = transform_translate(v3(2.5f * (float)(q % 2) - 1.25f, 2.5f * (float)(q / 2) - 1.25f, 0.5f));
+        assert_true(shape_init(&shapes[n++], &sphere, &m));
+    }
     for (int c = 0; c < NC; c++) {
         Vec3 cp[4];
         float w0, w1;
@@ -286,13 +295,22 @@ static void test_backends_agree(void **state)
         if (c % 2) w0 *= 0.25f, w1 *= 0.25f; /* thin: the BVH bounds these by pieces */
         Vec3 off = rnd_v3(&rng, -3.0f, 3.0f);
         for (int i = 0; i < 4; i++) cp[i] = v3_add(cp[i], off);
-        for (int s = 0; s < NS; s++)
-            assert_true(shape_init_curve(&shapes[c * NS + s], cp, (float)s / NS, (float)(s + 1) / NS, w0, w1,
+        for (int s = 0; s < NS; s++) {
+            if (c % 10 == 5 && s == 2) { /* a sphere splitting the run of segments that share widths */
+                const Transform m = transform_translate(v3_scale(v3_add(cp[0], cp[3]), 0.5f));
+                assert_true(shape_init(&shapes[n++], &(ShapeParams){.type = SHAPE_TAG_SPHERE, .radius = 0.1f,
+                                                                    .z_min = -0.1f, .z_max = 0.1f,
+                                                                    .phi_max = 2.0f * CST_PI},
+                                       &m));
+            }
+            assert_true(shape_init_curve(&shapes[n++], cp, (float)s / NS, (float)(s + 1) / NS, w0, w1,
                                          (CurveType)(c % 3), c % 3 == 2 ? (Vec3[2]){cp[1], cp[2]} : NULL, false));
+        }
     }
+    assert_int_equal(n, NC * NS + NQ);
     AccelGeometry g = {0};
     g.shapes = shapes;
-    g.num_shapes = NC * NS;
+    g.num_shapes = n;
     Accel a[ACCEL_TYPE_COUNT];
     int na = 0, list = -1;
     for (int t = 0; t < ACCEL_TYPE_COUNT; t++) {
