@@ -96,6 +96,18 @@ static inline Scene *media_furnace(Scene *s, int med, float radius, float ball, 
     return s;
 }
 
+/* Issue 27's edge furnace (test_photon_media, test_sppm_media): a scattering-only ball of
+ * radius 1 and optical radius 2 (sigma_s 2, an interface sphere) in vacuum inside the
+ * emitting sphere of radius 4, the camera outside the ball: L everywhere, and most camera
+ * vertices in the medium lie near its boundary, where a volume estimate's ball reaches
+ * into the vacuum. Returns the committed scene. */
+static inline Scene *media_edge_furnace(Color L)
+{
+    Scene *s = scene_create();
+    const int med = media_add_homogeneous(s, color_s(0.0f), color_s(2.0f), color_s(0.0f), 0.0f);
+    return media_furnace(s, med, 4.0f, 1.0f, 3.5f, L);
+}
+
 /* The path tracer's furnace check (test_media, test_grid_media): the first `variants` of MIS,
  * phase/BSDF sampling only and NEE only render s (32 x 32, spp, seeds seed + i), every 8 x 8
  * block's mean within Z_LIMIT standard errors of L (plus float rounding of zero-variance

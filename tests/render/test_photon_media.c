@@ -111,23 +111,20 @@ static void test_ball_fraction(void **state)
     scene_destroy(s);
 }
 
-/* Issue 27, the ball estimate at a medium's boundary: a scattering-only ball (radius
- * EDGE_BALL, an interface sphere, optical radius 2) in vacuum inside the furnace's emitting
+/* Issue 27, the ball estimate at a medium's boundary (media_edge_furnace): a scattering-only
+ * ball (radius 1, an interface sphere, optical radius 2) in vacuum inside the furnace's emitting
  * sphere, the camera outside the ball: still L everywhere. The camera's medium vertices lie
  * mostly within EDGE_R of the ball's surface, where the ball of the volume estimate reaches
  * into the vacuum, which holds no photons: without volume_ball.c's correction (dividing by
  * the part of the ball inside the medium) the image is resolved low, every block that
  * shows the ball (measured in the commit that added this test, red, whole image). */
-#define EDGE_BALL 1.0f
 #define EDGE_R 0.25
 enum { EDGE_PHOTONS = 16000, EDGE_RENDERS = 16 };
 static void test_edge_furnace(void **state)
 {
     (void)state;
     const Color L = color_rgb(1.0f, 0.5f, 0.25f);
-    Scene *s = scene_create();
-    const int med = media_add_homogeneous(s, color_s(0.0f), color_s(2.0f), color_s(0.0f), 0.0f);
-    s = media_furnace(s, med, 4.0f, EDGE_BALL, 3.5f, L);
+    Scene *s = media_edge_furnace(L);
     CstRenderSettings st;
     cst_render_settings_init(&st);
     st.spp = 4;

@@ -81,9 +81,7 @@ static void test_edge_furnace(void **state)
 {
     (void)state;
     const Color L = color_rgb(1.0f, 0.5f, 0.25f);
-    Scene *s = scene_create();
-    const int med = media_add_homogeneous(s, color_s(0.0f), color_s(2.0f), color_s(0.0f), 0.0f);
-    s = media_furnace(s, med, 4.0f, 1.0f, 3.5f, L);
+    Scene *s = media_edge_furnace(L);
     CstRenderSettings st;
     cst_render_settings_init(&st);
     st.spp = 8; /* iterations */
