@@ -96,17 +96,6 @@ static inline Scene *media_furnace(Scene *s, int med, float radius, float ball, 
     return s;
 }
 
-/* Issue 27's edge furnace (test_photon_media, test_sppm_media): a scattering-only ball of
- * radius 1 and optical radius 2 (sigma_s 2, an interface sphere) in vacuum inside the
- * emitting sphere of radius 4, the camera outside the ball: L everywhere, and most camera
- * vertices in the medium lie near its boundary, where a volume estimate's ball reaches
- * into the vacuum. Returns the committed scene. */
-static inline Scene *media_edge_furnace(Color L)
-{
-    Scene *s = scene_create();
-    const int med = media_add_homogeneous(s, color_s(0.0f), color_s(2.0f), color_s(0.0f), 0.0f);
-    return media_furnace(s, med, 4.0f, 1.0f, 3.5f, L);
-}
 
 /* The path tracer's furnace check (test_media, test_grid_media): the first `variants` of MIS,
  * phase/BSDF sampling only and NEE only render s (32 x 32, spp, seeds seed + i), every 8 x 8
@@ -223,5 +212,29 @@ static inline void media_furnace_check(const Scene *s, CstRenderSettings st, Cst
                   cst_integrator_name(integ), r.stat[0].mean[0], r.stat[0].mean[1], r.stat[0].mean[2],
                   r.stat[0].se[0], (double)L.c[0], (double)L.c[1], (double)L.c[2]);
 }
+
+/* Issue 27's edge furnace (test_photon_media, test_sppm_media): a scattering-only ball of
+ * radius 1 and optical radius 2 (sigma_s 2, an interface sphere) in vacuum inside the
+ * emitting sphere of radius 4, the camera outside the ball: L everywhere, and most camera
+ * vertices in the medium lie near its boundary, where a volume estimate's ball of radius
+ * `radius` reaches into the vacuum. integ (photon or sppm) renders it `renders` times with
+ * spp samples (iterations) of `photons` photons, media_furnace_check's 4-sigma test. */
+static inline void media_edge_furnace_check(CstIntegrator integ, int spp, float radius, int photons, int renders,
+                                            CstColorMode mode)
+{
+    const Color L = color_rgb(1.0f, 0.5f, 0.25f);
+    Scene *s = scene_create();
+    const int med = media_add_homogeneous(s, color_s(0.0f), color_s(2.0f), color_s(0.0f), 0.0f);
+    s = media_furnace(s, med, 4.0f, 1.0f, 3.5f, L);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.spp = spp;
+    st.photon_radius = radius;
+    st.photons = photons;
+    st.color_mode = mode;
+    media_furnace_check(s, st, integ, renders, 300, L, 0.0, "edge of a scattering ball");
+    scene_destroy(s);
+}
+
 
 #endif

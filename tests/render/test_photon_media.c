@@ -111,7 +111,7 @@ static void test_ball_fraction(void **state)
     scene_destroy(s);
 }
 
-/* Issue 27, the ball estimate at a medium's boundary (media_edge_furnace): a scattering-only
+/* Issue 27, the ball estimate at a medium's boundary (media_edge_furnace_check): a scattering-only
  * ball (radius 1, an interface sphere, optical radius 2) in vacuum inside the furnace's emitting
  * sphere, the camera outside the ball: still L everywhere. The camera's medium vertices lie
  * mostly within EDGE_R of the ball's surface, where the ball of the volume estimate reaches
@@ -123,16 +123,7 @@ enum { EDGE_PHOTONS = 16000, EDGE_RENDERS = 16 };
 static void test_edge_furnace(void **state)
 {
     (void)state;
-    const Color L = color_rgb(1.0f, 0.5f, 0.25f);
-    Scene *s = media_edge_furnace(L);
-    CstRenderSettings st;
-    cst_render_settings_init(&st);
-    st.spp = 4;
-    st.photon_radius = EDGE_R;
-    st.photons = EDGE_PHOTONS;
-    st.color_mode = g_color_mode;
-    media_furnace_check(s, st, CST_INTEGRATOR_PHOTON, EDGE_RENDERS, 300, L, 0.0, "edge of a scattering ball");
-    scene_destroy(s);
+    media_edge_furnace_check(CST_INTEGRATOR_PHOTON, 4, EDGE_R, EDGE_PHOTONS, EDGE_RENDERS, g_color_mode);
 }
 
 /* The fog box's settings. FOG_R_SMALL (2.5% of the box's width) holds a few volume photons

@@ -80,16 +80,7 @@ enum { EDGE_PHOTONS = 4000, EDGE_RENDERS = 16 };
 static void test_edge_furnace(void **state)
 {
     (void)state;
-    const Color L = color_rgb(1.0f, 0.5f, 0.25f);
-    Scene *s = media_edge_furnace(L);
-    CstRenderSettings st;
-    cst_render_settings_init(&st);
-    st.spp = 8; /* iterations */
-    st.photon_radius = EDGE_R0;
-    st.photons = EDGE_PHOTONS;
-    st.color_mode = g_color_mode;
-    media_furnace_check(s, st, CST_INTEGRATOR_SPPM, EDGE_RENDERS, 300, L, 0.0, "edge of a scattering ball");
-    scene_destroy(s);
+    media_edge_furnace_check(CST_INTEGRATOR_SPPM, 8 /* iterations */, EDGE_R0, EDGE_PHOTONS, EDGE_RENDERS, g_color_mode);
 }
 
 /* The fog box's settings. The initial radius, 2.5% of the box's width, is for the balls
