@@ -19,6 +19,9 @@ build=${FUZZ_BUILD_DIR:-build-fuzz}
 command -v clang >/dev/null || { echo "fuzz: clang (with libFuzzer) is needed" >&2; exit 2; }
 # FUZZ_SPECTRUM_TABLE: a spectrum table another tree solved, copied instead of solved
 # (CMakeLists.txt, CST_SPECTRUM_TABLE_FROM). -g1: line tables, all a report needs.
+# Ninja where it is installed and the tree is new (Make builds the listed targets one after
+# another, each a single source file: .ci/run). An existing tree keeps its generator.
+command -v ninja >/dev/null && export CMAKE_GENERATOR=${CMAKE_GENERATOR:-Ninja}
 CC=clang cmake -S . -B "$build" -DCST_FUZZ=ON -DCST_BUILD_TESTS=OFF -DCST_EMBREE=OFF \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" \
   ${FUZZ_SPECTRUM_TABLE:+-DCST_SPECTRUM_TABLE_FROM="$FUZZ_SPECTRUM_TABLE"} >/dev/null

@@ -6,6 +6,7 @@ set -euo pipefail
 
 PKGS=(
   build-essential cmake pkg-config
+  ninja-build         # CI's second and later build trees (.ci/run, scripts/fuzz.sh)
   clang               # the second compiler of CI's render identity check
   libjansson-dev      # JSON scenes with line/column errors
   libpng-dev          # PNG output
