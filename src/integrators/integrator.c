@@ -19,6 +19,7 @@
 
 #include "core/array.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "integrators/media_lights.h"
 #include "integrators/sss_walk.h"
 #include "math/motion.h"
@@ -28,6 +29,10 @@
  * enough that an item's splat list amortises its bookkeeping. Fixed, because chunk
  * boundaries decide the order in which splats are added. */
 enum { LIGHT_CHUNK = 1024 };
+/* Entries per light path a chunk's vertex and splat lists first make room for (light_chunk);
+ * a guess of the order of a path's stores in an enclosed diffuse scene (lists still grow
+ * past it, and a smaller need costs only untouched address space). */
+enum { LIGHT_RESERVE = 4 };
 
 /* ------------------------------------------------------------------ camera tiles */
 
@@ -233,9 +238,17 @@ static void light_chunk(void *ctx, int chunk, int worker)
     out->n = 0;
     int first = chunk * LIGHT_CHUNK;
     int last = first + LIGHT_CHUNK < L->light_paths ? first + LIGHT_CHUNK : L->light_paths;
+    /* The first iteration's lists start with room for LIGHT_RESERVE entries per path
+     * instead of doubling from 16: each doubling of a block below malloc's mmap threshold
+     * copies it: on SmallVCM's box memmove was 7.7% of a 4-iteration bdpt render's CPU
+     * time, nearly all of it in the first iteration (perf; docs/benchmarks-history.md,
+     * issue 32). Capacity only: the lists' contents, and so the images, are unchanged. */
+    const size_t reserve = (size_t)(last - first) * LIGHT_RESERVE;
+    if (!array_reserve(out, reserve)) out->oom = 1;
     if (it->kind == INTEGRATOR_BIDIR) {
         SubpathVertexList *verts = &L->chunks[chunk].verts;
         verts->n = 0;
+        if (!array_reserve(verts, reserve)) verts->oom = 1;
         for (int i = first; i < last; i++) {
             Sampler rng;
             bidir_light_stream(it, it->iteration, i, &rng);
@@ -294,6 +307,27 @@ void integrator_bidir_light_path(const Integrator *it, int iteration, int path, 
  * path_start[i]), and for VCM the merging grid is built over them. What is serial is
  * here: sizes, offsets and the grid's corner; the copying and sorting are steps
  * (bidir_gather_chunk, bidir_grid_range). Returns 0 on OOM. */
+/* Room for `need` elements of `elem` bytes at *data (capacity *cap) without keeping the
+ * contents, for the iteration-wide arrays that every iteration rewrites whole: a quarter
+ * more than asked (the totals vary a little between iterations), in huge pages where the
+ * system offers them (memory_alloc_large). Merging reads the light vertices and the grid's
+ * bucket bounds at random over tens of megabytes, and with 4 KiB pages nearly each read
+ * was a TLB miss; the first iteration also faulted every 4 KiB page in (perf: the kernel's
+ * page faults 8% of a 4-iteration bdpt render; docs/benchmarks-history.md, issue 32).
+ * False on overflow or OOM, with *data NULL and *cap 0 (light_free frees it). */
+static bool scratch_grow(void *data, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap) return true;
+    const size_t want = need + need / 4;
+    void *old;
+    memcpy(&old, data, sizeof old);
+    free(old);
+    void *p = want >= need && want <= SIZE_MAX / elem ? memory_alloc_large(want * elem) : NULL;
+    memcpy(data, &p, sizeof p);
+    *cap = p ? want : 0;
+    return p != NULL;
+}
+
 static int bidir_prepare(LightIterations *L, int threads)
 {
     size_t total = 0;
@@ -305,10 +339,10 @@ static int bidir_prepare(LightIterations *L, int threads)
         lo = v3_min(lo, L->chunks[c].lo);
     }
     if (total > UINT32_MAX - 1) return 0;
-    if (!array_grow(&L->vertices, &L->cap[0], total, sizeof *L->vertices) ||
-        !array_grow(&L->cell_items, &L->cap[1], total, sizeof *L->cell_items) ||
-        !array_grow(&L->cell_start, &L->cap[2], total + 1, sizeof *L->cell_start) ||
-        !array_grow(&L->cell_of, &L->cap[3], total, sizeof *L->cell_of))
+    if (!scratch_grow(&L->vertices, &L->cap[0], total, sizeof *L->vertices) ||
+        !scratch_grow(&L->cell_items, &L->cap[1], total, sizeof *L->cell_items) ||
+        !scratch_grow(&L->cell_start, &L->cap[2], total + 1, sizeof *L->cell_start) ||
+        !scratch_grow(&L->cell_of, &L->cap[3], total, sizeof *L->cell_of))
         return 0;
     L->total = total;
     uint32_t *ps = L->path_start;
