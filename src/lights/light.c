@@ -301,12 +301,12 @@ static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, 
  * 1 / omega per unit solid angle); outside that range, by area. Sampling and the MIS density
  * both decide here, from the same floats, so they always agree. pbrt-v4's extra bilinear
  * warp by |cos theta| at the vertices is not applied. */
-static bool tri_solid_angle(const EmitterSampler *s, const EmitterGeometry *g, const Emitter *em, Vec3 x, float *omega)
+static bool tri_solid_angle(const EmitterSampler *s, const EmitterGeometry *g, const Emitter *em, Vec3 x, SphTri *tri)
 {
     if (!s->solid_angle || (int)em->prim >= g->num_triangles) return false;
     const int32_t *t = &g->tri_indices[3 * em->prim];
-    *omega = sph_triangle_solid_angle(x, g->positions[t[0]], g->positions[t[1]], g->positions[t[2]]);
-    return *omega >= SPH_MIN_SOLID_ANGLE && *omega <= SPH_MAX_SOLID_ANGLE;
+    (void)sph_tri_init(tri, x, g->positions[t[0]], g->positions[t[1]], g->positions[t[2]]);
+    return tri->solid_angle >= SPH_MIN_SOLID_ANGLE && tri->solid_angle <= SPH_MAX_SOLID_ANGLE;
 }
 
 /* light_area_pdf_w for emitter e picked with probability pmf (pdf_a = pmf / area: with
@@ -315,8 +315,9 @@ static float area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e
                         float cos_l, bool nee)
 {
     const Emitter *em = &s->light[e].u.area;
-    float omc, sin2, omega;
-    if (nee && tri_solid_angle(s, g, em, x, &omega)) return pmf / omega;
+    float omc, sin2;
+    SphTri tri;
+    if (nee && tri_solid_angle(s, g, em, x, &tri)) return pmf / tri.solid_angle;
     const Sphere *sp = emitter_sphere(em, g);
     if (sp && sphere_cone(sp, x, &omc, &sin2)) return pmf / (2.0f * CST_PI * omc);
     /* triangles, analytic shapes, spheres from inside: by area, pdf_w = pdf_a dist^2 / |cos| */
@@ -346,12 +347,13 @@ static float delta_emit_pdf_w(const Light *l, Vec3 w)
  * (tri_solid_angle): where the ray x + t w meets the triangle's plane, with its
  * texture coordinates. False when the direction misses the plane (rounding at an edge seen
  * edge-on). */
-static bool tri_sample_solid_angle(const Emitter *e, const EmitterGeometry *g, Vec3 x, Vec2 u, Vec3 *p, Vec2 *uv)
+static bool tri_sample_solid_angle(const Emitter *e, const EmitterGeometry *g, const SphTri *tri, Vec3 x, Vec2 u,
+                                   Vec3 *p, Vec2 *uv)
 {
     const int32_t *t = &g->tri_indices[3 * e->prim];
     Vec3 a = g->positions[t[0]], b = g->positions[t[1]], c = g->positions[t[2]];
     Vec3 w;
-    if (!sph_triangle_sample(x, a, b, c, u, &w)) return false;
+    if (!sph_tri_sample(tri, u, &w)) return false;
     float wn = v3_dot(w, e->n);
     float tt = v3_dot(v3_sub(a, x), e->n) / wn;
     if (!(tt > 0.0f) || !isfinite(tt)) return false;
@@ -374,12 +376,14 @@ static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const Emit
     const float pdf_a = pmf / s->light[i].u.area.area; /* == s->pdf_a[i] for the power's pmf */
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
-    float omc = 0.0f, sin2 = 0.0f, omega = 0.0f;
+    float omc = 0.0f, sin2 = 0.0f;
+    SphTri tri = {.solid_angle = 0.0f};
     const Sphere *sp = emitter_sphere(e, g);
     const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
-    const bool solid = nee && tri_solid_angle(s, g, e, x, &omega);
+    const bool solid = nee && tri_solid_angle(s, g, e, x, &tri);
+    const float omega = tri.solid_angle;
     if (solid) {
-        if (!tri_sample_solid_angle(e, g, x, u, &out->p, &uv)) return false;
+        if (!tri_sample_solid_angle(e, g, &tri, x, u, &out->p, &uv)) return false;
         out->n = e->n;
     } else if (cone) {
         sphere_sample_cone(sp, x, u, omc, sin2, &out->n);

@@ -33,23 +33,47 @@ static inline double angle_between(D3 a, D3 b)
     return 2.0 * asin(clampd(0.5 * d3_len(d3_sub(b, a)), 0.0, 1.0));
 }
 
-float sph_triangle_solid_angle(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2)
+/* Van Oosterom & Strackee's solid angle from unit directions a, b, c. */
+static float solid_angle_of(D3 a, D3 b, D3 c)
 {
-    D3 o = d3_of(x), a, b, c;
-    if (!d3_unit(d3_sub(d3_of(p0), o), &a) || !d3_unit(d3_sub(d3_of(p1), o), &b) ||
-        !d3_unit(d3_sub(d3_of(p2), o), &c))
-        return 0.0f;
     double num = fabs(d3_dot(a, d3_cross(b, c)));
     double den = 1.0 + d3_dot(a, b) + d3_dot(b, c) + d3_dot(c, a);
     return (float)fabs(2.0 * atan2(num, den));
 }
 
-bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w)
+static void d3_store(double out[3], D3 v) { out[0] = v.x; out[1] = v.y; out[2] = v.z; }
+static D3 d3_load(const double v[3]) { return d3(v[0], v[1], v[2]); }
+
+bool sph_tri_init(SphTri *t, Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2)
 {
     D3 o = d3_of(x), a, b, c;
+    t->solid_angle = 0.0f;
     if (!d3_unit(d3_sub(d3_of(p0), o), &a) || !d3_unit(d3_sub(d3_of(p1), o), &b) ||
         !d3_unit(d3_sub(d3_of(p2), o), &c))
         return false;
+    d3_store(t->a, a);
+    d3_store(t->b, b);
+    d3_store(t->c, c);
+    t->solid_angle = solid_angle_of(a, b, c);
+    return true;
+}
+
+float sph_triangle_solid_angle(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2)
+{
+    SphTri t;
+    (void)sph_tri_init(&t, x, p0, p1, p2);
+    return t.solid_angle;
+}
+
+bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w)
+{
+    SphTri t;
+    return sph_tri_init(&t, x, p0, p1, p2) && sph_tri_sample(&t, u, w);
+}
+
+bool sph_tri_sample(const SphTri *t, Vec2 u, Vec3 *w)
+{
+    D3 a = d3_load(t->a), b = d3_load(t->b), c = d3_load(t->c);
     /* The great circles' normals and the triangle's inner angles alpha (at a), beta, gamma. */
     D3 n_ab, n_bc, n_ca;
     if (!d3_unit(d3_cross(a, b), &n_ab) || !d3_unit(d3_cross(b, c), &n_bc) || !d3_unit(d3_cross(c, a), &n_ca))
@@ -62,10 +86,12 @@ bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w)
     double area_pi = alpha + beta + gamma;
     if (!(area_pi > SPH_PI)) return false;
     double ap_pi = SPH_PI + (double)u.x * (area_pi - SPH_PI);
+    /* each sine and cosine once (the libm calls dominate this function's cost) */
     double cos_alpha = cos(alpha), sin_alpha = sin(alpha);
+    double sin_ap = sin(ap_pi), cos_ap = cos(ap_pi);
     /* phi = A_hat - alpha + pi ... Arvo's s and t through the sum formulas */
-    double sin_phi = sin(ap_pi) * cos_alpha - cos(ap_pi) * sin_alpha;
-    double cos_phi = cos(ap_pi) * cos_alpha + sin(ap_pi) * sin_alpha;
+    double sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
+    double cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
     double k1 = cos_phi + cos_alpha;
     double k2 = sin_phi - sin_alpha * d3_dot(a, b); /* a . b = cos of the side c */
     /* the cosine of the arc from a to the new vertex c_hat on the side a c (Arvo's q) */

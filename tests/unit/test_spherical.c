@@ -194,6 +194,14 @@ static void test_solid_angles(void **state)
     /* in the plane: nothing */
     assert_false(sph_rect_init(&r, v3(0, 0, 1), v3(-1, -1, 1), v3(2, 0, 0), v3(0, 2, 0)));
     assert_true(sph_triangle_solid_angle(v3(2.0f, 2.0f, 0.0f), v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)) < 1e-6f);
+    /* the set-up form NEE uses (light.c): the same solid angle; a vertex at x is refused
+     * with solid angle 0, which NEE's range check then sends to area sampling */
+    SphTri t;
+    assert_true(sph_tri_init(&t, v3s(0.0f), v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)));
+    assert_true(t.solid_angle == o);
+    t.solid_angle = 1.0f;
+    assert_false(sph_tri_init(&t, v3(1, 0, 0), v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)));
+    assert_true(t.solid_angle == 0.0f);
 }
 
 int main(void)
