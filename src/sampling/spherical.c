@@ -25,14 +25,6 @@ static inline bool d3_unit(D3 a, D3 *out)
     *out = d3_scale(a, 1.0 / l);
     return true;
 }
-/* The angle between unit vectors a and b, accurate near 0 and pi (pbrt-v4 AngleBetween's
- * form: 2 asin(|a - b| / 2) rather than acos of the dot product). */
-static inline double angle_between(D3 a, D3 b)
-{
-    if (d3_dot(a, b) < 0.0) return SPH_PI - 2.0 * asin(clampd(0.5 * d3_len(d3(a.x + b.x, a.y + b.y, a.z + b.z)), 0.0, 1.0));
-    return 2.0 * asin(clampd(0.5 * d3_len(d3_sub(b, a)), 0.0, 1.0));
-}
-
 /* Van Oosterom & Strackee's solid angle from unit directions a, b, c. */
 static float solid_angle_of(D3 a, D3 b, D3 c)
 {
@@ -74,22 +66,23 @@ bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w)
 bool sph_tri_sample(const SphTri *t, Vec2 u, Vec3 *w)
 {
     D3 a = d3_load(t->a), b = d3_load(t->b), c = d3_load(t->c);
-    /* The great circles' normals and the triangle's inner angles alpha (at a), beta, gamma. */
-    D3 n_ab, n_bc, n_ca;
-    if (!d3_unit(d3_cross(a, b), &n_ab) || !d3_unit(d3_cross(b, c), &n_bc) || !d3_unit(d3_cross(c, a), &n_ca))
+    /* Arvo's warp needs the spherical area A and the inner angle alpha at a only. A is the
+     * solid angle sph_tri_init already has (Van Oosterom & Strackee's atan2, accurate for
+     * small triangles, where Girard's excess alpha + beta + gamma - pi cancels), and it is
+     * the very float the density 1 / A uses, so the warp and its density agree. alpha, the
+     * angle between the planes through (a, b) and (a, c), comes as its cosine and sine
+     * straight from the planes' unit normals (the dot and the cross product's length):
+     * no inverse sines for alpha, beta, gamma and no sin(alpha), cos(alpha). */
+    D3 n_ab, n_ca;
+    if (!(t->solid_angle > 0.0f) || !d3_unit(d3_cross(a, b), &n_ab) || !d3_unit(d3_cross(c, a), &n_ca))
         return false;
-    double alpha = angle_between(n_ab, d3_scale(n_ca, -1.0));
-    double beta = angle_between(n_bc, d3_scale(n_ab, -1.0));
-    double gamma = angle_between(n_ca, d3_scale(n_bc, -1.0));
-    /* Girard: the area is the angle excess. A_hat, the sub-triangle's area, is u.x of it
-     * (Arvo eq. 4); carried as A_hat + pi, the angle s + alpha of the paper. */
-    double area_pi = alpha + beta + gamma;
-    if (!(area_pi > SPH_PI)) return false;
-    double ap_pi = SPH_PI + (double)u.x * (area_pi - SPH_PI);
-    /* each sine and cosine once (the libm calls dominate this function's cost) */
-    double cos_alpha = cos(alpha), sin_alpha = sin(alpha);
-    double sin_ap = sin(ap_pi), cos_ap = cos(ap_pi);
-    /* phi = A_hat - alpha + pi ... Arvo's s and t through the sum formulas */
+    double cos_alpha = clampd(-d3_dot(n_ab, n_ca), -1.0, 1.0);
+    double sin_alpha = d3_len(d3_cross(n_ab, n_ca));
+    /* A_hat = u.x A, the sub-triangle's area (Arvo eq. 4). The paper's s and t with
+     * phi = A_hat - alpha, through the sum formulas; carried as A_hat + pi (whose sine and
+     * cosine are minus A_hat's), the form in which the cosine below was derived. */
+    double area_hat = (double)u.x * (double)t->solid_angle;
+    double sin_ap = -sin(area_hat), cos_ap = -cos(area_hat);
     double sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
     double cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
     double k1 = cos_phi + cos_alpha;
