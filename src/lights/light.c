@@ -370,20 +370,31 @@ static bool tri_sample_solid_angle(const Emitter *e, const EmitterGeometry *g, c
     return true;
 }
 
+/* NEE toward triangle emitter e by its solid angle from x when tri_solid_angle says so: 1
+ * with *p, *uv and *omega (sr); 0 when that sample failed; -1 when the triangle is to be
+ * sampled by area. Apart from area_sample_li so that the SphTri (80 bytes, its address
+ * passed on) is not in the frame of every area-sampled NEE call. */
+static __attribute__((noinline)) int tri_solid_sample(const EmitterSampler *s, const EmitterGeometry *g,
+                                                      const Emitter *e, Vec3 x, Vec2 u, Vec3 *p, Vec2 *uv, float *omega)
+{
+    SphTri tri;
+    if (!tri_solid_angle(s, g, e, x, &tri)) return -1;
+    *omega = tri.solid_angle;
+    return tri_sample_solid_angle(e, g, &tri, x, u, p, uv) ? 1 : 0;
+}
+
 static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const EmitterGeometry *g, Vec3 x, Vec2 u,
                            bool nee, LightLi *out)
 {
     const float pdf_a = pmf / s->light[i].u.area.area; /* == s->pdf_a[i] for the power's pmf */
     const Emitter *e = &s->light[i].u.area;
     Vec2 uv;
-    float omc = 0.0f, sin2 = 0.0f;
-    SphTri tri = {.solid_angle = 0.0f};
+    float omc = 0.0f, sin2 = 0.0f, omega = 0.0f;
     const Sphere *sp = emitter_sphere(e, g);
     const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
-    const bool solid = nee && tri_solid_angle(s, g, e, x, &tri);
-    const float omega = tri.solid_angle;
-    if (solid) {
-        if (!tri_sample_solid_angle(e, g, &tri, x, u, &out->p, &uv)) return false;
+    int solid = nee && s->solid_angle ? tri_solid_sample(s, g, e, x, u, &out->p, &uv, &omega) : -1;
+    if (solid == 0) return false;
+    if (solid > 0) {
         out->n = e->n;
     } else if (cone) {
         sphere_sample_cone(sp, x, u, omc, sin2, &out->n);
@@ -405,7 +416,7 @@ static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const Emit
      * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
      * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
     const float area_pdf_w = pdf_a * dist2 / out->cos_light;
-    out->pdf_w = solid ? pmf / omega : cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
+    out->pdf_w = solid > 0 ? pmf / omega : cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
     out->finite = true;
     out->emit_pdf = pdf_a * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
     out->direct_pdf = area_pdf_w;
