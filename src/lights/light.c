@@ -297,8 +297,9 @@ static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, 
 
 /* NEE by the solid angle a triangle subtends (s->solid_angle; pbrt-v4 Triangle::Sample(ctx,
  * u)): when triangle emitter em's solid angle from x lies in [SPH_MIN_SOLID_ANGLE,
- * SPH_MAX_SOLID_ANGLE], *omega gets it and the direction is drawn uniformly over it (density
- * 1 / omega per unit solid angle); outside that range, by area. Sampling and the MIS density
+ * SPH_MAX_SOLID_ANGLE], *tri is set up (its solid_angle omega, and the unit directions the
+ * sample reuses) and the direction is drawn uniformly over it (density 1 / omega per unit
+ * solid angle; the warp uses that same omega); outside that range, by area. Sampling and the MIS density
  * both decide here, from the same floats, so they always agree. pbrt-v4's extra bilinear
  * warp by |cos theta| at the vertices is not applied. */
 static bool tri_solid_angle(const EmitterSampler *s, const EmitterGeometry *g, const Emitter *em, Vec3 x, SphTri *tri)
