@@ -297,16 +297,17 @@ static void sphere_sample_cone(const Sphere *sp, Vec3 x, Vec2 u, float omc_max, 
 
 /* NEE by the solid angle a triangle subtends (s->solid_angle; pbrt-v4 Triangle::Sample(ctx,
  * u)): when triangle emitter em's solid angle from x lies in [SPH_MIN_SOLID_ANGLE,
- * SPH_MAX_SOLID_ANGLE], *omega gets it and the direction is drawn uniformly over it (density
- * 1 / omega per unit solid angle); outside that range, by area. Sampling and the MIS density
+ * SPH_MAX_SOLID_ANGLE], *tri is set up (its solid_angle omega, and the unit directions the
+ * sample reuses) and the direction is drawn uniformly over it (density 1 / omega per unit
+ * solid angle; the warp uses that same omega); outside that range, by area. Sampling and the MIS density
  * both decide here, from the same floats, so they always agree. pbrt-v4's extra bilinear
  * warp by |cos theta| at the vertices is not applied. */
-static bool tri_solid_angle(const EmitterSampler *s, const EmitterGeometry *g, const Emitter *em, Vec3 x, float *omega)
+static bool tri_solid_angle(const EmitterSampler *s, const EmitterGeometry *g, const Emitter *em, Vec3 x, SphTri *tri)
 {
     if (!s->solid_angle || (int)em->prim >= g->num_triangles) return false;
     const int32_t *t = &g->tri_indices[3 * em->prim];
-    *omega = sph_triangle_solid_angle(x, g->positions[t[0]], g->positions[t[1]], g->positions[t[2]]);
-    return *omega >= SPH_MIN_SOLID_ANGLE && *omega <= SPH_MAX_SOLID_ANGLE;
+    (void)sph_tri_init(tri, x, g->positions[t[0]], g->positions[t[1]], g->positions[t[2]]);
+    return tri->solid_angle >= SPH_MIN_SOLID_ANGLE && tri->solid_angle <= SPH_MAX_SOLID_ANGLE;
 }
 
 /* light_area_pdf_w for emitter e picked with probability pmf (pdf_a = pmf / area: with
@@ -315,8 +316,9 @@ static float area_pdf_w(const EmitterSampler *s, const EmitterGeometry *g, int e
                         float cos_l, bool nee)
 {
     const Emitter *em = &s->light[e].u.area;
-    float omc, sin2, omega;
-    if (nee && tri_solid_angle(s, g, em, x, &omega)) return pmf / omega;
+    float omc, sin2;
+    SphTri tri;
+    if (nee && tri_solid_angle(s, g, em, x, &tri)) return pmf / tri.solid_angle;
     const Sphere *sp = emitter_sphere(em, g);
     if (sp && sphere_cone(sp, x, &omc, &sin2)) return pmf / (2.0f * CST_PI * omc);
     /* triangles, analytic shapes, spheres from inside: by area, pdf_w = pdf_a dist^2 / |cos| */
@@ -346,12 +348,13 @@ static float delta_emit_pdf_w(const Light *l, Vec3 w)
  * (tri_solid_angle): where the ray x + t w meets the triangle's plane, with its
  * texture coordinates. False when the direction misses the plane (rounding at an edge seen
  * edge-on). */
-static bool tri_sample_solid_angle(const Emitter *e, const EmitterGeometry *g, Vec3 x, Vec2 u, Vec3 *p, Vec2 *uv)
+static bool tri_sample_solid_angle(const Emitter *e, const EmitterGeometry *g, const SphTri *tri, Vec3 x, Vec2 u,
+                                   Vec3 *p, Vec2 *uv)
 {
     const int32_t *t = &g->tri_indices[3 * e->prim];
     Vec3 a = g->positions[t[0]], b = g->positions[t[1]], c = g->positions[t[2]];
     Vec3 w;
-    if (!sph_triangle_sample(x, a, b, c, u, &w)) return false;
+    if (!sph_tri_sample(tri, u, &w)) return false;
     float wn = v3_dot(w, e->n);
     float tt = v3_dot(v3_sub(a, x), e->n) / wn;
     if (!(tt > 0.0f) || !isfinite(tt)) return false;
@@ -368,6 +371,19 @@ static bool tri_sample_solid_angle(const Emitter *e, const EmitterGeometry *g, V
     return true;
 }
 
+/* NEE toward triangle emitter e by its solid angle from x when tri_solid_angle says so: 1
+ * with *p, *uv and *omega (sr); 0 when that sample failed; -1 when the triangle is to be
+ * sampled by area. Apart from area_sample_li so that the SphTri (80 bytes, its address
+ * passed on) is not in the frame of every area-sampled NEE call. */
+static __attribute__((noinline)) int tri_solid_sample(const EmitterSampler *s, const EmitterGeometry *g,
+                                                      const Emitter *e, Vec3 x, Vec2 u, Vec3 *p, Vec2 *uv, float *omega)
+{
+    SphTri tri;
+    if (!tri_solid_angle(s, g, e, x, &tri)) return -1;
+    *omega = tri.solid_angle;
+    return tri_sample_solid_angle(e, g, &tri, x, u, p, uv) ? 1 : 0;
+}
+
 static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const EmitterGeometry *g, Vec3 x, Vec2 u,
                            bool nee, LightLi *out)
 {
@@ -377,9 +393,9 @@ static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const Emit
     float omc = 0.0f, sin2 = 0.0f, omega = 0.0f;
     const Sphere *sp = emitter_sphere(e, g);
     const bool cone = sp && sphere_cone(sp, x, &omc, &sin2);
-    const bool solid = nee && tri_solid_angle(s, g, e, x, &omega);
-    if (solid) {
-        if (!tri_sample_solid_angle(e, g, x, u, &out->p, &uv)) return false;
+    int solid = nee && s->solid_angle ? tri_solid_sample(s, g, e, x, u, &out->p, &uv, &omega) : -1;
+    if (solid == 0) return false;
+    if (solid > 0) {
         out->n = e->n;
     } else if (cone) {
         sphere_sample_cone(sp, x, u, omc, sin2, &out->n);
@@ -401,7 +417,7 @@ static bool area_sample_li(const EmitterSampler *s, int i, float pmf, const Emit
      * sphere's cone was sampled: subpath.c's weights of every strategy come from one set
      * of densities, so they still sum to 1 (pbrt-v4's BDPT does the same). */
     const float area_pdf_w = pdf_a * dist2 / out->cos_light;
-    out->pdf_w = solid ? pmf / omega : cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
+    out->pdf_w = solid > 0 ? pmf / omega : cone ? pmf / (2.0f * CST_PI * omc) : area_pdf_w;
     out->finite = true;
     out->emit_pdf = pdf_a * emitter_emission_pdf_w(e, out->n, v3_neg(out->wi));
     out->direct_pdf = area_pdf_w;

@@ -25,47 +25,66 @@ static inline bool d3_unit(D3 a, D3 *out)
     *out = d3_scale(a, 1.0 / l);
     return true;
 }
-/* The angle between unit vectors a and b, accurate near 0 and pi (pbrt-v4 AngleBetween's
- * form: 2 asin(|a - b| / 2) rather than acos of the dot product). */
-static inline double angle_between(D3 a, D3 b)
+/* Van Oosterom & Strackee's solid angle from unit directions a, b, c. */
+static float solid_angle_of(D3 a, D3 b, D3 c)
 {
-    if (d3_dot(a, b) < 0.0) return SPH_PI - 2.0 * asin(clampd(0.5 * d3_len(d3(a.x + b.x, a.y + b.y, a.z + b.z)), 0.0, 1.0));
-    return 2.0 * asin(clampd(0.5 * d3_len(d3_sub(b, a)), 0.0, 1.0));
-}
-
-float sph_triangle_solid_angle(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2)
-{
-    D3 o = d3_of(x), a, b, c;
-    if (!d3_unit(d3_sub(d3_of(p0), o), &a) || !d3_unit(d3_sub(d3_of(p1), o), &b) ||
-        !d3_unit(d3_sub(d3_of(p2), o), &c))
-        return 0.0f;
     double num = fabs(d3_dot(a, d3_cross(b, c)));
     double den = 1.0 + d3_dot(a, b) + d3_dot(b, c) + d3_dot(c, a);
     return (float)fabs(2.0 * atan2(num, den));
 }
 
-bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w)
+static void d3_store(double out[3], D3 v) { out[0] = v.x; out[1] = v.y; out[2] = v.z; }
+static D3 d3_load(const double v[3]) { return d3(v[0], v[1], v[2]); }
+
+bool sph_tri_init(SphTri *t, Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2)
 {
     D3 o = d3_of(x), a, b, c;
+    t->solid_angle = 0.0f;
     if (!d3_unit(d3_sub(d3_of(p0), o), &a) || !d3_unit(d3_sub(d3_of(p1), o), &b) ||
         !d3_unit(d3_sub(d3_of(p2), o), &c))
         return false;
-    /* The great circles' normals and the triangle's inner angles alpha (at a), beta, gamma. */
-    D3 n_ab, n_bc, n_ca;
-    if (!d3_unit(d3_cross(a, b), &n_ab) || !d3_unit(d3_cross(b, c), &n_bc) || !d3_unit(d3_cross(c, a), &n_ca))
+    d3_store(t->a, a);
+    d3_store(t->b, b);
+    d3_store(t->c, c);
+    t->solid_angle = solid_angle_of(a, b, c);
+    return true;
+}
+
+float sph_triangle_solid_angle(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2)
+{
+    SphTri t;
+    (void)sph_tri_init(&t, x, p0, p1, p2);
+    return t.solid_angle;
+}
+
+bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w)
+{
+    SphTri t;
+    return sph_tri_init(&t, x, p0, p1, p2) && sph_tri_sample(&t, u, w);
+}
+
+bool sph_tri_sample(const SphTri *t, Vec2 u, Vec3 *w)
+{
+    D3 a = d3_load(t->a), b = d3_load(t->b), c = d3_load(t->c);
+    /* Arvo's warp needs the spherical area A and the inner angle alpha at a only. A is the
+     * solid angle sph_tri_init already has (Van Oosterom & Strackee's atan2, accurate for
+     * small triangles, where Girard's excess alpha + beta + gamma - pi cancels), and it is
+     * the very float the density 1 / A uses, so the warp and its density agree. alpha, the
+     * angle between the planes through (a, b) and (a, c), comes as its cosine and sine
+     * straight from the planes' unit normals (the dot and the cross product's length):
+     * no inverse sines for alpha, beta, gamma and no sin(alpha), cos(alpha). */
+    D3 n_ab, n_ca;
+    if (!(t->solid_angle > 0.0f) || !d3_unit(d3_cross(a, b), &n_ab) || !d3_unit(d3_cross(c, a), &n_ca))
         return false;
-    double alpha = angle_between(n_ab, d3_scale(n_ca, -1.0));
-    double beta = angle_between(n_bc, d3_scale(n_ab, -1.0));
-    double gamma = angle_between(n_ca, d3_scale(n_bc, -1.0));
-    /* Girard: the area is the angle excess. A_hat, the sub-triangle's area, is u.x of it
-     * (Arvo eq. 4); carried as A_hat + pi, the angle s + alpha of the paper. */
-    double area_pi = alpha + beta + gamma;
-    if (!(area_pi > SPH_PI)) return false;
-    double ap_pi = SPH_PI + (double)u.x * (area_pi - SPH_PI);
-    double cos_alpha = cos(alpha), sin_alpha = sin(alpha);
-    /* phi = A_hat - alpha + pi ... Arvo's s and t through the sum formulas */
-    double sin_phi = sin(ap_pi) * cos_alpha - cos(ap_pi) * sin_alpha;
-    double cos_phi = cos(ap_pi) * cos_alpha + sin(ap_pi) * sin_alpha;
+    double cos_alpha = clampd(-d3_dot(n_ab, n_ca), -1.0, 1.0);
+    double sin_alpha = d3_len(d3_cross(n_ab, n_ca));
+    /* A_hat = u.x A, the sub-triangle's area (Arvo eq. 4). The paper's s and t with
+     * phi = A_hat - alpha, through the sum formulas; carried as A_hat + pi (whose sine and
+     * cosine are minus A_hat's), the form in which the cosine below was derived. */
+    double area_hat = (double)u.x * (double)t->solid_angle;
+    double sin_ap = -sin(area_hat), cos_ap = -cos(area_hat);
+    double sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
+    double cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
     double k1 = cos_phi + cos_alpha;
     double k2 = sin_phi - sin_alpha * d3_dot(a, b); /* a . b = cos of the side c */
     /* the cosine of the arc from a to the new vertex c_hat on the side a c (Arvo's q) */

@@ -26,6 +26,20 @@ float sph_triangle_solid_angle(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2);
  * is 1 / sph_triangle_solid_angle(x, p0, p1, p2). False for a degenerate triangle. */
 bool sph_triangle_sample(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Vec2 u, Vec3 *w);
 
+/* A spherical triangle set up once for both its solid angle and its samples: NEE needs the
+ * solid angle (to decide between solid-angle and area sampling, and for the density) and
+ * then a sample, from the same unit directions. Keeping them saves the second set of
+ * normalisations; results are bit-identical to the two functions above. */
+typedef struct SphTri {
+    double a[3], b[3], c[3]; /* unit directions from x to p0, p1, p2 */
+    float solid_angle;       /* sr, as sph_triangle_solid_angle; 0 when degenerate */
+} SphTri;
+
+/* False (and solid_angle 0) when a vertex coincides with x. */
+bool sph_tri_init(SphTri *t, Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2);
+/* sph_triangle_sample from a set-up triangle. */
+bool sph_tri_sample(const SphTri *t, Vec2 u, Vec3 *w);
+
 /* A rectangle: corner s, and the two edges ex, ey from it (perpendicular). */
 typedef struct SphRect {
     /* in the rectangle's frame (x along ex, y along ey, z toward the side away from x),

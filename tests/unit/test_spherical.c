@@ -22,7 +22,7 @@ enum {
     SAMPLE_COUNT = 1000000, /* per chi-square test */
     GRID = 30,              /* cells per side */
     SUBCELLS = 8,           /* midpoint sub-samples per cell side for the expected counts */
-    CHI2_TESTS = 5          /* the number of p-values corrected for */
+    CHI2_TESTS = 7          /* the number of p-values corrected for */
 };
 static const double ALPHA = 0.01;
 static double sidak_threshold(void) { return 1.0 - pow(1.0 - ALPHA, 1.0 / (double)CHI2_TESTS); }
@@ -47,6 +47,11 @@ static const Poly POLYS[] = {
     {"triangle huge", false, {0.0f, 0.0f, 0.5f}, {-4.0f, -3.0f, 0.0f}, {9.0f, 0.0f, 0.0f}, {0.0f, 9.0f, 0.0f}},
     {"rectangle near", true, {0.3f, -0.2f, 0.5f}, {-1.0f, -1.5f, 1.2f}, {2.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 1.0f}},
     {"rectangle far", true, {0.0f, 0.0f, 0.0f}, {2.0f, 3.0f, -5.0f}, {0.0f, 0.7f, 0.0f}, {0.0f, 0.0f, 0.4f}},
+    /* tiny: about 5e-4 sr, just above NEE's switch to area sampling (SPH_MIN_SOLID_ANGLE),
+     * where the warp's area A_hat = u.x A and its trigonometry are smallest */
+    {"triangle tiny", false, {0.0f, 0.0f, 0.0f}, {3.0f, 1.0f, 4.0f}, {0.135f, 0.0f, -0.108f}, {0.027f, 0.162f, 0.0f}},
+    /* near-grazing: x 0.05 above the triangle's plane, most directions a few degrees from it */
+    {"triangle grazing", false, {0.0f, 0.0f, 0.05f}, {0.5f, -0.5f, 0.0f}, {1.5f, 0.0f, 0.0f}, {0.0f, 1.5f, 0.0f}},
 };
 
 static double poly_solid_angle(const Poly *pg, SphRect *r)
@@ -174,6 +179,8 @@ static void test_chi2_triangle_far(void **state) { (void)state; run_chi2(&POLYS[
 static void test_chi2_triangle_huge(void **state) { (void)state; run_chi2(&POLYS[2], 13u); }
 static void test_chi2_rect_near(void **state) { (void)state; run_chi2(&POLYS[3], 14u); }
 static void test_chi2_rect_far(void **state) { (void)state; run_chi2(&POLYS[4], 15u); }
+static void test_chi2_triangle_tiny(void **state) { (void)state; run_chi2(&POLYS[5], 16u); }
+static void test_chi2_triangle_grazing(void **state) { (void)state; run_chi2(&POLYS[6], 17u); }
 
 /* Closed forms: the octant triangle (1,0,0), (0,1,0), (0,0,1) from the origin is pi/2; a
  * cube's face from its centre, 4 pi / 6. A rectangle and the two triangles that split it
@@ -194,6 +201,14 @@ static void test_solid_angles(void **state)
     /* in the plane: nothing */
     assert_false(sph_rect_init(&r, v3(0, 0, 1), v3(-1, -1, 1), v3(2, 0, 0), v3(0, 2, 0)));
     assert_true(sph_triangle_solid_angle(v3(2.0f, 2.0f, 0.0f), v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)) < 1e-6f);
+    /* the set-up form NEE uses (light.c): the same solid angle; a vertex at x is refused
+     * with solid angle 0, which NEE's range check then sends to area sampling */
+    SphTri t;
+    assert_true(sph_tri_init(&t, v3s(0.0f), v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)));
+    assert_true(t.solid_angle == o);
+    t.solid_angle = 1.0f;
+    assert_false(sph_tri_init(&t, v3(1, 0, 0), v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)));
+    assert_true(t.solid_angle == 0.0f);
 }
 
 int main(void)
@@ -205,6 +220,8 @@ int main(void)
         cmocka_unit_test(test_chi2_triangle_huge),
         cmocka_unit_test(test_chi2_rect_near),
         cmocka_unit_test(test_chi2_rect_far),
+        cmocka_unit_test(test_chi2_triangle_tiny),
+        cmocka_unit_test(test_chi2_triangle_grazing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
