@@ -279,16 +279,18 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         return;
     case CST_EXPLAIN_SCATTER:
         if (is_whitted(x)) {
-            fprintf(f, "%*sbranch: specular lobe of probability %.6g, wi (%.4f, %.4f, %.4f), ", 2 * e->depth, "",
-                    (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
+            fprintf(f, "%*sbranch: %s lobe of probability %.6g, wi (%.4f, %.4f, %.4f), ", 2 * e->depth, "",
+                    e->lobe ? e->lobe : "specular", (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
             print3(f, "weight ", e->value);
             fputc('\n', f);
             return;
         }
+        /* the lobe that drew wi; a non-delta weight is still the mixture's (one-sample MIS) */
+        fprintf(f, "  scatter (%s): ", e->lobe ? e->lobe : "lobe unknown");
         if (e->flags & CST_EXPLAIN_DELTA)
-            fprintf(f, "  scatter: delta lobe, pmf %.6g", (double)e->pmf);
+            fprintf(f, "delta lobe, pmf %.6g", (double)e->pmf);
         else
-            fprintf(f, "  scatter: non-delta lobes, pdf_w %.6g", (double)e->pdf_w);
+            fprintf(f, "non-delta lobes, pdf_w %.6g", (double)e->pdf_w);
         fprintf(f, ", wi (%.4f, %.4f, %.4f), ", (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
         print3(f, "weight f cos/pdf ", e->value);
         fputc('\n', f);
@@ -594,6 +596,7 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         return o;
     case CST_EXPLAIN_SCATTER:
         json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
+        json_object_set_new(o, "lobe", e->lobe ? json_string(e->lobe) : json_null());
         json_object_set_new(o, "wi", arr3f(e->wi));
         json_object_set_new(o, "pdf_w", num((double)e->pdf_w));
         json_object_set_new(o, "pmf", num((double)e->pmf));
