@@ -156,6 +156,19 @@ static void print_distance(FILE *f, const CstExplain *x, const CstExplainEvent *
     fputc('\n', f);
 }
 
+/* NEE's MIS partner at the vertex the event belongs to (the last VERTEX before it): the
+ * phase function in a medium, the exit's cosine sampling at a subsurface exit, else the BSDF. */
+static const char *nee_partner(const CstExplain *x, const CstExplainEvent *e)
+{
+    for (const CstExplainEvent *v = e; v-- > x->events;) {
+        if (v->kind != CST_EXPLAIN_VERTEX) continue;
+        if (v->material_type && !strcmp(v->material_type, "medium")) return "phase";
+        if (v->material_type && !strcmp(v->material_type, "subsurface exit")) return "exit cos/pi";
+        break;
+    }
+    return "BSDF";
+}
+
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
     if (is_whitted(x) && (e->kind == CST_EXPLAIN_ESCAPE || e->kind == CST_EXPLAIN_EMISSION)) {
@@ -239,8 +252,8 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         else if (e->flags & CST_EXPLAIN_DELTA)
             fprintf(f, "delta light, pmf %.6g; ", (double)e->pmf);
         else
-            fprintf(f, "pmf %.6g, pdf_w %.6g, pdf_a %.6g, BSDF pdf_w %.6g; ", (double)e->pmf, (double)e->pdf_w,
-                    (double)e->pdf_a, (double)e->pdf_other_w);
+            fprintf(f, "pmf %.6g, pdf_w %.6g, pdf_a %.6g, %s pdf_w %.6g; ", (double)e->pmf, (double)e->pdf_w,
+                    (double)e->pdf_a, nee_partner(x, e), (double)e->pdf_other_w);
         print_mis(f, x, e);
         if (e->flags & CST_EXPLAIN_OCCLUDED) fputs(", occluded", f);
         print_value(f, e);
@@ -624,7 +637,10 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         }
     } else {
         json_object_set_new(o, "pdf_other_w", num((double)e->pdf_other_w));
-        if (e->kind == CST_EXPLAIN_NEE) json_object_set_new(o, "pmf", num((double)e->pmf));
+        if (e->kind == CST_EXPLAIN_NEE) {
+            json_object_set_new(o, "pmf", num((double)e->pmf));
+            json_object_set_new(o, "partner", json_string(nee_partner(x, e))); /* whose pdf_other_w */
+        }
     }
     json_object_set_new(o, "mis_weight", num((double)e->mis_weight));
     if (e->mis_strategies > 0) {
