@@ -19,6 +19,9 @@
 
 enum { W = 24, H = 20, DMAX = 64 };
 
+/* The pinhole of lobes.json and of the fog box. */
+static const double CAM[3] = {278.0, 273.0, -800.0};
+
 /* Lobe names counted over the image, per integrator (the order of LOBES). */
 static const char *const LOBES[] = {"diffuse reflection",       "specular reflection",      "specular transmission",
                                     "coat specular reflection", "base diffuse reflection",  "coat glossy reflection",
@@ -60,7 +63,7 @@ static int explain_image(const CstScene *s, CstIntegrator integ, int step, int c
     st.seed_set = 1;
     st.sampler = CST_SAMPLER_INDEPENDENT;
     st.photons = 2000;
-    const double cam[3] = {278.0, 273.0, -800.0}; /* the scene's pinhole */
+    const double *cam = CAM;
     int checked = 0;
     for (int y = 0; y < H; y += step) {
         for (int x = 0; x < W; x += step) {
@@ -175,8 +178,7 @@ static void test_whitted_sppm_photon_lobes(void **state)
  * fog box and every subsurface exit, the NEE event names the light point (p, its normal
  * in ng), pdf_w > 0, pdf_a = pdf_w |cos_light| / d^2 from the vertex to that point (wi
  * pointing at it; area lights: lights at infinity have no pdf_a), the pick's pmf in (0, 1], the partner's pdf_w (fog: Henyey-Greenstein
- * with g = 0.4, within [(1 - g) / (4 pi (1 + g)^2), (1 + g) / (4 pi (1 - g)^2)]; exit: cos / pi
- * <= 1 / pi) and the power-heuristic weight of the two. Returns the events checked. */
+ * with g = 0.4 of wo.wi, wo toward the previous vertex; exit: max(0, ns.wi) / pi) and the power-heuristic weight of the two. Returns the events checked. */
 static int area_checked; /* of the events check_nee_pdfs checked, those at area lights */
 
 static int check_nee_pdfs(const CstScene *s, CstIntegrator integ, const char *vertex_type, int step, double g)
@@ -201,9 +203,13 @@ static int check_nee_pdfs(const CstScene *s, CstIntegrator integ, const char *ve
                 assert_int_equal(cst_explain(s, &st, x, y, sample, &ex, &err), CST_OK);
                 assert_true(ex->exact);
                 const CstExplainEvent *v = NULL;
+                double prev[3] = {0.0, 0.0, 0.0}; /* the vertex before v (the camera before the first) */
                 for (int i = 0; i < ex->num_events; i++) {
                     const CstExplainEvent *e = &ex->events[i];
-                    if (e->kind == CST_EXPLAIN_VERTEX) v = e;
+                    if (e->kind == CST_EXPLAIN_VERTEX) {
+                        for (int c = 0; c < 3; c++) prev[c] = e->depth == 1 ? CAM[c] : v ? (double)v->p[c] : 0.0;
+                        v = e;
+                    }
                     if (e->kind != CST_EXPLAIN_NEE || !v || !v->material_type || strcmp(v->material_type, vertex_type))
                         continue;
                     if (e->light < 0) continue; /* no light sampled */
@@ -234,6 +240,23 @@ static int check_nee_pdfs(const CstScene *s, CstIntegrator integ, const char *ve
                     const double hi = g >= 0.0 ? (1.0 + g) / (4.0 * pi * (1.0 - g) * (1.0 - g)) : 1.0 / pi;
                     if (!(po >= lo * (1.0 - 1e-5) && po <= hi * (1.0 + 1e-5)))
                         fail_msg("%s: partner pdf_w %.6g outside [%.6g, %.6g]", vertex_type, po, lo, hi);
+                    /* the partner itself: HG(wo.wi) with wo toward the previous vertex in a
+                     * medium (pbrt-v4's argument), max(0, ns.wi) / pi at a subsurface exit */
+                    double want = -1.0;
+                    if (g >= 0.0) {
+                        double wo[3], l = 0.0, mu = 0.0;
+                        for (int c = 0; c < 3; c++) {
+                            wo[c] = prev[c] - (double)v->p[c];
+                            l += wo[c] * wo[c];
+                        }
+                        for (int c = 0; c < 3; c++) mu += wo[c] / sqrt(l) * (double)e->wi[c];
+                        const double den = 1.0 + g * g + 2.0 * g * mu;
+                        want = (1.0 - g * g) / (4.0 * pi * den * sqrt(den));
+                    } else if (!strcmp(vertex_type, "subsurface exit")) {
+                        want = fmax(0.0, dot3(v->n, (const double[3]){e->wi[0], e->wi[1], e->wi[2]})) / pi;
+                    }
+                    if (want >= 0.0 && fabs(po - want) > 1e-3 * want + 1e-7)
+                        fail_msg("%s pixel %d,%d: partner pdf_w %.7g, expected %.7g", vertex_type, x, y, po, want);
                     const double w = pw * pw / (pw * pw + po * po);
                     assert_true(fabs((double)e->mis_weight - w) <= 1e-5);
                     checked++;
