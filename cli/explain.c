@@ -169,6 +169,20 @@ static const char *nee_partner(const CstExplain *x, const CstExplainEvent *e)
     return "BSDF";
 }
 
+/* whitted_direct's one shadow ray: detail, not summed (the mean follows it). */
+static void print_shadow_ray(FILE *f, const CstExplainEvent *e)
+{
+    fprintf(f, "%*sshadow ray to light %d at (%.6g, %.6g, %.6g): ", 2 * e->depth, "", e->light, (double)e->p[0],
+            (double)e->p[1], (double)e->p[2]);
+    if (e->flags & CST_EXPLAIN_DELTA)
+        fprintf(f, "delta light, pmf %.6g; ", (double)e->pmf);
+    else
+        fprintf(f, "pmf %.6g, pdf_w %.6g, pdf_a %.6g, BSDF pdf_w %.6g (no MIS); ", (double)e->pmf, (double)e->pdf_w,
+                (double)e->pdf_a, (double)e->pdf_other_w);
+    print3(f, "its share of the mean ", e->value);
+    fputs(" (not summed: the line below is the mean)\n", f);
+}
+
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
     if (is_whitted(x) && (e->kind == CST_EXPLAIN_ESCAPE || e->kind == CST_EXPLAIN_EMISSION)) {
@@ -231,6 +245,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         print_value(f, e);
         return;
     case CST_EXPLAIN_NEE:
+        if (is_whitted(x) && !(e->flags & CST_EXPLAIN_ADDED)) { print_shadow_ray(f, e); return; }
         if (is_whitted(x)) {
             fprintf(f, "%*sdirect light (the mean of the shadow rays' estimates)", 2 * e->depth, "");
             print_value(f, e);

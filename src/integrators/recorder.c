@@ -149,14 +149,20 @@ void recorder_nee(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHi
         e->flags |= CST_EXPLAIN_OCCLUDED;
 }
 
-/* An added NEE event with the light sample drawn again from the render's uniforms at p
- * (shading normal n, zero in a medium): the light, its point and normal (ng), wi, pdf_w,
+/* A NEE event (added: flagged ADDED and summed by the replay) with the light sample drawn
+ * again from the render's uniforms at p (shading normal n, zero in a medium): the light, its point and normal (ng), wi, pdf_w,
  * pdf_a and the pick's pmf. NULL (the event without them) when no light was sampled. */
-static CstExplainEvent *nee_light_event(Recorder *r, const Scene *s, Vec3 p, Vec3 n, float u_sel, Vec2 u, Color beta,
-                                        Color value, LightLi *ls)
+static CstExplainEvent *nee_light_event(Recorder *r, const Scene *s, Vec3 p, Vec3 n, float u_sel, Vec2 u, bool added,
+                                        Color beta, Color value, LightLi *ls)
 {
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_NEE);
-    recorder_added(r, e, beta, value);
+    if (added) {
+        recorder_added(r, e, beta, value);
+    } else { /* a detail event (whitted's shadow rays): printed, not summed */
+        put_color(e->beta, beta);
+        put_color(e->value, value);
+        put_color(e->contribution, color_mul(beta, value));
+    }
     EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_nee(&s->emitter_sampler, &g, p, n, u_sel, u, ls)) return NULL;
     e->light = ls->light;
@@ -176,7 +182,7 @@ void recorder_vol_nee(Recorder *r, const Scene *s, const VolVertex *v, float u_s
                       Color value)
 {
     LightLi ls;
-    CstExplainEvent *e = nee_light_event(r, s, v->p, v->ns, u_sel, u, beta, value, &ls);
+    CstExplainEvent *e = nee_light_event(r, s, v->p, v->ns, u_sel, u, true, beta, value, &ls);
     if (!e) return;
     /* volpath_nee_u's partner: the BSDF's pdf_w at a surface, the phase function's (which
      * samples itself exactly) in a medium */
@@ -189,7 +195,7 @@ void recorder_sss_nee(Recorder *r, const Scene *s, const SurfaceHit *x, float u_
                       Color value)
 {
     LightLi ls;
-    CstExplainEvent *e = nee_light_event(r, s, x->p, x->ns, u_sel, u, beta, value, &ls);
+    CstExplainEvent *e = nee_light_event(r, s, x->p, x->ns, u_sel, u, true, beta, value, &ls);
     if (!e) return;
     /* path_sss.c's partner: the exit's cosine sampling of Sw, cos / pi (0 below the exit) */
     const float cos_s = v3_dot(ls.wi, x->ns);
@@ -381,6 +387,18 @@ void recorder_volume_estimate(Recorder *r, float radius, float kernel, Color bet
 }
 
 /* The throughput of the whitted node at depth d: 1 at the camera's hit, else its branch's. */
+static Color tree_beta(const Recorder *r, int d);
+
+void recorder_whitted_light(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
+                            Vec2 u, Color value)
+{
+    LightLi ls;
+    CstExplainEvent *e = nee_light_event(r, s, sh->p, sh->ns, u_sel, u, false, tree_beta(r, r->depth), value, &ls);
+    if (!e) return;
+    e->pdf_other_w = bsdf_pdf(bsdf, wo, ls.wi);
+    e->mis_weight = 1.0f; /* direct_light: no MIS */
+}
+
 static Color tree_beta(const Recorder *r, int d)
 {
     return d >= 2 && d <= RECORDER_PATH_MAX + 1 ? r->tree_beta[d] : color_s(1.0f);

@@ -206,6 +206,11 @@ void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value);
 /* A specular branch of weight w (the lobe's probability times its f cos / pdf) from the
  * node at `depth` to a child at depth + 1. */
 void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth);
+/* whitted_direct's shadow ray from uniforms u_sel, u at the current vertex: a NEE event NOT
+ * flagged ADDED (the sum event after them is what the tree adds) with the light, its pdf_w,
+ * pdf_a, pmf, the BSDF's pdf_w and value its share of the mean (the estimate / n). */
+void recorder_whitted_light(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
+                            Vec2 u, Color value);
 
 /* ---- photon mapping (photon.c's photon_li) */
 /* The camera ray's specular chain: what emission it met (value L, beta 1), and when it

@@ -48,6 +48,8 @@ static double dot3(const float a[3], const double b[3])
     return (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2];
 }
 
+static int shadow_checked; /* whitted: direct-light sums checked against their shadow rays */
+
 /* Explains samples 0 and 1 of every step-th pixel across and down; counts[k] the SCATTER events of lobe LOBES[k].
  * Returns the number of SCATTER events whose geometry was checked. */
 static int explain_image(const CstScene *s, CstIntegrator integ, int step, int counts[NLOBES])
@@ -77,10 +79,29 @@ static int explain_image(const CstScene *s, CstIntegrator integ, int step, int c
                  * scatter that reached it: whitted's tree too) and the last scatter's wi */
                 const CstExplainEvent *vd[DMAX + 1] = {NULL};
                 double wo[DMAX + 1][3], wi_prev[DMAX + 1][3];
+                double shadow[3] = {0.0, 0.0, 0.0}; /* whitted: the shadow rays' shares so far */
+                int rays = 0;
                 for (int i = 0; i < ex->num_events; i++) {
                     const CstExplainEvent *e = &ex->events[i];
                     if (e->flags & CST_EXPLAIN_IN_SPLAT) continue;
                     const int d = e->depth;
+                    if (integ == CST_INTEGRATOR_WHITTED && e->kind == CST_EXPLAIN_NEE) {
+                        /* each shadow ray's event (not ADDED), then their mean (ADDED), which
+                         * is their shares' sum up to rounding */
+                        if (!(e->flags & CST_EXPLAIN_ADDED)) {
+                            for (int c = 0; c < 3; c++) shadow[c] += (double)e->value[c];
+                            rays++;
+                            continue;
+                        }
+                        assert_true(rays >= 1);
+                        for (int c = 0; c < 3; c++)
+                            if (fabs(shadow[c] - (double)e->value[c]) > 1e-5 * fabs((double)e->value[c]) + 1e-12)
+                                fail_msg("whitted pixel %d,%d: shadow rays sum to %.9g, the mean is %.9g", x, y,
+                                         shadow[c], (double)e->value[c]);
+                        shadow_checked++;
+                        rays = 0;
+                        shadow[0] = shadow[1] = shadow[2] = 0.0;
+                    }
                     if (e->kind == CST_EXPLAIN_VERTEX && d >= 1 && d <= DMAX) {
                         if (d == 1) {
                             double dir[3], l = 0.0;
@@ -154,7 +175,8 @@ static void test_path_bdpt_lobes(void **state)
 
 /* Whitted's branches (glass: both lobes; the coat's mirror); SPPM's camera chain through
  * the delta lobes (the glass, the coat's mirror and the delta split at the coat); photon's
- * final gather (its camera chain is not itemised: photon.c records the diffuse vertex). */
+ * final gather (its camera chain is not itemised: photon.c records the diffuse vertex).
+ * Whitted's direct light: one event per shadow ray (not summed) before their mean. */
 static void test_whitted_sppm_photon_lobes(void **state)
 {
     (void)state;
@@ -162,6 +184,8 @@ static void test_whitted_sppm_photon_lobes(void **state)
     int counts[NLOBES] = {0};
     int checked = explain_image(s, CST_INTEGRATOR_WHITTED, 1, counts);
     report("whitted", counts, checked);
+    print_message("whitted: %d direct-light means checked against their shadow rays' events\n", shadow_checked);
+    assert_true(shadow_checked > 100);
     assert_true(checked > 100 && counts[1] > 0 && counts[2] > 0 && counts[3] > 0);
     memset(counts, 0, sizeof counts);
     checked = explain_image(s, CST_INTEGRATOR_SPPM, 2, counts);
