@@ -156,6 +156,33 @@ static void print_distance(FILE *f, const CstExplain *x, const CstExplainEvent *
     fputc('\n', f);
 }
 
+/* NEE's MIS partner at the vertex the event belongs to (the last VERTEX before it): the
+ * phase function in a medium, the exit's cosine sampling at a subsurface exit, else the BSDF. */
+static const char *nee_partner(const CstExplain *x, const CstExplainEvent *e)
+{
+    for (const CstExplainEvent *v = e; v-- > x->events;) {
+        if (v->kind != CST_EXPLAIN_VERTEX) continue;
+        if (v->material_type && !strcmp(v->material_type, "medium")) return "phase";
+        if (v->material_type && !strcmp(v->material_type, "subsurface exit")) return "exit cos/pi";
+        break;
+    }
+    return "BSDF";
+}
+
+/* whitted_direct's one shadow ray: detail, not summed (the mean follows it). */
+static void print_shadow_ray(FILE *f, const CstExplainEvent *e)
+{
+    fprintf(f, "%*sshadow ray to light %d at (%.6g, %.6g, %.6g): ", 2 * e->depth, "", e->light, (double)e->p[0],
+            (double)e->p[1], (double)e->p[2]);
+    if (e->flags & CST_EXPLAIN_DELTA)
+        fprintf(f, "delta light, pmf %.6g; ", (double)e->pmf);
+    else
+        fprintf(f, "pmf %.6g, pdf_w %.6g, pdf_a %.6g, BSDF pdf_w %.6g (no MIS); ", (double)e->pmf, (double)e->pdf_w,
+                (double)e->pdf_a, (double)e->pdf_other_w);
+    print3(f, "its share of the mean ", e->value);
+    fputs(" (not summed: the line below is the mean)\n", f);
+}
+
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
     if (is_whitted(x) && (e->kind == CST_EXPLAIN_ESCAPE || e->kind == CST_EXPLAIN_EMISSION)) {
@@ -218,6 +245,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         print_value(f, e);
         return;
     case CST_EXPLAIN_NEE:
+        if (is_whitted(x) && !(e->flags & CST_EXPLAIN_ADDED)) { print_shadow_ray(f, e); return; }
         if (is_whitted(x)) {
             fprintf(f, "%*sdirect light (the mean of the shadow rays' estimates)", 2 * e->depth, "");
             print_value(f, e);
@@ -239,8 +267,8 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         else if (e->flags & CST_EXPLAIN_DELTA)
             fprintf(f, "delta light, pmf %.6g; ", (double)e->pmf);
         else
-            fprintf(f, "pmf %.6g, pdf_w %.6g, pdf_a %.6g, BSDF pdf_w %.6g; ", (double)e->pmf, (double)e->pdf_w,
-                    (double)e->pdf_a, (double)e->pdf_other_w);
+            fprintf(f, "pmf %.6g, pdf_w %.6g, pdf_a %.6g, %s pdf_w %.6g; ", (double)e->pmf, (double)e->pdf_w,
+                    (double)e->pdf_a, nee_partner(x, e), (double)e->pdf_other_w);
         print_mis(f, x, e);
         if (e->flags & CST_EXPLAIN_OCCLUDED) fputs(", occluded", f);
         print_value(f, e);
@@ -279,16 +307,18 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         return;
     case CST_EXPLAIN_SCATTER:
         if (is_whitted(x)) {
-            fprintf(f, "%*sbranch: specular lobe of probability %.6g, wi (%.4f, %.4f, %.4f), ", 2 * e->depth, "",
-                    (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
+            fprintf(f, "%*sbranch: %s lobe of probability %.6g, wi (%.4f, %.4f, %.4f), ", 2 * e->depth, "",
+                    e->lobe ? e->lobe : "specular", (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
             print3(f, "weight ", e->value);
             fputc('\n', f);
             return;
         }
+        /* the lobe that drew wi; a non-delta weight is still the mixture's (one-sample MIS) */
+        fprintf(f, "  scatter (%s): ", e->lobe ? e->lobe : "lobe unknown");
         if (e->flags & CST_EXPLAIN_DELTA)
-            fprintf(f, "  scatter: delta lobe, pmf %.6g", (double)e->pmf);
+            fprintf(f, "delta lobe, pmf %.6g", (double)e->pmf);
         else
-            fprintf(f, "  scatter: non-delta lobes, pdf_w %.6g", (double)e->pdf_w);
+            fprintf(f, "non-delta lobes, pdf_w %.6g", (double)e->pdf_w);
         fprintf(f, ", wi (%.4f, %.4f, %.4f), ", (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
         print3(f, "weight f cos/pdf ", e->value);
         fputc('\n', f);
@@ -594,6 +624,7 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         return o;
     case CST_EXPLAIN_SCATTER:
         json_object_set_new(o, "delta", json_boolean(e->flags & CST_EXPLAIN_DELTA));
+        json_object_set_new(o, "lobe", e->lobe ? json_string(e->lobe) : json_null());
         json_object_set_new(o, "wi", arr3f(e->wi));
         json_object_set_new(o, "pdf_w", num((double)e->pdf_w));
         json_object_set_new(o, "pmf", num((double)e->pmf));
@@ -621,7 +652,10 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         }
     } else {
         json_object_set_new(o, "pdf_other_w", num((double)e->pdf_other_w));
-        if (e->kind == CST_EXPLAIN_NEE) json_object_set_new(o, "pmf", num((double)e->pmf));
+        if (e->kind == CST_EXPLAIN_NEE) {
+            json_object_set_new(o, "pmf", num((double)e->pmf));
+            json_object_set_new(o, "partner", json_string(nee_partner(x, e))); /* whose pdf_other_w */
+        }
     }
     json_object_set_new(o, "mis_weight", num((double)e->mis_weight));
     if (e->mis_strategies > 0) {

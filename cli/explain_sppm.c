@@ -54,8 +54,8 @@ static void print_chain(FILE *f, const CstExplain *x)
             break;
         case CST_EXPLAIN_SCATTER:
             if (e->flags & CST_EXPLAIN_DELTA)
-                fprintf(f, "  delta lobe, pmf %.6g, wi (%.4f, %.4f, %.4f), ", (double)e->pmf, (double)e->wi[0],
-                        (double)e->wi[1], (double)e->wi[2]);
+                fprintf(f, "  %s: delta lobe, pmf %.6g, wi (%.4f, %.4f, %.4f), ", e->lobe ? e->lobe : "lobe unknown",
+                        (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
             else
                 fprintf(f, "  the non-delta lobes taken (probability %.6g): the visible point, ", (double)e->pmf);
             p3f(f, "weight ", e->value);

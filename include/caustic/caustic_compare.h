@@ -275,6 +275,16 @@ typedef struct CstExplainEvent {
     int light;        /* the emitter or light chosen (emitter index), -1 none */
     int material;     /* VERTEX: material index (scene order), -1 none */
     const char *material_type; /* VERTEX: "diffuse", "glass", ... (a static string) */
+    /* SCATTER: the lobe that drew wi (a static string, never NULL on a SCATTER event):
+     * "diffuse reflection", "glossy reflection", "specular reflection", the same three with
+     * "transmission", "coat specular reflection", "coat glossy reflection", "base diffuse
+     * reflection", "base glossy reflection", "base specular reflection" (plastic and the
+     * coated materials: off the interface, or through it to the base and out), "hair R",
+     * "hair TT", "hair TRT", "hair residual", "subsurface exit" (the cosine-weighted
+     * direction leaving a subsurface exit point), "phase function" (a medium vertex),
+     * "delta split" (the choice between a BSDF's delta and non-delta parts, whose own
+     * SCATTER follows); NULL on other events */
+    const char *lobe;
     float p[3], n[3], ng[3]; /* VERTEX: position, shading and geometric normal; SPLAT,
                               * CONNECT: the light vertex's position in p */
     float wi[3];      /* SCATTER, NEE: the sampled direction (unit, world) */

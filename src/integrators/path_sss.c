@@ -67,11 +67,9 @@ static int sss_probe(const Scene *s, Vec3 p0, Vec3 p1, int material, float u, fl
 /* One light sample at the exit point (Sw lobe f = Sw(cos) eta^2 on ng's side; the eta^2
  * undoes the entry's radiance scaling 1 / eta^2, as pbrt-v4's NormalizedFresnelBxDF in
  * radiance mode), MIS-weighted against the lobe's cosine sampling when mis. */
-static Color sss_nee(const Scene *s, const SurfaceHit *x, float eta, bool mis, Sampler *smp, const Wavelengths *wl,
-                     uint64_t *rays)
+static Color sss_nee(const Scene *s, const SurfaceHit *x, float eta, bool mis, float u_sel, Vec2 u,
+                     const Wavelengths *wl, uint64_t *rays)
 {
-    float u_sel = sampler_1d(smp);
-    Vec2 u = sampler_2d(smp);
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_nee(&s->emitter_sampler, &g, x->p, x->ns, u_sel, u, &ls)) return color_s(0.0f);
@@ -134,9 +132,11 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             const float eta = m->bssrdf->eta;
             if (pp->rec) recorder_sss_exit(pp->rec, &x, pdf, count, ps.beta);
             if (use_nee) {
-                Color d = sss_nee(s, &x, eta, pp->mode == PATH_MIS, smp, wl, rays);
+                const float u_sel = sampler_1d(smp); /* kept for explain's recorder_sss_nee */
+                const Vec2 u_l = sampler_2d(smp);
+                Color d = sss_nee(s, &x, eta, pp->mode == PATH_MIS, u_sel, u_l, wl, rays);
                 ps.L = color_madd(ps.L, ps.beta, d);
-                if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, ps.beta, d);
+                if (pp->rec) recorder_sss_nee(pp->rec, s, &x, u_sel, u_l, pp->mode == PATH_MIS, ps.beta, d);
             }
             /* Sw by cosine sampling about the exit's shading normal (on ng's side):
              * weight Sw cos eta^2 / (cos / pi) */

@@ -10,6 +10,8 @@
 
 #include "integrators/direct.h"
 #include "integrators/photon_map.h"
+#include "integrators/volpath.h"
+#include "media/phase.h"
 #include "sampling/pss_sampler.h"
 
 static void put3(float o[3], Vec3 v) { o[0] = v.x; o[1] = v.y; o[2] = v.z; }
@@ -147,10 +149,66 @@ void recorder_nee(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHi
         e->flags |= CST_EXPLAIN_OCCLUDED;
 }
 
+/* A NEE event (added: flagged ADDED and summed by the replay) with the light sample drawn
+ * again from the render's uniforms at p (shading normal n, zero in a medium): the light, its point and normal (ng), wi, pdf_w,
+ * pdf_a and the pick's pmf. NULL (the event without them) when no light was sampled. */
+static CstExplainEvent *nee_light_event(Recorder *r, const Scene *s, Vec3 p, Vec3 n, float u_sel, Vec2 u, bool added,
+                                        Color beta, Color value, LightLi *ls)
+{
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_NEE);
+    if (added) {
+        recorder_added(r, e, beta, value);
+    } else { /* a detail event (whitted's shadow rays): printed, not summed */
+        put_color(e->beta, beta);
+        put_color(e->value, value);
+        put_color(e->contribution, color_mul(beta, value));
+    }
+    EmitterGeometry g = scene_emitter_geometry(s);
+    if (!light_sample_nee(&s->emitter_sampler, &g, p, n, u_sel, u, ls)) return NULL;
+    e->light = ls->light;
+    put3(e->p, ls->p);
+    put3(e->ng, ls->n);
+    put3(e->wi, ls->wi);
+    e->pdf_w = ls->pdf_w;
+    e->pmf = ls->delta ? ls->pmf : light_nee_pmf(&s->emitter_sampler, p, n, ls->light);
+    /* The light point's density per unit area: pdf_w |cos_light| / dist^2. */
+    if (!ls->delta && ls->finite && ls->dist > 0.0f)
+        e->pdf_a = ls->pdf_w * fabsf(v3_dot(ls->n, ls->wi)) / (ls->dist * ls->dist);
+    if (ls->delta) e->flags |= CST_EXPLAIN_DELTA;
+    return e;
+}
+
+void recorder_vol_nee(Recorder *r, const Scene *s, const VolVertex *v, float u_sel, Vec2 u, bool mis, Color beta,
+                      Color value)
+{
+    LightLi ls;
+    CstExplainEvent *e = nee_light_event(r, s, v->p, v->ns, u_sel, u, true, beta, value, &ls);
+    if (!e) return;
+    /* volpath_nee_u's partner: the BSDF's pdf_w at a surface, the phase function's (which
+     * samples itself exactly) in a medium */
+    const float other = v->bsdf ? bsdf_pdf(v->bsdf, v->wo, ls.wi) : phase_hg_eval(v->wo, ls.wi, v->g);
+    e->pdf_other_w = other;
+    e->mis_weight = mis && !ls.delta ? power_heuristic(ls.pdf_w, other) : 1.0f;
+}
+
+void recorder_sss_nee(Recorder *r, const Scene *s, const SurfaceHit *x, float u_sel, Vec2 u, bool mis, Color beta,
+                      Color value)
+{
+    LightLi ls;
+    CstExplainEvent *e = nee_light_event(r, s, x->p, x->ns, u_sel, u, true, beta, value, &ls);
+    if (!e) return;
+    /* path_sss.c's partner: the exit's cosine sampling of Sw, cos / pi (0 below the exit) */
+    const float cos_s = v3_dot(ls.wi, x->ns);
+    const float other = cos_s > 0.0f ? cos_s * CST_INV_PI : 0.0f;
+    e->pdf_other_w = other;
+    e->mis_weight = mis && !ls.delta ? power_heuristic(ls.pdf_w, other) : 1.0f;
+}
+
 void recorder_scatter(Recorder *r, const BsdfSample *bs, Color beta)
 {
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
     put3(e->wi, bs->wi);
+    e->lobe = bsdf_lobe_name(bs->lobe);
     e->pdf_w = bs->pdf_w;
     e->pmf = bs->pmf;
     if (bs->delta) e->flags |= CST_EXPLAIN_DELTA;
@@ -329,6 +387,18 @@ void recorder_volume_estimate(Recorder *r, float radius, float kernel, Color bet
 }
 
 /* The throughput of the whitted node at depth d: 1 at the camera's hit, else its branch's. */
+static Color tree_beta(const Recorder *r, int d);
+
+void recorder_whitted_light(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
+                            Vec2 u, Color value)
+{
+    LightLi ls;
+    CstExplainEvent *e = nee_light_event(r, s, sh->p, sh->ns, u_sel, u, false, tree_beta(r, r->depth), value, &ls);
+    if (!e) return;
+    e->pdf_other_w = bsdf_pdf(bsdf, wo, ls.wi);
+    e->mis_weight = 1.0f; /* direct_light: no MIS */
+}
+
 static Color tree_beta(const Recorder *r, int d)
 {
     return d >= 2 && d <= RECORDER_PATH_MAX + 1 ? r->tree_beta[d] : color_s(1.0f);
@@ -347,6 +417,7 @@ void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int dep
     r->depth = depth;
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
     put3(e->wi, bs->wi);
+    e->lobe = bsdf_lobe_name(bs->lobe);
     e->pmf = bs->pmf;
     e->flags |= CST_EXPLAIN_DELTA;
     Color beta = tree_beta(r, depth);
@@ -393,6 +464,7 @@ void recorder_sss_scatter(Recorder *r, Vec3 wi, float pdf_w, float w, Color beta
 {
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
     put3(e->wi, wi);
+    e->lobe = "subsurface exit";
     e->pdf_w = pdf_w;
     put_color(e->beta, beta);
     put_color(e->value, color_s(w));
@@ -533,6 +605,7 @@ void recorder_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta)
     put3(e->wi, wi);
     e->pdf_w = pdf_w;
     e->material_type = "phase";
+    e->lobe = "phase function";
     r->paths.next_dir = wi;
     put_color(e->beta, beta);
     put_color(e->value, color_s(1.0f));
@@ -542,6 +615,7 @@ void recorder_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta)
 void recorder_mixed(Recorder *r, float prob, Color beta)
 {
     CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_SCATTER);
+    e->lobe = "delta split";
     e->pmf = prob;
     put_color(e->beta, beta);
     const Color w = color_s(1.0f / prob);

@@ -115,6 +115,17 @@ void recorder_emission(Recorder *r, const SurfaceHit *sh, Vec3 wo, Color beta, C
 void recorder_nee(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
                   Vec2 u, bool mis, Color beta, Color value);
 void recorder_scatter(Recorder *r, const BsdfSample *bs, Color beta);
+/* volpath's NEE at a surface or medium vertex v (volpath.h) from the uniforms volpath_nee_u
+ * took: the light sample's pdf_w and pdf_a, the pick's pmf, the partner's pdf_w (the BSDF's,
+ * or the phase function's in a medium: pdf_other_w) and the power-heuristic weight; value
+ * what the render added (beta times it). */
+struct VolVertex;
+void recorder_vol_nee(Recorder *r, const Scene *s, const struct VolVertex *v, float u_sel, Vec2 u, bool mis, Color beta,
+                      Color value);
+/* path_sss.c's NEE at a subsurface exit x, the same fields (the partner: Sw's cosine
+ * sampling about x's shading normal, cos / pi). */
+void recorder_sss_nee(Recorder *r, const Scene *s, const SurfaceHit *x, float u_sel, Vec2 u, bool mis, Color beta,
+                      Color value);
 /* Russian roulette with survival probability q (a draw was made). */
 void recorder_roulette(Recorder *r, float q, bool survived);
 
@@ -195,6 +206,11 @@ void recorder_whitted(Recorder *r, CstExplainKind kind, int depth, Color value);
 /* A specular branch of weight w (the lobe's probability times its f cos / pdf) from the
  * node at `depth` to a child at depth + 1. */
 void recorder_whitted_branch(Recorder *r, const BsdfSample *bs, Color w, int depth);
+/* whitted_direct's shadow ray from uniforms u_sel, u at the current vertex: a NEE event NOT
+ * flagged ADDED (the sum event after them is what the tree adds) with the light, its pdf_w,
+ * pdf_a, pmf, the BSDF's pdf_w and value its share of the mean (the estimate / n). */
+void recorder_whitted_light(Recorder *r, const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, float u_sel,
+                            Vec2 u, Color value);
 
 /* ---- photon mapping (photon.c's photon_li) */
 /* The camera ray's specular chain: what emission it met (value L, beta 1), and when it

@@ -20,6 +20,12 @@ Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *smp, co
 {
     float u_sel = sampler_1d(smp);
     Vec2 u = sampler_2d(smp);
+    return volpath_nee_u(s, v, mis, u_sel, u, wl, rays);
+}
+
+Color volpath_nee_u(const Scene *s, const VolVertex *v, bool mis, float u_sel, Vec2 u, const Wavelengths *wl,
+                    uint64_t *rays)
+{
     LightLi ls;
     EmitterGeometry g = scene_emitter_geometry(s);
     if (!light_sample_nee(&s->emitter_sampler, &g, v->p, v->ns, u_sel, u, &ls)) return color_s(0.0f);
@@ -107,9 +113,11 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
                 if (pp->rec) recorder_medium_vertex(pp->rec, p, medium, depth + 1);
                 if (use_nee) {
                     VolVertex v = {p, v3s(0.0f), v3s(0.0f), wo, NULL, NULL, mc.g, medium, time};
-                    Color d = volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays);
+                    const float u_sel = sampler_1d(smp); /* volpath_nee's draws, kept for explain */
+                    const Vec2 u_l = sampler_2d(smp);
+                    Color d = volpath_nee_u(s, &v, pp->mode == PATH_MIS, u_sel, u_l, wl, rays);
                     ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), d);
-                    if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, mis_beta(ps.beta, hero, r_u), d);
+                    if (pp->rec) recorder_vol_nee(pp->rec, s, &v, u_sel, u_l, pp->mode == PATH_MIS, mis_beta(ps.beta, hero, r_u), d);
                 }
                 Vec2 u = sampler_2d(smp);
                 float pdf;
@@ -156,9 +164,11 @@ Color volpath_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wa
         if (pp->regularize && ps.any_non_delta) bsdf_regularize(&bsdf);
         if (use_nee && !bsdf_is_delta(&bsdf)) {
             VolVertex v = {sh.p, sh.ns, sh.ng, wo, &bsdf, &sh, 0.0f, medium, time};
-            Color d = volpath_nee(s, &v, pp->mode == PATH_MIS, smp, wl, rays);
+            const float u_sel = sampler_1d(smp); /* volpath_nee's draws, kept for explain */
+            const Vec2 u_l = sampler_2d(smp);
+            Color d = volpath_nee_u(s, &v, pp->mode == PATH_MIS, u_sel, u_l, wl, rays);
             ps.L = color_madd(ps.L, mis_beta(ps.beta, hero, r_u), d);
-            if (pp->rec) recorder_add(pp->rec, CST_EXPLAIN_NEE, mis_beta(ps.beta, hero, r_u), d);
+            if (pp->rec) recorder_vol_nee(pp->rec, s, &v, u_sel, u_l, pp->mode == PATH_MIS, mis_beta(ps.beta, hero, r_u), d);
         }
         BsdfSample bs;
         if (!path_sample_bsdf(pp, &ps, &bsdf, &sh, wo, smp, &bs)) break;

@@ -25,5 +25,9 @@ typedef struct VolVertex {
  * scattering density when mis (power heuristic; delta lights unweighted). Shared with
  * SPPM's visible points in media (sppm.c, mis false). */
 Color volpath_nee(const Scene *s, const VolVertex *v, bool mis, Sampler *smp, const Wavelengths *wl, uint64_t *rays);
+/* The same from the light pick's and the light point's uniforms u_sel, u (volpath_nee
+ * draws them in that order), so explain can sample the same light point again. */
+Color volpath_nee_u(const Scene *s, const VolVertex *v, bool mis, float u_sel, Vec2 u, const Wavelengths *wl,
+                    uint64_t *rays);
 
 #endif

@@ -19,13 +19,16 @@ static const float WHITTED_MIN_WEIGHT = 1e-4f;
  * converted to solid angle with dist^2 / |cos theta_light|, or point, spot and
  * directional lights, whose shadow rays are Whitted's own). */
 static Color whitted_direct(const Scene *s, const Bsdf *bsdf, const SurfaceHit *sh, Vec3 wo, int n, Sampler *smp,
-                          const Wavelengths *wl, uint64_t *rays)
+                          const Wavelengths *wl, uint64_t *rays, Recorder *rec)
 {
     Color sum = color_s(0.0f);
     for (int i = 0; i < n; i++) {
         float u_sel = sampler_1d(smp);
         Vec2 u = sampler_2d(smp);
-        sum = color_add(sum, direct_light(s, bsdf, sh, wo, u_sel, u, wl, rays));
+        const Color d = direct_light(s, bsdf, sh, wo, u_sel, u, wl, rays);
+        sum = color_add(sum, d);
+        /* explain: each shadow ray apart (its share of the mean; not summed) */
+        if (rec) recorder_whitted_light(rec, s, bsdf, sh, wo, u_sel, u, color_scale(d, 1.0f / (float)n));
     }
     return color_scale(sum, 1.0f / (float)n);
 }
@@ -52,7 +55,7 @@ static Color whitted_trace(const Scene *s, const WhittedParams *wp, Ray ray, int
      * lobes (smooth-coat plastic) then branches into those below as well. */
     if (!bsdf_is_delta(&bsdf)) {
         if (s->emitter_sampler.lights > 0) {
-            Color d = whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, smp, wl, rays);
+            Color d = whitted_direct(s, &bsdf, &sh, wo, wp->light_samples, smp, wl, rays, wp->rec);
             L = color_add(L, d);
             if (wp->rec) recorder_whitted(wp->rec, CST_EXPLAIN_NEE, depth + 1, d);
         }

@@ -115,6 +115,7 @@ static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
         out->pdf_w = 0.0f;
         out->weight = fresnel_conductor_rgb(wo.z, b->lobe.conductor.eta, b->lobe.conductor.k);
         out->delta = true;
+        out->lobe = BSDF_LOBE_SPECULAR_REFLECTION;
         return true;
     }
     Vec3 m = ggx_sample_visible(wo, b->lobe.conductor.alpha, b->lobe.conductor.alpha_y, u);
@@ -128,6 +129,7 @@ static bool conductor_sample(const Bsdf *b, Vec3 wo, Vec2 u, BsdfSample *out)
     float g = ggx_g2(wo, wi, ax, ay) / ggx_g1(wo, ax, ay);
     out->weight = color_scale(fresnel_conductor_rgb(v3_dot(wo, m), b->lobe.conductor.eta, b->lobe.conductor.k), g);
     out->delta = false;
+    out->lobe = BSDF_LOBE_GLOSSY_REFLECTION;
     return true;
 }
 
@@ -189,6 +191,7 @@ static bool dielectric_smooth_sample(const Bsdf *b, Vec3 wo, float uc, BsdfTrans
         out->pmf = f;
         out->pdf_w = 0.0f;
         out->weight = b->lobe.dielectric.tint; /* (F / |cos|) |cos| / F */
+        out->lobe = BSDF_LOBE_SPECULAR_REFLECTION;
         return true;
     }
     /* Refraction by Snell's law about the macro normal. */
@@ -197,6 +200,7 @@ static bool dielectric_smooth_sample(const Bsdf *b, Vec3 wo, float uc, BsdfTrans
     if (!refract_about(wo, v3(0.0f, 0.0f, 1.0f), b->lobe.dielectric.eta, &wt, &etap)) return false; /* f == 1 under TIR */
     out->wi = v3_normalize(wt);
     out->pmf = 1.0f - f;
+    out->lobe = BSDF_LOBE_SPECULAR_TRANSMISSION;
     out->pdf_w = 0.0f;
     /* Radiance is compressed by 1/etap^2 entering a denser medium (Veach thesis sec. 5.2,
      * pbrt-v4 sec. 9.5.2); camera paths carry radiance, so the factor applies to them.
@@ -228,6 +232,7 @@ static bool dielectric_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTran
     out->pdf_w = dielectric_pdf(b, wo, wi);
     out->pmf = 0.0f;
     out->delta = false;
+    out->lobe = uc < F ? BSDF_LOBE_GLOSSY_REFLECTION : BSDF_LOBE_GLOSSY_TRANSMISSION;
     /* f |cos_i| / pdf = G2 / G1(wo) for both lobes (D, F and the Jacobians cancel), times
      * 1 / etap^2 for radiance through refraction. */
     const float ax = b->lobe.dielectric.alpha, ay = b->lobe.dielectric.alpha_y;
@@ -317,6 +322,7 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
             out->pdf_w = 0.0f;
             out->weight = color_s(fresnel_dielectric(wo.z, b->lobe.plastic.eta) / pc);
             out->delta = true;
+            out->lobe = BSDF_LOBE_COAT_SPECULAR_REFLECTION;
             return true;
         }
         wi = reflect_about(wo, ggx_sample_visible(wo, b->lobe.plastic.alpha, b->lobe.plastic.alpha, u));
@@ -332,6 +338,8 @@ static bool plastic_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSample 
     out->pmf = 0.0f;
     out->weight = color_scale(plastic_eval(b, wo, wi), 1.0f / out->pdf_w);
     out->delta = false;
+    /* the lobe that drew wi; the weight is the mixture's (one-sample MIS) all the same */
+    out->lobe = uc < pc ? BSDF_LOBE_COAT_GLOSSY_REFLECTION : BSDF_LOBE_BASE_DIFFUSE_REFLECTION;
     return true;
 }
 
@@ -375,6 +383,7 @@ static bool difftrans_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfSampl
     out->pmf = 0.0f;
     out->weight = color_scale(reflect ? b->lobe.difftrans.reflectance : b->lobe.difftrans.transmittance, 1.0f / p);
     out->delta = false;
+    out->lobe = reflect ? BSDF_LOBE_DIFFUSE_REFLECTION : BSDF_LOBE_DIFFUSE_TRANSMISSION;
     return wi.z != 0.0f;
 }
 
@@ -397,9 +406,11 @@ static bool thin_dielectric_sample(const Bsdf *b, Vec3 wo, float uc, BsdfSample 
     if (uc < R) {
         out->wi = mirror_z(wo);
         out->pmf = R;
+        out->lobe = BSDF_LOBE_SPECULAR_REFLECTION;
     } else {
         out->wi = v3_neg(wo);
         out->pmf = T;
+        out->lobe = BSDF_LOBE_SPECULAR_TRANSMISSION;
     }
     return true;
 }
@@ -417,6 +428,7 @@ static bool layered_bsdf_sample(const Bsdf *b, Vec3 wo, float uc, Vec2 u, BsdfTr
     out->wi = ls.wi;
     out->weight = ls.weight;
     out->delta = ls.delta;
+    out->lobe = ls.lobe;
     out->pmf = ls.delta ? ls.pdf : 0.0f;
     out->pdf_w = ls.delta ? 0.0f : layered_pdf(&b->lobe.layered, wo, ls.wi);
     return true;
@@ -581,6 +593,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         out->pmf = 0.0f;
         out->weight = b->lobe.diffuse.albedo; /* (albedo/pi) |cos| / (|cos|/pi) */
         out->delta = false;
+        out->lobe = BSDF_LOBE_DIFFUSE_REFLECTION;
         ok = out->wi.z > 0.0f;
         break;
     case MATERIAL_MIRROR:
@@ -591,6 +604,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         out->pdf_w = 0.0f;
         out->weight = b->lobe.diffuse.albedo;
         out->delta = true;
+        out->lobe = BSDF_LOBE_SPECULAR_REFLECTION;
         ok = true;
         break;
     case MATERIAL_CONDUCTOR:
@@ -626,6 +640,7 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
         if (flipped) wo.z = -wo.z;
         out->pmf = 0.0f;
         out->delta = false;
+        out->lobe = BSDF_LOBE_GLOSSY_REFLECTION; /* one tabulated lobe (Dupuy & Jakob 2018) */
         ok = measured_sample(b->lobe.measured.table, wo, u, b->lobe.measured.spectral ? b->lobe.measured.lambda : NULL,
                              &out->wi, &out->weight, &out->pdf_w);
         break;
@@ -634,7 +649,9 @@ bool bsdf_sample_transport_general(const Bsdf *b, Vec3 wo_world, float uc, Vec2 
          * (the lobes' mixture density, so one-sample MIS over them). */
         out->pmf = 0.0f;
         out->delta = false;
-        ok = hair_sample(&b->lobe.hair, wo, uc, u, &out->wi, &out->pdf_w);
+        int p;
+        ok = hair_sample_lobe(&b->lobe.hair, wo, uc, u, &out->wi, &out->pdf_w, &p);
+        out->lobe = (uint8_t)(BSDF_LOBE_HAIR_R + (p < 3 ? p : 3));
         if (ok) {
             Color f = mode == BSDF_RADIANCE ? hair_eval(&b->lobe.hair, wo, out->wi)
                                             : hair_eval_adjoint(&b->lobe.hair, wo, out->wi);

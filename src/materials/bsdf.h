@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "materials/bsdf_lobe.h"
 #include "materials/fresnel.h"
 #include "materials/hair.h"
 #include "materials/layered.h"
@@ -94,6 +95,7 @@ typedef struct BsdfSample {
      * "pdf") reads delta ? pmf : pdf_w. */
     float pmf;
     bool delta;
+    uint8_t lobe; /* BsdfLobe: which lobe drew wi (explain prints it; renders never read it) */
 } BsdfSample;
 
 /* m must outlive b when m is a rough plastic (b points at its coat table). The shading
@@ -419,6 +421,7 @@ static inline bool bsdf_sample_transport(const Bsdf *b, Vec3 wo, float uc, Vec2 
     out->pmf = 0.0f;
     out->weight = b->lobe.diffuse.albedo;
     out->delta = false;
+    out->lobe = BSDF_LOBE_DIFFUSE_REFLECTION;
     if (!(wi.z > 0.0f) || !(out->pdf_w > 0.0f) || !color_is_finite(out->weight)) return false;
     if (z_o < 0.0f) wi.z = -wi.z;
     out->wi = frame_to_world(&b->frame, wi);

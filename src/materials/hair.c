@@ -271,12 +271,20 @@ float hair_pdf(const HairLobe *l, Vec3 wo, Vec3 wi)
 
 bool hair_sample(const HairLobe *l, Vec3 wo, float uc, Vec2 u, Vec3 *wi, float *pdf_w)
 {
+    int p;
+    return hair_sample_lobe(l, wo, uc, u, wi, pdf_w, &p);
+}
+
+bool hair_sample_lobe(const HairLobe *l, Vec3 wo, float uc, Vec2 u, Vec3 *wi, float *pdf_w, int *lobe_p)
+{
+    *lobe_p = 0;
     HairWo o;
     float ap_pdf[HAIR_P_MAX + 1];
     if (!hair_setup(l, wo, &o) || !hair_ap_pdf(&o, ap_pdf)) return false;
     /* The lobe, and uc remapped to [0, 1) within its share for the azimuth. */
     int p = 0;
     while (p < HAIR_P_MAX && uc >= ap_pdf[p]) uc -= ap_pdf[p++];
+    *lobe_p = p;
     uc = ap_pdf[p] > 0.0f ? fminf(uc / ap_pdf[p], 0x1.fffffep-1f) : 0.5f;
     float sp, cp;
     hair_tilt(l, p, o.sin_o, o.cos_o, &sp, &cp);

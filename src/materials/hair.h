@@ -64,6 +64,8 @@ float hair_pdf(const HairLobe *l, Vec3 wo, Vec3 wi);
  * u.x and u.y, phi_i from Np (the trimmed logistic) by uc remapped. Returns false when
  * nothing can be sampled. */
 bool hair_sample(const HairLobe *l, Vec3 wo, float uc, Vec2 u, Vec3 *wi, float *pdf_w);
+/* The same, and the lobe p that drew wi (0 R, 1 TT, 2 TRT, HAIR_P_MAX the residual). */
+bool hair_sample_lobe(const HairLobe *l, Vec3 wo, float uc, Vec2 u, Vec3 *wi, float *pdf_w, int *lobe_p);
 
 /* The longitudinal scattering function Mp (d'Eon et al. 2011, with the low-variance form
  * for v <= 0.1 of pbrt-v4); exposed for the tests. Symmetric in (i, o). */

@@ -423,6 +423,7 @@ bool layered_sample(const LayeredLobe *l, Vec3 wo, float uc, Vec2 u, bool import
         out->pdf = bs.pdf;
         out->weight = color_scale(bs.f, fabsf(bs.wi.z) / bs.pdf);
         out->delta = bs.specular;
+        out->lobe = bs.specular ? BSDF_LOBE_COAT_SPECULAR_REFLECTION : BSDF_LOBE_COAT_GLOSSY_REFLECTION;
         return true;
     }
     const float thick = maxf(l->thickness, FLT_MIN);
@@ -488,6 +489,11 @@ bool layered_sample(const LayeredLobe *l, Vec3 wo, float uc, Vec2 u, bool import
             out->pdf = pdf;
             out->weight = color_scale(beta, w.z);
             out->delta = specular;
+            /* through the interface: named by the base (a walk in a scattering slab is
+             * not specular even over a smooth conductor) */
+            out->lobe = specular ? BSDF_LOBE_BASE_SPECULAR_REFLECTION
+                        : l->conductor ? BSDF_LOBE_BASE_GLOSSY_REFLECTION
+                                       : BSDF_LOBE_BASE_DIFFUSE_REFLECTION;
             return true;
         }
         beta = color_scale(beta, fabsf(bs.wi.z));

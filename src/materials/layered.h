@@ -46,6 +46,7 @@ typedef struct LayeredSample {
     Vec3 wi;
     float pdf;    /* the path's density (delta: its discrete probability) */
     bool delta;   /* every scattering event on the path was specular */
+    uint8_t lobe; /* BsdfLobe: coat reflection, or through the coat to the base and out */
 } LayeredSample;
 
 /* Stochastic estimate of f(wo, wi) |cos_i| (radiance when importance is false, else the

@@ -74,6 +74,9 @@ static Color replay_whitted(const Recorder *r, int *i)
     if (r->ev[at].kind == CST_EXPLAIN_ESCAPE) return r->value[at];
     Color L = color_s(0.0f);
     if (*i < r->n && r->ev[*i].kind == CST_EXPLAIN_EMISSION && r->ev[*i].depth == d) L = r->value[(*i)++];
+    /* whitted_direct's shadow rays (not ADDED), then their mean, which the tree adds */
+    while (*i < r->n && r->ev[*i].kind == CST_EXPLAIN_NEE && r->ev[*i].depth == d && !(r->ev[*i].flags & CST_EXPLAIN_ADDED))
+        (*i)++;
     if (*i < r->n && r->ev[*i].kind == CST_EXPLAIN_NEE && r->ev[*i].depth == d) L = color_add(L, r->value[(*i)++]);
     while (*i < r->n && r->ev[*i].kind == CST_EXPLAIN_SCATTER && r->ev[*i].depth == d) {
         Color w = r->value[(*i)++];
