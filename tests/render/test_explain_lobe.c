@@ -48,11 +48,8 @@ static double dot3(const float a[3], const double b[3])
     return (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2];
 }
 
-static int shadow_checked; /* whitted: direct-light sums checked against their shadow rays */
-
-/* Explains samples 0 and 1 of every step-th pixel across and down; counts[k] the SCATTER events of lobe LOBES[k].
- * Returns the number of SCATTER events whose geometry was checked. */
-static int explain_image(const CstScene *s, CstIntegrator integ, int step, int counts[NLOBES])
+/* The settings every explain of this file uses: W x H, 2 samples, one thread, seed 7. */
+static CstRenderSettings explain_settings(CstIntegrator integ)
 {
     CstRenderSettings st;
     memset(&st, 0, sizeof st);
@@ -64,6 +61,16 @@ static int explain_image(const CstScene *s, CstIntegrator integ, int step, int c
     st.seed = 7;
     st.seed_set = 1;
     st.sampler = CST_SAMPLER_INDEPENDENT;
+    return st;
+}
+
+static int shadow_checked; /* whitted: direct-light sums checked against their shadow rays */
+
+/* Explains samples 0 and 1 of every step-th pixel across and down; counts[k] the SCATTER events of lobe LOBES[k].
+ * Returns the number of SCATTER events whose geometry was checked. */
+static int explain_image(const CstScene *s, CstIntegrator integ, int step, int counts[NLOBES])
+{
+    CstRenderSettings st = explain_settings(integ);
     st.photons = 2000;
     const double *cam = CAM;
     int checked = 0;
@@ -209,16 +216,7 @@ static int area_checked; /* of the events check_nee_pdfs checked, those at area 
 
 static int check_nee_pdfs(const CstScene *s, CstIntegrator integ, const char *vertex_type, int step, double g)
 {
-    CstRenderSettings st;
-    memset(&st, 0, sizeof st);
-    st.integrator = integ;
-    st.width = W;
-    st.height = H;
-    st.spp = 2;
-    st.threads = 1;
-    st.seed = 7;
-    st.seed_set = 1;
-    st.sampler = CST_SAMPLER_INDEPENDENT;
+    CstRenderSettings st = explain_settings(integ);
     const double pi = 3.14159265358979323846;
     int checked = 0;
     for (int y = 0; y < H; y += step) {
