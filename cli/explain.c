@@ -219,6 +219,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         fprintf(f, "vertex %d: surface at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f), material #%d (%s)",
                 e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->n[0], (double)e->n[1],
                 (double)e->n[2], e->material, e->material_type ? e->material_type : "none");
+        if (e->mix_material >= 0) fprintf(f, ", the mix chose #%d (%s)", e->mix_material, e->mix_material_type);
         if (e->light >= 0) fprintf(f, ", emitter %d", e->light);
         fputc('\n', f);
         return;
@@ -576,6 +577,10 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "ng", arr3f(e->ng));
         json_object_set_new(o, "material", json_integer(e->material));
         json_object_set_new(o, "material_type", json_string(e->material_type ? e->material_type : "none"));
+        if (e->mix_material >= 0) {
+            json_object_set_new(o, "mix_material", json_integer(e->mix_material));
+            json_object_set_new(o, "mix_material_type", json_string(e->mix_material_type));
+        }
         return o;
     case CST_EXPLAIN_ROULETTE:
         json_object_set_new(o, "q", num((double)e->q));

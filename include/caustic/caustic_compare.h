@@ -275,6 +275,11 @@ typedef struct CstExplainEvent {
     int light;        /* the emitter or light chosen (emitter index), -1 none */
     int material;     /* VERTEX: material index (scene order), -1 none */
     const char *material_type; /* VERTEX: "diffuse", "glass", ... (a static string) */
+    /* VERTEX at a mix material: the material the mix chose at this hit (pbrt-v4's
+     * MixMaterial, a hash of the hit: the one whose BSDF the path used there) and its type;
+     * -1 and NULL at other vertices */
+    int mix_material;
+    const char *mix_material_type;
     /* SCATTER: the lobe that drew wi (a static string, never NULL on a SCATTER event):
      * "diffuse reflection", "glossy reflection", "specular reflection", the same three with
      * "transmission", "coat specular reflection", "coat glossy reflection", "base diffuse

@@ -47,7 +47,7 @@ CstExplainEvent *recorder_push(Recorder *r, CstExplainKind k)
     e->kind = k;
     e->depth = r->depth;
     e->s = e->t = e->light = -1;
-    e->material = -1;
+    e->material = e->mix_material = -1;
     e->mis_weight = -1.0f;
     e->mis_explicit = e->mis_sum = -1.0f;
     e->path = -1;
@@ -104,6 +104,12 @@ void recorder_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int dept
         keep_flight(r, depth, -1);
     }
     e->material_type = sh->material >= 0 ? material_type_name(s->materials[sh->material].type) : "none";
+    if (sh->material >= 0 && s->materials[sh->material].type == MATERIAL_MIX) {
+        /* the same pure function of the hit the integrators' BSDF set-up calls */
+        const Material *chosen = scene_mix_choose(s, &s->materials[sh->material], sh);
+        e->mix_material = (int)(chosen - s->materials);
+        e->mix_material_type = material_type_name(chosen->type);
+    }
     e->light = sh->emitter;
 }
 

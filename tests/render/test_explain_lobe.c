@@ -4,7 +4,9 @@
  * (and SPPM's camera chain, photon's final gather) has a lobe; it is one the vertex's
  * material has; reflection lobes leave wi on wo's side
  * of the geometric normal and transmission lobes on the other; and over the image each
- * material shows each of its lobes. */
+ * material shows each of its lobes. The back wall is a mix of the white diffuse and the coated
+ * material: at its vertices the lobe must be one of the material the mix chose there, as
+ * explain reports it (both choices are seen). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -64,6 +66,7 @@ static CstRenderSettings explain_settings(CstIntegrator integ)
     return st;
 }
 
+static int mix_seen[2]; /* back-wall vertices where the mix chose diffuse, coateddiffuse */
 static int shadow_checked; /* whitted: direct-light sums checked against their shadow rays */
 
 /* Explains samples 0 and 1 of every step-th pixel across and down; counts[k] the SCATTER events of lobe LOBES[k].
@@ -121,6 +124,10 @@ static int explain_image(const CstScene *s, CstIntegrator integ, int step, int c
                             for (int c = 0; c < 3; c++) wo[d][c] = -wi_prev[d - 1][c];
                         }
                         vd[d] = e;
+                        if (!strcmp(e->material_type, "mix")) {
+                            if (!e->mix_material_type) fail_msg("a vertex of the mix without the mix's choice");
+                            mix_seen[!strcmp(e->mix_material_type, "coateddiffuse")]++;
+                        }
                     }
                     if (e->kind != CST_EXPLAIN_SCATTER) continue;
                     if (!e->lobe) fail_msg("%s pixel %d,%d sample %d: a SCATTER event without a lobe",
@@ -129,9 +136,10 @@ static int explain_image(const CstScene *s, CstIntegrator integ, int step, int c
                     if (d < 1 || d > DMAX || !vd[d] || !vd[d]->material_type || !strcmp(e->lobe, "delta split"))
                         continue;
                     const CstExplainEvent *v = vd[d];
-                    if (!lobe_allowed(v->material_type, e->lobe))
+                    const char *type = v->mix_material_type ? v->mix_material_type : v->material_type;
+                    if (!lobe_allowed(type, e->lobe))
                         fail_msg("%s pixel %d,%d: lobe \"%s\" at a %s vertex", cst_integrator_name(integ), x, y,
-                                 e->lobe, v->material_type);
+                                 e->lobe, type);
                     for (int c = 0; c < 3; c++) wi_prev[d][c] = (double)e->wi[c];
                     const double co = dot3(v->ng, wo[d]), ci = dot3(v->ng, wi_prev[d]);
                     if (co * ci == 0.0) continue;
@@ -170,9 +178,12 @@ static void test_path_bdpt_lobes(void **state)
     (void)state;
     CstScene *s = load_lobes();
     int counts[NLOBES] = {0};
+    mix_seen[0] = mix_seen[1] = 0;
     int checked = explain_image(s, CST_INTEGRATOR_PATH, 1, counts);
     report("path", counts, checked);
-    assert_true(checked > 500);
+    print_message("path: the back wall's mix chose diffuse at %d vertices, coateddiffuse at %d\n", mix_seen[0],
+                  mix_seen[1]);
+    assert_true(checked > 500 && mix_seen[0] > 0 && mix_seen[1] > 0);
     for (int l = 0; l < 6; l++)
         if (counts[l] == 0) fail_msg("path: no \"%s\" scatter over the image", LOBES[l]);
     memset(counts, 0, sizeof counts);
