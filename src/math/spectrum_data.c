@@ -83,20 +83,19 @@ static const float NK_CUZN[][3] = {
 /* Sellmeier coefficients B1, C1, B2, C2, B3, C3 (C in um^2) of the SCHOTT optical glass
  * catalogue (Zemax catalog 2017-01-20b, as given by refractiveindex.info):
  * n^2 - 1 = sum_i B_i lambda^2 / (lambda^2 - C_i), lambda in um. pbrt-v4's BK7, BAF10,
- * FK51A, LASF9 are SCHOTT's current N- glasses; F5, SF5, SF10, SF11 the lead glasses. */
+ * FK51A, LASF9 are SCHOTT's current N- glasses; SF5, SF10, SF11 the dense lead flints, which
+ * pbrt-v4 names "glass-F5", "glass-F10", "glass-F11" (its tables GlassSF5/SF10/SF11_eta):
+ * those names resolve here to the SF coefficients, as in pbrt-v4, and "glass-SF5" etc. are
+ * accepted as their catalogue names. */
 static const struct { const char *name; double b[6]; } GLASSES[] = {
     {"BK7", {1.03961212, 0.00600069867, 0.231792344, 0.0200179144, 1.01046945, 103.560653}},
     {"BAF10", {1.5851495, 0.00926681282, 0.143559385, 0.0424489805, 1.08521269, 105.613573}},
     {"FK51A", {0.971247817, 0.00472301995, 0.216901417, 0.0153575612, 0.904651666, 168.68133}},
     {"LASF9", {2.00029547, 0.0121426017, 0.298926886, 0.0538736236, 1.80691843, 156.530829}},
-    {"F5", {1.3104463, 0.00958633048, 0.19603426, 0.0457627627, 0.96612977, 115.011883}},
     {"SF5", {1.46141885, 0.0111826126, 0.247713019, 0.0508594669, 0.949995832, 112.041888}},
     {"SF10", {1.61625977, 0.0127534559, 0.259229334, 0.0581983954, 1.07762317, 116.60768}},
     {"SF11", {1.73848403, 0.0136068604, 0.311168974, 0.0615960463, 1.17490871, 121.922711}},
 };
-/* F10 and F11 are not in the current SCHOTT catalogue: their n_d (587.6 nm) as a constant,
- * reported as approximated (no dispersion). */
-static const struct { const char *name; float nd; } GLASSES_ND[] = {{"F10", 1.6200f}, {"F11", 1.6259f}};
 
 /* The CIE fluorescent illuminants F1-F12, relative spectral power at 5 nm over 380-780 nm,
  * and the CIE daylight basis S0, S1, S2 at 5 nm over 360-830 nm: CIE 15:2004,
@@ -390,22 +389,20 @@ static bool named_metal(const char *m, SampledSpectrum *out)
     return true;
 }
 
-bool spectrum_named(const char *name, SampledSpectrum *out, bool *approx)
+bool spectrum_named(const char *name, SampledSpectrum *out)
 {
-    *approx = false;
     if (strncmp(name, "metal-", 6) == 0) return named_metal(name + 6, out);
     if (strncmp(name, "glass-", 6) == 0) {
-        for (size_t i = 0; i < sizeof GLASSES / sizeof GLASSES[0]; i++)
-            if (strcmp(name + 6, GLASSES[i].name) == 0) {
+        /* pbrt-v4's F5/F10/F11 are SF5/SF10/SF11 (see GLASSES). */
+        const char *g = name + 6;
+        bool pbrt_flint = g[0] == 'F' && (!strcmp(g, "F5") || !strcmp(g, "F10") || !strcmp(g, "F11"));
+        for (size_t i = 0; i < sizeof GLASSES / sizeof GLASSES[0]; i++) {
+            const char *n = GLASSES[i].name;
+            if (pbrt_flint ? (n[0] == 'S' && strcmp(g, n + 1) == 0) : strcmp(g, n) == 0) {
                 from_n2(sellmeier_n2, GLASSES[i].b, out);
                 return true;
             }
-        for (size_t i = 0; i < sizeof GLASSES_ND / sizeof GLASSES_ND[0]; i++)
-            if (strcmp(name + 6, GLASSES_ND[i].name) == 0) {
-                sampled_spectrum_constant(GLASSES_ND[i].nd, out);
-                *approx = true;
-                return true;
-            }
+        }
         return false;
     }
     if (strcmp(name, "stdillum-D65") == 0) {

@@ -66,10 +66,9 @@ double sampled_spectrum_y(const SampledSpectrum *s);
 /* pbrt-v4's named spectra (spectrum_data.c): "metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k}",
  * "glass-{BK7,BAF10,FK51A,LASF9,F5,F10,F11,SF5,SF10,SF11}", "stdillum-A", "stdillum-D50",
  * "stdillum-D65", "stdillum-F1" ... "stdillum-F12", "illum-acesD60".
- * Fills *out and returns true, *approx set when the data are an approximation of
- * pbrt-v4's (a constant n_d where no dispersion formula is known); false for an unknown
- * name. */
-bool spectrum_named(const char *name, SampledSpectrum *out, bool *approx);
+ * "glass-F5/F10/F11" are pbrt-v4's names for SCHOTT SF5/SF10/SF11, the same spectra as
+ * "glass-SF5/SF10/SF11". Fills *out and returns true; false for an unknown name. */
+bool spectrum_named(const char *name, SampledSpectrum *out);
 /* The names spectrum_named knows, NULL-terminated. */
 extern const char *const spectrum_named_list[];
 

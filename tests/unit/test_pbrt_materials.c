@@ -527,8 +527,7 @@ static void test_light_spectra(void **state)
     assert_non_null(s->delta_spectrum);
     assert_true(s->num_delta_spectrum >= 4);
     static SampledSpectrum f11;
-    bool approx = false;
-    assert_true(spectrum_named("stdillum-F11", &f11, &approx));
+    assert_true(spectrum_named("stdillum-F11", &f11));
     int id = s->delta_spectrum[0];
     assert_true(id > 0);
     assert_memory_equal(s->spectra[id - 1].v, f11.v, sizeof f11.v);

@@ -53,36 +53,45 @@ static void test_named(void **state)
 {
     (void)state;
     static SampledSpectrum s;
-    bool approx = true;
     static const struct { const char *name; float nd, nF; } G[] = {
         {"glass-BK7", 1.5168f, 1.52238f}, {"glass-SF11", 1.78472f, 1.80645f}, {"glass-FK51A", 1.48656f, 0.0f},
         {"glass-LASF9", 1.85025f, 0.0f}, {"glass-BAF10", 1.67003f, 0.0f}};
     for (size_t i = 0; i < sizeof G / sizeof G[0]; i++) {
-        assert_true(spectrum_named(G[i].name, &s, &approx));
-        assert_false(approx || s.constant);
+        assert_true(spectrum_named(G[i].name, &s));
+        assert_false(s.constant);
         assert_true(fabsf(sampled_spectrum_at(&s, 587.56f) - G[i].nd) < 2e-4f);
         if (G[i].nF > 0.0f) assert_true(fabsf(sampled_spectrum_at(&s, 486.13f) - G[i].nF) < 2e-4f);
     }
-    assert_true(spectrum_named("glass-F10", &s, &approx) && approx && s.constant);
+    /* pbrt-v4's "glass-F5/F10/F11" are SCHOTT SF5/SF10/SF11 (its GlassSF*_eta tables): the
+     * same dispersive spectra as the catalogue names, not the light flint F5 */
+    static const char *const FLINT[3][2] = {{"glass-F5", "glass-SF5"}, {"glass-F10", "glass-SF10"},
+                                            {"glass-F11", "glass-SF11"}};
+    for (int i = 0; i < 3; i++) {
+        static SampledSpectrum t;
+        assert_true(spectrum_named(FLINT[i][0], &s) && spectrum_named(FLINT[i][1], &t));
+        assert_false(s.constant);
+        assert_memory_equal(s.v, t.v, sizeof s.v);
+    }
+    assert_true(fabsf(sampled_spectrum_at(&s, 587.56f) - 1.78472f) < 2e-4f);
     /* gold, Johnson & Christy 1972: n = 0.29, k = 2.863 at 582.1 nm */
-    assert_true(spectrum_named("metal-Au-eta", &s, &approx) && !approx);
+    assert_true(spectrum_named("metal-Au-eta", &s));
     assert_true(fabsf(sampled_spectrum_at(&s, 582.1f) - 0.29f) < 2e-3f);
-    assert_true(spectrum_named("metal-Au-k", &s, &approx));
+    assert_true(spectrum_named("metal-Au-k", &s));
     assert_true(fabsf(sampled_spectrum_at(&s, 582.1f) - 2.863f) < 2e-3f);
     /* MgO, Stephens & Malitson 1952: n = 1.7355 at 589.3 nm (their visible fit) */
-    assert_true(spectrum_named("metal-MgO-eta", &s, &approx));
+    assert_true(spectrum_named("metal-MgO-eta", &s));
     assert_true(fabsf(sampled_spectrum_at(&s, 589.3f) - 1.7355f) < 3e-3f);
-    assert_true(spectrum_named("stdillum-D65", &s, &approx));
+    assert_true(spectrum_named("stdillum-D65", &s));
     Color c = sampled_spectrum_rgb_illuminant(&s);
     for (int k = 0; k < 3; k++) assert_true(fabsf(c.c[k] - 1.0f) < 2e-3f);
-    assert_true(spectrum_named("stdillum-A", &s, &approx));
+    assert_true(spectrum_named("stdillum-A", &s));
     assert_true(fabsf(sampled_spectrum_at(&s, 560.0f) - 100.0f) < 1e-3f);
     c = sampled_spectrum_rgb_illuminant(&s);
     assert_true(c.c[0] > c.c[1] && c.c[1] > c.c[2]); /* warm */
-    for (int i = 0; spectrum_named_list[i]; i++) assert_true(spectrum_named(spectrum_named_list[i], &s, &approx));
-    assert_false(spectrum_named("metal-Xx-eta", &s, &approx));
-    assert_false(spectrum_named("metal-Au-kk", &s, &approx));
-    assert_false(spectrum_named("glass-XY", &s, &approx));
+    for (int i = 0; spectrum_named_list[i]; i++) assert_true(spectrum_named(spectrum_named_list[i], &s));
+    assert_false(spectrum_named("metal-Xx-eta", &s));
+    assert_false(spectrum_named("metal-Au-kk", &s));
+    assert_false(spectrum_named("glass-XY", &s));
     /* blackbody: peak 1 (Wien: 2898 um K / 5000 K = 579.6 nm) */
     sampled_spectrum_blackbody(5000.0f, &s);
     assert_true(fabsf(sampled_spectrum_at(&s, 579.6f) - 1.0f) < 1e-4f);
@@ -104,10 +113,9 @@ static void test_named_illuminants(void **state)
         {"stdillum-D50", 0.3457, 0.3585}, {"illum-acesD60", 0.32168, 0.33767}, {"stdillum-D65", 0.3127, 0.3290},
     };
     static SampledSpectrum s;
-    bool approx = true;
     for (size_t t = 0; t < sizeof T / sizeof T[0]; t++) {
-        assert_true(spectrum_named(T[t].name, &s, &approx));
-        assert_false(approx || s.constant);
+        assert_true(spectrum_named(T[t].name, &s));
+        assert_false(s.constant);
         double xyz[3] = {0.0, 0.0, 0.0};
         for (int i = 0; i < CIE_SAMPLES; i++) {
             double v = (double)sampled_spectrum_at(&s, (float)(CIE_LAMBDA_MIN + CIE_STEP * i));
@@ -118,15 +126,15 @@ static void test_named_illuminants(void **state)
             fail_msg("%s: (x, y) = (%.5f, %.5f); expected (%.4f, %.4f)", T[t].name, x, y, T[t].x, T[t].y);
     }
     /* the F series is 0 outside its table (380-780 nm), D50 is 100 at 560 nm */
-    assert_true(spectrum_named("stdillum-F11", &s, &approx));
+    assert_true(spectrum_named("stdillum-F11", &s));
     assert_true(sampled_spectrum_at(&s, 379.0f) == 0.0f && sampled_spectrum_at(&s, 781.0f) == 0.0f);
     assert_true(fabsf(sampled_spectrum_at(&s, 610.0f) - 55.27f) < 1e-3f); /* the table at 610 nm */
-    assert_true(spectrum_named("stdillum-D50", &s, &approx));
+    assert_true(spectrum_named("stdillum-D50", &s));
     assert_true(fabsf(sampled_spectrum_at(&s, 560.0f) - 100.0f) < 1e-3f);
-    assert_false(spectrum_named("stdillum-F0", &s, &approx));
-    assert_false(spectrum_named("stdillum-F13", &s, &approx));
-    assert_false(spectrum_named("stdillum-F1x", &s, &approx));
-    assert_false(spectrum_named("stdillum-F", &s, &approx));
+    assert_false(spectrum_named("stdillum-F0", &s));
+    assert_false(spectrum_named("stdillum-F13", &s));
+    assert_false(spectrum_named("stdillum-F1x", &s));
+    assert_false(spectrum_named("stdillum-F", &s));
 }
 
 /* Delta lights and the environment with spectra of their own (CstLightDesc.spectrum,
@@ -140,8 +148,7 @@ static void test_light_spectra(void **state)
     CstScene *cs = NULL;
     assert_int_equal(cst_scene_create(&cs, &err), CST_OK);
     static SampledSpectrum f11, bb;
-    bool approx = false;
-    assert_true(spectrum_named("stdillum-F11", &f11, &approx));
+    assert_true(spectrum_named("stdillum-F11", &f11));
     sampled_spectrum_blackbody(3000.0f, &bb);
     float l[SAMPLED_SPECTRUM_N];
     for (int i = 0; i < SAMPLED_SPECTRUM_N; i++) l[i] = (float)(SPECTRUM_LAMBDA_MIN + i);

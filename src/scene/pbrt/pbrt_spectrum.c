@@ -163,13 +163,14 @@ Color pbrt_conductor_r0(Color eta, Color k)
     return color_rgb(r0_channel(eta.c[0], k.c[0]), r0_channel(eta.c[1], k.c[1]), r0_channel(eta.c[2], k.c[2]));
 }
 
-/* n_d (587.6 nm) of pbrt-v4's named glasses (Schott catalogue). */
+/* n_d (587.6 nm) of pbrt-v4's named glasses (Schott catalogue); pbrt-v4's F5/F10/F11 are the
+ * dense flints SF5/SF10/SF11 (spectrum_data.c). */
 static int named_glass(const char *name, float *eta)
 {
     static const struct { const char *name; float eta; } g[] = {
         {"glass-BK7", 1.5168f}, {"glass-BAF10", 1.6700f}, {"glass-FK51A", 1.4866f},
-        {"glass-LASF9", 1.8503f}, {"glass-F5", 1.6034f}, {"glass-F10", 1.6200f},
-        {"glass-F11", 1.6259f}, {"glass-SF5", 1.6727f}, {"glass-SF10", 1.7283f},
+        {"glass-LASF9", 1.8503f}, {"glass-F5", 1.6727f}, {"glass-F10", 1.7283f},
+        {"glass-F11", 1.7847f}, {"glass-SF5", 1.6727f}, {"glass-SF10", 1.7283f},
         {"glass-SF11", 1.7847f}};
     for (size_t i = 0; i < sizeof g / sizeof g[0]; i++)
         if (strcmp(name, g[i].name) == 0) {
@@ -270,18 +271,14 @@ CstStatus pbrt_get_spectrum_id(Loader *ld, Params *ps, const char *d, const char
             float eta = 0.0f;
             int is_k = 0, mi = named_metal_index(s, &is_k);
             SampledSpectrum *sp = spectrum_id ? malloc(sizeof *sp) : NULL;
-            bool approx = false;
             if (spectrum_id && !sp) return pbrt_oom(ld);
-            bool named = sp && spectrum_named(s, sp, &approx);
+            bool named = sp && spectrum_named(s, sp);
             if (named) {
                 /* Kept as a spectrum for spectral mode; its RGB for RGB mode. */
                 CstStatus st = add_sampled(ld, sp, spectrum_id);
                 c = strncmp(s, "glass-", 6) == 0 ? color_s(sampled_spectrum_mean_y(sp)) : sampled_rgb(sp, kind);
                 free(sp);
                 TRY(st);
-                if (approx)
-                    pbrt_warn_at(ld, CST_WARN_APPROXIMATED, p->loc, "%s: \"%s\" taken as the constant %g (n_d): "
-                                 "no dispersion data", d, pbrt_clip(s, nm), (double)c.c[1]);
             }
             free(named ? NULL : sp);
             if (named) {
