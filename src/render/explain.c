@@ -437,6 +437,8 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     else if (it->kind == INTEGRATOR_PHOTON) it->photon.rec = rec;
     else if (it->kind == INTEGRATOR_LIGHT) rec->radius = 0.0f;
     else rec->radius = filter_radius(it->light.vcm_params.frame.filter);
+    /* BDPT, VCM: the pixel's light subpath listed too (not summed) */
+    rec->light_events = it->kind == INTEGRATOR_BIDIR && !mlt;
     const int pixel = y * st.width + x;
     double camera[3] = {0.0, 0.0, 0.0};
     if (mlt) {
