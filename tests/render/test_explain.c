@@ -8,7 +8,9 @@
  * box: homogeneous, grid, emitting grid), subsurface walks and a moving camera likewise, their
  * weights checked explicitly too; whitted's ray tree and the light tracer's splats sum to the film's value;
  * photon mapping with a moving instance prints and sums with its time window's kernel;
- * integrators explain cannot follow and bad pixels are refused. */
+ * BDPT's and VCM's pixel light subpath is listed, not summed (its scatters' directions and,
+ * at diffuse vertices, forward and reverse densities checked; through fog its medium
+ * vertices and phase samples); integrators explain cannot follow and bad pixels are refused. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

@@ -6,7 +6,11 @@
  * of the geometric normal and transmission lobes on the other; and over the image each
  * material shows each of its lobes. The back wall is a mix of the white diffuse and the coated
  * material: at its vertices the lobe must be one of the material the mix chose there, as
- * explain reports it (both choices are seen). */
+ * explain reports it (both choices are seen). A smooth coat's "coat specular reflection" is
+ * the mirror direction of wo and "base diffuse reflection" never is; lobes2.json adds hair,
+ * rough dielectric and diffuse transmission. NEE events say when the shadow ray was blocked
+ * (OCCLUDED, adding exactly 0): volpath's at medium vertices in the fog box, at subsurface
+ * exits under a blocker (sss-occluder.json), whitted's shadow rays. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdbool.h>

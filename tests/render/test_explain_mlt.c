@@ -8,7 +8,8 @@
  * sample's path, evaluated again from its primary sample vector: its radiance is the
  * splatted L bit for bit and its vertices are its path's (pssmlt: 1, 2, ... in order; mmlt:
  * t - 1 camera hits, s - 1 light hits and the one (s, t) connection with its MIS weight);
- * RGB and spectral, box, tent and Gaussian filters. */
+ * RGB and spectral, box, tent and Gaussian filters; mmlt through fog lists its medium
+ * vertices on both subpaths. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdbool.h>
