@@ -380,17 +380,16 @@ void recorder_subpath_roulette(Recorder *r, bool light, int bounces, float q, bo
     r->depth = depth;
 }
 
-void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L)
+void recorder_photon_chain(Recorder *r, Color beta)
 {
-    r->depth = 0;
-    recorder_add(r, CST_EXPLAIN_EMISSION, color_s(1.0f), L);
-    if (!x) return;
-    recorder_vertex(r, s, x, 1, NULL);
-    CstExplainEvent *e = &r->ev[r->n - 1];
-    if (r->truncated) return;
-    put_color(e->beta, beta);
-    r->beta[r->n - 1] = beta; /* the replay's: photon_li's final beta * lx */
+    for (int i = r->n - 1; i >= 0; i--)
+        if (r->ev[i].kind == CST_EXPLAIN_VERTEX) {
+            put_color(r->ev[i].beta, beta); /* shown; the replay takes it from NEE's event */
+            return;
+        }
 }
+
+int recorder_depth(const Recorder *r) { return r->depth; }
 
 void recorder_photon(Recorder *r, const Photon *ph, Color f)
 {

@@ -221,9 +221,12 @@ void recorder_whitted_light(Recorder *r, const Scene *s, const Bsdf *bsdf, const
                             Vec2 u, Color value);
 
 /* ---- photon mapping (photon.c's photon_li) */
-/* The camera ray's specular chain: what emission it met (value L, beta 1), and when it
- * reached a diffuse vertex x (NULL: it did not), x with the chain's throughput beta. */
-void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L);
+/* The camera ray's specular chain reached its diffuse vertex x, the last VERTEX recorded
+ * (photon_trace_to_diffuse records the chain: its vertices, delta scatters, and the emission
+ * it met, each added with its throughput): x's beta, the chain's throughput. */
+void recorder_photon_chain(Recorder *r, Color beta);
+/* The camera vertex being recorded (1 = the first hit). */
+int recorder_depth(const Recorder *r);
 /* A photon counted by a density estimate, with the BSDF value f (no cosine) it is weighted by. */
 void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
 /* The density estimate over the photons recorded just before it (their count is kept):
