@@ -46,6 +46,9 @@ static bool is_mlt(const CstExplain *x)
 
 /* ------------------------------------------------------------------ text */
 
+/* Whether any of the three lanes is nonzero. */
+static bool has3(const float v[3]) { return v[0] != 0.0f || v[1] != 0.0f || v[2] != 0.0f; }
+
 static void print3(FILE *f, const char *label, const float v[3])
 {
     fprintf(f, "%s(%.9g, %.9g, %.9g)", label, (double)v[0], (double)v[1], (double)v[2]);
@@ -179,12 +182,54 @@ static void print_shadow_ray(FILE *f, const CstExplainEvent *e)
     else
         fprintf(f, "pmf %.6g, pdf_w %.6g, pdf_a %.6g, BSDF pdf_w %.6g (no MIS); ", (double)e->pmf, (double)e->pdf_w,
                 (double)e->pdf_a, (double)e->pdf_other_w);
+    if (e->flags & CST_EXPLAIN_OCCLUDED) fputs("occluded; ", f);
     print3(f, "its share of the mean ", e->value);
     fputs(" (not summed: the line below is the mean)\n", f);
 }
 
+/* A hit of a light subpath (depth -bounces: mmlt's replay, BDPT's and VCM's pixel light path). */
+static void print_light_vertex(FILE *f, const CstExplainEvent *e)
+{
+    if (e->medium >= 0) {
+        fprintf(f, "light vertex %d (bounces from the emitter): in medium %d at (%.6g, %.6g, %.6g)\n", -e->depth,
+                e->medium, (double)e->p[0], (double)e->p[1], (double)e->p[2]);
+        return;
+    }
+    fprintf(f, "light vertex %d (bounces from the emitter): surface at (%.6g, %.6g, %.6g), normal (%.4f, %.4f, %.4f), "
+            "material #%d (%s)\n", -e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2], (double)e->n[0],
+            (double)e->n[1], (double)e->n[2], e->material, e->material_type ? e->material_type : "none");
+}
+
+/* A scatter: the lobe, its density, the direction and the weight (whitted: a branch). */
+static void print_scatter(FILE *f, const CstExplain *x, const CstExplainEvent *e)
+{
+    if (is_whitted(x)) {
+        fprintf(f, "%*sbranch: %s lobe of probability %.6g, wi (%.4f, %.4f, %.4f), ", 2 * e->depth, "",
+                e->lobe ? e->lobe : "specular", (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
+        print3(f, "weight ", e->value);
+        fputc('\n', f);
+        return;
+    }
+    /* the lobe that drew wi; a non-delta weight is still the mixture's (one-sample MIS) */
+    fprintf(f, "  scatter (%s): ", e->lobe ? e->lobe : "lobe unknown");
+    if (e->flags & CST_EXPLAIN_DELTA)
+        fprintf(f, "delta lobe, pmf %.6g", (double)e->pmf);
+    else
+        fprintf(f, "non-delta lobes, pdf_w %.6g", (double)e->pdf_w);
+    /* a light subpath's: the reverse density its MIS ratios use */
+    if (e->depth < 0) fprintf(f, ", reverse %s %.6g", (e->flags & CST_EXPLAIN_DELTA) ? "pmf" : "pdf_w",
+                              (double)e->pdf_other_w);
+    fprintf(f, ", wi (%.4f, %.4f, %.4f), ", (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
+    print3(f, "weight f cos/pdf ", e->value);
+    fputc('\n', f);
+}
+
 static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
 {
+    if (e->kind == CST_EXPLAIN_VERTEX && e->depth < 0) {
+        print_light_vertex(f, e);
+        return;
+    }
     if (is_whitted(x) && (e->kind == CST_EXPLAIN_ESCAPE || e->kind == CST_EXPLAIN_EMISSION)) {
         /* the ray tree: no densities, no MIS */
         fprintf(f, "%*s%s at tree depth %d", 2 * e->depth, "", e->kind == CST_EXPLAIN_ESCAPE ? "environment"
@@ -272,6 +317,9 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
                     (double)e->pdf_a, nee_partner(x, e), (double)e->pdf_other_w);
         print_mis(f, x, e);
         if (e->flags & CST_EXPLAIN_OCCLUDED) fputs(", occluded", f);
+        else if (!is_bdpt(x) && has3(e->transmittance)) /* volpath: the shadow ray's */
+            fprintf(f, ", transmittance (%.6g, %.6g, %.6g)", (double)e->transmittance[0], (double)e->transmittance[1],
+                    (double)e->transmittance[2]);
         print_value(f, e);
         return;
     case CST_EXPLAIN_CONNECT:
@@ -306,24 +354,7 @@ static void print_event(FILE *f, const CstExplain *x, const CstExplainEvent *e)
         print3(f, "\n      value (per unit film, before the filter) ", e->value);
         fprintf(f, "; adds (%.9g, %.9g, %.9g) to the pixel\n", e->share[0], e->share[1], e->share[2]);
         return;
-    case CST_EXPLAIN_SCATTER:
-        if (is_whitted(x)) {
-            fprintf(f, "%*sbranch: %s lobe of probability %.6g, wi (%.4f, %.4f, %.4f), ", 2 * e->depth, "",
-                    e->lobe ? e->lobe : "specular", (double)e->pmf, (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
-            print3(f, "weight ", e->value);
-            fputc('\n', f);
-            return;
-        }
-        /* the lobe that drew wi; a non-delta weight is still the mixture's (one-sample MIS) */
-        fprintf(f, "  scatter (%s): ", e->lobe ? e->lobe : "lobe unknown");
-        if (e->flags & CST_EXPLAIN_DELTA)
-            fprintf(f, "delta lobe, pmf %.6g", (double)e->pmf);
-        else
-            fprintf(f, "non-delta lobes, pdf_w %.6g", (double)e->pdf_w);
-        fprintf(f, ", wi (%.4f, %.4f, %.4f), ", (double)e->wi[0], (double)e->wi[1], (double)e->wi[2]);
-        print3(f, "weight f cos/pdf ", e->value);
-        fputc('\n', f);
-        return;
+    case CST_EXPLAIN_SCATTER: print_scatter(f, x, e); return;
     case CST_EXPLAIN_ROULETTE:
         fprintf(f, "  roulette: survival probability %.6g, %s\n", (double)e->q,
                 (e->flags & CST_EXPLAIN_SURVIVED) ? "survived (beta / q)" : "stopped");
@@ -417,10 +448,7 @@ static void print_mlt_path(FILE *f, const CstExplain *x, const CstExplainEvent *
         const CstExplainEvent *e = &ev[k];
         fputs("    | ", f);
         if (e->kind == CST_EXPLAIN_VERTEX && e->depth < 0) { /* mmlt: the light subpath's hits */
-            fprintf(f, "light vertex %d (bounces from the emitter): surface at (%.6g, %.6g, %.6g), normal (%.4f, "
-                    "%.4f, %.4f), material #%d (%s)\n", -e->depth, (double)e->p[0], (double)e->p[1], (double)e->p[2],
-                    (double)e->n[0], (double)e->n[1], (double)e->n[2], e->material,
-                    e->material_type ? e->material_type : "none");
+            print_light_vertex(f, e);
             continue;
         }
         /* Continuation lines of an event get the same bar. */
@@ -490,11 +518,19 @@ static void print_text(FILE *f, const CstExplain *x)
         fputs(": every value, beta and contribution below is per wavelength (the first three); the sum is "
               "converted to RGB\n", f);
     }
-    /* The camera path first; BDPT's light step ran before it, its splats follow. */
-    int splats = 0;
+    /* BDPT, VCM: the pixel's light subpath (its events have depth -bounces), then the camera
+     * path; the light step ran before it, its splats follow. */
+    int splats = 0, light = 0;
+    for (int i = 0; i < x->num_events; i++) light += x->events[i].kind != CST_EXPLAIN_SPLAT && x->events[i].depth < 0;
+    if (light) {
+        fputs("the pixel's light subpath (the light step's path of the pixel's index; listed, not summed):\n", f);
+        for (int i = 0; i < x->num_events; i++)
+            if (x->events[i].kind != CST_EXPLAIN_SPLAT && x->events[i].depth < 0) print_event(f, x, &x->events[i]);
+        fputs("the camera subpath:\n", f);
+    }
     for (int i = 0; i < x->num_events; i++) {
         if (x->events[i].kind == CST_EXPLAIN_SPLAT) splats++;
-        else print_event(f, x, &x->events[i]);
+        else if (x->events[i].depth >= 0) print_event(f, x, &x->events[i]);
     }
     if (x->truncated) fputs("(more events than explain keeps: the list is truncated and not checked)\n", f);
     print_largest(f, x);
@@ -633,6 +669,7 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         json_object_set_new(o, "wi", arr3f(e->wi));
         json_object_set_new(o, "pdf_w", num((double)e->pdf_w));
         json_object_set_new(o, "pmf", num((double)e->pmf));
+        if (e->depth < 0) json_object_set_new(o, "pdf_rev", num((double)e->pdf_other_w)); /* a light subpath's */
         json_object_set_new(o, "weight", arr3f(e->value));
         json_object_set_new(o, "beta", arr3f(e->beta));
         return o;
@@ -660,6 +697,9 @@ static json_t *event_json(const CstExplain *x, const CstExplainEvent *e)
         if (e->kind == CST_EXPLAIN_NEE) {
             json_object_set_new(o, "pmf", num((double)e->pmf));
             json_object_set_new(o, "partner", json_string(nee_partner(x, e))); /* whose pdf_other_w */
+            /* volpath: the shadow ray's transmittance (0 when occluded) */
+            if (has3(e->transmittance) || (e->flags & CST_EXPLAIN_OCCLUDED))
+                json_object_set_new(o, "transmittance", arr3f(e->transmittance));
         }
     }
     json_object_set_new(o, "mis_weight", num((double)e->mis_weight));
@@ -771,7 +811,7 @@ static void print_why_bright(FILE *f, const CstExplain *x)
     int low = -1;
     for (int i = 0; i < b; i++) {
         const CstExplainEvent *c = &x->events[i];
-        if (c->kind == CST_EXPLAIN_SCATTER && !(c->flags & CST_EXPLAIN_DELTA) && c->pdf_w > 0.0f &&
+        if (c->kind == CST_EXPLAIN_SCATTER && c->depth >= 0 && !(c->flags & CST_EXPLAIN_DELTA) && c->pdf_w > 0.0f &&
             (low < 0 || c->pdf_w < x->events[low].pdf_w))
             low = i;
     }

@@ -196,7 +196,10 @@ CST_API CstStatus cst_bench_rays(const CstBenchRaysOptions *options, CstBenchRay
 typedef enum CstExplainKind {
     CST_EXPLAIN_VERTEX = 1, /* a surface hit of the camera path: p, n, ng, material; or a
                              * subsurface exit (material_type "subsurface exit": pdf_a, pmf
-                             * 1 / the probe's hits, beta Sp / pdf_a) */
+                             * 1 / the probe's hits, beta Sp / pdf_a); depth -b: the hit after
+                             * b bounces of a light subpath (bdpt, vcm: the pixel's; mmlt's
+                             * replays), not summed, as that subpath's SCATTER (pdf_other_w its
+                             * reverse pdf_w) and ROULETTE events of the same depth */
     CST_EXPLAIN_ESCAPE,     /* the camera path left the scene (environment, if any, in value) */
     CST_EXPLAIN_EMISSION,   /* an emitter reached by the camera path (bdpt: s = 0) */
     CST_EXPLAIN_NEE,        /* a light sampled from a vertex (bdpt: s = 1) */
@@ -231,7 +234,8 @@ typedef enum CstExplainKind {
 
 enum {
     CST_EXPLAIN_DELTA = 1,    /* a delta lobe or delta light (pmf, not pdf_w) */
-    CST_EXPLAIN_OCCLUDED = 2, /* the connection's shadow ray was blocked (value 0) */
+    CST_EXPLAIN_OCCLUDED = 2, /* the connection's shadow ray was blocked (value 0); path in
+                               * media: NEE's transmittance (in transmittance) was 0 */
     CST_EXPLAIN_SURVIVED = 4, /* roulette: the path went on */
     CST_EXPLAIN_ADDED = 8,    /* the event added contribution to the sample (value summed) */
     CST_EXPLAIN_SCATTERED = 16, /* DISTANCE: the sampled distance fell inside the segment */
@@ -316,7 +320,8 @@ typedef struct CstExplainEvent {
     int path;         /* light, bdpt, vcm: the light path (of the iteration) whose splat this is; -1 */
     int medium;       /* VERTEX in a medium ("medium" material_type), DISTANCE: its index; -1 */
     float distance;   /* DISTANCE: the sampled distance, or the segment's length if it passed */
-    float transmittance[3]; /* DISTANCE, homogeneous media: exp(-sigma_t distance) (RGB lanes) */
+    float transmittance[3]; /* DISTANCE, homogeneous media: exp(-sigma_t distance) (RGB lanes);
+                             * NEE of path in media: the shadow ray's (0: OCCLUDED) */
     /* bdpt, vcm through media: the distance-sampling densities of the segment (DISTANCE: the
      * flight that made the next vertex; NEE, CONNECT, SPLAT: the connection's): chain_fwd
      * the density with which a walk from the camera side's end (DISTANCE: the previous

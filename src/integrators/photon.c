@@ -320,8 +320,9 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
     SurfaceHit x;
     Bsdf bsdf_x;
     Vec3 wo;
-    const bool diffuse = photon_trace_to_diffuse(s, ray, rng, wl, &beta, &L, &x, &bsdf_x, &wo, rays, NULL);
-    if (m->rec) recorder_photon_chain(m->rec, s, diffuse ? &x : NULL, beta, L);
+    /* explain: the chain's vertices, delta scatters and emission itemised (m->rec) */
+    const bool diffuse = photon_trace_to_diffuse(s, ray, rng, wl, &beta, &L, &x, &bsdf_x, &wo, rays, m->rec);
+    if (m->rec && diffuse) recorder_photon_chain(m->rec, beta);
     if (!diffuse) return L;
 
     Color lx = photon_direct_light(s, &bsdf_x, &x, wo, rng, wl, rays);
@@ -350,7 +351,7 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
         Ray gr = ray_make_at(scene_offset(s, x.p, x.ng, bs.wi), bs.wi, 0.0f, INFINITY, ray.time);
         /* Emission the gather ray meets is not added (le = NULL): see the header. */
         if (photon_trace_to_diffuse(s, gr, rng, wl, &g, NULL, &y, &bsdf_y, &wo_y, rays, NULL)) {
-            if (m->rec) recorder_vertex(m->rec, s, &y, 2, NULL);
+            if (m->rec) recorder_vertex(m->rec, s, &y, recorder_depth(m->rec) + 1, NULL); /* after x */
             Color global = radiance_estimate(s, m, &set->global, m->radius, &bsdf_y, &y, wo_y, m->rec);
             if (m->rec) estimate_window(m, y.time, win);
             if (m->rec) recorder_estimate(m->rec, false, m->radius, g, global, win);

@@ -195,6 +195,17 @@ void recorder_vol_nee(Recorder *r, const Scene *s, const VolVertex *v, float u_s
     const float other = v->bsdf ? bsdf_pdf(v->bsdf, v->wo, ls.wi) : phase_hg_eval(v->wo, ls.wi, v->g);
     e->pdf_other_w = other;
     e->mis_weight = mis && !ls.delta ? power_heuristic(ls.pdf_w, other) : 1.0f;
+    /* The shadow ray's transmittance, traced again as volpath_nee_u traced it (its ratio
+     * tracking in grids draws from a hash of the segment, so the same value): shown in
+     * transmittance, and OCCLUDED when it is 0 where the BSDF or phase function was not. */
+    const Color f = v->bsdf ? bsdf_eval(v->bsdf, v->wo, ls.wi) : color_s(other);
+    if (color_is_black(f)) return;
+    const int medium = v->sh ? scene_medium_after(s, v->sh, ls.wi, v->medium) : v->medium;
+    uint64_t rays = 0;
+    const Color tr = scene_transmittance_at(s, v->p, v->ng, ls.p, ls.n, medium, v->time, r->has_wl ? &r->wl : NULL,
+                                            &rays);
+    put_color(e->transmittance, tr);
+    if (color_is_black(tr)) e->flags |= CST_EXPLAIN_OCCLUDED;
 }
 
 void recorder_sss_nee(Recorder *r, const Scene *s, const SurfaceHit *x, float u_sel, Vec2 u, bool mis, Color beta,
@@ -208,6 +219,10 @@ void recorder_sss_nee(Recorder *r, const Scene *s, const SurfaceHit *x, float u_
     const float other = cos_s > 0.0f ? cos_s * CST_INV_PI : 0.0f;
     e->pdf_other_w = other;
     e->mis_weight = mis && !ls.delta ? power_heuristic(ls.pdf_w, other) : 1.0f;
+    /* sss_nee traces its shadow ray only for a light above the exit (both normals): the
+     * same test, then the same ray */
+    if (cos_s > 0.0f && v3_dot(ls.wi, x->ng) > 0.0f && !scene_visible_at(s, x->p, x->ng, ls.p, ls.n, x->time))
+        e->flags |= CST_EXPLAIN_OCCLUDED;
 }
 
 void recorder_scatter(Recorder *r, const BsdfSample *bs, Color beta)
@@ -320,23 +335,61 @@ void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir)
     p->nlight++;
 }
 
-void recorder_light_scatter(Recorder *r, bool delta)
+/* Whether the light subpath being traced is listed as events (recorder.h, light_events). */
+static bool light_listed(const Recorder *r) { return r->light_events && r->paths.light_on; }
+
+void recorder_light_scatter(Recorder *r, const Bsdf *b, const BsdfSample *bs, Vec3 wo, Color beta, int bounces)
 {
     RecorderPaths *p = &r->paths;
-    if (p->light_on && p->nlight >= 1 && p->nlight <= RECORDER_PATH_MAX) p->light_delta[p->nlight - 1] = delta;
+    if (p->light_on && p->nlight >= 1 && p->nlight <= RECORDER_PATH_MAX) p->light_delta[p->nlight - 1] = bs->delta;
+    if (!light_listed(r)) return;
+    const int depth = r->depth; /* the camera side's, which later strategies carry */
+    const Vec3 next = r->paths.next_dir; /* the camera subpath's, which recorder_scatter sets */
+    r->depth = -bounces;
+    recorder_scatter(r, bs, beta);
+    r->depth = depth;
+    r->paths.next_dir = next;
+    CstExplainEvent *e = r->truncated ? &r->spare : &r->ev[r->n - 1];
+    /* subpath_scatter_rr's reverse density for the MIS ratios (tech. rep. eqs. 34-36) */
+    e->pdf_other_w = bs->delta ? bs->pmf : bsdf_pdf(b, bs->wi, wo);
 }
 
-void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L)
+void recorder_light_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta, int bounces)
 {
-    r->depth = 0;
-    recorder_add(r, CST_EXPLAIN_EMISSION, color_s(1.0f), L);
-    if (!x) return;
-    recorder_vertex(r, s, x, 1, NULL);
-    CstExplainEvent *e = &r->ev[r->n - 1];
-    if (r->truncated) return;
-    put_color(e->beta, beta);
-    r->beta[r->n - 1] = beta; /* the replay's: photon_li's final beta * lx */
+    if (!light_listed(r)) return;
+    const int depth = r->depth;
+    const Vec3 next = r->paths.next_dir; /* the camera subpath's, which recorder_phase sets */
+    r->depth = -bounces;
+    recorder_phase(r, wi, pdf_w, beta);
+    r->depth = depth;
+    r->paths.next_dir = next;
+    CstExplainEvent *e = r->truncated ? &r->spare : &r->ev[r->n - 1];
+    e->pdf_other_w = pdf_w; /* Henyey-Greenstein is symmetric: the reverse density is the same */
 }
+
+void recorder_subpath_roulette(Recorder *r, bool light, int bounces, float q, bool survived)
+{
+    if (!light) {
+        recorder_roulette(r, q, survived);
+        return;
+    }
+    if (!light_listed(r)) return;
+    const int depth = r->depth;
+    r->depth = -bounces;
+    recorder_roulette(r, q, survived);
+    r->depth = depth;
+}
+
+void recorder_photon_chain(Recorder *r, Color beta)
+{
+    for (int i = r->n - 1; i >= 0; i--)
+        if (r->ev[i].kind == CST_EXPLAIN_VERTEX) {
+            put_color(r->ev[i].beta, beta); /* shown; the replay takes it from NEE's event */
+            return;
+        }
+}
+
+int recorder_depth(const Recorder *r) { return r->depth; }
 
 void recorder_photon(Recorder *r, const Photon *ph, Color f)
 {
@@ -403,6 +456,9 @@ void recorder_whitted_light(Recorder *r, const Scene *s, const Bsdf *bsdf, const
     if (!e) return;
     e->pdf_other_w = bsdf_pdf(bsdf, wo, ls.wi);
     e->mis_weight = 1.0f; /* direct_light: no MIS */
+    /* direct_light traces the shadow ray only where f is not black: the same ray again */
+    if (!color_is_black(bsdf_eval(bsdf, wo, ls.wi)) && !scene_visible_at(s, sh->p, sh->ng, ls.p, ls.n, sh->time))
+        e->flags |= CST_EXPLAIN_OCCLUDED;
 }
 
 static Color tree_beta(const Recorder *r, int d)
@@ -548,6 +604,20 @@ void recorder_media_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 p, int med
     rp->light_rev[b] = rev;
 }
 
+void recorder_media_light_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, Vec3 p, int medium, int bounces)
+{
+    if (!r->light_vertices && !light_listed(r)) return;
+    if (sh) {
+        recorder_light_vertex(r, s, sh, bounces);
+        return;
+    }
+    CstExplainEvent *e = recorder_push(r, CST_EXPLAIN_VERTEX);
+    e->depth = -bounces;
+    put3(e->p, p);
+    e->medium = medium;
+    e->material_type = "medium";
+}
+
 void recorder_media_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
                           float w_light, float pdf_a, float fwd, float rev)
 {
@@ -677,7 +747,7 @@ void recorder_mlt_free(Recorder *r)
 
 void recorder_light_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int bounces)
 {
-    if (!r->light_vertices) return;
+    if (!r->light_vertices && !light_listed(r)) return;
     const int depth = r->depth; /* the camera side's, which later strategies carry */
     recorder_vertex(r, s, sh, -bounces, NULL);
     r->depth = depth;

@@ -93,6 +93,10 @@ typedef struct Recorder {
     bool mlt_oom;
     /* mmlt's replay: the light subpath's hits are VERTEX events too (recorder_light_vertex). */
     bool light_vertices;
+    /* BDPT/VCM explain: the pixel's light subpath (paths.light_on) as events, its hits as
+     * VERTEX and its scatters and roulette as SCATTER and ROULETTE events of depth -bounces,
+     * none of them summed (recorder_light_vertex, recorder_light_scatter). */
+    bool light_events;
 } Recorder;
 
 /* A new event of kind k at the current depth (fields zero, s = t = light = -1,
@@ -186,6 +190,10 @@ void recorder_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta);
  * with chain densities fwd and rev (recorder_media_flight's). */
 void recorder_media_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 p, int medium, Vec3 dir, float dist, float fwd,
                               float rev);
+/* The same hit (after `bounces` bounces) as a VERTEX event of depth -bounces, for mmlt's
+ * replay (light_vertices) and BDPT/VCM's pixel light subpath (light_events); a medium
+ * vertex's material_type "medium". */
+void recorder_media_light_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, Vec3 p, int medium, int bounces);
 /* The t = 1 connection of a light vertex through media (recorder_splat), with the
  * connection's chain densities fwd (light vertex to lens) and rev. */
 void recorder_media_splat(Recorder *r, float x, float y, int s_light, Vec3 p, Vec3 lens, Color value, float w,
@@ -213,9 +221,12 @@ void recorder_whitted_light(Recorder *r, const Scene *s, const Bsdf *bsdf, const
                             Vec2 u, Color value);
 
 /* ---- photon mapping (photon.c's photon_li) */
-/* The camera ray's specular chain: what emission it met (value L, beta 1), and when it
- * reached a diffuse vertex x (NULL: it did not), x with the chain's throughput beta. */
-void recorder_photon_chain(Recorder *r, const Scene *s, const SurfaceHit *x, Color beta, Color L);
+/* The camera ray's specular chain reached its diffuse vertex x, the last VERTEX recorded
+ * (photon_trace_to_diffuse records the chain: its vertices, delta scatters, and the emission
+ * it met, each added with its throughput): x's beta, the chain's throughput. */
+void recorder_photon_chain(Recorder *r, Color beta);
+/* The camera vertex being recorded (1 = the first hit). */
+int recorder_depth(const Recorder *r);
 /* A photon counted by a density estimate, with the BSDF value f (no cosine) it is weighted by. */
 void recorder_photon(Recorder *r, const struct Photon *ph, Color f);
 /* The density estimate over the photons recorded just before it (their count is kept):
@@ -260,7 +271,19 @@ void recorder_light_hit(Recorder *r, const SurfaceHit *sh, Vec3 dir);
 /* mmlt's replay (light_vertices set): the light subpath's hit after `bounces` bounces as a
  * VERTEX event of depth -bounces (the light side, counted from the emitter). */
 void recorder_light_vertex(Recorder *r, const Scene *s, const SurfaceHit *sh, int bounces);
-void recorder_light_scatter(Recorder *r, bool delta);
+/* The BSDF sample bs (importance transport) that continues the light subpath from its hit
+ * after `bounces` bounces (b its BSDF, wo toward the previous vertex, beta the throughput
+ * before it): kept for the MIS check, and with light_events a SCATTER event of depth
+ * -bounces, not summed, whose pdf_other_w is the reverse density pdf_w(wi -> wo) BDPT's
+ * weights use (the pmf for a delta lobe). */
+void recorder_light_scatter(Recorder *r, const Bsdf *b, const BsdfSample *bs, Vec3 wo, Color beta, int bounces);
+/* The light subpath's Henyey-Greenstein sample at its medium vertex after `bounces`
+ * bounces (light_events): a SCATTER event of depth -bounces, lobe "phase function". */
+void recorder_light_phase(Recorder *r, Vec3 wi, float pdf_w, Color beta, int bounces);
+/* BDPT's Russian roulette on a subpath (subpath_scatter_rr): survival probability q; on
+ * the light subpath (light) a ROULETTE event of depth -bounces with light_events, on the
+ * camera subpath recorder_roulette's. */
+void recorder_subpath_roulette(Recorder *r, bool light, int bounces, float q, bool survived);
 
 /* ---- Metropolis light transport (mlt.c's mlt_chain_run) */
 /* One splat of a step: the sample's film position, radiance, scalar contribution I, the

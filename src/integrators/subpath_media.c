@@ -79,7 +79,10 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
             float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, w_prev));
             if (!(cos_in > 0.0f)) return true;
             mis_arrive_media(&sp, bounces > 1 || es->finite ? h.dist : 1.0f, cos_in, h.fwd, h.rev);
-            if (it->rec) recorder_media_light_hit(it->rec, vol ? NULL : &h.sh, h.p, medium, ray.d, h.dist, h.fwd, h.rev);
+            if (it->rec) {
+                recorder_media_light_hit(it->rec, vol ? NULL : &h.sh, h.p, medium, ray.d, h.dist, h.fwd, h.rev);
+                recorder_media_light_vertex(it->rec, s, vol ? NULL : &h.sh, h.p, medium, bounces);
+            }
         }
         const bool last = w->max_depth > 0 && bounces >= w->max_depth;
         if (vol) {
@@ -87,6 +90,8 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
             MediaLightVertex v = {h.p, v3s(0.0f), NULL, NULL, g, medium, w_prev, sp, bounces, sampler_2d(rng)};
             v.sp.beta = hero_beta(&hm, sp.beta);
             const bool more = !last && media_scatter_phase(&sp, it, h.p, w_prev, g, bounces, w->rr_depth, hero_scale(&hm), rng, &ray);
+            if (more && it && it->rec)
+                recorder_light_phase(it->rec, ray.d, phase_hg_eval(w_prev, ray.d, g), hero_beta(&hm, sp.beta), bounces);
             if (!w->visit(w->ctx, &v)) return false;
             if (!more) return true;
             x_prev = h.p;
@@ -779,6 +784,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
     Vec3 x_prev = ray.o;
     bool prev_med = false;
     HeroMis hm = {-1, color_s(1.0f), false}; /* grid media: the hero lane, as media_subpath_trace_camera */
+    if (it->rec) recorder_camera(it->rec, ray.o, ray.d, ray.time, wl); /* explain: mmlt's replay */
     for (int t = 1;; t++) {
         MediaHit h;
         /* Emitting media on the last segment (s = 0): media_subpath_trace_camera's weight 1
@@ -807,6 +813,11 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
         float cos_in = vol ? 1.0f : fabsf(v3_dot(h.sh.ng, wo));
         if (!(cos_in > 0.0f)) return false;
         mis_arrive_media(&sp, h.dist, cos_in, h.fwd, h.rev);
+        if (it->rec) { /* explain (mmlt's replay): the flight and the vertex, as media_subpath_trace_camera lists them */
+            recorder_media_flight(it->rec, h.p, medium, vol, h.dist, h.fwd, h.rev, hero_beta(&hm, sp.beta));
+            if (vol) recorder_medium_vertex(it->rec, h.p, medium, t);
+            else recorder_vertex(it->rec, s, &h.sh, t, wl);
+        }
         if (last) {
             if (vol || h.sh.emitter < 0) return false;
             const Emitter *e = &s->emitter_sampler.light[h.sh.emitter].u.area;
@@ -831,6 +842,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 return true;
             }
             if (!media_scatter_phase(&sp, it, h.p, wo, g, t, vp->rr_depth, hero_scale(&hm), rng, &ray)) return false;
+            if (it->rec) recorder_phase(it->rec, ray.d, phase_hg_eval(wo, ray.d, g), sp.beta);
             prev_med = true;
         } else {
             Bsdf bsdf;

@@ -119,12 +119,19 @@ static inline bool subpath_scatter_rr(const Scene *s, SubPath *sp, const Subpath
      * below may divide by it. */
     if (!bsdf_sample_transport(b, wo, uc, u, mode, &bs)) return false;
     if (it && it->rec && mode == BSDF_RADIANCE) recorder_scatter(it->rec, &bs, sp->beta);
-    if (it && it->rec && mode == BSDF_IMPORTANCE) recorder_light_scatter(it->rec, bs.delta);
+    if (it && it->rec && mode == BSDF_IMPORTANCE) recorder_light_scatter(it->rec, b, &bs, wo, sp->beta, depth);
     sp->specular_only = sp->specular_only && bs.delta;
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);
     if (color_is_black(sp->scatter)) return false;
-    if (!subpath_roulette(sp, depth, rr_depth, rr_scale, rng)) return false;
+    if (it && it->rec && depth >= rr_depth) { /* explain: roulette.h's survival probability */
+        const float q = minf(0.95f, color_max(color_scale(sp->scatter, rr_scale)));
+        const bool survived = subpath_roulette(sp, depth, rr_depth, rr_scale, rng);
+        recorder_subpath_roulette(it->rec, mode == BSDF_IMPORTANCE, depth, q, survived);
+        if (!survived) return false;
+    } else if (!subpath_roulette(sp, depth, rr_depth, rr_scale, rng)) {
+        return false;
+    }
     if (it) mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo));
     *ray = ray_make_at(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY, sh->time);
     return true;

@@ -122,10 +122,12 @@ static void replay_flush(const Integrator *it, const Recorder *r, const ReplayGr
  * (BDPT's connections of a vertex first among themselves), then as camera_tile turns the
  * path's value into the film's sample: spectral conversion, non-finite to 0, clamp, filter
  * weight. */
-/* photon_li summed again: the specular chain's emission L, plus beta times (the direct
- * light, plus the caustic map's estimate, plus the gather's throughput times the global
- * map's), each estimate the photons' f * power summed in the order the map visited them,
- * times the box kernel 1 / (pi r^2) (Jensen 2001 eq. 7.6). */
+/* photon_li summed again: the specular chain's emission L (each emission or environment
+ * it met madd'ed with its throughput, as photon_trace_to_diffuse adds it), plus beta (the
+ * chain's throughput at the diffuse vertex x, which x's NEE event carries) times (the
+ * direct light, plus the caustic map's estimate, plus the gather's throughput times the
+ * global map's), each estimate the photons' f * power summed in the order the map visited
+ * them, times the box kernel 1 / (pi r^2) (Jensen 2001 eq. 7.6). */
 static Color replay_photon(const Recorder *r)
 {
     Color L = color_s(0.0f), lx = color_s(0.0f), beta = color_s(1.0f), sum = color_s(0.0f);
@@ -133,11 +135,15 @@ static Color replay_photon(const Recorder *r)
     for (int i = 0; i < r->n; i++) {
         const CstExplainEvent *e = &r->ev[i];
         switch (e->kind) {
-        case CST_EXPLAIN_EMISSION: L = r->value[i]; break;
-        case CST_EXPLAIN_VERTEX:
-            if (e->depth == 1) beta = r->beta[i], diffuse = true;
+        case CST_EXPLAIN_ESCAPE:
+        case CST_EXPLAIN_EMISSION:
+            if (e->flags & CST_EXPLAIN_ADDED) L = color_madd(L, r->beta[i], r->value[i]);
             break;
-        case CST_EXPLAIN_NEE: lx = r->value[i]; break;
+        case CST_EXPLAIN_NEE:
+            lx = r->value[i];
+            beta = r->beta[i];
+            diffuse = true;
+            break;
         case CST_EXPLAIN_PHOTON: sum = color_madd(sum, r->beta[i], r->value[i]); break;
         case CST_EXPLAIN_ESTIMATE: {
             /* pmf: the kernel the estimate used, its time window's factor included. */
@@ -437,6 +443,8 @@ CstStatus cst_explain(const CstScene *scene, const CstRenderSettings *settings, 
     else if (it->kind == INTEGRATOR_PHOTON) it->photon.rec = rec;
     else if (it->kind == INTEGRATOR_LIGHT) rec->radius = 0.0f;
     else rec->radius = filter_radius(it->light.vcm_params.frame.filter);
+    /* BDPT, VCM: the pixel's light subpath listed too (not summed) */
+    rec->light_events = it->kind == INTEGRATOR_BIDIR && !mlt;
     const int pixel = y * st.width + x;
     double camera[3] = {0.0, 0.0, 0.0};
     if (mlt) {

@@ -19,6 +19,19 @@ harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[
 expect "bdpt: JSON, exact" 0 '"exact": true' '"kind": "connect"' '"w_light"' '"splat_value"'
 harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}"
 expect "bdpt: text, explicit MIS check" 0 'explicitly [0-9.e-]+ of [0-9]+ strategies' 'MIS check: [0-9]+ strategies'
+# The pixel's light subpath listed before the camera's (not summed): hits, scatters with
+# both densities, roulette.
+expect "bdpt: text, the light subpath" 0 "^the pixel's light subpath" '^light vertex 1 \(bounces from the emitter\)' \
+    'scatter \(diffuse reflection\): non-delta lobes, pdf_w [0-9.e-]+, reverse pdf_w [0-9.e-]+' \
+    'roulette: survival probability' '^the camera subpath:'
+harness_run "$d" 60 explain --pixel 12,10 --sample 1 --integrator bdpt "${SMALL[@]}" --json
+expect "bdpt: JSON, the light subpath" 0 '"depth": -1' '"pdf_rev"' '"exact": true'
+# volpath's NEE: the shadow ray's transmittance, and occluded when the block hides the light.
+harness_run "$d" 60 explain "$SRC/tests/render/media/cornell-fog.pbrt" --pixel 12,10 "${SMALL[@]}"
+expect "path in fog: NEE transmittance and occlusion" 0 'phase pdf_w [0-9.e-]+; MIS w [0-9.e-]+, transmittance \(' \
+    'MIS w 1, occluded' 'equal, bit for bit'
+harness_run "$d" 60 explain "$SRC/tests/render/media/cornell-fog.pbrt" --pixel 12,10 "${SMALL[@]}" --json
+expect "path in fog: JSON transmittance" 0 '"transmittance"' '"occluded": true' '"exact": true'
 # VCM with a radius large enough for this small image's light vertices to merge: every merge
 # and splat near the pixel checked against the weights computed from the whole path.
 mkdir -p "$TMP/vcm"

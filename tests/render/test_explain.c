@@ -8,7 +8,9 @@
  * box: homogeneous, grid, emitting grid), subsurface walks and a moving camera likewise, their
  * weights checked explicitly too; whitted's ray tree and the light tracer's splats sum to the film's value;
  * photon mapping with a moving instance prints and sums with its time window's kernel;
- * integrators explain cannot follow and bad pixels are refused. */
+ * BDPT's and VCM's pixel light subpath is listed, not summed (its scatters' directions and,
+ * at diffuse vertices, forward and reverse densities checked; through fog its medium
+ * vertices and phase samples); integrators explain cannot follow and bad pixels are refused. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -48,6 +50,88 @@ static int volume_estimates, volume_photons, surface_estimates_in_fog, photon_se
  * (time_scale >= 8: the window is at most 1/8 of the shutter), and their photons. */
 static int windowed_estimates, windowed_photons;
 static const double PI_D = 3.14159265358979323846;
+/* BDPT/VCM: the pixel's light subpath listed (events of depth -bounces, not summed): its
+ * scatters, those whose direction was checked against the next light vertex, those at
+ * diffuse vertices whose forward and reverse densities were checked, its roulette events,
+ * its medium vertices and phase-function scatters. */
+static int light_scatters, light_dirs_checked, light_pdfs_checked, light_roulettes, light_medium_vertices,
+    light_phases;
+
+/* The largest component of the difference between wi and the unit direction from a to b;
+ * -1 when a and b are closer than 1e-2 (a glass sphere resting on the floor: the scattered
+ * ray starts from an offset origin, so a segment that short has no comparable direction). */
+static double unit_diff(const float a[3], const float b[3], const float wi[3])
+{
+    double d[3], l = 0.0, m = 0.0;
+    for (int c = 0; c < 3; c++) {
+        d[c] = (double)b[c] - (double)a[c];
+        l += d[c] * d[c];
+    }
+    if (l < 1e-4) return -1.0;
+    for (int c = 0; c < 3; c++) m = fmax(m, fabs(d[c] / sqrt(l) - (double)wi[c]));
+    return m;
+}
+
+/* The light subpath's events of a BDPT/VCM explain: vertices -1, -2, ... in order, none
+ * summed; each scatter after its vertex, its wi pointing at the next light vertex; at a
+ * diffuse vertex the forward density |n.wi| / pi and the reverse one |n.wo| / pi (wo toward
+ * the previous light vertex), as BDPT's MIS ratios use them. */
+static void check_light_subpath(const CstExplain *ex)
+{
+    const CstExplainEvent *v[66] = {NULL};
+    int nv = 0;
+    for (int i = 0; i < ex->num_events; i++) {
+        const CstExplainEvent *e = &ex->events[i];
+        if (e->depth >= 0 || e->kind == CST_EXPLAIN_SPLAT) continue;
+        assert_false(e->flags & CST_EXPLAIN_ADDED); /* contribution-neutral */
+        const int b = -e->depth;
+        if (e->kind == CST_EXPLAIN_VERTEX) {
+            assert_int_equal(b, nv + 1);
+            if (nv < 65) v[++nv] = e;
+            light_medium_vertices += e->medium >= 0;
+            continue;
+        }
+        assert_int_equal(b, nv); /* after its vertex */
+        if (e->kind == CST_EXPLAIN_ROULETTE) {
+            assert_true(e->q > 0.0f && e->q <= 0.95f);
+            light_roulettes++;
+            continue;
+        }
+        assert_int_equal(e->kind, CST_EXPLAIN_SCATTER);
+        assert_non_null(e->lobe);
+        light_scatters++;
+        light_phases += !strcmp(e->lobe, "phase function");
+        if (!(e->flags & CST_EXPLAIN_DELTA)) assert_true(e->pdf_w > 0.0f && e->pdf_other_w >= 0.0f);
+        /* the next vertex, if the walk made one */
+        for (int k = i + 1; k < ex->num_events; k++) {
+            const CstExplainEvent *n = &ex->events[k];
+            if (n->kind != CST_EXPLAIN_VERTEX || n->depth != -(b + 1)) continue;
+            const double dev = unit_diff(v[b]->p, n->p, e->wi);
+            if (dev > 1e-3)
+                fail_msg("%s pixel %d,%d sample %d: light vertex %d: wi is %.3g off the direction to vertex %d",
+                         cst_integrator_name(ex->integrator), ex->x, ex->y, ex->sample, b, dev, b + 1);
+            light_dirs_checked += dev >= 0.0;
+            break;
+        }
+        const CstExplainEvent *x = v[b];
+        if (b < 2 || !x || !x->material_type || strcmp(x->material_type, "diffuse") || x->medium >= 0) continue;
+        double co = 0.0, ci = 0.0, d[3], l = 0.0;
+        for (int c = 0; c < 3; c++) {
+            d[c] = (double)v[b - 1]->p[c] - (double)x->p[c];
+            l += d[c] * d[c];
+        }
+        if (l < 1e-4) continue; /* too short for wo (unit_diff) */
+        for (int c = 0; c < 3; c++) {
+            co += (double)x->n[c] * d[c] / sqrt(l);
+            ci += (double)x->n[c] * (double)e->wi[c];
+        }
+        const double fwd = fabs(ci) / PI_D, rev = fabs(co) / PI_D;
+        if (fabs((double)e->pdf_w - fwd) > 1e-4 * fwd || fabs((double)e->pdf_other_w - rev) > 1e-3 * rev + 1e-7)
+            fail_msg("light vertex %d (diffuse): pdf_w %.7g (|n.wi|/pi %.7g), reverse %.7g (|n.wo|/pi %.7g)", b,
+                     (double)e->pdf_w, fwd, (double)e->pdf_other_w, rev);
+        light_pdfs_checked++;
+    }
+}
 
 static void settings(CstRenderSettings *st, CstIntegrator integ, CstFilter filter, CstColorMode color)
 {
@@ -132,11 +216,12 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 assert_true(ex->wavelengths[0] >= 360.0f && ex->wavelengths[3] <= 830.0f);
                 photon_sets_named++;
             }
+            if (integ == CST_INTEGRATOR_BDPT || integ == CST_INTEGRATOR_VCM) check_light_subpath(ex);
             bool in_medium = false; /* the camera vertex the events belong to is a medium vertex */
             bool flown = false; /* photon: the camera walk has crossed a medium */
             for (int i = 0; i < ex->num_events; i++) {
                 const CstExplainEvent *e = &ex->events[i];
-                if (e->kind == CST_EXPLAIN_VERTEX) {
+                if (e->kind == CST_EXPLAIN_VERTEX && e->depth >= 0) {
                     in_medium = e->material_type && !strcmp(e->material_type, "medium");
                     medium_vertices += in_medium;
                 }
@@ -287,9 +372,20 @@ static void test_path_subsurface(void **state)
     cst_scene_destroy(s);
 }
 
+/* The light subpaths' events seen since the last report (check_light_subpath): some of
+ * each kind. */
+static void report_light_subpaths(const char *name)
+{
+    print_message("%s: light subpaths: %d scatters (%d directions and %d diffuse densities checked), %d roulette "
+                  "events\n", name, light_scatters, light_dirs_checked, light_pdfs_checked, light_roulettes);
+    assert_true(light_scatters > 20 && light_dirs_checked > 10 && light_pdfs_checked > 10 && light_roulettes > 5);
+    light_scatters = light_dirs_checked = light_pdfs_checked = light_roulettes = 0;
+}
+
 static void test_bdpt(void **state)
 {
     (void)state;
+    light_scatters = light_dirs_checked = light_pdfs_checked = light_roulettes = 0;
     CstScene *s = NULL;
     CstError err;
     assert_int_equal(cst_scene_create_cornell_box(&s, &err), CST_OK);
@@ -303,6 +399,7 @@ static void test_bdpt(void **state)
     print_message("bdpt: %d strategies' MIS weights checked against the explicit ones (%d splats), largest "
                   "relative difference %.3g\n", mis_checked, splats_checked, mis_error);
     assert_true(mis_checked >= 50 && splats_checked >= 20);
+    report_light_subpaths("bdpt");
 }
 
 /* VCM: connections and merges (summed, normalised and added per camera vertex as the walk
@@ -313,6 +410,7 @@ static void test_vcm(void **state)
     (void)state;
     CstScene *s = load("cornell-spheres.json");
     merges = merges_checked = splats_checked = mis_checked = 0;
+    light_scatters = light_dirs_checked = light_pdfs_checked = light_roulettes = 0;
     mis_error = 0.0;
     radius = 20.0f; /* the box is 555 units wide */
     assert_true(explain_all(s, CST_INTEGRATOR_VCM, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
@@ -329,6 +427,7 @@ static void test_vcm(void **state)
                   "difference %.3g\n", merges, merges_checked, splats_checked, mis_checked, mis_error);
     assert_true(merges > 0 && merges_checked == merges);
     assert_true(splats_checked >= 50 && mis_checked >= 100);
+    report_light_subpaths("vcm");
 }
 
 /* Spectral BDPT and VCM through SF11 glass (scenes/prism.pbrt): camera subpaths and light
@@ -487,6 +586,7 @@ static void test_bidir_media(void **state)
     pixels = PIX;
     num_pixels = sizeof PIX / sizeof PIX[0];
     medium_vertices = volume_merges = volume_merges_checked = media_flights = media_emissions = 0;
+    light_medium_vertices = light_phases = 0;
     merges = merges_checked = splats_checked = mis_checked = 0;
     mis_error = 0.0;
     for (int kind = 0; kind < 3; kind++) { /* homogeneous, grid, emitting grid */
@@ -503,6 +603,10 @@ static void test_bidir_media(void **state)
                   medium_vertices, media_flights, media_emissions, merges, volume_merges, volume_merges_checked,
                   mis_checked, splats_checked, mis_error);
     assert_true(medium_vertices > 0 && media_flights > 0 && media_emissions > 0);
+    /* the pixels' light subpaths through the fog: medium vertices and phase-function samples */
+    print_message("media: light subpaths: %d medium vertices, %d phase-function scatters\n", light_medium_vertices,
+                  light_phases);
+    assert_true(light_medium_vertices >= 3 && light_phases >= 3);
     assert_true(volume_merges > 0 && volume_merges_checked == volume_merges && merges_checked == merges);
     assert_true(mis_checked >= 100 && splats_checked >= 20);
 }

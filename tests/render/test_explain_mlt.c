@@ -8,7 +8,8 @@
  * sample's path, evaluated again from its primary sample vector: its radiance is the
  * splatted L bit for bit and its vertices are its path's (pssmlt: 1, 2, ... in order; mmlt:
  * t - 1 camera hits, s - 1 light hits and the one (s, t) connection with its MIS weight);
- * RGB and spectral, box, tent and Gaussian filters. */
+ * RGB and spectral, box, tent and Gaussian filters; mmlt through fog lists its medium
+ * vertices on both subpaths. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -48,6 +49,8 @@ static double lum(const double v[3]) { return 0.2126 * v[0] + 0.7152 * v[1] + 0.
 /* Replayed samples' paths seen over the test, and of them those whose vertex counts were
  * checked against the strategy (mmlt) or that reached a light (pssmlt). */
 static int replayed, replayed_light_side;
+/* mmlt through media: replayed paths' medium vertices on the camera and the light side. */
+static int medium_cam, medium_light;
 
 /* The path of the splat m (its path_events events after it), evaluated again from the
  * sample's primary sample vector: it gave the splatted L bit for bit, and its vertices are
@@ -71,6 +74,12 @@ static void check_path(CstIntegrator integ, const CstRenderSettings *st, const C
         assert_true(e->flags & CST_EXPLAIN_IN_SPLAT);
         assert_int_not_equal(e->kind, CST_EXPLAIN_MUTATION);
         added += (e->flags & CST_EXPLAIN_ADDED) != 0;
+        if (e->kind == CST_EXPLAIN_DISTANCE) continue; /* a flight through media: neither vertex nor strategy */
+        if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "medium")) {
+            assert_true(e->medium >= 0);
+            medium_cam += e->depth > 0;
+            medium_light += e->depth < 0;
+        }
         if (e->kind == CST_EXPLAIN_VERTEX && e->depth > 0) {
             assert_int_equal(e->depth, ++cam); /* the camera side's, in order */
         } else if (e->kind == CST_EXPLAIN_VERTEX) {
@@ -288,6 +297,38 @@ static void test_mmlt(void **state)
     cst_scene_destroy(s);
 }
 
+/* mmlt through participating media (the fog-filled Cornell box, subpath_media.c's single
+ * strategies): each replayed strategy lists its camera subpath's t - 1 vertices and its
+ * light subpath's s - 1, medium vertices among them on both sides (check_path's counts), its
+ * flights apart; the radiance is still the splatted one bit for bit. Pixels are explained
+ * until both sides have shown medium vertices (iteration 1). */
+static void test_mmlt_media(void **state)
+{
+    (void)state;
+    static const char *const FOG = CST_SOURCE_DIR "/tests/render/media/cornell-fog.pbrt";
+    CstScene *s = NULL;
+    CstError err;
+    if (cst_scene_load_pbrt(FOG, NULL, &s, &err) != CST_OK) fail_msg("%s: %s", FOG, err.msg);
+    const CstRenderSettings st = mlt_settings(CST_INTEGRATOR_MMLT, CST_FILTER_BOX);
+    replayed = replayed_light_side = medium_cam = medium_light = 0;
+    int explained = 0;
+    for (int y = 4; y < SIZE && (medium_cam < 5 || medium_light < 5); y += 2)
+        for (int x = 1; x < SIZE && (medium_cam < 5 || medium_light < 5); x += 3) {
+            CstExplain *ex = NULL;
+            assert_int_equal(cst_explain(s, &st, x, y, 1, &ex, &err), CST_OK);
+            assert_true(ex->exact && !ex->truncated);
+            for (int i = 0; i < ex->num_events; i++)
+                if (ex->events[i].flags & CST_EXPLAIN_REPLAYED)
+                    check_path(CST_INTEGRATOR_MMLT, &st, &ex->events[i], &ex->events[i + 1], ex->num_events - i - 1);
+            explained++;
+            cst_explain_destroy(ex);
+        }
+    print_message("mmlt in fog: %d paths evaluated again at %d pixels (%d with light-subpath hits): %d camera-side and "
+                  "%d light-side medium vertices\n", replayed, explained, replayed_light_side, medium_cam, medium_light);
+    assert_true(replayed > 0 && medium_cam >= 5 && medium_light >= 5);
+    cst_scene_destroy(s);
+}
+
 /* Spectral mode: the samples' wavelengths are primary sample dimensions too. */
 static void test_spectral(void **state)
 {
@@ -308,6 +349,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pssmlt),
         cmocka_unit_test(test_mmlt),
+        cmocka_unit_test(test_mmlt_media),
         cmocka_unit_test(test_spectral),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
