@@ -4,7 +4,7 @@
  * the fog box (media_scenes.h) at two radii (within 4 standard errors at both: the large
  * one's bias was resolved before the ball's boundary correction, issue 27), the edge of a
  * scattering ball in a furnace (that correction) and its ball fraction against the exact
- * lens volume, the same image for 1 and 2 threads, and the refusal of emitting media.
+ * lens volume, and the same image for 1 and 2 threads (emitting media: test_photon_emit.c).
  * Standard errors of photon images come from independent renders (one render's pixels
  * share its maps). `--spectral` runs it all in
  * spectral mode. */
@@ -208,26 +208,6 @@ static void test_threads(void **state)
     scene_destroy(s);
 }
 
-/* Emitting media: refused (the photons and NEE start on the light sampler's emitters, so
- * a medium's emission would reach the camera by no estimator). */
-static void test_emissive_refused(void **state)
-{
-    (void)state;
-    Scene *s = fog_box(FOG_GRID_EMISSIVE);
-    CstRenderSettings st;
-    cst_render_settings_init(&st);
-    st.width = st.height = 8;
-    st.spp = 1;
-    st.integrator = CST_INTEGRATOR_PHOTON;
-    st.color_mode = g_color_mode;
-    CstError err;
-    CstFilm *f = NULL;
-    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
-    assert_non_null(strstr(err.msg, "emissive"));
-    cst_film_destroy(f);
-    scene_destroy(s);
-}
-
 int main(int argc, char **argv)
 {
     for (int i = 1; i < argc; i++) {
@@ -241,7 +221,6 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_fog_agreement),
         cmocka_unit_test(test_grid_agreement),
         cmocka_unit_test(test_threads),
-        cmocka_unit_test(test_emissive_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
