@@ -142,6 +142,7 @@ static bool store_media_photon(void *ctx, const MediaPhoton *mp)
     Photon ph = {mp->p, mp->wi, mp->power, mp->n, mp->time, -1};
     if (mp->sh) photon_to_rest(st->scene, mp->sh, &ph);
     const bool vol = mp->n.x == 0.0f && mp->n.y == 0.0f && mp->n.z == 0.0f;
+    if (vol) ph.inst = mp->medium; /* photon_map.h: a volume photon's medium */
     if (vol) return (mp->bounces <= 1 && !mp->medium_start) || photon_array_push(st->volume, &ph);
     if (mp->medium_start) return photon_array_push(st->global, &ph);
     return store_photon(ctx, &ph, mp->bounces, mp->specular_only);
@@ -374,6 +375,7 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
 typedef struct VolumeCtx {
     Vec3 wo;
     float g;
+    int medium; /* x's: photons of other media are not x's (Photon.inst of a volume photon) */
     Color sum;
     TimeWindow tw;
     struct Recorder *rec; /* explain (NULL in renders) */
@@ -383,7 +385,7 @@ static void volume_visit(void *ctx, const Photon *ph, float dist2)
 {
     (void)dist2;
     VolumeCtx *c = ctx;
-    if (time_outside(c->tw, ph)) return;
+    if (ph->inst != c->medium || time_outside(c->tw, ph)) return;
     const Color f = color_s(phase_hg_eval(c->wo, ph->wi, c->g));
     c->sum = color_madd(c->sum, f, ph->power);
     if (c->rec) recorder_photon(c->rec, ph, f);
@@ -405,7 +407,7 @@ static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMa
         return color_s(0.0f);
     }
     float scale;
-    VolumeCtx c = {v->wo, v->g, color_s(0.0f), time_window(m, time, &scale), rec};
+    VolumeCtx c = {v->wo, v->g, v->medium, color_s(0.0f), time_window(m, time, &scale), rec};
     const size_t found = photon_map_radius(map, v->p, r, volume_visit, &c);
     /* The kernel over the ball's part inside the medium (issue 27: photons exist only
      * there; volume_ball.c), folded into beta (so explain's replay, beta sum kernel /

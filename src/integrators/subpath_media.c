@@ -891,7 +891,7 @@ static bool visit_photon(void *ctx, const MediaLightVertex *v)
 {
     const MediaPhotonCtx *c = ctx;
     MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces, v->sp.specular_only, c->time, v->sh,
-                      c->medium_start};
+                      c->medium_start, v->medium};
     if (v->sh) ph.n = v3_dot(v->ng, v->w_prev) >= 0.0f ? v->ng : v3_neg(v->ng);
     return c->visit(c->ctx, &ph);
 }

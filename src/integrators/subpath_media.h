@@ -81,6 +81,7 @@ typedef struct MediaPhoton {
     float time;         /* the path's instant (PhotonWalk: its own or the iteration's) */
     const SurfaceHit *sh; /* the surface hit of a surface photon; NULL in a medium */
     bool medium_start;  /* the path started in an emitting medium (PhotonWalk.media_lights) */
+    int medium;         /* the medium at p: a volume photon's own, a surface photon's arrival one */
 } MediaPhoton;
 typedef bool (*MediaPhotonVisit)(void *ctx, const MediaPhoton *ph);
 
