@@ -122,6 +122,8 @@ static void print_gather(FILE *f, const CstExplainEvent *e)
         print_window(f, e);
     } else if (e->kind == CST_EXPLAIN_ESCAPE)
         fputs("environment met by the camera ray through media and delta bounces (no MIS)", f);
+    else if (e->s == 0) /* recorder_media_emission: emitting media on a walk (photon_li_media) */
+        fputs("emission of media met on the flight (collision estimate, weight 1, throughput included)", f);
     else
         fputs("emission met by the camera ray and its specular chain (no MIS)", f);
     print_value(f, e);

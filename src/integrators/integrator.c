@@ -812,8 +812,9 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
      * Emission of media is gathered by the camera walks of bdpt, vcm and mmlt (its s = 0
      * strategy); light and sppm start light paths (photons) in the emitting media too
      * (media_lights.h; sppm's camera walk gathers the emission on its way as well), which
-     * needs each such medium bounded (media_lights_create refuses the others); photon
-     * refuses them (its NEE and photons start on the emitters only). */
+     * needs each such medium bounded (media_lights_create refuses the others); photon's
+     * photons start in them as sppm's do, and its camera and final-gather walks gather the
+     * emission they pass (photon.c, photon_li_media). */
     const bool bidir_media = it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_BIDIR ||
                              st->integrator == CST_INTEGRATOR_MMLT || it->kind == INTEGRATOR_SPPM ||
                              it->kind == INTEGRATOR_PHOTON; /* photon: a volume photon map (photon.c) */
@@ -822,12 +823,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render participating media yet: "
                         "use path, path-nee, path-bsdf, light, photon, bdpt, vcm, pssmlt, mmlt or sppm",
                         cst_integrator_name(st->integrator));
-    if (it->kind == INTEGRATOR_PHOTON && media_lights_first_emissive(scene) >= 0)
-        return cst_fail(err, CST_ERR_UNSUPPORTED, "integrator %s does not render emissive participating "
-                        "media yet (medium %d emits; its photons and NEE start on the scene's lights "
-                        "only): use path, path-nee, path-bsdf, light, bdpt, vcm, mmlt or sppm",
-                        cst_integrator_name(st->integrator), media_lights_first_emissive(scene));
-    if (it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_SPPM) {
+    if (it->kind == INTEGRATOR_LIGHT || it->kind == INTEGRATOR_SPPM || it->kind == INTEGRATOR_PHOTON) {
         CstStatus ms = media_lights_create(scene, cst_integrator_name(st->integrator), &it->media_lights, err);
         if (ms != CST_OK) return ms;
     }
@@ -871,7 +867,7 @@ CstStatus integrator_prepare(Integrator *it, const Scene *scene, const CstRender
         CstStatus rs = st->photon_radius > 0.0 ? check_radius(scene, st->photon_radius, "photon gather", err) : CST_OK;
         if (rs != CST_OK) return rs;
         PhotonParams pp = {st->photons, (float)st->photon_radius, st->max_depth, st->rr_depth, st->seed,
-                           progress, progress_user, it->spectral, false};
+                           progress, progress_user, it->spectral, false, it->media_lights};
         return photon_maps_build_cached(st->photon_cache, scene, &it->camera, &pp, &it->photon,
                                         &it->photon_borrowed, rays, err);
     }

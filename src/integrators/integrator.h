@@ -112,7 +112,7 @@ typedef struct Integrator {
                                   * NULL without them */
     Film *film;
     Camera camera;
-    struct MediaLights *media_lights; /* light, sppm: the scene's emitting media as lights
+    struct MediaLights *media_lights; /* light, sppm, photon: the scene's emitting media as lights
                                        * (media_lights.h), owned; NULL without them */
     uint64_t seed;
     int threads;                 /* the render's thread count (it sizes some work cuts that

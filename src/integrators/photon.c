@@ -15,7 +15,9 @@
  *     non-delta point y, weighted by the global map's estimate at y (... D S* x).
  *   A gather ray that reaches an emitter adds nothing: that light is NEE's or the
  *   caustic map's at x.
- * Scenes with media add a volume map (Jensen & Christensen 1998; photon_li_media) and
+ * Scenes with media add a volume map (Jensen & Christensen 1998; photon_li_media), whose
+ * emitting media start photon paths too (media_lights.h) and are gathered by the camera's
+ * and the final gather's walks (photon_li_media), and
  * spectral mode splits the photons into sets at wavelengths of their own (set_wavelengths);
  * docs/integrators.md has both schemes. */
 #include "integrators/photon.h"
@@ -26,6 +28,7 @@
 #include "core/array.h"
 #include "core/error.h"
 #include "integrators/direct.h"
+#include "integrators/media_lights.h"
 #include "integrators/recorder.h"
 #include "integrators/subpath_media.h"
 #include "integrators/subpath_walk.h"
@@ -127,14 +130,21 @@ static bool store_photon(void *ctx, const Photon *ph, int depth, bool specular_o
 
 /* store_photon through media (media_photon_walk): surface photons as above (a path with a
  * medium vertex is not a caustic one); volume photons (n = 0) past the first vertex to the
- * volume map: the first, L V, is NEE's at a medium vertex. */
+ * volume map: the first, L V, is NEE's at a medium vertex.
+ * A path that started in an emitting medium at z0 (mp->medium_start) is stored from its
+ * first vertex on: NEE samples the emitters only, so z0 V (the first volume vertex) is the
+ * volume map's to count, and z0 S* D (the first surface vertex) the global map's. It never
+ * goes to the caustic map: z0 S* x at a camera point x is the final gather's, which adds
+ * the emission of the media it passes (photon_li_media; docs/integrators.md). */
 static bool store_media_photon(void *ctx, const MediaPhoton *mp)
 {
     PhotonStore *st = ctx;
     Photon ph = {mp->p, mp->wi, mp->power, mp->n, mp->time, -1};
     if (mp->sh) photon_to_rest(st->scene, mp->sh, &ph);
     const bool vol = mp->n.x == 0.0f && mp->n.y == 0.0f && mp->n.z == 0.0f;
-    if (vol) return mp->bounces <= 1 || photon_array_push(st->volume, &ph);
+    if (vol) ph.inst = mp->medium; /* photon_map.h: a volume photon's medium */
+    if (vol) return (mp->bounces <= 1 && !mp->medium_start) || photon_array_push(st->volume, &ph);
+    if (mp->medium_start) return photon_array_push(st->global, &ph);
     return store_photon(ctx, &ph, mp->bounces, mp->specular_only);
 }
 
@@ -366,6 +376,7 @@ static Color photon_li_surface(const Scene *s, const PhotonMaps *m, const Photon
 typedef struct VolumeCtx {
     Vec3 wo;
     float g;
+    int medium; /* x's: photons of other media are not x's (Photon.inst of a volume photon) */
     Color sum;
     TimeWindow tw;
     struct Recorder *rec; /* explain (NULL in renders) */
@@ -375,7 +386,7 @@ static void volume_visit(void *ctx, const Photon *ph, float dist2)
 {
     (void)dist2;
     VolumeCtx *c = ctx;
-    if (time_outside(c->tw, ph)) return;
+    if (ph->inst != c->medium || time_outside(c->tw, ph)) return;
     const Color f = color_s(phase_hg_eval(c->wo, ph->wi, c->g));
     c->sum = color_madd(c->sum, f, ph->power);
     if (c->rec) recorder_photon(c->rec, ph, f);
@@ -397,7 +408,7 @@ static Color volume_estimate(const Scene *s, const PhotonMaps *m, const PhotonMa
         return color_s(0.0f);
     }
     float scale;
-    VolumeCtx c = {v->wo, v->g, color_s(0.0f), time_window(m, time, &scale), rec};
+    VolumeCtx c = {v->wo, v->g, v->medium, color_s(0.0f), time_window(m, time, &scale), rec};
     const size_t found = photon_map_radius(map, v->p, r, volume_visit, &c);
     /* The kernel over the ball's part inside the medium (issue 27: photons exist only
      * there; volume_ball.c), folded into beta (so explain's replay, beta sum kernel /
@@ -443,7 +454,13 @@ static Color media_direct(const Scene *s, const MediaVisiblePoint *v, float time
  * map (L S+ D, no medium vertex between), and one final-gather ray, which walks media the
  * same way to its first vertex y and takes y's estimate of every path with at least one
  * vertex before y: the global map on a surface, NEE plus the volume map in a medium. Each
- * light path is counted once: by where its last non-delta vertex before x lies. */
+ * light path is counted once: by where its last non-delta vertex before x lies.
+ * Emitting media (m->media_emit): both walks add the emission of the media they pass
+ * (volpath.c's free-flight estimators of sigma_a Le), so a path that starts at a point z0
+ * of a medium is counted by the camera walk when z0 is x (or a tentative collision on the
+ * way to x), by the gather when z0 is y (or on the way: z0 S* x), and otherwise by a
+ * photon that started at z0: the volume map at x or y (z0 ... V, its first vertex
+ * included, as NEE samples emitters only) or the global map at y (z0 ... D). */
 static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSet *set, Ray ray, Sampler *rng,
                              const Wavelengths *wl, uint64_t *rays)
 {
@@ -453,7 +470,8 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
      * throughput it is multiplied by; explain.c's replay_photon_media sums them again. */
     struct Recorder *rec = m->rec;
     if (rec) rec->depth = 0;
-    if (!media_visible_point_rec(s, ray, s->camera_medium, rng, wl, color_s(1.0f), &L, &x, rays, rec)) return L;
+    if (!media_visible_point_rec(s, ray, s->camera_medium, rng, wl, color_s(1.0f), &L, false, &x, rays, rec))
+        return L;
     L = color_add(L, media_direct(s, &x, ray.time, rng, wl, rays, rec));
     if (x.vol) return color_add(L, volume_estimate(s, m, &set->volume, m->vol_radius, &x, ray.time, wl, rec, rays));
     Color caustic = radiance_estimate(s, m, &set->caustic, m->radius, &x.bsdf, &x.sh, x.wo, rec);
@@ -468,9 +486,12 @@ static Color photon_li_media(const Scene *s, const PhotonMaps *m, const PhotonSe
     if (rec) recorder_scatter(rec, &bs, x.beta);
     Ray gr = ray_make_at(scene_offset(s, x.sh.p, x.sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, ray.time);
     const int medium = scene_medium_after(s, &x.sh, bs.wi, x.medium);
-    /* le NULL: emission the gather meets is NEE's or the caustic map's, not added. */
+    /* The emitters' and the environment's light the gather meets is NEE's or the caustic
+     * map's at x, not added; emitting media's on the way is added (media_emit: z0 S* x, the
+     * paths the media-started photons leave out of the caustic map; store_media_photon). */
     MediaVisiblePoint y;
-    if (!media_visible_point_rec(s, gr, medium, rng, wl, color_mul(x.beta, bs.weight), NULL, &y, rays, rec))
+    if (!media_visible_point_rec(s, gr, medium, rng, wl, color_mul(x.beta, bs.weight), m->media_emit ? &L : NULL,
+                                 true, &y, rays, rec))
         return L;
     if (y.vol) {
         L = color_add(L, media_direct(s, &y, ray.time, rng, wl, rays, rec));
@@ -607,11 +628,13 @@ static CstStatus build_set(const Scene *s, const Camera *cam, const PhotonParams
 {
     PhotonArray global = {0}, caustic = {0}, volume = {0};
     CstStatus st = CST_OK;
-    if (s->emitter_sampler.lights > 0) {
+    /* Emitting media (pp->media_lights): paths start in them too, as SPPM's photons. */
+    const MediaLights *ml = pp->no_media ? NULL : pp->media_lights;
+    if (s->emitter_sampler.lights > 0 || ml) {
         /* Moving geometry: each path its own time over the shutter (the static scene's
          * streams stay as they were: no time is drawn there). */
         const PhotonWalk pw = {pp->seed, stream, 1.0f / (float)n, pp->max_depth, pp->rr_depth, wl, 0.0f,
-                               scene_geometry_moves(s) ? cam : NULL, NULL};
+                               scene_geometry_moves(s) ? cam : NULL, ml};
         PhotonStore store = {&global, &caustic, &volume, s};
         for (int i = 0; i < n; i++) {
             if (pp->progress && i % PHOTON_PROGRESS_EVERY == 0 &&
@@ -675,6 +698,7 @@ CstStatus photon_maps_build(const Scene *s, const Camera *cam, const PhotonParam
         }
     }
     out->emitted = per_set;
+    out->media_emit = pp->media_lights != NULL && !pp->no_media;
     if (scene_geometry_moves(s)) {
         out->shutter_open = cam->shutter_open;
         out->shutter_close = cam->shutter_close;

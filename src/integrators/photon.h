@@ -35,6 +35,9 @@ typedef struct PhotonParams {
     bool spectral;   /* spectral mode: PHOTON_SPECTRAL_SETS sets of wavelengths (photon.c) */
     bool no_media;   /* trace as if the scene had no media: SPPM's automatic initial radius,
                       * which was chosen so before photon maps walked media (its images kept) */
+    /* NULL, or the scene's emitting media as lights (media_lights.h): photon paths start in
+     * them too, with probability p_media, as SPPM's (media_photon_walk). Not owned. */
+    const struct MediaLights *media_lights;
 } PhotonParams;
 enum { PHOTON_PROGRESS_EVERY = 4096 };
 
@@ -51,8 +54,9 @@ typedef struct PhotonWalk {
      * draws its own time, uniform over this camera's shutter (camera_time), as the first
      * number of its stream, and `time` is ignored. */
     const Camera *shutter;
-    const struct MediaLights *media_lights; /* SPPM: NULL, or photons also start in the
-                                             * scene's emitting media (media_photon_walk) */
+    const struct MediaLights *media_lights; /* NULL, or photons also start in the scene's
+                                             * emitting media (media_photon_walk): SPPM's,
+                                             * and photon maps' (PhotonParams.media_lights) */
 } PhotonWalk;
 
 /* The time of a photon path: its own, drawn from its stream (pw->shutter), or pw->time. */
@@ -98,6 +102,8 @@ typedef struct PhotonMaps {
      * over. Set in scenes with moving instances (photon.c, TimeWindow). */
     float time_h, shutter_open, shutter_close;
     struct Recorder *rec; /* caustic explain's recorder (recorder.h); NULL in renders */
+    bool media_emit;      /* built with PhotonParams.media_lights: the final gather adds the
+                           * emission of media it passes (photon_li_media) */
 } PhotonMaps;
 
 /* Spectral mode: the set a camera sample of uniform u traces with (its wavelengths in

@@ -26,7 +26,10 @@
  *         with moving instances); 0 where nothing moves.
  *   inst  -1: pos, wi and n are in world space. Else the moving instance the photon landed
  *         on, and pos, wi and n are in that instance's rest frame (instances_rest_frame):
- *         only a query on the same instance, in its rest frame, finds it (photon.c). */
+ *         only a query on the same instance, in its rest frame, finds it (photon.c).
+ *         A volume photon (n = 0, photon.c's volume map; never on an instance) holds here
+ *         the index of the medium it scattered in: an estimate gathers only its own
+ *         medium's (the field reused so that a Photon stays within 60 bytes). */
 typedef struct Photon {
     Vec3 pos;
     Vec3 wi;

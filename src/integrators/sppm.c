@@ -696,7 +696,7 @@ static CstStatus initial_radius(const Scene *s, const Camera *cam, const SppmPar
                                 float *r, uint64_t *rays, CstError *err)
 {
     if (sp->radius > 0.0f) { *r = sp->radius; return CST_OK; }
-    PhotonParams pp = {photons, 0.0f, sp->max_depth, sp->rr_depth, sp->seed, NULL, NULL, false, true};
+    PhotonParams pp = {photons, 0.0f, sp->max_depth, sp->rr_depth, sp->seed, NULL, NULL, false, true, NULL};
     PhotonMaps maps;
     CstStatus st = photon_maps_build(s, cam, &pp, &maps, rays, err);
     if (st != CST_OK) return st;

@@ -903,7 +903,7 @@ static bool visit_photon(void *ctx, const MediaLightVertex *v)
 {
     const MediaPhotonCtx *c = ctx;
     MediaPhoton ph = {v->p, v->w_prev, v3s(0.0f), v->sp.beta, v->bounces, v->sp.specular_only, c->time, v->sh,
-                      c->medium_start};
+                      c->medium_start, v->medium};
     if (v->sh) ph.n = v3_dot(v->ng, v->w_prev) >= 0.0f ? v->ng : v3_neg(v->ng);
     return c->visit(c->ctx, &ph);
 }
@@ -941,7 +941,7 @@ bool media_photon_walk(const Scene *s, const Camera *cam, const PhotonWalk *pw, 
 bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
                          Color *le, MediaVisiblePoint *out, uint64_t *rays)
 {
-    return media_visible_point_rec(s, ray, medium, rng, wl, beta, le, out, rays, NULL);
+    return media_visible_point_rec(s, ray, medium, rng, wl, beta, le, false, out, rays, NULL);
 }
 
 /* explain (rec not NULL): the flight that reached a vertex and the vertex, numbered on from
@@ -962,8 +962,10 @@ static void record_visible_hit(Recorder *rec, const Scene *s, const MediaHit *h,
 }
 
 bool media_visible_point_rec(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
-                             Color *le, MediaVisiblePoint *out, uint64_t *rays, Recorder *rec)
+                             Color *le, bool le_media_only, MediaVisiblePoint *out, uint64_t *rays, Recorder *rec)
 {
+    /* The emission of emitters and of the environment, wanted unless le_media_only. */
+    Color *le_surf = le_media_only ? NULL : le;
     SubPath sp = subpath_start(beta);
     sp.specular_only = false;
     HeroMis hm = {-1, color_s(1.0f), false};
@@ -974,15 +976,19 @@ bool media_visible_point_rec(const Scene *s, Ray ray, int medium, Sampler *rng, 
          * walk gathers it): what reaches x after a scattering, the photons that start in the
          * media carry (media_photon_walk). Gathered also when the path ends on this segment. */
         const bool go = media_next(s, ray, x_prev, false, true, &medium, &sp, &hm, rng, wl, &h, rays);
-        /* (le NULL: photon's final gather, whose emission is NEE's or the caustic map's;
-         * photon refuses emitting media, so nothing is recorded for explain here) */
-        if (le) *le = color_add(*le, h.le);
+        /* (le NULL: photon's final gather in scenes without emitting media; le_media_only:
+         * its gather with them, whose emitters' and environment's light is NEE's or the
+         * caustic map's.) Recorded for explain as added (h.le holds the throughput). */
+        if (le) {
+            if (rec && !color_is_black(h.le)) recorder_media_emission(rec, rec->depth, h.le);
+            *le = color_add(*le, h.le);
+        }
         if (!go) return false;
         Vec3 wo = v3_neg(ray.d);
         if (h.kind == MEDIA_MISS) {
             const Color env = scene_env_radiance(s, ray.d, wl);
-            if (le && rec) recorder_add(rec, CST_EXPLAIN_ESCAPE, hero_beta(&hm, sp.beta), env);
-            if (le) *le = color_madd(*le, hero_beta(&hm, sp.beta), env);
+            if (le_surf && rec) recorder_add(rec, CST_EXPLAIN_ESCAPE, hero_beta(&hm, sp.beta), env);
+            if (le_surf) *le_surf = color_madd(*le_surf, hero_beta(&hm, sp.beta), env);
             return false;
         }
         if (rec) record_visible_hit(rec, s, &h, medium, hero_beta(&hm, sp.beta), wl);
@@ -997,10 +1003,10 @@ bool media_visible_point_rec(const Scene *s, Ray ray, int medium, Sampler *rng, 
         }
         out->vol = false;
         out->sh = h.sh;
-        if (h.sh.emitter >= 0 && le) {
+        if (h.sh.emitter >= 0 && le_surf) {
             const Color e = scene_emission(s, &h.sh, wo, wl);
             if (rec) recorder_add(rec, CST_EXPLAIN_EMISSION, hero_beta(&hm, sp.beta), e);
-            *le = color_madd(*le, hero_beta(&hm, sp.beta), e);
+            *le_surf = color_madd(*le_surf, hero_beta(&hm, sp.beta), e);
         }
         scene_bsdf(s, &h.sh, wl, &out->bsdf);
         /* photon_trace_to_diffuse's rule for BSDFs with delta and non-delta lobes. */

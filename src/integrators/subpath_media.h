@@ -81,6 +81,7 @@ typedef struct MediaPhoton {
     float time;         /* the path's instant (PhotonWalk: its own or the iteration's) */
     const SurfaceHit *sh; /* the surface hit of a surface photon; NULL in a medium */
     bool medium_start;  /* the path started in an emitting medium (PhotonWalk.media_lights) */
+    int medium;         /* the medium at p: a volume photon's own, a surface photon's arrival one */
 } MediaPhoton;
 typedef bool (*MediaPhotonVisit)(void *ctx, const MediaPhoton *ph);
 
@@ -115,9 +116,12 @@ bool media_visible_point(const Scene *s, Ray ray, int medium, Sampler *rng, cons
 /* The same, recorded for `caustic explain` (rec NULL: the render's, identical draws): each
  * flight through a medium, each vertex (numbered on from rec->depth; a medium vertex's q the
  * HG asymmetry g), delta scatters and the emission added. le may be NULL: the emission met is
- * not wanted (photon.c's final gather), and not recorded. */
+ * not wanted (photon.c's final gather without emitting media), and not recorded. With
+ * le_media_only, *le gets the emission of media alone (photon.c's final gather in emitting
+ * media: the emitters' and the environment's light there is NEE's or the caustic map's). */
 struct Recorder;
 bool media_visible_point_rec(const Scene *s, Ray ray, int medium, Sampler *rng, const Wavelengths *wl, Color beta,
-                             Color *le, MediaVisiblePoint *out, uint64_t *rays, struct Recorder *rec);
+                             Color *le, bool le_media_only, MediaVisiblePoint *out, uint64_t *rays,
+                             struct Recorder *rec);
 
 #endif

@@ -41,6 +41,7 @@ static size_t num_pixels;
 static int subsurface_walk; /* subsurface_walk of the settings */
 static int medium_vertices, volume_merges, media_flights; /* BDPT/VCM through media: what was recorded */
 static int volume_merges_checked, media_emissions; /* of the volume merges, checked explicitly; media's Le */
+static int s0_emissions; /* emission events with s = 0 (photon: the emission of media on its walks) */
 static int photon_count = 20000; /* photons of the settings: a small map is built for every explained sample */
 /* photon through media: volume estimates that gathered photons, and those photons; estimates
  * of the surface maps at vertices reached through fog; explained spectral samples whose
@@ -228,6 +229,8 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                 if (e->kind == CST_EXPLAIN_MERGE && in_medium) volume_merges++;
                 if (e->kind == CST_EXPLAIN_MERGE && in_medium && e->mis_strategies > 0) volume_merges_checked++;
                 if (e->kind == CST_EXPLAIN_EMISSION && e->light < 0 && e->contribution[0] != 0.0f) media_emissions++;
+                /* recorder_media_emission's (s = 0): photon's emission of media on its walks */
+                if (e->kind == CST_EXPLAIN_EMISSION && e->s == 0 && e->contribution[0] != 0.0f) s0_emissions++;
                 if (e->kind == CST_EXPLAIN_DISTANCE) media_flights++;
                 if (e->flags & CST_EXPLAIN_ADDED) added++;
                 if ((e->flags & CST_EXPLAIN_ADDED) && (e->flags & (CST_EXPLAIN_HERO | CST_EXPLAIN_LIGHT_DISPERSED)) &&
@@ -653,6 +656,33 @@ static void test_photon_in_media_spectral(void **state)
     assert_true(named_in_fog == 10 && photon_sets_named == 20);
 }
 
+/* Photon mapping in emitting media (issue 27): the fog box with emitting fog and with the
+ * emitting grid (RGB, and the fog spectral): the emission the camera walk and the final
+ * gather pass (media_visible_point_rec's medium-emission events, weight 1, the throughput
+ * in the value) and the volume and global maps with the photons that started in the media
+ * sum to the camera sample and the film bit for bit. */
+static void test_photon_emitting_media(void **state)
+{
+    (void)state;
+    static const int PIX[][2] = {{12, 10}, {10, 12}, {8, 9}, {14, 13}, {3, 17}};
+    pixels = PIX;
+    num_pixels = sizeof PIX / sizeof PIX[0];
+    s0_emissions = 0;
+    photon_count = 3000;
+    radius = 0.2f;
+    for (int kind = 0; kind < 2; kind++) {
+        CstScene *s = fog_box(kind > 0 ? FOG_GRID_EMISSIVE : FOG_HOMOGENEOUS_EMISSIVE);
+        assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_RGB) > 0);
+        if (kind == 0) assert_true(explain_all(s, CST_INTEGRATOR_PHOTON, CST_FILTER_BOX, CST_COLOR_SPECTRAL) > 0);
+        cst_scene_destroy(s);
+    }
+    radius = 0.0f;
+    pixels = NULL;
+    photon_count = 20000;
+    print_message("photon in emitting media: %d emissions of media recorded\n", s0_emissions);
+    assert_true(s0_emissions > 0);
+}
+
 /* Subsurface materials under --subsurface walk (sss_walk.h: their media walked by
  * subpath_media.c): BDPT and VCM on the subsurface sphere. */
 static void test_bidir_subsurface(void **state)
@@ -743,6 +773,7 @@ int main(void)
         cmocka_unit_test(test_photon),
         cmocka_unit_test(test_photon_moving),
         cmocka_unit_test(test_photon_in_media_spectral),
+        cmocka_unit_test(test_photon_emitting_media),
         cmocka_unit_test(test_strata),
         cmocka_unit_test(test_refused),
     };

@@ -4,7 +4,7 @@
  * the fog box (media_scenes.h) at two radii (within 4 standard errors at both: the large
  * one's bias was resolved before the ball's boundary correction, issue 27), the edge of a
  * scattering ball in a furnace (that correction) and its ball fraction against the exact
- * lens volume, the same image for 1 and 2 threads, and the refusal of emitting media.
+ * lens volume, and the same image for 1 and 2 threads (emitting media: test_photon_emit.c).
  * Standard errors of photon images come from independent renders (one render's pixels
  * share its maps). `--spectral` runs it all in
  * spectral mode. */
@@ -126,6 +126,44 @@ static void test_edge_furnace(void **state)
     media_edge_furnace_check(CST_INTEGRATOR_PHOTON, 4, EDGE_R, EDGE_PHOTONS, EDGE_RENDERS, g_color_mode);
 }
 
+/* Two touching media (issue 27): a thin scattering medium A (sigma_s 0.3) fills the
+ * furnace's emitter, and a ball of a dense one B (sigma_s 3, radius 1.5, an interface
+ * sphere) sits in it, the camera in A: L everywhere. A ball of the volume estimate near the
+ * sphere reaches into the other medium, whose photons have another density per volume and
+ * carry another sigma_s: the estimate gathers only the photons of x's medium (Photon.inst of
+ * a volume photon), whose part of the ball volume_ball.c measures. */
+enum { TWO_PHOTONS = 32000, TWO_RENDERS = 24 };
+#define TWO_R 0.25
+static void test_two_media(void **state)
+{
+    (void)state;
+    const Color L = color_rgb(1.0f, 0.5f, 0.25f);
+    Scene *s = scene_create();
+    CstError err;
+    const int a = media_add_homogeneous(s, color_s(0.0f), color_s(0.3f), color_s(0.0f), 0.3f);
+    const int b = media_add_homogeneous(s, color_s(0.0f), color_s(3.0f), color_s(0.0f), 0.3f);
+    int black;
+    Material m = {.type = MATERIAL_DIFFUSE, .albedo = {{0.0f, 0.0f, 0.0f, 0.0f}}, .ior = 1.0f};
+    assert_int_equal(scene_add_material(s, &m, &black, &err), CST_OK);
+    Emission em = {L, 1, 0};
+    assert_int_equal(scene_set_medium_interface(s, a, -1, 0, &err), CST_OK);
+    assert_int_equal(scene_set_camera_medium(s, a, &err), CST_OK);
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 4.0f, black, &em, &err), CST_OK);
+    assert_int_equal(scene_set_medium_interface(s, b, a, 1, &err), CST_OK);
+    assert_int_equal(scene_add_sphere(s, v3(0, 0, 0), 1.5f, black, NULL, &err), CST_OK);
+    CameraDesc cam = {{0, 0.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 50.0f, 0.0f, 3.5f, 0.0f};
+    scene_set_camera(s, &cam);
+    assert_int_equal(scene_commit(s, &err), CST_OK);
+    CstRenderSettings st;
+    cst_render_settings_init(&st);
+    st.spp = 2;
+    st.photon_radius = TWO_R;
+    st.photons = TWO_PHOTONS;
+    st.color_mode = g_color_mode;
+    media_furnace_check(s, st, CST_INTEGRATOR_PHOTON, TWO_RENDERS, 800, L, 0.0, "two touching media");
+    scene_destroy(s);
+}
+
 /* The fog box's settings. FOG_R_SMALL (2.5% of the box's width) holds a few volume photons
  * per ball at FOG_PHOTONS; at FOG_R_LARGE the balls reach far outside the fog (through the
  * box's walls) and the surfaces' discs across their edges. Measured (RGB, red, whole image):
@@ -208,26 +246,6 @@ static void test_threads(void **state)
     scene_destroy(s);
 }
 
-/* Emitting media: refused (the photons and NEE start on the light sampler's emitters, so
- * a medium's emission would reach the camera by no estimator). */
-static void test_emissive_refused(void **state)
-{
-    (void)state;
-    Scene *s = fog_box(FOG_GRID_EMISSIVE);
-    CstRenderSettings st;
-    cst_render_settings_init(&st);
-    st.width = st.height = 8;
-    st.spp = 1;
-    st.integrator = CST_INTEGRATOR_PHOTON;
-    st.color_mode = g_color_mode;
-    CstError err;
-    CstFilm *f = NULL;
-    assert_int_equal(cst_render(s, &st, &f, NULL, &err), CST_ERR_UNSUPPORTED);
-    assert_non_null(strstr(err.msg, "emissive"));
-    cst_film_destroy(f);
-    scene_destroy(s);
-}
-
 int main(int argc, char **argv)
 {
     for (int i = 1; i < argc; i++) {
@@ -238,10 +256,10 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_furnace),
         cmocka_unit_test(test_ball_fraction),
         cmocka_unit_test(test_edge_furnace),
+        cmocka_unit_test(test_two_media),
         cmocka_unit_test(test_fog_agreement),
         cmocka_unit_test(test_grid_agreement),
         cmocka_unit_test(test_threads),
-        cmocka_unit_test(test_emissive_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
