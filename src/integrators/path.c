@@ -42,7 +42,7 @@ Color path_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, Wavel
         if (!path_sample_bsdf(pp, &ps, &bsdf, &sh, wo, smp, &bs)) break;
         /* Russian roulette (roulette.h): beta is the path's scatter. */
         float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
-        if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
+        if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, roulette_survival(ps.beta), rr != 0.0f);
         if (rr == 0.0f) break;
         ps.beta = color_scale(ps.beta, rr);
         ray = ray_make_at(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, sh.time);

@@ -155,7 +155,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
             ps.prev_p = x.p;
             ps.prev_n = x.ns;
             float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
-            if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
+            if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, roulette_survival(ps.beta), rr != 0.0f);
             if (rr == 0.0f) break;
             ps.beta = color_scale(ps.beta, rr);
             ray = ray_make_at(scene_offset(s, x.p, x.ng, wi), wi, 0.0f, INFINITY, x.time);
@@ -163,7 +163,7 @@ Color path_sss_li(const Scene *s, const PathParams *pp, Ray ray, Sampler *smp, W
         }
 
         float rr = roulette(smp, depth + 1, pp->rr_depth, ps.beta);
-        if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, minf(0.95f, color_max(ps.beta)), rr != 0.0f);
+        if (pp->rec && depth + 1 >= pp->rr_depth) recorder_roulette(pp->rec, roulette_survival(ps.beta), rr != 0.0f);
         if (rr == 0.0f) break;
         ps.beta = color_scale(ps.beta, rr);
         ray = ray_make_at(scene_offset(s, sh.p, sh.ng, bs.wi), bs.wi, 0.0f, INFINITY, sh.time);

@@ -6,7 +6,8 @@
 #include "math/color.h"
 #include "sampling/sampler.h"
 
-/* From bounce `depth` on (depth >= rr_depth) the path survives with probability
+/* roulette_survival: q below (explain's recorders print it). From bounce `depth` on
+ * (depth >= rr_depth) the path survives with probability
  * q = min(0.95, max channel of `scatter`) and its throughputs are divided by q, which
  * keeps the estimate unbiased (Arvo & Kirk, "Particle Transport and Image Synthesis",
  * 1990; pbrt-v4 sec. 14.1). `scatter` is the product of the BSDF weights (and earlier
@@ -16,10 +17,12 @@
  * and is capped below 1 so even an albedo-1 furnace ends. Draws one number, only when the rule applies. Returns the
  * factor to scale the throughputs by: 1 before rr_depth, 1 / q on survival, 0 when the
  * path stops (also for a NaN throughput). */
+static inline float roulette_survival(Color scatter) { return minf(0.95f, color_max(scatter)); }
+
 static inline float roulette(Sampler *smp, int depth, int rr_depth, Color scatter)
 {
     if (depth < rr_depth) return 1.0f;
-    float q = minf(0.95f, color_max(scatter));
+    float q = roulette_survival(scatter);
     return sampler_1d(smp) < q ? 1.0f / q : 0.0f;
 }
 

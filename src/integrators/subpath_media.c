@@ -89,7 +89,7 @@ static bool media_walk_light(const Scene *s, const MediaWalk *w, const EmissionS
             const float g = s->media[medium].g;
             MediaLightVertex v = {h.p, v3s(0.0f), NULL, NULL, g, medium, w_prev, sp, bounces, sampler_2d(rng)};
             v.sp.beta = hero_beta(&hm, sp.beta);
-            const bool more = !last && media_scatter_phase(&sp, it, h.p, w_prev, g, bounces, w->rr_depth, hero_scale(&hm), rng, &ray);
+            const bool more = !last && media_scatter_phase(&sp, it, true, h.p, w_prev, g, bounces, w->rr_depth, hero_scale(&hm), rng, &ray);
             if (more && it && it->rec)
                 recorder_light_phase(it->rec, ray.d, phase_hg_eval(w_prev, ray.d, g), hero_beta(&hm, sp.beta), bounces);
             if (!w->visit(w->ctx, &v)) return false;
@@ -659,7 +659,7 @@ Color media_subpath_trace_camera(const Scene *s, const Camera *cam, const Subpat
             }
         }
         if (vol) {
-            if (!media_scatter_phase(&sp, it, h.p, wo, x.g, t, vp->rr_depth, hero_scale(&hm), rng, &ray)) break;
+            if (!media_scatter_phase(&sp, it, false, h.p, wo, x.g, t, vp->rr_depth, hero_scale(&hm), rng, &ray)) break;
             if (it->rec) recorder_phase(it->rec, ray.d, phase_hg_eval(wo, ray.d, x.g), sp.beta);
             prev_med = true;
         } else {
@@ -841,7 +841,7 @@ bool media_subpath_camera_vertex(const Scene *s, const Camera *cam, const Subpat
                 out->sp.beta = hero_beta(&hm, sp.beta);
                 return true;
             }
-            if (!media_scatter_phase(&sp, it, h.p, wo, g, t, vp->rr_depth, hero_scale(&hm), rng, &ray)) return false;
+            if (!media_scatter_phase(&sp, it, false, h.p, wo, g, t, vp->rr_depth, hero_scale(&hm), rng, &ray)) return false;
             if (it->rec) recorder_phase(it->rec, ray.d, phase_hg_eval(wo, ray.d, g), sp.beta);
             prev_med = true;
         } else {

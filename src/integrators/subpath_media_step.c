@@ -275,10 +275,10 @@ bool media_next(const Scene *s, Ray ray, Vec3 x_prev, bool prev_med, bool emit, 
 }
 
 /* A phase-function scattering at a volume vertex: HG sampled exactly (weight 1), Russian
- * roulette on scatter x rr_scale, the MIS quantities (tech. rep. eqs. 34-36 with no cosine;
+ * roulette on scatter x rr_scale (recorded for explain on the light or camera subpath), the MIS quantities (tech. rep. eqs. 34-36 with no cosine;
  * HG is symmetric, so the reverse density is the forward one) and the next ray, at *ray's
  * time (the ray that reached p). */
-bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p, Vec3 wo, float g, int depth,
+bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, bool light, Vec3 p, Vec3 wo, float g, int depth,
                          int rr_depth, float rr_scale, Sampler *rng, Ray *ray)
 {
     Vec2 u = sampler_2d(rng);
@@ -286,7 +286,7 @@ bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p, Vec3 w
     Vec3 wi = phase_hg_sample(wo, g, u.x, u.y, &pdf);
     if (!(pdf > 0.0f)) return false;
     sp->specular_only = false;
-    if (!subpath_roulette(sp, depth, rr_depth, rr_scale, rng)) return false;
+    if (!subpath_roulette_rec(sp, it, light, depth, rr_depth, rr_scale, rng)) return false;
     if (it) {
         /* mis_scatter (subpath_walk.h) with cos_out = 1 and the eta of a volume vertex:
          * merging here is the point-point 3D estimator. With two etas the merge

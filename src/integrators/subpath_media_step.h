@@ -108,10 +108,11 @@ static inline float eta_vm(const SubpathIteration *it, bool vol)
 }
 
 /* A phase-function scattering at a volume vertex: HG sampled exactly (weight 1), Russian
- * roulette (on scatter x rr_scale: subpath_roulette, hero_scale), the MIS quantities (tech.
- * rep. eqs. 34-36 with no cosine; HG is symmetric, so the reverse density is the forward
- * one) and the next ray, at *ray's time (the ray that reached p). */
-bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, Vec3 p, Vec3 wo, float g, int depth,
+ * roulette (on scatter x rr_scale: subpath_roulette, hero_scale; with it->rec a ROULETTE
+ * event of the light subpath when `light`, else of the camera subpath), the MIS quantities
+ * (tech. rep. eqs. 34-36 with no cosine; HG is symmetric, so the reverse density is the
+ * forward one) and the next ray, at *ray's time (the ray that reached p). */
+bool media_scatter_phase(SubPath *sp, const SubpathIteration *it, bool light, Vec3 p, Vec3 wo, float g, int depth,
                          int rr_depth, float rr_scale, Sampler *rng, Ray *ray);
 
 

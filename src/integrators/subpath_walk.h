@@ -104,6 +104,18 @@ static inline bool subpath_roulette(SubPath *sp, int depth, int rr_depth, float 
     return true;
 }
 
+/* subpath_roulette, and with a recorder (explain: it->rec) from rr_depth on its ROULETTE
+ * event on the light (light) or camera subpath, with roulette.h's survival probability. */
+static inline bool subpath_roulette_rec(SubPath *sp, const SubpathIteration *it, bool light, int depth, int rr_depth,
+                                        float rr_scale, Sampler *rng)
+{
+    if (!it || !it->rec || depth < rr_depth) return subpath_roulette(sp, depth, rr_depth, rr_scale, rng);
+    const float q = roulette_survival(color_scale(sp->scatter, rr_scale));
+    const bool survived = subpath_roulette(sp, depth, rr_depth, rr_scale, rng);
+    recorder_subpath_roulette(it->rec, light, depth, q, survived);
+    return survived;
+}
+
 /* The continuation of a subpath at a vertex (wo: back along the subpath; mode: what it
  * carries): a BSDF sample, the throughput, Russian roulette from depth rr_depth on (on
  * scatter x rr_scale: subpath_roulette), the MIS quantities (with an iteration `it`; NULL:
@@ -124,14 +136,7 @@ static inline bool subpath_scatter_rr(const Scene *s, SubPath *sp, const Subpath
     sp->beta = color_mul(sp->beta, bs.weight);
     sp->scatter = color_mul(sp->scatter, bs.weight);
     if (color_is_black(sp->scatter)) return false;
-    if (it && it->rec && depth >= rr_depth) { /* explain: roulette.h's survival probability */
-        const float q = minf(0.95f, color_max(color_scale(sp->scatter, rr_scale)));
-        const bool survived = subpath_roulette(sp, depth, rr_depth, rr_scale, rng);
-        recorder_subpath_roulette(it->rec, mode == BSDF_IMPORTANCE, depth, q, survived);
-        if (!survived) return false;
-    } else if (!subpath_roulette(sp, depth, rr_depth, rr_scale, rng)) {
-        return false;
-    }
+    if (!subpath_roulette_rec(sp, it, mode == BSDF_IMPORTANCE, depth, rr_depth, rr_scale, rng)) return false;
     if (it) mis_scatter(sp, it, &bs, fabsf(v3_dot(sh->ng, bs.wi)), bs.delta ? bs.pmf : bsdf_pdf(b, bs.wi, wo));
     *ray = ray_make_at(scene_offset(s, sh->p, sh->ng, bs.wi), bs.wi, 0.0f, INFINITY, sh->time);
     return true;

@@ -57,6 +57,8 @@ static const double PI_D = 3.14159265358979323846;
  * its medium vertices and phase-function scatters. */
 static int light_scatters, light_dirs_checked, light_pdfs_checked, light_roulettes, light_medium_vertices,
     light_phases;
+/* Roulette events at medium vertices (media_scatter_phase): the light subpath's, the camera's. */
+static int light_medium_roulettes, camera_medium_roulettes;
 
 /* The largest component of the difference between wi and the unit direction from a to b;
  * -1 when a and b are closer than 1e-2 (a glass sphere resting on the floor: the scattered
@@ -96,6 +98,7 @@ static void check_light_subpath(const CstExplain *ex)
         if (e->kind == CST_EXPLAIN_ROULETTE) {
             assert_true(e->q > 0.0f && e->q <= 0.95f);
             light_roulettes++;
+            light_medium_roulettes += v[b] && v[b]->medium >= 0;
             continue;
         }
         assert_int_equal(e->kind, CST_EXPLAIN_SCATTER);
@@ -226,6 +229,7 @@ static int explain_all(const CstScene *s, CstIntegrator integ, CstFilter filter,
                     in_medium = e->material_type && !strcmp(e->material_type, "medium");
                     medium_vertices += in_medium;
                 }
+                if (e->kind == CST_EXPLAIN_ROULETTE && e->depth >= 0 && in_medium) camera_medium_roulettes++;
                 if (e->kind == CST_EXPLAIN_MERGE && in_medium) volume_merges++;
                 if (e->kind == CST_EXPLAIN_MERGE && in_medium && e->mis_strategies > 0) volume_merges_checked++;
                 if (e->kind == CST_EXPLAIN_EMISSION && e->light < 0 && e->contribution[0] != 0.0f) media_emissions++;
@@ -589,7 +593,7 @@ static void test_bidir_media(void **state)
     pixels = PIX;
     num_pixels = sizeof PIX / sizeof PIX[0];
     medium_vertices = volume_merges = volume_merges_checked = media_flights = media_emissions = 0;
-    light_medium_vertices = light_phases = 0;
+    light_medium_vertices = light_phases = light_medium_roulettes = camera_medium_roulettes = 0;
     merges = merges_checked = splats_checked = mis_checked = 0;
     mis_error = 0.0;
     for (int kind = 0; kind < 3; kind++) { /* homogeneous, grid, emitting grid */
@@ -607,9 +611,12 @@ static void test_bidir_media(void **state)
                   mis_checked, splats_checked, mis_error);
     assert_true(medium_vertices > 0 && media_flights > 0 && media_emissions > 0);
     /* the pixels' light subpaths through the fog: medium vertices and phase-function samples */
-    print_message("media: light subpaths: %d medium vertices, %d phase-function scatters\n", light_medium_vertices,
-                  light_phases);
+    print_message("media: light subpaths: %d medium vertices, %d phase-function scatters; roulette at medium "
+                  "vertices: %d on light subpaths, %d on camera subpaths\n", light_medium_vertices, light_phases,
+                  light_medium_roulettes, camera_medium_roulettes);
     assert_true(light_medium_vertices >= 3 && light_phases >= 3);
+    /* media_scatter_phase's roulette is listed on both subpaths, as subpath_scatter_rr's */
+    assert_true(light_medium_roulettes > 0 && camera_medium_roulettes > 0);
     assert_true(volume_merges > 0 && volume_merges_checked == volume_merges && merges_checked == merges);
     assert_true(mis_checked >= 100 && splats_checked >= 20);
 }

@@ -301,7 +301,7 @@ static void test_roulette_hero_scale(void **state)
         SubPath sp = subpath_start(color_s(1.0f));
         sp.scatter = color_s(0.1f);
         Ray ray = ray_make_at(v3s(0.0f), v3(0, 0, 1), 0.0f, INFINITY, 0.0f);
-        if (!media_scatter_phase(&sp, NULL, v3s(0.0f), v3(0, 0, -1), 0.3f, 5, 1, hero_scale(&hm), &rng, &ray)) continue;
+        if (!media_scatter_phase(&sp, NULL, false, v3s(0.0f), v3(0, 0, -1), 0.3f, 5, 1, hero_scale(&hm), &rng, &ray)) continue;
         survived++;
         for (int c = 0; c < COLOR_LANES; c++)
             if (!(fabsf(sp.beta.c[c] - 2.5f) < 1e-5f))
