@@ -499,6 +499,7 @@ bool subpath_light_vertex(const Scene *s, const SubpathParams *vp, const Subpath
     sp.d_vc = es.delta ? 0.0f : mis(es.cos_l / emission_pdf);
     sp.d_vm = sp.d_vc * it->mis_vc;
     if (wl) *walk_wl = *wl;
+    if (it->rec) recorder_light_start(it->rec, &es); /* explain's mmlt replay: its scatters listed */
     LightTargetCtx c = {bounces, false, out, wl ? walk_wl : NULL};
     /* max_depth = bounces: the walk samples no continuation past the vertex it needs. */
     const LightWalk w = {bounces, vp->rr_depth, it, false, wl, keep_target, &c, wl ? walk_wl : NULL};

@@ -731,6 +731,7 @@ static bool media_walk_to(const Scene *s, const Camera *cam, const SubpathParams
     sp.d_vm = sp.d_vc * it->mis_vc;
     if (wl) *walk_wl = *wl;
     tc->walk_wl = wl ? walk_wl : NULL;
+    if (it->rec) recorder_light_start(it->rec, &es); /* explain's mmlt replay: its scatters listed */
     const MediaWalk w = {tc->bounces, vp->rr_depth, it, wl, wl ? walk_wl : NULL, visit_target, tc, false};
     media_walk_light(s, &w, &es, sp, medium, rng, rays);
     return tc->found;

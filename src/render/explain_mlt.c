@@ -123,7 +123,7 @@ static bool replay_paths(const Integrator *it, Recorder *r, CstExplain *ex)
         const int cap = sc->cap;
         memset(sc, 0, sizeof *sc);
         *sc = (Recorder){.ev = ev, .beta = beta, .value = value, .cap = cap, .px = r->px, .py = r->py,
-                         .radius = r->radius, .light_vertices = true};
+                         .radius = r->radius, .light_vertices = true, .light_events = true};
         Color L;
         int strategy;
         ok = mlt_replay(it->mlt, it->scene, &it->camera, &r->mlt_pool[smp->off], smp->n, smp->depth, sc, &L,

@@ -51,6 +51,8 @@ static double lum(const double v[3]) { return 0.2126 * v[0] + 0.7152 * v[1] + 0.
 static int replayed, replayed_light_side;
 /* mmlt through media: replayed paths' medium vertices on the camera and the light side. */
 static int medium_cam, medium_light;
+/* mmlt: the light subpath's scatters listed in replays (lobe named, after their vertex). */
+static int light_scatters;
 
 /* The path of the splat m (its path_events events after it), evaluated again from the
  * sample's primary sample vector: it gave the splatted L bit for bit, and its vertices are
@@ -68,13 +70,19 @@ static void check_path(CstIntegrator integ, const CstRenderSettings *st, const C
                  (double)m->value[0], (double)m->value[1], (double)m->value[2]);
     assert_memory_equal(m->replay_value, m->value, sizeof m->value);
     assert_true(m->path_events > 0 && m->path_events <= n);
-    int cam = 0, light = 0, strategies = 0, added = 0;
+    int cam = 0, light = 0, strategies = 0, added = 0, scatters = 0;
     for (int k = 0; k < m->path_events; k++) {
         const CstExplainEvent *e = &ev[k];
         assert_true(e->flags & CST_EXPLAIN_IN_SPLAT);
         assert_int_not_equal(e->kind, CST_EXPLAIN_MUTATION);
         added += (e->flags & CST_EXPLAIN_ADDED) != 0;
         if (e->kind == CST_EXPLAIN_DISTANCE) continue; /* a flight through media: neither vertex nor strategy */
+        if ((e->kind == CST_EXPLAIN_SCATTER || e->kind == CST_EXPLAIN_ROULETTE) && e->depth < 0) {
+            assert_int_equal(-e->depth, light); /* the light subpath's, after its vertex */
+            if (e->kind == CST_EXPLAIN_SCATTER) assert_non_null(e->lobe);
+            scatters += e->kind == CST_EXPLAIN_SCATTER;
+            continue;
+        }
         if (e->kind == CST_EXPLAIN_VERTEX && e->material_type && !strcmp(e->material_type, "medium")) {
             assert_true(e->medium >= 0);
             medium_cam += e->depth > 0;
@@ -103,6 +111,11 @@ static void check_path(CstIntegrator integ, const CstRenderSettings *st, const C
             fail_msg("mmlt chain %d step %d (s=%d, t=%d, length %d): %d strategy events, %d camera hits, %d light hits",
                      m->chain, m->step, m->s, m->t, m->path_length, strategies, cam, light);
         assert_int_equal(cam + light + (m->s >= 1 ? 1 : 0), m->path_length + 1);
+        /* the walk scatters at every light hit but the last (no continuation past it) */
+        if (scatters != (light > 0 ? light - 1 : 0))
+            fail_msg("mmlt chain %d step %d (s=%d, t=%d): %d light hits, %d light-subpath scatters listed", m->chain,
+                     m->step, m->s, m->t, light, scatters);
+        light_scatters += scatters;
         replayed_light_side += light > 0;
     } else {
         assert_true(cam >= 1 && cam <= st->max_depth + 1 && light == 0 && added > 0);
@@ -264,7 +277,7 @@ static void mmlt_light_side(const CstScene *s, CstColorMode mode)
 {
     color_mode = mode;
     const CstRenderSettings st = mlt_settings(CST_INTEGRATOR_MMLT, CST_FILTER_BOX);
-    replayed = replayed_light_side = 0;
+    replayed = replayed_light_side = light_scatters = 0;
     int explained = 0;
     for (int y = 3; y < SIZE && replayed_light_side < 5; y++)
         for (int x = 0; x < SIZE && replayed_light_side < 5; x++) {
@@ -278,8 +291,8 @@ static void mmlt_light_side(const CstScene *s, CstColorMode mode)
             explained++;
             cst_explain_destroy(ex);
         }
-    print_message("mmlt: %d paths evaluated again at %d pixels below the light, %d with light-subpath hits\n", replayed,
-                  explained, replayed_light_side);
+    print_message("mmlt: %d paths evaluated again at %d pixels below the light, %d with light-subpath hits, %d "
+                  "light-subpath scatters\n", replayed, explained, replayed_light_side, light_scatters);
     assert_true(replayed_light_side >= 5);
     color_mode = CST_COLOR_RGB;
 }
@@ -310,7 +323,7 @@ static void test_mmlt_media(void **state)
     CstError err;
     if (cst_scene_load_pbrt(FOG, NULL, &s, &err) != CST_OK) fail_msg("%s: %s", FOG, err.msg);
     const CstRenderSettings st = mlt_settings(CST_INTEGRATOR_MMLT, CST_FILTER_BOX);
-    replayed = replayed_light_side = medium_cam = medium_light = 0;
+    replayed = replayed_light_side = medium_cam = medium_light = light_scatters = 0;
     int explained = 0;
     for (int y = 4; y < SIZE && (medium_cam < 5 || medium_light < 5); y += 2)
         for (int x = 1; x < SIZE && (medium_cam < 5 || medium_light < 5); x += 3) {
@@ -324,8 +337,9 @@ static void test_mmlt_media(void **state)
             cst_explain_destroy(ex);
         }
     print_message("mmlt in fog: %d paths evaluated again at %d pixels (%d with light-subpath hits): %d camera-side and "
-                  "%d light-side medium vertices\n", replayed, explained, replayed_light_side, medium_cam, medium_light);
-    assert_true(replayed > 0 && medium_cam >= 5 && medium_light >= 5);
+                  "%d light-side medium vertices, %d light-subpath scatters\n", replayed, explained, replayed_light_side,
+                  medium_cam, medium_light, light_scatters);
+    assert_true(replayed > 0 && medium_cam >= 5 && medium_light >= 5 && light_scatters > 0);
     cst_scene_destroy(s);
 }
 
