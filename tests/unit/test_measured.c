@@ -20,6 +20,7 @@
 #include "materials/measured.h"
 #include "core/rng.h"
 #include "materials/bsdf.h"
+#include "materials/bsdf_lobe.h"
 #include "materials/fresnel.h"
 #include "materials/material.h"
 #include "materials/microfacet.h"
@@ -515,6 +516,18 @@ static void test_material(void **state)
     Color f = bsdf_eval(&b, wo, wi), want = measured_eval(s->measured[0], wo, wi, NULL);
     assert_true(f.c[0] > 0.0f && memcmp(&f, &want, sizeof f) == 0);
     assert_true(fabsf(bsdf_pdf(&b, wo, wi) - measured_pdf(s->measured[0], wo, wi)) == 0.0f);
+    /* explain's lobe (BsdfSample.lobe): the table is one reflection lobe, sampled on wo's side */
+    int sampled = 0;
+    for (int i = 0; i < 64; i++) {
+        BsdfSample bs;
+        if (!bsdf_sample(&b, wo, (i + 0.5f) / 64.0f, v2((i * 0.618034f) - floorf(i * 0.618034f), (i + 0.5f) / 64.0f), &bs))
+            continue;
+        sampled++;
+        assert_int_equal(bs.lobe, BSDF_LOBE_GLOSSY_REFLECTION);
+        assert_string_equal(bsdf_lobe_name(bs.lobe), "glossy reflection");
+        assert_true(bs.wi.z * wo.z > 0.0f);
+    }
+    assert_true(sampled >= 32);
     Wavelengths wl = {{450.0f, 500.0f, 600.0f, 700.0f}, {1, 1, 1, 1}};
     scene_bsdf(s, &sh, &wl, &b);
     f = bsdf_eval(&b, wo, wi), want = measured_eval(s->measured[0], wo, wi, wl.lambda);
