@@ -1070,20 +1070,47 @@ static void view_loop(View *v)
 
 /* ------------------------------------------------------------ setup */
 
-static int view_open(View *v)
+/* The display, a hidden window and its renderer, before the scene loads: SDL_Init and above
+ * all the renderer's start-up (SDL_CreateRenderer: 240 ms under Xvfb with Mesa's software
+ * OpenGL, 2026-12-08) would otherwise stand between the loaded scene and the first image
+ * (issue 30: within 100 ms of load), and the window is there while a large scene loads. */
+static int view_video_init(View *v)
 {
     if (SDL_Init(SDL_INIT_VIDEO) != 0) {
         fprintf(stderr, "caustic: error: view: cannot open a window: %s (is DISPLAY set? headless: "
                         "xvfb-run caustic view ...)\n", SDL_GetError());
         return CLI_EXIT_USAGE;
     }
-    int ww = v->w, wh = v->h;
-    while (ww > 1600 || wh > 1000) ww /= 2, wh /= 2; /* a big film shown scaled */
-    v->win = SDL_CreateWindow("caustic view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, ww > 0 ? ww : 1,
-                              wh > 0 ? wh : 1, SDL_WINDOW_RESIZABLE);
+    v->win = SDL_CreateWindow("caustic view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, 640, 480,
+                              SDL_WINDOW_RESIZABLE | SDL_WINDOW_HIDDEN);
     if (v->win) v->ren = SDL_CreateRenderer(v->win, -1, 0);
     if (v->win && !v->ren) v->ren = SDL_CreateRenderer(v->win, -1, SDL_RENDERER_SOFTWARE);
-    if (v->ren) v->tex = SDL_CreateTexture(v->ren, SDL_PIXELFORMAT_ARGB8888, SDL_TEXTUREACCESS_STREAMING, v->w, v->h);
+    if (!v->ren) {
+        fprintf(stderr, "caustic: error: view: cannot open a window: %s\n", SDL_GetError());
+        return CLI_EXIT_INTERNAL;
+    }
+    /* One draw of a texture, so that the renderer's first-use costs (Mesa compiles its
+     * shaders at the first draw: 44 ms under Xvfb) are paid here too, not by the first image. */
+    SDL_Texture *t = SDL_CreateTexture(v->ren, SDL_PIXELFORMAT_ARGB8888, SDL_TEXTUREACCESS_STREAMING, 1, 1);
+    if (t) {
+        const uint32_t black = 0xff000000u;
+        SDL_UpdateTexture(t, NULL, &black, 4);
+        SDL_RenderClear(v->ren);
+        SDL_RenderCopy(v->ren, t, NULL, NULL);
+        SDL_RenderPresent(v->ren);
+        SDL_DestroyTexture(t);
+    }
+    return CLI_EXIT_OK;
+}
+
+/* The window at the film's size (a big film shown scaled), shown, and the film's texture. */
+static int view_open(View *v)
+{
+    int ww = v->w, wh = v->h;
+    while (ww > 1600 || wh > 1000) ww /= 2, wh /= 2;
+    SDL_SetWindowSize(v->win, ww > 0 ? ww : 1, wh > 0 ? wh : 1);
+    SDL_ShowWindow(v->win);
+    v->tex = SDL_CreateTexture(v->ren, SDL_PIXELFORMAT_ARGB8888, SDL_TEXTUREACCESS_STREAMING, v->w, v->h);
     if (!v->tex) {
         fprintf(stderr, "caustic: error: view: cannot open a window: %s\n", SDL_GetError());
         return CLI_EXIT_INTERNAL;
@@ -1179,10 +1206,11 @@ int cli_view(const CliArgs *a)
         view_script_free(&v.script);
         return CLI_EXIT_USAGE;
     }
+    int code = view_video_init(&v);
     double read_seconds = 0.0;
-    int code = cli_load_scene(a, &v.scene, &read_seconds);
+    if (code == CLI_EXIT_OK) code = cli_load_scene(a, &v.scene, &read_seconds);
     if (code != CLI_EXIT_OK) {
-        view_script_free(&v.script);
+        view_close(&v); /* the window, SDL and the script */
         return code;
     }
     v.t_loaded = cli_clock_seconds();
