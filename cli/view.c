@@ -28,9 +28,8 @@ int cli_view(const CliArgs *a)
 #include <SDL.h>
 
 #include "tev.h"
+#include "view_camera.h"
 #include "view_script.h"
-
-#define VIEW_PI 3.14159265358979323846
 
 bool cli_view_available(void) { return true; }
 
@@ -126,104 +125,23 @@ typedef struct View {
 #define VIEW_DIFF_BLOCK 16
 #define VIEW_DIFF_ALPHA 0.01
 
-/* ------------------------------------------------------------ small vector math */
+/* ------------------------------------------------------------ camera moves (view_camera.c) */
 
-static void v3_set(float o[3], double x, double y, double z) { o[0] = (float)x; o[1] = (float)y; o[2] = (float)z; }
-static double v3_dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void v3_cross(const double a[3], const double b[3], double o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-static double v3_norm(double a[3])
-{
-    double l = sqrt(v3_dot(a, a));
-    if (l > 0.0) for (int k = 0; k < 3; k++) a[k] /= l;
-    return l;
-}
-
-/* The camera's frame: forward (unit, towards look_at), right, up (units), the target
- * distance. */
-static double view_frame(const CstCameraDesc *c, double f[3], double r[3], double u[3])
-{
-    double up[3] = {(double)c->up[0], (double)c->up[1], (double)c->up[2]};
-    if (up[0] == 0.0 && up[1] == 0.0 && up[2] == 0.0) up[1] = 1.0;
-    for (int k = 0; k < 3; k++) f[k] = (double)c->look_at[k] - (double)c->position[k];
-    double dist = v3_norm(f);
-    v3_cross(f, up, r);
-    v3_norm(r);
-    v3_cross(r, f, u);
-    return dist;
-}
-
-/* Rotates v about the unit axis a by angle t (Rodrigues). */
-static void v3_rotate(double v[3], const double a[3], double t)
-{
-    double c = cos(t), s = sin(t), axv[3], d = v3_dot(a, v);
-    v3_cross(a, v, axv);
-    for (int k = 0; k < 3; k++) v[k] = v[k] * c + axv[k] * s + a[k] * d * (1.0 - c);
-}
-
-/* Left drag: orbit about look_at, dx pixels turning about the up hint, dy about right;
- * the pitch stops 1 degree short of the up hint so the frame stays defined. */
 static void view_orbit(View *v, double dx, double dy)
 {
-    CstCameraDesc *c = &v->cam;
-    double f[3], r[3], u[3], up[3] = {(double)c->up[0], (double)c->up[1], (double)c->up[2]};
-    view_frame(c, f, r, u);
-    if (up[0] == 0.0 && up[1] == 0.0 && up[2] == 0.0) up[1] = 1.0;
-    v3_norm(up);
-    double off[3];
-    for (int k = 0; k < 3; k++) off[k] = (double)c->position[k] - (double)c->look_at[k];
-    const double per_pixel = VIEW_PI / (double)v->h; /* a drag across the window's height: half a turn */
-    v3_rotate(off, up, -dx * per_pixel);
-    v3_rotate(r, up, -dx * per_pixel);
-    double dist = sqrt(v3_dot(off, off)), pitch = asin(fmax(-1.0, fmin(1.0, v3_dot(off, up) / dist)));
-    double lim = VIEW_PI / 2.0 - VIEW_PI / 180.0, t = -dy * per_pixel;
-    if (pitch + t > lim) t = lim - pitch;
-    if (pitch + t < -lim) t = -lim - pitch;
-    v3_rotate(off, r, -t);
-    v3_set(c->position, (double)c->look_at[0] + off[0], (double)c->look_at[1] + off[1], (double)c->look_at[2] + off[2]);
+    view_camera_orbit(&v->cam, v->h, dx, dy);
     v->dirty = true;
 }
 
-/* Middle (or shift-left) drag: the view slides with the image, both position and look_at,
- * by the pixel size at the target's distance. */
 static void view_pan(View *v, double dx, double dy)
 {
-    CstCameraDesc *c = &v->cam;
-    double f[3], r[3], u[3];
-    double dist = view_frame(c, f, r, u);
-    double px = c->type == CST_CAMERA_ORTHOGRAPHIC ? (double)c->height / v->h
-                                                   : 2.0 * dist * tan((double)c->fov * VIEW_PI / 360.0) / v->h;
-    double sx = c->mirror ? -1.0 : 1.0;
-    for (int k = 0; k < 3; k++) {
-        double d = (-dx * sx * r[k] + dy * u[k]) * px;
-        c->position[k] = (float)((double)c->position[k] + d);
-        c->look_at[k] = (float)((double)c->look_at[k] + d);
-    }
+    view_camera_pan(&v->cam, v->h, dx, dy);
     v->dirty = true;
 }
 
-/* Wheel: dolly towards (steps > 0) or away from look_at, 10% of the distance a step. */
 static void view_dolly(View *v, double steps)
 {
-    CstCameraDesc *c = &v->cam;
-    double k = pow(0.9, steps);
-    if (c->type == CST_CAMERA_ORTHOGRAPHIC) {
-        c->height = (float)((double)c->height * k);
-    } else {
-        double p[3], off[3];
-        for (int i = 0; i < 3; i++) {
-            off[i] = ((double)c->position[i] - (double)c->look_at[i]) * k;
-            p[i] = (double)c->look_at[i] + off[i];
-        }
-        if (sqrt(v3_dot(off, off)) < 1e-6) return;
-        v3_set(c->position, p[0], p[1], p[2]);
-        if (c->focus_distance > 0.0f && c->aperture_radius == 0.0f) c->focus_distance = 0.0f;
-    }
-    v->dirty = true;
+    if (view_camera_dolly(&v->cam, steps)) v->dirty = true;
 }
 
 /* ------------------------------------------------------------ accumulation */
@@ -375,7 +293,7 @@ static void view_preview_pixel(const View *v, int x, int y, float rgb[3])
 {
     const double *a = &v->aov[VIEW_AOV_STRIDE * ((size_t)y * (size_t)v->w + (size_t)x)];
     double inv = v->spp > 0 ? 1.0 / v->spp : 0.0, n[3] = {a[3], a[4], a[5]};
-    double nl = v3_norm(n);
+    double nl = view_v3_norm(n);
     switch (v->preview) {
     case VIEW_NORMALS:
         for (int c = 0; c < 3; c++) rgb[c] = nl > 0.0 ? (float)(0.5 * n[c] + 0.5) : 0.0f;
@@ -384,7 +302,7 @@ static void view_preview_pixel(const View *v, int x, int y, float rgb[3])
         for (int c = 0; c < 3; c++) rgb[c] = (float)(a[c] * inv);
         return;
     case VIEW_DEPTH: {
-        double f[3], r[3], u[3], dist = view_frame(&v->cam, f, r, u);
+        double f[3], r[3], u[3], dist = view_camera_frame(&v->cam, f, r, u);
         float d = a[7] > 0.0 ? (float)(1.0 / (1.0 + a[6] / a[7] / dist)) : 0.0f;
         rgb[0] = rgb[1] = rgb[2] = d;
         return;
@@ -393,14 +311,14 @@ static void view_preview_pixel(const View *v, int x, int y, float rgb[3])
     }
     /* The eye ray through the pixel centre (pinhole; orthographic: the view axis). */
     double f[3], r[3], u[3], d[3];
-    view_frame(&v->cam, f, r, u);
+    view_camera_frame(&v->cam, f, r, u);
     double t = tan((double)v->cam.fov * VIEW_PI / 360.0), aspect = (double)v->w / v->h;
     double sx = (2.0 * (x + 0.5) / v->w - 1.0) * t * aspect * (v->cam.mirror ? -1.0 : 1.0);
     double sy = (1.0 - 2.0 * (y + 0.5) / v->h) * t;
     for (int k = 0; k < 3; k++)
         d[k] = v->cam.type == CST_CAMERA_ORTHOGRAPHIC ? f[k] : f[k] + sx * r[k] + sy * u[k];
-    v3_norm(d);
-    double cosv = nl > 0.0 ? fabs(v3_dot(n, d)) : 0.0;
+    view_v3_norm(d);
+    double cosv = nl > 0.0 ? fabs(view_v3_dot(n, d)) : 0.0;
     for (int c = 0; c < 3; c++) rgb[c] = (float)(a[c] * inv * cosv);
 }
 
@@ -432,7 +350,7 @@ static void view_photon_points(View *v, float *img, float k)
     if (!v->show_photons || v->mode != VIEW_PHOTON || v->error_view || v->diff_view || v->spp == 0) return;
     view_photons_fetch(v);
     double f[3], r[3], u[3];
-    view_frame(&v->cam, f, r, u);
+    view_camera_frame(&v->cam, f, r, u);
     const bool ortho = v->cam.type == CST_CAMERA_ORTHOGRAPHIC;
     const double aspect = (double)v->w / v->h, sx = v->cam.mirror ? -1.0 : 1.0;
     const double half_h = ortho ? 0.5 * (double)v->cam.height : tan((double)v->cam.fov * VIEW_PI / 360.0);
@@ -443,9 +361,9 @@ static void view_photon_points(View *v, float *img, float k)
             const float *p = &v->photon_xyz[m][3 * i];
             double d[3] = {(double)p[0] - (double)v->cam.position[0], (double)p[1] - (double)v->cam.position[1],
                            (double)p[2] - (double)v->cam.position[2]};
-            double z = v3_dot(d, f);
+            double z = view_v3_dot(d, f);
             if (!(z > 0.0)) continue; /* behind the camera */
-            double a = v3_dot(d, r) / (ortho ? 1.0 : z), b = v3_dot(d, u) / (ortho ? 1.0 : z);
+            double a = view_v3_dot(d, r) / (ortho ? 1.0 : z), b = view_v3_dot(d, u) / (ortho ? 1.0 : z);
             /* The inverse of the pixel centre ray of view_preview_pixel. */
             double x = (a * sx / (half_h * aspect) + 1.0) * 0.5 * v->w, y = (1.0 - b / half_h) * 0.5 * v->h;
             if (!(x >= 0.0 && x < v->w && y >= 0.0 && y < v->h)) continue;
@@ -1029,10 +947,10 @@ static void view_step(View *v)
             cst_film_aov_pixels(film, CST_AOV_NORMAL, nrm, &err) == CST_OK) {
             /* Eye light at the view axis: enough for a first look. */
             double f[3], r[3], u[3];
-            view_frame(&v->cam, f, r, u);
+            view_camera_frame(&v->cam, f, r, u);
             for (size_t i = 0; i < (size_t)v->lw * (size_t)v->lh; i++) {
                 double n[3] = {(double)nrm[3 * i], (double)nrm[3 * i + 1], (double)nrm[3 * i + 2]};
-                float k = (float)fabs(v3_dot(n, f));
+                float k = (float)fabs(view_v3_dot(n, f));
                 for (int c = 0; c < 3; c++) v->low[3 * i + (size_t)c] = alb[3 * i + (size_t)c] * k;
             }
             v->low_ready = true;
