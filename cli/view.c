@@ -71,6 +71,7 @@ typedef struct View {
     int spp;
     double *sum, *sum_sq, *aov;
     double samples, seconds; /* of the passes accumulated: samples/s */
+    double error_estimate;   /* view_error_estimate after the last pass (-1: none) */
     bool dirty, quit, failed;
     char fail_msg[256];
     float *low;              /* the low-resolution preview, w/VIEW_LOW_DIV x h/VIEW_LOW_DIV x 3 */
@@ -155,6 +156,7 @@ static void view_restart(View *v)
         cst_scene_camera(v->scene, &v->cam);
     }
     v->spp = 0;
+    v->error_estimate = -1.0;
     v->samples = v->seconds = 0.0;
     v->failed = false;
     v->dirty = false;
@@ -164,6 +166,7 @@ static void view_restart(View *v)
 }
 
 static int view_progress(void *user, double fraction, double elapsed);
+static double view_error_estimate(const View *v);
 
 /* The settings of the mode's next pass (or of the low-resolution preview). */
 static CstRenderSettings view_pass_settings(const View *v, bool low)
@@ -239,6 +242,7 @@ static bool view_accumulate(View *v, const CstFilm *film, const CstRenderStats *
     v->spp = replace ? st->spp : v->spp + 1;
     if (replace) v->samples = (double)st->samples, v->seconds = st->seconds;
     else v->samples += (double)st->samples, v->seconds += st->seconds;
+    v->error_estimate = view_error_estimate(v);
     v->shown_dirty = true;
     return true;
 }
@@ -269,22 +273,46 @@ static void view_ramp(double t, float rgb[3])
 /* The relative error of pixel i's mean: the standard error of its luminance over the
  * luminance (floored at 1e-3 so black pixels do not dominate), from the passes' sums of
  * squares; shown on a log scale from 0.1% (black) to 100% (red). */
-static void view_error_pixel(const View *v, size_t i, float rgb[3])
+/* Pixel i's relative error: the standard error of its luminance's mean over the mean (from
+ * the passes' sums of squares; a mean below 1e-3 counts as 1e-3); -1 where there is none
+ * (SPPM, fewer than 2 passes). */
+static double view_rel_error(const View *v, size_t i)
 {
     static const double Y[3] = {0.2126, 0.7152, 0.0722}; /* Rec. 709 luminance */
     double n = v->spp, mean = 0.0, var = 0.0;
-    if (v->mode == VIEW_SPPM || n < 2.0) {
-        rgb[0] = rgb[1] = rgb[2] = 0.0f;
-        return;
-    }
+    if (v->mode == VIEW_SPPM || n < 2.0) return -1.0;
     for (int c = 0; c < 3; c++) {
         double m = v->sum[3 * i + (size_t)c] / n;
         double s2 = (v->sum_sq[3 * i + (size_t)c] - n * m * m) / (n - 1.0);
         mean += Y[c] * m;
         var += Y[c] * Y[c] * (s2 > 0.0 ? s2 : 0.0) / n; /* channels taken as independent */
     }
-    double rel = sqrt(var) / fmax(mean, 1e-3);
+    return sqrt(var) / fmax(mean, 1e-3);
+}
+
+static void view_error_pixel(const View *v, size_t i, float rgb[3])
+{
+    double rel = view_rel_error(v, i);
+    if (rel < 0.0) {
+        rgb[0] = rgb[1] = rgb[2] = 0.0f;
+        return;
+    }
     view_ramp(rel > 0.0 ? (log10(rel) + 3.0) / 3.0 : 0.0, rgb);
+}
+
+/* The status line's estimated error: the root mean square over the pixels of their
+ * relative errors (view_rel_error); -1 where there is none. */
+static double view_error_estimate(const View *v)
+{
+    const size_t n = (size_t)v->w * (size_t)v->h;
+    double sum = 0.0;
+    if (v->mode == VIEW_PREVIEW) return -1.0; /* its image is the AOVs' */
+    for (size_t i = 0; i < n; i++) {
+        double rel = view_rel_error(v, i);
+        if (rel < 0.0) return -1.0;
+        sum += rel * rel;
+    }
+    return n ? sqrt(sum / (double)n) : -1.0;
 }
 
 /* The preview of pixel i from the AOV sums: eye light is albedo times |cos| between the
@@ -503,10 +531,14 @@ static void view_title(View *v)
         char line[200];
         view_diff_line(v, line, sizeof line);
         snprintf(title, sizeof title, "caustic view - %.200s", line);
-    } else
-        snprintf(title, sizeof title, "caustic view - %s%s - %d %s - %.2f M samples/s - exposure %+.1f",
+    } else {
+        char err[48] = "";
+        if (v->spp >= 2 && v->error_estimate >= 0.0)
+            snprintf(err, sizeof err, " - error %.3g%%", 100.0 * v->error_estimate);
+        snprintf(title, sizeof title, "caustic view - %s%s - %d %s - %.2f M samples/s%s - exposure %+.1f",
                  what, v->error_view ? " relative error" : "", v->spp, v->mode == VIEW_SPPM ? "iterations" : "spp",
-                 rate, v->exposure);
+                 rate, err, v->exposure);
+    }
     SDL_SetWindowTitle(v->win, title);
 }
 
@@ -741,9 +773,9 @@ static void view_print_camera(View *v)
 
 static void view_status(View *v)
 {
-    printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f photon_maps_built %d\n", VIEW_MODE_NAMES[v->mode],
-           v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms,
-           cst_photon_cache_builds(v->photons));
+    printf("view: mode %s%s spp %d samples %.0f first_image_ms %.1f photon_maps_built %d error %.6g\n",
+           VIEW_MODE_NAMES[v->mode], v->error_view ? " (relative error)" : "", v->spp, v->samples, v->first_image_ms,
+           cst_photon_cache_builds(v->photons), v->error_estimate);
     if (v->diff_view) { /* the comparison of the accumulation as it stands now */
         char line[240];
         if (v->spp > 0) view_diff_compose(v);

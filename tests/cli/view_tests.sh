@@ -99,6 +99,18 @@ done
 check "view: the preview is not black" eval \
     "'$BIN' compare '$dir/preview.png' '$dir/normals.png' --json | grep -q '\"mean_a\":0\.[0-9]*[1-9]'"
 
+# ------------------------------------------------------------ the status line's estimated error
+# The root mean square of the pixels' relative errors (view_error_estimate): none before two
+# passes (-1), then positive, and smaller after 16 passes than after 4 (fixed seed).
+dir=$TMP/error
+printf 'key 3\nwait-spp 1\nstatus\nwait-spp 4\nstatus\nwait-spp 16\nstatus\nquit\n' >"$TMP/error.txt"
+view "$dir" 300 "${SIZE[@]}" --script "$TMP/error.txt"
+HARNESS_EXPECT_STDOUT=1 expect "view: the error script runs" 0 "view: mode path spp 16 "
+check "view: the status line's error: none at 1 spp, then positive and falling (4 -> 16 spp)" eval \
+    "grep '^view: mode path spp' '$OUT' | sed 's/.* error //' | tr '\n' ' ' | \
+     awk '{ exit !(\$1 == -1 && \$2 > 0 && \$3 > 0 && \$3 < \$2) }'"
+grep '^view: mode path spp' "$OUT" | sed 's/^/      /'
+
 # ------------------------------------------------------------ the camera: orbit restarts
 dir=$TMP/orbit
 cat >"$TMP/orbit.txt" <<'EOF'
@@ -267,7 +279,7 @@ EOF2
 view "$dir" 300 "$SRC/scenes/cornell-box.json" "${SIZE[@]}" --integrator photon --script "$TMP/photon.txt"
 HARNESS_EXPECT_STDOUT=1 expect "view: the photon script runs" 0 "saved orbit.exr"
 check "view: photon maps built once for two passes, an orbit and two more" eval \
-    "test \$(grep -c '^view: mode photon spp 2 .* photon_maps_built 1\$' '$OUT') -eq 2"
+    "test \$(grep -c '^view: mode photon spp 2 .* photon_maps_built 1 error ' '$OUT') -eq 2"
 check "view: key o draws the photons (the PNG changes)" eval \
     "! '$BIN' compare '$dir/nopoints.png' '$dir/points.png' --json | grep -q '\"rmse\":0.0,'"
 same "view: the photons are not drawn into the linear EXR" "$dir/p2.exr" "$dir/points.exr"
