@@ -30,6 +30,7 @@ int cli_view(const CliArgs *a)
 #include "tev.h"
 #include "view_camera.h"
 #include "view_script.h"
+#include "view_state.h"
 
 bool cli_view_available(void) { return true; }
 
@@ -60,6 +61,8 @@ typedef struct View {
     int w, h;
     double out_exposure;    /* the render's 2^exposure, applied to saved linear images */
     CstCameraDesc cam;
+    CstCameraDesc cam0;     /* the scene's camera: a checkpoint needs it unmoved */
+    CstFilm *acc;           /* the passes' films added (cst_film_add): what a checkpoint writes */
     ViewMode mode;
     ViewPreview preview;
     bool error_view;
@@ -208,6 +211,8 @@ static bool view_accumulate(View *v, const CstFilm *film, const CstRenderStats *
         memset(v->sum, 0, 3 * n * sizeof *v->sum);
         memset(v->sum_sq, 0, 3 * n * sizeof *v->sum_sq);
     }
+    const CstRenderSettings ps = view_pass_settings(v, false);
+    view_state_add(&v->acc, v->scene, &ps, film, v->spp == 0, !replace && v->mode != VIEW_PREVIEW);
     for (int y = 0; y < v->h; y++)
         for (int x = 0; x < v->w; x++) {
             size_t i = 3 * ((size_t)y * (size_t)v->w + (size_t)x);
@@ -785,6 +790,18 @@ static void view_status(View *v)
     fflush(stdout);
 }
 
+/* k: the mode's accumulation as a state file for `caustic render --resume` (view_state.c). */
+static void view_checkpoint(View *v)
+{
+    const ViewCheckpoint k = {v->scene, v->acc, v->spp, v->args->scene_path, VIEW_MODE_NAMES[v->mode],
+                              VIEW_MODE_INTEGRATORS[v->mode], v->mode == VIEW_PREVIEW || v->mode == VIEW_SPPM,
+                              view_camera_moved(&v->cam, &v->cam0)};
+    const CstRenderSettings ps = view_pass_settings(v, false);
+    char name[64];
+    snprintf(name, sizeof name, "caustic-view-%03d.state", v->saves);
+    if (view_state_checkpoint(name, &ps, &k)) v->saves++;
+}
+
 /* ------------------------------------------------------------ input */
 
 static void view_key(View *v, SDL_Keycode key)
@@ -828,6 +845,7 @@ static void view_key(View *v, SDL_Keycode key)
         break;
     }
     case 'c': view_print_camera(v); break;
+    case 'k': view_checkpoint(v); break;
     case 'o': v->show_photons = !v->show_photons; v->shown_dirty = true; break;
     case 'q': case SDLK_ESCAPE: v->quit = true; break;
     default: break;
@@ -1090,6 +1108,7 @@ static void view_close(View *v)
     free(v->cur_var);
     free(v->block_z);
     cst_photon_cache_destroy(v->photons); /* before the scene (cli_view) */
+    cst_film_destroy(v->acc);
     view_script_free(&v->script);
 }
 
@@ -1116,6 +1135,7 @@ static int view_init(View *v, const CliArgs *a)
     v->mode = view_initial_mode(&r);
     v->first_image_ms = -1.0;
     cst_scene_camera(v->scene, &v->cam);
+    v->cam0 = v->cam;
     const size_t n = (size_t)v->w * (size_t)v->h;
     v->lw = (v->w + VIEW_LOW_DIV - 1) / VIEW_LOW_DIV;
     v->lh = (v->h + VIEW_LOW_DIV - 1) / VIEW_LOW_DIV;

@@ -1,6 +1,8 @@
 /* caustic view's camera moves (view_camera.h): orbit, pan and dolly of a CstCameraDesc. */
 #include "view_camera.h"
 
+#include <string.h>
+
 static void v3_set(float o[3], double x, double y, double z)
 {
     o[0] = (float)x;
@@ -84,4 +86,11 @@ bool view_camera_dolly(CstCameraDesc *c, double steps)
     v3_set(c->position, p[0], p[1], p[2]);
     if (c->focus_distance > 0.0f && c->aperture_radius == 0.0f) c->focus_distance = 0.0f;
     return true;
+}
+
+bool view_camera_moved(const CstCameraDesc *c, const CstCameraDesc *c0)
+{
+    return memcmp(c->position, c0->position, sizeof c->position) != 0 ||
+           memcmp(c->look_at, c0->look_at, sizeof c->look_at) != 0 || c->fov != c0->fov || c->height != c0->height ||
+           c->focus_distance != c0->focus_distance;
 }

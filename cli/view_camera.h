@@ -39,4 +39,8 @@ void view_camera_pan(CstCameraDesc *c, int height, double dx, double dy);
  * moved). */
 bool view_camera_dolly(CstCameraDesc *c, double steps);
 
+/* Whether c is not c0 in any of what the viewer changes (position, look_at, fov, height,
+ * focus distance). */
+bool view_camera_moved(const CstCameraDesc *c, const CstCameraDesc *c0);
+
 #endif

@@ -111,6 +111,29 @@ check "view: the status line's error: none at 1 spp, then positive and falling (
      awk '{ exit !(\$1 == -1 && \$2 > 0 && \$3 > 0 && \$3 < \$2) }'"
 grep '^view: mode path spp' "$OUT" | sed 's/^/      /'
 
+# ------------------------------------------------------------ k: a checkpoint render --resume continues
+# The path mode's 3 passes and BDPT's 2 iterations written as state files (view_state.c);
+# `render --resume` continues each to 5 (4) bit for bit as an uninterrupted render; the
+# preview and a moved camera are refused (a state has no camera).
+dir=$TMP/checkpoint
+printf 'key 3\nwait-spp 3\nkey k\nkey 7\nwait-spp 2\nkey k\nkey 1\nkey k\nkey 3\norbit 10 0\nwait-spp 1\nkey k\nquit\n' \
+    >"$TMP/checkpoint.txt"
+view "$dir" 300 "${SIZE[@]}" --script "$TMP/checkpoint.txt"
+HARNESS_EXPECT_STDOUT=1 expect "view: k writes checkpoints" 0 "view: checkpoint caustic-view-000.state \(path, 3 passes\)" \
+    "view: checkpoint caustic-view-001.state \(bdpt, 2 passes\)"
+check "view: k refuses the preview and a moved camera" eval \
+    "grep -q 'no checkpoint: not in the preview' '$ERR' && grep -q 'no checkpoint: the camera has moved' '$ERR'"
+harness_run "$dir" 300 render "${SIZE[@]}" --integrator path --resume caustic-view-000.state --spp 2 -q -o two.pfm
+expect "view: the path checkpoint holds its 3 passes (a resume to 2 is refused)" 2 "holds 3 samples per pixel"
+for m in path:000:5 bdpt:001:4; do
+    IFS=: read -r integ n spp <<<"$m"
+    harness_run "$dir" 300 render "${SIZE[@]}" --integrator "$integ" --resume "caustic-view-$n.state" --spp "$spp" -q \
+        -o "resumed-$integ.pfm"
+    harness_run "$dir" 300 render "${SIZE[@]}" --integrator "$integ" --spp "$spp" -q -o "whole-$integ.pfm"
+    check "view: the $integ checkpoint resumed to $spp equals the uninterrupted render bit for bit" \
+        cmp -s "$dir/resumed-$integ.pfm" "$dir/whole-$integ.pfm"
+done
+
 # ------------------------------------------------------------ the camera: orbit restarts
 dir=$TMP/orbit
 cat >"$TMP/orbit.txt" <<'EOF'
